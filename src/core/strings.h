@@ -1,0 +1,19 @@
+// Small string helpers used at the edges (CLI, file names, JSON keys).
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace raypc {
+
+// "Natural" order: digit runs compare by value, so step2.nc < step10.nc.
+bool naturalLess(std::string_view a, std::string_view b);
+
+// A file-system-safe form of a variable name: "temperature anomaly" -> "temperature_anomaly".
+std::string fileSafeName(std::string_view name);
+
+std::vector<std::string> split(std::string_view text, char separator);
+std::string trim(std::string_view text);
+
+}  // namespace raypc

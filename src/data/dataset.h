@@ -1,0 +1,130 @@
+// A preprocessed RayPC dataset: what the renderer, the server and the CLI load.
+// The on-disk format is documented in docs/format.md; arrays are memory-mapped raw
+// little-endian float32 in canonical grid order (grid.h), so a step loads without parsing.
+//
+// Variables: the stored ones of the input (contest names and units) plus derived ones
+// ("radial velocity" and "velocity magnitude" in cm/yr). Coordinates (x, y, z in km,
+// lat/lon in degrees, radius and depth in km) are not stored: they are functions of the grid.
+//
+// Thread safety: a Dataset and the StepVolumes it returns are immutable and may be shared.
+#pragma once
+
+#include "core/mapped_file.h"
+#include "data/grid.h"
+#include "data/snapshot.h"
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace raypc {
+
+inline constexpr int kHistogramBins = 256;
+inline constexpr int kLevelCount = 3;  // level 0 = full resolution, 1 and 2 coarser (1/8 each)
+
+struct ValueRange {
+    float min = 0, max = 0;
+};
+
+// Per-variable statistics, volume-weighted (each grid point counts with its dual-cell volume).
+struct VariableStats {
+    ValueRange range;  // exact min and max over the grid points
+    double mean = 0;   // volume-weighted mean
+    std::vector<double> histogram;  // kHistogramBins volume fractions over `range`; sums to 1
+};
+
+struct VariableInfo {
+    std::string name;   // e.g. "temperature anomaly", "radial velocity"
+    std::string units;  // e.g. "K", "cm/yr"
+    bool derived = false;
+    std::string fileStem;  // file-safe name of its arrays
+    VariableStats global;  // over all steps (histogram rebinned from the steps' histograms)
+};
+
+struct StepInfo {
+    int index = 0;
+    double timeMyr = 0;
+    std::string source;  // input file name
+    std::vector<VariableStats> stats;  // one per variable, same order as Dataset::variables()
+};
+
+struct LevelInfo {
+    SphericalGrid grid;
+    BrickLayout bricks;
+};
+
+// Coordinates that can be brushed and plotted like variables.
+enum class Coordinate { X, Y, Z, Lat, Lon, Radius, Depth };
+struct CoordinateInfo {
+    Coordinate id;
+    std::string name;   // "x", "y", "z", "lat", "lon", "radius", "depth"
+    std::string units;  // "km" or "degrees_north"/"degrees_east"
+};
+const std::vector<CoordinateInfo>& coordinateInfos();
+// The coordinate named `name`, if any.
+std::optional<Coordinate> findCoordinate(const std::string& name);
+
+// One step at one level of detail: every variable's values plus per-brick bounds.
+class StepVolume {
+public:
+    // Builds a volume in memory from a snapshot (computing brick bounds); used by tests
+    // and by preprocessing. Field order becomes variable order.
+    static std::shared_ptr<StepVolume> fromSnapshot(const Snapshot& snapshot, uint32_t brickSize = 8);
+
+    const SphericalGrid& grid() const { return m_grid; }
+    const BrickLayout& bricks() const { return m_bricks; }
+    size_t variableCount() const { return m_values.size(); }
+    // grid().cellCount() values of variable `var`, canonical order.
+    const float* values(size_t var) const { return m_values[var]; }
+    // bricks().brickCount() pairs (min, max) of variable `var`.
+    const float* brickBounds(size_t var) const { return m_bounds[var]; }
+
+private:
+    friend class Dataset;
+    SphericalGrid m_grid;
+    BrickLayout m_bricks;
+    std::vector<const float*> m_values, m_bounds;
+    std::vector<MappedFile> m_mapped;              // when loaded from disk
+    std::vector<std::vector<float>> m_owned;       // when built in memory
+};
+
+// The parallel-coordinates sample of one step: `rows` cells, columns = coordinates
+// (coordinateInfos() order) then variables (Dataset::variables() order), row-major.
+struct SampleTable {
+    std::vector<std::string> columns;
+    std::vector<std::string> units;
+    size_t rows = 0;
+    std::vector<float> values;  // rows * columns.size()
+    float at(size_t row, size_t column) const { return values[row * columns.size() + column]; }
+};
+
+class Dataset {
+public:
+    // Opens a dataset directory. Throws raypc::Error naming the directory if it is not a
+    // complete RayPC dataset of a supported format version.
+    static std::shared_ptr<const Dataset> open(const std::filesystem::path& dir);
+
+    const std::filesystem::path& dir() const { return m_dir; }
+    const std::vector<VariableInfo>& variables() const { return m_variables; }
+    // Index of the variable named `name`, or -1.
+    int variableIndex(const std::string& name) const;
+    const std::vector<StepInfo>& steps() const { return m_steps; }
+    const std::vector<LevelInfo>& levels() const { return m_levels; }
+    double dtMyr() const { return m_dtMyr; }
+
+    // Maps step `step` at level `level`. Throws raypc::Error if out of range or unreadable.
+    std::shared_ptr<const StepVolume> load(int step, int level) const;
+    SampleTable loadSample(int step) const;
+
+private:
+    std::filesystem::path m_dir;
+    std::vector<VariableInfo> m_variables;
+    std::vector<StepInfo> m_steps;
+    std::vector<LevelInfo> m_levels;
+    double m_dtMyr = 2.0;
+    size_t m_sampleRows = 0;
+};
+
+}  // namespace raypc

@@ -1,0 +1,80 @@
+// The spherical grid of a mantle snapshot, in RayPC's canonical order.
+//
+// Canonical order (after reading, whatever order the file had):
+//   lat ascending (south to north, degrees north), r ascending (km), lon ascending in [0, 360)
+//   (degrees east) without a repeated 360° seam; arrays are indexed
+//   index = (iLat * nR + iR) * nLon + iLon   (lon fastest, as in the contest files).
+// The grid is global and periodic in lon: the neighbour of the last lon column is column 0.
+// Values live on the grid points; between grid points, fields are trilinear in index space.
+// Rows do not need to reach the poles; the region between the outermost lat row and the pole
+// is covered by that row's dual cell (see cellVolumeKm3).
+//
+// Thread safety: immutable after construction.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace raypc {
+
+struct SphericalGrid {
+    std::vector<double> latDeg;  // ascending, within [-90, 90]
+    std::vector<double> rKm;     // ascending
+    std::vector<double> lonDeg;  // ascending, within [0, 360), periodic
+
+    size_t nLat() const { return latDeg.size(); }
+    size_t nR() const { return rKm.size(); }
+    size_t nLon() const { return lonDeg.size(); }
+    size_t cellCount() const { return nLat() * nR() * nLon(); }
+    size_t index(size_t iLat, size_t iR, size_t iLon) const { return (iLat * nR() + iR) * nLon() + iLon; }
+
+    // Edges of the dual cell around each grid point along one axis: midpoints between
+    // neighbours; lat ends extend by half a spacing, clamped to the poles; r ends are the
+    // shell's boundaries r.front() and r.back(); lon wraps. Each has n + 1 entries.
+    std::vector<double> latEdgesDeg() const;
+    std::vector<double> rEdgesKm() const;
+    std::vector<double> lonEdgesDeg() const;  // first edge may be negative, last may exceed 360
+
+    // Volume of the dual cell of every grid point, in km³, as three separable factors:
+    // volume(iLat, iR, iLon) = latFactor[iLat] * rFactor[iR] * lonFactor[iLon], with
+    // latFactor = sin(edge+) - sin(edge-), rFactor = (r+³ - r-³)/3, lonFactor = Δlon in radians.
+    struct VolumeFactors {
+        std::vector<double> lat, r, lon;
+        double at(size_t iLat, size_t iR, size_t iLon) const { return lat[iLat] * r[iR] * lon[iLon]; }
+    };
+    VolumeFactors volumeFactors() const;
+    double totalVolumeKm3() const;
+
+    // The grid of the next coarser level of detail: every 2 points along each axis are
+    // merged (an odd count keeps a last point alone); coordinates are the means of the
+    // merged points (lon averaged on the circle).
+    SphericalGrid coarsened() const;
+
+    // Throws raypc::Error naming `what` unless the coordinates are strictly ascending,
+    // in range, and lon is periodic (covers 360° with no gap wider than twice the median spacing).
+    void validate(const std::string& what) const;
+
+    // True when both grids have the same sizes and coordinates within `toleranceDeg/Km`.
+    bool sameAs(const SphericalGrid& other, double tolerance = 1e-6) const;
+};
+
+// Bricks partition the index space of one level for empty-space skipping. Brick (bLat, bR, bLon)
+// covers grid points [b * size, (b + 1) * size) along each axis; its bounds are taken over the
+// points [b * size, (b + 1) * size] inclusive (one point of overlap, lon wrapping), so that they
+// contain every trilinear value a ray can sample inside the brick.
+struct BrickLayout {
+    uint32_t size = 8;  // grid points per brick along each axis
+    std::array<uint32_t, 3> count{};  // bricks along lat, r, lon
+
+    static BrickLayout forGrid(const SphericalGrid& grid, uint32_t size = 8);
+    size_t brickCount() const { return size_t(count[0]) * count[1] * count[2]; }
+    size_t index(uint32_t bLat, uint32_t bR, uint32_t bLon) const
+    {
+        return (size_t(bLat) * count[1] + bR) * count[2] + bLon;
+    }
+};
+
+}  // namespace raypc
