@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <vector>
 
 namespace raypc {
 
@@ -20,9 +21,41 @@ struct SynthOptions {
     NetcdfFlavour flavour = NetcdfFlavour::Classic64;
 };
 
-// The model's state at time `timeMyr`, on a centred grid of the given size.
-// Deterministic for (options.seed, timeMyr, grid size).
+// The contest-like grid of the given size: lat cell-centred (nLat = 180 gives -89.5 ... 89.5,
+// ascending in memory), r uniform from the core-mantle boundary (3485 km) to the surface
+// (6371 km) inclusive, lon = i * 360 / nLon (0, 1, ..., 359 for 360; no repeated seam).
+// Throws raypc::Error unless nLat >= 2, nR >= 2 and nLon >= 3.
+SphericalGrid syntheticGrid(int nLat, int nR, int nLon);
+
+// The model's state at time `timeMyr`, on syntheticGrid(options.nLat, options.nR, options.nLon).
+// Deterministic for (options.seed, timeMyr, grid size). Uses oneTBB over lat rows.
 Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr);
+
+// The same model sampled on any grid (options' grid size is ignored): every field except
+// "temperature anomaly" is a pointwise function of (seed, time, position), so a small local
+// grid gives exactly the values of a global one at the same points. "temperature anomaly" is
+// temperature minus its area-weighted mean over each r shell *of the given grid*, which is
+// only the physical anomaly on a global grid.
+Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr, const SphericalGrid& grid);
+
+// The large-scale features of the model at `timeMyr`, for tests and documentation: where the
+// plumes and slabs are, how far they have risen or sunk, and where they stall.
+struct SynthFeature {
+    enum class Kind { Plume, Slab };
+    Kind kind = Kind::Plume;
+    // Plume: axis position. Slab: the midpoint of the slab's great-circle arc (degrees).
+    double latDeg = 0, lonDeg = 0;
+    // Slab only: the ends of its arc (degrees).
+    double startLatDeg = 0, startLonDeg = 0, endLatDeg = 0, endLonDeg = 0;
+    // Plume: radius of the head centre. Slab: radius of the tip (km).
+    double frontRadiusKm = 0;
+    // Depth (km) of the layer where the feature stalls (660 or 1600); 0 when it passes through.
+    double stallDepthKm = 0;
+    // Peak vertical speed of the feature's flow (m/s, > 0 for both kinds) and its temperature
+    // amplitude (K, > 0 for plumes, < 0 for slabs).
+    double speedMps = 0, temperatureK = 0;
+};
+std::vector<SynthFeature> syntheticFeatures(const SynthOptions& options, double timeMyr);
 
 // Writes spherical001.nc ... sphericalNNN.nc into `outDir` (created if missing); each file is
 // written atomically. Shows progress on a terminal. Throws raypc::Error on I/O failure.
