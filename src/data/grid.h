@@ -50,7 +50,8 @@ struct SphericalGrid {
 
     // The grid of the next coarser level of detail: every 2 points along each axis are
     // merged (an odd count keeps a last point alone); coordinates are the means of the
-    // merged points (lon averaged on the circle).
+    // merged points (lon averaged on the circle). The outermost coarse coordinates lie inside
+    // the fine grid's extent; samplers clamp (constant extension) up to the shell boundaries.
     SphericalGrid coarsened() const;
 
     // Throws raypc::Error naming `what` unless the coordinates are strictly ascending,

@@ -1,0 +1,143 @@
+// raypc info PATH [--json]: what a netCDF file or a dataset holds.
+#include "app/command.h"
+#include "app/options.h"
+#include "core/error.h"
+#include "data/dataset.h"
+#include "data/netcdf_reader.h"
+#include "data/preprocess.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+
+namespace raypc::app {
+namespace {
+
+using nlohmann::json;
+
+json describeGrid(const SphericalGrid& g)
+{
+    auto axis = [](const std::vector<double>& c) {
+        double minStep = c.size() > 1 ? c[1] - c[0] : 0, maxStep = minStep;
+        for (size_t i = 1; i < c.size(); ++i) {
+            minStep = std::min(minStep, c[i] - c[i - 1]);
+            maxStep = std::max(maxStep, c[i] - c[i - 1]);
+        }
+        return json{{"count", c.size()}, {"first", c.front()}, {"last", c.back()}, {"min_spacing", minStep},
+                    {"max_spacing", maxStep}};
+    };
+    return {{"lat_deg", axis(g.latDeg)}, {"r_km", axis(g.rKm)}, {"lon_deg", axis(g.lonDeg)},
+            {"cells", g.cellCount()}, {"volume_km3", g.totalVolumeKm3()}};
+}
+
+json describeFile(const std::filesystem::path& path, const ReaderOptions& options)
+{
+    const FileHeader header = readHeader(path, options);
+    const Snapshot snap = readSnapshot(path, options);
+    json j{{"kind", "netcdf"}, {"path", path.string()}, {"format", header.format}, {"grid", describeGrid(snap.grid)}};
+    j["variables"] = json::array();
+    for (size_t i = 0; i < snap.fields.size(); ++i) {
+        const auto stats = computeStats(snap.grid, snap.fields[i].values);
+        j["variables"].push_back({{"name", snap.fields[i].name},
+                                  {"name_in_file", header.variables[i].fileName},
+                                  {"units", snap.fields[i].units},
+                                  {"min", stats.range.min},
+                                  {"max", stats.range.max},
+                                  {"mean", stats.mean}});
+    }
+    return j;
+}
+
+json describeDataset(const Dataset& d)
+{
+    json j{{"kind", "dataset"}, {"path", d.dir().string()}, {"dt_myr", d.dtMyr()}};
+    j["levels"] = json::array();
+    for (size_t l = 0; l < d.levels().size(); ++l) {
+        const auto& level = d.levels()[l];
+        j["levels"].push_back({{"level", l},
+                               {"grid", describeGrid(level.grid)},
+                               {"bricks", level.bricks.brickCount()},
+                               {"brick_size", level.bricks.size}});
+    }
+    j["variables"] = json::array();
+    for (const auto& v : d.variables())
+        j["variables"].push_back({{"name", v.name},
+                                  {"units", v.units},
+                                  {"derived", v.derived},
+                                  {"min", v.global.range.min},
+                                  {"max", v.global.range.max},
+                                  {"mean", v.global.mean}});
+    j["coordinates"] = json::array();
+    for (const auto& c : coordinateInfos())
+        j["coordinates"].push_back({{"name", c.name}, {"units", c.units}});
+    j["steps"] = json::array();
+    for (const auto& s : d.steps())
+        j["steps"].push_back({{"index", s.index}, {"time_myr", s.timeMyr}, {"source", s.source}});
+    return j;
+}
+
+void printText(const json& j)
+{
+    auto gridLine = [](const json& g) {
+        return fmt::format("{} x {} x {} (lat x r x lon) = {} points; lat {}..{} deg, r {}..{} km, lon {}..{} deg",
+                           g["lat_deg"]["count"].get<size_t>(), g["r_km"]["count"].get<size_t>(),
+                           g["lon_deg"]["count"].get<size_t>(), g["cells"].get<size_t>(),
+                           g["lat_deg"]["first"].get<double>(), g["lat_deg"]["last"].get<double>(),
+                           g["r_km"]["first"].get<double>(), g["r_km"]["last"].get<double>(),
+                           g["lon_deg"]["first"].get<double>(), g["lon_deg"]["last"].get<double>());
+    };
+    if (j["kind"] == "netcdf") {
+        fmt::print("{} (netCDF, {})\n  grid: {}\n", j["path"].get<std::string>(), j["format"].get<std::string>(),
+                   gridLine(j["grid"]));
+    } else {
+        fmt::print("{} (RayPC dataset)\n", j["path"].get<std::string>());
+        for (const auto& l : j["levels"])
+            fmt::print("  level {}: {}; {} bricks of {}^3\n", l["level"].get<int>(), gridLine(l["grid"]),
+                       l["bricks"].get<size_t>(), l["brick_size"].get<int>());
+        const auto& steps = j["steps"];
+        fmt::print("  steps: {} ({} .. {} Myr, {} Myr apart; {} .. {})\n", steps.size(),
+                   steps.front()["time_myr"].get<double>(), steps.back()["time_myr"].get<double>(),
+                   j["dt_myr"].get<double>(), steps.front()["source"].get<std::string>(),
+                   steps.back()["source"].get<std::string>());
+    }
+    fmt::print("  variables{}:\n", j["kind"] == "dataset" ? " (ranges over all steps)" : "");
+    for (const auto& v : j["variables"])
+        fmt::print("    {:<42} [{:<8}] {:>12.5g} .. {:<12.5g} mean {:.5g}{}\n", v["name"].get<std::string>(),
+                   v["units"].get<std::string>(), v["min"].get<double>(), v["max"].get<double>(),
+                   v["mean"].get<double>(), v.value("derived", false) ? "  (derived)" : "");
+    if (j.contains("coordinates")) {
+        std::vector<std::string> names;
+        for (const auto& c : j["coordinates"])
+            names.push_back(fmt::format("{} [{}]", c["name"].get<std::string>(), c["units"].get<std::string>()));
+        fmt::print("  coordinates (brushable): {}\n", fmt::join(names, ", "));
+    }
+}
+
+struct InfoArgs {
+    std::string path;
+    bool json = false;
+    ReaderFlags reader;
+};
+
+const CommandRegistration kRegistration(
+    "info", "Describe a netCDF snapshot or a RayPC dataset: grid, variables with units and ranges, steps, levels",
+    [](CLI::App& cmd) {
+        auto args = std::make_shared<InfoArgs>();
+        cmd.add_option("path", args->path, "A netCDF file or a dataset directory")->required();
+        cmd.add_flag("--json", args->json, "Print JSON");
+        args->reader.add(cmd);
+        cmd.callback([args] {
+            const std::filesystem::path path = args->path;
+            const json j = std::filesystem::is_directory(path) ? describeDataset(*Dataset::open(path))
+                                                                : describeFile(path, args->reader.toOptions());
+            if (args->json)
+                fmt::print("{}\n", j.dump(2));
+            else
+                printText(j);
+        });
+    },
+    30);
+
+}  // namespace
+}  // namespace raypc::app

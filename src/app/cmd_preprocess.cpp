@@ -1,0 +1,48 @@
+// raypc preprocess INPUT... -o DATASET_DIR
+#include "app/command.h"
+#include "app/options.h"
+#include "data/preprocess.h"
+
+#include <fmt/format.h>
+
+namespace raypc::app {
+namespace {
+
+struct PreprocessArgs {
+    std::vector<std::string> inputs;
+    std::string output;
+    ReaderFlags reader;
+    PreprocessOptions options;
+};
+
+const CommandRegistration kRegistration(
+    "preprocess", "Turn netCDF snapshots into a render-ready dataset (resumable)",
+    [](CLI::App& cmd) {
+        auto args = std::make_shared<PreprocessArgs>();
+        cmd.add_option("inputs", args->inputs, "netCDF files, or directories of *.nc (steps in natural order)")
+            ->required();
+        cmd.add_option("-o,--output", args->output, "Dataset directory to write")->required();
+        cmd.add_option("--dt-myr", args->options.dtMyr, "Time between steps in Myr")->capture_default_str();
+        cmd.add_option("--sample-rows", args->options.sampleRows, "Cells in the parallel-coordinates sample")
+            ->capture_default_str();
+        cmd.add_option("--seed", args->options.seed, "Seed of the sample")->capture_default_str();
+        cmd.add_flag("-q,--quiet", args->options.quiet, "No progress output");
+        args->reader.add(cmd);
+        cmd.callback([args] {
+            std::vector<std::filesystem::path> inputs(args->inputs.begin(), args->inputs.end());
+            auto options = args->options;
+            options.reader = args->reader.toOptions();
+            const auto files = listSnapshotFiles(inputs);
+            const auto summary = preprocess(files, args->output, options);
+            const auto dataset = Dataset::open(args->output);
+            const auto& g = dataset->levels().front().grid;
+            fmt::print("{}: {} steps ({} written, {} already done) of {}x{}x{} (lat x r x lon), {} variables, "
+                       "in {:.1f} s\n",
+                       args->output, dataset->steps().size(), summary.stepsWritten, summary.stepsSkipped, g.nLat(),
+                       g.nR(), g.nLon(), dataset->variables().size(), summary.seconds);
+        });
+    },
+    20);
+
+}  // namespace
+}  // namespace raypc::app

@@ -1,0 +1,235 @@
+#include "data/dataset.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/strings.h"
+#include "data/bricks.h"
+#include "data/dataset_format.h"
+
+#include <fmt/format.h>
+
+namespace raypc {
+
+namespace format {
+
+std::filesystem::path stepDir(const std::filesystem::path& dataset, int step)
+{
+    return dataset / "steps" / fmt::format("{:04d}", step);
+}
+
+std::filesystem::path levelDir(const std::filesystem::path& stepDir, int level)
+{
+    return stepDir / fmt::format("L{}", level);
+}
+
+std::filesystem::path valuesFile(const std::filesystem::path& levelDir, const std::string& stem)
+{
+    return levelDir / (stem + ".f32");
+}
+
+std::filesystem::path boundsFile(const std::filesystem::path& levelDir, const std::string& stem)
+{
+    return levelDir / (stem + ".bricks.f32");
+}
+
+nlohmann::json toJson(const SphericalGrid& grid)
+{
+    return {{"lat_deg", grid.latDeg}, {"r_km", grid.rKm}, {"lon_deg", grid.lonDeg}};
+}
+
+SphericalGrid gridFromJson(const nlohmann::json& j)
+{
+    SphericalGrid g;
+    g.latDeg = j.at("lat_deg").get<std::vector<double>>();
+    g.rKm = j.at("r_km").get<std::vector<double>>();
+    g.lonDeg = j.at("lon_deg").get<std::vector<double>>();
+    return g;
+}
+
+nlohmann::json toJson(const VariableStats& stats)
+{
+    return {{"min", stats.range.min}, {"max", stats.range.max}, {"mean", stats.mean},
+            {"histogram", stats.histogram}};
+}
+
+VariableStats statsFromJson(const nlohmann::json& j)
+{
+    VariableStats s;
+    s.range = {j.at("min").get<float>(), j.at("max").get<float>()};
+    s.mean = j.at("mean").get<double>();
+    s.histogram = j.at("histogram").get<std::vector<double>>();
+    return s;
+}
+
+}  // namespace format
+
+const std::vector<CoordinateInfo>& coordinateInfos()
+{
+    static const std::vector<CoordinateInfo> infos = {
+        {Coordinate::X, "x", "km"},           {Coordinate::Y, "y", "km"},
+        {Coordinate::Z, "z", "km"},           {Coordinate::Lat, "lat", "degrees_north"},
+        {Coordinate::Lon, "lon", "degrees_east"}, {Coordinate::Radius, "radius", "km"},
+        {Coordinate::Depth, "depth", "km"}};
+    return infos;
+}
+
+std::optional<Coordinate> findCoordinate(const std::string& name)
+{
+    for (const auto& c : coordinateInfos())
+        if (c.name == name)
+            return c.id;
+    return std::nullopt;
+}
+
+std::shared_ptr<StepVolume> StepVolume::fromSnapshot(const Snapshot& snapshot, uint32_t brickSize)
+{
+    auto volume = std::make_shared<StepVolume>();
+    volume->m_grid = snapshot.grid;
+    volume->m_bricks = BrickLayout::forGrid(snapshot.grid, brickSize);
+    const size_t n = snapshot.grid.cellCount();
+    for (const auto& field : snapshot.fields) {
+        if (field.values.size() != n)
+            fail("{}: {} values, expected {} for the grid", field.name, field.values.size(), n);
+        auto& values = volume->m_owned.emplace_back(field.values);
+        auto& bounds = volume->m_owned.emplace_back(2 * volume->m_bricks.brickCount());
+        computeBrickBounds(volume->m_grid, volume->m_bricks, values, bounds);
+    }
+    for (size_t i = 0; i < snapshot.fields.size(); ++i) {
+        volume->m_values.push_back(volume->m_owned[2 * i].data());
+        volume->m_bounds.push_back(volume->m_owned[2 * i + 1].data());
+    }
+    return volume;
+}
+
+std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
+{
+    const auto manifestPath = dir / format::kManifest;
+    if (!std::filesystem::is_directory(dir))
+        fail("{}: not a directory (expected a RayPC dataset made by `raypc preprocess`)", dir.string());
+    if (!std::filesystem::exists(manifestPath))
+        fail("{}: no {} (expected a RayPC dataset made by `raypc preprocess`)", dir.string(), format::kManifest);
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(readFile(manifestPath));
+    } catch (const nlohmann::json::exception& e) {
+        fail("{}: not valid JSON: {}", manifestPath.string(), e.what());
+    }
+    auto dataset = std::make_shared<Dataset>();
+    dataset->m_dir = dir;
+    try {
+        if (j.at("format").get<std::string>() != format::kFormatName)
+            fail("{}: format is '{}', expected '{}'", manifestPath.string(), j.at("format").get<std::string>(),
+                 format::kFormatName);
+        if (const int version = j.at("version").get<int>(); version != format::kVersion)
+            fail("{}: format version {}, this raypc reads version {}", manifestPath.string(), version,
+                 format::kVersion);
+        if (j.at("status").get<std::string>() != "complete")
+            fail("{}: preprocessing did not finish (status '{}'); run `raypc preprocess` again to resume",
+                 dir.string(), j.at("status").get<std::string>());
+        dataset->m_dtMyr = j.at("dt_myr").get<double>();
+        const uint32_t brickSize = j.at("brick_size").get<uint32_t>();
+        for (const auto& level : j.at("levels")) {
+            LevelInfo info;
+            info.grid = format::gridFromJson(level);
+            info.bricks = BrickLayout::forGrid(info.grid, brickSize);
+            dataset->m_levels.push_back(std::move(info));
+        }
+        for (const auto& v : j.at("variables")) {
+            VariableInfo info;
+            info.name = v.at("name").get<std::string>();
+            info.units = v.at("units").get<std::string>();
+            info.derived = v.at("derived").get<bool>();
+            info.fileStem = v.at("file_stem").get<std::string>();
+            info.global = format::statsFromJson(v.at("global"));
+            dataset->m_variables.push_back(std::move(info));
+        }
+        for (const auto& s : j.at("steps")) {
+            StepInfo info;
+            info.index = s.at("index").get<int>();
+            info.timeMyr = s.at("time_myr").get<double>();
+            info.source = s.at("source").get<std::string>();
+            for (const auto& st : s.at("stats"))
+                info.stats.push_back(format::statsFromJson(st));
+            if (info.stats.size() != dataset->m_variables.size())
+                fail("{}: step {} has stats for {} variables, expected {}", manifestPath.string(), info.index,
+                     info.stats.size(), dataset->m_variables.size());
+            dataset->m_steps.push_back(std::move(info));
+        }
+        dataset->m_sampleRows = j.at("sample").at("rows").get<size_t>();
+    } catch (const nlohmann::json::exception& e) {
+        fail("{}: malformed manifest: {}", manifestPath.string(), e.what());
+    }
+    if (dataset->m_levels.empty() || dataset->m_steps.empty() || dataset->m_variables.empty())
+        fail("{}: the manifest lists no levels, steps or variables", manifestPath.string());
+    return dataset;
+}
+
+int Dataset::variableIndex(const std::string& name) const
+{
+    for (size_t i = 0; i < m_variables.size(); ++i)
+        if (m_variables[i].name == name)
+            return static_cast<int>(i);
+    return -1;
+}
+
+std::shared_ptr<const StepVolume> Dataset::load(int step, int level) const
+{
+    if (step < 0 || step >= static_cast<int>(m_steps.size()))
+        fail("{}: step {} out of range, the dataset has steps 0..{}", m_dir.string(), step, m_steps.size() - 1);
+    if (level < 0 || level >= static_cast<int>(m_levels.size()))
+        fail("{}: level {} out of range, the dataset has levels 0..{}", m_dir.string(), level,
+             m_levels.size() - 1);
+    auto volume = std::make_shared<StepVolume>();
+    volume->m_grid = m_levels[level].grid;
+    volume->m_bricks = m_levels[level].bricks;
+    const auto dir = format::levelDir(format::stepDir(m_dir, step), level);
+    const size_t valueBytes = volume->m_grid.cellCount() * sizeof(float);
+    const size_t boundBytes = 2 * volume->m_bricks.brickCount() * sizeof(float);
+    for (const auto& v : m_variables) {
+        auto& values = volume->m_mapped.emplace_back(format::valuesFile(dir, v.fileStem));
+        if (values.size() != valueBytes)
+            fail("{}: {} bytes, expected {}", format::valuesFile(dir, v.fileStem).string(), values.size(),
+                 valueBytes);
+        auto& bounds = volume->m_mapped.emplace_back(format::boundsFile(dir, v.fileStem));
+        if (bounds.size() != boundBytes)
+            fail("{}: {} bytes, expected {}", format::boundsFile(dir, v.fileStem).string(), bounds.size(),
+                 boundBytes);
+    }
+    for (size_t i = 0; i < m_variables.size(); ++i) {
+        volume->m_values.push_back(reinterpret_cast<const float*>(volume->m_mapped[2 * i].bytes().data()));
+        volume->m_bounds.push_back(reinterpret_cast<const float*>(volume->m_mapped[2 * i + 1].bytes().data()));
+    }
+    return volume;
+}
+
+SampleTable Dataset::loadSample(int step) const
+{
+    if (step < 0 || step >= static_cast<int>(m_steps.size()))
+        fail("{}: step {} out of range, the dataset has steps 0..{}", m_dir.string(), step, m_steps.size() - 1);
+    SampleTable table;
+    for (const auto& c : coordinateInfos()) {
+        table.columns.push_back(c.name);
+        table.units.push_back(c.units);
+    }
+    for (const auto& v : m_variables) {
+        table.columns.push_back(v.name);
+        table.units.push_back(v.units);
+    }
+    const size_t nCoords = coordinateInfos().size(), nVars = m_variables.size(), rows = m_sampleRows;
+    const MappedFile coords(m_dir / format::kSampleCoords);
+    const MappedFile vars(format::stepDir(m_dir, step) / format::kStepSample);
+    if (coords.size() != rows * nCoords * sizeof(float) || vars.size() != rows * nVars * sizeof(float))
+        fail("{}: sample files do not hold {} rows", m_dir.string(), rows);
+    const auto* c = reinterpret_cast<const float*>(coords.bytes().data());
+    const auto* v = reinterpret_cast<const float*>(vars.bytes().data());
+    table.rows = rows;
+    table.values.resize(rows * (nCoords + nVars));
+    for (size_t row = 0; row < rows; ++row) {
+        float* out = table.values.data() + row * (nCoords + nVars);
+        std::copy_n(c + row * nCoords, nCoords, out);
+        std::copy_n(v + row * nVars, nVars, out + nCoords);
+    }
+    return table;
+}
+
+}  // namespace raypc

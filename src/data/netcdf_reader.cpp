@@ -1,0 +1,469 @@
+#include "data/netcdf_reader.h"
+
+#include "core/error.h"
+#include "core/spherical.h"
+#include "core/strings.h"
+
+#include <netcdf.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <mutex>
+#include <numeric>
+#include <optional>
+
+namespace raypc {
+namespace {
+
+// netCDF-C is not thread-safe; every call into it holds this lock.
+std::mutex& netcdfMutex()
+{
+    static std::mutex m;
+    return m;
+}
+
+std::string errorText(int status) { return nc_strerror(status); }
+
+// An open file that closes itself.
+class NcFile {
+public:
+    explicit NcFile(const std::filesystem::path& path) : m_path(path)
+    {
+        std::error_code ec;
+        if (!std::filesystem::exists(path, ec))
+            fail("{}: no such file", path.string());
+        if (std::filesystem::is_directory(path, ec))
+            fail("{}: is a directory, expected a netCDF file", path.string());
+        const int status = nc_open(path.c_str(), NC_NOWRITE, &m_id);
+        if (status != NC_NOERR) {
+            if (status == NC_ENOTNC)
+                fail("{}: not a netCDF file (or an unsupported variant)", path.string());
+            fail("{}: cannot open as netCDF: {}", path.string(), errorText(status));
+        }
+    }
+    ~NcFile() { nc_close(m_id); }
+    NcFile(const NcFile&) = delete;
+    NcFile& operator=(const NcFile&) = delete;
+
+    int id() const { return m_id; }
+    const std::filesystem::path& path() const { return m_path; }
+    std::string name() const { return m_path.filename().string(); }
+
+    void check(int status, std::string_view what) const
+    {
+        if (status != NC_NOERR)
+            fail("{}: {}: {}", m_path.string(), what, errorText(status));
+    }
+
+    std::optional<int> findVar(const std::string& name) const
+    {
+        int varId = -1;
+        if (nc_inq_varid(m_id, name.c_str(), &varId) != NC_NOERR)
+            return std::nullopt;
+        return varId;
+    }
+
+    std::string varName(int varId) const
+    {
+        char name[NC_MAX_NAME + 1] = {};
+        check(nc_inq_varname(m_id, varId, name), "reading a variable name");
+        return name;
+    }
+
+    std::vector<int> varDims(int varId) const
+    {
+        int nDims = 0;
+        check(nc_inq_varndims(m_id, varId, &nDims), "reading variable dims");
+        std::vector<int> dims(nDims);
+        check(nc_inq_vardimid(m_id, varId, dims.data()), "reading variable dims");
+        return dims;
+    }
+
+    std::string dimName(int dimId) const
+    {
+        char name[NC_MAX_NAME + 1] = {};
+        check(nc_inq_dimname(m_id, dimId, name), "reading a dimension name");
+        return name;
+    }
+
+    size_t dimLength(int dimId) const
+    {
+        size_t n = 0;
+        check(nc_inq_dimlen(m_id, dimId, &n), "reading a dimension length");
+        return n;
+    }
+
+    std::optional<std::string> textAttribute(int varId, const char* name) const
+    {
+        nc_type type;
+        size_t len = 0;
+        if (nc_inq_att(m_id, varId, name, &type, &len) != NC_NOERR || type != NC_CHAR)
+            return std::nullopt;
+        std::string value(len, '\0');
+        check(nc_get_att_text(m_id, varId, name, value.data()), std::string("reading attribute ") + name);
+        while (!value.empty() && value.back() == '\0')
+            value.pop_back();
+        return value;
+    }
+
+    std::optional<double> numberAttribute(int varId, const char* name) const
+    {
+        nc_type type;
+        size_t len = 0;
+        if (nc_inq_att(m_id, varId, name, &type, &len) != NC_NOERR || len < 1 || type == NC_CHAR ||
+            type == NC_STRING)
+            return std::nullopt;
+        std::vector<double> values(len);
+        check(nc_get_att_double(m_id, varId, name, values.data()), std::string("reading attribute ") + name);
+        return values[0];
+    }
+
+    std::string formatName() const
+    {
+        int fmt = 0;
+        check(nc_inq_format(m_id, &fmt), "reading the format");
+        switch (fmt) {
+        case NC_FORMAT_CLASSIC: return "classic";
+        case NC_FORMAT_64BIT_OFFSET: return "64-bit offset";
+        case NC_FORMAT_CDF5: return "CDF-5";
+        case NC_FORMAT_NETCDF4: return "netCDF-4";
+        case NC_FORMAT_NETCDF4_CLASSIC: return "netCDF-4 classic model";
+        default: return "unknown";
+        }
+    }
+
+private:
+    std::filesystem::path m_path;
+    int m_id = -1;
+};
+
+enum Axis { kLat = 0, kR = 1, kLon = 2 };
+constexpr std::array<const char*, 3> kAxisNames = {"lat", "r", "lon"};
+
+struct CoordinateAxis {
+    int varId = -1;
+    int dimId = -1;
+    std::vector<double> fileValues;  // in file order, converted to degrees / km
+    // canonical index -> index in the file
+    std::vector<size_t> fileIndex;
+    std::vector<double> canonical;
+};
+
+bool unitsMatch(const std::optional<std::string>& units, std::initializer_list<const char*> accepted)
+{
+    if (!units)
+        return false;
+    for (const char* a : accepted)
+        if (*units == a)
+            return true;
+    return false;
+}
+
+// Finds a coordinate variable by explicit name, by customary names, or by CF units.
+int findCoordinateVar(const NcFile& file, Axis axis, const std::string& explicitName)
+{
+    if (!explicitName.empty()) {
+        if (auto id = file.findVar(explicitName))
+            return *id;
+        fail("{}: no coordinate variable '{}' (given for {})", file.path().string(), explicitName,
+             kAxisNames[axis]);
+    }
+    static const std::array<std::vector<std::string>, 3> names = {
+        std::vector<std::string>{"lat", "latitude", "Lat", "LAT"},
+        std::vector<std::string>{"r", "radius", "R", "rad"},
+        std::vector<std::string>{"lon", "longitude", "Lon", "LON"}};
+    for (const auto& name : names[axis])
+        if (auto id = file.findVar(name))
+            return *id;
+    int nVars = 0;
+    file.check(nc_inq_nvars(file.id(), &nVars), "listing variables");
+    for (int v = 0; v < nVars; ++v) {
+        if (file.varDims(v).size() != 1)
+            continue;
+        const auto units = file.textAttribute(v, "units");
+        if (axis == kLat && unitsMatch(units, {"degrees_north", "degree_north", "degrees_N", "degreesN"}))
+            return v;
+        if (axis == kLon && unitsMatch(units, {"degrees_east", "degree_east", "degrees_E", "degreesE"}))
+            return v;
+    }
+    fail("{}: no {} coordinate variable found (looked for {} and CF units); name it with an option",
+         file.path().string(), kAxisNames[axis],
+         axis == kLat ? "lat/latitude" : axis == kR ? "r/radius" : "lon/longitude");
+}
+
+CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explicitName)
+{
+    CoordinateAxis a;
+    a.varId = findCoordinateVar(file, axis, explicitName);
+    const std::string name = file.varName(a.varId);
+    const auto dims = file.varDims(a.varId);
+    if (dims.size() != 1)
+        fail("{}: coordinate '{}' has {} dims, expected 1", file.path().string(), name, dims.size());
+    a.dimId = dims[0];
+    const size_t n = file.dimLength(a.dimId);
+    if (n == 0)
+        fail("{}: coordinate '{}' is empty", file.path().string(), name);
+    a.fileValues.resize(n);
+    file.check(nc_get_var_double(file.id(), a.varId, a.fileValues.data()),
+               fmt::format("reading coordinate '{}'", name));
+    for (double v : a.fileValues)
+        if (!std::isfinite(v))
+            fail("{}: coordinate '{}' holds a non-finite value", file.path().string(), name);
+    if (axis == kR) {
+        const auto units = file.textAttribute(a.varId, "units");
+        if (unitsMatch(units, {"m", "meter", "meters", "metre", "metres"}))
+            for (double& v : a.fileValues)
+                v /= 1000.0;
+        else if (units && !unitsMatch(units, {"km", "kilometer", "kilometers", "kilometre", "kilometres"}))
+            fail("{}: coordinate '{}' has units '{}', expected km or m", file.path().string(), name, *units);
+    }
+
+    // Canonical order: ascending; lon wrapped into [0, 360) with a repeated seam dropped.
+    std::vector<double> values = a.fileValues;
+    std::vector<size_t> index(n);
+    std::iota(index.begin(), index.end(), 0);
+    if (axis == kLon) {
+        if (n > 2) {
+            const double span = values.back() - values.front();
+            if (std::abs(std::abs(span) - 360.0) < 1e-6 * 360.0)
+                index.pop_back();  // the seam is stored twice; keep the first copy
+        }
+        for (double& v : values)
+            v = wrapLonDeg(v);
+    }
+    std::stable_sort(index.begin(), index.end(), [&](size_t i, size_t j) { return values[i] < values[j]; });
+    a.fileIndex = index;
+    for (size_t i : index)
+        a.canonical.push_back(values[i]);
+    for (size_t i = 1; i < a.canonical.size(); ++i)
+        if (a.canonical[i] == a.canonical[i - 1])
+            fail("{}: coordinate '{}' repeats the value {}", file.path().string(), name, a.canonical[i]);
+    return a;
+}
+
+struct OpenedHeader {
+    std::array<CoordinateAxis, 3> axes;
+    SphericalGrid grid;
+};
+
+OpenedHeader readAxes(const NcFile& file, const ReaderOptions& options)
+{
+    OpenedHeader h;
+    h.axes[kLat] = readAxis(file, kLat, options.latName);
+    h.axes[kR] = readAxis(file, kR, options.rName);
+    h.axes[kLon] = readAxis(file, kLon, options.lonName);
+    h.grid.latDeg = h.axes[kLat].canonical;
+    h.grid.rKm = h.axes[kR].canonical;
+    h.grid.lonDeg = h.axes[kLon].canonical;
+    h.grid.validate(file.path().string());
+    return h;
+}
+
+std::vector<std::string> requestedVariables(const ReaderOptions& options)
+{
+    return options.variables.empty() ? contestVariableNames() : options.variables;
+}
+
+std::string fileNameOf(const ReaderOptions& options, const std::string& canonicalName)
+{
+    const auto it = options.variableNames.find(canonicalName);
+    return it == options.variableNames.end() ? canonicalName : it->second;
+}
+
+// Checks that the variable exists and has the three grid dims; returns its id and, for each
+// file dim in order, which axis it is.
+std::pair<int, std::array<Axis, 3>> checkVariable(const NcFile& file, const OpenedHeader& h,
+                                                  const std::string& canonicalName, const std::string& fileName)
+{
+    const auto id = file.findVar(fileName);
+    if (!id) {
+        if (fileName != canonicalName)
+            fail("{}: missing variable '{}' (mapped from '{}')", file.path().string(), fileName, canonicalName);
+        fail("{}: missing variable '{}'", file.path().string(), fileName);
+    }
+    const auto dims = file.varDims(*id);
+    auto describe = [&] {
+        std::vector<std::string> names;
+        for (int d : dims)
+            names.push_back(file.dimName(d));
+        return fmt::format("({})", fmt::join(names, ", "));
+    };
+    if (dims.size() != 3)
+        fail("{}: {}: dims {}, expected 3 dims ({}, {}, {})", file.path().string(), fileName, describe(),
+             file.dimName(h.axes[kLat].dimId), file.dimName(h.axes[kR].dimId), file.dimName(h.axes[kLon].dimId));
+    std::array<Axis, 3> order{};
+    std::array<bool, 3> seen{};
+    for (size_t i = 0; i < 3; ++i) {
+        bool found = false;
+        for (int a = 0; a < 3; ++a)
+            if (dims[i] == h.axes[a].dimId && !seen[a]) {
+                order[i] = static_cast<Axis>(a);
+                seen[a] = true;
+                found = true;
+            }
+        if (!found)
+            fail("{}: {}: dims {}, expected the grid's dims ({}, {}, {}) in any order", file.path().string(),
+                 fileName, describe(), file.dimName(h.axes[kLat].dimId), file.dimName(h.axes[kR].dimId),
+                 file.dimName(h.axes[kLon].dimId));
+    }
+    int type = 0;
+    file.check(nc_inq_vartype(file.id(), *id, &type), "reading a variable type");
+    if (type == NC_CHAR || type == NC_STRING)
+        fail("{}: {}: text variable, expected numbers", file.path().string(), fileName);
+    return {*id, order};
+}
+
+}  // namespace
+
+FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& options)
+{
+    std::lock_guard lock(netcdfMutex());
+    NcFile file(path);
+    const auto h = readAxes(file, options);
+    FileHeader header;
+    header.grid = h.grid;
+    header.format = file.formatName();
+    for (const auto& name : requestedVariables(options)) {
+        const auto fileName = fileNameOf(options, name);
+        const auto [id, order] = checkVariable(file, h, name, fileName);
+        header.variables.push_back({name, fileName, file.textAttribute(id, "units").value_or("")});
+    }
+    return header;
+}
+
+Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& options)
+{
+    std::lock_guard lock(netcdfMutex());
+    NcFile file(path);
+    const auto h = readAxes(file, options);
+    Snapshot snapshot;
+    snapshot.grid = h.grid;
+    const size_t n = h.grid.cellCount();
+    std::array<size_t, 3> fileLength{};
+    for (int a = 0; a < 3; ++a)
+        fileLength[a] = h.axes[a].fileValues.size();
+    const size_t fileCount = fileLength[0] * fileLength[1] * fileLength[2];
+    std::vector<float> buffer(fileCount);
+
+    for (const auto& name : requestedVariables(options)) {
+        const auto fileName = fileNameOf(options, name);
+        const auto [id, order] = checkVariable(file, h, name, fileName);
+        const int status = nc_get_var_float(file.id(), id, buffer.data());
+        if (status != NC_NOERR)
+            fail("{}: {}: cannot read the values ({}); the file may be truncated or damaged", path.string(),
+                 fileName, errorText(status));
+
+        // Element strides of each axis in the file's dim order (last dim fastest).
+        std::array<size_t, 3> stride{};
+        size_t s = 1;
+        for (int i = 2; i >= 0; --i) {
+            stride[order[i]] = s;
+            s *= fileLength[order[i]];
+        }
+        // Missing values: _FillValue, missing_value, and anything non-finite.
+        const auto fillValue = file.numberAttribute(id, "_FillValue");
+        const auto missingValue = file.numberAttribute(id, "missing_value");
+        const double scale = file.numberAttribute(id, "scale_factor").value_or(1.0);
+        const double offset = file.numberAttribute(id, "add_offset").value_or(0.0);
+        const auto fillF = fillValue ? std::optional<float>(static_cast<float>(*fillValue)) : std::nullopt;
+        const auto missF = missingValue ? std::optional<float>(static_cast<float>(*missingValue)) : std::nullopt;
+
+        Field field;
+        field.name = name;
+        field.units = file.textAttribute(id, "units").value_or("");
+        field.values.resize(n);
+        const auto& latIdx = h.axes[kLat].fileIndex;
+        const auto& rIdx = h.axes[kR].fileIndex;
+        const auto& lonIdx = h.axes[kLon].fileIndex;
+        const size_t nR = h.grid.nR(), nLon = h.grid.nLon();
+        std::vector<size_t> missingPerShell(nR, 0);
+        std::mutex missingMutex;
+        // Reorder into canonical order, marking missing values as NaN.
+        tbb::parallel_for(size_t(0), h.grid.nLat(), [&](size_t iLat) {
+            std::vector<size_t> localMissing(nR, 0);
+            for (size_t iR = 0; iR < nR; ++iR) {
+                const size_t base = latIdx[iLat] * stride[kLat] + rIdx[iR] * stride[kR];
+                float* out = field.values.data() + h.grid.index(iLat, iR, 0);
+                for (size_t iLon = 0; iLon < nLon; ++iLon) {
+                    float v = buffer[base + lonIdx[iLon] * stride[kLon]];
+                    if ((fillF && v == *fillF) || (missF && v == *missF) || !std::isfinite(v)) {
+                        v = std::numeric_limits<float>::quiet_NaN();
+                        ++localMissing[iR];
+                    } else if (scale != 1.0 || offset != 0.0) {
+                        v = static_cast<float>(v * scale + offset);
+                    }
+                    out[iLon] = v;
+                }
+            }
+            std::lock_guard l(missingMutex);
+            for (size_t iR = 0; iR < nR; ++iR)
+                missingPerShell[iR] += localMissing[iR];
+        });
+        const size_t missing = std::accumulate(missingPerShell.begin(), missingPerShell.end(), size_t(0));
+        if (missing > 0) {
+            if (!options.fillMissing)
+                fail("{}: {}: {} of {} values are missing (fill value, missing_value or NaN/Inf); "
+                     "use --fill-missing to replace them by the mean of their radius shell",
+                     path.string(), fileName, missing, n);
+            // Replace each missing value by the mean of the valid values on its shell.
+            for (size_t iR = 0; iR < nR; ++iR) {
+                if (missingPerShell[iR] == 0)
+                    continue;
+                double sum = 0;
+                size_t count = 0;
+                for (size_t iLat = 0; iLat < h.grid.nLat(); ++iLat)
+                    for (size_t iLon = 0; iLon < nLon; ++iLon)
+                        if (const float v = field.values[h.grid.index(iLat, iR, iLon)]; !std::isnan(v)) {
+                            sum += v;
+                            ++count;
+                        }
+                if (count == 0)
+                    fail("{}: {}: every value on the shell r = {} km is missing", path.string(), fileName,
+                         h.grid.rKm[iR]);
+                const float mean = static_cast<float>(sum / count);
+                for (size_t iLat = 0; iLat < h.grid.nLat(); ++iLat)
+                    for (size_t iLon = 0; iLon < nLon; ++iLon)
+                        if (float& v = field.values[h.grid.index(iLat, iR, iLon)]; std::isnan(v))
+                            v = mean;
+            }
+        }
+        snapshot.fields.push_back(std::move(field));
+    }
+    return snapshot;
+}
+
+std::vector<std::filesystem::path> listSnapshotFiles(const std::vector<std::filesystem::path>& inputs)
+{
+    std::vector<std::filesystem::path> files;
+    for (const auto& input : inputs) {
+        std::error_code ec;
+        if (std::filesystem::is_directory(input, ec)) {
+            std::vector<std::filesystem::path> inDir;
+            for (const auto& entry : std::filesystem::directory_iterator(input))
+                if (entry.is_regular_file() && entry.path().extension() == ".nc")
+                    inDir.push_back(entry.path());
+            if (inDir.empty())
+                fail("{}: directory holds no .nc files", input.string());
+            std::sort(inDir.begin(), inDir.end(),
+                      [](const auto& a, const auto& b) { return naturalLess(a.filename().string(), b.filename().string()); });
+            files.insert(files.end(), inDir.begin(), inDir.end());
+        } else {
+            if (!std::filesystem::exists(input, ec))
+                fail("{}: no such file", input.string());
+            files.push_back(input);
+        }
+    }
+    // Steps are in file order: natural sort of names (spherical2 < spherical10), as given
+    // order within a directory; explicit files are sorted the same way.
+    std::stable_sort(files.begin(), files.end(),
+                     [](const auto& a, const auto& b) { return naturalLess(a.filename().string(), b.filename().string()); });
+    for (size_t i = 1; i < files.size(); ++i)
+        if (files[i].filename() == files[i - 1].filename())
+            fail("{}: the same file name appears twice among the inputs ({} and {})", files[i].filename().string(),
+                 files[i - 1].string(), files[i].string());
+    return files;
+}
+
+}  // namespace raypc

@@ -1,0 +1,421 @@
+#include "data/preprocess.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/progress.h"
+#include "core/spherical.h"
+#include "core/strings.h"
+#include "data/bricks.h"
+#include "data/dataset_format.h"
+
+#include <spdlog/spdlog.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <random>
+
+namespace raypc {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+void writeArray(const fs::path& path, std::span<const float> values)
+{
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    if (!f)
+        fail("{}: cannot create", path.string());
+    const size_t written = std::fwrite(values.data(), sizeof(float), values.size(), f);
+    const bool ok = written == values.size() && std::fclose(f) == 0;
+    if (!ok)
+        fail("{}: write failed (disk full?)", path.string());
+}
+
+struct VariableSpec {
+    std::string name, units;
+    bool derived;
+};
+
+// The variables of the dataset, in order: the stored ones as the reader returns them, then
+// the derived ones. Units of derived variables are fixed by addDerivedVariables.
+std::vector<VariableSpec> variableSpecs(const FileHeader& header)
+{
+    std::vector<VariableSpec> specs;
+    for (const auto& v : header.variables)
+        specs.push_back({v.name, v.units, false});
+    specs.push_back({"radial velocity", "cm/yr", true});
+    specs.push_back({"velocity magnitude", "cm/yr", true});
+    return specs;
+}
+
+json manifest(const std::vector<SphericalGrid>& levels, const std::vector<VariableSpec>& specs,
+              const std::vector<fs::path>& inputs, const PreprocessOptions& options, size_t sampleRows)
+{
+    json j;
+    j["format"] = format::kFormatName;
+    j["version"] = format::kVersion;
+    j["status"] = "incomplete";
+    j["dt_myr"] = options.dtMyr;
+    j["brick_size"] = options.brickSize;
+    j["levels"] = json::array();
+    for (const auto& g : levels)
+        j["levels"].push_back(format::toJson(g));
+    j["variables"] = json::array();
+    for (const auto& v : specs)
+        j["variables"].push_back(
+            {{"name", v.name}, {"units", v.units}, {"derived", v.derived}, {"file_stem", fileSafeName(v.name)}});
+    j["inputs"] = json::array();
+    for (const auto& p : inputs)
+        j["inputs"].push_back(p.filename().string());
+    j["sample"] = {{"rows", sampleRows}, {"seed", options.seed}};
+    return j;
+}
+
+// Writes the sample's coordinate columns (coordinateInfos() order) for every sampled point.
+std::vector<float> sampleCoordinates(const SphericalGrid& grid, std::span<const uint32_t> cells)
+{
+    const size_t nc = coordinateInfos().size();
+    std::vector<float> out(cells.size() * nc);
+    for (size_t i = 0; i < cells.size(); ++i) {
+        const size_t c = cells[i];
+        const size_t iLon = c % grid.nLon(), iR = (c / grid.nLon()) % grid.nR(), iLat = c / (grid.nLon() * grid.nR());
+        const double lat = grid.latDeg[iLat], lon = grid.lonDeg[iLon], r = grid.rKm[iR];
+        const Vec3d p = sphericalToCartesianKm(lat, lon, r);
+        const double row[] = {p.x, p.y, p.z, lat, lon, r, kSurfaceRadiusKm - r};
+        for (size_t k = 0; k < nc; ++k)
+            out[i * nc + k] = static_cast<float>(row[k]);
+    }
+    return out;
+}
+
+}  // namespace
+
+void addDerivedVariables(Snapshot& snapshot)
+{
+    const Field* vx = snapshot.find("vx");
+    const Field* vy = snapshot.find("vy");
+    const Field* vz = snapshot.find("vz");
+    if (!vx || !vy || !vz)
+        fail("derived variables need vx, vy and vz, which are not all present");
+    const auto& g = snapshot.grid;
+    Field radial{"radial velocity", "cm/yr", std::vector<float>(g.cellCount())};
+    Field magnitude{"velocity magnitude", "cm/yr", std::vector<float>(g.cellCount())};
+    tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
+        const double lat = degToRad(g.latDeg[iLat]);
+        for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+            const double lon = degToRad(g.lonDeg[iLon]);
+            // The outward unit vector is the same on every shell of this column.
+            const double ux = std::cos(lat) * std::cos(lon), uy = std::cos(lat) * std::sin(lon), uz = std::sin(lat);
+            for (size_t iR = 0; iR < g.nR(); ++iR) {
+                const size_t i = g.index(iLat, iR, iLon);
+                const double x = vx->values[i], y = vy->values[i], z = vz->values[i];
+                radial.values[i] = static_cast<float>((x * ux + y * uy + z * uz) * kMpsToCmPerYr);
+                magnitude.values[i] = static_cast<float>(std::sqrt(x * x + y * y + z * z) * kMpsToCmPerYr);
+            }
+        }
+    });
+    snapshot.fields.push_back(std::move(radial));
+    snapshot.fields.push_back(std::move(magnitude));
+}
+
+std::vector<float> coarsenField(const SphericalGrid& fine, std::span<const float> values)
+{
+    RAYPC_CHECK_EQ(values.size(), fine.cellCount());
+    const SphericalGrid coarse = fine.coarsened();
+    const auto w = fine.volumeFactors();
+    std::vector<float> out(coarse.cellCount());
+    tbb::parallel_for(size_t(0), coarse.nLat(), [&](size_t cLat) {
+        const size_t lat0 = 2 * cLat, lat1 = std::min(lat0 + 2, fine.nLat());
+        for (size_t cR = 0; cR < coarse.nR(); ++cR) {
+            const size_t r0 = 2 * cR, r1 = std::min(r0 + 2, fine.nR());
+            for (size_t cLon = 0; cLon < coarse.nLon(); ++cLon) {
+                const size_t lon0 = 2 * cLon, lon1 = std::min(lon0 + 2, fine.nLon());
+                double sum = 0, weight = 0;
+                for (size_t iLat = lat0; iLat < lat1; ++iLat)
+                    for (size_t iR = r0; iR < r1; ++iR)
+                        for (size_t iLon = lon0; iLon < lon1; ++iLon) {
+                            const double wi = w.at(iLat, iR, iLon);
+                            sum += wi * values[fine.index(iLat, iR, iLon)];
+                            weight += wi;
+                        }
+                out[coarse.index(cLat, cR, cLon)] = static_cast<float>(sum / weight);
+            }
+        }
+    });
+    return out;
+}
+
+VariableStats computeStats(const SphericalGrid& grid, std::span<const float> values)
+{
+    RAYPC_CHECK_EQ(values.size(), grid.cellCount());
+    const auto w = grid.volumeFactors();
+    const size_t rowSize = grid.nR() * grid.nLon();
+    const auto [lo, hi] = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, values.size(), 1 << 16), std::pair<float, float>(INFINITY, -INFINITY),
+        [&](const auto& range, std::pair<float, float> acc) {
+            for (size_t i = range.begin(); i != range.end(); ++i) {
+                acc.first = std::min(acc.first, values[i]);
+                acc.second = std::max(acc.second, values[i]);
+            }
+            return acc;
+        },
+        [](auto a, auto b) { return std::pair(std::min(a.first, b.first), std::max(a.second, b.second)); });
+
+    VariableStats stats;
+    stats.range = {lo, hi};
+    const double span = static_cast<double>(hi) - lo;
+    const double scale = span > 0 ? kHistogramBins / span : 0.0;
+    struct Partial {
+        std::vector<double> histogram = std::vector<double>(kHistogramBins, 0.0);
+        double weighted = 0, weight = 0;
+    };
+    tbb::enumerable_thread_specific<Partial> partials;
+    tbb::parallel_for(size_t(0), grid.nLat(), [&](size_t iLat) {
+        auto& p = partials.local();
+        for (size_t iR = 0; iR < grid.nR(); ++iR) {
+            const double wRow = w.lat[iLat] * w.r[iR];
+            const float* row = values.data() + iLat * rowSize + iR * grid.nLon();
+            for (size_t iLon = 0; iLon < grid.nLon(); ++iLon) {
+                const double wi = wRow * w.lon[iLon];
+                const int bin = std::min(kHistogramBins - 1, static_cast<int>((row[iLon] - lo) * scale));
+                p.histogram[bin] += wi;
+                p.weighted += wi * row[iLon];
+                p.weight += wi;
+            }
+        }
+    });
+    stats.histogram.assign(kHistogramBins, 0.0);
+    double weighted = 0, weight = 0;
+    for (const auto& p : partials) {
+        for (int b = 0; b < kHistogramBins; ++b)
+            stats.histogram[b] += p.histogram[b];
+        weighted += p.weighted;
+        weight += p.weight;
+    }
+    for (double& h : stats.histogram)
+        h /= weight;
+    stats.mean = weighted / weight;
+    return stats;
+}
+
+std::vector<uint32_t> drawVolumeWeightedSample(const SphericalGrid& grid, size_t rows, uint64_t seed)
+{
+    // Dual-cell volumes factor into lat, r and lon parts, so drawing each index independently
+    // from its own factor draws grid points with probability proportional to volume.
+    const auto w = grid.volumeFactors();
+    std::mt19937_64 rng(seed);
+    std::discrete_distribution<size_t> lat(w.lat.begin(), w.lat.end());
+    std::discrete_distribution<size_t> r(w.r.begin(), w.r.end());
+    std::discrete_distribution<size_t> lon(w.lon.begin(), w.lon.end());
+    std::vector<uint32_t> cells(rows);
+    for (auto& c : cells) {
+        const size_t iLat = lat(rng), iR = r(rng), iLon = lon(rng);
+        c = static_cast<uint32_t>(grid.index(iLat, iR, iLon));
+    }
+    std::sort(cells.begin(), cells.end());
+    return cells;
+}
+
+void rebinHistogram(const VariableStats& stats, ValueRange range, std::span<double> histogram)
+{
+    const size_t nOut = histogram.size();
+    const size_t nIn = stats.histogram.size();
+    const double outLo = range.min, outSpan = static_cast<double>(range.max) - range.min;
+    const double inLo = stats.range.min, inSpan = static_cast<double>(stats.range.max) - stats.range.min;
+    auto outBin = [&](double v) {
+        if (outSpan <= 0)
+            return size_t(0);
+        return std::min(nOut - 1, static_cast<size_t>(std::max(0.0, (v - outLo) / outSpan * nOut)));
+    };
+    for (size_t b = 0; b < nIn; ++b) {
+        const double mass = stats.histogram[b];
+        if (mass == 0)
+            continue;
+        if (inSpan <= 0 || outSpan <= 0) {
+            histogram[outBin(inLo)] += mass;
+            continue;
+        }
+        const double a = inLo + inSpan * b / nIn, c = inLo + inSpan * (b + 1) / nIn;
+        const size_t first = outBin(a), last = outBin(c);
+        for (size_t o = first; o <= last; ++o) {
+            const double oLo = outLo + outSpan * o / nOut, oHi = outLo + outSpan * (o + 1) / nOut;
+            const double overlap = std::min(c, oHi) - std::max(a, oLo);
+            if (overlap > 0)
+                histogram[o] += mass * overlap / (c - a);
+        }
+    }
+}
+
+PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path& outDir,
+                             const PreprocessOptions& options)
+{
+    const auto start = std::chrono::steady_clock::now();
+    if (inputs.empty())
+        fail("preprocess: no input files");
+    if (!(options.dtMyr > 0))
+        fail("--dt-myr: {} is not a positive time step", options.dtMyr);
+    if (options.sampleRows == 0)
+        fail("--sample-rows: must be at least 1");
+
+    // The first file fixes the grid and the variables; every other step must match them.
+    const FileHeader header = readHeader(inputs.front(), options.reader);
+    std::vector<SphericalGrid> levels = {header.grid};
+    for (int l = 1; l < kLevelCount; ++l)
+        levels.push_back(levels.back().coarsened());
+    const auto specs = variableSpecs(header);
+    const size_t sampleRows = options.sampleRows;
+    json j = manifest(levels, specs, inputs, options, sampleRows);
+
+    fs::create_directories(outDir / "steps");
+    const fs::path manifestPath = outDir / format::kManifest;
+    if (fs::exists(manifestPath)) {
+        json old;
+        try {
+            old = json::parse(readFile(manifestPath));
+        } catch (const json::exception& e) {
+            fail("{}: exists but is not valid JSON ({}); remove the directory to start over",
+                 manifestPath.string(), e.what());
+        }
+        // Resuming is only safe into a dataset made from the same inputs with the same settings.
+        for (const char* key : {"format", "version", "levels", "variables", "dt_myr", "brick_size", "sample"})
+            if (old.value(key, json()) != j[key])
+                fail("{}: holds a dataset made with a different '{}' (other inputs or options); "
+                     "use another output directory or remove it",
+                     outDir.string(), key);
+        const auto oldInputs = old.value("inputs", json::array());
+        for (size_t i = 0; i < std::min(oldInputs.size(), j["inputs"].size()); ++i)
+            if (oldInputs[i] != j["inputs"][i] && fs::exists(format::stepDir(outDir, static_cast<int>(i))))
+                fail("{}: step {} was made from {}, now the input is {}; use another output directory",
+                     outDir.string(), i, oldInputs[i].get<std::string>(), j["inputs"][i].get<std::string>());
+    }
+    // Leftovers of a killed run: temporary step directories are never valid.
+    for (const auto& entry : fs::directory_iterator(outDir / "steps"))
+        if (entry.path().filename().string().starts_with("."))
+            fs::remove_all(entry.path());
+    for (const auto& entry : fs::directory_iterator(outDir))
+        if (entry.path().filename().string().starts_with(".") &&
+            entry.path().filename().string().find(".tmp-") != std::string::npos)
+            fs::remove_all(entry.path());
+    writeFileAtomic(manifestPath, j.dump(1));
+
+    // The sample's grid points are the same for every step, so lines are comparable over time.
+    const auto cells = drawVolumeWeightedSample(header.grid, sampleRows, options.seed);
+    if (!fs::exists(outDir / format::kSampleCoords)) {
+        const auto coords = sampleCoordinates(header.grid, cells);
+        writeFileAtomic(outDir / format::kSampleCoords, std::as_bytes(std::span(coords)));
+    }
+
+    PreprocessSummary summary;
+    std::vector<json> stepJsons(inputs.size());
+    std::vector<int> todo;
+    for (size_t s = 0; s < inputs.size(); ++s) {
+        const fs::path stepPath = format::stepDir(outDir, static_cast<int>(s));
+        if (fs::exists(stepPath / format::kStepManifest)) {
+            stepJsons[s] = json::parse(readFile(stepPath / format::kStepManifest));
+            ++summary.stepsSkipped;
+        } else {
+            if (fs::exists(stepPath))
+                fs::remove_all(stepPath);
+            todo.push_back(static_cast<int>(s));
+        }
+    }
+    if (summary.stepsSkipped > 0 && !options.quiet)
+        spdlog::info("{}: {} of {} steps already done by an earlier run, skipping them", outDir.string(),
+                     summary.stepsSkipped, inputs.size());
+
+    std::optional<Progress> progress;
+    if (!options.quiet && !todo.empty())
+        progress.emplace("preprocess", static_cast<int64_t>(todo.size()), "steps");
+    for (const int s : todo) {
+        const fs::path& input = inputs[s];
+        Snapshot snap = readSnapshot(input, options.reader);
+        if (!snap.grid.sameAs(header.grid))
+            fail("{}: grid {}x{}x{} (lat x r x lon) or its coordinates differ from the first step's {}x{}x{} in {}",
+                 input.string(), snap.grid.nLat(), snap.grid.nR(), snap.grid.nLon(), header.grid.nLat(),
+                 header.grid.nR(), header.grid.nLon(), inputs.front().filename().string());
+        addDerivedVariables(snap);
+        RAYPC_CHECK_EQ(snap.fields.size(), specs.size());
+
+        const fs::path finalDir = format::stepDir(outDir, s);
+        const fs::path tmpDir = temporarySibling(finalDir);
+        json stepJson = {{"index", s}, {"time_myr", s * options.dtMyr}, {"source", input.filename().string()}};
+        stepJson["stats"] = json::array();
+        // Level by level: values and brick bounds of every variable; stats at full resolution.
+        std::vector<std::vector<float>> current(snap.fields.size());
+        for (size_t v = 0; v < snap.fields.size(); ++v)
+            current[v] = std::move(snap.fields[v].values);
+        // The sample reads full-resolution values.
+        std::vector<float> sample(cells.size() * specs.size());
+        for (size_t v = 0; v < specs.size(); ++v) {
+            stepJson["stats"].push_back(format::toJson(computeStats(header.grid, current[v])));
+            for (size_t i = 0; i < cells.size(); ++i)
+                sample[i * specs.size() + v] = current[v][cells[i]];
+        }
+        for (int level = 0; level < kLevelCount; ++level) {
+            const SphericalGrid& grid = levels[level];
+            const BrickLayout layout = BrickLayout::forGrid(grid, options.brickSize);
+            const fs::path dir = format::levelDir(tmpDir, level);
+            fs::create_directories(dir);
+            std::vector<float> bounds(2 * layout.brickCount());
+            for (size_t v = 0; v < specs.size(); ++v) {
+                computeBrickBounds(grid, layout, current[v], bounds);
+                const auto stem = fileSafeName(specs[v].name);
+                writeArray(format::valuesFile(dir, stem), current[v]);
+                writeArray(format::boundsFile(dir, stem), bounds);
+                if (level + 1 < kLevelCount)
+                    current[v] = coarsenField(grid, current[v]);
+            }
+        }
+        writeArray(tmpDir / format::kStepSample, sample);
+        {
+            std::ofstream out(tmpDir / format::kStepManifest);
+            out << stepJson.dump(1);
+            if (!out)
+                fail("{}: write failed", (tmpDir / format::kStepManifest).string());
+        }
+        renameAtomic(tmpDir, finalDir);
+        stepJsons[s] = std::move(stepJson);
+        ++summary.stepsWritten;
+        if (progress)
+            progress->advance();
+    }
+    if (progress)
+        progress->finish();
+
+    // Finalize: every step's stats and the global ranges and histograms in one manifest.
+    j["steps"] = json::array();
+    for (const auto& sj : stepJsons)
+        j["steps"].push_back(sj);
+    for (size_t v = 0; v < specs.size(); ++v) {
+        std::vector<VariableStats> perStep;
+        for (const auto& sj : stepJsons)
+            perStep.push_back(format::statsFromJson(sj.at("stats").at(v)));
+        VariableStats global;
+        global.range = perStep.front().range;
+        double mean = 0;
+        for (const auto& st : perStep) {
+            global.range.min = std::min(global.range.min, st.range.min);
+            global.range.max = std::max(global.range.max, st.range.max);
+            mean += st.mean / perStep.size();
+        }
+        global.mean = mean;
+        global.histogram.assign(kHistogramBins, 0.0);
+        for (const auto& st : perStep)
+            rebinHistogram(st, global.range, global.histogram);
+        for (double& h : global.histogram)
+            h /= perStep.size();
+        j["variables"][v]["global"] = format::toJson(global);
+    }
+    j["status"] = "complete";
+    writeFileAtomic(manifestPath, j.dump(1));
+    summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return summary;
+}
+
+}  // namespace raypc

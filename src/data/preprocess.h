@@ -1,0 +1,63 @@
+// Preprocessing: snapshots -> a render-ready dataset (docs/format.md).
+//
+// Per step: derived variables, two coarser levels of detail by volume-weighted averaging,
+// per-brick bounds at every level, volume-weighted statistics and histograms, and the values
+// of the parallel-coordinates sample. Over all steps: global ranges and histograms, so that
+// a transfer function does not jump during an animation.
+#pragma once
+
+#include "data/dataset.h"
+#include "data/netcdf_reader.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <vector>
+
+namespace raypc {
+
+struct PreprocessOptions {
+    ReaderOptions reader;
+    double dtMyr = 2.0;          // time between consecutive input files
+    size_t sampleRows = 100000;  // parallel-coordinates sample size (cells, with replacement)
+    uint64_t seed = 1;           // for the sample
+    uint32_t brickSize = 8;
+    bool quiet = false;          // no progress output
+};
+
+struct PreprocessSummary {
+    int stepsWritten = 0;
+    int stepsSkipped = 0;  // already finished by an earlier run
+    double seconds = 0;
+};
+
+// Preprocesses `inputs` (files, in step order) into `outDir`. Resumable: finished steps of an
+// earlier run into the same directory are kept; a killed run leaves no corrupt step (each step
+// is written under a temporary name and renamed) and the manifest says "incomplete" until the
+// last step is done. Throws raypc::Error naming the file and the problem on bad input, and when
+// `outDir` holds a dataset made from other inputs.
+PreprocessSummary preprocess(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& outDir,
+                             const PreprocessOptions& options);
+
+// --- Building blocks, public for tests -----------------------------------------------------
+
+// Appends "radial velocity" and "velocity magnitude" (cm/yr) computed from vx, vy, vz (m/s).
+// Throws raypc::Error if a velocity component is missing.
+void addDerivedVariables(Snapshot& snapshot);
+
+// The next coarser level: each coarse point is the volume-weighted mean of the (up to) 2x2x2
+// fine points it merges (grid.coarsened() gives its coordinates).
+std::vector<float> coarsenField(const SphericalGrid& fine, std::span<const float> values);
+
+// Exact range, volume-weighted mean and kHistogramBins-bin volume-fraction histogram.
+VariableStats computeStats(const SphericalGrid& grid, std::span<const float> values);
+
+// `rows` grid-point indices drawn independently with probability proportional to each
+// point's dual-cell volume (deterministic for `seed`), sorted ascending.
+std::vector<uint32_t> drawVolumeWeightedSample(const SphericalGrid& grid, size_t rows, uint64_t seed);
+
+// Adds `stats.histogram` (over stats.range) into `histogram` over `range`, spreading each bin's
+// mass over the bins it overlaps.
+void rebinHistogram(const VariableStats& stats, ValueRange range, std::span<double> histogram);
+
+}  // namespace raypc
