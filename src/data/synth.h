@@ -5,8 +5,10 @@
 
 #include "data/snapshot.h"
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace raypc {
@@ -37,6 +39,11 @@ Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr);
 // temperature minus its area-weighted mean over each r shell *of the given grid*, which is
 // only the physical anomaly on a global grid.
 Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr, const SphericalGrid& grid);
+
+// Parses a grid size "LATxRxLON" (e.g. "180x201x360") for the option named `option`.
+// Throws raypc::Error naming the option and the text unless it is three whole numbers with
+// nLat >= 2, nR >= 2, nLon >= 3 and at most 1e9 cells.
+std::array<int, 3> parseSynthGridSize(const std::string& text, const std::string& option = "--grid");
 
 // The large-scale features of the model at `timeMyr`, for tests and documentation: where the
 // plumes and slabs are, how far they have risen or sunk, and where they stall.
