@@ -315,6 +315,36 @@ std::pair<int, std::array<Axis, 3>> checkVariable(const NcFile& file, const Open
     return {*id, order};
 }
 
+// netCDF-C reads past the end of a truncated classic file without an error, so compare the
+// file's size with the bytes its header describes (variables are padded to 4 bytes).
+void checkClassicFileSize(const NcFile& file)
+{
+    int fmt = 0;
+    file.check(nc_inq_format(file.id(), &fmt), "reading the format");
+    if (fmt != NC_FORMAT_CLASSIC && fmt != NC_FORMAT_64BIT_OFFSET && fmt != NC_FORMAT_CDF5)
+        return;
+    int nVars = 0, unlimited = -1;
+    file.check(nc_inq_nvars(file.id(), &nVars), "listing variables");
+    file.check(nc_inq_unlimdim(file.id(), &unlimited), "reading the record dimension");
+    uintmax_t needed = 0;
+    for (int v = 0; v < nVars; ++v) {
+        nc_type type;
+        file.check(nc_inq_vartype(file.id(), v, &type), "reading a variable type");
+        size_t typeSize = 0;
+        file.check(nc_inq_type(file.id(), type, nullptr, &typeSize), "reading a type size");
+        uintmax_t count = 1;
+        for (int d : file.varDims(v))
+            count *= file.dimLength(d);
+        needed += (count * typeSize + 3) / 4 * 4;
+    }
+    constexpr uintmax_t kMinHeaderBytes = 32;
+    std::error_code ec;
+    const uintmax_t size = std::filesystem::file_size(file.path(), ec);
+    if (!ec && size < needed + kMinHeaderBytes)
+        fail("{}: truncated: the file has {} bytes, its header describes at least {}", file.path().string(), size,
+             needed + kMinHeaderBytes);
+}
+
 }  // namespace
 
 FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& options)
@@ -337,6 +367,7 @@ Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& op
 {
     std::lock_guard lock(netcdfMutex());
     NcFile file(path);
+    checkClassicFileSize(file);
     const auto h = readAxes(file, options);
     Snapshot snapshot;
     snapshot.grid = h.grid;

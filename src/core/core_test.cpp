@@ -1,0 +1,70 @@
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/spherical.h"
+#include "core/strings.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+
+namespace raypc {
+namespace {
+
+TEST(Strings, NaturalOrderComparesDigitRunsByValue)
+{
+    std::vector<std::string> names = {"spherical10.nc", "spherical2.nc", "spherical001.nc", "spherical100.nc",
+                                      "a.nc"};
+    std::sort(names.begin(), names.end(), [](const auto& a, const auto& b) { return naturalLess(a, b); });
+    EXPECT_EQ(names, (std::vector<std::string>{"a.nc", "spherical001.nc", "spherical2.nc", "spherical10.nc",
+                                               "spherical100.nc"}));
+    EXPECT_FALSE(naturalLess("x2", "x2"));
+}
+
+TEST(Strings, FileSafeNames)
+{
+    EXPECT_EQ(fileSafeName("spin transition-induced density anomaly"), "spin_transition-induced_density_anomaly");
+    EXPECT_EQ(fileSafeName("a/../b"), "a_.._b");
+}
+
+TEST(Spherical, CartesianRoundTripAndContestFrame)
+{
+    const Vec3d p = sphericalToCartesianKm(30.0, 120.0, 5000.0);
+    EXPECT_NEAR(p.x, 5000 * std::cos(degToRad(30)) * std::cos(degToRad(120)), 1e-9);
+    EXPECT_NEAR(p.z, 2500.0, 1e-9);
+    const auto s = cartesianToSpherical(p);
+    EXPECT_NEAR(s.latDeg, 30.0, 1e-9);
+    EXPECT_NEAR(s.lonDeg, 120.0, 1e-9);
+    EXPECT_NEAR(s.rKm, 5000.0, 1e-9);
+    EXPECT_NEAR(cartesianToSpherical(sphericalToCartesianKm(-10, 350, 4000)).lonDeg, 350.0, 1e-9);
+    EXPECT_DOUBLE_EQ(wrapLonDeg(-10.0), 350.0);
+    EXPECT_DOUBLE_EQ(wrapLonDeg(360.0), 0.0);
+    EXPECT_DOUBLE_EQ(wrapLonDeg(725.0), 5.0);
+}
+
+TEST(AtomicFile, WritesWholeFileAndLeavesNoTemporary)
+{
+    const auto dir = std::filesystem::temp_directory_path() / "raypc_atomic_test";
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    writeFileAtomic(dir / "a.txt", std::string_view("first"));
+    writeFileAtomic(dir / "a.txt", std::string_view("second version"));
+    EXPECT_EQ(readFile(dir / "a.txt"), "second version");
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), std::filesystem::directory_iterator()), 1);
+    EXPECT_THROW(writeFileAtomic(dir / "missing" / "b.txt", std::string_view("x")), Error);
+    EXPECT_THROW(readFile(dir / "nope.txt"), Error);
+    std::filesystem::remove_all(dir);
+}
+
+TEST(Error, FailFormatsTheMessage)
+{
+    try {
+        fail("{}: dims {}, expected {}", "spherical001.nc", "(r, lat)", 3);
+        FAIL() << "fail() returned";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "spherical001.nc: dims (r, lat), expected 3");
+    }
+}
+
+}  // namespace
+}  // namespace raypc

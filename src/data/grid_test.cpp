@@ -1,0 +1,124 @@
+#include "data/bricks.h"
+#include "data/grid.h"
+#include "data/sampler.h"
+
+#include "core/error.h"
+#include "core/spherical.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+namespace raypc {
+namespace {
+
+SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon)
+{
+    SphericalGrid g;
+    for (size_t i = 0; i < nLat; ++i)
+        g.latDeg.push_back(-90.0 + (i + 0.5) * 180.0 / nLat);
+    for (size_t i = 0; i < nR; ++i)
+        g.rKm.push_back(kCoreRadiusKm + i * (kSurfaceRadiusKm - kCoreRadiusKm) / (nR - 1));
+    for (size_t i = 0; i < nLon; ++i)
+        g.lonDeg.push_back(i * 360.0 / nLon);
+    return g;
+}
+
+TEST(Grid, DualCellsFillTheShellExactly)
+{
+    const double shell = 4.0 / 3.0 * std::numbers::pi *
+                         (std::pow(kSurfaceRadiusKm, 3) - std::pow(kCoreRadiusKm, 3));
+    EXPECT_NEAR(centredGrid(36, 41, 72).totalVolumeKm3() / shell, 1.0, 1e-12);
+    // Non-uniform radii and a grid that includes the poles still tile the shell.
+    SphericalGrid g = centredGrid(5, 4, 7);
+    g.rKm = {3485, 3600, 5000, 6371};
+    g.latDeg = {-90, -45, 0, 45, 90};
+    EXPECT_NEAR(g.totalVolumeKm3() / shell, 1.0, 1e-12);
+}
+
+TEST(Grid, CoarsenedHalvesEachAxisAndKeepsOddEnds)
+{
+    const SphericalGrid fine = centredGrid(5, 7, 9);
+    const SphericalGrid coarse = fine.coarsened();
+    EXPECT_EQ(coarse.nLat(), 3u);
+    EXPECT_EQ(coarse.nR(), 4u);
+    EXPECT_EQ(coarse.nLon(), 5u);
+    EXPECT_DOUBLE_EQ(coarse.latDeg[0], 0.5 * (fine.latDeg[0] + fine.latDeg[1]));
+    EXPECT_DOUBLE_EQ(coarse.latDeg[2], fine.latDeg[4]);  // the odd last row stays alone
+    EXPECT_DOUBLE_EQ(coarse.lonDeg[4], fine.lonDeg[8]);
+    EXPECT_NO_THROW(coarse.validate("coarse"));
+}
+
+TEST(Grid, ValidateRejectsRegionalAndUnsortedGrids)
+{
+    SphericalGrid g = centredGrid(4, 3, 8);
+    EXPECT_NO_THROW(g.validate("ok"));
+    SphericalGrid regional = g;
+    regional.lonDeg = {0, 10, 20, 30};
+    EXPECT_THROW(regional.validate("regional"), Error);
+    SphericalGrid unsorted = g;
+    std::swap(unsorted.rKm[0], unsorted.rKm[1]);
+    EXPECT_THROW(unsorted.validate("unsorted"), Error);
+}
+
+// Every trilinear value a sample can take lies within the bounds of the brick it falls in,
+// including pole caps and the lon seam, at odd sizes.
+TEST(Bricks, BoundsContainEveryInterpolatedValue)
+{
+    const SphericalGrid g = centredGrid(13, 11, 21);
+    std::mt19937 rng(7);
+    std::normal_distribution<float> noise;
+    std::vector<float> values(g.cellCount());
+    for (auto& v : values)
+        v = noise(rng);
+    const BrickLayout layout = BrickLayout::forGrid(g, 4);
+    std::vector<float> bounds(2 * layout.brickCount());
+    computeBrickBounds(g, layout, values, bounds);
+    const GridSampler sampler(g);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int i = 0; i < 200000; ++i) {
+        const double lat = -90 + 180 * u(rng), lon = 360 * u(rng);
+        const double r = kCoreRadiusKm + (kSurfaceRadiusKm - kCoreRadiusKm) * u(rng);
+        const auto at = sampler.locate(lat, lon, r);
+        ASSERT_TRUE(at);
+        const double v = sampler.sample(values.data(), *at);
+        const size_t b = layout.index(at->lat0 / 4, at->r0 / 4, at->lon0 / 4);
+        ASSERT_GE(v, bounds[2 * b] - 1e-5) << lat << " " << lon << " " << r;
+        ASSERT_LE(v, bounds[2 * b + 1] + 1e-5) << lat << " " << lon << " " << r;
+    }
+}
+
+TEST(Sampler, ReproducesTrilinearFunctionsAndIsContinuousAtSeamAndPoles)
+{
+    const SphericalGrid g = centredGrid(18, 9, 36);
+    // A field linear in r: trilinear interpolation is exact in r.
+    std::vector<float> linearR(g.cellCount()), byLon(g.cellCount());
+    for (size_t a = 0; a < g.nLat(); ++a)
+        for (size_t b = 0; b < g.nR(); ++b)
+            for (size_t c = 0; c < g.nLon(); ++c) {
+                linearR[g.index(a, b, c)] = static_cast<float>(g.rKm[b]);
+                byLon[g.index(a, b, c)] = static_cast<float>(std::cos(degToRad(g.lonDeg[c])));
+            }
+    const GridSampler s(g);
+    EXPECT_NEAR(s.sample(linearR.data(), *s.locate(12.3, 45.6, 4321.0)), 4321.0, 1e-3);
+    EXPECT_FALSE(s.locate(0, 0, 3000.0));
+    EXPECT_FALSE(s.locate(0, 0, 7000.0));
+    // The seam: approaching 360 from below equals approaching 0 from above.
+    const double below = s.sample(byLon.data(), *s.locate(10, 359.9999, 5000));
+    const double above = s.sample(byLon.data(), *s.locate(10, 0.0001, 5000));
+    EXPECT_NEAR(below, above, 1e-4);
+    // Halfway between the last column (350°) and the first (0°), linear in index space.
+    EXPECT_NEAR(s.sample(byLon.data(), *s.locate(10, 355, 5000)), 0.5 * (std::cos(degToRad(350.0)) + 1.0), 1e-6);
+    // At a pole every longitude gives the same value (the ring mean).
+    const double p0 = s.sample(byLon.data(), *s.locate(90, 0, 5000));
+    const double p1 = s.sample(byLon.data(), *s.locate(90, 137, 5000));
+    EXPECT_NEAR(p0, p1, 1e-9);
+    EXPECT_NEAR(p0, 0.0, 1e-6);  // the ring mean of cos(lon)
+    // Just inside the cap, values are near the outermost row's.
+    EXPECT_NEAR(s.sample(byLon.data(), *s.locate(g.latDeg.back() + 1e-6, 0, 5000)), 1.0, 1e-6);
+}
+
+}  // namespace
+}  // namespace raypc

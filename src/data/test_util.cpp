@@ -1,0 +1,46 @@
+#include "data/test_util.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <sys/wait.h>
+
+namespace raypc::testing {
+
+TempDir::TempDir(const std::string& name)
+    : m_path(std::filesystem::temp_directory_path() / ("raypc_" + name + "_" + std::to_string(::getpid())))
+{
+    std::filesystem::remove_all(m_path);
+    std::filesystem::create_directories(m_path);
+}
+
+TempDir::~TempDir()
+{
+    std::error_code ec;
+    std::filesystem::remove_all(m_path, ec);
+}
+
+std::filesystem::path contestLayoutDir() { return std::filesystem::path(RAYPC_SHARED_DIR) / "data" / "contest-layout"; }
+
+int run(const std::string& command)
+{
+    const int status = std::system(command.c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::filesystem::path ncgen(const std::filesystem::path& dir, const std::string& name, const std::string& cdl,
+                            const std::string& kind)
+{
+    const auto cdlPath = dir / (name + ".cdl");
+    const auto ncPath = dir / (name + ".nc");
+    writeFileAtomic(cdlPath, cdl);
+    const std::string cmd = "ncgen -k " + kind + " -o '" + ncPath.string() + "' '" + cdlPath.string() + "'";
+    if (run(cmd) != 0)
+        fail("ncgen failed: {}", cmd);
+    return ncPath;
+}
+
+}  // namespace raypc::testing

@@ -1,0 +1,33 @@
+// Helpers for data-layer tests: temporary directories, the shared fixture, and small netCDF
+// files written from CDL text by ncgen (Debian's netcdf-bin), an independent writer.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace raypc::testing {
+
+// A fresh empty directory under the system temp dir, removed on destruction.
+class TempDir {
+public:
+    explicit TempDir(const std::string& name);
+    ~TempDir();
+    const std::filesystem::path& path() const { return m_path; }
+    std::filesystem::path operator/(const std::string& name) const { return m_path / name; }
+
+private:
+    std::filesystem::path m_path;
+};
+
+// ../shared/data/contest-layout
+std::filesystem::path contestLayoutDir();
+
+// Writes `cdl` to a file and runs `ncgen -k <kind>` on it; kind is "nc3", "nc6" (64-bit
+// offset) or "nc4". Fails the calling test (via exception) when ncgen fails.
+std::filesystem::path ncgen(const std::filesystem::path& dir, const std::string& name, const std::string& cdl,
+                            const std::string& kind = "nc6");
+
+// Runs a shell command; returns its exit status.
+int run(const std::string& command);
+
+}  // namespace raypc::testing
