@@ -1,0 +1,283 @@
+#include "data/preprocess.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/spherical.h"
+#include "data/dataset_format.h"
+#include "data/test_util.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+namespace raypc {
+namespace {
+
+using testing::contestLayoutDir;
+using testing::TempDir;
+
+SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon)
+{
+    SphericalGrid g;
+    for (size_t i = 0; i < nLat; ++i)
+        g.latDeg.push_back(-90.0 + (i + 0.5) * 180.0 / nLat);
+    for (size_t i = 0; i < nR; ++i)
+        g.rKm.push_back(kCoreRadiusKm + i * (kSurfaceRadiusKm - kCoreRadiusKm) / (nR - 1));
+    for (size_t i = 0; i < nLon; ++i)
+        g.lonDeg.push_back(i * 360.0 / nLon);
+    return g;
+}
+
+// Volume of one grid point's dual cell, from first principles (not SphericalGrid's factors).
+double dualVolume(const SphericalGrid& g, size_t a, size_t b, size_t c)
+{
+    auto mid = [](const std::vector<double>& v, size_t i, bool upper, double lo, double hi) {
+        if (upper)
+            return i + 1 < v.size() ? 0.5 * (v[i] + v[i + 1]) : hi;
+        return i > 0 ? 0.5 * (v[i - 1] + v[i]) : lo;
+    };
+    const double la0 = mid(g.latDeg, a, false, -90, 90), la1 = mid(g.latDeg, a, true, -90, 90);
+    const double r0 = mid(g.rKm, b, false, g.rKm.front(), 0), r1 = mid(g.rKm, b, true, 0, g.rKm.back());
+    const double dLon = 360.0 / g.nLon();  // uniform lon in these tests
+    return (std::sin(degToRad(la1)) - std::sin(degToRad(la0))) * (r1 * r1 * r1 - r0 * r0 * r0) / 3 * degToRad(dLon);
+}
+
+TEST(Lod, CoarseValuesAreVolumeWeightedMeansAtOddSizes)
+{
+    const SphericalGrid fine = centredGrid(7, 5, 9);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(-1, 1);
+    std::vector<float> values(fine.cellCount());
+    for (auto& v : values)
+        v = u(rng);
+    const auto coarse = coarsenField(fine, values);
+    const SphericalGrid cg = fine.coarsened();
+    ASSERT_EQ(coarse.size(), cg.cellCount());
+    for (size_t a = 0; a < cg.nLat(); ++a)
+        for (size_t b = 0; b < cg.nR(); ++b)
+            for (size_t c = 0; c < cg.nLon(); ++c) {
+                double sum = 0, weight = 0;
+                for (size_t i = 2 * a; i < std::min(2 * a + 2, fine.nLat()); ++i)
+                    for (size_t j = 2 * b; j < std::min(2 * b + 2, fine.nR()); ++j)
+                        for (size_t k = 2 * c; k < std::min(2 * c + 2, fine.nLon()); ++k) {
+                            const double w = dualVolume(fine, i, j, k);
+                            sum += w * values[fine.index(i, j, k)];
+                            weight += w;
+                        }
+                ASSERT_NEAR(coarse[cg.index(a, b, c)], sum / weight, 1e-5) << a << " " << b << " " << c;
+            }
+    // A constant stays constant, also in the pole rows and the odd last column.
+    const auto constant = coarsenField(fine, std::vector<float>(fine.cellCount(), 2.5f));
+    for (float v : constant)
+        ASSERT_FLOAT_EQ(v, 2.5f);
+}
+
+TEST(Stats, VolumeWeightedMeanAndHistogram)
+{
+    const SphericalGrid g = centredGrid(36, 81, 72);
+    std::vector<float> lat(g.cellCount()), r(g.cellCount());
+    for (size_t a = 0; a < g.nLat(); ++a)
+        for (size_t b = 0; b < g.nR(); ++b)
+            for (size_t c = 0; c < g.nLon(); ++c) {
+                lat[g.index(a, b, c)] = static_cast<float>(g.latDeg[a]);
+                r[g.index(a, b, c)] = static_cast<float>(g.rKm[b]);
+            }
+    const auto sLat = computeStats(g, lat);
+    EXPECT_NEAR(sLat.mean, 0.0, 1e-9);
+    double total = 0;
+    for (double h : sLat.histogram)
+        total += h;
+    EXPECT_NEAR(total, 1.0, 1e-12);
+    // Volume with lat above 60°: the rows at 62.5..87.5 fill exactly (1 - sin 60°) / 2.
+    double north = 0;
+    for (int b = 0; b < kHistogramBins; ++b)
+        if (sLat.range.min + (b + 0.5) * (sLat.range.max - sLat.range.min) / kHistogramBins > 60)
+            north += sLat.histogram[b];
+    EXPECT_NEAR(north, (1 - std::sin(degToRad(60.0))) / 2, 1e-9);
+    // The mean radius of a shell's volume is 3/4 (R⁴ - r⁴) / (R³ - r³), up to the discretisation.
+    const double R = kSurfaceRadiusKm, c = kCoreRadiusKm;
+    const double expected = 0.75 * (std::pow(R, 4) - std::pow(c, 4)) / (std::pow(R, 3) - std::pow(c, 3));
+    EXPECT_NEAR(computeStats(g, r).mean, expected, 2.0);
+    EXPECT_FLOAT_EQ(computeStats(g, r).range.min, 3485.0f);
+}
+
+// The sample must show volume fractions: as many samples above the radius that halves the
+// shell's volume as below, and 13.4 % beyond ±60° latitude; an index-uniform sample gives
+// other fractions, which the tolerance rejects.
+TEST(Sample, DrawsGridPointsInProportionToVolume)
+{
+    const SphericalGrid g = centredGrid(36, 41, 72);
+    const size_t n = 100000;
+    const auto cells = drawVolumeWeightedSample(g, n, 42);
+    ASSERT_EQ(cells.size(), n);
+    ASSERT_TRUE(std::is_sorted(cells.begin(), cells.end()));
+    // Exact volume fraction of the dual cells above r = 5200 km and poleward of 60°.
+    double above = 0, polar = 0, total = 0;
+    for (size_t a = 0; a < g.nLat(); ++a)
+        for (size_t b = 0; b < g.nR(); ++b) {
+            const double v = dualVolume(g, a, b, 0);
+            total += v;
+            above += g.rKm[b] > 5200 ? v : 0;
+            polar += std::abs(g.latDeg[a]) > 60 ? v : 0;
+        }
+    above /= total;
+    polar /= total;
+    size_t nAbove = 0, nPolar = 0, gridAbove = 0;
+    for (uint32_t c : cells) {
+        const size_t b = (c / g.nLon()) % g.nR(), a = c / (g.nLon() * g.nR());
+        nAbove += g.rKm[b] > 5200;
+        nPolar += std::abs(g.latDeg[a]) > 60;
+    }
+    for (double r : g.rKm)
+        gridAbove += r > 5200;
+    const double sigma = std::sqrt(0.25 / n);
+    EXPECT_NEAR(double(nAbove) / n, above, 5 * sigma);
+    EXPECT_NEAR(double(nPolar) / n, polar, 5 * sigma);
+    EXPECT_NEAR(polar, 1 - std::sin(degToRad(60.0)), 1e-9);
+    // Sanity of the test itself: counting grid points would be far off.
+    EXPECT_GT(std::abs(double(gridAbove) / g.nR() - above), 20 * sigma);
+    EXPECT_EQ(drawVolumeWeightedSample(g, 1000, 42), drawVolumeWeightedSample(g, 1000, 42));
+    EXPECT_NE(drawVolumeWeightedSample(g, 1000, 42), drawVolumeWeightedSample(g, 1000, 43));
+}
+
+TEST(Rebin, KeepsMassAndPlacesIt)
+{
+    VariableStats s;
+    s.range = {0, 10};
+    s.histogram.assign(10, 0.0);
+    s.histogram[2] = 0.5;  // [2, 3)
+    s.histogram[9] = 0.5;  // [9, 10]
+    std::vector<double> out(5, 0.0);  // over [0, 20): bins of 4
+    rebinHistogram(s, {0, 20}, out);
+    EXPECT_NEAR(out[0], 0.5, 1e-12);
+    EXPECT_NEAR(out[2], 0.5, 1e-12);  // [8, 12) holds [9, 10]
+    std::vector<double> split(2, 0.0);
+    s.histogram.assign(10, 0.0);
+    s.histogram[4] = 1.0;  // [4, 5) over two output bins [0, 4.5) and [4.5, 9)
+    rebinHistogram(s, {0, 9}, split);
+    EXPECT_NEAR(split[0], 0.5, 1e-12);
+    EXPECT_NEAR(split[1], 0.5, 1e-12);
+}
+
+std::vector<std::filesystem::path> fixtureFiles()
+{
+    return listSnapshotFiles({contestLayoutDir()});
+}
+
+PreprocessOptions quiet()
+{
+    PreprocessOptions o;
+    o.quiet = true;
+    o.sampleRows = 5000;
+    return o;
+}
+
+TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)
+{
+    TempDir dir("pp");
+    const auto summary = preprocess(fixtureFiles(), dir / "ds", quiet());
+    EXPECT_EQ(summary.stepsWritten, 3);
+    const auto ds = Dataset::open(dir / "ds");
+    ASSERT_EQ(ds->steps().size(), 3u);
+    EXPECT_DOUBLE_EQ(ds->steps()[2].timeMyr, 4.0);
+    EXPECT_EQ(ds->steps()[1].source, "spherical002.nc");
+    ASSERT_EQ(ds->variables().size(), 10u);
+    EXPECT_EQ(ds->variables()[8].name, "radial velocity");
+    EXPECT_TRUE(ds->variables()[8].derived);
+    ASSERT_EQ(ds->levels().size(), 3u);
+    EXPECT_EQ(ds->levels()[1].grid.nLat(), 18u);
+    EXPECT_EQ(ds->levels()[1].grid.nR(), 21u);
+    EXPECT_EQ(ds->levels()[2].grid.nR(), 11u);
+
+    const Snapshot snap = readSnapshot(fixtureFiles()[1]);
+    const int anomaly = ds->variableIndex("temperature anomaly");
+    ASSERT_GE(anomaly, 0);
+    for (int level = 0; level < 3; ++level) {
+        const auto vol = ds->load(1, level);
+        const auto& g = vol->grid();
+        // Level 0 is exactly the input; every level's bricks bound its values.
+        if (level == 0)
+            for (size_t i = 0; i < g.cellCount(); ++i)
+                ASSERT_EQ(vol->values(anomaly)[i], snap.find("temperature anomaly")->values[i]);
+        const auto& layout = vol->bricks();
+        for (size_t a = 0; a < g.nLat(); ++a)
+            for (size_t b = 0; b < g.nR(); ++b)
+                for (size_t c = 0; c < g.nLon(); ++c) {
+                    const size_t brick = layout.index(a / layout.size, b / layout.size, c / layout.size);
+                    const float v = vol->values(anomaly)[g.index(a, b, c)];
+                    ASSERT_GE(v, vol->brickBounds(anomaly)[2 * brick]);
+                    ASSERT_LE(v, vol->brickBounds(anomaly)[2 * brick + 1]);
+                }
+    }
+    // Global ranges cover every step's range.
+    for (const auto& step : ds->steps())
+        for (size_t v = 0; v < ds->variables().size(); ++v) {
+            EXPECT_LE(ds->variables()[v].global.range.min, step.stats[v].range.min);
+            EXPECT_GE(ds->variables()[v].global.range.max, step.stats[v].range.max);
+        }
+    // The sample: coordinates consistent with each other, values those of the sampled points.
+    const auto table = ds->loadSample(1);
+    ASSERT_EQ(table.rows, 5000u);
+    ASSERT_EQ(table.columns.size(), 7u + 10u);
+    EXPECT_EQ(table.columns[6], "depth");
+    const SphericalGrid& g = snap.grid;
+    for (size_t row = 0; row < table.rows; row += 97) {
+        const double lat = table.at(row, 3), lon = table.at(row, 4), r = table.at(row, 5);
+        const Vec3d p = sphericalToCartesianKm(lat, lon, r);
+        ASSERT_NEAR(table.at(row, 0), p.x, 1e-2);
+        ASSERT_NEAR(table.at(row, 6), kSurfaceRadiusKm - r, 1e-3);
+        // The sample stores float coordinates: find the grid point they round from.
+        auto nearest = [](const std::vector<double>& axis, double x) {
+            size_t best = 0;
+            for (size_t i = 1; i < axis.size(); ++i)
+                if (std::abs(axis[i] - x) < std::abs(axis[best] - x))
+                    best = i;
+            EXPECT_NEAR(axis[best], x, 1e-3 * std::max(1.0, std::abs(x)));
+            return best;
+        };
+        const size_t a = nearest(g.latDeg, lat), b = nearest(g.rKm, r), c = nearest(g.lonDeg, lon);
+        ASSERT_EQ(table.at(row, 7 + anomaly), snap.find("temperature anomaly")->values[g.index(a, b, c)]);
+    }
+}
+
+TEST(Preprocess, ResumesAfterAFailedRunAndSkipsFinishedSteps)
+{
+    TempDir dir("resume");
+    // The third input is broken: the run stops there, leaving two finished steps.
+    auto files = fixtureFiles();
+    std::filesystem::copy_file(files[0], dir / "spherical001.nc");
+    std::filesystem::copy_file(files[1], dir / "spherical002.nc");
+    writeFileAtomic(dir / "spherical003.nc", std::string_view("garbage"));
+    const std::vector<std::filesystem::path> inputs = {dir / "spherical001.nc", dir / "spherical002.nc",
+                                                       dir / "spherical003.nc"};
+    EXPECT_THROW(preprocess(inputs, dir / "ds", quiet()), Error);
+    try {
+        Dataset::open(dir / "ds");
+        FAIL() << "an unfinished dataset opened";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("did not finish"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(std::filesystem::exists(format::stepDir(dir / "ds", 1) / format::kStepManifest));
+    EXPECT_FALSE(std::filesystem::exists(format::stepDir(dir / "ds", 2)));
+    // A stale temporary step directory (as a kill would leave) is cleaned up.
+    std::filesystem::create_directories(dir / "ds" / "steps" / ".0002.tmp-1-0");
+
+    std::filesystem::remove(dir / "spherical003.nc");
+    std::filesystem::copy_file(files[2], dir / "spherical003.nc");
+    const auto summary = preprocess(inputs, dir / "ds", quiet());
+    EXPECT_EQ(summary.stepsSkipped, 2);
+    EXPECT_EQ(summary.stepsWritten, 1);
+    EXPECT_FALSE(std::filesystem::exists(dir / "ds" / "steps" / ".0002.tmp-1-0"));
+    EXPECT_EQ(Dataset::open(dir / "ds")->steps().size(), 3u);
+
+    // Other settings into the same directory are refused rather than mixed.
+    auto other = quiet();
+    other.dtMyr = 5;
+    EXPECT_THROW(preprocess(inputs, dir / "ds", other), Error);
+}
+
+}  // namespace
+}  // namespace raypc
