@@ -1,0 +1,81 @@
+// An orbiting perspective camera around the planet, and the ray geometry of the spherical shell.
+//
+// Positions are Cartesian km in the contest frame (core/spherical.h): x = r cos(lat) cos(lon), ...
+// The camera orbits `target`: azimuth is measured in the x-y plane from +x towards +y (degrees),
+// elevation from the x-y plane towards +z (degrees), the up direction is +z.
+// Image pixel (0, 0) is the top-left corner; pixel centres are at (i + 0.5, j + 0.5).
+//
+// Thread safety: plain values; CameraFrame is immutable after construction.
+#pragma once
+
+#include <cmath>
+
+namespace raypc::render {
+
+struct Vec3 {
+    float x = 0, y = 0, z = 0;
+};
+inline Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline Vec3 operator*(Vec3 a, float s) { return {a.x * s, a.y * s, a.z * s}; }
+inline float dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline Vec3 cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+inline float length(Vec3 a) { return std::sqrt(dot(a, a)); }
+inline Vec3 normalize(Vec3 a) { return a * (1.0f / length(a)); }
+
+struct OrbitCamera {
+    double azimuthDeg = 30.0;
+    double elevationDeg = 20.0;
+    double distanceKm = 20000.0;  // from target to eye
+    double fovYDeg = 40.0;        // vertical field of view
+    Vec3 targetKm{};              // point looked at, km
+
+    // Throws raypc::Error if distance <= 0 or the field of view is outside (0, 180).
+    void validate() const;
+};
+
+// The camera resolved for one image size: eye and an orthonormal basis.
+struct CameraFrame {
+    Vec3 eye, forward, right, up;
+    float tanHalfFovY = 0, aspect = 1;  // aspect = width / height
+    int width = 0, height = 0;
+
+    CameraFrame() = default;
+    CameraFrame(const OrbitCamera& camera, int width, int height);
+
+    // Unit direction through image position (px, py) in pixels (continuous; centre of pixel i is i + 0.5).
+    Vec3 direction(float px, float py) const
+    {
+        const float sx = (2.0f * px / float(width) - 1.0f) * tanHalfFovY * aspect;
+        const float sy = (1.0f - 2.0f * py / float(height)) * tanHalfFovY;
+        return normalize(forward + right * sx + up * sy);
+    }
+};
+
+// Intersection of the ray o + t d (|d| = 1) with the sphere of radius `radiusKm` around the origin.
+// Returns false on a miss; otherwise t0 <= t1 (either may be negative).
+inline bool intersectSphere(Vec3 o, Vec3 d, float radiusKm, float& t0, float& t1)
+{
+    // Solved around the closest approach (t = -b) so that grazing rays far from the origin keep precision.
+    const float b = dot(o, d);
+    const Vec3 closest = o - d * b;
+    const float h2 = radiusKm * radiusKm - dot(closest, closest);
+    if (h2 < 0.0f)
+        return false;
+    const float h = std::sqrt(h2);
+    t0 = -b - h;
+    t1 = -b + h;
+    return true;
+}
+
+// The parts of a ray inside the shell rInner <= |p| <= rOuter, for t >= 0.
+// Segment 0 is [enter, leave or core entry]; segment 1 (behind the core) exists only when the
+// ray passes through the core and `throughCore` is set. `coreT` is the first core hit (t >= 0) or -1.
+struct ShellSegments {
+    int count = 0;
+    float t0[2]{}, t1[2]{};
+    float coreT = -1;
+};
+ShellSegments intersectShell(Vec3 o, Vec3 d, float rInnerKm, float rOuterKm, bool throughCore);
+
+}  // namespace raypc::render

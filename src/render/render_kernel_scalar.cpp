@@ -1,0 +1,114 @@
+// The scalar reference kernel: the same sample positions, chunking, skipping and compositing
+// order as the SIMD kernel, one sample at a time, written for clarity.
+#include "render/render_kernel.h"
+
+namespace raypc::render::kernel {
+namespace {
+
+float coordinateValue(BrushKind kind, Vec3 p, const Located& L)
+{
+    switch (kind) {
+    case BrushKind::X: return p.x;
+    case BrushKind::Y: return p.y;
+    case BrushKind::Z: return p.z;
+    case BrushKind::Lat: return L.latDeg;
+    case BrushKind::Lon: return L.lonDeg;
+    case BrushKind::Radius: return L.rKm;
+    case BrushKind::Depth: return float(6371.0) - L.rKm;
+    case BrushKind::Variable: break;
+    }
+    return 0.0f;
+}
+
+bool insideBrushes(const KernelParams& k, Vec3 p, const Located& L)
+{
+    for (int b = 0; b < k.brushCount; ++b) {
+        const KernelBrush& brush = k.brushes[b];
+        const float v = brush.kind == BrushKind::Variable ? sampleAt(k, brush.variable, L)
+                                                          : coordinateValue(brush.kind, p, L);
+        if (!(v >= brush.min && v <= brush.max))
+            return false;
+    }
+    return true;
+}
+
+float colourValueAt(const KernelParams& k, Vec3 p)
+{
+    return sampleAt(k, k.colour, locate(k, p.x, p.y, p.z));
+}
+
+// Two-sided diffuse shading from the central-difference gradient of the colouring variable.
+float shadeFactor(const KernelParams& k, Vec3 p)
+{
+    const float h = k.gradientDeltaKm;
+    const Vec3 g{colourValueAt(k, p + Vec3{h, 0, 0}) - colourValueAt(k, p - Vec3{h, 0, 0}),
+                 colourValueAt(k, p + Vec3{0, h, 0}) - colourValueAt(k, p - Vec3{0, h, 0}),
+                 colourValueAt(k, p + Vec3{0, 0, h}) - colourValueAt(k, p - Vec3{0, 0, h})};
+    const float g2 = dot(g, g);
+    if (!(g2 > 1e-30f))
+        return 1.0f;
+    return k.ambient + k.diffuse * std::abs(dot(g, k.lightDir)) / std::sqrt(g2);
+}
+
+void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, float along, RayAccum& acc,
+                 TileStats& stats)
+{
+    float tc = t0;
+    while (tc < t1 && acc.transmittance > k.stopTransmittance) {
+        const float dt = localStepKm(k, o + d * tc, d);
+        ++stats.chunks;
+        bool anyActive = false;
+        for (int i = 0; i < k.chunkLanes && acc.transmittance > k.stopTransmittance; ++i) {
+            const float start = tc + float(i) * dt;
+            if (!(start < t1))
+                break;
+            const float len = std::min(dt, t1 - start);
+            const float t = std::min(start + along * dt, t1);
+            const Vec3 p = o + d * t;
+            const Located L = locate(k, p.x, p.y, p.z);
+            if (!brickActive(k, L)) {
+                ++stats.samplesSkipped;
+                continue;
+            }
+            anyActive = true;
+            ++stats.samples;
+            if (!insideBrushes(k, p, L))
+                continue;
+            const int idx = k.table.indexOf(sampleAt(k, k.colour, L));
+            const float sigma = k.table.sigmaPerKm[idx];
+            if (!(sigma > 0.0f))
+                continue;
+            const float alpha = std::max(0.0f, 1.0f - std::exp(-sigma * len));
+            float s = k.shade ? shadeFactor(k, p) : 1.0f;
+            const float w = acc.transmittance * alpha * s;
+            acc.r += w * k.table.red[idx];
+            acc.g += w * k.table.green[idx];
+            acc.b += w * k.table.blue[idx];
+            acc.transmittance *= 1.0f - alpha;
+            if (!std::isfinite(acc.depthKm) && 1.0f - acc.transmittance >= k.depthOpacity)
+                acc.depthKm = t;
+        }
+        if (!anyActive)
+            ++stats.chunksSkipped;
+        tc += float(k.chunkLanes) * dt;
+    }
+}
+
+}  // namespace
+
+void renderTileScalar(const KernelParams& k, Tile tile, PixelOut* out, TileStats& stats)
+{
+    renderTileWith(k, tile, out, stats,
+                   [&](Vec3 o, Vec3 d, float t0, float t1, float along, RayAccum& acc, TileStats& st) {
+                       marchScalar(k, o, d, t0, t1, along, acc, st);
+                   });
+}
+
+void sampleBatchScalar(const KernelParams& k, const KernelVariable& v, const float* x, const float* y,
+                       const float* z, int n, float* out)
+{
+    for (int i = 0; i < n; ++i)
+        out[i] = sampleAt(k, v, locate(k, x[i], y[i], z[i]));
+}
+
+}  // namespace raypc::render::kernel

@@ -1,0 +1,310 @@
+// The SIMD kernel: each vector holds consecutive samples along one ray (a "chunk"), so a chunk shares
+// one step length, one brick test and one early-termination test. Coordinates, cell location, the
+// trilinear gathers, brushing and the transfer function run across lanes; front-to-back compositing
+// is the short sequential tail over the lanes that have any opacity.
+// Highway with dynamic dispatch: compiled for the x86 targets Highway knows (SSE4, AVX2, AVX-512)
+// and the best one is chosen at run time — no -march flag is needed for the project.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "render/render_kernel_simd.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+
+#include <hwy/contrib/math/math-inl.h>
+#include <hwy/highway.h>
+
+#include "render/render_kernel.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace raypc::render::kernel::HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+using DF = hn::ScalableTag<float>;
+using DI = hn::RebindToSigned<DF>;
+using VF = hn::Vec<DF>;
+using VI = hn::Vec<DI>;
+using MF = hn::Mask<DF>;
+
+constexpr size_t kMaxLanes = HWY_MAX_BYTES / sizeof(float);
+
+HWY_INLINE VF AtanUnit(DF d, VF a)
+{
+    const VF s = hn::Mul(a, a);
+    VF p = hn::Set(d, -0.01172120f);
+    p = hn::MulAdd(p, s, hn::Set(d, 0.05265332f));
+    p = hn::MulAdd(p, s, hn::Set(d, -0.11643287f));
+    p = hn::MulAdd(p, s, hn::Set(d, 0.19354346f));
+    p = hn::MulAdd(p, s, hn::Set(d, -0.33262347f));
+    p = hn::MulAdd(p, s, hn::Set(d, 0.99997726f));
+    return hn::Mul(p, a);
+}
+
+HWY_INLINE VF FastAtan2(DF d, VF y, VF x)
+{
+    const VF ax = hn::Abs(x), ay = hn::Abs(y);
+    const VF mx = hn::Max(ax, ay), mn = hn::Min(ax, ay);
+    const MF nonzero = hn::Gt(mx, hn::Zero(d));
+    const VF a = hn::IfThenElseZero(nonzero, hn::Div(mn, hn::IfThenElse(nonzero, mx, hn::Set(d, 1.0f))));
+    VF r = AtanUnit(d, a);
+    r = hn::IfThenElse(hn::Gt(ay, ax), hn::Sub(hn::Set(d, float(std::numbers::pi / 2)), r), r);
+    r = hn::IfThenElse(hn::Lt(x, hn::Zero(d)), hn::Sub(hn::Set(d, float(std::numbers::pi)), r), r);
+    return hn::IfThenElse(hn::Lt(y, hn::Zero(d)), hn::Neg(r), r);
+}
+
+HWY_INLINE VF Clamp(VF v, VF lo, VF hi) { return hn::Min(hn::Max(v, lo), hi); }
+
+HWY_INLINE VF MapAxis(DF d, const AxisMap& m, VF c)
+{
+    if (m.affine)
+        return hn::MulAdd(c, hn::Set(d, m.scale), hn::Set(d, m.offset));
+    const DI di;
+    const VF u = Clamp(hn::Mul(hn::Sub(c, hn::Set(d, m.coordMin)), hn::Set(d, m.invTableStep)), hn::Zero(d),
+                       hn::Set(d, float(m.tableLast) - 1e-3f));
+    const VI ki = hn::ConvertTo(di, u);
+    const VF t0 = hn::GatherIndex(d, m.table, ki);
+    const VF t1 = hn::GatherIndex(d, m.table + 1, ki);
+    return hn::MulAdd(hn::Sub(u, hn::ConvertTo(d, ki)), hn::Sub(t1, t0), t0);
+}
+
+struct LocatedV {
+    VI o00, o01, o10, o11, iLon0, iLon1, capIndex, brick;
+    VF wLat, wR, wLon, cap;
+    VF latDeg, lonDeg, rKm;
+    bool anyCap;
+};
+
+HWY_INLINE LocatedV Locate(DF d, const KernelParams& k, VF x, VF y, VF z)
+{
+    const DI di;
+    LocatedV L;
+    const VF rho = hn::Sqrt(hn::MulAdd(x, x, hn::Mul(y, y)));
+    L.rKm = hn::Sqrt(hn::MulAdd(rho, rho, hn::Mul(z, z)));
+    const VF toDeg = hn::Set(d, kRadToDeg);
+    L.latDeg = hn::Mul(FastAtan2(d, z, rho), toDeg);
+    const VF lon = hn::Mul(FastAtan2(d, y, x), toDeg);
+    L.lonDeg = hn::IfThenElse(hn::Lt(lon, hn::Zero(d)), hn::Add(lon, hn::Set(d, 360.0f)), lon);
+
+    const VF fLat = Clamp(MapAxis(d, k.lat, L.latDeg), hn::Zero(d), hn::Set(d, float(k.nLat - 1)));
+    const VI iLat0 = hn::Min(hn::ConvertTo(di, fLat), hn::Set(di, k.nLat - 2));
+    L.wLat = hn::Sub(fLat, hn::ConvertTo(d, iLat0));
+    const VF fR = Clamp(MapAxis(d, k.r, L.rKm), hn::Zero(d), hn::Set(d, float(k.nR - 1)));
+    const VI iR0 = hn::Min(hn::ConvertTo(di, fR), hn::Set(di, k.nR - 2));
+    L.wR = hn::Sub(fR, hn::ConvertTo(d, iR0));
+    const VF nLonF = hn::Set(d, float(k.nLon));
+    VF fLon = MapAxis(d, k.lon, L.lonDeg);
+    fLon = hn::IfThenElse(hn::Lt(fLon, hn::Zero(d)), hn::Add(fLon, nLonF), fLon);
+    fLon = hn::IfThenElse(hn::Ge(fLon, nLonF), hn::Sub(fLon, nLonF), fLon);
+    L.iLon0 = hn::Min(hn::ConvertTo(di, fLon), hn::Set(di, k.nLon - 1));
+    L.wLon = hn::Sub(fLon, hn::ConvertTo(d, L.iLon0));
+    const VI next = hn::Add(L.iLon0, hn::Set(di, 1));
+    L.iLon1 = hn::IfThenZeroElse(hn::Eq(next, hn::Set(di, k.nLon)), next);
+
+    L.o00 = hn::Mul(hn::Add(hn::Mul(iLat0, hn::Set(di, k.nR)), iR0), hn::Set(di, k.nLon));
+    L.o01 = hn::Add(L.o00, hn::Set(di, k.nLon));
+    L.o10 = hn::Add(L.o00, hn::Set(di, k.nR * k.nLon));
+    L.o11 = hn::Add(L.o10, hn::Set(di, k.nLon));
+
+    L.cap = hn::Add(hn::Max(hn::Zero(d), hn::Mul(hn::Sub(hn::Set(d, k.latSouthDeg), L.latDeg), hn::Set(d, k.capScaleSouth))),
+                    hn::Max(hn::Zero(d), hn::Mul(hn::Sub(L.latDeg, hn::Set(d, k.latNorthDeg)), hn::Set(d, k.capScaleNorth))));
+    L.anyCap = !hn::AllFalse(d, hn::Gt(L.cap, hn::Zero(d)));
+    L.capIndex = hn::Add(hn::IfThenElseZero(hn::RebindMask(di, hn::Gt(L.latDeg, hn::Zero(d))), hn::Set(di, k.nR)), iR0);
+    if (k.brickActive) {
+        const int s = k.brickShift;
+        L.brick = hn::Add(hn::Mul(hn::Add(hn::Mul(hn::ShiftRightSame(iLat0, s), hn::Set(di, k.bricksR)),
+                                          hn::ShiftRightSame(iR0, s)),
+                                  hn::Set(di, k.bricksLon)),
+                          hn::ShiftRightSame(L.iLon0, s));
+    }
+    return L;
+}
+
+HWY_INLINE VF LerpV(VF a, VF b, VF w) { return hn::MulAdd(w, hn::Sub(b, a), a); }
+
+HWY_INLINE VF Sample(DF d, const KernelParams& k, const KernelVariable& v, const LocatedV& L)
+{
+    const float* p = v.values;
+    const VF c00 = LerpV(hn::GatherIndex(d, p, hn::Add(L.o00, L.iLon0)), hn::GatherIndex(d, p, hn::Add(L.o00, L.iLon1)), L.wLon);
+    const VF c01 = LerpV(hn::GatherIndex(d, p, hn::Add(L.o01, L.iLon0)), hn::GatherIndex(d, p, hn::Add(L.o01, L.iLon1)), L.wLon);
+    const VF c10 = LerpV(hn::GatherIndex(d, p, hn::Add(L.o10, L.iLon0)), hn::GatherIndex(d, p, hn::Add(L.o10, L.iLon1)), L.wLon);
+    const VF c11 = LerpV(hn::GatherIndex(d, p, hn::Add(L.o11, L.iLon0)), hn::GatherIndex(d, p, hn::Add(L.o11, L.iLon1)), L.wLon);
+    const VF value = LerpV(LerpV(c00, c01, L.wR), LerpV(c10, c11, L.wR), L.wLat);
+    if (!L.anyCap)
+        return value;
+    // Pole caps: blend towards the ring mean of the outermost row at this radius.
+    const VF mean = LerpV(hn::GatherIndex(d, v.capMean, L.capIndex), hn::GatherIndex(d, v.capMean + 1, L.capIndex), L.wR);
+    return LerpV(value, mean, L.cap);
+}
+
+HWY_INLINE VF CoordinateValue(DF d, BrushKind kind, VF x, VF y, VF z, const LocatedV& L)
+{
+    switch (kind) {
+    case BrushKind::X: return x;
+    case BrushKind::Y: return y;
+    case BrushKind::Z: return z;
+    case BrushKind::Lat: return L.latDeg;
+    case BrushKind::Lon: return L.lonDeg;
+    case BrushKind::Radius: return L.rKm;
+    case BrushKind::Depth: return hn::Sub(hn::Set(d, 6371.0f), L.rKm);
+    case BrushKind::Variable: break;
+    }
+    return hn::Zero(d);
+}
+
+HWY_INLINE VF ColourValueAt(DF d, const KernelParams& k, VF x, VF y, VF z)
+{
+    return Sample(d, k, k.colour, Locate(d, k, x, y, z));
+}
+
+struct Ray {
+    Vec3 o, d;
+};
+
+void MarchSimd(const KernelParams& k, const Ray& ray, float t0, float t1, float along, RayAccum& acc, TileStats& stats)
+{
+    const DF d;
+    const DI di;
+    const int lanes = int(hn::Lanes(d));
+    HWY_ALIGN float alphaBuf[kMaxLanes], redBuf[kMaxLanes], greenBuf[kMaxLanes], blueBuf[kMaxLanes], tBuf[kMaxLanes];
+    const VF iota = hn::Iota(d, 0.0f);
+    const VF vT1 = hn::Set(d, t1);
+    const VF zero = hn::Zero(d);
+
+    float tc = t0;
+    while (tc < t1 && acc.transmittance > k.stopTransmittance) {
+        const float dt = localStepKm(k, ray.o + ray.d * tc, ray.d);
+        ++stats.chunks;
+        const VF vdt = hn::Set(d, dt);
+        // Sample intervals [start, start + dt) clipped at t1; the sample sits `along` into its interval.
+        const VF start = hn::MulAdd(iota, vdt, hn::Set(d, tc));
+        const MF valid = hn::Lt(start, vT1);
+        const VF len = hn::Min(vdt, hn::Sub(vT1, start));
+        const VF t = hn::Min(hn::MulAdd(hn::Set(d, along), vdt, start), vT1);
+        const VF x = hn::MulAdd(t, hn::Set(d, ray.d.x), hn::Set(d, ray.o.x));
+        const VF y = hn::MulAdd(t, hn::Set(d, ray.d.y), hn::Set(d, ray.o.y));
+        const VF z = hn::MulAdd(t, hn::Set(d, ray.d.z), hn::Set(d, ray.o.z));
+        tc += float(lanes) * dt;
+
+        const LocatedV L = Locate(d, k, x, y, z);
+        MF active = valid;
+        if (k.brickActive) {
+            const VI flag = hn::GatherIndex(di, k.brickActive, hn::IfThenElseZero(hn::RebindMask(di, valid), L.brick));
+            const MF capOrFlag = hn::Or(hn::Gt(L.cap, zero), hn::RebindMask(d, hn::Ne(flag, hn::Zero(di))));
+            active = hn::And(valid, capOrFlag);
+        }
+        const size_t nValid = hn::CountTrue(d, valid);
+        const size_t nActive = hn::CountTrue(d, active);
+        stats.samples += nActive;
+        stats.samplesSkipped += nValid - nActive;
+        if (nActive == 0) {
+            ++stats.chunksSkipped;
+            continue;
+        }
+        // Brushing: any brush that rejects a lane zeroes it; stop as soon as no lane is left.
+        MF keep = active;
+        for (int b = 0; b < k.brushCount && !hn::AllFalse(d, keep); ++b) {
+            const KernelBrush& brush = k.brushes[b];
+            const VF v = brush.kind == BrushKind::Variable ? Sample(d, k, brush.variable, L)
+                                                           : CoordinateValue(d, brush.kind, x, y, z, L);
+            keep = hn::And(keep, hn::And(hn::Ge(v, hn::Set(d, brush.min)), hn::Le(v, hn::Set(d, brush.max))));
+        }
+        if (hn::AllFalse(d, keep))
+            continue;
+        const VF value = Sample(d, k, k.colour, L);
+        const VF u = Clamp(hn::MulAdd(hn::Sub(value, hn::Set(d, k.table.valueMin)), hn::Set(d, k.table.indexScale),
+                                      hn::Set(d, 0.5f)),
+                           zero, hn::Set(d, float(k.table.size - 1)));
+        const VI idx = hn::IfThenElseZero(hn::RebindMask(di, keep), hn::ConvertTo(di, u));
+        const VF sigma = hn::IfThenElseZero(keep, hn::GatherIndex(d, k.table.sigmaPerKm, idx));
+        const MF opaque = hn::Gt(sigma, zero);
+        if (hn::AllFalse(d, opaque))
+            continue;
+        // Opacity correction: alpha = 1 - exp(-sigma * length) for this sample's own interval.
+        const VF alpha = hn::IfThenElseZero(
+            opaque, hn::Max(zero, hn::Sub(hn::Set(d, 1.0f), hn::Exp(d, hn::Neg(hn::Mul(sigma, len))))));
+        VF shade = hn::Set(d, 1.0f);
+        if (k.shade) {
+            const VF h = hn::Set(d, k.gradientDeltaKm);
+            const VF gx = hn::Sub(ColourValueAt(d, k, hn::Add(x, h), y, z), ColourValueAt(d, k, hn::Sub(x, h), y, z));
+            const VF gy = hn::Sub(ColourValueAt(d, k, x, hn::Add(y, h), z), ColourValueAt(d, k, x, hn::Sub(y, h), z));
+            const VF gz = hn::Sub(ColourValueAt(d, k, x, y, hn::Add(z, h)), ColourValueAt(d, k, x, y, hn::Sub(z, h)));
+            const VF g2 = hn::MulAdd(gx, gx, hn::MulAdd(gy, gy, hn::Mul(gz, gz)));
+            const VF gl = hn::MulAdd(gx, hn::Set(d, k.lightDir.x),
+                                     hn::MulAdd(gy, hn::Set(d, k.lightDir.y), hn::Mul(gz, hn::Set(d, k.lightDir.z))));
+            const MF hasGradient = hn::Gt(g2, hn::Set(d, 1e-30f));
+            const VF safeG2 = hn::IfThenElse(hasGradient, g2, hn::Set(d, 1.0f));
+            const VF lit = hn::MulAdd(hn::Set(d, k.diffuse), hn::Div(hn::Abs(gl), hn::Sqrt(safeG2)), hn::Set(d, k.ambient));
+            shade = hn::IfThenElse(hasGradient, lit, shade);
+        }
+        hn::Store(alpha, d, alphaBuf);
+        hn::Store(hn::Mul(shade, hn::GatherIndex(d, k.table.red, idx)), d, redBuf);
+        hn::Store(hn::Mul(shade, hn::GatherIndex(d, k.table.green, idx)), d, greenBuf);
+        hn::Store(hn::Mul(shade, hn::GatherIndex(d, k.table.blue, idx)), d, blueBuf);
+        hn::Store(t, d, tBuf);
+        // Front-to-back compositing, in lane order, with the same early exit as the scalar kernel.
+        for (int i = 0; i < lanes && acc.transmittance > k.stopTransmittance; ++i) {
+            const float a = alphaBuf[i];
+            if (!(a > 0.0f))
+                continue;
+            const float w = acc.transmittance * a;
+            acc.r += w * redBuf[i];
+            acc.g += w * greenBuf[i];
+            acc.b += w * blueBuf[i];
+            acc.transmittance *= 1.0f - a;
+            if (!std::isfinite(acc.depthKm) && 1.0f - acc.transmittance >= k.depthOpacity)
+                acc.depthKm = tBuf[i];
+        }
+    }
+}
+
+void RenderTile(const KernelParams& k, Tile tile, PixelOut* out, TileStats& stats)
+{
+    renderTileWith(k, tile, out, stats,
+                   [&](Vec3 o, Vec3 dir, float t0, float t1, float along, RayAccum& acc, TileStats& st) {
+                       MarchSimd(k, Ray{o, dir}, t0, t1, along, acc, st);
+                   });
+}
+
+int Lanes() { return int(hn::Lanes(DF())); }
+
+void SampleBatch(const KernelParams& k, const KernelVariable& v, const float* x, const float* y, const float* z,
+                 int n, float* out)
+{
+    const DF d;
+    const int lanes = int(hn::Lanes(d));
+    HWY_ALIGN float bx[kMaxLanes], by[kMaxLanes], bz[kMaxLanes], bo[kMaxLanes];
+    for (int i = 0; i < n; i += lanes) {
+        const int m = std::min(lanes, n - i);
+        for (int j = 0; j < lanes; ++j) {
+            bx[j] = x[i + std::min(j, m - 1)];
+            by[j] = y[i + std::min(j, m - 1)];
+            bz[j] = z[i + std::min(j, m - 1)];
+        }
+        const LocatedV L = Locate(d, k, hn::Load(d, bx), hn::Load(d, by), hn::Load(d, bz));
+        hn::Store(Sample(d, k, v, L), d, bo);
+        std::copy(bo, bo + m, out + i);
+    }
+}
+
+}  // namespace raypc::render::kernel::HWY_NAMESPACE
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace raypc::render::kernel {
+
+HWY_EXPORT(RenderTile);
+HWY_EXPORT(Lanes);
+HWY_EXPORT(SampleBatch);
+
+void renderTileSimd(const KernelParams& k, Tile tile, PixelOut* out, TileStats& stats)
+{
+    HWY_DYNAMIC_DISPATCH(RenderTile)(k, tile, out, stats);
+}
+
+int simdLanes() { return HWY_DYNAMIC_DISPATCH(Lanes)(); }
+
+void sampleBatchSimd(const KernelParams& k, const KernelVariable& v, const float* x, const float* y, const float* z,
+                     int n, float* out)
+{
+    HWY_DYNAMIC_DISPATCH(SampleBatch)(k, v, x, y, z, n, out);
+}
+
+}  // namespace raypc::render::kernel
+#endif

@@ -1,0 +1,69 @@
+// The render state document (STATE.json): what the browser UI saves and loads and what
+// `raypc render --state` reads. Schema: docs/state.md. Names of variables and coordinates are
+// strings here; resolveParams turns them into indices for one volume.
+//
+// Parsing is strict: unknown keys and bad values throw raypc::Error naming the key
+// (e.g. "STATE.json: camera.distanceKm: expected a positive number, found -3").
+#pragma once
+
+#include "render/volume_renderer.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace raypc::render {
+
+inline constexpr int kRenderStateVersion = 1;
+
+struct BrushSpec {
+    std::string name;  // a variable or a coordinate (x, y, z, lat, lon, radius, depth)
+    float min = 0, max = 0;
+};
+
+struct RenderState {
+    int version = kRenderStateVersion;
+    int step = 0;  // time step index (reload class)
+    OrbitCamera camera;
+    int width = 512, height = 512;
+    std::string colorVariable;  // empty: the first variable
+    ColorMapId colorMap = ColorMapId::Viridis;
+    std::optional<ValueRange> colorRange;  // default: the variable's global range (symmetric for centred maps)
+    std::vector<OpacityPoint> opacity = {{0.0f, 0.0f}, {1.0f, 0.5f}};
+    float opacityUnitKm = 100.0f;
+    std::vector<BrushSpec> brushes;
+    std::optional<int> level;  // nullopt: chosen for timeBudgetMs (reload class)
+    double timeBudgetMs = 50.0;
+    int passes = 8;
+    float stepFactor = 0.5f;
+    float depthOpacity = 0.5f;
+    struct Core {
+        bool visible = true;
+        std::string variable;  // empty: plain colour
+        Rgb colour{0.55f, 0.55f, 0.58f};
+        ColorMapId colorMap = ColorMapId::Inferno;
+        std::optional<ValueRange> range;
+    } core;
+    ShadingStyle shading;
+    Rgb background{0.0f, 0.0f, 0.0f};
+};
+
+// `what` names the source in messages (a file name or "state").
+RenderState parseRenderState(const nlohmann::json& json, const std::string& what = "state");
+RenderState loadRenderState(const std::filesystem::path& path);
+nlohmann::json toJson(const RenderState& state);
+
+// What a volume offers to resolve names against: variable names and their global ranges.
+struct VariableCatalog {
+    std::vector<std::string> names;
+    std::vector<ValueRange> ranges;
+};
+
+// Resolves names and defaults. Throws raypc::Error for an unknown variable or coordinate (listing
+// the known ones), a brush with min > max, or a degenerate colour range.
+RenderParams resolveParams(const RenderState& state, const VariableCatalog& catalog);
+
+}  // namespace raypc::render

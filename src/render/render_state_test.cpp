@@ -1,0 +1,93 @@
+#include "render/render_state.h"
+
+#include "core/error.h"
+
+#include <gtest/gtest.h>
+
+namespace raypc::render {
+namespace {
+
+using nlohmann::json;
+
+std::string errorOf(const json& j)
+{
+    try {
+        parseRenderState(j, "STATE.json");
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "no error";
+}
+
+TEST(RenderState, RoundTripsThroughJson)
+{
+    RenderState s;
+    s.camera.azimuthDeg = 12;
+    s.width = 300;
+    s.colorVariable = "temperature anomaly";
+    s.colorMap = ColorMapId::BlueWhiteRed;
+    s.colorRange = ValueRange{-300, 300};
+    s.brushes = {{"temperature", 1000, 2000}, {"depth", 0, 660}};
+    s.level = 1;
+    s.core.variable = "temperature";
+    s.shading.enabled = true;
+    const RenderState t = parseRenderState(toJson(s));
+    EXPECT_EQ(toJson(t), toJson(s));
+    EXPECT_EQ(t.brushes.size(), 2u);
+    EXPECT_EQ(*t.level, 1);
+    RenderState autoLevel;
+    EXPECT_FALSE(parseRenderState(toJson(autoLevel)).level.has_value());
+}
+
+TEST(RenderState, UnknownKeysAndBadValuesNameTheKey)
+{
+    json j = toJson(RenderState{});
+    j["camera"]["zoom"] = 2;
+    EXPECT_NE(errorOf(j).find("camera.zoom: unknown key"), std::string::npos) << errorOf(j);
+    j = toJson(RenderState{});
+    j["camera"]["distanceKm"] = -3;
+    EXPECT_NE(errorOf(j).find("camera.distanceKm"), std::string::npos) << errorOf(j);
+    j = toJson(RenderState{});
+    j["color"]["colorMap"] = "rainbow";
+    EXPECT_NE(errorOf(j).find("color.colorMap"), std::string::npos) << errorOf(j);
+    j = toJson(RenderState{});
+    j["brushes"] = json::array({{{"name", "x"}, {"min", 3}, {"max", 1}}});
+    EXPECT_NE(errorOf(j).find("brushes[0].min"), std::string::npos) << errorOf(j);
+    j = toJson(RenderState{});
+    j.erase("version");
+    EXPECT_NE(errorOf(j).find("version"), std::string::npos);
+    j["version"] = 99;
+    EXPECT_NE(errorOf(j).find("not supported"), std::string::npos);
+    j = toJson(RenderState{});
+    j["level"] = 7;
+    EXPECT_NE(errorOf(j).find("level"), std::string::npos);
+}
+
+TEST(RenderState, ResolvesNamesAndRejectsUnknownOnes)
+{
+    const VariableCatalog catalog{{"temperature", "temperature anomaly"}, {{1000, 4000}, {-500, 200}}};
+    RenderState s;
+    s.colorVariable = "temperature anomaly";
+    s.colorMap = ColorMapId::BlueWhiteRed;
+    s.brushes = {{"temperature", 1500, 2500}, {"lat", -30, 30}};
+    const RenderParams p = resolveParams(s, catalog);
+    EXPECT_EQ(p.colorVariable, 1);
+    EXPECT_FLOAT_EQ(p.transfer.range.min, -500);  // centred map: symmetric default range
+    EXPECT_FLOAT_EQ(p.transfer.range.max, 500);
+    ASSERT_EQ(p.brushes.size(), 2u);
+    EXPECT_EQ(p.brushes[0].variable, 0);
+    EXPECT_EQ(*p.brushes[1].coordinate, Coordinate::Lat);
+    s.brushes = {{"pressure", 0, 1}};
+    try {
+        resolveParams(s, catalog);
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("'pressure'"), std::string::npos);
+    }
+    s.brushes.clear();
+    s.colorVariable = "nope";
+    EXPECT_THROW(resolveParams(s, catalog), Error);
+}
+
+}  // namespace
+}  // namespace raypc::render

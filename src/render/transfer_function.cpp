@@ -1,0 +1,86 @@
+#include "render/transfer_function.h"
+
+#include "core/error.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace raypc::render {
+
+void TransferFunction::validate() const
+{
+    if (!std::isfinite(range.min) || !std::isfinite(range.max) || !(range.min < range.max))
+        fail("transfer function range [{}, {}]: expected finite min < max", range.min, range.max);
+    if (opacity.empty())
+        fail("transfer function opacity: no points, expected at least one");
+    for (size_t i = 0; i < opacity.size(); ++i) {
+        const auto& p = opacity[i];
+        if (!(p.position >= 0 && p.position <= 1))
+            fail("opacity point {}: position {} outside [0, 1]", i, p.position);
+        if (!(p.opacity >= 0 && p.opacity <= 1))
+            fail("opacity point {}: opacity {} outside [0, 1]", i, p.opacity);
+        if (i > 0 && p.position < opacity[i - 1].position)
+            fail("opacity point {}: position {} is below the previous one; expected ascending positions", i,
+                 p.position);
+    }
+    if (!(opacityUnitKm > 0) || !std::isfinite(opacityUnitKm))
+        fail("opacity unit distance {} km: expected a positive distance", opacityUnitKm);
+}
+
+float TransferFunction::opacityAt(float u) const
+{
+    if (u <= opacity.front().position)
+        return opacity.front().opacity;
+    for (size_t i = 1; i < opacity.size(); ++i) {
+        if (u <= opacity[i].position) {
+            const auto& a = opacity[i - 1];
+            const auto& b = opacity[i];
+            const float span = b.position - a.position;
+            return span > 0 ? a.opacity + (u - a.position) / span * (b.opacity - a.opacity) : b.opacity;
+        }
+    }
+    return opacity.back().opacity;
+}
+
+TransferTable TransferTable::bake(const TransferFunction& tf)
+{
+    tf.validate();
+    TransferTable t;
+    t.valueMin = tf.range.min;
+    t.indexScale = float(kSize - 1) / (tf.range.max - tf.range.min);
+    t.red.resize(kSize);
+    t.green.resize(kSize);
+    t.blue.resize(kSize);
+    t.sigmaPerKm.resize(kSize);
+    t.nonzeroPrefix.assign(kSize + 1, 0);
+    // Centred maps put value 0 at the middle colour, scaled by the larger magnitude.
+    const float magnitude = std::max(std::abs(tf.range.min), std::abs(tf.range.max));
+    for (int i = 0; i < kSize; ++i) {
+        const float u = float(i) / float(kSize - 1);
+        const float value = tf.range.min + u * (tf.range.max - tf.range.min);
+        const float colourU = isCentredOnZero(tf.colorMap) ? 0.5f + 0.5f * value / magnitude : u;
+        const Rgb c = sampleColorMap(tf.colorMap, colourU);
+        t.red[i] = c.r;
+        t.green[i] = c.g;
+        t.blue[i] = c.b;
+        // Full opacity is capped so that sigma stays finite; 1 - 1e-6 is opaque for every purpose.
+        const float a = std::min(tf.opacityAt(u), 1.0f - 1e-6f);
+        t.sigmaPerKm[i] = float(-std::log1p(-double(a)) / tf.opacityUnitKm);
+        t.nonzeroPrefix[i + 1] = t.nonzeroPrefix[i] + (t.sigmaPerKm[i] > 0.0f ? 1 : 0);
+    }
+    return t;
+}
+
+int TransferTable::indexOf(float value) const
+{
+    const float k = (value - valueMin) * indexScale + 0.5f;
+    return int(std::clamp(k, 0.0f, float(kSize - 1)));
+}
+
+bool TransferTable::transparentOver(float lo, float hi) const
+{
+    const int a = indexOf(lo), b = indexOf(hi);
+    return nonzeroPrefix[b + 1] - nonzeroPrefix[a] == 0;
+}
+
+}  // namespace raypc::render

@@ -1,0 +1,49 @@
+// Transfer function: a colour map plus piecewise-linear opacity over one variable's value range,
+// and its baked lookup table for the kernels.
+//
+// Opacity is defined per `opacityUnitKm` of path length: a slab of that thickness with constant
+// opacity a lets 1 - a through. The table stores the extinction sigma = -ln(1 - a) / opacityUnitKm
+// (1/km), and a sample of step dt gets alpha = 1 - exp(-sigma dt) ("opacity correction"), so the
+// look does not depend on the sampling rate.
+#pragma once
+
+#include "data/dataset.h"
+#include "render/color_map.h"
+
+#include <vector>
+
+namespace raypc::render {
+
+// `position` is normalised over the value range (0 = range.min, 1 = range.max); opacity in [0, 1].
+struct OpacityPoint {
+    float position = 0, opacity = 0;
+};
+
+struct TransferFunction {
+    ColorMapId colorMap = ColorMapId::Viridis;
+    ValueRange range{0, 1};  // values outside are clamped to the ends
+    std::vector<OpacityPoint> opacity = {{0, 0}, {1, 0.5f}};
+    float opacityUnitKm = 100.0f;
+
+    // Throws raypc::Error on an empty or inverted range, positions not ascending in [0, 1],
+    // opacities outside [0, 1], or a non-positive unit distance.
+    void validate() const;
+    // Opacity at normalised position u (piecewise linear, constant beyond the end points).
+    float opacityAt(float u) const;
+};
+
+// The baked table: kSize entries over [range.min, range.max], nearest-entry lookup.
+struct TransferTable {
+    static constexpr int kSize = 1024;
+    float valueMin = 0;
+    float indexScale = 0;  // (kSize - 1) / (max - min)
+    std::vector<float> red, green, blue, sigmaPerKm;
+    std::vector<int> nonzeroPrefix;  // kSize + 1 prefix counts of sigma > 0, for range queries
+
+    static TransferTable bake(const TransferFunction& tf);
+    int indexOf(float value) const;
+    // True when sigma is 0 for every value in [lo, hi].
+    bool transparentOver(float lo, float hi) const;
+};
+
+}  // namespace raypc::render

@@ -1,0 +1,516 @@
+#include "render/volume_renderer.h"
+
+#include "core/error.h"
+#include "core/spherical.h"
+#include "render/render_kernel.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+namespace raypc::render {
+namespace {
+
+constexpr int kTileSize = 32;
+
+// Coordinate -> fractional index along one axis: affine when uniform, else a fine table.
+struct AxisTable {
+    kernel::AxisMap map;
+    std::vector<float> table;
+};
+
+AxisTable buildAxis(const std::vector<double>& coords, double lo, double hi, bool periodic)
+{
+    const size_t n = coords.size();
+    AxisTable a;
+    const double span = periodic ? 360.0 : coords.back() - coords.front();
+    const double h = span / double(periodic ? n : n - 1);
+    double deviation = 0;
+    for (size_t i = 0; i < n; ++i)
+        deviation = std::max(deviation, std::abs(coords[i] - (coords[0] + double(i) * h)));
+    if (deviation < 1e-5 * h) {
+        a.map.affine = true;
+        a.map.scale = float(1.0 / h);
+        a.map.offset = float(-coords[0] / h);
+        return a;
+    }
+    // Piecewise-linear index function through (coords[i], i); lon continues across the seam.
+    auto indexOf = [&](double c) {
+        if (periodic) {
+            if (c < coords[0])
+                c += 360.0;
+            const auto it = std::upper_bound(coords.begin(), coords.end(), c);
+            const size_t i = size_t(it - coords.begin()) - 1;
+            const double next = i + 1 < n ? coords[i + 1] : coords[0] + 360.0;
+            return double(i) + (c - coords[i]) / (next - coords[i]);
+        }
+        if (c <= coords.front())
+            return 0.0;
+        if (c >= coords.back())
+            return double(n - 1);
+        const size_t i = size_t(std::upper_bound(coords.begin(), coords.end(), c) - coords.begin()) - 1;
+        return double(i) + (c - coords[i]) / (coords[i + 1] - coords[i]);
+    };
+    const int last = int(std::max<size_t>(4096, 64 * n));
+    a.table.resize(size_t(last) + 1);
+    for (int k = 0; k <= last; ++k)
+        a.table[size_t(k)] = float(indexOf(lo + (hi - lo) * double(k) / double(last)));
+    a.map.affine = false;
+    a.map.coordMin = float(lo);
+    a.map.invTableStep = float(double(last) / (hi - lo));
+    a.map.tableLast = last;
+    return a;
+}
+
+struct Interval {
+    double lo, hi;
+};
+Interval mul(Interval a, Interval b)
+{
+    const double p[4] = {a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi};
+    return {*std::min_element(p, p + 4), *std::max_element(p, p + 4)};
+}
+// Range of cos (phaseDeg = 0) or sin (phaseDeg = 90) over [aDeg, bDeg].
+Interval trigRange(double aDeg, double bDeg, double phaseDeg)
+{
+    auto f = [&](double deg) { return std::cos(degToRad(deg - phaseDeg)); };
+    Interval r{std::min(f(aDeg), f(bDeg)), std::max(f(aDeg), f(bDeg))};
+    for (double k = std::ceil((aDeg - phaseDeg) / 180.0); phaseDeg + k * 180.0 <= bDeg; k += 1.0) {
+        const double v = f(phaseDeg + k * 180.0);
+        r.lo = std::min(r.lo, v);
+        r.hi = std::max(r.hi, v);
+    }
+    return r;
+}
+
+kernel::BrushKind brushKindOf(Coordinate c)
+{
+    switch (c) {
+    case Coordinate::X: return kernel::BrushKind::X;
+    case Coordinate::Y: return kernel::BrushKind::Y;
+    case Coordinate::Z: return kernel::BrushKind::Z;
+    case Coordinate::Lat: return kernel::BrushKind::Lat;
+    case Coordinate::Lon: return kernel::BrushKind::Lon;
+    case Coordinate::Radius: return kernel::BrushKind::Radius;
+    case Coordinate::Depth: return kernel::BrushKind::Depth;
+    }
+    return kernel::BrushKind::X;
+}
+
+kernel::ColourTable viewOf(const TransferTable& t)
+{
+    return {t.red.data(), t.green.data(), t.blue.data(), t.sigmaPerKm.data(), t.valueMin, t.indexScale,
+            TransferTable::kSize};
+}
+
+}  // namespace
+
+std::vector<float> coordinateBrickBounds(const SphericalGrid& g, const BrickLayout& bricks, Coordinate c)
+{
+    std::vector<float> out(bricks.brickCount() * 2);
+    const uint32_t s = bricks.size;
+    for (uint32_t bLat = 0; bLat < bricks.count[0]; ++bLat) {
+        const double a0 = g.latDeg[bLat * s], a1 = g.latDeg[std::min<size_t>((bLat + 1) * s, g.nLat() - 1)];
+        for (uint32_t bR = 0; bR < bricks.count[1]; ++bR) {
+            const double r0 = g.rKm[bR * s], r1 = g.rKm[std::min<size_t>((bR + 1) * s, g.nR() - 1)];
+            for (uint32_t bLon = 0; bLon < bricks.count[2]; ++bLon) {
+                const size_t end = size_t(bLon + 1) * s;
+                const double o0 = g.lonDeg[bLon * s];
+                const bool wraps = end >= g.nLon();
+                const double o1 = wraps ? g.lonDeg[end % g.nLon()] + 360.0 : g.lonDeg[end];
+                // Small pads absorb the kernel's angle approximation (about 1e-5 rad).
+                Interval v{};
+                switch (c) {
+                case Coordinate::Lat: v = {a0 - 0.01, a1 + 0.01}; break;
+                case Coordinate::Lon: v = wraps ? Interval{0, 360} : Interval{o0 - 0.01, o1 + 0.01}; break;
+                case Coordinate::Radius: v = {r0 - 0.01, r1 + 0.01}; break;
+                case Coordinate::Depth: v = {kSurfaceRadiusKm - r1 - 0.01, kSurfaceRadiusKm - r0 + 0.01}; break;
+                case Coordinate::X:
+                    v = mul(mul({r0, r1}, trigRange(a0, a1, 0)), trigRange(o0, o1, 0));
+                    v = {v.lo - 1, v.hi + 1};
+                    break;
+                case Coordinate::Y:
+                    v = mul(mul({r0, r1}, trigRange(a0, a1, 0)), trigRange(o0, o1, 90));
+                    v = {v.lo - 1, v.hi + 1};
+                    break;
+                case Coordinate::Z:
+                    v = mul({r0, r1}, trigRange(a0, a1, 90));
+                    v = {v.lo - 1, v.hi + 1};
+                    break;
+                }
+                const size_t b = bricks.index(bLat, bR, bLon);
+                out[2 * b] = float(v.lo);
+                out[2 * b + 1] = float(v.hi);
+            }
+        }
+    }
+    return out;
+}
+
+// ------------------------------------------------------------------------------------------------
+// FrameBuffer
+
+FrameBuffer::FrameBuffer(int width, int height) : m_width(width), m_height(height)
+{
+    if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
+        fail("image size {}x{}: expected 1..16384 pixels per side", width, height);
+    clear();
+}
+FrameBuffer::~FrameBuffer() = default;
+FrameBuffer::FrameBuffer(FrameBuffer&&) noexcept = default;
+FrameBuffer& FrameBuffer::operator=(FrameBuffer&&) noexcept = default;
+
+void FrameBuffer::clear()
+{
+    const size_t n = size_t(m_width) * size_t(m_height);
+    m_passes = 0;
+    m_rgbaSum.assign(4 * n, 0.0f);
+    m_depthSum.assign(n, 0.0f);
+    m_depthCount.assign(n, 0);
+    m_pass.resize(n);
+}
+
+std::vector<float> FrameBuffer::averagedRgba() const
+{
+    std::vector<float> out(m_rgbaSum.size());
+    const float s = m_passes > 0 ? 1.0f / float(m_passes) : 0.0f;
+    for (size_t i = 0; i < out.size(); ++i)
+        out[i] = m_rgbaSum[i] * s;
+    return out;
+}
+
+std::vector<float> FrameBuffer::averagedDepthKm() const
+{
+    std::vector<float> out(m_depthSum.size());
+    for (size_t i = 0; i < out.size(); ++i)
+        out[i] = m_depthCount[i] ? m_depthSum[i] / float(m_depthCount[i]) : INFINITY;
+    return out;
+}
+
+std::vector<uint8_t> FrameBuffer::resolveRgba8(Rgb background, bool opaqueBackground) const
+{
+    const std::vector<float> rgba = averagedRgba();
+    std::vector<uint8_t> out(rgba.size());
+    auto to8 = [](float v) { return uint8_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
+    for (size_t i = 0; i < rgba.size(); i += 4) {
+        const float t = 1.0f - rgba[i + 3];
+        if (opaqueBackground) {
+            out[i] = to8(rgba[i] + t * background.r);
+            out[i + 1] = to8(rgba[i + 1] + t * background.g);
+            out[i + 2] = to8(rgba[i + 2] + t * background.b);
+            out[i + 3] = 255;
+        } else {
+            out[i] = to8(rgba[i]);
+            out[i + 1] = to8(rgba[i + 1]);
+            out[i + 2] = to8(rgba[i + 2]);
+            out[i + 3] = to8(rgba[i + 3]);
+        }
+    }
+    return out;
+}
+
+// ------------------------------------------------------------------------------------------------
+// VolumeRenderer
+
+struct VolumeRenderer::Impl {
+    AxisTable lat, r, lon;
+    std::vector<std::vector<float>> capMeans;  // per variable: 2 * nR
+    float drKm = 1, dAngleRad = 0.01f;
+    int brickShift = 3;
+
+    // Baked per setParams (restart class).
+    TransferTable table, coreTable;
+    std::vector<kernel::KernelBrush> brushes;
+    std::vector<int32_t> brickActive;
+    size_t bricksSkipped = 0;
+    kernel::KernelParams params;
+};
+
+VolumeRenderer::VolumeRenderer(std::shared_ptr<const StepVolume> volume)
+    : m_volume(std::move(volume)), m_impl(std::make_unique<Impl>())
+{
+    if (!m_volume)
+        fail("renderer: no volume");
+    const SphericalGrid& g = m_volume->grid();
+    if (g.nLat() < 2 || g.nR() < 2 || g.nLon() < 2)
+        fail("renderer: grid {}x{}x{} (lat, r, lon), expected at least 2 points per axis", g.nLat(), g.nR(), g.nLon());
+    if (g.cellCount() >= size_t(1) << 31)
+        fail("renderer: grid of {} points exceeds 2^31", g.cellCount());
+    const uint32_t bs = m_volume->bricks().size;
+    if (bs == 0 || (bs & (bs - 1)) != 0)
+        fail("renderer: brick size {} is not a power of two", bs);
+    Impl& im = *m_impl;
+    im.brickShift = std::countr_zero(bs);
+    im.lat = buildAxis(g.latDeg, -90.0, 90.0, false);
+    im.r = buildAxis(g.rKm, g.rKm.front(), g.rKm.back(), false);
+    im.lon = buildAxis(g.lonDeg, 0.0, 360.0, true);
+    im.drKm = float((g.rKm.back() - g.rKm.front()) / double(g.nR() - 1));
+    im.dAngleRad = float(degToRad(std::min((g.latDeg.back() - g.latDeg.front()) / double(g.nLat() - 1),
+                                           360.0 / double(g.nLon()))));
+
+    // Ring means of the outermost rows, weighted by each point's lon extent (dual cell width).
+    const std::vector<double> lonEdges = [&] {
+        std::vector<double> e(g.nLon() + 1);
+        for (size_t i = 0; i <= g.nLon(); ++i) {
+            const double prev = i == 0 ? g.lonDeg.back() - 360.0 : g.lonDeg[i - 1];
+            const double cur = i == g.nLon() ? g.lonDeg[0] + 360.0 : g.lonDeg[i];
+            e[i] = 0.5 * (prev + cur);
+        }
+        return e;
+    }();
+    im.capMeans.resize(m_volume->variableCount());
+    for (size_t v = 0; v < m_volume->variableCount(); ++v) {
+        const float* values = m_volume->values(v);
+        auto& means = im.capMeans[v];
+        means.resize(2 * g.nR());
+        for (int side = 0; side < 2; ++side) {
+            const size_t iLat = side == 0 ? 0 : g.nLat() - 1;
+            for (size_t iR = 0; iR < g.nR(); ++iR) {
+                double sum = 0;
+                for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+                    sum += double(values[g.index(iLat, iR, iLon)]) * (lonEdges[iLon + 1] - lonEdges[iLon]);
+                means[side * g.nR() + iR] = float(sum / 360.0);
+            }
+        }
+    }
+}
+
+VolumeRenderer::~VolumeRenderer() = default;
+
+void VolumeRenderer::setParams(const RenderParams& p)
+{
+    const StepVolume& vol = *m_volume;
+    const SphericalGrid& g = vol.grid();
+    const int varCount = int(vol.variableCount());
+    if (p.width <= 0 || p.height <= 0 || p.width > 16384 || p.height > 16384)
+        fail("image size {}x{}: expected 1..16384 pixels per side", p.width, p.height);
+    p.camera.validate();
+    if (p.colorVariable < 0 || p.colorVariable >= varCount)
+        fail("colouring variable index {}: the volume has {} variables", p.colorVariable, varCount);
+    if (!(p.stepFactor >= 0.05f && p.stepFactor <= 8.0f))
+        fail("step factor {}: expected a value in [0.05, 8]", p.stepFactor);
+    if (!(p.depthOpacity > 0.0f && p.depthOpacity < 1.0f))
+        fail("depth opacity threshold {}: expected a value in (0, 1)", p.depthOpacity);
+    if (!(p.stopOpacity > 0.5f && p.stopOpacity <= 1.0f))
+        fail("stop opacity {}: expected a value in (0.5, 1]", p.stopOpacity);
+    for (const BrushRange& b : p.brushes) {
+        if (!b.coordinate && (b.variable < 0 || b.variable >= varCount))
+            fail("brush variable index {}: the volume has {} variables", b.variable, varCount);
+        if (!(b.min <= b.max))
+            fail("brush range [{}, {}]: min is greater than max", b.min, b.max);
+    }
+    if (p.core.variable >= varCount)
+        fail("core variable index {}: the volume has {} variables", p.core.variable, varCount);
+
+    Impl& im = *m_impl;
+    im.table = TransferTable::bake(p.transfer);
+    if (p.core.variable >= 0) {
+        TransferFunction coreTf;
+        coreTf.colorMap = p.core.colorMap;
+        coreTf.range = p.core.range;
+        im.coreTable = TransferTable::bake(coreTf);
+    }
+
+    auto view = [&](int v) { return kernel::KernelVariable{vol.values(size_t(v)), im.capMeans[size_t(v)].data()}; };
+    im.brushes.clear();
+    for (const BrushRange& b : p.brushes) {
+        kernel::KernelBrush kb;
+        kb.kind = b.coordinate ? brushKindOf(*b.coordinate) : kernel::BrushKind::Variable;
+        if (!b.coordinate)
+            kb.variable = view(b.variable);
+        kb.min = b.min;
+        kb.max = b.max;
+        im.brushes.push_back(kb);
+    }
+
+    // Brick flags: a brick is skipped when a brush excludes its bounds or the transfer function is
+    // transparent over the colouring variable's bounds there (bounds contain every trilinear value).
+    const BrickLayout& bl = vol.bricks();
+    im.brickActive.assign(bl.brickCount(), 1);
+    auto excludeOutside = [&](const float* bounds, float lo, float hi) {
+        for (size_t b = 0; b < bl.brickCount(); ++b)
+            if (bounds[2 * b + 1] < lo || bounds[2 * b] > hi)
+                im.brickActive[b] = 0;
+    };
+    for (const BrushRange& b : p.brushes) {
+        if (b.coordinate) {
+            const std::vector<float> bounds = coordinateBrickBounds(g, bl, *b.coordinate);
+            excludeOutside(bounds.data(), b.min, b.max);
+        } else {
+            excludeOutside(vol.brickBounds(size_t(b.variable)), b.min, b.max);
+        }
+    }
+    const float* colourBounds = vol.brickBounds(size_t(p.colorVariable));
+    for (size_t b = 0; b < bl.brickCount(); ++b)
+        if (im.table.transparentOver(colourBounds[2 * b], colourBounds[2 * b + 1]))
+            im.brickActive[b] = 0;
+    im.bricksSkipped = size_t(std::count(im.brickActive.begin(), im.brickActive.end(), 0));
+
+    kernel::KernelParams& k = im.params;
+    k = {};
+    k.nLat = int(g.nLat());
+    k.nR = int(g.nR());
+    k.nLon = int(g.nLon());
+    k.lat = im.lat.map;
+    k.lat.table = im.lat.table.data();
+    k.r = im.r.map;
+    k.r.table = im.r.table.data();
+    k.lon = im.lon.map;
+    k.lon.table = im.lon.table.data();
+    k.latSouthDeg = float(g.latDeg.front());
+    k.latNorthDeg = float(g.latDeg.back());
+    k.capScaleSouth = g.latDeg.front() > -90.0 ? float(1.0 / (g.latDeg.front() + 90.0)) : 0.0f;
+    k.capScaleNorth = g.latDeg.back() < 90.0 ? float(1.0 / (90.0 - g.latDeg.back())) : 0.0f;
+    k.rInnerKm = float(g.rKm.front());
+    k.rOuterKm = float(g.rKm.back());
+    k.brickActive = p.skipBricks ? im.brickActive.data() : nullptr;
+    k.brickShift = im.brickShift;
+    k.bricksR = int(bl.count[1]);
+    k.bricksLon = int(bl.count[2]);
+    k.colour = view(p.colorVariable);
+    k.table = viewOf(im.table);
+    k.brushes = im.brushes.data();
+    k.brushCount = int(im.brushes.size());
+    k.stepFactor = p.stepFactor;
+    k.drKm = im.drKm;
+    k.dAngleRad = im.dAngleRad;
+    k.minStepKm = p.stepFactor * std::min(im.drKm, k.rInnerKm * im.dAngleRad);
+    k.maxStepKm = p.stepFactor * std::max(im.drKm, k.rOuterKm * im.dAngleRad);
+    k.stopTransmittance = 1.0f - p.stopOpacity;
+    k.depthOpacity = p.depthOpacity;
+    k.camera = CameraFrame(p.camera, p.width, p.height);
+    k.shade = p.shading.enabled;
+    const Vec3 l = p.shading.lightFromCamera;
+    k.lightDir = normalize(k.camera.right * l.x + k.camera.up * l.y + k.camera.forward * (-l.z));
+    k.ambient = p.shading.ambient;
+    k.diffuse = p.shading.diffuse;
+    k.gradientDeltaKm = 0.5f * im.drKm;
+    k.drawCore = p.core.visible;
+    k.coreByVariable = p.core.variable >= 0;
+    k.coreColour = p.core.colour;
+    if (k.coreByVariable) {
+        k.coreVariable = view(p.core.variable);
+        k.coreTable = viewOf(im.coreTable);
+    }
+    k.seed = p.seed;
+    // The scalar kernel walks the same chunks as the SIMD one so that the two can be compared.
+    k.chunkLanes = kernel::simdLanes();
+    m_params = p;
+}
+
+PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>* cancel)
+{
+    if (frame.width() != m_params.width || frame.height() != m_params.height)
+        fail("frame buffer {}x{} does not match the render size {}x{}", frame.width(), frame.height(),
+             m_params.width, m_params.height);
+    const auto start = std::chrono::steady_clock::now();
+    kernel::KernelParams k = m_impl->params;
+    k.pass = frame.passes();
+    const int tilesX = (k.camera.width + kTileSize - 1) / kTileSize;
+    const int tilesY = (k.camera.height + kTileSize - 1) / kTileSize;
+    std::atomic<uint64_t> samples{0}, skipped{0}, chunks{0}, chunksSkipped{0}, rays{0};
+    std::atomic<bool> cancelled{false};
+    const bool simd = m_params.kernel == KernelKind::Simd;
+    kernel::PixelOut* out = frame.m_pass.data();
+
+    tbb::parallel_for(
+        tbb::blocked_range<int>(0, tilesX * tilesY, 1),
+        [&](const tbb::blocked_range<int>& range) {
+            for (int t = range.begin(); t != range.end(); ++t) {
+                if (cancel && cancel->load(std::memory_order_relaxed)) {
+                    cancelled.store(true, std::memory_order_relaxed);
+                    return;
+                }
+                const int tx = t % tilesX, ty = t / tilesX;
+                const kernel::Tile tile{tx * kTileSize, ty * kTileSize, std::min((tx + 1) * kTileSize, k.camera.width),
+                                        std::min((ty + 1) * kTileSize, k.camera.height)};
+                kernel::TileStats st;
+                if (simd)
+                    kernel::renderTileSimd(k, tile, out, st);
+                else
+                    kernel::renderTileScalar(k, tile, out, st);
+                samples += st.samples;
+                skipped += st.samplesSkipped;
+                chunks += st.chunks;
+                chunksSkipped += st.chunksSkipped;
+                rays += st.rays;
+            }
+        },
+        tbb::simple_partitioner());
+
+    PassStats stats;
+    stats.cancelled = cancelled.load() || (cancel && cancel->load());
+    if (!stats.cancelled) {
+        const size_t n = frame.m_pass.size();
+        for (size_t i = 0; i < n; ++i) {
+            const kernel::PixelOut& p = frame.m_pass[i];
+            frame.m_rgbaSum[4 * i] += p.r;
+            frame.m_rgbaSum[4 * i + 1] += p.g;
+            frame.m_rgbaSum[4 * i + 2] += p.b;
+            frame.m_rgbaSum[4 * i + 3] += p.a;
+            if (std::isfinite(p.depthKm)) {
+                frame.m_depthSum[i] += p.depthKm;
+                ++frame.m_depthCount[i];
+            }
+        }
+        ++frame.m_passes;
+    }
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    stats.samples = samples;
+    stats.samplesSkipped = skipped;
+    stats.chunks = chunks;
+    stats.chunksSkipped = chunksSkipped;
+    stats.rays = rays;
+    stats.bricksTotal = m_volume->bricks().brickCount();
+    stats.bricksSkipped = m_params.skipBricks ? m_impl->bricksSkipped : 0;
+    stats.threads = tbb::this_task_arena::max_concurrency();
+    stats.simdLanes = simd ? kernel::simdLanes() : 1;
+    return stats;
+}
+
+double VolumeRenderer::estimateSamplesPerPass() const
+{
+    // March a sparse grid of rays with the kernel's step rule, without reading data.
+    const kernel::KernelParams& k = m_impl->params;
+    constexpr int kProbe = 24;
+    double total = 0;
+    for (int j = 0; j < kProbe; ++j) {
+        for (int i = 0; i < kProbe; ++i) {
+            const Vec3 o = k.camera.eye;
+            const Vec3 d = k.camera.direction((float(i) + 0.5f) * float(k.camera.width) / kProbe,
+                                              (float(j) + 0.5f) * float(k.camera.height) / kProbe);
+            const ShellSegments seg = intersectShell(o, d, k.rInnerKm, k.rOuterKm, !k.drawCore);
+            for (int s = 0; s < seg.count; ++s)
+                for (float t = seg.t0[s]; t < seg.t1[s];) {
+                    const float dt = kernel::localStepKm(k, o + d * t, d);
+                    total += k.chunkLanes;
+                    t += float(k.chunkLanes) * dt;
+                }
+        }
+    }
+    return total * double(k.camera.width) * double(k.camera.height) / double(kProbe * kProbe);
+}
+
+const kernel::KernelParams& VolumeRenderer::kernelParams() const { return m_impl->params; }
+
+int chooseLevelForBudget(const std::vector<std::shared_ptr<const StepVolume>>& levels, const RenderParams& params,
+                         double budgetSeconds, double samplesPerSecond)
+{
+    if (levels.empty())
+        fail("level choice: no levels");
+    for (size_t level = 0; level < levels.size(); ++level) {
+        VolumeRenderer probe(levels[level]);
+        probe.setParams(params);
+        if (probe.estimateSamplesPerPass() / samplesPerSecond <= budgetSeconds)
+            return int(level);
+    }
+    return int(levels.size()) - 1;
+}
+
+}  // namespace raypc::render

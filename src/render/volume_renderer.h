@@ -1,0 +1,157 @@
+// The spherical volume ray caster: renders one StepVolume directly on its (lat, r, lon) grid.
+//
+// Typical use (CLI, server):
+//   VolumeRenderer renderer(volume);              // reload class: new step or level
+//   renderer.setParams(params);                   // restart class: camera, TF, brushes, size
+//   FrameBuffer frame(params.width, params.height);
+//   while (!converged) renderer.renderPass(frame, &cancelFlag);   // progressive, cancellable
+//   frame.resolveRgba8(...) / frame.averagedDepthKm()
+//
+// Units: km for positions and depths, degrees for angles. Depth of a pixel = distance along the
+// (unit) view ray from the eye to the first sample where the accumulated opacity reaches
+// RenderParams::depthOpacity, or to the core if it is hit first; +infinity where neither happens.
+//
+// Thread safety: renderPass uses all cores (oneTBB) and must not be called concurrently on the same
+// renderer or frame buffer; setParams must not race with renderPass. Distinct renderers are independent.
+#pragma once
+
+#include "data/dataset.h"
+#include "render/camera.h"
+#include "render/color_map.h"
+#include "render/transfer_function.h"
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+namespace raypc::render {
+
+namespace kernel {
+struct KernelParams;
+struct PixelOut;
+}  // namespace kernel
+
+// A sample outside [min, max] of any brush contributes nothing. Either a variable (index into the
+// volume's variables) or a coordinate (x, y, z, lat, lon, radius, depth; units as in dataset.h).
+struct BrushRange {
+    int variable = -1;
+    std::optional<Coordinate> coordinate;
+    float min = 0, max = 0;
+};
+
+struct CoreStyle {
+    bool visible = true;
+    int variable = -1;  // -1: plain colour; otherwise coloured by this variable at the core radius
+    Rgb colour{0.55f, 0.55f, 0.58f};
+    ColorMapId colorMap = ColorMapId::Inferno;
+    ValueRange range{0, 1};
+};
+
+struct ShadingStyle {
+    bool enabled = false;  // gradient shading of the volume (the core is always Lambert-shaded)
+    Vec3 lightFromCamera{0.4f, 0.6f, 1.0f};  // towards the light in the camera frame: x right, y up, z to the viewer
+    float ambient = 0.35f, diffuse = 0.65f;
+};
+
+enum class KernelKind { Simd, Scalar };
+
+struct RenderParams {
+    OrbitCamera camera;
+    int width = 512, height = 512;
+    int colorVariable = 0;
+    TransferFunction transfer;
+    std::vector<BrushRange> brushes;
+    CoreStyle core;
+    ShadingStyle shading;
+    float stepFactor = 0.5f;    // step = stepFactor x local cell extent along the ray
+    float depthOpacity = 0.5f;  // accumulated opacity that defines the depth
+    float stopOpacity = 0.995f; // early ray termination
+    bool skipBricks = true;     // empty-space skipping (never changes the image; off for testing)
+    KernelKind kernel = KernelKind::Simd;
+    uint32_t seed = 0x9e3779b9u;
+};
+
+// Accumulates progressive passes. Colours are premultiplied by alpha (alpha = 1 - transmittance).
+class FrameBuffer {
+public:
+    FrameBuffer(int width, int height);
+    ~FrameBuffer();
+    FrameBuffer(FrameBuffer&&) noexcept;
+    FrameBuffer& operator=(FrameBuffer&&) noexcept;
+
+    int width() const { return m_width; }
+    int height() const { return m_height; }
+    int passes() const { return m_passes; }
+    void clear();  // restart accumulation (after a restart-class change)
+
+    // Mean of the passes so far: premultiplied RGBA, row-major from the top-left, 4 floats a pixel.
+    std::vector<float> averagedRgba() const;
+    // Mean of the finite per-pass depths (km), +inf where no pass had one.
+    std::vector<float> averagedDepthKm() const;
+    // 8-bit RGBA, composited over `background` when `opaqueBackground`, else premultiplied with alpha.
+    std::vector<uint8_t> resolveRgba8(Rgb background, bool opaqueBackground = true) const;
+
+private:
+    friend class VolumeRenderer;
+    int m_width, m_height, m_passes = 0;
+    std::vector<float> m_rgbaSum, m_depthSum;
+    std::vector<uint16_t> m_depthCount;
+    std::vector<kernel::PixelOut> m_pass;  // scratch of the pass being rendered
+};
+
+struct PassStats {
+    double seconds = 0;
+    uint64_t samples = 0;          // samples whose data were read
+    uint64_t samplesSkipped = 0;   // samples in skipped bricks
+    uint64_t chunks = 0, chunksSkipped = 0, rays = 0;
+    size_t bricksTotal = 0, bricksSkipped = 0;  // bricks excluded by brushes or transparency
+    int threads = 1;
+    int simdLanes = 1;
+    bool cancelled = false;
+    double samplesPerSecondPerThread() const { return seconds > 0 ? double(samples + samplesSkipped) / seconds / threads : 0; }
+};
+
+class VolumeRenderer {
+public:
+    // Prepares per-volume tables (coordinate maps, pole ring means). Throws raypc::Error if the grid
+    // has fewer than 2 points along an axis or the brick size is not a power of two.
+    explicit VolumeRenderer(std::shared_ptr<const StepVolume> volume);
+    ~VolumeRenderer();
+
+    // Validates and bakes: transfer table, brick flags. Throws raypc::Error on bad parameters
+    // (variable index out of range, brush min > max, bad size, bad transfer function, bad camera).
+    void setParams(const RenderParams& params);
+    const RenderParams& params() const { return m_params; }
+    const std::shared_ptr<const StepVolume>& volume() const { return m_volume; }
+
+    // Renders one jittered pass (pass number = frame.passes()) and accumulates it into `frame`
+    // unless `cancel` becomes true, which is checked before every tile; a cancelled pass leaves
+    // the frame as it was. The frame must have the params' size.
+    PassStats renderPass(FrameBuffer& frame, const std::atomic<bool>* cancel = nullptr);
+
+    // Samples a pass would take at these params on this volume, estimated from a sparse set of rays.
+    double estimateSamplesPerPass() const;
+
+    // The baked kernel view (for tests and benchmarks of the kernels themselves).
+    const kernel::KernelParams& kernelParams() const;
+
+private:
+    struct Impl;
+    std::shared_ptr<const StepVolume> m_volume;
+    RenderParams m_params;
+    std::unique_ptr<Impl> m_impl;
+};
+
+// The finest level whose estimated pass time fits `budgetSeconds`, given a throughput in samples
+// per second (all threads). `levels[i]` are the volumes of level i (finest first); falls back to the
+// coarsest.
+int chooseLevelForBudget(const std::vector<std::shared_ptr<const StepVolume>>& levels, const RenderParams& params,
+                         double budgetSeconds, double samplesPerSecond);
+
+// Per-brick bounds of a coordinate over a grid's bricks (min, max pairs), conservative: every
+// trilinear sample inside the brick has its coordinate inside. Used for coordinate brushes.
+std::vector<float> coordinateBrickBounds(const SphericalGrid& grid, const BrickLayout& bricks, Coordinate coordinate);
+
+}  // namespace raypc::render
