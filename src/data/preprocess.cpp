@@ -334,7 +334,10 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
         progress.emplace("preprocess", static_cast<int64_t>(todo.size()), "steps");
     for (const int s : todo) {
         const fs::path& input = inputs[s];
+        const auto stepStart = std::chrono::steady_clock::now();
+        auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - stepStart).count(); };
         Snapshot snap = readSnapshot(input, options.reader);
+        spdlog::debug("{}: read in {:.2f} s", input.filename().string(), elapsed());
         if (!snap.grid.sameAs(header.grid))
             fail("{}: grid {}x{}x{} (lat x r x lon) or its coordinates differ from the first step's {}x{}x{} in {}",
                  input.string(), snap.grid.nLat(), snap.grid.nR(), snap.grid.nLon(), header.grid.nLat(),
@@ -352,26 +355,33 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
             current[v] = std::move(snap.fields[v].values);
         // The sample reads full-resolution values.
         std::vector<float> sample(cells.size() * specs.size());
-        for (size_t v = 0; v < specs.size(); ++v) {
-            stepJson["stats"].push_back(format::toJson(computeStats(header.grid, current[v])));
+        std::vector<VariableStats> stats(specs.size());
+        tbb::parallel_for(size_t(0), specs.size(), [&](size_t v) {
+            stats[v] = computeStats(header.grid, current[v]);
             for (size_t i = 0; i < cells.size(); ++i)
                 sample[i * specs.size() + v] = current[v][cells[i]];
-        }
-        for (int level = 0; level < kLevelCount; ++level) {
-            const SphericalGrid& grid = levels[level];
-            const BrickLayout layout = BrickLayout::forGrid(grid, options.brickSize);
-            const fs::path dir = format::levelDir(tmpDir, level);
-            fs::create_directories(dir);
-            std::vector<float> bounds(2 * layout.brickCount());
-            for (size_t v = 0; v < specs.size(); ++v) {
+        });
+        for (const auto& st : stats)
+            stepJson["stats"].push_back(format::toJson(st));
+        spdlog::debug("{}: derived, stats and sample done at {:.2f} s", input.filename().string(), elapsed());
+        for (int level = 0; level < kLevelCount; ++level)
+            fs::create_directories(format::levelDir(tmpDir, level));
+        // Variables in parallel: writing into the page cache costs as much CPU as computing,
+        // so both cores write while they compute bounds and coarser levels.
+        tbb::parallel_for(size_t(0), specs.size(), [&](size_t v) {
+            const auto stem = fileSafeName(specs[v].name);
+            for (int level = 0; level < kLevelCount; ++level) {
+                const SphericalGrid& grid = levels[level];
+                const BrickLayout layout = BrickLayout::forGrid(grid, options.brickSize);
+                const fs::path dir = format::levelDir(tmpDir, level);
+                std::vector<float> bounds(2 * layout.brickCount());
                 computeBrickBounds(grid, layout, current[v], bounds);
-                const auto stem = fileSafeName(specs[v].name);
                 writeArray(format::valuesFile(dir, stem), current[v]);
                 writeArray(format::boundsFile(dir, stem), bounds);
                 if (level + 1 < kLevelCount)
                     current[v] = coarsenField(grid, current[v]);
             }
-        }
+        });
         writeArray(tmpDir / format::kStepSample, sample);
         {
             std::ofstream out(tmpDir / format::kStepManifest);
@@ -380,6 +390,7 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
                 fail("{}: write failed", (tmpDir / format::kStepManifest).string());
         }
         renameAtomic(tmpDir, finalDir);
+        spdlog::debug("{}: levels, bricks and files done at {:.2f} s", input.filename().string(), elapsed());
         stepJsons[s] = std::move(stepJson);
         ++summary.stepsWritten;
         if (progress)

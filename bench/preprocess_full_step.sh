@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Benchmark (not a test): preprocess one full-resolution 180x201x360 step with the file in the
+# page cache; prints wall seconds and peak memory of `raypc preprocess`.
+# Targets (issue 2, 2 cores): <= 5 s and <= 2.5 GB.
+# Usage: bench/preprocess_full_step.sh [BUILD_DIR] [WORK_DIR]
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${1:-$root/build}
+work=${2:-${TMPDIR:-/tmp}/raypc-bench-full}
+raypc=$build/raypc
+[[ -x $raypc ]] || { echo "no $raypc: build first (scripts/build.sh)" >&2; exit 1; }
+command -v /usr/bin/time >/dev/null || { echo "needs /usr/bin/time (Debian package 'time')" >&2; exit 1; }
+
+mkdir -p "$work"
+if [[ ! -f $work/nc/spherical001.nc ]]; then
+  echo "writing one synthetic 180x201x360 step to $work/nc" >&2
+  "$raypc" synth -o "$work/nc" --steps 1 --grid 180x201x360 >/dev/null
+fi
+cat "$work/nc/spherical001.nc" >/dev/null   # into the page cache
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
+echo "input: $(du -h "$work/nc/spherical001.nc" | cut -f1) $work/nc/spherical001.nc"
+for run in 1 2 3; do
+  rm -rf "$work/dataset"
+  /usr/bin/time -f "run $run: %e s wall, %U s user, %S s sys, peak %M KB" \
+    "$raypc" preprocess "$work/nc/spherical001.nc" -o "$work/dataset" --quiet >/dev/null
+done
+echo "output: $(du -sh "$work/dataset" | cut -f1)"
+echo "targets: <= 5 s, <= 2.5 GB (2621440 KB)"

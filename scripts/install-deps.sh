@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Installs what RayPC needs from Debian 12's packages, and only what is missing, so a second run
+# is quick. Needs root (or sudo) for apt-get. Used by scripts/demo.sh and scripts/test.sh.
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config time
+  libnetcdf-dev netcdf-bin          # input files; ncgen/nccopy write independent test files
+  libtbb-dev libhwy-dev libembree-dev
+  nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
+  libboost-dev libturbojpeg0-dev libpng-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  nodejs npm chromium               # the web UI's build and its browser tests
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if ((${#missing[@]})); then
+  echo "install-deps: installing ${missing[*]}" >&2
+  sudo_cmd=()
+  if [[ $(id -u) -ne 0 ]]; then sudo_cmd=(sudo); fi
+  export DEBIAN_FRONTEND=noninteractive
+  "${sudo_cmd[@]}" apt-get update -qq
+  "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
