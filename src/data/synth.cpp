@@ -612,6 +612,13 @@ std::vector<SynthFeature> syntheticFeatures(const SynthOptions& options, double 
     return out;
 }
 
+std::array<double, 3> syntheticRotationRadPerSecond(const SynthOptions& options)
+{
+    const Model model = buildModel(options.seed);
+    const double w = model.rotationRadPerMyr / kSecondsPerMyr;
+    return {w * model.rotationAxis.x, w * model.rotationAxis.y, w * model.rotationAxis.z};
+}
+
 Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr)
 {
     return synthesizeSnapshot(options, timeMyr, syntheticGrid(options.nLat, options.nR, options.nLon));

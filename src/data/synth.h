@@ -64,6 +64,10 @@ struct SynthFeature {
 };
 std::vector<SynthFeature> syntheticFeatures(const SynthOptions& options, double timeMyr);
 
+// The slow rigid rotation that carries the whole pattern (part of the velocity field):
+// v_rotation = omega x p with p in metres, omega (rad/s) in the Cartesian frame of spherical.h.
+std::array<double, 3> syntheticRotationRadPerSecond(const SynthOptions& options);
+
 // Writes spherical001.nc ... sphericalNNN.nc into `outDir` (created if missing); each file is
 // written atomically. Shows progress on a terminal. Throws raypc::Error on I/O failure.
 void writeSyntheticSeries(const std::filesystem::path& outDir, const SynthOptions& options);

@@ -321,5 +321,380 @@ TEST(SynthModel, DiscreteDivergenceOnTheGridIsSmall)
     EXPECT_LT(ratio, 0.25);
 }
 
+// Mean |ur| and mean horizontal speed over the cells whose depth is within [d0, d1] km; the
+// horizontal speed without the model's rigid rotation, which is the same at every depth.
+std::pair<double, double> meanSpeeds(const Snapshot& s, double d0, double d1)
+{
+    const SphericalGrid& g = s.grid;
+    const auto omega = syntheticRotationRadPerSecond(demoOptions());
+    double ur = 0, horizontal = 0, weight = 0;
+    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+        for (size_t iR = 0; iR < g.nR(); ++iR) {
+            if (depthOf(g, iR) < d0 || depthOf(g, iR) > d1)
+                continue;
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                const LocalVelocity u = localVelocity(s, g.index(iLat, iR, iLon), g.latDeg[iLat], g.lonDeg[iLon]);
+                // Rotation omega x p at this point, in east/north components.
+                const Vec3d p = sphericalToCartesianKm(g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR] * 1000.0);
+                const Vec3d w{omega[1] * p.z - omega[2] * p.y, omega[2] * p.x - omega[0] * p.z, omega[0] * p.y - omega[1] * p.x};
+                const double lat = degToRad(g.latDeg[iLat]), lon = degToRad(g.lonDeg[iLon]);
+                const double wEast = -w.x * std::sin(lon) + w.y * std::cos(lon);
+                const double wNorth = -w.x * std::sin(lat) * std::cos(lon) - w.y * std::sin(lat) * std::sin(lon) + w.z * std::cos(lat);
+                ur += rowArea(g, iLat) * std::abs(u.ur);
+                horizontal += rowArea(g, iLat) * std::hypot(u.east - wEast, u.north - wNorth);
+                weight += rowArea(g, iLat);
+            }
+        }
+    return {ur / weight, horizontal / weight};
+}
+
+// Material stagnates at 660 km and ~1600 km: vertical flow is held back there and turns into
+// lateral flow (stronger than between the layers, where the features' flow is mostly vertical).
+TEST(SynthModel, StagnationLayersSlowVerticalButNotLateralFlow)
+{
+    const Snapshot& s = demoSnapshot();
+    const auto between = meanSpeeds(s, 950.0, 1300.0);
+    const auto deep = meanSpeeds(s, 2000.0, 2400.0);
+    for (double layer : {660.0, 1600.0}) {
+        const auto band = meanSpeeds(s, layer - 40.0, layer + 40.0);
+        std::printf("depth %.0f +- 40 km: |ur| %.3g vs %.3g (between) %.3g (deep); |uh| %.3g vs %.3g (between)\n", layer,
+                    band.first, between.first, deep.first, band.second, between.second);
+        EXPECT_LT(band.first, 0.5 * between.first) << layer;
+        EXPECT_LT(band.first, 0.5 * deep.first) << layer;
+        EXPECT_GT(band.second, 2.0 * between.second) << layer;
+    }
+}
+
+TEST(SynthModel, DeterministicForASeed)
+{
+    SynthOptions o = demoOptions();
+    o.nLat = 16;
+    o.nR = 12;
+    o.nLon = 32;
+    const Snapshot a = synthesizeSnapshot(o, 4.0), b = synthesizeSnapshot(o, 4.0);
+    o.seed = 2;
+    const Snapshot c = synthesizeSnapshot(o, 4.0);
+    for (size_t v = 0; v < a.fields.size(); ++v) {
+        EXPECT_EQ(a.fields[v].values, b.fields[v].values) << a.fields[v].name;
+        EXPECT_NE(a.fields[v].values, c.fields[v].values) << a.fields[v].name;
+    }
+    const auto fa = syntheticFeatures(demoOptions(1), 0.0), fc = syntheticFeatures(demoOptions(2), 0.0);
+    EXPECT_NE(fa[0].latDeg, fc[0].latDeg);
+}
+
+// The model is a function of position: a local grid gives the global grid's values (all but
+// the anomaly, which is relative to the grid's own shell mean).
+TEST(SynthModel, LocalGridMatchesGlobalGrid)
+{
+    const Snapshot& global = demoSnapshot();
+    const SphericalGrid& g = global.grid;
+    SphericalGrid local;
+    local.latDeg = {g.latDeg[20], g.latDeg[21]};
+    local.rKm = {g.rKm[30], g.rKm[31], g.rKm[50]};
+    local.lonDeg = {g.lonDeg[0], g.lonDeg[100], g.lonDeg[127]};
+    const Snapshot s = synthesizeSnapshot(demoOptions(), 0.0, local);
+    const std::array<size_t, 2> lats = {20, 21};
+    const std::array<size_t, 3> rs = {30, 31, 50}, lons = {0, 100, 127};
+    for (size_t v = 0; v < s.fields.size(); ++v) {
+        if (s.fields[v].name == "temperature anomaly")
+            continue;
+        for (size_t a = 0; a < 2; ++a)
+            for (size_t b = 0; b < 3; ++b)
+                for (size_t c = 0; c < 3; ++c)
+                    EXPECT_EQ(s.fields[v].values[local.index(a, b, c)], global.fields[v].values[g.index(lats[a], rs[b], lons[c])])
+                        << s.fields[v].name;
+    }
+}
+
+// Nothing is discontinuous at the lon seam or singular at the poles: the jump across the seam
+// is no larger than between any other neighbouring columns, and the exact poles are finite.
+TEST(SynthModel, ContinuousAcrossTheSeamAndFiniteAtThePoles)
+{
+    const Snapshot& s = demoSnapshot();
+    const SphericalGrid& g = s.grid;
+    for (const char* name : {"temperature", "vx", "vy", "vz"}) {
+        const auto& v = s.find(name)->values;
+        double seam = 0, elsewhere = 0;
+        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+            for (size_t iR = 0; iR < g.nR(); ++iR) {
+                seam = std::max<double>(seam, std::abs(v[g.index(iLat, iR, 0)] - v[g.index(iLat, iR, g.nLon() - 1)]));
+                for (size_t iLon = 1; iLon < g.nLon(); ++iLon)
+                    elsewhere = std::max<double>(elsewhere, std::abs(v[g.index(iLat, iR, iLon)] - v[g.index(iLat, iR, iLon - 1)]));
+            }
+        EXPECT_LE(seam, elsewhere) << name;
+    }
+    SphericalGrid poles;
+    poles.latDeg = {-90.0, 0.0, 90.0};
+    poles.rKm = {kCoreRadiusKm, 5000.0, kSurfaceRadiusKm};
+    poles.lonDeg = {0.0, 120.0, 240.0};
+    const Snapshot p = synthesizeSnapshot(demoOptions(), 0.0, poles);
+    for (const Field& f : p.fields)
+        for (size_t iR = 0; iR < 3; ++iR)
+            for (size_t iLat : {size_t(0), size_t(2)}) {
+                // At a pole every lon is the same point: the Cartesian values must agree.
+                const float v0 = f.values[poles.index(iLat, iR, 0)];
+                ASSERT_TRUE(std::isfinite(v0)) << f.name;
+                if (f.name != "temperature anomaly")
+                    EXPECT_NEAR(f.values[poles.index(iLat, iR, 1)], v0, 1e-5 * std::abs(v0) + 1e-20) << f.name;
+            }
+}
+
+// Structures move coherently: 2 Myr later the anomaly is nearly, but not exactly, the same;
+// plume heads rise and slab tips sink at the speed of the flow there.
+TEST(SynthModel, CoherentMotionBetweenSteps)
+{
+    const SynthOptions o = demoOptions();
+    const Snapshot& s0 = demoSnapshot();
+    const Snapshot s1 = synthesizeSnapshot(o, o.dtMyr);
+    const Snapshot s6 = synthesizeSnapshot(o, 6 * o.dtMyr);
+    const auto& a0 = s0.find("temperature anomaly")->values;
+    const std::vector<double> d0(a0.begin(), a0.end());
+    const auto& a1 = s1.find("temperature anomaly")->values;
+    const auto& a6 = s6.find("temperature anomaly")->values;
+    const double c1 = correlation(d0, std::vector<double>(a1.begin(), a1.end()));
+    const double c6 = correlation(d0, std::vector<double>(a6.begin(), a6.end()));
+    std::printf("corr(dT(0), dT(2 Myr)) = %.4f, corr(dT(0), dT(12 Myr)) = %.4f\n", c1, c6);
+    EXPECT_GT(c1, 0.9);
+    EXPECT_LT(c1, 0.9999);
+    EXPECT_LT(c6, c1);
+
+    const auto f0 = syntheticFeatures(o, 0.0), f1 = syntheticFeatures(o, o.dtMyr);
+    for (size_t i = 0; i < f0.size(); ++i) {
+        const double moved = f1[i].frontRadiusKm - f0[i].frontRadiusKm;
+        // The flow at the front, on the axis, from a tiny grid at the midpoint in time.
+        const auto fm = syntheticFeatures(o, 0.5 * o.dtMyr)[i];
+        const Snapshot at = synthesizeSnapshot(o, 0.5 * o.dtMyr, localGrid(fm.latDeg, fm.lonDeg, fm.frontRadiusKm, 0.01, 0.5));
+        const double ur = localVelocity(at, at.grid.index(1, 1, 1), fm.latDeg, fm.lonDeg).ur;
+        const double expectedKm = ur * o.dtMyr * kSecondsPerMyr / 1000.0;
+        std::printf("feature %zu: front moved %.2f km, flow there moves it %.2f km\n", i, moved, expectedKm);
+        if (f0[i].kind == SynthFeature::Kind::Plume)
+            EXPECT_GT(moved, 0.0);
+        else
+            EXPECT_LT(moved, 0.0);
+        // Plumes are sampled on their axis; slabs at the arc midpoint, where the sheet's flow is
+        // close to its peak.
+        EXPECT_NEAR(moved, expectedKm, 0.05 * std::abs(expectedKm) + 0.2);
+    }
+}
+
+// The spin-transition density anomaly lives in the mid mantle and has both signs (positive in
+// cold, negative in hot rock).
+TEST(SynthModel, SpinDensityAnomalyInTheMidMantleWithBothSigns)
+{
+    const Snapshot& s = demoSnapshot();
+    const SphericalGrid& g = s.grid;
+    const auto& rho = s.find("spin transition-induced density anomaly")->values;
+    const auto& dT = s.find("temperature anomaly")->values;
+    double inBand = 0, total = 0, minRho = 0, maxRho = 0, signAgreement = 0, signTotal = 0;
+    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+        for (size_t iR = 0; iR < g.nR(); ++iR) {
+            const double weight = rowArea(g, iLat) * g.rKm[iR] * g.rKm[iR];
+            const double d = depthOf(g, iR);
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                const size_t i = g.index(iLat, iR, iLon);
+                total += weight * std::abs(rho[i]);
+                if (d >= 1000.0 && d <= 2200.0)
+                    inBand += weight * std::abs(rho[i]);
+                minRho = std::min<double>(minRho, rho[i]);
+                maxRho = std::max<double>(maxRho, rho[i]);
+                if (std::abs(rho[i]) > 1.0 && std::abs(dT[i]) > 50.0) {
+                    signTotal += 1;
+                    signAgreement += (rho[i] > 0) == (dT[i] < 0);
+                }
+            }
+        }
+    std::printf("spin density anomaly: %.1f .. %.1f kg/m^3, %.1f%% of |.| in 1000-2200 km\n", minRho, maxRho, 100 * inBand / total);
+    EXPECT_GT(inBand / total, 0.85);
+    EXPECT_LT(minRho, -5.0);
+    EXPECT_GT(maxRho, 5.0);
+    EXPECT_GT(signAgreement / signTotal, 0.95);
+}
+
+// A negative expansivity anomaly marks cold shallow rock (slabs) and hot deep rock (plumes).
+TEST(SynthModel, NegativeExpansivityAnomalyInColdShallowAndHotDeepRock)
+{
+    const Snapshot& s = demoSnapshot();
+    const SphericalGrid& g = s.grid;
+    const auto& alpha = s.find("thermal expansivity")->values;
+    const auto& dT = s.find("temperature anomaly")->values;
+    double coldShallow = 0, hotShallow = 0, hotDeep = 0, coldDeep = 0;
+    int nColdShallow = 0, nHotShallow = 0, nHotDeep = 0, nColdDeep = 0;
+    for (size_t iR = 0; iR < g.nR(); ++iR) {
+        // The lateral mean of alpha on this shell.
+        double mean = 0, area = 0;
+        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                mean += rowArea(g, iLat) * alpha[g.index(iLat, iR, iLon)];
+                area += rowArea(g, iLat);
+            }
+        mean /= area;
+        const double d = depthOf(g, iR);
+        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                const size_t i = g.index(iLat, iR, iLon);
+                const double da = alpha[i] - mean;
+                if (d > 150.0 && d < 1000.0 && dT[i] < -100.0) coldShallow += da, ++nColdShallow;
+                if (d > 150.0 && d < 1000.0 && dT[i] > 100.0) hotShallow += da, ++nHotShallow;
+                if (d > 2300.0 && d < 2800.0 && dT[i] > 100.0) hotDeep += da, ++nHotDeep;
+                if (d > 2300.0 && d < 2800.0 && dT[i] < -100.0) coldDeep += da, ++nColdDeep;
+            }
+    }
+    ASSERT_GT(nColdShallow, 0);
+    ASSERT_GT(nHotShallow, 0);
+    ASSERT_GT(nHotDeep, 0);
+    EXPECT_LT(coldShallow / nColdShallow, 0.0);
+    EXPECT_GT(hotShallow / nHotShallow, 0.0);
+    EXPECT_LT(hotDeep / nHotDeep, 0.0);
+    if (nColdDeep > 0)
+        EXPECT_GT(coldDeep / nColdDeep, 0.0);
+}
+
+// ---- the netCDF writer, checked with plain netCDF-C calls ----
+
+class SynthNetcdf : public ::testing::TestWithParam<NetcdfFlavour> {
+protected:
+    void SetUp() override
+    {
+        m_dir = fs::temp_directory_path() / fmt::format("raypc-synth-test-{}-{}", ::getpid(),
+                                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::remove_all(m_dir);
+        fs::create_directories(m_dir);
+    }
+    void TearDown() override { fs::remove_all(m_dir); }
+    fs::path m_dir;
+};
+
+#define NC_OK(call) ASSERT_EQ((call), NC_NOERR) << nc_strerror(call)
+
+TEST_P(SynthNetcdf, WritesTheContestLayout)
+{
+    SynthOptions o = demoOptions();
+    o.nLat = 6;
+    o.nR = 5;
+    o.nLon = 8;
+    const Snapshot snap = synthesizeSnapshot(o, 2.0);
+    const fs::path path = m_dir / "spherical001.nc";
+    writeContestFile(path, snap, GetParam());
+
+    int nc = -1;
+    NC_OK(nc_open(path.c_str(), NC_NOWRITE, &nc));
+    int format = 0;
+    NC_OK(nc_inq_format(nc, &format));
+    EXPECT_EQ(format, GetParam() == NetcdfFlavour::Netcdf4 ? NC_FORMAT_NETCDF4 : NC_FORMAT_64BIT_OFFSET);
+    const std::array<std::pair<const char*, size_t>, 3> dims = {{{"lat", 6}, {"r", 5}, {"lon", 8}}};
+    for (int d = 0; d < 3; ++d) {
+        char name[NC_MAX_NAME + 1];
+        size_t len = 0;
+        NC_OK(nc_inq_dim(nc, d, name, &len));
+        EXPECT_STREQ(name, dims[d].first);
+        EXPECT_EQ(len, dims[d].second);
+    }
+    auto readCoordinate = [&](const char* name, const char* units, size_t n) {
+        int var = -1;
+        EXPECT_EQ(nc_inq_varid(nc, name, &var), NC_NOERR) << name;
+        nc_type type;
+        nc_inq_vartype(nc, var, &type);
+        EXPECT_EQ(type, NC_DOUBLE) << name;
+        char text[64] = {};
+        EXPECT_EQ(nc_get_att_text(nc, var, "units", text), NC_NOERR);
+        EXPECT_STREQ(text, units);
+        std::vector<double> values(n);
+        nc_get_var_double(nc, var, values.data());
+        return values;
+    };
+    const auto lat = readCoordinate("lat", "degrees_north", 6);
+    EXPECT_DOUBLE_EQ(lat.front(), 75.0);  // north first
+    EXPECT_DOUBLE_EQ(lat.back(), -75.0);
+    EXPECT_EQ(readCoordinate("r", "km", 5), snap.grid.rKm);
+    EXPECT_EQ(readCoordinate("lon", "degrees_east", 8), snap.grid.lonDeg);
+
+    const std::map<std::string, std::string> units = {
+        {"temperature", "K"}, {"vx", "m/s"}, {"vy", "m/s"}, {"vz", "m/s"}, {"thermal conductivity", "W/m/K"},
+        {"thermal expansivity", "1/K"}, {"temperature anomaly", "K"}, {"spin transition-induced density anomaly", "kg/m^3"}};
+    for (const auto& [name, unit] : units) {
+        int var = -1;
+        NC_OK(nc_inq_varid(nc, name.c_str(), &var));
+        nc_type type;
+        int ndims = 0;
+        std::array<int, NC_MAX_VAR_DIMS> varDims{};
+        NC_OK(nc_inq_var(nc, var, nullptr, &type, &ndims, varDims.data(), nullptr));
+        EXPECT_EQ(type, NC_FLOAT) << name;
+        ASSERT_EQ(ndims, 3) << name;
+        EXPECT_EQ(varDims[0], 0);
+        EXPECT_EQ(varDims[1], 1);
+        EXPECT_EQ(varDims[2], 2);
+        size_t len = 0;
+        NC_OK(nc_inq_attlen(nc, var, "units", &len));
+        std::string text(len, '\0');
+        NC_OK(nc_get_att_text(nc, var, "units", text.data()));
+        EXPECT_EQ(text, unit) << name;
+        std::vector<float> values(6 * 5 * 8);
+        NC_OK(nc_get_var_float(nc, var, values.data()));
+        const auto& expected = snap.find(name)->values;
+        // File row 0 is the northernmost, i.e. the last row in memory.
+        for (size_t fileRow = 0; fileRow < 6; ++fileRow)
+            for (size_t k = 0; k < 5 * 8; ++k)
+                ASSERT_EQ(values[fileRow * 40 + k], expected[(5 - fileRow) * 40 + k]) << name;
+    }
+    NC_OK(nc_close(nc));
+    // Only the final file remains: no temporaries.
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(m_dir))
+        names.push_back(e.path().filename().string());
+    EXPECT_EQ(names, std::vector<std::string>{"spherical001.nc"});
+}
+
+TEST_P(SynthNetcdf, ReplacesAnExistingFileAndFailsClearly)
+{
+    SynthOptions o = demoOptions();
+    o.nLat = 4;
+    o.nR = 3;
+    o.nLon = 6;
+    const Snapshot snap = synthesizeSnapshot(o, 0.0);
+    const fs::path path = m_dir / "out.nc";
+    writeContestFile(path, snap, GetParam());
+    writeContestFile(path, snap, GetParam());  // overwrites
+    const fs::path missing = m_dir / "no-such-dir" / "out.nc";
+    try {
+        writeContestFile(missing, snap, GetParam());
+        ADD_FAILURE() << "writing into a missing directory succeeded";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(missing.string()), std::string::npos) << e.what();
+    }
+    Snapshot broken = snap;
+    broken.fields[3].values.pop_back();
+    EXPECT_THROW(writeContestFile(m_dir / "broken.nc", broken, GetParam()), Error);
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(m_dir))
+        names.push_back(e.path().filename().string());
+    EXPECT_EQ(names, std::vector<std::string>{"out.nc"});
+}
+
+INSTANTIATE_TEST_SUITE_P(Flavours, SynthNetcdf, ::testing::Values(NetcdfFlavour::Classic64, NetcdfFlavour::Netcdf4),
+                         [](const auto& info) { return info.param == NetcdfFlavour::Netcdf4 ? "Netcdf4" : "Classic64"; });
+
+TEST(SynthSeries, WritesNumberedStepsAndRejectsBadOptions)
+{
+    const fs::path dir = fs::temp_directory_path() / fmt::format("raypc-synth-series-{}", ::getpid());
+    fs::remove_all(dir);
+    SynthOptions o = demoOptions();
+    o.steps = 3;
+    o.nLat = 4;
+    o.nR = 3;
+    o.nLon = 6;
+    writeSyntheticSeries(dir / "nested", o);
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir / "nested"))
+        names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    EXPECT_EQ(names, (std::vector<std::string>{"spherical001.nc", "spherical002.nc", "spherical003.nc"}));
+    o.steps = 0;
+    EXPECT_THROW(writeSyntheticSeries(dir, o), Error);
+    o.steps = 1;
+    o.dtMyr = -1;
+    EXPECT_THROW(writeSyntheticSeries(dir, o), Error);
+    fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace raypc
