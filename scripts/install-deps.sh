@@ -10,8 +10,12 @@ packages=(
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libboost-dev libturbojpeg0-dev libpng-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  nodejs npm chromium               # the web UI's build and its browser tests
+  chromium                          # the web UI's browser tests
 )
+# Node.js and npm build the web UI; a machine may carry them from elsewhere (npm bundled with
+# nodejs), so ask for Debian's only when the commands are missing.
+command -v node >/dev/null || packages+=(nodejs)
+command -v npm >/dev/null || packages+=(npm)
 
 missing=()
 for p in "${packages[@]}"; do

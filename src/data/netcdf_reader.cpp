@@ -351,6 +351,7 @@ FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& op
 {
     std::lock_guard lock(netcdfMutex());
     NcFile file(path);
+    checkClassicFileSize(file);
     const auto h = readAxes(file, options);
     FileHeader header;
     header.grid = h.grid;

@@ -268,6 +268,15 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
     std::vector<SphericalGrid> levels = {header.grid};
     for (int l = 1; l < kLevelCount; ++l)
         levels.push_back(levels.back().coarsened());
+    // Check every input's header before writing anything, so that a bad file, a missing variable
+    // or a different grid stops the run before it starts.
+    for (size_t s = 1; s < inputs.size(); ++s) {
+        const FileHeader other = readHeader(inputs[s], options.reader);
+        if (!other.grid.sameAs(header.grid))
+            fail("{}: grid {}x{}x{} (lat x r x lon) or its coordinates differ from the first step's {}x{}x{} in {}",
+                 inputs[s].string(), other.grid.nLat(), other.grid.nR(), other.grid.nLon(), header.grid.nLat(),
+                 header.grid.nR(), header.grid.nLon(), inputs.front().filename().string());
+    }
     const auto specs = variableSpecs(header);
     const size_t sampleRows = options.sampleRows;
     json j = manifest(levels, specs, inputs, options, sampleRows);
