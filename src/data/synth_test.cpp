@@ -3,6 +3,7 @@
 #include "data/synth.h"
 
 #include "core/error.h"
+#include "data/netcdf_reader.h"
 #include "core/spherical.h"
 
 #include <gtest/gtest.h>
@@ -668,6 +669,26 @@ TEST_P(SynthNetcdf, ReplacesAnExistingFileAndFailsClearly)
     for (const auto& e : fs::directory_iterator(m_dir))
         names.push_back(e.path().filename().string());
     EXPECT_EQ(names, std::vector<std::string>{"out.nc"});
+}
+
+// RayPC's own reader sees the written file as the snapshot that was written (canonical order).
+TEST_P(SynthNetcdf, ReadsBackThroughTheReader)
+{
+    SynthOptions o = demoOptions();
+    o.nLat = 6;
+    o.nR = 5;
+    o.nLon = 8;
+    const Snapshot snap = synthesizeSnapshot(o, 2.0);
+    const fs::path path = m_dir / "spherical001.nc";
+    writeContestFile(path, snap, GetParam());
+    const Snapshot back = readSnapshot(path);
+    EXPECT_TRUE(back.grid.sameAs(snap.grid));
+    for (const Field& f : snap.fields) {
+        const Field* b = back.find(f.name);
+        ASSERT_NE(b, nullptr) << f.name;
+        EXPECT_EQ(b->units, f.units);
+        EXPECT_EQ(b->values, f.values) << f.name;
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Flavours, SynthNetcdf, ::testing::Values(NetcdfFlavour::Classic64, NetcdfFlavour::Netcdf4),
