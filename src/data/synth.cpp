@@ -154,9 +154,9 @@ double pancakeStrength(double frontKm, double layerKm, double approachSign)
 double flowShape(double rKm, double frontKm, int stallLayer, double direction)
 {
     constexpr double kAheadKm = 400.0;
+    // sin(pi x) vanishes at both boundaries; it is not cut off outside them, so that f' (a
+    // central difference) stays exact on the boundary rows themselves.
     const double x = (rKm - kCoreRadiusKm) / kMantleThicknessKm;
-    if (x <= 0.0 || x >= 1.0)
-        return 0.0;
     double shape = std::sin(kPi * x);
     for (int l = 0; l < static_cast<int>(kLayers.size()); ++l) {
         const double rl = layerRadiusKm(l);
