@@ -435,8 +435,9 @@ TEST(SynthModel, ContinuousAcrossTheSeamAndFiniteAtThePoles)
                 // At a pole every lon is the same point: the Cartesian values must agree.
                 const float v0 = f.values[poles.index(iLat, iR, 0)];
                 ASSERT_TRUE(std::isfinite(v0)) << f.name;
-                if (f.name != "temperature anomaly")
+                if (f.name != "temperature anomaly") {
                     EXPECT_NEAR(f.values[poles.index(iLat, iR, 1)], v0, 1e-5 * std::abs(v0) + 1e-20) << f.name;
+                }
             }
 }
 
@@ -546,8 +547,9 @@ TEST(SynthModel, NegativeExpansivityAnomalyInColdShallowAndHotDeepRock)
     EXPECT_LT(coldShallow / nColdShallow, 0.0);
     EXPECT_GT(hotShallow / nHotShallow, 0.0);
     EXPECT_LT(hotDeep / nHotDeep, 0.0);
-    if (nColdDeep > 0)
+    if (nColdDeep > 0) {
         EXPECT_GT(coldDeep / nColdDeep, 0.0);
+    }
 }
 
 // ---- the netCDF writer, checked with plain netCDF-C calls ----
