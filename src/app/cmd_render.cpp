@@ -1,0 +1,240 @@
+// raypc render DATASET --time T -o out.png [--size WxH] [--state STATE.json] [--var NAME]
+//   [--colormap NAME] [--range NAME=MIN:MAX]... [--lod N|auto] [--passes N] [--depth depth.pfm] [--stats]
+#include "app/command.h"
+#include "app/options.h"
+#include "core/error.h"
+#include "core/strings.h"
+#include "data/dataset.h"
+#include "render/image_io.h"
+#include "render/render_state.h"
+#include "render/volume_renderer.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <tbb/task_arena.h>
+
+#include <cstdio>
+#include <filesystem>
+
+namespace raypc::app {
+namespace {
+
+using namespace raypc::render;
+
+struct RenderArgs {
+    std::string dataset, time = "0", output, size, statePath, var, colormap, lod, depthPath;
+    std::vector<std::string> ranges;
+    int passes = 0;
+    bool stats = false;
+};
+
+// "1024x768" -> width, height.
+std::pair<int, int> parseSize(const std::string& text)
+{
+    const auto parts = split(text, 'x');
+    try {
+        if (parts.size() == 2) {
+            size_t a = 0, b = 0;
+            const int w = std::stoi(parts[0], &a), h = std::stoi(parts[1], &b);
+            if (a == parts[0].size() && b == parts[1].size() && w >= 1 && h >= 1 && w <= 16384 && h <= 16384)
+                return {w, h};
+        }
+    } catch (const std::exception&) {
+    }
+    fail("--size '{}': expected WIDTHxHEIGHT with 1..16384 pixels per side, e.g. 1024x768", text);
+}
+
+// "temperature anomaly=-300:300" -> brush; names may contain spaces and '='-free text.
+BrushSpec parseRange(const std::string& text)
+{
+    const size_t eq = text.rfind('=');
+    const size_t colon = eq == std::string::npos ? std::string::npos : text.find(':', eq + 1);
+    BrushSpec b;
+    if (eq == std::string::npos || eq == 0 || colon == std::string::npos)
+        fail("--range '{}': expected NAME=MIN:MAX", text);
+    b.name = trim(text.substr(0, eq));
+    const std::string lo = trim(text.substr(eq + 1, colon - eq - 1)), hi = trim(text.substr(colon + 1));
+    try {
+        size_t a = 0, c = 0;
+        b.min = std::stof(lo, &a);
+        b.max = std::stof(hi, &c);
+        if (a != lo.size() || c != hi.size())
+            throw std::invalid_argument("trailing text");
+    } catch (const std::exception&) {
+        fail("--range '{}': MIN and MAX must be numbers", text);
+    }
+    if (!(b.min <= b.max))
+        fail("--range '{}': min {} is greater than max {}", text, b.min, b.max);
+    return b;
+}
+
+// Expands a printf-style "%03d" pattern for sequences; a plain name is used as is.
+std::string frameName(const std::string& pattern, int step, bool sequence)
+{
+    if (!sequence)
+        return pattern;
+    const size_t pct = pattern.find('%');
+    const size_t d = pct == std::string::npos ? pct : pattern.find('d', pct);
+    if (d == std::string::npos)
+        fail("-o '{}': a --time range needs a numbered pattern such as frames/frame_%03d.png", pattern);
+    std::string spec = pattern.substr(pct, d - pct + 1);
+    char buffer[64];
+    std::snprintf(buffer, sizeof buffer, spec.c_str(), step);
+    return pattern.substr(0, pct) + buffer + pattern.substr(d + 1);
+}
+
+void run(const RenderArgs& args)
+{
+    const auto dataset = Dataset::open(args.dataset);
+    RenderState state = args.statePath.empty() ? RenderState{} : loadRenderState(args.statePath);
+
+    // Flags override the state.
+    if (!args.size.empty())
+        std::tie(state.width, state.height) = parseSize(args.size);
+    if (!args.var.empty()) {
+        if (dataset->variableIndex(args.var) < 0) {
+            std::vector<std::string> names;
+            for (const auto& v : dataset->variables())
+                names.push_back(v.name);
+            fail("--var: unknown variable '{}'; the dataset has: {}", args.var, fmt::join(names, ", "));
+        }
+        if (state.colorVariable != args.var)
+            state.colorRange.reset();
+        state.colorVariable = args.var;
+    }
+    if (!args.colormap.empty()) {
+        try {
+            state.colorMap = parseColorMap(args.colormap);
+        } catch (const Error& e) {
+            fail("--colormap: {}", e.what());
+        }
+    }
+    for (const std::string& text : args.ranges) {
+        const BrushSpec b = parseRange(text);
+        std::erase_if(state.brushes, [&](const BrushSpec& s) { return s.name == b.name; });
+        state.brushes.push_back(b);
+    }
+    if (!args.lod.empty()) {
+        if (args.lod == "auto") {
+            state.level.reset();
+        } else {
+            int level = -1;
+            try {
+                size_t used = 0;
+                level = std::stoi(args.lod, &used);
+                if (used != args.lod.size())
+                    level = -1;
+            } catch (const std::exception&) {
+            }
+            if (level < 0 || level >= int(dataset->levels().size()))
+                fail("--lod '{}': expected auto or a level in 0..{}", args.lod, dataset->levels().size() - 1);
+            state.level = level;
+        }
+    }
+    if (args.passes != 0) {
+        if (args.passes < 1)
+            fail("--passes {}: expected at least 1", args.passes);
+        state.passes = args.passes;
+    }
+
+    VariableCatalog catalog;
+    for (const auto& v : dataset->variables()) {
+        catalog.names.push_back(v.name);
+        catalog.ranges.push_back(v.global.range);
+    }
+    const RenderParams params = resolveParams(state, catalog);
+
+    // Steps: one index/time, or A:B for a numbered sequence.
+    int first, last;
+    const size_t colon = args.time.find(':');
+    const bool sequence = colon != std::string::npos;
+    if (sequence) {
+        first = parseStep(*dataset, args.time.substr(0, colon));
+        last = parseStep(*dataset, args.time.substr(colon + 1));
+        if (first > last)
+            fail("--time '{}': the first step is after the last", args.time);
+    } else {
+        first = last = state.step = parseStep(*dataset, args.time);
+    }
+
+    nlohmann::json statsJson = nlohmann::json::array();
+    for (int step = first; step <= last; ++step) {
+        int level = state.level.value_or(-1);
+        if (level < 0) {
+            // Interactive choice: the finest level whose pass fits the time budget at ~100 M samples/s/thread.
+            std::vector<std::shared_ptr<const StepVolume>> levels;
+            for (int l = 0; l < int(dataset->levels().size()); ++l)
+                levels.push_back(dataset->load(step, l));
+            level = chooseLevelForBudget(levels, params, state.timeBudgetMs / 1000.0,
+                                         100e6 * tbb::this_task_arena::max_concurrency());
+        }
+        VolumeRenderer renderer(dataset->load(step, level));
+        renderer.setParams(params);
+        FrameBuffer frame(params.width, params.height);
+        nlohmann::json passes = nlohmann::json::array();
+        PassStats total;
+        for (int pass = 0; pass < state.passes; ++pass) {
+            const PassStats s = renderer.renderPass(frame);
+            passes.push_back({{"seconds", s.seconds},
+                              {"samples", s.samples},
+                              {"samplesSkipped", s.samplesSkipped},
+                              {"samplesPerSecondPerThread", s.samplesPerSecondPerThread()}});
+            total.seconds += s.seconds;
+            total.samples += s.samples;
+            total.samplesSkipped += s.samplesSkipped;
+            total.threads = s.threads;
+            total.simdLanes = s.simdLanes;
+            total.bricksTotal = s.bricksTotal;
+            total.bricksSkipped = s.bricksSkipped;
+        }
+        const std::string out = frameName(args.output, step, sequence);
+        if (const auto parent = std::filesystem::path(out).parent_path(); !parent.empty())
+            std::filesystem::create_directories(parent);
+        writePng(out, {params.width, params.height, frame.resolveRgba8(state.background)});
+        if (!args.depthPath.empty())
+            writePfm(frameName(args.depthPath, step, sequence), params.width, params.height, frame.averagedDepthKm());
+        statsJson.push_back({{"step", step},
+                             {"timeMyr", dataset->steps()[size_t(step)].timeMyr},
+                             {"level", level},
+                             {"output", out},
+                             {"size", {params.width, params.height}},
+                             {"threads", total.threads},
+                             {"simdLanes", total.simdLanes},
+                             {"passes", passes},
+                             {"seconds", total.seconds},
+                             {"samples", total.samples},
+                             {"samplesSkipped", total.samplesSkipped},
+                             {"bricksVisited", total.bricksTotal - total.bricksSkipped},
+                             {"bricksSkipped", total.bricksSkipped},
+                             {"samplesPerSecondPerThread", total.samplesPerSecondPerThread()}});
+    }
+    if (args.stats)
+        fmt::print("{}\n", (sequence ? statsJson : statsJson[0]).dump(2));
+}
+
+const CommandRegistration kRegistration(
+    "render", "Render a step (or a sequence of steps) of a dataset to PNG with the spherical volume ray caster",
+    [](CLI::App& cmd) {
+        auto args = std::make_shared<RenderArgs>();
+        cmd.add_option("dataset", args->dataset, "Preprocessed dataset directory (raypc preprocess)")->required();
+        cmd.add_option("-t,--time", args->time,
+                       "Step index (0-based) or time like 24Myr; A:B renders steps A..B into a numbered sequence")
+            ->capture_default_str();
+        cmd.add_option("-o,--output", args->output, "Output PNG; for --time A:B a pattern like frames/frame_%03d.png")
+            ->required();
+        cmd.add_option("--size", args->size, "Image size WIDTHxHEIGHT (default 512x512 or the state's)");
+        cmd.add_option("--state", args->statePath, "STATE.json saved by the browser UI (docs/state.md)");
+        cmd.add_option("--var", args->var, "Colouring variable (default: the state's, else the first)");
+        cmd.add_option("--colormap", args->colormap, "viridis, inferno, cool-to-warm, blue-white-red, grayscale");
+        cmd.add_option("--range", args->ranges,
+                       "Brush NAME=MIN:MAX on a variable or coordinate (x, y, z, lat, lon, radius, depth); repeatable");
+        cmd.add_option("--lod", args->lod, "Level of detail: 0 (full), 1, 2, or auto (fit the state's time budget)");
+        cmd.add_option("--passes", args->passes, "Progressive passes to accumulate (default: the state's, 8)");
+        cmd.add_option("--depth", args->depthPath, "Also write the depth (km along the view ray) as PFM");
+        cmd.add_flag("--stats", args->stats, "Print JSON statistics: time per pass, samples, bricks, rate");
+        cmd.callback([args] { run(*args); });
+    },
+    60);
+
+}  // namespace
+}  // namespace raypc::app

@@ -1,0 +1,201 @@
+// raypc_golden CASE GOLDEN_DIR OUT_DIR: renders one golden case from an analytic volume and compares
+// it with GOLDEN_DIR/CASE.png. Pass: at most 0.5% of pixels differ by more than 10/255 in any channel
+// and the mean difference is below 1/255 (SIMD widths and libm differ slightly between machines).
+// On failure writes OUT_DIR/CASE.png (actual) and OUT_DIR/CASE.diff.png (differences x8).
+// With RAYPC_UPDATE_GOLDEN=1 the golden is (re)written instead.
+#include "core/error.h"
+#include "render/image_io.h"
+#include "render/test_volumes.h"
+#include "render/volume_renderer.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+
+using namespace raypc;
+using namespace raypc::render;
+using raypc::render::testing::makeGrid;
+using raypc::render::testing::makeVolume;
+
+namespace {
+
+constexpr int kSize = 128;
+
+// Three analytic fields: a signed plume field, a radial temperature-like field, a lon/lat pattern.
+std::shared_ptr<StepVolume> volumeAt(int level)
+{
+    SphericalGrid grid = makeGrid(48, 41, 96, 0.3);
+    for (int i = 0; i < level; ++i)
+        grid = grid.coarsened();
+    return makeVolume(grid, {{"plume", testing::plumeField},
+                             {"radial", [](double, double r, double) { return float((r - 3485) / 2886); }},
+                             {"pattern", [](double lat, double, double lon) {
+                                  return float(std::cos(3 * lon * M_PI / 180) * std::cos(lat * M_PI / 180));
+                              }}});
+}
+
+RenderParams baseParams()
+{
+    RenderParams p;
+    p.width = p.height = kSize;
+    p.camera.azimuthDeg = 35;
+    p.camera.elevationDeg = 25;
+    p.camera.distanceKm = 18500;
+    p.camera.fovYDeg = 45;
+    p.colorVariable = 0;
+    p.transfer.range = {-0.8f, 1.0f};
+    p.transfer.opacity = {{0, 0.5f}, {0.4f, 0.0f}, {0.5f, 0.0f}, {1, 0.8f}};
+    p.transfer.opacityUnitKm = 150;
+    return p;
+}
+
+struct Case {
+    int level = 0;
+    std::function<void(RenderParams&)> setup;
+};
+
+std::map<std::string, Case> cases()
+{
+    std::map<std::string, Case> c;
+    c["tf_viridis"] = {0, [](RenderParams& p) { p.transfer.colorMap = ColorMapId::Viridis; }};
+    c["tf_inferno"] = {0, [](RenderParams& p) { p.transfer.colorMap = ColorMapId::Inferno; }};
+    c["tf_cool_to_warm"] = {0, [](RenderParams& p) { p.transfer.colorMap = ColorMapId::CoolToWarm; }};
+    c["tf_blue_white_red"] = {0, [](RenderParams& p) {
+                                  p.transfer.colorMap = ColorMapId::BlueWhiteRed;
+                                  p.transfer.range = {-1, 1};
+                                  p.transfer.opacity = {{0, 0.8f}, {0.45f, 0}, {0.55f, 0}, {1, 0.8f}};
+                              }};
+    c["tf_opacity_steps"] = {0, [](RenderParams& p) {
+                                 p.colorVariable = 1;
+                                 p.transfer.range = {0, 1};
+                                 p.transfer.opacity = {{0, 0}, {0.3f, 0}, {0.31f, 0.4f}, {0.4f, 0.4f}, {0.41f, 0}, {1, 0}};
+                             }};
+    c["brush_one_variable"] = {0, [](RenderParams& p) { p.brushes = {{1, std::nullopt, 0.3f, 0.7f}}; }};
+    c["brush_several_variables"] = {0, [](RenderParams& p) {
+                                        p.brushes = {{1, std::nullopt, 0.2f, 0.9f},
+                                                     {2, std::nullopt, -0.5f, 1.0f},
+                                                     {0, std::nullopt, -0.9f, 0.9f}};
+                                    }};
+    c["cut_by_coordinate"] = {0, [](RenderParams& p) {
+                                  p.colorVariable = 1;
+                                  p.transfer.range = {0, 1};
+                                  p.transfer.colorMap = ColorMapId::Inferno;
+                                  p.transfer.opacity = {{0, 0.9f}, {1, 0.9f}};
+                                  p.brushes = {{-1, Coordinate::Y, -7000, 0}, {-1, Coordinate::Depth, 0, 2000}};
+                              }};
+    for (int level = 0; level < 3; ++level)
+        c["level_" + std::to_string(level)] = {level, [](RenderParams&) {}};
+    c["lon_seam"] = {0, [](RenderParams& p) {
+                         // Looking at lon 0 from outside: the seam between the last column and column 0.
+                         p.camera.azimuthDeg = 0;
+                         p.camera.elevationDeg = 0;
+                         p.colorVariable = 2;
+                         p.transfer.range = {-1, 1};
+                         p.transfer.colorMap = ColorMapId::CoolToWarm;
+                         p.transfer.opacity = {{0, 0.6f}, {1, 0.6f}};
+                         p.brushes = {{-1, Coordinate::Depth, 0, 300}};
+                     }};
+    auto pole = [](double elevation) {
+        return [elevation](RenderParams& p) {
+            p.camera.elevationDeg = elevation;
+            p.colorVariable = 2;
+            p.transfer.range = {-1, 1};
+            p.transfer.colorMap = ColorMapId::Viridis;
+            p.transfer.opacity = {{0, 0.6f}, {1, 0.6f}};
+            p.brushes = {{-1, Coordinate::Depth, 0, 300}};
+        };
+    };
+    c["north_pole"] = {0, pole(90)};
+    c["south_pole"] = {0, pole(-90)};
+    c["shading"] = {0, [](RenderParams& p) {
+                        p.transfer.opacity = {{0, 0}, {0.6f, 0}, {0.65f, 0.9f}, {1, 0.9f}};
+                        p.transfer.opacityUnitKm = 30;
+                        p.shading.enabled = true;
+                    }};
+    c["core_plain"] = {0, [](RenderParams& p) {
+                           p.brushes = {{-1, Coordinate::X, -1e9f, 0}};
+                           p.core.colour = {0.8f, 0.5f, 0.2f};
+                       }};
+    c["core_by_variable"] = {0, [](RenderParams& p) {
+                                 p.brushes = {{-1, Coordinate::X, -1e9f, 0}};
+                                 p.core.variable = 2;
+                                 p.core.range = {-1, 1};
+                                 p.core.colorMap = ColorMapId::CoolToWarm;
+                             }};
+    return c;
+}
+
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    try {
+        if (argc != 4) {
+            std::fprintf(stderr, "usage: raypc_golden CASE GOLDEN_DIR OUT_DIR\n");
+            return 2;
+        }
+        const std::string name = argv[1];
+        const std::filesystem::path goldenDir = argv[2], outDir = argv[3];
+        const auto all = cases();
+        const auto it = all.find(name);
+        if (it == all.end())
+            fail("unknown golden case '{}'", name);
+        RenderParams params = baseParams();
+        it->second.setup(params);
+        VolumeRenderer renderer(volumeAt(it->second.level));
+        renderer.setParams(params);
+        FrameBuffer frame(params.width, params.height);
+        for (int pass = 0; pass < 6; ++pass)
+            renderer.renderPass(frame);
+        const ImageRgba8 actual{kSize, kSize, frame.resolveRgba8({0.1f, 0.1f, 0.12f})};
+        const auto golden = goldenDir / (name + ".png");
+        const char* update = std::getenv("RAYPC_UPDATE_GOLDEN");
+        if (update && std::string(update) == "1") {
+            writePng(golden, actual);
+            std::printf("%s: golden written to %s\n", name.c_str(), golden.string().c_str());
+            return 0;
+        }
+        std::filesystem::create_directories(outDir);
+        if (!std::filesystem::exists(golden)) {
+            writePng(outDir / (name + ".png"), actual);
+            fail("{}: no golden image; run with RAYPC_UPDATE_GOLDEN=1 to create it", golden.string());
+        }
+        const ImageRgba8 expected = readPng(golden);
+        if (expected.width != actual.width || expected.height != actual.height)
+            fail("{}: golden is {}x{}, rendered {}x{}", golden.string(), expected.width, expected.height, actual.width,
+                 actual.height);
+        ImageRgba8 diff{kSize, kSize, std::vector<uint8_t>(actual.pixels.size(), 255)};
+        size_t bad = 0;
+        double sum = 0;
+        for (size_t i = 0; i < actual.pixels.size(); i += 4) {
+            int worst = 0;
+            for (int c = 0; c < 3; ++c) {
+                const int d = std::abs(int(actual.pixels[i + c]) - int(expected.pixels[i + c]));
+                worst = std::max(worst, d);
+                sum += d;
+                diff.pixels[i + c] = uint8_t(std::min(255, d * 8));
+            }
+            bad += worst > 10;
+        }
+        const double pixels = double(kSize) * kSize;
+        const double mean = sum / (3 * pixels);
+        const double badFraction = double(bad) / pixels;
+        std::printf("%s: %.3f%% pixels off by > 10/255, mean difference %.3f/255\n", name.c_str(), 100 * badFraction,
+                    mean);
+        if (badFraction > 0.005 || mean > 1.0) {
+            writePng(outDir / (name + ".png"), actual);
+            writePng(outDir / (name + ".diff.png"), diff);
+            std::fprintf(stderr, "%s: differs from the golden; see %s\n", name.c_str(),
+                         (outDir / (name + ".diff.png")).string().c_str());
+            return 1;
+        }
+        return 0;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "raypc_golden: error: %s\n", e.what());
+        return 1;
+    }
+}
