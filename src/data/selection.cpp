@@ -1,0 +1,71 @@
+#include "data/selection.h"
+
+#include "core/error.h"
+#include "core/spherical.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+
+namespace raypc {
+namespace {
+
+double coordinateAt(Coordinate c, double latDeg, double lonDeg, double rKm)
+{
+    switch (c) {
+    case Coordinate::X: return sphericalToCartesianKm(latDeg, lonDeg, rKm).x;
+    case Coordinate::Y: return sphericalToCartesianKm(latDeg, lonDeg, rKm).y;
+    case Coordinate::Z: return sphericalToCartesianKm(latDeg, lonDeg, rKm).z;
+    case Coordinate::Lat: return latDeg;
+    case Coordinate::Lon: return lonDeg;
+    case Coordinate::Radius: return rKm;
+    case Coordinate::Depth: return kSurfaceRadiusKm - rKm;
+    }
+    return 0;
+}
+
+}  // namespace
+
+SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters)
+{
+    for (const auto& f : filters) {
+        if (!f.coordinate && (f.variable < 0 || static_cast<size_t>(f.variable) >= volume.variableCount()))
+            fail("selection: variable index {} out of range 0..{}", f.variable, volume.variableCount() - 1);
+        if (!(f.min <= f.max))
+            fail("selection: range [{}, {}] has min > max", f.min, f.max);
+    }
+    const auto& g = volume.grid();
+    const auto w = g.volumeFactors();
+    const double total = g.totalVolumeKm3();
+    tbb::enumerable_thread_specific<std::vector<double>> perThread(std::vector<double>(g.nR(), 0.0));
+    tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
+        auto& byR = perThread.local();
+        for (size_t iR = 0; iR < g.nR(); ++iR)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                const size_t i = g.index(iLat, iR, iLon);
+                bool inside = true;
+                for (const auto& f : filters) {
+                    const double v = f.coordinate ? coordinateAt(*f.coordinate, g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR])
+                                                  : volume.values(f.variable)[i];
+                    if (!(v >= f.min && v <= f.max)) {
+                        inside = false;
+                        break;
+                    }
+                }
+                if (inside)
+                    byR[iR] += w.at(iLat, iR, iLon);
+            }
+    });
+    SelectionStats stats;
+    stats.volumeByRadiusKm3.assign(g.nR(), 0.0);
+    for (const auto& byR : perThread)
+        for (size_t iR = 0; iR < g.nR(); ++iR)
+            stats.volumeByRadiusKm3[iR] += byR[iR];
+    for (double v : stats.volumeByRadiusKm3)
+        stats.volumeKm3 += v;
+    stats.fractionOfMantle = stats.volumeKm3 / total;
+    return stats;
+}
+
+}  // namespace raypc
