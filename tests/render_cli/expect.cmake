@@ -1,0 +1,11 @@
+# cmake -DRAYPC=... -DEXPECT_EXIT=N -DEXPECT_REGEX=... -DARGS="a;b;c" -P expect.cmake
+execute_process(COMMAND ${RAYPC} ${ARGS} RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+set(all "${out}${err}")
+if(NOT code EQUAL EXPECT_EXIT)
+  message(FATAL_ERROR "exit code ${code}, expected ${EXPECT_EXIT}; output:\n${all}")
+endif()
+string(FIND "${all}" "${EXPECT_REGEX}" found)
+if(found EQUAL -1)
+  message(FATAL_ERROR "output does not contain '${EXPECT_REGEX}':\n${all}")
+endif()
+message(STATUS "ok: exit ${code}; found '${EXPECT_REGEX}'")
