@@ -87,6 +87,7 @@ std::shared_ptr<StepVolume> StepVolume::fromSnapshot(const Snapshot& snapshot, u
     volume->m_grid = snapshot.grid;
     volume->m_bricks = BrickLayout::forGrid(snapshot.grid, brickSize);
     const size_t n = snapshot.grid.cellCount();
+    volume->m_owned.reserve(2 * snapshot.fields.size());  // references below must stay valid
     for (const auto& field : snapshot.fields) {
         if (field.values.size() != n)
             fail("{}: {} values, expected {} for the grid", field.name, field.values.size(), n);
