@@ -4,6 +4,7 @@
 #include "core/error.h"
 #include "core/spherical.h"
 #include "data/dataset_format.h"
+#include "data/synth.h"
 #include "data/test_util.h"
 
 #include <gtest/gtest.h>
@@ -246,11 +247,14 @@ TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)
 TEST(Preprocess, ResumesAfterAFailedRunAndSkipsFinishedSteps)
 {
     TempDir dir("resume");
-    // The third input is broken: the run stops there, leaving two finished steps.
+    // The third input holds a NaN, which only shows when its data are read: the run stops
+    // there, leaving two finished steps.
     auto files = fixtureFiles();
     std::filesystem::copy_file(files[0], dir / "spherical001.nc");
     std::filesystem::copy_file(files[1], dir / "spherical002.nc");
-    writeFileAtomic(dir / "spherical003.nc", std::string_view("garbage"));
+    Snapshot broken = readSnapshot(files[2]);
+    broken.fields[0].values[100] = std::nanf("");
+    writeContestFile(dir / "spherical003.nc", broken);
     const std::vector<std::filesystem::path> inputs = {dir / "spherical001.nc", dir / "spherical002.nc",
                                                        dir / "spherical003.nc"};
     EXPECT_THROW(preprocess(inputs, dir / "ds", quiet()), Error);
