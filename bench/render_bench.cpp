@@ -43,7 +43,7 @@ const Data& data()
         for (const auto& f : s.fields)
             out.names.push_back(f.name);
         for (int l = 0; l < kLevelCount; ++l) {
-            out.levels.push_back(testing::detail::volumeFromSnapshot(s, 8));
+            out.levels.push_back(StepVolume::fromSnapshot(s, 8));
             Snapshot coarse;
             coarse.grid = s.grid.coarsened();
             for (const auto& f : s.fields)

@@ -2,7 +2,6 @@
 // renderer itself). Fields are closed-form functions of (lat, r, lon) so the truth is known.
 #pragma once
 
-#include "data/bricks.h"
 #include "data/dataset.h"
 
 #include <cmath>
@@ -13,44 +12,6 @@
 
 namespace raypc::render::testing {
 
-namespace detail {
-// StepVolume::fromSnapshot (src/data/dataset.cpp) keeps a reference into m_owned across a second
-// emplace_back, which reallocates; until that is fixed, tests fill the volume's members themselves
-// through the standard explicit-instantiation access idiom. Replace by fromSnapshot once fixed.
-template <class Tag, typename Tag::type M>
-struct Rob {
-    friend typename Tag::type get(Tag) { return M; }
-};
-struct GridTag { using type = SphericalGrid StepVolume::*; friend type get(GridTag); };
-struct BricksTag { using type = BrickLayout StepVolume::*; friend type get(BricksTag); };
-struct PtrsTag { using type = std::vector<const float*> StepVolume::*; };
-struct ValuesTag : PtrsTag { friend type get(ValuesTag); };
-struct BoundsTag : PtrsTag { friend type get(BoundsTag); };
-struct OwnedTag { using type = std::vector<std::vector<float>> StepVolume::*; friend type get(OwnedTag); };
-template struct Rob<GridTag, &StepVolume::m_grid>;
-template struct Rob<BricksTag, &StepVolume::m_bricks>;
-template struct Rob<ValuesTag, &StepVolume::m_values>;
-template struct Rob<BoundsTag, &StepVolume::m_bounds>;
-template struct Rob<OwnedTag, &StepVolume::m_owned>;
-
-inline std::shared_ptr<StepVolume> volumeFromSnapshot(const Snapshot& s, uint32_t brickSize)
-{
-    auto v = std::make_shared<StepVolume>();
-    StepVolume& vol = *v;
-    vol.*get(GridTag{}) = s.grid;
-    vol.*get(BricksTag{}) = BrickLayout::forGrid(s.grid, brickSize);
-    auto& owned = vol.*get(OwnedTag{});
-    owned.reserve(2 * s.fields.size());
-    for (const auto& f : s.fields) {
-        owned.push_back(f.values);
-        owned.emplace_back(2 * (vol.*get(BricksTag{})).brickCount());
-        computeBrickBounds(s.grid, vol.*get(BricksTag{}), owned[owned.size() - 2], owned.back());
-        (vol.*get(ValuesTag{})).push_back(owned[owned.size() - 2].data());
-        (vol.*get(BoundsTag{})).push_back(owned.back().data());
-    }
-    return v;
-}
-}  // namespace detail
 
 // A centred grid: lat rows at cell centres (no pole rows), r from the CMB to the surface, lon from 0.
 // `stretch` > 0 makes r and lat non-uniform (denser near the ends) to exercise the coordinate maps.
@@ -95,7 +56,7 @@ inline std::shared_ptr<StepVolume> makeVolume(const SphericalGrid& grid, const s
                     field.values[grid.index(a, r, o)] = f.fn(grid.latDeg[a], grid.rKm[r], grid.lonDeg[o]);
         s.fields.push_back(std::move(field));
     }
-    return detail::volumeFromSnapshot(s, brickSize);
+    return StepVolume::fromSnapshot(s, brickSize);
 }
 
 // A smooth "plume" field with both signs: blobs at fixed places plus a radial trend.
