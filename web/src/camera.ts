@@ -1,0 +1,59 @@
+// The server's orbit camera (src/render/camera.{h,cpp}: OrbitCamera, CameraFrame), mirrored
+// exactly so a depth map can be unprojected with the frame's camera and reprojected with the
+// current one. Positions are Cartesian km in the contest frame; +z is up; azimuth in the x-y
+// plane from +x towards +y, elevation towards +z, degrees. Pixel (0, 0) is the top-left corner.
+import type { CameraState } from './state';
+
+export type Vec3 = [number, number, number];
+
+const dot = (a: Vec3, b: Vec3) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+const cross = (a: Vec3, b: Vec3): Vec3 => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+const scale = (a: Vec3, s: number): Vec3 => [a[0] * s, a[1] * s, a[2] * s];
+const add = (a: Vec3, b: Vec3): Vec3 => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+const normalize = (a: Vec3): Vec3 => scale(a, 1 / Math.sqrt(dot(a, a)));
+const degToRad = (d: number) => (d * Math.PI) / 180;
+
+export class CameraFrame {
+  readonly eye: Vec3;
+  readonly forward: Vec3;
+  readonly right: Vec3;
+  readonly up: Vec3;
+  readonly tanHalfFovY: number;
+  readonly aspect: number;
+
+  constructor(camera: CameraState, readonly width: number, readonly height: number) {
+    // As the server: keep the elevation a hair away from ±90° so +z never becomes the view direction.
+    const el = degToRad(Math.min(89.999, Math.max(-89.999, camera.elevationDeg)));
+    const az = degToRad(camera.azimuthDeg);
+    const offset: Vec3 = [Math.cos(el) * Math.cos(az), Math.cos(el) * Math.sin(az), Math.sin(el)];
+    this.eye = add(camera.targetKm, scale(offset, camera.distanceKm));
+    this.forward = normalize(scale(offset, -1));
+    this.right = normalize(cross(this.forward, [0, 0, 1]));
+    this.up = cross(this.right, this.forward);
+    this.tanHalfFovY = Math.tan(degToRad(camera.fovYDeg) * 0.5);
+    this.aspect = width / height;
+  }
+
+  // Unit direction through continuous image position (px, py); the centre of pixel i is i + 0.5.
+  direction(px: number, py: number): Vec3 {
+    const sx = ((2 * px) / this.width - 1) * this.tanHalfFovY * this.aspect;
+    const sy = (1 - (2 * py) / this.height) * this.tanHalfFovY;
+    return normalize(add(add(this.forward, scale(this.right, sx)), scale(this.up, sy)));
+  }
+
+  // Image position (px, py) of a world point and its camera-space depth along `forward`
+  // (z <= 0: behind the eye).
+  project(p: Vec3): { px: number; py: number; z: number } {
+    const d: Vec3 = [p[0] - this.eye[0], p[1] - this.eye[1], p[2] - this.eye[2]];
+    const z = dot(d, this.forward);
+    const sx = dot(d, this.right) / (z * this.tanHalfFovY * this.aspect);
+    const sy = dot(d, this.up) / (z * this.tanHalfFovY);
+    return { px: ((sx + 1) * this.width) / 2, py: ((1 - sy) * this.height) / 2, z };
+  }
+}
+
+export function camerasEqual(a: CameraState, b: CameraState): boolean {
+  return a.azimuthDeg === b.azimuthDeg && a.elevationDeg === b.elevationDeg && a.distanceKm === b.distanceKm &&
+    a.fovYDeg === b.fovYDeg && a.targetKm[0] === b.targetKm[0] && a.targetKm[1] === b.targetKm[1] &&
+    a.targetKm[2] === b.targetKm[2];
+}

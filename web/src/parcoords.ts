@@ -1,0 +1,163 @@
+// Parallel coordinates of the dataset's volume-weighted sample (GET /api/sample), drawn by
+// parcoord-es: one axis per column (coordinates, then variables, derived ones included), with
+// units in the titles, fixed global ranges (so axes do not jump between steps), reorderable axes
+// and 1-D brushes. Brushes are reported as state.brushes ranges in each column's units.
+import ParCoords from 'parcoord-es';
+import * as d3 from 'd3';
+import type { Brush } from './state';
+import type { Sample } from './api';
+
+export interface AxisInfo {
+  name: string;
+  units: string;
+  min: number;
+  max: number;
+}
+
+export interface ParcoordsOptions {
+  onBrush(brushes: Brush[], interactive: boolean): void;
+}
+
+export interface ParcoordsTiming {
+  lastBrushMs: number; // cost of the UI's handler of the last brush event (after parcoord-es filtered)
+  brushEvents: number;
+}
+
+type Row = Record<string, number>;
+
+const kRate = 12000; // lines per animation frame in the progressive queue
+
+export class ParallelCoordinates {
+  private pc: any = null; // eslint-disable-line @typescript-eslint/no-explicit-any
+  private rows: Row[] = [];
+  private suppress = 0;
+  private order: string[] | null = null;
+  private lineColor: (row: Row) => string = () => '#4a90d9';
+  readonly timing: ParcoordsTiming = { lastBrushMs: 0, brushEvents: 0 };
+
+  constructor(private readonly container: HTMLElement, private axes: AxisInfo[], private readonly options: ParcoordsOptions) {
+    let resizeTimer = 0;
+    new ResizeObserver(() => {
+      clearTimeout(resizeTimer);
+      resizeTimer = window.setTimeout(() => this.rebuild(), 150);
+    }).observe(container);
+  }
+
+  get rowCount(): number {
+    return this.rows.length;
+  }
+
+  setData(sample: Sample): void {
+    const n = sample.rows, c = sample.columns.length, v = sample.values;
+    const rows: Row[] = new Array(n);
+    for (let i = 0; i < n; i++) {
+      const r: Row = {};
+      for (let k = 0; k < c; k++) r[sample.columns[k]] = v[i * c + k];
+      rows[i] = r;
+    }
+    this.rows = rows;
+    if (!this.pc) {
+      this.rebuild();
+      return;
+    }
+    const brushes = this.brushes();
+    this.suppress++;
+    try {
+      this.pc.data(rows);
+      this.pc.render();
+      if (brushes.length) this.applyBrushes(brushes);
+    } finally {
+      this.suppress--;
+    }
+  }
+
+  setColor(fn: (row: Row) => string): void {
+    this.lineColor = fn;
+    if (this.pc) this.pc.color(fn).render();
+  }
+
+  // The current brushes in data units, in axis order.
+  brushes(): Brush[] {
+    if (!this.pc || !this.pc.brushExtents) return [];
+    const ext = this.pc.brushExtents() as Record<string, { selection: { scaled: number[] } }>;
+    const keys: string[] = this.pc.getOrderedDimensionKeys ? this.pc.getOrderedDimensionKeys() : Object.keys(ext);
+    return keys.filter((k) => ext[k]).map((k) => {
+      const s = ext[k].selection.scaled;
+      return { name: k, min: Math.min(s[0], s[1]), max: Math.max(s[0], s[1]) };
+    });
+  }
+
+  // Shows the given brushes (e.g. from a loaded state) without reporting them back.
+  setBrushes(brushes: Brush[]): void {
+    if (!this.pc) return;
+    const same = JSON.stringify(this.brushes().map((b) => [b.name, b.min.toPrecision(5), b.max.toPrecision(5)]).sort()) ===
+      JSON.stringify(brushes.map((b) => [b.name, b.min.toPrecision(5), b.max.toPrecision(5)]).sort());
+    if (same) return;
+    this.suppress++;
+    try {
+      this.pc.brushReset();
+      this.applyBrushes(brushes);
+    } finally {
+      this.suppress--;
+    }
+  }
+
+  private applyBrushes(brushes: Brush[]): void {
+    const known = new Set(this.axes.map((a) => a.name));
+    const ext: Record<string, [number, number]> = {};
+    for (const b of brushes) if (known.has(b.name)) ext[b.name] = [b.min, b.max];
+    if (Object.keys(ext).length) this.pc.brushExtents(ext);
+  }
+
+  private rebuild(): void {
+    const w = this.container.clientWidth, h = this.container.clientHeight;
+    if (w < 50 || h < 50 || this.rows.length === 0) return;
+    const brushes = this.brushes();
+    if (this.pc) this.order = this.pc.getOrderedDimensionKeys();
+    this.container.innerHTML = '';
+    const margin = { top: 34, right: 30, bottom: 14, left: 30 };
+    const plotH = h - margin.top - margin.bottom;
+    const order = this.order ?? this.axes.map((a) => a.name);
+    const dimensions: Record<string, unknown> = {};
+    order.forEach((name, index) => {
+      const a = this.axes.find((x) => x.name === name);
+      if (!a) return;
+      const lo = a.min, hi = a.max > a.min ? a.max : a.min + 1;
+      dimensions[name] = {
+        title: a.units ? `${name} [${a.units}]` : name,
+        type: 'number',
+        index,
+        yscale: d3.scaleLinear().domain([lo, hi]).range([plotH + 1, 1]),
+        ticks: 5,
+      };
+    });
+    this.suppress++;
+    try {
+      this.pc = ParCoords({ width: w, height: h, margin, alpha: 0.06, alphaOnBrushed: 0.03, lineWidth: 1 })(this.container)
+        .data(this.rows)
+        .dimensions(dimensions)
+        .mode('queue')
+        .rate(kRate)
+        .color(this.lineColor)
+        .render()
+        .createAxes()
+        .reorderable()
+        .brushMode('1D-axes');
+      this.pc.on('brush', () => this.emit(true));
+      this.pc.on('brushend', () => this.emit(false));
+      if (brushes.length) this.applyBrushes(brushes);
+    } finally {
+      this.suppress--;
+    }
+    // Axis titles carry units; show them upright and readable.
+    d3.select(this.container).selectAll('.label').style('font-size', '11px');
+  }
+
+  private emit(interactive: boolean): void {
+    if (this.suppress) return;
+    const t0 = performance.now();
+    this.timing.brushEvents++;
+    this.options.onBrush(this.brushes(), interactive);
+    this.timing.lastBrushMs = performance.now() - t0;
+  }
+}

@@ -1,0 +1,194 @@
+// Transfer-function editor: the piecewise-linear opacity (state.color.opacity, positions
+// normalised over the colour range) drawn over the variable's histogram and a colour bar.
+// Drag a point to move it, click on empty space to add one, double-click a point to remove it.
+import { sampleColorMap } from './colormaps';
+
+export interface HistogramData {
+  min: number;
+  max: number;
+  histogram: number[]; // volume fractions of equal bins over [min, max]
+}
+
+export interface TfEditorOptions {
+  onChange(opacity: [number, number][], interactive: boolean): void;
+}
+
+const kBarHeight = 14;
+const kPointRadius = 5;
+
+export class TfEditor {
+  private points: [number, number][] = [[0, 0], [1, 0.5]];
+  private range: [number, number] = [0, 1];
+  private colorMap = 'viridis';
+  private units = '';
+  private histograms: { data: HistogramData; style: 'bars' | 'line' }[] = [];
+  private dragging = -1;
+  private readonly ctx: CanvasRenderingContext2D;
+
+  constructor(readonly canvas: HTMLCanvasElement, private readonly options: TfEditorOptions) {
+    this.ctx = canvas.getContext('2d')!;
+    canvas.addEventListener('pointerdown', (e) => this.onDown(e));
+    canvas.addEventListener('pointermove', (e) => this.onMove(e));
+    canvas.addEventListener('pointerup', (e) => this.onUp(e));
+    canvas.addEventListener('pointercancel', (e) => this.onUp(e));
+    canvas.addEventListener('dblclick', (e) => this.onDoubleClick(e));
+    new ResizeObserver(() => this.draw()).observe(canvas);
+  }
+
+  set(points: [number, number][], range: [number, number], colorMap: string, units: string,
+      histograms: { data: HistogramData; style: 'bars' | 'line' }[]): void {
+    if (this.dragging < 0) this.points = points.map((p) => [p[0], p[1]] as [number, number]);
+    this.range = range;
+    this.colorMap = colorMap;
+    this.units = units;
+    this.histograms = histograms;
+    this.draw();
+  }
+
+  private plotArea() {
+    const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
+    return { x0: 8, x1: w - 8, y0: 6, y1: h - kBarHeight - 22 };
+  }
+
+  private toScreen(p: [number, number]): [number, number] {
+    const a = this.plotArea();
+    return [a.x0 + p[0] * (a.x1 - a.x0), a.y1 - p[1] * (a.y1 - a.y0)];
+  }
+
+  private fromEvent(e: PointerEvent | MouseEvent): [number, number] {
+    const r = this.canvas.getBoundingClientRect();
+    const a = this.plotArea();
+    const x = (e.clientX - r.left - a.x0) / (a.x1 - a.x0);
+    const y = (a.y1 - (e.clientY - r.top)) / (a.y1 - a.y0);
+    return [Math.min(1, Math.max(0, x)), Math.min(1, Math.max(0, y))];
+  }
+
+  private hit(e: PointerEvent | MouseEvent): number {
+    const r = this.canvas.getBoundingClientRect();
+    const mx = e.clientX - r.left, my = e.clientY - r.top;
+    let best = -1, bestD = (kPointRadius + 4) ** 2;
+    this.points.forEach((p, i) => {
+      const [sx, sy] = this.toScreen(p);
+      const d = (sx - mx) ** 2 + (sy - my) ** 2;
+      if (d < bestD) { bestD = d; best = i; }
+    });
+    return best;
+  }
+
+  private onDown(e: PointerEvent): void {
+    if (e.button !== 0) return;
+    let i = this.hit(e);
+    if (i < 0) {
+      const p = this.fromEvent(e);
+      i = this.points.findIndex((q) => q[0] > p[0]);
+      if (i < 0) i = this.points.length;
+      this.points.splice(i, 0, p);
+    }
+    this.dragging = i;
+    this.canvas.setPointerCapture(e.pointerId);
+    this.draw();
+    this.options.onChange(this.points.map((p) => [...p] as [number, number]), true);
+  }
+
+  private onMove(e: PointerEvent): void {
+    if (this.dragging < 0) return;
+    const i = this.dragging;
+    const [x, y] = this.fromEvent(e);
+    const lo = i > 0 ? this.points[i - 1][0] : 0, hi = i + 1 < this.points.length ? this.points[i + 1][0] : 1;
+    this.points[i] = [Math.min(hi, Math.max(lo, x)), y];
+    this.draw();
+    this.options.onChange(this.points.map((p) => [...p] as [number, number]), true);
+  }
+
+  private onUp(e: PointerEvent): void {
+    if (this.dragging < 0) return;
+    this.dragging = -1;
+    if (this.canvas.hasPointerCapture(e.pointerId)) this.canvas.releasePointerCapture(e.pointerId);
+    this.options.onChange(this.points.map((p) => [...p] as [number, number]), false);
+  }
+
+  private onDoubleClick(e: MouseEvent): void {
+    const i = this.hit(e);
+    if (i < 0 || this.points.length <= 2) return;
+    this.points.splice(i, 1);
+    this.draw();
+    this.options.onChange(this.points.map((p) => [...p] as [number, number]), false);
+  }
+
+  draw(): void {
+    const c = this.canvas, ctx = this.ctx;
+    const dpr = window.devicePixelRatio || 1;
+    const w = c.clientWidth, h = c.clientHeight;
+    if (w === 0 || h === 0) return;
+    if (c.width !== Math.round(w * dpr) || c.height !== Math.round(h * dpr)) {
+      c.width = Math.round(w * dpr);
+      c.height = Math.round(h * dpr);
+    }
+    ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    ctx.clearRect(0, 0, w, h);
+    const a = this.plotArea();
+    const [lo, hi] = this.range;
+    ctx.fillStyle = '#15181d';
+    ctx.fillRect(a.x0, a.y0, a.x1 - a.x0, a.y1 - a.y0);
+
+    // Histograms: bin masses as density over the displayed range, square-root scaled so thin tails show.
+    for (const { data, style } of this.histograms) {
+      const n = data.histogram.length;
+      const binW = (data.max - data.min) / n;
+      if (!(binW > 0)) continue;
+      const peak = Math.max(...data.histogram.map(Math.sqrt), 1e-12);
+      ctx.beginPath();
+      for (let b = 0; b < n; b++) {
+        const v0 = data.min + b * binW, v1 = v0 + binW;
+        const x0 = a.x0 + ((v0 - lo) / (hi - lo)) * (a.x1 - a.x0), x1 = a.x0 + ((v1 - lo) / (hi - lo)) * (a.x1 - a.x0);
+        if (x1 < a.x0 || x0 > a.x1) continue;
+        const y = a.y1 - (Math.sqrt(data.histogram[b]) / peak) * (a.y1 - a.y0) * 0.95;
+        if (style === 'bars') ctx.rect(Math.max(a.x0, x0), y, Math.max(0.5, Math.min(a.x1, x1) - Math.max(a.x0, x0)), a.y1 - y);
+        else {
+          ctx.lineTo(Math.max(a.x0, x0), y);
+          ctx.lineTo(Math.min(a.x1, x1), y);
+        }
+      }
+      if (style === 'bars') { ctx.fillStyle = 'rgba(150,160,175,0.45)'; ctx.fill(); }
+      else { ctx.strokeStyle = 'rgba(230,200,120,0.8)'; ctx.lineWidth = 1; ctx.stroke(); }
+    }
+
+    // Colour bar, with the opacity shown as a darker band above it.
+    const barY = a.y1 + 4;
+    for (let x = a.x0; x < a.x1; x++) {
+      const [r, g, b] = sampleColorMap(this.colorMap, (x - a.x0) / (a.x1 - a.x0));
+      ctx.fillStyle = `rgb(${r * 255},${g * 255},${b * 255})`;
+      ctx.fillRect(x, barY, 1, kBarHeight);
+    }
+    ctx.fillStyle = '#ccd';
+    ctx.font = '11px system-ui, sans-serif';
+    ctx.textBaseline = 'top';
+    const fmt = (v: number) => (Math.abs(v) >= 1e4 || (Math.abs(v) < 1e-2 && v !== 0) ? v.toExponential(2) : v.toPrecision(4));
+    ctx.textAlign = 'left';
+    ctx.fillText(fmt(lo), a.x0, barY + kBarHeight + 3);
+    ctx.textAlign = 'right';
+    ctx.fillText(`${fmt(hi)} ${this.units}`, a.x1, barY + kBarHeight + 3);
+
+    // Opacity curve and its control points.
+    ctx.beginPath();
+    this.points.forEach((p, i) => {
+      const [sx, sy] = this.toScreen(p);
+      if (i === 0) ctx.moveTo(a.x0, sy);
+      ctx.lineTo(sx, sy);
+      if (i === this.points.length - 1) ctx.lineTo(a.x1, sy);
+    });
+    ctx.strokeStyle = '#fff';
+    ctx.lineWidth = 1.5;
+    ctx.stroke();
+    this.points.forEach((p, i) => {
+      const [sx, sy] = this.toScreen(p);
+      const [r, g, b] = sampleColorMap(this.colorMap, p[0]);
+      ctx.beginPath();
+      ctx.arc(sx, sy, kPointRadius, 0, 2 * Math.PI);
+      ctx.fillStyle = `rgb(${r * 255},${g * 255},${b * 255})`;
+      ctx.fill();
+      ctx.strokeStyle = i === this.dragging ? '#ff0' : '#fff';
+      ctx.stroke();
+    });
+  }
+}

@@ -1,0 +1,249 @@
+// The 3D view: shows the server's last frame, and while the camera differs from the one it was
+// rendered with, re-projects it (image warping, as the paper): the frame's depth map becomes a
+// vertex grid of world points (unprojected with the frame's camera), drawn with the current
+// camera in WebGL2 and textured with the frame's JPEG. Where the depth map has no hit, the grid
+// lies on a far sphere; triangles that mix hit and no-hit corners are dropped so the silhouette
+// does not smear into the background. Disocclusions stretch (no hole filling).
+import { CameraFrame, camerasEqual } from './camera';
+import type { CameraState } from './state';
+import type { Frame } from './connection';
+
+const kPlanetRadiusKm = 6371;
+
+const warpVs = `#version 300 es
+in vec3 aPos;
+in vec2 aUv;
+in float aHit;
+uniform vec3 uEye, uRight, uUp, uForward;
+uniform float uTanHalfFovY, uAspect, uNear, uFar;
+out vec2 vUv;
+out float vHit;
+void main() {
+  vec3 d = aPos - uEye;
+  float z = dot(d, uForward);
+  float x = dot(d, uRight) / (uTanHalfFovY * uAspect);
+  float y = dot(d, uUp) / uTanHalfFovY;
+  float a = (uFar + uNear) / (uFar - uNear), b = -2.0 * uFar * uNear / (uFar - uNear);
+  gl_Position = vec4(x, y, a * z + b, z);
+  vUv = aUv;
+  vHit = aHit;
+}`;
+const warpFs = `#version 300 es
+precision highp float;
+in vec2 vUv;
+in float vHit;
+uniform sampler2D uImage;
+out vec4 outColor;
+void main() {
+  if (vHit > 0.001 && vHit < 0.999) discard;
+  outColor = vec4(texture(uImage, vUv).rgb, 1.0);
+}`;
+const quadVs = `#version 300 es
+in vec2 aXy;
+out vec2 vUv;
+void main() { vUv = vec2(aXy.x * 0.5 + 0.5, 0.5 - aXy.y * 0.5); gl_Position = vec4(aXy, 0.0, 1.0); }`;
+const quadFs = `#version 300 es
+precision highp float;
+in vec2 vUv;
+uniform sampler2D uImage;
+out vec4 outColor;
+void main() { outColor = vec4(texture(uImage, vUv).rgb, 1.0); }`;
+
+function compile(gl: WebGL2RenderingContext, vs: string, fs: string): WebGLProgram {
+  const program = gl.createProgram()!;
+  for (const [type, src] of [[gl.VERTEX_SHADER, vs], [gl.FRAGMENT_SHADER, fs]] as const) {
+    const s = gl.createShader(type)!;
+    gl.shaderSource(s, src);
+    gl.compileShader(s);
+    if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) throw new Error(`shader: ${gl.getShaderInfoLog(s)}`);
+    gl.attachShader(program, s);
+  }
+  gl.linkProgram(program);
+  if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new Error(`shader link: ${gl.getProgramInfoLog(program)}`);
+  return program;
+}
+
+export interface ViewStats {
+  warpedDraws: number;
+  exactDraws: number;
+  framesShown: number;
+}
+
+export class View3D {
+  private readonly gl: WebGL2RenderingContext;
+  private readonly warpProgram: WebGLProgram;
+  private readonly quadProgram: WebGLProgram;
+  private readonly texture: WebGLTexture;
+  private readonly meshVao: WebGLVertexArrayObject;
+  private readonly meshBuffer: WebGLBuffer;
+  private readonly indexBuffer: WebGLBuffer;
+  private readonly quadVao: WebGLVertexArrayObject;
+  private indexCount = 0;
+  private meshKey = '';
+  private frame: Frame | null = null;
+  private decoding: Promise<void> = Promise.resolve();
+  readonly stats: ViewStats = { warpedDraws: 0, exactDraws: 0, framesShown: 0 };
+
+  constructor(readonly canvas: HTMLCanvasElement) {
+    const gl = canvas.getContext('webgl2', { antialias: false, preserveDrawingBuffer: true, alpha: false });
+    if (!gl) throw new Error('WebGL2 is not available in this browser');
+    this.gl = gl;
+    this.warpProgram = compile(gl, warpVs, warpFs);
+    this.quadProgram = compile(gl, quadVs, quadFs);
+    this.texture = gl.createTexture()!;
+    gl.bindTexture(gl.TEXTURE_2D, this.texture);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+
+    this.meshVao = gl.createVertexArray()!;
+    this.meshBuffer = gl.createBuffer()!;
+    this.indexBuffer = gl.createBuffer()!;
+    gl.bindVertexArray(this.meshVao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, this.meshBuffer);
+    const stride = 6 * 4;
+    const attrib = (name: string, size: number, offset: number) => {
+      const loc = gl.getAttribLocation(this.warpProgram, name);
+      gl.enableVertexAttribArray(loc);
+      gl.vertexAttribPointer(loc, size, gl.FLOAT, false, stride, offset);
+    };
+    attrib('aPos', 3, 0);
+    attrib('aUv', 2, 12);
+    attrib('aHit', 1, 20);
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.indexBuffer);
+
+    this.quadVao = gl.createVertexArray()!;
+    gl.bindVertexArray(this.quadVao);
+    const qb = gl.createBuffer()!;
+    gl.bindBuffer(gl.ARRAY_BUFFER, qb);
+    gl.bufferData(gl.ARRAY_BUFFER, new Float32Array([-1, -1, 1, -1, -1, 1, 1, 1]), gl.STATIC_DRAW);
+    const ql = gl.getAttribLocation(this.quadProgram, 'aXy');
+    gl.enableVertexAttribArray(ql);
+    gl.vertexAttribPointer(ql, 2, gl.FLOAT, false, 0, 0);
+    gl.bindVertexArray(null);
+  }
+
+  get hasFrame(): boolean {
+    return this.frame !== null;
+  }
+  get currentFrame(): Frame | null {
+    return this.frame;
+  }
+
+  // Decodes the frame's JPEG and makes it the one shown; frames are applied in arrival order.
+  setFrame(frame: Frame): Promise<void> {
+    this.decoding = this.decoding.then(async () => {
+      const bitmap = await createImageBitmap(frame.jpeg);
+      const gl = this.gl;
+      gl.bindTexture(gl.TEXTURE_2D, this.texture);
+      gl.pixelStorei(gl.UNPACK_FLIP_Y_WEBGL, false);
+      gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGB, gl.RGB, gl.UNSIGNED_BYTE, bitmap);
+      bitmap.close();
+      this.buildMesh(frame);
+      this.frame = frame;
+      this.stats.framesShown++;
+    });
+    return this.decoding;
+  }
+
+  // One vertex per corner of the depth map's blocks, at the nearest finite depth of the blocks
+  // that share the corner (the server's depth is the nearest finite depth per block).
+  private buildMesh(frame: Frame): void {
+    const h = frame.header;
+    const dw = h.depthWidth, dh = h.depthHeight;
+    const cam = new CameraFrame(h.camera, h.width, h.height);
+    const eyeDist = Math.hypot(...cam.eye);
+    const farT = eyeDist + 2 * kPlanetRadiusKm; // behind the planet, for pixels that hit nothing
+    const nx = dw + 1, ny = dh + 1;
+    const data = new Float32Array(nx * ny * 6);
+    for (let j = 0; j < ny; j++) {
+      for (let i = 0; i < nx; i++) {
+        let t = Infinity;
+        for (let bj = Math.max(0, j - 1); bj <= Math.min(dh - 1, j); bj++)
+          for (let bi = Math.max(0, i - 1); bi <= Math.min(dw - 1, i); bi++) {
+            const v = frame.depth[bj * dw + bi];
+            if (Number.isFinite(v) && v < t) t = v;
+          }
+        const hit = Number.isFinite(t);
+        const px = (i * h.width) / dw, py = (j * h.height) / dh;
+        const d = cam.direction(px, py);
+        const tt = hit ? t : farT;
+        const o = (j * nx + i) * 6;
+        data[o] = cam.eye[0] + d[0] * tt;
+        data[o + 1] = cam.eye[1] + d[1] * tt;
+        data[o + 2] = cam.eye[2] + d[2] * tt;
+        data[o + 3] = i / dw;
+        data[o + 4] = j / dh;
+        data[o + 5] = hit ? 1 : 0;
+      }
+    }
+    const gl = this.gl;
+    gl.bindVertexArray(this.meshVao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, this.meshBuffer);
+    gl.bufferData(gl.ARRAY_BUFFER, data, gl.DYNAMIC_DRAW);
+    const key = `${dw}x${dh}`;
+    if (key !== this.meshKey) {
+      const idx = new Uint32Array(dw * dh * 6);
+      let k = 0;
+      for (let j = 0; j < dh; j++)
+        for (let i = 0; i < dw; i++) {
+          const a = j * nx + i, b = a + 1, c = a + nx, e = c + 1;
+          idx[k++] = a; idx[k++] = c; idx[k++] = b;
+          idx[k++] = b; idx[k++] = c; idx[k++] = e;
+        }
+      gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.indexBuffer);
+      gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, idx, gl.STATIC_DRAW);
+      this.indexCount = idx.length;
+      this.meshKey = key;
+    }
+    gl.bindVertexArray(null);
+  }
+
+  // Draws the last frame for `camera` at image size width x height (letterboxed into the canvas).
+  // Returns 'exact' when the frame's own camera and size match, 'warped' when re-projected.
+  draw(camera: CameraState, width: number, height: number, background: [number, number, number]): 'exact' | 'warped' | 'none' {
+    const gl = this.gl;
+    const cw = this.canvas.width, ch = this.canvas.height;
+    gl.viewport(0, 0, cw, ch);
+    gl.clearColor(background[0], background[1], background[2], 1);
+    gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+    const frame = this.frame;
+    if (!frame) return 'none';
+    // Fit the image's aspect into the canvas.
+    const aspect = width / height;
+    let vw = cw, vh = Math.round(cw / aspect);
+    if (vh > ch) { vh = ch; vw = Math.round(ch * aspect); }
+    gl.viewport(Math.floor((cw - vw) / 2), Math.floor((ch - vh) / 2), vw, vh);
+    gl.bindTexture(gl.TEXTURE_2D, this.texture);
+    const h = frame.header;
+    if (camerasEqual(camera, h.camera) && width * h.height === height * h.width) {
+      gl.useProgram(this.quadProgram);
+      gl.disable(gl.DEPTH_TEST);
+      gl.bindVertexArray(this.quadVao);
+      gl.drawArrays(gl.TRIANGLE_STRIP, 0, 4);
+      gl.bindVertexArray(null);
+      this.stats.exactDraws++;
+      return 'exact';
+    }
+    const cam = new CameraFrame(camera, width, height);
+    const p = this.warpProgram;
+    gl.useProgram(p);
+    gl.enable(gl.DEPTH_TEST);
+    gl.depthFunc(gl.LEQUAL);
+    gl.uniform3fv(gl.getUniformLocation(p, 'uEye'), cam.eye);
+    gl.uniform3fv(gl.getUniformLocation(p, 'uRight'), cam.right);
+    gl.uniform3fv(gl.getUniformLocation(p, 'uUp'), cam.up);
+    gl.uniform3fv(gl.getUniformLocation(p, 'uForward'), cam.forward);
+    gl.uniform1f(gl.getUniformLocation(p, 'uTanHalfFovY'), cam.tanHalfFovY);
+    gl.uniform1f(gl.getUniformLocation(p, 'uAspect'), cam.aspect);
+    const eyeDist = Math.hypot(...cam.eye);
+    gl.uniform1f(gl.getUniformLocation(p, 'uNear'), Math.max(1, (eyeDist - 3 * kPlanetRadiusKm) * 0.5));
+    gl.uniform1f(gl.getUniformLocation(p, 'uFar'), eyeDist + 8 * kPlanetRadiusKm + 1e5);
+    gl.bindVertexArray(this.meshVao);
+    gl.drawElements(gl.TRIANGLES, this.indexCount, gl.UNSIGNED_INT, 0);
+    gl.bindVertexArray(null);
+    this.stats.warpedDraws++;
+    return 'warped';
+  }
+}
