@@ -1,0 +1,277 @@
+// End-to-end browser tests of the UI against the real server:
+//   node tests/browser/cases.mjs CASE RAYPC FIXTURE_DIR
+// CASE: brush | warp | play | save_load | two_tabs. Each case starts its own server and browser.
+import { readFileSync, writeFileSync } from 'node:fs';
+import { spawnSync } from 'node:child_process';
+import { join } from 'node:path';
+import { check, meanAbsDiff, openUi, postJson, runCase, TestFailure, viewPixels, waitConverged } from './harness.mjs';
+
+const [caseName, raypc, fixture] = process.argv.slice(2);
+
+const frames = () => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
+const rState = (page) => page.evaluate(() => window.__raypc.state());
+
+// Screen box of the brush area of one parallel-coordinates axis.
+async function axisBox(page, name) {
+  const box = await page.evaluate((axis) => {
+    for (const g of document.querySelectorAll('#parcoords svg g.dimension')) {
+      if (g.__data__ !== axis) continue;
+      const r = g.querySelector('.brush .overlay')?.getBoundingClientRect();
+      if (r) return { x: r.x, y: r.y, width: r.width, height: r.height };
+    }
+    return null;
+  }, name);
+  if (!box) throw new TestFailure(`no brushable axis '${name}' in the parallel coordinates`);
+  return box;
+}
+
+async function brushAxis(page, name, fromFraction, toFraction) {
+  const b = await axisBox(page, name);
+  const x = b.x + b.width / 2;
+  await page.mouse.move(x, b.y + b.height * fromFraction);
+  await page.mouse.down();
+  for (let i = 1; i <= 8; i++) await page.mouse.move(x, b.y + b.height * (fromFraction + ((toFraction - fromFraction) * i) / 8));
+  await page.mouse.up();
+}
+
+async function drag(page, dx, dy, { steps = 6, button = 'left' } = {}) {
+  const r = await page.locator('#view3d').boundingBox();
+  const x = r.x + r.width / 2, y = r.y + r.height / 2;
+  await page.mouse.move(x, y);
+  await page.mouse.down({ button });
+  for (let i = 1; i <= steps; i++) await page.mouse.move(x + (dx * i) / steps, y + (dy * i) / steps);
+  await page.mouse.up({ button });
+}
+
+const info = async (url) => (await fetch(url + 'api/info')).json();
+
+const cases = {
+  // Brushing an axis with the mouse sends its range to the server (the state of the frame shown
+  // carries it), the exact selected volume is shown and agrees with the server and with the
+  // analytic shell volume, and the image changes; clearing the brush brings the image back.
+  async brush({ context, url }) {
+    const page = await openUi(context, url);
+    const before = await viewPixels(page);
+    const ds = await info(url);
+    const radius = ds.coordinates.find((c) => c.name === 'radius');
+    check(radius && radius.units === 'km', `/api/info has no radius coordinate in km: ${JSON.stringify(ds.coordinates)}`);
+    const title = await page.evaluate(() => [...document.querySelectorAll('#parcoords svg .label')].map((e) => e.textContent));
+    check(title.includes('radius [km]') && title.some((t) => /^temperature \[K\]$/.test(t)), `axis titles lack units: ${title.join(', ')}`);
+    const axesShown = title.length, expected = ds.sample.columns.length;
+    check(axesShown === expected, `${axesShown} axes shown, expected every sample column (${expected})`);
+
+    await brushAxis(page, 'radius', 0.25, 0.6);
+    const s = await rState(page);
+    check(s.brushes.length === 1 && s.brushes[0].name === 'radius', `state.brushes after brushing radius: ${JSON.stringify(s.brushes)}`);
+    const { min, max } = s.brushes[0];
+    check(min > radius.min && max < radius.max && max - min > 0.2 * (radius.max - radius.min),
+      `radius brush ${min}..${max} does not match the dragged 25 %..60 % of ${radius.min}..${radius.max}`);
+    const interactiveSent = await page.evaluate(() => window.__raypc.sentLog.filter((e) => e.interactive && e.brushes.length).length);
+    check(interactiveSent >= 1, 'no interactive state was sent while brushing');
+
+    await waitConverged(page);
+    const shown = await page.evaluate(() => {
+      const r = window.__raypc;
+      const h = r.headers[r.headers.length - 1];
+      return { header: h, sent: r.sentLog.find((e) => e.id === h.id), selection: r.selection, text: document.getElementById('selectionValue')?.textContent };
+    });
+    check(shown.sent && JSON.stringify(shown.sent.brushes) === JSON.stringify(s.brushes),
+      `the frame shown (id ${shown.header.id}) was not rendered from the brushed state: ${JSON.stringify(shown.sent)}`);
+    const sel = shown.selection;
+    check(sel && sel.fractionOfMantle > 0.05 && sel.fractionOfMantle < 0.95, `selected fraction ${JSON.stringify(sel)}`);
+    const server = await postJson(url + 'api/selection', s);
+    check(server.status === 200 && Math.abs(server.body.fractionOfMantle - sel.fractionOfMantle) < 1e-9,
+      `UI shows ${sel.fractionOfMantle}, POST /api/selection says ${JSON.stringify(server.body)}`);
+    const rc = radius.min, rs = radius.max;
+    const analytic = (max ** 3 - min ** 3) / (rs ** 3 - rc ** 3);
+    check(Math.abs(sel.fractionOfMantle - analytic) < 0.03, `selected fraction ${sel.fractionOfMantle} of the shell ${min}..${max} km, analytic ${analytic}`);
+    const pct = (sel.fractionOfMantle * 100).toFixed(2);
+    check(shown.text && shown.text.includes(`${pct} %`) && shown.text.includes('km³'), `selection text '${shown.text}' lacks ${pct} % and km³`);
+
+    const after = await viewPixels(page);
+    const d = meanAbsDiff(before, after);
+    check(d > 2, `the image hardly changed after brushing (mean difference ${d.toFixed(2)} grey levels)`);
+
+    await page.click('#clearBrushes');
+    await waitConverged(page);
+    check((await rState(page)).brushes.length === 0, 'brushes not cleared');
+    const cleared = await viewPixels(page);
+    const d2 = meanAbsDiff(before, cleared);
+    check(d2 < 1, `after clearing the brush the image differs from the unbrushed one by ${d2.toFixed(2)}`);
+  },
+
+  // While a new frame is on its way the last one is re-projected with the current camera, and the
+  // warped picture is closer to the new frame than the unwarped old one (the camera math agrees
+  // with the server's).
+  async warp({ context, url }) {
+    const page = await openUi(context, url);
+    await page.evaluate(() => window.__raypc.setState({ ...window.__raypc.state(), image: { width: 384, height: 384 } }));
+    await waitConverged(page);
+    for (const [label, act] of [
+      ['orbit', () => drag(page, 45, 20)],
+      ['zoom', async () => {
+        const r = await page.locator('#view3d').boundingBox();
+        await page.mouse.move(r.x + r.width / 2, r.y + r.height / 2);
+        await page.mouse.wheel(0, -250);
+      }],
+      ['pan', () => drag(page, 40, -25, { button: 'right' })],
+    ]) {
+      const old = await viewPixels(page);
+      const before = await page.evaluate(() => ({ warped: window.__raypc.warpedWhileWaiting, shown: window.__raypc.lastShownId }));
+      await page.evaluate(() => { window.__raypc.holdFrames = true; });
+      await act();
+      await page.evaluate(frames);
+      const warped = await viewPixels(page);
+      const during = await page.evaluate(() => ({ warped: window.__raypc.warpedWhileWaiting, shown: window.__raypc.lastShownId, sent: window.__raypc.lastSentId }));
+      check(during.warped > before.warped, `${label}: no warped draw while the new frame was pending (${JSON.stringify(during)})`);
+      check(during.shown === before.shown && during.sent > during.shown, `${label}: a new frame was shown while frames were held: ${JSON.stringify(during)}`);
+      await page.evaluate(() => window.__raypc.releaseFrames());
+      await page.waitForTimeout(label === 'zoom' ? 400 : 0); // the wheel's final state follows after 250 ms
+      await waitConverged(page);
+      const fresh = await viewPixels(page);
+      const dOld = meanAbsDiff(old, fresh), dWarp = meanAbsDiff(warped, fresh);
+      check(dOld > 1.5, `${label}: the camera change hardly changed the image (${dOld.toFixed(2)})`);
+      check(dWarp < 0.6 * dOld, `${label}: the warped view (difference ${dWarp.toFixed(2)}) is not much closer to the new frame than the old frame (${dOld.toFixed(2)})`);
+      console.log(`  ${label}: old frame differs by ${dOld.toFixed(2)}, warped by ${dWarp.toFixed(2)} grey levels`);
+    }
+  },
+
+  // Play runs over all steps in order, sends the next step only after a frame of the current one
+  // arrived, keeps the colour range, and pausing leaves a converged frame of the current step.
+  async play({ context, url }) {
+    const page = await openUi(context, url);
+    const ds = await info(url);
+    const nSteps = ds.steps.length;
+    check(nSteps >= 3, `fixture has ${nSteps} steps`);
+    const rangeBefore = await page.evaluate(() => [document.getElementById('rangeMin').value, document.getElementById('rangeMax').value]);
+    await page.selectOption('#fps', '10');
+    const t0 = await page.evaluate(() => performance.now());
+    await page.click('#play');
+    await page.waitForFunction((n) => {
+      const steps = window.__raypc.sentLog.filter((e) => e.interactive).map((e) => e.step);
+      return steps.length >= n + 2;
+    }, nSteps, { timeout: 40000 }).catch(() => { throw new TestFailure('playback did not advance through every step within 40 s'); });
+    await page.click('#play');
+    await waitConverged(page);
+    const log = await page.evaluate((since) => ({
+      sent: window.__raypc.sentLog.filter((e) => e.t >= since),
+      frames: window.__raypc.frameLog.filter((e) => e.t >= since),
+      step: window.__raypc.state().step,
+      last: window.__raypc.headers[window.__raypc.headers.length - 1],
+    }), t0);
+    const playSent = log.sent.filter((e) => e.interactive);
+    for (let i = 1; i < playSent.length; i++) {
+      const prev = playSent[i - 1], cur = playSent[i];
+      check(cur.step === (prev.step + 1) % nSteps, `playback went from step ${prev.step} to ${cur.step}`);
+      const answered = log.frames.some((f) => f.id === prev.id && f.t <= cur.t);
+      check(answered, `step ${cur.step} (state ${cur.id}) was sent before any frame of step ${prev.step} (state ${prev.id}) arrived`);
+    }
+    const stepsSeen = new Set(log.frames.map((f) => f.step));
+    check(stepsSeen.size === nSteps, `frames of steps ${[...stepsSeen].join(',')} arrived, expected all ${nSteps}`);
+    check(log.last.step === log.step && log.last.converged, `after pausing, the last frame is ${JSON.stringify(log.last)} for step ${log.step}`);
+    const rangeAfter = await page.evaluate(() => [document.getElementById('rangeMin').value, document.getElementById('rangeMax').value]);
+    check(JSON.stringify(rangeBefore) === JSON.stringify(rangeAfter), `the colour range changed during playback: ${rangeBefore} -> ${rangeAfter}`);
+    const label = await page.textContent('#stepLabel');
+    check(label.includes(`step ${log.step + 1} / ${nSteps}`) && label.includes('Myr'), `step label '${label}'`);
+  },
+
+  // Save downloads the whole state (accepted by `raypc render --state`); reloading the page and
+  // loading that file restores the same image; so does the shareable URL; the screenshot is a PNG
+  // of the state's size; a bad file is refused with a message and changes nothing.
+  async save_load({ context, url, tmp, raypc, dataset }) {
+    const page = await openUi(context, url);
+    await page.selectOption('#variable', 'temperature');
+    await page.selectOption('#colorMap', 'inferno');
+    await drag(page, -60, 30);
+    await brushAxis(page, 'depth', 0.1, 0.5);
+    await waitConverged(page);
+    const imageA = await viewPixels(page);
+    const stateA = await rState(page);
+    check(stateA.color.variable === 'temperature' && stateA.color.colorMap === 'inferno' && stateA.brushes.length === 1,
+      `UI changes did not reach the state: ${JSON.stringify(stateA.color)} ${JSON.stringify(stateA.brushes)}`);
+
+    const [download] = await Promise.all([page.waitForEvent('download'), page.click('#save')]);
+    const file = join(tmp, 'STATE.json');
+    await download.saveAs(file);
+    const saved = JSON.parse(readFileSync(file, 'utf8'));
+    check(JSON.stringify(saved) === JSON.stringify(stateA), 'the saved file is not the UI state');
+    const cli = spawnSync(raypc, ['render', dataset, '--state', file, '-o', join(tmp, 'cli.png'), '--passes', '1'], { encoding: 'utf8', timeout: 60000 });
+    check(cli.status === 0, `raypc render --state refused the saved state: ${cli.stderr}`);
+
+    const hash = new URL(page.url()).hash;
+    check(hash.startsWith('#state='), `the page URL holds no state: ${page.url()}`);
+
+    await page.goto(url);
+    await waitConverged(page);
+    const imageDefault = await viewPixels(page);
+    check(meanAbsDiff(imageA, imageDefault) > 2, 'the default view looks like the saved one; the test would prove nothing');
+    await page.setInputFiles('#load', file);
+    await waitConverged(page);
+    const imageB = await viewPixels(page);
+    const stateB = await rState(page);
+    check(JSON.stringify(stateB) === JSON.stringify(stateA), `loaded state differs: ${JSON.stringify(stateB)}`);
+    const dB = meanAbsDiff(imageA, imageB);
+    check(dB < 1, `the loaded state renders differently (mean difference ${dB.toFixed(2)})`);
+    const pcBrush = await page.evaluate(() => window.__raypc.parcoords.brushes());
+    check(pcBrush.length === 1 && pcBrush[0].name === 'depth' && Math.abs(pcBrush[0].min - stateA.brushes[0].min) < 1e-3 * Math.abs(stateA.brushes[0].max - stateA.brushes[0].min) + 1e-6,
+      `parallel coordinates show brushes ${JSON.stringify(pcBrush)} after loading ${JSON.stringify(stateA.brushes)}`);
+
+    const page2 = await openUi(context, url, { hash });
+    const stateC = await rState(page2);
+    check(JSON.stringify(stateC) === JSON.stringify(stateA), 'the shared URL did not restore the state');
+    const dC = meanAbsDiff(imageA, await viewPixels(page2));
+    check(dC < 1, `the shared URL renders differently (mean difference ${dC.toFixed(2)})`);
+
+    const [shot] = await Promise.all([page.waitForEvent('download', { timeout: 60000 }), page.click('#screenshot')]);
+    const png = join(tmp, 'shot.png');
+    await shot.saveAs(png);
+    const bytes = readFileSync(png);
+    check(bytes.subarray(1, 4).toString() === 'PNG', 'the screenshot is not a PNG');
+    const w = bytes.readUInt32BE(16), h = bytes.readUInt32BE(20);
+    check(w === stateA.image.width && h === stateA.image.height, `screenshot is ${w}x${h}, the state's image ${stateA.image.width}x${stateA.image.height}`);
+
+    const bad = join(tmp, 'bad.json');
+    writeFileSync(bad, JSON.stringify({ ...stateA, version: 99 }));
+    const errorsBefore = await page.evaluate(() => window.__raypc.errors.length);
+    await page.setInputFiles('#load', bad);
+    await page.waitForFunction((n) => window.__raypc.errors.length > n, errorsBefore, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('loading a state of version 99 showed no error'); });
+    const msg = await page.textContent('#error');
+    check(/version/.test(msg) && (await page.isVisible('#error')), `error shown for a bad state file: '${msg}'`);
+    check(JSON.stringify(await rState(page)) === JSON.stringify(stateA), 'a refused state file changed the state');
+  },
+
+  // Two tabs hold different states and render independently: each tab's frames carry its own
+  // camera, and work in one tab sends no frames to the other.
+  async two_tabs({ context, url }) {
+    const ds = await info(url);
+    const other = { ...ds.defaultState, camera: { ...ds.defaultState.camera, azimuthDeg: 200, elevationDeg: -30 },
+      color: { ...ds.defaultState.color, variable: ds.variables[1].name, colorMap: 'cool-to-warm' } };
+    const hash = '#state=' + Buffer.from(JSON.stringify(other)).toString('base64url');
+    const a = await openUi(context, url);
+    const b = await openUi(context, url, { hash });
+    const [sa, sb] = [await rState(a), await rState(b)];
+    check(sb.camera.azimuthDeg === 200 && sb.color.variable === ds.variables[1].name, `tab 2 state ${JSON.stringify(sb.camera)}`);
+    const ha = await a.evaluate(() => window.__raypc.headers.at(-1));
+    const hb = await b.evaluate(() => window.__raypc.headers.at(-1));
+    check(ha.camera.azimuthDeg === sa.camera.azimuthDeg && hb.camera.azimuthDeg === 200, `frames carry cameras ${ha.camera.azimuthDeg} and ${hb.camera.azimuthDeg}`);
+    const pa = await viewPixels(a), pb = await viewPixels(b);
+    check(meanAbsDiff(pa, pb) > 2, 'the two tabs show the same image');
+    const framesB = await b.evaluate(() => window.__raypc.framesReceived);
+    await a.bringToFront();
+    await drag(a, 50, 0);
+    await waitConverged(a);
+    check((await a.evaluate(() => window.__raypc.headers.at(-1).camera.azimuthDeg)) !== sa.camera.azimuthDeg, 'tab 1 did not rotate');
+    await b.waitForTimeout(300);
+    const framesB2 = await b.evaluate(() => window.__raypc.framesReceived);
+    check(framesB2 === framesB, `tab 2 received ${framesB2 - framesB} frames while only tab 1 changed`);
+    check(meanAbsDiff(pb, await viewPixels(b)) < 0.5, 'tab 2 image changed while only tab 1 changed');
+  },
+};
+
+const body = cases[caseName];
+if (!body) {
+  console.error(`unknown case '${caseName}'; cases: ${Object.keys(cases).join(', ')}`);
+  process.exit(2);
+}
+runCase(caseName, raypc, fixture, body);

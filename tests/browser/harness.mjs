@@ -1,0 +1,160 @@
+// Shared set-up of the browser tests: preprocess the fixture, start `raypc serve` on a free port,
+// launch Debian's chromium through playwright-core with a fresh profile, and tear everything down.
+// Only 127.0.0.1 is contacted. Every failure names what was missing or what went wrong.
+import { spawn, spawnSync } from 'node:child_process';
+import { existsSync, mkdtempSync, rmSync } from 'node:fs';
+import { createRequire } from 'node:module';
+import { tmpdir } from 'node:os';
+import { dirname, join, resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+export const repoRoot = resolve(dirname(fileURLToPath(import.meta.url)), '../..');
+export const chromiumPath = process.env.RAYPC_CHROMIUM ?? '/usr/bin/chromium';
+
+export class TestFailure extends Error {}
+
+export function check(condition, message) {
+  if (!condition) throw new TestFailure(message);
+}
+
+function loadPlaywright() {
+  const require = createRequire(join(repoRoot, 'web', 'package.json'));
+  try {
+    return require('playwright-core');
+  } catch {
+    throw new TestFailure(`playwright-core is not installed in ${join(repoRoot, 'web', 'node_modules')}: run scripts/build-web.sh`);
+  }
+}
+
+function waitForUrl(proc, timeoutMs) {
+  return new Promise((resolvePromise, reject) => {
+    let out = '', err = '';
+    const timer = setTimeout(() => reject(new TestFailure(`raypc serve printed no URL within ${timeoutMs} ms; stdout: ${out} stderr: ${err}`)), timeoutMs);
+    proc.stdout.on('data', (d) => {
+      out += d;
+      const m = /(http:\/\/127\.0\.0\.1:(\d+)\/)/.exec(out);
+      if (m) {
+        clearTimeout(timer);
+        resolvePromise(m[1]);
+      }
+    });
+    proc.stderr.on('data', (d) => { err += d; if (err.length > 20000) err = err.slice(-10000); });
+    proc.on('exit', (code) => {
+      clearTimeout(timer);
+      reject(new TestFailure(`raypc serve exited with ${code} before printing its URL; stderr: ${err}`));
+    });
+  });
+}
+
+// Runs `body({ browser, context, url, dataset, tmp })` and always cleans up. Exits the process
+// with 0 on success, 1 on failure, and never runs past `limitMs`.
+export async function runCase(name, raypc, fixture, body, { limitMs = 100000 } = {}) {
+  const started = Date.now();
+  let server = null, context = null, tmp = null;
+  const cleanup = async () => {
+    if (context) await context.close().catch(() => {});
+    context = null;
+    if (server && server.exitCode === null) {
+      server.kill('SIGTERM');
+      await new Promise((r) => { const t = setTimeout(() => { server.kill('SIGKILL'); r(); }, 3000); server.once('exit', () => { clearTimeout(t); r(); }); });
+    }
+    if (tmp) rmSync(tmp, { recursive: true, force: true });
+    tmp = null;
+  };
+  const watchdog = setTimeout(async () => {
+    console.error(`FAIL ${name}: took longer than ${limitMs} ms`);
+    await cleanup();
+    process.exit(1);
+  }, limitMs);
+  try {
+    check(existsSync(chromiumPath), `chromium is not installed at ${chromiumPath} (Debian package 'chromium'; scripts/install-deps.sh installs it)`);
+    check(raypc && existsSync(raypc), `raypc binary not found: ${raypc}`);
+    check(fixture && existsSync(fixture), `fixture not found: ${fixture}`);
+    const dist = join(repoRoot, 'web', 'dist');
+    check(existsSync(join(dist, 'index.html')), `the UI is not built (${dist}/index.html missing): run scripts/build-web.sh`);
+    const { chromium } = loadPlaywright();
+
+    tmp = mkdtempSync(join(tmpdir(), `raypc-browser-${name}-`));
+    const dataset = join(tmp, 'ds');
+    const pre = spawnSync(raypc, ['preprocess', fixture, '-o', dataset, '--quiet', '--sample-rows', '5000'], { encoding: 'utf8', timeout: 60000 });
+    check(pre.status === 0, `raypc preprocess failed (${pre.status}): ${pre.stderr}`);
+
+    server = spawn(raypc, ['serve', dataset, '--port', '0', '--assets', dist], { stdio: ['ignore', 'pipe', 'pipe'] });
+    const url = await waitForUrl(server, 20000);
+
+    context = await chromium.launchPersistentContext(join(tmp, 'profile'), {
+      executablePath: chromiumPath,
+      headless: true,
+      acceptDownloads: true,
+      viewport: { width: 1280, height: 860 },
+      args: ['--no-sandbox', '--disable-gpu', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-quic',
+        '--no-first-run', '--disable-background-networking', '--disable-component-update', '--disable-sync',
+        '--disable-features=Translate,MediaRouter,OptimizationHints', '--disable-dev-shm-usage'],
+    });
+    await body({ context, url, dataset, tmp, raypc });
+    console.log(`PASS ${name} (${((Date.now() - started) / 1000).toFixed(1)} s)`);
+    clearTimeout(watchdog);
+    await cleanup();
+    process.exit(0);
+  } catch (e) {
+    console.error(`FAIL ${name}: ${e instanceof TestFailure ? e.message : e.stack ?? e}`);
+    clearTimeout(watchdog);
+    await cleanup();
+    process.exit(1);
+  }
+}
+
+// Opens the UI (optionally with a state in the URL) and waits until it shows a converged frame.
+export async function openUi(context, url, { hash = '', timeoutMs = 30000 } = {}) {
+  const page = await context.newPage();
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(String(e)));
+  page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
+  page.raypcErrors = errors;
+  await page.goto(url + hash);
+  await page.waitForFunction(() => window.__raypc && window.__raypc.headers.length > 0, null, { timeout: timeoutMs })
+    .catch(() => { throw new TestFailure(`no frame arrived within ${timeoutMs} ms; page errors: ${errors.join(' | ')}`); });
+  await waitConverged(page, timeoutMs);
+  return page;
+}
+
+// Waits until the newest sent state has been answered by a converged frame that is on screen.
+export async function waitConverged(page, timeoutMs = 30000) {
+  await page.waitForFunction(() => {
+    const r = window.__raypc;
+    const h = r.headers[r.headers.length - 1];
+    return h && h.converged && h.id === r.lastSentId && r.lastShownId === h.id;
+  }, null, { timeout: timeoutMs, polling: 50 }).catch(async () => {
+    const info = await page.evaluate(() => { const r = window.__raypc; return { lastSent: r.lastSentId, shown: r.lastShownId, last: r.headers[r.headers.length - 1], errors: r.errors }; });
+    throw new TestFailure(`no converged frame for the newest state within ${timeoutMs} ms: ${JSON.stringify(info)}`);
+  });
+  // One more display frame so the canvas holds it.
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+}
+
+// The 3D view's pixels, downsampled to 64x64 grey levels (0..255), for image comparisons.
+export async function viewPixels(page) {
+  return page.evaluate(() => {
+    const src = document.getElementById('view3d');
+    const c = document.createElement('canvas');
+    c.width = 64; c.height = 64;
+    const ctx = c.getContext('2d', { willReadFrequently: true });
+    ctx.drawImage(src, 0, 0, 64, 64);
+    const d = ctx.getImageData(0, 0, 64, 64).data;
+    const out = [];
+    for (let i = 0; i < d.length; i += 4) out.push((d[i] + d[i + 1] + d[i + 2]) / 3);
+    return out;
+  });
+}
+
+export function meanAbsDiff(a, b) {
+  let s = 0;
+  for (let i = 0; i < a.length; i++) s += Math.abs(a[i] - b[i]);
+  return s / a.length;
+}
+
+export async function postJson(url, body) {
+  const r = await fetch(url, { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body) });
+  const text = await r.text();
+  return { status: r.status, body: r.headers.get('content-type')?.includes('json') ? JSON.parse(text) : text };
+}
