@@ -1,0 +1,221 @@
+#include "server/access.h"
+
+#include <algorithm>
+#include <array>
+#include <random>
+#include <system_error>
+
+namespace raypc::server {
+
+namespace fs = std::filesystem;
+
+bool isLoopbackHost(std::string_view host)
+{
+    if (host == "localhost" || host == "::1" || host == "[::1]")
+        return true;
+    // 127.x.y.z: four dotted decimal numbers starting with 127.
+    if (!host.starts_with("127."))
+        return false;
+    int dots = 0, digits = 0;
+    for (char c : host.substr(4)) {
+        if (c == '.') {
+            if (digits == 0)
+                return false;
+            ++dots;
+            digits = 0;
+        } else if (c >= '0' && c <= '9' && digits < 3) {
+            ++digits;
+        } else {
+            return false;
+        }
+    }
+    return dots == 2 && digits > 0;
+}
+
+std::string makeAccessToken()
+{
+    std::random_device device;
+    static constexpr char kHex[] = "0123456789abcdef";
+    std::string token;
+    for (int i = 0; i < 32; ++i)
+        token.push_back(kHex[device() & 15u]);
+    return token;
+}
+
+namespace {
+
+bool constantTimeEqual(std::string_view a, std::string_view b)
+{
+    if (a.size() != b.size())
+        return false;
+    unsigned diff = 0;
+    for (size_t i = 0; i < a.size(); ++i)
+        diff |= unsigned(uint8_t(a[i]) ^ uint8_t(b[i]));
+    return diff == 0;
+}
+
+std::string_view trimSpaces(std::string_view s)
+{
+    while (!s.empty() && (s.front() == ' ' || s.front() == '\t'))
+        s.remove_prefix(1);
+    while (!s.empty() && (s.back() == ' ' || s.back() == '\t'))
+        s.remove_suffix(1);
+    return s;
+}
+
+int hexValue(char c)
+{
+    if (c >= '0' && c <= '9')
+        return c - '0';
+    if (c >= 'a' && c <= 'f')
+        return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F')
+        return c - 'A' + 10;
+    return -1;
+}
+
+}  // namespace
+
+std::string_view targetPath(std::string_view target)
+{
+    return target.substr(0, target.find('?'));
+}
+
+std::string_view targetQuery(std::string_view target)
+{
+    const size_t q = target.find('?');
+    return q == std::string_view::npos ? std::string_view() : target.substr(q + 1);
+}
+
+std::optional<std::string> percentDecode(std::string_view text, bool plusIsSpace)
+{
+    std::string out;
+    out.reserve(text.size());
+    for (size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (c == '%') {
+            if (i + 2 >= text.size())
+                return std::nullopt;
+            const int hi = hexValue(text[i + 1]), lo = hexValue(text[i + 2]);
+            if (hi < 0 || lo < 0)
+                return std::nullopt;
+            out.push_back(char(hi * 16 + lo));
+            i += 2;
+        } else if (c == '+' && plusIsSpace) {
+            out.push_back(' ');
+        } else {
+            out.push_back(c);
+        }
+    }
+    return out;
+}
+
+std::optional<std::string> queryParameter(std::string_view query, std::string_view name)
+{
+    while (!query.empty()) {
+        const size_t amp = query.find('&');
+        const std::string_view pair = query.substr(0, amp);
+        const size_t eq = pair.find('=');
+        const auto key = percentDecode(pair.substr(0, eq), true);
+        if (key && *key == name)
+            return eq == std::string_view::npos ? std::optional<std::string>("") : percentDecode(pair.substr(eq + 1), true);
+        if (amp == std::string_view::npos)
+            break;
+        query.remove_prefix(amp + 1);
+    }
+    return std::nullopt;
+}
+
+bool tokenAccepted(const Credentials& request, const std::string& expected)
+{
+    if (expected.empty())
+        return true;
+    if (const auto t = queryParameter(targetQuery(request.target), "token"); t && constantTimeEqual(*t, expected))
+        return true;
+    if (std::string_view auth = trimSpaces(request.authorization); auth.starts_with("Bearer ")) {
+        if (constantTimeEqual(trimSpaces(auth.substr(7)), expected))
+            return true;
+    }
+    std::string_view cookies = request.cookie;
+    while (!cookies.empty()) {
+        const size_t semi = cookies.find(';');
+        const std::string_view item = trimSpaces(cookies.substr(0, semi));
+        if (item.starts_with("raypc_token=") && constantTimeEqual(item.substr(12), expected))
+            return true;
+        if (semi == std::string_view::npos)
+            break;
+        cookies.remove_prefix(semi + 1);
+    }
+    return false;
+}
+
+std::optional<fs::path> resolveStaticPath(const fs::path& root, std::string_view urlPath)
+{
+    if (!urlPath.starts_with('/'))
+        return std::nullopt;
+    const auto decoded = percentDecode(urlPath);
+    if (!decoded)
+        return std::nullopt;
+    const std::string& p = *decoded;
+    // Refuse anything that could name a file outside the root or confuse a later layer.
+    if (p.find('\0') != std::string::npos || p.find('\\') != std::string::npos || p.starts_with("//") ||
+        p.find(':') != std::string::npos)
+        return std::nullopt;
+    fs::path relative;
+    size_t start = 1;
+    while (start <= p.size()) {
+        size_t end = p.find('/', start);
+        if (end == std::string::npos)
+            end = p.size();
+        const std::string_view segment = std::string_view(p).substr(start, end - start);
+        if (segment == "." || segment == "..")
+            return std::nullopt;
+        if (!segment.empty())
+            relative /= fs::path(std::string(segment));
+        start = end + 1;
+    }
+    std::error_code ec;
+    const fs::path base = fs::weakly_canonical(root, ec);
+    if (ec)
+        return std::nullopt;
+    fs::path file = base / relative;
+    if (fs::is_directory(file, ec))
+        file /= "index.html";
+    const fs::path real = fs::weakly_canonical(file, ec);
+    if (ec)
+        return std::nullopt;
+    // The resolved file must still lie below the root (a symlink may point elsewhere).
+    const auto [rootEnd, fileIt] = std::mismatch(base.begin(), base.end(), real.begin(), real.end());
+    if (rootEnd != base.end())
+        return std::nullopt;
+    if (!fs::is_regular_file(real, ec))
+        return std::nullopt;
+    return real;
+}
+
+std::string_view mimeType(const fs::path& file)
+{
+    static const std::array<std::pair<std::string_view, std::string_view>, 14> kTypes{{
+        {".html", "text/html; charset=utf-8"},
+        {".htm", "text/html; charset=utf-8"},
+        {".js", "text/javascript; charset=utf-8"},
+        {".mjs", "text/javascript; charset=utf-8"},
+        {".css", "text/css; charset=utf-8"},
+        {".json", "application/json"},
+        {".map", "application/json"},
+        {".png", "image/png"},
+        {".jpg", "image/jpeg"},
+        {".svg", "image/svg+xml"},
+        {".ico", "image/x-icon"},
+        {".wasm", "application/wasm"},
+        {".woff2", "font/woff2"},
+        {".txt", "text/plain; charset=utf-8"},
+    }};
+    const std::string ext = file.extension().string();
+    for (const auto& [e, type] : kTypes)
+        if (ext == e)
+            return type;
+    return "application/octet-stream";
+}
+
+}  // namespace raypc::server

@@ -1,0 +1,46 @@
+// Access rules of docs/protocol.md: the token required off loopback, and which static files may be
+// served. No network types; everything here is tested on its own.
+//
+// Thread safety: all functions are reentrant.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace raypc::server {
+
+// True for 127.0.0.0/8, ::1 and "localhost": no token is needed there.
+bool isLoopbackHost(std::string_view host);
+
+// 32 hex digits from std::random_device.
+std::string makeAccessToken();
+
+// What a request offers as credentials (any may be empty).
+struct Credentials {
+    std::string target;         // request target, e.g. "/api/info?token=abc"
+    std::string authorization;  // Authorization header
+    std::string cookie;         // Cookie header
+};
+// True when `expected` is empty (no token needed) or any of the query parameter `token`, the
+// header "Bearer <token>" or the cookie `raypc_token` equals it (compared in constant time).
+bool tokenAccepted(const Credentials& request, const std::string& expected);
+
+// Splits "/a/b?x=1" into path and query.
+std::string_view targetPath(std::string_view target);
+std::string_view targetQuery(std::string_view target);
+// The percent-decoded value of query parameter `name`, if present.
+std::optional<std::string> queryParameter(std::string_view query, std::string_view name);
+// Decodes %XX and (when `plusIsSpace`) '+'. Returns nullopt on a malformed escape.
+std::optional<std::string> percentDecode(std::string_view text, bool plusIsSpace = false);
+
+// The file under `root` that URL path `urlPath` (without query) names, or nullopt when it is refused:
+// malformed escapes, NUL, backslashes, "." or ".." segments (also encoded), a path that resolves
+// (through symlinks) outside `root`, or no regular file there. "/" and directories map to index.html.
+std::optional<std::filesystem::path> resolveStaticPath(const std::filesystem::path& root, std::string_view urlPath);
+
+// Content-Type for a file name by extension (application/octet-stream when unknown).
+std::string_view mimeType(const std::filesystem::path& file);
+
+}  // namespace raypc::server

@@ -1,0 +1,184 @@
+#include "server/protocol.h"
+
+#include "core/error.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace raypc::server {
+
+using nlohmann::json;
+
+namespace {
+
+int64_t integerField(const json& message, const char* type, const char* key)
+{
+    const auto it = message.find(key);
+    if (it == message.end())
+        fail("{}: missing field '{}'", type, key);
+    if (it->is_number_integer() || it->is_number_unsigned())
+        return it->get<int64_t>();
+    if (it->is_number_float()) {
+        const double v = it->get<double>();
+        if (std::isfinite(v) && v == std::floor(v) && std::abs(v) < 9e15)
+            return int64_t(v);
+    }
+    fail("{}: field '{}' must be an integer, found {}", type, key, it->dump().substr(0, 40));
+}
+
+void rejectUnknownKeys(const json& message, const char* type, std::initializer_list<const char*> known)
+{
+    for (const auto& [key, value] : message.items())
+        if (std::none_of(known.begin(), known.end(), [&](const char* k) { return key == k; }))
+            fail("{}: unknown field '{}'", type, key);
+}
+
+void putU32(std::string& out, uint32_t v)
+{
+    for (int i = 0; i < 4; ++i)
+        out.push_back(char((v >> (8 * i)) & 0xff));
+}
+
+}  // namespace
+
+ClientMessage parseClientMessage(std::string_view text)
+{
+    if (text.size() > kMaxClientMessageBytes)
+        fail("message of {} bytes is over the limit of {} bytes", text.size(), kMaxClientMessageBytes);
+    json message;
+    try {
+        message = json::parse(text);
+    } catch (const json::parse_error& e) {
+        fail("malformed JSON: {}", e.what());
+    }
+    if (!message.is_object())
+        fail("expected a JSON object with a 'type', found {}", message.type_name());
+    const auto typeIt = message.find("type");
+    if (typeIt == message.end())
+        fail("missing field 'type'");
+    if (!typeIt->is_string())
+        fail("field 'type' must be a string");
+    const std::string type = typeIt->get<std::string>();
+    if (type == "hello") {
+        rejectUnknownKeys(message, "hello", {"type", "protocol"});
+        return HelloMessage{int(std::clamp<int64_t>(integerField(message, "hello", "protocol"), -1, 1 << 30))};
+    }
+    if (type == "state") {
+        rejectUnknownKeys(message, "state", {"type", "id", "state", "interactive"});
+        StateMessage m;
+        m.id = integerField(message, "state", "id");
+        const auto st = message.find("state");
+        if (st == message.end())
+            fail("state: missing field 'state'");
+        if (!st->is_object())
+            fail("state: field 'state' must be an object (docs/state.md)");
+        m.state = *st;
+        if (const auto in = message.find("interactive"); in != message.end()) {
+            if (!in->is_boolean())
+                fail("state: field 'interactive' must be true or false");
+            m.interactive = in->get<bool>();
+        }
+        return m;
+    }
+    if (type == "cancel") {
+        rejectUnknownKeys(message, "cancel", {"type"});
+        return CancelMessage{};
+    }
+    if (type == "ping") {
+        rejectUnknownKeys(message, "ping", {"type", "id"});
+        return PingMessage{integerField(message, "ping", "id")};
+    }
+    fail("unknown message type '{}'; expected hello, state, cancel or ping", type.substr(0, 64));
+}
+
+std::string helloReply(const std::string& sessionId)
+{
+    return json{{"type", "hello"}, {"protocol", kProtocolVersion}, {"session", sessionId}}.dump();
+}
+
+std::string pongReply(int64_t id)
+{
+    return json{{"type", "pong"}, {"id", id}}.dump();
+}
+
+std::string errorReply(const std::string& message, std::optional<int64_t> id)
+{
+    json j{{"type", "error"}, {"message", message}};
+    if (id)
+        j["id"] = *id;
+    // Messages may quote client input: never let invalid UTF-8 make dump() throw.
+    return j.dump(-1, ' ', false, json::error_handler_t::replace);
+}
+
+std::string encodeFrame(json header, std::span<const uint8_t> jpeg, std::span<const float> depth, int depthWidth,
+                        int depthHeight)
+{
+    RAYPC_CHECK_EQ(depth.size(), size_t(depthWidth) * size_t(depthHeight));
+    header["jpegBytes"] = jpeg.size();
+    header["depthWidth"] = depthWidth;
+    header["depthHeight"] = depthHeight;
+    header["depthBytes"] = depth.size() * sizeof(float);
+    const std::string text = header.dump(-1, ' ', false, json::error_handler_t::replace);
+    std::string out;
+    out.reserve(4 + text.size() + jpeg.size() + depth.size() * 4);
+    putU32(out, uint32_t(text.size()));
+    out += text;
+    out.append(reinterpret_cast<const char*>(jpeg.data()), jpeg.size());
+    static_assert(std::numeric_limits<float>::is_iec559);
+    for (float d : depth) {
+        uint32_t bits;
+        std::memcpy(&bits, &d, 4);
+        putU32(out, bits);
+    }
+    return out;
+}
+
+DecodedFrame decodeFrame(std::string_view bytes)
+{
+    if (bytes.size() < 4)
+        fail("frame: {} bytes, too short for the header length", bytes.size());
+    uint32_t headerBytes = 0;
+    for (int i = 0; i < 4; ++i)
+        headerBytes |= uint32_t(uint8_t(bytes[size_t(i)])) << (8 * i);
+    if (bytes.size() - 4 < headerBytes)
+        fail("frame: header of {} bytes does not fit in {} bytes", headerBytes, bytes.size());
+    DecodedFrame f;
+    try {
+        f.header = json::parse(bytes.substr(4, headerBytes));
+    } catch (const json::exception& e) {
+        fail("frame: header is not JSON: {}", e.what());
+    }
+    const auto jpegBytes = f.header.value("jpegBytes", size_t(0));
+    const auto depthBytes = f.header.value("depthBytes", size_t(0));
+    const size_t rest = bytes.size() - 4 - headerBytes;
+    if (jpegBytes + depthBytes != rest)
+        fail("frame: jpegBytes {} + depthBytes {} != {} bytes after the header", jpegBytes, depthBytes, rest);
+    if (depthBytes % 4 != 0)
+        fail("frame: depthBytes {} is not a multiple of 4", depthBytes);
+    f.jpeg = bytes.substr(4 + headerBytes, jpegBytes);
+    f.depth.resize(depthBytes / 4);
+    std::memcpy(f.depth.data(), bytes.data() + 4 + headerBytes + jpegBytes, depthBytes);
+    return f;
+}
+
+std::vector<float> downsampleDepth(std::span<const float> depthKm, int width, int height, int factor, int& outWidth,
+                                   int& outHeight)
+{
+    RAYPC_CHECK(factor >= 1 && width >= 0 && height >= 0);
+    RAYPC_CHECK_EQ(depthKm.size(), size_t(width) * size_t(height));
+    outWidth = (width + factor - 1) / factor;
+    outHeight = (height + factor - 1) / factor;
+    std::vector<float> out(size_t(outWidth) * size_t(outHeight), std::numeric_limits<float>::infinity());
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const float d = depthKm[size_t(y) * size_t(width) + size_t(x)];
+            float& o = out[size_t(y / factor) * size_t(outWidth) + size_t(x / factor)];
+            if (std::isfinite(d) && d < o)
+                o = d;
+        }
+    return out;
+}
+
+}  // namespace raypc::server

@@ -1,0 +1,224 @@
+#include "server/render_session.h"
+
+#include "core/error.h"
+#include "data/selection.h"
+#include "server/image_codec.h"
+
+#include <spdlog/spdlog.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+
+namespace raypc::server {
+
+using namespace raypc::render;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+constexpr int kDepthDownsample = 4;
+constexpr int kJpegQualityInteractive = 75, kJpegQualityStill = 90;
+
+double millisecondsSince(Clock::time_point start)
+{
+    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+nlohmann::json cameraJson(const RenderState& state)
+{
+    return toJson(state)["camera"];
+}
+
+}  // namespace
+
+RenderSession::RenderSession(RenderContext& context, SessionSink sink, std::string name)
+    : m_context(context), m_sink(std::move(sink)), m_name(std::move(name)), m_thread([this] { loop(); })
+{
+}
+
+RenderSession::~RenderSession()
+{
+    stop();
+}
+
+void RenderSession::submit(const StateMessage& message)
+{
+    Request request;
+    request.id = message.id;
+    request.resolved = resolveState(message.state, *m_context.dataset);  // throws: the old state stays
+    request.interactive = message.interactive;
+    {
+        std::lock_guard lock(m_mutex);
+        m_pending = std::move(request);  // drops a state that has not started
+        m_cancel = true;                 // and stops the pass in flight
+    }
+    m_cv.notify_all();
+}
+
+void RenderSession::cancel()
+{
+    std::lock_guard lock(m_mutex);
+    m_pending.reset();
+    m_cancel = true;
+}
+
+void RenderSession::stop()
+{
+    {
+        std::lock_guard lock(m_mutex);
+        m_stopping = true;
+        m_pending.reset();
+        m_cancel = true;
+    }
+    m_cv.notify_all();
+    if (m_thread.joinable())
+        m_thread.join();
+}
+
+void RenderSession::loop()
+{
+    for (;;) {
+        Request request;
+        {
+            std::unique_lock lock(m_mutex);
+            m_cv.wait(lock, [&] { return m_stopping || m_pending; });
+            if (m_stopping)
+                return;
+            request = std::move(*m_pending);
+            m_pending.reset();
+            m_cancel = false;
+        }
+        // Catch at the edge of the worker: log and report to the client, keep the session.
+        try {
+            render(request);
+        } catch (const std::exception& e) {
+            spdlog::warn("{}: state {}: {}", m_name, request.id, e.what());
+            m_sink.sendText(errorReply(e.what(), request.id));
+        }
+    }
+}
+
+VolumeRenderer& RenderSession::rendererFor(int step, int level)
+{
+    // Reload class: a new step drops every level's renderer of the old one.
+    if (step != m_rendererStep) {
+        m_renderers.clear();
+        m_rendererStep = step;
+    }
+    auto& slot = m_renderers[level];
+    if (!slot)
+        slot = std::make_unique<VolumeRenderer>(m_context.cache->get(step, level));
+    return *slot;
+}
+
+int RenderSession::chooseInteractiveLevel(int step, const RenderParams& params, double budgetSeconds)
+{
+    double rate = m_context.samplesPerSecond.load();
+    if (rate <= 0)
+        rate = 100e6 * tbb::this_task_arena::max_concurrency();  // until a pass has been measured
+    const int levels = int(m_context.dataset->levels().size());
+    for (int level = 0; level < levels; ++level) {
+        VolumeRenderer& r = rendererFor(step, level);
+        r.setParams(params);
+        if (r.estimateSamplesPerPass() / rate <= budgetSeconds)
+            return level;
+    }
+    return levels - 1;
+}
+
+void RenderSession::render(const Request& request)
+{
+    const RenderState& state = request.resolved.state;
+    const RenderParams& params = request.resolved.params;
+    const Dataset& dataset = *m_context.dataset;
+    const int step = state.step;
+
+    int level;
+    if (state.level)
+        level = *state.level;
+    else if (request.interactive)
+        level = chooseInteractiveLevel(step, params, state.timeBudgetMs / 1000.0);  // reload class when it changes
+    else
+        level = 0;
+
+    // Playback (step = previous step + 1): load the next step in the background at this level.
+    if (m_lastStep >= 0 && step == m_lastStep + 1 && step + 1 < int(dataset.steps().size()))
+        m_context.cache->prefetch(step + 1, level);
+    m_lastStep = step;
+
+    VolumeRenderer& renderer = rendererFor(step, level);
+    renderer.setParams(params);  // restart class: camera, transfer function, brushes, size
+    const double estimatedSamples = renderer.estimateSamplesPerPass();
+
+    // Exact selection statistics of the brushes, recomputed only when they or the volume change.
+    const std::string selectionKey =
+        fmt::format("{}/{}/{}", step, level, nlohmann::json(toJson(state)["brushes"]).dump());
+    if (selectionKey != m_selectionKey) {
+        const auto filters = selectionFilters(params);
+        const SelectionStats s = selectedVolume(*renderer.volume(), filters);
+        m_selection = {{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}};
+        m_selectionKey = selectionKey;
+    }
+
+    const int passes = request.interactive ? 1 : std::max(1, state.passes);
+    FrameBuffer frame(params.width, params.height);
+    double renderMsTotal = 0, encodeMsTotal = 0, firstPassMs = 0;
+    int done = 0;
+    for (int pass = 1; pass <= passes; ++pass) {
+        if (m_cancel)
+            break;
+        const PassStats stats = renderer.renderPass(frame, &m_cancel);
+        if (stats.cancelled)
+            break;
+        if (stats.seconds > 0) {
+            // Exponential average of the throughput, shared with the other sessions.
+            const double measured = estimatedSamples / stats.seconds;
+            const double old = m_context.samplesPerSecond.load();
+            m_context.samplesPerSecond.store(old > 0 ? 0.7 * old + 0.3 * measured : measured);
+        }
+        const auto encodeStart = Clock::now();
+        const std::vector<uint8_t> rgba = frame.resolveRgba8(state.background);
+        const std::string jpeg = encodeJpeg(rgba, params.width, params.height,
+                                            request.interactive ? kJpegQualityInteractive : kJpegQualityStill);
+        int depthWidth = 0, depthHeight = 0;
+        const std::vector<float> depth =
+            downsampleDepth(frame.averagedDepthKm(), params.width, params.height, kDepthDownsample, depthWidth, depthHeight);
+        const double passMs = stats.seconds * 1000.0;
+        const uint64_t samples = stats.samples + stats.samplesSkipped;
+        nlohmann::json header{{"type", "frame"},
+                              {"id", request.id},
+                              {"step", step},
+                              {"level", level},
+                              {"pass", pass},
+                              {"passes", passes},
+                              {"converged", pass == passes},
+                              {"interactive", request.interactive},
+                              {"width", params.width},
+                              {"height", params.height},
+                              {"camera", cameraJson(state)},
+                              {"stats",
+                               {{"passMs", passMs},
+                                {"samples", samples},
+                                {"samplesPerSecond", stats.seconds > 0 ? double(samples) / stats.seconds : 0.0},
+                                {"bricksSkipped", stats.bricksSkipped},
+                                {"bricksTotal", stats.bricksTotal}}},
+                              {"selection", m_selection}};
+        std::string bytes = encodeFrame(std::move(header), {reinterpret_cast<const uint8_t*>(jpeg.data()), jpeg.size()},
+                                        depth, depthWidth, depthHeight);
+        encodeMsTotal += millisecondsSince(encodeStart);
+        renderMsTotal += passMs;
+        if (pass == 1)
+            firstPassMs = passMs;
+        done = pass;
+        m_sink.sendBinary(std::move(bytes));
+    }
+    if (done > 0)
+        spdlog::info("{}: state {} step {} level {} {}x{} {}: {}/{} passes, first {:.1f} ms, mean {:.1f} ms/pass, "
+                     "encode {:.1f} ms/frame",
+                     m_name, request.id, step, level, params.width, params.height,
+                     request.interactive ? "interactive" : "still", done, passes, firstPassMs, renderMsTotal / done,
+                     encodeMsTotal / done);
+}
+
+}  // namespace raypc::server

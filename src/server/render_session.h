@@ -1,0 +1,93 @@
+// The render work of one WebSocket session, on its own thread, decoupled from the network.
+//
+// The newest state wins: submit() replaces any state that has not started and cancels the pass in
+// flight (the renderer checks the flag before every tile); states in between are dropped, never
+// queued. An interactive state gets one pass at the finest level whose estimated pass time fits the
+// state's time budget (from a throughput measured on earlier passes); a still state gets
+// state.passes progressive passes at the state's level (level 0 when "auto"). Every pass is sent as
+// one binary frame (protocol.h) through the sink.
+//
+// Thread safety: submit, cancel and stop may be called from any one thread (the network thread);
+// the sink is called from the render thread and must hand the bytes over (e.g. post them).
+#pragma once
+
+#include "data/dataset.h"
+#include "render/volume_renderer.h"
+#include "server/protocol.h"
+#include "server/render_support.h"
+#include "server/step_cache.h"
+
+#include <atomic>
+#include <condition_variable>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+namespace raypc::server {
+
+// Shared by all sessions of a server.
+struct RenderContext {
+    std::shared_ptr<const Dataset> dataset;
+    StepCache* cache = nullptr;
+    // Throughput of the machine in estimated samples (VolumeRenderer::estimateSamplesPerPass) per
+    // second, all threads; updated from every pass, used to choose the interactive level.
+    std::atomic<double> samplesPerSecond{0.0};
+};
+
+struct SessionSink {
+    std::function<void(std::string)> sendText;
+    std::function<void(std::string)> sendBinary;
+};
+
+class RenderSession {
+public:
+    RenderSession(RenderContext& context, SessionSink sink, std::string name);
+    ~RenderSession();  // stop()
+    RenderSession(const RenderSession&) = delete;
+    RenderSession& operator=(const RenderSession&) = delete;
+
+    // Validates the state against the dataset (throws raypc::Error naming the key; the previous
+    // state stays in force) and makes it the newest request.
+    void submit(const StateMessage& message);
+    // Stops the current work; no more frames until the next submit.
+    void cancel();
+    // Cancels and joins the render thread. Idempotent.
+    void stop();
+
+    const std::string& name() const { return m_name; }
+
+private:
+    struct Request {
+        int64_t id = 0;
+        ResolvedState resolved;
+        bool interactive = false;
+    };
+    void loop();
+    void render(const Request& request);
+    render::VolumeRenderer& rendererFor(int step, int level);
+    int chooseInteractiveLevel(int step, const render::RenderParams& params, double budgetSeconds);
+
+    RenderContext& m_context;
+    SessionSink m_sink;
+    std::string m_name;
+
+    std::mutex m_mutex;
+    std::condition_variable m_cv;
+    std::optional<Request> m_pending;
+    bool m_stopping = false;
+    std::atomic<bool> m_cancel{false};
+
+    // Render thread only.
+    int m_rendererStep = -1, m_lastStep = -1;
+    std::map<int, std::unique_ptr<render::VolumeRenderer>> m_renderers;  // by level, of m_rendererStep
+    std::string m_selectionKey;
+    nlohmann::json m_selection;
+
+    std::thread m_thread;  // last member: starts after everything above exists
+};
+
+}  // namespace raypc::server

@@ -1,0 +1,152 @@
+#include "server/step_cache.h"
+
+#include <spdlog/spdlog.h>
+
+#include <exception>
+
+namespace raypc::server {
+
+StepCache::StepCache(Loader loader, size_t maxBytes, size_t maxEntries)
+    : m_loader(std::move(loader)), m_maxBytes(maxBytes), m_maxEntries(std::max<size_t>(maxEntries, 1)),
+      m_prefetchThread([this] { prefetchLoop(); })
+{
+}
+
+StepCache::~StepCache()
+{
+    {
+        std::lock_guard lock(m_mutex);
+        m_stop = true;
+    }
+    m_prefetchCv.notify_all();
+    m_prefetchThread.join();
+}
+
+size_t StepCache::volumeBytes(const StepVolume& volume)
+{
+    return volume.variableCount() *
+           (volume.grid().cellCount() * sizeof(float) + volume.bricks().brickCount() * 2 * sizeof(float));
+}
+
+std::shared_ptr<const StepVolume> StepCache::findLocked(int step, int level)
+{
+    for (auto it = m_lru.begin(); it != m_lru.end(); ++it)
+        if (it->step == step && it->level == level) {
+            m_lru.splice(m_lru.begin(), m_lru, it);
+            return it->volume;
+        }
+    return nullptr;
+}
+
+void StepCache::insert(int step, int level, std::shared_ptr<const StepVolume> volume)
+{
+    std::lock_guard lock(m_mutex);
+    if (findLocked(step, level))
+        return;  // another thread loaded it meanwhile
+    const size_t bytes = volumeBytes(*volume);
+    m_lru.push_front({step, level, std::move(volume), bytes});
+    m_bytes += bytes;
+    // Evict from the back, but always keep the entry just inserted.
+    while (m_lru.size() > 1 && (m_bytes > m_maxBytes || m_lru.size() > m_maxEntries)) {
+        m_bytes -= m_lru.back().bytes;
+        m_lru.pop_back();
+    }
+}
+
+std::shared_ptr<const StepVolume> StepCache::get(int step, int level)
+{
+    {
+        std::lock_guard lock(m_mutex);
+        if (auto v = findLocked(step, level))
+            return v;
+        ++m_loads;
+    }
+    // Load outside the lock: mapping a step must not stall other sessions' cache hits.
+    auto volume = m_loader(step, level);
+    insert(step, level, volume);
+    return volume;
+}
+
+void StepCache::prefetch(int step, int level)
+{
+    {
+        std::lock_guard lock(m_mutex);
+        for (const auto& e : m_lru)
+            if (e.step == step && e.level == level)
+                return;
+        m_prefetchRequest = {step, level};
+    }
+    m_prefetchCv.notify_all();
+}
+
+void StepCache::waitForPrefetch()
+{
+    std::unique_lock lock(m_mutex);
+    m_idleCv.wait(lock, [&] { return !m_prefetchRequest && !m_prefetchBusy; });
+}
+
+bool StepCache::contains(int step, int level) const
+{
+    std::lock_guard lock(m_mutex);
+    for (const auto& e : m_lru)
+        if (e.step == step && e.level == level)
+            return true;
+    return false;
+}
+
+size_t StepCache::bytes() const
+{
+    std::lock_guard lock(m_mutex);
+    return m_bytes;
+}
+
+size_t StepCache::entries() const
+{
+    std::lock_guard lock(m_mutex);
+    return m_lru.size();
+}
+
+uint64_t StepCache::loads() const
+{
+    std::lock_guard lock(m_mutex);
+    return m_loads;
+}
+
+void StepCache::prefetchLoop()
+{
+    std::unique_lock lock(m_mutex);
+    for (;;) {
+        m_prefetchCv.wait(lock, [&] { return m_stop || m_prefetchRequest; });
+        if (m_stop)
+            return;
+        const auto [step, level] = *m_prefetchRequest;
+        m_prefetchRequest.reset();
+        m_prefetchBusy = true;
+        const bool cached = findLocked(step, level) != nullptr;
+        if (!cached)
+            ++m_loads;
+        lock.unlock();
+        if (!cached) {
+            try {
+                auto volume = m_loader(step, level);
+                // Touch one value per page so that the mapped data is read now, not during the next pass.
+                volatile float sink = 0;
+                for (size_t v = 0; v < volume->variableCount(); ++v) {
+                    const float* values = volume->values(v);
+                    const size_t n = volume->grid().cellCount();
+                    for (size_t i = 0; i < n; i += 1024)
+                        sink = sink + values[i];
+                }
+                insert(step, level, std::move(volume));
+            } catch (const std::exception& e) {
+                // A worker thread logs and reports: the session that asks for this step gets the error itself.
+                spdlog::warn("prefetch of step {} level {}: {}", step, level, e.what());
+            }
+        }
+        lock.lock();
+        m_prefetchBusy = false;
+        m_idleCv.notify_all();
+    }
+}
+
+}  // namespace raypc::server

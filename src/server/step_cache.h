@@ -1,0 +1,72 @@
+// A bounded cache of loaded StepVolumes shared by all sessions, with background prefetch.
+//
+// Bounded by bytes and by entries (least recently used first out), so memory does not grow with
+// the number of steps played. Volumes still used by a renderer stay alive through their shared_ptr
+// after eviction; the cache only stops holding them. Prefetch loads a (step, level) on a background
+// thread and touches its pages, so that the next step of a playback is in memory when asked for;
+// only the newest prefetch request waits, older ones are dropped.
+//
+// Thread safety: every member function may be called from any thread.
+#pragma once
+
+#include "data/dataset.h"
+
+#include <condition_variable>
+#include <functional>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <utility>
+
+namespace raypc::server {
+
+class StepCache {
+public:
+    using Loader = std::function<std::shared_ptr<const StepVolume>(int step, int level)>;
+
+    // `loader` throws raypc::Error for a step or level it cannot load; get() passes that on.
+    StepCache(Loader loader, size_t maxBytes, size_t maxEntries);
+    ~StepCache();  // stops and joins the prefetch thread
+    StepCache(const StepCache&) = delete;
+    StepCache& operator=(const StepCache&) = delete;
+
+    std::shared_ptr<const StepVolume> get(int step, int level);
+    // Queues a background load; replaces an earlier request that has not started.
+    void prefetch(int step, int level);
+    // Waits until no prefetch is queued or running (tests).
+    void waitForPrefetch();
+
+    bool contains(int step, int level) const;
+    size_t bytes() const;
+    size_t entries() const;
+    uint64_t loads() const;  // loader calls so far (misses and prefetches)
+
+    // Bytes a volume occupies: its values and brick bounds.
+    static size_t volumeBytes(const StepVolume& volume);
+
+private:
+    struct Entry {
+        int step, level;
+        std::shared_ptr<const StepVolume> volume;
+        size_t bytes;
+    };
+    std::shared_ptr<const StepVolume> findLocked(int step, int level);
+    void insert(int step, int level, std::shared_ptr<const StepVolume> volume);
+    void prefetchLoop();
+
+    Loader m_loader;
+    size_t m_maxBytes, m_maxEntries;
+    mutable std::mutex m_mutex;
+    std::list<Entry> m_lru;  // most recently used first
+    size_t m_bytes = 0;
+    uint64_t m_loads = 0;
+
+    std::condition_variable m_prefetchCv, m_idleCv;
+    std::optional<std::pair<int, int>> m_prefetchRequest;
+    bool m_prefetchBusy = false, m_stop = false;
+    std::thread m_prefetchThread;
+};
+
+}  // namespace raypc::server

@@ -1,0 +1,122 @@
+#include "server/step_cache.h"
+
+#include "core/error.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+
+namespace raypc::server {
+namespace {
+
+// A small in-memory volume whose values encode (step, level), 8 x 4 x 16 points, one variable.
+std::shared_ptr<const StepVolume> makeVolume(int step, int level)
+{
+    Snapshot s;
+    for (int i = 0; i < 8; ++i)
+        s.grid.latDeg.push_back(-80.0 + 20.0 * i);
+    for (int i = 0; i < 4; ++i)
+        s.grid.rKm.push_back(3500.0 + 900.0 * i);
+    for (int i = 0; i < 16; ++i)
+        s.grid.lonDeg.push_back(22.5 * i);
+    s.fields.push_back({"v", "1", std::vector<float>(s.grid.cellCount(), float(step * 10 + level))});
+    return StepVolume::fromSnapshot(s);
+}
+
+struct CountingLoader {
+    std::shared_ptr<std::atomic<int>> calls = std::make_shared<std::atomic<int>>(0);
+    std::shared_ptr<const StepVolume> operator()(int step, int level) const
+    {
+        ++*calls;
+        if (step < 0)
+            fail("step {} out of range", step);
+        return makeVolume(step, level);
+    }
+};
+
+TEST(StepCache, HitsDoNotReload)
+{
+    CountingLoader loader;
+    StepCache cache(loader, size_t(1) << 30, 8);
+    const auto a = cache.get(1, 0);
+    const auto b = cache.get(1, 0);
+    EXPECT_EQ(a.get(), b.get());
+    EXPECT_EQ(*loader.calls, 1);
+    EXPECT_EQ(a->values(0)[0], 10.0f);
+    EXPECT_EQ(cache.get(1, 2)->values(0)[0], 12.0f);
+    EXPECT_EQ(*loader.calls, 2);
+}
+
+TEST(StepCache, BoundedByEntriesWhilePlayingManySteps)
+{
+    CountingLoader loader;
+    StepCache cache(loader, size_t(1) << 30, 3);
+    for (int step = 0; step < 100; ++step) {
+        cache.get(step, 0);
+        EXPECT_LE(cache.entries(), 3u);
+    }
+    EXPECT_TRUE(cache.contains(99, 0));
+    EXPECT_TRUE(cache.contains(97, 0));
+    EXPECT_FALSE(cache.contains(96, 0));
+}
+
+TEST(StepCache, BoundedByBytesLeastRecentlyUsedFirst)
+{
+    CountingLoader loader;
+    const size_t one = StepCache::volumeBytes(*makeVolume(0, 0));
+    EXPECT_GE(one, 8u * 4 * 16 * sizeof(float));
+    StepCache cache(loader, 2 * one + one / 2, 100);  // room for two
+    cache.get(0, 0);
+    cache.get(1, 0);
+    cache.get(0, 0);  // 0 is now the most recently used
+    cache.get(2, 0);  // evicts 1
+    EXPECT_TRUE(cache.contains(0, 0));
+    EXPECT_FALSE(cache.contains(1, 0));
+    EXPECT_TRUE(cache.contains(2, 0));
+    EXPECT_LE(cache.bytes(), 2 * one + one / 2);
+    for (int step = 3; step < 50; ++step)
+        cache.get(step, 1);
+    EXPECT_EQ(cache.entries(), 2u);
+    EXPECT_LE(cache.bytes(), 2 * one + one / 2);
+}
+
+TEST(StepCache, EvictedVolumesStayValidForTheirUsers)
+{
+    CountingLoader loader;
+    StepCache cache(loader, 1, 1);  // holds one entry at most
+    const auto held = cache.get(5, 0);
+    cache.get(6, 0);
+    EXPECT_FALSE(cache.contains(5, 0));
+    EXPECT_EQ(held->values(0)[0], 50.0f);
+}
+
+TEST(StepCache, PrefetchLoadsInTheBackground)
+{
+    CountingLoader loader;
+    StepCache cache(loader, size_t(1) << 30, 8);
+    cache.prefetch(4, 2);
+    cache.waitForPrefetch();
+    EXPECT_TRUE(cache.contains(4, 2));
+    const int calls = *loader.calls;
+    cache.get(4, 2);
+    EXPECT_EQ(*loader.calls, calls);  // served from the prefetch
+    cache.prefetch(4, 2);             // already cached: no load
+    cache.waitForPrefetch();
+    EXPECT_EQ(*loader.calls, calls);
+}
+
+TEST(StepCache, LoaderErrorsReachTheCallerAndSpareThePrefetchThread)
+{
+    CountingLoader loader;
+    StepCache cache(loader, size_t(1) << 30, 8);
+    EXPECT_THROW(cache.get(-1, 0), Error);
+    cache.prefetch(-1, 0);  // logged, not thrown
+    cache.waitForPrefetch();
+    EXPECT_FALSE(cache.contains(-1, 0));
+    cache.prefetch(2, 0);
+    cache.waitForPrefetch();
+    EXPECT_TRUE(cache.contains(2, 0));
+}
+
+}  // namespace
+}  // namespace raypc::server
