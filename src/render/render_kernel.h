@@ -2,10 +2,11 @@
 // per-pixel driver shared by the scalar and SIMD kernels, and the scalar reference sampler.
 //
 // Everything here is validated and baked by VolumeRenderer (volume_renderer.cpp) so that the kernels
-// are noexcept, allocate nothing and make no virtual calls. The SIMD kernel (render_kernel_simd.cpp)
-// marches SIMD-width runs of consecutive samples along one ray ("chunks"); the scalar kernel
-// (render_kernel_scalar.cpp) walks exactly the same sample positions one at a time, so tests can
-// compare the two.
+// are noexcept, allocate nothing and make no virtual calls. Both kernels march runs of kChunkSamples
+// consecutive samples along one ray ("chunks") that share one step length; the SIMD kernel
+// (render_kernel_simd.cpp) processes a chunk as 16 / (SIMD width) vectors, the scalar kernel
+// (render_kernel_scalar.cpp) one sample at a time, so the sample positions (and the images) do not
+// depend on the machine's SIMD width and tests can compare the two kernels.
 #pragma once
 
 #include "data/dataset.h"
@@ -20,6 +21,8 @@
 namespace raypc::render::kernel {
 
 inline constexpr float kRadToDeg = float(180.0 / std::numbers::pi);
+// Samples per chunk, independent of the SIMD width (so images are identical on AVX2 and AVX-512).
+inline constexpr int kChunkSamples = 16;
 
 // atan for |a| <= 1: odd minimax polynomial, max error about 1e-5 rad (0.0006° — far below a cell).
 inline float atanUnit(float a)
@@ -98,6 +101,12 @@ struct KernelParams {
     // Bricks: active flags per brick (nullptr: no skipping); brick size is 1 << brickShift points.
     const int32_t* brickActive = nullptr;
     int brickShift = 3, bricksR = 1, bricksLon = 1;
+    // Empty-space skipping along the ray: per brick the Chebyshev distance, in bricks, to the nearest
+    // active brick (0 = active, capped; lon wraps), and the finest grid spacings, which bound how many
+    // grid points any index can move over a given path length (see safeSkipKm).
+    const uint8_t* brickDistance = nullptr;
+    int lonBrickSlack = 0;  // 1 when the last lon brick is partial (fewer points to cross at the seam)
+    float minDrKm = 1, minDLatRad = 0.01f, minDLonRad = 0.01f;
 
     KernelVariable colour;
     ColourTable table;
@@ -122,13 +131,14 @@ struct KernelParams {
     CameraFrame camera;
     int pass = 0;
     uint32_t seed = 0x9e3779b9u;
-    int chunkLanes = 16;  // samples per chunk (the SIMD width; the scalar kernel mimics it)
+    int chunkLanes = kChunkSamples;  // samples per chunk (fixed; kept for the estimators)
 };
 
 struct TileStats {
     uint64_t samples = 0;         // samples whose data were read
     uint64_t samplesSkipped = 0;  // samples in inactive bricks (no data read)
     uint64_t chunks = 0, chunksSkipped = 0;
+    uint64_t chunksJumped = 0;  // skipped by interval skipping, without locating their samples
     uint64_t rays = 0;
 };
 
@@ -244,6 +254,78 @@ inline bool brickActive(const KernelParams& k, const Located& L)
     const int b = ((L.iLat0 >> k.brickShift) * k.bricksR + (L.iR0 >> k.brickShift)) * k.bricksLon +
                   (L.iLon0 >> k.brickShift);
     return k.brickActive[b] != 0;
+}
+
+// How far (km) a ray may go from p while every sample stays in inactive bricks and out of the pole
+// caps: the conservative form of a DDA over bricks (pbrt-v4 DDAMajorantIterator, Open VKL
+// RayMarchIterator interval skipping). With D the Chebyshev brick distance from p's brick to the
+// nearest active brick, every index may move by n = (D - 1) x brick size grid points. Over a path of
+// length s that stays at radius >= m and distance >= rho_m from the polar axis, r changes by <= s,
+// the angle from the origin (so lat) by <= s / m and lon by <= s / rho_m (radians); inverting gives
+// s. Returns 0 when p is in or next to an active brick, or in a cap.
+inline float safeSkipKm(const KernelParams& k, Vec3 p, const Located& L)
+{
+    if (L.cap > 0.0f)
+        return 0.0f;
+    const int b = ((L.iLat0 >> k.brickShift) * k.bricksR + (L.iR0 >> k.brickShift)) * k.bricksLon +
+                  (L.iLon0 >> k.brickShift);
+    const int D = k.brickDistance[b];
+    if (D < 2)
+        return 0.0f;
+    const float size = float(1 << k.brickShift);
+    // 0.05 points of slack absorb the angle approximation (1e-5 rad) and rounding.
+    const float n = float(D - 1) * size - 0.05f;
+    float s = n * k.minDrKm;
+    // Lat: the index budget, but never into a pole cap (caps are always sampled).
+    float aLat = n * k.minDLatRad;
+    constexpr float kDegToRad = float(std::numbers::pi / 180.0);
+    if (k.capScaleSouth > 0.0f)
+        aLat = std::min(aLat, (L.latDeg - k.latSouthDeg) * kDegToRad);
+    if (k.capScaleNorth > 0.0f)
+        aLat = std::min(aLat, (k.latNorthDeg - L.latDeg) * kDegToRad);
+    aLat = std::max(aLat, 0.0f);
+    // s / max(rInner, r - s) <= aLat: either form is sufficient.
+    s = std::min(s, std::max(aLat * k.rInnerKm, aLat * L.rKm / (1.0f + aLat)));
+    // Lon: unconstrained when the inactive cube already spans every lon brick.
+    if (2 * (D - 1) + 1 < k.bricksLon) {
+        const float aLon = std::max(0.0f, float(D - 1 - k.lonBrickSlack) * size - 0.05f) * k.minDLonRad;
+        const float rho = std::sqrt(p.x * p.x + p.y * p.y);
+        s = std::min(s, aLon * rho / (1.0f + aLon));
+    }
+    return std::max(0.0f, s * 0.999f);
+}
+
+// Interval skipping state of one ray segment: [.., tSafe] is known to hold only inactive samples;
+// a probe (one scalar locate) is taken at the start of a chunk only after a chunk without active
+// samples, so dense regions pay nothing for it.
+struct SkipState {
+    float tSafe = -INFINITY;
+    bool probe = true;
+};
+
+// True when every sample of the chunk starting at tc (all in [tc, tc + kChunkSamples * dt)) lies in
+// inactive space, so it can be passed over without locating its samples.
+inline bool chunkIsEmpty(const KernelParams& k, Vec3 o, Vec3 d, float tc, float dt, SkipState& s)
+{
+    if (!k.brickDistance)
+        return false;
+    const float tEnd = tc + float(kChunkSamples) * dt;
+    if (tEnd <= s.tSafe)
+        return true;
+    if (!s.probe)
+        return false;
+    const Vec3 p = o + d * tc;
+    s.tSafe = std::max(s.tSafe, tc + safeSkipKm(k, p, locate(k, p.x, p.y, p.z)));
+    return tEnd <= s.tSafe;
+}
+
+// Samples of the chunk at tc that lie before t1.
+inline int chunkSampleCount(float tc, float dt, float t1)
+{
+    int n = 0;
+    for (int i = 0; i < kChunkSamples; ++i)
+        n += tc + float(i) * dt < t1;
+    return n;
 }
 
 // The opaque core sphere: plain or coloured by a variable at the core radius, Lambert-shaded.

@@ -53,12 +53,20 @@ float shadeFactor(const KernelParams& k, Vec3 p)
 void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, float along, RayAccum& acc,
                  TileStats& stats)
 {
+    SkipState skip;
     float tc = t0;
     while (tc < t1 && acc.transmittance > k.stopTransmittance) {
         const float dt = localStepKm(k, o + d * tc, d);
         ++stats.chunks;
+        if (chunkIsEmpty(k, o, d, tc, dt, skip)) {
+            stats.samplesSkipped += uint64_t(chunkSampleCount(tc, dt, t1));
+            ++stats.chunksSkipped;
+            ++stats.chunksJumped;
+            tc += float(kChunkSamples) * dt;
+            continue;
+        }
         bool anyActive = false;
-        for (int i = 0; i < k.chunkLanes && acc.transmittance > k.stopTransmittance; ++i) {
+        for (int i = 0; i < kChunkSamples && acc.transmittance > k.stopTransmittance; ++i) {
             const float start = tc + float(i) * dt;
             if (!(start < t1))
                 break;
@@ -88,9 +96,10 @@ void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, floa
             if (!std::isfinite(acc.depthKm) && 1.0f - acc.transmittance >= k.depthOpacity)
                 acc.depthKm = t;
         }
+        skip.probe = !anyActive;
         if (!anyActive)
             ++stats.chunksSkipped;
-        tc += float(k.chunkLanes) * dt;
+        tc += float(kChunkSamples) * dt;
     }
 }
 

@@ -1,5 +1,6 @@
-// The SIMD kernel: each vector holds consecutive samples along one ray (a "chunk"), so a chunk shares
-// one step length, one brick test and one early-termination test. Coordinates, cell location, the
+// The SIMD kernel: each vector holds consecutive samples along one ray; a chunk of kChunkSamples (16)
+// samples is one AVX-512 vector, two AVX2 vectors or four SSE4 vectors, and shares one step length,
+// so the sample positions do not depend on the SIMD width. Coordinates, cell location, the
 // trilinear gathers, brushing and the transfer function run across lanes; front-to-back compositing
 // is the short sequential tail over the lanes that have any opacity.
 // Highway with dynamic dispatch: compiled for the x86 targets Highway knows (SSE4, AVX2, AVX-512)
@@ -17,7 +18,8 @@ HWY_BEFORE_NAMESPACE();
 namespace raypc::render::kernel::HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-using DF = hn::ScalableTag<float>;
+// At most 16 lanes so that a vector never spans two chunks.
+using DF = hn::CappedTag<float, kChunkSamples>;
 using DI = hn::RebindToSigned<DF>;
 using VF = hn::Vec<DF>;
 using VI = hn::Vec<DI>;
@@ -166,91 +168,108 @@ void MarchSimd(const KernelParams& k, const Ray& ray, float t0, float t1, float 
     const VF iota = hn::Iota(d, 0.0f);
     const VF vT1 = hn::Set(d, t1);
     const VF zero = hn::Zero(d);
+    const VF vAlong = hn::Set(d, along);
 
+    SkipState skip;
     float tc = t0;
     while (tc < t1 && acc.transmittance > k.stopTransmittance) {
         const float dt = localStepKm(k, ray.o + ray.d * tc, ray.d);
         ++stats.chunks;
-        const VF vdt = hn::Set(d, dt);
-        // Sample intervals [start, start + dt) clipped at t1; the sample sits `along` into its interval.
-        const VF start = hn::MulAdd(iota, vdt, hn::Set(d, tc));
-        const MF valid = hn::Lt(start, vT1);
-        const VF len = hn::Min(vdt, hn::Sub(vT1, start));
-        const VF t = hn::Min(hn::MulAdd(hn::Set(d, along), vdt, start), vT1);
-        const VF x = hn::MulAdd(t, hn::Set(d, ray.d.x), hn::Set(d, ray.o.x));
-        const VF y = hn::MulAdd(t, hn::Set(d, ray.d.y), hn::Set(d, ray.o.y));
-        const VF z = hn::MulAdd(t, hn::Set(d, ray.d.z), hn::Set(d, ray.o.z));
-        tc += float(lanes) * dt;
-
-        const LocatedV L = Locate(d, k, x, y, z);
-        MF active = valid;
-        if (k.brickActive) {
-            const VI flag = hn::GatherIndex(di, k.brickActive, hn::IfThenElseZero(hn::RebindMask(di, valid), L.brick));
-            const MF capOrFlag = hn::Or(hn::Gt(L.cap, zero), hn::RebindMask(d, hn::Ne(flag, hn::Zero(di))));
-            active = hn::And(valid, capOrFlag);
-        }
-        const size_t nValid = hn::CountTrue(d, valid);
-        const size_t nActive = hn::CountTrue(d, active);
-        stats.samples += nActive;
-        stats.samplesSkipped += nValid - nActive;
-        if (nActive == 0) {
+        // Interval skipping: a chunk in known-empty space costs only the step recurrence.
+        if (chunkIsEmpty(k, ray.o, ray.d, tc, dt, skip)) {
+            stats.samplesSkipped += uint64_t(chunkSampleCount(tc, dt, t1));
             ++stats.chunksSkipped;
+            ++stats.chunksJumped;
+            tc += float(kChunkSamples) * dt;
             continue;
         }
-        // Brushing: any brush that rejects a lane zeroes it; stop as soon as no lane is left.
-        MF keep = active;
-        for (int b = 0; b < k.brushCount && !hn::AllFalse(d, keep); ++b) {
-            const KernelBrush& brush = k.brushes[b];
-            const VF v = brush.kind == BrushKind::Variable ? Sample(d, k, brush.variable, L)
-                                                           : CoordinateValue(d, brush.kind, x, y, z, L);
-            keep = hn::And(keep, hn::And(hn::Ge(v, hn::Set(d, brush.min)), hn::Le(v, hn::Set(d, brush.max))));
-        }
-        if (hn::AllFalse(d, keep))
-            continue;
-        const VF value = Sample(d, k, k.colour, L);
-        const VF u = Clamp(hn::MulAdd(hn::Sub(value, hn::Set(d, k.table.valueMin)), hn::Set(d, k.table.indexScale),
-                                      hn::Set(d, 0.5f)),
-                           zero, hn::Set(d, float(k.table.size - 1)));
-        const VI idx = hn::IfThenElseZero(hn::RebindMask(di, keep), hn::ConvertTo(di, u));
-        const VF sigma = hn::IfThenElseZero(keep, hn::GatherIndex(d, k.table.sigmaPerKm, idx));
-        const MF opaque = hn::Gt(sigma, zero);
-        if (hn::AllFalse(d, opaque))
-            continue;
-        // Opacity correction: alpha = 1 - exp(-sigma * length) for this sample's own interval.
-        const VF alpha = hn::IfThenElseZero(
-            opaque, hn::Max(zero, hn::Sub(hn::Set(d, 1.0f), hn::Exp(d, hn::Neg(hn::Mul(sigma, len))))));
-        VF shade = hn::Set(d, 1.0f);
-        if (k.shade) {
-            const VF h = hn::Set(d, k.gradientDeltaKm);
-            const VF gx = hn::Sub(ColourValueAt(d, k, hn::Add(x, h), y, z), ColourValueAt(d, k, hn::Sub(x, h), y, z));
-            const VF gy = hn::Sub(ColourValueAt(d, k, x, hn::Add(y, h), z), ColourValueAt(d, k, x, hn::Sub(y, h), z));
-            const VF gz = hn::Sub(ColourValueAt(d, k, x, y, hn::Add(z, h)), ColourValueAt(d, k, x, y, hn::Sub(z, h)));
-            const VF g2 = hn::MulAdd(gx, gx, hn::MulAdd(gy, gy, hn::Mul(gz, gz)));
-            const VF gl = hn::MulAdd(gx, hn::Set(d, k.lightDir.x),
-                                     hn::MulAdd(gy, hn::Set(d, k.lightDir.y), hn::Mul(gz, hn::Set(d, k.lightDir.z))));
-            const MF hasGradient = hn::Gt(g2, hn::Set(d, 1e-30f));
-            const VF safeG2 = hn::IfThenElse(hasGradient, g2, hn::Set(d, 1.0f));
-            const VF lit = hn::MulAdd(hn::Set(d, k.diffuse), hn::Div(hn::Abs(gl), hn::Sqrt(safeG2)), hn::Set(d, k.ambient));
-            shade = hn::IfThenElse(hasGradient, lit, shade);
-        }
-        hn::Store(alpha, d, alphaBuf);
-        hn::Store(hn::Mul(shade, hn::GatherIndex(d, k.table.red, idx)), d, redBuf);
-        hn::Store(hn::Mul(shade, hn::GatherIndex(d, k.table.green, idx)), d, greenBuf);
-        hn::Store(hn::Mul(shade, hn::GatherIndex(d, k.table.blue, idx)), d, blueBuf);
-        hn::Store(t, d, tBuf);
-        // Front-to-back compositing, in lane order, with the same early exit as the scalar kernel.
-        for (int i = 0; i < lanes && acc.transmittance > k.stopTransmittance; ++i) {
-            const float a = alphaBuf[i];
-            if (!(a > 0.0f))
+        const VF vdt = hn::Set(d, dt);
+        bool anyActive = false;
+        for (int base = 0; base < kChunkSamples && acc.transmittance > k.stopTransmittance; base += lanes) {
+            // Sample intervals [start, start + dt) clipped at t1; the sample sits `along` into its interval.
+            const VF start = hn::MulAdd(hn::Add(iota, hn::Set(d, float(base))), vdt, hn::Set(d, tc));
+            const MF valid = hn::Lt(start, vT1);
+            if (hn::AllFalse(d, valid))
+                break;
+            const VF len = hn::Min(vdt, hn::Sub(vT1, start));
+            const VF t = hn::Min(hn::MulAdd(vAlong, vdt, start), vT1);
+            const VF x = hn::MulAdd(t, hn::Set(d, ray.d.x), hn::Set(d, ray.o.x));
+            const VF y = hn::MulAdd(t, hn::Set(d, ray.d.y), hn::Set(d, ray.o.y));
+            const VF z = hn::MulAdd(t, hn::Set(d, ray.d.z), hn::Set(d, ray.o.z));
+
+            const LocatedV L = Locate(d, k, x, y, z);
+            MF active = valid;
+            if (k.brickActive) {
+                const VI flag = hn::GatherIndex(di, k.brickActive, hn::IfThenElseZero(hn::RebindMask(di, valid), L.brick));
+                const MF capOrFlag = hn::Or(hn::Gt(L.cap, zero), hn::RebindMask(d, hn::Ne(flag, hn::Zero(di))));
+                active = hn::And(valid, capOrFlag);
+            }
+            const size_t nValid = hn::CountTrue(d, valid);
+            const size_t nActive = hn::CountTrue(d, active);
+            stats.samples += nActive;
+            stats.samplesSkipped += nValid - nActive;
+            if (nActive == 0)
                 continue;
-            const float w = acc.transmittance * a;
-            acc.r += w * redBuf[i];
-            acc.g += w * greenBuf[i];
-            acc.b += w * blueBuf[i];
-            acc.transmittance *= 1.0f - a;
-            if (!std::isfinite(acc.depthKm) && 1.0f - acc.transmittance >= k.depthOpacity)
-                acc.depthKm = tBuf[i];
+            anyActive = true;
+            // Brushing: any brush that rejects a lane zeroes it; stop as soon as no lane is left.
+            MF keep = active;
+            for (int b = 0; b < k.brushCount && !hn::AllFalse(d, keep); ++b) {
+                const KernelBrush& brush = k.brushes[b];
+                const VF v = brush.kind == BrushKind::Variable ? Sample(d, k, brush.variable, L)
+                                                               : CoordinateValue(d, brush.kind, x, y, z, L);
+                keep = hn::And(keep, hn::And(hn::Ge(v, hn::Set(d, brush.min)), hn::Le(v, hn::Set(d, brush.max))));
+            }
+            if (hn::AllFalse(d, keep))
+                continue;
+            const VF value = Sample(d, k, k.colour, L);
+            const VF u = Clamp(hn::MulAdd(hn::Sub(value, hn::Set(d, k.table.valueMin)), hn::Set(d, k.table.indexScale),
+                                          hn::Set(d, 0.5f)),
+                               zero, hn::Set(d, float(k.table.size - 1)));
+            const VI idx = hn::IfThenElseZero(hn::RebindMask(di, keep), hn::ConvertTo(di, u));
+            const VF sigma = hn::IfThenElseZero(keep, hn::GatherIndex(d, k.table.sigmaPerKm, idx));
+            const MF opaque = hn::Gt(sigma, zero);
+            if (hn::AllFalse(d, opaque))
+                continue;
+            // Opacity correction: alpha = 1 - exp(-sigma * length) for this sample's own interval.
+            const VF alpha = hn::IfThenElseZero(
+                opaque, hn::Max(zero, hn::Sub(hn::Set(d, 1.0f), hn::Exp(d, hn::Neg(hn::Mul(sigma, len))))));
+            VF shade = hn::Set(d, 1.0f);
+            if (k.shade) {
+                const VF h = hn::Set(d, k.gradientDeltaKm);
+                const VF gx = hn::Sub(ColourValueAt(d, k, hn::Add(x, h), y, z), ColourValueAt(d, k, hn::Sub(x, h), y, z));
+                const VF gy = hn::Sub(ColourValueAt(d, k, x, hn::Add(y, h), z), ColourValueAt(d, k, x, hn::Sub(y, h), z));
+                const VF gz = hn::Sub(ColourValueAt(d, k, x, y, hn::Add(z, h)), ColourValueAt(d, k, x, y, hn::Sub(z, h)));
+                const VF g2 = hn::MulAdd(gx, gx, hn::MulAdd(gy, gy, hn::Mul(gz, gz)));
+                const VF gl = hn::MulAdd(gx, hn::Set(d, k.lightDir.x),
+                                         hn::MulAdd(gy, hn::Set(d, k.lightDir.y), hn::Mul(gz, hn::Set(d, k.lightDir.z))));
+                const MF hasGradient = hn::Gt(g2, hn::Set(d, 1e-30f));
+                const VF safeG2 = hn::IfThenElse(hasGradient, g2, hn::Set(d, 1.0f));
+                const VF lit = hn::MulAdd(hn::Set(d, k.diffuse), hn::Div(hn::Abs(gl), hn::Sqrt(safeG2)), hn::Set(d, k.ambient));
+                shade = hn::IfThenElse(hasGradient, lit, shade);
+            }
+            hn::Store(alpha, d, alphaBuf);
+            hn::Store(hn::Mul(shade, hn::GatherIndex(d, k.table.red, idx)), d, redBuf);
+            hn::Store(hn::Mul(shade, hn::GatherIndex(d, k.table.green, idx)), d, greenBuf);
+            hn::Store(hn::Mul(shade, hn::GatherIndex(d, k.table.blue, idx)), d, blueBuf);
+            hn::Store(t, d, tBuf);
+            // Front-to-back compositing, in lane order, with the same early exit as the scalar kernel.
+            for (int i = 0; i < lanes && acc.transmittance > k.stopTransmittance; ++i) {
+                const float a = alphaBuf[i];
+                if (!(a > 0.0f))
+                    continue;
+                const float w = acc.transmittance * a;
+                acc.r += w * redBuf[i];
+                acc.g += w * greenBuf[i];
+                acc.b += w * blueBuf[i];
+                acc.transmittance *= 1.0f - a;
+                if (!std::isfinite(acc.depthKm) && 1.0f - acc.transmittance >= k.depthOpacity)
+                    acc.depthKm = tBuf[i];
+            }
         }
+        skip.probe = !anyActive;
+        if (!anyActive)
+            ++stats.chunksSkipped;
+        tc += float(kChunkSamples) * dt;
     }
 }
 

@@ -106,6 +106,7 @@ struct PassStats {
     uint64_t samples = 0;          // samples whose data were read
     uint64_t samplesSkipped = 0;   // samples in skipped bricks
     uint64_t chunks = 0, chunksSkipped = 0, rays = 0;
+    uint64_t chunksJumped = 0;     // skipped chunks passed over by interval skipping (no sample located)
     size_t bricksTotal = 0, bricksSkipped = 0;  // bricks excluded by brushes or transparency
     int threads = 1;
     int simdLanes = 1;

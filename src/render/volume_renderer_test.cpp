@@ -142,14 +142,29 @@ TEST(Renderer, SkippingNeverChangesTheImage)
     auto volume = makeVolume(makeGrid(36, 33, 72), {{"f", testing::plumeField},
                                                     {"g", [](double, double r, double lon) { return float(r + lon); }}});
     VolumeRenderer renderer(volume);
-    for (int variant = 0; variant < 3; ++variant) {
+    uint64_t jumped = 0;
+    for (int variant = 0; variant < 6; ++variant) {
         RenderParams p = smallParams();
         p.transfer.range = {-0.8f, 1.0f};
         p.transfer.opacity = {{0, 0}, {0.6f, 0}, {0.7f, 0.5f}, {1, 0.9f}};  // transparent below 0.28
-        if (variant >= 1)
+        if (variant >= 1 && variant <= 2)
             p.brushes.push_back({1, std::nullopt, 4000, 6000});
-        if (variant >= 2)
+        if (variant == 2)
             p.brushes.push_back({-1, Coordinate::Z, -3000, 5000});
+        // Large empty regions, so that interval skipping jumps over many chunks: a thin outer
+        // shell; the polar regions next to the caps (caps are always sampled); a lon wedge
+        // across the seam seen edge-on and from above.
+        if (variant == 3)
+            p.brushes.push_back({-1, Coordinate::Radius, 6000, 6371});
+        if (variant == 4) {
+            p.brushes.push_back({-1, Coordinate::Lat, 60, 90});
+            p.camera.elevationDeg = 70;
+        }
+        if (variant == 5) {
+            p.brushes.push_back({-1, Coordinate::Lon, 340, 360});
+            p.camera.azimuthDeg = 80;
+            p.transfer.opacity = {{0, 0.4f}, {1, 0.4f}};
+        }
         PassStats on;
         const auto a = render(renderer, p, 2, &on);
         p.skipBricks = false;
@@ -159,7 +174,10 @@ TEST(Renderer, SkippingNeverChangesTheImage)
         EXPECT_GT(on.samplesSkipped, 0u) << "variant " << variant;  // the test would be vacuous otherwise
         EXPECT_GT(on.bricksSkipped, 0u);
         EXPECT_EQ(off.samplesSkipped, 0u);
+        EXPECT_EQ(off.chunksJumped, 0u);
+        jumped += on.chunksJumped;
     }
+    EXPECT_GT(jumped, 1000u);
 }
 
 TEST(Renderer, BrushedOutVolumeShowsOnlyBackgroundAndCore)
