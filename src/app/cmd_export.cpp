@@ -1,11 +1,16 @@
-// raypc export DATASET --time T --what sample -o FILE.csv
+// raypc export DATASET --time T --what sample|pathlines|critical-points -o FILE.{csv,vtp,vtk}
 #include "app/command.h"
 #include "app/options.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "data/dataset.h"
+#include "data/pathlines.h"
 
 #include <fmt/format.h>
+
+#include <cctype>
+#include <filesystem>
+#include <numeric>
 
 namespace raypc::app {
 namespace {
@@ -42,23 +47,61 @@ std::string sampleCsv(const SampleTable& table)
     return out;
 }
 
+// The format of `output` from its extension: csv, vtp (VTK XML PolyData) or vtk (legacy VTK).
+std::string formatOf(const std::string& output)
+{
+    std::string ext = std::filesystem::path(output).extension().string();
+    for (char& c : ext)
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext == ".csv" || ext == ".vtp" || ext == ".vtk")
+        return ext.substr(1);
+    fail("-o: '{}' has no known extension; expected .csv, .vtp (VTK XML PolyData) or .vtk (legacy VTK)", output);
+}
+
 const CommandRegistration kRegistration(
-    "export", "Export data of one step (the parallel-coordinates sample as CSV)",
+    "export",
+    "Export data of one step: the parallel-coordinates sample (CSV), or the pathlines injected at the step "
+    "and their seeds, the critical points (CSV, VTK .vtp or legacy .vtk)",
     [](CLI::App& cmd) {
         auto args = std::make_shared<ExportArgs>();
         cmd.add_option("dataset", args->dataset, "Dataset directory")->required();
         cmd.add_option("-t,--time", args->time, "Step index (0-based) or time like 24Myr")->capture_default_str();
-        cmd.add_option("--what", args->what, "What to export: sample")->capture_default_str();
-        cmd.add_option("-o,--output", args->output, "Output file (.csv)")->required();
+        cmd.add_option("--what", args->what, "What to export: sample, pathlines or critical-points")
+            ->capture_default_str();
+        cmd.add_option("-o,--output", args->output,
+                       "Output file: .csv; for pathlines and critical-points also .vtp (VTK XML) or .vtk (legacy VTK)")
+            ->required();
         cmd.callback([args] {
-            if (args->what != "sample")
-                fail("--what: unknown export '{}', expected: sample", args->what);
+            if (args->what != "sample" && args->what != "pathlines" && args->what != "critical-points")
+                fail("--what: unknown export '{}', expected: sample, pathlines, critical-points", args->what);
+            // The sample is always CSV (whatever the extension, as before pathlines existed).
+            const std::string format = args->what == "sample" ? "csv" : formatOf(args->output);
             const auto dataset = Dataset::open(args->dataset);
             const int step = parseStep(*dataset, args->time);
-            const auto table = dataset->loadSample(step);
-            writeFileAtomic(args->output, sampleCsv(table));
-            fmt::print("{}: {} rows x {} columns of step {} ({} Myr)\n", args->output, table.rows,
-                       table.columns.size(), step, dataset->steps()[step].timeMyr);
+            if (args->what == "sample") {
+                const auto table = dataset->loadSample(step);
+                writeFileAtomic(args->output, sampleCsv(table));
+                fmt::print("{}: {} rows x {} columns of step {} ({} Myr)\n", args->output, table.rows,
+                           table.columns.size(), step, dataset->steps()[step].timeMyr);
+                return;
+            }
+            const PathlineSet set = loadPathlineSet(dataset->dir(), step);
+            const bool lines = args->what == "pathlines";
+            std::string text;
+            if (format == "csv")
+                text = lines ? pathlinesCsv(set) : criticalPointsCsv(set);
+            else if (format == "vtp")
+                text = lines ? pathlinesVtp(set) : criticalPointsVtp(set);
+            else
+                text = lines ? pathlinesLegacyVtk(set) : criticalPointsLegacyVtk(set);
+            writeFileAtomic(args->output, text);
+            if (lines)
+                fmt::print("{}: {} pathlines ({} points) injected at step {} ({} Myr), traced to step {}\n",
+                           args->output, set.lineCount(), set.pointCount(), step, set.injectionTimeMyr, set.endStep);
+            else
+                fmt::print("{}: {} critical points of {} at step {} ({} Myr) above |{:.4g}| (of {} found)\n",
+                           args->output, set.lineCount(), set.seedField, step, set.injectionTimeMyr, set.threshold,
+                           std::accumulate(set.criticalCounts.begin(), set.criticalCounts.end(), size_t(0)));
         });
     },
     50);

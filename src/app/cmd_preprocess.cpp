@@ -13,6 +13,7 @@ struct PreprocessArgs {
     std::string output;
     ReaderFlags reader;
     PreprocessOptions options;
+    bool noPathlines = false, noSaddles = false;
 };
 
 const CommandRegistration kRegistration(
@@ -27,11 +28,29 @@ const CommandRegistration kRegistration(
             ->capture_default_str();
         cmd.add_option("--seed", args->options.seed, "Seed of the sample")->capture_default_str();
         cmd.add_flag("-q,--quiet", args->options.quiet, "No progress output");
+        auto& pl = args->options.pathlines;
+        cmd.add_flag("--no-pathlines", args->noPathlines,
+                     "Skip the critical points of --pathline-field and the pathlines seeded there");
+        cmd.add_option("--pathline-field", pl.field, "Variable whose critical points seed pathlines")
+            ->capture_default_str();
+        cmd.add_option("--pathline-steps", pl.steps, "Steps each pathline is traced forward")->capture_default_str();
+        cmd.add_option("--cp-min-abs", pl.filter.minAbsValue,
+                       "Critical points: keep maxima >= V, minima <= -V, saddles |value| >= V (field units)")
+            ->capture_default_str();
+        cmd.add_option("--cp-min-fraction", pl.filter.minFractionOfMaxAbs,
+                       "Critical points: the threshold is at least this fraction of the step's largest |value|")
+            ->capture_default_str();
+        cmd.add_option("--cp-max-count", pl.filter.maxCount,
+                       "Critical points: at most this many per step (the largest |value| first)")
+            ->capture_default_str();
+        cmd.add_flag("--cp-no-saddles", args->noSaddles, "Critical points: seed pathlines at extrema only");
         args->reader.add(cmd);
         cmd.callback([args] {
             std::vector<std::filesystem::path> inputs(args->inputs.begin(), args->inputs.end());
             auto options = args->options;
             options.reader = args->reader.toOptions();
+            options.pathlines.enabled = !args->noPathlines;
+            options.pathlines.filter.saddles = !args->noSaddles;
             const auto files = listSnapshotFiles(inputs);
             const auto summary = preprocess(files, args->output, options);
             const auto dataset = Dataset::open(args->output);
@@ -40,6 +59,10 @@ const CommandRegistration kRegistration(
                        "in {:.1f} s\n",
                        args->output, dataset->steps().size(), summary.stepsWritten, summary.stepsSkipped, g.nLat(),
                        g.nR(), g.nLon(), dataset->variables().size(), summary.seconds);
+            if (options.pathlines.enabled)
+                fmt::print("{}: pathlines of {} steps ({} written with {} lines, {} already done)\n", args->output,
+                           dataset->steps().size(), summary.pathlineSetsWritten, summary.pathlineCount,
+                           summary.pathlineSetsSkipped);
         });
     },
     20);

@@ -6,8 +6,10 @@
 // a transfer function does not jump during an animation.
 #pragma once
 
+#include "data/critical_points.h"
 #include "data/dataset.h"
 #include "data/netcdf_reader.h"
+#include "data/pathlines.h"
 
 #include <cstdint>
 #include <filesystem>
@@ -16,6 +18,16 @@
 
 namespace raypc {
 
+// The pathline phase (docs/format.md, "Pathlines"): after every step is written, the significant
+// critical points of `field` at each step seed pathlines traced through the next `steps` steps.
+struct PathlineOptions {
+    bool enabled = true;
+    std::string field = "temperature anomaly";
+    int steps = 10;  // traced from step s to min(s + steps, last step)
+    CriticalPointFilter filter;
+    TracerOptions tracer;
+};
+
 struct PreprocessOptions {
     ReaderOptions reader;
     double dtMyr = 2.0;          // time between consecutive input files
@@ -23,18 +35,23 @@ struct PreprocessOptions {
     uint64_t seed = 1;           // for the sample
     uint32_t brickSize = 8;
     bool quiet = false;          // no progress output
+    PathlineOptions pathlines;
 };
 
 struct PreprocessSummary {
     int stepsWritten = 0;
     int stepsSkipped = 0;  // already finished by an earlier run
+    int pathlineSetsWritten = 0;
+    int pathlineSetsSkipped = 0;  // finished by an earlier run with the same settings
+    size_t pathlineCount = 0;     // lines in the sets written by this run
     double seconds = 0;
 };
 
 // Preprocesses `inputs` (files, in step order) into `outDir`. Resumable: finished steps of an
 // earlier run into the same directory are kept; a killed run leaves no corrupt step (each step
 // is written under a temporary name and renamed) and the manifest says "incomplete" until the
-// last step is done. Throws raypc::Error naming the file and the problem on bad input, and when
+// last step and then every step's pathlines (a second phase: they need the velocities of later
+// steps, read back from the written level-0 arrays) are done. Throws raypc::Error naming the file and the problem on bad input, and when
 // `outDir` holds a dataset made from other inputs.
 PreprocessSummary preprocess(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& outDir,
                              const PreprocessOptions& options);

@@ -1,0 +1,153 @@
+// Pathlines of the mantle flow, seeded at critical points of a scalar field (paper, "Data
+// Preprocessing": seeds at critical points of the temperature anomaly, traced forward for 10
+// steps), and their stored form (docs/format.md, "Pathlines").
+//
+// Conventions: positions are Cartesian km in the frame of core/spherical.h (x = r cos lat cos lon,
+// y = r cos lat sin lon, z = r sin lat); lat/lon in degrees, r in km; time in Myr. Velocities on
+// the grid are Cartesian components vx, vy, vz in m/s; 1 m/s = kSecondsPerMyr / 1000 km/Myr.
+// Between grid points velocity is sampled by GridSampler (trilinear, lon seam, pole caps); between
+// steps it is linear in time. Integrating in Cartesian coordinates has no pole singularity.
+//
+// Thread safety: PathlineTracer is immutable after construction and may be shared by threads.
+#pragma once
+
+#include "core/spherical.h"
+#include "data/critical_points.h"
+#include "data/grid.h"
+#include "data/sampler.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace raypc {
+
+inline constexpr double kMpsToKmPerMyr = kSecondsPerMyr / 1000.0;  // 3.15576e10
+
+// Fields of several steps on one grid: fields[step][variable] points at grid.cellCount() values
+// in canonical order. The pointers are not owned.
+struct FieldSeries {
+    SphericalGrid grid;
+    std::vector<double> timesMyr;                  // ascending, one per step
+    std::vector<std::vector<const float*>> fields;  // [step][variable]
+};
+
+struct TracerOptions {
+    double toleranceKm = 0.01;  // local error per step (Dormand–Prince embedded 4th-order estimate)
+    double maxStepMyr = 0.5;    // also the longest time between two stored points
+    double maxSegmentKm = 25;   // longest distance between two stored points, so tubes bend smoothly
+    size_t maxPoints = 20000;   // a line stops when it has this many points
+};
+
+enum class PathlineEnd : uint8_t { ReachedEndTime = 0, LeftShell = 1, PointLimit = 2 };
+
+struct TracedPathline {
+    std::vector<Vec3d> pointsKm;
+    std::vector<double> timesMyr;
+    PathlineEnd end = PathlineEnd::ReachedEndTime;
+    double lengthKm = 0;  // polyline length
+};
+
+// Integrates dx/dt = v(x, t) with the Dormand–Prince 5(4) pair (Dormand & Prince 1980; step
+// control as in Hairer, Nørsett & Wanner, "Solving ODEs I", II.4), steps ending exactly on the
+// series' step times (where v has a kink in time). A line stops at `endMyr`, or where it leaves
+// the shell [first radius, last radius] of the grid (its last point then lies on the boundary,
+// found by bisecting the step), or after options.maxPoints points.
+class PathlineTracer {
+public:
+    // `series` must outlive the tracer; vx, vy, vz are the indices of the velocity components
+    // (m/s) in series.fields[step]. Throws raypc::Error when the series has no step, its times
+    // are not ascending or an index is out of range.
+    PathlineTracer(const FieldSeries& series, size_t vx, size_t vy, size_t vz, TracerOptions options = {});
+
+    // Velocity in km/Myr at `pKm` and `timeMyr` (clamped to the series' time range); nullopt
+    // outside the shell.
+    std::optional<Vec3d> velocityKmPerMyr(const Vec3d& pKm, double timeMyr) const;
+    // Value of variable `var` at `pKm` and `timeMyr` (linear in time); NaN outside the shell.
+    double sample(size_t var, const Vec3d& pKm, double timeMyr) const;
+
+    TracedPathline trace(const Vec3d& startKm, double startMyr, double endMyr) const;
+
+private:
+    std::optional<GridSampler::Location> locate(const Vec3d& pKm) const;
+    // The bracketing steps of `timeMyr` and the weight of the later one.
+    void bracketTime(double timeMyr, size_t& k0, size_t& k1, double& w) const;
+
+    const FieldSeries& m_series;
+    GridSampler m_sampler;
+    size_t m_v[3];
+    TracerOptions m_options;
+    double m_rMinKm, m_rMaxKm, m_rToleranceKm;
+};
+
+// The pathlines injected at one step, as stored (docs/format.md, "Pathlines"): points of all
+// lines in one array, lines as ranges of it, and one row of attributes per line.
+struct PathlineSet {
+    int injectionStep = 0;
+    double injectionTimeMyr = 0;
+    int endStep = 0;         // the step whose time ends the lines (unless they leave the shell)
+    std::string seedField;   // the field whose critical points seeded the lines
+    double threshold = 0;    // the significance threshold used (seedField's units)
+    std::vector<size_t> criticalCounts = std::vector<size_t>(5, 0);  // all found, by CriticalKind
+    std::string settingsJson;  // the settings that made the set (preprocessing compares them)
+
+    std::vector<std::string> columns, units;  // line attributes, see pathlineColumns
+    std::vector<uint32_t> offsets;  // lineCount() + 1 entries: line i is points [offsets[i], offsets[i+1])
+    std::vector<float> points;      // 4 floats per point: x, y, z (km), time (Myr)
+    std::vector<float> attributes;  // lineCount() * columns.size(), row-major
+
+    size_t lineCount() const { return offsets.empty() ? 0 : offsets.size() - 1; }
+    size_t pointCount() const { return points.size() / 4; }
+    float attribute(size_t line, size_t column) const { return attributes[line * columns.size() + column]; }
+    // Index of the attribute column `name`, or -1.
+    int column(const std::string& name) const;
+};
+
+// Fixed attribute columns, before the "start <variable>" and "end <variable>" columns (one each per
+// dataset variable, in dataset order). Codes: seed kind = CriticalKind, end reason = PathlineEnd.
+inline constexpr const char* kPathlineFixedColumns[] = {
+    "seed kind", "seed value", "injection time", "duration", "length", "end reason",
+    "start lat", "start lon", "start radius", "end lat", "end lon", "end radius"};
+inline constexpr size_t kPathlineFixedColumnCount = std::size(kPathlineFixedColumns);
+
+// Traces one line from every seed from series time `injectionStep` to `endStep` and fills a
+// PathlineSet (lines in seed order). `names`/`units` name the series' variables (for the
+// attribute columns). Uses oneTBB over seeds.
+PathlineSet tracePathlines(const FieldSeries& series, const PathlineTracer& tracer,
+                           const std::vector<CriticalPoint>& seeds, int injectionStep, int endStep,
+                           const std::vector<std::string>& names, const std::vector<std::string>& units);
+
+// --- Storage ---------------------------------------------------------------------------------
+
+// DATASET/pathlines/NNNN.
+std::filesystem::path pathlineDir(const std::filesystem::path& dataset, int step);
+
+// Writes `set` into `dir` (created; the caller writes into a temporary directory and renames it).
+// Throws raypc::Error on I/O failure.
+void writePathlineSet(const std::filesystem::path& dir, const PathlineSet& set);
+
+// Reads the set of lines injected at `step` from the dataset directory `dataset`. Throws
+// raypc::Error naming the file when it is missing (e.g. preprocessed with --no-pathlines), of the
+// wrong size or malformed.
+PathlineSet loadPathlineSet(const std::filesystem::path& dataset, int step);
+
+// What a renderer shows at step s (paper: "all pathlines spawned during the last 10 time steps"):
+// the sets injected at steps max(0, s - window + 1) .. s, oldest first. Throws like loadPathlineSet.
+std::vector<PathlineSet> loadPathlineWindow(const std::filesystem::path& dataset, int step, int window = 10);
+
+// --- Export ----------------------------------------------------------------------------------
+
+// One row per point: line, point, x, y, z, lat, lon, radius, time, age, then the line's attributes.
+std::string pathlinesCsv(const PathlineSet& set);
+// One row per seed (the first point of each line): kind, value, coordinates, then attributes.
+std::string criticalPointsCsv(const PathlineSet& set);
+// VTK PolyData, XML (.vtp, ASCII) or legacy ASCII (.vtk): lines with point data time/age and cell
+// data for every attribute; critical points as vertices with their attributes as point data.
+std::string pathlinesVtp(const PathlineSet& set);
+std::string pathlinesLegacyVtk(const PathlineSet& set);
+std::string criticalPointsVtp(const PathlineSet& set);
+std::string criticalPointsLegacyVtk(const PathlineSet& set);
+
+}  // namespace raypc
