@@ -65,4 +65,41 @@ int parseStep(const Dataset& dataset, const std::string& text, const std::string
     return step;
 }
 
+RangeOption parseRangeOption(const std::string& text, const std::string& option)
+{
+    const size_t eq = text.rfind('=');
+    const size_t colon = eq == std::string::npos ? std::string::npos : text.find(':', eq + 1);
+    if (eq == std::string::npos || eq == 0 || colon == std::string::npos)
+        fail("{} '{}': expected NAME=MIN:MAX", option, text);
+    RangeOption r;
+    r.name = trim(text.substr(0, eq));
+    const std::string lo = trim(text.substr(eq + 1, colon - eq - 1)), hi = trim(text.substr(colon + 1));
+    auto number = [&](const std::string& s) {
+        float v = 0;
+        const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+        if (s.empty() || ec != std::errc() || end != s.data() + s.size())
+            fail("{} '{}': MIN and MAX must be numbers", option, text);
+        return v;
+    };
+    r.min = number(lo);
+    r.max = number(hi);
+    if (!(r.min <= r.max))
+        fail("{} '{}': min {} is greater than max {}", option, text, r.min, r.max);
+    return r;
+}
+
+std::pair<int, int> parseStepRange(const Dataset& dataset, const std::string& text, const std::string& option)
+{
+    const size_t colon = text.find(':');
+    if (colon == std::string::npos) {
+        const int step = parseStep(dataset, text, option);
+        return {step, step};
+    }
+    const int first = parseStep(dataset, text.substr(0, colon), option);
+    const int last = parseStep(dataset, text.substr(colon + 1), option);
+    if (first > last)
+        fail("{} '{}': the first step {} is after the last {}", option, text, first, last);
+    return {first, last};
+}
+
 }  // namespace raypc::app

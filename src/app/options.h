@@ -26,4 +26,15 @@ struct ReaderFlags {
 // and the dataset's valid steps when it is out of range or malformed.
 int parseStep(const Dataset& dataset, const std::string& text, const std::string& option = "--time");
 
+// Parses "NAME=MIN:MAX" (names may contain spaces; the last '=' splits) for --range.
+// Throws raypc::Error naming the option for a malformed text or min > max.
+struct RangeOption {
+    std::string name;
+    float min = 0, max = 0;
+};
+RangeOption parseRangeOption(const std::string& text, const std::string& option = "--range");
+
+// Parses "A" or "A:B" (each a step index or a time like 24Myr) into the inclusive step range.
+std::pair<int, int> parseStepRange(const Dataset& dataset, const std::string& text, const std::string& option = "--time");
+
 }  // namespace raypc::app

@@ -1,6 +1,7 @@
 #include "data/bricks.h"
 #include "data/grid.h"
 #include "data/sampler.h"
+#include "data/test_util.h"
 
 #include "core/error.h"
 #include "core/spherical.h"
@@ -14,17 +15,7 @@
 namespace raypc {
 namespace {
 
-SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon)
-{
-    SphericalGrid g;
-    for (size_t i = 0; i < nLat; ++i)
-        g.latDeg.push_back(-90.0 + (i + 0.5) * 180.0 / nLat);
-    for (size_t i = 0; i < nR; ++i)
-        g.rKm.push_back(kCoreRadiusKm + i * (kSurfaceRadiusKm - kCoreRadiusKm) / (nR - 1));
-    for (size_t i = 0; i < nLon; ++i)
-        g.lonDeg.push_back(i * 360.0 / nLon);
-    return g;
-}
+using testing::centredGrid;
 
 TEST(Grid, DualCellsFillTheShellExactly)
 {

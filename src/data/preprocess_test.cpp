@@ -17,20 +17,11 @@
 namespace raypc {
 namespace {
 
+using testing::centredGrid;
+
 using testing::contestLayoutDir;
 using testing::TempDir;
 
-SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon)
-{
-    SphericalGrid g;
-    for (size_t i = 0; i < nLat; ++i)
-        g.latDeg.push_back(-90.0 + (i + 0.5) * 180.0 / nLat);
-    for (size_t i = 0; i < nR; ++i)
-        g.rKm.push_back(kCoreRadiusKm + i * (kSurfaceRadiusKm - kCoreRadiusKm) / (nR - 1));
-    for (size_t i = 0; i < nLon; ++i)
-        g.lonDeg.push_back(i * 360.0 / nLon);
-    return g;
-}
 
 // Volume of one grid point's dual cell, from first principles (not SphericalGrid's factors).
 double dualVolume(const SphericalGrid& g, size_t a, size_t b, size_t c)

@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/spherical.h"
 
+#include <fmt/format.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
@@ -26,6 +27,34 @@ double coordinateAt(Coordinate c, double latDeg, double lonDeg, double rKm)
 }
 
 }  // namespace
+
+std::vector<RangeFilter> resolveRangeFilters(const Dataset& dataset, std::span<const NamedRange> ranges,
+                                             const std::string& what)
+{
+    std::vector<RangeFilter> filters;
+    for (size_t i = 0; i < ranges.size(); ++i) {
+        const auto& r = ranges[i];
+        RangeFilter f;
+        f.min = r.min;
+        f.max = r.max;
+        if (const int v = dataset.variableIndex(r.name); v >= 0) {
+            f.variable = v;
+        } else if (const auto c = findCoordinate(r.name)) {
+            f.coordinate = c;
+        } else {
+            std::vector<std::string> names;
+            for (const auto& info : dataset.variables())
+                names.push_back(info.name);
+            for (const auto& info : coordinateInfos())
+                names.push_back(info.name);
+            fail("{}[{}]: unknown variable or coordinate '{}'; known: {}", what, i, r.name, fmt::join(names, ", "));
+        }
+        if (!(r.min <= r.max))
+            fail("{}[{}] ({}): min {} is greater than max {}", what, i, r.name, r.min, r.max);
+        filters.push_back(f);
+    }
+    return filters;
+}
 
 SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters)
 {

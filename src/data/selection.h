@@ -6,6 +6,7 @@
 #include "data/dataset.h"
 
 #include <optional>
+#include <string>
 #include <span>
 #include <vector>
 
@@ -17,6 +18,17 @@ struct RangeFilter {
     std::optional<Coordinate> coordinate;
     float min = 0, max = 0;  // inclusive
 };
+
+// A range named by a variable or coordinate name, as in the state document's brushes.
+struct NamedRange {
+    std::string name;
+    float min = 0, max = 0;
+};
+
+// Resolves names against the dataset's variables and coordinates. Throws raypc::Error naming
+// `what` (e.g. "brushes[1]") for an unknown name (listing the known ones) or min > max.
+std::vector<RangeFilter> resolveRangeFilters(const Dataset& dataset, std::span<const NamedRange> ranges,
+                                             const std::string& what = "brushes");
 
 struct SelectionStats {
     double volumeKm3 = 0;

@@ -2,6 +2,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/spherical.h"
 
 #include <unistd.h>
 
@@ -24,6 +25,18 @@ TempDir::~TempDir()
 }
 
 std::filesystem::path contestLayoutDir() { return std::filesystem::path(RAYPC_SHARED_DIR) / "data" / "contest-layout"; }
+
+SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon)
+{
+    SphericalGrid g;
+    for (size_t i = 0; i < nLat; ++i)
+        g.latDeg.push_back(-90.0 + (i + 0.5) * 180.0 / nLat);
+    for (size_t i = 0; i < nR; ++i)
+        g.rKm.push_back(kCoreRadiusKm + i * (kSurfaceRadiusKm - kCoreRadiusKm) / (nR - 1));
+    for (size_t i = 0; i < nLon; ++i)
+        g.lonDeg.push_back(i * 360.0 / nLon);
+    return g;
+}
 
 int run(const std::string& command)
 {

@@ -2,6 +2,8 @@
 // files written from CDL text by ncgen (Debian's netcdf-bin), an independent writer.
 #pragma once
 
+#include "data/grid.h"
+
 #include <filesystem>
 #include <string>
 
@@ -26,6 +28,10 @@ std::filesystem::path contestLayoutDir();
 // offset) or "nc4". Fails the calling test (via exception) when ncgen fails.
 std::filesystem::path ncgen(const std::filesystem::path& dir, const std::string& name, const std::string& cdl,
                             const std::string& kind = "nc6");
+
+// A global grid with cell-centred lat rows (no pole rows), nR radii evenly from the core-mantle
+// boundary to the surface, and lon columns at i * 360 / nLon.
+SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon);
 
 // Runs a shell command; returns its exit status.
 int run(const std::string& command);

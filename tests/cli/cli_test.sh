@@ -111,6 +111,28 @@ synth_preprocess_kill_resume)
   check "no temporary directories remain" test -z "$(find "$work/ds" -name '.*tmp*')"
   check "dataset opens with 8 steps" grep -q "steps: 8" <<<"$("$raypc" info "$work/ds")"
   ;;
+stats_analytic_selection)
+  preprocess_fixture
+  # The fixture's radii are 3485 + i * 2886 / 40 km (41 shells); depth <= 660 km selects the
+  # shells from the first radius >= 5711 km, whose dual cells start halfway below it. The radial
+  # velocity is u0 = 0.15779 cm/yr everywhere, so a range around it keeps everything.
+  expected=$(awk 'BEGIN { pi = atan2(0, -1); for (i = 0; i <= 40; i++) { r = 3485 + i * 2886 / 40;
+      if (r >= 5711) { e = (prev + r) / 2; break } prev = r }
+      printf "%.6e %.6f", 4 / 3 * pi * (6371^3 - e^3), 100 * (6371^3 - e^3) / (6371^3 - 3485^3) }')
+  "$raypc" stats "$work/ds" --range "depth=0:660" --range "radial velocity=0.15:0.16" -o "$work/stats.csv" \
+    --profile "$work/profile.csv" --quiet >/dev/null
+  check "stats has a header and 3 steps" test "$(wc -l < "$work/stats.csv")" -eq 4
+  read -r volume percent <<<"$expected"
+  check "selected volume of every step is the analytic $volume km3 ($percent %)" awk -F, -v v="$volume" -v p="$percent" \
+    'NR > 1 { n++; if (($3 - v)^2 > (1e-6 * v)^2 || ($4 - p)^2 > 1e-8) bad = 1 } END { exit bad || n != 3 }' "$work/stats.csv"
+  check "profile: no selected volume below 660 km" awk -F, 'NR > 1 && $4 > 660 && $5 != 0 { bad = 1 } END { exit bad }' "$work/profile.csv"
+  check "profile: shells above 660 km fully selected" awk -F, 'NR > 1 && $4 < 600 && ($7 - 100)^2 > 1e-6 { bad = 1 } END { exit bad }' "$work/profile.csv"
+  "$raypc" stats "$work/ds" --range "radial velocity=0.2:0.3" -o "$work/none.csv" --quiet >/dev/null
+  check "a range beside u0 selects nothing" awk -F, 'NR > 1 && $3 != 0 { bad = 1 } END { exit bad }' "$work/none.csv"
+  expect_error "unknown variable or coordinate 'pressure'" stats "$work/ds" --range "pressure=0:1" -o "$work/x.csv"
+  expect_error "min 3 is greater than max 1" stats "$work/ds" --range "depth=3:1" -o "$work/x.csv"
+  check "no output after errors" test ! -e "$work/x.csv"
+  ;;
 *) echo "unknown case $case_name"; exit 2 ;;
 esac
 
