@@ -1,0 +1,106 @@
+// Critical points and pathlines on the full-resolution (180 x 201 x 360) synthetic model built in
+// memory (synthesizeSnapshot): 11 steps 2 Myr apart, only vx, vy, vz kept (1.7 GB) plus the
+// temperature anomaly of step 0.
+//   BM_CriticalPoints: classify all 13 M vertices of step 0 (seconds per step).
+//   BM_Pathlines: trace the significant seeds of step 0 (default filter: <= 200) for 10 steps,
+//     counter "lines/s" (and points per line), with 1 thread and with every core.
+// No peer is measured here: the paper traced pathlines outside its tool (ParaView).
+//   build-paths/bench/pathlines_bench --benchmark_min_time=1
+#include "data/critical_points.h"
+#include "data/pathlines.h"
+#include "data/synth.h"
+
+#include <benchmark/benchmark.h>
+#include <fmt/format.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <thread>
+
+using namespace raypc;
+
+namespace {
+
+struct Data {
+    FieldSeries series;
+    std::vector<std::vector<float>> velocity;  // 3 per step
+    std::vector<float> anomaly;                // step 0
+    std::vector<CriticalPoint> seeds;
+};
+
+const Data& data()
+{
+    static const Data d = [] {
+        Data out;
+        SynthOptions o;
+        o.nLat = 180;
+        o.nR = 201;
+        o.nLon = 360;
+        const int steps = 11;
+        out.velocity.reserve(3 * steps);
+        for (int k = 0; k < steps; ++k) {
+            Snapshot s = synthesizeSnapshot(o, k * o.dtMyr);
+            if (k == 0) {
+                out.series.grid = s.grid;
+                out.anomaly = std::move(s.find("temperature anomaly")->values);
+            }
+            std::vector<const float*> fields;
+            for (const char* name : {"vx", "vy", "vz"})
+                fields.push_back(out.velocity.emplace_back(std::move(s.find(name)->values)).data());
+            out.series.timesMyr.push_back(k * o.dtMyr);
+            out.series.fields.push_back(fields);
+        }
+        float maxAbs = 0;
+        for (float v : out.anomaly)
+            maxAbs = std::max(maxAbs, std::abs(v));
+        const auto all = findCriticalPoints(out.series.grid, out.anomaly);
+        out.seeds = selectSignificant(all, maxAbs, CriticalPointFilter{});
+        fmt::print(stderr, "grid {}x{}x{}, {} critical points in step 0, {} seeds (threshold {:.1f} K of max |{:.1f}| K)\n",
+                   o.nLat, o.nR, o.nLon, all.size(), out.seeds.size(),
+                   significanceThreshold(CriticalPointFilter{}, maxAbs), maxAbs);
+        return out;
+    }();
+    return d;
+}
+
+int threadsFor(int arg) { return arg == 0 ? static_cast<int>(std::thread::hardware_concurrency()) : arg; }
+
+void BM_CriticalPoints(benchmark::State& state)
+{
+    const Data& d = data();
+    tbb::task_arena arena(threadsFor(static_cast<int>(state.range(0))));
+    size_t found = 0;
+    for (auto _ : state)
+        arena.execute([&] { found = findCriticalPoints(d.series.grid, d.anomaly).size(); });
+    state.counters["critical_points"] = static_cast<double>(found);
+    state.counters["Mvertices/s"] = benchmark::Counter(static_cast<double>(d.anomaly.size()) * 1e-6,
+                                                       benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["threads"] = threadsFor(static_cast<int>(state.range(0)));
+}
+
+void BM_Pathlines(benchmark::State& state)
+{
+    const Data& d = data();
+    const PathlineTracer tracer(d.series, 0, 1, 2);
+    tbb::task_arena arena(threadsFor(static_cast<int>(state.range(0))));
+    PathlineSet set;
+    for (auto _ : state)
+        arena.execute([&] {
+            set = tracePathlines(d.series, tracer, d.seeds, 0, 10, {"vx", "vy", "vz"}, {"m/s", "m/s", "m/s"});
+        });
+    state.counters["lines/s"] =
+        benchmark::Counter(static_cast<double>(set.lineCount()), benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["points/line"] = set.lineCount() ? double(set.pointCount()) / set.lineCount() : 0;
+    double length = 0;
+    for (size_t i = 0; i < set.lineCount(); ++i)
+        length += set.attribute(i, set.column("length"));
+    state.counters["km/line"] = set.lineCount() ? length / set.lineCount() : 0;
+    state.counters["threads"] = threadsFor(static_cast<int>(state.range(0)));
+}
+
+}  // namespace
+
+BENCHMARK(BM_CriticalPoints)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Pathlines)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+BENCHMARK_MAIN();
