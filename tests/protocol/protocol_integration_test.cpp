@@ -1,0 +1,623 @@
+// Integration tests of `raypc serve` against docs/protocol.md: a real server process on an ephemeral
+// port, a client built with Beast. Connects to 127.0.0.1 only.
+#include "server/protocol.h"
+
+#include <boost/asio.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <poll.h>
+#include <unistd.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+namespace net = boost::asio;
+using tcp = net::ip::tcp;
+using nlohmann::json;
+using raypc::server::decodeFrame;
+using raypc::server::DecodedFrame;
+
+// ---------------------------------------------------------------------------------------------
+// The dataset (preprocessed once per test process into a temporary directory) and server processes.
+
+fs::path g_work;
+
+void runOrDie(const std::string& command)
+{
+    const int status = std::system(command.c_str());
+    ASSERT_EQ(status, 0) << command;
+}
+
+class Environment : public ::testing::Environment {
+public:
+    void SetUp() override
+    {
+        char pattern[] = "/tmp/raypc_protocol_XXXXXX";
+        ASSERT_NE(::mkdtemp(pattern), nullptr);
+        g_work = pattern;
+        runOrDie(std::string(RAYPC_EXE) + " preprocess " + RAYPC_SHARED_DIR + "/data/contest-layout -o " +
+                 (g_work / "ds").string() + " --quiet --sample-rows 2000 >/dev/null");
+        fs::create_directories(g_work / "assets" / "js");
+        std::ofstream(g_work / "assets" / "index.html") << "<html>raypc test page</html>";
+        std::ofstream(g_work / "assets" / "js" / "app.js") << "console.log('app')";
+        std::ofstream(g_work / "secret.txt") << "TOP-SECRET-CONTENT";
+    }
+    void TearDown() override
+    {
+        std::error_code ec;
+        fs::remove_all(g_work, ec);
+    }
+};
+const auto* const g_environment = ::testing::AddGlobalTestEnvironment(new Environment);
+
+// `raypc serve` in a child process; stopped (SIGTERM, then SIGKILL) on destruction.
+class ServerProcess {
+public:
+    explicit ServerProcess(std::vector<std::string> extra = {})
+    {
+        int out[2];
+        if (::pipe(out) != 0)
+            throw std::runtime_error("pipe");
+        std::vector<std::string> args = {RAYPC_EXE, "serve", (g_work / "ds").string(), "--port", "0",
+                                         "--assets", (g_work / "assets").string()};
+        args.insert(args.end(), extra.begin(), extra.end());
+        m_pid = ::fork();
+        if (m_pid == 0) {
+            ::dup2(out[1], 1);
+            ::close(out[0]);
+            ::close(out[1]);
+            std::vector<char*> argv;
+            for (auto& a : args)
+                argv.push_back(a.data());
+            argv.push_back(nullptr);
+            ::execv(argv[0], argv.data());
+            _exit(127);
+        }
+        ::close(out[1]);
+        m_out = out[0];
+        // Wait for "raypc: serving http://HOST:PORT/[?token=T]".
+        std::string text;
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+        const std::regex line(R"(raypc: serving http://[^ ]*:(\d+)/(\?token=([0-9a-f]+))?\n)");
+        std::smatch m;
+        while (!std::regex_search(text, m, line)) {
+            pollfd p{m_out, POLLIN, 0};
+            const int left = int(std::chrono::duration_cast<std::chrono::milliseconds>(
+                                     deadline - std::chrono::steady_clock::now())
+                                     .count());
+            if (left <= 0 || ::poll(&p, 1, left) <= 0)
+                throw std::runtime_error("no 'raypc: serving' line in time; output: " + text);
+            char buffer[512];
+            const ssize_t n = ::read(m_out, buffer, sizeof buffer);
+            if (n <= 0)
+                throw std::runtime_error("server exited early; output: " + text);
+            text.append(buffer, size_t(n));
+        }
+        port = uint16_t(std::stoi(m[1]));
+        token = m[3];
+        banner = text;
+    }
+    ~ServerProcess() { stop(); }
+    // SIGTERM, then SIGKILL after 5 s. True when the server exited by itself with status 0.
+    bool stop()
+    {
+        if (m_pid < 0)
+            return false;
+        ::kill(m_pid, SIGTERM);
+        bool clean = false;
+        int status = 0;
+        int i = 0;
+        for (; i < 100; ++i) {
+            if (::waitpid(m_pid, &status, WNOHANG) == m_pid) {
+                clean = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+                break;
+            }
+            ::usleep(50000);
+        }
+        if (i == 100) {
+            ::kill(m_pid, SIGKILL);
+            ::waitpid(m_pid, nullptr, 0);
+        }
+        ::close(m_out);
+        m_pid = -1;
+        return clean;
+    }
+    bool alive() const { return ::kill(m_pid, 0) == 0; }
+
+    uint16_t port = 0;
+    std::string token, banner;
+
+private:
+    pid_t m_pid = -1;
+    int m_out = -1;
+};
+
+void setReceiveTimeout(tcp::socket& socket, int seconds)
+{
+    timeval tv{seconds, 0};
+    ::setsockopt(socket.native_handle(), SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+}
+
+struct HttpAnswer {
+    int status = 0;
+    std::string body, contentType, setCookie;
+};
+
+HttpAnswer httpRequest(uint16_t port, http::verb method, const std::string& target, const std::string& body = "",
+                       const std::vector<std::pair<http::field, std::string>>& headers = {})
+{
+    net::io_context ioc;
+    tcp::socket socket(ioc);
+    socket.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
+    setReceiveTimeout(socket, 120);
+    http::request<http::string_body> req{method, target, 11};
+    req.set(http::field::host, "127.0.0.1");
+    for (const auto& [field, value] : headers)
+        req.set(field, value);
+    if (method == http::verb::post) {
+        req.set(http::field::content_type, "application/json");
+        req.body() = body;
+        req.prepare_payload();
+    }
+    http::write(socket, req);
+    beast::flat_buffer buffer;
+    http::response_parser<http::string_body> parser;
+    parser.body_limit(64 * 1024 * 1024);
+    beast::error_code ec;
+    http::read(socket, buffer, parser, ec);
+    if (ec)
+        throw std::runtime_error("HTTP " + target + ": " + ec.message());
+    const auto& res = parser.get();
+    return {int(res.result_int()), res.body(), std::string(res[http::field::content_type]),
+            std::string(res[http::field::set_cookie])};
+}
+
+HttpAnswer httpGet(uint16_t port, const std::string& target,
+                   const std::vector<std::pair<http::field, std::string>>& headers = {})
+{
+    return httpRequest(port, http::verb::get, target, "", headers);
+}
+
+// A WebSocket client: text messages are parsed as JSON, binary ones as frames.
+class WsClient {
+public:
+    explicit WsClient(uint16_t port, const std::string& target = "/ws") : m_ws(m_ioc)
+    {
+        auto& socket = beast::get_lowest_layer(m_ws);
+        socket.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
+        setReceiveTimeout(socket, 60);
+        m_ws.read_message_max(64 * 1024 * 1024);
+        m_ws.handshake("127.0.0.1:" + std::to_string(port), target);
+    }
+    void sendText(const std::string& text)
+    {
+        m_ws.text(true);
+        m_ws.write(net::buffer(text));
+    }
+    void sendBinary(const std::string& bytes)
+    {
+        m_ws.binary(true);
+        m_ws.write(net::buffer(bytes));
+    }
+    void send(const json& message) { sendText(message.dump()); }
+
+    struct Message {
+        bool binary = false;
+        json text;
+        DecodedFrame frame;
+        std::string raw;
+    };
+    Message receive()
+    {
+        beast::flat_buffer buffer;
+        m_ws.read(buffer);
+        Message m;
+        m.raw = beast::buffers_to_string(buffer.data());
+        m.binary = m_ws.got_binary();
+        if (m.binary) {
+            m.frame = decodeFrame(m.raw);  // its jpeg view is not used after the move; see jpegOf
+        } else {
+            m.text = json::parse(m.raw);
+        }
+        return m;
+    }
+    // Next text message (binary frames before it are collected into `frames`).
+    json receiveText(std::vector<Message>* frames = nullptr)
+    {
+        for (;;) {
+            Message m = receive();
+            if (!m.binary)
+                return m.text;
+            if (frames)
+                frames->push_back(std::move(m));
+        }
+    }
+    void hello()
+    {
+        send({{"type", "hello"}, {"protocol", 1}});
+        const json reply = receiveText();
+        ASSERT_EQ(reply["type"], "hello") << reply.dump();
+        ASSERT_EQ(reply["protocol"], 1);
+        ASSERT_TRUE(reply["session"].is_string());
+    }
+    // Frames until the converged one of state `id` (frames of other ids are returned too).
+    std::vector<Message> framesUntilConverged(int64_t id)
+    {
+        std::vector<Message> frames;
+        for (;;) {
+            Message m = receive();
+            if (!m.binary)
+                throw std::runtime_error("unexpected text message: " + m.raw);
+            const bool done = m.frame.header["id"] == id && m.frame.header["converged"] == true;
+            frames.push_back(std::move(m));
+            if (done)
+                return frames;
+        }
+    }
+    void close() { m_ws.close(websocket::close_code::normal); }
+    websocket::stream<tcp::socket>& stream() { return m_ws; }
+
+private:
+    net::io_context m_ioc;
+    websocket::stream<tcp::socket> m_ws;
+};
+
+json smallState(double azimuthDeg = 30, const std::string& colorMap = "viridis", int passes = 2)
+{
+    return {{"version", 1},
+            {"step", 1},
+            {"camera", {{"azimuthDeg", azimuthDeg}, {"elevationDeg", 20}, {"distanceKm", 20000}, {"fovYDeg", 40}}},
+            {"image", {{"width", 128}, {"height", 96}}},
+            {"color", {{"variable", "temperature"}, {"colorMap", colorMap}, {"opacity", {{0, 0.1}, {1, 0.9}}}}},
+            {"passes", passes}};
+}
+
+std::string jpegOf(const WsClient::Message& m)
+{
+    const auto& h = m.frame.header;
+    const size_t headerBytes = m.raw.size() - h["jpegBytes"].get<size_t>() - h["depthBytes"].get<size_t>() - 4;
+    return m.raw.substr(4 + headerBytes, h["jpegBytes"].get<size_t>());
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(Serve, InfoHistogramSampleOverHttp)
+{
+    ServerProcess server;
+    EXPECT_TRUE(server.token.empty()) << "no token on loopback";
+    const auto info = httpGet(server.port, "/api/info");
+    ASSERT_EQ(info.status, 200) << info.body;
+    EXPECT_EQ(info.contentType, "application/json");
+    const json j = json::parse(info.body);
+    EXPECT_EQ(j["protocol"], 1);
+    EXPECT_EQ(j["steps"].size(), 3u);
+    EXPECT_EQ(j["levels"].size(), 3u);
+    EXPECT_EQ(j["levels"][0]["nLat"], 36);
+    EXPECT_EQ(j["levels"][0]["nR"], 41);
+    EXPECT_EQ(j["levels"][0]["nLon"], 72);
+    ASSERT_FALSE(j["variables"].empty());
+    EXPECT_EQ(j["variables"][0]["histogram"].size(), 256u);
+    EXPECT_EQ(j["coordinates"].size(), 7u);
+    EXPECT_TRUE(j["defaultState"].is_object());
+    EXPECT_EQ(j["defaultState"]["version"], 1);
+    EXPECT_FALSE(j["colorMaps"].empty());
+
+    const auto h = httpGet(server.port, "/api/histogram?step=2&var=temperature");
+    ASSERT_EQ(h.status, 200) << h.body;
+    EXPECT_EQ(json::parse(h.body)["histogram"].size(), 256u);
+    const auto badStep = httpGet(server.port, "/api/histogram?step=300&var=temperature");
+    EXPECT_EQ(badStep.status, 400);
+    EXPECT_NE(json::parse(badStep.body)["error"].get<std::string>().find("step: 300 out of range 0..2"),
+              std::string::npos);
+    EXPECT_EQ(httpGet(server.port, "/api/histogram?step=0&var=pressure").status, 400);
+
+    const auto sample = httpGet(server.port, "/api/sample?step=0");
+    ASSERT_EQ(sample.status, 200);
+    EXPECT_EQ(sample.body.size(),
+              j["sample"]["rows"].get<size_t>() * j["sample"]["columns"].size() * sizeof(float));
+    EXPECT_EQ(httpGet(server.port, "/api/nothing").status, 404);
+}
+
+TEST(Serve, StaticFilesAndPathTraversal)
+{
+    ServerProcess server;
+    const auto index = httpGet(server.port, "/");
+    EXPECT_EQ(index.status, 200);
+    EXPECT_NE(index.body.find("raypc test page"), std::string::npos);
+    EXPECT_EQ(httpGet(server.port, "/js/app.js").status, 200);
+    for (const char* target : {"/../secret.txt", "/%2e%2e/secret.txt", "/%2E%2E/secret.txt", "/js/../../secret.txt",
+                               "/js/%2e%2e/%2e%2e/secret.txt", "/..%2fsecret.txt", "/..%5csecret.txt",
+                               "/%2fetc/passwd", "//etc/passwd", "/index.html%00", "/missing.html"}) {
+        const auto r = httpGet(server.port, target);
+        EXPECT_EQ(r.status, 404) << target;
+        EXPECT_EQ(r.body.find("TOP-SECRET"), std::string::npos) << target;
+        EXPECT_EQ(r.body.find("root:"), std::string::npos) << target;
+    }
+    // Targets a strict HTTP parser may reject outright: never 200, never the file.
+    for (const char* target : {"/..\\secret.txt", (g_work / "secret.txt").c_str()}) {
+        const auto r = httpGet(server.port, target);
+        EXPECT_NE(r.status, 200) << target;
+        EXPECT_EQ(r.body.find("TOP-SECRET"), std::string::npos) << target;
+    }
+}
+
+TEST(Serve, WebSocketFrameLayout)
+{
+    ServerProcess server;
+    WsClient ws(server.port);
+    ws.hello();
+    ws.send({{"type", "ping"}, {"id", 7}});
+    EXPECT_EQ(ws.receiveText(), (json{{"type", "pong"}, {"id", 7}}));
+
+    const json state = smallState(30, "viridis", 2);
+    ws.send({{"type", "state"}, {"id", 1}, {"state", state}, {"interactive", false}});
+    const auto frames = ws.framesUntilConverged(1);
+    ASSERT_EQ(frames.size(), 2u);
+    for (size_t i = 0; i < frames.size(); ++i) {
+        const json& h = frames[i].frame.header;
+        EXPECT_EQ(h["type"], "frame");
+        EXPECT_EQ(h["id"], 1);
+        EXPECT_EQ(h["step"], 1);
+        EXPECT_EQ(h["level"], 0);
+        EXPECT_EQ(h["pass"], int(i) + 1);
+        EXPECT_EQ(h["passes"], 2);
+        EXPECT_EQ(h["converged"], i == 1);
+        EXPECT_EQ(h["interactive"], false);
+        EXPECT_EQ(h["width"], 128);
+        EXPECT_EQ(h["height"], 96);
+        EXPECT_EQ(h["camera"]["azimuthDeg"], 30.0);
+        EXPECT_EQ(h["camera"]["distanceKm"], 20000.0);
+        EXPECT_EQ(h["depthWidth"], 32);
+        EXPECT_EQ(h["depthHeight"], 24);
+        EXPECT_EQ(h["depthBytes"], 32 * 24 * 4);
+        EXPECT_TRUE(h["stats"]["passMs"].is_number());
+        EXPECT_GT(h["stats"]["samples"].get<double>(), 0);
+        EXPECT_TRUE(h["selection"]["fractionOfMantle"].is_number());
+        EXPECT_NEAR(h["selection"]["fractionOfMantle"].get<double>(), 1.0, 1e-9);  // no brushes
+        const std::string jpeg = jpegOf(frames[i]);
+        ASSERT_GE(jpeg.size(), 4u);
+        EXPECT_EQ(uint8_t(jpeg[0]), 0xff);
+        EXPECT_EQ(uint8_t(jpeg[1]), 0xd8);
+        EXPECT_EQ(uint8_t(jpeg[jpeg.size() - 2]), 0xff);
+        EXPECT_EQ(uint8_t(jpeg[jpeg.size() - 1]), 0xd9);
+        ASSERT_EQ(frames[i].frame.depth.size(), 32u * 24u);
+        // The planet fills the middle of the image: finite depths there (km from the eye, less than the
+        // eye's distance from the centre), nothing hit in the corners.
+        const float centre = frames[i].frame.depth[12 * 32 + 16];
+        EXPECT_TRUE(std::isfinite(centre));
+        EXPECT_GT(centre, 20000.0f - 6371.0f - 1.0f);
+        EXPECT_LT(centre, 20000.0f);
+        EXPECT_TRUE(std::isinf(frames[i].frame.depth[0]));
+    }
+
+    // Interactive: one pass, at a level chosen for the time budget.
+    json fast = state;
+    fast["camera"]["azimuthDeg"] = 60;
+    ws.send({{"type", "state"}, {"id", 2}, {"state", fast}, {"interactive", true}});
+    const auto interactive = ws.framesUntilConverged(2);
+    const json& h = interactive.back().frame.header;
+    EXPECT_EQ(h["interactive"], true);
+    EXPECT_EQ(h["passes"], 1);
+    EXPECT_EQ(h["camera"]["azimuthDeg"], 60.0);
+    EXPECT_GE(h["level"].get<int>(), 0);
+    EXPECT_LE(h["level"].get<int>(), 2);
+}
+
+TEST(Serve, BadMessagesGetErrorsAndTheConnectionStays)
+{
+    ServerProcess server;
+    WsClient ws(server.port);
+    // Before hello: an error, not a crash.
+    ws.send({{"type", "ping"}, {"id", 1}});
+    EXPECT_EQ(ws.receiveText()["type"], "error");
+    ws.hello();
+
+    auto expectError = [&](const std::string& text, const std::string& fragment) {
+        ws.sendText(text);
+        const json reply = ws.receiveText();
+        EXPECT_EQ(reply["type"], "error") << text.substr(0, 100);
+        EXPECT_NE(reply["message"].get<std::string>().find(fragment), std::string::npos)
+            << reply["message"] << " lacks " << fragment;
+    };
+    expectError(R"({"type": "state", "id": )", "malformed JSON");
+    expectError("not json at all", "malformed JSON");
+    expectError(R"({"type": "teleport"})", "unknown message type 'teleport'");
+    expectError(R"({"type": "state", "state": {}})", "missing field 'id'");
+    expectError(R"({"type": "ping"})", "missing field 'id'");
+    expectError(std::string(R"({"type": "ping", "id": 1, "pad": ")") + std::string(300 * 1024, 'x') + "\"}",
+                "over the limit");
+    ws.sendBinary("\x01\x02\x03");
+    EXPECT_EQ(ws.receiveText()["type"], "error");
+
+    // A state the dataset cannot render: error with its id; the previous state stays.
+    json unknownVar = smallState();
+    unknownVar["color"]["variable"] = "pressure";
+    ws.send({{"type", "state"}, {"id", 41}, {"state", unknownVar}});
+    json reply = ws.receiveText();
+    EXPECT_EQ(reply["type"], "error");
+    EXPECT_EQ(reply["id"], 41);
+    EXPECT_NE(reply["message"].get<std::string>().find("pressure"), std::string::npos);
+    json badStep = smallState();
+    badStep["step"] = 300;
+    ws.send({{"type", "state"}, {"id", 42}, {"state", badStep}});
+    reply = ws.receiveText();
+    EXPECT_EQ(reply["id"], 42);
+    EXPECT_NE(reply["message"].get<std::string>().find("step: 300 out of range 0..2"), std::string::npos);
+    json badKey = smallState();
+    badKey["camera"]["zoom"] = 2;
+    ws.send({{"type", "state"}, {"id", 43}, {"state", badKey}});
+    EXPECT_EQ(ws.receiveText()["id"], 43);
+
+    // Still working.
+    ws.send({{"type", "ping"}, {"id", 5}});
+    EXPECT_EQ(ws.receiveText(), (json{{"type", "pong"}, {"id", 5}}));
+    ws.send({{"type", "state"}, {"id", 44}, {"state", smallState()}, {"interactive", true}});
+    EXPECT_EQ(ws.framesUntilConverged(44).back().frame.header["id"], 44);
+    EXPECT_TRUE(server.alive());
+}
+
+TEST(Serve, WrongProtocolVersionIsRefusedAndClosed)
+{
+    ServerProcess server;
+    WsClient ws(server.port);
+    ws.send({{"type", "hello"}, {"protocol", 2}});
+    const json reply = ws.receiveText();
+    EXPECT_EQ(reply["type"], "error");
+    EXPECT_NE(reply["message"].get<std::string>().find("protocol 2"), std::string::npos);
+    EXPECT_NE(reply["message"].get<std::string>().find("protocol 1"), std::string::npos);
+    beast::flat_buffer buffer;
+    beast::error_code ec;
+    ws.stream().read(buffer, ec);
+    EXPECT_EQ(ec, websocket::error::closed);
+}
+
+TEST(Serve, TwoSessionsKeepTheirOwnStates)
+{
+    ServerProcess server;
+    WsClient a(server.port), b(server.port);
+    a.hello();
+    b.hello();
+    a.send({{"type", "state"}, {"id", 1}, {"state", smallState(0, "viridis", 1)}});
+    b.send({{"type", "state"}, {"id", 1}, {"state", smallState(120, "grayscale", 1)}});
+    const auto fa = a.framesUntilConverged(1);
+    const auto fb = b.framesUntilConverged(1);
+    EXPECT_EQ(fa.back().frame.header["camera"]["azimuthDeg"], 0.0);
+    EXPECT_EQ(fb.back().frame.header["camera"]["azimuthDeg"], 120.0);
+    EXPECT_NE(jpegOf(fa.back()), jpegOf(fb.back()));
+    // Session a's state is unchanged by b's: the same state again gives the same image.
+    a.send({{"type", "state"}, {"id", 2}, {"state", smallState(0, "viridis", 1)}});
+    EXPECT_EQ(jpegOf(a.framesUntilConverged(2).back()), jpegOf(fa.back()));
+}
+
+TEST(Serve, NewestStateWinsAndCancelStops)
+{
+    ServerProcess server;
+    WsClient ws(server.port);
+    ws.hello();
+    json slow = smallState(10, "viridis", 200);
+    slow["image"] = {{"width", 256}, {"height", 256}};
+    ws.send({{"type", "state"}, {"id", 1}, {"state", slow}});
+    ws.send({{"type", "state"}, {"id", 2}, {"state", smallState(20, "viridis", 1)}});
+    const auto frames = ws.framesUntilConverged(2);
+    // Then nothing more of state 1: a ping is answered with no frame in between.
+    ws.send({{"type", "ping"}, {"id", 9}});
+    std::vector<WsClient::Message> after;
+    EXPECT_EQ(ws.receiveText(&after)["id"], 9);
+    EXPECT_TRUE(after.empty());
+    int firstOfTwo = -1;
+    for (size_t i = 0; i < frames.size(); ++i)
+        if (frames[i].frame.header["id"] == 2 && firstOfTwo < 0)
+            firstOfTwo = int(i);
+    for (size_t i = size_t(firstOfTwo); i < frames.size(); ++i)
+        EXPECT_EQ(frames[i].frame.header["id"], 2);
+    EXPECT_LT(frames.size(), 200u);
+
+    // cancel: the 200-pass state stops; a ping right after sees at most a few frames.
+    ws.send({{"type", "state"}, {"id", 3}, {"state", slow}});
+    ws.receive();  // its first pass
+    ws.send({{"type", "cancel"}});
+    ws.send({{"type", "ping"}, {"id", 10}});
+    std::vector<WsClient::Message> late;
+    EXPECT_EQ(ws.receiveText(&late)["id"], 10);
+    ws.send({{"type", "ping"}, {"id", 11}});
+    std::vector<WsClient::Message> later;
+    EXPECT_EQ(ws.receiveText(&later)["id"], 11);
+    EXPECT_LE(late.size(), 3u);
+    EXPECT_TRUE(later.empty()) << later.size() << " frames after cancel";
+}
+
+TEST(Serve, ClosingATabStopsItsWork)
+{
+    ServerProcess server;
+    {
+        WsClient ws(server.port);
+        ws.hello();
+        json slow = smallState(10, "viridis", 100000);
+        slow["image"] = {{"width", 256}, {"height", 256}};
+        ws.send({{"type", "state"}, {"id", 1}, {"state", slow}});
+        ws.receive();
+        ws.close();
+    }
+    // The server answers a new session promptly (the closed one's work was stopped).
+    const auto start = std::chrono::steady_clock::now();
+    WsClient ws(server.port);
+    ws.hello();
+    ws.send({{"type", "state"}, {"id", 1}, {"state", smallState()}, {"interactive", true}});
+    ws.framesUntilConverged(1);
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(20));
+    EXPECT_TRUE(server.alive());
+}
+
+TEST(Serve, ScreenshotSelectionAndBodyLimit)
+{
+    ServerProcess server;
+    json state = smallState(30, "viridis", 2);
+    const auto png = httpRequest(server.port, http::verb::post, "/api/screenshot", state.dump());
+    ASSERT_EQ(png.status, 200) << png.body;
+    EXPECT_EQ(png.contentType, "image/png");
+    ASSERT_GT(png.body.size(), 8u);
+    EXPECT_EQ(png.body.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+
+    state["brushes"] = {{{"name", "depth"}, {"min", 0}, {"max", 1000}}};
+    const auto sel = httpRequest(server.port, http::verb::post, "/api/selection", state.dump());
+    ASSERT_EQ(sel.status, 200) << sel.body;
+    const json s = json::parse(sel.body);
+    EXPECT_GT(s["fractionOfMantle"].get<double>(), 0.0);
+    EXPECT_LT(s["fractionOfMantle"].get<double>(), 1.0);
+    EXPECT_EQ(s["step"], 1);
+
+    state["brushes"] = {{{"name", "pressure"}, {"min", 0}, {"max", 1}}};
+    const auto bad = httpRequest(server.port, http::verb::post, "/api/selection", state.dump());
+    EXPECT_EQ(bad.status, 400);
+    EXPECT_NE(bad.body.find("pressure"), std::string::npos);
+    EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/selection", "{nope").status, 400);
+    const auto big = httpRequest(server.port, http::verb::post, "/api/selection", std::string(2 * 1024 * 1024, ' '));
+    EXPECT_EQ(big.status, 413);
+}
+
+TEST(Serve, NonLoopbackNeedsTheToken)
+{
+    ServerProcess server({"--host", "0.0.0.0"});
+    ASSERT_EQ(server.token.size(), 32u) << server.banner;
+    EXPECT_EQ(httpGet(server.port, "/api/info").status, 401);
+    EXPECT_EQ(httpGet(server.port, "/").status, 401);
+    EXPECT_EQ(httpGet(server.port, "/api/info?token=0000").status, 401);
+    EXPECT_EQ(httpGet(server.port, "/api/info?token=" + server.token).status, 200);
+    EXPECT_EQ(httpGet(server.port, "/api/info", {{http::field::authorization, "Bearer " + server.token}}).status, 200);
+    EXPECT_EQ(httpGet(server.port, "/api/info", {{http::field::cookie, "raypc_token=" + server.token}}).status, 200);
+    const auto page = httpGet(server.port, "/?token=" + server.token);
+    EXPECT_EQ(page.status, 200);
+    EXPECT_NE(page.setCookie.find("raypc_token=" + server.token), std::string::npos);
+
+    EXPECT_THROW(WsClient(server.port, "/ws"), beast::system_error);
+    WsClient ws(server.port, "/ws?token=" + server.token);
+    ws.hello();
+}
+
+TEST(Serve, StopsCleanlyOnSigtermWhileRendering)
+{
+    ServerProcess server;
+    WsClient ws(server.port);
+    ws.hello();
+    ws.send({{"type", "state"}, {"id", 1}, {"state", smallState(0, "viridis", 100000)}});
+    ws.receive();
+    EXPECT_TRUE(server.stop());
+}
+
+}  // namespace
