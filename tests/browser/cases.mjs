@@ -4,7 +4,7 @@
 import { readFileSync, writeFileSync } from 'node:fs';
 import { spawnSync } from 'node:child_process';
 import { join } from 'node:path';
-import { check, meanAbsDiff, openUi, postJson, runCase, TestFailure, viewPixels, waitConverged } from './harness.mjs';
+import { check, meanAbsDiff, openUi, postJson, runCase, standardView, TestFailure, viewPixels, waitConverged } from './harness.mjs';
 
 const [caseName, raypc, fixture] = process.argv.slice(2);
 
@@ -51,6 +51,7 @@ const cases = {
   // analytic shell volume, and the image changes; clearing the brush brings the image back.
   async brush({ context, url }) {
     const page = await openUi(context, url);
+    await standardView(page);
     const before = await viewPixels(page);
     const ds = await info(url);
     const radius = ds.coordinates.find((c) => c.name === 'radius');
@@ -105,7 +106,10 @@ const cases = {
   // with the server's).
   async warp({ context, url }) {
     const page = await openUi(context, url);
-    await page.evaluate(() => window.__raypc.setState({ ...window.__raypc.state(), image: { width: 384, height: 384 } }));
+    await standardView(page);
+    // Without the core: its shading follows the camera (light in the camera frame), which no
+    // re-projection of an image can reproduce; the volume alone must warp into place.
+    await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, core: { ...s.core, visible: false } }); });
     await waitConverged(page);
     for (const [label, act] of [
       ['orbit', () => drag(page, 45, 20)],
@@ -131,7 +135,7 @@ const cases = {
       const fresh = await viewPixels(page);
       const dOld = meanAbsDiff(old, fresh), dWarp = meanAbsDiff(warped, fresh);
       check(dOld > 1.5, `${label}: the camera change hardly changed the image (${dOld.toFixed(2)})`);
-      check(dWarp < 0.6 * dOld, `${label}: the warped view (difference ${dWarp.toFixed(2)}) is not much closer to the new frame than the old frame (${dOld.toFixed(2)})`);
+      check(dWarp < 0.5 * dOld, `${label}: the warped view (difference ${dWarp.toFixed(2)}) is not much closer to the new frame than the old frame (${dOld.toFixed(2)})`);
       console.log(`  ${label}: old frame differs by ${dOld.toFixed(2)}, warped by ${dWarp.toFixed(2)} grey levels`);
     }
   },
@@ -180,6 +184,7 @@ const cases = {
   // of the state's size; a bad file is refused with a message and changes nothing.
   async save_load({ context, url, tmp, raypc, dataset }) {
     const page = await openUi(context, url);
+    await standardView(page);
     await page.selectOption('#variable', 'temperature');
     await page.selectOption('#colorMap', 'inferno');
     await drag(page, -60, 30);

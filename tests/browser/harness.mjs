@@ -118,6 +118,15 @@ export async function openUi(context, url, { hash = '', timeoutMs = 30000 } = {}
   return page;
 }
 
+// A square image with the planet filling most of it, so image differences are not diluted.
+export async function standardView(page) {
+  await page.evaluate(() => {
+    const s = window.__raypc.state();
+    window.__raypc.setState({ ...s, image: { width: 384, height: 384 }, camera: { ...s.camera, distanceKm: 16000 } });
+  });
+  await waitConverged(page);
+}
+
 // Waits until the newest sent state has been answered by a converged frame that is on screen.
 export async function waitConverged(page, timeoutMs = 30000) {
   await page.waitForFunction(() => {
@@ -132,19 +141,32 @@ export async function waitConverged(page, timeoutMs = 30000) {
   await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
 }
 
-// The 3D view's pixels, downsampled to 64x64 grey levels (0..255), for image comparisons.
-export async function viewPixels(page) {
-  return page.evaluate(() => {
+// The 3D view's image (its letterboxed viewport), box-filtered to n x n grey levels (0..255).
+export async function viewPixels(page, n = 64) {
+  return page.evaluate((n) => {
+    // Only the image's letterboxed viewport, as View3D.draw places it.
     const src = document.getElementById('view3d');
+    const { width, height } = window.__raypc.state().image;
+    const cw = src.width, ch = src.height, aspect = width / height;
+    let vw = cw, vh = Math.round(cw / aspect);
+    if (vh > ch) { vh = ch; vw = Math.round(ch * aspect); }
+    // Box-filter the viewport down to n x n grey levels (drawImage's own scaling samples too few pixels).
     const c = document.createElement('canvas');
-    c.width = 64; c.height = 64;
+    c.width = vw; c.height = vh;
     const ctx = c.getContext('2d', { willReadFrequently: true });
-    ctx.drawImage(src, 0, 0, 64, 64);
-    const d = ctx.getImageData(0, 0, 64, 64).data;
-    const out = [];
-    for (let i = 0; i < d.length; i += 4) out.push((d[i] + d[i + 1] + d[i + 2]) / 3);
-    return out;
-  });
+    ctx.drawImage(src, Math.floor((cw - vw) / 2), Math.ceil((ch - vh) / 2), vw, vh, 0, 0, vw, vh);
+    const d = ctx.getImageData(0, 0, vw, vh).data;
+    const sum = new Float64Array(n * n), count = new Float64Array(n * n);
+    for (let y = 0; y < vh; y++) {
+      const by = Math.min(n - 1, Math.floor((y * n) / vh));
+      for (let x = 0; x < vw; x++) {
+        const k = by * n + Math.min(n - 1, Math.floor((x * n) / vw)), o = (y * vw + x) * 4;
+        sum[k] += (d[o] + d[o + 1] + d[o + 2]) / 3;
+        count[k]++;
+      }
+    }
+    return Array.from(sum, (v, k) => v / Math.max(1, count[k]));
+  }, n);
 }
 
 export function meanAbsDiff(a, b) {

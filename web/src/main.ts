@@ -35,6 +35,13 @@ interface Debug {
   playing: boolean;
   parcoords: ParallelCoordinates;
   sampleStep: number;
+  // Test hooks: what was sent and received when, warps drawn while a newer state was pending,
+  // and holding incoming frames back (to look at a warped view deterministically).
+  sentLog: { id: number; t: number; step: number; interactive: boolean; brushes: Brush[] }[];
+  frameLog: { id: number; step: number; pass: number; t: number }[];
+  warpedWhileWaiting: number;
+  holdFrames: boolean;
+  releaseFrames(): void;
 }
 
 class App {
@@ -62,6 +69,7 @@ class App {
   private lastHeader: FrameHeader | null = null;
   private lastDrawKind = 'none';
   private errorTimer = 0;
+  private heldFrames: Frame[] = [];
   readonly debug: Debug;
 
   constructor(readonly info: Info) {
@@ -108,6 +116,16 @@ class App {
       playing: false,
       parcoords: this.pc,
       sampleStep: -1,
+      sentLog: [],
+      frameLog: [],
+      warpedWhileWaiting: 0,
+      holdFrames: false,
+      releaseFrames: () => {
+        this.debug.holdFrames = false;
+        const held = this.heldFrames;
+        this.heldFrames = [];
+        for (const f of held) this.onFrame(f);
+      },
     };
     (window as unknown as { __raypc: Debug }).__raypc = this.debug;
 
@@ -193,20 +211,30 @@ class App {
     if (this.sendTimes.size > 200) this.sendTimes.delete(this.sendTimes.keys().next().value as number);
     this.debug.lastSentId = id;
     this.debug.statesSent++;
+    this.debug.sentLog.push({ id, t: this.lastSendTime, step: this.state.step, interactive, brushes: this.state.brushes.map((b) => ({ ...b })) });
+    if (this.debug.sentLog.length > 500) this.debug.sentLog.shift();
   }
 
   // ---- frames ------------------------------------------------------------------------------
 
   private onFrame(frame: Frame): void {
+    if (this.debug.holdFrames) {
+      this.heldFrames.push(frame);
+      return;
+    }
     const h = frame.header;
     this.debug.framesReceived++;
+    this.debug.frameLog.push({ id: h.id, step: h.step, pass: h.pass, t: frame.receivedAt });
+    if (this.debug.frameLog.length > 500) this.debug.frameLog.shift();
     this.debug.headers.push(h);
     if (this.debug.headers.length > 100) this.debug.headers.shift();
     const sent = this.sendTimes.get(h.id);
     if (sent && sent.first === undefined) sent.first = frame.receivedAt - sent.t;
     if (h.id < this.debug.lastShownId) return; // a pass of an older state that was still in flight
     this.lastHeader = h;
-    if (h.selection) this.setSelection({ ...h.selection, step: h.step });
+    // Interactive frames carry the selection on the level they rendered: quick feedback while
+    // brushing; final states get the exact volume from POST /api/selection (refreshSelection).
+    if (h.selection && h.interactive && this.state.brushes.length) this.setSelection({ ...h.selection, step: h.step });
     void this.view.setFrame(frame).then(() => {
       if (h.id >= this.debug.lastShownId) this.debug.lastShownId = h.id;
       if (sent && h.pass === 1) {
@@ -226,6 +254,7 @@ class App {
       this.drawPending = false;
       const bg = (this.state.background as [number, number, number] | undefined) ?? [0, 0, 0];
       this.lastDrawKind = this.view.draw(this.state.camera, this.state.image.width, this.state.image.height, bg);
+      if (this.lastDrawKind === 'warped' && this.debug.lastShownId < this.debug.lastSentId) this.debug.warpedWhileWaiting++;
     });
   }
 

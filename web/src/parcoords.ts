@@ -27,6 +27,30 @@ type Row = Record<string, number>;
 
 const kRate = 12000; // lines per animation frame in the progressive queue
 
+// Short axis titles for the long dataset names (the full name is the axis' tooltip).
+const kShortNames: Record<string, string> = {
+  'temperature anomaly': 'T anomaly',
+  'spin transition-induced density anomaly': 'spin Δρ',
+  'thermal conductivity': 'conductivity',
+  'thermal expansivity': 'expansivity',
+  'radial velocity': 'v radial',
+  'velocity magnitude': '|v|',
+};
+const kShortUnits: Record<string, string> = { degrees_north: '°N', degrees_east: '°E', 'kg/m^3': 'kg/m³' };
+
+export function axisTitle(a: AxisInfo): string {
+  const units = kShortUnits[a.units] ?? a.units;
+  const name = kShortNames[a.name] ?? a.name;
+  return units ? `${name} [${units}]` : name;
+}
+
+// Tick labels that stay short for values like 3e-9 m/s or 2e-6 1/K.
+function tickFormatFor(lo: number, hi: number): (v: number) => string {
+  const m = Math.max(Math.abs(lo), Math.abs(hi));
+  if (m > 0 && (m < 1e-2 || m >= 1e6)) return (v) => (v === 0 ? '0' : v.toExponential(1));
+  return d3.format('~g');
+}
+
 export class ParallelCoordinates {
   private pc: any = null; // eslint-disable-line @typescript-eslint/no-explicit-any
   private rows: Row[] = [];
@@ -124,7 +148,8 @@ export class ParallelCoordinates {
       if (!a) return;
       const lo = a.min, hi = a.max > a.min ? a.max : a.min + 1;
       dimensions[name] = {
-        title: a.units ? `${name} [${a.units}]` : name,
+        title: axisTitle(a),
+        tickFormat: tickFormatFor(lo, hi),
         type: 'number',
         index,
         yscale: d3.scaleLinear().domain([lo, hi]).range([plotH + 1, 1]),
@@ -149,8 +174,15 @@ export class ParallelCoordinates {
     } finally {
       this.suppress--;
     }
-    // Axis titles carry units; show them upright and readable.
-    d3.select(this.container).selectAll('.label').style('font-size', '11px');
+    // Titles carry units; stagger every other one so neighbours do not overlap; full name as tooltip.
+    d3.select(this.container).selectAll<SVGTextElement, string>('text.label')
+      .style('font-size', '11px')
+      .attr('transform', (_d, i) => `translate(0,${i % 2 ? -5 : -18})`)
+      .each((d, i, nodes) => {
+        const a = this.axes.find((x) => x.name === d);
+        d3.select(nodes[i].parentNode as SVGGElement).append('title')
+          .text(a ? `${a.name} [${a.units}]: drag vertically on the axis to brush, drag the title to reorder` : d);
+      });
   }
 
   private emit(interactive: boolean): void {

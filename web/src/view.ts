@@ -9,6 +9,7 @@ import type { CameraState } from './state';
 import type { Frame } from './connection';
 
 const kPlanetRadiusKm = 6371;
+const kRimBlocks = 2;
 
 const warpVs = `#version 300 es
 in vec3 aPos;
@@ -156,13 +157,28 @@ export class View3D {
     const eyeDist = Math.hypot(...cam.eye);
     const farT = eyeDist + 2 * kPlanetRadiusKm; // behind the planet, for pixels that hit nothing
     const nx = dw + 1, ny = dh + 1;
+    // Blocks that hit nothing next to ones that did (the translucent rim of a feature, whose
+    // opacity stayed below depthOpacity) take the nearest depth within kRimBlocks, so the rim
+    // moves with its feature instead of staying on the far sphere.
+    const depth = new Float32Array(frame.depth);
+    for (let j = 0; j < dh; j++)
+      for (let i = 0; i < dw; i++) {
+        if (Number.isFinite(frame.depth[j * dw + i])) continue;
+        let t = Infinity;
+        for (let bj = Math.max(0, j - kRimBlocks); bj <= Math.min(dh - 1, j + kRimBlocks); bj++)
+          for (let bi = Math.max(0, i - kRimBlocks); bi <= Math.min(dw - 1, i + kRimBlocks); bi++) {
+            const v = frame.depth[bj * dw + bi];
+            if (v < t) t = v;
+          }
+        depth[j * dw + i] = t;
+      }
     const data = new Float32Array(nx * ny * 6);
     for (let j = 0; j < ny; j++) {
       for (let i = 0; i < nx; i++) {
         let t = Infinity;
         for (let bj = Math.max(0, j - 1); bj <= Math.min(dh - 1, j); bj++)
           for (let bi = Math.max(0, i - 1); bi <= Math.min(dw - 1, i); bi++) {
-            const v = frame.depth[bj * dw + bi];
+            const v = depth[bj * dw + bi];
             if (Number.isFinite(v) && v < t) t = v;
           }
         const hit = Number.isFinite(t);
