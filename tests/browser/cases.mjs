@@ -61,12 +61,12 @@ const cases = {
     const axesShown = title.length, expected = ds.sample.columns.length;
     check(axesShown === expected, `${axesShown} axes shown, expected every sample column (${expected})`);
 
-    await brushAxis(page, 'radius', 0.25, 0.6);
+    await brushAxis(page, 'radius', 0.5, 0.95);
     const s = await rState(page);
     check(s.brushes.length === 1 && s.brushes[0].name === 'radius', `state.brushes after brushing radius: ${JSON.stringify(s.brushes)}`);
     const { min, max } = s.brushes[0];
     check(min > radius.min && max < radius.max && max - min > 0.2 * (radius.max - radius.min),
-      `radius brush ${min}..${max} does not match the dragged 25 %..60 % of ${radius.min}..${radius.max}`);
+      `radius brush ${min}..${max} does not match the dragged 50 %..95 % of ${radius.min}..${radius.max}`);
     const interactiveSent = await page.evaluate(() => window.__raypc.sentLog.filter((e) => e.interactive && e.brushes.length).length);
     check(interactiveSent >= 1, 'no interactive state was sent while brushing');
 
@@ -192,6 +192,7 @@ const cases = {
     await waitConverged(page);
     const imageA = await viewPixels(page);
     const stateA = await rState(page);
+    if (process.env.RAYPC_TEST_DEBUG) await page.locator('#view3d').screenshot({ path: join(process.env.RAYPC_TEST_DEBUG, 'saved.png') });
     check(stateA.color.variable === 'temperature' && stateA.color.colorMap === 'inferno' && stateA.brushes.length === 1,
       `UI changes did not reach the state: ${JSON.stringify(stateA.color)} ${JSON.stringify(stateA.brushes)}`);
 
@@ -210,12 +211,19 @@ const cases = {
     await waitConverged(page);
     const imageDefault = await viewPixels(page);
     check(meanAbsDiff(imageA, imageDefault) > 2, 'the default view looks like the saved one; the test would prove nothing');
+    const sentBefore = await page.evaluate(() => window.__raypc.lastSentId);
     await page.setInputFiles('#load', file);
+    await page.waitForFunction((n) => window.__raypc.lastSentId > n, sentBefore, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('loading the saved file sent no state'); });
     await waitConverged(page);
     const imageB = await viewPixels(page);
     const stateB = await rState(page);
     check(JSON.stringify(stateB) === JSON.stringify(stateA), `loaded state differs: ${JSON.stringify(stateB)}`);
     const dB = meanAbsDiff(imageA, imageB);
+    if (process.env.RAYPC_TEST_DEBUG) {
+      await page.locator('#view3d').screenshot({ path: join(process.env.RAYPC_TEST_DEBUG, 'loaded.png') });
+      console.log(JSON.stringify(await page.evaluate(() => window.__raypc.headers.slice(-3))), JSON.stringify(stateA));
+    }
     check(dB < 1, `the loaded state renders differently (mean difference ${dB.toFixed(2)})`);
     const pcBrush = await page.evaluate(() => window.__raypc.parcoords.brushes());
     check(pcBrush.length === 1 && pcBrush[0].name === 'depth' && Math.abs(pcBrush[0].min - stateA.brushes[0].min) < 1e-3 * Math.abs(stateA.brushes[0].max - stateA.brushes[0].min) + 1e-6,
@@ -226,6 +234,8 @@ const cases = {
     check(JSON.stringify(stateC) === JSON.stringify(stateA), 'the shared URL did not restore the state');
     const dC = meanAbsDiff(imageA, await viewPixels(page2));
     check(dC < 1, `the shared URL renders differently (mean difference ${dC.toFixed(2)})`);
+    const pcBrush2 = await page2.evaluate(() => window.__raypc.parcoords.brushes());
+    check(pcBrush2.length === 1 && pcBrush2[0].name === 'depth', `parallel coordinates opened from the URL show brushes ${JSON.stringify(pcBrush2)}`);
 
     const [shot] = await Promise.all([page.waitForEvent('download', { timeout: 60000 }), page.click('#screenshot')]);
     const png = join(tmp, 'shot.png');

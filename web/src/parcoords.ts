@@ -56,6 +56,7 @@ export class ParallelCoordinates {
   private rows: Row[] = [];
   private suppress = 0;
   private order: string[] | null = null;
+  private pending: Brush[] = [];
   private lineColor: (row: Row) => string = () => '#4a90d9';
   readonly timing: ParcoordsTiming = { lastBrushMs: 0, brushEvents: 0 };
 
@@ -113,7 +114,10 @@ export class ParallelCoordinates {
 
   // Shows the given brushes (e.g. from a loaded state) without reporting them back.
   setBrushes(brushes: Brush[]): void {
-    if (!this.pc) return;
+    if (!this.pc) {
+      this.pending = brushes.map((b) => ({ ...b })); // shown once the sample has arrived
+      return;
+    }
     const same = JSON.stringify(this.brushes().map((b) => [b.name, b.min.toPrecision(5), b.max.toPrecision(5)]).sort()) ===
       JSON.stringify(brushes.map((b) => [b.name, b.min.toPrecision(5), b.max.toPrecision(5)]).sort());
     if (same) return;
@@ -136,7 +140,7 @@ export class ParallelCoordinates {
   private rebuild(): void {
     const w = this.container.clientWidth, h = this.container.clientHeight;
     if (w < 50 || h < 50 || this.rows.length === 0) return;
-    const brushes = this.brushes();
+    const brushes = this.pc ? this.brushes() : this.pending;
     if (this.pc) this.order = this.pc.getOrderedDimensionKeys();
     this.container.innerHTML = '';
     const margin = { top: 34, right: 30, bottom: 14, left: 30 };
