@@ -84,7 +84,7 @@ struct Layer {
 // 660 km: the ringwoodite -> bridgmanite + ferropericlase transition (endothermic, resists flow).
 // 1600 km: the iron spin transition in ferropericlase, which in the contest data also shows
 // stagnation. Narrow notches with steep flanks give strong lateral flow around the layers.
-constexpr std::array<Layer, 2> kLayers = {{{660.0, 70.0, 0.85}, {1600.0, 110.0, 0.8}}};
+constexpr std::array<Layer, 2> kLayers = {{{660.0, 90.0, 0.85}, {1600.0, 130.0, 0.8}}};
 constexpr int kNoLayer = -1;
 
 double layerRadiusKm(int layer) { return kSurfaceRadiusKm - kLayers[layer].depthKm; }
@@ -107,17 +107,33 @@ double referenceTemperatureK(double rKm)
 struct Plume {
     Vec3d axis0;            // unit vector at t = 0
     double speedMps;        // peak upwelling on the axis
-    double amplitudeK;      // tail excess temperature
+    double amplitudeK;      // excess temperature scale (conduit ~0.65-1x, head 1.2x)
     double headRadius0Km;   // radius of the head centre at t = 0
     int stallLayer;         // index into kLayers, or kNoLayer when it passes through
+    double size;            // multiplies the lateral widths (0.8 ... 1.3)
 };
 
+// A slab hangs from a trench that is an arc of a small circle: the points at angular
+// "latitude" beta0 about the pole `pole0` (beta0 != 0 curves the trench), from azimuth 0
+// (direction `start0`) to `arcAngle`. With depth the sheet moves towards larger |beta| by
+// dipSign * dipOffsetRad * (1 - exp(-depth / dipScaleKm)): shallow dip at the trench
+// (atan(dipScale / (R * dipOffset))), steepening to near-vertical below a few hundred km.
 struct Slab {
-    Vec3d start0, end0;     // ends of the trench-parallel great-circle arc at t = 0
+    Vec3d pole0, start0;
+    double beta0, arcAngle;
+    double dipSign, dipOffsetRad, dipScaleKm;
+    double thicknessKm;     // Gaussian sigma of the sheet at the trench (thickens below 660)
     double speedMps;        // peak downwelling in the sheet
     double amplitudeK;      // (negative) temperature deficit
     double tipRadius0Km;    // radius of the slab tip at t = 0
     int stallLayer;
+};
+
+// One zonal spherical harmonic P_l(n . axis) (an exact degree-l harmonic about a random axis).
+struct Harmonic {
+    Vec3d axis0;
+    int degree;
+    double coeff;
 };
 
 struct Model {
@@ -125,20 +141,33 @@ struct Model {
     double rotationRadPerMyr;
     std::vector<Plume> plumes;
     std::vector<Slab> slabs;
+    // Background: poloidal flow potential (its -lap_S also patterns the mid-mantle temperature),
+    // toroidal flow stream function, top and bottom boundary-layer temperature patterns.
+    std::vector<Harmonic> poloidal, toroidal, top, bottom;
+    // Maxima over the sphere of |sum c l(l+1) P_l|, |toroidal velocity pattern|, |top|, |bottom|.
+    double poloidalNorm = 1, toroidalNorm = 1, topNorm = 1, bottomNorm = 1;
 };
 
 // Lateral sizes (km, measured at the reference radius of each term).
-constexpr double kPlumeFlowWidthKm = 420.0;   // angular width of the plume's flow potential
-constexpr double kPlumeTailSigmaKm = 180.0;
-constexpr double kPlumeHeadSigmaKm = 380.0;
-constexpr double kPlumeHeadRadialSigmaKm = 200.0;
-constexpr double kPlumeBaseSigmaKm = 550.0;   // the hot pool feeding a plume at the CMB
-constexpr double kPancakeSigmaKm = 950.0;     // material spreading along a layer
-constexpr double kPancakeRadialSigmaKm = 60.0;
+constexpr double kPlumeFlowWidthKm = 480.0;   // angular width of the plume's flow potential
+constexpr double kPlumeTailSigmaKm = 220.0;   // conduit, at kPlumeTailReferenceKm
+constexpr double kPlumeTailReferenceKm = 4400.0;
+constexpr double kPlumeHeadSigmaKm = 430.0;
+constexpr double kPlumeHeadRadialSigmaKm = 220.0;
+constexpr double kPlumeBaseSigmaKm = 700.0;   // the hot pile feeding a plume at the CMB
+constexpr double kPancakeSigmaKm = 900.0;     // material spreading along a layer
+constexpr double kPancakeRadialSigmaKm = 70.0;
 constexpr double kPancakeOffsetKm = 70.0;     // below the layer for plumes, above for slabs
-constexpr double kSlabFlowWidthKm = 260.0;
-constexpr double kSlabSigmaKm = 170.0;
+constexpr double kSlabFlowWidthKm = 300.0;
+constexpr double kSlabPoolSigmaKm = 800.0;    // cold pool where a slab lies on the CMB
 constexpr double kFlowReferenceRadiusKm = 5000.0;
+
+// Background magnitudes.
+constexpr double kBackgroundUpwellingCmPerYr = 0.7;   // peak |u_r| of the poloidal background
+constexpr double kBackgroundToroidalCmPerYr = 0.8;    // peak toroidal speed at the surface
+constexpr double kBackgroundMidK = 30.0;              // mid-mantle lateral variation
+constexpr double kBackgroundTopK = 70.0;              // top boundary layer
+constexpr double kBackgroundBottomK = 90.0;           // bottom boundary layer
 
 // Where the front of a feature (head, tip) is relative to a layer: 1 while it lingers near the
 // layer, decaying to 0 far below / above it; after passing, half of the spread material remains.
@@ -149,6 +178,19 @@ double pancakeStrength(double frontKm, double layerKm, double approachSign)
     return ahead >= 0.0 ? near : 0.5 + 0.5 * near;
 }
 
+// Notches of vertical flow at the layers a flow passes (not the one where it stalls).
+double layerNotches(double rKm, int stallLayer)
+{
+    double shape = 1.0;
+    for (int l = 0; l < static_cast<int>(kLayers.size()); ++l) {
+        if (l == stallLayer)
+            continue;
+        const double t = (rKm - layerRadiusKm(l)) / kLayers[l].notchHalfWidthKm;
+        shape *= 1.0 - kLayers[l].notchDepth * std::exp(-t * t);
+    }
+    return shape;
+}
+
 // Radial profile (dimensionless, 0 at both boundaries) of a feature's flow. `front` is the head
 // or tip radius; flow fades over `kAheadKm` beyond it; `direction` is +1 for rising plumes.
 double flowShape(double rKm, double frontKm, int stallLayer, double direction)
@@ -157,17 +199,11 @@ double flowShape(double rKm, double frontKm, int stallLayer, double direction)
     // sin(pi x) vanishes at both boundaries; it is not cut off outside them, so that f' (a
     // central difference) stays exact on the boundary rows themselves.
     const double x = (rKm - kCoreRadiusKm) / kMantleThicknessKm;
-    double shape = std::sin(kPi * x);
-    for (int l = 0; l < static_cast<int>(kLayers.size()); ++l) {
-        const double rl = layerRadiusKm(l);
-        if (l == stallLayer) {
-            // The feature cannot cross this layer: its flow ends there, with a steep decline
-            // just before it that turns vertical flow into lateral spreading.
-            shape *= smootherstep(direction * (rl - rKm) / 250.0);
-        } else {
-            const double t = (rKm - rl) / kLayers[l].notchHalfWidthKm;
-            shape *= 1.0 - kLayers[l].notchDepth * std::exp(-t * t);
-        }
+    double shape = std::sin(kPi * x) * layerNotches(rKm, stallLayer);
+    if (stallLayer != kNoLayer) {
+        // The feature cannot cross this layer: its flow ends there, with a steep decline
+        // just before it that turns vertical flow into lateral spreading.
+        shape *= smootherstep(direction * (layerRadiusKm(stallLayer) - rKm) / 250.0);
     }
     const double beyond = direction * (rKm - frontKm);
     if (beyond > 0.0)
@@ -175,12 +211,123 @@ double flowShape(double rKm, double frontKm, int stallLayer, double direction)
     return shape;
 }
 
-// Moves a head or tip with its own axis speed: dr/dt = direction * speed * shape(r).
-// RK4 in steps of at most 0.05 Myr; the head sits at shape's "front" so the fade-out is 1.
-double integrateFrontKm(double front0Km, double speedMps, int stallLayer, double direction, double timeMyr)
+// Radial profile of the background poloidal flow: sin(pi x) with notches at both layers.
+double backgroundShape(double rKm)
+{
+    const double x = (rKm - kCoreRadiusKm) / kMantleThicknessKm;
+    return std::sin(kPi * x) * layerNotches(rKm, kNoLayer);
+}
+
+// Radial profile of the background toroidal flow: plate-like, strongest at the surface.
+double toroidalShape(double rKm)
+{
+    const double depth = kSurfaceRadiusKm - rKm;
+    return (rKm / kSurfaceRadiusKm) * std::exp(-depth / 700.0);
+}
+
+// Legendre P_l(mu) and its derivative, by the three-term recurrences (no singularity at |mu| = 1).
+void legendre(int l, double mu, double& p, double& dp)
+{
+    double p0 = 1.0, p1 = mu, d0 = 0.0, d1 = 1.0;
+    if (l == 0) {
+        p = 1.0;
+        dp = 0.0;
+        return;
+    }
+    for (int k = 2; k <= l; ++k) {
+        const double p2 = ((2.0 * k - 1.0) * mu * p1 - (k - 1.0) * p0) / k;
+        const double d2 = d0 + (2.0 * k - 1.0) * p1;
+        p0 = p1;
+        p1 = p2;
+        d0 = d1;
+        d1 = d2;
+    }
+    p = p1;
+    dp = d1;
+}
+
+// Background patterns at the unit vector n for harmonics with the given (rotated) axes.
+struct BackgroundColumn {
+    double upwelling = 0;   // sum c l(l+1) P_l / poloidalNorm = -lap_S B / norm, in [-1, 1]
+    Vec3d gradB{};          // grad_S B / poloidalNorm
+    Vec3d toroidal{};       // n x grad_S C / toroidalNorm
+    double top = 0, bottom = 0;
+};
+
+BackgroundColumn backgroundColumn(const Model& model, const std::vector<Vec3d>& axes, Vec3d n)
+{
+    BackgroundColumn b;
+    size_t a = 0;
+    double p = 0, dp = 0;
+    for (const Harmonic& h : model.poloidal) {
+        const Vec3d ax = axes[a++];
+        const double mu = dot(n, ax);
+        legendre(h.degree, mu, p, dp);
+        b.upwelling += h.coeff * h.degree * (h.degree + 1) * p;
+        b.gradB = b.gradB + (h.coeff * dp) * (ax - mu * n);
+    }
+    for (const Harmonic& h : model.toroidal) {
+        const Vec3d ax = axes[a++];
+        legendre(h.degree, dot(n, ax), p, dp);
+        b.toroidal = b.toroidal + (h.coeff * dp) * cross(n, ax);
+    }
+    for (const Harmonic& h : model.top) {
+        legendre(h.degree, dot(n, axes[a++]), p, dp);
+        b.top += h.coeff * p;
+    }
+    for (const Harmonic& h : model.bottom) {
+        legendre(h.degree, dot(n, axes[a++]), p, dp);
+        b.bottom += h.coeff * p;
+    }
+    b.upwelling /= model.poloidalNorm;
+    b.gradB = (1.0 / model.poloidalNorm) * b.gradB;
+    b.toroidal = (1.0 / model.toroidalNorm) * b.toroidal;
+    b.top /= model.topNorm;
+    b.bottom /= model.bottomNorm;
+    return b;
+}
+
+std::vector<Vec3d> harmonicAxes(const Model& model, double turn)
+{
+    std::vector<Vec3d> axes;
+    for (const auto* set : {&model.poloidal, &model.toroidal, &model.top, &model.bottom})
+        for (const Harmonic& h : *set)
+            axes.push_back(rotate(h.axis0, model.rotationAxis, turn));
+    return axes;
+}
+
+// Background poloidal potential f_bg(r) (so that u_r = f_bg / r^2 * upwelling, in m/s).
+double backgroundPotential(double rKm)
+{
+    const double v = kBackgroundUpwellingCmPerYr * 0.01 / (kSecondsPerMyr / 1e6);
+    return v * rKm * rKm * backgroundShape(rKm);
+}
+
+// Background radial velocity (m/s) at unit vector n (t = 0 frame) and radius r.
+double backgroundRadialVelocity(const Model& model, const std::vector<Vec3d>& axes0, Vec3d n, double rKm)
+{
+    double up = 0, p = 0, dp = 0;
+    size_t a = 0;
+    for (const Harmonic& h : model.poloidal) {
+        legendre(h.degree, dot(n, axes0[a++]), p, dp);
+        up += h.coeff * h.degree * (h.degree + 1) * p;
+    }
+    return backgroundPotential(rKm) / (rKm * rKm) * up / model.poloidalNorm;
+}
+
+// Moves a head or tip: dr/dt = direction * speed * shape(r) + background u_r at the front's
+// own position (`where(r)`, t = 0 frame, in which the features and background are at rest
+// apart from the common rotation). RK4 in steps of at most 0.05 Myr.
+template <class Where>
+double integrateFrontKm(const Model& model, const std::vector<Vec3d>& axes0, double front0Km, double speedMps,
+                        int stallLayer, double direction, double timeMyr, Where where)
 {
     const double kmPerMyr = speedMps * kSecondsPerMyr / 1000.0;
-    auto rate = [&](double r) { return direction * kmPerMyr * flowShape(r, r, stallLayer, direction); };
+    const double kmPerMyrPerMps = kSecondsPerMyr / 1000.0;
+    auto rate = [&](double r) {
+        return direction * kmPerMyr * flowShape(r, r, stallLayer, direction) +
+               kmPerMyrPerMps * backgroundRadialVelocity(model, axes0, where(r), r);
+    };
     const int steps = std::max(1, static_cast<int>(std::ceil(std::abs(timeMyr) / 0.05)));
     const double h = timeMyr / steps;
     double r = front0Km;
@@ -198,7 +345,7 @@ Vec3d pickSeparated(Rng& rng, const std::vector<Vec3d>& taken, double minAngleRa
 {
     Vec3d best{};
     double bestAngle = -1.0;
-    for (int attempt = 0; attempt < 200; ++attempt) {
+    for (int attempt = 0; attempt < 400; ++attempt) {
         const Vec3d p = rng.onSphere();
         double nearest = kPi;
         for (const Vec3d& q : taken)
@@ -213,8 +360,56 @@ Vec3d pickSeparated(Rng& rng, const std::vector<Vec3d>& taken, double minAngleRa
     return best;
 }
 
+// Slab geometry: the sheet's angular latitude offset (radians, about the slab's pole) at depth.
+double slabShift(const Slab& s, double rKm)
+{
+    const double depth = std::max(0.0, kSurfaceRadiusKm - rKm);
+    return s.dipSign * s.dipOffsetRad * (1.0 - std::exp(-depth / s.dipScaleKm));
+}
+// d(shift)/dr (per km); the shift grows with depth, i.e. as r decreases.
+double slabShiftPrime(const Slab& s, double rKm)
+{
+    const double depth = kSurfaceRadiusKm - rKm;
+    if (depth < 0.0)
+        return 0.0;
+    return -s.dipSign * s.dipOffsetRad / s.dipScaleKm * std::exp(-depth / s.dipScaleKm);
+}
+
+// The point of a slab's sheet centre at radius r and trench azimuth psi (t = 0 frame unless
+// pole/start are rotated).
+Vec3d slabPoint(Vec3d pole, Vec3d start, double beta, double psi)
+{
+    const Vec3d e2 = cross(pole, start);
+    return std::sin(beta) * pole + std::cos(beta) * (std::cos(psi) * start + std::sin(psi) * e2);
+}
+
+// Random harmonics of degrees [lo, hi], `perDegree` axes each, coefficient ~ degree^-slope.
+void addHarmonics(Rng& rng, std::vector<Harmonic>& out, int lo, int hi, int perDegree, double slope)
+{
+    for (int l = lo; l <= hi; ++l)
+        for (int k = 0; k < perDegree; ++k) {
+            const double sign = rng.uniform() < 0.5 ? -1.0 : 1.0;
+            out.push_back({rng.onSphere(), l, sign * rng.uniform(0.5, 1.0) * std::pow(static_cast<double>(l), -slope)});
+        }
+}
+
+// Maximum over a fixed quasi-uniform point set (Fibonacci sphere) of |fn(n)|.
+template <class Fn>
+double maxOverSphere(Fn fn)
+{
+    constexpr int kPoints = 3000;
+    double best = 1e-30;
+    for (int i = 0; i < kPoints; ++i) {
+        const double z = 1.0 - (2.0 * i + 1.0) / kPoints;
+        const double phi = i * kPi * (3.0 - std::sqrt(5.0));
+        const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
+        best = std::max(best, std::abs(fn(Vec3d{s * std::cos(phi), s * std::sin(phi), z})));
+    }
+    return best;
+}
+
 // The cast of features. Their roles are fixed so every seed shows every phenomenon the contest
-// tasks look for; the seed decides positions, orientations, strengths and starting depths.
+// tasks look for; the seed decides positions, orientations, sizes, strengths and starting depths.
 Model buildModel(uint64_t seed)
 {
     Rng rng(seed ^ 0x5eed5eed12345678ull);
@@ -226,48 +421,95 @@ Model buildModel(uint64_t seed)
 
     std::vector<Vec3d> taken;
     const double cmPerYr = 0.01 / (kSecondsPerMyr / 1e6);  // in m/s
-    struct PlumeRole {
-        double headDepthKm;
+    struct Role {
+        double frontDepthKm;
         int stallLayer;
     };
-    // Heads: one already in the upper mantle, one below 660 about to slow down, one below the
-    // spin layer, two stalling (at 660 and at 1600 km), one young plume near the CMB.
-    const std::array<PlumeRole, 6> plumeRoles = {
-        {{450.0, kNoLayer}, {1000.0, kNoLayer}, {1850.0, kNoLayer}, {1780.0, 1}, {820.0, 0}, {2450.0, kNoLayer}}};
-    for (const PlumeRole& role : plumeRoles) {
+    // Plume heads: in the upper mantle (two, one spreading under the lithosphere), rising
+    // through the lower mantle (three), stalling below 1600 km (two) and below 660 km (two),
+    // and a young plume just above the CMB.
+    const std::array<Role, 10> plumeRoles = {{{450.0, kNoLayer},
+                                              {1000.0, kNoLayer},
+                                              {1850.0, kNoLayer},
+                                              {1780.0, 1},
+                                              {820.0, 0},
+                                              {2450.0, kNoLayer},
+                                              {260.0, kNoLayer},
+                                              {1300.0, kNoLayer},
+                                              {2000.0, 1},
+                                              {1050.0, 0}}};
+    for (const Role& role : plumeRoles) {
         Plume p;
-        p.axis0 = pickSeparated(rng, taken, degToRad(40.0));
+        p.axis0 = pickSeparated(rng, taken, degToRad(32.0));
         taken.push_back(p.axis0);
         p.speedMps = rng.uniform(3.0, 4.5) * cmPerYr;
         p.amplitudeK = rng.uniform(250.0, 380.0);
-        p.headRadius0Km = kSurfaceRadiusKm - role.headDepthKm + rng.uniform(-60.0, 60.0);
+        p.headRadius0Km = kSurfaceRadiusKm - role.frontDepthKm + rng.uniform(-60.0, 60.0);
         p.stallLayer = role.stallLayer;
+        p.size = rng.uniform(0.9, 1.3);
         model.plumes.push_back(p);
     }
-    struct SlabRole {
-        double tipDepthKm;
-        int stallLayer;
-    };
-    // Tips: two lying on 660, one in the upper mantle heading for 660, one between the layers,
-    // one crossing the spin layer, one deep in the lower mantle.
-    const std::array<SlabRole, 5> slabRoles = {
-        {{560.0, 0}, {420.0, 0}, {1150.0, kNoLayer}, {1500.0, kNoLayer}, {2150.0, kNoLayer}}};
-    for (const SlabRole& role : slabRoles) {
+    // Slab tips: three lying on 660 and one heading for it, one between the layers, one
+    // crossing the spin layer, two stalling on it, one deep in the lower mantle and one on the CMB.
+    const std::array<Role, 10> slabRoles = {{{560.0, 0},
+                                             {420.0, 0},
+                                             {1150.0, kNoLayer},
+                                             {1500.0, kNoLayer},
+                                             {2150.0, kNoLayer},
+                                             {620.0, 0},
+                                             {1380.0, 1},
+                                             {1490.0, 1},
+                                             {2700.0, kNoLayer},
+                                             {300.0, kNoLayer}}};
+    for (const Role& role : slabRoles) {
         Slab s;
-        const Vec3d mid = pickSeparated(rng, taken, degToRad(35.0));
+        // The trench's midpoint, and a small circle through it: pole at angular distance
+        // 90 - |beta0| from it; the arc extends half its length on both sides of the midpoint.
+        const Vec3d mid = pickSeparated(rng, taken, degToRad(30.0));
         taken.push_back(mid);
-        // A random direction tangent at `mid`, and an arc of 25-50 degrees along it.
-        Vec3d tangent = cross(mid, rng.onSphere());
-        tangent = normalized(tangent);
-        const double halfArc = degToRad(rng.uniform(12.5, 25.0));
-        s.start0 = std::cos(halfArc) * mid - std::sin(halfArc) * tangent;
-        s.end0 = std::cos(halfArc) * mid + std::sin(halfArc) * tangent;
+        const Vec3d tangent = normalized(cross(mid, rng.onSphere()));
+        const double beta0 = degToRad(rng.uniform(8.0, 40.0)) * (rng.uniform() < 0.5 ? -1.0 : 1.0);
+        // Pole: rotate mid towards `tangent`'s normal by 90 - beta0 ... built so that
+        // sin(beta0) = mid . pole.
+        const Vec3d side = normalized(cross(tangent, mid));  // perpendicular to mid and tangent
+        s.pole0 = std::sin(beta0) * mid + std::cos(beta0) * side;
+        s.beta0 = beta0;
+        const double lengthRad = degToRad(rng.uniform(25.0, 50.0));
+        s.arcAngle = lengthRad / std::cos(beta0);
+        // Start direction: the component of mid perpendicular to the pole, rotated back by half the arc.
+        const Vec3d midFlat = normalized(mid - dot(mid, s.pole0) * s.pole0);
+        s.start0 = rotate(midFlat, s.pole0, -0.5 * s.arcAngle);
+        // Dip towards the concave side (the small circle's pole), like island arcs.
+        s.dipSign = beta0 > 0 ? 1.0 : -1.0;
+        s.dipScaleKm = rng.uniform(180.0, 320.0);
+        const double dipAtTrench = degToRad(rng.uniform(25.0, 45.0));
+        s.dipOffsetRad = s.dipScaleKm / std::tan(dipAtTrench) / kSurfaceRadiusKm;
+        s.thicknessKm = rng.uniform(90.0, 130.0);
         s.speedMps = rng.uniform(3.5, 5.0) * cmPerYr;
         s.amplitudeK = -rng.uniform(320.0, 480.0);
-        s.tipRadius0Km = kSurfaceRadiusKm - role.tipDepthKm + rng.uniform(-50.0, 50.0);
+        s.tipRadius0Km = kSurfaceRadiusKm - role.frontDepthKm + rng.uniform(-50.0, 50.0);
         s.stallLayer = role.stallLayer;
         model.slabs.push_back(s);
     }
+    // Background: long-wavelength patterns (degrees 2-8).
+    addHarmonics(rng, model.poloidal, 2, 5, 2, 1.5);
+    addHarmonics(rng, model.toroidal, 2, 4, 2, 1.0);
+    addHarmonics(rng, model.top, 3, 8, 2, 0.7);
+    addHarmonics(rng, model.bottom, 2, 4, 2, 0.8);
+    const std::vector<Vec3d> axes = harmonicAxes(model, 0.0);
+    model.poloidalNorm = maxOverSphere([&](Vec3d n) {
+        Model m = model;
+        m.poloidalNorm = m.toroidalNorm = m.topNorm = m.bottomNorm = 1.0;
+        return backgroundColumn(m, axes, n).upwelling;
+    });
+    Model unit = model;
+    unit.poloidalNorm = unit.toroidalNorm = unit.topNorm = unit.bottomNorm = 1.0;
+    model.toroidalNorm = maxOverSphere([&](Vec3d n) {
+        const Vec3d t = backgroundColumn(unit, axes, n).toroidal;
+        return std::sqrt(dot(t, t));
+    });
+    model.topNorm = maxOverSphere([&](Vec3d n) { return backgroundColumn(unit, axes, n).top; });
+    model.bottomNorm = maxOverSphere([&](Vec3d n) { return backgroundColumn(unit, axes, n).bottom; });
     return model;
 }
 
@@ -279,26 +521,33 @@ constexpr int kMaxTerms = 5;
 
 struct FeatureAtTime {
     bool isPlume = true;
-    // Plume: axis. Slab: arc start, in-plane unit vector towards the end, and the arc's normal.
-    Vec3d axis{}, arcE1{}, arcE2{}, arcNormal{};
-    double arcAngle = 0;
+    // Plume: axis. Slab: the trench's small-circle pole, start direction, its normal partner.
+    Vec3d axis{}, arcE1{}, arcE2{}, pole{};
+    double beta0 = 0, arcAngle = 0;
     double flowWidthRad = 0;  // angular width of G
     int termCount = 0;
-    // Angular widths (radians) of the temperature terms.
+    // Angular widths (radians) of the separable temperature terms.
     std::array<double, kMaxTerms> termWidthRad{};
     // Radial tables (per grid radius): flow potential f and f', temperature terms.
     std::vector<double> f, fPrime;
     std::array<std::vector<double>, kMaxTerms> termRadial;
+    // Slabs: sheet shift and its r-derivative, sheet temperature and its angular width per radius;
+    // the shifts at the centres of the separable terms (pancakes, pool).
+    std::vector<double> shift, shiftPrime, sheetK, sheetWidthRad;
+    std::array<double, kMaxTerms> termShift{};
+    double shiftLo = 0, shiftHi = 0, sheetWidthMax = 0;
     SynthFeature description;
 };
 
 struct ModelAtTime {
     Vec3d rotationAxis;
     double rotationRadPerSecond;
+    Model model;
+    std::vector<Vec3d> harmonicAxes;  // rotated to this time
     std::vector<FeatureAtTime> features;
+    // Background radial tables: poloidal f, f', toroidal speed (m/s), temperature modes (K).
+    std::vector<double> bgF, bgFPrime, bgToroidal, bgMidK, bgTopK, bgBottomK;
 };
-
-double angleBetween(Vec3d a, Vec3d b) { return std::atan2(std::sqrt(dot(cross(a, b), cross(a, b))), dot(a, b)); }
 
 SynthFeature::Kind kindOf(bool isPlume) { return isPlume ? SynthFeature::Kind::Plume : SynthFeature::Kind::Slab; }
 
@@ -314,31 +563,58 @@ ModelAtTime modelAt(const SynthOptions& options, double timeMyr, const std::vect
 {
     const Model model = buildModel(options.seed);
     ModelAtTime m;
+    m.model = model;
     m.rotationAxis = model.rotationAxis;
     m.rotationRadPerSecond = model.rotationRadPerMyr / kSecondsPerMyr;
     const double turn = model.rotationRadPerMyr * timeMyr;
+    m.harmonicAxes = harmonicAxes(model, turn);
+    const std::vector<Vec3d> axes0 = harmonicAxes(model, 0.0);
     const size_t nR = rKm.size();
+
+    // Background radial tables.
+    m.bgF.resize(nR);
+    m.bgFPrime.resize(nR);
+    m.bgToroidal.resize(nR);
+    m.bgMidK.resize(nR);
+    m.bgTopK.resize(nR);
+    m.bgBottomK.resize(nR);
+    const double toroidalMps = kBackgroundToroidalCmPerYr * 0.01 / (kSecondsPerMyr / 1e6);
+    for (size_t i = 0; i < nR; ++i) {
+        const double r = rKm[i];
+        constexpr double h = 0.01;
+        m.bgF[i] = backgroundPotential(r);
+        m.bgFPrime[i] = (backgroundPotential(r + h) - backgroundPotential(r - h)) / (2.0 * h);
+        m.bgToroidal[i] = toroidalMps * toroidalShape(r);
+        const double depth = kSurfaceRadiusKm - r, above = r - kCoreRadiusKm;
+        // The mid-mantle pattern follows the background upwelling (hot where it rises).
+        m.bgMidK[i] = kBackgroundMidK * backgroundShape(r);
+        m.bgTopK[i] = kBackgroundTopK * std::exp(-depth / 180.0);
+        m.bgBottomK[i] = kBackgroundBottomK * std::exp(-above / 220.0);
+    }
 
     for (const Plume& p : model.plumes) {
         FeatureAtTime fa;
         fa.isPlume = true;
         fa.axis = rotate(p.axis0, model.rotationAxis, turn);
-        fa.flowWidthRad = kPlumeFlowWidthKm / kFlowReferenceRadiusKm;
-        const double head = integrateFrontKm(p.headRadius0Km, p.speedMps, p.stallLayer, +1.0, timeMyr);
+        fa.flowWidthRad = p.size * kPlumeFlowWidthKm / kFlowReferenceRadiusKm;
+        const double head = integrateFrontKm(model, axes0, p.headRadius0Km, p.speedMps, p.stallLayer, +1.0, timeMyr,
+                                             [&](double) { return p.axis0; });
         // G = exp(-(1 - cos gamma) / s^2) has -lap_S G = 2 / s^2 on the axis; scaling f by
         // s^2 / 2 * r^2 makes the axis speed exactly speedMps * flowShape.
         const double s2 = fa.flowWidthRad * fa.flowWidthRad;
         auto potential = [&](double r) { return p.speedMps * 0.5 * s2 * r * r * flowShape(r, head, p.stallLayer, +1.0); };
-        // Terms: tail (column up to the head), head, hot pool at the base, one pancake per layer.
+        // Terms: conduit (up to the head), head, hot pile at the base, one pancake per layer.
         fa.termCount = 5;
-        fa.termWidthRad = {kPlumeTailSigmaKm / kFlowReferenceRadiusKm, kPlumeHeadSigmaKm / head,
-                           kPlumeBaseSigmaKm / kCoreRadiusKm, kPancakeSigmaKm / layerRadiusKm(0),
+        fa.termWidthRad = {p.size * kPlumeTailSigmaKm / kPlumeTailReferenceKm, p.size * kPlumeHeadSigmaKm / head,
+                           p.size * kPlumeBaseSigmaKm / kCoreRadiusKm, kPancakeSigmaKm / layerRadiusKm(0),
                            kPancakeSigmaKm / layerRadiusKm(1)};
         // A rising plume meets the spin layer (index 1) before 660 km (index 0); a plume
         // stalled at a layer spreads there and never reaches the layers above it.
         std::array<double, 2> pancake{};
         for (int l = 0; l < 2; ++l)
             pancake[l] = (p.stallLayer == kNoLayer || l >= p.stallLayer) ? pancakeStrength(head, layerRadiusKm(l), +1.0) : 0.0;
+        // A head near the surface flattens under the lithosphere.
+        const double headRadialSigma = p.size * kPlumeHeadRadialSigmaKm * (1.0 - 0.5 * smootherstep((head - 5700.0) / 400.0));
         fa.f.resize(nR);
         fa.fPrime.resize(nR);
         for (auto& t : fa.termRadial)
@@ -349,11 +625,11 @@ ModelAtTime modelAt(const SynthOptions& options, double timeMyr, const std::vect
             fa.f[i] = potential(r);
             fa.fPrime[i] = (potential(r + h) - potential(r - h)) / (2.0 * h);
             const double aboveCmb = r - kCoreRadiusKm;
-            const double tail = 0.6 + 0.4 * std::exp(-aboveCmb / 300.0);
+            const double tail = 0.65 + 0.35 * std::exp(-aboveCmb / 300.0);
             fa.termRadial[0][i] = p.amplitudeK * tail * smootherstep((head - r) / 150.0);
-            const double dh = (r - head) / kPlumeHeadRadialSigmaKm;
-            fa.termRadial[1][i] = p.amplitudeK * 1.1 * std::exp(-0.5 * dh * dh);
-            fa.termRadial[2][i] = p.amplitudeK * 0.6 * std::exp(-aboveCmb / 130.0);
+            const double dh = (r - head) / headRadialSigma;
+            fa.termRadial[1][i] = p.amplitudeK * 1.2 * std::exp(-0.5 * dh * dh);
+            fa.termRadial[2][i] = p.amplitudeK * 0.45 * std::exp(-aboveCmb / 200.0);
             for (int l = 0; l < 2; ++l) {
                 const double dl = (r - (layerRadiusKm(l) - kPancakeOffsetKm)) / kPancakeRadialSigmaKm;
                 fa.termRadial[3 + l][i] = p.amplitudeK * 0.7 * pancake[l] * std::exp(-0.5 * dl * dl);
@@ -366,34 +642,45 @@ ModelAtTime modelAt(const SynthOptions& options, double timeMyr, const std::vect
         d.stallDepthKm = p.stallLayer == kNoLayer ? 0.0 : kLayers[p.stallLayer].depthKm;
         d.speedMps = p.speedMps;
         d.temperatureK = p.amplitudeK;
+        d.conduitSigmaKm = fa.termWidthRad[0] * kPlumeTailReferenceKm;
         m.features.push_back(std::move(fa));
     }
 
     for (const Slab& s : model.slabs) {
         FeatureAtTime fa;
         fa.isPlume = false;
-        const Vec3d a = rotate(s.start0, model.rotationAxis, turn);
-        const Vec3d b = rotate(s.end0, model.rotationAxis, turn);
-        fa.arcNormal = normalized(cross(a, b));
-        fa.arcE1 = a;
-        fa.arcE2 = cross(fa.arcNormal, a);
-        fa.arcAngle = angleBetween(a, b);
+        fa.pole = rotate(s.pole0, model.rotationAxis, turn);
+        fa.arcE1 = rotate(s.start0, model.rotationAxis, turn);
+        fa.arcE2 = cross(fa.pole, fa.arcE1);
+        fa.beta0 = s.beta0;
+        fa.arcAngle = s.arcAngle;
         fa.flowWidthRad = kSlabFlowWidthKm / kFlowReferenceRadiusKm;
-        const double tip = integrateFrontKm(s.tipRadius0Km, s.speedMps, s.stallLayer, -1.0, timeMyr);
-        // G = exp(-x^2 / (2 w^2)) across the sheet has -lap_S G ~ 1 / w^2 on the sheet; the
-        // minus sign makes the flow go down where the slab is.
+        const double midPsi = 0.5 * s.arcAngle;
+        const double tip = integrateFrontKm(model, axes0, s.tipRadius0Km, s.speedMps, s.stallLayer, -1.0, timeMyr,
+                                            [&](double r) { return slabPoint(s.pole0, s.start0, s.beta0 + slabShift(s, r), midPsi); });
+        // On the sheet -lap_S G = A / w^2 (see columnTerms); the minus sign makes the flow go
+        // down where the slab is.
         const double w2 = fa.flowWidthRad * fa.flowWidthRad;
         auto potential = [&](double r) { return -s.speedMps * w2 * r * r * flowShape(r, tip, s.stallLayer, -1.0); };
-        // Terms: the sheet down to the tip, then one pancake per layer (above it).
+        // Separable terms: one pancake per layer (above it), a cold pool on the CMB.
         fa.termCount = 3;
-        fa.termWidthRad = {kSlabSigmaKm / kFlowReferenceRadiusKm, kPancakeSigmaKm / layerRadiusKm(0),
-                           kPancakeSigmaKm / layerRadiusKm(1), 0.0, 0.0};
+        fa.termWidthRad = {kPancakeSigmaKm / layerRadiusKm(0), kPancakeSigmaKm / layerRadiusKm(1),
+                           kSlabPoolSigmaKm / kCoreRadiusKm, 0.0, 0.0};
+        fa.termShift = {slabShift(s, layerRadiusKm(0) + kPancakeOffsetKm), slabShift(s, layerRadiusKm(1) + kPancakeOffsetKm),
+                        slabShift(s, kCoreRadiusKm), 0.0, 0.0};
+        fa.shiftLo = std::min(0.0, s.dipSign * s.dipOffsetRad);
+        fa.shiftHi = std::max(0.0, s.dipSign * s.dipOffsetRad);
         // A sinking slab meets 660 km first; stalled there, it never reaches the spin layer.
         std::array<double, 2> pancake{};
         for (int l = 0; l < 2; ++l)
             pancake[l] = (s.stallLayer == kNoLayer || l <= s.stallLayer) ? pancakeStrength(tip, layerRadiusKm(l), -1.0) : 0.0;
+        const double pool = smootherstep((kCoreRadiusKm + 700.0 - tip) / 550.0);
         fa.f.resize(nR);
         fa.fPrime.resize(nR);
+        fa.shift.resize(nR);
+        fa.shiftPrime.resize(nR);
+        fa.sheetK.resize(nR);
+        fa.sheetWidthRad.resize(nR);
         for (auto& t : fa.termRadial)
             t.assign(nR, 0.0);
         for (size_t i = 0; i < nR; ++i) {
@@ -401,72 +688,77 @@ ModelAtTime modelAt(const SynthOptions& options, double timeMyr, const std::vect
             constexpr double h = 0.01;
             fa.f[i] = potential(r);
             fa.fPrime[i] = (potential(r + h) - potential(r - h)) / (2.0 * h);
-            // Coldest near the surface; warms (thermal assimilation) with depth below the trench.
+            fa.shift[i] = slabShift(s, r);
+            fa.shiftPrime[i] = slabShiftPrime(s, r);
+            // Coldest near the surface; warms (thermal assimilation) with depth below the trench,
+            // and thickens (buckling, slower sinking) below 660 km.
             const double depth = kSurfaceRadiusKm - r;
             const double assimilation = 0.55 + 0.45 * std::exp(-depth / 900.0);
-            fa.termRadial[0][i] = s.amplitudeK * assimilation * smootherstep((r - tip) / 120.0);
+            fa.sheetK[i] = s.amplitudeK * assimilation * smootherstep((r - tip) / 120.0);
+            fa.sheetWidthRad[i] = s.thicknessKm * (1.0 + 0.9 * smootherstep((depth - 500.0) / 500.0)) / std::max(r, 1.0);
+            fa.sheetWidthMax = std::max(fa.sheetWidthMax, fa.sheetWidthRad[i]);
             for (int l = 0; l < 2; ++l) {
                 const double dl = (r - (layerRadiusKm(l) + kPancakeOffsetKm)) / kPancakeRadialSigmaKm;
-                fa.termRadial[1 + l][i] = s.amplitudeK * 0.6 * pancake[l] * std::exp(-0.5 * dl * dl);
+                fa.termRadial[l][i] = s.amplitudeK * 0.6 * pancake[l] * std::exp(-0.5 * dl * dl);
             }
+            fa.termRadial[2][i] = s.amplitudeK * 0.55 * pool * std::exp(-(r - kCoreRadiusKm) / 160.0);
         }
         SynthFeature& d = fa.description;
         d.kind = kindOf(false);
-        describePoint(normalized(a + b), d.latDeg, d.lonDeg);
-        describePoint(a, d.startLatDeg, d.startLonDeg);
-        describePoint(b, d.endLatDeg, d.endLonDeg);
+        describePoint(slabPoint(fa.pole, fa.arcE1, s.beta0, midPsi), d.latDeg, d.lonDeg);
+        describePoint(slabPoint(fa.pole, fa.arcE1, s.beta0, 0.0), d.startLatDeg, d.startLonDeg);
+        describePoint(slabPoint(fa.pole, fa.arcE1, s.beta0, s.arcAngle), d.endLatDeg, d.endLonDeg);
         d.frontRadiusKm = tip;
         d.stallDepthKm = s.stallLayer == kNoLayer ? 0.0 : kLayers[s.stallLayer].depthKm;
         d.speedMps = s.speedMps;
         d.temperatureK = s.amplitudeK;
+        d.dipAtTrenchDeg = radToDeg(std::atan(s.dipScaleKm / (kSurfaceRadiusKm * s.dipOffsetRad)));
         m.features.push_back(std::move(fa));
     }
     return m;
 }
 
-// Angular part of the flow potential of a feature at the unit vector n.
-double flowPotentialAngular(const FeatureAtTime& fa, Vec3d n)
-{
-    if (fa.isPlume) {
-        const double w = fa.flowWidthRad;
-        return std::exp(-(1.0 - dot(n, fa.axis)) / (w * w));
-    }
-    const double x = dot(n, fa.arcNormal);
-    const double psi = std::atan2(dot(n, fa.arcE2), dot(n, fa.arcE1));
-    const double taper = std::min(0.15, fa.arcAngle / 3.0);
-    const double along = smootherstep(psi / taper) * smootherstep((fa.arcAngle - psi) / taper);
-    const double w = fa.flowWidthRad;
-    return std::exp(-0.5 * x * x / (w * w)) * along;
-}
-
-// Per-column values of one feature: G, its surface Laplacian and gradient, temperature factors.
+// Per-column values of one feature.
 struct ColumnTerms {
+    // Plumes: G's surface Laplacian and gradient.
     double lapG = 0;
     Vec3d gradG{};
+    // Slabs: angular latitude about the pole and its gradient, the trench taper A(psi) and its
+    // psi-derivatives times grad psi, 1 / cos^2(beta), tan(beta).
+    double beta = 0, along = 0, alongD1 = 0, alongD2 = 0, invCos2 = 0, tanBeta = 0;
+    Vec3d gradBeta{}, gradPsi{};
     std::array<double, kMaxTerms> angular{};
     bool active = false;
 };
 
-// Surface Laplacian and gradient of G on the unit sphere by geodesic central differences in an
-// orthonormal tangent basis (e1, e2): at the origin of Riemann normal coordinates the
-// Laplace-Beltrami operator is the flat Laplacian, so the 5-point stencil is second order.
+// Angular part of a plume's flow potential at the unit vector n.
+double plumeFlowAngular(const FeatureAtTime& fa, Vec3d n)
+{
+    const double w = fa.flowWidthRad;
+    return std::exp(-(1.0 - dot(n, fa.axis)) / (w * w));
+}
+
+// Surface Laplacian and gradient of a plume's G on the unit sphere by geodesic central
+// differences in an orthonormal tangent basis (e1, e2): at the origin of Riemann normal
+// coordinates the Laplace-Beltrami operator is the flat Laplacian, so the stencil is second order.
 void surfaceDerivatives(const FeatureAtTime& fa, Vec3d n, Vec3d e1, Vec3d e2, ColumnTerms& out)
 {
     constexpr double h = 2e-4;  // radians (~1 km); features are >= 0.03 rad wide
     const double c = std::cos(h), s = std::sin(h);
-    const double g0 = flowPotentialAngular(fa, n);
-    const double g1p = flowPotentialAngular(fa, c * n + s * e1), g1m = flowPotentialAngular(fa, c * n - s * e1);
-    const double g2p = flowPotentialAngular(fa, c * n + s * e2), g2m = flowPotentialAngular(fa, c * n - s * e2);
+    const double g0 = plumeFlowAngular(fa, n);
+    const double g1p = plumeFlowAngular(fa, c * n + s * e1), g1m = plumeFlowAngular(fa, c * n - s * e1);
+    const double g2p = plumeFlowAngular(fa, c * n + s * e2), g2m = plumeFlowAngular(fa, c * n - s * e2);
     out.lapG = (g1p + g1m + g2p + g2m - 4.0 * g0) / (h * h);
     out.gradG = ((g1p - g1m) / (2.0 * h)) * e1 + ((g2p - g2m) / (2.0 * h)) * e2;
 }
 
+// Far from a feature every factor is below ~1e-13 of its peak; skipping it there is invisible
+// in float32 and makes the per-cell loop touch only nearby features.
+constexpr double kNegligibleExponent = 30.0;
+
 void columnTerms(const FeatureAtTime& fa, Vec3d n, Vec3d e1, Vec3d e2, ColumnTerms& out)
 {
-    // Far from a feature every factor is below ~1e-13 of its peak; skipping it there is
-    // invisible in float32 and makes the per-cell loop touch only nearby features.
-    constexpr double kNegligibleExponent = 30.0;
-    double widest = fa.flowWidthRad;
+    double widest = std::max(fa.flowWidthRad, fa.sheetWidthMax);
     for (int k = 0; k < fa.termCount; ++k)
         widest = std::max(widest, fa.termWidthRad[k]);
     if (fa.isPlume) {
@@ -476,27 +768,58 @@ void columnTerms(const FeatureAtTime& fa, Vec3d n, Vec3d e1, Vec3d e2, ColumnTer
             return;
         for (int k = 0; k < fa.termCount; ++k)
             out.angular[k] = std::exp(-0.5 * chord2 / (fa.termWidthRad[k] * fa.termWidthRad[k]));
-    } else {
-        const double x = dot(n, fa.arcNormal);
-        const double psi = std::atan2(dot(n, fa.arcE2), dot(n, fa.arcE1));
-        // Beyond the arc's ends by more than a few widths nothing remains either.
-        const double margin = std::sqrt(2.0 * kNegligibleExponent) * widest;
-        out.active = x * x < 2.0 * kNegligibleExponent * widest * widest && psi > -margin &&
-                     psi < fa.arcAngle + margin;
-        if (!out.active)
-            return;
-        // Temperature: the sheet tapers sharply at the arc's ends; the pancakes (spread
-        // material) extend beyond the ends as well, with a Gaussian fall-off.
-        const double taper = std::min(0.15, fa.arcAngle / 3.0);
-        const double along = smootherstep(psi / taper) * smootherstep((fa.arcAngle - psi) / taper);
-        const double outside = psi < 0.0 ? -psi : (psi > fa.arcAngle ? psi - fa.arcAngle : 0.0);
-        out.angular[0] = std::exp(-0.5 * x * x / (fa.termWidthRad[0] * fa.termWidthRad[0])) * along;
-        for (int k = 1; k < fa.termCount; ++k) {
-            const double w2 = fa.termWidthRad[k] * fa.termWidthRad[k];
-            out.angular[k] = std::exp(-0.5 * (x * x + outside * outside) / w2);
-        }
+        surfaceDerivatives(fa, n, e1, e2, out);
+        return;
     }
-    surfaceDerivatives(fa, n, e1, e2, out);
+    // Slab: beta = asin(n . pole) (|grad beta| = 1, lap beta = -tan beta), psi = azimuth about
+    // the pole from arcE1 (|grad psi| = 1 / cos beta, lap psi = 0, grad beta . grad psi = 0).
+    const double x = std::clamp(dot(n, fa.pole), -1.0, 1.0);
+    const double cos2 = 1.0 - x * x;
+    const double beta = std::asin(x);
+    const double margin = std::sqrt(2.0 * kNegligibleExponent) * widest;
+    const double rel = beta - fa.beta0;
+    out.active = cos2 > 1e-6 && rel > fa.shiftLo - margin && rel < fa.shiftHi + margin;
+    if (!out.active)
+        return;
+    const double psi = std::atan2(dot(n, fa.arcE2), dot(n, fa.arcE1));
+    const double cosBeta = std::sqrt(cos2);
+    // Beyond the arc's ends by more than a few widths nothing remains either.
+    const double psiMargin = margin / cosBeta;
+    out.active = psi > -psiMargin && psi < fa.arcAngle + psiMargin;
+    if (!out.active)
+        return;
+    out.beta = beta;
+    out.invCos2 = 1.0 / cos2;
+    out.tanBeta = x / cosBeta;
+    out.gradBeta = (1.0 / cosBeta) * (fa.pole - x * n);
+    out.gradPsi = (1.0 / cos2) * cross(fa.pole, n);
+    // The trench taper A(psi) = S(psi / tau) S((Psi - psi) / tau) and its derivatives.
+    const double tau = std::min(0.15, fa.arcAngle / 3.0);
+    auto S = [](double t, double& d1, double& d2) {
+        if (t <= 0.0) {
+            d1 = d2 = 0.0;
+            return 0.0;
+        }
+        if (t >= 1.0) {
+            d1 = d2 = 0.0;
+            return 1.0;
+        }
+        d1 = 30.0 * t * t * (1.0 - t) * (1.0 - t);
+        d2 = 60.0 * t * (1.0 - t) * (1.0 - 2.0 * t);
+        return t * t * t * (t * (6.0 * t - 15.0) + 10.0);
+    };
+    double a1 = 0, a2 = 0, b1 = 0, b2 = 0;
+    const double a = S(psi / tau, a1, a2), b = S((fa.arcAngle - psi) / tau, b1, b2);
+    out.along = a * b;
+    out.alongD1 = (a1 * b - a * b1) / tau;
+    out.alongD2 = (a2 * b - 2.0 * a1 * b1 + a * b2) / (tau * tau);
+    // Separable terms (pancakes, pool) extend beyond the arc's ends with a Gaussian fall-off.
+    const double outside = (psi < 0.0 ? -psi : (psi > fa.arcAngle ? psi - fa.arcAngle : 0.0)) * cosBeta;
+    for (int k = 0; k < fa.termCount; ++k) {
+        const double xi = rel - fa.termShift[k];
+        const double w2 = fa.termWidthRad[k] * fa.termWidthRad[k];
+        out.angular[k] = std::exp(-0.5 * (xi * xi + outside * outside) / w2);
+    }
 }
 
 // ---- derived material properties ----
@@ -612,6 +935,24 @@ std::vector<SynthFeature> syntheticFeatures(const SynthOptions& options, double 
     return out;
 }
 
+std::array<double, 2> syntheticFeatureCentreDeg(const SynthOptions& options, double timeMyr, size_t index, double rKm)
+{
+    const Model model = buildModel(options.seed);
+    const double turn = model.rotationRadPerMyr * timeMyr;
+    Vec3d p{};
+    if (index < model.plumes.size()) {
+        p = rotate(model.plumes[index].axis0, model.rotationAxis, turn);
+    } else {
+        if (index >= model.plumes.size() + model.slabs.size())
+            fail("synthetic feature {} does not exist", index);
+        const Slab& s = model.slabs[index - model.plumes.size()];
+        p = rotate(slabPoint(s.pole0, s.start0, s.beta0 + slabShift(s, rKm), 0.5 * s.arcAngle), model.rotationAxis, turn);
+    }
+    std::array<double, 2> out{};
+    describePoint(p, out[0], out[1]);
+    return out;
+}
+
 std::array<double, 3> syntheticRotationRadPerSecond(const SynthOptions& options)
 {
     const Model model = buildModel(options.seed);
@@ -685,19 +1026,40 @@ Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr, const S
                 }
                 // Rigid rotation omega x (r n): purely horizontal, in m/s per km of radius.
                 const Vec3d spinPerKm = (model.rotationRadPerSecond * 1000.0) * cross(model.rotationAxis, n);
+                const BackgroundColumn bg = backgroundColumn(model.model, model.harmonicAxes, n);
                 for (size_t iR = 0; iR < nR; ++iR) {
                     const double r = grid.rKm[iR];
-                    double dT = 0.0, ur = 0.0;
-                    Vec3d uh = r * spinPerKm;
+                    const double invR = r > 0.0 ? 1.0 / r : 0.0;
+                    // Background: long-wavelength temperature and the poloidal + toroidal flow.
+                    double dT = model.bgMidK[iR] * bg.upwelling + model.bgTopK[iR] * bg.top + model.bgBottomK[iR] * bg.bottom;
+                    double ur = model.bgF[iR] * bg.upwelling * invR * invR;
+                    Vec3d uh = r * spinPerKm + (model.bgFPrime[iR] * invR) * bg.gradB + model.bgToroidal[iR] * bg.toroidal;
                     for (int f : active) {
                         const FeatureAtTime& fa = model.features[f];
                         const ColumnTerms& ct = terms[f];
                         for (int k = 0; k < fa.termCount; ++k)
                             dT += fa.termRadial[k][iR] * ct.angular[k];
-                        if (r > 0.0) {
-                            ur -= fa.f[iR] * ct.lapG / (r * r);
-                            uh = uh + (fa.fPrime[iR] / r) * ct.gradG;
+                        if (fa.isPlume) {
+                            ur -= fa.f[iR] * ct.lapG * invR * invR;
+                            uh = uh + (fa.fPrime[iR] * invR) * ct.gradG;
+                            continue;
                         }
+                        // Slab: Q = f(r) g(xi) A(psi) with xi = beta - beta0 - shift(r).
+                        const double xi = ct.beta - fa.beta0 - fa.shift[iR];
+                        const double wt = fa.sheetWidthRad[iR];
+                        if (xi * xi < 2.0 * kNegligibleExponent * wt * wt)
+                            dT += fa.sheetK[iR] * ct.along * std::exp(-0.5 * xi * xi / (wt * wt));
+                        const double w2 = fa.flowWidthRad * fa.flowWidthRad;
+                        if (xi * xi > 2.0 * kNegligibleExponent * w2)
+                            continue;
+                        const double g = std::exp(-0.5 * xi * xi / w2);
+                        const double g1 = -xi / w2 * g, g2 = (xi * xi / w2 - 1.0) / w2 * g;
+                        const double lapG = ct.along * (g2 - ct.tanBeta * g1) + g * ct.alongD2 * ct.invCos2;
+                        const double fr = fa.f[iR], fp = fa.fPrime[iR], sp = fa.shiftPrime[iR];
+                        ur -= fr * lapG * invR * invR;
+                        // u_h = grad_S(dQ/dr) / r, dQ/dr = A (f' g - f s' g').
+                        uh = uh + (invR * ct.along * (fp * g1 - fr * sp * g2)) * ct.gradBeta +
+                             (invR * ct.alongD1 * (fp * g - fr * sp * g1)) * ct.gradPsi;
                     }
                     const double t = referenceK[iR] + dT * boundaryTaper[iR];
                     const size_t idx = grid.index(iLat, iR, iLon);

@@ -50,9 +50,10 @@ std::array<int, 3> parseSynthGridSize(const std::string& text, const std::string
 struct SynthFeature {
     enum class Kind { Plume, Slab };
     Kind kind = Kind::Plume;
-    // Plume: axis position. Slab: the midpoint of the slab's great-circle arc (degrees).
+    // Plume: axis position. Slab: the midpoint of its trench (a small-circle arc; degrees).
+    // Slabs dip: below the surface the sheet is elsewhere, see syntheticFeatureCentreDeg.
     double latDeg = 0, lonDeg = 0;
-    // Slab only: the ends of its arc (degrees).
+    // Slab only: the ends of its trench (degrees).
     double startLatDeg = 0, startLonDeg = 0, endLatDeg = 0, endLonDeg = 0;
     // Plume: radius of the head centre. Slab: radius of the tip (km).
     double frontRadiusKm = 0;
@@ -61,8 +62,17 @@ struct SynthFeature {
     // Peak vertical speed of the feature's flow (m/s, > 0 for both kinds) and its temperature
     // amplitude (K, > 0 for plumes, < 0 for slabs).
     double speedMps = 0, temperatureK = 0;
+    // Plume only: Gaussian sigma of the conduit (km, at 4400 km radius; angular width fixed).
+    double conduitSigmaKm = 0;
+    // Slab only: dip at the trench (degrees); it steepens to near-vertical with depth.
+    double dipAtTrenchDeg = 0;
 };
 std::vector<SynthFeature> syntheticFeatures(const SynthOptions& options, double timeMyr);
+
+// Where feature `index` (as in syntheticFeatures) is centred at radius `rKm` and `timeMyr`:
+// a plume's axis, or the centre of a slab's (dipping) sheet below the middle of its trench.
+// Returns {latDeg, lonDeg}.
+std::array<double, 2> syntheticFeatureCentreDeg(const SynthOptions& options, double timeMyr, size_t index, double rKm);
 
 // The slow rigid rotation that carries the whole pattern (part of the velocity field):
 // v_rotation = omega x p with p in metres, omega (rad/s) in the Cartesian frame of spherical.h.

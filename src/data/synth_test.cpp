@@ -150,6 +150,7 @@ TEST(SynthModel, FiniteWithPlausibleMagnitudes)
     const auto& k = s.find("thermal conductivity")->values;
     const auto& alpha = s.find("thermal expansivity")->values;
     double maxSpeed = 0, sumSq = 0;
+    std::array<double, 3> maxAt{};
     for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
         for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
             EXPECT_NEAR(t[g.index(iLat, g.nR() - 1, iLon)], 300.0, 1.0);
@@ -158,6 +159,8 @@ TEST(SynthModel, FiniteWithPlausibleMagnitudes)
                 const size_t i = g.index(iLat, iR, iLon);
                 const double vx = s.fields[1].values[i], vy = s.fields[2].values[i], vz = s.fields[3].values[i];
                 const double speed = std::sqrt(vx * vx + vy * vy + vz * vz);
+                if (speed > maxSpeed)
+                    maxAt = {g.latDeg[iLat], depthOf(g, iR), g.lonDeg[iLon]};
                 maxSpeed = std::max(maxSpeed, speed);
                 sumSq += speed * speed;
                 ASSERT_GT(k[i], 2.5f);
@@ -167,7 +170,8 @@ TEST(SynthModel, FiniteWithPlausibleMagnitudes)
             }
         }
     const double rms = std::sqrt(sumSq / g.cellCount());
-    std::printf("max speed %.3g m/s (%.2f cm/yr), rms %.3g m/s\n", maxSpeed, maxSpeed * kMpsToCmPerYr, rms);
+    std::printf("max speed %.3g m/s (%.2f cm/yr) at lat %.1f depth %.0f km lon %.1f, rms %.3g m/s\n", maxSpeed,
+                maxSpeed * kMpsToCmPerYr, maxAt[0], maxAt[1], maxAt[2], rms);
     EXPECT_GT(maxSpeed, 1e-9);  // a few cm/yr
     EXPECT_LT(maxSpeed, 1e-8);
     EXPECT_GT(rms, 1e-10);
@@ -214,15 +218,19 @@ TEST(SynthModel, RadialVelocityFollowsTemperature)
     const Snapshot& s = demoSnapshot();
     const SphericalGrid& g = s.grid;
     const auto& dT = s.find("temperature anomaly")->values;
-    for (const SynthFeature& f : syntheticFeatures(demoOptions(), 0.0)) {
+    const auto features = syntheticFeatures(demoOptions(), 0.0);
+    for (size_t fi = 0; fi < features.size(); ++fi) {
+        const SynthFeature& f = features[fi];
         const bool plume = f.kind == SynthFeature::Kind::Plume;
         // Halfway along the feature, away from the stagnation layers where ur is held back.
         double rKm = plume ? 0.5 * (kCoreRadiusKm + 300.0 + f.frontRadiusKm) : 0.5 * (kSurfaceRadiusKm - 150.0 + f.frontRadiusKm);
         for (double layer : {660.0, 1600.0})
             if (std::abs(kSurfaceRadiusKm - layer - rKm) < 200.0)
                 rKm = kSurfaceRadiusKm - layer + (plume ? -220.0 : 220.0);
-        const size_t iLat = nearestIndex(g.latDeg, f.latDeg), iLon = nearestLon(g, f.lonDeg);
         const size_t iR = nearestIndex(g.rKm, rKm);
+        // Slabs dip: sample the sheet's centre at this radius.
+        const auto centre = syntheticFeatureCentreDeg(demoOptions(), 0.0, fi, g.rKm[iR]);
+        const size_t iLat = nearestIndex(g.latDeg, centre[0]), iLon = nearestLon(g, centre[1]);
         const size_t i = g.index(iLat, iR, iLon);
         const LocalVelocity u = localVelocity(s, i, g.latDeg[iLat], g.lonDeg[iLon]);
         std::printf("%s at (%.1f, %.1f) depth %.0f km (front %.0f km): ur %.3g m/s, dT %.0f K\n", plume ? "plume" : "slab",
@@ -319,7 +327,9 @@ TEST(SynthModel, DiscreteDivergenceOnTheGridIsSmall)
     }
     const double ratio = std::sqrt(sumDiv / sumRadial);
     std::printf("rms(div) / rms(radial term) on the demo grid: %.3f\n", ratio);
-    EXPECT_LT(ratio, 0.25);
+    // Was 0.25 with six plumes and five vertical slabs; the twenty features, dipping slabs and
+    // CMB pools add resolution-limited structure at ~2 demo cells (exact-difference test above).
+    EXPECT_LT(ratio, 0.3);
 }
 
 // Mean |ur| and mean horizontal speed over the cells whose depth is within [d0, d1] km; the
@@ -465,8 +475,9 @@ TEST(SynthModel, CoherentMotionBetweenSteps)
         const double moved = f1[i].frontRadiusKm - f0[i].frontRadiusKm;
         // The flow at the front, on the axis, from a tiny grid at the midpoint in time.
         const auto fm = syntheticFeatures(o, 0.5 * o.dtMyr)[i];
-        const Snapshot at = synthesizeSnapshot(o, 0.5 * o.dtMyr, localGrid(fm.latDeg, fm.lonDeg, fm.frontRadiusKm, 0.01, 0.5));
-        const double ur = localVelocity(at, at.grid.index(1, 1, 1), fm.latDeg, fm.lonDeg).ur;
+        const auto c = syntheticFeatureCentreDeg(o, 0.5 * o.dtMyr, i, fm.frontRadiusKm);
+        const Snapshot at = synthesizeSnapshot(o, 0.5 * o.dtMyr, localGrid(c[0], c[1], fm.frontRadiusKm, 0.01, 0.5));
+        const double ur = localVelocity(at, at.grid.index(1, 1, 1), c[0], c[1]).ur;
         const double expectedKm = ur * o.dtMyr * kSecondsPerMyr / 1000.0;
         std::printf("feature %zu: front moved %.2f km, flow there moves it %.2f km\n", i, moved, expectedKm);
         if (f0[i].kind == SynthFeature::Kind::Plume)
@@ -550,6 +561,173 @@ TEST(SynthModel, NegativeExpansivityAnomalyInColdShallowAndHotDeepRock)
     if (nColdDeep > 0) {
         EXPECT_GT(coldDeep / nColdDeep, 0.0);
     }
+}
+
+// The cast: 8-12 plumes and 8-12 slabs, stalling at both layers, of varied sizes; slabs dip.
+TEST(SynthModel, ManyVariedFeatures)
+{
+    for (uint64_t seed : {1, 2, 7}) {
+        const auto features = syntheticFeatures(demoOptions(seed), 0.0);
+        int plumes = 0, slabs = 0, plumeStall660 = 0, plumeStall1600 = 0, slabStall660 = 0, slabStall1600 = 0, deepSlabs = 0;
+        double minSigma = 1e9, maxSigma = 0;
+        for (size_t i = 0; i < features.size(); ++i) {
+            const SynthFeature& f = features[i];
+            if (f.kind == SynthFeature::Kind::Plume) {
+                ++plumes;
+                plumeStall660 += f.stallDepthKm == 660.0;
+                plumeStall1600 += f.stallDepthKm == 1600.0;
+                minSigma = std::min(minSigma, f.conduitSigmaKm);
+                maxSigma = std::max(maxSigma, f.conduitSigmaKm);
+            } else {
+                ++slabs;
+                slabStall660 += f.stallDepthKm == 660.0;
+                slabStall1600 += f.stallDepthKm == 1600.0;
+                deepSlabs += kSurfaceRadiusKm - f.frontRadiusKm > 2500.0;
+                EXPECT_GT(f.dipAtTrenchDeg, 20.0);
+                EXPECT_LT(f.dipAtTrenchDeg, 50.0);
+                // The sheet 500 km down is offset from the trench by a dip of < 70 degrees on average.
+                const auto top = syntheticFeatureCentreDeg(demoOptions(seed), 0.0, i, kSurfaceRadiusKm);
+                const auto deep = syntheticFeatureCentreDeg(demoOptions(seed), 0.0, i, kSurfaceRadiusKm - 500.0);
+                EXPECT_NEAR(top[0], f.latDeg, 1e-6);
+                const Vec3d a = sphericalToCartesianKm(top[0], top[1], 1.0), b = sphericalToCartesianKm(deep[0], deep[1], 1.0);
+                const double offsetKm = std::acos(std::clamp(a.x * b.x + a.y * b.y + a.z * b.z, -1.0, 1.0)) * kSurfaceRadiusKm;
+                EXPECT_GT(offsetKm, 500.0 / std::tan(degToRad(70.0))) << "slab " << i;
+            }
+        }
+        EXPECT_GE(plumes, 8);
+        EXPECT_LE(plumes, 12);
+        EXPECT_GE(slabs, 8);
+        EXPECT_LE(slabs, 12);
+        EXPECT_GE(plumeStall660, 1);
+        EXPECT_GE(plumeStall1600, 1);
+        EXPECT_GE(slabStall660, 2);
+        EXPECT_GE(slabStall1600, 1);
+        EXPECT_GE(deepSlabs, 1);
+        EXPECT_GT(maxSigma, 1.2 * minSigma);
+    }
+}
+
+// Plume conduits are continuous: on every plume's axis the anomaly stays above 100 K from
+// 150 km above the CMB up to the head, on the demo grid.
+TEST(SynthModel, PlumeConduitsAreContinuousFromTheCmb)
+{
+    const Snapshot& s = demoSnapshot();
+    const SphericalGrid& g = s.grid;
+    const auto& dT = s.find("temperature anomaly")->values;
+    int plumes = 0;
+    for (const SynthFeature& f : syntheticFeatures(demoOptions(), 0.0)) {
+        if (f.kind != SynthFeature::Kind::Plume)
+            continue;
+        ++plumes;
+        // Bilinear in lat/lon at each radius, so a conduit between grid columns counts.
+        SphericalGrid axis;
+        axis.latDeg = {f.latDeg};
+        axis.lonDeg = {f.lonDeg};
+        for (size_t iR = 0; iR < g.nR(); ++iR)
+            if (g.rKm[iR] >= kCoreRadiusKm + 150.0 && g.rKm[iR] <= f.frontRadiusKm)
+                axis.rKm.push_back(g.rKm[iR]);
+        ASSERT_FALSE(axis.rKm.empty());
+        const Snapshot a = synthesizeSnapshot(demoOptions(), 0.0, axis);
+        const auto& t = a.find("temperature")->values;
+        double minExcess = 1e9;
+        for (size_t iR = 0; iR < axis.rKm.size(); ++iR) {
+            // Anomaly = temperature - the demo grid's shell mean at this radius.
+            const size_t gR = nearestIndex(g.rKm, axis.rKm[iR]);
+            double mean = 0, area = 0;
+            for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+                for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                    const size_t i = g.index(iLat, gR, iLon);
+                    mean += rowArea(g, iLat) * (s.find("temperature")->values[i]);
+                    area += rowArea(g, iLat);
+                }
+            minExcess = std::min(minExcess, t[iR] - mean / area);
+        }
+        std::printf("plume at (%.1f, %.1f), head %.0f km deep: min anomaly on the axis %.0f K\n", f.latDeg, f.lonDeg,
+                    kSurfaceRadiusKm - f.frontRadiusKm, minExcess);
+        EXPECT_GT(minExcess, 100.0);
+        // And on the demo grid itself, the nearest column sees the conduit at mid height.
+        const size_t iLat = nearestIndex(g.latDeg, f.latDeg), iLon = nearestLon(g, f.lonDeg);
+        const size_t iMid = nearestIndex(g.rKm, 0.5 * (kCoreRadiusKm + f.frontRadiusKm));
+        EXPECT_GT(dT[g.index(iLat, iMid, iLon)], 60.0);
+    }
+    EXPECT_GE(plumes, 8);
+}
+
+// The boundary layers carry lateral variation: hot piles under plumes, cold pools under the
+// slab on the CMB, and a cold/hot pattern under the surface.
+TEST(SynthModel, BoundaryLayersVaryLaterally)
+{
+    const Snapshot& s = demoSnapshot();
+    const SphericalGrid& g = s.grid;
+    const auto& dT = s.find("temperature anomaly")->values;
+    for (double depth : {150.0, 2750.0}) {
+        const size_t iR = nearestIndex(g.rKm, kSurfaceRadiusKm - depth);
+        double lo = 0, hi = 0;
+        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                lo = std::min<double>(lo, dT[g.index(iLat, iR, iLon)]);
+                hi = std::max<double>(hi, dT[g.index(iLat, iR, iLon)]);
+            }
+        std::printf("anomaly at %.0f km depth: %.0f .. %.0f K\n", depth, lo, hi);
+        EXPECT_LT(lo, -100.0);
+        EXPECT_GT(hi, 100.0);
+    }
+}
+
+// The background flow away from features is divergence-free too, and ~1 cm/yr.
+TEST(SynthModel, BackgroundFlowIsDivergenceFreeAndSlow)
+{
+    const SynthOptions o = demoOptions();
+    const auto omega = syntheticRotationRadPerSecond(o);
+    int checked = 0;
+    double maxRelative = 0, meanSpeed = 0;
+    for (int k = 0; k < 40; ++k) {
+        const double lat = -80.0 + 160.0 * std::fmod(k * 0.618034, 1.0), lon = std::fmod(k * 97.3, 360.0);
+        const double depth = 100.0 + std::fmod(k * 431.0, 2700.0);
+        const Snapshot s = synthesizeSnapshot(o, 0.0, localGrid(lat, lon, kSurfaceRadiusKm - depth, 0.01, 0.5));
+        const auto [div, scale] = centralDivergence(s);
+        const LocalVelocity u = localVelocity(s, s.grid.index(1, 1, 1), lat, lon);
+        // Without the rigid rotation.
+        const Vec3d p = sphericalToCartesianKm(lat, lon, (kSurfaceRadiusKm - depth) * 1000.0);
+        const Vec3d w{omega[1] * p.z - omega[2] * p.y, omega[2] * p.x - omega[0] * p.z, omega[0] * p.y - omega[1] * p.x};
+        const double wEast = -w.x * std::sin(degToRad(lon)) + w.y * std::cos(degToRad(lon));
+        const double wNorth = -w.x * std::sin(degToRad(lat)) * std::cos(degToRad(lon)) -
+                              w.y * std::sin(degToRad(lat)) * std::sin(degToRad(lon)) + w.z * std::cos(degToRad(lat));
+        meanSpeed += std::sqrt(u.ur * u.ur + std::pow(u.east - wEast, 2) + std::pow(u.north - wNorth, 2));
+        // Below this the float32 rounding of ~1e-10 m/s over 0.5 km steps dominates.
+        if (scale < 5e-15)
+            continue;
+        ++checked;
+        maxRelative = std::max(maxRelative, std::abs(div) / scale);
+    }
+    meanSpeed /= 40;
+    std::printf("background: max |div| / term %.2g over %d points, mean non-rigid speed %.2f cm/yr\n", maxRelative, checked,
+                meanSpeed * kMpsToCmPerYr);
+    EXPECT_GT(checked, 30);
+    EXPECT_LT(maxRelative, 3e-3);
+    EXPECT_GT(meanSpeed * kMpsToCmPerYr, 0.1);
+    EXPECT_LT(meanSpeed * kMpsToCmPerYr, 5.0);
+}
+
+// Contest task 1: cold material moving down or not at all between 560 and 760 km depth.
+TEST(SynthModel, ColdStagnatingMaterialNear660)
+{
+    const Snapshot& s = demoSnapshot();
+    const SphericalGrid& g = s.grid;
+    const auto& dT = s.find("temperature anomaly")->values;
+    double volume = 0;
+    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+        for (size_t iR = 0; iR < g.nR(); ++iR) {
+            if (depthOf(g, iR) < 560.0 || depthOf(g, iR) > 760.0)
+                continue;
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                const size_t i = g.index(iLat, iR, iLon);
+                if (dT[i] < -100.0 && localVelocity(s, i, g.latDeg[iLat], g.lonDeg[iLon]).ur <= 0.0)
+                    volume += rowArea(g, iLat);
+            }
+        }
+    std::printf("cold, non-rising cells at 560-760 km: %.3g (area-weighted)\n", volume);
+    EXPECT_GT(volume, 0.05);
 }
 
 // ---- the netCDF writer, checked with plain netCDF-C calls ----
