@@ -158,15 +158,23 @@ void run(const RenderArgs& args)
     }
 
     nlohmann::json statsJson = nlohmann::json::array();
+    double measuredRate = 0;  // estimated samples per second, all threads (VolumeRenderer::measuredSamplesPerSecond)
     for (int step = first; step <= last; ++step) {
         int level = state.level.value_or(-1);
         if (level < 0) {
-            // Interactive choice: the finest level whose pass fits the time budget at ~100 M samples/s/thread.
+            // Interactive choice: the finest level whose pass fits the time budget at the throughput
+            // measured on this machine, now: one calibration pass at the coarsest level (cheap).
             std::vector<std::shared_ptr<const StepVolume>> levels;
             for (int l = 0; l < int(dataset->levels().size()); ++l)
                 levels.push_back(dataset->load(step, l));
-            level = chooseLevelForBudget(levels, params, state.timeBudgetMs / 1000.0,
-                                         100e6 * tbb::this_task_arena::max_concurrency());
+            if (measuredRate <= 0) {
+                VolumeRenderer calibration(levels.back());
+                calibration.setParams(params);
+                FrameBuffer scratch(params.width, params.height);
+                calibration.renderPass(scratch);
+                measuredRate = calibration.measuredSamplesPerSecond();
+            }
+            level = chooseInteractive(levels, params, state.timeBudgetMs / 1000.0, measuredRate).level;
         }
         VolumeRenderer renderer(dataset->load(step, level));
         renderer.setParams(params);
@@ -178,10 +186,13 @@ void run(const RenderArgs& args)
             passes.push_back({{"seconds", s.seconds},
                               {"samples", s.samples},
                               {"samplesSkipped", s.samplesSkipped},
-                              {"samplesPerSecondPerThread", s.samplesPerSecondPerThread()}});
+                              {"samplesPerSecondPerThread", s.samplesPerSecondPerThread()},
+                              {"dataSamplesPerSecondPerThread", s.dataSamplesPerSecondPerThread()}});
             total.seconds += s.seconds;
             total.samples += s.samples;
             total.samplesSkipped += s.samplesSkipped;
+            total.chunks += s.chunks;
+            total.chunksJumped += s.chunksJumped;
             total.threads = s.threads;
             total.simdLanes = s.simdLanes;
             total.bricksTotal = s.bricksTotal;
@@ -206,7 +217,10 @@ void run(const RenderArgs& args)
                              {"samplesSkipped", total.samplesSkipped},
                              {"bricksVisited", total.bricksTotal - total.bricksSkipped},
                              {"bricksSkipped", total.bricksSkipped},
-                             {"samplesPerSecondPerThread", total.samplesPerSecondPerThread()}});
+                             {"chunks", total.chunks},
+                             {"chunksJumped", total.chunksJumped},
+                             {"samplesPerSecondPerThread", total.samplesPerSecondPerThread()},
+                             {"dataSamplesPerSecondPerThread", total.dataSamplesPerSecondPerThread()}});
     }
     if (args.stats)
         fmt::print("{}\n", (sequence ? statsJson : statsJson[0]).dump(2));

@@ -268,7 +268,7 @@ RenderState loadRenderState(const std::filesystem::path& path)
 json toJson(const RenderState& s)
 {
     json opacity = json::array();
-    for (const auto& p : s.opacity)
+    for (const auto& p : s.opacity.empty() ? defaultOpacity(s.colorMap) : s.opacity)
         opacity.push_back({p.position, p.opacity});
     json brushes = json::array();
     for (const auto& b : s.brushes)
@@ -312,6 +312,13 @@ json toJson(const RenderState& s)
     };
 }
 
+std::vector<OpacityPoint> defaultOpacity(ColorMapId map)
+{
+    if (isCentredOnZero(map))
+        return {{0.0f, 0.5f}, {0.5f, 0.0f}, {1.0f, 0.5f}};
+    return {{0.0f, 0.0f}, {1.0f, 0.5f}};
+}
+
 RenderParams resolveParams(const RenderState& s, const VariableCatalog& catalog)
 {
     auto known = [&] {
@@ -345,7 +352,7 @@ RenderParams resolveParams(const RenderState& s, const VariableCatalog& catalog)
     };
     p.transfer.colorMap = s.colorMap;
     p.transfer.range = s.colorRange ? *s.colorRange : defaultRange(p.colorVariable, s.colorMap);
-    p.transfer.opacity = s.opacity;
+    p.transfer.opacity = s.opacity.empty() ? defaultOpacity(s.colorMap) : s.opacity;
     p.transfer.opacityUnitKm = s.opacityUnitKm;
     p.transfer.validate();
     for (const BrushSpec& b : s.brushes) {

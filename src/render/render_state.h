@@ -32,7 +32,7 @@ struct RenderState {
     std::string colorVariable;  // empty: the first variable
     ColorMapId colorMap = ColorMapId::Viridis;
     std::optional<ValueRange> colorRange;  // default: the variable's global range (symmetric for centred maps)
-    std::vector<OpacityPoint> opacity = {{0.0f, 0.0f}, {1.0f, 0.5f}};
+    std::vector<OpacityPoint> opacity;  // empty: defaultOpacity(colorMap)
     float opacityUnitKm = 100.0f;
     std::vector<BrushSpec> brushes;
     std::optional<int> level;  // nullopt: chosen for timeBudgetMs (reload class)
@@ -50,6 +50,10 @@ struct RenderState {
     ShadingStyle shading;
     Rgb background{0.0f, 0.0f, 0.0f};
 };
+
+// The opacity used when the state gives none: a ramp from 0 to 0.5 over the range, or for maps
+// centred on zero (blue-white-red) a V, 0.5 at both ends and transparent at zero.
+std::vector<OpacityPoint> defaultOpacity(ColorMapId map);
 
 // `what` names the source in messages (a file name or "state").
 RenderState parseRenderState(const nlohmann::json& json, const std::string& what = "state");

@@ -89,5 +89,31 @@ TEST(RenderState, ResolvesNamesAndRejectsUnknownOnes)
     EXPECT_THROW(resolveParams(s, catalog), Error);
 }
 
+TEST(RenderState, DefaultOpacityIsAVForMapsCentredOnZero)
+{
+    const VariableCatalog catalog{{"temperature anomaly"}, {{-500, 200}}};
+    RenderState s = parseRenderState(json{{"version", 1}, {"color", {{"colorMap", "blue-white-red"}}}});
+    EXPECT_TRUE(s.opacity.empty());
+    const TransferFunction tf = resolveParams(s, catalog).transfer;
+    auto opacityAt = [&](float position) {
+        const auto& o = tf.opacity;
+        for (size_t i = 1; i < o.size(); ++i)
+            if (position <= o[i].position)
+                return o[i - 1].opacity + (position - o[i - 1].position) / (o[i].position - o[i - 1].position) *
+                                              (o[i].opacity - o[i - 1].opacity);
+        return o.back().opacity;
+    };
+    EXPECT_FLOAT_EQ(opacityAt(0.5f), 0.0f);  // value 0: transparent
+    EXPECT_FLOAT_EQ(opacityAt(0.0f), opacityAt(1.0f));  // equal magnitudes, equal opacity
+    EXPECT_GT(opacityAt(0.0f), 0.0f);
+    // Other maps keep the ramp; an explicit opacity is kept; toJson writes the effective default.
+    s.colorMap = ColorMapId::Viridis;
+    EXPECT_FLOAT_EQ(resolveParams(s, catalog).transfer.opacity.front().opacity, 0.0f);
+    s.colorMap = ColorMapId::BlueWhiteRed;
+    EXPECT_EQ(toJson(s)["color"]["opacity"].size(), 3u);
+    s.opacity = {{0, 0.2f}, {1, 0.2f}};
+    EXPECT_FLOAT_EQ(resolveParams(s, catalog).transfer.opacity[0].opacity, 0.2f);
+}
+
 }  // namespace
 }  // namespace raypc::render

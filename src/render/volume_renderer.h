@@ -111,7 +111,10 @@ struct PassStats {
     int threads = 1;
     int simdLanes = 1;
     bool cancelled = false;
+    // Sample positions (including those in skipped space) per second per thread.
     double samplesPerSecondPerThread() const { return seconds > 0 ? double(samples + samplesSkipped) / seconds / threads : 0; }
+    // Samples that read data per second per thread: the sampling rate proper.
+    double dataSamplesPerSecondPerThread() const { return seconds > 0 ? double(samples) / seconds / threads : 0; }
 };
 
 class VolumeRenderer {
@@ -132,8 +135,17 @@ public:
     // the frame as it was. The frame must have the params' size.
     PassStats renderPass(FrameBuffer& frame, const std::atomic<bool>* cancel = nullptr);
 
-    // Samples a pass would take at these params on this volume, estimated from a sparse set of rays.
+    // Cost of a pass at these params on this volume in sample equivalents, estimated from a sparse
+    // set of rays with the kernels' own step and skipping rules: samples in active bricks count 1,
+    // skipped space and per-ray work count what they cost relative to a sample (early ray
+    // termination is not foreseen). Proportional to the pass time, so (estimate / measured seconds)
+    // is a throughput that transfers between levels, views and image sizes. Cached per setParams.
     double estimateSamplesPerPass() const;
+
+    // Exponential average (weight 0.3 for the newest) of estimateSamplesPerPass() / seconds over the
+    // passes this renderer has rendered; 0 before the first. Use it (or the caller's own average
+    // over renderers) with chooseInteractive.
+    double measuredSamplesPerSecond() const;
 
     // The baked kernel view (for tests and benchmarks of the kernels themselves).
     const kernel::KernelParams& kernelParams() const;
@@ -150,6 +162,24 @@ private:
 // coarsest.
 int chooseLevelForBudget(const std::vector<std::shared_ptr<const StepVolume>>& levels, const RenderParams& params,
                          double budgetSeconds, double samplesPerSecond);
+
+// What the interactive mode renders: a level and an internal image size (the requested size, or
+// smaller when even the coarsest level would miss the budget; the caller upscales the result or
+// asks for the smaller image), with the pass time predicted from the throughput.
+struct InteractiveChoice {
+    int level = 0;
+    int width = 0, height = 0;
+    double estimatedSeconds = 0;
+};
+
+// The finest level whose predicted pass time (estimateSamplesPerPass / samplesPerSecond) fits 90% of
+// `budgetSeconds`; if none does, the coarsest level at an internal resolution scaled down (by at
+// most 4 per side) to fit. `samplesPerSecond` should be measured (measuredSamplesPerSecond of recent
+// passes); without a measurement (<= 0) the coarsest level at full size is returned so that its
+// pass measures the machine. `levels[i]` are the volumes of level i (finest first). Throws
+// raypc::Error if `levels` is empty or the params are invalid.
+InteractiveChoice chooseInteractive(const std::vector<std::shared_ptr<const StepVolume>>& levels,
+                                    const RenderParams& params, double budgetSeconds, double samplesPerSecond);
 
 // Per-brick bounds of a coordinate over a grid's bricks (min, max pairs), conservative: every
 // trilinear sample inside the brick has its coordinate inside. Used for coordinate brushes.

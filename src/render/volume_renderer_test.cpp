@@ -248,5 +248,38 @@ TEST(Renderer, LevelChoiceMeetsTheBudget)
     EXPECT_EQ(chooseLevelForBudget({fine, coarse}, p, 1.0, samples / 2), 1);
 }
 
+TEST(Renderer, InteractiveChoiceUsesTheMeasuredRateAndShrinksTheImageWhenNeeded)
+{
+    auto fine = makeVolume(makeGrid(72, 41, 144), {{"f", testing::plumeField}});
+    auto coarse = makeVolume(makeGrid(18, 11, 36), {{"f", testing::plumeField}});
+    RenderParams p = smallParams(256);
+    p.transfer.range = {-0.8f, 1.0f};
+    VolumeRenderer rf(fine), rc(coarse);
+    rf.setParams(p);
+    rc.setParams(p);
+    const double fineCost = rf.estimateSamplesPerPass(), coarseCost = rc.estimateSamplesPerPass();
+    ASSERT_GT(fineCost, coarseCost);
+    // No measurement yet: the coarsest level at full size, whose pass will measure the machine.
+    InteractiveChoice c = chooseInteractive({fine, coarse}, p, 0.05, 0);
+    EXPECT_EQ(c.level, 1);
+    EXPECT_EQ(c.width, 256);
+    c = chooseInteractive({fine, coarse}, p, 1.0, fineCost * 2);
+    EXPECT_EQ(c.level, 0);
+    EXPECT_NEAR(c.estimatedSeconds, 0.5, 1e-9);
+    c = chooseInteractive({fine, coarse}, p, 1.0, fineCost / 2);
+    EXPECT_EQ(c.level, 1);
+    EXPECT_EQ(c.width, 256);
+    // Even the coarsest level misses the budget fourfold: a quarter of the pixels (half per side).
+    c = chooseInteractive({fine, coarse}, p, 1.0, coarseCost / 4 / 0.9);
+    EXPECT_EQ(c.level, 1);
+    EXPECT_NEAR(c.width, 128, 1);
+    EXPECT_LE(c.estimatedSeconds, 0.9 + 1e-3);
+    // The renderer's own average of the throughput after a pass.
+    FrameBuffer f(p.width, p.height);
+    EXPECT_EQ(rc.measuredSamplesPerSecond(), 0.0);
+    rc.renderPass(f);
+    EXPECT_GT(rc.measuredSamplesPerSecond(), 0.0);
+}
+
 }  // namespace
 }  // namespace raypc::render
