@@ -130,17 +130,30 @@ int RenderSession::chooseInteractiveLevel(int step, const RenderParams& params, 
 void RenderSession::render(const Request& request)
 {
     const RenderState& state = request.resolved.state;
-    const RenderParams& params = request.resolved.params;
+    RenderParams params = request.resolved.params;
     const Dataset& dataset = *m_context.dataset;
     const int step = state.step;
+    const double budgetSeconds = state.timeBudgetMs / 1000.0;
 
     int level;
     if (state.level)
         level = *state.level;
     else if (request.interactive)
-        level = chooseInteractiveLevel(step, params, state.timeBudgetMs / 1000.0);  // reload class when it changes
+        level = chooseInteractiveLevel(step, params, budgetSeconds);  // reload class when it changes
     else
         level = 0;
+
+    // Interactive resolution: when even the coarsest level misses the budget, render 1/2 or 1/4 of the
+    // pixels per axis (the UI scales the frame up; same aspect when the size divides).
+    if (request.interactive && !state.level && level == int(dataset.levels().size()) - 1) {
+        const double rate = m_context.samplesPerSecond.load();
+        if (rate > 0) {
+            const double seconds = rendererFor(step, level).estimateSamplesPerPass() / rate;
+            const int divisor = seconds <= budgetSeconds ? 1 : seconds / 4 <= budgetSeconds ? 2 : 4;
+            params.width = std::max(1, (params.width + divisor - 1) / divisor);
+            params.height = std::max(1, (params.height + divisor - 1) / divisor);
+        }
+    }
 
     // Playback (step = previous step + 1): load the next step in the background at this level.
     if (m_lastStep >= 0 && step == m_lastStep + 1 && step + 1 < int(dataset.steps().size()))

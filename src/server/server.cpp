@@ -417,6 +417,12 @@ private:
                                fmt::format("body over the limit of {} bytes", kMaxHttpBodyBytes), 11, false));
             return;
         }
+        if (ec && ec.category() == http::make_error_code(http::error::bad_target).category() &&
+            ec != http::error::partial_message) {
+            spdlog::warn("http: malformed request: {}", ec.message());
+            send(errorResponse(http::status::bad_request, fmt::format("malformed request: {}", ec.message()), 11, false));
+            return;
+        }
         if (ec) {
             if (ec != beast::error::timeout && ec != net::error::connection_reset)
                 spdlog::debug("http: read: {}", ec.message());

@@ -350,7 +350,8 @@ TEST(Serve, StaticFilesAndPathTraversal)
         EXPECT_EQ(r.body.find("root:"), std::string::npos) << target;
     }
     // Targets a strict HTTP parser may reject outright: never 200, never the file.
-    for (const char* target : {"/..\\secret.txt", (g_work / "secret.txt").c_str()}) {
+    const std::string absolute = (g_work / "secret.txt").string();
+    for (const std::string& target : {std::string("/..\\secret.txt"), absolute, std::string("/a b\x01")}) {
         const auto r = httpGet(server.port, target);
         EXPECT_NE(r.status, 200) << target;
         EXPECT_EQ(r.body.find("TOP-SECRET"), std::string::npos) << target;
@@ -417,6 +418,28 @@ TEST(Serve, WebSocketFrameLayout)
     EXPECT_EQ(h["camera"]["azimuthDeg"], 60.0);
     EXPECT_GE(h["level"].get<int>(), 0);
     EXPECT_LE(h["level"].get<int>(), 2);
+}
+
+TEST(Serve, DefaultStateOfInfoRendersAndInteractiveFitsTheBudget)
+{
+    ServerProcess server;
+    json state = json::parse(httpGet(server.port, "/api/info").body)["defaultState"];
+    WsClient ws(server.port);
+    ws.hello();
+    state["passes"] = 1;
+    ws.send({{"type", "state"}, {"id", 1}, {"state", state}});
+    const auto still = ws.framesUntilConverged(1);
+    EXPECT_EQ(still.back().frame.header["width"], state["image"]["width"]);
+    // A budget no level can meet: the interactive frame comes at the coarsest level and a reduced size
+    // of the same aspect.
+    state["timeBudgetMs"] = 0.001;
+    ws.send({{"type", "state"}, {"id", 2}, {"state", state}, {"interactive", true}});
+    const json h = ws.framesUntilConverged(2).back().frame.header;
+    EXPECT_EQ(h["level"], 2);
+    EXPECT_EQ(h["width"].get<int>() * state["image"]["height"].get<int>(),
+              h["height"].get<int>() * state["image"]["width"].get<int>());
+    EXPECT_LT(h["width"].get<int>(), state["image"]["width"].get<int>());
+    EXPECT_EQ(h["depthWidth"], (h["width"].get<int>() + 3) / 4);
 }
 
 TEST(Serve, BadMessagesGetErrorsAndTheConnectionStays)
