@@ -156,8 +156,10 @@ void RenderSession::render(const Request& request)
     }
 
     // Playback (step = previous step + 1): load the next step in the background at this level.
-    if (m_lastStep >= 0 && step == m_lastStep + 1 && step + 1 < int(dataset.steps().size()))
+    if (m_lastStep >= 0 && step == m_lastStep + 1 && step + 1 < int(dataset.steps().size())) {
+        spdlog::debug("{}: playback: prefetching step {} level {}", m_name, step + 1, level);
         m_context.cache->prefetch(step + 1, level);
+    }
     m_lastStep = step;
 
     VolumeRenderer& renderer = rendererFor(step, level);

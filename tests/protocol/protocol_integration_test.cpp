@@ -15,7 +15,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <regex>
+#include <thread>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <poll.h>
@@ -69,13 +71,17 @@ const auto* const g_environment = ::testing::AddGlobalTestEnvironment(new Enviro
 // `raypc serve` in a child process; stopped (SIGTERM, then SIGKILL) on destruction.
 class ServerProcess {
 public:
-    explicit ServerProcess(std::vector<std::string> extra = {})
+    explicit ServerProcess(std::vector<std::string> extra = {}, bool verbose = false)
     {
         int out[2];
         if (::pipe(out) != 0)
             throw std::runtime_error("pipe");
-        std::vector<std::string> args = {RAYPC_EXE, "serve", (g_work / "ds").string(), "--port", "0",
-                                         "--assets", (g_work / "assets").string()};
+        std::vector<std::string> args = {RAYPC_EXE};
+        if (verbose)
+            args.push_back("-v");
+        for (const std::string& a : {std::string("serve"), (g_work / "ds").string(), std::string("--port"),
+                                     std::string("0"), std::string("--assets"), (g_work / "assets").string()})
+            args.push_back(a);
         args.insert(args.end(), extra.begin(), extra.end());
         m_pid = ::fork();
         if (m_pid == 0) {
@@ -112,6 +118,23 @@ public:
         port = uint16_t(std::stoi(m[1]));
         token = m[3];
         banner = text;
+        // Keep draining the server's output (its log) so that it never blocks on a full pipe.
+        m_output = text;
+        m_drain = std::thread([this] {
+            char buffer[4096];
+            for (;;) {
+                const ssize_t n = ::read(m_out, buffer, sizeof buffer);
+                if (n <= 0)
+                    return;
+                std::lock_guard lock(m_mutex);
+                m_output.append(buffer, size_t(n));
+            }
+        });
+    }
+    std::string output()
+    {
+        std::lock_guard lock(m_mutex);
+        return m_output;
     }
     ~ServerProcess() { stop(); }
     // SIGTERM, then SIGKILL after 5 s. True when the server exited by itself with status 0.
@@ -134,6 +157,8 @@ public:
             ::kill(m_pid, SIGKILL);
             ::waitpid(m_pid, nullptr, 0);
         }
+        if (m_drain.joinable())
+            m_drain.join();  // ends at EOF: the server has exited
         ::close(m_out);
         m_pid = -1;
         return clean;
@@ -146,6 +171,9 @@ public:
 private:
     pid_t m_pid = -1;
     int m_out = -1;
+    std::thread m_drain;
+    std::mutex m_mutex;
+    std::string m_output;
 };
 
 void setReceiveTimeout(tcp::socket& socket, int seconds)
@@ -440,6 +468,23 @@ TEST(Serve, DefaultStateOfInfoRendersAndInteractiveFitsTheBudget)
               h["height"].get<int>() * state["image"]["width"].get<int>());
     EXPECT_LT(h["width"].get<int>(), state["image"]["width"].get<int>());
     EXPECT_EQ(h["depthWidth"], (h["width"].get<int>() + 3) / 4);
+}
+
+TEST(Serve, PlaybackPrefetchesTheNextStep)
+{
+    ServerProcess server({}, true);
+    WsClient ws(server.port);
+    ws.hello();
+    for (int step = 0; step < 2; ++step) {
+        json state = smallState(30, "viridis", 1);
+        state["step"] = step;
+        state["level"] = 1;
+        ws.send({{"type", "state"}, {"id", step}, {"state", state}, {"interactive", true}});
+        EXPECT_EQ(ws.framesUntilConverged(step).back().frame.header["step"], step);
+    }
+    ws.send({{"type", "ping"}, {"id", 1}});
+    ws.receiveText();
+    EXPECT_NE(server.output().find("playback: prefetching step 2 level 1"), std::string::npos) << server.output();
 }
 
 TEST(Serve, BadMessagesGetErrorsAndTheConnectionStays)
