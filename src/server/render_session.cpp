@@ -18,6 +18,7 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 constexpr int kDepthDownsample = 4;
+constexpr int kMaxSessionPixels = 4096 * 4096;  // a frame buffer of 4096² takes ~0.7 GB with its scratch
 constexpr int kJpegQualityInteractive = 75, kJpegQualityStill = 90;
 
 double millisecondsSince(Clock::time_point start)
@@ -47,6 +48,10 @@ void RenderSession::submit(const StateMessage& message)
     Request request;
     request.id = message.id;
     request.resolved = resolveState(message.state, *m_context.dataset);  // throws: the old state stays
+    const auto& st = request.resolved.state;
+    if (int64_t(st.width) * st.height > int64_t(kMaxSessionPixels))
+        fail("image: {}x{} is over the limit of {} pixels for a session (use /api/screenshot for larger images)",
+             st.width, st.height, kMaxSessionPixels);
     request.interactive = message.interactive;
     {
         std::lock_guard lock(m_mutex);

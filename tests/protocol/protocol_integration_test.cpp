@@ -527,6 +527,12 @@ TEST(Serve, BadMessagesGetErrorsAndTheConnectionStays)
     reply = ws.receiveText();
     EXPECT_EQ(reply["id"], 42);
     EXPECT_NE(reply["message"].get<std::string>().find("step: 300 out of range 0..2"), std::string::npos);
+    json huge = smallState();
+    huge["image"] = {{"width", 8192}, {"height", 8192}};
+    ws.send({{"type", "state"}, {"id", 45}, {"state", huge}});
+    reply = ws.receiveText();
+    EXPECT_EQ(reply["id"], 45);
+    EXPECT_NE(reply["message"].get<std::string>().find("over the limit"), std::string::npos);
     json badKey = smallState();
     badKey["camera"]["zoom"] = 2;
     ws.send({{"type", "state"}, {"id", 43}, {"state", badKey}});
