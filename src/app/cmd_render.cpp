@@ -171,8 +171,9 @@ void run(const RenderArgs& args)
                 VolumeRenderer calibration(levels.back());
                 calibration.setParams(params);
                 FrameBuffer scratch(params.width, params.height);
-                calibration.renderPass(scratch);
-                measuredRate = calibration.measuredSamplesPerSecond();
+                calibration.renderPass(scratch);  // the first pass also starts the worker threads
+                const PassStats s = calibration.renderPass(scratch);
+                measuredRate = s.seconds > 0 ? calibration.estimateSamplesPerPass() / s.seconds : 0;
             }
             level = chooseInteractive(levels, params, state.timeBudgetMs / 1000.0, measuredRate).level;
         }
