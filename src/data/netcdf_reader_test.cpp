@@ -110,6 +110,32 @@ TEST(NetcdfReader, DerivedRadialVelocityIsU0)
     EXPECT_NEAR(mag->values[i], std::hypot(truth.omega * axisKm * 1000, truth.u0) * kMpsToCmPerYr, 1e-4);
 }
 
+// The expansivity anomaly has zero area-weighted mean on every shell and differs from the
+// expansivity by that shell's mean only.
+TEST(NetcdfReader, DerivedExpansivityAnomalyIsTheLateralDeviation)
+{
+    Snapshot s = readSnapshot(contestLayoutDir() / "spherical001.nc");
+    addDerivedVariables(s);
+    const Field* alpha = s.find("thermal expansivity");
+    const Field* anomaly = s.find("thermal expansivity anomaly");
+    ASSERT_TRUE(anomaly);
+    EXPECT_EQ(anomaly->units, alpha->units);
+    const auto& g = s.grid;
+    for (size_t iR = 0; iR < g.nR(); iR += 5) {
+        double sum = 0, area = 0;
+        for (size_t a = 0; a < g.nLat(); ++a) {
+            const double w = std::sin(degToRad(std::min(90.0, g.latDeg[a] + 2.5))) - std::sin(degToRad(std::max(-90.0, g.latDeg[a] - 2.5)));
+            for (size_t c = 0; c < g.nLon(); ++c) {
+                sum += w * anomaly->values[g.index(a, iR, c)];
+                area += w;
+            }
+        }
+        EXPECT_NEAR(sum / area, 0.0, 1e-12) << "r " << g.rKm[iR];
+        const double offset = alpha->values[g.index(3, iR, 5)] - anomaly->values[g.index(3, iR, 5)];
+        EXPECT_NEAR(alpha->values[g.index(30, iR, 60)] - anomaly->values[g.index(30, iR, 60)], offset, 1e-12);
+    }
+}
+
 TEST(NetcdfReader, BothNetcdfFlavoursGiveIdenticalValues)
 {
     TempDir dir("flavours");

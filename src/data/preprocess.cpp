@@ -53,6 +53,9 @@ std::vector<VariableSpec> variableSpecs(const FileHeader& header)
         specs.push_back({v.name, v.units, false});
     specs.push_back({"radial velocity", "cm/yr", true});
     specs.push_back({"velocity magnitude", "cm/yr", true});
+    for (const auto& v : header.variables)
+        if (v.name == "thermal expansivity")
+            specs.push_back({"thermal expansivity anomaly", v.units, true});
     return specs;
 }
 
@@ -289,6 +292,33 @@ void addDerivedVariables(Snapshot& snapshot)
     });
     snapshot.fields.push_back(std::move(radial));
     snapshot.fields.push_back(std::move(magnitude));
+    // The contest's correlation task asks for the sign of the expansivity *anomaly*: its
+    // deviation from the area-weighted lateral mean of each shell, like the temperature anomaly.
+    if (const Field* alpha = snapshot.find("thermal expansivity"))
+        snapshot.fields.push_back(lateralAnomaly(g, *alpha, "thermal expansivity anomaly"));
+}
+
+Field lateralAnomaly(const SphericalGrid& g, const Field& field, const std::string& name)
+{
+    const auto w = g.volumeFactors();
+    double area = 0;
+    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+        for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+            area += w.lat[iLat] * w.lon[iLon];
+    Field out{name, field.units, std::vector<float>(g.cellCount())};
+    tbb::parallel_for(size_t(0), g.nR(), [&](size_t iR) {
+        double sum = 0;
+        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+                sum += w.lat[iLat] * w.lon[iLon] * field.values[g.index(iLat, iR, iLon)];
+        const double mean = sum / area;
+        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                const size_t i = g.index(iLat, iR, iLon);
+                out.values[i] = static_cast<float>(field.values[i] - mean);
+            }
+    });
+    return out;
 }
 
 std::vector<float> coarsenField(const SphericalGrid& fine, std::span<const float> values)

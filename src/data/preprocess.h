@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace raypc {
@@ -58,9 +59,13 @@ PreprocessSummary preprocess(const std::vector<std::filesystem::path>& inputs, c
 
 // --- Building blocks, public for tests -----------------------------------------------------
 
-// Appends "radial velocity" and "velocity magnitude" (cm/yr) computed from vx, vy, vz (m/s).
+// Appends "radial velocity" and "velocity magnitude" (cm/yr) computed from vx, vy, vz (m/s),
+// and, when "thermal expansivity" is present, "thermal expansivity anomaly" (see lateralAnomaly).
 // Throws raypc::Error if a velocity component is missing.
 void addDerivedVariables(Snapshot& snapshot);
+
+// `field` minus its area-weighted mean over each radius shell (the lateral mean), named `name`.
+Field lateralAnomaly(const SphericalGrid& grid, const Field& field, const std::string& name);
 
 // The next coarser level: each coarse point is the volume-weighted mean of the (up to) 2x2x2
 // fine points it merges (grid.coarsened() gives its coordinates).

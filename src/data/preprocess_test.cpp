@@ -176,9 +176,11 @@ TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)
     ASSERT_EQ(ds->steps().size(), 3u);
     EXPECT_DOUBLE_EQ(ds->steps()[2].timeMyr, 4.0);
     EXPECT_EQ(ds->steps()[1].source, "spherical002.nc");
-    ASSERT_EQ(ds->variables().size(), 10u);
+    ASSERT_EQ(ds->variables().size(), 11u);
     EXPECT_EQ(ds->variables()[8].name, "radial velocity");
     EXPECT_TRUE(ds->variables()[8].derived);
+    EXPECT_EQ(ds->variables()[10].name, "thermal expansivity anomaly");
+    EXPECT_EQ(ds->variables()[10].units, "1/K");
     ASSERT_EQ(ds->levels().size(), 3u);
     EXPECT_EQ(ds->levels()[1].grid.nLat(), 18u);
     EXPECT_EQ(ds->levels()[1].grid.nR(), 21u);
@@ -213,7 +215,7 @@ TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)
     // The sample: coordinates consistent with each other, values those of the sampled points.
     const auto table = ds->loadSample(1);
     ASSERT_EQ(table.rows, 5000u);
-    ASSERT_EQ(table.columns.size(), 7u + 10u);
+    ASSERT_EQ(table.columns.size(), 7u + 11u);
     EXPECT_EQ(table.columns[6], "depth");
     const SphericalGrid& g = snap.grid;
     for (size_t row = 0; row < table.rows; row += 97) {
