@@ -82,7 +82,7 @@ read -r rp_conv _ < <(raypc_seconds 0 "$converged")
 
 pv_frame="" vtk_frame="" pv_first="" vtk_first="" resample=""
 if ((have_pv)); then
-  out=$(cd "$work" && timeout 3600 xvfb-run -a -s "-screen 0 ${size}x${size}x24" pvbatch "$root/bench/peers/peers.py" both "$nc" "$size" "$frames" "$n" "$var" 2>&1 | tee "$work/peers.log" | grep -E '^(RESULT|vtk:)' || true)
+  out=$(cd "$work" && timeout 3600 xvfb-run -a pvbatch "$root/bench/peers/peers.py" both "$nc" "$size" "$frames" "$n" "$var" 2>&1 | tee "$work/peers.log" | grep -E '^(RESULT|vtk:)' || true)
   echo "$out" | grep '^vtk:' || true
   get() { echo "$out" | awk -v p="$1" -v w="$2" '$1=="RESULT" && $2==p && $3==w {print $4}'; }
   pv_frame=$(get paraview frame); pv_first=$(get paraview first_frame)
