@@ -3,6 +3,7 @@
 #include "app/options.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/strings.h"
 #include "data/dataset.h"
 #include "data/pathlines.h"
 
@@ -19,15 +20,6 @@ struct ExportArgs {
     std::string dataset, time = "0", what = "sample", output;
 };
 
-std::string csvQuote(const std::string& s)
-{
-    if (s.find_first_of(",\"\n") == std::string::npos)
-        return s;
-    std::string out = "\"";
-    for (char c : s)
-        out += c == '"' ? std::string("\"\"") : std::string(1, c);
-    return out + "\"";
-}
 
 std::string sampleCsv(const SampleTable& table)
 {

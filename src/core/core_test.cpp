@@ -27,6 +27,13 @@ TEST(Strings, FileSafeNames)
     EXPECT_EQ(fileSafeName("a/../b"), "a_.._b");
 }
 
+TEST(Strings, CsvQuoting)
+{
+    EXPECT_EQ(csvQuote("temperature [K]"), "temperature [K]");
+    EXPECT_EQ(csvQuote("a,b"), "\"a,b\"");
+    EXPECT_EQ(csvQuote("say \"hi\""), "\"say \"\"hi\"\"\"");
+}
+
 TEST(Spherical, CartesianRoundTripAndContestFrame)
 {
     const Vec3d p = sphericalToCartesianKm(30.0, 120.0, 5000.0);

@@ -50,6 +50,19 @@ std::string fileSafeName(std::string_view name)
     return out;
 }
 
+std::string csvQuote(std::string_view field)
+{
+    if (field.find_first_of(",\"\n") == std::string_view::npos)
+        return std::string(field);
+    std::string out = "\"";
+    for (char c : field) {
+        out += c;
+        if (c == '"')
+            out += '"';
+    }
+    return out + "\"";
+}
+
 std::vector<std::string> split(std::string_view text, char separator)
 {
     std::vector<std::string> parts;

@@ -13,6 +13,9 @@ bool naturalLess(std::string_view a, std::string_view b);
 // A file-system-safe form of a variable name: "temperature anomaly" -> "temperature_anomaly".
 std::string fileSafeName(std::string_view name);
 
+// A CSV field: quoted (with doubled quotes) when it holds a comma, quote or newline.
+std::string csvQuote(std::string_view field);
+
 std::vector<std::string> split(std::string_view text, char separator);
 std::string trim(std::string_view text);
 

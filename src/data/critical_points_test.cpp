@@ -16,18 +16,8 @@
 namespace raypc {
 namespace {
 
-// Cell-centred lat rows (±85 for 18 rows), uniform radii through the mantle, lon from 0.
-SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon)
-{
-    SphericalGrid g;
-    for (size_t i = 0; i < nLat; ++i)
-        g.latDeg.push_back(-90.0 + (i + 0.5) * 180.0 / nLat);
-    for (size_t i = 0; i < nR; ++i)
-        g.rKm.push_back(kCoreRadiusKm + i * (kSurfaceRadiusKm - kCoreRadiusKm) / (nR - 1));
-    for (size_t i = 0; i < nLon; ++i)
-        g.lonDeg.push_back(i * 360.0 / nLon);
-    return g;
-}
+using testing::centredGrid;
+
 
 std::vector<float> fill(const SphericalGrid& g, const std::function<double(size_t, size_t, size_t)>& f)
 {

@@ -54,15 +54,6 @@ std::string xmlEscape(const std::string& s)
     return out;
 }
 
-std::string csvQuote(const std::string& s)
-{
-    if (s.find_first_of(",\"\n") == std::string::npos)
-        return s;
-    std::string out = "\"";
-    for (char c : s)
-        out += c == '"' ? std::string("\"\"") : std::string(1, c);
-    return out + "\"";
-}
 
 std::string header(const std::string& name, const std::string& units)
 {

@@ -16,19 +16,9 @@
 namespace raypc {
 namespace {
 
+using testing::centredGrid;
 using testing::TempDir;
 
-SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon)
-{
-    SphericalGrid g;
-    for (size_t i = 0; i < nLat; ++i)
-        g.latDeg.push_back(-90.0 + (i + 0.5) * 180.0 / nLat);
-    for (size_t i = 0; i < nR; ++i)
-        g.rKm.push_back(kCoreRadiusKm + i * (kSurfaceRadiusKm - kCoreRadiusKm) / (nR - 1));
-    for (size_t i = 0; i < nLon; ++i)
-        g.lonDeg.push_back(i * 360.0 / nLon);
-    return g;
-}
 
 // Velocity fields (m/s, Cartesian) of several steps from a function of (step, position in km),
 // plus a fourth variable: the radius in km (to check attribute sampling).
