@@ -1,11 +1,13 @@
 // raypc render DATASET --time T -o out.png [--size WxH] [--state STATE.json] [--var NAME]
 //   [--colormap NAME] [--range NAME=MIN:MAX]... [--lod N|auto] [--passes N] [--depth depth.pfm] [--stats]
+//   [--pathlines] [--pathline-radius KM]
 #include "app/command.h"
 #include "app/options.h"
 #include "core/error.h"
 #include "core/strings.h"
 #include "data/dataset.h"
 #include "render/image_io.h"
+#include "render/pathline_scene.h"
 #include "render/render_state.h"
 #include "render/volume_renderer.h"
 
@@ -26,6 +28,8 @@ struct RenderArgs {
     std::vector<std::string> ranges;
     int passes = 0;
     bool stats = false;
+    bool pathlines = false;
+    double pathlineRadiusKm = 0;  // 0: the state's
 };
 
 // "1024x768" -> width, height.
@@ -137,6 +141,15 @@ void run(const RenderArgs& args)
         state.passes = args.passes;
     }
 
+    if (args.pathlines)
+        state.pathlines.visible = true;
+    if (args.pathlineRadiusKm != 0) {
+        if (!(args.pathlineRadiusKm > 0) || !std::isfinite(args.pathlineRadiusKm))
+            fail("--pathline-radius {}: expected a positive number of km", args.pathlineRadiusKm);
+        state.pathlines.radiusKm = float(args.pathlineRadiusKm);
+        state.pathlines.visible = true;
+    }
+
     VariableCatalog catalog;
     for (const auto& v : dataset->variables()) {
         catalog.names.push_back(v.name);
@@ -179,6 +192,22 @@ void run(const RenderArgs& args)
         }
         VolumeRenderer renderer(dataset->load(step, level));
         renderer.setParams(params);
+        size_t pathlinesShown = 0;
+        if (state.pathlines.visible) {
+            // Reload class: the window of line sets for this step, one BVH; then the state's mask.
+            std::vector<PathlineSet> sets;
+            try {
+                sets = loadPathlineWindow(args.dataset, step, state.pathlines.window);
+            } catch (const Error& e) {
+                fail("pathlines: {} has no pathlines for step {} (preprocessed with --no-pathlines?): {}", args.dataset,
+                     step, e.what());
+            }
+            auto scene = std::make_shared<PathlineScene>(std::move(sets), state.pathlines.radiusKm);
+            RenderState stepState = state;
+            stepState.step = step;
+            pathlinesShown = scene->applyState(stepState);
+            renderer.setPathlines(std::move(scene));
+        }
         FrameBuffer frame(params.width, params.height);
         nlohmann::json passes = nlohmann::json::array();
         PassStats total;
@@ -208,6 +237,7 @@ void run(const RenderArgs& args)
         statsJson.push_back({{"step", step},
                              {"timeMyr", dataset->steps()[size_t(step)].timeMyr},
                              {"level", level},
+                             {"pathlinesShown", pathlinesShown},
                              {"output", out},
                              {"size", {params.width, params.height}},
                              {"threads", total.threads},
@@ -247,6 +277,9 @@ const CommandRegistration kRegistration(
         cmd.add_option("--passes", args->passes, "Progressive passes to accumulate (default: the state's, 8)");
         cmd.add_option("--depth", args->depthPath, "Also write the depth (km along the view ray) as PFM");
         cmd.add_flag("--stats", args->stats, "Print JSON statistics: time per pass, samples, bricks, rate");
+        cmd.add_flag("--pathlines", args->pathlines,
+                     "Show the pathlines injected in the last 10 steps (or the state's window) as tubes");
+        cmd.add_option("--pathline-radius", args->pathlineRadiusKm, "Tube radius in km (implies --pathlines; default 12)");
         cmd.callback([args] { run(*args); });
     },
     60);

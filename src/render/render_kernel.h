@@ -90,6 +90,19 @@ struct ColourTable {
     int indexOf(float v) const { return int(std::clamp((v - valueMin) * indexScale + 0.5f, 0.0f, float(size - 1))); }
 };
 
+struct KernelParams;
+
+// The closest opaque tube (pathline) along a ray, shaded: found before the march, which then stops
+// at tKm; the tube is composited behind the accumulated volume. tKm = +inf: no tube.
+struct TubeHit {
+    float tKm = INFINITY;
+    Rgb colour;
+};
+// Traces one primary ray (o + t d, |d| = 1, t in [0, tMaxKm)) against the tubes; `ctx` is the tube
+// scene (pathline_scene.cpp). noexcept and allocation-free, called once per ray from renderTileWith.
+using TraceTubesFn = TubeHit (*)(const void* ctx, const KernelParams& k, Vec3 o, Vec3 d, float tMaxKm, int px,
+                                 int py) noexcept;
+
 struct KernelParams {
     // Grid (sizes >= 2 along each axis) and its coordinate maps.
     int nLat = 0, nR = 0, nLon = 0;
@@ -127,6 +140,10 @@ struct KernelParams {
     Rgb coreColour{0.55f, 0.55f, 0.58f};
     KernelVariable coreVariable;
     ColourTable coreTable;
+
+    // Tubes along pathlines (nullptr: none), bound per pass by VolumeRenderer::renderPass.
+    TraceTubesFn traceTubes = nullptr;
+    const void* tubeContext = nullptr;
 
     CameraFrame camera;
     int pass = 0;
@@ -356,9 +373,27 @@ void renderTileWith(const KernelParams& k, Tile tile, PixelOut* out, TileStats& 
             const ShellSegments seg = intersectShell(o, d, k.rInnerKm, k.rOuterKm, !k.drawCore);
             RayAccum acc;
             ++stats.rays;
-            for (int s = 0; s < seg.count && acc.transmittance > k.stopTransmittance; ++s)
-                march(o, d, seg.t0[s], seg.t1[s], along, acc, stats);
-            if (k.drawCore && seg.coreT >= 0.0f && acc.transmittance > k.stopTransmittance) {
+            // The closest tube first (in front of the core, if any): the volume is marched only up to it.
+            const bool coreHit = k.drawCore && seg.coreT >= 0.0f;
+            const TubeHit tube = k.traceTubes ? k.traceTubes(k.tubeContext, k, o, d, coreHit ? seg.coreT : INFINITY, px, py)
+                                              : TubeHit{};
+            for (int s = 0; s < seg.count && acc.transmittance > k.stopTransmittance; ++s) {
+                const float t1 = std::min(seg.t1[s], tube.tKm);
+                if (!(seg.t0[s] < t1))
+                    break;
+                march(o, d, seg.t0[s], t1, along, acc, stats);
+            }
+            if (std::isfinite(tube.tKm)) {
+                // C += T C_tube, alpha likewise: the tube is opaque and hides the core behind it.
+                if (acc.transmittance > k.stopTransmittance) {
+                    acc.r += acc.transmittance * tube.colour.r;
+                    acc.g += acc.transmittance * tube.colour.g;
+                    acc.b += acc.transmittance * tube.colour.b;
+                    acc.transmittance = 0.0f;
+                    if (!std::isfinite(acc.depthKm))
+                        acc.depthKm = tube.tKm;
+                }
+            } else if (coreHit && acc.transmittance > k.stopTransmittance) {
                 const Rgb c = coreColourAt(k, o + d * seg.coreT);
                 acc.r += acc.transmittance * c.r;
                 acc.g += acc.transmittance * c.g;

@@ -155,8 +155,8 @@ RenderState parseRenderState(const json& j, const std::string& what)
     if (!top.get("version"))
         top.failAt("version", fmt::format("missing; expected {}", kRenderStateVersion));
     s.version = top.integer("version", kRenderStateVersion, 1, 1000000);
-    if (s.version != kRenderStateVersion)
-        top.failAt("version", fmt::format("{} is not supported, expected {}", s.version, kRenderStateVersion));
+    if (s.version != 1 && s.version != kRenderStateVersion)
+        top.failAt("version", fmt::format("{} is not supported, expected 1 or {}", s.version, kRenderStateVersion));
     s.step = top.integer("step", s.step, 0, 1000000);
     if (const json* c = top.get("camera")) {
         Reader r = top.child("camera", *c);
@@ -249,6 +249,45 @@ RenderState parseRenderState(const json& j, const std::string& what)
         r.finish();
     }
     s.background = top.colour("background", s.background);
+    if (const json* c = top.get("pathlines")) {
+        if (s.version < 2)
+            top.failAt("pathlines", fmt::format("needs version 2, the document says version {}", s.version));
+        Reader r = top.child("pathlines", *c);
+        PathlineState& pl = s.pathlines;
+        pl.visible = r.boolean("visible", pl.visible);
+        if (const json* v = r.get("radiusKm"); v && !(v->is_number() && v->get<double>() > 0))
+            r.failAt("radiusKm", "expected a positive number, found " + v->dump());
+        pl.radiusKm = float(r.number("radiusKm", pl.radiusKm, 1e-6, 1e5));
+        pl.window = r.integer("window", pl.window, 1, 1000);
+        pl.colorBy = r.string("colorBy", pl.colorBy);
+        if (pl.colorBy.empty())
+            r.failAt("colorBy", "expected \"age\" or a line attribute name, found \"\"");
+        if (const json* m = r.get("colorMap"); m && !m->is_null())
+            pl.colorMap = r.colorMap("colorMap", ColorMapId::Viridis);
+        pl.range = r.range("range");
+        pl.filterByBrushes = r.boolean("filterByBrushes", pl.filterByBrushes);
+        if (const json* f = r.get("filters")) {
+            if (!f->is_array())
+                r.failAt("filters", "expected an array, found " + f->dump());
+            for (size_t i = 0; i < f->size(); ++i) {
+                Reader fr = r.child(fmt::format("filters[{}]", i), (*f)[i]);
+                PathlineFilter filter;
+                filter.name = fr.string("name", "");
+                if (filter.name.empty())
+                    fr.failAt("name", "missing; expected a line attribute name");
+                if (!fr.get("min") || !fr.get("max"))
+                    fr.failAt(fr.get("min") ? "max" : "min", "missing");
+                filter.min = float(fr.number("min", 0));
+                filter.max = float(fr.number("max", 0));
+                if (!(filter.min <= filter.max))
+                    fr.failAt("min", fmt::format("min {} is greater than max {}", filter.min, filter.max));
+                fr.finish();
+                pl.filters.push_back(filter);
+            }
+        }
+        pl.ambientOcclusion = r.boolean("ambientOcclusion", pl.ambientOcclusion);
+        r.finish();
+    }
     top.finish();
     return s;
 }
@@ -275,8 +314,12 @@ json toJson(const RenderState& s)
         brushes.push_back({{"name", b.name}, {"min", b.min}, {"max", b.max}});
     const Vec3 t = s.camera.targetKm;
     const Vec3 l = s.shading.lightFromCamera;
+    json filters = json::array();
+    for (const auto& f : s.pathlines.filters)
+        filters.push_back({{"name", f.name}, {"min", f.min}, {"max", f.max}});
+    // Always written in the current version (a version-1 document gains the default pathlines).
     return {
-        {"version", s.version},
+        {"version", kRenderStateVersion},
         {"step", s.step},
         {"camera",
          {{"azimuthDeg", s.camera.azimuthDeg},
@@ -309,6 +352,16 @@ json toJson(const RenderState& s)
           {"ambient", s.shading.ambient},
           {"diffuse", s.shading.diffuse}}},
         {"background", colourJson(s.background)},
+        {"pathlines",
+         {{"visible", s.pathlines.visible},
+          {"radiusKm", s.pathlines.radiusKm},
+          {"window", s.pathlines.window},
+          {"colorBy", s.pathlines.colorBy},
+          {"colorMap", std::string(colorMapName(s.pathlines.effectiveColorMap()))},
+          {"range", rangeJson(s.pathlines.range)},
+          {"filterByBrushes", s.pathlines.filterByBrushes},
+          {"filters", filters},
+          {"ambientOcclusion", s.pathlines.ambientOcclusion}}},
     };
 }
 

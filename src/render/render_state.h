@@ -17,11 +17,39 @@
 
 namespace raypc::render {
 
-inline constexpr int kRenderStateVersion = 1;
+// Version 2 added "pathlines"; version 1 documents are still read (they have no pathlines).
+inline constexpr int kRenderStateVersion = 2;
 
 struct BrushSpec {
     std::string name;  // a variable or a coordinate (x, y, z, lat, lon, radius, depth)
     float min = 0, max = 0;
+};
+
+// A range over one pathline attribute column (the pathline parallel-coordinates plot).
+struct PathlineFilter {
+    std::string name;  // a column of the pathline sets, e.g. "length", "start temperature anomaly"
+    float min = 0, max = 0;
+};
+
+// The "pathlines" object: tubes along the pathlines injected in the last `window` steps
+// (docs/state.md). Cost classes: window (and the state's step) reload the line window and
+// rebuild the tube scene; everything else restarts passes (PathlineScene::applyState).
+struct PathlineState {
+    bool visible = false;
+    float radiusKm = 12.0f;  // tube radius, > 0
+    int window = 10;         // steps: lines injected in [step - window + 1, step]
+    std::string colorBy = "age";  // "age" or a line attribute column
+    std::optional<ColorMapId> colorMap;  // nullopt: blue-white-red for age, viridis for attributes
+    std::optional<ValueRange> range;     // nullopt: [0, window x step length] for age, else the column's range
+    bool filterByBrushes = true;  // a line's start must satisfy the volume brushes
+    std::vector<PathlineFilter> filters;
+    bool ambientOcclusion = true;
+
+    // The colour map in effect (the default depends on colorBy).
+    ColorMapId effectiveColorMap() const
+    {
+        return colorMap ? *colorMap : (colorBy == "age" ? ColorMapId::BlueWhiteRed : ColorMapId::Viridis);
+    }
 };
 
 struct RenderState {
@@ -49,6 +77,7 @@ struct RenderState {
     } core;
     ShadingStyle shading;
     Rgb background{0.0f, 0.0f, 0.0f};
+    PathlineState pathlines;  // version 2
 };
 
 // The opacity used when the state gives none: a ramp from 0 to 0.5 over the range, or for maps

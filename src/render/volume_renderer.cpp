@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/spherical.h"
+#include "render/pathline_scene.h"
 #include "render/render_kernel.h"
 
 #include <tbb/blocked_range.h>
@@ -281,6 +282,7 @@ struct VolumeRenderer::Impl {
     double estimatedSamples = -1;  // estimateSamplesPerPass of the current params, computed lazily
     double measuredRate = 0;       // exponential average of estimatedSamples / seconds of recent passes
     kernel::KernelParams params;
+    std::shared_ptr<const PathlineScene> pathlines;  // tubes (optional), bound per pass
 };
 
 VolumeRenderer::VolumeRenderer(std::shared_ptr<const StepVolume> volume)
@@ -470,6 +472,8 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
     const auto start = std::chrono::steady_clock::now();
     kernel::KernelParams k = m_impl->params;
     k.pass = frame.passes();
+    if (m_impl->pathlines)
+        m_impl->pathlines->bind(k);
     const int tilesX = (k.camera.width + kTileSize - 1) / kTileSize;
     const int tilesY = (k.camera.height + kTileSize - 1) / kTileSize;
     std::atomic<uint64_t> samples{0}, skipped{0}, chunks{0}, chunksSkipped{0}, chunksJumped{0}, rays{0};
@@ -581,6 +585,10 @@ double VolumeRenderer::estimateSamplesPerPass() const
 double VolumeRenderer::measuredSamplesPerSecond() const { return m_impl->measuredRate; }
 
 const kernel::KernelParams& VolumeRenderer::kernelParams() const { return m_impl->params; }
+
+void VolumeRenderer::setPathlines(std::shared_ptr<const PathlineScene> scene) { m_impl->pathlines = std::move(scene); }
+
+const std::shared_ptr<const PathlineScene>& VolumeRenderer::pathlines() const { return m_impl->pathlines; }
 
 InteractiveChoice chooseInteractive(const std::vector<std::shared_ptr<const StepVolume>>& levels,
                                     const RenderParams& params, double budgetSeconds, double samplesPerSecond)

@@ -33,6 +33,8 @@ struct KernelParams;
 struct PixelOut;
 }  // namespace kernel
 
+class PathlineScene;  // render/pathline_scene.h
+
 // A sample outside [min, max] of any brush contributes nothing. Either a variable (index into the
 // volume's variables) or a coordinate (x, y, z, lat, lon, radius, depth; units as in dataset.h).
 struct BrushRange {
@@ -149,6 +151,14 @@ public:
 
     // The baked kernel view (for tests and benchmarks of the kernels themselves).
     const kernel::KernelParams& kernelParams() const;
+
+    // Tubes along pathlines, ray traced in the same frame (nullptr: none). Restart class: the
+    // caller clears the frame. The renderer reads the scene's BVH, mask and style during
+    // renderPass, so the scene must not be changed while a pass runs. Per ray the closest visible
+    // tube is found first, the volume is marched up to it and the shaded tube is composited behind
+    // the accumulated volume; the depth includes the tube.
+    void setPathlines(std::shared_ptr<const PathlineScene> scene);
+    const std::shared_ptr<const PathlineScene>& pathlines() const;
 
 private:
     struct Impl;

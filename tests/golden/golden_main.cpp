@@ -5,6 +5,8 @@
 // With RAYPC_UPDATE_GOLDEN=1 the golden is (re)written instead.
 #include "core/error.h"
 #include "render/image_io.h"
+#include "render/pathline_scene.h"
+#include "render/test_pathlines.h"
 #include "render/test_volumes.h"
 #include "render/volume_renderer.h"
 
@@ -56,7 +58,34 @@ RenderParams baseParams()
 struct Case {
     int level = 0;
     std::function<void(RenderParams&)> setup;
+    std::function<std::shared_ptr<PathlineScene>()> tubes = {};  // pathline tubes (issue 5), optional
 };
+
+// Eight helices rising through the mantle on the side facing the camera, injected at steps 0 and 1
+// (2 Myr apart) and traced for 16 Myr: coloured by age they run from blue to red.
+std::shared_ptr<PathlineScene> helixTubes(float radiusKm, bool ambientOcclusion, std::vector<uint8_t> mask = {})
+{
+    std::vector<PathlineSet> sets;
+    for (int step = 0; step < 2; ++step) {
+        std::vector<testing::TestLine> lines;
+        for (int i = 0; i < 4; ++i) {
+            const double lat = -25.0 + 22.0 * i + 9.0 * step, lon = 5.0 + 18.0 * i + 30.0 * step;
+            lines.push_back(testing::helixLine(lat, lon, 3700, 6100, 250, 1.5 + 0.5 * i, 120, 2.0 * step,
+                                               2.0 * step + 16.0));
+        }
+        sets.push_back(testing::makePathlineSet(step, 2.0 * step, step + 8, lines));
+    }
+    auto scene = std::make_shared<PathlineScene>(std::move(sets), radiusKm);
+    RenderState state;
+    state.step = 1;
+    state.pathlines.visible = true;
+    state.pathlines.radiusKm = radiusKm;
+    state.pathlines.ambientOcclusion = ambientOcclusion;
+    scene->applyState(state);
+    if (!mask.empty())
+        scene->setVisibility(std::move(mask));
+    return scene;
+}
 
 std::map<std::string, Case> cases()
 {
@@ -126,6 +155,20 @@ std::map<std::string, Case> cases()
                                  p.core.range = {-1, 1};
                                  p.core.colorMap = ColorMapId::CoolToWarm;
                              }};
+    // Pathline tubes ray traced in the volume's frame (issue 5).
+    c["tubes_age"] = {0, [](RenderParams& p) { p.transfer.opacity = {{0, 0}, {1, 0}}; },
+                      [] { return helixTubes(60, true); }};
+    c["tubes_opaque_volume"] = {0, [](RenderParams& p) {
+                                    p.colorVariable = 1;
+                                    p.transfer.range = {0, 1};
+                                    p.transfer.colorMap = ColorMapId::Grayscale;
+                                    p.transfer.opacity = {{0, 1}, {1, 1}};
+                                    p.brushes = {{-1, Coordinate::Radius, 0, 4800}};  // opaque below 4800 km
+                                },
+                                [] { return helixTubes(60, true); }};
+    c["tubes_translucent_volume"] = {0, [](RenderParams&) {}, [] { return helixTubes(60, false); }};
+    c["tubes_filtered"] = {0, [](RenderParams& p) { p.transfer.opacity = {{0, 0}, {1, 0}}; },
+                           [] { return helixTubes(60, true, {1, 0, 1, 0, 0, 1, 0, 1}); }};
     return c;
 }
 
@@ -148,6 +191,8 @@ int main(int argc, char** argv)
         it->second.setup(params);
         VolumeRenderer renderer(volumeAt(it->second.level));
         renderer.setParams(params);
+        if (it->second.tubes)
+            renderer.setPathlines(it->second.tubes());
         FrameBuffer frame(params.width, params.height);
         for (int pass = 0; pass < 6; ++pass)
             renderer.renderPass(frame);

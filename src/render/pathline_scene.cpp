@@ -1,0 +1,511 @@
+#include "render/pathline_scene.h"
+
+#include "core/error.h"
+#include "core/spherical.h"
+#include "render/render_kernel.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <numbers>
+
+namespace raypc::render {
+namespace {
+
+// One Embree device for the process: devices are heavy (thread pools), scenes are cheap.
+RTCDevice sharedDevice()
+{
+    static RTCDevice device = [] {
+        RTCDevice d = rtcNewDevice(nullptr);
+        if (!d)
+            fail("Embree: cannot create a device (error {})", int(rtcGetDeviceError(nullptr)));
+        return d;
+    }();
+    return device;
+}
+
+constexpr int kColourTableSize = 1024;
+
+std::string columnList(const std::vector<std::string>& columns)
+{
+    std::string s;
+    for (const auto& c : columns)
+        s += (s.empty() ? "" : ", ") + c;
+    return s;
+}
+
+}  // namespace
+
+struct PathlineScene::Impl {
+    std::vector<PathlineSet> sets;
+    std::vector<std::string> columns;
+    // Per global line: its set and index in the set.
+    std::vector<uint32_t> lineSet, lineLocal;
+    std::vector<float> lineInjectionMyr;
+    // Per segment (Embree primID): its line; per vertex: the point's time (Myr).
+    std::vector<uint32_t> segmentLine;
+    std::vector<float> vertexTimeMyr;
+    std::vector<uint32_t> segmentStart;  // first vertex of each segment (the index buffer's contents)
+    float boundRadiusKm = 0;             // all vertices lie within this distance of the origin
+    double stepMyr = 0;
+    float maxAgeMyr = 0;
+
+    RTCScene scene = nullptr;
+    RTCGeometry geometry = nullptr;
+    float* vertices = nullptr;  // Embree-owned: x, y, z, radius per vertex
+    size_t vertexCount = 0;
+    float radiusKm = 12;
+
+    std::vector<uint8_t> mask;
+    size_t visible = 0;
+    PathlineStyle style;
+    float colourTable[kColourTableSize][3]{};
+
+    ~Impl()
+    {
+        if (geometry)
+            rtcReleaseGeometry(geometry);
+        if (scene)
+            rtcReleaseScene(scene);
+    }
+
+    void bakeColours()
+    {
+        for (int i = 0; i < kColourTableSize; ++i) {
+            const Rgb c = sampleColorMap(style.colorMap, float(i) / float(kColourTableSize - 1));
+            colourTable[i][0] = c.r;
+            colourTable[i][1] = c.g;
+            colourTable[i][2] = c.b;
+        }
+    }
+
+    // Rejects hits on hidden lines, for primary and occlusion rays alike.
+    static void filter(const RTCFilterFunctionNArguments* args)
+    {
+        const Impl& im = *static_cast<const Impl*>(args->geometryUserPtr);
+        for (unsigned i = 0; i < args->N; ++i) {
+            if (args->valid[i] != -1)
+                continue;
+            const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+            if (!im.mask[im.segmentLine[prim]])
+                args->valid[i] = 0;
+        }
+    }
+};
+
+namespace {
+
+// Cosine-weighted direction around the unit normal n from two uniform numbers (Malley's method).
+Vec3 cosineDirection(Vec3 n, float u1, float u2)
+{
+    const Vec3 a = std::abs(n.x) < 0.9f ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+    const Vec3 t = normalize(cross(n, a));
+    const Vec3 b = cross(n, t);
+    const float r = std::sqrt(u1), phi = 2.0f * std::numbers::pi_v<float> * u2;
+    const float z = std::sqrt(std::max(0.0f, 1.0f - u1));
+    return t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z;
+}
+
+// The closest visible tube along the ray, shaded: colour map of age or attribute, Lambert with the
+// volume's light and weights, times ambient occlusion from a few rays against the tubes and the core.
+kernel::TubeHit traceTubes(const void* ctx, const kernel::KernelParams& k, Vec3 o, Vec3 d, float tMaxKm, int px,
+                           int py) noexcept
+{
+    const PathlineScene::Impl& im = *static_cast<const PathlineScene::Impl*>(ctx);
+    float tIn, tOut;
+    if (!intersectSphere(o, d, im.boundRadiusKm, tIn, tOut) || tOut < 0.0f)
+        return {};
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh{};
+    rh.ray.org_x = o.x;
+    rh.ray.org_y = o.y;
+    rh.ray.org_z = o.z;
+    rh.ray.dir_x = d.x;
+    rh.ray.dir_y = d.y;
+    rh.ray.dir_z = d.z;
+    rh.ray.tnear = std::max(0.0f, tIn);
+    rh.ray.tfar = std::min(tMaxKm, tOut);
+    rh.ray.mask = 0xffffffffu;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    if (!(rh.ray.tnear < rh.ray.tfar))
+        return {};
+    rtcIntersect1(im.scene, &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+        return {};
+
+    kernel::TubeHit hit;
+    hit.tKm = rh.ray.tfar;
+    const uint32_t prim = rh.hit.primID;
+    const uint32_t line = im.segmentLine[prim];
+    float value;
+    if (im.style.colorColumn < 0) {
+        const uint32_t v0 = im.segmentStart[prim];
+        const float u = std::clamp(rh.hit.u, 0.0f, 1.0f);
+        value = im.vertexTimeMyr[v0] + u * (im.vertexTimeMyr[v0 + 1] - im.vertexTimeMyr[v0]) - im.lineInjectionMyr[line];
+    } else {
+        value = im.sets[im.lineSet[line]].attribute(im.lineLocal[line], size_t(im.style.colorColumn));
+    }
+    const float span = im.style.range.max - im.style.range.min;
+    const float pos = std::isfinite(value) ? std::clamp((value - im.style.range.min) / span, 0.0f, 1.0f) : 0.0f;
+    const float* c = im.colourTable[int(pos * float(kColourTableSize - 1) + 0.5f)];
+
+    Vec3 n{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
+    const float nl = length(n);
+    n = nl > 0.0f ? n * (1.0f / nl) : d * -1.0f;
+    if (dot(n, d) > 0.0f)
+        n = n * -1.0f;
+    float shade = k.ambient + k.diffuse * std::max(0.0f, dot(n, k.lightDir));
+
+    if (im.style.ambientOcclusion && im.style.aoRays > 0) {
+        const Vec3 p = o + d * hit.tKm + n * std::max(0.01f * im.radiusKm, 0.01f);
+        const float reach = im.style.aoDistanceFactor * im.radiusKm;
+        int occluded = 0;
+        for (int i = 0; i < im.style.aoRays; ++i) {
+            const uint32_t h1 = kernel::hash32(uint32_t(px) * 73856093u ^ uint32_t(py) * 19349663u ^
+                                               uint32_t(k.pass * im.style.aoRays + i) * 83492791u ^ k.seed);
+            const uint32_t h2 = kernel::hash32(h1 ^ 0x68bc21ebu);
+            const Vec3 dir = cosineDirection(n, float(h1 >> 8) * (1.0f / 16777216.0f),
+                                             float(h2 >> 8) * (1.0f / 16777216.0f));
+            float c0, c1;
+            if (k.drawCore && intersectSphere(p, dir, k.rInnerKm, c0, c1) && c1 > 0.0f && c0 < reach) {
+                ++occluded;
+                continue;
+            }
+            RTCRay ray{};
+            ray.org_x = p.x;
+            ray.org_y = p.y;
+            ray.org_z = p.z;
+            ray.dir_x = dir.x;
+            ray.dir_y = dir.y;
+            ray.dir_z = dir.z;
+            ray.tnear = 0.0f;
+            ray.tfar = reach;
+            ray.mask = 0xffffffffu;
+            RTCIntersectContext oc;
+            rtcInitIntersectContext(&oc);
+            rtcOccluded1(im.scene, &oc, &ray);
+            occluded += ray.tfar < 0.0f;  // Embree sets tfar = -inf on an occlusion
+        }
+        const float open = 1.0f - float(occluded) / float(im.style.aoRays);
+        shade *= 0.25f + 0.75f * open;
+    }
+    hit.colour = {c[0] * shade, c[1] * shade, c[2] * shade};
+    return hit;
+}
+
+}  // namespace
+
+PathlineScene::PathlineScene(std::vector<PathlineSet> sets, float radiusKm) : m_impl(std::make_unique<Impl>())
+{
+    if (!(radiusKm > 0.0f) || !std::isfinite(radiusKm))
+        fail("pathlines: tube radius {} km, expected a positive number", radiusKm);
+    Impl& im = *m_impl;
+    im.sets = std::move(sets);
+    im.radiusKm = radiusKm;
+    for (size_t s = 0; s < im.sets.size(); ++s) {
+        const PathlineSet& set = im.sets[s];
+        if (s == 0)
+            im.columns = set.columns;
+        else if (set.columns != im.columns)
+            fail("pathlines: the set of step {} has columns ({}), the set of step {} has ({})", set.injectionStep,
+                 columnList(set.columns), im.sets[0].injectionStep, columnList(im.columns));
+        if (set.lineCount() > 0 && (set.offsets.back() != set.pointCount() || set.offsets.front() != 0))
+            fail("pathlines: the set of step {} has offsets ending at {} for {} points", set.injectionStep,
+                 set.offsets.back(), set.pointCount());
+        if (set.attributes.size() != set.lineCount() * set.columns.size())
+            fail("pathlines: the set of step {} has {} attribute values, expected {} lines x {} columns",
+                 set.injectionStep, set.attributes.size(), set.lineCount(), set.columns.size());
+    }
+
+    // Global numbering of lines, segments and vertices.
+    size_t segments = 0, vertices = 0;
+    for (uint32_t s = 0; s < im.sets.size(); ++s) {
+        const PathlineSet& set = im.sets[s];
+        for (uint32_t i = 0; i < set.lineCount(); ++i) {
+            im.lineSet.push_back(s);
+            im.lineLocal.push_back(i);
+            im.lineInjectionMyr.push_back(float(set.injectionTimeMyr));
+            const size_t n = set.offsets[i + 1] - set.offsets[i];
+            if (set.offsets[i + 1] < set.offsets[i])
+                fail("pathlines: the set of step {} has decreasing offsets at line {}", set.injectionStep, i);
+            if (n >= 2) {
+                segments += n - 1;
+                vertices += n;
+            }
+        }
+    }
+    im.mask.assign(im.lineSet.size(), 1);
+    im.visible = im.lineSet.size();
+    im.vertexCount = vertices;
+
+    im.scene = rtcNewScene(sharedDevice());
+    rtcSetSceneBuildQuality(im.scene, RTC_BUILD_QUALITY_MEDIUM);
+    if (segments > 0) {
+        im.geometry = rtcNewGeometry(sharedDevice(), RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE);
+        im.vertices = static_cast<float*>(rtcSetNewGeometryBuffer(im.geometry, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                                  RTC_FORMAT_FLOAT4, 4 * sizeof(float), vertices));
+        auto* index = static_cast<uint32_t*>(
+            rtcSetNewGeometryBuffer(im.geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, sizeof(uint32_t), segments));
+        if (!im.vertices || !index)
+            fail("Embree: cannot allocate buffers for {} tube segments (error {})", segments,
+                 int(rtcGetDeviceError(sharedDevice())));
+        im.vertexTimeMyr.reserve(vertices);
+        im.segmentLine.reserve(segments);
+        im.segmentStart.reserve(segments);
+        float bound = 0;
+        size_t v = 0;
+        uint32_t line = 0;
+        for (const PathlineSet& set : im.sets) {
+            for (size_t i = 0; i < set.lineCount(); ++i, ++line) {
+                const size_t first = set.offsets[i], last = set.offsets[i + 1];
+                if (last - first < 2)
+                    continue;
+                for (size_t p = first; p < last; ++p, ++v) {
+                    const float* q = &set.points[4 * p];
+                    im.vertices[4 * v] = q[0];
+                    im.vertices[4 * v + 1] = q[1];
+                    im.vertices[4 * v + 2] = q[2];
+                    im.vertices[4 * v + 3] = radiusKm;
+                    im.vertexTimeMyr.push_back(q[3]);
+                    bound = std::max(bound, std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]));
+                    if (p + 1 < last) {
+                        index[im.segmentStart.size()] = uint32_t(v);
+                        im.segmentStart.push_back(uint32_t(v));
+                        im.segmentLine.push_back(line);
+                    }
+                    im.maxAgeMyr = std::max(im.maxAgeMyr, q[3] - float(set.injectionTimeMyr));
+                }
+            }
+        }
+        im.boundRadiusKm = bound;
+        rtcSetGeometryUserData(im.geometry, &im);
+        rtcSetGeometryIntersectFilterFunction(im.geometry, &Impl::filter);
+        rtcSetGeometryOccludedFilterFunction(im.geometry, &Impl::filter);
+        rtcCommitGeometry(im.geometry);
+        rtcAttachGeometry(im.scene, im.geometry);
+    }
+    rtcCommitScene(im.scene);
+    if (const RTCError e = rtcGetDeviceError(sharedDevice()); e != RTC_ERROR_NONE)
+        fail("Embree: building the tube scene of {} segments failed (error {})", segments, int(e));
+    im.boundRadiusKm += radiusKm;
+
+    // Step length: from the injection times of distinct steps, else from the lines that reached
+    // their end step in a single set.
+    int s0 = std::numeric_limits<int>::max(), s1 = std::numeric_limits<int>::min();
+    double t0 = 0, t1 = 0;
+    for (const PathlineSet& set : im.sets) {
+        if (set.injectionStep < s0)
+            s0 = set.injectionStep, t0 = set.injectionTimeMyr;
+        if (set.injectionStep > s1)
+            s1 = set.injectionStep, t1 = set.injectionTimeMyr;
+    }
+    if (!im.sets.empty() && s1 > s0) {
+        im.stepMyr = (t1 - t0) / double(s1 - s0);
+    } else if (!im.sets.empty()) {
+        const PathlineSet& set = im.sets.front();
+        const int duration = set.column("duration"), reason = set.column("end reason");
+        double longest = 0;
+        for (size_t i = 0; duration >= 0 && i < set.lineCount(); ++i)
+            if (reason < 0 || set.attribute(i, size_t(reason)) == float(PathlineEnd::ReachedEndTime))
+                longest = std::max(longest, double(set.attribute(i, size_t(duration))));
+        if (set.endStep > set.injectionStep && longest > 0)
+            im.stepMyr = longest / double(set.endStep - set.injectionStep);
+    }
+    im.style.range = {0.0f, float(im.stepMyr > 0 ? 10.0 * im.stepMyr : std::max(1.0f, im.maxAgeMyr))};
+    im.bakeColours();
+}
+
+PathlineScene::~PathlineScene() = default;
+
+const std::vector<PathlineSet>& PathlineScene::sets() const { return m_impl->sets; }
+size_t PathlineScene::lineCount() const { return m_impl->lineSet.size(); }
+const std::vector<std::string>& PathlineScene::columns() const { return m_impl->columns; }
+float PathlineScene::attribute(size_t line, size_t column) const
+{
+    return m_impl->sets[m_impl->lineSet[line]].attribute(m_impl->lineLocal[line], column);
+}
+int PathlineScene::injectionStep(size_t line) const { return m_impl->sets[m_impl->lineSet[line]].injectionStep; }
+double PathlineScene::stepMyr() const { return m_impl->stepMyr; }
+
+std::vector<uint8_t> PathlineScene::visibilityFor(const RenderState& state) const
+{
+    const Impl& im = *m_impl;
+    const PathlineState& pl = state.pathlines;
+    std::vector<uint8_t> mask(lineCount(), 0);
+    if (!pl.visible)
+        return mask;
+    auto columnOf = [&](const std::string& name, const std::string& role) {
+        const auto it = std::find(im.columns.begin(), im.columns.end(), name);
+        if (it == im.columns.end())
+            fail("pathlines: {}: the lines have no attribute '{}'; they have: {}", role, name, columnList(im.columns));
+        return size_t(it - im.columns.begin());
+    };
+    // Each test: a column (or a coordinate computed from the start position) and a range.
+    struct Test {
+        int column = -1;  // -1: coordinate
+        Coordinate coordinate = Coordinate::X;
+        float min, max;
+    };
+    std::vector<Test> tests;
+    if (pl.filterByBrushes) {
+        for (const BrushSpec& b : state.brushes) {
+            Test t{-1, Coordinate::X, b.min, b.max};
+            if (const auto c = findCoordinate(b.name))
+                t.coordinate = *c;
+            else
+                t.column = int(columnOf("start " + b.name, "brush '" + b.name + "'"));
+            tests.push_back(t);
+        }
+    }
+    for (size_t i = 0; i < pl.filters.size(); ++i)
+        tests.push_back({int(columnOf(pl.filters[i].name, fmt::format("filters[{}]", i))), Coordinate::X,
+                         pl.filters[i].min, pl.filters[i].max});
+    const bool needStart = std::any_of(tests.begin(), tests.end(), [](const Test& t) { return t.column < 0; });
+    const size_t cLat = needStart ? columnOf("start lat", "brushes") : 0;
+    const size_t cLon = needStart ? columnOf("start lon", "brushes") : 0;
+    const size_t cR = needStart ? columnOf("start radius", "brushes") : 0;
+
+    for (size_t line = 0; line < lineCount(); ++line) {
+        const int injected = injectionStep(line);
+        if (injected > state.step || injected < state.step - pl.window + 1)
+            continue;
+        bool inside = true;
+        for (const Test& t : tests) {
+            double v;
+            if (t.column >= 0) {
+                v = attribute(line, size_t(t.column));
+            } else {
+                const double lat = attribute(line, cLat), lon = wrapLonDeg(attribute(line, cLon)),
+                             r = attribute(line, cR);
+                const Vec3d p = sphericalToCartesianKm(lat, lon, r);
+                switch (t.coordinate) {
+                case Coordinate::X: v = p.x; break;
+                case Coordinate::Y: v = p.y; break;
+                case Coordinate::Z: v = p.z; break;
+                case Coordinate::Lat: v = lat; break;
+                case Coordinate::Lon: v = lon; break;
+                case Coordinate::Radius: v = r; break;
+                case Coordinate::Depth: v = kSurfaceRadiusKm - r; break;
+                default: v = NAN;
+                }
+            }
+            if (!(v >= t.min && v <= t.max)) {
+                inside = false;
+                break;
+            }
+        }
+        mask[line] = inside;
+    }
+    return mask;
+}
+
+PathlineStyle PathlineScene::styleFor(const PathlineState& pl) const
+{
+    const Impl& im = *m_impl;
+    PathlineStyle style = im.style;
+    style.colorMap = pl.effectiveColorMap();
+    style.ambientOcclusion = pl.ambientOcclusion;
+    if (pl.colorBy == "age") {
+        style.colorColumn = -1;
+        const double span = im.stepMyr > 0 ? double(pl.window) * im.stepMyr : std::max(1.0, double(im.maxAgeMyr));
+        style.range = pl.range ? *pl.range : ValueRange{0.0f, float(span)};
+        return style;
+    }
+    const auto it = std::find(im.columns.begin(), im.columns.end(), pl.colorBy);
+    if (it == im.columns.end())
+        fail("pathlines: colorBy '{}' is neither \"age\" nor a line attribute; the lines have: {}", pl.colorBy,
+             columnList(im.columns));
+    style.colorColumn = int(it - im.columns.begin());
+    if (pl.range) {
+        style.range = *pl.range;
+        return style;
+    }
+    float lo = INFINITY, hi = -INFINITY;
+    for (size_t line = 0; line < lineCount(); ++line) {
+        const float v = attribute(line, size_t(style.colorColumn));
+        if (std::isfinite(v))
+            lo = std::min(lo, v), hi = std::max(hi, v);
+    }
+    if (!(lo <= hi))
+        lo = 0, hi = 1;
+    if (isCentredOnZero(style.colorMap)) {
+        const float m = std::max(std::abs(lo), std::abs(hi));
+        lo = -m, hi = m;
+    }
+    if (!(lo < hi))
+        lo -= 0.5f, hi += 0.5f;
+    style.range = {lo, hi};
+    return style;
+}
+
+size_t PathlineScene::applyState(const RenderState& state)
+{
+    // Everything is computed before anything changes, so a bad state leaves the scene as it was.
+    PathlineStyle style = styleFor(state.pathlines);
+    std::vector<uint8_t> mask = visibilityFor(state);
+    if (!(state.pathlines.radiusKm > 0.0f))
+        fail("pathlines: radiusKm {}: expected a positive number", state.pathlines.radiusKm);
+    if (state.pathlines.radiusKm != m_impl->radiusKm)
+        setRadiusKm(state.pathlines.radiusKm);
+    setStyle(style);
+    return setVisibility(std::move(mask));
+}
+
+size_t PathlineScene::setVisibility(std::vector<uint8_t> mask)
+{
+    if (mask.size() != lineCount())
+        fail("pathlines: visibility mask of {} entries for {} lines", mask.size(), lineCount());
+    m_impl->mask = std::move(mask);
+    m_impl->visible = size_t(std::count_if(m_impl->mask.begin(), m_impl->mask.end(), [](uint8_t b) { return b != 0; }));
+    return m_impl->visible;
+}
+
+const std::vector<uint8_t>& PathlineScene::visibility() const { return m_impl->mask; }
+size_t PathlineScene::visibleCount() const { return m_impl->visible; }
+
+void PathlineScene::setStyle(const PathlineStyle& style)
+{
+    if (!(style.range.min < style.range.max))
+        fail("pathlines: colour range [{}, {}]: expected min < max", style.range.min, style.range.max);
+    if (style.colorColumn >= int(m_impl->columns.size()))
+        fail("pathlines: colour column {} of {}", style.colorColumn, m_impl->columns.size());
+    m_impl->style = style;
+    m_impl->bakeColours();
+}
+
+const PathlineStyle& PathlineScene::style() const { return m_impl->style; }
+
+void PathlineScene::setRadiusKm(float radiusKm)
+{
+    Impl& im = *m_impl;
+    if (!(radiusKm > 0.0f) || !std::isfinite(radiusKm))
+        fail("pathlines: tube radius {} km, expected a positive number", radiusKm);
+    im.boundRadiusKm += radiusKm - im.radiusKm;
+    im.radiusKm = radiusKm;
+    if (!im.geometry)
+        return;
+    for (size_t v = 0; v < im.vertexCount; ++v)
+        im.vertices[4 * v + 3] = radiusKm;
+    rtcUpdateGeometryBuffer(im.geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+    rtcCommitGeometry(im.geometry);
+    rtcCommitScene(im.scene);
+}
+
+float PathlineScene::radiusKm() const { return m_impl->radiusKm; }
+
+void PathlineScene::bind(kernel::KernelParams& k) const
+{
+    if (m_impl->visible == 0 || !m_impl->geometry) {
+        k.traceTubes = nullptr;
+        k.tubeContext = nullptr;
+        return;
+    }
+    k.traceTubes = &traceTubes;
+    k.tubeContext = m_impl.get();
+}
+
+}  // namespace raypc::render

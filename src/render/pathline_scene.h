@@ -1,0 +1,105 @@
+// Tubes along pathlines, ray traced with Embree in the same frame as the volume (issue 5).
+//
+// A PathlineScene holds the lines of one step window (loadPathlineWindow) as round linear curves
+// (cones between points, spheres at the joints) of one radius in one Embree BVH, built once.
+// Which lines count is a per-line mask read by an Embree intersection/occlusion filter, so brushing
+// and attribute filters change the picture without rebuilding the BVH; the radius changes by
+// rewriting the vertex radii and recommitting (a rebuild of this BVH only, no reload).
+//
+// Typical use (server, CLI):
+//   auto scene = std::make_shared<PathlineScene>(loadPathlineWindow(dir, step, state.pathlines.window));
+//   size_t shown = scene->applyState(state);   // restart class: radius, colour, mask
+//   renderer.setPathlines(scene);              // the renderer only reads it
+//
+// Colouring: "age" = point time - the line's injection time (Myr), or one line attribute column
+// (constant along a line), through a colour map over a range (PathlineStyle).
+// Units: km, Myr, degrees (as in data/pathlines.h).
+//
+// Thread safety: const member functions may be called from any thread (the renderer traces from
+// all cores). applyState, setVisibility, setStyle and setRadiusKm must not run while a renderPass
+// uses this scene (the same rule as VolumeRenderer::setParams). Embree types stay in the .cpp.
+#pragma once
+
+#include "data/pathlines.h"
+#include "render/render_state.h"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace raypc::render {
+
+namespace kernel {
+struct KernelParams;
+}
+
+// How visible lines look (resolved from PathlineState by applyState, or set directly by tests).
+struct PathlineStyle {
+    int colorColumn = -1;  // -1: colour by age; otherwise an index into columns()
+    ColorMapId colorMap = ColorMapId::BlueWhiteRed;
+    ValueRange range{0, 20};  // value (age in Myr or the column's units) mapped to the map's ends
+    bool ambientOcclusion = true;
+    int aoRays = 4;            // occlusion rays per tube pixel and pass (the mean over passes converges)
+    float aoDistanceFactor = 12;  // occlusion rays reach this many tube radii
+};
+
+class PathlineScene {
+public:
+    // Builds the BVH of every line of `sets` (any order; typically a window, oldest first) with
+    // tubes of `radiusKm`. Lines with fewer than 2 points draw nothing. Throws raypc::Error when
+    // the radius is not positive, the sets' columns differ, or a set is malformed (offsets).
+    explicit PathlineScene(std::vector<PathlineSet> sets, float radiusKm = 12.0f);
+    ~PathlineScene();
+    PathlineScene(const PathlineScene&) = delete;
+    PathlineScene& operator=(const PathlineScene&) = delete;
+
+    const std::vector<PathlineSet>& sets() const;
+    // Lines over all sets, numbered set by set (set 0's lines first). Masks are in this order.
+    size_t lineCount() const;
+    // Attribute columns shared by all sets (empty without lines).
+    const std::vector<std::string>& columns() const;
+    // Value of `column` for global line `line`.
+    float attribute(size_t line, size_t column) const;
+    int injectionStep(size_t line) const;
+    // Time between steps (Myr) from the sets' injection times, or from the lines' durations for a
+    // single set; 0 if unknown. The default age range is [0, window x stepMyr].
+    double stepMyr() const;
+
+    // --- Restart class (no BVH rebuild) ------------------------------------------------------
+
+    // Which lines the state shows (see docs/state.md, "pathlines"): lines injected in
+    // [step - window + 1, step] whose start lies inside every brush range (coordinates from the
+    // "start lat/lon/radius" columns, variables from "start <variable>") when filterByBrushes, and
+    // inside every attribute filter. All zero when pathlines are not visible. Throws raypc::Error
+    // naming a filter or brush whose column the lines do not have (listing the columns).
+    std::vector<uint8_t> visibilityFor(const RenderState& state) const;
+    // The style the state asks for: colorBy resolved to a column (or age), the colour map and the
+    // range (default: age [0, window x stepMyr]; a column's range over all loaded lines, symmetric
+    // for maps centred on zero). Throws raypc::Error for an unknown colorBy (listing the columns).
+    PathlineStyle styleFor(const PathlineState& state) const;
+
+    // Radius, style and visibility from the state; returns the number of visible lines.
+    size_t applyState(const RenderState& state);
+    // One byte per line (non-zero = visible); returns the number of visible lines. Throws
+    // raypc::Error if the mask has the wrong size.
+    size_t setVisibility(std::vector<uint8_t> mask);
+    const std::vector<uint8_t>& visibility() const;
+    size_t visibleCount() const;
+    void setStyle(const PathlineStyle& style);
+    const PathlineStyle& style() const;
+    // Rewrites the tube radii and refits the BVH. Throws raypc::Error unless radiusKm > 0.
+    void setRadiusKm(float radiusKm);
+    float radiusKm() const;
+
+    // For VolumeRenderer: binds this scene's tracer into the kernel parameters (left unbound when
+    // no line is visible, so such a frame costs nothing and equals one without tubes).
+    void bind(kernel::KernelParams& k) const;
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> m_impl;
+};
+
+}  // namespace raypc::render
