@@ -199,8 +199,7 @@ void run(const RenderArgs& args)
             try {
                 sets = loadPathlineWindow(args.dataset, step, state.pathlines.window);
             } catch (const Error& e) {
-                fail("pathlines: {} has no pathlines for step {} (preprocessed with --no-pathlines?): {}", args.dataset,
-                     step, e.what());
+                fail("pathlines: {}", e.what());
             }
             auto scene = std::make_shared<PathlineScene>(std::move(sets), state.pathlines.radiusKm);
             RenderState stepState = state;
