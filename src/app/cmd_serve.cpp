@@ -1,6 +1,7 @@
-// raypc serve DATASET [--port 8080] [--host 127.0.0.1] [--assets DIR]: the browser UI and the
+// raypc serve DATASET [--port 8080] [--host 127.0.0.1] [--assets DIR] [--examples DIR]: the browser UI and the
 // protocol of docs/protocol.md.
 #include "app/command.h"
+#include "server/dataset_api.h"
 #include "server/server.h"
 
 #include <fmt/format.h>
@@ -12,7 +13,7 @@ namespace raypc::app {
 namespace {
 
 struct ServeArgs {
-    std::string dataset, host = "127.0.0.1", assets;
+    std::string dataset, host = "127.0.0.1", assets, examples;
     int port = 8080;
 };
 
@@ -28,6 +29,8 @@ const CommandRegistration kRegistration(
                        "Address to listen on; anything but loopback requires the access token printed at start")
             ->capture_default_str();
         cmd.add_option("--assets", args->assets, "Directory of the built UI (default: $RAYPC_ASSETS, web/dist, ...)");
+        cmd.add_option("--examples", args->examples,
+                       "Directory of example states offered as presets (default: $RAYPC_EXAMPLES, the source tree's examples/)");
         cmd.callback([args] {
             server::ServerOptions options;
             options.dataset = args->dataset;
@@ -35,6 +38,8 @@ const CommandRegistration kRegistration(
             options.port = uint16_t(args->port);
             options.assets = server::findAssetDir(args->assets.empty() ? std::nullopt
                                                                        : std::optional<std::filesystem::path>(args->assets));
+            options.examples = server::findExamplesDir(
+                args->examples.empty() ? std::nullopt : std::optional<std::filesystem::path>(args->examples));
             server::Server srv(options);
             if (options.assets)
                 spdlog::info("serving the UI from {}", options.assets->string());

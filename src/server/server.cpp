@@ -5,6 +5,7 @@
 #include "data/selection.h"
 #include "render/color_map.h"
 #include "server/access.h"
+#include "server/dataset_api.h"
 #include "server/image_codec.h"
 #include "server/protocol.h"
 #include "server/render_session.h"
@@ -86,11 +87,12 @@ struct ServerState {
     ServerOptions options;
     std::shared_ptr<const Dataset> dataset;
     std::unique_ptr<StepCache> cache;
+    std::unique_ptr<PathlineCache> pathlines;
     RenderContext render;
     std::string token;
     std::optional<fs::path> assets;
     std::string infoJson;
-    net::thread_pool workers{1};  // screenshots, selections, samples
+    net::thread_pool workers{1};  // screenshots, selections, samples, statistics, pathlines
     std::atomic<uint64_t> sessionCounter{0};
     // Every session's render work, so that shutdown can stop it before the io_context goes away.
     std::mutex sessionsMutex;
@@ -521,8 +523,40 @@ private:
                                          .count());
                         return std::pair<std::string, std::string>(std::move(png), "image/png");
                     });
+                } else if (path == "/api/presets" && method == http::verb::get) {
+                    offload(version, keepAlive, [this] {
+                        return std::pair<std::string, std::string>(
+                            presetsJson(m_server.options.examples).dump(-1, ' ', false, json::error_handler_t::replace),
+                            "application/json");
+                    });
+                } else if (path == "/api/stats" && method == http::verb::post) {
+                    // Level 1 by default (quick); 0 is exact on the full grid.
+                    const int levels = int(dataset.levels().size());
+                    const int level = queryParameter(query, "level") ? parseIntParameter(query, "level") : std::min(1, levels - 1);
+                    if (level < 0 || level >= levels)
+                        fail("level: {} out of range 0..{}", level, levels - 1);
+                    auto resolved = std::make_shared<ResolvedState>(resolveState(parseBody(request.body()), dataset));
+                    offload(version, keepAlive, [this, resolved, level] {
+                        const auto start = std::chrono::steady_clock::now();
+                        const auto filters = selectionFilters(resolved->params);
+                        json stats = selectionStatsJson(*m_server.dataset, *m_server.cache, filters, level, resolved->state.step);
+                        spdlog::info("stats: {} steps at level {} in {:.0f} ms", stats["steps"].size(), level,
+                                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+                        return std::pair<std::string, std::string>(stats.dump(), "application/json");
+                    });
+                } else if (path == "/api/pathlines" && method == http::verb::get) {
+                    const int step = checkedStep(dataset, query);
+                    const int window = queryParameter(query, "window") ? parseIntParameter(query, "window") : 10;
+                    if (window < 1 || window > 1000)
+                        fail("window: {} out of range 1..1000", window);
+                    offload(version, keepAlive, [this, step, window] {
+                        const auto sets = m_server.pathlines->get(step, window);
+                        return std::pair<std::string, std::string>(pathlineAttributesPayload(*sets, step, window),
+                                                                   "application/octet-stream");
+                    });
                 } else if (path == "/api/info" || path == "/api/histogram" || path == "/api/sample" ||
-                           path == "/api/selection" || path == "/api/screenshot") {
+                           path == "/api/selection" || path == "/api/screenshot" || path == "/api/presets" ||
+                           path == "/api/stats" || path == "/api/pathlines") {
                     bad(http::status::method_not_allowed, fmt::format("{}: method not allowed", path));
                 } else {
                     bad(http::status::not_found, fmt::format("unknown endpoint {}", path.substr(0, 100)));
@@ -655,6 +689,7 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>())
     s.dataset = Dataset::open(s.options.dataset);
     s.cache = std::make_unique<StepCache>([dataset = s.dataset](int step, int level) { return dataset->load(step, level); },
                                           s.options.cacheBytes, s.options.cacheEntries);
+    s.pathlines = std::make_unique<PathlineCache>(s.options.dataset);
     s.render.dataset = s.dataset;
     s.render.cache = s.cache.get();
     s.assets = s.options.assets;

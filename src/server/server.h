@@ -20,6 +20,7 @@ struct ServerOptions {
     std::string host = "127.0.0.1";
     uint16_t port = 8080;  // 0: an ephemeral port (see Server::port())
     std::optional<std::filesystem::path> assets;  // nullopt: the built-in page saying the UI is not built
+    std::optional<std::filesystem::path> examples;  // presets (GET /api/presets); nullopt: none (findExamplesDir)
     size_t cacheBytes = size_t(2) << 30;          // bound of the shared StepVolume cache
     size_t cacheEntries = 12;
     bool handleSignals = true;                    // SIGINT/SIGTERM stop run()

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <exception>
 
 namespace raypc::server {
@@ -64,6 +65,26 @@ std::shared_ptr<const StepVolume> StepCache::get(int step, int level)
     // Load outside the lock: mapping a step must not stall other sessions' cache hits.
     auto volume = m_loader(step, level);
     insert(step, level, volume);
+    return volume;
+}
+
+std::shared_ptr<const StepVolume> StepCache::getWithoutEvicting(int step, int level)
+{
+    {
+        std::lock_guard lock(m_mutex);
+        for (const auto& e : m_lru)
+            if (e.step == step && e.level == level)
+                return e.volume;
+        ++m_loads;
+    }
+    auto volume = m_loader(step, level);
+    const size_t bytes = volumeBytes(*volume);
+    std::lock_guard lock(m_mutex);
+    const bool present = std::any_of(m_lru.begin(), m_lru.end(), [&](const Entry& e) { return e.step == step && e.level == level; });
+    if (!present && m_bytes + bytes <= m_maxBytes && m_lru.size() < m_maxEntries) {
+        m_lru.push_back({step, level, volume, bytes});  // least recently used: first to go later
+        m_bytes += bytes;
+    }
     return volume;
 }
 

@@ -33,6 +33,10 @@ public:
     StepCache& operator=(const StepCache&) = delete;
 
     std::shared_ptr<const StepVolume> get(int step, int level);
+    // For scans over many steps (statistics): a cached volume without changing the order of use, or
+    // a fresh load that is kept only when it fits without evicting anything, so that a scan never
+    // pushes the renderers' working set out.
+    std::shared_ptr<const StepVolume> getWithoutEvicting(int step, int level);
     // Queues a background load; replaces an earlier request that has not started.
     void prefetch(int step, int level);
     // Waits until no prefetch is queued or running (tests).

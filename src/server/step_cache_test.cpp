@@ -118,5 +118,33 @@ TEST(StepCache, LoaderErrorsReachTheCallerAndSpareThePrefetchThread)
     EXPECT_TRUE(cache.contains(2, 0));
 }
 
+TEST(StepCache, ScansDoNotEvictTheWorkingSet)
+{
+    CountingLoader loader;
+    StepCache cache(loader, size_t(1) << 30, 2);
+    cache.get(0, 0);
+    cache.get(1, 0);
+    // A scan over other steps loads them but keeps the two entries in use.
+    for (int step = 2; step < 6; ++step)
+        EXPECT_FLOAT_EQ(cache.getWithoutEvicting(step, 1)->values(0)[0], float(step * 10 + 1));
+    EXPECT_TRUE(cache.contains(0, 0));
+    EXPECT_TRUE(cache.contains(1, 0));
+    EXPECT_EQ(cache.entries(), 2u);
+    // A cached entry is returned without a load.
+    const int calls = *loader.calls;
+    cache.getWithoutEvicting(0, 0);
+    EXPECT_EQ(*loader.calls, calls);
+    // With room, a scanned volume is kept (as the least recently used entry).
+    StepCache roomy(loader, size_t(1) << 30, 4);
+    roomy.get(0, 0);
+    roomy.getWithoutEvicting(3, 0);
+    EXPECT_TRUE(roomy.contains(3, 0));
+    roomy.get(1, 0);
+    roomy.get(2, 0);
+    roomy.get(4, 0);  // evicts the scanned entry first
+    EXPECT_FALSE(roomy.contains(3, 0));
+    EXPECT_TRUE(roomy.contains(0, 0));
+}
+
 }  // namespace
 }  // namespace raypc::server

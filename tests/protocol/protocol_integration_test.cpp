@@ -1,5 +1,6 @@
 // Integration tests of `raypc serve` against docs/protocol.md: a real server process on an ephemeral
 // port, a client built with Beast. Connects to 127.0.0.1 only.
+#include "render/render_state.h"
 #include "server/protocol.h"
 
 #include <boost/asio.hpp>
@@ -9,13 +10,18 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstring>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <numbers>
+#include <sstream>
 #include <regex>
 #include <thread>
 #include <sys/socket.h>
@@ -343,7 +349,7 @@ TEST(Serve, InfoHistogramSampleOverHttp)
     EXPECT_EQ(j["variables"][0]["histogram"].size(), 256u);
     EXPECT_EQ(j["coordinates"].size(), 7u);
     EXPECT_TRUE(j["defaultState"].is_object());
-    EXPECT_EQ(j["defaultState"]["version"], 1);
+    EXPECT_EQ(j["defaultState"]["version"], raypc::render::kRenderStateVersion);
     EXPECT_FALSE(j["colorMaps"].empty());
 
     const auto h = httpGet(server.port, "/api/histogram?step=2&var=temperature");
@@ -663,6 +669,202 @@ TEST(Serve, ScreenshotSelectionAndBodyLimit)
     EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/selection", "{nope").status, 400);
     const auto big = httpRequest(server.port, http::verb::post, "/api/selection", std::string(2 * 1024 * 1024, ' '));
     EXPECT_EQ(big.status, 413);
+}
+
+// GET /api/presets: every example state but demo.json, with a title, exactly as in the file; each
+// is a valid state for the fixture once its step is one of the fixture's. A file that is not JSON is
+// left out.
+TEST(Serve, PresetsAreTheExampleStates)
+{
+    const fs::path examples = fs::path(RAYPC_SOURCE_DIR) / "examples";
+    std::vector<std::string> expected;
+    for (const auto& e : fs::directory_iterator(examples))
+        if (e.path().extension() == ".json" && e.path().filename() != "demo.json")
+            expected.push_back(e.path().stem().string());
+    std::sort(expected.begin(), expected.end());
+    ASSERT_GE(expected.size(), 6u);
+
+    ServerProcess server({"--examples", examples.string()});
+    const auto answer = httpGet(server.port, "/api/presets");
+    ASSERT_EQ(answer.status, 200) << answer.body;
+    const json presets = json::parse(answer.body);
+    ASSERT_TRUE(presets.is_array());
+    std::vector<std::string> names;
+    for (const auto& p : presets) {
+        const std::string name = p.at("name");
+        names.push_back(name);
+        EXPECT_FALSE(p.at("title").get<std::string>().empty()) << name;
+        EXPECT_NE(p.at("title").get<std::string>(), name) << "the contest presets have human titles";
+        std::ifstream in(examples / (name + ".json"));
+        EXPECT_EQ(p.at("state"), json::parse(in)) << name;
+        json state = p.at("state");
+        state["step"] = 1;
+        state["image"] = {{"width", 64}, {"height", 48}};
+        const auto sel = httpRequest(server.port, http::verb::post, "/api/selection", state.dump());
+        EXPECT_EQ(sel.status, 200) << name << ": " << sel.body;
+    }
+    EXPECT_EQ(names, expected);
+    EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/presets", "{}").status, 405);
+
+    const fs::path own = g_work / "own-examples";
+    fs::create_directories(own);
+    std::ofstream(own / "demo.json") << R"({"version": 1})";
+    std::ofstream(own / "broken.json") << "{not json";
+    std::ofstream(own / "my-view.json") << R"({"version": 1, "step": 0})";
+    ServerProcess second({"--examples", own.string()});
+    const json mine = json::parse(httpGet(second.port, "/api/presets").body);
+    ASSERT_EQ(mine.size(), 1u) << mine.dump();
+    EXPECT_EQ(mine[0]["name"], "my-view");
+    EXPECT_EQ(mine[0]["title"], "my view");
+}
+
+// POST /api/stats: the selected volume of every step at level 0 equals `raypc stats` and the
+// analytic volume of the fixture (radial velocity = u0 everywhere, so depth <= 660 km selects
+// whole shells: tests/cli/cli_test.sh, stats_analytic_selection); the depth profile has nothing
+// below 660 km and full shells above; bad levels are 400.
+TEST(Serve, StatsOverTimeMatchTheCliAndTheAnalyticSelection)
+{
+    ServerProcess server;
+    json state = smallState();
+    state["step"] = 2;
+    state["brushes"] = {{{"name", "depth"}, {"min", 0}, {"max", 660}},
+                        {{"name", "radial velocity"}, {"min", 0.15}, {"max", 0.16}}};
+    const auto answer = httpRequest(server.port, http::verb::post, "/api/stats?level=0", state.dump());
+    ASSERT_EQ(answer.status, 200) << answer.body;
+    const json stats = json::parse(answer.body);
+    EXPECT_EQ(stats["level"], 0);
+    ASSERT_EQ(stats["steps"].size(), 3u);
+
+    double prev = 0, edge = 0;
+    for (int i = 0; i <= 40; ++i) {
+        const double r = 3485 + i * 2886.0 / 40;
+        if (r >= 5711) {
+            edge = (prev + r) / 2;
+            break;
+        }
+        prev = r;
+    }
+    const double analyticKm3 = 4.0 / 3.0 * std::numbers::pi * (std::pow(6371.0, 3) - std::pow(edge, 3));
+    const double analyticFraction = (std::pow(6371.0, 3) - std::pow(edge, 3)) / (std::pow(6371.0, 3) - std::pow(3485.0, 3));
+
+    const fs::path csv = g_work / "stats_cli.csv";
+    runOrDie(std::string(RAYPC_EXE) + " stats " + (g_work / "ds").string() +
+             " --range depth=0:660 --range 'radial velocity=0.15:0.16' --quiet -o " + csv.string() + " >/dev/null");
+    std::ifstream in(csv);
+    std::string line;
+    std::getline(in, line);  // header
+    for (int step = 0; step < 3; ++step) {
+        const json& s = stats["steps"][size_t(step)];
+        EXPECT_EQ(s["step"], step);
+        const double v = s["volumeKm3"], f = s["fractionOfMantle"];
+        EXPECT_NEAR(v, analyticKm3, 1e-6 * analyticKm3) << "step " << step;
+        EXPECT_NEAR(f, analyticFraction, 1e-8) << "step " << step;
+        ASSERT_TRUE(std::getline(in, line));
+        std::stringstream fields(line);
+        std::string cell[4];
+        for (auto& c : cell)
+            std::getline(fields, c, ',');
+        EXPECT_EQ(std::stoi(cell[0]), step);
+        EXPECT_NEAR(std::stod(cell[1]), s["timeMyr"].get<double>(), 1e-9);
+        EXPECT_NEAR(std::stod(cell[2]), v, 1e-6 * v) << "CLI and endpoint differ at step " << step;
+        EXPECT_NEAR(std::stod(cell[3]), 100 * f, 1e-6) << "CLI and endpoint differ at step " << step;
+    }
+
+    const json& p = stats["profile"];
+    EXPECT_EQ(p["step"], 2);
+    ASSERT_EQ(p["radiusKm"].size(), 41u);
+    ASSERT_EQ(p["volumeKm3"].size(), 41u);
+    double sum = 0;
+    for (size_t i = 0; i < 41; ++i) {
+        const double depth = p["depthKm"][i], selected = p["volumeKm3"][i], shell = p["shellVolumeKm3"][i];
+        EXPECT_NEAR(depth, 6371.0 - p["radiusKm"][i].get<double>(), 1e-9);
+        sum += selected;
+        if (depth > 660)
+            EXPECT_EQ(selected, 0.0) << "selected below 660 km at depth " << depth;
+        else if (depth < 600)
+            EXPECT_NEAR(selected, shell, 1e-9 * shell) << "shell at depth " << depth << " not fully selected";
+    }
+    EXPECT_NEAR(sum, analyticKm3, 1e-6 * analyticKm3);
+
+    // Default level 1: close to the exact value, not necessarily equal.
+    const auto quick = httpRequest(server.port, http::verb::post, "/api/stats", state.dump());
+    ASSERT_EQ(quick.status, 200) << quick.body;
+    const json q = json::parse(quick.body);
+    EXPECT_EQ(q["level"], 1);
+    EXPECT_EQ(q["steps"].size(), 3u);
+    EXPECT_EQ(q["profile"]["radiusKm"].size(), 21u);
+
+    // Nothing selected beside u0.
+    state["brushes"][1]["min"] = 0.2, state["brushes"][1]["max"] = 0.3;
+    const json none = json::parse(httpRequest(server.port, http::verb::post, "/api/stats?level=0", state.dump()).body);
+    for (const auto& s : none["steps"])
+        EXPECT_EQ(s["volumeKm3"], 0.0);
+
+    const auto badLevel = httpRequest(server.port, http::verb::post, "/api/stats?level=7", state.dump());
+    EXPECT_EQ(badLevel.status, 400);
+    EXPECT_NE(badLevel.body.find("level: 7 out of range 0..2"), std::string::npos) << badLevel.body;
+    EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/stats?level=x", state.dump()).status, 400);
+    state["brushes"] = {{{"name", "pressure"}, {"min", 0}, {"max", 1}}};
+    EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/stats", state.dump()).status, 400);
+    EXPECT_EQ(httpGet(server.port, "/api/stats").status, 405);
+}
+
+// GET /api/pathlines: u32 header length, JSON header, lines x columns float32; the window's sets
+// are those injected at steps max(0, step - window + 1)..step; bad parameters are 400.
+TEST(Serve, PathlineAttributesOfAWindow)
+{
+    ServerProcess server;
+    auto fetch = [&](const std::string& query) {
+        const auto a = httpGet(server.port, "/api/pathlines?" + query);
+        EXPECT_EQ(a.status, 200) << query << ": " << a.body;
+        EXPECT_EQ(a.contentType, "application/octet-stream");
+        uint32_t n = 0;
+        for (int i = 0; i < 4; ++i)
+            n |= uint32_t(uint8_t(a.body[size_t(i)])) << (8 * i);
+        json header = json::parse(a.body.substr(4, n));
+        std::vector<float> values((a.body.size() - 4 - n) / 4);
+        EXPECT_EQ(values.size() * 4, a.body.size() - 4 - n);
+        std::memcpy(values.data(), a.body.data() + 4 + n, values.size() * 4);
+        return std::pair(header, values);
+    };
+    const auto [all, values] = fetch("step=2&window=10");
+    EXPECT_EQ(all["step"], 2);
+    EXPECT_EQ(all["window"], 10);
+    ASSERT_EQ(all["sets"].size(), 3u) << all.dump();
+    size_t lines = 0;
+    for (size_t i = 0; i < 3; ++i) {
+        EXPECT_EQ(all["sets"][i]["injectionStep"], int(i));
+        lines += all["sets"][i]["lines"].get<size_t>();
+    }
+    EXPECT_EQ(all["lines"], lines);
+    ASSERT_GT(lines, 0u) << "the fixture's pathlines are empty";
+    const auto& columns = all["columns"];
+    EXPECT_EQ(columns[0], "seed kind");
+    EXPECT_NE(std::find(columns.begin(), columns.end(), "length"), columns.end());
+    EXPECT_NE(std::find(columns.begin(), columns.end(), "start temperature"), columns.end());
+    EXPECT_EQ(all["units"].size(), columns.size());
+    EXPECT_EQ(values.size(), lines * columns.size());
+    // Lengths are non-negative and the injection time column matches each set's time.
+    const size_t nc = columns.size();
+    const size_t kLength = size_t(std::find(columns.begin(), columns.end(), "length") - columns.begin());
+    const size_t kInjection = size_t(std::find(columns.begin(), columns.end(), "injection time") - columns.begin());
+    size_t row = 0;
+    for (const auto& set : all["sets"])
+        for (size_t i = 0; i < set["lines"].get<size_t>(); ++i, ++row) {
+            EXPECT_GE(values[row * nc + kLength], 0.0f);
+            EXPECT_NEAR(values[row * nc + kInjection], set["injectionTimeMyr"].get<double>(), 1e-3);
+        }
+
+    const auto [last, lastValues] = fetch("step=2&window=1");
+    ASSERT_EQ(last["sets"].size(), 1u);
+    EXPECT_EQ(last["sets"][0]["injectionStep"], 2);
+    EXPECT_EQ(last["lines"], all["sets"][2]["lines"]);
+    EXPECT_EQ(fetch("step=1").first["window"], 10) << "window defaults to 10";
+
+    EXPECT_EQ(httpGet(server.port, "/api/pathlines?step=3&window=2").status, 400);
+    EXPECT_EQ(httpGet(server.port, "/api/pathlines?step=1&window=0").status, 400);
+    EXPECT_EQ(httpGet(server.port, "/api/pathlines?window=2").status, 400);
+    EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/pathlines?step=0", "{}").status, 405);
 }
 
 TEST(Serve, NonLoopbackNeedsTheToken)
