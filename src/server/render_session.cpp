@@ -132,6 +132,26 @@ int RenderSession::chooseInteractiveLevel(int step, const RenderParams& params, 
     return levels - 1;
 }
 
+std::shared_ptr<const PathlineScene> RenderSession::pathlinesFor(const RenderState& state)
+{
+    if (!state.pathlines.visible || !m_context.pathlines)
+        return nullptr;
+    // Reload class: a new step or window loads that window (shared cache) and builds a new BVH.
+    if (!m_scene || m_sceneStep != state.step || m_sceneWindow != state.pathlines.window) {
+        const auto window = m_context.pathlines->get(state.step, state.pathlines.window);
+        const auto start = Clock::now();
+        m_scene.reset();
+        m_scene = std::make_shared<PathlineScene>(*window, state.pathlines.radiusKm);
+        m_sceneStep = state.step;
+        m_sceneWindow = state.pathlines.window;
+        spdlog::info("{}: pathline scene of step {} window {}: {} lines in {:.0f} ms", m_name, state.step,
+                     state.pathlines.window, m_scene->lineCount(), millisecondsSince(start));
+    }
+    // Restart class: radius, style and the visibility mask (attribute filters, brushes).
+    m_scene->applyState(state);
+    return m_scene;
+}
+
 void RenderSession::render(const Request& request)
 {
     const RenderState& state = request.resolved.state;
@@ -169,6 +189,11 @@ void RenderSession::render(const Request& request)
 
     VolumeRenderer& renderer = rendererFor(step, level);
     renderer.setParams(params);  // restart class: camera, transfer function, brushes, size
+    const auto scene = pathlinesFor(state);  // before any pass reads it
+    for (auto& [l, r] : m_renderers)
+        if (r.get() != &renderer)
+            r->setPathlines(nullptr);  // no other renderer of this session keeps a scene that changes
+    renderer.setPathlines(scene);
     const double estimatedSamples = renderer.estimateSamplesPerPass();
 
     // Exact selection statistics of the brushes, recomputed only when they or the volume change.
@@ -224,6 +249,8 @@ void RenderSession::render(const Request& request)
                                 {"bricksSkipped", stats.bricksSkipped},
                                 {"bricksTotal", stats.bricksTotal}}},
                               {"selection", m_selection}};
+        if (scene)
+            header["pathlines"] = {{"lines", scene->lineCount()}, {"visible", scene->visibleCount()}};
         std::string bytes = encodeFrame(std::move(header), {reinterpret_cast<const uint8_t*>(jpeg.data()), jpeg.size()},
                                         depth, depthWidth, depthHeight);
         encodeMsTotal += millisecondsSince(encodeStart);

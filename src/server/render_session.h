@@ -12,7 +12,9 @@
 #pragma once
 
 #include "data/dataset.h"
+#include "render/pathline_scene.h"
 #include "render/volume_renderer.h"
+#include "server/dataset_api.h"
 #include "server/protocol.h"
 #include "server/render_support.h"
 #include "server/step_cache.h"
@@ -33,6 +35,7 @@ namespace raypc::server {
 struct RenderContext {
     std::shared_ptr<const Dataset> dataset;
     StepCache* cache = nullptr;
+    PathlineCache* pathlines = nullptr;  // line windows shared by the sessions (each builds its own scene)
     // Throughput of the machine in estimated samples (VolumeRenderer::estimateSamplesPerPass) per
     // second, all threads; updated from every pass, used to choose the interactive level.
     std::atomic<double> samplesPerSecond{0.0};
@@ -70,6 +73,9 @@ private:
     void render(const Request& request);
     render::VolumeRenderer& rendererFor(int step, int level);
     int chooseInteractiveLevel(int step, const render::RenderParams& params, double budgetSeconds);
+    // The tube scene of the state (nullptr when pathlines are hidden): built once per (step, window),
+    // then only restyled and masked (restart class).
+    std::shared_ptr<const render::PathlineScene> pathlinesFor(const render::RenderState& state);
 
     RenderContext& m_context;
     SessionSink m_sink;
@@ -84,6 +90,8 @@ private:
     // Render thread only.
     int m_rendererStep = -1, m_lastStep = -1;
     std::map<int, std::unique_ptr<render::VolumeRenderer>> m_renderers;  // by level, of m_rendererStep
+    std::shared_ptr<render::PathlineScene> m_scene;
+    int m_sceneStep = -1, m_sceneWindow = -1;
     std::string m_selectionKey;
     nlohmann::json m_selection;
 

@@ -4,6 +4,7 @@
 #include "core/spherical.h"
 #include "data/selection.h"
 #include "render/color_map.h"
+#include "render/pathline_scene.h"
 #include "server/access.h"
 #include "server/dataset_api.h"
 #include "server/image_codec.h"
@@ -512,6 +513,13 @@ private:
                         const auto start = std::chrono::steady_clock::now();
                         render::VolumeRenderer renderer(m_server.cache->get(resolved->state.step, 0));
                         renderer.setParams(resolved->params);
+                        const auto& pl = resolved->state.pathlines;
+                        if (pl.visible) {
+                            auto scene = std::make_shared<render::PathlineScene>(
+                                *m_server.pathlines->get(resolved->state.step, pl.window), pl.radiusKm);
+                            scene->applyState(resolved->state);
+                            renderer.setPathlines(scene);
+                        }
                         render::FrameBuffer frame(resolved->params.width, resolved->params.height);
                         for (int pass = 0; pass < std::max(1, resolved->state.passes); ++pass)
                             renderer.renderPass(frame);
@@ -692,6 +700,7 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>())
     s.pathlines = std::make_unique<PathlineCache>(s.options.dataset);
     s.render.dataset = s.dataset;
     s.render.cache = s.cache.get();
+    s.render.pathlines = s.pathlines.get();
     s.assets = s.options.assets;
     s.infoJson = buildInfo(*s.dataset).dump(-1, ' ', false, json::error_handler_t::replace);
     if (!isLoopbackHost(s.options.host))

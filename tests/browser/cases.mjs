@@ -1,6 +1,6 @@
 // End-to-end browser tests of the UI against the real server:
 //   node tests/browser/cases.mjs CASE RAYPC FIXTURE_DIR
-// CASE: brush | warp | play | save_load | two_tabs. Each case starts its own server and browser.
+// CASE: brush | warp | play | save_load | two_tabs | presets | pathlines. Each case starts its own server and browser.
 import { readFileSync, writeFileSync } from 'node:fs';
 import { spawnSync } from 'node:child_process';
 import { join } from 'node:path';
@@ -281,6 +281,141 @@ const cases = {
     const framesB2 = await b.evaluate(() => window.__raypc.framesReceived);
     check(framesB2 === framesB, `tab 2 received ${framesB2 - framesB} frames while only tab 1 changed`);
     check(meanAbsDiff(pb, await viewPixels(b)) < 0.5, 'tab 2 image changed while only tab 1 changed');
+  },
+
+  // Every example state is a preset button; one click applies it: the state sent carries the
+  // preset's brushes, colours and camera (with the current step and image size), the parallel
+  // coordinates show its brushes, and the image changes. The selection-over-time plot then holds
+  // every step with the current one marked, and with "exact" its value at the current step equals
+  // POST /api/selection.
+  async presets({ context, url }) {
+    const page = await openUi(context, url);
+    await standardView(page);
+    const presets = await (await fetch(url + 'api/presets')).json();
+    check(presets.length >= 9, `GET /api/presets has ${presets.length} presets, expected the 9 example states`);
+    const buttons = await page.evaluate(() => [...document.querySelectorAll('#presets button')].map((b) => ({ name: b.dataset.preset, text: b.textContent })));
+    check(JSON.stringify(buttons.map((b) => b.name)) === JSON.stringify(presets.map((p) => p.name)),
+      `preset buttons ${JSON.stringify(buttons)} do not match /api/presets`);
+    const step = (await rState(page)).step, image = (await rState(page)).image;
+    let before = await viewPixels(page);
+    const diffs = [];
+    for (const p of presets) {
+      const sentBefore = await page.evaluate(() => window.__raypc.lastSentId);
+      await page.click(`#presets button[data-preset="${p.name}"]`);
+      await page.waitForFunction((n) => window.__raypc.lastSentId > n, sentBefore, { timeout: 5000 })
+        .catch(() => { throw new TestFailure(`clicking preset ${p.name} sent no state`); });
+      await waitConverged(page);
+      const shown = await page.evaluate(() => {
+        const r = window.__raypc, h = r.headers[r.headers.length - 1];
+        return { sent: r.sentLog.find((e) => e.id === h.id), state: r.state(), pc: r.parcoords.brushes(), errors: r.errors };
+      });
+      check(JSON.stringify(shown.sent.brushes) === JSON.stringify(p.state.brushes),
+        `${p.name}: the frame shown was rendered with brushes ${JSON.stringify(shown.sent.brushes)}, the preset has ${JSON.stringify(p.state.brushes)}`);
+      check(JSON.stringify(shown.state.camera) === JSON.stringify(p.state.camera) && shown.state.color.variable === p.state.color.variable &&
+        JSON.stringify(shown.state.color.opacity) === JSON.stringify(p.state.color.opacity),
+        `${p.name}: camera or colours not applied: ${JSON.stringify(shown.state.camera)} ${JSON.stringify(shown.state.color)}`);
+      check(shown.state.step === step && JSON.stringify(shown.state.image) === JSON.stringify(image),
+        `${p.name}: the step ${shown.state.step} or image ${JSON.stringify(shown.state.image)} changed (expected ${step}, ${JSON.stringify(image)})`);
+      const pcNames = shown.pc.map((b) => b.name).sort().join(',');
+      check(pcNames === p.state.brushes.map((b) => b.name).sort().join(','), `${p.name}: parallel coordinates show brushes on ${pcNames}`);
+      const after = await viewPixels(page);
+      const d = meanAbsDiff(before, after);
+      diffs.push(`${p.name} ${d.toFixed(2)}`);
+      check(d > 0.3, `${p.name}: the image hardly changed (mean difference ${d.toFixed(2)} grey levels)`);
+      before = after;
+    }
+    console.log(`  image change per preset: ${diffs.join(', ')}`);
+
+    // Selection over time of the last preset (brushed), first at level 1, then exact.
+    const last = presets[presets.length - 1];
+    check(last.state.brushes.length > 0, `the last preset ${last.name} has no brushes`);
+    const waitStats = (level) => page.waitForFunction((lv) => {
+      const st = window.__raypc.stats;
+      return st && st.level === lv && JSON.stringify(st) !== 'null';
+    }, level, { timeout: 30000 }).catch(() => { throw new TestFailure(`no selection statistics at level ${level}`); });
+    await waitStats(1);
+    const nSteps = (await info(url)).steps.length;
+    const plot = await page.evaluate(() => ({
+      stats: window.__raypc.stats,
+      dots: document.querySelectorAll('#statsTime circle.step').length,
+      marked: document.querySelectorAll('#statsTime line.current').length,
+      profile: document.querySelector('#statsProfile path.profile')?.getAttribute('d')?.length ?? 0,
+    }));
+    check(plot.stats.steps.length === nSteps && plot.dots === nSteps && plot.marked === 1 && plot.profile > 20,
+      `selection-over-time plot: ${plot.stats.steps.length} steps, ${plot.dots} dots, ${plot.marked} marks, profile path of ${plot.profile} characters`);
+    await page.check('#statsExact');
+    await waitStats(0);
+    const exact = await page.evaluate(() => window.__raypc.stats);
+    const sel = await postJson(url + 'api/selection', await rState(page));
+    const now = exact.steps.find((s) => s.step === step);
+    check(sel.status === 200 && Math.abs(now.fractionOfMantle - sel.body.fractionOfMantle) < 1e-12,
+      `exact statistics ${now.fractionOfMantle} at step ${step}, POST /api/selection ${JSON.stringify(sel.body)}`);
+    const profileSum = exact.profile.volumeKm3.reduce((a, b) => a + b, 0);
+    check(Math.abs(profileSum - now.volumeKm3) <= 1e-6 * Math.max(1, now.volumeKm3), `depth profile sums to ${profileSum}, the step's volume is ${now.volumeKm3}`);
+  },
+
+  // Pathlines: showing them changes the image; the second parallel-coordinates plot holds one line
+  // per pathline of the window; brushing its length axis sets state.pathlines.filters, lowers the
+  // visible-line count and changes the image.
+  async pathlines({ context, url }) {
+    const ds = await info(url);
+    check(ds.defaultState.version >= 2 && ds.defaultState.pathlines, `the server's default state has no pathlines (version ${ds.defaultState.version})`);
+    const page = await openUi(context, url);
+    await standardView(page);
+    // Last step: the window holds the lines of every step; no volume brushes. The fixture's lines
+    // are short (slow flow), so: a transparent volume, no core, thick tubes set in the UI.
+    await page.evaluate((n) => {
+      const s = window.__raypc.state();
+      window.__raypc.setState({ ...s, step: n - 1, core: { ...s.core, visible: false }, color: { ...s.color, opacity: [[0, 0], [1, 0]] } });
+    }, ds.steps.length);
+    await waitConverged(page);
+    await page.fill('#plRadius', '250');
+    await page.dispatchEvent('#plRadius', 'change');
+    await waitConverged(page);
+    check((await rState(page)).pathlines.radiusKm === 250, `tube radius from the UI: ${JSON.stringify((await rState(page)).pathlines)}`);
+    const off = await viewPixels(page);
+    await page.check('#plVisible');
+    await waitConverged(page);
+    await page.waitForFunction(() => window.__raypc.pathlines && window.__raypc.pathlines.lines > 0, null, { timeout: 20000 })
+      .catch(() => { throw new TestFailure('no pathline attributes arrived'); });
+    const sOn = await rState(page);
+    check(sOn.pathlines.visible === true, `state.pathlines after showing: ${JSON.stringify(sOn.pathlines)}`);
+    const on = await viewPixels(page);
+    const dOn = meanAbsDiff(off, on);
+    check(dOn > 0.3, `showing the pathlines hardly changed the image (${dOn.toFixed(2)})`);
+    const pl0 = await page.evaluate(() => window.__raypc.pathlines);
+    check(pl0.visibleLines === pl0.lines, `with no filters ${pl0.visibleLines} of ${pl0.lines} lines counted`);
+    check((await page.textContent('#plCount')).includes(`${pl0.lines.toLocaleString('en-US')} of`), `count text '${await page.textContent('#plCount')}'`);
+    await page.waitForFunction(() => document.querySelectorAll('#plParcoords svg g.dimension').length > 5, null, { timeout: 10000 })
+      .catch(() => { throw new TestFailure('the pathline parallel coordinates did not appear'); });
+
+    const b = await page.evaluate(() => {
+      for (const g of document.querySelectorAll('#plParcoords svg g.dimension')) {
+        if (g.__data__ !== 'length') continue;
+        const r = g.querySelector('.brush .overlay')?.getBoundingClientRect();
+        if (r) return { x: r.x, y: r.y, width: r.width, height: r.height };
+      }
+      return null;
+    });
+    check(b, 'no brushable length axis in the pathline parallel coordinates');
+    const x = b.x + b.width / 2;
+    await page.mouse.move(x, b.y + b.height * 0.02);
+    await page.mouse.down();
+    for (let i = 1; i <= 8; i++) await page.mouse.move(x, b.y + b.height * (0.02 + (0.6 * i) / 8));
+    await page.mouse.up();
+    await waitConverged(page);
+    const sF = await rState(page);
+    check(sF.pathlines.filters.length === 1 && sF.pathlines.filters[0].name === 'length', `pathlines.filters after brushing: ${JSON.stringify(sF.pathlines.filters)}`);
+    const pl1 = await page.evaluate(() => window.__raypc.pathlines);
+    check(pl1.visibleLines < pl0.visibleLines && pl1.visibleLines >= 0, `visible lines ${pl0.visibleLines} -> ${pl1.visibleLines} after brushing the longest 60 %`);
+    const header = await page.evaluate(() => { const r = window.__raypc, h = r.headers.at(-1); return h.id === r.lastSentId ? h : null; });
+    check(header, 'the frame shown is not of the filtered state');
+    check(header.pathlines && header.pathlines.lines === pl0.lines && header.pathlines.visible === pl1.visibleLines,
+      `the server shows ${JSON.stringify(header.pathlines)} lines, the UI counts ${pl1.visibleLines} of ${pl0.lines}`);
+    const filtered = await viewPixels(page);
+    const dF = meanAbsDiff(on, filtered);
+    check(dF > 0.1, `filtering lines hardly changed the image (${dF.toFixed(2)})`);
+    console.log(`  lines ${pl0.lines} -> ${pl1.visibleLines}; image change on ${dOn.toFixed(2)}, filtered ${dF.toFixed(2)}`);
   },
 };
 

@@ -79,7 +79,7 @@ export async function runCase(name, raypc, fixture, body, { limitMs = 100000 } =
     const pre = spawnSync(raypc, ['preprocess', fixture, '-o', dataset, '--quiet', '--sample-rows', '5000'], { encoding: 'utf8', timeout: 60000 });
     check(pre.status === 0, `raypc preprocess failed (${pre.status}): ${pre.stderr}`);
 
-    server = spawn(raypc, ['serve', dataset, '--port', '0', '--assets', dist], { stdio: ['ignore', 'pipe', 'pipe'] });
+    server = spawn(raypc, ['serve', dataset, '--port', '0', '--assets', dist, '--examples', join(repoRoot, 'examples')], { stdio: ['ignore', 'pipe', 'pipe'] });
     const url = await waitForUrl(server, 20000);
 
     context = await chromium.launchPersistentContext(join(tmp, 'profile'), {

@@ -94,3 +94,54 @@ export async function postScreenshot(state: RenderState): Promise<Blob> {
   });
   return (await check(r, 'POST /api/screenshot')).blob();
 }
+
+export interface Preset {
+  name: string; // file name without .json
+  title: string;
+  state: unknown; // a state document (checked when applied)
+}
+
+export async function fetchPresets(): Promise<Preset[]> {
+  return (await check(await fetch('api/presets'), 'GET /api/presets')).json();
+}
+
+export interface SelectionOverTime {
+  level: number;
+  steps: { step: number; timeMyr: number; volumeKm3: number; fractionOfMantle: number }[];
+  profile: { step: number; radiusKm: number[]; depthKm: number[]; volumeKm3: number[]; shellVolumeKm3: number[] };
+}
+
+// Selected volume of every step and the depth profile of the state's step (POST /api/stats).
+export async function postStats(state: RenderState, level: number | undefined, signal?: AbortSignal): Promise<SelectionOverTime> {
+  const r = await fetch(`api/stats${level === undefined ? '' : `?level=${level}`}`, {
+    method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(state), signal,
+  });
+  return (await check(r, 'POST /api/stats')).json();
+}
+
+export interface PathlineAttributes {
+  step: number;
+  window: number;
+  lines: number;
+  columns: string[];
+  units: string[];
+  sets: { injectionStep: number; injectionTimeMyr: number; lines: number }[];
+  values: Float32Array; // lines x columns, row-major
+}
+
+// The line attributes of the pathlines shown at `step` (GET /api/pathlines): u32 LE header length,
+// JSON header, float32 LE values.
+export async function fetchPathlines(step: number, window: number, signal?: AbortSignal): Promise<PathlineAttributes> {
+  const r = await check(await fetch(`api/pathlines?step=${step}&window=${window}`, { signal }), 'GET /api/pathlines');
+  const buffer = await r.arrayBuffer();
+  if (buffer.byteLength < 4) throw new Error('GET /api/pathlines: answer shorter than its header length');
+  const n = new DataView(buffer).getUint32(0, true);
+  if (4 + n > buffer.byteLength) throw new Error(`GET /api/pathlines: header of ${n} bytes does not fit in ${buffer.byteLength}`);
+  const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buffer, 4, n)));
+  const valueBytes = buffer.byteLength - 4 - n;
+  const expected = header.lines * header.columns.length * 4;
+  if (valueBytes !== expected) throw new Error(`GET /api/pathlines: ${valueBytes} bytes of values, expected ${expected}`);
+  // Copy: the values start at an offset that need not be a multiple of 4.
+  const values = new Float32Array(buffer.slice(4 + n));
+  return { ...header, values };
+}

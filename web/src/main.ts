@@ -6,12 +6,16 @@
 // step and level reload data. While the user drags, states go out as `interactive` (one pass at
 // the interactive level), at most one per display frame and only when the server has answered
 // the previous one or 120 ms passed; on release the final state asks for all passes.
-import { fetchHistogram, fetchInfo, fetchSample, postScreenshot, postSelection, type Histogram, type Info, type Selection } from './api';
+import {
+  fetchHistogram, fetchInfo, fetchPathlines, fetchPresets, fetchSample, postScreenshot, postSelection, postStats,
+  type Histogram, type Info, type PathlineAttributes, type Preset, type Selection, type SelectionOverTime,
+} from './api';
 import { CameraFrame } from './camera';
 import { centredMaps, sampleColorMap } from './colormaps';
 import { Connection, type Frame, type FrameHeader } from './connection';
 import { ParallelCoordinates, type AxisInfo } from './parcoords';
-import { cloneState, encodeStateForUrl, normaliseState, stateFromHash, type Brush, type RenderState } from './state';
+import { cloneState, encodeStateForUrl, normaliseState, stateFromHash, type Brush, type PathlineState, type RenderState } from './state';
+import { drawProfilePlot, drawTimePlot } from './stats_plot';
 import { TfEditor } from './tf_editor';
 import { View3D } from './view';
 
@@ -42,6 +46,12 @@ interface Debug {
   warpedWhileWaiting: number;
   holdFrames: boolean;
   releaseFrames(): void;
+  presets: Preset[];
+  applyPreset(name: string): void;
+  stats: SelectionOverTime | null;
+  statsRequests: number;
+  pathlines: { step: number; window: number; lines: number; visibleLines: number } | null;
+  plParcoords: ParallelCoordinates;
 }
 
 class App {
@@ -70,6 +80,15 @@ class App {
   private lastDrawKind = 'none';
   private errorTimer = 0;
   private heldFrames: Frame[] = [];
+  private presets: Preset[] = [];
+  private stats: SelectionOverTime | null = null;
+  private statsKey = '';
+  private statsAbort: AbortController | null = null;
+  private statsTimer = 0;
+  private readonly plPc: ParallelCoordinates;
+  private plData: PathlineAttributes | null = null;
+  private plKey = '';
+  private plAbort: AbortController | null = null;
   readonly debug: Debug;
 
   constructor(readonly info: Info) {
@@ -94,6 +113,9 @@ class App {
     });
     this.pc = new ParallelCoordinates($('parcoords'), this.axes(), {
       onBrush: (brushes, interactive) => this.onBrush(brushes, interactive),
+    });
+    this.plPc = new ParallelCoordinates($('plParcoords'), [], {
+      onBrush: (brushes, interactive) => this.onLineFilter(brushes, interactive),
     });
     this.connection = new Connection({
       onFrame: (f) => this.onFrame(f),
@@ -126,6 +148,16 @@ class App {
         this.heldFrames = [];
         for (const f of held) this.onFrame(f);
       },
+      presets: [],
+      applyPreset: (name) => {
+        const p = this.presets.find((x) => x.name === name);
+        if (!p) throw new Error(`no preset '${name}'`);
+        this.applyPreset(p);
+      },
+      stats: null,
+      statsRequests: 0,
+      pathlines: null,
+      plParcoords: this.plPc,
     };
     (window as unknown as { __raypc: Debug }).__raypc = this.debug;
 
@@ -136,6 +168,7 @@ class App {
     this.syncControls();
     this.loadSample();
     this.loadHistogram();
+    this.loadPresets();
     this.commit(false);
   }
 
@@ -179,6 +212,53 @@ class App {
     this.commit(false);
   }
 
+  // ---- presets (GET /api/presets) ------------------------------------------------------------
+
+  private loadPresets(): void {
+    fetchPresets()
+      .then((presets) => {
+        this.presets = presets;
+        this.debug.presets = presets;
+        const box = $('presets');
+        box.innerHTML = '';
+        if (!presets.length) box.textContent = 'none (no examples directory)';
+        for (const p of presets) {
+          const b = document.createElement('button');
+          b.textContent = p.title;
+          b.title = `${p.name}.json`;
+          b.dataset.preset = p.name;
+          b.addEventListener('click', () => this.applyPreset(p));
+          box.appendChild(b);
+        }
+      })
+      .catch((e) => this.showError((e as Error).message));
+  }
+
+  // A preset replaces colours, opacity, brushes, camera, shading and core; the current step (presets
+  // are written for one time but the criteria apply to every step, and the dataset may have fewer
+  // steps), the image size (it follows the window), the level and the pathlines (presets have none)
+  // stay as they are.
+  applyPreset(p: Preset): void {
+    try {
+      const doc = { ...(p.state as Record<string, unknown>) };
+      doc.step = this.state.step;
+      doc.image = { ...this.state.image };
+      doc.level = this.state.level;
+      if (this.state.pathlines && !('pathlines' in doc)) {
+        doc.pathlines = cloneState(this.state).pathlines;
+        doc.version = this.state.version;
+      }
+      const fit = this.autoFitImage;
+      this.loadState(doc);
+      this.autoFitImage = fit;
+      for (const b of document.querySelectorAll<HTMLButtonElement>('#presets button'))
+        b.classList.toggle('active', b.dataset.preset === p.name);
+      this.setStatusNote(`preset ${p.title}`);
+    } catch (e) {
+      this.showError(`preset ${p.name}: ${(e as Error).message}`);
+    }
+  }
+
   // Sends the state. Interactive states are coalesced to one per display frame.
   commit(interactive: boolean): void {
     this.requestDraw();
@@ -191,6 +271,8 @@ class App {
     this.send(false);
     history.replaceState(null, '', `${location.pathname}${location.search}#state=${encodeStateForUrl(this.state)}`);
     this.refreshSelection();
+    this.refreshStats();
+    this.refreshPathlines();
   }
 
   private pumpInteractive(): void {
@@ -359,6 +441,240 @@ class App {
     this.state.brushes = brushes;
     this.commit(interactive);
     this.updateSelectionText();
+    this.updateLineCount();
+  }
+
+  // ---- selection over time (POST /api/stats) --------------------------------------------------
+
+  // Asks for the statistics when the brushes, the step or the level asked for changed (debounced;
+  // not while playing, when only the current-step mark moves).
+  private refreshStats(): void {
+    const exact = $<HTMLInputElement>('statsExact').checked;
+    if (!this.state.brushes.length) {
+      this.statsAbort?.abort();
+      this.stats = null;
+      this.debug.stats = null;
+      this.statsKey = '';
+      $('statsNote').textContent = 'Brush an axis to see the selected volume over time.';
+      for (const id of ['statsTime', 'statsProfile']) $(id).innerHTML = '';
+      return;
+    }
+    const key = JSON.stringify([this.state.brushes, this.state.step, exact]);
+    if (this.stats) drawTimePlot($('statsTime') as unknown as SVGSVGElement, this.stats, this.state.step);
+    if (key === this.statsKey || this.playing) return;
+    clearTimeout(this.statsTimer);
+    this.statsTimer = window.setTimeout(() => {
+      this.statsAbort?.abort();
+      const ctl = new AbortController();
+      this.statsAbort = ctl;
+      this.statsKey = key;
+      this.debug.statsRequests++;
+      $('statsNote').textContent = 'computing…';
+      postStats(cloneState(this.state), exact ? 0 : undefined, ctl.signal)
+        .then((st) => {
+          if (ctl.signal.aborted) return;
+          this.stats = st;
+          this.debug.stats = st;
+          const cur = st.steps.find((x) => x.step === this.state.step);
+          $('statsNote').textContent = `level ${st.level}${st.level === 0 ? ' (exact)' : ''} · now ${cur ? (cur.fractionOfMantle * 100).toFixed(2) : '?'} % · ` +
+            `range ${(Math.min(...st.steps.map((x) => x.fractionOfMantle)) * 100).toFixed(2)}–${(Math.max(...st.steps.map((x) => x.fractionOfMantle)) * 100).toFixed(2)} %`;
+          drawTimePlot($('statsTime') as unknown as SVGSVGElement, st, this.state.step);
+          drawProfilePlot($('statsProfile') as unknown as SVGSVGElement, st);
+        })
+        .catch((e) => { if (!ctl.signal.aborted) { this.statsKey = ''; this.showError((e as Error).message); } });
+    }, 250);
+  }
+
+  // ---- pathlines (GET /api/pathlines, state.pathlines) ----------------------------------------
+
+  private get pathlines(): PathlineState | undefined {
+    return this.state.pathlines;
+  }
+
+  // Loads the line attributes of the window shown when the lines are visible and (step, window) changed.
+  private refreshPathlines(): void {
+    const pl = this.pathlines;
+    if (!pl || !pl.visible) return;
+    const key = `${this.state.step}/${pl.window}`;
+    if (key === this.plKey) return;
+    this.plKey = key;
+    this.plAbort?.abort();
+    const ctl = new AbortController();
+    this.plAbort = ctl;
+    const step = this.state.step, window = pl.window;
+    fetchPathlines(step, window, ctl.signal)
+      .then((d) => {
+        if (ctl.signal.aborted) return;
+        this.plData = d;
+        const axes: AxisInfo[] = d.columns.map((name, k) => {
+          let lo = Infinity, hi = -Infinity;
+          for (let i = 0; i < d.lines; i++) {
+            const v = d.values[i * d.columns.length + k];
+            if (Number.isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
+          }
+          if (!(lo <= hi)) { lo = 0; hi = 1; }
+          // Keep the state's filters inside the axes, so that they show as brushes.
+          for (const f of pl.filters) if (f.name === name) { lo = Math.min(lo, f.min); hi = Math.max(hi, f.max); }
+          return { name, units: d.units[k] ?? '', min: lo, max: hi > lo ? hi : lo + 1 };
+        });
+        this.plPc.setAxes(axes);
+        this.plPc.setBrushes(pl.filters);
+        this.plPc.setData({ rows: d.lines, columns: d.columns, values: d.values });
+        this.updatePlColorOptions();
+        this.updatePlLineColors();
+        this.updateLineCount();
+      })
+      .catch((e) => { if (!ctl.signal.aborted) { this.plKey = ''; this.showError((e as Error).message); } });
+  }
+
+  private onLineFilter(filters: Brush[], interactive: boolean): void {
+    const pl = this.pathlines;
+    if (!pl) return;
+    pl.filters = filters.map((f) => ({ name: f.name, min: f.min, max: f.max }));
+    this.updateLineCount();
+    this.commit(interactive); // restart class: no new lines, no tube rebuild
+  }
+
+  // How many lines of the window pass the line filters and, with filterByBrushes, start inside the
+  // volume brushes (variables by their "start <name>" column; coordinates from the start position).
+  private countVisibleLines(): number {
+    const d = this.plData, pl = this.pathlines;
+    if (!d || !pl) return 0;
+    const nc = d.columns.length, col = (n: string) => d.columns.indexOf(n);
+    const tests: ((row: number) => boolean)[] = [];
+    for (const f of pl.filters) {
+      const k = col(f.name);
+      if (k >= 0) tests.push((i) => { const v = d.values[i * nc + k]; return v >= f.min && v <= f.max; });
+    }
+    if (pl.filterByBrushes) {
+      const kLat = col('start lat'), kLon = col('start lon'), kR = col('start radius');
+      for (const b of this.state.brushes) {
+        const inside = (v: number) => v >= b.min && v <= b.max;
+        const k = col(`start ${b.name}`);
+        if (k >= 0) { tests.push((i) => inside(d.values[i * nc + k])); continue; }
+        const pos = (i: number) => {
+          const lat = (d.values[i * nc + kLat] * Math.PI) / 180, lon = (d.values[i * nc + kLon] * Math.PI) / 180, r = d.values[i * nc + kR];
+          return { lat, lon, r };
+        };
+        const coordinate: Record<string, (i: number) => number> = {
+          lat: (i) => d.values[i * nc + kLat],
+          lon: (i) => d.values[i * nc + kLon],
+          radius: (i) => d.values[i * nc + kR],
+          depth: (i) => 6371 - d.values[i * nc + kR],
+          x: (i) => { const p = pos(i); return p.r * Math.cos(p.lat) * Math.cos(p.lon); },
+          y: (i) => { const p = pos(i); return p.r * Math.cos(p.lat) * Math.sin(p.lon); },
+          z: (i) => { const p = pos(i); return p.r * Math.sin(p.lat); },
+        };
+        const get = coordinate[b.name];
+        if (get && kLat >= 0 && kLon >= 0 && kR >= 0) tests.push((i) => inside(get(i)));
+      }
+    }
+    let n = 0;
+    for (let i = 0; i < d.lines; i++) if (tests.every((t) => t(i))) n++;
+    return n;
+  }
+
+  private updateLineCount(): void {
+    const pl = this.pathlines, d = this.plData;
+    if (!pl || !d) {
+      $('plCount').textContent = pl?.visible ? 'loading lines…' : '';
+      this.debug.pathlines = null;
+      return;
+    }
+    const visible = pl.visible ? this.countVisibleLines() : 0;
+    this.debug.pathlines = { step: d.step, window: d.window, lines: d.lines, visibleLines: visible };
+    $('plCount').textContent = pl.visible ? `${visible.toLocaleString()} of ${d.lines.toLocaleString()} lines shown` : 'hidden';
+  }
+
+  private updatePlColorOptions(): void {
+    const sel = $<HTMLSelectElement>('plColorBy');
+    const d = this.plData;
+    const want = ['age', ...(d ? d.columns : [])];
+    if ([...sel.options].map((o) => o.value).join('|') !== want.join('|')) {
+      sel.innerHTML = '';
+      for (const c of want) sel.add(new Option(c, c));
+    }
+    sel.value = this.pathlines?.colorBy ?? 'age';
+  }
+
+  // Lines of the pathline plot coloured like the tubes: by injection time for age, else the attribute.
+  private updatePlLineColors(): void {
+    const d = this.plData, pl = this.pathlines;
+    if (!d || !pl) return;
+    const name = pl.colorBy === 'age' ? 'injection time' : pl.colorBy;
+    const k = d.columns.indexOf(name);
+    if (k < 0) return;
+    let lo = Infinity, hi = -Infinity;
+    for (let i = 0; i < d.lines; i++) { const v = d.values[i * d.columns.length + k]; if (Number.isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); } }
+    const map = pl.colorMap ?? (pl.colorBy === 'age' ? 'blue-white-red' : 'viridis');
+    const palette = Array.from({ length: 64 }, (_, i) => {
+      const [r, g, b] = sampleColorMap(map, pl.colorBy === 'age' ? 1 - i / 63 : i / 63); // old lines are red, as the tubes' age
+      return `rgb(${Math.round(r * 255)},${Math.round(g * 255)},${Math.round(b * 255)})`;
+    });
+    this.plPc.setColor((row) => palette[Math.min(63, Math.max(0, Math.round(((row[name] - lo) / (hi - lo || 1)) * 63))) || 0]);
+  }
+
+  private showPcTab(pathlines: boolean): void {
+    $('parcoords').hidden = pathlines;
+    $('plParcoords').hidden = !pathlines;
+    $('pcTabVolume').classList.toggle('active', !pathlines);
+    $('pcTabPathlines').classList.toggle('active', pathlines);
+  }
+
+  private setUpPathlineControls(): void {
+    if (!this.state.pathlines) {
+      $('plUnavailable').hidden = false;
+      $('plControls').hidden = true;
+      $('pcTabPathlines').hidden = true;
+      return;
+    }
+    const change = (f: (pl: PathlineState) => void, reload = false) => () => {
+      const pl = this.pathlines;
+      if (!pl) return;
+      f(pl);
+      if (reload) this.plKey = '';
+      this.updateLineCount();
+      this.commit(false);
+    };
+    $('plVisible').addEventListener('change', change((pl) => {
+      pl.visible = $<HTMLInputElement>('plVisible').checked;
+      if (pl.visible) this.showPcTab(true);
+    }));
+    $('plRadius').addEventListener('change', change((pl) => {
+      const v = Number($<HTMLInputElement>('plRadius').value);
+      if (v > 0) pl.radiusKm = v;
+    }));
+    $('plWindow').addEventListener('change', change((pl) => {
+      const v = Math.round(Number($<HTMLInputElement>('plWindow').value));
+      if (v >= 1) pl.window = v;
+    }));
+    $('plAO').addEventListener('change', change((pl) => { pl.ambientOcclusion = $<HTMLInputElement>('plAO').checked; }));
+    $('plFilterByBrushes').addEventListener('change', change((pl) => { pl.filterByBrushes = $<HTMLInputElement>('plFilterByBrushes').checked; }));
+    $('plColorBy').addEventListener('change', change((pl) => {
+      pl.colorBy = $<HTMLSelectElement>('plColorBy').value;
+      pl.range = null;
+      pl.colorMap = pl.colorBy === 'age' ? 'blue-white-red' : 'viridis';
+      this.updatePlLineColors();
+    }));
+    $('plClearFilters').addEventListener('click', change((pl) => {
+      pl.filters = [];
+      this.plPc.setBrushes([]);
+    }));
+    $('pcTabVolume').addEventListener('click', () => this.showPcTab(false));
+    $('pcTabPathlines').addEventListener('click', () => this.showPcTab(true));
+  }
+
+  private syncPathlineControls(): void {
+    const pl = this.pathlines;
+    if (!pl) return;
+    $<HTMLInputElement>('plVisible').checked = pl.visible;
+    $<HTMLInputElement>('plRadius').value = String(pl.radiusKm);
+    $<HTMLInputElement>('plWindow').value = String(pl.window);
+    $<HTMLInputElement>('plAO').checked = pl.ambientOcclusion;
+    $<HTMLInputElement>('plFilterByBrushes').checked = pl.filterByBrushes;
+    this.updatePlColorOptions();
+    if (this.plData) this.plPc.setBrushes(pl.filters);
+    this.updateLineCount();
   }
 
   private refreshSelection(): void {
@@ -512,6 +828,8 @@ class App {
 
   private setUpControls(): void {
     const info = this.info;
+    this.setUpPathlineControls();
+    $('statsExact').addEventListener('change', () => this.refreshStats());
     $('dataset').textContent = `${info.steps.length} steps · ${info.variables.length} variables · sample of ${info.sample.rows.toLocaleString()} points`;
     const varSel = $<HTMLSelectElement>('variable');
     for (const v of info.variables) varSel.add(new Option(`${v.name} [${v.units}]`, v.name));
@@ -673,6 +991,7 @@ class App {
     this.updateTf();
     this.pc.setBrushes(s.brushes);
     this.updateSelectionText();
+    this.syncPathlineControls();
   }
 
   // ---- status ------------------------------------------------------------------------------

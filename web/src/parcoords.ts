@@ -40,7 +40,9 @@ const kShortUnits: Record<string, string> = { degrees_north: '°N', degrees_east
 
 export function axisTitle(a: AxisInfo): string {
   const units = kShortUnits[a.units] ?? a.units;
-  const name = kShortNames[a.name] ?? a.name;
+  // Pathline attributes: "start temperature anomaly" -> "start T anomaly".
+  const m = /^(start|end) (.*)$/.exec(a.name);
+  const name = kShortNames[a.name] ?? (m && kShortNames[m[2]] ? `${m[1]} ${kShortNames[m[2]]}` : a.name);
   return units ? `${name} [${units}]` : name;
 }
 
@@ -66,6 +68,18 @@ export class ParallelCoordinates {
       clearTimeout(resizeTimer);
       resizeTimer = window.setTimeout(() => this.rebuild(), 150);
     }).observe(container);
+  }
+
+  // New axes (e.g. the columns of another pathline window); drops brushes on axes that are gone.
+  setAxes(axes: AxisInfo[]): void {
+    const same = JSON.stringify(axes) === JSON.stringify(this.axes);
+    this.axes = axes;
+    if (!same && this.pc) {
+      const names = new Set(axes.map((a) => a.name));
+      if (this.order) this.order = this.order.filter((n) => names.has(n));
+      this.pending = this.brushes().filter((b) => names.has(b.name));
+      this.pc = null;
+    }
   }
 
   get rowCount(): number {
