@@ -116,6 +116,7 @@ class App {
     });
     this.plPc = new ParallelCoordinates($('plParcoords'), [], {
       onBrush: (brushes, interactive) => this.onLineFilter(brushes, interactive),
+      alpha: 0.5, // hundreds of lines, not 100 000
     });
     this.connection = new Connection({
       onFrame: (f) => this.onFrame(f),
@@ -506,17 +507,7 @@ class App {
       .then((d) => {
         if (ctl.signal.aborted) return;
         this.plData = d;
-        const axes: AxisInfo[] = d.columns.map((name, k) => {
-          let lo = Infinity, hi = -Infinity;
-          for (let i = 0; i < d.lines; i++) {
-            const v = d.values[i * d.columns.length + k];
-            if (Number.isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
-          }
-          if (!(lo <= hi)) { lo = 0; hi = 1; }
-          // Keep the state's filters inside the axes, so that they show as brushes.
-          for (const f of pl.filters) if (f.name === name) { lo = Math.min(lo, f.min); hi = Math.max(hi, f.max); }
-          return { name, units: d.units[k] ?? '', min: lo, max: hi > lo ? hi : lo + 1 };
-        });
+        const axes = this.pathlineAxes();
         this.plPc.setAxes(axes);
         this.plPc.setBrushes(pl.filters);
         this.plPc.setData({ rows: d.lines, columns: d.columns, values: d.values });
@@ -525,6 +516,29 @@ class App {
         this.updateLineCount();
       })
       .catch((e) => { if (!ctl.signal.aborted) { this.plKey = ''; this.showError((e as Error).message); } });
+  }
+
+  // Axes of the pathline plot: the fixed attributes (seed, times, length, end reason, start and end
+  // position), the start and end values of the volume's colour variable, and every filtered column
+  // (all 30-odd columns would not fit). Ranges over the window's lines, widened to hold the filters.
+  private pathlineAxes(): AxisInfo[] {
+    const d = this.plData, pl = this.pathlines;
+    if (!d || !pl) return [];
+    const v = this.state.color.variable;
+    const filtered = new Set(pl.filters.map((f) => f.name));
+    const shown = (c: string) => !/^(start|end) /.test(c) || /^(start|end) (lat|lon|radius)$/.test(c) ||
+      c === `start ${v}` || c === `end ${v}` || filtered.has(c);
+    return d.columns.flatMap((name, k) => {
+      if (!shown(name)) return [];
+      let lo = Infinity, hi = -Infinity;
+      for (let i = 0; i < d.lines; i++) {
+        const x = d.values[i * d.columns.length + k];
+        if (Number.isFinite(x)) { lo = Math.min(lo, x); hi = Math.max(hi, x); }
+      }
+      if (!(lo <= hi)) { lo = 0; hi = 1; }
+      for (const f of pl.filters) if (f.name === name) { lo = Math.min(lo, f.min); hi = Math.max(hi, f.max); }
+      return [{ name, units: d.units[k] ?? '', min: lo, max: hi > lo ? hi : lo + 1 }];
+    });
   }
 
   private onLineFilter(filters: Brush[], interactive: boolean): void {
@@ -840,6 +854,10 @@ class App {
       this.updateTf();
       this.loadHistogram();
       this.updateLineColors();
+      if (this.plData) {
+        this.plPc.setAxes(this.pathlineAxes());
+        this.plPc.setData({ rows: this.plData.lines, columns: this.plData.columns, values: this.plData.values });
+      }
       this.commit(false);
     });
     const mapSel = $<HTMLSelectElement>('colorMap');

@@ -16,6 +16,7 @@ export interface AxisInfo {
 
 export interface ParcoordsOptions {
   onBrush(brushes: Brush[], interactive: boolean): void;
+  alpha?: number; // line opacity (default 0.06, for many lines)
 }
 
 export interface ParcoordsTiming {
@@ -176,7 +177,7 @@ export class ParallelCoordinates {
     });
     this.suppress++;
     try {
-      this.pc = ParCoords({ width: w, height: h, margin, alpha: 0.06, alphaOnBrushed: 0.03, lineWidth: 1 })(this.container)
+      this.pc = ParCoords({ width: w, height: h, margin, alpha: this.options.alpha ?? 0.06, alphaOnBrushed: (this.options.alpha ?? 0.06) / 2, lineWidth: 1 })(this.container)
         .data(this.rows)
         .dimensions(dimensions)
         .mode('queue')

@@ -4,7 +4,7 @@
 import * as d3 from 'd3';
 import type { SelectionOverTime } from './api';
 
-const kMargin = { top: 8, right: 10, bottom: 22, left: 42 };
+const kMargin = { top: 8, right: 12, bottom: 22, left: 50 };
 
 function frame(svg: SVGSVGElement) {
   const w = Number(svg.getAttribute('width')), h = Number(svg.getAttribute('height'));
@@ -19,7 +19,7 @@ export function drawTimePlot(svg: SVGSVGElement, s: SelectionOverTime, currentSt
   const pts = s.steps.map((p) => ({ t: p.timeMyr, v: p.fractionOfMantle * 100, step: p.step }));
   const tExt = d3.extent(pts, (p) => p.t) as [number, number];
   const xs = d3.scaleLinear().domain(tExt[0] === tExt[1] ? [tExt[0] - 1, tExt[1] + 1] : tExt).range([0, iw]);
-  const ys = d3.scaleLinear().domain([0, Math.max(1e-9, d3.max(pts, (p) => p.v) ?? 1) * 1.1]).range([ih, 0]).nice();
+  const ys = d3.scaleLinear().domain([0, Math.max(1e-3, d3.max(pts, (p) => p.v) ?? 1) * 1.1]).range([ih, 0]).nice();
   const x = (v: number) => xs(v) as number, y = (v: number) => ys(v) as number;
   g.append('g').attr('class', 'axis').attr('transform', `translate(0,${ih})`).call(d3.axisBottom(xs).ticks(5).tickFormat(d3.format('~g')));
   g.append('g').attr('class', 'axis').call(d3.axisLeft(ys).ticks(4).tickFormat(d3.format('~g')));
@@ -43,7 +43,7 @@ export function drawProfilePlot(svg: SVGSVGElement, s: SelectionOverTime): void 
     .sort((a, b) => a.d - b.d);
   const dExt = d3.extent(pts, (q) => q.d) as [number, number];
   const ys = d3.scaleLinear().domain(dExt).range([0, ih]); // depth increases downwards
-  const xs = d3.scaleLinear().domain([0, Math.max(1e-9, d3.max(pts, (q) => q.v) ?? 1)]).range([0, iw]).nice();
+  const xs = d3.scaleLinear().domain([0, Math.max(1e-3, d3.max(pts, (q) => q.v) ?? 1)]).range([0, iw]).nice();
   const x = (v: number) => xs(v) as number, y = (v: number) => ys(v) as number;
   g.append('g').attr('class', 'axis').attr('transform', `translate(0,${ih})`).call(d3.axisBottom(xs).ticks(4).tickFormat(d3.format('~g')));
   g.append('g').attr('class', 'axis').call(d3.axisLeft(ys).ticks(5).tickFormat(d3.format('~g')));
