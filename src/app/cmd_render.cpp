@@ -48,29 +48,6 @@ std::pair<int, int> parseSize(const std::string& text)
     fail("--size '{}': expected WIDTHxHEIGHT with 1..16384 pixels per side, e.g. 1024x768", text);
 }
 
-// "temperature anomaly=-300:300" -> brush; names may contain spaces and '='-free text.
-BrushSpec parseRange(const std::string& text)
-{
-    const size_t eq = text.rfind('=');
-    const size_t colon = eq == std::string::npos ? std::string::npos : text.find(':', eq + 1);
-    BrushSpec b;
-    if (eq == std::string::npos || eq == 0 || colon == std::string::npos)
-        fail("--range '{}': expected NAME=MIN:MAX", text);
-    b.name = trim(text.substr(0, eq));
-    const std::string lo = trim(text.substr(eq + 1, colon - eq - 1)), hi = trim(text.substr(colon + 1));
-    try {
-        size_t a = 0, c = 0;
-        b.min = std::stof(lo, &a);
-        b.max = std::stof(hi, &c);
-        if (a != lo.size() || c != hi.size())
-            throw std::invalid_argument("trailing text");
-    } catch (const std::exception&) {
-        fail("--range '{}': MIN and MAX must be numbers", text);
-    }
-    if (!(b.min <= b.max))
-        fail("--range '{}': min {} is greater than max {}", text, b.min, b.max);
-    return b;
-}
 
 // Expands a printf-style "%03d" pattern for sequences; a plain name is used as is.
 std::string frameName(const std::string& pattern, int step, bool sequence)
@@ -114,7 +91,8 @@ void run(const RenderArgs& args)
         }
     }
     for (const std::string& text : args.ranges) {
-        const BrushSpec b = parseRange(text);
+        const auto r = parseRangeOption(text);
+        const BrushSpec b{r.name, r.min, r.max};
         std::erase_if(state.brushes, [&](const BrushSpec& s) { return s.name == b.name; });
         state.brushes.push_back(b);
     }
