@@ -416,6 +416,19 @@ const cases = {
     const dF = meanAbsDiff(on, filtered);
     check(dF > 0.1, `filtering lines hardly changed the image (${dF.toFixed(2)})`);
     console.log(`  lines ${pl0.lines} -> ${pl1.visibleLines}; image change on ${dOn.toFixed(2)}, filtered ${dF.toFixed(2)}`);
+
+    // The UI parses the pathlines object as strictly as the server: an unknown key or a wrong type
+    // is refused and changes nothing; a version-1 document gets no pathlines.
+    const refused = await page.evaluate(() => {
+      const s = window.__raypc.state(), out = [];
+      for (const bad of [{ ...s, pathlines: { ...s.pathlines, bogus: 1 } }, { ...s, pathlines: { ...s.pathlines, visible: 'yes' } },
+        { ...s, version: 1 }]) {
+        try { window.__raypc.setState(bad); out.push(null); } catch (e) { out.push(e.message); }
+      }
+      return { out, same: JSON.stringify(window.__raypc.state()) === JSON.stringify(s) };
+    });
+    check(/pathlines\.bogus: unknown key/.test(refused.out[0]) && /pathlines\.visible/.test(refused.out[1]) &&
+      /version 1/.test(refused.out[2]) && refused.same, `strict pathlines parsing: ${JSON.stringify(refused)}`);
   },
 };
 
