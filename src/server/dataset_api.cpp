@@ -52,7 +52,9 @@ const std::map<std::string, std::string> kPresetTitles = {
     {"task5b-expansivity-negative-cold-high", "5b · Negative expansivity, cold, shallow"},
     {"task5c-expansivity-negative-hot-deep", "5c · Negative expansivity, hot, deep"},
     {"task5d-expansivity-positive", "5d · Positive expansivity anomaly"},
+    {"task5e-expansivity-negative-pathlines", "5e · Negative expansivity, pathlines"},
     {"appendix-cut-by-x", "Appendix · Cut at x = 0"},
+    {"appendix-hot-with-pathlines", "Appendix · Hot mantle with pathlines"},
 };
 
 }  // namespace

@@ -237,8 +237,8 @@ class App {
 
   // A preset replaces colours, opacity, brushes, camera, shading and core; the current step (presets
   // are written for one time but the criteria apply to every step, and the dataset may have fewer
-  // steps), the image size (it follows the window), the level and the pathlines (presets have none)
-  // stay as they are.
+  // steps), the image size (it follows the window), the level, and the pathlines when the preset has
+  // none (version 1) stay as they are.
   applyPreset(p: Preset): void {
     try {
       const doc = { ...(p.state as Record<string, unknown>) };
