@@ -24,6 +24,12 @@ using DI = hn::RebindToSigned<DF>;
 using VF = hn::Vec<DF>;
 using VI = hn::Vec<DI>;
 using MF = hn::Mask<DF>;
+using MI = hn::Mask<DI>;
+#if HWY_TARGET != HWY_SCALAR
+// Lon neighbour pairs: half as many 64-bit lanes, each holding the values at iLon0 and iLon0 + 1.
+using DH = hn::Half<DI>;
+using D64 = hn::Rebind<int64_t, DH>;
+#endif
 
 constexpr size_t kMaxLanes = HWY_MAX_BYTES / sizeof(float);
 
@@ -71,6 +77,7 @@ struct LocatedV {
     VF wLat, wR, wLon, cap;
     VF latDeg, lonDeg, rKm;
     bool anyCap;
+    bool anySeam;  // some lane has iLon0 = nLon - 1 (its lon neighbour wraps to 0)
 };
 
 HWY_INLINE LocatedV Locate(DF d, const KernelParams& k, VF x, VF y, VF z)
@@ -97,7 +104,9 @@ HWY_INLINE LocatedV Locate(DF d, const KernelParams& k, VF x, VF y, VF z)
     L.iLon0 = hn::Min(hn::ConvertTo(di, fLon), hn::Set(di, k.nLon - 1));
     L.wLon = hn::Sub(fLon, hn::ConvertTo(d, L.iLon0));
     const VI next = hn::Add(L.iLon0, hn::Set(di, 1));
-    L.iLon1 = hn::IfThenZeroElse(hn::Eq(next, hn::Set(di, k.nLon)), next);
+    const MI seam = hn::Eq(next, hn::Set(di, k.nLon));
+    L.iLon1 = hn::IfThenZeroElse(seam, next);
+    L.anySeam = !hn::AllFalse(di, seam);
 
     L.o00 = hn::Mul(hn::Add(hn::Mul(iLat0, hn::Set(di, k.nR)), iR0), hn::Set(di, k.nLon));
     L.o01 = hn::Add(L.o00, hn::Set(di, k.nLon));
@@ -120,13 +129,42 @@ HWY_INLINE LocatedV Locate(DF d, const KernelParams& k, VF x, VF y, VF z)
 
 HWY_INLINE VF LerpV(VF a, VF b, VF w) { return hn::MulAdd(w, hn::Sub(b, a), a); }
 
+// Lon-interpolated value of one (lat, r) corner row at byte offsets 4 (row + iLon0): the two lon
+// neighbours are adjacent in memory, so one 64-bit gather per pair fetches both (half as many
+// element loads as two 32-bit gathers); used when no lane wraps at the lon seam.
+#if HWY_TARGET != HWY_SCALAR
+#define RAYPC_LON_PAIRS 1
+HWY_INLINE VF LonPair(DF d, const float* p, VI idx, VF wLon)
+{
+    const DH dh;
+    const D64 d64;
+    const VI off = hn::ShiftLeft<2>(idx);
+    const int64_t* base = reinterpret_cast<const int64_t*>(p);
+    const VF lo = hn::BitCast(d, hn::GatherOffset(d64, base, hn::PromoteTo(d64, hn::LowerHalf(dh, off))));
+    const VF hi = hn::BitCast(d, hn::GatherOffset(d64, base, hn::PromoteTo(d64, hn::UpperHalf(dh, off))));
+    return LerpV(hn::ConcatEven(d, hi, lo), hn::ConcatOdd(d, hi, lo), wLon);
+}
+#else
+#define RAYPC_LON_PAIRS 0
+#endif
+
 HWY_INLINE VF Sample(DF d, const KernelParams& k, const KernelVariable& v, const LocatedV& L)
 {
     const float* p = v.values;
-    const VF c00 = LerpV(hn::GatherIndex(d, p, hn::Add(L.o00, L.iLon0)), hn::GatherIndex(d, p, hn::Add(L.o00, L.iLon1)), L.wLon);
-    const VF c01 = LerpV(hn::GatherIndex(d, p, hn::Add(L.o01, L.iLon0)), hn::GatherIndex(d, p, hn::Add(L.o01, L.iLon1)), L.wLon);
-    const VF c10 = LerpV(hn::GatherIndex(d, p, hn::Add(L.o10, L.iLon0)), hn::GatherIndex(d, p, hn::Add(L.o10, L.iLon1)), L.wLon);
-    const VF c11 = LerpV(hn::GatherIndex(d, p, hn::Add(L.o11, L.iLon0)), hn::GatherIndex(d, p, hn::Add(L.o11, L.iLon1)), L.wLon);
+    VF c00, c01, c10, c11;
+    if (RAYPC_LON_PAIRS && !L.anySeam) {
+#if RAYPC_LON_PAIRS
+        c00 = LonPair(d, p, hn::Add(L.o00, L.iLon0), L.wLon);
+        c01 = LonPair(d, p, hn::Add(L.o01, L.iLon0), L.wLon);
+        c10 = LonPair(d, p, hn::Add(L.o10, L.iLon0), L.wLon);
+        c11 = LonPair(d, p, hn::Add(L.o11, L.iLon0), L.wLon);
+#endif
+    } else {
+        c00 = LerpV(hn::GatherIndex(d, p, hn::Add(L.o00, L.iLon0)), hn::GatherIndex(d, p, hn::Add(L.o00, L.iLon1)), L.wLon);
+        c01 = LerpV(hn::GatherIndex(d, p, hn::Add(L.o01, L.iLon0)), hn::GatherIndex(d, p, hn::Add(L.o01, L.iLon1)), L.wLon);
+        c10 = LerpV(hn::GatherIndex(d, p, hn::Add(L.o10, L.iLon0)), hn::GatherIndex(d, p, hn::Add(L.o10, L.iLon1)), L.wLon);
+        c11 = LerpV(hn::GatherIndex(d, p, hn::Add(L.o11, L.iLon0)), hn::GatherIndex(d, p, hn::Add(L.o11, L.iLon1)), L.wLon);
+    }
     const VF value = LerpV(LerpV(c00, c01, L.wR), LerpV(c10, c11, L.wR), L.wLat);
     if (!L.anyCap)
         return value;
@@ -134,6 +172,7 @@ HWY_INLINE VF Sample(DF d, const KernelParams& k, const KernelVariable& v, const
     const VF mean = LerpV(hn::GatherIndex(d, v.capMean, L.capIndex), hn::GatherIndex(d, v.capMean + 1, L.capIndex), L.wR);
     return LerpV(value, mean, L.cap);
 }
+#undef RAYPC_LON_PAIRS
 
 HWY_INLINE VF CoordinateValue(DF d, BrushKind kind, VF x, VF y, VF z, const LocatedV& L)
 {
@@ -253,10 +292,11 @@ void MarchSimd(const KernelParams& k, const Ray& ray, float t0, float t1, float 
             hn::Store(hn::Mul(shade, hn::GatherIndex(d, k.table.blue, idx)), d, blueBuf);
             hn::Store(t, d, tBuf);
             // Front-to-back compositing, in lane order, with the same early exit as the scalar kernel.
+            // No branch on a lane's opacity (it mispredicts and discards the next chunk's
+            // speculative work): a transparent lane (a = 0) adds 0 and multiplies T by 1, and the
+            // depth test can only pass where T changed, so the result is bit-identical.
             for (int i = 0; i < lanes && acc.transmittance > k.stopTransmittance; ++i) {
                 const float a = alphaBuf[i];
-                if (!(a > 0.0f))
-                    continue;
                 const float w = acc.transmittance * a;
                 acc.r += w * redBuf[i];
                 acc.g += w * greenBuf[i];
