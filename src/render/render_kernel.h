@@ -51,11 +51,13 @@ inline float fastAtan2(float y, float x)
 }
 
 // Coordinate (degrees or km) -> fractional grid index along one axis. Uniform axes use the affine
-// map; non-uniform ones a table of fractional indices at equally spaced coordinates, linearly
+// map, axes uniform but for their last interval (coarsened odd-sized axes) two affine pieces; other
+// non-uniform ones a table of fractional indices at equally spaced coordinates, linearly
 // interpolated (exact at the table nodes; the table is at least 64x finer than the grid).
 struct AxisMap {
     bool affine = true;
-    float scale = 1, offset = 0;  // affine: f = coord * scale + offset
+    float scale = 1, offset = 0;  // affine: f = coord * scale + offset for coord <= breakCoord,
+    float breakCoord = INFINITY, scale2 = 0, offset2 = 0;  // coord * scale2 + offset2 above it
     float coordMin = 0, invTableStep = 1;
     int tableLast = 0;  // table has tableLast + 1 entries
     const float* table = nullptr;
@@ -63,7 +65,7 @@ struct AxisMap {
     float map(float coord) const
     {
         if (affine)
-            return coord * scale + offset;
+            return coord <= breakCoord ? coord * scale + offset : coord * scale2 + offset2;
         const float u = std::clamp((coord - coordMin) * invTableStep, 0.0f, float(tableLast) - 1e-3f);
         const int k = int(u);
         return table[k] + (u - float(k)) * (table[k + 1] - table[k]);

@@ -61,8 +61,13 @@ HWY_INLINE VF Clamp(VF v, VF lo, VF hi) { return hn::Min(hn::Max(v, lo), hi); }
 
 HWY_INLINE VF MapAxis(DF d, const AxisMap& m, VF c)
 {
-    if (m.affine)
-        return hn::MulAdd(c, hn::Set(d, m.scale), hn::Set(d, m.offset));
+    if (m.affine) {
+        const VF f = hn::MulAdd(c, hn::Set(d, m.scale), hn::Set(d, m.offset));
+        if (!(m.breakCoord < INFINITY))
+            return f;
+        return hn::IfThenElse(hn::Le(c, hn::Set(d, m.breakCoord)), f,
+                              hn::MulAdd(c, hn::Set(d, m.scale2), hn::Set(d, m.offset2)));
+    }
     const DI di;
     const VF u = Clamp(hn::Mul(hn::Sub(c, hn::Set(d, m.coordMin)), hn::Set(d, m.invTableStep)), hn::Zero(d),
                        hn::Set(d, float(m.tableLast) - 1e-3f));

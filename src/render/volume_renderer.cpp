@@ -41,6 +41,24 @@ AxisTable buildAxis(const std::vector<double>& coords, double lo, double hi, boo
         a.map.offset = float(-coords[0] / h);
         return a;
     }
+    // Uniform but for the last interval (a coarsened odd-sized axis keeps its last point alone):
+    // two affine pieces, no table (whose gathers sit on the kernel's critical path).
+    if (!periodic && n >= 3) {
+        const double h1 = (coords[n - 2] - coords[0]) / double(n - 2);
+        double dev1 = 0;
+        for (size_t i = 0; i + 1 < n; ++i)
+            dev1 = std::max(dev1, std::abs(coords[i] - (coords[0] + double(i) * h1)));
+        if (dev1 < 1e-5 * h1) {
+            const double h2 = coords[n - 1] - coords[n - 2];
+            a.map.affine = true;
+            a.map.scale = float(1.0 / h1);
+            a.map.offset = float(-coords[0] / h1);
+            a.map.breakCoord = float(coords[n - 2]);
+            a.map.scale2 = float(1.0 / h2);
+            a.map.offset2 = float(double(n - 2) - coords[n - 2] / h2);
+            return a;
+        }
+    }
     // Piecewise-linear index function through (coords[i], i); lon continues across the seam.
     auto indexOf = [&](double c) {
         if (periodic) {
