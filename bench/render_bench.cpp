@@ -215,6 +215,13 @@ void BM_Level0Pass512NoSkipping(benchmark::State& state)
     runPasses(state, 0, p, 1);
 }
 BENCHMARK(BM_Level0Pass512NoSkipping)->Unit(benchmark::kMillisecond);
+void BM_Level2Pass512NoSkipping(benchmark::State& state)
+{
+    RenderParams p = params(512);
+    p.skipBricks = false;
+    runPasses(state, 2, p, 1);
+}
+BENCHMARK(BM_Level2Pass512NoSkipping)->Unit(benchmark::kMillisecond);
 
 // Converged 1024² at full resolution: passes are accumulated until the image stops changing, measured
 // two ways on the 8-bit scale: the mean absolute change of the accumulated RGBA between successive
