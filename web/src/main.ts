@@ -324,7 +324,7 @@ class App {
         this.debug.latencies.push({ id: h.id, interactive: sent.interactive, firstFrameMs: sent.first ?? NaN, shownMs: performance.now() - sent.t });
         if (this.debug.latencies.length > 200) this.debug.latencies.shift();
       }
-      this.requestDraw();
+      this.drawNow(); // at once, not in the next animation frame (which may queue behind other work)
       this.updateStatus();
     });
     if (this.playing) this.maybeAdvance();
@@ -334,11 +334,15 @@ class App {
     if (this.drawPending) return;
     this.drawPending = true;
     requestAnimationFrame(() => {
-      this.drawPending = false;
-      const bg = (this.state.background as [number, number, number] | undefined) ?? [0, 0, 0];
-      this.lastDrawKind = this.view.draw(this.state.camera, this.state.image.width, this.state.image.height, bg);
-      if (this.lastDrawKind === 'warped' && this.debug.lastShownId < this.debug.lastSentId) this.debug.warpedWhileWaiting++;
+      if (this.drawPending) this.drawNow();
     });
+  }
+
+  private drawNow(): void {
+    this.drawPending = false;
+    const bg = (this.state.background as [number, number, number] | undefined) ?? [0, 0, 0];
+    this.lastDrawKind = this.view.draw(this.state.camera, this.state.image.width, this.state.image.height, bg);
+    if (this.lastDrawKind === 'warped' && this.debug.lastShownId < this.debug.lastSentId) this.debug.warpedWhileWaiting++;
   }
 
   // ---- camera ------------------------------------------------------------------------------

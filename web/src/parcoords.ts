@@ -26,7 +26,15 @@ export interface ParcoordsTiming {
 
 type Row = Record<string, number>;
 
-const kRate = 4000; // lines per animation frame in the progressive queue (short frames keep the 3D view responsive)
+// Lines are drawn by our own renderer (not parcoord-es's queue): in slices of at most kSliceMs of
+// main-thread time that yield to the browser between them (so an arriving 3D frame is decoded and
+// drawn without waiting for the lines), with each axis' scale reduced to x and y = a * v + b.
+// A new brush event cancels the slices still pending for the same layer.
+// While a brush is dragged, at most kDragLines brushed lines are drawn (every k-th, each k times
+// as opaque, so the density looks alike): less main-thread and CPU time per move on a machine
+// whose cores the browser shares with the server. Releasing the brush draws every line.
+const kSliceMs = 6;
+const kDragLines = 20000;
 
 // Short axis titles for the long dataset names (the full name is the axis' tooltip).
 const kShortNames: Record<string, string> = {
@@ -62,8 +70,16 @@ export class ParallelCoordinates {
   private pending: Brush[] = [];
   private lineColor: (row: Row) => string = () => '#4a90d9';
   readonly timing: ParcoordsTiming = { lastBrushMs: 0, brushEvents: 0 };
+  private readonly jobs: Record<string, number> = { foreground: 0, brushed: 0 };
+  private readonly channel = new MessageChannel();
+  private readonly slices: (() => void)[] = [];
+  private dragging = false;
 
   constructor(private readonly container: HTMLElement, private axes: AxisInfo[], private readonly options: ParcoordsOptions) {
+    this.channel.port1.onmessage = () => {
+      const f = this.slices.shift();
+      if (f) f();
+    };
     let resizeTimer = 0;
     new ResizeObserver(() => {
       clearTimeout(resizeTimer);
@@ -177,11 +193,12 @@ export class ParallelCoordinates {
     });
     this.suppress++;
     try {
-      this.pc = ParCoords({ width: w, height: h, margin, alpha: this.options.alpha ?? 0.06, alphaOnBrushed: (this.options.alpha ?? 0.06) / 2, lineWidth: 1 })(this.container)
+      this.pc = ParCoords({ width: w, height: h, margin, alpha: this.options.alpha ?? 0.06, alphaOnBrushed: (this.options.alpha ?? 0.06) / 2, lineWidth: 1 })(this.container);
+      this.installRenderer();
+      this.pc
         .data(this.rows)
         .dimensions(dimensions)
         .mode('queue')
-        .rate(kRate)
         .color(this.lineColor)
         .render()
         .createAxes()
@@ -204,11 +221,90 @@ export class ParallelCoordinates {
       });
   }
 
+  // Replaces parcoord-es's line drawing (foreground and brushed layers; it stays in charge of
+  // axes, brushes, filtering and reordering) with the sliced renderer below.
+  private installRenderer(): void {
+    const pc = this.pc;
+    const brushed = () => {
+      const rows = pc.brushed() as Row[] | false;
+      const active = !!rows && (rows.length !== this.rows.length || this.brushes().length > 0);
+      this.drawLayer('brushed', active ? (rows as Row[]) : [], this.dragging);
+    };
+    this.redrawBrushed = brushed;
+    pc.renderBrushed.queue = brushed;
+    pc.renderBrushed.default = brushed;
+    pc.render.queue = () => {
+      brushed();
+      pc.renderMarked.queue();
+      this.drawLayer('foreground', pc.data() as Row[]);
+    };
+  }
+
+  // Clears the layer (parcoord-es's clear: the brushed layer then veils the foreground) and draws
+  // the rows' polylines in time-limited slices; a newer call for the layer cancels this one.
+  private redrawBrushed: () => void = () => {};
+
+  private drawLayer(layer: 'foreground' | 'brushed', rows: Row[], coarse = false): void {
+    const job = ++this.jobs[layer];
+    const pc = this.pc;
+    if (layer === 'foreground') {
+      pc.clear('foreground');
+      pc.clear('highlight');
+    } else {
+      pc.clear('brushed');
+    }
+    if (!rows.length) return;
+    const ctx = pc.ctx[layer] as CanvasRenderingContext2D;
+    const dims = pc.dimensions() as Record<string, { yscale: { domain(): number[]; range(): number[] } }>;
+    const keys = (pc.getOrderedDimensionKeys() as string[]).filter((k) => dims[k]);
+    const xs = keys.map((k) => pc.xscale(k) as number);
+    const order = keys.map((_k, i) => i).sort((a, b) => xs[a] - xs[b]);
+    const ks = order.map((i) => keys[i]), px = order.map((i) => xs[i]);
+    const sa = ks.map((k) => {
+      const d = dims[k].yscale.domain(), r = dims[k].yscale.range();
+      return (r[1] - r[0]) / (d[1] - d[0] || 1);
+    });
+    const sb = ks.map((k, i) => dims[k].yscale.range()[0] - dims[k].yscale.domain()[0] * sa[i]);
+    const color = this.lineColor;
+    const m = ks.length;
+    const stride = coarse ? Math.max(1, Math.ceil(rows.length / kDragLines)) : 1;
+    const alpha = this.options.alpha ?? 0.06;
+    let next = 0;
+    const slice = () => {
+      if (job !== this.jobs[layer] || pc !== this.pc) return;
+      const t0 = performance.now();
+      ctx.globalAlpha = Math.min(1, alpha * stride);
+      let style = '';
+      while (next < rows.length) {
+        const end = Math.min(rows.length, next + 256 * stride);
+        for (; next < end; next += stride) {
+          const r = rows[next];
+          const c = color(r);
+          if (c !== style) { ctx.strokeStyle = c; style = c; }
+          ctx.beginPath();
+          ctx.moveTo(px[0], r[ks[0]] * sa[0] + sb[0]);
+          for (let k = 1; k < m; k++) ctx.lineTo(px[k], r[ks[k]] * sa[k] + sb[k]);
+          ctx.stroke();
+        }
+        if (performance.now() - t0 > kSliceMs) break;
+      }
+      if (next < rows.length) this.yieldThen(slice);
+    };
+    this.yieldThen(slice);
+  }
+
+  private yieldThen(f: () => void): void {
+    this.slices.push(f);
+    this.channel.port2.postMessage(0);
+  }
+
   private emit(interactive: boolean): void {
     if (this.suppress) return;
     const t0 = performance.now();
     this.timing.brushEvents++;
+    this.dragging = interactive;
     this.options.onBrush(this.brushes(), interactive);
     this.timing.lastBrushMs = performance.now() - t0;
+    if (!interactive) this.redrawBrushed(); // every line once the brush is released
   }
 }
