@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include <array>
 #include <chrono>
 #include <cstdlib>
 #include <deque>
@@ -652,14 +653,28 @@ private:
                               if (message->need_eof()) {
                                   beast::error_code ignored;
                                   self->m_stream.socket().shutdown(tcp::socket::shutdown_send, ignored);
+                                  self->drainThenClose();
                                   return;
                               }
                               self->doRead();
                           });
     }
 
+    // A lingering close: after answering early (413, 400) the client may still be sending; closing
+    // with unread input would reset the connection and could destroy the answer in flight, so read
+    // and discard until the client is done (or 2 s pass), then close.
+    void drainThenClose()
+    {
+        m_stream.expires_after(std::chrono::seconds(2));
+        m_stream.async_read_some(net::buffer(m_drain), [self = shared_from_this()](beast::error_code ec, size_t) {
+            if (!ec)
+                self->drainThenClose();
+        });
+    }
+
     beast::tcp_stream m_stream;
     beast::flat_buffer m_buffer;
+    std::array<char, 16384> m_drain{};
     ServerState& m_server;
     std::optional<http::request_parser<http::string_body>> m_parser;
 };

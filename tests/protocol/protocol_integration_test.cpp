@@ -209,14 +209,18 @@ HttpAnswer httpRequest(uint16_t port, http::verb method, const std::string& targ
         req.body() = body;
         req.prepare_payload();
     }
-    http::write(socket, req);
+    // A server may answer an oversized body (413) and close before the client has written it
+    // all; a failed write is then expected, and the answer is still there to read.
+    beast::error_code writeError;
+    http::write(socket, req, writeError);
     beast::flat_buffer buffer;
     http::response_parser<http::string_body> parser;
     parser.body_limit(64 * 1024 * 1024);
     beast::error_code ec;
     http::read(socket, buffer, parser, ec);
     if (ec)
-        throw std::runtime_error("HTTP " + target + ": " + ec.message());
+        throw std::runtime_error("HTTP " + target + ": " + ec.message() +
+                                 (writeError ? " (after a failed write: " + writeError.message() + ")" : ""));
     const auto& res = parser.get();
     return {int(res.result_int()), res.body(), std::string(res[http::field::content_type]),
             std::string(res[http::field::set_cookie])};
