@@ -12,6 +12,11 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium                          # the web UI's browser tests
 )
+# Only the test command needs these: an independent XML parser and ParaView's Python, which
+# check that ParaView opens the exported pathlines and critical points.
+if [[ ${1:-} == --tests ]]; then
+  packages+=(libxml2-utils python3-paraview)
+fi
 # Node.js and npm build the web UI; a machine may carry them from elsewhere (npm bundled with
 # nodejs), so ask for Debian's only when the commands are missing.
 command -v node >/dev/null || packages+=(nodejs)
