@@ -34,7 +34,7 @@ type Row = Record<string, number>;
 // as opaque, so the density looks alike): less main-thread and CPU time per move on a machine
 // whose cores the browser shares with the server. Releasing the brush draws every line.
 const kSliceMs = 6;
-const kDragLines = 20000;
+const kDragLines = 5000;
 
 // Short axis titles for the long dataset names (the full name is the axis' tooltip).
 const kShortNames: Record<string, string> = {
