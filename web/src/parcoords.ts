@@ -257,7 +257,14 @@ export class ParallelCoordinates {
     const ctx = pc.ctx[layer] as CanvasRenderingContext2D;
     const dims = pc.dimensions() as Record<string, { yscale: { domain(): number[]; range(): number[] } }>;
     const keys = (pc.getOrderedDimensionKeys() as string[]).filter((k) => dims[k]);
-    const xs = keys.map((k) => pc.xscale(k) as number);
+    // An axis being dragged sideways sits at its drag position (parcoord-es keeps it on the node).
+    const dragged = new Map<string, number>();
+    for (const g of this.container.querySelectorAll('g.dimension')) {
+      const n = g as unknown as { __data__?: string; __origin__?: number };
+      const [r0, r1] = (pc.xscale.range() as number[]).concat().sort((a, b) => a - b);
+      if (n.__data__ !== undefined && typeof n.__origin__ === 'number') dragged.set(n.__data__, Math.min(r1, Math.max(r0, n.__origin__)));
+    }
+    const xs = keys.map((k) => dragged.get(k) ?? (pc.xscale(k) as number));
     const order = keys.map((_k, i) => i).sort((a, b) => xs[a] - xs[b]);
     const ks = order.map((i) => keys[i]), px = order.map((i) => xs[i]);
     const sa = ks.map((k) => {
