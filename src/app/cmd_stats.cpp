@@ -42,13 +42,6 @@ void run(const StatsArgs& args)
                                                  : parseStepRange(*dataset, args.time);
 
     const SphericalGrid& grid = dataset->levels()[args.level].grid;
-    const auto factors = grid.volumeFactors();
-    double latLonArea = 0, lonSum = 0;
-    for (double v : factors.lat)
-        latLonArea += v;
-    for (double v : factors.lon)
-        lonSum += v;
-    latLonArea *= lonSum;
 
     std::string csv = "step,time_myr,selected_volume_km3,selected_percent_of_mantle\n";
     std::string profile = "step,time_myr,radius_km,depth_km,selected_volume_km3,shell_volume_km3,selected_percent_of_shell\n";
@@ -61,7 +54,7 @@ void run(const StatsArgs& args)
         const double t = dataset->steps()[step].timeMyr;
         fmt::format_to(std::back_inserter(csv), "{},{},{:.6e},{:.6f}\n", step, t, s.volumeKm3, 100.0 * s.fractionOfMantle);
         for (size_t iR = 0; iR < grid.nR(); ++iR) {
-            const double shell = factors.r[iR] * latLonArea;
+            const double shell = s.shellVolumeByRadiusKm3[iR];
             fmt::format_to(std::back_inserter(profile), "{},{},{:.3f},{:.3f},{:.6e},{:.6e},{:.6f}\n", step, t, grid.rKm[iR],
                            kSurfaceRadiusKm - grid.rKm[iR], s.volumeByRadiusKm3[iR], shell,
                            100.0 * s.volumeByRadiusKm3[iR] / shell);

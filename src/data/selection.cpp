@@ -93,6 +93,13 @@ SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFil
             stats.volumeByRadiusKm3[iR] += byR[iR];
     for (double v : stats.volumeByRadiusKm3)
         stats.volumeKm3 += v;
+    double latSum = 0, lonSum = 0;
+    for (double v : w.lat)
+        latSum += v;
+    for (double v : w.lon)
+        lonSum += v;
+    for (double rFactor : w.r)
+        stats.shellVolumeByRadiusKm3.push_back(rFactor * latSum * lonSum);
     stats.fractionOfMantle = stats.volumeKm3 / total;
     return stats;
 }

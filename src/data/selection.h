@@ -34,6 +34,7 @@ struct SelectionStats {
     double volumeKm3 = 0;
     double fractionOfMantle = 0;             // of the grid's whole shell volume
     std::vector<double> volumeByRadiusKm3;   // per radius index of the grid (ascending r)
+    std::vector<double> shellVolumeByRadiusKm3;  // whole dual-cell shell of each radius index
 };
 
 // A grid point is selected when every filter holds at it; it counts with its dual-cell volume.

@@ -42,6 +42,12 @@ TEST(Selection, ExactVolumesOfAnalyticSelections)
     for (size_t i = 0; i < first; ++i)
         EXPECT_EQ(up.volumeByRadiusKm3[i], 0.0);
     EXPECT_GT(up.volumeByRadiusKm3.back(), 0.0);
+    // Shells above 660 km are selected whole; the shells add up to the mantle.
+    EXPECT_NEAR(up.volumeByRadiusKm3.back(), up.shellVolumeByRadiusKm3.back(), 1e-9 * shell);
+    double shells = 0;
+    for (double v : up.shellVolumeByRadiusKm3)
+        shells += v;
+    EXPECT_NEAR(shells / shell, 1.0, 1e-12);
 
     // The radial velocity is u0 everywhere (truth.json): a range around it selects all, one
     // beside it nothing; combined with the depth cut, the cut alone remains.

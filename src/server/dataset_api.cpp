@@ -113,20 +113,13 @@ json selectionStatsJson(const Dataset& dataset, StepCache& cache, std::span<cons
         if (step == profileStep)
             profile = std::move(s);
     }
-    // Shell volumes as `raypc stats --profile` computes them: the radius factor times the lat-lon area.
     const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
-    const auto factors = grid.volumeFactors();
-    double latSum = 0, lonSum = 0;
-    for (double v : factors.lat)
-        latSum += v;
-    for (double v : factors.lon)
-        lonSum += v;
     json radius = json::array(), depth = json::array(), selected = json::array(), shell = json::array();
     for (size_t iR = 0; iR < grid.nR(); ++iR) {
         radius.push_back(grid.rKm[iR]);
         depth.push_back(kSurfaceRadiusKm - grid.rKm[iR]);
         selected.push_back(iR < profile.volumeByRadiusKm3.size() ? profile.volumeByRadiusKm3[iR] : 0.0);
-        shell.push_back(factors.r[iR] * latSum * lonSum);
+        shell.push_back(iR < profile.shellVolumeByRadiusKm3.size() ? profile.shellVolumeByRadiusKm3[iR] : 0.0);
     }
     return {{"level", level},
             {"steps", std::move(steps)},
