@@ -617,7 +617,7 @@ InteractiveChoice chooseInteractive(const std::vector<std::shared_ptr<const Step
     InteractiveChoice c{coarsest, params.width, params.height, 0};
     if (!(samplesPerSecond > 0))
         return c;
-    const double budget = 0.9 * budgetSeconds;
+    const double budget = kInteractiveBudgetShare * budgetSeconds;
     for (int level = 0; level <= coarsest; ++level) {
         VolumeRenderer probe(levels[size_t(level)]);
         probe.setParams(params);

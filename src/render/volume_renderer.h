@@ -182,8 +182,13 @@ struct InteractiveChoice {
     double estimatedSeconds = 0;
 };
 
-// The finest level whose predicted pass time (estimateSamplesPerPass / samplesPerSecond) fits 90% of
-// `budgetSeconds`; if none does, the coarsest level at an internal resolution scaled down (by at
+// The share of an interactive time budget the predicted pass time may use. The prediction counts
+// samples; per-pixel work it does not model made real passes ~20% slower than predicted on the
+// full-resolution benchmark (55.6 ms for a 45 ms prediction), so keep that much in reserve.
+inline constexpr double kInteractiveBudgetShare = 0.75;
+
+// The finest level whose predicted pass time (estimateSamplesPerPass / samplesPerSecond) fits
+// kInteractiveBudgetShare of `budgetSeconds`; if none does, the coarsest level at an internal resolution scaled down (by at
 // most 4 per side) to fit. `samplesPerSecond` should be measured (measuredSamplesPerSecond of recent
 // passes); without a measurement (<= 0) the coarsest level at full size is returned so that its
 // pass measures the machine. `levels[i]` are the volumes of level i (finest first). Throws

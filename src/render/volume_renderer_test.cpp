@@ -270,10 +270,10 @@ TEST(Renderer, InteractiveChoiceUsesTheMeasuredRateAndShrinksTheImageWhenNeeded)
     EXPECT_EQ(c.level, 1);
     EXPECT_EQ(c.width, 256);
     // Even the coarsest level misses the budget fourfold: a quarter of the pixels (half per side).
-    c = chooseInteractive({fine, coarse}, p, 1.0, coarseCost / 4 / 0.9);
+    c = chooseInteractive({fine, coarse}, p, 1.0, coarseCost / 4 / kInteractiveBudgetShare);
     EXPECT_EQ(c.level, 1);
     EXPECT_NEAR(c.width, 128, 1);
-    EXPECT_LE(c.estimatedSeconds, 0.9 + 1e-3);
+    EXPECT_LE(c.estimatedSeconds, kInteractiveBudgetShare + 1e-3);
     // The renderer's own average of the throughput after a pass.
     FrameBuffer f(p.width, p.height);
     EXPECT_EQ(rc.measuredSamplesPerSecond(), 0.0);
