@@ -30,7 +30,7 @@ void renderDemoPicture(const Dataset& dataset, int step, const fs::path& output)
 {
     render::RenderState state = server::defaultState(dataset);
     state.step = step;
-    const render::RenderParams params = render::resolveParams(state, server::catalogOf(dataset));
+    const render::RenderParams params = render::resolveParams(state, render::catalogOf(dataset));
     render::VolumeRenderer renderer(dataset.load(step, 0));
     renderer.setParams(params);
     render::FrameBuffer frame(params.width, params.height);

@@ -36,10 +36,8 @@ const CommandRegistration kRegistration(
                 fail("--lat: {} is outside [-90, 90] degrees", args->latDeg);
             int only = -1;
             if (!args->var.empty() && (only = dataset->variableIndex(args->var)) < 0) {
-                std::vector<std::string> names;
-                for (const auto& v : dataset->variables())
-                    names.push_back(v.name);
-                fail("--var: unknown variable '{}'; the dataset has: {}", args->var, fmt::join(names, ", "));
+                fail("--var: unknown variable '{}'; the dataset has: {}", args->var,
+                     fmt::join(dataset->variableNames(), ", "));
             }
             const auto volume = dataset->load(step, args->level);
             const GridSampler sampler(volume->grid());

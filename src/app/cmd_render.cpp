@@ -74,10 +74,8 @@ void run(const RenderArgs& args)
         std::tie(state.width, state.height) = parseSize(args.size);
     if (!args.var.empty()) {
         if (dataset->variableIndex(args.var) < 0) {
-            std::vector<std::string> names;
-            for (const auto& v : dataset->variables())
-                names.push_back(v.name);
-            fail("--var: unknown variable '{}'; the dataset has: {}", args.var, fmt::join(names, ", "));
+            fail("--var: unknown variable '{}'; the dataset has: {}", args.var,
+                 fmt::join(dataset->variableNames(), ", "));
         }
         if (state.colorVariable != args.var)
             state.colorRange.reset();
@@ -128,25 +126,13 @@ void run(const RenderArgs& args)
         state.pathlines.visible = true;
     }
 
-    VariableCatalog catalog;
-    for (const auto& v : dataset->variables()) {
-        catalog.names.push_back(v.name);
-        catalog.ranges.push_back(v.global.range);
-    }
-    const RenderParams params = resolveParams(state, catalog);
+    const RenderParams params = resolveParams(state, catalogOf(*dataset));
 
     // Steps: one index/time, or A:B for a numbered sequence.
-    int first, last;
-    const size_t colon = args.time.find(':');
-    const bool sequence = colon != std::string::npos;
-    if (sequence) {
-        first = parseStep(*dataset, args.time.substr(0, colon));
-        last = parseStep(*dataset, args.time.substr(colon + 1));
-        if (first > last)
-            fail("--time '{}': the first step is after the last", args.time);
-    } else {
-        first = last = state.step = parseStep(*dataset, args.time);
-    }
+    const bool sequence = args.time.find(':') != std::string::npos;
+    const auto [first, last] = parseStepRange(*dataset, args.time);
+    if (!sequence)
+        state.step = first;
 
     nlohmann::json statsJson = nlohmann::json::array();
     double measuredRate = 0;  // estimated samples per second, all threads (VolumeRenderer::measuredSamplesPerSecond)

@@ -165,6 +165,14 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
     return dataset;
 }
 
+std::vector<std::string> Dataset::variableNames() const
+{
+    std::vector<std::string> names;
+    for (const auto& v : m_variables)
+        names.push_back(v.name);
+    return names;
+}
+
 int Dataset::variableIndex(const std::string& name) const
 {
     for (size_t i = 0; i < m_variables.size(); ++i)

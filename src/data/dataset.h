@@ -108,6 +108,8 @@ public:
 
     const std::filesystem::path& dir() const { return m_dir; }
     const std::vector<VariableInfo>& variables() const { return m_variables; }
+    // The variables' names, in order (for messages and catalogs).
+    std::vector<std::string> variableNames() const;
     // Index of the variable named `name`, or -1.
     int variableIndex(const std::string& name) const;
     const std::vector<StepInfo>& steps() const { return m_steps; }

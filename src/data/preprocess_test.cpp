@@ -193,9 +193,10 @@ TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)
         const auto vol = ds->load(1, level);
         const auto& g = vol->grid();
         // Level 0 is exactly the input; every level's bricks bound its values.
-        if (level == 0)
+        if (level == 0) {
             for (size_t i = 0; i < g.cellCount(); ++i)
                 ASSERT_EQ(vol->values(anomaly)[i], snap.find("temperature anomaly")->values[i]);
+        }
         const auto& layout = vol->bricks();
         for (size_t a = 0; a < g.nLat(); ++a)
             for (size_t b = 0; b < g.nR(); ++b)

@@ -42,9 +42,7 @@ std::vector<RangeFilter> resolveRangeFilters(const Dataset& dataset, std::span<c
         } else if (const auto c = findCoordinate(r.name)) {
             f.coordinate = c;
         } else {
-            std::vector<std::string> names;
-            for (const auto& info : dataset.variables())
-                names.push_back(info.name);
+            std::vector<std::string> names = dataset.variableNames();
             for (const auto& info : coordinateInfos())
                 names.push_back(info.name);
             fail("{}[{}]: unknown variable or coordinate '{}'; known: {}", what, i, r.name, fmt::join(names, ", "));

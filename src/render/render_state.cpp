@@ -442,4 +442,13 @@ RenderParams resolveParams(const RenderState& s, const VariableCatalog& catalog)
     return p;
 }
 
+VariableCatalog catalogOf(const Dataset& dataset)
+{
+    VariableCatalog catalog;
+    catalog.names = dataset.variableNames();
+    for (const auto& v : dataset.variables())
+        catalog.ranges.push_back(v.global.range);
+    return catalog;
+}
+
 }  // namespace raypc::render

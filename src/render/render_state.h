@@ -95,6 +95,9 @@ struct VariableCatalog {
     std::vector<ValueRange> ranges;
 };
 
+// The catalog of a dataset: its variables' names and global ranges (over all steps).
+VariableCatalog catalogOf(const Dataset& dataset);
+
 // Resolves names and defaults. Throws raypc::Error for an unknown variable or coordinate (listing
 // the known ones), a brush with min > max, or a degenerate colour range.
 RenderParams resolveParams(const RenderState& state, const VariableCatalog& catalog);

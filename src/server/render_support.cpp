@@ -8,16 +8,6 @@ namespace raypc::server {
 
 using namespace raypc::render;
 
-VariableCatalog catalogOf(const Dataset& dataset)
-{
-    VariableCatalog catalog;
-    for (const auto& v : dataset.variables()) {
-        catalog.names.push_back(v.name);
-        catalog.ranges.push_back(v.global.range);
-    }
-    return catalog;
-}
-
 RenderState defaultState(const Dataset& dataset)
 {
     RenderState s;

@@ -1,4 +1,4 @@
-// What the server's render paths share: the dataset's variable catalogue, the default state shown
+// What the server's render paths share: the default state shown
 // first in the UI (also the picture `raypc demo` writes), state validation against a dataset, and
 // brushing ranges as selection filters.
 #pragma once
@@ -11,7 +11,6 @@
 
 namespace raypc::server {
 
-render::VariableCatalog catalogOf(const Dataset& dataset);
 
 // A state that shows the data well without tuning: the temperature anomaly (if the dataset has it,
 // else the first variable) on the blue-white-red map, opacity only on the hot and cold tails.
