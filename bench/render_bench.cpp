@@ -223,6 +223,23 @@ void BM_Level2Pass512NoSkipping(benchmark::State& state)
 }
 BENCHMARK(BM_Level2Pass512NoSkipping)->Unit(benchmark::kMillisecond);
 
+// What a brush or transfer-function change costs before the next pass can start: setParams bakes the
+// transfer table, the brick flags, the brick distance map and the skip grid's cell distances.
+void BM_SetParams(benchmark::State& state)
+{
+    const int level = int(state.range(0));
+    VolumeRenderer r(data().levels[size_t(level)]);
+    RenderParams p = params(512);
+    r.setParams(p);  // the first call also builds the grid's skip geometry (cached per grid)
+    int i = 0;
+    for (auto _ : state) {
+        p.brushes = {{var("temperature anomaly"), std::nullopt, -400.0f + float(i++ % 7), 400.0f}};
+        r.setParams(p);
+    }
+    state.counters["level"] = level;
+}
+BENCHMARK(BM_SetParams)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
 // Converged 1024² at full resolution: passes are accumulated until the image stops changing, measured
 // two ways on the 8-bit scale: the mean absolute change of the accumulated RGBA between successive
 // passes is below kConvergedChange grey levels, and the per-pixel standard error of the mean (from the

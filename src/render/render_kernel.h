@@ -122,6 +122,12 @@ struct KernelParams {
     const uint8_t* brickDistance = nullptr;
     int lonBrickSlack = 0;  // 1 when the last lon brick is partial (fewer points to cross at the seam)
     float minDrKm = 1, minDLatRad = 0.01f, minDLonRad = 0.01f;
+    // The Cartesian skip grid (skip_grid.h): cellN^3 cells of cellKm from cellOriginKm on every axis,
+    // per cell the Chebyshev distance in cells to the nearest cell that may hold an active sample
+    // (nullptr: not used).
+    const uint8_t* cellDistance = nullptr;
+    int cellN = 0;
+    float cellOriginKm = 0, cellKm = 1, cellInvKm = 1, cellStepPastKm = 0;
 
     KernelVariable colour;
     ColourTable table;
@@ -314,6 +320,39 @@ inline float safeSkipKm(const KernelParams& k, Vec3 p, const Located& L)
     return std::max(0.0f, s * 0.999f);
 }
 
+// How far along the ray from o + d t the skip grid shows only cells without active samples: probes
+// the cell at the point; at distance D >= 1 the (2D - 1)^3 block of cells around it is empty, so the
+// ray moves to the block's exit (a little past it: the cells' bricks were found for cells grown by
+// kSkipCellPadKm, so the point stays covered) and probes again, at most `probes` times. Returns the
+// first t (>= the given one) where the ray may meet an active sample.
+inline float cellSkipTo(const KernelParams& k, Vec3 o, Vec3 d, float t, int probes)
+{
+    const float span = float(k.cellN);
+    for (int i = 0; i < probes; ++i) {
+        const Vec3 p = o + d * t;
+        const float fx = (p.x - k.cellOriginKm) * k.cellInvKm, fy = (p.y - k.cellOriginKm) * k.cellInvKm,
+                    fz = (p.z - k.cellOriginKm) * k.cellInvKm;
+        if (!(fx >= 0.0f && fy >= 0.0f && fz >= 0.0f && fx < span && fy < span && fz < span))
+            return t;
+        const int ix = int(fx), iy = int(fy), iz = int(fz);
+        const int D = k.cellDistance[(size_t(iz) * size_t(k.cellN) + size_t(iy)) * size_t(k.cellN) + size_t(ix)];
+        if (D == 0)
+            return t;
+        // Exit of the block [i - (D - 1), i + D) of cells along each axis, in cell units.
+        const float m = float(D - 1);
+        auto exitAlong = [&](float f, int c, float dir) {
+            if (dir > 0.0f)
+                return (float(c) + m + 1.0f - f) * k.cellKm / dir;
+            if (dir < 0.0f)
+                return (float(c) - m - f) * k.cellKm / dir;
+            return INFINITY;
+        };
+        const float exit = std::min({exitAlong(fx, ix, d.x), exitAlong(fy, iy, d.y), exitAlong(fz, iz, d.z)});
+        t += std::max(exit, 0.0f) + k.cellStepPastKm;
+    }
+    return t;
+}
+
 // Interval skipping state of one ray segment: [.., tSafe] is known to hold only inactive samples;
 // a probe (one scalar locate) is taken at the start of a chunk only after a chunk without active
 // samples, so dense regions pay nothing for it.
@@ -333,8 +372,16 @@ inline bool chunkIsEmpty(const KernelParams& k, Vec3 o, Vec3 d, float tc, float 
         return true;
     if (!s.probe)
         return false;
-    const Vec3 p = o + d * tc;
-    s.tSafe = std::max(s.tSafe, tc + safeSkipKm(k, p, locate(k, p.x, p.y, p.z)));
+    // The skip grid first (cheap, chained probes), then one brick probe where it stopped.
+    float t = std::max(tc, s.tSafe);
+    if (k.cellDistance) {
+        t = cellSkipTo(k, o, d, t, 8);
+        s.tSafe = std::max(s.tSafe, t);
+        if (tEnd <= s.tSafe)
+            return true;
+    }
+    const Vec3 p = o + d * t;
+    s.tSafe = std::max(s.tSafe, t + safeSkipKm(k, p, locate(k, p.x, p.y, p.z)));
     return tEnd <= s.tSafe;
 }
 
