@@ -134,8 +134,9 @@ struct KernelParams {
     const KernelBrush* brushes = nullptr;
     int brushCount = 0;
 
-    // Step: dt = stepFactor * (local cell extent along the ray), see localStepKm.
-    float stepFactor = 0.5f, drKm = 1, dAngleRad = 0.01f, minStepKm = 1, maxStepKm = 100;
+    // Samples: about stepFactor cells apart (mean radial spacing drKm, smaller mean angular spacing
+    // dAngleRad), see RaySampling.
+    float stepFactor = 0.5f, drKm = 1, dAngleRad = 0.01f;
     float stopTransmittance = 0.005f;  // early ray termination below this transmittance
     float depthOpacity = 0.5f;          // depth = first sample where accumulated opacity >= this
 
@@ -206,15 +207,62 @@ inline void jitter(const KernelParams& k, int px, int py, float& sx, float& sy, 
     along = std::fmod(float(h >> 8) * (1.0f / 16777216.0f) + float(k.pass) * 0.6180339887f, 1.0f);
 }
 
-// Local step: one cell along the ray's dominant direction of index change (radial spacing drKm,
-// angular spacing dAngleRad at radius r), scaled by stepFactor and clamped.
-inline float localStepKm(const KernelParams& k, Vec3 p, Vec3 d)
+// Where the samples of a ray lie: a closed-form sample count U(t) along the ray, so that the chunk
+// holding any t is found directly (skipping jumps over empty space in O(1) and never moves a
+// sample). With s = t + o.d the signed distance from the ray's closest approach to the centre,
+// h that distance and r = sqrt(h^2 + s^2), the sampling rate (samples per km) is
+//   dU/ds = max(|s| / (r dr), 1 / (H dθ)) / stepFactor,   H = max(h, dr / dθ),
+// i.e. about stepFactor cells of the dominant direction of index change per sample: dr where the
+// ray runs radially (|s| / r = |cos α|), H dθ — the angular cell at the closest approach — where it
+// runs tangentially (there r is within 3 % of h as long as the closest approach is outside the
+// core). Both pieces integrate in closed form: U = s / (stepFactor H dθ) up to the crossover s*,
+// then U* + (r - r*) / (stepFactor dr); U is odd in s and continuous with a continuous rate.
+// Chunk j holds the samples with U in [16 j, 16 j + 16), evenly spaced in t.
+struct RaySampling {
+    float b = 0, h2 = 0;         // s = t + b; squared distance of the ray from the centre
+    float sStar = INFINITY, uStar = INFINITY, rStar = 0;
+    float kmPerSampleMid = 1, kmPerSampleRadial = 1;
+
+    float samplesAt(float t) const
+    {
+        const float s = t + b, a = std::abs(s);
+        const float u = a <= sStar ? a / kmPerSampleMid
+                                   : uStar + (std::sqrt(h2 + a * a) - rStar) / kmPerSampleRadial;
+        return s < 0.0f ? -u : u;
+    }
+    float tAt(float u) const
+    {
+        const float a = std::abs(u);
+        float s;
+        if (a <= uStar) {
+            s = a * kmPerSampleMid;
+        } else {
+            const float r = rStar + (a - uStar) * kmPerSampleRadial;
+            s = std::sqrt(std::max(r * r - h2, 0.0f));
+        }
+        return (u < 0.0f ? -s : s) - b;
+    }
+    float chunkStart(int j) const { return tAt(float(j * kChunkSamples)); }
+    // The chunk holding t.
+    int chunkOf(float t) const { return int(std::floor(samplesAt(t) / float(kChunkSamples))); }
+};
+
+inline RaySampling raySampling(const KernelParams& k, Vec3 o, Vec3 d)
 {
-    const float r = std::max(length(p), 1.0f);
-    const float cosA = std::min(std::abs(dot(p, d)) / r, 1.0f);
-    const float sinA = std::sqrt(std::max(0.0f, 1.0f - cosA * cosA));
-    const float rate = std::max(cosA / k.drKm, sinA / (r * k.dAngleRad));
-    return std::clamp(k.stepFactor / std::max(rate, 1e-12f), k.minStepKm, k.maxStepKm);
+    RaySampling rs;
+    rs.b = dot(o, d);
+    rs.h2 = std::max(0.0f, dot(o, o) - rs.b * rs.b);
+    const float h = std::sqrt(rs.h2);
+    const float cellRatioKm = k.drKm / k.dAngleRad;  // dr / dθ: where the two pieces meet at h
+    rs.kmPerSampleMid = k.stepFactor * std::max(h, cellRatioKm) * k.dAngleRad;
+    rs.kmPerSampleRadial = k.stepFactor * k.drKm;
+    if (h > cellRatioKm) {
+        const float q = cellRatioKm / h, c = std::sqrt(1.0f - q * q);
+        rs.sStar = cellRatioKm / c;
+        rs.rStar = h / c;
+        rs.uStar = rs.sStar / rs.kmPerSampleMid;
+    }
+    return rs;
 }
 
 // Where a point is in the grid: corner indices, weights and the pole-cap blend.
@@ -361,13 +409,12 @@ struct SkipState {
     bool probe = true;
 };
 
-// True when every sample of the chunk starting at tc (all in [tc, tc + kChunkSamples * dt)) lies in
-// inactive space, so it can be passed over without locating its samples.
-inline bool chunkIsEmpty(const KernelParams& k, Vec3 o, Vec3 d, float tc, float dt, SkipState& s)
+// True when every sample of the chunk [tc, tEnd) lies in inactive space, so it can be passed over
+// without locating its samples; then s.tSafe says how far the empty space is known to reach.
+inline bool chunkIsEmpty(const KernelParams& k, Vec3 o, Vec3 d, float tc, float tEnd, SkipState& s)
 {
     if (!k.brickDistance)
         return false;
-    const float tEnd = tc + float(kChunkSamples) * dt;
     if (tEnd <= s.tSafe)
         return true;
     if (!s.probe)
@@ -385,12 +432,15 @@ inline bool chunkIsEmpty(const KernelParams& k, Vec3 o, Vec3 d, float tc, float 
     return tEnd <= s.tSafe;
 }
 
-// Samples of the chunk at tc that lie before t1.
-inline int chunkSampleCount(float tc, float dt, float t1)
+// Sample i of a chunk starting at tc with spacing dt owns [tc + i dt, tc + (i + 1) dt) clipped to the
+// segment [t0, t1) and sits `along` into it (clamped to the segment).
+inline int chunkSampleCount(float tc, float dt, float t0, float t1)
 {
     int n = 0;
-    for (int i = 0; i < kChunkSamples; ++i)
-        n += tc + float(i) * dt < t1;
+    for (int i = 0; i < kChunkSamples; ++i) {
+        const float start = tc + float(i) * dt;
+        n += start < t1 && start + dt > t0;
+    }
     return n;
 }
 

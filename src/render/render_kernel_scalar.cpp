@@ -53,16 +53,23 @@ float shadeFactor(const KernelParams& k, Vec3 p)
 void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, float along, RayAccum& acc,
                  TileStats& stats)
 {
+    const RaySampling rs = raySampling(k, o, d);
     SkipState skip;
-    float tc = t0;
+    int j = rs.chunkOf(t0);
+    float tc = rs.chunkStart(j);
     while (tc < t1 && acc.transmittance > k.stopTransmittance) {
-        const float dt = localStepKm(k, o + d * tc, d);
+        const float tn = rs.chunkStart(j + 1);
+        const float dt = (tn - tc) * (1.0f / float(kChunkSamples));
         ++stats.chunks;
-        if (chunkIsEmpty(k, o, d, tc, dt, skip)) {
-            stats.samplesSkipped += uint64_t(chunkSampleCount(tc, dt, t1));
-            ++stats.chunksSkipped;
-            ++stats.chunksJumped;
-            tc += float(kChunkSamples) * dt;
+        if (chunkIsEmpty(k, o, d, tc, tn, skip)) {
+            const int next = std::max(j + 1, rs.chunkOf(std::min(skip.tSafe, t1)));
+            stats.samplesSkipped += uint64_t(chunkSampleCount(tc, dt, t0, t1)) + uint64_t(kChunkSamples) * uint64_t(next - j - 1);
+            stats.chunks += uint64_t(next - j - 1);
+            stats.chunksSkipped += uint64_t(next - j);
+            stats.chunksJumped += uint64_t(next - j);
+            j = next;
+            tc = rs.chunkStart(j);
+            skip.probe = false;
             continue;
         }
         bool anyActive = false;
@@ -70,8 +77,10 @@ void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, floa
             const float start = tc + float(i) * dt;
             if (!(start < t1))
                 break;
-            const float len = std::min(dt, t1 - start);
-            const float t = std::min(start + along * dt, t1);
+            if (!(start + dt > t0))
+                continue;
+            const float len = std::min(start + dt, t1) - std::max(start, t0);
+            const float t = std::min(std::max(start + along * dt, t0), t1);
             const Vec3 p = o + d * t;
             const Located L = locate(k, p.x, p.y, p.z);
             if (!brickActive(k, L)) {
@@ -99,7 +108,8 @@ void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, floa
         skip.probe = !anyActive;
         if (!anyActive)
             ++stats.chunksSkipped;
-        tc += float(kChunkSamples) * dt;
+        ++j;
+        tc = tn;
     }
 }
 

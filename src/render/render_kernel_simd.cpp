@@ -214,29 +214,39 @@ void MarchSimd(const KernelParams& k, const Ray& ray, float t0, float t1, float 
     const VF zero = hn::Zero(d);
     const VF vAlong = hn::Set(d, along);
 
+    const RaySampling rs = raySampling(k, ray.o, ray.d);
+    const VF vT0 = hn::Set(d, t0);
     SkipState skip;
-    float tc = t0;
+    int j = rs.chunkOf(t0);
+    float tc = rs.chunkStart(j);
     while (tc < t1 && acc.transmittance > k.stopTransmittance) {
-        const float dt = localStepKm(k, ray.o + ray.d * tc, ray.d);
+        const float tn = rs.chunkStart(j + 1);
+        const float dt = (tn - tc) * (1.0f / float(kChunkSamples));
         ++stats.chunks;
-        // Interval skipping: a chunk in known-empty space costs only the step recurrence.
-        if (chunkIsEmpty(k, ray.o, ray.d, tc, dt, skip)) {
-            stats.samplesSkipped += uint64_t(chunkSampleCount(tc, dt, t1));
-            ++stats.chunksSkipped;
-            ++stats.chunksJumped;
-            tc += float(kChunkSamples) * dt;
+        // Interval skipping: known-empty space is passed over in one jump to the chunk where it ends.
+        if (chunkIsEmpty(k, ray.o, ray.d, tc, tn, skip)) {
+            const int next = std::max(j + 1, rs.chunkOf(std::min(skip.tSafe, t1)));
+            stats.samplesSkipped += uint64_t(chunkSampleCount(tc, dt, t0, t1)) + uint64_t(kChunkSamples) * uint64_t(next - j - 1);
+            stats.chunks += uint64_t(next - j - 1);
+            stats.chunksSkipped += uint64_t(next - j);
+            stats.chunksJumped += uint64_t(next - j);
+            j = next;
+            tc = rs.chunkStart(j);
+            skip.probe = false;  // the chunk where the empty space ends is located sample by sample
             continue;
         }
         const VF vdt = hn::Set(d, dt);
         bool anyActive = false;
         for (int base = 0; base < kChunkSamples && acc.transmittance > k.stopTransmittance; base += lanes) {
-            // Sample intervals [start, start + dt) clipped at t1; the sample sits `along` into its interval.
+            // Sample intervals [start, start + dt) clipped to [t0, t1); the sample sits `along` into its
+            // interval (clamped to the segment).
             const VF start = hn::MulAdd(hn::Add(iota, hn::Set(d, float(base))), vdt, hn::Set(d, tc));
-            const MF valid = hn::Lt(start, vT1);
+            const VF end = hn::Add(start, vdt);
+            const MF valid = hn::And(hn::Lt(start, vT1), hn::Gt(end, vT0));
             if (hn::AllFalse(d, valid))
-                break;
-            const VF len = hn::Min(vdt, hn::Sub(vT1, start));
-            const VF t = hn::Min(hn::MulAdd(vAlong, vdt, start), vT1);
+                continue;
+            const VF len = hn::Sub(hn::Min(end, vT1), hn::Max(start, vT0));
+            const VF t = hn::Min(hn::Max(hn::MulAdd(vAlong, vdt, start), vT0), vT1);
             const VF x = hn::MulAdd(t, hn::Set(d, ray.d.x), hn::Set(d, ray.o.x));
             const VF y = hn::MulAdd(t, hn::Set(d, ray.d.y), hn::Set(d, ray.o.y));
             const VF z = hn::MulAdd(t, hn::Set(d, ray.d.z), hn::Set(d, ray.o.z));
@@ -314,7 +324,8 @@ void MarchSimd(const KernelParams& k, const Ray& ray, float t0, float t1, float 
         skip.probe = !anyActive;
         if (!anyActive)
             ++stats.chunksSkipped;
-        tc += float(kChunkSamples) * dt;
+        ++j;
+        tc = tn;
     }
 }
 

@@ -466,8 +466,6 @@ void VolumeRenderer::setParams(const RenderParams& p)
     k.stepFactor = p.stepFactor;
     k.drKm = im.drKm;
     k.dAngleRad = im.dAngleRad;
-    k.minStepKm = p.stepFactor * std::min(im.drKm, k.rInnerKm * im.dAngleRad);
-    k.maxStepKm = p.stepFactor * std::max(im.drKm, k.rOuterKm * im.dAngleRad);
     k.stopTransmittance = 1.0f - p.stopOpacity;
     k.depthOpacity = p.depthOpacity;
     k.camera = CameraFrame(p.camera, p.width, p.height);
@@ -586,7 +584,7 @@ double VolumeRenderer::estimateSamplesPerPass() const
         return im.estimatedSamples;
     // March a sparse grid of rays with the kernels' step and skipping rules. Relative costs, measured
     // on the full-resolution benchmark scene: a chunk that reads data ~ its 16 samples, a chunk
-    // located but found inactive ~ 6, a chunk jumped over ~ 1, a ray segment ~ 8.
+    // located but found inactive ~ 6, a jump over empty space ~ 2, a ray segment ~ 8.
     const kernel::KernelParams& k = im.params;
     constexpr int kProbe = 16;
     double total = 0;
@@ -598,18 +596,25 @@ double VolumeRenderer::estimateSamplesPerPass() const
             const ShellSegments seg = intersectShell(o, d, k.rInnerKm, k.rOuterKm, !k.drawCore);
             for (int s = 0; s < seg.count; ++s) {
                 total += 8;
+                const float t0 = seg.t0[s], t1 = seg.t1[s];
+                const kernel::RaySampling rs = kernel::raySampling(k, o, d);
                 kernel::SkipState skip;
-                for (float t = seg.t0[s]; t < seg.t1[s];) {
-                    const float dt = kernel::localStepKm(k, o + d * t, d);
-                    if (kernel::chunkIsEmpty(k, o, d, t, dt, skip)) {
-                        total += 1;
-                    } else {
-                        const Vec3 mid = o + d * std::min(t + 0.5f * float(kernel::kChunkSamples) * dt, seg.t1[s]);
-                        const bool active = kernel::brickActive(k, kernel::locate(k, mid.x, mid.y, mid.z));
-                        total += active ? double(kernel::chunkSampleCount(t, dt, seg.t1[s])) : 6.0;
-                        skip.probe = !active;
+                for (int c = rs.chunkOf(t0);;) {
+                    const float tc = rs.chunkStart(c), tn = rs.chunkStart(c + 1);
+                    if (!(tc < t1))
+                        break;
+                    if (kernel::chunkIsEmpty(k, o, d, tc, tn, skip)) {
+                        total += 2;
+                        c = std::max(c + 1, rs.chunkOf(std::min(skip.tSafe, t1)));
+                        skip.probe = false;
+                        continue;
                     }
-                    t += float(kernel::kChunkSamples) * dt;
+                    const Vec3 mid = o + d * std::clamp(0.5f * (tc + tn), t0, t1);
+                    const bool active = kernel::brickActive(k, kernel::locate(k, mid.x, mid.y, mid.z));
+                    const float dt = (tn - tc) * (1.0f / float(kernel::kChunkSamples));
+                    total += active ? double(kernel::chunkSampleCount(tc, dt, t0, t1)) : 6.0;
+                    skip.probe = !active;
+                    ++c;
                 }
             }
         }
