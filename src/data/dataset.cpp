@@ -102,6 +102,21 @@ std::shared_ptr<StepVolume> StepVolume::fromSnapshot(const Snapshot& snapshot, u
     return volume;
 }
 
+const float* StepVolume::brickBounds(size_t var, uint32_t brickSize) const
+{
+    RAYPC_CHECK(var < m_values.size());
+    if (brickSize == m_bricks.size)
+        return m_bounds[var];
+    std::lock_guard lock(m_derivedMutex);
+    std::vector<float>& bounds = m_derivedBounds[{var, brickSize}];
+    if (bounds.empty()) {
+        const BrickLayout layout = BrickLayout::forGrid(m_grid, brickSize);
+        bounds.resize(2 * layout.brickCount());
+        computeBrickBounds(m_grid, layout, {m_values[var], m_grid.cellCount()}, bounds);
+    }
+    return bounds.data();
+}
+
 std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
 {
     const auto manifestPath = dir / format::kManifest;

@@ -14,7 +14,9 @@
 #include "data/snapshot.h"
 
 #include <filesystem>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -80,12 +82,18 @@ public:
     const float* values(size_t var) const { return m_values[var]; }
     // bricks().brickCount() pairs (min, max) of variable `var`.
     const float* brickBounds(size_t var) const { return m_bounds[var]; }
+    // The same over bricks of `brickSize` points (BrickLayout::forGrid(grid(), brickSize)): the stored
+    // bounds at bricks().size, otherwise computed from the values on first use and kept with the
+    // volume (the renderer skips smaller bricks on coarse levels). Thread-safe.
+    const float* brickBounds(size_t var, uint32_t brickSize) const;
 
 private:
     friend class Dataset;
     SphericalGrid m_grid;
     BrickLayout m_bricks;
     std::vector<const float*> m_values, m_bounds;
+    mutable std::mutex m_derivedMutex;
+    mutable std::map<std::pair<size_t, uint32_t>, std::vector<float>> m_derivedBounds;
     std::vector<MappedFile> m_mapped;              // when loaded from disk
     std::vector<std::vector<float>> m_owned;       // when built in memory
 };

@@ -1,4 +1,5 @@
 #include "data/bricks.h"
+#include "data/dataset.h"
 #include "data/grid.h"
 #include "data/sampler.h"
 #include "data/test_util.h"
@@ -79,6 +80,26 @@ TEST(Bricks, BoundsContainEveryInterpolatedValue)
         ASSERT_GE(v, bounds[2 * b] - 1e-5) << lat << " " << lon << " " << r;
         ASSERT_LE(v, bounds[2 * b + 1] + 1e-5) << lat << " " << lon << " " << r;
     }
+}
+
+TEST(Bricks, VolumesDeriveBoundsOfSmallerBricksOnceAndKeepThem)
+{
+    Snapshot snap;
+    snap.grid = centredGrid(13, 11, 21);
+    std::mt19937 rng(3);
+    std::normal_distribution<float> noise;
+    Field f{"f", "1", std::vector<float>(snap.grid.cellCount())};
+    for (auto& v : f.values)
+        v = noise(rng);
+    snap.fields = {f};
+    const auto volume = StepVolume::fromSnapshot(snap, 8);
+    EXPECT_EQ(volume->brickBounds(0, 8), volume->brickBounds(0));
+    const BrickLayout layout = BrickLayout::forGrid(snap.grid, 2);
+    std::vector<float> expected(2 * layout.brickCount());
+    computeBrickBounds(snap.grid, layout, f.values, expected);
+    const float* derived = volume->brickBounds(0, 2);
+    EXPECT_EQ(std::vector<float>(derived, derived + expected.size()), expected);
+    EXPECT_EQ(volume->brickBounds(0, 2), derived);  // kept, not recomputed
 }
 
 TEST(Sampler, ReproducesTrilinearFunctionsAndIsContinuousAtSeamAndPoles)

@@ -116,12 +116,6 @@ struct KernelParams {
     // Bricks: active flags per brick (nullptr: no skipping); brick size is 1 << brickShift points.
     const int32_t* brickActive = nullptr;
     int brickShift = 3, bricksR = 1, bricksLon = 1;
-    // Empty-space skipping along the ray: per brick the Chebyshev distance, in bricks, to the nearest
-    // active brick (0 = active, capped; lon wraps), and the finest grid spacings, which bound how many
-    // grid points any index can move over a given path length (see safeSkipKm).
-    const uint8_t* brickDistance = nullptr;
-    int lonBrickSlack = 0;  // 1 when the last lon brick is partial (fewer points to cross at the seam)
-    float minDrKm = 1, minDLatRad = 0.01f, minDLonRad = 0.01f;
     // The Cartesian skip grid (skip_grid.h): cellN^3 cells of cellKm from cellOriginKm on every axis,
     // per cell the Chebyshev distance in cells to the nearest cell that may hold an active sample
     // (nullptr: not used).
@@ -329,45 +323,6 @@ inline bool brickActive(const KernelParams& k, const Located& L)
     return k.brickActive[b] != 0;
 }
 
-// How far (km) a ray may go from p while every sample stays in inactive bricks and out of the pole
-// caps: the conservative form of a DDA over bricks (pbrt-v4 DDAMajorantIterator, Open VKL
-// RayMarchIterator interval skipping). With D the Chebyshev brick distance from p's brick to the
-// nearest active brick, every index may move by n = (D - 1) x brick size grid points. Over a path of
-// length s that stays at radius >= m and distance >= rho_m from the polar axis, r changes by <= s,
-// the angle from the origin (so lat) by <= s / m and lon by <= s / rho_m (radians); inverting gives
-// s. Returns 0 when p is in or next to an active brick, or in a cap.
-inline float safeSkipKm(const KernelParams& k, Vec3 p, const Located& L)
-{
-    if (L.cap > 0.0f)
-        return 0.0f;
-    const int b = ((L.iLat0 >> k.brickShift) * k.bricksR + (L.iR0 >> k.brickShift)) * k.bricksLon +
-                  (L.iLon0 >> k.brickShift);
-    const int D = k.brickDistance[b];
-    if (D < 2)
-        return 0.0f;
-    const float size = float(1 << k.brickShift);
-    // 0.05 points of slack absorb the angle approximation (1e-5 rad) and rounding.
-    const float n = float(D - 1) * size - 0.05f;
-    float s = n * k.minDrKm;
-    // Lat: the index budget, but never into a pole cap (caps are always sampled).
-    float aLat = n * k.minDLatRad;
-    constexpr float kDegToRad = float(std::numbers::pi / 180.0);
-    if (k.capScaleSouth > 0.0f)
-        aLat = std::min(aLat, (L.latDeg - k.latSouthDeg) * kDegToRad);
-    if (k.capScaleNorth > 0.0f)
-        aLat = std::min(aLat, (k.latNorthDeg - L.latDeg) * kDegToRad);
-    aLat = std::max(aLat, 0.0f);
-    // s / max(rInner, r - s) <= aLat: either form is sufficient.
-    s = std::min(s, std::max(aLat * k.rInnerKm, aLat * L.rKm / (1.0f + aLat)));
-    // Lon: unconstrained when the inactive cube already spans every lon brick.
-    if (2 * (D - 1) + 1 < k.bricksLon) {
-        const float aLon = std::max(0.0f, float(D - 1 - k.lonBrickSlack) * size - 0.05f) * k.minDLonRad;
-        const float rho = std::sqrt(p.x * p.x + p.y * p.y);
-        s = std::min(s, aLon * rho / (1.0f + aLon));
-    }
-    return std::max(0.0f, s * 0.999f);
-}
-
 // How far along the ray from o + d t the skip grid shows only cells without active samples: probes
 // the cell at the point; at distance D >= 1 the (2D - 1)^3 block of cells around it is empty, so the
 // ray moves to the block's exit (a little past it: the cells' bricks were found for cells grown by
@@ -402,8 +357,8 @@ inline float cellSkipTo(const KernelParams& k, Vec3 o, Vec3 d, float t, int prob
 }
 
 // Interval skipping state of one ray segment: [.., tSafe] is known to hold only inactive samples;
-// a probe (one scalar locate) is taken at the start of a chunk only after a chunk without active
-// samples, so dense regions pay nothing for it.
+// the skip grid is probed at the start of a chunk only after a chunk without active samples, so
+// dense regions pay nothing for it.
 struct SkipState {
     float tSafe = -INFINITY;
     bool probe = true;
@@ -413,22 +368,13 @@ struct SkipState {
 // without locating its samples; then s.tSafe says how far the empty space is known to reach.
 inline bool chunkIsEmpty(const KernelParams& k, Vec3 o, Vec3 d, float tc, float tEnd, SkipState& s)
 {
-    if (!k.brickDistance)
+    if (!k.cellDistance)
         return false;
     if (tEnd <= s.tSafe)
         return true;
     if (!s.probe)
         return false;
-    // The skip grid first (cheap, chained probes), then one brick probe where it stopped.
-    float t = std::max(tc, s.tSafe);
-    if (k.cellDistance) {
-        t = cellSkipTo(k, o, d, t, 8);
-        s.tSafe = std::max(s.tSafe, t);
-        if (tEnd <= s.tSafe)
-            return true;
-    }
-    const Vec3 p = o + d * t;
-    s.tSafe = std::max(s.tSafe, t + safeSkipKm(k, p, locate(k, p.x, p.y, p.z)));
+    s.tSafe = std::max(s.tSafe, cellSkipTo(k, o, d, std::max(tc, s.tSafe), 8));
     return tEnd <= s.tSafe;
 }
 

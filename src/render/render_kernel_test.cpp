@@ -132,5 +132,45 @@ TEST(Sampler, PolesGiveOneValueForAllLongitudesAndBlendContinuously)
     }
 }
 
+// The closed-form sample count along a ray: increasing, inverted by tAt, continuous at the crossover,
+// and about stepFactor cells per sample — dr on a radial ray, h dθ at a tangential closest approach.
+TEST(RaySampling, SamplesAreAboutStepFactorCellsApartAndTheMapInverts)
+{
+    kernel::KernelParams k;
+    k.stepFactor = 0.5f;
+    k.drKm = 14.4f;
+    k.dAngleRad = float(M_PI / 180.0);
+    std::mt19937 rng(3);
+    std::normal_distribution<float> nd;
+    for (int ray = 0; ray < 200; ++ray) {
+        const Vec3 o = normalize(Vec3{nd(rng), nd(rng), nd(rng)}) * 19000.0f;
+        const Vec3 target = normalize(Vec3{nd(rng), nd(rng), nd(rng)}) * (6371.0f * float(ray % 10) / 9.0f);
+        const Vec3 d = normalize(target - o);
+        const kernel::RaySampling rs = kernel::raySampling(k, o, d);
+        float previous = -INFINITY;
+        for (float t = 10000.0f; t < 30000.0f; t += 3.7f) {
+            const float u = rs.samplesAt(t);
+            ASSERT_GE(u, previous) << "ray " << ray << " t " << t;
+            previous = u;
+            ASSERT_NEAR(rs.tAt(u), t, 2e-2f) << "ray " << ray << " t " << t;
+            // The spacing where the ray is at radius r in the shell, against the cell it crosses.
+            const Vec3 p = o + d * t;
+            const float r = length(p);
+            if (r < 3485.0f || r > 6371.0f)
+                continue;
+            const float spacing = 1.0f / (rs.samplesAt(t + 0.5f) - rs.samplesAt(t - 0.5f));
+            const float cosA = std::abs(dot(p, d)) / r, sinA = std::sqrt(std::max(0.0f, 1.0f - cosA * cosA));
+            const float cellAlongRay = 1.0f / std::max(cosA / k.drKm, sinA / (r * k.dAngleRad));
+            ASSERT_GT(spacing, 0.9f * cellAlongRay * k.stepFactor) << "ray " << ray << " t " << t;
+            ASSERT_LT(spacing, 1.01f * cellAlongRay * k.stepFactor) << "ray " << ray << " t " << t;
+        }
+    }
+    // A ray through the centre steps dr; one grazing the surface steps h dθ at its closest approach.
+    const kernel::RaySampling radial = kernel::raySampling(k, {0, 0, 19000}, {0, 0, -1});
+    EXPECT_NEAR(radial.tAt(1) - radial.tAt(0), k.stepFactor * k.drKm, 1e-3);
+    const kernel::RaySampling grazing = kernel::raySampling(k, {-19000, 6000, 0}, {1, 0, 0});
+    EXPECT_NEAR(grazing.tAt(1) - grazing.tAt(0), k.stepFactor * 6000.0f * k.dAngleRad, 1e-2);
+}
+
 }  // namespace
 }  // namespace raypc::render

@@ -20,10 +20,22 @@ namespace raypc::render {
 namespace {
 
 constexpr int kTileSize = 32;
-// Skip-grid cells span this many bricks' radial extent: on the full-resolution benchmark passes
-// took the same time with cells of 1, 1.5 and 2 (115-230 km at level 0), while preparing the cell
-// distances per change took 11.6, 3.4 and 1.7 ms.
-constexpr float kSkipCellBricks = 2.0f;
+// Skip-grid cell size: on the full-resolution benchmark passes took the same time with cells of 115,
+// 170 and 230 km, while preparing the cell distances per change took 11.6, 3.4 and 1.7 ms.
+constexpr float kSkipCellKm = 230.0f;
+
+// Skipping decides per "activity brick": the dataset's bricks (8 points) at full resolution, smaller
+// ones on coarser levels, so that a brick stays about this deep (km) at every level. With 8-point
+// bricks everywhere, 58 % of the level-2 volume of the benchmark scene was in active bricks against
+// 15 % at level 0; with 2-point bricks at level 2, 14 %.
+constexpr double kActivityBrickKm = 60.0;
+uint32_t activityBrickSize(uint32_t datasetBrickSize, double drKm)
+{
+    uint32_t s = datasetBrickSize;
+    while (s > 2 && double(s) * drKm > kActivityBrickKm)
+        s /= 2;
+    return s;
+}
 
 // Coordinate -> fractional index along one axis: affine when uniform, else a fine table.
 struct AxisTable {
@@ -125,54 +137,6 @@ kernel::BrushKind brushKindOf(Coordinate c)
     case Coordinate::Depth: return kernel::BrushKind::Depth;
     }
     return kernel::BrushKind::X;
-}
-
-// Chebyshev distance, in bricks, from every brick to the nearest active one (0 for active bricks,
-// capped at kMaxBrickDistance; lon wraps): grown one ring per iteration by a 3x3x3 min filter done
-// as three 1-D passes. At full resolution (23 x 26 x 45 bricks) this takes about a millisecond.
-constexpr int kMaxBrickDistance = 8;
-void brickDistanceMap(const std::vector<int32_t>& active, const BrickLayout& bl, std::vector<uint8_t>& dist)
-{
-    const int nA = int(bl.count[0]), nR = int(bl.count[1]), nO = int(bl.count[2]);
-    const size_t n = bl.brickCount();
-    dist.resize(n);
-    for (size_t b = 0; b < n; ++b)
-        dist[b] = active[b] ? 0 : kMaxBrickDistance;
-    std::vector<uint8_t> a(n), c(n);
-    auto at = [&](int i, int j, int l) { return (size_t(i) * size_t(nR) + size_t(j)) * size_t(nO) + size_t(l); };
-    for (int ring = 1; ring < kMaxBrickDistance; ++ring) {
-        for (int i = 0; i < nA; ++i)
-            for (int j = 0; j < nR; ++j)
-                for (int l = 0; l < nO; ++l) {
-                    const int lm = l == 0 ? nO - 1 : l - 1, lp = l + 1 == nO ? 0 : l + 1;
-                    a[at(i, j, l)] = std::min({dist[at(i, j, lm)], dist[at(i, j, l)], dist[at(i, j, lp)]});
-                }
-        for (int i = 0; i < nA; ++i)
-            for (int j = 0; j < nR; ++j)
-                for (int l = 0; l < nO; ++l)
-                    c[at(i, j, l)] = std::min({a[at(i, std::max(j - 1, 0), l)], a[at(i, j, l)], a[at(i, std::min(j + 1, nR - 1), l)]});
-        bool changed = false;
-        for (int i = 0; i < nA; ++i)
-            for (int j = 0; j < nR; ++j)
-                for (int l = 0; l < nO; ++l) {
-                    const uint8_t m = std::min({c[at(std::max(i - 1, 0), j, l)], c[at(i, j, l)], c[at(std::min(i + 1, nA - 1), j, l)]});
-                    uint8_t& v = dist[at(i, j, l)];
-                    if (m + 1 < v) {
-                        v = uint8_t(m + 1);
-                        changed = true;
-                    }
-                }
-        if (!changed)
-            break;
-    }
-}
-
-double minSpacing(const std::vector<double>& c, double period)
-{
-    double m = period > 0 ? c.front() + period - c.back() : INFINITY;
-    for (size_t i = 1; i < c.size(); ++i)
-        m = std::min(m, c[i] - c[i - 1]);
-    return m;
 }
 
 kernel::ColourTable viewOf(const TransferTable& t)
@@ -294,13 +258,13 @@ struct VolumeRenderer::Impl {
     AxisTable lat, r, lon;
     std::vector<std::vector<float>> capMeans;  // per variable: 2 * nR
     float drKm = 1, dAngleRad = 0.01f;
+    BrickLayout activity;  // the bricks skipping decides on (activityBrickSize)
     int brickShift = 3;
 
     // Baked per setParams (restart class).
     TransferTable table, coreTable;
     std::vector<kernel::KernelBrush> brushes;
     std::vector<int32_t> brickActive;
-    std::vector<uint8_t> brickDistance;
     std::shared_ptr<const SkipGridGeometry> skipGeometry;  // per grid, shared
     std::vector<uint8_t> cellDistance;
     size_t bricksSkipped = 0;
@@ -324,11 +288,12 @@ VolumeRenderer::VolumeRenderer(std::shared_ptr<const StepVolume> volume)
     if (bs == 0 || (bs & (bs - 1)) != 0)
         fail("renderer: brick size {} is not a power of two", bs);
     Impl& im = *m_impl;
-    im.brickShift = std::countr_zero(bs);
     im.lat = buildAxis(g.latDeg, -90.0, 90.0, false);
     im.r = buildAxis(g.rKm, g.rKm.front(), g.rKm.back(), false);
     im.lon = buildAxis(g.lonDeg, 0.0, 360.0, true);
     im.drKm = float((g.rKm.back() - g.rKm.front()) / double(g.nR() - 1));
+    im.activity = BrickLayout::forGrid(g, activityBrickSize(bs, im.drKm));
+    im.brickShift = std::countr_zero(im.activity.size);
     im.dAngleRad = float(degToRad(std::min((g.latDeg.back() - g.latDeg.front()) / double(g.nLat() - 1),
                                            360.0 / double(g.nLon()))));
 
@@ -409,7 +374,8 @@ void VolumeRenderer::setParams(const RenderParams& p)
 
     // Brick flags: a brick is skipped when a brush excludes its bounds or the transfer function is
     // transparent over the colouring variable's bounds there (bounds contain every trilinear value).
-    const BrickLayout& bl = vol.bricks();
+    const BrickLayout& bl = im.activity;
+    auto boundsOf = [&](int v) { return vol.brickBounds(size_t(v), bl.size); };
     im.brickActive.assign(bl.brickCount(), 1);
     auto excludeOutside = [&](const float* bounds, float lo, float hi) {
         for (size_t b = 0; b < bl.brickCount(); ++b)
@@ -421,16 +387,14 @@ void VolumeRenderer::setParams(const RenderParams& p)
             const std::vector<float> bounds = coordinateBrickBounds(g, bl, *b.coordinate);
             excludeOutside(bounds.data(), b.min, b.max);
         } else {
-            excludeOutside(vol.brickBounds(size_t(b.variable)), b.min, b.max);
+            excludeOutside(boundsOf(b.variable), b.min, b.max);
         }
     }
-    const float* colourBounds = vol.brickBounds(size_t(p.colorVariable));
+    const float* colourBounds = boundsOf(p.colorVariable);
     for (size_t b = 0; b < bl.brickCount(); ++b)
         if (im.table.transparentOver(colourBounds[2 * b], colourBounds[2 * b + 1]))
             im.brickActive[b] = 0;
     im.bricksSkipped = size_t(std::count(im.brickActive.begin(), im.brickActive.end(), 0));
-    if (p.skipBricks)
-        brickDistanceMap(im.brickActive, bl, im.brickDistance);
     im.estimatedSamples = -1;
 
     kernel::KernelParams& k = im.params;
@@ -454,11 +418,6 @@ void VolumeRenderer::setParams(const RenderParams& p)
     k.brickShift = im.brickShift;
     k.bricksR = int(bl.count[1]);
     k.bricksLon = int(bl.count[2]);
-    k.brickDistance = p.skipBricks ? im.brickDistance.data() : nullptr;
-    k.lonBrickSlack = g.nLon() % bl.size != 0 ? 1 : 0;
-    k.minDrKm = float(minSpacing(g.rKm, 0));
-    k.minDLatRad = float(degToRad(minSpacing(g.latDeg, 0)));
-    k.minDLonRad = float(degToRad(minSpacing(g.lonDeg, 360.0)));
     k.colour = view(p.colorVariable);
     k.table = viewOf(im.table);
     k.brushes = im.brushes.data();
@@ -485,8 +444,7 @@ void VolumeRenderer::setParams(const RenderParams& p)
     k.seed = p.seed;
     k.chunkLanes = kernel::kChunkSamples;
     if (p.skipBricks) {
-        const float cellKm = kSkipCellBricks * float(bl.size) * im.drKm;
-        im.skipGeometry = skipGridGeometry(g, bl, k, cellKm);
+        im.skipGeometry = skipGridGeometry(g, bl, k, kSkipCellKm);
         skipGridDistance(*im.skipGeometry, im.brickActive, im.cellDistance);
         k.cellDistance = im.cellDistance.data();
         k.cellN = im.skipGeometry->n;
@@ -570,7 +528,7 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
     stats.chunksSkipped = chunksSkipped;
     stats.chunksJumped = chunksJumped;
     stats.rays = rays;
-    stats.bricksTotal = m_volume->bricks().brickCount();
+    stats.bricksTotal = m_impl->activity.brickCount();
     stats.bricksSkipped = m_params.skipBricks ? m_impl->bricksSkipped : 0;
     stats.threads = tbb::this_task_arena::max_concurrency();
     stats.simdLanes = simd ? kernel::simdLanes() : 1;
