@@ -1,5 +1,5 @@
 // Internal to raypc_render: a Cartesian grid over the planet's bounding cube for empty-space
-// skipping, next to the brick distance map (docs/rendering.md, "Empty-space skipping").
+// skipping (docs/rendering.md, "Empty-space skipping").
 //
 // Bricks live in (lat, r, lon) index space; a ray is a line in Cartesian space. Locating a point in
 // a brick takes a square root and two arctangents, so probing brick by brick costs almost as much
