@@ -191,14 +191,16 @@ inline uint32_t hash32(uint32_t x)
 // per-pixel sample offset along the ray (a pixel hash rotated by the golden ratio each pass).
 inline void jitter(const KernelParams& k, int px, int py, float& sx, float& sy, float& along)
 {
+    // x - floor(x) is exact for x >= 0, like fmod(x, 1), and much cheaper.
+    auto fraction = [](float x) { return x - std::floor(x); };
     if (k.pass == 0) {
         sx = sy = 0.5f;
     } else {
-        sx = std::fmod(0.5f + float(k.pass) * 0.7548776662f, 1.0f);
-        sy = std::fmod(0.5f + float(k.pass) * 0.5698402910f, 1.0f);
+        sx = fraction(0.5f + float(k.pass) * 0.7548776662f);
+        sy = fraction(0.5f + float(k.pass) * 0.5698402910f);
     }
     const uint32_t h = hash32(uint32_t(px) * 73856093u ^ uint32_t(py) * 19349663u ^ k.seed);
-    along = std::fmod(float(h >> 8) * (1.0f / 16777216.0f) + float(k.pass) * 0.6180339887f, 1.0f);
+    along = fraction(float(h >> 8) * (1.0f / 16777216.0f) + float(k.pass) * 0.6180339887f);
 }
 
 // Where the samples of a ray lie: a closed-form sample count U(t) along the ray, so that the chunk
@@ -323,34 +325,54 @@ inline bool brickActive(const KernelParams& k, const Located& L)
     return k.brickActive[b] != 0;
 }
 
-// How far along the ray from o + d t the skip grid shows only cells without active samples: probes
-// the cell at the point; at distance D >= 1 the (2D - 1)^3 block of cells around it is empty, so the
-// ray moves to the block's exit (a little past it: the cells' bricks were found for cells grown by
-// kSkipCellPadKm, so the point stays covered) and probes again, at most `probes` times. Returns the
-// first t (>= the given one) where the ray may meet an active sample.
-inline float cellSkipTo(const KernelParams& k, Vec3 o, Vec3 d, float t, int probes)
+// The ray in the skip grid's cell units, f(t) = f0 + t g, prepared once per ray segment.
+struct CellRay {
+    float f0[3]{}, g[3]{}, invG[3]{};
+    bool up[3]{};  // g >= 0: the block is left through its upper face
+};
+
+inline CellRay cellRay(const KernelParams& k, Vec3 o, Vec3 d)
+{
+    CellRay c;
+    const float oc[3] = {o.x, o.y, o.z}, dc[3] = {d.x, d.y, d.z};
+    for (int a = 0; a < 3; ++a) {
+        c.f0[a] = (oc[a] - k.cellOriginKm) * k.cellInvKm;
+        c.g[a] = dc[a] * k.cellInvKm;
+        c.up[a] = c.g[a] >= 0.0f;
+        c.invG[a] = c.g[a] != 0.0f ? 1.0f / c.g[a] : 1e30f;
+    }
+    return c;
+}
+
+// How far along the ray from t the skip grid shows only cells without active samples: probes the
+// cell at the point; at distance D >= 1 the (2D - 1)^3 block of cells around it is empty, so the ray
+// moves to the block's exit (a little past it: the cells' bricks were found for cells grown by
+// kSkipCellPadKm, which also covers the rounding of the cell coordinates) and probes again, at most
+// `probes` times. Returns the first t (>= the given one) where the ray may meet an active sample;
+// `occupiedUntil` (if given) receives where the ray leaves the occupied cell found there.
+inline float cellSkipTo(const KernelParams& k, const CellRay& c, float t, int probes, float* occupiedUntil = nullptr)
 {
     const float span = float(k.cellN);
+    const size_t n = size_t(k.cellN);
     for (int i = 0; i < probes; ++i) {
-        const Vec3 p = o + d * t;
-        const float fx = (p.x - k.cellOriginKm) * k.cellInvKm, fy = (p.y - k.cellOriginKm) * k.cellInvKm,
-                    fz = (p.z - k.cellOriginKm) * k.cellInvKm;
-        if (!(fx >= 0.0f && fy >= 0.0f && fz >= 0.0f && fx < span && fy < span && fz < span))
+        const float f[3] = {c.f0[0] + t * c.g[0], c.f0[1] + t * c.g[1], c.f0[2] + t * c.g[2]};
+        if (!(f[0] >= 0.0f && f[1] >= 0.0f && f[2] >= 0.0f && f[0] < span && f[1] < span && f[2] < span))
             return t;
-        const int ix = int(fx), iy = int(fy), iz = int(fz);
-        const int D = k.cellDistance[(size_t(iz) * size_t(k.cellN) + size_t(iy)) * size_t(k.cellN) + size_t(ix)];
-        if (D == 0)
+        const int ix = int(f[0]), iy = int(f[1]), iz = int(f[2]);
+        const int D = k.cellDistance[(size_t(iz) * n + size_t(iy)) * n + size_t(ix)];
+        // Exit of the block [i - (D - 1), i + D) of cells along each axis (the cell itself at D = 0).
+        const float m = float(std::max(D - 1, 0));
+        const int idx[3] = {ix, iy, iz};
+        float exit = INFINITY;
+        for (int a = 0; a < 3; ++a) {
+            const float bound = float(idx[a]) + (c.up[a] ? m + 1.0f : -m);
+            exit = std::min(exit, (bound - f[a]) * c.invG[a]);
+        }
+        if (D == 0) {
+            if (occupiedUntil)
+                *occupiedUntil = t + exit;
             return t;
-        // Exit of the block [i - (D - 1), i + D) of cells along each axis, in cell units.
-        const float m = float(D - 1);
-        auto exitAlong = [&](float f, int c, float dir) {
-            if (dir > 0.0f)
-                return (float(c) + m + 1.0f - f) * k.cellKm / dir;
-            if (dir < 0.0f)
-                return (float(c) - m - f) * k.cellKm / dir;
-            return INFINITY;
-        };
-        const float exit = std::min({exitAlong(fx, ix, d.x), exitAlong(fy, iy, d.y), exitAlong(fz, iz, d.z)});
+        }
         t += std::max(exit, 0.0f) + k.cellStepPastKm;
     }
     return t;
@@ -360,34 +382,39 @@ inline float cellSkipTo(const KernelParams& k, Vec3 o, Vec3 d, float t, int prob
 // the skip grid is probed at the start of a chunk only after a chunk without active samples, so
 // dense regions pay nothing for it.
 struct SkipState {
+    CellRay ray;
     float tSafe = -INFINITY;
+    float tOccupied = -INFINITY;  // the last probe found an occupied cell that the ray leaves here
     bool probe = true;
+    SkipState(const KernelParams& k, Vec3 o, Vec3 d)
+    {
+        if (k.cellDistance)
+            ray = cellRay(k, o, d);
+    }
 };
 
 // True when every sample of the chunk [tc, tEnd) lies in inactive space, so it can be passed over
 // without locating its samples; then s.tSafe says how far the empty space is known to reach.
-inline bool chunkIsEmpty(const KernelParams& k, Vec3 o, Vec3 d, float tc, float tEnd, SkipState& s)
+inline bool chunkIsEmpty(const KernelParams& k, float tc, float tEnd, SkipState& s)
 {
     if (!k.cellDistance)
         return false;
     if (tEnd <= s.tSafe)
         return true;
-    if (!s.probe)
+    if (!s.probe || tc < s.tOccupied)  // probing again inside the same occupied cell finds nothing
         return false;
-    s.tSafe = std::max(s.tSafe, cellSkipTo(k, o, d, std::max(tc, s.tSafe), 8));
+    s.tSafe = std::max(s.tSafe, cellSkipTo(k, s.ray, std::max(tc, s.tSafe), 8, &s.tOccupied));
     return tEnd <= s.tSafe;
 }
 
 // Sample i of a chunk starting at tc with spacing dt owns [tc + i dt, tc + (i + 1) dt) clipped to the
-// segment [t0, t1) and sits `along` into it (clamped to the segment).
+// segment [t0, t1) and sits `along` into it (clamped to the segment). How many of the chunk's
+// samples have a non-empty interval (for statistics; closed form, exact up to rounding at the ends).
 inline int chunkSampleCount(float tc, float dt, float t0, float t1)
 {
-    int n = 0;
-    for (int i = 0; i < kChunkSamples; ++i) {
-        const float start = tc + float(i) * dt;
-        n += start < t1 && start + dt > t0;
-    }
-    return n;
+    const float first = std::floor((t0 - tc) / dt);       // the sample whose interval holds t0
+    const float last = std::ceil((t1 - tc) / dt) - 1.0f;  // the last sample starting before t1
+    return std::max(0, int(std::clamp(last, -1.0f, float(kChunkSamples - 1)) - std::clamp(first, 0.0f, float(kChunkSamples)) + 1.0f));
 }
 
 // The opaque core sphere: plain or coloured by a variable at the core radius, Lambert-shaded.

@@ -54,14 +54,14 @@ void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, floa
                  TileStats& stats)
 {
     const RaySampling rs = raySampling(k, o, d);
-    SkipState skip;
+    SkipState skip(k, o, d);
     int j = rs.chunkOf(t0);
     float tc = rs.chunkStart(j);
     while (tc < t1 && acc.transmittance > k.stopTransmittance) {
         const float tn = rs.chunkStart(j + 1);
         const float dt = (tn - tc) * (1.0f / float(kChunkSamples));
         ++stats.chunks;
-        if (chunkIsEmpty(k, o, d, tc, tn, skip)) {
+        if (chunkIsEmpty(k, tc, tn, skip)) {
             const int next = std::max(j + 1, rs.chunkOf(std::min(skip.tSafe, t1)));
             stats.samplesSkipped += uint64_t(chunkSampleCount(tc, dt, t0, t1)) + uint64_t(kChunkSamples) * uint64_t(next - j - 1);
             stats.chunks += uint64_t(next - j - 1);

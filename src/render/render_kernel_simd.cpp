@@ -216,7 +216,7 @@ void MarchSimd(const KernelParams& k, const Ray& ray, float t0, float t1, float 
 
     const RaySampling rs = raySampling(k, ray.o, ray.d);
     const VF vT0 = hn::Set(d, t0);
-    SkipState skip;
+    SkipState skip(k, ray.o, ray.d);
     int j = rs.chunkOf(t0);
     float tc = rs.chunkStart(j);
     while (tc < t1 && acc.transmittance > k.stopTransmittance) {
@@ -224,7 +224,7 @@ void MarchSimd(const KernelParams& k, const Ray& ray, float t0, float t1, float 
         const float dt = (tn - tc) * (1.0f / float(kChunkSamples));
         ++stats.chunks;
         // Interval skipping: known-empty space is passed over in one jump to the chunk where it ends.
-        if (chunkIsEmpty(k, ray.o, ray.d, tc, tn, skip)) {
+        if (chunkIsEmpty(k, tc, tn, skip)) {
             const int next = std::max(j + 1, rs.chunkOf(std::min(skip.tSafe, t1)));
             stats.samplesSkipped += uint64_t(chunkSampleCount(tc, dt, t0, t1)) + uint64_t(kChunkSamples) * uint64_t(next - j - 1);
             stats.chunks += uint64_t(next - j - 1);

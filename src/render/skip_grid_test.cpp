@@ -153,7 +153,7 @@ TEST(SkipGrid, SkippedRayStretchesHoldNoActiveSample)
         const ShellSegments seg = intersectShell(o, d, 3485.0f, 6371.0f, true);
         for (int sgi = 0; sgi < seg.count; ++sgi) {
             for (float t = seg.t0[sgi]; t < seg.t1[sgi];) {
-                const float end = std::min(kernel::cellSkipTo(k, o, d, t, 8), seg.t1[sgi]);
+                const float end = std::min(kernel::cellSkipTo(k, kernel::cellRay(k, o, d), t, 8), seg.t1[sgi]);
                 for (float q = t; q < end; q += 2.0f) {
                     const Vec3 p = o + d * q;
                     ASSERT_FALSE(kernel::brickActive(k, kernel::locate(k, p.x, p.y, p.z))) << "ray " << ray << " t " << q;

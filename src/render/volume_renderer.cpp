@@ -556,12 +556,12 @@ double VolumeRenderer::estimateSamplesPerPass() const
                 total += 8;
                 const float t0 = seg.t0[s], t1 = seg.t1[s];
                 const kernel::RaySampling rs = kernel::raySampling(k, o, d);
-                kernel::SkipState skip;
+                kernel::SkipState skip(k, o, d);
                 for (int c = rs.chunkOf(t0);;) {
                     const float tc = rs.chunkStart(c), tn = rs.chunkStart(c + 1);
                     if (!(tc < t1))
                         break;
-                    if (kernel::chunkIsEmpty(k, o, d, tc, tn, skip)) {
+                    if (kernel::chunkIsEmpty(k, tc, tn, skip)) {
                         total += 2;
                         c = std::max(c + 1, rs.chunkOf(std::min(skip.tSafe, t1)));
                         skip.probe = false;
