@@ -208,8 +208,22 @@ void MarchSimd(const KernelParams& k, const Ray& ray, float t0, float t1, float 
     const DF d;
     const DI di;
     const int lanes = int(hn::Lanes(d));
-    HWY_ALIGN float alphaBuf[kMaxLanes], redBuf[kMaxLanes], greenBuf[kMaxLanes], blueBuf[kMaxLanes], tBuf[kMaxLanes];
+    HWY_ALIGN float tBuf[kMaxLanes];
     const VF iota = hn::Iota(d, 0.0f);
+    const VF one = hn::Set(d, 1.0f);
+    const VF vStop = hn::Set(d, k.stopTransmittance);
+    const VF vDepth = hn::Set(d, k.depthOpacity);
+    // shiftUp[s] moves lane i - 2^s to lane i (the first 2^s lanes are replaced by the caller).
+    using IndicesF = decltype(hn::SetTableIndices(d, static_cast<const int32_t*>(nullptr)));
+    IndicesF shiftUp[4];
+    {
+        HWY_ALIGN int32_t index[kMaxLanes];
+        for (int s = 0; s < 4; ++s) {
+            for (int i = 0; i < lanes; ++i)
+                index[i] = std::max(i - (1 << s), 0);
+            shiftUp[s] = hn::SetTableIndices(d, index);
+        }
+    }
     const VF vT1 = hn::Set(d, t1);
     const VF zero = hn::Zero(d);
     const VF vAlong = hn::Set(d, along);
@@ -301,25 +315,34 @@ void MarchSimd(const KernelParams& k, const Ray& ray, float t0, float t1, float 
                 const VF lit = hn::MulAdd(hn::Set(d, k.diffuse), hn::Div(hn::Abs(gl), hn::Sqrt(safeG2)), hn::Set(d, k.ambient));
                 shade = hn::IfThenElse(hasGradient, lit, shade);
             }
-            hn::Store(alpha, d, alphaBuf);
-            hn::Store(hn::Mul(shade, hn::GatherIndex(d, k.table.red, idx)), d, redBuf);
-            hn::Store(hn::Mul(shade, hn::GatherIndex(d, k.table.green, idx)), d, greenBuf);
-            hn::Store(hn::Mul(shade, hn::GatherIndex(d, k.table.blue, idx)), d, blueBuf);
-            hn::Store(t, d, tBuf);
-            // Front-to-back compositing, in lane order, with the same early exit as the scalar kernel.
-            // No branch on a lane's opacity (it mispredicts and discards the next chunk's
-            // speculative work): a transparent lane (a = 0) adds 0 and multiplies T by 1, and the
-            // depth test can only pass where T changed, so the result is bit-identical.
-            for (int i = 0; i < lanes && acc.transmittance > k.stopTransmittance; ++i) {
-                const float a = alphaBuf[i];
-                const float w = acc.transmittance * a;
-                acc.r += w * redBuf[i];
-                acc.g += w * greenBuf[i];
-                acc.b += w * blueBuf[i];
-                acc.transmittance *= 1.0f - a;
-                if (!std::isfinite(acc.depthKm) && 1.0f - acc.transmittance >= k.depthOpacity)
-                    acc.depthKm = tBuf[i];
+            const VF red = hn::Mul(shade, hn::GatherIndex(d, k.table.red, idx));
+            const VF green = hn::Mul(shade, hn::GatherIndex(d, k.table.green, idx));
+            const VF blue = hn::Mul(shade, hn::GatherIndex(d, k.table.blue, idx));
+            // Front-to-back compositing across the lanes at once: the transmittance after lane i is
+            // T (1 - a_0) ... (1 - a_i), an inclusive prefix product (log2(lanes) permute steps).
+            // Lanes are composited while the transmittance before them is above the stop threshold
+            // (a prefix of the lanes), as the scalar kernel stops mid-chunk; the products are
+            // rounded in a different order, so the two kernels agree to rounding.
+            VF after = hn::Sub(one, alpha);
+            for (int s = 0; (1 << s) < lanes; ++s)
+                after = hn::Mul(after, hn::IfThenElse(hn::FirstN(d, size_t(1) << s), one,
+                                                      hn::TableLookupLanes(after, shiftUp[s])));
+            const VF vT = hn::Set(d, acc.transmittance);
+            const VF tBefore = hn::Mul(vT, hn::IfThenElse(hn::FirstN(d, 1), one, hn::TableLookupLanes(after, shiftUp[0])));
+            const VF tAfter = hn::Mul(vT, after);
+            const MF live = hn::Gt(tBefore, vStop);
+            const VF w = hn::IfThenElseZero(live, hn::Mul(tBefore, alpha));
+            acc.r += hn::GetLane(hn::SumOfLanes(d, hn::Mul(w, red)));
+            acc.g += hn::GetLane(hn::SumOfLanes(d, hn::Mul(w, green)));
+            acc.b += hn::GetLane(hn::SumOfLanes(d, hn::Mul(w, blue)));
+            if (!std::isfinite(acc.depthKm)) {
+                const MF deep = hn::And(live, hn::Ge(hn::Sub(one, tAfter), vDepth));
+                if (!hn::AllFalse(d, deep)) {
+                    hn::Store(t, d, tBuf);
+                    acc.depthKm = tBuf[hn::FindKnownFirstTrue(d, deep)];
+                }
             }
+            acc.transmittance = hn::GetLane(hn::MinOfLanes(d, hn::IfThenElse(live, tAfter, one)));
         }
         skip.probe = !anyActive;
         if (!anyActive)
