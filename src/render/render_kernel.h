@@ -327,8 +327,8 @@ inline bool brickActive(const KernelParams& k, const Located& L)
 
 // The ray in the skip grid's cell units, f(t) = f0 + t g, prepared once per ray segment.
 struct CellRay {
-    float f0[3]{}, g[3]{}, invG[3]{};
-    bool up[3]{};  // g >= 0: the block is left through its upper face
+    float f0[3]{}, g[3]{}, invG[3]{}, absInvG[3]{};
+    float up[3]{};  // 1 where g >= 0 (cells are left through their upper face), else 0
 };
 
 inline CellRay cellRay(const KernelParams& k, Vec3 o, Vec3 d)
@@ -338,8 +338,9 @@ inline CellRay cellRay(const KernelParams& k, Vec3 o, Vec3 d)
     for (int a = 0; a < 3; ++a) {
         c.f0[a] = (oc[a] - k.cellOriginKm) * k.cellInvKm;
         c.g[a] = dc[a] * k.cellInvKm;
-        c.up[a] = c.g[a] >= 0.0f;
+        c.up[a] = c.g[a] >= 0.0f ? 1.0f : 0.0f;
         c.invG[a] = c.g[a] != 0.0f ? 1.0f / c.g[a] : 1e30f;
+        c.absInvG[a] = std::abs(c.invG[a]);
     }
     return c;
 }
@@ -350,6 +351,8 @@ inline CellRay cellRay(const KernelParams& k, Vec3 o, Vec3 d)
 // kSkipCellPadKm, which also covers the rounding of the cell coordinates) and probes again, at most
 // `probes` times. Returns the first t (>= the given one) where the ray may meet an active sample;
 // `occupiedUntil` (if given) receives where the ray leaves the occupied cell found there.
+// The probes form a serial chain, so the work after the table load is kept short: the exit of the
+// current cell is computed while the load is in flight, the block adds (D - 1) cells per axis.
 inline float cellSkipTo(const KernelParams& k, const CellRay& c, float t, int probes, float* occupiedUntil = nullptr)
 {
     const float span = float(k.cellN);
@@ -360,14 +363,12 @@ inline float cellSkipTo(const KernelParams& k, const CellRay& c, float t, int pr
             return t;
         const int ix = int(f[0]), iy = int(f[1]), iz = int(f[2]);
         const int D = k.cellDistance[(size_t(iz) * n + size_t(iy)) * n + size_t(ix)];
-        // Exit of the block [i - (D - 1), i + D) of cells along each axis (the cell itself at D = 0).
+        // Exit of the cell itself along each axis, then of the block [i - (D - 1), i + D).
+        const float cellExit[3] = {(float(ix) + c.up[0] - f[0]) * c.invG[0], (float(iy) + c.up[1] - f[1]) * c.invG[1],
+                                   (float(iz) + c.up[2] - f[2]) * c.invG[2]};
         const float m = float(std::max(D - 1, 0));
-        const int idx[3] = {ix, iy, iz};
-        float exit = INFINITY;
-        for (int a = 0; a < 3; ++a) {
-            const float bound = float(idx[a]) + (c.up[a] ? m + 1.0f : -m);
-            exit = std::min(exit, (bound - f[a]) * c.invG[a]);
-        }
+        const float exit = std::min({cellExit[0] + m * c.absInvG[0], cellExit[1] + m * c.absInvG[1],
+                                     cellExit[2] + m * c.absInvG[2]});
         if (D == 0) {
             if (occupiedUntil)
                 *occupiedUntil = t + exit;
