@@ -198,6 +198,8 @@ BENCHMARK(BM_Level0Pass512)->Unit(benchmark::kMillisecond);
 // One full-resolution pass at the peers' image size (bench/peers/run_peers.sh).
 void BM_Level0Pass1024(benchmark::State& state) { runPasses(state, 0, params(1024), 1); }
 BENCHMARK(BM_Level0Pass1024)->Unit(benchmark::kMillisecond);
+void BM_Level2Pass1024(benchmark::State& state) { runPasses(state, 2, params(1024), 1); }
+BENCHMARK(BM_Level2Pass1024)->Unit(benchmark::kMillisecond);
 void BM_Level1Pass512(benchmark::State& state) { runPasses(state, 1, params(512), 1); }
 BENCHMARK(BM_Level1Pass512)->Unit(benchmark::kMillisecond);
 void BM_Level2Pass512(benchmark::State& state) { runPasses(state, 2, params(512), 1); }
