@@ -10,6 +10,7 @@
 //   jumped%            share of chunks passed over by interval skipping without locating a sample
 // Targets (2 cores): interactive 512² pass <= 50 ms, converged 1024² full resolution <= 3 s,
 // >= 100 M samples/s/thread, brushing 4 variables (<= 20 % selected) not slower than no brushing.
+#include "data/bricks.h"
 #include "data/dataset.h"
 #include "data/preprocess.h"
 #include "data/selection.h"
@@ -244,6 +245,18 @@ void BM_SetParams(benchmark::State& state)
     state.counters["level"] = level;
 }
 BENCHMARK(BM_SetParams)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
+// What a new step costs the first renderer at level 0: the bounds of its 4-point activity bricks
+// are derived from the values once per volume (StepVolume::brickBounds(var, 4)).
+void BM_DeriveBrickBounds4(benchmark::State& state)
+{
+    const StepVolume& v = *data().levels[0];
+    const BrickLayout layout = BrickLayout::forGrid(v.grid(), 4);
+    std::vector<float> bounds(2 * layout.brickCount());
+    for (auto _ : state)
+        computeBrickBounds(v.grid(), layout, {v.values(size_t(var("temperature anomaly"))), v.grid().cellCount()}, bounds);
+}
+BENCHMARK(BM_DeriveBrickBounds4)->Unit(benchmark::kMillisecond);
 
 // Converged 1024² at full resolution: passes are accumulated until the image stops changing, measured
 // two ways on the 8-bit scale: the mean absolute change of the accumulated RGBA between successive

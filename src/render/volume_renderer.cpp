@@ -598,16 +598,23 @@ InteractiveChoice chooseInteractive(const std::vector<std::shared_ptr<const Step
     InteractiveChoice c{coarsest, params.width, params.height, 0};
     if (!(samplesPerSecond > 0))
         return c;
-    const double budget = kInteractiveBudgetShare * budgetSeconds;
-    for (int level = 0; level <= coarsest; ++level) {
-        VolumeRenderer probe(levels[size_t(level)]);
-        probe.setParams(params);
+    std::vector<std::unique_ptr<VolumeRenderer>> renderers(levels.size());
+    const int level = finestLevelWithin(
+        int(levels.size()), kInteractiveBudgetShare * budgetSeconds,
+        [&](int l) {
+            auto& r = renderers[size_t(l)];
+            if (!r)
+                r = std::make_unique<VolumeRenderer>(levels[size_t(l)]);
+            r->setParams(params);
+            return r->estimateSamplesPerPass() / samplesPerSecond;
+        },
+        &c.estimatedSeconds);
+    if (level >= 0) {
         c.level = level;
-        c.estimatedSeconds = probe.estimateSamplesPerPass() / samplesPerSecond;
-        if (c.estimatedSeconds <= budget)
-            return c;
+        return c;
     }
     // Even the coarsest level is too slow: fewer pixels (the cost is proportional to them).
+    const double budget = kInteractiveBudgetShare * budgetSeconds;
     const double scale = std::clamp(std::sqrt(budget / c.estimatedSeconds), 0.25, 1.0);
     c.width = std::max(1, int(std::lround(params.width * scale)));
     c.height = std::max(1, int(std::lround(params.height * scale)));
@@ -620,13 +627,12 @@ int chooseLevelForBudget(const std::vector<std::shared_ptr<const StepVolume>>& l
 {
     if (levels.empty())
         fail("level choice: no levels");
-    for (size_t level = 0; level < levels.size(); ++level) {
-        VolumeRenderer probe(levels[level]);
+    const int level = finestLevelWithin(int(levels.size()), budgetSeconds, [&](int l) {
+        VolumeRenderer probe(levels[size_t(l)]);
         probe.setParams(params);
-        if (probe.estimateSamplesPerPass() / samplesPerSecond <= budgetSeconds)
-            return int(level);
-    }
-    return int(levels.size()) - 1;
+        return probe.estimateSamplesPerPass() / samplesPerSecond;
+    });
+    return level >= 0 ? level : int(levels.size()) - 1;
 }
 
 }  // namespace raypc::render

@@ -167,6 +167,30 @@ private:
     std::unique_ptr<Impl> m_impl;
 };
 
+// The finest of `levelCount` levels (0 finest) whose predicted pass time `secondsAt(level)` fits
+// `budgetSeconds`, or -1 if even the coarsest does not. Levels are tried from the coarsest towards
+// finer ones and the search stops at the first that misses (pass time grows with resolution), so the
+// finer levels are not even prepared when the coarse ones are all that fit — during playback that
+// spares loading and preparing the full-resolution step. `seconds` (optional) receives the prediction
+// for the level returned, or for the coarsest level when none fits.
+template <class SecondsAt>
+int finestLevelWithin(int levelCount, double budgetSeconds, SecondsAt&& secondsAt, double* seconds = nullptr)
+{
+    int fits = -1;
+    for (int level = levelCount - 1; level >= 0; --level) {
+        const double s = secondsAt(level);
+        if (s > budgetSeconds) {
+            if (fits < 0 && seconds)
+                *seconds = s;
+            break;
+        }
+        fits = level;
+        if (seconds)
+            *seconds = s;
+    }
+    return fits;
+}
+
 // The finest level whose estimated pass time fits `budgetSeconds`, given a throughput in samples
 // per second (all threads). `levels[i]` are the volumes of level i (finest first); falls back to the
 // coarsest.

@@ -122,14 +122,15 @@ int RenderSession::chooseInteractiveLevel(int step, const RenderParams& params, 
     double rate = m_context.samplesPerSecond.load();
     if (rate <= 0)
         rate = 100e6 * tbb::this_task_arena::max_concurrency();  // until a pass has been measured
+    // Coarse to fine (render::finestLevelWithin): while only the coarse levels fit, the finer ones of
+    // a new step are neither loaded nor prepared.
     const int levels = int(m_context.dataset->levels().size());
-    for (int level = 0; level < levels; ++level) {
-        VolumeRenderer& r = rendererFor(step, level);
+    const int level = finestLevelWithin(levels, kInteractiveBudgetShare * budgetSeconds, [&](int l) {
+        VolumeRenderer& r = rendererFor(step, l);
         r.setParams(params);
-        if (r.estimateSamplesPerPass() / rate <= budgetSeconds)
-            return level;
-    }
-    return levels - 1;
+        return r.estimateSamplesPerPass() / rate;
+    });
+    return level >= 0 ? level : levels - 1;
 }
 
 std::shared_ptr<const PathlineScene> RenderSession::pathlinesFor(const RenderState& state)
@@ -174,7 +175,8 @@ void RenderSession::render(const Request& request)
         const double rate = m_context.samplesPerSecond.load();
         if (rate > 0) {
             const double seconds = rendererFor(step, level).estimateSamplesPerPass() / rate;
-            const int divisor = seconds <= budgetSeconds ? 1 : seconds / 4 <= budgetSeconds ? 2 : 4;
+            const double budget = kInteractiveBudgetShare * budgetSeconds;
+            const int divisor = seconds <= budget ? 1 : seconds / 4 <= budget ? 2 : 4;
             params.width = std::max(1, (params.width + divisor - 1) / divisor);
             params.height = std::max(1, (params.height + divisor - 1) / divisor);
         }
