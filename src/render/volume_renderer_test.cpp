@@ -248,6 +248,28 @@ TEST(Renderer, LevelChoiceMeetsTheBudget)
     EXPECT_EQ(chooseLevelForBudget({fine, coarse}, p, 1.0, samples / 2), 1);
 }
 
+TEST(Renderer, LevelSearchGoesFromCoarseToFineAndStopsAtTheFirstMiss)
+{
+    // Predicted seconds of levels 0 (finest) to 3.
+    const std::vector<double> seconds{0.9, 0.4, 0.2, 0.1};
+    std::vector<int> asked;
+    auto at = [&](int level) {
+        asked.push_back(level);
+        return seconds[size_t(level)];
+    };
+    double s = 0;
+    EXPECT_EQ(finestLevelWithin(4, 0.5, at, &s), 1);
+    EXPECT_EQ(asked, (std::vector<int>{3, 2, 1, 0}));
+    EXPECT_EQ(s, 0.4);
+    asked.clear();
+    EXPECT_EQ(finestLevelWithin(4, 0.05, at, &s), -1);
+    EXPECT_EQ(asked, (std::vector<int>{3}));  // the finer levels are not even prepared
+    EXPECT_EQ(s, 0.1);
+    asked.clear();
+    EXPECT_EQ(finestLevelWithin(4, 1.0, at, &s), 0);
+    EXPECT_EQ(s, 0.9);
+}
+
 TEST(Renderer, InteractiveChoiceUsesTheMeasuredRateAndShrinksTheImageWhenNeeded)
 {
     auto fine = makeVolume(makeGrid(72, 41, 144), {{"f", testing::plumeField}});
