@@ -116,12 +116,12 @@ struct KernelParams {
     // Bricks: active flags per brick (nullptr: no skipping); brick size is 1 << brickShift points.
     const int32_t* brickActive = nullptr;
     int brickShift = 3, bricksR = 1, bricksLon = 1;
-    // The Cartesian skip grid (skip_grid.h): cellN^3 cells of cellKm from cellOriginKm on every axis,
-    // per cell the Chebyshev distance in cells to the nearest cell that may hold an active sample
-    // (nullptr: not used).
+    // The Cartesian skip grid (skip_grid.h): cellN^3 cells of 1 / cellInvKm km from cellOriginKm on
+    // every axis, per cell the Chebyshev distance in cells to the nearest cell that may hold an
+    // active sample (nullptr: not used).
     const uint8_t* cellDistance = nullptr;
     int cellN = 0;
-    float cellOriginKm = 0, cellKm = 1, cellInvKm = 1, cellStepPastKm = 0;
+    float cellOriginKm = 0, cellInvKm = 1, cellStepPastKm = 0;
 
     KernelVariable colour;
     ColourTable table;
