@@ -76,6 +76,8 @@ try {
   console.log(`brush to updated frame at 512x512: interactive states (n=${inter.length}) median ${median(inter).toFixed(0)} ms; final states, first pass (n=${fin.length}) median ${median(fin).toFixed(0)} ms`);
   const arrive = r.lat.filter((l) => l.interactive).map((l) => l.firstFrameMs), onScreen = r.lat.filter((l) => l.interactive).map((l) => l.shownMs - l.firstFrameMs);
   console.log(`  interactive states: send to frame received median ${median(arrive).toFixed(0)} ms (server), received to on screen median ${median(onScreen).toFixed(0)} ms, 90th percentile ${pct(onScreen, 0.9).toFixed(0)} ms (browser)`);
+  const finArrive = r.lat.filter((l) => !l.interactive).map((l) => l.firstFrameMs), finOnScreen = r.lat.filter((l) => !l.interactive).map((l) => l.shownMs - l.firstFrameMs);
+  console.log(`  final states: send to first frame received median ${median(finArrive).toFixed(0)} ms (server), received to on screen median ${median(finOnScreen).toFixed(0)} ms (browser)`);
   console.log(`last frame: level ${r.last.level}, ${r.last.stats?.passMs?.toFixed(1)} ms/pass, ${(r.last.stats?.samplesPerSecond / 1e6).toFixed(1)} M samples/s`);
   if (screenshot) {
     await page.evaluate(() => {
