@@ -22,6 +22,9 @@ import { View3D } from './view';
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
 const kOrbitDegPerPx = 0.35;
 const kMinDistanceKm = 500, kMaxDistanceKm = 500000;
+// How long the full redraw of the parallel coordinates after a brush release waits at most for the
+// still frame it asked for (ParcoordsOptions.afterFrame).
+const kAfterFrameMs = 1000;
 
 interface Debug {
   info: Info;
@@ -44,6 +47,9 @@ interface Debug {
   sentLog: { id: number; t: number; step: number; interactive: boolean; brushes: Brush[] }[];
   frameLog: { id: number; step: number; pass: number; t: number }[];
   warpedWhileWaiting: number;
+  // Deferred work (the full line redraw after a brush release): the state it waited for, whether
+  // that state's frame was on screen when it ran (false: it ran on the timeout or was superseded).
+  afterFrames: { id: number; shownId: number; afterShown: boolean }[];
   holdFrames: boolean;
   releaseFrames(): void;
   presets: Preset[];
@@ -113,6 +119,7 @@ class App {
     });
     this.pc = new ParallelCoordinates($('parcoords'), this.axes(), {
       onBrush: (brushes, interactive) => this.onBrush(brushes, interactive),
+      afterFrame: (draw) => this.afterFrameShown(draw),
     });
     this.plPc = new ParallelCoordinates($('plParcoords'), [], {
       onBrush: (brushes, interactive) => this.onLineFilter(brushes, interactive),
@@ -142,6 +149,7 @@ class App {
       sentLog: [],
       frameLog: [],
       warpedWhileWaiting: 0,
+      afterFrames: [],
       holdFrames: false,
       releaseFrames: () => {
         this.debug.holdFrames = false;
@@ -326,6 +334,7 @@ class App {
       }
       this.drawNow(); // at once, not in the next animation frame (which may queue behind other work)
       this.updateStatus();
+      if (this.afterFrame && h.id >= this.afterFrame.id) this.runAfterFrame();
     });
     if (this.playing) this.maybeAdvance();
   }
@@ -438,6 +447,26 @@ class App {
     if (w === this.state.image.width && h === this.state.image.height) return false;
     this.state.image = { width: w, height: h };
     return true;
+  }
+
+  // Work that waits until the frame of the state sent last is on screen (or kAfterFrameMs passed).
+  private afterFrame: { id: number; run: () => void; timer: number } | null = null;
+
+  private afterFrameShown(run: () => void): void {
+    if (this.afterFrame) this.runAfterFrame(); // an older one runs now
+    const timer = window.setTimeout(() => this.runAfterFrame(), kAfterFrameMs);
+    this.afterFrame = { id: this.debug.lastSentId, run, timer };
+  }
+
+  private runAfterFrame(): void {
+    const pending = this.afterFrame;
+    if (!pending) return;
+    this.afterFrame = null;
+    clearTimeout(pending.timer);
+    const shownId = this.debug.lastShownId;
+    this.debug.afterFrames.push({ id: pending.id, shownId, afterShown: shownId >= pending.id });
+    if (this.debug.afterFrames.length > 50) this.debug.afterFrames.shift();
+    pending.run();
   }
 
   // ---- brushes, selection, sample ---------------------------------------------------------

@@ -17,6 +17,10 @@ export interface AxisInfo {
 export interface ParcoordsOptions {
   onBrush(brushes: Brush[], interactive: boolean): void;
   alpha?: number; // line opacity (default 0.06, for many lines)
+  // Runs `draw` once the 3D view shows the frame of the state onBrush just sent (or after a while):
+  // the full redraw of the lines after a brush is released waits for it, so that drawing 100 000
+  // lines does not compete with that frame for the CPU. Without it the lines are drawn at once.
+  afterFrame?(draw: () => void): void;
 }
 
 export interface ParcoordsTiming {
@@ -312,6 +316,9 @@ export class ParallelCoordinates {
     this.dragging = interactive;
     this.options.onBrush(this.brushes(), interactive);
     this.timing.lastBrushMs = performance.now() - t0;
-    if (!interactive) this.redrawBrushed(); // every line once the brush is released
+    if (interactive) return;
+    // Every line once the brush is released (after the still frame it asked for is on screen).
+    if (this.options.afterFrame) this.options.afterFrame(() => this.redrawBrushed());
+    else this.redrawBrushed();
   }
 }
