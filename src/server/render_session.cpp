@@ -46,6 +46,7 @@ RenderSession::~RenderSession()
 void RenderSession::submit(const StateMessage& message)
 {
     Request request;
+    request.received = Clock::now();
     request.id = message.id;
     request.resolved = resolveState(message.state, *m_context.dataset);  // throws: the old state stays
     const auto& st = request.resolved.state;
@@ -155,6 +156,7 @@ std::shared_ptr<const PathlineScene> RenderSession::pathlinesFor(const RenderSta
 
 void RenderSession::render(const Request& request)
 {
+    const auto renderStart = Clock::now();
     const RenderState& state = request.resolved.state;
     RenderParams params = request.resolved.params;
     const Dataset& dataset = *m_context.dataset;
@@ -208,6 +210,8 @@ void RenderSession::render(const Request& request)
         m_selectionKey = selectionKey;
     }
 
+    const double waitedMs = std::chrono::duration<double, std::milli>(renderStart - request.received).count();
+    const double preparedMs = millisecondsSince(renderStart);
     const int passes = request.interactive ? 1 : std::max(1, state.passes);
     FrameBuffer frame(params.width, params.height);
     double renderMsTotal = 0, encodeMsTotal = 0, firstPassMs = 0;
@@ -263,11 +267,11 @@ void RenderSession::render(const Request& request)
         m_sink.sendBinary(std::move(bytes));
     }
     if (done > 0)
-        spdlog::info("{}: state {} step {} level {} {}x{} {}: {}/{} passes, first {:.1f} ms, mean {:.1f} ms/pass, "
-                     "encode {:.1f} ms/frame",
+        spdlog::info("{}: state {} step {} level {} {}x{} {}: waited {:.1f} ms, prepared {:.1f} ms, {}/{} passes, "
+                     "first {:.1f} ms, mean {:.1f} ms/pass, encode {:.1f} ms/frame",
                      m_name, request.id, step, level, params.width, params.height,
-                     request.interactive ? "interactive" : "still", done, passes, firstPassMs, renderMsTotal / done,
-                     encodeMsTotal / done);
+                     request.interactive ? "interactive" : "still", waitedMs, preparedMs, done, passes, firstPassMs,
+                     renderMsTotal / done, encodeMsTotal / done);
 }
 
 }  // namespace raypc::server

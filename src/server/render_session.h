@@ -20,6 +20,7 @@
 #include "server/step_cache.h"
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <functional>
 #include <map>
@@ -68,6 +69,7 @@ private:
         int64_t id = 0;
         ResolvedState resolved;
         bool interactive = false;
+        std::chrono::steady_clock::time_point received;  // for the log: waiting and preparation time
     };
     void loop();
     void render(const Request& request);
