@@ -201,14 +201,20 @@ void RenderSession::render(const Request& request)
     const double estimatedSamples = renderer.estimateSamplesPerPass();
 
     // Exact selection statistics of the brushes, recomputed only when they or the volume change.
+    // A still state computes them after its first frame is sent (that frame says null): at full
+    // resolution they take 12-80 ms, which the first frame after a brush release should not wait for
+    // (the UI asks POST /api/selection for final states anyway).
     const std::string selectionKey =
         fmt::format("{}/{}/{}", step, level, nlohmann::json(toJson(state)["brushes"]).dump());
-    if (selectionKey != m_selectionKey) {
-        const auto filters = selectionFilters(params);
-        const SelectionStats s = selectedVolume(*renderer.volume(), filters);
+    auto updateSelection = [&] {
+        if (selectionKey == m_selectionKey)
+            return;
+        const SelectionStats s = selectedVolume(*renderer.volume(), selectionFilters(params));
         m_selection = {{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}};
         m_selectionKey = selectionKey;
-    }
+    };
+    if (request.interactive)
+        updateSelection();
 
     const double waitedMs = std::chrono::duration<double, std::milli>(renderStart - request.received).count();
     const double preparedMs = millisecondsSince(renderStart);
@@ -254,7 +260,7 @@ void RenderSession::render(const Request& request)
                                 {"samplesPerSecond", stats.seconds > 0 ? double(samples) / stats.seconds : 0.0},
                                 {"bricksSkipped", stats.bricksSkipped},
                                 {"bricksTotal", stats.bricksTotal}}},
-                              {"selection", m_selection}};
+                              {"selection", selectionKey == m_selectionKey ? m_selection : nlohmann::json()}};
         if (scene)
             header["pathlines"] = {{"lines", scene->lineCount()}, {"visible", scene->visibleCount()}};
         std::string bytes = encodeFrame(std::move(header), {reinterpret_cast<const uint8_t*>(jpeg.data()), jpeg.size()},
@@ -265,6 +271,7 @@ void RenderSession::render(const Request& request)
             firstPassMs = passMs;
         done = pass;
         m_sink.sendBinary(std::move(bytes));
+        updateSelection();
     }
     if (done > 0)
         spdlog::info("{}: state {} step {} level {} {}x{} {}: waited {:.1f} ms, prepared {:.1f} ms, {}/{} passes, "

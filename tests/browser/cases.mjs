@@ -69,10 +69,11 @@ const cases = {
       `radius brush ${min}..${max} does not match the dragged 50 %..95 % of ${radius.min}..${radius.max}`);
     const interactiveSent = await page.evaluate(() => window.__raypc.sentLog.filter((e) => e.interactive && e.brushes.length).length);
     check(interactiveSent >= 1, 'no interactive state was sent while brushing');
-    // Releasing the brush redraws every line, but only once the still frame it asked for is shown.
-    await page.waitForFunction(() => window.__raypc.afterFrames.length > 0, null, { timeout: 20000 });
-    const deferred = await page.evaluate(() => window.__raypc.afterFrames);
+    // Releasing the brush redraws every line (and asks for the exact selection and the statistics),
+    // but only once the still frame it asked for is shown.
     const finalId = await page.evaluate(() => window.__raypc.sentLog.filter((e) => !e.interactive).at(-1)?.id);
+    await page.waitForFunction((id) => window.__raypc.afterFrames.some((a) => a.id === id), finalId, { timeout: 20000 });
+    const deferred = await page.evaluate(() => window.__raypc.afterFrames);
     check(deferred.some((a) => a.id === finalId && a.afterShown),
       `the full line redraw did not wait for the frame of the released brush (state ${finalId}): ${JSON.stringify(deferred)}`);
 

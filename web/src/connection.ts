@@ -20,7 +20,7 @@ export interface FrameHeader {
   depthHeight: number;
   depthBytes: number;
   stats?: { passMs?: number; samples?: number; samplesPerSecond?: number; bricksSkipped?: number; bricksTotal?: number };
-  selection?: { fractionOfMantle: number; volumeKm3: number };
+  selection?: { fractionOfMantle: number; volumeKm3: number } | null; // null on the first frame of a new still state
 }
 export interface Frame {
   header: FrameHeader;

@@ -279,8 +279,10 @@ class App {
     this.interactivePending = false;
     this.send(false);
     history.replaceState(null, '', `${location.pathname}${location.search}#state=${encodeStateForUrl(this.state)}`);
-    this.refreshSelection();
-    this.refreshStats();
+    this.afterFrameShown(() => {
+      this.refreshSelection();
+      this.refreshStats();
+    });
     this.refreshPathlines();
   }
 
@@ -449,13 +451,16 @@ class App {
     return true;
   }
 
-  // Work that waits until the frame of the state sent last is on screen (or kAfterFrameMs passed).
-  private afterFrame: { id: number; run: () => void; timer: number } | null = null;
+  // Work that waits until the frame of the state sent last is on screen (or kAfterFrameMs passed),
+  // so that it does not compete with that frame for the CPU (the browser and the server share it):
+  // the full line redraw after a brush release, the exact selection and the statistics over time.
+  private afterFrame: { id: number; run: (() => void)[]; timer: number } | null = null;
 
   private afterFrameShown(run: () => void): void {
-    if (this.afterFrame) this.runAfterFrame(); // an older one runs now
-    const timer = window.setTimeout(() => this.runAfterFrame(), kAfterFrameMs);
-    this.afterFrame = { id: this.debug.lastSentId, run, timer };
+    const id = this.debug.lastSentId;
+    if (this.afterFrame && this.afterFrame.id !== id) this.runAfterFrame(); // older work runs now
+    if (!this.afterFrame) this.afterFrame = { id, run: [], timer: window.setTimeout(() => this.runAfterFrame(), kAfterFrameMs) };
+    this.afterFrame.run.push(run);
   }
 
   private runAfterFrame(): void {
@@ -466,7 +471,7 @@ class App {
     const shownId = this.debug.lastShownId;
     this.debug.afterFrames.push({ id: pending.id, shownId, afterShown: shownId >= pending.id });
     if (this.debug.afterFrames.length > 50) this.debug.afterFrames.shift();
-    pending.run();
+    for (const run of pending.run) run();
   }
 
   // ---- brushes, selection, sample ---------------------------------------------------------
