@@ -200,16 +200,19 @@ void RenderSession::render(const Request& request)
     renderer.setPathlines(scene);
     const double estimatedSamples = renderer.estimateSamplesPerPass();
 
-    // Exact selection statistics of the brushes, recomputed only when they or the volume change.
-    // A still state computes them after its first frame is sent (that frame says null): at full
-    // resolution they take 12-80 ms, which the first frame after a brush release should not wait for
-    // (the UI asks POST /api/selection for final states anyway).
+    // Selection statistics of the brushes (exact on a level's grid), recomputed only when they or the
+    // volume change. At full resolution they take 12-80 ms, so interactive frames take them from the
+    // coarsest level (under a millisecond), and a still state computes them on its own level after
+    // its first frame is sent (that frame says null; the UI asks POST /api/selection for final
+    // states anyway).
+    const int selectionLevel = request.interactive ? int(dataset.levels().size()) - 1 : level;
     const std::string selectionKey =
-        fmt::format("{}/{}/{}", step, level, nlohmann::json(toJson(state)["brushes"]).dump());
+        fmt::format("{}/{}/{}", step, selectionLevel, nlohmann::json(toJson(state)["brushes"]).dump());
     auto updateSelection = [&] {
         if (selectionKey == m_selectionKey)
             return;
-        const SelectionStats s = selectedVolume(*renderer.volume(), selectionFilters(params));
+        const auto volume = selectionLevel == level ? renderer.volume() : m_context.cache->get(step, selectionLevel);
+        const SelectionStats s = selectedVolume(*volume, selectionFilters(params));
         m_selection = {{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}};
         m_selectionKey = selectionKey;
     };
