@@ -408,6 +408,14 @@ inline bool chunkIsEmpty(const KernelParams& k, float tc, float tEnd, SkipState&
     return tEnd <= s.tSafe;
 }
 
+// After chunkIsEmpty: the chunk where the known-empty space (up to s.tSafe, within the segment's end
+// t1) ends, at least j + 1. That chunk is located sample by sample before the next probe.
+inline int chunkAfterEmpty(const RaySampling& rs, int j, float t1, SkipState& s)
+{
+    s.probe = false;
+    return std::max(j + 1, rs.chunkOf(std::min(s.tSafe, t1)));
+}
+
 // Sample i of a chunk starting at tc with spacing dt owns [tc + i dt, tc + (i + 1) dt) clipped to the
 // segment [t0, t1) and sits `along` into it (clamped to the segment). How many of the chunk's
 // samples have a non-empty interval (for statistics; closed form, exact up to rounding at the ends).
@@ -416,6 +424,17 @@ inline int chunkSampleCount(float tc, float dt, float t0, float t1)
     const float first = std::floor((t0 - tc) / dt);       // the sample whose interval holds t0
     const float last = std::ceil((t1 - tc) / dt) - 1.0f;  // the last sample starting before t1
     return std::max(0, int(std::clamp(last, -1.0f, float(kChunkSamples - 1)) - std::clamp(first, 0.0f, float(kChunkSamples)) + 1.0f));
+}
+
+// Statistics of the chunks j .. next - 1 passed over by a jump; chunk j starts at tc with spacing dt
+// (it may be cut by the segment [t0, t1)), the others are whole.
+inline void countJumped(TileStats& stats, int j, int next, float tc, float dt, float t0, float t1)
+{
+    const uint64_t chunks = uint64_t(next - j);
+    stats.samplesSkipped += uint64_t(chunkSampleCount(tc, dt, t0, t1)) + uint64_t(kChunkSamples) * (chunks - 1);
+    stats.chunks += chunks - 1;  // the first was counted when it was reached
+    stats.chunksSkipped += chunks;
+    stats.chunksJumped += chunks;
 }
 
 // The opaque core sphere: plain or coloured by a variable at the core radius, Lambert-shaded.

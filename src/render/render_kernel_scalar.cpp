@@ -62,14 +62,10 @@ void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, floa
         const float dt = (tn - tc) * (1.0f / float(kChunkSamples));
         ++stats.chunks;
         if (chunkIsEmpty(k, tc, tn, skip)) {
-            const int next = std::max(j + 1, rs.chunkOf(std::min(skip.tSafe, t1)));
-            stats.samplesSkipped += uint64_t(chunkSampleCount(tc, dt, t0, t1)) + uint64_t(kChunkSamples) * uint64_t(next - j - 1);
-            stats.chunks += uint64_t(next - j - 1);
-            stats.chunksSkipped += uint64_t(next - j);
-            stats.chunksJumped += uint64_t(next - j);
+            const int next = chunkAfterEmpty(rs, j, t1, skip);
+            countJumped(stats, j, next, tc, dt, t0, t1);
             j = next;
             tc = rs.chunkStart(j);
-            skip.probe = false;
             continue;
         }
         bool anyActive = false;

@@ -203,7 +203,25 @@ struct Ray {
     Vec3 o, d;
 };
 
-void MarchSimd(const KernelParams& k, const Ray& ray, float t0, float t1, float along, RayAccum& acc, TileStats& stats)
+// Lane permutations for the prefix products of compositing: shiftUp[s] moves lane i - 2^s to lane i
+// (the first 2^s lanes are replaced by the caller). Built once per tile.
+using IndicesF = decltype(hn::SetTableIndices(DF(), static_cast<const int32_t*>(nullptr)));
+struct LaneShifts {
+    IndicesF shiftUp[4];
+    LaneShifts()
+    {
+        const DF d;
+        HWY_ALIGN int32_t index[kMaxLanes];
+        for (int s = 0; s < 4; ++s) {
+            for (int i = 0; i < int(hn::Lanes(d)); ++i)
+                index[i] = std::max(i - (1 << s), 0);
+            shiftUp[s] = hn::SetTableIndices(d, index);
+        }
+    }
+};
+
+void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, float t0, float t1, float along,
+               RayAccum& acc, TileStats& stats)
 {
     const DF d;
     const DI di;
@@ -213,17 +231,6 @@ void MarchSimd(const KernelParams& k, const Ray& ray, float t0, float t1, float 
     const VF one = hn::Set(d, 1.0f);
     const VF vStop = hn::Set(d, k.stopTransmittance);
     const VF vDepth = hn::Set(d, k.depthOpacity);
-    // shiftUp[s] moves lane i - 2^s to lane i (the first 2^s lanes are replaced by the caller).
-    using IndicesF = decltype(hn::SetTableIndices(d, static_cast<const int32_t*>(nullptr)));
-    IndicesF shiftUp[4];
-    {
-        HWY_ALIGN int32_t index[kMaxLanes];
-        for (int s = 0; s < 4; ++s) {
-            for (int i = 0; i < lanes; ++i)
-                index[i] = std::max(i - (1 << s), 0);
-            shiftUp[s] = hn::SetTableIndices(d, index);
-        }
-    }
     const VF vT1 = hn::Set(d, t1);
     const VF zero = hn::Zero(d);
     const VF vAlong = hn::Set(d, along);
@@ -239,14 +246,10 @@ void MarchSimd(const KernelParams& k, const Ray& ray, float t0, float t1, float 
         ++stats.chunks;
         // Interval skipping: known-empty space is passed over in one jump to the chunk where it ends.
         if (chunkIsEmpty(k, tc, tn, skip)) {
-            const int next = std::max(j + 1, rs.chunkOf(std::min(skip.tSafe, t1)));
-            stats.samplesSkipped += uint64_t(chunkSampleCount(tc, dt, t0, t1)) + uint64_t(kChunkSamples) * uint64_t(next - j - 1);
-            stats.chunks += uint64_t(next - j - 1);
-            stats.chunksSkipped += uint64_t(next - j);
-            stats.chunksJumped += uint64_t(next - j);
+            const int next = chunkAfterEmpty(rs, j, t1, skip);
+            countJumped(stats, j, next, tc, dt, t0, t1);
             j = next;
             tc = rs.chunkStart(j);
-            skip.probe = false;  // the chunk where the empty space ends is located sample by sample
             continue;
         }
         const VF vdt = hn::Set(d, dt);
@@ -326,9 +329,9 @@ void MarchSimd(const KernelParams& k, const Ray& ray, float t0, float t1, float 
             VF after = hn::Sub(one, alpha);
             for (int s = 0; (1 << s) < lanes; ++s)
                 after = hn::Mul(after, hn::IfThenElse(hn::FirstN(d, size_t(1) << s), one,
-                                                      hn::TableLookupLanes(after, shiftUp[s])));
+                                                      hn::TableLookupLanes(after, shifts.shiftUp[s])));
             const VF vT = hn::Set(d, acc.transmittance);
-            const VF tBefore = hn::Mul(vT, hn::IfThenElse(hn::FirstN(d, 1), one, hn::TableLookupLanes(after, shiftUp[0])));
+            const VF tBefore = hn::Mul(vT, hn::IfThenElse(hn::FirstN(d, 1), one, hn::TableLookupLanes(after, shifts.shiftUp[0])));
             const VF tAfter = hn::Mul(vT, after);
             const MF live = hn::Gt(tBefore, vStop);
             const VF w = hn::IfThenElseZero(live, hn::Mul(tBefore, alpha));
@@ -354,9 +357,10 @@ void MarchSimd(const KernelParams& k, const Ray& ray, float t0, float t1, float 
 
 void RenderTile(const KernelParams& k, Tile tile, PixelOut* out, TileStats& stats)
 {
+    const LaneShifts shifts;
     renderTileWith(k, tile, out, stats,
                    [&](Vec3 o, Vec3 dir, float t0, float t1, float along, RayAccum& acc, TileStats& st) {
-                       MarchSimd(k, Ray{o, dir}, t0, t1, along, acc, st);
+                       MarchSimd(k, shifts, Ray{o, dir}, t0, t1, along, acc, st);
                    });
 }
 

@@ -562,8 +562,7 @@ double VolumeRenderer::estimateSamplesPerPass() const
                         break;
                     if (kernel::chunkIsEmpty(k, tc, tn, skip)) {
                         total += 2;
-                        c = std::max(c + 1, rs.chunkOf(std::min(skip.tSafe, t1)));
-                        skip.probe = false;
+                        c = kernel::chunkAfterEmpty(rs, c, t1, skip);
                         continue;
                     }
                     const Vec3 mid = o + d * std::clamp(0.5f * (tc + tn), t0, t1);
