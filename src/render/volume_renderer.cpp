@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <numeric>
 
 namespace raypc::render {
@@ -259,6 +260,7 @@ struct VolumeRenderer::Impl {
     std::vector<std::vector<float>> capMeans;  // per variable: 2 * nR
     float drKm = 1, dAngleRad = 0.01f;
     BrickLayout activity;  // the bricks skipping decides on (activityBrickSize)
+    std::map<Coordinate, std::vector<float>> coordinateBounds;  // coordinateBrickBounds, when first brushed
     int brickShift = 3;
 
     // Baked per setParams (restart class).
@@ -384,7 +386,10 @@ void VolumeRenderer::setParams(const RenderParams& p)
     };
     for (const BrushRange& b : p.brushes) {
         if (b.coordinate) {
-            const std::vector<float> bounds = coordinateBrickBounds(g, bl, *b.coordinate);
+            // Per renderer (they depend on the grid only): 8.7 ms for x at level 0 with 4-point bricks.
+            std::vector<float>& bounds = im.coordinateBounds[*b.coordinate];
+            if (bounds.empty())
+                bounds = coordinateBrickBounds(g, bl, *b.coordinate);
             excludeOutside(bounds.data(), b.min, b.max);
         } else {
             excludeOutside(boundsOf(b.variable), b.min, b.max);
