@@ -7,7 +7,7 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${1:-$root/build}
 work=${2:-${TMPDIR:-/tmp}/raypc-bench-full}
-raypc=$build/src/app/raypc
+raypc=$build/raypc
 [[ -x $raypc ]] || { echo "no $raypc: build first (scripts/build.sh)" >&2; exit 1; }
 command -v /usr/bin/time >/dev/null || { echo "needs /usr/bin/time (Debian package 'time')" >&2; exit 1; }
 

@@ -4,7 +4,7 @@
 # The demo dataset is made by scripts/demo.sh (or `raypc demo --no-serve`).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-raypc=${RAYPC:-${RAYPC_BUILD_DIR:-$root/build}/src/app/raypc}
+raypc=${RAYPC:-${RAYPC_BUILD_DIR:-$root/build}/raypc}
 dataset=${1:-${RAYPC_DEMO_DIR:-$root/demo-data}/dataset}
 size=${2:-800x600}
 [[ -x $raypc ]] || { echo "make-figures: no $raypc; build first (scripts/build.sh)" >&2; exit 1; }

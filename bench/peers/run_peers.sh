@@ -21,8 +21,7 @@ n=${3:-256}
 converged=${4:-4}
 work=${WORK:-/tmp/raypc-peers}
 frames=${FRAMES:-5}
-raypc=$build/src/app/raypc
-[[ -x $raypc ]] || raypc=$build/raypc
+raypc=$build/raypc
 [[ -x $raypc ]] || { echo "no raypc in $build: build it first (cmake --build $build --target raypc)" >&2; exit 1; }
 
 # Peers: ParaView 5.11 from Debian (paraview, python3-paraview) and xvfb for an X display.

@@ -1,55 +1,19 @@
 // raypc serve DATASET [--port 8080] [--host 127.0.0.1] [--assets DIR] [--examples DIR]: the browser UI and the
 // protocol of docs/protocol.md.
 #include "app/command.h"
-#include "server/dataset_api.h"
-#include "server/server.h"
-
-#include <fmt/format.h>
-#include <spdlog/spdlog.h>
-
-#include <cstdio>
+#include "app/serve_setup.h"
 
 namespace raypc::app {
 namespace {
 
-struct ServeArgs {
-    std::string dataset, host = "127.0.0.1", assets, examples;
-    int port = 8080;
-};
-
 const CommandRegistration kRegistration(
     "serve", "Serve a dataset to the browser UI (HTTP + WebSocket, docs/protocol.md)",
     [](CLI::App& cmd) {
-        auto args = std::make_shared<ServeArgs>();
-        cmd.add_option("dataset", args->dataset, "Preprocessed dataset directory (raypc preprocess)")->required();
-        cmd.add_option("--port", args->port, "TCP port; 0 picks a free one (printed at start)")
-            ->capture_default_str()
-            ->check(CLI::Range(0, 65535));
-        cmd.add_option("--host", args->host,
-                       "Address to listen on; anything but loopback requires the access token printed at start")
-            ->capture_default_str();
-        cmd.add_option("--assets", args->assets, "Directory of the built UI (default: $RAYPC_ASSETS, web/dist, ...)");
-        cmd.add_option("--examples", args->examples,
-                       "Directory of example states offered as presets (default: $RAYPC_EXAMPLES, the source tree's examples/)");
-        cmd.callback([args] {
-            server::ServerOptions options;
-            options.dataset = args->dataset;
-            options.host = args->host;
-            options.port = uint16_t(args->port);
-            options.assets = server::findAssetDir(args->assets.empty() ? std::nullopt
-                                                                       : std::optional<std::filesystem::path>(args->assets));
-            options.examples = server::findExamplesDir(
-                args->examples.empty() ? std::nullopt : std::optional<std::filesystem::path>(args->examples));
-            server::Server srv(options);
-            if (options.assets)
-                spdlog::info("serving the UI from {}", options.assets->string());
-            else
-                spdlog::warn("the browser UI is not built (no web/dist found); serving a placeholder page and the API");
-            // One parseable line (tests and scripts read the port and token from it).
-            fmt::print("raypc: serving {}\n", srv.url());
-            std::fflush(stdout);
-            srv.run();
-        });
+        auto dataset = std::make_shared<std::string>();
+        auto flags = std::make_shared<ServeFlags>();
+        cmd.add_option("dataset", *dataset, "Preprocessed dataset directory (raypc preprocess)")->required();
+        flags->add(cmd);
+        cmd.callback([dataset, flags] { serveDataset(*dataset, *flags); });
     },
     70);
 

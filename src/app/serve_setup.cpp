@@ -1,0 +1,53 @@
+#include "app/serve_setup.h"
+
+#include "server/dataset_api.h"
+#include "server/server.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <optional>
+
+namespace raypc::app {
+
+namespace {
+std::optional<std::filesystem::path> given(const std::string& text)
+{
+    return text.empty() ? std::nullopt : std::optional<std::filesystem::path>(text);
+}
+}  // namespace
+
+void ServeFlags::add(CLI::App& cmd)
+{
+    cmd.add_option("--port", port, "TCP port; 0 picks a free one (printed at start)")
+        ->capture_default_str()
+        ->check(CLI::Range(0, 65535));
+    cmd.add_option("--host", host, "Address to listen on; anything but loopback requires the access token printed at start")
+        ->capture_default_str();
+    cmd.add_option("--assets", assets, "Directory of the built UI (default: $RAYPC_ASSETS, web/dist, ...)");
+    cmd.add_option("--examples", examples,
+                   "Directory of example states offered as presets (default: $RAYPC_EXAMPLES, the source tree's examples/)");
+}
+
+void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
+{
+    server::ServerOptions options;
+    options.dataset = dataset;
+    options.host = flags.host;
+    options.port = uint16_t(flags.port);
+    options.assets = server::findAssetDir(given(flags.assets));
+    options.examples = server::findExamplesDir(given(flags.examples));
+    server::Server srv(options);
+    if (options.assets)
+        spdlog::info("serving the UI from {}", options.assets->string());
+    else
+        spdlog::warn("the browser UI is not built (no web/dist found); serving a placeholder page and the API");
+    if (options.examples)
+        spdlog::info("presets from {}", options.examples->string());
+    fmt::print("raypc: serving {}\n", srv.url());
+    std::fflush(stdout);
+    srv.run();
+}
+
+}  // namespace raypc::app
