@@ -317,19 +317,16 @@ BENCHMARK(BM_Converged1024Fixed8)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 // Brushing four variables against no brushing; the selected share of the mantle is computed exactly
 // (selectedVolume over dual cells) and printed as counter selected%.
-std::vector<BrushRange> fourBrushes()
+std::vector<RangeFilter> fourBrushes()
 {
     return {{var("temperature"), std::nullopt, 1800, 4000},
             {var("thermal conductivity"), std::nullopt, 0, 100},
             {var("vx"), std::nullopt, -1.0f, 1.0f},
             {var("temperature anomaly"), std::nullopt, 50, 1000}};
 }
-double selectedPercent(const std::vector<BrushRange>& brushes)
+double selectedPercent(const std::vector<RangeFilter>& brushes)
 {
-    std::vector<RangeFilter> filters;
-    for (const BrushRange& b : brushes)
-        filters.push_back({b.variable, b.coordinate, b.min, b.max});
-    return 100.0 * selectedVolume(*data().levels[0], filters).fractionOfMantle;
+    return 100.0 * selectedVolume(*data().levels[0], brushes).fractionOfMantle;
 }
 void BM_Brush4Pass512(benchmark::State& state)
 {

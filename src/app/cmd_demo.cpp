@@ -1,13 +1,12 @@
 // raypc demo: make the built-in demo data set if missing, preprocess it, render a picture of it
 // (<dir>/demo.png) and serve it to the browser UI (unless --no-serve).
 #include "app/command.h"
+#include "app/serve_setup.h"
 #include "core/error.h"
 #include "data/preprocess.h"
 #include "data/synth.h"
 #include "render/image_io.h"
-#include "render/volume_renderer.h"
-#include "server/render_support.h"
-#include "server/server.h"
+#include "render/state_renderer.h"
 
 #include <fmt/format.h>
 #include <cstdio>
@@ -21,25 +20,24 @@ namespace fs = std::filesystem;
 struct DemoArgs {
     std::string dir = "demo-data";
     bool noServe = false;
-    int port = 8080;
+    ServeFlags serve;
 };
 
-// The picture of the demo: the server's default state (temperature anomaly, blue-white-red,
-// opacity on the hot and cold tails) at full resolution.
-void renderDemoPicture(const Dataset& dataset, int step, const fs::path& output)
+// The picture of the demo: the UI's first view (render::defaultState: temperature anomaly,
+// blue-white-red, opacity on the hot and cold tails) at full resolution, converged.
+void renderDemoPicture(std::shared_ptr<const Dataset> dataset, int step, const fs::path& output)
 {
-    render::RenderState state = server::defaultState(dataset);
+    render::RenderState state = render::defaultState(*dataset);
     state.step = step;
-    const render::RenderParams params = render::resolveParams(state, render::catalogOf(dataset));
-    render::VolumeRenderer renderer(dataset.load(step, 0));
-    renderer.setParams(params);
-    render::FrameBuffer frame(params.width, params.height);
+    const render::ResolvedState resolved = render::resolveState(state, *dataset);
+    render::StateRenderer renderer(dataset);
+    const auto still = renderer.renderStill(resolved);
     double seconds = 0;
-    for (int pass = 0; pass < state.passes; ++pass)
-        seconds += renderer.renderPass(frame).seconds;
-    render::writePng(output, {params.width, params.height, frame.resolveRgba8(state.background)});
-    fmt::print("demo picture {}: step {}, {}x{}, {} passes in {:.2f} s\n", output.string(), step, params.width,
-               params.height, state.passes, seconds);
+    for (const auto& pass : still.passes)
+        seconds += pass.seconds;
+    render::writePng(output, {still.frame.width(), still.frame.height(), still.frame.resolveRgba8(state.background)});
+    fmt::print("demo picture {}: step {}, {}x{}, {} passes in {:.2f} s\n", output.string(), step, still.frame.width(),
+               still.frame.height(), still.frame.passes(), seconds);
 }
 
 // True when `ncDir` holds all of the demo's snapshot files (each was written atomically).
@@ -57,9 +55,7 @@ const CommandRegistration kRegistration(
         auto args = std::make_shared<DemoArgs>();
         cmd.add_option("--dir", args->dir, "Where the demo's snapshots and dataset live")->capture_default_str();
         cmd.add_flag("--no-serve", args->noServe, "Only make the data and the picture, then exit");
-        cmd.add_option("--port", args->port, "Port to serve on (0: a free one)")
-            ->capture_default_str()
-            ->check(CLI::Range(0, 65535));
+        args->serve.add(cmd);
         cmd.callback([args] {
             const fs::path root = args->dir;
             const fs::path ncDir = root / "snapshots", datasetDir = root / "dataset";
@@ -81,17 +77,10 @@ const CommandRegistration kRegistration(
             for (const auto& v : dataset->variables())
                 fmt::print("  {:<42} [{:<7}] {:>11.4g} .. {:<11.4g}\n", v.name, v.units, v.global.range.min,
                            v.global.range.max);
-            renderDemoPicture(*dataset, int(dataset->steps().size()) / 2, root / "demo.png");
+            renderDemoPicture(dataset, int(dataset->steps().size()) / 2, root / "demo.png");
             if (args->noServe)
                 return;
-            server::ServerOptions serveOptions;
-            serveOptions.dataset = datasetDir;
-            serveOptions.port = uint16_t(args->port);
-            serveOptions.assets = server::findAssetDir(std::nullopt);
-            server::Server srv(serveOptions);
-            fmt::print("raypc: serving {}\n", srv.url());
-            std::fflush(stdout);
-            srv.run();
+            serveDataset(datasetDir, args->serve);
         });
     },
     5);

@@ -9,11 +9,10 @@
 #include "render/image_io.h"
 #include "render/pathline_scene.h"
 #include "render/render_state.h"
-#include "render/volume_renderer.h"
+#include "render/state_renderer.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
-#include <tbb/task_arena.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -94,8 +93,11 @@ void run(const RenderArgs& args)
         std::erase_if(state.brushes, [&](const BrushSpec& s) { return s.name == b.name; });
         state.brushes.push_back(b);
     }
+    // Scripted figures are deterministic: the state's level, else level 0; only --lod auto lets the
+    // machine's speed choose (the finest level within the state's time budget).
+    const bool lodAuto = args.lod == "auto";
     if (!args.lod.empty()) {
-        if (args.lod == "auto") {
+        if (lodAuto) {
             state.level.reset();
         } else {
             int level = -1;
@@ -126,56 +128,28 @@ void run(const RenderArgs& args)
         state.pathlines.visible = true;
     }
 
-    const RenderParams params = resolveParams(state, catalogOf(*dataset));
-
     // Steps: one index/time, or A:B for a numbered sequence.
     const bool sequence = args.time.find(':') != std::string::npos;
     const auto [first, last] = parseStepRange(*dataset, args.time);
-    if (!sequence)
-        state.step = first;
+    state.step = first;
+    ResolvedState resolved = resolveState(state, *dataset);
+    const RenderParams& params = resolved.params;
 
+    StateRenderer renderer(dataset);
+    LevelPolicy policy;  // level 0 unless the state names one
+    if (lodAuto && !state.level)
+        policy.samplesPerSecond = renderer.measureSamplesPerSecond(first, params);
     nlohmann::json statsJson = nlohmann::json::array();
-    double measuredRate = 0;  // estimated samples per second, all threads (VolumeRenderer::measuredSamplesPerSecond)
     for (int step = first; step <= last; ++step) {
-        int level = state.level.value_or(-1);
-        if (level < 0) {
-            // Interactive choice: the finest level whose pass fits the time budget at the throughput
-            // measured on this machine, now: one calibration pass at the coarsest level (cheap).
-            std::vector<std::shared_ptr<const StepVolume>> levels;
-            for (int l = 0; l < int(dataset->levels().size()); ++l)
-                levels.push_back(dataset->load(step, l));
-            if (measuredRate <= 0) {
-                VolumeRenderer calibration(levels.back());
-                calibration.setParams(params);
-                FrameBuffer scratch(params.width, params.height);
-                calibration.renderPass(scratch);  // the first pass also starts the worker threads
-                const PassStats s = calibration.renderPass(scratch);
-                measuredRate = s.seconds > 0 ? calibration.estimateSamplesPerPass() / s.seconds : 0;
-            }
-            level = chooseInteractive(levels, params, state.timeBudgetMs / 1000.0, measuredRate).level;
-        }
-        VolumeRenderer renderer(dataset->load(step, level));
-        renderer.setParams(params);
-        size_t pathlinesShown = 0;
-        if (state.pathlines.visible) {
-            // Reload class: the window of line sets for this step, one BVH; then the state's mask.
-            std::vector<PathlineSet> sets;
-            try {
-                sets = loadPathlineWindow(args.dataset, step, state.pathlines.window);
-            } catch (const Error& e) {
-                fail("pathlines: {}", e.what());
-            }
-            auto scene = std::make_shared<PathlineScene>(std::move(sets), state.pathlines.radiusKm);
-            RenderState stepState = state;
-            stepState.step = step;
-            pathlinesShown = scene->applyState(stepState);
-            renderer.setPathlines(std::move(scene));
-        }
+        resolved.state.step = step;
+        const StateRenderer::Prepared prepared = renderer.prepare(resolved, policy);
+        const int level = prepared.level;
+        const size_t pathlinesShown = prepared.scene ? prepared.scene->visibleCount() : 0;
         FrameBuffer frame(params.width, params.height);
         nlohmann::json passes = nlohmann::json::array();
         PassStats total;
         for (int pass = 0; pass < state.passes; ++pass) {
-            const PassStats s = renderer.renderPass(frame);
+            const PassStats s = prepared.renderer->renderPass(frame);
             passes.push_back({{"seconds", s.seconds},
                               {"samples", s.samples},
                               {"samplesSkipped", s.samplesSkipped},

@@ -36,8 +36,7 @@ void run(const StatsArgs& args)
         ranges.push_back({r.name, r.min, r.max});
     }
     const auto filters = resolveRangeFilters(*dataset, ranges, args.statePath.empty() ? "--range" : "brushes");
-    if (args.level < 0 || args.level >= static_cast<int>(dataset->levels().size()))
-        fail("--lod {}: expected a level in 0..{}", args.level, dataset->levels().size() - 1);
+    dataset->checkLevel(args.level, "--lod");
     const auto [first, last] = args.time.empty() ? std::pair<int, int>(0, static_cast<int>(dataset->steps().size()) - 1)
                                                  : parseStepRange(*dataset, args.time);
 
@@ -48,10 +47,14 @@ void run(const StatsArgs& args)
     std::optional<Progress> progress;
     if (!args.quiet)
         progress.emplace("stats", last - first + 1, "steps");
-    for (int step = first; step <= last; ++step) {
-        const auto volume = dataset->load(step, args.level);
-        const SelectionStats s = selectedVolume(*volume, filters);
-        const double t = dataset->steps()[step].timeMyr;
+    const auto selections = selectionOverTime(*dataset, filters, args.level, first, last, {}, [&] {
+        if (progress)
+            progress->advance();
+    });
+    for (const StepSelection& sel : selections) {
+        const SelectionStats& s = sel.stats;
+        const int step = sel.step;
+        const double t = sel.timeMyr;
         fmt::format_to(std::back_inserter(csv), "{},{},{:.6e},{:.6f}\n", step, t, s.volumeKm3, 100.0 * s.fractionOfMantle);
         for (size_t iR = 0; iR < grid.nR(); ++iR) {
             const double shell = s.shellVolumeByRadiusKm3[iR];
@@ -59,8 +62,6 @@ void run(const StatsArgs& args)
                            kSurfaceRadiusKm - grid.rKm[iR], s.volumeByRadiusKm3[iR], shell,
                            100.0 * s.volumeByRadiusKm3[iR] / shell);
         }
-        if (progress)
-            progress->advance();
     }
     if (progress)
         progress->finish();

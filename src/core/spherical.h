@@ -6,6 +6,8 @@
 // Cartesian positions are in km.
 #pragma once
 
+#include "core/vec3.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -19,10 +21,6 @@ inline constexpr double kMpsToCmPerYr = 3.15576e9;    // 1 m/s = 3.15576e9 cm/yr
 
 inline constexpr double degToRad(double degrees) { return degrees * (std::numbers::pi / 180.0); }
 inline constexpr double radToDeg(double radians) { return radians * (180.0 / std::numbers::pi); }
-
-struct Vec3d {
-    double x = 0, y = 0, z = 0;
-};
 
 inline Vec3d sphericalToCartesianKm(double latDeg, double lonDeg, double rKm)
 {

@@ -63,24 +63,6 @@ VariableStats statsFromJson(const nlohmann::json& j)
 
 }  // namespace format
 
-const std::vector<CoordinateInfo>& coordinateInfos()
-{
-    static const std::vector<CoordinateInfo> infos = {
-        {Coordinate::X, "x", "km"},           {Coordinate::Y, "y", "km"},
-        {Coordinate::Z, "z", "km"},           {Coordinate::Lat, "lat", "degrees_north"},
-        {Coordinate::Lon, "lon", "degrees_east"}, {Coordinate::Radius, "radius", "km"},
-        {Coordinate::Depth, "depth", "km"}};
-    return infos;
-}
-
-std::optional<Coordinate> findCoordinate(const std::string& name)
-{
-    for (const auto& c : coordinateInfos())
-        if (c.name == name)
-            return c.id;
-    return std::nullopt;
-}
-
 std::shared_ptr<StepVolume> StepVolume::fromSnapshot(const Snapshot& snapshot, uint32_t brickSize)
 {
     auto volume = std::make_shared<StepVolume>();
@@ -194,6 +176,18 @@ int Dataset::variableIndex(const std::string& name) const
         if (m_variables[i].name == name)
             return static_cast<int>(i);
     return -1;
+}
+
+void Dataset::checkStep(int step, std::string_view what) const
+{
+    if (step < 0 || step >= static_cast<int>(m_steps.size()))
+        fail("{}: {} out of range 0..{}", what, step, m_steps.size() - 1);
+}
+
+void Dataset::checkLevel(int level, std::string_view what) const
+{
+    if (level < 0 || level >= static_cast<int>(m_levels.size()))
+        fail("{}: {} out of range 0..{}", what, level, m_levels.size() - 1);
 }
 
 std::shared_ptr<const StepVolume> Dataset::load(int step, int level) const

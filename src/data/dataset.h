@@ -10,6 +10,7 @@
 #pragma once
 
 #include "core/mapped_file.h"
+#include "data/coordinates.h"
 #include "data/grid.h"
 #include "data/snapshot.h"
 
@@ -19,6 +20,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace raypc {
@@ -57,16 +59,6 @@ struct LevelInfo {
     BrickLayout bricks;
 };
 
-// Coordinates that can be brushed and plotted like variables.
-enum class Coordinate { X, Y, Z, Lat, Lon, Radius, Depth };
-struct CoordinateInfo {
-    Coordinate id;
-    std::string name;   // "x", "y", "z", "lat", "lon", "radius", "depth"
-    std::string units;  // "km" or "degrees_north"/"degrees_east"
-};
-const std::vector<CoordinateInfo>& coordinateInfos();
-// The coordinate named `name`, if any.
-std::optional<Coordinate> findCoordinate(const std::string& name);
 
 // One step at one level of detail: every variable's values plus per-brick bounds.
 class StepVolume {
@@ -123,6 +115,11 @@ public:
     const std::vector<StepInfo>& steps() const { return m_steps; }
     const std::vector<LevelInfo>& levels() const { return m_levels; }
     double dtMyr() const { return m_dtMyr; }
+
+    // The range checks of every request that names a step or a level (CLI options, state documents,
+    // HTTP parameters): throw raypc::Error "<what>: 300 out of range 0..11" unless valid.
+    void checkStep(int step, std::string_view what = "step") const;
+    void checkLevel(int level, std::string_view what = "level") const;
 
     // Maps step `step` at level `level`. Throws raypc::Error if out of range or unreadable.
     std::shared_ptr<const StepVolume> load(int step, int level) const;

@@ -79,6 +79,24 @@ std::vector<double> SphericalGrid::lonEdgesDeg() const
     return e;
 }
 
+std::vector<double> SphericalGrid::lonWidthsDeg() const
+{
+    const auto e = lonEdgesDeg();
+    std::vector<double> w(nLon());
+    for (size_t i = 0; i < nLon(); ++i)
+        w[i] = e[i + 1] - e[i];
+    return w;
+}
+
+double SphericalGrid::ringMean(const float* values, size_t iLat, size_t iR, const std::vector<double>& lonWidthsDeg) const
+{
+    const float* row = values + index(iLat, iR, 0);
+    double sum = 0;
+    for (size_t i = 0; i < nLon(); ++i)
+        sum += double(row[i]) * lonWidthsDeg[i];
+    return sum / 360.0;
+}
+
 SphericalGrid::VolumeFactors SphericalGrid::volumeFactors() const
 {
     VolumeFactors f;

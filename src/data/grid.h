@@ -37,6 +37,14 @@ struct SphericalGrid {
     std::vector<double> latEdgesDeg() const;
     std::vector<double> rEdgesKm() const;
     std::vector<double> lonEdgesDeg() const;  // first edge may be negative, last may exceed 360
+    // Width of each lon column's dual cell in degrees (differences of lonEdgesDeg; they sum to 360).
+    std::vector<double> lonWidthsDeg() const;
+
+    // The mean of row iLat at radius iR over the whole ring, each point weighted by its lon width
+    // (`lonWidthsDeg`, passed so that callers compute it once): the value every longitude meets at
+    // the pole in the cap between the outermost row and its pole. Probe, pathlines and the ray
+    // caster all blend towards it.
+    double ringMean(const float* values, size_t iLat, size_t iR, const std::vector<double>& lonWidthsDeg) const;
 
     // Volume of the dual cell of every grid point, in km³, as three separable factors:
     // volume(iLat, iR, iLon) = latFactor[iLat] * rFactor[iR] * lonFactor[iLon], with

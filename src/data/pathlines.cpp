@@ -19,10 +19,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-Vec3d operator+(const Vec3d& a, const Vec3d& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-Vec3d operator-(const Vec3d& a, const Vec3d& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Vec3d operator*(double s, const Vec3d& a) { return {s * a.x, s * a.y, s * a.z}; }
-double norm(const Vec3d& a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
 
 // Dormand–Prince 5(4) tableau (Hairer, Nørsett & Wanner, Table II.5.2).
 constexpr double kC[7] = {0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1, 1};
@@ -189,7 +185,7 @@ TracedPathline PathlineTracer::trace(const Vec3d& startKm, double startMyr, doub
     // m_rToleranceKm through integration error and still be sampled (r clamped); a point strictly
     // inside must stay strictly inside, so that an exit is found on the boundary itself.
     auto strictlyInside = [&](const Vec3d& x) {
-        const double r = norm(x);
+        const double r = length(x);
         return r >= m_rMinKm && r <= m_rMaxKm;
     };
     // One Dormand–Prince step of size h from (p, t) with k[0] = v(p, t); false when a stage leaves
@@ -214,7 +210,7 @@ TracedPathline PathlineTracer::trace(const Vec3d& startKm, double startMyr, doub
         Vec3d e{};
         for (int s = 0; s < 7; ++s)
             e = e + (h * kE[s]) * k[s];
-        error = norm(e);
+        error = length(e);
         return true;
     };
     auto factor = [&](double error) {
@@ -235,7 +231,7 @@ TracedPathline PathlineTracer::trace(const Vec3d& startKm, double startMyr, doub
         // stored points close enough for smooth tubes.
         const auto next = std::upper_bound(times.begin(), times.end(), t + timeEps);
         const double stepEnd = next == times.end() ? endMyr : std::min(endMyr, *next);
-        const double speed = norm(k[0]);
+        const double speed = length(k[0]);
         double cap = std::min({m_options.maxStepMyr, stepEnd - t});
         if (speed > 0)
             cap = std::min(cap, m_options.maxSegmentKm / speed);
@@ -261,9 +257,9 @@ TracedPathline PathlineTracer::trace(const Vec3d& startKm, double startMyr, doub
             }
             if (lo > 0 && loError <= m_options.toleranceKm) {
                 // A point that drifted within the tolerance past a boundary ends on it.
-                const double r = norm(loP), rb = std::clamp(r, m_rMinKm, m_rMaxKm);
+                const double r = length(loP), rb = std::clamp(r, m_rMinKm, m_rMaxKm);
                 loP = (rb / r) * loP;
-                line.lengthKm += norm(loP - p);
+                line.lengthKm += length(loP - p);
                 line.pointsKm.push_back(loP);
                 line.timesMyr.push_back(t + lo);
                 line.end = PathlineEnd::LeftShell;
@@ -279,7 +275,7 @@ TracedPathline PathlineTracer::trace(const Vec3d& startKm, double startMyr, doub
         }
         if (error <= m_options.toleranceKm) {
             t = h >= stepEnd - t ? stepEnd : t + h;
-            line.lengthKm += norm(p5 - p);
+            line.lengthKm += length(p5 - p);
             p = p5;
             k[0] = k[6];
             line.pointsKm.push_back(p);

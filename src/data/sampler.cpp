@@ -21,7 +21,7 @@ std::pair<size_t, double> bracket(const std::vector<double>& c, double x)
 
 }  // namespace
 
-GridSampler::GridSampler(const SphericalGrid& grid) : m_grid(grid) {}
+GridSampler::GridSampler(const SphericalGrid& grid) : m_grid(grid), m_lonWidthsDeg(grid.lonWidthsDeg()) {}
 
 std::optional<GridSampler::Location> GridSampler::locate(double latDeg, double lonDeg, double rKm) const
 {
@@ -64,15 +64,6 @@ std::optional<GridSampler::Location> GridSampler::locate(double latDeg, double l
     return at;
 }
 
-double GridSampler::ringMean(const float* values, size_t iLat, size_t iR) const
-{
-    const float* row = values + m_grid.index(iLat, iR, 0);
-    double sum = 0;
-    for (size_t i = 0; i < m_grid.nLon(); ++i)
-        sum += row[i];
-    return sum / m_grid.nLon();
-}
-
 double GridSampler::sample(const float* values, const Location& at) const
 {
     const auto& g = m_grid;
@@ -82,7 +73,7 @@ double GridSampler::sample(const float* values, const Location& at) const
     auto atR = [&](size_t iR) {
         double value = lerp(atLat(at.lat0, iR), atLat(at.lat1, iR), at.tLat);
         if (at.poleWeight > 0)
-            value = lerp(value, ringMean(values, at.lat0, iR), at.poleWeight);
+            value = lerp(value, g.ringMean(values, at.lat0, iR, m_lonWidthsDeg), at.poleWeight);
         return value;
     };
     return lerp(atR(at.r0), atR(at.r1), at.tR);

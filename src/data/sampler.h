@@ -4,7 +4,8 @@
 //   - trilinear in index space; coordinates may be non-uniform (located by binary search);
 //   - lon is periodic: between the last column and the first one (plus 360°) values blend;
 //   - between the outermost lat row and its pole, values blend linearly in lat from the row
-//     toward the row's ring mean at the pole, so every longitude meets the same pole value;
+//     toward the row's ring mean at the pole (SphericalGrid::ringMean, weighted by lon width), so
+//     every longitude meets the same pole value;
 //   - r is clamped to the grid's radii (coarse levels' outermost radii lie inside the shell).
 //
 // Thread safety: immutable after construction.
@@ -13,6 +14,7 @@
 #include "data/grid.h"
 
 #include <optional>
+#include <vector>
 
 namespace raypc {
 
@@ -38,8 +40,8 @@ public:
     const SphericalGrid& grid() const { return m_grid; }
 
 private:
-    double ringMean(const float* values, size_t iLat, size_t iR) const;
     SphericalGrid m_grid;
+    std::vector<double> m_lonWidthsDeg;
 };
 
 }  // namespace raypc

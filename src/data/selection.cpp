@@ -7,29 +7,13 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace raypc {
-namespace {
 
-double coordinateAt(Coordinate c, double latDeg, double lonDeg, double rKm)
-{
-    switch (c) {
-    case Coordinate::X: return sphericalToCartesianKm(latDeg, lonDeg, rKm).x;
-    case Coordinate::Y: return sphericalToCartesianKm(latDeg, lonDeg, rKm).y;
-    case Coordinate::Z: return sphericalToCartesianKm(latDeg, lonDeg, rKm).z;
-    case Coordinate::Lat: return latDeg;
-    case Coordinate::Lon: return lonDeg;
-    case Coordinate::Radius: return rKm;
-    case Coordinate::Depth: return kSurfaceRadiusKm - rKm;
-    }
-    return 0;
-}
-
-}  // namespace
-
-std::vector<RangeFilter> resolveRangeFilters(const Dataset& dataset, std::span<const NamedRange> ranges,
-                                             const std::string& what)
+std::vector<RangeFilter> resolveRangeFilters(std::span<const std::string> variableNames,
+                                             std::span<const NamedRange> ranges, const std::string& what)
 {
     std::vector<RangeFilter> filters;
     for (size_t i = 0; i < ranges.size(); ++i) {
@@ -37,21 +21,29 @@ std::vector<RangeFilter> resolveRangeFilters(const Dataset& dataset, std::span<c
         RangeFilter f;
         f.min = r.min;
         f.max = r.max;
-        if (const int v = dataset.variableIndex(r.name); v >= 0) {
-            f.variable = v;
+        if (const auto it = std::find(variableNames.begin(), variableNames.end(), r.name); it != variableNames.end()) {
+            f.variable = int(it - variableNames.begin());
         } else if (const auto c = findCoordinate(r.name)) {
             f.coordinate = c;
         } else {
-            std::vector<std::string> names = dataset.variableNames();
+            std::vector<std::string> coordinates;
             for (const auto& info : coordinateInfos())
-                names.push_back(info.name);
-            fail("{}[{}]: unknown variable or coordinate '{}'; known: {}", what, i, r.name, fmt::join(names, ", "));
+                coordinates.push_back(info.name);
+            fail("{}[{}] ({}): unknown variable or coordinate '{}'; variables: {}; coordinates: {}", what, i, r.name,
+                 r.name, fmt::join(variableNames, ", "), fmt::join(coordinates, ", "));
         }
         if (!(r.min <= r.max))
             fail("{}[{}] ({}): min {} is greater than max {}", what, i, r.name, r.min, r.max);
         filters.push_back(f);
     }
     return filters;
+}
+
+std::vector<RangeFilter> resolveRangeFilters(const Dataset& dataset, std::span<const NamedRange> ranges,
+                                             const std::string& what)
+{
+    const std::vector<std::string> names = dataset.variableNames();
+    return resolveRangeFilters(std::span<const std::string>(names), ranges, what);
 }
 
 SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters)
@@ -73,7 +65,7 @@ SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFil
                 const size_t i = g.index(iLat, iR, iLon);
                 bool inside = true;
                 for (const auto& f : filters) {
-                    const double v = f.coordinate ? coordinateAt(*f.coordinate, g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR])
+                    const double v = f.coordinate ? coordinateValue(*f.coordinate, g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR])
                                                   : volume.values(f.variable)[i];
                     if (!(v >= f.min && v <= f.max)) {
                         inside = false;
@@ -100,6 +92,27 @@ SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFil
         stats.shellVolumeByRadiusKm3.push_back(rFactor * latSum * lonSum);
     stats.fractionOfMantle = stats.volumeKm3 / total;
     return stats;
+}
+
+}  // namespace raypc
+
+namespace raypc {
+
+std::vector<StepSelection> selectionOverTime(const Dataset& dataset, std::span<const RangeFilter> filters, int level,
+                                             int firstStep, int lastStep, const VolumeLoader& load,
+                                             const std::function<void()>& onStep)
+{
+    dataset.checkLevel(level);
+    dataset.checkStep(firstStep);
+    dataset.checkStep(lastStep);
+    std::vector<StepSelection> out;
+    for (int step = firstStep; step <= lastStep; ++step) {
+        const auto volume = load ? load(step, level) : dataset.load(step, level);
+        out.push_back({step, dataset.steps()[size_t(step)].timeMyr, selectedVolume(*volume, filters)});
+        if (onStep)
+            onStep();
+    }
+    return out;
 }
 
 }  // namespace raypc

@@ -5,12 +5,18 @@
 
 #include "data/dataset.h"
 
+#include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <span>
 #include <vector>
 
 namespace raypc {
+
+// The one brush model of RayPC. A brush names a variable or a coordinate (NamedRange, as in the
+// state document and the --range options) and resolves against a volume's variable names into a
+// RangeFilter, which selection, the renderer and pathline filtering all use.
 
 // One brushed range: a variable (index into the volume's variables) or a coordinate.
 struct RangeFilter {
@@ -25,8 +31,12 @@ struct NamedRange {
     float min = 0, max = 0;
 };
 
-// Resolves names against the dataset's variables and coordinates. Throws raypc::Error naming
-// `what` (e.g. "brushes[1]") for an unknown name (listing the known ones) or min > max.
+// Resolves names against `variableNames` (a volume's variables, in order) and the coordinates.
+// Throws raypc::Error naming `what` and the index, e.g. "brushes[1] (pressure): unknown variable or
+// coordinate 'pressure'; variables: ...; coordinates: ..." or "brushes[0] (depth): min 3 is greater
+// than max 1".
+std::vector<RangeFilter> resolveRangeFilters(std::span<const std::string> variableNames,
+                                             std::span<const NamedRange> ranges, const std::string& what = "brushes");
 std::vector<RangeFilter> resolveRangeFilters(const Dataset& dataset, std::span<const NamedRange> ranges,
                                              const std::string& what = "brushes");
 
@@ -40,5 +50,19 @@ struct SelectionStats {
 // A grid point is selected when every filter holds at it; it counts with its dual-cell volume.
 // Throws raypc::Error for a variable index out of range or min > max. Parallel over lat rows.
 SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters);
+
+// The selection of every step in [firstStep, lastStep] at one level, in step order: what
+// `raypc stats` writes and the server's /api/stats answers. `load` gives a step's volume at the
+// level (default: Dataset::load); `onStep` is called after each step (progress). Throws
+// raypc::Error for a step or level out of range (Dataset::checkStep/checkLevel).
+struct StepSelection {
+    int step = 0;
+    double timeMyr = 0;
+    SelectionStats stats;
+};
+using VolumeLoader = std::function<std::shared_ptr<const StepVolume>(int step, int level)>;
+std::vector<StepSelection> selectionOverTime(const Dataset& dataset, std::span<const RangeFilter> filters, int level,
+                                             int firstStep, int lastStep, const VolumeLoader& load = {},
+                                             const std::function<void()>& onStep = {});
 
 }  // namespace raypc

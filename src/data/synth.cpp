@@ -33,15 +33,6 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kMantleThicknessKm = kSurfaceRadiusKm - kCoreRadiusKm;
 
-// ---- small vector helpers (Cartesian, unit sphere or km) ----
-
-Vec3d operator+(Vec3d a, Vec3d b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-Vec3d operator-(Vec3d a, Vec3d b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Vec3d operator*(double s, Vec3d a) { return {s * a.x, s * a.y, s * a.z}; }
-double dot(Vec3d a, Vec3d b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-Vec3d cross(Vec3d a, Vec3d b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-Vec3d normalized(Vec3d a) { return (1.0 / std::sqrt(dot(a, a))) * a; }
-
 // Rodrigues rotation of `v` about the unit `axis` by `angle` radians.
 Vec3d rotate(Vec3d v, Vec3d axis, double angle)
 {
@@ -467,17 +458,17 @@ Model buildModel(uint64_t seed)
         // 90 - |beta0| from it; the arc extends half its length on both sides of the midpoint.
         const Vec3d mid = pickSeparated(rng, taken, degToRad(30.0));
         taken.push_back(mid);
-        const Vec3d tangent = normalized(cross(mid, rng.onSphere()));
+        const Vec3d tangent = normalize(cross(mid, rng.onSphere()));
         const double beta0 = degToRad(rng.uniform(8.0, 40.0)) * (rng.uniform() < 0.5 ? -1.0 : 1.0);
         // Pole: rotate mid towards `tangent`'s normal by 90 - beta0 ... built so that
         // sin(beta0) = mid . pole.
-        const Vec3d side = normalized(cross(tangent, mid));  // perpendicular to mid and tangent
+        const Vec3d side = normalize(cross(tangent, mid));  // perpendicular to mid and tangent
         s.pole0 = std::sin(beta0) * mid + std::cos(beta0) * side;
         s.beta0 = beta0;
         const double lengthRad = degToRad(rng.uniform(25.0, 50.0));
         s.arcAngle = lengthRad / std::cos(beta0);
         // Start direction: the component of mid perpendicular to the pole, rotated back by half the arc.
-        const Vec3d midFlat = normalized(mid - dot(mid, s.pole0) * s.pole0);
+        const Vec3d midFlat = normalize(mid - dot(mid, s.pole0) * s.pole0);
         s.start0 = rotate(midFlat, s.pole0, -0.5 * s.arcAngle);
         // Dip towards the concave side (the small circle's pole), like island arcs.
         s.dipSign = beta0 > 0 ? 1.0 : -1.0;
@@ -854,38 +845,6 @@ float spinDensityAnomaly(double depthKm, double temperatureK, double referenceK)
     return static_cast<float>(kDensityJump * (lowSpin(temperatureK - referenceK) - lowSpin(0.0)));
 }
 
-// Area weights of lat rows: sin(upper edge) - sin(lower edge) of the row's dual cell, with the
-// outer edges half a spacing out and clamped to the poles (as SphericalGrid::latEdgesDeg).
-std::vector<double> latRowWeights(const std::vector<double>& latDeg)
-{
-    const size_t n = latDeg.size();
-    std::vector<double> edges(n + 1);
-    for (size_t i = 1; i < n; ++i)
-        edges[i] = 0.5 * (latDeg[i - 1] + latDeg[i]);
-    edges[0] = n > 1 ? latDeg[0] - 0.5 * (latDeg[1] - latDeg[0]) : -90.0;
-    edges[n] = n > 1 ? latDeg[n - 1] + 0.5 * (latDeg[n - 1] - latDeg[n - 2]) : 90.0;
-    std::vector<double> w(n);
-    for (size_t i = 0; i < n; ++i)
-        w[i] = std::sin(degToRad(std::clamp(edges[i + 1], -90.0, 90.0))) -
-               std::sin(degToRad(std::clamp(edges[i], -90.0, 90.0)));
-    return w;
-}
-
-// Lon weights: the width of each column's dual cell on the periodic circle.
-std::vector<double> lonColumnWeights(const std::vector<double>& lonDeg)
-{
-    const size_t n = lonDeg.size();
-    std::vector<double> w(n, 1.0);
-    if (n < 2)
-        return w;
-    for (size_t i = 0; i < n; ++i) {
-        const double prev = i == 0 ? lonDeg[n - 1] - 360.0 : lonDeg[i - 1];
-        const double next = i + 1 == n ? lonDeg[0] + 360.0 : lonDeg[i + 1];
-        w[i] = 0.5 * (next - prev);
-    }
-    return w;
-}
-
 }  // namespace
 
 SphericalGrid syntheticGrid(int nLat, int nR, int nLon)
@@ -1000,8 +959,9 @@ Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr, const S
         boundaryTaper[i] = (1.0 - std::exp(-std::max(0.0, depthKm[i]) / 60.0)) *
                            (1.0 - std::exp(-std::max(0.0, grid.rKm[i] - kCoreRadiusKm) / 40.0));
     }
-    const std::vector<double> latWeights = latRowWeights(grid.latDeg);
-    const std::vector<double> lonWeights = lonColumnWeights(grid.lonDeg);
+    // Dual-cell area weights: lat rows by sin(upper edge) - sin(lower edge), lon columns by width.
+    const std::vector<double> latWeights = grid.volumeFactors().lat;
+    const std::vector<double> lonWeights = grid.lonWidthsDeg();
     // Per (lat row, radius) weighted sums of temperature, for the shell means; summed in a
     // fixed order afterwards so the result does not depend on thread scheduling.
     std::vector<double> rowSums(nLat * nR, 0.0);

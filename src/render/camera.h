@@ -8,20 +8,13 @@
 // Thread safety: plain values; CameraFrame is immutable after construction.
 #pragma once
 
+#include "core/vec3.h"
+
 #include <cmath>
 
 namespace raypc::render {
 
-struct Vec3 {
-    float x = 0, y = 0, z = 0;
-};
-inline Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-inline Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-inline Vec3 operator*(Vec3 a, float s) { return {a.x * s, a.y * s, a.z * s}; }
-inline float dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline Vec3 cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-inline float length(Vec3 a) { return std::sqrt(dot(a, a)); }
-inline Vec3 normalize(Vec3 a) { return a * (1.0f / length(a)); }
+using Vec3 = Vec3f;  // core/vec3.h
 
 struct OrbitCamera {
     double azimuthDeg = 30.0;

@@ -381,17 +381,7 @@ std::vector<uint8_t> PathlineScene::visibilityFor(const RenderState& state) cons
             } else {
                 const double lat = attribute(line, cLat), lon = wrapLonDeg(attribute(line, cLon)),
                              r = attribute(line, cR);
-                const Vec3d p = sphericalToCartesianKm(lat, lon, r);
-                switch (t.coordinate) {
-                case Coordinate::X: v = p.x; break;
-                case Coordinate::Y: v = p.y; break;
-                case Coordinate::Z: v = p.z; break;
-                case Coordinate::Lat: v = lat; break;
-                case Coordinate::Lon: v = lon; break;
-                case Coordinate::Radius: v = r; break;
-                case Coordinate::Depth: v = kSurfaceRadiusKm - r; break;
-                default: v = NAN;
-                }
+                v = coordinateValue(t.coordinate, lat, lon, r);
             }
             if (!(v >= t.min && v <= t.max)) {
                 inside = false;

@@ -77,11 +77,13 @@ struct KernelVariable {
     const float* capMean = nullptr;  // 2 * nR: ring means of the southmost row per r, then the northmost
 };
 
-enum class BrushKind : int { Variable, X, Y, Z, Lat, Lon, Radius, Depth };
-
+// A brush on a variable or on a coordinate, whose value is scale * component + offset
+// (coordinateDefinition in data/coordinates.h).
 struct KernelBrush {
-    BrushKind kind = BrushKind::Variable;
-    KernelVariable variable;  // for kind == Variable
+    bool onCoordinate = false;
+    PointComponent component = PointComponent::X;  // when onCoordinate
+    float scale = 1, offset = 0;
+    KernelVariable variable;                // otherwise
     float min = 0, max = 0;
 };
 

@@ -5,27 +5,25 @@
 namespace raypc::render::kernel {
 namespace {
 
-float coordinateValue(BrushKind kind, Vec3 p, const Located& L)
+float coordinateValue(const KernelBrush& brush, Vec3 p, const Located& L)
 {
-    switch (kind) {
-    case BrushKind::X: return p.x;
-    case BrushKind::Y: return p.y;
-    case BrushKind::Z: return p.z;
-    case BrushKind::Lat: return L.latDeg;
-    case BrushKind::Lon: return L.lonDeg;
-    case BrushKind::Radius: return L.rKm;
-    case BrushKind::Depth: return float(6371.0) - L.rKm;
-    case BrushKind::Variable: break;
+    float v = 0;
+    switch (brush.component) {
+    case PointComponent::X: v = p.x; break;
+    case PointComponent::Y: v = p.y; break;
+    case PointComponent::Z: v = p.z; break;
+    case PointComponent::LatDeg: v = L.latDeg; break;
+    case PointComponent::LonDeg: v = L.lonDeg; break;
+    case PointComponent::RKm: v = L.rKm; break;
     }
-    return 0.0f;
+    return brush.scale * v + brush.offset;
 }
 
 bool insideBrushes(const KernelParams& k, Vec3 p, const Located& L)
 {
     for (int b = 0; b < k.brushCount; ++b) {
         const KernelBrush& brush = k.brushes[b];
-        const float v = brush.kind == BrushKind::Variable ? sampleAt(k, brush.variable, L)
-                                                          : coordinateValue(brush.kind, p, L);
+        const float v = brush.onCoordinate ? coordinateValue(brush, p, L) : sampleAt(k, brush.variable, L);
         if (!(v >= brush.min && v <= brush.max))
             return false;
     }

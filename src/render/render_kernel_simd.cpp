@@ -179,19 +179,19 @@ HWY_INLINE VF Sample(DF d, const KernelParams& k, const KernelVariable& v, const
 }
 #undef RAYPC_LON_PAIRS
 
-HWY_INLINE VF CoordinateValue(DF d, BrushKind kind, VF x, VF y, VF z, const LocatedV& L)
+// scale * component + offset (KernelBrush; the table is coordinateDefinition in data/coordinates.h).
+HWY_INLINE VF CoordinateValue(DF d, const KernelBrush& brush, VF x, VF y, VF z, const LocatedV& L)
 {
-    switch (kind) {
-    case BrushKind::X: return x;
-    case BrushKind::Y: return y;
-    case BrushKind::Z: return z;
-    case BrushKind::Lat: return L.latDeg;
-    case BrushKind::Lon: return L.lonDeg;
-    case BrushKind::Radius: return L.rKm;
-    case BrushKind::Depth: return hn::Sub(hn::Set(d, 6371.0f), L.rKm);
-    case BrushKind::Variable: break;
+    VF v = x;
+    switch (brush.component) {
+    case PointComponent::X: v = x; break;
+    case PointComponent::Y: v = y; break;
+    case PointComponent::Z: v = z; break;
+    case PointComponent::LatDeg: v = L.latDeg; break;
+    case PointComponent::LonDeg: v = L.lonDeg; break;
+    case PointComponent::RKm: v = L.rKm; break;
     }
-    return hn::Zero(d);
+    return hn::MulAdd(hn::Set(d, brush.scale), v, hn::Set(d, brush.offset));
 }
 
 HWY_INLINE VF ColourValueAt(DF d, const KernelParams& k, VF x, VF y, VF z)
@@ -286,8 +286,7 @@ void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, 
             MF keep = active;
             for (int b = 0; b < k.brushCount && !hn::AllFalse(d, keep); ++b) {
                 const KernelBrush& brush = k.brushes[b];
-                const VF v = brush.kind == BrushKind::Variable ? Sample(d, k, brush.variable, L)
-                                                               : CoordinateValue(d, brush.kind, x, y, z, L);
+                const VF v = brush.onCoordinate ? CoordinateValue(d, brush, x, y, z, L) : Sample(d, k, brush.variable, L);
                 keep = hn::And(keep, hn::And(hn::Ge(v, hn::Set(d, brush.min)), hn::Le(v, hn::Set(d, brush.max))));
             }
             if (hn::AllFalse(d, keep))

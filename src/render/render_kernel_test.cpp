@@ -1,5 +1,6 @@
 // The samplers: SIMD equals scalar on random inputs; analytic values at grid points, across the lon
 // seam and at the poles; the angle approximation.
+#include "data/sampler.h"
 #include "render/render_kernel.h"
 #include "render/test_volumes.h"
 #include "render/volume_renderer.h"
@@ -170,6 +171,60 @@ TEST(RaySampling, SamplesAreAboutStepFactorCellsApartAndTheMapInverts)
     EXPECT_NEAR(radial.tAt(1) - radial.tAt(0), k.stepFactor * k.drKm, 1e-3);
     const kernel::RaySampling grazing = kernel::raySampling(k, {-19000, 6000, 0}, {1, 0, 0});
     EXPECT_NEAR(grazing.tAt(1) - grazing.tAt(0), k.stepFactor * 6000.0f * k.dAngleRad, 1e-2);
+}
+
+// The kernels and GridSampler (probe, pathlines) follow the same sampling rules, including the pole
+// caps' ring mean (weighted by lon width) and the lon seam, on a grid whose lon axis is not uniform.
+TEST(Sampler, KernelsEqualGridSamplerOnRandomPointsWithNonUniformLonCapsAndSeam)
+{
+    SphericalGrid g = makeGrid(20, 13, 40, 0.4);
+    g.lonDeg.clear();
+    for (int i = 0; i < 40; ++i) {  // columns bunched towards 90° and sparse towards 270°
+        const double u = i / 40.0;
+        g.lonDeg.push_back(2.0 + 360.0 * (u + 0.35 * std::sin(2 * M_PI * u) / (2 * M_PI)));
+    }
+    // A field whose ring mean depends on how the columns are weighted.
+    const Sampler s(makeVolume(g, {{"f", [](double lat, double r, double lon) {
+                                        return float(std::cos(lon * M_PI / 180) * (1 + lat / 90) + 0.0005 * r);
+                                    }}}));
+    const GridSampler reference(g);
+    const float* values = s.volume->values(0);
+
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(0, 1);
+    std::vector<float> x, y, z;
+    std::vector<double> expected;
+    const double capLat = g.latDeg.back(), firstLon = g.lonDeg.front(), lastLon = g.lonDeg.back();
+    int inCaps = 0, inSeam = 0;
+    while (x.size() < 6000) {
+        const int kind = int(x.size() % 3);  // anywhere, in a pole cap, in the seam gap
+        const double r = 3485.0 + (6371.0 - 3485.0) * u(rng);
+        double lat = -90 + 180 * u(rng), lon = 360 * u(rng);
+        if (kind == 1)
+            lat = (u(rng) < 0.5 ? -1 : 1) * (capLat + (90 - capLat) * u(rng) * 0.999);
+        if (kind == 2)
+            lon = std::fmod(lastLon + (firstLon + 360 - lastLon) * u(rng), 360.0);
+        const auto at = reference.locate(lat, lon, r);
+        ASSERT_TRUE(at) << lat << " " << lon << " " << r;
+        inCaps += at->poleWeight > 0;
+        inSeam += at->lon0 == g.nLon() - 1 && at->lon1 == 0;
+        const Vec3 p = toXyz(lat, lon, r);
+        x.push_back(p.x), y.push_back(p.y), z.push_back(p.z);
+        expected.push_back(reference.sample(values, *at));
+    }
+    EXPECT_GT(inCaps, 1500);
+    EXPECT_GT(inSeam, 1500);
+    std::vector<float> scalar(x.size()), simd(x.size());
+    kernel::sampleBatchScalar(s.k(), s.k().colour, x.data(), y.data(), z.data(), int(x.size()), scalar.data());
+    kernel::sampleBatchSimd(s.k(), s.k().colour, x.data(), y.data(), z.data(), int(x.size()), simd.data());
+    double worst = 0;
+    for (size_t i = 0; i < x.size(); ++i) {
+        worst = std::max({worst, std::abs(scalar[i] - expected[i]), std::abs(simd[i] - expected[i])});
+        const auto sp = cartesianToSpherical({x[i], y[i], z[i]});
+        ASSERT_NEAR(scalar[i], expected[i], 2e-3) << "point " << i << " lat " << sp.latDeg << " lon " << sp.lonDeg << " r " << sp.rKm;
+        ASSERT_NEAR(simd[i], expected[i], 2e-3) << "point " << i;
+    }
+    RecordProperty("worstDifference", std::to_string(worst));
 }
 
 }  // namespace

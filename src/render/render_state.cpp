@@ -408,27 +408,10 @@ RenderParams resolveParams(const RenderState& s, const VariableCatalog& catalog)
     p.transfer.opacity = s.opacity.empty() ? defaultOpacity(s.colorMap) : s.opacity;
     p.transfer.opacityUnitKm = s.opacityUnitKm;
     p.transfer.validate();
-    for (const BrushSpec& b : s.brushes) {
-        if (!(b.min <= b.max))
-            fail("range for '{}': min {} is greater than max {}", b.name, b.min, b.max);
-        BrushRange r;
-        r.min = b.min;
-        r.max = b.max;
-        if (auto c = findCoordinate(b.name)) {
-            r.coordinate = c;
-        } else {
-            const auto it = std::find(catalog.names.begin(), catalog.names.end(), b.name);
-            if (it == catalog.names.end()) {
-                std::string coords;
-                for (const auto& info : coordinateInfos())
-                    coords += (coords.empty() ? "" : ", ") + info.name;
-                fail("range for '{}': not a variable or coordinate; variables: {}; coordinates: {}", b.name, known(),
-                     coords);
-            }
-            r.variable = int(it - catalog.names.begin());
-        }
-        p.brushes.push_back(r);
-    }
+    std::vector<NamedRange> brushes;
+    for (const BrushSpec& b : s.brushes)
+        brushes.push_back({b.name, b.min, b.max});
+    p.brushes = resolveRangeFilters(std::span<const std::string>(catalog.names), brushes, "brushes");
     p.core.visible = s.core.visible;
     p.core.colour = s.core.colour;
     p.core.colorMap = s.core.colorMap;

@@ -21,14 +21,13 @@ namespace raypc::render {
 namespace {
 
 constexpr int kTileSize = 32;
-// Skip-grid cell size: on the full-resolution benchmark passes took the same time with cells of 115,
-// 160 and 230 km, while setParams at level 0 took 15.9, 7.8 and 4.4 ms with them.
+// Skip-grid cell size: as fast as smaller cells per pass, and the cheapest setParams
+// (docs/rendering.md, "Measured choices").
 constexpr float kSkipCellKm = 230.0f;
 
 // Skipping decides per "activity brick": the dataset's bricks halved until one is at most this deep
-// (km) — 4 points at level 0 of the contest grid, 2 at levels 1 and 2. With 8-point bricks
-// everywhere, 58 % of the level-2 volume of the benchmark scene was in active bricks and 15 % at
-// level 0; with these, 14 % and 10 %.
+// (km) — 4 points at level 0 of the contest grid, 2 at levels 1 and 2 (why: docs/rendering.md,
+// "Measured choices").
 constexpr double kActivityBrickKm = 60.0;
 uint32_t activityBrickSize(uint32_t datasetBrickSize, double drKm)
 {
@@ -77,15 +76,19 @@ AxisTable buildAxis(const std::vector<double>& coords, double lo, double hi, boo
             return a;
         }
     }
-    // Piecewise-linear index function through (coords[i], i); lon continues across the seam.
+    // Piecewise-linear index function through (coords[i], i); lon continues across the seam. Below
+    // the first column (an axis that does not start at 0°) the index runs from above -1 up to 0, so
+    // that the table is continuous over [0°, 360°] and its interpolation never spans the wrap from
+    // n - 1 to 0 (the kernels wrap negative indices by n).
     auto indexOf = [&](double c) {
         if (periodic) {
-            if (c < coords[0])
+            const bool beforeFirst = c < coords[0];
+            if (beforeFirst)
                 c += 360.0;
             const auto it = std::upper_bound(coords.begin(), coords.end(), c);
             const size_t i = size_t(it - coords.begin()) - 1;
             const double next = i + 1 < n ? coords[i + 1] : coords[0] + 360.0;
-            return double(i) + (c - coords[i]) / (next - coords[i]);
+            return double(i) + (c - coords[i]) / (next - coords[i]) - (beforeFirst ? double(n) : 0.0);
         }
         if (c <= coords.front())
             return 0.0;
@@ -124,20 +127,6 @@ Interval trigRange(double aDeg, double bDeg, double phaseDeg)
         r.hi = std::max(r.hi, v);
     }
     return r;
-}
-
-kernel::BrushKind brushKindOf(Coordinate c)
-{
-    switch (c) {
-    case Coordinate::X: return kernel::BrushKind::X;
-    case Coordinate::Y: return kernel::BrushKind::Y;
-    case Coordinate::Z: return kernel::BrushKind::Z;
-    case Coordinate::Lat: return kernel::BrushKind::Lat;
-    case Coordinate::Lon: return kernel::BrushKind::Lon;
-    case Coordinate::Radius: return kernel::BrushKind::Radius;
-    case Coordinate::Depth: return kernel::BrushKind::Depth;
-    }
-    return kernel::BrushKind::X;
 }
 
 kernel::ColourTable viewOf(const TransferTable& t)
@@ -191,68 +180,6 @@ std::vector<float> coordinateBrickBounds(const SphericalGrid& g, const BrickLayo
 }
 
 // ------------------------------------------------------------------------------------------------
-// FrameBuffer
-
-FrameBuffer::FrameBuffer(int width, int height) : m_width(width), m_height(height)
-{
-    if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
-        fail("image size {}x{}: expected 1..16384 pixels per side", width, height);
-    clear();
-}
-FrameBuffer::~FrameBuffer() = default;
-FrameBuffer::FrameBuffer(FrameBuffer&&) noexcept = default;
-FrameBuffer& FrameBuffer::operator=(FrameBuffer&&) noexcept = default;
-
-void FrameBuffer::clear()
-{
-    const size_t n = size_t(m_width) * size_t(m_height);
-    m_passes = 0;
-    m_rgbaSum.assign(4 * n, 0.0f);
-    m_depthSum.assign(n, 0.0f);
-    m_depthCount.assign(n, 0);
-    m_pass.resize(n);
-}
-
-std::vector<float> FrameBuffer::averagedRgba() const
-{
-    std::vector<float> out(m_rgbaSum.size());
-    const float s = m_passes > 0 ? 1.0f / float(m_passes) : 0.0f;
-    for (size_t i = 0; i < out.size(); ++i)
-        out[i] = m_rgbaSum[i] * s;
-    return out;
-}
-
-std::vector<float> FrameBuffer::averagedDepthKm() const
-{
-    std::vector<float> out(m_depthSum.size());
-    for (size_t i = 0; i < out.size(); ++i)
-        out[i] = m_depthCount[i] ? m_depthSum[i] / float(m_depthCount[i]) : INFINITY;
-    return out;
-}
-
-std::vector<uint8_t> FrameBuffer::resolveRgba8(Rgb background, bool opaqueBackground) const
-{
-    const std::vector<float> rgba = averagedRgba();
-    std::vector<uint8_t> out(rgba.size());
-    auto to8 = [](float v) { return uint8_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
-    for (size_t i = 0; i < rgba.size(); i += 4) {
-        const float t = 1.0f - rgba[i + 3];
-        if (opaqueBackground) {
-            out[i] = to8(rgba[i] + t * background.r);
-            out[i + 1] = to8(rgba[i + 1] + t * background.g);
-            out[i + 2] = to8(rgba[i + 2] + t * background.b);
-            out[i + 3] = 255;
-        } else {
-            out[i] = to8(rgba[i]);
-            out[i + 1] = to8(rgba[i + 1]);
-            out[i + 2] = to8(rgba[i + 2]);
-            out[i + 3] = to8(rgba[i + 3]);
-        }
-    }
-    return out;
-}
-
-// ------------------------------------------------------------------------------------------------
 // VolumeRenderer
 
 struct VolumeRenderer::Impl {
@@ -299,16 +226,8 @@ VolumeRenderer::VolumeRenderer(std::shared_ptr<const StepVolume> volume)
     im.dAngleRad = float(degToRad(std::min((g.latDeg.back() - g.latDeg.front()) / double(g.nLat() - 1),
                                            360.0 / double(g.nLon()))));
 
-    // Ring means of the outermost rows, weighted by each point's lon extent (dual cell width).
-    const std::vector<double> lonEdges = [&] {
-        std::vector<double> e(g.nLon() + 1);
-        for (size_t i = 0; i <= g.nLon(); ++i) {
-            const double prev = i == 0 ? g.lonDeg.back() - 360.0 : g.lonDeg[i - 1];
-            const double cur = i == g.nLon() ? g.lonDeg[0] + 360.0 : g.lonDeg[i];
-            e[i] = 0.5 * (prev + cur);
-        }
-        return e;
-    }();
+    // Ring means of the outermost rows, towards which the pole caps blend (as GridSampler does).
+    const std::vector<double> lonWidths = g.lonWidthsDeg();
     im.capMeans.resize(m_volume->variableCount());
     for (size_t v = 0; v < m_volume->variableCount(); ++v) {
         const float* values = m_volume->values(v);
@@ -316,23 +235,30 @@ VolumeRenderer::VolumeRenderer(std::shared_ptr<const StepVolume> volume)
         means.resize(2 * g.nR());
         for (int side = 0; side < 2; ++side) {
             const size_t iLat = side == 0 ? 0 : g.nLat() - 1;
-            for (size_t iR = 0; iR < g.nR(); ++iR) {
-                double sum = 0;
-                for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
-                    sum += double(values[g.index(iLat, iR, iLon)]) * (lonEdges[iLon + 1] - lonEdges[iLon]);
-                means[side * g.nR() + iR] = float(sum / 360.0);
-            }
+            for (size_t iR = 0; iR < g.nR(); ++iR)
+                means[side * g.nR() + iR] = float(g.ringMean(values, iLat, iR, lonWidths));
         }
     }
 }
 
 VolumeRenderer::~VolumeRenderer() = default;
 
+// setParams in stages, each a cost of the restart class: check the parameters, bake the transfer
+// tables and brushes, flag the bricks a pass can skip, fill the kernel's view, build the skip grid.
 void VolumeRenderer::setParams(const RenderParams& p)
 {
-    const StepVolume& vol = *m_volume;
-    const SphericalGrid& g = vol.grid();
-    const int varCount = int(vol.variableCount());
+    validateParams(p);
+    bakeTables(p);
+    flagActiveBricks(p);
+    fillKernelParams(p);
+    if (p.skipBricks)
+        buildSkipGrid();
+    m_params = p;
+}
+
+void VolumeRenderer::validateParams(const RenderParams& p) const
+{
+    const int varCount = int(m_volume->variableCount());
     if (p.width <= 0 || p.height <= 0 || p.width > 16384 || p.height > 16384)
         fail("image size {}x{}: expected 1..16384 pixels per side", p.width, p.height);
     p.camera.validate();
@@ -344,7 +270,7 @@ void VolumeRenderer::setParams(const RenderParams& p)
         fail("depth opacity threshold {}: expected a value in (0, 1)", p.depthOpacity);
     if (!(p.stopOpacity > 0.5f && p.stopOpacity <= 1.0f))
         fail("stop opacity {}: expected a value in (0.5, 1]", p.stopOpacity);
-    for (const BrushRange& b : p.brushes) {
+    for (const RangeFilter& b : p.brushes) {
         if (!b.coordinate && (b.variable < 0 || b.variable >= varCount))
             fail("brush variable index {}: the volume has {} variables", b.variable, varCount);
         if (!(b.min <= b.max))
@@ -352,7 +278,15 @@ void VolumeRenderer::setParams(const RenderParams& p)
     }
     if (p.core.variable >= varCount)
         fail("core variable index {}: the volume has {} variables", p.core.variable, varCount);
+}
 
+kernel::KernelVariable VolumeRenderer::kernelVariable(int variable) const
+{
+    return {m_volume->values(size_t(variable)), m_impl->capMeans[size_t(variable)].data()};
+}
+
+void VolumeRenderer::bakeTables(const RenderParams& p)
+{
     Impl& im = *m_impl;
     im.table = TransferTable::bake(p.transfer);
     if (p.core.variable >= 0) {
@@ -361,21 +295,30 @@ void VolumeRenderer::setParams(const RenderParams& p)
         coreTf.range = p.core.range;
         im.coreTable = TransferTable::bake(coreTf);
     }
-
-    auto view = [&](int v) { return kernel::KernelVariable{vol.values(size_t(v)), im.capMeans[size_t(v)].data()}; };
     im.brushes.clear();
-    for (const BrushRange& b : p.brushes) {
+    for (const RangeFilter& b : p.brushes) {
         kernel::KernelBrush kb;
-        kb.kind = b.coordinate ? brushKindOf(*b.coordinate) : kernel::BrushKind::Variable;
-        if (!b.coordinate)
-            kb.variable = view(b.variable);
+        kb.onCoordinate = b.coordinate.has_value();
+        if (b.coordinate) {
+            const CoordinateDefinition def = coordinateDefinition(*b.coordinate);
+            kb.component = def.component;
+            kb.scale = float(def.scale);
+            kb.offset = float(def.offset);
+        } else {
+            kb.variable = kernelVariable(b.variable);
+        }
         kb.min = b.min;
         kb.max = b.max;
         im.brushes.push_back(kb);
     }
+}
 
-    // Brick flags: a brick is skipped when a brush excludes its bounds or the transfer function is
-    // transparent over the colouring variable's bounds there (bounds contain every trilinear value).
+// A brick is skipped when a brush excludes its bounds or the transfer function is transparent over
+// the colouring variable's bounds there (bounds contain every trilinear value).
+void VolumeRenderer::flagActiveBricks(const RenderParams& p)
+{
+    Impl& im = *m_impl;
+    const StepVolume& vol = *m_volume;
     const BrickLayout& bl = im.activity;
     auto boundsOf = [&](int v) { return vol.brickBounds(size_t(v), bl.size); };
     im.brickActive.assign(bl.brickCount(), 1);
@@ -384,12 +327,12 @@ void VolumeRenderer::setParams(const RenderParams& p)
             if (bounds[2 * b + 1] < lo || bounds[2 * b] > hi)
                 im.brickActive[b] = 0;
     };
-    for (const BrushRange& b : p.brushes) {
+    for (const RangeFilter& b : p.brushes) {
         if (b.coordinate) {
-            // Per renderer (they depend on the grid only): 8.7 ms for x at level 0 with 4-point bricks.
+            // Per renderer: they depend on the grid only (docs/rendering.md has their cost).
             std::vector<float>& bounds = im.coordinateBounds[*b.coordinate];
             if (bounds.empty())
-                bounds = coordinateBrickBounds(g, bl, *b.coordinate);
+                bounds = coordinateBrickBounds(vol.grid(), bl, *b.coordinate);
             excludeOutside(bounds.data(), b.min, b.max);
         } else {
             excludeOutside(boundsOf(b.variable), b.min, b.max);
@@ -401,7 +344,13 @@ void VolumeRenderer::setParams(const RenderParams& p)
             im.brickActive[b] = 0;
     im.bricksSkipped = size_t(std::count(im.brickActive.begin(), im.brickActive.end(), 0));
     im.estimatedSamples = -1;
+}
 
+void VolumeRenderer::fillKernelParams(const RenderParams& p)
+{
+    Impl& im = *m_impl;
+    const SphericalGrid& g = m_volume->grid();
+    const BrickLayout& bl = im.activity;
     kernel::KernelParams& k = im.params;
     k = {};
     k.nLat = int(g.nLat());
@@ -423,7 +372,7 @@ void VolumeRenderer::setParams(const RenderParams& p)
     k.brickShift = im.brickShift;
     k.bricksR = int(bl.count[1]);
     k.bricksLon = int(bl.count[2]);
-    k.colour = view(p.colorVariable);
+    k.colour = kernelVariable(p.colorVariable);
     k.table = viewOf(im.table);
     k.brushes = im.brushes.data();
     k.brushCount = int(im.brushes.size());
@@ -443,21 +392,24 @@ void VolumeRenderer::setParams(const RenderParams& p)
     k.coreByVariable = p.core.variable >= 0;
     k.coreColour = p.core.colour;
     if (k.coreByVariable) {
-        k.coreVariable = view(p.core.variable);
+        k.coreVariable = kernelVariable(p.core.variable);
         k.coreTable = viewOf(im.coreTable);
     }
     k.seed = p.seed;
     k.chunkLanes = kernel::kChunkSamples;
-    if (p.skipBricks) {
-        im.skipGeometry = skipGridGeometry(g, bl, k, kSkipCellKm);
-        skipGridDistance(*im.skipGeometry, im.brickActive, im.cellDistance);
-        k.cellDistance = im.cellDistance.data();
-        k.cellN = im.skipGeometry->n;
-        k.cellOriginKm = im.skipGeometry->originKm;
-        k.cellInvKm = 1.0f / im.skipGeometry->cellKm;
-        k.cellStepPastKm = 0.5f * kSkipCellPadKm;
-    }
-    m_params = p;
+}
+
+void VolumeRenderer::buildSkipGrid()
+{
+    Impl& im = *m_impl;
+    kernel::KernelParams& k = im.params;
+    im.skipGeometry = skipGridGeometry(m_volume->grid(), im.activity, k, kSkipCellKm);
+    skipGridDistance(*im.skipGeometry, im.brickActive, im.cellDistance);
+    k.cellDistance = im.cellDistance.data();
+    k.cellN = im.skipGeometry->n;
+    k.cellOriginKm = im.skipGeometry->originKm;
+    k.cellInvKm = 1.0f / im.skipGeometry->cellKm;
+    k.cellStepPastKm = 0.5f * kSkipCellPadKm;
 }
 
 PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>* cancel)
@@ -591,51 +543,5 @@ const kernel::KernelParams& VolumeRenderer::kernelParams() const { return m_impl
 void VolumeRenderer::setPathlines(std::shared_ptr<const PathlineScene> scene) { m_impl->pathlines = std::move(scene); }
 
 const std::shared_ptr<const PathlineScene>& VolumeRenderer::pathlines() const { return m_impl->pathlines; }
-
-InteractiveChoice chooseInteractive(const std::vector<std::shared_ptr<const StepVolume>>& levels,
-                                    const RenderParams& params, double budgetSeconds, double samplesPerSecond)
-{
-    if (levels.empty())
-        fail("level choice: no levels");
-    const int coarsest = int(levels.size()) - 1;
-    InteractiveChoice c{coarsest, params.width, params.height, 0};
-    if (!(samplesPerSecond > 0))
-        return c;
-    std::vector<std::unique_ptr<VolumeRenderer>> renderers(levels.size());
-    const int level = finestLevelWithin(
-        int(levels.size()), kInteractiveBudgetShare * budgetSeconds,
-        [&](int l) {
-            auto& r = renderers[size_t(l)];
-            if (!r)
-                r = std::make_unique<VolumeRenderer>(levels[size_t(l)]);
-            r->setParams(params);
-            return r->estimateSamplesPerPass() / samplesPerSecond;
-        },
-        &c.estimatedSeconds);
-    if (level >= 0) {
-        c.level = level;
-        return c;
-    }
-    // Even the coarsest level is too slow: fewer pixels (the cost is proportional to them).
-    const double budget = kInteractiveBudgetShare * budgetSeconds;
-    const double scale = std::clamp(std::sqrt(budget / c.estimatedSeconds), 0.25, 1.0);
-    c.width = std::max(1, int(std::lround(params.width * scale)));
-    c.height = std::max(1, int(std::lround(params.height * scale)));
-    c.estimatedSeconds *= double(c.width) * double(c.height) / (double(params.width) * double(params.height));
-    return c;
-}
-
-int chooseLevelForBudget(const std::vector<std::shared_ptr<const StepVolume>>& levels, const RenderParams& params,
-                         double budgetSeconds, double samplesPerSecond)
-{
-    if (levels.empty())
-        fail("level choice: no levels");
-    const int level = finestLevelWithin(int(levels.size()), budgetSeconds, [&](int l) {
-        VolumeRenderer probe(levels[size_t(l)]);
-        probe.setParams(params);
-        return probe.estimateSamplesPerPass() / samplesPerSecond;
-    });
-    return level >= 0 ? level : int(levels.size()) - 1;
-}
 
 }  // namespace raypc::render

@@ -7,6 +7,8 @@
 //   while (!converged) renderer.renderPass(frame, &cancelFlag);   // progressive, cancellable
 //   frame.resolveRgba8(...) / frame.averagedDepthKm()
 //
+// The level of detail for a time budget: level_choice.h. From a whole state: state_renderer.h.
+//
 // Units: km for positions and depths, degrees for angles. Depth of a pixel = distance along the
 // (unit) view ray from the eye to the first sample where the accumulated opacity reaches
 // RenderParams::depthOpacity, or to the core if it is hit first; +infinity where neither happens.
@@ -16,8 +18,10 @@
 #pragma once
 
 #include "data/dataset.h"
+#include "data/selection.h"
 #include "render/camera.h"
 #include "render/color_map.h"
+#include "render/frame_buffer.h"
 #include "render/transfer_function.h"
 
 #include <atomic>
@@ -30,18 +34,10 @@ namespace raypc::render {
 
 namespace kernel {
 struct KernelParams;
-struct PixelOut;
+struct KernelVariable;
 }  // namespace kernel
 
 class PathlineScene;  // render/pathline_scene.h
-
-// A sample outside [min, max] of any brush contributes nothing. Either a variable (index into the
-// volume's variables) or a coordinate (x, y, z, lat, lon, radius, depth; units as in dataset.h).
-struct BrushRange {
-    int variable = -1;
-    std::optional<Coordinate> coordinate;
-    float min = 0, max = 0;
-};
 
 struct CoreStyle {
     bool visible = true;
@@ -64,7 +60,7 @@ struct RenderParams {
     int width = 512, height = 512;
     int colorVariable = 0;
     TransferFunction transfer;
-    std::vector<BrushRange> brushes;
+    std::vector<RangeFilter> brushes;  // a sample outside any brush contributes nothing (data/selection.h)
     CoreStyle core;
     ShadingStyle shading;
     float stepFactor = 0.5f;    // step = stepFactor x local cell extent along the ray
@@ -73,34 +69,6 @@ struct RenderParams {
     bool skipBricks = true;     // empty-space skipping (never changes the image; off for testing)
     KernelKind kernel = KernelKind::Simd;
     uint32_t seed = 0x9e3779b9u;
-};
-
-// Accumulates progressive passes. Colours are premultiplied by alpha (alpha = 1 - transmittance).
-class FrameBuffer {
-public:
-    FrameBuffer(int width, int height);
-    ~FrameBuffer();
-    FrameBuffer(FrameBuffer&&) noexcept;
-    FrameBuffer& operator=(FrameBuffer&&) noexcept;
-
-    int width() const { return m_width; }
-    int height() const { return m_height; }
-    int passes() const { return m_passes; }
-    void clear();  // restart accumulation (after a restart-class change)
-
-    // Mean of the passes so far: premultiplied RGBA, row-major from the top-left, 4 floats a pixel.
-    std::vector<float> averagedRgba() const;
-    // Mean of the finite per-pass depths (km), +inf where no pass had one.
-    std::vector<float> averagedDepthKm() const;
-    // 8-bit RGBA, composited over `background` when `opaqueBackground`, else premultiplied with alpha.
-    std::vector<uint8_t> resolveRgba8(Rgb background, bool opaqueBackground = true) const;
-
-private:
-    friend class VolumeRenderer;
-    int m_width, m_height, m_passes = 0;
-    std::vector<float> m_rgbaSum, m_depthSum;
-    std::vector<uint16_t> m_depthCount;
-    std::vector<kernel::PixelOut> m_pass;  // scratch of the pass being rendered
 };
 
 struct PassStats {
@@ -161,67 +129,24 @@ public:
     const std::shared_ptr<const PathlineScene>& pathlines() const;
 
 private:
+    // The stages of setParams (restart class).
+    void validateParams(const RenderParams& params) const;
+    void bakeTables(const RenderParams& params);
+    void flagActiveBricks(const RenderParams& params);
+    void fillKernelParams(const RenderParams& params);
+    void buildSkipGrid();
+    kernel::KernelVariable kernelVariable(int variable) const;
+
     struct Impl;
     std::shared_ptr<const StepVolume> m_volume;
     RenderParams m_params;
     std::unique_ptr<Impl> m_impl;
 };
 
-// The finest of `levelCount` levels (0 finest) whose predicted pass time `secondsAt(level)` fits
-// `budgetSeconds`, or -1 if even the coarsest does not. Levels are tried from the coarsest towards
-// finer ones and the search stops at the first that misses (pass time grows with resolution), so the
-// finer levels are not even prepared when the coarse ones are all that fit — during playback that
-// spares loading and preparing the full-resolution step. `seconds` (optional) receives the prediction
-// for the level returned, or for the coarsest level when none fits.
-template <class SecondsAt>
-int finestLevelWithin(int levelCount, double budgetSeconds, SecondsAt&& secondsAt, double* seconds = nullptr)
-{
-    int fits = -1;
-    for (int level = levelCount - 1; level >= 0; --level) {
-        const double s = secondsAt(level);
-        if (s > budgetSeconds) {
-            if (fits < 0 && seconds)
-                *seconds = s;
-            break;
-        }
-        fits = level;
-        if (seconds)
-            *seconds = s;
-    }
-    return fits;
-}
-
-// The finest level whose estimated pass time fits `budgetSeconds`, given a throughput in samples
-// per second (all threads). `levels[i]` are the volumes of level i (finest first); falls back to the
-// coarsest.
-int chooseLevelForBudget(const std::vector<std::shared_ptr<const StepVolume>>& levels, const RenderParams& params,
-                         double budgetSeconds, double samplesPerSecond);
-
-// What the interactive mode renders: a level and an internal image size (the requested size, or
-// smaller when even the coarsest level would miss the budget; the caller upscales the result or
-// asks for the smaller image), with the pass time predicted from the throughput.
-struct InteractiveChoice {
-    int level = 0;
-    int width = 0, height = 0;
-    double estimatedSeconds = 0;
-};
-
-// The share of an interactive time budget the predicted pass time may use. The prediction counts
-// samples; per-pixel work it does not model made real passes ~20% slower than predicted on the
-// full-resolution benchmark (55.6 ms for a 45 ms prediction), so keep that much in reserve.
-inline constexpr double kInteractiveBudgetShare = 0.75;
-
-// The finest level whose predicted pass time (estimateSamplesPerPass / samplesPerSecond) fits
-// kInteractiveBudgetShare of `budgetSeconds`; if none does, the coarsest level at an internal resolution scaled down (by at
-// most 4 per side) to fit. `samplesPerSecond` should be measured (measuredSamplesPerSecond of recent
-// passes); without a measurement (<= 0) the coarsest level at full size is returned so that its
-// pass measures the machine. `levels[i]` are the volumes of level i (finest first). Throws
-// raypc::Error if `levels` is empty or the params are invalid.
-InteractiveChoice chooseInteractive(const std::vector<std::shared_ptr<const StepVolume>>& levels,
-                                    const RenderParams& params, double budgetSeconds, double samplesPerSecond);
-
 // Per-brick bounds of a coordinate over a grid's bricks (min, max pairs), conservative: every
 // trilinear sample inside the brick has its coordinate inside. Used for coordinate brushes.
 std::vector<float> coordinateBrickBounds(const SphericalGrid& grid, const BrickLayout& bricks, Coordinate coordinate);
 
 }  // namespace raypc::render
+
+#include "render/level_choice.h"  // IWYU pragma: export (callers of the renderer choose levels)

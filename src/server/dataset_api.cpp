@@ -95,24 +95,17 @@ json presetsJson(const std::optional<fs::path>& dir)
 json selectionStatsJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters, int level,
                         int profileStep)
 {
-    const int levels = int(dataset.levels().size());
-    if (level < 0 || level >= levels)
-        fail("level: {} out of range 0..{}", level, levels - 1);
-    const int nSteps = int(dataset.steps().size());
-    if (profileStep < 0 || profileStep >= nSteps)
-        fail("step: {} out of range 0..{}", profileStep, nSteps - 1);
+    dataset.checkLevel(level);
+    dataset.checkStep(profileStep);
+    const auto selections = selectionOverTime(dataset, filters, level, 0, int(dataset.steps().size()) - 1,
+                                              [&](int step, int l) { return cache.getWithoutEvicting(step, l); });
     json steps = json::array();
-    SelectionStats profile;
-    for (int step = 0; step < nSteps; ++step) {
-        const auto volume = cache.getWithoutEvicting(step, level);
-        SelectionStats s = selectedVolume(*volume, filters);
-        steps.push_back({{"step", step},
-                         {"timeMyr", dataset.steps()[size_t(step)].timeMyr},
-                         {"volumeKm3", s.volumeKm3},
-                         {"fractionOfMantle", s.fractionOfMantle}});
-        if (step == profileStep)
-            profile = std::move(s);
-    }
+    for (const StepSelection& sel : selections)
+        steps.push_back({{"step", sel.step},
+                         {"timeMyr", sel.timeMyr},
+                         {"volumeKm3", sel.stats.volumeKm3},
+                         {"fractionOfMantle", sel.stats.fractionOfMantle}});
+    const SelectionStats& profile = selections[size_t(profileStep)].stats;
     const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
     json radius = json::array(), depth = json::array(), selected = json::array(), shell = json::array();
     for (size_t iR = 0; iR < grid.nR(); ++iR) {

@@ -33,8 +33,26 @@ nlohmann::json cameraJson(const RenderState& state)
 
 }  // namespace
 
+render::StateSources RenderContext::sources() const
+{
+    StepCache* volumes = cache;
+    PathlineCache* lines = pathlines;
+    render::StateSources s;
+    s.volume = [volumes](int step, int level) { return volumes->get(step, level); };
+    s.pathlines = [lines](int step, int window) -> std::shared_ptr<const std::vector<PathlineSet>> {
+        if (!lines)
+            fail("this server has no pathline cache");
+        return lines->get(step, window);
+    };
+    return s;
+}
+
 RenderSession::RenderSession(RenderContext& context, SessionSink sink, std::string name)
-    : m_context(context), m_sink(std::move(sink)), m_name(std::move(name)), m_thread([this] { loop(); })
+    : m_context(context),
+      m_sink(std::move(sink)),
+      m_name(std::move(name)),
+      m_renderer(context.dataset, context.sources()),
+      m_thread([this] { loop(); })
 {
 }
 
@@ -48,7 +66,7 @@ void RenderSession::submit(const StateMessage& message)
     Request request;
     request.received = Clock::now();
     request.id = message.id;
-    request.resolved = resolveState(message.state, *m_context.dataset);  // throws: the old state stays
+    request.resolved = render::resolveState(message.state, *m_context.dataset);  // throws: the old state stays
     const auto& st = request.resolved.state;
     if (int64_t(st.width) * st.height > int64_t(kMaxSessionPixels))
         fail("image: {}x{} is over the limit of {} pixels for a session (use /api/screenshot for larger images)",
@@ -105,84 +123,28 @@ void RenderSession::loop()
     }
 }
 
-VolumeRenderer& RenderSession::rendererFor(int step, int level)
-{
-    // Reload class: a new step drops every level's renderer of the old one.
-    if (step != m_rendererStep) {
-        m_renderers.clear();
-        m_rendererStep = step;
-    }
-    auto& slot = m_renderers[level];
-    if (!slot)
-        slot = std::make_unique<VolumeRenderer>(m_context.cache->get(step, level));
-    return *slot;
-}
-
-int RenderSession::chooseInteractiveLevel(int step, const RenderParams& params, double budgetSeconds)
-{
-    double rate = m_context.samplesPerSecond.load();
-    if (rate <= 0)
-        rate = 100e6 * tbb::this_task_arena::max_concurrency();  // until a pass has been measured
-    // Coarse to fine (render::finestLevelWithin): while only the coarse levels fit, the finer ones of
-    // a new step are neither loaded nor prepared.
-    const int levels = int(m_context.dataset->levels().size());
-    const int level = finestLevelWithin(levels, kInteractiveBudgetShare * budgetSeconds, [&](int l) {
-        VolumeRenderer& r = rendererFor(step, l);
-        r.setParams(params);
-        return r.estimateSamplesPerPass() / rate;
-    });
-    return level >= 0 ? level : levels - 1;
-}
-
-std::shared_ptr<const PathlineScene> RenderSession::pathlinesFor(const RenderState& state)
-{
-    if (!state.pathlines.visible || !m_context.pathlines)
-        return nullptr;
-    // Reload class: a new step or window loads that window (shared cache) and builds a new BVH.
-    if (!m_scene || m_sceneStep != state.step || m_sceneWindow != state.pathlines.window) {
-        const auto window = m_context.pathlines->get(state.step, state.pathlines.window);
-        const auto start = Clock::now();
-        m_scene.reset();
-        m_scene = std::make_shared<PathlineScene>(*window, state.pathlines.radiusKm);
-        m_sceneStep = state.step;
-        m_sceneWindow = state.pathlines.window;
-        spdlog::info("{}: pathline scene of step {} window {}: {} lines in {:.0f} ms", m_name, state.step,
-                     state.pathlines.window, m_scene->lineCount(), millisecondsSince(start));
-    }
-    // Restart class: radius, style and the visibility mask (attribute filters, brushes).
-    m_scene->applyState(state);
-    return m_scene;
-}
-
 void RenderSession::render(const Request& request)
 {
     const auto renderStart = Clock::now();
     const RenderState& state = request.resolved.state;
-    RenderParams params = request.resolved.params;
     const Dataset& dataset = *m_context.dataset;
     const int step = state.step;
-    const double budgetSeconds = state.timeBudgetMs / 1000.0;
 
-    int level;
-    if (state.level)
-        level = *state.level;
-    else if (request.interactive)
-        level = chooseInteractiveLevel(step, params, budgetSeconds);  // reload class when it changes
-    else
-        level = 0;
-
-    // Interactive resolution: when even the coarsest level misses the budget, render 1/2 or 1/4 of the
-    // pixels per axis (the UI scales the frame up; same aspect when the size divides).
-    if (request.interactive && !state.level && level == int(dataset.levels().size()) - 1) {
-        const double rate = m_context.samplesPerSecond.load();
-        if (rate > 0) {
-            const double seconds = rendererFor(step, level).estimateSamplesPerPass() / rate;
-            const double budget = kInteractiveBudgetShare * budgetSeconds;
-            const int divisor = seconds <= budget ? 1 : seconds / 4 <= budget ? 2 : 4;
-            params.width = std::max(1, (params.width + divisor - 1) / divisor);
-            params.height = std::max(1, (params.height + divisor - 1) / divisor);
-        }
+    // Interactive: the finest level within the time budget at the measured throughput (until a pass
+    // has been measured, an assumed 100 M samples/s per thread), 1/2 or 1/4 of the pixels per axis
+    // when even the coarsest misses it. Still: the state's level, else level 0.
+    LevelPolicy policy;
+    if (request.interactive) {
+        const double measured = m_context.samplesPerSecond.load();
+        policy.samplesPerSecond = measured > 0 ? measured : 100e6 * tbb::this_task_arena::max_concurrency();
+        policy.reduceResolution = measured > 0;
     }
+    const StateRenderer::Prepared prepared = m_renderer.prepare(request.resolved, policy);
+    const int level = prepared.level;
+    const RenderParams& params = prepared.params;
+    VolumeRenderer& renderer = *prepared.renderer;
+    const auto& scene = prepared.scene;
+    const double estimatedSamples = prepared.estimatedSamplesPerPass;
 
     // Playback (step = previous step + 1): load the next step in the background at this level.
     if (m_lastStep >= 0 && step == m_lastStep + 1 && step + 1 < int(dataset.steps().size())) {
@@ -191,17 +153,8 @@ void RenderSession::render(const Request& request)
     }
     m_lastStep = step;
 
-    VolumeRenderer& renderer = rendererFor(step, level);
-    renderer.setParams(params);  // restart class: camera, transfer function, brushes, size
-    const auto scene = pathlinesFor(state);  // before any pass reads it
-    for (auto& [l, r] : m_renderers)
-        if (r.get() != &renderer)
-            r->setPathlines(nullptr);  // no other renderer of this session keeps a scene that changes
-    renderer.setPathlines(scene);
-    const double estimatedSamples = renderer.estimateSamplesPerPass();
-
     // Selection statistics of the brushes (exact on a level's grid), recomputed only when they or the
-    // volume change. At full resolution they take 12-80 ms, so interactive frames take them from the
+    // volume change. At full resolution they take tens of ms (docs/rendering.md), so interactive frames take them from the
     // coarsest level (under a millisecond), and a still state computes them on its own level after
     // its first frame is sent (that frame says null; the UI asks POST /api/selection for final
     // states anyway).
@@ -212,7 +165,7 @@ void RenderSession::render(const Request& request)
         if (selectionKey == m_selectionKey)
             return;
         const auto volume = selectionLevel == level ? renderer.volume() : m_context.cache->get(step, selectionLevel);
-        const SelectionStats s = selectedVolume(*volume, selectionFilters(params));
+        const SelectionStats s = selectedVolume(*volume, params.brushes);
         m_selection = {{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}};
         m_selectionKey = selectionKey;
     };

@@ -13,10 +13,10 @@
 
 #include "data/dataset.h"
 #include "render/pathline_scene.h"
+#include "render/state_renderer.h"
 #include "render/volume_renderer.h"
 #include "server/dataset_api.h"
 #include "server/protocol.h"
-#include "server/render_support.h"
 #include "server/step_cache.h"
 
 #include <atomic>
@@ -40,6 +40,9 @@ struct RenderContext {
     // Throughput of the machine in estimated samples (VolumeRenderer::estimateSamplesPerPass) per
     // second, all threads; updated from every pass, used to choose the interactive level.
     std::atomic<double> samplesPerSecond{0.0};
+
+    // The caches as the sources of a render::StateRenderer (valid while this context lives).
+    render::StateSources sources() const;
 };
 
 struct SessionSink {
@@ -67,17 +70,12 @@ public:
 private:
     struct Request {
         int64_t id = 0;
-        ResolvedState resolved;
+        render::ResolvedState resolved;
         bool interactive = false;
         std::chrono::steady_clock::time_point received;  // for the log: waiting and preparation time
     };
     void loop();
     void render(const Request& request);
-    render::VolumeRenderer& rendererFor(int step, int level);
-    int chooseInteractiveLevel(int step, const render::RenderParams& params, double budgetSeconds);
-    // The tube scene of the state (nullptr when pathlines are hidden): built once per (step, window),
-    // then only restyled and masked (restart class).
-    std::shared_ptr<const render::PathlineScene> pathlinesFor(const render::RenderState& state);
 
     RenderContext& m_context;
     SessionSink m_sink;
@@ -90,10 +88,8 @@ private:
     std::atomic<bool> m_cancel{false};
 
     // Render thread only.
-    int m_rendererStep = -1, m_lastStep = -1;
-    std::map<int, std::unique_ptr<render::VolumeRenderer>> m_renderers;  // by level, of m_rendererStep
-    std::shared_ptr<render::PathlineScene> m_scene;
-    int m_sceneStep = -1, m_sceneWindow = -1;
+    render::StateRenderer m_renderer;
+    int m_lastStep = -1;
     std::string m_selectionKey;
     nlohmann::json m_selection;
 

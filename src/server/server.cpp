@@ -5,12 +5,12 @@
 #include "data/selection.h"
 #include "render/color_map.h"
 #include "render/pathline_scene.h"
+#include "render/state_renderer.h"
 #include "server/access.h"
 #include "server/dataset_api.h"
 #include "server/image_codec.h"
 #include "server/protocol.h"
 #include "server/render_session.h"
-#include "server/render_support.h"
 #include "server/step_cache.h"
 
 #include <boost/asio.hpp>
@@ -114,22 +114,10 @@ json buildInfo(const Dataset& dataset)
                              {"max", v.global.range.max},
                              {"mean", v.global.mean},
                              {"histogram", v.global.histogram}});
-    const SphericalGrid& g = dataset.levels().front().grid;
-    const double rMax = kSurfaceRadiusKm, rMin = g.rKm.front();
-    const double rTop = std::max(rMax, g.rKm.back());
     json coordinates = json::array();
     for (const auto& c : coordinateInfos()) {
-        double lo = 0, hi = 0;
-        switch (c.id) {
-        case Coordinate::X:
-        case Coordinate::Y:
-        case Coordinate::Z: lo = -rTop, hi = rTop; break;
-        case Coordinate::Lat: lo = -90, hi = 90; break;
-        case Coordinate::Lon: lo = 0, hi = 360; break;
-        case Coordinate::Radius: lo = rMin, hi = g.rKm.back(); break;
-        case Coordinate::Depth: lo = kSurfaceRadiusKm - g.rKm.back(), hi = kSurfaceRadiusKm - rMin; break;
-        }
-        coordinates.push_back({{"name", c.name}, {"units", c.units}, {"min", lo}, {"max", hi}});
+        const CoordinateRange r = coordinateRange(dataset.levels().front().grid, c.id);
+        coordinates.push_back({{"name", c.name}, {"units", c.units}, {"min", r.min}, {"max", r.max}});
     }
     json steps = json::array();
     for (const auto& s : dataset.steps())
@@ -156,7 +144,7 @@ json buildInfo(const Dataset& dataset)
             {"levels", levels},
             {"sample", {{"rows", sample.rows}, {"columns", sample.columns}, {"units", sample.units}}},
             {"colorMaps", maps},
-            {"defaultState", render::toJson(defaultState(dataset))}};
+            {"defaultState", render::toJson(render::defaultState(dataset))}};
 }
 
 // A 4xx/5xx answer {"error": message}.
@@ -200,9 +188,7 @@ int parseIntParameter(std::string_view query, const char* name)
 int checkedStep(const Dataset& dataset, std::string_view query)
 {
     const int step = parseIntParameter(query, "step");
-    const int steps = int(dataset.steps().size());
-    if (step < 0 || step >= steps)
-        fail("step: {} out of range 0..{}", step, steps - 1);
+    dataset.checkStep(step);
     return step;
 }
 
@@ -498,10 +484,10 @@ private:
                         return std::pair<std::string, std::string>(std::move(bytes), "application/octet-stream");
                     });
                 } else if (path == "/api/selection" && method == http::verb::post) {
-                    auto resolved = std::make_shared<ResolvedState>(resolveState(parseBody(request.body()), dataset));
+                    auto resolved = std::make_shared<render::ResolvedState>(render::resolveState(parseBody(request.body()), dataset));
                     offload(version, keepAlive, [this, resolved] {
                         const auto volume = m_server.cache->get(resolved->state.step, 0);
-                        const auto s = selectedVolume(*volume, selectionFilters(resolved->params));
+                        const auto s = selectedVolume(*volume, resolved->params.brushes);
                         return std::pair<std::string, std::string>(json{{"fractionOfMantle", s.fractionOfMantle},
                                                                         {"volumeKm3", s.volumeKm3},
                                                                         {"step", resolved->state.step}}
@@ -509,21 +495,12 @@ private:
                                                                    "application/json");
                     });
                 } else if (path == "/api/screenshot" && method == http::verb::post) {
-                    auto resolved = std::make_shared<ResolvedState>(resolveState(parseBody(request.body()), dataset));
+                    auto resolved = std::make_shared<render::ResolvedState>(render::resolveState(parseBody(request.body()), dataset));
                     offload(version, keepAlive, [this, resolved] {
                         const auto start = std::chrono::steady_clock::now();
-                        render::VolumeRenderer renderer(m_server.cache->get(resolved->state.step, 0));
-                        renderer.setParams(resolved->params);
-                        const auto& pl = resolved->state.pathlines;
-                        if (pl.visible) {
-                            auto scene = std::make_shared<render::PathlineScene>(
-                                *m_server.pathlines->get(resolved->state.step, pl.window), pl.radiusKm);
-                            scene->applyState(resolved->state);
-                            renderer.setPathlines(scene);
-                        }
-                        render::FrameBuffer frame(resolved->params.width, resolved->params.height);
-                        for (int pass = 0; pass < std::max(1, resolved->state.passes); ++pass)
-                            renderer.renderPass(frame);
+                        render::StateRenderer renderer(m_server.dataset, m_server.render.sources());
+                        const auto still = renderer.renderStill(*resolved);
+                        const render::FrameBuffer& frame = still.frame;
                         std::string png = encodePng(frame.resolveRgba8(resolved->state.background), frame.width(),
                                                     frame.height());
                         spdlog::info("screenshot: step {} {}x{} {} passes at level 0 in {:.0f} ms", resolved->state.step,
@@ -542,12 +519,11 @@ private:
                     // Level 1 by default (quick); 0 is exact on the full grid.
                     const int levels = int(dataset.levels().size());
                     const int level = queryParameter(query, "level") ? parseIntParameter(query, "level") : std::min(1, levels - 1);
-                    if (level < 0 || level >= levels)
-                        fail("level: {} out of range 0..{}", level, levels - 1);
-                    auto resolved = std::make_shared<ResolvedState>(resolveState(parseBody(request.body()), dataset));
+                    dataset.checkLevel(level);
+                    auto resolved = std::make_shared<render::ResolvedState>(render::resolveState(parseBody(request.body()), dataset));
                     offload(version, keepAlive, [this, resolved, level] {
                         const auto start = std::chrono::steady_clock::now();
-                        const auto filters = selectionFilters(resolved->params);
+                        const auto& filters = resolved->params.brushes;
                         json stats = selectionStatsJson(*m_server.dataset, *m_server.cache, filters, level, resolved->state.step);
                         spdlog::info("stats: {} steps at level {} in {:.0f} ms", stats["steps"].size(), level,
                                      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());

@@ -1,0 +1,57 @@
+#include "render/level_choice.h"
+
+#include "core/error.h"
+#include "render/volume_renderer.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace raypc::render {
+
+InteractiveChoice chooseInteractive(const std::vector<std::shared_ptr<const StepVolume>>& levels,
+                                    const RenderParams& params, double budgetSeconds, double samplesPerSecond)
+{
+    if (levels.empty())
+        fail("level choice: no levels");
+    const int coarsest = int(levels.size()) - 1;
+    InteractiveChoice c{coarsest, params.width, params.height, 0};
+    if (!(samplesPerSecond > 0))
+        return c;
+    std::vector<std::unique_ptr<VolumeRenderer>> renderers(levels.size());
+    const int level = finestLevelWithin(
+        int(levels.size()), kInteractiveBudgetShare * budgetSeconds,
+        [&](int l) {
+            auto& r = renderers[size_t(l)];
+            if (!r)
+                r = std::make_unique<VolumeRenderer>(levels[size_t(l)]);
+            r->setParams(params);
+            return r->estimateSamplesPerPass() / samplesPerSecond;
+        },
+        &c.estimatedSeconds);
+    if (level >= 0) {
+        c.level = level;
+        return c;
+    }
+    // Even the coarsest level is too slow: fewer pixels (the cost is proportional to them).
+    const double budget = kInteractiveBudgetShare * budgetSeconds;
+    const double scale = std::clamp(std::sqrt(budget / c.estimatedSeconds), 0.25, 1.0);
+    c.width = std::max(1, int(std::lround(params.width * scale)));
+    c.height = std::max(1, int(std::lround(params.height * scale)));
+    c.estimatedSeconds *= double(c.width) * double(c.height) / (double(params.width) * double(params.height));
+    return c;
+}
+
+int chooseLevelForBudget(const std::vector<std::shared_ptr<const StepVolume>>& levels, const RenderParams& params,
+                         double budgetSeconds, double samplesPerSecond)
+{
+    if (levels.empty())
+        fail("level choice: no levels");
+    const int level = finestLevelWithin(int(levels.size()), budgetSeconds, [&](int l) {
+        VolumeRenderer probe(levels[size_t(l)]);
+        probe.setParams(params);
+        return probe.estimateSamplesPerPass() / samplesPerSecond;
+    });
+    return level >= 0 ? level : int(levels.size()) - 1;
+}
+
+}  // namespace raypc::render

@@ -1,0 +1,172 @@
+#include "render/state_renderer.h"
+
+#include "core/error.h"
+
+#include <spdlog/spdlog.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace raypc::render {
+
+RenderState defaultState(const Dataset& dataset)
+{
+    RenderState s;
+    const int anomaly = dataset.variableIndex("temperature anomaly");
+    const int var = anomaly >= 0 ? anomaly : 0;
+    s.colorVariable = dataset.variables().at(size_t(var)).name;
+    s.colorMap = ColorMapId::BlueWhiteRed;
+    // Symmetric range over the bulk of the values, so that plumes and slabs saturate.
+    const ValueRange r = dataset.variables()[size_t(var)].global.range;
+    const float m = 0.6f * std::max(std::abs(r.min), std::abs(r.max));
+    if (m > 0)
+        s.colorRange = ValueRange{-m, m};
+    s.opacity = {{0.0f, 0.8f}, {0.3f, 0.05f}, {0.4f, 0.0f}, {0.6f, 0.0f}, {0.7f, 0.05f}, {1.0f, 0.8f}};
+    s.opacityUnitKm = 200.0f;
+    s.camera.distanceKm = 22000.0;
+    s.passes = 8;
+    return s;
+}
+
+ResolvedState resolveState(RenderState state, const Dataset& dataset)
+{
+    dataset.checkStep(state.step);
+    if (state.level)
+        dataset.checkLevel(*state.level);
+    ResolvedState r;
+    r.params = resolveParams(state, catalogOf(dataset));
+    r.state = std::move(state);
+    return r;
+}
+
+ResolvedState resolveState(const nlohmann::json& document, const Dataset& dataset, const std::string& what)
+{
+    return resolveState(parseRenderState(document, what), dataset);
+}
+
+StateRenderer::StateRenderer(std::shared_ptr<const Dataset> dataset, StateSources sources)
+    : m_dataset(std::move(dataset)), m_sources(std::move(sources))
+{
+    if (!m_sources.volume)
+        m_sources.volume = [d = m_dataset](int step, int level) { return d->load(step, level); };
+    if (!m_sources.pathlines)
+        m_sources.pathlines = [d = m_dataset](int step, int window) {
+            return std::make_shared<const std::vector<PathlineSet>>(loadPathlineWindow(d->dir(), step, window));
+        };
+}
+
+StateRenderer::~StateRenderer() = default;
+
+VolumeRenderer& StateRenderer::rendererFor(int step, int level)
+{
+    // Reload class: a new step drops every level's renderer of the old one.
+    if (step != m_rendererStep) {
+        m_renderers.clear();
+        m_rendererStep = step;
+    }
+    auto& slot = m_renderers[level];
+    if (!slot)
+        slot = std::make_unique<VolumeRenderer>(m_sources.volume(step, level));
+    return *slot;
+}
+
+std::shared_ptr<const PathlineScene> StateRenderer::pathlinesFor(const RenderState& state)
+{
+    if (!state.pathlines.visible)
+        return nullptr;
+    // Reload class: a new step or window loads that window and builds a new BVH.
+    if (!m_scene || m_sceneStep != state.step || m_sceneWindow != state.pathlines.window) {
+        std::shared_ptr<const std::vector<PathlineSet>> window;
+        try {
+            window = m_sources.pathlines(state.step, state.pathlines.window);
+        } catch (const Error& e) {
+            fail("pathlines: {}", e.what());
+        }
+        const auto start = std::chrono::steady_clock::now();
+        m_scene.reset();
+        m_scene = std::make_shared<PathlineScene>(*window, state.pathlines.radiusKm);
+        m_sceneStep = state.step;
+        m_sceneWindow = state.pathlines.window;
+        spdlog::debug("pathline scene of step {} window {}: {} lines in {:.0f} ms", state.step, state.pathlines.window,
+                      m_scene->lineCount(),
+                      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    }
+    // Restart class: radius, style and the visibility mask (attribute filters, brushes).
+    m_scene->applyState(state);
+    return m_scene;
+}
+
+StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, const LevelPolicy& policy)
+{
+    const RenderState& state = resolved.state;
+    Prepared p;
+    p.params = resolved.params;
+    const int step = state.step;
+    const int levels = int(m_dataset->levels().size());
+    const double budget = kInteractiveBudgetShare * state.timeBudgetMs / 1000.0;
+    const double rate = policy.samplesPerSecond;
+
+    if (state.level) {
+        p.level = *state.level;
+    } else if (rate > 0) {
+        // Coarse to fine (finestLevelWithin): while only the coarse levels fit, the finer ones of a
+        // new step are neither loaded nor prepared. Reload class when the level changes.
+        const int fits = finestLevelWithin(levels, budget, [&](int l) {
+            VolumeRenderer& r = rendererFor(step, l);
+            r.setParams(p.params);
+            return r.estimateSamplesPerPass() / rate;
+        });
+        p.level = fits >= 0 ? fits : levels - 1;
+        // Even the coarsest level misses the budget: 1/2 or 1/4 of the pixels per axis.
+        if (fits < 0 && policy.reduceResolution) {
+            const double seconds = rendererFor(step, p.level).estimateSamplesPerPass() / rate;
+            const int divisor = seconds <= budget ? 1 : seconds / 4 <= budget ? 2 : 4;
+            p.params.width = std::max(1, (p.params.width + divisor - 1) / divisor);
+            p.params.height = std::max(1, (p.params.height + divisor - 1) / divisor);
+        }
+    } else {
+        p.level = 0;
+    }
+
+    VolumeRenderer& renderer = rendererFor(step, p.level);
+    renderer.setParams(p.params);  // restart class: camera, transfer function, brushes, size
+    p.scene = pathlinesFor(state);  // before any pass reads it
+    for (auto& [l, r] : m_renderers)
+        if (r.get() != &renderer)
+            r->setPathlines(nullptr);  // no other renderer keeps a scene that changes
+    renderer.setPathlines(p.scene);
+    p.renderer = &renderer;
+    p.estimatedSamplesPerPass = renderer.estimateSamplesPerPass();
+    return p;
+}
+
+StateRenderer::Still StateRenderer::renderStill(const ResolvedState& resolved, int passes,
+                                                const std::atomic<bool>* cancel)
+{
+    const Prepared p = prepare(resolved);
+    Still still{FrameBuffer(p.params.width, p.params.height), p.level, p.scene ? p.scene->visibleCount() : 0, {}};
+    const int n = passes > 0 ? passes : std::max(1, resolved.state.passes);
+    for (int pass = 0; pass < n; ++pass) {
+        if (cancel && cancel->load())
+            break;
+        const PassStats s = p.renderer->renderPass(still.frame, cancel);
+        if (s.cancelled)
+            break;
+        still.passes.push_back(s);
+    }
+    return still;
+}
+
+double StateRenderer::measureSamplesPerSecond(int step, const RenderParams& params)
+{
+    VolumeRenderer& calibration = rendererFor(step, int(m_dataset->levels().size()) - 1);
+    calibration.setParams(params);
+    FrameBuffer scratch(params.width, params.height);
+    calibration.renderPass(scratch);  // the first pass also starts the worker threads
+    const PassStats s = calibration.renderPass(scratch);
+    return s.seconds > 0 ? calibration.estimateSamplesPerPass() / s.seconds : 0;
+}
+
+}  // namespace raypc::render

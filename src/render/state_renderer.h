@@ -1,0 +1,113 @@
+// The one path from a render state to pixels, shared by `raypc render`, `raypc demo`, the server's
+// screenshots and its interactive sessions:
+//
+//   RenderState --resolveState--> ResolvedState (checked against the dataset, names -> indices)
+//               --StateRenderer::prepare--> level, renderer of (step, level), pathline scene, size
+//               --renderPass x N--> FrameBuffer --resolveRgba8 / averagedDepthKm--> image, depth
+//
+// Cost classes (house style): a new step or level loads a volume and builds a renderer (reload);
+// a new pathline window builds a tube scene (reload); everything else restarts passes.
+//
+// Thread safety: one StateRenderer per thread of work (a session, a CLI run, a screenshot); the
+// sources it is given must be thread-safe when shared.
+#pragma once
+
+#include "data/dataset.h"
+#include "data/pathlines.h"
+#include "render/pathline_scene.h"
+#include "render/render_state.h"
+#include "render/volume_renderer.h"
+
+#include <nlohmann/json.hpp>
+
+#include <atomic>
+#include <functional>
+#include <map>
+#include <memory>
+#include <vector>
+
+namespace raypc::render {
+
+// A state that shows the data well without tuning (the UI's first view and `raypc demo`'s
+// picture): the temperature anomaly (if the dataset has it, else the first variable) on the
+// blue-white-red map, opacity only on the hot and cold tails.
+RenderState defaultState(const Dataset& dataset);
+
+struct ResolvedState {
+    RenderState state;
+    RenderParams params;
+};
+// Checks a state against the dataset (step and level in range, names known) and resolves it.
+// Throws raypc::Error naming the key, e.g. "step: 300 out of range 0..11".
+ResolvedState resolveState(RenderState state, const Dataset& dataset);
+// Parses a state document first (parseRenderState; `what` names the source in messages).
+ResolvedState resolveState(const nlohmann::json& document, const Dataset& dataset, const std::string& what = "state");
+
+// Where a StateRenderer gets volumes and pathlines. Unset members read the dataset directly
+// (Dataset::load, loadPathlineWindow); the server passes its shared caches.
+struct StateSources {
+    std::function<std::shared_ptr<const StepVolume>(int step, int level)> volume;
+    std::function<std::shared_ptr<const std::vector<PathlineSet>>(int step, int window)> pathlines;
+};
+
+// How the level is chosen when the state leaves it open (RenderState::level unset).
+struct LevelPolicy {
+    // > 0: the finest level whose predicted pass (VolumeRenderer::estimateSamplesPerPass /
+    // samplesPerSecond) fits kInteractiveBudgetShare of the state's timeBudgetMs (interactive
+    // frames, `raypc render --lod auto`). 0: level 0 (still frames and scripted figures, so that a
+    // figure does not depend on the machine's speed).
+    double samplesPerSecond = 0;
+    // When even the coarsest level misses the budget, render 1/2 or 1/4 of the pixels per axis (the
+    // interactive UI scales the frame up).
+    bool reduceResolution = false;
+};
+
+class StateRenderer {
+public:
+    explicit StateRenderer(std::shared_ptr<const Dataset> dataset, StateSources sources = {});
+    ~StateRenderer();
+    StateRenderer(const StateRenderer&) = delete;
+    StateRenderer& operator=(const StateRenderer&) = delete;
+
+    // What prepare() set up for one state; `renderer` stays valid until the next prepare().
+    struct Prepared {
+        int level = 0;
+        RenderParams params;  // the state's, with the size reduced if LevelPolicy asked for it
+        VolumeRenderer* renderer = nullptr;
+        std::shared_ptr<const PathlineScene> scene;  // nullptr when pathlines are hidden
+        double estimatedSamplesPerPass = 0;
+    };
+    // Chooses the level, maps the volume, sets the parameters and the pathline scene. Throws
+    // raypc::Error when data cannot be read (e.g. a dataset without pathlines asked to show them).
+    Prepared prepare(const ResolvedState& resolved, const LevelPolicy& policy = {});
+
+    // The renderer of (step, level), created on first use; a new step drops the old step's.
+    VolumeRenderer& rendererFor(int step, int level);
+
+    // A converged picture: prepare() with LevelPolicy{} (level 0 unless the state names one), then
+    // `passes` passes (the state's when 0). Stops early when `cancel` becomes true (the frame then
+    // holds fewer passes; check frame.passes()).
+    struct Still {
+        FrameBuffer frame;
+        int level = 0;
+        size_t pathlinesShown = 0;
+        std::vector<PassStats> passes;
+    };
+    Still renderStill(const ResolvedState& resolved, int passes = 0, const std::atomic<bool>* cancel = nullptr);
+
+    // The machine's throughput now, in estimated samples per second (all threads): two passes at
+    // the coarsest level of `step` (the first also starts the worker threads). For `--lod auto`.
+    double measureSamplesPerSecond(int step, const RenderParams& params);
+
+private:
+    std::shared_ptr<const PathlineScene> pathlinesFor(const RenderState& state);
+
+    std::shared_ptr<const Dataset> m_dataset;
+    StateSources m_sources;
+    int m_rendererStep = -1;
+    std::map<int, std::unique_ptr<VolumeRenderer>> m_renderers;  // by level, of m_rendererStep
+    std::shared_ptr<PathlineScene> m_scene;
+    int m_sceneStep = -1, m_sceneWindow = -1;
+};
+
+}  // namespace raypc::render
