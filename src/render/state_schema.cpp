@@ -555,9 +555,7 @@ public:
     json schema(const json& defaults) const override { return this->annotate(m_object.schema(defaults), json()); }
     void rows(const std::string& prefix, const json& defaults, Rows& out) const override
     {
-        if (!this->doc.meaning.empty())
-            out.push_back({prefix + this->key, "object" + this->sinceText(), "—", this->doc.meaning,
-                           costText(this->doc.cost)});
+        out.push_back({prefix + this->key, "object" + this->sinceText(), "—", this->doc.meaning, "—"});
         m_object.rows(prefix + this->key + ".", defaults, out);
     }
     json forbiddenBefore(int version) const override { return m_object.forbiddenBefore(version); }
@@ -583,7 +581,7 @@ FieldPtr<Owner> leaf(std::string key, Access access, Kind<T> kind, FieldDoc doc,
 }
 
 template <class Owner>
-FieldPtr<Owner> group(std::string key, std::string title, std::vector<FieldPtr<Owner>> fields, FieldDoc doc = {})
+FieldPtr<Owner> group(std::string key, std::string title, std::vector<FieldPtr<Owner>> fields, FieldDoc doc)
 {
     return std::make_shared<Group<Owner>>(std::move(key), Object<Owner>{std::move(title), std::move(fields), {}},
                                           std::move(doc));
@@ -669,10 +667,12 @@ const Object<RenderState>& document()
                       leaf<S>("fovYDeg", at(&S::camera, &C::fovYDeg), number<double>(1e-3, 179.9),
                               {.meaning = "vertical field of view, degrees"}),
                       leaf<S>("targetKm", at(&S::camera, &C::targetKm), vec3(false),
-                              {.meaning = "point looked at, km (contest Cartesian frame)"})}),
+                              {.meaning = "point looked at, km (contest Cartesian frame)"})},
+                     {.meaning = "the orbit camera"}),
             group<S>("image", "",
                      {leaf<S>("width", at(&S::width), integer(1, 16384), {.meaning = "image width, pixels"}),
-                      leaf<S>("height", at(&S::height), integer(1, 16384), {.meaning = "image height, pixels"})}),
+                      leaf<S>("height", at(&S::height), integer(1, 16384), {.meaning = "image height, pixels"})},
+                     {.meaning = "the size of the rendered image"}),
             group<S>(
                 "color", "",
                 {leaf<S>("variable", at(&S::colorVariable), text(true),
@@ -695,7 +695,8 @@ const Object<RenderState>& document()
                          }),
                  leaf<S>("opacityUnitKm", at(&S::opacityUnitKm), number<float>(1e-6, 1e9),
                          {.meaning = "path length over which `opacity` applies (docs/rendering.md, opacity "
-                                     "correction)"})}),
+                                     "correction)"})},
+                {.meaning = "the volume's transfer function"}),
             leaf<S>("brushes", at(&S::brushes),
                     arrayOf(namedRange<BrushSpec>("Brush", "a variable or a coordinate",
                                                   "a variable or coordinate name"),
@@ -725,7 +726,8 @@ const Object<RenderState>& document()
                               {.meaning = "colour map of the core variable"}),
                       leaf<S>("range", at(&S::core, &S::Core::range), range(),
                               {.meaning = "value range for the core colour map",
-                               .defaultText = "null: the global range"})}),
+                               .defaultText = "null: the global range"})},
+                     {.meaning = "the core sphere at the core–mantle boundary"}),
             group<S>("shading", "",
                      {leaf<S>("enabled", at(&S::shading, &ShadingStyle::enabled), boolean(),
                               {.meaning = "gradient (two-sided diffuse) shading of the volume"}),
@@ -735,7 +737,8 @@ const Object<RenderState>& document()
                       leaf<S>("ambient", at(&S::shading, &ShadingStyle::ambient), number<float>(0, 1),
                               {.meaning = "ambient lighting weight (also used for the core)"}),
                       leaf<S>("diffuse", at(&S::shading, &ShadingStyle::diffuse), number<float>(0, 1),
-                              {.meaning = "diffuse lighting weight (also used for the core)"})}),
+                              {.meaning = "diffuse lighting weight (also used for the core)"})},
+                     {.meaning = "lighting of the volume and the core"}),
             leaf<S>("background", at(&S::background), colour(), {.meaning = "background colour of PNG output"}),
             group<S>(
                 "pathlines", "PathlineState",
@@ -771,7 +774,7 @@ const Object<RenderState>& document()
                  leaf<S>("ambientOcclusion", at(&S::pathlines, &P::ambientOcclusion), boolean(),
                          {.meaning = "ambient occlusion on the tubes (a few rays per pass against the tubes and the "
                                      "core)"})},
-                {.meaning = "tubes along the pathlines injected in the last `window` steps", .cost = Cost::None, .since = 2}),
+                {.meaning = "tubes along the pathlines injected in the last `window` steps", .since = 2}),
         },
         {}};
     return doc;

@@ -5,9 +5,10 @@
 //   node ui_state_test.mjs RAYPC STATE_CASES DATASET WORK_DIR
 // Cases: the server's default state round-trips through the UI's loader unchanged (also through
 // the URL form and back through raypc); a state with every optional value set likewise; every
-// examples/*.json is accepted by the schema, the UI and raypc; malformed documents are refused by
-// all three naming the same key; and 400 random mutations of the default state are accepted or
-// refused alike by raypc and the UI (apart from the three relations JSON Schema cannot express).
+// examples/*.json and the example in docs/state.md are accepted by the schema, the UI and raypc;
+// malformed documents are refused by all three naming the same key; and 400 random mutations of
+// the default state are accepted or refused alike by raypc and the UI (apart from the three
+// relations JSON Schema cannot express).
 import { spawnSync } from 'node:child_process';
 import { mkdirSync, readFileSync, readdirSync, writeFileSync } from 'node:fs';
 import { createRequire } from 'node:module';
@@ -105,11 +106,15 @@ const defaults = JSON.parse(run(stateCases, ['default', dataset]));
   check(loaded.ok && same(loaded.json, parsed.json), `the rich state through the UI's loader: ${JSON.stringify(loaded)}`);
 }
 
-// ---- every example is accepted by the schema, the UI and raypc alike ---------------------------
+// ---- every example (and docs/state.md's) is accepted by the schema, the UI and raypc alike -------
 {
   const names = readdirSync(join(root, 'examples')).filter((f) => f.endsWith('.json')).sort();
   check(names.length > 0, 'no examples/*.json');
   const docs = names.map((f) => JSON.parse(readFileSync(join(root, 'examples', f), 'utf8')));
+  const docExample = /```json\n([\s\S]*?)```/.exec(readFileSync(join(root, 'docs/state.md'), 'utf8'));
+  check(docExample, 'docs/state.md has no ```json example');
+  names.push('../docs/state.md (its example)');
+  docs.push(JSON.parse(docExample?.[1] ?? '{}'));
   const loaded = docs.map((d) => uiLoad(d, defaults));
   const cpp = cppParse([...docs, ...loaded.map((l) => l.json ?? {})]);
   names.forEach((name, i) => {
@@ -118,7 +123,7 @@ const defaults = JSON.parse(run(stateCases, ['default', dataset]));
     check(cpp[i].ok, `raypc refuses examples/${name}: ${cpp[i].error}`);
     check(cpp[docs.length + i].ok, `raypc refuses examples/${name} as the UI loaded it: ${cpp[docs.length + i].error}`);
   });
-  console.log(`${names.length} examples accepted by the schema, the UI and raypc`);
+  console.log(`${names.length} examples (with docs/state.md's) accepted by the schema, the UI and raypc`);
 }
 
 // ---- malformed documents are refused by all three, naming the same key -------------------------
