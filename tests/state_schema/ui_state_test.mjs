@@ -39,11 +39,18 @@ run(process.execPath, [join(web, 'build.mjs'), '--generate']);
 
 // The UI's loader, bundled as the page bundles it.
 const require = createRequire(join(web, 'package.json'));
-const { buildSync } = require('esbuild');
+const fromWeb = (name) => {
+  try {
+    return require(name);
+  } catch {
+    throw new Error(`${name} is not installed in ${join(web, 'node_modules')}: run scripts/build-web.sh`);
+  }
+};
+const { buildSync } = fromWeb('esbuild');
 const bundle = join(work, 'state.mjs');
 buildSync({ entryPoints: [join(web, 'src/state.ts')], bundle: true, format: 'esm', platform: 'node', outfile: bundle, logLevel: 'error' });
 const ui = await import(pathToFileURL(bundle).href);
-const Ajv = require('ajv');
+const Ajv = fromWeb('ajv');
 const validate = new Ajv({ allowUnionTypes: true, strict: true }).compile(schema);
 
 const uiLoad = (doc, defaults) => {
