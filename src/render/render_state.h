@@ -3,7 +3,9 @@
 // strings here; resolveParams turns them into indices for one volume.
 //
 // Parsing is strict: unknown keys and bad values throw raypc::Error naming the key
-// (e.g. "STATE.json: camera.distanceKm: expected a positive number, found -3").
+// (e.g. "STATE.json: camera.distanceKm: expected a number in [0.001, 1000000000], found -3").
+// Every key is described once, in state_schema.cpp: parseRenderState, toJson, the JSON Schema
+// and the docs table are derived from that description; a new key is an entry there and a member here.
 #pragma once
 
 #include "render/volume_renderer.h"

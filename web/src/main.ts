@@ -950,11 +950,11 @@ class App {
       this.commit(false);
     });
     $('lighting').addEventListener('change', () => {
-      this.state.shading = { ...(this.state.shading as object), enabled: $<HTMLInputElement>('lighting').checked };
+      this.state.shading = { ...this.state.shading, enabled: $<HTMLInputElement>('lighting').checked };
       this.commit(false);
     });
     $('core').addEventListener('change', () => {
-      this.state.core = { ...(this.state.core as object), visible: $<HTMLInputElement>('core').checked };
+      this.state.core = { ...this.state.core, visible: $<HTMLInputElement>('core').checked };
       this.commit(false);
     });
     $('cancel').addEventListener('click', () => {

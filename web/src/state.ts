@@ -1,120 +1,111 @@
 // The render state document (docs/state.md), its shareable URL form and file form.
-// The UI keeps one RenderState and sends it whole; keys are exactly the server's, because the
-// server parses strictly (an unknown key is an error).
+// Its types and its validator are generated (web/build.mjs) from the JSON Schema that raypc derives
+// from the one description of the document (src/render/state_schema.cpp), so the UI checks a loaded
+// document as strictly as the server parses it (an unknown key is an error) and keeps no copy of it.
+import type { ErrorObject, ValidateFunction } from 'ajv';
+import schema from './generated/state.schema.json';
+import validateGenerated from './generated/validate_state';
+import type { RenderState } from './generated/state_types';
 
-export interface CameraState {
-  azimuthDeg: number;
-  elevationDeg: number;
-  distanceKm: number;
-  fovYDeg: number;
-  targetKm: [number, number, number];
-}
-export interface Brush {
-  name: string;
-  min: number;
-  max: number;
-}
-export interface PathlineFilter {
-  name: string; // a line attribute column, e.g. "length"
-  min: number;
-  max: number;
-}
-// The "pathlines" object of state version 2 (docs/state.md).
-export interface PathlineState {
-  visible: boolean;
-  radiusKm: number;
-  window: number;
-  colorBy: string; // "age" or a line attribute column
-  colorMap: string | null;
-  range: [number, number] | null;
-  filterByBrushes: boolean;
-  filters: PathlineFilter[];
-  ambientOcclusion: boolean;
-}
-export const kPathlineDefaults: PathlineState = {
-  visible: false, radiusKm: 12, window: 10, colorBy: 'age', colorMap: 'blue-white-red', range: null,
-  filterByBrushes: true, filters: [], ambientOcclusion: true,
-};
+export type { Brush, CameraState, PathlineFilter, PathlineState, RenderState } from './generated/state_types';
 
-export interface RenderState {
-  version: number;
-  step: number;
-  camera: CameraState;
-  image: { width: number; height: number };
-  color: {
-    variable: string;
-    colorMap: string;
-    range: [number, number] | null;
-    opacity: [number, number][];
-    opacityUnitKm: number;
-  };
-  brushes: Brush[];
-  level: number | 'auto';
-  timeBudgetMs: number;
-  passes: number;
-  pathlines?: PathlineState; // version 2 only
-  [key: string]: unknown; // stepFactor, depthOpacity, core, shading, background: passed through
-}
+const validateDocument = validateGenerated as unknown as ValidateFunction;
 
-// Versions this UI reads; it writes the version of the server's default state (1: no pathlines).
-export const kStateVersions = [1, 2];
+// Versions this UI reads; it writes the version of the server's default state.
+export const kStateVersions: number[] = schema.properties.version.enum;
 
 export function cloneState(s: RenderState): RenderState {
   return JSON.parse(JSON.stringify(s));
 }
 
-// Fills keys missing from `s` with the defaults (the server's default state, whose version the
-// result takes); throws on something that is not a state document, naming what is wrong. A version-1
-// document has no pathlines; a version-2 one for a server that reads only version 1 is refused.
+// A copy of `defaults` with the keys of `s` merged in (objects key by key, anything else replaced),
+// after checking `s` against the schema; the result takes the defaults' version (the server's default
+// state). Throws an Error naming the key for anything the schema refuses. A version-1 document has no
+// pathlines, and one newer than the server reads is refused. The server checks the rest (min <= max
+// and ascending opacity positions, which JSON Schema cannot express; names against the dataset).
 export function normaliseState(s: unknown, defaults: RenderState): RenderState {
   if (typeof s !== 'object' || s === null || Array.isArray(s)) throw new Error('state: expected a JSON object');
-  const o = s as Record<string, unknown>;
-  if (!kStateVersions.includes(o.version as number))
-    throw new Error(`state: version ${JSON.stringify(o.version)}, expected one of ${kStateVersions.join(', ')}`);
-  if ((o.version as number) > defaults.version)
-    throw new Error(`state: version ${o.version as number}, but the server reads version ${defaults.version}`);
-  if (o.version === 1 && 'pathlines' in o) throw new Error('state: pathlines: unknown key in a version 1 document');
-  const out = cloneState(defaults) as Record<string, unknown>;
-  for (const [k, v] of Object.entries(o)) {
-    if (k === 'version') continue;
-    const d = out[k];
-    if (k === 'pathlines') out[k] = checkPathlines(v, (d as PathlineState | undefined) ?? kPathlineDefaults);
-    else if (d && typeof d === 'object' && !Array.isArray(d) && v && typeof v === 'object' && !Array.isArray(v))
-      out[k] = { ...(d as object), ...(v as object) };
-    else out[k] = v;
-  }
+  const version = (s as Record<string, unknown>).version;
+  const newest = Math.max(...kStateVersions);
+  if (version === undefined) throw new Error(`state: version: missing; expected ${newest}`);
+  if (!kStateVersions.includes(version as number))
+    throw new Error(`state: version: ${JSON.stringify(version)} is not supported, expected one of ${kStateVersions.join(', ')}`);
+  if ((version as number) > defaults.version)
+    throw new Error(`state: version ${version as number}, but the server reads version ${defaults.version}`);
+  if (!validateDocument(s)) throw new Error(`state: ${describeError(validateDocument.errors ?? [], s)}`);
+  const out = merge(cloneState(defaults) as unknown as Record<string, unknown>, s as Record<string, unknown>) as unknown as RenderState;
   out.version = defaults.version;
-  if (defaults.version >= 2 && !out.pathlines) out.pathlines = { ...kPathlineDefaults, filters: [] };
-  const r = out as RenderState;
-  if (!Array.isArray(r.brushes)) throw new Error('state: brushes: expected an array');
-  if (!r.camera || typeof r.camera.azimuthDeg !== 'number') throw new Error('state: camera: expected an object');
-  return r;
+  return out;
 }
 
-// The pathlines object with defaults for missing keys; throws naming the key for an unknown key or a
-// wrong type (the server checks ranges).
-export function checkPathlines(v: unknown, defaults: PathlineState): PathlineState {
-  if (typeof v !== 'object' || v === null || Array.isArray(v)) throw new Error('state: pathlines: expected an object');
-  const out = { ...defaults, filters: defaults.filters.map((f) => ({ ...f })) } as unknown as Record<string, unknown>;
-  const types: Record<string, (x: unknown) => boolean> = {
-    visible: (x) => typeof x === 'boolean',
-    radiusKm: (x) => typeof x === 'number',
-    window: (x) => Number.isInteger(x),
-    colorBy: (x) => typeof x === 'string',
-    colorMap: (x) => x === null || typeof x === 'string',
-    range: (x) => x === null || (Array.isArray(x) && x.length === 2 && x.every((y) => typeof y === 'number')),
-    filterByBrushes: (x) => typeof x === 'boolean',
-    filters: (x) => Array.isArray(x) && x.every((f) => f && typeof f === 'object' && typeof f.name === 'string' &&
-      typeof f.min === 'number' && typeof f.max === 'number' && Object.keys(f).every((k) => ['name', 'min', 'max'].includes(k))),
-    ambientOcclusion: (x) => typeof x === 'boolean',
-  };
-  for (const [k, x] of Object.entries(v as Record<string, unknown>)) {
-    const ok = types[k];
-    if (!ok) throw new Error(`state: pathlines.${k}: unknown key`);
-    if (!ok(x)) throw new Error(`state: pathlines.${k}: unexpected value ${JSON.stringify(x).slice(0, 60)}`);
-    out[k] = k === 'filters' ? (x as PathlineFilter[]).map((f) => ({ name: f.name, min: f.min, max: f.max })) : x;
+function isObject(x: unknown): x is Record<string, unknown> {
+  return typeof x === 'object' && x !== null && !Array.isArray(x);
+}
+
+function merge(base: Record<string, unknown>, over: Record<string, unknown>): Record<string, unknown> {
+  for (const [k, v] of Object.entries(over)) {
+    const b = base[k];
+    base[k] = isObject(b) && isObject(v) ? merge(b, v) : JSON.parse(JSON.stringify(v));
   }
-  return out as unknown as PathlineState;
+  return base;
+}
+
+// ---- messages: "pathlines.filters[0].max: missing", as the server words them where it can ----------
+
+function unescapePointer(part: string): string {
+  return part.replace(/~1/g, '/').replace(/~0/g, '~');
+}
+
+// "/brushes/0/min" -> "brushes[0].min"
+function keyPath(pointer: string, key?: string): string {
+  let out = '';
+  for (const part of [...pointer.split('/').slice(1).map(unescapePointer), ...(key === undefined ? [] : [key])])
+    out += /^\d+$/.test(part) ? `[${part}]` : (out ? '.' : '') + part;
+  return out || 'top level';
+}
+
+function at(root: unknown, pointer: string): unknown {
+  let x: unknown = root;
+  for (const part of pointer.split('/').slice(1).map(unescapePointer)) x = (x as Record<string, unknown> | undefined)?.[part];
+  return x;
+}
+
+function expectation(e: ErrorObject): string {
+  const p = e.params as Record<string, unknown>;
+  switch (e.keyword) {
+    case 'type': return String(p.type).replace(/,/g, ' or ');
+    case 'const': return JSON.stringify(p.allowedValue);
+    case 'enum': return `one of ${(p.allowedValues as unknown[]).map((v) => JSON.stringify(v)).join(', ')}`;
+    case 'minimum': case 'maximum': case 'exclusiveMinimum': case 'exclusiveMaximum':
+      return `a number ${String(p.comparison)} ${String(p.limit)}`;
+    case 'minItems': return `at least ${String(p.limit)} items`;
+    case 'maxItems': return `at most ${String(p.limit)} items`;
+    case 'minLength': return 'a non-empty string';
+    case 'not': {
+      const negated = (at(schema, e.schemaPath.slice(1)) as Record<string, unknown> | undefined)?.const;
+      return `anything but ${JSON.stringify(negated)}`;
+    }
+    default: return e.message ?? e.keyword;
+  }
+}
+
+function describeError(errors: ErrorObject[], doc: unknown): string {
+  // Alternatives (anyOf, e.g. level) report each branch before themselves: name them all.
+  const alternatives = errors.find((e) => e.keyword === 'anyOf');
+  const e = alternatives ?? errors[0];
+  if (!e) return 'not a valid state document';
+  const p = e.params as Record<string, unknown>;
+  if (e.keyword === 'additionalProperties') return `${keyPath(e.instancePath, String(p.additionalProperty))}: unknown key`;
+  if (e.keyword === 'required') return `${keyPath(e.instancePath, String(p.missingProperty))}: missing`;
+  const path = keyPath(e.instancePath);
+  // A key newer than the document's version: {"not": {}, "description": "needs version N"}.
+  const gate = e.keyword === 'not' ? at(schema, e.schemaPath.slice(1).replace(/\/not$/, '')) as Record<string, unknown> : null;
+  if (gate && isObject(gate.not) && !Object.keys(gate.not).length)
+    return `${path}: ${String(gate.description)}, the document says version ${JSON.stringify(at(doc, '/version'))}`;
+  const expected = alternatives
+    ? errors.filter((x) => x !== e && x.schemaPath.startsWith(e.schemaPath)).map(expectation).join(' or ')
+    : expectation(e);
+  return `${path}: expected ${expected}, found ${JSON.stringify(at(doc, e.instancePath))?.slice(0, 80)}`;
 }
 
 // base64url of the UTF-8 JSON, for `#state=…`.

@@ -1,0 +1,828 @@
+// The state document described once (document() below) and everything derived from it: strict
+// parsing with messages that name the key, serialisation, the JSON Schema and the docs table.
+#include "render/state_schema.h"
+
+#include "core/error.h"
+#include "render/render_state.h"
+
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <set>
+
+namespace raypc::render {
+namespace {
+
+using nlohmann::json;
+
+// ---- Reading ------------------------------------------------------------------------------------
+
+// What a whole parse shares: the source's name for messages and the document's version (keys
+// newer than it are refused).
+struct ParseContext {
+    std::string what;
+    int version = kRenderStateVersion;
+};
+
+// Strict reading of one JSON object: every key must be consumed; `path` prefixes messages.
+class Reader {
+public:
+    Reader(const json& object, ParseContext& context, std::string path)
+        : m_object(object), m_context(context), m_path(std::move(path))
+    {
+        if (!m_object.is_object())
+            failAt("", "expected an object, found " + std::string(m_object.type_name()));
+    }
+
+    [[noreturn]] void failAt(const std::string& key, const std::string& message) const
+    {
+        fail("{}: {}: {}", m_context.what,
+             key.empty() ? (m_path.empty() ? std::string("top level") : m_path) : name(key), message);
+    }
+    std::string name(const std::string& key) const { return m_path.empty() ? key : m_path + "." + key; }
+    int version() const { return m_context.version; }
+    void setVersion(int version) { m_context.version = version; }
+
+    const json* get(const std::string& key)
+    {
+        m_used.insert(key);
+        const auto it = m_object.find(key);
+        return it == m_object.end() ? nullptr : &*it;
+    }
+    Reader child(const std::string& key, const json& value) const { return Reader(value, m_context, name(key)); }
+
+    // Throws on keys nobody asked for.
+    void finish() const
+    {
+        for (auto it = m_object.begin(); it != m_object.end(); ++it)
+            if (!m_used.count(it.key()))
+                failAt(it.key(), "unknown key");
+    }
+
+private:
+    const json& m_object;
+    ParseContext& m_context;
+    std::string m_path;
+    std::set<std::string> m_used;
+};
+
+// ---- Kinds of values --------------------------------------------------------------------------
+
+// One kind of JSON value and the C++ type it fills: how to read it (strictly, failing through the
+// reader with the key), write it, describe it as JSON Schema and name it in the docs table.
+template <class T>
+struct Kind {
+    // Reads a present value (possibly null) into `target`, which holds the default.
+    std::function<void(const json& value, T& target, Reader& at, const std::string& key)> read;
+    std::function<json(const T&)> write;
+    json schema;
+    std::string type;  // the docs table's "type" column
+    // Arrays of objects: rows for their elements' keys, and the schema refusing element keys newer
+    // than a version (null: none).
+    std::function<void(const std::string& path, std::vector<std::vector<std::string>>& rows)> elementRows{};
+    std::function<json(int version)> forbiddenBefore{};
+};
+
+std::string boundText(double x) { return fmt::format("{}", x); }
+
+// Whole bounds as JSON integers, so that the schema reads as written.
+json boundJson(double x) { return x == std::trunc(x) && std::abs(x) < 1e15 ? json(int64_t(x)) : json(x); }
+
+json numberSchema(const char* type, double lo, double hi)
+{
+    json s{{"type", type}};
+    if (std::isfinite(lo))
+        s["minimum"] = boundJson(lo);
+    if (std::isfinite(hi))
+        s["maximum"] = boundJson(hi);
+    return s;
+}
+
+std::string rangeText(const char* type, double lo, double hi)
+{
+    if (std::isfinite(lo) && std::isfinite(hi))
+        return fmt::format("{} in [{}, {}]", type, boundText(lo), boundText(hi));
+    if (std::isfinite(lo))
+        return fmt::format("{} ≥ {}", type, boundText(lo));
+    return type;
+}
+
+template <class T>
+Kind<T> number(double lo = -INFINITY, double hi = INFINITY)
+{
+    return {[lo, hi](const json& v, T& target, Reader& r, const std::string& key) {
+                if (!v.is_number())
+                    r.failAt(key, "expected a number, found " + v.dump());
+                const double x = v.get<double>();
+                if (!(x >= lo && x <= hi) || !std::isfinite(x))
+                    r.failAt(key, fmt::format("expected a number in [{}, {}], found {}", lo, hi, x));
+                target = T(x);
+            },
+            [](const T& x) { return json(x); }, numberSchema("number", lo, hi), rangeText("number", lo, hi)};
+}
+
+Kind<int> integer(int lo, int hi)
+{
+    return {[lo, hi](const json& v, int& target, Reader& r, const std::string& key) {
+                if (!v.is_number_integer())
+                    r.failAt(key, "expected an integer, found " + v.dump());
+                const auto x = v.get<int64_t>();
+                if (x < lo || x > hi)
+                    r.failAt(key, fmt::format("expected an integer in [{}, {}], found {}", lo, hi, x));
+                target = int(x);
+            },
+            [](const int& x) { return json(x); }, numberSchema("integer", lo, hi), rangeText("integer", lo, hi)};
+}
+
+Kind<bool> boolean()
+{
+    return {[](const json& v, bool& target, Reader& r, const std::string& key) {
+                if (!v.is_boolean())
+                    r.failAt(key, "expected true or false, found " + v.dump());
+                target = v.get<bool>();
+            },
+            [](const bool& x) { return json(x); }, {{"type", "boolean"}}, "bool"};
+}
+
+// A string. `nullable`: null keeps the default; `nonEmpty` (what is expected) refuses "".
+Kind<std::string> text(bool nullable, const std::string& nonEmpty = "")
+{
+    json schema{{"type", nullable ? json::array({"string", "null"}) : json("string")}};
+    if (!nonEmpty.empty())
+        schema["minLength"] = 1;
+    std::string type = nonEmpty.empty() ? "string" : "non-empty string";
+    return {[nullable, nonEmpty](const json& v, std::string& target, Reader& r, const std::string& key) {
+                if (nullable && v.is_null())
+                    return;
+                if (!v.is_string())
+                    r.failAt(key, "expected a string, found " + v.dump());
+                if (!nonEmpty.empty() && v.get_ref<const std::string&>().empty())
+                    r.failAt(key, fmt::format("expected {}, found \"\"", nonEmpty));
+                target = v.get<std::string>();
+            },
+            [](const std::string& x) { return json(x); }, schema, nullable ? type + " or null" : type};
+}
+
+json numbersSchema(size_t count, double lo = -INFINITY, double hi = INFINITY)
+{
+    return {{"type", "array"}, {"items", numberSchema("number", lo, hi)}, {"minItems", count}, {"maxItems", count}};
+}
+
+std::vector<double> numbers(const json& v, size_t count, Reader& r, const std::string& key)
+{
+    if (!v.is_array() || v.size() != count)
+        r.failAt(key, fmt::format("expected an array of {} numbers, found {}", count, v.dump()));
+    std::vector<double> out;
+    for (const json& e : v) {
+        if (!e.is_number())
+            r.failAt(key, "expected numbers, found " + v.dump());
+        out.push_back(e.get<double>());
+    }
+    return out;
+}
+
+Kind<Rgb> colour()
+{
+    return {[](const json& v, Rgb& target, Reader& r, const std::string& key) {
+                const auto c = numbers(v, 3, r, key);
+                for (double x : c)
+                    if (!(x >= 0 && x <= 1))
+                        r.failAt(key, "expected colour components in [0, 1], found " + v.dump());
+                target = {float(c[0]), float(c[1]), float(c[2])};
+            },
+            [](const Rgb& c) { return json::array({c.r, c.g, c.b}); }, numbersSchema(3, 0, 1),
+            "[r, g, b], each in [0, 1]"};
+}
+
+// A vector; `direction`: [0, 0, 0] is refused.
+Kind<Vec3> vec3(bool direction)
+{
+    json schema = numbersSchema(3);
+    if (direction)
+        schema["not"] = {{"const", json::array({0, 0, 0})}};
+    return {[direction](const json& v, Vec3& target, Reader& r, const std::string& key) {
+                const auto c = numbers(v, 3, r, key);
+                if (direction && c[0] == 0 && c[1] == 0 && c[2] == 0)
+                    r.failAt(key, "expected a non-zero direction");
+                target = {float(c[0]), float(c[1]), float(c[2])};
+            },
+            [](const Vec3& x) { return json::array({x.x, x.y, x.z}); }, schema,
+            direction ? "[x, y, z], not [0, 0, 0]" : "[x, y, z]"};
+}
+
+// [min, max] with min < max, or null (nullopt: a default that depends on the data).
+Kind<std::optional<ValueRange>> range()
+{
+    json schema = numbersSchema(2);
+    schema["type"] = json::array({"array", "null"});
+    return {[](const json& v, std::optional<ValueRange>& target, Reader& r, const std::string& key) {
+                if (v.is_null()) {
+                    target.reset();
+                    return;
+                }
+                const auto x = numbers(v, 2, r, key);
+                if (!(x[0] < x[1]))
+                    r.failAt(key, fmt::format("expected [min, max] with min < max, found {}", v.dump()));
+                target = ValueRange{float(x[0]), float(x[1])};
+            },
+            [](const std::optional<ValueRange>& x) {
+                return x ? json::array({x->min, x->max}) : json(nullptr);
+            },
+            schema, "[min, max] with min < max, or null"};
+}
+
+json colorMapNames()
+{
+    json names = json::array();
+    for (ColorMapId m : allColorMaps())
+        names.push_back(std::string(colorMapName(m)));
+    return names;
+}
+
+ColorMapId readColorMap(const json& v, Reader& r, const std::string& key)
+{
+    if (!v.is_string())
+        r.failAt(key, "expected a colour map name, found " + v.dump());
+    try {
+        return parseColorMap(v.get<std::string>());
+    } catch (const Error& e) {
+        r.failAt(key, e.what());
+    }
+}
+
+std::string colorMapType()
+{
+    std::string list;
+    for (const auto& n : colorMapNames())
+        list += (list.empty() ? "" : ", ") + ("`" + n.get<std::string>() + "`");
+    return "one of " + list;
+}
+
+Kind<ColorMapId> colorMap()
+{
+    return {[](const json& v, ColorMapId& target, Reader& r, const std::string& key) {
+                target = readColorMap(v, r, key);
+            },
+            [](const ColorMapId& m) { return json(std::string(colorMapName(m))); },
+            {{"type", "string"}, {"enum", colorMapNames()}}, colorMapType()};
+}
+
+// A colour map or null (nullopt: the default depends on other keys).
+Kind<std::optional<ColorMapId>> optionalColorMap()
+{
+    json names = colorMapNames();
+    names.push_back(nullptr);
+    return {[](const json& v, std::optional<ColorMapId>& target, Reader& r, const std::string& key) {
+                if (v.is_null())
+                    target.reset();
+                else
+                    target = readColorMap(v, r, key);
+            },
+            [](const std::optional<ColorMapId>& m) {
+                return m ? json(std::string(colorMapName(*m))) : json(nullptr);
+            },
+            {{"type", json::array({"string", "null"})}, {"enum", names}}, colorMapType() + ", or null"};
+}
+
+Kind<std::vector<OpacityPoint>> opacityPoints()
+{
+    return {[](const json& o, std::vector<OpacityPoint>& target, Reader& r, const std::string& key) {
+                if (!o.is_array() || o.empty())
+                    r.failAt(key, "expected an array of [position, opacity] pairs, found " + o.dump());
+                target.clear();
+                for (const json& p : o) {
+                    const auto v = numbers(p, 2, r, key);
+                    if (!(v[0] >= 0 && v[0] <= 1 && v[1] >= 0 && v[1] <= 1))
+                        r.failAt(key, "expected position and opacity in [0, 1], found " + p.dump());
+                    if (!target.empty() && v[0] < target.back().position)
+                        r.failAt(key, "positions must ascend, found " + o.dump());
+                    target.push_back({float(v[0]), float(v[1])});
+                }
+            },
+            [](const std::vector<OpacityPoint>& points) {
+                json out = json::array();
+                for (const auto& p : points)
+                    out.push_back({p.position, p.opacity});
+                return out;
+            },
+            {{"type", "array"}, {"items", numbersSchema(2, 0, 1)}, {"minItems", 1}},
+            "[[position, opacity], …], each in [0, 1], positions ascending"};
+}
+
+// An explicit level or "auto" (nullopt).
+Kind<std::optional<int>> level()
+{
+    const int top = kLevelCount - 1;
+    return {[top](const json& v, std::optional<int>& target, Reader& r, const std::string& key) {
+                if (v.is_string() && v.get_ref<const std::string&>() == "auto") {
+                    target.reset();
+                    return;
+                }
+                if (!v.is_number_integer() || v.get<int64_t>() < 0 || v.get<int64_t>() > top)
+                    r.failAt(key, fmt::format("expected \"auto\" or an integer in [0, {}], found {}", top, v.dump()));
+                target = v.get<int>();
+            },
+            [](const std::optional<int>& l) { return l ? json(*l) : json("auto"); },
+            {{"anyOf", json::array({numberSchema("integer", 0, top), json{{"const", "auto"}}})}},
+            fmt::format("integer in [0, {}] or `\"auto\"`", top)};
+}
+
+// The document's version: read first, it decides which keys the document may have.
+Kind<int> version()
+{
+    json supported = json::array();
+    std::string list;
+    for (int v = 1; v <= kRenderStateVersion; ++v) {
+        supported.push_back(v);
+        list += v == 1 ? fmt::format("{}", v) : fmt::format("{} {}", v == kRenderStateVersion ? " or" : ",", v);
+    }
+    return {[list](const json& v, int& target, Reader& r, const std::string& key) {
+                if (!v.is_number_integer())
+                    r.failAt(key, "expected an integer, found " + v.dump());
+                const auto x = v.get<int64_t>();
+                if (x < 1 || x > kRenderStateVersion)
+                    r.failAt(key, fmt::format("{} is not supported, expected {}", x, list));
+                target = int(x);
+                r.setVersion(target);
+            },
+            [](const int&) { return json(kRenderStateVersion); },  // always written in the current version
+            {{"type", "integer"}, {"enum", supported}}, "integer: " + list};
+}
+
+// ---- Fields and objects ---------------------------------------------------------------------------
+
+// What restarts or reloads when a key changes (house style: name the cost class of a change).
+enum class Cost { None, Restart, Reload };
+
+struct FieldDoc {
+    std::string meaning{};
+    Cost cost = Cost::Restart;
+    std::string defaultText{};  // when the default is not a plain value (it depends on other keys or the data)
+    int since = 1;            // the document version that added the key
+    bool required = false;
+    std::string expect{};  // what a missing required key should have been, for its message
+};
+
+std::string costText(Cost c)
+{
+    switch (c) {
+    case Cost::Restart: return "restart";
+    case Cost::Reload: return "reload";
+    case Cost::None: break;
+    }
+    return "—";
+}
+
+// A docs-table rendering of a default value: numbers as the floats they are stored as.
+std::string valueText(const json& v)
+{
+    if (v.is_number_float()) {
+        const float f = float(v.get<double>());
+        return f == std::trunc(f) && std::abs(f) < 1e9f ? fmt::format("{}", int64_t(f)) : fmt::format("{}", f);
+    }
+    if (v.is_array()) {
+        std::string out;
+        for (const auto& e : v)
+            out += (out.empty() ? "" : ", ") + valueText(e);
+        return "[" + out + "]";
+    }
+    return v.dump();
+}
+
+using Rows = std::vector<std::vector<std::string>>;
+
+// One key of a JSON object whose values live in an `Owner` (RenderState, or an array element).
+template <class Owner>
+class Field {
+public:
+    Field(std::string key, FieldDoc doc) : key(std::move(key)), doc(std::move(doc)) {}
+    virtual ~Field() = default;
+    virtual void read(Reader& r, Owner& owner) const = 0;
+    virtual json write(const Owner& owner) const = 0;
+    // `defaults`: this key's value in toJson(RenderState{}), null where there is none.
+    virtual json schema(const json& defaults) const = 0;
+    virtual void rows(const std::string& prefix, const json& defaults, Rows& out) const = 0;
+    // The schema of this key for a document of `version` refusing what is newer, or null.
+    virtual json forbiddenBefore(int version) const = 0;
+
+    const std::string key;
+    const FieldDoc doc;
+
+protected:
+    // The value, or nullptr when absent; fails for a missing required key or one newer than the document.
+    const json* present(Reader& r) const
+    {
+        const json* v = r.get(key);
+        if (!v) {
+            if (doc.required)
+                r.failAt(key, doc.expect.empty() ? "missing" : "missing; expected " + doc.expect);
+            return nullptr;
+        }
+        if (doc.since > r.version())
+            r.failAt(key, fmt::format("needs version {}, the document says version {}", doc.since, r.version()));
+        return v;
+    }
+    json annotate(json schema, const json& defaults) const
+    {
+        std::string description = doc.meaning;
+        if (!doc.defaultText.empty())
+            description += ". Default: " + doc.defaultText;
+        if (!description.empty())
+            schema["description"] = description;
+        if (!defaults.is_null() && !doc.required)
+            schema["default"] = defaults;
+        return schema;
+    }
+    std::string sinceText() const { return doc.since > 1 ? fmt::format(", version ≥ {}", doc.since) : ""; }
+    std::string defaultCell(const json& defaults) const
+    {
+        if (!doc.defaultText.empty())
+            return doc.defaultText;
+        if (doc.required || defaults.is_null())
+            return "—";
+        return "`" + valueText(defaults) + "`";
+    }
+};
+
+template <class Owner>
+using FieldPtr = std::shared_ptr<const Field<Owner>>;
+
+// The keys of one JSON object, in document order; `check` tests what spans several keys.
+template <class Owner>
+struct Object {
+    std::string title;  // names the generated TypeScript type; empty: written inline
+    std::vector<FieldPtr<Owner>> fields;
+    std::function<void(const Owner&, Reader&)> check;
+
+    void read(Reader& r, Owner& owner) const
+    {
+        for (const auto& f : fields)
+            f->read(r, owner);
+        if (check)
+            check(owner, r);
+        r.finish();
+    }
+    json write(const Owner& owner) const
+    {
+        json out = json::object();
+        for (const auto& f : fields)
+            out[f->key] = f->write(owner);
+        return out;
+    }
+    json schema(const json& defaults) const
+    {
+        json properties = json::object(), required = json::array();
+        for (const auto& f : fields) {
+            properties[f->key] = f->schema(defaults.is_object() && defaults.contains(f->key) ? defaults[f->key] : json());
+            if (f->doc.required)
+                required.push_back(f->key);
+        }
+        json s{{"type", "object"}, {"properties", properties}, {"additionalProperties", false}};
+        if (!required.empty())
+            s["required"] = required;
+        if (!title.empty())
+            s["title"] = title;
+        return s;
+    }
+    void rows(const std::string& prefix, const json& defaults, Rows& out) const
+    {
+        for (const auto& f : fields)
+            f->rows(prefix, defaults.is_object() && defaults.contains(f->key) ? defaults[f->key] : json(), out);
+    }
+    json forbiddenBefore(int version) const
+    {
+        json properties = json::object();
+        for (const auto& f : fields) {
+            if (f->doc.since > version)
+                properties[f->key] = {{"not", json::object()}, {"description", fmt::format("needs version {}", f->doc.since)}};
+            else if (json sub = f->forbiddenBefore(version); !sub.is_null())
+                properties[f->key] = sub;
+        }
+        return properties.empty() ? json() : json{{"properties", properties}};
+    }
+};
+
+// A key holding one value of a Kind, reached in the owner through `access`.
+template <class Owner, class T, class Access>
+class Leaf final : public Field<Owner> {
+public:
+    Leaf(std::string key, Access access, Kind<T> kind, FieldDoc doc, std::function<json(const Owner&)> writeAs)
+        : Field<Owner>(std::move(key), std::move(doc)), m_access(access), m_kind(std::move(kind)),
+          m_writeAs(std::move(writeAs))
+    {
+    }
+    void read(Reader& r, Owner& owner) const override
+    {
+        if (const json* v = this->present(r))
+            m_kind.read(*v, m_access(owner), r, this->key);
+    }
+    json write(const Owner& owner) const override { return m_writeAs ? m_writeAs(owner) : m_kind.write(m_access(owner)); }
+    json schema(const json& defaults) const override { return this->annotate(m_kind.schema, defaults); }
+    void rows(const std::string& prefix, const json& defaults, Rows& out) const override
+    {
+        const std::string type = m_kind.type + (this->doc.required ? ", required" : "") + this->sinceText();
+        out.push_back({prefix + this->key, type, this->defaultCell(defaults), this->doc.meaning, costText(this->doc.cost)});
+        if (m_kind.elementRows)
+            m_kind.elementRows(prefix + this->key + "[].", out);
+    }
+    json forbiddenBefore(int version) const override
+    {
+        return m_kind.forbiddenBefore ? m_kind.forbiddenBefore(version) : json();
+    }
+
+private:
+    Access m_access;
+    Kind<T> m_kind;
+    std::function<json(const Owner&)> m_writeAs;  // what toJson writes when it is not the member itself
+};
+
+// A key holding a JSON object whose keys fill the same owner (e.g. "camera" within RenderState).
+template <class Owner>
+class Group final : public Field<Owner> {
+public:
+    Group(std::string key, Object<Owner> object, FieldDoc doc)
+        : Field<Owner>(std::move(key), std::move(doc)), m_object(std::move(object))
+    {
+    }
+    void read(Reader& r, Owner& owner) const override
+    {
+        if (const json* v = this->present(r)) {
+            Reader child = r.child(this->key, *v);
+            m_object.read(child, owner);
+        }
+    }
+    json write(const Owner& owner) const override { return m_object.write(owner); }
+    json schema(const json& defaults) const override { return this->annotate(m_object.schema(defaults), json()); }
+    void rows(const std::string& prefix, const json& defaults, Rows& out) const override
+    {
+        out.push_back({prefix + this->key, "object" + this->sinceText(), "—", this->doc.meaning, "—"});
+        m_object.rows(prefix + this->key + ".", defaults, out);
+    }
+    json forbiddenBefore(int version) const override { return m_object.forbiddenBefore(version); }
+
+private:
+    Object<Owner> m_object;
+};
+
+// The member reached from an owner through a chain of member pointers, e.g.
+// at(&RenderState::camera, &OrbitCamera::fovYDeg); const for a const owner.
+template <class... Members>
+auto at(Members... members)
+{
+    return [=](auto& owner) -> auto& { return (owner .* ... .* members); };
+}
+
+template <class Owner, class T, class Access>
+FieldPtr<Owner> leaf(std::string key, Access access, Kind<T> kind, FieldDoc doc,
+                     std::function<json(const Owner&)> writeAs = {})
+{
+    return std::make_shared<Leaf<Owner, T, Access>>(std::move(key), access, std::move(kind), std::move(doc),
+                                                    std::move(writeAs));
+}
+
+template <class Owner>
+FieldPtr<Owner> group(std::string key, std::string title, std::vector<FieldPtr<Owner>> fields, FieldDoc doc)
+{
+    return std::make_shared<Group<Owner>>(std::move(key), Object<Owner>{std::move(title), std::move(fields), {}},
+                                          std::move(doc));
+}
+
+// An array of JSON objects, each read into one element.
+template <class E>
+Kind<std::vector<E>> arrayOf(Object<E> element, std::string type)
+{
+    auto e = std::make_shared<const Object<E>>(std::move(element));
+    Kind<std::vector<E>> kind{
+        [e](const json& v, std::vector<E>& target, Reader& r, const std::string& key) {
+            if (!v.is_array())
+                r.failAt(key, "expected an array, found " + v.dump());
+            target.clear();
+            for (size_t i = 0; i < v.size(); ++i) {
+                Reader child = r.child(fmt::format("{}[{}]", key, i), v[i]);
+                E item;
+                e->read(child, item);
+                target.push_back(std::move(item));
+            }
+        },
+        [e](const std::vector<E>& items) {
+            json out = json::array();
+            for (const E& item : items)
+                out.push_back(e->write(item));
+            return out;
+        },
+        {{"type", "array"}, {"items", e->schema(json())}},
+        std::move(type)};
+    kind.elementRows = [e](const std::string& prefix, Rows& out) { e->rows(prefix, json(), out); };
+    kind.forbiddenBefore = [e](int version) {
+        json sub = e->forbiddenBefore(version);
+        return sub.is_null() ? sub : json{{"items", sub}};
+    };
+    return kind;
+}
+
+// {name, min, max} ranges: brushes over variables or coordinates, filters over line attributes.
+template <class Range>
+Object<Range> namedRange(std::string title, const std::string& nameMeaning, const std::string& nameExpect)
+{
+    auto bound = [](const char* which) {
+        return FieldDoc{.meaning = std::string(which) + " of the range, inclusive", .required = true};
+    };
+    return {std::move(title),
+            {leaf<Range>("name", at(&Range::name), text(false, nameExpect),
+                         {.meaning = nameMeaning, .required = true, .expect = nameExpect}),
+             leaf<Range>("min", at(&Range::min), number<float>(), bound("lower end")),
+             leaf<Range>("max", at(&Range::max), number<float>(), bound("upper end"))},
+            [](const Range& range, Reader& r) {
+                if (!(range.min <= range.max))
+                    r.failAt("min", fmt::format("min {} is greater than max {}", range.min, range.max));
+            }};
+}
+
+// ---- The document ------------------------------------------------------------------------------
+
+const Object<RenderState>& document()
+{
+    using S = RenderState;
+    using C = OrbitCamera;
+    using P = PathlineState;
+    static const Object<S> doc{
+        "RenderState",
+        {
+            leaf<S>("version", at(&S::version), version(),
+                    {.meaning = fmt::format("schema version: {} or an older one (read, written back as {}); "
+                                            "a key newer than the document's version is refused",
+                                            kRenderStateVersion, kRenderStateVersion),
+                     .cost = Cost::None,
+                     .defaultText = fmt::format("`{}`", kRenderStateVersion),
+                     .required = true,
+                     .expect = fmt::format("{}", kRenderStateVersion)}),
+            leaf<S>("step", at(&S::step), integer(0, 1000000), {.meaning = "time step index", .cost = Cost::Reload}),
+            group<S>("camera", "CameraState",
+                     {leaf<S>("azimuthDeg", at(&S::camera, &C::azimuthDeg), number<double>(),
+                              {.meaning = "orbit angle in the x–y plane from +x towards +y, degrees"}),
+                      leaf<S>("elevationDeg", at(&S::camera, &C::elevationDeg), number<double>(-90, 90),
+                              {.meaning = "angle above the equatorial plane, degrees"}),
+                      leaf<S>("distanceKm", at(&S::camera, &C::distanceKm), number<double>(1e-3, 1e9),
+                              {.meaning = "eye–target distance, km"}),
+                      leaf<S>("fovYDeg", at(&S::camera, &C::fovYDeg), number<double>(1e-3, 179.9),
+                              {.meaning = "vertical field of view, degrees"}),
+                      leaf<S>("targetKm", at(&S::camera, &C::targetKm), vec3(false),
+                              {.meaning = "point looked at, km (contest Cartesian frame)"})},
+                     {.meaning = "the orbit camera"}),
+            group<S>("image", "",
+                     {leaf<S>("width", at(&S::width), integer(1, 16384), {.meaning = "image width, pixels"}),
+                      leaf<S>("height", at(&S::height), integer(1, 16384), {.meaning = "image height, pixels"})},
+                     {.meaning = "the size of the rendered image"}),
+            group<S>(
+                "color", "",
+                {leaf<S>("variable", at(&S::colorVariable), text(true),
+                         {.meaning = "colouring variable (dataset name, e.g. `\"temperature anomaly\"`)",
+                          .defaultText = "`\"\"`: the first variable"}),
+                 leaf<S>("colorMap", at(&S::colorMap), colorMap(),
+                         {.meaning = "colour map: `inferno` is black body, `cool-to-warm` ParaView's, "
+                                     "`blue-white-red` centred on 0"}),
+                 leaf<S>("range", at(&S::colorRange), range(),
+                         {.meaning = "value range of the transfer function; values outside clamp to the ends",
+                          .defaultText = "null: the global range of the variable over all steps (symmetric ±max\\|v\\| "
+                                         "for centred maps)"}),
+                 leaf<S>("opacity", at(&S::opacity), opacityPoints(),
+                         {.meaning = "piecewise-linear opacity; position normalised over `color.range` (0 = min, 1 = "
+                                     "max)",
+                          .defaultText = "`[[0, 0], [1, 0.5]]`; for `blue-white-red` a V: `[[0, 0.5], [0.5, 0], [1, "
+                                         "0.5]]` (transparent at zero)"},
+                         [](const S& s) {
+                             return opacityPoints().write(s.opacity.empty() ? defaultOpacity(s.colorMap) : s.opacity);
+                         }),
+                 leaf<S>("opacityUnitKm", at(&S::opacityUnitKm), number<float>(1e-6, 1e9),
+                         {.meaning = "path length over which `opacity` applies (docs/rendering.md, opacity "
+                                     "correction)"})},
+                {.meaning = "the volume's transfer function"}),
+            leaf<S>("brushes", at(&S::brushes),
+                    arrayOf(namedRange<BrushSpec>("Brush", "a variable or a coordinate",
+                                                  "a variable or coordinate name"),
+                            "array of {name, min, max}"),
+                    {.meaning = "ranges of any number of variables or coordinates (`x`, `y`, `z` km, `lat` °N, `lon` "
+                                "°E, `radius` km, `depth` km); a sample outside any range contributes nothing; min ≤ "
+                                "max"}),
+            leaf<S>("level", at(&S::level), level(),
+                    {.meaning = "level of detail; auto = finest level whose estimated pass time fits `timeBudgetMs`",
+                     .cost = Cost::Reload}),
+            leaf<S>("timeBudgetMs", at(&S::timeBudgetMs), number<double>(1e-3, 1e7),
+                    {.meaning = "time budget of one interactive pass, ms", .cost = Cost::Reload}),
+            leaf<S>("passes", at(&S::passes), integer(1, 100000),
+                    {.meaning = "progressive passes accumulated for a still image", .cost = Cost::None}),
+            leaf<S>("stepFactor", at(&S::stepFactor), number<float>(0.05, 8),
+                    {.meaning = "step length as a fraction of the local cell extent along the ray"}),
+            leaf<S>("depthOpacity", at(&S::depthOpacity), number<float>(1e-3, 0.999),
+                    {.meaning = "accumulated opacity that defines a pixel's depth"}),
+            group<S>("core", "",
+                     {leaf<S>("visible", at(&S::core, &S::Core::visible), boolean(),
+                              {.meaning = "draw the opaque core sphere at the core–mantle boundary"}),
+                      leaf<S>("variable", at(&S::core, &S::Core::variable), text(true),
+                              {.meaning = "colour the core by this variable at the core radius",
+                               .defaultText = "`\"\"` or null: plain colour"}),
+                      leaf<S>("color", at(&S::core, &S::Core::colour), colour(), {.meaning = "plain core colour"}),
+                      leaf<S>("colorMap", at(&S::core, &S::Core::colorMap), colorMap(),
+                              {.meaning = "colour map of the core variable"}),
+                      leaf<S>("range", at(&S::core, &S::Core::range), range(),
+                              {.meaning = "value range for the core colour map",
+                               .defaultText = "null: the global range"})},
+                     {.meaning = "the core sphere at the core–mantle boundary"}),
+            group<S>("shading", "",
+                     {leaf<S>("enabled", at(&S::shading, &ShadingStyle::enabled), boolean(),
+                              {.meaning = "gradient (two-sided diffuse) shading of the volume"}),
+                      leaf<S>("light", at(&S::shading, &ShadingStyle::lightFromCamera), vec3(true),
+                              {.meaning = "direction towards the light in the camera frame (x right, y up, z "
+                                          "towards the viewer)"}),
+                      leaf<S>("ambient", at(&S::shading, &ShadingStyle::ambient), number<float>(0, 1),
+                              {.meaning = "ambient lighting weight (also used for the core)"}),
+                      leaf<S>("diffuse", at(&S::shading, &ShadingStyle::diffuse), number<float>(0, 1),
+                              {.meaning = "diffuse lighting weight (also used for the core)"})},
+                     {.meaning = "lighting of the volume and the core"}),
+            leaf<S>("background", at(&S::background), colour(), {.meaning = "background colour of PNG output"}),
+            group<S>(
+                "pathlines", "PathlineState",
+                {leaf<S>("visible", at(&S::pathlines, &P::visible), boolean(),
+                         {.meaning = "draw the pathlines as tubes (ray traced with Embree in the volume's frame)"}),
+                 leaf<S>("radiusKm", at(&S::pathlines, &P::radiusKm), number<float>(1e-6, 1e5),
+                         {.meaning = "tube radius, km (a change refits the tube BVH)"}),
+                 leaf<S>("window", at(&S::pathlines, &P::window), integer(1, 1000),
+                         {.meaning = "show lines injected in steps [`step` − window + 1, `step`] (a change reloads "
+                                     "the line window and its BVH)",
+                          .cost = Cost::Reload}),
+                 leaf<S>("colorBy", at(&S::pathlines, &P::colorBy), text(true, "\"age\" or a line attribute name"),
+                         {.meaning = "`\"age\"` (point time − the line's injection time, Myr) or a line attribute "
+                                     "column (docs/format.md, e.g. `\"length\"`, `\"start temperature anomaly\"`)"}),
+                 leaf<S>("colorMap", at(&S::pathlines, &P::colorMap), optionalColorMap(),
+                         {.meaning = "colour map of `colorBy` (written as the map in effect)",
+                          .defaultText = "null: `\"blue-white-red\"` for age, else `\"viridis\"`"},
+                         [](const S& s) { return json(std::string(colorMapName(s.pathlines.effectiveColorMap()))); }),
+                 leaf<S>("range", at(&S::pathlines, &P::range), range(),
+                         {.meaning = "value range of the colour map",
+                          .defaultText = "null: age [0, window × step length in Myr] (blue at the seed, white half "
+                                         "way, red at the end of the window); an attribute: its range over the loaded "
+                                         "lines (symmetric for centred maps)"}),
+                 leaf<S>("filterByBrushes", at(&S::pathlines, &P::filterByBrushes), boolean(),
+                         {.meaning = "show a line only if its start satisfies every `brushes` range (coordinates from "
+                                     "`start lat`/`start lon`/`start radius`, variables from `start <variable>`)"}),
+                 leaf<S>("filters", at(&S::pathlines, &P::filters),
+                         arrayOf(namedRange<PathlineFilter>("PathlineFilter", "a line attribute column",
+                                                            "a line attribute name"),
+                                 "array of {name, min, max}"),
+                         {.meaning = "ranges over line attribute columns (the pathline parallel-coordinates plot); "
+                                     "min ≤ max"}),
+                 leaf<S>("ambientOcclusion", at(&S::pathlines, &P::ambientOcclusion), boolean(),
+                         {.meaning = "ambient occlusion on the tubes (a few rays per pass against the tubes and the "
+                                     "core)"})},
+                {.meaning = "tubes along the pathlines injected in the last `window` steps", .since = 2}),
+        },
+        {}};
+    return doc;
+}
+
+}  // namespace
+
+RenderState parseRenderState(const json& j, const std::string& what)
+{
+    ParseContext context{what};
+    RenderState s;
+    Reader top(j, context, "");
+    document().read(top, s);
+    return s;
+}
+
+json toJson(const RenderState& s) { return document().write(s); }
+
+json stateJsonSchema()
+{
+    json schema = document().schema(toJson(RenderState{}));
+    schema["$schema"] = "http://json-schema.org/draft-07/schema#";
+    schema["description"] =
+        fmt::format("The RayPC render state document, version {} (docs/state.md). Generated by `raypc state-schema` "
+                    "from src/render/state_schema.cpp; do not edit.",
+                    kRenderStateVersion);
+    // Keys newer than the document's version are refused, as parseRenderState does.
+    json gates = json::array();
+    for (int v = 1; v < kRenderStateVersion; ++v)
+        if (json forbidden = document().forbiddenBefore(v); !forbidden.is_null())
+            gates.push_back({{"if", {{"properties", {{"version", {{"const", v}}}}}}}, {"then", forbidden}});
+    if (!gates.empty())
+        schema["allOf"] = gates;
+    return schema;
+}
+
+std::string stateFieldTable()
+{
+    Rows rows;
+    document().rows("", toJson(RenderState{}), rows);
+    std::string out = "| key | type | default | meaning | cost |\n|---|---|---|---|---|\n";
+    for (const auto& row : rows) {
+        out += "|";
+        for (size_t i = 0; i < row.size(); ++i)
+            out += " " + (i == 0 ? "`" + row[i] + "`" : row[i]) + " |";
+        out += "\n";
+    }
+    return out;
+}
+
+}  // namespace raypc::render

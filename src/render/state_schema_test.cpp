@@ -1,0 +1,73 @@
+#include "render/state_schema.h"
+
+#include "core/error.h"
+#include "render/render_state.h"
+
+#include <gtest/gtest.h>
+
+namespace raypc::render {
+namespace {
+
+using nlohmann::json;
+
+// Every key toJson writes is in the schema with toJson(RenderState{})'s value as its default, and
+// in the docs table; the schema has no key toJson does not write.
+void expectDescribed(const json& written, const json& schema, const std::string& path, const std::string& table)
+{
+    ASSERT_TRUE(schema.contains("properties")) << path;
+    EXPECT_EQ(schema["properties"].size(), written.size()) << path;
+    for (auto it = written.begin(); it != written.end(); ++it) {
+        const std::string key = path.empty() ? it.key() : path + "." + it.key();
+        ASSERT_TRUE(schema["properties"].contains(it.key())) << key << " is written by toJson but not in the schema";
+        const json& property = schema["properties"][it.key()];
+        EXPECT_TRUE(property.contains("description")) << key;
+        if (it->is_object()) {
+            expectDescribed(*it, property, key, table);
+        } else {
+            EXPECT_NE(table.find("| `" + key + "` |"), std::string::npos) << key << " has no row in the table";
+            if (key != "version")
+                EXPECT_EQ(property.value("default", json()), *it) << key;
+        }
+    }
+}
+
+TEST(StateSchema, DescribesEveryKeyWithItsDefault)
+{
+    const json schema = stateJsonSchema();
+    EXPECT_EQ(schema["required"], json::array({"version"}));
+    EXPECT_FALSE(schema["additionalProperties"].get<bool>());
+    expectDescribed(toJson(RenderState{}), schema, "", stateFieldTable());
+}
+
+TEST(StateSchema, CarriesTheParsersBoundsAndVersions)
+{
+    const json schema = stateJsonSchema();
+    const json& camera = schema["properties"]["camera"]["properties"];
+    EXPECT_EQ(camera["elevationDeg"]["minimum"], -90);
+    EXPECT_EQ(camera["elevationDeg"]["maximum"], 90);
+    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, kRenderStateVersion}));
+    EXPECT_EQ(schema["properties"]["brushes"]["items"]["required"], json::array({"name", "min", "max"}));
+    // A version-1 document may not have pathlines, as parseRenderState says.
+    ASSERT_TRUE(schema.contains("allOf"));
+    EXPECT_EQ(schema["allOf"][0]["if"]["properties"]["version"]["const"], 1);
+    EXPECT_EQ(schema["allOf"][0]["then"]["properties"]["pathlines"]["description"], "needs version 2");
+    EXPECT_THROW(parseRenderState(json{{"version", 1}, {"pathlines", json::object()}}), Error);
+}
+
+TEST(StateSchema, NullKeepsTheDefaultOfStringKeys)
+{
+    // Strings the schema allows to be null ("the default") parse to the default.
+    const RenderState s = parseRenderState(json::parse(
+        R"({"version": 2, "color": {"variable": null}, "core": {"variable": null}, "pathlines": {"colorBy": null, "colorMap": null}})"));
+    EXPECT_EQ(s.colorVariable, "");
+    EXPECT_EQ(s.core.variable, "");
+    EXPECT_EQ(s.pathlines.colorBy, "age");
+    EXPECT_FALSE(s.pathlines.colorMap.has_value());
+    const json schema = stateJsonSchema();
+    const json& pl = schema["properties"]["pathlines"]["properties"];
+    EXPECT_EQ(pl["colorBy"]["type"], json::array({"string", "null"}));
+    EXPECT_EQ(pl["colorMap"]["enum"].back(), nullptr);
+}
+
+}  // namespace
+}  // namespace raypc::render
