@@ -17,26 +17,13 @@ namespace raypc {
 namespace {
 
 using testing::centredGrid;
-
-
-std::vector<float> fill(const SphericalGrid& g, const std::function<double(size_t, size_t, size_t)>& f)
-{
-    std::vector<float> v(g.cellCount());
-    for (size_t a = 0; a < g.nLat(); ++a)
-        for (size_t b = 0; b < g.nR(); ++b)
-            for (size_t c = 0; c < g.nLon(); ++c)
-                v[g.index(a, b, c)] = static_cast<float>(f(a, b, c));
-    return v;
-}
+using testing::fillGrid;
 
 // A Gaussian blob in Cartesian km (the contest fixture's shape).
 std::vector<float> blob(const SphericalGrid& g, double latDeg, double lonDeg, double rKm, double sigmaKm)
 {
-    const Vec3d c = sphericalToCartesianKm(latDeg, lonDeg, rKm);
-    return fill(g, [&](size_t a, size_t b, size_t k) {
-        const Vec3d p = sphericalToCartesianKm(g.latDeg[a], g.lonDeg[k], g.rKm[b]);
-        const double d2 = (p.x - c.x) * (p.x - c.x) + (p.y - c.y) * (p.y - c.y) + (p.z - c.z) * (p.z - c.z);
-        return std::exp(-d2 / (2 * sigmaKm * sigmaKm));
+    return fillGrid(g, [&](size_t a, size_t b, size_t k) {
+        return testing::gaussianBlob(g, a, b, k, latDeg, lonDeg, rKm, sigmaKm);
     });
 }
 
@@ -83,12 +70,12 @@ TEST(CriticalPoints, LowerStarsSumToTheSolidTorusEulerCharacteristic)
     std::mt19937 rng(7);
     std::uniform_int_distribution<int> small(0, 3);  // many ties: Simulation of Simplicity decides
     std::uniform_real_distribution<float> real(-1, 1);
-    EXPECT_EQ(eulerSum(g, fill(g, [&](size_t, size_t, size_t) { return small(rng); })), 0);
-    EXPECT_EQ(eulerSum(g, fill(g, [&](size_t, size_t, size_t) { return real(rng); })), 0);
+    EXPECT_EQ(eulerSum(g, fillGrid(g, [&](size_t, size_t, size_t) { return small(rng); })), 0);
+    EXPECT_EQ(eulerSum(g, fillGrid(g, [&](size_t, size_t, size_t) { return real(rng); })), 0);
     EXPECT_EQ(eulerSum(g, std::vector<float>(g.cellCount(), 1.0f)), 0);
     // An interior vertex above all its neighbours: its lower link is the whole link, a sphere
     // (14 vertices - 36 edges + 24 triangles = 2), so it contributes 1 - 2.
-    auto peak = fill(g, [&](size_t a, size_t b, size_t c) { return a == 2 && b == 2 && c == 3 ? 1.0 : 0.0; });
+    auto peak = fillGrid(g, [&](size_t a, size_t b, size_t c) { return a == 2 && b == 2 && c == 3 ? 1.0 : 0.0; });
     EXPECT_EQ(lowerStarEulerContribution(g, peak, g.index(2, 2, 3)), -1);
     // Below all its neighbours: the empty lower link contributes 1.
     for (auto& x : peak)
@@ -137,7 +124,7 @@ TEST(CriticalPoints, QuadraticSaddlesOfBothKinds)
     const SphericalGrid g = centredGrid(9, 9, 12);
     const size_t a0 = 4, b0 = 4, c0 = 6;
     for (const double sign : {1.0, -1.0}) {
-        const auto values = fill(g, [&](size_t a, size_t b, size_t c) {
+        const auto values = fillGrid(g, [&](size_t a, size_t b, size_t c) {
             const double x = double(a) - a0, y = double(b) - b0, z = double(c) - c0;
             return sign * (x * x - 2 * y * y + 3 * z * z);
         });
@@ -182,7 +169,7 @@ TEST(CriticalPoints, MaximumNextToAndOnAPole)
         if (std::abs(lat) == 90) {
             // Centred on the pole: |p - c|² depends on lat and r only, so each ring ties exactly.
             const double rc = 4500, pole = lat > 0 ? 1 : -1;
-            values = fill(g, [&](size_t a, size_t b, size_t) {
+            values = fillGrid(g, [&](size_t a, size_t b, size_t) {
                 const double r = g.rKm[b];
                 const double d2 = r * r + rc * rc - 2 * r * rc * pole * std::sin(degToRad(g.latDeg[a]));
                 return std::exp(-d2 / (2 * 700.0 * 700.0));
@@ -219,6 +206,7 @@ TEST(CriticalPoints, SelectionKeepsTheSignificantAndCaps)
     CriticalPointFilter filter;
     filter.minAbsValue = 30;
     filter.minFractionOfMaxAbs = 0.1;  // 0.1 * 100 = 10 < 30
+    filter.saddles = true;             // not the default since seeds are chosen by persistence
     auto kept = selectSignificant(points, 100, filter);
     ASSERT_EQ(kept.size(), 3u);
     EXPECT_EQ(kept[0].value, 100);  // most extreme first
