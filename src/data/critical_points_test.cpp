@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/spherical.h"
 #include "data/netcdf_reader.h"
+#include "data/persistence.h"
 #include "data/test_util.h"
 
 #include <gtest/gtest.h>
@@ -231,9 +232,11 @@ TEST(CriticalPoints, SelectionKeepsTheSignificantAndCaps)
     EXPECT_EQ(selectSignificant(all, 1.0, CriticalPointFilter{}).size(), 200u);
 }
 
-// The contest fixture (written by Python, analytic truth.json): a maximum at each positive blob
-// and a minimum at each negative one, at the blob's position at the step's time, and no other
-// significant extremum.
+// The contest fixture (written by Python, analytic truth.json): two hot and two cold blobs whose
+// anomaly is taken relative to each shell's mean. Under both seed rules, a maximum at each positive
+// blob and a minimum at each negative one, at the blob's position at the step's time, and no other
+// significant extremum; by persistence (the default) nothing else at all, and the global pair's
+// ends (the 400 K and -350 K blobs) first.
 TEST(CriticalPoints, ContestFixtureBlobs)
 {
     const auto truth = nlohmann::json::parse(std::ifstream(testing::contestLayoutDir() / "truth.json"));
@@ -244,25 +247,34 @@ TEST(CriticalPoints, ContestFixtureBlobs)
         const Snapshot snap = readSnapshot(files[step]);
         const auto& g = snap.grid;
         const auto& values = snap.find("temperature anomaly")->values;
-        float maxAbs = 0;
-        for (float v : values)
-            maxAbs = std::max(maxAbs, std::abs(v));
-        const auto kept = selectSignificant(findCriticalPoints(g, values), maxAbs, CriticalPointFilter{});
-        const double ts = step * dt * kSecondsPerMyr;
-        const double dLat = g.latDeg[1] - g.latDeg[0], dR = g.rKm[1] - g.rKm[0], dLon = g.lonDeg[1] - g.lonDeg[0];
-        size_t extrema = 0;
-        for (const auto& p : kept)
-            extrema += p.kind == CriticalKind::Maximum || p.kind == CriticalKind::Minimum;
-        EXPECT_EQ(extrema, truth["blobs_lat_lon_rkm_amp_sigma"].size()) << "step " << step;
-        for (const auto& b : truth["blobs_lat_lon_rkm_amp_sigma"]) {
-            const double lat = b[0], lon = double(b[1]) + radToDeg(omega * ts), r = double(b[2]) + u0 * ts / 1000;
-            const CriticalKind want = double(b[3]) > 0 ? CriticalKind::Maximum : CriticalKind::Minimum;
-            int found = 0;
+        const auto all = findCriticalPoints(g, values);
+        for (const SeedRule rule : {SeedRule::Value, SeedRule::Persistence}) {
+            CriticalPointFilter filter;
+            filter.rule = rule;
+            filter.saddles = rule == SeedRule::Value;  // as before persistence
+            const auto kept = selectSeeds(g, values, all, filter).seeds;
+            const double ts = step * dt * kSecondsPerMyr;
+            const double dLat = g.latDeg[1] - g.latDeg[0], dR = g.rKm[1] - g.rKm[0], dLon = g.lonDeg[1] - g.lonDeg[0];
+            size_t extrema = 0;
             for (const auto& p : kept)
-                if (p.kind == want && std::abs(p.latDeg - lat) <= dLat && lonDistanceDeg(p.lonDeg, lon) <= dLon &&
-                    std::abs(p.rKm - r) <= dR)
-                    ++found;
-            EXPECT_EQ(found, 1) << "step " << step << " blob at " << lat << ", " << lon << ", " << r;
+                extrema += p.kind == CriticalKind::Maximum || p.kind == CriticalKind::Minimum;
+            const std::string where = fmt::format("step {}, {} rule", step, seedRuleName(rule));
+            EXPECT_EQ(extrema, truth["blobs_lat_lon_rkm_amp_sigma"].size()) << where;
+            for (const auto& b : truth["blobs_lat_lon_rkm_amp_sigma"]) {
+                const double lat = b[0], lon = double(b[1]) + radToDeg(omega * ts), r = double(b[2]) + u0 * ts / 1000;
+                const CriticalKind want = double(b[3]) > 0 ? CriticalKind::Maximum : CriticalKind::Minimum;
+                int found = 0;
+                for (const auto& p : kept)
+                    if (p.kind == want && std::abs(p.latDeg - lat) <= dLat && lonDistanceDeg(p.lonDeg, lon) <= dLon &&
+                        std::abs(p.rKm - r) <= dR)
+                        ++found;
+                EXPECT_EQ(found, 1) << where << ", blob at " << lat << ", " << lon << ", " << r;
+            }
+            if (rule == SeedRule::Persistence) {
+                ASSERT_EQ(kept.size(), extrema) << where;
+                EXPECT_GT(kept[0].value, 300) << where;
+                EXPECT_LT(kept[1].value, -250) << where;
+            }
         }
     }
 }

@@ -1,12 +1,16 @@
 #include "data/persistence.h"
 
 #include "core/error.h"
+#include "core/spherical.h"
+#include "core/strings.h"
 #include "data/triangulation.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_for.h>
+
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <bit>
@@ -228,6 +232,33 @@ SeedSelection selectSeeds(const SphericalGrid& grid, std::span<const float> valu
                 add(p.birthIndex, p.persistence());
             break;
         }
+    }
+    return out;
+}
+
+std::string persistenceDiagramCsv(const SphericalGrid& grid, const std::vector<PersistencePair>& pairs,
+                                  const std::string& units)
+{
+    const std::string u = units.empty() ? "" : " [" + units + "]";
+    std::string out = csvQuote("kind") + "," + csvQuote("birth" + u) + "," + csvQuote("death" + u) + "," +
+                      csvQuote("persistence" + u);
+    for (const char* end : {"birth", "death"})
+        out += fmt::format(",{0} kind,{0} lat [degrees_north],{0} lon [degrees_east],{0} radius [km],{0} x [km],"
+                           "{0} y [km],{0} z [km]",
+                           end);
+    out += '\n';
+    auto it = std::back_inserter(out);
+    const size_t nLon = grid.nLon(), nR = grid.nR();
+    for (const auto& p : pairs) {
+        fmt::format_to(it, "{},{:.7g},{:.7g},{:.7g}", pairKindName(p.kind), p.birth, p.death, p.persistence());
+        for (const auto& [index, kind] : {std::pair{p.birthIndex, p.birthKind}, std::pair{p.deathIndex, p.deathKind}}) {
+            const double lat = grid.latDeg[index / (nLon * nR)], r = grid.rKm[(index / nLon) % nR],
+                         lon = grid.lonDeg[index % nLon];
+            const Vec3d x = sphericalToCartesianKm(lat, lon, r);
+            fmt::format_to(it, ",{},{:.7g},{:.7g},{:.7g},{:.7g},{:.7g},{:.7g}", criticalKindName(kind), lat, lon, r, x.x,
+                           x.y, x.z);
+        }
+        out += '\n';
     }
     return out;
 }

@@ -33,6 +33,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace raypc {
@@ -75,5 +76,11 @@ struct SeedSelection {
 };
 SeedSelection selectSeeds(const SphericalGrid& grid, std::span<const float> values,
                           const std::vector<CriticalPoint>& all, const CriticalPointFilter& filter);
+
+// The persistence diagram as CSV, one row per pair in the given order: kind, birth, death,
+// persistence (in `units`), then for the birth end and the death end: critical kind, lat, lon,
+// radius, x, y, z (degrees, km; frame of core/spherical.h).
+std::string persistenceDiagramCsv(const SphericalGrid& grid, const std::vector<PersistencePair>& pairs,
+                                  const std::string& units);
 
 }  // namespace raypc
