@@ -127,7 +127,8 @@ std::vector<Rule> rules()
     for (const char* threshold : {"2%", "5%", "10%"}) {
         CriticalPointFilter f;
         parsePersistenceThreshold(threshold, f);
-        out.push_back({fmt::format("persistence {}{}", threshold, std::string(threshold) == "5%" ? " (default)" : ""), f});
+        const bool isDefault = std::string(threshold) == "5%";
+        out.push_back({fmt::format("persistence {}{}", threshold, isDefault ? " (default)" : ""), f});
     }
     CriticalPointFilter withSaddles;
     withSaddles.saddles = true;

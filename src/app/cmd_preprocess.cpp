@@ -36,7 +36,8 @@ const CommandRegistration kRegistration(
             ->capture_default_str();
         cmd.add_option("--pathline-steps", pl.steps, "Steps each pathline is traced forward")->capture_default_str();
         cmd.add_option_function<std::string>(
-               "--cp-select", [args](const std::string& text) { args->options.pathlines.filter.rule = parseSeedRule(text); },
+               "--cp-select",
+               [args](const std::string& text) { args->options.pathlines.filter.rule = parseSeedRule(text); },
                "Seeds: 'persistence' (extrema of persistent pairs) or 'value' (the largest |value|)")
             ->default_str(seedRuleName(pl.filter.rule));
         cmd.add_option_function<std::string>(
@@ -54,7 +55,8 @@ const CommandRegistration kRegistration(
                        "Seeds: at most this many per step (the most persistent, or the largest |value|, first)")
             ->capture_default_str();
         cmd.add_flag("--cp-saddles,!--cp-no-saddles", pl.filter.saddles,
-                     "Seeds: also at saddles (by persistence: those paired with the kept extrema); default: extrema only");
+                     "Seeds: also at saddles (by persistence: those paired with the kept extrema); "
+                     "default: extrema only");
         args->reader.add(cmd);
         cmd.callback([args, &cmd] {
             // An option of the other seed rule would be silently ignored.

@@ -51,7 +51,8 @@ void sweep(const SphericalGrid& grid, const float* values, std::vector<Saddle>& 
     auto earlier = [values](size_t a, size_t b) {
         return Up ? triangulation::below(values, b, a) : triangulation::below(values, a, b);
     };
-    std::sort(saddles.begin(), saddles.end(), [&](const Saddle& a, const Saddle& b) { return earlier(a.index, b.index); });
+    std::sort(saddles.begin(), saddles.end(),
+              [&](const Saddle& a, const Saddle& b) { return earlier(a.index, b.index); });
     const auto& tables = linkTables();
     const size_t nLon = grid.nLon(), nR = grid.nR();
     std::array<size_t, kLinkSize> neighbours{};
@@ -255,8 +256,8 @@ std::string persistenceDiagramCsv(const SphericalGrid& grid, const std::vector<P
             const double lat = grid.latDeg[index / (nLon * nR)], r = grid.rKm[(index / nLon) % nR],
                          lon = grid.lonDeg[index % nLon];
             const Vec3d x = sphericalToCartesianKm(lat, lon, r);
-            fmt::format_to(it, ",{},{:.7g},{:.7g},{:.7g},{:.7g},{:.7g},{:.7g}", criticalKindName(kind), lat, lon, r, x.x,
-                           x.y, x.z);
+            fmt::format_to(it, ",{},{:.7g},{:.7g},{:.7g},{:.7g},{:.7g},{:.7g}", criticalKindName(kind), lat, lon, r,
+                           x.x, x.y, x.z);
         }
         out += '\n';
     }
