@@ -2,12 +2,13 @@
 // memory (synthesizeSnapshot): 11 steps 2 Myr apart, only vx, vy, vz kept (1.7 GB) plus the
 // temperature anomaly of step 0.
 //   BM_CriticalPoints: classify all 13 M vertices of step 0 (seconds per step).
-//   BM_Pathlines: trace the significant seeds of step 0 (default filter: <= 200) for 10 steps,
+//   BM_Pathlines: trace the seeds of step 0 (default rule: persistence > 5% of the range, <= 200) for 10 steps,
 //     counter "lines/s" (and points per line), with 1 thread and with every core.
 // No peer is measured here: the paper traced pathlines outside its tool (ParaView).
 //   build-paths/bench/pathlines_bench --benchmark_min_time=1
 #include "data/critical_points.h"
 #include "data/pathlines.h"
+#include "data/persistence.h"
 #include "data/synth.h"
 
 #include <benchmark/benchmark.h>
@@ -50,14 +51,11 @@ const Data& data()
             out.series.timesMyr.push_back(k * o.dtMyr);
             out.series.fields.push_back(fields);
         }
-        float maxAbs = 0;
-        for (float v : out.anomaly)
-            maxAbs = std::max(maxAbs, std::abs(v));
         const auto all = findCriticalPoints(out.series.grid, out.anomaly);
-        out.seeds = selectSignificant(all, maxAbs, CriticalPointFilter{});
-        fmt::print(stderr, "grid {}x{}x{}, {} critical points in step 0, {} seeds (threshold {:.1f} K of max |{:.1f}| K)\n",
-                   o.nLat, o.nR, o.nLon, all.size(), out.seeds.size(),
-                   significanceThreshold(CriticalPointFilter{}, maxAbs), maxAbs);
+        const SeedSelection selection = selectSeeds(out.series.grid, out.anomaly, all, CriticalPointFilter{});
+        out.seeds = selection.seeds;
+        fmt::print(stderr, "grid {}x{}x{}, {} critical points in step 0, {} seeds (persistence > {:.1f} K)\n", o.nLat,
+                   o.nR, o.nLon, all.size(), out.seeds.size(), selection.threshold);
         return out;
     }();
     return d;

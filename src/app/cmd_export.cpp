@@ -1,4 +1,4 @@
-// raypc export DATASET --time T --what sample|pathlines|critical-points -o FILE.{csv,vtp,vtk}
+// raypc export DATASET --time T --what sample|pathlines|critical-points|persistence -o FILE.{csv,vtp,vtk}
 #include "app/command.h"
 #include "app/options.h"
 #include "core/atomic_file.h"
@@ -6,18 +6,21 @@
 #include "core/strings.h"
 #include "data/dataset.h"
 #include "data/pathlines.h"
+#include "data/persistence.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cctype>
 #include <filesystem>
 #include <numeric>
+#include <span>
 
 namespace raypc::app {
 namespace {
 
 struct ExportArgs {
-    std::string dataset, time = "0", what = "sample", output;
+    std::string dataset, time = "0", what = "sample", output, var = "temperature anomaly";
 };
 
 
@@ -53,21 +56,27 @@ std::string formatOf(const std::string& output)
 const CommandRegistration kRegistration(
     "export",
     "Export data of one step: the parallel-coordinates sample (CSV), or the pathlines injected at the step "
-    "and their seeds, the critical points (CSV, VTK .vtp or legacy .vtk)",
+    "and their seeds, the critical points (CSV, VTK .vtp or legacy .vtk), or the persistence diagram (CSV)",
     [](CLI::App& cmd) {
         auto args = std::make_shared<ExportArgs>();
         cmd.add_option("dataset", args->dataset, "Dataset directory")->required();
         cmd.add_option("-t,--time", args->time, "Step index (0-based) or time like 24Myr")->capture_default_str();
-        cmd.add_option("--what", args->what, "What to export: sample, pathlines or critical-points")
+        cmd.add_option("--what", args->what, "What to export: sample, pathlines, critical-points or persistence")
+            ->capture_default_str();
+        cmd.add_option("--var", args->var, "persistence: the variable whose persistence pairs are exported")
             ->capture_default_str();
         cmd.add_option("-o,--output", args->output,
                        "Output file: .csv; for pathlines and critical-points also .vtp (VTK XML) or .vtk (legacy VTK)")
             ->required();
         cmd.callback([args] {
-            if (args->what != "sample" && args->what != "pathlines" && args->what != "critical-points")
-                fail("--what: unknown export '{}', expected: sample, pathlines, critical-points", args->what);
+            if (args->what != "sample" && args->what != "pathlines" && args->what != "critical-points" &&
+                args->what != "persistence")
+                fail("--what: unknown export '{}', expected: sample, pathlines, critical-points, persistence",
+                     args->what);
             // The sample is always CSV (whatever the extension, as before pathlines existed).
             const std::string format = args->what == "sample" ? "csv" : formatOf(args->output);
+            if (args->what == "persistence" && format != "csv")
+                fail("-o: '{}': the persistence diagram is written as CSV only (.csv)", args->output);
             const auto dataset = Dataset::open(args->dataset);
             const int step = parseStep(*dataset, args->time);
             if (args->what == "sample") {
@@ -75,6 +84,21 @@ const CommandRegistration kRegistration(
                 writeFileAtomic(args->output, sampleCsv(table));
                 fmt::print("{}: {} rows x {} columns of step {} ({} Myr)\n", args->output, table.rows,
                            table.columns.size(), step, dataset->steps()[step].timeMyr);
+                return;
+            }
+            if (args->what == "persistence") {
+                const int var = dataset->variableIndex(args->var);
+                if (var < 0)
+                    fail("--var: no variable '{}' in {}; variables are {}", args->var, args->dataset,
+                         fmt::join(dataset->variableNames(), ", "));
+                const auto volume = dataset->load(step, 0);
+                const std::span<const float> values(volume->values(var), volume->grid().cellCount());
+                const auto pairs = persistencePairs(volume->grid(), values);
+                writeFileAtomic(args->output,
+                                persistenceDiagramCsv(volume->grid(), pairs, dataset->variables()[var].units));
+                fmt::print("{}: {} persistence pairs of {} at step {} ({} Myr), the largest {:.4g} {}\n", args->output,
+                           pairs.size(), args->var, step, dataset->steps()[step].timeMyr,
+                           pairs.front().persistence(), dataset->variables()[var].units);
                 return;
             }
             const PathlineSet set = loadPathlineSet(dataset->dir(), step);
@@ -91,7 +115,7 @@ const CommandRegistration kRegistration(
                 fmt::print("{}: {} pathlines ({} points) injected at step {} ({} Myr), traced to step {}\n",
                            args->output, set.lineCount(), set.pointCount(), step, set.injectionTimeMyr, set.endStep);
             else
-                fmt::print("{}: {} critical points of {} at step {} ({} Myr) above |{:.4g}| (of {} found)\n",
+                fmt::print("{}: {} critical points of {} at step {} ({} Myr), threshold {:.4g} (of {} found)\n",
                            args->output, set.lineCount(), set.seedField, step, set.injectionTimeMyr, set.threshold,
                            std::accumulate(set.criticalCounts.begin(), set.criticalCounts.end(), size_t(0)));
         });

@@ -1,6 +1,7 @@
 // raypc preprocess INPUT... -o DATASET_DIR
 #include "app/command.h"
 #include "app/options.h"
+#include "core/error.h"
 #include "data/preprocess.h"
 
 #include <fmt/format.h>
@@ -13,7 +14,7 @@ struct PreprocessArgs {
     std::string output;
     ReaderFlags reader;
     PreprocessOptions options;
-    bool noPathlines = false, noSaddles = false;
+    bool noPathlines = false;
 };
 
 const CommandRegistration kRegistration(
@@ -34,23 +35,40 @@ const CommandRegistration kRegistration(
         cmd.add_option("--pathline-field", pl.field, "Variable whose critical points seed pathlines")
             ->capture_default_str();
         cmd.add_option("--pathline-steps", pl.steps, "Steps each pathline is traced forward")->capture_default_str();
+        cmd.add_option_function<std::string>(
+               "--cp-select",
+               [args](const std::string& text) { args->options.pathlines.filter.rule = parseSeedRule(text); },
+               "Seeds: 'persistence' (extrema of persistent pairs) or 'value' (the largest |value|)")
+            ->default_str(seedRuleName(pl.filter.rule));
+        cmd.add_option_function<std::string>(
+               "--cp-persistence",
+               [args](const std::string& text) { parsePersistenceThreshold(text, args->options.pathlines.filter); },
+               "Seeds by persistence: extrema whose persistence exceeds K (field units) or P% of the step's range")
+            ->default_str("5%");
         cmd.add_option("--cp-min-abs", pl.filter.minAbsValue,
-                       "Critical points: keep maxima >= V, minima <= -V, saddles |value| >= V (field units)")
+                       "Seeds by value: keep maxima >= V, minima <= -V, saddles |value| >= V (field units)")
             ->capture_default_str();
         cmd.add_option("--cp-min-fraction", pl.filter.minFractionOfMaxAbs,
-                       "Critical points: the threshold is at least this fraction of the step's largest |value|")
+                       "Seeds by value: the threshold is at least this fraction of the step's largest |value|")
             ->capture_default_str();
         cmd.add_option("--cp-max-count", pl.filter.maxCount,
-                       "Critical points: at most this many per step (the largest |value| first)")
+                       "Seeds: at most this many per step (the most persistent, or the largest |value|, first)")
             ->capture_default_str();
-        cmd.add_flag("--cp-no-saddles", args->noSaddles, "Critical points: seed pathlines at extrema only");
+        cmd.add_flag("--cp-saddles,!--cp-no-saddles", pl.filter.saddles,
+                     "Seeds: also at saddles (by persistence: those paired with the kept extrema); "
+                     "default: extrema only");
         args->reader.add(cmd);
-        cmd.callback([args] {
+        cmd.callback([args, &cmd] {
+            // An option of the other seed rule would be silently ignored.
+            const bool byValue = args->options.pathlines.filter.rule == SeedRule::Value;
+            for (const char* option : {"--cp-persistence", "--cp-min-abs", "--cp-min-fraction"})
+                if (cmd.count(option) && byValue == (option == std::string("--cp-persistence")))
+                    fail("{}: applies to seeds chosen by {}, but --cp-select is {}", option,
+                         byValue ? "persistence" : "value", seedRuleName(args->options.pathlines.filter.rule));
             std::vector<std::filesystem::path> inputs(args->inputs.begin(), args->inputs.end());
             auto options = args->options;
             options.reader = args->reader.toOptions();
             options.pathlines.enabled = !args->noPathlines;
-            options.pathlines.filter.saddles = !args->noSaddles;
             const auto files = listSnapshotFiles(inputs);
             const auto summary = preprocess(files, args->output, options);
             const auto dataset = Dataset::open(args->output);

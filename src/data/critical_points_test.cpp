@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/spherical.h"
 #include "data/netcdf_reader.h"
+#include "data/persistence.h"
 #include "data/test_util.h"
 
 #include <gtest/gtest.h>
@@ -17,26 +18,13 @@ namespace raypc {
 namespace {
 
 using testing::centredGrid;
-
-
-std::vector<float> fill(const SphericalGrid& g, const std::function<double(size_t, size_t, size_t)>& f)
-{
-    std::vector<float> v(g.cellCount());
-    for (size_t a = 0; a < g.nLat(); ++a)
-        for (size_t b = 0; b < g.nR(); ++b)
-            for (size_t c = 0; c < g.nLon(); ++c)
-                v[g.index(a, b, c)] = static_cast<float>(f(a, b, c));
-    return v;
-}
+using testing::fillGrid;
 
 // A Gaussian blob in Cartesian km (the contest fixture's shape).
 std::vector<float> blob(const SphericalGrid& g, double latDeg, double lonDeg, double rKm, double sigmaKm)
 {
-    const Vec3d c = sphericalToCartesianKm(latDeg, lonDeg, rKm);
-    return fill(g, [&](size_t a, size_t b, size_t k) {
-        const Vec3d p = sphericalToCartesianKm(g.latDeg[a], g.lonDeg[k], g.rKm[b]);
-        const double d2 = (p.x - c.x) * (p.x - c.x) + (p.y - c.y) * (p.y - c.y) + (p.z - c.z) * (p.z - c.z);
-        return std::exp(-d2 / (2 * sigmaKm * sigmaKm));
+    return fillGrid(g, [&](size_t a, size_t b, size_t k) {
+        return testing::gaussianBlob(g, a, b, k, latDeg, lonDeg, rKm, sigmaKm);
     });
 }
 
@@ -83,12 +71,12 @@ TEST(CriticalPoints, LowerStarsSumToTheSolidTorusEulerCharacteristic)
     std::mt19937 rng(7);
     std::uniform_int_distribution<int> small(0, 3);  // many ties: Simulation of Simplicity decides
     std::uniform_real_distribution<float> real(-1, 1);
-    EXPECT_EQ(eulerSum(g, fill(g, [&](size_t, size_t, size_t) { return small(rng); })), 0);
-    EXPECT_EQ(eulerSum(g, fill(g, [&](size_t, size_t, size_t) { return real(rng); })), 0);
+    EXPECT_EQ(eulerSum(g, fillGrid(g, [&](size_t, size_t, size_t) { return small(rng); })), 0);
+    EXPECT_EQ(eulerSum(g, fillGrid(g, [&](size_t, size_t, size_t) { return real(rng); })), 0);
     EXPECT_EQ(eulerSum(g, std::vector<float>(g.cellCount(), 1.0f)), 0);
     // An interior vertex above all its neighbours: its lower link is the whole link, a sphere
     // (14 vertices - 36 edges + 24 triangles = 2), so it contributes 1 - 2.
-    auto peak = fill(g, [&](size_t a, size_t b, size_t c) { return a == 2 && b == 2 && c == 3 ? 1.0 : 0.0; });
+    auto peak = fillGrid(g, [&](size_t a, size_t b, size_t c) { return a == 2 && b == 2 && c == 3 ? 1.0 : 0.0; });
     EXPECT_EQ(lowerStarEulerContribution(g, peak, g.index(2, 2, 3)), -1);
     // Below all its neighbours: the empty lower link contributes 1.
     for (auto& x : peak)
@@ -137,7 +125,7 @@ TEST(CriticalPoints, QuadraticSaddlesOfBothKinds)
     const SphericalGrid g = centredGrid(9, 9, 12);
     const size_t a0 = 4, b0 = 4, c0 = 6;
     for (const double sign : {1.0, -1.0}) {
-        const auto values = fill(g, [&](size_t a, size_t b, size_t c) {
+        const auto values = fillGrid(g, [&](size_t a, size_t b, size_t c) {
             const double x = double(a) - a0, y = double(b) - b0, z = double(c) - c0;
             return sign * (x * x - 2 * y * y + 3 * z * z);
         });
@@ -182,7 +170,7 @@ TEST(CriticalPoints, MaximumNextToAndOnAPole)
         if (std::abs(lat) == 90) {
             // Centred on the pole: |p - c|² depends on lat and r only, so each ring ties exactly.
             const double rc = 4500, pole = lat > 0 ? 1 : -1;
-            values = fill(g, [&](size_t a, size_t b, size_t) {
+            values = fillGrid(g, [&](size_t a, size_t b, size_t) {
                 const double r = g.rKm[b];
                 const double d2 = r * r + rc * rc - 2 * r * rc * pole * std::sin(degToRad(g.latDeg[a]));
                 return std::exp(-d2 / (2 * 700.0 * 700.0));
@@ -219,6 +207,7 @@ TEST(CriticalPoints, SelectionKeepsTheSignificantAndCaps)
     CriticalPointFilter filter;
     filter.minAbsValue = 30;
     filter.minFractionOfMaxAbs = 0.1;  // 0.1 * 100 = 10 < 30
+    filter.saddles = true;             // not the default since seeds are chosen by persistence
     auto kept = selectSignificant(points, 100, filter);
     ASSERT_EQ(kept.size(), 3u);
     EXPECT_EQ(kept[0].value, 100);  // most extreme first
@@ -243,9 +232,11 @@ TEST(CriticalPoints, SelectionKeepsTheSignificantAndCaps)
     EXPECT_EQ(selectSignificant(all, 1.0, CriticalPointFilter{}).size(), 200u);
 }
 
-// The contest fixture (written by Python, analytic truth.json): a maximum at each positive blob
-// and a minimum at each negative one, at the blob's position at the step's time, and no other
-// significant extremum.
+// The contest fixture (written by Python, analytic truth.json): two hot and two cold blobs whose
+// anomaly is taken relative to each shell's mean. Under both seed rules, a maximum at each positive
+// blob and a minimum at each negative one, at the blob's position at the step's time, and no other
+// significant extremum; by persistence (the default) nothing else at all, and the global pair's
+// ends (the 400 K and -350 K blobs) first.
 TEST(CriticalPoints, ContestFixtureBlobs)
 {
     const auto truth = nlohmann::json::parse(std::ifstream(testing::contestLayoutDir() / "truth.json"));
@@ -256,25 +247,34 @@ TEST(CriticalPoints, ContestFixtureBlobs)
         const Snapshot snap = readSnapshot(files[step]);
         const auto& g = snap.grid;
         const auto& values = snap.find("temperature anomaly")->values;
-        float maxAbs = 0;
-        for (float v : values)
-            maxAbs = std::max(maxAbs, std::abs(v));
-        const auto kept = selectSignificant(findCriticalPoints(g, values), maxAbs, CriticalPointFilter{});
-        const double ts = step * dt * kSecondsPerMyr;
-        const double dLat = g.latDeg[1] - g.latDeg[0], dR = g.rKm[1] - g.rKm[0], dLon = g.lonDeg[1] - g.lonDeg[0];
-        size_t extrema = 0;
-        for (const auto& p : kept)
-            extrema += p.kind == CriticalKind::Maximum || p.kind == CriticalKind::Minimum;
-        EXPECT_EQ(extrema, truth["blobs_lat_lon_rkm_amp_sigma"].size()) << "step " << step;
-        for (const auto& b : truth["blobs_lat_lon_rkm_amp_sigma"]) {
-            const double lat = b[0], lon = double(b[1]) + radToDeg(omega * ts), r = double(b[2]) + u0 * ts / 1000;
-            const CriticalKind want = double(b[3]) > 0 ? CriticalKind::Maximum : CriticalKind::Minimum;
-            int found = 0;
+        const auto all = findCriticalPoints(g, values);
+        for (const SeedRule rule : {SeedRule::Value, SeedRule::Persistence}) {
+            CriticalPointFilter filter;
+            filter.rule = rule;
+            filter.saddles = rule == SeedRule::Value;  // as before persistence
+            const auto kept = selectSeeds(g, values, all, filter).seeds;
+            const double ts = step * dt * kSecondsPerMyr;
+            const double dLat = g.latDeg[1] - g.latDeg[0], dR = g.rKm[1] - g.rKm[0], dLon = g.lonDeg[1] - g.lonDeg[0];
+            size_t extrema = 0;
             for (const auto& p : kept)
-                if (p.kind == want && std::abs(p.latDeg - lat) <= dLat && lonDistanceDeg(p.lonDeg, lon) <= dLon &&
-                    std::abs(p.rKm - r) <= dR)
-                    ++found;
-            EXPECT_EQ(found, 1) << "step " << step << " blob at " << lat << ", " << lon << ", " << r;
+                extrema += p.kind == CriticalKind::Maximum || p.kind == CriticalKind::Minimum;
+            const std::string where = fmt::format("step {}, {} rule", step, seedRuleName(rule));
+            EXPECT_EQ(extrema, truth["blobs_lat_lon_rkm_amp_sigma"].size()) << where;
+            for (const auto& b : truth["blobs_lat_lon_rkm_amp_sigma"]) {
+                const double lat = b[0], lon = double(b[1]) + radToDeg(omega * ts), r = double(b[2]) + u0 * ts / 1000;
+                const CriticalKind want = double(b[3]) > 0 ? CriticalKind::Maximum : CriticalKind::Minimum;
+                int found = 0;
+                for (const auto& p : kept)
+                    if (p.kind == want && std::abs(p.latDeg - lat) <= dLat && lonDistanceDeg(p.lonDeg, lon) <= dLon &&
+                        std::abs(p.rKm - r) <= dR)
+                        ++found;
+                EXPECT_EQ(found, 1) << where << ", blob at " << lat << ", " << lon << ", " << r;
+            }
+            if (rule == SeedRule::Persistence) {
+                ASSERT_EQ(kept.size(), extrema) << where;
+                EXPECT_GT(kept[0].value, 300) << where;
+                EXPECT_LT(kept[1].value, -250) << where;
+            }
         }
     }
 }

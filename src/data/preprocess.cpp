@@ -8,6 +8,7 @@
 #include "core/strings.h"
 #include "data/bricks.h"
 #include "data/dataset_format.h"
+#include "data/persistence.h"
 
 #include <spdlog/spdlog.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -104,7 +105,10 @@ json pathlineSettings(const PathlineOptions& o)
     return {{"field", o.field},
             {"steps", o.steps},
             {"filter",
-             {{"min_abs_value", o.filter.minAbsValue},
+             {{"rule", seedRuleName(o.filter.rule)},
+              {"min_persistence", o.filter.minPersistence},
+              {"persistence_is_fraction", o.filter.persistenceIsFraction},
+              {"min_abs_value", o.filter.minAbsValue},
               {"min_fraction_of_max_abs", o.filter.minFractionOfMaxAbs},
               {"max_count", o.filter.maxCount},
               {"saddles", o.filter.saddles}}},
@@ -127,11 +131,7 @@ void checkPathlineOptions(const PathlineOptions& o, const std::vector<VariableSp
             names.push_back(v.name);
         fail("--pathline-field: no variable '{}' in the input; variables are {}", o.field, fmt::join(names, ", "));
     }
-    if (!(o.filter.minAbsValue >= 0) || !(o.filter.minFractionOfMaxAbs >= 0 && o.filter.minFractionOfMaxAbs <= 1))
-        fail("critical-point threshold: need --cp-min-abs >= 0 and --cp-min-fraction within [0, 1], got {} and {}",
-             o.filter.minAbsValue, o.filter.minFractionOfMaxAbs);
-    if (o.filter.maxCount == 0)
-        fail("--cp-max-count: must be at least 1");
+    checkCriticalPointFilter(o.filter);
 }
 
 // The level-0 arrays of written steps, mapped on demand and released when no longer needed.
@@ -228,15 +228,14 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
         }
         const std::span<const float> values(series.fields.front()[field], grid.cellCount());
         const auto all = findCriticalPoints(grid, values);
-        const VariableStats stats = format::statsFromJson(stepJsons[s].at("stats").at(field));
-        const double maxAbs = std::max(std::abs(double(stats.range.min)), std::abs(double(stats.range.max)));
-        const auto seeds = selectSignificant(all, maxAbs, po.filter);
+        const SeedSelection selection = selectSeeds(grid, values, all, po.filter);
+        const auto& seeds = selection.seeds;
         const PathlineTracer tracer(series, vx, vy, vz, po.tracer);
         PathlineSet set = tracePathlines(series, tracer, seeds, 0, endStep - s, names, units);
         set.injectionStep = s;
         set.endStep = endStep;
         set.seedField = po.field;
-        set.threshold = significanceThreshold(po.filter, maxAbs);
+        set.threshold = selection.threshold;
         for (const auto& p : all)
             ++set.criticalCounts[static_cast<size_t>(p.kind)];
         set.settingsJson = settings.dump();

@@ -6,6 +6,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <sys/wait.h>
 
@@ -36,6 +37,25 @@ SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon)
     for (size_t i = 0; i < nLon; ++i)
         g.lonDeg.push_back(i * 360.0 / nLon);
     return g;
+}
+
+std::vector<float> fillGrid(const SphericalGrid& g, const std::function<double(size_t, size_t, size_t)>& f)
+{
+    std::vector<float> v(g.cellCount());
+    for (size_t a = 0; a < g.nLat(); ++a)
+        for (size_t b = 0; b < g.nR(); ++b)
+            for (size_t c = 0; c < g.nLon(); ++c)
+                v[g.index(a, b, c)] = static_cast<float>(f(a, b, c));
+    return v;
+}
+
+double gaussianBlob(const SphericalGrid& g, size_t iLat, size_t iR, size_t iLon, double latDeg, double lonDeg,
+                    double rKm, double sigmaKm)
+{
+    const Vec3d c = sphericalToCartesianKm(latDeg, lonDeg, rKm);
+    const Vec3d p = sphericalToCartesianKm(g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR]);
+    const double d2 = (p.x - c.x) * (p.x - c.x) + (p.y - c.y) * (p.y - c.y) + (p.z - c.z) * (p.z - c.z);
+    return std::exp(-d2 / (2 * sigmaKm * sigmaKm));
 }
 
 int run(const std::string& command)
