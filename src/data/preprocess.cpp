@@ -5,12 +5,12 @@
 #include "core/mapped_file.h"
 #include "core/progress.h"
 #include "core/spherical.h"
+#include "core/system_memory.h"
 #include "core/strings.h"
 #include "data/bricks.h"
 #include "data/dataset_format.h"
 
 #include <spdlog/spdlog.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
@@ -18,7 +18,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <random>
 
@@ -27,6 +29,24 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+
+// Runs an action when the scope is left by an exception, unless dismissed first.
+class ScopeCleanup {
+public:
+    explicit ScopeCleanup(std::function<void()> action) : m_action(std::move(action)) {}
+    ~ScopeCleanup()
+    {
+        if (m_action && std::uncaught_exceptions() > m_exceptions)
+            m_action();
+    }
+    ScopeCleanup(const ScopeCleanup&) = delete;
+    ScopeCleanup& operator=(const ScopeCleanup&) = delete;
+    void dismiss() { m_action = nullptr; }
+
+private:
+    std::function<void()> m_action;
+    int m_exceptions = std::uncaught_exceptions();
+};
 
 void writeArray(const fs::path& path, std::span<const float> values)
 {
@@ -266,6 +286,18 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
 
 }  // namespace
 
+uint64_t preprocessMemoryBytes(const SphericalGrid& grid, size_t variableCount)
+{
+    return (variableCount + 1) * uint64_t(grid.nLat()) * grid.nR() * grid.nLon() * sizeof(float);
+}
+
+float toFloat32(double value)
+{
+    if (std::abs(value) > std::numeric_limits<float>::max())
+        return std::copysign(std::numeric_limits<float>::infinity(), value);
+    return static_cast<float>(value);
+}
+
 void addDerivedVariables(Snapshot& snapshot)
 {
     const Field* vx = snapshot.find("vx");
@@ -274,8 +306,8 @@ void addDerivedVariables(Snapshot& snapshot)
     if (!vx || !vy || !vz)
         fail("derived variables need vx, vy and vz, which are not all present");
     const auto& g = snapshot.grid;
-    Field radial{"radial velocity", "cm/yr", std::vector<float>(g.cellCount())};
-    Field magnitude{"velocity magnitude", "cm/yr", std::vector<float>(g.cellCount())};
+    Field radial{"radial velocity", "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
+    Field magnitude{"velocity magnitude", "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
     tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
         const double lat = degToRad(g.latDeg[iLat]);
         for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
@@ -285,8 +317,8 @@ void addDerivedVariables(Snapshot& snapshot)
             for (size_t iR = 0; iR < g.nR(); ++iR) {
                 const size_t i = g.index(iLat, iR, iLon);
                 const double x = vx->values[i], y = vy->values[i], z = vz->values[i];
-                radial.values[i] = static_cast<float>((x * ux + y * uy + z * uz) * kMpsToCmPerYr);
-                magnitude.values[i] = static_cast<float>(std::sqrt(x * x + y * y + z * z) * kMpsToCmPerYr);
+                radial.values[i] = toFloat32((x * ux + y * uy + z * uz) * kMpsToCmPerYr);
+                magnitude.values[i] = toFloat32(std::sqrt(x * x + y * y + z * z) * kMpsToCmPerYr);
             }
         }
     });
@@ -305,7 +337,7 @@ Field lateralAnomaly(const SphericalGrid& g, const Field& field, const std::stri
     for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
         for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
             area += w.lat[iLat] * w.lon[iLon];
-    Field out{name, field.units, std::vector<float>(g.cellCount())};
+    Field out{name, field.units, std::vector<float>(g.cellCount()), {field.name}};
     tbb::parallel_for(size_t(0), g.nR(), [&](size_t iR) {
         double sum = 0;
         for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
@@ -315,7 +347,7 @@ Field lateralAnomaly(const SphericalGrid& g, const Field& field, const std::stri
         for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
             for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
                 const size_t i = g.index(iLat, iR, iLon);
-                out.values[i] = static_cast<float>(field.values[i] - mean);
+                out.values[i] = toFloat32(field.values[i] - mean);
             }
     });
     return out;
@@ -364,24 +396,30 @@ VariableStats computeStats(const SphericalGrid& grid, std::span<const float> val
         },
         [](auto a, auto b) { return std::pair(std::min(a.first, b.first), std::max(a.second, b.second)); });
 
+    // Callers check that values are finite (checkFinite): an infinite range has no bins.
+    RAYPC_CHECK(std::isfinite(lo) && std::isfinite(hi));
     VariableStats stats;
     stats.range = {lo, hi};
     const double span = static_cast<double>(hi) - lo;
     const double scale = span > 0 ? kHistogramBins / span : 0.0;
+    // One partial sum per lat row, added in row order: the sums do not depend on how rows were
+    // spread over threads, so a rerun writes the same bytes (dataset.json is reproducible).
     struct Partial {
-        std::vector<double> histogram = std::vector<double>(kHistogramBins, 0.0);
         double weighted = 0, weight = 0;
     };
-    tbb::enumerable_thread_specific<Partial> partials;
+    std::vector<Partial> rows(grid.nLat());
+    std::vector<double> rowHistograms(grid.nLat() * kHistogramBins, 0.0);
     tbb::parallel_for(size_t(0), grid.nLat(), [&](size_t iLat) {
-        auto& p = partials.local();
+        Partial& p = rows[iLat];
+        double* histogram = rowHistograms.data() + iLat * kHistogramBins;
         for (size_t iR = 0; iR < grid.nR(); ++iR) {
             const double wRow = w.lat[iLat] * w.r[iR];
             const float* row = values.data() + iLat * rowSize + iR * grid.nLon();
             for (size_t iLon = 0; iLon < grid.nLon(); ++iLon) {
                 const double wi = wRow * w.lon[iLon];
-                const int bin = std::min(kHistogramBins - 1, static_cast<int>((row[iLon] - lo) * scale));
-                p.histogram[bin] += wi;
+                // In double: the difference of two finite floats may overflow float.
+                const int bin = std::min(kHistogramBins - 1, static_cast<int>((double(row[iLon]) - lo) * scale));
+                histogram[bin] += wi;
                 p.weighted += wi * row[iLon];
                 p.weight += wi;
             }
@@ -389,11 +427,11 @@ VariableStats computeStats(const SphericalGrid& grid, std::span<const float> val
     });
     stats.histogram.assign(kHistogramBins, 0.0);
     double weighted = 0, weight = 0;
-    for (const auto& p : partials) {
+    for (size_t iLat = 0; iLat < grid.nLat(); ++iLat) {
         for (int b = 0; b < kHistogramBins; ++b)
-            stats.histogram[b] += p.histogram[b];
-        weighted += p.weighted;
-        weight += p.weight;
+            stats.histogram[b] += rowHistograms[iLat * kHistogramBins + b];
+        weighted += rows[iLat].weighted;
+        weight += rows[iLat].weight;
     }
     for (double& h : stats.histogram)
         h /= weight;
@@ -476,12 +514,37 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
     }
     const auto specs = variableSpecs(header);
     checkPathlineOptions(options.pathlines, specs);
+    checkGridFitsMemory(header.grid, preprocessMemoryBytes(header.grid, specs.size()), inputs.front().string(),
+                        "preprocess", availableMemory());
     const size_t sampleRows = options.sampleRows;
     json j = manifest(levels, specs, inputs, options, sampleRows);
 
-    fs::create_directories(outDir / "steps");
+    // From here on the run writes; one run at a time per directory.
+    const bool dirExisted = fs::exists(outDir);
+    DatasetWriteLock lock(outDir);
     const fs::path manifestPath = outDir / format::kManifest;
-    if (fs::exists(manifestPath)) {
+    const bool fresh = !fs::exists(manifestPath);
+    // A fresh run that fails before it finishes a step leaves nothing (what it created goes);
+    // later, the finished steps stay for a rerun to resume from (docs/format.md).
+    std::vector<fs::path> created;
+    for (const fs::path name : {format::kSampleCoords, "steps", "pathlines"})
+        if (!fs::exists(outDir / name))
+            created.push_back(outDir / name);
+    ScopeCleanup leaveNothing([&] {
+        std::error_code ec;
+        lock.removeFile();
+        if (!dirExisted) {
+            fs::remove_all(outDir, ec);
+            return;
+        }
+        fs::remove(manifestPath, ec);
+        for (const auto& path : created)
+            fs::remove_all(path, ec);
+    });
+    if (!fresh)
+        leaveNothing.dismiss();
+    fs::create_directories(outDir / "steps");
+    if (!fresh) {
         json old;
         try {
             old = json::parse(readFile(manifestPath));
@@ -544,69 +607,87 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
     std::optional<Progress> progress;
     if (!options.quiet && !todo.empty())
         progress.emplace("preprocess", static_cast<int64_t>(todo.size()), "steps");
-    for (const int s : todo) {
-        const fs::path& input = inputs[s];
-        const auto stepStart = std::chrono::steady_clock::now();
-        auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - stepStart).count(); };
-        Snapshot snap = readSnapshot(input, options.reader);
-        spdlog::debug("{}: read in {:.2f} s", input.filename().string(), elapsed());
-        if (!snap.grid.sameAs(header.grid))
-            fail("{}: grid {}x{}x{} (lat x r x lon) or its coordinates differ from the first step's {}x{}x{} in {}",
-                 input.string(), snap.grid.nLat(), snap.grid.nR(), snap.grid.nLon(), header.grid.nLat(),
-                 header.grid.nR(), header.grid.nLon(), inputs.front().filename().string());
-        addDerivedVariables(snap);
-        RAYPC_CHECK_EQ(snap.fields.size(), specs.size());
+    try {
+        for (const int s : todo) {
+            const fs::path& input = inputs[s];
+            const auto stepStart = std::chrono::steady_clock::now();
+            auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - stepStart).count(); };
+            Snapshot snap = readSnapshot(input, options.reader);
+            spdlog::debug("{}: read in {:.2f} s", input.filename().string(), elapsed());
+            if (!snap.grid.sameAs(header.grid))
+                fail("{}: grid {}x{}x{} (lat x r x lon) or its coordinates differ from the first step's {}x{}x{} in {}",
+                     input.string(), snap.grid.nLat(), snap.grid.nR(), snap.grid.nLon(), header.grid.nLat(),
+                     header.grid.nR(), header.grid.nLon(), inputs.front().filename().string());
+            addDerivedVariables(snap);
+            RAYPC_CHECK_EQ(snap.fields.size(), specs.size());
+            // The reader refused non-finite inputs; a finite input can still derive an infinity.
+            for (const auto& field : snap.fields)
+                checkFinite(snap, field, input.string());
 
-        const fs::path finalDir = format::stepDir(outDir, s);
-        const fs::path tmpDir = temporarySibling(finalDir);
-        json stepJson = {{"index", s}, {"time_myr", s * options.dtMyr}, {"source", input.filename().string()}};
-        stepJson["stats"] = json::array();
-        // Level by level: values and brick bounds of every variable; stats at full resolution.
-        std::vector<std::vector<float>> current(snap.fields.size());
-        for (size_t v = 0; v < snap.fields.size(); ++v)
-            current[v] = std::move(snap.fields[v].values);
-        // The sample reads full-resolution values.
-        std::vector<float> sample(cells.size() * specs.size());
-        std::vector<VariableStats> stats(specs.size());
-        tbb::parallel_for(size_t(0), specs.size(), [&](size_t v) {
-            stats[v] = computeStats(header.grid, current[v]);
-            for (size_t i = 0; i < cells.size(); ++i)
-                sample[i * specs.size() + v] = current[v][cells[i]];
-        });
-        for (const auto& st : stats)
-            stepJson["stats"].push_back(format::toJson(st));
-        spdlog::debug("{}: derived, stats and sample done at {:.2f} s", input.filename().string(), elapsed());
-        for (int level = 0; level < kLevelCount; ++level)
-            fs::create_directories(format::levelDir(tmpDir, level));
-        // Variables in parallel: writing into the page cache costs as much CPU as computing,
-        // so both cores write while they compute bounds and coarser levels.
-        tbb::parallel_for(size_t(0), specs.size(), [&](size_t v) {
-            const auto stem = fileSafeName(specs[v].name);
-            for (int level = 0; level < kLevelCount; ++level) {
-                const SphericalGrid& grid = levels[level];
-                const BrickLayout layout = BrickLayout::forGrid(grid, options.brickSize);
-                const fs::path dir = format::levelDir(tmpDir, level);
-                std::vector<float> bounds(2 * layout.brickCount());
-                computeBrickBounds(grid, layout, current[v], bounds);
-                writeArray(format::valuesFile(dir, stem), current[v]);
-                writeArray(format::boundsFile(dir, stem), bounds);
-                if (level + 1 < kLevelCount)
-                    current[v] = coarsenField(grid, current[v]);
+            const fs::path finalDir = format::stepDir(outDir, s);
+            const fs::path tmpDir = temporarySibling(finalDir);
+            ScopeCleanup removeTmp([&] {
+                std::error_code ec;
+                fs::remove_all(tmpDir, ec);
+            });
+            json stepJson = {{"index", s}, {"time_myr", s * options.dtMyr}, {"source", input.filename().string()}};
+            stepJson["stats"] = json::array();
+            // Level by level: values and brick bounds of every variable; stats at full resolution.
+            std::vector<std::vector<float>> current(snap.fields.size());
+            for (size_t v = 0; v < snap.fields.size(); ++v)
+                current[v] = std::move(snap.fields[v].values);
+            // The sample reads full-resolution values.
+            std::vector<float> sample(cells.size() * specs.size());
+            std::vector<VariableStats> stats(specs.size());
+            tbb::parallel_for(size_t(0), specs.size(), [&](size_t v) {
+                stats[v] = computeStats(header.grid, current[v]);
+                for (size_t i = 0; i < cells.size(); ++i)
+                    sample[i * specs.size() + v] = current[v][cells[i]];
+            });
+            for (const auto& st : stats)
+                stepJson["stats"].push_back(format::toJson(st));
+            spdlog::debug("{}: derived, stats and sample done at {:.2f} s", input.filename().string(), elapsed());
+            for (int level = 0; level < kLevelCount; ++level)
+                fs::create_directories(format::levelDir(tmpDir, level));
+            // Variables in parallel: writing into the page cache costs as much CPU as computing,
+            // so both cores write while they compute bounds and coarser levels.
+            tbb::parallel_for(size_t(0), specs.size(), [&](size_t v) {
+                const auto stem = fileSafeName(specs[v].name);
+                for (int level = 0; level < kLevelCount; ++level) {
+                    const SphericalGrid& grid = levels[level];
+                    const BrickLayout layout = BrickLayout::forGrid(grid, options.brickSize);
+                    const fs::path dir = format::levelDir(tmpDir, level);
+                    std::vector<float> bounds(2 * layout.brickCount());
+                    computeBrickBounds(grid, layout, current[v], bounds);
+                    writeArray(format::valuesFile(dir, stem), current[v]);
+                    writeArray(format::boundsFile(dir, stem), bounds);
+                    if (level + 1 < kLevelCount)
+                        current[v] = coarsenField(grid, current[v]);
+                }
+            });
+            writeArray(tmpDir / format::kStepSample, sample);
+            {
+                std::ofstream out(tmpDir / format::kStepManifest);
+                out << stepJson.dump(1);
+                if (!out)
+                    fail("{}: write failed", (tmpDir / format::kStepManifest).string());
             }
-        });
-        writeArray(tmpDir / format::kStepSample, sample);
-        {
-            std::ofstream out(tmpDir / format::kStepManifest);
-            out << stepJson.dump(1);
-            if (!out)
-                fail("{}: write failed", (tmpDir / format::kStepManifest).string());
+            renameAtomic(tmpDir, finalDir);
+            removeTmp.dismiss();
+            leaveNothing.dismiss();
+            spdlog::debug("{}: levels, bricks and files done at {:.2f} s", input.filename().string(), elapsed());
+            stepJsons[s] = std::move(stepJson);
+            ++summary.stepsWritten;
+            if (progress)
+                progress->advance();
         }
-        renameAtomic(tmpDir, finalDir);
-        spdlog::debug("{}: levels, bricks and files done at {:.2f} s", input.filename().string(), elapsed());
-        stepJsons[s] = std::move(stepJson);
-        ++summary.stepsWritten;
-        if (progress)
-            progress->advance();
+    } catch (const Error& e) {
+        // What the run finished stays (the failed step's temporary directory does not).
+        const int kept = summary.stepsWritten + summary.stepsSkipped;
+        if (kept == 0)
+            throw;
+        throw Error(fmt::format("{} ({} finished steps stay in {}: a rerun resumes from them)", e.what(), kept,
+                                outDir.string()));
     }
     if (progress)
         progress->finish();

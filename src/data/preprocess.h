@@ -59,9 +59,17 @@ PreprocessSummary preprocess(const std::vector<std::filesystem::path>& inputs, c
 
 // --- Building blocks, public for tests -----------------------------------------------------
 
+// Bytes of memory preprocessing one step of `grid` takes at its peak: `variableCount` (stored and
+// derived) full-resolution float32 arrays and the reader's buffer for one variable.
+uint64_t preprocessMemoryBytes(const SphericalGrid& grid, size_t variableCount);
+
+// `value` as float32; ±infinity beyond float32's range (where a plain conversion is undefined).
+float toFloat32(double value);
+
 // Appends "radial velocity" and "velocity magnitude" (cm/yr) computed from vx, vy, vz (m/s),
 // and, when "thermal expansivity" is present, "thermal expansivity anomaly" (see lateralAnomaly).
-// Throws raypc::Error if a velocity component is missing.
+// Values too large for float32 become infinite (see checkFinite). Throws raypc::Error if a
+// velocity component is missing.
 void addDerivedVariables(Snapshot& snapshot);
 
 // `field` minus its area-weighted mean over each radius shell (the lateral mean), named `name`.
@@ -71,7 +79,8 @@ Field lateralAnomaly(const SphericalGrid& grid, const Field& field, const std::s
 // fine points it merges (grid.coarsened() gives its coordinates).
 std::vector<float> coarsenField(const SphericalGrid& fine, std::span<const float> values);
 
-// Exact range, volume-weighted mean and kHistogramBins-bin volume-fraction histogram.
+// Exact range, volume-weighted mean and kHistogramBins-bin volume-fraction histogram of finite
+// values (a non-finite value is a broken invariant: checked, aborts).
 VariableStats computeStats(const SphericalGrid& grid, std::span<const float> values);
 
 // `rows` grid-point indices drawn independently with probability proportional to each
