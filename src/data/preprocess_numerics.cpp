@@ -107,7 +107,7 @@ VariableStats computeStats(const SphericalGrid& grid, std::span<const float> val
     RAYPC_CHECK_EQ(values.size(), grid.cellCount());
     const auto w = grid.volumeFactors();
     const size_t rowSize = grid.nR() * grid.nLon();
-    const auto [lo, hi] = tbb::parallel_reduce(
+    const auto extremes = tbb::parallel_reduce(
         tbb::blocked_range<size_t>(0, values.size(), 1 << 16), std::pair<float, float>(INFINITY, -INFINITY),
         [&](const auto& range, std::pair<float, float> acc) {
             for (size_t i = range.begin(); i != range.end(); ++i) {
@@ -117,6 +117,8 @@ VariableStats computeStats(const SphericalGrid& grid, std::span<const float> val
             return acc;
         },
         [](auto a, auto b) { return std::pair(std::min(a.first, b.first), std::max(a.second, b.second)); });
+    // Named copies, not structured bindings: clang 14 (the fuzzing build) cannot capture those.
+    const float lo = extremes.first, hi = extremes.second;
 
     // Callers check that values are finite (checkFinite): an infinite range has no bins.
     RAYPC_CHECK(std::isfinite(lo) && std::isfinite(hi));
