@@ -5,6 +5,8 @@
 #include "core/error.h"
 #include "core/strings.h"
 #include "data/dataset.h"
+#include "data/pathline_export.h"
+#include "data/pathline_storage.h"
 #include "data/pathlines.h"
 #include "data/persistence.h"
 

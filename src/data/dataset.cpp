@@ -6,7 +6,14 @@
 #include "data/bricks.h"
 #include "data/dataset_format.h"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 namespace raypc {
 
@@ -248,6 +255,55 @@ SampleTable Dataset::loadSample(int step) const
         std::copy_n(v + row * nVars, nVars, out + nCoords);
     }
     return table;
+}
+
+DatasetWriteLock::DatasetWriteLock(const std::filesystem::path& dir) : m_path(dir / format::kLockFile)
+{
+    std::filesystem::create_directories(dir);
+    // The holder may remove the file (removeFile) between our open and flock: then the lock we got
+    // is on a file no longer at the path, and we try again with a new one.
+    for (;;) {
+        m_fd = ::open(m_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+        if (m_fd < 0)
+            fail("{}: cannot open the lock file: {}", m_path.string(), std::strerror(errno));
+        if (::flock(m_fd, LOCK_EX | LOCK_NB) != 0) {
+            const int error = errno;
+            char holder[256] = {};
+            const ssize_t n = ::pread(m_fd, holder, sizeof holder - 1, 0);
+            ::close(m_fd);
+            m_fd = -1;
+            if (error != EWOULDBLOCK)
+                fail("{}: cannot lock: {}", m_path.string(), std::strerror(error));
+            std::string who(holder, n > 0 ? static_cast<size_t>(n) : 0);
+            while (!who.empty() && (who.back() == '\n' || who.back() == '\0'))
+                who.pop_back();
+            fail("{}: another raypc preprocess is writing this dataset ({}); wait for it to finish or use another "
+                 "output directory",
+                 dir.string(), who.empty() ? "pid unknown" : who);
+        }
+        struct stat held {}, atPath {};
+        if (::fstat(m_fd, &held) == 0 && ::stat(m_path.c_str(), &atPath) == 0 && held.st_ino == atPath.st_ino &&
+            held.st_dev == atPath.st_dev)
+            break;
+        ::close(m_fd);
+    }
+    char host[256] = {};
+    ::gethostname(host, sizeof host - 1);
+    const std::string who = fmt::format("pid {} on host {}\n", ::getpid(), host);
+    if (::ftruncate(m_fd, 0) != 0 || ::pwrite(m_fd, who.data(), who.size(), 0) != static_cast<ssize_t>(who.size()))
+        fail("{}: cannot write the lock file: {}", m_path.string(), std::strerror(errno));
+}
+
+DatasetWriteLock::~DatasetWriteLock()
+{
+    if (m_fd >= 0)
+        ::close(m_fd);  // releases the lock
+}
+
+void DatasetWriteLock::removeFile()
+{
+    std::error_code ec;
+    std::filesystem::remove(m_path, ec);
 }
 
 }  // namespace raypc

@@ -100,6 +100,29 @@ struct SampleTable {
     float at(size_t row, size_t column) const { return values[row * columns.size() + column]; }
 };
 
+// Exclusive write access to a dataset directory, so that two `raypc preprocess` runs into one
+// directory cannot interleave: flock(2) on DIR/.lock, released when the object is destroyed or
+// the process ends (also when it is killed, so a stale lock never blocks a rerun). The file
+// holds the holder's pid and host name, for the message to the one refused. Reading a dataset
+// takes no lock (Dataset::open refuses an unfinished one).
+class DatasetWriteLock {
+public:
+    // Creates `dir` if needed and locks it. Throws raypc::Error naming the directory and the
+    // holder (pid, host) when another process holds the lock, or naming the file on an I/O error.
+    explicit DatasetWriteLock(const std::filesystem::path& dir);
+    ~DatasetWriteLock();
+    DatasetWriteLock(const DatasetWriteLock&) = delete;
+    DatasetWriteLock& operator=(const DatasetWriteLock&) = delete;
+
+    // Removes the lock file while still holding the lock (before removing the directory of a
+    // run that leaves nothing); a process that opened the old file sees it is gone and retries.
+    void removeFile();
+
+private:
+    std::filesystem::path m_path;
+    int m_fd = -1;
+};
+
 class Dataset {
 public:
     // Opens a dataset directory. Throws raypc::Error naming the directory if it is not a

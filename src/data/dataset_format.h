@@ -17,6 +17,7 @@ inline constexpr int kVersion = 1;
 inline constexpr const char* kSampleCoords = "sample_coords.f32";
 inline constexpr const char* kStepManifest = "step.json";
 inline constexpr const char* kStepSample = "sample.f32";
+inline constexpr const char* kLockFile = ".lock";  // DatasetWriteLock
 
 std::filesystem::path stepDir(const std::filesystem::path& dataset, int step);
 std::filesystem::path levelDir(const std::filesystem::path& stepDir, int level);

@@ -3,6 +3,8 @@
 #include "core/error.h"
 #include "core/spherical.h"
 #include "core/strings.h"
+#include "core/system_memory.h"
+#include "data/netcdf_classic.h"
 
 #include <netcdf.h>
 #include <tbb/parallel_for.h>
@@ -10,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <fstream>
 #include <mutex>
 #include <numeric>
 #include <optional>
@@ -193,6 +196,9 @@ int findCoordinateVar(const NcFile& file, Axis axis, const std::string& explicit
          axis == kLat ? "lat/latitude" : axis == kR ? "r/radius" : "lon/longitude");
 }
 
+// An axis keeps its values in file and canonical order, a sorting copy and an index.
+constexpr uint64_t kAxisBytesPerValue = 3 * sizeof(double) + sizeof(size_t);
+
 CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explicitName)
 {
     CoordinateAxis a;
@@ -205,6 +211,13 @@ CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explic
     const size_t n = file.dimLength(a.dimId);
     if (n == 0)
         fail("{}: coordinate '{}' is empty", file.path().string(), name);
+    // A hostile or broken header may declare any length: check before allocating for it.
+    if (n > kMaxGridPoints)
+        fail("{}: coordinate '{}' has {} values, more than a grid RayPC reads may have points ({})",
+             file.path().string(), name, n, kMaxGridPoints);
+    if (const auto available = availableMemory(); n * kAxisBytesPerValue > available.bytes)
+        fail("{}: coordinate '{}' has {} values, which need {} of memory, {} available ({})", file.path().string(),
+             name, n, formatBytes(n * kAxisBytesPerValue), formatBytes(available.bytes), available.limitedBy);
     a.fileValues.resize(n);
     file.check(nc_get_var_double(file.id(), a.varId, a.fileValues.data()),
                fmt::format("reading coordinate '{}'", name));
@@ -315,34 +328,46 @@ std::pair<int, std::array<Axis, 3>> checkVariable(const NcFile& file, const Open
     return {*id, order};
 }
 
-// netCDF-C reads past the end of a truncated classic file without an error, so compare the
-// file's size with the bytes its header describes (variables are padded to 4 bytes).
+// The value netCDF gives a cell of variable `varId` that was never written when the variable
+// has no _FillValue (NC_FILL_FLOAT etc.), or nothing for a type without one.
+std::optional<double> defaultFillValue(const NcFile& file, int varId)
+{
+    nc_type type = 0;
+    file.check(nc_inq_vartype(file.id(), varId, &type), "reading a variable type");
+    switch (type) {
+    case NC_BYTE: return NC_FILL_BYTE;
+    case NC_UBYTE: return NC_FILL_UBYTE;
+    case NC_SHORT: return NC_FILL_SHORT;
+    case NC_USHORT: return NC_FILL_USHORT;
+    case NC_INT: return NC_FILL_INT;
+    case NC_UINT: return NC_FILL_UINT;
+    case NC_INT64: return static_cast<double>(NC_FILL_INT64);
+    case NC_UINT64: return static_cast<double>(NC_FILL_UINT64);
+    case NC_FLOAT: return NC_FILL_FLOAT;
+    case NC_DOUBLE: return NC_FILL_DOUBLE;
+    default: return std::nullopt;
+    }
+}
+
+// netCDF-C reads past the end of a truncated classic file without an error (the missing bytes
+// come back as zeros), so compare the file's size with where its header says the data ends.
 void checkClassicFileSize(const NcFile& file)
 {
     int fmt = 0;
     file.check(nc_inq_format(file.id(), &fmt), "reading the format");
     if (fmt != NC_FORMAT_CLASSIC && fmt != NC_FORMAT_64BIT_OFFSET && fmt != NC_FORMAT_CDF5)
         return;
-    int nVars = 0, unlimited = -1;
-    file.check(nc_inq_nvars(file.id(), &nVars), "listing variables");
-    file.check(nc_inq_unlimdim(file.id(), &unlimited), "reading the record dimension");
-    uintmax_t needed = 0;
-    for (int v = 0; v < nVars; ++v) {
-        nc_type type;
-        file.check(nc_inq_vartype(file.id(), v, &type), "reading a variable type");
-        size_t typeSize = 0;
-        file.check(nc_inq_type(file.id(), type, nullptr, &typeSize), "reading a type size");
-        uintmax_t count = 1;
-        for (int d : file.varDims(v))
-            count *= file.dimLength(d);
-        needed += (count * typeSize + 3) / 4 * 4;
-    }
-    constexpr uintmax_t kMinHeaderBytes = 32;
+    std::ifstream in(file.path(), std::ios::binary);
+    if (!in)
+        fail("{}: cannot open for reading", file.path().string());
+    const uint64_t needed = classicDataEndBytes(in, file.path().string());
     std::error_code ec;
     const uintmax_t size = std::filesystem::file_size(file.path(), ec);
-    if (!ec && size < needed + kMinHeaderBytes)
-        fail("{}: truncated: the file has {} bytes, its header describes at least {}", file.path().string(), size,
-             needed + kMinHeaderBytes);
+    if (ec)
+        fail("{}: cannot read the file size: {}", file.path().string(), ec.message());
+    if (size < needed)
+        fail("{}: truncated: the file has {} bytes, its header places data up to byte {}", file.path().string(),
+             size, needed);
 }
 
 }  // namespace
@@ -377,9 +402,13 @@ Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& op
     for (int a = 0; a < 3; ++a)
         fileLength[a] = h.axes[a].fileValues.size();
     const size_t fileCount = fileLength[0] * fileLength[1] * fileLength[2];
+    // The fields and one variable's buffer in file order.
+    const auto requested = requestedVariables(options);
+    checkGridFitsMemory(h.grid, (requested.size() + 1) * fileCount * sizeof(float), path.string(), "read",
+                        availableMemory());
     std::vector<float> buffer(fileCount);
 
-    for (const auto& name : requestedVariables(options)) {
+    for (const auto& name : requested) {
         const auto fileName = fileNameOf(options, name);
         const auto [id, order] = checkVariable(file, h, name, fileName);
         const int status = nc_get_var_float(file.id(), id, buffer.data());
@@ -394,12 +423,16 @@ Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& op
             stride[order[i]] = s;
             s *= fileLength[order[i]];
         }
-        // Missing values: _FillValue, missing_value, and anything non-finite.
+        // Missing values: _FillValue (or, without one, netCDF's default fill value of the type: what
+        // a cell never written holds), missing_value, and anything non-finite.
         const auto fillValue = file.numberAttribute(id, "_FillValue");
+        const auto defaultFill = fillValue ? std::nullopt : defaultFillValue(file, id);
+        const auto fillValueOrDefault = fillValue ? fillValue : defaultFill;
         const auto missingValue = file.numberAttribute(id, "missing_value");
         const double scale = file.numberAttribute(id, "scale_factor").value_or(1.0);
         const double offset = file.numberAttribute(id, "add_offset").value_or(0.0);
-        const auto fillF = fillValue ? std::optional<float>(static_cast<float>(*fillValue)) : std::nullopt;
+        const auto fillF =
+            fillValueOrDefault ? std::optional<float>(static_cast<float>(*fillValueOrDefault)) : std::nullopt;
         const auto missF = missingValue ? std::optional<float>(static_cast<float>(*missingValue)) : std::nullopt;
 
         Field field;
@@ -411,16 +444,24 @@ Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& op
         const auto& lonIdx = h.axes[kLon].fileIndex;
         const size_t nR = h.grid.nR(), nLon = h.grid.nLon();
         std::vector<size_t> missingPerShell(nR, 0);
+        size_t firstMissing = n;  // canonical index, for the message
+        float firstMissingValue = 0;
         std::mutex missingMutex;
         // Reorder into canonical order, marking missing values as NaN.
         tbb::parallel_for(size_t(0), h.grid.nLat(), [&](size_t iLat) {
             std::vector<size_t> localMissing(nR, 0);
+            size_t localFirst = n;
+            float localFirstValue = 0;
             for (size_t iR = 0; iR < nR; ++iR) {
                 const size_t base = latIdx[iLat] * stride[kLat] + rIdx[iR] * stride[kR];
                 float* out = field.values.data() + h.grid.index(iLat, iR, 0);
                 for (size_t iLon = 0; iLon < nLon; ++iLon) {
                     float v = buffer[base + lonIdx[iLon] * stride[kLon]];
                     if ((fillF && v == *fillF) || (missF && v == *missF) || !std::isfinite(v)) {
+                        if (localFirst == n) {
+                            localFirst = h.grid.index(iLat, iR, iLon);
+                            localFirstValue = v;
+                        }
                         v = std::numeric_limits<float>::quiet_NaN();
                         ++localMissing[iR];
                     } else if (scale != 1.0 || offset != 0.0) {
@@ -432,13 +473,23 @@ Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& op
             std::lock_guard l(missingMutex);
             for (size_t iR = 0; iR < nR; ++iR)
                 missingPerShell[iR] += localMissing[iR];
+            if (localFirst < firstMissing) {
+                firstMissing = localFirst;
+                firstMissingValue = localFirstValue;
+            }
         });
         const size_t missing = std::accumulate(missingPerShell.begin(), missingPerShell.end(), size_t(0));
         if (missing > 0) {
-            if (!options.fillMissing)
-                fail("{}: {}: {} of {} values are missing (fill value, missing_value or NaN/Inf); "
+            if (!options.fillMissing) {
+                const std::string what = !std::isfinite(firstMissingValue) ? fmt::format("{}", firstMissingValue)
+                                         : fillF && firstMissingValue == *fillF
+                                             ? fmt::format("{} {:g}", fillValue ? "_FillValue" : "netCDF's default fill value (never written)",
+                                                           *fillValueOrDefault)
+                                             : fmt::format("missing_value {:g}", *missingValue);
+                fail("{}: {}: {} of {} values are missing (fill value, missing_value or NaN/Inf), the first at {}: {}; "
                      "use --fill-missing to replace them by the mean of their radius shell",
-                     path.string(), fileName, missing, n);
+                     path.string(), fileName, missing, n, describeGridPoint(h.grid, firstMissing), what);
+            }
             // Replace each missing value by the mean of the valid values on its shell.
             for (size_t iR = 0; iR < nR; ++iR) {
                 if (missingPerShell[iR] == 0)

@@ -3,6 +3,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/spherical.h"
+#include "data/netcdf_classic.h"
 #include "data/preprocess.h"
 #include "data/test_util.h"
 
@@ -12,6 +13,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <sstream>
 
 namespace raypc {
 namespace {
@@ -264,6 +266,75 @@ TEST(NetcdfReaderBadInput, TruncatedFile)
               0);
     std::filesystem::resize_file(nc4, std::filesystem::file_size(nc4) / 2);
     expectReadError(nc4, {}, {"nc4.nc"});
+}
+
+// A classic file cut by less than its header's size (about 1.4 KB here) was read with the
+// missing values as zeros: the size check assumed a 32-byte header.
+TEST(NetcdfReaderBadInput, ShortTruncationsOfAClassicFile)
+{
+    TempDir dir("shortcut");
+    const auto original = contestLayoutDir() / "spherical001.nc";
+    const auto size = std::filesystem::file_size(original);
+    for (const uintmax_t cut : {1, 3, 4, 100, 1000, 1400}) {
+        const auto copy = dir / fmt::format("cut{}.nc", cut);
+        std::filesystem::copy_file(original, copy);
+        std::filesystem::resize_file(copy, size - cut);
+        expectReadError(copy, {}, {copy.filename().string(), "truncated", fmt::format("{} bytes", size - cut)});
+        EXPECT_THROW(readHeader(copy), Error) << cut;
+    }
+    // Every classic flavour, with record variables too: the exact size reads, one byte less does not.
+    for (const char* kind : {"nc3", "nc6", "nc5"}) {
+        const std::string cdl = R"(netcdf rec {
+dimensions: t = UNLIMITED ; x = 3 ;
+variables: short a(t, x) ; byte b(t) ; double c(x) ; c:note = "padded" ;
+data: a = 1, 2, 3, 4, 5, 6 ; b = 7, 8 ; c = 1, 2, 3 ;
+})";
+        const auto path = ncgen(dir.path(), std::string("rec-") + kind, cdl, kind);
+        std::ifstream in(path, std::ios::binary);
+        const uint64_t end = classicDataEndBytes(in, path.string());
+        EXPECT_LE(end, std::filesystem::file_size(path)) << kind;
+        // The last record's data ends within the file's padding of at most 3 bytes.
+        EXPECT_GE(end + 3, std::filesystem::file_size(path)) << kind;
+    }
+}
+
+TEST(NetcdfClassicLayout, RefusesWhatIsNotAClassicHeader)
+{
+    for (const std::string& bytes : {std::string("CDF"), std::string("HDF\x01", 4), std::string("CDF\x02\0\0\0\0\0\0\0\x0a", 12),
+                                    std::string("CDF\x01\0\0\0\0\0\0\0\x0b\0\0\0\x01", 16)}) {
+        std::istringstream in(bytes);
+        EXPECT_THROW(classicDataEndBytes(in, "x.nc"), Error) << bytes.size();
+    }
+}
+
+// A variable without _FillValue whose cells were never written holds netCDF's default fill
+// value (9.96921e36 for float): it was taken as a temperature.
+TEST(NetcdfReaderBadInput, DefaultFillValuesAreMissing)
+{
+    TempDir dir("defaultfill");
+    for (const char* kind : {"nc6", "nc4"}) {
+        // ncgen writes the type's default fill value for `_` when the variable has no _FillValue.
+        const auto path = ncgen(dir.path(), std::string("unwritten-") + kind,
+                                smallCdl("1, 2, 3, 4, 5, _, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16"), kind);
+        expectReadError(path, temperatureOnly(),
+                        {"temperature", "1 of 16 values are missing", "default fill value", "9.96921e+36",
+                         "lat 45°, r 6371 km, lon 90°"});
+        ReaderOptions fill = temperatureOnly();
+        fill.fillMissing = true;
+        const Snapshot s = readSnapshot(path, fill);
+        EXPECT_NEAR(s.fields[0].values[s.grid.index(1, 1, 1)], (5 + 7 + 8 + 13 + 14 + 15 + 16) / 7.0, 1e-5) << kind;
+    }
+    // Integer variables too (NC_FILL_SHORT = -32767).
+    const std::string cdl = R"(netcdf small {
+dimensions: lat = 2 ; r = 2 ; lon = 4 ;
+variables:
+  double lat(lat) ; lat:units = "degrees_north" ; double r(r) ; r:units = "km" ; double lon(lon) ;
+  short temperature(lat, r, lon) ;
+data:
+  lat = 45, -45 ; r = 3485, 6371 ; lon = 0, 90, 180, 270 ;
+  temperature = 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, _, 13, 14, 15, 16 ;
+})";
+    expectReadError(ncgen(dir.path(), "short", cdl), temperatureOnly(), {"1 of 16 values are missing", "-32767"});
 }
 
 TEST(NetcdfReaderBadInput, MissingVariable)

@@ -119,35 +119,4 @@ PathlineSet tracePathlines(const FieldSeries& series, const PathlineTracer& trac
                            const std::vector<CriticalPoint>& seeds, int injectionStep, int endStep,
                            const std::vector<std::string>& names, const std::vector<std::string>& units);
 
-// --- Storage ---------------------------------------------------------------------------------
-
-// DATASET/pathlines/NNNN.
-std::filesystem::path pathlineDir(const std::filesystem::path& dataset, int step);
-
-// Writes `set` into `dir` (created; the caller writes into a temporary directory and renames it).
-// Throws raypc::Error on I/O failure.
-void writePathlineSet(const std::filesystem::path& dir, const PathlineSet& set);
-
-// Reads the set of lines injected at `step` from the dataset directory `dataset`. Throws
-// raypc::Error naming the file when it is missing (e.g. preprocessed with --no-pathlines), of the
-// wrong size or malformed.
-PathlineSet loadPathlineSet(const std::filesystem::path& dataset, int step);
-
-// What a renderer shows at step s (paper: "all pathlines spawned during the last 10 time steps"):
-// the sets injected at steps max(0, s - window + 1) .. s, oldest first. Throws like loadPathlineSet.
-std::vector<PathlineSet> loadPathlineWindow(const std::filesystem::path& dataset, int step, int window = 10);
-
-// --- Export ----------------------------------------------------------------------------------
-
-// One row per point: line, point, x, y, z, lat, lon, radius, time, age, then the line's attributes.
-std::string pathlinesCsv(const PathlineSet& set);
-// One row per seed (the first point of each line): kind, value, coordinates, then attributes.
-std::string criticalPointsCsv(const PathlineSet& set);
-// VTK PolyData, XML (.vtp, ASCII) or legacy ASCII (.vtk): lines with point data time/age and cell
-// data for every attribute; critical points as vertices with their attributes as point data.
-std::string pathlinesVtp(const PathlineSet& set);
-std::string pathlinesLegacyVtk(const PathlineSet& set);
-std::string criticalPointsVtp(const PathlineSet& set);
-std::string criticalPointsLegacyVtk(const PathlineSet& set);
-
 }  // namespace raypc

@@ -1,3 +1,5 @@
+#include "data/pathline_export.h"
+#include "data/pathline_storage.h"
 #include "data/pathlines.h"
 
 #include "core/atomic_file.h"

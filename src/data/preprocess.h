@@ -10,6 +10,7 @@
 #include "data/dataset.h"
 #include "data/netcdf_reader.h"
 #include "data/pathlines.h"
+#include "data/preprocess_numerics.h"
 
 #include <cstdint>
 #include <filesystem>
@@ -48,38 +49,23 @@ struct PreprocessSummary {
     double seconds = 0;
 };
 
-// Preprocesses `inputs` (files, in step order) into `outDir`. Resumable: finished steps of an
-// earlier run into the same directory are kept; a killed run leaves no corrupt step (each step
-// is written under a temporary name and renamed) and the manifest says "incomplete" until the
-// last step and then every step's pathlines (a second phase: they need the velocities of later
-// steps, read back from the written level-0 arrays) are done. Throws raypc::Error naming the file and the problem on bad input, and when
-// `outDir` holds a dataset made from other inputs.
+// Preprocesses `inputs` (files, in step order) into `outDir`, in phases (preprocess.cpp):
+// 1. plan: options and every input's header, the grid's size and the memory a step needs,
+//    before anything is written; 2. the output directory: locked (DatasetWriteLock), checked
+//    for resuming, the "incomplete" manifest written; 3. the sample's coordinates; 4. the steps
+//    an earlier run finished; 5. each remaining step (preprocess_numerics.h), written under a
+//    temporary name and renamed; 6. statistics over all steps in the manifest; 7. critical
+//    points and pathlines (preprocess_pathlines.cpp: they need later steps' velocities, read
+//    back from the written level-0 arrays); 8. the manifest says "complete".
+// Resumable: finished steps of an earlier run into the same directory are kept. What a failed
+// or killed run leaves is in docs/format.md. Throws raypc::Error naming the file and the
+// problem on bad input, when another run holds `outDir`, and when `outDir` holds a dataset
+// made from other inputs.
 PreprocessSummary preprocess(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& outDir,
                              const PreprocessOptions& options);
 
-// --- Building blocks, public for tests -----------------------------------------------------
-
-// Appends "radial velocity" and "velocity magnitude" (cm/yr) computed from vx, vy, vz (m/s),
-// and, when "thermal expansivity" is present, "thermal expansivity anomaly" (see lateralAnomaly).
-// Throws raypc::Error if a velocity component is missing.
-void addDerivedVariables(Snapshot& snapshot);
-
-// `field` minus its area-weighted mean over each radius shell (the lateral mean), named `name`.
-Field lateralAnomaly(const SphericalGrid& grid, const Field& field, const std::string& name);
-
-// The next coarser level: each coarse point is the volume-weighted mean of the (up to) 2x2x2
-// fine points it merges (grid.coarsened() gives its coordinates).
-std::vector<float> coarsenField(const SphericalGrid& fine, std::span<const float> values);
-
-// Exact range, volume-weighted mean and kHistogramBins-bin volume-fraction histogram.
-VariableStats computeStats(const SphericalGrid& grid, std::span<const float> values);
-
-// `rows` grid-point indices drawn independently with probability proportional to each
-// point's dual-cell volume (deterministic for `seed`), sorted ascending.
-std::vector<uint32_t> drawVolumeWeightedSample(const SphericalGrid& grid, size_t rows, uint64_t seed);
-
-// Adds `stats.histogram` (over stats.range) into `histogram` over `range`, spreading each bin's
-// mass over the bins it overlaps.
-void rebinHistogram(const VariableStats& stats, ValueRange range, std::span<double> histogram);
+// Bytes of memory preprocessing one step of `grid` takes at its peak: `variableCount` (stored and
+// derived) full-resolution float32 arrays and the reader's buffer for one variable.
+uint64_t preprocessMemoryBytes(const SphericalGrid& grid, size_t variableCount);
 
 }  // namespace raypc

@@ -8,9 +8,13 @@
 #include "data/test_util.h"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 
+#include <bit>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -37,14 +41,20 @@ double dualVolume(const SphericalGrid& g, size_t a, size_t b, size_t c)
     return (std::sin(degToRad(la1)) - std::sin(degToRad(la0))) * (r1 * r1 * r1 - r0 * r0 * r0) / 3 * degToRad(dLon);
 }
 
+std::vector<float> randomValues(const SphericalGrid& grid, unsigned seed, float lo, float hi)
+{
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(lo, hi);
+    std::vector<float> values(grid.cellCount());
+    for (auto& v : values)
+        v = u(rng);
+    return values;
+}
+
 TEST(Lod, CoarseValuesAreVolumeWeightedMeansAtOddSizes)
 {
     const SphericalGrid fine = centredGrid(7, 5, 9);
-    std::mt19937 rng(3);
-    std::uniform_real_distribution<float> u(-1, 1);
-    std::vector<float> values(fine.cellCount());
-    for (auto& v : values)
-        v = u(rng);
+    const std::vector<float> values = randomValues(fine, 3, -1, 1);
     const auto coarse = coarsenField(fine, values);
     const SphericalGrid cg = fine.coarsened();
     ASSERT_EQ(coarse.size(), cg.cellCount());
@@ -165,6 +175,126 @@ PreprocessOptions quiet()
     o.quiet = true;
     o.sampleRows = 5000;
     return o;
+}
+
+// Float32's extremes in one field: the histogram's bin arithmetic overflowed float (the
+// difference of the two is beyond float32) and indexed the histogram at INT_MIN.
+TEST(Stats, FiniteExtremesOfFloat32)
+{
+    const SphericalGrid g = centredGrid(6, 5, 8);
+    std::vector<float> values(g.cellCount(), 0.0f);
+    values.front() = -3.4e38f;
+    values.back() = 3.4e38f;
+    const auto s = computeStats(g, values);
+    EXPECT_EQ(s.range.min, -3.4e38f);
+    EXPECT_EQ(s.range.max, 3.4e38f);
+    double total = 0;
+    for (double h : s.histogram)
+        total += h;
+    EXPECT_NEAR(total, 1.0, 1e-12);
+    EXPECT_GT(s.histogram.front(), 0);
+    EXPECT_GT(s.histogram.back(), 0);
+    EXPECT_GT(s.histogram[kHistogramBins / 2 - 1] + s.histogram[kHistogramBins / 2], 0.9);  // the zeros, mid-range
+}
+
+// The statistics must not depend on how many threads share the work: dataset.json is the same
+// bytes on every run (issue 16, 11). Thread-local partial sums gave other last digits.
+TEST(Stats, SameBitsWithAnyNumberOfThreads)
+{
+    const SphericalGrid g = centredGrid(90, 41, 180);
+    const std::vector<float> values = randomValues(g, 7, -1000, 3000);
+    VariableStats reference;
+    tbb::task_arena(1).execute([&] { reference = computeStats(g, values); });
+    for (int threads : {2, 3, 4, 8})
+        for (int repeat = 0; repeat < 3; ++repeat) {
+            VariableStats s;
+            tbb::task_arena(threads).execute([&] { s = computeStats(g, values); });
+            ASSERT_EQ(std::bit_cast<uint64_t>(s.mean), std::bit_cast<uint64_t>(reference.mean)) << threads;
+            ASSERT_EQ(s.histogram, reference.histogram) << threads;
+        }
+}
+
+TEST(Derived, ValuesBeyondFloat32BecomeInfiniteAndAreRefusedWithTheirPlace)
+{
+    EXPECT_EQ(toFloat32(1e39), std::numeric_limits<float>::infinity());
+    EXPECT_EQ(toFloat32(-1e39), -std::numeric_limits<float>::infinity());
+    EXPECT_EQ(toFloat32(3.4e38), 3.4e38f);
+    Snapshot snap;
+    snap.grid = centredGrid(2, 2, 4);
+    for (const char* name : {"vx", "vy", "vz"})
+        snap.fields.push_back({name, "m/s", std::vector<float>(snap.grid.cellCount(), 0.01f)});
+    snap.fields[0].values[snap.grid.index(1, 0, 2)] = 1e30f;
+    addDerivedVariables(snap);
+    const Field* magnitude = snap.find("velocity magnitude");
+    ASSERT_NE(magnitude, nullptr);
+    EXPECT_TRUE(std::isinf(magnitude->values[snap.grid.index(1, 0, 2)]));
+    for (const char* stored : {"vx", "vy", "vz"})
+        EXPECT_NO_THROW(checkFinite(snap, *snap.find(stored), "in.nc"));
+    try {
+        checkFinite(snap, *magnitude, "in.nc");
+        FAIL() << "an infinite magnitude passed";
+    } catch (const Error& e) {
+        const std::string m = e.what();
+        for (const char* fragment :
+             {"in.nc: velocity magnitude: inf", "lat 45°, r 3485 km, lon 180° (point 1, 0, 2 of lat, r, lon ascending)",
+              "vx = 1e+30 m/s, vy = 0.01 m/s, vz = 0.01 m/s"})
+            EXPECT_NE(m.find(fragment), std::string::npos) << m << " lacks " << fragment;
+    }
+}
+
+TEST(Memory, AGridTooLargeIsRefusedBeforeAllocating)
+{
+    SphericalGrid g = centredGrid(1000, 500, 1000);
+    EXPECT_EQ(preprocessMemoryBytes(g, 11), 12ull * 500'000'000 * 4);
+    try {
+        checkGridFitsMemory(g, preprocessMemoryBytes(g, 11), "huge.nc", "preprocess", {8'000'000'000, "ulimit -v"});
+        FAIL() << "24 GB fit into 8 GB";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "huge.nc: grid 1000x500x1000 (lat x r x lon) needs 24.0 GB of memory to preprocess, "
+                               "8.0 GB available (ulimit -v)");
+    }
+    EXPECT_NO_THROW(checkGridFitsMemory(g, preprocessMemoryBytes(g, 11), "huge.nc", "preprocess", {24'000'000'000, "x"}));
+    g = centredGrid(2000, 1000, 4000);
+    EXPECT_THROW(checkGridFitsMemory(g, 0, "many.nc", "read", {UINT64_MAX, "x"}), Error);
+}
+
+TEST(DatasetWriteLock, OneWriterAtATimeAndTheOtherIsToldWho)
+{
+    TempDir dir("lock");
+    {
+        DatasetWriteLock first(dir / "ds");
+        try {
+            DatasetWriteLock second(dir / "ds");
+            FAIL() << "two writers";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(fmt::format("(pid {} on host", getpid())), std::string::npos)
+                << e.what();
+        }
+        // The holder may remove the file (a run that leaves nothing); the next writer still locks.
+        first.removeFile();
+        DatasetWriteLock third(dir / "ds");
+        EXPECT_THROW(DatasetWriteLock(dir / "ds"), Error);
+    }
+    EXPECT_NO_THROW(DatasetWriteLock(dir / "ds"));
+}
+
+TEST(Preprocess, AFreshRunThatFailsLeavesNothing)
+{
+    TempDir dir("fresh");
+    Snapshot broken = readSnapshot(fixtureFiles()[0]);
+    broken.find("vx")->values[7] = 1e30f;
+    writeContestFile(dir / "spherical001.nc", broken);
+    try {
+        preprocess({dir / "spherical001.nc"}, dir / "ds", quiet());
+        FAIL() << "vx = 1e30 passed";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("spherical001.nc: velocity magnitude: inf"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir / "ds"));
+    std::filesystem::create_directories(dir / "empty");
+    EXPECT_THROW(preprocess({dir / "spherical001.nc"}, dir / "empty", quiet()), Error);
+    EXPECT_TRUE(std::filesystem::is_empty(dir / "empty"));
 }
 
 TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)

@@ -20,7 +20,7 @@
 // uses this scene (the same rule as VolumeRenderer::setParams). Embree types stay in the .cpp.
 #pragma once
 
-#include "data/pathlines.h"
+#include "data/pathline_storage.h"
 #include "render/render_state.h"
 
 #include <cstdint>

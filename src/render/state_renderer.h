@@ -13,7 +13,7 @@
 #pragma once
 
 #include "data/dataset.h"
-#include "data/pathlines.h"
+#include "data/pathline_storage.h"
 #include "render/pathline_scene.h"
 #include "render/render_state.h"
 #include "render/volume_renderer.h"

@@ -5,7 +5,7 @@
 #pragma once
 
 #include "data/dataset.h"
-#include "data/pathlines.h"
+#include "data/pathline_storage.h"
 #include "data/selection.h"
 #include "server/step_cache.h"
 

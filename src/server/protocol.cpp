@@ -30,9 +30,9 @@ int64_t integerField(const json& message, const char* type, const char* key)
 
 void rejectUnknownKeys(const json& message, const char* type, std::initializer_list<const char*> known)
 {
-    for (const auto& [key, value] : message.items())
-        if (std::none_of(known.begin(), known.end(), [&](const char* k) { return key == k; }))
-            fail("{}: unknown field '{}'", type, key);
+    for (const auto& item : message.items())
+        if (std::none_of(known.begin(), known.end(), [&](const char* k) { return item.key() == k; }))
+            fail("{}: unknown field '{}'", type, item.key());
 }
 
 void putU32(std::string& out, uint32_t v)

@@ -133,6 +133,127 @@ stats_analytic_selection)
   expect_error "min 3 is greater than max 1" stats "$work/ds" --range "depth=3:1" -o "$work/x.csv"
   check "no output after errors" test ! -e "$work/x.csv"
   ;;
+finite_overflow)
+  # Issue 16, 1: one vx = 1e30 (finite) makes the velocity magnitude overflow float32; it crashed
+  # in the histogram. The first value in the file is at lat 87.5 (the file descends), r 3485, lon 0.
+  mkdir -p "$work/in"
+  ncdump "$fixture/spherical001.nc" |
+    awk 'done != 1 && after { sub(/[-0-9.e+]+/, "1e30"); done = 1 } /^ vx =/ { after = 1 } { print }' > "$work/big.cdl"
+  ncgen -k nc6 -o "$work/in/big.nc" "$work/big.cdl"
+  expect_error "big.nc: velocity magnitude: inf (beyond float32) at lat 87.5°, r 3485 km, lon 0° (point 35, 0, 0 of lat, r, lon ascending), computed from vx = 1e+30 m/s" \
+    preprocess "$work/in/big.nc" -o "$work/ds" --quiet
+  check "a failed fresh run leaves no output directory" test ! -e "$work/ds"
+  # Finite extremes of float32 in a stored variable: the histogram bins them without overflow.
+  ncdump "$fixture/spherical001.nc" |
+    awk '/^ temperature =/ { after = 1; print; next } after == 1 { sub(/[-0-9.e+]+/, "3.4e38"); after = 2 }
+         after == 2 && /;/ { sub(/[-0-9.e+]+ ;/, "-3.4e38 ;"); after = 3 } { print }' > "$work/extreme.cdl"
+  ncgen -k nc6 -o "$work/in/extreme.nc" "$work/extreme.cdl"
+  "$raypc" preprocess "$work/in/extreme.nc" -o "$work/ext" --quiet --no-pathlines >/dev/null
+  check "float32 extremes preprocess" grep -q '"complete"' "$work/ext/dataset.json"
+  ;;
+truncated_and_fill)
+  # Issue 16, 2: cuts shorter than the header (~1.4 KB) were read as zeros with exit 0.
+  size=$(stat -c %s "$fixture/spherical001.nc")
+  for cut in 1 4 1000 1400; do
+    head -c $((size - cut)) "$fixture/spherical001.nc" > "$work/cut$cut.nc"
+    expect_error "cut$cut.nc: truncated: the file has $((size - cut)) bytes" preprocess "$work/cut$cut.nc" -o "$work/out"
+  done
+  check "no output after truncated inputs" test ! -e "$work/out"
+  # A value never written (no _FillValue: netCDF's default fill, 9.96921e+36) is missing, not a temperature.
+  ncdump "$fixture/spherical002.nc" |
+    awk 'done != 1 && after { sub(/[-0-9.e+]+/, "_"); done = 1 } /^ temperature =/ { after = 1 } { print }' > "$work/unwritten.cdl"
+  ncgen -k nc6 -o "$work/unwritten.nc" "$work/unwritten.cdl"
+  expect_error "unwritten.nc: temperature: 1 of 106272 values are missing" preprocess "$work/unwritten.nc" -o "$work/out" --quiet
+  expect_error "netCDF's default fill value (never written) 9.96921e+36" preprocess "$work/unwritten.nc" -o "$work/out" --quiet
+  check "no output after default fill values" test ! -e "$work/out"
+  "$raypc" preprocess "$work/unwritten.nc" -o "$work/filled" --fill-missing --quiet --no-pathlines >/dev/null
+  check "--fill-missing accepts them" grep -q '"complete"' "$work/filled/dataset.json"
+  ;;
+huge_grid)
+  # Issue 16, 4: a netCDF-4 file may declare a grid larger than memory (its data never written,
+  # so the file is small); the run must say so before allocating.
+  make_grid() {  # make_grid NAME NLAT NR NLON
+    awk -v name="$1" -v nlat="$2" -v nr="$3" -v nlon="$4" 'function axis(n, lo, hi,   i, s) {
+        for (i = 0; i < n; i++) s = s (i ? ", " : "") lo + (hi - lo) * (i + 0.5) / n; return s }
+      BEGIN {
+        printf "netcdf %s {\ndimensions: lat = %d ; r = %d ; lon = %d ;\nvariables:\n", name, nlat, nr, nlon
+        print "  double lat(lat) ; lat:units = \"degrees_north\" ; double r(r) ; r:units = \"km\" ;"
+        print "  double lon(lon) ; lon:units = \"degrees_east\" ;"
+        n = split("temperature vx vy vz thermal_conductivity thermal_expansivity temperature_anomaly spin_transition-induced_density_anomaly", v, " ")
+        for (i = 1; i <= n; i++) { gsub(/_/, "\\ ", v[i]); printf "  float %s(lat, r, lon) ; %s:_ChunkSizes = 1, 1, %d ;\n", v[i], v[i], nlon }
+        printf "data:\n  lat = %s ;\n  r = %s ;\n  lon = %s ;\n}\n", axis(nlat, -90, 90), axis(nr, 3485, 6371), axis(nlon, 0, 360)
+      }' > "$work/$1.cdl"
+    ncgen -k nc4 -o "$work/$1.nc" "$work/$1.cdl"
+  }
+  make_grid huge 1000 1000 4000
+  check "the huge file is small" test "$(stat -c %s "$work/huge.nc")" -lt 10000000
+  expect_error "huge.nc: grid 1000x1000x4000 (lat x r x lon) needs 192.0 GB of memory to preprocess" \
+    preprocess "$work/huge.nc" -o "$work/out" --quiet
+  expect_error "huge.nc: grid 1000x1000x4000 (lat x r x lon) needs 144.0 GB of memory to read" info "$work/huge.nc"
+  make_grid toomany 2000 1000 4000
+  expect_error "toomany.nc: grid 2000x1000x4000 (lat x r x lon) has 8000000000 points, more than the 4294967295" \
+    preprocess "$work/toomany.nc" -o "$work/out" --quiet
+  check "no output after grids too large" test ! -e "$work/out"
+  ;;
+lock)
+  # Issue 16, 5: two runs into one directory. The first is stopped while it holds the lock, so
+  # the second surely meets it; it must be refused, naming the holder, and leave the first intact.
+  "$raypc" synth -o "$work/nc" --steps 3 --grid 48x61x96 >/dev/null 2>&1
+  "$raypc" preprocess "$work/nc" -o "$work/ds" --quiet >/dev/null 2>&1 &
+  pid=$!
+  for _ in $(seq 1 600); do
+    grep -q "pid $pid" "$work/ds/.lock" 2>/dev/null && break
+    sleep 0.01
+  done
+  kill -STOP "$pid"
+  expect_error "$work/ds: another raypc preprocess is writing this dataset (pid $pid on host $(hostname))" \
+    preprocess "$work/nc" -o "$work/ds" --quiet
+  kill -CONT "$pid"
+  wait "$pid"; status=$?
+  check "the holder finished (exit $status)" test "$status" -eq 0
+  check "its dataset is complete" grep -q "steps: 3" <<<"$("$raypc" info "$work/ds")"
+  out=$("$raypc" preprocess "$work/nc" -o "$work/ds" --quiet)
+  check "a later run is not blocked ($out)" grep -q "0 written, 3 already done" <<<"$out"
+  ;;
+failed_run_leaves)
+  # Issue 16, 3 (docs/format.md, "What a failed run leaves").
+  mkdir -p "$work/in" "$work/empty"
+  cp "$fixture"/spherical00{1,2}.nc "$work/in/"
+  ncdump "$fixture/spherical003.nc" |
+    awk 'done != 1 && after { sub(/[-0-9.e+]+/, "NaN"); done = 1 } /^ temperature =/ { after = 1 } { print }' > "$work/nan.cdl"
+  ncgen -k nc6 -o "$work/nan.nc" "$work/nan.cdl"
+  # A fresh run failing at its first step: nothing, in a new or an existing empty directory.
+  expect_error "nan.nc: temperature: 1 of" preprocess "$work/nan.nc" -o "$work/new" --quiet
+  check "no directory created" test ! -e "$work/new"
+  expect_error "nan.nc: temperature: 1 of" preprocess "$work/nan.nc" -o "$work/empty" --quiet
+  check "the empty directory stays empty" test -z "$(ls -A "$work/empty")"
+  # Failing later: the finished steps, sample_coords.f32 and an "incomplete" manifest, nothing else.
+  cp "$work/nan.nc" "$work/in/spherical003.nc"
+  expect_error "(2 finished steps stay in $work/ds: a rerun resumes from them)" preprocess "$work/in" -o "$work/ds" --quiet
+  check "exactly the finished steps" test "$(ls -A "$work/ds/steps")" = "$(printf '0000\n0001')"
+  check "no temporary files" test -z "$(find "$work/ds" -name '.*' ! -name .lock)"
+  check "the manifest says incomplete" grep -q '"status": "incomplete"' "$work/ds/dataset.json"
+  check "and lists no steps" test "$(grep -c '"time_myr"' "$work/ds/dataset.json")" -eq 0
+  expect_error "did not finish" info "$work/ds"
+  # A write that fails (here: a file size limit) removes the step it was writing.
+  cp "$fixture/spherical003.nc" "$work/in/"
+  "$raypc" preprocess "$work/in/spherical00"{1,2}.nc -o "$work/ext" --quiet --no-pathlines --sample-rows 1000 >/dev/null
+  err=$( (trap '' XFSZ; ulimit -f 200; "$raypc" preprocess "$work/in" -o "$work/ext" --quiet --no-pathlines --sample-rows 1000 2>&1 >/dev/null) )
+  check "a failed write names the file ($err)" grep -q "steps/.0002.tmp-.*write failed" <<<"$err"
+  check "and leaves no temporary directory" test -z "$(find "$work/ext" -name '.*tmp*')"
+  out=$("$raypc" preprocess "$work/in" -o "$work/ds" --quiet)
+  check "rerun resumes ($out)" grep -q "1 written, 2 already done" <<<"$out"
+  ;;
+reproducible)
+  # Issue 16, 11: parallel sums made global means differ in the last digits between runs.
+  "$raypc" synth -o "$work/nc" --steps 2 --grid 48x61x96 >/dev/null 2>&1
+  for run in 1 2 3; do
+    "$raypc" preprocess "$work/nc" -o "$work/ds$run" --quiet --pathline-steps 1 >/dev/null
+  done
+  check "dataset.json of runs 1 and 2 byte-identical" cmp "$work/ds1/dataset.json" "$work/ds2/dataset.json"
+  check "dataset.json of runs 1 and 3 byte-identical" cmp "$work/ds1/dataset.json" "$work/ds3/dataset.json"
+  check "every file of runs 1 and 2 byte-identical" diff -r --exclude=.lock "$work/ds1" "$work/ds2"
+  ;;
 *) echo "unknown case $case_name"; exit 2 ;;
 esac
 

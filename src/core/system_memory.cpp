@@ -1,0 +1,86 @@
+#include "core/system_memory.h"
+
+#include <fmt/format.h>
+#include <sys/resource.h>
+
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <sstream>
+
+namespace raypc {
+namespace {
+
+// The value of `key` (in kB) in a /proc file of "Key:   123 kB" lines.
+std::optional<uint64_t> procKilobytes(const char* path, const std::string& key)
+{
+    std::ifstream in(path);
+    std::string line;
+    while (std::getline(in, line))
+        if (line.starts_with(key + ":")) {
+            std::istringstream fields(line.substr(key.size() + 1));
+            uint64_t kb = 0;
+            if (fields >> kb)
+                return kb * 1024;
+        }
+    return std::nullopt;
+}
+
+std::optional<uint64_t> fileNumber(const std::string& path)
+{
+    std::ifstream in(path);
+    uint64_t value = 0;
+    if (in >> value)
+        return value;
+    return std::nullopt;  // also "max": no limit
+}
+
+// memory.max - memory.current of this process's cgroup (v2, the "0::/path" line of /proc/self/cgroup).
+std::optional<uint64_t> cgroupRemaining()
+{
+    std::ifstream in("/proc/self/cgroup");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.starts_with("0::")) {
+            const std::string dir = "/sys/fs/cgroup" + line.substr(3);
+            const auto max = fileNumber(dir + "/memory.max"), current = fileNumber(dir + "/memory.current");
+            if (max && current)
+                return *max > *current ? *max - *current : 0;
+        }
+    return std::nullopt;
+}
+
+std::optional<uint64_t> addressSpaceRemaining()
+{
+    rlimit limit{};
+    if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY)
+        return std::nullopt;
+    const uint64_t used = procKilobytes("/proc/self/status", "VmSize").value_or(0);
+    return limit.rlim_cur > used ? limit.rlim_cur - used : 0;
+}
+
+}  // namespace
+
+AvailableMemory availableMemory()
+{
+    AvailableMemory a{std::numeric_limits<uint64_t>::max(), "no limit found"};
+    auto consider = [&](std::optional<uint64_t> bytes, const char* what) {
+        if (bytes && *bytes < a.bytes)
+            a = {*bytes, what};
+    };
+    consider(procKilobytes("/proc/meminfo", "MemAvailable"), "MemAvailable");
+    consider(cgroupRemaining(), "cgroup memory.max");
+    consider(addressSpaceRemaining(), "ulimit -v");
+    return a;
+}
+
+std::string formatBytes(uint64_t bytes)
+{
+    if (bytes >= 1'000'000'000)
+        return fmt::format("{:.1f} GB", bytes / 1e9);
+    if (bytes >= 1'000'000)
+        return fmt::format("{:.0f} MB", bytes / 1e6);
+    return fmt::format("{} kB", (bytes + 999) / 1000);
+}
+
+}  // namespace raypc

@@ -1,0 +1,30 @@
+// The stored form of pathline sets in a dataset directory (docs/format.md, "Pathlines").
+//
+// Thread safety: free functions; concurrent reads are safe, writes go to a directory the caller
+// renames into place.
+#pragma once
+
+#include "data/pathlines.h"
+
+#include <filesystem>
+#include <vector>
+
+namespace raypc {
+
+// DATASET/pathlines/NNNN.
+std::filesystem::path pathlineDir(const std::filesystem::path& dataset, int step);
+
+// Writes `set` into `dir` (created; the caller writes into a temporary directory and renames it).
+// Throws raypc::Error on I/O failure.
+void writePathlineSet(const std::filesystem::path& dir, const PathlineSet& set);
+
+// Reads the set of lines injected at `step` from the dataset directory `dataset`. Throws
+// raypc::Error naming the file when it is missing (e.g. preprocessed with --no-pathlines), of the
+// wrong size or malformed.
+PathlineSet loadPathlineSet(const std::filesystem::path& dataset, int step);
+
+// What a renderer shows at step s (paper: "all pathlines spawned during the last 10 time steps"):
+// the sets injected at steps max(0, s - window + 1) .. s, oldest first. Throws like loadPathlineSet.
+std::vector<PathlineSet> loadPathlineWindow(const std::filesystem::path& dataset, int step, int window = 10);
+
+}  // namespace raypc

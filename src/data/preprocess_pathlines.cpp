@@ -1,0 +1,187 @@
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/mapped_file.h"
+#include "core/progress.h"
+#include "core/strings.h"
+#include "data/dataset_format.h"
+#include "data/persistence.h"
+#include "data/pathline_storage.h"
+#include "data/preprocess_phases.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <optional>
+
+namespace raypc::preprocessing {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// The level-0 arrays of written steps, mapped on demand and released when no longer needed.
+class StepArrays {
+public:
+    StepArrays(fs::path dataset, std::vector<VariableSpec> specs) : m_dir(std::move(dataset)), m_specs(std::move(specs)) {}
+
+    const std::vector<const float*>& fields(int step, size_t cellCount)
+    {
+        auto it = m_steps.find(step);
+        if (it != m_steps.end())
+            return it->second.pointers;
+        Mapped& m = m_steps[step];
+        const fs::path dir = format::levelDir(format::stepDir(m_dir, step), 0);
+        for (const auto& v : m_specs) {
+            const fs::path path = format::valuesFile(dir, fileSafeName(v.name));
+            auto& file = m.files.emplace_back(path);
+            if (file.size() != cellCount * sizeof(float))
+                fail("{}: {} bytes, expected {}", path.string(), file.size(), cellCount * sizeof(float));
+            m.pointers.push_back(reinterpret_cast<const float*>(file.bytes().data()));
+        }
+        return m.pointers;
+    }
+    // Unmaps the steps before `step`.
+    void releaseBefore(int step) { m_steps.erase(m_steps.begin(), m_steps.lower_bound(step)); }
+
+private:
+    struct Mapped {
+        std::vector<MappedFile> files;
+        std::vector<const float*> pointers;
+    };
+    fs::path m_dir;
+    std::vector<VariableSpec> m_specs;
+    std::map<int, Mapped> m_steps;
+};
+
+}  // namespace
+
+json pathlineSettings(const PathlineOptions& o)
+{
+    return {{"field", o.field},
+            {"steps", o.steps},
+            {"filter",
+             {{"rule", seedRuleName(o.filter.rule)},
+              {"min_persistence", o.filter.minPersistence},
+              {"persistence_is_fraction", o.filter.persistenceIsFraction},
+              {"min_abs_value", o.filter.minAbsValue},
+              {"min_fraction_of_max_abs", o.filter.minFractionOfMaxAbs},
+              {"max_count", o.filter.maxCount},
+              {"saddles", o.filter.saddles}}},
+            {"tracer",
+             {{"tolerance_km", o.tracer.toleranceKm},
+              {"max_step_myr", o.tracer.maxStepMyr},
+              {"max_segment_km", o.tracer.maxSegmentKm},
+              {"max_points", o.tracer.maxPoints}}}};
+}
+
+void checkPathlineOptions(const PathlineOptions& o, const std::vector<VariableSpec>& specs)
+{
+    if (!o.enabled)
+        return;
+    if (o.steps < 1)
+        fail("--pathline-steps: {} is not a positive number of steps", o.steps);
+    if (std::none_of(specs.begin(), specs.end(), [&](const VariableSpec& v) { return v.name == o.field; })) {
+        std::vector<std::string> names;
+        for (const auto& v : specs)
+            names.push_back(v.name);
+        fail("--pathline-field: no variable '{}' in the input; variables are {}", o.field, fmt::join(names, ", "));
+    }
+    checkCriticalPointFilter(o.filter);
+}
+
+void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std::vector<VariableSpec>& specs,
+                    const std::vector<json>& stepJsons, const PreprocessOptions& options, PreprocessSummary& summary)
+{
+    const PathlineOptions& po = options.pathlines;
+    const fs::path root = outDir / "pathlines";
+    if (!po.enabled) {
+        fs::remove_all(root);
+        return;
+    }
+    fs::create_directories(root);
+    for (const auto& entry : fs::directory_iterator(root))
+        if (entry.path().filename().string().starts_with("."))
+            fs::remove_all(entry.path());
+    const json settings = pathlineSettings(po);
+    const int nSteps = static_cast<int>(stepJsons.size());
+    std::vector<std::string> names, units;
+    size_t field = 0, vx = 0, vy = 0, vz = 0;
+    for (size_t v = 0; v < specs.size(); ++v) {
+        names.push_back(specs[v].name);
+        units.push_back(specs[v].units);
+        field = specs[v].name == po.field ? v : field;
+        vx = specs[v].name == "vx" ? v : vx;
+        vy = specs[v].name == "vy" ? v : vy;
+        vz = specs[v].name == "vz" ? v : vz;
+    }
+
+    std::vector<int> todo;
+    for (int s = 0; s < nSteps; ++s) {
+        const int endStep = std::min(s + po.steps, nSteps - 1);
+        const fs::path dir = pathlineDir(outDir, s);
+        if (fs::exists(dir / "lines.json")) {
+            try {
+                const json old = json::parse(readFile(dir / "lines.json"));
+                if (old.at("settings") == settings && old.at("end_step").get<int>() == endStep) {
+                    ++summary.pathlineSetsSkipped;
+                    continue;
+                }
+            } catch (const json::exception&) {
+                // An unreadable set is redone below.
+            }
+        }
+        todo.push_back(s);
+    }
+    std::optional<Progress> progress;
+    if (!options.quiet && !todo.empty())
+        progress.emplace("pathlines", static_cast<int64_t>(todo.size()), "steps");
+    StepArrays arrays(outDir, specs);
+    for (const int s : todo) {
+        const int endStep = std::min(s + po.steps, nSteps - 1);
+        arrays.releaseBefore(s);
+        FieldSeries series;
+        series.grid = grid;
+        for (int k = s; k <= endStep; ++k) {
+            series.timesMyr.push_back(stepJsons[k].at("time_myr").get<double>());
+            series.fields.push_back(arrays.fields(k, grid.cellCount()));
+        }
+        const std::span<const float> values(series.fields.front()[field], grid.cellCount());
+        const auto all = findCriticalPoints(grid, values);
+        const SeedSelection selection = selectSeeds(grid, values, all, po.filter);
+        const auto& seeds = selection.seeds;
+        const PathlineTracer tracer(series, vx, vy, vz, po.tracer);
+        PathlineSet set = tracePathlines(series, tracer, seeds, 0, endStep - s, names, units);
+        set.injectionStep = s;
+        set.endStep = endStep;
+        set.seedField = po.field;
+        set.threshold = selection.threshold;
+        for (const auto& p : all)
+            ++set.criticalCounts[static_cast<size_t>(p.kind)];
+        set.settingsJson = settings.dump();
+
+        const fs::path finalDir = pathlineDir(outDir, s);
+        const fs::path tmpDir = temporarySibling(finalDir);
+        writePathlineSet(tmpDir, set);
+        if (fs::exists(finalDir))
+            fs::remove_all(finalDir);
+        renameAtomic(tmpDir, finalDir);
+        spdlog::debug("step {}: {} critical points, {} seeds above {:.4g}, {} pathline points", s, all.size(),
+                      seeds.size(), set.threshold, set.pointCount());
+        ++summary.pathlineSetsWritten;
+        summary.pathlineCount += set.lineCount();
+        if (progress)
+            progress->advance();
+    }
+    if (progress)
+        progress->finish();
+    // Sets of steps beyond the inputs (a rerun with fewer inputs is refused earlier) never stay.
+    for (const auto& entry : fs::directory_iterator(root)) {
+        const std::string name = entry.path().filename().string();
+        if (name.size() == 4 && std::all_of(name.begin(), name.end(), ::isdigit) && std::stoi(name) >= nSteps)
+            fs::remove_all(entry.path());
+    }
+}
+
+}  // namespace raypc::preprocessing

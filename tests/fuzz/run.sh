@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Runs every libFuzzer target for a bounded time: tests/fuzz/run.sh BUILD_DIR SECONDS_EACH
+# (BUILD_DIR as `scripts/test.sh --sanitize` makes it, default build-sanitize/; CI: 60 s each,
+# bench/fuzz_long.sh: an hour each). Seeds come from tests/fuzz/corpus/<target> (and examples/
+# for the state parser); what the fuzzer finds goes to BUILD_DIR/fuzz/<target>/corpus (kept
+# between runs), crashes to BUILD_DIR/fuzz/<target>/crash-*. Prints one line of figures per
+# target (executions, rate, coverage) and exits non-zero if any target found a crash.
+set -uo pipefail
+root=$(cd "$(dirname "$0")/../.." && pwd)
+build=$(cd "${1:-$root/build-sanitize}" && pwd)
+seconds=${2:-60}
+status=0
+for target in netcdf_reader render_state protocol; do
+  exe=$build/tests/fuzz/fuzz_$target
+  work=$build/fuzz/$target
+  mkdir -p "$work/corpus"
+  seeds=("$root/tests/fuzz/corpus/$target")
+  [[ $target == render_state ]] && seeds+=("$root/examples")
+  # Small inputs: the reader's seeds are under 2 KB; leaks are findings too (detect_leaks).
+  ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1} \
+  "$exe" -max_total_time="$seconds" -max_len=8192 -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
+    -artifact_prefix="$work/" "$work/corpus" "${seeds[@]}" > "$work/log.txt" 2>&1
+  rc=$?
+  execs=$(grep -o 'stat::number_of_executed_units: [0-9]*' "$work/log.txt" | grep -o '[0-9]*$')
+  rate=$(grep -o 'stat::average_exec_per_sec: [0-9]*' "$work/log.txt" | grep -o '[0-9]*$')
+  last=$(grep -E '^#[0-9]+' "$work/log.txt" | tail -1)
+  cov=$(grep -o 'cov: [0-9]*' <<<"$last" | grep -o '[0-9]*')
+  ft=$(grep -o 'ft: [0-9]*' <<<"$last" | grep -o '[0-9]*')
+  corpus=$(grep -o 'corp: [0-9]*/[0-9]*[a-zA-Z]*' <<<"$last" | sed 's/corp: //')
+  printf 'fuzz %-14s %3ss: %s executions (%s/s), coverage %s edges, %s features, corpus %s, exit %d\n' \
+    "$target" "$seconds" "${execs:-?}" "${rate:-?}" "${cov:-?}" "${ft:-?}" "${corpus:-?}" "$rc"
+  if [[ $rc -ne 0 ]]; then
+    status=1
+    echo "fuzz $target: finding (log $work/log.txt):"
+    grep -E 'ERROR|SUMMARY|Test unit written|uncaught|==[0-9]+==' "$work/log.txt" | head -20
+  fi
+done
+exit $status
