@@ -2,10 +2,18 @@
 
 #include "core/error.h"
 #include "core/spherical.h"
+#include "render/color_map.h"
+#include "render/pathline_scene.h"
+#include "render/volume_renderer.h"
+#include "server/access.h"
+#include "server/image_codec.h"
+#include "server/protocol.h"
+#include "server/render_support.h"
 
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -186,6 +194,218 @@ std::string pathlineAttributesPayload(const PathlineCache::Window& sets, int ste
     for (const auto& s : sets)  // float32 little-endian (the host order on every supported target)
         out.append(reinterpret_cast<const char*>(s.attributes.data()), s.attributes.size() * sizeof(float));
     return out;
+}
+
+json infoJson(const Dataset& dataset)
+{
+    json variables = json::array();
+    for (const auto& v : dataset.variables())
+        variables.push_back({{"name", v.name},
+                             {"units", v.units},
+                             {"derived", v.derived},
+                             {"min", v.global.range.min},
+                             {"max", v.global.range.max},
+                             {"mean", v.global.mean},
+                             {"histogram", v.global.histogram}});
+    const SphericalGrid& g = dataset.levels().front().grid;
+    const double rMax = kSurfaceRadiusKm, rMin = g.rKm.front();
+    const double rTop = std::max(rMax, g.rKm.back());
+    json coordinates = json::array();
+    for (const auto& c : coordinateInfos()) {
+        double lo = 0, hi = 0;
+        switch (c.id) {
+        case Coordinate::X:
+        case Coordinate::Y:
+        case Coordinate::Z: lo = -rTop, hi = rTop; break;
+        case Coordinate::Lat: lo = -90, hi = 90; break;
+        case Coordinate::Lon: lo = 0, hi = 360; break;
+        case Coordinate::Radius: lo = rMin, hi = g.rKm.back(); break;
+        case Coordinate::Depth: lo = kSurfaceRadiusKm - g.rKm.back(), hi = kSurfaceRadiusKm - rMin; break;
+        }
+        coordinates.push_back({{"name", c.name}, {"units", c.units}, {"min", lo}, {"max", hi}});
+    }
+    json steps = json::array();
+    for (const auto& s : dataset.steps())
+        steps.push_back({{"index", s.index}, {"timeMyr", s.timeMyr}, {"source", s.source}});
+    json levels = json::array();
+    for (size_t l = 0; l < dataset.levels().size(); ++l) {
+        const auto& lg = dataset.levels()[l].grid;
+        levels.push_back({{"level", l}, {"nLat", lg.nLat()}, {"nR", lg.nR()}, {"nLon", lg.nLon()}});
+    }
+    // The sample's shape without reading it: coordinates then variables.
+    json columns = json::array(), units = json::array();
+    for (const auto& c : coordinateInfos())
+        columns.push_back(c.name), units.push_back(c.units);
+    for (const auto& v : dataset.variables())
+        columns.push_back(v.name), units.push_back(v.units);
+    const SampleTable sample = dataset.loadSample(0);
+    json maps = json::array();
+    for (const auto m : render::allColorMaps())
+        maps.push_back(std::string(render::colorMapName(m)));
+    return {{"protocol", kProtocolVersion},
+            {"variables", variables},
+            {"coordinates", coordinates},
+            {"steps", steps},
+            {"levels", levels},
+            {"sample", {{"rows", sample.rows}, {"columns", sample.columns}, {"units", sample.units}}},
+            {"colorMaps", maps},
+            {"defaultState", render::toJson(defaultState(dataset))}};
+}
+
+// ---------------------------------------------------------------------------------------------
+// The route handlers.
+
+namespace {
+
+int parseIntParameter(std::string_view query, const char* name)
+{
+    const auto text = queryParameter(query, name);
+    if (!text)
+        fail("missing parameter '{}'", name);
+    try {
+        size_t used = 0;
+        const int v = std::stoi(*text, &used);
+        if (used == text->size())
+            return v;
+    } catch (const std::exception&) {
+    }
+    fail("{}: expected an integer, found '{}'", name, text->substr(0, 40));
+}
+
+int checkedStep(const Dataset& dataset, std::string_view query)
+{
+    const int step = parseIntParameter(query, "step");
+    const int steps = int(dataset.steps().size());
+    if (step < 0 || step >= steps)
+        fail("step: {} out of range 0..{}", step, steps - 1);
+    return step;
+}
+
+json parseBody(std::string_view body)
+{
+    try {
+        return json::parse(body);
+    } catch (const json::parse_error& e) {
+        fail("body: not valid JSON: {}", e.what());
+    }
+}
+
+double millisecondsSince(std::chrono::steady_clock::time_point start)
+{
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+ApiAnswer jsonAnswer(const json& j)
+{
+    return {j.dump(-1, ' ', false, json::error_handler_t::replace), "application/json"};
+}
+
+ApiAnswer info(const ApiContext& api, const ApiRequest&)
+{
+    return {api.infoJson, "application/json"};
+}
+
+ApiAnswer histogram(const ApiContext& api, const ApiRequest& request)
+{
+    const Dataset& dataset = *api.dataset;
+    const int step = checkedStep(dataset, request.query);
+    const auto name = queryParameter(request.query, "var");
+    if (!name)
+        fail("missing parameter 'var'");
+    const int var = dataset.variableIndex(*name);
+    if (var < 0)
+        fail("var: unknown variable '{}'", name->substr(0, 80));
+    const VariableStats& s = dataset.steps()[size_t(step)].stats[size_t(var)];
+    const auto& v = dataset.variables()[size_t(var)];
+    return jsonAnswer(
+        {{"name", v.name}, {"units", v.units}, {"min", s.range.min}, {"max", s.range.max}, {"histogram", s.histogram}});
+}
+
+ApiAnswer sample(const ApiContext& api, const ApiRequest& request)
+{
+    const int step = checkedStep(*api.dataset, request.query);
+    const SampleTable t = api.dataset->loadSample(step);
+    return {std::string(reinterpret_cast<const char*>(t.values.data()), t.values.size() * sizeof(float)),
+            "application/octet-stream"};
+}
+
+ApiAnswer selection(const ApiContext& api, const ApiRequest& request)
+{
+    const ResolvedState resolved = resolveState(parseBody(request.body), *api.dataset);
+    const auto volume = api.cache->get(resolved.state.step, 0);
+    const auto s = selectedVolume(*volume, selectionFilters(resolved.params));
+    return jsonAnswer({{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}, {"step", resolved.state.step}});
+}
+
+ApiAnswer screenshot(const ApiContext& api, const ApiRequest& request)
+{
+    const ResolvedState resolved = resolveState(parseBody(request.body), *api.dataset);
+    const auto start = std::chrono::steady_clock::now();
+    render::VolumeRenderer renderer(api.cache->get(resolved.state.step, 0));
+    renderer.setParams(resolved.params);
+    const auto& pl = resolved.state.pathlines;
+    if (pl.visible) {
+        auto scene = std::make_shared<render::PathlineScene>(*api.pathlines->get(resolved.state.step, pl.window),
+                                                             pl.radiusKm);
+        scene->applyState(resolved.state);
+        renderer.setPathlines(scene);
+    }
+    render::FrameBuffer frame(resolved.params.width, resolved.params.height);
+    for (int pass = 0; pass < std::max(1, resolved.state.passes); ++pass)
+        renderer.renderPass(frame);
+    std::string png = encodePng(frame.resolveRgba8(resolved.state.background), frame.width(), frame.height());
+    spdlog::info("screenshot: step {} {}x{} {} passes at level 0 in {:.0f} ms", resolved.state.step, frame.width(),
+                 frame.height(), frame.passes(), millisecondsSince(start));
+    return {std::move(png), "image/png"};
+}
+
+ApiAnswer presets(const ApiContext& api, const ApiRequest&)
+{
+    return jsonAnswer(presetsJson(api.examples));
+}
+
+ApiAnswer stats(const ApiContext& api, const ApiRequest& request)
+{
+    const Dataset& dataset = *api.dataset;
+    // Level 1 by default (quick); 0 is exact on the full grid.
+    const int levels = int(dataset.levels().size());
+    const int level =
+        queryParameter(request.query, "level") ? parseIntParameter(request.query, "level") : std::min(1, levels - 1);
+    if (level < 0 || level >= levels)
+        fail("level: {} out of range 0..{}", level, levels - 1);
+    const ResolvedState resolved = resolveState(parseBody(request.body), dataset);
+    const auto start = std::chrono::steady_clock::now();
+    json result = selectionStatsJson(dataset, *api.cache, selectionFilters(resolved.params), level, resolved.state.step);
+    spdlog::info("stats: {} steps at level {} in {:.0f} ms", result["steps"].size(), level, millisecondsSince(start));
+    return {result.dump(), "application/json"};
+}
+
+ApiAnswer pathlines(const ApiContext& api, const ApiRequest& request)
+{
+    const int step = checkedStep(*api.dataset, request.query);
+    const int window = queryParameter(request.query, "window") ? parseIntParameter(request.query, "window") : 10;
+    if (window < 1 || window > 1000)
+        fail("window: {} out of range 1..1000", window);
+    const auto sets = api.pathlines->get(step, window);
+    return {pathlineAttributesPayload(*sets, step, window), "application/octet-stream"};
+}
+
+const Route kRoutes[] = {
+    {HttpMethod::Get, "/api/info", Lane::Network, info},
+    {HttpMethod::Get, "/api/histogram", Lane::Network, histogram},
+    {HttpMethod::Get, "/api/sample", Lane::Worker, sample},
+    {HttpMethod::Post, "/api/selection", Lane::Worker, selection},
+    {HttpMethod::Post, "/api/screenshot", Lane::Worker, screenshot},
+    {HttpMethod::Get, "/api/presets", Lane::Worker, presets},
+    {HttpMethod::Post, "/api/stats", Lane::Worker, stats},
+    {HttpMethod::Get, "/api/pathlines", Lane::Worker, pathlines},
+};
+
+}  // namespace
+
+std::span<const Route> apiRoutes()
+{
+    return kRoutes;
 }
 
 }  // namespace raypc::server

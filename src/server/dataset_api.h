@@ -1,7 +1,9 @@
-// What the HTTP endpoints /api/presets, /api/stats and /api/pathlines compute (docs/protocol.md),
-// as functions without network types so that they are tested on their own.
+// The HTTP API of docs/protocol.md without network types: the route table {method, path, lane,
+// handler} that the HTTP connection dispatches on, and what the endpoints compute, as functions that
+// are tested on their own.
 //
-// Thread safety: the free functions are reentrant; PathlineCache may be used from any thread.
+// Thread safety: the free functions and the handlers are reentrant; PathlineCache may be used from
+// any thread.
 #pragma once
 
 #include "data/dataset.h"
@@ -11,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <atomic>
 #include <filesystem>
 #include <list>
 #include <memory>
@@ -18,6 +21,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace raypc::server {
@@ -63,5 +67,49 @@ private:
 // JSON header {step, window, lines, columns, units, sets: [{injectionStep, injectionTimeMyr, lines}]},
 // then lines x columns float32 little-endian, row-major, lines in set order (oldest set first).
 std::string pathlineAttributesPayload(const PathlineCache::Window& sets, int step, int window);
+
+// What the handlers read: shared by every connection of a server, immutable after start (the caches
+// are thread-safe).
+struct ApiContext {
+    std::shared_ptr<const Dataset> dataset;
+    StepCache* cache = nullptr;
+    PathlineCache* pathlines = nullptr;
+    std::optional<std::filesystem::path> examples;  // presets directory (findExamplesDir)
+    std::string infoJson;                           // GET /api/info, built once (infoJson())
+};
+
+// One API request as the handlers see it: the percent-encoded query and the body.
+struct ApiRequest {
+    std::string_view query;
+    std::string_view body;
+};
+
+struct ApiAnswer {
+    std::string body;
+    std::string contentType;
+};
+
+enum class HttpMethod { Get, Post };
+
+// Where a handler runs: on the network thread (only answers that are ready or take microseconds,
+// without a body to parse) or on the worker pool.
+enum class Lane { Network, Worker };
+
+// A handler throws raypc::Error for a bad request (the connection answers 400 with its message).
+using ApiHandler = ApiAnswer (*)(const ApiContext&, const ApiRequest&);
+
+struct Route {
+    HttpMethod method;
+    std::string_view path;
+    Lane lane;
+    ApiHandler handler;
+};
+
+// Every /api/ endpoint of docs/protocol.md.
+std::span<const Route> apiRoutes();
+
+// GET /api/info: the dataset's variables, coordinates, steps, levels, sample shape, colour maps and
+// default state (docs/protocol.md).
+nlohmann::json infoJson(const Dataset& dataset);
 
 }  // namespace raypc::server

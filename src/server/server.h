@@ -1,4 +1,5 @@
-// `raypc serve`: the HTTP and WebSocket server of docs/protocol.md. Beast stays inside server.cpp.
+// `raypc serve`: the HTTP and WebSocket server of docs/protocol.md. Beast stays inside the server
+// library (server.cpp: the acceptor; http_session.cpp: routes and static files; ws_session.cpp).
 //
 // One network thread runs every connection; each WebSocket session renders on its own thread
 // (render_session.h); screenshots, selections and samples run on a worker pool so that they never
