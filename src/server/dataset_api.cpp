@@ -101,7 +101,7 @@ json presetsJson(const std::optional<fs::path>& dir)
 }
 
 json selectionStatsJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters, int level,
-                        int profileStep)
+                        int profileStep, const std::atomic<bool>* cancel)
 {
     const int levels = int(dataset.levels().size());
     if (level < 0 || level >= levels)
@@ -112,6 +112,8 @@ json selectionStatsJson(const Dataset& dataset, StepCache& cache, std::span<cons
     json steps = json::array();
     SelectionStats profile;
     for (int step = 0; step < nSteps; ++step) {
+        if (cancel && *cancel)
+            fail("statistics cancelled at step {} of {} (the client went away or the server is stopping)", step, nSteps);
         const auto volume = cache.getWithoutEvicting(step, level);
         SelectionStats s = selectedVolume(*volume, filters);
         steps.push_back({{"step", step},
@@ -337,9 +339,26 @@ ApiAnswer selection(const ApiContext& api, const ApiRequest& request)
     return jsonAnswer({{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}, {"step", resolved.state.step}});
 }
 
+// The bounds of limits.h, checked before anything is allocated.
+void checkScreenshotLimits(const render::RenderState& state, const ServerLimits& limits)
+{
+    const int64_t pixels = int64_t(state.width) * state.height;
+    const int passes = std::max(1, state.passes);
+    if (pixels > limits.maxScreenshotPixels)
+        fail("screenshot: image {}x{} is over the limit of {} pixels (e.g. 4096x4096)", state.width, state.height,
+             limits.maxScreenshotPixels);
+    if (passes > limits.maxScreenshotPasses)
+        fail("screenshot: passes {} is over the limit of {}", passes, limits.maxScreenshotPasses);
+    if (pixels * passes > limits.maxScreenshotPixelPasses)
+        fail("screenshot: {}x{} at {} passes is over the limit of {} pixel-passes (e.g. 1024x1024 at 256 passes, "
+             "4096x4096 at 16); use fewer passes or a smaller image",
+             state.width, state.height, passes, limits.maxScreenshotPixelPasses);
+}
+
 ApiAnswer screenshot(const ApiContext& api, const ApiRequest& request)
 {
     const ResolvedState resolved = resolveState(parseBody(request.body), *api.dataset);
+    checkScreenshotLimits(resolved.state, api.limits);
     const auto start = std::chrono::steady_clock::now();
     render::VolumeRenderer renderer(api.cache->get(resolved.state.step, 0));
     renderer.setParams(resolved.params);
@@ -352,7 +371,9 @@ ApiAnswer screenshot(const ApiContext& api, const ApiRequest& request)
     }
     render::FrameBuffer frame(resolved.params.width, resolved.params.height);
     for (int pass = 0; pass < std::max(1, resolved.state.passes); ++pass)
-        renderer.renderPass(frame);
+        if (renderer.renderPass(frame, request.cancel).cancelled)
+            fail("screenshot cancelled after {} of {} passes (the client went away or the server is stopping)",
+                 frame.passes(), std::max(1, resolved.state.passes));
     std::string png = encodePng(frame.resolveRgba8(resolved.state.background), frame.width(), frame.height());
     spdlog::info("screenshot: step {} {}x{} {} passes at level 0 in {:.0f} ms", resolved.state.step, frame.width(),
                  frame.height(), frame.passes(), millisecondsSince(start));
@@ -375,7 +396,8 @@ ApiAnswer stats(const ApiContext& api, const ApiRequest& request)
         fail("level: {} out of range 0..{}", level, levels - 1);
     const ResolvedState resolved = resolveState(parseBody(request.body), dataset);
     const auto start = std::chrono::steady_clock::now();
-    json result = selectionStatsJson(dataset, *api.cache, selectionFilters(resolved.params), level, resolved.state.step);
+    json result = selectionStatsJson(dataset, *api.cache, selectionFilters(resolved.params), level, resolved.state.step,
+                                     request.cancel);
     spdlog::info("stats: {} steps at level {} in {:.0f} ms", result["steps"].size(), level, millisecondsSince(start));
     return {result.dump(), "application/json"};
 }
@@ -395,9 +417,9 @@ const Route kRoutes[] = {
     {HttpMethod::Get, "/api/histogram", Lane::Network, histogram},
     {HttpMethod::Get, "/api/sample", Lane::Worker, sample},
     {HttpMethod::Post, "/api/selection", Lane::Worker, selection},
-    {HttpMethod::Post, "/api/screenshot", Lane::Worker, screenshot},
+    {HttpMethod::Post, "/api/screenshot", Lane::Screenshot, screenshot},
     {HttpMethod::Get, "/api/presets", Lane::Worker, presets},
-    {HttpMethod::Post, "/api/stats", Lane::Worker, stats},
+    {HttpMethod::Post, "/api/stats", Lane::Statistics, stats},
     {HttpMethod::Get, "/api/pathlines", Lane::Worker, pathlines},
 };
 

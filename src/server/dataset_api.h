@@ -9,6 +9,7 @@
 #include "data/dataset.h"
 #include "data/pathlines.h"
 #include "data/selection.h"
+#include "server/limits.h"
 #include "server/step_cache.h"
 
 #include <nlohmann/json.hpp>
@@ -40,9 +41,10 @@ nlohmann::json presetsJson(const std::optional<std::filesystem::path>& dir);
 // The selected volume of every step and the depth profile of `profileStep`, at `level`
 // ({level, steps: [{step, timeMyr, volumeKm3, fractionOfMantle}], profile: {step, radiusKm,
 // depthKm, volumeKm3, shellVolumeKm3}}). Volumes come through `cache` without evicting what the
-// renderers use. Throws raypc::Error for a level out of range.
+// renderers use. Throws raypc::Error for a level out of range, or when `cancel` becomes true (checked
+// before every step).
 nlohmann::json selectionStatsJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
-                                  int level, int profileStep);
+                                  int level, int profileStep, const std::atomic<bool>* cancel = nullptr);
 
 // A bounded cache of pathline windows (loadPathlineWindow) by (step, window), least recently used
 // out. get() throws raypc::Error like loadPathlineWindow (e.g. a dataset without pathlines).
@@ -76,12 +78,16 @@ struct ApiContext {
     PathlineCache* pathlines = nullptr;
     std::optional<std::filesystem::path> examples;  // presets directory (findExamplesDir)
     std::string infoJson;                           // GET /api/info, built once (infoJson())
+    ServerLimits limits;
 };
 
-// One API request as the handlers see it: the percent-encoded query and the body.
+// One API request as the handlers see it: the percent-encoded query, the body, and a flag that
+// becomes true when the answer is no longer wanted (the client closed the connection, or the server
+// is stopping); long handlers check it and throw.
 struct ApiRequest {
     std::string_view query;
     std::string_view body;
+    const std::atomic<bool>* cancel = nullptr;
 };
 
 struct ApiAnswer {
@@ -91,9 +97,10 @@ struct ApiAnswer {
 
 enum class HttpMethod { Get, Post };
 
-// Where a handler runs: on the network thread (only answers that are ready or take microseconds,
-// without a body to parse) or on the worker pool.
-enum class Lane { Network, Worker };
+// Where a handler runs (server_context.h): on the network thread (only answers that are ready or take
+// microseconds, without a body to parse), on the worker pool (quick requests), or one at a time in the
+// lane of statistics over time or of screenshots (long requests, with a bounded queue).
+enum class Lane { Network, Worker, Statistics, Screenshot };
 
 // A handler throws raypc::Error for a bad request (the connection answers 400 with its message).
 using ApiHandler = ApiAnswer (*)(const ApiContext&, const ApiRequest&);

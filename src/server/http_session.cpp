@@ -18,6 +18,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <sys/socket.h>
 
 namespace raypc::server {
 
@@ -98,10 +99,15 @@ Response answerResponse(ApiAnswer answer, unsigned version, bool keepAlive)
     return bodyResponse(std::move(answer.body), answer.contentType, version, keepAlive);
 }
 
-// One HTTP connection (keep-alive): routes requests, upgrades /ws to a WsSession.
+// One HTTP connection (keep-alive): routes requests, upgrades /ws to a WsSession. At most one request
+// is in flight: the next is read after the answer is written.
 class HttpSession : public std::enable_shared_from_this<HttpSession> {
 public:
-    HttpSession(tcp::socket&& socket, ServerContext& server) : m_stream(std::move(socket)), m_server(server) {}
+    HttpSession(tcp::socket&& socket, ServerContext& server) : m_stream(std::move(socket)), m_server(server)
+    {
+        ++m_server.openConnections;
+    }
+    ~HttpSession() { --m_server.openConnections; }
 
     void run()
     {
@@ -143,6 +149,17 @@ private:
         }
         Request request = m_parser->release();
         const std::string target(request.target());
+        auto header = [&](http::field f) {
+            const auto it = request.find(f);
+            return it == request.end() ? std::nullopt
+                                        : std::optional<std::string_view>(std::string_view(it->value().data(), it->value().size()));
+        };
+        if (const auto why = crossSiteRefusal(m_server.site, header(http::field::host), header(http::field::origin))) {
+            spdlog::warn("http: {} {}: 403 {}", std::string(request.method_string()),
+                         std::string(targetPath(target)).substr(0, 200), *why);
+            send(errorResponse(http::status::forbidden, *why, request.version(), false));
+            return;
+        }
         const Credentials credentials{target, std::string(request[http::field::authorization]),
                                       std::string(request[http::field::cookie])};
         if (!tokenAccepted(credentials, m_server.token)) {
@@ -155,6 +172,16 @@ private:
         if (websocket::is_upgrade(request)) {
             if (targetPath(target) != "/ws") {
                 send(errorResponse(http::status::not_found, "WebSocket endpoint is /ws", request.version(), false));
+                return;
+            }
+            const size_t maxSessions = m_server.options.limits.maxSessions;
+            if (m_server.openSessions >= maxSessions) {
+                const std::string why =
+                    fmt::format("too many sessions: {} are open, the limit is {} (--max-sessions); close another tab "
+                                "or try again later",
+                                m_server.openSessions.load(), maxSessions);
+                spdlog::warn("http: /ws: 503 {}", why);
+                send(errorResponse(http::status::service_unavailable, why, request.version(), false));
                 return;
             }
             m_stream.expires_never();
@@ -185,7 +212,7 @@ private:
                                                 [&](const Route& r) { return r.path == path && r.method == method; });
                 if (found != routes.end()) {
                     if (found->lane == Lane::Network)
-                        send(answerResponse(found->handler(m_server.api, {targetQuery(target), request.body()}),
+                        send(answerResponse(found->handler(m_server.api, {targetQuery(target), request.body(), nullptr}),
                                             version, keepAlive));
                     else
                         offload(*found, std::move(request));
@@ -245,27 +272,78 @@ private:
         send(std::move(res));
     }
 
-    // Runs the route's handler on the worker pool; the answer is written back on the network thread.
-    // A raypc::Error becomes 400.
+    JobLane& laneOf(Lane lane)
+    {
+        switch (lane) {
+        case Lane::Screenshot: return m_server.screenshots;
+        case Lane::Statistics: return m_server.statistics;
+        default: return m_server.workers;
+        }
+    }
+
+    // Runs the route's handler on its lane; the answer is written back on the network thread. A
+    // raypc::Error becomes 400; a full lane 503. While the handler runs, the connection is watched:
+    // when the client goes away, the handler's cancel flag is set.
     void offload(const Route& route, Request request)
     {
-        net::post(m_server.workers, [self = shared_from_this(), &route, request = std::move(request)]() {
+        JobLane& lane = laneOf(route.lane);
+        if (!lane.tryEnter()) {
+            const std::string why = fmt::format("busy: {} requests of {} are running or waiting (at most {}); try again later",
+                                                lane.maxJobs(), route.path, lane.maxJobs());
+            spdlog::warn("http: {}: 503 {}", route.path, why);
+            Response res = errorResponse(http::status::service_unavailable, why, request.version(), request.keep_alive());
+            res.set(http::field::retry_after, "5");
+            send(std::move(res));
+            return;
+        }
+        m_job = m_server.jobs.add();
+        watchForDisconnect();
+        net::post(lane.pool(), [self = shared_from_this(), &route, &lane, cancel = m_job, request = std::move(request)]() {
             const unsigned version = request.version();
             const bool keepAlive = request.keep_alive();
             const std::string target(request.target());
             Response res;
             try {
-                res = answerResponse(route.handler(self->m_server.api, {targetQuery(target), request.body()}), version,
-                                     keepAlive);
+                res = answerResponse(route.handler(self->m_server.api, {targetQuery(target), request.body(), cancel.get()}),
+                                     version, keepAlive);
             } catch (const Error& e) {
-                spdlog::warn("http: {}: {}", route.path, e.what());
+                if (*cancel)
+                    spdlog::info("http: {}: {}", route.path, e.what());
+                else
+                    spdlog::warn("http: {}: {}", route.path, e.what());
                 res = errorResponse(http::status::bad_request, e.what(), version, keepAlive);
             } catch (const std::exception& e) {
                 spdlog::error("http: {}: {}", route.path, e.what());
                 res = errorResponse(http::status::internal_server_error, e.what(), version, keepAlive);
             }
-            net::post(self->m_stream.get_executor(),
-                      [self, res = std::move(res)]() mutable { self->send(std::move(res)); });
+            lane.leave();
+            net::post(self->m_stream.get_executor(), [self, res = std::move(res)]() mutable {
+                self->m_job.reset();
+                beast::error_code ignored;
+                self->m_stream.socket().cancel(ignored);  // the watch
+                self->send(std::move(res));
+            });
+        });
+    }
+
+    // Waits until the connection becomes readable while a job runs: end of stream or an error means
+    // the client has gone, so the job is cancelled; data means a pipelined request (the client is
+    // still there, and the watch ends).
+    void watchForDisconnect()
+    {
+        m_stream.socket().async_wait(tcp::socket::wait_read, [self = shared_from_this()](beast::error_code ec) {
+            if (ec || !self->m_job)
+                return;
+            char byte;
+            const ssize_t n = ::recv(self->m_stream.socket().native_handle(), &byte, 1, MSG_PEEK | MSG_DONTWAIT);
+            if (n > 0)
+                return;
+            if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR)) {
+                self->watchForDisconnect();
+                return;
+            }
+            spdlog::info("http: the client closed the connection; cancelling its request");
+            self->m_job->store(true);
         });
     }
 
@@ -303,6 +381,7 @@ private:
     std::array<char, 16384> m_drain{};
     ServerContext& m_server;
     std::optional<http::request_parser<http::string_body>> m_parser;
+    std::shared_ptr<std::atomic<bool>> m_job;  // the cancel flag of the request in flight on a lane
 };
 
 }  // namespace

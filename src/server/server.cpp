@@ -19,33 +19,99 @@ using nlohmann::json;
 
 // ---------------------------------------------------------------------------------------------
 // The acceptor: one network thread accepts connections and hands each to an HttpSession.
+
+namespace {
+
+// Out of descriptors or kernel memory: retrying at once would fail again (and spin).
+bool outOfResources(const beast::error_code& ec)
+{
+    return ec == net::error::no_descriptors || ec == net::error::no_buffer_space || ec == net::error::no_memory ||
+           (ec.category() == net::error::get_system_category() && ec.value() == ENFILE);
+}
+
+const std::string kBusyAnswer = [] {
+    const std::string body = R"({"error": "too many open connections (--max-connections); try again later"})";
+    return "HTTP/1.1 503 Service Unavailable\r\nContent-Type: application/json\r\nRetry-After: 5\r\n"
+           "Connection: close\r\nContent-Length: " +
+           std::to_string(body.size()) + "\r\n\r\n" + body;
+}();
+
+}  // namespace
+
 struct Server::Impl {
+    explicit Impl(ServerOptions options) : state(std::move(options)) {}
+
     ServerContext state;  // first: destroyed after the io_context, whose pending handlers own sessions
     net::io_context ioc{1};
     tcp::acceptor acceptor{ioc};
     net::signal_set signals{ioc};
+    net::steady_timer acceptPause{ioc};
+    std::chrono::milliseconds backoff{0};
+    uint64_t acceptFailures = 0;
+    bool atConnectionLimit = false;
     uint16_t port = 0;
 
     void doAccept()
     {
         acceptor.async_accept(net::make_strand(ioc), [this](beast::error_code ec, tcp::socket socket) {
+            if (ec == net::error::operation_aborted)
+                return;
+            if (ec && outOfResources(ec)) {
+                pauseAccepting(ec);
+                return;
+            }
             if (ec) {
-                if (ec != net::error::operation_aborted)
-                    spdlog::warn("accept: {}", ec.message());
-                else
-                    return;
+                spdlog::warn("accept: {}", ec.message());
             } else {
-                startHttpSession(std::move(socket), state);
+                if (acceptFailures > 0) {
+                    spdlog::info("accept: accepting again after {} failed attempts", acceptFailures);
+                    acceptFailures = 0;
+                    backoff = {};
+                }
+                admit(std::move(socket));
             }
             doAccept();
         });
     }
+
+    // Logged once per episode; the pending connections wait in the listen backlog meanwhile.
+    void pauseAccepting(const beast::error_code& ec)
+    {
+        const ServerLimits& limits = state.options.limits;
+        if (acceptFailures++ == 0)
+            spdlog::error("accept: {}; pausing new connections, retrying every {}-{} ms until it works (logged once)",
+                          ec.message(), limits.acceptBackoffMin.count(), limits.acceptBackoffMax.count());
+        backoff = backoff.count() == 0 ? limits.acceptBackoffMin : std::min(2 * backoff, limits.acceptBackoffMax);
+        acceptPause.expires_after(backoff);
+        acceptPause.async_wait([this](beast::error_code waitError) {
+            if (!waitError)
+                doAccept();
+        });
+    }
+
+    void admit(tcp::socket socket)
+    {
+        const size_t limit = state.options.limits.maxConnections;
+        if (state.openConnections < limit) {
+            atConnectionLimit = false;
+            startHttpSession(std::move(socket), state);
+            return;
+        }
+        if (!atConnectionLimit)
+            spdlog::warn("connections: {} are open, the limit (--max-connections); answering 503 to new ones", limit);
+        atConnectionLimit = true;
+        auto s = std::make_shared<tcp::socket>(std::move(socket));
+        net::async_write(*s, net::buffer(kBusyAnswer), [s](beast::error_code, size_t) {
+            beast::error_code ignored;
+            s->shutdown(tcp::socket::shutdown_both, ignored);
+            s->close(ignored);
+        });
+    }
 };
 
-Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>())
+Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(options)))
 {
     ServerContext& s = m_impl->state;
-    s.options = std::move(options);
     s.dataset = Dataset::open(s.options.dataset);
     s.cache = std::make_unique<StepCache>([dataset = s.dataset](int step, int level) { return dataset->load(step, level); },
                                           s.options.cacheBytes, s.options.cacheEntries);
@@ -58,8 +124,12 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>())
     s.api.pathlines = s.pathlines.get();
     s.api.examples = s.options.examples;
     s.api.infoJson = infoJson(*s.dataset).dump(-1, ' ', false, json::error_handler_t::replace);
+    s.api.limits = s.options.limits;
     s.assets = s.options.assets;
-    if (!isLoopbackHost(s.options.host))
+    s.site.loopback = isLoopbackHost(s.options.host);
+    for (const auto& origin : s.options.allowedOrigins)
+        s.site.allowedOrigins.push_back(normaliseOrigin(origin, "--allow-origin"));
+    if (!s.site.loopback)
         s.token = makeAccessToken();
 
     const std::string host = s.options.host == "localhost" ? "127.0.0.1" : s.options.host;
@@ -83,10 +153,22 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>())
 
 Server::~Server()
 {
+    // Stop the work first (screenshots and statistics check their cancel flag between tiles and steps),
+    // then wait for the threads: shutdown takes about one tile, not one screenshot.
     stop();
-    m_impl->state.workers.join();
-    std::lock_guard lock(m_impl->state.sessionsMutex);
-    for (const auto& weak : m_impl->state.sessions)
+    ServerContext& s = m_impl->state;
+    s.jobs.cancelAll();
+    {
+        std::lock_guard lock(s.sessionsMutex);
+        for (const auto& weak : s.sessions)
+            if (auto session = weak.lock())
+                session->cancel();
+    }
+    for (JobLane* lane : {&s.workers, &s.screenshots, &s.statistics})
+        lane->pool().join();
+    s.messages.join();
+    std::lock_guard lock(s.sessionsMutex);
+    for (const auto& weak : s.sessions)
         if (auto session = weak.lock())
             session->stop();
 }
@@ -124,7 +206,15 @@ void Server::run()
         });
     }
     m_impl->doAccept();
-    m_impl->ioc.run();
+    // An exception out of one connection's handler must not end the server: log it and serve on.
+    for (;;) {
+        try {
+            m_impl->ioc.run();
+            return;
+        } catch (const std::exception& e) {
+            spdlog::error("server: a connection failed: {}; serving on", e.what());
+        }
+    }
 }
 
 void Server::stop()
@@ -133,8 +223,10 @@ void Server::stop()
         beast::error_code ec;
         impl->acceptor.close(ec);
         impl->signals.cancel(ec);
+        impl->acceptPause.cancel();
     });
     m_impl->ioc.stop();
+    m_impl->state.jobs.cancelAll();
 }
 
 }  // namespace raypc::server

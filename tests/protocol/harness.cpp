@@ -166,7 +166,7 @@ HttpAnswer httpRequest(uint16_t port, http::verb method, const std::string& targ
     socket.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
     setReceiveTimeout(socket, 120);
     http::request<http::string_body> req{method, target, 11};
-    req.set(http::field::host, "127.0.0.1");
+    req.set(http::field::host, "127.0.0.1:" + std::to_string(port));  // as a browser sends it
     for (const auto& [field, value] : headers)
         req.set(field, value);
     if (method == http::verb::post) {

@@ -89,7 +89,7 @@ struct HttpAnswer {
     int status = 0;
     std::string body, contentType, setCookie;
 };
-// One request on a new connection (Host: 127.0.0.1 unless `headers` sets it).
+// One request on a new connection (Host: 127.0.0.1:PORT unless `headers` sets it).
 HttpAnswer httpRequest(uint16_t port, http::verb method, const std::string& target, const std::string& body = "",
                        const std::vector<std::pair<http::field, std::string>>& headers = {});
 HttpAnswer httpGet(uint16_t port, const std::string& target,
