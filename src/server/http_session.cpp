@@ -149,10 +149,11 @@ private:
         }
         Request request = m_parser->release();
         const std::string target(request.target());
-        auto header = [&](http::field f) {
+        auto header = [&](http::field f) -> std::optional<std::string_view> {
             const auto it = request.find(f);
-            return it == request.end() ? std::nullopt
-                                        : std::optional<std::string_view>(std::string_view(it->value().data(), it->value().size()));
+            if (it == request.end())
+                return std::nullopt;
+            return std::string_view(it->value().data(), it->value().size());
         };
         if (const auto why = crossSiteRefusal(m_server.site, header(http::field::host), header(http::field::origin))) {
             spdlog::warn("http: {} {}: 403 {}", std::string(request.method_string()),

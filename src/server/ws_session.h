@@ -2,8 +2,9 @@
 // ping, hands states to the connection's RenderSession and writes what it produces. Internal to the
 // server library.
 //
-// Thread safety: startWsSession is called on the network thread; the session lives there (its render
-// work on its own thread) until the connection closes.
+// Thread safety: startWsSession is called on the network thread; the session reads and writes there,
+// parses and hands over its messages on the server's message thread (one at a time), and renders on a
+// thread of its own, until the connection closes. Its bounds are those of limits.h.
 #pragma once
 
 #include "server/server_context.h"
