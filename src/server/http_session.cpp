@@ -305,6 +305,9 @@ private:
             const std::string target(request.target());
             Response res;
             try {
+                // A request whose client left (or a server that is stopping) while it waited is not started.
+                if (*cancel)
+                    fail("{}: cancelled before it started (the client went away or the server is stopping)", route.path);
                 res = answerResponse(route.handler(self->m_server.api, {targetQuery(target), request.body(), cancel.get()}),
                                      version, keepAlive);
             } catch (const Error& e) {

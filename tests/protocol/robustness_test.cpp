@@ -266,7 +266,10 @@ TEST(Screenshot, WaitingScreenshotsAreBounded)
     EXPECT_NE(errorOf(busy).find("busy: 5 requests of /api/screenshot"), std::string::npos) << busy.body;
     for (auto& s : shots)
         s->close();
+    // The running one stops within a tile, the waiting ones are not started.
     EXPECT_TRUE(server.waitForLog("screenshot cancelled after", 20)) << server.output();
+    EXPECT_TRUE(server.waitForLog("cancelled before it started", 20)) << server.output();
+    EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/screenshot", smallState().dump()).status, 200);
 }
 
 TEST(Screenshot, SigtermDuringALongScreenshotExitsWithinFiveSeconds)
