@@ -307,7 +307,7 @@ private:
             try {
                 // A request whose client left (or a server that is stopping) while it waited is not started.
                 if (*cancel)
-                    fail("{}: cancelled before it started (the client went away or the server is stopping)", route.path);
+                    fail("cancelled before it started (the client went away or the server is stopping)");
                 res = answerResponse(route.handler(self->m_server.api, {targetQuery(target), request.body(), cancel.get()}),
                                      version, keepAlive);
             } catch (const Error& e) {
