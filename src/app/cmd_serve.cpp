@@ -1,5 +1,6 @@
-// raypc serve DATASET [--port 8080] [--host 127.0.0.1] [--assets DIR] [--examples DIR]: the browser UI and the
-// protocol of docs/protocol.md.
+// raypc serve DATASET [--port 8080] [--host 127.0.0.1] [--assets DIR] [--examples DIR] [--allow-origin URL]...
+// [--max-sessions N] [--max-connections N] [--session-memory MIB]: the browser UI and the protocol of
+// docs/protocol.md, within the limits of docs/reliability.md (options: app/serve_setup.h).
 #include "app/command.h"
 #include "app/serve_setup.h"
 

@@ -28,6 +28,21 @@ void ServeFlags::add(CLI::App& cmd)
     cmd.add_option("--assets", assets, "Directory of the built UI (default: $RAYPC_ASSETS, web/dist, ...)");
     cmd.add_option("--examples", examples,
                    "Directory of example states offered as presets (default: $RAYPC_EXAMPLES, the source tree's examples/)");
+    cmd.add_option("--allow-origin", allowOrigins,
+                   "Origin of another page allowed to use the server, e.g. http://viz.lab:8080 (repeatable); "
+                   "its host is also accepted as Host on loopback");
+    cmd.add_option("--max-sessions", limits.maxSessions, "Open WebSocket sessions (browser tabs) at most")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 4096));
+    cmd.add_option("--max-connections", limits.maxConnections, "Open connections (HTTP and WebSocket) at most")
+        ->capture_default_str()
+        ->check(CLI::Range(2, 100000));
+    cmd.add_option("--session-memory", sessionMemoryMiB,
+                   fmt::format("Frame memory of all sessions together, MiB (a session's image costs width x height x {} "
+                               "bytes)",
+                               server::kFrameBytesPerPixel))
+        ->capture_default_str()
+        ->check(CLI::Range(1, 1 << 24));
 }
 
 void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
@@ -38,6 +53,9 @@ void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
     options.port = uint16_t(flags.port);
     options.assets = server::findAssetDir(given(flags.assets));
     options.examples = server::findExamplesDir(given(flags.examples));
+    options.allowedOrigins = flags.allowOrigins;
+    options.limits = flags.limits;
+    options.limits.sessionFrameBytes = flags.sessionMemoryMiB << 20;
     server::Server srv(options);
     if (options.assets)
         spdlog::info("serving the UI from {}", options.assets->string());

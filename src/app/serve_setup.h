@@ -1,17 +1,23 @@
 // How `raypc serve` and `raypc demo` start the server: the same options (--port, --host, --assets,
-// --examples) with the same defaults, so the demo serves exactly what `raypc serve` would.
+// --examples, --allow-origin and the limits of docs/reliability.md) with the same defaults, so the demo serves exactly what `raypc serve` would.
 #pragma once
+
+#include "server/limits.h"
 
 #include <CLI/CLI.hpp>
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace raypc::app {
 
 struct ServeFlags {
     std::string host = "127.0.0.1", assets, examples;
     int port = 8080;
+    std::vector<std::string> allowOrigins;
+    server::ServerLimits limits;
+    size_t sessionMemoryMiB = server::ServerLimits{}.sessionFrameBytes >> 20;
 
     void add(CLI::App& cmd);
 };

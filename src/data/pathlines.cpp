@@ -241,6 +241,15 @@ int PathlineSet::column(const std::string& name) const
     return -1;
 }
 
+std::vector<std::string> pathlineColumns(const std::vector<std::string>& variableNames)
+{
+    std::vector<std::string> columns(std::begin(kPathlineFixedColumns), std::end(kPathlineFixedColumns));
+    for (const char* prefix : {"start ", "end "})
+        for (const auto& name : variableNames)
+            columns.push_back(prefix + name);
+    return columns;
+}
+
 PathlineSet tracePathlines(const FieldSeries& series, const PathlineTracer& tracer,
                            const std::vector<CriticalPoint>& seeds, int injectionStep, int endStep,
                            const std::vector<std::string>& names, const std::vector<std::string>& units)
@@ -254,15 +263,10 @@ PathlineSet tracePathlines(const FieldSeries& series, const PathlineTracer& trac
     set.endStep = endStep;
     const std::string fixedUnits[] = {"", "", "Myr", "Myr", "km", "", "degrees_north", "degrees_east", "km",
                                       "degrees_north", "degrees_east", "km"};
-    for (size_t i = 0; i < kPathlineFixedColumnCount; ++i) {
-        set.columns.push_back(kPathlineFixedColumns[i]);
-        set.units.push_back(fixedUnits[i]);
-    }
-    for (const char* prefix : {"start ", "end "})
-        for (size_t v = 0; v < names.size(); ++v) {
-            set.columns.push_back(prefix + names[v]);
-            set.units.push_back(units[v]);
-        }
+    set.columns = pathlineColumns(names);
+    set.units.assign(std::begin(fixedUnits), std::end(fixedUnits));
+    for (int side = 0; side < 2; ++side)
+        set.units.insert(set.units.end(), units.begin(), units.end());
 
     const double t0 = series.timesMyr[injectionStep], t1 = series.timesMyr[endStep];
     std::vector<TracedPathline> lines(seeds.size());

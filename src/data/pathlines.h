@@ -112,6 +112,10 @@ inline constexpr const char* kPathlineFixedColumns[] = {
     "start lat", "start lon", "start radius", "end lat", "end lon", "end radius"};
 inline constexpr size_t kPathlineFixedColumnCount = std::size(kPathlineFixedColumns);
 
+// Every attribute column of the pathline sets of a dataset with these variables, in stored order:
+// the fixed columns, then "start <variable>" and "end <variable>" for each variable.
+std::vector<std::string> pathlineColumns(const std::vector<std::string>& variableNames);
+
 // Traces one line from every seed from series time `injectionStep` to `endStep` and fills a
 // PathlineSet (lines in seed order). `names`/`units` name the series' variables (for the
 // attribute columns). Uses oneTBB over seeds.

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 #include <tbb/task_arena.h>
 
@@ -35,6 +36,17 @@ ResolvedState resolveState(RenderState state, const Dataset& dataset)
     dataset.checkStep(state.step);
     if (state.level)
         dataset.checkLevel(*state.level);
+    // Pathline attributes are checked even while the lines are hidden, so that a state that shows
+    // them later does not fail then (the columns follow from the dataset's variables).
+    const std::vector<std::string> columns = pathlineColumns(dataset.variableNames());
+    auto checkColumn = [&](const std::string& name, const std::string& key) {
+        if (std::find(columns.begin(), columns.end(), name) == columns.end())
+            fail("pathlines: {}: the lines have no attribute '{}'; they have: {}", key, name, fmt::join(columns, ", "));
+    };
+    if (state.pathlines.colorBy != "age")
+        checkColumn(state.pathlines.colorBy, "colorBy");
+    for (size_t i = 0; i < state.pathlines.filters.size(); ++i)
+        checkColumn(state.pathlines.filters[i].name, fmt::format("filters[{}]", i));
     ResolvedState r;
     r.params = resolveParams(state, catalogOf(dataset));
     r.state = std::move(state);

@@ -1,7 +1,10 @@
 #include "server/access.h"
 
+#include "core/error.h"
+
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <random>
 #include <system_error>
 
@@ -74,7 +77,80 @@ int hexValue(char c)
     return -1;
 }
 
+std::string lowerCase(std::string_view s)
+{
+    std::string out(s);
+    std::transform(out.begin(), out.end(), out.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return out;
+}
+
+// The host name of a Host header or URL authority "host[:port]" / "[v6]:port", lower case.
+std::string hostName(std::string_view authority)
+{
+    if (authority.starts_with('[')) {
+        const size_t close = authority.find(']');
+        return lowerCase(authority.substr(0, close == std::string_view::npos ? authority.size() : close + 1));
+    }
+    return lowerCase(authority.substr(0, authority.rfind(':')));
+}
+
+// "scheme://authority" split, or nullopt when `origin` is not of that form.
+std::optional<std::pair<std::string, std::string>> splitOrigin(std::string_view origin)
+{
+    const size_t sep = origin.find("://");
+    if (sep == std::string_view::npos || sep == 0)
+        return std::nullopt;
+    const std::string scheme = lowerCase(origin.substr(0, sep));
+    const std::string authority = lowerCase(origin.substr(sep + 3));
+    if ((scheme != "http" && scheme != "https") || authority.empty() ||
+        authority.find_first_of("/?#@ \t") != std::string::npos)
+        return std::nullopt;
+    return std::pair(scheme, authority);
+}
+
 }  // namespace
+
+std::string normaliseOrigin(std::string_view origin, std::string_view what)
+{
+    std::string_view text = origin;
+    if (text.ends_with('/'))
+        text.remove_suffix(1);  // "http://host:8080/" as copied from an address bar
+    const auto parts = splitOrigin(text);
+    if (!parts)
+        fail("{} '{}': expected an origin such as http://host:8080 (http or https, no path)", what,
+             std::string(origin.substr(0, 200)));
+    return parts->first + "://" + parts->second;
+}
+
+std::optional<std::string> crossSiteRefusal(const SitePolicy& policy, std::optional<std::string_view> host,
+                                            std::optional<std::string_view> origin)
+{
+    auto allowedHost = [&](const std::string& name) {
+        return std::any_of(policy.allowedOrigins.begin(), policy.allowedOrigins.end(),
+                           [&](const std::string& o) { return hostName(o.substr(o.find("://") + 3)) == name; });
+    };
+    if (policy.loopback && host) {
+        const std::string name = hostName(*host);
+        if (!isLoopbackHost(name) && !allowedHost(name))
+            return "Host '" + std::string(host->substr(0, 200)) +
+                   "' is not a loopback name: refused as a possible DNS-rebinding attack (this server answers "
+                   "localhost, 127.0.0.1 and [::1]; allow another name with --allow-origin)";
+    }
+    if (!origin)
+        return std::nullopt;
+    const std::string shown(origin->substr(0, 200));
+    if (const auto parts = splitOrigin(*origin)) {
+        const std::string normalised = parts->first + "://" + parts->second;
+        if (std::find(policy.allowedOrigins.begin(), policy.allowedOrigins.end(), normalised) !=
+            policy.allowedOrigins.end())
+            return std::nullopt;
+        if (host && parts->second == lowerCase(*host))
+            return std::nullopt;  // the server's own page
+    }
+    return "Origin '" + shown + "' is not this server's origin" +
+           (host ? " (http://" + std::string(host->substr(0, 200)) + ")" : std::string(" (no Host header)")) +
+           ": cross-site request refused; allow a trusted page with --allow-origin";
+}
 
 std::string_view targetPath(std::string_view target)
 {

@@ -1,5 +1,6 @@
-// Access rules of docs/protocol.md: the token required off loopback, and which static files may be
-// served. No network types; everything here is tested on its own.
+// Access rules of docs/protocol.md: the token required off loopback, the Host and Origin checks
+// against other web sites, and which static files may be served. No network types; everything here
+// is tested on its own.
 //
 // Thread safety: all functions are reentrant.
 #pragma once
@@ -8,6 +9,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace raypc::server {
 
@@ -26,6 +28,24 @@ struct Credentials {
 // True when `expected` is empty (no token needed) or any of the query parameter `token`, the
 // header "Bearer <token>" or the cookie `raypc_token` equals it (compared in constant time).
 bool tokenAccepted(const Credentials& request, const std::string& expected);
+
+// Cross-site protection. A web page the user visits must not drive or read the server: on a loopback
+// address (no token) the Host header must name a loopback host (localhost, 127.x.y.z, [::1]) or the
+// host of an allowed origin, which defeats DNS rebinding; on any address, a request that carries an
+// Origin header must come from the server's own origin (http or https with the authority of the Host
+// header) or an allowed origin, which refuses cross-site WebSocket upgrades and cross-site simple
+// POSTs. Requests without Origin (not from a browser page) pass the second check.
+struct SitePolicy {
+    bool loopback = true;                     // listening on a loopback address
+    std::vector<std::string> allowedOrigins;  // as returned by normaliseOrigin (`--allow-origin`)
+};
+// "scheme://host[:port]" in lower case, scheme http or https, no path, query or user. Throws
+// raypc::Error naming `what` (e.g. "--allow-origin") and the value otherwise.
+std::string normaliseOrigin(std::string_view origin, std::string_view what);
+// nullopt when a request with these headers (nullopt: header absent) may pass; otherwise the reason
+// for answering 403, naming the header, its value and how to allow it.
+std::optional<std::string> crossSiteRefusal(const SitePolicy& policy, std::optional<std::string_view> host,
+                                            std::optional<std::string_view> origin);
 
 // Splits "/a/b?x=1" into path and query.
 std::string_view targetPath(std::string_view target);

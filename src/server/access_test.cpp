@@ -1,5 +1,7 @@
 #include "server/access.h"
 
+#include "core/error.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -107,6 +109,64 @@ TEST_F(StaticPaths, RefusesEscapes)
     const std::string absolute = (base / "secret.txt").string();
     const auto r = resolveStaticPath(root, absolute);
     EXPECT_FALSE(r) << absolute;
+}
+
+// DNS rebinding: a page of evil.example whose name now resolves to 127.0.0.1 sends Host: evil.example.
+TEST(CrossSite, LoopbackAnswersOnlyLoopbackHostNames)
+{
+    const SitePolicy loopback{true, {}};
+    for (const char* host : {"127.0.0.1:8080", "localhost:8080", "LOCALHOST", "[::1]:8080", "127.0.0.1", "127.3.4.5:1"})
+        EXPECT_FALSE(crossSiteRefusal(loopback, host, std::nullopt)) << host;
+    for (const char* host : {"evil.example", "evil.example:8080", "127.0.0.1.evil.example:8080", "localhost.evil:8080",
+                             "192.168.1.2:8080", "[::2]:8080", ""}) {
+        const auto why = crossSiteRefusal(loopback, host, std::nullopt);
+        ASSERT_TRUE(why) << host;
+        EXPECT_NE(why->find("Host '" + std::string(host) + "'"), std::string::npos) << *why;
+        EXPECT_NE(why->find("DNS-rebinding"), std::string::npos) << *why;
+    }
+    EXPECT_FALSE(crossSiteRefusal(loopback, std::nullopt, std::nullopt)) << "no Host: not a browser";
+    // Off loopback the token guards; any Host name may reach the machine.
+    EXPECT_FALSE(crossSiteRefusal(SitePolicy{false, {}}, "evil.example:8080", std::nullopt));
+    // An allowed origin's host is a name of this server (a proxy or an /etc/hosts alias).
+    const SitePolicy alias{true, {normaliseOrigin("http://viz.lab:8080", "--allow-origin")}};
+    EXPECT_FALSE(crossSiteRefusal(alias, "viz.lab:8080", std::nullopt));
+    EXPECT_TRUE(crossSiteRefusal(alias, "evil.example:8080", std::nullopt));
+}
+
+TEST(CrossSite, OriginMustBeTheServersOwnOrAllowed)
+{
+    for (const bool loopback : {true, false}) {
+        const SitePolicy policy{loopback, {normaliseOrigin("https://Proxy.Example/", "--allow-origin")}};
+        // The server's own page, under each of its names.
+        EXPECT_FALSE(crossSiteRefusal(policy, "127.0.0.1:8080", "http://127.0.0.1:8080"));
+        EXPECT_FALSE(crossSiteRefusal(policy, "localhost:8080", "http://localhost:8080"));
+        EXPECT_FALSE(crossSiteRefusal(policy, "localhost:8080", "HTTP://LocalHost:8080"));
+        EXPECT_FALSE(crossSiteRefusal(policy, "127.0.0.1:8080", "https://proxy.example"));
+        for (const char* origin : {"http://evil.example", "http://127.0.0.1:9999", "http://localhost:8080",
+                                   "null", "", "file://", "http://127.0.0.1:8080/path", "ftp://127.0.0.1:8080",
+                                   "http://127.0.0.1:8080@evil.example"}) {
+            const auto why = crossSiteRefusal(policy, "127.0.0.1:8080", origin);
+            ASSERT_TRUE(why) << origin;
+            EXPECT_NE(why->find("Origin '" + std::string(origin) + "'"), std::string::npos) << *why;
+            EXPECT_NE(why->find("--allow-origin"), std::string::npos) << *why;
+        }
+        EXPECT_TRUE(crossSiteRefusal(policy, std::nullopt, "http://127.0.0.1:8080")) << "nothing to compare with";
+    }
+}
+
+TEST(CrossSite, AllowOriginValuesAreCheckedAndNormalised)
+{
+    EXPECT_EQ(normaliseOrigin("HTTP://Viz.Lab:8080/", "--allow-origin"), "http://viz.lab:8080");
+    EXPECT_EQ(normaliseOrigin("https://a.b", "--allow-origin"), "https://a.b");
+    for (const char* bad : {"viz.lab:8080", "ftp://a.b", "http://", "http://a.b/path", "http://u@a.b", "*", ""}) {
+        try {
+            normaliseOrigin(bad, "--allow-origin");
+            ADD_FAILURE() << bad << " accepted";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("--allow-origin '" + std::string(bad) + "'"), std::string::npos)
+                << e.what();
+        }
+    }
 }
 
 TEST(MimeTypes, ByExtension)

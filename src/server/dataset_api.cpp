@@ -2,10 +2,18 @@
 
 #include "core/error.h"
 #include "core/spherical.h"
+#include "render/color_map.h"
+#include "render/pathline_scene.h"
+#include "render/volume_renderer.h"
+#include "server/access.h"
+#include "server/image_codec.h"
+#include "server/protocol.h"
+#include "render/state_renderer.h"
 
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -93,12 +101,16 @@ json presetsJson(const std::optional<fs::path>& dir)
 }
 
 json selectionStatsJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters, int level,
-                        int profileStep)
+                        int profileStep, const std::atomic<bool>* cancel)
 {
     dataset.checkLevel(level);
     dataset.checkStep(profileStep);
-    const auto selections = selectionOverTime(dataset, filters, level, 0, int(dataset.steps().size()) - 1,
-                                              [&](int step, int l) { return cache.getWithoutEvicting(step, l); });
+    const int nSteps = int(dataset.steps().size());
+    const auto selections = selectionOverTime(dataset, filters, level, 0, nSteps - 1, [&](int step, int l) {
+        if (cancel && *cancel)
+            fail("statistics cancelled at step {} of {} (the client went away or the server is stopping)", step, nSteps);
+        return cache.getWithoutEvicting(step, l);
+    });
     json steps = json::array();
     for (const StepSelection& sel : selections)
         steps.push_back({{"step", sel.step},
@@ -122,6 +134,18 @@ json selectionStatsJson(const Dataset& dataset, StepCache& cache, std::span<cons
               {"depthKm", std::move(depth)},
               {"volumeKm3", std::move(selected)},
               {"shellVolumeKm3", std::move(shell)}}}};
+}
+
+render::StateSources cacheSources(StepCache* volumes, PathlineCache* lines)
+{
+    render::StateSources s;
+    s.volume = [volumes](int step, int level) { return volumes->get(step, level); };
+    s.pathlines = [lines](int step, int window) -> std::shared_ptr<const std::vector<PathlineSet>> {
+        if (!lines)
+            fail("this server has no pathline cache");
+        return lines->get(step, window);
+    };
+    return s;
 }
 
 PathlineCache::PathlineCache(fs::path datasetDir, size_t maxEntries)
@@ -179,6 +203,215 @@ std::string pathlineAttributesPayload(const PathlineCache::Window& sets, int ste
     for (const auto& s : sets)  // float32 little-endian (the host order on every supported target)
         out.append(reinterpret_cast<const char*>(s.attributes.data()), s.attributes.size() * sizeof(float));
     return out;
+}
+
+json infoJson(const Dataset& dataset)
+{
+    json variables = json::array();
+    for (const auto& v : dataset.variables())
+        variables.push_back({{"name", v.name},
+                             {"units", v.units},
+                             {"derived", v.derived},
+                             {"min", v.global.range.min},
+                             {"max", v.global.range.max},
+                             {"mean", v.global.mean},
+                             {"histogram", v.global.histogram}});
+    json coordinates = json::array();
+    for (const auto& c : coordinateInfos()) {
+        const CoordinateRange r = coordinateRange(dataset.levels().front().grid, c.id);
+        coordinates.push_back({{"name", c.name}, {"units", c.units}, {"min", r.min}, {"max", r.max}});
+    }
+    json steps = json::array();
+    for (const auto& s : dataset.steps())
+        steps.push_back({{"index", s.index}, {"timeMyr", s.timeMyr}, {"source", s.source}});
+    json levels = json::array();
+    for (size_t l = 0; l < dataset.levels().size(); ++l) {
+        const auto& lg = dataset.levels()[l].grid;
+        levels.push_back({{"level", l}, {"nLat", lg.nLat()}, {"nR", lg.nR()}, {"nLon", lg.nLon()}});
+    }
+    // The sample's shape without reading it: coordinates then variables.
+    json columns = json::array(), units = json::array();
+    for (const auto& c : coordinateInfos())
+        columns.push_back(c.name), units.push_back(c.units);
+    for (const auto& v : dataset.variables())
+        columns.push_back(v.name), units.push_back(v.units);
+    const SampleTable sample = dataset.loadSample(0);
+    json maps = json::array();
+    for (const auto m : render::allColorMaps())
+        maps.push_back(std::string(render::colorMapName(m)));
+    return {{"protocol", kProtocolVersion},
+            {"variables", variables},
+            {"coordinates", coordinates},
+            {"steps", steps},
+            {"levels", levels},
+            {"sample", {{"rows", sample.rows}, {"columns", sample.columns}, {"units", sample.units}}},
+            {"colorMaps", maps},
+            {"defaultState", render::toJson(render::defaultState(dataset))}};
+}
+
+// ---------------------------------------------------------------------------------------------
+// The route handlers.
+
+namespace {
+
+int parseIntParameter(std::string_view query, const char* name)
+{
+    const auto text = queryParameter(query, name);
+    if (!text)
+        fail("missing parameter '{}'", name);
+    try {
+        size_t used = 0;
+        const int v = std::stoi(*text, &used);
+        if (used == text->size())
+            return v;
+    } catch (const std::exception&) {
+    }
+    fail("{}: expected an integer, found '{}'", name, text->substr(0, 40));
+}
+
+int checkedStep(const Dataset& dataset, std::string_view query)
+{
+    const int step = parseIntParameter(query, "step");
+    dataset.checkStep(step);
+    return step;
+}
+
+json parseBody(std::string_view body)
+{
+    try {
+        return json::parse(body);
+    } catch (const json::parse_error& e) {
+        fail("body: not valid JSON: {}", e.what());
+    }
+}
+
+double millisecondsSince(std::chrono::steady_clock::time_point start)
+{
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+ApiAnswer jsonAnswer(const json& j)
+{
+    return {j.dump(-1, ' ', false, json::error_handler_t::replace), "application/json"};
+}
+
+ApiAnswer info(const ApiContext& api, const ApiRequest&)
+{
+    return {api.infoJson, "application/json"};
+}
+
+ApiAnswer histogram(const ApiContext& api, const ApiRequest& request)
+{
+    const Dataset& dataset = *api.dataset;
+    const int step = checkedStep(dataset, request.query);
+    const auto name = queryParameter(request.query, "var");
+    if (!name)
+        fail("missing parameter 'var'");
+    const int var = dataset.variableIndex(*name);
+    if (var < 0)
+        fail("var: unknown variable '{}'", name->substr(0, 80));
+    const VariableStats& s = dataset.steps()[size_t(step)].stats[size_t(var)];
+    const auto& v = dataset.variables()[size_t(var)];
+    return jsonAnswer(
+        {{"name", v.name}, {"units", v.units}, {"min", s.range.min}, {"max", s.range.max}, {"histogram", s.histogram}});
+}
+
+ApiAnswer sample(const ApiContext& api, const ApiRequest& request)
+{
+    const int step = checkedStep(*api.dataset, request.query);
+    const SampleTable t = api.dataset->loadSample(step);
+    return {std::string(reinterpret_cast<const char*>(t.values.data()), t.values.size() * sizeof(float)),
+            "application/octet-stream"};
+}
+
+ApiAnswer selection(const ApiContext& api, const ApiRequest& request)
+{
+    const render::ResolvedState resolved = render::resolveState(parseBody(request.body), *api.dataset);
+    const auto volume = api.cache->get(resolved.state.step, 0);
+    const auto s = selectedVolume(*volume, resolved.params.brushes);
+    return jsonAnswer({{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}, {"step", resolved.state.step}});
+}
+
+// The bounds of limits.h, checked before anything is allocated.
+void checkScreenshotLimits(const render::RenderState& state, const ServerLimits& limits)
+{
+    const int64_t pixels = int64_t(state.width) * state.height;
+    const int passes = std::max(1, state.passes);
+    if (pixels > limits.maxScreenshotPixels)
+        fail("screenshot: image {}x{} is over the limit of {} pixels (e.g. 4096x4096)", state.width, state.height,
+             limits.maxScreenshotPixels);
+    if (passes > limits.maxScreenshotPasses)
+        fail("screenshot: passes {} is over the limit of {}", passes, limits.maxScreenshotPasses);
+    if (pixels * passes > limits.maxScreenshotPixelPasses)
+        fail("screenshot: {}x{} at {} passes is over the limit of {} pixel-passes (e.g. 1024x1024 at 256 passes, "
+             "4096x4096 at 16); use fewer passes or a smaller image",
+             state.width, state.height, passes, limits.maxScreenshotPixelPasses);
+}
+
+ApiAnswer screenshot(const ApiContext& api, const ApiRequest& request)
+{
+    const render::ResolvedState resolved = render::resolveState(parseBody(request.body), *api.dataset);
+    checkScreenshotLimits(resolved.state, api.limits);
+    const auto start = std::chrono::steady_clock::now();
+    render::StateRenderer renderer(api.dataset, cacheSources(api.cache, api.pathlines));
+    const auto still = renderer.renderStill(resolved, 0, request.cancel);
+    const render::FrameBuffer& frame = still.frame;
+    if (frame.passes() < std::max(1, resolved.state.passes))
+        fail("screenshot cancelled after {} of {} passes (the client went away or the server is stopping)",
+             frame.passes(), std::max(1, resolved.state.passes));
+    std::string png = encodePng(frame.resolveRgba8(resolved.state.background), frame.width(), frame.height());
+    spdlog::info("screenshot: step {} {}x{} {} passes at level 0 in {:.0f} ms", resolved.state.step, frame.width(),
+                 frame.height(), frame.passes(), millisecondsSince(start));
+    return {std::move(png), "image/png"};
+}
+
+ApiAnswer presets(const ApiContext& api, const ApiRequest&)
+{
+    return jsonAnswer(presetsJson(api.examples));
+}
+
+ApiAnswer stats(const ApiContext& api, const ApiRequest& request)
+{
+    const Dataset& dataset = *api.dataset;
+    // Level 1 by default (quick); 0 is exact on the full grid.
+    const int levels = int(dataset.levels().size());
+    const int level =
+        queryParameter(request.query, "level") ? parseIntParameter(request.query, "level") : std::min(1, levels - 1);
+    dataset.checkLevel(level);
+    const render::ResolvedState resolved = render::resolveState(parseBody(request.body), dataset);
+    const auto start = std::chrono::steady_clock::now();
+    json result = selectionStatsJson(dataset, *api.cache, resolved.params.brushes, level, resolved.state.step,
+                                     request.cancel);
+    spdlog::info("stats: {} steps at level {} in {:.0f} ms", result["steps"].size(), level, millisecondsSince(start));
+    return {result.dump(), "application/json"};
+}
+
+ApiAnswer pathlines(const ApiContext& api, const ApiRequest& request)
+{
+    const int step = checkedStep(*api.dataset, request.query);
+    const int window = queryParameter(request.query, "window") ? parseIntParameter(request.query, "window") : 10;
+    if (window < 1 || window > 1000)
+        fail("window: {} out of range 1..1000", window);
+    const auto sets = api.pathlines->get(step, window);
+    return {pathlineAttributesPayload(*sets, step, window), "application/octet-stream"};
+}
+
+const Route kRoutes[] = {
+    {HttpMethod::Get, "/api/info", Lane::Network, info},
+    {HttpMethod::Get, "/api/histogram", Lane::Network, histogram},
+    {HttpMethod::Get, "/api/sample", Lane::Worker, sample},
+    {HttpMethod::Post, "/api/selection", Lane::Worker, selection},
+    {HttpMethod::Post, "/api/screenshot", Lane::Screenshot, screenshot},
+    {HttpMethod::Get, "/api/presets", Lane::Worker, presets},
+    {HttpMethod::Post, "/api/stats", Lane::Statistics, stats},
+    {HttpMethod::Get, "/api/pathlines", Lane::Worker, pathlines},
+};
+
+}  // namespace
+
+std::span<const Route> apiRoutes()
+{
+    return kRoutes;
 }
 
 }  // namespace raypc::server

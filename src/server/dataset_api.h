@@ -1,16 +1,21 @@
-// What the HTTP endpoints /api/presets, /api/stats and /api/pathlines compute (docs/protocol.md),
-// as functions without network types so that they are tested on their own.
+// The HTTP API of docs/protocol.md without network types: the route table {method, path, lane,
+// handler} that the HTTP connection dispatches on, and what the endpoints compute, as functions that
+// are tested on their own.
 //
-// Thread safety: the free functions are reentrant; PathlineCache may be used from any thread.
+// Thread safety: the free functions and the handlers are reentrant; PathlineCache may be used from
+// any thread.
 #pragma once
 
 #include "data/dataset.h"
 #include "data/pathline_storage.h"
 #include "data/selection.h"
+#include "render/state_renderer.h"
+#include "server/limits.h"
 #include "server/step_cache.h"
 
 #include <nlohmann/json.hpp>
 
+#include <atomic>
 #include <filesystem>
 #include <list>
 #include <memory>
@@ -18,6 +23,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace raypc::server {
@@ -36,9 +42,10 @@ nlohmann::json presetsJson(const std::optional<std::filesystem::path>& dir);
 // The selected volume of every step and the depth profile of `profileStep`, at `level`
 // ({level, steps: [{step, timeMyr, volumeKm3, fractionOfMantle}], profile: {step, radiusKm,
 // depthKm, volumeKm3, shellVolumeKm3}}). Volumes come through `cache` without evicting what the
-// renderers use. Throws raypc::Error for a level out of range.
+// renderers use. Throws raypc::Error for a level out of range, or when `cancel` becomes true (checked
+// before every step).
 nlohmann::json selectionStatsJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
-                                  int level, int profileStep);
+                                  int level, int profileStep, const std::atomic<bool>* cancel = nullptr);
 
 // A bounded cache of pathline windows (loadPathlineWindow) by (step, window), least recently used
 // out. get() throws raypc::Error like loadPathlineWindow (e.g. a dataset without pathlines).
@@ -63,5 +70,57 @@ private:
 // JSON header {step, window, lines, columns, units, sets: [{injectionStep, injectionTimeMyr, lines}]},
 // then lines x columns float32 little-endian, row-major, lines in set order (oldest set first).
 std::string pathlineAttributesPayload(const PathlineCache::Window& sets, int step, int window);
+
+// What the handlers read: shared by every connection of a server, immutable after start (the caches
+// are thread-safe).
+// The server's shared caches as the sources of a render::StateRenderer (valid while they live).
+render::StateSources cacheSources(StepCache* volumes, PathlineCache* lines);
+
+struct ApiContext {
+    std::shared_ptr<const Dataset> dataset;
+    StepCache* cache = nullptr;
+    PathlineCache* pathlines = nullptr;
+    std::optional<std::filesystem::path> examples;  // presets directory (findExamplesDir)
+    std::string infoJson;                           // GET /api/info, built once (infoJson())
+    ServerLimits limits;
+};
+
+// One API request as the handlers see it: the percent-encoded query, the body, and a flag that
+// becomes true when the answer is no longer wanted (the client closed the connection, or the server
+// is stopping); long handlers check it and throw.
+struct ApiRequest {
+    std::string_view query;
+    std::string_view body;
+    const std::atomic<bool>* cancel = nullptr;
+};
+
+struct ApiAnswer {
+    std::string body;
+    std::string contentType;
+};
+
+enum class HttpMethod { Get, Post };
+
+// Where a handler runs (server_context.h): on the network thread (only answers that are ready or take
+// microseconds, without a body to parse), on the worker pool (quick requests), or one at a time in the
+// lane of statistics over time or of screenshots (long requests, with a bounded queue).
+enum class Lane { Network, Worker, Statistics, Screenshot };
+
+// A handler throws raypc::Error for a bad request (the connection answers 400 with its message).
+using ApiHandler = ApiAnswer (*)(const ApiContext&, const ApiRequest&);
+
+struct Route {
+    HttpMethod method;
+    std::string_view path;
+    Lane lane;
+    ApiHandler handler;
+};
+
+// Every /api/ endpoint of docs/protocol.md.
+std::span<const Route> apiRoutes();
+
+// GET /api/info: the dataset's variables, coordinates, steps, levels, sample shape, colour maps and
+// default state (docs/protocol.md).
+nlohmann::json infoJson(const Dataset& dataset);
 
 }  // namespace raypc::server

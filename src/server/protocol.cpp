@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <tuple>
 
 namespace raypc::server {
 
@@ -13,17 +14,30 @@ using nlohmann::json;
 
 namespace {
 
+// Ids and versions are signed 64-bit integers: they are echoed exactly, so a value outside that range
+// (e.g. 18446744073709551615, which would come back as -1) is refused, not wrapped.
 int64_t integerField(const json& message, const char* type, const char* key)
 {
     const auto it = message.find(key);
     if (it == message.end())
         fail("{}: missing field '{}'", type, key);
-    if (it->is_number_integer() || it->is_number_unsigned())
+    if (it->is_number_unsigned()) {
+        const uint64_t v = it->get<uint64_t>();
+        if (v <= uint64_t(std::numeric_limits<int64_t>::max()))
+            return int64_t(v);
+        fail("{}: field '{}' is {}, out of range (a signed 64-bit integer: at most {})", type, key, v,
+             std::numeric_limits<int64_t>::max());
+    }
+    if (it->is_number_integer())
         return it->get<int64_t>();
     if (it->is_number_float()) {
         const double v = it->get<double>();
         if (std::isfinite(v) && v == std::floor(v) && std::abs(v) < 9e15)
             return int64_t(v);
+        if (std::isfinite(v) && v == std::floor(v))
+            fail("{}: field '{}' is {}, out of range (a signed 64-bit integer; written with a fraction or "
+                 "exponent, at most 9e15 in magnitude)",
+                 type, key, it->dump().substr(0, 40));
     }
     fail("{}: field '{}' must be an integer, found {}", type, key, it->dump().substr(0, 40));
 }
@@ -135,7 +149,10 @@ std::string encodeFrame(json header, std::span<const uint8_t> jpeg, std::span<co
     return out;
 }
 
-DecodedFrame decodeFrame(std::string_view bytes)
+namespace {
+
+// The header's length and the parsed header of a frame.
+std::pair<uint32_t, json> readFrameHeader(std::string_view bytes)
 {
     if (bytes.size() < 4)
         fail("frame: {} bytes, too short for the header length", bytes.size());
@@ -144,12 +161,25 @@ DecodedFrame decodeFrame(std::string_view bytes)
         headerBytes |= uint32_t(uint8_t(bytes[size_t(i)])) << (8 * i);
     if (bytes.size() - 4 < headerBytes)
         fail("frame: header of {} bytes does not fit in {} bytes", headerBytes, bytes.size());
-    DecodedFrame f;
     try {
-        f.header = json::parse(bytes.substr(4, headerBytes));
+        return {headerBytes, json::parse(bytes.substr(4, headerBytes))};
     } catch (const json::exception& e) {
         fail("frame: header is not JSON: {}", e.what());
     }
+}
+
+}  // namespace
+
+json frameHeader(std::string_view bytes)
+{
+    return readFrameHeader(bytes).second;
+}
+
+DecodedFrame decodeFrame(std::string_view bytes)
+{
+    DecodedFrame f;
+    uint32_t headerBytes = 0;
+    std::tie(headerBytes, f.header) = readFrameHeader(bytes);
     const auto jpegBytes = f.header.value("jpegBytes", size_t(0));
     const auto depthBytes = f.header.value("depthBytes", size_t(0));
     const size_t rest = bytes.size() - 4 - headerBytes;

@@ -36,7 +36,8 @@ struct PingMessage {
 using ClientMessage = std::variant<HelloMessage, StateMessage, CancelMessage, PingMessage>;
 
 // Parses one text message. Throws raypc::Error with a message for the client on oversized input,
-// malformed JSON, a non-object, an unknown or missing `type`, or a missing/ill-typed field.
+// malformed JSON, a non-object, an unknown or missing `type`, or a missing/ill-typed field (an `id`
+// outside the signed 64-bit range included: ids are echoed exactly, never wrapped).
 ClientMessage parseClientMessage(std::string_view text);
 
 // Server text messages.
@@ -56,6 +57,8 @@ struct DecodedFrame {
 };
 // The inverse of encodeFrame (for tests and the test client). Throws raypc::Error on a bad layout.
 DecodedFrame decodeFrame(std::string_view bytes);
+// Only the header of a frame (cheap: the image and depth are not touched). Throws like decodeFrame.
+nlohmann::json frameHeader(std::string_view bytes);
 
 // Downsamples a width x height depth map by `factor` along both axes (ceil sizes): each block keeps
 // its nearest finite depth, or +infinity if it has none.

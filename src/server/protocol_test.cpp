@@ -45,6 +45,23 @@ TEST(ProtocolCodec, ParsesEachClientMessage)
     EXPECT_EQ(parseAs<PingMessage>(R"({"type": "ping", "id": 5.0})").id, 5);
 }
 
+// Ids are echoed exactly: the whole signed 64-bit range passes, anything beyond is refused (never
+// wrapped: 18446744073709551615 used to come back as -1).
+TEST(ProtocolCodec, IdsKeepTheirValueOrAreRefused)
+{
+    EXPECT_EQ(parseAs<PingMessage>(R"({"type": "ping", "id": 9223372036854775807})").id, INT64_MAX);
+    EXPECT_EQ(parseAs<PingMessage>(R"({"type": "ping", "id": -9223372036854775808})").id, INT64_MIN);
+    EXPECT_EQ(pongReply(INT64_MAX), R"({"id":9223372036854775807,"type":"pong"})");
+    for (const char* id : {"18446744073709551615", "9223372036854775808"}) {
+        const std::string e = errorOf(std::string(R"({"type": "ping", "id": )") + id + "}");
+        EXPECT_NE(e.find(std::string("ping: field 'id' is ") + id + ", out of range"), std::string::npos) << e;
+    }
+    EXPECT_NE(errorOf(R"({"type": "state", "id": 18446744073709551615, "state": {}})").find("state: field 'id'"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"type": "ping", "id": -9223372036854775809})").find("out of range"), std::string::npos);
+    EXPECT_NE(errorOf(R"({"type": "ping", "id": 1e300})").find("out of range"), std::string::npos);
+}
+
 TEST(ProtocolCodec, RejectsMalformedJson)
 {
     EXPECT_NE(errorOf(R"({"type": "hello", )").find("malformed JSON"), std::string::npos);
@@ -95,6 +112,18 @@ TEST(ProtocolCodec, ServerTextMessages)
     EXPECT_FALSE(json::parse(errorReply("x")).contains("id"));
     // Invalid UTF-8 quoted from client input must not throw.
     EXPECT_NO_THROW(json::parse(errorReply("bad \xff\xfe input")));
+}
+
+TEST(FrameEncoding, HeaderAloneIsReadWithoutTheRest)
+{
+    const std::vector<uint8_t> jpeg(1000, 7);
+    const std::vector<float> depth(64, 1.0f);
+    const std::string bytes = encodeFrame({{"type", "frame"}, {"id", 42}, {"converged", true}}, jpeg, depth, 8, 8);
+    const json header = frameHeader(bytes);
+    EXPECT_EQ(header["id"], 42);
+    EXPECT_EQ(header, decodeFrame(bytes).header);
+    EXPECT_THROW(frameHeader(bytes.substr(0, 3)), Error);
+    EXPECT_THROW(frameHeader(bytes.substr(0, 10)), Error);
 }
 
 TEST(FrameEncoding, LayoutIsLengthHeaderJpegDepth)

@@ -33,25 +33,11 @@ nlohmann::json cameraJson(const RenderState& state)
 
 }  // namespace
 
-render::StateSources RenderContext::sources() const
-{
-    StepCache* volumes = cache;
-    PathlineCache* lines = pathlines;
-    render::StateSources s;
-    s.volume = [volumes](int step, int level) { return volumes->get(step, level); };
-    s.pathlines = [lines](int step, int window) -> std::shared_ptr<const std::vector<PathlineSet>> {
-        if (!lines)
-            fail("this server has no pathline cache");
-        return lines->get(step, window);
-    };
-    return s;
-}
-
 RenderSession::RenderSession(RenderContext& context, SessionSink sink, std::string name)
     : m_context(context),
       m_sink(std::move(sink)),
       m_name(std::move(name)),
-      m_renderer(context.dataset, context.sources()),
+      m_renderer(context.dataset, cacheSources(context.cache, context.pathlines)),
       m_thread([this] { loop(); })
 {
 }

@@ -40,9 +40,6 @@ struct RenderContext {
     // Throughput of the machine in estimated samples (VolumeRenderer::estimateSamplesPerPass) per
     // second, all threads; updated from every pass, used to choose the interactive level.
     std::atomic<double> samplesPerSecond{0.0};
-
-    // The caches as the sources of a render::StateRenderer (valid while this context lives).
-    render::StateSources sources() const;
 };
 
 struct SessionSink {

@@ -1,17 +1,23 @@
-// `raypc serve`: the HTTP and WebSocket server of docs/protocol.md. Beast stays inside server.cpp.
+// `raypc serve`: the HTTP and WebSocket server of docs/protocol.md. Beast stays inside the server
+// library (server.cpp: the acceptor; http_session.cpp: routes and static files; ws_session.cpp).
 //
-// One network thread runs every connection; each WebSocket session renders on its own thread
-// (render_session.h); screenshots, selections and samples run on a worker pool so that they never
-// block the network thread.
+// One network thread runs every connection and parses no JSON; WebSocket messages are parsed and
+// handed over on a message thread, each session renders on its own thread (render_session.h), API
+// requests run on lanes (server_context.h: a worker pool for the quick ones, one thread each for
+// screenshots and for statistics over time), so that none of them blocks the network thread or the
+// others. The limits (connections, sessions, memory, queues, screenshots) are in limits.h.
 //
 // Thread safety: construct and run() on one thread; stop() may be called from any thread.
 #pragma once
+
+#include "server/limits.h"
 
 #include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace raypc::server {
 
@@ -24,6 +30,10 @@ struct ServerOptions {
     size_t cacheBytes = size_t(2) << 30;          // bound of the shared StepVolume cache
     size_t cacheEntries = 12;
     bool handleSignals = true;                    // SIGINT/SIGTERM stop run()
+    // Pages of other origins that may use the server ("http://host:port", `--allow-origin`); their
+    // hosts are also accepted as Host on loopback (access.h, SitePolicy).
+    std::vector<std::string> allowedOrigins;
+    ServerLimits limits;
 };
 
 // The UI's asset directory: `explicitDir` if given (throws raypc::Error if it is not a directory),
@@ -33,8 +43,8 @@ std::optional<std::filesystem::path> findAssetDir(const std::optional<std::files
 
 class Server {
 public:
-    // Opens the dataset and binds the port. Throws raypc::Error when the dataset cannot be opened
-    // or the address cannot be bound (naming host and port).
+    // Opens the dataset and binds the port. Throws raypc::Error when the dataset cannot be opened,
+    // an allowed origin is malformed, or the address cannot be bound (naming host and port).
     explicit Server(ServerOptions options);
     ~Server();
 
@@ -44,7 +54,9 @@ public:
     // "http://HOST:PORT/" plus "?token=…" when a token is needed.
     std::string url() const;
 
-    void run();   // serves until stop()
+    void run();   // serves until stop(); an exception out of one connection is logged, not thrown
+    // Stops serving and cancels running screenshots and statistics; the destructor then waits for
+    // the worker and render threads (about one tile of work).
     void stop();
 
 private:

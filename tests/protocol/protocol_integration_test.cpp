@@ -1,7 +1,7 @@
 // Integration tests of `raypc serve` against docs/protocol.md: a real server process on an ephemeral
 // port, a client built with Beast. Connects to 127.0.0.1 only.
+#include "harness.h"
 #include "render/render_state.h"
-#include "server/protocol.h"
 
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
@@ -32,19 +32,20 @@
 namespace {
 
 namespace fs = std::filesystem;
-namespace beast = boost::beast;
-namespace http = beast::http;
-namespace websocket = beast::websocket;
-namespace net = boost::asio;
-using tcp = net::ip::tcp;
-using nlohmann::json;
-using raypc::server::decodeFrame;
-using raypc::server::DecodedFrame;
+namespace servertest = raypc::servertest;
+using namespace servertest::aliases;
+using servertest::httpGet;
+using servertest::httpRequest;
+using servertest::jpegOf;
+using servertest::smallState;
+using servertest::WsClient;
 
-// ---------------------------------------------------------------------------------------------
 // The dataset (preprocessed once per test process into a temporary directory) and server processes.
 
-fs::path g_work;
+const auto* const g_environment =
+    ::testing::AddGlobalTestEnvironment(new servertest::WorkDirEnvironment(RAYPC_EXE, RAYPC_SHARED_DIR));
+
+const fs::path& g_work = servertest::WorkDirEnvironment::work();
 
 void runOrDie(const std::string& command)
 {
@@ -52,286 +53,14 @@ void runOrDie(const std::string& command)
     ASSERT_EQ(status, 0) << command;
 }
 
-class Environment : public ::testing::Environment {
-public:
-    void SetUp() override
-    {
-        char pattern[] = "/tmp/raypc_protocol_XXXXXX";
-        ASSERT_NE(::mkdtemp(pattern), nullptr);
-        g_work = pattern;
-        runOrDie(std::string(RAYPC_EXE) + " preprocess " + RAYPC_SHARED_DIR + "/data/contest-layout -o " +
-                 (g_work / "ds").string() + " --quiet --sample-rows 2000 >/dev/null");
-        fs::create_directories(g_work / "assets" / "js");
-        std::ofstream(g_work / "assets" / "index.html") << "<html>raypc test page</html>";
-        std::ofstream(g_work / "assets" / "js" / "app.js") << "console.log('app')";
-        std::ofstream(g_work / "secret.txt") << "TOP-SECRET-CONTENT";
-    }
-    void TearDown() override
-    {
-        std::error_code ec;
-        fs::remove_all(g_work, ec);
-    }
-};
-const auto* const g_environment = ::testing::AddGlobalTestEnvironment(new Environment);
-
-// `raypc serve` in a child process; stopped (SIGTERM, then SIGKILL) on destruction.
-class ServerProcess {
+// `raypc serve` of the prepared dataset.
+class ServerProcess : public servertest::ServerProcess {
 public:
     explicit ServerProcess(std::vector<std::string> extra = {}, bool verbose = false)
+        : servertest::ServerProcess(RAYPC_EXE, g_work, std::move(extra), verbose)
     {
-        int out[2];
-        if (::pipe(out) != 0)
-            throw std::runtime_error("pipe");
-        std::vector<std::string> args = {RAYPC_EXE};
-        if (verbose)
-            args.push_back("-v");
-        for (const std::string& a : {std::string("serve"), (g_work / "ds").string(), std::string("--port"),
-                                     std::string("0"), std::string("--assets"), (g_work / "assets").string()})
-            args.push_back(a);
-        args.insert(args.end(), extra.begin(), extra.end());
-        m_pid = ::fork();
-        if (m_pid == 0) {
-            ::dup2(out[1], 1);
-            ::close(out[0]);
-            ::close(out[1]);
-            std::vector<char*> argv;
-            for (auto& a : args)
-                argv.push_back(a.data());
-            argv.push_back(nullptr);
-            ::execv(argv[0], argv.data());
-            _exit(127);
-        }
-        ::close(out[1]);
-        m_out = out[0];
-        // Wait for "raypc: serving http://HOST:PORT/[?token=T]".
-        std::string text;
-        const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-        const std::regex line(R"(raypc: serving http://[^ ]*:(\d+)/(\?token=([0-9a-f]+))?\n)");
-        std::smatch m;
-        while (!std::regex_search(text, m, line)) {
-            pollfd p{m_out, POLLIN, 0};
-            const int left = int(std::chrono::duration_cast<std::chrono::milliseconds>(
-                                     deadline - std::chrono::steady_clock::now())
-                                     .count());
-            if (left <= 0 || ::poll(&p, 1, left) <= 0)
-                throw std::runtime_error("no 'raypc: serving' line in time; output: " + text);
-            char buffer[512];
-            const ssize_t n = ::read(m_out, buffer, sizeof buffer);
-            if (n <= 0)
-                throw std::runtime_error("server exited early; output: " + text);
-            text.append(buffer, size_t(n));
-        }
-        port = uint16_t(std::stoi(m[1]));
-        token = m[3];
-        banner = text;
-        // Keep draining the server's output (its log) so that it never blocks on a full pipe.
-        m_output = text;
-        m_drain = std::thread([this] {
-            char buffer[4096];
-            for (;;) {
-                const ssize_t n = ::read(m_out, buffer, sizeof buffer);
-                if (n <= 0)
-                    return;
-                std::lock_guard lock(m_mutex);
-                m_output.append(buffer, size_t(n));
-            }
-        });
     }
-    std::string output()
-    {
-        std::lock_guard lock(m_mutex);
-        return m_output;
-    }
-    ~ServerProcess() { stop(); }
-    // SIGTERM, then SIGKILL after 5 s. True when the server exited by itself with status 0.
-    bool stop()
-    {
-        if (m_pid < 0)
-            return false;
-        ::kill(m_pid, SIGTERM);
-        bool clean = false;
-        int status = 0;
-        int i = 0;
-        for (; i < 100; ++i) {
-            if (::waitpid(m_pid, &status, WNOHANG) == m_pid) {
-                clean = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-                break;
-            }
-            ::usleep(50000);
-        }
-        if (i == 100) {
-            ::kill(m_pid, SIGKILL);
-            ::waitpid(m_pid, nullptr, 0);
-        }
-        if (m_drain.joinable())
-            m_drain.join();  // ends at EOF: the server has exited
-        ::close(m_out);
-        m_pid = -1;
-        return clean;
-    }
-    bool alive() const { return ::kill(m_pid, 0) == 0; }
-
-    uint16_t port = 0;
-    std::string token, banner;
-
-private:
-    pid_t m_pid = -1;
-    int m_out = -1;
-    std::thread m_drain;
-    std::mutex m_mutex;
-    std::string m_output;
 };
-
-void setReceiveTimeout(tcp::socket& socket, int seconds)
-{
-    timeval tv{seconds, 0};
-    ::setsockopt(socket.native_handle(), SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-}
-
-struct HttpAnswer {
-    int status = 0;
-    std::string body, contentType, setCookie;
-};
-
-HttpAnswer httpRequest(uint16_t port, http::verb method, const std::string& target, const std::string& body = "",
-                       const std::vector<std::pair<http::field, std::string>>& headers = {})
-{
-    net::io_context ioc;
-    tcp::socket socket(ioc);
-    socket.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
-    setReceiveTimeout(socket, 120);
-    http::request<http::string_body> req{method, target, 11};
-    req.set(http::field::host, "127.0.0.1");
-    for (const auto& [field, value] : headers)
-        req.set(field, value);
-    if (method == http::verb::post) {
-        req.set(http::field::content_type, "application/json");
-        req.body() = body;
-        req.prepare_payload();
-    }
-    // A server may answer an oversized body (413) and close before the client has written it
-    // all; a failed write is then expected, and the answer is still there to read.
-    beast::error_code writeError;
-    http::write(socket, req, writeError);
-    beast::flat_buffer buffer;
-    http::response_parser<http::string_body> parser;
-    parser.body_limit(64 * 1024 * 1024);
-    beast::error_code ec;
-    http::read(socket, buffer, parser, ec);
-    if (ec)
-        throw std::runtime_error("HTTP " + target + ": " + ec.message() +
-                                 (writeError ? " (after a failed write: " + writeError.message() + ")" : ""));
-    const auto& res = parser.get();
-    return {int(res.result_int()), res.body(), std::string(res[http::field::content_type]),
-            std::string(res[http::field::set_cookie])};
-}
-
-HttpAnswer httpGet(uint16_t port, const std::string& target,
-                   const std::vector<std::pair<http::field, std::string>>& headers = {})
-{
-    return httpRequest(port, http::verb::get, target, "", headers);
-}
-
-// A WebSocket client: text messages are parsed as JSON, binary ones as frames.
-class WsClient {
-public:
-    explicit WsClient(uint16_t port, const std::string& target = "/ws") : m_ws(m_ioc)
-    {
-        auto& socket = beast::get_lowest_layer(m_ws);
-        socket.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
-        setReceiveTimeout(socket, 60);
-        m_ws.read_message_max(64 * 1024 * 1024);
-        m_ws.handshake("127.0.0.1:" + std::to_string(port), target);
-    }
-    void sendText(const std::string& text)
-    {
-        m_ws.text(true);
-        m_ws.write(net::buffer(text));
-    }
-    void sendBinary(const std::string& bytes)
-    {
-        m_ws.binary(true);
-        m_ws.write(net::buffer(bytes));
-    }
-    void send(const json& message) { sendText(message.dump()); }
-
-    struct Message {
-        bool binary = false;
-        json text;
-        DecodedFrame frame;
-        std::string raw;
-    };
-    Message receive()
-    {
-        beast::flat_buffer buffer;
-        m_ws.read(buffer);
-        Message m;
-        m.raw = beast::buffers_to_string(buffer.data());
-        m.binary = m_ws.got_binary();
-        if (m.binary) {
-            m.frame = decodeFrame(m.raw);  // its jpeg view is not used after the move; see jpegOf
-        } else {
-            m.text = json::parse(m.raw);
-        }
-        return m;
-    }
-    // Next text message (binary frames before it are collected into `frames`).
-    json receiveText(std::vector<Message>* frames = nullptr)
-    {
-        for (;;) {
-            Message m = receive();
-            if (!m.binary)
-                return m.text;
-            if (frames)
-                frames->push_back(std::move(m));
-        }
-    }
-    void hello()
-    {
-        send({{"type", "hello"}, {"protocol", 1}});
-        const json reply = receiveText();
-        ASSERT_EQ(reply["type"], "hello") << reply.dump();
-        ASSERT_EQ(reply["protocol"], 1);
-        ASSERT_TRUE(reply["session"].is_string());
-    }
-    // Frames until the converged one of state `id` (frames of other ids are returned too).
-    std::vector<Message> framesUntilConverged(int64_t id)
-    {
-        std::vector<Message> frames;
-        for (;;) {
-            Message m = receive();
-            if (!m.binary)
-                throw std::runtime_error("unexpected text message: " + m.raw);
-            const bool done = m.frame.header["id"] == id && m.frame.header["converged"] == true;
-            frames.push_back(std::move(m));
-            if (done)
-                return frames;
-        }
-    }
-    void close() { m_ws.close(websocket::close_code::normal); }
-    websocket::stream<tcp::socket>& stream() { return m_ws; }
-
-private:
-    net::io_context m_ioc;
-    websocket::stream<tcp::socket> m_ws;
-};
-
-json smallState(double azimuthDeg = 30, const std::string& colorMap = "viridis", int passes = 2)
-{
-    return {{"version", 1},
-            {"step", 1},
-            {"camera", {{"azimuthDeg", azimuthDeg}, {"elevationDeg", 20}, {"distanceKm", 20000}, {"fovYDeg", 40}}},
-            {"image", {{"width", 128}, {"height", 96}}},
-            {"color", {{"variable", "temperature"}, {"colorMap", colorMap}, {"opacity", {{0, 0.1}, {1, 0.9}}}}},
-            {"passes", passes}};
-}
-
-std::string jpegOf(const WsClient::Message& m)
-{
-    const auto& h = m.frame.header;
-    const size_t headerBytes = m.raw.size() - h["jpegBytes"].get<size_t>() - h["depthBytes"].get<size_t>() - 4;
-    return m.raw.substr(4 + headerBytes, h["jpegBytes"].get<size_t>());
-}
 
 // ---------------------------------------------------------------------------------------------
 

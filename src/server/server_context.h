@@ -1,0 +1,149 @@
+// What every connection of one `raypc serve` shares: the options, the dataset and its caches, the
+// thread pools the work runs on, the registry of render sessions, and the accounting behind the
+// limits of limits.h. Internal to the server library (Asio types are allowed here; nothing outside
+// src/server includes this header).
+//
+// Thread safety: the options, dataset, caches, token, assets and API context are set before the first
+// connection and only read after; the caches are thread-safe; every other member guards itself.
+#pragma once
+
+#include "server/access.h"
+#include "server/dataset_api.h"
+#include "server/limits.h"
+#include "server/render_session.h"
+#include "server/server.h"
+#include "server/step_cache.h"
+
+#include <boost/asio/thread_pool.hpp>
+
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace raypc::server {
+
+// A pool of threads for one kind of work, and how many jobs it holds (running or waiting).
+class JobLane {
+public:
+    JobLane(const char* name, int threads, size_t maxJobs) : m_name(name), m_pool(size_t(threads)), m_maxJobs(maxJobs) {}
+    const char* name() const { return m_name; }
+    boost::asio::thread_pool& pool() { return m_pool; }
+    // Counts a job in; false (nothing counted) when the lane already holds its maximum.
+    bool tryEnter()
+    {
+        size_t n = m_jobs.load();
+        do {
+            if (n >= m_maxJobs)
+                return false;
+        } while (!m_jobs.compare_exchange_weak(n, n + 1));
+        return true;
+    }
+    void leave() { --m_jobs; }
+    size_t maxJobs() const { return m_maxJobs; }
+
+private:
+    const char* m_name;
+    boost::asio::thread_pool m_pool;
+    size_t m_maxJobs;
+    std::atomic<size_t> m_jobs{0};
+};
+
+// The cancellation flags of the API jobs in flight, so that shutdown stops them all at once.
+class JobRegistry {
+public:
+    // A flag for a new job; already set when the server is stopping.
+    std::shared_ptr<std::atomic<bool>> add()
+    {
+        auto flag = std::make_shared<std::atomic<bool>>(false);
+        std::lock_guard lock(m_mutex);
+        std::erase_if(m_flags, [](const auto& w) { return w.expired(); });
+        if (m_stopping)
+            flag->store(true);
+        m_flags.push_back(flag);
+        return flag;
+    }
+    void cancelAll()
+    {
+        std::lock_guard lock(m_mutex);
+        m_stopping = true;
+        for (const auto& weak : m_flags)
+            if (auto flag = weak.lock())
+                flag->store(true);
+    }
+
+private:
+    std::mutex m_mutex;
+    bool m_stopping = false;
+    std::vector<std::weak_ptr<std::atomic<bool>>> m_flags;
+};
+
+// The frame memory reserved by the sessions (ServerLimits::sessionFrameBytes).
+class FrameBudget {
+public:
+    explicit FrameBudget(size_t limitBytes) : m_limit(limitBytes) {}
+    // Replaces a session's reservation `held` by `wanted` bytes if the total stays within the limit;
+    // otherwise returns false and leaves everything as it was. `othersBytes` receives what the other
+    // sessions hold (for the error message).
+    bool replace(size_t& held, size_t wanted, size_t& othersBytes)
+    {
+        std::lock_guard lock(m_mutex);
+        othersBytes = m_used - held;
+        if (othersBytes + wanted > m_limit)
+            return false;
+        m_used = othersBytes + wanted;
+        held = wanted;
+        return true;
+    }
+    void release(size_t& held)
+    {
+        std::lock_guard lock(m_mutex);
+        m_used -= held;
+        held = 0;
+    }
+    size_t limit() const { return m_limit; }
+
+private:
+    std::mutex m_mutex;
+    size_t m_limit, m_used = 0;
+};
+
+struct ServerContext {
+    explicit ServerContext(ServerOptions serverOptions)
+        : options(std::move(serverOptions)),
+          frameBudget(options.limits.sessionFrameBytes),
+          screenshots("screenshots", 1, 1 + options.limits.maxWaitingJobs),
+          statistics("statistics", 1, 1 + options.limits.maxWaitingJobs)
+    {
+    }
+
+    ServerOptions options;
+    FrameBudget frameBudget;
+    std::shared_ptr<const Dataset> dataset;
+    std::unique_ptr<StepCache> cache;
+    std::unique_ptr<PathlineCache> pathlines;
+    ApiContext api;
+    RenderContext render;
+    std::string token;  // empty on loopback
+    SitePolicy site;
+    std::optional<std::filesystem::path> assets;
+
+    // Where work runs besides the network thread (docs/reliability.md, Server): the quick API
+    // requests; screenshots and statistics over time one at a time each, so that neither can hold up
+    // the quick requests or the other; the WebSocket messages (parsing, validation, hand-over to the
+    // render thread), which never wait behind an API request.
+    JobLane screenshots, statistics;
+    JobLane workers{"workers", 2, SIZE_MAX};
+    boost::asio::thread_pool messages{1};
+    JobRegistry jobs;
+
+    std::atomic<size_t> openConnections{0}, openSessions{0};
+    std::atomic<uint64_t> sessionCounter{0};
+    // Every session's render work, so that shutdown can stop it before the io_context goes away.
+    std::mutex sessionsMutex;
+    std::vector<std::weak_ptr<RenderSession>> sessions;
+};
+
+}  // namespace raypc::server
