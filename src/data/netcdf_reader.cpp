@@ -29,6 +29,30 @@ std::mutex& netcdfMutex()
 
 std::string errorText(int status) { return nc_strerror(status); }
 
+// netCDF-C reads past the end of a truncated classic file without an error (the missing bytes
+// come back as zeros), and allocates what a header claims (a variable of 10^9 dimensions) before
+// reading it. So a classic file's header is walked first, allocating nothing it claims, and the
+// file's size compared with where the header says the data ends.
+void checkClassicFileSize(const std::filesystem::path& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    if (!in)
+        fail("{}: cannot open for reading", path.string());
+    char magic[4] = {};
+    in.read(magic, 4);
+    if (in.gcount() != 4 || std::string_view(magic, 3) != "CDF")
+        return;  // netCDF-4 (HDF5) or not netCDF: nc_open says which
+    in.seekg(0);
+    const uint64_t needed = classicDataEndBytes(in, path.string());
+    std::error_code ec;
+    const uintmax_t size = std::filesystem::file_size(path, ec);
+    if (ec)
+        fail("{}: cannot read the file size: {}", path.string(), ec.message());
+    if (size < needed)
+        fail("{}: truncated: the file has {} bytes, its header places data up to byte {}", path.string(), size,
+             needed);
+}
+
 // An open file that closes itself.
 class NcFile {
 public:
@@ -39,6 +63,7 @@ public:
             fail("{}: no such file", path.string());
         if (std::filesystem::is_directory(path, ec))
             fail("{}: is a directory, expected a netCDF file", path.string());
+        checkClassicFileSize(path);
         const int status = nc_open(path.c_str(), NC_NOWRITE, &m_id);
         if (status != NC_NOERR) {
             if (status == NC_ENOTNC)
@@ -349,34 +374,12 @@ std::optional<double> defaultFillValue(const NcFile& file, int varId)
     }
 }
 
-// netCDF-C reads past the end of a truncated classic file without an error (the missing bytes
-// come back as zeros), so compare the file's size with where its header says the data ends.
-void checkClassicFileSize(const NcFile& file)
-{
-    int fmt = 0;
-    file.check(nc_inq_format(file.id(), &fmt), "reading the format");
-    if (fmt != NC_FORMAT_CLASSIC && fmt != NC_FORMAT_64BIT_OFFSET && fmt != NC_FORMAT_CDF5)
-        return;
-    std::ifstream in(file.path(), std::ios::binary);
-    if (!in)
-        fail("{}: cannot open for reading", file.path().string());
-    const uint64_t needed = classicDataEndBytes(in, file.path().string());
-    std::error_code ec;
-    const uintmax_t size = std::filesystem::file_size(file.path(), ec);
-    if (ec)
-        fail("{}: cannot read the file size: {}", file.path().string(), ec.message());
-    if (size < needed)
-        fail("{}: truncated: the file has {} bytes, its header places data up to byte {}", file.path().string(),
-             size, needed);
-}
-
 }  // namespace
 
 FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& options)
 {
     std::lock_guard lock(netcdfMutex());
     NcFile file(path);
-    checkClassicFileSize(file);
     const auto h = readAxes(file, options);
     FileHeader header;
     header.grid = h.grid;
@@ -393,7 +396,6 @@ Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& op
 {
     std::lock_guard lock(netcdfMutex());
     NcFile file(path);
-    checkClassicFileSize(file);
     const auto h = readAxes(file, options);
     Snapshot snapshot;
     snapshot.grid = h.grid;

@@ -64,7 +64,7 @@ ClientMessage parseClientMessage(std::string_view text)
     json message;
     try {
         message = json::parse(text);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number such as 1e999
         fail("malformed JSON: {}", e.what());
     }
     if (!message.is_object())
