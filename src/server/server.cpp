@@ -501,7 +501,7 @@ private:
                         render::StateRenderer renderer(m_server.dataset, m_server.render.sources());
                         const auto still = renderer.renderStill(*resolved);
                         const render::FrameBuffer& frame = still.frame;
-                        std::string png = encodePng(frame.resolveRgba8(resolved->state.background), frame.width(),
+                        std::string png = encodePng(renderer.picture(frame, *resolved, true), frame.width(),
                                                     frame.height());
                         spdlog::info("screenshot: step {} {}x{} {} passes at level 0 in {:.0f} ms", resolved->state.step,
                                      frame.width(), frame.height(), frame.passes(),
