@@ -5,7 +5,6 @@
 import { fetchPresets, fetchSample, type Info, type Preset } from './api';
 import { setUpCameraInput } from './camera_input';
 import { ContextPanel, showLegends, type LegendEntry } from './context_panel';
-import { sampleColorMap } from './colormaps';
 import { download, maxImageSide, setUpControls, syncControls, writeStateToUrl } from './controls';
 import { ParallelCoordinates } from './parcoords';
 import { PathlinePanel } from './pathline_panel';
@@ -13,7 +12,8 @@ import { Playback } from './playback';
 import { RenderLink } from './render_link';
 import { setUpScreenshot } from './screenshot';
 import { SelectionPanel } from './selection_panel';
-import { cloneState, type Brush } from './state';
+import { describePreset } from './presets';
+import { type Brush } from './state';
 import { StateStore } from './store';
 import { TfPanel } from './tf_panel';
 import { displayUnits } from './units';
@@ -68,6 +68,7 @@ export class App {
     this.tf = new TfPanel(store, {
       commit: (i) => this.commit(i),
       showError: (m) => this.showError(m),
+      setStatusNote: (t) => this.setStatusNote(t),
       coloursChanged: () => this.updateLineColors(),
       variableChanged: () => this.pathlines.variableChanged(),
     });
@@ -75,10 +76,23 @@ export class App {
       onBrush: (brushes, interactive) => this.onBrush(brushes, interactive),
       afterFrame: (draw) => this.link.afterFrameShown(draw),
     });
-    this.pathlines = new PathlinePanel(store, { commit: (i) => this.commit(i), showError: (m) => this.showError(m) });
+    this.pathlines = new PathlinePanel(store, {
+      commit: (i) => this.commit(i),
+      showError: (m) => this.showError(m),
+      linesLoaded: () => this.updateLegends(),
+    });
     this.context = new ContextPanel(store, { commit: (i) => this.commit(i), showError: (m) => this.showError(m) });
     this.selection = new SelectionPanel(store, {
       showError: (m) => this.showError(m),
+      setBrush: (name, range) => {
+        const brushes = store.state.brushes.filter((b) => b.name !== name);
+        if (range) {
+          const at = store.state.brushes.findIndex((b) => b.name === name);
+          brushes.splice(at < 0 ? brushes.length : at, 0, { name, min: range[0], max: range[1] });
+        }
+        this.pc.setBrushes(brushes);
+        this.onBrush(brushes, false);
+      },
       playing: () => this.playback.playing,
       selectionChanged: () => this.updateStatus(),
     });
@@ -113,6 +127,14 @@ export class App {
       fileStem: () => `raypc-step${store.state.step}`,
     });
     setUpCameraInput(this.link.view.canvas, store, (i) => this.commit(i));
+    // Escape clears the brushes (outside text fields, where it belongs to the field).
+    document.addEventListener('keydown', (e) => {
+      const t = e.target as HTMLElement;
+      if (e.key === 'Escape' && !(t instanceof HTMLInputElement && t.type !== 'checkbox') && store.state.brushes.length && !document.querySelector('dialog[open]')) {
+        this.pc.setBrushes([]);
+        this.onBrush([], false);
+      }
+    });
     new ResizeObserver(() => this.onResize()).observe($('viewPanel'));
   }
 
@@ -162,7 +184,8 @@ export class App {
     if (s.legend) {
       const v = this.store.variableInfo();
       const units = displayUnits(v.units);
-      entries.push({ title: units ? `${v.name} [${units}]` : v.name, colorMap: s.color.colorMap, range: this.store.effectiveRange() });
+      const colourOf = this.store.colourOf();
+      entries.push({ title: units ? `${v.name} [${units}]` : v.name, colourAt: (u) => colourOf(this.store.valueAt(u)), valueAt: (u) => this.store.valueAt(u) });
       const pl = this.pathlines.legend();
       if (pl) entries.push(pl);
     }
@@ -201,26 +224,25 @@ export class App {
       .catch((e) => this.showError((e as Error).message));
   }
 
-  // A preset replaces colours, opacity, brushes, camera, shading and core; the current step (presets
-  // are written for one time but the criteria apply to every step, and the dataset may have fewer
-  // steps), the image size (it follows the window), the level, and the pathlines when the preset has
-  // none (version 1) stay as they are.
+  // A preset sets everything it names and resets the rest to the defaults (pathlines off unless it
+  // names them, the level, reference geometry, …), its step included (the figures of docs/tasks.md
+  // are of that step; a dataset with fewer steps shows its last one, and the note says so). Only the
+  // image size stays: it follows the view.
   applyPreset(p: Preset): void {
     try {
       const state = this.store.state;
       const doc = { ...(p.state as Record<string, unknown>) };
-      doc.step = state.step;
+      const last = this.info.steps.length - 1;
+      const asked = typeof doc.step === 'number' ? doc.step : 0;
+      doc.step = Math.min(asked, last);
       doc.image = { ...state.image };
-      doc.level = state.level;
-      if (state.pathlines && !('pathlines' in doc)) {
-        doc.pathlines = cloneState(state).pathlines;
-        doc.version = state.version;
-      }
       const fit = this.store.autoFitImage;
       this.loadState(doc);
       this.store.autoFitImage = fit;
       for (const b of document.querySelectorAll<HTMLButtonElement>('#presets button'))
         b.classList.toggle('active', b.dataset.preset === p.name);
+      const note = describePreset(this.store.state, this.store.axes());
+      $('presetNote').textContent = `${p.title}: ${note}${asked > last ? ` (written for step ${asked}; this dataset ends at step ${last})` : ''}`;
       this.setStatusNote(`preset ${p.title}`);
     } catch (e) {
       this.showError(`preset ${p.name}: ${(e as Error).message}`);
@@ -288,13 +310,13 @@ export class App {
 
   // The lines of the sample coloured as the volume.
   private updateLineColors(): void {
-    const name = this.store.state.color.variable, map = this.store.state.color.colorMap;
-    const [lo, hi] = this.store.effectiveRange();
+    const name = this.store.state.color.variable;
+    const colourOf = this.store.colourOf();
     const palette = Array.from({ length: 64 }, (_, i) => {
-      const [r, g, b] = sampleColorMap(map, i / 63);
+      const [r, g, b] = colourOf(this.store.valueAt(i / 63));
       return `rgb(${Math.round(r * 255)},${Math.round(g * 255)},${Math.round(b * 255)})`;
     });
-    this.pc.setColor((row) => palette[Math.min(63, Math.max(0, Math.round(((row[name] - lo) / (hi - lo)) * 63))) || 0]);
+    this.pc.setColor((row) => palette[Math.min(63, Math.max(0, Math.round(this.store.positionOf(row[name]) * 63))) || 0]);
   }
 
   // ---- time --------------------------------------------------------------------------------
@@ -311,7 +333,8 @@ export class App {
 
   private updateStepLabel(): void {
     const s = this.info.steps[this.store.state.step];
-    $('stepLabel').textContent = s ? `step ${s.index + 1} / ${this.info.steps.length} · ${s.timeMyr.toFixed(1)} Myr` : '';
+    // Steps are numbered from 0 everywhere: the state's step, file names, `raypc render --time`.
+    $('stepLabel').textContent = s ? `step ${s.index} of 0–${this.info.steps.length - 1} · ${s.timeMyr.toFixed(1)} Myr` : '';
   }
 
   // ---- status ------------------------------------------------------------------------------
@@ -326,7 +349,7 @@ export class App {
     const parts: string[] = [];
     if (h) {
       const st = h.stats ?? {};
-      parts.push(`frame ${h.id}`, `step ${h.step + 1}`, `level ${h.level}`, `pass ${h.pass}/${h.passes}${h.converged ? ' ✓' : ''}`);
+      parts.push(`frame ${h.id}`, `step ${h.step}`, `level ${h.level}`, `pass ${h.pass}/${h.passes}${h.converged ? ' ✓' : ''}`);
       if (st.passMs !== undefined) parts.push(`${st.passMs.toFixed(1)} ms/pass`);
       if (st.samplesPerSecond !== undefined) parts.push(`${(st.samplesPerSecond / 1e6).toFixed(1)} M samples/s`);
       if (st.bricksTotal) parts.push(`${(((st.bricksSkipped ?? 0) / st.bricksTotal) * 100).toFixed(0)} % bricks skipped`);

@@ -6,12 +6,15 @@ import ParCoords from 'parcoord-es';
 import * as d3 from 'd3';
 import type { Brush } from './state';
 import type { Sample } from './api';
+import { displayUnits } from './units';
 
 export interface AxisInfo {
   name: string;
   units: string;
   min: number;
   max: number;
+  // Names of integer values (a categorical axis such as the seed kind): ticks at those values.
+  categories?: Record<number, string>;
 }
 
 export interface ParcoordsOptions {
@@ -49,10 +52,8 @@ const kShortNames: Record<string, string> = {
   'radial velocity': 'v radial',
   'velocity magnitude': '|v|',
 };
-const kShortUnits: Record<string, string> = { degrees_north: '°N', degrees_east: '°E', 'kg/m^3': 'kg/m³' };
-
 export function axisTitle(a: AxisInfo): string {
-  const units = kShortUnits[a.units] ?? a.units;
+  const units = displayUnits(a.units);
   // Pathline attributes: "start temperature anomaly" -> "start T anomaly".
   const m = /^(start|end) (.*)$/.exec(a.name);
   const name = kShortNames[a.name] ?? (m && kShortNames[m[2]] ? `${m[1]} ${kShortNames[m[2]]}` : a.name);
@@ -163,6 +164,7 @@ export class ParallelCoordinates {
     } finally {
       this.suppress--;
     }
+    this.drawBrushLabels();
   }
 
   private applyBrushes(brushes: Brush[]): void {
@@ -178,7 +180,8 @@ export class ParallelCoordinates {
     const brushes = this.pc ? this.brushes() : this.pending;
     if (this.pc) this.order = this.pc.getOrderedDimensionKeys();
     this.container.innerHTML = '';
-    const margin = { top: 34, right: 30, bottom: 14, left: 30 };
+    // Wide enough side margins that the first and last (centred) titles are not cut off.
+    const margin = { top: 34, right: 64, bottom: 14, left: 48 };
     const plotH = h - margin.top - margin.bottom;
     const order = this.order ?? this.axes.map((a) => a.name);
     const dimensions: Record<string, unknown> = {};
@@ -186,9 +189,11 @@ export class ParallelCoordinates {
       const a = this.axes.find((x) => x.name === name);
       if (!a) return;
       const lo = a.min, hi = a.max > a.min ? a.max : a.min + 1;
+      const categories = a.categories;
       dimensions[name] = {
         title: axisTitle(a),
-        tickFormat: tickFormatFor(lo, hi),
+        tickFormat: categories ? (v: number) => categories[v] ?? '' : tickFormatFor(lo, hi),
+        ...(categories ? { tickValues: Object.keys(categories).map(Number).filter((v) => v >= lo && v <= hi) } : {}),
         type: 'number',
         index,
         yscale: d3.scaleLinear().domain([lo, hi]).range([plotH + 1, 1]),
@@ -214,6 +219,7 @@ export class ParallelCoordinates {
     } finally {
       this.suppress--;
     }
+    this.drawBrushLabels();
     // Titles carry units; stagger every other one so neighbours do not overlap; full name as tooltip.
     d3.select(this.container).selectAll<SVGTextElement, string>('text.label')
       .style('font-size', '11px')
@@ -221,7 +227,7 @@ export class ParallelCoordinates {
       .each((d, i, nodes) => {
         const a = this.axes.find((x) => x.name === d);
         d3.select(nodes[i].parentNode as SVGGElement).append('title')
-          .text(a ? `${a.name} [${a.units}]: drag vertically on the axis to brush, drag the title to reorder` : d);
+          .text(a ? `${a.name} [${displayUnits(a.units)}]: drag vertically on the axis to brush, drag the title to reorder` : d);
       });
   }
 
@@ -309,8 +315,26 @@ export class ParallelCoordinates {
     this.channel.port2.postMessage(0);
   }
 
+  // Each brush's min and max as text at its ends, in the axis' tick format.
+  private drawBrushLabels(): void {
+    if (!this.pc) return;
+    const dims = this.pc.dimensions() as Record<string, { yscale: (v: number) => number }>;
+    const brushes = new Map(this.brushes().map((b) => [b.name, b]));
+    d3.select(this.container).selectAll<SVGGElement, string>('g.dimension').each((name, i, nodes) => {
+      const g = d3.select(nodes[i]);
+      g.selectAll('text.brushLabel').remove();
+      const b = brushes.get(name), dim = dims[name];
+      if (!b || !dim) return;
+      const a = this.axes.find((x) => x.name === name);
+      const format = tickFormatFor(a?.min ?? b.min, a?.max ?? b.max);
+      for (const [v, dy] of [[b.max, -4], [b.min, 12]] as const)
+        g.append('text').attr('class', 'brushLabel').attr('x', 9).attr('y', dim.yscale(v) + dy).text(format(v));
+    });
+  }
+
   private emit(interactive: boolean): void {
     if (this.suppress) return;
+    this.drawBrushLabels();
     const t0 = performance.now();
     this.timing.brushEvents++;
     this.dragging = interactive;

@@ -11,9 +11,14 @@ import { displayUnits } from './units';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
 
+// The seed kinds of docs/format.md (critical points of the seeding field), by their stored value.
+const kSeedKinds: Record<number, string> = { 0: 'minimum', 1: '1-saddle', 2: '2-saddle', 3: 'maximum', 4: 'multi-saddle' };
+
 export interface PathlinePanelHost {
   commit(interactive: boolean): void;
   showError(message: string): void;
+  // The lines' attributes arrived (the legend of an attribute colouring needs their range).
+  linesLoaded(): void;
 }
 
 export interface PathlineCount {
@@ -63,6 +68,8 @@ export class PathlinePanel {
         this.updateColorOptions();
         this.updateLineColors();
         this.updateLineCount();
+        $('plEmpty').hidden = true;
+        this.host.linesLoaded();
       })
       .catch((e) => { if (!ctl.signal.aborted) { this.key = ''; this.host.showError((e as Error).message); } });
   }
@@ -94,6 +101,7 @@ export class PathlinePanel {
       }
       if (!(lo <= hi)) { lo = 0; hi = 1; }
       for (const f of pl.filters) if (f.name === name) { lo = Math.min(lo, f.min); hi = Math.max(hi, f.max); }
+      if (name === 'seed kind') return [{ name, units: '', min: -0.2, max: 4.2, categories: kSeedKinds }];
       return [{ name, units: d.units[k] ?? '', min: lo, max: hi > lo ? hi : lo + 1 }];
     });
   }
@@ -195,7 +203,8 @@ export class PathlinePanel {
     if (pl.colorBy === 'age') {
       const steps = this.store.info.steps;
       const stepMyr = steps.length > 1 ? (steps[steps.length - 1].timeMyr - steps[0].timeMyr) / (steps.length - 1) : 0;
-      return { title: 'pathline age [Myr]', colorMap: map, range: pl.range ?? [0, pl.window * stepMyr || 1] };
+      const [lo, hi] = (pl.range as [number, number] | null) ?? [0, pl.window * stepMyr || 1];
+      return { title: 'pathline age [Myr]', colourAt: (u) => sampleColorMap(map, u), valueAt: (u) => lo + u * (hi - lo) };
     }
     const d = this.data;
     const k = d ? d.columns.indexOf(pl.colorBy) : -1;
@@ -207,12 +216,15 @@ export class PathlinePanel {
     }
     if (!range) return null;
     const units = d && k >= 0 ? displayUnits(d.units[k] ?? '') : '';
-    return { title: `pathlines: ${pl.colorBy}${units ? ` [${units}]` : ''}`, colorMap: map, range };
+    const [lo, hi] = range;
+    return { title: `pathlines: ${pl.colorBy}${units ? ` [${units}]` : ''}`, colourAt: (u) => sampleColorMap(map, u), valueAt: (u) => lo + u * (hi - lo) };
   }
 
   showTab(pathlines: boolean): void {
     $('parcoords').hidden = pathlines;
     $('plParcoords').hidden = !pathlines;
+    // Until lines are shown the tab says how to get them instead of staying blank.
+    $('plEmpty').hidden = !pathlines || Boolean(this.pathlines?.visible && this.data);
     $('pcTabVolume').classList.toggle('active', !pathlines);
     $('pcTabPathlines').classList.toggle('active', pathlines);
   }
