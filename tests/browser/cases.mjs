@@ -1,14 +1,16 @@
 // End-to-end browser tests of the UI against the real server:
 //   node tests/browser/cases.mjs CASE RAYPC FIXTURE_DIR
 // CASE: brush | warp | play | save_load | two_tabs | presets | pathlines | resolution | context | colours |
-// brush_values | camera.
+// brush_values | camera | responsive [gpu].
 // Each case starts its own server and browser.
 import { readFileSync, writeFileSync } from 'node:fs';
 import { spawnSync } from 'node:child_process';
 import { join } from 'node:path';
 import { check, meanAbsDiff, openUi, postJson, runCase, standardView, TestFailure, viewPixels, waitConverged } from './harness.mjs';
 
-const [caseName, raypc, fixture] = process.argv.slice(2);
+// A fourth argument `gpu` runs chromium with GPU rasterisation on a software GL (SwiftShader), as a
+// machine without a GPU does, instead of --disable-gpu (ctest runs every case both ways).
+const [caseName, raypc, fixture, mode] = process.argv.slice(2);
 
 const frames = () => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
 const rState = (page) => page.evaluate(() => window.__raypc.state());
@@ -638,6 +640,40 @@ const cases = {
     check(c.azimuthDeg !== def.azimuthDeg && c.distanceKm < def.distanceKm, `keys: azimuth ${def.azimuthDeg} -> ${c.azimuthDeg}, distance ${def.distanceKm} -> ${c.distanceKm}`);
   },
 
+  // Responsiveness with 100 000 lines: the page answers a click within 1 s while the lines are
+  // being drawn — right after the sample arrived and right after a brush release (run with GPU
+  // rasterisation on by ctest's browser.gpu.responsive, where it used to stall for minutes).
+  async responsive({ context, url }) {
+    const t0 = Date.now();
+    const page = await openUi(context, url, { timeoutMs: 60000 });
+    await page.waitForFunction(() => window.__raypc.sampleStep >= 0, null, { timeout: 60000 });
+    const rows = await page.evaluate(() => window.__raypc.parcoords.rowCount);
+    check(rows >= 50000, `the sample has ${rows} rows, expected the 100 000 asked for (at least 50 000)`);
+    // From the click's input event (its timeStamp, when it was sent) to the first frame painted
+    // after the page handled it: what the user waits for.
+    await page.evaluate(() => {
+      window.addEventListener('click', (e) => {
+        const t0 = e.timeStamp;
+        requestAnimationFrame(() => { window.__clickMs = performance.now() - t0; });
+      }, true);
+    });
+    const clickMs = async (id, key) => {
+      const before = await page.evaluate((k) => window.__raypc.state()[k], key);
+      await page.locator(id).scrollIntoViewIfNeeded();
+      const box = await page.locator(id).boundingBox();
+      await page.evaluate(() => { window.__clickMs = undefined; });
+      await page.mouse.click(box.x + box.width / 2, box.y + box.height / 2);
+      await page.waitForFunction(([k, b]) => window.__raypc.state()[k] !== b && window.__clickMs !== undefined, [key, before], { timeout: 30000, polling: 20 });
+      return Math.round(await page.evaluate(() => window.__clickMs));
+    };
+    const atOpen = await clickMs('#legend', 'legend');
+    await page.locator('#parcoords').scrollIntoViewIfNeeded();
+    await brushAxis(page, 'temperature', 0.2, 0.6);
+    const afterBrush = await clickMs('#legend', 'legend');
+    console.log(`  ${rows} lines; opened in ${Date.now() - t0} ms; click answered in ${atOpen} ms while the lines were drawn, ${afterBrush} ms after a brush release`);
+    check(atOpen < 1000 && afterBrush < 1000, `a click took ${atOpen} ms while the lines were drawn and ${afterBrush} ms after a brush release (limit 1000 ms)`);
+  },
+
   // Pathlines: showing them changes the image; the second parallel-coordinates plot holds one line
   // per pathline of the window; brushing its length axis sets state.pathlines.filters, lowers the
   // visible-line count and changes the image.
@@ -719,6 +755,7 @@ const cases = {
 // Chromium context options per case (default: 1280x860 at devicePixelRatio 1).
 const caseOptions = {
   resolution: { contextOptions: { viewport: { width: 1000, height: 700 }, deviceScaleFactor: 2 } },
+  responsive: { sampleRows: 100000, limitMs: 150000 },
 };
 
 const body = cases[caseName];
@@ -726,4 +763,4 @@ if (!body) {
   console.error(`unknown case '${caseName}'; cases: ${Object.keys(cases).join(', ')}`);
   process.exit(2);
 }
-runCase(caseName, raypc, fixture, body, caseOptions[caseName] ?? {});
+runCase(mode === 'gpu' ? `${caseName} (gpu)` : caseName, raypc, fixture, body, { ...(caseOptions[caseName] ?? {}), gpu: mode === 'gpu' });

@@ -51,7 +51,7 @@ function waitForUrl(proc, timeoutMs) {
 // `contextOptions` go to chromium's context (e.g. a viewport or deviceScaleFactor); `gpu` runs
 // chromium with GPU rasterisation on a software GL (SwiftShader), as on a machine without a GPU,
 // instead of --disable-gpu.
-export async function runCase(name, raypc, fixture, body, { limitMs = 100000, contextOptions = {}, gpu = false } = {}) {
+export async function runCase(name, raypc, fixture, body, { limitMs = 100000, contextOptions = {}, gpu = false, sampleRows = 5000 } = {}) {
   const started = Date.now();
   let server = null, context = null, tmp = null;
   const cleanup = async () => {
@@ -79,7 +79,7 @@ export async function runCase(name, raypc, fixture, body, { limitMs = 100000, co
 
     tmp = mkdtempSync(join(tmpdir(), `raypc-browser-${name}-`));
     const dataset = join(tmp, 'ds');
-    const pre = spawnSync(raypc, ['preprocess', fixture, '-o', dataset, '--quiet', '--sample-rows', '5000'], { encoding: 'utf8', timeout: 60000 });
+    const pre = spawnSync(raypc, ['preprocess', fixture, '-o', dataset, '--quiet', '--sample-rows', String(sampleRows)], { encoding: 'utf8', timeout: 60000 });
     check(pre.status === 0, `raypc preprocess failed (${pre.status}): ${pre.stderr}`);
 
     server = spawn(raypc, ['serve', dataset, '--port', '0', '--assets', dist, '--examples', join(repoRoot, 'examples')], { stdio: ['ignore', 'pipe', 'pipe'] });

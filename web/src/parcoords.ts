@@ -43,6 +43,26 @@ type Row = Record<string, number>;
 const kSliceMs = 6;
 const kDragLines = 5000;
 
+// Chromium rasterises 2D canvases on the GPU when it can. With only a software GL (SwiftShader, what a
+// machine without a GPU has when GPU rasterisation is on) drawing 100 000 polylines there stalled
+// the page for minutes ("GPU stall due to ReadPixels"; issue 12). A context asked for with
+// willReadFrequently stays in CPU memory and is drawn by Skia's software rasteriser, in the time
+// budget of a slice, GPU rasterisation on or off. parcoord-es creates its layers' contexts itself,
+// synchronously in its constructor: they are asked for with that option while `make` runs.
+function withCpuCanvases<T>(make: () => T): T {
+  const proto = HTMLCanvasElement.prototype;
+  const original = proto.getContext;
+  const patched = function (this: HTMLCanvasElement, type: string, options?: Record<string, unknown>) {
+    return original.call(this, type, type === '2d' ? { ...options, willReadFrequently: true } : options);
+  };
+  proto.getContext = patched as typeof original;
+  try {
+    return make();
+  } finally {
+    proto.getContext = original;
+  }
+}
+
 // Short axis titles for the long dataset names (the full name is the axis' tooltip).
 const kShortNames: Record<string, string> = {
   'temperature anomaly': 'T anomaly',
@@ -202,7 +222,8 @@ export class ParallelCoordinates {
     });
     this.suppress++;
     try {
-      this.pc = ParCoords({ width: w, height: h, margin, alpha: this.options.alpha ?? 0.06, alphaOnBrushed: (this.options.alpha ?? 0.06) / 2, lineWidth: 1 })(this.container);
+      this.pc = withCpuCanvases(() => ParCoords({ width: w, height: h, margin, alpha: this.options.alpha ?? 0.06,
+        alphaOnBrushed: (this.options.alpha ?? 0.06) / 2, lineWidth: 1 })(this.container));
       this.installRenderer();
       this.pc
         .data(this.rows)
@@ -310,7 +331,16 @@ export class ParallelCoordinates {
     this.yieldThen(slice);
   }
 
+  // The next slice runs as a background-priority task where the browser has the Prioritized Task
+  // Scheduling API (Chromium): input, rendering and frames from the server go first, so a click is
+  // answered while 100 000 lines are drawn. Elsewhere a MessageChannel message (a task, without
+  // setTimeout's clamping).
   private yieldThen(f: () => void): void {
+    const scheduler = (globalThis as unknown as { scheduler?: { postTask(cb: () => void, o: { priority: string }): Promise<void> } }).scheduler;
+    if (scheduler) {
+      void scheduler.postTask(f, { priority: 'background' });
+      return;
+    }
     this.slices.push(f);
     this.channel.port2.postMessage(0);
   }
