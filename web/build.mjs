@@ -1,12 +1,13 @@
 // Bundles the UI into web/dist: dist/app.js (esbuild, ES2020, minified, with a source map),
-// dist/app.css (our styles followed by parcoord-es's), dist/index.html. First it generates the
+// dist/app.css (our styles followed by parcoord-es's), dist/index.html, dist/coastlines.json. First it generates the
 // state document's modules from its JSON Schema (generateStateModules); `node build.mjs --generate`
 // does only that (for the type check). Imported (by tests/state_schema), it only exports.
 import { build } from 'esbuild';
 import Ajv from 'ajv';
 import standaloneCode from 'ajv/dist/standalone/index.js';
 import { compile } from 'json-schema-to-typescript';
-import { existsSync, mkdirSync, readFileSync, writeFileSync, copyFileSync } from 'node:fs';
+import { mesh } from 'topojson-client';
+import { existsSync, mkdirSync, readFileSync, renameSync, writeFileSync, copyFileSync } from 'node:fs';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
@@ -78,7 +79,27 @@ async function bundle() {
   copyFileSync(join(here, 'src/index.html'), join(dist, 'index.html'));
 }
 
+// The coastlines of the Earth's land for the reference geometry (docs/state.md, reference.coastlines):
+// Natural Earth 1:110m from the npm package world-atlas, merged into lines by topojson-client's mesh
+// (shared borders once), written as dist/coastlines.json {"source", "lines": [[lon, lat, ...], ...]},
+// rounded to 0.01 degrees. The renderer reads this file (src/render/reference_geometry.h), found
+// like the UI's assets, so `raypc render` draws the same coastlines as the UI.
+function writeCoastlines(dist) {
+  const topology = JSON.parse(readFileSync(join(here, 'node_modules/world-atlas/land-110m.json'), 'utf8'));
+  const lines = mesh(topology, topology.objects.land).coordinates
+    .map((line) => line.flatMap(([lon, lat]) => [Math.round(lon * 100) / 100, Math.round(lat * 100) / 100]))
+    .filter((line) => line.length >= 4);
+  const version = JSON.parse(readFileSync(join(here, 'node_modules/world-atlas/package.json'), 'utf8')).version;
+  const text = JSON.stringify({ source: `world-atlas ${version} land-110m (Natural Earth 1:110m), topojson-client mesh`, lines });
+  const file = join(dist, 'coastlines.json');
+  writeFileSync(`${file}.tmp`, text);
+  renameSync(`${file}.tmp`, file);
+}
+
 if (process.argv[1] === fileURLToPath(import.meta.url)) {
   await generateStateModules();
-  if (!process.argv.includes('--generate')) await bundle();
+  if (!process.argv.includes('--generate')) {
+    await bundle();
+    writeCoastlines(join(here, 'dist'));
+  }
 }

@@ -35,7 +35,7 @@ void renderDemoPicture(std::shared_ptr<const Dataset> dataset, int step, const f
     double seconds = 0;
     for (const auto& pass : still.passes)
         seconds += pass.seconds;
-    render::writePng(output, {still.frame.width(), still.frame.height(), still.frame.resolveRgba8(state.background)});
+    render::writePng(output, {still.frame.width(), still.frame.height(), renderer.picture(still.frame, resolved, true)});
     fmt::print("demo picture {}: step {}, {}x{}, {} passes in {:.2f} s\n", output.string(), step, still.frame.width(),
                still.frame.height(), still.frame.passes(), seconds);
 }

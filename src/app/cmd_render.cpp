@@ -1,6 +1,6 @@
 // raypc render DATASET --time T -o out.png [--size WxH] [--state STATE.json] [--var NAME]
 //   [--colormap NAME] [--range NAME=MIN:MAX]... [--lod N|auto] [--passes N] [--depth depth.pfm] [--stats]
-//   [--pathlines] [--pathline-radius KM]
+//   [--pathlines] [--pathline-radius KM] [--legend] [--reference shells|graticule|coastlines]...
 #include "app/command.h"
 #include "app/options.h"
 #include "core/error.h"
@@ -29,6 +29,8 @@ struct RenderArgs {
     bool stats = false;
     bool pathlines = false;
     double pathlineRadiusKm = 0;  // 0: the state's
+    bool legend = false;
+    std::vector<std::string> reference;  // shells, graticule, coastlines
 };
 
 // "1024x768" -> width, height.
@@ -121,6 +123,18 @@ void run(const RenderArgs& args)
 
     if (args.pathlines)
         state.pathlines.visible = true;
+    if (args.legend)
+        state.legend = true;
+    for (const std::string& what : args.reference) {
+        if (what == "shells")
+            state.reference.shells.visible = true;
+        else if (what == "graticule")
+            state.reference.graticule.visible = true;
+        else if (what == "coastlines")
+            state.reference.coastlines.visible = true;
+        else
+            fail("--reference '{}': expected shells, graticule or coastlines", what);
+    }
     if (args.pathlineRadiusKm != 0) {
         if (!(args.pathlineRadiusKm > 0) || !std::isfinite(args.pathlineRadiusKm))
             fail("--pathline-radius {}: expected a positive number of km", args.pathlineRadiusKm);
@@ -168,7 +182,7 @@ void run(const RenderArgs& args)
         const std::string out = frameName(args.output, step, sequence);
         if (const auto parent = std::filesystem::path(out).parent_path(); !parent.empty())
             std::filesystem::create_directories(parent);
-        writePng(out, {params.width, params.height, frame.resolveRgba8(state.background)});
+        writePng(out, {params.width, params.height, renderer.picture(frame, resolved, true)});
         if (!args.depthPath.empty())
             writePfm(frameName(args.depthPath, step, sequence), params.width, params.height, frame.averagedDepthKm());
         statsJson.push_back({{"step", step},
@@ -217,6 +231,10 @@ const CommandRegistration kRegistration(
         cmd.add_flag("--pathlines", args->pathlines,
                      "Show the pathlines injected in the last 10 steps (or the state's window) as tubes");
         cmd.add_option("--pathline-radius", args->pathlineRadiusKm, "Tube radius in km (implies --pathlines; default 12)");
+        cmd.add_flag("--legend", args->legend, "Draw colour legends (variable, units, range; pathlines' colouring)");
+        cmd.add_option("--reference", args->reference,
+                       "Reference geometry to draw: shells (410, 660, 1000, 1600, 2200 km or the state's), "
+                       "graticule, coastlines; repeatable");
         cmd.callback([args] { run(*args); });
     },
     60);

@@ -2,90 +2,93 @@
 
 #include "core/error.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
-#include <array>
 #include <cmath>
-#include <span>
 
 namespace raypc::render {
 namespace {
 
-struct Stop {
-    float u;
-    Rgb c;
+// The text of src/render/color_maps.json, compiled in (CMake writes color_maps_json.inc).
+constexpr const char* kTableJson =
+#include "color_maps_json.inc"
+    ;
+
+struct MapEntry {
+    std::string name;
+    bool diverging = false, centred = false;
+    std::vector<ColorStop> stops;
 };
 
-// Samples of matplotlib's viridis and inferno (van der Walt & Smith), ParaView's "Cool to Warm"
-// (Moreland, "Diverging Color Maps for Scientific Visualization", 2009) and ColorBrewer's RdBu reversed.
-constexpr std::array kViridis{
-    Stop{0.000f, {0.267f, 0.005f, 0.329f}}, Stop{0.125f, {0.283f, 0.141f, 0.458f}},
-    Stop{0.250f, {0.254f, 0.265f, 0.530f}}, Stop{0.375f, {0.207f, 0.372f, 0.553f}},
-    Stop{0.500f, {0.164f, 0.471f, 0.558f}}, Stop{0.625f, {0.128f, 0.567f, 0.551f}},
-    Stop{0.750f, {0.135f, 0.659f, 0.518f}}, Stop{0.875f, {0.267f, 0.749f, 0.441f}},
-    Stop{0.9375f, {0.478f, 0.821f, 0.318f}}, Stop{1.000f, {0.993f, 0.906f, 0.144f}}};
-constexpr std::array kInferno{
-    Stop{0.000f, {0.001f, 0.000f, 0.014f}}, Stop{0.125f, {0.087f, 0.045f, 0.225f}},
-    Stop{0.250f, {0.258f, 0.039f, 0.406f}}, Stop{0.375f, {0.416f, 0.090f, 0.433f}},
-    Stop{0.500f, {0.578f, 0.148f, 0.404f}}, Stop{0.625f, {0.736f, 0.216f, 0.330f}},
-    Stop{0.750f, {0.865f, 0.317f, 0.226f}}, Stop{0.875f, {0.955f, 0.469f, 0.100f}},
-    Stop{0.9375f, {0.976f, 0.680f, 0.150f}}, Stop{1.000f, {0.988f, 0.998f, 0.645f}}};
-constexpr std::array kCoolToWarm{
-    Stop{0.000f, {0.230f, 0.299f, 0.754f}}, Stop{0.125f, {0.384f, 0.510f, 0.918f}},
-    Stop{0.250f, {0.552f, 0.690f, 0.996f}}, Stop{0.375f, {0.717f, 0.795f, 0.950f}},
-    Stop{0.500f, {0.865f, 0.865f, 0.865f}}, Stop{0.625f, {0.957f, 0.752f, 0.651f}},
-    Stop{0.750f, {0.958f, 0.603f, 0.482f}}, Stop{0.875f, {0.866f, 0.394f, 0.315f}},
-    Stop{1.000f, {0.706f, 0.016f, 0.150f}}};
-constexpr std::array kBlueWhiteRed{
-    Stop{0.000f, {0.020f, 0.188f, 0.380f}}, Stop{0.167f, {0.129f, 0.400f, 0.675f}},
-    Stop{0.333f, {0.573f, 0.773f, 0.871f}}, Stop{0.500f, {0.969f, 0.969f, 0.969f}},
-    Stop{0.667f, {0.957f, 0.647f, 0.510f}}, Stop{0.833f, {0.698f, 0.094f, 0.169f}},
-    Stop{1.000f, {0.404f, 0.000f, 0.122f}}};
-constexpr std::array kGrayscale{Stop{0.0f, {0, 0, 0}}, Stop{1.0f, {1, 1, 1}}};
+constexpr int kMapCount = int(ColorMapId::Balance) + 1;
 
-Rgb interpolate(std::span<const Stop> stops, float u)
+// The table, read once. Its order is the enum's; a mismatch is a build error in all but name, so
+// it is checked here and fails loudly at the first use.
+const std::vector<MapEntry>& table()
 {
-    u = std::clamp(std::isfinite(u) ? u : 0.0f, 0.0f, 1.0f);
-    size_t i = 1;
-    while (i + 1 < stops.size() && stops[i].u < u)
-        ++i;
-    const Stop& a = stops[i - 1];
-    const Stop& b = stops[i];
-    const float w = (u - a.u) / (b.u - a.u);
-    return {a.c.r + w * (b.c.r - a.c.r), a.c.g + w * (b.c.g - a.c.g), a.c.b + w * (b.c.b - a.c.b)};
+    static const std::vector<MapEntry> maps = [] {
+        static const char* const kNames[kMapCount] = {"viridis", "inferno", "cool-to-warm", "blue-white-red", "grayscale",
+                                                      "batlow",  "lajolla", "vik",          "roma",           "thermal",
+                                                      "balance"};
+        const auto j = nlohmann::json::parse(kTableJson);
+        std::vector<MapEntry> out;
+        for (const auto& m : j.at("maps")) {
+            MapEntry e;
+            e.name = m.at("name").get<std::string>();
+            e.diverging = m.at("kind").get<std::string>() == "diverging";
+            e.centred = m.at("centred").get<bool>();
+            for (const auto& s : m.at("stops"))
+                e.stops.push_back({s.at(0).get<float>(), {s.at(1).get<float>(), s.at(2).get<float>(), s.at(3).get<float>()}});
+            out.push_back(std::move(e));
+        }
+        if (out.size() != size_t(kMapCount))
+            fail("color_maps.json: {} maps, the renderer knows {}", out.size(), kMapCount);
+        for (int i = 0; i < kMapCount; ++i)
+            if (out[size_t(i)].name != kNames[i])
+                fail("color_maps.json: map {} is '{}', expected '{}' (the order of ColorMapId)", i, out[size_t(i)].name,
+                     kNames[i]);
+        return out;
+    }();
+    return maps;
 }
+
+const MapEntry& entry(ColorMapId map) { return table().at(size_t(map)); }
 
 }  // namespace
 
-Rgb sampleColorMap(ColorMapId map, float u)
+Rgb sampleStops(std::span<const ColorStop> stops, float u)
 {
-    switch (map) {
-    case ColorMapId::Viridis: return interpolate(kViridis, u);
-    case ColorMapId::Inferno: return interpolate(kInferno, u);
-    case ColorMapId::CoolToWarm: return interpolate(kCoolToWarm, u);
-    case ColorMapId::BlueWhiteRed: return interpolate(kBlueWhiteRed, u);
-    case ColorMapId::Grayscale: return interpolate(kGrayscale, u);
-    }
-    return {};
+    u = std::clamp(std::isfinite(u) ? u : 0.0f, 0.0f, 1.0f);
+    if (stops.size() == 1)
+        return stops[0].c;
+    size_t i = 1;
+    while (i + 1 < stops.size() && stops[i].u < u)
+        ++i;
+    const ColorStop& a = stops[i - 1];
+    const ColorStop& b = stops[i];
+    const float w = b.u > a.u ? std::clamp((u - a.u) / (b.u - a.u), 0.0f, 1.0f) : 1.0f;
+    return {a.c.r + w * (b.c.r - a.c.r), a.c.g + w * (b.c.g - a.c.g), a.c.b + w * (b.c.b - a.c.b)};
 }
 
-bool isCentredOnZero(ColorMapId map) { return map == ColorMapId::BlueWhiteRed; }
+Rgb sampleColorMap(ColorMapId map, float u) { return sampleStops(entry(map).stops, u); }
 
-std::string_view colorMapName(ColorMapId map)
-{
-    switch (map) {
-    case ColorMapId::Viridis: return "viridis";
-    case ColorMapId::Inferno: return "inferno";
-    case ColorMapId::CoolToWarm: return "cool-to-warm";
-    case ColorMapId::BlueWhiteRed: return "blue-white-red";
-    case ColorMapId::Grayscale: return "grayscale";
-    }
-    return "?";
-}
+std::span<const ColorStop> colorMapStops(ColorMapId map) { return entry(map).stops; }
+
+bool isCentredOnZero(ColorMapId map) { return entry(map).centred; }
+
+bool isDiverging(ColorMapId map) { return entry(map).diverging; }
+
+std::string_view colorMapName(ColorMapId map) { return entry(map).name; }
 
 const std::vector<ColorMapId>& allColorMaps()
 {
-    static const std::vector<ColorMapId> maps = {ColorMapId::Viridis, ColorMapId::Inferno, ColorMapId::CoolToWarm,
-                                                 ColorMapId::BlueWhiteRed, ColorMapId::Grayscale};
+    static const std::vector<ColorMapId> maps = [] {
+        std::vector<ColorMapId> out;
+        for (int i = 0; i < kMapCount; ++i)
+            out.push_back(ColorMapId(i));
+        return out;
+    }();
     return maps;
 }
 

@@ -48,7 +48,11 @@ std::vector<float> FrameBuffer::averagedDepthKm() const
 
 std::vector<uint8_t> FrameBuffer::resolveRgba8(Rgb background, bool opaqueBackground) const
 {
-    const std::vector<float> rgba = averagedRgba();
+    return toRgba8(averagedRgba(), background, opaqueBackground);
+}
+
+std::vector<uint8_t> toRgba8(const std::vector<float>& rgba, Rgb background, bool opaqueBackground)
+{
     std::vector<uint8_t> out(rgba.size());
     auto to8 = [](float v) { return uint8_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
     for (size_t i = 0; i < rgba.size(); i += 4) {

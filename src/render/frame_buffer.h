@@ -14,6 +14,10 @@ namespace kernel {
 struct PixelOut;
 }  // namespace kernel
 
+// 8-bit RGBA of premultiplied float RGBA (4 floats a pixel): composited over `background` when
+// `opaqueBackground`, else premultiplied with alpha.
+std::vector<uint8_t> toRgba8(const std::vector<float>& premultipliedRgba, Rgb background, bool opaqueBackground = true);
+
 // Accumulates progressive passes. Colours are premultiplied by alpha (alpha = 1 - transmittance).
 class FrameBuffer {
 public:

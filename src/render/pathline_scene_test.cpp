@@ -162,7 +162,7 @@ TEST(RenderStatePathlines, ParsesAndRoundTrips)
     EXPECT_EQ(d.pathlines.effectiveColorMap(), ColorMapId::BlueWhiteRed);
     EXPECT_TRUE(d.pathlines.filterByBrushes);
     EXPECT_TRUE(d.pathlines.ambientOcclusion);
-    EXPECT_EQ(toJson(d)["version"], 2);
+    EXPECT_EQ(toJson(d)["version"], kRenderStateVersion);  // written in the current version
 }
 
 TEST(RenderStatePathlines, RejectsBadValuesNamingTheKey)
@@ -180,7 +180,7 @@ TEST(RenderStatePathlines, RejectsBadValuesNamingTheKey)
     };
     std::string e = errorOf(R"({"version": 1, "pathlines": {"visible": true}})");
     EXPECT_TRUE(has(e, "pathlines") && has(e, "version 2")) << e;
-    e = errorOf(R"({"version": 3})");
+    e = errorOf(R"({"version": 4})");
     EXPECT_TRUE(has(e, "version") && has(e, "not supported")) << e;
     e = errorOf(R"({"version": 2, "pathlines": {"radiusKm": 0}})");
     EXPECT_TRUE(has(e, "STATE.json: pathlines.radiusKm")) << e;

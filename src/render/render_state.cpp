@@ -65,6 +65,13 @@ RenderParams resolveParams(const RenderState& s, const VariableCatalog& catalog)
     p.transfer.range = s.colorRange ? *s.colorRange : defaultRange(p.colorVariable, s.colorMap);
     p.transfer.opacity = s.opacity.empty() ? defaultOpacity(s.colorMap) : s.opacity;
     p.transfer.opacityUnitKm = s.opacityUnitKm;
+    p.transfer.colorPoints = s.colorPoints;
+    p.transfer.reversed = s.colorReversed;
+    p.transfer.logScale = s.logScale;
+    if (s.logScale && !s.colorRange && !(p.transfer.range.min > 0))
+        fail("color.logScale: the global range of '{}' is [{}, {}]; a log scale needs positive values (set "
+             "color.range)",
+             catalog.names[size_t(p.colorVariable)], p.transfer.range.min, p.transfer.range.max);
     p.transfer.validate();
     std::vector<NamedRange> brushes;
     for (const BrushSpec& b : s.brushes)

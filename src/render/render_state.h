@@ -19,8 +19,9 @@
 
 namespace raypc::render {
 
-// Version 2 added "pathlines"; version 1 documents are still read (they have no pathlines).
-inline constexpr int kRenderStateVersion = 2;
+// Version 2 added "pathlines", version 3 "reference" (shells, graticule, coastlines) and "legend";
+// older documents are still read (they have neither).
+inline constexpr int kRenderStateVersion = 3;
 
 struct BrushSpec {
     std::string name;  // a variable or a coordinate (x, y, z, lat, lon, radius, depth)
@@ -54,6 +55,29 @@ struct PathlineState {
     }
 };
 
+// Reference geometry drawn with the volume (reference_geometry.h): thin translucent spheres at
+// given depths, a latitude/longitude graticule and the coastlines on the surface. Restart class.
+struct ReferenceState {
+    struct Shells {
+        bool visible = false;
+        std::vector<float> depthsKm{410.0f, 660.0f, 1000.0f, 1600.0f, 2200.0f};
+        float opacity = 0.04f;  // of a shell seen face-on; towards its silhouette the path through it lengthens
+        Rgb colour{0.85f, 0.85f, 0.85f};
+    } shells;
+    struct Graticule {
+        bool visible = false;
+        float spacingDeg = 30.0f;  // between parallels and between meridians
+        float opacity = 0.5f;
+        Rgb colour{0.8f, 0.8f, 0.8f};
+    } graticule;
+    struct Coastlines {
+        bool visible = false;
+        float opacity = 0.9f;
+        Rgb colour{0.95f, 0.95f, 0.75f};
+    } coastlines;
+    float lineWidthPx = 1.5f;  // graticule and coastline width in pixels of the image
+};
+
 struct RenderState {
     int version = kRenderStateVersion;
     int step = 0;  // time step index (reload class)
@@ -64,6 +88,9 @@ struct RenderState {
     std::optional<ValueRange> colorRange;  // default: the variable's global range (symmetric for centred maps)
     std::vector<OpacityPoint> opacity;  // empty: defaultOpacity(colorMap)
     float opacityUnitKm = 100.0f;
+    std::vector<ColorStop> colorPoints;  // version 3: custom colours replacing colorMap when not empty
+    bool colorReversed = false;          // version 3
+    bool logScale = false;               // version 3: positions over log10 of the value (range > 0)
     std::vector<BrushSpec> brushes;
     std::optional<int> level;  // nullopt: chosen for timeBudgetMs (reload class)
     double timeBudgetMs = 50.0;
@@ -80,6 +107,8 @@ struct RenderState {
     ShadingStyle shading;
     Rgb background{0.0f, 0.0f, 0.0f};
     PathlineState pathlines;  // version 2
+    ReferenceState reference;  // version 3
+    bool legend = false;       // version 3: colour legends in still pictures (raypc render, screenshots)
 };
 
 // The opacity used when the state gives none: a ramp from 0 to 0.5 over the range, or for maps

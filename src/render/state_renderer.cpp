@@ -1,6 +1,8 @@
 #include "render/state_renderer.h"
 
 #include "core/error.h"
+#include "render/legend.h"
+#include "render/reference_geometry.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -169,6 +171,44 @@ StateRenderer::Still StateRenderer::renderStill(const ResolvedState& resolved, i
         still.passes.push_back(s);
     }
     return still;
+}
+
+std::vector<uint8_t> StateRenderer::picture(const FrameBuffer& frame, const ResolvedState& resolved,
+                                            bool withLegends) const
+{
+    const RenderState& state = resolved.state;
+    const auto& ref = state.reference;
+    std::vector<uint8_t> out;
+    if (ref.shells.visible || ref.graticule.visible || ref.coastlines.visible) {
+        std::vector<float> rgba = frame.averagedRgba();
+        const SphericalGrid& grid = m_dataset->levels().front().grid;
+        const auto coastlines = ref.coastlines.visible ? defaultCoastlines() : nullptr;
+        drawReferenceGeometry(ref, state.camera, frame.width(), frame.height(), float(grid.rKm.back()),
+                              float(grid.rKm.front()), rgba, frame.averagedDepthKm(), coastlines.get());
+        out = toRgba8(rgba, state.background);
+    } else {
+        out = frame.resolveRgba8(state.background);
+    }
+    if (withLegends && state.legend) {
+        std::vector<LegendSpec> legends;
+        const int var = resolved.params.colorVariable;
+        const auto& info = m_dataset->variables().at(size_t(var));
+        legends.push_back({info.units.empty() ? info.name : fmt::format("{} [{}]", info.name, displayUnits(info.units)),
+                           resolved.params.transfer});
+        if (state.pathlines.visible && m_scene && m_sceneStep == state.step) {
+            const PathlineStyle& style = m_scene->style();
+            const std::string what = style.colorColumn < 0 ? std::string("pathline age [Myr]")
+                                                           : "pathlines: " + m_scene->columns()[size_t(style.colorColumn)];
+            // The tubes map their range linearly (PathlineScene), not centred on 0: the map's stops.
+            TransferFunction colours;
+            const auto stops = colorMapStops(style.colorMap);
+            colours.colorPoints.assign(stops.begin(), stops.end());
+            colours.range = style.range;
+            legends.push_back({what, colours});
+        }
+        drawLegends(out, frame.width(), frame.height(), legends);
+    }
+    return out;
 }
 
 double StateRenderer::measureSamplesPerSecond(int step, const RenderParams& params)

@@ -3,7 +3,7 @@
 //
 //   RenderState --resolveState--> ResolvedState (checked against the dataset, names -> indices)
 //               --StateRenderer::prepare--> level, renderer of (step, level), pathline scene, size
-//               --renderPass x N--> FrameBuffer --resolveRgba8 / averagedDepthKm--> image, depth
+//               --renderPass x N--> FrameBuffer --picture (reference geometry, legends) / averagedDepthKm--> image, depth
 //
 // Cost classes (house style): a new step or level loads a volume and builds a renderer (reload);
 // a new pathline window builds a tube scene (reload); everything else restarts passes.
@@ -94,6 +94,14 @@ public:
         std::vector<PassStats> passes;
     };
     Still renderStill(const ResolvedState& resolved, int passes = 0, const std::atomic<bool>* cancel = nullptr);
+
+    // The finished picture of `frame`, rendered for `resolved` (after prepare or renderStill with
+    // that state): the state's reference geometry (shells, graticule, coastlines) composited by
+    // depth with the volume, over the state's background, and with `withLegends` and state.legend
+    // the colour legends (the volume's variable; the pathlines' colouring when they are shown).
+    // 8-bit RGBA, row-major from the top left. Throws raypc::Error when the coastlines or the
+    // legend font cannot be read.
+    std::vector<uint8_t> picture(const FrameBuffer& frame, const ResolvedState& resolved, bool withLegends) const;
 
     // The machine's throughput now, in estimated samples per second (all threads): two passes at
     // the coarsest level of `step` (the first also starts the worker threads). For `--lod auto`.

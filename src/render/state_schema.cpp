@@ -181,6 +181,29 @@ std::vector<double> numbers(const json& v, size_t count, Reader& r, const std::s
     return out;
 }
 
+// A list of numbers in [lo, hi], at most `maxItems` (e.g. reference shell depths).
+Kind<std::vector<float>> numberList(double lo, double hi, size_t maxItems)
+{
+    json schema{{"type", "array"}, {"items", numberSchema("number", lo, hi)}, {"maxItems", maxItems}};
+    return {[lo, hi, maxItems](const json& v, std::vector<float>& target, Reader& r, const std::string& key) {
+                if (!v.is_array() || v.size() > maxItems)
+                    r.failAt(key, fmt::format("expected an array of at most {} numbers, found {}", maxItems, v.dump()));
+                target.clear();
+                for (const json& e : v) {
+                    if (!e.is_number() || !(e.get<double>() >= lo && e.get<double>() <= hi))
+                        r.failAt(key, fmt::format("expected numbers in [{}, {}], found {}", lo, hi, e.dump()));
+                    target.push_back(e.get<float>());
+                }
+            },
+            [](const std::vector<float>& x) {
+                json out = json::array();
+                for (float f : x)
+                    out.push_back(f);
+                return out;
+            },
+            schema, fmt::format("array of at most {} numbers in [{}, {}]", maxItems, boundText(lo), boundText(hi))};
+}
+
 Kind<Rgb> colour()
 {
     return {[](const json& v, Rgb& target, Reader& r, const std::string& key) {
@@ -307,6 +330,33 @@ Kind<std::vector<OpacityPoint>> opacityPoints()
             },
             {{"type", "array"}, {"items", numbersSchema(2, 0, 1)}, {"minItems", 1}},
             "[[position, opacity], …], each in [0, 1], positions ascending"};
+}
+
+// Colour control points [[u, r, g, b], ...], each in [0, 1], u ascending; [] = none.
+Kind<std::vector<ColorStop>> colorPoints()
+{
+    return {[](const json& o, std::vector<ColorStop>& target, Reader& r, const std::string& key) {
+                if (!o.is_array() || o.size() == 1)
+                    r.failAt(key, "expected [] or an array of at least 2 [u, r, g, b] points, found " + o.dump());
+                target.clear();
+                for (const json& p : o) {
+                    const auto v = numbers(p, 4, r, key);
+                    for (double x : v)
+                        if (!(x >= 0 && x <= 1))
+                            r.failAt(key, "expected u, r, g, b in [0, 1], found " + p.dump());
+                    if (!target.empty() && v[0] < target.back().u)
+                        r.failAt(key, "positions must ascend, found " + o.dump());
+                    target.push_back({float(v[0]), {float(v[1]), float(v[2]), float(v[3])}});
+                }
+            },
+            [](const std::vector<ColorStop>& points) {
+                json out = json::array();
+                for (const auto& p : points)
+                    out.push_back({p.u, p.c.r, p.c.g, p.c.b});
+                return out;
+            },
+            {{"type", "array"}, {"items", numbersSchema(4, 0, 1)}},
+            "[[u, r, g, b], …], each in [0, 1], u ascending; [] or at least 2 points"};
 }
 
 // An explicit level or "auto" (nullopt).
@@ -498,7 +548,9 @@ struct Object {
             else if (json sub = f->forbiddenBefore(version); !sub.is_null())
                 properties[f->key] = sub;
         }
-        return properties.empty() ? json() : json{{"properties", properties}};
+        // "type" too: strict validators (ajv) want it beside "properties", e.g. for the keys of
+        // "color" that a newer version added.
+        return properties.empty() ? json() : json{{"type", "object"}, {"properties", properties}};
     }
 };
 
@@ -645,6 +697,7 @@ const Object<RenderState>& document()
     using S = RenderState;
     using C = OrbitCamera;
     using P = PathlineState;
+    using R = ReferenceState;
     static const Object<S> doc{
         "RenderState",
         {
@@ -679,8 +732,10 @@ const Object<RenderState>& document()
                          {.meaning = "colouring variable (dataset name, e.g. `\"temperature anomaly\"`)",
                           .defaultText = "`\"\"`: the first variable"}),
                  leaf<S>("colorMap", at(&S::colorMap), colorMap(),
-                         {.meaning = "colour map: `inferno` is black body, `cool-to-warm` ParaView's, "
-                                     "`blue-white-red` centred on 0"}),
+                         {.meaning = "colour map (src/render/color_maps.json names each table's source): "
+                                     "`inferno` is black body, `cool-to-warm` ParaView's; Crameri's `batlow`, "
+                                     "`lajolla` and cmocean's `thermal` sequential, `vik`, `roma`, `balance` and "
+                                     "`blue-white-red` diverging, centred on 0"}),
                  leaf<S>("range", at(&S::colorRange), range(),
                          {.meaning = "value range of the transfer function; values outside clamp to the ends",
                           .defaultText = "null: the global range of the variable over all steps (symmetric ±max\\|v\\| "
@@ -695,7 +750,18 @@ const Object<RenderState>& document()
                          }),
                  leaf<S>("opacityUnitKm", at(&S::opacityUnitKm), number<float>(1e-6, 1e9),
                          {.meaning = "path length over which `opacity` applies (docs/rendering.md, opacity "
-                                     "correction)"})},
+                                     "correction)"}),
+                 leaf<S>("logScale", at(&S::logScale), boolean(),
+                         {.meaning = "colour and opacity positions over log10 of the value, for positive quantities "
+                                     "(the range must be positive)",
+                          .since = 3}),
+                 leaf<S>("points", at(&S::colorPoints), colorPoints(),
+                         {.meaning = "colour control points (the UI's editor, an imported ParaView colour map), "
+                                     "position normalised over `color.range` as `opacity`; when not empty they "
+                                     "replace `colorMap` (and are not centred on 0)",
+                          .since = 3}),
+                 leaf<S>("reversed", at(&S::colorReversed), boolean(),
+                         {.meaning = "run the colours from the map's (or the points') end to its start", .since = 3})},
                 {.meaning = "the volume's transfer function"}),
             leaf<S>("brushes", at(&S::brushes),
                     arrayOf(namedRange<BrushSpec>("Brush", "a variable or a coordinate",
@@ -740,6 +806,10 @@ const Object<RenderState>& document()
                               {.meaning = "diffuse lighting weight (also used for the core)"})},
                      {.meaning = "lighting of the volume and the core"}),
             leaf<S>("background", at(&S::background), colour(), {.meaning = "background colour of PNG output"}),
+            leaf<S>("legend", at(&S::legend), boolean(),
+                    {.meaning = "colour legends (variable, units, range; the pathlines' colouring when shown) in "
+                                "still pictures: `raypc render` and screenshots (the UI draws its own on the view)",
+                     .since = 3}),
             group<S>(
                 "pathlines", "PathlineState",
                 {leaf<S>("visible", at(&S::pathlines, &P::visible), boolean(),
@@ -775,6 +845,43 @@ const Object<RenderState>& document()
                          {.meaning = "ambient occlusion on the tubes (a few rays per pass against the tubes and the "
                                      "core)"})},
                 {.meaning = "tubes along the pathlines injected in the last `window` steps", .since = 2}),
+            group<S>(
+                "reference", "ReferenceState",
+                {group<S>("shells", "",
+                          {leaf<S>("visible", at(&S::reference, &R::shells, &R::Shells::visible), boolean(),
+                                   {.meaning = "draw thin translucent spheres at the given depths"}),
+                           leaf<S>("depthsKm", at(&S::reference, &R::shells, &R::Shells::depthsKm),
+                                   numberList(0, 6371, 32),
+                                   {.meaning = "depths below the surface, km (e.g. the 410 and 660 km "
+                                               "discontinuities); depths outside the grid's shell draw nothing"}),
+                           leaf<S>("opacity", at(&S::reference, &R::shells, &R::Shells::opacity), number<float>(0, 1),
+                                   {.meaning = "opacity of a shell seen face-on; it grows towards the silhouette, "
+                                               "where the line of sight runs along the shell"}),
+                           leaf<S>("color", at(&S::reference, &R::shells, &R::Shells::colour), colour(),
+                                   {.meaning = "shell colour"})},
+                          {.meaning = "reference shells at fixed depths"}),
+                 group<S>("graticule", "",
+                          {leaf<S>("visible", at(&S::reference, &R::graticule, &R::Graticule::visible), boolean(),
+                                   {.meaning = "draw parallels and meridians on the surface"}),
+                           leaf<S>("spacingDeg", at(&S::reference, &R::graticule, &R::Graticule::spacingDeg),
+                                   number<float>(1, 90), {.meaning = "spacing of the lines, degrees"}),
+                           leaf<S>("opacity", at(&S::reference, &R::graticule, &R::Graticule::opacity),
+                                   number<float>(0, 1), {.meaning = "line opacity"}),
+                           leaf<S>("color", at(&S::reference, &R::graticule, &R::Graticule::colour), colour(),
+                                   {.meaning = "line colour"})},
+                          {.meaning = "latitude/longitude graticule on the surface"}),
+                 group<S>("coastlines", "",
+                          {leaf<S>("visible", at(&S::reference, &R::coastlines, &R::Coastlines::visible), boolean(),
+                                   {.meaning = "draw the coastlines on the surface (Natural Earth 1:110m, from the "
+                                               "npm package world-atlas; the UI build writes coastlines.json)"}),
+                           leaf<S>("opacity", at(&S::reference, &R::coastlines, &R::Coastlines::opacity),
+                                   number<float>(0, 1), {.meaning = "line opacity"}),
+                           leaf<S>("color", at(&S::reference, &R::coastlines, &R::Coastlines::colour), colour(),
+                                   {.meaning = "line colour"})},
+                          {.meaning = "coastlines of the Earth's surface"}),
+                 leaf<S>("lineWidthPx", at(&S::reference, &R::lineWidthPx), number<float>(0.25, 32),
+                         {.meaning = "width of graticule and coastline lines, pixels of the image"})},
+                {.meaning = "reference geometry drawn with the volume and composited by depth", .since = 3}),
         },
         {}};
     return doc;

@@ -45,13 +45,26 @@ TEST(StateSchema, CarriesTheParsersBoundsAndVersions)
     const json& camera = schema["properties"]["camera"]["properties"];
     EXPECT_EQ(camera["elevationDeg"]["minimum"], -90);
     EXPECT_EQ(camera["elevationDeg"]["maximum"], 90);
-    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, kRenderStateVersion}));
+    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, kRenderStateVersion}));
     EXPECT_EQ(schema["properties"]["brushes"]["items"]["required"], json::array({"name", "min", "max"}));
     // A version-1 document may not have pathlines, as parseRenderState says.
     ASSERT_TRUE(schema.contains("allOf"));
     EXPECT_EQ(schema["allOf"][0]["if"]["properties"]["version"]["const"], 1);
     EXPECT_EQ(schema["allOf"][0]["then"]["properties"]["pathlines"]["description"], "needs version 2");
     EXPECT_THROW(parseRenderState(json{{"version", 1}, {"pathlines", json::object()}}), Error);
+    // Version 3 added the reference geometry and the legend: refused in a version-2 document.
+    EXPECT_EQ(schema["allOf"][1]["if"]["properties"]["version"]["const"], 2);
+    EXPECT_EQ(schema["allOf"][1]["then"]["properties"]["reference"]["description"], "needs version 3");
+    EXPECT_THROW(parseRenderState(json{{"version", 2}, {"legend", true}}), Error);
+    const RenderState s = parseRenderState(json::parse(
+        R"({"version": 3, "legend": true, "reference": {"shells": {"visible": true, "depthsKm": [660]}, "lineWidthPx": 2}})"));
+    EXPECT_TRUE(s.legend);
+    EXPECT_TRUE(s.reference.shells.visible);
+    EXPECT_EQ(s.reference.shells.depthsKm, std::vector<float>{660.0f});
+    EXPECT_FLOAT_EQ(s.reference.lineWidthPx, 2.0f);
+    EXPECT_THROW(parseRenderState(json::parse(R"({"version": 3, "reference": {"shells": {"depthsKm": [-5]}}})")), Error);
+    EXPECT_THROW(parseRenderState(json::parse(R"({"version": 3, "reference": {"graticule": {"spacingDeg": 0}}})")), Error);
+    EXPECT_THROW(parseRenderState(json::parse(R"({"version": 3, "reference": {"moon": {}}})")), Error);
 }
 
 TEST(StateSchema, NullKeepsTheDefaultOfStringKeys)

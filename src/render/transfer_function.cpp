@@ -25,6 +25,44 @@ void TransferFunction::validate() const
     }
     if (!(opacityUnitKm > 0) || !std::isfinite(opacityUnitKm))
         fail("opacity unit distance {} km: expected a positive distance", opacityUnitKm);
+    for (size_t i = 0; i < colorPoints.size(); ++i) {
+        const auto& p = colorPoints[i];
+        if (!(p.u >= 0 && p.u <= 1))
+            fail("colour point {}: position {} outside [0, 1]", i, p.u);
+        if (i > 0 && p.u < colorPoints[i - 1].u)
+            fail("colour point {}: position {} is below the previous one; expected ascending positions", i, p.u);
+        for (float c : {p.c.r, p.c.g, p.c.b})
+            if (!(c >= 0 && c <= 1))
+                fail("colour point {}: colour component {} outside [0, 1]", i, c);
+    }
+    if (logScale && !(range.min > 0))
+        fail("log scale over the range [{}, {}]: expected a positive minimum", range.min, range.max);
+}
+
+float TransferFunction::positionOf(float value) const
+{
+    float u;
+    if (logScale)
+        u = (std::log10(std::max(value, range.min)) - std::log10(range.min)) /
+            (std::log10(range.max) - std::log10(range.min));
+    else
+        u = (value - range.min) / (range.max - range.min);
+    return std::clamp(std::isfinite(u) ? u : 0.0f, 0.0f, 1.0f);
+}
+
+Rgb TransferFunction::colorOf(float value) const
+{
+    float u;
+    if (colorPoints.empty() && !logScale && isCentredOnZero(colorMap)) {
+        // Centred maps put value 0 at the middle colour, scaled by the larger magnitude.
+        const float magnitude = std::max(std::abs(range.min), std::abs(range.max));
+        u = std::clamp(0.5f + 0.5f * value / magnitude, 0.0f, 1.0f);
+    } else {
+        u = positionOf(value);
+    }
+    if (reversed)
+        u = 1.0f - u;
+    return colorPoints.empty() ? sampleColorMap(colorMap, u) : sampleStops(colorPoints, u);
 }
 
 float TransferFunction::opacityAt(float u) const
@@ -53,13 +91,12 @@ TransferTable TransferTable::bake(const TransferFunction& tf)
     t.blue.resize(kSize);
     t.sigmaPerKm.resize(kSize);
     t.nonzeroPrefix.assign(kSize + 1, 0);
-    // Centred maps put value 0 at the middle colour, scaled by the larger magnitude.
-    const float magnitude = std::max(std::abs(tf.range.min), std::abs(tf.range.max));
+    // The table is indexed linearly in value; with a log scale its entries hold the colour and
+    // opacity at the value's logarithmic position (the lowest decades get few entries).
     for (int i = 0; i < kSize; ++i) {
-        const float u = float(i) / float(kSize - 1);
-        const float value = tf.range.min + u * (tf.range.max - tf.range.min);
-        const float colourU = isCentredOnZero(tf.colorMap) ? 0.5f + 0.5f * value / magnitude : u;
-        const Rgb c = sampleColorMap(tf.colorMap, colourU);
+        const float value = tf.range.min + float(i) / float(kSize - 1) * (tf.range.max - tf.range.min);
+        const float u = tf.positionOf(value);
+        const Rgb c = tf.colorOf(value);
         t.red[i] = c.r;
         t.green[i] = c.g;
         t.blue[i] = c.b;

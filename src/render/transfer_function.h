@@ -24,9 +24,22 @@ struct TransferFunction {
     ValueRange range{0, 1};  // values outside are clamped to the ends
     std::vector<OpacityPoint> opacity = {{0, 0}, {1, 0.5f}};
     float opacityUnitKm = 100.0f;
+    // Colour control points (the UI's editor, a ParaView colour map): when not empty they replace
+    // colorMap, positions normalised as the opacity's (not centred on zero).
+    std::vector<ColorStop> colorPoints;
+    bool reversed = false;  // the colours run from the map's end to its start
+    // Positions (colour and opacity) over log10 of the value: for positive quantities; range.min > 0.
+    bool logScale = false;
+
+    // Normalised position of a value: linear, or logarithmic with logScale (clamped to [0, 1]).
+    float positionOf(float value) const;
+    // The colour of a value (the map or the colour points, reversed if asked; centred maps put 0 in
+    // the middle).
+    Rgb colorOf(float value) const;
 
     // Throws raypc::Error on an empty or inverted range, positions not ascending in [0, 1],
-    // opacities outside [0, 1], or a non-positive unit distance.
+    // opacities outside [0, 1], a non-positive unit distance, colour points not ascending in
+    // [0, 1] or with components outside [0, 1], or a log scale over a range that is not positive.
     void validate() const;
     // Opacity at normalised position u (piecewise linear, constant beyond the end points).
     float opacityAt(float u) const;

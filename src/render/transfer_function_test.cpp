@@ -71,5 +71,64 @@ TEST(ColorMap, KnownEndsAndCentredZero)
     EXPECT_THROW(parseColorMap("rainbow"), Error);
 }
 
+// The perceptually uniform maps come from the shared table with their published end colours
+// (Crameri 8.0.1: batlow 1,25,89 .. 250,204,250 in 8 bits; cmocean thermal starts near-black blue),
+// and the diverging ones are centred on 0.
+TEST(ColorMap, ScientificMapsFromTheSharedTable)
+{
+    const Rgb b0 = sampleColorMap(ColorMapId::Batlow, 0), b1 = sampleColorMap(ColorMapId::Batlow, 1);
+    EXPECT_NEAR(b0.r * 255, 1, 0.6);
+    EXPECT_NEAR(b0.g * 255, 25, 0.6);
+    EXPECT_NEAR(b0.b * 255, 89, 0.6);
+    EXPECT_NEAR(b1.r * 255, 250, 0.6);
+    EXPECT_NEAR(b1.g * 255, 204, 0.6);
+    EXPECT_NEAR(b1.b * 255, 250, 0.6);
+    const Rgb t0 = sampleColorMap(ColorMapId::Thermal, 0);
+    EXPECT_LT(t0.r + t0.g + t0.b, 0.4f);
+    for (ColorMapId m : {ColorMapId::Vik, ColorMapId::Roma, ColorMapId::Balance, ColorMapId::BlueWhiteRed}) {
+        EXPECT_TRUE(isCentredOnZero(m)) << colorMapName(m);
+        EXPECT_TRUE(isDiverging(m)) << colorMapName(m);
+    }
+    for (ColorMapId m : {ColorMapId::Batlow, ColorMapId::Lajolla, ColorMapId::Thermal, ColorMapId::Viridis})
+        EXPECT_FALSE(isDiverging(m)) << colorMapName(m);
+    for (ColorMapId m : allColorMaps())
+        EXPECT_EQ(parseColorMap(colorMapName(m)), m);
+    EXPECT_EQ(allColorMaps().size(), 11u);
+}
+
+TEST(TransferFunction, ColourPointsReversedAndLogScale)
+{
+    TransferFunction tf;
+    tf.range = {0, 10};
+    tf.colorPoints = {{0, {1, 0, 0}}, {0.5f, {0, 1, 0}}, {1, {0, 0, 1}}};
+    EXPECT_NEAR(tf.colorOf(0).r, 1, 1e-6);
+    EXPECT_NEAR(tf.colorOf(2.5f).r, 0.5, 1e-6);
+    EXPECT_NEAR(tf.colorOf(2.5f).g, 0.5, 1e-6);
+    EXPECT_NEAR(tf.colorOf(10).b, 1, 1e-6);
+    tf.reversed = true;
+    EXPECT_NEAR(tf.colorOf(0).b, 1, 1e-6);
+    EXPECT_NEAR(tf.colorOf(10).r, 1, 1e-6);
+    // Log scale: 1 .. 1000, the value 10 sits a third of the way, 100 two thirds.
+    tf.reversed = false;
+    tf.range = {1, 1000};
+    tf.logScale = true;
+    EXPECT_NEAR(tf.positionOf(10), 1.0 / 3, 1e-5);
+    EXPECT_NEAR(tf.positionOf(100), 2.0 / 3, 1e-5);
+    EXPECT_NEAR(tf.colorOf(std::sqrt(1000.0f)).g, 1, 1e-4);  // the middle point, green
+    tf.opacity = {{0, 0}, {1, 1}};
+    const TransferTable t = TransferTable::bake(tf);
+    const float sigma100 = t.sigmaPerKm[t.indexOf(100)];
+    EXPECT_NEAR(1 - std::exp(-sigma100 * tf.opacityUnitKm), 2.0 / 3, 0.01);  // opacity at u = 2/3
+    // Bad colour points and a log scale over a range through zero are refused.
+    tf.range = {-1, 1};
+    EXPECT_THROW(tf.validate(), Error);
+    tf.logScale = false;
+    EXPECT_NO_THROW(tf.validate());
+    tf.colorPoints = {{0.5f, {0, 0, 0}}, {0.2f, {1, 1, 1}}};
+    EXPECT_THROW(tf.validate(), Error);
+    tf.colorPoints = {{0, {0, 0, 0}}, {1, {1, 2, 1}}};
+    EXPECT_THROW(tf.validate(), Error);
+}
+
 }  // namespace
 }  // namespace raypc::render

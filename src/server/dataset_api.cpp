@@ -359,7 +359,7 @@ ApiAnswer screenshot(const ApiContext& api, const ApiRequest& request)
     if (frame.passes() < std::max(1, resolved.state.passes))
         fail("screenshot cancelled after {} of {} passes (the client went away or the server is stopping)",
              frame.passes(), std::max(1, resolved.state.passes));
-    std::string png = encodePng(frame.resolveRgba8(resolved.state.background), frame.width(), frame.height());
+    std::string png = encodePng(renderer.picture(frame, resolved, true), frame.width(), frame.height());
     spdlog::info("screenshot: step {} {}x{} {} passes at level 0 in {:.0f} ms", resolved.state.step, frame.width(),
                  frame.height(), frame.passes(), millisecondsSince(start));
     return {std::move(png), "image/png"};

@@ -177,7 +177,7 @@ void RenderSession::render(const Request& request)
             m_context.samplesPerSecond.store(old > 0 ? 0.7 * old + 0.3 * measured : measured);
         }
         const auto encodeStart = Clock::now();
-        const std::vector<uint8_t> rgba = frame.resolveRgba8(state.background);
+        const std::vector<uint8_t> rgba = m_renderer.picture(frame, request.resolved, false);  // the UI draws legends
         const std::string jpeg = encodeJpeg(rgba, params.width, params.height,
                                             request.interactive ? kJpegQualityInteractive : kJpegQualityStill);
         int depthWidth = 0, depthHeight = 0;

@@ -1,12 +1,16 @@
 // End-to-end browser tests of the UI against the real server:
 //   node tests/browser/cases.mjs CASE RAYPC FIXTURE_DIR
-// CASE: brush | warp | play | save_load | two_tabs | presets | pathlines. Each case starts its own server and browser.
+// CASE: brush | warp | play | save_load | two_tabs | presets | pathlines | resolution | context | colours |
+// brush_values | camera | responsive [gpu].
+// Each case starts its own server and browser.
 import { readFileSync, writeFileSync } from 'node:fs';
 import { spawnSync } from 'node:child_process';
 import { join } from 'node:path';
 import { check, meanAbsDiff, openUi, postJson, runCase, standardView, TestFailure, viewPixels, waitConverged } from './harness.mjs';
 
-const [caseName, raypc, fixture] = process.argv.slice(2);
+// A fourth argument `gpu` runs chromium with GPU rasterisation on a software GL (SwiftShader), as a
+// machine without a GPU does, instead of --disable-gpu (ctest runs every case both ways).
+const [caseName, raypc, fixture, mode] = process.argv.slice(2);
 
 const frames = () => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
 const rState = (page) => page.evaluate(() => window.__raypc.state());
@@ -44,6 +48,26 @@ async function drag(page, dx, dy, { steps = 6, button = 'left' } = {}) {
 }
 
 const info = async (url) => (await fetch(url + 'api/info')).json();
+
+// The size of a PNG file's image.
+function pngSize(file) {
+  const bytes = readFileSync(file);
+  check(bytes.subarray(1, 4).toString() === 'PNG', `${file} is not a PNG`);
+  return { width: bytes.readUInt32BE(16), height: bytes.readUInt32BE(20) };
+}
+
+// Opens the screenshot dialog, picks `choice` (view, 2x, 4k, custom [w, h]) and saves the PNG.
+async function screenshot(page, file, choice = 'view', custom = null) {
+  await page.click('#screenshot');
+  await page.check(`input[name="shotSize"][value="${choice}"]`);
+  if (custom) {
+    await page.fill('#shotWidth', String(custom[0]));
+    await page.fill('#shotHeight', String(custom[1]));
+  }
+  const [shot] = await Promise.all([page.waitForEvent('download', { timeout: 90000 }), page.click('#shotRender')]);
+  await shot.saveAs(file);
+  return pngSize(file);
+}
 
 const cases = {
   // Brushing an axis with the mouse sends its range to the server (the state of the frame shown
@@ -183,7 +207,7 @@ const cases = {
     const rangeAfter = await page.evaluate(() => [document.getElementById('rangeMin').value, document.getElementById('rangeMax').value]);
     check(JSON.stringify(rangeBefore) === JSON.stringify(rangeAfter), `the colour range changed during playback: ${rangeBefore} -> ${rangeAfter}`);
     const label = await page.textContent('#stepLabel');
-    check(label.includes(`step ${log.step + 1} / ${nSteps}`) && label.includes('Myr'), `step label '${label}'`);
+    check(label.includes(`step ${log.step} of 0–${nSteps - 1}`) && label.includes('Myr'), `step label '${label}' (steps numbered from 0, as --time)`);
   },
 
   // Save downloads the whole state (accepted by `raypc render --state`); reloading the page and
@@ -244,12 +268,7 @@ const cases = {
     const pcBrush2 = await page2.evaluate(() => window.__raypc.parcoords.brushes());
     check(pcBrush2.length === 1 && pcBrush2[0].name === 'depth', `parallel coordinates opened from the URL show brushes ${JSON.stringify(pcBrush2)}`);
 
-    const [shot] = await Promise.all([page.waitForEvent('download', { timeout: 60000 }), page.click('#screenshot')]);
-    const png = join(tmp, 'shot.png');
-    await shot.saveAs(png);
-    const bytes = readFileSync(png);
-    check(bytes.subarray(1, 4).toString() === 'PNG', 'the screenshot is not a PNG');
-    const w = bytes.readUInt32BE(16), h = bytes.readUInt32BE(20);
+    const { width: w, height: h } = await screenshot(page, join(tmp, 'shot.png'));
     check(w === stateA.image.width && h === stateA.image.height, `screenshot is ${w}x${h}, the state's image ${stateA.image.width}x${stateA.image.height}`);
 
     const bad = join(tmp, 'bad.json');
@@ -295,7 +314,7 @@ const cases = {
   // coordinates show its brushes, and the image changes. The selection-over-time plot then holds
   // every step with the current one marked, and with "exact" its value at the current step equals
   // POST /api/selection.
-  async presets({ context, url }) {
+  async presets({ context, url, tmp }) {
     const page = await openUi(context, url);
     await standardView(page);
     const presets = await (await fetch(url + 'api/presets')).json();
@@ -303,8 +322,11 @@ const cases = {
     const buttons = await page.evaluate(() => [...document.querySelectorAll('#presets button')].map((b) => ({ name: b.dataset.preset, text: b.textContent })));
     check(JSON.stringify(buttons.map((b) => b.name)) === JSON.stringify(presets.map((p) => p.name)),
       `preset buttons ${JSON.stringify(buttons)} do not match /api/presets`);
-    const step = (await rState(page)).step, image = (await rState(page)).image;
+    const image = (await rState(page)).image;
+    const nSteps = (await info(url)).steps.length;
     let before = await viewPixels(page);
+    let step = 0;
+    let pathlinesSeen = false;
     const diffs = [];
     for (const p of presets) {
       const sentBefore = await page.evaluate(() => window.__raypc.lastSentId);
@@ -321,8 +343,17 @@ const cases = {
       check(JSON.stringify(shown.state.camera) === JSON.stringify(p.state.camera) && shown.state.color.variable === p.state.color.variable &&
         JSON.stringify(shown.state.color.opacity) === JSON.stringify(p.state.color.opacity),
         `${p.name}: camera or colours not applied: ${JSON.stringify(shown.state.camera)} ${JSON.stringify(shown.state.color)}`);
+      // The preset's step (the last one when the dataset has fewer), its pathlines or none, the image
+      // size of the view; and a one-line description naming its brushes.
+      step = Math.min(p.state.step ?? 0, nSteps - 1);
       check(shown.state.step === step && JSON.stringify(shown.state.image) === JSON.stringify(image),
-        `${p.name}: the step ${shown.state.step} or image ${JSON.stringify(shown.state.image)} changed (expected ${step}, ${JSON.stringify(image)})`);
+        `${p.name}: step ${shown.state.step} and image ${JSON.stringify(shown.state.image)}, expected step ${step} and ${JSON.stringify(image)}`);
+      const namesPathlines = Boolean(p.state.pathlines?.visible);
+      check(shown.state.pathlines.visible === namesPathlines,
+        `${p.name}: pathlines ${shown.state.pathlines.visible ? 'on' : 'off'}${pathlinesSeen ? ' after a preset that showed them' : ''}, the preset ${namesPathlines ? 'shows' : 'does not show'} them`);
+      pathlinesSeen ||= namesPathlines;
+      const note = await page.textContent('#presetNote');
+      check(p.state.brushes.every((b) => note.includes(b.name)) && note.includes(`step ${step}`), `${p.name}: preset description '${note}'`);
       const pcNames = shown.pc.map((b) => b.name).sort().join(',');
       check(pcNames === p.state.brushes.map((b) => b.name).sort().join(','), `${p.name}: parallel coordinates show brushes on ${pcNames}`);
       const after = await viewPixels(page);
@@ -332,16 +363,17 @@ const cases = {
       before = after;
     }
     console.log(`  image change per preset: ${diffs.join(', ')}`);
+    check(pathlinesSeen, 'no preset showed pathlines, so resetting them was not tested');
 
-    // Selection over time of the last preset (brushed), first at level 1, then exact.
+    // Selection over time of the last preset (brushed): exact by default (level 0), then approximate
+    // at level 1 and labelled so.
     const last = presets[presets.length - 1];
     check(last.state.brushes.length > 0, `the last preset ${last.name} has no brushes`);
     const waitStats = (level) => page.waitForFunction((lv) => {
       const st = window.__raypc.stats;
       return st && st.level === lv && JSON.stringify(st) !== 'null';
     }, level, { timeout: 30000 }).catch(() => { throw new TestFailure(`no selection statistics at level ${level}`); });
-    await waitStats(1);
-    const nSteps = (await info(url)).steps.length;
+    await waitStats(0);
     const plot = await page.evaluate(() => ({
       stats: window.__raypc.stats,
       dots: document.querySelectorAll('#statsTime circle.step').length,
@@ -350,15 +382,296 @@ const cases = {
     }));
     check(plot.stats.steps.length === nSteps && plot.dots === nSteps && plot.marked === 1 && plot.profile > 20,
       `selection-over-time plot: ${plot.stats.steps.length} steps, ${plot.dots} dots, ${plot.marked} marks, profile path of ${plot.profile} characters`);
-    await page.check('#statsExact');
-    await waitStats(0);
     const exact = await page.evaluate(() => window.__raypc.stats);
+    const exactNote = await page.textContent('#statsNote');
+    check(/^exact: now /.test(exactNote), `statistics note '${exactNote}'`);
     const sel = await postJson(url + 'api/selection', await rState(page));
     const now = exact.steps.find((s) => s.step === step);
     check(sel.status === 200 && Math.abs(now.fractionOfMantle - sel.body.fractionOfMantle) < 1e-12,
       `exact statistics ${now.fractionOfMantle} at step ${step}, POST /api/selection ${JSON.stringify(sel.body)}`);
     const profileSum = exact.profile.volumeKm3.reduce((a, b) => a + b, 0);
     check(Math.abs(profileSum - now.volumeKm3) <= 1e-6 * Math.max(1, now.volumeKm3), `depth profile sums to ${profileSum}, the step's volume is ${now.volumeKm3}`);
+    const selectionText = await page.textContent('#selectionValue');
+    check(selectionText.includes(`${(now.fractionOfMantle * 100).toFixed(2)} %`) && exactNote.includes(`now ${(now.fractionOfMantle * 100).toFixed(2)} %`),
+      `the selection says '${selectionText}', the statistics '${exactNote}'`);
+    const [csv] = await Promise.all([page.waitForEvent('download'), page.click('#statsCsv')]);
+    const csvFile = join(tmp, 'stats.csv');
+    await csv.saveAs(csvFile);
+    const rows = readFileSync(csvFile, 'utf8').trim().split('\n');
+    check(rows[0] === 'step,time_myr,selected_volume_km3,selected_percent_of_mantle,level' && rows.length === nSteps + 1, `statistics CSV: ${rows.join(' | ')}`);
+    await page.uncheck('#statsExact');
+    await waitStats(1);
+    const approx = await page.textContent('#statsNote');
+    check(/^approximate \(level 1 grid\)/.test(approx), `level-1 statistics note '${approx}'`);
+  },
+
+  // Pictures at the screen's resolution: at devicePixelRatio 2 the still frame has the canvas's
+  // size in device pixels (CSS size x 2); the Max size setting caps its longer side keeping the
+  // aspect; the screenshot dialog offers the view size and 2x of it and renders a custom size.
+  async resolution({ context, url, tmp }) {
+    const page = await openUi(context, url);
+    const view = () => page.evaluate(() => {
+      const c = document.getElementById('view3d'), r = window.__raypc, h = r.headers.at(-1);
+      return { dpr: devicePixelRatio, css: [c.clientWidth, c.clientHeight], canvas: [c.width, c.height], frame: [h.width, h.height], image: r.state().image };
+    });
+    const v = await view();
+    check(v.dpr === 2, `devicePixelRatio ${v.dpr}, expected 2`);
+    check(v.canvas[0] === Math.round(v.css[0] * 2) && v.canvas[1] === Math.round(v.css[1] * 2), `canvas ${v.canvas} for CSS size ${v.css} at ratio 2`);
+    check(v.frame[0] === v.canvas[0] && v.frame[1] === v.canvas[1] && v.image.width === v.canvas[0] && v.image.height === v.canvas[1],
+      `the still frame is ${v.frame.join('x')} (state ${v.image.width}x${v.image.height}), the canvas ${v.canvas.join('x')} device pixels`);
+    console.log(`  still frame ${v.frame.join('x')} for a ${v.css.join('x')} CSS-pixel view at ratio 2`);
+
+    await page.selectOption('#maxSize', '512');
+    await waitConverged(page);
+    const c = await view();
+    const longer = Math.max(...c.frame), aspect = c.frame[0] / c.frame[1], viewAspect = c.canvas[0] / c.canvas[1];
+    check(longer === 512 && Math.abs(aspect - viewAspect) < 0.01, `with Max size 512 the frame is ${c.frame.join('x')} for a view of aspect ${viewAspect.toFixed(3)}`);
+
+    const image = (await rState(page)).image;
+    await page.click('#screenshot');
+    const labels = await page.evaluate(() => ({ view: document.getElementById('shotViewSize').textContent, x2: document.getElementById('shot2xSize').textContent }));
+    check(labels.view === `${image.width} × ${image.height}` && labels.x2 === `${2 * image.width} × ${2 * image.height}`, `screenshot sizes offered: ${JSON.stringify(labels)} for ${JSON.stringify(image)}`);
+    await page.click('#shotCancel');
+    const size = await screenshot(page, join(tmp, 'custom.png'), 'custom', [300, 180]);
+    check(size.width === 300 && size.height === 180, `the custom screenshot is ${size.width}x${size.height}, asked 300x180`);
+    const doubled = await screenshot(page, join(tmp, 'double.png'), '2x');
+    check(doubled.width === 2 * image.width && doubled.height === 2 * image.height, `the 2x screenshot is ${doubled.width}x${doubled.height} for ${image.width}x${image.height}`);
+  },
+
+  // Context: reference shells and coastlines change the picture and are in the state; the shell
+  // depths are editable; the legend shows the variable with its units; `raypc render` with the
+  // saved state draws them too.
+  async context({ context, url, tmp, raypc, dataset }) {
+    const page = await openUi(context, url);
+    await standardView(page);
+    const plain = await viewPixels(page);
+    await page.check('#refShells');
+    await waitConverged(page);
+    const s1 = await rState(page);
+    check(s1.reference.shells.visible && JSON.stringify(s1.reference.shells.depthsKm) === '[410,660,1000,1600,2200]',
+      `state.reference.shells after ticking Shells: ${JSON.stringify(s1.reference.shells)}`);
+    const shells = await viewPixels(page);
+    const dShells = meanAbsDiff(plain, shells);
+    check(dShells > 0.3, `the reference shells hardly changed the image (${dShells.toFixed(2)})`);
+    await page.fill('#refDepths', '660');
+    await page.dispatchEvent('#refDepths', 'change');
+    await waitConverged(page);
+    check(JSON.stringify((await rState(page)).reference.shells.depthsKm) === '[660]', `edited depths: ${JSON.stringify((await rState(page)).reference.shells)}`);
+    const one = await viewPixels(page);
+    check(meanAbsDiff(shells, one) > 0.1, 'one shell looks like five');
+    await page.uncheck('#refShells');
+    await page.check('#refCoastlines');
+    await page.check('#refGraticule');
+    await waitConverged(page);
+    const s2 = await rState(page);
+    check(s2.reference.coastlines.visible && s2.reference.graticule.visible && !s2.reference.shells.visible, `state.reference: ${JSON.stringify(s2.reference)}`);
+    const coast = await viewPixels(page);
+    const dCoast = meanAbsDiff(plain, coast);
+    check(dCoast > 0.2, `coastlines and graticule hardly changed the image (${dCoast.toFixed(2)})`);
+    await page.check('#legend');
+    await waitConverged(page);
+    const legend = await page.evaluate(() => [...document.querySelectorAll('#legends .legendTitle')].map((e) => e.textContent));
+    const variable = s2.color.variable;
+    check(legend.length === 1 && legend[0].startsWith(variable) && /\[.+\]/.test(legend[0]), `legend titles ${JSON.stringify(legend)} for ${variable}`);
+    console.log(`  image change: shells ${dShells.toFixed(2)}, coastlines and graticule ${dCoast.toFixed(2)}`);
+
+    // The same state rendered by `raypc render` shows them: with and without coastlines differ.
+    const state = await rState(page);
+    const withFile = join(tmp, 'with.json'), withoutFile = join(tmp, 'without.json');
+    writeFileSync(withFile, JSON.stringify(state));
+    writeFileSync(withoutFile, JSON.stringify({ ...state, legend: false, reference: { ...state.reference, coastlines: { ...state.reference.coastlines, visible: false }, graticule: { ...state.reference.graticule, visible: false } } }));
+    for (const [f, out] of [[withFile, 'with.png'], [withoutFile, 'without.png']]) {
+      const r = spawnSync(raypc, ['render', dataset, '--state', f, '-o', join(tmp, out), '--passes', '1', '--size', '256x256'], { encoding: 'utf8', timeout: 60000 });
+      check(r.status === 0, `raypc render --state ${f}: ${r.stderr}`);
+    }
+    check(!readFileSync(join(tmp, 'with.png')).equals(readFileSync(join(tmp, 'without.png'))), 'raypc render drew no coastlines, graticule or legend');
+  },
+
+  // The colour editor: switching the variable picks defaults that suit it (a sequential map over the
+  // data range for temperature, a diverging map centred on 0 for the anomaly, a fresh opacity ramp);
+  // colour points added on the bar and recoloured change the picture and survive save/load; a
+  // reversed map changes it too; ParaView colour-map JSON round-trips through export and import
+  // (colour points exactly, at their values).
+  async colours({ context, url, tmp }) {
+    const page = await openUi(context, url);
+    await standardView(page);
+    await page.selectOption('#variable', 'temperature');
+    await waitConverged(page);
+    const t = await rState(page);
+    const tMin = Number(await page.inputValue('#rangeMin'));
+    check(t.color.colorMap === 'batlow' && t.color.range === null && tMin > 0 && JSON.stringify(t.color.opacity) === '[[0,0],[1,0.5]]',
+      `temperature defaults: ${JSON.stringify(t.color)}, range min ${tMin}`);
+    await page.selectOption('#variable', 'temperature anomaly');
+    await waitConverged(page);
+    const a = await rState(page);
+    const [aMin, aMax] = [Number(await page.inputValue('#rangeMin')), Number(await page.inputValue('#rangeMax'))];
+    check(a.color.colorMap === 'vik' && aMin < 0 && Math.abs(aMin + aMax) < 1e-6 * aMax, `anomaly defaults: ${a.color.colorMap} ${aMin}..${aMax}`);
+    const before = await viewPixels(page);
+
+    // A colour point in the middle of the bar, recoloured bright green.
+    await page.locator('#tf').scrollIntoViewIfNeeded();
+    const bar = await page.evaluate(() => {
+      const r = document.getElementById('tf').getBoundingClientRect();
+      return { x: r.x + r.width / 2, y: r.y + r.height - 22 - 14 + 4 + 7 };
+    });
+    await page.mouse.click(bar.x, bar.y);
+    await waitConverged(page);
+    const p1 = (await rState(page)).color.points;
+    check(p1.length === 8, `clicking the colour bar made ${p1.length} colour points, expected the map's 7 and the new one`);
+    await page.evaluate(() => {
+      const input = document.getElementById('tfPointColor');
+      input.value = '#00ff00';
+      input.dispatchEvent(new Event('input'));
+    });
+    await waitConverged(page);
+    const edited = await rState(page);
+    const green = edited.color.points.find((p) => p[1] === 0 && p[2] === 1 && p[3] === 0);
+    check(green && Math.abs(green[0] - 0.5) < 0.03, `the selected point did not turn green: ${JSON.stringify(edited.color.points)}`);
+    const recoloured = await viewPixels(page);
+    const dColour = meanAbsDiff(before, recoloured);
+    check(dColour > 0.3, `recolouring the middle of the map hardly changed the image (${dColour.toFixed(2)})`);
+
+    // Save/load: the points come back and render the same.
+    await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, color: { ...s.color, points: [] } }); });
+    await waitConverged(page);
+    await page.evaluate((s) => window.__raypc.setState(s), edited);
+    await waitConverged(page);
+    check(JSON.stringify((await rState(page)).color.points) === JSON.stringify(edited.color.points), 'colour points lost on load');
+    check(meanAbsDiff(recoloured, await viewPixels(page)) < 1, 'the reloaded colour points render differently');
+
+    // ParaView JSON: export, then import it over the plain map.
+    const [dl] = await Promise.all([page.waitForEvent('download'), page.click('#pvExport')]);
+    const file = join(tmp, 'pv.json');
+    await dl.saveAs(file);
+    const pv = JSON.parse(readFileSync(file, 'utf8'));
+    check(Array.isArray(pv) && pv[0].RGBPoints.length === edited.color.points.length * 4 && pv[0].Points.length === edited.color.opacity.length * 4,
+      `exported ParaView JSON: ${JSON.stringify(pv).slice(0, 200)}`);
+    await page.selectOption('#colorMap', 'vik');
+    await waitConverged(page);
+    check((await rState(page)).color.points.length === 0, 'choosing a map kept the colour points');
+    await page.setInputFiles('#pvImport', file);
+    await waitConverged(page);
+    const imported = await rState(page);
+    check(imported.color.points.length === edited.color.points.length && Math.abs(imported.color.range[0] - pv[0].RGBPoints[0]) < 1e-3 * aMax,
+      `imported ParaView map: ${imported.color.points.length} points, range ${JSON.stringify(imported.color.range)}`);
+    const dImport = meanAbsDiff(recoloured, await viewPixels(page));
+    check(dImport < 0.5, `the imported map renders unlike the exported one (${dImport.toFixed(2)})`);
+    const bad = join(tmp, 'bad-pv.json');
+    writeFileSync(bad, JSON.stringify([{ Name: 'x', RGBPoints: [0, 0, 0] }]));
+    const errorsBefore = await page.evaluate(() => window.__raypc.errors.length);
+    await page.setInputFiles('#pvImport', bad);
+    await page.waitForFunction((n) => window.__raypc.errors.length > n, errorsBefore, { timeout: 5000 });
+    check(/RGBPoints/.test(await page.textContent('#error')), `bad ParaView file: ${await page.textContent('#error')}`);
+
+    // Reversed.
+    await page.check('#colorReversed');
+    await waitConverged(page);
+    check((await rState(page)).color.reversed === true, 'reversed not in the state');
+    const dRev = meanAbsDiff(await viewPixels(page), recoloured);
+    check(dRev > 0.3, `reversing the colours hardly changed the image (${dRev.toFixed(2)})`);
+    console.log(`  image change: recoloured ${dColour.toFixed(2)}, imported vs exported ${dImport.toFixed(2)}, reversed ${dRev.toFixed(2)}`);
+  },
+
+  // Brush values: a brush's min and max are written at its ends on the axis and can be typed
+  // exactly in the Selection panel (the state and the frame get them); × clears one axis, Escape all.
+  async brush_values({ context, url }) {
+    const page = await openUi(context, url);
+    await standardView(page);
+    await brushAxis(page, 'depth', 0.2, 0.6);
+    await brushAxis(page, 'temperature', 0.1, 0.7);
+    await waitConverged(page);
+    const labels = await page.evaluate(() => [...document.querySelectorAll('#parcoords g.dimension')].map((g) => ({
+      name: g.__data__, labels: [...g.querySelectorAll('text.brushLabel')].map((t) => t.textContent) })).filter((x) => x.labels.length));
+    check(labels.length === 2 && labels.every((l) => l.labels.length === 2), `brush end labels: ${JSON.stringify(labels)}`);
+    await page.fill('.brushRow[data-brush="depth"] input.brushMin', '660');
+    await page.fill('.brushRow[data-brush="depth"] input.brushMax', '1000');
+    await page.dispatchEvent('.brushRow[data-brush="depth"] input.brushMax', 'change');
+    await waitConverged(page);
+    const s = await rState(page);
+    const depth = s.brushes.find((b) => b.name === 'depth');
+    check(depth && depth.min === 660 && depth.max === 1000 && s.brushes.length === 2, `typed depth 660 … 1000 km, state brushes ${JSON.stringify(s.brushes)}`);
+    const sent = await page.evaluate(() => { const r = window.__raypc, h = r.headers.at(-1); return r.sentLog.find((e) => e.id === h.id); });
+    check(JSON.stringify(sent.brushes) === JSON.stringify(s.brushes), `the frame shown was rendered with ${JSON.stringify(sent.brushes)}`);
+    const pc = await page.evaluate(() => window.__raypc.parcoords.brushes().find((b) => b.name === 'depth'));
+    check(pc && Math.abs(pc.min - 660) < 1 && Math.abs(pc.max - 1000) < 1, `the depth axis shows ${JSON.stringify(pc)}`);
+    await page.click('.brushRow[data-brush="depth"] button.brushClear');
+    await waitConverged(page);
+    check(JSON.stringify((await rState(page)).brushes.map((b) => b.name)) === '["temperature"]', `after × on depth: ${JSON.stringify((await rState(page)).brushes)}`);
+    await page.locator('#view3d').focus();
+    await page.keyboard.press('Escape');
+    await waitConverged(page);
+    check((await rState(page)).brushes.length === 0, 'Escape did not clear the brushes');
+  },
+
+  // Camera: the wheel cannot take the eye inside the planet (unless Fly inside is ticked); arrow
+  // keys orbit and + zooms; a double-click resets the view.
+  async camera({ context, url }) {
+    const page = await openUi(context, url);
+    const eye = () => page.evaluate(() => {
+      const c = window.__raypc.state().camera, el = (c.elevationDeg * Math.PI) / 180, az = (c.azimuthDeg * Math.PI) / 180;
+      const o = [Math.cos(el) * Math.cos(az), Math.cos(el) * Math.sin(az), Math.sin(el)];
+      return Math.hypot(...c.targetKm.map((t, k) => t + o[k] * c.distanceKm));
+    });
+    const r = await page.locator('#view3d').boundingBox();
+    await page.mouse.move(r.x + r.width / 2, r.y + r.height / 2);
+    for (let i = 0; i < 20; i++) await page.mouse.wheel(0, -400);
+    await page.waitForTimeout(400);
+    await waitConverged(page);
+    const inside = await eye();
+    check(inside >= 6371, `after 20 wheel steps the eye is ${inside.toFixed(0)} km from the centre, inside the planet`);
+    await page.check('#flyInside');
+    await page.mouse.move(r.x + r.width / 2, r.y + r.height / 2); // checking the box moved the mouse away
+    for (let i = 0; i < 20; i++) await page.mouse.wheel(0, -400);
+    await page.waitForTimeout(400);
+    await waitConverged(page);
+    const flown = await eye();
+    check(flown < 6371, `with Fly inside the eye stays at ${flown.toFixed(0)} km`);
+    await page.uncheck('#flyInside');
+    const def = (await info(url)).defaultState.camera;
+    await page.mouse.dblclick(r.x + r.width / 2, r.y + r.height / 2);
+    await waitConverged(page);
+    check(JSON.stringify((await rState(page)).camera) === JSON.stringify(def), `double-click did not reset the camera: ${JSON.stringify((await rState(page)).camera)}`);
+    await page.locator('#view3d').focus();
+    await page.keyboard.press('ArrowLeft');
+    await page.keyboard.press('+');
+    await page.waitForTimeout(400);
+    await waitConverged(page);
+    const c = (await rState(page)).camera;
+    check(c.azimuthDeg !== def.azimuthDeg && c.distanceKm < def.distanceKm, `keys: azimuth ${def.azimuthDeg} -> ${c.azimuthDeg}, distance ${def.distanceKm} -> ${c.distanceKm}`);
+  },
+
+  // Responsiveness with 100 000 lines: the page answers a click within 1 s while the lines are
+  // being drawn — right after the sample arrived and right after a brush release (run with GPU
+  // rasterisation on by ctest's browser.gpu.responsive, where it used to stall for minutes).
+  async responsive({ context, url }) {
+    const t0 = Date.now();
+    const page = await openUi(context, url, { timeoutMs: 60000 });
+    await page.waitForFunction(() => window.__raypc.sampleStep >= 0, null, { timeout: 60000 });
+    const rows = await page.evaluate(() => window.__raypc.parcoords.rowCount);
+    check(rows >= 50000, `the sample has ${rows} rows, expected the 100 000 asked for (at least 50 000)`);
+    // From the click's input event (its timeStamp, when it was sent) to the first frame painted
+    // after the page handled it: what the user waits for.
+    await page.evaluate(() => {
+      window.addEventListener('click', (e) => {
+        const t0 = e.timeStamp;
+        requestAnimationFrame(() => { window.__clickMs = performance.now() - t0; });
+      }, true);
+    });
+    const clickMs = async (id, key) => {
+      const before = await page.evaluate((k) => window.__raypc.state()[k], key);
+      await page.locator(id).scrollIntoViewIfNeeded();
+      const box = await page.locator(id).boundingBox();
+      await page.evaluate(() => { window.__clickMs = undefined; });
+      await page.mouse.click(box.x + box.width / 2, box.y + box.height / 2);
+      await page.waitForFunction(([k, b]) => window.__raypc.state()[k] !== b && window.__clickMs !== undefined, [key, before], { timeout: 30000, polling: 20 });
+      return Math.round(await page.evaluate(() => window.__clickMs));
+    };
+    const atOpen = await clickMs('#legend', 'legend');
+    await page.locator('#parcoords').scrollIntoViewIfNeeded();
+    await brushAxis(page, 'temperature', 0.2, 0.6);
+    const afterBrush = await clickMs('#legend', 'legend');
+    console.log(`  ${rows} lines; opened in ${Date.now() - t0} ms; click answered in ${atOpen} ms while the lines were drawn, ${afterBrush} ms after a brush release`);
+    check(atOpen < 1000 && afterBrush < 1000, `a click took ${atOpen} ms while the lines were drawn and ${afterBrush} ms after a brush release (limit 1000 ms)`);
   },
 
   // Pathlines: showing them changes the image; the second parallel-coordinates plot holds one line
@@ -439,9 +752,15 @@ const cases = {
   },
 };
 
+// Chromium context options per case (default: 1280x860 at devicePixelRatio 1).
+const caseOptions = {
+  resolution: { contextOptions: { viewport: { width: 1000, height: 700 }, deviceScaleFactor: 2 } },
+  responsive: { sampleRows: 100000, limitMs: 150000 },
+};
+
 const body = cases[caseName];
 if (!body) {
   console.error(`unknown case '${caseName}'; cases: ${Object.keys(cases).join(', ')}`);
   process.exit(2);
 }
-runCase(caseName, raypc, fixture, body);
+runCase(mode === 'gpu' ? `${caseName} (gpu)` : caseName, raypc, fixture, body, { ...(caseOptions[caseName] ?? {}), gpu: mode === 'gpu' });

@@ -48,7 +48,10 @@ function waitForUrl(proc, timeoutMs) {
 
 // Runs `body({ browser, context, url, dataset, tmp })` and always cleans up. Exits the process
 // with 0 on success, 1 on failure, and never runs past `limitMs`.
-export async function runCase(name, raypc, fixture, body, { limitMs = 100000 } = {}) {
+// `contextOptions` go to chromium's context (e.g. a viewport or deviceScaleFactor); `gpu` runs
+// chromium with GPU rasterisation on a software GL (SwiftShader), as on a machine without a GPU,
+// instead of --disable-gpu.
+export async function runCase(name, raypc, fixture, body, { limitMs = 100000, contextOptions = {}, gpu = false, sampleRows = 5000 } = {}) {
   const started = Date.now();
   let server = null, context = null, tmp = null;
   const cleanup = async () => {
@@ -76,7 +79,7 @@ export async function runCase(name, raypc, fixture, body, { limitMs = 100000 } =
 
     tmp = mkdtempSync(join(tmpdir(), `raypc-browser-${name}-`));
     const dataset = join(tmp, 'ds');
-    const pre = spawnSync(raypc, ['preprocess', fixture, '-o', dataset, '--quiet', '--sample-rows', '5000'], { encoding: 'utf8', timeout: 60000 });
+    const pre = spawnSync(raypc, ['preprocess', fixture, '-o', dataset, '--quiet', '--sample-rows', String(sampleRows)], { encoding: 'utf8', timeout: 60000 });
     check(pre.status === 0, `raypc preprocess failed (${pre.status}): ${pre.stderr}`);
 
     server = spawn(raypc, ['serve', dataset, '--port', '0', '--assets', dist, '--examples', join(repoRoot, 'examples')], { stdio: ['ignore', 'pipe', 'pipe'] });
@@ -87,10 +90,13 @@ export async function runCase(name, raypc, fixture, body, { limitMs = 100000 } =
       headless: true,
       acceptDownloads: true,
       viewport: { width: 1280, height: 860 },
-      args: ['--no-sandbox', '--disable-gpu', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-quic',
+      ...contextOptions,
+      args: ['--no-sandbox', ...(gpu ? ['--enable-gpu-rasterization', '--ignore-gpu-blocklist'] : ['--disable-gpu']), '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-quic',
         '--no-first-run', '--disable-background-networking', '--disable-component-update', '--disable-sync',
         '--disable-features=Translate,MediaRouter,OptimizationHints', '--disable-dev-shm-usage'],
     });
+    // The UI installs window.__raypc (web/src/test_hooks.ts) only when asked before it loads.
+    await context.addInitScript(() => { window.__raypcTestHooks = true; });
     await body({ context, url, dataset, tmp, raypc });
     console.log(`PASS ${name} (${((Date.now() - started) / 1000).toFixed(1)} s)`);
     clearTimeout(watchdog);

@@ -33,6 +33,7 @@ const context = await chromium.launchPersistentContext(profile, {
     '--disable-background-networking', '--disable-component-update', '--disable-sync'],
 });
 try {
+  await context.addInitScript(() => { window.__raypcTestHooks = true; }); // web/src/test_hooks.ts
   const page = await context.newPage();
   await page.goto(url);
   await page.waitForFunction(() => window.__raypc && window.__raypc.parcoords.rowCount > 0 && window.__raypc.headers.length > 0, null, { timeout: 60000 });

@@ -101,7 +101,12 @@ const defaults = JSON.parse(run(stateCases, ['default', dataset]));
   const rich = structuredClone(defaults);
   Object.assign(rich, { step: 3, level: 1, timeBudgetMs: 80, passes: 4, stepFactor: 0.25, depthOpacity: 0.7, background: [0.1, 0.2, 0.3] });
   rich.camera.targetKm = [100, -200, 300];
-  rich.color = { variable: 'temperature', colorMap: 'inferno', range: [1000, 3000], opacity: [[0, 0.1], [0.5, 0.9], [1, 0.2]], opacityUnitKm: 50 };
+  rich.color = { variable: 'temperature', colorMap: 'inferno', range: [1000, 3000], opacity: [[0, 0.1], [0.5, 0.9], [1, 0.2]], opacityUnitKm: 50,
+    logScale: true, points: [[0, 0.1, 0.2, 0.3], [0.4, 0.5, 0.5, 0.5], [1, 0.9, 0.8, 0.7]], reversed: true };
+  rich.legend = true;
+  rich.reference = { shells: { visible: true, depthsKm: [660, 1600], opacity: 0.1, color: [0.5, 0.6, 0.7] },
+    graticule: { visible: true, spacingDeg: 15, opacity: 0.25, color: [0.25, 0.5, 0.75] },
+    coastlines: { visible: true, opacity: 0.5, color: [1, 1, 0] }, lineWidthPx: 2.5 };
   rich.brushes = [{ name: 'depth', min: 0, max: 660 }, { name: 'temperature', min: 1500, max: 2500 }];
   rich.core = { visible: false, variable: 'temperature', color: [0.2, 0.3, 0.4], colorMap: 'grayscale', range: [2000, 4000] };
   rich.shading = { enabled: true, light: [-1, 0.5, 0.25], ambient: 0.2, diffuse: 0.8 };

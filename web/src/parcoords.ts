@@ -6,12 +6,15 @@ import ParCoords from 'parcoord-es';
 import * as d3 from 'd3';
 import type { Brush } from './state';
 import type { Sample } from './api';
+import { displayUnits } from './units';
 
 export interface AxisInfo {
   name: string;
   units: string;
   min: number;
   max: number;
+  // Names of integer values (a categorical axis such as the seed kind): ticks at those values.
+  categories?: Record<number, string>;
 }
 
 export interface ParcoordsOptions {
@@ -40,6 +43,26 @@ type Row = Record<string, number>;
 const kSliceMs = 6;
 const kDragLines = 5000;
 
+// Chromium rasterises 2D canvases on the GPU when it can. With only a software GL (SwiftShader, what a
+// machine without a GPU has when GPU rasterisation is on) drawing 100 000 polylines there stalled
+// the page for minutes ("GPU stall due to ReadPixels"; issue 12). A context asked for with
+// willReadFrequently stays in CPU memory and is drawn by Skia's software rasteriser, in the time
+// budget of a slice, GPU rasterisation on or off. parcoord-es creates its layers' contexts itself,
+// synchronously in its constructor: they are asked for with that option while `make` runs.
+function withCpuCanvases<T>(make: () => T): T {
+  const proto = HTMLCanvasElement.prototype;
+  const original = proto.getContext;
+  const patched = function (this: HTMLCanvasElement, type: string, options?: Record<string, unknown>) {
+    return original.call(this, type, type === '2d' ? { ...options, willReadFrequently: true } : options);
+  };
+  proto.getContext = patched as typeof original;
+  try {
+    return make();
+  } finally {
+    proto.getContext = original;
+  }
+}
+
 // Short axis titles for the long dataset names (the full name is the axis' tooltip).
 const kShortNames: Record<string, string> = {
   'temperature anomaly': 'T anomaly',
@@ -49,10 +72,8 @@ const kShortNames: Record<string, string> = {
   'radial velocity': 'v radial',
   'velocity magnitude': '|v|',
 };
-const kShortUnits: Record<string, string> = { degrees_north: '°N', degrees_east: '°E', 'kg/m^3': 'kg/m³' };
-
 export function axisTitle(a: AxisInfo): string {
-  const units = kShortUnits[a.units] ?? a.units;
+  const units = displayUnits(a.units);
   // Pathline attributes: "start temperature anomaly" -> "start T anomaly".
   const m = /^(start|end) (.*)$/.exec(a.name);
   const name = kShortNames[a.name] ?? (m && kShortNames[m[2]] ? `${m[1]} ${kShortNames[m[2]]}` : a.name);
@@ -163,6 +184,7 @@ export class ParallelCoordinates {
     } finally {
       this.suppress--;
     }
+    this.drawBrushLabels();
   }
 
   private applyBrushes(brushes: Brush[]): void {
@@ -178,7 +200,8 @@ export class ParallelCoordinates {
     const brushes = this.pc ? this.brushes() : this.pending;
     if (this.pc) this.order = this.pc.getOrderedDimensionKeys();
     this.container.innerHTML = '';
-    const margin = { top: 34, right: 30, bottom: 14, left: 30 };
+    // Wide enough side margins that the first and last (centred) titles are not cut off.
+    const margin = { top: 34, right: 64, bottom: 14, left: 48 };
     const plotH = h - margin.top - margin.bottom;
     const order = this.order ?? this.axes.map((a) => a.name);
     const dimensions: Record<string, unknown> = {};
@@ -186,9 +209,11 @@ export class ParallelCoordinates {
       const a = this.axes.find((x) => x.name === name);
       if (!a) return;
       const lo = a.min, hi = a.max > a.min ? a.max : a.min + 1;
+      const categories = a.categories;
       dimensions[name] = {
         title: axisTitle(a),
-        tickFormat: tickFormatFor(lo, hi),
+        tickFormat: categories ? (v: number) => categories[v] ?? '' : tickFormatFor(lo, hi),
+        ...(categories ? { tickValues: Object.keys(categories).map(Number).filter((v) => v >= lo && v <= hi) } : {}),
         type: 'number',
         index,
         yscale: d3.scaleLinear().domain([lo, hi]).range([plotH + 1, 1]),
@@ -197,7 +222,8 @@ export class ParallelCoordinates {
     });
     this.suppress++;
     try {
-      this.pc = ParCoords({ width: w, height: h, margin, alpha: this.options.alpha ?? 0.06, alphaOnBrushed: (this.options.alpha ?? 0.06) / 2, lineWidth: 1 })(this.container);
+      this.pc = withCpuCanvases(() => ParCoords({ width: w, height: h, margin, alpha: this.options.alpha ?? 0.06,
+        alphaOnBrushed: (this.options.alpha ?? 0.06) / 2, lineWidth: 1 })(this.container));
       this.installRenderer();
       this.pc
         .data(this.rows)
@@ -214,6 +240,7 @@ export class ParallelCoordinates {
     } finally {
       this.suppress--;
     }
+    this.drawBrushLabels();
     // Titles carry units; stagger every other one so neighbours do not overlap; full name as tooltip.
     d3.select(this.container).selectAll<SVGTextElement, string>('text.label')
       .style('font-size', '11px')
@@ -221,7 +248,7 @@ export class ParallelCoordinates {
       .each((d, i, nodes) => {
         const a = this.axes.find((x) => x.name === d);
         d3.select(nodes[i].parentNode as SVGGElement).append('title')
-          .text(a ? `${a.name} [${a.units}]: drag vertically on the axis to brush, drag the title to reorder` : d);
+          .text(a ? `${a.name} [${displayUnits(a.units)}]: drag vertically on the axis to brush, drag the title to reorder` : d);
       });
   }
 
@@ -304,13 +331,40 @@ export class ParallelCoordinates {
     this.yieldThen(slice);
   }
 
+  // The next slice runs as a background-priority task where the browser has the Prioritized Task
+  // Scheduling API (Chromium): input, rendering and frames from the server go first, so a click is
+  // answered while 100 000 lines are drawn. Elsewhere a MessageChannel message (a task, without
+  // setTimeout's clamping).
   private yieldThen(f: () => void): void {
+    const scheduler = (globalThis as unknown as { scheduler?: { postTask(cb: () => void, o: { priority: string }): Promise<void> } }).scheduler;
+    if (scheduler) {
+      void scheduler.postTask(f, { priority: 'background' });
+      return;
+    }
     this.slices.push(f);
     this.channel.port2.postMessage(0);
   }
 
+  // Each brush's min and max as text at its ends, in the axis' tick format.
+  private drawBrushLabels(): void {
+    if (!this.pc) return;
+    const dims = this.pc.dimensions() as Record<string, { yscale: (v: number) => number }>;
+    const brushes = new Map(this.brushes().map((b) => [b.name, b]));
+    d3.select(this.container).selectAll<SVGGElement, string>('g.dimension').each((name, i, nodes) => {
+      const g = d3.select(nodes[i]);
+      g.selectAll('text.brushLabel').remove();
+      const b = brushes.get(name), dim = dims[name];
+      if (!b || !dim) return;
+      const a = this.axes.find((x) => x.name === name);
+      const format = tickFormatFor(a?.min ?? b.min, a?.max ?? b.max);
+      for (const [v, dy] of [[b.max, -4], [b.min, 12]] as const)
+        g.append('text').attr('class', 'brushLabel').attr('x', 9).attr('y', dim.yscale(v) + dy).text(format(v));
+    });
+  }
+
   private emit(interactive: boolean): void {
     if (this.suppress) return;
+    this.drawBrushLabels();
     const t0 = performance.now();
     this.timing.brushEvents++;
     this.dragging = interactive;

@@ -7,6 +7,9 @@ import type { SelectionOverTime } from './api';
 const kMargin = { top: 8, right: 12, bottom: 22, left: 50 };
 
 function frame(svg: SVGSVGElement) {
+  // As wide as the panel holding it (docked in the side panel, which grows with the window).
+  const parentW = (svg.parentElement?.clientWidth ?? 0) - 4;
+  if (parentW > 100) svg.setAttribute('width', String(parentW));
   const w = Number(svg.getAttribute('width')), h = Number(svg.getAttribute('height'));
   const root = d3.select(svg);
   root.selectAll('*').remove();
@@ -30,7 +33,7 @@ export function drawTimePlot(svg: SVGSVGElement, s: SelectionOverTime, currentSt
   g.selectAll('circle.step').data(pts).enter().append('circle').attr('class', 'step')
     .attr('cx', (p) => x(p.t)).attr('cy', (p) => y(p.v)).attr('r', (p) => (p.step === currentStep ? 4 : 1.8))
     .attr('fill', (p) => (p.step === currentStep ? '#ffcc4d' : '#8ab4f8'))
-    .append('title').text((p) => `step ${p.step + 1}: ${p.t.toFixed(1)} Myr, ${p.v.toFixed(3)} %`);
+    .append('title').text((p) => `step ${p.step}: ${p.t.toFixed(1)} Myr, ${p.v.toFixed(3)} %`);
   const cur = pts.find((p) => p.step === currentStep);
   if (cur) g.append('line').attr('class', 'current').attr('x1', x(cur.t)).attr('x2', x(cur.t)).attr('y1', 0).attr('y2', ih)
     .attr('stroke', '#ffcc4d').attr('stroke-dasharray', '3,2');

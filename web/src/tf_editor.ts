@@ -1,7 +1,10 @@
 // Transfer-function editor: the piecewise-linear opacity (state.color.opacity, positions
-// normalised over the colour range) drawn over the variable's histogram and a colour bar.
-// Drag a point to move it, click on empty space to add one, double-click a point to remove it.
-import { sampleColorMap } from './colormaps';
+// normalised over the colour range, logarithmically with a log scale) drawn over the variable's
+// histogram, and the colour bar with its colour control points (state.color.points).
+// Opacity: drag a point to move it, click on empty space to add one, double-click a point to remove it.
+// Colours (on the bar): click to add a point (it takes the colour there), drag to move, click to
+// select it (its colour is then picked in the panel), double-click to remove it.
+import type { ColorStop } from './colormaps';
 
 export interface HistogramData {
   min: number;
@@ -11,16 +14,33 @@ export interface HistogramData {
 
 export interface TfEditorOptions {
   onChange(opacity: [number, number][], interactive: boolean): void;
+  // The colour points changed (`points` is the whole new list) or one was selected (-1: none).
+  onColorPoints(points: ColorStop[], interactive: boolean): void;
+  onSelectColorPoint(index: number): void;
+}
+
+// What the editor shows besides the opacity points: the colour at a position of the bar, the
+// position of a value (for the histograms), the colour points being edited (empty: a named map).
+export interface TfView {
+  colourAt(u: number): [number, number, number];
+  positionOf(value: number): number;
+  valueAt(u: number): number;
+  colorPoints: ColorStop[];
 }
 
 const kBarHeight = 14;
+// Where a named map becomes editable colour points.
+const kEditPositions = [0, 1 / 6, 2 / 6, 3 / 6, 4 / 6, 5 / 6, 1];
 const kPointRadius = 5;
 
 export class TfEditor {
   private points: [number, number][] = [[0, 0], [1, 0.5]];
   private range: [number, number] = [0, 1];
-  private colorMap = 'viridis';
+  private tfView: TfView = { colourAt: () => [0.5, 0.5, 0.5], positionOf: (v) => v, valueAt: (u) => u, colorPoints: [] };
   private units = '';
+  private colorPoints: ColorStop[] = [];
+  private draggingColor = -1;
+  selectedColor = -1;
   private histograms: { data: HistogramData; style: 'bars' | 'line' }[] = [];
   private dragging = -1;
   private readonly ctx: CanvasRenderingContext2D;
@@ -35,11 +55,13 @@ export class TfEditor {
     new ResizeObserver(() => this.draw()).observe(canvas);
   }
 
-  set(points: [number, number][], range: [number, number], colorMap: string, units: string,
+  set(points: [number, number][], range: [number, number], view: TfView, units: string,
       histograms: { data: HistogramData; style: 'bars' | 'line' }[]): void {
     if (this.dragging < 0) this.points = points.map((p) => [p[0], p[1]] as [number, number]);
     this.range = range;
-    this.colorMap = colorMap;
+    this.tfView = view;
+    if (this.draggingColor < 0) this.colorPoints = view.colorPoints.map((p) => [...p] as ColorStop);
+    if (this.selectedColor >= this.colorPoints.length) this.selectedColor = -1;
     this.units = units;
     this.histograms = histograms;
     this.draw();
@@ -75,8 +97,54 @@ export class TfEditor {
     return best;
   }
 
+  private barY(): number {
+    return this.plotArea().y1 + 4;
+  }
+
+  // The colour point under the pointer on the bar (within a few pixels), or -1.
+  private hitColor(e: PointerEvent | MouseEvent): number {
+    const r = this.canvas.getBoundingClientRect();
+    const a = this.plotArea();
+    const mx = e.clientX - r.left;
+    let best = -1, bestD = 6;
+    this.colorPoints.forEach((p, i) => {
+      const d = Math.abs(a.x0 + p[0] * (a.x1 - a.x0) - mx);
+      if (d <= bestD) { bestD = d; best = i; }
+    });
+    return best;
+  }
+
+  private onBar(e: PointerEvent | MouseEvent): boolean {
+    const r = this.canvas.getBoundingClientRect();
+    const y = e.clientY - r.top, barY = this.barY();
+    return y >= barY - 2 && y <= barY + kBarHeight + 6;
+  }
+
+  private emitColors(interactive: boolean): void {
+    this.options.onColorPoints(this.colorPoints.map((p) => [...p] as ColorStop), interactive);
+  }
+
   private onDown(e: PointerEvent): void {
     if (e.button !== 0) return;
+    if (this.onBar(e)) {
+      let i = this.hitColor(e);
+      if (i < 0) {
+        // A new point takes the colour shown there; a named map first becomes points.
+        const [u] = this.fromEvent(e);
+        if (!this.colorPoints.length) this.colorPoints = kEditPositions.map((x) => [x, ...this.tfView.colourAt(x)] as ColorStop);
+        const c = this.tfView.colourAt(u);
+        i = this.colorPoints.findIndex((q) => q[0] > u);
+        if (i < 0) i = this.colorPoints.length;
+        this.colorPoints.splice(i, 0, [u, ...c]);
+        this.emitColors(false);
+      }
+      this.selectedColor = i;
+      this.draggingColor = i;
+      this.options.onSelectColorPoint(i);
+      this.canvas.setPointerCapture(e.pointerId);
+      this.draw();
+      return;
+    }
     let i = this.hit(e);
     if (i < 0) {
       const p = this.fromEvent(e);
@@ -91,6 +159,15 @@ export class TfEditor {
   }
 
   private onMove(e: PointerEvent): void {
+    if (this.draggingColor >= 0) {
+      const i = this.draggingColor;
+      const [u] = this.fromEvent(e);
+      const lo = i > 0 ? this.colorPoints[i - 1][0] : 0, hi = i + 1 < this.colorPoints.length ? this.colorPoints[i + 1][0] : 1;
+      this.colorPoints[i] = [Math.min(hi, Math.max(lo, u)), this.colorPoints[i][1], this.colorPoints[i][2], this.colorPoints[i][3]];
+      this.draw();
+      this.emitColors(true);
+      return;
+    }
     if (this.dragging < 0) return;
     const i = this.dragging;
     const [x, y] = this.fromEvent(e);
@@ -101,6 +178,12 @@ export class TfEditor {
   }
 
   private onUp(e: PointerEvent): void {
+    if (this.draggingColor >= 0) {
+      this.draggingColor = -1;
+      if (this.canvas.hasPointerCapture(e.pointerId)) this.canvas.releasePointerCapture(e.pointerId);
+      this.emitColors(false);
+      return;
+    }
     if (this.dragging < 0) return;
     this.dragging = -1;
     if (this.canvas.hasPointerCapture(e.pointerId)) this.canvas.releasePointerCapture(e.pointerId);
@@ -108,6 +191,17 @@ export class TfEditor {
   }
 
   private onDoubleClick(e: MouseEvent): void {
+    if (this.onBar(e)) {
+      const k = this.hitColor(e);
+      if (k >= 0 && this.colorPoints.length > 2) {
+        this.colorPoints.splice(k, 1);
+        this.selectedColor = -1;
+        this.options.onSelectColorPoint(-1);
+        this.draw();
+        this.emitColors(false);
+      }
+      return;
+    }
     const i = this.hit(e);
     if (i < 0 || this.points.length <= 2) return;
     this.points.splice(i, 1);
@@ -140,7 +234,8 @@ export class TfEditor {
       ctx.beginPath();
       for (let b = 0; b < n; b++) {
         const v0 = data.min + b * binW, v1 = v0 + binW;
-        const x0 = a.x0 + ((v0 - lo) / (hi - lo)) * (a.x1 - a.x0), x1 = a.x0 + ((v1 - lo) / (hi - lo)) * (a.x1 - a.x0);
+        const x0 = a.x0 + this.tfView.positionOf(v0) * (a.x1 - a.x0), x1 = a.x0 + this.tfView.positionOf(v1) * (a.x1 - a.x0);
+        if (v1 < lo || v0 > hi) continue;
         if (x1 < a.x0 || x0 > a.x1) continue;
         const y = a.y1 - (Math.sqrt(data.histogram[b]) / peak) * (a.y1 - a.y0) * 0.95;
         if (style === 'bars') ctx.rect(Math.max(a.x0, x0), y, Math.max(0.5, Math.min(a.x1, x1) - Math.max(a.x0, x0)), a.y1 - y);
@@ -156,16 +251,29 @@ export class TfEditor {
     // Colour bar, with the opacity shown as a darker band above it.
     const barY = a.y1 + 4;
     for (let x = a.x0; x < a.x1; x++) {
-      const [r, g, b] = sampleColorMap(this.colorMap, (x - a.x0) / (a.x1 - a.x0));
+      const [r, g, b] = this.tfView.colourAt((x - a.x0) / (a.x1 - a.x0));
       ctx.fillStyle = `rgb(${r * 255},${g * 255},${b * 255})`;
       ctx.fillRect(x, barY, 1, kBarHeight);
     }
+    // Colour points: a tick through the bar and a handle below it (the selected one yellow).
+    this.colorPoints.forEach((p, i) => {
+      const x = a.x0 + p[0] * (a.x1 - a.x0);
+      ctx.fillStyle = `rgb(${p[1] * 255},${p[2] * 255},${p[3] * 255})`;
+      ctx.strokeStyle = i === this.selectedColor ? '#ff0' : '#fff';
+      ctx.lineWidth = 1.5;
+      ctx.beginPath();
+      ctx.rect(x - 3, barY - 1, 6, kBarHeight + 2);
+      ctx.fill();
+      ctx.stroke();
+    });
     ctx.fillStyle = '#ccd';
     ctx.font = '11px system-ui, sans-serif';
     ctx.textBaseline = 'top';
     const fmt = (v: number) => (Math.abs(v) >= 1e4 || (Math.abs(v) < 1e-2 && v !== 0) ? v.toExponential(2) : v.toPrecision(4));
     ctx.textAlign = 'left';
     ctx.fillText(fmt(lo), a.x0, barY + kBarHeight + 3);
+    ctx.textAlign = 'center';
+    ctx.fillText(fmt(this.tfView.valueAt(0.5)), (a.x0 + a.x1) / 2, barY + kBarHeight + 3);
     ctx.textAlign = 'right';
     ctx.fillText(`${fmt(hi)} ${this.units}`, a.x1, barY + kBarHeight + 3);
 
@@ -182,7 +290,7 @@ export class TfEditor {
     ctx.stroke();
     this.points.forEach((p, i) => {
       const [sx, sy] = this.toScreen(p);
-      const [r, g, b] = sampleColorMap(this.colorMap, p[0]);
+      const [r, g, b] = this.tfView.colourAt(p[0]);
       ctx.beginPath();
       ctx.arc(sx, sy, kPointRadius, 0, 2 * Math.PI);
       ctx.fillStyle = `rgb(${r * 255},${g * 255},${b * 255})`;

@@ -1,0 +1,183 @@
+#include "render/legend.h"
+
+#include "core/error.h"
+
+#include <fmt/format.h>
+#include <ft2build.h>
+#include FT_FREETYPE_H
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+
+namespace raypc::render {
+namespace {
+
+std::string fontPath()
+{
+    if (const char* env = std::getenv("RAYPC_FONT"); env && *env)
+        return env;
+    return "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+}
+
+// A FreeType face at one pixel size, closed on destruction.
+class Font {
+public:
+    explicit Font(int pixelSize)
+    {
+        const std::string path = fontPath();
+        if (FT_Init_FreeType(&m_library))
+            fail("legend: FreeType could not be initialised");
+        if (!std::filesystem::is_regular_file(path) || FT_New_Face(m_library, path.c_str(), 0, &m_face)) {
+            FT_Done_FreeType(m_library);
+            fail("legend: cannot read the font {} (Debian package fonts-dejavu-core, or set $RAYPC_FONT)", path);
+        }
+        FT_Set_Pixel_Sizes(m_face, 0, FT_UInt(pixelSize));
+    }
+    ~Font()
+    {
+        FT_Done_Face(m_face);
+        FT_Done_FreeType(m_library);
+    }
+    Font(const Font&) = delete;
+    Font& operator=(const Font&) = delete;
+
+    // Draws UTF-8 `text` with its baseline at (x, y); returns the advance in pixels. With `draw`
+    // false it only measures.
+    int text(std::vector<uint8_t>& rgba, int width, int height, int x, int y, const std::string& text,
+             const uint8_t colour[3], bool draw = true)
+    {
+        int pen = x;
+        for (size_t i = 0; i < text.size();) {
+            const char32_t c = nextCodePoint(text, i);
+            if (FT_Load_Char(m_face, c, FT_LOAD_RENDER))
+                continue;
+            const FT_GlyphSlot g = m_face->glyph;
+            if (draw)
+                for (unsigned row = 0; row < g->bitmap.rows; ++row)
+                    for (unsigned col = 0; col < g->bitmap.width; ++col) {
+                        const int px = pen + g->bitmap_left + int(col), py = y - g->bitmap_top + int(row);
+                        if (px < 0 || py < 0 || px >= width || py >= height)
+                            continue;
+                        const float a = g->bitmap.buffer[row * unsigned(g->bitmap.pitch) + col] / 255.0f;
+                        uint8_t* p = &rgba[(size_t(py) * size_t(width) + size_t(px)) * 4];
+                        for (int k = 0; k < 3; ++k)
+                            p[k] = uint8_t(std::lround(p[k] * (1 - a) + colour[k] * a));
+                    }
+            pen += int(g->advance.x >> 6);
+        }
+        return pen - x;
+    }
+
+private:
+    static char32_t nextCodePoint(const std::string& s, size_t& i)
+    {
+        const auto byte = [&](size_t k) { return k < s.size() ? char32_t(uint8_t(s[k])) : char32_t(0x80); };
+        const char32_t b0 = byte(i);
+        if (b0 < 0x80) {
+            i += 1;
+            return b0;
+        }
+        if ((b0 >> 5) == 0x6) {
+            i += 2;
+            return ((b0 & 0x1F) << 6) | (byte(i - 1) & 0x3F);
+        }
+        if ((b0 >> 4) == 0xE) {
+            i += 3;
+            return ((b0 & 0x0F) << 12) | ((byte(i - 2) & 0x3F) << 6) | (byte(i - 1) & 0x3F);
+        }
+        i += 4;
+        return ((b0 & 0x07) << 18) | ((byte(i - 3) & 0x3F) << 12) | ((byte(i - 2) & 0x3F) << 6) | (byte(i - 1) & 0x3F);
+    }
+
+    FT_Library m_library = nullptr;
+    FT_Face m_face = nullptr;
+};
+
+void blend(std::vector<uint8_t>& rgba, int width, int height, int x0, int y0, int x1, int y1, const float c[3], float a)
+{
+    for (int y = std::max(0, y0); y < std::min(height, y1); ++y)
+        for (int x = std::max(0, x0); x < std::min(width, x1); ++x) {
+            uint8_t* p = &rgba[(size_t(y) * size_t(width) + size_t(x)) * 4];
+            for (int k = 0; k < 3; ++k)
+                p[k] = uint8_t(std::lround(p[k] * (1 - a) + c[k] * 255.0f * a));
+        }
+}
+
+}  // namespace
+
+std::string displayUnits(const std::string& units)
+{
+    if (units == "degrees_north")
+        return "°N";
+    if (units == "degrees_east")
+        return "°E";
+    std::string out;
+    for (size_t i = 0; i < units.size(); ++i) {
+        if (units[i] == '^' && i + 1 < units.size() && (units[i + 1] == '2' || units[i + 1] == '3')) {
+            out += units[i + 1] == '2' ? "²" : "³";
+            ++i;
+        } else {
+            out += units[i];
+        }
+    }
+    return out;
+}
+
+std::string legendNumber(double v)
+{
+    const double m = std::abs(v);
+    if (v == 0)
+        return "0";
+    if (m >= 1e5 || m < 1e-2)
+        return fmt::format("{:.2e}", v);
+    return fmt::format("{:.4g}", v);
+}
+
+void drawLegends(std::vector<uint8_t>& rgba, int width, int height, std::span<const LegendSpec> legends)
+{
+    if (legends.empty())
+        return;
+    if (rgba.size() != size_t(width) * size_t(height) * 4)
+        fail("legend: image of {} bytes for {}x{} pixels", rgba.size(), width, height);
+    // Sizes follow the picture: readable at 512 px, not dominant at 4K.
+    const int fontPx = std::clamp(std::min(width, height) / 36, 10, 48);
+    Font font(fontPx);
+    const int margin = fontPx, pad = fontPx / 2;
+    const int barW = std::clamp(width / 4, 8 * fontPx, 20 * fontPx), barH = std::max(6, fontPx * 3 / 4);
+    const int blockH = pad + fontPx + pad / 2 + barH + pad / 2 + fontPx + pad;
+    const uint8_t white[3] = {235, 235, 235};
+    const float panel[3] = {0.05f, 0.06f, 0.08f};
+    for (size_t n = 0; n < legends.size(); ++n) {
+        const LegendSpec& l = legends[n];
+        const int top = height - margin - int(legends.size() - n) * (blockH + pad);
+        const int left = margin;
+        const int titleW = font.text(rgba, width, height, 0, 0, l.title, white, false);
+        const int panelW = std::max(barW, titleW) + 2 * pad;
+        blend(rgba, width, height, left, top, left + panelW, top + blockH, panel, 0.6f);
+        int y = top + pad + fontPx * 4 / 5;
+        font.text(rgba, width, height, left + pad, y, l.title, white);
+        const int barTop = top + pad + fontPx + pad / 2;
+        // The value at a position along the bar (logarithmic with a log scale), as the renderer maps it.
+        const TransferFunction& tf = l.colours;
+        auto valueAt = [&](double u) {
+            return tf.logScale ? tf.range.min * std::pow(double(tf.range.max) / tf.range.min, u)
+                               : tf.range.min + u * (double(tf.range.max) - tf.range.min);
+        };
+        for (int x = 0; x < barW; ++x) {
+            const Rgb c = tf.colorOf(float(valueAt((float(x) + 0.5f) / float(barW))));
+            const float cc[3] = {c.r, c.g, c.b};
+            blend(rgba, width, height, left + pad + x, barTop, left + pad + x + 1, barTop + barH, cc, 1.0f);
+        }
+        y = barTop + barH + pad / 2 + fontPx * 4 / 5;
+        const std::string a = legendNumber(valueAt(0)), m = legendNumber(valueAt(0.5)), b = legendNumber(valueAt(1));
+        font.text(rgba, width, height, left + pad, y, a, white);
+        const int mw = font.text(rgba, width, height, 0, 0, m, white, false);
+        font.text(rgba, width, height, left + pad + barW / 2 - mw / 2, y, m, white);
+        const int bw = font.text(rgba, width, height, 0, 0, b, white, false);
+        font.text(rgba, width, height, left + pad + barW - bw, y, b, white);
+    }
+}
+
+}  // namespace raypc::render

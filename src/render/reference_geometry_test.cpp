@@ -1,0 +1,166 @@
+// Reference geometry against closed-form expectations: a thin shell's opacity seen face-on and at
+// its silhouette, compositing by the volume's depth, graticule lines where the projection puts them
+// and nowhere on the far side, and the coastline file's checks.
+#include "render/reference_geometry.h"
+
+#include "core/error.h"
+#include "core/spherical.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+namespace raypc::render {
+namespace {
+
+constexpr int kSize = 101;  // odd: the centre pixel's ray passes through the planet's centre
+
+OrbitCamera frontCamera()
+{
+    OrbitCamera c;
+    c.azimuthDeg = 0;
+    c.elevationDeg = 0;
+    c.distanceKm = 30000;
+    c.fovYDeg = 30;
+    return c;
+}
+
+struct Image {
+    std::vector<float> rgba = std::vector<float>(size_t(kSize) * kSize * 4, 0.0f);
+    std::vector<float> depth = std::vector<float>(size_t(kSize) * kSize, INFINITY);
+    float alpha(int x, int y) const { return rgba[(size_t(y) * kSize + size_t(x)) * 4 + 3]; }
+};
+
+ReferenceState shellsOnly(float depthKm, float opacity)
+{
+    ReferenceState r;
+    r.shells.visible = true;
+    r.shells.depthsKm = {depthKm};
+    r.shells.opacity = opacity;
+    return r;
+}
+
+TEST(ReferenceGeometry, ThinShellIsFaintFaceOnAndStrongAtItsSilhouette)
+{
+    Image im;
+    drawReferenceGeometry(shellsOnly(660, 0.3f), frontCamera(), kSize, kSize, 6371, 3481, im.rgba, im.depth, nullptr);
+    // The centre ray crosses the shell twice, face-on: 1 - (1 - 0.3)^2.
+    EXPECT_NEAR(im.alpha(kSize / 2, kSize / 2), 1.0f - 0.7f * 0.7f, 0.01f);
+    // Along the middle row alpha grows towards the silhouette, then drops to 0 outside the shell.
+    const CameraFrame cam(frontCamera(), kSize, kSize);
+    const float r = 6371 - 660;
+    int silhouette = -1;
+    for (int x = kSize / 2; x < kSize; ++x) {
+        float t0, t1;
+        if (!intersectSphere(cam.eye, cam.direction(float(x) + 0.5f, kSize / 2 + 0.5f), r, t0, t1)) {
+            silhouette = x - 1;
+            break;
+        }
+    }
+    ASSERT_GT(silhouette, kSize / 2 + 5);
+    EXPECT_GT(im.alpha(silhouette, kSize / 2), im.alpha(kSize / 2 + 3, kSize / 2) + 0.2f);
+    EXPECT_EQ(im.alpha(silhouette + 2, kSize / 2), 0.0f);
+}
+
+TEST(ReferenceGeometry, ShellsAreCompositedByTheVolumesDepth)
+{
+    const CameraFrame cam(frontCamera(), kSize, kSize);
+    const size_t centre = size_t(kSize / 2) * kSize + kSize / 2;
+    const float frontT = float(cam.eye.x) - (6371 - 660);  // the eye is on +x
+    for (bool volumeInFront : {true, false}) {
+        Image im;
+        // An opaque red volume at the centre pixel, in front of or behind the shell's near side.
+        im.rgba[centre * 4] = 1.0f;
+        im.rgba[centre * 4 + 3] = 1.0f;
+        im.depth[centre] = volumeInFront ? frontT - 100 : frontT + 100;
+        drawReferenceGeometry(shellsOnly(660, 0.5f), frontCamera(), kSize, kSize, 6371, 3481, im.rgba, im.depth, nullptr);
+        const float* p = &im.rgba[centre * 4];
+        if (volumeInFront) {
+            EXPECT_FLOAT_EQ(p[0], 1.0f);  // the shell hides behind the opaque volume
+            EXPECT_FLOAT_EQ(p[1], 0.0f);
+        } else {
+            // Shell (grey 0.85, alpha 0.5) over the red volume.
+            EXPECT_NEAR(p[0], 0.5f * 0.85f + 0.5f, 1e-4f);
+            EXPECT_NEAR(p[1], 0.5f * 0.85f, 1e-4f);
+            EXPECT_NEAR(p[3], 1.0f, 1e-6f);
+        }
+    }
+}
+
+TEST(ReferenceGeometry, ShellsOutsideThePlanetsShellDrawNothing)
+{
+    Image im;
+    ReferenceState r = shellsOnly(3000, 0.5f);  // radius 3371 km: inside the core (3481 km)
+    drawReferenceGeometry(r, frontCamera(), kSize, kSize, 6371, 3481, im.rgba, im.depth, nullptr);
+    for (float v : im.rgba)
+        ASSERT_EQ(v, 0.0f);
+}
+
+TEST(ReferenceGeometry, GraticuleLinesLieWhereTheyProjectAndOnlyOnTheNearSide)
+{
+    ReferenceState r;
+    r.graticule.visible = true;
+    r.graticule.spacingDeg = 90;  // the equator, and meridians 0, 90, 180, 270
+    r.graticule.opacity = 1;
+    r.lineWidthPx = 2;
+    Image im;
+    drawReferenceGeometry(r, frontCamera(), kSize, kSize, 6371, 3481, im.rgba, im.depth, nullptr);
+    // Seen from (lat 0, lon 0): the equator is the middle row, meridian 0 the middle column.
+    EXPECT_GT(im.alpha(kSize / 2 + 10, kSize / 2), 0.5f);
+    EXPECT_GT(im.alpha(kSize / 2, kSize / 2 - 10), 0.5f);
+    // Between them nothing; meridian 180 (on the far side) is not drawn through the middle either.
+    EXPECT_EQ(im.alpha(kSize / 2 + 10, kSize / 2 - 10), 0.0f);
+    // Lines are hidden behind an opaque volume in front of the surface.
+    Image hidden;
+    for (size_t i = 0; i < hidden.depth.size(); ++i) {
+        hidden.depth[i] = 1000;
+        hidden.rgba[i * 4 + 3] = 1.0f;
+    }
+    drawReferenceGeometry(r, frontCamera(), kSize, kSize, 6371, 3481, hidden.rgba, hidden.depth, nullptr);
+    EXPECT_EQ(hidden.rgba[(size_t(kSize / 2) * kSize + kSize / 2 + 10) * 4], 0.0f);
+}
+
+TEST(ReferenceGeometry, CoastlineFileIsCheckedAndDrawn)
+{
+    const auto dir = std::filesystem::temp_directory_path() / "raypc_coastlines_test";
+    std::filesystem::create_directories(dir);
+    auto write = [&](const std::string& name, const std::string& text) {
+        std::ofstream(dir / name) << text;
+        return dir / name;
+    };
+    // A square around (lat 0, lon 0), 20 degrees wide.
+    const Coastlines c = readCoastlines(write("ok.json", R"({"source": "test", "lines": [[-10, -10, 10, -10, 10, 10, -10, 10, -10, -10]]})"));
+    ASSERT_EQ(c.lines.size(), 1u);
+    EXPECT_EQ(c.pointCount(), 5u);
+    ReferenceState r;
+    r.coastlines.visible = true;
+    r.coastlines.opacity = 1;
+    Image im;
+    drawReferenceGeometry(r, frontCamera(), kSize, kSize, 6371, 3481, im.rgba, im.depth, &c);
+    float drawn = 0;
+    for (size_t i = 0; i < im.depth.size(); ++i)
+        drawn += im.rgba[i * 4 + 3];
+    EXPECT_GT(drawn, 20.0f);  // four sides of several pixels each
+    EXPECT_EQ(im.alpha(kSize / 2, kSize / 2), 0.0f);  // the inside of the square stays empty
+
+    auto errorOf = [&](const std::string& text) {
+        try {
+            readCoastlines(write("bad.json", text));
+        } catch (const Error& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_NE(errorOf("not json").find("bad.json: not valid JSON"), std::string::npos);
+    EXPECT_NE(errorOf(R"({"line": []})").find("expected an object with \"lines\""), std::string::npos);
+    EXPECT_NE(errorOf(R"({"lines": [[1, 2, 3]]})").find("lines[0]: expected an even number"), std::string::npos);
+    EXPECT_NE(errorOf(R"({"lines": [[0, 0, 10, 95]]})").find("lines[0]: point (10, 95)"), std::string::npos);
+    r.coastlines.visible = true;
+    EXPECT_THROW(drawReferenceGeometry(r, frontCamera(), kSize, kSize, 6371, 3481, im.rgba, im.depth, nullptr), Error);
+    std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace raypc::render

@@ -1,0 +1,375 @@
+// The RayPC browser UI: one render state (StateStore) sent whole to the server (RenderLink,
+// docs/protocol.md), and the parts that read and change it: camera input, the transfer-function
+// panel, presets, the volume's parallel coordinates and its sample, the selection and pathline
+// panels, playback, the other controls and the status line.
+import { fetchPresets, fetchSample, type Info, type Preset } from './api';
+import { setUpCameraInput } from './camera_input';
+import { ContextPanel, showLegends, type LegendEntry } from './context_panel';
+import { download, maxImageSide, setUpControls, syncControls, writeStateToUrl } from './controls';
+import { ParallelCoordinates } from './parcoords';
+import { PathlinePanel } from './pathline_panel';
+import { Playback } from './playback';
+import { RenderLink } from './render_link';
+import { setUpScreenshot } from './screenshot';
+import { SelectionPanel } from './selection_panel';
+import { describePreset } from './presets';
+import { type Brush } from './state';
+import { StateStore } from './store';
+import { TfPanel } from './tf_panel';
+import { displayUnits } from './units';
+
+const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
+
+// The size of a still frame for a view of viewW x viewH device pixels: the view's own, or scaled
+// down to `maxSide` on the longer side (the aspect kept).
+export function fitImageSize(viewW: number, viewH: number, maxSide: number): { width: number; height: number } {
+  const w = Math.max(1, viewW), h = Math.max(1, viewH);
+  const scale = Math.min(1, maxSide / Math.max(w, h));
+  return { width: Math.max(1, Math.round(w * scale)), height: Math.max(1, Math.round(h * scale)) };
+}
+
+export class App {
+  readonly store: StateStore;
+  readonly link: RenderLink;
+  readonly pc: ParallelCoordinates;
+  readonly tf: TfPanel;
+  readonly selection: SelectionPanel;
+  readonly pathlines: PathlinePanel;
+  readonly playback: Playback;
+  readonly context: ContextPanel;
+  presets: Preset[] = [];
+  sampleStep = -1;
+  readonly errors: string[] = [];
+  private sampleLoading = false;
+  private lastSampleLoad = 0;
+  private errorTimer = 0;
+  private statusNote = '';
+
+  constructor(readonly info: Info) {
+    this.store = new StateStore(info);
+    try {
+      this.store.loadFromHash(location.hash);
+    } catch (e) {
+      this.showError(`state in the URL: ${(e as Error).message}`);
+    }
+    const store = this.store;
+
+    this.link = new RenderLink($<HTMLCanvasElement>('view3d'), store, {
+      onFrameArrived: (h) => {
+        // Interactive frames carry the selection on the level they rendered: quick feedback while
+        // brushing; final states get the exact volume from POST /api/selection (refreshSelection).
+        if (h.selection && h.interactive && store.state.brushes.length) this.selection.setSelection({ ...h.selection, step: h.step });
+        if (this.playback.playing) this.playback.maybeAdvance();
+      },
+      onFrameShown: () => this.updateStatus(),
+      onError: (m) => this.showError(m),
+      onStatus: (t) => this.setStatusNote(t),
+    });
+    this.tf = new TfPanel(store, {
+      commit: (i) => this.commit(i),
+      showError: (m) => this.showError(m),
+      setStatusNote: (t) => this.setStatusNote(t),
+      coloursChanged: () => this.updateLineColors(),
+      variableChanged: () => this.pathlines.variableChanged(),
+    });
+    this.pc = new ParallelCoordinates($('parcoords'), store.axes(), {
+      onBrush: (brushes, interactive) => this.onBrush(brushes, interactive),
+      afterFrame: (draw) => this.link.afterFrameShown(draw),
+    });
+    this.pathlines = new PathlinePanel(store, {
+      commit: (i) => this.commit(i),
+      showError: (m) => this.showError(m),
+      linesLoaded: () => this.updateLegends(),
+    });
+    this.context = new ContextPanel(store, { commit: (i) => this.commit(i), showError: (m) => this.showError(m) });
+    this.selection = new SelectionPanel(store, {
+      showError: (m) => this.showError(m),
+      setBrush: (name, range) => {
+        const brushes = store.state.brushes.filter((b) => b.name !== name);
+        if (range) {
+          const at = store.state.brushes.findIndex((b) => b.name === name);
+          brushes.splice(at < 0 ? brushes.length : at, 0, { name, min: range[0], max: range[1] });
+        }
+        this.pc.setBrushes(brushes);
+        this.onBrush(brushes, false);
+      },
+      playing: () => this.playback.playing,
+      selectionChanged: () => this.updateStatus(),
+    });
+    this.playback = new Playback({
+      stepCount: info.steps.length,
+      currentStep: () => store.state.step,
+      caughtUp: () => this.link.caughtUp,
+      setStep: (step, interactive) => this.setStep(step, interactive),
+    });
+    setUpControls(store, {
+      commit: (i) => this.commit(i),
+      loadState: (doc) => this.loadState(doc),
+      showError: (m) => this.showError(m),
+      setStatusNote: (t) => this.setStatusNote(t),
+      setStep: (step, interactive) => this.setStep(step, interactive),
+      togglePlay: () => this.playback.toggle(),
+      stopPlaying: () => { if (this.playback.playing) this.playback.toggle(); },
+      cancelRendering: () => this.link.cancel(),
+      fitImage: () => this.fitImage(),
+      clearBrushes: () => {
+        this.pc.setBrushes([]);
+        store.state.brushes = [];
+        this.selection.updateText();
+        this.commit(false);
+      },
+    });
+    setUpScreenshot({
+      state: () => store.state,
+      showError: (m) => this.showError(m),
+      setStatusNote: (t) => this.setStatusNote(t),
+      download,
+      fileStem: () => `raypc-step${store.state.step}`,
+    });
+    setUpCameraInput(this.link.view.canvas, store, (i) => this.commit(i));
+    // Escape clears the brushes (outside text fields, where it belongs to the field).
+    document.addEventListener('keydown', (e) => {
+      const t = e.target as HTMLElement;
+      if (e.key === 'Escape' && !(t instanceof HTMLInputElement && t.type !== 'checkbox') && store.state.brushes.length && !document.querySelector('dialog[open]')) {
+        this.pc.setBrushes([]);
+        this.onBrush([], false);
+      }
+    });
+    new ResizeObserver(() => this.onResize()).observe($('viewPanel'));
+  }
+
+  // Starts the work that needs the test hooks (if any) in place: the first state, the sample, ….
+  start(): void {
+    this.onResize();
+    this.syncControls();
+    this.loadSample();
+    this.tf.loadHistogram();
+    this.loadPresets();
+    this.commit(false);
+  }
+
+  // ---- state -------------------------------------------------------------------------------
+
+  loadState(s: unknown): void {
+    const prev = this.store.replace(s);
+    const state = this.store.state;
+    this.syncControls();
+    if (prev.step !== state.step) {
+      this.loadSample();
+      this.tf.loadHistogram();
+    } else if (prev.color.variable !== state.color.variable) this.tf.loadHistogram();
+    this.updateLineColors();
+    this.commit(false);
+  }
+
+  // Sends the state; a final (not interactive) one also goes into the page URL, and once its frame
+  // is shown the exact selection and the statistics are asked for.
+  commit(interactive: boolean): void {
+    this.link.send(interactive);
+    this.updateLegends();
+    if (interactive) return;
+    writeStateToUrl(this.store);
+    this.link.afterFrameShown(() => {
+      this.selection.refreshSelection();
+      this.selection.refreshStats();
+    });
+    this.pathlines.refresh();
+  }
+
+  // The colour legends on the view (state.legend): the volume's variable, and the pathlines'
+  // colouring while they are shown.
+  updateLegends(): void {
+    const s = this.store.state;
+    const entries: LegendEntry[] = [];
+    if (s.legend) {
+      const v = this.store.variableInfo();
+      const units = displayUnits(v.units);
+      const colourOf = this.store.colourOf();
+      entries.push({ title: units ? `${v.name} [${units}]` : v.name, colourAt: (u) => colourOf(this.store.valueAt(u)), valueAt: (u) => this.store.valueAt(u) });
+      const pl = this.pathlines.legend();
+      if (pl) entries.push(pl);
+    }
+    showLegends(entries);
+  }
+
+  // Puts the state into every control (after load, undo, URL).
+  private syncControls(): void {
+    this.context.sync();
+    this.tf.sync();
+    syncControls(this.store);
+    this.updateStepLabel();
+    this.pc.setBrushes(this.store.state.brushes);
+    this.selection.updateText();
+    this.pathlines.sync();
+  }
+
+  // ---- presets (GET /api/presets) ------------------------------------------------------------
+
+  private loadPresets(): void {
+    fetchPresets()
+      .then((presets) => {
+        this.presets = presets;
+        const box = $('presets');
+        box.innerHTML = '';
+        if (!presets.length) box.textContent = 'none (no examples directory)';
+        for (const p of presets) {
+          const b = document.createElement('button');
+          b.textContent = p.title;
+          b.title = `${p.name}.json`;
+          b.dataset.preset = p.name;
+          b.addEventListener('click', () => this.applyPreset(p));
+          box.appendChild(b);
+        }
+      })
+      .catch((e) => this.showError((e as Error).message));
+  }
+
+  // A preset sets everything it names and resets the rest to the defaults (pathlines off unless it
+  // names them, the level, reference geometry, …), its step included (the figures of docs/tasks.md
+  // are of that step; a dataset with fewer steps shows its last one, and the note says so). Only the
+  // image size stays: it follows the view.
+  applyPreset(p: Preset): void {
+    try {
+      const state = this.store.state;
+      const doc = { ...(p.state as Record<string, unknown>) };
+      const last = this.info.steps.length - 1;
+      const asked = typeof doc.step === 'number' ? doc.step : 0;
+      doc.step = Math.min(asked, last);
+      doc.image = { ...state.image };
+      const fit = this.store.autoFitImage;
+      this.loadState(doc);
+      this.store.autoFitImage = fit;
+      for (const b of document.querySelectorAll<HTMLButtonElement>('#presets button'))
+        b.classList.toggle('active', b.dataset.preset === p.name);
+      const note = describePreset(this.store.state, this.store.axes());
+      $('presetNote').textContent = `${p.title}: ${note}${asked > last ? ` (written for step ${asked}; this dataset ends at step ${last})` : ''}`;
+      this.setStatusNote(`preset ${p.title}`);
+    } catch (e) {
+      this.showError(`preset ${p.name}: ${(e as Error).message}`);
+    }
+  }
+
+  // ---- view size ---------------------------------------------------------------------------
+
+  private onResize(): void {
+    const canvas = this.link.view.canvas;
+    const dpr = window.devicePixelRatio || 1;
+    const w = Math.max(1, Math.round(canvas.clientWidth * dpr)), h = Math.max(1, Math.round(canvas.clientHeight * dpr));
+    if (canvas.width !== w || canvas.height !== h) {
+      canvas.width = w;
+      canvas.height = h;
+    }
+    if (this.store.autoFitImage) {
+      const changed = this.fitImage();
+      if (changed) this.commit(false);
+    }
+    this.link.requestDraw();
+  }
+
+  // Still frames at the view's size in device pixels (CSS size × devicePixelRatio, as the canvas),
+  // scaled down to the Max size setting on the longer side. Interactive frames keep their time
+  // budget on the server (coarser level, then 1/2 or 1/4 of the pixels per axis; docs/protocol.md)
+  // and are warped in between.
+  private fitImage(): boolean {
+    const canvas = this.link.view.canvas;
+    const { width, height } = fitImageSize(canvas.width, canvas.height, maxImageSide());
+    const w = width, h = height;
+    const image = this.store.state.image;
+    if (w === image.width && h === image.height) return false;
+    this.store.state.image = { width: w, height: h };
+    return true;
+  }
+
+  // ---- brushes and the sample ----------------------------------------------------------------
+
+  private onBrush(brushes: Brush[], interactive: boolean): void {
+    this.store.state.brushes = brushes;
+    this.commit(interactive);
+    this.selection.updateText();
+    this.pathlines.updateLineCount();
+  }
+
+  private loadSample(): void {
+    if (this.sampleLoading) return;
+    const step = this.store.state.step;
+    if (step === this.sampleStep) return;
+    this.sampleLoading = true;
+    this.lastSampleLoad = performance.now();
+    fetchSample(step, this.info.sample.columns)
+      .then((sample) => {
+        this.pc.setData(sample);
+        this.sampleStep = step;
+        this.updateLineColors();
+      })
+      .catch((e) => this.showError((e as Error).message))
+      .finally(() => {
+        this.sampleLoading = false;
+        if (this.store.state.step !== this.sampleStep && !this.playback.playing) this.loadSample();
+      });
+  }
+
+  // The lines of the sample coloured as the volume.
+  private updateLineColors(): void {
+    const name = this.store.state.color.variable;
+    const colourOf = this.store.colourOf();
+    const palette = Array.from({ length: 64 }, (_, i) => {
+      const [r, g, b] = colourOf(this.store.valueAt(i / 63));
+      return `rgb(${Math.round(r * 255)},${Math.round(g * 255)},${Math.round(b * 255)})`;
+    });
+    this.pc.setColor((row) => palette[Math.min(63, Math.max(0, Math.round(this.store.positionOf(row[name]) * 63))) || 0]);
+  }
+
+  // ---- time --------------------------------------------------------------------------------
+
+  private setStep(step: number, interactive: boolean): void {
+    this.store.state.step = step;
+    this.updateStepLabel();
+    this.commit(interactive);
+    if (!interactive) {
+      this.tf.loadHistogram();
+      this.loadSample();
+    } else if (performance.now() - this.lastSampleLoad > 1000) this.loadSample();
+  }
+
+  private updateStepLabel(): void {
+    const s = this.info.steps[this.store.state.step];
+    // Steps are numbered from 0 everywhere: the state's step, file names, `raypc render --time`.
+    $('stepLabel').textContent = s ? `step ${s.index} of 0–${this.info.steps.length - 1} · ${s.timeMyr.toFixed(1)} Myr` : '';
+  }
+
+  // ---- status ------------------------------------------------------------------------------
+
+  setStatusNote(t: string): void {
+    this.statusNote = t;
+    this.updateStatus();
+  }
+
+  private updateStatus(): void {
+    const h = this.link?.lastHeader;
+    const parts: string[] = [];
+    if (h) {
+      const st = h.stats ?? {};
+      parts.push(`frame ${h.id}`, `step ${h.step}`, `level ${h.level}`, `pass ${h.pass}/${h.passes}${h.converged ? ' ✓' : ''}`);
+      if (st.passMs !== undefined) parts.push(`${st.passMs.toFixed(1)} ms/pass`);
+      if (st.samplesPerSecond !== undefined) parts.push(`${(st.samplesPerSecond / 1e6).toFixed(1)} M samples/s`);
+      if (st.bricksTotal) parts.push(`${(((st.bricksSkipped ?? 0) / st.bricksTotal) * 100).toFixed(0)} % bricks skipped`);
+      parts.push(`${h.width}×${h.height}`);
+    }
+    const sel = this.selection?.selection;
+    if (this.store.state.brushes.length && sel) parts.push(`selected ${(sel.fractionOfMantle * 100).toFixed(2)} %`);
+    const lat = this.link?.lastLatency;
+    if (lat) parts.push(`latency ${lat.shownMs.toFixed(0)} ms`);
+    if (this.statusNote) parts.push(this.statusNote);
+    $('status').textContent = parts.join(' · ');
+  }
+
+  showError(message: string): void {
+    this.errors.push(message);
+    if (this.errors.length > 100) this.errors.shift();
+    const el = $('error');
+    el.textContent = message;
+    el.hidden = false;
+    clearTimeout(this.errorTimer);
+    this.errorTimer = window.setTimeout(() => { el.hidden = true; }, 6000);
+  }
+}

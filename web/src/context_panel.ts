@@ -1,0 +1,102 @@
+// The Context section: reference shells at editable depths, the graticule, the coastlines
+// (state.reference; the server draws them into every frame, composited by depth with the volume)
+// and the colour legends (state.legend: drawn here on the view, and by the server into screenshots
+// and `raypc render` pictures).
+import type { StateStore } from './store';
+
+const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
+
+export interface ContextPanelHost {
+  commit(interactive: boolean): void;
+  showError(message: string): void;
+}
+
+// "410, 660 km" -> [410, 660]; throws an Error naming the bad entry.
+export function parseDepths(text: string): number[] {
+  const parts = text.split(/[,;\s]+/).map((p) => p.replace(/km$/i, '')).filter((p) => p !== '');
+  return parts.map((p) => {
+    const v = Number(p);
+    if (!Number.isFinite(v) || v < 0 || v > 6371) throw new Error(`shell depth '${p}': expected km between 0 and 6371`);
+    return v;
+  });
+}
+
+export class ContextPanel {
+  constructor(private readonly store: StateStore, private readonly host: ContextPanelHost) {
+    const ref = () => this.store.state.reference;
+    const toggle = (id: string, set: (on: boolean) => void) => $(id).addEventListener('change', () => {
+      set($<HTMLInputElement>(id).checked);
+      this.host.commit(false);
+    });
+    toggle('refShells', (on) => { ref().shells.visible = on; });
+    toggle('refGraticule', (on) => { ref().graticule.visible = on; });
+    toggle('refCoastlines', (on) => { ref().coastlines.visible = on; });
+    toggle('legend', (on) => { this.store.state.legend = on; });
+    $('refDepths').addEventListener('change', () => {
+      try {
+        ref().shells.depthsKm = parseDepths($<HTMLInputElement>('refDepths').value);
+        ref().shells.visible = true;
+        this.sync();
+        this.host.commit(false);
+      } catch (e) {
+        this.host.showError((e as Error).message);
+        this.sync();
+      }
+    });
+  }
+
+  sync(): void {
+    const s = this.store.state;
+    $<HTMLInputElement>('refShells').checked = s.reference.shells.visible;
+    $<HTMLInputElement>('refDepths').value = s.reference.shells.depthsKm.join(', ');
+    $<HTMLInputElement>('refGraticule').checked = s.reference.graticule.visible;
+    $<HTMLInputElement>('refCoastlines').checked = s.reference.coastlines.visible;
+    $<HTMLInputElement>('legend').checked = s.legend;
+  }
+}
+
+// One colour legend on the view: title, a bar and the values at its ends and middle.
+export interface LegendEntry {
+  title: string;
+  colourAt(u: number): [number, number, number]; // along the bar, 0 = left
+  valueAt(u: number): number;
+}
+
+function legendNumber(v: number): string {
+  if (v === 0) return '0';
+  const m = Math.abs(v);
+  return m >= 1e5 || m < 1e-2 ? v.toExponential(2) : String(+v.toPrecision(4));
+}
+
+// Draws the legends into the view's overlay (#legends); none when `entries` is empty.
+export function showLegends(entries: LegendEntry[]): void {
+  const box = $('legends');
+  box.innerHTML = '';
+  box.hidden = entries.length === 0;
+  for (const e of entries) {
+    const div = document.createElement('div');
+    div.className = 'legend';
+    const title = document.createElement('div');
+    title.className = 'legendTitle';
+    title.textContent = e.title;
+    const bar = document.createElement('canvas');
+    bar.width = 200;
+    bar.height = 1;
+    const ctx = bar.getContext('2d')!;
+    for (let x = 0; x < bar.width; x++) {
+      const u = (x + 0.5) / bar.width;
+      const [r, g, b] = e.colourAt(u);
+      ctx.fillStyle = `rgb(${Math.round(r * 255)},${Math.round(g * 255)},${Math.round(b * 255)})`;
+      ctx.fillRect(x, 0, 1, 1);
+    }
+    const labels = document.createElement('div');
+    labels.className = 'legendLabels';
+    for (const v of [e.valueAt(0), e.valueAt(0.5), e.valueAt(1)]) {
+      const span = document.createElement('span');
+      span.textContent = legendNumber(v);
+      labels.appendChild(span);
+    }
+    div.append(title, bar, labels);
+    box.appendChild(div);
+  }
+}

@@ -1,0 +1,141 @@
+// The controls that are neither a panel nor the view: the Rendering section, the header's Save /
+// Load / Copy link, the time bar, the keyboard and the page URL.
+import { cloneState, encodeStateForUrl, stateFromHash } from './state';
+import type { StateStore } from './store';
+
+const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
+
+export interface ControlsHost {
+  commit(interactive: boolean): void;
+  loadState(doc: unknown): void;
+  showError(message: string): void;
+  setStatusNote(text: string): void;
+  setStep(step: number, interactive: boolean): void;
+  togglePlay(): void;
+  stopPlaying(): void;
+  cancelRendering(): void;
+  // The image size follows the view again; true when it changed.
+  fitImage(): boolean;
+  clearBrushes(): void;
+}
+
+const kMaxSizeKey = 'raypc.maxImageSide';
+
+// The cap on the longer side of still frames (the Max size setting; default 4096 pixels).
+export function maxImageSide(): number {
+  return Number($<HTMLSelectElement>('maxSize').value) || 4096;
+}
+
+export function download(blob: Blob, name: string): void {
+  const a = document.createElement('a');
+  a.href = URL.createObjectURL(blob);
+  a.download = name;
+  document.body.appendChild(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(a.href), 10000);
+}
+
+export function setUpControls(store: StateStore, host: ControlsHost): void {
+  const info = store.info;
+  $('dataset').textContent = `${info.steps.length} steps · ${info.variables.length} variables · sample of ${info.sample.rows.toLocaleString()} points`;
+  // The cap on the still frame's longer side (a setting of this browser, not of the state).
+  const maxSize = $<HTMLSelectElement>('maxSize');
+  const savedMax = localStorage.getItem(kMaxSizeKey);
+  if (savedMax && [...maxSize.options].some((o) => o.value === savedMax)) maxSize.value = savedMax;
+  maxSize.addEventListener('change', () => {
+    localStorage.setItem(kMaxSizeKey, maxSize.value);
+    store.autoFitImage = true;
+    if (host.fitImage()) host.commit(false);
+  });
+  $('passes').addEventListener('change', () => {
+    const v = Math.round(Number($<HTMLInputElement>('passes').value));
+    if (v >= 1) {
+      store.state.passes = v;
+      host.commit(false);
+    }
+  });
+  $('level').addEventListener('change', () => {
+    const v = $<HTMLSelectElement>('level').value;
+    store.state.level = v === 'auto' ? 'auto' : Number(v);
+    host.commit(false);
+  });
+  $('lighting').addEventListener('change', () => {
+    store.state.shading = { ...store.state.shading, enabled: $<HTMLInputElement>('lighting').checked };
+    host.commit(false);
+  });
+  $('core').addEventListener('change', () => {
+    store.state.core = { ...store.state.core, visible: $<HTMLInputElement>('core').checked };
+    host.commit(false);
+  });
+  $('cancel').addEventListener('click', () => {
+    host.stopPlaying();
+    host.cancelRendering();
+    host.setStatusNote('cancelled');
+  });
+  $('resetView').addEventListener('click', () => {
+    store.state.camera = cloneState(store.defaults).camera;
+    host.commit(false);
+  });
+  $('clearBrushes').addEventListener('click', () => host.clearBrushes());
+  const stepIn = $<HTMLInputElement>('step');
+  stepIn.max = String(info.steps.length - 1);
+  stepIn.addEventListener('input', () => host.setStep(Number(stepIn.value), true));
+  stepIn.addEventListener('change', () => host.setStep(Number(stepIn.value), false));
+  $('play').addEventListener('click', () => host.togglePlay());
+  document.addEventListener('keydown', (e) => {
+    const t = e.target as HTMLElement;
+    if (e.key === ' ' && !(t instanceof HTMLInputElement || t instanceof HTMLSelectElement || t instanceof HTMLButtonElement)) {
+      e.preventDefault();
+      host.togglePlay();
+    }
+  });
+
+  $('save').addEventListener('click', () => {
+    download(new Blob([JSON.stringify(store.state, null, 2) + '\n'], { type: 'application/json' }), `raypc-state-step${store.state.step}.json`);
+  });
+  $<HTMLInputElement>('load').addEventListener('change', async (e) => {
+    const input = e.target as HTMLInputElement;
+    const file = input.files?.[0];
+    input.value = '';
+    if (!file) return;
+    try {
+      host.loadState(JSON.parse(await file.text()));
+      host.setStatusNote(`loaded ${file.name}`);
+    } catch (err) {
+      host.showError(`${file.name}: ${(err as Error).message}`);
+    }
+  });
+  $('share').addEventListener('click', async () => {
+    const url = `${location.origin}${location.pathname}${location.search}#state=${encodeStateForUrl(store.state)}`;
+    try {
+      await navigator.clipboard.writeText(url);
+      host.setStatusNote('link copied');
+    } catch {
+      window.prompt('Link to this view:', url);
+    }
+  });
+  window.addEventListener('hashchange', () => {
+    try {
+      const s = stateFromHash(location.hash);
+      if (s && JSON.stringify(s) !== JSON.stringify(store.state)) host.loadState(s);
+    } catch (e) {
+      host.showError(`state in the URL: ${(e as Error).message}`);
+    }
+  });
+}
+
+// Puts the state into the controls of this module (after load, preset, URL).
+export function syncControls(store: StateStore): void {
+  const s = store.state;
+  $<HTMLInputElement>('passes').value = String(s.passes);
+  $<HTMLSelectElement>('level').value = String(s.level);
+  $<HTMLInputElement>('lighting').checked = Boolean((s.shading as { enabled?: boolean } | undefined)?.enabled);
+  $<HTMLInputElement>('core').checked = (s.core as { visible?: boolean } | undefined)?.visible !== false;
+  $<HTMLInputElement>('step').value = String(s.step);
+}
+
+// The URL of the page holds the state (#state=…) so that a bookmark reopens this view.
+export function writeStateToUrl(store: StateStore): void {
+  history.replaceState(null, '', `${location.pathname}${location.search}#state=${encodeStateForUrl(store.state)}`);
+}

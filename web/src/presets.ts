@@ -1,0 +1,19 @@
+// The one-line description of a preset (shown under the preset buttons): what it colours, what
+// its brushes select, and the step it shows, in the units of the axes.
+import type { AxisInfo } from './parcoords';
+import { fmt } from './selection_panel';
+import type { RenderState } from './state';
+import { displayUnits } from './units';
+
+export function describePreset(s: RenderState, axes: AxisInfo[]): string {
+  const units = (name: string) => {
+    const u = axes.find((a) => a.name === name)?.units ?? '';
+    return u ? ` ${displayUnits(u)}` : '';
+  };
+  const parts = [`step ${s.step}`, `colour ${s.color.variable} (${s.color.points.length ? 'custom colours' : s.color.colorMap})`];
+  if (s.brushes.length)
+    parts.push(`selects ${s.brushes.map((b) => `${b.name} ${fmt(b.min)} … ${fmt(b.max)}${units(b.name)}`).join(' and ')}`);
+  else parts.push('no brushes');
+  if (s.pathlines?.visible) parts.push(`pathlines of the last ${s.pathlines.window} steps`);
+  return parts.join('; ');
+}

@@ -1,0 +1,196 @@
+// The Selection panel: the brushed ranges and the exact share of the mantle they select
+// (POST /api/selection, or the quick figure of an interactive frame while brushing), and the
+// selection over time (POST /api/stats) as two plots.
+import { postSelection, postStats, type Selection, type SelectionOverTime } from './api';
+import { cloneState } from './state';
+import { drawProfilePlot, drawTimePlot } from './stats_plot';
+import { download } from './controls';
+import type { StateStore } from './store';
+import { displayUnits } from './units';
+
+const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
+
+export interface SelectionPanelHost {
+  showError(message: string): void;
+  // Replaces the brush on `name` (null: removes it) and sends the state.
+  setBrush(name: string, range: [number, number] | null): void;
+  playing(): boolean;
+  // The selection changed (the status line shows it).
+  selectionChanged(): void;
+}
+
+// What the browser tests observe (test_hooks.ts).
+export interface SelectionPanelObserver {
+  selection(s: Selection): void;
+  stats(s: SelectionOverTime | null): void;
+  statsRequested(): void;
+}
+
+export function fmt(v: number): string {
+  return Math.abs(v) >= 1e4 || (Math.abs(v) < 1e-2 && v !== 0) ? v.toExponential(3) : String(+v.toPrecision(4));
+}
+
+export class SelectionPanel {
+  selection: Selection | null = null;
+  observer: SelectionPanelObserver | null = null;
+  private selectionAbort: AbortController | null = null;
+  private stats: SelectionOverTime | null = null;
+  private statsKey = '';
+  private statsAbort: AbortController | null = null;
+  private statsTimer = 0;
+
+  constructor(private readonly store: StateStore, private readonly host: SelectionPanelHost) {
+    $('statsExact').addEventListener('change', () => this.refreshStats());
+    $('statsCsv').addEventListener('click', () => {
+      const st = this.stats;
+      if (!st) return;
+      // The columns of `raypc stats -o` (docs/ui.md), plus the level the figures are exact on.
+      let csv = 'step,time_myr,selected_volume_km3,selected_percent_of_mantle,level\n';
+      for (const s of st.steps) csv += `${s.step},${s.timeMyr},${s.volumeKm3.toExponential(6)},${(100 * s.fractionOfMantle).toFixed(6)},${st.level}\n`;
+      download(new Blob([csv], { type: 'text/csv' }), `raypc-selection-over-time-step${this.store.state.step}.csv`);
+    });
+  }
+
+  refreshSelection(): void {
+    this.selectionAbort?.abort();
+    const state = this.store.state;
+    if (!state.brushes.length) {
+      this.setSelection({ fractionOfMantle: 1, volumeKm3: NaN, step: state.step });
+      return;
+    }
+    const ctl = new AbortController();
+    this.selectionAbort = ctl;
+    postSelection(state, ctl.signal)
+      .then((s) => { if (!ctl.signal.aborted) this.setSelection(s); })
+      .catch((e) => { if (!ctl.signal.aborted) this.host.showError((e as Error).message); });
+  }
+
+  setSelection(s: Selection): void {
+    this.selection = s;
+    this.observer?.selection(s);
+    this.updateText();
+    this.host.selectionChanged();
+  }
+
+  updateText(): void {
+    const el = $('selection');
+    const state = this.store.state;
+    if (!state.brushes.length) {
+      el.textContent = 'no brushes: the whole mantle';
+      return;
+    }
+    const axes = this.store.axes();
+    // The same brushes as shown: update the figures in place, so that a field being typed in keeps
+    // its element (and its text) while another field's change is applied.
+    const rows = [...el.querySelectorAll<HTMLElement>('.brushRow')];
+    if (rows.length === state.brushes.length && rows.every((r, i) => r.dataset.brush === state.brushes[i].name)) {
+      const head = el.querySelector('#selectionValue');
+      if (head) head.textContent = this.selectionText();
+      rows.forEach((r, i) => {
+        const b = state.brushes[i];
+        for (const [cls, v] of [['brushMin', b.min], ['brushMax', b.max]] as const) {
+          const input = r.querySelector<HTMLInputElement>(`input.${cls}`);
+          if (input && input !== document.activeElement) input.value = String(+v.toPrecision(6));
+        }
+      });
+      return;
+    }
+    el.innerHTML = '';
+    const head = document.createElement('div');
+    head.textContent = this.selectionText();
+    head.id = 'selectionValue';
+    el.appendChild(head);
+    // One row per brush: its name, exact min and max to type, and × to clear it.
+    for (const b of state.brushes) {
+      const a = axes.find((x) => x.name === b.name);
+      const row = document.createElement('div');
+      row.className = 'brushRow';
+      row.dataset.brush = b.name;
+      const name = document.createElement('span');
+      name.className = 'brushName';
+      name.textContent = `${b.name}${a?.units ? ` [${displayUnits(a.units)}]` : ''}`;
+      name.title = name.textContent;
+      const input = (value: number, which: string) => {
+        const i = document.createElement('input');
+        i.type = 'number';
+        i.step = 'any';
+        i.value = String(+value.toPrecision(6));
+        i.className = `brush${which}`;
+        i.setAttribute('aria-label', `${b.name} ${which.toLowerCase()}`);
+        return i;
+      };
+      const lo = input(b.min, 'Min'), hi = input(b.max, 'Max');
+      const typed = () => {
+        const min = Number(lo.value), max = Number(hi.value);
+        if (!(Number.isFinite(min) && Number.isFinite(max) && min <= max)) {
+          this.host.showError(`brush ${b.name}: min ${lo.value} must not be greater than max ${hi.value}`);
+          this.updateText();
+          return;
+        }
+        this.host.setBrush(b.name, [min, max]);
+      };
+      lo.addEventListener('change', typed);
+      hi.addEventListener('change', typed);
+      const clear = document.createElement('button');
+      clear.textContent = '×';
+      clear.title = `Clear the brush on ${b.name}`;
+      clear.className = 'brushClear';
+      clear.addEventListener('click', () => this.host.setBrush(b.name, null));
+      row.append(name, lo, hi, clear);
+      el.appendChild(row);
+    }
+  }
+
+  private selectionText(): string {
+    const s = this.selection;
+    return s && Number.isFinite(s.fractionOfMantle)
+      ? `${(s.fractionOfMantle * 100).toFixed(2)} % of the mantle${Number.isFinite(s.volumeKm3) ? `, ${s.volumeKm3.toExponential(3)} km³` : ''}`
+      : 'computing…';
+  }
+
+  // Asks for the statistics when the brushes, the step or the level asked for changed (debounced;
+  // not while playing, when only the current-step mark moves).
+  refreshStats(): void {
+    const exact = $<HTMLInputElement>('statsExact').checked;
+    const state = this.store.state;
+    if (!state.brushes.length) {
+      this.statsAbort?.abort();
+      this.stats = null;
+      this.observer?.stats(null);
+      this.statsKey = '';
+      $('statsNote').textContent = 'Brush an axis to see the selected volume over time.';
+      for (const id of ['statsTime', 'statsProfile']) $(id).innerHTML = '';
+      return;
+    }
+    const key = JSON.stringify([state.brushes, state.step, exact]);
+    if (this.stats) drawTimePlot($('statsTime') as unknown as SVGSVGElement, this.stats, state.step);
+    if (key === this.statsKey || this.host.playing()) return;
+    clearTimeout(this.statsTimer);
+    this.statsTimer = window.setTimeout(() => {
+      this.statsAbort?.abort();
+      const ctl = new AbortController();
+      this.statsAbort = ctl;
+      this.statsKey = key;
+      this.observer?.statsRequested();
+      $('statsNote').textContent = 'computing…';
+      postStats(cloneState(this.store.state), exact ? 0 : undefined, ctl.signal)
+        .then((st) => {
+          if (ctl.signal.aborted) return;
+          this.stats = st;
+          this.observer?.stats(st);
+          const step = this.store.state.step;
+          const cur = st.steps.find((x) => x.step === step);
+          // Exact figures (level 0) agree with the selection above and `raypc stats`; the quick ones
+          // of a coarser grid are labelled as approximate.
+          const pct = (x: number) => (x * 100).toFixed(2);
+          const lo = Math.min(...st.steps.map((x) => x.fractionOfMantle)), hi = Math.max(...st.steps.map((x) => x.fractionOfMantle));
+          $('statsNote').textContent = st.level === 0
+            ? `exact: now ${cur ? pct(cur.fractionOfMantle) : '?'} % · over time ${pct(lo)}–${pct(hi)} %`
+            : `approximate (level ${st.level} grid): now ≈ ${cur ? pct(cur.fractionOfMantle) : '?'} % · over time ≈ ${pct(lo)}–${pct(hi)} %`;
+          drawTimePlot($('statsTime') as unknown as SVGSVGElement, st, step);
+          drawProfilePlot($('statsProfile') as unknown as SVGSVGElement, st);
+        })
+        .catch((e) => { if (!ctl.signal.aborted) { this.statsKey = ''; this.host.showError((e as Error).message); } });
+    }, 250);
+  }
+}

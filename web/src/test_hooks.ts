@@ -1,0 +1,124 @@
+// What the browser tests (tests/browser) read and drive, as `window.__raypc`. Installed only when
+// the page is opened with `window.__raypcTestHooks = true` set before it loads (the tests' init
+// script); otherwise nothing here runs and nothing is recorded.
+import type { Selection, SelectionOverTime } from './api';
+import type { App } from './app';
+import type { Frame, FrameHeader } from './connection';
+import type { ParallelCoordinates } from './parcoords';
+import type { PathlineCount } from './pathline_panel';
+import type { Latency } from './render_link';
+import { cloneState, type Brush, type RenderState } from './state';
+import type { Info, Preset } from './api';
+import type { ViewStats } from './view';
+
+export interface TestHooks {
+  info: Info;
+  state(): RenderState;
+  setState(s: unknown): void;
+  view: ViewStats;
+  framesReceived: number;
+  headers: FrameHeader[];
+  readonly lastShownId: number;
+  readonly lastSentId: number;
+  statesSent: number;
+  latencies: Latency[];
+  selection: Selection | null;
+  readonly errors: string[];
+  readonly playing: boolean;
+  parcoords: ParallelCoordinates;
+  readonly sampleStep: number;
+  // What was sent and received when, warps drawn while a newer state was pending, and holding
+  // incoming frames back (to look at a warped view deterministically).
+  sentLog: { id: number; t: number; step: number; interactive: boolean; brushes: Brush[] }[];
+  frameLog: { id: number; step: number; pass: number; t: number }[];
+  warpedWhileWaiting: number;
+  // Deferred work (the full line redraw after a brush release): the state it waited for, whether
+  // that state's frame was on screen when it ran (false: it ran on the timeout or was superseded).
+  afterFrames: { id: number; shownId: number; afterShown: boolean }[];
+  holdFrames: boolean;
+  releaseFrames(): void;
+  readonly presets: Preset[];
+  applyPreset(name: string): void;
+  stats: SelectionOverTime | null;
+  statsRequests: number;
+  readonly pathlines: PathlineCount | null;
+  plParcoords: ParallelCoordinates;
+}
+
+export function testHooksWanted(): boolean {
+  return (window as unknown as { __raypcTestHooks?: boolean }).__raypcTestHooks === true;
+}
+
+function push<T>(list: T[], item: T, limit: number): void {
+  list.push(item);
+  if (list.length > limit) list.shift();
+}
+
+export function installTestHooks(app: App): TestHooks {
+  let held: Frame[] = [];
+  const hooks: TestHooks = {
+    info: app.info,
+    state: () => cloneState(app.store.state),
+    setState: (s) => app.loadState(s),
+    view: app.link.view.stats,
+    framesReceived: 0,
+    headers: [],
+    get lastShownId() { return app.link.lastShownId; },
+    get lastSentId() { return app.link.lastSentId; },
+    statesSent: 0,
+    latencies: [],
+    selection: null,
+    get errors() { return app.errors; },
+    get playing() { return app.playback.playing; },
+    parcoords: app.pc,
+    get sampleStep() { return app.sampleStep; },
+    sentLog: [],
+    frameLog: [],
+    warpedWhileWaiting: 0,
+    afterFrames: [],
+    holdFrames: false,
+    releaseFrames: () => {
+      hooks.holdFrames = false;
+      const frames = held;
+      held = [];
+      for (const f of frames) app.link.receive(f);
+    },
+    get presets() { return app.presets; },
+    applyPreset: (name) => {
+      const p = app.presets.find((x) => x.name === name);
+      if (!p) throw new Error(`no preset '${name}'`);
+      app.applyPreset(p);
+    },
+    stats: null,
+    statsRequests: 0,
+    get pathlines() { return app.pathlines.count; },
+    plParcoords: app.pathlines.pc,
+  };
+  app.link.observer = {
+    sent: (e) => {
+      hooks.statesSent++;
+      push(hooks.sentLog, e, 500);
+    },
+    received: (f) => {
+      if (hooks.holdFrames) {
+        held.push(f);
+        return false;
+      }
+      const h = f.header;
+      hooks.framesReceived++;
+      push(hooks.frameLog, { id: h.id, step: h.step, pass: h.pass, t: f.receivedAt }, 500);
+      push(hooks.headers, h, 100);
+      return true;
+    },
+    shown: (_h, latency) => { if (latency) push(hooks.latencies, latency, 200); },
+    drawn: (kind, waiting) => { if (kind === 'warped' && waiting) hooks.warpedWhileWaiting++; },
+    afterFrame: (record) => push(hooks.afterFrames, record, 50),
+  };
+  app.selection.observer = {
+    selection: (s) => { hooks.selection = s; },
+    stats: (s) => { hooks.stats = s; },
+    statsRequested: () => { hooks.statsRequests++; },
+  };
+  (window as unknown as { __raypc: TestHooks }).__raypc = hooks;
+  return hooks;
+}
