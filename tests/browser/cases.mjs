@@ -577,6 +577,12 @@ const cases = {
   async brush_values({ context, url }) {
     const page = await openUi(context, url);
     await standardView(page);
+    // Depth grows downwards: its smallest tick is at the top (smallest y), radius the other way.
+    const ticks = await page.evaluate(() => Object.fromEntries([...document.querySelectorAll('#parcoords g.dimension')]
+      .filter((g) => g.__data__ === 'depth' || g.__data__ === 'radius')
+      .map((g) => [g.__data__, [...g.querySelectorAll('.tick')].map((t) => [t.__data__, t.getBoundingClientRect().y]).sort((a, b) => a[0] - b[0])])));
+    const topOf = (name) => { const t = ticks[name]; return t[0][1] < t[t.length - 1][1]; };
+    check(ticks.depth?.length > 1 && topOf('depth') && !topOf('radius'), `depth ticks (value, y) ${JSON.stringify(ticks.depth)}, radius ${JSON.stringify(ticks.radius)}`);
     await brushAxis(page, 'depth', 0.2, 0.6);
     await brushAxis(page, 'temperature', 0.1, 0.7);
     await waitConverged(page);

@@ -26,6 +26,22 @@ export function maxImageSide(): number {
   return Number($<HTMLSelectElement>('maxSize').value) || 4096;
 }
 
+// Calls `read` with the text of the file chosen in a file input (then clears the input, so the same
+// file can be chosen again); an error of `read` is shown naming the file (`what` before its name).
+export function onFileChosen(input: HTMLInputElement, what: string, read: (text: string, name: string) => void,
+  showError: (message: string) => void): void {
+  input.addEventListener('change', async () => {
+    const file = input.files?.[0];
+    input.value = '';
+    if (!file) return;
+    try {
+      read(await file.text(), file.name);
+    } catch (err) {
+      showError(`${what}${file.name}: ${(err as Error).message}`);
+    }
+  });
+}
+
 export function download(blob: Blob, name: string): void {
   const a = document.createElement('a');
   a.href = URL.createObjectURL(blob);
@@ -94,18 +110,10 @@ export function setUpControls(store: StateStore, host: ControlsHost): void {
   $('save').addEventListener('click', () => {
     download(new Blob([JSON.stringify(store.state, null, 2) + '\n'], { type: 'application/json' }), `raypc-state-step${store.state.step}.json`);
   });
-  $<HTMLInputElement>('load').addEventListener('change', async (e) => {
-    const input = e.target as HTMLInputElement;
-    const file = input.files?.[0];
-    input.value = '';
-    if (!file) return;
-    try {
-      host.loadState(JSON.parse(await file.text()));
-      host.setStatusNote(`loaded ${file.name}`);
-    } catch (err) {
-      host.showError(`${file.name}: ${(err as Error).message}`);
-    }
-  });
+  onFileChosen($<HTMLInputElement>('load'), '', (text, name) => {
+    host.loadState(JSON.parse(text));
+    host.setStatusNote(`loaded ${name}`);
+  }, (m) => host.showError(m));
   $('share').addEventListener('click', async () => {
     const url = `${location.origin}${location.pathname}${location.search}#state=${encodeStateForUrl(store.state)}`;
     try {

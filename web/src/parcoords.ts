@@ -63,6 +63,9 @@ function withCpuCanvases<T>(make: () => T): T {
   }
 }
 
+// Axes whose values grow downwards.
+const kDownwards = new Set(['depth']);
+
 // Short axis titles for the long dataset names (the full name is the axis' tooltip).
 const kShortNames: Record<string, string> = {
   'temperature anomaly': 'T anomaly',
@@ -216,7 +219,8 @@ export class ParallelCoordinates {
         ...(categories ? { tickValues: Object.keys(categories).map(Number).filter((v) => v >= lo && v <= hi) } : {}),
         type: 'number',
         index,
-        yscale: d3.scaleLinear().domain([lo, hi]).range([plotH + 1, 1]),
+        // Depth grows downwards (0 km at the top), as in the depth profile and the planet.
+        yscale: d3.scaleLinear().domain(kDownwards.has(name) ? [hi, lo] : [lo, hi]).range([plotH + 1, 1]),
         ticks: 5,
       };
     });

@@ -7,7 +7,7 @@
 // opacity ramp; the log scale is offered only for positive quantities.
 import { fetchHistogram, type Histogram, type VariableInfo } from './api';
 import { mapKind, type ColorStop } from './colormaps';
-import { download } from './controls';
+import { download, onFileChosen } from './controls';
 import { paraViewMapJson, parseParaViewMap } from './paraview_colormap';
 import type { StateStore } from './store';
 import { TfEditor } from './tf_editor';
@@ -121,18 +121,10 @@ export class TfPanel {
       const text = paraViewMapJson(`RayPC ${c.variable}`, colours, valueAt, c.opacity as [number, number][], c.logScale);
       download(new Blob([text], { type: 'application/json' }), `raypc-colormap-${c.variable.replace(/\W+/g, '_')}.json`);
     });
-    $<HTMLInputElement>('pvImport').addEventListener('change', async (e) => {
-      const input = e.target as HTMLInputElement;
-      const file = input.files?.[0];
-      input.value = '';
-      if (!file) return;
-      try {
-        this.importParaView(await file.text());
-        this.host.setStatusNote(`colour map ${file.name} imported`);
-      } catch (err) {
-        this.host.showError(`ParaView colour map ${file.name}: ${(err as Error).message}`);
-      }
-    });
+    onFileChosen($<HTMLInputElement>('pvImport'), 'ParaView colour map ', (text, name) => {
+      this.importParaView(text);
+      this.host.setStatusNote(`colour map ${name} imported`);
+    }, (m) => this.host.showError(m));
     const rangeChanged = () => {
       const lo = Number($<HTMLInputElement>('rangeMin').value), hi = Number($<HTMLInputElement>('rangeMax').value);
       if (!(Number.isFinite(lo) && Number.isFinite(hi) && lo < hi)) {
