@@ -705,6 +705,8 @@ const cases = {
       window.__raypc.setState({ ...s, step: n - 1, core: { ...s.core, visible: false }, color: { ...s.color, opacity: [[0, 0], [1, 0]] } });
     }, ds.steps.length);
     await waitConverged(page);
+    await page.fill('#plMinWidth', '0');
+    await page.dispatchEvent('#plMinWidth', 'change');
     await page.fill('#plRadius', '250');
     await page.dispatchEvent('#plRadius', 'change');
     await waitConverged(page);
@@ -751,7 +753,22 @@ const cases = {
     const filtered = await viewPixels(page);
     const dF = meanAbsDiff(on, filtered);
     check(dF > 0.1, `filtering lines hardly changed the image (${dF.toFixed(2)})`);
-    console.log(`  lines ${pl0.lines} -> ${pl1.visibleLines}; image change on ${dOn.toFixed(2)}, filtered ${dF.toFixed(2)}`);
+
+    // Thin tubes (1 km, under a pixel at this distance) are drawn at least the minimum width:
+    // 0 px leaves them a hair wide, 6 px widens them.
+    const thin = async (px) => {
+      await page.fill('#plRadius', '1');
+      await page.dispatchEvent('#plRadius', 'change');
+      await page.fill('#plMinWidth', String(px));
+      await page.dispatchEvent('#plMinWidth', 'change');
+      await waitConverged(page);
+      check((await rState(page)).pathlines.minWidthPx === px, `pathlines.minWidthPx ${JSON.stringify((await rState(page)).pathlines)}`);
+      return viewPixels(page);
+    };
+    const hair = await thin(0), wide = await thin(6);
+    const dW = meanAbsDiff(hair, wide);
+    check(dW > 0.05, `a 6 px minimum width hardly changed 1 km tubes (${dW.toFixed(3)})`);
+    console.log(`  lines ${pl0.lines} -> ${pl1.visibleLines}; image change on ${dOn.toFixed(2)}, filtered ${dF.toFixed(2)}, minimum width ${dW.toFixed(3)}`);
 
     // The UI parses the pathlines object as strictly as the server: an unknown key or a wrong type
     // is refused and changes nothing; a version-1 document gets no pathlines.
