@@ -40,6 +40,9 @@ struct PathlineFilter {
 struct PathlineState {
     bool visible = false;
     float radiusKm = 12.0f;  // tube radius, > 0
+    // Version 3: tubes at least this many pixels wide at the camera target's distance (the radius
+    // grows when zoomed out); 0: the radius alone. The UI's default state asks for 2.
+    float minWidthPx = 0.0f;
     int window = 10;         // steps: lines injected in [step - window + 1, step]
     std::string colorBy = "age";  // "age" or a line attribute column
     std::optional<ColorMapId> colorMap;  // nullopt: blue-white-red for age, viridis for attributes

@@ -14,6 +14,13 @@
 
 namespace raypc::render {
 
+float tubeRadiusKm(const RenderState& s)
+{
+    const double kmPerPixel =
+        2.0 * s.camera.distanceKm * std::tan(s.camera.fovYDeg * M_PI / 360.0) / double(std::max(1, s.height));
+    return std::max(s.pathlines.radiusKm, float(0.5 * s.pathlines.minWidthPx * kmPerPixel));
+}
+
 RenderState defaultState(const Dataset& dataset)
 {
     RenderState s;
@@ -30,6 +37,7 @@ RenderState defaultState(const Dataset& dataset)
     s.opacityUnitKm = 200.0f;
     s.camera.distanceKm = 22000.0;
     s.passes = 8;
+    s.pathlines.minWidthPx = 2.0f;  // 12 km tubes are a hair wide at this distance
     return s;
 }
 
@@ -108,7 +116,9 @@ std::shared_ptr<const PathlineScene> StateRenderer::pathlinesFor(const RenderSta
                       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
     }
     // Restart class: radius, style and the visibility mask (attribute filters, brushes).
-    m_scene->applyState(state);
+    RenderState shown = state;
+    shown.pathlines.radiusKm = tubeRadiusKm(state);
+    m_scene->applyState(shown);
     return m_scene;
 }
 

@@ -33,6 +33,10 @@ namespace raypc::render {
 // blue-white-red map, opacity only on the hot and cold tails.
 RenderState defaultState(const Dataset& dataset);
 
+// The tube radius that draws the pathlines at least pathlines.minWidthPx pixels wide at the camera
+// target's distance (the state's radiusKm when that is wider), km.
+float tubeRadiusKm(const RenderState& state);
+
 struct ResolvedState {
     RenderState state;
     RenderParams params;

@@ -816,6 +816,10 @@ const Object<RenderState>& document()
                          {.meaning = "draw the pathlines as tubes (ray traced with Embree in the volume's frame)"}),
                  leaf<S>("radiusKm", at(&S::pathlines, &P::radiusKm), number<float>(1e-6, 1e5),
                          {.meaning = "tube radius, km (a change refits the tube BVH)"}),
+                 leaf<S>("minWidthPx", at(&S::pathlines, &P::minWidthPx), number<float>(0, 100),
+                         {.meaning = "tubes at least this many pixels wide at the camera target's distance (the "
+                                     "radius grows when zoomed out); 0: `radiusKm` alone",
+                          .since = 3}),
                  leaf<S>("window", at(&S::pathlines, &P::window), integer(1, 1000),
                          {.meaning = "show lines injected in steps [`step` − window + 1, `step`] (a change reloads "
                                      "the line window and its BVH)",

@@ -80,10 +80,20 @@ const cases = {
     const ds = await info(url);
     const radius = ds.coordinates.find((c) => c.name === 'radius');
     check(radius && radius.units === 'km', `/api/info has no radius coordinate in km: ${JSON.stringify(ds.coordinates)}`);
-    const title = await page.evaluate(() => [...document.querySelectorAll('#parcoords svg .label')].map((e) => e.textContent));
+    const titles = () => page.evaluate(() => [...document.querySelectorAll('#parcoords svg .label')].map((e) => e.textContent));
+    // x, y, z and radius are hidden by default; the Axes menu shows radius.
+    const hidden = ['x', 'y', 'z', 'radius'];
+    const shownBefore = await titles();
+    check(shownBefore.length === ds.sample.columns.length - hidden.length && !shownBefore.includes('radius [km]'),
+      `${shownBefore.length} axes shown by default (${shownBefore.join(', ')}), expected every sample column but ${hidden.join(', ')}`);
+    await page.click('#axisMenu summary');
+    await page.check('#axisChoice input[data-axis="radius"]');
+    await page.click('#axisMenu summary');
+    await page.waitForFunction(() => [...document.querySelectorAll('#parcoords svg .label')].some((e) => e.textContent === 'radius [km]'), null, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('ticking radius under Axes did not show its axis'); });
+    const title = await titles();
     check(title.includes('radius [km]') && title.some((t) => /^temperature \[K\]$/.test(t)), `axis titles lack units: ${title.join(', ')}`);
-    const axesShown = title.length, expected = ds.sample.columns.length;
-    check(axesShown === expected, `${axesShown} axes shown, expected every sample column (${expected})`);
+    check(title.length === shownBefore.length + 1, `${title.length} axes after showing radius, expected ${shownBefore.length + 1}`);
 
     await brushAxis(page, 'radius', 0.5, 0.95);
     const s = await rState(page);
@@ -577,12 +587,12 @@ const cases = {
   async brush_values({ context, url }) {
     const page = await openUi(context, url);
     await standardView(page);
-    // Depth grows downwards: its smallest tick is at the top (smallest y), radius the other way.
+    // Depth grows downwards: its smallest tick is at the top (smallest y), latitude the other way.
     const ticks = await page.evaluate(() => Object.fromEntries([...document.querySelectorAll('#parcoords g.dimension')]
-      .filter((g) => g.__data__ === 'depth' || g.__data__ === 'radius')
+      .filter((g) => g.__data__ === 'depth' || g.__data__ === 'lat')
       .map((g) => [g.__data__, [...g.querySelectorAll('.tick')].map((t) => [t.__data__, t.getBoundingClientRect().y]).sort((a, b) => a[0] - b[0])])));
     const topOf = (name) => { const t = ticks[name]; return t[0][1] < t[t.length - 1][1]; };
-    check(ticks.depth?.length > 1 && topOf('depth') && !topOf('radius'), `depth ticks (value, y) ${JSON.stringify(ticks.depth)}, radius ${JSON.stringify(ticks.radius)}`);
+    check(ticks.depth?.length > 1 && ticks.lat?.length > 1 && topOf('depth') && !topOf('lat'), `depth ticks (value, y) ${JSON.stringify(ticks.depth)}, lat ${JSON.stringify(ticks.lat)}`);
     await brushAxis(page, 'depth', 0.2, 0.6);
     await brushAxis(page, 'temperature', 0.1, 0.7);
     await waitConverged(page);
@@ -695,6 +705,8 @@ const cases = {
       window.__raypc.setState({ ...s, step: n - 1, core: { ...s.core, visible: false }, color: { ...s.color, opacity: [[0, 0], [1, 0]] } });
     }, ds.steps.length);
     await waitConverged(page);
+    await page.fill('#plMinWidth', '0');
+    await page.dispatchEvent('#plMinWidth', 'change');
     await page.fill('#plRadius', '250');
     await page.dispatchEvent('#plRadius', 'change');
     await waitConverged(page);
@@ -741,7 +753,22 @@ const cases = {
     const filtered = await viewPixels(page);
     const dF = meanAbsDiff(on, filtered);
     check(dF > 0.1, `filtering lines hardly changed the image (${dF.toFixed(2)})`);
-    console.log(`  lines ${pl0.lines} -> ${pl1.visibleLines}; image change on ${dOn.toFixed(2)}, filtered ${dF.toFixed(2)}`);
+
+    // Thin tubes (1 km, under a pixel at this distance) are drawn at least the minimum width:
+    // 0 px leaves them a hair wide, 6 px widens them.
+    const thin = async (px) => {
+      await page.fill('#plRadius', '1');
+      await page.dispatchEvent('#plRadius', 'change');
+      await page.fill('#plMinWidth', String(px));
+      await page.dispatchEvent('#plMinWidth', 'change');
+      await waitConverged(page);
+      check((await rState(page)).pathlines.minWidthPx === px, `pathlines.minWidthPx ${JSON.stringify((await rState(page)).pathlines)}`);
+      return viewPixels(page);
+    };
+    const hair = await thin(0), wide = await thin(6);
+    const dW = meanAbsDiff(hair, wide);
+    check(dW > 0.05, `a 6 px minimum width hardly changed 1 km tubes (${dW.toFixed(3)})`);
+    console.log(`  lines ${pl0.lines} -> ${pl1.visibleLines}; image change on ${dOn.toFixed(2)}, filtered ${dF.toFixed(2)}, minimum width ${dW.toFixed(3)}`);
 
     // The UI parses the pathlines object as strictly as the server: an unknown key or a wrong type
     // is refused and changes nothing; a version-1 document gets no pathlines.

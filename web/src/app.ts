@@ -22,6 +22,9 @@ const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getEleme
 
 // The size of a still frame for a view of viewW x viewH device pixels: the view's own, or scaled
 // down to `maxSide` on the longer side (the aspect kept).
+// Axes of the volume's plot hidden until ticked under Axes (or brushed).
+const kHiddenByDefault = ['x', 'y', 'z', 'radius'];
+
 export function fitImageSize(viewW: number, viewH: number, maxSide: number): { width: number; height: number } {
   const w = Math.max(1, viewW), h = Math.max(1, viewH);
   const scale = Math.min(1, maxSide / Math.max(w, h));
@@ -72,7 +75,7 @@ export class App {
       coloursChanged: () => this.updateLineColors(),
       variableChanged: () => this.pathlines.variableChanged(),
     });
-    this.pc = new ParallelCoordinates($('parcoords'), store.axes(), {
+    this.pc = new ParallelCoordinates($('parcoords'), this.shownAxes(), {
       onBrush: (brushes, interactive) => this.onBrush(brushes, interactive),
       afterFrame: (draw) => this.link.afterFrameShown(draw),
     });
@@ -126,6 +129,7 @@ export class App {
       download,
       fileStem: () => `raypc-step${store.state.step}`,
     });
+    this.setUpAxisChoice();
     setUpCameraInput(this.link.view.canvas, store, (i) => this.commit(i));
     // Escape clears the brushes (outside text fields, where it belongs to the field).
     document.addEventListener('keydown', (e) => {
@@ -198,6 +202,7 @@ export class App {
     this.tf.sync();
     syncControls(this.store);
     this.updateStepLabel();
+    this.pc.showAxes(this.shownAxes()); // before the brushes: a brushed axis is shown
     this.pc.setBrushes(this.store.state.brushes);
     this.selection.updateText();
     this.pathlines.sync();
@@ -280,10 +285,40 @@ export class App {
     return true;
   }
 
+  // ---- axes, brushes and the sample ----------------------------------------------------------
+
+  // The axes of the volume's plot: the ones ticked under Axes (x, y, z and radius are not by
+  // default: depth, lat and lon say where more plainly), and any axis a brush is on.
+  private shownAxes() {
+    const brushed = new Set(this.store.state.brushes.map((b) => b.name));
+    return this.store.axes().filter((a) => !this.hiddenAxes.has(a.name) || brushed.has(a.name));
+  }
+
+  private hiddenAxes = new Set(kHiddenByDefault);
+
+  private setUpAxisChoice(): void {
+    const box = $('axisChoice');
+    for (const a of this.store.axes()) {
+      const label = document.createElement('label');
+      const input = document.createElement('input');
+      input.type = 'checkbox';
+      input.dataset.axis = a.name;
+      input.checked = !this.hiddenAxes.has(a.name);
+      input.addEventListener('change', () => {
+        if (input.checked) this.hiddenAxes.delete(a.name);
+        else this.hiddenAxes.add(a.name);
+        this.pc.showAxes(this.shownAxes());
+      });
+      label.append(input, ` ${a.name}`);
+      box.appendChild(label);
+    }
+  }
+
   // ---- brushes and the sample ----------------------------------------------------------------
 
   private onBrush(brushes: Brush[], interactive: boolean): void {
     this.store.state.brushes = brushes;
+    if (!interactive) this.pc.showAxes(this.shownAxes()); // an axis hidden once its brush is gone
     this.commit(interactive);
     this.selection.updateText();
     this.pathlines.updateLineCount();

@@ -74,6 +74,7 @@ const kShortNames: Record<string, string> = {
   'thermal expansivity': 'expansivity',
   'radial velocity': 'v radial',
   'velocity magnitude': '|v|',
+  'thermal expansivity anomaly': 'α anomaly',
 };
 export function axisTitle(a: AxisInfo): string {
   const units = displayUnits(a.units);
@@ -121,10 +122,18 @@ export class ParallelCoordinates {
     this.axes = axes;
     if (!same && this.pc) {
       const names = new Set(axes.map((a) => a.name));
-      if (this.order) this.order = this.order.filter((n) => names.has(n));
+      this.order = this.pc.getOrderedDimensionKeys() as string[];
+      const kept = this.order.filter((n) => names.has(n));
+      this.order = [...kept, ...axes.map((a) => a.name).filter((n) => !kept.includes(n))];
       this.pending = this.brushes().filter((b) => names.has(b.name));
       this.pc = null;
     }
+  }
+
+  // New axes drawn at once with the rows already loaded (a shown or hidden axis).
+  showAxes(axes: AxisInfo[]): void {
+    this.setAxes(axes);
+    if (!this.pc && this.rows.length) this.rebuild();
   }
 
   get rowCount(): number {
@@ -245,9 +254,13 @@ export class ParallelCoordinates {
       this.suppress--;
     }
     this.drawBrushLabels();
-    // Titles carry units; stagger every other one so neighbours do not overlap; full name as tooltip.
+    // Titles carry units; stagger every other one so neighbours do not overlap; the first and last
+    // titles are anchored inwards so that a long one is not cut off at the panel's edge; full name
+    // as tooltip.
+    const shown = (this.pc.getOrderedDimensionKeys() as string[]);
     d3.select(this.container).selectAll<SVGTextElement, string>('text.label')
       .style('font-size', '11px')
+      .attr('text-anchor', (d) => (d === shown[0] ? 'start' : d === shown[shown.length - 1] ? 'end' : 'middle'))
       .attr('transform', (_d, i) => `translate(0,${i % 2 ? -5 : -18})`)
       .each((d, i, nodes) => {
         const a = this.axes.find((x) => x.name === d);

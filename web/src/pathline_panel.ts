@@ -252,6 +252,10 @@ export class PathlinePanel {
       const v = Number($<HTMLInputElement>('plRadius').value);
       if (v > 0) pl.radiusKm = v;
     }));
+    $('plMinWidth').addEventListener('change', change((pl) => {
+      const v = Number($<HTMLInputElement>('plMinWidth').value);
+      if (v >= 0 && v <= 100) pl.minWidthPx = v;
+    }));
     $('plWindow').addEventListener('change', change((pl) => {
       const v = Math.round(Number($<HTMLInputElement>('plWindow').value));
       if (v >= 1) pl.window = v;
@@ -278,6 +282,7 @@ export class PathlinePanel {
     if (!pl) return;
     $<HTMLInputElement>('plVisible').checked = pl.visible;
     $<HTMLInputElement>('plRadius').value = String(pl.radiusKm);
+    $<HTMLInputElement>('plMinWidth').value = String(pl.minWidthPx);
     $<HTMLInputElement>('plWindow').value = String(pl.window);
     $<HTMLInputElement>('plAO').checked = pl.ambientOcclusion;
     $<HTMLInputElement>('plFilterByBrushes').checked = pl.filterByBrushes;
