@@ -560,6 +560,8 @@ const cases = {
     await waitConverged(page);
     check((await rState(page)).color.points.length === 0, 'choosing a map kept the colour points');
     await page.setInputFiles('#pvImport', file);
+    // The file is read asynchronously: wait for the imported points before waiting for the frame.
+    await page.waitForFunction((n) => window.__raypc.state().color.points.length === n, edited.color.points.length);
     await waitConverged(page);
     const imported = await rState(page);
     check(imported.color.points.length === edited.color.points.length && Math.abs(imported.color.range[0] - pv[0].RGBPoints[0]) < 1e-3 * aMax,
