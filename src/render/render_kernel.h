@@ -136,9 +136,16 @@ struct KernelParams {
     float stopTransmittance = 0.005f;  // early ray termination below this transmittance
     float depthOpacity = 0.5f;          // depth = first sample where accumulated opacity >= this
 
+    // Shading: the gradient of the colouring variable on its native grid (nativeGradient) lights a
+    // sample with ambient + diffuse |n.l| + specular |n.h|^shininess (two-sided Blinn-Phong).
     bool shade = false;
     Vec3 lightDir{0, 0, 1};  // unit, towards the light, world frame
-    float ambient = 0.35f, diffuse = 0.65f, gradientDeltaKm = 10;
+    float ambient = 0.35f, diffuse = 0.65f, specular = 0, shininess = 32;
+    // Grid spacing of cell i along each axis (lat: nLat - 1 entries, degrees; r: nR - 1, km; lon: nLon,
+    // degrees, the last across the seam): the gradient's central differences are divided by them.
+    const float* latSpacingDeg = nullptr;
+    const float* rSpacingKm = nullptr;
+    const float* lonSpacingDeg = nullptr;
 
     bool drawCore = true;
     bool coreByVariable = false;
@@ -316,6 +323,54 @@ inline float sampleAt(const KernelParams& k, const KernelVariable& v, const Loca
     const float* m = v.capMean + L.capRow + L.iR0;
     const float mean = m[0] + L.wR * (m[1] - m[0]);
     return value + L.cap * (mean - value);
+}
+
+// The gradient of `v` at a located point p (km, world frame), from the native grid: central
+// differences one grid index either side along lat, r and lon (the same interpolation weights,
+// clamped at the outermost lat rows and radii, wrapped across the lon seam), divided by the local
+// cell spacing and mapped to Cartesian with the local unit vectors (e_r, e_north, e_east). In the
+// pole caps the lon difference fades with the cap blend, as the field does; the lat difference is
+// that of the outermost rows. Units: value per km.
+inline Vec3 nativeGradient(const KernelParams& k, const KernelVariable& v, const Located& L, Vec3 p)
+{
+    auto difference = [&](Located a, Located b, int steps, float spacing) {
+        return steps > 0 ? (sampleAt(k, v, a) - sampleAt(k, v, b)) / (float(steps) * spacing) : 0.0f;
+    };
+    Located a = L, b = L;
+    a.iLat0 = std::min(L.iLat0 + 1, k.nLat - 2);
+    b.iLat0 = std::max(L.iLat0 - 1, 0);
+    const float perDegLat = difference(a, b, a.iLat0 - b.iLat0, k.latSpacingDeg[L.iLat0]);
+    a = b = L;
+    a.iR0 = std::min(L.iR0 + 1, k.nR - 2);
+    b.iR0 = std::max(L.iR0 - 1, 0);
+    const float perKmR = difference(a, b, a.iR0 - b.iR0, k.rSpacingKm[L.iR0]);
+    a = b = L;
+    auto wrap = [&](int i) { return i < 0 ? i + k.nLon : (i >= k.nLon ? i - k.nLon : i); };
+    a.iLon0 = wrap(L.iLon0 + 1), a.iLon1 = wrap(L.iLon1 + 1);
+    b.iLon0 = wrap(L.iLon0 - 1), b.iLon1 = wrap(L.iLon1 - 1);
+    const float perDegLon = difference(a, b, 2, k.lonSpacingDeg[L.iLon0]);
+
+    const float r = std::max(L.rKm, 1.0f), rho = std::max(std::sqrt(p.x * p.x + p.y * p.y), 1e-3f * r);
+    const float gNorth = perDegLat * kRadToDeg / r, gEast = perDegLon * kRadToDeg / rho;
+    const Vec3 eR = p * (1.0f / r);
+    const Vec3 eNorth{-p.z * p.x / (r * rho), -p.z * p.y / (r * rho), rho / r};
+    const Vec3 eEast{-p.y / rho, p.x / rho, 0.0f};
+    return eR * perKmR + eNorth * gNorth + eEast * gEast;
+}
+
+// Two-sided Blinn-Phong of a sample with gradient g seen along the unit ray direction d; 1 (unlit)
+// where the field is flat.
+inline float shadeFactor(const KernelParams& k, Vec3 g, Vec3 d)
+{
+    const float g2 = dot(g, g);
+    if (!(g2 > 1e-30f))
+        return 1.0f;
+    const float inv = 1.0f / std::sqrt(g2);
+    float s = k.ambient + k.diffuse * std::abs(dot(g, k.lightDir)) * inv;
+    const Vec3 lv = k.lightDir - d;  // light plus view direction
+    if (k.specular > 0.0f && dot(lv, lv) > 1e-12f)
+        s += k.specular * std::pow(std::abs(dot(g, normalize(lv))) * inv, k.shininess);
+    return s;
 }
 
 inline bool brickActive(const KernelParams& k, const Located& L)

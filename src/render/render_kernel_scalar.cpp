@@ -30,24 +30,6 @@ bool insideBrushes(const KernelParams& k, Vec3 p, const Located& L)
     return true;
 }
 
-float colourValueAt(const KernelParams& k, Vec3 p)
-{
-    return sampleAt(k, k.colour, locate(k, p.x, p.y, p.z));
-}
-
-// Two-sided diffuse shading from the central-difference gradient of the colouring variable.
-float shadeFactor(const KernelParams& k, Vec3 p)
-{
-    const float h = k.gradientDeltaKm;
-    const Vec3 g{colourValueAt(k, p + Vec3{h, 0, 0}) - colourValueAt(k, p - Vec3{h, 0, 0}),
-                 colourValueAt(k, p + Vec3{0, h, 0}) - colourValueAt(k, p - Vec3{0, h, 0}),
-                 colourValueAt(k, p + Vec3{0, 0, h}) - colourValueAt(k, p - Vec3{0, 0, h})};
-    const float g2 = dot(g, g);
-    if (!(g2 > 1e-30f))
-        return 1.0f;
-    return k.ambient + k.diffuse * std::abs(dot(g, k.lightDir)) / std::sqrt(g2);
-}
-
 void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, float along, RayAccum& acc,
                  TileStats& stats)
 {
@@ -90,7 +72,7 @@ void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, floa
             if (!(sigma > 0.0f))
                 continue;
             const float alpha = std::max(0.0f, 1.0f - std::exp(-sigma * len));
-            float s = k.shade ? shadeFactor(k, p) : 1.0f;
+            const float s = k.shade ? shadeFactor(k, nativeGradient(k, k.colour, L, p), d) : 1.0f;
             const float w = acc.transmittance * alpha * s;
             acc.r += w * k.table.red[idx];
             acc.g += w * k.table.green[idx];

@@ -78,12 +78,23 @@ HWY_INLINE VF MapAxis(DF d, const AxisMap& m, VF c)
 }
 
 struct LocatedV {
+    VI iLat0, iR0;
     VI o00, o01, o10, o11, iLon0, iLon1, capIndex, brick;
     VF wLat, wR, wLon, cap;
     VF latDeg, lonDeg, rKm;
     bool anyCap;
     bool anySeam;  // some lane has iLon0 = nLon - 1 (its lon neighbour wraps to 0)
 };
+
+// Offsets of the four (lat, r) corner rows of L's cell.
+HWY_INLINE void SetRowOffsets(const KernelParams& k, LocatedV& L)
+{
+    const DI di;
+    L.o00 = hn::Mul(hn::Add(hn::Mul(L.iLat0, hn::Set(di, k.nR)), L.iR0), hn::Set(di, k.nLon));
+    L.o01 = hn::Add(L.o00, hn::Set(di, k.nLon));
+    L.o10 = hn::Add(L.o00, hn::Set(di, k.nR * k.nLon));
+    L.o11 = hn::Add(L.o10, hn::Set(di, k.nLon));
+}
 
 HWY_INLINE LocatedV Locate(DF d, const KernelParams& k, VF x, VF y, VF z)
 {
@@ -98,9 +109,11 @@ HWY_INLINE LocatedV Locate(DF d, const KernelParams& k, VF x, VF y, VF z)
 
     const VF fLat = Clamp(MapAxis(d, k.lat, L.latDeg), hn::Zero(d), hn::Set(d, float(k.nLat - 1)));
     const VI iLat0 = hn::Min(hn::ConvertTo(di, fLat), hn::Set(di, k.nLat - 2));
+    L.iLat0 = iLat0;
     L.wLat = hn::Sub(fLat, hn::ConvertTo(d, iLat0));
     const VF fR = Clamp(MapAxis(d, k.r, L.rKm), hn::Zero(d), hn::Set(d, float(k.nR - 1)));
     const VI iR0 = hn::Min(hn::ConvertTo(di, fR), hn::Set(di, k.nR - 2));
+    L.iR0 = iR0;
     L.wR = hn::Sub(fR, hn::ConvertTo(d, iR0));
     const VF nLonF = hn::Set(d, float(k.nLon));
     VF fLon = MapAxis(d, k.lon, L.lonDeg);
@@ -113,10 +126,7 @@ HWY_INLINE LocatedV Locate(DF d, const KernelParams& k, VF x, VF y, VF z)
     L.iLon1 = hn::IfThenZeroElse(seam, next);
     L.anySeam = !hn::AllFalse(di, seam);
 
-    L.o00 = hn::Mul(hn::Add(hn::Mul(iLat0, hn::Set(di, k.nR)), iR0), hn::Set(di, k.nLon));
-    L.o01 = hn::Add(L.o00, hn::Set(di, k.nLon));
-    L.o10 = hn::Add(L.o00, hn::Set(di, k.nR * k.nLon));
-    L.o11 = hn::Add(L.o10, hn::Set(di, k.nLon));
+    SetRowOffsets(k, L);
 
     L.cap = hn::Add(hn::Max(hn::Zero(d), hn::Mul(hn::Sub(hn::Set(d, k.latSouthDeg), L.latDeg), hn::Set(d, k.capScaleSouth))),
                     hn::Max(hn::Zero(d), hn::Mul(hn::Sub(L.latDeg, hn::Set(d, k.latNorthDeg)), hn::Set(d, k.capScaleNorth))));
@@ -194,9 +204,104 @@ HWY_INLINE VF CoordinateValue(DF d, const KernelBrush& brush, VF x, VF y, VF z, 
     return hn::MulAdd(hn::Set(d, brush.scale), v, hn::Set(d, brush.offset));
 }
 
-HWY_INLINE VF ColourValueAt(DF d, const KernelParams& k, VF x, VF y, VF z)
+// L moved by one grid index along each axis (clamped to the rows and radii, wrapped across the lon
+// seam), for the gradient's central differences.
+HWY_INLINE LocatedV ShiftLat(const KernelParams& k, LocatedV L, int by)
 {
-    return Sample(d, k, k.colour, Locate(d, k, x, y, z));
+    const DI di;
+    L.iLat0 = hn::Min(hn::Max(hn::Add(L.iLat0, hn::Set(di, by)), hn::Zero(di)), hn::Set(di, k.nLat - 2));
+    SetRowOffsets(k, L);
+    return L;
+}
+
+HWY_INLINE LocatedV ShiftR(const KernelParams& k, LocatedV L, int by)
+{
+    const DI di;
+    const VI iR0 = hn::Min(hn::Max(hn::Add(L.iR0, hn::Set(di, by)), hn::Zero(di)), hn::Set(di, k.nR - 2));
+    L.capIndex = hn::Add(L.capIndex, hn::Sub(iR0, L.iR0));
+    L.iR0 = iR0;
+    SetRowOffsets(k, L);
+    return L;
+}
+
+HWY_INLINE VI WrapLon(const KernelParams& k, VI i)
+{
+    const DI di;
+    const VI n = hn::Set(di, k.nLon);
+    i = hn::IfThenElse(hn::Lt(i, hn::Zero(di)), hn::Add(i, n), i);
+    return hn::IfThenElse(hn::Lt(i, n), i, hn::Sub(i, n));
+}
+
+HWY_INLINE LocatedV ShiftLon(const KernelParams& k, LocatedV L, int by)
+{
+    const DI di;
+    L.iLon0 = WrapLon(k, hn::Add(L.iLon0, hn::Set(di, by)));
+    L.iLon1 = WrapLon(k, hn::Add(L.iLon1, hn::Set(di, by)));
+    L.anySeam = !hn::AllFalse(di, hn::Eq(L.iLon0, hn::Set(di, k.nLon - 1)));
+    return L;
+}
+
+// (f(a) - f(b)) / (steps * spacing); 0 where the stencil collapsed (steps = 0).
+HWY_INLINE VF Difference(DF d, const KernelParams& k, const KernelVariable& v, const LocatedV& a, const LocatedV& b,
+                         VI steps, VF spacing)
+{
+    const DI di;
+    const VF denominator = hn::Mul(hn::ConvertTo(d, hn::Max(steps, hn::Set(di, 1))), spacing);
+    const VF q = hn::Div(hn::Sub(Sample(d, k, v, a), Sample(d, k, v, b)), denominator);
+    return hn::IfThenElseZero(hn::RebindMask(d, hn::Gt(steps, hn::Zero(di))), q);
+}
+
+// nativeGradient (render_kernel.h) across lanes: central differences on the native grid, mapped to
+// Cartesian with the local unit vectors.
+struct GradientV {
+    VF x, y, z;
+};
+HWY_INLINE GradientV NativeGradient(DF d, const KernelParams& k, const KernelVariable& v, const LocatedV& L, VF x,
+                                    VF y, VF z)
+{
+    const DI di;
+    const LocatedV latA = ShiftLat(k, L, 1), latB = ShiftLat(k, L, -1);
+    const VF perDegLat = Difference(d, k, v, latA, latB, hn::Sub(latA.iLat0, latB.iLat0),
+                                    hn::GatherIndex(d, k.latSpacingDeg, L.iLat0));
+    const LocatedV rA = ShiftR(k, L, 1), rB = ShiftR(k, L, -1);
+    const VF perKmR = Difference(d, k, v, rA, rB, hn::Sub(rA.iR0, rB.iR0), hn::GatherIndex(d, k.rSpacingKm, L.iR0));
+    const VF perDegLon = Difference(d, k, v, ShiftLon(k, L, 1), ShiftLon(k, L, -1), hn::Set(di, 2),
+                                    hn::GatherIndex(d, k.lonSpacingDeg, L.iLon0));
+
+    const VF r = hn::Max(L.rKm, hn::Set(d, 1.0f));
+    const VF rho = hn::Max(hn::Sqrt(hn::MulAdd(x, x, hn::Mul(y, y))), hn::Mul(r, hn::Set(d, 1e-3f)));
+    const VF invR = hn::Div(hn::Set(d, 1.0f), r), invRho = hn::Div(hn::Set(d, 1.0f), rho);
+    const VF gNorth = hn::Mul(hn::Mul(perDegLat, hn::Set(d, kRadToDeg)), invR);
+    const VF gEast = hn::Mul(hn::Mul(perDegLon, hn::Set(d, kRadToDeg)), invRho);
+    // e_r = p / r, e_north = (-z x, -z y, rho^2) / (r rho), e_east = (-y, x, 0) / rho.
+    const VF radial = hn::Mul(perKmR, invR);
+    const VF north = hn::Mul(gNorth, hn::Mul(invR, invRho));
+    const VF east = hn::Mul(gEast, invRho);
+    const VF zNorth = hn::Mul(hn::Neg(z), north);
+    GradientV g;
+    g.x = hn::MulAdd(x, radial, hn::MulSub(x, zNorth, hn::Mul(y, east)));
+    g.y = hn::MulAdd(y, radial, hn::MulAdd(y, zNorth, hn::Mul(x, east)));
+    g.z = hn::MulAdd(z, radial, hn::Mul(hn::Mul(rho, rho), north));
+    return g;
+}
+
+// shadeFactor (render_kernel.h) across lanes; `half` is normalize(light - ray direction).
+HWY_INLINE VF ShadeFactor(DF d, const KernelParams& k, const GradientV& g, Vec3 half)
+{
+    const VF g2 = hn::MulAdd(g.x, g.x, hn::MulAdd(g.y, g.y, hn::Mul(g.z, g.z)));
+    const MF hasGradient = hn::Gt(g2, hn::Set(d, 1e-30f));
+    const VF inv = hn::Div(hn::Set(d, 1.0f), hn::Sqrt(hn::IfThenElse(hasGradient, g2, hn::Set(d, 1.0f))));
+    auto absDot = [&](Vec3 a) {
+        return hn::Mul(hn::Abs(hn::MulAdd(g.x, hn::Set(d, a.x), hn::MulAdd(g.y, hn::Set(d, a.y), hn::Mul(g.z, hn::Set(d, a.z))))),
+                       inv);
+    };
+    VF lit = hn::MulAdd(hn::Set(d, k.diffuse), absDot(k.lightDir), hn::Set(d, k.ambient));
+    if (k.specular > 0.0f) {
+        // |n.h|^shininess = exp(shininess ln |n.h|), with |n.h| kept above 0 for the logarithm.
+        const VF nh = hn::Max(absDot(half), hn::Set(d, 1e-20f));
+        lit = hn::MulAdd(hn::Set(d, k.specular), hn::Exp(d, hn::Mul(hn::Set(d, k.shininess), hn::Log(d, nh))), lit);
+    }
+    return hn::IfThenElse(hasGradient, lit, hn::Set(d, 1.0f));
 }
 
 struct Ray {
@@ -220,23 +325,119 @@ struct LaneShifts {
     }
 };
 
+// The stages of one vector of samples in MarchSimd, in order: where the samples are, which lie in
+// active bricks, which pass the brushes, their colour and opacity, their shading, and front-to-back
+// compositing into the ray.
+
+// Sample positions of lanes [base, base + lanes) of the chunk starting at tc with spacing dt: each
+// sample owns [start, start + dt) clipped to [t0, t1) and sits `along` into it (clamped).
+struct SamplesV {
+    MF valid;     // the lane's interval is not empty
+    VF len, t;    // clipped interval length (km) and position along the ray
+    VF x, y, z;   // world position (km)
+};
+HWY_INLINE SamplesV ChunkSamples(DF d, const Ray& ray, float tc, float dt, int base, float t0, float t1, float along)
+{
+    const VF vdt = hn::Set(d, dt), vT0 = hn::Set(d, t0), vT1 = hn::Set(d, t1);
+    const VF start = hn::MulAdd(hn::Add(hn::Iota(d, 0.0f), hn::Set(d, float(base))), vdt, hn::Set(d, tc));
+    const VF end = hn::Add(start, vdt);
+    SamplesV s;
+    s.valid = hn::And(hn::Lt(start, vT1), hn::Gt(end, vT0));
+    s.len = hn::Sub(hn::Min(end, vT1), hn::Max(start, vT0));
+    s.t = hn::Min(hn::Max(hn::MulAdd(hn::Set(d, along), vdt, start), vT0), vT1);
+    s.x = hn::MulAdd(s.t, hn::Set(d, ray.d.x), hn::Set(d, ray.o.x));
+    s.y = hn::MulAdd(s.t, hn::Set(d, ray.d.y), hn::Set(d, ray.o.y));
+    s.z = hn::MulAdd(s.t, hn::Set(d, ray.d.z), hn::Set(d, ray.o.z));
+    return s;
+}
+
+// Lanes in active bricks (or in a pole cap, which has no bricks).
+HWY_INLINE MF ActiveLanes(DF d, const KernelParams& k, const LocatedV& L, MF valid)
+{
+    if (!k.brickActive)
+        return valid;
+    const DI di;
+    const VI flag = hn::GatherIndex(di, k.brickActive, hn::IfThenElseZero(hn::RebindMask(di, valid), L.brick));
+    const MF capOrFlag = hn::Or(hn::Gt(L.cap, hn::Zero(d)), hn::RebindMask(d, hn::Ne(flag, hn::Zero(di))));
+    return hn::And(valid, capOrFlag);
+}
+
+// Brushing: any brush that rejects a lane zeroes it; stops as soon as no lane is left.
+HWY_INLINE MF BrushedLanes(DF d, const KernelParams& k, const SamplesV& s, const LocatedV& L, MF keep)
+{
+    for (int b = 0; b < k.brushCount && !hn::AllFalse(d, keep); ++b) {
+        const KernelBrush& brush = k.brushes[b];
+        const VF v = brush.onCoordinate ? CoordinateValue(d, brush, s.x, s.y, s.z, L) : Sample(d, k, brush.variable, L);
+        keep = hn::And(keep, hn::And(hn::Ge(v, hn::Set(d, brush.min)), hn::Le(v, hn::Set(d, brush.max))));
+    }
+    return keep;
+}
+
+// The transfer function: the table index of each kept lane and its opacity over its own interval,
+// alpha = 1 - exp(-sigma len) (0 for lanes not kept or transparent).
+struct ClassifiedV {
+    VI index;
+    VF alpha;
+    MF opaque;
+};
+HWY_INLINE ClassifiedV Classify(DF d, const KernelParams& k, const LocatedV& L, MF keep, VF len)
+{
+    const DI di;
+    const VF zero = hn::Zero(d);
+    const VF value = Sample(d, k, k.colour, L);
+    const VF u = Clamp(hn::MulAdd(hn::Sub(value, hn::Set(d, k.table.valueMin)), hn::Set(d, k.table.indexScale), hn::Set(d, 0.5f)),
+                       zero, hn::Set(d, float(k.table.size - 1)));
+    ClassifiedV c;
+    c.index = hn::IfThenElseZero(hn::RebindMask(di, keep), hn::ConvertTo(di, u));
+    const VF sigma = hn::IfThenElseZero(keep, hn::GatherIndex(d, k.table.sigmaPerKm, c.index));
+    c.opaque = hn::Gt(sigma, zero);
+    c.alpha = hn::IfThenElseZero(c.opaque, hn::Max(zero, hn::Sub(hn::Set(d, 1.0f), hn::Exp(d, hn::Neg(hn::Mul(sigma, len))))));
+    return c;
+}
+
+// Front-to-back compositing across the lanes at once: the transmittance after lane i is
+// T (1 - a_0) ... (1 - a_i), an inclusive prefix product (log2(lanes) permute steps). Lanes are
+// composited while the transmittance before them is above the stop threshold (a prefix of the
+// lanes), as the scalar kernel stops mid-chunk; the products are rounded in a different order, so
+// the two kernels agree to rounding. The depth is the first sample where the accumulated opacity
+// reaches depthOpacity.
+HWY_INLINE void Composite(DF d, const KernelParams& k, const LaneShifts& shifts, VF alpha, VF red, VF green, VF blue,
+                          VF t, RayAccum& acc)
+{
+    const int lanes = int(hn::Lanes(d));
+    const VF one = hn::Set(d, 1.0f);
+    VF after = hn::Sub(one, alpha);
+    for (int s = 0; (1 << s) < lanes; ++s)
+        after = hn::Mul(after, hn::IfThenElse(hn::FirstN(d, size_t(1) << s), one, hn::TableLookupLanes(after, shifts.shiftUp[s])));
+    const VF vT = hn::Set(d, acc.transmittance);
+    const VF tBefore = hn::Mul(vT, hn::IfThenElse(hn::FirstN(d, 1), one, hn::TableLookupLanes(after, shifts.shiftUp[0])));
+    const VF tAfter = hn::Mul(vT, after);
+    const MF live = hn::Gt(tBefore, hn::Set(d, k.stopTransmittance));
+    const VF w = hn::IfThenElseZero(live, hn::Mul(tBefore, alpha));
+    acc.r += hn::GetLane(hn::SumOfLanes(d, hn::Mul(w, red)));
+    acc.g += hn::GetLane(hn::SumOfLanes(d, hn::Mul(w, green)));
+    acc.b += hn::GetLane(hn::SumOfLanes(d, hn::Mul(w, blue)));
+    if (!std::isfinite(acc.depthKm)) {
+        const MF deep = hn::And(live, hn::Ge(hn::Sub(one, tAfter), hn::Set(d, k.depthOpacity)));
+        if (!hn::AllFalse(d, deep)) {
+            HWY_ALIGN float tBuf[kMaxLanes];
+            hn::Store(t, d, tBuf);
+            acc.depthKm = tBuf[hn::FindKnownFirstTrue(d, deep)];
+        }
+    }
+    acc.transmittance = hn::GetLane(hn::MinOfLanes(d, hn::IfThenElse(live, tAfter, one)));
+}
+
+// One ray segment [t0, t1): chunk by chunk (interval skipping over known-empty space), each chunk
+// as vectors of samples through the stages above, until the ray is opaque.
 void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, float t0, float t1, float along,
                RayAccum& acc, TileStats& stats)
 {
     const DF d;
-    const DI di;
     const int lanes = int(hn::Lanes(d));
-    HWY_ALIGN float tBuf[kMaxLanes];
-    const VF iota = hn::Iota(d, 0.0f);
-    const VF one = hn::Set(d, 1.0f);
-    const VF vStop = hn::Set(d, k.stopTransmittance);
-    const VF vDepth = hn::Set(d, k.depthOpacity);
-    const VF vT1 = hn::Set(d, t1);
-    const VF zero = hn::Zero(d);
-    const VF vAlong = hn::Set(d, along);
-
     const RaySampling rs = raySampling(k, ray.o, ray.d);
-    const VF vT0 = hn::Set(d, t0);
+    const Vec3 lv = k.lightDir - ray.d;
+    const Vec3 half = dot(lv, lv) > 1e-12f ? normalize(lv) : k.lightDir;
     SkipState skip(k, ray.o, ray.d);
     int j = rs.chunkOf(t0);
     float tc = rs.chunkStart(j);
@@ -252,99 +453,30 @@ void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, 
             tc = rs.chunkStart(j);
             continue;
         }
-        const VF vdt = hn::Set(d, dt);
         bool anyActive = false;
         for (int base = 0; base < kChunkSamples && acc.transmittance > k.stopTransmittance; base += lanes) {
-            // Sample intervals [start, start + dt) clipped to [t0, t1); the sample sits `along` into its
-            // interval (clamped to the segment).
-            const VF start = hn::MulAdd(hn::Add(iota, hn::Set(d, float(base))), vdt, hn::Set(d, tc));
-            const VF end = hn::Add(start, vdt);
-            const MF valid = hn::And(hn::Lt(start, vT1), hn::Gt(end, vT0));
-            if (hn::AllFalse(d, valid))
+            const SamplesV s = ChunkSamples(d, ray, tc, dt, base, t0, t1, along);
+            if (hn::AllFalse(d, s.valid))
                 continue;
-            const VF len = hn::Sub(hn::Min(end, vT1), hn::Max(start, vT0));
-            const VF t = hn::Min(hn::Max(hn::MulAdd(vAlong, vdt, start), vT0), vT1);
-            const VF x = hn::MulAdd(t, hn::Set(d, ray.d.x), hn::Set(d, ray.o.x));
-            const VF y = hn::MulAdd(t, hn::Set(d, ray.d.y), hn::Set(d, ray.o.y));
-            const VF z = hn::MulAdd(t, hn::Set(d, ray.d.z), hn::Set(d, ray.o.z));
-
-            const LocatedV L = Locate(d, k, x, y, z);
-            MF active = valid;
-            if (k.brickActive) {
-                const VI flag = hn::GatherIndex(di, k.brickActive, hn::IfThenElseZero(hn::RebindMask(di, valid), L.brick));
-                const MF capOrFlag = hn::Or(hn::Gt(L.cap, zero), hn::RebindMask(d, hn::Ne(flag, hn::Zero(di))));
-                active = hn::And(valid, capOrFlag);
-            }
-            const size_t nValid = hn::CountTrue(d, valid);
+            const LocatedV L = Locate(d, k, s.x, s.y, s.z);
+            const MF active = ActiveLanes(d, k, L, s.valid);
             const size_t nActive = hn::CountTrue(d, active);
             stats.samples += nActive;
-            stats.samplesSkipped += nValid - nActive;
+            stats.samplesSkipped += hn::CountTrue(d, s.valid) - nActive;
             if (nActive == 0)
                 continue;
             anyActive = true;
-            // Brushing: any brush that rejects a lane zeroes it; stop as soon as no lane is left.
-            MF keep = active;
-            for (int b = 0; b < k.brushCount && !hn::AllFalse(d, keep); ++b) {
-                const KernelBrush& brush = k.brushes[b];
-                const VF v = brush.onCoordinate ? CoordinateValue(d, brush, x, y, z, L) : Sample(d, k, brush.variable, L);
-                keep = hn::And(keep, hn::And(hn::Ge(v, hn::Set(d, brush.min)), hn::Le(v, hn::Set(d, brush.max))));
-            }
+            const MF keep = BrushedLanes(d, k, s, L, active);
             if (hn::AllFalse(d, keep))
                 continue;
-            const VF value = Sample(d, k, k.colour, L);
-            const VF u = Clamp(hn::MulAdd(hn::Sub(value, hn::Set(d, k.table.valueMin)), hn::Set(d, k.table.indexScale),
-                                          hn::Set(d, 0.5f)),
-                               zero, hn::Set(d, float(k.table.size - 1)));
-            const VI idx = hn::IfThenElseZero(hn::RebindMask(di, keep), hn::ConvertTo(di, u));
-            const VF sigma = hn::IfThenElseZero(keep, hn::GatherIndex(d, k.table.sigmaPerKm, idx));
-            const MF opaque = hn::Gt(sigma, zero);
-            if (hn::AllFalse(d, opaque))
+            const ClassifiedV c = Classify(d, k, L, keep, s.len);
+            if (hn::AllFalse(d, c.opaque))
                 continue;
-            // Opacity correction: alpha = 1 - exp(-sigma * length) for this sample's own interval.
-            const VF alpha = hn::IfThenElseZero(
-                opaque, hn::Max(zero, hn::Sub(hn::Set(d, 1.0f), hn::Exp(d, hn::Neg(hn::Mul(sigma, len))))));
-            VF shade = hn::Set(d, 1.0f);
-            if (k.shade) {
-                const VF h = hn::Set(d, k.gradientDeltaKm);
-                const VF gx = hn::Sub(ColourValueAt(d, k, hn::Add(x, h), y, z), ColourValueAt(d, k, hn::Sub(x, h), y, z));
-                const VF gy = hn::Sub(ColourValueAt(d, k, x, hn::Add(y, h), z), ColourValueAt(d, k, x, hn::Sub(y, h), z));
-                const VF gz = hn::Sub(ColourValueAt(d, k, x, y, hn::Add(z, h)), ColourValueAt(d, k, x, y, hn::Sub(z, h)));
-                const VF g2 = hn::MulAdd(gx, gx, hn::MulAdd(gy, gy, hn::Mul(gz, gz)));
-                const VF gl = hn::MulAdd(gx, hn::Set(d, k.lightDir.x),
-                                         hn::MulAdd(gy, hn::Set(d, k.lightDir.y), hn::Mul(gz, hn::Set(d, k.lightDir.z))));
-                const MF hasGradient = hn::Gt(g2, hn::Set(d, 1e-30f));
-                const VF safeG2 = hn::IfThenElse(hasGradient, g2, hn::Set(d, 1.0f));
-                const VF lit = hn::MulAdd(hn::Set(d, k.diffuse), hn::Div(hn::Abs(gl), hn::Sqrt(safeG2)), hn::Set(d, k.ambient));
-                shade = hn::IfThenElse(hasGradient, lit, shade);
-            }
-            const VF red = hn::Mul(shade, hn::GatherIndex(d, k.table.red, idx));
-            const VF green = hn::Mul(shade, hn::GatherIndex(d, k.table.green, idx));
-            const VF blue = hn::Mul(shade, hn::GatherIndex(d, k.table.blue, idx));
-            // Front-to-back compositing across the lanes at once: the transmittance after lane i is
-            // T (1 - a_0) ... (1 - a_i), an inclusive prefix product (log2(lanes) permute steps).
-            // Lanes are composited while the transmittance before them is above the stop threshold
-            // (a prefix of the lanes), as the scalar kernel stops mid-chunk; the products are
-            // rounded in a different order, so the two kernels agree to rounding.
-            VF after = hn::Sub(one, alpha);
-            for (int s = 0; (1 << s) < lanes; ++s)
-                after = hn::Mul(after, hn::IfThenElse(hn::FirstN(d, size_t(1) << s), one,
-                                                      hn::TableLookupLanes(after, shifts.shiftUp[s])));
-            const VF vT = hn::Set(d, acc.transmittance);
-            const VF tBefore = hn::Mul(vT, hn::IfThenElse(hn::FirstN(d, 1), one, hn::TableLookupLanes(after, shifts.shiftUp[0])));
-            const VF tAfter = hn::Mul(vT, after);
-            const MF live = hn::Gt(tBefore, vStop);
-            const VF w = hn::IfThenElseZero(live, hn::Mul(tBefore, alpha));
-            acc.r += hn::GetLane(hn::SumOfLanes(d, hn::Mul(w, red)));
-            acc.g += hn::GetLane(hn::SumOfLanes(d, hn::Mul(w, green)));
-            acc.b += hn::GetLane(hn::SumOfLanes(d, hn::Mul(w, blue)));
-            if (!std::isfinite(acc.depthKm)) {
-                const MF deep = hn::And(live, hn::Ge(hn::Sub(one, tAfter), vDepth));
-                if (!hn::AllFalse(d, deep)) {
-                    hn::Store(t, d, tBuf);
-                    acc.depthKm = tBuf[hn::FindKnownFirstTrue(d, deep)];
-                }
-            }
-            acc.transmittance = hn::GetLane(hn::MinOfLanes(d, hn::IfThenElse(live, tAfter, one)));
+            const VF shade = k.shade ? ShadeFactor(d, k, NativeGradient(d, k, k.colour, L, s.x, s.y, s.z), half)
+                                     : hn::Set(d, 1.0f);
+            Composite(d, k, shifts, c.alpha, hn::Mul(shade, hn::GatherIndex(d, k.table.red, c.index)),
+                      hn::Mul(shade, hn::GatherIndex(d, k.table.green, c.index)),
+                      hn::Mul(shade, hn::GatherIndex(d, k.table.blue, c.index)), s.t, acc);
         }
         skip.probe = !anyActive;
         if (!anyActive)

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <random>
 
 namespace raypc::render {
@@ -135,6 +136,56 @@ TEST(Sampler, PolesGiveOneValueForAllLongitudesAndBlendContinuously)
 
 // The closed-form sample count along a ray: increasing, inverted by tAt, continuous at the crossover,
 // and about stepFactor cells per sample — dr on a radial ray, h dθ at a tangential closest approach.
+// Shading's gradient on the native grid (nativeGradient) points along the analytic gradient of
+// linear Cartesian fields and of r, on uniform and non-uniform grids, across the lon seam and up to
+// the outermost lat rows; a field constant in lon gives no east component even at the seam.
+void expectGradientDirection(const SphericalGrid& g, std::function<float(Vec3)> field, Vec3 expected,
+                             bool radial, double maxDeg)
+{
+    const Sampler s(makeVolume(g, {{"f", [&](double lat, double r, double lon) { return field(toXyz(lat, lon, r)); }}}));
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> lat(g.latDeg.front(), g.latDeg.back()), lon(0, 360), r(3600, 6250);
+    std::vector<Vec3> points;
+    for (int i = 0; i < 2000; ++i)
+        points.push_back(toXyz(lat(rng), lon(rng), r(rng)));
+    for (double seamLon : {359.95, 0.0, 0.05, 359.5, 0.5})
+        points.push_back(toXyz(20, seamLon, 5000));
+    double worst = 0;
+    for (const Vec3 p : points) {
+        const kernel::Located L = kernel::locate(s.k(), p.x, p.y, p.z);
+        const Vec3 gr = kernel::nativeGradient(s.k(), s.k().colour, L, p);
+        const Vec3 want = radial ? normalize(p) : expected;
+        const double c = std::clamp(double(dot(normalize(gr), want)), -1.0, 1.0);
+        worst = std::max(worst, std::acos(c) * 180 / M_PI);
+    }
+    EXPECT_LT(worst, maxDeg);
+}
+
+TEST(NativeGradient, PointsAlongTheAnalyticGradient)
+{
+    for (const double stretch : {0.0, 0.5}) {
+        SCOPED_TRACE(stretch);
+        const SphericalGrid g = makeGrid(60, 41, 120, stretch);
+        expectGradientDirection(g, [](Vec3 p) { return p.z; }, {0, 0, 1}, false, 6);
+        expectGradientDirection(g, [](Vec3 p) { return p.x; }, {1, 0, 0}, false, 6);
+        expectGradientDirection(g, [](Vec3 p) { return -2 * p.y; }, {0, -1, 0}, false, 6);
+        expectGradientDirection(g, [](Vec3 p) { return length(p); }, {}, true, 0.5);
+    }
+}
+
+TEST(NativeGradient, MatchesTheFiniteDifferenceOfTheSampledField)
+{
+    // Magnitude, not just direction: d/dz of f = 3 z is 3 per km (within the interpolation error).
+    const SphericalGrid g = makeGrid(90, 61, 180);
+    const Sampler s(makeVolume(g, {{"f", [](double lat, double r, double lon) { return 3 * toXyz(lat, lon, r).z; }}}));
+    for (const Vec3 p : {toXyz(30, 10, 5000), toXyz(-45, 200, 4000), toXyz(5, 359.9, 6000)}) {
+        const Vec3 gr = kernel::nativeGradient(s.k(), s.k().colour, kernel::locate(s.k(), p.x, p.y, p.z), p);
+        EXPECT_NEAR(gr.z, 3.0, 0.15) << p.x << "," << p.y << "," << p.z;
+        EXPECT_NEAR(gr.x, 0.0, 0.15);
+        EXPECT_NEAR(gr.y, 0.0, 0.15);
+    }
+}
+
 TEST(RaySampling, SamplesAreAboutStepFactorCellsApartAndTheMapInverts)
 {
     kernel::KernelParams k;

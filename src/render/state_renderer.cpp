@@ -38,6 +38,9 @@ RenderState defaultState(const Dataset& dataset)
     s.camera.distanceKm = 22000.0;
     s.passes = 8;
     s.pathlines.minWidthPx = 2.0f;  // 12 km tubes are a hair wide at this distance
+    // Lit: plumes and slabs read as shapes and which is in front shows (docs/rendering.md,
+    // "Shading"); a document without the key stays unlit, as it was written.
+    s.shading.enabled = true;
     return s;
 }
 

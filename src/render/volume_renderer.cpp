@@ -184,6 +184,7 @@ std::vector<float> coordinateBrickBounds(const SphericalGrid& g, const BrickLayo
 
 struct VolumeRenderer::Impl {
     AxisTable lat, r, lon;
+    std::vector<float> latSpacingDeg, rSpacingKm, lonSpacingDeg;  // per cell (KernelParams)
     std::vector<std::vector<float>> capMeans;  // per variable: 2 * nR
     float drKm = 1, dAngleRad = 0.01f;
     BrickLayout activity;  // the bricks skipping decides on (activityBrickSize)
@@ -220,6 +221,15 @@ VolumeRenderer::VolumeRenderer(std::shared_ptr<const StepVolume> volume)
     im.lat = buildAxis(g.latDeg, -90.0, 90.0, false);
     im.r = buildAxis(g.rKm, g.rKm.front(), g.rKm.back(), false);
     im.lon = buildAxis(g.lonDeg, 0.0, 360.0, true);
+    auto spacings = [](const std::vector<double>& c, bool periodic) {
+        std::vector<float> s(periodic ? c.size() : c.size() - 1);
+        for (size_t i = 0; i < s.size(); ++i)
+            s[i] = float(i + 1 < c.size() ? c[i + 1] - c[i] : c.front() + 360.0 - c.back());
+        return s;
+    };
+    im.latSpacingDeg = spacings(g.latDeg, false);
+    im.rSpacingKm = spacings(g.rKm, false);
+    im.lonSpacingDeg = spacings(g.lonDeg, true);
     im.drKm = float((g.rKm.back() - g.rKm.front()) / double(g.nR() - 1));
     im.activity = BrickLayout::forGrid(g, activityBrickSize(bs, im.drKm));
     im.brickShift = std::countr_zero(im.activity.size);
@@ -387,7 +397,11 @@ void VolumeRenderer::fillKernelParams(const RenderParams& p)
     k.lightDir = normalize(k.camera.right * l.x + k.camera.up * l.y + k.camera.forward * (-l.z));
     k.ambient = p.shading.ambient;
     k.diffuse = p.shading.diffuse;
-    k.gradientDeltaKm = 0.5f * im.drKm;
+    k.specular = p.shading.specular;
+    k.shininess = p.shading.shininess;
+    k.latSpacingDeg = im.latSpacingDeg.data();
+    k.rSpacingKm = im.rSpacingKm.data();
+    k.lonSpacingDeg = im.lonSpacingDeg.data();
     k.drawCore = p.core.visible;
     k.coreByVariable = p.core.variable >= 0;
     k.coreColour = p.core.colour;

@@ -51,6 +51,7 @@ struct ShadingStyle {
     bool enabled = false;  // gradient shading of the volume (the core is always Lambert-shaded)
     Vec3 lightFromCamera{0.4f, 0.6f, 1.0f};  // towards the light in the camera frame: x right, y up, z to the viewer
     float ambient = 0.35f, diffuse = 0.65f;
+    float specular = 0.2f, shininess = 24;  // Blinn-Phong highlight weight and exponent
 };
 
 enum class KernelKind { Simd, Scalar };
