@@ -32,26 +32,12 @@ InteractiveChoice chooseInteractive(const std::vector<std::shared_ptr<const Step
         c.level = level;
         return c;
     }
-    // Even the coarsest level is too slow: fewer pixels (the cost is proportional to them).
-    const double budget = kInteractiveBudgetShare * budgetSeconds;
-    const double scale = std::clamp(std::sqrt(budget / c.estimatedSeconds), 0.25, 1.0);
-    c.width = std::max(1, int(std::lround(params.width * scale)));
-    c.height = std::max(1, int(std::lround(params.height * scale)));
+    // Even the coarsest level is too slow: fewer pixels.
+    const int divisor = resolutionDivisor(c.estimatedSeconds, kInteractiveBudgetShare * budgetSeconds);
+    c.width = std::max(1, (params.width + divisor - 1) / divisor);
+    c.height = std::max(1, (params.height + divisor - 1) / divisor);
     c.estimatedSeconds *= double(c.width) * double(c.height) / (double(params.width) * double(params.height));
     return c;
-}
-
-int chooseLevelForBudget(const std::vector<std::shared_ptr<const StepVolume>>& levels, const RenderParams& params,
-                         double budgetSeconds, double samplesPerSecond)
-{
-    if (levels.empty())
-        fail("level choice: no levels");
-    const int level = finestLevelWithin(int(levels.size()), budgetSeconds, [&](int l) {
-        VolumeRenderer probe(levels[size_t(l)]);
-        probe.setParams(params);
-        return probe.estimateSamplesPerPass() / samplesPerSecond;
-    });
-    return level >= 0 ? level : int(levels.size()) - 1;
 }
 
 }  // namespace raypc::render

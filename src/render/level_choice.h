@@ -36,11 +36,13 @@ int finestLevelWithin(int levelCount, double budgetSeconds, SecondsAt&& secondsA
     return fits;
 }
 
-// The finest level whose estimated pass time fits `budgetSeconds`, given a throughput in samples
-// per second (all threads). `levels[i]` are the volumes of level i (finest first); falls back to the
-// coarsest.
-int chooseLevelForBudget(const std::vector<std::shared_ptr<const StepVolume>>& levels, const RenderParams& params,
-                         double budgetSeconds, double samplesPerSecond);
+// When even the coarsest level misses the budget: the image is rendered with 1/divisor of the pixels
+// per axis and upscaled — 1, 2 or 4, the smallest whose predicted pass time (proportional to the
+// pixels) fits. Used by StateRenderer::prepare and chooseInteractive.
+inline int resolutionDivisor(double seconds, double budgetSeconds)
+{
+    return seconds <= budgetSeconds ? 1 : seconds / 4 <= budgetSeconds ? 2 : 4;
+}
 
 // What the interactive mode renders: a level and an internal image size (the requested size, or
 // smaller when even the coarsest level would miss the budget; the caller upscales the result or
@@ -57,8 +59,8 @@ struct InteractiveChoice {
 inline constexpr double kInteractiveBudgetShare = 0.75;
 
 // The finest level whose predicted pass time (estimateSamplesPerPass / samplesPerSecond) fits
-// kInteractiveBudgetShare of `budgetSeconds`; if none does, the coarsest level at an internal resolution scaled down (by at
-// most 4 per side) to fit. `samplesPerSecond` should be measured (measuredSamplesPerSecond of recent
+// kInteractiveBudgetShare of `budgetSeconds`; if none does, the coarsest level at an internal resolution
+// divided by resolutionDivisor. `samplesPerSecond` should be measured (measuredSamplesPerSecond of recent
 // passes); without a measurement (<= 0) the coarsest level at full size is returned so that its
 // pass measures the machine. `levels[i]` are the volumes of level i (finest first). Throws
 // raypc::Error if `levels` is empty or the params are invalid.

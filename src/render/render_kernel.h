@@ -494,6 +494,38 @@ inline void countJumped(TileStats& stats, int j, int next, float tc, float dt, f
     stats.chunksJumped += chunks;
 }
 
+// The chunk walk both kernels share: chunk by chunk along the segment [t0, t1) while the ray is not
+// opaque, known-empty space passed over in one jump (interval skipping), and the skip grid probed
+// again after a chunk without active samples. `marchChunk(tc, dt)` composites the samples of the
+// chunk starting at tc with spacing dt into acc and returns whether any of them was active.
+template <class MarchChunk>
+void walkChunks(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, const RayAccum& acc, TileStats& stats,
+                MarchChunk&& marchChunk)
+{
+    const RaySampling rs = raySampling(k, o, d);
+    SkipState skip(k, o, d);
+    int j = rs.chunkOf(t0);
+    float tc = rs.chunkStart(j);
+    while (tc < t1 && acc.transmittance > k.stopTransmittance) {
+        const float tn = rs.chunkStart(j + 1);
+        const float dt = (tn - tc) * (1.0f / float(kChunkSamples));
+        ++stats.chunks;
+        if (chunkIsEmpty(k, tc, tn, skip)) {
+            const int next = chunkAfterEmpty(rs, j, t1, skip);
+            countJumped(stats, j, next, tc, dt, t0, t1);
+            j = next;
+            tc = rs.chunkStart(j);
+            continue;
+        }
+        const bool anyActive = marchChunk(tc, dt);
+        skip.probe = !anyActive;
+        if (!anyActive)
+            ++stats.chunksSkipped;
+        ++j;
+        tc = tn;
+    }
+}
+
 // The opaque core sphere: plain or coloured by a variable at the core radius, Lambert-shaded.
 inline Rgb coreColourAt(const KernelParams& k, Vec3 hit)
 {

@@ -33,21 +33,7 @@ bool insideBrushes(const KernelParams& k, Vec3 p, const Located& L)
 void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, float along, RayAccum& acc,
                  TileStats& stats)
 {
-    const RaySampling rs = raySampling(k, o, d);
-    SkipState skip(k, o, d);
-    int j = rs.chunkOf(t0);
-    float tc = rs.chunkStart(j);
-    while (tc < t1 && acc.transmittance > k.stopTransmittance) {
-        const float tn = rs.chunkStart(j + 1);
-        const float dt = (tn - tc) * (1.0f / float(kChunkSamples));
-        ++stats.chunks;
-        if (chunkIsEmpty(k, tc, tn, skip)) {
-            const int next = chunkAfterEmpty(rs, j, t1, skip);
-            countJumped(stats, j, next, tc, dt, t0, t1);
-            j = next;
-            tc = rs.chunkStart(j);
-            continue;
-        }
+    walkChunks(k, o, d, t0, t1, acc, stats, [&](float tc, float dt) {
         bool anyActive = false;
         for (int i = 0; i < kChunkSamples && acc.transmittance > k.stopTransmittance; ++i) {
             const float start = tc + float(i) * dt;
@@ -81,12 +67,8 @@ void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, floa
             if (!std::isfinite(acc.depthKm) && 1.0f - acc.transmittance >= k.depthOpacity)
                 acc.depthKm = t;
         }
-        skip.probe = !anyActive;
-        if (!anyActive)
-            ++stats.chunksSkipped;
-        ++j;
-        tc = tn;
-    }
+        return anyActive;
+    });
 }
 
 }  // namespace

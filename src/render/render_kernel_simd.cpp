@@ -428,31 +428,16 @@ HWY_INLINE void Composite(DF d, const KernelParams& k, const LaneShifts& shifts,
     acc.transmittance = hn::GetLane(hn::MinOfLanes(d, hn::IfThenElse(live, tAfter, one)));
 }
 
-// One ray segment [t0, t1): chunk by chunk (interval skipping over known-empty space), each chunk
-// as vectors of samples through the stages above, until the ray is opaque.
+// One ray segment [t0, t1): the chunks of walkChunks, each as vectors of samples through the stages
+// above.
 void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, float t0, float t1, float along,
                RayAccum& acc, TileStats& stats)
 {
     const DF d;
     const int lanes = int(hn::Lanes(d));
-    const RaySampling rs = raySampling(k, ray.o, ray.d);
     const Vec3 lv = k.lightDir - ray.d;
     const Vec3 half = dot(lv, lv) > 1e-12f ? normalize(lv) : k.lightDir;
-    SkipState skip(k, ray.o, ray.d);
-    int j = rs.chunkOf(t0);
-    float tc = rs.chunkStart(j);
-    while (tc < t1 && acc.transmittance > k.stopTransmittance) {
-        const float tn = rs.chunkStart(j + 1);
-        const float dt = (tn - tc) * (1.0f / float(kChunkSamples));
-        ++stats.chunks;
-        // Interval skipping: known-empty space is passed over in one jump to the chunk where it ends.
-        if (chunkIsEmpty(k, tc, tn, skip)) {
-            const int next = chunkAfterEmpty(rs, j, t1, skip);
-            countJumped(stats, j, next, tc, dt, t0, t1);
-            j = next;
-            tc = rs.chunkStart(j);
-            continue;
-        }
+    walkChunks(k, ray.o, ray.d, t0, t1, acc, stats, [&](float tc, float dt) {
         bool anyActive = false;
         for (int base = 0; base < kChunkSamples && acc.transmittance > k.stopTransmittance; base += lanes) {
             const SamplesV s = ChunkSamples(d, ray, tc, dt, base, t0, t1, along);
@@ -478,12 +463,8 @@ void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, 
                       hn::Mul(shade, hn::GatherIndex(d, k.table.green, c.index)),
                       hn::Mul(shade, hn::GatherIndex(d, k.table.blue, c.index)), s.t, acc);
         }
-        skip.probe = !anyActive;
-        if (!anyActive)
-            ++stats.chunksSkipped;
-        ++j;
-        tc = tn;
-    }
+        return anyActive;
+    });
 }
 
 void RenderTile(const KernelParams& k, Tile tile, PixelOut* out, TileStats& stats)

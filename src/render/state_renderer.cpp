@@ -149,7 +149,7 @@ StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, co
         // Even the coarsest level misses the budget: 1/2 or 1/4 of the pixels per axis.
         if (fits < 0 && policy.reduceResolution) {
             const double seconds = rendererFor(step, p.level).estimateSamplesPerPass() / rate;
-            const int divisor = seconds <= budget ? 1 : seconds / 4 <= budget ? 2 : 4;
+            const int divisor = resolutionDivisor(seconds, budget);
             p.params.width = std::max(1, (p.params.width + divisor - 1) / divisor);
             p.params.height = std::max(1, (p.params.height + divisor - 1) / divisor);
         }
