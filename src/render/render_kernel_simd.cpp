@@ -288,6 +288,14 @@ void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, 
                 const KernelBrush& brush = k.brushes[b];
                 const VF v = brush.onCoordinate ? CoordinateValue(d, brush, x, y, z, L) : Sample(d, k, brush.variable, L);
                 keep = hn::And(keep, hn::And(hn::Ge(v, hn::Set(d, brush.min)), hn::Le(v, hn::Set(d, brush.max))));
+                // Several ranges on the axis (min, max is their hull): a lane must lie in one of them.
+                if (brush.rangeCount > 1) {
+                    MF inOne = hn::FirstN(d, 0);
+                    for (int i = 0; i < brush.rangeCount; ++i)
+                        inOne = hn::Or(inOne, hn::And(hn::Ge(v, hn::Set(d, brush.ranges[i].min)),
+                                                      hn::Le(v, hn::Set(d, brush.ranges[i].max))));
+                    keep = hn::And(keep, inOne);
+                }
             }
             if (hn::AllFalse(d, keep))
                 continue;

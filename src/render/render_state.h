@@ -19,20 +19,18 @@
 
 namespace raypc::render {
 
-// Version 2 added "pathlines", version 3 "reference" (shells, graticule, coastlines) and "legend";
-// older documents are still read (they have neither).
-inline constexpr int kRenderStateVersion = 3;
+// Version 2 added "pathlines", version 3 "reference" (shells, graticule, coastlines) and "legend",
+// version 4 several ranges on one axis (a repeated brush name ORs its ranges); older
+// documents are still read (they have none of these).
+inline constexpr int kRenderStateVersion = 4;
 
-struct BrushSpec {
-    std::string name;  // a variable or a coordinate (x, y, z, lat, lon, radius, depth)
-    float min = 0, max = 0;
-};
+// A brush range: a variable or a coordinate (x, y, z, lat, lon, radius, depth) and [min, max]. The
+// brush model is data/selection.h's: a name that repeats adds a range to its axis (OR).
+using BrushSpec = NamedRange;
 
-// A range over one pathline attribute column (the pathline parallel-coordinates plot).
-struct PathlineFilter {
-    std::string name;  // a column of the pathline sets, e.g. "length", "start temperature anomaly"
-    float min = 0, max = 0;
-};
+// A range over one pathline attribute column (the pathline parallel-coordinates plot), e.g.
+// "length", "start temperature anomaly"; as brushes, a repeated column ORs its ranges.
+using PathlineFilter = NamedRange;
 
 // The "pathlines" object: tubes along the pathlines injected in the last `window` steps
 // (docs/state.md). Cost classes: window (and the state's step) reload the line window and

@@ -768,8 +768,10 @@ const Object<RenderState>& document()
                                                   "a variable or coordinate name"),
                             "array of {name, min, max}"),
                     {.meaning = "ranges of any number of variables or coordinates (`x`, `y`, `z` km, `lat` °N, `lon` "
-                                "°E, `radius` km, `depth` km); a sample outside any range contributes nothing; min ≤ "
-                                "max"}),
+                                "°E, `radius` km, `depth` km); min ≤ max. A name that repeats adds a range to its "
+                                "axis (version ≥ 4): a sample is selected when on every brushed axis it lies in at "
+                                "least one of the axis' ranges (OR within an axis, AND over axes); a sample not "
+                                "selected contributes nothing"}),
             leaf<S>("level", at(&S::level), level(),
                     {.meaning = "level of detail; auto = finest level whose estimated pass time fits `timeBudgetMs`",
                      .cost = Cost::Reload}),
@@ -844,7 +846,7 @@ const Object<RenderState>& document()
                                                             "a line attribute name"),
                                  "array of {name, min, max}"),
                          {.meaning = "ranges over line attribute columns (the pathline parallel-coordinates plot); "
-                                     "min ≤ max"}),
+                                     "min ≤ max; a column that repeats ORs its ranges, as in `brushes` (version ≥ 4)"}),
                  leaf<S>("ambientOcclusion", at(&S::pathlines, &P::ambientOcclusion), boolean(),
                          {.meaning = "ambient occlusion on the tubes (a few rays per pass against the tubes and the "
                                      "core)"})},
@@ -887,7 +889,23 @@ const Object<RenderState>& document()
                          {.meaning = "width of graticule and coastline lines, pixels of the image"})},
                 {.meaning = "reference geometry drawn with the volume and composited by depth", .since = 3}),
         },
-        {}};
+        // Before version 4 a repeated name meant the intersection of its ranges (nothing wrote that);
+        // since then the union. An older document repeating a name is refused rather than re-read.
+        [](const S& s, Reader& r) {
+            if (r.version() >= 4)
+                return;
+            auto refuseRepeats = [&](const std::vector<NamedRange>& ranges, const std::string& key) {
+                for (size_t i = 0; i < ranges.size(); ++i)
+                    for (size_t j = 0; j < i; ++j)
+                        if (ranges[j].name == ranges[i].name)
+                            r.failAt(fmt::format("{}[{}]", key, i),
+                                     fmt::format("a second range on '{}' needs version 4 (ranges on one axis are "
+                                                 "OR-ed), the document says version {}",
+                                                 ranges[i].name, r.version()));
+            };
+            refuseRepeats(s.brushes, "brushes");
+            refuseRepeats(s.pathlines.filters, "pathlines.filters");
+        }};
     return doc;
 }
 

@@ -123,10 +123,12 @@ const defaults = JSON.parse(run(stateCases, ['default', dataset]));
   const names = readdirSync(join(root, 'examples')).filter((f) => f.endsWith('.json')).sort();
   check(names.length > 0, 'no examples/*.json');
   const docs = names.map((f) => JSON.parse(readFileSync(join(root, 'examples', f), 'utf8')));
-  const docExample = /```json\n([\s\S]*?)```/.exec(readFileSync(join(root, 'docs/state.md'), 'utf8'));
-  check(docExample, 'docs/state.md has no ```json example');
-  names.push('../docs/state.md (its example)');
-  docs.push(JSON.parse(docExample?.[1] ?? '{}'));
+  const docExamples = [...readFileSync(join(root, 'docs/state.md'), 'utf8').matchAll(/```json\n([\s\S]*?)```/g)];
+  check(docExamples.length > 0, 'docs/state.md has no ```json example');
+  docExamples.forEach((m, i) => {
+    names.push(`../docs/state.md (example ${i + 1})`);
+    docs.push(JSON.parse(m[1]));
+  });
   const loaded = docs.map((d) => uiLoad(d, defaults));
   const cpp = cppParse([...docs, ...loaded.map((l) => l.json ?? {})]);
   names.forEach((name, i) => {
@@ -206,7 +208,7 @@ const defaults = JSON.parse(run(stateCases, ['default', dataset]));
   }
   const cpp = cppParse(docs);
   // What JSON Schema cannot express; raypc alone refuses these.
-  const onlyRaypc = /is greater than max|with min < max|positions must ascend/;
+  const onlyRaypc = /is greater than max|with min < max|positions must ascend|a second range on/;
   let refused = 0, raypcOnly = 0;
   docs.forEach((doc, i) => {
     const u = uiLoad(doc, defaults), c = cpp[i];
