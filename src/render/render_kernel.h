@@ -133,6 +133,7 @@ struct KernelParams {
     ColourTable table;
     const KernelBrush* brushes = nullptr;
     int brushCount = 0;
+    bool multiRangeBrushes = false;  // some brush has rangeCount > 1 (the SIMD kernel's variant)
 
     // Samples: about stepFactor cells apart (mean radial spacing drKm, smaller mean angular spacing
     // dAngleRad), see RaySampling.

@@ -220,6 +220,9 @@ struct LaneShifts {
     }
 };
 
+// kMultiRange: some brushed axis has several ranges (decided once per tile, so that the common
+// single-range case runs the loop without the test of further ranges).
+template <bool kMultiRange>
 void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, float t0, float t1, float along,
                RayAccum& acc, TileStats& stats)
 {
@@ -289,7 +292,7 @@ void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, 
                 const VF v = brush.onCoordinate ? CoordinateValue(d, brush, x, y, z, L) : Sample(d, k, brush.variable, L);
                 keep = hn::And(keep, hn::And(hn::Ge(v, hn::Set(d, brush.min)), hn::Le(v, hn::Set(d, brush.max))));
                 // Several ranges on the axis (min, max is their hull): a lane must lie in one of them.
-                if (brush.rangeCount > 1) {
+                if (kMultiRange && brush.rangeCount > 1) {
                     MF inOne = hn::FirstN(d, 0);
                     for (int i = 0; i < brush.rangeCount; ++i)
                         inOne = hn::Or(inOne, hn::And(hn::Ge(v, hn::Set(d, brush.ranges[i].min)),
@@ -365,10 +368,16 @@ void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, 
 void RenderTile(const KernelParams& k, Tile tile, PixelOut* out, TileStats& stats)
 {
     const LaneShifts shifts;
-    renderTileWith(k, tile, out, stats,
-                   [&](Vec3 o, Vec3 dir, float t0, float t1, float along, RayAccum& acc, TileStats& st) {
-                       MarchSimd(k, shifts, Ray{o, dir}, t0, t1, along, acc, st);
-                   });
+    if (k.multiRangeBrushes)
+        renderTileWith(k, tile, out, stats,
+                       [&](Vec3 o, Vec3 dir, float t0, float t1, float along, RayAccum& acc, TileStats& st) {
+                           MarchSimd<true>(k, shifts, Ray{o, dir}, t0, t1, along, acc, st);
+                       });
+    else
+        renderTileWith(k, tile, out, stats,
+                       [&](Vec3 o, Vec3 dir, float t0, float t1, float along, RayAccum& acc, TileStats& st) {
+                           MarchSimd<false>(k, shifts, Ray{o, dir}, t0, t1, along, acc, st);
+                       });
 }
 
 int Lanes() { return int(hn::Lanes(DF())); }

@@ -396,6 +396,8 @@ void VolumeRenderer::fillKernelParams(const RenderParams& p)
     k.table = viewOf(im.table);
     k.brushes = im.brushes.data();
     k.brushCount = int(im.brushes.size());
+    k.multiRangeBrushes = std::any_of(im.brushes.begin(), im.brushes.end(),
+                                      [](const kernel::KernelBrush& b) { return b.rangeCount > 1; });
     k.stepFactor = p.stepFactor;
     k.drKm = im.drKm;
     k.dAngleRad = im.dAngleRad;
