@@ -20,7 +20,7 @@
 namespace raypc::render {
 
 // Version 2 added "pathlines", version 3 "reference" (shells, graticule, coastlines) and "legend",
-// version 4 several ranges on one axis (a repeated brush name ORs its ranges); older
+// version 4 several ranges on one axis (a repeated brush name ORs its ranges) and "axes"; older
 // documents are still read (they have none of these).
 inline constexpr int kRenderStateVersion = 4;
 
@@ -93,6 +93,9 @@ struct RenderState {
     bool colorReversed = false;          // version 3
     bool logScale = false;               // version 3: positions over log10 of the value (range > 0)
     std::vector<BrushSpec> brushes;
+    // Version 4: the UI's parallel-coordinates axes in display order (nullopt: its default); the
+    // renderer does not read it.
+    std::optional<std::vector<std::string>> axes;
     std::optional<int> level;  // nullopt: chosen for timeBudgetMs (reload class)
     double timeBudgetMs = 50.0;
     int passes = 8;

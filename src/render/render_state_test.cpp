@@ -123,6 +123,25 @@ TEST(RenderState, RepeatedBrushNamesAreRangesOfOneAxis)
     EXPECT_EQ(errorOf(reversed), "STATE.json: brushes[2].min: min 3000 is greater than max 2000");
 }
 
+// Version 4: the UI's axes in display order round-trip; null is the UI's default; a name twice, an
+// empty name or a version-3 document with axes are refused naming the key.
+TEST(RenderState, AxesRoundTripAndAreChecked)
+{
+    EXPECT_EQ(toJson(RenderState{})["axes"], nullptr);
+    const json doc = json::parse(R"({"version": 4, "axes": ["depth", "temperature", "radius"]})");
+    const RenderState s = parseRenderState(doc);
+    ASSERT_TRUE(s.axes.has_value());
+    EXPECT_EQ(*s.axes, (std::vector<std::string>{"depth", "temperature", "radius"}));
+    EXPECT_EQ(toJson(s)["axes"], doc["axes"]);
+    EXPECT_EQ(errorOf(json::parse(R"({"version": 4, "axes": ["depth", "lat", "depth"]})")),
+              "STATE.json: axes: expected each name once, found \"depth\" twice");
+    EXPECT_EQ(errorOf(json::parse(R"({"version": 4, "axes": ["depth", ""]})")),
+              "STATE.json: axes: expected non-empty names, found \"\"");
+    EXPECT_EQ(errorOf(json::parse(R"({"version": 3, "axes": ["depth"]})")),
+              "STATE.json: axes: needs version 4, the document says version 3");
+    EXPECT_FALSE(parseRenderState(json::parse(R"({"version": 4, "axes": null})")).axes.has_value());
+}
+
 TEST(RenderState, DefaultOpacityIsAVForMapsCentredOnZero)
 {
     const VariableCatalog catalog{{"temperature anomaly"}, {{-500, 200}}};

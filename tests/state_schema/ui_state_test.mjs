@@ -107,11 +107,12 @@ const defaults = JSON.parse(run(stateCases, ['default', dataset]));
   rich.reference = { shells: { visible: true, depthsKm: [660, 1600], opacity: 0.1, color: [0.5, 0.6, 0.7] },
     graticule: { visible: true, spacingDeg: 15, opacity: 0.25, color: [0.25, 0.5, 0.75] },
     coastlines: { visible: true, opacity: 0.5, color: [1, 1, 0] }, lineWidthPx: 2.5 };
-  rich.brushes = [{ name: 'depth', min: 0, max: 660 }, { name: 'temperature', min: 1500, max: 2500 }];
+  rich.brushes = [{ name: 'depth', min: 0, max: 660 }, { name: 'temperature', min: 1500, max: 2500 }, { name: 'depth', min: 1500, max: 2000 }];
+  rich.axes = ['temperature', 'depth', 'radius'];
   rich.core = { visible: false, variable: 'temperature', color: [0.2, 0.3, 0.4], colorMap: 'grayscale', range: [2000, 4000] };
   rich.shading = { enabled: true, light: [-1, 0.5, 0.25], ambient: 0.2, diffuse: 0.8 };
   rich.pathlines = { visible: true, radiusKm: 30, minWidthPx: 3, window: 5, colorBy: 'length', colorMap: 'cool-to-warm', range: [0, 5000],
-    filterByBrushes: false, filters: [{ name: 'length', min: 100, max: 4000 }], ambientOcclusion: false };
+    filterByBrushes: false, filters: [{ name: 'length', min: 100, max: 400 }, { name: 'length', min: 1000, max: 4000 }], ambientOcclusion: false };
   const [parsed] = cppParse([rich]);
   check(parsed.ok && sameAsFloats(parsed.json, rich), `raypc changed the rich state: ${JSON.stringify(parsed)}`);
   const loaded = uiLoad(parsed.json, defaults);
