@@ -559,7 +559,12 @@ const cases = {
     await page.selectOption('#colorMap', 'vik');
     await waitConverged(page);
     check((await rState(page)).color.points.length === 0, 'choosing a map kept the colour points');
+    // The file is read asynchronously: wait for the state it makes to be sent before waiting for
+    // its frame (else the converged frame of the plain map may pass for it).
+    const sentBeforeImport = await page.evaluate(() => window.__raypc.lastSentId);
     await page.setInputFiles('#pvImport', file);
+    await page.waitForFunction((n) => window.__raypc.lastSentId > n, sentBeforeImport, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('importing the ParaView colour map sent no state'); });
     await waitConverged(page);
     const imported = await rState(page);
     check(imported.color.points.length === edited.color.points.length && Math.abs(imported.color.range[0] - pv[0].RGBPoints[0]) < 1e-3 * aMax,
