@@ -738,6 +738,18 @@ const cases = {
       order.includes('radius') && !order.includes('lat'),
       `after showing radius, hiding lat and dragging depth to the right: state.axes ${JSON.stringify(s.axes)}, shown ${JSON.stringify(order)}`);
     check(JSON.stringify(order) !== JSON.stringify(initial), 'the axes did not change; the test would prove nothing');
+    // Brushes still land on the axis they are drawn on once axes have moved (parcoord-es's multi
+    // mode names brush elements by axis position).
+    await brushAxis(page, 'depth', 0.1, 0.3);
+    await brushAxis(page, 'depth', 0.6, 0.8);
+    await brushAxis(page, 'temperature', 0.2, 0.6);
+    await waitConverged(page);
+    const moved = await page.evaluate(() => ({ state: window.__raypc.state().brushes, shown: window.__raypc.parcoords.brushes() }));
+    const names = (list) => list.map((x) => x.name).sort().join(',');
+    check(names(moved.state) === 'depth,depth,temperature' && names(moved.shown) === names(moved.state),
+      `brushes after moving axes: state ${JSON.stringify(moved.state)}, shown ${JSON.stringify(moved.shown)}`);
+    await page.keyboard.press('Escape');
+    await waitConverged(page);
 
     const [download] = await Promise.all([page.waitForEvent('download'), page.click('#save')]);
     const file = join(tmp, 'axes.json');
