@@ -239,7 +239,7 @@ void BM_SetParams(benchmark::State& state)
     r.setParams(p);  // the first call also builds the grid's skip geometry (cached per grid)
     int i = 0;
     for (auto _ : state) {
-        p.brushes = {{var("temperature anomaly"), std::nullopt, -400.0f + float(i++ % 7), 400.0f}};
+        p.brushes = {{var("temperature anomaly"), std::nullopt, {{-400.0f + float(i++ % 7), 400.0f}}}};
         r.setParams(p);
     }
     state.counters["level"] = level;
@@ -319,23 +319,34 @@ BENCHMARK(BM_Converged1024Fixed8)->Unit(benchmark::kMillisecond)->Iterations(1);
 // (selectedVolume over dual cells) and printed as counter selected%.
 std::vector<RangeFilter> fourBrushes()
 {
-    return {{var("temperature"), std::nullopt, 1800, 4000},
-            {var("thermal conductivity"), std::nullopt, 0, 100},
-            {var("vx"), std::nullopt, -1.0f, 1.0f},
-            {var("temperature anomaly"), std::nullopt, 50, 1000}};
+    return {{var("temperature"), std::nullopt, {{1800, 4000}}},
+            {var("thermal conductivity"), std::nullopt, {{0, 100}}},
+            {var("vx"), std::nullopt, {{-1.0f, 1.0f}}},
+            {var("temperature anomaly"), std::nullopt, {{50, 1000}}}};
+}
+// The same selection with the anomaly's range split in two touching ranges (OR): the cost of an
+// axis with several ranges.
+std::vector<RangeFilter> fourBrushesSplit()
+{
+    std::vector<RangeFilter> b = fourBrushes();
+    b.back().ranges = {{50, 400}, {400, 1000}};
+    return b;
 }
 double selectedPercent(const std::vector<RangeFilter>& brushes)
 {
     return 100.0 * selectedVolume(*data().levels[0], brushes).fractionOfMantle;
 }
-void BM_Brush4Pass512(benchmark::State& state)
+void brushedPass(benchmark::State& state, std::vector<RangeFilter> brushes)
 {
     RenderParams p = params(512);
-    p.brushes = fourBrushes();
+    p.brushes = std::move(brushes);
     runPasses(state, 0, p, 1);
     state.counters["selected%"] = selectedPercent(p.brushes);
 }
+void BM_Brush4Pass512(benchmark::State& state) { brushedPass(state, fourBrushes()); }
 BENCHMARK(BM_Brush4Pass512)->Unit(benchmark::kMillisecond);
+void BM_Brush4SplitPass512(benchmark::State& state) { brushedPass(state, fourBrushesSplit()); }
+BENCHMARK(BM_Brush4SplitPass512)->Unit(benchmark::kMillisecond);
 void BM_NoBrushPass512(benchmark::State& state) { runPasses(state, 0, params(512), 1); }
 BENCHMARK(BM_NoBrushPass512)->Unit(benchmark::kMillisecond);
 

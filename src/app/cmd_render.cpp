@@ -89,12 +89,7 @@ void run(const RenderArgs& args)
             fail("--colormap: {}", e.what());
         }
     }
-    for (const std::string& text : args.ranges) {
-        const auto r = parseRangeOption(text);
-        const BrushSpec b{r.name, r.min, r.max};
-        std::erase_if(state.brushes, [&](const BrushSpec& s) { return s.name == b.name; });
-        state.brushes.push_back(b);
-    }
+    applyRangeOptions(state.brushes, args.ranges);
     // Scripted figures are deterministic: the state's level, else level 0; only --lod auto lets the
     // machine's speed choose (the finest level within the state's time budget).
     const bool lodAuto = args.lod == "auto";
@@ -223,7 +218,8 @@ const CommandRegistration kRegistration(
         cmd.add_option("--var", args->var, "Colouring variable (default: the state's, else the first)");
         cmd.add_option("--colormap", args->colormap, "viridis, inferno, cool-to-warm, blue-white-red, grayscale");
         cmd.add_option("--range", args->ranges,
-                       "Brush NAME=MIN:MAX on a variable or coordinate (x, y, z, lat, lon, radius, depth); repeatable");
+                       "Brush NAME=MIN:MAX on a variable or coordinate (x, y, z, lat, lon, radius, depth); repeatable, a "
+                       "name given twice selects either range (OR); replaces the state's ranges of that name");
         cmd.add_option("--lod", args->lod, "Level of detail: 0 (full), 1, 2, or auto (fit the state's time budget)");
         cmd.add_option("--passes", args->passes, "Progressive passes to accumulate (default: the state's, 8)");
         cmd.add_option("--depth", args->depthPath, "Also write the depth (km along the view ray) as PFM");

@@ -28,13 +28,8 @@ void run(const StatsArgs& args)
     const auto dataset = Dataset::open(args.dataset);
     std::vector<NamedRange> ranges;
     if (!args.statePath.empty())
-        for (const auto& b : render::loadRenderState(args.statePath).brushes)
-            ranges.push_back({b.name, b.min, b.max});
-    for (const auto& text : args.ranges) {
-        const auto r = parseRangeOption(text);
-        std::erase_if(ranges, [&](const NamedRange& n) { return n.name == r.name; });
-        ranges.push_back({r.name, r.min, r.max});
-    }
+        ranges = render::loadRenderState(args.statePath).brushes;
+    applyRangeOptions(ranges, args.ranges);
     const auto filters = resolveRangeFilters(*dataset, ranges, args.statePath.empty() ? "--range" : "brushes");
     dataset->checkLevel(args.level, "--lod");
     const auto [first, last] = args.time.empty() ? std::pair<int, int>(0, static_cast<int>(dataset->steps().size()) - 1)
@@ -79,7 +74,8 @@ const CommandRegistration kRegistration(
         auto args = std::make_shared<StatsArgs>();
         cmd.add_option("dataset", args->dataset, "Dataset directory")->required();
         cmd.add_option("--state", args->statePath, "STATE.json whose brushes define the selection");
-        cmd.add_option("--range", args->ranges, "Brush NAME=MIN:MAX on a variable or coordinate; repeatable, overrides the state");
+        cmd.add_option("--range", args->ranges, "Brush NAME=MIN:MAX on a variable or coordinate; repeatable, a name given twice selects "
+                       "either range (OR); replaces the state's ranges of that name");
         cmd.add_option("-o,--output", args->output, "CSV: step, time, selected volume, percent of the mantle")->required();
         cmd.add_option("--profile", args->profile, "CSV: selected volume per radius (depth distribution) of every step");
         cmd.add_option("-t,--time", args->time, "Steps A or A:B (index or time like 24Myr); default all");

@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/strings.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 
@@ -65,13 +66,13 @@ int parseStep(const Dataset& dataset, const std::string& text, const std::string
     return step;
 }
 
-RangeOption parseRangeOption(const std::string& text, const std::string& option)
+NamedRange parseRangeOption(const std::string& text, const std::string& option)
 {
     const size_t eq = text.rfind('=');
     const size_t colon = eq == std::string::npos ? std::string::npos : text.find(':', eq + 1);
     if (eq == std::string::npos || eq == 0 || colon == std::string::npos)
         fail("{} '{}': expected NAME=MIN:MAX", option, text);
-    RangeOption r;
+    NamedRange r;
     r.name = trim(text.substr(0, eq));
     const std::string lo = trim(text.substr(eq + 1, colon - eq - 1)), hi = trim(text.substr(colon + 1));
     auto number = [&](const std::string& s) {
@@ -86,6 +87,18 @@ RangeOption parseRangeOption(const std::string& text, const std::string& option)
     if (!(r.min <= r.max))
         fail("{} '{}': min {} is greater than max {}", option, text, r.min, r.max);
     return r;
+}
+
+void applyRangeOptions(std::vector<NamedRange>& ranges, const std::vector<std::string>& options,
+                       const std::string& option)
+{
+    std::vector<NamedRange> given;
+    for (const std::string& text : options)
+        given.push_back(parseRangeOption(text, option));
+    std::erase_if(ranges, [&](const NamedRange& r) {
+        return std::any_of(given.begin(), given.end(), [&](const NamedRange& g) { return g.name == r.name; });
+    });
+    ranges.insert(ranges.end(), given.begin(), given.end());
 }
 
 std::pair<int, int> parseStepRange(const Dataset& dataset, const std::string& text, const std::string& option)

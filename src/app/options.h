@@ -3,6 +3,7 @@
 
 #include "data/dataset.h"
 #include "data/netcdf_reader.h"
+#include "data/selection.h"
 
 #include <CLI/CLI.hpp>
 
@@ -28,11 +29,12 @@ int parseStep(const Dataset& dataset, const std::string& text, const std::string
 
 // Parses "NAME=MIN:MAX" (names may contain spaces; the last '=' splits) for --range.
 // Throws raypc::Error naming the option for a malformed text or min > max.
-struct RangeOption {
-    std::string name;
-    float min = 0, max = 0;
-};
-RangeOption parseRangeOption(const std::string& text, const std::string& option = "--range");
+NamedRange parseRangeOption(const std::string& text, const std::string& option = "--range");
+
+// Applies --range options over the ranges of a state: a name given on the command line replaces
+// that name's ranges, and a name given several times gets them all (OR, data/selection.h).
+void applyRangeOptions(std::vector<NamedRange>& ranges, const std::vector<std::string>& options,
+                       const std::string& option = "--range");
 
 // Parses "A" or "A:B" (each a step index or a time like 24Myr) into the inclusive step range.
 std::pair<int, int> parseStepRange(const Dataset& dataset, const std::string& text, const std::string& option = "--time");

@@ -12,29 +12,44 @@
 
 namespace raypc {
 
+std::vector<NamedRanges> groupRanges(std::span<const NamedRange> ranges, const std::string& what)
+{
+    std::vector<NamedRanges> groups;
+    for (size_t i = 0; i < ranges.size(); ++i) {
+        const NamedRange& r = ranges[i];
+        if (!(r.min <= r.max))
+            fail("{}[{}] ({}): min {} is greater than max {}", what, i, r.name, r.min, r.max);
+        auto it = std::find_if(groups.begin(), groups.end(), [&](const NamedRanges& g) { return g.name == r.name; });
+        if (it == groups.end())
+            it = groups.insert(groups.end(), NamedRanges{r.name, {}});
+        it->ranges.push_back({r.min, r.max});
+    }
+    return groups;
+}
+
 std::vector<RangeFilter> resolveRangeFilters(std::span<const std::string> variableNames,
                                              std::span<const NamedRange> ranges, const std::string& what)
 {
     std::vector<RangeFilter> filters;
-    for (size_t i = 0; i < ranges.size(); ++i) {
-        const auto& r = ranges[i];
+    for (NamedRanges& group : groupRanges(ranges, what)) {
         RangeFilter f;
-        f.min = r.min;
-        f.max = r.max;
-        if (const auto it = std::find(variableNames.begin(), variableNames.end(), r.name); it != variableNames.end()) {
+        f.ranges = std::move(group.ranges);
+        const std::string& name = group.name;
+        if (const auto it = std::find(variableNames.begin(), variableNames.end(), name); it != variableNames.end()) {
             f.variable = int(it - variableNames.begin());
-        } else if (const auto c = findCoordinate(r.name)) {
+        } else if (const auto c = findCoordinate(name)) {
             f.coordinate = c;
         } else {
+            const size_t i = size_t(std::find_if(ranges.begin(), ranges.end(),
+                                                 [&](const NamedRange& r) { return r.name == name; }) -
+                                    ranges.begin());
             std::vector<std::string> coordinates;
             for (const auto& info : coordinateInfos())
                 coordinates.push_back(info.name);
-            fail("{}[{}] ({}): unknown variable or coordinate '{}'; variables: {}; coordinates: {}", what, i, r.name,
-                 r.name, fmt::join(variableNames, ", "), fmt::join(coordinates, ", "));
+            fail("{}[{}] ({}): unknown variable or coordinate '{}'; variables: {}; coordinates: {}", what, i, name,
+                 name, fmt::join(variableNames, ", "), fmt::join(coordinates, ", "));
         }
-        if (!(r.min <= r.max))
-            fail("{}[{}] ({}): min {} is greater than max {}", what, i, r.name, r.min, r.max);
-        filters.push_back(f);
+        filters.push_back(std::move(f));
     }
     return filters;
 }
@@ -51,8 +66,11 @@ SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFil
     for (const auto& f : filters) {
         if (!f.coordinate && (f.variable < 0 || static_cast<size_t>(f.variable) >= volume.variableCount()))
             fail("selection: variable index {} out of range 0..{}", f.variable, volume.variableCount() - 1);
-        if (!(f.min <= f.max))
-            fail("selection: range [{}, {}] has min > max", f.min, f.max);
+        if (f.ranges.empty())
+            fail("selection: a filter without ranges");
+        for (const ValueRange& r : f.ranges)
+            if (!(r.min <= r.max))
+                fail("selection: range [{}, {}] has min > max", r.min, r.max);
     }
     const auto& g = volume.grid();
     const auto w = g.volumeFactors();
@@ -67,7 +85,7 @@ SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFil
                 for (const auto& f : filters) {
                     const double v = f.coordinate ? coordinateValue(*f.coordinate, g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR])
                                                   : volume.values(f.variable)[i];
-                    if (!(v >= f.min && v <= f.max)) {
+                    if (!f.contains(v)) {
                         inside = false;
                         break;
                     }

@@ -17,12 +17,25 @@ namespace raypc {
 // The one brush model of RayPC. A brush names a variable or a coordinate (NamedRange, as in the
 // state document and the --range options) and resolves against a volume's variable names into a
 // RangeFilter, which selection, the renderer and pathline filtering all use.
+//
+// One axis may hold several ranges (the paper's "multi" brushes): a value is selected when it lies
+// in at least one range of its axis, and a sample when that holds on every brushed axis (OR within
+// an axis, AND over axes). In a list of NamedRanges a name that repeats adds a range to its axis.
 
-// One brushed range: a variable (index into the volume's variables) or a coordinate.
+// One brushed axis: a variable (index into the volume's variables) or a coordinate, and its ranges.
 struct RangeFilter {
     int variable = -1;
     std::optional<Coordinate> coordinate;
-    float min = 0, max = 0;  // inclusive
+    std::vector<ValueRange> ranges;  // inclusive, min <= max each; at least one; may overlap
+
+    // True when `v` lies in at least one range (false for NaN).
+    bool contains(double v) const
+    {
+        for (const ValueRange& r : ranges)
+            if (v >= r.min && v <= r.max)
+                return true;
+        return false;
+    }
 };
 
 // A range named by a variable or coordinate name, as in the state document's brushes.
@@ -31,10 +44,21 @@ struct NamedRange {
     float min = 0, max = 0;
 };
 
-// Resolves names against `variableNames` (a volume's variables, in order) and the coordinates.
-// Throws raypc::Error naming `what` and the index, e.g. "brushes[1] (pressure): unknown variable or
-// coordinate 'pressure'; variables: ...; coordinates: ..." or "brushes[0] (depth): min 3 is greater
-// than max 1".
+// The ranges of one name, in the order given.
+struct NamedRanges {
+    std::string name;
+    std::vector<ValueRange> ranges;
+};
+
+// Groups ranges by name, in the order the names first appear (each name's ranges in their order).
+// Throws raypc::Error for min > max naming `what` and the range's index in `ranges`, e.g.
+// "brushes[2] (depth): min 3 is greater than max 1".
+std::vector<NamedRanges> groupRanges(std::span<const NamedRange> ranges, const std::string& what = "brushes");
+
+// Resolves names against `variableNames` (a volume's variables, in order) and the coordinates, one
+// RangeFilter per name (groupRanges). Throws raypc::Error naming `what` and the index, e.g.
+// "brushes[1] (pressure): unknown variable or coordinate 'pressure'; variables: ...; coordinates: ..."
+// or "brushes[0] (depth): min 3 is greater than max 1".
 std::vector<RangeFilter> resolveRangeFilters(std::span<const std::string> variableNames,
                                              std::span<const NamedRange> ranges, const std::string& what = "brushes");
 std::vector<RangeFilter> resolveRangeFilters(const Dataset& dataset, std::span<const NamedRange> ranges,
@@ -47,8 +71,9 @@ struct SelectionStats {
     std::vector<double> shellVolumeByRadiusKm3;  // whole dual-cell shell of each radius index
 };
 
-// A grid point is selected when every filter holds at it; it counts with its dual-cell volume.
-// Throws raypc::Error for a variable index out of range or min > max. Parallel over lat rows.
+// A grid point is selected when every filter holds at it (its value lies in one of the filter's
+// ranges); it counts with its dual-cell volume. Throws raypc::Error for a variable index out of
+// range, a filter without ranges or min > max. Parallel over lat rows.
 SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters);
 
 // The selection of every step in [firstStep, lastStep] at one level, in step order: what

@@ -26,12 +26,12 @@ TEST(Selection, ExactVolumesOfAnalyticSelections)
     EXPECT_NEAR(all.volumeKm3 / shell, 1.0, 1e-12);
 
     // North of 60°: the rows 62.5..87.5 end at the 60° edge, so this is exact.
-    const RangeFilter north{-1, Coordinate::Lat, 60.0f, 90.0f};
+    const RangeFilter north{-1, Coordinate::Lat, {{60.0f, 90.0f}}};
     EXPECT_NEAR(selectedVolume(*volume, std::span(&north, 1)).fractionOfMantle, (1 - std::sin(std::numbers::pi / 3)) / 2,
                 1e-9);
 
     // Depth <= 660 km: the radii >= 5711 km; their dual cells start halfway below the first one.
-    const RangeFilter upper{-1, Coordinate::Depth, 0.0f, 660.0f};
+    const RangeFilter upper{-1, Coordinate::Depth, {{0.0f, 660.0f}}};
     const auto& r = snap.grid.rKm;
     size_t first = 0;
     while (r[first] < 6371.0 - 660.0)
@@ -53,15 +53,62 @@ TEST(Selection, ExactVolumesOfAnalyticSelections)
     // beside it nothing; combined with the depth cut, the cut alone remains.
     const int ur = 8;
     ASSERT_EQ(snap.fields[ur].name, "radial velocity");
-    const std::vector<RangeFilter> both = {{ur, std::nullopt, 0.15f, 0.16f}, upper};
+    const std::vector<RangeFilter> both = {{ur, std::nullopt, {{0.15f, 0.16f}}}, upper};
     EXPECT_NEAR(selectedVolume(*volume, both).volumeKm3, up.volumeKm3, 1e-9 * shell);
-    const RangeFilter none{ur, std::nullopt, 0.2f, 0.3f};
+    const RangeFilter none{ur, std::nullopt, {{0.2f, 0.3f}}};
     EXPECT_EQ(selectedVolume(*volume, std::span(&none, 1)).volumeKm3, 0.0);
 
-    const RangeFilter inverted{ur, std::nullopt, 1.0f, 0.0f};
+    const RangeFilter inverted{ur, std::nullopt, {{1.0f, 0.0f}}};
     EXPECT_THROW(selectedVolume(*volume, std::span(&inverted, 1)), Error);
-    const RangeFilter missing{42, std::nullopt, 0.0f, 1.0f};
+    const RangeFilter missing{42, std::nullopt, {{0.0f, 1.0f}}};
     EXPECT_THROW(selectedVolume(*volume, std::span(&missing, 1)), Error);
+}
+
+// Several ranges on one axis select their union: disjoint ranges add up, overlapping ones select
+// what their merged range selects; names that repeat in a list of NamedRanges become one axis.
+TEST(Selection, RangesOnOneAxisSelectTheirUnion)
+{
+    Snapshot snap = readSnapshot(testing::contestLayoutDir() / "spherical001.nc");
+    const auto volume = StepVolume::fromSnapshot(snap);
+    std::vector<std::string> names;
+    for (const auto& field : snap.fields)
+        names.push_back(field.name);
+    auto fraction = [&](const std::vector<NamedRange>& ranges) {
+        return selectedVolume(*volume, resolveRangeFilters(std::span<const std::string>(names), ranges)).fractionOfMantle;
+    };
+    // The lat rows (2.5° apart, at ±1.25°, ±3.75°, ...) have dual-cell edges at multiples of 2.5°,
+    // so ranges ending there select exactly the caps and bands between them.
+    const double cap = (1 - std::sin(std::numbers::pi / 3)) / 2;  // north of 60°
+    const double north = fraction({{"lat", 60, 90}}), south = fraction({{"lat", -90, -60}});
+    EXPECT_NEAR(north, cap, 1e-9);
+    EXPECT_NEAR(south, cap, 1e-9);
+    EXPECT_NEAR(fraction({{"lat", 60, 90}, {"lat", -90, -60}}), 2 * cap, 1e-9);
+    EXPECT_NEAR(fraction({{"lat", -90, -60}, {"depth", 0, 6371}, {"lat", 60, 90}}), 2 * cap, 1e-9);
+    // Overlapping: [0, 30] or [20, 60] is [0, 60], the band sin 60° / 2.
+    EXPECT_NEAR(fraction({{"lat", 0, 30}, {"lat", 20, 60}}), std::sin(std::numbers::pi / 3) / 2, 1e-9);
+    EXPECT_NEAR(fraction({{"lat", 0, 30}, {"lat", 20, 60}}), fraction({{"lat", 0, 60}}), 1e-12);
+    // A range inside another changes nothing; AND over axes still holds (north cap and depth <= 660).
+    EXPECT_NEAR(fraction({{"lat", 60, 90}, {"lat", 70, 80}}), north, 1e-12);
+    EXPECT_LT(fraction({{"lat", 60, 90}, {"depth", 0, 660}, {"lat", -90, -60}}), 2 * cap * 0.5);
+
+    const auto filters = resolveRangeFilters(std::span<const std::string>(names),
+                                             std::vector<NamedRange>{{"lat", 60, 90}, {"depth", 0, 660}, {"lat", -90, -60}});
+    ASSERT_EQ(filters.size(), 2u);
+    EXPECT_EQ(*filters[0].coordinate, Coordinate::Lat);
+    ASSERT_EQ(filters[0].ranges.size(), 2u);
+    EXPECT_EQ(filters[0].ranges[1].min, -90.0f);
+    EXPECT_TRUE(filters[0].contains(-70) && filters[0].contains(89) && !filters[0].contains(0));
+
+    // min > max names the range by its index in the list.
+    try {
+        resolveRangeFilters(std::span<const std::string>(names),
+                            std::vector<NamedRange>{{"lat", 60, 90}, {"depth", 0, 660}, {"lat", -60, -90}}, "brushes");
+        FAIL() << "expected an error";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "brushes[2] (lat): min -60 is greater than max -90");
+    }
+    const RangeFilter noRange{-1, Coordinate::Lat, {}};
+    EXPECT_THROW(selectedVolume(*volume, std::span(&noRange, 1)), Error);
 }
 
 }  // namespace

@@ -344,26 +344,27 @@ std::vector<uint8_t> PathlineScene::visibilityFor(const RenderState& state) cons
             fail("pathlines: {}: the lines have no attribute '{}'; they have: {}", role, name, columnList(im.columns));
         return size_t(it - im.columns.begin());
     };
-    // Each test: a column (or a coordinate computed from the start position) and a range.
+    // Each test: a column, or a coordinate computed from the start position (filter.coordinate),
+    // and the filter's ranges, OR-ed.
     struct Test {
-        int column = -1;  // -1: coordinate
-        Coordinate coordinate = Coordinate::X;
-        float min, max;
+        int column = -1;  // -1: filter.coordinate
+        RangeFilter filter;
     };
     std::vector<Test> tests;
     if (pl.filterByBrushes) {
-        for (const BrushSpec& b : state.brushes) {
-            Test t{-1, Coordinate::X, b.min, b.max};
-            if (const auto c = findCoordinate(b.name))
-                t.coordinate = *c;
-            else
+        for (NamedRanges& b : groupRanges(state.brushes, "brushes")) {
+            Test t{-1, {-1, findCoordinate(b.name), std::move(b.ranges)}};
+            if (!t.filter.coordinate)
                 t.column = int(columnOf("start " + b.name, "brush '" + b.name + "'"));
-            tests.push_back(t);
+            tests.push_back(std::move(t));
         }
     }
-    for (size_t i = 0; i < pl.filters.size(); ++i)
-        tests.push_back({int(columnOf(pl.filters[i].name, fmt::format("filters[{}]", i))), Coordinate::X,
-                         pl.filters[i].min, pl.filters[i].max});
+    for (NamedRanges& f : groupRanges(pl.filters, "filters")) {
+        const auto first = std::find_if(pl.filters.begin(), pl.filters.end(),
+                                        [&](const PathlineFilter& x) { return x.name == f.name; });
+        tests.push_back({int(columnOf(f.name, fmt::format("filters[{}]", first - pl.filters.begin()))),
+                         {-1, std::nullopt, std::move(f.ranges)}});
+    }
     const bool needStart = std::any_of(tests.begin(), tests.end(), [](const Test& t) { return t.column < 0; });
     const size_t cLat = needStart ? columnOf("start lat", "brushes") : 0;
     const size_t cLon = needStart ? columnOf("start lon", "brushes") : 0;
@@ -381,9 +382,9 @@ std::vector<uint8_t> PathlineScene::visibilityFor(const RenderState& state) cons
             } else {
                 const double lat = attribute(line, cLat), lon = wrapLonDeg(attribute(line, cLon)),
                              r = attribute(line, cR);
-                v = coordinateValue(t.coordinate, lat, lon, r);
+                v = coordinateValue(*t.filter.coordinate, lat, lon, r);
             }
-            if (!(v >= t.min && v <= t.max)) {
+            if (!t.filter.contains(v)) {
                 inside = false;
                 break;
             }

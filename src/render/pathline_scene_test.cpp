@@ -79,6 +79,14 @@ TEST(PathlineScene, StartMustSatisfyBrushes)
     EXPECT_EQ(scene.visibilityFor(s), mask({0, 1, 0, 1, 0, 1}));
     s.brushes = {{"plume", 4.5f, 6.0f}};  // variable brush -> "start plume": 4 or 5
     EXPECT_EQ(scene.visibilityFor(s), mask({0, 1, 0, 1, 0, 1}));
+    // Two ranges on one axis select either (lines at lon 30 and 50, not 40); AND with another axis.
+    s.brushes = {{"lon", 25, 35}, {"lon", 45, 55}};
+    EXPECT_EQ(scene.visibilityFor(s), mask({1, 1, 0, 0, 1, 1}));
+    s.brushes = {{"radius", 3900, 4100}, {"lon", 35, 45}, {"radius", 4900, 5100}};
+    EXPECT_EQ(scene.visibilityFor(s), mask({0, 0, 1, 1, 0, 0}));
+    s.brushes = {{"plume", 3.9f, 4.1f}, {"lon", 25, 35}, {"plume", 4.9f, 5.1f}, {"lon", 45, 55}};
+    EXPECT_EQ(scene.visibilityFor(s), mask({1, 1, 0, 0, 1, 1}));
+    s.brushes = {{"plume", 4.5f, 6.0f}};
     s.pathlines.filterByBrushes = false;
     EXPECT_EQ(scene.visibilityFor(s), mask({1, 1, 1, 1, 1, 1}));
     s.pathlines.filterByBrushes = true;
@@ -99,6 +107,17 @@ TEST(PathlineScene, AttributeFilters)
     EXPECT_EQ(scene.visibilityFor(s), mask({0, 1, 0, 1, 0, 1}));
     s.pathlines.filters = {{"length", 0, 1000}, {"injection time", 7, 9}};  // step 4 (8 Myr)
     EXPECT_EQ(scene.visibilityFor(s), mask({0, 0, 1, 1, 0, 0}));
+    s.pathlines.filters = {{"injection time", 5, 7}, {"length", 0, 1000}, {"injection time", 9, 11}};  // steps 3, 5
+    EXPECT_EQ(scene.visibilityFor(s), mask({1, 1, 0, 0, 1, 1}));
+    s.pathlines.filters = {{"injection time", 5, 7}, {"injection time", 11, 9}};
+    try {
+        (void)scene.visibilityFor(s);
+        FAIL() << "no error for min > max";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("filters[1] (injection time): min 11 is greater than max 9"),
+                  std::string::npos)
+            << e.what();
+    }
     s.pathlines.filters = {{"curvature", 0, 1}};
     try {
         (void)scene.visibilityFor(s);
@@ -180,7 +199,7 @@ TEST(RenderStatePathlines, RejectsBadValuesNamingTheKey)
     };
     std::string e = errorOf(R"({"version": 1, "pathlines": {"visible": true}})");
     EXPECT_TRUE(has(e, "pathlines") && has(e, "version 2")) << e;
-    e = errorOf(R"({"version": 4})");
+    e = errorOf(R"({"version": 99})");
     EXPECT_TRUE(has(e, "version") && has(e, "not supported")) << e;
     e = errorOf(R"({"version": 2, "pathlines": {"radiusKm": 0}})");
     EXPECT_TRUE(has(e, "STATE.json: pathlines.radiusKm")) << e;
@@ -346,7 +365,7 @@ TEST(TubeRendering, TubeInFrontHidesAnOpaqueVolume)
 {
     const auto scene = tubeScene({straightLine(kTubeX, kTubeTop, 2, 0, 10)});
     RenderParams opaque = analyticParams(1.0f);
-    opaque.brushes = {{1, std::nullopt, 0.0f, 4500.0f}};  // opaque below r = 4500 km, behind the tube
+    opaque.brushes = {{1, std::nullopt, {{0.0f, 4500.0f}}}};  // opaque below r = 4500 km, behind the tube
     const Frame tube = renderFrame(analyticParams(0.0f), scene);
     const Frame both = renderFrame(opaque, scene);
     const Frame volume = renderFrame(opaque, nullptr);

@@ -84,7 +84,11 @@ struct KernelBrush {
     PointComponent component = PointComponent::X;  // when onCoordinate
     float scale = 1, offset = 0;
     KernelVariable variable;                // otherwise
+    // The only range, or with several (an axis' ranges OR-ed, RangeFilter) the hull of them all:
+    // the single-range test is all the common case pays, and it rejects what lies outside the hull.
     float min = 0, max = 0;
+    const ValueRange* ranges = nullptr;  // rangeCount > 1: the value must also lie in one of these
+    int rangeCount = 1;
 };
 
 struct ColourTable {
@@ -129,6 +133,7 @@ struct KernelParams {
     ColourTable table;
     const KernelBrush* brushes = nullptr;
     int brushCount = 0;
+    bool multiRangeBrushes = false;  // some brush has rangeCount > 1 (the SIMD kernel's variant)
 
     // Samples: about stepFactor cells apart (mean radial spacing drKm, smaller mean angular spacing
     // dAngleRad), see RaySampling.

@@ -26,6 +26,13 @@ bool insideBrushes(const KernelParams& k, Vec3 p, const Located& L)
         const float v = brush.onCoordinate ? coordinateValue(brush, p, L) : sampleAt(k, brush.variable, L);
         if (!(v >= brush.min && v <= brush.max))
             return false;
+        if (brush.rangeCount > 1) {
+            bool inOne = false;
+            for (int i = 0; i < brush.rangeCount && !inOne; ++i)
+                inOne = v >= brush.ranges[i].min && v <= brush.ranges[i].max;
+            if (!inOne)
+                return false;
+        }
     }
     return true;
 }

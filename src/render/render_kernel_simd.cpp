@@ -362,13 +362,24 @@ HWY_INLINE MF ActiveLanes(DF d, const KernelParams& k, const LocatedV& L, MF val
     return hn::And(valid, capOrFlag);
 }
 
-// Brushing: any brush that rejects a lane zeroes it; stops as soon as no lane is left.
+// Brushing: any brush that rejects a lane zeroes it; stops as soon as no lane is left. kMultiRange:
+// some brushed axis has several ranges (decided once per tile, so that the common single-range case
+// runs without the test of further ranges).
+template <bool kMultiRange>
 HWY_INLINE MF BrushedLanes(DF d, const KernelParams& k, const SamplesV& s, const LocatedV& L, MF keep)
 {
     for (int b = 0; b < k.brushCount && !hn::AllFalse(d, keep); ++b) {
         const KernelBrush& brush = k.brushes[b];
         const VF v = brush.onCoordinate ? CoordinateValue(d, brush, s.x, s.y, s.z, L) : Sample(d, k, brush.variable, L);
         keep = hn::And(keep, hn::And(hn::Ge(v, hn::Set(d, brush.min)), hn::Le(v, hn::Set(d, brush.max))));
+        // Several ranges on the axis (min, max is their hull): a lane must lie in one of them.
+        if (kMultiRange && brush.rangeCount > 1) {
+            MF inOne = hn::FirstN(d, 0);
+            for (int i = 0; i < brush.rangeCount; ++i)
+                inOne = hn::Or(inOne, hn::And(hn::Ge(v, hn::Set(d, brush.ranges[i].min)),
+                                              hn::Le(v, hn::Set(d, brush.ranges[i].max))));
+            keep = hn::And(keep, inOne);
+        }
     }
     return keep;
 }
@@ -430,6 +441,7 @@ HWY_INLINE void Composite(DF d, const KernelParams& k, const LaneShifts& shifts,
 
 // One ray segment [t0, t1): the chunks of walkChunks, each as vectors of samples through the stages
 // above.
+template <bool kMultiRange>
 void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, float t0, float t1, float along,
                RayAccum& acc, TileStats& stats)
 {
@@ -451,7 +463,7 @@ void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, 
             if (nActive == 0)
                 continue;
             anyActive = true;
-            const MF keep = BrushedLanes(d, k, s, L, active);
+            const MF keep = BrushedLanes<kMultiRange>(d, k, s, L, active);
             if (hn::AllFalse(d, keep))
                 continue;
             const ClassifiedV c = Classify(d, k, L, keep, s.len);
@@ -470,10 +482,16 @@ void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, 
 void RenderTile(const KernelParams& k, Tile tile, PixelOut* out, TileStats& stats)
 {
     const LaneShifts shifts;
-    renderTileWith(k, tile, out, stats,
-                   [&](Vec3 o, Vec3 dir, float t0, float t1, float along, RayAccum& acc, TileStats& st) {
-                       MarchSimd(k, shifts, Ray{o, dir}, t0, t1, along, acc, st);
-                   });
+    if (k.multiRangeBrushes)
+        renderTileWith(k, tile, out, stats,
+                       [&](Vec3 o, Vec3 dir, float t0, float t1, float along, RayAccum& acc, TileStats& st) {
+                           MarchSimd<true>(k, shifts, Ray{o, dir}, t0, t1, along, acc, st);
+                       });
+    else
+        renderTileWith(k, tile, out, stats,
+                       [&](Vec3 o, Vec3 dir, float t0, float t1, float along, RayAccum& acc, TileStats& st) {
+                           MarchSimd<false>(k, shifts, Ray{o, dir}, t0, t1, along, acc, st);
+                       });
 }
 
 int Lanes() { return int(hn::Lanes(DF())); }

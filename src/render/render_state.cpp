@@ -73,10 +73,7 @@ RenderParams resolveParams(const RenderState& s, const VariableCatalog& catalog)
              "color.range)",
              catalog.names[size_t(p.colorVariable)], p.transfer.range.min, p.transfer.range.max);
     p.transfer.validate();
-    std::vector<NamedRange> brushes;
-    for (const BrushSpec& b : s.brushes)
-        brushes.push_back({b.name, b.min, b.max});
-    p.brushes = resolveRangeFilters(std::span<const std::string>(catalog.names), brushes, "brushes");
+    p.brushes = resolveRangeFilters(std::span<const std::string>(catalog.names), s.brushes, "brushes");
     p.core.visible = s.core.visible;
     p.core.colour = s.core.colour;
     p.core.colorMap = s.core.colorMap;

@@ -19,20 +19,18 @@
 
 namespace raypc::render {
 
-// Version 2 added "pathlines", version 3 "reference" (shells, graticule, coastlines) and "legend";
-// older documents are still read (they have neither).
-inline constexpr int kRenderStateVersion = 3;
+// Version 2 added "pathlines", version 3 "reference" (shells, graticule, coastlines) and "legend",
+// version 4 several ranges on one axis (a repeated brush name ORs its ranges) and "axes"; older
+// documents are still read (they have none of these).
+inline constexpr int kRenderStateVersion = 4;
 
-struct BrushSpec {
-    std::string name;  // a variable or a coordinate (x, y, z, lat, lon, radius, depth)
-    float min = 0, max = 0;
-};
+// A brush range: a variable or a coordinate (x, y, z, lat, lon, radius, depth) and [min, max]. The
+// brush model is data/selection.h's: a name that repeats adds a range to its axis (OR).
+using BrushSpec = NamedRange;
 
-// A range over one pathline attribute column (the pathline parallel-coordinates plot).
-struct PathlineFilter {
-    std::string name;  // a column of the pathline sets, e.g. "length", "start temperature anomaly"
-    float min = 0, max = 0;
-};
+// A range over one pathline attribute column (the pathline parallel-coordinates plot), e.g.
+// "length", "start temperature anomaly"; as brushes, a repeated column ORs its ranges.
+using PathlineFilter = NamedRange;
 
 // The "pathlines" object: tubes along the pathlines injected in the last `window` steps
 // (docs/state.md). Cost classes: window (and the state's step) reload the line window and
@@ -95,6 +93,9 @@ struct RenderState {
     bool colorReversed = false;          // version 3
     bool logScale = false;               // version 3: positions over log10 of the value (range > 0)
     std::vector<BrushSpec> brushes;
+    // Version 4: the UI's parallel-coordinates axes in display order (nullopt: its default); the
+    // renderer does not read it.
+    std::optional<std::vector<std::string>> axes;
     std::optional<int> level;  // nullopt: chosen for timeBudgetMs (reload class)
     double timeBudgetMs = 50.0;
     int passes = 8;

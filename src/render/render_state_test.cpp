@@ -89,6 +89,59 @@ TEST(RenderState, ResolvesNamesAndRejectsUnknownOnes)
     EXPECT_THROW(resolveParams(s, catalog), Error);
 }
 
+// Version 4: a brush name that repeats adds a range to its axis; the document round-trips as
+// written; an older document repeating a name (which meant the intersection) is refused.
+TEST(RenderState, RepeatedBrushNamesAreRangesOfOneAxis)
+{
+    const VariableCatalog catalog{{"temperature"}, {{1000, 4000}}};
+    const json doc = json::parse(R"({"version": 4, "brushes": [{"name": "depth", "min": 0, "max": 660},
+        {"name": "temperature", "min": 1500, "max": 2500}, {"name": "depth", "min": 1500, "max": 2000}],
+        "pathlines": {"filters": [{"name": "length", "min": 0, "max": 10}, {"name": "length", "min": 50, "max": 60}]}})");
+    const RenderState s = parseRenderState(doc);
+    ASSERT_EQ(s.brushes.size(), 3u);
+    EXPECT_EQ(toJson(s)["brushes"], doc["brushes"]);
+    EXPECT_EQ(toJson(s)["pathlines"]["filters"], doc["pathlines"]["filters"]);
+    const RenderParams p = resolveParams(s, catalog);
+    ASSERT_EQ(p.brushes.size(), 2u);
+    EXPECT_EQ(*p.brushes[0].coordinate, Coordinate::Depth);
+    ASSERT_EQ(p.brushes[0].ranges.size(), 2u);
+    EXPECT_FLOAT_EQ(p.brushes[0].ranges[1].min, 1500);
+    EXPECT_EQ(p.brushes[1].variable, 0);
+
+    json old = doc;
+    old["version"] = 3;
+    EXPECT_EQ(errorOf(old), "STATE.json: brushes[2]: a second range on 'depth' needs version 4 (ranges on one axis are "
+                            "OR-ed), the document says version 3");
+    old["brushes"].erase(2);
+    EXPECT_EQ(errorOf(old), "STATE.json: pathlines.filters[1]: a second range on 'length' needs version 4 (ranges on one "
+                            "axis are OR-ed), the document says version 3");
+    old["pathlines"]["filters"].erase(1);
+    EXPECT_EQ(errorOf(old), "no error");
+
+    json reversed = doc;
+    reversed["brushes"][2]["min"] = 3000;
+    EXPECT_EQ(errorOf(reversed), "STATE.json: brushes[2].min: min 3000 is greater than max 2000");
+}
+
+// Version 4: the UI's axes in display order round-trip; null is the UI's default; a name twice, an
+// empty name or a version-3 document with axes are refused naming the key.
+TEST(RenderState, AxesRoundTripAndAreChecked)
+{
+    EXPECT_EQ(toJson(RenderState{})["axes"], nullptr);
+    const json doc = json::parse(R"({"version": 4, "axes": ["depth", "temperature", "radius"]})");
+    const RenderState s = parseRenderState(doc);
+    ASSERT_TRUE(s.axes.has_value());
+    EXPECT_EQ(*s.axes, (std::vector<std::string>{"depth", "temperature", "radius"}));
+    EXPECT_EQ(toJson(s)["axes"], doc["axes"]);
+    EXPECT_EQ(errorOf(json::parse(R"({"version": 4, "axes": ["depth", "lat", "depth"]})")),
+              "STATE.json: axes: expected each name once, found \"depth\" twice");
+    EXPECT_EQ(errorOf(json::parse(R"({"version": 4, "axes": ["depth", ""]})")),
+              "STATE.json: axes: expected non-empty names, found \"\"");
+    EXPECT_EQ(errorOf(json::parse(R"({"version": 3, "axes": ["depth"]})")),
+              "STATE.json: axes: needs version 4, the document says version 3");
+    EXPECT_FALSE(parseRenderState(json::parse(R"({"version": 4, "axes": null})")).axes.has_value());
+}
+
 TEST(RenderState, DefaultOpacityIsAVForMapsCentredOnZero)
 {
     const VariableCatalog catalog{{"temperature anomaly"}, {{-500, 200}}};

@@ -5,6 +5,7 @@
 #include "core/error.h"
 #include "render/render_state.h"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <memory>
@@ -202,6 +203,35 @@ Kind<std::vector<float>> numberList(double lo, double hi, size_t maxItems)
                 return out;
             },
             schema, fmt::format("array of at most {} numbers in [{}, {}]", maxItems, boundText(lo), boundText(hi))};
+}
+
+// Non-empty names, each at most once, or null (nullopt: a default that depends on the dataset).
+Kind<std::optional<std::vector<std::string>>> nameList(size_t maxItems)
+{
+    json schema{{"type", json::array({"array", "null"})},
+                {"items", {{"type", "string"}, {"minLength", 1}}},
+                {"maxItems", maxItems},
+                {"uniqueItems", true}};
+    return {[maxItems](const json& v, std::optional<std::vector<std::string>>& target, Reader& r, const std::string& key) {
+                if (v.is_null()) {
+                    target.reset();
+                    return;
+                }
+                if (!v.is_array() || v.size() > maxItems)
+                    r.failAt(key, fmt::format("expected null or an array of at most {} names, found {}", maxItems,
+                                              v.dump()));
+                std::vector<std::string> names;
+                for (const json& e : v) {
+                    if (!e.is_string() || e.get_ref<const std::string&>().empty())
+                        r.failAt(key, "expected non-empty names, found " + e.dump());
+                    if (std::find(names.begin(), names.end(), e.get<std::string>()) != names.end())
+                        r.failAt(key, "expected each name once, found " + e.dump() + " twice");
+                    names.push_back(e.get<std::string>());
+                }
+                target = std::move(names);
+            },
+            [](const std::optional<std::vector<std::string>>& x) { return x ? json(*x) : json(nullptr); }, schema,
+            fmt::format("array of at most {} distinct non-empty strings, or null", maxItems)};
 }
 
 Kind<Rgb> colour()
@@ -726,6 +756,13 @@ const Object<RenderState>& document()
                      {leaf<S>("width", at(&S::width), integer(1, 16384), {.meaning = "image width, pixels"}),
                       leaf<S>("height", at(&S::height), integer(1, 16384), {.meaning = "image height, pixels"})},
                      {.meaning = "the size of the rendered image"}),
+            leaf<S>("axes", at(&S::axes), nameList(256),
+                    {.meaning = "the axes of the UI's volume parallel coordinates, in display order (sample "
+                                "columns: coordinates and variables; names the dataset lacks are passed over); an "
+                                "axis with a brush is shown whether listed or not. Pictures do not depend on it",
+                     .cost = Cost::None,
+                     .defaultText = "null: every axis but `x`, `y`, `z` and `radius`, in the dataset's order",
+                     .since = 4}),
             group<S>(
                 "color", "",
                 {leaf<S>("variable", at(&S::colorVariable), text(true),
@@ -768,8 +805,10 @@ const Object<RenderState>& document()
                                                   "a variable or coordinate name"),
                             "array of {name, min, max}"),
                     {.meaning = "ranges of any number of variables or coordinates (`x`, `y`, `z` km, `lat` °N, `lon` "
-                                "°E, `radius` km, `depth` km); a sample outside any range contributes nothing; min ≤ "
-                                "max"}),
+                                "°E, `radius` km, `depth` km); min ≤ max. A name that repeats adds a range to its "
+                                "axis (version ≥ 4): a sample is selected when on every brushed axis it lies in at "
+                                "least one of the axis' ranges (OR within an axis, AND over axes); a sample not "
+                                "selected contributes nothing"}),
             leaf<S>("level", at(&S::level), level(),
                     {.meaning = "level of detail; auto = finest level whose estimated pass time fits `timeBudgetMs`",
                      .cost = Cost::Reload}),
@@ -848,7 +887,7 @@ const Object<RenderState>& document()
                                                             "a line attribute name"),
                                  "array of {name, min, max}"),
                          {.meaning = "ranges over line attribute columns (the pathline parallel-coordinates plot); "
-                                     "min ≤ max"}),
+                                     "min ≤ max; a column that repeats ORs its ranges, as in `brushes` (version ≥ 4)"}),
                  leaf<S>("ambientOcclusion", at(&S::pathlines, &P::ambientOcclusion), boolean(),
                          {.meaning = "ambient occlusion on the tubes (a few rays per pass against the tubes and the "
                                      "core)"})},
@@ -891,7 +930,23 @@ const Object<RenderState>& document()
                          {.meaning = "width of graticule and coastline lines, pixels of the image"})},
                 {.meaning = "reference geometry drawn with the volume and composited by depth", .since = 3}),
         },
-        {}};
+        // Before version 4 a repeated name meant the intersection of its ranges (nothing wrote that);
+        // since then the union. An older document repeating a name is refused rather than re-read.
+        [](const S& s, Reader& r) {
+            if (r.version() >= 4)
+                return;
+            auto refuseRepeats = [&](const std::vector<NamedRange>& ranges, const std::string& key) {
+                for (size_t i = 0; i < ranges.size(); ++i)
+                    for (size_t j = 0; j < i; ++j)
+                        if (ranges[j].name == ranges[i].name)
+                            r.failAt(fmt::format("{}[{}]", key, i),
+                                     fmt::format("a second range on '{}' needs version 4 (ranges on one axis are "
+                                                 "OR-ed), the document says version {}",
+                                                 ranges[i].name, r.version()));
+            };
+            refuseRepeats(s.brushes, "brushes");
+            refuseRepeats(s.pathlines.filters, "pathlines.filters");
+        }};
     return doc;
 }
 

@@ -194,6 +194,7 @@ struct VolumeRenderer::Impl {
     // Baked per setParams (restart class).
     TransferTable table, coreTable;
     std::vector<kernel::KernelBrush> brushes;
+    std::vector<ValueRange> brushRanges;  // the brushes' ranges, axis after axis
     std::vector<int32_t> brickActive;
     std::shared_ptr<const SkipGridGeometry> skipGeometry;  // per grid, shared
     std::vector<uint8_t> cellDistance;
@@ -283,8 +284,11 @@ void VolumeRenderer::validateParams(const RenderParams& p) const
     for (const RangeFilter& b : p.brushes) {
         if (!b.coordinate && (b.variable < 0 || b.variable >= varCount))
             fail("brush variable index {}: the volume has {} variables", b.variable, varCount);
-        if (!(b.min <= b.max))
-            fail("brush range [{}, {}]: min is greater than max", b.min, b.max);
+        if (b.ranges.empty())
+            fail("brush on variable index {}: no range", b.variable);
+        for (const ValueRange& r : b.ranges)
+            if (!(r.min <= r.max))
+                fail("brush range [{}, {}]: min is greater than max", r.min, r.max);
     }
     if (p.core.variable >= varCount)
         fail("core variable index {}: the volume has {} variables", p.core.variable, varCount);
@@ -317,10 +321,21 @@ void VolumeRenderer::bakeTables(const RenderParams& p)
         } else {
             kb.variable = kernelVariable(b.variable);
         }
-        kb.min = b.min;
-        kb.max = b.max;
+        kb.min = b.ranges[0].min;
+        kb.max = b.ranges[0].max;
+        for (const ValueRange& r : b.ranges) {
+            kb.min = std::min(kb.min, r.min);
+            kb.max = std::max(kb.max, r.max);
+        }
+        kb.rangeCount = int(b.ranges.size());
         im.brushes.push_back(kb);
     }
+    // Every axis' ranges in one array that the kernel brushes point into (set once it is complete).
+    im.brushRanges.clear();
+    for (const RangeFilter& b : p.brushes)
+        im.brushRanges.insert(im.brushRanges.end(), b.ranges.begin(), b.ranges.end());
+    for (size_t i = 0, first = 0; i < im.brushes.size(); first += size_t(im.brushes[i].rangeCount), ++i)
+        im.brushes[i].ranges = im.brushRanges.data() + first;
 }
 
 // A brick is skipped when a brush excludes its bounds or the transfer function is transparent over
@@ -332,10 +347,15 @@ void VolumeRenderer::flagActiveBricks(const RenderParams& p)
     const BrickLayout& bl = im.activity;
     auto boundsOf = [&](int v) { return vol.brickBounds(size_t(v), bl.size); };
     im.brickActive.assign(bl.brickCount(), 1);
-    auto excludeOutside = [&](const float* bounds, float lo, float hi) {
-        for (size_t b = 0; b < bl.brickCount(); ++b)
-            if (bounds[2 * b + 1] < lo || bounds[2 * b] > hi)
+    // A brick whose bounds miss every range of one brushed axis holds no selected sample.
+    auto excludeOutside = [&](const float* bounds, const std::vector<ValueRange>& ranges) {
+        for (size_t b = 0; b < bl.brickCount(); ++b) {
+            const bool meetsOne = std::any_of(ranges.begin(), ranges.end(), [&](const ValueRange& r) {
+                return !(bounds[2 * b + 1] < r.min || bounds[2 * b] > r.max);
+            });
+            if (!meetsOne)
                 im.brickActive[b] = 0;
+        }
     };
     for (const RangeFilter& b : p.brushes) {
         if (b.coordinate) {
@@ -343,9 +363,9 @@ void VolumeRenderer::flagActiveBricks(const RenderParams& p)
             std::vector<float>& bounds = im.coordinateBounds[*b.coordinate];
             if (bounds.empty())
                 bounds = coordinateBrickBounds(vol.grid(), bl, *b.coordinate);
-            excludeOutside(bounds.data(), b.min, b.max);
+            excludeOutside(bounds.data(), b.ranges);
         } else {
-            excludeOutside(boundsOf(b.variable), b.min, b.max);
+            excludeOutside(boundsOf(b.variable), b.ranges);
         }
     }
     const float* colourBounds = boundsOf(p.colorVariable);
@@ -386,6 +406,8 @@ void VolumeRenderer::fillKernelParams(const RenderParams& p)
     k.table = viewOf(im.table);
     k.brushes = im.brushes.data();
     k.brushCount = int(im.brushes.size());
+    k.multiRangeBrushes = std::any_of(im.brushes.begin(), im.brushes.end(),
+                                      [](const kernel::KernelBrush& b) { return b.rangeCount > 1; });
     k.stepFactor = p.stepFactor;
     k.drKm = im.drKm;
     k.dAngleRad = im.dAngleRad;

@@ -126,7 +126,7 @@ TEST(Renderer, SimdImageEqualsScalarImage)
     p.transfer.range = {-0.8f, 1.0f};
     p.transfer.colorMap = ColorMapId::CoolToWarm;
     p.transfer.opacity = {{0, 0.3f}, {0.4f, 0.0f}, {1, 0.8f}};
-    p.brushes = {{1, std::nullopt, -60, 80}, {-1, Coordinate::Lon, 20, 300}};
+    p.brushes = {{1, std::nullopt, {{-60, 80}}}, {-1, Coordinate::Lon, {{20, 300}}}};
     p.shading.enabled = true;
     p.core.variable = 1;
     p.core.range = {0, 40};
@@ -143,28 +143,33 @@ TEST(Renderer, SkippingNeverChangesTheImage)
                                                     {"g", [](double, double r, double lon) { return float(r + lon); }}});
     VolumeRenderer renderer(volume);
     uint64_t jumped = 0;
-    for (int variant = 0; variant < 6; ++variant) {
+    for (int variant = 0; variant < 8; ++variant) {
         RenderParams p = smallParams();
         p.transfer.range = {-0.8f, 1.0f};
         p.transfer.opacity = {{0, 0}, {0.6f, 0}, {0.7f, 0.5f}, {1, 0.9f}};  // transparent below 0.28
         if (variant >= 1 && variant <= 2)
-            p.brushes.push_back({1, std::nullopt, 4000, 6000});
+            p.brushes.push_back({1, std::nullopt, {{4000, 6000}}});
         if (variant == 2)
-            p.brushes.push_back({-1, Coordinate::Z, -3000, 5000});
+            p.brushes.push_back({-1, Coordinate::Z, {{-3000, 5000}}});
         // Large empty regions, so that interval skipping jumps over many chunks: a thin outer
         // shell; the polar regions next to the caps (caps are always sampled); a lon wedge
         // across the seam seen edge-on and from above.
         if (variant == 3)
-            p.brushes.push_back({-1, Coordinate::Radius, 6000, 6371});
+            p.brushes.push_back({-1, Coordinate::Radius, {{6000, 6371}}});
         if (variant == 4) {
-            p.brushes.push_back({-1, Coordinate::Lat, 60, 90});
+            p.brushes.push_back({-1, Coordinate::Lat, {{60, 90}}});
             p.camera.elevationDeg = 70;
         }
         if (variant == 5) {
-            p.brushes.push_back({-1, Coordinate::Lon, 340, 360});
+            p.brushes.push_back({-1, Coordinate::Lon, {{340, 360}}});
             p.camera.azimuthDeg = 80;
             p.transfer.opacity = {{0, 0.4f}, {1, 0.4f}};
         }
+        // Several ranges on one axis: a brick is skipped only if it misses all of them.
+        if (variant == 6)
+            p.brushes.push_back({-1, Coordinate::Radius, {{5900, 6371}, {3485, 3900}}});
+        if (variant == 7)
+            p.brushes.push_back({1, std::nullopt, {{4000, 4300}, {5000, 5200}, {6200, 6600}}});
         PassStats on;
         const auto a = render(renderer, p, 2, &on);
         p.skipBricks = false;
@@ -180,6 +185,54 @@ TEST(Renderer, SkippingNeverChangesTheImage)
     EXPECT_GT(jumped, 1000u);
 }
 
+// Ranges on one axis are OR-ed: two that touch give the picture of their merged range, in both
+// kernels; two apart give neither the picture of either one nor that of their hull.
+TEST(Renderer, RangesOnOneAxisSelectTheirUnion)
+{
+    auto volume = makeVolume(makeGrid(36, 33, 72), {{"f", testing::plumeField},
+                                                    {"r", [](double, double r, double) { return float(r); }}});
+    VolumeRenderer renderer(volume);
+    RenderParams p = smallParams();
+    p.transfer.range = {-0.8f, 1.0f};
+    p.transfer.opacity = {{0, 0.3f}, {1, 0.6f}};
+    for (const KernelKind kernel : {KernelKind::Simd, KernelKind::Scalar}) {
+        p.kernel = kernel;
+        p.brushes = {{1, std::nullopt, {{4000, 4800}}}};
+        const auto lower = render(renderer, p, 2);
+        p.brushes = {{1, std::nullopt, {{4000, 5600}}}};
+        const auto merged = render(renderer, p, 2);
+        p.brushes = {{1, std::nullopt, {{4800, 5600}, {4000, 4800}}}};
+        const auto touching = render(renderer, p, 2);
+        EXPECT_LE(maxAbsDiff(touching, merged), 1e-6);
+        EXPECT_GT(meanAbsDiff(merged, lower), 1e-3);  // the upper range adds to the picture
+
+        // Apart: [4000, 4400] or [5200, 5600] (and a coordinate axis with two ranges beside it).
+        p.brushes = {{1, std::nullopt, {{4000, 4400}, {5200, 5600}}}, {-1, Coordinate::Lon, {{0, 90}, {180, 300}}}};
+        const auto apart = render(renderer, p, 2);
+        p.brushes = {{1, std::nullopt, {{4000, 4400}}}, {-1, Coordinate::Lon, {{0, 90}, {180, 300}}}};
+        const auto first = render(renderer, p, 2);
+        p.brushes = {{1, std::nullopt, {{5200, 5600}}}, {-1, Coordinate::Lon, {{0, 90}, {180, 300}}}};
+        const auto second = render(renderer, p, 2);
+        p.brushes = {{1, std::nullopt, {{4000, 5600}}}, {-1, Coordinate::Lon, {{0, 90}, {180, 300}}}};
+        const auto hull = render(renderer, p, 2);
+        EXPECT_GT(meanAbsDiff(apart, first), 1e-3);
+        EXPECT_GT(meanAbsDiff(apart, second), 1e-3);
+        EXPECT_GT(meanAbsDiff(apart, hull), 1e-3);
+        // Where only one range contributes (a pixel transparent in one picture), the union shows
+        // the other's pixel; nowhere is it more opaque than the hull (but for early ray
+        // termination, which stops either at an opacity of 0.995 or more).
+        size_t onlyOne = 0;
+        for (size_t i = 3; i < apart.size(); i += 4) {
+            EXPECT_LE(apart[i], hull[i] + 1.0f - p.stopOpacity);
+            if (first[i] == 0.0f && second[i] > 0.0f) {
+                EXPECT_NEAR(apart[i], second[i], 1e-5f);
+                ++onlyOne;
+            }
+        }
+        EXPECT_GT(onlyOne, 10u);
+    }
+}
+
 TEST(Renderer, BrushedOutVolumeShowsOnlyBackgroundAndCore)
 {
     auto volume = makeVolume(makeGrid(18, 9, 36), {{"f", testing::plumeField}});
@@ -187,7 +240,7 @@ TEST(Renderer, BrushedOutVolumeShowsOnlyBackgroundAndCore)
     RenderParams p = smallParams(32);
     p.transfer.range = {-0.8f, 1.0f};
     p.transfer.opacity = {{0, 0.9f}, {1, 0.9f}};
-    p.brushes = {{0, std::nullopt, 5, 6}};  // no value is in [5, 6]
+    p.brushes = {{0, std::nullopt, {{5, 6}}}};  // no value is in [5, 6]
     p.core.colour = {1, 0, 0};
     const auto img = render(renderer, p, 1);
     const CameraFrame cam(p.camera, p.width, p.height);
@@ -228,7 +281,7 @@ TEST(Renderer, BadParametersThrow)
     p.colorVariable = 3;
     EXPECT_THROW(renderer.setParams(p), Error);
     p = smallParams();
-    p.brushes = {{0, std::nullopt, 2, 1}};
+    p.brushes = {{0, std::nullopt, {{2, 1}}}};
     EXPECT_THROW(renderer.setParams(p), Error);
     p = smallParams();
     p.width = 0;

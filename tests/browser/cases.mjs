@@ -1,7 +1,7 @@
 // End-to-end browser tests of the UI against the real server:
 //   node tests/browser/cases.mjs CASE RAYPC FIXTURE_DIR
 // CASE: brush | warp | play | save_load | two_tabs | presets | pathlines | resolution | context | colours |
-// brush_values | camera | responsive [gpu].
+// brush_values | multi_brush | axes | camera | responsive [gpu].
 // Each case starts its own server and browser.
 import { readFileSync, writeFileSync } from 'node:fs';
 import { spawnSync } from 'node:child_process';
@@ -559,9 +559,12 @@ const cases = {
     await page.selectOption('#colorMap', 'vik');
     await waitConverged(page);
     check((await rState(page)).color.points.length === 0, 'choosing a map kept the colour points');
+    // The file is read asynchronously: wait for the state it makes to be sent before waiting for
+    // its frame (else the converged frame of the plain map may pass for it).
+    const sentBeforeImport = await page.evaluate(() => window.__raypc.lastSentId);
     await page.setInputFiles('#pvImport', file);
-    // The file is read asynchronously: wait for the imported points before waiting for the frame.
-    await page.waitForFunction((n) => window.__raypc.state().color.points.length === n, edited.color.points.length);
+    await page.waitForFunction((n) => window.__raypc.lastSentId > n, sentBeforeImport, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('importing the ParaView colour map sent no state'); });
     await waitConverged(page);
     const imported = await rState(page);
     check(imported.color.points.length === edited.color.points.length && Math.abs(imported.color.range[0] - pv[0].RGBPoints[0]) < 1e-3 * aMax,
@@ -619,6 +622,159 @@ const cases = {
     await page.keyboard.press('Escape');
     await waitConverged(page);
     check((await rState(page)).brushes.length === 0, 'Escape did not clear the brushes');
+  },
+
+  // Two ranges on one axis (parcoord-es multi brushes) select their union: the state holds both, the
+  // exact selection shown equals the sum of each range's (they are apart) and what `raypc stats`
+  // says for the saved state; each range's ends are labelled and typed per range; × removes one
+  // range, a click on the axis clears the axis, and a saved state restores both ranges.
+  async multi_brush({ context, url, tmp, raypc, dataset }) {
+    const page = await openUi(context, url);
+    await standardView(page);
+    await brushAxis(page, 'depth', 0.05, 0.3);
+    await brushAxis(page, 'depth', 0.6, 0.85);
+    await waitConverged(page);
+    const s = await rState(page);
+    const depth = s.brushes.filter((b) => b.name === 'depth');
+    check(s.brushes.length === 2 && depth.length === 2, `state.brushes after two drags on depth: ${JSON.stringify(s.brushes)}`);
+    const [a, b] = [...depth].sort((x, y) => x.min - y.min);
+    check(a.min >= 0 && a.max < b.min && b.max - b.min > 300 && a.max - a.min > 300,
+      `two separate depth ranges expected (dragged 5-30 % and 60-85 % of the axis): ${JSON.stringify(depth)}`);
+    const labels = await page.evaluate(() => [...document.querySelectorAll('#parcoords g.dimension')]
+      .filter((g) => g.__data__ === 'depth').flatMap((g) => [...g.querySelectorAll('text.brushLabel')].map((t) => t.textContent)));
+    check(labels.length === 4, `each range's ends labelled on the depth axis: ${JSON.stringify(labels)}`);
+
+    const sel = await page.evaluate(() => window.__raypc.selection);
+    const server = await postJson(url + 'api/selection', s);
+    check(server.status === 200 && Math.abs(server.body.fractionOfMantle - sel.fractionOfMantle) < 1e-9,
+      `UI shows ${JSON.stringify(sel)}, POST /api/selection says ${JSON.stringify(server.body)}`);
+    const only = async (r) => (await postJson(url + 'api/selection', { ...s, brushes: [r] })).body.fractionOfMantle;
+    const fa = await only(a), fb = await only(b);
+    check(fa > 0 && fb > 0 && Math.abs(sel.fractionOfMantle - (fa + fb)) < 1e-9,
+      `the union selects ${sel.fractionOfMantle}, the ranges alone ${fa} + ${fb}`);
+    const [download] = await Promise.all([page.waitForEvent('download'), page.click('#save')]);
+    const file = join(tmp, 'multi.json');
+    await download.saveAs(file);
+    const cli = spawnSync(raypc, ['stats', dataset, '--state', file, '-o', join(tmp, 'multi.csv'), '--quiet'], { encoding: 'utf8', timeout: 60000 });
+    check(cli.status === 0, `raypc stats --state refused the saved state: ${cli.stderr}`);
+    const row = readFileSync(join(tmp, 'multi.csv'), 'utf8').trim().split('\n').slice(1).map((l) => l.split(',')).find((r) => Number(r[0]) === s.step);
+    check(row && Math.abs(Number(row[3]) - 100 * sel.fractionOfMantle) < 1e-4,
+      `raypc stats says ${row?.[3]} % at step ${s.step}, the UI ${100 * sel.fractionOfMantle} %`);
+
+    // Typed values change one range only.
+    const second = s.brushes.findIndex((x) => x === depth[1] || (x.name === 'depth' && x.min === depth[1].min));
+    const typedRow = page.locator('.brushRow').nth(second);
+    await typedRow.locator('input.brushMin').fill('1500');
+    await typedRow.locator('input.brushMax').fill('2000');
+    await typedRow.locator('input.brushMax').dispatchEvent('change');
+    await waitConverged(page);
+    const typed = (await rState(page)).brushes;
+    check(typed.length === 2 && typed[second].min === 1500 && typed[second].max === 2000 &&
+      typed[1 - second].min === s.brushes[1 - second].min, `typed 1500 … 2000 into range ${second}: ${JSON.stringify(typed)}`);
+    const shown = await page.evaluate(() => window.__raypc.parcoords.brushes());
+    check(shown.length === 2 && shown.some((x) => Math.abs(x.min - 1500) < 1 && Math.abs(x.max - 2000) < 1),
+      `the depth axis shows ${JSON.stringify(shown)} after typing`);
+
+    // The saved state restores both ranges on the axis.
+    await page.goto(url);
+    await waitConverged(page);
+    const sentBefore = await page.evaluate(() => window.__raypc.lastSentId);
+    await page.setInputFiles('#load', file);
+    await page.waitForFunction((n) => window.__raypc.lastSentId > n, sentBefore, { timeout: 5000 });
+    await waitConverged(page);
+    const loaded = await page.evaluate(() => window.__raypc.parcoords.brushes());
+    check(loaded.length === 2 && loaded.every((x) => x.name === 'depth') &&
+      loaded.every((x) => depth.some((d) => Math.abs(d.min - x.min) < 1e-3 * (d.max - d.min) + 1e-6)),
+      `parallel coordinates show ${JSON.stringify(loaded)} after loading ${JSON.stringify(depth)}`);
+    // A third range can be drawn beside the loaded ones.
+    await brushAxis(page, 'depth', 0.4, 0.5);
+    await waitConverged(page);
+    check((await rState(page)).brushes.length === 3, `a third range beside two loaded ones: ${JSON.stringify((await rState(page)).brushes)}`);
+
+    await page.locator('.brushRow').nth(0).locator('button.brushClear').click();
+    await waitConverged(page);
+    check((await rState(page)).brushes.length === 2, `× removes one range: ${JSON.stringify((await rState(page)).brushes)}`);
+    // A click on the axis outside its brushes clears the axis.
+    const box = await axisBox(page, 'depth');
+    const left = await page.evaluate(() => window.__raypc.parcoords.brushes());
+    check(left.length === 2, `the depth axis shows ${JSON.stringify(left)} after × on one of three ranges`);
+    await page.mouse.click(box.x + box.width / 2, box.y + box.height * 0.98);
+    await waitConverged(page);
+    check((await rState(page)).brushes.length === 0, `a click on the depth axis left ${JSON.stringify((await rState(page)).brushes)}`);
+  },
+
+  // The axes shown and their order are in the state: hiding, showing and dragging axes changes
+  // state.axes, and a saved file and the page URL restore the same axes in the same order.
+  async axes({ context, url, tmp }) {
+    const page = await openUi(context, url);
+    await standardView(page);
+    const shownOrder = (p) => p.evaluate(() => window.__raypc.parcoords.order());
+    const initial = await shownOrder(page);
+    check((await rState(page)).axes === null && initial.includes('lat') && !initial.includes('radius'),
+      `default: state.axes ${JSON.stringify((await rState(page)).axes)}, shown ${JSON.stringify(initial)}`);
+    await page.click('#axisMenu summary');
+    await page.check('#axisChoice input[data-axis="radius"]');
+    await page.uncheck('#axisChoice input[data-axis="lat"]');
+    await page.click('#axisMenu summary');
+    // Drag the depth axis by its title to the right end.
+    const title = await page.evaluate(() => {
+      const g = [...document.querySelectorAll('#parcoords svg g.dimension')].find((x) => x.__data__ === 'depth');
+      const r = g?.querySelector('text.label')?.getBoundingClientRect();
+      return r ? { x: r.x + r.width / 2, y: r.y + r.height / 2 } : null;
+    });
+    check(title, 'no depth axis title to drag');
+    const panel = await page.locator('#parcoords').boundingBox();
+    await page.mouse.move(title.x, title.y);
+    await page.mouse.down();
+    for (let i = 1; i <= 12; i++) await page.mouse.move(title.x + ((panel.x + panel.width - 5 - title.x) * i) / 12, title.y);
+    await page.mouse.up();
+    await page.waitForFunction(() => {
+      const a = window.__raypc.state().axes;
+      return Array.isArray(a) && a[a.length - 1] === 'depth';
+    }, null, { timeout: 5000 }).catch(() => {});
+    const s = await rState(page);
+    const order = await shownOrder(page);
+    check(Array.isArray(s.axes) && JSON.stringify(s.axes) === JSON.stringify(order) && order.at(-1) === 'depth' &&
+      order.includes('radius') && !order.includes('lat'),
+      `after showing radius, hiding lat and dragging depth to the right: state.axes ${JSON.stringify(s.axes)}, shown ${JSON.stringify(order)}`);
+    check(JSON.stringify(order) !== JSON.stringify(initial), 'the axes did not change; the test would prove nothing');
+    // Brushes still land on the axis they are drawn on once axes have moved (parcoord-es's multi
+    // mode names brush elements by axis position).
+    await brushAxis(page, 'depth', 0.1, 0.3);
+    await brushAxis(page, 'depth', 0.6, 0.8);
+    await brushAxis(page, 'temperature', 0.2, 0.6);
+    await waitConverged(page);
+    const moved = await page.evaluate(() => ({ state: window.__raypc.state().brushes, shown: window.__raypc.parcoords.brushes() }));
+    const names = (list) => list.map((x) => x.name).sort().join(',');
+    check(names(moved.state) === 'depth,depth,temperature' && names(moved.shown) === names(moved.state),
+      `brushes after moving axes: state ${JSON.stringify(moved.state)}, shown ${JSON.stringify(moved.shown)}`);
+    await page.keyboard.press('Escape');
+    await waitConverged(page);
+
+    const [download] = await Promise.all([page.waitForEvent('download'), page.click('#save')]);
+    const file = join(tmp, 'axes.json');
+    await download.saveAs(file);
+    check(JSON.stringify(JSON.parse(readFileSync(file, 'utf8')).axes) === JSON.stringify(order), 'the saved file lacks the axes');
+    const hash = new URL(page.url()).hash;
+
+    await page.goto(url);
+    await waitConverged(page);
+    check(JSON.stringify(await shownOrder(page)) === JSON.stringify(initial), 'a fresh page does not show the default axes');
+    const sentBefore = await page.evaluate(() => window.__raypc.lastSentId);
+    await page.setInputFiles('#load', file);
+    await page.waitForFunction((n) => window.__raypc.lastSentId > n, sentBefore, { timeout: 5000 });
+    await page.waitForFunction((o) => JSON.stringify(window.__raypc.parcoords.order()) === o, JSON.stringify(order), { timeout: 5000 })
+      .catch(() => {});
+    const loaded = await shownOrder(page);
+    check(JSON.stringify(loaded) === JSON.stringify(order), `after loading the file the axes are ${JSON.stringify(loaded)}, saved ${JSON.stringify(order)}`);
+    const ticks = await page.evaluate(() => Object.fromEntries([...document.querySelectorAll('#axisChoice input')].map((i) => [i.dataset.axis, i.checked])));
+    check(ticks.radius === true && ticks.lat === false, `the Axes menu after loading: ${JSON.stringify(ticks)}`);
+
+    const page2 = await openUi(context, url, { hash });
+    await page2.waitForFunction((o) => JSON.stringify(window.__raypc.parcoords.order()) === o, JSON.stringify(order), { timeout: 5000 })
+      .catch(() => {});
+    const fromUrl = await shownOrder(page2);
+    check(JSON.stringify(fromUrl) === JSON.stringify(order), `the shared URL shows the axes ${JSON.stringify(fromUrl)}, saved ${JSON.stringify(order)}`);
   },
 
   // Camera: the wheel cannot take the eye inside the planet (unless Fly inside is ticked); arrow

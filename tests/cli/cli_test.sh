@@ -133,6 +133,35 @@ stats_analytic_selection)
   expect_error "min 3 is greater than max 1" stats "$work/ds" --range "depth=3:1" -o "$work/x.csv"
   check "no output after errors" test ! -e "$work/x.csv"
   ;;
+multi_range)
+  # Several ranges on one axis (a name given twice) select their union, in raypc stats and render,
+  # from --range and from a state alike; --range replaces the state's ranges of its name.
+  preprocess_fixture
+  vol() { "$raypc" stats "$work/ds" --quiet -o "$work/v.csv" "$@" >/dev/null && awk -F, 'NR > 1 { print $3 }' "$work/v.csv"; }
+  a=$(vol --range depth=0:660) b=$(vol --range depth=1500:2000) ab=$(vol --range depth=0:660 --range depth=1500:2000)
+  check "disjoint depth ranges: the union's volume is the sum, every step ($ab)" \
+    awk -v a="$a" -v b="$b" -v ab="$ab" 'BEGIN { na = split(a, A); split(b, B); split(ab, C);
+      for (i = 1; i <= na; i++) if (A[i] <= 0 || B[i] <= 0 || (C[i] - A[i] - B[i])^2 > (1e-9 * C[i])^2) exit 1; exit na != 3 }'
+  check "overlapping ranges select the merged range" test "$(vol --range depth=0:660 --range depth=500:1200)" = "$(vol --range depth=0:1200)"
+  printf '%s' '{"version": 4, "brushes": [{"name": "depth", "min": 0, "max": 660}, {"name": "lat", "min": -90, "max": 90},
+    {"name": "depth", "min": 1500, "max": 2000}]}' > "$work/multi.json"
+  check "a state with two depth ranges gives what two --range do" test "$(vol --state "$work/multi.json")" = "$ab"
+  check "--range depth replaces both of the state's depth ranges" \
+    test "$(vol --state "$work/multi.json" --range depth=1500:2000)" = "$b"
+  "$raypc" render "$work/ds" -o "$work/touching.png" --size 64x64 --passes 1 --range depth=0:660 --range depth=660:1500 >/dev/null
+  "$raypc" render "$work/ds" -o "$work/merged.png" --size 64x64 --passes 1 --range depth=0:1500 >/dev/null
+  "$raypc" render "$work/ds" -o "$work/lower.png" --size 64x64 --passes 1 --range depth=660:1500 >/dev/null
+  check "render: touching ranges draw the merged range's picture" cmp -s "$work/touching.png" "$work/merged.png"
+  check "render: the upper range adds to the picture" bash -c "! cmp -s '$work/lower.png' '$work/merged.png'"
+  "$raypc" render "$work/ds" -o "$work/state.png" --size 64x64 --passes 1 --state "$work/multi.json" >/dev/null
+  "$raypc" render "$work/ds" -o "$work/ranges.png" --size 64x64 --passes 1 --range depth=0:660 --range depth=1500:2000 >/dev/null
+  check "render: the state's two ranges draw what two --range do" cmp -s "$work/state.png" "$work/ranges.png"
+  sed 's/"version": 4/"version": 3/' "$work/multi.json" > "$work/v3.json"
+  expect_error "v3.json: brushes[2]: a second range on 'depth' needs version 4" stats "$work/ds" --state "$work/v3.json" -o "$work/x.csv"
+  printf '%s' '{"version": 4, "brushes": [{"name": "depth", "min": 0, "max": 660}, {"name": "depth", "min": 900, "max": 800}]}' > "$work/bad.json"
+  expect_error "bad.json: brushes[1].min: min 900 is greater than max 800" render "$work/ds" --state "$work/bad.json" -o "$work/x.png"
+  check "no output after errors" test ! -e "$work/x.csv" -a ! -e "$work/x.png"
+  ;;
 finite_overflow)
   # Issue 16, 1: one vx = 1e30 (finite) makes the velocity magnitude overflow float32; it crashed
   # in the histogram. The first value in the file is at lat 87.5 (the file descends), r 3485, lon 0.

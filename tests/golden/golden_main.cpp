@@ -103,18 +103,18 @@ std::map<std::string, Case> cases()
                                  p.transfer.range = {0, 1};
                                  p.transfer.opacity = {{0, 0}, {0.3f, 0}, {0.31f, 0.4f}, {0.4f, 0.4f}, {0.41f, 0}, {1, 0}};
                              }};
-    c["brush_one_variable"] = {0, [](RenderParams& p) { p.brushes = {{1, std::nullopt, 0.3f, 0.7f}}; }};
+    c["brush_one_variable"] = {0, [](RenderParams& p) { p.brushes = {{1, std::nullopt, {{0.3f, 0.7f}}}}; }};
     c["brush_several_variables"] = {0, [](RenderParams& p) {
-                                        p.brushes = {{1, std::nullopt, 0.2f, 0.9f},
-                                                     {2, std::nullopt, -0.5f, 1.0f},
-                                                     {0, std::nullopt, -0.9f, 0.9f}};
+                                        p.brushes = {{1, std::nullopt, {{0.2f, 0.9f}}},
+                                                     {2, std::nullopt, {{-0.5f, 1.0f}}},
+                                                     {0, std::nullopt, {{-0.9f, 0.9f}}}};
                                     }};
     c["cut_by_coordinate"] = {0, [](RenderParams& p) {
                                   p.colorVariable = 1;
                                   p.transfer.range = {0, 1};
                                   p.transfer.colorMap = ColorMapId::Inferno;
                                   p.transfer.opacity = {{0, 0.9f}, {1, 0.9f}};
-                                  p.brushes = {{-1, Coordinate::Y, -7000, 0}, {-1, Coordinate::Depth, 0, 2000}};
+                                  p.brushes = {{-1, Coordinate::Y, {{-7000, 0}}}, {-1, Coordinate::Depth, {{0, 2000}}}};
                               }};
     for (int level = 0; level < 3; ++level)
         c["level_" + std::to_string(level)] = {level, [](RenderParams&) {}};
@@ -126,7 +126,7 @@ std::map<std::string, Case> cases()
                          p.transfer.range = {-1, 1};
                          p.transfer.colorMap = ColorMapId::CoolToWarm;
                          p.transfer.opacity = {{0, 0.6f}, {1, 0.6f}};
-                         p.brushes = {{-1, Coordinate::Depth, 0, 300}};
+                         p.brushes = {{-1, Coordinate::Depth, {{0, 300}}}};
                      }};
     auto pole = [](double elevation) {
         return [elevation](RenderParams& p) {
@@ -135,7 +135,7 @@ std::map<std::string, Case> cases()
             p.transfer.range = {-1, 1};
             p.transfer.colorMap = ColorMapId::Viridis;
             p.transfer.opacity = {{0, 0.6f}, {1, 0.6f}};
-            p.brushes = {{-1, Coordinate::Depth, 0, 300}};
+            p.brushes = {{-1, Coordinate::Depth, {{0, 300}}}};
         };
     };
     c["north_pole"] = {0, pole(90)};
@@ -146,11 +146,11 @@ std::map<std::string, Case> cases()
                         p.shading.enabled = true;
                     }};
     c["core_plain"] = {0, [](RenderParams& p) {
-                           p.brushes = {{-1, Coordinate::X, -1e9f, 0}};
+                           p.brushes = {{-1, Coordinate::X, {{-1e9f, 0}}}};
                            p.core.colour = {0.8f, 0.5f, 0.2f};
                        }};
     c["core_by_variable"] = {0, [](RenderParams& p) {
-                                 p.brushes = {{-1, Coordinate::X, -1e9f, 0}};
+                                 p.brushes = {{-1, Coordinate::X, {{-1e9f, 0}}}};
                                  p.core.variable = 2;
                                  p.core.range = {-1, 1};
                                  p.core.colorMap = ColorMapId::CoolToWarm;
@@ -163,7 +163,7 @@ std::map<std::string, Case> cases()
                                     p.transfer.range = {0, 1};
                                     p.transfer.colorMap = ColorMapId::Grayscale;
                                     p.transfer.opacity = {{0, 1}, {1, 1}};
-                                    p.brushes = {{-1, Coordinate::Radius, 0, 4800}};  // opaque below 4800 km
+                                    p.brushes = {{-1, Coordinate::Radius, {{0, 4800}}}};  // opaque below 4800 km
                                 },
                                 [] { return helixTubes(60, true); }};
     c["tubes_translucent_volume"] = {0, [](RenderParams&) {}, [] { return helixTubes(60, false); }};

@@ -107,11 +107,12 @@ const defaults = JSON.parse(run(stateCases, ['default', dataset]));
   rich.reference = { shells: { visible: true, depthsKm: [660, 1600], opacity: 0.1, color: [0.5, 0.6, 0.7] },
     graticule: { visible: true, spacingDeg: 15, opacity: 0.25, color: [0.25, 0.5, 0.75] },
     coastlines: { visible: true, opacity: 0.5, color: [1, 1, 0] }, lineWidthPx: 2.5 };
-  rich.brushes = [{ name: 'depth', min: 0, max: 660 }, { name: 'temperature', min: 1500, max: 2500 }];
+  rich.brushes = [{ name: 'depth', min: 0, max: 660 }, { name: 'temperature', min: 1500, max: 2500 }, { name: 'depth', min: 1500, max: 2000 }];
+  rich.axes = ['temperature', 'depth', 'radius'];
   rich.core = { visible: false, variable: 'temperature', color: [0.2, 0.3, 0.4], colorMap: 'grayscale', range: [2000, 4000] };
   rich.shading = { enabled: true, light: [-1, 0.5, 0.25], ambient: 0.2, diffuse: 0.8, specular: 0.5, shininess: 10 };
   rich.pathlines = { visible: true, radiusKm: 30, minWidthPx: 3, window: 5, colorBy: 'length', colorMap: 'cool-to-warm', range: [0, 5000],
-    filterByBrushes: false, filters: [{ name: 'length', min: 100, max: 4000 }], ambientOcclusion: false };
+    filterByBrushes: false, filters: [{ name: 'length', min: 100, max: 400 }, { name: 'length', min: 1000, max: 4000 }], ambientOcclusion: false };
   const [parsed] = cppParse([rich]);
   check(parsed.ok && sameAsFloats(parsed.json, rich), `raypc changed the rich state: ${JSON.stringify(parsed)}`);
   const loaded = uiLoad(parsed.json, defaults);
@@ -123,10 +124,12 @@ const defaults = JSON.parse(run(stateCases, ['default', dataset]));
   const names = readdirSync(join(root, 'examples')).filter((f) => f.endsWith('.json')).sort();
   check(names.length > 0, 'no examples/*.json');
   const docs = names.map((f) => JSON.parse(readFileSync(join(root, 'examples', f), 'utf8')));
-  const docExample = /```json\n([\s\S]*?)```/.exec(readFileSync(join(root, 'docs/state.md'), 'utf8'));
-  check(docExample, 'docs/state.md has no ```json example');
-  names.push('../docs/state.md (its example)');
-  docs.push(JSON.parse(docExample?.[1] ?? '{}'));
+  const docExamples = [...readFileSync(join(root, 'docs/state.md'), 'utf8').matchAll(/```json\n([\s\S]*?)```/g)];
+  check(docExamples.length > 0, 'docs/state.md has no ```json example');
+  docExamples.forEach((m, i) => {
+    names.push(`../docs/state.md (example ${i + 1})`);
+    docs.push(JSON.parse(m[1]));
+  });
   const loaded = docs.map((d) => uiLoad(d, defaults));
   const cpp = cppParse([...docs, ...loaded.map((l) => l.json ?? {})]);
   names.forEach((name, i) => {
@@ -206,7 +209,7 @@ const defaults = JSON.parse(run(stateCases, ['default', dataset]));
   }
   const cpp = cppParse(docs);
   // What JSON Schema cannot express; raypc alone refuses these.
-  const onlyRaypc = /is greater than max|with min < max|positions must ascend/;
+  const onlyRaypc = /is greater than max|with min < max|positions must ascend|a second range on/;
   let refused = 0, raypcOnly = 0;
   docs.forEach((doc, i) => {
     const u = uiLoad(doc, defaults), c = cpp[i];

@@ -78,6 +78,8 @@ export class App {
     this.pc = new ParallelCoordinates($('parcoords'), this.shownAxes(), {
       onBrush: (brushes, interactive) => this.onBrush(brushes, interactive),
       afterFrame: (draw) => this.link.afterFrameShown(draw),
+      multi: true,
+      onOrder: (order) => this.setAxes(order),
     });
     this.pathlines = new PathlinePanel(store, {
       commit: (i) => this.commit(i),
@@ -87,12 +89,10 @@ export class App {
     this.context = new ContextPanel(store, { commit: (i) => this.commit(i), showError: (m) => this.showError(m) });
     this.selection = new SelectionPanel(store, {
       showError: (m) => this.showError(m),
-      setBrush: (name, range) => {
-        const brushes = store.state.brushes.filter((b) => b.name !== name);
-        if (range) {
-          const at = store.state.brushes.findIndex((b) => b.name === name);
-          brushes.splice(at < 0 ? brushes.length : at, 0, { name, min: range[0], max: range[1] });
-        }
+      setBrush: (index, range) => {
+        const brushes = store.state.brushes.map((b) => ({ ...b }));
+        if (range) brushes[index] = { name: brushes[index].name, min: range[0], max: range[1] };
+        else brushes.splice(index, 1);
         this.pc.setBrushes(brushes);
         this.onBrush(brushes, false);
       },
@@ -202,7 +202,7 @@ export class App {
     this.tf.sync();
     syncControls(this.store);
     this.updateStepLabel();
-    this.pc.showAxes(this.shownAxes()); // before the brushes: a brushed axis is shown
+    this.showStateAxes(); // before the brushes: a brushed axis is shown
     this.pc.setBrushes(this.store.state.brushes);
     this.selection.updateText();
     this.pathlines.sync();
@@ -287,14 +287,35 @@ export class App {
 
   // ---- axes, brushes and the sample ----------------------------------------------------------
 
-  // The axes of the volume's plot: the ones ticked under Axes (x, y, z and radius are not by
-  // default: depth, lat and lon say where more plainly), and any axis a brush is on.
-  private shownAxes() {
-    const brushed = new Set(this.store.state.brushes.map((b) => b.name));
-    return this.store.axes().filter((a) => !this.hiddenAxes.has(a.name) || brushed.has(a.name));
+  // The axes of the volume's plot in display order: state.axes (ticked under Axes, in the order
+  // they were dragged to), by default every axis but x, y, z and radius (depth, lat and lon say
+  // where more plainly) in the dataset's order; and any axis a brush is on, after them.
+  private axisNames(): string[] {
+    const all = this.store.axes().map((a) => a.name);
+    const chosen = this.store.state.axes ?? all.filter((n) => !kHiddenByDefault.includes(n));
+    const brushed = this.store.state.brushes.map((b) => b.name);
+    return [...new Set([...chosen, ...brushed])].filter((n) => all.includes(n));
   }
 
-  private hiddenAxes = new Set(kHiddenByDefault);
+  private shownAxes() {
+    const axes = this.store.axes();
+    return this.axisNames().map((n) => axes.find((a) => a.name === n)!);
+  }
+
+  // Shows the state's axes in its order (after a load, or a change under Axes).
+  private showStateAxes(): void {
+    this.pc.showAxes(this.shownAxes());
+    this.pc.setOrder(this.axisNames());
+    for (const input of document.querySelectorAll<HTMLInputElement>('#axisChoice input'))
+      input.checked = this.axisNames().includes(input.dataset.axis ?? '');
+  }
+
+  // Axes shown and their order change nothing in the picture: the state keeps them (saved files,
+  // the URL) without sending it.
+  private setAxes(names: string[]): void {
+    this.store.state.axes = names;
+    writeStateToUrl(this.store);
+  }
 
   private setUpAxisChoice(): void {
     const box = $('axisChoice');
@@ -303,11 +324,11 @@ export class App {
       const input = document.createElement('input');
       input.type = 'checkbox';
       input.dataset.axis = a.name;
-      input.checked = !this.hiddenAxes.has(a.name);
+      input.checked = this.axisNames().includes(a.name);
       input.addEventListener('change', () => {
-        if (input.checked) this.hiddenAxes.delete(a.name);
-        else this.hiddenAxes.add(a.name);
-        this.pc.showAxes(this.shownAxes());
+        const shown = this.pc.order().filter((n) => n !== a.name);
+        this.setAxes(input.checked ? [...shown, a.name] : shown);
+        this.showStateAxes();
       });
       label.append(input, ` ${a.name}`);
       box.appendChild(label);

@@ -1,10 +1,11 @@
 // Parallel coordinates of the dataset's volume-weighted sample (GET /api/sample), drawn by
 // parcoord-es: one axis per column (coordinates, then variables, derived ones included), with
 // units in the titles, fixed global ranges (so axes do not jump between steps), reorderable axes
-// and 1-D brushes. Brushes are reported as state.brushes ranges in each column's units.
+// and 1-D brushes, several per axis where asked (parcoord-es "1D-axes-multi": OR-ed, docs/state.md).
+// Brushes are reported as state.brushes ranges in each column's units, one entry per range.
 import ParCoords from 'parcoord-es';
 import * as d3 from 'd3';
-import type { Brush } from './state';
+import { rangesByName, type Brush } from './state';
 import type { Sample } from './api';
 import { displayUnits } from './units';
 
@@ -24,6 +25,12 @@ export interface ParcoordsOptions {
   // the full redraw of the lines after a brush is released waits for it, so that drawing 100 000
   // lines does not compete with that frame for the CPU. Without it the lines are drawn at once.
   afterFrame?(draw: () => void): void;
+  // Several ranges per axis (parcoord-es "1D-axes-multi"): brushing beside a brush adds a range, a
+  // click on the axis outside the brushes clears its ranges. One plot per page may use it: that
+  // mode finds its brushes by document-wide element ids.
+  multi?: boolean;
+  // The axis order changed (an axis dragged sideways), in display order.
+  onOrder?(order: string[]): void;
 }
 
 export interface ParcoordsTiming {
@@ -95,7 +102,8 @@ export class ParallelCoordinates {
   private pc: any = null; // eslint-disable-line @typescript-eslint/no-explicit-any
   private rows: Row[] = [];
   private suppress = 0;
-  private order: string[] | null = null;
+  private order_: string[] | null = null;
+  private shownOrder = '';
   private pending: Brush[] = [];
   private lineColor: (row: Row) => string = () => '#4a90d9';
   readonly timing: ParcoordsTiming = { lastBrushMs: 0, brushEvents: 0 };
@@ -122,9 +130,8 @@ export class ParallelCoordinates {
     this.axes = axes;
     if (!same && this.pc) {
       const names = new Set(axes.map((a) => a.name));
-      this.order = this.pc.getOrderedDimensionKeys() as string[];
-      const kept = this.order.filter((n) => names.has(n));
-      this.order = [...kept, ...axes.map((a) => a.name).filter((n) => !kept.includes(n))];
+      const kept = (this.pc.getOrderedDimensionKeys() as string[]).filter((n) => names.has(n));
+      this.order_ = [...kept, ...axes.map((a) => a.name).filter((n) => !kept.includes(n))];
       this.pending = this.brushes().filter((b) => names.has(b.name));
       this.pc = null;
     }
@@ -169,15 +176,36 @@ export class ParallelCoordinates {
     if (this.pc) this.pc.color(fn).render();
   }
 
-  // The current brushes in data units, in axis order.
+  // The current brushes in data units, in axis order (an axis' ranges in the order drawn).
   brushes(): Brush[] {
     if (!this.pc || !this.pc.brushExtents) return [];
-    const ext = this.pc.brushExtents() as Record<string, { selection: { scaled: number[] } }>;
+    type Extent = { selection: { scaled: number[] } };
+    const ext = this.pc.brushExtents() as Record<string, Extent | Extent[]>;
     const keys: string[] = this.pc.getOrderedDimensionKeys ? this.pc.getOrderedDimensionKeys() : Object.keys(ext);
-    return keys.filter((k) => ext[k]).map((k) => {
-      const s = ext[k].selection.scaled;
-      return { name: k, min: Math.min(s[0], s[1]), max: Math.max(s[0], s[1]) };
+    return keys.filter((k) => ext[k]).flatMap((k) => {
+      const list = Array.isArray(ext[k]) ? ext[k] as Extent[] : [ext[k] as Extent];
+      return list.map((e) => {
+        const s = e.selection.scaled;
+        return { name: k, min: Math.min(s[0], s[1]), max: Math.max(s[0], s[1]) };
+      });
     });
+  }
+
+  // The axes in display order.
+  order(): string[] {
+    return this.pc ? this.pc.getOrderedDimensionKeys() as string[] : this.order_ ?? this.axes.map((a) => a.name);
+  }
+
+  // Puts the axes in this order (names not shown are ignored; shown ones not named keep their
+  // relative order after the named ones) without reporting it back.
+  setOrder(order: string[]): void {
+    const names = this.axes.map((a) => a.name);
+    const next = [...order.filter((n) => names.includes(n)), ...names.filter((n) => !order.includes(n))];
+    if (JSON.stringify(next) === JSON.stringify(this.order())) return;
+    if (this.pc) this.pending = this.brushes();
+    this.order_ = next;
+    this.pc = null;
+    if (this.rows.length) this.rebuild();
   }
 
   // Shows the given brushes (e.g. from a loaded state) without reporting them back.
@@ -189,6 +217,14 @@ export class ParallelCoordinates {
     const same = JSON.stringify(this.brushes().map((b) => [b.name, b.min.toPrecision(5), b.max.toPrecision(5)]).sort()) ===
       JSON.stringify(brushes.map((b) => [b.name, b.min.toPrecision(5), b.max.toPrecision(5)]).sort());
     if (same) return;
+    if (this.options.multi) {
+      // parcoord-es's multi mode cannot take ranges away from an axis: a fresh plot gets them.
+      this.pending = brushes.map((b) => ({ ...b }));
+      this.order_ = this.pc.getOrderedDimensionKeys();
+      this.pc = null;
+      this.rebuild();
+      return;
+    }
     this.suppress++;
     try {
       this.pc.brushReset();
@@ -201,21 +237,60 @@ export class ParallelCoordinates {
 
   private applyBrushes(brushes: Brush[]): void {
     const known = new Set(this.axes.map((a) => a.name));
-    const ext: Record<string, [number, number]> = {};
-    for (const b of brushes) if (known.has(b.name)) ext[b.name] = [b.min, b.max];
-    if (Object.keys(ext).length) this.pc.brushExtents(ext);
+    const byName = [...rangesByName(brushes)].filter(([name]) => known.has(name));
+    if (!byName.length) return;
+    if (!this.options.multi) {
+      // One range per axis: the last given (a state with several shows the last one here).
+      this.pc.brushExtents(Object.fromEntries(byName.map(([name, ranges]) => [name, ranges[ranges.length - 1]])));
+      return;
+    }
+    // parcoord-es's multi-mode setter maps each [a, b] to pixels and expects the first to be the
+    // lower one on screen (the larger y), and it confines each brush to its own range; both are
+    // put right here: the pair is given in screen order, and the brushes get the whole axis back.
+    const dims = this.pc.dimensions() as Record<string, { yscale: { (v: number): number; range(): number[] } }>;
+    const ext: Record<string, [number, number][]> = {};
+    for (const [name, ranges] of byName) {
+      const y = dims[name].yscale;
+      ext[name] = ranges.map(([lo, hi]) => (y(lo) >= y(hi) ? [lo, hi] : [hi, lo]));
+    }
+    this.pc.brushExtents(ext);
+    for (const node of this.container.querySelectorAll<SVGGElement>('g.brush')) {
+      const name = node.getAttribute('dimension') ?? '';
+      const brush = (node as unknown as { __data__?: { brush?: { extent(e: number[][]): unknown } } }).__data__?.brush;
+      if (!brush || !dims[name]) continue;
+      brush.extent([[-15, 0], [15, dims[name].yscale.range()[0]]]);
+      d3.select(node).call(brush as never);
+    }
+  }
+
+  // parcoord-es's multi mode names each axis' brush elements by the axis' position when they were
+  // made and looks them up by its current position; moving an axis changes positions, so the ids
+  // are brought up to date before anything reads them.
+  private renumberBrushes(): void {
+    if (!this.options.multi || !this.pc) return;
+    const keys = Object.keys(this.pc.dimensions());
+    for (const group of this.container.querySelectorAll<SVGGElement>('g.brush-group')) {
+      const pos = keys.indexOf(group.getAttribute('dimension') ?? '');
+      if (pos < 0) continue;
+      group.id = `brush-group-${pos}`;
+      for (const b of group.querySelectorAll<SVGGElement>('g.brush')) {
+        const id = (b as unknown as { __data__?: { id?: number } }).__data__?.id;
+        if (id !== undefined) b.id = `brush-${pos}-${id}`;
+      }
+    }
   }
 
   private rebuild(): void {
     const w = this.container.clientWidth, h = this.container.clientHeight;
     if (w < 50 || h < 50 || this.rows.length === 0) return;
     const brushes = this.pc ? this.brushes() : this.pending;
-    if (this.pc) this.order = this.pc.getOrderedDimensionKeys();
+    if (this.pc) this.order_ = this.pc.getOrderedDimensionKeys();
     this.container.innerHTML = '';
     // Wide enough side margins that the first and last (centred) titles are not cut off.
     const margin = { top: 34, right: 64, bottom: 14, left: 48 };
     const plotH = h - margin.top - margin.bottom;
-    const order = this.order ?? this.axes.map((a) => a.name);
+    const names = this.axes.map((a) => a.name);
+    const order = this.order_ ? [...this.order_.filter((n) => names.includes(n)), ...names.filter((n) => !this.order_!.includes(n))] : names;
     const dimensions: Record<string, unknown> = {};
     order.forEach((name, index) => {
       const a = this.axes.find((x) => x.name === name);
@@ -246,13 +321,14 @@ export class ParallelCoordinates {
         .render()
         .createAxes()
         .reorderable()
-        .brushMode('1D-axes');
+        .brushMode(this.options.multi ? '1D-axes-multi' : '1D-axes');
       this.pc.on('brush', () => this.emit(true));
       this.pc.on('brushend', () => this.emit(false));
       if (brushes.length) this.applyBrushes(brushes);
     } finally {
       this.suppress--;
     }
+    this.shownOrder = JSON.stringify(this.pc.getOrderedDimensionKeys());
     this.drawBrushLabels();
     // Titles carry units; stagger every other one so neighbours do not overlap; the first and last
     // titles are anchored inwards so that a long one is not cut off at the panel's edge; full name
@@ -281,7 +357,18 @@ export class ParallelCoordinates {
     this.redrawBrushed = brushed;
     pc.renderBrushed.queue = brushed;
     pc.renderBrushed.default = brushed;
+    let orderTimer = 0;
     pc.render.queue = () => {
+      // An axis dragged sideways re-renders on every move: the brushes' ids follow at once, the
+      // new order is reported once the drag has settled.
+      this.renumberBrushes();
+      const order = JSON.stringify(pc.getOrderedDimensionKeys());
+      if (this.suppress) this.shownOrder = order; // drawn by rebuild or setData, not moved by the user
+      else if (order !== this.shownOrder && pc === this.pc) {
+        this.shownOrder = order;
+        clearTimeout(orderTimer);
+        orderTimer = window.setTimeout(() => { if (pc === this.pc) this.options.onOrder?.(this.order()); }, 400);
+      }
       brushed();
       pc.renderMarked.queue();
       this.drawLayer('foreground', pc.data() as Row[]);
@@ -366,16 +453,21 @@ export class ParallelCoordinates {
   private drawBrushLabels(): void {
     if (!this.pc) return;
     const dims = this.pc.dimensions() as Record<string, { yscale: (v: number) => number }>;
-    const brushes = new Map(this.brushes().map((b) => [b.name, b]));
+    const brushes = rangesByName(this.brushes());
     d3.select(this.container).selectAll<SVGGElement, string>('g.dimension').each((name, i, nodes) => {
       const g = d3.select(nodes[i]);
       g.selectAll('text.brushLabel').remove();
-      const b = brushes.get(name), dim = dims[name];
-      if (!b || !dim) return;
+      const ranges = brushes.get(name), dim = dims[name];
+      if (!ranges || !dim) return;
       const a = this.axes.find((x) => x.name === name);
-      const format = tickFormatFor(a?.min ?? b.min, a?.max ?? b.max);
-      for (const [v, dy] of [[b.max, -4], [b.min, 12]] as const)
-        g.append('text').attr('class', 'brushLabel').attr('x', 9).attr('y', dim.yscale(v) + dy).text(format(v));
+      for (const [lo, hi] of ranges) {
+        const format = tickFormatFor(a?.min ?? lo, a?.max ?? hi);
+        // Each range's upper end above it and its lower end below it on screen.
+        const top = Math.min(dim.yscale(lo), dim.yscale(hi)), bottom = Math.max(dim.yscale(lo), dim.yscale(hi));
+        const [atTop, atBottom] = dim.yscale(hi) <= dim.yscale(lo) ? [hi, lo] : [lo, hi];
+        g.append('text').attr('class', 'brushLabel').attr('x', 9).attr('y', top - 4).text(format(atTop));
+        g.append('text').attr('class', 'brushLabel').attr('x', 9).attr('y', bottom + 12).text(format(atBottom));
+      }
     });
   }
 

@@ -4,7 +4,7 @@
 import { fetchPathlines, type PathlineAttributes } from './api';
 import { sampleColorMap } from './colormaps';
 import { ParallelCoordinates, type AxisInfo } from './parcoords';
-import type { Brush, PathlineState } from './state';
+import { inRanges, rangesByName, type Brush, type PathlineState } from './state';
 import type { LegendEntry } from './context_panel';
 import type { StateStore } from './store';
 import { displayUnits } from './units';
@@ -121,15 +121,15 @@ export class PathlinePanel {
     if (!d || !pl) return 0;
     const nc = d.columns.length, col = (n: string) => d.columns.indexOf(n);
     const tests: ((row: number) => boolean)[] = [];
-    for (const f of pl.filters) {
-      const k = col(f.name);
-      if (k >= 0) tests.push((i) => { const v = d.values[i * nc + k]; return v >= f.min && v <= f.max; });
+    for (const [name, ranges] of rangesByName(pl.filters)) {
+      const k = col(name);
+      if (k >= 0) tests.push((i) => inRanges(d.values[i * nc + k], ranges));
     }
     if (pl.filterByBrushes) {
       const kLat = col('start lat'), kLon = col('start lon'), kR = col('start radius');
-      for (const b of this.store.state.brushes) {
-        const inside = (v: number) => v >= b.min && v <= b.max;
-        const k = col(`start ${b.name}`);
+      for (const [name, ranges] of rangesByName(this.store.state.brushes)) {
+        const inside = (v: number) => inRanges(v, ranges);
+        const k = col(`start ${name}`);
         if (k >= 0) { tests.push((i) => inside(d.values[i * nc + k])); continue; }
         const pos = (i: number) => {
           const lat = (d.values[i * nc + kLat] * Math.PI) / 180, lon = (d.values[i * nc + kLon] * Math.PI) / 180, r = d.values[i * nc + kR];
@@ -144,7 +144,7 @@ export class PathlinePanel {
           y: (i) => { const p = pos(i); return p.r * Math.cos(p.lat) * Math.sin(p.lon); },
           z: (i) => { const p = pos(i); return p.r * Math.sin(p.lat); },
         };
-        const get = coordinate[b.name];
+        const get = coordinate[name];
         if (get && kLat >= 0 && kLon >= 0 && kR >= 0) tests.push((i) => inside(get(i)));
       }
     }

@@ -2,7 +2,7 @@
 // its brushes select, and the step it shows, in the units of the axes.
 import type { AxisInfo } from './parcoords';
 import { fmt } from './selection_panel';
-import type { RenderState } from './state';
+import { rangesByName, type RenderState } from './state';
 import { displayUnits } from './units';
 
 export function describePreset(s: RenderState, axes: AxisInfo[]): string {
@@ -12,7 +12,8 @@ export function describePreset(s: RenderState, axes: AxisInfo[]): string {
   };
   const parts = [`step ${s.step}`, `colour ${s.color.variable} (${s.color.points.length ? 'custom colours' : s.color.colorMap})`];
   if (s.brushes.length)
-    parts.push(`selects ${s.brushes.map((b) => `${b.name} ${fmt(b.min)} … ${fmt(b.max)}${units(b.name)}`).join(' and ')}`);
+    parts.push(`selects ${[...rangesByName(s.brushes)].map(([name, ranges]) =>
+      `${name} ${ranges.map(([lo, hi]) => `${fmt(lo)} … ${fmt(hi)}`).join(' or ')}${units(name)}`).join(' and ')}`);
   else parts.push('no brushes');
   if (s.pathlines?.visible) parts.push(`pathlines of the last ${s.pathlines.window} steps`);
   return parts.join('; ');

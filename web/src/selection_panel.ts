@@ -12,8 +12,8 @@ const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getEleme
 
 export interface SelectionPanelHost {
   showError(message: string): void;
-  // Replaces the brush on `name` (null: removes it) and sends the state.
-  setBrush(name: string, range: [number, number] | null): void;
+  // Replaces the range state.brushes[index] (null: removes it) and sends the state.
+  setBrush(index: number, range: [number, number] | null): void;
   playing(): boolean;
   // The selection changed (the status line shows it).
   selectionChanged(): void;
@@ -100,8 +100,9 @@ export class SelectionPanel {
     head.textContent = this.selectionText();
     head.id = 'selectionValue';
     el.appendChild(head);
-    // One row per brush: its name, exact min and max to type, and × to clear it.
-    for (const b of state.brushes) {
+    // One row per range (an axis with several has a row for each, OR-ed): its name, exact min and
+    // max to type, and × to clear it.
+    state.brushes.forEach((b, index) => {
       const a = axes.find((x) => x.name === b.name);
       const row = document.createElement('div');
       row.className = 'brushRow';
@@ -127,18 +128,23 @@ export class SelectionPanel {
           this.updateText();
           return;
         }
-        this.host.setBrush(b.name, [min, max]);
+        this.host.setBrush(index, [min, max]);
       };
       lo.addEventListener('change', typed);
       hi.addEventListener('change', typed);
       const clear = document.createElement('button');
       clear.textContent = '×';
-      clear.title = `Clear the brush on ${b.name}`;
+      const several = state.brushes.filter((x) => x.name === b.name).length > 1;
+      clear.title = several ? `Clear this range on ${b.name}` : `Clear the brush on ${b.name}`;
       clear.className = 'brushClear';
-      clear.addEventListener('click', () => this.host.setBrush(b.name, null));
+      clear.addEventListener('click', () => this.host.setBrush(index, null));
+      if (several && state.brushes.findIndex((x) => x.name === b.name) !== index) {
+        name.textContent = `or ${name.textContent}`;
+        row.classList.add('brushOr');
+      }
       row.append(name, lo, hi, clear);
       el.appendChild(row);
-    }
+    });
   }
 
   private selectionText(): string {

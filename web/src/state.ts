@@ -14,6 +14,23 @@ const validateDocument = validateGenerated as unknown as ValidateFunction;
 // Versions this UI reads; it writes the version of the server's default state.
 export const kStateVersions: number[] = schema.properties.version.enum;
 
+// The ranges of each brushed name (brushes, pathlines.filters), in the order the names first appear.
+// A name that repeats adds a range to its axis: a value is selected when it lies in one of them (OR
+// within an axis, AND over axes), as raypc resolves them (data/selection.h).
+export function rangesByName(ranges: readonly { name: string; min: number; max: number }[]): Map<string, [number, number][]> {
+  const out = new Map<string, [number, number][]>();
+  for (const r of ranges) {
+    const list = out.get(r.name) ?? [];
+    list.push([r.min, r.max]);
+    out.set(r.name, list);
+  }
+  return out;
+}
+
+export function inRanges(v: number, ranges: readonly [number, number][]): boolean {
+  return ranges.some(([lo, hi]) => v >= lo && v <= hi);
+}
+
 export function cloneState(s: RenderState): RenderState {
   return JSON.parse(JSON.stringify(s));
 }
