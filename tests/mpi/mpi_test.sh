@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# One MPI test case against the real binary: mpi_test.sh CASE RAYPC MPIRUN_LOCAL
+# Every case: what `mpirun -np N raypc ...` writes equals what one `raypc ...` writes, byte for byte.
+set -uo pipefail
+case_name=$1 raypc=$2 mpirun_local=$3
+work=$(mktemp -d "${TMPDIR:-/tmp}/raypc-mpi-$case_name.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+failures=0
+
+check() {  # check DESCRIPTION CONDITION...
+  local what=$1; shift
+  if "$@"; then echo "ok: $what"; else echo "FAIL: $what"; failures=$((failures + 1)); fi
+}
+ranks() {  # ranks N ARGS...: raypc ARGS under mpirun with N ranks
+  local n=$1; shift
+  "$mpirun_local" -np "$n" "$raypc" "$@"
+}
+# A small synthetic series (6 steps of 24x31x48) and its dataset, made by one process.
+make_data() {
+  "$raypc" synth -o "$work/nc" --steps 6 --grid 24x31x48 >/dev/null 2>&1
+  "$raypc" preprocess "$work/nc" -o "$work/ds" --quiet --sample-rows 2000 >/dev/null
+}
+# same_tree A B: the same files with the same bytes (the lock file aside).
+same_tree() {
+  diff -r --exclude=.lock "$1" "$2" >/dev/null
+}
+
+case $case_name in
+stats)
+  make_data
+  sel=(--range "depth=0:660" --range "temperature anomaly=100:1000")
+  "$raypc" stats "$work/ds" "${sel[@]}" -o "$work/s1.csv" --profile "$work/p1.csv" --quiet >/dev/null
+  for n in 2 3; do
+    ranks "$n" stats "$work/ds" "${sel[@]}" -o "$work/s$n.csv" --profile "$work/p$n.csv" --quiet >"$work/out$n" 2>&1
+    check "stats with $n ranks exits 0" test $? -eq 0
+    check "stats with $n ranks: the same CSV as one process" cmp -s "$work/s1.csv" "$work/s$n.csv"
+    check "stats with $n ranks: the same profile as one process" cmp -s "$work/p1.csv" "$work/p$n.csv"
+    check "stats with $n ranks reports once" test "$(grep -c 'selected volume of 6 steps' "$work/out$n")" -eq 1
+  done
+  # 7 ranks for 6 steps: a rank without a step still takes part.
+  ranks 7 stats "$work/ds" "${sel[@]}" -o "$work/s7.csv" --time 1:4 --quiet >/dev/null 2>&1
+  "$raypc" stats "$work/ds" "${sel[@]}" -o "$work/s1b.csv" --time 1:4 --quiet >/dev/null
+  check "stats of 4 steps on 7 ranks: the same CSV" cmp -s "$work/s1b.csv" "$work/s7.csv"
+  ;;
+errors)
+  make_data
+  # An error every rank meets is printed once (by rank 0), with a non-zero status, nothing written.
+  ranks 2 stats "$work/ds" --range "pressure=0:1" -o "$work/x.csv" >"$work/out" 2>&1
+  status=$?
+  check "bad --range under mpirun: non-zero status ($status)" test $status -ne 0
+  check "bad --range: one error line naming the variable" \
+    test "$(grep -c "raypc: error: --range\[0\] (pressure): unknown variable" "$work/out")" -eq 1
+  check "bad --range: no other raypc error line" test "$(grep -c 'raypc: error' "$work/out")" -eq 1
+  check "bad --range: nothing written" test ! -e "$work/x.csv"
+  # A command that is not shared out runs once, on rank 0.
+  ranks 3 info "$work/ds" >"$work/info" 2>&1
+  check "info under 3 ranks prints once" test "$(grep -c '(RayPC dataset)' "$work/info")" -eq 1
+  ;;
+*)
+  echo "unknown case $case_name"; exit 2
+  ;;
+esac
+
+if ((failures)); then echo "$failures check(s) failed"; exit 1; fi
+echo "all checks passed"
