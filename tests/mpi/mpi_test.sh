@@ -56,6 +56,37 @@ errors)
   ranks 3 info "$work/ds" >"$work/info" 2>&1
   check "info under 3 ranks prints once" test "$(grep -c '(RayPC dataset)' "$work/info")" -eq 1
   ;;
+render_frames)
+  make_data
+  view=(--size 96x64 --passes 3 --legend --reference shells)
+  "$raypc" render "$work/ds" --time 0:5 -o "$work/one/f_%02d.png" --depth "$work/one/d_%02d.pfm" "${view[@]}"
+  for n in 2 3; do
+    ranks "$n" render "$work/ds" --time 0:5 -o "$work/n$n/f_%02d.png" --depth "$work/n$n/d_%02d.pfm" "${view[@]}" \
+      --stats >"$work/stats$n.json" 2>"$work/err$n"
+    check "6 frames on $n ranks exit 0" test $? -eq 0
+    check "6 frames on $n ranks: the same PNGs and depths as one process" same_tree "$work/one" "$work/n$n"
+    check "6 frames on $n ranks: rank 0 prints the statistics of all 6, in step order" \
+      test "$(grep -o '"step": [0-9]*' "$work/stats$n.json" | tr -dc '0-9')" = 012345
+  done
+  check "no temporary files left" test "$(find "$work/n2" "$work/n3" -name '.*' | wc -l)" -eq 0
+  ;;
+render_tiles)
+  make_data
+  # 200x150 is 7x5 tiles of 32 pixels, the last row and column partial: tiles of every shape go
+  # to every rank, and the frame is gathered from the accumulated sums.
+  view=(--time 2 --size 200x150 --passes 4 --legend --reference shells --reference graticule)
+  "$raypc" render "$work/ds" "${view[@]}" -o "$work/one.png" --depth "$work/one.pfm" --stats >"$work/one.json"
+  for n in 2 3; do
+    ranks "$n" render "$work/ds" "${view[@]}" -o "$work/n$n.png" --depth "$work/n$n.pfm" --stats \
+      >"$work/n$n.json" 2>"$work/err$n"
+    check "one frame on $n ranks exits 0" test $? -eq 0
+    check "one frame on $n ranks: the same PNG as one process" cmp -s "$work/one.png" "$work/n$n.png"
+    check "one frame on $n ranks: the same depth as one process" cmp -s "$work/one.pfm" "$work/n$n.pfm"
+    check "one frame on $n ranks: the statistics say $n ranks" grep -q "\"ranks\": $n" "$work/n$n.json"
+    check "one frame on $n ranks: the ranks' samples add up to one process's" \
+      test "$(grep '^  "samples"' "$work/n$n.json")" = "$(grep '^  "samples"' "$work/one.json")"
+  done
+  ;;
 *)
   echo "unknown case $case_name"; exit 2
   ;;
