@@ -206,6 +206,7 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
             total.bricksSkipped = s.bricksSkipped;
         }
     });
+    mpi::dieHook("render-frame");
     if (!share.all()) {
         gatherTilesToRoot(frame);
         // The work of every rank; "passes" and "seconds" stay rank 0's.

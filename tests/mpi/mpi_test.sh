@@ -87,6 +87,63 @@ render_tiles)
       test "$(grep '^  "samples"' "$work/n$n.json")" = "$(grep '^  "samples"' "$work/one.json")"
   done
   ;;
+preprocess)
+  "$raypc" synth -o "$work/nc" --steps 8 --grid 24x31x48 >/dev/null 2>&1
+  "$raypc" preprocess "$work/nc" -o "$work/ds1" --quiet --sample-rows 2000 >/dev/null
+  for n in 2 3; do
+    ranks "$n" preprocess "$work/nc" -o "$work/ds$n" --sample-rows 2000 >"$work/out$n" 2>"$work/err$n"
+    check "preprocess on $n ranks exits 0" test $? -eq 0
+    check "preprocess on $n ranks: dataset.json, arrays, sample and pathlines equal one process's" \
+      same_tree "$work/ds1" "$work/ds$n"
+    check "preprocess on $n ranks: one summary" test "$(grep -c '8 steps (8 written, 0 already done)' "$work/out$n")" -eq 1
+    check "preprocess on $n ranks: progress once, by rank 0" \
+      test "$(grep -c '^preprocess: 8/8 steps' "$work/err$n")" -eq 1
+  done
+  # The files really hold data (two datasets of empty files would compare equal too).
+  check "the dataset is complete" grep -q '"status": "complete"' "$work/ds3/dataset.json"
+  check "step 7's temperature holds 24x31x48 floats" \
+    test "$(stat -c %s "$work/ds3/steps/0007/L0/temperature.f32")" -eq $((24 * 31 * 48 * 4))
+  ;;
+preprocess_resume)
+  "$raypc" synth -o "$work/nc" --steps 8 --grid 24x31x48 >/dev/null 2>&1
+  "$raypc" preprocess "$work/nc" -o "$work/ds1" --quiet --sample-rows 2000 >/dev/null
+  # Rank 1 dies after its first step (a test hook, docs/scaling.md): the job stops, no hang.
+  RAYPC_TEST_DIE_RANK=1 RAYPC_TEST_DIE_AT=preprocess-step timeout 120 "$mpirun_local" -np 2 "$raypc" \
+    preprocess "$work/nc" -o "$work/ds2" --quiet --sample-rows 2000 >"$work/out" 2>&1
+  status=$?
+  check "a rank that dies stops the run with a non-zero status ($status), not a hang (124)" \
+    test $status -ne 0 -a $status -ne 124
+  check "the dying rank is named" grep -q "rank 1 exits" "$work/out"
+  check "the dataset says it did not finish" grep -q '"status": "incomplete"' "$work/ds2/dataset.json"
+  finished=$(ls "$work/ds2/steps" | grep -c '^[0-9]*$')
+  check "finished steps stay ($finished)" test "$finished" -ge 1
+  # How many steps rank 0 finishes before mpirun ends it depends on the machine's load: make the
+  # rerun's work certain by taking two finished steps away (as if the run had died before them).
+  rm -rf "$work/ds2/steps/0002" "$work/ds2/steps/0005"
+  finished=$(ls "$work/ds2/steps" | grep -c '^[0-9]*$')
+  ranks 2 preprocess "$work/nc" -o "$work/ds2" --quiet --sample-rows 2000 >"$work/out2" 2>&1
+  check "the rerun on 2 ranks exits 0" test $? -eq 0
+  check "the rerun resumes ($(grep -o '[0-9]* written, [0-9]* already done' "$work/out2"))" \
+    grep -q "$((8 - finished)) written, $finished already done" "$work/out2"
+  check "the resumed dataset equals one process's" same_tree "$work/ds1" "$work/ds2"
+  ;;
+rank_dies)
+  make_data
+  # A rank that dies in the pathline phase and one that dies while rendering frames: the job ends
+  # with an error within the timeout instead of waiting for the dead rank.
+  RAYPC_TEST_DIE_RANK=1 RAYPC_TEST_DIE_AT=preprocess-pathlines timeout 120 "$mpirun_local" -np 3 "$raypc" \
+    preprocess "$work/nc" -o "$work/dsx" --quiet --sample-rows 2000 >"$work/out" 2>&1
+  status=$?
+  check "preprocess: a rank dying before the pathlines ends the job ($status), no hang" \
+    test $status -ne 0 -a $status -ne 124
+  check "preprocess: the dataset is not marked complete" grep -q '"status": "incomplete"' "$work/dsx/dataset.json"
+  RAYPC_TEST_DIE_RANK=1 RAYPC_TEST_DIE_AT=render-frame timeout 120 "$mpirun_local" -np 2 "$raypc" \
+    render "$work/ds" --time 1 --size 128x96 --passes 2 -o "$work/x.png" >"$work/out" 2>&1
+  status=$?
+  check "render: a rank dying before its tiles are gathered ends the job ($status), no hang" \
+    test $status -ne 0 -a $status -ne 124
+  check "render: no picture written" test ! -e "$work/x.png"
+  ;;
 *)
   echo "unknown case $case_name"; exit 2
   ;;
