@@ -94,6 +94,10 @@ int main(int argc, char** argv)
         // A command that is not shared out runs once, on rank 0; the others wait for its outcome.
         int status = 0;
         mpi::together([&] {
+            if (selected->ranks == Ranks::OneProcess)
+                raypc::fail("{}: runs in one process; a distributed server is not built yet (docs/scaling.md): "
+                            "start it without mpirun",
+                            selected->name);
             if (mpi::isRoot())
                 status = parseAndRun(app, argc, argv);
         });

@@ -55,6 +55,12 @@ errors)
   # A command that is not shared out runs once, on rank 0.
   ranks 3 info "$work/ds" >"$work/info" 2>&1
   check "info under 3 ranks prints once" test "$(grep -c '(RayPC dataset)' "$work/info")" -eq 1
+  # The server is not distributed: refused with one line, at once.
+  timeout 60 "$mpirun_local" -np 2 "$raypc" serve "$work/ds" --port 0 >"$work/serve" 2>&1
+  status=$?
+  check "serve under 2 ranks is refused ($status)" test $status -ne 0 -a $status -ne 124
+  check "serve under 2 ranks: one error line saying why" \
+    test "$(grep -c 'raypc: error: serve: runs in one process' "$work/serve")" -eq 1
   ;;
 render_frames)
   make_data
