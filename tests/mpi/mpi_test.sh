@@ -20,6 +20,16 @@ make_data() {
   "$raypc" synth -o "$work/nc" --steps 6 --grid 24x31x48 >/dev/null 2>&1
   "$raypc" preprocess "$work/nc" -o "$work/ds" --quiet --sample-rows 2000 >/dev/null
 }
+# die_run PHASE N ARGS...: raypc ARGS on N ranks with rank 1 dying at PHASE (the test hook,
+# docs/scaling.md), bounded by a timeout; output in $work/out, exit status in $status.
+die_run() {
+  local phase=$1 n=$2; shift 2
+  RAYPC_TEST_DIE_RANK=1 RAYPC_TEST_DIE_AT=$phase timeout 120 "$mpirun_local" -np "$n" "$raypc" "$@" >"$work/out" 2>&1
+  status=$?
+}
+ended_with_error() {  # ended_with_error WHAT: the last run failed, and not by the timeout (124)
+  check "$1: non-zero status ($status), not a hang" test "$status" -ne 0 -a "$status" -ne 124
+}
 # same_tree A B: the same files with the same bytes (the lock file aside).
 same_tree() {
   diff -r --exclude=.lock "$1" "$2" >/dev/null
@@ -58,7 +68,7 @@ errors)
   # The server is not distributed: refused with one line, at once.
   timeout 60 "$mpirun_local" -np 2 "$raypc" serve "$work/ds" --port 0 >"$work/serve" 2>&1
   status=$?
-  check "serve under 2 ranks is refused ($status)" test $status -ne 0 -a $status -ne 124
+  ended_with_error "serve under 2 ranks is refused"
   check "serve under 2 ranks: one error line saying why" \
     test "$(grep -c 'raypc: error: serve: runs in one process' "$work/serve")" -eq 1
   ;;
@@ -114,11 +124,8 @@ preprocess_resume)
   "$raypc" synth -o "$work/nc" --steps 8 --grid 24x31x48 >/dev/null 2>&1
   "$raypc" preprocess "$work/nc" -o "$work/ds1" --quiet --sample-rows 2000 >/dev/null
   # Rank 1 dies after its first step (a test hook, docs/scaling.md): the job stops, no hang.
-  RAYPC_TEST_DIE_RANK=1 RAYPC_TEST_DIE_AT=preprocess-step timeout 120 "$mpirun_local" -np 2 "$raypc" \
-    preprocess "$work/nc" -o "$work/ds2" --quiet --sample-rows 2000 >"$work/out" 2>&1
-  status=$?
-  check "a rank that dies stops the run with a non-zero status ($status), not a hang (124)" \
-    test $status -ne 0 -a $status -ne 124
+  die_run preprocess-step 2 preprocess "$work/nc" -o "$work/ds2" --quiet --sample-rows 2000
+  ended_with_error "a rank that dies stops the run"
   check "the dying rank is named" grep -q "rank 1 exits" "$work/out"
   check "the dataset says it did not finish" grep -q '"status": "incomplete"' "$work/ds2/dataset.json"
   finished=$(ls "$work/ds2/steps" | grep -c '^[0-9]*$')
@@ -137,17 +144,11 @@ rank_dies)
   make_data
   # A rank that dies in the pathline phase and one that dies while rendering frames: the job ends
   # with an error within the timeout instead of waiting for the dead rank.
-  RAYPC_TEST_DIE_RANK=1 RAYPC_TEST_DIE_AT=preprocess-pathlines timeout 120 "$mpirun_local" -np 3 "$raypc" \
-    preprocess "$work/nc" -o "$work/dsx" --quiet --sample-rows 2000 >"$work/out" 2>&1
-  status=$?
-  check "preprocess: a rank dying before the pathlines ends the job ($status), no hang" \
-    test $status -ne 0 -a $status -ne 124
+  die_run preprocess-pathlines 3 preprocess "$work/nc" -o "$work/dsx" --quiet --sample-rows 2000
+  ended_with_error "preprocess: a rank dying before the pathlines ends the job"
   check "preprocess: the dataset is not marked complete" grep -q '"status": "incomplete"' "$work/dsx/dataset.json"
-  RAYPC_TEST_DIE_RANK=1 RAYPC_TEST_DIE_AT=render-frame timeout 120 "$mpirun_local" -np 2 "$raypc" \
-    render "$work/ds" --time 1 --size 128x96 --passes 2 -o "$work/x.png" >"$work/out" 2>&1
-  status=$?
-  check "render: a rank dying before its tiles are gathered ends the job ($status), no hang" \
-    test $status -ne 0 -a $status -ne 124
+  die_run render-frame 2 render "$work/ds" --time 1 --size 128x96 --passes 2 -o "$work/x.png"
+  ended_with_error "render: a rank dying before its tiles are gathered ends the job"
   check "render: no picture written" test ! -e "$work/x.png"
   ;;
 *)
