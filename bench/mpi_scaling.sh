@@ -26,7 +26,8 @@ best() {  # best LABEL COMMAND...: the least wall time of $runs runs, in seconds
   local t min=""
   for ((i = 0; i < runs; i++)); do
     [[ $label == preprocess* ]] && rm -rf "$work/ds-run"
-    t=$( { /usr/bin/time -f "%e" "$@" >/dev/null 2>/dev/null; } 2>&1 | tail -1)
+    /usr/bin/time -f "%e" -o "$work/seconds" "$@" >/dev/null 2>&1
+    t=$(tail -1 "$work/seconds")
     if [[ -z $min ]] || awk "BEGIN { exit !($t < $min) }"; then min=$t; fi
   done
   echo "$min"
