@@ -9,6 +9,7 @@ packages=(
   libtbb-dev libhwy-dev libembree-dev
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libboost-dev libturbojpeg0-dev libpng-dev
+  libopenmpi-dev openmpi-bin        # MPI: one binary, alone or under mpirun (docs/scaling.md)
   libfreetype-dev fonts-dejavu-core # legends in rendered pictures
   libgtest-dev libgmock-dev libbenchmark-dev
   chromium                          # the web UI's browser tests

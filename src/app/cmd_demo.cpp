@@ -83,7 +83,7 @@ const CommandRegistration kRegistration(
             serveDataset(datasetDir, args->serve);
         });
     },
-    5);
+    5, Ranks::OneProcess);
 
 }  // namespace
 }  // namespace raypc::app

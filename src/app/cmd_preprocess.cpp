@@ -2,6 +2,7 @@
 #include "app/command.h"
 #include "app/options.h"
 #include "core/error.h"
+#include "core/mpi.h"
 #include "data/preprocess.h"
 
 #include <fmt/format.h>
@@ -59,31 +60,39 @@ const CommandRegistration kRegistration(
                      "default: extrema only");
         args->reader.add(cmd);
         cmd.callback([args, &cmd] {
-            // An option of the other seed rule would be silently ignored.
-            const bool byValue = args->options.pathlines.filter.rule == SeedRule::Value;
-            for (const char* option : {"--cp-persistence", "--cp-min-abs", "--cp-min-fraction"})
-                if (cmd.count(option) && byValue == (option == std::string("--cp-persistence")))
-                    fail("{}: applies to seeds chosen by {}, but --cp-select is {}", option,
-                         byValue ? "persistence" : "value", seedRuleName(args->options.pathlines.filter.rule));
-            std::vector<std::filesystem::path> inputs(args->inputs.begin(), args->inputs.end());
+            std::vector<std::filesystem::path> files;
             auto options = args->options;
-            options.reader = args->reader.toOptions();
-            options.pathlines.enabled = !args->noPathlines;
-            const auto files = listSnapshotFiles(inputs);
+            mpi::together([&] {
+                // An option of the other seed rule would be silently ignored.
+                const bool byValue = args->options.pathlines.filter.rule == SeedRule::Value;
+                for (const char* option : {"--cp-persistence", "--cp-min-abs", "--cp-min-fraction"})
+                    if (cmd.count(option) && byValue == (option == std::string("--cp-persistence")))
+                        fail("{}: applies to seeds chosen by {}, but --cp-select is {}", option,
+                             byValue ? "persistence" : "value", seedRuleName(args->options.pathlines.filter.rule));
+                std::vector<std::filesystem::path> inputs(args->inputs.begin(), args->inputs.end());
+                options.reader = args->reader.toOptions();
+                options.pathlines.enabled = !args->noPathlines;
+                files = listSnapshotFiles(inputs);
+            });
+            // Under mpirun every rank takes steps (preprocess.h); rank 0 reports.
             const auto summary = preprocess(files, args->output, options);
-            const auto dataset = Dataset::open(args->output);
-            const auto& g = dataset->levels().front().grid;
-            fmt::print("{}: {} steps ({} written, {} already done) of {}x{}x{} (lat x r x lon), {} variables, "
-                       "in {:.1f} s\n",
-                       args->output, dataset->steps().size(), summary.stepsWritten, summary.stepsSkipped, g.nLat(),
-                       g.nR(), g.nLon(), dataset->variables().size(), summary.seconds);
-            if (options.pathlines.enabled)
-                fmt::print("{}: pathlines of {} steps ({} written with {} lines, {} already done)\n", args->output,
-                           dataset->steps().size(), summary.pathlineSetsWritten, summary.pathlineCount,
-                           summary.pathlineSetsSkipped);
+            mpi::together([&] {
+                if (!mpi::isRoot())
+                    return;
+                const auto dataset = Dataset::open(args->output);
+                const auto& g = dataset->levels().front().grid;
+                fmt::print("{}: {} steps ({} written, {} already done) of {}x{}x{} (lat x r x lon), {} variables, "
+                           "in {:.1f} s\n",
+                           args->output, dataset->steps().size(), summary.stepsWritten, summary.stepsSkipped, g.nLat(),
+                           g.nR(), g.nLon(), dataset->variables().size(), summary.seconds);
+                if (options.pathlines.enabled)
+                    fmt::print("{}: pathlines of {} steps ({} written with {} lines, {} already done)\n", args->output,
+                               dataset->steps().size(), summary.pathlineSetsWritten, summary.pathlineCount,
+                               summary.pathlineSetsSkipped);
+            });
         });
     },
-    20);
+    20, Ranks::AllRanks);
 
 }  // namespace
 }  // namespace raypc::app

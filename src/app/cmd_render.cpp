@@ -4,6 +4,7 @@
 #include "app/command.h"
 #include "app/options.h"
 #include "core/error.h"
+#include "core/mpi.h"
 #include "core/strings.h"
 #include "data/dataset.h"
 #include "render/image_io.h"
@@ -14,7 +15,10 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cstdio>
+#include <functional>
 #include <filesystem>
 
 namespace raypc::app {
@@ -65,7 +69,15 @@ std::string frameName(const std::string& pattern, int step, bool sequence)
     return pattern.substr(0, pct) + buffer + pattern.substr(d + 1);
 }
 
-void run(const RenderArgs& args)
+// What the options resolve to, before anything is rendered.
+struct RenderSetup {
+    std::shared_ptr<const Dataset> dataset;
+    ResolvedState resolved;
+    int first = 0, last = 0;
+    bool sequence = false, lodAuto = false;
+};
+
+RenderSetup setUp(const RenderArgs& args)
 {
     const auto dataset = Dataset::open(args.dataset);
     RenderState state = args.statePath.empty() ? RenderState{} : loadRenderState(args.statePath);
@@ -141,24 +153,38 @@ void run(const RenderArgs& args)
     const bool sequence = args.time.find(':') != std::string::npos;
     const auto [first, last] = parseStepRange(*dataset, args.time);
     state.step = first;
-    ResolvedState resolved = resolveState(state, *dataset);
-    const RenderParams& params = resolved.params;
+    return {dataset, resolveState(state, *dataset), first, last, sequence, lodAuto};
+}
 
-    StateRenderer renderer(dataset);
-    LevelPolicy policy;  // level 0 unless the state names one
-    if (lodAuto && !state.level)
-        policy.samplesPerSecond = renderer.measureSamplesPerSecond(first, params);
-    nlohmann::json statsJson = nlohmann::json::array();
-    for (int step = first; step <= last; ++step) {
-        resolved.state.step = step;
+// Renders one step (only the tiles of `share`; rank 0 then gathers them all when `share` is shared
+// out), writes its PNG (and depth) from the rank that holds the whole frame, and returns its
+// statistics. With a shared-out frame every rank must call it (collective).
+nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, StateRenderer& renderer,
+                          const LevelPolicy& policy, int step, TileShare share)
+{
+    const Dataset& dataset = *setup.dataset;
+    ResolvedState resolved = setup.resolved;
+    resolved.state.step = step;
+    const RenderParams& params = resolved.params;
+    FrameBuffer frame(params.width, params.height);
+    nlohmann::json passes = nlohmann::json::array();
+    PassStats total;
+    int level = 0;
+    size_t pathlinesShown = 0;
+    // A shared-out frame's phases end with every rank agreeing; a whole frame is one rank's work
+    // (inside mpi::forEachDynamic, which agrees at its end), so no collective here.
+    const auto phase = [&](const std::function<void()>& work) {
+        if (share.all())
+            work();
+        else
+            mpi::together(work);
+    };
+    phase([&] {
         const StateRenderer::Prepared prepared = renderer.prepare(resolved, policy);
-        const int level = prepared.level;
-        const size_t pathlinesShown = prepared.scene ? prepared.scene->visibleCount() : 0;
-        FrameBuffer frame(params.width, params.height);
-        nlohmann::json passes = nlohmann::json::array();
-        PassStats total;
-        for (int pass = 0; pass < state.passes; ++pass) {
-            const PassStats s = prepared.renderer->renderPass(frame);
+        level = prepared.level;
+        pathlinesShown = prepared.scene ? prepared.scene->visibleCount() : 0;
+        for (int pass = 0; pass < resolved.state.passes; ++pass) {
+            const PassStats s = prepared.renderer->renderPass(frame, nullptr, share);
             passes.push_back({{"seconds", s.seconds},
                               {"samples", s.samples},
                               {"samplesSkipped", s.samplesSkipped},
@@ -174,33 +200,92 @@ void run(const RenderArgs& args)
             total.bricksTotal = s.bricksTotal;
             total.bricksSkipped = s.bricksSkipped;
         }
-        const std::string out = frameName(args.output, step, sequence);
-        if (const auto parent = std::filesystem::path(out).parent_path(); !parent.empty())
-            std::filesystem::create_directories(parent);
+    });
+    mpi::dieHook("render-frame");
+    if (!share.all()) {
+        gatherTilesToRoot(frame);
+        // The work of every rank; "passes" and "seconds" stay rank 0's.
+        std::array<int64_t, 4> counts{int64_t(total.samples), int64_t(total.samplesSkipped), int64_t(total.chunks),
+                                      int64_t(total.chunksJumped)};
+        mpi::sum(counts);
+        total.samples = uint64_t(counts[0]);
+        total.samplesSkipped = uint64_t(counts[1]);
+        total.chunks = uint64_t(counts[2]);
+        total.chunksJumped = uint64_t(counts[3]);
+    }
+    const std::string out = frameName(args.output, step, setup.sequence);
+    phase([&] {
+        if (!share.all() && !mpi::isRoot())
+            return;
+        if (const auto parent = std::filesystem::path(out).parent_path(); !parent.empty()) {
+            // Ranks writing frames may create the directory at the same time: existing is fine.
+            std::error_code ec;
+            std::filesystem::create_directories(parent, ec);
+            if (ec && !std::filesystem::is_directory(parent))
+                fail("{}: cannot create the directory ({})", parent.string(), ec.message());
+        }
         writePng(out, {params.width, params.height, renderer.picture(frame, resolved, true)});
         if (!args.depthPath.empty())
-            writePfm(frameName(args.depthPath, step, sequence), params.width, params.height, frame.averagedDepthKm());
-        statsJson.push_back({{"step", step},
-                             {"timeMyr", dataset->steps()[size_t(step)].timeMyr},
-                             {"level", level},
-                             {"pathlinesShown", pathlinesShown},
-                             {"output", out},
-                             {"size", {params.width, params.height}},
-                             {"threads", total.threads},
-                             {"simdLanes", total.simdLanes},
-                             {"passes", passes},
-                             {"seconds", total.seconds},
-                             {"samples", total.samples},
-                             {"samplesSkipped", total.samplesSkipped},
-                             {"bricksVisited", total.bricksTotal - total.bricksSkipped},
-                             {"bricksSkipped", total.bricksSkipped},
-                             {"chunks", total.chunks},
-                             {"chunksJumped", total.chunksJumped},
-                             {"samplesPerSecondPerThread", total.samplesPerSecondPerThread()},
-                             {"dataSamplesPerSecondPerThread", total.dataSamplesPerSecondPerThread()}});
+            writePfm(frameName(args.depthPath, step, setup.sequence), params.width, params.height,
+                     frame.averagedDepthKm());
+    });
+    return {{"step", step},
+            {"timeMyr", dataset.steps()[size_t(step)].timeMyr},
+            {"level", level},
+            {"pathlinesShown", pathlinesShown},
+            {"output", out},
+            {"size", {params.width, params.height}},
+            {"ranks", share.count},
+            {"threads", total.threads},
+            {"simdLanes", total.simdLanes},
+            {"passes", passes},
+            {"seconds", total.seconds},
+            {"samples", total.samples},
+            {"samplesSkipped", total.samplesSkipped},
+            {"bricksVisited", total.bricksTotal - total.bricksSkipped},
+            {"bricksSkipped", total.bricksSkipped},
+            {"chunks", total.chunks},
+            {"chunksJumped", total.chunksJumped},
+            {"samplesPerSecondPerThread", total.samplesPerSecondPerThread()},
+            {"dataSamplesPerSecondPerThread", total.dataSamplesPerSecondPerThread()}};
+}
+
+// Under mpirun: a sequence spreads its frames over the ranks (handed out one at a time, each
+// written by the rank that rendered it); a single frame is shared out by tiles and written by
+// rank 0 (docs/scaling.md).
+void run(const RenderArgs& args)
+{
+    RenderSetup setup;
+    mpi::together([&] { setup = setUp(args); });
+    StateRenderer renderer(setup.dataset);
+    LevelPolicy policy;  // level 0 unless the state names one
+    if (setup.lodAuto && !setup.resolved.state.level) {
+        mpi::together([&] {
+            if (mpi::isRoot())
+                policy.samplesPerSecond = renderer.measureSamplesPerSecond(setup.first, setup.resolved.params);
+        });
+        // Every rank must choose the same level: rank 0's measure decides.
+        policy.samplesPerSecond = std::stod(mpi::broadcast(fmt::format("{:.17g}", policy.samplesPerSecond)));
     }
-    if (args.stats)
-        fmt::print("{}\n", (sequence ? statsJson : statsJson[0]).dump(2));
+    nlohmann::json statsJson = nlohmann::json::array();
+    if (mpi::distributed() && setup.first == setup.last) {
+        statsJson.push_back(renderStep(args, setup, renderer, policy, setup.first, rankTileShare()));
+    } else {
+        mpi::forEachDynamic(setup.last - setup.first + 1, [&](int64_t item) {
+            statsJson.push_back(renderStep(args, setup, renderer, policy, setup.first + int(item), {}));
+        });
+        // Every rank's frames, in step order.
+        nlohmann::json all = nlohmann::json::array();
+        for (const std::string& part : mpi::gatherToRoot(statsJson.dump()))
+            for (auto& frame : nlohmann::json::parse(part))
+                all.push_back(std::move(frame));
+        std::sort(all.begin(), all.end(), [](const nlohmann::json& a, const nlohmann::json& b) {
+            return a.at("step").get<int>() < b.at("step").get<int>();
+        });
+        statsJson = std::move(all);
+    }
+    if (args.stats && mpi::isRoot())
+        fmt::print("{}\n", (setup.sequence ? statsJson : statsJson[0]).dump(2));
 }
 
 const CommandRegistration kRegistration(
@@ -233,7 +318,7 @@ const CommandRegistration kRegistration(
                        "graticule, coastlines; repeatable");
         cmd.callback([args] { run(*args); });
     },
-    60);
+    60, Ranks::AllRanks);
 
 }  // namespace
 }  // namespace raypc::app

@@ -16,7 +16,7 @@ const CommandRegistration kRegistration(
         flags->add(cmd);
         cmd.callback([dataset, flags] { serveDataset(*dataset, *flags); });
     },
-    70);
+    70, Ranks::OneProcess);
 
 }  // namespace
 }  // namespace raypc::app

@@ -13,8 +13,15 @@ namespace raypc::app {
 // Callbacks throw raypc::Error for expected failures; main prints one line and exits 1.
 using CommandSetup = std::function<void(CLI::App& subcommand)>;
 
+// Under mpirun with more than one rank (core/mpi.h): a RootOnly command runs on rank 0 while the
+// others wait for it; an AllRanks command runs on every rank and shares its work through core/mpi.h
+// (its failures must go through mpi::together so that every rank stops with one message); a
+// OneProcess command (the server) refuses to start on several ranks (docs/scaling.md).
+enum class Ranks { RootOnly, AllRanks, OneProcess };
+
 struct CommandRegistration {
-    CommandRegistration(std::string name, std::string description, CommandSetup setup, int order = 100);
+    CommandRegistration(std::string name, std::string description, CommandSetup setup, int order = 100,
+                        Ranks ranks = Ranks::RootOnly);
 };
 
 }  // namespace raypc::app

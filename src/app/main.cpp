@@ -1,12 +1,14 @@
 // raypc: interactive visual analysis of mantle convection simulations.
 #include "app/command.h"
 #include "core/error.h"
+#include "core/mpi.h"
 
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <optional>
 #include <vector>
 
 namespace raypc::app {
@@ -16,6 +18,7 @@ struct Entry {
     std::string name, description;
     CommandSetup setup;
     int order;
+    Ranks ranks;
 };
 
 std::vector<Entry>& registry()
@@ -27,16 +30,43 @@ std::vector<Entry>& registry()
 }  // namespace
 
 CommandRegistration::CommandRegistration(std::string name, std::string description, CommandSetup setup,
-                                         int order)
+                                         int order, Ranks ranks)
 {
-    registry().push_back({std::move(name), std::move(description), std::move(setup), order});
+    registry().push_back({std::move(name), std::move(description), std::move(setup), order, ranks});
 }
+
+namespace {
+
+// The subcommand named on the command line (the first argument that is one), before parsing: under
+// mpirun, ranks other than 0 must know whether to parse (and run) it at all.
+const Entry* selectedEntry(int argc, char** argv, const std::vector<Entry>& entries)
+{
+    for (int i = 1; i < argc; ++i)
+        for (const auto& entry : entries)
+            if (entry.name == argv[i])
+                return &entry;
+    return nullptr;
+}
+
+int parseAndRun(CLI::App& app, int argc, char** argv)
+{
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        // Every rank parses the same arguments: one of them prints.
+        return raypc::mpi::isRoot() ? app.exit(e) : e.get_exit_code();
+    }
+    return 0;
+}
+
+}  // namespace
 
 }  // namespace raypc::app
 
 int main(int argc, char** argv)
 {
     using namespace raypc::app;
+    namespace mpi = raypc::mpi;
     CLI::App app{"RayPC: interactive visual analysis of mantle convection simulations"};
     app.require_subcommand(1);
     app.set_version_flag("--version", "raypc 0.1.0");
@@ -48,16 +78,31 @@ int main(int argc, char** argv)
     for (auto& entry : entries)
         entry.setup(*app.add_subcommand(entry.name, entry.description));
     app.parse_complete_callback([&] { spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::info); });
+    // Alone (no MPI launcher) this initialises nothing: one process, as without MPI. It outlives the
+    // catch below, so that a failing rank reports (and, if need be, aborts the job) before finalising.
+    std::optional<mpi::Environment> environment;
     try {
-        app.parse(argc, argv);
-    } catch (const CLI::ParseError& e) {
-        return app.exit(e);
-    } catch (const raypc::Error& e) {
-        std::fprintf(stderr, "raypc: error: %s\n", e.what());
-        return 1;
+        environment.emplace(argc, argv);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "raypc: error: %s\n", e.what());
         return 1;
     }
-    return 0;
+    try {
+        const Entry* selected = selectedEntry(argc, argv, entries);
+        if (!mpi::distributed() || !selected || selected->ranks == Ranks::AllRanks)
+            return parseAndRun(app, argc, argv);
+        // A command that is not shared out runs once, on rank 0; the others wait for its outcome.
+        int status = 0;
+        mpi::together([&] {
+            if (selected->ranks == Ranks::OneProcess)
+                raypc::fail("{}: runs in one process; a distributed server is not built yet (docs/scaling.md): "
+                            "start it without mpirun",
+                            selected->name);
+            if (mpi::isRoot())
+                status = parseAndRun(app, argc, argv);
+        });
+        return status;
+    } catch (const std::exception& e) {
+        return mpi::reportFailure(e);
+    }
 }

@@ -2,6 +2,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/mpi.h"
 #include "core/progress.h"
 #include "core/strings.h"
 #include "core/system_memory.h"
@@ -19,6 +20,7 @@
 #include <fstream>
 #include <functional>
 #include <optional>
+#include <utility>
 
 namespace raypc {
 namespace {
@@ -226,13 +228,14 @@ private:
 
 // Phase 3: the sample's grid points, the same for every step so that lines are comparable over
 // time; their coordinates are written once.
-std::vector<uint32_t> writeSampleCoordinates(const OutputDirectory& out, const SphericalGrid& grid,
+// Every rank draws the same cells (the draw is seeded); rank 0 writes them.
+std::vector<uint32_t> writeSampleCoordinates(const fs::path& dir, const SphericalGrid& grid,
                                              const PreprocessOptions& options)
 {
     auto cells = drawVolumeWeightedSample(grid, options.sampleRows, options.seed);
-    if (!fs::exists(out.path() / format::kSampleCoords)) {
+    if (mpi::isRoot() && !fs::exists(dir / format::kSampleCoords)) {
         const auto coords = sampleCoordinates(grid, cells);
-        writeFileAtomic(out.path() / format::kSampleCoords, std::as_bytes(std::span(coords)));
+        writeFileAtomic(dir / format::kSampleCoords, std::as_bytes(std::span(coords)));
     }
     return cells;
 }
@@ -260,7 +263,7 @@ std::vector<int> findStepsToDo(const OutputDirectory& out, size_t stepCount, std
 // Phase 5, for one step: read, derive, check, statistics and sample values at full resolution,
 // then level by level values and brick bounds of every variable, written into a temporary
 // directory renamed when whole (removed if anything fails). Returns the step's manifest.
-json writeStep(const OutputDirectory& out, const RunPlan& plan, const std::vector<fs::path>& inputs, int s,
+json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs::path>& inputs, int s,
                std::span<const uint32_t> cells, const PreprocessOptions& options)
 {
     const fs::path& input = inputs[s];
@@ -276,7 +279,7 @@ json writeStep(const OutputDirectory& out, const RunPlan& plan, const std::vecto
     for (const auto& field : snap.fields)
         checkFinite(snap, field, input.string());
 
-    const fs::path finalDir = format::stepDir(out.path(), s);
+    const fs::path finalDir = format::stepDir(outDir, s);
     const fs::path tmpDir = temporarySibling(finalDir);
     ScopeCleanup removeTmp([&] {
         std::error_code ec;
@@ -352,47 +355,97 @@ uint64_t preprocessMemoryBytes(const SphericalGrid& grid, size_t variableCount)
 PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path& outDir,
                              const PreprocessOptions& options)
 {
+    // Under mpirun (core/mpi.h, docs/scaling.md) every rank plans the run; rank 0 owns the output
+    // directory (lock, manifest, cleanup of a failed fresh run); the steps are handed out one at a
+    // time to whichever rank is free, each written atomically by it; the steps' manifests are then
+    // gathered, and rank 0 writes the global statistics. Each phase ends with every rank agreeing.
     const auto start = std::chrono::steady_clock::now();
-    RunPlan plan = planRun(inputs, options);
+    RunPlan plan;
+    mpi::together([&] { plan = planRun(inputs, options); });
     // From here on the run writes; one run at a time per directory.
-    OutputDirectory out(outDir, plan.manifest);
-    const auto cells = writeSampleCoordinates(out, plan.header.grid, options);
+    std::optional<OutputDirectory> out;
+    mpi::together([&] {
+        if (mpi::isRoot())
+            out.emplace(outDir, plan.manifest);
+    });
+    std::vector<uint32_t> cells;
+    mpi::together([&] { cells = writeSampleCoordinates(outDir, plan.header.grid, options); });
 
     PreprocessSummary summary;
     std::vector<json> stepJsons(inputs.size());
-    const std::vector<int> todo = findStepsToDo(out, inputs.size(), stepJsons, summary);
-    if (summary.stepsSkipped > 0 && !options.quiet)
+    std::vector<int> todo;
+    mpi::together([&] {
+        if (mpi::isRoot())
+            todo = findStepsToDo(*out, inputs.size(), stepJsons, summary);
+    });
+    if (mpi::distributed()) {
+        // Rank 0 found what an earlier run left; every rank needs the list and the finished steps.
+        const json found = json::parse(mpi::broadcast(
+            json{{"todo", todo}, {"skipped", summary.stepsSkipped}, {"steps", stepJsons}}.dump()));
+        todo = found.at("todo").get<std::vector<int>>();
+        summary.stepsSkipped = found.at("skipped").get<int>();
+        stepJsons = found.at("steps").get<std::vector<json>>();
+    }
+    if (summary.stepsSkipped > 0 && !options.quiet && mpi::isRoot())
         spdlog::info("{}: {} of {} steps already done by an earlier run, skipping them", outDir.string(),
                      summary.stepsSkipped, inputs.size());
     std::optional<Progress> progress;
-    if (!options.quiet && !todo.empty())
+    if (!options.quiet && !todo.empty() && mpi::isRoot())
         progress.emplace("preprocess", static_cast<int64_t>(todo.size()), "steps");
+    int64_t reported = 0;
+    json written = json::object();  // this rank's steps: index -> step manifest
     try {
-        for (const int s : todo) {
-            stepJsons[s] = writeStep(out, plan, inputs, s, cells, options);
-            out.keep();
-            ++summary.stepsWritten;
-            if (progress)
-                progress->advance();
-        }
+        mpi::forEachDynamic(
+            int64_t(todo.size()),
+            [&](int64_t item) {
+                const int s = todo[size_t(item)];
+                written[std::to_string(s)] = writeStep(outDir, plan, inputs, s, cells, options);
+                if (out)
+                    out->keep();
+                ++summary.stepsWritten;
+                mpi::dieHook("preprocess-step");
+            },
+            [&](int64_t handedOut) {
+                if (progress)
+                    progress->advance(handedOut - std::exchange(reported, handedOut));
+            });
     } catch (const Error& e) {
-        // What the run finished stays (the failed step's temporary directory does not).
-        const int kept = summary.stepsWritten + summary.stepsSkipped;
+        // What the run finished stays (the failed step's temporary directory does not), whichever
+        // rank finished it.
+        const int64_t kept = mpi::sum(int64_t(summary.stepsWritten)) + summary.stepsSkipped;
         if (kept == 0)
             throw;
-        throw Error(fmt::format("{} ({} finished steps stay in {}: a rerun resumes from them)", e.what(), kept,
-                                outDir.string()));
+        if (out)
+            out->keep();
+        throw mpi::AgreedError(fmt::format("{} ({} finished steps stay in {}: a rerun resumes from them)", e.what(),
+                                           kept, outDir.string()));
     }
     if (progress)
         progress->finish();
+    summary.stepsWritten = int(mpi::sum(int64_t(summary.stepsWritten)));
+    if (out && summary.stepsWritten > 0)
+        out->keep();
+    for (const std::string& part : mpi::allgather(written.dump())) {
+        const json steps = json::parse(part);
+        for (const auto& [index, stepJson] : steps.items())
+            stepJsons[size_t(std::stoi(index))] = stepJson;
+    }
 
-    addStepsToManifest(plan.manifest, stepJsons, plan.specs.size());
-    // Phase 7 reads the finished steps back: the manifest says "complete" only after it.
-    out.writeManifest(plan.manifest);
+    mpi::together([&] {
+        addStepsToManifest(plan.manifest, stepJsons, plan.specs.size());
+        // Phase 7 reads the finished steps back: the manifest says "complete" only after it.
+        if (out)
+            out->writeManifest(plan.manifest);
+    });
+    mpi::dieHook("preprocess-pathlines");
     preprocessing::writePathlines(outDir, plan.header.grid, plan.specs, stepJsons, options, summary);
-    plan.manifest["pathlines"] = options.pathlines.enabled ? preprocessing::pathlineSettings(options.pathlines) : json();
-    plan.manifest["status"] = "complete";
-    out.writeManifest(plan.manifest);
+    mpi::together([&] {
+        plan.manifest["pathlines"] =
+            options.pathlines.enabled ? preprocessing::pathlineSettings(options.pathlines) : json();
+        plan.manifest["status"] = "complete";
+        if (out)
+            out->writeManifest(plan.manifest);
+    });
     summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return summary;
 }

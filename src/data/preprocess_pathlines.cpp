@@ -1,6 +1,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/mapped_file.h"
+#include "core/mpi.h"
 #include "core/progress.h"
 #include "core/strings.h"
 #include "data/dataset_format.h"
@@ -11,9 +12,11 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <optional>
+#include <utility>
 
 namespace raypc::preprocessing {
 namespace {
@@ -96,16 +99,46 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
 {
     const PathlineOptions& po = options.pathlines;
     const fs::path root = outDir / "pathlines";
-    if (!po.enabled) {
-        fs::remove_all(root);
-        return;
-    }
-    fs::create_directories(root);
-    for (const auto& entry : fs::directory_iterator(root))
-        if (entry.path().filename().string().starts_with("."))
-            fs::remove_all(entry.path());
-    const json settings = pathlineSettings(po);
     const int nSteps = static_cast<int>(stepJsons.size());
+    const json settings = pathlineSettings(po);
+    // Rank 0 clears what a killed run left and finds the sets to do; under mpirun the others learn
+    // the list from it and the sets are handed out to whichever rank is free (core/mpi.h).
+    std::vector<int> todo;
+    mpi::together([&] {
+        if (!mpi::isRoot())
+            return;
+        if (!po.enabled) {
+            fs::remove_all(root);
+            return;
+        }
+        fs::create_directories(root);
+        for (const auto& entry : fs::directory_iterator(root))
+            if (entry.path().filename().string().starts_with("."))
+                fs::remove_all(entry.path());
+        for (int s = 0; s < nSteps; ++s) {
+            const int endStep = std::min(s + po.steps, nSteps - 1);
+            const fs::path dir = pathlineDir(outDir, s);
+            if (fs::exists(dir / "lines.json")) {
+                try {
+                    const json old = json::parse(readFile(dir / "lines.json"));
+                    if (old.at("settings") == settings && old.at("end_step").get<int>() == endStep) {
+                        ++summary.pathlineSetsSkipped;
+                        continue;
+                    }
+                } catch (const json::exception&) {
+                    // An unreadable set is redone below.
+                }
+            }
+            todo.push_back(s);
+        }
+    });
+    if (!po.enabled)
+        return;
+    if (mpi::distributed()) {
+        const json found = json::parse(mpi::broadcast(json{{"todo", todo}, {"skipped", summary.pathlineSetsSkipped}}.dump()));
+        todo = found.at("todo").get<std::vector<int>>();
+        summary.pathlineSetsSkipped = found.at("skipped").get<int>();
+    }
     std::vector<std::string> names, units;
     size_t field = 0, vx = 0, vy = 0, vz = 0;
     for (size_t v = 0; v < specs.size(); ++v) {
@@ -116,29 +149,12 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
         vy = specs[v].name == "vy" ? v : vy;
         vz = specs[v].name == "vz" ? v : vz;
     }
-
-    std::vector<int> todo;
-    for (int s = 0; s < nSteps; ++s) {
-        const int endStep = std::min(s + po.steps, nSteps - 1);
-        const fs::path dir = pathlineDir(outDir, s);
-        if (fs::exists(dir / "lines.json")) {
-            try {
-                const json old = json::parse(readFile(dir / "lines.json"));
-                if (old.at("settings") == settings && old.at("end_step").get<int>() == endStep) {
-                    ++summary.pathlineSetsSkipped;
-                    continue;
-                }
-            } catch (const json::exception&) {
-                // An unreadable set is redone below.
-            }
-        }
-        todo.push_back(s);
-    }
     std::optional<Progress> progress;
-    if (!options.quiet && !todo.empty())
+    if (!options.quiet && !todo.empty() && mpi::isRoot())
         progress.emplace("pathlines", static_cast<int64_t>(todo.size()), "steps");
     StepArrays arrays(outDir, specs);
-    for (const int s : todo) {
+    int64_t reported = 0, written = 0, lines = 0;
+    auto traceStep = [&](int s) {
         const int endStep = std::min(s + po.steps, nSteps - 1);
         arrays.releaseBefore(s);
         FieldSeries series;
@@ -169,19 +185,32 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
         renameAtomic(tmpDir, finalDir);
         spdlog::debug("step {}: {} critical points, {} seeds above {:.4g}, {} pathline points", s, all.size(),
                       seeds.size(), set.threshold, set.pointCount());
-        ++summary.pathlineSetsWritten;
-        summary.pathlineCount += set.lineCount();
-        if (progress)
-            progress->advance();
-    }
+        ++written;
+        lines += int64_t(set.lineCount());
+    };
+    // Items are handed out in increasing order, so a rank's steps increase and releaseBefore holds.
+    mpi::forEachDynamic(
+        int64_t(todo.size()), [&](int64_t item) { traceStep(todo[size_t(item)]); },
+        [&](int64_t handedOut) {
+            if (progress)
+                progress->advance(handedOut - std::exchange(reported, handedOut));
+        });
     if (progress)
         progress->finish();
+    std::array<int64_t, 2> counts{written, lines};
+    mpi::sum(counts);
+    summary.pathlineSetsWritten += int(counts[0]);
+    summary.pathlineCount += size_t(counts[1]);
     // Sets of steps beyond the inputs (a rerun with fewer inputs is refused earlier) never stay.
-    for (const auto& entry : fs::directory_iterator(root)) {
-        const std::string name = entry.path().filename().string();
-        if (name.size() == 4 && std::all_of(name.begin(), name.end(), ::isdigit) && std::stoi(name) >= nSteps)
-            fs::remove_all(entry.path());
-    }
+    mpi::together([&] {
+        if (!mpi::isRoot())
+            return;
+        for (const auto& entry : fs::directory_iterator(root)) {
+            const std::string name = entry.path().filename().string();
+            if (name.size() == 4 && std::all_of(name.begin(), name.end(), ::isdigit) && std::stoi(name) >= nSteps)
+                fs::remove_all(entry.path());
+        }
+    });
 }
 
 }  // namespace raypc::preprocessing

@@ -29,6 +29,63 @@ void FrameBuffer::clear()
     m_pass.resize(n);
 }
 
+int FrameBuffer::tileCount() const
+{
+    return ((m_width + kTileSize - 1) / kTileSize) * ((m_height + kTileSize - 1) / kTileSize);
+}
+
+TileRect FrameBuffer::tile(int t) const
+{
+    const int tilesX = (m_width + kTileSize - 1) / kTileSize;
+    const int tx = t % tilesX, ty = t / tilesX;
+    return {tx * kTileSize, ty * kTileSize, std::min((tx + 1) * kTileSize, m_width),
+            std::min((ty + 1) * kTileSize, m_height)};
+}
+
+namespace {
+constexpr size_t kPackedFloatsPerPixel = 6;
+}  // namespace
+
+std::vector<float> FrameBuffer::packTiles(TileShare share) const
+{
+    std::vector<float> out;
+    for (int t = 0; t < tileCount(); ++t) {
+        if (!share.owns(t))
+            continue;
+        const TileRect r = tile(t);
+        for (int y = r.y0; y < r.y1; ++y)
+            for (int x = r.x0; x < r.x1; ++x) {
+                const size_t i = size_t(y) * size_t(m_width) + size_t(x);
+                out.insert(out.end(), {m_rgbaSum[4 * i], m_rgbaSum[4 * i + 1], m_rgbaSum[4 * i + 2],
+                                       m_rgbaSum[4 * i + 3], m_depthSum[i], float(m_depthCount[i])});
+            }
+    }
+    return out;
+}
+
+size_t FrameBuffer::unpackTiles(std::span<const float> packed, TileShare share)
+{
+    size_t k = 0;
+    for (int t = 0; t < tileCount(); ++t) {
+        if (!share.owns(t))
+            continue;
+        const TileRect r = tile(t);
+        const size_t need = kPackedFloatsPerPixel * size_t(r.x1 - r.x0) * size_t(r.y1 - r.y0);
+        if (k + need > packed.size())
+            fail("frame {}x{}: {} floats of gathered tiles, fewer than the tiles of worker {} of {} need",
+                 m_width, m_height, packed.size(), share.index, share.count);
+        for (int y = r.y0; y < r.y1; ++y)
+            for (int x = r.x0; x < r.x1; ++x) {
+                const size_t i = size_t(y) * size_t(m_width) + size_t(x);
+                for (int c = 0; c < 4; ++c)
+                    m_rgbaSum[4 * i + c] = packed[k++];
+                m_depthSum[i] = packed[k++];
+                m_depthCount[i] = uint16_t(packed[k++]);
+            }
+    }
+    return k;
+}
+
 std::vector<float> FrameBuffer::averagedRgba() const
 {
     std::vector<float> out(m_rgbaSum.size());

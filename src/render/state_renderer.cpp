@@ -1,6 +1,7 @@
 #include "render/state_renderer.h"
 
 #include "core/error.h"
+#include "core/mpi.h"
 #include "render/legend.h"
 #include "render/reference_geometry.h"
 
@@ -169,8 +170,27 @@ StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, co
     return p;
 }
 
+TileShare rankTileShare()
+{
+    return {mpi::rank(), mpi::size()};
+}
+
+void gatherTilesToRoot(FrameBuffer& frame)
+{
+    if (!mpi::distributed())
+        return;
+    const std::vector<float> all = mpi::gatherToRoot(frame.packTiles(rankTileShare()));
+    if (!mpi::isRoot())
+        return;
+    // Rank order: rank r's block holds its tiles in tile order.
+    size_t offset = 0;
+    for (int r = 0; r < mpi::size(); ++r)
+        offset += frame.unpackTiles(std::span(all).subspan(offset), {r, mpi::size()});
+    RAYPC_CHECK_EQ(offset, all.size());
+}
+
 StateRenderer::Still StateRenderer::renderStill(const ResolvedState& resolved, int passes,
-                                                const std::atomic<bool>* cancel)
+                                                const std::atomic<bool>* cancel, TileShare share)
 {
     const Prepared p = prepare(resolved);
     Still still{FrameBuffer(p.params.width, p.params.height), p.level, p.scene ? p.scene->visibleCount() : 0, {}};
@@ -178,7 +198,7 @@ StateRenderer::Still StateRenderer::renderStill(const ResolvedState& resolved, i
     for (int pass = 0; pass < n; ++pass) {
         if (cancel && cancel->load())
             break;
-        const PassStats s = p.renderer->renderPass(still.frame, cancel);
+        const PassStats s = p.renderer->renderPass(still.frame, cancel, share);
         if (s.cancelled)
             break;
         still.passes.push_back(s);

@@ -66,6 +66,15 @@ struct LevelPolicy {
     bool reduceResolution = false;
 };
 
+// Image-parallel frames under mpirun (core/mpi.h, docs/scaling.md): rank r of N renders the tiles
+// t with t % N == r of every pass (the jitter of a sample depends only on its pixel and the pass
+// number, so a tile is the same whoever renders it); {0, 1} without MPI.
+TileShare rankTileShare();
+// Collective: rank 0's `frame` receives the accumulated sums of every rank's tiles of a frame
+// rendered with rankTileShare(); it then equals the frame one process renders, bit for bit. Other
+// ranks' frames are unchanged. Does nothing without MPI.
+void gatherTilesToRoot(FrameBuffer& frame);
+
 class StateRenderer {
 public:
     explicit StateRenderer(std::shared_ptr<const Dataset> dataset, StateSources sources = {});
@@ -97,7 +106,9 @@ public:
         size_t pathlinesShown = 0;
         std::vector<PassStats> passes;
     };
-    Still renderStill(const ResolvedState& resolved, int passes = 0, const std::atomic<bool>* cancel = nullptr);
+    // With a TileShare, only its tiles are rendered (gatherTilesToRoot assembles the frame).
+    Still renderStill(const ResolvedState& resolved, int passes = 0, const std::atomic<bool>* cancel = nullptr,
+                      TileShare share = {});
 
     // The finished picture of `frame`, rendered for `resolved` (after prepare or renderStill with
     // that state): the state's reference geometry (shells, graticule, coastlines) composited by

@@ -20,7 +20,7 @@
 namespace raypc::render {
 namespace {
 
-constexpr int kTileSize = 32;
+constexpr int kTileSize = FrameBuffer::kTileSize;
 // Skip-grid cell size: as fast as smaller cells per pass, and the cheapest setParams
 // (docs/rendering.md, "Measured choices").
 constexpr float kSkipCellKm = 230.0f;
@@ -448,7 +448,7 @@ void VolumeRenderer::buildSkipGrid()
     k.cellStepPastKm = 0.5f * kSkipCellPadKm;
 }
 
-PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>* cancel)
+PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>* cancel, TileShare share)
 {
     if (frame.width() != m_params.width || frame.height() != m_params.height)
         fail("frame buffer {}x{} does not match the render size {}x{}", frame.width(), frame.height(),
@@ -473,9 +473,10 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
                     cancelled.store(true, std::memory_order_relaxed);
                     return;
                 }
-                const int tx = t % tilesX, ty = t / tilesX;
-                const kernel::Tile tile{tx * kTileSize, ty * kTileSize, std::min((tx + 1) * kTileSize, k.camera.width),
-                                        std::min((ty + 1) * kTileSize, k.camera.height)};
+                if (!share.owns(t))
+                    continue;
+                const TileRect r = frame.tile(t);
+                const kernel::Tile tile{r.x0, r.y0, r.x1, r.y1};
                 kernel::TileStats st;
                 if (simd)
                     kernel::renderTileSimd(k, tile, out, st);
@@ -494,8 +495,7 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
     PassStats stats;
     stats.cancelled = cancelled.load() || (cancel && cancel->load());
     if (!stats.cancelled) {
-        const size_t n = frame.m_pass.size();
-        for (size_t i = 0; i < n; ++i) {
+        auto accumulate = [&frame](size_t i) {
             const kernel::PixelOut& p = frame.m_pass[i];
             frame.m_rgbaSum[4 * i] += p.r;
             frame.m_rgbaSum[4 * i + 1] += p.g;
@@ -504,6 +504,20 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
             if (std::isfinite(p.depthKm)) {
                 frame.m_depthSum[i] += p.depthKm;
                 ++frame.m_depthCount[i];
+            }
+        };
+        if (share.all()) {
+            for (size_t i = 0; i < frame.m_pass.size(); ++i)
+                accumulate(i);
+        } else {
+            // Only the tiles rendered here: the others' pixels of m_pass hold nothing of this pass.
+            for (int t = 0; t < frame.tileCount(); ++t) {
+                if (!share.owns(t))
+                    continue;
+                const TileRect r = frame.tile(t);
+                for (int y = r.y0; y < r.y1; ++y)
+                    for (int x = r.x0; x < r.x1; ++x)
+                        accumulate(size_t(y) * size_t(frame.width()) + size_t(x));
             }
         }
         ++frame.m_passes;

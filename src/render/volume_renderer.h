@@ -104,7 +104,9 @@ public:
     // Renders one jittered pass (pass number = frame.passes()) and accumulates it into `frame`
     // unless `cancel` becomes true, which is checked before every tile; a cancelled pass leaves
     // the frame as it was. The frame must have the params' size.
-    PassStats renderPass(FrameBuffer& frame, const std::atomic<bool>* cancel = nullptr);
+    // With a TileShare other than {0, 1} only the tiles it owns are rendered and accumulated (the
+    // rest of `frame` is left as it was); the pass number still advances.
+    PassStats renderPass(FrameBuffer& frame, const std::atomic<bool>* cancel = nullptr, TileShare share = {});
 
     // Cost of a pass at these params on this volume in sample equivalents, estimated from a sparse
     // set of rays with the kernels' own step and skipping rules: samples in active bricks count 1,

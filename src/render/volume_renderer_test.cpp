@@ -273,6 +273,44 @@ TEST(Renderer, CancelledPassLeavesTheFrameUnchanged)
     EXPECT_EQ(frame.passes(), 1);
 }
 
+// Image-parallel frames (docs/scaling.md): three workers each render their interleaved tiles of
+// every pass; their packed sums put into one frame give the frame rendered whole, bit for bit
+// (jitter depends only on pixel and pass), depth included. 100x70 has partial tiles on two sides.
+TEST(Renderer, SharedOutTilesGatherToTheWholeFrame)
+{
+    auto volume = makeVolume(makeGrid(18, 9, 36), {{"f", testing::plumeField}});
+    VolumeRenderer renderer(volume);
+    RenderParams p = smallParams();
+    p.width = 100;
+    p.height = 70;
+    p.transfer.opacity = {{0, 0.3f}, {1, 0.8f}};
+    renderer.setParams(p);
+    constexpr int kPasses = 3, kWorkers = 3;
+    FrameBuffer whole(p.width, p.height);
+    for (int pass = 0; pass < kPasses; ++pass)
+        renderer.renderPass(whole);
+    FrameBuffer gathered(p.width, p.height);
+    for (int pass = 0; pass < kPasses; ++pass)
+        renderer.renderPass(gathered, nullptr, {0, kWorkers});  // worker 0 is the gathering one
+    EXPECT_NE(gathered.averagedRgba(), whole.averagedRgba());  // it lacks the others' tiles
+    for (int w = 1; w < kWorkers; ++w) {
+        FrameBuffer part(p.width, p.height);
+        for (int pass = 0; pass < kPasses; ++pass)
+            renderer.renderPass(part, nullptr, {w, kWorkers});
+        const std::vector<float> packed = part.packTiles({w, kWorkers});
+        EXPECT_EQ(gathered.unpackTiles(packed, {w, kWorkers}), packed.size());
+    }
+    EXPECT_EQ(gathered.passes(), kPasses);
+    EXPECT_EQ(gathered.averagedRgba(), whole.averagedRgba());
+    const auto depthWhole = whole.averagedDepthKm(), depthGathered = gathered.averagedDepthKm();
+    ASSERT_EQ(depthWhole.size(), depthGathered.size());
+    for (size_t i = 0; i < depthWhole.size(); ++i)
+        ASSERT_TRUE(depthWhole[i] == depthGathered[i] || (std::isinf(depthWhole[i]) && std::isinf(depthGathered[i])))
+            << "pixel " << i;
+    // Too few floats for a worker's tiles is an error, not a read past the end.
+    EXPECT_THROW(gathered.unpackTiles(std::vector<float>(10), {1, kWorkers}), Error);
+}
+
 TEST(Renderer, BadParametersThrow)
 {
     auto volume = makeVolume(makeGrid(18, 9, 36), {{"f", testing::plumeField}});

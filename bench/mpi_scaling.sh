@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Benchmark (not a test): what MPI ranks buy on this machine (docs/scaling.md).
+#  1. preprocessing the 12 demo steps (64x81x128) with 1 process and with 2 ranks;
+#  2. one converged 4096x4096 frame (8 passes, the default state) with 1 process and 2 ranks;
+#  3. the start-up cost of the MPI-enabled binary without mpirun (`raypc info`).
+# Prints wall seconds (best of RUNS), the ratio 1 process / 2 ranks and the load average.
+# Usage: bench/mpi_scaling.sh [BUILD_DIR] [WORK_DIR] [RUNS]
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${1:-$root/build}
+work=${2:-${TMPDIR:-/tmp}/raypc-bench-mpi}
+runs=${3:-3}
+raypc=$build/raypc
+mpirun_local=$root/scripts/mpirun-local.sh
+[[ -x $raypc ]] || { echo "no $raypc: build first" >&2; exit 1; }
+
+mkdir -p "$work"
+if [[ ! -f $work/nc/spherical012.nc ]]; then
+  echo "writing the 12 demo steps (64x81x128) to $work/nc" >&2
+  "$raypc" synth -o "$work/nc" --steps 12 --grid 64x81x128 >/dev/null 2>&1
+fi
+cat "$work"/nc/*.nc >/dev/null   # into the page cache
+
+best() {  # best LABEL COMMAND...: the least wall time of $runs runs, in seconds
+  local label=$1; shift
+  local t min=""
+  for ((i = 0; i < runs; i++)); do
+    [[ $label == preprocess* ]] && rm -rf "$work/ds-run"
+    /usr/bin/time -f "%e" -o "$work/seconds" "$@" >/dev/null 2>&1
+    t=$(tail -1 "$work/seconds")
+    if [[ -z $min ]] || awk "BEGIN { exit !($t < $min) }"; then min=$t; fi
+  done
+  echo "$min"
+}
+
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
+echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)"
+pre1=$(best preprocess "$raypc" preprocess "$work/nc" -o "$work/ds-run" --quiet)
+pre2=$(best preprocess "$mpirun_local" -np 2 "$raypc" preprocess "$work/nc" -o "$work/ds-run" --quiet)
+echo "preprocess 12 demo steps: 1 process $pre1 s, 2 ranks $pre2 s, ratio $(awk "BEGIN { printf \"%.2f\", $pre1 / $pre2 }")"
+
+[[ -f $work/ds/dataset.json ]] || "$raypc" preprocess "$work/nc" -o "$work/ds" --quiet >/dev/null
+frame=(render "$work/ds" --time 6 --size 4096x4096 --passes 8 -o "$work/frame.png")
+ren1=$(best render "$raypc" "${frame[@]}")
+ren2=$(best render "$mpirun_local" -np 2 "$raypc" "${frame[@]}")
+echo "4096x4096 frame, 8 passes: 1 process $ren1 s, 2 ranks $ren2 s, ratio $(awk "BEGIN { printf \"%.2f\", $ren1 / $ren2 }")"
+
+info=$(best info "$raypc" info "$work/ds")
+echo "raypc info without mpirun (no MPI init): $info s"
+echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)"
