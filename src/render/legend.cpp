@@ -46,7 +46,7 @@ public:
     // Draws UTF-8 `text` with its baseline at (x, y); returns the advance in pixels. With `draw`
     // false it only measures.
     int text(std::vector<uint8_t>& rgba, int width, int height, int x, int y, const std::string& text,
-             const uint8_t colour[3], bool draw = true)
+             const uint8_t color[3], bool draw = true)
     {
         int pen = x;
         for (size_t i = 0; i < text.size();) {
@@ -63,7 +63,7 @@ public:
                         const float a = g->bitmap.buffer[row * unsigned(g->bitmap.pitch) + col] / 255.0f;
                         uint8_t* p = &rgba[(size_t(py) * size_t(width) + size_t(px)) * 4];
                         for (int k = 0; k < 3; ++k)
-                            p[k] = uint8_t(std::lround(p[k] * (1 - a) + colour[k] * a));
+                            p[k] = uint8_t(std::lround(p[k] * (1 - a) + color[k] * a));
                     }
             pen += int(g->advance.x >> 6);
         }
@@ -160,7 +160,7 @@ void drawLegends(std::vector<uint8_t>& rgba, int width, int height, std::span<co
         font.text(rgba, width, height, left + pad, y, l.title, white);
         const int barTop = top + pad + fontPx + pad / 2;
         // The value at a position along the bar (logarithmic with a log scale), as the renderer maps it.
-        const TransferFunction& tf = l.colours;
+        const TransferFunction& tf = l.colors;
         auto valueAt = [&](double u) {
             return tf.logScale ? tf.range.min * std::pow(double(tf.range.max) / tf.range.min, u)
                                : tf.range.min + u * (double(tf.range.max) - tf.range.min);

@@ -18,7 +18,7 @@ namespace raypc::render {
 
 struct LegendSpec {
     std::string title;  // e.g. "temperature anomaly [K]" (UTF-8)
-    TransferFunction colours;  // range, map or points, reversal, log scale (the opacity is not drawn)
+    TransferFunction colors;  // range, map or points, reversal, log scale (the opacity is not drawn)
 };
 
 // Units as written in pictures: exponents as superscripts ("kg/m^3" -> "kg/m³", as the UI writes

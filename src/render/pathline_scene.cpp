@@ -27,7 +27,7 @@ RTCDevice sharedDevice()
     return device;
 }
 
-constexpr int kColourTableSize = 1024;
+constexpr int kColorTableSize = 1024;
 
 std::string columnList(const std::vector<std::string>& columns)
 {
@@ -62,7 +62,7 @@ struct PathlineScene::Impl {
     std::vector<uint8_t> mask;
     size_t visible = 0;
     PathlineStyle style;
-    float colourTable[kColourTableSize][3]{};
+    float colorTable[kColorTableSize][3]{};
 
     ~Impl()
     {
@@ -72,13 +72,13 @@ struct PathlineScene::Impl {
             rtcReleaseScene(scene);
     }
 
-    void bakeColours()
+    void bakeColors()
     {
-        for (int i = 0; i < kColourTableSize; ++i) {
-            const Rgb c = sampleColorMap(style.colorMap, float(i) / float(kColourTableSize - 1));
-            colourTable[i][0] = c.r;
-            colourTable[i][1] = c.g;
-            colourTable[i][2] = c.b;
+        for (int i = 0; i < kColorTableSize; ++i) {
+            const Rgb c = sampleColorMap(style.colorMap, float(i) / float(kColorTableSize - 1));
+            colorTable[i][0] = c.r;
+            colorTable[i][1] = c.g;
+            colorTable[i][2] = c.b;
         }
     }
 
@@ -151,7 +151,7 @@ kernel::TubeHit traceTubes(const void* ctx, const kernel::KernelParams& k, Vec3 
     }
     const float span = im.style.range.max - im.style.range.min;
     const float pos = std::isfinite(value) ? std::clamp((value - im.style.range.min) / span, 0.0f, 1.0f) : 0.0f;
-    const float* c = im.colourTable[int(pos * float(kColourTableSize - 1) + 0.5f)];
+    const float* c = im.colorTable[int(pos * float(kColorTableSize - 1) + 0.5f)];
 
     Vec3 n{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
     const float nl = length(n);
@@ -193,7 +193,7 @@ kernel::TubeHit traceTubes(const void* ctx, const kernel::KernelParams& k, Vec3 
         const float open = 1.0f - float(occluded) / float(im.style.aoRays);
         shade *= 0.25f + 0.75f * open;
     }
-    hit.colour = {c[0] * shade, c[1] * shade, c[2] * shade};
+    hit.color = {c[0] * shade, c[1] * shade, c[2] * shade};
     return hit;
 }
 
@@ -316,7 +316,7 @@ PathlineScene::PathlineScene(std::vector<PathlineSet> sets, float radiusKm) : m_
             im.stepMyr = longest / double(set.endStep - set.injectionStep);
     }
     im.style.range = {0.0f, float(im.stepMyr > 0 ? 10.0 * im.stepMyr : std::max(1.0f, im.maxAgeMyr))};
-    im.bakeColours();
+    im.bakeColors();
 }
 
 PathlineScene::~PathlineScene() = default;
@@ -465,7 +465,7 @@ void PathlineScene::setStyle(const PathlineStyle& style)
     if (style.colorColumn >= int(m_impl->columns.size()))
         fail("pathlines: colour column {} of {}", style.colorColumn, m_impl->columns.size());
     m_impl->style = style;
-    m_impl->bakeColours();
+    m_impl->bakeColors();
 }
 
 const PathlineStyle& PathlineScene::style() const { return m_impl->style; }

@@ -349,9 +349,9 @@ TEST(TubeRendering, TubeBehindConstantMediumIsAttenuated)
         const float T = std::exp(-sigma * (tHit - tIn));
         ASSERT_GT(T, 0.3f);
         ASSERT_LT(T, 0.7f);
-        const float volumeColour[3] = {table.red[size_t(idx)], table.green[size_t(idx)], table.blue[size_t(idx)]};
+        const float volumeColor[3] = {table.red[size_t(idx)], table.green[size_t(idx)], table.blue[size_t(idx)]};
         for (int c = 0; c < 3; ++c)
-            EXPECT_NEAR(both.rgba[4 * i + size_t(c)], volumeColour[c] * (1 - T) + T * tube.rgba[4 * i + size_t(c)], 2e-3f)
+            EXPECT_NEAR(both.rgba[4 * i + size_t(c)], volumeColor[c] * (1 - T) + T * tube.rgba[4 * i + size_t(c)], 2e-3f)
                 << "channel " << c;
         EXPECT_NEAR(both.rgba[4 * i + 3], 1.0f, 1e-6f);
         EXPECT_NEAR(both.depth[i], tHit, 0.5f) << "the medium alone does not reach the depth opacity";
@@ -400,7 +400,7 @@ TEST(TubeRendering, MaskHidesLinesWithoutRebuilding)
     EXPECT_EQ(none.depth, noScene.depth);
 }
 
-TEST(TubeRendering, AgeColoursBlueAtTheSeedRedAtTheWindowEnd)
+TEST(TubeRendering, AgeColorsBlueAtTheSeedRedAtTheWindowEnd)
 {
     // A line along z whose time runs 0..20 Myr from bottom to top: bottom blue, top red.
     auto scene = tubeScene({straightLine(kTubeX, kTubeTop, 30, 0, 20)});

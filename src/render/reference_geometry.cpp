@@ -252,7 +252,7 @@ void drawReferenceGeometry(const ReferenceState& reference, const OrbitCamera& c
                         const Vec3 n = (cam.eye + d * t) * (1.0f / r);
                         const float cosAngle = std::max(std::abs(dot(n, d)), 0.02f);
                         const float a = 1.0f - std::pow(faceOnTransmittance, 1.0f / cosAngle);
-                        fragments.push_back({t, shells.colour.r * a, shells.colour.g * a, shells.colour.b * a, a});
+                        fragments.push_back({t, shells.color.r * a, shells.color.g * a, shells.color.b * a, a});
                     }
                 }
             }
@@ -262,8 +262,8 @@ void drawReferenceGeometry(const ReferenceState& reference, const OrbitCamera& c
                     fragments.push_back({layer->t[i], c.r * a, c.g * a, c.b * a, a});
                 }
             };
-            addLine(graticuleLayer, graticule.opacity, graticule.colour);
-            addLine(coastLayer, reference.coastlines.opacity, reference.coastlines.colour);
+            addLine(graticuleLayer, graticule.opacity, graticule.color);
+            addLine(coastLayer, reference.coastlines.opacity, reference.coastlines.color);
             if (fragments.empty())
                 continue;
             std::sort(fragments.begin(), fragments.end(), [](const Fragment& a, const Fragment& b) { return a.t < b.t; });

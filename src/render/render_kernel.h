@@ -91,7 +91,7 @@ struct KernelBrush {
     int rangeCount = 1;
 };
 
-struct ColourTable {
+struct ColorTable {
     const float *red = nullptr, *green = nullptr, *blue = nullptr, *sigmaPerKm = nullptr;
     float valueMin = 0, indexScale = 0;
     int size = 0;
@@ -104,7 +104,7 @@ struct KernelParams;
 // at tKm; the tube is composited behind the accumulated volume. tKm = +inf: no tube.
 struct TubeHit {
     float tKm = INFINITY;
-    Rgb colour;
+    Rgb color;
 };
 // Traces one primary ray (o + t d, |d| = 1, t in [0, tMaxKm)) against the tubes; `ctx` is the tube
 // scene (pathline_scene.cpp). noexcept and allocation-free, called once per ray from renderTileWith.
@@ -129,8 +129,8 @@ struct KernelParams {
     int cellN = 0;
     float cellOriginKm = 0, cellInvKm = 1, cellStepPastKm = 0;
 
-    KernelVariable colour;
-    ColourTable table;
+    KernelVariable color;
+    ColorTable table;
     const KernelBrush* brushes = nullptr;
     int brushCount = 0;
     bool multiRangeBrushes = false;  // some brush has rangeCount > 1 (the SIMD kernel's variant)
@@ -154,9 +154,9 @@ struct KernelParams {
 
     bool drawCore = true;
     bool coreByVariable = false;
-    Rgb coreColour{0.55f, 0.55f, 0.58f};
+    Rgb coreColor{0.55f, 0.55f, 0.58f};
     KernelVariable coreVariable;
-    ColourTable coreTable;
+    ColorTable coreTable;
 
     // Tubes along pathlines (nullptr: none), bound per pass by VolumeRenderer::renderPass.
     TraceTubesFn traceTubes = nullptr;
@@ -532,9 +532,9 @@ void walkChunks(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, const
 }
 
 // The opaque core sphere: plain or coloured by a variable at the core radius, Lambert-shaded.
-inline Rgb coreColourAt(const KernelParams& k, Vec3 hit)
+inline Rgb coreColorAt(const KernelParams& k, Vec3 hit)
 {
-    Rgb c = k.coreColour;
+    Rgb c = k.coreColor;
     if (k.coreByVariable) {
         const Located L = locate(k, hit.x, hit.y, hit.z);
         const int i = k.coreTable.indexOf(sampleAt(k, k.coreVariable, L));
@@ -572,15 +572,15 @@ void renderTileWith(const KernelParams& k, Tile tile, PixelOut* out, TileStats& 
             if (std::isfinite(tube.tKm)) {
                 // C += T C_tube, alpha likewise: the tube is opaque and hides the core behind it.
                 if (acc.transmittance > k.stopTransmittance) {
-                    acc.r += acc.transmittance * tube.colour.r;
-                    acc.g += acc.transmittance * tube.colour.g;
-                    acc.b += acc.transmittance * tube.colour.b;
+                    acc.r += acc.transmittance * tube.color.r;
+                    acc.g += acc.transmittance * tube.color.g;
+                    acc.b += acc.transmittance * tube.color.b;
                     acc.transmittance = 0.0f;
                     if (!std::isfinite(acc.depthKm))
                         acc.depthKm = tube.tKm;
                 }
             } else if (coreHit && acc.transmittance > k.stopTransmittance) {
-                const Rgb c = coreColourAt(k, o + d * seg.coreT);
+                const Rgb c = coreColorAt(k, o + d * seg.coreT);
                 acc.r += acc.transmittance * c.r;
                 acc.g += acc.transmittance * c.g;
                 acc.b += acc.transmittance * c.b;

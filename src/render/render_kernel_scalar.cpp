@@ -60,12 +60,12 @@ void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, floa
             ++stats.samples;
             if (!insideBrushes(k, p, L))
                 continue;
-            const int idx = k.table.indexOf(sampleAt(k, k.colour, L));
+            const int idx = k.table.indexOf(sampleAt(k, k.color, L));
             const float sigma = k.table.sigmaPerKm[idx];
             if (!(sigma > 0.0f))
                 continue;
             const float alpha = std::max(0.0f, 1.0f - std::exp(-sigma * len));
-            const float s = k.shade ? shadeFactor(k, nativeGradient(k, k.colour, L, p), d) : 1.0f;
+            const float s = k.shade ? shadeFactor(k, nativeGradient(k, k.color, L, p), d) : 1.0f;
             const float w = acc.transmittance * alpha * s;
             acc.r += w * k.table.red[idx];
             acc.g += w * k.table.green[idx];

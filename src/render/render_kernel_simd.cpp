@@ -395,7 +395,7 @@ HWY_INLINE ClassifiedV Classify(DF d, const KernelParams& k, const LocatedV& L, 
 {
     const DI di;
     const VF zero = hn::Zero(d);
-    const VF value = Sample(d, k, k.colour, L);
+    const VF value = Sample(d, k, k.color, L);
     const VF u = Clamp(hn::MulAdd(hn::Sub(value, hn::Set(d, k.table.valueMin)), hn::Set(d, k.table.indexScale), hn::Set(d, 0.5f)),
                        zero, hn::Set(d, float(k.table.size - 1)));
     ClassifiedV c;
@@ -469,7 +469,7 @@ void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, 
             const ClassifiedV c = Classify(d, k, L, keep, s.len);
             if (hn::AllFalse(d, c.opaque))
                 continue;
-            const VF shade = k.shade ? ShadeFactor(d, k, NativeGradient(d, k, k.colour, L, s.x, s.y, s.z), half)
+            const VF shade = k.shade ? ShadeFactor(d, k, NativeGradient(d, k, k.color, L, s.x, s.y, s.z), half)
                                      : hn::Set(d, 1.0f);
             Composite(d, k, shifts, c.alpha, hn::Mul(shade, hn::GatherIndex(d, k.table.red, c.index)),
                       hn::Mul(shade, hn::GatherIndex(d, k.table.green, c.index)),

@@ -35,7 +35,7 @@ struct Sampler {
     float scalar(Vec3 p) const
     {
         float out;
-        kernel::sampleBatchScalar(k(), k().colour, &p.x, &p.y, &p.z, 1, &out);
+        kernel::sampleBatchScalar(k(), k().color, &p.x, &p.y, &p.z, 1, &out);
         return out;
     }
 };
@@ -73,8 +73,8 @@ void expectSimdEqualsScalar(const Sampler& s)
     }
     const int n = int(x.size());
     std::vector<float> a(n), b(n);
-    kernel::sampleBatchScalar(s.k(), s.k().colour, x.data(), y.data(), z.data(), n, a.data());
-    kernel::sampleBatchSimd(s.k(), s.k().colour, x.data(), y.data(), z.data(), n, b.data());
+    kernel::sampleBatchScalar(s.k(), s.k().color, x.data(), y.data(), z.data(), n, a.data());
+    kernel::sampleBatchSimd(s.k(), s.k().color, x.data(), y.data(), z.data(), n, b.data());
     for (int i = 0; i < n; ++i)
         ASSERT_NEAR(a[i], b[i], 1e-4f * (1 + std::abs(a[i]))) << "point " << i;
 }
@@ -153,7 +153,7 @@ void expectGradientDirection(const SphericalGrid& g, std::function<float(Vec3)> 
     double worst = 0;
     for (const Vec3 p : points) {
         const kernel::Located L = kernel::locate(s.k(), p.x, p.y, p.z);
-        const Vec3 gr = kernel::nativeGradient(s.k(), s.k().colour, L, p);
+        const Vec3 gr = kernel::nativeGradient(s.k(), s.k().color, L, p);
         const Vec3 want = radial ? normalize(p) : expected;
         const double c = std::clamp(double(dot(normalize(gr), want)), -1.0, 1.0);
         worst = std::max(worst, std::acos(c) * 180 / M_PI);
@@ -179,7 +179,7 @@ TEST(NativeGradient, MatchesTheFiniteDifferenceOfTheSampledField)
     const SphericalGrid g = makeGrid(90, 61, 180);
     const Sampler s(makeVolume(g, {{"f", [](double lat, double r, double lon) { return 3 * toXyz(lat, lon, r).z; }}}));
     for (const Vec3 p : {toXyz(30, 10, 5000), toXyz(-45, 200, 4000), toXyz(5, 359.9, 6000)}) {
-        const Vec3 gr = kernel::nativeGradient(s.k(), s.k().colour, kernel::locate(s.k(), p.x, p.y, p.z), p);
+        const Vec3 gr = kernel::nativeGradient(s.k(), s.k().color, kernel::locate(s.k(), p.x, p.y, p.z), p);
         EXPECT_NEAR(gr.z, 3.0, 0.15) << p.x << "," << p.y << "," << p.z;
         EXPECT_NEAR(gr.x, 0.0, 0.15);
         EXPECT_NEAR(gr.y, 0.0, 0.15);
@@ -266,8 +266,8 @@ TEST(Sampler, KernelsEqualGridSamplerOnRandomPointsWithNonUniformLonCapsAndSeam)
     EXPECT_GT(inCaps, 1500);
     EXPECT_GT(inSeam, 1500);
     std::vector<float> scalar(x.size()), simd(x.size());
-    kernel::sampleBatchScalar(s.k(), s.k().colour, x.data(), y.data(), z.data(), int(x.size()), scalar.data());
-    kernel::sampleBatchSimd(s.k(), s.k().colour, x.data(), y.data(), z.data(), int(x.size()), simd.data());
+    kernel::sampleBatchScalar(s.k(), s.k().color, x.data(), y.data(), z.data(), int(x.size()), scalar.data());
+    kernel::sampleBatchSimd(s.k(), s.k().color, x.data(), y.data(), z.data(), int(x.size()), simd.data());
     double worst = 0;
     for (size_t i = 0; i < x.size(); ++i) {
         worst = std::max({worst, std::abs(scalar[i] - expected[i]), std::abs(simd[i] - expected[i])});

@@ -75,7 +75,7 @@ RenderParams resolveParams(const RenderState& s, const VariableCatalog& catalog)
     p.transfer.validate();
     p.brushes = resolveRangeFilters(std::span<const std::string>(catalog.names), s.brushes, "brushes");
     p.core.visible = s.core.visible;
-    p.core.colour = s.core.colour;
+    p.core.color = s.core.color;
     p.core.colorMap = s.core.colorMap;
     if (!s.core.variable.empty()) {
         p.core.variable = variableIndex(s.core.variable, "core");

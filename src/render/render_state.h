@@ -63,18 +63,18 @@ struct ReferenceState {
         bool visible = false;
         std::vector<float> depthsKm{410.0f, 660.0f, 1000.0f, 1600.0f, 2200.0f};
         float opacity = 0.04f;  // of a shell seen face-on; towards its silhouette the path through it lengthens
-        Rgb colour{0.85f, 0.85f, 0.85f};
+        Rgb color{0.85f, 0.85f, 0.85f};
     } shells;
     struct Graticule {
         bool visible = false;
         float spacingDeg = 30.0f;  // between parallels and between meridians
         float opacity = 0.5f;
-        Rgb colour{0.8f, 0.8f, 0.8f};
+        Rgb color{0.8f, 0.8f, 0.8f};
     } graticule;
     struct Coastlines {
         bool visible = false;
         float opacity = 0.9f;
-        Rgb colour{0.95f, 0.95f, 0.75f};
+        Rgb color{0.95f, 0.95f, 0.75f};
     } coastlines;
     float lineWidthPx = 1.5f;  // graticule and coastline width in pixels of the image
 };
@@ -104,7 +104,7 @@ struct RenderState {
     struct Core {
         bool visible = true;
         std::string variable;  // empty: plain colour
-        Rgb colour{0.55f, 0.55f, 0.58f};
+        Rgb color{0.55f, 0.55f, 0.58f};
         ColorMapId colorMap = ColorMapId::Inferno;
         std::optional<ValueRange> range;
     } core;

@@ -233,11 +233,11 @@ std::vector<uint8_t> StateRenderer::picture(const FrameBuffer& frame, const Reso
             const std::string what = style.colorColumn < 0 ? std::string("pathline age [Myr]")
                                                            : "pathlines: " + m_scene->columns()[size_t(style.colorColumn)];
             // The tubes map their range linearly (PathlineScene), not centred on 0: the map's stops.
-            TransferFunction colours;
+            TransferFunction colors;
             const auto stops = colorMapStops(style.colorMap);
-            colours.colorPoints.assign(stops.begin(), stops.end());
-            colours.range = style.range;
-            legends.push_back({what, colours});
+            colors.colorPoints.assign(stops.begin(), stops.end());
+            colors.range = style.range;
+            legends.push_back({what, colors});
         }
         drawLegends(out, frame.width(), frame.height(), legends);
     }

@@ -234,7 +234,7 @@ Kind<std::optional<std::vector<std::string>>> nameList(size_t maxItems)
             fmt::format("array of at most {} distinct non-empty strings, or null", maxItems)};
 }
 
-Kind<Rgb> colour()
+Kind<Rgb> color()
 {
     return {[](const json& v, Rgb& target, Reader& r, const std::string& key) {
                 const auto c = numbers(v, 3, r, key);
@@ -826,7 +826,7 @@ const Object<RenderState>& document()
                       leaf<S>("variable", at(&S::core, &S::Core::variable), text(true),
                               {.meaning = "colour the core by this variable at the core radius",
                                .defaultText = "`\"\"` or null: plain colour"}),
-                      leaf<S>("color", at(&S::core, &S::Core::colour), colour(), {.meaning = "plain core colour"}),
+                      leaf<S>("color", at(&S::core, &S::Core::color), color(), {.meaning = "plain core colour"}),
                       leaf<S>("colorMap", at(&S::core, &S::Core::colorMap), colorMap(),
                               {.meaning = "colour map of the core variable"}),
                       leaf<S>("range", at(&S::core, &S::Core::range), range(),
@@ -848,7 +848,7 @@ const Object<RenderState>& document()
                       leaf<S>("shininess", at(&S::shading, &ShadingStyle::shininess), number<float>(1, 256),
                               {.meaning = "exponent of the highlight (larger: smaller, sharper)", .since = 3})},
                      {.meaning = "lighting of the volume and the core"}),
-            leaf<S>("background", at(&S::background), colour(), {.meaning = "background colour of PNG output"}),
+            leaf<S>("background", at(&S::background), color(), {.meaning = "background colour of PNG output"}),
             leaf<S>("legend", at(&S::legend), boolean(),
                     {.meaning = "colour legends (variable, units, range; the pathlines' colouring when shown) in "
                                 "still pictures: `raypc render` and screenshots (the UI draws its own on the view)",
@@ -904,7 +904,7 @@ const Object<RenderState>& document()
                            leaf<S>("opacity", at(&S::reference, &R::shells, &R::Shells::opacity), number<float>(0, 1),
                                    {.meaning = "opacity of a shell seen face-on; it grows towards the silhouette, "
                                                "where the line of sight runs along the shell"}),
-                           leaf<S>("color", at(&S::reference, &R::shells, &R::Shells::colour), colour(),
+                           leaf<S>("color", at(&S::reference, &R::shells, &R::Shells::color), color(),
                                    {.meaning = "shell colour"})},
                           {.meaning = "reference shells at fixed depths"}),
                  group<S>("graticule", "",
@@ -914,7 +914,7 @@ const Object<RenderState>& document()
                                    number<float>(1, 90), {.meaning = "spacing of the lines, degrees"}),
                            leaf<S>("opacity", at(&S::reference, &R::graticule, &R::Graticule::opacity),
                                    number<float>(0, 1), {.meaning = "line opacity"}),
-                           leaf<S>("color", at(&S::reference, &R::graticule, &R::Graticule::colour), colour(),
+                           leaf<S>("color", at(&S::reference, &R::graticule, &R::Graticule::color), color(),
                                    {.meaning = "line colour"})},
                           {.meaning = "latitude/longitude graticule on the surface"}),
                  group<S>("coastlines", "",
@@ -923,7 +923,7 @@ const Object<RenderState>& document()
                                                "npm package world-atlas; the UI build writes coastlines.json)"}),
                            leaf<S>("opacity", at(&S::reference, &R::coastlines, &R::Coastlines::opacity),
                                    number<float>(0, 1), {.meaning = "line opacity"}),
-                           leaf<S>("color", at(&S::reference, &R::coastlines, &R::Coastlines::colour), colour(),
+                           leaf<S>("color", at(&S::reference, &R::coastlines, &R::Coastlines::color), color(),
                                    {.meaning = "line colour"})},
                           {.meaning = "coastlines of the Earth's surface"}),
                  leaf<S>("lineWidthPx", at(&S::reference, &R::lineWidthPx), number<float>(0.25, 32),

@@ -96,7 +96,7 @@ TEST(ColorMap, ScientificMapsFromTheSharedTable)
     EXPECT_EQ(allColorMaps().size(), 11u);
 }
 
-TEST(TransferFunction, ColourPointsReversedAndLogScale)
+TEST(TransferFunction, ColorPointsReversedAndLogScale)
 {
     TransferFunction tf;
     tf.range = {0, 10};

@@ -129,7 +129,7 @@ Interval trigRange(double aDeg, double bDeg, double phaseDeg)
     return r;
 }
 
-kernel::ColourTable viewOf(const TransferTable& t)
+kernel::ColorTable viewOf(const TransferTable& t)
 {
     return {t.red.data(), t.green.data(), t.blue.data(), t.sigmaPerKm.data(), t.valueMin, t.indexScale,
             TransferTable::kSize};
@@ -368,9 +368,9 @@ void VolumeRenderer::flagActiveBricks(const RenderParams& p)
             excludeOutside(boundsOf(b.variable), b.ranges);
         }
     }
-    const float* colourBounds = boundsOf(p.colorVariable);
+    const float* colorBounds = boundsOf(p.colorVariable);
     for (size_t b = 0; b < bl.brickCount(); ++b)
-        if (im.table.transparentOver(colourBounds[2 * b], colourBounds[2 * b + 1]))
+        if (im.table.transparentOver(colorBounds[2 * b], colorBounds[2 * b + 1]))
             im.brickActive[b] = 0;
     im.bricksSkipped = size_t(std::count(im.brickActive.begin(), im.brickActive.end(), 0));
     im.estimatedSamples = -1;
@@ -402,7 +402,7 @@ void VolumeRenderer::fillKernelParams(const RenderParams& p)
     k.brickShift = im.brickShift;
     k.bricksR = int(bl.count[1]);
     k.bricksLon = int(bl.count[2]);
-    k.colour = kernelVariable(p.colorVariable);
+    k.color = kernelVariable(p.colorVariable);
     k.table = viewOf(im.table);
     k.brushes = im.brushes.data();
     k.brushCount = int(im.brushes.size());
@@ -426,7 +426,7 @@ void VolumeRenderer::fillKernelParams(const RenderParams& p)
     k.lonSpacingDeg = im.lonSpacingDeg.data();
     k.drawCore = p.core.visible;
     k.coreByVariable = p.core.variable >= 0;
-    k.coreColour = p.core.colour;
+    k.coreColor = p.core.color;
     if (k.coreByVariable) {
         k.coreVariable = kernelVariable(p.core.variable);
         k.coreTable = viewOf(im.coreTable);

@@ -42,7 +42,7 @@ class PathlineScene;  // render/pathline_scene.h
 struct CoreStyle {
     bool visible = true;
     int variable = -1;  // -1: plain colour; otherwise coloured by this variable at the core radius
-    Rgb colour{0.55f, 0.55f, 0.58f};
+    Rgb color{0.55f, 0.55f, 0.58f};
     ColorMapId colorMap = ColorMapId::Inferno;
     ValueRange range{0, 1};
 };

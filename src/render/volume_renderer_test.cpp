@@ -241,7 +241,7 @@ TEST(Renderer, BrushedOutVolumeShowsOnlyBackgroundAndCore)
     p.transfer.range = {-0.8f, 1.0f};
     p.transfer.opacity = {{0, 0.9f}, {1, 0.9f}};
     p.brushes = {{0, std::nullopt, {{5, 6}}}};  // no value is in [5, 6]
-    p.core.colour = {1, 0, 0};
+    p.core.color = {1, 0, 0};
     const auto img = render(renderer, p, 1);
     const CameraFrame cam(p.camera, p.width, p.height);
     for (int y = 0; y < p.height; ++y)

@@ -502,7 +502,7 @@ const cases = {
   // colour points added on the bar and recoloured change the picture and survive save/load; a
   // reversed map changes it too; ParaView colour-map JSON round-trips through export and import
   // (colour points exactly, at their values).
-  async colours({ context, url, tmp }) {
+  async colors({ context, url, tmp }) {
     const page = await openUi(context, url);
     await standardView(page);
     await page.selectOption('#variable', 'temperature');
@@ -537,9 +537,9 @@ const cases = {
     const edited = await rState(page);
     const green = edited.color.points.find((p) => p[1] === 0 && p[2] === 1 && p[3] === 0);
     check(green && Math.abs(green[0] - 0.5) < 0.03, `the selected point did not turn green: ${JSON.stringify(edited.color.points)}`);
-    const recoloured = await viewPixels(page);
-    const dColour = meanAbsDiff(before, recoloured);
-    check(dColour > 0.3, `recolouring the middle of the map hardly changed the image (${dColour.toFixed(2)})`);
+    const recolored = await viewPixels(page);
+    const dColor = meanAbsDiff(before, recolored);
+    check(dColor > 0.3, `recolouring the middle of the map hardly changed the image (${dColour.toFixed(2)})`);
 
     // Save/load: the points come back and render the same.
     await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, color: { ...s.color, points: [] } }); });
@@ -547,7 +547,7 @@ const cases = {
     await page.evaluate((s) => window.__raypc.setState(s), edited);
     await waitConverged(page);
     check(JSON.stringify((await rState(page)).color.points) === JSON.stringify(edited.color.points), 'colour points lost on load');
-    check(meanAbsDiff(recoloured, await viewPixels(page)) < 1, 'the reloaded colour points render differently');
+    check(meanAbsDiff(recolored, await viewPixels(page)) < 1, 'the reloaded colour points render differently');
 
     // ParaView JSON: export, then import it over the plain map.
     const [dl] = await Promise.all([page.waitForEvent('download'), page.click('#pvExport')]);
@@ -569,7 +569,7 @@ const cases = {
     const imported = await rState(page);
     check(imported.color.points.length === edited.color.points.length && Math.abs(imported.color.range[0] - pv[0].RGBPoints[0]) < 1e-3 * aMax,
       `imported ParaView map: ${imported.color.points.length} points, range ${JSON.stringify(imported.color.range)}`);
-    const dImport = meanAbsDiff(recoloured, await viewPixels(page));
+    const dImport = meanAbsDiff(recolored, await viewPixels(page));
     check(dImport < 0.5, `the imported map renders unlike the exported one (${dImport.toFixed(2)})`);
     const bad = join(tmp, 'bad-pv.json');
     writeFileSync(bad, JSON.stringify([{ Name: 'x', RGBPoints: [0, 0, 0] }]));
@@ -582,7 +582,7 @@ const cases = {
     await page.check('#colorReversed');
     await waitConverged(page);
     check((await rState(page)).color.reversed === true, 'reversed not in the state');
-    const dRev = meanAbsDiff(await viewPixels(page), recoloured);
+    const dRev = meanAbsDiff(await viewPixels(page), recolored);
     check(dRev > 0.3, `reversing the colours hardly changed the image (${dRev.toFixed(2)})`);
     console.log(`  image change: recoloured ${dColour.toFixed(2)}, imported vs exported ${dImport.toFixed(2)}, reversed ${dRev.toFixed(2)}`);
   },

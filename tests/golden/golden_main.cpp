@@ -147,7 +147,7 @@ std::map<std::string, Case> cases()
                     }};
     c["core_plain"] = {0, [](RenderParams& p) {
                            p.brushes = {{-1, Coordinate::X, {{-1e9f, 0}}}};
-                           p.core.colour = {0.8f, 0.5f, 0.2f};
+                           p.core.color = {0.8f, 0.5f, 0.2f};
                        }};
     c["core_by_variable"] = {0, [](RenderParams& p) {
                                  p.brushes = {{-1, Coordinate::X, {{-1e9f, 0}}}};

@@ -72,7 +72,7 @@ export class App {
       commit: (i) => this.commit(i),
       showError: (m) => this.showError(m),
       setStatusNote: (t) => this.setStatusNote(t),
-      coloursChanged: () => this.updateLineColors(),
+      colorsChanged: () => this.updateLineColors(),
       variableChanged: () => this.pathlines.variableChanged(),
     });
     this.pc = new ParallelCoordinates($('parcoords'), this.shownAxes(), {
@@ -188,8 +188,8 @@ export class App {
     if (s.legend) {
       const v = this.store.variableInfo();
       const units = displayUnits(v.units);
-      const colourOf = this.store.colourOf();
-      entries.push({ title: units ? `${v.name} [${units}]` : v.name, colourAt: (u) => colourOf(this.store.valueAt(u)), valueAt: (u) => this.store.valueAt(u) });
+      const colorOf = this.store.colorOf();
+      entries.push({ title: units ? `${v.name} [${units}]` : v.name, colorAt: (u) => colorOf(this.store.valueAt(u)), valueAt: (u) => this.store.valueAt(u) });
       const pl = this.pathlines.legend();
       if (pl) entries.push(pl);
     }
@@ -367,9 +367,9 @@ export class App {
   // The lines of the sample coloured as the volume.
   private updateLineColors(): void {
     const name = this.store.state.color.variable;
-    const colourOf = this.store.colourOf();
+    const colorOf = this.store.colorOf();
     const palette = Array.from({ length: 64 }, (_, i) => {
-      const [r, g, b] = colourOf(this.store.valueAt(i / 63));
+      const [r, g, b] = colorOf(this.store.valueAt(i / 63));
       return `rgb(${Math.round(r * 255)},${Math.round(g * 255)},${Math.round(b * 255)})`;
     });
     this.pc.setColor((row) => palette[Math.min(63, Math.max(0, Math.round(this.store.positionOf(row[name]) * 63))) || 0]);

@@ -58,7 +58,7 @@ export class ContextPanel {
 // One colour legend on the view: title, a bar and the values at its ends and middle.
 export interface LegendEntry {
   title: string;
-  colourAt(u: number): [number, number, number]; // along the bar, 0 = left
+  colorAt(u: number): [number, number, number]; // along the bar, 0 = left
   valueAt(u: number): number;
 }
 
@@ -85,7 +85,7 @@ export function showLegends(entries: LegendEntry[]): void {
     const ctx = bar.getContext('2d')!;
     for (let x = 0; x < bar.width; x++) {
       const u = (x + 0.5) / bar.width;
-      const [r, g, b] = e.colourAt(u);
+      const [r, g, b] = e.colorAt(u);
       ctx.fillStyle = `rgb(${Math.round(r * 255)},${Math.round(g * 255)},${Math.round(b * 255)})`;
       ctx.fillRect(x, 0, 1, 1);
     }

@@ -49,9 +49,9 @@ export function parseParaViewMap(text: string): ParaViewMap {
 }
 
 // One preset: the colours at their values ([value, r, g, b], ascending), the opacity points at theirs.
-export function paraViewMapJson(name: string, colours: [number, number, number, number][], valueAt: (u: number) => number,
+export function paraViewMapJson(name: string, colors: [number, number, number, number][], valueAt: (u: number) => number,
   opacity: [number, number][], logScale: boolean): string {
-  const rgb = colours.flatMap(([v, r, g, b]) => [+v.toPrecision(7), +r.toFixed(5), +g.toFixed(5), +b.toFixed(5)]);
+  const rgb = colors.flatMap(([v, r, g, b]) => [+v.toPrecision(7), +r.toFixed(5), +g.toFixed(5), +b.toFixed(5)]);
   const points = opacity.flatMap(([u, o]) => [+valueAt(u).toPrecision(7), o, 0.5, 0]);
   return JSON.stringify([{ Name: name, ColorSpace: 'RGB', NanColor: [0.5, 0.5, 0.5], RGBPoints: rgb, Points: points, UseLogScale: logScale }], null, 1) + '\n';
 }

@@ -204,7 +204,7 @@ export class PathlinePanel {
       const steps = this.store.info.steps;
       const stepMyr = steps.length > 1 ? (steps[steps.length - 1].timeMyr - steps[0].timeMyr) / (steps.length - 1) : 0;
       const [lo, hi] = (pl.range as [number, number] | null) ?? [0, pl.window * stepMyr || 1];
-      return { title: 'pathline age [Myr]', colourAt: (u) => sampleColorMap(map, u), valueAt: (u) => lo + u * (hi - lo) };
+      return { title: 'pathline age [Myr]', colorAt: (u) => sampleColorMap(map, u), valueAt: (u) => lo + u * (hi - lo) };
     }
     const d = this.data;
     const k = d ? d.columns.indexOf(pl.colorBy) : -1;
@@ -217,7 +217,7 @@ export class PathlinePanel {
     if (!range) return null;
     const units = d && k >= 0 ? displayUnits(d.units[k] ?? '') : '';
     const [lo, hi] = range;
-    return { title: `pathlines: ${pl.colorBy}${units ? ` [${units}]` : ''}`, colourAt: (u) => sampleColorMap(map, u), valueAt: (u) => lo + u * (hi - lo) };
+    return { title: `pathlines: ${pl.colorBy}${units ? ` [${units}]` : ''}`, colorAt: (u) => sampleColorMap(map, u), valueAt: (u) => lo + u * (hi - lo) };
   }
 
   showTab(pathlines: boolean): void {

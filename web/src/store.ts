@@ -67,16 +67,16 @@ export class StateStore {
   }
 
   // The stops in force: the colour points, else the named map's.
-  colourStops(): ColorStop[] {
+  colorStops(): ColorStop[] {
     const c = this.state.color;
     return c.points.length ? (c.points as ColorStop[]) : mapStops(c.colorMap);
   }
 
   // The colour of a value, as the renderer's TransferFunction::colorOf: centred maps put 0 in the
   // middle (named maps without a log scale), the colours reversed if asked.
-  colourOf(): (value: number) => [number, number, number] {
+  colorOf(): (value: number) => [number, number, number] {
     const c = this.state.color;
-    const stops = this.colourStops();
+    const stops = this.colorStops();
     const [lo, hi] = this.effectiveRange();
     const centred = !c.points.length && !c.logScale && centredMaps.has(c.colorMap);
     const m = Math.max(Math.abs(lo), Math.abs(hi)) || 1;

@@ -22,7 +22,7 @@ export interface TfEditorOptions {
 // What the editor shows besides the opacity points: the colour at a position of the bar, the
 // position of a value (for the histograms), the colour points being edited (empty: a named map).
 export interface TfView {
-  colourAt(u: number): [number, number, number];
+  colorAt(u: number): [number, number, number];
   positionOf(value: number): number;
   valueAt(u: number): number;
   colorPoints: ColorStop[];
@@ -36,7 +36,7 @@ const kPointRadius = 5;
 export class TfEditor {
   private points: [number, number][] = [[0, 0], [1, 0.5]];
   private range: [number, number] = [0, 1];
-  private tfView: TfView = { colourAt: () => [0.5, 0.5, 0.5], positionOf: (v) => v, valueAt: (u) => u, colorPoints: [] };
+  private tfView: TfView = { colorAt: () => [0.5, 0.5, 0.5], positionOf: (v) => v, valueAt: (u) => u, colorPoints: [] };
   private units = '';
   private colorPoints: ColorStop[] = [];
   private draggingColor = -1;
@@ -131,8 +131,8 @@ export class TfEditor {
       if (i < 0) {
         // A new point takes the colour shown there; a named map first becomes points.
         const [u] = this.fromEvent(e);
-        if (!this.colorPoints.length) this.colorPoints = kEditPositions.map((x) => [x, ...this.tfView.colourAt(x)] as ColorStop);
-        const c = this.tfView.colourAt(u);
+        if (!this.colorPoints.length) this.colorPoints = kEditPositions.map((x) => [x, ...this.tfView.colorAt(x)] as ColorStop);
+        const c = this.tfView.colorAt(u);
         i = this.colorPoints.findIndex((q) => q[0] > u);
         if (i < 0) i = this.colorPoints.length;
         this.colorPoints.splice(i, 0, [u, ...c]);
@@ -251,7 +251,7 @@ export class TfEditor {
     // Colour bar, with the opacity shown as a darker band above it.
     const barY = a.y1 + 4;
     for (let x = a.x0; x < a.x1; x++) {
-      const [r, g, b] = this.tfView.colourAt((x - a.x0) / (a.x1 - a.x0));
+      const [r, g, b] = this.tfView.colorAt((x - a.x0) / (a.x1 - a.x0));
       ctx.fillStyle = `rgb(${r * 255},${g * 255},${b * 255})`;
       ctx.fillRect(x, barY, 1, kBarHeight);
     }
@@ -290,7 +290,7 @@ export class TfEditor {
     ctx.stroke();
     this.points.forEach((p, i) => {
       const [sx, sy] = this.toScreen(p);
-      const [r, g, b] = this.tfView.colourAt(p[0]);
+      const [r, g, b] = this.tfView.colorAt(p[0]);
       ctx.beginPath();
       ctx.arc(sx, sy, kPointRadius, 0, 2 * Math.PI);
       ctx.fillStyle = `rgb(${r * 255},${g * 255},${b * 255})`;

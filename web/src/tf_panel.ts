@@ -20,7 +20,7 @@ export interface TfPanelHost {
   showError(message: string): void;
   setStatusNote(text: string): void;
   // The colours of the volume changed (the lines of the parallel coordinates follow them).
-  coloursChanged(): void;
+  colorsChanged(): void;
   // The colour variable changed.
   variableChanged(): void;
 }
@@ -48,7 +48,7 @@ export class TfPanel {
         c.points = points;
         c.reversed = false; // the points hold the colours as shown
         this.syncMapControls();
-        this.host.coloursChanged();
+        this.host.colorsChanged();
         this.host.commit(interactive);
       },
       onSelectColorPoint: (i) => this.showSelectedColor(i),
@@ -61,7 +61,7 @@ export class TfPanel {
       this.stepHistogram = null;
       this.sync();
       this.loadHistogram();
-      this.host.coloursChanged();
+      this.host.colorsChanged();
       this.host.variableChanged();
       this.host.commit(false);
     });
@@ -73,13 +73,13 @@ export class TfPanel {
       this.store.state.color.colorMap = mapSel.value;
       this.store.state.color.points = [];
       this.update();
-      this.host.coloursChanged();
+      this.host.colorsChanged();
       this.host.commit(false);
     });
     $('colorReversed').addEventListener('change', () => {
       this.store.state.color.reversed = $<HTMLInputElement>('colorReversed').checked;
       this.update();
-      this.host.coloursChanged();
+      this.host.colorsChanged();
       this.host.commit(false);
     });
     $('logScale').addEventListener('change', () => {
@@ -92,7 +92,7 @@ export class TfPanel {
       }
       this.store.state.color.logScale = on;
       this.update();
-      this.host.coloursChanged();
+      this.host.colorsChanged();
       this.host.commit(false);
     });
     $('tfPointColor').addEventListener('input', () => {
@@ -102,7 +102,7 @@ export class TfPanel {
       const rgb = [1, 3, 5].map((k) => parseInt(hex.slice(k, k + 2), 16) / 255);
       c.points[i] = [c.points[i][0], rgb[0], rgb[1], rgb[2]];
       this.update();
-      this.host.coloursChanged();
+      this.host.colorsChanged();
       this.host.commit(false);
     });
     $('pvExport').addEventListener('click', () => {
@@ -110,15 +110,15 @@ export class TfPanel {
       // (a centred map's middle stays at 0).
       const c = this.store.state.color;
       const valueAt = (u: number) => this.store.valueAt(u);
-      let colours: [number, number, number, number][];
+      let colors: [number, number, number, number][];
       if (c.points.length) {
-        colours = c.points.map((p) => [valueAt(c.reversed ? 1 - p[0] : p[0]), p[1], p[2], p[3]] as [number, number, number, number]);
-        colours.sort((a, b) => a[0] - b[0]);
+        colors = c.points.map((p) => [valueAt(c.reversed ? 1 - p[0] : p[0]), p[1], p[2], p[3]] as [number, number, number, number]);
+        colors.sort((a, b) => a[0] - b[0]);
       } else {
-        const colourOf = this.store.colourOf();
-        colours = Array.from({ length: 65 }, (_, k) => { const v = valueAt(k / 64); return [v, ...colourOf(v)] as [number, number, number, number]; });
+        const colorOf = this.store.colorOf();
+        colors = Array.from({ length: 65 }, (_, k) => { const v = valueAt(k / 64); return [v, ...colorOf(v)] as [number, number, number, number]; });
       }
-      const text = paraViewMapJson(`RayPC ${c.variable}`, colours, valueAt, c.opacity as [number, number][], c.logScale);
+      const text = paraViewMapJson(`RayPC ${c.variable}`, colors, valueAt, c.opacity as [number, number][], c.logScale);
       download(new Blob([text], { type: 'application/json' }), `raypc-colormap-${c.variable.replace(/\W+/g, '_')}.json`);
     });
     onFileChosen($<HTMLInputElement>('pvImport'), 'ParaView colour map ', (text, name) => {
@@ -139,7 +139,7 @@ export class TfPanel {
       }
       this.store.state.color.range = [lo, hi];
       this.update();
-      this.host.coloursChanged();
+      this.host.colorsChanged();
       this.host.commit(false);
     };
     $('rangeMin').addEventListener('change', rangeChanged);
@@ -148,7 +148,7 @@ export class TfPanel {
       this.store.state.color.range = null;
       if (this.store.state.color.logScale && !(this.store.effectiveRange()[0] > 0)) this.store.state.color.logScale = false;
       this.sync();
-      this.host.coloursChanged();
+      this.host.colorsChanged();
       this.host.commit(false);
     });
     $('opacityUnit').addEventListener('change', () => {
@@ -188,7 +188,7 @@ export class TfPanel {
     c.logScale = m.logScale;
     if (m.opacity?.length) c.opacity = m.opacity;
     this.sync();
-    this.host.coloursChanged();
+    this.host.colorsChanged();
     this.host.commit(false);
   }
 
@@ -220,9 +220,9 @@ export class TfPanel {
     hist.push({ data: v, style: 'line' as const });
     const range = this.store.effectiveRange();
     const color = this.store.state.color;
-    const colourOf = this.store.colourOf();
+    const colorOf = this.store.colorOf();
     this.editor.set(color.opacity as [number, number][], range, {
-      colourAt: (u) => colourOf(this.store.valueAt(u)),
+      colorAt: (u) => colorOf(this.store.valueAt(u)),
       positionOf: (value) => this.store.positionOf(value),
       valueAt: (u) => this.store.valueAt(u),
       colorPoints: color.points as ColorStop[],
