@@ -4,7 +4,9 @@
 #  2. one converged 4096x4096 frame (8 passes, the default state) with 1 process and 2 ranks;
 #  3. the start-up cost of the MPI-enabled binary without mpirun (`raypc info`).
 # Prints wall seconds (best of RUNS), the ratio 1 process / 2 ranks and the load average.
-# Usage: bench/mpi_scaling.sh [BUILD_DIR] [WORK_DIR] [RUNS]
+#  4. with FULL=1 in the environment, also 4 full-resolution steps (180x201x360, ~1.7 GB of netCDF
+#     and ~2.5 GB of dataset in WORK_DIR) with 1 process and 2 ranks.
+# Usage: [FULL=1] bench/mpi_scaling.sh [BUILD_DIR] [WORK_DIR] [RUNS]
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${1:-$root/build}
@@ -44,6 +46,18 @@ frame=(render "$work/ds" --time 6 --size 4096x4096 --passes 8 -o "$work/frame.pn
 ren1=$(best render "$raypc" "${frame[@]}")
 ren2=$(best render "$mpirun_local" -np 2 "$raypc" "${frame[@]}")
 echo "4096x4096 frame, 8 passes: 1 process $ren1 s, 2 ranks $ren2 s, ratio $(awk "BEGIN { printf \"%.2f\", $ren1 / $ren2 }")"
+
+if [[ ${FULL:-0} == 1 ]]; then
+  if [[ ! -f $work/full/spherical004.nc ]]; then
+    echo "writing 4 full-resolution steps (180x201x360) to $work/full" >&2
+    "$raypc" synth -o "$work/full" --steps 4 --grid 180x201x360 >/dev/null 2>&1
+  fi
+  cat "$work"/full/*.nc >/dev/null
+  full1=$(best preprocess "$raypc" preprocess "$work/full" -o "$work/ds-run" --quiet)
+  full2=$(best preprocess "$mpirun_local" -np 2 "$raypc" preprocess "$work/full" -o "$work/ds-run" --quiet)
+  echo "preprocess 4 full-resolution steps: 1 process $full1 s, 2 ranks $full2 s, ratio $(awk "BEGIN { printf \"%.2f\", $full1 / $full2 }")"
+  rm -rf "$work/ds-run"
+fi
 
 info=$(best info "$raypc" info "$work/ds")
 echo "raypc info without mpirun (no MPI init): $info s"
