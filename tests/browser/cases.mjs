@@ -539,7 +539,7 @@ const cases = {
     check(green && Math.abs(green[0] - 0.5) < 0.03, `the selected point did not turn green: ${JSON.stringify(edited.color.points)}`);
     const recolored = await viewPixels(page);
     const dColor = meanAbsDiff(before, recolored);
-    check(dColor > 0.3, `recolouring the middle of the map hardly changed the image (${dColour.toFixed(2)})`);
+    check(dColor > 0.3, `recolouring the middle of the map hardly changed the image (${dColor.toFixed(2)})`);
 
     // Save/load: the points come back and render the same.
     await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, color: { ...s.color, points: [] } }); });
@@ -584,7 +584,7 @@ const cases = {
     check((await rState(page)).color.reversed === true, 'reversed not in the state');
     const dRev = meanAbsDiff(await viewPixels(page), recolored);
     check(dRev > 0.3, `reversing the colours hardly changed the image (${dRev.toFixed(2)})`);
-    console.log(`  image change: recoloured ${dColour.toFixed(2)}, imported vs exported ${dImport.toFixed(2)}, reversed ${dRev.toFixed(2)}`);
+    console.log(`  image change: recoloured ${dColor.toFixed(2)}, imported vs exported ${dImport.toFixed(2)}, reversed ${dRev.toFixed(2)}`);
   },
 
   // Brush values: a brush's min and max are written at its ends on the axis and can be typed
