@@ -13,6 +13,7 @@
 #include "render/state_renderer.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -301,7 +302,11 @@ const CommandRegistration kRegistration(
         cmd.add_option("--size", args->size, "Image size WIDTHxHEIGHT (default 512x512 or the state's)");
         cmd.add_option("--state", args->statePath, "STATE.json saved by the browser UI (docs/state.md)");
         cmd.add_option("--var", args->var, "Colouring variable (default: the state's, else the first)");
-        cmd.add_option("--colormap", args->colormap, "viridis, inferno, cool-to-warm, blue-white-red, grayscale");
+        std::vector<std::string> mapNames;
+        for (const ColorMapId map : allColorMaps())
+            mapNames.emplace_back(colorMapName(map));
+        cmd.add_option("--colormap", args->colormap,
+                       fmt::format("Colour map of the colouring variable: {}", fmt::join(mapNames, ", ")));
         cmd.add_option("--range", args->ranges,
                        "Brush NAME=MIN:MAX on a variable or coordinate (x, y, z, lat, lon, radius, depth); repeatable, a "
                        "name given twice selects either range (OR); replaces the state's ranges of that name");
