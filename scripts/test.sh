@@ -30,8 +30,18 @@ if [[ ! -f $build/build.ninja ]]; then
     -DCMAKE_EXE_LINKER_FLAGS="$sanitizers" -DRAYPC_BUILD_BENCH=OFF -DRAYPC_FUZZ=ON >/dev/null
 fi
 cmake --build "$build" -j "$(nproc)"
+# The UI's packages: the schema round trip and the type check run node (as in the Release run).
+"$root/scripts/build-web.sh"
 cd "$build"
-# Browser tests drive Chromium against a server; they are left to the Release run.
+# Left to the Release run (docs/reliability.md):
+# - browser tests (Chromium against a server);
+# - the tests of resource bounds, which the sanitizers themselves break: ASan's quarantine and
+#   shadow memory add hundreds of MB to the server's anonymous memory and its 2-5x slowdown
+#   stretches the time bounds (server.soak_short, the two non-reading-client tests), and with every
+#   descriptor used up the sanitizer runtime cannot open the pipe it checks memory with, so UBSan's
+#   vptr check reports a valid object as having an invalid vptr (server.Descriptors.*).
+excluded='^browser\.|^server\.soak_short$|^server\.Sessions\.(AClientThatDoesNotReadIsClosedAndMemoryStaysBounded|AFrameThatIsNotTakenClosesTheConnection)$|^server\.Descriptors\.'
 ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:strict_string_checks=1} \
+LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/tests/sanitize/lsan.supp} \
 UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1} \
-  ctest --output-on-failure -j "$(nproc)" --timeout 1200 -E '^browser\.'
+  ctest --output-on-failure -j "$(nproc)" --timeout 1200 -E "$excluded"
