@@ -3,14 +3,8 @@
 set -uo pipefail
 case_name=$1 raypc=$2 shared=$3
 fixture=$shared/data/contest-layout
-work=$(mktemp -d "${TMPDIR:-/tmp}/raypc-cli-$case_name.XXXXXX")
-trap 'rm -rf "$work"' EXIT
-failures=0
-
-check() {  # check DESCRIPTION CONDITION...
-  local what=$1; shift
-  if "$@"; then echo "ok: $what"; else echo "FAIL: $what"; failures=$((failures + 1)); fi
-}
+source "$(dirname "$0")/../lib/check.sh"
+make_work "cli-$case_name"
 
 # expect_error "FRAGMENT" ARGS...: exit status 1, exactly one line on stderr, naming FRAGMENT.
 expect_error() {

@@ -3,14 +3,8 @@
 # Every case: what `mpirun -np N raypc ...` writes equals what one `raypc ...` writes, byte for byte.
 set -uo pipefail
 case_name=$1 raypc=$2 mpirun_local=$3
-work=$(mktemp -d "${TMPDIR:-/tmp}/raypc-mpi-$case_name.XXXXXX")
-trap 'rm -rf "$work"' EXIT
-failures=0
-
-check() {  # check DESCRIPTION CONDITION...
-  local what=$1; shift
-  if "$@"; then echo "ok: $what"; else echo "FAIL: $what"; failures=$((failures + 1)); fi
-}
+source "$(dirname "$0")/../lib/check.sh"
+make_work "mpi-$case_name"
 ranks() {  # ranks N ARGS...: raypc ARGS under mpirun with N ranks
   local n=$1; shift
   "$mpirun_local" -np "$n" "$raypc" "$@"

@@ -7,13 +7,8 @@
 # (--cp-select, --cp-persistence, --cp-saddles) against them.
 set -uo pipefail
 case=$1 raypc=$2 shared=$3
-work=$(mktemp -d "${TMPDIR:-/tmp}/raypc-pathlines-cli.XXXXXX")
-trap 'rm -rf "$work"' EXIT
-failures=0
-check() {  # check DESCRIPTION COMMAND...
-  local what=$1; shift
-  if "$@"; then echo "ok: $what"; else echo "FAIL: $what"; failures=$((failures + 1)); fi
-}
+source "$(dirname "$0")/../lib/check.sh"
+make_work pathlines-cli
 expect_error() {  # expect_error PATTERN ARGS...: exit code 1 and PATTERN in the one-line message
   local pattern=$1; shift
   local out code
