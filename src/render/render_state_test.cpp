@@ -61,6 +61,13 @@ TEST(RenderState, UnknownKeysAndBadValuesNameTheKey)
     j = toJson(RenderState{});
     j["level"] = 7;
     EXPECT_NE(errorOf(j).find("level"), std::string::npos);
+    // Finite in JSON but beyond float32 (a fuzzing finding: it became inf, written back as null).
+    j = toJson(RenderState{});
+    j["brushes"] = json::array({{{"name", "lat"}, {"min", -90}, {"max", 9e60}}});
+    EXPECT_NE(errorOf(j).find("brushes[0].max: 9e+60 is beyond the float32 range"), std::string::npos) << errorOf(j);
+    j = toJson(RenderState{});
+    j["color"]["range"] = json::array({-1e30, 1e60});
+    EXPECT_NE(errorOf(j).find("color.range"), std::string::npos) << errorOf(j);
 }
 
 TEST(RenderState, ResolvesNamesAndRejectsUnknownOnes)

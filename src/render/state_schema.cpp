@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <set>
 
@@ -108,6 +109,10 @@ std::string rangeText(const char* type, double lo, double hi)
     return type;
 }
 
+// Every number of a state is kept as a float (or narrower): a finite JSON number beyond float32's
+// range would become inf and be written back as null, which no reader accepts.
+bool fitsFloat32(double x) { return std::abs(x) <= double(std::numeric_limits<float>::max()); }
+
 template <class T>
 Kind<T> number(double lo = -INFINITY, double hi = INFINITY)
 {
@@ -115,7 +120,9 @@ Kind<T> number(double lo = -INFINITY, double hi = INFINITY)
                 if (!v.is_number())
                     r.failAt(key, "expected a number, found " + v.dump());
                 const double x = v.get<double>();
-                if (!(x >= lo && x <= hi) || !std::isfinite(x))
+                if (!fitsFloat32(x))
+                    r.failAt(key, fmt::format("{} is beyond the float32 range", x));
+                if (!(x >= lo && x <= hi))
                     r.failAt(key, fmt::format("expected a number in [{}, {}], found {}", lo, hi, x));
                 target = T(x);
             },
@@ -177,6 +184,8 @@ std::vector<double> numbers(const json& v, size_t count, Reader& r, const std::s
     for (const json& e : v) {
         if (!e.is_number())
             r.failAt(key, "expected numbers, found " + v.dump());
+        if (!fitsFloat32(e.get<double>()))
+            r.failAt(key, fmt::format("{} is beyond the float32 range", e.get<double>()));
         out.push_back(e.get<double>());
     }
     return out;
@@ -191,7 +200,7 @@ Kind<std::vector<float>> numberList(double lo, double hi, size_t maxItems)
                     r.failAt(key, fmt::format("expected an array of at most {} numbers, found {}", maxItems, v.dump()));
                 target.clear();
                 for (const json& e : v) {
-                    if (!e.is_number() || !(e.get<double>() >= lo && e.get<double>() <= hi))
+                    if (!e.is_number() || !fitsFloat32(e.get<double>()) || !(e.get<double>() >= lo && e.get<double>() <= hi))
                         r.failAt(key, fmt::format("expected numbers in [{}, {}], found {}", lo, hi, e.dump()));
                     target.push_back(e.get<float>());
                 }
