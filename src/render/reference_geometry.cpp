@@ -2,6 +2,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/install_paths.h"
 #include "core/spherical.h"
 
 #include <nlohmann/json.hpp>
@@ -67,19 +68,10 @@ std::shared_ptr<const Coastlines> defaultCoastlines()
         loaded = std::make_shared<const Coastlines>(readCoastlines(env));
         return loaded;
     }
-    std::vector<fs::path> candidates;
-    if (const char* env = std::getenv("RAYPC_ASSETS"); env && *env)
-        candidates.push_back(fs::path(env) / "coastlines.json");
-#ifdef RAYPC_WEB_DIST_DIR
-    candidates.push_back(fs::path(RAYPC_WEB_DIST_DIR) / "coastlines.json");
-#endif
-    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-    if (!ec) {
-        candidates.push_back(exe.parent_path() / "web" / "coastlines.json");
-        candidates.push_back(exe.parent_path() / ".." / "web" / "dist" / "coastlines.json");
-    }
+    // The UI build writes coastlines.json beside the UI's files.
     std::string looked;
-    for (const auto& file : candidates) {
+    for (const auto& dir : uiAssetCandidates()) {
+        const fs::path file = dir / "coastlines.json";
         if (fs::is_regular_file(file, ec)) {
             loaded = std::make_shared<const Coastlines>(readCoastlines(file));
             return loaded;

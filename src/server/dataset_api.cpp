@@ -1,6 +1,7 @@
 #include "server/dataset_api.h"
 
 #include "core/error.h"
+#include "core/install_paths.h"
 #include "core/spherical.h"
 #include "render/color_map.h"
 #include "render/pathline_scene.h"
@@ -32,17 +33,8 @@ std::optional<fs::path> findExamplesDir(const std::optional<fs::path>& explicitD
             fail("--examples {}: not a directory", explicitDir->string());
         return fs::weakly_canonical(*explicitDir);
     }
-    std::vector<fs::path> candidates;
-    if (const char* env = std::getenv("RAYPC_EXAMPLES"); env && *env)
-        candidates.emplace_back(env);
-#ifdef RAYPC_EXAMPLES_DIR
-    candidates.emplace_back(RAYPC_EXAMPLES_DIR);
-#endif
     std::error_code ec;
-    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-    if (!ec)
-        candidates.push_back(exe.parent_path() / "examples");
-    for (const auto& dir : candidates)
+    for (const auto& dir : exampleCandidates())
         if (fs::is_directory(dir, ec))
             return fs::weakly_canonical(dir, ec);
     return std::nullopt;

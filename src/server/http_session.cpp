@@ -1,6 +1,7 @@
 #include "server/http_session.h"
 
 #include "core/error.h"
+#include "core/install_paths.h"
 #include "server/access.h"
 #include "server/protocol.h"
 #include "server/ws_session.h"
@@ -39,19 +40,8 @@ std::optional<fs::path> findAssetDir(const std::optional<fs::path>& explicitDir)
             fail("--assets {}: not a directory", explicitDir->string());
         return fs::weakly_canonical(*explicitDir);
     }
-    std::vector<fs::path> candidates;
-    if (const char* env = std::getenv("RAYPC_ASSETS"); env && *env)
-        candidates.emplace_back(env);
-#ifdef RAYPC_WEB_DIST_DIR
-    candidates.emplace_back(RAYPC_WEB_DIST_DIR);
-#endif
     std::error_code ec;
-    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-    if (!ec) {
-        candidates.push_back(exe.parent_path() / "web");
-        candidates.push_back(exe.parent_path() / ".." / "web" / "dist");
-    }
-    for (const auto& dir : candidates)
+    for (const auto& dir : uiAssetCandidates())
         if (fs::is_regular_file(dir / "index.html", ec))
             return fs::weakly_canonical(dir, ec);
     return std::nullopt;
