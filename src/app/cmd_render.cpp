@@ -81,7 +81,9 @@ struct RenderSetup {
 RenderSetup setUp(const RenderArgs& args)
 {
     const auto dataset = Dataset::open(args.dataset);
-    RenderState state = args.statePath.empty() ? RenderState{} : loadRenderState(args.statePath);
+    // Without a state: the UI's first view (render::defaultState), so that a figure made from the
+    // command line and the browser's first picture are the same.
+    RenderState state = args.statePath.empty() ? defaultState(*dataset) : loadRenderState(args.statePath);
 
     // Flags override the state.
     if (!args.size.empty())
@@ -301,7 +303,7 @@ const CommandRegistration kRegistration(
             ->required();
         cmd.add_option("--size", args->size, "Image size WIDTHxHEIGHT (default 512x512 or the state's)");
         cmd.add_option("--state", args->statePath, "STATE.json saved by the browser UI (docs/state.md)");
-        cmd.add_option("--var", args->var, "Colouring variable (default: the state's, else the first)");
+        cmd.add_option("--var", args->var, "Colouring variable (default: the state's, else temperature anomaly as in the UI's first view)");
         std::vector<std::string> mapNames;
         for (const ColorMapId map : allColorMaps())
             mapNames.emplace_back(colorMapName(map));
