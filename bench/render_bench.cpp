@@ -15,6 +15,8 @@
 #include "data/preprocess.h"
 #include "data/selection.h"
 #include "data/synth.h"
+#include "render/render_state.h"
+#include "render/state_renderer.h"
 #include "render/volume_renderer.h"
 
 #include <benchmark/benchmark.h>
@@ -87,6 +89,23 @@ RenderParams params(int size)
     p.transfer.range = {-400, 400};
     p.transfer.opacity = {{0, 0.6f}, {0.4f, 0.0f}, {0.6f, 0.0f}, {1, 0.6f}};
     return p;
+}
+
+// The UI's first view (render::defaultState: temperature anomaly, lit, the middle of the range
+// transparent) resolved against the benchmark volume's variables and ranges, at size x size.
+RenderParams defaultViewParams(int size, bool lit)
+{
+    const StepVolume& v = *data().levels[0];
+    VariableCatalog catalog;
+    catalog.names = data().names;
+    for (size_t i = 0; i < v.variableCount(); ++i) {
+        const auto [lo, hi] = std::minmax_element(v.values(i), v.values(i) + v.grid().cellCount());
+        catalog.ranges.push_back({*lo, *hi});
+    }
+    RenderState s = defaultState(catalog);
+    s.width = s.height = size;
+    s.shading.enabled = lit;
+    return resolveParams(s, catalog);
 }
 
 double processCpuSeconds()
@@ -199,6 +218,11 @@ BENCHMARK(BM_Level0Pass512)->Unit(benchmark::kMillisecond);
 // One full-resolution pass at the peers' image size (bench/peers/run_peers.sh).
 void BM_Level0Pass1024(benchmark::State& state) { runPasses(state, 0, params(1024), 1); }
 BENCHMARK(BM_Level0Pass1024)->Unit(benchmark::kMillisecond);
+// The UI's first view, lit (as it is shown) and unlit: what shading costs per pass.
+void BM_DefaultViewPass1024(benchmark::State& state) { runPasses(state, 0, defaultViewParams(1024, true), 1); }
+BENCHMARK(BM_DefaultViewPass1024)->Unit(benchmark::kMillisecond);
+void BM_DefaultViewPass1024Unlit(benchmark::State& state) { runPasses(state, 0, defaultViewParams(1024, false), 1); }
+BENCHMARK(BM_DefaultViewPass1024Unlit)->Unit(benchmark::kMillisecond);
 void BM_Level2Pass1024(benchmark::State& state) { runPasses(state, 2, params(1024), 1); }
 BENCHMARK(BM_Level2Pass1024)->Unit(benchmark::kMillisecond);
 void BM_Level1Pass512(benchmark::State& state) { runPasses(state, 1, params(512), 1); }
@@ -257,6 +281,16 @@ void BM_DeriveBrickBounds4(benchmark::State& state)
         computeBrickBounds(v.grid(), layout, {v.values(size_t(var("temperature anomaly"))), v.grid().cellCount()}, bounds);
 }
 BENCHMARK(BM_DeriveBrickBounds4)->Unit(benchmark::kMillisecond);
+
+// What shading costs a step the first time it is shown lit: the colouring variable's gradient at
+// every grid point (nodeGradient, kept with the volume).
+void BM_NodeGradient(benchmark::State& state)
+{
+    const StepVolume& v = *data().levels[0];
+    for (auto _ : state)
+        benchmark::DoNotOptimize(nodeGradient(v.grid(), v.values(size_t(var("temperature anomaly")))));
+}
+BENCHMARK(BM_NodeGradient)->Unit(benchmark::kMillisecond);
 
 // Converged 1024² at full resolution: passes are accumulated until the image stops changing, measured
 // two ways on the 8-bit scale: the mean absolute change of the accumulated RGBA between successive

@@ -106,6 +106,16 @@ const float* StepVolume::brickBounds(size_t var, uint32_t brickSize) const
     return bounds.data();
 }
 
+const NodeGradient& StepVolume::nodeGradient(size_t var) const
+{
+    RAYPC_CHECK(var < m_values.size());
+    std::lock_guard lock(m_derivedMutex);
+    auto it = m_gradients.find(var);
+    if (it == m_gradients.end())
+        it = m_gradients.emplace(var, raypc::nodeGradient(m_grid, m_values[var])).first;
+    return it->second;
+}
+
 std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
 {
     const auto manifestPath = dir / format::kManifest;

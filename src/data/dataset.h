@@ -78,6 +78,9 @@ public:
     // bounds at bricks().size, otherwise computed from the values on first use and kept with the
     // volume (the renderer skips smaller bricks on coarse levels). Thread-safe.
     const float* brickBounds(size_t var, uint32_t brickSize) const;
+    // nodeGradient (data/grid.h) of variable `var`: computed from the values on first use and kept
+    // with the volume (the ray caster's shading interpolates it). Thread-safe.
+    const NodeGradient& nodeGradient(size_t var) const;
 
 private:
     friend class Dataset;
@@ -86,6 +89,7 @@ private:
     std::vector<const float*> m_values, m_bounds;
     mutable std::mutex m_derivedMutex;
     mutable std::map<std::pair<size_t, uint32_t>, std::vector<float>> m_derivedBounds;
+    mutable std::map<size_t, NodeGradient> m_gradients;
     std::vector<MappedFile> m_mapped;              // when loaded from disk
     std::vector<std::vector<float>> m_owned;       // when built in memory
 };

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/parallel_for.h>
+
 namespace raypc {
 namespace {
 
@@ -95,6 +97,54 @@ double SphericalGrid::ringMean(const float* values, size_t iLat, size_t iR, cons
     for (size_t i = 0; i < nLon(); ++i)
         sum += double(row[i]) * lonWidthsDeg[i];
     return sum / 360.0;
+}
+
+NodeGradient nodeGradient(const SphericalGrid& grid, const float* values)
+{
+    const size_t nLat = grid.nLat(), nR = grid.nR(), nLon = grid.nLon();
+    RAYPC_CHECK(nLat >= 2 && nR >= 2 && nLon >= 2);
+    NodeGradient out;
+    out.count = grid.cellCount();
+    out.values.reset(new float[3 * out.count]);  // not zeroed: the threads write (and first touch) it
+    // Neighbours i - 1 and i + 1 (clamped) and the inverse of the coordinate difference between them.
+    struct Stencil {
+        size_t lo, hi;
+        float inv;
+    };
+    auto stencils = [](const std::vector<double>& c, bool periodic) {
+        const size_t n = c.size();
+        std::vector<Stencil> s(n);
+        for (size_t i = 0; i < n; ++i) {
+            size_t lo = i == 0 ? (periodic ? n - 1 : 0) : i - 1;
+            size_t hi = i + 1 == n ? (periodic ? 0 : n - 1) : i + 1;
+            double span = c[hi] - c[lo];
+            if (periodic && span <= 0.0)
+                span += 360.0;
+            s[i] = {lo, hi, float(1.0 / span)};
+        }
+        return s;
+    };
+    const std::vector<Stencil> sLat = stencils(grid.latDeg, false), sR = stencils(grid.rKm, false),
+                               sLon = stencils(grid.lonDeg, true);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nLat * nR), [&](const tbb::blocked_range<size_t>& rows) {
+        for (size_t row = rows.begin(); row != rows.end(); ++row) {
+            const size_t iLat = row / nR, iR = row % nR;
+            const float* v = values + row * nLon;
+            const float* vLatLo = values + grid.index(sLat[iLat].lo, iR, 0);
+            const float* vLatHi = values + grid.index(sLat[iLat].hi, iR, 0);
+            const float* vRLo = values + grid.index(iLat, sR[iR].lo, 0);
+            const float* vRHi = values + grid.index(iLat, sR[iR].hi, 0);
+            float* gLat = out.values.get() + row * nLon;
+            float* gR = gLat + out.count;
+            float* gLon = gR + out.count;
+            for (size_t i = 0; i < nLon; ++i) {
+                gLat[i] = (vLatHi[i] - vLatLo[i]) * sLat[iLat].inv;
+                gR[i] = (vRHi[i] - vRLo[i]) * sR[iR].inv;
+                gLon[i] = (v[sLon[i].hi] - v[sLon[i].lo]) * sLon[i].inv;
+            }
+        }
+    });
+    return out;
 }
 
 SphericalGrid::VolumeFactors SphericalGrid::volumeFactors() const

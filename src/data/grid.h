@@ -15,6 +15,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,20 @@ struct SphericalGrid {
     // True when both grids have the same sizes and coordinates within `toleranceDeg/Km`.
     bool sameAs(const SphericalGrid& other, double tolerance = 1e-6) const;
 };
+
+// The gradient of a field at every grid point in the grid's own directions, per degree of latitude,
+// per km of radius and per degree of longitude: central differences over the two neighbours
+// (x[i+1] - x[i-1] apart), one-sided at the outermost rows and radii, wrapped across the lon seam.
+// Trilinear interpolation of these (as of the field itself) gives the gradient between grid points;
+// the ray caster's shading maps it to Cartesian with the local unit vectors.
+struct NodeGradient {
+    size_t count = 0;                // grid.cellCount()
+    std::unique_ptr<float[]> values;  // 3 * count: per degree lat, then per km r, then per degree lon
+    const float* perDegLat() const { return values.get(); }
+    const float* perKmR() const { return values.get() + count; }
+    const float* perDegLon() const { return values.get() + 2 * count; }
+};
+NodeGradient nodeGradient(const SphericalGrid& grid, const float* values);
 
 // Bricks partition the index space of one level for empty-space skipping. Brick (bLat, bR, bLon)
 // covers grid points [b * size, (b + 1) * size) along each axis; its bounds are taken over the

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -100,6 +101,40 @@ TEST(Bricks, VolumesDeriveBoundsOfSmallerBricksOnceAndKeepThem)
     const float* derived = volume->brickBounds(0, 2);
     EXPECT_EQ(std::vector<float>(derived, derived + expected.size()), expected);
     EXPECT_EQ(volume->brickBounds(0, 2), derived);  // kept, not recomputed
+}
+
+// Central differences per degree / km: exact for fields linear in each coordinate (also one-sided at
+// the outermost rows and radii), second-order for sin(lon) and continuous across the seam; on a
+// stretched radial axis the difference is taken over the real spacing.
+TEST(Grid, NodeGradientIsTheCentralDifferenceInEachGridDirection)
+{
+    SphericalGrid g = centredGrid(9, 7, 36);
+    for (size_t i = 0; i < g.nR(); ++i)
+        g.rKm[i] = 3485 + 2886 * std::pow(double(i) / double(g.nR() - 1), 1.7);  // stretched
+    std::vector<float> f(g.cellCount());
+    for (size_t a = 0; a < g.nLat(); ++a)
+        for (size_t b = 0; b < g.nR(); ++b)
+            for (size_t c = 0; c < g.nLon(); ++c)
+                f[g.index(a, b, c)] = float(2 * g.latDeg[a] - 0.5 * g.rKm[b] + 100 * std::sin(degToRad(g.lonDeg[c])));
+    const NodeGradient n = nodeGradient(g, f.data());
+    const double h = degToRad(g.lonDeg[1] - g.lonDeg[0]);
+    for (size_t a = 0; a < g.nLat(); ++a)
+        for (size_t b = 0; b < g.nR(); ++b)
+            for (size_t c = 0; c < g.nLon(); ++c) {
+                const size_t i = g.index(a, b, c);
+                EXPECT_NEAR(n.perDegLat()[i], 2.0, 2e-4) << a << "," << b << "," << c;
+                EXPECT_NEAR(n.perKmR()[i], -0.5, 2e-5) << a << "," << b << "," << c;
+                // d/dlon of 100 sin(lon) per degree, times sin(h)/h for the central difference.
+                const double want = 100 * std::cos(degToRad(g.lonDeg[c])) * degToRad(1.0) * std::sin(h) / h;
+                EXPECT_NEAR(n.perDegLon()[i], want, 2e-4) << a << "," << b << "," << c;
+            }
+    // The volume keeps what it computed.
+    Snapshot snap;
+    snap.grid = g;
+    snap.fields = {{"f", "1", f}};
+    const auto volume = StepVolume::fromSnapshot(snap, 8);
+    EXPECT_EQ(&volume->nodeGradient(0), &volume->nodeGradient(0));
+    EXPECT_TRUE(std::equal(n.perKmR(), n.perKmR() + n.count, volume->nodeGradient(0).perKmR()));
 }
 
 TEST(Sampler, ReproducesTrilinearFunctionsAndIsContinuousAtSeamAndPoles)

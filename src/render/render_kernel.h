@@ -146,11 +146,11 @@ struct KernelParams {
     bool shade = false;
     Vec3 lightDir{0, 0, 1};  // unit, towards the light, world frame
     float ambient = 0.35f, diffuse = 0.65f, specular = 0, shininess = 32;
-    // Grid spacing of cell i along each axis (lat: nLat - 1 entries, degrees; r: nR - 1, km; lon: nLon,
-    // degrees, the last across the seam): the gradient's central differences are divided by them.
-    const float* latSpacingDeg = nullptr;
-    const float* rSpacingKm = nullptr;
-    const float* lonSpacingDeg = nullptr;
+    // The colouring variable's gradient at the grid points (nodeGradient, data/grid.h: per degree of
+    // lat, per km of r, per degree of lon), interpolated like the field (bound when shade is set). In
+    // the pole caps the lat and lon components fade to 0 and the radial one blends towards the
+    // radial derivative of the ring mean, as differences of the blended field would.
+    KernelVariable gradLat, gradR, gradLon;
 
     bool drawCore = true;
     bool coreByVariable = false;
@@ -330,31 +330,14 @@ inline float sampleAt(const KernelParams& k, const KernelVariable& v, const Loca
     return value + L.cap * (mean - value);
 }
 
-// The gradient of `v` at a located point p (km, world frame), from the native grid: central
-// differences one grid index either side along lat, r and lon (the same interpolation weights,
-// clamped at the outermost lat rows and radii, wrapped across the lon seam), divided by the local
-// cell spacing and mapped to Cartesian with the local unit vectors (e_r, e_north, e_east). In the
-// pole caps the lon difference fades with the cap blend, as the field does; the lat difference is
-// that of the outermost rows. Units: value per km.
-inline Vec3 nativeGradient(const KernelParams& k, const KernelVariable& v, const Located& L, Vec3 p)
+// The gradient of the colouring variable at a located point p (km, world frame): its gradient at
+// the grid points in (lat, r, lon) (KernelParams::gradLat, gradR, gradLon), interpolated with the
+// point's weights and mapped to Cartesian with the local unit vectors (e_r, e_north, e_east).
+// Units: value per km.
+inline Vec3 nativeGradient(const KernelParams& k, const Located& L, Vec3 p)
 {
-    auto difference = [&](Located a, Located b, int steps, float spacing) {
-        return steps > 0 ? (sampleAt(k, v, a) - sampleAt(k, v, b)) / (float(steps) * spacing) : 0.0f;
-    };
-    Located a = L, b = L;
-    a.iLat0 = std::min(L.iLat0 + 1, k.nLat - 2);
-    b.iLat0 = std::max(L.iLat0 - 1, 0);
-    const float perDegLat = difference(a, b, a.iLat0 - b.iLat0, k.latSpacingDeg[L.iLat0]);
-    a = b = L;
-    a.iR0 = std::min(L.iR0 + 1, k.nR - 2);
-    b.iR0 = std::max(L.iR0 - 1, 0);
-    const float perKmR = difference(a, b, a.iR0 - b.iR0, k.rSpacingKm[L.iR0]);
-    a = b = L;
-    auto wrap = [&](int i) { return i < 0 ? i + k.nLon : (i >= k.nLon ? i - k.nLon : i); };
-    a.iLon0 = wrap(L.iLon0 + 1), a.iLon1 = wrap(L.iLon1 + 1);
-    b.iLon0 = wrap(L.iLon0 - 1), b.iLon1 = wrap(L.iLon1 - 1);
-    const float perDegLon = difference(a, b, 2, k.lonSpacingDeg[L.iLon0]);
-
+    const float perDegLat = sampleAt(k, k.gradLat, L), perKmR = sampleAt(k, k.gradR, L);
+    const float perDegLon = sampleAt(k, k.gradLon, L);
     const float r = std::max(L.rKm, 1.0f), rho = std::max(std::sqrt(p.x * p.x + p.y * p.y), 1e-3f * r);
     const float gNorth = perDegLat * kRadToDeg / r, gEast = perDegLon * kRadToDeg / rho;
     const Vec3 eR = p * (1.0f / r);

@@ -65,7 +65,7 @@ void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, floa
             if (!(sigma > 0.0f))
                 continue;
             const float alpha = std::max(0.0f, 1.0f - std::exp(-sigma * len));
-            const float s = k.shade ? shadeFactor(k, nativeGradient(k, k.color, L, p), d) : 1.0f;
+            const float s = k.shade ? shadeFactor(k, nativeGradient(k, L, p), d) : 1.0f;
             const float w = acc.transmittance * alpha * s;
             acc.r += w * k.table.red[idx];
             acc.g += w * k.table.green[idx];

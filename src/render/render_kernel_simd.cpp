@@ -204,69 +204,16 @@ HWY_INLINE VF CoordinateValue(DF d, const KernelBrush& brush, VF x, VF y, VF z, 
     return hn::MulAdd(hn::Set(d, brush.scale), v, hn::Set(d, brush.offset));
 }
 
-// L moved by one grid index along each axis (clamped to the rows and radii, wrapped across the lon
-// seam), for the gradient's central differences.
-HWY_INLINE LocatedV ShiftLat(const KernelParams& k, LocatedV L, int by)
-{
-    const DI di;
-    L.iLat0 = hn::Min(hn::Max(hn::Add(L.iLat0, hn::Set(di, by)), hn::Zero(di)), hn::Set(di, k.nLat - 2));
-    SetRowOffsets(k, L);
-    return L;
-}
-
-HWY_INLINE LocatedV ShiftR(const KernelParams& k, LocatedV L, int by)
-{
-    const DI di;
-    const VI iR0 = hn::Min(hn::Max(hn::Add(L.iR0, hn::Set(di, by)), hn::Zero(di)), hn::Set(di, k.nR - 2));
-    L.capIndex = hn::Add(L.capIndex, hn::Sub(iR0, L.iR0));
-    L.iR0 = iR0;
-    SetRowOffsets(k, L);
-    return L;
-}
-
-HWY_INLINE VI WrapLon(const KernelParams& k, VI i)
-{
-    const DI di;
-    const VI n = hn::Set(di, k.nLon);
-    i = hn::IfThenElse(hn::Lt(i, hn::Zero(di)), hn::Add(i, n), i);
-    return hn::IfThenElse(hn::Lt(i, n), i, hn::Sub(i, n));
-}
-
-HWY_INLINE LocatedV ShiftLon(const KernelParams& k, LocatedV L, int by)
-{
-    const DI di;
-    L.iLon0 = WrapLon(k, hn::Add(L.iLon0, hn::Set(di, by)));
-    L.iLon1 = WrapLon(k, hn::Add(L.iLon1, hn::Set(di, by)));
-    L.anySeam = !hn::AllFalse(di, hn::Eq(L.iLon0, hn::Set(di, k.nLon - 1)));
-    return L;
-}
-
-// (f(a) - f(b)) / (steps * spacing); 0 where the stencil collapsed (steps = 0).
-HWY_INLINE VF Difference(DF d, const KernelParams& k, const KernelVariable& v, const LocatedV& a, const LocatedV& b,
-                         VI steps, VF spacing)
-{
-    const DI di;
-    const VF denominator = hn::Mul(hn::ConvertTo(d, hn::Max(steps, hn::Set(di, 1))), spacing);
-    const VF q = hn::Div(hn::Sub(Sample(d, k, v, a), Sample(d, k, v, b)), denominator);
-    return hn::IfThenElseZero(hn::RebindMask(d, hn::Gt(steps, hn::Zero(di))), q);
-}
-
-// nativeGradient (render_kernel.h) across lanes: central differences on the native grid, mapped to
-// Cartesian with the local unit vectors.
+// nativeGradient (render_kernel.h) across lanes: the gradient at the grid points interpolated with
+// the samples' weights, mapped to Cartesian with the local unit vectors.
 struct GradientV {
     VF x, y, z;
 };
-HWY_INLINE GradientV NativeGradient(DF d, const KernelParams& k, const KernelVariable& v, const LocatedV& L, VF x,
-                                    VF y, VF z)
+HWY_INLINE GradientV NativeGradient(DF d, const KernelParams& k, const LocatedV& L, VF x, VF y, VF z)
 {
-    const DI di;
-    const LocatedV latA = ShiftLat(k, L, 1), latB = ShiftLat(k, L, -1);
-    const VF perDegLat = Difference(d, k, v, latA, latB, hn::Sub(latA.iLat0, latB.iLat0),
-                                    hn::GatherIndex(d, k.latSpacingDeg, L.iLat0));
-    const LocatedV rA = ShiftR(k, L, 1), rB = ShiftR(k, L, -1);
-    const VF perKmR = Difference(d, k, v, rA, rB, hn::Sub(rA.iR0, rB.iR0), hn::GatherIndex(d, k.rSpacingKm, L.iR0));
-    const VF perDegLon = Difference(d, k, v, ShiftLon(k, L, 1), ShiftLon(k, L, -1), hn::Set(di, 2),
-                                    hn::GatherIndex(d, k.lonSpacingDeg, L.iLon0));
+    const VF perDegLat = Sample(d, k, k.gradLat, L);
+    const VF perKmR = Sample(d, k, k.gradR, L);
+    const VF perDegLon = Sample(d, k, k.gradLon, L);
 
     const VF r = hn::Max(L.rKm, hn::Set(d, 1.0f));
     const VF rho = hn::Max(hn::Sqrt(hn::MulAdd(x, x, hn::Mul(y, y))), hn::Mul(r, hn::Set(d, 1e-3f)));
@@ -469,7 +416,7 @@ void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, 
             const ClassifiedV c = Classify(d, k, L, keep, s.len);
             if (hn::AllFalse(d, c.opaque))
                 continue;
-            const VF shade = k.shade ? ShadeFactor(d, k, NativeGradient(d, k, k.color, L, s.x, s.y, s.z), half)
+            const VF shade = k.shade ? ShadeFactor(d, k, NativeGradient(d, k, L, s.x, s.y, s.z), half)
                                      : hn::Set(d, 1.0f);
             Composite(d, k, shifts, c.alpha, hn::Mul(shade, hn::GatherIndex(d, k.table.red, c.index)),
                       hn::Mul(shade, hn::GatherIndex(d, k.table.green, c.index)),

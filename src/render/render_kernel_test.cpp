@@ -29,6 +29,7 @@ struct Sampler {
     explicit Sampler(std::shared_ptr<StepVolume> v) : volume(v), renderer(v)
     {
         RenderParams p;
+        p.shading.enabled = true;  // binds the gradient (nativeGradient)
         renderer.setParams(p);
     }
     const kernel::KernelParams& k() const { return renderer.kernelParams(); }
@@ -153,7 +154,7 @@ void expectGradientDirection(const SphericalGrid& g, std::function<float(Vec3)> 
     double worst = 0;
     for (const Vec3 p : points) {
         const kernel::Located L = kernel::locate(s.k(), p.x, p.y, p.z);
-        const Vec3 gr = kernel::nativeGradient(s.k(), s.k().color, L, p);
+        const Vec3 gr = kernel::nativeGradient(s.k(), L, p);
         const Vec3 want = radial ? normalize(p) : expected;
         const double c = std::clamp(double(dot(normalize(gr), want)), -1.0, 1.0);
         worst = std::max(worst, std::acos(c) * 180 / M_PI);
@@ -179,7 +180,7 @@ TEST(NativeGradient, MatchesTheFiniteDifferenceOfTheSampledField)
     const SphericalGrid g = makeGrid(90, 61, 180);
     const Sampler s(makeVolume(g, {{"f", [](double lat, double r, double lon) { return 3 * toXyz(lat, lon, r).z; }}}));
     for (const Vec3 p : {toXyz(30, 10, 5000), toXyz(-45, 200, 4000), toXyz(5, 359.9, 6000)}) {
-        const Vec3 gr = kernel::nativeGradient(s.k(), s.k().color, kernel::locate(s.k(), p.x, p.y, p.z), p);
+        const Vec3 gr = kernel::nativeGradient(s.k(), kernel::locate(s.k(), p.x, p.y, p.z), p);
         EXPECT_NEAR(gr.z, 3.0, 0.15) << p.x << "," << p.y << "," << p.z;
         EXPECT_NEAR(gr.x, 0.0, 0.15);
         EXPECT_NEAR(gr.y, 0.0, 0.15);

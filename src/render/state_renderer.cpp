@@ -22,15 +22,17 @@ float tubeRadiusKm(const RenderState& s)
     return std::max(s.pathlines.radiusKm, float(0.5 * s.pathlines.minWidthPx * kmPerPixel));
 }
 
-RenderState defaultState(const Dataset& dataset)
+RenderState defaultState(const Dataset& dataset) { return defaultState(catalogOf(dataset)); }
+
+RenderState defaultState(const VariableCatalog& catalog)
 {
     RenderState s;
-    const int anomaly = dataset.variableIndex("temperature anomaly");
-    const int var = anomaly >= 0 ? anomaly : 0;
-    s.colorVariable = dataset.variables().at(size_t(var)).name;
+    const auto anomaly = std::find(catalog.names.begin(), catalog.names.end(), "temperature anomaly");
+    const size_t var = anomaly != catalog.names.end() ? size_t(anomaly - catalog.names.begin()) : 0;
+    s.colorVariable = catalog.names.at(var);
     s.colorMap = ColorMapId::BlueWhiteRed;
     // Symmetric range over the bulk of the values, so that plumes and slabs saturate.
-    const ValueRange r = dataset.variables()[size_t(var)].global.range;
+    const ValueRange r = catalog.ranges.at(var);
     const float m = 0.6f * std::max(std::abs(r.min), std::abs(r.max));
     if (m > 0)
         s.colorRange = ValueRange{-m, m};

@@ -32,6 +32,8 @@ namespace raypc::render {
 // picture): the temperature anomaly (if the dataset has it, else the first variable) on the
 // blue-white-red map, opacity only on the hot and cold tails.
 RenderState defaultState(const Dataset& dataset);
+// The same for any volume's variables (their names and global ranges).
+RenderState defaultState(const VariableCatalog& catalog);
 
 // The tube radius that draws the pathlines at least pathlines.minWidthPx pixels wide at the camera
 // target's distance (the state's radiusKm when that is wider), km.

@@ -184,8 +184,11 @@ std::vector<float> coordinateBrickBounds(const SphericalGrid& g, const BrickLayo
 
 struct VolumeRenderer::Impl {
     AxisTable lat, r, lon;
-    std::vector<float> latSpacingDeg, rSpacingKm, lonSpacingDeg;  // per cell (KernelParams)
     std::vector<std::vector<float>> capMeans;  // per variable: 2 * nR
+    // Shading's gradient (KernelParams::gradLat, gradR, gradLon) towards the pole caps: 0 for lat
+    // and lon, the radial derivative of the ring means for r (of gradientVariable's).
+    std::vector<float> zeroCapMean, gradRCapMean;
+    int gradientVariable = -1;
     float drKm = 1, dAngleRad = 0.01f;
     BrickLayout activity;  // the bricks skipping decides on (activityBrickSize)
     std::map<Coordinate, std::vector<float>> coordinateBounds;  // coordinateBrickBounds, when first brushed
@@ -222,15 +225,6 @@ VolumeRenderer::VolumeRenderer(std::shared_ptr<const StepVolume> volume)
     im.lat = buildAxis(g.latDeg, -90.0, 90.0, false);
     im.r = buildAxis(g.rKm, g.rKm.front(), g.rKm.back(), false);
     im.lon = buildAxis(g.lonDeg, 0.0, 360.0, true);
-    auto spacings = [](const std::vector<double>& c, bool periodic) {
-        std::vector<float> s(periodic ? c.size() : c.size() - 1);
-        for (size_t i = 0; i < s.size(); ++i)
-            s[i] = float(i + 1 < c.size() ? c[i + 1] - c[i] : c.front() + 360.0 - c.back());
-        return s;
-    };
-    im.latSpacingDeg = spacings(g.latDeg, false);
-    im.rSpacingKm = spacings(g.rKm, false);
-    im.lonSpacingDeg = spacings(g.lonDeg, true);
     im.drKm = float((g.rKm.back() - g.rKm.front()) / double(g.nR() - 1));
     im.activity = BrickLayout::forGrid(g, activityBrickSize(bs, im.drKm));
     im.brickShift = std::countr_zero(im.activity.size);
@@ -292,6 +286,31 @@ void VolumeRenderer::validateParams(const RenderParams& p) const
     }
     if (p.core.variable >= varCount)
         fail("core variable index {}: the volume has {} variables", p.core.variable, varCount);
+}
+
+void VolumeRenderer::bindGradient(int variable)
+{
+    Impl& im = *m_impl;
+    const size_t nR = m_volume->grid().nR();
+    const NodeGradient& g = m_volume->nodeGradient(size_t(variable));
+    if (im.gradientVariable != variable) {
+        // The radial derivative of the ring means, with nodeGradient's stencil (one-sided at the ends).
+        const std::vector<double>& rKm = m_volume->grid().rKm;
+        const std::vector<float>& means = im.capMeans[size_t(variable)];
+        im.zeroCapMean.assign(2 * nR, 0.0f);
+        im.gradRCapMean.resize(2 * nR);
+        for (size_t side = 0; side < 2; ++side)
+            for (size_t i = 0; i < nR; ++i) {
+                const size_t lo = i == 0 ? 0 : i - 1, hi = std::min(i + 1, nR - 1);
+                im.gradRCapMean[side * nR + i] =
+                    float((means[side * nR + hi] - means[side * nR + lo]) / (rKm[hi] - rKm[lo]));
+            }
+        im.gradientVariable = variable;
+    }
+    kernel::KernelParams& k = im.params;
+    k.gradLat = {g.perDegLat(), im.zeroCapMean.data()};
+    k.gradR = {g.perKmR(), im.gradRCapMean.data()};
+    k.gradLon = {g.perDegLon(), im.zeroCapMean.data()};
 }
 
 kernel::KernelVariable VolumeRenderer::kernelVariable(int variable) const
@@ -421,9 +440,8 @@ void VolumeRenderer::fillKernelParams(const RenderParams& p)
     k.diffuse = p.shading.diffuse;
     k.specular = p.shading.specular;
     k.shininess = p.shading.shininess;
-    k.latSpacingDeg = im.latSpacingDeg.data();
-    k.rSpacingKm = im.rSpacingKm.data();
-    k.lonSpacingDeg = im.lonSpacingDeg.data();
+    if (k.shade)
+        bindGradient(p.colorVariable);
     k.drawCore = p.core.visible;
     k.coreByVariable = p.core.variable >= 0;
     k.coreColor = p.core.color;

@@ -139,6 +139,9 @@ private:
     void fillKernelParams(const RenderParams& params);
     void buildSkipGrid();
     kernel::KernelVariable kernelVariable(int variable) const;
+    // Points the kernel's gradient (KernelParams::gradLat, gradR, gradLon) at the volume's
+    // nodeGradient of `variable` (computed on the volume's first use of it).
+    void bindGradient(int variable);
 
     struct Impl;
     std::shared_ptr<const StepVolume> m_volume;
