@@ -61,7 +61,9 @@ std::vector<RangeFilter> resolveRangeFilters(const Dataset& dataset, std::span<c
     return resolveRangeFilters(std::span<const std::string>(names), ranges, what);
 }
 
-SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters)
+namespace {
+
+void checkFilters(const StepVolume& volume, std::span<const RangeFilter> filters)
 {
     for (const auto& f : filters) {
         if (!f.coordinate && (f.variable < 0 || static_cast<size_t>(f.variable) >= volume.variableCount()))
@@ -72,6 +74,27 @@ SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFil
             if (!(r.min <= r.max))
                 fail("selection: range [{}, {}] has min > max", r.min, r.max);
     }
+}
+
+// Whether the grid point (iLat, iR, iLon) is selected: every filter holds at it.
+bool pointSelected(const StepVolume& volume, std::span<const RangeFilter> filters, size_t iLat, size_t iR, size_t iLon)
+{
+    const auto& g = volume.grid();
+    const size_t i = g.index(iLat, iR, iLon);
+    for (const auto& f : filters) {
+        const double v = f.coordinate ? coordinateValue(*f.coordinate, g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR])
+                                      : volume.values(f.variable)[i];
+        if (!f.contains(v))
+            return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters)
+{
+    checkFilters(volume, filters);
     const auto& g = volume.grid();
     const auto w = g.volumeFactors();
     const double total = g.totalVolumeKm3();
@@ -79,20 +102,9 @@ SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFil
     tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
         auto& byR = perThread.local();
         for (size_t iR = 0; iR < g.nR(); ++iR)
-            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
-                const size_t i = g.index(iLat, iR, iLon);
-                bool inside = true;
-                for (const auto& f : filters) {
-                    const double v = f.coordinate ? coordinateValue(*f.coordinate, g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR])
-                                                  : volume.values(f.variable)[i];
-                    if (!f.contains(v)) {
-                        inside = false;
-                        break;
-                    }
-                }
-                if (inside)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+                if (pointSelected(volume, filters, iLat, iR, iLon))
                     byR[iR] += w.at(iLat, iR, iLon);
-            }
     });
     SelectionStats stats;
     stats.volumeByRadiusKm3.assign(g.nR(), 0.0);
@@ -110,6 +122,42 @@ SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFil
         stats.shellVolumeByRadiusKm3.push_back(rFactor * latSum * lonSum);
     stats.fractionOfMantle = stats.volumeKm3 / total;
     return stats;
+}
+
+ClassVolumes selectedVolumeByClass(const StepVolume& volume, std::span<const RangeFilter> filters,
+                                   std::span<const uint32_t> classes, size_t classCount)
+{
+    checkFilters(volume, filters);
+    const auto& g = volume.grid();
+    if (classes.size() != g.cellCount())
+        fail("selection by class: {} classes for a grid of {} points, expected one per point", classes.size(),
+             g.cellCount());
+    for (size_t i = 0; i < classes.size(); ++i)
+        if (classes[i] >= classCount)
+            fail("selection by class: point {} has class {}, expected < {}", i, classes[i], classCount);
+    const auto w = g.volumeFactors();
+    struct Sums {
+        std::vector<double> total, selected;
+    };
+    tbb::enumerable_thread_specific<Sums> perThread(Sums{std::vector<double>(classCount, 0.0), std::vector<double>(classCount, 0.0)});
+    tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
+        Sums& sums = perThread.local();
+        for (size_t iR = 0; iR < g.nR(); ++iR)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                const uint32_t c = classes[g.index(iLat, iR, iLon)];
+                const double v = w.at(iLat, iR, iLon);
+                sums.total[c] += v;
+                if (pointSelected(volume, filters, iLat, iR, iLon))
+                    sums.selected[c] += v;
+            }
+    });
+    ClassVolumes out{std::vector<double>(classCount, 0.0), std::vector<double>(classCount, 0.0)};
+    for (const Sums& sums : perThread)
+        for (size_t c = 0; c < classCount; ++c) {
+            out.totalKm3[c] += sums.total[c];
+            out.selectedKm3[c] += sums.selected[c];
+        }
+    return out;
 }
 
 }  // namespace raypc

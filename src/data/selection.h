@@ -76,6 +76,17 @@ struct SelectionStats {
 // range, a filter without ranges or min > max. Parallel over lat rows.
 SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters);
 
+// The selection split by a labelling of the grid's points: `classes` holds one class in
+// [0, classCount) per grid point (canonical order), e.g. what the synthetic generator put there
+// (syntheticTruth), and the answer the whole and the selected dual-cell volume of each class. The
+// points are selected exactly as by selectedVolume. Throws raypc::Error as selectedVolume does,
+// and when `classes` does not have one entry per grid point or holds a class >= classCount.
+struct ClassVolumes {
+    std::vector<double> totalKm3, selectedKm3;  // per class
+};
+ClassVolumes selectedVolumeByClass(const StepVolume& volume, std::span<const RangeFilter> filters,
+                                   std::span<const uint32_t> classes, size_t classCount);
+
 // The selection of every step in [firstStep, lastStep] at one level, in step order: what
 // `raypc stats` writes and the server's /api/stats answers. `load` gives a step's volume at the
 // level (default: Dataset::load); `onStep` is called after each step (progress). Throws

@@ -111,5 +111,45 @@ TEST(Selection, RangesOnOneAxisSelectTheirUnion)
     EXPECT_THROW(selectedVolume(*volume, std::span(&noRange, 1)), Error);
 }
 
+// Split by classes of points, the selection's volume is the same as without classes; a class that
+// is a lat cap holds exactly the cap's volume, and its selected part the cap's share of the selection.
+TEST(Selection, VolumesByClassAddUpToTheSelection)
+{
+    Snapshot snap = readSnapshot(testing::contestLayoutDir() / "spherical001.nc");
+    const auto volume = StepVolume::fromSnapshot(snap);
+    const SphericalGrid& g = snap.grid;
+    const double shell = g.totalVolumeKm3();
+    // Class 0: south of -60°, 1: north of 60° (the lat rows' dual cells end at multiples of 2.5°),
+    // 2: the rest.
+    std::vector<uint32_t> classes(g.cellCount());
+    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+        for (size_t iR = 0; iR < g.nR(); ++iR)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+                classes[g.index(iLat, iR, iLon)] = g.latDeg[iLat] < -60 ? 0 : g.latDeg[iLat] > 60 ? 1 : 2;
+    const RangeFilter upper{-1, Coordinate::Depth, {{0.0f, 660.0f}}};
+    const auto whole = selectedVolume(*volume, std::span(&upper, 1));
+    const ClassVolumes byClass = selectedVolumeByClass(*volume, std::span(&upper, 1), classes, 3);
+    ASSERT_EQ(byClass.totalKm3.size(), 3u);
+    const double cap = (1 - std::sin(std::numbers::pi / 3)) / 2;
+    EXPECT_NEAR(byClass.totalKm3[0] / shell, cap, 1e-9);
+    EXPECT_NEAR(byClass.totalKm3[1] / shell, cap, 1e-9);
+    EXPECT_NEAR((byClass.totalKm3[0] + byClass.totalKm3[1] + byClass.totalKm3[2]) / shell, 1.0, 1e-12);
+    EXPECT_NEAR((byClass.selectedKm3[0] + byClass.selectedKm3[1] + byClass.selectedKm3[2]) / shell,
+                whole.volumeKm3 / shell, 1e-12);
+    EXPECT_NEAR(byClass.selectedKm3[1] / whole.volumeKm3, cap, 1e-9);
+
+    // Bad labellings are refused by name.
+    std::vector<uint32_t> shortList(classes.begin(), classes.end() - 1);
+    EXPECT_THROW(selectedVolumeByClass(*volume, std::span(&upper, 1), shortList, 3), Error);
+    try {
+        selectedVolumeByClass(*volume, std::span(&upper, 1), classes, 2);
+        FAIL() << "expected an error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("class 2, expected < 2"), std::string::npos) << e.what();
+    }
+    const RangeFilter noRange{-1, Coordinate::Lat, {}};
+    EXPECT_THROW(selectedVolumeByClass(*volume, std::span(&noRange, 1), classes, 3), Error);
+}
+
 }  // namespace
 }  // namespace raypc

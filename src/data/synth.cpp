@@ -82,6 +82,17 @@ double layerRadiusKm(int layer) { return kSurfaceRadiusKm - kLayers[layer].depth
 
 // ---- the radial reference state ----
 
+// Feature anomalies are tapered to zero over these distances from the surface and the CMB.
+constexpr double kSurfaceTaperKm = 60.0, kCmbTaperKm = 40.0;
+
+// The largest value of exp(-a / decayKm) * (1 - exp(-a / kCmbTaperKm)) over heights a above the
+// CMB: the peak of a layer on the CMB (pile, pool) after the taper, at a = 40 ln((40 + L) / 40).
+double cmbLayerPeak(double decayKm)
+{
+    const double q = kCmbTaperKm / (kCmbTaperKm + decayKm);
+    return std::pow(q, kCmbTaperKm / decayKm) * (1.0 - q);
+}
+
 // Temperature at rest (K): 300 K surface, ~120 km top boundary layer into an adiabat of
 // 0.3 K/km starting at 1600 K, and a ~150 km hot boundary layer up to 4000 K at the CMB.
 double referenceTemperatureK(double rKm)
@@ -151,6 +162,8 @@ constexpr double kPancakeRadialSigmaKm = 70.0;
 constexpr double kPancakeOffsetKm = 70.0;     // below the layer for plumes, above for slabs
 constexpr double kSlabFlowWidthKm = 300.0;
 constexpr double kSlabPoolSigmaKm = 800.0;    // cold pool where a slab lies on the CMB
+constexpr double kPlumePileDecayKm = 200.0;   // thickness scales of the pile and the pool
+constexpr double kSlabPoolDecayKm = 160.0;
 constexpr double kFlowReferenceRadiusKm = 5000.0;
 
 // Background magnitudes.
@@ -522,9 +535,14 @@ struct FeatureAtTime {
     // Radial tables (per grid radius): flow potential f and f', temperature terms.
     std::vector<double> f, fPrime;
     std::array<std::vector<double>, kMaxTerms> termRadial;
+    // The ground truth (syntheticTruth): which part each term is, and per radius the anomaly it
+    // would have at full development (termRadial without its radial shape and growth).
+    std::array<SynthPart, kMaxTerms> termPart{};
+    std::array<std::vector<double>, kMaxTerms> termPeakK;
     // Slabs: sheet shift and its r-derivative, sheet temperature and its angular width per radius;
-    // the shifts at the centres of the separable terms (pancakes, pool).
-    std::vector<double> shift, shiftPrime, sheetK, sheetWidthRad;
+    // the shifts at the centres of the separable terms (pancakes, pool); the sheet's anomaly at
+    // full development (sheetK without the cut-off at the tip).
+    std::vector<double> shift, shiftPrime, sheetK, sheetWidthRad, sheetPeakK;
     std::array<double, kMaxTerms> termShift{};
     double shiftLo = 0, shiftHi = 0, sheetWidthMax = 0;
     SynthFeature description;
@@ -610,6 +628,10 @@ ModelAtTime modelAt(const SynthOptions& options, double timeMyr, const std::vect
         fa.fPrime.resize(nR);
         for (auto& t : fa.termRadial)
             t.assign(nR, 0.0);
+        fa.termPart = {SynthPart::PlumeConduit, SynthPart::PlumeHead, SynthPart::PlumePile, SynthPart::PlumePancake660,
+                       SynthPart::PlumePancake1600};
+        for (auto& t : fa.termPeakK)
+            t.assign(nR, 0.0);
         for (size_t i = 0; i < nR; ++i) {
             const double r = rKm[i];
             constexpr double h = 0.01;  // km; central difference, error ~1e-8 relative
@@ -620,11 +642,15 @@ ModelAtTime modelAt(const SynthOptions& options, double timeMyr, const std::vect
             fa.termRadial[0][i] = p.amplitudeK * tail * smootherstep((head - r) / 150.0);
             const double dh = (r - head) / headRadialSigma;
             fa.termRadial[1][i] = p.amplitudeK * 1.2 * std::exp(-0.5 * dh * dh);
-            fa.termRadial[2][i] = p.amplitudeK * 0.45 * std::exp(-aboveCmb / 200.0);
+            fa.termRadial[2][i] = p.amplitudeK * 0.45 * std::exp(-aboveCmb / kPlumePileDecayKm);
             for (int l = 0; l < 2; ++l) {
                 const double dl = (r - (layerRadiusKm(l) - kPancakeOffsetKm)) / kPancakeRadialSigmaKm;
                 fa.termRadial[3 + l][i] = p.amplitudeK * 0.7 * pancake[l] * std::exp(-0.5 * dl * dl);
             }
+            fa.termPeakK[0][i] = p.amplitudeK * tail;
+            fa.termPeakK[1][i] = p.amplitudeK * 1.2;
+            fa.termPeakK[2][i] = p.amplitudeK * 0.45 * cmbLayerPeak(kPlumePileDecayKm);
+            fa.termPeakK[3][i] = fa.termPeakK[4][i] = p.amplitudeK * 0.7;
         }
         SynthFeature& d = fa.description;
         d.kind = kindOf(true);
@@ -672,7 +698,11 @@ ModelAtTime modelAt(const SynthOptions& options, double timeMyr, const std::vect
         fa.shiftPrime.resize(nR);
         fa.sheetK.resize(nR);
         fa.sheetWidthRad.resize(nR);
+        fa.sheetPeakK.resize(nR);
         for (auto& t : fa.termRadial)
+            t.assign(nR, 0.0);
+        fa.termPart = {SynthPart::SlabPancake660, SynthPart::SlabPancake1600, SynthPart::SlabPool};
+        for (auto& t : fa.termPeakK)
             t.assign(nR, 0.0);
         for (size_t i = 0; i < nR; ++i) {
             const double r = rKm[i];
@@ -686,13 +716,16 @@ ModelAtTime modelAt(const SynthOptions& options, double timeMyr, const std::vect
             const double depth = kSurfaceRadiusKm - r;
             const double assimilation = 0.55 + 0.45 * std::exp(-depth / 900.0);
             fa.sheetK[i] = s.amplitudeK * assimilation * smootherstep((r - tip) / 120.0);
+            fa.sheetPeakK[i] = s.amplitudeK * assimilation;
             fa.sheetWidthRad[i] = s.thicknessKm * (1.0 + 0.9 * smootherstep((depth - 500.0) / 500.0)) / std::max(r, 1.0);
             fa.sheetWidthMax = std::max(fa.sheetWidthMax, fa.sheetWidthRad[i]);
             for (int l = 0; l < 2; ++l) {
                 const double dl = (r - (layerRadiusKm(l) + kPancakeOffsetKm)) / kPancakeRadialSigmaKm;
                 fa.termRadial[l][i] = s.amplitudeK * 0.6 * pancake[l] * std::exp(-0.5 * dl * dl);
             }
-            fa.termRadial[2][i] = s.amplitudeK * 0.55 * pool * std::exp(-(r - kCoreRadiusKm) / 160.0);
+            fa.termRadial[2][i] = s.amplitudeK * 0.55 * pool * std::exp(-(r - kCoreRadiusKm) / kSlabPoolDecayKm);
+            fa.termPeakK[0][i] = fa.termPeakK[1][i] = s.amplitudeK * 0.6;
+            fa.termPeakK[2][i] = s.amplitudeK * 0.55 * cmbLayerPeak(kSlabPoolDecayKm);
         }
         SynthFeature& d = fa.description;
         d.kind = kindOf(false);
@@ -811,6 +844,22 @@ void columnTerms(const FeatureAtTime& fa, Vec3d n, Vec3d e1, Vec3d e2, ColumnTer
         const double w2 = fa.termWidthRad[k] * fa.termWidthRad[k];
         out.angular[k] = std::exp(-0.5 * (xi * xi + outside * outside) / w2);
     }
+}
+
+// The slab sheet's profile across its (dipping) centre at radius index iR: a Gaussian of the
+// angular offset `xi` from the centre, 0 where it is negligible.
+double sheetProfile(const FeatureAtTime& fa, double xi, size_t iR)
+{
+    const double wt = fa.sheetWidthRad[iR];
+    return xi * xi < 2.0 * kNegligibleExponent * wt * wt ? std::exp(-0.5 * xi * xi / (wt * wt)) : 0.0;
+}
+
+// Anomalies vanish at the isothermal surface and CMB: the factor (0 ... 1) they are multiplied by.
+double isothermalBoundaryTaper(double rKm)
+{
+    const double depthKm = kSurfaceRadiusKm - rKm;
+    return (1.0 - std::exp(-std::max(0.0, depthKm) / kSurfaceTaperKm)) *
+           (1.0 - std::exp(-std::max(0.0, rKm - kCoreRadiusKm) / kCmbTaperKm));
 }
 
 // ---- derived material properties ----
@@ -955,9 +1004,7 @@ Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr, const S
     for (size_t i = 0; i < nR; ++i) {
         referenceK[i] = referenceTemperatureK(grid.rKm[i]);
         depthKm[i] = kSurfaceRadiusKm - grid.rKm[i];
-        // Anomalies vanish at the isothermal surface and CMB.
-        boundaryTaper[i] = (1.0 - std::exp(-std::max(0.0, depthKm[i]) / 60.0)) *
-                           (1.0 - std::exp(-std::max(0.0, grid.rKm[i] - kCoreRadiusKm) / 40.0));
+        boundaryTaper[i] = isothermalBoundaryTaper(grid.rKm[i]);
     }
     // Dual-cell area weights: lat rows by sin(upper edge) - sin(lower edge), lon columns by width.
     const std::vector<double> latWeights = grid.volumeFactors().lat;
@@ -1006,9 +1053,7 @@ Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr, const S
                         }
                         // Slab: Q = f(r) g(xi) A(psi) with xi = beta - beta0 - shift(r).
                         const double xi = ct.beta - fa.beta0 - fa.shift[iR];
-                        const double wt = fa.sheetWidthRad[iR];
-                        if (xi * xi < 2.0 * kNegligibleExponent * wt * wt)
-                            dT += fa.sheetK[iR] * ct.along * std::exp(-0.5 * xi * xi / (wt * wt));
+                        dT += fa.sheetK[iR] * ct.along * sheetProfile(fa, xi, iR);
                         const double w2 = fa.flowWidthRad * fa.flowWidthRad;
                         if (xi * xi > 2.0 * kNegligibleExponent * w2)
                             continue;
@@ -1066,6 +1111,95 @@ Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr, const S
             }
     });
     return snap;
+}
+
+const char* synthPartName(SynthPart part)
+{
+    switch (part) {
+    case SynthPart::Background: return "background";
+    case SynthPart::PlumeConduit: return "plume conduit";
+    case SynthPart::PlumeHead: return "plume head";
+    case SynthPart::PlumePile: return "plume pile";
+    case SynthPart::PlumePancake660: return "plume pancake 660";
+    case SynthPart::PlumePancake1600: return "plume pancake 1600";
+    case SynthPart::SlabSheet: return "slab sheet";
+    case SynthPart::SlabPancake660: return "slab pancake 660";
+    case SynthPart::SlabPancake1600: return "slab pancake 1600";
+    case SynthPart::SlabPool: return "slab pool";
+    }
+    return "?";
+}
+
+SynthTruth syntheticTruth(const SynthOptions& options, double timeMyr, const SphericalGrid& grid)
+{
+    if (!std::isfinite(timeMyr))
+        fail("synthetic truth: time {} Myr is not finite", timeMyr);
+    const size_t nLat = grid.nLat(), nR = grid.nR(), nLon = grid.nLon();
+    const ModelAtTime model = modelAt(options, timeMyr, grid.rKm);
+    const size_t nFeatures = model.features.size();
+    SynthTruth truth;
+    truth.feature.assign(grid.cellCount(), -1);
+    truth.part.assign(grid.cellCount(), SynthPart::Background);
+    truth.envelope.assign(grid.cellCount(), 0.0f);
+    std::vector<double> taper(nR);
+    for (size_t i = 0; i < nR; ++i)
+        taper[i] = isothermalBoundaryTaper(grid.rKm[i]);
+
+    // The same columns and radial tables synthesizeSnapshot sums, compared term by term.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nLat), [&](const tbb::blocked_range<size_t>& rows) {
+        std::vector<ColumnTerms> terms(nFeatures);
+        std::vector<int> active;
+        active.reserve(nFeatures);
+        for (size_t iLat = rows.begin(); iLat != rows.end(); ++iLat) {
+            const double lat = degToRad(grid.latDeg[iLat]);
+            for (size_t iLon = 0; iLon < nLon; ++iLon) {
+                const double lon = degToRad(grid.lonDeg[iLon]);
+                const Vec3d n{std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat)};
+                const Vec3d east{-std::sin(lon), std::cos(lon), 0.0};
+                const Vec3d north = cross(n, east);
+                active.clear();
+                for (size_t f = 0; f < nFeatures; ++f) {
+                    columnTerms(model.features[f], n, east, north, terms[f]);
+                    if (terms[f].active)
+                        active.push_back(static_cast<int>(f));
+                }
+                for (size_t iR = 0; iR < nR; ++iR) {
+                    double bestK = 0.0, bestEnvelope = 0.0;
+                    int bestFeature = -1;
+                    SynthPart bestPart = SynthPart::Background;
+                    // A part competes where its envelope reaches the extent; the largest anomaly wins.
+                    auto consider = [&](int f, SynthPart part, double anomalyK, double peakK) {
+                        if (peakK == 0.0)
+                            return;
+                        const double envelope = anomalyK / peakK;
+                        if (envelope >= kSynthExtent && std::abs(anomalyK) > bestK) {
+                            bestK = std::abs(anomalyK);
+                            bestEnvelope = envelope;
+                            bestFeature = f;
+                            bestPart = part;
+                        }
+                    };
+                    for (int f : active) {
+                        const FeatureAtTime& fa = model.features[f];
+                        const ColumnTerms& ct = terms[f];
+                        for (int k = 0; k < fa.termCount; ++k)
+                            consider(f, fa.termPart[k], fa.termRadial[k][iR] * ct.angular[k] * taper[iR],
+                                     fa.termPeakK[k][iR]);
+                        if (!fa.isPlume) {
+                            const double xi = ct.beta - fa.beta0 - fa.shift[iR];
+                            consider(f, SynthPart::SlabSheet, fa.sheetK[iR] * ct.along * sheetProfile(fa, xi, iR) * taper[iR],
+                                     fa.sheetPeakK[iR]);
+                        }
+                    }
+                    const size_t idx = grid.index(iLat, iR, iLon);
+                    truth.feature[idx] = static_cast<int16_t>(bestFeature);
+                    truth.part[idx] = bestPart;
+                    truth.envelope[idx] = static_cast<float>(bestEnvelope);
+                }
+            }
+        }
+    });
+    return truth;
 }
 
 void writeSyntheticSeries(const std::filesystem::path& outDir, const SynthOptions& options)

@@ -74,6 +74,47 @@ std::vector<SynthFeature> syntheticFeatures(const SynthOptions& options, double 
 // Returns {latDeg, lonDeg}.
 std::array<double, 2> syntheticFeatureCentreDeg(const SynthOptions& options, double timeMyr, size_t index, double rKm);
 
+// The parts of a feature: each is one term of the temperature anomaly the generator sums
+// (docs/synthetic-data.md, "Features").
+enum class SynthPart : uint8_t {
+    Background,        // no part of any feature reaches its extent here
+    PlumeConduit,      // the column from the CMB up to the head
+    PlumeHead,
+    PlumePile,         // the hot pile at the conduit's base on the CMB
+    PlumePancake660,   // hot material spreading ~70 km below 660 km
+    PlumePancake1600,  // ... below the spin layer (1600 km)
+    SlabSheet,         // the dipping sheet from the trench down to the tip
+    SlabPancake660,    // cold material spreading ~70 km above 660 km
+    SlabPancake1600,   // ... above the spin layer
+    SlabPool,          // the cold pool where a slab lies on the CMB
+};
+inline constexpr size_t kSynthPartCount = 10;
+// "plume conduit", "slab pancake 660", ... (for tables and messages).
+const char* synthPartName(SynthPart part);
+
+// What the generator put at each point of a grid: the ground truth that tests of the task presets
+// measure selections against (docs/synthetic-data.md, "Ground truth"). Every part is an analytic
+// shape times an amplitude; its *envelope* at a point is that shape's value there, in [0, 1]: the
+// part's anomaly divided by its peak anomaly at full development (the product of its Gaussians,
+// smooth steps, trench taper, growth of pancakes and pool, and the taper at the isothermal
+// boundaries; the pile and the pool relative to the peak of their tapered profile on the CMB;
+// conduits and sheets relative to their amplitude at the same radius, which changes slowly). A point
+// belongs to the part whose anomaly (K) is largest among the parts whose envelope reaches
+// kSynthExtent there (two sigma of one Gaussian); its core is where the envelope is at least
+// kSynthCore (one sigma). Elsewhere it is Background.
+inline constexpr double kSynthCore = 0.60653065971263342;    // exp(-1/2)
+inline constexpr double kSynthExtent = 0.13533528323661270;  // exp(-2)
+struct SynthTruth {
+    // One entry per grid point, canonical order (SphericalGrid::index).
+    std::vector<int16_t> feature;  // index into syntheticFeatures(options, timeMyr); -1 for Background
+    std::vector<SynthPart> part;
+    std::vector<float> envelope;   // of that part, >= kSynthExtent; 0 for Background
+    bool inCore(size_t i) const { return envelope[i] >= kSynthCore; }
+};
+// The truth on `grid` (any grid, like synthesizeSnapshot) at `timeMyr`. Deterministic; parallel
+// over lat rows. Throws raypc::Error for a non-finite time.
+SynthTruth syntheticTruth(const SynthOptions& options, double timeMyr, const SphericalGrid& grid);
+
 // The slow rigid rotation that carries the whole pattern (part of the velocity field):
 // v_rotation = omega x p with p in metres, omega (rad/s) in the Cartesian frame of spherical.h.
 std::array<double, 3> syntheticRotationRadPerSecond(const SynthOptions& options);

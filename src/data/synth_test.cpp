@@ -710,6 +710,105 @@ TEST(SynthModel, BackgroundFlowIsDivergenceFreeAndSlow)
 }
 
 // Contest task 1: cold material moving down or not at all between 560 and 760 km depth.
+// The truth names each feature where the generator put it: the head on a plume's axis at the
+// head's radius, the conduit on the axis below it, the sheet at a slab's (dipping) centre.
+TEST(SynthTruth, NamesTheFeatureAtItsOwnCentre)
+{
+    const SynthOptions o = demoOptions();
+    const double t = 12.0;
+    const auto features = syntheticFeatures(o, t);
+    ASSERT_EQ(features.size(), 20u);
+    auto at = [&](double latDeg, double lonDeg, double rKm) {
+        SphericalGrid g;
+        g.latDeg = {latDeg};
+        g.rKm = {rKm};
+        g.lonDeg = {lonDeg};
+        return syntheticTruth(o, t, g);
+    };
+    for (size_t f = 0; f < features.size(); ++f) {
+        const SynthFeature& feature = features[f];
+        SCOPED_TRACE(fmt::format("feature {}", f));
+        if (feature.kind == SynthFeature::Kind::Plume) {
+            const SynthTruth head = at(feature.latDeg, feature.lonDeg, feature.frontRadiusKm);
+            EXPECT_EQ(head.feature[0], int(f));
+            EXPECT_EQ(head.part[0], SynthPart::PlumeHead);
+            // (Heads just under the lithosphere are tapered towards the isothermal surface.)
+            EXPECT_GT(head.envelope[0], 0.85);
+            // 500 km above the CMB (beyond the pile, below the pancakes), the conduit.
+            const double r = kCoreRadiusKm + 500.0;
+            if (feature.frontRadiusKm > r + 200.0) {
+                const SynthTruth conduit = at(feature.latDeg, feature.lonDeg, r);
+                EXPECT_EQ(conduit.feature[0], int(f));
+                EXPECT_EQ(conduit.part[0], SynthPart::PlumeConduit);
+                EXPECT_TRUE(conduit.inCore(0));
+            }
+        } else {
+            // 200 km deep, on the sheet's centre below the trench's middle.
+            const double r = kSurfaceRadiusKm - 200.0;
+            ASSERT_LT(feature.frontRadiusKm, r - 150.0);
+            const auto c = syntheticFeatureCentreDeg(o, t, f, r);
+            const SynthTruth sheet = at(c[0], c[1], r);
+            EXPECT_EQ(sheet.feature[0], int(f));
+            EXPECT_EQ(sheet.part[0], SynthPart::SlabSheet);
+            EXPECT_GT(sheet.envelope[0], 0.9);
+        }
+    }
+    EXPECT_THROW(syntheticTruth(o, std::nan(""), syntheticGrid(4, 3, 4)), Error);
+}
+
+// The truth agrees with the fields it labels: hot where it says plume, cold where it says slab,
+// and only the weak background pattern where it says background; every stall has its pancake.
+TEST(SynthTruth, AgreesWithTheTemperatureAnomaly)
+{
+    const SynthOptions o = demoOptions();
+    const double t = 12.0;
+    const Snapshot snap = synthesizeSnapshot(o, t);
+    const SynthTruth truth = syntheticTruth(o, t, snap.grid);
+    const auto features = syntheticFeatures(o, t);
+    const std::vector<float>& dT = snap.find("temperature anomaly")->values;
+    const SphericalGrid& g = snap.grid;
+    const auto w = g.volumeFactors();
+    // Volume-weighted mean anomaly over plume cores, slab cores and the background of the mid
+    // mantle (away from the boundary layers' own patterns).
+    double plumeSum = 0, plumeVol = 0, slabSum = 0, slabVol = 0, bgSum = 0, bgVol = 0;
+    std::map<SynthPart, double> coreVolume;
+    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+        for (size_t iR = 0; iR < g.nR(); ++iR)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                const size_t i = g.index(iLat, iR, iLon);
+                const double v = w.at(iLat, iR, iLon);
+                if (truth.part[i] == SynthPart::Background) {
+                    EXPECT_EQ(truth.feature[i], -1);
+                    EXPECT_EQ(truth.envelope[i], 0.0f);
+                    const double depth = depthOf(g, iR);
+                    if (depth > 400 && depth < 2400) {
+                        bgSum += v * std::abs(dT[i]);
+                        bgVol += v;
+                    }
+                    continue;
+                }
+                ASSERT_GE(truth.feature[i], 0);
+                ASSERT_LT(size_t(truth.feature[i]), features.size());
+                EXPECT_GE(truth.envelope[i], kSynthExtent);
+                EXPECT_LE(truth.envelope[i], 1.0f + 1e-6f);
+                const bool plume = features[size_t(truth.feature[i])].kind == SynthFeature::Kind::Plume;
+                const SynthPart p = truth.part[i];
+                EXPECT_EQ(plume, p < SynthPart::SlabSheet) << synthPartName(p);
+                if (!truth.inCore(i))
+                    continue;
+                coreVolume[p] += v;
+                (plume ? plumeSum : slabSum) += v * dT[i];
+                (plume ? plumeVol : slabVol) += v;
+            }
+    EXPECT_GT(plumeSum / plumeVol, 120.0);
+    EXPECT_LT(slabSum / slabVol, -120.0);
+    EXPECT_LT(bgSum / bgVol, 40.0);
+    for (SynthPart p : {SynthPart::PlumeConduit, SynthPart::PlumeHead, SynthPart::PlumePile, SynthPart::PlumePancake660,
+                        SynthPart::PlumePancake1600, SynthPart::SlabSheet, SynthPart::SlabPancake660,
+                        SynthPart::SlabPancake1600, SynthPart::SlabPool})
+        EXPECT_GT(coreVolume[p], 0.0) << synthPartName(p);
+}
+
 TEST(SynthModel, ColdStagnatingMaterialNear660)
 {
     const Snapshot& s = demoSnapshot();
