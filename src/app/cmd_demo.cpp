@@ -35,9 +35,10 @@ void renderDemoPicture(std::shared_ptr<const Dataset> dataset, int step, const f
     double seconds = 0;
     for (const auto& pass : still.passes)
         seconds += pass.seconds;
-    render::writePng(output, {still.frame.width(), still.frame.height(), renderer.picture(still.frame, resolved, true)});
-    fmt::print("demo picture {}: step {}, {}x{}, {} passes in {:.2f} s\n", output.string(), step, still.frame.width(),
-               still.frame.height(), still.frame.passes(), seconds);
+    const render::ImageRgba8 picture = renderer.picture(still.frames, resolved, true);
+    render::writePng(output, picture);
+    fmt::print("demo picture {}: step {}, {}x{}, {} passes in {:.2f} s\n", output.string(), step, picture.width,
+               picture.height, still.frames.front().passes(), seconds);
 }
 
 // True when `ncDir` holds all of the demo's snapshot files (each was written atomically).

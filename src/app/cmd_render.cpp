@@ -1,6 +1,7 @@
 // raypc render DATASET --time T -o out.png [--size WxH] [--state STATE.json] [--var NAME]
 //   [--colormap NAME] [--range NAME=MIN:MAX]... [--lod N|auto] [--passes N] [--depth depth.pfm] [--stats]
 //   [--pathlines] [--pathline-radius KM] [--legend] [--reference shells|graticule|coastlines]...
+//   [--stereo off|side-by-side|side-by-side-half|anaglyph]
 #include "app/command.h"
 #include "app/options.h"
 #include "core/error.h"
@@ -36,6 +37,7 @@ struct RenderArgs {
     double pathlineRadiusKm = 0;  // 0: the state's
     bool legend = false;
     std::vector<std::string> reference;  // shells, graticule, coastlines
+    std::string stereo;                  // a stereo mode; empty: the state's
 };
 
 // "1024x768" -> width, height.
@@ -145,6 +147,13 @@ RenderSetup setUp(const RenderArgs& args)
         else
             fail("--reference '{}': expected shells, graticule or coastlines", what);
     }
+    if (!args.stereo.empty()) {
+        try {
+            state.stereo.mode = parseStereoMode(args.stereo);
+        } catch (const Error& e) {
+            fail("--stereo: {}", e.what());
+        }
+    }
     if (args.pathlineRadiusKm != 0) {
         if (!(args.pathlineRadiusKm > 0) || !std::isfinite(args.pathlineRadiusKm))
             fail("--pathline-radius {}: expected a positive number of km", args.pathlineRadiusKm);
@@ -168,8 +177,7 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
     const Dataset& dataset = *setup.dataset;
     ResolvedState resolved = setup.resolved;
     resolved.state.step = step;
-    const RenderParams& params = resolved.params;
-    FrameBuffer frame(params.width, params.height);
+    ViewFrames frames;  // one, or a stereo pair's two eyes
     nlohmann::json passes = nlohmann::json::array();
     PassStats total;
     int level = 0;
@@ -186,8 +194,9 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
         const StateRenderer::Prepared prepared = renderer.prepare(resolved, policy);
         level = prepared.level;
         pathlinesShown = prepared.scene ? prepared.scene->visibleCount() : 0;
+        frames = prepared.frames();
         for (int pass = 0; pass < resolved.state.passes; ++pass) {
-            const PassStats s = prepared.renderer->renderPass(frame, nullptr, share);
+            const PassStats s = prepared.renderPass(frames, nullptr, share);
             passes.push_back({{"seconds", s.seconds},
                               {"samples", s.samples},
                               {"samplesSkipped", s.samplesSkipped},
@@ -206,7 +215,8 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
     });
     mpi::dieHook("render-frame");
     if (!share.all()) {
-        gatherTilesToRoot(frame);
+        for (FrameBuffer& frame : frames)
+            gatherTilesToRoot(frame);
         // The work of every rank; "passes" and "seconds" stay rank 0's.
         std::array<int64_t, 4> counts{int64_t(total.samples), int64_t(total.samplesSkipped), int64_t(total.chunks),
                                       int64_t(total.chunksJumped)};
@@ -227,17 +237,20 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
             if (ec && !std::filesystem::is_directory(parent))
                 fail("{}: cannot create the directory ({})", parent.string(), ec.message());
         }
-        writePng(out, {params.width, params.height, renderer.picture(frame, resolved, true)});
-        if (!args.depthPath.empty())
-            writePfm(frameName(args.depthPath, step, setup.sequence), params.width, params.height,
-                     frame.averagedDepthKm());
+        writePng(out, renderer.picture(frames, resolved, true));
+        if (!args.depthPath.empty()) {
+            int width = 0, height = 0;
+            const std::vector<float> depth = averagedDepthKm(frames, width, height);  // stereo: the eyes side by side
+            writePfm(frameName(args.depthPath, step, setup.sequence), width, height, depth);
+        }
     });
+    const StereoLayout layout = stereoLayout(resolved.state.stereo.mode, resolved.state.width, resolved.state.height);
     return {{"step", step},
             {"timeMyr", dataset.steps()[size_t(step)].timeMyr},
             {"level", level},
             {"pathlinesShown", pathlinesShown},
             {"output", out},
-            {"size", {params.width, params.height}},
+            {"size", {layout.width, layout.height}},
             {"ranks", share.count},
             {"threads", total.threads},
             {"simdLanes", total.simdLanes},
@@ -323,6 +336,9 @@ const CommandRegistration kRegistration(
         cmd.add_option("--reference", args->reference,
                        "Reference geometry to draw: shells (410, 660, 1000, 1600, 2200 km or the state's), "
                        "graticule, coastlines; repeatable");
+        cmd.add_option("--stereo", args->stereo,
+                       "Stereo pair: off, side-by-side (2W x H), side-by-side-half (W x H), anaglyph (red-cyan); eye "
+                       "separation and convergence from the state (docs/state.md)");
         cmd.callback([args] { run(*args); });
     },
     60, Ranks::AllRanks);

@@ -15,6 +15,23 @@ void OrbitCamera::validate() const
         fail("camera field of view: {} degrees, expected a value in (0, 180)", fovYDeg);
     if (!std::isfinite(azimuthDeg) || !std::isfinite(elevationDeg))
         fail("camera azimuth/elevation must be finite numbers");
+    if (!std::isfinite(eyeOffsetKm) || !std::isfinite(convergenceKm) || (eyeOffsetKm != 0 && !(convergenceKm > 0)))
+        fail("camera eye offset {} km, convergence {} km: expected finite numbers and a positive convergence",
+             eyeOffsetKm, convergenceKm);
+    if (!(pixelAspect > 0) || !std::isfinite(pixelAspect))
+        fail("camera pixel aspect {}: expected a positive number", pixelAspect);
+}
+
+OrbitCamera stereoEye(const OrbitCamera& camera, Eye eye, double eyeSeparationKm, double convergenceKm)
+{
+    if (!(eyeSeparationKm >= 0) || !std::isfinite(eyeSeparationKm))
+        fail("stereo eye separation: {} km, expected a distance >= 0", eyeSeparationKm);
+    if (!(convergenceKm > 0) || !std::isfinite(convergenceKm))
+        fail("stereo convergence distance: {} km, expected a positive distance", convergenceKm);
+    OrbitCamera e = camera;
+    e.eyeOffsetKm = (eye == Eye::Left ? -0.5 : 0.5) * eyeSeparationKm;
+    e.convergenceKm = convergenceKm;
+    return e;
 }
 
 CameraFrame::CameraFrame(const OrbitCamera& camera, int width_, int height_) : width(width_), height(height_)
@@ -23,12 +40,15 @@ CameraFrame::CameraFrame(const OrbitCamera& camera, int width_, int height_) : w
     const double el = degToRad(std::clamp(camera.elevationDeg, -89.999, 89.999));
     const double az = degToRad(camera.azimuthDeg);
     const Vec3 offset{float(std::cos(el) * std::cos(az)), float(std::cos(el) * std::sin(az)), float(std::sin(el))};
-    eye = camera.targetKm + offset * float(camera.distanceKm);
     forward = normalize(offset * -1.0f);
     right = normalize(cross(forward, Vec3{0, 0, 1}));
     up = cross(right, forward);
+    // A stereo eye: beside the orbit position, its window shifted so that the axis point at the
+    // convergence distance projects to the image centre as it does for the orbit position.
+    eye = camera.targetKm + offset * float(camera.distanceKm) + right * float(camera.eyeOffsetKm);
+    shiftX = camera.convergenceKm > 0 ? float(-camera.eyeOffsetKm / camera.convergenceKm) : 0.0f;
     tanHalfFovY = float(std::tan(degToRad(camera.fovYDeg) * 0.5));
-    aspect = float(width) / float(height);
+    aspect = float(double(width) * camera.pixelAspect / double(height));
 }
 
 ShellSegments intersectShell(Vec3 o, Vec3 d, float rInnerKm, float rOuterKm, bool throughCore)

@@ -4,6 +4,8 @@
 // The camera orbits `target`: azimuth is measured in the x-y plane from +x towards +y (degrees),
 // elevation from the x-y plane towards +z (degrees), the up direction is +z.
 // Image pixel (0, 0) is the top-left corner; pixel centres are at (i + 0.5, j + 0.5).
+// A stereo eye (stereoEye) is the same camera moved along the image's right axis with the image
+// window shifted sideways (an off-axis, asymmetric frustum; the view axes stay parallel).
 //
 // Thread safety: plain values; CameraFrame is immutable after construction.
 #pragma once
@@ -23,14 +25,36 @@ struct OrbitCamera {
     double fovYDeg = 40.0;        // vertical field of view
     Vec3 targetKm{};              // point looked at, km
 
-    // Throws raypc::Error if distance <= 0 or the field of view is outside (0, 180).
+    // One eye of a stereo pair (stereoEye sets these; the state document has no such keys): the eye
+    // moved by eyeOffsetKm along the image's right axis (negative: to the left), and the image
+    // window shifted so that points at convergenceKm along the view axis have no parallax.
+    double eyeOffsetKm = 0;
+    double convergenceKm = 0;  // <= 0: no shift (only with eyeOffsetKm = 0)
+    // Width / height of one pixel: 2 renders each eye of a half-width side-by-side pair squeezed
+    // into half the columns (a display stretches it back).
+    double pixelAspect = 1;
+
+    // Throws raypc::Error if distance <= 0, the field of view is outside (0, 180), or the eye
+    // offset, convergence or pixel aspect are not usable.
     void validate() const;
 };
+
+enum class Eye { Left, Right };
+
+// The camera of one eye of a stereo pair: parallel view axes, the eyes eyeSeparationKm apart
+// (each half of it beside the original eye), and an asymmetric frustum whose zero-parallax plane
+// lies convergenceKm in front of the eyes ("toe-in", rotating the eyes, would add vertical
+// parallax away from the centre). A point at depth z (km along the view axis) then has the
+// horizontal screen parallax eyeSeparationKm (1/convergenceKm - 1/z) in tangent units (right eye
+// minus left eye; positive behind the zero-parallax plane). Throws raypc::Error unless
+// eyeSeparationKm >= 0 and convergenceKm > 0.
+OrbitCamera stereoEye(const OrbitCamera& camera, Eye eye, double eyeSeparationKm, double convergenceKm);
 
 // The camera resolved for one image size: eye and an orthonormal basis.
 struct CameraFrame {
     Vec3 eye, forward, right, up;
-    float tanHalfFovY = 0, aspect = 1;  // aspect = width / height
+    float tanHalfFovY = 0, aspect = 1;  // aspect = width x pixelAspect / height
+    float shiftX = 0;  // horizontal shift of the image window, tangent units (a stereo eye's frustum)
     int width = 0, height = 0;
 
     CameraFrame() = default;
@@ -39,9 +63,25 @@ struct CameraFrame {
     // Unit direction through image position (px, py) in pixels (continuous; centre of pixel i is i + 0.5).
     Vec3 direction(float px, float py) const
     {
-        const float sx = (2.0f * px / float(width) - 1.0f) * tanHalfFovY * aspect;
+        const float sx = (2.0f * px / float(width) - 1.0f) * tanHalfFovY * aspect + shiftX;
         const float sy = (1.0f - 2.0f * py / float(height)) * tanHalfFovY;
         return normalize(forward + right * sx + up * sy);
+    }
+
+    // The inverse of direction: image position (px, py) of point p (km) and its distance from the
+    // eye; false when p is not in front of the eye.
+    bool project(Vec3 p, float& px, float& py, float& distanceKm) const
+    {
+        const Vec3 d = p - eye;
+        const float z = dot(d, forward);
+        if (z <= 1e-3f)
+            return false;
+        const float sx = (dot(d, right) / z - shiftX) / (tanHalfFovY * aspect);
+        const float sy = dot(d, up) / (z * tanHalfFovY);
+        px = (sx + 1.0f) * 0.5f * float(width);
+        py = (1.0f - sy) * 0.5f * float(height);
+        distanceKm = std::sqrt(dot(d, d));
+        return true;
     }
 };
 

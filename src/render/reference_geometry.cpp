@@ -104,21 +104,6 @@ Vec3 onSphere(float lonDeg, float latDeg, float radiusKm)
     return {radiusKm * std::cos(lat) * std::cos(lon), radiusKm * std::cos(lat) * std::sin(lon), radiusKm * std::sin(lat)};
 }
 
-// Screen position and distance from the eye of a world point; false behind the eye.
-bool project(const CameraFrame& cam, Vec3 p, float& px, float& py, float& dist)
-{
-    const Vec3 d = p - cam.eye;
-    const float z = dot(d, cam.forward);
-    if (z <= 1e-3f)
-        return false;
-    const float sx = dot(d, cam.right) / (z * cam.tanHalfFovY * cam.aspect);
-    const float sy = dot(d, cam.up) / (z * cam.tanHalfFovY);
-    px = (sx + 1.0f) * 0.5f * float(cam.width);
-    py = (1.0f - sy) * 0.5f * float(cam.height);
-    dist = std::sqrt(dot(d, d));
-    return true;
-}
-
 // An anti-aliased segment: coverage falls off over one pixel beyond half the width.
 void drawSegment(LineLayer& layer, float x0, float y0, float t0, float x1, float y1, float t1, float widthPx)
 {
@@ -166,7 +151,7 @@ void drawPolyline(LineLayer& layer, const CameraFrame& cam, const std::vector<st
             const float w = float(s) / float(pieces);
             const Vec3 next = onSphere(lonA + w * (lonB - lonA), latA + w * (latB - latA), radiusKm);
             float x0, y0, t0, x1, y1, t1;
-            if (visible(prev) && visible(next) && project(cam, prev, x0, y0, t0) && project(cam, next, x1, y1, t1))
+            if (visible(prev) && visible(next) && cam.project(prev, x0, y0, t0) && cam.project(next, x1, y1, t1))
                 drawSegment(layer, x0, y0, t0, x1, y1, t1, widthPx);
             prev = next;
         }

@@ -8,6 +8,7 @@
 // and the docs table are derived from that description; a new key is an entry there and a member here.
 #pragma once
 
+#include "render/stereo.h"
 #include "render/volume_renderer.h"
 
 #include <nlohmann/json.hpp>
@@ -20,9 +21,9 @@
 namespace raypc::render {
 
 // Version 2 added "pathlines", version 3 "reference" (shells, graticule, coastlines) and "legend",
-// version 4 several ranges on one axis (a repeated brush name ORs its ranges) and "axes"; older
-// documents are still read (they have none of these).
-inline constexpr int kRenderStateVersion = 4;
+// version 4 several ranges on one axis (a repeated brush name ORs its ranges) and "axes", version
+// 5 "stereo"; older documents are still read (they have none of these).
+inline constexpr int kRenderStateVersion = 5;
 
 // A brush range: a variable or a coordinate (x, y, z, lat, lon, radius, depth) and [min, max]. The
 // brush model is data/selection.h's: a name that repeats adds a range to its axis (OR).
@@ -113,6 +114,7 @@ struct RenderState {
     PathlineState pathlines;  // version 2
     ReferenceState reference;  // version 3
     bool legend = false;       // version 3: colour legends in still pictures (raypc render, screenshots)
+    StereoState stereo;        // version 5: stereo pairs (render/stereo.h)
 };
 
 // The opacity used when the state gives none: a ramp from 0 to 0.5 over the range, or for maps

@@ -74,6 +74,43 @@ ResolvedState resolveState(const nlohmann::json& document, const Dataset& datase
     return resolveState(parseRenderState(document, what), dataset);
 }
 
+std::vector<ResolvedState> stereoViews(const ResolvedState& resolved)
+{
+    const StereoState& stereo = resolved.state.stereo;
+    if (!stereo.enabled())
+        return {resolved};
+    const StereoLayout layout = stereoLayout(stereo.mode, resolved.state.width, resolved.state.height);
+    const double convergenceKm = stereo.convergenceOr(resolved.state.camera.distanceKm);
+    std::vector<ResolvedState> views;
+    for (Eye eye : {Eye::Left, Eye::Right}) {
+        ResolvedState v = resolved;
+        v.state.stereo.mode = StereoMode::Off;
+        v.state.camera = stereoEye(resolved.state.camera, eye, stereo.eyeSeparationKm, convergenceKm);
+        v.state.camera.pixelAspect = layout.pixelAspect;
+        v.state.width = layout.eyeWidth;
+        v.state.height = layout.eyeHeight;
+        v.params.camera = v.state.camera;
+        v.params.width = layout.eyeWidth;
+        v.params.height = layout.eyeHeight;
+        views.push_back(std::move(v));
+    }
+    return views;
+}
+
+std::vector<float> averagedDepthKm(const ViewFrames& frames, int& width, int& height)
+{
+    RAYPC_CHECK(!frames.empty());
+    const FrameBuffer& first = frames.front();
+    width = first.width();
+    height = first.height();
+    if (frames.size() == 1)
+        return first.averagedDepthKm();
+    RAYPC_CHECK_EQ(frames.size(), size_t(2));
+    const StereoLayout eyes{first.width(), first.height(), 2 * first.width(), first.height(), 1.0, 2};
+    width = eyes.width;
+    return sideBySide(eyes, first.averagedDepthKm(), frames[1].averagedDepthKm());
+}
+
 StateRenderer::StateRenderer(std::shared_ptr<const Dataset> dataset, StateSources sources)
     : m_dataset(std::move(dataset)), m_sources(std::move(sources))
 {
@@ -87,14 +124,14 @@ StateRenderer::StateRenderer(std::shared_ptr<const Dataset> dataset, StateSource
 
 StateRenderer::~StateRenderer() = default;
 
-VolumeRenderer& StateRenderer::rendererFor(int step, int level)
+VolumeRenderer& StateRenderer::rendererFor(int step, int level, int view)
 {
     // Reload class: a new step drops every level's renderer of the old one.
     if (step != m_rendererStep) {
         m_renderers.clear();
         m_rendererStep = step;
     }
-    auto& slot = m_renderers[level];
+    auto& slot = m_renderers[{level, view}];
     if (!slot)
         slot = std::make_unique<VolumeRenderer>(m_sources.volume(step, level));
     return *slot;
@@ -131,45 +168,90 @@ std::shared_ptr<const PathlineScene> StateRenderer::pathlinesFor(const RenderSta
 StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, const LevelPolicy& policy)
 {
     const RenderState& state = resolved.state;
+    const std::vector<ResolvedState> views = stereoViews(resolved);
     Prepared p;
-    p.params = resolved.params;
+    for (const ResolvedState& v : views)
+        p.views.push_back({v.params, nullptr});
     const int step = state.step;
     const int levels = int(m_dataset->levels().size());
-    const double budget = kInteractiveBudgetShare * state.timeBudgetMs / 1000.0;
+    // The views share the budget: each eye of a stereo pair gets half.
+    const double budget = kInteractiveBudgetShare * state.timeBudgetMs / 1000.0 / double(views.size());
     const double rate = policy.samplesPerSecond;
 
     if (state.level) {
         p.level = *state.level;
     } else if (rate > 0) {
         // Coarse to fine (finestLevelWithin): while only the coarse levels fit, the finer ones of a
-        // new step are neither loaded nor prepared. Reload class when the level changes.
+        // new step are neither loaded nor prepared. Reload class when the level changes. The first
+        // view stands for all (the eyes differ by a small shift).
         const int fits = finestLevelWithin(levels, budget, [&](int l) {
-            VolumeRenderer& r = rendererFor(step, l);
-            r.setParams(p.params);
+            VolumeRenderer& r = rendererFor(step, l, 0);
+            r.setParams(p.views[0].params);
             return r.estimateSamplesPerPass() / rate;
         });
         p.level = fits >= 0 ? fits : levels - 1;
         // Even the coarsest level misses the budget: 1/2 or 1/4 of the pixels per axis.
         if (fits < 0 && policy.reduceResolution) {
-            const double seconds = rendererFor(step, p.level).estimateSamplesPerPass() / rate;
+            const double seconds = rendererFor(step, p.level, 0).estimateSamplesPerPass() / rate;
             const int divisor = resolutionDivisor(seconds, budget);
-            p.params.width = std::max(1, (p.params.width + divisor - 1) / divisor);
-            p.params.height = std::max(1, (p.params.height + divisor - 1) / divisor);
+            for (View& v : p.views) {
+                v.params.width = std::max(1, (v.params.width + divisor - 1) / divisor);
+                v.params.height = std::max(1, (v.params.height + divisor - 1) / divisor);
+            }
         }
     } else {
         p.level = 0;
     }
 
-    VolumeRenderer& renderer = rendererFor(step, p.level);
-    renderer.setParams(p.params);  // restart class: camera, transfer function, brushes, size
+    for (size_t i = 0; i < p.views.size(); ++i) {
+        p.views[i].renderer = &rendererFor(step, p.level, int(i));
+        p.views[i].renderer->setParams(p.views[i].params);  // restart class: camera, transfer function, brushes, size
+    }
     p.scene = pathlinesFor(state);  // before any pass reads it
-    for (auto& [l, r] : m_renderers)
-        if (r.get() != &renderer)
+    for (auto& [key, r] : m_renderers) {
+        const bool used = std::any_of(p.views.begin(), p.views.end(), [&](const View& v) { return v.renderer == r.get(); });
+        if (!used)
             r->setPathlines(nullptr);  // no other renderer keeps a scene that changes
-    renderer.setPathlines(p.scene);
-    p.renderer = &renderer;
-    p.estimatedSamplesPerPass = renderer.estimateSamplesPerPass();
+    }
+    for (View& v : p.views) {
+        v.renderer->setPathlines(p.scene);
+        p.estimatedSamplesPerPass += v.renderer->estimateSamplesPerPass();
+    }
     return p;
+}
+
+ViewFrames StateRenderer::Prepared::frames() const
+{
+    ViewFrames out;
+    for (const View& v : views)
+        out.emplace_back(v.params.width, v.params.height);
+    return out;
+}
+
+PassStats StateRenderer::Prepared::renderPass(ViewFrames& frames, const std::atomic<bool>* cancel,
+                                              TileShare share) const
+{
+    RAYPC_CHECK_EQ(frames.size(), views.size());
+    PassStats total;
+    for (size_t i = 0; i < views.size(); ++i) {
+        const PassStats s = views[i].renderer->renderPass(frames[i], cancel, share);
+        if (s.cancelled) {
+            total.cancelled = true;
+            return total;
+        }
+        total.seconds += s.seconds;
+        total.samples += s.samples;
+        total.samplesSkipped += s.samplesSkipped;
+        total.chunks += s.chunks;
+        total.chunksSkipped += s.chunksSkipped;
+        total.chunksJumped += s.chunksJumped;
+        total.rays += s.rays;
+        total.bricksTotal = s.bricksTotal;
+        total.bricksSkipped = s.bricksSkipped;
+        total.threads = s.threads;
+        total.simdLanes = s.simdLanes;
+    }
+    return total;
 }
 
 TileShare rankTileShare()
@@ -195,12 +277,12 @@ StateRenderer::Still StateRenderer::renderStill(const ResolvedState& resolved, i
                                                 const std::atomic<bool>* cancel, TileShare share)
 {
     const Prepared p = prepare(resolved);
-    Still still{FrameBuffer(p.params.width, p.params.height), p.level, p.scene ? p.scene->visibleCount() : 0, {}};
+    Still still{p.frames(), p.level, p.scene ? p.scene->visibleCount() : 0, {}};
     const int n = passes > 0 ? passes : std::max(1, resolved.state.passes);
     for (int pass = 0; pass < n; ++pass) {
         if (cancel && cancel->load())
             break;
-        const PassStats s = p.renderer->renderPass(still.frame, cancel, share);
+        const PassStats s = p.renderPass(still.frames, cancel, share);
         if (s.cancelled)
             break;
         still.passes.push_back(s);
@@ -208,8 +290,24 @@ StateRenderer::Still StateRenderer::renderStill(const ResolvedState& resolved, i
     return still;
 }
 
-std::vector<uint8_t> StateRenderer::picture(const FrameBuffer& frame, const ResolvedState& resolved,
-                                            bool withLegends) const
+ImageRgba8 StateRenderer::picture(const ViewFrames& frames, const ResolvedState& resolved, bool withLegends) const
+{
+    const std::vector<ResolvedState> views = stereoViews(resolved);
+    RAYPC_CHECK_EQ(frames.size(), views.size());
+    const FrameBuffer& first = frames.front();
+    if (views.size() == 1)
+        return {first.width(), first.height(), viewPicture(first, resolved, withLegends)};
+    // Each eye is a whole picture (its own reference geometry and legends), then the pair is composed.
+    const StereoMode mode = resolved.state.stereo.mode;
+    const StereoLayout eyes = stereoLayout(mode == StereoMode::Anaglyph ? mode : StereoMode::SideBySide, first.width(),
+                                     first.height());
+    return {eyes.width, eyes.height,
+            composeStereo(mode, eyes, viewPicture(first, views[0], withLegends),
+                          viewPicture(frames[1], views[1], withLegends))};
+}
+
+std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const ResolvedState& resolved,
+                                                bool withLegends) const
 {
     const RenderState& state = resolved.state;
     const auto& ref = state.reference;
@@ -248,7 +346,7 @@ std::vector<uint8_t> StateRenderer::picture(const FrameBuffer& frame, const Reso
 
 double StateRenderer::measureSamplesPerSecond(int step, const RenderParams& params)
 {
-    VolumeRenderer& calibration = rendererFor(step, int(m_dataset->levels().size()) - 1);
+    VolumeRenderer& calibration = rendererFor(step, int(m_dataset->levels().size()) - 1, 0);
     calibration.setParams(params);
     FrameBuffer scratch(params.width, params.height);
     calibration.renderPass(scratch);  // the first pass also starts the worker threads

@@ -2,8 +2,10 @@
 // screenshots and its interactive sessions:
 //
 //   RenderState --resolveState--> ResolvedState (checked against the dataset, names -> indices)
-//               --StateRenderer::prepare--> level, renderer of (step, level), pathline scene, size
-//               --renderPass x N--> FrameBuffer --picture (reference geometry, legends) / averagedDepthKm--> image, depth
+//               --StateRenderer::prepare--> level, the views (one, or a stereo pair's two eyes) with
+//                                           their renderers of (step, level), pathline scene, size
+//               --renderPass x N--> ViewFrames (one FrameBuffer a view)
+//               --picture (reference geometry, legends per view; stereo composition) / depthKm--> image, depth
 //
 // Cost classes (house style): a new step or level loads a volume and builds a renderer (reload);
 // a new pathline window builds a tube scene (reload); everything else restarts passes.
@@ -15,7 +17,9 @@
 #include "data/dataset.h"
 #include "data/pathline_storage.h"
 #include "render/pathline_scene.h"
+#include "render/image_io.h"
 #include "render/render_state.h"
+#include "render/stereo.h"
 #include "render/volume_renderer.h"
 
 #include <nlohmann/json.hpp>
@@ -24,6 +28,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace raypc::render {
@@ -48,6 +53,18 @@ struct ResolvedState {
 ResolvedState resolveState(RenderState state, const Dataset& dataset);
 // Parses a state document first (parseRenderState; `what` names the source in messages).
 ResolvedState resolveState(const nlohmann::json& document, const Dataset& dataset, const std::string& what = "state");
+
+// What a state is rendered as: the state itself when stereo is off, else its left and right eye
+// (render/stereo.h): each with its eye's camera (stereoEye: parallel axes, off-axis frustum
+// converging at stereo.convergenceKm), its eye's size and pixel aspect (stereoLayout) and stereo
+// off. Throws raypc::Error for an unusable separation or convergence.
+std::vector<ResolvedState> stereoViews(const ResolvedState& resolved);
+
+// The accumulation buffers of a picture: one per view (stereoViews), in the same order.
+using ViewFrames = std::vector<FrameBuffer>;
+// The mean depth of every view (FrameBuffer::averagedDepthKm), the eyes side by side (left |
+// right) for a stereo pair whatever its mode; the size in `width` x `height`.
+std::vector<float> averagedDepthKm(const ViewFrames& frames, int& width, int& height);
 
 // Where a StateRenderer gets volumes and pathlines. Unset members read the dataset directly
 // (Dataset::load, loadPathlineWindow); the server passes its shared caches.
@@ -84,26 +101,38 @@ public:
     StateRenderer(const StateRenderer&) = delete;
     StateRenderer& operator=(const StateRenderer&) = delete;
 
-    // What prepare() set up for one state; `renderer` stays valid until the next prepare().
+    // What prepare() set up for one state; the renderers stay valid until the next prepare().
+    struct View {
+        RenderParams params;  // the view's, with the size reduced if LevelPolicy asked for it
+        VolumeRenderer* renderer = nullptr;
+    };
     struct Prepared {
         int level = 0;
-        RenderParams params;  // the state's, with the size reduced if LevelPolicy asked for it
-        VolumeRenderer* renderer = nullptr;
+        std::vector<View> views;  // stereoViews' order: one, or the left and the right eye
         std::shared_ptr<const PathlineScene> scene;  // nullptr when pathlines are hidden
-        double estimatedSamplesPerPass = 0;
+        double estimatedSamplesPerPass = 0;          // of all views
+
+        // Empty buffers of the views' sizes.
+        ViewFrames frames() const;
+        // One progressive pass of every view into `frames` (see VolumeRenderer::renderPass; a
+        // cancelled view stops the pass). Stats are summed over the views.
+        PassStats renderPass(ViewFrames& frames, const std::atomic<bool>* cancel = nullptr, TileShare share = {}) const;
     };
-    // Chooses the level, maps the volume, sets the parameters and the pathline scene. Throws
-    // raypc::Error when data cannot be read (e.g. a dataset without pathlines asked to show them).
+    // Chooses the level, maps the volume, sets the parameters of every view and the pathline scene.
+    // The time budget is shared by the views. Throws raypc::Error when data cannot be read (e.g. a
+    // dataset without pathlines asked to show them).
     Prepared prepare(const ResolvedState& resolved, const LevelPolicy& policy = {});
 
-    // The renderer of (step, level), created on first use; a new step drops the old step's.
-    VolumeRenderer& rendererFor(int step, int level);
+    // The renderer of (step, level) for view `view` (each eye of a stereo pair keeps its own, so
+    // that alternating eyes do not redo setParams), created on first use; a new step drops the
+    // old step's.
+    VolumeRenderer& rendererFor(int step, int level, int view = 0);
 
     // A converged picture: prepare() with LevelPolicy{} (level 0 unless the state names one), then
     // `passes` passes (the state's when 0). Stops early when `cancel` becomes true (the frame then
     // holds fewer passes; check frame.passes()).
     struct Still {
-        FrameBuffer frame;
+        ViewFrames frames;
         int level = 0;
         size_t pathlinesShown = 0;
         std::vector<PassStats> passes;
@@ -112,13 +141,14 @@ public:
     Still renderStill(const ResolvedState& resolved, int passes = 0, const std::atomic<bool>* cancel = nullptr,
                       TileShare share = {});
 
-    // The finished picture of `frame`, rendered for `resolved` (after prepare or renderStill with
-    // that state): the state's reference geometry (shells, graticule, coastlines) composited by
-    // depth with the volume, over the state's background, and with `withLegends` and state.legend
-    // the colour legends (the volume's variable; the pathlines' colouring when they are shown).
+    // The finished picture of `frames`, rendered for `resolved` (after prepare or renderStill with
+    // that state): per view, the state's reference geometry (shells, graticule, coastlines)
+    // composited by depth with the volume, over the state's background, and with `withLegends` and
+    // state.legend the colour legends (the volume's variable; the pathlines' colouring when they
+    // are shown); a stereo pair's two views then composed as stereo.mode says (composeStereo).
     // 8-bit RGBA, row-major from the top left. Throws raypc::Error when the coastlines or the
     // legend font cannot be read.
-    std::vector<uint8_t> picture(const FrameBuffer& frame, const ResolvedState& resolved, bool withLegends) const;
+    ImageRgba8 picture(const ViewFrames& frames, const ResolvedState& resolved, bool withLegends) const;
 
     // The machine's throughput now, in estimated samples per second (all threads): two passes at
     // the coarsest level of `step` (the first also starts the worker threads). For `--lod auto`.
@@ -126,11 +156,13 @@ public:
 
 private:
     std::shared_ptr<const PathlineScene> pathlinesFor(const RenderState& state);
+    // One view's picture (`resolved` is the view's).
+    std::vector<uint8_t> viewPicture(const FrameBuffer& frame, const ResolvedState& resolved, bool withLegends) const;
 
     std::shared_ptr<const Dataset> m_dataset;
     StateSources m_sources;
     int m_rendererStep = -1;
-    std::map<int, std::unique_ptr<VolumeRenderer>> m_renderers;  // by level, of m_rendererStep
+    std::map<std::pair<int, int>, std::unique_ptr<VolumeRenderer>> m_renderers;  // by (level, view), of m_rendererStep
     std::shared_ptr<PathlineScene> m_scene;
     int m_sceneStep = -1, m_sceneWindow = -1;
 };

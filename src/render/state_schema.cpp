@@ -398,6 +398,46 @@ Kind<std::vector<ColorStop>> colorPoints()
             "[[u, r, g, b], …], each in [0, 1], u ascending; [] or at least 2 points"};
 }
 
+Kind<StereoMode> stereoMode()
+{
+    json names = json::array();
+    std::string list;
+    for (StereoMode m : allStereoModes()) {
+        names.push_back(std::string(stereoModeName(m)));
+        list += (list.empty() ? "" : ", ") + ("`" + std::string(stereoModeName(m)) + "`");
+    }
+    return {[](const json& v, StereoMode& target, Reader& r, const std::string& key) {
+                if (!v.is_string())
+                    r.failAt(key, "expected a stereo mode name, found " + v.dump());
+                try {
+                    target = parseStereoMode(v.get<std::string>());
+                } catch (const Error& e) {
+                    r.failAt(key, e.what());
+                }
+            },
+            [](const StereoMode& m) { return json(std::string(stereoModeName(m))); },
+            {{"type", "string"}, {"enum", names}}, "one of " + list};
+}
+
+// A number in [lo, hi] or null (nullopt: a default that depends on other keys).
+Kind<std::optional<float>> optionalNumber(double lo, double hi)
+{
+    json schema = numberSchema("number", lo, hi);
+    schema["type"] = json::array({"number", "null"});
+    const Kind<float> plain = number<float>(lo, hi);
+    return {[plain](const json& v, std::optional<float>& target, Reader& r, const std::string& key) {
+                if (v.is_null()) {
+                    target.reset();
+                    return;
+                }
+                float x = 0;
+                plain.read(v, x, r, key);
+                target = x;
+            },
+            [](const std::optional<float>& x) { return x ? json(*x) : json(nullptr); }, schema,
+            plain.type + ", or null"};
+}
+
 // An explicit level or "auto" (nullopt).
 Kind<std::optional<int>> level()
 {
@@ -938,6 +978,22 @@ const Object<RenderState>& document()
                  leaf<S>("lineWidthPx", at(&S::reference, &R::lineWidthPx), number<float>(0.25, 32),
                          {.meaning = "width of graticule and coastline lines, pixels of the image"})},
                 {.meaning = "reference geometry drawn with the volume and composited by depth", .since = 3}),
+            group<S>(
+                "stereo", "StereoState",
+                {leaf<S>("mode", at(&S::stereo, &StereoState::mode), stereoMode(),
+                         {.meaning = "stereo pairs: `side-by-side` puts the left eye's picture beside the right "
+                                     "eye's, each `image.width` wide (2 × width); `side-by-side-half` squeezes each eye into half the width "
+                                     "(width × height, for 3D displays); `anaglyph` is red–cyan (red: the left "
+                                     "eye's luma, green and blue: the right eye's)"}),
+                 leaf<S>("eyeSeparationKm", at(&S::stereo, &StereoState::eyeSeparationKm), number<float>(0, 1e6),
+                         {.meaning = "distance between the eyes, km (side by side along the image's horizontal "
+                                     "axis, centred on the camera's position)"}),
+                 leaf<S>("convergenceKm", at(&S::stereo, &StereoState::convergenceKm), optionalNumber(1e-3, 1e9),
+                         {.meaning = "distance in front of the eyes of the zero-parallax plane (the screen), km; "
+                                     "nearer points stand out of the screen, farther ones lie behind it (parallel "
+                                     "view axes, asymmetric frusta)",
+                          .defaultText = "null: `camera.distanceKm` (the camera's target on the screen)"})},
+                {.meaning = "stereoscopic output of the camera (docs/rendering.md, Stereo)", .since = 5}),
         },
         // Before version 4 a repeated name meant the intersection of its ranges (nothing wrote that);
         // since then the union. An older document repeating a name is refused rather than re-read.

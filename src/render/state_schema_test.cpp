@@ -45,7 +45,8 @@ TEST(StateSchema, CarriesTheParsersBoundsAndVersions)
     const json& camera = schema["properties"]["camera"]["properties"];
     EXPECT_EQ(camera["elevationDeg"]["minimum"], -90);
     EXPECT_EQ(camera["elevationDeg"]["maximum"], 90);
-    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, kRenderStateVersion}));
+    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5}));
+    EXPECT_EQ(kRenderStateVersion, 5);
     EXPECT_EQ(schema["properties"]["brushes"]["items"]["required"], json::array({"name", "min", "max"}));
     // A version-1 document may not have pathlines, as parseRenderState says.
     ASSERT_TRUE(schema.contains("allOf"));
@@ -56,6 +57,9 @@ TEST(StateSchema, CarriesTheParsersBoundsAndVersions)
     EXPECT_EQ(schema["allOf"][1]["if"]["properties"]["version"]["const"], 2);
     EXPECT_EQ(schema["allOf"][1]["then"]["properties"]["reference"]["description"], "needs version 3");
     EXPECT_THROW(parseRenderState(json{{"version", 2}, {"legend", true}}), Error);
+    // Version 5 added stereo.
+    EXPECT_EQ(schema["allOf"][3]["if"]["properties"]["version"]["const"], 4);
+    EXPECT_EQ(schema["allOf"][3]["then"]["properties"]["stereo"]["description"], "needs version 5");
     const RenderState s = parseRenderState(json::parse(
         R"({"version": 3, "legend": true, "reference": {"shells": {"visible": true, "depthsKm": [660]}, "lineWidthPx": 2}})"));
     EXPECT_TRUE(s.legend);

@@ -327,11 +327,13 @@ ApiAnswer selection(const ApiContext& api, const ApiRequest& request)
 // The bounds of limits.h, checked before anything is allocated.
 void checkScreenshotLimits(const render::RenderState& state, const ServerLimits& limits)
 {
-    const int64_t pixels = int64_t(state.width) * state.height;
+    // A stereo pair renders two eyes.
+    const render::StereoLayout layout = render::stereoLayout(state.stereo.mode, state.width, state.height);
+    const int64_t pixels = layout.renderedPixels();
     const int passes = std::max(1, state.passes);
     if (pixels > limits.maxScreenshotPixels)
-        fail("screenshot: image {}x{} is over the limit of {} pixels (e.g. 4096x4096)", state.width, state.height,
-             limits.maxScreenshotPixels);
+        fail("screenshot: image {}x{}{} is over the limit of {} pixels (e.g. 4096x4096)", state.width, state.height,
+             layout.eyes == 2 ? " (stereo: two eyes)" : "", limits.maxScreenshotPixels);
     if (passes > limits.maxScreenshotPasses)
         fail("screenshot: passes {} is over the limit of {}", passes, limits.maxScreenshotPasses);
     if (pixels * passes > limits.maxScreenshotPixelPasses)
@@ -347,13 +349,14 @@ ApiAnswer screenshot(const ApiContext& api, const ApiRequest& request)
     const auto start = std::chrono::steady_clock::now();
     render::StateRenderer renderer(api.dataset, cacheSources(api.cache, api.pathlines));
     const auto still = renderer.renderStill(resolved, 0, request.cancel);
-    const render::FrameBuffer& frame = still.frame;
-    if (frame.passes() < std::max(1, resolved.state.passes))
-        fail("screenshot cancelled after {} of {} passes (the client went away or the server is stopping)",
-             frame.passes(), std::max(1, resolved.state.passes));
-    std::string png = encodePng(renderer.picture(frame, resolved, true), frame.width(), frame.height());
-    spdlog::info("screenshot: step {} {}x{} {} passes at level 0 in {:.0f} ms", resolved.state.step, frame.width(),
-                 frame.height(), frame.passes(), millisecondsSince(start));
+    const int done = still.frames.back().passes();  // the last view's: a stereo pass renders the left eye first
+    if (done < std::max(1, resolved.state.passes))
+        fail("screenshot cancelled after {} of {} passes (the client went away or the server is stopping)", done,
+             std::max(1, resolved.state.passes));
+    const render::ImageRgba8 picture = renderer.picture(still.frames, resolved, true);
+    std::string png = encodePng(picture.pixels, picture.width, picture.height);
+    spdlog::info("screenshot: step {} {}x{} {} passes at level 0 in {:.0f} ms", resolved.state.step, picture.width,
+                 picture.height, done, millisecondsSince(start));
     return {std::move(png), "image/png"};
 }
 

@@ -31,6 +31,19 @@ nlohmann::json cameraJson(const RenderState& state)
     return toJson(state)["camera"];
 }
 
+// What the UI needs to re-project each eye of a stereo frame (docs/protocol.md): the eyes' size as
+// rendered (the depth map holds them side by side) and their cameras' offsets.
+nlohmann::json stereoJson(const RenderState& state, int eyeWidth, int eyeHeight)
+{
+    const StereoLayout layout = stereoLayout(state.stereo.mode, state.width, state.height);
+    return {{"mode", std::string(stereoModeName(state.stereo.mode))},
+            {"eyeSeparationKm", state.stereo.eyeSeparationKm},
+            {"convergenceKm", state.stereo.convergenceOr(state.camera.distanceKm)},
+            {"eyeWidth", eyeWidth},
+            {"eyeHeight", eyeHeight},
+            {"pixelAspect", layout.pixelAspect}};
+}
+
 }  // namespace
 
 RenderSession::RenderSession(RenderContext& context, SessionSink sink, std::string name)
@@ -54,9 +67,9 @@ void RenderSession::submit(const StateMessage& message)
     request.id = message.id;
     request.resolved = render::resolveState(message.state, *m_context.dataset);  // throws: the old state stays
     const auto& st = request.resolved.state;
-    if (int64_t(st.width) * st.height > int64_t(kMaxSessionPixels))
-        fail("image: {}x{} is over the limit of {} pixels for a session (use /api/screenshot for larger images)",
-             st.width, st.height, kMaxSessionPixels);
+    if (render::stereoLayout(st.stereo.mode, st.width, st.height).renderedPixels() > int64_t(kMaxSessionPixels))
+        fail("image: {}x{}{} is over the limit of {} pixels for a session (use /api/screenshot for larger images)",
+             st.width, st.height, st.stereo.enabled() ? " (stereo: two eyes)" : "", kMaxSessionPixels);
     request.interactive = message.interactive;
     {
         std::lock_guard lock(m_mutex);
@@ -127,8 +140,8 @@ void RenderSession::render(const Request& request)
     }
     const StateRenderer::Prepared prepared = m_renderer.prepare(request.resolved, policy);
     const int level = prepared.level;
-    const RenderParams& params = prepared.params;
-    VolumeRenderer& renderer = *prepared.renderer;
+    const RenderParams& params = prepared.views.front().params;  // the first view's (all share brushes)
+    VolumeRenderer& renderer = *prepared.views.front().renderer;
     const auto& scene = prepared.scene;
     const double estimatedSamples = prepared.estimatedSamplesPerPass;
 
@@ -161,13 +174,13 @@ void RenderSession::render(const Request& request)
     const double waitedMs = std::chrono::duration<double, std::milli>(renderStart - request.received).count();
     const double preparedMs = millisecondsSince(renderStart);
     const int passes = request.interactive ? 1 : std::max(1, state.passes);
-    FrameBuffer frame(params.width, params.height);
+    ViewFrames frames = prepared.frames();
     double renderMsTotal = 0, encodeMsTotal = 0, firstPassMs = 0;
     int done = 0;
     for (int pass = 1; pass <= passes; ++pass) {
         if (m_cancel)
             break;
-        const PassStats stats = renderer.renderPass(frame, &m_cancel);
+        const PassStats stats = prepared.renderPass(frames, &m_cancel);
         if (stats.cancelled)
             break;
         if (stats.seconds > 0) {
@@ -177,12 +190,19 @@ void RenderSession::render(const Request& request)
             m_context.samplesPerSecond.store(old > 0 ? 0.7 * old + 0.3 * measured : measured);
         }
         const auto encodeStart = Clock::now();
-        const std::vector<uint8_t> rgba = m_renderer.picture(frame, request.resolved, false);  // the UI draws legends
-        const std::string jpeg = encodeJpeg(rgba, params.width, params.height,
+        const ImageRgba8 picture = m_renderer.picture(frames, request.resolved, false);  // the UI draws legends
+        const std::string jpeg = encodeJpeg(picture.pixels, picture.width, picture.height,
                                             request.interactive ? kJpegQualityInteractive : kJpegQualityStill);
+        // A stereo pair's depth is the two eyes' side by side, whatever the picture's layout, each
+        // downsampled on its own (so that no block straddles the eyes).
         int depthWidth = 0, depthHeight = 0;
-        const std::vector<float> depth =
-            downsampleDepth(frame.averagedDepthKm(), params.width, params.height, kDepthDownsample, depthWidth, depthHeight);
+        std::vector<float> depth;
+        for (const FrameBuffer& frame : frames) {
+            const std::vector<float> eye = downsampleDepth(frame.averagedDepthKm(), frame.width(), frame.height(),
+                                                           kDepthDownsample, depthWidth, depthHeight);
+            depth = depth.empty() ? eye : sideBySide({depthWidth, depthHeight, 2 * depthWidth, depthHeight, 1.0, 2}, depth, eye);
+        }
+        depthWidth *= int(frames.size());
         const double passMs = stats.seconds * 1000.0;
         const uint64_t samples = stats.samples + stats.samplesSkipped;
         nlohmann::json header{{"type", "frame"},
@@ -193,8 +213,8 @@ void RenderSession::render(const Request& request)
                               {"passes", passes},
                               {"converged", pass == passes},
                               {"interactive", request.interactive},
-                              {"width", params.width},
-                              {"height", params.height},
+                              {"width", picture.width},
+                              {"height", picture.height},
                               {"camera", cameraJson(state)},
                               {"stats",
                                {{"passMs", passMs},
@@ -205,6 +225,8 @@ void RenderSession::render(const Request& request)
                               {"selection", selectionKey == m_selectionKey ? m_selection : nlohmann::json()}};
         if (scene)
             header["pathlines"] = {{"lines", scene->lineCount()}, {"visible", scene->visibleCount()}};
+        if (state.stereo.enabled())
+            header["stereo"] = stereoJson(state, frames.front().width(), frames.front().height());
         std::string bytes = encodeFrame(std::move(header), {reinterpret_cast<const uint8_t*>(jpeg.data()), jpeg.size()},
                                         depth, depthWidth, depthHeight);
         encodeMsTotal += millisecondsSince(encodeStart);
@@ -218,7 +240,7 @@ void RenderSession::render(const Request& request)
     if (done > 0)
         spdlog::info("{}: state {} step {} level {} {}x{} {}: waited {:.1f} ms, prepared {:.1f} ms, {}/{} passes, "
                      "first {:.1f} ms, mean {:.1f} ms/pass, encode {:.1f} ms/frame",
-                     m_name, request.id, step, level, params.width, params.height,
+                     m_name, request.id, step, level, frames.front().width() * int(frames.size()), params.height,
                      request.interactive ? "interactive" : "still", waitedMs, preparedMs, done, passes, firstPassMs,
                      renderMsTotal / done, encodeMsTotal / done);
 }

@@ -321,12 +321,15 @@ private:
         const size_t previous = m_frameBytes;
         try {
             const render::RenderState s = render::parseRenderState(state.state, "state");
-            const size_t wanted = size_t(s.width) * size_t(s.height) * kFrameBytesPerPixel;
+            // A stereo pair holds two eyes' frames.
+            const size_t wanted =
+                size_t(render::stereoLayout(s.stereo.mode, s.width, s.height).renderedPixels()) * kFrameBytesPerPixel;
             size_t others = 0;
             if (!m_server.frameBudget.replace(m_frameBytes, wanted, others))
-                fail("image: {}x{} needs {} MiB of frame memory, over the limit of the sessions' frame memory: "
+                fail("image: {}x{}{} needs {} MiB of frame memory, over the limit of the sessions' frame memory: "
                      "{} MiB, of which other sessions hold {} MiB (--session-memory); use a smaller image",
-                     s.width, s.height, (wanted + kMiB - 1) / kMiB, m_server.frameBudget.limit() / kMiB,
+                     s.width, s.height, s.stereo.enabled() ? " (stereo: two eyes)" : "", (wanted + kMiB - 1) / kMiB,
+                     m_server.frameBudget.limit() / kMiB,
                      (others + kMiB - 1) / kMiB);
         } catch (const Error& e) {
             reject(e.what(), state.id);

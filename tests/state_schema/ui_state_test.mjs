@@ -113,6 +113,7 @@ const defaults = JSON.parse(run(stateCases, ['default', dataset]));
   rich.shading = { enabled: true, light: [-1, 0.5, 0.25], ambient: 0.2, diffuse: 0.8, specular: 0.5, shininess: 10 };
   rich.pathlines = { visible: true, radiusKm: 30, minWidthPx: 3, window: 5, colorBy: 'length', colorMap: 'cool-to-warm', range: [0, 5000],
     filterByBrushes: false, filters: [{ name: 'length', min: 100, max: 400 }, { name: 'length', min: 1000, max: 4000 }], ambientOcclusion: false };
+  rich.stereo = { mode: 'anaglyph', eyeSeparationKm: 450, convergenceKm: 17000 };
   const [parsed] = cppParse([rich]);
   check(parsed.ok && sameAsFloats(parsed.json, rich), `raypc changed the rich state: ${JSON.stringify(parsed)}`);
   const loaded = uiLoad(parsed.json, defaults);
@@ -158,6 +159,9 @@ const defaults = JSON.parse(run(stateCases, ['default', dataset]));
     [v2({ pathlines: { visible: 'yes' } }), 'pathlines.visible'],
     [v2({ pathlines: { filters: [{ name: 'length', min: 1, max: 2, bogus: 1 }] } }), 'pathlines.filters[0].bogus'],
     [{ version: 1, pathlines: { visible: true } }, 'pathlines'],
+    [{ version: 5, stereo: { mode: 'top-bottom' } }, 'stereo.mode'],
+    [{ version: 5, stereo: { eyeSeparationKm: -1 } }, 'stereo.eyeSeparationKm'],
+    [{ version: 4, stereo: { mode: 'anaglyph' } }, 'stereo'],
     [{ step: 1 }, 'version'],
     [{ version: 9 }, 'version'],
   ];

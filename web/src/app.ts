@@ -274,10 +274,11 @@ export class App {
   // Still frames at the view's size in device pixels (CSS size × devicePixelRatio, as the canvas),
   // scaled down to the Max size setting on the longer side. Interactive frames keep their time
   // budget on the server (coarser level, then 1/2 or 1/4 of the pixels per axis; docs/protocol.md)
-  // and are warped in between.
+  // and are warped in between. Side by side at full width, each eye takes half the view.
   private fitImage(): boolean {
     const canvas = this.link.view.canvas;
-    const { width, height } = fitImageSize(canvas.width, canvas.height, maxImageSide());
+    const eyesAcross = this.store.state.stereo.mode === 'side-by-side' ? 2 : 1;
+    const { width, height } = fitImageSize(Math.max(1, Math.floor(canvas.width / eyesAcross)), canvas.height, maxImageSide());
     const w = width, h = height;
     const image = this.store.state.image;
     if (w === image.width && h === image.height) return false;

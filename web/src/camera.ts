@@ -2,7 +2,7 @@
 // exactly so a depth map can be unprojected with the frame's camera and reprojected with the
 // current one. Positions are Cartesian km in the contest frame; +z is up; azimuth in the x-y
 // plane from +x towards +y, elevation towards +z, degrees. Pixel (0, 0) is the top-left corner.
-import type { CameraState } from './state';
+import type { CameraState, StereoState } from './state';
 
 export type Vec3 = [number, number, number];
 
@@ -13,6 +13,36 @@ const add = (a: Vec3, b: Vec3): Vec3 => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
 const normalize = (a: Vec3): Vec3 => scale(a, 1 / Math.sqrt(dot(a, a)));
 const degToRad = (d: number) => (d * Math.PI) / 180;
 
+// One eye of a stereo pair (OrbitCamera's eyeOffsetKm, convergenceKm, pixelAspect; stereoEye):
+// the eye moved along the image's right axis, the image window shifted so that the view axis'
+// point at convergenceKm has no parallax (parallel axes, off-axis frustum).
+export interface EyeOffset {
+  eyeOffsetKm: number;
+  convergenceKm: number;
+  pixelAspect: number;
+}
+
+// The views of a state (StateRenderer's stereoViews and stereoLayout): one eye of the orbit
+// camera, or the left and right eye with their sizes; `width` x `height` is the composed image.
+export interface StereoLayout {
+  mode: string;
+  eyes: (EyeOffset & { width: number; height: number })[];
+  width: number;
+  height: number;
+}
+
+export function stereoLayout(stereo: StereoState | undefined, camera: CameraState, width: number, height: number): StereoLayout {
+  const mode = stereo?.mode ?? 'off';
+  if (!stereo || mode === 'off')
+    return { mode: 'off', eyes: [{ eyeOffsetKm: 0, convergenceKm: 0, pixelAspect: 1, width, height }], width, height };
+  const half = mode === 'side-by-side-half';
+  const eyeWidth = half ? Math.max(1, Math.floor(width / 2)) : width;
+  const pixelAspect = half ? width / eyeWidth : 1;
+  const convergenceKm = stereo.convergenceKm ?? camera.distanceKm;
+  const eyes = [-0.5, 0.5].map((side) => ({ eyeOffsetKm: side * stereo.eyeSeparationKm, convergenceKm, pixelAspect, width: eyeWidth, height }));
+  return { mode, eyes, width: mode === 'anaglyph' ? width : 2 * eyeWidth, height };
+}
+
 export class CameraFrame {
   readonly eye: Vec3;
   readonly forward: Vec3;
@@ -20,23 +50,26 @@ export class CameraFrame {
   readonly up: Vec3;
   readonly tanHalfFovY: number;
   readonly aspect: number;
+  readonly shiftX: number; // horizontal shift of the image window, tangent units (a stereo eye)
 
-  constructor(camera: CameraState, readonly width: number, readonly height: number) {
+  constructor(camera: CameraState, readonly width: number, readonly height: number, eye?: EyeOffset) {
     // As the server: keep the elevation a hair away from ±90° so +z never becomes the view direction.
     const el = degToRad(Math.min(89.999, Math.max(-89.999, camera.elevationDeg)));
     const az = degToRad(camera.azimuthDeg);
     const offset: Vec3 = [Math.cos(el) * Math.cos(az), Math.cos(el) * Math.sin(az), Math.sin(el)];
-    this.eye = add(camera.targetKm, scale(offset, camera.distanceKm));
     this.forward = normalize(scale(offset, -1));
     this.right = normalize(cross(this.forward, [0, 0, 1]));
     this.up = cross(this.right, this.forward);
+    const eyeOffsetKm = eye?.eyeOffsetKm ?? 0;
+    this.eye = add(add(camera.targetKm, scale(offset, camera.distanceKm)), scale(this.right, eyeOffsetKm));
+    this.shiftX = eye && eye.convergenceKm > 0 ? -eyeOffsetKm / eye.convergenceKm : 0;
     this.tanHalfFovY = Math.tan(degToRad(camera.fovYDeg) * 0.5);
-    this.aspect = width / height;
+    this.aspect = (width * (eye?.pixelAspect ?? 1)) / height;
   }
 
   // Unit direction through continuous image position (px, py); the centre of pixel i is i + 0.5.
   direction(px: number, py: number): Vec3 {
-    const sx = ((2 * px) / this.width - 1) * this.tanHalfFovY * this.aspect;
+    const sx = ((2 * px) / this.width - 1) * this.tanHalfFovY * this.aspect + this.shiftX;
     const sy = (1 - (2 * py) / this.height) * this.tanHalfFovY;
     return normalize(add(add(this.forward, scale(this.right, sx)), scale(this.up, sy)));
   }
@@ -46,7 +79,7 @@ export class CameraFrame {
   project(p: Vec3): { px: number; py: number; z: number } {
     const d: Vec3 = [p[0] - this.eye[0], p[1] - this.eye[1], p[2] - this.eye[2]];
     const z = dot(d, this.forward);
-    const sx = dot(d, this.right) / (z * this.tanHalfFovY * this.aspect);
+    const sx = (dot(d, this.right) / z - this.shiftX) / (this.tanHalfFovY * this.aspect);
     const sy = dot(d, this.up) / (z * this.tanHalfFovY);
     return { px: ((sx + 1) * this.width) / 2, py: ((1 - sy) * this.height) / 2, z };
   }

@@ -21,6 +21,9 @@ export interface FrameHeader {
   depthBytes: number;
   stats?: { passMs?: number; samples?: number; samplesPerSecond?: number; bricksSkipped?: number; bricksTotal?: number };
   selection?: { fractionOfMantle: number; volumeKm3: number } | null; // null on the first frame of a new still state
+  // A stereo frame (docs/protocol.md): the image is the composed pair (width x height), the depth
+  // map the two eyes' side by side; eyeWidth x eyeHeight is each eye as rendered.
+  stereo?: { mode: string; eyeSeparationKm: number; convergenceKm: number; eyeWidth: number; eyeHeight: number; pixelAspect: number };
 }
 export interface Frame {
   header: FrameHeader;

@@ -80,6 +80,21 @@ export function setUpControls(store: StateStore, host: ControlsHost): void {
     store.state.shading = { ...store.state.shading, enabled: $<HTMLInputElement>('lighting').checked };
     host.commit(false);
   });
+  // Stereo (state key stereo): the server renders both eyes; the view re-projects each.
+  const stereoInput = () => {
+    const separation = Number($<HTMLInputElement>('stereoSeparation').value);
+    const convergenceText = $<HTMLInputElement>('stereoConvergence').value.trim();
+    const convergence = Number(convergenceText);
+    store.state.stereo = {
+      mode: $<HTMLSelectElement>('stereoMode').value,
+      eyeSeparationKm: Number.isFinite(separation) && separation >= 0 ? separation : store.state.stereo.eyeSeparationKm,
+      convergenceKm: convergenceText === '' || !(convergence > 0) ? null : convergence,
+    };
+    if (store.autoFitImage) host.fitImage();
+    host.commit(false);
+  };
+  for (const id of ['stereoMode', 'stereoSeparation', 'stereoConvergence']) $(id).addEventListener('change', stereoInput);
+  void describeWebXr().then((text) => { $('xrNote').textContent = text; });
   $('core').addEventListener('change', () => {
     store.state.core = { ...store.state.core, visible: $<HTMLInputElement>('core').checked };
     host.commit(false);
@@ -140,7 +155,25 @@ export function syncControls(store: StateStore): void {
   $<HTMLSelectElement>('level').value = String(s.level);
   $<HTMLInputElement>('lighting').checked = Boolean((s.shading as { enabled?: boolean } | undefined)?.enabled);
   $<HTMLInputElement>('core').checked = (s.core as { visible?: boolean } | undefined)?.visible !== false;
+  $<HTMLSelectElement>('stereoMode').value = s.stereo.mode;
+  $<HTMLInputElement>('stereoSeparation').value = String(s.stereo.eyeSeparationKm);
+  $<HTMLInputElement>('stereoConvergence').value = s.stereo.convergenceKm === null ? '' : String(s.stereo.convergenceKm);
   $<HTMLInputElement>('step').value = String(s.step);
+}
+
+// Whether this browser offers WebXR immersive-vr (head-tracked stereo on a headset). This UI shows
+// the server's stereo pairs on the page (anaglyph, side by side); it has no WebXR session of its own
+// (docs/rendering.md, Stereo: what was and was not tested).
+export async function describeWebXr(): Promise<string> {
+  const xr = (navigator as Navigator & { xr?: { isSessionSupported(mode: string): Promise<boolean> } }).xr;
+  if (!xr) return 'WebXR: not available in this browser (no navigator.xr)';
+  try {
+    return (await xr.isSessionSupported('immersive-vr'))
+      ? 'WebXR: immersive-vr is offered (a headset session is not implemented; use side by side)'
+      : 'WebXR: immersive-vr is not offered here (no headset)';
+  } catch (e) {
+    return `WebXR: not available (${(e as Error).message})`;
+  }
 }
 
 // The URL of the page holds the state (#state=…) so that a bookmark reopens this view.

@@ -139,7 +139,7 @@ export class RenderLink {
     this.drawPending = false;
     const s = this.store.state;
     const bg = (s.background as [number, number, number] | undefined) ?? [0, 0, 0];
-    const kind = this.view.draw(s.camera, s.image.width, s.image.height, bg);
+    const kind = this.view.draw(s.camera, s.stereo, s.image.width, s.image.height, bg);
     this.observer?.drawn(kind, this.lastShownId < this.lastSentId);
   }
 

@@ -7,7 +7,7 @@ import schema from './generated/state.schema.json';
 import validateGenerated from './generated/validate_state';
 import type { RenderState } from './generated/state_types';
 
-export type { Brush, CameraState, PathlineFilter, PathlineState, RenderState } from './generated/state_types';
+export type { Brush, CameraState, PathlineFilter, PathlineState, RenderState, StereoState } from './generated/state_types';
 
 const validateDocument = validateGenerated as unknown as ValidateFunction;
 

@@ -4,8 +4,11 @@
 // camera in WebGL2 and textured with the frame's JPEG. Where the depth map has no hit, the grid
 // lies on a far sphere; triangles that mix hit and no-hit corners are dropped so the silhouette
 // does not smear into the background. Disocclusions stretch (no hole filling).
-import { CameraFrame, camerasEqual } from './camera';
-import type { CameraState } from './state';
+// A stereo frame (docs/rendering.md, Stereo) is re-projected eye by eye: each eye's half of the
+// depth map with that eye's camera, drawn with the current eye's camera into its half of the view
+// (side by side) or into its colour channels (anaglyph: red the left eye, green and blue the right).
+import { CameraFrame, camerasEqual, stereoLayout, type EyeOffset } from './camera';
+import type { CameraState, StereoState } from './state';
 import type { Frame } from './connection';
 
 const kPlanetRadiusKm = 6371;
@@ -16,13 +19,13 @@ in vec3 aPos;
 in vec2 aUv;
 in float aHit;
 uniform vec3 uEye, uRight, uUp, uForward;
-uniform float uTanHalfFovY, uAspect, uNear, uFar;
+uniform float uTanHalfFovY, uAspect, uShiftX, uNear, uFar;
 out vec2 vUv;
 out float vHit;
 void main() {
   vec3 d = aPos - uEye;
   float z = dot(d, uForward);
-  float x = dot(d, uRight) / (uTanHalfFovY * uAspect);
+  float x = (dot(d, uRight) - uShiftX * z) / (uTanHalfFovY * uAspect);
   float y = dot(d, uUp) / uTanHalfFovY;
   float a = (uFar + uNear) / (uFar - uNear), b = -2.0 * uFar * uNear / (uFar - uNear);
   gl_Position = vec4(x, y, a * z + b, z);
@@ -70,17 +73,29 @@ export interface ViewStats {
   framesShown: number;
 }
 
+// The mesh of one view of a frame (the frame, or one eye of a stereo frame).
+interface Mesh {
+  vao: WebGLVertexArrayObject;
+  buffer: WebGLBuffer;
+  indexBuffer: WebGLBuffer;
+  indexCount: number;
+  key: string;
+}
+
+// The stereo fields a frame's views depend on ('off' for a mono frame).
+function stereoKey(stereo: StereoState | undefined, camera: CameraState): string {
+  if (!stereo || stereo.mode === 'off') return 'off';
+  return `${stereo.mode}/${stereo.eyeSeparationKm}/${stereo.convergenceKm ?? camera.distanceKm}`;
+}
+
 export class View3D {
   private readonly gl: WebGL2RenderingContext;
   private readonly warpProgram: WebGLProgram;
   private readonly quadProgram: WebGLProgram;
   private readonly texture: WebGLTexture;
-  private readonly meshVao: WebGLVertexArrayObject;
-  private readonly meshBuffer: WebGLBuffer;
-  private readonly indexBuffer: WebGLBuffer;
+  private readonly meshes: Mesh[];
+  private meshCount = 0; // of the frame shown: 1, or 2 for a stereo frame
   private readonly quadVao: WebGLVertexArrayObject;
-  private indexCount = 0;
-  private meshKey = '';
   private frame: Frame | null = null;
   private decoding: Promise<void> = Promise.resolve();
   readonly stats: ViewStats = { warpedDraws: 0, exactDraws: 0, framesShown: 0 };
@@ -98,21 +113,23 @@ export class View3D {
     gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE);
     gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
 
-    this.meshVao = gl.createVertexArray()!;
-    this.meshBuffer = gl.createBuffer()!;
-    this.indexBuffer = gl.createBuffer()!;
-    gl.bindVertexArray(this.meshVao);
-    gl.bindBuffer(gl.ARRAY_BUFFER, this.meshBuffer);
-    const stride = 6 * 4;
-    const attrib = (name: string, size: number, offset: number) => {
-      const loc = gl.getAttribLocation(this.warpProgram, name);
-      gl.enableVertexAttribArray(loc);
-      gl.vertexAttribPointer(loc, size, gl.FLOAT, false, stride, offset);
-    };
-    attrib('aPos', 3, 0);
-    attrib('aUv', 2, 12);
-    attrib('aHit', 1, 20);
-    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.indexBuffer);
+    this.meshes = [0, 1].map(() => {
+      const mesh: Mesh = { vao: gl.createVertexArray()!, buffer: gl.createBuffer()!, indexBuffer: gl.createBuffer()!, indexCount: 0, key: '' };
+      gl.bindVertexArray(mesh.vao);
+      gl.bindBuffer(gl.ARRAY_BUFFER, mesh.buffer);
+      const stride = 6 * 4;
+      const attrib = (name: string, size: number, offset: number) => {
+        const loc = gl.getAttribLocation(this.warpProgram, name);
+        gl.enableVertexAttribArray(loc);
+        gl.vertexAttribPointer(loc, size, gl.FLOAT, false, stride, offset);
+      };
+      attrib('aPos', 3, 0);
+      attrib('aUv', 2, 12);
+      attrib('aHit', 1, 20);
+      gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, mesh.indexBuffer);
+      gl.bindVertexArray(null);
+      return mesh;
+    });
 
     this.quadVao = gl.createVertexArray()!;
     gl.bindVertexArray(this.quadVao);
@@ -141,33 +158,52 @@ export class View3D {
       gl.pixelStorei(gl.UNPACK_FLIP_Y_WEBGL, false);
       gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGB, gl.RGB, gl.UNSIGNED_BYTE, bitmap);
       bitmap.close();
-      this.buildMesh(frame);
+      this.buildMeshes(frame);
       this.frame = frame;
       this.stats.framesShown++;
     });
     return this.decoding;
   }
 
-  // One vertex per corner of the depth map's blocks, at the nearest finite depth of the blocks
-  // that share the corner (the server's depth is the nearest finite depth per block).
-  private buildMesh(frame: Frame): void {
+  // A mesh per view of the frame: a stereo frame's depth map holds the eyes side by side (each
+  // eyeWidth / depthWidth x 2 downsampled); its image holds them side by side or as an anaglyph.
+  private buildMeshes(frame: Frame): void {
     const h = frame.header;
-    const dw = h.depthWidth, dh = h.depthHeight;
-    const cam = new CameraFrame(h.camera, h.width, h.height);
+    const s = h.stereo;
+    if (!s) {
+      this.buildMesh(this.meshes[0], frame.depth, h.depthWidth, h.depthHeight, new CameraFrame(h.camera, h.width, h.height), 0, 1);
+      this.meshCount = 1;
+      return;
+    }
+    const dw = h.depthWidth / 2, dh = h.depthHeight;
+    for (let e = 0; e < 2; e++) {
+      const depth = new Float32Array(dw * dh);
+      for (let j = 0; j < dh; j++) depth.set(frame.depth.subarray(j * h.depthWidth + e * dw, j * h.depthWidth + (e + 1) * dw), j * dw);
+      const eye: EyeOffset = { eyeOffsetKm: (e - 0.5) * s.eyeSeparationKm, convergenceKm: s.convergenceKm, pixelAspect: s.pixelAspect };
+      const u0 = s.mode === 'anaglyph' ? 0 : e * 0.5, u1 = s.mode === 'anaglyph' ? 1 : u0 + 0.5;
+      this.buildMesh(this.meshes[e], depth, dw, dh, new CameraFrame(h.camera, s.eyeWidth, s.eyeHeight, eye), u0, u1);
+    }
+    this.meshCount = 2;
+  }
+
+  // One vertex per corner of the depth map's blocks, at the nearest finite depth of the blocks
+  // that share the corner (the server's depth is the nearest finite depth per block); texture
+  // u from u0 to u1 across the view.
+  private buildMesh(mesh: Mesh, frameDepth: Float32Array, dw: number, dh: number, cam: CameraFrame, u0: number, u1: number): void {
     const eyeDist = Math.hypot(...cam.eye);
     const farT = eyeDist + 2 * kPlanetRadiusKm; // behind the planet, for pixels that hit nothing
     const nx = dw + 1, ny = dh + 1;
     // Blocks that hit nothing next to ones that did (the translucent rim of a feature, whose
     // opacity stayed below depthOpacity) take the nearest depth within kRimBlocks, so the rim
     // moves with its feature instead of staying on the far sphere.
-    const depth = new Float32Array(frame.depth);
+    const depth = new Float32Array(frameDepth);
     for (let j = 0; j < dh; j++)
       for (let i = 0; i < dw; i++) {
-        if (Number.isFinite(frame.depth[j * dw + i])) continue;
+        if (Number.isFinite(frameDepth[j * dw + i])) continue;
         let t = Infinity;
         for (let bj = Math.max(0, j - kRimBlocks); bj <= Math.min(dh - 1, j + kRimBlocks); bj++)
           for (let bi = Math.max(0, i - kRimBlocks); bi <= Math.min(dw - 1, i + kRimBlocks); bi++) {
-            const v = frame.depth[bj * dw + bi];
+            const v = frameDepth[bj * dw + bi];
             if (v < t) t = v;
           }
         depth[j * dw + i] = t;
@@ -182,24 +218,24 @@ export class View3D {
             if (Number.isFinite(v) && v < t) t = v;
           }
         const hit = Number.isFinite(t);
-        const px = (i * h.width) / dw, py = (j * h.height) / dh;
+        const px = (i * cam.width) / dw, py = (j * cam.height) / dh;
         const d = cam.direction(px, py);
         const tt = hit ? t : farT;
         const o = (j * nx + i) * 6;
         data[o] = cam.eye[0] + d[0] * tt;
         data[o + 1] = cam.eye[1] + d[1] * tt;
         data[o + 2] = cam.eye[2] + d[2] * tt;
-        data[o + 3] = i / dw;
+        data[o + 3] = u0 + ((u1 - u0) * i) / dw;
         data[o + 4] = j / dh;
         data[o + 5] = hit ? 1 : 0;
       }
     }
     const gl = this.gl;
-    gl.bindVertexArray(this.meshVao);
-    gl.bindBuffer(gl.ARRAY_BUFFER, this.meshBuffer);
+    gl.bindVertexArray(mesh.vao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, mesh.buffer);
     gl.bufferData(gl.ARRAY_BUFFER, data, gl.DYNAMIC_DRAW);
     const key = `${dw}x${dh}`;
-    if (key !== this.meshKey) {
+    if (key !== mesh.key) {
       const idx = new Uint32Array(dw * dh * 6);
       let k = 0;
       for (let j = 0; j < dh; j++)
@@ -208,32 +244,39 @@ export class View3D {
           idx[k++] = a; idx[k++] = c; idx[k++] = b;
           idx[k++] = b; idx[k++] = c; idx[k++] = e;
         }
-      gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.indexBuffer);
+      gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, mesh.indexBuffer);
       gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, idx, gl.STATIC_DRAW);
-      this.indexCount = idx.length;
-      this.meshKey = key;
+      mesh.indexCount = idx.length;
+      mesh.key = key;
     }
     gl.bindVertexArray(null);
   }
 
-  // Draws the last frame for `camera` at image size width x height (letterboxed into the canvas).
-  // Returns 'exact' when the frame's own camera and size match, 'warped' when re-projected.
-  draw(camera: CameraState, width: number, height: number, background: [number, number, number]): 'exact' | 'warped' | 'none' {
+  // Draws the last frame for `camera` and `stereo` at image size width x height (each eye's, as the
+  // state's image; letterboxed into the canvas as the composed picture). Returns 'exact' when the
+  // frame's own camera, stereo views and size match, 'warped' when re-projected.
+  draw(camera: CameraState, stereo: StereoState | undefined, width: number, height: number,
+    background: [number, number, number]): 'exact' | 'warped' | 'none' {
     const gl = this.gl;
     const cw = this.canvas.width, ch = this.canvas.height;
     gl.viewport(0, 0, cw, ch);
+    gl.colorMask(true, true, true, true);
     gl.clearColor(background[0], background[1], background[2], 1);
     gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
     const frame = this.frame;
     if (!frame) return 'none';
-    // Fit the image's aspect into the canvas.
-    const aspect = width / height;
+    const layout = stereoLayout(stereo, camera, width, height);
+    // Fit the composed image's aspect into the canvas.
+    const aspect = layout.width / layout.height;
     let vw = cw, vh = Math.round(cw / aspect);
     if (vh > ch) { vh = ch; vw = Math.round(ch * aspect); }
-    gl.viewport(Math.floor((cw - vw) / 2), Math.floor((ch - vh) / 2), vw, vh);
+    const vx = Math.floor((cw - vw) / 2), vy = Math.floor((ch - vh) / 2);
+    gl.viewport(vx, vy, vw, vh);
     gl.bindTexture(gl.TEXTURE_2D, this.texture);
     const h = frame.header;
-    if (camerasEqual(camera, h.camera) && width * h.height === height * h.width) {
+    const frameStereo = h.stereo ? stereoKey({ mode: h.stereo.mode, eyeSeparationKm: h.stereo.eyeSeparationKm, convergenceKm: h.stereo.convergenceKm }, h.camera) : 'off';
+    if (camerasEqual(camera, h.camera) && stereoKey(stereo, camera) === frameStereo &&
+      layout.width * h.height === layout.height * h.width) {
       gl.useProgram(this.quadProgram);
       gl.disable(gl.DEPTH_TEST);
       gl.bindVertexArray(this.quadVao);
@@ -242,23 +285,33 @@ export class View3D {
       this.stats.exactDraws++;
       return 'exact';
     }
-    const cam = new CameraFrame(camera, width, height);
     const p = this.warpProgram;
     gl.useProgram(p);
     gl.enable(gl.DEPTH_TEST);
     gl.depthFunc(gl.LEQUAL);
-    gl.uniform3fv(gl.getUniformLocation(p, 'uEye'), cam.eye);
-    gl.uniform3fv(gl.getUniformLocation(p, 'uRight'), cam.right);
-    gl.uniform3fv(gl.getUniformLocation(p, 'uUp'), cam.up);
-    gl.uniform3fv(gl.getUniformLocation(p, 'uForward'), cam.forward);
-    gl.uniform1f(gl.getUniformLocation(p, 'uTanHalfFovY'), cam.tanHalfFovY);
-    gl.uniform1f(gl.getUniformLocation(p, 'uAspect'), cam.aspect);
-    const eyeDist = Math.hypot(...cam.eye);
-    gl.uniform1f(gl.getUniformLocation(p, 'uNear'), Math.max(1, (eyeDist - 3 * kPlanetRadiusKm) * 0.5));
-    gl.uniform1f(gl.getUniformLocation(p, 'uFar'), eyeDist + 8 * kPlanetRadiusKm + 1e5);
-    gl.bindVertexArray(this.meshVao);
-    gl.drawElements(gl.TRIANGLES, this.indexCount, gl.UNSIGNED_INT, 0);
+    const sideBySide = layout.mode === 'side-by-side' || layout.mode === 'side-by-side-half';
+    layout.eyes.forEach((eye, e) => {
+      // Each eye of the view from the frame's view of the same eye (a mono frame serves both).
+      const mesh = this.meshes[Math.min(e, this.meshCount - 1)];
+      if (sideBySide) gl.viewport(vx + (e * vw) / 2, vy, vw / 2, vh);
+      if (layout.mode === 'anaglyph') gl.colorMask(e === 0, e === 1, e === 1, true);
+      gl.clear(gl.DEPTH_BUFFER_BIT);
+      const cam = new CameraFrame(camera, eye.width, eye.height, eye);
+      gl.uniform3fv(gl.getUniformLocation(p, 'uEye'), cam.eye);
+      gl.uniform3fv(gl.getUniformLocation(p, 'uRight'), cam.right);
+      gl.uniform3fv(gl.getUniformLocation(p, 'uUp'), cam.up);
+      gl.uniform3fv(gl.getUniformLocation(p, 'uForward'), cam.forward);
+      gl.uniform1f(gl.getUniformLocation(p, 'uTanHalfFovY'), cam.tanHalfFovY);
+      gl.uniform1f(gl.getUniformLocation(p, 'uAspect'), cam.aspect);
+      gl.uniform1f(gl.getUniformLocation(p, 'uShiftX'), cam.shiftX);
+      const eyeDist = Math.hypot(...cam.eye);
+      gl.uniform1f(gl.getUniformLocation(p, 'uNear'), Math.max(1, (eyeDist - 3 * kPlanetRadiusKm) * 0.5));
+      gl.uniform1f(gl.getUniformLocation(p, 'uFar'), eyeDist + 8 * kPlanetRadiusKm + 1e5);
+      gl.bindVertexArray(mesh.vao);
+      gl.drawElements(gl.TRIANGLES, mesh.indexCount, gl.UNSIGNED_INT, 0);
+    });
     gl.bindVertexArray(null);
+    gl.colorMask(true, true, true, true);
     this.stats.warpedDraws++;
     return 'warped';
   }
