@@ -12,6 +12,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <tbb/task_arena.h>
+
 #include <cerrno>
 #include <cstring>
 
@@ -101,7 +103,10 @@ const float* StepVolume::brickBounds(size_t var, uint32_t brickSize) const
     if (bounds.empty()) {
         const BrickLayout layout = BrickLayout::forGrid(m_grid, brickSize);
         bounds.resize(2 * layout.brickCount());
-        computeBrickBounds(m_grid, layout, {m_values[var], m_grid.cellCount()}, bounds);
+        // Isolated: while this thread waits inside the parallel loop it must not pick up another
+        // task that asks this volume for derived data and blocks on the lock it holds.
+        tbb::this_task_arena::isolate(
+            [&] { computeBrickBounds(m_grid, layout, {m_values[var], m_grid.cellCount()}, bounds); });
     }
     return bounds.data();
 }
@@ -112,7 +117,9 @@ const NodeGradient& StepVolume::nodeGradient(size_t var) const
     std::lock_guard lock(m_derivedMutex);
     auto it = m_gradients.find(var);
     if (it == m_gradients.end())
-        it = m_gradients.emplace(var, raypc::nodeGradient(m_grid, m_values[var])).first;
+        it = m_gradients
+                 .emplace(var, tbb::this_task_arena::isolate([&] { return raypc::nodeGradient(m_grid, m_values[var]); }))
+                 .first;  // isolated as above
     return it->second;
 }
 
