@@ -1,7 +1,7 @@
 // End-to-end browser tests of the UI against the real server:
 //   node tests/browser/cases.mjs CASE RAYPC FIXTURE_DIR
 // CASE: brush | warp | play | save_load | two_tabs | presets | pathlines | resolution | context | colours |
-// brush_values | multi_brush | axes | camera | responsive | stereo [gpu].
+// brush_values | multi_brush | axes | camera | responsive | stereo | light [gpu].
 // Each case starts its own server and browser.
 import { readFileSync, writeFileSync } from 'node:fs';
 import { spawnSync } from 'node:child_process';
@@ -230,6 +230,58 @@ const cases = {
     await waitConverged(page);
     const off = await page.evaluate(() => window.__raypc.headers.at(-1));
     check((await rState(page)).stereo.mode === 'off' && !off.stereo, 'stereo off did not give a mono frame');
+  },
+
+  // Lighting: the light's controls are off while Lighting is not ticked; dragging the azimuth and
+  // elevation sliders puts the unit vector of those angles (camera frame: x right, y up, z towards
+  // the viewer) into state.shading.light, the specular slider into shading.specular, and each
+  // changes the picture.
+  async light({ context, url }) {
+    const page = await openUi(context, url);
+    await standardView(page);
+    // The server's default state is lit: off first, then on again.
+    await page.uncheck('#lighting');
+    await waitConverged(page);
+    check(await page.isDisabled('#lightAzimuth') && await page.isDisabled('#lightSpecular'), 'the light controls are enabled while lighting is off');
+    await page.check('#lighting');
+    await waitConverged(page);
+    check(!(await page.isDisabled('#lightAzimuth')), 'the light controls stay disabled with lighting on');
+    const s0 = await rState(page);
+    check(s0.shading.enabled === true, `state.shading after ticking Lighting: ${JSON.stringify(s0.shading)}`);
+    const lit = await viewPixels(page);
+    // A click on a range input moves it there: azimuth near -90° (light from the left), elevation
+    // near -35° (from below).
+    const clickAt = async (id, fraction) => {
+      const r = await page.locator(id).boundingBox();
+      await page.mouse.click(r.x + r.width * fraction, r.y + r.height / 2);
+      await waitConverged(page);
+      return Number(await page.inputValue(id));
+    };
+    const az = await clickAt('#lightAzimuth', 0.25);
+    const el = await clickAt('#lightElevation', 0.3);
+    check(az < -45 && az > -135 && el < -15 && el > -75, `sliders after the clicks: azimuth ${az}, elevation ${el}`);
+    const s1 = await rState(page);
+    const rad = Math.PI / 180;
+    const want = [Math.cos(el * rad) * Math.sin(az * rad), Math.sin(el * rad), Math.cos(el * rad) * Math.cos(az * rad)];
+    check(s1.shading.light.every((v, i) => Math.abs(v - want[i]) < 1e-4), `state.shading.light ${JSON.stringify(s1.shading.light)} for azimuth ${az}°, elevation ${el}°: expected ${JSON.stringify(want)}`);
+    const h = await page.evaluate(() => { const r = window.__raypc; return r.headers.at(-1).id === r.lastSentId; });
+    check(h, 'the frame shown is not of the state with the new light');
+    const moved = await viewPixels(page);
+    const dLight = meanAbsDiff(lit, moved);
+    check(dLight > 1, `moving the light to the left and below hardly changed the picture (${dLight.toFixed(2)} grey levels)`);
+    const spec0 = s1.shading.specular;
+    const spec = await clickAt('#lightSpecular', 0.97);
+    const s2 = await rState(page);
+    check(spec > 0.9 && s2.shading.specular === spec && spec0 !== spec, `shading.specular ${s2.shading.specular} after the slider went to ${spec} (was ${spec0})`);
+    // A saved state's light comes back into the sliders.
+    await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, shading: { ...s.shading, light: [0, 1, 0] } }); });
+    await waitConverged(page);
+    const back = [Number(await page.inputValue('#lightAzimuth')), Number(await page.inputValue('#lightElevation'))];
+    check(back[1] === 90, `a state with the light straight up shows elevation ${back[1]}`);
+    await page.uncheck('#lighting');
+    await waitConverged(page);
+    check(await page.isDisabled('#lightElevation'), 'the light controls stay enabled after lighting is turned off');
+    console.log(`  light at azimuth ${az}°, elevation ${el}°: picture changed by ${dLight.toFixed(2)} grey levels; specular ${spec0} -> ${spec}`);
   },
 
   // Play runs over all steps in order, sends the next step only after a frame of the current one
