@@ -435,6 +435,35 @@ TEST(PathlinePreprocess, SeedPersistenceIsThePersistenceOfTheSeedsPair)
     const double want[] = {peak[0] - peak[2], std::abs(peak[1]), peak[0] - peak[2], std::abs(peak[3])};
     for (size_t k = 0; k < 4; ++k)
         EXPECT_NEAR(set.attribute(line[k], column), want[k], 0.04 * want[k]) << "blob " << k;
+
+    // A set stored before the column (lines.json version 1) reads with the columns it lists, and a
+    // rerun of preprocess redoes it (the others stay).
+    PathlineSet old = set;
+    old.columns.erase(old.columns.begin() + column);
+    old.units.erase(old.units.begin() + column);
+    old.attributes.clear();
+    for (size_t i = 0; i < set.lineCount(); ++i)
+        for (size_t c = 0; c < set.columns.size(); ++c)
+            if (int(c) != column)
+                old.attributes.push_back(set.attribute(i, c));
+    const auto dir0 = pathlineDir(dir / "ds", 0);
+    std::filesystem::remove_all(dir0);
+    writePathlineSet(dir0, old);
+    auto lines = nlohmann::json::parse(std::ifstream(dir0 / "lines.json"));
+    lines["version"] = 1;
+    std::ofstream(dir0 / "lines.json") << lines.dump();
+    const PathlineSet read = loadPathlineSet(dir / "ds", 0);
+    EXPECT_EQ(read.column("seed persistence"), -1);
+    EXPECT_EQ(read.columns.size(), set.columns.size() - 1);
+    EXPECT_EQ(read.attribute(1, read.column("length")), set.attribute(1, set.column("length")));
+    lines["version"] = kPathlineSetVersion + 1;
+    std::ofstream(dir0 / "lines.json") << lines.dump();
+    EXPECT_THROW(loadPathlineSet(dir / "ds", 0), Error);
+    lines["version"] = 1;
+    std::ofstream(dir0 / "lines.json") << lines.dump();
+    const auto again = preprocess(files, dir / "ds", o);
+    EXPECT_EQ(again.pathlineSetsWritten, 1);
+    EXPECT_EQ(loadPathlineSet(dir / "ds", 0).column("seed persistence"), column);
 }
 
 }  // namespace
