@@ -76,14 +76,19 @@ export class PersistencePanel {
     const pl = this.store.state.pathlines;
     if (!pl) return;
     const others = pl.filters.filter((f) => f.name !== kSeedPersistence);
-    if (t !== null) {
-      const top = Math.max(t, this.diagram?.range ?? t, this.host.columnMax(kSeedPersistence) ?? t);
-      others.push({ name: kSeedPersistence, min: t, max: top });
-    }
+    if (t !== null) others.push({ name: kSeedPersistence, min: t, max: this.upperBound(t) });
     pl.filters = others;
     this.host.filtersChanged(interactive);
     this.host.commit(interactive);
     this.draw();
+  }
+
+  // The upper end of the filter: no pair of any step can be more persistent than the variable's
+  // global range over all steps (GET /api/info), so the lines of the steps played later pass too.
+  private upperBound(t: number): number {
+    const v = this.store.info.variables.find((x) => x.name === this.diagram?.variable);
+    const global = v ? v.max - v.min : 0;
+    return Math.max(t, global, this.diagram?.range ?? t, this.host.columnMax(kSeedPersistence) ?? t);
   }
 
   // Redraws the diagram (after the state's filters changed elsewhere too).
@@ -174,7 +179,7 @@ export class PersistencePanel {
     const pl = this.store.state.pathlines;
     if (!pl || !this.dragging) return;
     const others = pl.filters.filter((f) => f.name !== kSeedPersistence);
-    if (t !== null) others.push({ name: kSeedPersistence, min: t, max: Math.max(t, this.diagram?.range ?? t, this.host.columnMax(kSeedPersistence) ?? t) });
+    if (t !== null) others.push({ name: kSeedPersistence, min: t, max: this.upperBound(t) });
     pl.filters = others;
     this.host.filtersChanged(true);
     this.host.commit(true);
