@@ -39,8 +39,8 @@ struct CriticalPoint {
     float value = 0;
     uint8_t lowerComponents = 0, upperComponents = 0;
     double latDeg = 0, lonDeg = 0, rKm = 0;  // the grid point's coordinates
-    // Of the persistence pair(s) it belongs to (the largest), where selectSeeds used persistence;
-    // NaN otherwise.
+    // Of the persistence pair(s) it belongs to (the largest), as selectSeeds sets it (0 for a
+    // saddle in no extremum pair); NaN where nothing set it.
     double persistence = std::numeric_limits<double>::quiet_NaN();
 };
 

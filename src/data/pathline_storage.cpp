@@ -46,7 +46,7 @@ void writePathlineSet(const fs::path& dir, const PathlineSet& set)
     fs::create_directories(dir);
     json j;
     j["format"] = "raypc-pathlines";
-    j["version"] = 1;
+    j["version"] = kPathlineSetVersion;
     j["injection_step"] = set.injectionStep;
     j["injection_time_myr"] = set.injectionTimeMyr;
     j["end_step"] = set.endStep;
@@ -83,8 +83,10 @@ PathlineSet loadPathlineSet(const fs::path& dataset, int step)
     PathlineSet set;
     try {
         const json j = json::parse(readFile(jsonPath));
-        if (j.at("format").get<std::string>() != "raypc-pathlines" || j.at("version").get<int>() != 1)
-            fail("{}: not a version 1 raypc-pathlines file", jsonPath.string());
+        // Version 1 (before the "seed persistence" column) reads as it is, with its own columns.
+        const int version = j.at("format").get<std::string>() == "raypc-pathlines" ? j.at("version").get<int>() : 0;
+        if (version < 1 || version > kPathlineSetVersion)
+            fail("{}: not a raypc-pathlines file of version 1 to {}", jsonPath.string(), kPathlineSetVersion);
         set.injectionStep = j.at("injection_step").get<int>();
         set.injectionTimeMyr = j.at("injection_time_myr").get<double>();
         set.endStep = j.at("end_step").get<int>();

@@ -11,6 +11,10 @@
 
 namespace raypc {
 
+// The version of lines.json this build writes: 2 added the "seed persistence" column; version 1
+// sets (without it) are still read.
+inline constexpr int kPathlineSetVersion = 2;
+
 // DATASET/pathlines/NNNN.
 std::filesystem::path pathlineDir(const std::filesystem::path& dataset, int step);
 

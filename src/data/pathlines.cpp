@@ -261,7 +261,7 @@ PathlineSet tracePathlines(const FieldSeries& series, const PathlineTracer& trac
     set.injectionStep = injectionStep;
     set.injectionTimeMyr = series.timesMyr[injectionStep];
     set.endStep = endStep;
-    const std::string fixedUnits[] = {"", "", "Myr", "Myr", "km", "", "degrees_north", "degrees_east", "km",
+    const std::string fixedUnits[] = {"", "", "", "Myr", "Myr", "km", "", "degrees_north", "degrees_east", "km",
                                       "degrees_north", "degrees_east", "km"};
     set.columns = pathlineColumns(names);
     set.units.assign(std::begin(fixedUnits), std::end(fixedUnits));
@@ -290,7 +290,9 @@ PathlineSet tracePathlines(const FieldSeries& series, const PathlineTracer& trac
         const double ta = line.timesMyr.front(), tb = line.timesMyr.back();
         const SphericalPoint sa = cartesianToSpherical(a), sb = cartesianToSpherical(b);
         float* row = set.attributes.data() + i * nc;
-        const double fixed[] = {static_cast<double>(seeds[i].kind), seeds[i].value, t0, tb - ta, line.lengthKm,
+        // A seed without a persistence (chosen by hand, or by a rule that computed none) gets 0.
+        const double persistence = std::isnan(seeds[i].persistence) ? 0.0 : seeds[i].persistence;
+        const double fixed[] = {static_cast<double>(seeds[i].kind), seeds[i].value, persistence, t0, tb - ta, line.lengthKm,
                                 static_cast<double>(line.end), sa.latDeg, sa.lonDeg, sa.rKm,
                                 sb.latDeg, sb.lonDeg, sb.rKm};
         for (size_t c = 0; c < kPathlineFixedColumnCount; ++c)

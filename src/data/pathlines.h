@@ -107,8 +107,11 @@ struct PathlineSet {
 
 // Fixed attribute columns, before the "start <variable>" and "end <variable>" columns (one each per
 // dataset variable, in dataset order). Codes: seed kind = CriticalKind, end reason = PathlineEnd.
+// "seed persistence" is the persistence of the seed's pair (the largest of its pairs; 0 for a
+// saddle the value rule chose that ends no extremum pair), in the seed field's units; sets stored
+// before it (lines.json version 1) lack the column.
 inline constexpr const char* kPathlineFixedColumns[] = {
-    "seed kind", "seed value", "injection time", "duration", "length", "end reason",
+    "seed kind", "seed value", "seed persistence", "injection time", "duration", "length", "end reason",
     "start lat", "start lon", "start radius", "end lat", "end lon", "end radius"};
 inline constexpr size_t kPathlineFixedColumnCount = std::size(kPathlineFixedColumns);
 

@@ -1,6 +1,7 @@
 #include "data/pathline_export.h"
 #include "data/pathline_storage.h"
 #include "data/pathlines.h"
+#include "data/persistence.h"
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -355,6 +356,114 @@ TEST(PathlinePreprocess, ContestFixtureLinesFollowTheAnalyticFlow)
     o.pathlines.field = "no such field";
     EXPECT_THROW(preprocess(files, dir / "other", o), Error);
     EXPECT_FALSE(std::filesystem::exists(dir / "other"));
+}
+
+// The "seed persistence" column: each line carries the persistence of its seed's pair, as
+// persistencePairs finds it on the stored values (the largest pair the seed ends), and on the
+// contest fixture, whose four Gaussian blobs are the only features, the seeds at the blobs carry
+// the blobs' amplitudes: the 400 K maximum and the -350 K minimum form the global pair (750 K
+// apart), the 300 K maximum and the -300 K minimum die at saddles in the near-zero background.
+// The amplitudes are those of the grid's sample of each blob (its centre lies between grid
+// points) and hold to 4 %: the fixture subtracts each shell's mean (about 1 % of an amplitude).
+TEST(PathlinePreprocess, SeedPersistenceIsThePersistenceOfTheSeedsPair)
+{
+    const auto truth = nlohmann::json::parse(std::ifstream(testing::contestLayoutDir() / "truth.json"));
+    TempDir dir("plpersist");
+    PreprocessOptions o;
+    o.quiet = true;
+    o.sampleRows = 1000;
+    o.pathlines.steps = 1;
+    const auto files = listSnapshotFiles({testing::contestLayoutDir()});
+    preprocess(files, dir / "ds", o);
+    const auto ds = Dataset::open(dir / "ds");
+    const PathlineSet set = loadPathlineSet(ds->dir(), 0);
+    const int column = set.column("seed persistence");
+    ASSERT_EQ(column, 2);
+    ASSERT_GE(set.lineCount(), 4u);
+    const auto volume = ds->load(0, 0);
+    const SphericalGrid& g = volume->grid();
+    const std::span<const float> values(volume->values(size_t(ds->variableIndex("temperature anomaly"))), g.cellCount());
+    const auto pairs = persistencePairs(g, values);
+    auto nearestIndex = [&](double latDeg, double lonDeg, double rKm) {
+        auto nearest = [](const std::vector<double>& axis, double x) {
+            return size_t(std::min_element(axis.begin(), axis.end(), [&](double a, double b) {
+                              return std::abs(a - x) < std::abs(b - x);
+                          }) - axis.begin());
+        };
+        const double lon = std::fmod(lonDeg + 360.0, 360.0);
+        return g.index(nearest(g.latDeg, latDeg), nearest(g.rKm, rKm), nearest(g.lonDeg, lon));
+    };
+    std::vector<size_t> seedIndex(set.lineCount());
+    for (size_t i = 0; i < set.lineCount(); ++i) {
+        seedIndex[i] = nearestIndex(set.attribute(i, set.column("start lat")), set.attribute(i, set.column("start lon")),
+                                    set.attribute(i, set.column("start radius")));
+        double expected = -1;
+        for (const auto& p : pairs)  // by decreasing persistence: the first pair the seed ends
+            if (p.birthIndex == seedIndex[i] || p.deathIndex == seedIndex[i]) {
+                expected = p.persistence();
+                break;
+            }
+        ASSERT_GE(expected, 0) << "line " << i << ": its seed ends no pair";
+        EXPECT_NEAR(set.attribute(i, column), expected, 1e-5 * expected) << i;
+        EXPECT_GT(set.attribute(i, column), set.threshold) << i;
+    }
+    // The blobs: the grid's largest sample of amp exp(-d²/2σ²), at the line seeded nearest each centre.
+    std::vector<double> peak;
+    std::vector<size_t> line;
+    for (const auto& b : truth["blobs_lat_lon_rkm_amp_sigma"]) {
+        const double lat = b[0], lon = b[1], r = b[2], amp = b[3], sigma = b[4];
+        double factor = 0;
+        for (size_t a = 0; a < g.nLat(); ++a)
+            for (size_t k = 0; k < g.nR(); ++k)
+                for (size_t c = 0; c < g.nLon(); ++c)
+                    factor = std::max(factor, testing::gaussianBlob(g, a, k, c, lat, lon, r, sigma));
+        peak.push_back(amp * factor);
+        const Vec3d centre = sphericalToCartesianKm(lat, lon, r);
+        size_t best = 0;
+        double bestKm = 1e30;
+        for (size_t i = 0; i < set.lineCount(); ++i) {
+            const float* q = &set.points[4 * set.offsets[i]];
+            const double km = std::hypot(q[0] - centre.x, q[1] - centre.y, q[2] - centre.z);
+            if (km < bestKm) {
+                bestKm = km;
+                best = i;
+            }
+        }
+        EXPECT_LT(bestKm, 400.0) << "no seed near the blob at " << lat << ", " << lon;
+        line.push_back(best);
+    }
+    const double want[] = {peak[0] - peak[2], std::abs(peak[1]), peak[0] - peak[2], std::abs(peak[3])};
+    for (size_t k = 0; k < 4; ++k)
+        EXPECT_NEAR(set.attribute(line[k], column), want[k], 0.04 * want[k]) << "blob " << k;
+
+    // A set stored before the column (lines.json version 1) reads with the columns it lists, and a
+    // rerun of preprocess redoes it (the others stay).
+    PathlineSet old = set;
+    old.columns.erase(old.columns.begin() + column);
+    old.units.erase(old.units.begin() + column);
+    old.attributes.clear();
+    for (size_t i = 0; i < set.lineCount(); ++i)
+        for (size_t c = 0; c < set.columns.size(); ++c)
+            if (int(c) != column)
+                old.attributes.push_back(set.attribute(i, c));
+    const auto dir0 = pathlineDir(dir / "ds", 0);
+    std::filesystem::remove_all(dir0);
+    writePathlineSet(dir0, old);
+    auto lines = nlohmann::json::parse(std::ifstream(dir0 / "lines.json"));
+    lines["version"] = 1;
+    std::ofstream(dir0 / "lines.json") << lines.dump();
+    const PathlineSet read = loadPathlineSet(dir / "ds", 0);
+    EXPECT_EQ(read.column("seed persistence"), -1);
+    EXPECT_EQ(read.columns.size(), set.columns.size() - 1);
+    EXPECT_EQ(read.attribute(1, read.column("length")), set.attribute(1, set.column("length")));
+    lines["version"] = kPathlineSetVersion + 1;
+    std::ofstream(dir0 / "lines.json") << lines.dump();
+    EXPECT_THROW(loadPathlineSet(dir / "ds", 0), Error);
+    lines["version"] = 1;
+    std::ofstream(dir0 / "lines.json") << lines.dump();
+    const auto again = preprocess(files, dir / "ds", o);
+    EXPECT_EQ(again.pathlineSetsWritten, 1);
+    EXPECT_EQ(loadPathlineSet(dir / "ds", 0).column("seed persistence"), column);
 }
 
 }  // namespace

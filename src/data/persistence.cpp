@@ -16,6 +16,7 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 
 namespace raypc {
 namespace {
@@ -194,6 +195,17 @@ SeedSelection selectSeeds(const SphericalGrid& grid, std::span<const float> valu
             maxAbs = std::max(maxAbs, std::abs(double(x)));
         out.seeds = selectSignificant(all, maxAbs, filter);
         out.threshold = significanceThreshold(filter, maxAbs);
+        // The seeds' persistence too (the pathlines' "seed persistence" attribute), so that a set
+        // chosen by value can still be thresholded by persistence.
+        const auto pairs = persistencePairs(grid, values);
+        std::unordered_map<size_t, double> largest;
+        for (const auto& p : pairs)  // by decreasing persistence: the first met is the largest
+            for (const size_t index : {p.birthIndex, p.deathIndex})
+                largest.try_emplace(index, p.persistence());
+        for (auto& s : out.seeds) {
+            const auto it = largest.find(s.index);
+            s.persistence = it == largest.end() ? 0.0 : it->second;
+        }
         return out;
     }
     const auto pairs = persistencePairs(grid, values);

@@ -67,7 +67,8 @@ std::vector<PersistencePair> persistencePairs(const SphericalGrid& grid, std::sp
 //     ends of the global pair), with filter.saddles also the saddles of those pairs; ordered by
 //     decreasing persistence (a point in several pairs counts with the largest); each point's
 //     `persistence` is set.
-//   SeedRule::Value: selectSignificant with the step's largest |value|.
+//   SeedRule::Value: selectSignificant with the step's largest |value|; each point's `persistence`
+//     is set as well (the largest of its pairs; 0 for a saddle that ends no extremum pair).
 // Then at most filter.maxCount. Throws like persistencePairs, and raypc::Error for a filter that
 // checkCriticalPointFilter refuses.
 struct SeedSelection {

@@ -121,7 +121,9 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
             if (fs::exists(dir / "lines.json")) {
                 try {
                     const json old = json::parse(readFile(dir / "lines.json"));
-                    if (old.at("settings") == settings && old.at("end_step").get<int>() == endStep) {
+                    // A set of an older version lacks columns (seed persistence): redone.
+                    if (old.at("settings") == settings && old.at("end_step").get<int>() == endStep &&
+                        old.at("version").get<int>() == kPathlineSetVersion) {
                         ++summary.pathlineSetsSkipped;
                         continue;
                     }

@@ -49,7 +49,7 @@ inline PathlineSet makePathlineSet(int injectionStep, double injectionTimeMyr, i
         set.offsets.push_back(uint32_t(set.points.size() / 4));
         const SphericalPoint a = cartesianToSpherical(line.pointsKm.front());
         const SphericalPoint b = cartesianToSpherical(line.pointsKm.back());
-        std::vector<float> row = {3.0f, 100.0f, float(injectionTimeMyr),
+        std::vector<float> row = {3.0f, 100.0f, 50.0f, float(injectionTimeMyr),
                                   float(line.timesMyr.back() - line.timesMyr.front()), float(lengthKm), 0.0f,
                                   float(a.latDeg), float(a.lonDeg), float(a.rKm), float(b.latDeg), float(b.lonDeg),
                                   float(b.rKm)};

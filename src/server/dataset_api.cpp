@@ -14,6 +14,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
@@ -162,6 +163,90 @@ std::shared_ptr<const PathlineCache::Window> PathlineCache::get(int step, int wi
     while (m_lru.size() > m_maxEntries)
         m_lru.pop_back();
     return sets;
+}
+
+PersistenceCache::PersistenceCache(StepCache* volumes, size_t maxEntries)
+    : m_volumes(volumes), m_maxEntries(std::max<size_t>(1, maxEntries))
+{
+}
+
+std::shared_ptr<const PersistenceCache::Pairs> PersistenceCache::get(int step, int variable)
+{
+    {
+        std::lock_guard lock(m_mutex);
+        for (auto it = m_lru.begin(); it != m_lru.end(); ++it)
+            if (it->step == step && it->variable == variable) {
+                m_lru.splice(m_lru.begin(), m_lru, it);
+                return it->pairs;
+            }
+    }
+    // Computed outside the lock; two threads may compute the same step once each, which is harmless.
+    const auto volume = m_volumes->getWithoutEvicting(step, 0);
+    const std::span<const float> values(volume->values(size_t(variable)), volume->grid().cellCount());
+    auto pairs = std::make_shared<const Pairs>(persistencePairs(volume->grid(), values));
+    std::lock_guard lock(m_mutex);
+    m_lru.push_front({step, variable, pairs});
+    while (m_lru.size() > m_maxEntries)
+        m_lru.pop_back();
+    return pairs;
+}
+
+json persistenceDiagramJson(const SphericalGrid& grid, const std::vector<PersistencePair>& pairs, int step,
+                            const std::string& variable, const std::string& units, size_t top,
+                            const PathlineSet* stored)
+{
+    const size_t nLon = grid.nLon(), nR = grid.nR();
+    auto position = [&](size_t index) {
+        return std::array<double, 3>{grid.latDeg[index / (nLon * nR)], grid.lonDeg[index % nLon],
+                                     kSurfaceRadiusKm - grid.rKm[(index / nLon) % nR]};
+    };
+    json shown = json::array();
+    std::array<size_t, 3> counts{};
+    double range = 0;
+    for (const auto& p : pairs) {
+        ++counts[size_t(p.kind)];
+        if (p.kind == PairKind::Global)
+            range = p.persistence();
+    }
+    for (size_t i = 0; i < std::min(top, pairs.size()); ++i) {
+        const PersistencePair& p = pairs[i];
+        const auto b = position(p.birthIndex), e = position(p.extremumIndex());
+        shown.push_back({{"kind", pairKindName(p.kind)},
+                         {"birth", p.birth},
+                         {"death", p.death},
+                         {"persistence", p.persistence()},
+                         {"birthLat", b[0]},
+                         {"birthLon", b[1]},
+                         {"birthDepthKm", b[2]},
+                         {"lat", e[0]},
+                         {"lon", e[1]},
+                         {"depthKm", e[2]}});
+    }
+    const size_t rest = pairs.size() - shown.size();
+    const double restMax = rest ? pairs[shown.size()].persistence() : 0.0;
+    json storedJson = nullptr;
+    if (stored) {
+        const json settings = stored->settingsJson.empty() ? json() : json::parse(stored->settingsJson);
+        const std::string rule = settings.is_object() && settings.contains("filter")
+                                     ? settings["filter"].value("rule", std::string("persistence"))
+                                     : std::string("persistence");
+        storedJson = {{"threshold", stored->threshold},
+                      {"rule", rule},
+                      {"lines", stored->lineCount()},
+                      {"seedPersistenceColumn", stored->column("seed persistence") >= 0}};
+    }
+    return {{"step", step},
+            {"variable", variable},
+            {"units", units},
+            {"range", range},
+            {"pairCount", pairs.size()},
+            {"counts",
+             {{pairKindName(PairKind::MinimumSaddle), counts[0]},
+              {pairKindName(PairKind::SaddleMaximum), counts[1]},
+              {pairKindName(PairKind::Global), counts[2]}}},
+            {"pairs", std::move(shown)},
+            {"rest", {{"count", rest}, {"maxPersistence", restMax}}},
+            {"stored", std::move(storedJson)}};
 }
 
 std::string pathlineAttributesPayload(const PathlineCache::Window& sets, int step, int window)
@@ -391,6 +476,44 @@ ApiAnswer pathlines(const ApiContext& api, const ApiRequest& request)
     return {pathlineAttributesPayload(*sets, step, window), "application/octet-stream"};
 }
 
+// The diagram of the seed field of the step's stored pathlines (else `var`, default the temperature
+// anomaly): `top` pairs (default 500, at most 20000) and the stored seeds' threshold.
+ApiAnswer persistence(const ApiContext& api, const ApiRequest& request)
+{
+    const Dataset& dataset = *api.dataset;
+    const int step = checkedStep(dataset, request.query);
+    int top = 500;
+    if (queryParameter(request.query, "top")) {
+        top = parseIntParameter(request.query, "top");
+        if (top < 0 || top > 20000)
+            fail("top: {} out of range 0..20000", top);
+    }
+    // The step's set read directly (one set, small), not through the pathline cache, whose few
+    // entries hold the renderers' windows.
+    std::optional<PathlineSet> set;
+    if (fs::exists(pathlineDir(dataset.dir(), step) / "lines.json"))
+        set = loadPathlineSet(dataset.dir(), step);
+    const PathlineSet* stored = set ? &*set : nullptr;
+    std::string name = stored ? stored->seedField : std::string("temperature anomaly");
+    if (const auto var = queryParameter(request.query, "var"))
+        name = *var;
+    const int var = dataset.variableIndex(name);
+    if (var < 0)
+        fail("var: unknown variable '{}'", name.substr(0, 80));
+    if (stored && stored->seedField != name)
+        stored = nullptr;  // seeded on another variable: its threshold means nothing here
+    if (!api.persistence)
+        fail("this server has no persistence cache");
+    const auto start = std::chrono::steady_clock::now();
+    const auto pairs = api.persistence->get(step, var);
+    const SphericalGrid& grid = dataset.levels().front().grid;
+    json result = persistenceDiagramJson(grid, *pairs, step, name, dataset.variables()[size_t(var)].units,
+                                         size_t(top), stored);
+    spdlog::debug("persistence: step {} '{}': {} pairs in {:.0f} ms", step, name, pairs->size(),
+                  millisecondsSince(start));
+    return jsonAnswer(result);
+}
+
 const Route kRoutes[] = {
     {HttpMethod::Get, "/api/info", Lane::Network, info},
     {HttpMethod::Get, "/api/histogram", Lane::Network, histogram},
@@ -400,6 +523,7 @@ const Route kRoutes[] = {
     {HttpMethod::Get, "/api/presets", Lane::Worker, presets},
     {HttpMethod::Post, "/api/stats", Lane::Statistics, stats},
     {HttpMethod::Get, "/api/pathlines", Lane::Worker, pathlines},
+    {HttpMethod::Get, "/api/persistence", Lane::Worker, persistence},
 };
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include "data/dataset.h"
 #include "data/pathline_storage.h"
+#include "data/persistence.h"
 #include "data/selection.h"
 #include "render/state_renderer.h"
 #include "server/limits.h"
@@ -71,6 +72,37 @@ private:
 // then lines x columns float32 little-endian, row-major, lines in set order (oldest set first).
 std::string pathlineAttributesPayload(const PathlineCache::Window& sets, int step, int window);
 
+// The persistence pairs (data/persistence.h) of one step's variable at level 0, computed once per
+// (step, variable) and kept for the last `maxEntries`, least recently used out: a full-resolution
+// step takes about 2 s (docs/persistence.md). get() throws raypc::Error like the volume loader.
+class PersistenceCache {
+public:
+    using Pairs = std::vector<PersistencePair>;
+    PersistenceCache(StepCache* volumes, size_t maxEntries = 4);
+    std::shared_ptr<const Pairs> get(int step, int variable);
+
+private:
+    struct Entry {
+        int step, variable;
+        std::shared_ptr<const Pairs> pairs;
+    };
+    StepCache* m_volumes;
+    size_t m_maxEntries;
+    std::mutex m_mutex;
+    std::list<Entry> m_lru;
+};
+
+// GET /api/persistence (docs/protocol.md): the persistence diagram of `variable` at `step`, at most
+// `top` pairs by decreasing persistence ({kind, birth, death, persistence, birthLat, birthLon,
+// birthDepthKm, lat, lon, depthKm}: the lower end's position and the extremum's, degrees and km),
+// the count and largest persistence of the rest, the count of each kind, the step's range; and
+// `stored`: the threshold and rule the stored pathline set of the step was seeded with, its line count
+// and whether its lines carry the "seed persistence" column, or null when the dataset has no
+// pathlines or they were seeded on another variable.
+nlohmann::json persistenceDiagramJson(const SphericalGrid& grid, const std::vector<PersistencePair>& pairs, int step,
+                                      const std::string& variable, const std::string& units, size_t top,
+                                      const PathlineSet* stored);
+
 // What the handlers read: shared by every connection of a server, immutable after start (the caches
 // are thread-safe).
 // The server's shared caches as the sources of a render::StateRenderer (valid while they live).
@@ -80,6 +112,7 @@ struct ApiContext {
     std::shared_ptr<const Dataset> dataset;
     StepCache* cache = nullptr;
     PathlineCache* pathlines = nullptr;
+    PersistenceCache* persistence = nullptr;
     std::optional<std::filesystem::path> examples;  // presets directory (findExamplesDir)
     std::string infoJson;                           // GET /api/info, built once (infoJson())
     ServerLimits limits;

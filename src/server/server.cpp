@@ -116,12 +116,14 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     s.cache = std::make_unique<StepCache>([dataset = s.dataset](int step, int level) { return dataset->load(step, level); },
                                           s.options.cacheBytes, s.options.cacheEntries);
     s.pathlines = std::make_unique<PathlineCache>(s.options.dataset);
+    s.persistence = std::make_unique<PersistenceCache>(s.cache.get());
     s.render.dataset = s.dataset;
     s.render.cache = s.cache.get();
     s.render.pathlines = s.pathlines.get();
     s.api.dataset = s.dataset;
     s.api.cache = s.cache.get();
     s.api.pathlines = s.pathlines.get();
+    s.api.persistence = s.persistence.get();
     s.api.examples = s.options.examples;
     s.api.infoJson = infoJson(*s.dataset).dump(-1, ' ', false, json::error_handler_t::replace);
     s.api.limits = s.options.limits;

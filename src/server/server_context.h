@@ -124,6 +124,7 @@ struct ServerContext {
     std::shared_ptr<const Dataset> dataset;
     std::unique_ptr<StepCache> cache;
     std::unique_ptr<PathlineCache> pathlines;
+    std::unique_ptr<PersistenceCache> persistence;
     ApiContext api;
     RenderContext render;
     std::string token;  // empty on loopback

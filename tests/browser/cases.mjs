@@ -1,7 +1,7 @@
 // End-to-end browser tests of the UI against the real server:
 //   node tests/browser/cases.mjs CASE RAYPC FIXTURE_DIR
 // CASE: brush | warp | play | save_load | two_tabs | presets | pathlines | resolution | context | colours |
-// brush_values | multi_brush | axes | camera | responsive | stereo [gpu].
+// brush_values | multi_brush | axes | camera | responsive | stereo | light | persistence [gpu].
 // Each case starts its own server and browser.
 import { readFileSync, writeFileSync } from 'node:fs';
 import { spawnSync } from 'node:child_process';
@@ -230,6 +230,138 @@ const cases = {
     await waitConverged(page);
     const off = await page.evaluate(() => window.__raypc.headers.at(-1));
     check((await rState(page)).stereo.mode === 'off' && !off.stereo, 'stereo off did not give a mono frame');
+  },
+
+  // Lighting: the light's controls are off while Lighting is not ticked; dragging the azimuth and
+  // elevation sliders puts the unit vector of those angles (camera frame: x right, y up, z towards
+  // the viewer) into state.shading.light, the specular slider into shading.specular, and each
+  // changes the picture.
+  async light({ context, url }) {
+    const page = await openUi(context, url);
+    await standardView(page);
+    // The server's default state is lit: off first, then on again.
+    await page.uncheck('#lighting');
+    await waitConverged(page);
+    check(await page.isDisabled('#lightAzimuth') && await page.isDisabled('#lightSpecular'), 'the light controls are enabled while lighting is off');
+    await page.check('#lighting');
+    await waitConverged(page);
+    check(!(await page.isDisabled('#lightAzimuth')), 'the light controls stay disabled with lighting on');
+    const s0 = await rState(page);
+    check(s0.shading.enabled === true, `state.shading after ticking Lighting: ${JSON.stringify(s0.shading)}`);
+    const lit = await viewPixels(page);
+    // A click on a range input moves it there: azimuth near -90° (light from the left), elevation
+    // near -35° (from below).
+    const clickAt = async (id, fraction) => {
+      const r = await page.locator(id).boundingBox();
+      await page.mouse.click(r.x + r.width * fraction, r.y + r.height / 2);
+      await waitConverged(page);
+      return Number(await page.inputValue(id));
+    };
+    const az = await clickAt('#lightAzimuth', 0.25);
+    const el = await clickAt('#lightElevation', 0.3);
+    check(az < -45 && az > -135 && el < -15 && el > -75, `sliders after the clicks: azimuth ${az}, elevation ${el}`);
+    const s1 = await rState(page);
+    const rad = Math.PI / 180;
+    const want = [Math.cos(el * rad) * Math.sin(az * rad), Math.sin(el * rad), Math.cos(el * rad) * Math.cos(az * rad)];
+    check(s1.shading.light.every((v, i) => Math.abs(v - want[i]) < 1e-4), `state.shading.light ${JSON.stringify(s1.shading.light)} for azimuth ${az}°, elevation ${el}°: expected ${JSON.stringify(want)}`);
+    const h = await page.evaluate(() => { const r = window.__raypc; return r.headers.at(-1).id === r.lastSentId; });
+    check(h, 'the frame shown is not of the state with the new light');
+    const moved = await viewPixels(page);
+    const dLight = meanAbsDiff(lit, moved);
+    check(dLight > 1, `moving the light to the left and below hardly changed the picture (${dLight.toFixed(2)} grey levels)`);
+    const spec0 = s1.shading.specular;
+    const spec = await clickAt('#lightSpecular', 0.97);
+    const s2 = await rState(page);
+    check(spec > 0.9 && s2.shading.specular === spec && spec0 !== spec, `shading.specular ${s2.shading.specular} after the slider went to ${spec} (was ${spec0})`);
+    // A saved state's light comes back into the sliders.
+    await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, shading: { ...s.shading, light: [0, 1, 0] } }); });
+    await waitConverged(page);
+    const back = [Number(await page.inputValue('#lightAzimuth')), Number(await page.inputValue('#lightElevation'))];
+    check(back[1] === 90, `a state with the light straight up shows elevation ${back[1]}`);
+    await page.uncheck('#lighting');
+    await waitConverged(page);
+    check(await page.isDisabled('#lightElevation'), 'the light controls stay enabled after lighting is turned off');
+    console.log(`  light at azimuth ${az}°, elevation ${el}°: picture changed by ${dLight.toFixed(2)} grey levels; specular ${spec0} -> ${spec}`);
+  },
+
+  // The persistence diagram: it shows the pairs of the step shown and the stored seeds' threshold;
+  // dragging its threshold handle up (between the two most persistent pairs) sets a "seed
+  // persistence" range in state.pathlines.filters, and the lines shown are exactly those of the
+  // window whose seed persistence (from GET /api/pathlines) passes it: fewer, and the picture
+  // changes. Dragging it down to the stored threshold removes the filter.
+  async persistence({ context, url }) {
+    const ds = await info(url);
+    const last = ds.steps.length - 1;
+    const page = await openUi(context, url);
+    await standardView(page);
+    await page.evaluate((n) => {
+      const s = window.__raypc.state();
+      window.__raypc.setState({ ...s, step: n, core: { ...s.core, visible: false }, color: { ...s.color, opacity: [[0, 0], [1, 0]] },
+        pathlines: { ...s.pathlines, visible: true, radiusKm: 250, minWidthPx: 0 } });
+    }, last);
+    await waitConverged(page);
+    await page.waitForFunction((n) => window.__raypc.pathlines?.lines > 0 && window.__raypc.persistence?.step === n, last, { timeout: 20000 })
+      .catch(() => { throw new TestFailure('no pathlines or no persistence diagram of the last step arrived'); });
+    const d = await page.evaluate(() => window.__raypc.persistence);
+    check(d.stored && d.stored.seedPersistenceColumn && d.stored.rule === 'persistence' && d.pairs.length >= 3,
+      `diagram of step ${last}: ${JSON.stringify({ ...d, pairs: d.pairs.length })}`);
+    const circles = await page.locator('#persistencePlot circle.pair').count();
+    check(circles >= 3, `${circles} pairs drawn`);
+    const before = await viewPixels(page);
+    const pl0 = await page.evaluate(() => window.__raypc.pathlines);
+    check(pl0.visibleLines === pl0.lines, `without filters ${pl0.visibleLines} of ${pl0.lines} lines counted`);
+
+    // The handle to half way (on the log scale) between the two most persistent pairs (the plot is
+    // at the bottom of the side panel: scrolled into view first).
+    await page.locator('#persistencePlot').scrollIntoViewIfNeeded();
+    const ys = await page.evaluate(() => [...document.querySelectorAll('#persistencePlot circle.pair')]
+      .map((c) => { const r = c.getBoundingClientRect(); return { y: r.y + r.height / 2, p: c.__data__.persistence }; })
+      .sort((a, b) => b.p - a.p));
+    const handle = await page.locator('#persistenceHandle line').boundingBox();
+    const hx = handle.x + handle.width / 2, hy = handle.y + handle.height / 2;
+    const ty = (ys[0].y + ys[1].y) / 2;
+    await page.mouse.move(hx, hy);
+    await page.mouse.down();
+    for (let i = 1; i <= 8; i++) await page.mouse.move(hx, hy + ((ty - hy) * i) / 8);
+    await page.mouse.up();
+    await waitConverged(page);
+    const s1 = await rState(page);
+    const f = s1.pathlines.filters.filter((x) => x.name === 'seed persistence');
+    check(f.length === 1 && f[0].min > ys[1].p && f[0].min < ys[0].p && f[0].max >= ys[0].p,
+      `the filter after the drag ${JSON.stringify(s1.pathlines.filters)}; the two top pairs ${ys[0].p}, ${ys[1].p}`);
+    // Which lines pass, from the attributes the server stores.
+    const r = await fetch(`${url}api/pathlines?step=${last}&window=${s1.pathlines.window}`);
+    const buf = Buffer.from(await r.arrayBuffer());
+    const n = buf.readUInt32LE(0), header = JSON.parse(buf.subarray(4, 4 + n).toString());
+    const k = header.columns.indexOf('seed persistence');
+    check(k >= 0, `no seed persistence column: ${header.columns.join(', ')}`);
+    const values = new Float32Array(buf.buffer.slice(buf.byteOffset + 4 + n, buf.byteOffset + buf.length));
+    let passing = 0;
+    for (let i = 0; i < header.lines; i++) { const v = values[i * header.columns.length + k]; if (v >= f[0].min && v <= f[0].max) passing++; }
+    const pl1 = await page.evaluate(() => window.__raypc.pathlines);
+    check(pl1.visibleLines === passing && passing > 0 && passing < pl0.lines,
+      `visible lines ${pl0.lines} -> ${pl1.visibleLines}; ${passing} lines have a seed persistence of at least ${f[0].min}`);
+    const h = await page.evaluate(() => { const r = window.__raypc, h = r.headers.at(-1); return h.id === r.lastSentId ? h : null; });
+    check(h && h.pathlines && h.pathlines.visible === passing, `the server shows ${JSON.stringify(h?.pathlines)} lines, expected ${passing}`);
+    const kept = await page.locator('#persistencePlot circle.kept').count();
+    check(kept === 1, `${kept} pairs highlighted above the threshold, expected the global pair alone`);
+    const after = await viewPixels(page);
+    const dF = meanAbsDiff(before, after);
+    check(dF > 0.1, `the threshold hardly changed the picture (${dF.toFixed(2)})`);
+    console.log(`  threshold ${f[0].min.toFixed(1)} (pairs ${ys[0].p.toFixed(1)}, ${ys[1].p.toFixed(1)}; stored above ${d.stored.threshold.toFixed(1)}): lines ${pl0.lines} -> ${passing}, picture changed by ${dF.toFixed(2)}`);
+
+    // Back down to the bottom of the plot: below the stored threshold, so no filter at all.
+    const h2 = await page.locator('#persistenceHandle line').boundingBox();
+    const plot = await page.locator('#persistencePlot').boundingBox();
+    await page.mouse.move(h2.x + h2.width / 2, h2.y + h2.height / 2);
+    await page.mouse.down();
+    for (let i = 1; i <= 8; i++) await page.mouse.move(h2.x + h2.width / 2, h2.y + ((plot.y + plot.height - h2.y) * i) / 8);
+    await page.mouse.up();
+    await waitConverged(page);
+    const s2 = await rState(page);
+    const pl2 = await page.evaluate(() => window.__raypc.pathlines);
+    check(!s2.pathlines.filters.some((x) => x.name === 'seed persistence') && pl2.visibleLines === pl0.lines,
+      `after dragging the handle down: filters ${JSON.stringify(s2.pathlines.filters)}, ${pl2.visibleLines} of ${pl0.lines} lines`);
   },
 
   // Play runs over all steps in order, sends the next step only after a frame of the current one

@@ -23,6 +23,7 @@
 #include <numbers>
 #include <sstream>
 #include <regex>
+#include <set>
 #include <thread>
 #include <sys/socket.h>
 #include <sys/wait.h>
@@ -603,6 +604,73 @@ TEST(Serve, PathlineAttributesOfAWindow)
     EXPECT_EQ(httpGet(server.port, "/api/pathlines?step=1&window=0").status, 400);
     EXPECT_EQ(httpGet(server.port, "/api/pathlines?window=2").status, 400);
     EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/pathlines?step=0", "{}").status, 405);
+}
+
+// GET /api/persistence: the fixture's temperature anomaly is four Gaussian blobs (truth.json: +400,
+// +300, -350, -300 K) on a near-zero background, so its diagram has three pairs that stand out: the
+// global pair (the +400 K maximum and the -350 K minimum, about 750 K apart) and one pair for each
+// 300 K blob, at their centres; every other pair is far weaker. The 5° grid samples a blob up to half
+// a cell off its centre, where it is up to 13 % weaker (the -300 K blob's grid minimum is -265 K at
+// step 1): 15 % tolerance. The stored seeds' threshold is the
+// preprocess default, 5 % of the step's range. Bad parameters are 400 with a message.
+TEST(Serve, PersistenceDiagramOfAStep)
+{
+    ServerProcess server;
+    const auto a = httpGet(server.port, "/api/persistence?step=1&top=5");
+    ASSERT_EQ(a.status, 200) << a.body;
+    EXPECT_EQ(a.contentType, "application/json");
+    const json d = json::parse(a.body);
+    EXPECT_EQ(d["step"], 1);
+    EXPECT_EQ(d["variable"], "temperature anomaly");
+    ASSERT_EQ(d["pairs"].size(), 5u);
+    const auto& p = d["pairs"];
+    EXPECT_EQ(p[0]["kind"], "global");
+    EXPECT_NEAR(p[0]["persistence"].get<double>(), 750, 0.15 * 750);
+    EXPECT_NEAR(p[0]["persistence"].get<double>(), d["range"].get<double>(), 1e-6);
+    // The global pair's extremum is the +400 K blob's maximum (lat 20, lon 40 at t = 0, r 4300 km);
+    // step 1 is 2 Myr later: rotated by omega t (under 0.01 degrees) and risen by u0 t (3 km).
+    EXPECT_NEAR(p[0]["lat"].get<double>(), 20, 5.1);
+    EXPECT_NEAR(p[0]["lon"].get<double>(), 40, 5.1);
+    EXPECT_NEAR(p[0]["depthKm"].get<double>(), 6371 - 4300, 80);
+    EXPECT_NEAR(p[0]["birth"].get<double>() + p[0]["persistence"].get<double>(), p[0]["death"].get<double>(), 1e-3);
+    std::set<std::string> kinds;
+    for (size_t i = 1; i < 3; ++i) {
+        EXPECT_NEAR(p[i]["persistence"].get<double>(), 300, 0.15 * 300) << p[i].dump();
+        kinds.insert(p[i]["kind"].get<std::string>());
+    }
+    EXPECT_EQ(kinds, (std::set<std::string>{"minimum-saddle", "saddle-maximum"}));
+    EXPECT_LT(p[3]["persistence"].get<double>(), 0.2 * 300) << "a fourth feature stands out";
+    for (size_t i = 1; i < p.size(); ++i)
+        EXPECT_LE(p[i]["persistence"].get<double>(), p[i - 1]["persistence"].get<double>());
+    const size_t total = d["pairCount"];
+    EXPECT_EQ(d["rest"]["count"].get<size_t>(), total - 5);
+    EXPECT_EQ(d["counts"]["global"], 1);
+    EXPECT_EQ(d["counts"]["minimum-saddle"].get<size_t>() + d["counts"]["saddle-maximum"].get<size_t>() + 1, total);
+    const json more = json::parse(httpGet(server.port, "/api/persistence?step=1&top=6").body);
+    EXPECT_EQ(more["pairs"][5]["persistence"], d["rest"]["maxPersistence"]);
+    // The stored seeds: the default rule, 5 % of the range, and as many lines as /api/pathlines has.
+    const json& stored = d["stored"];
+    ASSERT_TRUE(stored.is_object()) << d.dump();
+    EXPECT_EQ(stored["rule"], "persistence");
+    EXPECT_NEAR(stored["threshold"].get<double>(), 0.05 * d["range"].get<double>(), 1e-6 * d["range"].get<double>());
+    EXPECT_EQ(stored["seedPersistenceColumn"], true);
+    const auto lines = httpGet(server.port, "/api/pathlines?step=1&window=1");
+    uint32_t n = 0;
+    for (int i = 0; i < 4; ++i)
+        n |= uint32_t(uint8_t(lines.body[size_t(i)])) << (8 * i);
+    EXPECT_EQ(json::parse(lines.body.substr(4, n))["lines"], stored["lines"]);
+    EXPECT_EQ(json::parse(httpGet(server.port, "/api/persistence?step=1").body)["pairs"].size(),
+              std::min<size_t>(500, total)) << "top defaults to 500";
+    // Another variable has no stored threshold.
+    const json other = json::parse(httpGet(server.port, "/api/persistence?step=1&top=1&var=temperature").body);
+    EXPECT_TRUE(other["stored"].is_null());
+    for (const char* bad : {"step=3", "step=-1", "top=5", "step=1&top=-1", "step=1&top=20001", "step=1&top=many",
+                            "step=1&var=pressure"}) {
+        const auto r = httpGet(server.port, std::string("/api/persistence?") + bad);
+        EXPECT_EQ(r.status, 400) << bad << ": " << r.body;
+    }
+    const auto badTop = httpGet(server.port, "/api/persistence?step=1&top=many");
+    EXPECT_NE(badTop.body.find("top: expected an integer"), std::string::npos) << badTop.body;
 }
 
 TEST(Serve, NonLoopbackNeedsTheToken)

@@ -145,3 +145,30 @@ export async function fetchPathlines(step: number, window: number, signal?: Abor
   const values = new Float32Array(buffer.slice(4 + n));
   return { ...header, values };
 }
+
+export interface PersistencePairInfo {
+  kind: 'minimum-saddle' | 'saddle-maximum' | 'global';
+  birth: number;
+  death: number;
+  persistence: number;
+  birthLat: number; birthLon: number; birthDepthKm: number; // the lower end
+  lat: number; lon: number; depthKm: number; // the extremum (the seed, when stored)
+}
+
+export interface PersistenceDiagram {
+  step: number;
+  variable: string;
+  units: string;
+  range: number; // the global pair's persistence: the step's max - min
+  pairCount: number;
+  counts: Record<string, number>;
+  pairs: PersistencePairInfo[]; // the most persistent first
+  rest: { count: number; maxPersistence: number };
+  // How the step's stored pathlines were seeded, or null (no pathlines, or another variable).
+  stored: { threshold: number; rule: string; lines: number; seedPersistenceColumn: boolean } | null;
+}
+
+// The persistence diagram of `step` (GET /api/persistence): the `top` most persistent pairs.
+export async function fetchPersistence(step: number, top: number, signal?: AbortSignal): Promise<PersistenceDiagram> {
+  return (await check(await fetch(`api/persistence?step=${step}&top=${top}`, { signal }), 'GET /api/persistence')).json();
+}

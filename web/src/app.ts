@@ -8,6 +8,7 @@ import { ContextPanel, showLegends, type LegendEntry } from './context_panel';
 import { download, maxImageSide, setUpControls, syncControls, writeStateToUrl } from './controls';
 import { ParallelCoordinates } from './parcoords';
 import { PathlinePanel } from './pathline_panel';
+import { PersistencePanel } from './persistence_panel';
 import { Playback } from './playback';
 import { RenderLink } from './render_link';
 import { setUpScreenshot } from './screenshot';
@@ -38,6 +39,7 @@ export class App {
   readonly tf: TfPanel;
   readonly selection: SelectionPanel;
   readonly pathlines: PathlinePanel;
+  readonly persistence: PersistencePanel;
   readonly playback: Playback;
   readonly context: ContextPanel;
   presets: Preset[] = [];
@@ -85,6 +87,13 @@ export class App {
       commit: (i) => this.commit(i),
       showError: (m) => this.showError(m),
       linesLoaded: () => this.updateLegends(),
+      filtersChanged: () => this.persistence.draw(),
+    });
+    this.persistence = new PersistencePanel(store, {
+      commit: (i) => this.commit(i),
+      showError: (m) => this.showError(m),
+      filtersChanged: (i) => this.pathlines.filtersChanged(i),
+      columnMax: (name) => this.pathlines.columnMax(name),
     });
     this.context = new ContextPanel(store, { commit: (i) => this.commit(i), showError: (m) => this.showError(m) });
     this.selection = new SelectionPanel(store, {
@@ -178,6 +187,7 @@ export class App {
       this.selection.refreshStats();
     });
     this.pathlines.refresh();
+    this.persistence.refresh();
   }
 
   // The colour legends on the view (state.legend): the volume's variable, and the pathlines'
@@ -206,6 +216,7 @@ export class App {
     this.pc.setBrushes(this.store.state.brushes);
     this.selection.updateText();
     this.pathlines.sync();
+    this.persistence.draw();
   }
 
   // ---- presets (GET /api/presets) ------------------------------------------------------------

@@ -78,8 +78,25 @@ export function setUpControls(store: StateStore, host: ControlsHost): void {
   });
   $('lighting').addEventListener('change', () => {
     store.state.shading = { ...store.state.shading, enabled: $<HTMLInputElement>('lighting').checked };
+    enableLightControls(store);
     host.commit(false);
   });
+  // The light's direction (azimuth, elevation in the camera frame) and the highlight's weight:
+  // interactive while dragged, a still frame on release (a restart of the passes either way).
+  const lightInput = (interactive: boolean) => {
+    const az = Number($<HTMLInputElement>('lightAzimuth').value), el = Number($<HTMLInputElement>('lightElevation').value);
+    store.state.shading = {
+      ...store.state.shading,
+      light: lightFromAngles(az, el),
+      specular: Number($<HTMLInputElement>('lightSpecular').value),
+    };
+    showLightAngles(az, el);
+    host.commit(interactive);
+  };
+  for (const id of ['lightAzimuth', 'lightElevation', 'lightSpecular']) {
+    $(id).addEventListener('input', () => lightInput(true));
+    $(id).addEventListener('change', () => lightInput(false));
+  }
   // Stereo (state key stereo): the server renders both eyes; the view re-projects each.
   const stereoInput = () => {
     const separation = Number($<HTMLInputElement>('stereoSeparation').value);
@@ -154,11 +171,45 @@ export function syncControls(store: StateStore): void {
   $<HTMLInputElement>('passes').value = String(s.passes);
   $<HTMLSelectElement>('level').value = String(s.level);
   $<HTMLInputElement>('lighting').checked = Boolean((s.shading as { enabled?: boolean } | undefined)?.enabled);
+  const [az, el] = anglesFromLight(s.shading.light);
+  $<HTMLInputElement>('lightAzimuth').value = String(Math.round(az));
+  $<HTMLInputElement>('lightElevation').value = String(Math.round(el));
+  $<HTMLInputElement>('lightSpecular').value = String(s.shading.specular);
+  showLightAngles(az, el);
+  enableLightControls(store);
   $<HTMLInputElement>('core').checked = (s.core as { visible?: boolean } | undefined)?.visible !== false;
   $<HTMLSelectElement>('stereoMode').value = s.stereo.mode;
   $<HTMLInputElement>('stereoSeparation').value = String(s.stereo.eyeSeparationKm);
   $<HTMLInputElement>('stereoConvergence').value = s.stereo.convergenceKm === null ? '' : String(s.stereo.convergenceKm);
   $<HTMLInputElement>('step').value = String(s.step);
+}
+
+// The direction towards the light in the camera frame (x right, y up, z towards the viewer; the
+// state's shading.light) from its azimuth (degrees from the viewing direction, +z, towards the
+// right, +x) and elevation (degrees above the image's horizontal plane, towards +y). A unit vector.
+export function lightFromAngles(azimuthDeg: number, elevationDeg: number): [number, number, number] {
+  const az = (azimuthDeg * Math.PI) / 180, el = (elevationDeg * Math.PI) / 180;
+  const round = (v: number) => Math.round(v * 1e6) / 1e6;
+  return [round(Math.cos(el) * Math.sin(az)), round(Math.sin(el)), round(Math.cos(el) * Math.cos(az))];
+}
+
+// The inverse of lightFromAngles for any non-zero vector: [azimuth, elevation] in degrees.
+export function anglesFromLight(light: readonly number[]): [number, number] {
+  const [x, y, z] = light;
+  const len = Math.hypot(x, y, z) || 1;
+  return [(Math.atan2(x, z) * 180) / Math.PI, (Math.asin(Math.max(-1, Math.min(1, y / len))) * 180) / Math.PI];
+}
+
+function showLightAngles(azimuthDeg: number, elevationDeg: number): void {
+  $('lightAzimuthValue').textContent = `${Math.round(azimuthDeg)}°`;
+  $('lightElevationValue').textContent = `${Math.round(elevationDeg)}°`;
+}
+
+// The light's controls mean nothing while lighting is off.
+function enableLightControls(store: StateStore): void {
+  const off = !store.state.shading.enabled;
+  for (const id of ['lightAzimuth', 'lightElevation', 'lightSpecular']) $<HTMLInputElement>(id).disabled = off;
+  $('lightRow').classList.toggle('disabled', off);
 }
 
 // Whether this browser offers WebXR immersive-vr (head-tracked stereo on a headset). This UI shows

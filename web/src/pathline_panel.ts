@@ -19,6 +19,8 @@ export interface PathlinePanelHost {
   showError(message: string): void;
   // The lines' attributes arrived (the legend of an attribute colouring needs their range).
   linesLoaded(): void;
+  // The line filters were brushed (the persistence diagram shows its threshold).
+  filtersChanged(): void;
 }
 
 export interface PathlineCount {
@@ -112,6 +114,30 @@ export class PathlinePanel {
     pl.filters = filters.map((f) => ({ name: f.name, min: f.min, max: f.max }));
     this.updateLineCount();
     this.host.commit(interactive); // restart class: no new lines, no tube rebuild
+    if (!interactive) this.host.filtersChanged();
+  }
+
+  // state.pathlines.filters changed elsewhere (the persistence diagram's threshold): the count
+  // follows at once, the plot's brushes (and an axis widened to hold them) once the drag ends.
+  filtersChanged(interactive: boolean): void {
+    const pl = this.pathlines, d = this.data;
+    if (!pl) return;
+    this.updateLineCount();
+    if (interactive || !d) return;
+    this.pc.setAxes(this.axes());
+    this.pc.setBrushes(pl.filters);
+    this.pc.setData({ rows: d.lines, columns: d.columns, values: d.values });
+    this.updateLineColors();
+  }
+
+  // The largest value of a line attribute among the loaded lines, or null.
+  columnMax(name: string): number | null {
+    const d = this.data;
+    const k = d ? d.columns.indexOf(name) : -1;
+    if (!d || k < 0) return null;
+    let hi = -Infinity;
+    for (let i = 0; i < d.lines; i++) { const v = d.values[i * d.columns.length + k]; if (Number.isFinite(v)) hi = Math.max(hi, v); }
+    return hi > -Infinity ? hi : null;
   }
 
   // How many lines of the window pass the line filters and, with filterByBrushes, start inside the
@@ -271,6 +297,7 @@ export class PathlinePanel {
     $('plClearFilters').addEventListener('click', change((pl) => {
       pl.filters = [];
       this.pc.setBrushes([]);
+      this.host.filtersChanged();
     }));
     $('pcTabVolume').addEventListener('click', () => this.showTab(false));
     $('pcTabPathlines').addEventListener('click', () => this.showTab(true));

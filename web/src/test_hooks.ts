@@ -8,7 +8,7 @@ import type { ParallelCoordinates } from './parcoords';
 import type { PathlineCount } from './pathline_panel';
 import type { Latency } from './render_link';
 import { cloneState, type Brush, type RenderState } from './state';
-import type { Info, Preset } from './api';
+import type { Info, PersistenceDiagram, Preset } from './api';
 import type { ViewStats } from './view';
 
 export interface TestHooks {
@@ -43,6 +43,7 @@ export interface TestHooks {
   statsRequests: number;
   readonly pathlines: PathlineCount | null;
   plParcoords: ParallelCoordinates;
+  readonly persistence: PersistenceDiagram | null;
 }
 
 export function testHooksWanted(): boolean {
@@ -93,6 +94,7 @@ export function installTestHooks(app: App): TestHooks {
     statsRequests: 0,
     get pathlines() { return app.pathlines.count; },
     plParcoords: app.pathlines.pc,
+    get persistence() { return app.persistence.diagram; },
   };
   app.link.observer = {
     sent: (e) => {
