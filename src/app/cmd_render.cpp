@@ -202,15 +202,7 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
                               {"samplesSkipped", s.samplesSkipped},
                               {"samplesPerSecondPerThread", s.samplesPerSecondPerThread()},
                               {"dataSamplesPerSecondPerThread", s.dataSamplesPerSecondPerThread()}});
-            total.seconds += s.seconds;
-            total.samples += s.samples;
-            total.samplesSkipped += s.samplesSkipped;
-            total.chunks += s.chunks;
-            total.chunksJumped += s.chunksJumped;
-            total.threads = s.threads;
-            total.simdLanes = s.simdLanes;
-            total.bricksTotal = s.bricksTotal;
-            total.bricksSkipped = s.bricksSkipped;
+            total += s;
         }
     });
     mpi::dieHook("render-frame");

@@ -894,6 +894,25 @@ float spinDensityAnomaly(double depthKm, double temperatureK, double referenceK)
     return static_cast<float>(kDensityJump * (lowSpin(temperatureK - referenceK) - lowSpin(0.0)));
 }
 
+// The features at the grid column (latDeg, lonDeg): every feature's terms there (columnTerms, with
+// east and north as an orthonormal tangent basis even at the poles) and in `active` the features
+// present. Returns the column's outward unit vector.
+Vec3d featuresOfColumn(const ModelAtTime& model, double latDeg, double lonDeg, std::vector<ColumnTerms>& terms,
+                       std::vector<int>& active)
+{
+    const double lat = degToRad(latDeg), lon = degToRad(lonDeg);
+    const Vec3d n{std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat)};
+    const Vec3d east{-std::sin(lon), std::cos(lon), 0.0};
+    const Vec3d north = cross(n, east);
+    active.clear();
+    for (size_t f = 0; f < model.features.size(); ++f) {
+        columnTerms(model.features[f], n, east, north, terms[f]);
+        if (terms[f].active)
+            active.push_back(static_cast<int>(f));
+    }
+    return n;
+}
+
 }  // namespace
 
 SphericalGrid syntheticGrid(int nLat, int nR, int nLon)
@@ -1018,19 +1037,8 @@ Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr, const S
         std::vector<int> active;
         active.reserve(nFeatures);
         for (size_t iLat = rows.begin(); iLat != rows.end(); ++iLat) {
-            const double lat = degToRad(grid.latDeg[iLat]);
             for (size_t iLon = 0; iLon < nLon; ++iLon) {
-                const double lon = degToRad(grid.lonDeg[iLon]);
-                const Vec3d n{std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat)};
-                // East and north unit vectors: an orthonormal tangent basis even at the poles.
-                const Vec3d east{-std::sin(lon), std::cos(lon), 0.0};
-                const Vec3d north = cross(n, east);
-                active.clear();
-                for (size_t f = 0; f < nFeatures; ++f) {
-                    columnTerms(model.features[f], n, east, north, terms[f]);
-                    if (terms[f].active)
-                        active.push_back(static_cast<int>(f));
-                }
+                const Vec3d n = featuresOfColumn(model, grid.latDeg[iLat], grid.lonDeg[iLon], terms, active);
                 // Rigid rotation omega x (r n): purely horizontal, in m/s per km of radius.
                 const Vec3d spinPerKm = (model.rotationRadPerSecond * 1000.0) * cross(model.rotationAxis, n);
                 const BackgroundColumn bg = backgroundColumn(model.model, model.harmonicAxes, n);
@@ -1151,18 +1159,8 @@ SynthTruth syntheticTruth(const SynthOptions& options, double timeMyr, const Sph
         std::vector<int> active;
         active.reserve(nFeatures);
         for (size_t iLat = rows.begin(); iLat != rows.end(); ++iLat) {
-            const double lat = degToRad(grid.latDeg[iLat]);
             for (size_t iLon = 0; iLon < nLon; ++iLon) {
-                const double lon = degToRad(grid.lonDeg[iLon]);
-                const Vec3d n{std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat)};
-                const Vec3d east{-std::sin(lon), std::cos(lon), 0.0};
-                const Vec3d north = cross(n, east);
-                active.clear();
-                for (size_t f = 0; f < nFeatures; ++f) {
-                    columnTerms(model.features[f], n, east, north, terms[f]);
-                    if (terms[f].active)
-                        active.push_back(static_cast<int>(f));
-                }
+                featuresOfColumn(model, grid.latDeg[iLat], grid.lonDeg[iLon], terms, active);
                 for (size_t iR = 0; iR < nR; ++iR) {
                     double bestK = 0.0, bestEnvelope = 0.0;
                     int bestFeature = -1;

@@ -239,17 +239,7 @@ PassStats StateRenderer::Prepared::renderPass(ViewFrames& frames, const std::ato
             total.cancelled = true;
             return total;
         }
-        total.seconds += s.seconds;
-        total.samples += s.samples;
-        total.samplesSkipped += s.samplesSkipped;
-        total.chunks += s.chunks;
-        total.chunksSkipped += s.chunksSkipped;
-        total.chunksJumped += s.chunksJumped;
-        total.rays += s.rays;
-        total.bricksTotal = s.bricksTotal;
-        total.bricksSkipped = s.bricksSkipped;
-        total.threads = s.threads;
-        total.simdLanes = s.simdLanes;
+        total += s;
     }
     return total;
 }

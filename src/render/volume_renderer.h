@@ -86,6 +86,24 @@ struct PassStats {
     double samplesPerSecondPerThread() const { return seconds > 0 ? double(samples + samplesSkipped) / seconds / threads : 0; }
     // Samples that read data per second per thread: the sampling rate proper.
     double dataSamplesPerSecondPerThread() const { return seconds > 0 ? double(samples) / seconds / threads : 0; }
+    // Adds a later pass (or the other eye's): times and counts sum, the machine and brick figures
+    // are the later one's.
+    PassStats& operator+=(const PassStats& s)
+    {
+        seconds += s.seconds;
+        samples += s.samples;
+        samplesSkipped += s.samplesSkipped;
+        chunks += s.chunks;
+        chunksSkipped += s.chunksSkipped;
+        chunksJumped += s.chunksJumped;
+        rays += s.rays;
+        bricksTotal = s.bricksTotal;
+        bricksSkipped = s.bricksSkipped;
+        threads = s.threads;
+        simdLanes = s.simdLanes;
+        cancelled = cancelled || s.cancelled;
+        return *this;
+    }
 };
 
 class VolumeRenderer {
