@@ -135,12 +135,13 @@ export async function standardView(page) {
 
 // Waits until the newest sent state has been answered by a converged frame that is on screen.
 export async function waitConverged(page, timeoutMs = 30000) {
+  // After page.goto the UI's hooks appear only once its script has started: until then, wait.
   await page.waitForFunction(() => {
     const r = window.__raypc;
-    const h = r.headers[r.headers.length - 1];
+    const h = r?.headers[r.headers.length - 1];
     return h && h.converged && h.id === r.lastSentId && r.lastShownId === h.id;
   }, null, { timeout: timeoutMs, polling: 50 }).catch(async () => {
-    const info = await page.evaluate(() => { const r = window.__raypc; return { lastSent: r.lastSentId, shown: r.lastShownId, last: r.headers[r.headers.length - 1], errors: r.errors }; });
+    const info = await page.evaluate(() => { const r = window.__raypc; return r ? { lastSent: r.lastSentId, shown: r.lastShownId, last: r.headers[r.headers.length - 1], errors: r.errors } : 'the UI did not start'; });
     throw new TestFailure(`no converged frame for the newest state within ${timeoutMs} ms: ${JSON.stringify(info)}`);
   });
   // One more display frame so the canvas holds it.
