@@ -208,8 +208,9 @@ StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, co
         p.views[i].renderer->setParams(p.views[i].params);  // restart class: camera, transfer function, brushes, size
     }
     p.scene = pathlinesFor(state);  // before any pass reads it
-    for (auto& [key, r] : m_renderers) {
-        const bool used = std::any_of(p.views.begin(), p.views.end(), [&](const View& v) { return v.renderer == r.get(); });
+    for (auto& entry : m_renderers) {
+        VolumeRenderer* r = entry.second.get();  // not a structured binding: clang 14 cannot capture one
+        const bool used = std::any_of(p.views.begin(), p.views.end(), [&](const View& v) { return v.renderer == r; });
         if (!used)
             r->setPathlines(nullptr);  // no other renderer keeps a scene that changes
     }
