@@ -26,7 +26,8 @@ StepCache::~StepCache()
 size_t StepCache::volumeBytes(const StepVolume& volume)
 {
     return volume.variableCount() *
-           (volume.grid().cellCount() * sizeof(float) + volume.bricks().brickCount() * 2 * sizeof(float));
+               (volume.grid().cellCount() * sizeof(float) + volume.bricks().brickCount() * 2 * sizeof(float)) +
+           3 * volume.grid().cellCount() * sizeof(float);
 }
 
 std::shared_ptr<const StepVolume> StepCache::findLocked(int step, int level)

@@ -47,7 +47,8 @@ public:
     size_t entries() const;
     uint64_t loads() const;  // loader calls so far (misses and prefetches)
 
-    // Bytes a volume occupies: its values and brick bounds.
+    // Bytes a volume occupies: its values and brick bounds, and room for the shading gradient of one
+    // variable (3 floats a grid point, StepVolume::nodeGradient), which it keeps once shown lit.
     static size_t volumeBytes(const StepVolume& volume);
 
 private:
