@@ -16,7 +16,7 @@ using CommandSetup = std::function<void(CLI::App& subcommand)>;
 // Under mpirun with more than one rank (core/mpi.h): a RootOnly command runs on rank 0 while the
 // others wait for it; an AllRanks command runs on every rank and shares its work through core/mpi.h
 // (its failures must go through mpi::together so that every rank stops with one message); a
-// OneProcess command (the server) refuses to start on several ranks (docs/scaling.md).
+// OneProcess command (the demo) refuses to start on several ranks (docs/scaling.md).
 enum class Ranks { RootOnly, AllRanks, OneProcess };
 
 struct CommandRegistration {

@@ -95,8 +95,8 @@ int main(int argc, char** argv)
         int status = 0;
         mpi::together([&] {
             if (selected->ranks == Ranks::OneProcess)
-                raypc::fail("{}: runs in one process; a distributed server is not built yet (docs/scaling.md): "
-                            "start it without mpirun",
+                raypc::fail("{}: runs in one process (docs/scaling.md): start it without mpirun, or make a dataset "
+                            "and run `mpirun raypc serve DATASET`",
                             selected->name);
             if (mpi::isRoot())
                 status = parseAndRun(app, argc, argv);

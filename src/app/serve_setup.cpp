@@ -1,13 +1,19 @@
 #include "app/serve_setup.h"
 
+#include "core/error.h"
+#include "core/mpi.h"
 #include "server/dataset_api.h"
+#include "server/rank_pool.h"
 #include "server/server.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
+#include <memory>
+#include <mutex>
 #include <optional>
+#include <thread>
 
 namespace raypc::app {
 
@@ -56,16 +62,67 @@ void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
     options.allowedOrigins = flags.allowOrigins;
     options.limits = flags.limits;
     options.limits.sessionFrameBytes = flags.sessionMemoryMiB << 20;
-    server::Server srv(options);
+    // Under mpirun (docs/scaling.md): rank 0 serves, the others render their tiles of every pass;
+    // opening the dataset and binding the port are agreed on by all ranks, so a bad dataset or a
+    // busy port stops every rank with one message.
+    std::optional<server::RankPool> pool;
+    std::unique_ptr<server::Server> srv;
+    std::unique_ptr<server::WorkerRank> worker;
+    mpi::together([&] {
+        if (!mpi::isRoot()) {
+            worker = std::make_unique<server::WorkerRank>(dataset, options.cacheBytes, options.cacheEntries);
+            return;
+        }
+        if (mpi::distributed())
+            options.ranks = &pool.emplace();
+        srv = std::make_unique<server::Server>(options);
+    });
+    if (worker) {
+        worker->run();
+        return;
+    }
     if (options.assets)
         spdlog::info("serving the UI from {}", options.assets->string());
     else
         spdlog::warn("the browser UI is not built (no web/dist found); serving a placeholder page and the API");
     if (options.examples)
         spdlog::info("presets from {}", options.examples->string());
-    fmt::print("raypc: serving {}\n", srv.url());
+    if (pool)
+        spdlog::info("distributed: every pass is shared out over {} ranks", pool->ranks());
+    fmt::print("raypc: serving {}\n", srv->url());
     std::fflush(stdout);
-    srv.run();
+    if (!pool) {
+        srv->run();
+        return;
+    }
+    // MPI calls stay on this (the main) thread (core/mpi.h): the network runs on another, and the
+    // server, whose sessions may wait on the pool, is destroyed there before the pool stops.
+    std::exception_ptr failure;
+    std::mutex serverMutex;  // srv: reset on the network thread, stopped from this one
+    std::thread network([&] {
+        try {
+            srv->run();
+        } catch (...) {
+            failure = std::current_exception();
+        }
+        {
+            std::lock_guard lock(serverMutex);
+            srv.reset();
+        }
+        pool->stop();
+    });
+    std::string broken;
+    const bool clean = pool->run([&](const std::string& why) {
+        broken = why;
+        std::lock_guard lock(serverMutex);
+        if (srv)
+            srv->stop();
+    });
+    network.join();
+    if (failure)
+        std::rethrow_exception(failure);
+    if (!clean)
+        fail("{}", broken);
 }
 
 }  // namespace raypc::app

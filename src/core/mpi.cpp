@@ -198,6 +198,31 @@ std::vector<float> gatherToRoot(std::span<const float> mine)
     return all;
 }
 
+void send(int destination, int tag, const std::string& bytes)
+{
+    if (!distributed())
+        fail("MPI: send to rank {} without MPI", destination);
+    MPI_Send(bytes.data(), toCount(bytes.size(), "a message"), MPI_BYTE, destination, tag, MPI_COMM_WORLD);
+}
+
+std::optional<Message> tryReceive(int source, int tag)
+{
+    if (!distributed())
+        return std::nullopt;
+    int arrived = 0;
+    MPI_Status status;
+    MPI_Iprobe(source == kAnySource ? MPI_ANY_SOURCE : source, tag == kAnyTag ? MPI_ANY_TAG : tag, MPI_COMM_WORLD,
+               &arrived, &status);
+    if (!arrived)
+        return std::nullopt;
+    int count = 0;
+    MPI_Get_count(&status, MPI_BYTE, &count);
+    Message message{status.MPI_SOURCE, status.MPI_TAG, std::string(size_t(count), '\0')};
+    MPI_Recv(message.bytes.data(), count, MPI_BYTE, status.MPI_SOURCE, status.MPI_TAG, MPI_COMM_WORLD,
+             MPI_STATUS_IGNORE);
+    return message;
+}
+
 Block blockOf(int64_t count)
 {
     const int64_t n = size(), r = rank();

@@ -77,6 +77,23 @@ int64_t sum(int64_t value);
 // Every rank's floats appended in rank order, on rank 0 (empty elsewhere).
 std::vector<float> gatherToRoot(std::span<const float> mine);
 
+// Point-to-point messages (the distributed server, server/rank_pool.h): tagged byte strings, from
+// the main thread like everything here. Tags are the caller's (0..32767).
+constexpr int kAnySource = -1;
+constexpr int kAnyTag = -1;
+struct Message {
+    int source = 0;
+    int tag = 0;
+    std::string bytes;
+};
+// Sends `bytes` to rank `destination` (returns when the buffer may be reused: at once for small
+// messages, when the receiver has started to take a large one).
+void send(int destination, int tag, const std::string& bytes);
+// A message from `source` with `tag` (kAnySource, kAnyTag: any) if one has arrived, received;
+// nullopt at once otherwise. Polling with a short sleep in between keeps a waiting rank from
+// spinning a core (MPI's blocking receive busy-waits on shared memory). Without MPI: nullopt.
+std::optional<Message> tryReceive(int source, int tag);
+
 // The contiguous block of [0, count) that this rank takes in a static split (balanced to one item).
 struct Block {
     int64_t begin = 0, end = 0;

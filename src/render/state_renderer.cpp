@@ -178,7 +178,10 @@ StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, co
     const double budget = kInteractiveBudgetShare * state.timeBudgetMs / 1000.0 / double(views.size());
     const double rate = policy.samplesPerSecond;
 
-    if (state.level) {
+    if (policy.chosen) {
+        p.level = policy.chosen->level;
+        p.divisor = policy.chosen->divisor;
+    } else if (state.level) {
         p.level = *state.level;
     } else if (rate > 0) {
         // Coarse to fine (finestLevelWithin): while only the coarse levels fit, the finer ones of a
@@ -193,14 +196,14 @@ StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, co
         // Even the coarsest level misses the budget: 1/2 or 1/4 of the pixels per axis.
         if (fits < 0 && policy.reduceResolution) {
             const double seconds = rendererFor(step, p.level, 0).estimateSamplesPerPass() / rate;
-            const int divisor = resolutionDivisor(seconds, budget);
-            for (View& v : p.views) {
-                v.params.width = std::max(1, (v.params.width + divisor - 1) / divisor);
-                v.params.height = std::max(1, (v.params.height + divisor - 1) / divisor);
-            }
+            p.divisor = resolutionDivisor(seconds, budget);
         }
     } else {
         p.level = 0;
+    }
+    for (View& v : p.views) {
+        v.params.width = std::max(1, (v.params.width + p.divisor - 1) / p.divisor);
+        v.params.height = std::max(1, (v.params.height + p.divisor - 1) / p.divisor);
     }
 
     for (size_t i = 0; i < p.views.size(); ++i) {

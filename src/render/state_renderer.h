@@ -28,6 +28,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -83,6 +84,13 @@ struct LevelPolicy {
     // When even the coarsest level misses the budget, render 1/2 or 1/4 of the pixels per axis (the
     // interactive UI scales the frame up).
     bool reduceResolution = false;
+    // Set: the level and the size divisor another process's prepare() chose (Prepared::level and
+    // ::divisor), used as they are: a worker rank of the distributed server repeats rank 0's choice.
+    struct Choice {
+        int level = 0;
+        int divisor = 1;
+    };
+    std::optional<Choice> chosen;
 };
 
 // Image-parallel frames under mpirun (core/mpi.h, docs/scaling.md): rank r of N renders the tiles
@@ -108,6 +116,7 @@ public:
     };
     struct Prepared {
         int level = 0;
+        int divisor = 1;          // the views' size is the state's divided by this (LevelPolicy::reduceResolution)
         std::vector<View> views;  // stereoViews' order: one, or the left and the right eye
         std::shared_ptr<const PathlineScene> scene;  // nullptr when pathlines are hidden
         double estimatedSamplesPerPass = 0;          // of all views

@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "data/selection.h"
 #include "server/image_codec.h"
+#include "server/rank_pool.h"
 
 #include <spdlog/spdlog.h>
 #include <tbb/task_arena.h>
@@ -51,6 +52,7 @@ RenderSession::RenderSession(RenderContext& context, SessionSink sink, std::stri
       m_sink(std::move(sink)),
       m_name(std::move(name)),
       m_renderer(context.dataset, cacheSources(context.cache, context.pathlines)),
+      m_rankSession(context.ranks ? context.ranks->openSession() : 0),
       m_thread([this] { loop(); })
 {
 }
@@ -58,6 +60,8 @@ RenderSession::RenderSession(RenderContext& context, SessionSink sink, std::stri
 RenderSession::~RenderSession()
 {
     stop();
+    if (m_context.ranks)
+        m_context.ranks->closeSession(m_rankSession);
 }
 
 void RenderSession::submit(const StateMessage& message)
@@ -175,12 +179,17 @@ void RenderSession::render(const Request& request)
     const double preparedMs = millisecondsSince(renderStart);
     const int passes = request.interactive ? 1 : std::max(1, state.passes);
     ViewFrames frames = prepared.frames();
+    const uint64_t frameNumber = ++m_frames;
+    const int ranks = m_context.ranks ? m_context.ranks->ranks() : 1;
     double renderMsTotal = 0, encodeMsTotal = 0, firstPassMs = 0;
     int done = 0;
     for (int pass = 1; pass <= passes; ++pass) {
         if (m_cancel)
             break;
-        const PassStats stats = prepared.renderPass(frames, &m_cancel);
+        const PassStats stats =
+            m_context.ranks
+                ? m_context.ranks->renderPass(m_rankSession, frameNumber, pass, request.resolved, prepared, frames, &m_cancel)
+                : prepared.renderPass(frames, &m_cancel);
         if (stats.cancelled)
             break;
         if (stats.seconds > 0) {
@@ -213,6 +222,7 @@ void RenderSession::render(const Request& request)
                               {"passes", passes},
                               {"converged", pass == passes},
                               {"interactive", request.interactive},
+                              {"ranks", ranks},
                               {"width", picture.width},
                               {"height", picture.height},
                               {"camera", cameraJson(state)},

@@ -32,6 +32,8 @@
 
 namespace raypc::server {
 
+class RankPool;
+
 // Shared by all sessions of a server.
 struct RenderContext {
     std::shared_ptr<const Dataset> dataset;
@@ -40,6 +42,7 @@ struct RenderContext {
     // Throughput of the machine in estimated samples (VolumeRenderer::estimateSamplesPerPass) per
     // second, all threads; updated from every pass, used to choose the interactive level.
     std::atomic<double> samplesPerSecond{0.0};
+    RankPool* ranks = nullptr;  // a distributed server's (rank_pool.h): passes go to every rank
 };
 
 struct SessionSink {
@@ -87,6 +90,8 @@ private:
     // Render thread only.
     render::StateRenderer m_renderer;
     int m_lastStep = -1;
+    uint64_t m_rankSession = 0;  // this session's id in m_context.ranks
+    uint64_t m_frames = 0;       // frames started (a distributed pass names its frame)
     std::string m_selectionKey;
     nlohmann::json m_selection;
 

@@ -120,6 +120,7 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     s.render.dataset = s.dataset;
     s.render.cache = s.cache.get();
     s.render.pathlines = s.pathlines.get();
+    s.render.ranks = s.options.ranks;
     s.api.dataset = s.dataset;
     s.api.cache = s.cache.get();
     s.api.pathlines = s.pathlines.get();
@@ -202,7 +203,12 @@ void Server::run()
         m_impl->signals.add(SIGTERM);
         m_impl->signals.async_wait([this](beast::error_code ec, int signal) {
             if (!ec) {
-                spdlog::info("signal {}: stopping", signal);
+                if (m_impl->state.options.ranks)  // mpirun sends SIGTERM to every rank when one of them dies
+                    spdlog::info("signal {}: stopping (under mpirun: the job is stopping; if a rank died, mpirun "
+                                 "names it)",
+                                 signal);
+                else
+                    spdlog::info("signal {}: stopping", signal);
                 stop();
             }
         });

@@ -21,6 +21,8 @@
 
 namespace raypc::server {
 
+class RankPool;
+
 struct ServerOptions {
     std::filesystem::path dataset;
     std::string host = "127.0.0.1";
@@ -34,6 +36,9 @@ struct ServerOptions {
     // hosts are also accepted as Host on loopback (access.h, SitePolicy).
     std::vector<std::string> allowedOrigins;
     ServerLimits limits;
+    // Under mpirun (rank 0 of a distributed server, rank_pool.h): every session's passes are shared
+    // out over the ranks. nullptr: one process.
+    RankPool* ranks = nullptr;
 };
 
 // The UI's asset directory: `explicitDir` if given (throws raypc::Error if it is not a directory),

@@ -76,12 +76,21 @@ errors)
   # A command that is not shared out runs once, on rank 0.
   ranks 3 info "$work/ds" >"$work/info" 2>&1
   check "info under 3 ranks prints once" test "$(grep -c '(RayPC dataset)' "$work/info")" -eq 1
-  # The server is not distributed: refused with one line, at once.
-  timeout 60 "$mpirun_local" -np 2 "$raypc" serve "$work/ds" --port 0 >"$work/serve" 2>&1
+  # The demo runs in one process: refused with one line, at once, nothing made.
+  timeout 60 "$mpirun_local" -np 2 "$raypc" demo --dir "$work/demo" --no-serve >"$work/demo.out" 2>&1
   status=$?
-  ended_with_error "serve under 2 ranks is refused"
-  check "serve under 2 ranks: one error line saying why" \
-    test "$(grep -c 'raypc: error: serve: runs in one process' "$work/serve")" -eq 1
+  ended_with_error "demo under 2 ranks is refused"
+  check "demo under 2 ranks: one error line saying why" \
+    test "$(grep -c 'raypc: error: demo: runs in one process' "$work/demo.out")" -eq 1
+  check "demo under 2 ranks: nothing made" test ! -e "$work/demo"
+  # A distributed server whose dataset cannot be opened: every rank stops, one error line.
+  timeout 60 "$mpirun_local" -np 2 "$raypc" serve "$work/missing" --port 0 >"$work/serve" 2>&1
+  status=$?
+  ended_with_error "serve of a missing dataset under 2 ranks"
+  check "serve of a missing dataset under 2 ranks: one error line naming it" \
+    test "$(grep -c "raypc: error: .*$work/missing" "$work/serve")" -eq 1
+  check "serve of a missing dataset under 2 ranks: no other raypc error line" \
+    test "$(grep -c 'raypc: error' "$work/serve")" -eq 1
   ;;
 render_frames)
   make_data

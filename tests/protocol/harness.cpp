@@ -53,12 +53,13 @@ const fs::path& WorkDirEnvironment::work()
 }
 
 ServerProcess::ServerProcess(const std::string& raypcExe, const fs::path& work, std::vector<std::string> extra,
-                             bool verbose)
+                             bool verbose, std::vector<std::string> launcher)
 {
     int out[2];
     if (::pipe(out) != 0)
         throw std::runtime_error("pipe");
-    std::vector<std::string> args = {raypcExe};
+    std::vector<std::string> args = launcher;
+    args.push_back(raypcExe);
     if (verbose)
         args.push_back("-v");
     for (const std::string& a : {std::string("serve"), (work / "ds").string(), std::string("--port"),
@@ -68,6 +69,8 @@ ServerProcess::ServerProcess(const std::string& raypcExe, const fs::path& work, 
     m_pid = ::fork();
     if (m_pid == 0) {
         ::dup2(out[1], 1);
+        if (!launcher.empty())
+            ::dup2(out[1], 2);  // mpirun reports a rank that died on stderr
         ::close(out[0]);
         ::close(out[1]);
         std::vector<char*> argv;
@@ -144,6 +147,24 @@ bool ServerProcess::stop()
     ::close(m_out);
     m_pid = -1;
     return clean;
+}
+
+std::optional<int> ServerProcess::waitExit(double seconds)
+{
+    if (m_pid < 0)
+        return std::nullopt;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    int status = 0;
+    while (::waitpid(m_pid, &status, WNOHANG) != m_pid) {
+        if (std::chrono::steady_clock::now() > deadline)
+            return std::nullopt;
+        ::usleep(50000);
+    }
+    if (m_drain.joinable())
+        m_drain.join();
+    ::close(m_out);
+    m_pid = -1;
+    return status;
 }
 
 bool ServerProcess::alive() const

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <sys/types.h>
 #include <thread>
@@ -56,11 +57,12 @@ private:
     std::string m_exe, m_shared;
 };
 
-// `raypc serve` in a child process; stopped (SIGTERM, then SIGKILL) on destruction.
+// `raypc serve` in a child process; stopped (SIGTERM, then SIGKILL) on destruction. `launcher`, if
+// given, starts it (e.g. {"scripts/mpirun-local.sh", "-np", "2"}: a distributed server).
 class ServerProcess {
 public:
     ServerProcess(const std::string& raypcExe, const std::filesystem::path& work, std::vector<std::string> extra = {},
-                  bool verbose = false);
+                  bool verbose = false, std::vector<std::string> launcher = {});
     ~ServerProcess() { stop(); }
     ServerProcess(const ServerProcess&) = delete;
     ServerProcess& operator=(const ServerProcess&) = delete;
@@ -69,6 +71,9 @@ public:
     std::string output();
     // SIGTERM, then SIGKILL after 5 s. True when the server exited by itself with status 0.
     bool stop();
+    // Waits up to `seconds` for the server to exit by itself: its wait status, or nullopt if it
+    // still runs then.
+    std::optional<int> waitExit(double seconds);
     bool alive() const;
     pid_t pid() const { return m_pid; }
 

@@ -1,0 +1,372 @@
+#include "server/rank_pool.h"
+
+#include "core/error.h"
+#include "core/mpi.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstring>
+#include <optional>
+#include <thread>
+
+namespace raypc::server {
+
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+// Message tags (core/mpi.h send/tryReceive).
+enum Tag : int { kTagPass = 1, kTagCancel = 2, kTagDrop = 3, kTagStop = 4, kTagAnswer = 5 };
+
+// The counters of a pass that add up over ranks (the machine and brick figures stay rank 0's).
+json countsJson(const render::PassStats& s)
+{
+    return {s.samples, s.samplesSkipped, s.chunks, s.chunksSkipped, s.chunksJumped, s.rays};
+}
+
+void addCounts(render::PassStats& total, const json& counts)
+{
+    total.samples += counts.at(0).get<uint64_t>();
+    total.samplesSkipped += counts.at(1).get<uint64_t>();
+    total.chunks += counts.at(2).get<uint64_t>();
+    total.chunksSkipped += counts.at(3).get<uint64_t>();
+    total.chunksJumped += counts.at(4).get<uint64_t>();
+    total.rays += counts.at(5).get<uint64_t>();
+}
+
+double secondsSince(Clock::time_point start)
+{
+    return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+}  // namespace
+
+// ---- rank 0 ----------------------------------------------------------------------------------
+
+RankPool::RankPool() : m_ranks(mpi::size())
+{
+    RAYPC_CHECK(mpi::distributed() && mpi::isRoot());
+}
+
+RankPool::~RankPool() = default;
+
+uint64_t RankPool::openSession()
+{
+    std::lock_guard lock(m_mutex);
+    return m_nextSession++;
+}
+
+void RankPool::closeSession(uint64_t session)
+{
+    {
+        std::lock_guard lock(m_mutex);
+        if (m_stopping || !m_broken.empty())
+            return;
+        auto task = std::make_unique<Task>();
+        task->tag = kTagDrop;
+        task->bytes = std::to_string(session);
+        m_queue.push_back(std::move(task));
+    }
+    m_cv.notify_all();
+}
+
+render::PassStats RankPool::renderPass(uint64_t session, uint64_t frame, int pass,
+                                       const render::ResolvedState& resolved,
+                                       const render::StateRenderer::Prepared& prepared, render::ViewFrames& frames,
+                                       const std::atomic<bool>* cancel)
+{
+    const auto start = Clock::now();
+    auto task = std::make_unique<Task>();
+    task->tag = kTagPass;
+    task->cancel = cancel;
+    std::future<std::vector<std::string>> answers = task->answers.get_future();
+    uint64_t seq = 0;
+    {
+        std::lock_guard lock(m_mutex);
+        if (!m_broken.empty())
+            fail("{}", m_broken);
+        if (m_stopping)
+            fail("the server is stopping");
+        seq = task->seq = m_nextSeq++;
+        task->bytes = json{{"seq", seq},
+                           {"session", session},
+                           {"frame", frame},
+                           {"pass", pass},
+                           {"level", prepared.level},
+                           {"divisor", prepared.divisor},
+                           {"state", render::toJson(resolved.state)}}
+                          .dump();
+        m_queue.push_back(std::move(task));
+    }
+    m_cv.notify_all();
+
+    // Rank 0's own tiles while the others render theirs; then theirs, whatever happened here, so
+    // that the answers of this pass are taken before the next.
+    render::PassStats total = prepared.renderPass(frames, cancel, {0, m_ranks});
+    const std::vector<std::string> got = answers.get();  // throws when a rank stopped answering
+    int stoppedPartWay = 0;
+    for (size_t i = 0; i < got.size(); ++i) {
+        const int rank = int(i) + 1;
+        const size_t eol = got[i].find('\n');
+        RAYPC_CHECK(eol != std::string::npos);
+        const json header = json::parse(got[i].substr(0, eol));
+        if (header.contains("error"))
+            fail("rank {}: {}", rank, header["error"].get<std::string>());
+        RAYPC_CHECK_EQ(header.at("seq").get<uint64_t>(), seq);
+        if (header.at("cancelled").get<bool>()) {
+            total.cancelled = true;
+            ++stoppedPartWay;
+            continue;
+        }
+        addCounts(total, header.at("counts"));
+        // The floats follow the header; copied out, since the string's bytes need not be aligned.
+        const size_t bytes = got[i].size() - eol - 1;
+        RAYPC_CHECK_EQ(bytes % sizeof(float), size_t(0));
+        std::vector<float> packed(bytes / sizeof(float));
+        std::memcpy(packed.data(), got[i].data() + eol + 1, bytes);
+        size_t offset = 0;
+        for (render::FrameBuffer& f : frames)
+            offset += f.unpackTiles(std::span<const float>(packed).subspan(offset), {rank, m_ranks});
+        RAYPC_CHECK_EQ(offset, packed.size());
+    }
+    if (stoppedPartWay > 0)
+        spdlog::info("distributed: session {} frame {} pass {}: {} of {} other ranks stopped part-way (cancelled)",
+                     session, frame, pass, stoppedPartWay, m_ranks - 1);
+    total.seconds = secondsSince(start);
+    return total;
+}
+
+void RankPool::stop()
+{
+    {
+        std::lock_guard lock(m_mutex);
+        m_stopping = true;
+    }
+    m_cv.notify_all();
+}
+
+std::vector<std::string> RankPool::collect(const Task& task, bool& broken, std::string& why)
+{
+    const int others = m_ranks - 1;
+    for (int r = 1; r < m_ranks; ++r)
+        mpi::send(r, kTagPass, task.bytes);
+    std::vector<std::string> answers(static_cast<size_t>(others));
+    std::vector<bool> answered(size_t(others), false);
+    int missing = others;
+    std::optional<Clock::time_point> cancelledAt;
+    while (missing > 0) {
+        bool arrived = false;
+        for (int r = 1; r < m_ranks; ++r) {
+            if (answered[size_t(r - 1)])
+                continue;
+            if (std::optional<mpi::Message> m = mpi::tryReceive(r, kTagAnswer)) {
+                answers[size_t(r - 1)] = std::move(m->bytes);
+                answered[size_t(r - 1)] = true;
+                --missing;
+                arrived = true;
+            }
+        }
+        if (missing == 0)
+            break;
+        bool stopping = false;
+        {
+            std::lock_guard lock(m_mutex);
+            stopping = m_stopping;
+        }
+        if (!cancelledAt && (stopping || (task.cancel && task.cancel->load()))) {
+            for (int r = 1; r < m_ranks; ++r)
+                if (!answered[size_t(r - 1)])
+                    mpi::send(r, kTagCancel, std::to_string(task.seq));
+            cancelledAt = Clock::now();
+        }
+        if (cancelledAt && secondsSince(*cancelledAt) > kAnswerTimeoutSeconds) {
+            std::vector<int> silent;
+            for (int r = 1; r < m_ranks; ++r)
+                if (!answered[size_t(r - 1)])
+                    silent.push_back(r);
+            why = fmt::format("distributed server: rank{} {} did not answer within {:.0f} s of a cancel; the server "
+                              "stops (MPI cannot go on without a rank)",
+                              silent.size() > 1 ? "s" : "", fmt::join(silent, ", "), kAnswerTimeoutSeconds);
+            broken = true;
+            return {};
+        }
+        if (!arrived)
+            std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    return answers;
+}
+
+bool RankPool::run(const std::function<void(const std::string&)>& onBroken)
+{
+    for (;;) {
+        std::unique_ptr<Task> task;
+        {
+            std::unique_lock lock(m_mutex);
+            m_cv.wait(lock, [&] { return m_stopping || !m_queue.empty(); });
+            if (m_queue.empty())
+                break;  // stopping, and nothing left: later calls fail at once
+            task = std::move(m_queue.front());
+            m_queue.pop_front();
+        }
+        if (task->tag != kTagPass) {
+            for (int r = 1; r < m_ranks; ++r)
+                mpi::send(r, task->tag, task->bytes);
+            continue;
+        }
+        bool broken = false;
+        std::string why;
+        std::vector<std::string> answers = collect(*task, broken, why);
+        if (!broken) {
+            task->answers.set_value(std::move(answers));
+            continue;
+        }
+        spdlog::error("{}", why);
+        std::deque<std::unique_ptr<Task>> left;
+        {
+            std::lock_guard lock(m_mutex);
+            m_broken = why;
+            left.swap(m_queue);
+        }
+        const auto error = std::make_exception_ptr(Error(why));
+        task->answers.set_exception(error);
+        for (auto& t : left)
+            if (t->tag == kTagPass)
+                t->answers.set_exception(error);
+        onBroken(why);
+        return false;
+    }
+    for (int r = 1; r < m_ranks; ++r)
+        mpi::send(r, kTagStop, "");
+    spdlog::info("distributed: ranks 1..{} stopped", m_ranks - 1);
+    return true;
+}
+
+// ---- ranks 1..N-1 ----------------------------------------------------------------------------
+
+struct WorkerRank::Session {
+    Session(std::shared_ptr<const Dataset> dataset, render::StateSources sources)
+        : renderer(std::move(dataset), std::move(sources))
+    {
+    }
+    render::StateRenderer renderer;
+    uint64_t frame = 0;
+    std::optional<render::StateRenderer::Prepared> prepared;
+    render::ViewFrames frames;
+};
+
+WorkerRank::WorkerRank(const std::filesystem::path& dataset, size_t cacheBytes, size_t cacheEntries)
+    : m_dataset(Dataset::open(dataset))
+{
+    m_cache = std::make_unique<StepCache>([ds = m_dataset](int step, int level) { return ds->load(step, level); },
+                                          cacheBytes, cacheEntries);
+    m_pathlines = std::make_unique<PathlineCache>(dataset);
+}
+
+WorkerRank::~WorkerRank() = default;
+
+namespace {
+volatile std::sig_atomic_t g_signal = 0;
+extern "C" void noteSignal(int signal) { g_signal = signal; }
+}  // namespace
+
+void WorkerRank::run()
+{
+    // mpirun passes SIGINT/SIGTERM to every rank: rank 0 then stops serving and tells this rank to
+    // stop, so that every rank ends normally (exit status 0). Should rank 0 not do so in time, this
+    // rank ends the job with an error.
+    std::signal(SIGINT, noteSignal);
+    std::signal(SIGTERM, noteSignal);
+    std::optional<Clock::time_point> signalled;
+    // Poll with a short sleep: a blocking MPI receive busy-waits and would take a core from the
+    // ranks that render on the same node.
+    auto idle = std::chrono::microseconds(100);
+    for (;;) {
+        if (g_signal && !signalled)
+            signalled = Clock::now();
+        if (signalled && secondsSince(*signalled) > kAnswerTimeoutSeconds)
+            fail("distributed server: rank {} got signal {} and rank 0 did not stop the server within {:.0f} s",
+                 mpi::rank(), int(g_signal), kAnswerTimeoutSeconds);
+        std::optional<mpi::Message> m = mpi::tryReceive(0, mpi::kAnyTag);
+        if (!m) {
+            std::this_thread::sleep_for(idle);
+            idle = std::min(idle * 2, std::chrono::microseconds(2000));
+            continue;
+        }
+        idle = std::chrono::microseconds(100);
+        switch (m->tag) {
+        case kTagStop:
+            return;
+        case kTagDrop:
+            m_sessions.erase(std::stoull(m->bytes));
+            break;
+        case kTagCancel:
+            break;  // for a pass already answered
+        case kTagPass:
+            mpi::send(0, kTagAnswer, renderPass(m->bytes));
+            break;
+        default:
+            fail("distributed server: rank {} got a message with the unknown tag {}", mpi::rank(), m->tag);
+        }
+    }
+}
+
+std::string WorkerRank::renderPass(const std::string& text)
+{
+    json header;
+    std::string tiles;
+    uint64_t seq = 0;
+    try {
+        const json job = json::parse(text);
+        seq = job.at("seq").get<uint64_t>();
+        const uint64_t id = job.at("session").get<uint64_t>(), frame = job.at("frame").get<uint64_t>();
+        const int pass = job.at("pass").get<int>();
+        std::unique_ptr<Session>& slot = m_sessions[id];
+        if (!slot)
+            slot = std::make_unique<Session>(m_dataset, cacheSources(m_cache.get(), m_pathlines.get()));
+        Session& s = *slot;
+        if (s.frame != frame || !s.prepared) {
+            if (pass != 1)
+                fail("pass {} of frame {} arrived before its first pass", pass, frame);
+            s.prepared.reset();
+            render::LevelPolicy policy;
+            policy.chosen = render::LevelPolicy::Choice{job.at("level").get<int>(), job.at("divisor").get<int>()};
+            s.prepared = s.renderer.prepare(render::resolveState(job.at("state"), *m_dataset), policy);
+            s.frames = s.prepared->frames();
+            s.frame = frame;
+        }
+        if (s.frames.front().passes() != pass - 1)
+            fail("pass {} of frame {} arrived after {} passes", pass, frame, s.frames.front().passes());
+
+        // Render on another thread so that this one (MPI's) can take a cancel between tiles.
+        std::atomic<bool> cancel{false};
+        const render::TileShare share = render::rankTileShare();
+        std::future<render::PassStats> rendered =
+            std::async(std::launch::async, [&] { return s.prepared->renderPass(s.frames, &cancel, share); });
+        const std::string mine = std::to_string(seq);
+        while (rendered.wait_for(std::chrono::milliseconds(1)) != std::future_status::ready)
+            if (std::optional<mpi::Message> c = mpi::tryReceive(0, kTagCancel); c && c->bytes == mine)
+                cancel = true;
+        const render::PassStats stats = rendered.get();
+        mpi::dieHook("serve-pass");
+        header = {{"seq", seq}, {"cancelled", stats.cancelled}, {"counts", countsJson(stats)}};
+        if (!stats.cancelled)
+            for (const render::FrameBuffer& f : s.frames) {
+                const std::vector<float> packed = f.packTiles(share);
+                tiles.append(reinterpret_cast<const char*>(packed.data()), packed.size() * sizeof(float));
+            }
+        else
+            s.prepared.reset();  // rank 0 starts a new frame after a cancel
+    } catch (const std::exception& e) {
+        header = {{"seq", seq}, {"error", e.what()}};
+        tiles.clear();
+    }
+    return header.dump() + '\n' + tiles;
+}
+
+}  // namespace raypc::server

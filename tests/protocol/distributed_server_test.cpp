@@ -1,0 +1,179 @@
+// The distributed server (issue 13 part 4, docs/scaling.md): `raypc serve` under mpirun
+// (scripts/mpirun-local.sh) against the same server alone, through the WebSocket protocol. A
+// still state's frames must be the same bytes whatever the number of ranks (the tiles are gathered
+// as sums, so the picture is bit for bit one process's, and the JPEG encoder is deterministic); a
+// new state must cancel a pass on every rank; a rank that dies must end the job, not hang it.
+#include "harness.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <sys/wait.h>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+namespace servertest = raypc::servertest;
+using namespace servertest::aliases;
+using servertest::jpegOf;
+using servertest::smallState;
+using servertest::WsClient;
+
+const auto* const g_environment =
+    ::testing::AddGlobalTestEnvironment(new servertest::WorkDirEnvironment(RAYPC_EXE, RAYPC_SHARED_DIR));
+
+const fs::path& g_work = servertest::WorkDirEnvironment::work();
+
+// `raypc serve` of the prepared dataset on `ranks` ranks (1: alone, without mpirun).
+class Server : public servertest::ServerProcess {
+public:
+    explicit Server(int ranks)
+        : servertest::ServerProcess(RAYPC_EXE, g_work, {}, false,
+                                    ranks == 1 ? std::vector<std::string>{}
+                                               : std::vector<std::string>{RAYPC_MPIRUN_LOCAL, "-np",
+                                                                          std::to_string(ranks)})
+    {
+    }
+};
+
+// SIGTERM ends the server without an error. Alone its exit status is 0; mpirun exits with 1
+// whenever it is sent SIGTERM (whatever its ranks do), so there the log tells: rank 0 stopped the
+// other ranks, and neither a rank nor mpirun reported an error.
+void expectCleanStop(Server& server, int ranks)
+{
+    if (ranks == 1) {
+        EXPECT_TRUE(server.stop()) << "the server stops cleanly on SIGTERM; output: " << server.output();
+        return;
+    }
+    ::kill(server.pid(), SIGTERM);
+    const std::optional<int> status = server.waitExit(30);
+    ASSERT_TRUE(status.has_value()) << "still running 30 s after SIGTERM: " << server.output();
+    const std::string out = server.output();
+    EXPECT_NE(out.find(fmt::format("distributed: ranks 1..{} stopped", ranks - 1)), std::string::npos) << out;
+    EXPECT_EQ(out.find("error"), std::string::npos) << out;
+    EXPECT_EQ(out.find("mpirun noticed"), std::string::npos) << out;
+}
+
+// The states whose converged frames are compared: the small still state; a stereo pair (two views,
+// each shared out) with pathlines; a size that is not a multiple of the 32-pixel tiles.
+std::vector<json> comparedStates()
+{
+    json stereo = smallState(60, "viridis", 3);
+    stereo["version"] = 5;
+    stereo["stereo"] = {{"mode", "side-by-side"}, {"eyeSeparationKm", 600}};
+    stereo["pathlines"] = {{"visible", true}, {"window", 2}};
+    json odd = smallState(-40, "inferno", 2);
+    odd["image"] = {{"width", 203}, {"height", 117}};
+    return {smallState(30, "viridis", 2), stereo, odd};
+}
+
+// The converged frame of each compared state, in order, from a server on `ranks` ranks.
+std::vector<WsClient::Message> convergedFrames(int ranks)
+{
+    Server server(ranks);
+    WsClient ws(server.port);
+    ws.hello();
+    std::vector<WsClient::Message> out;
+    int64_t id = 0;
+    for (const json& state : comparedStates()) {
+        ++id;
+        ws.send({{"type", "state"}, {"id", id}, {"state", state}, {"interactive", false}});
+        std::vector<WsClient::Message> frames = ws.framesUntilConverged(id);
+        out.push_back(std::move(frames.back()));
+    }
+    ws.close();
+    expectCleanStop(server, ranks);
+    return out;
+}
+
+TEST(DistributedServer, FramesEqualOneProcessOnTwoAndThreeRanks)
+{
+    const std::vector<WsClient::Message> alone = convergedFrames(1);
+    ASSERT_EQ(alone.size(), comparedStates().size());
+    for (const auto& m : alone)
+        EXPECT_EQ(m.frame.header["ranks"], 1);
+    for (int ranks : {2, 3}) {
+        const std::vector<WsClient::Message> shared = convergedFrames(ranks);
+        ASSERT_EQ(shared.size(), alone.size());
+        for (size_t i = 0; i < alone.size(); ++i) {
+            const json& h = shared[i].frame.header;
+            EXPECT_EQ(h["ranks"], ranks) << "state " << i;
+            EXPECT_EQ(h["width"], alone[i].frame.header["width"]) << "state " << i;
+            EXPECT_EQ(h["passes"], alone[i].frame.header["passes"]) << "state " << i;
+            // Every rank's samples are counted: the same total as one process.
+            EXPECT_EQ(h["stats"]["samples"], alone[i].frame.header["stats"]["samples"]) << "state " << i;
+            EXPECT_TRUE(jpegOf(shared[i]) == jpegOf(alone[i]))
+                << "state " << i << " on " << ranks << " ranks: the JPEG differs from one process's";
+            EXPECT_EQ(shared[i].frame.depth, alone[i].frame.depth) << "state " << i << ": depth map";
+        }
+    }
+}
+
+// A new state while a long still is being rendered: the ranks drop the old pass, the new state's
+// frames follow at once and the old state never converges.
+TEST(DistributedServer, NewStateCancelsThePassOnEveryRank)
+{
+    Server server(2);
+    WsClient ws(server.port);
+    ws.hello();
+    json slow = smallState(10, "viridis", 400);
+    slow["image"] = {{"width", 1024}, {"height", 768}};
+    ws.send({{"type", "state"}, {"id", 1}, {"state", slow}, {"interactive", false}});
+    const WsClient::Message first = ws.receive();
+    ASSERT_TRUE(first.binary) << first.raw;
+    EXPECT_EQ(first.frame.header["id"], 1);
+    EXPECT_EQ(first.frame.header["ranks"], 2);
+    ws.send({{"type", "state"}, {"id", 2}, {"state", smallState(50)}, {"interactive", false}});
+    const auto sent = std::chrono::steady_clock::now();
+    const std::vector<WsClient::Message> frames = ws.framesUntilConverged(2);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
+    for (const auto& m : frames)
+        if (m.frame.header["id"] == 1)
+            EXPECT_FALSE(m.frame.header["converged"].get<bool>()) << "the old state went on to converge";
+    // 400 passes of 1024x768 take minutes; the new state's 2 small passes come after one old pass at most.
+    EXPECT_LT(seconds, 60.0);
+    EXPECT_LT(frames.size(), 12u) << "old frames kept coming after the new state";
+    // Rank 1 was in the old state's second pass when the new state came: it stopped between tiles.
+    EXPECT_NE(server.output().find("session 1 frame 1 pass 2: 1 of 1 other ranks stopped part-way"), std::string::npos)
+        << server.output();
+    ws.close();
+    expectCleanStop(server, 2);
+}
+
+// Rank 1 exits in the middle of a pass (the test hook of docs/scaling.md): the job ends with an
+// error that names the rank, well within the timeout, and the client's connection closes.
+TEST(DistributedServer, RankThatDiesEndsTheJobWithoutHanging)
+{
+    ::setenv("RAYPC_TEST_DIE_RANK", "1", 1);
+    ::setenv("RAYPC_TEST_DIE_AT", "serve-pass", 1);
+    Server server(2);
+    ::unsetenv("RAYPC_TEST_DIE_RANK");
+    ::unsetenv("RAYPC_TEST_DIE_AT");
+    WsClient ws(server.port);
+    ws.hello();
+    servertest::setReceiveTimeout(ws.stream().next_layer(), 60);
+    ws.send({{"type", "state"}, {"id", 1}, {"state", smallState()}, {"interactive", false}});
+    bool closed = false;
+    try {
+        for (int i = 0; i < 100; ++i)
+            ws.receive();
+    } catch (const std::exception&) {
+        closed = true;
+    }
+    EXPECT_TRUE(closed) << "the connection stays open after a rank died";
+    const std::optional<int> status = server.waitExit(60);
+    ASSERT_TRUE(status.has_value()) << "the job still runs 60 s after rank 1 died; output: " << server.output();
+    EXPECT_FALSE(WIFEXITED(*status) && WEXITSTATUS(*status) == 0) << "exit status 0 after a rank died";
+    const std::string out = server.output();
+    EXPECT_NE(out.find("rank 1 exits"), std::string::npos) << out;
+    EXPECT_NE(out.find("exited with non-zero status"), std::string::npos) << "mpirun names the rank: " << out;
+}
+
+}  // namespace
