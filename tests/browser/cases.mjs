@@ -1124,12 +1124,38 @@ const cases = {
     check(/pathlines\.bogus: unknown key/.test(refused.out[0]) && /pathlines\.visible/.test(refused.out[1]) &&
       /version 1/.test(refused.out[2]) && refused.same, `strict pathlines parsing: ${JSON.stringify(refused)}`);
   },
+
+  // The distributed server (docs/scaling.md), started under mpirun with 2 ranks: the UI works as
+  // alone — converged frames come, each says it was rendered by 2 ranks (the frame header and the
+  // status line), and a brush sent from the UI changes the picture.
+  async distributed({ context, url }) {
+    const page = await openUi(context, url);
+    await standardView(page);
+    const ranks = await page.evaluate(() => window.__raypc.headers.map((h) => h.ranks));
+    check(ranks.length > 0 && ranks.every((r) => r === 2), `frame headers' ranks under 2 MPI ranks: ${JSON.stringify(ranks)}`);
+    const status = await page.textContent('#status');
+    check(/\b2 ranks\b/.test(status), `the status line does not say '2 ranks': ${status}`);
+    const before = await viewPixels(page);
+    const ds = await info(url);
+    const radius = ds.coordinates.find((c) => c.name === 'radius');
+    await page.evaluate((r) => {
+      const s = window.__raypc.state();
+      window.__raypc.setState({ ...s, brushes: [{ name: 'radius', min: r.min + 0.6 * (r.max - r.min), max: r.max }] });
+    }, radius);
+    await waitConverged(page);
+    const after = await viewPixels(page);
+    const diff = meanAbsDiff(before, after);
+    check(diff > 2, `brushing the outer 40 % of the radius changed the picture by only ${diff.toFixed(2)} grey levels`);
+    const last = await page.evaluate(() => window.__raypc.headers.at(-1));
+    check(last.ranks === 2 && last.converged, `last frame: ${JSON.stringify(last)}`);
+  },
 };
 
 // Chromium context options per case (default: 1280x860 at devicePixelRatio 1).
 const caseOptions = {
   resolution: { contextOptions: { viewport: { width: 1000, height: 700 }, deviceScaleFactor: 2 } },
   responsive: { sampleRows: 100000, limitMs: 150000 },
+  distributed: { ranks: 2 },
 };
 
 const body = cases[caseName];

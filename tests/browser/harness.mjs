@@ -51,7 +51,8 @@ function waitForUrl(proc, timeoutMs) {
 // `contextOptions` go to chromium's context (e.g. a viewport or deviceScaleFactor); `gpu` runs
 // chromium with GPU rasterisation on a software GL (SwiftShader), as on a machine without a GPU,
 // instead of --disable-gpu.
-export async function runCase(name, raypc, fixture, body, { limitMs = 100000, contextOptions = {}, gpu = false, sampleRows = 5000 } = {}) {
+// `ranks` > 1 starts the server under MPI (scripts/mpirun-local.sh -np RANKS: a distributed server).
+export async function runCase(name, raypc, fixture, body, { limitMs = 100000, contextOptions = {}, gpu = false, sampleRows = 5000, ranks = 1 } = {}) {
   const started = Date.now();
   let server = null, context = null, tmp = null;
   const cleanup = async () => {
@@ -82,7 +83,9 @@ export async function runCase(name, raypc, fixture, body, { limitMs = 100000, co
     const pre = spawnSync(raypc, ['preprocess', fixture, '-o', dataset, '--quiet', '--sample-rows', String(sampleRows)], { encoding: 'utf8', timeout: 60000 });
     check(pre.status === 0, `raypc preprocess failed (${pre.status}): ${pre.stderr}`);
 
-    server = spawn(raypc, ['serve', dataset, '--port', '0', '--assets', dist, '--examples', join(repoRoot, 'examples')], { stdio: ['ignore', 'pipe', 'pipe'] });
+    const serve = [raypc, 'serve', dataset, '--port', '0', '--assets', dist, '--examples', join(repoRoot, 'examples')];
+    const command = ranks > 1 ? [join(repoRoot, 'scripts', 'mpirun-local.sh'), '-np', String(ranks), ...serve] : serve;
+    server = spawn(command[0], command.slice(1), { stdio: ['ignore', 'pipe', 'pipe'] });
     const url = await waitForUrl(server, 20000);
 
     context = await chromium.launchPersistentContext(join(tmp, 'profile'), {

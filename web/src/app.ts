@@ -422,6 +422,7 @@ export class App {
       if (st.samplesPerSecond !== undefined) parts.push(`${(st.samplesPerSecond / 1e6).toFixed(1)} M samples/s`);
       if (st.bricksTotal) parts.push(`${(((st.bricksSkipped ?? 0) / st.bricksTotal) * 100).toFixed(0)} % bricks skipped`);
       parts.push(`${h.width}×${h.height}`);
+      if ((h.ranks ?? 1) > 1) parts.push(`${h.ranks} ranks`);
     }
     const sel = this.selection?.selection;
     if (this.store.state.brushes.length && sel) parts.push(`selected ${(sel.fractionOfMantle * 100).toFixed(2)} %`);

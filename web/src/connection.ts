@@ -12,6 +12,7 @@ export interface FrameHeader {
   passes: number;
   converged: boolean;
   interactive: boolean;
+  ranks?: number; // MPI ranks that rendered the pass (docs/protocol.md); 1 alone
   width: number;
   height: number;
   camera: CameraState;
