@@ -373,14 +373,39 @@ const cases = {
     check(nSteps >= 3, `fixture has ${nSteps} steps`);
     const rangeBefore = await page.evaluate(() => [document.getElementById('rangeMin').value, document.getElementById('rangeMax').value]);
     await page.selectOption('#fps', '10');
+    const rows = await page.evaluate(() => window.__raypc.parcoords.rowCount);
+    const firstSampleStep = await page.evaluate(() => window.__raypc.sampleStep);
+    check(rows === 20000, `the sample has ${rows} rows, the case asked for 20000`);
     const t0 = await page.evaluate(() => performance.now());
     await page.click('#play');
+    // While playing, each new step's sample is drawn coarsely: a quarter of its 20 000 lines.
+    let playingLines = 0;
     await page.waitForFunction((n) => {
       const steps = window.__raypc.sentLog.filter((e) => e.interactive).map((e) => e.step);
       return steps.length >= n + 2;
     }, nSteps, { timeout: 40000 }).catch(() => { throw new TestFailure('playback did not advance through every step within 40 s'); });
+    // (the sample of a later step has been loaded meanwhile: it loads at most once a second)
+    await page.waitForFunction((first) => window.__raypc.sampleStep !== first, firstSampleStep, { timeout: 20000 })
+      .catch(() => { throw new TestFailure('no other step\'s sample was loaded while playing'); });
+    playingLines = await page.evaluate(() => window.__raypc.parcoords.timing.lines.foreground);
+    check(playingLines === 5000, `while playing, the parallel coordinates drew ${playingLines} of ${rows} lines, expected 5000 (coarse)`);
     await page.click('#play');
     await waitConverged(page);
+    // Paused: every line again, of the step paused at (its sample's values, taken into the same rows).
+    await page.waitForFunction(() => window.__raypc.sampleStep === window.__raypc.state().step, null, { timeout: 20000 })
+      .catch(() => { throw new TestFailure('after pausing, the sample of the step shown was not loaded'); });
+    const paused = await page.evaluate(async () => {
+      const r = window.__raypc;
+      const names = r.info.sample.columns;
+      const values = new Float32Array(await (await fetch(`api/sample?step=${r.state().step}`)).arrayBuffer());
+      const rows = r.parcoords.rows;
+      let mismatches = 0;
+      for (const i of [0, 1, 777, rows.length - 1])
+        names.forEach((name, k) => { if (rows[i][name] !== values[i * names.length + k]) mismatches++; });
+      return { lines: r.parcoords.timing.lines.foreground, mismatches };
+    });
+    check(paused.lines === rows, `after pausing, ${paused.lines} of ${rows} lines drawn, expected all`);
+    check(paused.mismatches === 0, `after pausing, ${paused.mismatches} values of the lines differ from the step's sample`);
     const log = await page.evaluate((since) => ({
       sent: window.__raypc.sentLog.filter((e) => e.t >= since),
       frames: window.__raypc.frameLog.filter((e) => e.t >= since),
@@ -1156,6 +1181,7 @@ const caseOptions = {
   resolution: { contextOptions: { viewport: { width: 1000, height: 700 }, deviceScaleFactor: 2 } },
   responsive: { sampleRows: 100000, limitMs: 150000 },
   distributed: { ranks: 2 },
+  play: { sampleRows: 20000 },
 };
 
 const body = cases[caseName];

@@ -1,5 +1,7 @@
 // Measurements of the UI on a real dataset (not part of ctest; speed is reported, not asserted):
-//   node tests/browser/measure.mjs RAYPC DATASET [SCREENSHOT.png]
+//   node tests/browser/measure.mjs RAYPC DATASET [SCREENSHOT.png] [--play FPS [--seconds S] [--only-play]]
+//                                  [--server-log FILE]   (the server's log, for where the time goes)
+//                                  [--assets DIR]        (another build of the UI, for A/B runs)
 // 1. brush-to-updated-frame latency at 512x512: a brush on the temperature axis is dragged with
 //    the mouse; for every state the brush sent, the time from sending it to its first frame on
 //    screen (decoded and drawn), separately for interactive states (while dragging) and the final
@@ -8,21 +10,30 @@
 //    for each mouse move of a brush, the time from the input event to the next animation frame
 //    (parcoord-es filters every line and starts redrawing inside that frame), and the longest task.
 // 3. optionally a screenshot of the whole UI.
+// 4. with --play FPS: playback at 512x512 at FPS steps/s (the UI's speed menu) for S seconds
+//    (default 10): steps shown per second, and per step the time from the state sent to its frame
+//    received (server) and to its frame on screen (browser), with the level the server chose.
+//    --only-play skips 1-3.
 import { spawn } from 'node:child_process';
 import { createRequire } from 'node:module';
 import { join } from 'node:path';
-import { mkdtempSync, rmSync } from 'node:fs';
+import { createWriteStream, mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { chromiumPath, repoRoot, waitConverged } from './harness.mjs';
 
-const [raypc, dataset, screenshot] = process.argv.slice(2);
+const args = process.argv.slice(2);
+const flag = (name) => { const i = args.indexOf(name); return i < 0 ? null : args.splice(i, name === '--only-play' ? 1 : 2).at(-1); };
+const serverLog = flag('--server-log'), assets = flag('--assets') ?? join(repoRoot, 'web', 'dist');
+const playFps = flag('--play'), playSeconds = Number(flag('--seconds') ?? 10), onlyPlay = flag('--only-play') !== null;
+const [raypc, dataset, screenshot] = args;
 const { chromium } = createRequire(join(repoRoot, 'web', 'package.json'))('playwright-core');
 const median = (a) => { const s = [...a].sort((x, y) => x - y); return s.length ? s[Math.floor(s.length / 2)] : NaN; };
 const pct = (a, p) => { const s = [...a].sort((x, y) => x - y); return s[Math.min(s.length - 1, Math.floor(s.length * p))]; };
 
-const server = spawn(raypc, ['serve', dataset, '--port', '0', '--assets', join(repoRoot, 'web', 'dist')], { stdio: ['ignore', 'pipe', 'inherit'] });
+const server = spawn(raypc, ['serve', dataset, '--port', '0', '--assets', assets], { stdio: ['ignore', 'pipe', 'inherit'] });
 const url = await new Promise((resolve, reject) => {
   let out = '';
+  if (serverLog) server.stdout.pipe(createWriteStream(serverLog));
   server.stdout.on('data', (d) => { out += d; const m = /(http:\/\/127\.0\.0\.1:\d+\/)/.exec(out); if (m) resolve(m[1]); });
   server.on('exit', (c) => reject(new Error(`raypc serve exited with ${c}`)));
 });
@@ -40,6 +51,51 @@ try {
   await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, image: { width: 512, height: 512 } }); });
   await waitConverged(page, 60000);
   const rows = await page.evaluate(() => window.__raypc.parcoords.rowCount);
+  if (!onlyPlay) await brushAndScreenshot(page, rows);
+  if (playFps) await measurePlayback(page);
+} finally {
+  await context.close();
+  server.kill('SIGTERM');
+  rmSync(profile, { recursive: true, force: true });
+}
+
+async function measurePlayback(page) {
+  const nSteps = await page.evaluate(() => window.__raypc.info.steps.length);
+  await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, step: 0 }); });
+  await waitConverged(page, 60000);
+  await page.selectOption('#fps', String(playFps));
+  const since = await page.evaluate(() => ({ sent: window.__raypc.sentLog.length, lat: window.__raypc.latencies.length, headers: window.__raypc.headers.length }));
+  await page.evaluate(() => {
+    window.__playTasks = [];
+    new PerformanceObserver((l) => { for (const e of l.getEntries()) window.__playTasks.push(e.duration); }).observe({ type: 'longtask', buffered: false });
+  });
+  const t0 = Date.now();
+  await page.click('#play');
+  await page.waitForTimeout(playSeconds * 1000);
+  await page.click('#play');
+  const seconds = (Date.now() - t0) / 1000;
+  const r = await page.evaluate((n) => ({
+    sent: window.__raypc.sentLog.slice(n.sent).filter((e) => e.interactive),
+    lat: window.__raypc.latencies.slice(n.lat).filter((l) => l.interactive),
+    headers: window.__raypc.headers.slice(n.headers).filter((h) => h.interactive),
+    tasks: window.__playTasks,
+  }), since);
+  // From a step's frame on screen to the next step sent: the UI's own time (and the speed's wait).
+  const gaps = [];
+  for (let i = 0; i + 1 < r.sent.length; i++) {
+    const l = r.lat.find((x) => x.id === r.sent[i].id);
+    if (l) gaps.push(r.sent[i + 1].t - (r.sent[i].t + l.shownMs));
+  }
+  const levels = {};
+  for (const h of r.headers) levels[h.level] = (levels[h.level] ?? 0) + 1;
+  const passMs = r.headers.map((h) => h.stats?.passMs ?? 0);
+  console.log(`playback of ${nSteps} steps at ${playFps} steps/s asked, 512x512, ${seconds.toFixed(1)} s: ${r.sent.length} steps sent, ${(r.sent.length / seconds).toFixed(2)} steps/s`);
+  console.log(`  per step: sent to frame received median ${median(r.lat.map((l) => l.firstFrameMs)).toFixed(0)} ms, 90th percentile ${pct(r.lat.map((l) => l.firstFrameMs), 0.9).toFixed(0)} ms; received to on screen median ${median(r.lat.map((l) => l.shownMs - l.firstFrameMs)).toFixed(0)} ms`);
+  console.log(`  frame on screen to the next step sent: median ${median(gaps).toFixed(0)} ms, 90th percentile ${pct(gaps, 0.9).toFixed(0)} ms; long tasks ${r.tasks.length}, ${r.tasks.reduce((a, b) => a + b, 0).toFixed(0)} ms in all, longest ${Math.max(0, ...r.tasks).toFixed(0)} ms`);
+  console.log(`  server pass median ${median(passMs).toFixed(0)} ms; levels ${JSON.stringify(levels)}; frame sizes ${[...new Set(r.headers.map((h) => `${h.width}x${h.height}`))].join(', ')}`);
+}
+
+async function brushAndScreenshot(page, rows) {
 
   // Input-to-next-frame timing of every mouse move.
   await page.evaluate(() => {
@@ -89,8 +145,4 @@ try {
     await page.screenshot({ path: screenshot });
     console.log(`screenshot ${screenshot}`);
   }
-} finally {
-  await context.close();
-  server.kill('SIGTERM');
-  rmSync(profile, { recursive: true, force: true });
 }

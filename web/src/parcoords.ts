@@ -36,6 +36,8 @@ export interface ParcoordsOptions {
 export interface ParcoordsTiming {
   lastBrushMs: number; // cost of the UI's handler of the last brush event (after parcoord-es filtered)
   brushEvents: number;
+  // The lines the last drawing of each layer draws (fewer than its rows while dragging or coarse).
+  lines: { foreground: number; brushed: number };
 }
 
 type Row = Record<string, number>;
@@ -46,7 +48,9 @@ type Row = Record<string, number>;
 // A new brush event cancels the slices still pending for the same layer.
 // While a brush is dragged, at most kDragLines brushed lines are drawn (every k-th, each k times
 // as opaque, so the density looks alike): less main-thread and CPU time per move on a machine
-// whose cores the browser shares with the server. Releasing the brush draws every line.
+// whose cores the browser shares with the server. Releasing the brush draws every line. In coarse
+// mode (setCoarse: while the time series plays) both layers are drawn that way, so that a new
+// step's sample costs a twentieth of a full redraw; leaving it draws every line.
 const kSliceMs = 6;
 const kDragLines = 5000;
 
@@ -106,11 +110,12 @@ export class ParallelCoordinates {
   private shownOrder = '';
   private pending: Brush[] = [];
   private lineColor: (row: Row) => string = () => '#4a90d9';
-  readonly timing: ParcoordsTiming = { lastBrushMs: 0, brushEvents: 0 };
+  readonly timing: ParcoordsTiming = { lastBrushMs: 0, brushEvents: 0, lines: { foreground: 0, brushed: 0 } };
   private readonly jobs: Record<string, number> = { foreground: 0, brushed: 0 };
   private readonly channel = new MessageChannel();
   private readonly slices: (() => void)[] = [];
   private dragging = false;
+  private coarse = false;
 
   constructor(private readonly container: HTMLElement, private axes: AxisInfo[], private readonly options: ParcoordsOptions) {
     this.channel.port1.onmessage = () => {
@@ -149,11 +154,16 @@ export class ParallelCoordinates {
 
   setData(sample: Sample): void {
     const n = sample.rows, c = sample.columns.length, v = sample.values;
-    const rows: Row[] = new Array(n);
-    for (let i = 0; i < n; i++) {
-      const r: Row = {};
-      for (let k = 0; k < c; k++) r[sample.columns[k]] = v[i * c + k];
-      rows[i] = r;
+    // A new step's sample has the same rows and columns: its values go into the rows there are
+    // (100 000 objects not made again, nor collected, for every step of a playback).
+    const same = this.rows.length === n && n > 0 && sample.columns.every((name) => name in this.rows[0]) &&
+      Object.keys(this.rows[0]).length === c;
+    const rows: Row[] = same ? this.rows : new Array(n);
+    if (!same) for (let i = 0; i < n; i++) rows[i] = {};
+    // Column by column: one property name per loop, so each store stays monomorphic.
+    for (let k = 0; k < c; k++) {
+      const name = sample.columns[k];
+      for (let i = 0; i < n; i++) rows[i][name] = v[i * c + k];
     }
     this.rows = rows;
     if (!this.pc) {
@@ -168,6 +178,20 @@ export class ParallelCoordinates {
       if (brushes.length) this.applyBrushes(brushes);
     } finally {
       this.suppress--;
+    }
+  }
+
+  // Coarse mode: at most kDragLines lines per layer (see above); turning it off redraws every line.
+  setCoarse(on: boolean): void {
+    if (on === this.coarse) return;
+    this.coarse = on;
+    if (!on && this.pc) {
+      this.suppress++;
+      try {
+        this.pc.render();
+      } finally {
+        this.suppress--;
+      }
     }
   }
 
@@ -352,7 +376,7 @@ export class ParallelCoordinates {
     const brushed = () => {
       const rows = pc.brushed() as Row[] | false;
       const active = !!rows && (rows.length !== this.rows.length || this.brushes().length > 0);
-      this.drawLayer('brushed', active ? (rows as Row[]) : [], this.dragging);
+      this.drawLayer('brushed', active ? (rows as Row[]) : [], this.dragging || this.coarse);
     };
     this.redrawBrushed = brushed;
     pc.renderBrushed.queue = brushed;
@@ -371,7 +395,7 @@ export class ParallelCoordinates {
       }
       brushed();
       pc.renderMarked.queue();
-      this.drawLayer('foreground', pc.data() as Row[]);
+      this.drawLayer('foreground', pc.data() as Row[], this.coarse);
     };
   }
 
@@ -388,7 +412,10 @@ export class ParallelCoordinates {
     } else {
       pc.clear('brushed');
     }
-    if (!rows.length) return;
+    if (!rows.length) {
+      this.timing.lines[layer] = 0;
+      return;
+    }
     const ctx = pc.ctx[layer] as CanvasRenderingContext2D;
     const dims = pc.dimensions() as Record<string, { yscale: { domain(): number[]; range(): number[] } }>;
     const keys = (pc.getOrderedDimensionKeys() as string[]).filter((k) => dims[k]);
@@ -410,6 +437,7 @@ export class ParallelCoordinates {
     const color = this.lineColor;
     const m = ks.length;
     const stride = coarse ? Math.max(1, Math.ceil(rows.length / kDragLines)) : 1;
+    this.timing.lines[layer] = Math.ceil(rows.length / stride);
     const alpha = this.options.alpha ?? 0.06;
     let next = 0;
     const slice = () => {

@@ -9,6 +9,8 @@ export interface PlaybackHost {
   caughtUp(): boolean;
   // interactive: one pass while playing; false: the still frame when paused.
   setStep(step: number, interactive: boolean): void;
+  // Called when playing starts or stops (before the still frame of the step paused at is asked).
+  playingChanged(playing: boolean): void;
 }
 
 export class Playback {
@@ -21,6 +23,7 @@ export class Playback {
   toggle(): void {
     this.playing = !this.playing;
     $('play').textContent = this.playing ? '❚❚' : '▶';
+    this.host.playingChanged(this.playing);
     if (this.playing) {
       this.lastAdvance = 0;
       this.maybeAdvance();
