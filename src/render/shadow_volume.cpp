@@ -272,15 +272,33 @@ void ShadowVolume::buildLight(const kernel::KernelParams& k, float strength)
     const float ob = l[b] / la, oc = l[c] / la, segmentKm = m_cellKm / la;
     std::vector<float>& tau = m_light;  // optical depth first, visibility at the end
     const std::vector<float>& sigma = m_sigma;
+    // Only nodes within kNeededKm of the centre are computed (the rest stay 0, their visibility 1):
+    // lookups happen in the shell, moved at most two cells towards the light (tubes), and read the
+    // nodes of their cell; a node inside continues one towards the light, which outside this ball
+    // lies on the light's side of the planet, where the optical depth is 0.
+    const float h = m_cellKm, o = m_originKm;
+    const float neededKm = k.rOuterKm + 4.0f * h, needed2 = neededKm * neededKm;
+    // Nodes [mFirst, mLast] of a row at squared distance d2 from the centre within the other two axes.
+    auto rowSpan = [&](float d2, int& mFirst, int& mLast) {
+        const float half = std::sqrt(std::max(0.0f, needed2 - d2));
+        mFirst = std::max(0, int(std::floor((-half - o) / h)));
+        mLast = std::min(n - 1, int(std::ceil((half - o) / h)));
+        if (!(d2 <= needed2))
+            mLast = -1;
+    };
+    auto coord = [&](int i) { return o + float(i) * h; };
     const int first = towards > 0 ? n - 1 : 0;
     for (int step = 1; step < n; ++step) {
         const int slice = first - towards * step, up = slice + towards;
         const size_t sliceBase = size_t(slice) * stride[a], upBase = size_t(up) * stride[a];
+        const float sliceD2 = coord(slice) * coord(slice);
         tbb::parallel_for(tbb::blocked_range<int>(0, n, 16), [&](const tbb::blocked_range<int>& rows) {
             for (int j = rows.begin(); j != rows.end(); ++j) {
+                int mFirst, mLast;
+                rowSpan(sliceD2 + coord(j) * coord(j), mFirst, mLast);
                 const float fb = float(j) + ob;
                 if (!(fb >= 0.0f && fb <= float(n - 1))) {
-                    for (int m = 0; m < n; ++m) {
+                    for (int m = mFirst; m <= mLast; ++m) {
                         const size_t i = sliceBase + size_t(j) * stride[b] + size_t(m) * stride[c];
                         tau[i] = 0.5f * sigma[i] * segmentKm;
                     }
@@ -288,7 +306,7 @@ void ShadowVolume::buildLight(const kernel::KernelParams& k, float strength)
                 }
                 const int jb = std::min(int(fb), n - 2);
                 const float wb = fb - float(jb);
-                for (int m = 0; m < n; ++m) {
+                for (int m = mFirst; m <= mLast; ++m) {
                     const size_t i = sliceBase + size_t(j) * stride[b] + size_t(m) * stride[c];
                     const float fc = float(m) + oc;
                     float tauUp = 0, sigmaUp = 0;
@@ -307,13 +325,19 @@ void ShadowVolume::buildLight(const kernel::KernelParams& k, float strength)
         });
     }
     // Visibility: exp(-optical depth), times the core's shadow, with the strength applied.
-    const float h = m_cellKm, o = m_originKm, rCore = k.rInnerKm;
+    const float rCore = k.rInnerKm;
     const Vec3 light = k.lightDir;
     const bool core = k.drawCore;
     tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& zs) {
         for (int iz = zs.begin(); iz != zs.end(); ++iz)
-            for (int iy = 0; iy < n; ++iy)
+            for (int iy = 0; iy < n; ++iy) {
+                int xFirst, xLast;
+                rowSpan(coord(iz) * coord(iz) + coord(iy) * coord(iy), xFirst, xLast);
                 for (int ix = 0; ix < n; ++ix) {
+                    if (ix < xFirst || ix > xLast) {
+                        tau[(size_t(iz) * size_t(n) + size_t(iy)) * size_t(n) + size_t(ix)] = 1.0f;
+                        continue;
+                    }
                     const size_t i = (size_t(iz) * size_t(n) + size_t(iy)) * size_t(n) + size_t(ix);
                     float visible = std::exp(-tau[i]);
                     if (core) {
@@ -327,6 +351,7 @@ void ShadowVolume::buildLight(const kernel::KernelParams& k, float strength)
                     }
                     tau[i] = 1.0f - strength * (1.0f - visible);
                 }
+            }
     });
 }
 
