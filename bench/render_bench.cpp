@@ -254,7 +254,7 @@ void BM_ShadowBuild(benchmark::State& state)
     const kernel::KernelParams& k = r.kernelParams();
     ShadowBuildStats last;
     for (auto _ : state) {
-        ShadowVolume shadows;
+        ShadowVolume shadows(shadowNodesFor(k.dAngleRad, k.rOuterKm));
         last = shadows.update(k, 0.8f, nullptr);
     }
     state.counters["extinctionMs"] = last.extinctionMs;
@@ -264,10 +264,13 @@ void BM_ShadowBuild(benchmark::State& state)
 BENCHMARK(BM_ShadowBuild)->Unit(benchmark::kMillisecond);
 void BM_ShadowLightOnly(benchmark::State& state)
 {
-    VolumeRenderer r(data().levels[0]);
+    const int level = int(state.range(0));
+    VolumeRenderer r(data().levels[size_t(level)]);
     r.setParams(defaultViewParams(512, true, true));
     kernel::KernelParams k = r.kernelParams();
-    ShadowVolume shadows;
+    ShadowVolume shadows(shadowNodesFor(k.dAngleRad, k.rOuterKm));
+    state.counters["nodes"] = shadows.nodes();
+    state.counters["level"] = level;
     shadows.update(k, 0.8f, nullptr);
     int i = 0;
     for (auto _ : state) {
@@ -276,7 +279,7 @@ void BM_ShadowLightOnly(benchmark::State& state)
         shadows.update(k, 0.8f, nullptr);
     }
 }
-BENCHMARK(BM_ShadowLightOnly)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ShadowLightOnly)->Arg(0)->Arg(2)->Unit(benchmark::kMillisecond);
 void BM_Level2Pass1024(benchmark::State& state) { runPasses(state, 2, params(1024), 1); }
 BENCHMARK(BM_Level2Pass1024)->Unit(benchmark::kMillisecond);
 void BM_Level1Pass512(benchmark::State& state) { runPasses(state, 1, params(512), 1); }

@@ -569,8 +569,9 @@ void VolumeRenderer::bindShadows(kernel::KernelParams& k)
     if (!m_params.shading.shadows)
         return;
     Impl& im = *m_impl;
-    if (!im.shadows)
-        im.shadows = std::make_unique<ShadowVolume>();
+    const int nodes = shadowNodesFor(im.dAngleRad, im.params.rOuterKm);
+    if (!im.shadows || im.shadows->nodes() != nodes)
+        im.shadows = std::make_unique<ShadowVolume>(nodes);
     im.shadows->update(im.params, m_params.shading.shadowStrength, im.pathlines.get());
     im.shadows->bind(k);
 }
