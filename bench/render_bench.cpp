@@ -249,7 +249,8 @@ BENCHMARK(BM_DefaultViewPass1024Shadowed)->Unit(benchmark::kMillisecond);
 // the light's visibility alone (a camera move: the light follows the camera).
 void BM_ShadowBuild(benchmark::State& state)
 {
-    VolumeRenderer r(data().levels[0]);
+    const int level = int(state.range(0));
+    VolumeRenderer r(data().levels[size_t(level)]);
     r.setParams(defaultViewParams(512, true, true));
     const kernel::KernelParams& k = r.kernelParams();
     ShadowBuildStats last;
@@ -257,11 +258,12 @@ void BM_ShadowBuild(benchmark::State& state)
         ShadowVolume shadows(shadowNodesFor(k.dAngleRad, k.rOuterKm));
         last = shadows.update(k, 0.8f, nullptr);
     }
+    state.counters["level"] = level;
     state.counters["extinctionMs"] = last.extinctionMs;
     state.counters["lightMs"] = last.lightMs;
     state.counters["ambientMs"] = last.ambientMs;
 }
-BENCHMARK(BM_ShadowBuild)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ShadowBuild)->Arg(0)->Arg(2)->Unit(benchmark::kMillisecond);
 void BM_ShadowLightOnly(benchmark::State& state)
 {
     const int level = int(state.range(0));
