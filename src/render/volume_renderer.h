@@ -129,6 +129,9 @@ public:
     // the frame as it was. The frame must have the params' size.
     // With a TileShare other than {0, 1} only the tiles it owns are rendered and accumulated (the
     // rest of `frame` is left as it was); the pass number still advances.
+    // With shading.shadows the pass first brings the occlusion grids up to date with what changed
+    // since the last pass (shadow_volume.h: after a transfer function, brush or tube change all of
+    // them, after a camera or light move the light's), which its seconds include.
     PassStats renderPass(FrameBuffer& frame, const std::atomic<bool>* cancel = nullptr, TileShare share = {});
 
     // Cost of a pass at these params on this volume in sample equivalents, estimated from a sparse
