@@ -16,6 +16,7 @@
 #include "data/selection.h"
 #include "data/synth.h"
 #include "render/render_state.h"
+#include "render/shadow_volume.h"
 #include "render/state_renderer.h"
 #include "render/volume_renderer.h"
 
@@ -93,7 +94,7 @@ RenderParams params(int size)
 
 // The UI's first view (render::defaultState: temperature anomaly, lit, the middle of the range
 // transparent) resolved against the benchmark volume's variables and ranges, at size x size.
-RenderParams defaultViewParams(int size, bool lit)
+RenderParams defaultViewParams(int size, bool lit, bool shadows = false)
 {
     const StepVolume& v = *data().levels[0];
     VariableCatalog catalog;
@@ -105,6 +106,7 @@ RenderParams defaultViewParams(int size, bool lit)
     RenderState s = defaultState(catalog);
     s.width = s.height = size;
     s.shading.enabled = lit;
+    s.shading.shadows = shadows;
     return resolveParams(s, catalog);
 }
 
@@ -223,6 +225,63 @@ void BM_DefaultViewPass1024(benchmark::State& state) { runPasses(state, 0, defau
 BENCHMARK(BM_DefaultViewPass1024)->Unit(benchmark::kMillisecond);
 void BM_DefaultViewPass1024Unlit(benchmark::State& state) { runPasses(state, 0, defaultViewParams(1024, false), 1); }
 BENCHMARK(BM_DefaultViewPass1024Unlit)->Unit(benchmark::kMillisecond);
+// Lit and shadowed: what the occlusion lookups cost per pass. The shadow volume is built by a
+// pass before the timed ones (its build is BM_ShadowBuild).
+void BM_DefaultViewPass1024Shadowed(benchmark::State& state)
+{
+    const RenderParams p = defaultViewParams(1024, true, true);
+    VolumeRenderer r(data().levels[0]);
+    r.setParams(p);
+    FrameBuffer f(p.width, p.height);
+    r.renderPass(f);
+    Totals t;
+    for (auto _ : state) {
+        f.clear();
+        timedPass(r, f, t);
+    }
+    report(state, t);
+    state.counters["level"] = 0;
+}
+BENCHMARK(BM_DefaultViewPass1024Shadowed)->Unit(benchmark::kMillisecond);
+
+// What occlusion costs before a pass can start, on the default view at full resolution: all of it
+// (a transfer function or brush change: the extinction, the light's and the ambient visibility) and
+// the light's visibility alone (a camera move: the light follows the camera).
+void BM_ShadowBuild(benchmark::State& state)
+{
+    const int level = int(state.range(0));
+    VolumeRenderer r(data().levels[size_t(level)]);
+    r.setParams(defaultViewParams(512, true, true));
+    const kernel::KernelParams& k = r.kernelParams();
+    ShadowBuildStats last;
+    for (auto _ : state) {
+        ShadowVolume shadows(shadowNodesFor(k.dAngleRad, k.rOuterKm));
+        last = shadows.update(k, 0.8f, nullptr);
+    }
+    state.counters["level"] = level;
+    state.counters["extinctionMs"] = last.extinctionMs;
+    state.counters["lightMs"] = last.lightMs;
+    state.counters["ambientMs"] = last.ambientMs;
+}
+BENCHMARK(BM_ShadowBuild)->Arg(0)->Arg(2)->Unit(benchmark::kMillisecond);
+void BM_ShadowLightOnly(benchmark::State& state)
+{
+    const int level = int(state.range(0));
+    VolumeRenderer r(data().levels[size_t(level)]);
+    r.setParams(defaultViewParams(512, true, true));
+    kernel::KernelParams k = r.kernelParams();
+    ShadowVolume shadows(shadowNodesFor(k.dAngleRad, k.rOuterKm));
+    state.counters["nodes"] = shadows.nodes();
+    state.counters["level"] = level;
+    shadows.update(k, 0.8f, nullptr);
+    int i = 0;
+    for (auto _ : state) {
+        const float a = 0.01f * float(++i);
+        k.lightDir = normalize(Vec3{std::cos(a), std::sin(a), 0.5f});
+        shadows.update(k, 0.8f, nullptr);
+    }
+}
+BENCHMARK(BM_ShadowLightOnly)->Arg(0)->Arg(2)->Unit(benchmark::kMillisecond);
 void BM_Level2Pass1024(benchmark::State& state) { runPasses(state, 2, params(1024), 1); }
 BENCHMARK(BM_Level2Pass1024)->Unit(benchmark::kMillisecond);
 void BM_Level1Pass512(benchmark::State& state) { runPasses(state, 1, params(512), 1); }

@@ -158,7 +158,16 @@ kernel::TubeHit traceTubes(const void* ctx, const kernel::KernelParams& k, Vec3 
     n = nl > 0.0f ? n * (1.0f / nl) : d * -1.0f;
     if (dot(n, d) > 0.0f)
         n = n * -1.0f;
-    float shade = k.ambient + k.diffuse * std::max(0.0f, dot(n, k.lightDir));
+    // The volume (and other tubes) shadow the tube: the light's visibility looked up two shadow
+    // cells towards the light, beyond the cells this tube's own splat reaches (shadow_volume.h).
+    float lightVisible = 1.0f;
+    if (k.shadowLight) {
+        const Vec3 q = o + d * hit.tKm + k.lightDir * (2.0f * k.shadowLightBiasKm);
+        lightVisible = kernel::shadowGridAt(k, k.shadowLight, (q.x - k.shadowOriginKm) * k.shadowInvKm,
+                                            (q.y - k.shadowOriginKm) * k.shadowInvKm,
+                                            (q.z - k.shadowOriginKm) * k.shadowInvKm);
+    }
+    float shade = k.ambient + k.diffuse * std::max(0.0f, dot(n, k.lightDir)) * lightVisible;
 
     if (im.style.ambientOcclusion && im.style.aoRays > 0) {
         const Vec3 p = o + d * hit.tKm + n * std::max(0.01f * im.radiusKm, 0.01f);

@@ -152,6 +152,15 @@ struct KernelParams {
     // radial derivative of the ring mean, as differences of the blended field would.
     KernelVariable gradLat, gradR, gradLon;
 
+    // Occlusion (shadow_volume.h; null: none): on shadowN^3 Cartesian nodes from shadowOriginKm,
+    // 1 / shadowInvKm apart on every axis, the visibility of the light (`shadowLight`, lookups
+    // moved shadowLightBiasKm towards the light so that a sample's own cell does not shadow it) and
+    // of the ambient light (`shadowAmbient`), both in [0, 1] with the strength already applied.
+    const float* shadowLight = nullptr;
+    const float* shadowAmbient = nullptr;
+    int shadowN = 0;
+    float shadowOriginKm = 0, shadowInvKm = 1, shadowLightBiasKm = 0;
+
     bool drawCore = true;
     bool coreByVariable = false;
     Rgb coreColor{0.55f, 0.55f, 0.58f};
@@ -346,19 +355,60 @@ inline Vec3 nativeGradient(const KernelParams& k, const Located& L, Vec3 p)
     return eR * perKmR + eNorth * gNorth + eEast * gEast;
 }
 
-// Two-sided Blinn-Phong of a sample with gradient g seen along the unit ray direction d; 1 (unlit)
+// How much of the light and of the ambient light reach a point (1: all; KernelParams::shadowLight).
+struct Occlusion {
+    float light = 1, ambient = 1;
+};
+
+// Trilinear value of a shadow grid at node coordinates f (clamped to the grid).
+inline float shadowGridAt(const KernelParams& k, const float* grid, float fx, float fy, float fz)
+{
+    const float top = float(k.shadowN - 1) - 1e-3f;
+    fx = std::clamp(fx, 0.0f, top);
+    fy = std::clamp(fy, 0.0f, top);
+    fz = std::clamp(fz, 0.0f, top);
+    const int ix = int(fx), iy = int(fy), iz = int(fz);
+    const float wx = fx - float(ix), wy = fy - float(iy), wz = fz - float(iz);
+    const size_t n = size_t(k.shadowN), o = (size_t(iz) * n + size_t(iy)) * n + size_t(ix);
+    const float* g = grid + o;
+    auto lerp = [](float a, float b, float w) { return a + w * (b - a); };
+    const float c00 = lerp(g[0], g[1], wx), c01 = lerp(g[n], g[n + 1], wx);
+    const float c10 = lerp(g[n * n], g[n * n + 1], wx), c11 = lerp(g[n * n + n], g[n * n + n + 1], wx);
+    return lerp(lerp(c00, c01, wy), lerp(c10, c11, wy), wz);
+}
+
+inline Occlusion occlusionAt(const KernelParams& k, Vec3 p)
+{
+    if (!k.shadowLight)
+        return {};
+    const float inv = k.shadowInvKm, o = k.shadowOriginKm;
+    const Vec3 q = p + k.lightDir * k.shadowLightBiasKm;
+    return {shadowGridAt(k, k.shadowLight, (q.x - o) * inv, (q.y - o) * inv, (q.z - o) * inv),
+            shadowGridAt(k, k.shadowAmbient, (p.x - o) * inv, (p.y - o) * inv, (p.z - o) * inv)};
+}
+
+// The factor of a sample without a lighting normal (shading off, or a flat field): 1 when nothing
+// is occluded, else the lit weights' mix of the two visibilities.
+inline float unlitFactor(const KernelParams& k, Occlusion occ)
+{
+    const float sum = k.ambient + k.diffuse;
+    return sum > 0.0f ? (k.ambient * occ.ambient + k.diffuse * occ.light) / sum : 1.0f;
+}
+
+// Two-sided Blinn-Phong of a sample with gradient g seen along the unit ray direction d, the
+// ambient term scaled by the ambient visibility and the direct terms by the light's; unlitFactor
 // where the field is flat.
-inline float shadeFactor(const KernelParams& k, Vec3 g, Vec3 d)
+inline float shadeFactor(const KernelParams& k, Vec3 g, Vec3 d, Occlusion occ = {})
 {
     const float g2 = dot(g, g);
     if (!(g2 > 1e-30f))
-        return 1.0f;
+        return unlitFactor(k, occ);
     const float inv = 1.0f / std::sqrt(g2);
-    float s = k.ambient + k.diffuse * std::abs(dot(g, k.lightDir)) * inv;
+    float direct = k.diffuse * std::abs(dot(g, k.lightDir)) * inv;
     const Vec3 lv = k.lightDir - d;  // light plus view direction
     if (k.specular > 0.0f && dot(lv, lv) > 1e-12f)
-        s += k.specular * std::pow(std::abs(dot(g, normalize(lv))) * inv, k.shininess);
-    return s;
+        direct += k.specular * std::pow(std::abs(dot(g, normalize(lv))) * inv, k.shininess);
+    return k.ambient * occ.ambient + direct * occ.light;
 }
 
 inline bool brickActive(const KernelParams& k, const Located& L)
@@ -524,7 +574,8 @@ inline Rgb coreColorAt(const KernelParams& k, Vec3 hit)
         c = {k.coreTable.red[i], k.coreTable.green[i], k.coreTable.blue[i]};
     }
     const float lambert = std::max(0.0f, dot(normalize(hit), k.lightDir));
-    const float s = k.ambient + k.diffuse * lambert;
+    const Occlusion occ = occlusionAt(k, hit);
+    const float s = k.ambient * occ.ambient + k.diffuse * lambert * occ.light;
     return {c.r * s, c.g * s, c.b * s};
 }
 
@@ -588,5 +639,10 @@ void sampleBatchScalar(const KernelParams& k, const KernelVariable& v, const flo
                        const float* z, int n, float* out);
 void sampleBatchSimd(const KernelParams& k, const KernelVariable& v, const float* x, const float* y,
                      const float* z, int n, float* out);
+// The extinction (per km) the kernels give a sample at each of n points: the transfer table's
+// sigma of the colouring variable where the point lies in the shell, in an active brick and
+// inside every brush; 0 elsewhere. For the shadow volume (shadow_volume.h).
+void extinctionBatchScalar(const KernelParams& k, const float* x, const float* y, const float* z, int n, float* out);
+void extinctionBatchSimd(const KernelParams& k, const float* x, const float* y, const float* z, int n, float* out);
 
 }  // namespace raypc::render::kernel

@@ -65,7 +65,9 @@ void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, floa
             if (!(sigma > 0.0f))
                 continue;
             const float alpha = std::max(0.0f, 1.0f - std::exp(-sigma * len));
-            const float s = k.shade ? shadeFactor(k, nativeGradient(k, L, p), d) : 1.0f;
+            const Occlusion occ = occlusionAt(k, p);
+            const float s = k.shade ? shadeFactor(k, nativeGradient(k, L, p), d, occ)
+                                    : (k.shadowLight ? unlitFactor(k, occ) : 1.0f);
             const float w = acc.transmittance * alpha * s;
             acc.r += w * k.table.red[idx];
             acc.g += w * k.table.green[idx];
@@ -93,6 +95,18 @@ void sampleBatchScalar(const KernelParams& k, const KernelVariable& v, const flo
 {
     for (int i = 0; i < n; ++i)
         out[i] = sampleAt(k, v, locate(k, x[i], y[i], z[i]));
+}
+
+void extinctionBatchScalar(const KernelParams& k, const float* x, const float* y, const float* z, int n, float* out)
+{
+    for (int i = 0; i < n; ++i) {
+        const Vec3 p{x[i], y[i], z[i]};
+        const Located L = locate(k, p.x, p.y, p.z);
+        const bool inShell = L.rKm >= k.rInnerKm && L.rKm <= k.rOuterKm;
+        out[i] = inShell && brickActive(k, L) && insideBrushes(k, p, L)
+                     ? k.table.sigmaPerKm[k.table.indexOf(sampleAt(k, k.color, L))]
+                     : 0.0f;
+    }
 }
 
 }  // namespace raypc::render::kernel

@@ -187,7 +187,64 @@ HWY_INLINE VF Sample(DF d, const KernelParams& k, const KernelVariable& v, const
     const VF mean = LerpV(hn::GatherIndex(d, v.capMean, L.capIndex), hn::GatherIndex(d, v.capMean + 1, L.capIndex), L.wR);
     return LerpV(value, mean, L.cap);
 }
+// shadowGridAt (render_kernel.h) across lanes: the x neighbours of a node are adjacent in memory,
+// so each of the four (y, z) corner rows is one pair gather where pairs are available.
+HWY_INLINE VF ShadowGridAt(DF d, const KernelParams& k, const float* grid, VF fx, VF fy, VF fz)
+{
+    const DI di;
+    const VF zero = hn::Zero(d), top = hn::Set(d, float(k.shadowN - 1) - 1e-3f);
+    fx = Clamp(fx, zero, top);
+    fy = Clamp(fy, zero, top);
+    fz = Clamp(fz, zero, top);
+    const VI ix = hn::ConvertTo(di, fx), iy = hn::ConvertTo(di, fy), iz = hn::ConvertTo(di, fz);
+    const VF wx = hn::Sub(fx, hn::ConvertTo(d, ix)), wy = hn::Sub(fy, hn::ConvertTo(d, iy)),
+             wz = hn::Sub(fz, hn::ConvertTo(d, iz));
+    const int n = k.shadowN;
+    const VI o00 = hn::Add(hn::Mul(hn::Add(hn::Mul(iz, hn::Set(di, n)), iy), hn::Set(di, n)), ix);
+    const VI o01 = hn::Add(o00, hn::Set(di, n)), o10 = hn::Add(o00, hn::Set(di, n * n)),
+             o11 = hn::Add(o10, hn::Set(di, n));
+    VF c00, c01, c10, c11;
+#if RAYPC_LON_PAIRS
+    c00 = LonPair(d, grid, o00, wx);
+    c01 = LonPair(d, grid, o01, wx);
+    c10 = LonPair(d, grid, o10, wx);
+    c11 = LonPair(d, grid, o11, wx);
+#else
+    const VI one = hn::Set(di, 1);
+    c00 = LerpV(hn::GatherIndex(d, grid, o00), hn::GatherIndex(d, grid, hn::Add(o00, one)), wx);
+    c01 = LerpV(hn::GatherIndex(d, grid, o01), hn::GatherIndex(d, grid, hn::Add(o01, one)), wx);
+    c10 = LerpV(hn::GatherIndex(d, grid, o10), hn::GatherIndex(d, grid, hn::Add(o10, one)), wx);
+    c11 = LerpV(hn::GatherIndex(d, grid, o11), hn::GatherIndex(d, grid, hn::Add(o11, one)), wx);
+#endif
+    return LerpV(LerpV(c00, c01, wy), LerpV(c10, c11, wy), wz);
+}
 #undef RAYPC_LON_PAIRS
+
+// occlusionAt (render_kernel.h) across lanes.
+struct OcclusionV {
+    VF light, ambient;
+};
+HWY_INLINE OcclusionV OcclusionAt(DF d, const KernelParams& k, VF x, VF y, VF z)
+{
+    const VF inv = hn::Set(d, k.shadowInvKm), o = hn::Set(d, k.shadowOriginKm);
+    auto node = [&](VF c) { return hn::Mul(hn::Sub(c, o), inv); };
+    const VF b = hn::Set(d, k.shadowLightBiasKm);
+    OcclusionV occ;
+    occ.light = ShadowGridAt(d, k, k.shadowLight, node(hn::MulAdd(b, hn::Set(d, k.lightDir.x), x)),
+                             node(hn::MulAdd(b, hn::Set(d, k.lightDir.y), y)),
+                             node(hn::MulAdd(b, hn::Set(d, k.lightDir.z), z)));
+    occ.ambient = ShadowGridAt(d, k, k.shadowAmbient, node(x), node(y), node(z));
+    return occ;
+}
+
+// unlitFactor (render_kernel.h) across lanes.
+HWY_INLINE VF UnlitFactor(DF d, const KernelParams& k, const OcclusionV& occ)
+{
+    const float sum = k.ambient + k.diffuse;
+    if (!(sum > 0.0f))
+        return hn::Set(d, 1.0f);
+    return hn::MulAdd(hn::Set(d, k.ambient / sum), occ.ambient, hn::Mul(hn::Set(d, k.diffuse / sum), occ.light));
+}
 
 // scale * component + offset (KernelBrush; the table is coordinateDefinition in data/coordinates.h).
 HWY_INLINE VF CoordinateValue(DF d, const KernelBrush& brush, VF x, VF y, VF z, const LocatedV& L)
@@ -232,8 +289,9 @@ HWY_INLINE GradientV NativeGradient(DF d, const KernelParams& k, const LocatedV&
     return g;
 }
 
-// shadeFactor (render_kernel.h) across lanes; `half` is normalize(light - ray direction).
-HWY_INLINE VF ShadeFactor(DF d, const KernelParams& k, const GradientV& g, Vec3 half)
+// shadeFactor (render_kernel.h) across lanes; `half` is normalize(light - ray direction); `occ`
+// null: nothing occluded.
+HWY_INLINE VF ShadeFactor(DF d, const KernelParams& k, const GradientV& g, Vec3 half, const OcclusionV* occ)
 {
     const VF g2 = hn::MulAdd(g.x, g.x, hn::MulAdd(g.y, g.y, hn::Mul(g.z, g.z)));
     const MF hasGradient = hn::Gt(g2, hn::Set(d, 1e-30f));
@@ -242,13 +300,16 @@ HWY_INLINE VF ShadeFactor(DF d, const KernelParams& k, const GradientV& g, Vec3 
         return hn::Mul(hn::Abs(hn::MulAdd(g.x, hn::Set(d, a.x), hn::MulAdd(g.y, hn::Set(d, a.y), hn::Mul(g.z, hn::Set(d, a.z))))),
                        inv);
     };
-    VF lit = hn::MulAdd(hn::Set(d, k.diffuse), absDot(k.lightDir), hn::Set(d, k.ambient));
+    VF direct = hn::Mul(hn::Set(d, k.diffuse), absDot(k.lightDir));
     if (k.specular > 0.0f) {
         // |n.h|^shininess = exp(shininess ln |n.h|), with |n.h| kept above 0 for the logarithm.
         const VF nh = hn::Max(absDot(half), hn::Set(d, 1e-20f));
-        lit = hn::MulAdd(hn::Set(d, k.specular), hn::Exp(d, hn::Mul(hn::Set(d, k.shininess), hn::Log(d, nh))), lit);
+        direct = hn::MulAdd(hn::Set(d, k.specular), hn::Exp(d, hn::Mul(hn::Set(d, k.shininess), hn::Log(d, nh))), direct);
     }
-    return hn::IfThenElse(hasGradient, lit, hn::Set(d, 1.0f));
+    if (!occ)
+        return hn::IfThenElse(hasGradient, hn::Add(direct, hn::Set(d, k.ambient)), hn::Set(d, 1.0f));
+    const VF lit = hn::MulAdd(direct, occ->light, hn::Mul(hn::Set(d, k.ambient), occ->ambient));
+    return hn::IfThenElse(hasGradient, lit, UnlitFactor(d, k, *occ));
 }
 
 struct Ray {
@@ -416,8 +477,14 @@ void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, 
             const ClassifiedV c = Classify(d, k, L, keep, s.len);
             if (hn::AllFalse(d, c.opaque))
                 continue;
-            const VF shade = k.shade ? ShadeFactor(d, k, NativeGradient(d, k, L, s.x, s.y, s.z), half)
-                                     : hn::Set(d, 1.0f);
+            VF shade = hn::Set(d, 1.0f);
+            if (k.shadowLight) {
+                const OcclusionV occ = OcclusionAt(d, k, s.x, s.y, s.z);
+                shade = k.shade ? ShadeFactor(d, k, NativeGradient(d, k, L, s.x, s.y, s.z), half, &occ)
+                                : UnlitFactor(d, k, occ);
+            } else if (k.shade) {
+                shade = ShadeFactor(d, k, NativeGradient(d, k, L, s.x, s.y, s.z), half, nullptr);
+            }
             Composite(d, k, shifts, c.alpha, hn::Mul(shade, hn::GatherIndex(d, k.table.red, c.index)),
                       hn::Mul(shade, hn::GatherIndex(d, k.table.green, c.index)),
                       hn::Mul(shade, hn::GatherIndex(d, k.table.blue, c.index)), s.t, acc);
@@ -462,6 +529,41 @@ void SampleBatch(const KernelParams& k, const KernelVariable& v, const float* x,
     }
 }
 
+void ExtinctionBatch(const KernelParams& k, const float* x, const float* y, const float* z, int n, float* out)
+{
+    const DF d;
+    const DI di;
+    const int lanes = int(hn::Lanes(d));
+    HWY_ALIGN float bx[kMaxLanes], by[kMaxLanes], bz[kMaxLanes], bo[kMaxLanes];
+    for (int i = 0; i < n; i += lanes) {
+        const int m = std::min(lanes, n - i);
+        for (int j = 0; j < lanes; ++j) {
+            bx[j] = x[i + std::min(j, m - 1)];
+            by[j] = y[i + std::min(j, m - 1)];
+            bz[j] = z[i + std::min(j, m - 1)];
+        }
+        SamplesV s;
+        s.x = hn::Load(d, bx);
+        s.y = hn::Load(d, by);
+        s.z = hn::Load(d, bz);
+        const LocatedV L = Locate(d, k, s.x, s.y, s.z);
+        const MF inShell = hn::And(hn::Ge(L.rKm, hn::Set(d, k.rInnerKm)), hn::Le(L.rKm, hn::Set(d, k.rOuterKm)));
+        const MF active = ActiveLanes(d, k, L, inShell);
+        const MF keep = k.multiRangeBrushes ? BrushedLanes<true>(d, k, s, L, active) : BrushedLanes<false>(d, k, s, L, active);
+        VF sigma = hn::Zero(d);
+        if (!hn::AllFalse(d, keep)) {
+            const VF value = Sample(d, k, k.color, L);
+            const VF u = Clamp(hn::MulAdd(hn::Sub(value, hn::Set(d, k.table.valueMin)), hn::Set(d, k.table.indexScale),
+                                          hn::Set(d, 0.5f)),
+                               hn::Zero(d), hn::Set(d, float(k.table.size - 1)));
+            const VI index = hn::IfThenElseZero(hn::RebindMask(di, keep), hn::ConvertTo(di, u));
+            sigma = hn::IfThenElseZero(keep, hn::GatherIndex(d, k.table.sigmaPerKm, index));
+        }
+        hn::Store(sigma, d, bo);
+        std::copy(bo, bo + m, out + i);
+    }
+}
+
 }  // namespace raypc::render::kernel::HWY_NAMESPACE
 HWY_AFTER_NAMESPACE();
 
@@ -471,6 +573,7 @@ namespace raypc::render::kernel {
 HWY_EXPORT(RenderTile);
 HWY_EXPORT(Lanes);
 HWY_EXPORT(SampleBatch);
+HWY_EXPORT(ExtinctionBatch);
 
 void renderTileSimd(const KernelParams& k, Tile tile, PixelOut* out, TileStats& stats)
 {
@@ -483,6 +586,11 @@ void sampleBatchSimd(const KernelParams& k, const KernelVariable& v, const float
                      int n, float* out)
 {
     HWY_DYNAMIC_DISPATCH(SampleBatch)(k, v, x, y, z, n, out);
+}
+
+void extinctionBatchSimd(const KernelParams& k, const float* x, const float* y, const float* z, int n, float* out)
+{
+    HWY_DYNAMIC_DISPATCH(ExtinctionBatch)(k, x, y, z, n, out);
 }
 
 }  // namespace raypc::render::kernel

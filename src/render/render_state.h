@@ -22,8 +22,9 @@ namespace raypc::render {
 
 // Version 2 added "pathlines", version 3 "reference" (shells, graticule, coastlines) and "legend",
 // version 4 several ranges on one axis (a repeated brush name ORs its ranges) and "axes", version
-// 5 "stereo"; older documents are still read (they have none of these).
-inline constexpr int kRenderStateVersion = 5;
+// 5 "stereo", version 6 "shading.shadows" and "shading.shadowStrength"; older documents are still
+// read (they have none of these).
+inline constexpr int kRenderStateVersion = 6;
 
 // A brush range: a variable or a coordinate (x, y, z, lat, lon, radius, depth) and [min, max]. The
 // brush model is data/selection.h's: a name that repeats adds a range to its axis (OR).

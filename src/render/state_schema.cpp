@@ -895,7 +895,15 @@ const Object<RenderState>& document()
                       leaf<S>("specular", at(&S::shading, &ShadingStyle::specular), number<float>(0, 1),
                               {.meaning = "weight of the Blinn–Phong highlight of the volume", .since = 3}),
                       leaf<S>("shininess", at(&S::shading, &ShadingStyle::shininess), number<float>(1, 256),
-                              {.meaning = "exponent of the highlight (larger: smaller, sharper)", .since = 3})},
+                              {.meaning = "exponent of the highlight (larger: smaller, sharper)", .since = 3}),
+                      leaf<S>("shadows", at(&S::shading, &ShadingStyle::shadows), boolean(),
+                              {.meaning = "soft shadows from the light and ambient occlusion, cast by the volume, the "
+                                          "core and the tubes on the volume, the core and the tubes (a coarse "
+                                          "occlusion grid, docs/rendering.md; applies with or without `enabled`)",
+                               .since = 6}),
+                      leaf<S>("shadowStrength", at(&S::shading, &ShadingStyle::shadowStrength), number<float>(0, 1),
+                              {.meaning = "how much of the occluded light `shadows` takes away (0: none, 1: all)",
+                               .since = 6})},
                      {.meaning = "lighting of the volume and the core"}),
             leaf<S>("background", at(&S::background), color(), {.meaning = "background colour of PNG output"}),
             leaf<S>("legend", at(&S::legend), boolean(),

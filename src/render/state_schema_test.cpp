@@ -45,8 +45,8 @@ TEST(StateSchema, CarriesTheParsersBoundsAndVersions)
     const json& camera = schema["properties"]["camera"]["properties"];
     EXPECT_EQ(camera["elevationDeg"]["minimum"], -90);
     EXPECT_EQ(camera["elevationDeg"]["maximum"], 90);
-    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5}));
-    EXPECT_EQ(kRenderStateVersion, 5);
+    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5, 6}));
+    EXPECT_EQ(kRenderStateVersion, 6);
     EXPECT_EQ(schema["properties"]["brushes"]["items"]["required"], json::array({"name", "min", "max"}));
     // A version-1 document may not have pathlines, as parseRenderState says.
     ASSERT_TRUE(schema.contains("allOf"));
@@ -60,6 +60,16 @@ TEST(StateSchema, CarriesTheParsersBoundsAndVersions)
     // Version 5 added stereo.
     EXPECT_EQ(schema["allOf"][3]["if"]["properties"]["version"]["const"], 4);
     EXPECT_EQ(schema["allOf"][3]["then"]["properties"]["stereo"]["description"], "needs version 5");
+    // Version 6 added the shadows: refused in a version-5 document, naming the key.
+    EXPECT_EQ(schema["allOf"][4]["if"]["properties"]["version"]["const"], 5);
+    EXPECT_EQ(schema["allOf"][4]["then"]["properties"]["shading"]["properties"]["shadows"]["description"],
+              "needs version 6");
+    try {
+        parseRenderState(json::parse(R"({"version": 5, "shading": {"shadows": true}})"));
+        ADD_FAILURE() << "a version-5 document with shading.shadows was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("shading.shadows"), std::string::npos) << e.what();
+    }
     const RenderState s = parseRenderState(json::parse(
         R"({"version": 3, "legend": true, "reference": {"shells": {"visible": true, "depthsKm": [660]}, "lineWidthPx": 2}})"));
     EXPECT_TRUE(s.legend);
@@ -84,6 +94,28 @@ TEST(StateSchema, NullKeepsTheDefaultOfStringKeys)
     const json& pl = schema["properties"]["pathlines"]["properties"];
     EXPECT_EQ(pl["colorBy"]["type"], json::array({"string", "null"}));
     EXPECT_EQ(pl["colorMap"]["enum"].back(), nullptr);
+}
+
+TEST(StateSchema, ShadowsRoundTripAndBadValuesNameTheKey)
+{
+    const RenderState s = parseRenderState(json::parse(R"({"version": 6, "shading": {"shadows": true, "shadowStrength": 0.6}})"));
+    EXPECT_TRUE(s.shading.shadows);
+    EXPECT_FLOAT_EQ(s.shading.shadowStrength, 0.6f);
+    const RenderState back = parseRenderState(toJson(s));
+    EXPECT_TRUE(back.shading.shadows);
+    EXPECT_FLOAT_EQ(back.shading.shadowStrength, 0.6f);
+    EXPECT_FALSE(parseRenderState(json{{"version", 6}}).shading.shadows);  // off unless asked for
+    auto refusal = [](const char* text) {
+        try {
+            parseRenderState(json::parse(text));
+        } catch (const Error& e) {
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    EXPECT_NE(refusal(R"({"version": 6, "shading": {"shadowStrength": 1.5}})").find("shading.shadowStrength"), std::string::npos);
+    EXPECT_NE(refusal(R"({"version": 6, "shading": {"shadowStrength": -0.1}})").find("shading.shadowStrength"), std::string::npos);
+    EXPECT_NE(refusal(R"({"version": 6, "shading": {"shadows": "yes"}})").find("shading.shadows"), std::string::npos);
 }
 
 }  // namespace

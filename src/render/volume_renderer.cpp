@@ -4,6 +4,7 @@
 #include "core/spherical.h"
 #include "render/pathline_scene.h"
 #include "render/render_kernel.h"
+#include "render/shadow_volume.h"
 #include "render/skip_grid.h"
 
 #include <tbb/blocked_range.h>
@@ -206,6 +207,7 @@ struct VolumeRenderer::Impl {
     double measuredRate = 0;       // exponential average of estimatedSamples / seconds of recent passes
     kernel::KernelParams params;
     std::shared_ptr<const PathlineScene> pathlines;  // tubes (optional), bound per pass
+    std::unique_ptr<ShadowVolume> shadows;          // made on the first pass with shading.shadows
 };
 
 VolumeRenderer::VolumeRenderer(std::shared_ptr<const StepVolume> volume)
@@ -284,6 +286,8 @@ void VolumeRenderer::validateParams(const RenderParams& p) const
             if (!(r.min <= r.max))
                 fail("brush range [{}, {}]: min is greater than max", r.min, r.max);
     }
+    if (!(p.shading.shadowStrength >= 0.0f && p.shading.shadowStrength <= 1.0f))
+        fail("shadow strength {}: expected a value in [0, 1]", p.shading.shadowStrength);
     if (p.core.variable >= varCount)
         fail("core variable index {}: the volume has {} variables", p.core.variable, varCount);
 }
@@ -476,6 +480,7 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
     k.pass = frame.passes();
     if (m_impl->pathlines)
         m_impl->pathlines->bind(k);
+    bindShadows(k);
     const int tilesX = (k.camera.width + kTileSize - 1) / kTileSize;
     const int tilesY = (k.camera.height + kTileSize - 1) / kTileSize;
     std::atomic<uint64_t> samples{0}, skipped{0}, chunks{0}, chunksSkipped{0}, chunksJumped{0}, rays{0};
@@ -557,6 +562,18 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
     stats.threads = tbb::this_task_arena::max_concurrency();
     stats.simdLanes = simd ? kernel::simdLanes() : 1;
     return stats;
+}
+
+void VolumeRenderer::bindShadows(kernel::KernelParams& k)
+{
+    if (!m_params.shading.shadows)
+        return;
+    Impl& im = *m_impl;
+    const int nodes = shadowNodesFor(im.dAngleRad, im.params.rOuterKm);
+    if (!im.shadows || im.shadows->nodes() != nodes)
+        im.shadows = std::make_unique<ShadowVolume>(nodes);
+    im.shadows->update(im.params, m_params.shading.shadowStrength, im.pathlines.get());
+    im.shadows->bind(k);
 }
 
 double VolumeRenderer::estimateSamplesPerPass() const

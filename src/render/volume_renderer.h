@@ -52,6 +52,11 @@ struct ShadingStyle {
     Vec3 lightFromCamera{0.4f, 0.6f, 1.0f};  // towards the light in the camera frame: x right, y up, z to the viewer
     float ambient = 0.35f, diffuse = 0.65f;
     float specular = 0.2f, shininess = 24;  // Blinn-Phong highlight weight and exponent
+    // Volumetric occlusion (shadow_volume.h): soft shadows from the light and ambient occlusion by
+    // the volume, the tubes and the core, on the volume, the core and the tubes; with or without
+    // `enabled`. Strength in [0, 1]: how much of the occluded light is taken away.
+    bool shadows = false;
+    float shadowStrength = 0.8f;
 };
 
 enum class KernelKind { Simd, Scalar };
@@ -124,6 +129,9 @@ public:
     // the frame as it was. The frame must have the params' size.
     // With a TileShare other than {0, 1} only the tiles it owns are rendered and accumulated (the
     // rest of `frame` is left as it was); the pass number still advances.
+    // With shading.shadows the pass first brings the occlusion grids up to date with what changed
+    // since the last pass (shadow_volume.h: after a transfer function, brush or tube change all of
+    // them, after a camera or light move the light's), which its seconds include.
     PassStats renderPass(FrameBuffer& frame, const std::atomic<bool>* cancel = nullptr, TileShare share = {});
 
     // Cost of a pass at these params on this volume in sample equivalents, estimated from a sparse
@@ -157,6 +165,9 @@ private:
     void fillKernelParams(const RenderParams& params);
     void buildSkipGrid();
     kernel::KernelVariable kernelVariable(int variable) const;
+    // With shading.shadows: brings the shadow volume up to date (what changed since the last pass)
+    // and binds it into `k`, the pass's kernel view.
+    void bindShadows(kernel::KernelParams& k);
     // Points the kernel's gradient (KernelParams::gradLat, gradR, gradLon) at the volume's
     // nodeGradient of `variable` (computed on the volume's first use of it).
     void bindGradient(int variable);

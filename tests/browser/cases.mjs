@@ -281,7 +281,27 @@ const cases = {
     await page.uncheck('#lighting');
     await waitConverged(page);
     check(await page.isDisabled('#lightElevation'), 'the light controls stay enabled after lighting is turned off');
-    console.log(`  light at azimuth ${az}°, elevation ${el}°: picture changed by ${dLight.toFixed(2)} grey levels; specular ${spec0} -> ${spec}`);
+    // Shadows (shading.shadows): the light's direction casts them, so it is live again with
+    // Shadows alone; the strength slider only with Shadows; the picture darkens.
+    check(await page.isDisabled('#shadowStrength'), 'the shadow strength is enabled while Shadows is off');
+    await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, shading: { ...s.shading, enabled: true, light: [-0.9, 0.4, 0.3] } }); });
+    await waitConverged(page);
+    const unshadowed = await viewPixels(page);
+    await page.check('#shadows');
+    await waitConverged(page);
+    const s3 = await rState(page);
+    check(s3.shading.shadows === true, `state.shading after ticking Shadows: ${JSON.stringify(s3.shading)}`);
+    check(!(await page.isDisabled('#shadowStrength')), 'the shadow strength stays disabled with Shadows on');
+    const shadowed = await viewPixels(page);
+    const dShadow = meanAbsDiff(unshadowed, shadowed);
+    check(dShadow > 0.5, `ticking Shadows hardly changed the picture (${dShadow.toFixed(2)} grey levels)`);
+    const strength = await clickAt('#shadowStrength', 0.1);
+    const s4 = await rState(page);
+    check(strength < 0.3 && s4.shading.shadowStrength === strength, `shading.shadowStrength ${s4.shading.shadowStrength} after the slider went to ${strength}`);
+    await page.uncheck('#lighting');
+    await waitConverged(page);
+    check(!(await page.isDisabled('#lightAzimuth')) && await page.isDisabled('#lightSpecular'), 'with Shadows alone the light direction must be live and the highlight not');
+    console.log(`  light at azimuth ${az}°, elevation ${el}°: picture changed by ${dLight.toFixed(2)} grey levels; specular ${spec0} -> ${spec}; shadows changed it by ${dShadow.toFixed(2)}`);
   },
 
   // The persistence diagram: it shows the pairs of the step shown and the stored seeds' threshold;

@@ -145,6 +145,13 @@ std::map<std::string, Case> cases()
                         p.transfer.opacityUnitKm = 30;
                         p.shading.enabled = true;
                     }};
+    // The shading case with occlusion (soft shadows and ambient occlusion, shadow_volume.h).
+    c["shadows"] = {0, [](RenderParams& p) {
+                        p.transfer.opacity = {{0, 0}, {0.6f, 0}, {0.65f, 0.9f}, {1, 0.9f}};
+                        p.transfer.opacityUnitKm = 30;
+                        p.shading.enabled = true;
+                        p.shading.shadows = true;
+                    }};
     c["core_plain"] = {0, [](RenderParams& p) {
                            p.brushes = {{-1, Coordinate::X, {{-1e9f, 0}}}};
                            p.core.color = {0.8f, 0.5f, 0.2f};
@@ -167,6 +174,12 @@ std::map<std::string, Case> cases()
                                 },
                                 [] { return helixTubes(60, true); }};
     c["tubes_translucent_volume"] = {0, [](RenderParams&) {}, [] { return helixTubes(60, false); }};
+    // Tubes and a translucent volume shadowing each other.
+    c["tubes_shadows"] = {0, [](RenderParams& p) {
+                              p.shading.enabled = true;
+                              p.shading.shadows = true;
+                          },
+                          [] { return helixTubes(60, false); }};
     c["tubes_filtered"] = {0, [](RenderParams& p) { p.transfer.opacity = {{0, 0}, {1, 0}}; },
                            [] { return helixTubes(60, true, {1, 0, 1, 0, 0, 1, 0, 1}); }};
     return c;

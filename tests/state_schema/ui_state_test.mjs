@@ -110,7 +110,7 @@ const defaults = JSON.parse(run(stateCases, ['default', dataset]));
   rich.brushes = [{ name: 'depth', min: 0, max: 660 }, { name: 'temperature', min: 1500, max: 2500 }, { name: 'depth', min: 1500, max: 2000 }];
   rich.axes = ['temperature', 'depth', 'radius'];
   rich.core = { visible: false, variable: 'temperature', color: [0.2, 0.3, 0.4], colorMap: 'grayscale', range: [2000, 4000] };
-  rich.shading = { enabled: true, light: [-1, 0.5, 0.25], ambient: 0.2, diffuse: 0.8, specular: 0.5, shininess: 10 };
+  rich.shading = { enabled: true, light: [-1, 0.5, 0.25], ambient: 0.2, diffuse: 0.8, specular: 0.5, shininess: 10, shadows: true, shadowStrength: 0.5 };
   rich.pathlines = { visible: true, radiusKm: 30, minWidthPx: 3, window: 5, colorBy: 'length', colorMap: 'cool-to-warm', range: [0, 5000],
     filterByBrushes: false, filters: [{ name: 'length', min: 100, max: 400 }, { name: 'length', min: 1000, max: 4000 }], ambientOcclusion: false };
   rich.stereo = { mode: 'anaglyph', eyeSeparationKm: 450, convergenceKm: 17000 };
@@ -162,6 +162,9 @@ const defaults = JSON.parse(run(stateCases, ['default', dataset]));
     [{ version: 5, stereo: { mode: 'top-bottom' } }, 'stereo.mode'],
     [{ version: 5, stereo: { eyeSeparationKm: -1 } }, 'stereo.eyeSeparationKm'],
     [{ version: 4, stereo: { mode: 'anaglyph' } }, 'stereo'],
+    [{ version: 6, shading: { shadowStrength: 1.5 } }, 'shading.shadowStrength'],
+    [{ version: 6, shading: { shadows: 'yes' } }, 'shading.shadows'],
+    [{ version: 5, shading: { shadows: true } }, 'shading.shadows'],
     [{ step: 1 }, 'version'],
     [{ version: 9 }, 'version'],
   ];

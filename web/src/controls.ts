@@ -81,6 +81,11 @@ export function setUpControls(store: StateStore, host: ControlsHost): void {
     enableLightControls(store);
     host.commit(false);
   });
+  $('shadows').addEventListener('change', () => {
+    store.state.shading = { ...store.state.shading, shadows: $<HTMLInputElement>('shadows').checked };
+    enableLightControls(store);
+    host.commit(false);
+  });
   // The light's direction (azimuth, elevation in the camera frame) and the highlight's weight:
   // interactive while dragged, a still frame on release (a restart of the passes either way).
   const lightInput = (interactive: boolean) => {
@@ -89,11 +94,12 @@ export function setUpControls(store: StateStore, host: ControlsHost): void {
       ...store.state.shading,
       light: lightFromAngles(az, el),
       specular: Number($<HTMLInputElement>('lightSpecular').value),
+      shadowStrength: Number($<HTMLInputElement>('shadowStrength').value),
     };
     showLightAngles(az, el);
     host.commit(interactive);
   };
-  for (const id of ['lightAzimuth', 'lightElevation', 'lightSpecular']) {
+  for (const id of ['lightAzimuth', 'lightElevation', 'lightSpecular', 'shadowStrength']) {
     $(id).addEventListener('input', () => lightInput(true));
     $(id).addEventListener('change', () => lightInput(false));
   }
@@ -175,6 +181,8 @@ export function syncControls(store: StateStore): void {
   $<HTMLInputElement>('lightAzimuth').value = String(Math.round(az));
   $<HTMLInputElement>('lightElevation').value = String(Math.round(el));
   $<HTMLInputElement>('lightSpecular').value = String(s.shading.specular);
+  $<HTMLInputElement>('shadows').checked = Boolean(s.shading.shadows);
+  $<HTMLInputElement>('shadowStrength').value = String(s.shading.shadowStrength);
   showLightAngles(az, el);
   enableLightControls(store);
   $<HTMLInputElement>('core').checked = (s.core as { visible?: boolean } | undefined)?.visible !== false;
@@ -205,10 +213,14 @@ function showLightAngles(azimuthDeg: number, elevationDeg: number): void {
   $('lightElevationValue').textContent = `${Math.round(elevationDeg)}°`;
 }
 
-// The light's controls mean nothing while lighting is off.
+// The light's controls mean nothing while lighting and shadows are off (its direction casts the
+// shadows, so it stays live with shadows alone); the highlight needs lighting, the strength shadows.
 function enableLightControls(store: StateStore): void {
-  const off = !store.state.shading.enabled;
-  for (const id of ['lightAzimuth', 'lightElevation', 'lightSpecular']) $<HTMLInputElement>(id).disabled = off;
+  const lit = Boolean(store.state.shading.enabled), shadowed = Boolean(store.state.shading.shadows);
+  const off = !lit && !shadowed;
+  for (const id of ['lightAzimuth', 'lightElevation']) $<HTMLInputElement>(id).disabled = off;
+  $<HTMLInputElement>('lightSpecular').disabled = !lit;
+  $<HTMLInputElement>('shadowStrength').disabled = !shadowed;
   $('lightRow').classList.toggle('disabled', off);
 }
 
