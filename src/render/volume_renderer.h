@@ -123,7 +123,10 @@ public:
     // unless `cancel` becomes true, which is checked before every tile; a cancelled pass leaves
     // the frame as it was. The frame must have the params' size.
     // With a TileShare other than {0, 1} only the tiles it owns are rendered and accumulated (the
-    // rest of `frame` is left as it was); the pass number still advances.
+    // rest of `frame` is left as it was); the pass number still advances. With the frame's
+    // Refinement on, only its blocks that still refine are rendered (a pass's pixels are those of
+    // the full pass; the estimate after it may stop more blocks); once every block has stopped a
+    // pass renders nothing.
     PassStats renderPass(FrameBuffer& frame, const std::atomic<bool>* cancel = nullptr, TileShare share = {});
 
     // Cost of a pass at these params on this volume in sample equivalents, estimated from a sparse
