@@ -15,11 +15,13 @@
 #include "data/preprocess.h"
 #include "data/selection.h"
 #include "data/synth.h"
+#include "render/image_io.h"
 #include "render/render_state.h"
 #include "render/state_renderer.h"
 #include "render/volume_renderer.h"
 
 #include <benchmark/benchmark.h>
+#include <fmt/format.h>
 #include <tbb/task_arena.h>
 
 #include <sys/resource.h>
@@ -391,8 +393,14 @@ void convergedStill(benchmark::State& state, int width, int height, float errorG
         FrameBuffer f(width, height);
         f.setRefinement({errorGreyLevels});
         int n = 0;
-        for (; n < 8 && !f.converged(); ++n)
-            timedPass(r, f, t);
+        for (; n < 8 && !f.converged(); ++n) {
+            int refining = 0;
+            for (int b = 0; b < f.blockCount(); ++b)
+                refining += f.blockRefining(b);
+            const PassStats s = timedPass(r, f, t);
+            std::fprintf(stderr, "converged %dx%d at %.2f: pass %d  %5.1f %% of the blocks  %.0f ms\n", width, height,
+                         errorGreyLevels, n, 100.0 * refining / f.blockCount(), 1e3 * s.seconds);
+        }
         state.PauseTiming();
         passesToConverge = n;
         blockPasses = blockPassesMax = 0;
@@ -401,6 +409,25 @@ void convergedStill(benchmark::State& state, int width, int height, float errorG
             blockPassesMax += 8;
         }
         picture = f.resolveRgba8({0, 0, 0});
+        if (const char* dir = std::getenv("RAYPC_BENCH_PICTURES")) {
+            // The picture and a map of each block's passes (grey: passes / 8).
+            const std::string name = fmt::format("{}/converged_{}x{}_{:.2f}", dir, width, height, errorGreyLevels);
+            writePng(name + ".png", {width, height, picture});
+            std::vector<uint8_t> map(picture.size(), 255);
+            for (int b = 0; b < f.blockCount(); ++b) {
+                const TileRect rect = f.block(b);
+                for (int y = rect.y0; y < rect.y1; ++y)
+                    for (int x = rect.x0; x < rect.x1; ++x)
+                        for (int c = 0; c < 3; ++c)
+                            map[4 * (size_t(y) * size_t(width) + size_t(x)) + size_t(c)] = uint8_t(255 * f.blockPasses(b) / 8);
+            }
+            writePng(name + "_passes.png", {width, height, map});
+            std::vector<uint8_t> diff(picture.size(), 255);
+            for (size_t i = 0; i < picture.size(); ++i)
+                if (i % 4 != 3)
+                    diff[i] = uint8_t(std::min(255, 8 * std::abs(int(picture[i]) - int(reference[i]))));
+            writePng(name + "_diff8.png", {width, height, diff});
+        }
         state.ResumeTiming();
     }
     int maxDiff = 0;
@@ -429,7 +456,7 @@ void convergedStill(benchmark::State& state, int width, int height, float errorG
     state.counters["vs8_over2%"] = 100.0 * double(over2) / pixels;
 }
 void BM_ConvergedAdaptive1024(benchmark::State& state) { convergedStill(state, 1024, 1024, float(state.range(0)) / 100); }
-BENCHMARK(BM_ConvergedAdaptive1024)->Arg(25)->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_ConvergedAdaptive1024)->Arg(50)->Arg(100)->Arg(200)->Arg(400)->Unit(benchmark::kMillisecond)->Iterations(1);
 void BM_ConvergedFixed8_1024(benchmark::State& state) { convergedStill(state, 1024, 1024, 0); }
 BENCHMARK(BM_ConvergedFixed8_1024)->Unit(benchmark::kMillisecond)->Iterations(1);
 void BM_ConvergedAdaptive1920x1080(benchmark::State& state) { convergedStill(state, 1920, 1080, float(state.range(0)) / 100); }

@@ -32,6 +32,7 @@ void FrameBuffer::clear()
     m_blockPasses.assign(size_t(blockCount()), 0);
     m_blockDone.assign(size_t(blockCount()), 0);
     m_blockError.assign(size_t(blockCount()), INFINITY);
+    m_blockFirstError.assign(size_t(blockCount()), 0.0f);
 }
 
 void FrameBuffer::setRefinement(Refinement refinement)
@@ -68,9 +69,9 @@ TileRect FrameBuffer::block(int b) const
             std::min((by + 1) * kBlockSize, m_height)};
 }
 
-int FrameBuffer::blocksOfTile(int t, int (&out)[4]) const
+int FrameBuffer::blocksOfTile(int t, int (&out)[kMaxBlocksPerTile]) const
 {
-    static_assert(kTileSize == 2 * kBlockSize, "a tile is 2 x 2 blocks");
+    static_assert(kTileSize % kBlockSize == 0, "a tile is a whole number of blocks");
     const TileRect r = tile(t);
     int n = 0;
     for (int by = r.y0 / kBlockSize; by * kBlockSize < r.y1; ++by)
@@ -79,40 +80,36 @@ int FrameBuffer::blocksOfTile(int t, int (&out)[4]) const
     return n;
 }
 
-float FrameBuffer::estimateErrorGreyLevels(int t, int b, int passesAfter, const std::vector<uint8_t>& rendered) const
+float FrameBuffer::estimateErrorGreyLevels(int b, int passesAfter) const
 {
     const TileRect r = block(b);
     float worst = 0;
     if (passesAfter == 1) {
-        // One pass: the second differences of the pixels along x and y (within the tile, over blocks
-        // rendered in this pass). The mean of later passes is the pixel's value over its footprint
-        // (subpixel offsets) and along-ray offsets: where the image is linear over a pixel's
-        // neighbours the footprint's mean is the centre's value; at an edge a second difference
-        // of d means the centre can be off by up to d / 2; and the along-ray offsets are hashed per
-        // pixel, so their noise shows as second differences too.
-        const TileRect tr = tile(t);
+        // One pass: the second differences along x and y centred on the block's pixels (the pixels
+        // next to the block included, in whatever tile). The mean of later passes is a pixel's value
+        // over its footprint (subpixel offsets) and over the along-ray offsets: where the image is
+        // linear across a pixel's neighbours the footprint's mean is the centre's value, at an edge a
+        // second difference d allows the centre to be off by up to d / 2, and the along-ray offset is
+        // a hash of the pixel, so the sampling noise of a pass shows as second differences too.
         auto at = [&](int x, int y) -> const kernel::PixelOut& { return m_pass[size_t(y) * size_t(m_width) + size_t(x)]; };
-        auto usable = [&](int x, int y) {
-            return x >= tr.x0 && x < tr.x1 && y >= tr.y0 && y < tr.y1 &&
-                   rendered[size_t((y / kBlockSize) * m_blocksX + x / kBlockSize)];
-        };
         auto stencil = [&](int x, int y, int dx, int dy) {
-            if (!usable(x - dx, y - dy) || !usable(x, y) || !usable(x + dx, y + dy))
+            if (x - dx < 0 || y - dy < 0 || x + dx >= m_width || y + dy >= m_height)
                 return;
             const kernel::PixelOut &u = at(x - dx, y - dy), &m = at(x, y), &v = at(x + dx, y + dy);
             worst = std::max({worst, std::abs(u.r - 2 * m.r + v.r), std::abs(u.g - 2 * m.g + v.g),
                               std::abs(u.b - 2 * m.b + v.b), std::abs(u.a - 2 * m.a + v.a)});
         };
-        // Every stencil that touches a pixel of the block.
         for (int y = r.y0; y < r.y1; ++y)
-            for (int x = r.x0 - 1; x <= r.x1; ++x)
+            for (int x = r.x0; x < r.x1; ++x) {
                 stencil(x, y, 1, 0);
-        for (int y = r.y0 - 1; y <= r.y1; ++y)
-            for (int x = r.x0; x < r.x1; ++x)
                 stencil(x, y, 0, 1);
+            }
         return 0.5f * 255.0f * worst;
     }
-    // Later passes: how much this pass moves the block's mean, |x_n - mean_(n-1)| / n, at its worst pixel.
+    // Later passes: how much this pass moves the block's mean, |x_n - mean_(n-1)| / n, at its worst
+    // pixel; but at least the first pass's estimate / n. Where a sharp edge crosses the block a pixel's
+    // few samples may all have fallen on one side so far (the mean then seems not to move); the
+    // mean of n well-spread samples over the footprint is off by about 1 / n of one sample's error.
     const float previous = float(passesAfter - 1), inv = 1.0f / float(passesAfter);
     for (int y = r.y0; y < r.y1; ++y)
         for (int x = r.x0; x < r.x1; ++x) {
@@ -122,12 +119,12 @@ float FrameBuffer::estimateErrorGreyLevels(int t, int b, int passesAfter, const 
             worst = std::max({worst, std::abs(p.r - s[0] / previous), std::abs(p.g - s[1] / previous),
                               std::abs(p.b - s[2] / previous), std::abs(p.a - s[3] / previous)});
         }
-    return 255.0f * inv * worst;
+    return std::max(255.0f * inv * worst, m_blockFirstError[size_t(b)] * inv);
 }
 
 void FrameBuffer::accumulateTile(int t, const std::vector<uint8_t>& rendered)
 {
-    int blocks[4];
+    int blocks[kMaxBlocksPerTile];
     const int nb = blocksOfTile(t, blocks);
     for (int k = 0; k < nb; ++k) {
         const int b = blocks[k];
@@ -136,7 +133,9 @@ void FrameBuffer::accumulateTile(int t, const std::vector<uint8_t>& rendered)
         const int passesAfter = int(m_blockPasses[size_t(b)]) + 1;
         // Before the sums change: the estimate of later passes reads the previous mean.
         if (m_refinement.enabled() && passesAfter >= m_refinement.minPasses) {
-            m_blockError[size_t(b)] = estimateErrorGreyLevels(t, b, passesAfter, rendered);
+            m_blockError[size_t(b)] = estimateErrorGreyLevels(b, passesAfter);
+            if (passesAfter == 1)
+                m_blockFirstError[size_t(b)] = m_blockError[size_t(b)];
             m_blockDone[size_t(b)] = m_blockError[size_t(b)] < m_refinement.errorGreyLevels;
         }
         const TileRect r = block(b);
@@ -175,7 +174,7 @@ std::vector<float> FrameBuffer::packTiles(TileShare share) const
                 out.insert(out.end(), {m_rgbaSum[4 * i], m_rgbaSum[4 * i + 1], m_rgbaSum[4 * i + 2],
                                        m_rgbaSum[4 * i + 3], m_depthSum[i], float(m_depthCount[i])});
             }
-        int blocks[4];
+        int blocks[kMaxBlocksPerTile];
         const int nb = blocksOfTile(t, blocks);
         for (int k = 0; k < nb; ++k)
             out.insert(out.end(), {float(m_blockPasses[size_t(blocks[k])]), float(m_blockDone[size_t(blocks[k])])});
@@ -190,7 +189,7 @@ size_t FrameBuffer::unpackTiles(std::span<const float> packed, TileShare share)
         if (!share.owns(t))
             continue;
         const TileRect r = tile(t);
-        int blocks[4];
+        int blocks[kMaxBlocksPerTile];
         const int nb = blocksOfTile(t, blocks);
         const size_t need = kPackedFloatsPerPixel * size_t(r.x1 - r.x0) * size_t(r.y1 - r.y0) +
                             kPackedFloatsPerBlock * size_t(nb);

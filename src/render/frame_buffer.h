@@ -36,8 +36,10 @@ struct TileRect {
 // Adaptive refinement of still frames (docs/rendering.md, "Adaptive refinement"): a block of
 // FrameBuffer::kBlockSize² pixels stops taking passes once its estimated error is below
 // `errorGreyLevels` (8-bit units of premultiplied RGBA); the other blocks go on. The estimate
-// depends only on the block's own tile, so a frame shared out by tiles (TileShare) decides as one
-// rendered whole does. Off (errorGreyLevels 0): every pass renders every pixel.
+// reads only the block's pixels and, after the first pass, the first pass's pixels around it (a
+// pixel's value depends only on the pixel and the pass), so a frame shared out by tiles
+// (TileShare) decides as one rendered whole does. Off (errorGreyLevels 0): every pass renders
+// every pixel.
 struct Refinement {
     float errorGreyLevels = 0;
     // Passes every block takes before its error is estimated: 1 estimates from the first pass's
@@ -72,11 +74,12 @@ public:
 
     // Blocks: the unit of adaptive refinement, kTileSize / kBlockSize per side of a tile, row-major
     // over the frame.
-    static constexpr int kBlockSize = 16;
+    static constexpr int kBlockSize = 8;
+    static constexpr int kMaxBlocksPerTile = (kTileSize / kBlockSize) * (kTileSize / kBlockSize);
     int blockCount() const { return m_blocksX * m_blocksY; }
     TileRect block(int b) const;
-    // The blocks of tile t (at most 4), row-major.
-    int blocksOfTile(int t, int (&out)[4]) const;
+    // The blocks of tile t, row-major; returns their number.
+    int blocksOfTile(int t, int (&out)[kMaxBlocksPerTile]) const;
     // Passes accumulated in block b, and whether it takes the next pass (not yet converged).
     int blockPasses(int b) const { return m_blockPasses[size_t(b)]; }
     bool blockRefining(int b) const { return !m_blockDone[size_t(b)]; }
@@ -102,10 +105,15 @@ public:
 
 private:
     friend class VolumeRenderer;
-    // Adds the pass in m_pass to the blocks of tile t with rendered[b] set, then estimates their
-    // error and stops those below the threshold. Distinct tiles may be accumulated concurrently.
+    // Estimates the error of the blocks of tile t with rendered[b] set, stops those below the
+    // threshold, then adds the pass in m_pass to them. Distinct tiles may be accumulated
+    // concurrently. A block's first-pass estimate also reads the pixels of m_pass next to it, which
+    // the caller must have rendered in this pass (VolumeRenderer renders those of tiles it does
+    // not render itself: firstPassNeighbours).
     void accumulateTile(int t, const std::vector<uint8_t>& rendered);
-    float estimateErrorGreyLevels(int t, int b, int blockPassesAfter, const std::vector<uint8_t>& rendered) const;
+    float estimateErrorGreyLevels(int b, int blockPassesAfter) const;
+    // Whether this pass estimates some block from its first pass (and reads its neighbours' pixels).
+    bool firstPassEstimates() const { return m_refinement.enabled() && m_refinement.minPasses == 1 && m_passes == 0; }
 
     int m_width, m_height, m_passes = 0;
     int m_blocksX, m_blocksY;
@@ -115,6 +123,7 @@ private:
     std::vector<uint32_t> m_blockPasses;
     std::vector<uint8_t> m_blockDone;
     std::vector<float> m_blockError;
+    std::vector<float> m_blockFirstError;  // the first pass's estimate (0 when not made)
     std::vector<kernel::PixelOut> m_pass;  // scratch of the pass being rendered
 };
 

@@ -866,7 +866,7 @@ const Object<RenderState>& document()
             leaf<S>("passes", at(&S::passes), integer(1, 100000),
                     {.meaning = "progressive passes accumulated for a still image", .cost = Cost::None}),
             leaf<S>("convergenceGreyLevels", at(&S::convergenceGreyLevels), number<float>(0, 255),
-                    {.meaning = "adaptive refinement of a still image: a block of 16² pixels stops taking passes "
+                    {.meaning = "adaptive refinement of a still image: a block of 8² pixels stops taking passes "
                                 "(of at most `passes`) once its estimated error is below this many 8-bit levels "
                                 "(docs/rendering.md, adaptive refinement); 0: every pass renders every pixel",
                      .cost = Cost::None,

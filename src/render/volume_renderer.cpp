@@ -493,7 +493,7 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
     for (int t = 0; t < frame.tileCount(); ++t) {
         if (!share.owns(t))
             continue;
-        int blocks[4];
+        int blocks[FrameBuffer::kMaxBlocksPerTile];
         const int nb = frame.blocksOfTile(t, blocks);
         bool any = false;
         for (int j = 0; j < nb; ++j) {
@@ -520,24 +520,20 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
                     return;
                 }
                 const int t = tiles[size_t(i)];
-                // A whole tile at once, or its refining blocks one by one.
-                int blocks[4];
+                // The refining blocks of the tile: per row of blocks, runs of them as one rectangle
+                // (the whole tile in one call when all refine).
+                int blocks[FrameBuffer::kMaxBlocksPerTile];
                 const int nb = frame.blocksOfTile(t, blocks);
-                int nRendered = 0;
-                for (int j = 0; j < nb; ++j)
-                    nRendered += rendered[size_t(blocks[j])];
-                TileRect rects[4];
-                int nRects = 0;
-                if (nRendered == nb) {
-                    rects[nRects++] = frame.tile(t);
-                } else {
-                    for (int j = 0; j < nb; ++j)
-                        if (rendered[size_t(blocks[j])])
-                            rects[nRects++] = frame.block(blocks[j]);
-                }
                 kernel::TileStats st;
-                for (int j = 0; j < nRects; ++j) {
-                    const kernel::Tile tile{rects[j].x0, rects[j].y0, rects[j].x1, rects[j].y1};
+                for (int j = 0; j < nb;) {
+                    if (!rendered[size_t(blocks[j])]) {
+                        ++j;
+                        continue;
+                    }
+                    TileRect rect = frame.block(blocks[j]);
+                    for (++j; j < nb && rendered[size_t(blocks[j])] && frame.block(blocks[j]).y0 == rect.y0; ++j)
+                        rect.x1 = frame.block(blocks[j]).x1;
+                    const kernel::Tile tile{rect.x0, rect.y0, rect.x1, rect.y1};
                     if (simd)
                         kernel::renderTileSimd(k, tile, out, st);
                     else
@@ -552,6 +548,55 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
             }
         },
         tbb::simple_partitioner());
+
+    // First-pass estimates read the pixels next to a block; those in tiles not rendered here
+    // (another worker's under TileShare) are rendered too, into m_pass where they lie: a pixel's
+    // value depends only on the pixel and the pass, so every worker decides as one whole frame
+    // does. They are work for the estimate only and not counted in the statistics (so the workers'
+    // counts still add up to one whole frame's).
+    if (frame.firstPassEstimates() && !share.all() && !cancelled.load() && !(cancel && cancel->load())) {
+        const int w = frame.width(), h = frame.height();
+        std::vector<uint8_t> inRendered(size_t(frame.tileCount()), 0);
+        for (int t : tiles)
+            inRendered[size_t(t)] = 1;
+        const int tilesX = (w + FrameBuffer::kTileSize - 1) / FrameBuffer::kTileSize;
+        auto tileOf = [&](int x, int y) { return (y / FrameBuffer::kTileSize) * tilesX + x / FrameBuffer::kTileSize; };
+        std::vector<uint8_t> ring(size_t(w) * size_t(h), 0);
+        for (int t : tiles) {
+            const TileRect r = frame.tile(t);
+            auto mark = [&](int x, int y) {
+                if (x >= 0 && y >= 0 && x < w && y < h && !inRendered[size_t(tileOf(x, y))])
+                    ring[size_t(y) * size_t(w) + size_t(x)] = 1;
+            };
+            for (int x = r.x0; x < r.x1; ++x) {
+                mark(x, r.y0 - 1);
+                mark(x, r.y1);
+            }
+            for (int y = r.y0; y < r.y1; ++y) {
+                mark(r.x0 - 1, y);
+                mark(r.x1, y);
+            }
+        }
+        // By rows of the frame, runs of marked pixels: no two calls write one pixel.
+        tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
+            kernel::TileStats uncounted;
+            for (int y = rows.begin(); y != rows.end(); ++y)
+                for (int x = 0; x < w;) {
+                    if (!ring[size_t(y) * size_t(w) + size_t(x)]) {
+                        ++x;
+                        continue;
+                    }
+                    const int x0 = x;
+                    while (x < w && ring[size_t(y) * size_t(w) + size_t(x)])
+                        ++x;
+                    const kernel::Tile run{x0, y, x, y + 1};
+                    if (simd)
+                        kernel::renderTileSimd(k, run, out, uncounted);
+                    else
+                        kernel::renderTileScalar(k, run, out, uncounted);
+                }
+        });
+    }
 
     PassStats stats;
     stats.cancelled = cancelled.load() || (cancel && cancel->load());
