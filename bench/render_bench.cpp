@@ -377,7 +377,7 @@ const std::vector<uint8_t>& fixed8Picture(int width, int height)
     return slot;
 }
 
-void convergedStill(benchmark::State& state, int width, int height, float errorGreyLevels)
+void convergedStill(benchmark::State& state, int width, int height, float errorGreyLevels, int maxPasses = 8)
 {
     RenderParams p = params(width);
     p.width = width;
@@ -393,7 +393,7 @@ void convergedStill(benchmark::State& state, int width, int height, float errorG
         FrameBuffer f(width, height);
         f.setRefinement({errorGreyLevels});
         int n = 0;
-        for (; n < 8 && !f.converged(); ++n) {
+        for (; n < maxPasses && !f.converged(); ++n) {
             int refining = 0;
             for (int b = 0; b < f.blockCount(); ++b)
                 refining += f.blockRefining(b);
@@ -406,11 +406,11 @@ void convergedStill(benchmark::State& state, int width, int height, float errorG
         blockPasses = blockPassesMax = 0;
         for (int b = 0; b < f.blockCount(); ++b) {
             blockPasses += f.blockPasses(b);
-            blockPassesMax += 8;
+            blockPassesMax += maxPasses;
         }
         picture = f.resolveRgba8({0, 0, 0});
         if (const char* dir = std::getenv("RAYPC_BENCH_PICTURES")) {
-            // The picture and a map of each block's passes (grey: passes / 8).
+            // The picture, a map of each block's passes (grey: passes / maximum) and the difference from the 8-pass picture x 8.
             const std::string name = fmt::format("{}/converged_{}x{}_{:.2f}", dir, width, height, errorGreyLevels);
             writePng(name + ".png", {width, height, picture});
             std::vector<uint8_t> map(picture.size(), 255);
@@ -419,7 +419,7 @@ void convergedStill(benchmark::State& state, int width, int height, float errorG
                 for (int y = rect.y0; y < rect.y1; ++y)
                     for (int x = rect.x0; x < rect.x1; ++x)
                         for (int c = 0; c < 3; ++c)
-                            map[4 * (size_t(y) * size_t(width) + size_t(x)) + size_t(c)] = uint8_t(255 * f.blockPasses(b) / 8);
+                            map[4 * (size_t(y) * size_t(width) + size_t(x)) + size_t(c)] = uint8_t(255 * f.blockPasses(b) / maxPasses);
             }
             writePng(name + "_passes.png", {width, height, map});
             std::vector<uint8_t> diff(picture.size(), 255);
@@ -459,6 +459,9 @@ void BM_ConvergedAdaptive1024(benchmark::State& state) { convergedStill(state, 1
 BENCHMARK(BM_ConvergedAdaptive1024)->Arg(50)->Arg(100)->Arg(200)->Arg(400)->Unit(benchmark::kMillisecond)->Iterations(1);
 void BM_ConvergedFixed8_1024(benchmark::State& state) { convergedStill(state, 1024, 1024, 0); }
 BENCHMARK(BM_ConvergedFixed8_1024)->Unit(benchmark::kMillisecond)->Iterations(1);
+// What the 8-pass image itself is off by: 32 fixed passes against it.
+void BM_ConvergedFixed32_1024(benchmark::State& state) { convergedStill(state, 1024, 1024, 0, 32); }
+BENCHMARK(BM_ConvergedFixed32_1024)->Unit(benchmark::kMillisecond)->Iterations(1);
 void BM_ConvergedAdaptive1920x1080(benchmark::State& state) { convergedStill(state, 1920, 1080, float(state.range(0)) / 100); }
 BENCHMARK(BM_ConvergedAdaptive1920x1080)->Arg(50)->Unit(benchmark::kMillisecond)->Iterations(1);
 void BM_ConvergedFixed8_1920x1080(benchmark::State& state) { convergedStill(state, 1920, 1080, 0); }

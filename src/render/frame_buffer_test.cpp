@@ -4,6 +4,7 @@
 #include "render/frame_buffer.h"
 
 #include "core/error.h"
+#include "render/render_state.h"
 #include "render/test_volumes.h"
 #include "render/volume_renderer.h"
 
@@ -85,36 +86,41 @@ int blockPassesTotal(const FrameBuffer& f)
 
 // The adaptive still is the full 8-pass still where blocks refined to the end, and elsewhere differs
 // by what the stopped blocks' remaining passes would have moved their mean. A block stops when its
-// estimated error is below 0.5 levels, so the images must agree within the golden tests' tolerance
-// (at most 0.5 % of pixels off by more than 10 levels, mean below 1 level) and, tighter, a mean
-// difference below a quarter level; and the refinement must have skipped work.
+// estimated error is below the threshold (0.5 levels, and the state's default), so the images must
+// agree within the golden tests' tolerance (at most 0.5 % of pixels off by more than 10 levels, mean
+// below 1 level) and, tighter, a mean difference below a quarter level (the worst pixel of a stopped
+// block is estimated within the threshold, most pixels far within); and the refinement must have
+// skipped work.
 TEST(Refinement, AdaptiveStillMatchesTheFullStill)
 {
     VolumeRenderer r(plumeVolume());
     const RenderParams p = plumeParams(160, 128);
     r.setParams(p);
     const FrameBuffer full = renderFrame(r, p.width, p.height, {});
-    const FrameBuffer adaptive = renderFrame(r, p.width, p.height, {0.5f});
     EXPECT_EQ(blockPassesTotal(full), kMaxPasses * full.blockCount());
-    const Difference d = difference8(adaptive, full);
-    EXPECT_LE(d.over10, 0.005);
-    EXPECT_LT(d.mean, 0.25);
-    const double share = double(blockPassesTotal(adaptive)) / double(blockPassesTotal(full));
-    EXPECT_LT(share, 0.75) << "adaptive refinement rendered " << 100 * share << " % of the block-passes";
-    std::printf("adaptive vs full 8 passes: max %d, mean %.3f levels, %.3f %% off by > 10; %.0f %% of the block-passes\n",
-                d.max, d.mean, 100 * d.over10, 100 * share);
-    // Blocks that took every pass are the full still's, bit for bit.
-    const std::vector<float> a = adaptive.averagedRgba(), f = full.averagedRgba();
-    for (int b = 0; b < adaptive.blockCount(); ++b) {
-        if (adaptive.blockPasses(b) != kMaxPasses)
-            continue;
-        const TileRect rect = adaptive.block(b);
-        for (int y = rect.y0; y < rect.y1; ++y)
-            for (int x = rect.x0; x < rect.x1; ++x)
-                for (int c = 0; c < 4; ++c) {
-                    const size_t i = 4 * (size_t(y) * size_t(p.width) + size_t(x)) + size_t(c);
-                    ASSERT_EQ(a[i], f[i]) << "block " << b << " pixel " << x << "," << y;
-                }
+    for (const float threshold : {0.5f, RenderState{}.convergenceGreyLevels}) {
+        const FrameBuffer adaptive = renderFrame(r, p.width, p.height, {threshold});
+        const Difference d = difference8(adaptive, full);
+        EXPECT_LE(d.over10, 0.005) << "threshold " << threshold;
+        EXPECT_LT(d.mean, 0.25) << "threshold " << threshold;
+        const double share = double(blockPassesTotal(adaptive)) / double(blockPassesTotal(full));
+        EXPECT_LT(share, 0.75) << "adaptive refinement rendered " << 100 * share << " % of the block-passes";
+        std::printf("threshold %.1f: adaptive vs full 8 passes: max %d, mean %.3f levels, %.3f %% off by > 10; %.0f %% "
+                    "of the block-passes\n",
+                    threshold, d.max, d.mean, 100 * d.over10, 100 * share);
+        // Blocks that took every pass are the full still's, bit for bit.
+        const std::vector<float> a = adaptive.averagedRgba(), f = full.averagedRgba();
+        for (int b = 0; b < adaptive.blockCount(); ++b) {
+            if (adaptive.blockPasses(b) != kMaxPasses)
+                continue;
+            const TileRect rect = adaptive.block(b);
+            for (int y = rect.y0; y < rect.y1; ++y)
+                for (int x = rect.x0; x < rect.x1; ++x)
+                    for (int c = 0; c < 4; ++c) {
+                        const size_t i = 4 * (size_t(y) * size_t(p.width) + size_t(x)) + size_t(c);
+                        ASSERT_EQ(a[i], f[i]) << "block " << b << " pixel " << x << "," << y;
+                    }
+        }
     }
 }
 
