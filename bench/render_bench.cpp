@@ -8,7 +8,8 @@
 //   Msteps/s/thread    every sample position along the rays, including those in skipped space
 //   Mdata/s/thread     samples that read data (in active bricks): the honest sampling rate
 //   jumped%            share of chunks passed over by interval skipping without locating a sample
-// Targets (2 cores): interactive 512² pass <= 50 ms, converged 1024² full resolution <= 3 s,
+// Targets (2 cores): interactive 512² pass <= 50 ms, converged 1024² full resolution <= 3 s (issue
+// 15: <= 0.5 s, and 1920x1080 <= 1 s, by adaptive refinement: BM_ConvergedAdaptive*),
 // >= 100 M samples/s/thread, brushing 4 variables (<= 20 % selected) not slower than no brushing.
 #include "data/bricks.h"
 #include "data/dataset.h"
@@ -463,7 +464,7 @@ BENCHMARK(BM_ConvergedFixed8_1024)->Unit(benchmark::kMillisecond)->Iterations(1)
 void BM_ConvergedFixed32_1024(benchmark::State& state) { convergedStill(state, 1024, 1024, 0, 32); }
 BENCHMARK(BM_ConvergedFixed32_1024)->Unit(benchmark::kMillisecond)->Iterations(1);
 void BM_ConvergedAdaptive1920x1080(benchmark::State& state) { convergedStill(state, 1920, 1080, float(state.range(0)) / 100); }
-BENCHMARK(BM_ConvergedAdaptive1920x1080)->Arg(50)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_ConvergedAdaptive1920x1080)->Arg(200)->Unit(benchmark::kMillisecond)->Iterations(1);
 void BM_ConvergedFixed8_1920x1080(benchmark::State& state) { convergedStill(state, 1920, 1080, 0); }
 BENCHMARK(BM_ConvergedFixed8_1920x1080)->Unit(benchmark::kMillisecond)->Iterations(1);
 
