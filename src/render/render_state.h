@@ -101,6 +101,8 @@ struct RenderState {
     std::optional<int> level;  // nullopt: chosen for timeBudgetMs (reload class)
     double timeBudgetMs = 50.0;
     int passes = 8;
+    // Adaptive refinement of still images (render::Refinement): 8-bit levels; 0: off.
+    float convergenceGreyLevels = 2.0f;
     float stepFactor = 0.5f;
     float depthOpacity = 0.5f;
     struct Core {

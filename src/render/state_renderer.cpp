@@ -170,6 +170,7 @@ StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, co
     const RenderState& state = resolved.state;
     const std::vector<ResolvedState> views = stereoViews(resolved);
     Prepared p;
+    p.refinement.errorGreyLevels = state.convergenceGreyLevels;
     for (const ResolvedState& v : views)
         p.views.push_back({v.params, nullptr});
     const int step = state.step;
@@ -227,8 +228,10 @@ StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, co
 ViewFrames StateRenderer::Prepared::frames() const
 {
     ViewFrames out;
-    for (const View& v : views)
+    for (const View& v : views) {
         out.emplace_back(v.params.width, v.params.height);
+        out.back().setRefinement(refinement);
+    }
     return out;
 }
 

@@ -120,8 +120,10 @@ public:
         std::vector<View> views;  // stereoViews' order: one, or the left and the right eye
         std::shared_ptr<const PathlineScene> scene;  // nullptr when pathlines are hidden
         double estimatedSamplesPerPass = 0;          // of all views
+        Refinement refinement;  // of still frames: the state's convergenceGreyLevels
 
-        // Empty buffers of the views' sizes.
+        // Empty buffers of the views' sizes, refining adaptively as `refinement` says (a block
+        // that has converged takes no more passes; FrameBuffer::converged when all have).
         ViewFrames frames() const;
         // One progressive pass of every view into `frames` (see VolumeRenderer::renderPass; a
         // cancelled view stops the pass). Stats are summed over the views.
@@ -138,8 +140,10 @@ public:
     VolumeRenderer& rendererFor(int step, int level, int view = 0);
 
     // A converged picture: prepare() with LevelPolicy{} (level 0 unless the state names one), then
-    // `passes` passes (the state's when 0). Stops early when `cancel` becomes true (the frame then
-    // holds fewer passes; check frame.passes()).
+    // `passes` passes (the state's when 0); with adaptive refinement (the state's
+    // convergenceGreyLevels) the blocks that have converged take no more of them, and passes after
+    // every block has cost nothing. Stops early when `cancel` becomes true (the frame then holds
+    // fewer passes; check frame.passes()).
     struct Still {
         ViewFrames frames;
         int level = 0;

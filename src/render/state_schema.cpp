@@ -865,6 +865,12 @@ const Object<RenderState>& document()
                     {.meaning = "time budget of one interactive pass, ms", .cost = Cost::Reload}),
             leaf<S>("passes", at(&S::passes), integer(1, 100000),
                     {.meaning = "progressive passes accumulated for a still image", .cost = Cost::None}),
+            leaf<S>("convergenceGreyLevels", at(&S::convergenceGreyLevels), number<float>(0, 255),
+                    {.meaning = "adaptive refinement of a still image: a block of 8² pixels stops taking passes "
+                                "(of at most `passes`) once its estimated error is below this many 8-bit levels "
+                                "(docs/rendering.md, adaptive refinement); 0: every pass renders every pixel",
+                     .cost = Cost::None,
+                     .since = 6}),
             leaf<S>("stepFactor", at(&S::stepFactor), number<float>(0.05, 8),
                     {.meaning = "step length as a fraction of the local cell extent along the ray"}),
             leaf<S>("depthOpacity", at(&S::depthOpacity), number<float>(1e-3, 0.999),

@@ -74,6 +74,7 @@ TEST(StereoState, BadValuesAndOlderDocumentsAreRefusedByName)
     j["version"] = 4;
     j["shading"].erase("shadows");  // version 6 keys, refused first otherwise
     j["shading"].erase("shadowStrength");
+    j.erase("convergenceGreyLevels");
     EXPECT_NE(errorOf(j).find("stereo: needs version 5, the document says version 4"), std::string::npos) << errorOf(j);
     j.erase("stereo");
     EXPECT_EQ(parseRenderState(j).stereo.mode, StereoMode::Off);  // a version-4 document still reads

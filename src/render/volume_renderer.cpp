@@ -21,7 +21,6 @@
 namespace raypc::render {
 namespace {
 
-constexpr int kTileSize = FrameBuffer::kTileSize;
 // Skip-grid cell size: as fast as smaller cells per pass, and the cheapest setParams
 // (docs/rendering.md, "Measured choices").
 constexpr float kSkipCellKm = 230.0f;
@@ -476,35 +475,75 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
         fail("frame buffer {}x{} does not match the render size {}x{}", frame.width(), frame.height(),
              m_params.width, m_params.height);
     const auto start = std::chrono::steady_clock::now();
+    if (frame.converged()) {
+        // Adaptive refinement has stopped every block: the pass renders nothing.
+        ++frame.m_passes;
+        PassStats stats;
+        stats.threads = tbb::this_task_arena::max_concurrency();
+        stats.simdLanes = m_params.kernel == KernelKind::Simd ? kernel::simdLanes() : 1;
+        stats.bricksTotal = m_impl->activity.brickCount();
+        stats.bricksSkipped = m_params.skipBricks ? m_impl->bricksSkipped : 0;
+        return stats;
+    }
     kernel::KernelParams k = m_impl->params;
     k.pass = frame.passes();
     if (m_impl->pathlines)
         m_impl->pathlines->bind(k);
     bindShadows(k);
-    const int tilesX = (k.camera.width + kTileSize - 1) / kTileSize;
-    const int tilesY = (k.camera.height + kTileSize - 1) / kTileSize;
+    // The blocks this pass renders: those of the tiles `share` owns that still refine (all of them
+    // without refinement).
+    std::vector<uint8_t> rendered(size_t(frame.blockCount()), 0);
+    std::vector<int> tiles;
+    bool everyBlock = true;  // no block stopped refining: a pass whose time measures the throughput
+    for (int t = 0; t < frame.tileCount(); ++t) {
+        if (!share.owns(t))
+            continue;
+        int blocks[FrameBuffer::kMaxBlocksPerTile];
+        const int nb = frame.blocksOfTile(t, blocks);
+        bool any = false;
+        for (int j = 0; j < nb; ++j) {
+            if (frame.blockRefining(blocks[j]))
+                any = rendered[size_t(blocks[j])] = 1;
+            else
+                everyBlock = false;
+        }
+        if (any)
+            tiles.push_back(t);
+    }
     std::atomic<uint64_t> samples{0}, skipped{0}, chunks{0}, chunksSkipped{0}, chunksJumped{0}, rays{0};
     std::atomic<bool> cancelled{false};
     const bool simd = m_params.kernel == KernelKind::Simd;
     kernel::PixelOut* out = frame.m_pass.data();
+    const int tileCount = int(tiles.size());
 
     tbb::parallel_for(
-        tbb::blocked_range<int>(0, tilesX * tilesY, 1),
+        tbb::blocked_range<int>(0, tileCount, 1),
         [&](const tbb::blocked_range<int>& range) {
-            for (int t = range.begin(); t != range.end(); ++t) {
+            for (int i = range.begin(); i != range.end(); ++i) {
                 if (cancel && cancel->load(std::memory_order_relaxed)) {
                     cancelled.store(true, std::memory_order_relaxed);
                     return;
                 }
-                if (!share.owns(t))
-                    continue;
-                const TileRect r = frame.tile(t);
-                const kernel::Tile tile{r.x0, r.y0, r.x1, r.y1};
+                const int t = tiles[size_t(i)];
+                // The refining blocks of the tile: per row of blocks, runs of them as one rectangle
+                // (the whole tile in one call when all refine).
+                int blocks[FrameBuffer::kMaxBlocksPerTile];
+                const int nb = frame.blocksOfTile(t, blocks);
                 kernel::TileStats st;
-                if (simd)
-                    kernel::renderTileSimd(k, tile, out, st);
-                else
-                    kernel::renderTileScalar(k, tile, out, st);
+                for (int j = 0; j < nb;) {
+                    if (!rendered[size_t(blocks[j])]) {
+                        ++j;
+                        continue;
+                    }
+                    TileRect rect = frame.block(blocks[j]);
+                    for (++j; j < nb && rendered[size_t(blocks[j])] && frame.block(blocks[j]).y0 == rect.y0; ++j)
+                        rect.x1 = frame.block(blocks[j]).x1;
+                    const kernel::Tile tile{rect.x0, rect.y0, rect.x1, rect.y1};
+                    if (simd)
+                        kernel::renderTileSimd(k, tile, out, st);
+                    else
+                        kernel::renderTileScalar(k, tile, out, st);
+                }
                 samples += st.samples;
                 skipped += st.samplesSkipped;
                 chunks += st.chunks;
@@ -515,38 +554,70 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
         },
         tbb::simple_partitioner());
 
+    // First-pass estimates read the pixels next to a block; those in tiles not rendered here
+    // (another worker's under TileShare) are rendered too, into m_pass where they lie: a pixel's
+    // value depends only on the pixel and the pass, so every worker decides as one whole frame
+    // does. They are work for the estimate only and not counted in the statistics (so the workers'
+    // counts still add up to one whole frame's).
+    if (frame.firstPassEstimates() && !share.all() && !cancelled.load() && !(cancel && cancel->load())) {
+        const int w = frame.width(), h = frame.height();
+        std::vector<uint8_t> inRendered(size_t(frame.tileCount()), 0);
+        for (int t : tiles)
+            inRendered[size_t(t)] = 1;
+        const int tilesX = (w + FrameBuffer::kTileSize - 1) / FrameBuffer::kTileSize;
+        auto tileOf = [&](int x, int y) { return (y / FrameBuffer::kTileSize) * tilesX + x / FrameBuffer::kTileSize; };
+        std::vector<uint8_t> ring(size_t(w) * size_t(h), 0);
+        for (int t : tiles) {
+            const TileRect r = frame.tile(t);
+            auto mark = [&](int x, int y) {
+                if (x >= 0 && y >= 0 && x < w && y < h && !inRendered[size_t(tileOf(x, y))])
+                    ring[size_t(y) * size_t(w) + size_t(x)] = 1;
+            };
+            for (int x = r.x0; x < r.x1; ++x) {
+                mark(x, r.y0 - 1);
+                mark(x, r.y1);
+            }
+            for (int y = r.y0; y < r.y1; ++y) {
+                mark(r.x0 - 1, y);
+                mark(r.x1, y);
+            }
+        }
+        // By rows of the frame, runs of marked pixels: no two calls write one pixel.
+        tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
+            kernel::TileStats uncounted;
+            for (int y = rows.begin(); y != rows.end(); ++y)
+                for (int x = 0; x < w;) {
+                    if (!ring[size_t(y) * size_t(w) + size_t(x)]) {
+                        ++x;
+                        continue;
+                    }
+                    const int x0 = x;
+                    while (x < w && ring[size_t(y) * size_t(w) + size_t(x)])
+                        ++x;
+                    const kernel::Tile run{x0, y, x, y + 1};
+                    if (simd)
+                        kernel::renderTileSimd(k, run, out, uncounted);
+                    else
+                        kernel::renderTileScalar(k, run, out, uncounted);
+                }
+        });
+    }
+
     PassStats stats;
     stats.cancelled = cancelled.load() || (cancel && cancel->load());
     if (!stats.cancelled) {
-        auto accumulate = [&frame](size_t i) {
-            const kernel::PixelOut& p = frame.m_pass[i];
-            frame.m_rgbaSum[4 * i] += p.r;
-            frame.m_rgbaSum[4 * i + 1] += p.g;
-            frame.m_rgbaSum[4 * i + 2] += p.b;
-            frame.m_rgbaSum[4 * i + 3] += p.a;
-            if (std::isfinite(p.depthKm)) {
-                frame.m_depthSum[i] += p.depthKm;
-                ++frame.m_depthCount[i];
-            }
-        };
-        if (share.all()) {
-            for (size_t i = 0; i < frame.m_pass.size(); ++i)
-                accumulate(i);
-        } else {
-            // Only the tiles rendered here: the others' pixels of m_pass hold nothing of this pass.
-            for (int t = 0; t < frame.tileCount(); ++t) {
-                if (!share.owns(t))
-                    continue;
-                const TileRect r = frame.tile(t);
-                for (int y = r.y0; y < r.y1; ++y)
-                    for (int x = r.x0; x < r.x1; ++x)
-                        accumulate(size_t(y) * size_t(frame.width()) + size_t(x));
-            }
-        }
+        // Only the blocks rendered here: the others' pixels of m_pass hold nothing of this pass.
+        // Tiles are disjoint, and so is what their accumulation writes.
+        tbb::parallel_for(
+            tbb::blocked_range<int>(0, tileCount, 4),
+            [&](const tbb::blocked_range<int>& range) {
+                for (int i = range.begin(); i != range.end(); ++i)
+                    frame.accumulateTile(tiles[size_t(i)], rendered);
+            });
         ++frame.m_passes;
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (!cancelled.load() && seconds > 0) {
+    if (!cancelled.load() && everyBlock && seconds > 0) {
         const double rate = estimateSamplesPerPass() / seconds;
         m_impl->measuredRate = m_impl->measuredRate > 0 ? 0.7 * m_impl->measuredRate + 0.3 * rate : rate;
     }

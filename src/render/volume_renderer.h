@@ -128,7 +128,10 @@ public:
     // unless `cancel` becomes true, which is checked before every tile; a cancelled pass leaves
     // the frame as it was. The frame must have the params' size.
     // With a TileShare other than {0, 1} only the tiles it owns are rendered and accumulated (the
-    // rest of `frame` is left as it was); the pass number still advances.
+    // rest of `frame` is left as it was); the pass number still advances. With the frame's
+    // Refinement on, only its blocks that still refine are rendered (a pass's pixels are those of
+    // the full pass; the estimate after it may stop more blocks); once every block has stopped a
+    // pass renders nothing.
     // With shading.shadows the pass first brings the occlusion grids up to date with what changed
     // since the last pass (shadow_volume.h: after a transfer function, brush or tube change all of
     // them, after a camera or light move the light's), which its seconds include.
