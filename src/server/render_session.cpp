@@ -198,6 +198,10 @@ void RenderSession::render(const Request& request)
             const double old = m_context.samplesPerSecond.load();
             m_context.samplesPerSecond.store(old > 0 ? 0.7 * old + 0.3 * measured : measured);
         }
+        // Adaptive refinement (a still state's convergenceGreyLevels) may have stopped every block:
+        // this frame is final, further passes would render nothing.
+        const bool refined = std::all_of(frames.begin(), frames.end(), [](const FrameBuffer& f) { return f.converged(); });
+        const bool last = pass == passes || refined;
         const auto encodeStart = Clock::now();
         const ImageRgba8 picture = m_renderer.picture(frames, request.resolved, false);  // the UI draws legends
         const std::string jpeg = encodeJpeg(picture.pixels, picture.width, picture.height,
@@ -220,7 +224,7 @@ void RenderSession::render(const Request& request)
                               {"level", level},
                               {"pass", pass},
                               {"passes", passes},
-                              {"converged", pass == passes},
+                              {"converged", last},
                               {"interactive", request.interactive},
                               {"ranks", ranks},
                               {"width", picture.width},
@@ -246,6 +250,8 @@ void RenderSession::render(const Request& request)
         done = pass;
         m_sink.sendBinary(std::move(bytes));
         updateSelection();
+        if (last)
+            break;
     }
     if (done > 0)
         spdlog::info("{}: state {} step {} level {} {}x{} {}: waited {:.1f} ms, prepared {:.1f} ms, {}/{} passes, "

@@ -291,12 +291,19 @@ std::vector<WsClient::Message> WsClient::framesUntilConverged(int64_t id)
 
 json smallState(double azimuthDeg, const std::string& colorMap, int passes)
 {
-    return {{"version", 1},
-            {"step", 1},
-            {"camera", {{"azimuthDeg", azimuthDeg}, {"elevationDeg", 20}, {"distanceKm", 20000}, {"fovYDeg", 40}}},
-            {"image", {{"width", 128}, {"height", 96}}},
-            {"color", {{"variable", "temperature"}, {"colorMap", colorMap}, {"opacity", {{0, 0.1}, {1, 0.9}}}}},
-            {"passes", passes}};
+    json state{{"version", 1},
+               {"step", 1},
+               {"camera", {{"azimuthDeg", azimuthDeg}, {"elevationDeg", 20}, {"distanceKm", 20000}, {"fovYDeg", 40}}},
+               {"image", {{"width", 128}, {"height", 96}}},
+               {"color", {{"variable", "temperature"}, {"colorMap", colorMap}, {"opacity", {{0, 0.1}, {1, 0.9}}}}},
+               {"passes", passes}};
+    if (passes > kLongStillPasses) {
+        // A long still keeps the server busy for all its passes: no adaptive refinement, which
+        // would stop every block of this small image after a few (docs/state.md, version 6).
+        state["version"] = 6;
+        state["convergenceGreyLevels"] = 0;
+    }
+    return state;
 }
 
 std::string jpegOf(const WsClient::Message& m)

@@ -128,7 +128,9 @@ private:
     websocket::stream<tcp::socket> m_ws;
 };
 
-// A small still state of the fixture: step 1, 128 x 96, temperature.
+// A small still state of the fixture: step 1, 128 x 96, temperature. With more than
+// kLongStillPasses passes, adaptive refinement is off, so that every pass renders every pixel.
+constexpr int kLongStillPasses = 8;
 json smallState(double azimuthDeg = 30, const std::string& colorMap = "viridis", int passes = 2);
 std::string jpegOf(const WsClient::Message& m);
 
