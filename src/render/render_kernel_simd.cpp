@@ -510,8 +510,10 @@ void RenderTile(const KernelParams& k, Tile tile, PixelOut* out, TileStats& stat
 
 int Lanes() { return int(hn::Lanes(DF())); }
 
-void SampleBatch(const KernelParams& k, const KernelVariable& v, const float* x, const float* y, const float* z,
-                 int n, float* out)
+// Runs `f(x, y, z)` -> values on the points i..i+lanes-1 of each batch (the last batch padded with
+// its last point) and stores the first n results to `out`.
+template <class F>
+void ForEachBatch(const float* x, const float* y, const float* z, int n, float* out, F&& f)
 {
     const DF d;
     const int lanes = int(hn::Lanes(d));
@@ -523,29 +525,27 @@ void SampleBatch(const KernelParams& k, const KernelVariable& v, const float* x,
             by[j] = y[i + std::min(j, m - 1)];
             bz[j] = z[i + std::min(j, m - 1)];
         }
-        const LocatedV L = Locate(d, k, hn::Load(d, bx), hn::Load(d, by), hn::Load(d, bz));
-        hn::Store(Sample(d, k, v, L), d, bo);
+        hn::Store(f(hn::Load(d, bx), hn::Load(d, by), hn::Load(d, bz)), d, bo);
         std::copy(bo, bo + m, out + i);
     }
+}
+
+void SampleBatch(const KernelParams& k, const KernelVariable& v, const float* x, const float* y, const float* z,
+                 int n, float* out)
+{
+    const DF d;
+    ForEachBatch(x, y, z, n, out, [&](VF px, VF py, VF pz) { return Sample(d, k, v, Locate(d, k, px, py, pz)); });
 }
 
 void ExtinctionBatch(const KernelParams& k, const float* x, const float* y, const float* z, int n, float* out)
 {
     const DF d;
     const DI di;
-    const int lanes = int(hn::Lanes(d));
-    HWY_ALIGN float bx[kMaxLanes], by[kMaxLanes], bz[kMaxLanes], bo[kMaxLanes];
-    for (int i = 0; i < n; i += lanes) {
-        const int m = std::min(lanes, n - i);
-        for (int j = 0; j < lanes; ++j) {
-            bx[j] = x[i + std::min(j, m - 1)];
-            by[j] = y[i + std::min(j, m - 1)];
-            bz[j] = z[i + std::min(j, m - 1)];
-        }
+    ForEachBatch(x, y, z, n, out, [&](VF px, VF py, VF pz) {
         SamplesV s;
-        s.x = hn::Load(d, bx);
-        s.y = hn::Load(d, by);
-        s.z = hn::Load(d, bz);
+        s.x = px;
+        s.y = py;
+        s.z = pz;
         const LocatedV L = Locate(d, k, s.x, s.y, s.z);
         const MF inShell = hn::And(hn::Ge(L.rKm, hn::Set(d, k.rInnerKm)), hn::Le(L.rKm, hn::Set(d, k.rOuterKm)));
         const MF active = ActiveLanes(d, k, L, inShell);
@@ -559,9 +559,8 @@ void ExtinctionBatch(const KernelParams& k, const float* x, const float* y, cons
             const VI index = hn::IfThenElseZero(hn::RebindMask(di, keep), hn::ConvertTo(di, u));
             sigma = hn::IfThenElseZero(keep, hn::GatherIndex(d, k.table.sigmaPerKm, index));
         }
-        hn::Store(sigma, d, bo);
-        std::copy(bo, bo + m, out + i);
-    }
+        return sigma;
+    });
 }
 
 }  // namespace raypc::render::kernel::HWY_NAMESPACE
