@@ -2,7 +2,8 @@
 //   node tests/browser/measure.mjs RAYPC DATASET [SCREENSHOT.png] [--play FPS [--seconds S] [--only-play]]
 //                                  [--server-log FILE]   (the server's log, for where the time goes)
 //                                  [--assets DIR]        (another build of the UI, for A/B runs)
-// 1. brush-to-updated-frame latency at 512x512: a brush on the temperature axis is dragged with
+//                                  [--size WxH]          (the state's image size; default 512x512)
+// 1. brush-to-updated-frame latency at --size (512x512): a brush on the temperature axis is dragged with
 //    the mouse; for every state the brush sent, the time from sending it to its first frame on
 //    screen (decoded and drawn), separately for interactive states (while dragging) and the final
 //    state (on release).
@@ -10,7 +11,7 @@
 //    for each mouse move of a brush, the time from the input event to the next animation frame
 //    (parcoord-es filters every line and starts redrawing inside that frame), and the longest task.
 // 3. optionally a screenshot of the whole UI.
-// 4. with --play FPS: playback at 512x512 at FPS steps/s (the UI's speed menu) for S seconds
+// 4. with --play FPS: playback at --size at FPS steps/s (the UI's speed menu) for S seconds
 //    (default 10): steps shown per second, and per step the time from the state sent to its frame
 //    received (server) and to its frame on screen (browser), with the level the server chose.
 //    --only-play skips 1-3.
@@ -23,6 +24,7 @@ import { chromiumPath, repoRoot, waitConverged } from './harness.mjs';
 
 const args = process.argv.slice(2);
 const flag = (name) => { const i = args.indexOf(name); return i < 0 ? null : args.splice(i, name === '--only-play' ? 1 : 2).at(-1); };
+const size = (flag('--size') ?? '512x512').split('x').map(Number);
 const serverLog = flag('--server-log'), assets = flag('--assets') ?? join(repoRoot, 'web', 'dist');
 const playFps = flag('--play'), playSeconds = Number(flag('--seconds') ?? 10), onlyPlay = flag('--only-play') !== null;
 const [raypc, dataset, screenshot] = args;
@@ -48,7 +50,7 @@ try {
   const page = await context.newPage();
   await page.goto(url);
   await page.waitForFunction(() => window.__raypc && window.__raypc.parcoords.rowCount > 0 && window.__raypc.headers.length > 0, null, { timeout: 60000 });
-  await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, image: { width: 512, height: 512 } }); });
+  await page.evaluate(([width, height]) => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, image: { width, height } }); }, size);
   await waitConverged(page, 60000);
   const rows = await page.evaluate(() => window.__raypc.parcoords.rowCount);
   if (!onlyPlay) await brushAndScreenshot(page, rows);
@@ -89,7 +91,7 @@ async function measurePlayback(page) {
   const levels = {};
   for (const h of r.headers) levels[h.level] = (levels[h.level] ?? 0) + 1;
   const passMs = r.headers.map((h) => h.stats?.passMs ?? 0);
-  console.log(`playback of ${nSteps} steps at ${playFps} steps/s asked, 512x512, ${seconds.toFixed(1)} s: ${r.sent.length} steps sent, ${(r.sent.length / seconds).toFixed(2)} steps/s`);
+  console.log(`playback of ${nSteps} steps at ${playFps} steps/s asked, ${size.join('x')}, ${seconds.toFixed(1)} s: ${r.sent.length} steps sent, ${(r.sent.length / seconds).toFixed(2)} steps/s`);
   console.log(`  per step: sent to frame received median ${median(r.lat.map((l) => l.firstFrameMs)).toFixed(0)} ms, 90th percentile ${pct(r.lat.map((l) => l.firstFrameMs), 0.9).toFixed(0)} ms; received to on screen median ${median(r.lat.map((l) => l.shownMs - l.firstFrameMs)).toFixed(0)} ms`);
   console.log(`  frame on screen to the next step sent: median ${median(gaps).toFixed(0)} ms, 90th percentile ${pct(gaps, 0.9).toFixed(0)} ms; long tasks ${r.tasks.length}, ${r.tasks.reduce((a, b) => a + b, 0).toFixed(0)} ms in all, longest ${Math.max(0, ...r.tasks).toFixed(0)} ms`);
   console.log(`  server pass median ${median(passMs).toFixed(0)} ms; levels ${JSON.stringify(levels)}; frame sizes ${[...new Set(r.headers.map((h) => `${h.width}x${h.height}`))].join(', ')}`);
@@ -130,7 +132,7 @@ async function brushAndScreenshot(page, rows) {
   const inter = r.lat.filter((l) => l.interactive).map((l) => l.shownMs);
   const fin = r.lat.filter((l) => !l.interactive).map((l) => l.shownMs);
   console.log(`parallel coordinates: ${rows} lines, ${r.moves.length} brush moves: input to next frame median ${median(r.moves).toFixed(1)} ms, 90th percentile ${pct(r.moves, 0.9).toFixed(1)} ms; longest task ${r.longest.toFixed(0)} ms`);
-  console.log(`brush to updated frame at 512x512: interactive states (n=${inter.length}) median ${median(inter).toFixed(0)} ms; final states, first pass (n=${fin.length}) median ${median(fin).toFixed(0)} ms`);
+  console.log(`brush to updated frame at ${size.join('x')}: interactive states (n=${inter.length}) median ${median(inter).toFixed(0)} ms; final states, first pass (n=${fin.length}) median ${median(fin).toFixed(0)} ms`);
   const arrive = r.lat.filter((l) => l.interactive).map((l) => l.firstFrameMs), onScreen = r.lat.filter((l) => l.interactive).map((l) => l.shownMs - l.firstFrameMs);
   console.log(`  interactive states: send to frame received median ${median(arrive).toFixed(0)} ms (server), received to on screen median ${median(onScreen).toFixed(0)} ms, 90th percentile ${pct(onScreen, 0.9).toFixed(0)} ms (browser)`);
   const finArrive = r.lat.filter((l) => !l.interactive).map((l) => l.firstFrameMs), finOnScreen = r.lat.filter((l) => !l.interactive).map((l) => l.shownMs - l.firstFrameMs);
