@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/mpi.h"
+#include "core/system_memory.h"
 #include "server/dataset_api.h"
 #include "server/rank_pool.h"
 #include "server/server.h"
@@ -53,6 +54,7 @@ void ServeFlags::add(CLI::App& cmd)
 
 void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
 {
+    keepLargeBlocksForReuse();  // frame buffers come and go with every state
     server::ServerOptions options;
     options.dataset = dataset;
     options.host = flags.host;

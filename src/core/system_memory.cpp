@@ -1,5 +1,7 @@
 #include "core/system_memory.h"
 
+#include <malloc.h>
+
 #include <fmt/format.h>
 #include <sys/resource.h>
 
@@ -81,6 +83,13 @@ std::string formatBytes(uint64_t bytes)
     if (bytes >= 1'000'000)
         return fmt::format("{:.0f} MB", bytes / 1e6);
     return fmt::format("{} kB", (bytes + 999) / 1000);
+}
+
+void keepLargeBlocksForReuse()
+{
+    constexpr int kBytes = 256 << 20;
+    mallopt(M_MMAP_THRESHOLD, kBytes);
+    mallopt(M_TRIM_THRESHOLD, kBytes);
 }
 
 }  // namespace raypc
