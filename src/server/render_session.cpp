@@ -192,7 +192,9 @@ void RenderSession::render(const Request& request)
                 : prepared.renderPass(frames, &m_cancel);
         if (stats.cancelled)
             break;
-        if (stats.seconds > 0) {
+        // A first pass renders every pixel; later ones may render only the blocks that still refine
+        // (adaptive refinement) and would overstate the throughput.
+        if (stats.seconds > 0 && pass == 1) {
             // Exponential average of the throughput, shared with the other sessions.
             const double measured = estimatedSamples / stats.seconds;
             const double old = m_context.samplesPerSecond.load();
