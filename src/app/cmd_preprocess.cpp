@@ -13,9 +13,7 @@ namespace {
 struct PreprocessArgs {
     std::vector<std::string> inputs;
     std::string output;
-    ReaderFlags reader;
-    PreprocessOptions options;
-    bool noPathlines = false;
+    PreprocessFlags flags;
 };
 
 const CommandRegistration kRegistration(
@@ -25,54 +23,13 @@ const CommandRegistration kRegistration(
         cmd.add_option("inputs", args->inputs, "netCDF files, or directories of *.nc (steps in natural order)")
             ->required();
         cmd.add_option("-o,--output", args->output, "Dataset directory to write")->required();
-        cmd.add_option("--dt-myr", args->options.dtMyr, "Time between steps in Myr")->capture_default_str();
-        cmd.add_option("--sample-rows", args->options.sampleRows, "Cells in the parallel-coordinates sample")
-            ->capture_default_str();
-        cmd.add_option("--seed", args->options.seed, "Seed of the sample")->capture_default_str();
-        cmd.add_flag("-q,--quiet", args->options.quiet, "No progress output");
-        auto& pl = args->options.pathlines;
-        cmd.add_flag("--no-pathlines", args->noPathlines,
-                     "Skip the critical points of --pathline-field and the pathlines seeded there");
-        cmd.add_option("--pathline-field", pl.field, "Variable whose critical points seed pathlines")
-            ->capture_default_str();
-        cmd.add_option("--pathline-steps", pl.steps, "Steps each pathline is traced forward")->capture_default_str();
-        cmd.add_option_function<std::string>(
-               "--cp-select",
-               [args](const std::string& text) { args->options.pathlines.filter.rule = parseSeedRule(text); },
-               "Seeds: 'persistence' (extrema of persistent pairs) or 'value' (the largest |value|)")
-            ->default_str(seedRuleName(pl.filter.rule));
-        cmd.add_option_function<std::string>(
-               "--cp-persistence",
-               [args](const std::string& text) { parsePersistenceThreshold(text, args->options.pathlines.filter); },
-               "Seeds by persistence: extrema whose persistence exceeds K (field units) or P% of the step's range")
-            ->default_str("5%");
-        cmd.add_option("--cp-min-abs", pl.filter.minAbsValue,
-                       "Seeds by value: keep maxima >= V, minima <= -V, saddles |value| >= V (field units)")
-            ->capture_default_str();
-        cmd.add_option("--cp-min-fraction", pl.filter.minFractionOfMaxAbs,
-                       "Seeds by value: the threshold is at least this fraction of the step's largest |value|")
-            ->capture_default_str();
-        cmd.add_option("--cp-max-count", pl.filter.maxCount,
-                       "Seeds: at most this many per step (the most persistent, or the largest |value|, first)")
-            ->capture_default_str();
-        cmd.add_flag("--cp-saddles,!--cp-no-saddles", pl.filter.saddles,
-                     "Seeds: also at saddles (by persistence: those paired with the kept extrema); "
-                     "default: extrema only");
-        args->reader.add(cmd);
+        args->flags.add(cmd);
         cmd.callback([args, &cmd] {
             std::vector<std::filesystem::path> files;
-            auto options = args->options;
+            PreprocessOptions options;
             mpi::together([&] {
-                // An option of the other seed rule would be silently ignored.
-                const bool byValue = args->options.pathlines.filter.rule == SeedRule::Value;
-                for (const char* option : {"--cp-persistence", "--cp-min-abs", "--cp-min-fraction"})
-                    if (cmd.count(option) && byValue == (option == std::string("--cp-persistence")))
-                        fail("{}: applies to seeds chosen by {}, but --cp-select is {}", option,
-                             byValue ? "persistence" : "value", seedRuleName(args->options.pathlines.filter.rule));
-                std::vector<std::filesystem::path> inputs(args->inputs.begin(), args->inputs.end());
-                options.reader = args->reader.toOptions();
-                options.pathlines.enabled = !args->noPathlines;
-                files = listSnapshotFiles(inputs);
+                options = args->flags.toOptions(cmd);
+                files = listSnapshotFiles(std::vector<std::filesystem::path>(args->inputs.begin(), args->inputs.end()));
             });
             // Under mpirun every rank takes steps (preprocess.h); rank 0 reports.
             const auto summary = preprocess(files, args->output, options);

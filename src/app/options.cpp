@@ -115,4 +115,56 @@ std::pair<int, int> parseStepRange(const Dataset& dataset, const std::string& te
     return {first, last};
 }
 
+void PreprocessFlags::add(CLI::App& cmd, bool withQuiet)
+{
+    cmd.add_option("--dt-myr", options.dtMyr, "Time between steps in Myr")->capture_default_str();
+    cmd.add_option("--sample-rows", options.sampleRows, "Cells in the parallel-coordinates sample")
+        ->capture_default_str();
+    cmd.add_option("--seed", options.seed, "Seed of the sample")->capture_default_str();
+    if (withQuiet)
+        cmd.add_flag("-q,--quiet", options.quiet, "No progress output");
+    auto& pl = options.pathlines;
+    cmd.add_flag("--no-pathlines", noPathlines,
+                 "Skip the critical points of --pathline-field and the pathlines seeded there");
+    cmd.add_option("--pathline-field", pl.field, "Variable whose critical points seed pathlines")
+        ->capture_default_str();
+    cmd.add_option("--pathline-steps", pl.steps, "Steps each pathline is traced forward")->capture_default_str();
+    cmd.add_option_function<std::string>(
+           "--cp-select", [this](const std::string& text) { options.pathlines.filter.rule = parseSeedRule(text); },
+           "Seeds: 'persistence' (extrema of persistent pairs) or 'value' (the largest |value|)")
+        ->default_str(seedRuleName(pl.filter.rule));
+    cmd.add_option_function<std::string>(
+           "--cp-persistence",
+           [this](const std::string& text) { parsePersistenceThreshold(text, options.pathlines.filter); },
+           "Seeds by persistence: extrema whose persistence exceeds K (field units) or P% of the step's range")
+        ->default_str("5%");
+    cmd.add_option("--cp-min-abs", pl.filter.minAbsValue,
+                   "Seeds by value: keep maxima >= V, minima <= -V, saddles |value| >= V (field units)")
+        ->capture_default_str();
+    cmd.add_option("--cp-min-fraction", pl.filter.minFractionOfMaxAbs,
+                   "Seeds by value: the threshold is at least this fraction of the step's largest |value|")
+        ->capture_default_str();
+    cmd.add_option("--cp-max-count", pl.filter.maxCount,
+                   "Seeds: at most this many per step (the most persistent, or the largest |value|, first)")
+        ->capture_default_str();
+    cmd.add_flag("--cp-saddles,!--cp-no-saddles", pl.filter.saddles,
+                 "Seeds: also at saddles (by persistence: those paired with the kept extrema); "
+                 "default: extrema only");
+    reader.add(cmd);
+}
+
+PreprocessOptions PreprocessFlags::toOptions(const CLI::App& cmd) const
+{
+    // An option of the other seed rule would be silently ignored.
+    const bool byValue = options.pathlines.filter.rule == SeedRule::Value;
+    for (const char* option : {"--cp-persistence", "--cp-min-abs", "--cp-min-fraction"})
+        if (cmd.count(option) && byValue == (option == std::string("--cp-persistence")))
+            fail("{}: applies to seeds chosen by {}, but --cp-select is {}", option, byValue ? "persistence" : "value",
+                 seedRuleName(options.pathlines.filter.rule));
+    PreprocessOptions o = options;
+    o.reader = reader.toOptions();
+    o.pathlines.enabled = !noPathlines;
+    return o;
+}
+
 }  // namespace raypc::app

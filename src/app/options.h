@@ -3,6 +3,7 @@
 
 #include "data/dataset.h"
 #include "data/netcdf_reader.h"
+#include "data/preprocess.h"
 #include "data/selection.h"
 
 #include <CLI/CLI.hpp>
@@ -21,6 +22,20 @@ struct ReaderFlags {
     void add(CLI::App& app);
     // Throws raypc::Error for a malformed --map.
     ReaderOptions toOptions() const;
+};
+
+// The options of a preprocessing run (`raypc preprocess`, and `raypc serve`/`render` given netCDF
+// files): the sample, the time step, the reader's names and the pathline seeds.
+struct PreprocessFlags {
+    PreprocessOptions options;
+    ReaderFlags reader;
+    bool noPathlines = false;
+
+    // `withQuiet`: also -q/--quiet (serve and render report their own progress).
+    void add(CLI::App& cmd, bool withQuiet = true);
+    // The options as given. Throws raypc::Error for a malformed --map, or an option of the seed rule
+    // --cp-select does not use (it would be silently ignored); `cmd` is the command they were added to.
+    PreprocessOptions toOptions(const CLI::App& cmd) const;
 };
 
 // A step given as an index ("12") or a time ("24Myr"); throws raypc::Error naming the option

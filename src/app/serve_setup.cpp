@@ -5,11 +5,18 @@
 #include "core/system_memory.h"
 #include "server/dataset_api.h"
 #include "server/rank_pool.h"
+#include "server/series_progress.h"
 #include "server/server.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <tbb/task_arena.h>
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <atomic>
 #include <cstdio>
 #include <memory>
 #include <mutex>
@@ -52,9 +59,10 @@ void ServeFlags::add(CLI::App& cmd)
         ->check(CLI::Range(1, 1 << 24));
 }
 
-void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
+namespace {
+
+server::ServerOptions serverOptions(const std::filesystem::path& dataset, const ServeFlags& flags)
 {
-    keepLargeBlocksForReuse();  // frame buffers come and go with every state
     server::ServerOptions options;
     options.dataset = dataset;
     options.host = flags.host;
@@ -64,6 +72,32 @@ void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
     options.allowedOrigins = flags.allowOrigins;
     options.limits = flags.limits;
     options.limits.sessionFrameBytes = flags.sessionMemoryMiB << 20;
+    return options;
+}
+
+void logServing(const server::ServerOptions& options)
+{
+    if (options.assets)
+        spdlog::info("serving the UI from {}", options.assets->string());
+    else
+        spdlog::warn("the browser UI is not built (no web/dist found); serving a placeholder page and the API");
+    if (options.examples)
+        spdlog::info("presets from {}", options.examples->string());
+}
+
+// The background thread's share of the machine: one thread (a task arena of one), at a lower
+// priority than the renderer's (nice 10 for this thread alone, Linux's per-thread priority).
+void yieldToRendering()
+{
+    ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
+}
+
+}  // namespace
+
+void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
+{
+    keepLargeBlocksForReuse();  // frame buffers come and go with every state
+    server::ServerOptions options = serverOptions(dataset, flags);
     // Under mpirun (docs/scaling.md): rank 0 serves, the others render their tiles of every pass;
     // opening the dataset and binding the port are agreed on by all ranks, so a bad dataset or a
     // busy port stops every rank with one message.
@@ -83,12 +117,7 @@ void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
         worker->run();
         return;
     }
-    if (options.assets)
-        spdlog::info("serving the UI from {}", options.assets->string());
-    else
-        spdlog::warn("the browser UI is not built (no web/dist found); serving a placeholder page and the API");
-    if (options.examples)
-        spdlog::info("presets from {}", options.examples->string());
+    logServing(options);
     if (pool)
         spdlog::info("distributed: every pass is shared out over {} ranks", pool->ranks());
     fmt::print("raypc: serving {}\n", srv->url());
@@ -125,6 +154,89 @@ void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
         std::rethrow_exception(failure);
     if (!clean)
         fail("{}", broken);
+}
+
+void serveSeries(const SeriesInputs& inputs, const PreprocessOptions& preprocessOptions, const ServeFlags& flags)
+{
+    if (!inputs.fromFiles()) {
+        serveDataset(inputs.dataset, flags);
+        return;
+    }
+    if (mpi::distributed())
+        fail("serving netCDF files is for one process; under mpirun preprocess them first (mpirun raypc preprocess "
+             "FILES -o DATASET), then mpirun raypc serve DATASET");
+    const size_t steps = inputs.files.size();
+    if (datasetOfFiles(inputs.dataset, inputs.files) || steps == 1) {
+        // Complete (the run only checks the settings), or one step: nothing to show before it.
+        spdlog::info("{}: the dataset of {} netCDF file{}", inputs.dataset.string(), steps, steps == 1 ? "" : "s");
+        prepareSeries(inputs, preprocessOptions);
+        serveDataset(inputs.dataset, flags);
+        return;
+    }
+    keepLargeBlocksForReuse();
+    const double previewSeconds = preparePreview(inputs, preprocessOptions);
+    spdlog::info("{}: step 0 preprocessed in {:.1f} s; the other {} steps follow in the background into {}",
+                 inputs.files.front().filename().string(), previewSeconds, steps - 1, inputs.dataset.string());
+    auto progress = std::make_shared<server::SeriesProgress>(inputs.dataset, int(steps));
+    server::ServerOptions options = serverOptions(inputs.previewDir(), flags);
+    options.series = progress;
+    auto srv = std::make_unique<server::Server>(options);
+    logServing(options);
+
+    // The rest of the series in the background; when it is complete the server is replaced by one of
+    // the whole series on the same port (and token): open pages reload (docs/protocol.md, /api/progress).
+    std::atomic<bool> cancel{false};
+    std::mutex serverMutex;  // srv: stopped from the background thread once the series is ready
+    bool switching = false;
+    std::thread background([&] {
+        yieldToRendering();
+        PreprocessOptions o = preprocessOptions;
+        o.quiet = true;
+        o.cancel = &cancel;
+        int loggedTenth = -1;
+        o.onProgress = [&](const PreprocessProgress& p) {
+            progress->update(p);
+            const int tenth = p.total > 0 ? 10 * p.done / p.total : 10;
+            if (tenth != loggedTenth)
+                spdlog::info("background preprocessing: {} {} of {}", p.phase, p.done, p.total);
+            loggedTenth = tenth;
+        };
+        try {
+            tbb::task_arena(1).execute([&] { prepareSeries(inputs, o); });
+        } catch (const std::exception& e) {
+            if (!cancel) {
+                spdlog::error("background preprocessing stopped: {}; serving step 0 only", e.what());
+                progress->failed(e.what());
+            }
+            return;
+        }
+        progress->finished();
+        std::lock_guard lock(serverMutex);
+        switching = true;
+        srv->stop();
+    });
+    fmt::print("raypc: serving {}\n", srv->url());
+    std::fflush(stdout);
+    srv->run();
+    {
+        std::lock_guard lock(serverMutex);
+        if (!switching) {
+            cancel = true;
+            spdlog::info("stopping the background preprocessing (finished steps stay in {}; the next run resumes)",
+                         inputs.dataset.string());
+        }
+    }
+    background.join();
+    if (!switching)
+        return;
+    options.port = srv->port();
+    options.token = srv->token();
+    srv.reset();
+    options.dataset = inputs.dataset;
+    options.series = nullptr;
+    srv = std::make_unique<server::Server>(options);
+    spdlog::info("{}: all {} steps are ready; serving them at the same address", inputs.dataset.string(), steps);
+    srv->run();
 }
 
 }  // namespace raypc::app

@@ -2,6 +2,7 @@
 // --examples, --allow-origin and the limits of docs/reliability.md) with the same defaults, so the demo serves exactly what `raypc serve` would.
 #pragma once
 
+#include "app/series_inputs.h"
 #include "server/limits.h"
 
 #include <CLI/CLI.hpp>
@@ -26,5 +27,12 @@ struct ServeFlags {
 // scripts read the port and token from it). Throws raypc::Error when the dataset cannot be opened,
 // the address cannot be bound, or --assets/--examples is not a directory.
 void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags);
+
+// `raypc serve INPUT…`: a dataset as serveDataset; netCDF files (series_inputs.h) as the dataset made
+// from them: when it is not complete yet, the first file is preprocessed alone and served at once
+// while the rest of the series is preprocessed in the background (one thread, lower priority; GET
+// /api/progress says where it is), then the server of the whole series replaces it on the same port.
+// SIGINT/SIGTERM stop the background run between steps (a later run resumes). One process only.
+void serveSeries(const SeriesInputs& inputs, const PreprocessOptions& preprocessOptions, const ServeFlags& flags);
 
 }  // namespace raypc::app

@@ -347,6 +347,12 @@ void addStepsToManifest(json& j, const std::vector<json>& stepJsons, size_t vari
 
 }  // namespace
 
+void preprocessing::throwIfCancelled(const PreprocessOptions& options)
+{
+    if (options.cancel && options.cancel->load())
+        fail("preprocess: cancelled");
+}
+
 uint64_t preprocessMemoryBytes(const SphericalGrid& grid, size_t variableCount)
 {
     return (variableCount + 1) * uint64_t(grid.nLat()) * grid.nR() * grid.nLon() * sizeof(float);
@@ -398,11 +404,14 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
         mpi::forEachDynamic(
             int64_t(todo.size()),
             [&](int64_t item) {
+                preprocessing::throwIfCancelled(options);
                 const int s = todo[size_t(item)];
                 written[std::to_string(s)] = writeStep(outDir, plan, inputs, s, cells, options);
                 if (out)
                     out->keep();
                 ++summary.stepsWritten;
+                if (options.onProgress)
+                    options.onProgress({"steps", summary.stepsSkipped + summary.stepsWritten, int(inputs.size())});
                 mpi::dieHook("preprocess-step");
             },
             [&](int64_t handedOut) {

@@ -12,8 +12,10 @@
 #include "data/pathlines.h"
 #include "data/preprocess_numerics.h"
 
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <span>
 #include <string>
 #include <vector>
@@ -30,6 +32,13 @@ struct PathlineOptions {
     TracerOptions tracer;
 };
 
+// Where a run is: `phase` "steps" (done of total steps, counting those an earlier run finished)
+// or "pathlines" (done of total pathline sets).
+struct PreprocessProgress {
+    std::string phase;
+    int done = 0, total = 0;
+};
+
 struct PreprocessOptions {
     ReaderOptions reader;
     double dtMyr = 2.0;          // time between consecutive input files
@@ -38,7 +47,14 @@ struct PreprocessOptions {
     uint32_t brickSize = 8;
     bool quiet = false;          // no progress output
     PathlineOptions pathlines;
+    // For a run in the background (`raypc serve FILES`, app/series_inputs.h), one process only:
+    // `onProgress` is called after each step or pathline set this run finishes; `cancel`, once set,
+    // stops the run before its next step or pathline set with raypc::Error "cancelled" (what was
+    // finished stays, as after any failure: a rerun resumes).
+    std::function<void(const PreprocessProgress&)> onProgress;
+    const std::atomic<bool>* cancel = nullptr;
 };
+
 
 struct PreprocessSummary {
     int stepsWritten = 0;

@@ -157,6 +157,7 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
     StepArrays arrays(outDir, specs);
     int64_t reported = 0, written = 0, lines = 0;
     auto traceStep = [&](int s) {
+        throwIfCancelled(options);
         const int endStep = std::min(s + po.steps, nSteps - 1);
         arrays.releaseBefore(s);
         FieldSeries series;
@@ -189,6 +190,8 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
                       seeds.size(), set.threshold, set.pointCount());
         ++written;
         lines += int64_t(set.lineCount());
+        if (options.onProgress)
+            options.onProgress({"pathlines", summary.pathlineSetsSkipped + int(written), nSteps});
     };
     // Items are handed out in increasing order, so a rank's steps increase and releaseBefore holds.
     mpi::forEachDynamic(

@@ -18,6 +18,9 @@ struct VariableSpec {
     bool derived;
 };
 
+// Throws raypc::Error "preprocess: cancelled" once options.cancel is set (between steps and sets).
+void throwIfCancelled(const PreprocessOptions& options);
+
 // The pathline settings as the manifest and every set's lines.json store them.
 nlohmann::json pathlineSettings(const PathlineOptions& options);
 

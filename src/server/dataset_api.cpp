@@ -377,6 +377,11 @@ ApiAnswer info(const ApiContext& api, const ApiRequest&)
     return {api.infoJson, "application/json"};
 }
 
+ApiAnswer progress(const ApiContext& api, const ApiRequest&)
+{
+    return jsonAnswer(api.series ? api.series->toJson() : json{{"state", "complete"}});
+}
+
 ApiAnswer histogram(const ApiContext& api, const ApiRequest& request)
 {
     const Dataset& dataset = *api.dataset;
@@ -516,6 +521,7 @@ ApiAnswer persistence(const ApiContext& api, const ApiRequest& request)
 
 const Route kRoutes[] = {
     {HttpMethod::Get, "/api/info", Lane::Network, info},
+    {HttpMethod::Get, "/api/progress", Lane::Network, progress},
     {HttpMethod::Get, "/api/histogram", Lane::Network, histogram},
     {HttpMethod::Get, "/api/sample", Lane::Worker, sample},
     {HttpMethod::Post, "/api/selection", Lane::Worker, selection},

@@ -12,6 +12,7 @@
 #include "data/selection.h"
 #include "render/state_renderer.h"
 #include "server/limits.h"
+#include "server/series_progress.h"
 #include "server/step_cache.h"
 
 #include <nlohmann/json.hpp>
@@ -116,6 +117,7 @@ struct ApiContext {
     std::optional<std::filesystem::path> examples;  // presets directory (findExamplesDir)
     std::string infoJson;                           // GET /api/info, built once (infoJson())
     ServerLimits limits;
+    std::shared_ptr<const SeriesProgress> series;   // GET /api/progress; nullptr: a complete dataset
 };
 
 // One API request as the handlers see it: the percent-encoded query, the body, and a flag that

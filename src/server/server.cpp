@@ -128,12 +128,13 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     s.api.examples = s.options.examples;
     s.api.infoJson = infoJson(*s.dataset).dump(-1, ' ', false, json::error_handler_t::replace);
     s.api.limits = s.options.limits;
+    s.api.series = s.options.series;
     s.assets = s.options.assets;
     s.site.loopback = isLoopbackHost(s.options.host);
     for (const auto& origin : s.options.allowedOrigins)
         s.site.allowedOrigins.push_back(normaliseOrigin(origin, "--allow-origin"));
     if (!s.site.loopback)
-        s.token = makeAccessToken();
+        s.token = s.options.token.empty() ? makeAccessToken() : s.options.token;
 
     const std::string host = s.options.host == "localhost" ? "127.0.0.1" : s.options.host;
     beast::error_code ec;

@@ -22,6 +22,7 @@
 namespace raypc::server {
 
 class RankPool;
+class SeriesProgress;
 
 struct ServerOptions {
     std::filesystem::path dataset;
@@ -39,6 +40,12 @@ struct ServerOptions {
     // Under mpirun (rank 0 of a distributed server, rank_pool.h): every session's passes are shared
     // out over the ranks. nullptr: one process.
     RankPool* ranks = nullptr;
+    // The access token on a non-loopback host; empty: a new random one. A server that replaces
+    // another on the same port (serve_setup.cpp) keeps its token, so open pages stay valid.
+    std::string token;
+    // While `dataset` is the first step of a series preprocessed in the background: where that run
+    // is (GET /api/progress). nullptr: the dataset is complete.
+    std::shared_ptr<const SeriesProgress> series;
 };
 
 // The UI's asset directory: `explicitDir` if given (throws raypc::Error if it is not a directory),

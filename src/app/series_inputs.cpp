@@ -1,0 +1,118 @@
+#include "app/series_inputs.h"
+
+#include "core/error.h"
+#include "data/dataset.h"
+#include "data/dataset_format.h"
+#include "data/netcdf_reader.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <system_error>
+
+#include <unistd.h>
+
+namespace raypc::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// "spherical001", "spherical002" -> "spherical"; one file keeps its stem. Never empty.
+std::string seriesName(const std::vector<fs::path>& files)
+{
+    std::string name = files.front().stem().string();
+    for (const auto& f : files) {
+        const std::string stem = f.stem().string();
+        size_t n = 0;
+        while (n < name.size() && n < stem.size() && name[n] == stem[n])
+            ++n;
+        name.resize(n);
+    }
+    if (files.size() > 1)
+        while (!name.empty() && std::isdigit(static_cast<unsigned char>(name.back())))
+            name.pop_back();
+    while (!name.empty() && (name.back() == '_' || name.back() == '-' || name.back() == '.'))
+        name.pop_back();
+    return name.empty() ? "series" : name;
+}
+
+// The dataset directory of files exists and can be written, or one error that says where to write.
+void checkWritable(const fs::path& dir)
+{
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec || ::access(dir.c_str(), W_OK) != 0)
+        fail("{}: cannot write the dataset of the netCDF files here ({}); give --dataset DIR to write it elsewhere",
+             dir.string(), ec ? ec.message() : std::string("not writable"));
+}
+
+}  // namespace
+
+SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std::string& datasetOption)
+{
+    if (args.empty())
+        fail("no input: give a dataset directory or netCDF files");
+    if (args.size() == 1 && fs::is_directory(args.front()) && fs::exists(fs::path(args.front()) / format::kManifest)) {
+        if (!datasetOption.empty())
+            fail("--dataset: only for netCDF inputs; '{}' is a dataset already", args.front());
+        return {fs::path(args.front()), {}};
+    }
+    SeriesInputs inputs;
+    try {
+        inputs.files = listSnapshotFiles(std::vector<fs::path>(args.begin(), args.end()));
+    } catch (const Error& e) {
+        fail("{} (expected a RayPC dataset directory, which holds {}, or netCDF files)", e.what(), format::kManifest);
+    }
+    inputs.dataset = datasetOption.empty()
+                         ? fs::absolute(inputs.files.front()).parent_path() / (seriesName(inputs.files) + ".raypc")
+                         : fs::path(datasetOption);
+    return inputs;
+}
+
+bool datasetOfFiles(const fs::path& dir, const std::vector<fs::path>& files)
+{
+    if (!fs::exists(dir / format::kManifest))
+        return false;
+    std::shared_ptr<const Dataset> dataset;
+    try {
+        dataset = Dataset::open(dir);
+    } catch (const Error&) {
+        return false;  // unfinished or unreadable: preprocessing resumes or says what is wrong
+    }
+    const auto& steps = dataset->steps();
+    if (steps.size() != files.size())
+        return false;
+    for (size_t s = 0; s < files.size(); ++s)
+        if (steps[s].source != files[s].filename().string())
+            return false;
+    return true;
+}
+
+double preparePreview(const SeriesInputs& inputs, PreprocessOptions options)
+{
+    const auto start = std::chrono::steady_clock::now();
+    const std::vector<fs::path> first = {inputs.files.front()};
+    const fs::path dir = inputs.previewDir();
+    if (!datasetOfFiles(dir, first)) {
+        std::error_code ec;
+        fs::remove_all(dir, ec);  // a preview of other files, or of other options: ours to replace
+        checkWritable(inputs.dataset);
+        options.pathlines.enabled = false;
+        options.quiet = true;
+        preprocess(first, dir, options);
+    }
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void prepareSeries(const SeriesInputs& inputs, const PreprocessOptions& options)
+{
+    checkWritable(inputs.dataset);
+    preprocess(inputs.files, inputs.dataset, options);
+    std::error_code ec;
+    fs::remove_all(inputs.previewDir(), ec);
+}
+
+}  // namespace raypc::app

@@ -1,0 +1,42 @@
+// What `raypc serve` and `raypc render` are given: a dataset directory (`raypc preprocess`), or the
+// netCDF snapshots themselves, preprocessed into a dataset directory that later runs reuse
+// (docs/format.md, "Serving netCDF files").
+#pragma once
+
+#include "data/preprocess.h"
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace raypc::app {
+
+struct SeriesInputs {
+    std::filesystem::path dataset;             // given, or where the files are preprocessed to
+    std::vector<std::filesystem::path> files;  // in step order; empty when a dataset was given
+
+    bool fromFiles() const { return !files.empty(); }
+    // The one-step dataset of the first file, shown while the series is preprocessed.
+    std::filesystem::path previewDir() const { return dataset / "preview"; }
+};
+
+// `args`: one dataset directory (it holds dataset.json), or netCDF files and directories of *.nc.
+// `datasetOption` (--dataset): where a dataset made from files goes; empty: beside the first file,
+// named after the files' common name and ".raypc" (spherical001.nc … spherical251.nc ->
+// spherical.raypc). Throws raypc::Error naming an argument that is neither.
+SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std::string& datasetOption);
+
+// True when `dir` holds a complete dataset of exactly `files` (by name, in order).
+bool datasetOfFiles(const std::filesystem::path& dir, const std::vector<std::filesystem::path>& files);
+
+// The first file alone, without pathlines, preprocessed into inputs.previewDir() (a preview of those
+// files made earlier is reused; anything else there is replaced). Returns the seconds it took.
+// Throws raypc::Error like prepareSeries.
+double preparePreview(const SeriesInputs& inputs, PreprocessOptions options);
+
+// Preprocesses what is missing of the series into inputs.dataset (progress as `options` say), then
+// removes the preview. Throws raypc::Error like preprocess(), and naming the directory and --dataset
+// when it cannot be written.
+void prepareSeries(const SeriesInputs& inputs, const PreprocessOptions& options);
+
+}  // namespace raypc::app
