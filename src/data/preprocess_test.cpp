@@ -7,11 +7,13 @@
 #include "data/synth.h"
 #include "data/test_util.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 #include <unistd.h>
 #include <nlohmann/json.hpp>
 
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -295,6 +297,42 @@ TEST(Preprocess, AFreshRunThatFailsLeavesNothing)
     std::filesystem::create_directories(dir / "empty");
     EXPECT_THROW(preprocess({dir / "spherical001.nc"}, dir / "empty", quiet()), Error);
     EXPECT_TRUE(std::filesystem::is_empty(dir / "empty"));
+}
+
+// `raypc serve FILE.nc…` runs preprocessing in the background: it reports every step and pathline
+// set, and a cancel stops it between steps with what was finished kept for the next run.
+TEST(Preprocess, ACancelledRunKeepsItsStepsAndProgressCountsEveryItem)
+{
+    TempDir dir("cancel");
+    std::atomic<bool> cancel{false};
+    std::vector<std::string> events;
+    PreprocessOptions o = quiet();
+    o.cancel = &cancel;
+    o.onProgress = [&](const PreprocessProgress& p) {
+        events.push_back(fmt::format("{} {}/{}", p.phase, p.done, p.total));
+        if (p.done == 1)
+            cancel = true;
+    };
+    try {
+        preprocess(fixtureFiles(), dir / "ds", o);
+        FAIL() << "the cancelled run finished";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("cancelled"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(events, std::vector<std::string>{"steps 1/3"});
+    EXPECT_TRUE(std::filesystem::exists(dir / "ds" / "steps" / "0000" / "step.json"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "ds" / "steps" / "0001"));
+    EXPECT_THROW(Dataset::open(dir / "ds"), Error);
+
+    cancel = false;
+    events.clear();
+    o.onProgress = [&](const PreprocessProgress& p) { events.push_back(fmt::format("{} {}/{}", p.phase, p.done, p.total)); };
+    const auto summary = preprocess(fixtureFiles(), dir / "ds", o);
+    EXPECT_EQ(summary.stepsSkipped, 1);
+    EXPECT_EQ(summary.stepsWritten, 2);
+    EXPECT_EQ(events, (std::vector<std::string>{"steps 2/3", "steps 3/3", "pathlines 1/3", "pathlines 2/3",
+                                                "pathlines 3/3"}));
+    EXPECT_EQ(Dataset::open(dir / "ds")->steps().size(), 3u);
 }
 
 TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)

@@ -43,7 +43,10 @@ bad_options)
   expect_error "--time" export "$work/ds" --time abc -o "$work/s.csv"
   expect_error "--what" export "$work/ds" --what volume -o "$work/s.csv"
   expect_error "level 5 out of range" probe "$work/ds" --lod 5 --lat 0 --lon 0 --r 5000
-  check "no output written by failed commands" test ! -e "$work/s.csv" -a ! -e "$work/x/dataset.json"
+  expect_error "--dataset DIR" serve "$fixture/spherical001.nc" "$fixture/spherical002.nc" --dataset /proc/raypc-x --port 0
+  expect_error "missing.nc: no such file" serve "$work/missing.nc" --port 0
+  expect_error "--dataset: only for netCDF inputs" serve "$work/ds" --dataset "$work/y" --port 0
+  check "no output written by failed commands" test ! -e "$work/s.csv" -a ! -e "$work/x/dataset.json" -a ! -e "$work/y"
   ;;
 bad_inputs)
   expect_error "no such file" preprocess "$work/missing.nc" -o "$work/out"

@@ -53,7 +53,7 @@ const fs::path& WorkDirEnvironment::work()
 }
 
 ServerProcess::ServerProcess(const std::string& raypcExe, const fs::path& work, std::vector<std::string> extra,
-                             bool verbose, std::vector<std::string> launcher)
+                             bool verbose, std::vector<std::string> launcher, std::vector<std::string> inputs)
 {
     int out[2];
     if (::pipe(out) != 0)
@@ -62,8 +62,11 @@ ServerProcess::ServerProcess(const std::string& raypcExe, const fs::path& work, 
     args.push_back(raypcExe);
     if (verbose)
         args.push_back("-v");
-    for (const std::string& a : {std::string("serve"), (work / "ds").string(), std::string("--port"),
-                                 std::string("0"), std::string("--assets"), (work / "assets").string()})
+    if (inputs.empty())
+        inputs.push_back((work / "ds").string());
+    args.push_back("serve");
+    args.insert(args.end(), inputs.begin(), inputs.end());
+    for (const std::string& a : {std::string("--port"), std::string("0"), std::string("--assets"), (work / "assets").string()})
         args.push_back(a);
     args.insert(args.end(), extra.begin(), extra.end());
     m_pid = ::fork();

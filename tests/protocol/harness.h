@@ -58,11 +58,12 @@ private:
 };
 
 // `raypc serve` in a child process; stopped (SIGTERM, then SIGKILL) on destruction. `launcher`, if
-// given, starts it (e.g. {"scripts/mpirun-local.sh", "-np", "2"}: a distributed server).
+// given, starts it (e.g. {"scripts/mpirun-local.sh", "-np", "2"}: a distributed server). `inputs`:
+// what it serves (default: the fixture's dataset `work`/ds).
 class ServerProcess {
 public:
     ServerProcess(const std::string& raypcExe, const std::filesystem::path& work, std::vector<std::string> extra = {},
-                  bool verbose = false, std::vector<std::string> launcher = {});
+                  bool verbose = false, std::vector<std::string> launcher = {}, std::vector<std::string> inputs = {});
     ~ServerProcess() { stop(); }
     ServerProcess(const ServerProcess&) = delete;
     ServerProcess& operator=(const ServerProcess&) = delete;

@@ -57,8 +57,9 @@ void runOrDie(const std::string& command)
 // `raypc serve` of the prepared dataset.
 class ServerProcess : public servertest::ServerProcess {
 public:
-    explicit ServerProcess(std::vector<std::string> extra = {}, bool verbose = false)
-        : servertest::ServerProcess(RAYPC_EXE, g_work, std::move(extra), verbose)
+    explicit ServerProcess(std::vector<std::string> extra = {}, bool verbose = false,
+                           std::vector<std::string> launcher = {}, std::vector<std::string> inputs = {})
+        : servertest::ServerProcess(RAYPC_EXE, g_work, std::move(extra), verbose, std::move(launcher), std::move(inputs))
     {
     }
 };
@@ -700,6 +701,107 @@ TEST(Serve, StopsCleanlyOnSigtermWhileRendering)
     ws.send({{"type", "state"}, {"id", 1}, {"state", smallState(0, "viridis", 100000)}});
     ws.receive();
     EXPECT_TRUE(server.stop());
+}
+
+// ---- netCDF files served at once (issue 15, goal 6) ----------------------------------------
+
+// The contest-layout files copied into `dir` (the dataset goes beside them by default); `broken`:
+// the second file cut short, so that only the background run fails.
+std::vector<std::string> copyContestFiles(const fs::path& dir, bool broken = false)
+{
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::vector<std::string> files;
+    for (const char* name : {"spherical001.nc", "spherical002.nc", "spherical003.nc"}) {
+        fs::copy_file(fs::path(RAYPC_SHARED_DIR) / "data/contest-layout" / name, dir / name);
+        files.push_back((dir / name).string());
+    }
+    if (broken)
+        fs::resize_file(dir / "spherical002.nc", 4000);
+    return files;
+}
+
+// GET /api/progress (with the token) until `state`, at most `seconds`; the last answer.
+json waitForProgress(uint16_t port, const std::string& token, const std::string& state, double seconds)
+{
+    json p;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < deadline) {
+        try {
+            const auto answer = httpGet(port, "/api/progress?token=" + token);
+            if (answer.status == 200)
+                p = json::parse(answer.body);
+        } catch (const std::exception&) {
+            // between the two servers
+        }
+        if (p.value("state", "") == state)
+            break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return p;
+}
+
+TEST(ServeNetcdf, FirstStepAtOnceThenTheWholeSeriesOnTheSameAddress)
+{
+    const fs::path dir = g_work / "nc-series";
+    const auto files = copyContestFiles(dir);
+    std::vector<std::string> extra = {"--host", "0.0.0.0", "--sample-rows", "2000"};
+    {
+        ServerProcess server(extra, false, {}, files);
+        ASSERT_EQ(server.token.size(), 32u) << server.banner;
+        const json done = waitForProgress(server.port, server.token, "complete", 60);
+        ASSERT_EQ(done.value("state", ""), "complete") << done.dump() << server.output();
+        const std::string out = server.output();
+        EXPECT_NE(out.find("spherical001.nc: step 0 preprocessed in"), std::string::npos) << out;
+        EXPECT_NE(out.find("all 3 steps are ready; serving them at the same address"), std::string::npos) << out;
+        // The replacing server: same port, same token, the whole series in file order (2 Myr apart).
+        EXPECT_EQ(httpGet(server.port, "/api/info").status, 401);
+        const json info = json::parse(httpGet(server.port, "/api/info?token=" + server.token).body);
+        ASSERT_EQ(info["steps"].size(), 3u);
+        for (int s = 0; s < 3; ++s) {
+            EXPECT_EQ(info["steps"][s]["source"], fs::path(files[size_t(s)]).filename().string());
+            EXPECT_DOUBLE_EQ(info["steps"][s]["timeMyr"].get<double>(), 2.0 * s);
+        }
+        WsClient ws(server.port, "/ws?token=" + server.token);
+        ws.hello();
+        json state = smallState();
+        state["step"] = 2;
+        ws.send({{"type", "state"}, {"id", 1}, {"state", state}});
+        const auto frames = ws.framesUntilConverged(1);
+        EXPECT_EQ(frames.back().frame.header.value("step", -1), 2);
+        EXPECT_TRUE(fs::exists(dir / "spherical.raypc" / "dataset.json"));
+        EXPECT_FALSE(fs::exists(dir / "spherical.raypc" / "preview")) << "the preview stays after the series is done";
+        EXPECT_TRUE(server.stop()) << server.output();
+    }
+    // A second run finds the dataset complete and serves it without a preview.
+    ServerProcess again(extra, false, {}, files);
+    EXPECT_EQ(waitForProgress(again.port, again.token, "complete", 5).value("state", ""), "complete");
+    const std::string out = again.output();
+    EXPECT_NE(out.find("3 of 3 steps already done"), std::string::npos) << out;
+    EXPECT_EQ(out.find("step 0 preprocessed"), std::string::npos) << out;
+    EXPECT_TRUE(again.stop());
+}
+
+TEST(ServeNetcdf, ALaterBadFileStopsTheBackgroundRunAndTheFirstStepStaysServed)
+{
+    const fs::path dir = g_work / "nc-broken";
+    const auto files = copyContestFiles(dir, true);
+    ServerProcess server({"--sample-rows", "2000"}, false, {}, files);
+    const json failed = waitForProgress(server.port, "", "failed", 60);
+    ASSERT_EQ(failed.value("state", ""), "failed") << failed.dump() << server.output();
+    EXPECT_NE(failed.value("message", "").find("spherical002.nc"), std::string::npos) << failed.dump();
+    EXPECT_EQ(failed["steps"], 3);
+    const json info = json::parse(httpGet(server.port, "/api/info").body);
+    ASSERT_EQ(info["steps"].size(), 1u);
+    EXPECT_EQ(info["steps"][0]["source"], "spherical001.nc");
+    WsClient ws(server.port);
+    ws.hello();
+    json state = smallState();
+    state["step"] = 0;
+    ws.send({{"type", "state"}, {"id", 1}, {"state", state}});
+    EXPECT_FALSE(ws.framesUntilConverged(1).empty());
+    EXPECT_TRUE(server.alive());
+    EXPECT_TRUE(server.stop()) << server.output();
 }
 
 }  // namespace

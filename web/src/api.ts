@@ -67,6 +67,24 @@ export async function fetchInfo(): Promise<Info> {
   return (await check(await fetch('api/info'), 'GET /api/info')).json();
 }
 
+// GET /api/progress (docs/protocol.md): a series of netCDF files preprocessed in the background
+// while its first step is shown; 'complete' when the server shows a whole dataset.
+export interface SeriesProgress {
+  state: 'complete' | 'preparing' | 'ready' | 'failed';
+  dataset?: string;
+  steps?: number;
+  phase?: 'steps' | 'pathlines';
+  done?: number;
+  total?: number;
+  elapsedSeconds?: number;
+  etaSeconds?: number | null;
+  message?: string;
+}
+
+export async function fetchProgress(): Promise<SeriesProgress> {
+  return (await check(await fetch('api/progress', { cache: 'no-store' }), 'GET /api/progress')).json();
+}
+
 export async function fetchHistogram(step: number, variable: string): Promise<Histogram> {
   const url = `api/histogram?step=${step}&var=${encodeURIComponent(variable)}`;
   return (await check(await fetch(url), 'GET /api/histogram')).json();

@@ -13,6 +13,7 @@ import { Playback } from './playback';
 import { RenderLink } from './render_link';
 import { setUpScreenshot } from './screenshot';
 import { SelectionPanel } from './selection_panel';
+import { watchSeriesProgress } from './series_progress';
 import { describePreset } from './presets';
 import { type Brush } from './state';
 import { StateStore } from './store';
@@ -162,6 +163,7 @@ export class App {
     this.tf.loadHistogram();
     this.loadPresets();
     this.commit(false);
+    watchSeriesProgress($('seriesProgress'));
   }
 
   // ---- state -------------------------------------------------------------------------------

@@ -1,0 +1,72 @@
+// Benchmark (not a test): time to the first picture of netCDF files (`raypc serve FILE.nc…`, issue 15
+// goal 6). Starts `raypc serve FILES --dataset DIR --port 0` with DIR empty, then measures from the
+// start of the process: the "serving" line (the first step preprocessed alone), the first frame and
+// the converged frame of the UI's default state at WxH, and the whole series served (GET
+// /api/progress says "complete" on the server that replaced the first). DIR is removed at the end.
+//   node --experimental-websocket bench/serve_netcdf.mjs BUILD_DIR DIR WxH FILE.nc…
+import { spawn } from 'node:child_process';
+import { readFileSync, rmSync } from 'node:fs';
+import { join } from 'node:path';
+
+const [build, dir, size, ...files] = process.argv.slice(2);
+if (!build || !dir || !/^\d+x\d+$/.test(size ?? '') || files.length < 2 || typeof WebSocket !== 'function') {
+  console.error('usage: node --experimental-websocket bench/serve_netcdf.mjs BUILD_DIR DIR WxH FILE.nc FILE.nc…');
+  process.exit(2);
+}
+const [width, height] = size.split('x').map(Number);
+rmSync(dir, { recursive: true, force: true });
+const start = performance.now();
+const since = () => ((performance.now() - start) / 1000).toFixed(2);
+const child = spawn(join(build, 'raypc'), ['serve', ...files, '--dataset', dir, '--port', '0'],
+  { stdio: ['ignore', 'pipe', 'inherit'] });
+let out = '';
+const url = await new Promise((resolve, reject) => {
+  child.stdout.on('data', (d) => {
+    out += d;
+    const m = /serving (http:\/\/\S+)/.exec(out);
+    if (m) resolve(m[1]);
+  });
+  child.once('exit', (code) => reject(new Error(`raypc serve exited with ${code}`)));
+});
+console.log(`serving (step 0 preprocessed):  ${since()} s`);
+const info = await (await fetch(url + 'api/info')).json();
+const state = { ...info.defaultState, image: { ...info.defaultState.image, width, height } };
+const ws = new WebSocket(url.replace(/^http/, 'ws') + 'ws');
+ws.binaryType = 'arraybuffer';
+await new Promise((resolve) => { ws.onopen = resolve; });
+ws.send(JSON.stringify({ type: 'hello', protocol: 1 }));
+let first = null;
+await new Promise((resolve) => {
+  ws.onmessage = (e) => {
+    if (typeof e.data === 'string') return;
+    const n = new DataView(e.data).getUint32(0, true);
+    const h = JSON.parse(new TextDecoder().decode(new Uint8Array(e.data, 4, n)));
+    if (first === null) {
+      first = since();
+      console.log(`first frame (${h.width}x${h.height}, pass ${h.pass}, level ${h.level}): ${first} s`);
+    }
+    if (h.converged) {
+      console.log(`converged frame (pass ${h.pass}):          ${since()} s`);
+      resolve();
+    }
+  };
+  ws.send(JSON.stringify({ type: 'state', id: 1, state, interactive: false }));
+});
+ws.close();
+for (;;) {
+  let p = null;
+  try {
+    p = await (await fetch(url + 'api/progress')).json();
+  } catch {
+    // the server of the whole series is replacing the first
+  }
+  if (p?.state === 'complete') break;
+  if (p?.state === 'failed') throw new Error(p.message);
+  await new Promise((r) => setTimeout(r, 200));
+}
+const steps = (await (await fetch(url + 'api/info')).json()).steps.length;
+console.log(`whole series served (${steps} steps): ${since()} s`);
+child.kill('SIGTERM');
+await new Promise((resolve) => child.once('exit', resolve));
+rmSync(dir, { recursive: true, force: true });
+console.log(`load: ${readFileSync('/proc/loadavg', 'utf8').trim()}`);
