@@ -17,7 +17,9 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -90,6 +92,18 @@ void logServing(const server::ServerOptions& options)
 void yieldToRendering()
 {
     ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
+}
+
+// Test hook (docs/protocol.md, GET /api/progress): with RAYPC_TEST_HOLD_SERIES=FILE set, the
+// background run starts only once FILE exists, so that a test sees the first step served alone.
+void holdForTest(const std::atomic<bool>& cancel)
+{
+    const char* file = std::getenv("RAYPC_TEST_HOLD_SERIES");
+    if (!file)
+        return;
+    spdlog::info("test hook RAYPC_TEST_HOLD_SERIES: waiting for {}", file);
+    while (!cancel && !std::filesystem::exists(file))
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
 }
 
 }  // namespace
@@ -190,6 +204,7 @@ void serveSeries(const SeriesInputs& inputs, const PreprocessOptions& preprocess
     bool switching = false;
     std::thread background([&] {
         yieldToRendering();
+        holdForTest(cancel);
         PreprocessOptions o = preprocessOptions;
         o.quiet = true;
         o.cancel = &cancel;

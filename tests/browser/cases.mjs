@@ -1194,6 +1194,35 @@ const cases = {
     const last = await page.evaluate(() => window.__raypc.headers.at(-1));
     check(last.ranks === 2 && last.converged, `last frame: ${JSON.stringify(last)}`);
   },
+
+  // netCDF files served at once (`raypc serve FILE.nc…`): while the rest of the series is held back
+  // (RAYPC_TEST_HOLD_SERIES), the UI shows step 0 alone and the header says the series is being
+  // preprocessed; once it is done, the page reloads by itself onto all 3 steps and keeps the view
+  // (the state is in the URL).
+  async series({ context, url, tmp }) {
+    const page = await openUi(context, url);
+    await page.waitForSelector('#seriesProgress:not([hidden])', { timeout: 10000 })
+      .catch(() => { throw new TestFailure('the header shows no progress of the series while step 0 is served alone'); });
+    const text = await page.textContent('#seriesProgress');
+    check(/^Showing step 0 while the series is preprocessed: step 0 of 3 done$/.test(text), `progress while held: '${text}'`);
+    const label = await page.textContent('#stepLabel');
+    check(/of 0–0\b/.test(label), `the step label while only step 0 is served: '${label}'`);
+    await page.evaluate(() => {
+      const s = window.__raypc.state();
+      window.__raypc.setState({ ...s, camera: { ...s.camera, azimuthDeg: 123 } });
+    });
+    await waitConverged(page);
+    const reloaded = page.waitForEvent('load', { timeout: 60000 });
+    writeFileSync(join(tmp, 'go'), '');
+    await reloaded.catch(() => { throw new TestFailure('the page did not reload within 60 s of the series being released'); });
+    await page.waitForFunction(() => window.__raypc && window.__raypc.headers.length > 0, null, { timeout: 30000 });
+    await waitConverged(page);
+    const after = await page.textContent('#stepLabel');
+    check(/of 0–2\b/.test(after), `the step label after the reload: '${after}'`);
+    check(await page.isHidden('#seriesProgress'), 'the progress stays in the header after the whole series is served');
+    const azimuth = await page.evaluate(() => window.__raypc.state().camera.azimuthDeg);
+    check(azimuth === 123, `the view after the reload has azimuth ${azimuth}, not the 123 set before`);
+  },
 };
 
 // Chromium context options per case (default: 1280x860 at devicePixelRatio 1).
@@ -1201,6 +1230,7 @@ const caseOptions = {
   resolution: { contextOptions: { viewport: { width: 1000, height: 700 }, deviceScaleFactor: 2 } },
   responsive: { sampleRows: 100000, limitMs: 150000 },
   distributed: { ranks: 2 },
+  series: { netcdf: true },
   play: { sampleRows: 20000 },
 };
 

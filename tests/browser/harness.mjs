@@ -2,7 +2,7 @@
 // launch Debian's chromium through playwright-core with a fresh profile, and tear everything down.
 // Only 127.0.0.1 is contacted. Every failure names what was missing or what went wrong.
 import { spawn, spawnSync } from 'node:child_process';
-import { existsSync, mkdtempSync, rmSync } from 'node:fs';
+import { existsSync, mkdtempSync, readdirSync, rmSync } from 'node:fs';
 import { createRequire } from 'node:module';
 import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
@@ -52,7 +52,9 @@ function waitForUrl(proc, timeoutMs) {
 // chromium with GPU rasterisation on a software GL (SwiftShader), as on a machine without a GPU,
 // instead of --disable-gpu.
 // `ranks` > 1 starts the server under MPI (scripts/mpirun-local.sh -np RANKS: a distributed server).
-export async function runCase(name, raypc, fixture, body, { limitMs = 100000, contextOptions = {}, gpu = false, sampleRows = 5000, ranks = 1 } = {}) {
+// `netcdf`: serve the fixture's netCDF files themselves (raypc serve FILE.nc…), the background run of
+// the series held until the case creates `${tmp}/go` (RAYPC_TEST_HOLD_SERIES).
+export async function runCase(name, raypc, fixture, body, { limitMs = 100000, contextOptions = {}, gpu = false, sampleRows = 5000, ranks = 1, netcdf = false } = {}) {
   const started = Date.now();
   let server = null, context = null, tmp = null;
   const cleanup = async () => {
@@ -80,12 +82,19 @@ export async function runCase(name, raypc, fixture, body, { limitMs = 100000, co
 
     tmp = mkdtempSync(join(tmpdir(), `raypc-browser-${name}-`));
     const dataset = join(tmp, 'ds');
-    const pre = spawnSync(raypc, ['preprocess', fixture, '-o', dataset, '--quiet', '--sample-rows', String(sampleRows)], { encoding: 'utf8', timeout: 60000 });
-    check(pre.status === 0, `raypc preprocess failed (${pre.status}): ${pre.stderr}`);
+    let inputs = [dataset];
+    if (netcdf) {
+      inputs = readdirSync(fixture).filter((f) => f.endsWith('.nc')).sort().map((f) => join(fixture, f));
+      inputs.push('--dataset', dataset, '--sample-rows', String(sampleRows));
+    } else {
+      const pre = spawnSync(raypc, ['preprocess', fixture, '-o', dataset, '--quiet', '--sample-rows', String(sampleRows)], { encoding: 'utf8', timeout: 60000 });
+      check(pre.status === 0, `raypc preprocess failed (${pre.status}): ${pre.stderr}`);
+    }
 
-    const serve = [raypc, 'serve', dataset, '--port', '0', '--assets', dist, '--examples', join(repoRoot, 'examples')];
+    const serve = [raypc, 'serve', ...inputs, '--port', '0', '--assets', dist, '--examples', join(repoRoot, 'examples')];
     const command = ranks > 1 ? [join(repoRoot, 'scripts', 'mpirun-local.sh'), '-np', String(ranks), ...serve] : serve;
-    server = spawn(command[0], command.slice(1), { stdio: ['ignore', 'pipe', 'pipe'] });
+    const env = netcdf ? { ...process.env, RAYPC_TEST_HOLD_SERIES: join(tmp, 'go') } : process.env;
+    server = spawn(command[0], command.slice(1), { stdio: ['ignore', 'pipe', 'pipe'], env });
     const url = await waitForUrl(server, 20000);
 
     context = await chromium.launchPersistentContext(join(tmp, 'profile'), {
