@@ -1,9 +1,10 @@
-// raypc render DATASET --time T -o out.png [--size WxH] [--state STATE.json] [--var NAME]
+// raypc render DATASET|FILE.nc… [--dataset DIR] --time T -o out.png [--size WxH] [--state STATE.json] [--var NAME]
 //   [--colormap NAME] [--range NAME=MIN:MAX]... [--lod N|auto] [--passes N] [--depth depth.pfm] [--stats]
 //   [--pathlines] [--pathline-radius KM] [--legend] [--reference shells|graticule|coastlines]...
 //   [--stereo off|side-by-side|side-by-side-half|anaglyph]
 #include "app/command.h"
 #include "app/options.h"
+#include "app/series_inputs.h"
 #include "core/error.h"
 #include "core/mpi.h"
 #include "core/strings.h"
@@ -29,6 +30,9 @@ namespace {
 using namespace raypc::render;
 
 struct RenderArgs {
+    std::vector<std::string> inputs;  // a dataset, or netCDF files (series_inputs.h)
+    std::string datasetOption;
+    PreprocessFlags preprocess;
     std::string dataset, time = "0", output, size, statePath, var, colormap, lod, depthPath;
     std::vector<std::string> ranges;
     int passes = 0;
@@ -300,7 +304,15 @@ const CommandRegistration kRegistration(
     "render", "Render a step (or a sequence of steps) of a dataset to PNG with the spherical volume ray caster",
     [](CLI::App& cmd) {
         auto args = std::make_shared<RenderArgs>();
-        cmd.add_option("dataset", args->dataset, "Preprocessed dataset directory (raypc preprocess)")->required();
+        cmd.add_option("inputs", args->inputs,
+                       "A dataset directory (raypc preprocess), or netCDF files / directories of *.nc (preprocessed "
+                       "first into --dataset, reused by later runs)")
+            ->required();
+        cmd.add_option("--dataset", args->datasetOption,
+                       "Where the dataset of netCDF inputs is written and found again (default: beside the first "
+                       "file, e.g. spherical.raypc)");
+        auto* preprocessing = cmd.add_option_group("preprocessing", "For netCDF inputs: as raypc preprocess");
+        args->preprocess.add(*preprocessing, false);
         cmd.add_option("-t,--time", args->time,
                        "Step index (0-based) or time like 24Myr; A:B renders steps A..B into a numbered sequence")
             ->capture_default_str();
@@ -331,7 +343,13 @@ const CommandRegistration kRegistration(
         cmd.add_option("--stereo", args->stereo,
                        "Stereo pair: off, side-by-side (2W x H), side-by-side-half (W x H), anaglyph (red-cyan); eye "
                        "separation and convergence from the state (docs/state.md)");
-        cmd.callback([args] { run(*args); });
+        cmd.callback([args, preprocessing] {
+            const SeriesInputs series = resolveSeriesInputs(args->inputs, args->datasetOption);
+            if (series.fromFiles())
+                prepareSeries(series, args->preprocess.toOptions(*preprocessing));  // quick when complete
+            args->dataset = series.dataset.string();
+            run(*args);
+        });
     },
     60, Ranks::AllRanks);
 

@@ -284,6 +284,21 @@ reproducible)
   check "dataset.json of runs 1 and 3 byte-identical" cmp "$work/ds1/dataset.json" "$work/ds3/dataset.json"
   check "every file of runs 1 and 2 byte-identical" diff -r --exclude=.lock "$work/ds1" "$work/ds2"
   ;;
+netcdf_inputs)
+  # raypc render FILE.nc…: the files are preprocessed into --dataset first (a later run reuses it);
+  # the picture is the one of a dataset preprocessed on its own with the same options.
+  preprocess_fixture
+  "$raypc" render "$work/ds" --time 2 --size 200x150 -o "$work/a.png" >/dev/null
+  err=$("$raypc" render "$fixture"/spherical00{1,2,3}.nc --dataset "$work/series" --sample-rows 2000 \
+        --time 2 --size 200x150 -o "$work/b.png" 2>&1 >/dev/null)
+  check "render of netCDF files wrote the picture of the preprocessed dataset" cmp "$work/a.png" "$work/b.png"
+  check "the dataset of the files is complete" "$raypc" info "$work/series"
+  out=$("$raypc" render "$fixture"/spherical00{1,2,3}.nc --dataset "$work/series" --sample-rows 2000 \
+        --time 1 -o "$work/c.png" 2>&1)
+  check "a second render reuses the dataset ($out)" grep -q "3 of 3 steps already done" <<<"$out"
+  expect_error "different 'sample'" render "$fixture"/spherical00{1,2,3}.nc --dataset "$work/series" --time 1 -o "$work/d.png"
+  check "no picture from the refused run" test ! -e "$work/d.png"
+  ;;
 *) echo "unknown case $case_name"; exit 2 ;;
 esac
 
