@@ -344,9 +344,14 @@ const CommandRegistration kRegistration(
                        "Stereo pair: off, side-by-side (2W x H), side-by-side-half (W x H), anaglyph (red-cyan); eye "
                        "separation and convergence from the state (docs/state.md)");
         cmd.callback([args, preprocessing] {
-            const SeriesInputs series = resolveSeriesInputs(args->inputs, args->datasetOption);
+            SeriesInputs series;
+            PreprocessOptions options;
+            mpi::together([&] {  // under mpirun: one message for a bad input, not one per rank
+                series = resolveSeriesInputs(args->inputs, args->datasetOption);
+                options = args->preprocess.toOptions(*preprocessing);
+            });
             if (series.fromFiles())
-                prepareSeries(series, args->preprocess.toOptions(*preprocessing));  // quick when complete
+                prepareSeries(series, options);  // quick when complete; collective under mpirun
             args->dataset = series.dataset.string();
             run(*args);
         });

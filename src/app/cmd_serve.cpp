@@ -7,6 +7,7 @@
 #include "app/command.h"
 #include "app/options.h"
 #include "app/serve_setup.h"
+#include "core/mpi.h"
 
 namespace raypc::app {
 namespace {
@@ -33,8 +34,13 @@ const CommandRegistration kRegistration(
         auto* preprocessing = cmd.add_option_group("preprocessing", "For netCDF inputs: as raypc preprocess");
         args->preprocess.add(*preprocessing, false);
         cmd.callback([args, preprocessing] {
-            const SeriesInputs inputs = resolveSeriesInputs(args->inputs, args->dataset);
-            serveSeries(inputs, args->preprocess.toOptions(*preprocessing), args->flags);
+            SeriesInputs inputs;
+            PreprocessOptions options;
+            mpi::together([&] {  // under mpirun: one message for a bad input, not one per rank
+                inputs = resolveSeriesInputs(args->inputs, args->dataset);
+                options = args->preprocess.toOptions(*preprocessing);
+            });
+            serveSeries(inputs, options, args->flags);
         });
     },
     70, Ranks::AllRanks);

@@ -3,7 +3,6 @@
 #include "core/error.h"
 #include "core/mpi.h"
 #include "core/system_memory.h"
-#include "server/dataset_api.h"
 #include "server/rank_pool.h"
 #include "server/series_progress.h"
 #include "server/server.h"
@@ -77,7 +76,8 @@ server::ServerOptions serverOptions(const std::filesystem::path& dataset, const 
     return options;
 }
 
-void logServing(const server::ServerOptions& options)
+// Where the UI and presets come from, then the one parseable line "raypc: serving URL" (serve_setup.h).
+void announce(const server::ServerOptions& options, const server::Server& srv)
 {
     if (options.assets)
         spdlog::info("serving the UI from {}", options.assets->string());
@@ -85,6 +85,8 @@ void logServing(const server::ServerOptions& options)
         spdlog::warn("the browser UI is not built (no web/dist found); serving a placeholder page and the API");
     if (options.examples)
         spdlog::info("presets from {}", options.examples->string());
+    fmt::print("raypc: serving {}\n", srv.url());
+    std::fflush(stdout);
 }
 
 // The background thread's share of the machine: one thread (a task arena of one), at a lower
@@ -112,62 +114,7 @@ void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
 {
     keepLargeBlocksForReuse();  // frame buffers come and go with every state
     server::ServerOptions options = serverOptions(dataset, flags);
-    // Under mpirun (docs/scaling.md): rank 0 serves, the others render their tiles of every pass;
-    // opening the dataset and binding the port are agreed on by all ranks, so a bad dataset or a
-    // busy port stops every rank with one message.
-    std::optional<server::RankPool> pool;
-    std::unique_ptr<server::Server> srv;
-    std::unique_ptr<server::WorkerRank> worker;
-    mpi::together([&] {
-        if (!mpi::isRoot()) {
-            worker = std::make_unique<server::WorkerRank>(dataset, options.cacheBytes, options.cacheEntries);
-            return;
-        }
-        if (mpi::distributed())
-            options.ranks = &pool.emplace();
-        srv = std::make_unique<server::Server>(options);
-    });
-    if (worker) {
-        worker->run();
-        return;
-    }
-    logServing(options);
-    if (pool)
-        spdlog::info("distributed: every pass is shared out over {} ranks", pool->ranks());
-    fmt::print("raypc: serving {}\n", srv->url());
-    std::fflush(stdout);
-    if (!pool) {
-        srv->run();
-        return;
-    }
-    // MPI calls stay on this (the main) thread (core/mpi.h): the network runs on another, and the
-    // server, whose sessions may wait on the pool, is destroyed there before the pool stops.
-    std::exception_ptr failure;
-    std::mutex serverMutex;  // srv: reset on the network thread, stopped from this one
-    std::thread network([&] {
-        try {
-            srv->run();
-        } catch (...) {
-            failure = std::current_exception();
-        }
-        {
-            std::lock_guard lock(serverMutex);
-            srv.reset();
-        }
-        pool->stop();
-    });
-    std::string broken;
-    const bool clean = pool->run([&](const std::string& why) {
-        broken = why;
-        std::lock_guard lock(serverMutex);
-        if (srv)
-            srv->stop();
-    });
-    network.join();
-    if (failure)
-        std::rethrow_exception(failure);
-    if (!clean)
-        fail("{}", broken);
+    server::serveOnRanks(options, [&](const server::Server& srv) { announce(options, srv); });
 }
 
 void serveSeries(const SeriesInputs& inputs, const PreprocessOptions& preprocessOptions, const ServeFlags& flags)
@@ -176,9 +123,11 @@ void serveSeries(const SeriesInputs& inputs, const PreprocessOptions& preprocess
         serveDataset(inputs.dataset, flags);
         return;
     }
-    if (mpi::distributed())
-        fail("serving netCDF files is for one process; under mpirun preprocess them first (mpirun raypc preprocess "
-             "FILES -o DATASET), then mpirun raypc serve DATASET");
+    mpi::together([] {
+        if (mpi::distributed())
+            fail("serving netCDF files is for one process; under mpirun preprocess them first (mpirun raypc "
+                 "preprocess FILES -o DATASET), then mpirun raypc serve DATASET");
+    });
     const size_t steps = inputs.files.size();
     if (datasetOfFiles(inputs.dataset, inputs.files) || steps == 1) {
         // Complete (the run only checks the settings), or one step: nothing to show before it.
@@ -195,7 +144,6 @@ void serveSeries(const SeriesInputs& inputs, const PreprocessOptions& preprocess
     server::ServerOptions options = serverOptions(inputs.previewDir(), flags);
     options.series = progress;
     auto srv = std::make_unique<server::Server>(options);
-    logServing(options);
 
     // The rest of the series in the background; when it is complete the server is replaced by one of
     // the whole series on the same port (and token): open pages reload (docs/protocol.md, /api/progress).
@@ -230,8 +178,7 @@ void serveSeries(const SeriesInputs& inputs, const PreprocessOptions& preprocess
         switching = true;
         srv->stop();
     });
-    fmt::print("raypc: serving {}\n", srv->url());
-    std::fflush(stdout);
+    announce(options, *srv);
     srv->run();
     {
         std::lock_guard lock(serverMutex);

@@ -141,6 +141,16 @@ render::StateSources cacheSources(StepCache* volumes, PathlineCache* lines)
     return s;
 }
 
+DatasetCaches openDatasetCaches(const fs::path& dir, size_t cacheBytes, size_t cacheEntries)
+{
+    DatasetCaches c;
+    c.dataset = Dataset::open(dir);
+    c.volumes = std::make_unique<StepCache>([dataset = c.dataset](int step, int level) { return dataset->load(step, level); },
+                                            cacheBytes, cacheEntries);
+    c.pathlines = std::make_unique<PathlineCache>(dir);
+    return c;
+}
+
 PathlineCache::PathlineCache(fs::path datasetDir, size_t maxEntries)
     : m_dir(std::move(datasetDir)), m_maxEntries(std::max<size_t>(1, maxEntries))
 {

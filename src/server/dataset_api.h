@@ -104,10 +104,22 @@ nlohmann::json persistenceDiagramJson(const SphericalGrid& grid, const std::vect
                                       const std::string& variable, const std::string& units, size_t top,
                                       const PathlineSet* stored);
 
-// What the handlers read: shared by every connection of a server, immutable after start (the caches
-// are thread-safe).
 // The server's shared caches as the sources of a render::StateRenderer (valid while they live).
 render::StateSources cacheSources(StepCache* volumes, PathlineCache* lines);
+
+// What a server process reads a dataset through: the dataset and its volume and pathline caches,
+// built alike by the Server and by every other rank of a distributed server (rank_pool.h).
+struct DatasetCaches {
+    std::shared_ptr<const Dataset> dataset;
+    std::unique_ptr<StepCache> volumes;
+    std::unique_ptr<PathlineCache> pathlines;
+};
+// Opens `dir` (throws raypc::Error as Dataset::open does); the volume cache holds at most
+// `cacheBytes` and `cacheEntries` volumes.
+DatasetCaches openDatasetCaches(const std::filesystem::path& dir, size_t cacheBytes, size_t cacheEntries);
+
+// What the handlers read: shared by every connection of a server, immutable after start (the caches
+// are thread-safe).
 
 struct ApiContext {
     std::shared_ptr<const Dataset> dataset;

@@ -11,6 +11,8 @@
 #include <chrono>
 #include <csignal>
 #include <cstring>
+#include <exception>
+#include <mutex>
 #include <optional>
 #include <thread>
 
@@ -261,11 +263,8 @@ struct WorkerRank::Session {
 };
 
 WorkerRank::WorkerRank(const std::filesystem::path& dataset, size_t cacheBytes, size_t cacheEntries)
-    : m_dataset(Dataset::open(dataset))
+    : m_caches(openDatasetCaches(dataset, cacheBytes, cacheEntries))
 {
-    m_cache = std::make_unique<StepCache>([ds = m_dataset](int step, int level) { return ds->load(step, level); },
-                                          cacheBytes, cacheEntries);
-    m_pathlines = std::make_unique<PathlineCache>(dataset);
 }
 
 WorkerRank::~WorkerRank() = default;
@@ -328,7 +327,7 @@ std::string WorkerRank::renderPass(const std::string& text)
         const int pass = job.at("pass").get<int>();
         std::unique_ptr<Session>& slot = m_sessions[id];
         if (!slot)
-            slot = std::make_unique<Session>(m_dataset, cacheSources(m_cache.get(), m_pathlines.get()));
+            slot = std::make_unique<Session>(m_caches.dataset, cacheSources(m_caches.volumes.get(), m_caches.pathlines.get()));
         Session& s = *slot;
         if (s.frame != frame || !s.prepared) {
             if (pass != 1)
@@ -336,7 +335,7 @@ std::string WorkerRank::renderPass(const std::string& text)
             s.prepared.reset();
             render::LevelPolicy policy;
             policy.chosen = render::LevelPolicy::Choice{job.at("level").get<int>(), job.at("divisor").get<int>()};
-            s.prepared = s.renderer.prepare(render::resolveState(job.at("state"), *m_dataset), policy);
+            s.prepared = s.renderer.prepare(render::resolveState(job.at("state"), *m_caches.dataset), policy);
             s.frames = s.prepared->frames();
             s.frame = frame;
         }
@@ -367,6 +366,61 @@ std::string WorkerRank::renderPass(const std::string& text)
         tiles.clear();
     }
     return header.dump() + '\n' + tiles;
+}
+
+void serveOnRanks(ServerOptions options, const std::function<void(const Server&)>& onServing)
+{
+    std::optional<RankPool> pool;
+    std::unique_ptr<Server> srv;
+    std::unique_ptr<WorkerRank> worker;
+    mpi::together([&] {
+        if (!mpi::isRoot()) {
+            worker = std::make_unique<WorkerRank>(options.dataset, options.cacheBytes, options.cacheEntries);
+            return;
+        }
+        if (mpi::distributed())
+            options.ranks = &pool.emplace();
+        srv = std::make_unique<Server>(options);
+    });
+    if (worker) {
+        worker->run();
+        return;
+    }
+    if (pool)
+        spdlog::info("distributed: every pass is shared out over {} ranks", pool->ranks());
+    onServing(*srv);
+    if (!pool) {
+        srv->run();
+        return;
+    }
+    // MPI calls stay on this (the main) thread (core/mpi.h): the network runs on another, and the
+    // server, whose sessions may wait on the pool, is destroyed there before the pool stops.
+    std::exception_ptr failure;
+    std::mutex serverMutex;  // srv: reset on the network thread, stopped from this one
+    std::thread network([&] {
+        try {
+            srv->run();
+        } catch (...) {
+            failure = std::current_exception();
+        }
+        {
+            std::lock_guard lock(serverMutex);
+            srv.reset();
+        }
+        pool->stop();
+    });
+    std::string broken;
+    const bool clean = pool->run([&](const std::string& why) {
+        broken = why;
+        std::lock_guard lock(serverMutex);
+        if (srv)
+            srv->stop();
+    });
+    network.join();
+    if (failure)
+        std::rethrow_exception(failure);
+    if (!clean)
+        fail("{}", broken);
 }
 
 }  // namespace raypc::server

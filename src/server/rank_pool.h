@@ -26,6 +26,7 @@
 
 #include "render/state_renderer.h"
 #include "server/dataset_api.h"
+#include "server/server.h"
 #include "server/step_cache.h"
 
 #include <atomic>
@@ -106,10 +107,17 @@ private:
     struct Session;
     std::string renderPass(const std::string& job);
 
-    std::shared_ptr<const Dataset> m_dataset;
-    std::unique_ptr<StepCache> m_cache;
-    std::unique_ptr<PathlineCache> m_pathlines;
+    DatasetCaches m_caches;
     std::map<uint64_t, std::unique_ptr<Session>> m_sessions;
 };
 
+// `raypc serve` on every rank of the job (one process: just the Server): rank 0 builds the Server
+// (with a RankPool when there are other ranks) and serves until SIGINT/SIGTERM; the other ranks run
+// WorkerRank. Opening the dataset and binding the port are agreed on by all ranks, so a bad dataset
+// or a busy port stops every rank with one message. `onServing` runs on rank 0 once the port is
+// bound (to print the URL). MPI stays on the calling (main) thread; the network runs on another.
+// Throws raypc::Error as Server's constructor does, and when a rank stopped answering.
+void serveOnRanks(ServerOptions options, const std::function<void(const Server&)>& onServing);
+
 }  // namespace raypc::server
+

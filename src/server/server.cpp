@@ -112,10 +112,10 @@ struct Server::Impl {
 Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(options)))
 {
     ServerContext& s = m_impl->state;
-    s.dataset = Dataset::open(s.options.dataset);
-    s.cache = std::make_unique<StepCache>([dataset = s.dataset](int step, int level) { return dataset->load(step, level); },
-                                          s.options.cacheBytes, s.options.cacheEntries);
-    s.pathlines = std::make_unique<PathlineCache>(s.options.dataset);
+    DatasetCaches caches = openDatasetCaches(s.options.dataset, s.options.cacheBytes, s.options.cacheEntries);
+    s.dataset = std::move(caches.dataset);
+    s.cache = std::move(caches.volumes);
+    s.pathlines = std::move(caches.pathlines);
     s.persistence = std::make_unique<PersistenceCache>(s.cache.get());
     s.render.dataset = s.dataset;
     s.render.cache = s.cache.get();
