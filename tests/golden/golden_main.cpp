@@ -217,15 +217,28 @@ int viewEqualsOrbit(const std::filesystem::path& outDir)
     const double t = std::tan(orbit.camera.fovYDeg * M_PI / 360);
     view.camera.views = {CameraView{{float(orbit.camera.distanceKm), 0, 0}, {0.5f, 0.5f, 0.5f, 0.5f},
                                     {float(-t), float(t), float(-t), float(t)}}};
-    const ImageRgba8 a = renderCase(c, orbit), b = renderCase(c, view);
-    int worst = 0;
-    size_t differing = 0;
-    for (size_t i = 0; i < a.pixels.size(); ++i) {
-        const int d = std::abs(int(a.pixels[i]) - int(b.pixels[i]));
-        worst = std::max(worst, d);
-        differing += d > 0;
-    }
-    std::printf("view_equals_orbit: largest difference %d/255, %zu channel values differ\n", worst, differing);
+    // A control: the view shifted by a few pixels must give another picture (the view is used).
+    RenderParams shifted = view;
+    for (float& t : shifted.camera.views[0].frustum)
+        t += float(2 * t / kSize * 4);
+    const ImageRgba8 a = renderCase(c, orbit), b = renderCase(c, view), control = renderCase(c, shifted);
+    auto compare = [&](const ImageRgba8& x, const ImageRgba8& y, size_t& differing) {
+        int worst = 0;
+        differing = 0;
+        for (size_t i = 0; i < x.pixels.size(); ++i) {
+            const int d = std::abs(int(x.pixels[i]) - int(y.pixels[i]));
+            worst = std::max(worst, d);
+            differing += d > 0;
+        }
+        return worst;
+    };
+    size_t differing = 0, controlDiffering = 0;
+    const int worst = compare(a, b, differing), controlWorst = compare(a, control, controlDiffering);
+    std::printf("view_equals_orbit: largest difference %d/255, %zu channel values differ; the view zoomed out by "
+                "4 pixels: %d/255, %zu differ\n",
+                worst, differing, controlWorst, controlDiffering);
+    if (controlWorst < 32)
+        fail("view_equals_orbit: a changed view gives the same picture: the view is not used");
     if (worst > 1) {
         std::filesystem::create_directories(outDir);
         writePng(outDir / "view_equals_orbit.orbit.png", a);
