@@ -7,6 +7,26 @@
 
 namespace raypc::render {
 
+void CameraView::validate() const
+{
+    const auto finite = [](auto values) {
+        return std::all_of(values.begin(), values.end(), [](float x) { return std::isfinite(x); });
+    };
+    if (!finite(std::array<float, 3>{positionKm.x, positionKm.y, positionKm.z}) || !finite(orientation) ||
+        !finite(frustum))
+        fail("camera view: expected finite numbers");
+    const double length = std::sqrt(double(orientation[0]) * orientation[0] + double(orientation[1]) * orientation[1] +
+                                    double(orientation[2]) * orientation[2] + double(orientation[3]) * orientation[3]);
+    if (!(std::abs(length - 1.0) <= kUnitTolerance))
+        fail("camera view orientation [{}, {}, {}, {}]: length {}, expected a unit quaternion (within {})", orientation[0],
+             orientation[1], orientation[2], orientation[3], length, kUnitTolerance);
+    const auto [left, right, down, up] = frustum;
+    if (!(left < right && down < up) || std::max({std::abs(left), std::abs(right), std::abs(down), std::abs(up)}) > 1e4f)
+        fail("camera view frustum [{}, {}, {}, {}]: expected tangents [left, right, down, up] with left < right, "
+             "down < up, each within ±10000",
+             left, right, down, up);
+}
+
 void OrbitCamera::validate() const
 {
     if (!(distanceKm > 0.0) || !std::isfinite(distanceKm))
@@ -20,6 +40,10 @@ void OrbitCamera::validate() const
              eyeOffsetKm, convergenceKm);
     if (!(pixelAspect > 0) || !std::isfinite(pixelAspect))
         fail("camera pixel aspect {}: expected a positive number", pixelAspect);
+    if (views.size() > 2)
+        fail("camera views: {} views, expected at most 2 (one, or a stereo pair's left and right eye)", views.size());
+    for (const CameraView& v : views)
+        v.validate();
 }
 
 OrbitCamera stereoEye(const OrbitCamera& camera, Eye eye, double eyeSeparationKm, double convergenceKm)
@@ -29,6 +53,10 @@ OrbitCamera stereoEye(const OrbitCamera& camera, Eye eye, double eyeSeparationKm
     if (!(convergenceKm > 0) || !std::isfinite(convergenceKm))
         fail("stereo convergence distance: {} km, expected a positive distance", convergenceKm);
     OrbitCamera e = camera;
+    if (camera.views.size() == 2) {
+        e.views = {camera.views[eye == Eye::Left ? 0 : 1]};
+        return e;
+    }
     e.eyeOffsetKm = (eye == Eye::Left ? -0.5 : 0.5) * eyeSeparationKm;
     e.convergenceKm = convergenceKm;
     return e;
@@ -36,6 +64,24 @@ OrbitCamera stereoEye(const OrbitCamera& camera, Eye eye, double eyeSeparationKm
 
 CameraFrame::CameraFrame(const OrbitCamera& camera, int width_, int height_) : width(width_), height(height_)
 {
+    RAYPC_CHECK_LT(camera.views.size(), size_t(2));
+    if (camera.views.size() == 1) {
+        // The rotation of the (normalised) quaternion applied to the camera's axes +x, +y and -z.
+        const CameraView& v = camera.views.front();
+        const double n = std::sqrt(double(v.orientation[0]) * v.orientation[0] + double(v.orientation[1]) * v.orientation[1] +
+                                   double(v.orientation[2]) * v.orientation[2] + double(v.orientation[3]) * v.orientation[3]);
+        const double x = v.orientation[0] / n, y = v.orientation[1] / n, z = v.orientation[2] / n, w = v.orientation[3] / n;
+        right = Vec3{float(1 - 2 * (y * y + z * z)), float(2 * (x * y + z * w)), float(2 * (x * z - y * w))};
+        up = Vec3{float(2 * (x * y - z * w)), float(1 - 2 * (x * x + z * z)), float(2 * (y * z + x * w))};
+        forward = Vec3{float(-2 * (x * z + y * w)), float(-2 * (y * z - x * w)), float(-(1 - 2 * (x * x + y * y)))};
+        eye = v.positionKm;
+        const auto [left, rightTan, down, upTan] = v.frustum;
+        tanHalfFovY = 0.5f * (upTan - down);
+        aspect = (rightTan - left) / (upTan - down);
+        shiftX = 0.5f * (rightTan + left);
+        shiftY = 0.5f * (upTan + down);
+        return;
+    }
     // Keep the elevation a hair away from ±90° so that the +z up vector never becomes parallel to the view.
     const double el = degToRad(std::clamp(camera.elevationDeg, -89.999, 89.999));
     const double az = degToRad(camera.azimuthDeg);

@@ -6,17 +6,40 @@
 // Image pixel (0, 0) is the top-left corner; pixel centres are at (i + 0.5, j + 0.5).
 // A stereo eye (stereoEye) is the same camera moved along the image's right axis with the image
 // window shifted sideways (an off-axis, asymmetric frustum; the view axes stay parallel).
+// An explicit view (CameraView, state key camera.views, e.g. one eye of a WebXR headset) replaces
+// the orbit's pose and frustum by a general one: any position, orientation and asymmetric frustum.
 //
 // Thread safety: plain values; CameraFrame is immutable after construction.
 #pragma once
 
 #include "core/vec3.h"
 
+#include <array>
 #include <cmath>
+#include <vector>
 
 namespace raypc::render {
 
 using Vec3 = Vec3f;  // core/vec3.h
+
+// A general camera pose and frustum, as WebXR gives one per eye (an XRView's transform and
+// projection matrix): the eye at positionKm, turned by the unit quaternion `orientation`
+// [x, y, z, w] from camera axes to the contest frame, where the camera looks along its -z with +y
+// up and +x right (the WebXR/OpenGL convention); the image spans the signed tangents
+// frustum = [left, right, down, up] of the angles of its edges from the view axis (left < right,
+// down < up; a symmetric 90° frustum is [-1, 1, -1, 1]). The image's width and height map onto
+// the frustum whatever their ratio (a headset's pixels need not be square).
+struct CameraView {
+    Vec3 positionKm{};
+    std::array<float, 4> orientation{0, 0, 0, 1};
+    std::array<float, 4> frustum{-1, 1, -1, 1};
+
+    // |orientation| may differ from 1 by this much (float JSON round trips); it is normalised.
+    static constexpr float kUnitTolerance = 1e-3f;
+    // Throws raypc::Error for a non-finite value, an orientation whose length is not 1 within
+    // kUnitTolerance, or a degenerate frustum (left >= right or down >= up, or a tangent beyond 1e4).
+    void validate() const;
+};
 
 struct OrbitCamera {
     double azimuthDeg = 30.0;
@@ -34,8 +57,14 @@ struct OrbitCamera {
     // into half the columns (a display stretches it back).
     double pixelAspect = 1;
 
-    // Throws raypc::Error if distance <= 0, the field of view is outside (0, 180), or the eye
-    // offset, convergence or pixel aspect are not usable.
+    // Explicit views (state key camera.views): none, the orbit defines the camera; one, it replaces
+    // the orbit's pose and frustum (the orbit keys stay, e.g. for the UI's navigation and the tubes'
+    // minimum width); two, the left and right eye of a stereo pair (stereoEye picks one). The eye
+    // offset, convergence and pixel aspect do not apply to an explicit view.
+    std::vector<CameraView> views;
+
+    // Throws raypc::Error if distance <= 0, the field of view is outside (0, 180), the eye
+    // offset, convergence or pixel aspect are not usable, or a view is invalid (CameraView::validate).
     void validate() const;
 };
 
@@ -47,24 +76,29 @@ enum class Eye { Left, Right };
 // parallax away from the centre). A point at depth z (km along the view axis) then has the
 // horizontal screen parallax eyeSeparationKm (1/convergenceKm - 1/z) in tangent units (right eye
 // minus left eye; positive behind the zero-parallax plane). Throws raypc::Error unless
-// eyeSeparationKm >= 0 and convergenceKm > 0.
+// eyeSeparationKm >= 0 and convergenceKm > 0. A camera with two explicit views gives the eye's
+// view instead (the separation and convergence do not apply).
 OrbitCamera stereoEye(const OrbitCamera& camera, Eye eye, double eyeSeparationKm, double convergenceKm);
 
-// The camera resolved for one image size: eye and an orthonormal basis.
+// The camera resolved for one image size: eye and an orthonormal basis. The image window spans
+// tangents [shiftX - tanHalfFovY aspect, shiftX + tanHalfFovY aspect] horizontally and
+// [shiftY - tanHalfFovY, shiftY + tanHalfFovY] vertically.
 struct CameraFrame {
     Vec3 eye, forward, right, up;
-    float tanHalfFovY = 0, aspect = 1;  // aspect = width x pixelAspect / height
-    float shiftX = 0;  // horizontal shift of the image window, tangent units (a stereo eye's frustum)
+    float tanHalfFovY = 0, aspect = 1;  // orbit: aspect = width x pixelAspect / height
+    float shiftX = 0;  // horizontal shift of the image window, tangent units (an off-axis frustum)
+    float shiftY = 0;  // vertical shift (an explicit view's frustum)
     int width = 0, height = 0;
 
     CameraFrame() = default;
+    // The orbit camera, or its explicit view (it must have at most one: stereoEye picks an eye's).
     CameraFrame(const OrbitCamera& camera, int width, int height);
 
     // Unit direction through image position (px, py) in pixels (continuous; centre of pixel i is i + 0.5).
     Vec3 direction(float px, float py) const
     {
         const float sx = (2.0f * px / float(width) - 1.0f) * tanHalfFovY * aspect + shiftX;
-        const float sy = (1.0f - 2.0f * py / float(height)) * tanHalfFovY;
+        const float sy = (1.0f - 2.0f * py / float(height)) * tanHalfFovY + shiftY;
         return normalize(forward + right * sx + up * sy);
     }
 
@@ -77,7 +111,7 @@ struct CameraFrame {
         if (z <= 1e-3f)
             return false;
         const float sx = (dot(d, right) / z - shiftX) / (tanHalfFovY * aspect);
-        const float sy = dot(d, up) / (z * tanHalfFovY);
+        const float sy = (dot(d, up) / z - shiftY) / tanHalfFovY;
         px = (sx + 1.0f) * 0.5f * float(width);
         py = (1.0f - sy) * 0.5f * float(height);
         distanceKm = std::sqrt(dot(d, d));

@@ -30,6 +30,15 @@ std::vector<OpacityPoint> defaultOpacity(ColorMapId map)
     return {{0.0f, 0.0f}, {1.0f, 0.5f}};
 }
 
+std::string cameraViewsMismatch(const RenderState& s)
+{
+    const size_t views = s.camera.views.size();
+    if (views == 0 || views == (s.stereo.enabled() ? 2u : 1u))
+        return "";
+    return fmt::format("{} views with stereo.mode \"{}\", expected {}", views, stereoModeName(s.stereo.mode),
+                       s.stereo.enabled() ? "[] or 2 (left, right)" : "[] or 1");
+}
+
 RenderParams resolveParams(const RenderState& s, const VariableCatalog& catalog)
 {
     auto known = [&] {
@@ -46,6 +55,8 @@ RenderParams resolveParams(const RenderState& s, const VariableCatalog& catalog)
     };
     if (catalog.names.empty())
         fail("the volume has no variables to render");
+    if (const std::string problem = cameraViewsMismatch(s); !problem.empty())
+        fail("camera.views: {}", problem);
     RenderParams p;
     p.camera = s.camera;
     p.width = s.width;

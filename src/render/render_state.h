@@ -22,9 +22,9 @@ namespace raypc::render {
 
 // Version 2 added "pathlines", version 3 "reference" (shells, graticule, coastlines) and "legend",
 // version 4 several ranges on one axis (a repeated brush name ORs its ranges) and "axes", version
-// 5 "stereo", version 6 "shading.shadows" and "shading.shadowStrength"; older documents are still
-// read (they have none of these).
-inline constexpr int kRenderStateVersion = 6;
+// 5 "stereo", version 6 "shading.shadows" and "shading.shadowStrength", version 7 "camera.views"
+// (explicit camera poses, e.g. WebXR eyes); older documents are still read (they have none of these).
+inline constexpr int kRenderStateVersion = 7;
 
 // A brush range: a variable or a coordinate (x, y, z, lat, lon, radius, depth) and [min, max]. The
 // brush model is data/selection.h's: a name that repeats adds a range to its axis (OR).
@@ -124,6 +124,11 @@ struct RenderState {
 // centred on zero (blue-white-red) a V, 0.5 at both ends and transparent at zero.
 std::vector<OpacityPoint> defaultOpacity(ColorMapId map);
 
+// What is wrong with the state's camera.views for its stereo mode (one view without stereo, two
+// with it), or "" when nothing is: checked when a document is read and again when a state is
+// resolved (command-line flags may change the stereo mode after reading).
+std::string cameraViewsMismatch(const RenderState& state);
+
 // `what` names the source in messages (a file name or "state").
 RenderState parseRenderState(const nlohmann::json& json, const std::string& what = "state");
 RenderState loadRenderState(const std::filesystem::path& path);
@@ -139,7 +144,8 @@ struct VariableCatalog {
 VariableCatalog catalogOf(const Dataset& dataset);
 
 // Resolves names and defaults. Throws raypc::Error for an unknown variable or coordinate (listing
-// the known ones), a brush with min > max, or a degenerate colour range.
+// the known ones), a brush with min > max, a degenerate colour range, or camera views that do not
+// fit the stereo mode.
 RenderParams resolveParams(const RenderState& state, const VariableCatalog& catalog);
 
 }  // namespace raypc::render

@@ -438,6 +438,21 @@ Kind<std::optional<float>> optionalNumber(double lo, double hi)
             plain.type + ", or null"};
 }
 
+// Four numbers, each in [lo, hi] (a quaternion, frustum tangents).
+Kind<std::array<float, 4>> four(const std::string& type, double lo = -INFINITY, double hi = INFINITY)
+{
+    return {[lo, hi](const json& v, std::array<float, 4>& target, Reader& r, const std::string& key) {
+                const auto x = numbers(v, 4, r, key);
+                for (size_t i = 0; i < 4; ++i) {
+                    if (!(x[i] >= lo && x[i] <= hi))
+                        r.failAt(key, fmt::format("expected numbers in [{}, {}], found {}", lo, hi, v.dump()));
+                    target[i] = float(x[i]);
+                }
+            },
+            [](const std::array<float, 4>& x) { return json::array({x[0], x[1], x[2], x[3]}); },
+            numbersSchema(4, lo, hi), type};
+}
+
 // An explicit level or "auto" (nullopt).
 Kind<std::optional<int>> level()
 {
@@ -769,6 +784,33 @@ Object<Range> namedRange(std::string title, const std::string& nameMeaning, cons
             }};
 }
 
+// One explicit camera view (render/camera.h CameraView); what JSON Schema cannot say (a unit
+// quaternion, left < right and down < up) is CameraView::validate's, reported at the view's path.
+Object<CameraView> cameraView()
+{
+    using V = CameraView;
+    return {"CameraView",
+            {leaf<V>("positionKm", at(&V::positionKm), vec3(false),
+                     {.meaning = "the eye, km (contest Cartesian frame)", .required = true, .expect = "[x, y, z]"}),
+             leaf<V>("orientation", at(&V::orientation), four("[x, y, z, w], a unit quaternion", -1.01, 1.01),
+                     {.meaning = "rotation from camera axes (looking along −z, +y up, +x right: WebXR's) to the "
+                                 "contest frame; its length must be 1 within 0.001",
+                      .required = true,
+                      .expect = "[x, y, z, w]"}),
+             leaf<V>("frustum", at(&V::frustum), four("[left, right, down, up], left < right, down < up", -1e4, 1e4),
+                     {.meaning = "signed tangents of the angles of the image's edges from the view axis (a 90° "
+                                 "square view: [-1, 1, -1, 1]); the image's width and height span them",
+                      .required = true,
+                      .expect = "[left, right, down, up]"})},
+            [](const V& view, Reader& r) {
+                try {
+                    view.validate();
+                } catch (const Error& e) {
+                    r.failAt("", e.what());
+                }
+            }};
+}
+
 // ---- The document ------------------------------------------------------------------------------
 
 const Object<RenderState>& document()
@@ -799,7 +841,13 @@ const Object<RenderState>& document()
                       leaf<S>("fovYDeg", at(&S::camera, &C::fovYDeg), number<double>(1e-3, 179.9),
                               {.meaning = "vertical field of view, degrees"}),
                       leaf<S>("targetKm", at(&S::camera, &C::targetKm), vec3(false),
-                              {.meaning = "point looked at, km (contest Cartesian frame)"})},
+                              {.meaning = "point looked at, km (contest Cartesian frame)"}),
+                      leaf<S>("views", at(&S::camera, &C::views), arrayOf(cameraView(), "array of {positionKm, orientation, frustum}"),
+                              {.meaning = "explicit views replacing the orbit's pose and frustum (e.g. a WebXR "
+                                          "headset's eyes, docs/rendering.md): [] the orbit camera; one view; or, "
+                                          "with `stereo.mode` not `off`, the left and right eye (the orbit keys stay, "
+                                          "for the UI's navigation)",
+                               .since = 7})},
                      {.meaning = "the orbit camera"}),
             group<S>("image", "",
                      {leaf<S>("width", at(&S::width), integer(1, 16384), {.meaning = "image width, pixels"}),
@@ -1009,9 +1057,12 @@ const Object<RenderState>& document()
                           .defaultText = "null: `camera.distanceKm` (the camera's target on the screen)"})},
                 {.meaning = "stereoscopic output of the camera (docs/rendering.md, Stereo)", .since = 5}),
         },
-        // Before version 4 a repeated name meant the intersection of its ranges (nothing wrote that);
-        // since then the union. An older document repeating a name is refused rather than re-read.
+        // Explicit views: one, or a stereo pair's two eyes. Before version 4 a repeated name meant
+        // the intersection of its ranges (nothing wrote that); since then the union. An older
+        // document repeating a name is refused rather than re-read.
         [](const S& s, Reader& r) {
+            if (const std::string problem = cameraViewsMismatch(s); !problem.empty())
+                r.failAt("camera.views", problem);
             if (r.version() >= 4)
                 return;
             auto refuseRepeats = [&](const std::vector<NamedRange>& ranges, const std::string& key) {

@@ -45,8 +45,8 @@ TEST(StateSchema, CarriesTheParsersBoundsAndVersions)
     const json& camera = schema["properties"]["camera"]["properties"];
     EXPECT_EQ(camera["elevationDeg"]["minimum"], -90);
     EXPECT_EQ(camera["elevationDeg"]["maximum"], 90);
-    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5, 6}));
-    EXPECT_EQ(kRenderStateVersion, 6);
+    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5, 6, 7}));
+    EXPECT_EQ(kRenderStateVersion, 7);
     EXPECT_EQ(schema["properties"]["brushes"]["items"]["required"], json::array({"name", "min", "max"}));
     // A version-1 document may not have pathlines, as parseRenderState says.
     ASSERT_TRUE(schema.contains("allOf"));
@@ -116,6 +116,67 @@ TEST(StateSchema, ShadowsRoundTripAndBadValuesNameTheKey)
     EXPECT_NE(refusal(R"({"version": 6, "shading": {"shadowStrength": 1.5}})").find("shading.shadowStrength"), std::string::npos);
     EXPECT_NE(refusal(R"({"version": 6, "shading": {"shadowStrength": -0.1}})").find("shading.shadowStrength"), std::string::npos);
     EXPECT_NE(refusal(R"({"version": 6, "shading": {"shadows": "yes"}})").find("shading.shadows"), std::string::npos);
+}
+
+std::string refusalOf(const json& document)
+{
+    try {
+        parseRenderState(document);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "accepted";
+}
+
+// Version 7: explicit camera views (WebXR eyes) round-trip; bad ones are refused naming the key.
+TEST(StateSchema, CameraViewsRoundTripAndBadViewsAreRefused)
+{
+    const json view = json::parse(R"({"positionKm": [20000, -5, 7.5], "orientation": [0.5, 0.5, 0.5, 0.5],
+                                      "frustum": [-0.25, 0.5, -0.125, 0.375]})");  // exact in float32
+    json doc{{"version", 7}, {"camera", {{"views", json::array({view})}}}};
+    const RenderState s = parseRenderState(doc);
+    ASSERT_EQ(s.camera.views.size(), 1u);
+    EXPECT_EQ(s.camera.views[0].positionKm.y, -5.0f);
+    EXPECT_EQ(s.camera.views[0].orientation[3], 0.5f);
+    EXPECT_EQ(s.camera.views[0].frustum[1], 0.5f);
+    const json written = toJson(s)["camera"]["views"];
+    EXPECT_EQ(written, json::array({view})) << written.dump();
+    EXPECT_EQ(parseRenderState(toJson(s)).camera.views.size(), 1u);
+    EXPECT_EQ(toJson(RenderState{})["camera"]["views"], json::array());  // the orbit camera
+    // Two views: a stereo pair's eyes, only with stereo on; one view only without.
+    json pair = doc;
+    pair["camera"]["views"] = json::array({view, view});
+    EXPECT_NE(refusalOf(pair).find("camera.views: 2 views with stereo.mode \"off\""), std::string::npos)
+        << refusalOf(pair);
+    pair["stereo"] = {{"mode", "side-by-side"}};
+    EXPECT_EQ(parseRenderState(pair).camera.views.size(), 2u);
+    doc["stereo"] = {{"mode", "anaglyph"}};
+    EXPECT_NE(refusalOf(doc).find("camera.views"), std::string::npos);
+    doc.erase("stereo");
+    // Older documents have no views.
+    doc["version"] = 6;
+    EXPECT_NE(refusalOf(doc).find("camera.views: needs version 7"), std::string::npos) << refusalOf(doc);
+    doc["version"] = 7;
+    // A quaternion that is not a unit beyond the tolerance; one within it is accepted.
+    doc["camera"]["views"][0]["orientation"] = {0.5, 0.5, 0.5, 0.51};
+    EXPECT_NE(refusalOf(doc).find("camera.views[0]: camera view orientation"), std::string::npos) << refusalOf(doc);
+    EXPECT_NE(refusalOf(doc).find("expected a unit quaternion"), std::string::npos);
+    doc["camera"]["views"][0]["orientation"] = {0.5, 0.5, 0.5, 0.5004};
+    EXPECT_EQ(refusalOf(doc), "accepted");
+    doc["camera"]["views"][0]["orientation"] = {0, 0, 0, 0};
+    EXPECT_NE(refusalOf(doc).find("expected a unit quaternion"), std::string::npos);
+    doc["camera"]["views"][0]["orientation"] = {0.5, 0.5, 0.5, 0.5};
+    // Degenerate frusta: left >= right, down >= up.
+    for (const json& frustum : {json{0.5, -0.2, -0.1, 0.4}, json{0.3, 0.3, -0.1, 0.4}, json{-0.2, 0.5, 0.4, 0.4}}) {
+        doc["camera"]["views"][0]["frustum"] = frustum;
+        EXPECT_NE(refusalOf(doc).find("camera.views[0]: camera view frustum"), std::string::npos) << refusalOf(doc);
+        EXPECT_NE(refusalOf(doc).find("left < right, down < up"), std::string::npos);
+    }
+    doc["camera"]["views"][0]["frustum"] = {-0.2, 0.5, -0.1};
+    EXPECT_NE(refusalOf(doc).find("camera.views[0].frustum: expected an array of 4 numbers"), std::string::npos)
+        << refusalOf(doc);
+    doc["camera"]["views"][0].erase("frustum");
+    EXPECT_NE(refusalOf(doc).find("camera.views[0].frustum: missing"), std::string::npos) << refusalOf(doc);
 }
 
 }  // namespace

@@ -49,6 +49,76 @@ async function drag(page, dx, dy, { steps = 6, button = 'left' } = {}) {
 
 const info = async (url) => (await fetch(url + 'api/info')).json();
 
+// The rotation of unit quaternion q = [x, y, z, w] applied to v.
+function rotate([x, y, z, w], v) {
+  return [
+    (1 - 2 * (y * y + z * z)) * v[0] + 2 * (x * y - z * w) * v[1] + 2 * (x * z + y * w) * v[2],
+    2 * (x * y + z * w) * v[0] + (1 - 2 * (x * x + z * z)) * v[1] + 2 * (y * z - x * w) * v[2],
+    2 * (x * z - y * w) * v[0] + 2 * (y * z + x * w) * v[1] + (1 - 2 * (x * x + y * y)) * v[2],
+  ];
+}
+
+// A mock WebXR headset for headless chromium (an init script): with ?xrmock in the page's URL,
+// navigator.xr offers immersive-vr; its session's animation frames run when the test calls
+// __xrMock.tick(); the viewer pose has two eyes `ipd` metres apart about the head (position and yaw
+// about +y in __xrMock.head) with the projection matrices of `frusta` ([left, right, down, up]
+// tangents); the layer's framebuffer is null (the canvas) and its viewports are the canvas' halves.
+// With ?noxr the browser has no navigator.xr.
+function xrMock() {
+  const q = new URLSearchParams(location.search);
+  if (q.has('noxr')) {
+    Object.defineProperty(Navigator.prototype, 'xr', { get: () => undefined, configurable: true });
+    return;
+  }
+  if (!q.has('xrmock')) return;
+  const mock = { head: { x: 0, y: 0, z: 0, yawDeg: 0 }, ipd: 0.2, frusta: { left: [-1.1, 0.9, -1, 1], right: [-0.9, 1.1, -1, 1] }, callbacks: [], ended: false };
+  const projection = ([l, r, d, u]) => {
+    const n = 0.1, f = 1000, m = new Float32Array(16);
+    m[0] = 2 / (r - l); m[5] = 2 / (u - d); m[8] = (r + l) / (r - l); m[9] = (u + d) / (u - d);
+    m[10] = -(f + n) / (f - n); m[11] = -1; m[14] = (-2 * f * n) / (f - n);
+    return m;
+  };
+  const pose = () => {
+    const h = mock.head, a = (h.yawDeg * Math.PI) / 180;
+    return {
+      views: ['left', 'right'].map((eye) => {
+        const k = (eye === 'left' ? -0.5 : 0.5) * mock.ipd; // along the head's +x = (cos a, 0, -sin a)
+        return { eye, transform: { position: { x: h.x + Math.cos(a) * k, y: h.y, z: h.z - Math.sin(a) * k, w: 1 },
+          orientation: { x: 0, y: Math.sin(a / 2), z: 0, w: Math.cos(a / 2) } }, projectionMatrix: projection(mock.frusta[eye]) };
+      }),
+    };
+  };
+  class XRWebGLLayer {
+    constructor(session, gl) { this.gl = gl; this.framebuffer = null; }
+    getViewport(view) {
+      const w = Math.floor(this.gl.canvas.width / 2), h = this.gl.canvas.height;
+      return { x: view.eye === 'left' ? 0 : w, y: 0, width: w, height: h };
+    }
+  }
+  const session = {
+    listeners: [],
+    requestReferenceSpace: async (type) => ({ type }),
+    requestAnimationFrame: (cb) => mock.callbacks.push(cb),
+    updateRenderState: (s) => { session.renderState = s; },
+    end: async () => { mock.ended = true; for (const l of session.listeners) l(); },
+    addEventListener: (type, l) => { if (type === 'end') session.listeners.push(l); },
+  };
+  mock.tick = () => {
+    const callbacks = mock.callbacks;
+    mock.callbacks = [];
+    for (const cb of callbacks) cb(performance.now(), { getViewerPose: () => pose() });
+  };
+  window.XRWebGLLayer = XRWebGLLayer;
+  // Chromium's own makeXRCompatible waits for a device that is not there.
+  WebGL2RenderingContext.prototype.makeXRCompatible = async () => {};
+  const xr = {
+    isSessionSupported: async (mode) => mode === 'immersive-vr',
+    requestSession: async (mode) => { mock.ended = false; mock.callbacks = []; session.listeners = []; mock.mode = mode; return session; },
+  };
+  Object.defineProperty(Navigator.prototype, 'xr', { get: () => xr, configurable: true });
+  window.__xrMock = mock;
+}
+
 // The size of a PNG file's image.
 function pngSize(file) {
   const bytes = readFileSync(file);
@@ -221,15 +291,166 @@ const cases = {
     check(dOld > 1.5 && dWarp < 0.5 * dOld, `orbit in anaglyph: the warped view differs from the new frame by ${dWarp.toFixed(2)}, the old frame by ${dOld.toFixed(2)}`);
     console.log(`  orbit in anaglyph: old frame differs by ${dOld.toFixed(2)}, warped by ${dWarp.toFixed(2)} grey levels`);
 
-    const xr = await page.textContent('#xrNote');
+    await page.waitForFunction(() => !/checking/.test(document.getElementById('enterVr').textContent));
+    const xr = await page.textContent('#enterVr');
     const offered = await page.evaluate(async () => Boolean(await navigator.xr?.isSessionSupported('immersive-vr').catch(() => false)));
-    check(!offered && /WebXR: .*not (available|offered)/.test(xr) || offered && /immersive-vr is offered/.test(xr), `WebXR note '${xr}' (immersive-vr offered: ${offered})`);
+    check(!offered && xr === 'WebXR immersive VR is not available in this browser' || offered && xr === 'Enter VR', `WebXR control '${xr}' (immersive-vr offered: ${offered})`);
     console.log(`  ${xr}`);
 
     await page.selectOption('#stereoMode', 'off');
     await waitConverged(page);
     const off = await page.evaluate(() => window.__raypc.headers.at(-1));
     check((await rState(page)).stereo.mode === 'off' && !off.stereo, 'stereo off did not give a mono frame');
+  },
+
+  // WebXR immersive-vr (issue 14, part 3) with a mock headset: headless chromium has none, so an
+  // init script (xrMock below) installs a fake navigator.xr whose session's animation frames the test
+  // drives, with two eyes 0.2 m apart and mirrored asymmetric frusta, drawing into the halves of the
+  // canvas. Only the core is shown (flat white), so each eye's picture is a disc whose limb tangents
+  // are known. Checks: the control says "Enter VR"; entering sends side-by-side states whose
+  // camera.views are the mock's poses mapped onto the planet (origin at the orbit eye, 1 m =
+  // 10 000 km); the eyes' discs sit where the analytic limb tangents say (crossed parallax: right
+  // of the frustum centre in the left eye, left of it in the right eye); turning the head moves the
+  // drawn discs before any new frame arrives (warping); ending restores the desktop view. Without
+  // navigator.xr the control says WebXR immersive VR is not available.
+  async xr({ context, url }) {
+    await context.addInitScript(xrMock);
+    const page = await openUi(context, `${url}?xrmock=1`);
+    await page.evaluate(() => {
+      const s = window.__raypc.state();
+      window.__raypc.setState({ ...s, image: { width: 384, height: 384 }, camera: { ...s.camera, distanceKm: 16000 },
+        color: { ...s.color, opacity: [[0, 0], [1, 0]] }, background: [0, 0, 0],
+        core: { ...s.core, visible: true, variable: '', color: [1, 1, 1] },
+        shading: { ...s.shading, enabled: false, ambient: 1, diffuse: 0, specular: 0, shadows: false },
+        pathlines: { ...s.pathlines, visible: false },
+        reference: { ...s.reference, shells: { ...s.reference.shells, visible: false }, graticule: { ...s.reference.graticule, visible: false }, coastlines: { ...s.reference.coastlines, visible: false } } });
+    });
+    await waitConverged(page);
+    const desktop = await viewPixels(page);
+    const desktopState = await rState(page);
+    await page.waitForFunction(() => !/checking/.test(document.getElementById('enterVr').textContent));
+    const label = await page.textContent('#enterVr');
+    check(label === 'Enter VR' && !(await page.isDisabled('#enterVr')), `with a headset the control says '${label}'`);
+
+    await page.click('#enterVr');
+    await page.waitForFunction(() => window.__xrMock.callbacks.length > 0 && document.getElementById('enterVr').textContent === 'Exit VR', null, { timeout: 10000 })
+      .catch(async () => { throw new TestFailure(`the session did not start: ${JSON.stringify(await page.evaluate(() => window.__raypc.errors))}`); });
+    // Drive the session's animation frames until the frame of the newest state (the head at rest:
+    // a still state after the first interactive one) is converged and on screen.
+    const settle = () => page.evaluate(async () => {
+      const r = window.__raypc;
+      for (let i = 0; i < 600; i++) {
+        window.__xrMock.tick();
+        const h = r.headers.at(-1);
+        if (h && h.camera.views.length === 2 && !h.interactive && h.converged && h.id === r.lastSentId && r.lastShownId === h.id) {
+          window.__xrMock.tick();
+          return true;
+        }
+        await new Promise((res) => setTimeout(res, 50));
+      }
+      return false;
+    });
+    check(await settle(), 'no converged frame of the XR state arrived');
+    const sent = await page.evaluate(() => window.__raypc.sentLog.at(-1));
+    const header = await page.evaluate(() => window.__raypc.headers.at(-1));
+    check(sent.stereoMode === 'side-by-side' && header.stereo?.mode === 'side-by-side', `XR states are side-by-side pairs: ${sent.stereoMode}, header ${JSON.stringify(header.stereo)}`);
+    // The mock's eyes on the planet: the orbit eye is the origin, the camera's right/up/back its axes.
+    const c = desktopState.camera, az = (c.azimuthDeg * Math.PI) / 180, el = (c.elevationDeg * Math.PI) / 180;
+    const back = [Math.cos(el) * Math.cos(az), Math.cos(el) * Math.sin(az), Math.sin(el)];
+    const eyeKm = back.map((b, k) => c.targetKm[k] + b * c.distanceKm);
+    const forward = back.map((b) => -b);
+    const rightAxis = [forward[1], -forward[0], 0].map((x, _, a) => x / Math.hypot(...a));
+    const mock = await page.evaluate(() => ({ ipd: window.__xrMock.ipd, frusta: window.__xrMock.frusta }));
+    ['left', 'right'].forEach((eye, e) => {
+      const v = sent.camera.views[e];
+      const expected = eyeKm.map((p, k) => p + rightAxis[k] * (e === 0 ? -0.5 : 0.5) * mock.ipd * 10000);
+      const dist = Math.hypot(...v.positionKm.map((p, k) => p - expected[k]));
+      check(dist < 0.5, `${eye} eye at ${JSON.stringify(v.positionKm)}, expected ${JSON.stringify(expected)} (${dist.toFixed(3)} km off)`);
+      const f = rotate(v.orientation, [0, 0, -1]);
+      check(Math.hypot(...f.map((x, k) => x - forward[k])) < 1e-5, `${eye} eye looks along ${JSON.stringify(f)}, expected ${JSON.stringify(forward)}`);
+      check(v.frustum.every((t, k) => Math.abs(t - mock.frusta[eye][k]) < 1e-5), `${eye} frustum ${JSON.stringify(v.frustum)}, the mock's ${JSON.stringify(mock.frusta[eye])}`);
+      // The server keeps float32: the header's view is the one sent, rounded.
+      const hv = header.camera.views[e], near = (a, b, tol) => a.every((x, k) => Math.abs(x - b[k]) <= tol);
+      check(near(hv.positionKm, v.positionKm, 0.01) && near(hv.orientation, v.orientation, 1e-6) && near(hv.frustum, v.frustum, 1e-6),
+        `the frame's ${eye} view ${JSON.stringify(hv)} is not the one sent ${JSON.stringify(v)}`);
+    });
+
+    // Each eye's disc: the middle row's lit extent in tangent units against the limb tangents
+    // tan(θ ∓ α) of the core (θ: the centre's angle from the eye's view axis, α its angular radius).
+    const radius = await page.evaluate(() => window.__raypc.info.coordinates.find((k) => k.name === 'radius'));
+    const coreKm = radius.min, D = c.distanceKm; // the core sphere is the grid's inner radius
+    // In the head's starting frame (metres × 10 000 km, +x right, -z forward) the centre is at
+    // (0, 0, -D); an eye at k (∓ipd/2) along the turned head's +x (cos a, 0, -sin a) looks along
+    // (-sin a, 0, -cos a).
+    const predicted = (eye, yawDeg) => {
+      const a = (yawDeg * Math.PI) / 180, k = (eye === 'left' ? -0.5 : 0.5) * mock.ipd * 10000;
+      const v = [-k * Math.cos(a), 0, -D + k * Math.sin(a)];
+      const theta = Math.atan2(v[0] * Math.cos(a) - v[2] * Math.sin(a), -v[0] * Math.sin(a) - v[2] * Math.cos(a));
+      const alpha = Math.asin(coreKm / Math.hypot(...v));
+      return [Math.tan(theta - alpha), Math.tan(theta + alpha)];
+    };
+    const discs = async () => page.evaluate((frusta) => {
+      const src = document.getElementById('view3d');
+      const w = src.width, h = src.height, half = Math.floor(w / 2);
+      const cv = document.createElement('canvas');
+      cv.width = w; cv.height = 1;
+      const ctx = cv.getContext('2d', { willReadFrequently: true });
+      ctx.drawImage(src, 0, Math.floor(h / 2), w, 1, 0, 0, w, 1);
+      const d = ctx.getImageData(0, 0, w, 1).data;
+      return ['left', 'right'].map((eye, e) => {
+        let lo = -1, hi = -1;
+        for (let i = 0; i < half; i++) {
+          const g = (d[(e * half + i) * 4] + d[(e * half + i) * 4 + 1] + d[(e * half + i) * 4 + 2]) / 3;
+          if (g > 128) { if (lo < 0) lo = i; hi = i + 1; }
+        }
+        const [l, r] = frusta[eye], t = (px) => l + (px / half) * (r - l);
+        return { eye, lit: lo >= 0, left: t(lo), right: t(hi), pxPerTangent: half / (r - l) };
+      });
+    }, mock.frusta);
+    const checkDiscs = (measured, yawDeg, what) => {
+      for (const m of measured) {
+        const [pl, pr] = predicted(m.eye, yawDeg), tol = 3 / m.pxPerTangent;
+        check(m.lit && Math.abs(m.left - pl) < tol && Math.abs(m.right - pr) < tol,
+          `${what}: the ${m.eye} eye's disc spans tangents [${m.left.toFixed(4)}, ${m.right.toFixed(4)}], expected [${pl.toFixed(4)}, ${pr.toFixed(4)}] ± ${tol.toFixed(4)}`);
+      }
+      const [l, r] = measured.map((m) => (m.left + m.right) / 2);
+      console.log(`  ${what}: disc centres at tangents ${l.toFixed(4)} (left eye), ${r.toFixed(4)} (right eye)`);
+      return [l, r];
+    };
+    const [cl, cr] = checkDiscs(await discs(), 0, 'XR frame');
+    check(cl > 0.03 && cr < -0.03, `parallax: the core should lie right of the view axis in the left eye and left of it in the right eye (${cl}, ${cr})`);
+
+    // Turning the head 6° to the left while the server's frames are held: the discs move right at
+    // the next animation frame, drawn from the old frame.
+    const before = await page.evaluate(() => ({ shown: window.__raypc.lastShownId, sent: window.__raypc.lastSentId }));
+    await page.evaluate(() => { window.__raypc.holdFrames = true; window.__xrMock.head.yawDeg = 6; window.__xrMock.tick(); });
+    const turned = await page.evaluate(() => ({ shown: window.__raypc.lastShownId, sent: window.__raypc.lastSentId, view: window.__raypc.sentLog.at(-1).camera.views[0] }));
+    check(turned.shown === before.shown && turned.sent > before.sent, `the turned head should send a new state and show no new frame yet: ${JSON.stringify({ before, turned: { ...turned, view: undefined } })}`);
+    const warpedDiscs = checkDiscs(await discs(), 6, 'head turned 6°, warped');
+    check(warpedDiscs[0] > cl + 0.05, 'the warped discs did not move with the head');
+    const warped = await viewPixels(page);
+    await page.evaluate(() => window.__raypc.releaseFrames());
+    check(await settle(), 'no converged frame after turning the head');
+    checkDiscs(await discs(), 6, 'head turned 6°, new frame');
+    const fresh = await viewPixels(page);
+    console.log(`  warped vs new frame: ${meanAbsDiff(warped, fresh).toFixed(2)} grey levels`);
+
+    await page.click('#enterVr');
+    await page.waitForFunction(() => window.__xrMock.ended && document.getElementById('enterVr').textContent === 'Enter VR');
+    await waitConverged(page);
+    const after = await page.evaluate(() => ({ header: window.__raypc.headers.at(-1), state: window.__raypc.state() }));
+    check(after.header.camera.views.length === 0 && !after.header.stereo && after.header.width === 384,
+      `after the session the desktop frame should be mono 384 wide without views: ${JSON.stringify({ ...after.header, stats: undefined })}`);
+    const restored = await viewPixels(page);
+    const dRestored = meanAbsDiff(desktop, restored);
+    check(dRestored < 0.5 && JSON.stringify(after.state.camera) === JSON.stringify(desktopState.camera), `the desktop view after VR differs by ${dRestored.toFixed(2)} grey levels`);
+    console.log(`  desktop view restored (differs by ${dRestored.toFixed(2)} grey levels)`);
+
+    const plain = await openUi(context, `${url}?noxr=1`);
+    await plain.waitForFunction(() => !/checking/.test(document.getElementById('enterVr').textContent));
+    const none = await plain.textContent('#enterVr');
+    check(none === 'WebXR immersive VR is not available in this browser' && await plain.isDisabled('#enterVr'), `without navigator.xr the control says '${none}'`);
+    console.log(`  without navigator.xr: '${none}' (disabled)`);
   },
 
   // Lighting: the light's controls are off while Lighting is not ticked; dragging the azimuth and

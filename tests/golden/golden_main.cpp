@@ -3,6 +3,8 @@
 // and the mean difference is below 1/255 (SIMD widths and libm differ slightly between machines).
 // On failure writes OUT_DIR/CASE.png (actual) and OUT_DIR/CASE.diff.png (differences x8).
 // With RAYPC_UPDATE_GOLDEN=1 the golden is (re)written instead.
+// `raypc_golden view_equals_orbit`: no golden file; the picture of an explicit camera view
+// (camera.views) equal to an orbit camera's frame must match the orbit camera's within 1/255.
 #include "core/error.h"
 #include "render/image_io.h"
 #include "render/pathline_scene.h"
@@ -185,6 +187,69 @@ std::map<std::string, Case> cases()
     return c;
 }
 
+ImageRgba8 renderCase(const Case& c, const RenderParams& params)
+{
+    VolumeRenderer renderer(volumeAt(c.level));
+    renderer.setParams(params);
+    if (c.tubes)
+        renderer.setPathlines(c.tubes());
+    FrameBuffer frame(params.width, params.height);
+    for (int pass = 0; pass < 6; ++pass)
+        renderer.renderPass(frame);
+    return {params.width, params.height, frame.resolveRgba8({0.1f, 0.1f, 0.12f})};
+}
+
+// The orbit camera at azimuth 0, elevation 0 looks from +x along -x with +y to the right and +z
+// up: as an explicit view, camera +x -> +y, +y -> +z, -z -> -x, the rotation by 120 degrees about
+// (1, 1, 1) (quaternion [1/2, 1/2, 1/2, 1/2], exact in floats), and the symmetric frustum of
+// fovYDeg. The volume, the shading, the core and the tubes must come out as the orbit's.
+int viewEqualsOrbit(const std::filesystem::path& outDir)
+{
+    Case c{0, [](RenderParams& p) {
+               p.camera.azimuthDeg = 0;
+               p.camera.elevationDeg = 0;
+               p.shading.enabled = true;
+           },
+           [] { return helixTubes(60, true); }};
+    RenderParams orbit = baseParams();
+    c.setup(orbit);
+    RenderParams view = orbit;
+    const double t = std::tan(orbit.camera.fovYDeg * M_PI / 360);
+    view.camera.views = {CameraView{{float(orbit.camera.distanceKm), 0, 0}, {0.5f, 0.5f, 0.5f, 0.5f},
+                                    {float(-t), float(t), float(-t), float(t)}}};
+    // A control: the view shifted by a few pixels must give another picture (the view is used).
+    RenderParams shifted = view;
+    for (float& t : shifted.camera.views[0].frustum)
+        t += float(2 * t / kSize * 4);
+    const ImageRgba8 a = renderCase(c, orbit), b = renderCase(c, view), control = renderCase(c, shifted);
+    auto compare = [&](const ImageRgba8& x, const ImageRgba8& y, size_t& differing) {
+        int worst = 0;
+        differing = 0;
+        for (size_t i = 0; i < x.pixels.size(); ++i) {
+            const int d = std::abs(int(x.pixels[i]) - int(y.pixels[i]));
+            worst = std::max(worst, d);
+            differing += d > 0;
+        }
+        return worst;
+    };
+    size_t differing = 0, controlDiffering = 0;
+    const int worst = compare(a, b, differing), controlWorst = compare(a, control, controlDiffering);
+    std::printf("view_equals_orbit: largest difference %d/255, %zu channel values differ; the view zoomed out by "
+                "4 pixels: %d/255, %zu differ\n",
+                worst, differing, controlWorst, controlDiffering);
+    if (controlWorst < 32)
+        fail("view_equals_orbit: a changed view gives the same picture: the view is not used");
+    if (worst > 1) {
+        std::filesystem::create_directories(outDir);
+        writePng(outDir / "view_equals_orbit.orbit.png", a);
+        writePng(outDir / "view_equals_orbit.view.png", b);
+        std::fprintf(stderr, "view_equals_orbit: the view's picture differs from the orbit's; see %s\n",
+                     outDir.string().c_str());
+        return 1;
+    }
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
@@ -196,6 +261,8 @@ int main(int argc, char** argv)
         }
         const std::string name = argv[1];
         const std::filesystem::path goldenDir = argv[2], outDir = argv[3];
+        if (name == "view_equals_orbit")
+            return viewEqualsOrbit(outDir);
         const auto all = cases();
         const auto it = all.find(name);
         if (it == all.end())

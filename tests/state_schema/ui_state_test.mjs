@@ -72,8 +72,13 @@ const keyOf = (message) => /^state: (.*?): /.exec(message)?.[1] ?? `(no key in '
 // The UI may name the element of a number array that raypc names as a whole: targetKm[1] / targetKm.
 const sameKey = (a, b) => a === b || a.startsWith(`${b}[`) || b.startsWith(`${a}[`);
 // Of several unknown keys in one object, raypc names the first in sorted order, the UI the first written.
+// Of several keys newer than the document's version, raypc names the first in the description's
+// order, the UI the first in sorted order (a version-1 document: camera.views vs axes); both say
+// which version the key needs and the document's.
+const versionGate = (m) => /: needs version \d+, the document says version (\d+)$/.exec(m)?.[1];
 const sameError = (a, b) => sameKey(keyOf(a), keyOf(b)) ||
-  (/: unknown key$/.test(a) && /: unknown key$/.test(b) && keyOf(a).replace(/\.[^.]*$/, '') === keyOf(b).replace(/\.[^.]*$/, ''));
+  (/: unknown key$/.test(a) && /: unknown key$/.test(b) && keyOf(a).replace(/\.[^.]*$/, '') === keyOf(b).replace(/\.[^.]*$/, '')) ||
+  (versionGate(a) !== undefined && versionGate(a) === versionGate(b));
 const same = (a, b) => JSON.stringify(a) === JSON.stringify(b);
 // raypc stores most numbers as float; the UI keeps what the document says.
 const sameAsFloats = (a, b) => isDeepStrictEqual(JSON.parse(JSON.stringify(a, (k, v) => (typeof v === 'number' ? Math.fround(v) : v))),

@@ -19,6 +19,7 @@ import { type Brush } from './state';
 import { StateStore } from './store';
 import { TfPanel } from './tf_panel';
 import { displayUnits } from './units';
+import { setUpXr, type XrSession } from './xr';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
 
@@ -44,6 +45,8 @@ export class App {
   readonly playback: Playback;
   readonly context: ContextPanel;
   presets: Preset[] = [];
+  // The WebXR session control once the browser has said whether it offers immersive-vr (null: not).
+  readonly xr: Promise<XrSession | null>;
   sampleStep = -1;
   readonly errors: string[] = [];
   private sampleLoading = false;
@@ -144,6 +147,7 @@ export class App {
     });
     this.setUpAxisChoice();
     setUpCameraInput(this.link.view.canvas, store, (i) => this.commit(i));
+    this.xr = setUpXr($<HTMLButtonElement>('enterVr'), this.link, store, (m) => this.showError(m));
     // Escape clears the brushes (outside text fields, where it belongs to the field).
     document.addEventListener('keydown', (e) => {
       const t = e.target as HTMLElement;

@@ -24,7 +24,11 @@ export function setUpCameraInput(canvas: HTMLCanvasElement, store: StateStore, c
   const pointers = new Map<number, { x: number; y: number }>();
   let pan = false;
   let finalTimer = 0;
-  const cameraChanged = () => commit(true);
+  // The desktop drives the orbit: explicit views (a state loaded with camera.views) give way to it.
+  const cameraChanged = () => {
+    store.state.camera.views = [];
+    commit(true);
+  };
   const panBy = (dxPx: number, dyPx: number) => {
     const cam = store.state.camera;
     const frame = new CameraFrame(cam, store.state.image.width, store.state.image.height);

@@ -117,7 +117,6 @@ export function setUpControls(store: StateStore, host: ControlsHost): void {
     host.commit(false);
   };
   for (const id of ['stereoMode', 'stereoSeparation', 'stereoConvergence']) $(id).addEventListener('change', stereoInput);
-  void describeWebXr().then((text) => { $('xrNote').textContent = text; });
   $('core').addEventListener('change', () => {
     store.state.core = { ...store.state.core, visible: $<HTMLInputElement>('core').checked };
     host.commit(false);
@@ -222,21 +221,6 @@ function enableLightControls(store: StateStore): void {
   $<HTMLInputElement>('lightSpecular').disabled = !lit;
   $<HTMLInputElement>('shadowStrength').disabled = !shadowed;
   $('lightRow').classList.toggle('disabled', off);
-}
-
-// Whether this browser offers WebXR immersive-vr (head-tracked stereo on a headset). This UI shows
-// the server's stereo pairs on the page (anaglyph, side by side); it has no WebXR session of its own
-// (docs/rendering.md, Stereo: what was and was not tested).
-export async function describeWebXr(): Promise<string> {
-  const xr = (navigator as Navigator & { xr?: { isSessionSupported(mode: string): Promise<boolean> } }).xr;
-  if (!xr) return 'WebXR: not available in this browser (no navigator.xr)';
-  try {
-    return (await xr.isSessionSupported('immersive-vr'))
-      ? 'WebXR: immersive-vr is offered (a headset session is not implemented; use side by side)'
-      : 'WebXR: immersive-vr is not offered here (no headset)';
-  } catch (e) {
-    return `WebXR: not available (${(e as Error).message})`;
-  }
 }
 
 // The URL of the page holds the state (#state=…) so that a bookmark reopens this view.

@@ -7,7 +7,7 @@
 // the interactive level), at most one per display frame and only when the server has answered
 // the previous one or 120 ms passed; on release the final state asks for all passes.
 import { Connection, type Frame, type FrameHeader } from './connection';
-import { cloneState, type Brush } from './state';
+import { cloneState, type Brush, type CameraState, type RenderState } from './state';
 import type { StateStore } from './store';
 import { View3D } from './view';
 
@@ -25,12 +25,23 @@ export interface RenderLinkEvents {
 
 // What the browser tests observe (test_hooks.ts); absent in normal use.
 export interface RenderLinkObserver {
-  sent(entry: { id: number; t: number; step: number; interactive: boolean; brushes: Brush[] }): void;
+  sent(entry: SentEntry): void;
   // Returns false to hold the frame back (it is passed to `receive` later).
   received(frame: Frame): boolean;
   shown(header: FrameHeader, latency: Latency | null): void;
   drawn(kind: 'exact' | 'warped' | 'none', waiting: boolean): void;
   afterFrame(record: { id: number; shownId: number; afterShown: boolean }): void;
+}
+
+export interface SentEntry {
+  id: number;
+  t: number;
+  step: number;
+  interactive: boolean;
+  brushes: Brush[];
+  camera: CameraState;
+  stereoMode: string;
+  image: { width: number; height: number };
 }
 
 export interface Latency {
@@ -53,6 +64,9 @@ export class RenderLink {
   private lastSendTime = 0;
   private readonly sendTimes = new Map<number, { t: number; interactive: boolean; first?: number }>();
   private afterFrame: { id: number; run: (() => void)[]; timer: number } | null = null;
+  // While a WebXR session runs (xr.ts): what is sent is the store's state made into the session's
+  // (the eyes' views, a side-by-side pair), and the session's animation frames draw, not this link.
+  xr: { stateToSend(state: RenderState): RenderState } | null = null;
 
   constructor(canvas: HTMLCanvasElement, private readonly store: StateStore, private readonly events: RenderLinkEvents) {
     this.view = new View3D(canvas);
@@ -95,14 +109,16 @@ export class RenderLink {
     }
   }
 
-  private sendNow(interactive: boolean): void {
-    const state = this.store.state;
+  // Sends the store's state at once (the XR session coalesces its own requests).
+  sendNow(interactive: boolean): void {
+    const state = this.xr ? this.xr.stateToSend(cloneState(this.store.state)) : this.store.state;
     const id = this.connection.send(cloneState(state), interactive);
     this.lastSendTime = performance.now();
     this.sendTimes.set(id, { t: this.lastSendTime, interactive });
     if (this.sendTimes.size > 200) this.sendTimes.delete(this.sendTimes.keys().next().value as number);
     this.lastSentId = id;
-    this.observer?.sent({ id, t: this.lastSendTime, step: state.step, interactive, brushes: state.brushes.map((b) => ({ ...b })) });
+    this.observer?.sent({ id, t: this.lastSendTime, step: state.step, interactive, brushes: state.brushes.map((b) => ({ ...b })),
+      camera: cloneState(state).camera, stereoMode: state.stereo.mode, image: { ...state.image } });
   }
 
   receive(frame: Frame): void {
@@ -137,6 +153,7 @@ export class RenderLink {
 
   private drawNow(): void {
     this.drawPending = false;
+    if (this.xr) return;
     const s = this.store.state;
     const bg = (s.background as [number, number, number] | undefined) ?? [0, 0, 0];
     const kind = this.view.draw(s.camera, s.stereo, s.image.width, s.image.height, bg);

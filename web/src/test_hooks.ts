@@ -6,10 +6,11 @@ import type { App } from './app';
 import type { Frame, FrameHeader } from './connection';
 import type { ParallelCoordinates } from './parcoords';
 import type { PathlineCount } from './pathline_panel';
-import type { Latency } from './render_link';
+import type { Latency, SentEntry } from './render_link';
 import { cloneState, type Brush, type RenderState } from './state';
 import type { Info, PersistenceDiagram, Preset } from './api';
 import type { ViewStats } from './view';
+import type { XrSession } from './xr';
 
 export interface TestHooks {
   info: Info;
@@ -29,7 +30,7 @@ export interface TestHooks {
   readonly sampleStep: number;
   // What was sent and received when, warps drawn while a newer state was pending, and holding
   // incoming frames back (to look at a warped view deterministically).
-  sentLog: { id: number; t: number; step: number; interactive: boolean; brushes: Brush[] }[];
+  sentLog: SentEntry[];
   frameLog: { id: number; step: number; pass: number; t: number }[];
   warpedWhileWaiting: number;
   // Deferred work (the full line redraw after a brush release): the state it waited for, whether
@@ -44,6 +45,8 @@ export interface TestHooks {
   readonly pathlines: PathlineCount | null;
   plParcoords: ParallelCoordinates;
   readonly persistence: PersistenceDiagram | null;
+  // The WebXR session (null when the browser offers no immersive-vr), once known.
+  xr(): Promise<XrSession | null>;
 }
 
 export function testHooksWanted(): boolean {
@@ -95,6 +98,7 @@ export function installTestHooks(app: App): TestHooks {
     get pathlines() { return app.pathlines.count; },
     plParcoords: app.pathlines.pc,
     get persistence() { return app.persistence.diagram; },
+    xr: () => app.xr,
   };
   app.link.observer = {
     sent: (e) => {

@@ -7,7 +7,9 @@
 // A stereo frame (docs/rendering.md, Stereo) is re-projected eye by eye: each eye's half of the
 // depth map with that eye's camera, drawn with the current eye's camera into its half of the view
 // (side by side) or into its colour channels (anaglyph: red the left eye, green and blue the right).
-import { CameraFrame, camerasEqual, stereoLayout, type EyeOffset } from './camera';
+// A WebXR session (xr.ts) draws each eye of the last frame into its XRWebGLLayer viewport with the
+// eye's current pose (drawViews), the same re-projection.
+import { CameraFrame, camerasEqual, stereoLayout, type CameraView, type EyeOffset } from './camera';
 import type { CameraState, StereoState } from './state';
 import type { Frame } from './connection';
 
@@ -19,14 +21,14 @@ in vec3 aPos;
 in vec2 aUv;
 in float aHit;
 uniform vec3 uEye, uRight, uUp, uForward;
-uniform float uTanHalfFovY, uAspect, uShiftX, uNear, uFar;
+uniform float uTanHalfFovY, uAspect, uShiftX, uShiftY, uNear, uFar;
 out vec2 vUv;
 out float vHit;
 void main() {
   vec3 d = aPos - uEye;
   float z = dot(d, uForward);
   float x = (dot(d, uRight) - uShiftX * z) / (uTanHalfFovY * uAspect);
-  float y = dot(d, uUp) / uTanHalfFovY;
+  float y = (dot(d, uUp) - uShiftY * z) / uTanHalfFovY;
   float a = (uFar + uNear) / (uFar - uNear), b = -2.0 * uFar * uNear / (uFar - uNear);
   gl_Position = vec4(x, y, a * z + b, z);
   vUv = aUv;
@@ -65,6 +67,14 @@ function compile(gl: WebGL2RenderingContext, vs: string, fs: string): WebGLProgr
   gl.linkProgram(program);
   if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new Error(`shader link: ${gl.getProgramInfoLog(program)}`);
   return program;
+}
+
+// A view's viewport in the framebuffer, pixels from the bottom left (WebGL's, and XRViewport's).
+export interface Viewport {
+  x: number;
+  y: number;
+  width: number;
+  height: number;
 }
 
 export interface ViewStats {
@@ -142,6 +152,11 @@ export class View3D {
     gl.bindVertexArray(null);
   }
 
+  // The WebGL context (a WebXR session makes it XR-compatible and draws through drawViews).
+  get context(): WebGL2RenderingContext {
+    return this.gl;
+  }
+
   get hasFrame(): boolean {
     return this.frame !== null;
   }
@@ -170,8 +185,9 @@ export class View3D {
   private buildMeshes(frame: Frame): void {
     const h = frame.header;
     const s = h.stereo;
+    const views = h.camera.views ?? [];
     if (!s) {
-      this.buildMesh(this.meshes[0], frame.depth, h.depthWidth, h.depthHeight, new CameraFrame(h.camera, h.width, h.height), 0, 1);
+      this.buildMesh(this.meshes[0], frame.depth, h.depthWidth, h.depthHeight, new CameraFrame(h.camera, h.width, h.height, undefined, views[0]), 0, 1);
       this.meshCount = 1;
       return;
     }
@@ -181,7 +197,7 @@ export class View3D {
       for (let j = 0; j < dh; j++) depth.set(frame.depth.subarray(j * h.depthWidth + e * dw, j * h.depthWidth + (e + 1) * dw), j * dw);
       const eye: EyeOffset = { eyeOffsetKm: (e - 0.5) * s.eyeSeparationKm, convergenceKm: s.convergenceKm, pixelAspect: s.pixelAspect };
       const u0 = s.mode === 'anaglyph' ? 0 : e * 0.5, u1 = s.mode === 'anaglyph' ? 1 : u0 + 0.5;
-      this.buildMesh(this.meshes[e], depth, dw, dh, new CameraFrame(h.camera, s.eyeWidth, s.eyeHeight, eye), u0, u1);
+      this.buildMesh(this.meshes[e], depth, dw, dh, new CameraFrame(h.camera, s.eyeWidth, s.eyeHeight, eye, views[e]), u0, u1);
     }
     this.meshCount = 2;
   }
@@ -285,34 +301,77 @@ export class View3D {
       this.stats.exactDraws++;
       return 'exact';
     }
-    const p = this.warpProgram;
-    gl.useProgram(p);
-    gl.enable(gl.DEPTH_TEST);
-    gl.depthFunc(gl.LEQUAL);
+    this.beginWarp();
     const sideBySide = layout.mode === 'side-by-side' || layout.mode === 'side-by-side-half';
+    const views = camera.views ?? [];
     layout.eyes.forEach((eye, e) => {
       // Each eye of the view from the frame's view of the same eye (a mono frame serves both).
-      const mesh = this.meshes[Math.min(e, this.meshCount - 1)];
       if (sideBySide) gl.viewport(vx + (e * vw) / 2, vy, vw / 2, vh);
       if (layout.mode === 'anaglyph') gl.colorMask(e === 0, e === 1, e === 1, true);
-      gl.clear(gl.DEPTH_BUFFER_BIT);
-      const cam = new CameraFrame(camera, eye.width, eye.height, eye);
-      gl.uniform3fv(gl.getUniformLocation(p, 'uEye'), cam.eye);
-      gl.uniform3fv(gl.getUniformLocation(p, 'uRight'), cam.right);
-      gl.uniform3fv(gl.getUniformLocation(p, 'uUp'), cam.up);
-      gl.uniform3fv(gl.getUniformLocation(p, 'uForward'), cam.forward);
-      gl.uniform1f(gl.getUniformLocation(p, 'uTanHalfFovY'), cam.tanHalfFovY);
-      gl.uniform1f(gl.getUniformLocation(p, 'uAspect'), cam.aspect);
-      gl.uniform1f(gl.getUniformLocation(p, 'uShiftX'), cam.shiftX);
-      const eyeDist = Math.hypot(...cam.eye);
-      gl.uniform1f(gl.getUniformLocation(p, 'uNear'), Math.max(1, (eyeDist - 3 * kPlanetRadiusKm) * 0.5));
-      gl.uniform1f(gl.getUniformLocation(p, 'uFar'), eyeDist + 8 * kPlanetRadiusKm + 1e5);
-      gl.bindVertexArray(mesh.vao);
-      gl.drawElements(gl.TRIANGLES, mesh.indexCount, gl.UNSIGNED_INT, 0);
+      this.drawMesh(e, new CameraFrame(camera, eye.width, eye.height, eye, views[e]));
     });
     gl.bindVertexArray(null);
     gl.colorMask(true, true, true, true);
     this.stats.warpedDraws++;
     return 'warped';
+  }
+
+  // Draws the last frame into `framebuffer` (null: the canvas) once per view, each re-projected to
+  // its current pose and frustum in its viewport: view e from the frame's eye e (a mono frame serves
+  // both). Returns false when there is no frame yet (the viewports are cleared).
+  drawViews(framebuffer: WebGLFramebuffer | null, views: { view: CameraView; viewport: Viewport }[],
+    background: [number, number, number]): boolean {
+    const gl = this.gl;
+    gl.bindFramebuffer(gl.FRAMEBUFFER, framebuffer);
+    gl.colorMask(true, true, true, true);
+    gl.clearColor(background[0], background[1], background[2], 1);
+    gl.enable(gl.SCISSOR_TEST);
+    for (const { viewport: v } of views) {
+      gl.viewport(v.x, v.y, v.width, v.height);
+      gl.scissor(v.x, v.y, v.width, v.height);
+      gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+    }
+    gl.disable(gl.SCISSOR_TEST);
+    const frame = this.frame;
+    if (frame) {
+      gl.bindTexture(gl.TEXTURE_2D, this.texture);
+      this.beginWarp();
+      views.forEach(({ view, viewport: v }, e) => {
+        gl.viewport(v.x, v.y, v.width, v.height);
+        this.drawMesh(e, new CameraFrame(frame.header.camera, v.width, v.height, undefined, view));
+      });
+      gl.bindVertexArray(null);
+      this.stats.warpedDraws++;
+    }
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    return frame !== null;
+  }
+
+  private beginWarp(): void {
+    const gl = this.gl;
+    gl.useProgram(this.warpProgram);
+    gl.enable(gl.DEPTH_TEST);
+    gl.depthFunc(gl.LEQUAL);
+  }
+
+  // The mesh of the frame's view e (the last one when the frame has fewer) drawn with camera `cam`
+  // into the current viewport.
+  private drawMesh(e: number, cam: CameraFrame): void {
+    const gl = this.gl, p = this.warpProgram;
+    const mesh = this.meshes[Math.min(e, this.meshCount - 1)];
+    gl.clear(gl.DEPTH_BUFFER_BIT);
+    gl.uniform3fv(gl.getUniformLocation(p, 'uEye'), cam.eye);
+    gl.uniform3fv(gl.getUniformLocation(p, 'uRight'), cam.right);
+    gl.uniform3fv(gl.getUniformLocation(p, 'uUp'), cam.up);
+    gl.uniform3fv(gl.getUniformLocation(p, 'uForward'), cam.forward);
+    gl.uniform1f(gl.getUniformLocation(p, 'uTanHalfFovY'), cam.tanHalfFovY);
+    gl.uniform1f(gl.getUniformLocation(p, 'uAspect'), cam.aspect);
+    gl.uniform1f(gl.getUniformLocation(p, 'uShiftX'), cam.shiftX);
+    gl.uniform1f(gl.getUniformLocation(p, 'uShiftY'), cam.shiftY);
+    const eyeDist = Math.hypot(...cam.eye);
+    gl.uniform1f(gl.getUniformLocation(p, 'uNear'), Math.max(1, (eyeDist - 3 * kPlanetRadiusKm) * 0.5));
+    gl.uniform1f(gl.getUniformLocation(p, 'uFar'), eyeDist + 8 * kPlanetRadiusKm + 1e5);
+    gl.bindVertexArray(mesh.vao);
+    gl.drawElements(gl.TRIANGLES, mesh.indexCount, gl.UNSIGNED_INT, 0);
   }
 }
