@@ -494,7 +494,7 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
     // without refinement).
     std::vector<uint8_t> rendered(size_t(frame.blockCount()), 0);
     std::vector<int> tiles;
-    bool everyBlock = true;  // no block stopped refining: a pass whose time measures the throughput
+    bool everyBlock = true;  // PassStats::everyBlock
     for (int t = 0; t < frame.tileCount(); ++t) {
         if (!share.owns(t))
             continue;
@@ -621,6 +621,7 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
         const double rate = estimateSamplesPerPass() / seconds;
         m_impl->measuredRate = m_impl->measuredRate > 0 ? 0.7 * m_impl->measuredRate + 0.3 * rate : rate;
     }
+    stats.everyBlock = everyBlock;
     stats.seconds = seconds;
     stats.samples = samples;
     stats.samplesSkipped = skipped;

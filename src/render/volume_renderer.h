@@ -87,6 +87,9 @@ struct PassStats {
     int threads = 1;
     int simdLanes = 1;
     bool cancelled = false;
+    // No block had stopped refining (adaptive refinement): the pass rendered every pixel, so its
+    // time measures the machine's throughput (the interactive level choice uses only such passes).
+    bool everyBlock = true;
     // Sample positions (including those in skipped space) per second per thread.
     double samplesPerSecondPerThread() const { return seconds > 0 ? double(samples + samplesSkipped) / seconds / threads : 0; }
     // Samples that read data per second per thread: the sampling rate proper.
@@ -107,6 +110,7 @@ struct PassStats {
         threads = s.threads;
         simdLanes = s.simdLanes;
         cancelled = cancelled || s.cancelled;
+        everyBlock = everyBlock && s.everyBlock;
         return *this;
     }
 };

@@ -192,9 +192,9 @@ void RenderSession::render(const Request& request)
                 : prepared.renderPass(frames, &m_cancel);
         if (stats.cancelled)
             break;
-        // A first pass renders every pixel; later ones may render only the blocks that still refine
-        // (adaptive refinement) and would overstate the throughput.
-        if (stats.seconds > 0 && pass == 1) {
+        // Only a pass that rendered every pixel measures the throughput: later ones may render only
+        // the blocks that still refine (adaptive refinement) and would overstate it.
+        if (stats.seconds > 0 && stats.everyBlock) {
             // Exponential average of the throughput, shared with the other sessions.
             const double measured = estimatedSamples / stats.seconds;
             const double old = m_context.samplesPerSecond.load();
