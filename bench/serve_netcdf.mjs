@@ -2,7 +2,8 @@
 // goal 6). Starts `raypc serve FILES --dataset DIR --port 0` with DIR empty, then measures from the
 // start of the process: the "serving" line (the first step preprocessed alone), the first frame and
 // the converged frame of the UI's default state at WxH, and the whole series served (GET
-// /api/progress says "complete" on the server that replaced the first). DIR is removed at the end.
+// /api/progress says "complete" on the server that replaced the first), then the server's log lines of
+// the first step's phases and of the first still. DIR is removed at the end.
 //   node --experimental-websocket bench/serve_netcdf.mjs BUILD_DIR DIR WxH FILE.nc…
 import { spawn } from 'node:child_process';
 import { readFileSync, rmSync } from 'node:fs';
@@ -17,7 +18,7 @@ const [width, height] = size.split('x').map(Number);
 rmSync(dir, { recursive: true, force: true });
 const start = performance.now();
 const since = () => ((performance.now() - start) / 1000).toFixed(2);
-const child = spawn(join(build, 'raypc'), ['serve', ...files, '--dataset', dir, '--port', '0'],
+const child = spawn(join(build, 'raypc'), ['-v', 'serve', ...files, '--dataset', dir, '--port', '0'],
   { stdio: ['ignore', 'pipe', 'inherit'] });
 let out = '';
 const url = await new Promise((resolve, reject) => {
@@ -69,4 +70,7 @@ console.log(`whole series served (${steps} steps): ${since()} s`);
 child.kill('SIGTERM');
 await new Promise((resolve) => child.once('exit', resolve));
 rmSync(dir, { recursive: true, force: true });
+// Where the time went, from the server's log (-v): the first step's phases and the first still.
+for (const line of out.split('\n').filter((l) => /spherical\S*: (read in|derived|levels)| still: /.test(l)).slice(0, 5))
+  console.log('  ' + line.replace(/^\[[^\]]*\] \[\w+\] /, ''));
 console.log(`load: ${readFileSync('/proc/loadavg', 'utf8').trim()}`);

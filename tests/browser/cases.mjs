@@ -145,6 +145,18 @@ const cases = {
   // analytic shell volume, and the image changes; clearing the brush brings the image back.
   async brush({ context, url }) {
     const page = await openUi(context, url);
+    // With no brush the lines are not veiled (the brushed layer is empty); a brush veils them.
+    const veil = () => page.evaluate(() => {
+      const c = document.querySelector('#parcoords canvas.brushed');
+      const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+      let n = 0;
+      for (let i = 3; i < d.length; i += 4) if (d[i] > 0) n++;
+      return n / (c.width * c.height);
+    });
+    await page.waitForFunction(() => window.__raypc.parcoords.timing.lines.foreground > 0, null, { timeout: 10000 }).catch(() => {});
+    const unbrushed = await veil();
+    check(unbrushed === 0, `with no brush ${(100 * unbrushed).toFixed(1)} % of the brushed layer is painted (a veil over every line)`);
+
     await standardView(page);
     const before = await viewPixels(page);
     const ds = await info(url);
@@ -166,6 +178,9 @@ const cases = {
     check(title.length === shownBefore.length + 1, `${title.length} axes after showing radius, expected ${shownBefore.length + 1}`);
 
     await brushAxis(page, 'radius', 0.5, 0.95);
+    await page.waitForFunction(() => window.__raypc.parcoords.timing.lines.brushed > 0, null, { timeout: 10000 }).catch(() => {});
+    const brushedVeil = await veil();
+    check(brushedVeil > 0.9, `with a brush only ${(100 * brushedVeil).toFixed(1)} % of the brushed layer is veiled`);
     const s = await rState(page);
     check(s.brushes.length === 1 && s.brushes[0].name === 'radius', `state.brushes after brushing radius: ${JSON.stringify(s.brushes)}`);
     const { min, max } = s.brushes[0];
@@ -207,6 +222,9 @@ const cases = {
     await page.click('#clearBrushes');
     await waitConverged(page);
     check((await rState(page)).brushes.length === 0, 'brushes not cleared');
+    await page.waitForTimeout(300);
+    const clearedVeil = await veil();
+    check(clearedVeil === 0, `after Clear brushes ${(100 * clearedVeil).toFixed(1)} % of the brushed layer still veils the lines`);
     const cleared = await viewPixels(page);
     const d2 = meanAbsDiff(before, cleared);
     check(d2 < 1, `after clearing the brush the image differs from the unbrushed one by ${d2.toFixed(2)}`);

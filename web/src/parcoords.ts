@@ -399,7 +399,8 @@ export class ParallelCoordinates {
     };
   }
 
-  // Clears the layer (parcoord-es's clear: the brushed layer then veils the foreground) and draws
+  // Clears the layer (parcoord-es's clear: the brushed layer then veils the foreground while something
+  // is brushed) and draws
   // the rows' polylines in time-limited slices; a newer call for the layer cancels this one.
   private redrawBrushed: () => void = () => {};
 
@@ -409,8 +410,16 @@ export class ParallelCoordinates {
     if (layer === 'foreground') {
       pc.clear('foreground');
       pc.clear('highlight');
-    } else {
+    } else if (rows.length || this.brushes().length > 0) {
       pc.clear('brushed');
+    } else {
+      // Nothing brushed: no veil. parcoord-es's clear veils whenever its brush state has a key, and
+      // the multi-range mode keeps keys for axes without ranges: the lines were veiled with no brush.
+      const c = pc.ctx.brushed as CanvasRenderingContext2D;
+      c.save();
+      c.setTransform(1, 0, 0, 1, 0, 0);
+      c.clearRect(0, 0, c.canvas.width, c.canvas.height);
+      c.restore();
     }
     if (!rows.length) {
       this.timing.lines[layer] = 0;
