@@ -30,9 +30,7 @@ namespace {
 using namespace raypc::render;
 
 struct RenderArgs {
-    std::vector<std::string> inputs;  // a dataset, or netCDF files (series_inputs.h)
-    std::string datasetOption;
-    PreprocessFlags preprocess;
+    SeriesFlags series;  // a dataset, or netCDF files
     std::string dataset, time = "0", output, size, statePath, var, colormap, lod, depthPath;
     std::vector<std::string> ranges;
     int passes = 0;
@@ -304,15 +302,7 @@ const CommandRegistration kRegistration(
     "render", "Render a step (or a sequence of steps) of a dataset to PNG with the spherical volume ray caster",
     [](CLI::App& cmd) {
         auto args = std::make_shared<RenderArgs>();
-        cmd.add_option("inputs", args->inputs,
-                       "A dataset directory (raypc preprocess), or netCDF files / directories of *.nc (preprocessed "
-                       "first into --dataset, reused by later runs)")
-            ->required();
-        cmd.add_option("--dataset", args->datasetOption,
-                       "Where the dataset of netCDF inputs is written and found again (default: beside the first "
-                       "file, e.g. spherical.raypc)");
-        auto* preprocessing = cmd.add_option_group("preprocessing", "For netCDF inputs: as raypc preprocess");
-        args->preprocess.add(*preprocessing, false);
+        args->series.add(cmd, "preprocessed first, reused by later runs");
         cmd.add_option("-t,--time", args->time,
                        "Step index (0-based) or time like 24Myr; A:B renders steps A..B into a numbered sequence")
             ->capture_default_str();
@@ -343,13 +333,8 @@ const CommandRegistration kRegistration(
         cmd.add_option("--stereo", args->stereo,
                        "Stereo pair: off, side-by-side (2W x H), side-by-side-half (W x H), anaglyph (red-cyan); eye "
                        "separation and convergence from the state (docs/state.md)");
-        cmd.callback([args, preprocessing] {
-            SeriesInputs series;
-            PreprocessOptions options;
-            mpi::together([&] {  // under mpirun: one message for a bad input, not one per rank
-                series = resolveSeriesInputs(args->inputs, args->datasetOption);
-                options = args->preprocess.toOptions(*preprocessing);
-            });
+        cmd.callback([args] {
+            const auto [series, options] = args->series.resolve();
             if (series.fromFiles())
                 prepareSeries(series, options);  // quick when complete; collective under mpirun
             args->dataset = series.dataset.string();

@@ -1,6 +1,7 @@
 #include "app/series_inputs.h"
 
 #include "core/error.h"
+#include "core/mpi.h"
 #include "data/dataset.h"
 #include "data/dataset_format.h"
 #include "data/netcdf_reader.h"
@@ -115,4 +116,26 @@ void prepareSeries(const SeriesInputs& inputs, const PreprocessOptions& options)
     fs::remove_all(inputs.previewDir(), ec);
 }
 
+void SeriesFlags::add(CLI::App& cmd, const std::string& inputsHelp)
+{
+    cmd.add_option("inputs", inputs, "A dataset directory (raypc preprocess), or netCDF files / directories of *.nc: " + inputsHelp)
+        ->required();
+    cmd.add_option("--dataset", dataset,
+                   "Where the dataset of netCDF inputs is written and found again (default: beside the first file, "
+                   "e.g. spherical.raypc)");
+    m_group = cmd.add_option_group("preprocessing", "For netCDF inputs: as raypc preprocess");
+    preprocess.add(*m_group, false);
+}
+
+std::pair<SeriesInputs, PreprocessOptions> SeriesFlags::resolve() const
+{
+    std::pair<SeriesInputs, PreprocessOptions> result;
+    mpi::together([&] {
+        result.first = resolveSeriesInputs(inputs, dataset);
+        result.second = preprocess.toOptions(*m_group);
+    });
+    return result;
+}
+
 }  // namespace raypc::app
+

@@ -3,10 +3,12 @@
 // (docs/format.md, "Serving netCDF files").
 #pragma once
 
+#include "app/options.h"
 #include "data/preprocess.h"
 
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace raypc::app {
@@ -38,5 +40,22 @@ double preparePreview(const SeriesInputs& inputs, PreprocessOptions options);
 // removes the preview. Throws raypc::Error like preprocess(), and naming the directory and --dataset
 // when it cannot be written.
 void prepareSeries(const SeriesInputs& inputs, const PreprocessOptions& options);
+
+// What serve and render take on the command line: INPUT… (a dataset or netCDF files), --dataset and
+// the preprocessing options of `raypc preprocess` (an option group).
+struct SeriesFlags {
+    std::vector<std::string> inputs;
+    std::string dataset;
+    PreprocessFlags preprocess;
+
+    // `inputsHelp`: what the command does with netCDF files.
+    void add(CLI::App& cmd, const std::string& inputsHelp);
+    // The inputs and the preprocessing options; under mpirun agreed over the ranks (one message for
+    // a bad input, not one per rank). Throws raypc::Error as resolveSeriesInputs and PreprocessFlags.
+    std::pair<SeriesInputs, PreprocessOptions> resolve() const;
+
+private:
+    CLI::App* m_group = nullptr;
+};
 
 }  // namespace raypc::app
