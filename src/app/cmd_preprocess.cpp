@@ -30,6 +30,12 @@ const CommandRegistration kRegistration(
             ->capture_default_str();
         cmd.add_option("--seed", args->options.seed, "Seed of the sample")->capture_default_str();
         cmd.add_flag("-q,--quiet", args->options.quiet, "No progress output");
+        cmd.add_option_function<std::string>(
+               "--encoding",
+               [args](const std::string& text) { args->options.encoding = parseEncoding(text, "--encoding"); },
+               "Level arrays: 'u16' (quantised per brick, error <= brick range / 131070; half the size) or "
+               "'float32' (exact)")
+            ->default_str(std::string(encodingName(args->options.encoding)));
         auto& pl = args->options.pathlines;
         cmd.add_flag("--no-pathlines", args->noPathlines,
                      "Skip the critical points of --pathline-field and the pathlines seeded there");

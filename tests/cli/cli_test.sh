@@ -78,8 +78,11 @@ fixture_info_probe_export)
   check "info names radial velocity in cm/yr" grep -q '"cm/yr"' <<<"$info"
   # truth.json: the radial velocity is u0 = 5e-11 m/s = 0.15779 cm/yr everywhere.
   probe=$("$raypc" probe "$work/ds" --time 4Myr --lat 33 --lon 359.5 --r 5000 --var "radial velocity")
-  value=$(tr -d ' \n' <<<"$probe" | grep -o '"radialvelocity":{"units":"cm/yr","value":[^}]*' | sed 's/.*"value"://')
+  value=$(tr -d ' \n' <<<"$probe" | grep -o '"radialvelocity":{[^}]*' | sed 's/.*"value"://')
+  bound=$(tr -d ' \n' <<<"$probe" | grep -o '"radialvelocity":{[^}]*' | sed 's/.*"quantisation_error_max":\([^,]*\),.*/\1/')
   check "probe radial velocity '$value' == u0" awk -v v="$value" 'BEGIN { exit !(v != "" && (v - 0.157788) ^ 2 < 1e-8) }'
+  # A constant field is one constant brick after another: u16 stores it exactly.
+  check "probe reports the quantisation bound '$bound' (0 for a constant field)" awk -v b="$bound" 'BEGIN { exit !(b != "" && b + 0 < 1e-9) }'
   "$raypc" export "$work/ds" --time 2 -o "$work/sample.csv" >/dev/null
   check "export writes 2000 rows + header" test "$(wc -l < "$work/sample.csv")" -eq 2001
   check "export header has units" grep -q '^x \[km\],.*temperature anomaly \[K\]' "$work/sample.csv"
