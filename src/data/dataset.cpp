@@ -168,6 +168,13 @@ const float* StepVolume::decode(size_t var) const
     return p;
 }
 
+float StepVolume::value(size_t var, size_t iLat, size_t iR, size_t iLon) const
+{
+    if (const float* p = m_values[var].load(std::memory_order_acquire))
+        return p[m_grid.index(iLat, iR, iLon)];
+    return decodeUint16Point(m_grid, m_bricks, m_encoded[var], m_bounds[var], iLat, iR, iLon);
+}
+
 double StepVolume::errorBound(size_t var, size_t iLat, size_t iR, size_t iLon) const
 {
     RAYPC_CHECK(var < variableCount());

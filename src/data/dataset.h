@@ -90,6 +90,9 @@ public:
         const float* p = m_values[var].load(std::memory_order_acquire);
         return p ? p : decode(var);
     }
+    // values(var)[grid().index(iLat, iR, iLon)], without decoding the whole variable when it is not
+    // decoded yet (for a few samples, such as the pathline phase's attributes). Thread-safe.
+    float value(size_t var, size_t iLat, size_t iR, size_t iLon) const;
     // Whether values(var) is ready without decoding.
     bool valuesReady(size_t var) const { return m_values[var].load(std::memory_order_acquire) != nullptr; }
     // bricks().brickCount() pairs (min, max) of variable `var`.

@@ -108,8 +108,11 @@ double PathlineTracer::sample(size_t var, const Vec3d& pKm, double timeMyr) cons
     size_t k0, k1;
     double w;
     bracketTime(timeMyr, k0, k1, w);
-    const double a = m_sampler.sample(m_series.field(k0, var), *at);
-    const double b = w > 0 ? m_sampler.sample(m_series.field(k1, var), *at) : a;
+    // A few samples per line (its attributes): a u16 variable is not decoded for them.
+    auto at0 = [&](size_t i, size_t j, size_t k) { return m_series.value(k0, var, i, j, k); };
+    auto at1 = [&](size_t i, size_t j, size_t k) { return m_series.value(k1, var, i, j, k); };
+    const double a = m_sampler.sample(at0, *at);
+    const double b = w > 0 ? m_sampler.sample(at1, *at) : a;
     return a + (b - a) * w;
 }
 

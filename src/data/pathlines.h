@@ -46,6 +46,12 @@ struct FieldSeries {
     {
         return volumes.empty() ? fields[step][variable] : volumes[step]->values(variable);
     }
+    // One value, without decoding the whole variable (StepVolume::value).
+    float value(size_t step, size_t variable, size_t iLat, size_t iR, size_t iLon) const
+    {
+        return volumes.empty() ? fields[step][variable][grid.index(iLat, iR, iLon)]
+                               : volumes[step]->value(variable, iLat, iR, iLon);
+    }
 };
 
 struct TracerOptions {

@@ -23,30 +23,29 @@ struct AxisCover {
     uint32_t count = 0;
 };
 
+AxisCover coverOf(size_t i, size_t n, uint32_t size, uint32_t brickCount, bool wraps)
+{
+    AxisCover c{{uint32_t(i / size)}, 1};
+    if (!wraps) {
+        // b·s <= i <= min((b + 1)·s, n − 1): the owner, and the brick before when i starts a brick.
+        if (i % size == 0 && i > 0)
+            c.bricks[c.count++] = uint32_t(i / size - 1);
+        return c;
+    }
+    const size_t points = std::min<size_t>(size + 1, n);
+    for (uint32_t b = 0; b < brickCount; ++b)
+        if (b != c.bricks[0] && (i + n - (size_t(b) * size) % n) % n < points) {
+            RAYPC_CHECK_LT(c.count, 3u);
+            c.bricks[c.count++] = b;
+        }
+    return c;
+}
+
 std::vector<AxisCover> axisCover(size_t n, uint32_t size, uint32_t brickCount, bool wraps)
 {
     std::vector<AxisCover> cover(n);
     for (size_t i = 0; i < n; ++i)
-        cover[i] = {{uint32_t(i / size)}, 1};
-    auto add = [&](size_t i, uint32_t b) {
-        AxisCover& c = cover[i];
-        for (uint32_t k = 0; k < c.count; ++k)
-            if (c.bricks[k] == b)
-                return;
-        RAYPC_CHECK_LT(c.count, 3u);
-        c.bricks[c.count++] = b;
-    };
-    for (uint32_t b = 0; b < brickCount; ++b) {
-        const size_t first = size_t(b) * size;
-        if (wraps) {
-            const size_t points = std::min<size_t>(size + 1, n);
-            for (size_t k = 0; k < points; ++k)
-                add((first + k) % n, b);
-        } else {
-            for (size_t i = first; i <= std::min(first + size, n - 1); ++i)
-                add(i, b);
-        }
-    }
+        cover[i] = coverOf(i, n, size, brickCount, wraps);
     return cover;
 }
 
@@ -156,6 +155,33 @@ void decodeUint16(const SphericalGrid& grid, const BrickLayout& layout, std::spa
             }
         }
     });
+}
+
+}  // namespace raypc
+
+namespace raypc {
+
+float decodeUint16Point(const SphericalGrid& grid, const BrickLayout& layout, const uint16_t* encoded,
+                        const float* bounds, size_t iLat, size_t iR, size_t iLon)
+{
+    const AxisCover lat = coverOf(iLat, grid.nLat(), layout.size, layout.count[0], false);
+    const AxisCover r = coverOf(iR, grid.nR(), layout.size, layout.count[1], false);
+    const AxisCover lon = coverOf(iLon, grid.nLon(), layout.size, layout.count[2], true);
+    const size_t brick = layout.index(lat.bricks[0], r.bricks[0], lon.bricks[0]);
+    const float min = bounds[2 * brick], max = bounds[2 * brick + 1];
+    // The steps of decodeUint16, so that both give the same bits.
+    float lo = min, hi = max;
+    const std::span<const float> all(bounds, 2 * layout.brickCount());
+    if (lat.count > 1 || r.count > 1)
+        intersectBounds(layout, all, lat, r, AxisCover{{lon.bricks[0]}, 1}, lo, hi);
+    const double scale = (double(max) - double(min)) / kLevels;
+    const double v = double(min) + double(encoded[grid.index(iLat, iR, iLon)]) * scale;
+    float value = float(std::clamp(v, double(lo), double(hi)));
+    if (lon.count > 1) {
+        intersectBounds(layout, all, lat, r, lon, lo, hi);
+        value = std::clamp(value, lo, hi);
+    }
+    return value;
 }
 
 }  // namespace raypc

@@ -41,4 +41,9 @@ void encodeUint16(const SphericalGrid& grid, const BrickLayout& layout, std::spa
 void decodeUint16(const SphericalGrid& grid, const BrickLayout& layout, std::span<const uint16_t> encoded,
                   std::span<const float> bounds, std::span<float> out);
 
+// The value decodeUint16 gives point (iLat, iR, iLon), bit for bit, decoding that point alone (for
+// sparse reads: a few samples of a variable that is not decoded).
+float decodeUint16Point(const SphericalGrid& grid, const BrickLayout& layout, const uint16_t* encoded,
+                        const float* bounds, size_t iLat, size_t iR, size_t iLon);
+
 }  // namespace raypc

@@ -97,6 +97,8 @@ Checked checkRoundTrip(const SphericalGrid& g, const std::vector<float>& values,
                 // Plus half an ulp of the decoded float (value_encoding.h).
                 const double rounding = 0.5 * std::abs(std::nextafter(decoded[p], INFINITY) - decoded[p]);
                 const double error = std::abs(double(decoded[p]) - double(values[p]));
+                // One point decoded alone gives the same bits.
+                EXPECT_EQ(decodeUint16Point(g, layout, encoded.data(), bounds.data(), i, j, k), decoded[p]);
                 EXPECT_LE(error, quantisation * (1 + 1e-9) + rounding)
                     << "point " << i << " " << j << " " << k << ": " << values[p] << " -> " << decoded[p];
                 if (quantisation > 0)
