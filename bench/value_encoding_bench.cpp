@@ -1,7 +1,7 @@
 // Decoding and encoding one u16 level array (docs/format.md, "Encoding of the level arrays") at full
 // resolution: the synthetic model's temperature anomaly on 180 x 201 x 360 points (13 M), bricks of 8.
 //   BM_Decode/threads: decodeUint16 of one variable (what the first values(var) of a loaded step
-//     costs), with 1 thread and with every core; counters: ms per variable, ns per point.
+//     costs), with 1 thread and with every core; time per variable, counter points/s.
 //   BM_Encode/threads: encodeUint16 (preprocessing, per variable and level).
 // The peer is a plain copy of the float32 array (what a float32 dataset's first touch of mapped
 // pages cannot beat), measured in the same run: BM_CopyFloat32.
@@ -53,10 +53,7 @@ const Data& data()
 
 void report(benchmark::State& state, size_t points)
 {
-    state.counters["ms/variable"] =
-        benchmark::Counter(double(state.iterations()) * 1e3, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-    state.counters["ns/point"] = benchmark::Counter(double(state.iterations() * points) * 1e-9,
-                                                    benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+    state.counters["points/s"] = benchmark::Counter(double(points), benchmark::Counter::kIsIterationInvariantRate);
 }
 
 void BM_Decode(benchmark::State& state)

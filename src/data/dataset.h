@@ -84,7 +84,9 @@ public:
     size_t variableCount() const { return m_values.size(); }
     ValueEncoding encoding() const { return m_encoding; }
     // grid().cellCount() values of variable `var`, canonical order. Thread-safe; the first call for a
-    // variable of a u16 volume decodes it (other threads asking for it meanwhile wait), later calls are one atomic load.
+    // variable of a u16 volume decodes it (about 14 ms for 13 M points on 2 cores,
+    // bench/value_encoding_bench.cpp; other threads asking for it meanwhile wait), later calls are
+    // one atomic load.
     const float* values(size_t var) const
     {
         const float* p = m_values[var].load(std::memory_order_acquire);

@@ -135,8 +135,13 @@ RunPlan planRun(const std::vector<fs::path>& inputs, const PreprocessOptions& op
         checkSameGrid(inputs[s], readHeader(inputs[s], options.reader).grid, plan.header.grid, inputs.front());
     plan.specs = variableSpecs(plan.header);
     preprocessing::checkPathlineOptions(options.pathlines, plan.specs);
-    checkGridFitsMemory(plan.header.grid, preprocessMemoryBytes(plan.header.grid, plan.specs.size()),
-                        inputs.front().string(), "preprocess", availableMemory());
+    // A u16 dataset's pathline phase decodes the velocities of every step it traces through.
+    uint64_t bytes = preprocessMemoryBytes(plan.header.grid, plan.specs.size());
+    if (options.encoding == ValueEncoding::Uint16 && options.pathlines.enabled) {
+        const uint64_t traced = uint64_t(std::min<size_t>(size_t(std::max(options.pathlines.steps, 0)), inputs.size() - 1)) + 1;
+        bytes = std::max(bytes, (3 * traced + 1) * plan.header.grid.cellCount() * sizeof(float));
+    }
+    checkGridFitsMemory(plan.header.grid, bytes, inputs.front().string(), "preprocess", availableMemory());
     plan.manifest = manifest(plan.levels, plan.specs, inputs, options, options.sampleRows);
     return plan;
 }
