@@ -345,6 +345,19 @@ TEST_F(EncodedDatasets, VersionOneDatasetsStillOpen)
     }
 }
 
+TEST_F(EncodedDatasets, ARerunWithTheOtherEncodingIsRefused)
+{
+    TempDir tmp("rerun_encoding");
+    std::filesystem::copy(dir("u16"), tmp / "ds", std::filesystem::copy_options::recursive);
+    try {
+        preprocess(listSnapshotFiles({testing::contestLayoutDir()}), tmp / "ds", options(ValueEncoding::Float32));
+        FAIL() << "a float32 run resumed a u16 dataset";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("a different 'encoding'"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(Dataset::open(tmp / "ds")->encoding(), ValueEncoding::Uint16);
+}
+
 TEST_F(EncodedDatasets, ADamagedFileIsOneErrorNamingIt)
 {
     TempDir tmp("damaged");
