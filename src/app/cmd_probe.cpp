@@ -85,7 +85,9 @@ const CommandRegistration kRegistration(
                 if (only >= 0 && static_cast<int>(v) != only)
                     continue;
                 const auto& info = dataset->variables()[v];
-                values[info.name] = {{"value", sampler.sample(volume->values(v), *at)},
+                // Point reads: a u16 variable is not decoded whole for one sample.
+                auto valueAt = [&](size_t iLat, size_t iR, size_t iLon) { return volume->value(v, iLat, iR, iLon); };
+                values[info.name] = {{"value", sampler.sample(valueAt, *at)},
                                      {"units", info.units},
                                      {"quantisation_error_max", quantisationBound(*volume, v, *at)}};
             }
