@@ -22,7 +22,7 @@ fi
 mkdir -p "$work"
 if [[ ! -f $work/$grid/dataset.json ]]; then
   "$raypc" synth -o "$work/nc-$grid" --steps 1 --grid "$grid" >/dev/null
-  "$raypc" preprocess "$work/nc-$grid" -o "$work/$grid" --no-pathlines --quiet >/dev/null
+  "$raypc" preprocess "$work/nc-$grid" -o "$work/$grid" --no-pathlines --encoding float32 --quiet >/dev/null  # gudhi reads the .f32 array
 fi
 IFS=x read -r nlat nr nlon <<<"$grid"
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"

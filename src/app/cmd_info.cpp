@@ -51,7 +51,10 @@ json describeFile(const std::filesystem::path& path, const ReaderOptions& option
 
 json describeDataset(const Dataset& d)
 {
-    json j{{"kind", "dataset"}, {"path", d.dir().string()}, {"dt_myr", d.dtMyr()}};
+    json j{{"kind", "dataset"},
+           {"path", d.dir().string()},
+           {"dt_myr", d.dtMyr()},
+           {"encoding", std::string(encodingName(d.encoding()))}};
     j["levels"] = json::array();
     for (size_t l = 0; l < d.levels().size(); ++l) {
         const auto& level = d.levels()[l];
@@ -91,7 +94,8 @@ void printText(const json& j)
         fmt::print("{} (netCDF, {})\n  grid: {}\n", j["path"].get<std::string>(), j["format"].get<std::string>(),
                    gridLine(j["grid"]));
     } else {
-        fmt::print("{} (RayPC dataset)\n", j["path"].get<std::string>());
+        fmt::print("{} (RayPC dataset, level arrays {})\n", j["path"].get<std::string>(),
+                   j["encoding"].get<std::string>() == "u16" ? "u16, quantised per brick" : "float32");
         for (const auto& l : j["levels"])
             fmt::print("  level {}: {}; {} bricks of {}^3\n", l["level"].get<int>(), gridLine(l["grid"]),
                        l["bricks"].get<size_t>(), l["brick_size"].get<int>());

@@ -9,8 +9,31 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+
 namespace raypc::app {
 namespace {
+
+// The largest error a sample's value can have from quantisation (docs/format.md, "Encoding of the
+// level arrays"): the sample is a weighted mean of grid values (trilinear, and in a pole cap also
+// the outermost row's ring means), so its error is at most the largest bound among those points.
+double quantisationBound(const StepVolume& volume, size_t var, const GridSampler::Location& at)
+{
+    if (volume.encoding() == ValueEncoding::Float32)
+        return 0;
+    double bound = 0;
+    for (size_t iLat : {at.lat0, at.lat1})
+        for (size_t iR : {at.r0, at.r1}) {
+            if (at.poleWeight > 0) {
+                for (size_t iLon = 0; iLon < volume.grid().nLon(); ++iLon)
+                    bound = std::max(bound, volume.errorBound(var, iLat, iR, iLon));
+            } else {
+                for (size_t iLon : {at.lon0, at.lon1})
+                    bound = std::max(bound, volume.errorBound(var, iLat, iR, iLon));
+            }
+        }
+    return bound;
+}
 
 struct ProbeArgs {
     std::string dataset, time = "0", var;
@@ -62,7 +85,11 @@ const CommandRegistration kRegistration(
                 if (only >= 0 && static_cast<int>(v) != only)
                     continue;
                 const auto& info = dataset->variables()[v];
-                values[info.name] = {{"value", sampler.sample(volume->values(v), *at)}, {"units", info.units}};
+                // Point reads: a u16 variable is not decoded whole for one sample.
+                auto valueAt = [&](size_t iLat, size_t iR, size_t iLon) { return volume->value(v, iLat, iR, iLon); };
+                values[info.name] = {{"value", sampler.sample(valueAt, *at)},
+                                     {"units", info.units},
+                                     {"quantisation_error_max", quantisationBound(*volume, v, *at)}};
             }
             j["values"] = values;
             fmt::print("{}\n", j.dump(2));

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/strings.h"
+#include "data/value_encoding.h"
 
 #include <algorithm>
 #include <charconv>
@@ -123,6 +124,11 @@ void PreprocessFlags::add(CLI::App& cmd, bool withQuiet)
     cmd.add_option("--seed", options.seed, "Seed of the sample")->capture_default_str();
     if (withQuiet)
         cmd.add_flag("-q,--quiet", options.quiet, "No progress output");
+    cmd.add_option_function<std::string>(
+           "--encoding", [this](const std::string& text) { options.encoding = parseEncoding(text, "--encoding"); },
+           "Level arrays: 'u16' (quantised per brick, error <= brick range / 131070; half the size) or 'float32' "
+           "(exact)")
+        ->default_str(std::string(encodingName(options.encoding)));
     auto& pl = options.pathlines;
     cmd.add_flag("--no-pathlines", noPathlines,
                  "Skip the critical points of --pathline-field and the pathlines seeded there");

@@ -15,6 +15,7 @@
 #include <tbb/task_arena.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 
 namespace raypc {
@@ -34,6 +35,11 @@ std::filesystem::path levelDir(const std::filesystem::path& stepDir, int level)
 std::filesystem::path valuesFile(const std::filesystem::path& levelDir, const std::string& stem)
 {
     return levelDir / (stem + ".f32");
+}
+
+std::filesystem::path encodedValuesFile(const std::filesystem::path& levelDir, const std::string& stem)
+{
+    return levelDir / (stem + ".u16");
 }
 
 std::filesystem::path boundsFile(const std::filesystem::path& levelDir, const std::string& stem)
@@ -86,16 +92,122 @@ std::shared_ptr<StepVolume> StepVolume::fromSnapshot(const Snapshot& snapshot, u
         auto& bounds = volume->m_owned.emplace_back(2 * volume->m_bricks.brickCount());
         computeBrickBounds(volume->m_grid, volume->m_bricks, values, bounds);
     }
-    for (size_t i = 0; i < snapshot.fields.size(); ++i) {
-        volume->m_values.push_back(volume->m_owned[2 * i].data());
+    const size_t count = snapshot.fields.size();
+    volume->m_valuesStorage = std::make_unique<std::atomic<const float*>[]>(count);
+    volume->m_values = {volume->m_valuesStorage.get(), count};
+    for (size_t i = 0; i < count; ++i) {
+        volume->m_values[i].store(volume->m_owned[2 * i].data());
         volume->m_bounds.push_back(volume->m_owned[2 * i + 1].data());
     }
     return volume;
 }
 
+std::shared_ptr<StepVolume> StepVolume::open(const std::filesystem::path& dir, const LevelInfo& level,
+                                             const std::vector<std::string>& fileStems, ValueEncoding encoding)
+{
+    auto volume = std::make_shared<StepVolume>();
+    volume->m_grid = level.grid;
+    volume->m_bricks = level.bricks;
+    volume->m_encoding = encoding;
+    const size_t n = volume->m_grid.cellCount(), brickCount = volume->m_bricks.brickCount();
+    const bool encoded = encoding == ValueEncoding::Uint16;
+    const size_t valueBytes = n * (encoded ? sizeof(uint16_t) : sizeof(float));
+    const size_t boundBytes = 2 * brickCount * sizeof(float);
+    const size_t count = fileStems.size();
+    volume->m_valuesStorage = std::make_unique<std::atomic<const float*>[]>(count);
+    volume->m_values = {volume->m_valuesStorage.get(), count};
+    volume->m_decoded.resize(count);
+    volume->m_mapped.reserve(2 * count);  // references below must stay valid
+    for (size_t i = 0; i < count; ++i) {
+        const auto valuesPath = encoded ? format::encodedValuesFile(dir, fileStems[i]) : format::valuesFile(dir, fileStems[i]);
+        const auto boundsPath = format::boundsFile(dir, fileStems[i]);
+        const MappedFile& values = volume->m_mapped.emplace_back(valuesPath);
+        if (values.size() != valueBytes)
+            fail("{}: {} bytes, expected {} ({} points of {})", valuesPath.string(), values.size(), valueBytes, n,
+                 encodingName(encoding));
+        const MappedFile& boundsFile = volume->m_mapped.emplace_back(boundsPath);
+        if (boundsFile.size() != boundBytes)
+            fail("{}: {} bytes, expected {}", boundsPath.string(), boundsFile.size(), boundBytes);
+        const auto* bounds = reinterpret_cast<const float*>(boundsFile.bytes().data());
+        volume->m_bounds.push_back(bounds);
+        if (encoded) {
+            // Decoding trusts the bounds (value_encoding.h); checked here, where a bad file is an error.
+            for (size_t b = 0; b < brickCount; ++b)
+                if (!(std::isfinite(bounds[2 * b]) && std::isfinite(bounds[2 * b + 1]) &&
+                      bounds[2 * b] <= bounds[2 * b + 1]))
+                    fail("{}: brick {} has bounds ({}, {}), expected finite values with min <= max (a damaged "
+                         "file; preprocess the step again)",
+                         boundsPath.string(), b, bounds[2 * b], bounds[2 * b + 1]);
+            volume->m_encoded.push_back(reinterpret_cast<const uint16_t*>(values.bytes().data()));
+        } else {
+            volume->m_values[i].store(reinterpret_cast<const float*>(values.bytes().data()));
+        }
+    }
+    return volume;
+}
+
+const float* StepVolume::decode(size_t var) const
+{
+    RAYPC_CHECK(var < variableCount());
+    std::lock_guard lock(m_decodeMutex);
+    if (const float* p = m_values[var].load(std::memory_order_acquire))
+        return p;  // another thread decoded it while this one waited
+    RAYPC_CHECK(m_encoding == ValueEncoding::Uint16);
+    const size_t n = m_grid.cellCount();
+    auto values = std::make_unique_for_overwrite<float[]>(n);
+    // Isolated: while this thread waits inside the parallel loop it must not pick up another task
+    // that asks this volume for values and blocks on the lock it holds.
+    tbb::this_task_arena::isolate([&] {
+        decodeUint16(m_grid, m_bricks, {m_encoded[var], n}, {m_bounds[var], 2 * m_bricks.brickCount()},
+                     {values.get(), n});
+    });
+    const float* p = values.get();
+    m_decoded[var] = std::move(values);
+    m_decodedBytes.fetch_add(n * sizeof(float), std::memory_order_relaxed);
+    m_values[var].store(p, std::memory_order_release);
+    return p;
+}
+
+float StepVolume::value(size_t var, size_t iLat, size_t iR, size_t iLon) const
+{
+    if (const float* p = m_values[var].load(std::memory_order_acquire))
+        return p[m_grid.index(iLat, iR, iLon)];
+    return decodeUint16Point(m_grid, m_bricks, m_encoded[var], m_bounds[var], iLat, iR, iLon);
+}
+
+double StepVolume::errorBound(size_t var, size_t iLat, size_t iR, size_t iLon) const
+{
+    RAYPC_CHECK(var < variableCount());
+    if (m_encoding != ValueEncoding::Uint16)
+        return 0;
+    const uint32_t s = m_bricks.size;
+    const size_t brick = m_bricks.index(uint32_t(iLat / s), uint32_t(iR / s), uint32_t(iLon / s));
+    return uint16ErrorBound(m_bounds[var][2 * brick], m_bounds[var][2 * brick + 1]);
+}
+
+size_t StepVolume::memoryBytes() const
+{
+    size_t bytes = decodedBytes();
+    for (const auto& file : m_mapped)
+        bytes += file.size();
+    for (const auto& array : m_owned)
+        bytes += array.size() * sizeof(float);
+    return bytes;
+}
+
+void StepVolume::touchPages() const
+{
+    volatile uint8_t sink = 0;
+    for (const auto& file : m_mapped) {
+        const auto bytes = file.bytes();
+        for (size_t i = 0; i < bytes.size(); i += 4096)
+            sink = sink + uint8_t(bytes[i]);
+    }
+}
+
 const float* StepVolume::brickBounds(size_t var, uint32_t brickSize) const
 {
-    RAYPC_CHECK(var < m_values.size());
+    RAYPC_CHECK(var < variableCount());
     if (brickSize == m_bricks.size)
         return m_bounds[var];
     std::lock_guard lock(m_derivedMutex);
@@ -106,19 +218,19 @@ const float* StepVolume::brickBounds(size_t var, uint32_t brickSize) const
         // Isolated: while this thread waits inside the parallel loop it must not pick up another
         // task that asks this volume for derived data and blocks on the lock it holds.
         tbb::this_task_arena::isolate(
-            [&] { computeBrickBounds(m_grid, layout, {m_values[var], m_grid.cellCount()}, bounds); });
+            [&] { computeBrickBounds(m_grid, layout, {values(var), m_grid.cellCount()}, bounds); });
     }
     return bounds.data();
 }
 
 const NodeGradient& StepVolume::nodeGradient(size_t var) const
 {
-    RAYPC_CHECK(var < m_values.size());
+    RAYPC_CHECK(var < variableCount());
     std::lock_guard lock(m_derivedMutex);
     auto it = m_gradients.find(var);
     if (it == m_gradients.end())
         it = m_gradients
-                 .emplace(var, tbb::this_task_arena::isolate([&] { return raypc::nodeGradient(m_grid, m_values[var]); }))
+                 .emplace(var, tbb::this_task_arena::isolate([&] { return raypc::nodeGradient(m_grid, values(var)); }))
                  .first;  // isolated as above
     return it->second;
 }
@@ -142,9 +254,13 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
         if (j.at("format").get<std::string>() != format::kFormatName)
             fail("{}: format is '{}', expected '{}'", manifestPath.string(), j.at("format").get<std::string>(),
                  format::kFormatName);
-        if (const int version = j.at("version").get<int>(); version != format::kVersion)
-            fail("{}: format version {}, this raypc reads version {}", manifestPath.string(), version,
-                 format::kVersion);
+        const int version = j.at("version").get<int>();
+        if (version < format::kOldestReadableVersion || version > format::kVersion)
+            fail("{}: format version {}, this raypc reads versions {} to {}", manifestPath.string(), version,
+                 format::kOldestReadableVersion, format::kVersion);
+        // Version 1 stored float32 only; version 2 names its encoding.
+        dataset->m_encoding = version == 1 ? ValueEncoding::Float32
+                                           : parseEncoding(j.at("encoding").get<std::string>(), manifestPath.string());
         if (j.at("status").get<std::string>() != "complete")
             fail("{}: preprocessing did not finish (status '{}'); run `raypc preprocess` again to resume",
                  dir.string(), j.at("status").get<std::string>());
@@ -221,27 +337,10 @@ std::shared_ptr<const StepVolume> Dataset::load(int step, int level) const
     if (level < 0 || level >= static_cast<int>(m_levels.size()))
         fail("{}: level {} out of range, the dataset has levels 0..{}", m_dir.string(), level,
              m_levels.size() - 1);
-    auto volume = std::make_shared<StepVolume>();
-    volume->m_grid = m_levels[level].grid;
-    volume->m_bricks = m_levels[level].bricks;
-    const auto dir = format::levelDir(format::stepDir(m_dir, step), level);
-    const size_t valueBytes = volume->m_grid.cellCount() * sizeof(float);
-    const size_t boundBytes = 2 * volume->m_bricks.brickCount() * sizeof(float);
-    for (const auto& v : m_variables) {
-        auto& values = volume->m_mapped.emplace_back(format::valuesFile(dir, v.fileStem));
-        if (values.size() != valueBytes)
-            fail("{}: {} bytes, expected {}", format::valuesFile(dir, v.fileStem).string(), values.size(),
-                 valueBytes);
-        auto& bounds = volume->m_mapped.emplace_back(format::boundsFile(dir, v.fileStem));
-        if (bounds.size() != boundBytes)
-            fail("{}: {} bytes, expected {}", format::boundsFile(dir, v.fileStem).string(), bounds.size(),
-                 boundBytes);
-    }
-    for (size_t i = 0; i < m_variables.size(); ++i) {
-        volume->m_values.push_back(reinterpret_cast<const float*>(volume->m_mapped[2 * i].bytes().data()));
-        volume->m_bounds.push_back(reinterpret_cast<const float*>(volume->m_mapped[2 * i + 1].bytes().data()));
-    }
-    return volume;
+    std::vector<std::string> stems;
+    for (const auto& v : m_variables)
+        stems.push_back(v.fileStem);
+    return StepVolume::open(format::levelDir(format::stepDir(m_dir, step), level), m_levels[level], stems, m_encoding);
 }
 
 SampleTable Dataset::loadSample(int step) const

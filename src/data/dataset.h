@@ -13,12 +13,15 @@
 #include "data/coordinates.h"
 #include "data/grid.h"
 #include "data/snapshot.h"
+#include "data/value_encoding.h"
 
+#include <atomic>
 #include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -61,17 +64,39 @@ struct LevelInfo {
 
 
 // One step at one level of detail: every variable's values plus per-brick bounds.
+//
+// A dataset of encoding u16 (value_encoding.h) decodes a variable's values on first use of
+// values(var) (in parallel) and keeps them with the volume; float32 datasets map their values.
 class StepVolume {
 public:
     // Builds a volume in memory from a snapshot (computing brick bounds); used by tests
     // and by preprocessing. Field order becomes variable order.
     static std::shared_ptr<StepVolume> fromSnapshot(const Snapshot& snapshot, uint32_t brickSize = 8);
 
+    // Maps the arrays of one level directory (docs/format.md): per variable `<stem>.f32` or
+    // `<stem>.u16`, and `<stem>.bricks.f32`. Throws raypc::Error naming the file when one is missing,
+    // has the wrong size, or (u16) holds bounds that are not finite with min <= max.
+    static std::shared_ptr<StepVolume> open(const std::filesystem::path& levelDir, const LevelInfo& level,
+                                            const std::vector<std::string>& fileStems, ValueEncoding encoding);
+
     const SphericalGrid& grid() const { return m_grid; }
     const BrickLayout& bricks() const { return m_bricks; }
     size_t variableCount() const { return m_values.size(); }
-    // grid().cellCount() values of variable `var`, canonical order.
-    const float* values(size_t var) const { return m_values[var]; }
+    ValueEncoding encoding() const { return m_encoding; }
+    // grid().cellCount() values of variable `var`, canonical order. Thread-safe; the first call for a
+    // variable of a u16 volume decodes it (about 14 ms for 13 M points on 2 cores,
+    // bench/value_encoding_bench.cpp; other threads asking for it meanwhile wait), later calls are
+    // one atomic load.
+    const float* values(size_t var) const
+    {
+        const float* p = m_values[var].load(std::memory_order_acquire);
+        return p ? p : decode(var);
+    }
+    // values(var)[grid().index(iLat, iR, iLon)], without decoding the whole variable when it is not
+    // decoded yet (for a few samples, such as the pathline phase's attributes). Thread-safe.
+    float value(size_t var, size_t iLat, size_t iR, size_t iLon) const;
+    // Whether values(var) is ready without decoding.
+    bool valuesReady(size_t var) const { return m_values[var].load(std::memory_order_acquire) != nullptr; }
     // bricks().brickCount() pairs (min, max) of variable `var`.
     const float* brickBounds(size_t var) const { return m_bounds[var]; }
     // The same over bricks of `brickSize` points (BrickLayout::forGrid(grid(), brickSize)): the stored
@@ -82,11 +107,32 @@ public:
     // with the volume (the ray caster's shading interpolates it). Thread-safe.
     const NodeGradient& nodeGradient(size_t var) const;
 
+    // The largest error of value (iLat, iR, iLon) of variable `var` against the exact value: 0 for
+    // float32, for u16 uint16ErrorBound of the brick that owns the point (value_encoding.h; without
+    // the half ulp of float32 rounding).
+    double errorBound(size_t var, size_t iLat, size_t iR, size_t iLon) const;
+
+    // Bytes of the values and bounds the volume holds now: mapped files (page cache), arrays built in
+    // memory, and the values of u16 variables decoded so far. Thread-safe.
+    size_t memoryBytes() const;
+    // Bytes of decoded values held in memory (u16 volumes; 0 for mapped float32). Thread-safe.
+    size_t decodedBytes() const { return m_decodedBytes.load(std::memory_order_relaxed); }
+    // Reads one value per page of every mapped file, so that a later pass does not wait for the disk.
+    void touchPages() const;
+
 private:
-    friend class Dataset;
+    const float* decode(size_t var) const;
+
     SphericalGrid m_grid;
     BrickLayout m_bricks;
-    std::vector<const float*> m_values, m_bounds;
+    ValueEncoding m_encoding = ValueEncoding::Float32;
+    std::unique_ptr<std::atomic<const float*>[]> m_valuesStorage;
+    std::span<std::atomic<const float*>> m_values;
+    std::vector<const float*> m_bounds;
+    std::vector<const uint16_t*> m_encoded;  // u16: per variable, decoded by decode()
+    mutable std::mutex m_decodeMutex;
+    mutable std::vector<std::unique_ptr<float[]>> m_decoded;
+    mutable std::atomic<size_t> m_decodedBytes{0};
     mutable std::mutex m_derivedMutex;
     mutable std::map<std::pair<size_t, uint32_t>, std::vector<float>> m_derivedBounds;
     mutable std::map<size_t, NodeGradient> m_gradients;
@@ -142,13 +188,16 @@ public:
     const std::vector<StepInfo>& steps() const { return m_steps; }
     const std::vector<LevelInfo>& levels() const { return m_levels; }
     double dtMyr() const { return m_dtMyr; }
+    // How the level arrays are stored: float32 (format version 1, or `--encoding float32`) or u16.
+    ValueEncoding encoding() const { return m_encoding; }
 
     // The range checks of every request that names a step or a level (CLI options, state documents,
     // HTTP parameters): throw raypc::Error "<what>: 300 out of range 0..11" unless valid.
     void checkStep(int step, std::string_view what = "step") const;
     void checkLevel(int level, std::string_view what = "level") const;
 
-    // Maps step `step` at level `level`. Throws raypc::Error if out of range or unreadable.
+    // Maps step `step` at level `level` (StepVolume::open). Throws raypc::Error if out of range or
+    // unreadable.
     std::shared_ptr<const StepVolume> load(int step, int level) const;
     SampleTable loadSample(int step) const;
 
@@ -159,6 +208,7 @@ private:
     std::vector<LevelInfo> m_levels;
     double m_dtMyr = 2.0;
     size_t m_sampleRows = 0;
+    ValueEncoding m_encoding = ValueEncoding::Float32;
 };
 
 }  // namespace raypc

@@ -34,16 +34,17 @@ constexpr double kE[7] = {71.0 / 57600,      0, -71.0 / 16695, 71.0 / 1920, -172
 PathlineTracer::PathlineTracer(const FieldSeries& series, size_t vx, size_t vy, size_t vz, TracerOptions options)
     : m_series(series), m_sampler(series.grid), m_v{vx, vy, vz}, m_options(options)
 {
-    if (series.timesMyr.empty() || series.fields.size() != series.timesMyr.size())
-        fail("pathlines: {} step times for {} steps of fields", series.timesMyr.size(), series.fields.size());
+    if (series.timesMyr.empty() || series.stepCount() != series.timesMyr.size())
+        fail("pathlines: {} step times for {} steps of fields", series.timesMyr.size(), series.stepCount());
     for (size_t k = 1; k < series.timesMyr.size(); ++k)
         if (!(series.timesMyr[k] > series.timesMyr[k - 1]))
             fail("pathlines: step times are not ascending ({} then {} Myr)", series.timesMyr[k - 1],
                  series.timesMyr[k]);
-    for (const auto& step : series.fields)
+    for (size_t k = 0; k < series.stepCount(); ++k)
         for (size_t v : m_v)
-            if (v >= step.size())
-                fail("pathlines: velocity component {} out of range, a step has {} fields", v, step.size());
+            if (v >= series.variableCount(k))
+                fail("pathlines: velocity component {} out of range, a step has {} fields", v,
+                     series.variableCount(k));
     if (!(options.toleranceKm > 0 && options.maxStepMyr > 0 && options.maxSegmentKm > 0 && options.maxPoints >= 2))
         fail("pathlines: tolerance, step, segment and point limits must be positive");
     m_rMinKm = series.grid.rKm.front();
@@ -92,8 +93,8 @@ std::optional<Vec3d> PathlineTracer::velocityKmPerMyr(const Vec3d& pKm, double t
     bracketTime(timeMyr, k0, k1, w);
     double v[3];
     for (int c = 0; c < 3; ++c) {
-        const double a = m_sampler.sample(m_series.fields[k0][m_v[c]], *at);
-        const double b = w > 0 ? m_sampler.sample(m_series.fields[k1][m_v[c]], *at) : a;
+        const double a = m_sampler.sample(m_series.field(k0, m_v[c]), *at);
+        const double b = w > 0 ? m_sampler.sample(m_series.field(k1, m_v[c]), *at) : a;
         v[c] = (a + (b - a) * w) * kMpsToKmPerMyr;
     }
     return Vec3d{v[0], v[1], v[2]};
@@ -107,8 +108,11 @@ double PathlineTracer::sample(size_t var, const Vec3d& pKm, double timeMyr) cons
     size_t k0, k1;
     double w;
     bracketTime(timeMyr, k0, k1, w);
-    const double a = m_sampler.sample(m_series.fields[k0][var], *at);
-    const double b = w > 0 ? m_sampler.sample(m_series.fields[k1][var], *at) : a;
+    // A few samples per line (its attributes): a u16 variable is not decoded for them.
+    auto at0 = [&](size_t i, size_t j, size_t k) { return m_series.value(k0, var, i, j, k); };
+    auto at1 = [&](size_t i, size_t j, size_t k) { return m_series.value(k1, var, i, j, k); };
+    const double a = m_sampler.sample(at0, *at);
+    const double b = w > 0 ? m_sampler.sample(at1, *at) : a;
     return a + (b - a) * w;
 }
 

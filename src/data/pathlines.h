@@ -13,11 +13,13 @@
 
 #include "core/spherical.h"
 #include "data/critical_points.h"
+#include "data/dataset.h"
 #include "data/grid.h"
 #include "data/sampler.h"
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,11 +29,29 @@ namespace raypc {
 inline constexpr double kMpsToKmPerMyr = kSecondsPerMyr / 1000.0;  // 3.15576e10
 
 // Fields of several steps on one grid: fields[step][variable] points at grid.cellCount() values
-// in canonical order. The pointers are not owned.
+// in canonical order (not owned); or, when `volumes` is set, each step's values come from its
+// volume, so that a u16 dataset decodes only the arrays a trace reads (StepVolume::values).
 struct FieldSeries {
     SphericalGrid grid;
     std::vector<double> timesMyr;                  // ascending, one per step
-    std::vector<std::vector<const float*>> fields;  // [step][variable]
+    std::vector<std::vector<const float*>> fields;  // [step][variable]; empty when `volumes` is set
+    std::vector<std::shared_ptr<const StepVolume>> volumes;  // [step]
+
+    size_t stepCount() const { return volumes.empty() ? fields.size() : volumes.size(); }
+    size_t variableCount(size_t step) const
+    {
+        return volumes.empty() ? fields[step].size() : volumes[step]->variableCount();
+    }
+    const float* field(size_t step, size_t variable) const
+    {
+        return volumes.empty() ? fields[step][variable] : volumes[step]->values(variable);
+    }
+    // One value, without decoding the whole variable (StepVolume::value).
+    float value(size_t step, size_t variable, size_t iLat, size_t iR, size_t iLon) const
+    {
+        return volumes.empty() ? fields[step][variable][grid.index(iLat, iR, iLon)]
+                               : volumes[step]->value(variable, iLat, iR, iLon);
+    }
 };
 
 struct TracerOptions {

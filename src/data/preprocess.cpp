@@ -47,12 +47,13 @@ private:
     int m_exceptions = std::uncaught_exceptions();
 };
 
-void writeArray(const fs::path& path, std::span<const float> values)
+template <typename T>
+void writeArray(const fs::path& path, std::span<const T> values)
 {
     std::FILE* f = std::fopen(path.c_str(), "wb");
     if (!f)
         fail("{}: cannot create", path.string());
-    const size_t written = std::fwrite(values.data(), sizeof(float), values.size(), f);
+    const size_t written = std::fwrite(values.data(), sizeof(T), values.size(), f);
     const bool ok = written == values.size() && std::fclose(f) == 0;
     if (!ok)
         fail("{}: write failed (disk full?)", path.string());
@@ -79,6 +80,7 @@ json manifest(const std::vector<SphericalGrid>& levels, const std::vector<Variab
     json j;
     j["format"] = format::kFormatName;
     j["version"] = format::kVersion;
+    j["encoding"] = encodingName(options.encoding);
     j["status"] = "incomplete";
     j["dt_myr"] = options.dtMyr;
     j["brick_size"] = options.brickSize;
@@ -133,8 +135,13 @@ RunPlan planRun(const std::vector<fs::path>& inputs, const PreprocessOptions& op
         checkSameGrid(inputs[s], readHeader(inputs[s], options.reader).grid, plan.header.grid, inputs.front());
     plan.specs = variableSpecs(plan.header);
     preprocessing::checkPathlineOptions(options.pathlines, plan.specs);
-    checkGridFitsMemory(plan.header.grid, preprocessMemoryBytes(plan.header.grid, plan.specs.size()),
-                        inputs.front().string(), "preprocess", availableMemory());
+    // A u16 dataset's pathline phase decodes the velocities of every step it traces through.
+    uint64_t bytes = preprocessMemoryBytes(plan.header.grid, plan.specs.size());
+    if (options.encoding == ValueEncoding::Uint16 && options.pathlines.enabled) {
+        const uint64_t traced = uint64_t(std::min<size_t>(size_t(std::max(options.pathlines.steps, 0)), inputs.size() - 1)) + 1;
+        bytes = std::max(bytes, (3 * traced + 1) * plan.header.grid.cellCount() * sizeof(float));
+    }
+    checkGridFitsMemory(plan.header.grid, bytes, inputs.front().string(), "preprocess", availableMemory());
     plan.manifest = manifest(plan.levels, plan.specs, inputs, options, options.sampleRows);
     return plan;
 }
@@ -181,7 +188,7 @@ private:
             for (auto& v : old["variables"])
                 if (v.is_object())
                     v.erase("global");
-        for (const char* key : {"format", "version", "levels", "variables", "dt_myr", "brick_size", "sample"})
+        for (const char* key : {"format", "version", "encoding", "levels", "variables", "dt_myr", "brick_size", "sample"})
             if (old.value(key, json()) != j[key])
                 fail("{}: holds a dataset made with a different '{}' (other inputs or options); "
                      "use another output directory or remove it",
@@ -312,13 +319,20 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
             const fs::path dir = format::levelDir(tmpDir, level);
             std::vector<float> bounds(2 * layout.brickCount());
             computeBrickBounds(grid, layout, current[v], bounds);
-            writeArray(format::valuesFile(dir, stem), current[v]);
-            writeArray(format::boundsFile(dir, stem), bounds);
+            if (options.encoding == ValueEncoding::Uint16) {
+                // Quantised from the exact values; coarser levels are computed from the exact ones too.
+                std::vector<uint16_t> encoded(current[v].size());
+                encodeUint16(grid, layout, current[v], bounds, encoded);
+                writeArray<uint16_t>(format::encodedValuesFile(dir, stem), encoded);
+            } else {
+                writeArray<float>(format::valuesFile(dir, stem), current[v]);
+            }
+            writeArray<float>(format::boundsFile(dir, stem), bounds);
             if (level + 1 < kLevelCount)
                 current[v] = coarsenField(grid, current[v]);
         }
     });
-    writeArray(tmpDir / format::kStepSample, sample);
+    writeArray<float>(tmpDir / format::kStepSample, sample);
     {
         std::ofstream file(tmpDir / format::kStepManifest);
         file << stepJson.dump(1);

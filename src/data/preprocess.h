@@ -45,6 +45,8 @@ struct PreprocessOptions {
     size_t sampleRows = 100000;  // parallel-coordinates sample size (cells, with replacement)
     uint64_t seed = 1;           // for the sample
     uint32_t brickSize = 8;
+    // Level arrays as u16 quantised per brick (half the size; docs/format.md) or exact float32.
+    ValueEncoding encoding = ValueEncoding::Uint16;
     bool quiet = false;          // no progress output
     PathlineOptions pathlines;
     // For a run in the background (`raypc serve FILES`, app/series_inputs.h), one process only:

@@ -1,6 +1,5 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "core/mapped_file.h"
 #include "core/mpi.h"
 #include "core/progress.h"
 #include "core/strings.h"
@@ -24,38 +23,35 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-// The level-0 arrays of written steps, mapped on demand and released when no longer needed.
+// The level-0 arrays of written steps, opened on demand and released when no longer needed. A u16
+// variable is decoded when a trace first reads it: the pathlines see the values every reader sees.
 class StepArrays {
 public:
-    StepArrays(fs::path dataset, std::vector<VariableSpec> specs) : m_dir(std::move(dataset)), m_specs(std::move(specs)) {}
-
-    const std::vector<const float*>& fields(int step, size_t cellCount)
+    StepArrays(fs::path dataset, const SphericalGrid& grid, const std::vector<VariableSpec>& specs,
+               const PreprocessOptions& options)
+        : m_dir(std::move(dataset)), m_level{grid, BrickLayout::forGrid(grid, options.brickSize)},
+          m_encoding(options.encoding)
     {
-        auto it = m_steps.find(step);
-        if (it != m_steps.end())
-            return it->second.pointers;
-        Mapped& m = m_steps[step];
-        const fs::path dir = format::levelDir(format::stepDir(m_dir, step), 0);
-        for (const auto& v : m_specs) {
-            const fs::path path = format::valuesFile(dir, fileSafeName(v.name));
-            auto& file = m.files.emplace_back(path);
-            if (file.size() != cellCount * sizeof(float))
-                fail("{}: {} bytes, expected {}", path.string(), file.size(), cellCount * sizeof(float));
-            m.pointers.push_back(reinterpret_cast<const float*>(file.bytes().data()));
-        }
-        return m.pointers;
+        for (const auto& v : specs)
+            m_stems.push_back(fileSafeName(v.name));
     }
-    // Unmaps the steps before `step`.
+
+    const std::shared_ptr<const StepVolume>& volume(int step)
+    {
+        auto& v = m_steps[step];
+        if (!v)
+            v = StepVolume::open(format::levelDir(format::stepDir(m_dir, step), 0), m_level, m_stems, m_encoding);
+        return v;
+    }
+    // Releases the steps before `step`.
     void releaseBefore(int step) { m_steps.erase(m_steps.begin(), m_steps.lower_bound(step)); }
 
 private:
-    struct Mapped {
-        std::vector<MappedFile> files;
-        std::vector<const float*> pointers;
-    };
     fs::path m_dir;
-    std::vector<VariableSpec> m_specs;
-    std::map<int, Mapped> m_steps;
+    LevelInfo m_level;
+    ValueEncoding m_encoding;
+    std::vector<std::string> m_stems;
+    std::map<int, std::shared_ptr<const StepVolume>> m_steps;
 };
 
 }  // namespace
@@ -154,7 +150,7 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
     std::optional<Progress> progress;
     if (!options.quiet && !todo.empty() && mpi::isRoot())
         progress.emplace("pathlines", static_cast<int64_t>(todo.size()), "steps");
-    StepArrays arrays(outDir, specs);
+    StepArrays arrays(outDir, grid, specs, options);
     int64_t reported = 0, written = 0, lines = 0;
     auto traceStep = [&](int s) {
         throwIfCancelled(options);
@@ -164,9 +160,9 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
         series.grid = grid;
         for (int k = s; k <= endStep; ++k) {
             series.timesMyr.push_back(stepJsons[k].at("time_myr").get<double>());
-            series.fields.push_back(arrays.fields(k, grid.cellCount()));
+            series.volumes.push_back(arrays.volume(k));
         }
-        const std::span<const float> values(series.fields.front()[field], grid.cellCount());
+        const std::span<const float> values(series.field(0, field), grid.cellCount());
         const auto all = findCriticalPoints(grid, values);
         const SeedSelection selection = selectSeeds(grid, values, all, po.filter);
         const auto& seeds = selection.seeds;

@@ -64,19 +64,4 @@ std::optional<GridSampler::Location> GridSampler::locate(double latDeg, double l
     return at;
 }
 
-double GridSampler::sample(const float* values, const Location& at) const
-{
-    const auto& g = m_grid;
-    auto v = [&](size_t iLat, size_t iR, size_t iLon) { return static_cast<double>(values[g.index(iLat, iR, iLon)]); };
-    auto lerp = [](double a, double b, double t) { return a + (b - a) * t; };
-    auto atLat = [&](size_t iLat, size_t iR) { return lerp(v(iLat, iR, at.lon0), v(iLat, iR, at.lon1), at.tLon); };
-    auto atR = [&](size_t iR) {
-        double value = lerp(atLat(at.lat0, iR), atLat(at.lat1, iR), at.tLat);
-        if (at.poleWeight > 0)
-            value = lerp(value, g.ringMean(values, at.lat0, iR, m_lonWidthsDeg), at.poleWeight);
-        return value;
-    };
-    return lerp(atR(at.r0), atR(at.r1), at.tR);
-}
-
 }  // namespace raypc

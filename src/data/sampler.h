@@ -14,6 +14,7 @@
 #include "data/grid.h"
 
 #include <optional>
+#include <type_traits>
 #include <vector>
 
 namespace raypc {
@@ -35,7 +36,32 @@ public:
     std::optional<Location> locate(double latDeg, double lonDeg, double rKm) const;
 
     // Interpolated value of `values` (canonical order, grid.cellCount() entries) at `at`.
-    double sample(const float* values, const Location& at) const;
+    double sample(const float* values, const Location& at) const
+    {
+        return sample([&](size_t iLat, size_t iR, size_t iLon) { return values[m_grid.index(iLat, iR, iLon)]; }, at);
+    }
+    // The same with the grid values given by `valueAt(iLat, iR, iLon)` (a float).
+    template <typename ValueAt>
+        requires std::is_invocable_r_v<float, ValueAt, size_t, size_t, size_t>
+    double sample(const ValueAt& valueAt, const Location& at) const
+    {
+        const auto& g = m_grid;
+        auto v = [&](size_t iLat, size_t iR, size_t iLon) { return static_cast<double>(valueAt(iLat, iR, iLon)); };
+        auto lerp = [](double a, double b, double t) { return a + (b - a) * t; };
+        auto atLat = [&](size_t iLat, size_t iR) { return lerp(v(iLat, iR, at.lon0), v(iLat, iR, at.lon1), at.tLon); };
+        auto atR = [&](size_t iR) {
+            double value = lerp(atLat(at.lat0, iR), atLat(at.lat1, iR), at.tLat);
+            if (at.poleWeight > 0) {
+                // The row's ring mean (SphericalGrid::ringMean), weighted by lon width.
+                double sum = 0;
+                for (size_t i = 0; i < g.nLon(); ++i)
+                    sum += v(at.lat0, iR, i) * m_lonWidthsDeg[i];
+                value = lerp(value, sum / 360.0, at.poleWeight);
+            }
+            return value;
+        };
+        return lerp(atR(at.r0), atR(at.r1), at.tR);
+    }
 
     const SphericalGrid& grid() const { return m_grid; }
 

@@ -184,7 +184,7 @@ std::vector<float> coordinateBrickBounds(const SphericalGrid& g, const BrickLayo
 
 struct VolumeRenderer::Impl {
     AxisTable lat, r, lon;
-    std::vector<std::vector<float>> capMeans;  // per variable: 2 * nR
+    std::vector<std::vector<float>> capMeans;  // per variable: 2 * nR, empty until capMeans(variable)
     // Shading's gradient (KernelParams::gradLat, gradR, gradLon) towards the pole caps: 0 for lat
     // and lon, the radial derivative of the ring means for r (of gradientVariable's).
     std::vector<float> zeroCapMean, gradRCapMean;
@@ -232,12 +232,20 @@ VolumeRenderer::VolumeRenderer(std::shared_ptr<const StepVolume> volume)
     im.dAngleRad = float(degToRad(std::min((g.latDeg.back() - g.latDeg.front()) / double(g.nLat() - 1),
                                            360.0 / double(g.nLon()))));
 
-    // Ring means of the outermost rows, towards which the pole caps blend (as GridSampler does).
-    const std::vector<double> lonWidths = g.lonWidthsDeg();
+    // Ring means of the outermost rows: per variable on first use (capMeans), so that a u16 volume
+    // decodes only the variables a frame shows.
     im.capMeans.resize(m_volume->variableCount());
-    for (size_t v = 0; v < m_volume->variableCount(); ++v) {
-        const float* values = m_volume->values(v);
-        auto& means = im.capMeans[v];
+}
+
+// The ring means of the outermost rows of `variable`, towards which the pole caps blend (as
+// GridSampler does). Computed on first use; called from setParams (restart class), not during passes.
+const std::vector<float>& VolumeRenderer::capMeans(int variable) const
+{
+    std::vector<float>& means = m_impl->capMeans[size_t(variable)];
+    if (means.empty()) {
+        const SphericalGrid& g = m_volume->grid();
+        const std::vector<double> lonWidths = g.lonWidthsDeg();
+        const float* values = m_volume->values(size_t(variable));
         means.resize(2 * g.nR());
         for (int side = 0; side < 2; ++side) {
             const size_t iLat = side == 0 ? 0 : g.nLat() - 1;
@@ -245,6 +253,7 @@ VolumeRenderer::VolumeRenderer(std::shared_ptr<const StepVolume> volume)
                 means[side * g.nR() + iR] = float(g.ringMean(values, iLat, iR, lonWidths));
         }
     }
+    return means;
 }
 
 VolumeRenderer::~VolumeRenderer() = default;
@@ -299,7 +308,7 @@ void VolumeRenderer::bindGradient(int variable)
     if (im.gradientVariable != variable) {
         // The radial derivative of the ring means, with nodeGradient's stencil (one-sided at the ends).
         const std::vector<double>& rKm = m_volume->grid().rKm;
-        const std::vector<float>& means = im.capMeans[size_t(variable)];
+        const std::vector<float>& means = capMeans(variable);
         im.zeroCapMean.assign(2 * nR, 0.0f);
         im.gradRCapMean.resize(2 * nR);
         for (size_t side = 0; side < 2; ++side)
@@ -318,7 +327,7 @@ void VolumeRenderer::bindGradient(int variable)
 
 kernel::KernelVariable VolumeRenderer::kernelVariable(int variable) const
 {
-    return {m_volume->values(size_t(variable)), m_impl->capMeans[size_t(variable)].data()};
+    return {m_volume->values(size_t(variable)), capMeans(variable).data()};
 }
 
 void VolumeRenderer::bakeTables(const RenderParams& p)

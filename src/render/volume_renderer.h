@@ -172,6 +172,7 @@ private:
     void fillKernelParams(const RenderParams& params);
     void buildSkipGrid();
     kernel::KernelVariable kernelVariable(int variable) const;
+    const std::vector<float>& capMeans(int variable) const;
     // With shading.shadows: brings the shadow volume up to date (what changed since the last pass)
     // and binds it into `k`, the pass's kernel view.
     void bindShadows(kernel::KernelParams& k);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <exception>
+#include <vector>
 
 namespace raypc::server {
 
@@ -25,9 +26,10 @@ StepCache::~StepCache()
 
 size_t StepCache::volumeBytes(const StepVolume& volume)
 {
-    return volume.variableCount() *
-               (volume.grid().cellCount() * sizeof(float) + volume.bricks().brickCount() * 2 * sizeof(float)) +
-           3 * volume.grid().cellCount() * sizeof(float);
+    const size_t floats = volume.grid().cellCount() * sizeof(float);
+    const size_t decodeRoom =
+        volume.encoding() == ValueEncoding::Uint16 ? floats - std::min(floats, volume.decodedBytes()) : 0;
+    return volume.memoryBytes() + 3 * floats + decodeRoom;
 }
 
 std::shared_ptr<const StepVolume> StepCache::findLocked(int step, int level)
@@ -35,9 +37,23 @@ std::shared_ptr<const StepVolume> StepCache::findLocked(int step, int level)
     for (auto it = m_lru.begin(); it != m_lru.end(); ++it)
         if (it->step == step && it->level == level) {
             m_lru.splice(m_lru.begin(), m_lru, it);
-            return it->volume;
+            // A u16 volume grows as renderers decode its variables: counted now.
+            Entry& e = m_lru.front();
+            const size_t bytes = volumeBytes(*e.volume);
+            m_bytes += bytes - e.bytes;
+            e.bytes = bytes;
+            evictLocked();
+            return e.volume;
         }
     return nullptr;
+}
+
+void StepCache::evictLocked()
+{
+    while (m_lru.size() > 1 && (m_bytes > m_maxBytes || m_lru.size() > m_maxEntries)) {
+        m_bytes -= m_lru.back().bytes;
+        m_lru.pop_back();
+    }
 }
 
 void StepCache::insert(int step, int level, std::shared_ptr<const StepVolume> volume)
@@ -49,10 +65,7 @@ void StepCache::insert(int step, int level, std::shared_ptr<const StepVolume> vo
     m_lru.push_front({step, level, std::move(volume), bytes});
     m_bytes += bytes;
     // Evict from the back, but always keep the entry just inserted.
-    while (m_lru.size() > 1 && (m_bytes > m_maxBytes || m_lru.size() > m_maxEntries)) {
-        m_bytes -= m_lru.back().bytes;
-        m_lru.pop_back();
-    }
+    evictLocked();
 }
 
 std::shared_ptr<const StepVolume> StepCache::get(int step, int level)
@@ -151,14 +164,22 @@ void StepCache::prefetchLoop()
         if (!cached) {
             try {
                 auto volume = m_loader(step, level);
-                // Touch one value per page so that the mapped data is read now, not during the next pass.
-                volatile float sink = 0;
-                for (size_t v = 0; v < volume->variableCount(); ++v) {
-                    const float* values = volume->values(v);
-                    const size_t n = volume->grid().cellCount();
-                    for (size_t i = 0; i < n; i += 1024)
-                        sink = sink + values[i];
+                // Read the mapped data now, not during the next pass, and decode what the session
+                // shows: the variables the most recently used volume of this level has decoded.
+                volume->touchPages();
+                std::vector<size_t> shown;
+                {
+                    std::lock_guard relock(m_mutex);
+                    for (const auto& e : m_lru)
+                        if (e.level == level && e.volume->variableCount() == volume->variableCount()) {
+                            for (size_t v = 0; v < e.volume->variableCount(); ++v)
+                                if (e.volume->encoding() == ValueEncoding::Uint16 && e.volume->valuesReady(v))
+                                    shown.push_back(v);
+                            break;
+                        }
                 }
+                for (size_t v : shown)
+                    volume->values(v);
                 insert(step, level, std::move(volume));
             } catch (const std::exception& e) {
                 // A worker thread logs and reports: the session that asks for this step gets the error itself.

@@ -3,7 +3,8 @@
 // Bounded by bytes and by entries (least recently used first out), so memory does not grow with
 // the number of steps played. Volumes still used by a renderer stay alive through their shared_ptr
 // after eviction; the cache only stops holding them. Prefetch loads a (step, level) on a background
-// thread and touches its pages, so that the next step of a playback is in memory when asked for;
+// thread, touches its pages and decodes the u16 variables that the most recently used volume of that
+// level has decoded, so that the next step of a playback is in memory and decoded when asked for;
 // only the newest prefetch request waits, older ones are dropped.
 //
 // Thread safety: every member function may be called from any thread.
@@ -47,8 +48,11 @@ public:
     size_t entries() const;
     uint64_t loads() const;  // loader calls so far (misses and prefetches)
 
-    // Bytes a volume occupies: its values and brick bounds, and room for the shading gradient of one
-    // variable (3 floats a grid point, StepVolume::nodeGradient), which it keeps once shown lit.
+    // Bytes a volume occupies: its values and brick bounds (StepVolume::memoryBytes: mapped, built or
+    // decoded), room for the shading gradient of one variable (3 floats a grid point,
+    // StepVolume::nodeGradient), which it keeps once shown lit, and for a u16 volume room for at
+    // least one decoded variable (the one a renderer colours by). Variables decoded after the volume
+    // entered the cache are counted when it is next asked for.
     static size_t volumeBytes(const StepVolume& volume);
 
 private:
@@ -58,6 +62,8 @@ private:
         size_t bytes;
     };
     std::shared_ptr<const StepVolume> findLocked(int step, int level);
+    // Evicts from the back until within bounds, always keeping the front entry.
+    void evictLocked();
     void insert(int step, int level, std::shared_ptr<const StepVolume> volume);
     void prefetchLoop();
 

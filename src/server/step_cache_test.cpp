@@ -1,10 +1,14 @@
 #include "server/step_cache.h"
 
 #include "core/error.h"
+#include "data/netcdf_reader.h"
+#include "data/preprocess.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <atomic>
+#include <filesystem>
 
 namespace raypc::server {
 namespace {
@@ -144,6 +148,46 @@ TEST(StepCache, ScansDoNotEvictTheWorkingSet)
     roomy.get(4, 0);  // evicts the scanned entry first
     EXPECT_FALSE(roomy.contains(3, 0));
     EXPECT_TRUE(roomy.contains(0, 0));
+}
+
+// A u16 dataset's volumes grow as their variables are decoded (docs/format.md, "Loading"): the cache
+// counts the decoded values when a volume is next asked for, and a prefetch decodes the variables the
+// current step shows.
+TEST(StepCache, CountsDecodedValuesAndPrefetchDecodesWhatIsShown)
+{
+    const auto dir = std::filesystem::temp_directory_path() / ("raypc_step_cache_u16_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    PreprocessOptions o;
+    o.quiet = true;
+    o.sampleRows = 500;
+    o.pathlines.enabled = false;
+    preprocess(listSnapshotFiles({std::filesystem::path(RAYPC_SHARED_DIR) / "data" / "contest-layout"}), dir, o);
+    {
+        const auto dataset = Dataset::open(dir);
+        ASSERT_EQ(dataset->encoding(), ValueEncoding::Uint16);
+        StepCache cache([dataset](int step, int level) { return dataset->load(step, level); }, size_t(1) << 30, 8);
+        const auto a = cache.get(0, 0);
+        const size_t floats = a->grid().cellCount() * sizeof(float);
+        // Mapped u16 arrays and bounds, room for a gradient (3 floats a point) and one decoded variable.
+        size_t mapped = 0;
+        for (size_t v = 0; v < a->variableCount(); ++v)
+            mapped += a->grid().cellCount() * 2 + a->bricks().brickCount() * 2 * sizeof(float);
+        EXPECT_EQ(a->memoryBytes(), mapped);
+        EXPECT_EQ(cache.bytes(), mapped + 3 * floats + floats);
+        a->values(2);
+        a->values(5);
+        EXPECT_EQ(a->decodedBytes(), 2 * floats);
+        cache.get(0, 0);
+        EXPECT_EQ(cache.bytes(), mapped + 2 * floats + 3 * floats);
+        cache.prefetch(1, 0);
+        cache.waitForPrefetch();
+        const auto b = cache.get(1, 0);
+        EXPECT_TRUE(b->valuesReady(2));
+        EXPECT_TRUE(b->valuesReady(5));
+        EXPECT_FALSE(b->valuesReady(0));
+        EXPECT_EQ(cache.bytes(), 2 * (mapped + 2 * floats + 3 * floats));
+    }
+    std::filesystem::remove_all(dir);
 }
 
 }  // namespace

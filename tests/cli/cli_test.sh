@@ -81,8 +81,25 @@ fixture_info_probe_export)
   check "info names radial velocity in cm/yr" grep -q '"cm/yr"' <<<"$info"
   # truth.json: the radial velocity is u0 = 5e-11 m/s = 0.15779 cm/yr everywhere.
   probe=$("$raypc" probe "$work/ds" --time 4Myr --lat 33 --lon 359.5 --r 5000 --var "radial velocity")
-  value=$(tr -d ' \n' <<<"$probe" | grep -o '"radialvelocity":{"units":"cm/yr","value":[^}]*' | sed 's/.*"value"://')
+  value=$(tr -d ' \n' <<<"$probe" | grep -o '"radialvelocity":{[^}]*' | sed 's/.*"value"://')
+  bound=$(tr -d ' \n' <<<"$probe" | grep -o '"radialvelocity":{[^}]*' | sed 's/.*"quantisation_error_max":\([^,]*\),.*/\1/')
   check "probe radial velocity '$value' == u0" awk -v v="$value" 'BEGIN { exit !(v != "" && (v - 0.157788) ^ 2 < 1e-8) }'
+  # A field constant up to float32 rounding has bricks of (almost) no range: a bound of (almost) 0.
+  check "probe reports the quantisation bound '$bound' (about 0 for a constant field)" awk -v b="$bound" 'BEGIN { exit !(b != "" && b + 0 < 1e-9) }'
+  # Every variable probed in a u16 and a float32 dataset of the fixture: within the bound probe prints.
+  "$raypc" preprocess "$fixture" -o "$work/ds32" --quiet --sample-rows 2000 --no-pathlines --encoding float32 >/dev/null
+  "$raypc" probe "$work/ds" --time 2 --lat 47.5 --lon 121 --r 4100 >"$work/p16.json"
+  "$raypc" probe "$work/ds32" --time 2 --lat 47.5 --lon 121 --r 4100 >"$work/p32.json"
+  check "u16 probe values are within their quantisation bound of float32's" python3 - "$work/p16.json" "$work/p32.json" <<'PY'
+import json, sys
+a, b = (json.load(open(f))["values"] for f in sys.argv[1:3])
+assert len(a) == 11 and a.keys() == b.keys()
+assert sum(a[k]["quantisation_error_max"] > 0 for k in a) >= 8
+for k in a:
+    assert b[k]["quantisation_error_max"] == 0, k
+    d = abs(a[k]["value"] - b[k]["value"])
+    assert d <= a[k]["quantisation_error_max"] * (1 + 1e-6) + 1e-6 * abs(b[k]["value"]), (k, d, a[k])
+PY
   "$raypc" export "$work/ds" --time 2 -o "$work/sample.csv" >/dev/null
   check "export writes 2000 rows + header" test "$(wc -l < "$work/sample.csv")" -eq 2001
   check "export header has units" grep -q '^x \[km\],.*temperature anomaly \[K\]' "$work/sample.csv"

@@ -75,7 +75,7 @@ errors)
   check "a NaN in one step: step 4 (the bad file) was not written" test ! -e "$work/dsbad/steps/0004"
   # A command that is not shared out runs once, on rank 0.
   ranks 3 info "$work/ds" >"$work/info" 2>&1
-  check "info under 3 ranks prints once" test "$(grep -c '(RayPC dataset)' "$work/info")" -eq 1
+  check "info under 3 ranks prints once" test "$(grep -c '(RayPC dataset' "$work/info")" -eq 1
   # The demo runs in one process: refused with one line, at once, nothing made.
   timeout 60 "$mpirun_local" -np 2 "$raypc" demo --dir "$work/demo" --no-serve >"$work/demo.out" 2>&1
   status=$?
@@ -137,8 +137,8 @@ preprocess)
   done
   # The files really hold data (two datasets of empty files would compare equal too).
   check "the dataset is complete" grep -q '"status": "complete"' "$work/ds3/dataset.json"
-  check "step 7's temperature holds 24x31x48 floats" \
-    test "$(stat -c %s "$work/ds3/steps/0007/L0/temperature.f32")" -eq $((24 * 31 * 48 * 4))
+  check "step 7's temperature holds 24x31x48 u16 values" \
+    test "$(stat -c %s "$work/ds3/steps/0007/L0/temperature.u16")" -eq $((24 * 31 * 48 * 2))
   ;;
 preprocess_resume)
   "$raypc" synth -o "$work/nc" --steps 8 --grid 24x31x48 >/dev/null 2>&1
