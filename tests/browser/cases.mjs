@@ -815,9 +815,10 @@ const cases = {
         const r = window.__raypc, h = r.headers[r.headers.length - 1];
         return { sent: r.sentLog.find((e) => e.id === h.id), state: r.state(), pc: r.parcoords.brushes(), errors: r.errors };
       });
+      // Presets older than state version 7 name no camera.views: the state then has the default, [].
       check(JSON.stringify(shown.sent.brushes) === JSON.stringify(p.state.brushes),
         `${p.name}: the frame shown was rendered with brushes ${JSON.stringify(shown.sent.brushes)}, the preset has ${JSON.stringify(p.state.brushes)}`);
-      check(JSON.stringify(shown.state.camera) === JSON.stringify(p.state.camera) && shown.state.color.variable === p.state.color.variable &&
+      check(JSON.stringify(shown.state.camera) === JSON.stringify({ ...p.state.camera, views: p.state.camera.views ?? [] }) && shown.state.color.variable === p.state.color.variable &&
         JSON.stringify(shown.state.color.opacity) === JSON.stringify(p.state.color.opacity),
         `${p.name}: camera or colours not applied: ${JSON.stringify(shown.state.camera)} ${JSON.stringify(shown.state.color)}`);
       // The preset's step (the last one when the dataset has fewer), its pathlines or none, the image
@@ -859,10 +860,17 @@ const cases = {
     }));
     check(plot.stats.steps.length === nSteps && plot.dots === nSteps && plot.marked === 1 && plot.profile > 20,
       `selection-over-time plot: ${plot.stats.steps.length} steps, ${plot.dots} dots, ${plot.marked} marks, profile path of ${plot.profile} characters`);
+    // The statistics shown may still be the previous preset's for a moment (they are asked for after a
+    // pause): wait until the step's figure is the exact selection of this state.
+    const sel = await postJson(url + 'api/selection', await rState(page));
+    await page.waitForFunction(([st, f]) => {
+      const now = window.__raypc.stats?.steps.find((s) => s.step === st);
+      return window.__raypc.stats?.level === 0 && now && Math.abs(now.fractionOfMantle - f) < 1e-12 &&
+        /^exact: now /.test(document.getElementById('statsNote').textContent);
+    }, [step, sel.body.fractionOfMantle], { timeout: 30000 }).catch(() => {});
     const exact = await page.evaluate(() => window.__raypc.stats);
     const exactNote = await page.textContent('#statsNote');
     check(/^exact: now /.test(exactNote), `statistics note '${exactNote}'`);
-    const sel = await postJson(url + 'api/selection', await rState(page));
     const now = exact.steps.find((s) => s.step === step);
     check(sel.status === 200 && Math.abs(now.fractionOfMantle - sel.body.fractionOfMantle) < 1e-12,
       `exact statistics ${now.fractionOfMantle} at step ${step}, POST /api/selection ${JSON.stringify(sel.body)}`);
