@@ -175,6 +175,8 @@ void serveSeries(const SeriesInputs& inputs, const PreprocessOptions& preprocess
         }
         progress->finished();
         std::lock_guard lock(serverMutex);
+        if (cancel)
+            return;  // the server was stopped (SIGINT/SIGTERM) as the series became ready: no switch
         switching = true;
         srv->stop();
     });
