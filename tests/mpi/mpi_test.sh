@@ -91,6 +91,16 @@ errors)
     test "$(grep -c "raypc: error: .*$work/missing" "$work/serve")" -eq 1
   check "serve of a missing dataset under 2 ranks: no other raypc error line" \
     test "$(grep -c 'raypc: error' "$work/serve")" -eq 1
+  # netCDF files are served by one process only: under mpirun one error line, nothing written.
+  timeout 60 "$mpirun_local" -np 2 "$raypc" serve "$work"/nc/spherical00{1,2}.nc --dataset "$work/nc-series" \
+    --port 0 >"$work/serve-nc" 2>&1
+  status=$?
+  ended_with_error "serve of netCDF files under 2 ranks"
+  check "serve of netCDF files under 2 ranks: one error line saying to preprocess first" \
+    test "$(grep -c 'raypc: error: serving netCDF files is for one process' "$work/serve-nc")" -eq 1
+  check "serve of netCDF files under 2 ranks: no other raypc error line" \
+    test "$(grep -c 'raypc: error' "$work/serve-nc")" -eq 1
+  check "serve of netCDF files under 2 ranks: nothing written" test ! -e "$work/nc-series"
   ;;
 render_frames)
   make_data
