@@ -6,6 +6,10 @@
 #                                UndefinedBehaviorSanitizer (float-cast-overflow included, every
 #                                report fatal), every test but the browser ones; the libFuzzer
 #                                targets are built there too (tests/fuzz/run.sh runs them)
+#   scripts/test.sh --sanitize --inputs
+#                                the same build, only the tests of what reads input from outside:
+#                                netCDF files, datasets, states, protocol messages, HTTP requests,
+#                                command-line options (what CI runs by default: .ci/run)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/install-deps.sh" --tests
@@ -23,7 +27,7 @@ sanitizers="-fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recov
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 if [[ ! -f $build/build.ninja ]]; then
-  cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Sanitize \
+  cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Sanitize -DCMAKE_UNITY_BUILD=ON \
     -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ "${launcher[@]}" \
     -DCMAKE_C_FLAGS="-O1 -g1 -fno-omit-frame-pointer $sanitizers" \
     -DCMAKE_CXX_FLAGS="-O1 -g1 -fno-omit-frame-pointer $sanitizers -fsanitize=fuzzer-no-link" \
@@ -43,7 +47,11 @@ cd "$build"
 # A test that fails once is run again (the sanitizers' slowdown stretches the timing of the server
 # tests on a loaded machine); the log shows the first failure.
 excluded='^browser\.|^server\.soak_short$|^server\.Sessions\.(AClientThatDoesNotReadIsClosedAndMemoryStaysBounded|AFrameThatIsNotTakenClosesTheConnection)$|^server\.Descriptors\.'
+subset=()
+if [[ ${2:-} == --inputs ]]; then
+  subset=(-R '^(NetcdfReader|NetcdfReaderBadInput|NetcdfClassicLayout|Flavours/SynthNetcdf|EncodedDatasets|Preprocess|RenderState|StateSchema|state_schema|ProtocolCodec|QueryParameters|Token|CrossSite|StaticPaths|MimeTypes|protocol|server|cli|fuzz)\.')
+fi
 ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:strict_string_checks=1} \
 LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/tests/sanitize/lsan.supp} \
 UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1} \
-  ctest --output-on-failure -j "$(nproc)" --timeout 1200 --repeat until-pass:2 -E "$excluded"
+  ctest --output-on-failure -j "$(nproc)" --timeout 1200 --repeat until-pass:2 -E "$excluded" "${subset[@]}"

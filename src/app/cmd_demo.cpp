@@ -50,7 +50,7 @@ bool demoSnapshotsPresent(const fs::path& ncDir, int steps)
     return true;
 }
 
-const CommandRegistration kRegistration(
+const CommandRegistration kDemoCommand(
     "demo", "Create the demo data set if missing, preprocess it, render demo.png and serve it",
     [](CLI::App& cmd) {
         auto args = std::make_shared<DemoArgs>();

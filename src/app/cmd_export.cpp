@@ -55,7 +55,7 @@ std::string formatOf(const std::string& output)
     fail("-o: '{}' has no known extension; expected .csv, .vtp (VTK XML PolyData) or .vtk (legacy VTK)", output);
 }
 
-const CommandRegistration kRegistration(
+const CommandRegistration kExportCommand(
     "export",
     "Export data of one step: the parallel-coordinates sample (CSV), or the pathlines injected at the step "
     "and their seeds, the critical points (CSV, VTK .vtp or legacy .vtk), or the persistence diagram (CSV)",

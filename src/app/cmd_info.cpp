@@ -124,7 +124,7 @@ struct InfoArgs {
     ReaderFlags reader;
 };
 
-const CommandRegistration kRegistration(
+const CommandRegistration kInfoCommand(
     "info", "Describe a netCDF snapshot or a RayPC dataset: grid, variables with units and ranges, steps, levels",
     [](CLI::App& cmd) {
         auto args = std::make_shared<InfoArgs>();

@@ -16,7 +16,7 @@ struct PreprocessArgs {
     PreprocessFlags flags;
 };
 
-const CommandRegistration kRegistration(
+const CommandRegistration kPreprocessCommand(
     "preprocess", "Turn netCDF snapshots into a render-ready dataset (resumable)",
     [](CLI::App& cmd) {
         auto args = std::make_shared<PreprocessArgs>();

@@ -41,7 +41,7 @@ struct ProbeArgs {
     int level = 0;
 };
 
-const CommandRegistration kRegistration(
+const CommandRegistration kProbeCommand(
     "probe", "Print the interpolated values at one point and step, as JSON with units",
     [](CLI::App& cmd) {
         auto args = std::make_shared<ProbeArgs>();

@@ -298,7 +298,7 @@ void run(const RenderArgs& args)
         fmt::print("{}\n", (setup.sequence ? statsJson : statsJson[0]).dump(2));
 }
 
-const CommandRegistration kRegistration(
+const CommandRegistration kRenderCommand(
     "render", "Render a step (or a sequence of steps) of a dataset to PNG with the spherical volume ray caster",
     [](CLI::App& cmd) {
         auto args = std::make_shared<RenderArgs>();

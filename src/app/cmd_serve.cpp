@@ -15,7 +15,7 @@ struct ServeArgs {
     ServeFlags flags;
 };
 
-const CommandRegistration kRegistration(
+const CommandRegistration kServeCommand(
     "serve", "Serve a dataset, or netCDF files, to the browser UI (HTTP + WebSocket, docs/protocol.md)",
     [](CLI::App& cmd) {
         auto args = std::make_shared<ServeArgs>();

@@ -15,7 +15,7 @@ struct StateSchemaArgs {
     bool markdown = false;
 };
 
-const CommandRegistration kRegistration(
+const CommandRegistration kStateSchemaCommand(
     "state-schema", "Write the JSON Schema of the state document (STATE.json), or its docs table",
     [](CLI::App& cmd) {
         auto args = std::make_shared<StateSchemaArgs>();

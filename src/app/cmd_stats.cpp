@@ -108,7 +108,7 @@ void run(const StatsArgs& args)
     });
 }
 
-const CommandRegistration kRegistration(
+const CommandRegistration kStatsCommand(
     "stats",
     "Selected volume (km³, % of the mantle) and its depth distribution for every step, exact from the grid",
     [](CLI::App& cmd) {

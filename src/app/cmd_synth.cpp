@@ -1,5 +1,6 @@
 // `raypc synth`: writes a synthetic mantle-convection time series in the contest layout.
 #include "app/command.h"
+#include "core/clock.h"
 #include "core/error.h"
 #include "data/synth.h"
 
@@ -50,7 +51,7 @@ void run(const SynthArgs& args)
 
     const auto start = std::chrono::steady_clock::now();
     writeSyntheticSeries(args.outDir, options);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = secondsSince(start);
     uintmax_t bytes = 0;
     for (int step = 1; step <= options.steps; ++step) {
         std::error_code ec;
@@ -64,7 +65,7 @@ void run(const SynthArgs& args)
                 bytes / 1e6, seconds);
 }
 
-const CommandRegistration registration(
+const CommandRegistration kSynthCommand(
     "synth", "Write a synthetic mantle-convection time series in the contest's netCDF layout",
     [](CLI::App& cmd) {
         auto args = std::make_shared<SynthArgs>();

@@ -1,5 +1,6 @@
 // Subcommands of the `raypc` executable register themselves here, one file each
-// (cmd_<name>.cpp), so that adding a subcommand touches no other file.
+// (cmd_<name>.cpp, a CommandRegistration named k<Name>Command: the names differ, so the files can
+// share a unity build), so that adding a subcommand touches no other file.
 #pragma once
 
 #include <CLI/CLI.hpp>

@@ -1,5 +1,6 @@
 #include "app/series_inputs.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/mpi.h"
 #include "data/dataset.h"
@@ -105,7 +106,7 @@ double preparePreview(const SeriesInputs& inputs, PreprocessOptions options)
         options.quiet = true;
         preprocess(first, dir, options);
     }
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return secondsSince(start);
 }
 
 void prepareSeries(const SeriesInputs& inputs, const PreprocessOptions& options)

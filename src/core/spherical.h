@@ -54,4 +54,11 @@ inline double wrapLonDeg(double lonDeg)
     return w >= 360.0 ? 0.0 : w;
 }
 
+// The angle between two longitudes the short way round, across the seam if shorter: [0, 180].
+inline double lonSeparationDeg(double aDeg, double bDeg)
+{
+    const double d = std::fmod(std::abs(aDeg - bDeg), 360.0);
+    return std::min(d, 360.0 - d);
+}
+
 }  // namespace raypc

@@ -56,12 +56,6 @@ int eulerSum(const SphericalGrid& g, const std::vector<float>& v)
     return sum;
 }
 
-double lonDistanceDeg(double a, double b)
-{
-    const double d = std::fmod(std::abs(a - b), 360.0);
-    return std::min(d, 360.0 - d);
-}
-
 // Counting every simplex at its highest vertex gives the Euler characteristic of the triangulated
 // domain, [lat rows] x [radii] x circle = 0, for any field: a check that the links (14 neighbours,
 // their edges and triangles, wrapping across the seam, cut at the boundaries) fit together.
@@ -155,7 +149,7 @@ TEST(CriticalPoints, MaximumOnAndAcrossTheLonSeam)
         const auto values = blob(g, -15, lon, 5200, 700);
         const auto maxima = blobMaxima(findCriticalPoints(g, values));
         ASSERT_EQ(maxima.size(), 1u) << lon;
-        EXPECT_LE(lonDistanceDeg(maxima[0].lonDeg, lon), 5.0) << lon;  // within half a column
+        EXPECT_LE(lonSeparationDeg(maxima[0].lonDeg, lon), 5.0) << lon;  // within half a column
         EXPECT_DOUBLE_EQ(maxima[0].latDeg, -15);
     }
 }
@@ -265,7 +259,7 @@ TEST(CriticalPoints, ContestFixtureBlobs)
                 const CriticalKind want = double(b[3]) > 0 ? CriticalKind::Maximum : CriticalKind::Minimum;
                 int found = 0;
                 for (const auto& p : kept)
-                    if (p.kind == want && std::abs(p.latDeg - lat) <= dLat && lonDistanceDeg(p.lonDeg, lon) <= dLon &&
+                    if (p.kind == want && std::abs(p.latDeg - lat) <= dLat && lonSeparationDeg(p.lonDeg, lon) <= dLon &&
                         std::abs(p.rKm - r) <= dR)
                         ++found;
                 EXPECT_EQ(found, 1) << where << ", blob at " << lat << ", " << lon << ", " << r;

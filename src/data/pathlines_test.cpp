@@ -5,6 +5,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/spherical.h"
 #include "data/preprocess.h"
 #include "data/test_util.h"
 
@@ -56,12 +57,6 @@ struct Series {
 
 double radiusOf(const Vec3d& p) { return std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z); }
 
-double lonDistanceDeg(double a, double b)
-{
-    const double d = std::fmod(std::abs(a - b), 360.0);
-    return std::min(d, 360.0 - d);
-}
-
 // Solid-body rotation about z whose rate changes from step to step, plus a uniform outward speed:
 // a particle keeps its latitude, turns by the integral of the (piecewise linear in time) rate and
 // rises by u0 t. It crosses the lon seam on the way.
@@ -98,7 +93,7 @@ TEST(Tracer, RotationWithTimeVaryingRateAndRadialRise)
         // A small fraction of a cell (5°, 72 km): the trilinear interpolation of the rotation is
         // not exact between grid points (relative error ~ (5°)²/8 of the speed).
         EXPECT_NEAR(q.latDeg, lat0, 0.01) << t;
-        EXPECT_LT(lonDistanceDeg(q.lonDeg, lon0 + radToDeg(angle)), 0.02) << t;
+        EXPECT_LT(lonSeparationDeg(q.lonDeg, lon0 + radToDeg(angle)), 0.02) << t;
         EXPECT_NEAR(q.rKm, r0 + u0 * kMpsToKmPerMyr * t, 0.2) << t;
     }
     EXPECT_LT(cartesianToSpherical(line.pointsKm.back()).lonDeg, 90.0);  // crossed the seam
@@ -325,7 +320,7 @@ TEST(PathlinePreprocess, ContestFixtureLinesFollowTheAnalyticFlow)
         EXPECT_FLOAT_EQ(b[3], 4.0f);
         // A small fraction of a cell (5°, 72 km).
         EXPECT_NEAR(sb.latDeg, sa.latDeg, 0.01) << i;
-        EXPECT_LT(lonDistanceDeg(sb.lonDeg, sa.lonDeg + radToDeg(omega * t)), 0.01) << i;
+        EXPECT_LT(lonSeparationDeg(sb.lonDeg, sa.lonDeg + radToDeg(omega * t)), 0.01) << i;
         EXPECT_NEAR(sb.rKm, sa.rKm + u0 * t / 1000, 0.02) << i;
         // The start attributes are the seed's grid values.
         EXPECT_FLOAT_EQ(set.attribute(i, set.column("start temperature anomaly")), set.attribute(i, 1));

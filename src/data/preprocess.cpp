@@ -1,6 +1,7 @@
 #include "data/preprocess.h"
 
 #include "core/atomic_file.h"
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/mpi.h"
 #include "core/progress.h"
@@ -276,7 +277,7 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
     const fs::path& input = inputs[s];
     const auto& specs = plan.specs;
     const auto stepStart = std::chrono::steady_clock::now();
-    auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - stepStart).count(); };
+    auto elapsed = [&] { return secondsSince(stepStart); };
     Snapshot snap = readSnapshot(input, options.reader);
     spdlog::debug("{}: read in {:.2f} s", input.filename().string(), elapsed());
     checkSameGrid(input, snap.grid, plan.header.grid, inputs.front());
@@ -469,7 +470,7 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
         if (out)
             out->writeManifest(plan.manifest);
     });
-    summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    summary.seconds = secondsSince(start);
     return summary;
 }
 

@@ -88,8 +88,7 @@ size_t nearestLon(const SphericalGrid& g, double lonDeg)
     size_t best = 0;
     double bestD = 1e9;
     for (size_t i = 0; i < g.nLon(); ++i) {
-        double d = std::abs(g.lonDeg[i] - lonDeg);
-        d = std::min(d, 360.0 - d);
+        const double d = lonSeparationDeg(g.lonDeg[i], lonDeg);
         if (d < bestD) {
             bestD = d;
             best = i;

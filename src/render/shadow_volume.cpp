@@ -1,5 +1,6 @@
 #include "render/shadow_volume.h"
 
+#include "core/clock.h"
 #include "render/pathline_scene.h"
 
 #include <tbb/blocked_range.h>
@@ -29,11 +30,6 @@ struct Hasher {
         bytes(&v, sizeof v);
     }
 };
-
-double millisecondsSince(std::chrono::steady_clock::time_point start)
-{
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
 
 }  // namespace
 

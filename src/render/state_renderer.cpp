@@ -1,5 +1,6 @@
 #include "render/state_renderer.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/mpi.h"
 #include "render/legend.h"
@@ -156,7 +157,7 @@ std::shared_ptr<const PathlineScene> StateRenderer::pathlinesFor(const RenderSta
         m_sceneWindow = state.pathlines.window;
         spdlog::debug("pathline scene of step {} window {}: {} lines in {:.0f} ms", state.step, state.pathlines.window,
                       m_scene->lineCount(),
-                      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+                      millisecondsSince(start));
     }
     // Restart class: radius, style and the visibility mask (attribute filters, brushes).
     RenderState shown = state;

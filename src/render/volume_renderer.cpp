@@ -1,5 +1,6 @@
 #include "render/volume_renderer.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/spherical.h"
 #include "render/pathline_scene.h"
@@ -625,7 +626,7 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
             });
         ++frame.m_passes;
     }
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds = secondsSince(start);
     if (!cancelled.load() && everyBlock && seconds > 0) {
         const double rate = estimateSamplesPerPass() / seconds;
         m_impl->measuredRate = m_impl->measuredRate > 0 ? 0.7 * m_impl->measuredRate + 0.3 * rate : rate;

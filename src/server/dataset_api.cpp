@@ -1,5 +1,6 @@
 #include "server/dataset_api.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/install_paths.h"
 #include "core/spherical.h"
@@ -370,11 +371,6 @@ json parseBody(std::string_view body)
     } catch (const json::parse_error& e) {
         fail("body: not valid JSON: {}", e.what());
     }
-}
-
-double millisecondsSince(std::chrono::steady_clock::time_point start)
-{
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 ApiAnswer jsonAnswer(const json& j)

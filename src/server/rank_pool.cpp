@@ -1,5 +1,6 @@
 #include "server/rank_pool.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/mpi.h"
 
@@ -40,11 +41,6 @@ void addCounts(render::PassStats& total, const json& counts)
     total.chunksSkipped += counts.at(3).get<uint64_t>();
     total.chunksJumped += counts.at(4).get<uint64_t>();
     total.rays += counts.at(5).get<uint64_t>();
-}
-
-double secondsSince(Clock::time_point start)
-{
-    return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
 }  // namespace

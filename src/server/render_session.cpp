@@ -1,5 +1,6 @@
 #include "server/render_session.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "data/selection.h"
 #include "server/image_codec.h"
@@ -21,11 +22,6 @@ namespace {
 constexpr int kDepthDownsample = 4;
 constexpr int kMaxSessionPixels = 4096 * 4096;  // a frame buffer of 4096² takes ~0.7 GB with its scratch
 constexpr int kJpegQualityInteractive = 75, kJpegQualityStill = 90;
-
-double millisecondsSince(Clock::time_point start)
-{
-    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 nlohmann::json cameraJson(const RenderState& state)
 {

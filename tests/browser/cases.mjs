@@ -9,7 +9,7 @@ import { join } from 'node:path';
 import { check, meanAbsDiff, openUi, postJson, runCase, standardView, TestFailure, viewPixels, waitConverged } from './harness.mjs';
 
 // A fourth argument `gpu` runs chromium with GPU rasterisation on a software GL (SwiftShader), as a
-// machine without a GPU does, instead of --disable-gpu (ctest runs every case both ways).
+// machine without a GPU does, instead of --disable-gpu (ctest runs the drawing-heavy cases both ways: tests/browser/CMakeLists.txt).
 const [caseName, raypc, fixture, mode] = process.argv.slice(2);
 
 const frames = () => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
