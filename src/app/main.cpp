@@ -2,6 +2,7 @@
 #include "app/command.h"
 #include "core/error.h"
 #include "core/mpi.h"
+#include "core/system_memory.h"
 
 #include <spdlog/spdlog.h>
 
@@ -65,6 +66,7 @@ int parseAndRun(CLI::App& app, int argc, char** argv)
 
 int main(int argc, char** argv)
 {
+    raypc::restartWithTransparentHugePages(argv);
     using namespace raypc::app;
     namespace mpi = raypc::mpi;
     CLI::App app{"RayPC: interactive visual analysis of mantle convection simulations"};

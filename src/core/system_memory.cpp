@@ -1,14 +1,18 @@
 #include "core/system_memory.h"
 
 #include <malloc.h>
+#include <unistd.h>
 
 #include <fmt/format.h>
 #include <sys/resource.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <optional>
 #include <sstream>
+#include <string>
+#include <string_view>
 
 namespace raypc {
 namespace {
@@ -83,6 +87,30 @@ std::string formatBytes(uint64_t bytes)
     if (bytes >= 1'000'000)
         return fmt::format("{:.0f} MB", bytes / 1e6);
     return fmt::format("{} kB", (bytes + 999) / 1000);
+}
+
+void restartWithTransparentHugePages(char** argv)
+{
+    constexpr const char* kTunable = "glibc.malloc.hugetlb=1";
+    const char* optOut = std::getenv("RAYPC_HUGE_PAGES");
+    if (optOut && std::string_view(optOut) == "0")
+        return;
+    const char* tunables = std::getenv("GLIBC_TUNABLES");
+    if (tunables && std::string_view(tunables).find("glibc.malloc.hugetlb") != std::string_view::npos)
+        return;
+    std::ifstream policy("/sys/kernel/mm/transparent_hugepage/enabled");
+    std::string line;
+    if (!std::getline(policy, line) || line.find("[madvise]") == std::string::npos)
+        return;
+    const std::string value = tunables && *tunables ? std::string(tunables) + ":" + kTunable : kTunable;
+    if (setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0)
+        return;
+    execv("/proc/self/exe", argv);
+    // The exec failed (no /proc): carry on with 4 KB pages, and tell children nothing false.
+    if (tunables)
+        setenv("GLIBC_TUNABLES", tunables, 1);
+    else
+        unsetenv("GLIBC_TUNABLES");
 }
 
 void keepLargeBlocksForReuse()

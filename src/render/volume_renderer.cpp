@@ -512,9 +512,10 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
         const int nb = frame.blocksOfTile(t, blocks);
         bool any = false;
         for (int j = 0; j < nb; ++j) {
-            if (frame.blockRefining(blocks[j]))
-                any = rendered[size_t(blocks[j])] = 1;
-            else
+            if (frame.blockRefining(blocks[j])) {
+                rendered[size_t(blocks[j])] = 1;
+                any = true;
+            } else
                 everyBlock = false;
         }
         if (any)
