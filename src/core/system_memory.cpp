@@ -102,7 +102,7 @@ void restartWithTransparentHugePages(char** argv)
     std::string line;
     if (!std::getline(policy, line) || line.find("[madvise]") == std::string::npos)
         return;
-    const std::string value = tunables && *tunables ? std::string(tunables) + ":" + kTunable : kTunable;
+    const std::string value = tunables && *tunables ? std::string(kTunable) + ":" + tunables : kTunable;
     if (setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0)
         return;
     execv("/proc/self/exe", argv);

@@ -31,9 +31,10 @@ void keepLargeBlocksForReuse();
 // on Debian). RayPC's arrays are tens to hundreds of MB (a variable of a full-resolution step is
 // 52 MB) and mostly written once after allocation; on 4 KB pages every page costs a fault and a
 // zeroing, which took about half the time of preprocessing a full-resolution step (docs/format.md).
-// Does nothing when the tunable is set already (also by the user: their choice stands), when
-// RAYPC_HUGE_PAGES=0 (for A/B runs), or when the kernel uses huge pages always or never. Call it
-// first thing in main; returns only if nothing was done or the exec failed. Never throws.
+// The user's other tunables are kept after it. Does nothing when the user set the tunable (their
+// choice stands), when RAYPC_HUGE_PAGES=0 (for A/B runs), or when the kernel uses huge pages always
+// or never. Call it first thing in main; returns only if nothing was done or the exec failed.
+// Never throws.
 void restartWithTransparentHugePages(char** argv);
 
 // "1.5 GB", "830 MB": bytes for messages (decimal units).

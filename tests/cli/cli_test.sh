@@ -316,6 +316,39 @@ netcdf_inputs)
   expect_error "different 'sample'" render "$fixture"/spherical00{1,2,3}.nc --dataset "$work/series" --time 1 -o "$work/d.png"
   check "no picture from the refused run" test ! -e "$work/d.png"
   ;;
+huge_pages)
+  # core/system_memory.h: raypc runs itself again with glibc's malloc asking for transparent huge
+  # pages when the kernel gives them only on request; RAYPC_HUGE_PAGES=0 and a hugetlb tunable the
+  # user set themselves are left alone. glibc shortens GLIBC_TUNABLES in the process's memory to its
+  # first tunable once parsed, so /proc shows that one; the huge pages themselves show in smaps.
+  # The sample of 100 000 rows (5.6 MB, read as the server starts) is memory huge pages can back.
+  "$raypc" preprocess "$fixture" -o "$work/ds" --quiet >/dev/null
+  # server_memory [ENV...]: "GLIBC_TUNABLES (first tunable) AnonHugePages_kB" of a running server.
+  server_memory() {
+    env "$@" "$raypc" serve "$work/ds" --port 0 > "$work/serve.log" 2>&1 &
+    local pid=$!
+    for _ in $(seq 200); do grep -q "http://" "$work/serve.log" && break; sleep 0.1; done
+    local t h
+    t=$(tr '\0' '\n' < "/proc/$pid/environ" | sed -n 's/^GLIBC_TUNABLES=//p')
+    h=$(awk '/^AnonHugePages:/ {print $2}' "/proc/$pid/smaps_rollup")
+    kill "$pid"; wait "$pid" 2>/dev/null
+    echo "${t:-none} ${h:-?}"
+  }
+  if grep -q '\[madvise\]' /sys/kernel/mm/transparent_hugepage/enabled 2>/dev/null; then
+    read -r t h <<<"$(server_memory)"
+    check "the server asks for huge pages ($t)" test "$t" = "glibc.malloc.hugetlb=1"
+    check "and has some ($h kB)" test "$h" -gt 0
+    read -r t h <<<"$(server_memory GLIBC_TUNABLES=glibc.malloc.tcache_count=5)"
+    check "with another tunable of the user's too ($t, $h kB)" test "$t" = "glibc.malloc.hugetlb=1" -a "$h" -gt 0
+    read -r t h <<<"$(server_memory RAYPC_HUGE_PAGES=0)"
+    check "RAYPC_HUGE_PAGES=0 leaves malloc alone ($t, $h kB)" test "$t" = none -a "$h" -eq 0
+  else
+    read -r t h <<<"$(server_memory)"
+    check "no tunable where the kernel's policy is not madvise ($t)" test "$t" = none
+  fi
+  read -r t h <<<"$(server_memory GLIBC_TUNABLES=glibc.malloc.hugetlb=0)"
+  check "the user's own hugetlb setting stands ($t)" test "$t" = "glibc.malloc.hugetlb=0"
+  ;;
 *) echo "unknown case $case_name"; exit 2 ;;
 esac
 
