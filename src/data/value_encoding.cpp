@@ -111,7 +111,8 @@ void encodeUint16(const SphericalGrid& grid, const BrickLayout& layout, std::spa
                 const size_t end = std::min(size_t(c + 1) * s, nLon);
                 for (size_t iLon = size_t(c) * s; iLon < end; ++iLon) {
                     const double t = std::clamp((double(values[first + iLon]) - lo) * perUnit, 0.0, kLevels);
-                    out[first + iLon] = uint16_t(std::lround(t));
+                    // t >= 0: rounding half up is lround's half away from zero, without its call.
+                    out[first + iLon] = uint16_t(t + 0.5);
                 }
             }
         }

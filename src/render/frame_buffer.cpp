@@ -3,6 +3,9 @@
 #include "core/error.h"
 #include "render/render_kernel.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -220,22 +223,24 @@ size_t FrameBuffer::unpackTiles(std::span<const float> packed, TileShare share)
 std::vector<float> FrameBuffer::averagedRgba() const
 {
     std::vector<float> out(m_rgbaSum.size());
-    for (int b = 0; b < blockCount(); ++b) {
+    tbb::parallel_for(0, blockCount(), [&](int b) {
         const uint32_t n = m_blockPasses[size_t(b)];
         const float s = n > 0 ? 1.0f / float(n) : 0.0f;
         const TileRect r = block(b);
         for (int y = r.y0; y < r.y1; ++y)
             for (size_t i = 4 * (size_t(y) * size_t(m_width) + size_t(r.x0)), end = i + 4 * size_t(r.x1 - r.x0); i < end; ++i)
                 out[i] = m_rgbaSum[i] * s;
-    }
+    });
     return out;
 }
 
 std::vector<float> FrameBuffer::averagedDepthKm() const
 {
     std::vector<float> out(m_depthSum.size());
-    for (size_t i = 0; i < out.size(); ++i)
-        out[i] = m_depthCount[i] ? m_depthSum[i] / float(m_depthCount[i]) : INFINITY;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, out.size(), 1 << 16), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t i = range.begin(); i < range.end(); ++i)
+            out[i] = m_depthCount[i] ? m_depthSum[i] / float(m_depthCount[i]) : INFINITY;
+    });
     return out;
 }
 
@@ -247,21 +252,25 @@ std::vector<uint8_t> FrameBuffer::resolveRgba8(Rgb background, bool opaqueBackgr
 std::vector<uint8_t> toRgba8(const std::vector<float>& rgba, Rgb background, bool opaqueBackground)
 {
     std::vector<uint8_t> out(rgba.size());
-    auto to8 = [](float v) { return uint8_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
-    for (size_t i = 0; i < rgba.size(); i += 4) {
-        const float t = 1.0f - rgba[i + 3];
-        if (opaqueBackground) {
-            out[i] = to8(rgba[i] + t * background.r);
-            out[i + 1] = to8(rgba[i + 1] + t * background.g);
-            out[i + 2] = to8(rgba[i + 2] + t * background.b);
-            out[i + 3] = 255;
-        } else {
-            out[i] = to8(rgba[i]);
-            out[i + 1] = to8(rgba[i + 1]);
-            out[i + 2] = to8(rgba[i + 2]);
-            out[i + 3] = to8(rgba[i + 3]);
+    // Rounds as std::lround of the float product (half away from zero, here >= 0), without a call
+    // per channel: a 1920x1080 frame has 8 M of them.
+    auto to8 = [](float v) { return uint8_t(double(std::clamp(v, 0.0f, 1.0f) * 255.0f) + 0.5); };
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, rgba.size() / 4, 1 << 14), [&](const tbb::blocked_range<size_t>& pixels) {
+        for (size_t i = 4 * pixels.begin(); i < 4 * pixels.end(); i += 4) {
+            const float t = 1.0f - rgba[i + 3];
+            if (opaqueBackground) {
+                out[i] = to8(rgba[i] + t * background.r);
+                out[i + 1] = to8(rgba[i + 1] + t * background.g);
+                out[i + 2] = to8(rgba[i + 2] + t * background.b);
+                out[i + 3] = 255;
+            } else {
+                out[i] = to8(rgba[i]);
+                out[i + 1] = to8(rgba[i + 1]);
+                out[i + 2] = to8(rgba[i + 2]);
+                out[i + 3] = to8(rgba[i + 3]);
+            }
         }
-    }
+    });
     return out;
 }
 
