@@ -55,8 +55,7 @@ void Progress::finish()
 
 void Progress::draw(int64_t done, bool final)
 {
-    const double seconds =
-        secondsSince(m_start);
+    const double seconds = secondsSince(m_start);
     const double rate = seconds > 0 ? done / seconds : 0.0;
     const double fraction = m_total > 0 ? static_cast<double>(done) / m_total : 1.0;
     const double eta = rate > 0 ? (m_total - done) / rate : 0.0;
