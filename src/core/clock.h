@@ -6,16 +6,14 @@
 
 namespace raypc {
 
-using SteadyClock = std::chrono::steady_clock;
-
-inline double secondsSince(SteadyClock::time_point start)
+inline double secondsSince(std::chrono::steady_clock::time_point start)
 {
-    return std::chrono::duration<double>(SteadyClock::now() - start).count();
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-inline double millisecondsSince(SteadyClock::time_point start)
+inline double millisecondsSince(std::chrono::steady_clock::time_point start)
 {
-    return std::chrono::duration<double, std::milli>(SteadyClock::now() - start).count();
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 }  // namespace raypc

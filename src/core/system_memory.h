@@ -25,16 +25,16 @@ AvailableMemory availableMemory();
 // picture, depth map and JPEG of a pass 212-319 ms without, 53-125 ms with. Never throws.
 void keepLargeBlocksForReuse();
 
-// Runs this program again, in place (same process, arguments and environment), with glibc's
-// malloc told to ask for transparent huge pages (GLIBC_TUNABLES=glibc.malloc.hugetlb=1), when the
-// kernel gives them only on request (/sys/kernel/mm/transparent_hugepage/enabled is "madvise", as
-// on Debian). RayPC's arrays are tens to hundreds of MB (a variable of a full-resolution step is
-// 52 MB) and mostly written once after allocation; on 4 KB pages every page costs a fault and a
-// zeroing, which took about half the time of preprocessing a full-resolution step (docs/format.md).
-// The user's other tunables are kept after it. Does nothing when the user set the tunable (their
-// choice stands), when RAYPC_HUGE_PAGES=0 (for A/B runs), or when the kernel uses huge pages always
-// or never. Call it first thing in main; returns only if nothing was done or the exec failed.
-// Never throws.
+// Runs this program again, in place (the same process and arguments; the environment gains one
+// tunable), with glibc's malloc told to ask for transparent huge pages
+// (GLIBC_TUNABLES=glibc.malloc.hugetlb=1), when the kernel gives them only on request
+// (/sys/kernel/mm/transparent_hugepage/enabled is "madvise", as on Debian). RayPC's arrays are tens
+// to hundreds of MB (a variable of a full-resolution step is 52 MB) and mostly written once after
+// allocation; on 4 KB pages every page costs a fault and a zeroing, which took about half the time
+// of preprocessing a full-resolution step (docs/format.md). The user's other tunables are kept
+// after it. Does nothing when the user set the tunable (their choice stands), when
+// RAYPC_HUGE_PAGES=0 (for A/B runs), or when the kernel uses huge pages always or never. Call it
+// first thing in main; returns only if nothing was done or the exec failed. Never throws.
 void restartWithTransparentHugePages(char** argv);
 
 // "1.5 GB", "830 MB": bytes for messages (decimal units).
