@@ -3,6 +3,7 @@
 //                                  [--server-log FILE]   (the server's log, for where the time goes)
 //                                  [--assets DIR]        (another build of the UI, for A/B runs)
 //                                  [--size WxH]          (the state's image size; default 512x512)
+//                                  [--profile FILE]      (the page's CPU profile during playback, .cpuprofile)
 // 1. brush-to-updated-frame latency at --size (512x512): a brush on the temperature axis is dragged with
 //    the mouse; for every state the brush sent, the time from sending it to its first frame on
 //    screen (decoded and drawn), separately for interactive states (while dragging) and the final
@@ -18,7 +19,7 @@
 import { spawn } from 'node:child_process';
 import { createRequire } from 'node:module';
 import { join } from 'node:path';
-import { createWriteStream, mkdtempSync, rmSync } from 'node:fs';
+import { createWriteStream, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { chromiumPath, repoRoot, waitConverged } from './harness.mjs';
 
@@ -26,6 +27,7 @@ const args = process.argv.slice(2);
 const flag = (name) => { const i = args.indexOf(name); return i < 0 ? null : args.splice(i, name === '--only-play' ? 1 : 2).at(-1); };
 const size = (flag('--size') ?? '512x512').split('x').map(Number);
 const serverLog = flag('--server-log'), assets = flag('--assets') ?? join(repoRoot, 'web', 'dist');
+const profileFile = flag('--profile');
 const playFps = flag('--play'), playSeconds = Number(flag('--seconds') ?? 10), onlyPlay = flag('--only-play') !== null;
 const [raypc, dataset, screenshot] = args;
 const { chromium } = createRequire(join(repoRoot, 'web', 'package.json'))('playwright-core');
@@ -71,10 +73,13 @@ async function measurePlayback(page) {
     window.__playTasks = [];
     new PerformanceObserver((l) => { for (const e of l.getEntries()) window.__playTasks.push(e.duration); }).observe({ type: 'longtask', buffered: false });
   });
+  const cdp = profileFile ? await page.context().newCDPSession(page) : null;
+  if (cdp) { await cdp.send('Profiler.enable'); await cdp.send('Profiler.setSamplingInterval', { interval: 200 }); await cdp.send('Profiler.start'); }
   const t0 = Date.now();
   await page.click('#play');
   await page.waitForTimeout(playSeconds * 1000);
   await page.click('#play');
+  if (cdp) reportProfile((await cdp.send('Profiler.stop')).profile);
   const seconds = (Date.now() - t0) / 1000;
   const r = await page.evaluate((n) => ({
     sent: window.__raypc.sentLog.slice(n.sent).filter((e) => e.interactive),
@@ -95,6 +100,21 @@ async function measurePlayback(page) {
   console.log(`  per step: sent to frame received median ${median(r.lat.map((l) => l.firstFrameMs)).toFixed(0)} ms, 90th percentile ${pct(r.lat.map((l) => l.firstFrameMs), 0.9).toFixed(0)} ms; received to on screen median ${median(r.lat.map((l) => l.shownMs - l.firstFrameMs)).toFixed(0)} ms`);
   console.log(`  frame on screen to the next step sent: median ${median(gaps).toFixed(0)} ms, 90th percentile ${pct(gaps, 0.9).toFixed(0)} ms; long tasks ${r.tasks.length}, ${r.tasks.reduce((a, b) => a + b, 0).toFixed(0)} ms in all, longest ${Math.max(0, ...r.tasks).toFixed(0)} ms`);
   console.log(`  server pass median ${median(passMs).toFixed(0)} ms; levels ${JSON.stringify(levels)}; frame sizes ${[...new Set(r.headers.map((h) => `${h.width}x${h.height}`))].join(', ')}`);
+}
+
+// The functions with the most self time in a CPU profile of the page (written whole to --profile).
+function reportProfile(profile) {
+  writeFileSync(profileFile, JSON.stringify(profile));
+  const self = new Map(), byId = new Map(profile.nodes.map((n) => [n.id, n]));
+  const dt = profile.timeDeltas, total = (profile.endTime - profile.startTime) / 1000;
+  for (let i = 0; i < profile.samples.length; i++) {
+    const f = byId.get(profile.samples[i]).callFrame;
+    const key = `${f.functionName || '(anonymous)'} ${f.url.split('/').at(-1)}:${f.lineNumber + 1}`;
+    self.set(key, (self.get(key) ?? 0) + (dt[i + 1] ?? 0) / 1000);
+  }
+  const top = [...self].sort((a, b) => b[1] - a[1]).slice(0, 15);
+  console.log(`  CPU profile of the page (${total.toFixed(0)} ms, written to ${profileFile}), self time:`);
+  for (const [k, ms] of top) console.log(`    ${ms.toFixed(0).padStart(6)} ms  ${k}`);
 }
 
 async function brushAndScreenshot(page, rows) {

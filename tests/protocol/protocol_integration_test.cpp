@@ -21,11 +21,15 @@
 #include <fstream>
 #include <mutex>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <regex>
 #include <set>
 #include <thread>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <sys/socket.h>
+#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <poll.h>
 #include <unistd.h>
@@ -101,6 +105,53 @@ TEST(Serve, InfoHistogramSampleOverHttp)
     EXPECT_EQ(sample.body.size(),
               j["sample"]["rows"].get<size_t>() * j["sample"]["columns"].size() * sizeof(float));
     EXPECT_EQ(httpGet(server.port, "/api/nothing").status, 404);
+}
+
+// TCP_NODELAY of each connection the server accepted, read from the server's own descriptors
+// (pidfd_getfd: Linux 5.6, and the right to trace the process). Without it a frame's last segment
+// waits for the browser's delayed acknowledgement of the one before (up to 40 ms per frame).
+// nullopt: this process may not read them.
+std::optional<std::vector<int>> noDelayOfAcceptedSockets(pid_t pid, uint16_t port)
+{
+    const int pidfd = int(syscall(SYS_pidfd_open, pid, 0));
+    if (pidfd < 0)
+        return std::nullopt;
+    std::vector<int> found;
+    bool permitted = false;
+    for (const auto& entry : fs::directory_iterator("/proc/" + std::to_string(pid) + "/fd")) {
+        const int fd = int(syscall(SYS_pidfd_getfd, pidfd, std::stoi(entry.path().filename().string()), 0));
+        if (fd < 0)
+            continue;
+        permitted = true;
+        sockaddr_storage local{}, peer{};
+        socklen_t localSize = sizeof local, peerSize = sizeof peer;
+        int noDelay = -1;
+        socklen_t size = sizeof noDelay;
+        // A connected TCP socket on the server's port: an accepted connection (the listener has no peer).
+        if (getsockname(fd, reinterpret_cast<sockaddr*>(&local), &localSize) == 0 && local.ss_family == AF_INET &&
+            ntohs(reinterpret_cast<sockaddr_in*>(&local)->sin_port) == port &&
+            getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &peerSize) == 0 &&
+            getsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &noDelay, &size) == 0)
+            found.push_back(noDelay);
+        close(fd);
+    }
+    close(pidfd);
+    if (!permitted)
+        return std::nullopt;
+    return found;
+}
+
+TEST(Serve, AcceptedConnectionsSendWithoutDelay)
+{
+    ServerProcess server;
+    WsClient ws(server.port);
+    ws.hello();
+    const auto noDelay = noDelayOfAcceptedSockets(server.pid(), server.port);
+    if (!noDelay)
+        GTEST_SKIP() << "this process may not read the server's descriptors (pidfd_open, pidfd_getfd)";
+    ASSERT_FALSE(noDelay->empty()) << "no accepted connection found among the server's descriptors";
+    for (const int v : *noDelay)
+        EXPECT_NE(v, 0) << "an accepted connection without TCP_NODELAY";
 }
 
 TEST(Serve, StaticFilesAndPathTraversal)
@@ -519,10 +570,11 @@ TEST(Serve, StatsOverTimeMatchTheCliAndTheAnalyticSelection)
         const double depth = p["depthKm"][i], selected = p["volumeKm3"][i], shell = p["shellVolumeKm3"][i];
         EXPECT_NEAR(depth, 6371.0 - p["radiusKm"][i].get<double>(), 1e-9);
         sum += selected;
-        if (depth > 660)
+        if (depth > 660) {
             EXPECT_EQ(selected, 0.0) << "selected below 660 km at depth " << depth;
-        else if (depth < 600)
+        } else if (depth < 600) {
             EXPECT_NEAR(selected, shell, 1e-9 * shell) << "shell at depth " << depth << " not fully selected";
+        }
     }
     EXPECT_NEAR(sum, analyticKm3, 1e-6 * analyticKm3);
 
