@@ -1,4 +1,4 @@
-// Bundles the UI into web/dist: dist/app.js (esbuild, ES2020, minified, with a source map),
+// Bundles the UI into web/dist: dist/app.js and dist/sample_worker.js (esbuild, ES2020, minified, with source maps),
 // dist/app.css (our styles followed by parcoord-es's), dist/index.html, dist/coastlines.json. First it generates the
 // state document's modules from its JSON Schema (generateStateModules); `node build.mjs --generate`
 // does only that (for the type check). Imported (by tests/state_schema), it only exports.
@@ -72,6 +72,17 @@ async function bundle() {
     // parcoord-es: use its ES module build (package.json "module"), which imports d3 v1/v2 modules
     // that npm deduplicates with d3@5's; one d3-selection instance keeps d3.event working.
     mainFields: ['module', 'main'],
+  });
+  // The worker that fetches samples (src/sample_worker.ts; api.ts starts it as dist/sample_worker.js).
+  await build({
+    entryPoints: [join(here, 'src/sample_worker.ts')],
+    bundle: true,
+    format: 'iife',
+    target: ['es2020'],
+    minify: true,
+    sourcemap: true,
+    outfile: join(dist, 'sample_worker.js'),
+    logLevel: 'warning',
   });
   const css = readFileSync(join(here, 'src/style.css'), 'utf8') + '\n' +
     readFileSync(join(here, 'node_modules/parcoord-es/dist/parcoords.css'), 'utf8');

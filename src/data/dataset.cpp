@@ -343,27 +343,35 @@ std::shared_ptr<const StepVolume> Dataset::load(int step, int level) const
     return StepVolume::open(format::levelDir(format::stepDir(m_dir, step), level), m_levels[level], stems, m_encoding);
 }
 
-SampleTable Dataset::loadSample(int step) const
+SampleTable Dataset::loadSample(int step, SampleColumns which) const
 {
     if (step < 0 || step >= static_cast<int>(m_steps.size()))
         fail("{}: step {} out of range, the dataset has steps 0..{}", m_dir.string(), step, m_steps.size() - 1);
+    const bool withCoords = which == SampleColumns::All;
     SampleTable table;
-    for (const auto& c : coordinateInfos()) {
-        table.columns.push_back(c.name);
-        table.units.push_back(c.units);
-    }
+    if (withCoords)
+        for (const auto& c : coordinateInfos()) {
+            table.columns.push_back(c.name);
+            table.units.push_back(c.units);
+        }
     for (const auto& v : m_variables) {
         table.columns.push_back(v.name);
         table.units.push_back(v.units);
     }
-    const size_t nCoords = coordinateInfos().size(), nVars = m_variables.size(), rows = m_sampleRows;
-    const MappedFile coords(m_dir / format::kSampleCoords);
+    const size_t nCoords = withCoords ? coordinateInfos().size() : 0, nVars = m_variables.size(), rows = m_sampleRows;
     const MappedFile vars(format::stepDir(m_dir, step) / format::kStepSample);
-    if (coords.size() != rows * nCoords * sizeof(float) || vars.size() != rows * nVars * sizeof(float))
+    if (vars.size() != rows * nVars * sizeof(float))
         fail("{}: sample files do not hold {} rows", m_dir.string(), rows);
-    const auto* c = reinterpret_cast<const float*>(coords.bytes().data());
     const auto* v = reinterpret_cast<const float*>(vars.bytes().data());
     table.rows = rows;
+    if (!withCoords) {
+        table.values.assign(v, v + rows * nVars);
+        return table;
+    }
+    const MappedFile coords(m_dir / format::kSampleCoords);
+    if (coords.size() != rows * nCoords * sizeof(float))
+        fail("{}: sample files do not hold {} rows", m_dir.string(), rows);
+    const auto* c = reinterpret_cast<const float*>(coords.bytes().data());
     table.values.resize(rows * (nCoords + nVars));
     for (size_t row = 0; row < rows; ++row) {
         float* out = table.values.data() + row * (nCoords + nVars);

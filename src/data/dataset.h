@@ -141,7 +141,10 @@ private:
 };
 
 // The parallel-coordinates sample of one step: `rows` cells, columns = coordinates
-// (coordinateInfos() order) then variables (Dataset::variables() order), row-major.
+// (coordinateInfos() order) then variables (Dataset::variables() order), row-major. The rows are
+// the same cells in every step, so the coordinates are the same too: SampleColumns::Variables
+// leaves them out (what a step changes).
+enum class SampleColumns { All, Variables };
 struct SampleTable {
     std::vector<std::string> columns;
     std::vector<std::string> units;
@@ -199,7 +202,7 @@ public:
     // Maps step `step` at level `level` (StepVolume::open). Throws raypc::Error if out of range or
     // unreadable.
     std::shared_ptr<const StepVolume> load(int step, int level) const;
-    SampleTable loadSample(int step) const;
+    SampleTable loadSample(int step, SampleColumns which = SampleColumns::All) const;
 
 private:
     std::filesystem::path m_dir;

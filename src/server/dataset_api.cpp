@@ -407,7 +407,14 @@ ApiAnswer histogram(const ApiContext& api, const ApiRequest& request)
 ApiAnswer sample(const ApiContext& api, const ApiRequest& request)
 {
     const int step = checkedStep(*api.dataset, request.query);
-    const SampleTable t = api.dataset->loadSample(step);
+    SampleColumns which = SampleColumns::All;
+    if (const auto columns = queryParameter(request.query, "columns")) {
+        if (*columns == "variables")
+            which = SampleColumns::Variables;
+        else if (*columns != "all")
+            fail("columns: expected 'all' or 'variables', found '{}'", columns->substr(0, 40));
+    }
+    const SampleTable t = api.dataset->loadSample(step, which);
     return {std::string(reinterpret_cast<const char*>(t.values.data()), t.values.size() * sizeof(float)),
             "application/octet-stream"};
 }

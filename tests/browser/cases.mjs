@@ -635,6 +635,8 @@ const cases = {
     const rows = await page.evaluate(() => window.__raypc.parcoords.rowCount);
     const firstSampleStep = await page.evaluate(() => window.__raypc.sampleStep);
     check(rows === 20000, `the sample has ${rows} rows, the case asked for 20000`);
+    const sampleUrls = [];
+    page.on('request', (r) => { if (r.url().includes('/api/sample')) sampleUrls.push(r.url()); });
     const t0 = await page.evaluate(() => performance.now());
     await page.click('#play');
     // While playing, each new step's sample is drawn coarsely: a quarter of its 20 000 lines.
@@ -646,6 +648,11 @@ const cases = {
     // (the sample of a later step has been loaded meanwhile: it loads at most once a second)
     await page.waitForFunction((first) => window.__raypc.sampleStep !== first, firstSampleStep, { timeout: 20000 })
       .catch(() => { throw new TestFailure('no other step\'s sample was loaded while playing'); });
+    // A new step's sample is fetched by the sample worker (off the page's main thread), its
+    // variables only: the rows' coordinates are the same in every step.
+    check(page.workers().some((w) => w.url().endsWith('/sample_worker.js')), `no sample worker among ${page.workers().map((w) => w.url()).join(', ') || 'no workers'}`);
+    check(sampleUrls.length > 0 && sampleUrls.every((u) => u.includes('columns=variables')),
+      `samples fetched while playing: ${sampleUrls.join(', ') || 'none seen'}; expected each with columns=variables`);
     playingLines = await page.evaluate(() => window.__raypc.parcoords.timing.lines.foreground);
     check(playingLines === 5000, `while playing, the parallel coordinates drew ${playingLines} of ${rows} lines, expected 5000 (coarse)`);
     await page.click('#play');

@@ -104,6 +104,23 @@ TEST(Serve, InfoHistogramSampleOverHttp)
     ASSERT_EQ(sample.status, 200);
     EXPECT_EQ(sample.body.size(),
               j["sample"]["rows"].get<size_t>() * j["sample"]["columns"].size() * sizeof(float));
+    // A later step's variables alone: the same values as the variable columns of its whole sample.
+    const auto whole = httpGet(server.port, "/api/sample?step=2&columns=all");
+    const auto vars = httpGet(server.port, "/api/sample?step=2&columns=variables");
+    ASSERT_EQ(whole.status, 200);
+    ASSERT_EQ(vars.status, 200);
+    const size_t rows = j["sample"]["rows"], nAll = j["sample"]["columns"].size(), nVars = j["variables"].size();
+    ASSERT_EQ(vars.body.size(), rows * nVars * sizeof(float));
+    std::vector<float> w(rows * nAll), v(rows * nVars);
+    std::memcpy(w.data(), whole.body.data(), whole.body.size());
+    std::memcpy(v.data(), vars.body.data(), vars.body.size());
+    for (size_t row = 0; row < rows; row += 97)
+        for (size_t k = 0; k < nVars; ++k)
+            ASSERT_EQ(v[row * nVars + k], w[row * nAll + (nAll - nVars) + k]) << "row " << row << " variable " << k;
+    const auto badColumns = httpGet(server.port, "/api/sample?step=0&columns=coordinates");
+    EXPECT_EQ(badColumns.status, 400);
+    EXPECT_NE(badColumns.body.find("columns: expected 'all' or 'variables', found 'coordinates'"), std::string::npos)
+        << badColumns.body;
     EXPECT_EQ(httpGet(server.port, "/api/nothing").status, 404);
 }
 

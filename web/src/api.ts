@@ -90,9 +90,52 @@ export async function fetchHistogram(step: number, variable: string): Promise<Hi
   return (await check(await fetch(url), 'GET /api/histogram')).json();
 }
 
-export async function fetchSample(step: number, columns: string[]): Promise<Sample> {
-  const r = await check(await fetch(`api/sample?step=${step}`), 'GET /api/sample');
-  const buffer = await r.arrayBuffer();
+// GET /api/sample (docs/protocol.md). 'variables' leaves out the coordinate columns, which are the
+// same in every step (what a new step's sample changes). The body (7.2 MB for 100 000 rows of 18
+// columns) is fetched by a worker (sample_worker.ts): received on the page's main thread, such a
+// body held it in tasks of 60–85 ms (headless chromium's trace: ResourceReceivedData,
+// ResourceFinish), during which the 3D frames of a playback waited. Without workers, here.
+export type SampleColumns = 'all' | 'variables';
+
+export function sampleUrl(step: number, which: SampleColumns): string {
+  return `api/sample?step=${step}&columns=${which}`;
+}
+
+export async function fetchSampleBody(url: string): Promise<ArrayBuffer> {
+  return (await check(await fetch(url), 'GET /api/sample')).arrayBuffer();
+}
+
+// What sample_worker.ts answers: the body (transferred, not copied) or the error's message.
+export type SampleReply = { id: number; buffer: ArrayBuffer } | { id: number; error: string };
+
+let sampleWorker: Worker | null | undefined;
+const sampleRequests = new Map<number, { resolve: (b: ArrayBuffer) => void; reject: (e: Error) => void }>();
+let sampleRequestId = 0;
+
+function fetchSampleOffThread(url: string): Promise<ArrayBuffer> {
+  if (sampleWorker === undefined) {
+    try {
+      sampleWorker = new Worker('sample_worker.js');
+      sampleWorker.onmessage = (e: MessageEvent<SampleReply>) => {
+        const request = sampleRequests.get(e.data.id);
+        sampleRequests.delete(e.data.id);
+        if (request && 'buffer' in e.data) request.resolve(e.data.buffer);
+        else if (request && 'error' in e.data) request.reject(new Error(e.data.error));
+      };
+    } catch {
+      sampleWorker = null;
+    }
+  }
+  if (!sampleWorker) return fetchSampleBody(url);
+  const id = ++sampleRequestId, worker = sampleWorker;
+  return new Promise((resolve, reject) => {
+    sampleRequests.set(id, { resolve, reject });
+    worker.postMessage({ id, url: new URL(url, document.baseURI).href });
+  });
+}
+
+export async function fetchSample(step: number, columns: string[], which: SampleColumns = 'all'): Promise<Sample> {
+  const buffer = await fetchSampleOffThread(sampleUrl(step, which));
   if (buffer.byteLength % (4 * columns.length) !== 0)
     throw new Error(`GET /api/sample: ${buffer.byteLength} bytes is not a whole number of rows of ${columns.length} float32`);
   const values = new Float32Array(buffer);

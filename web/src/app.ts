@@ -372,7 +372,12 @@ export class App {
     if (step === this.sampleStep) return;
     this.sampleLoading = true;
     this.lastSampleLoad = performance.now();
-    fetchSample(step, this.info.sample.columns)
+    // The first sample whole; later steps only their variables (the rows' coordinates stay).
+    const coordinates = new Set(this.info.coordinates.map((c) => c.name));
+    const request = this.sampleStep < 0
+      ? fetchSample(step, this.info.sample.columns, 'all')
+      : fetchSample(step, this.info.sample.columns.filter((c) => !coordinates.has(c)), 'variables');
+    request
       .then((sample) => {
         this.pc.setData(sample);  // drawn with the colour function in force
         // A new step's lines keep that function; setting it again would draw them all twice.

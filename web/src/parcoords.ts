@@ -152,12 +152,12 @@ export class ParallelCoordinates {
     return this.rows.length;
   }
 
+  // A sample of every column, or (a new step) of some of the columns the lines have: those change.
   setData(sample: Sample): void {
     const n = sample.rows, c = sample.columns.length, v = sample.values;
-    // A new step's sample has the same rows and columns: its values go into the rows there are
-    // (100 000 objects not made again, nor collected, for every step of a playback).
-    const same = this.rows.length === n && n > 0 && sample.columns.every((name) => name in this.rows[0]) &&
-      Object.keys(this.rows[0]).length === c;
+    // A new step's sample has the same rows: its values go into the rows there are (100 000 objects
+    // not made again, nor collected, for every step of a playback); the other columns stay.
+    const same = this.rows.length === n && n > 0 && sample.columns.every((name) => name in this.rows[0]);
     const rows: Row[] = same ? this.rows : new Array(n);
     if (!same) for (let i = 0; i < n; i++) rows[i] = {};
     // Column by column: one property name per loop, so each store stays monomorphic.

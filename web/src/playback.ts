@@ -33,17 +33,21 @@ export class Playback {
     }
   }
 
-  // Advances one step once the frame for the current step has arrived and the speed allows.
+  // Advances one step once the frame for the current step has arrived and the speed allows. Steps
+  // are due on a regular schedule (lastAdvance is when the last one was due, not when it went): a
+  // step whose frame came late is followed by one sent at once, so the speed holds on average;
+  // more than a period behind, the schedule starts again from now.
   maybeAdvance(): void {
     if (!this.playing || !this.host.caughtUp()) return;
     const fps = Number($<HTMLSelectElement>('fps').value) || 2;
-    const wait = 1000 / fps - (performance.now() - this.lastAdvance);
+    const period = 1000 / fps, now = performance.now();
+    const wait = period - (now - this.lastAdvance);
     clearTimeout(this.advanceTimer);
     if (wait > 0) {
       this.advanceTimer = window.setTimeout(() => this.maybeAdvance(), wait);
       return;
     }
-    this.lastAdvance = performance.now();
+    this.lastAdvance = wait > -period ? this.lastAdvance + period : now;
     const next = (this.host.currentStep() + 1) % this.host.stepCount;
     this.host.setStep(next, true);
     $<HTMLInputElement>('step').value = String(next);
