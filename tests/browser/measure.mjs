@@ -3,7 +3,7 @@
 //                                  [--server-log FILE]   (the server's log, for where the time goes)
 //                                  [--assets DIR]        (another build of the UI, for A/B runs)
 //                                  [--size WxH]          (the state's image size; default 512x512)
-//                                  [--profile FILE]      (the page's CPU profile during playback, .cpuprofile)
+//                                  [--profile FILE]      (the page's CPU profiles while brushing and playing: FILE.brushing.cpuprofile …)
 // 1. brush-to-updated-frame latency at --size (512x512): a brush on the temperature axis is dragged with
 //    the mouse; for every state the brush sent, the time from sending it to its first frame on
 //    screen (decoded and drawn), separately for interactive states (while dragging) and the final
@@ -73,13 +73,12 @@ async function measurePlayback(page) {
     window.__playTasks = [];
     new PerformanceObserver((l) => { for (const e of l.getEntries()) window.__playTasks.push(e.duration); }).observe({ type: 'longtask', buffered: false });
   });
-  const cdp = profileFile ? await page.context().newCDPSession(page) : null;
-  if (cdp) { await cdp.send('Profiler.enable'); await cdp.send('Profiler.setSamplingInterval', { interval: 200 }); await cdp.send('Profiler.start'); }
+  const cdp = await startProfile(page);
   const t0 = Date.now();
   await page.click('#play');
   await page.waitForTimeout(playSeconds * 1000);
   await page.click('#play');
-  if (cdp) reportProfile((await cdp.send('Profiler.stop')).profile);
+  await stopProfile(cdp, 'playback');
   const seconds = (Date.now() - t0) / 1000;
   const r = await page.evaluate((n) => ({
     sent: window.__raypc.sentLog.slice(n.sent).filter((e) => e.interactive),
@@ -104,9 +103,23 @@ async function measurePlayback(page) {
   console.log(`  server pass median ${median(passMs).toFixed(0)} ms; levels ${JSON.stringify(levels)}; frame sizes ${[...new Set(r.headers.map((h) => `${h.width}x${h.height}`))].join(', ')}`);
 }
 
-// The functions with the most self time in a CPU profile of the page (written whole to --profile).
-function reportProfile(profile) {
-  writeFileSync(profileFile, JSON.stringify(profile));
+// With --profile: a CPU profile of the page from startProfile to stopProfile, written whole to
+// FILE with the phase's name before its extension, and the functions with the most self time.
+async function startProfile(page) {
+  if (!profileFile) return null;
+  const cdp = await page.context().newCDPSession(page);
+  await cdp.send('Profiler.enable');
+  await cdp.send('Profiler.setSamplingInterval', { interval: 200 });
+  await cdp.send('Profiler.start');
+  return cdp;
+}
+
+async function stopProfile(cdp, phase) {
+  if (!cdp) return;
+  const { profile } = await cdp.send('Profiler.stop');
+  await cdp.detach();
+  const file = profileFile.replace(/(\.[^./]*)?$/, (ext) => `.${phase}${ext}`);
+  writeFileSync(file, JSON.stringify(profile));
   const self = new Map(), byId = new Map(profile.nodes.map((n) => [n.id, n]));
   const dt = profile.timeDeltas, total = (profile.endTime - profile.startTime) / 1000;
   for (let i = 0; i < profile.samples.length; i++) {
@@ -115,7 +128,7 @@ function reportProfile(profile) {
     self.set(key, (self.get(key) ?? 0) + (dt[i + 1] ?? 0) / 1000);
   }
   const top = [...self].sort((a, b) => b[1] - a[1]).slice(0, 15);
-  console.log(`  CPU profile of the page (${total.toFixed(0)} ms, written to ${profileFile}), self time:`);
+  console.log(`  CPU profile of the page during ${phase} (${total.toFixed(0)} ms, written to ${file}), self time:`);
   for (const [k, ms] of top) console.log(`    ${ms.toFixed(0).padStart(6)} ms  ${k}`);
 }
 
@@ -139,6 +152,7 @@ async function brushAndScreenshot(page, rows) {
   });
   const x = box.x + box.w / 2;
   const since = await page.evaluate(() => window.__raypc.latencies.length);
+  const cdp = await startProfile(page);
   const drags = 8;
   for (let k = 0; k < drags; k++) {
     const y0 = box.y + box.h * (0.1 + 0.04 * k), y1 = y0 + box.h * 0.3;
@@ -150,6 +164,7 @@ async function brushAndScreenshot(page, rows) {
     await page.mouse.up();
     await waitConverged(page, 60000);
   }
+  await stopProfile(cdp, 'brushing');
   const r = await page.evaluate((n) => ({ lat: window.__raypc.latencies.slice(n), moves: window.__moves, longest: window.__longest, last: window.__raypc.headers.at(-1) }), since);
   const inter = r.lat.filter((l) => l.interactive).map((l) => l.shownMs);
   const fin = r.lat.filter((l) => !l.interactive).map((l) => l.shownMs);
