@@ -465,6 +465,10 @@ export class ParallelCoordinates {
           for (let k = 1; k < m; k++) ctx.lineTo(px[k], r[ks[k]] * sa[k] + sb[k]);
           ctx.stroke();
         }
+        // Chromium records a 2D canvas' strokes and rasterises them when the page's next frame is
+        // made (CanvasRenderingContext2D::FinalizeFrame), all at once: reading a pixel rasterises
+        // them here, so a slice's time is what it costs.
+        ctx.getImageData(0, 0, 1, 1);
         if (performance.now() - t0 > kSliceMs) break;
       }
       if (next < rows.length) this.yieldThen(slice);
