@@ -692,6 +692,30 @@ const cases = {
     check(JSON.stringify(rangeBefore) === JSON.stringify(rangeAfter), `the colour range changed during playback: ${rangeBefore} -> ${rangeAfter}`);
     const label = await page.textContent('#stepLabel');
     check(label.includes(`step ${log.step} of 0–${nSteps - 1}`) && label.includes('Myr'), `step label '${label}' (steps numbered from 0, as --time)`);
+
+    // A page whose sample worker cannot start (its script not loaded) fetches the samples itself:
+    // the first one whole, a new step's variables, the same values as the step's whole sample.
+    await context.route('**/sample_worker.js', (r) => r.abort());
+    try {
+      const bare = await openUi(context, url);
+      await bare.waitForFunction(() => window.__raypc.parcoords.rowCount > 0, null, { timeout: 20000 })
+        .catch(() => { throw new TestFailure('without its worker, the page loaded no sample'); });
+      await bare.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, step: 1 }); });
+      await bare.waitForFunction(() => window.__raypc.sampleStep === 1, null, { timeout: 20000 })
+        .catch(() => { throw new TestFailure('without its worker, the sample of step 1 was not loaded'); });
+      const mismatches = await bare.evaluate(async () => {
+        const r = window.__raypc, names = r.info.sample.columns, rows = r.parcoords.rows;
+        const values = new Float32Array(await (await fetch('api/sample?step=1')).arrayBuffer());
+        let n = 0;
+        for (const i of [0, 5, rows.length - 1]) names.forEach((name, k) => { if (rows[i][name] !== values[i * names.length + k]) n++; });
+        return n;
+      });
+      check(mismatches === 0, `without its worker, ${mismatches} values of step 1's lines differ from its sample`);
+      check(bare.raypcErrors.every((e) => !e.includes('api/sample')), `page errors: ${bare.raypcErrors.join(' | ')}`);
+      await bare.close();
+    } finally {
+      await context.unroute('**/sample_worker.js');
+    }
   },
 
   // Save downloads the whole state (accepted by `raypc render --state`); reloading the page and

@@ -109,9 +109,11 @@ export async function fetchSampleBody(url: string): Promise<ArrayBuffer> {
 export type SampleReply = { id: number; buffer: ArrayBuffer } | { id: number; error: string };
 
 let sampleWorker: Worker | null | undefined;
-const sampleRequests = new Map<number, { resolve: (b: ArrayBuffer) => void; reject: (e: Error) => void }>();
+const sampleRequests = new Map<number, { url: string; resolve: (b: ArrayBuffer) => void; reject: (e: Error) => void }>();
 let sampleRequestId = 0;
 
+// A worker that cannot start (its script not loaded, workers not allowed) leaves the fetching to
+// the main thread, the requests it had included.
 function fetchSampleOffThread(url: string): Promise<ArrayBuffer> {
   if (sampleWorker === undefined) {
     try {
@@ -122,6 +124,12 @@ function fetchSampleOffThread(url: string): Promise<ArrayBuffer> {
         if (request && 'buffer' in e.data) request.resolve(e.data.buffer);
         else if (request && 'error' in e.data) request.reject(new Error(e.data.error));
       };
+      sampleWorker.onerror = () => {
+        sampleWorker?.terminate();
+        sampleWorker = null;
+        for (const { url: u, resolve, reject } of sampleRequests.values()) fetchSampleBody(u).then(resolve, reject);
+        sampleRequests.clear();
+      };
     } catch {
       sampleWorker = null;
     }
@@ -129,7 +137,7 @@ function fetchSampleOffThread(url: string): Promise<ArrayBuffer> {
   if (!sampleWorker) return fetchSampleBody(url);
   const id = ++sampleRequestId, worker = sampleWorker;
   return new Promise((resolve, reject) => {
-    sampleRequests.set(id, { resolve, reject });
+    sampleRequests.set(id, { url, resolve, reject });
     worker.postMessage({ id, url: new URL(url, document.baseURI).href });
   });
 }
