@@ -12,6 +12,6 @@ if [[ ! -f $stamp || package-lock.json -nt $stamp || package.json -nt $stamp ]];
   npm ci --no-audit --no-fund --loglevel=error >/dev/null
   touch "$stamp"
 fi
-if [[ ! -f dist/app.js || -n $(find src build.mjs package-lock.json -newer dist/app.js -print -quit) ]]; then
+if [[ ! -f dist/app.js || ! -f dist/sample_worker.js || -n $(find src build.mjs package-lock.json -newer dist/app.js -print -quit) ]]; then
   node build.mjs
 fi
