@@ -60,30 +60,23 @@ async function generateStateModules() {
 async function bundle() {
   const dist = join(here, 'dist');
   mkdirSync(dist, { recursive: true });
-  await build({
-    entryPoints: [join(here, 'src/main.ts')],
-    bundle: true,
-    format: 'esm',
-    target: ['es2020'],
-    minify: true,
-    sourcemap: true,
-    outfile: join(dist, 'app.js'),
-    logLevel: 'warning',
-    // parcoord-es: use its ES module build (package.json "module"), which imports d3 v1/v2 modules
-    // that npm deduplicates with d3@5's; one d3-selection instance keeps d3.event working.
-    mainFields: ['module', 'main'],
-  });
-  // The worker that fetches samples (src/sample_worker.ts; api.ts starts it as dist/sample_worker.js).
-  await build({
-    entryPoints: [join(here, 'src/sample_worker.ts')],
-    bundle: true,
-    format: 'iife',
-    target: ['es2020'],
-    minify: true,
-    sourcemap: true,
-    outfile: join(dist, 'sample_worker.js'),
-    logLevel: 'warning',
-  });
+  // The page (an ES module) and the worker that fetches samples (api.ts starts it as
+  // dist/sample_worker.js; a classic worker script).
+  for (const [entry, out, format] of [['main.ts', 'app.js', 'esm'], ['sample_worker.ts', 'sample_worker.js', 'iife']]) {
+    await build({
+      entryPoints: [join(here, 'src', entry)],
+      bundle: true,
+      format,
+      target: ['es2020'],
+      minify: true,
+      sourcemap: true,
+      outfile: join(dist, out),
+      logLevel: 'warning',
+      // parcoord-es: use its ES module build (package.json "module"), which imports d3 v1/v2 modules
+      // that npm deduplicates with d3@5's; one d3-selection instance keeps d3.event working.
+      mainFields: ['module', 'main'],
+    });
+  }
   const css = readFileSync(join(here, 'src/style.css'), 'utf8') + '\n' +
     readFileSync(join(here, 'node_modules/parcoord-es/dist/parcoords.css'), 'utf8');
   writeFileSync(join(dist, 'app.css'), css);
