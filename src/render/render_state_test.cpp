@@ -1,6 +1,7 @@
 #include "render/render_state.h"
 
 #include "core/error.h"
+#include "render/test_states.h"
 
 #include <gtest/gtest.h>
 
@@ -8,16 +9,7 @@ namespace raypc::render {
 namespace {
 
 using nlohmann::json;
-
-std::string errorOf(const json& j)
-{
-    try {
-        parseRenderState(j, "STATE.json");
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "no error";
-}
+using testing::refusalOf;
 
 TEST(RenderState, RoundTripsThroughJson)
 {
@@ -43,31 +35,31 @@ TEST(RenderState, UnknownKeysAndBadValuesNameTheKey)
 {
     json j = toJson(RenderState{});
     j["camera"]["zoom"] = 2;
-    EXPECT_NE(errorOf(j).find("camera.zoom: unknown key"), std::string::npos) << errorOf(j);
+    EXPECT_NE(refusalOf(j).find("camera.zoom: unknown key"), std::string::npos) << refusalOf(j);
     j = toJson(RenderState{});
     j["camera"]["distanceKm"] = -3;
-    EXPECT_NE(errorOf(j).find("camera.distanceKm"), std::string::npos) << errorOf(j);
+    EXPECT_NE(refusalOf(j).find("camera.distanceKm"), std::string::npos) << refusalOf(j);
     j = toJson(RenderState{});
     j["color"]["colorMap"] = "rainbow";
-    EXPECT_NE(errorOf(j).find("color.colorMap"), std::string::npos) << errorOf(j);
+    EXPECT_NE(refusalOf(j).find("color.colorMap"), std::string::npos) << refusalOf(j);
     j = toJson(RenderState{});
     j["brushes"] = json::array({{{"name", "x"}, {"min", 3}, {"max", 1}}});
-    EXPECT_NE(errorOf(j).find("brushes[0].min"), std::string::npos) << errorOf(j);
+    EXPECT_NE(refusalOf(j).find("brushes[0].min"), std::string::npos) << refusalOf(j);
     j = toJson(RenderState{});
     j.erase("version");
-    EXPECT_NE(errorOf(j).find("version"), std::string::npos);
+    EXPECT_NE(refusalOf(j).find("version"), std::string::npos);
     j["version"] = 99;
-    EXPECT_NE(errorOf(j).find("not supported"), std::string::npos);
+    EXPECT_NE(refusalOf(j).find("not supported"), std::string::npos);
     j = toJson(RenderState{});
     j["level"] = 7;
-    EXPECT_NE(errorOf(j).find("level"), std::string::npos);
+    EXPECT_NE(refusalOf(j).find("level"), std::string::npos);
     // Finite in JSON but beyond float32 (a fuzzing finding: it became inf, written back as null).
     j = toJson(RenderState{});
     j["brushes"] = json::array({{{"name", "lat"}, {"min", -90}, {"max", 9e60}}});
-    EXPECT_NE(errorOf(j).find("brushes[0].max: 9e+60 is beyond the float32 range"), std::string::npos) << errorOf(j);
+    EXPECT_NE(refusalOf(j).find("brushes[0].max: 9e+60 is beyond the float32 range"), std::string::npos) << refusalOf(j);
     j = toJson(RenderState{});
     j["color"]["range"] = json::array({-1e30, 1e60});
-    EXPECT_NE(errorOf(j).find("color.range"), std::string::npos) << errorOf(j);
+    EXPECT_NE(refusalOf(j).find("color.range"), std::string::npos) << refusalOf(j);
 }
 
 TEST(RenderState, ResolvesNamesAndRejectsUnknownOnes)
@@ -117,17 +109,17 @@ TEST(RenderState, RepeatedBrushNamesAreRangesOfOneAxis)
 
     json old = doc;
     old["version"] = 3;
-    EXPECT_EQ(errorOf(old), "STATE.json: brushes[2]: a second range on 'depth' needs version 4 (ranges on one axis are "
+    EXPECT_EQ(refusalOf(old), "STATE.json: brushes[2]: a second range on 'depth' needs version 4 (ranges on one axis are "
                             "OR-ed), the document says version 3");
     old["brushes"].erase(2);
-    EXPECT_EQ(errorOf(old), "STATE.json: pathlines.filters[1]: a second range on 'length' needs version 4 (ranges on one "
+    EXPECT_EQ(refusalOf(old), "STATE.json: pathlines.filters[1]: a second range on 'length' needs version 4 (ranges on one "
                             "axis are OR-ed), the document says version 3");
     old["pathlines"]["filters"].erase(1);
-    EXPECT_EQ(errorOf(old), "no error");
+    EXPECT_EQ(refusalOf(old), "accepted");
 
     json reversed = doc;
     reversed["brushes"][2]["min"] = 3000;
-    EXPECT_EQ(errorOf(reversed), "STATE.json: brushes[2].min: min 3000 is greater than max 2000");
+    EXPECT_EQ(refusalOf(reversed), "STATE.json: brushes[2].min: min 3000 is greater than max 2000");
 }
 
 // Version 4: the UI's axes in display order round-trip; null is the UI's default; a name twice, an
@@ -140,11 +132,11 @@ TEST(RenderState, AxesRoundTripAndAreChecked)
     ASSERT_TRUE(s.axes.has_value());
     EXPECT_EQ(*s.axes, (std::vector<std::string>{"depth", "temperature", "radius"}));
     EXPECT_EQ(toJson(s)["axes"], doc["axes"]);
-    EXPECT_EQ(errorOf(json::parse(R"({"version": 4, "axes": ["depth", "lat", "depth"]})")),
+    EXPECT_EQ(refusalOf(json::parse(R"({"version": 4, "axes": ["depth", "lat", "depth"]})")),
               "STATE.json: axes: expected each name once, found \"depth\" twice");
-    EXPECT_EQ(errorOf(json::parse(R"({"version": 4, "axes": ["depth", ""]})")),
+    EXPECT_EQ(refusalOf(json::parse(R"({"version": 4, "axes": ["depth", ""]})")),
               "STATE.json: axes: expected non-empty names, found \"\"");
-    EXPECT_EQ(errorOf(json::parse(R"({"version": 3, "axes": ["depth"]})")),
+    EXPECT_EQ(refusalOf(json::parse(R"({"version": 3, "axes": ["depth"]})")),
               "STATE.json: axes: needs version 4, the document says version 3");
     EXPECT_FALSE(parseRenderState(json::parse(R"({"version": 4, "axes": null})")).axes.has_value());
 }

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "render/render_state.h"
+#include "render/test_states.h"
 
 #include <gtest/gtest.h>
 
@@ -9,6 +10,7 @@ namespace raypc::render {
 namespace {
 
 using nlohmann::json;
+using testing::refusalOf;
 
 // Every key toJson writes is in the schema with toJson(RenderState{})'s value as its default, and
 // in the docs table; the schema has no key toJson does not write.
@@ -105,27 +107,10 @@ TEST(StateSchema, ShadowsRoundTripAndBadValuesNameTheKey)
     EXPECT_TRUE(back.shading.shadows);
     EXPECT_FLOAT_EQ(back.shading.shadowStrength, 0.6f);
     EXPECT_FALSE(parseRenderState(json{{"version", 6}}).shading.shadows);  // off unless asked for
-    auto refusal = [](const char* text) {
-        try {
-            parseRenderState(json::parse(text));
-        } catch (const Error& e) {
-            return std::string(e.what());
-        }
-        return std::string("accepted");
-    };
+    auto refusal = [](const char* text) { return refusalOf(json::parse(text)); };
     EXPECT_NE(refusal(R"({"version": 6, "shading": {"shadowStrength": 1.5}})").find("shading.shadowStrength"), std::string::npos);
     EXPECT_NE(refusal(R"({"version": 6, "shading": {"shadowStrength": -0.1}})").find("shading.shadowStrength"), std::string::npos);
     EXPECT_NE(refusal(R"({"version": 6, "shading": {"shadows": "yes"}})").find("shading.shadows"), std::string::npos);
-}
-
-std::string refusalOf(const json& document)
-{
-    try {
-        parseRenderState(document);
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "accepted";
 }
 
 // Version 7: explicit camera views (WebXR eyes) round-trip; bad ones are refused naming the key.

@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "render/camera.h"
 #include "render/render_state.h"
+#include "render/test_states.h"
 
 #include <gtest/gtest.h>
 
@@ -15,16 +16,7 @@ namespace raypc::render {
 namespace {
 
 using nlohmann::json;
-
-std::string errorOf(const json& j)
-{
-    try {
-        parseRenderState(j, "STATE.json");
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "no error";
-}
+using testing::refusalOf;
 
 TEST(StereoState, RoundTripsAndDefaultsOff)
 {
@@ -56,27 +48,27 @@ TEST(StereoState, BadValuesAndOlderDocumentsAreRefusedByName)
 {
     json j = toJson(RenderState{});
     j["stereo"]["mode"] = "top-bottom";
-    EXPECT_NE(errorOf(j).find("stereo.mode: stereo mode 'top-bottom' is unknown, expected one of: off, side-by-side, "
+    EXPECT_NE(refusalOf(j).find("stereo.mode: stereo mode 'top-bottom' is unknown, expected one of: off, side-by-side, "
                               "side-by-side-half, anaglyph"),
               std::string::npos)
-        << errorOf(j);
+        << refusalOf(j);
     j = toJson(RenderState{});
     j["stereo"]["eyeSeparationKm"] = -1;
-    EXPECT_NE(errorOf(j).find("stereo.eyeSeparationKm: expected a number in [0, 1000000], found -1"), std::string::npos)
-        << errorOf(j);
+    EXPECT_NE(refusalOf(j).find("stereo.eyeSeparationKm: expected a number in [0, 1000000], found -1"), std::string::npos)
+        << refusalOf(j);
     j = toJson(RenderState{});
     j["stereo"]["convergenceKm"] = 0;
-    EXPECT_NE(errorOf(j).find("stereo.convergenceKm"), std::string::npos) << errorOf(j);
+    EXPECT_NE(refusalOf(j).find("stereo.convergenceKm"), std::string::npos) << refusalOf(j);
     j = toJson(RenderState{});
     j["stereo"]["parallax"] = 1;
-    EXPECT_NE(errorOf(j).find("stereo.parallax: unknown key"), std::string::npos) << errorOf(j);
+    EXPECT_NE(refusalOf(j).find("stereo.parallax: unknown key"), std::string::npos) << refusalOf(j);
     j = toJson(RenderState{});
     j["version"] = 4;
     j["shading"].erase("shadows");  // version 6 and 7 keys, refused first otherwise
     j["shading"].erase("shadowStrength");
     j.erase("convergenceGreyLevels");
     j["camera"].erase("views");
-    EXPECT_NE(errorOf(j).find("stereo: needs version 5, the document says version 4"), std::string::npos) << errorOf(j);
+    EXPECT_NE(refusalOf(j).find("stereo: needs version 5, the document says version 4"), std::string::npos) << refusalOf(j);
     j.erase("stereo");
     EXPECT_EQ(parseRenderState(j).stereo.mode, StereoMode::Off);  // a version-4 document still reads
 }
