@@ -4,12 +4,14 @@
 
 #include <fmt/format.h>
 #include <ft2build.h>
+#include <nlohmann/json.hpp>
 #include FT_FREETYPE_H
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 
 namespace raypc::render {
 namespace {
@@ -109,14 +111,25 @@ void blend(std::vector<uint8_t>& rgba, int width, int height, int x0, int y0, in
 
 std::string displayUnits(const std::string& units)
 {
-    if (units == "degrees_north")
-        return "°N";
-    if (units == "degrees_east")
-        return "°E";
+    // src/render/display_units.json, compiled in (CMake writes display_units_json.inc), read once.
+    struct Table {
+        std::map<std::string, std::string> symbols, superscripts;
+    };
+    static const Table table = [] {
+        const auto j = nlohmann::json::parse(
+#include "display_units_json.inc"
+        );
+        return Table{j.at("symbols").get<std::map<std::string, std::string>>(),
+                     j.at("superscripts").get<std::map<std::string, std::string>>()};
+    }();
+    if (const auto it = table.symbols.find(units); it != table.symbols.end())
+        return it->second;
     std::string out;
     for (size_t i = 0; i < units.size(); ++i) {
-        if (units[i] == '^' && i + 1 < units.size() && (units[i + 1] == '2' || units[i + 1] == '3')) {
-            out += units[i + 1] == '2' ? "²" : "³";
+        const auto sup = units[i] == '^' && i + 1 < units.size() ? table.superscripts.find(units.substr(i + 1, 1))
+                                                                 : table.superscripts.end();
+        if (sup != table.superscripts.end()) {
+            out += sup->second;
             ++i;
         } else {
             out += units[i];

@@ -175,6 +175,9 @@ const cases = {
       .catch(() => { throw new TestFailure('ticking radius under Axes did not show its axis'); });
     const title = await titles();
     check(title.includes('radius [km]') && title.some((t) => /^temperature \[K\]$/.test(t)), `axis titles lack units: ${title.join(', ')}`);
+    // Units as src/render/display_units.json writes them (the legends of pictures too).
+    check(title.includes('lat [°N]') && title.includes('lon [°E]') && title.includes('spin Δρ [kg/m³]'),
+      `axis titles do not write units as display_units.json says: ${title.join(', ')}`);
     check(title.length === shownBefore.length + 1, `${title.length} axes after showing radius, expected ${shownBefore.length + 1}`);
 
     await brushAxis(page, 'radius', 0.5, 0.95);
