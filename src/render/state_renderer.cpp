@@ -166,6 +166,17 @@ std::shared_ptr<const PathlineScene> StateRenderer::pathlinesFor(const RenderSta
     return m_scene;
 }
 
+std::optional<LevelPolicy::Choice> StateRenderer::knownChoice(const RenderState& state, const LevelPolicy& policy)
+{
+    if (policy.chosen)
+        return policy.chosen;
+    if (state.level)
+        return LevelPolicy::Choice{*state.level, 1};
+    if (policy.samplesPerSecond > 0)
+        return std::nullopt;
+    return LevelPolicy::Choice{0, 1};
+}
+
 StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, const LevelPolicy& policy)
 {
     const RenderState& state = resolved.state;
@@ -180,12 +191,10 @@ StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, co
     const double budget = kInteractiveBudgetShare * state.timeBudgetMs / 1000.0 / double(views.size());
     const double rate = policy.samplesPerSecond;
 
-    if (policy.chosen) {
-        p.level = policy.chosen->level;
-        p.divisor = policy.chosen->divisor;
-    } else if (state.level) {
-        p.level = *state.level;
-    } else if (rate > 0) {
+    if (const auto known = knownChoice(state, policy)) {
+        p.level = known->level;
+        p.divisor = known->divisor;
+    } else {
         // Coarse to fine (finestLevelWithin): while only the coarse levels fit, the finer ones of a
         // new step are neither loaded nor prepared. Reload class when the level changes. The first
         // view stands for all (the eyes differ by a small shift).
@@ -200,8 +209,6 @@ StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, co
             const double seconds = rendererFor(step, p.level, 0).estimateSamplesPerPass() / rate;
             p.divisor = resolutionDivisor(seconds, budget);
         }
-    } else {
-        p.level = 0;
     }
     for (View& v : p.views) {
         v.params.width = std::max(1, (v.params.width + p.divisor - 1) / p.divisor);

@@ -133,6 +133,9 @@ public:
     // The time budget is shared by the views. Throws raypc::Error when data cannot be read (e.g. a
     // dataset without pathlines asked to show them).
     Prepared prepare(const ResolvedState& resolved, const LevelPolicy& policy = {});
+    // The level and divisor prepare() will choose when they do not depend on estimated pass times
+    // (a given choice, the state's level, or level 0 without a throughput); nullopt when they do.
+    static std::optional<LevelPolicy::Choice> knownChoice(const RenderState& state, const LevelPolicy& policy);
 
     // The renderer of (step, level) for view `view` (each eye of a stereo pair keeps its own, so
     // that alternating eyes do not redo setParams), created on first use; a new step drops the

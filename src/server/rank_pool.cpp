@@ -25,12 +25,22 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 // Message tags (core/mpi.h send/tryReceive).
-enum Tag : int { kTagPass = 1, kTagCancel = 2, kTagDrop = 3, kTagStop = 4, kTagAnswer = 5 };
+enum Tag : int { kTagPass = 1, kTagCancel = 2, kTagDrop = 3, kTagStop = 4, kTagAnswer = 5, kTagPrepare = 6 };
 
 // The counters of a pass that add up over ranks (the machine and brick figures stay rank 0's).
 json countsJson(const render::PassStats& s)
 {
     return {s.samples, s.samplesSkipped, s.chunks, s.chunksSkipped, s.chunksJumped, s.rays};
+}
+
+// What a rank needs to prepare a session's frame (kTagPrepare; a pass adds "seq" and "pass").
+json frameJob(uint64_t session, uint64_t frame, const render::ResolvedState& resolved, render::LevelPolicy::Choice choice)
+{
+    return {{"session", session},
+            {"frame", frame},
+            {"level", choice.level},
+            {"divisor", choice.divisor},
+            {"state", render::toJson(resolved.state)}};
 }
 
 void addCounts(render::PassStats& total, const json& counts)
@@ -74,6 +84,21 @@ void RankPool::closeSession(uint64_t session)
     m_cv.notify_all();
 }
 
+void RankPool::prepare(uint64_t session, uint64_t frame, const render::ResolvedState& resolved,
+                       render::LevelPolicy::Choice choice)
+{
+    {
+        std::lock_guard lock(m_mutex);
+        if (m_stopping || !m_broken.empty())
+            return;
+        auto task = std::make_unique<Task>();
+        task->tag = kTagPrepare;
+        task->bytes = frameJob(session, frame, resolved, choice).dump();
+        m_queue.push_back(std::move(task));
+    }
+    m_cv.notify_all();
+}
+
 render::PassStats RankPool::renderPass(uint64_t session, uint64_t frame, int pass,
                                        const render::ResolvedState& resolved,
                                        const render::StateRenderer::Prepared& prepared, render::ViewFrames& frames,
@@ -92,14 +117,10 @@ render::PassStats RankPool::renderPass(uint64_t session, uint64_t frame, int pas
         if (m_stopping)
             fail("the server is stopping");
         seq = task->seq = m_nextSeq++;
-        task->bytes = json{{"seq", seq},
-                           {"session", session},
-                           {"frame", frame},
-                           {"pass", pass},
-                           {"level", prepared.level},
-                           {"divisor", prepared.divisor},
-                           {"state", render::toJson(resolved.state)}}
-                          .dump();
+        json job = frameJob(session, frame, resolved, {prepared.level, prepared.divisor});
+        job["seq"] = seq;
+        job["pass"] = pass;
+        task->bytes = job.dump();
         m_queue.push_back(std::move(task));
     }
     m_cv.notify_all();
@@ -305,9 +326,45 @@ void WorkerRank::run()
         case kTagPass:
             mpi::send(0, kTagAnswer, renderPass(m->bytes));
             break;
+        case kTagPrepare:
+            prepareAhead(m->bytes);
+            break;
         default:
             fail("distributed server: rank {} got a message with the unknown tag {}", mpi::rank(), m->tag);
         }
+    }
+}
+
+WorkerRank::Session& WorkerRank::session(uint64_t id)
+{
+    std::unique_ptr<Session>& slot = m_sessions[id];
+    if (!slot)
+        slot = std::make_unique<Session>(m_caches.dataset, cacheSources(m_caches.volumes.get(), m_caches.pathlines.get()));
+    return *slot;
+}
+
+void WorkerRank::prepare(Session& s, const json& job)
+{
+    s.prepared.reset();
+    render::LevelPolicy policy;
+    policy.chosen = render::LevelPolicy::Choice{job.at("level").get<int>(), job.at("divisor").get<int>()};
+    s.prepared = s.renderer.prepare(render::resolveState(job.at("state"), *m_caches.dataset), policy);
+    s.frames = s.prepared->frames();
+    s.frame = job.at("frame").get<uint64_t>();
+}
+
+void WorkerRank::prepareAhead(const std::string& text)
+{
+    // A failure here is the first pass's to report: that pass prepares again and answers with it.
+    try {
+        const auto start = Clock::now();
+        const json job = json::parse(text);
+        const uint64_t id = job.at("session").get<uint64_t>();
+        prepare(session(id), job);
+        spdlog::debug("distributed: rank {}: session {} frame {} prepared ahead of its first pass in {:.1f} ms",
+                      mpi::rank(), id, job.at("frame").get<uint64_t>(), millisecondsSince(start));
+    } catch (const std::exception& e) {
+        spdlog::debug("distributed: rank {}: preparing ahead: {}", mpi::rank(), e.what());
     }
 }
 
@@ -321,19 +378,16 @@ std::string WorkerRank::renderPass(const std::string& text)
         seq = job.at("seq").get<uint64_t>();
         const uint64_t id = job.at("session").get<uint64_t>(), frame = job.at("frame").get<uint64_t>();
         const int pass = job.at("pass").get<int>();
-        std::unique_ptr<Session>& slot = m_sessions[id];
-        if (!slot)
-            slot = std::make_unique<Session>(m_caches.dataset, cacheSources(m_caches.volumes.get(), m_caches.pathlines.get()));
-        Session& s = *slot;
-        if (s.frame != frame || !s.prepared) {
+        Session& s = session(id);
+        // Prepared ahead (kTagPrepare, at the same level and divisor) or not yet.
+        if (s.frame != frame || !s.prepared || s.prepared->level != job.at("level").get<int>() ||
+            s.prepared->divisor != job.at("divisor").get<int>()) {
             if (pass != 1)
                 fail("pass {} of frame {} arrived before its first pass", pass, frame);
-            s.prepared.reset();
-            render::LevelPolicy policy;
-            policy.chosen = render::LevelPolicy::Choice{job.at("level").get<int>(), job.at("divisor").get<int>()};
-            s.prepared = s.renderer.prepare(render::resolveState(job.at("state"), *m_caches.dataset), policy);
-            s.frames = s.prepared->frames();
-            s.frame = frame;
+            const auto start = Clock::now();
+            prepare(s, job);
+            spdlog::debug("distributed: rank {}: session {} frame {} prepared at its first pass in {:.1f} ms",
+                          mpi::rank(), id, frame, millisecondsSince(start));
         }
         if (s.frames.front().passes() != pass - 1)
             fail("pass {} of frame {} arrived after {} passes", pass, frame, s.frames.front().passes());

@@ -13,7 +13,8 @@
 // mapped volume and the accumulated frame as a lone process does.
 //
 // Messages (tagged byte strings): a pass is JSON (the state document, the level and size divisor
-// rank 0 chose, the pass number); a worker answers every pass exactly once with a JSON header
+// rank 0 chose, the pass number), and so is a frame to prepare ahead of its first pass (the same
+// without the pass number; no answer); a worker answers every pass exactly once with a JSON header
 // (statistics, "cancelled", or "error" with its message) followed by its tiles'
 // FrameBuffer::packTiles floats, one block per view.
 //
@@ -60,6 +61,13 @@ public:
     uint64_t openSession();
     void closeSession(uint64_t session);
 
+    // Lets the other ranks prepare frame `frame` of `resolved` at `choice` now, while rank 0 prepares
+    // it too, rather than when its first pass arrives (the preparation of a full-resolution still
+    // took about as long as its pass). Optional: renderPass prepares what was not. Never throws for
+    // a rank's failure: that rank reports it with the first pass.
+    void prepare(uint64_t session, uint64_t frame, const render::ResolvedState& resolved,
+                 render::LevelPolicy::Choice choice);
+
     // One pass of `prepared` (prepared for `resolved` on rank 0) into `frames`, on every rank.
     // `frame` numbers the session's frames: a new number (with pass 1) makes the other ranks prepare
     // the state anew; later passes of the same frame continue their accumulated tiles. Blocks until
@@ -105,6 +113,9 @@ public:
 
 private:
     struct Session;
+    Session& session(uint64_t id);  // created on first use
+    void prepare(Session& s, const nlohmann::json& job);  // frame `job.frame` at its level and divisor
+    void prepareAhead(const std::string& job);
     std::string renderPass(const std::string& job);
 
     DatasetCaches m_caches;

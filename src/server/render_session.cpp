@@ -138,6 +138,12 @@ void RenderSession::render(const Request& request)
         policy.samplesPerSecond = measured > 0 ? measured : 100e6 * tbb::this_task_arena::max_concurrency();
         policy.reduceResolution = measured > 0;
     }
+    // The other ranks of a distributed server prepare the frame while this one does, when its level
+    // is known before preparing (still frames).
+    const uint64_t frameNumber = ++m_frames;
+    if (m_context.ranks)
+        if (const auto choice = StateRenderer::knownChoice(state, policy))
+            m_context.ranks->prepare(m_rankSession, frameNumber, request.resolved, *choice);
     const StateRenderer::Prepared prepared = m_renderer.prepare(request.resolved, policy);
     const int level = prepared.level;
     const RenderParams& params = prepared.views.front().params;  // the first view's (all share brushes)
@@ -175,7 +181,6 @@ void RenderSession::render(const Request& request)
     const double preparedMs = millisecondsSince(renderStart);
     const int passes = request.interactive ? 1 : std::max(1, state.passes);
     ViewFrames frames = prepared.frames();
-    const uint64_t frameNumber = ++m_frames;
     const int ranks = m_context.ranks ? m_context.ranks->ranks() : 1;
     double renderMsTotal = 0, encodeMsTotal = 0, firstPassMs = 0;
     int done = 0;

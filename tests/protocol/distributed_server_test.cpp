@@ -34,8 +34,8 @@ const fs::path& g_work = servertest::WorkDirEnvironment::work();
 // `raypc serve` of the prepared dataset on `ranks` ranks (1: alone, without mpirun).
 class Server : public servertest::ServerProcess {
 public:
-    explicit Server(int ranks)
-        : servertest::ServerProcess(RAYPC_EXE, g_work, {}, false,
+    explicit Server(int ranks, bool verbose = false)
+        : servertest::ServerProcess(RAYPC_EXE, g_work, {}, verbose,
                                     ranks == 1 ? std::vector<std::string>{}
                                                : std::vector<std::string>{RAYPC_MPIRUN_LOCAL, "-np",
                                                                           std::to_string(ranks)})
@@ -114,6 +114,26 @@ TEST(DistributedServer, FramesEqualOneProcessOnTwoAndThreeRanks)
             EXPECT_EQ(shared[i].frame.depth, alone[i].frame.depth) << "state " << i << ": depth map";
         }
     }
+}
+
+// A still state's level is known before it is prepared: the other ranks prepare its frame while
+// rank 0 does, not when its first pass arrives. An interactive state's level depends on rank 0's
+// estimate: the other ranks prepare it with its first pass.
+TEST(DistributedServer, RanksPrepareAStillFrameAheadOfItsFirstPass)
+{
+    Server server(2, true);
+    WsClient ws(server.port);
+    ws.hello();
+    ws.send({{"type", "state"}, {"id", 1}, {"state", smallState(30, "viridis", 2)}, {"interactive", false}});
+    ws.framesUntilConverged(1);
+    ws.send({{"type", "state"}, {"id", 2}, {"state", smallState(40, "viridis", 2)}, {"interactive", true}});
+    ws.framesUntilConverged(2);
+    ws.close();
+    expectCleanStop(server, 2);
+    const std::string out = server.output();
+    EXPECT_NE(out.find("rank 1: session 1 frame 1 prepared ahead of its first pass"), std::string::npos) << out;
+    EXPECT_EQ(out.find("rank 1: session 1 frame 1 prepared at its first pass"), std::string::npos) << out;
+    EXPECT_NE(out.find("rank 1: session 1 frame 2 prepared at its first pass"), std::string::npos) << out;
 }
 
 // A new state while a long still is being rendered: the ranks drop the old pass, the new state's
