@@ -15,6 +15,7 @@
 // (CMB to head) or the slab's sheet (trench to tip). RAYPC_BENCH_REPORT=0 skips it.
 //   build/bench/persistence_bench --benchmark_min_time=1
 #include "core/spherical.h"
+#include "core/system_memory.h"
 #include "data/critical_points.h"
 #include "data/persistence.h"
 #include "data/synth.h"
@@ -256,6 +257,7 @@ BENCHMARK(BM_SelectSeeds)->Args({0, 0})->Args({0, 1})->Unit(benchmark::kMillisec
 
 int main(int argc, char** argv)
 {
+    raypc::restartWithTransparentHugePages(argv);  // memory as `raypc` has it (render_bench.cpp)
     benchmark::Initialize(&argc, argv);
     std::string cpu;
     std::ifstream info("/proc/cpuinfo");

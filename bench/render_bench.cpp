@@ -11,6 +11,7 @@
 // Targets (2 cores): interactive 512² pass <= 50 ms, converged 1024² full resolution <= 3 s (issue
 // 15: <= 0.5 s, and 1920x1080 <= 1 s, by adaptive refinement: BM_ConvergedAdaptive*),
 // >= 100 M samples/s/thread, brushing 4 variables (<= 20 % selected) not slower than no brushing.
+#include "core/system_memory.h"
 #include "data/bricks.h"
 #include "data/dataset.h"
 #include "data/preprocess.h"
@@ -574,6 +575,9 @@ std::string firstLine(const char* path)
 
 int main(int argc, char** argv)
 {
+    // Memory as `raypc` has it (transparent huge pages where the kernel gives them on request), so
+    // that these figures compare with raypc's; RAYPC_HUGE_PAGES=0 for 4 KB pages.
+    raypc::restartWithTransparentHugePages(argv);
     benchmark::Initialize(&argc, argv);
     std::string cpu;
     {
