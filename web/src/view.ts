@@ -106,7 +106,8 @@ export class View3D {
   private readonly meshes: Mesh[];
   private meshCount = 0; // of the frame shown: 1, or 2 for a stereo frame
   // The frame the meshes are of. A frame drawn with its own camera needs none (most still passes):
-  // building them for a 1920x1080 frame's depth map took 10-20 ms of the main thread.
+  // building them for every frame shown took 1.7 s of the main thread's 30 s of brushing at
+  // 1920x1080 (a CPU profile, tests/browser/measure.mjs --profile).
   private meshFrame: Frame | null = null;
   private readonly quadVao: WebGLVertexArrayObject;
   private frame: Frame | null = null;
