@@ -4,8 +4,8 @@
 
 #include <fmt/format.h>
 #include <ft2build.h>
-#include <nlohmann/json.hpp>
 #include FT_FREETYPE_H
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -95,9 +95,9 @@ export async function fetchHistogram(step: number, variable: string): Promise<Hi
 // columns) is fetched by a worker (sample_worker.ts): received on the page's main thread, such a
 // body held it in tasks of 60–85 ms (headless chromium's trace: ResourceReceivedData,
 // ResourceFinish), during which the 3D frames of a playback waited. Without workers, here.
-export type SampleColumns = 'all' | 'variables';
+type SampleColumns = 'all' | 'variables';
 
-export function sampleUrl(step: number, which: SampleColumns): string {
+function sampleUrl(step: number, which: SampleColumns): string {
   return `api/sample?step=${step}&columns=${which}`;
 }
 

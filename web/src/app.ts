@@ -373,10 +373,9 @@ export class App {
     this.sampleLoading = true;
     this.lastSampleLoad = performance.now();
     // The first sample whole; later steps only their variables (the rows' coordinates stay).
-    const coordinates = new Set(this.info.coordinates.map((c) => c.name));
     const request = this.sampleStep < 0
       ? fetchSample(step, this.info.sample.columns, 'all')
-      : fetchSample(step, this.info.sample.columns.filter((c) => !coordinates.has(c)), 'variables');
+      : fetchSample(step, this.info.variables.map((v) => v.name), 'variables');
     request
       .then((sample) => {
         this.pc.setData(sample);  // drawn with the colour function in force
