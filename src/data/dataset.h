@@ -203,7 +203,6 @@ public:
     // unreadable.
     std::shared_ptr<const StepVolume> load(int step, int level) const;
     SampleTable loadSample(int step, SampleColumns which = SampleColumns::All) const;
-    size_t sampleRows() const { return m_sampleRows; }  // of every step's sample
 
 private:
     std::filesystem::path m_dir;

@@ -323,6 +323,7 @@ json infoJson(const Dataset& dataset)
         columns.push_back(c.name), units.push_back(c.units);
     for (const auto& v : dataset.variables())
         columns.push_back(v.name), units.push_back(v.units);
+    const SampleTable sample = dataset.loadSample(0);
     json maps = json::array();
     for (const auto m : render::allColorMaps())
         maps.push_back(std::string(render::colorMapName(m)));
@@ -331,7 +332,7 @@ json infoJson(const Dataset& dataset)
             {"coordinates", coordinates},
             {"steps", steps},
             {"levels", levels},
-            {"sample", {{"rows", dataset.sampleRows()}, {"columns", columns}, {"units", units}}},
+            {"sample", {{"rows", sample.rows}, {"columns", sample.columns}, {"units", sample.units}}},
             {"colorMaps", maps},
             {"defaultState", render::toJson(render::defaultState(dataset))}};
 }
