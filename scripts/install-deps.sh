@@ -15,10 +15,11 @@ packages=(
   chromium                          # the web UI's browser tests
 )
 # Only the test command needs these: an independent XML parser and ParaView's Python, which
-# check that ParaView opens the exported pathlines and critical points; clang with its sanitizer
-# and libFuzzer runtimes and llvm-symbolizer for `scripts/test.sh --sanitize` and tests/fuzz/.
+# check that ParaView opens the exported pathlines and critical points; Python's netCDF4, which
+# writes the contest-layout fixture at test time (tests/data); clang with its sanitizer and
+# libFuzzer runtimes and llvm-symbolizer for `scripts/test.sh --sanitize` and tests/fuzz/.
 if [[ ${1:-} == --tests ]]; then
-  packages+=(libxml2-utils python3-paraview clang libclang-rt-14-dev llvm)
+  packages+=(libxml2-utils python3-paraview python3-netcdf4 clang libclang-rt-14-dev llvm)
 fi
 # Node.js and npm build the web UI; a machine may carry them from elsewhere (npm bundled with
 # nodejs), so ask for Debian's only when the commands are missing.

@@ -22,7 +22,7 @@ using testing::contestLayoutDir;
 using testing::ncgen;
 using testing::TempDir;
 
-// The analytic fields of ../shared/data/contest-layout (truth.json), evaluated independently.
+// The analytic fields of the contest-layout fixture (truth.json), evaluated independently.
 struct Truth {
     nlohmann::json j = nlohmann::json::parse(readFile(contestLayoutDir() / "truth.json"));
     double omega = j["omega_rad_per_s"], u0 = j["u0_m_per_s"], dtMyr = j["dt_myr"];

@@ -25,7 +25,7 @@ TempDir::~TempDir()
     std::filesystem::remove_all(m_path, ec);
 }
 
-std::filesystem::path contestLayoutDir() { return std::filesystem::path(RAYPC_SHARED_DIR) / "data" / "contest-layout"; }
+std::filesystem::path contestLayoutDir() { return std::filesystem::path(RAYPC_TEST_DATA_DIR) / "contest-layout"; }
 
 SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon)
 {

@@ -161,7 +161,7 @@ TEST(StepCache, CountsDecodedValuesAndPrefetchDecodesWhatIsShown)
     o.quiet = true;
     o.sampleRows = 500;
     o.pathlines.enabled = false;
-    preprocess(listSnapshotFiles({std::filesystem::path(RAYPC_SHARED_DIR) / "data" / "contest-layout"}), dir, o);
+    preprocess(listSnapshotFiles({std::filesystem::path(RAYPC_TEST_DATA_DIR) / "contest-layout"}), dir, o);
     {
         const auto dataset = Dataset::open(dir);
         ASSERT_EQ(dataset->encoding(), ValueEncoding::Uint16);

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Runs one command-line test case against the real binary: cli_test.sh CASE RAYPC SHARED_DIR
+# Runs one command-line test case against the real binary: cli_test.sh CASE RAYPC CONTEST_LAYOUT_DIR
+# (the contest-layout fixture, written at test time by tests/data).
 set -uo pipefail
-case_name=$1 raypc=$2 shared=$3
-fixture=$shared/data/contest-layout
+case_name=$1 raypc=$2 fixture=$3
 source "$(dirname "$0")/../lib/check.sh"
 make_work "cli-$case_name"
 

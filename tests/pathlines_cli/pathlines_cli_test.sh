@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# Usage: pathlines_cli_test.sh CASE RAYPC SHARED_DIR
+# Usage: pathlines_cli_test.sh CASE RAYPC CONTEST_LAYOUT_DIR
 # Preprocesses the contest fixture and exports its pathlines and critical points as CSV, VTK XML
 # and legacy VTK. XML files are checked by xmllint (an independent parser) and, when pvpython is
 # installed, opened by ParaView's readers with the expected counts. The fixture has two hot and two
 # cold blobs (truth.json): the persistence cases check the diagram export and the seed rules
 # (--cp-select, --cp-persistence, --cp-saddles) against them.
 set -uo pipefail
-case=$1 raypc=$2 shared=$3
+case=$1 raypc=$2 fixture=$3
 source "$(dirname "$0")/../lib/check.sh"
 make_work pathlines-cli
 expect_error() {  # expect_error PATTERN ARGS...: exit code 1 and PATTERN in the one-line message
@@ -20,7 +20,6 @@ expect_error() {  # expect_error PATTERN ARGS...: exit code 1 and PATTERN in the
   fi
 }
 
-fixture=$shared/data/contest-layout
 "$raypc" preprocess "$fixture" -o "$work/ds" --sample-rows 500 --quiet >"$work/pp.log" 2>&1 \
   || { cat "$work/pp.log"; exit 1; }
 seeds() {  # seeds CSV: the seed kinds of a critical-points export, one per line
@@ -65,12 +64,12 @@ bad_options)
   expect_error "--what" export "$work/ds" --what streamlines -o "$work/x.csv"
   expect_error "no known extension" export "$work/ds" --what pathlines -o "$work/x.txt"
   expect_error "--time" export "$work/ds" --what critical-points --time 7 -o "$work/x.csv"
-  expect_error "--pathline-field" preprocess "$shared/data/contest-layout" -o "$work/bad1" --pathline-field nope
+  expect_error "--pathline-field" preprocess "$fixture" -o "$work/bad1" --pathline-field nope
   check "a refused run writes nothing" test ! -e "$work/bad1"
-  expect_error "--pathline-steps" preprocess "$shared/data/contest-layout" -o "$work/bad2" --pathline-steps 0
-  expect_error "--cp-min-fraction" preprocess "$shared/data/contest-layout" -o "$work/bad3" --cp-select value --cp-min-fraction 2
-  expect_error "--cp-max-count" preprocess "$shared/data/contest-layout" -o "$work/bad4" --cp-max-count 0
-  check "a rerun with --no-pathlines succeeds" "$raypc" preprocess "$shared/data/contest-layout" -o "$work/ds" --sample-rows 500 --no-pathlines --quiet
+  expect_error "--pathline-steps" preprocess "$fixture" -o "$work/bad2" --pathline-steps 0
+  expect_error "--cp-min-fraction" preprocess "$fixture" -o "$work/bad3" --cp-select value --cp-min-fraction 2
+  expect_error "--cp-max-count" preprocess "$fixture" -o "$work/bad4" --cp-max-count 0
+  check "a rerun with --no-pathlines succeeds" "$raypc" preprocess "$fixture" -o "$work/ds" --sample-rows 500 --no-pathlines --quiet
   check "--no-pathlines removes them" test ! -e "$work/ds/pathlines"
   expect_error "no-pathlines" export "$work/ds" --what pathlines -o "$work/x.vtp"
   ;;

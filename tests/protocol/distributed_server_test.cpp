@@ -27,7 +27,7 @@ using servertest::smallState;
 using servertest::WsClient;
 
 const auto* const g_environment =
-    ::testing::AddGlobalTestEnvironment(new servertest::WorkDirEnvironment(RAYPC_EXE, RAYPC_SHARED_DIR));
+    ::testing::AddGlobalTestEnvironment(new servertest::WorkDirEnvironment(RAYPC_EXE, RAYPC_CONTEST_LAYOUT_DIR));
 
 const fs::path& g_work = servertest::WorkDirEnvironment::work();
 

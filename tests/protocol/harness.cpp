@@ -17,9 +17,9 @@ namespace raypc::servertest {
 
 namespace fs = std::filesystem;
 
-void prepareWorkDir(const fs::path& work, const std::string& raypcExe, const std::string& sharedDir)
+void prepareWorkDir(const fs::path& work, const std::string& raypcExe, const std::string& fixtureDir)
 {
-    const std::string command = raypcExe + " preprocess " + sharedDir + "/data/contest-layout -o " +
+    const std::string command = raypcExe + " preprocess " + fixtureDir + " -o " +
                                 (work / "ds").string() + " --quiet --sample-rows 2000 >/dev/null";
     if (std::system(command.c_str()) != 0)
         throw std::runtime_error("failed: " + command);
@@ -38,7 +38,7 @@ void WorkDirEnvironment::SetUp()
     char pattern[] = "/tmp/raypc_protocol_XXXXXX";
     ASSERT_NE(::mkdtemp(pattern), nullptr);
     g_work = pattern;
-    prepareWorkDir(g_work, m_exe, m_shared);
+    prepareWorkDir(g_work, m_exe, m_fixture);
 }
 
 void WorkDirEnvironment::TearDown()

@@ -38,15 +38,16 @@ using raypc::server::DecodedFrame;
 }  // namespace aliases
 using namespace aliases;
 
-// Preprocesses ../shared/data/contest-layout into `work`/ds (2000 sample rows) and writes a small
-// asset directory `work`/assets and a file outside it, `work`/secret.txt.
-void prepareWorkDir(const std::filesystem::path& work, const std::string& raypcExe, const std::string& sharedDir);
+// Preprocesses the contest-layout fixture's folder `fixtureDir` (tests/data/contest-layout, written at
+// test time) into `work`/ds (2000 sample rows) and writes a small asset directory `work`/assets and a
+// file outside it, `work`/secret.txt.
+void prepareWorkDir(const std::filesystem::path& work, const std::string& raypcExe, const std::string& fixtureDir);
 
 // For gtest programs: prepareWorkDir in a new temporary directory before the tests (removed after).
 class WorkDirEnvironment : public ::testing::Environment {
 public:
-    WorkDirEnvironment(std::string raypcExe, std::string sharedDir)
-        : m_exe(std::move(raypcExe)), m_shared(std::move(sharedDir))
+    WorkDirEnvironment(std::string raypcExe, std::string fixtureDir)
+        : m_exe(std::move(raypcExe)), m_fixture(std::move(fixtureDir))
     {
     }
     void SetUp() override;
@@ -54,7 +55,7 @@ public:
     static const std::filesystem::path& work();
 
 private:
-    std::string m_exe, m_shared;
+    std::string m_exe, m_fixture;
 };
 
 // `raypc serve` in a child process; stopped (SIGTERM, then SIGKILL) on destruction. `launcher`, if

@@ -48,7 +48,7 @@ using servertest::WsClient;
 // The dataset (preprocessed once per test process into a temporary directory) and server processes.
 
 const auto* const g_environment =
-    ::testing::AddGlobalTestEnvironment(new servertest::WorkDirEnvironment(RAYPC_EXE, RAYPC_SHARED_DIR));
+    ::testing::AddGlobalTestEnvironment(new servertest::WorkDirEnvironment(RAYPC_EXE, RAYPC_CONTEST_LAYOUT_DIR));
 
 const fs::path& g_work = servertest::WorkDirEnvironment::work();
 
@@ -782,7 +782,7 @@ std::vector<std::string> copyContestFiles(const fs::path& dir, bool broken = fal
     fs::create_directories(dir);
     std::vector<std::string> files;
     for (const char* name : {"spherical001.nc", "spherical002.nc", "spherical003.nc"}) {
-        fs::copy_file(fs::path(RAYPC_SHARED_DIR) / "data/contest-layout" / name, dir / name);
+        fs::copy_file(fs::path(RAYPC_CONTEST_LAYOUT_DIR) / name, dir / name);
         files.push_back((dir / name).string());
     }
     if (broken)

@@ -27,7 +27,7 @@ using Clock = std::chrono::steady_clock;
 using Headers = std::vector<std::pair<http::field, std::string>>;
 
 const auto* const g_environment =
-    ::testing::AddGlobalTestEnvironment(new servertest::WorkDirEnvironment(RAYPC_EXE, RAYPC_SHARED_DIR));
+    ::testing::AddGlobalTestEnvironment(new servertest::WorkDirEnvironment(RAYPC_EXE, RAYPC_CONTEST_LAYOUT_DIR));
 
 class ServerProcess : public servertest::ServerProcess {
 public:

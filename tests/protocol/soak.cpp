@@ -5,7 +5,7 @@
 // server's peak anonymous memory; with --max-* bounds, exits 1 naming each bound that was broken.
 // The short run is a ctest case (tests/protocol/CMakeLists.txt), the long one bench/soak/run.sh.
 //
-// raypc_soak --raypc EXE (--fixture SHARED_DIR | --dataset DIR) [--clients 4] [--seconds 30]
+// raypc_soak --raypc EXE (--fixture CONTEST_LAYOUT_DIR | --dataset DIR) [--clients 4] [--seconds 30]
 //            [--size 256x256] [--interval-ms 0] [--server-arg ARG]... [--max-gap-s S]
 //            [--max-info-ms MS] [--max-rss-mib MIB]
 #include "harness.h"
@@ -97,7 +97,7 @@ Options parseOptions(int argc, char** argv)
             usage("unknown option '" + a + "'");
     }
     if (o.raypc.empty() || (o.fixture.empty() == o.dataset.empty()))
-        usage("give --raypc and one of --fixture SHARED_DIR or --dataset DIR");
+        usage("give --raypc and one of --fixture CONTEST_LAYOUT_DIR or --dataset DIR");
     if (o.clients < 1 || o.seconds <= 0)
         usage("--clients and --seconds must be positive");
     return o;
