@@ -6,6 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config time
   libnetcdf-dev netcdf-bin          # input files; ncgen/nccopy write independent test files
+  libpugixml-dev zlib1g-dev         # VTK XML input (ASPECT's .pvd/.pvtu/.vtu), not VTK itself
   libtbb-dev libhwy-dev libembree-dev
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libboost-dev libturbojpeg0-dev libpng-dev

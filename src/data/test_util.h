@@ -25,7 +25,7 @@ private:
 };
 
 // The contest-layout fixture, written at test time by tests/data/contest-layout (ctest fixture
-// contest_layout): three steps in the SciVis 2021 files' layout with the analytic fields of its truth.json.
+// test_data): three steps in the SciVis 2021 files' layout with the analytic fields of its truth.json.
 std::filesystem::path contestLayoutDir();
 
 // Writes `cdl` to a file and runs `ncgen -k <kind>` on it; kind is "nc3", "nc6" (64-bit

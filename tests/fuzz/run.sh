@@ -10,7 +10,16 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 build=$(cd "${1:-$root/build-sanitize}" && pwd)
 seconds=${2:-60}
 status=0
-for target in netcdf_reader render_state protocol; do
+# Every target the build has (tests/fuzz/CMakeLists.txt names them), so that this list is not a second one.
+targets=()
+for exe in "$build"/tests/fuzz/fuzz_*; do
+  [[ -x $exe && -f $exe ]] && targets+=("${exe##*/fuzz_}")
+done
+if ((${#targets[@]} == 0)); then
+  echo "fuzz: no fuzz_* targets in $build/tests/fuzz (build with scripts/test.sh --sanitize)" >&2
+  exit 1
+fi
+for target in "${targets[@]}"; do
   exe=$build/tests/fuzz/fuzz_$target
   work=$build/fuzz/$target
   mkdir -p "$work/corpus"
