@@ -1,5 +1,6 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/json_input.h"
 #include "core/spherical.h"
 #include "core/strings.h"
 
@@ -71,6 +72,38 @@ TEST(Error, FailFormatsTheMessage)
     } catch (const Error& e) {
         EXPECT_STREQ(e.what(), "spherical001.nc: dims (r, lat), expected 3");
     }
+}
+
+// JSON from outside: nesting bounded before nlohmann's recursive parser sees it (issue 31).
+TEST(JsonInput, NestingIsBoundedBeforeParsing)
+{
+    const auto nested = [](int depth) { return std::string(size_t(depth), '[') + std::string(size_t(depth), ']'); };
+    EXPECT_EQ(parseJsonInput(nested(kMaxJsonDepth), "x").size(), 1u);
+    for (int depth : {kMaxJsonDepth + 1, 100000}) {
+        try {
+            parseJsonInput(nested(depth), "deep.json");
+            ADD_FAILURE() << "depth " << depth << " parsed";
+        } catch (const Error& e) {
+            EXPECT_EQ(std::string(e.what()), fmt::format("deep.json: JSON nested deeper than {} levels (at byte {})",
+                                                         kMaxJsonDepth, kMaxJsonDepth));
+        }
+    }
+    // Brackets inside strings (escaped quotes included) are text, not nesting.
+    const std::string inString = "{\"a\": \"\\\"" + std::string(1000, '[') + "\"}";
+    EXPECT_EQ(parseJsonInput(inString, "x")["a"].get<std::string>().size(), 1001u);
+    EXPECT_THROW(parseJsonInput("{\"a\": ", "x"), Error);
+    EXPECT_THROW(parseJsonInput("1e999", "x"), Error);
+}
+
+TEST(JsonInput, ExcerptsAreShort)
+{
+    EXPECT_EQ(jsonExcerpt(nlohmann::json(42)), "42");
+    const nlohmann::json big = nlohmann::json::parse(std::string(60, '[') + std::string(60, ']'));
+    const std::string e = jsonExcerpt(big, 20);
+    EXPECT_EQ(e, std::string(20, '[') + "…");
+    // Never cut inside a UTF-8 sequence.
+    const std::string u = jsonExcerpt(nlohmann::json("ééééééééééééééééééééé"), 4);
+    EXPECT_EQ(u, "\"é…");
 }
 
 }  // namespace

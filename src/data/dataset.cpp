@@ -2,6 +2,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/json_input.h"
 #include "core/strings.h"
 #include "data/bricks.h"
 #include "data/dataset_format.h"
@@ -242,12 +243,7 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
         fail("{}: not a directory (expected a RayPC dataset made by `raypc preprocess`)", dir.string());
     if (!std::filesystem::exists(manifestPath))
         fail("{}: no {} (expected a RayPC dataset made by `raypc preprocess`)", dir.string(), format::kManifest);
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(readFile(manifestPath));
-    } catch (const nlohmann::json::exception& e) {
-        fail("{}: not valid JSON: {}", manifestPath.string(), e.what());
-    }
+    nlohmann::json j = parseJsonInput(readFile(manifestPath), manifestPath.string());
     auto dataset = std::make_shared<Dataset>();
     dataset->m_dir = dir;
     try {

@@ -2,6 +2,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/json_input.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -82,7 +83,7 @@ PathlineSet loadPathlineSet(const fs::path& dataset, int step)
              dataset.string(), step);
     PathlineSet set;
     try {
-        const json j = json::parse(readFile(jsonPath));
+        const json j = parseJsonInput(readFile(jsonPath), jsonPath.string());
         // Version 1 (before the "seed persistence" column) reads as it is, with its own columns.
         const int version = j.at("format").get<std::string>() == "raypc-pathlines" ? j.at("version").get<int>() : 0;
         if (version < 1 || version > kPathlineSetVersion)

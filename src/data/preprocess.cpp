@@ -3,6 +3,7 @@
 #include "core/atomic_file.h"
 #include "core/clock.h"
 #include "core/error.h"
+#include "core/json_input.h"
 #include "core/mpi.h"
 #include "core/progress.h"
 #include "core/strings.h"
@@ -179,10 +180,9 @@ private:
     {
         json old;
         try {
-            old = json::parse(readFile(manifestPath()));
-        } catch (const json::exception& e) {
-            fail("{}: exists but is not valid JSON ({}); remove the directory to start over",
-                 manifestPath().string(), e.what());
+            old = parseJsonInput(readFile(manifestPath()), manifestPath().string());
+        } catch (const Error& e) {
+            fail("{} (it exists already); remove the directory to start over", e.what());
         }
         // A finished manifest adds global statistics to the variables: not a setting.
         if (old.contains("variables") && old["variables"].is_array())
@@ -257,7 +257,8 @@ std::vector<int> findStepsToDo(const OutputDirectory& out, size_t stepCount, std
     for (size_t s = 0; s < stepCount; ++s) {
         const fs::path stepPath = format::stepDir(out.path(), static_cast<int>(s));
         if (fs::exists(stepPath / format::kStepManifest)) {
-            stepJsons[s] = json::parse(readFile(stepPath / format::kStepManifest));
+            stepJsons[s] = parseJsonInput(readFile(stepPath / format::kStepManifest),
+                                          (stepPath / format::kStepManifest).string());
             ++summary.stepsSkipped;
         } else {
             if (fs::exists(stepPath))

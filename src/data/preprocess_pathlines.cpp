@@ -1,11 +1,12 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/json_input.h"
 #include "core/mpi.h"
 #include "core/progress.h"
 #include "core/strings.h"
 #include "data/dataset_format.h"
-#include "data/persistence.h"
 #include "data/pathline_storage.h"
+#include "data/persistence.h"
 #include "data/preprocess_phases.h"
 
 #include <spdlog/spdlog.h>
@@ -116,14 +117,14 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
             const fs::path dir = pathlineDir(outDir, s);
             if (fs::exists(dir / "lines.json")) {
                 try {
-                    const json old = json::parse(readFile(dir / "lines.json"));
+                    const json old = parseJsonInput(readFile(dir / "lines.json"), (dir / "lines.json").string());
                     // A set of an older version lacks columns (seed persistence): redone.
                     if (old.at("settings") == settings && old.at("end_step").get<int>() == endStep &&
                         old.at("version").get<int>() == kPathlineSetVersion) {
                         ++summary.pathlineSetsSkipped;
                         continue;
                     }
-                } catch (const json::exception&) {
+                } catch (const std::exception&) {  // not JSON (raypc::Error) or not of the expected shape
                     // An unreadable set is redone below.
                 }
             }

@@ -3,6 +3,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/install_paths.h"
+#include "core/json_input.h"
 #include "core/spherical.h"
 
 #include <nlohmann/json.hpp>
@@ -27,12 +28,7 @@ size_t Coastlines::pointCount() const
 
 Coastlines readCoastlines(const fs::path& file)
 {
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(readFile(file));
-    } catch (const nlohmann::json::parse_error& e) {
-        fail("{}: not valid JSON: {}", file.string(), e.what());
-    }
+    const nlohmann::json j = parseJsonInput(readFile(file), file.string());
     if (!j.is_object() || !j.contains("lines") || !j["lines"].is_array())
         fail("{}: expected an object with \"lines\": [[lon, lat, ...], ...]", file.string());
     Coastlines c;

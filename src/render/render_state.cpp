@@ -2,6 +2,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/json_input.h"
 
 #include <cmath>
 
@@ -13,14 +14,7 @@ using nlohmann::json;
 
 RenderState loadRenderState(const std::filesystem::path& path)
 {
-    const std::string text = readFile(path);
-    json j;
-    try {
-        j = json::parse(text);
-    } catch (const json::parse_error& e) {
-        fail("{}: not valid JSON: {}", path.string(), e.what());
-    }
-    return parseRenderState(j, path.filename().string());
+    return parseRenderState(parseJsonInput(readFile(path), path.string()), path.filename().string());
 }
 
 std::vector<OpacityPoint> defaultOpacity(ColorMapId map)

@@ -3,6 +3,7 @@
 #include "render/state_schema.h"
 
 #include "core/error.h"
+#include "core/json_input.h"
 #include "render/render_state.h"
 
 #include <algorithm>
@@ -118,7 +119,7 @@ Kind<T> number(double lo = -INFINITY, double hi = INFINITY)
 {
     return {[lo, hi](const json& v, T& target, Reader& r, const std::string& key) {
                 if (!v.is_number())
-                    r.failAt(key, "expected a number, found " + v.dump());
+                    r.failAt(key, "expected a number, found " + jsonExcerpt(v));
                 const double x = v.get<double>();
                 if (!fitsFloat32(x))
                     r.failAt(key, fmt::format("{} is beyond the float32 range", x));
@@ -133,7 +134,7 @@ Kind<int> integer(int lo, int hi)
 {
     return {[lo, hi](const json& v, int& target, Reader& r, const std::string& key) {
                 if (!v.is_number_integer())
-                    r.failAt(key, "expected an integer, found " + v.dump());
+                    r.failAt(key, "expected an integer, found " + jsonExcerpt(v));
                 const auto x = v.get<int64_t>();
                 if (x < lo || x > hi)
                     r.failAt(key, fmt::format("expected an integer in [{}, {}], found {}", lo, hi, x));
@@ -146,7 +147,7 @@ Kind<bool> boolean()
 {
     return {[](const json& v, bool& target, Reader& r, const std::string& key) {
                 if (!v.is_boolean())
-                    r.failAt(key, "expected true or false, found " + v.dump());
+                    r.failAt(key, "expected true or false, found " + jsonExcerpt(v));
                 target = v.get<bool>();
             },
             [](const bool& x) { return json(x); }, {{"type", "boolean"}}, "bool"};
@@ -163,7 +164,7 @@ Kind<std::string> text(bool nullable, const std::string& nonEmpty = "")
                 if (nullable && v.is_null())
                     return;
                 if (!v.is_string())
-                    r.failAt(key, "expected a string, found " + v.dump());
+                    r.failAt(key, "expected a string, found " + jsonExcerpt(v));
                 if (!nonEmpty.empty() && v.get_ref<const std::string&>().empty())
                     r.failAt(key, fmt::format("expected {}, found \"\"", nonEmpty));
                 target = v.get<std::string>();
@@ -179,11 +180,11 @@ json numbersSchema(size_t count, double lo = -INFINITY, double hi = INFINITY)
 std::vector<double> numbers(const json& v, size_t count, Reader& r, const std::string& key)
 {
     if (!v.is_array() || v.size() != count)
-        r.failAt(key, fmt::format("expected an array of {} numbers, found {}", count, v.dump()));
+        r.failAt(key, fmt::format("expected an array of {} numbers, found {}", count, jsonExcerpt(v)));
     std::vector<double> out;
     for (const json& e : v) {
         if (!e.is_number())
-            r.failAt(key, "expected numbers, found " + v.dump());
+            r.failAt(key, "expected numbers, found " + jsonExcerpt(v));
         if (!fitsFloat32(e.get<double>()))
             r.failAt(key, fmt::format("{} is beyond the float32 range", e.get<double>()));
         out.push_back(e.get<double>());
@@ -197,11 +198,11 @@ Kind<std::vector<float>> numberList(double lo, double hi, size_t maxItems)
     json schema{{"type", "array"}, {"items", numberSchema("number", lo, hi)}, {"maxItems", maxItems}};
     return {[lo, hi, maxItems](const json& v, std::vector<float>& target, Reader& r, const std::string& key) {
                 if (!v.is_array() || v.size() > maxItems)
-                    r.failAt(key, fmt::format("expected an array of at most {} numbers, found {}", maxItems, v.dump()));
+                    r.failAt(key, fmt::format("expected an array of at most {} numbers, found {}", maxItems, jsonExcerpt(v)));
                 target.clear();
                 for (const json& e : v) {
                     if (!e.is_number() || !fitsFloat32(e.get<double>()) || !(e.get<double>() >= lo && e.get<double>() <= hi))
-                        r.failAt(key, fmt::format("expected numbers in [{}, {}], found {}", lo, hi, e.dump()));
+                        r.failAt(key, fmt::format("expected numbers in [{}, {}], found {}", lo, hi, jsonExcerpt(e)));
                     target.push_back(e.get<float>());
                 }
             },
@@ -228,13 +229,13 @@ Kind<std::optional<std::vector<std::string>>> nameList(size_t maxItems)
                 }
                 if (!v.is_array() || v.size() > maxItems)
                     r.failAt(key, fmt::format("expected null or an array of at most {} names, found {}", maxItems,
-                                              v.dump()));
+                                              jsonExcerpt(v)));
                 std::vector<std::string> names;
                 for (const json& e : v) {
                     if (!e.is_string() || e.get_ref<const std::string&>().empty())
-                        r.failAt(key, "expected non-empty names, found " + e.dump());
+                        r.failAt(key, "expected non-empty names, found " + jsonExcerpt(e));
                     if (std::find(names.begin(), names.end(), e.get<std::string>()) != names.end())
-                        r.failAt(key, "expected each name once, found " + e.dump() + " twice");
+                        r.failAt(key, "expected each name once, found " + jsonExcerpt(e) + " twice");
                     names.push_back(e.get<std::string>());
                 }
                 target = std::move(names);
@@ -249,7 +250,7 @@ Kind<Rgb> color()
                 const auto c = numbers(v, 3, r, key);
                 for (double x : c)
                     if (!(x >= 0 && x <= 1))
-                        r.failAt(key, "expected colour components in [0, 1], found " + v.dump());
+                        r.failAt(key, "expected colour components in [0, 1], found " + jsonExcerpt(v));
                 target = {float(c[0]), float(c[1]), float(c[2])};
             },
             [](const Rgb& c) { return json::array({c.r, c.g, c.b}); }, numbersSchema(3, 0, 1),
@@ -284,7 +285,7 @@ Kind<std::optional<ValueRange>> range()
                 }
                 const auto x = numbers(v, 2, r, key);
                 if (!(x[0] < x[1]))
-                    r.failAt(key, fmt::format("expected [min, max] with min < max, found {}", v.dump()));
+                    r.failAt(key, fmt::format("expected [min, max] with min < max, found {}", jsonExcerpt(v)));
                 target = ValueRange{float(x[0]), float(x[1])};
             },
             [](const std::optional<ValueRange>& x) {
@@ -304,7 +305,7 @@ json colorMapNames()
 ColorMapId readColorMap(const json& v, Reader& r, const std::string& key)
 {
     if (!v.is_string())
-        r.failAt(key, "expected a colour map name, found " + v.dump());
+        r.failAt(key, "expected a colour map name, found " + jsonExcerpt(v));
     try {
         return parseColorMap(v.get<std::string>());
     } catch (const Error& e) {
@@ -350,14 +351,14 @@ Kind<std::vector<OpacityPoint>> opacityPoints()
 {
     return {[](const json& o, std::vector<OpacityPoint>& target, Reader& r, const std::string& key) {
                 if (!o.is_array() || o.empty())
-                    r.failAt(key, "expected an array of [position, opacity] pairs, found " + o.dump());
+                    r.failAt(key, "expected an array of [position, opacity] pairs, found " + jsonExcerpt(o));
                 target.clear();
                 for (const json& p : o) {
                     const auto v = numbers(p, 2, r, key);
                     if (!(v[0] >= 0 && v[0] <= 1 && v[1] >= 0 && v[1] <= 1))
-                        r.failAt(key, "expected position and opacity in [0, 1], found " + p.dump());
+                        r.failAt(key, "expected position and opacity in [0, 1], found " + jsonExcerpt(p));
                     if (!target.empty() && v[0] < target.back().position)
-                        r.failAt(key, "positions must ascend, found " + o.dump());
+                        r.failAt(key, "positions must ascend, found " + jsonExcerpt(o));
                     target.push_back({float(v[0]), float(v[1])});
                 }
             },
@@ -376,15 +377,15 @@ Kind<std::vector<ColorStop>> colorPoints()
 {
     return {[](const json& o, std::vector<ColorStop>& target, Reader& r, const std::string& key) {
                 if (!o.is_array() || o.size() == 1)
-                    r.failAt(key, "expected [] or an array of at least 2 [u, r, g, b] points, found " + o.dump());
+                    r.failAt(key, "expected [] or an array of at least 2 [u, r, g, b] points, found " + jsonExcerpt(o));
                 target.clear();
                 for (const json& p : o) {
                     const auto v = numbers(p, 4, r, key);
                     for (double x : v)
                         if (!(x >= 0 && x <= 1))
-                            r.failAt(key, "expected u, r, g, b in [0, 1], found " + p.dump());
+                            r.failAt(key, "expected u, r, g, b in [0, 1], found " + jsonExcerpt(p));
                     if (!target.empty() && v[0] < target.back().u)
-                        r.failAt(key, "positions must ascend, found " + o.dump());
+                        r.failAt(key, "positions must ascend, found " + jsonExcerpt(o));
                     target.push_back({float(v[0]), {float(v[1]), float(v[2]), float(v[3])}});
                 }
             },
@@ -408,7 +409,7 @@ Kind<StereoMode> stereoMode()
     }
     return {[](const json& v, StereoMode& target, Reader& r, const std::string& key) {
                 if (!v.is_string())
-                    r.failAt(key, "expected a stereo mode name, found " + v.dump());
+                    r.failAt(key, "expected a stereo mode name, found " + jsonExcerpt(v));
                 try {
                     target = parseStereoMode(v.get<std::string>());
                 } catch (const Error& e) {
@@ -445,7 +446,7 @@ Kind<std::array<float, 4>> four(const std::string& type, double lo = -INFINITY, 
                 const auto x = numbers(v, 4, r, key);
                 for (size_t i = 0; i < 4; ++i) {
                     if (!(x[i] >= lo && x[i] <= hi))
-                        r.failAt(key, fmt::format("expected numbers in [{}, {}], found {}", lo, hi, v.dump()));
+                        r.failAt(key, fmt::format("expected numbers in [{}, {}], found {}", lo, hi, jsonExcerpt(v)));
                     target[i] = float(x[i]);
                 }
             },
@@ -463,7 +464,7 @@ Kind<std::optional<int>> level()
                     return;
                 }
                 if (!v.is_number_integer() || v.get<int64_t>() < 0 || v.get<int64_t>() > top)
-                    r.failAt(key, fmt::format("expected \"auto\" or an integer in [0, {}], found {}", top, v.dump()));
+                    r.failAt(key, fmt::format("expected \"auto\" or an integer in [0, {}], found {}", top, jsonExcerpt(v)));
                 target = v.get<int>();
             },
             [](const std::optional<int>& l) { return l ? json(*l) : json("auto"); },
@@ -482,7 +483,7 @@ Kind<int> version()
     }
     return {[list](const json& v, int& target, Reader& r, const std::string& key) {
                 if (!v.is_number_integer())
-                    r.failAt(key, "expected an integer, found " + v.dump());
+                    r.failAt(key, "expected an integer, found " + jsonExcerpt(v));
                 const auto x = v.get<int64_t>();
                 if (x < 1 || x > kRenderStateVersion)
                     r.failAt(key, fmt::format("{} is not supported, expected {}", x, list));
@@ -741,7 +742,7 @@ Kind<std::vector<E>> arrayOf(Object<E> element, std::string type)
     Kind<std::vector<E>> kind{
         [e](const json& v, std::vector<E>& target, Reader& r, const std::string& key) {
             if (!v.is_array())
-                r.failAt(key, "expected an array, found " + v.dump());
+                r.failAt(key, "expected an array, found " + jsonExcerpt(v));
             target.clear();
             for (size_t i = 0; i < v.size(); ++i) {
                 Reader child = r.child(fmt::format("{}[{}]", key, i), v[i]);

@@ -3,14 +3,15 @@
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/install_paths.h"
+#include "core/json_input.h"
 #include "core/spherical.h"
 #include "render/color_map.h"
 #include "render/pathline_scene.h"
+#include "render/state_renderer.h"
 #include "render/volume_renderer.h"
 #include "server/access.h"
 #include "server/image_codec.h"
 #include "server/protocol.h"
-#include "render/state_renderer.h"
 
 #include <spdlog/spdlog.h>
 
@@ -78,9 +79,9 @@ json presetsJson(const std::optional<fs::path>& dir)
         text << in.rdbuf();
         json state;
         try {
-            state = json::parse(text.str());
-        } catch (const json::parse_error& e) {
-            spdlog::warn("presets: {}: not valid JSON ({}), left out", file.string(), e.what());
+            state = parseJsonInput(text.str(), file.string());
+        } catch (const Error& e) {
+            spdlog::warn("presets: {}, left out", e.what());
             continue;
         }
         const std::string name = file.stem().string();
@@ -364,14 +365,7 @@ int checkedStep(const Dataset& dataset, std::string_view query)
     return step;
 }
 
-json parseBody(std::string_view body)
-{
-    try {
-        return json::parse(body);
-    } catch (const json::parse_error& e) {
-        fail("body: not valid JSON: {}", e.what());
-    }
-}
+json parseBody(std::string_view body) { return parseJsonInput(body, "body"); }
 
 ApiAnswer jsonAnswer(const json& j)
 {

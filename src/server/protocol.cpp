@@ -1,6 +1,7 @@
 #include "server/protocol.h"
 
 #include "core/error.h"
+#include "core/json_input.h"
 
 #include <algorithm>
 #include <cmath>
@@ -37,9 +38,9 @@ int64_t integerField(const json& message, const char* type, const char* key)
         if (std::isfinite(v) && v == std::floor(v))
             fail("{}: field '{}' is {}, out of range (a signed 64-bit integer; written with a fraction or "
                  "exponent, at most 9e15 in magnitude)",
-                 type, key, it->dump().substr(0, 40));
+                 type, key, jsonExcerpt(*it, 40));
     }
-    fail("{}: field '{}' must be an integer, found {}", type, key, it->dump().substr(0, 40));
+    fail("{}: field '{}' must be an integer, found {}", type, key, jsonExcerpt(*it, 40));
 }
 
 void rejectUnknownKeys(const json& message, const char* type, std::initializer_list<const char*> known)
@@ -61,12 +62,7 @@ ClientMessage parseClientMessage(std::string_view text)
 {
     if (text.size() > kMaxClientMessageBytes)
         fail("message of {} bytes is over the limit of {} bytes", text.size(), kMaxClientMessageBytes);
-    json message;
-    try {
-        message = json::parse(text);
-    } catch (const json::exception& e) {  // parse_error, and out_of_range for a number such as 1e999
-        fail("malformed JSON: {}", e.what());
-    }
+    const json message = parseJsonInput(text, "message");
     if (!message.is_object())
         fail("expected a JSON object with a 'type', found {}", message.type_name());
     const auto typeIt = message.find("type");

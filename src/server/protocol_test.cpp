@@ -64,9 +64,13 @@ TEST(ProtocolCodec, IdsKeepTheirValueOrAreRefused)
 
 TEST(ProtocolCodec, RejectsMalformedJson)
 {
-    EXPECT_NE(errorOf(R"({"type": "hello", )").find("malformed JSON"), std::string::npos);
-    EXPECT_NE(errorOf("").find("malformed JSON"), std::string::npos);
-    EXPECT_NE(errorOf("\xff\xfe").find("malformed JSON"), std::string::npos);
+    EXPECT_NE(errorOf(R"({"type": "hello", )").find("message: not valid JSON"), std::string::npos);
+    EXPECT_NE(errorOf("").find("message: not valid JSON"), std::string::npos);
+    EXPECT_NE(errorOf("\xff\xfe").find("message: not valid JSON"), std::string::npos);
+    // Nesting is bounded before parsing (issue 31): 100 000 levels in 200 KB, under the message limit.
+    const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+    EXPECT_NE(errorOf(R"({"type": "ping", "id": )" + deep + "}").find("nested deeper than 64 levels"), std::string::npos);
+    EXPECT_LT(errorOf(R"({"type": "ping", "id": )" + deep + "}").size(), 200u);
     EXPECT_NE(errorOf("[1, 2]").find("expected a JSON object"), std::string::npos);
     EXPECT_NE(errorOf("42").find("expected a JSON object"), std::string::npos);
 }

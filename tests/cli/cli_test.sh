@@ -349,6 +349,25 @@ huge_pages)
   read -r t h <<<"$(server_memory GLIBC_TUNABLES=glibc.malloc.hugetlb=0)"
   check "the user's own hugetlb setting stands ($t)" test "$t" = "glibc.malloc.hugetlb=0"
   ;;
+deep_json)
+  # Issue 31, item 1: JSON nested 100 000 deep (200 KB) in a state file and in a dataset manifest
+  # gets one short line (no crash, no 20 KB value quoted); 10 000 deep likewise.
+  preprocess_fixture
+  for depth in 100000 10000; do
+    python3 -c "import sys; n=int(sys.argv[1]); print('{\"version\": 7, \"step\": ' + '['*n + ']'*n + '}')" $depth > "$work/deep.json"
+    expect_error "nested deeper than" render "$work/ds" --time 0 -o "$work/deep.png" --state "$work/deep.json"
+    err=$("$raypc" render "$work/ds" --time 0 -o "$work/deep.png" --state "$work/deep.json" 2>&1 >/dev/null)
+    check "the message at depth $depth is short (${#err} characters)" test "${#err}" -lt 300
+    check "no picture is written" test ! -e "$work/deep.png"
+  done
+  # A value of a wrong type, 10 000 deep inside an array, is quoted as an excerpt.
+  python3 -c "print('{\"version\": 7, \"step\": 0, \"camera\": {\"azimuthDeg\": ' + '['*60 + ']'*60 + '}}')" > "$work/wide.json"
+  err=$("$raypc" render "$work/ds" --time 0 -o "$work/deep.png" --state "$work/wide.json" 2>&1 >/dev/null)
+  check "a refused value is quoted in a short excerpt (${#err} characters: $err)" test "${#err}" -lt 300
+  cp -r "$work/ds" "$work/ds-deep"
+  python3 -c "print('['*100000 + ']'*100000)" > "$work/ds-deep/dataset.json"
+  expect_error "nested deeper than" info "$work/ds-deep"
+  ;;
 *) echo "unknown case $case_name"; exit 2 ;;
 esac
 

@@ -317,8 +317,8 @@ TEST(Serve, BadMessagesGetErrorsAndTheConnectionStays)
         EXPECT_NE(reply["message"].get<std::string>().find(fragment), std::string::npos)
             << reply["message"] << " lacks " << fragment;
     };
-    expectError(R"({"type": "state", "id": )", "malformed JSON");
-    expectError("not json at all", "malformed JSON");
+    expectError(R"({"type": "state", "id": )", "not valid JSON");
+    expectError("not json at all", "not valid JSON");
     expectError(R"({"type": "teleport"})", "unknown message type 'teleport'");
     expectError(R"({"type": "state", "state": {}})", "missing field 'id'");
     expectError(R"({"type": "ping"})", "missing field 'id'");

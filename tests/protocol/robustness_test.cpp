@@ -553,4 +553,29 @@ TEST(Messages, IdsAreEchoedExactlyOrRefused)
     EXPECT_NE(reply.raw.find("out of range"), std::string::npos) << reply.raw;
 }
 
+// Issue 31, item 1: JSON nested 100 000 deep (200 KB, under the body and message limits) crashed
+// the server through every path that takes JSON from a client. Each now gets a short error reply
+// naming the nesting, and the server and the connection live on.
+TEST(Messages, DeeplyNestedJsonIsRefusedAndTheServerLives)
+{
+    ServerProcess server;
+    const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+    const auto post = httpRequest(server.port, http::verb::post, "/api/selection", R"({"version": 7, "step": )" + deep + "}");
+    EXPECT_EQ(post.status, 400);
+    EXPECT_NE(post.body.find("nested deeper than"), std::string::npos) << post.body.substr(0, 300);
+    EXPECT_LT(post.body.size(), 300u);
+    WsClient ws(server.port);
+    ws.hello();
+    for (const std::string& text : {R"({"type": "ping", "id": )" + deep + "}",
+                                    R"({"type": "state", "id": 1, "state": {"version": 7, "step": )" + deep + "}}"}) {
+        ws.sendText(text);
+        const json reply = ws.receiveText();
+        EXPECT_EQ(reply["type"], "error");
+        EXPECT_NE(reply.value("message", "").find("nested deeper than"), std::string::npos) << reply.dump().substr(0, 300);
+    }
+    ws.sendText(R"({"type": "ping", "id": 5})");
+    EXPECT_EQ(ws.receiveText()["type"], "pong");
+    EXPECT_TRUE(server.alive());
+}
+
 }  // namespace
