@@ -7,6 +7,7 @@
 #include "app/series_inputs.h"
 #include "core/error.h"
 #include "core/mpi.h"
+#include "core/numbered_name.h"
 #include "core/strings.h"
 #include "data/dataset.h"
 #include "render/image_io.h"
@@ -20,7 +21,7 @@
 
 #include <algorithm>
 #include <array>
-#include <cstdio>
+#include <optional>
 #include <functional>
 #include <filesystem>
 
@@ -59,31 +60,39 @@ std::pair<int, int> parseSize(const std::string& text)
 }
 
 
-// Expands a printf-style "%03d" pattern for sequences; a plain name is used as is.
-std::string frameName(const std::string& pattern, int step, bool sequence)
-{
-    if (!sequence)
-        return pattern;
-    const size_t pct = pattern.find('%');
-    const size_t d = pct == std::string::npos ? pct : pattern.find('d', pct);
-    if (d == std::string::npos)
-        fail("-o '{}': a --time range needs a numbered pattern such as frames/frame_%03d.png", pattern);
-    std::string spec = pattern.substr(pct, d - pct + 1);
-    char buffer[64];
-    std::snprintf(buffer, sizeof buffer, spec.c_str(), step);
-    return pattern.substr(0, pct) + buffer + pattern.substr(d + 1);
-}
-
 // What the options resolve to, before anything is rendered.
 struct RenderSetup {
     std::shared_ptr<const Dataset> dataset;
     ResolvedState resolved;
     int first = 0, last = 0;
     bool sequence = false, lodAuto = false;
+    // -o and --depth: the step goes where they say %d or %03d (core/numbered_name.h).
+    std::optional<NumberedName> output, depth;
 };
+
+// -o and --depth, checked before anything is read: one step number at most, and a --time range
+// needs one, so that no two frames share a name.
+std::pair<NumberedName, std::optional<NumberedName>> outputNames(const RenderArgs& args, bool sequence)
+{
+    NumberedName output(args.output, "-o");
+    if (sequence && !output.numbered())
+        fail("-o '{}': a --time range needs a numbered pattern such as frames/frame_%03d.png", args.output);
+    std::optional<NumberedName> depth;
+    if (!args.depthPath.empty()) {
+        depth.emplace(args.depthPath, "--depth");
+        if (sequence && !depth->numbered())
+            fail("--depth '{}': a --time range needs a numbered pattern such as depth/depth_%03d.pfm", args.depthPath);
+        if ((*depth)(0) == output(0))
+            fail("--depth '{}' names the same file as -o", args.depthPath);
+    }
+    return {std::move(output), std::move(depth)};
+}
 
 RenderSetup setUp(const RenderArgs& args)
 {
+    // Steps: one index/time, or A:B for a numbered sequence.
+    const bool sequence = args.time.find(':') != std::string::npos;
+    auto [output, depth] = outputNames(args, sequence);
     const auto dataset = Dataset::open(args.dataset);
     // Without a state: the UI's first view (render::defaultState), so that a figure made from the
     // command line and the browser's first picture are the same.
@@ -163,11 +172,9 @@ RenderSetup setUp(const RenderArgs& args)
         state.pathlines.visible = true;
     }
 
-    // Steps: one index/time, or A:B for a numbered sequence.
-    const bool sequence = args.time.find(':') != std::string::npos;
     const auto [first, last] = parseStepRange(*dataset, args.time);
     state.step = first;
-    return {dataset, resolveState(state, *dataset), first, last, sequence, lodAuto};
+    return {dataset, resolveState(state, *dataset), first, last, sequence, lodAuto, std::move(output), std::move(depth)};
 }
 
 // Renders one step (only the tiles of `share`; rank 0 then gathers them all when `share` is shared
@@ -220,7 +227,7 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
         total.chunks = uint64_t(counts[2]);
         total.chunksJumped = uint64_t(counts[3]);
     }
-    const std::string out = frameName(args.output, step, setup.sequence);
+    const std::string out = (*setup.output)(step);
     phase([&] {
         if (!share.all() && !mpi::isRoot())
             return;
@@ -232,10 +239,10 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
                 fail("{}: cannot create the directory ({})", parent.string(), ec.message());
         }
         writePng(out, renderer.picture(frames, resolved, true));
-        if (!args.depthPath.empty()) {
+        if (setup.depth) {
             int width = 0, height = 0;
             const std::vector<float> depth = averagedDepthKm(frames, width, height);  // stereo: the eyes side by side
-            writePfm(frameName(args.depthPath, step, setup.sequence), width, height, depth);
+            writePfm((*setup.depth)(step), width, height, depth);
         }
     });
     const StereoLayout layout = stereoLayout(resolved.state.stereo.mode, resolved.state.width, resolved.state.height);
@@ -306,7 +313,7 @@ const CommandRegistration kRenderCommand(
         cmd.add_option("-t,--time", args->time,
                        "Step index (0-based) or time like 24Myr; A:B renders steps A..B into a numbered sequence")
             ->capture_default_str();
-        cmd.add_option("-o,--output", args->output, "Output PNG; for --time A:B a pattern like frames/frame_%03d.png")
+        cmd.add_option("-o,--output", args->output, "Output PNG; for --time A:B a pattern like frames/frame_%03d.png (%d or %0Nd, N <= 9: the step; %%: a %)")
             ->required();
         cmd.add_option("--size", args->size, "Image size WIDTHxHEIGHT (default 512x512 or the state's)");
         cmd.add_option("--state", args->statePath, "STATE.json saved by the browser UI (docs/state.md)");
@@ -321,7 +328,7 @@ const CommandRegistration kRenderCommand(
                        "name given twice selects either range (OR); replaces the state's ranges of that name");
         cmd.add_option("--lod", args->lod, "Level of detail: 0 (full), 1, 2, or auto (fit the state's time budget)");
         cmd.add_option("--passes", args->passes, "Progressive passes to accumulate (default: the state's, 8)");
-        cmd.add_option("--depth", args->depthPath, "Also write the depth (km along the view ray) as PFM");
+        cmd.add_option("--depth", args->depthPath, "Also write the depth (km along the view ray) as PFM (a pattern as -o)");
         cmd.add_flag("--stats", args->stats, "Print JSON statistics: time per pass, samples, bricks, rate");
         cmd.add_flag("--pathlines", args->pathlines,
                      "Show the pathlines injected in the last 10 steps (or the state's window) as tubes");

@@ -1,6 +1,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json_input.h"
+#include "core/numbered_name.h"
 #include "core/spherical.h"
 #include "core/strings.h"
 
@@ -104,6 +105,42 @@ TEST(JsonInput, ExcerptsAreShort)
     // Never cut inside a UTF-8 sequence.
     const std::string u = jsonExcerpt(nlohmann::json("ééééééééééééééééééééé"), 4);
     EXPECT_EQ(u, "\"é…");
+}
+
+// `raypc render -o` patterns (issue 31, item 3): one %d / %0Nd, %% for %, nothing else.
+TEST(NumberedName, ExpandsOneStepNumberWithoutPrintf)
+{
+    EXPECT_EQ(NumberedName("f_%03d.png", "-o")(7), "f_007.png");
+    EXPECT_EQ(NumberedName("f_%d.png", "-o")(1234), "f_1234.png");
+    EXPECT_EQ(NumberedName("f_%02d.png", "-o")(1234), "f_1234.png");  // a width is a minimum
+    EXPECT_EQ(NumberedName("%%_%09d_100%%.png", "-o")(42), "%_000000042_100%.png");
+    EXPECT_EQ(NumberedName("f_%03d.png", "-o")(-5), "f_-05.png");
+    const NumberedName plain("plain%%.png", "-o");
+    EXPECT_FALSE(plain.numbered());
+    EXPECT_EQ(plain(3), "plain%.png");
+    EXPECT_TRUE(NumberedName("a%d", "-o").numbered());
+}
+
+TEST(NumberedName, RefusesEveryOtherConversion)
+{
+    for (const char* bad : {"f_%s%03d.png", "f_%n.png", "f_%x%d.png", "f_%p%d.png", "f_%999999999d.png", "f_%.0d.png",
+                            "f_%d_%d.png", "f_%.png", "f_%", "f_%0d.png", "f_%010d.png", "f_%3d.png", "f_%ld.png",
+                            "f_%-3d.png", "f_%+d.png", "f_% d.png", "f_%i.png"}) {
+        try {
+            NumberedName name(bad, "-o");
+            ADD_FAILURE() << bad << " accepted";
+        } catch (const Error& e) {
+            const std::string m = e.what();
+            EXPECT_EQ(m.rfind(std::string("-o '") + bad + "': ", 0), 0u) << m;
+            EXPECT_NE(m.find("%03d"), std::string::npos) << m;  // says what to write instead
+        }
+    }
+    try {
+        NumberedName name(std::string(10000, 'x') + "%s", "-o");
+        ADD_FAILURE();
+    } catch (const Error& e) {
+        EXPECT_LT(std::string(e.what()).size(), 300u);
+    }
 }
 
 }  // namespace
