@@ -1,5 +1,6 @@
 // raypc: interactive visual analysis of mantle convection simulations.
 #include "app/command.h"
+#include "app/options.h"
 #include "core/error.h"
 #include "core/mpi.h"
 #include "core/system_memory.h"
@@ -54,8 +55,14 @@ int parseAndRun(CLI::App& app, int argc, char** argv)
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        // Every rank parses the same arguments: one of them prints.
-        return raypc::mpi::isRoot() ? app.exit(e) : e.get_exit_code();
+        // Every rank parses the same arguments: one of them prints. Help and --version print as
+        // CLI11 does; an error is one line, as every other error of raypc.
+        if (!raypc::mpi::isRoot())
+            return e.get_exit_code();
+        if (e.get_exit_code() == 0)
+            return app.exit(e);
+        std::fprintf(stderr, "raypc: error: %s (see --help)\n", e.what());
+        return e.get_exit_code();
     }
     return 0;
 }
@@ -79,6 +86,7 @@ int main(int argc, char** argv)
                      [](const Entry& a, const Entry& b) { return a.order < b.order; });
     for (auto& entry : entries)
         entry.setup(*app.add_subcommand(entry.name, entry.description));
+    requireFiniteNumbers(app);
     app.parse_complete_callback([&] { spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::info); });
     // Alone (no MPI launcher) this initialises nothing: one process, as without MPI. It outlives the
     // catch below, so that a failing rank reports (and, if need be, aborts the job) before finalising.

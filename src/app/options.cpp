@@ -10,6 +10,24 @@
 
 namespace raypc::app {
 
+void requireFiniteNumbers(CLI::App& app)
+{
+    static const CLI::Validator finite(
+        [](std::string& text) -> std::string {
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            if (end != text.c_str() && *end == '\0' && !std::isfinite(v))
+                return text + " is not a finite number";
+            return {};
+        },
+        "FINITE");
+    for (CLI::Option* option : app.get_options())
+        if (option->get_type_name() == "FLOAT")
+            option->check(finite);
+    for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
+        requireFiniteNumbers(*sub);
+}
+
 void ReaderFlags::add(CLI::App& app)
 {
     app.add_option("--map", variableMap,
@@ -50,7 +68,7 @@ int parseStep(const Dataset& dataset, const std::string& text, const std::string
         const std::string number = trim(t.substr(0, t.size() - 3));
         double myr = 0;
         const auto [end, ec] = std::from_chars(number.data(), number.data() + number.size(), myr);
-        if (ec != std::errc() || end != number.data() + number.size())
+        if (ec != std::errc() || end != number.data() + number.size() || !std::isfinite(myr))
             fail("{}: '{}' is not a time like 24Myr", option, text);
         for (const auto& s : dataset.steps())
             if (std::abs(s.timeMyr - myr) <= 1e-6 * std::max(1.0, std::abs(myr)))
@@ -81,6 +99,8 @@ NamedRange parseRangeOption(const std::string& text, const std::string& option)
         const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
         if (s.empty() || ec != std::errc() || end != s.data() + s.size())
             fail("{} '{}': MIN and MAX must be numbers", option, text);
+        if (!std::isfinite(v))
+            fail("{} '{}': MIN and MAX must be finite numbers (for an open end, give the range's end)", option, text);
         return v;
     };
     r.min = number(lo);

@@ -13,6 +13,11 @@
 
 namespace raypc::app {
 
+// Adds to every floating-point option of `app` and its subcommands a check that refuses NaN and
+// infinities ("nan", "inf", "1e999"): no command works with a non-finite number (issue 31: `probe
+// --lon nan` answered with null values and exit 0). Call once every option is added.
+void requireFiniteNumbers(CLI::App& app);
+
 // Options that tell the netCDF reader how the input names things.
 struct ReaderFlags {
     std::vector<std::string> variableMap;  // NAME=FILE_NAME

@@ -368,6 +368,24 @@ deep_json)
   python3 -c "print('['*100000 + ']'*100000)" > "$work/ds-deep/dataset.json"
   expect_error "nested deeper than" info "$work/ds-deep"
   ;;
+non_finite_options)
+  # Issue 31, item 7: every numeric option refuses NaN and infinities with one line (probe --lon nan
+  # answered null values with exit 0; --time infMyr rendered step 0; --range 0:inf ran).
+  preprocess_fixture
+  for v in nan inf -inf 1e999 NAN; do
+    expect_error "--lon: $v is not a finite number" probe "$work/ds" --lat 0 --r 5000 --lon "$v"
+  done
+  expect_error "--lat: nan is not a finite number" probe "$work/ds" --lat nan --lon 0 --r 5000
+  expect_error "--r: inf is not a finite number" probe "$work/ds" --lat 0 --lon 0 --r inf
+  expect_error "MIN and MAX must be finite numbers" stats "$work/ds" --range "temperature=nan:5" -o "$work/s.csv"
+  expect_error "MIN and MAX must be finite numbers" stats "$work/ds" --range "temperature=0:inf" -o "$work/s.csv"
+  expect_error "'infMyr' is not a time like 24Myr" render "$work/ds" --time infMyr -o "$work/x.png"
+  expect_error "'nanMyr' is not a time like 24Myr" probe "$work/ds" --time nanMyr --lat 0 --lon 0 --r 5000
+  expect_error "--pathline-radius: inf is not a finite number" render "$work/ds" --pathline-radius inf -o "$work/x.png"
+  expect_error "--dt-myr: nan is not a finite number" preprocess "$fixture" -o "$work/x" --dt-myr nan
+  expect_error "--dt-myr: inf is not a finite number" synth -o "$work/sy" --dt-myr inf
+  check "nothing was written" test ! -e "$work/x.png" -a ! -e "$work/s.csv" -a ! -e "$work/x" -a ! -e "$work/sy"
+  ;;
 *) echo "unknown case $case_name"; exit 2 ;;
 esac
 
