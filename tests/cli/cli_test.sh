@@ -349,6 +349,20 @@ huge_pages)
   read -r t h <<<"$(server_memory GLIBC_TUNABLES=glibc.malloc.hugetlb=0)"
   check "the user's own hugetlb setting stands ($t)" test "$t" = "glibc.malloc.hugetlb=0"
   ;;
+netcdf4_serve_quiet)
+  # Issue 31, item 9: `raypc serve DIR` of netCDF-4 files preprocesses on a background thread, which
+  # printed HDF5's error stacks (HDF5-DIAG) for the calls netCDF-C expects to fail.
+  "$raypc" synth -o "$work/nc4" --steps 3 --grid 12x9x16 --format netcdf4 >/dev/null
+  "$raypc" serve "$work/nc4" --port 0 --dataset "$work/nc4.raypc" > "$work/serve.log" 2>&1 &
+  pid=$!
+  for _ in $(seq 300); do grep -q "steps are ready" "$work/serve.log" && break; sleep 0.1; done
+  kill "$pid"; wait "$pid" 2>/dev/null
+  check "the whole series was served" grep -q "all 3 steps are ready" "$work/serve.log"
+  diag=$(grep -c "HDF5-DIAG" "$work/serve.log")
+  check "no HDF5-DIAG lines in the server's log ($diag)" test "$diag" -eq 0
+  "$raypc" info "$work/nc4/spherical002.nc" > "$work/info.log" 2>&1
+  check "nor from info of a netCDF-4 file" test "$(grep -c HDF5-DIAG "$work/info.log")" -eq 0
+  ;;
 *) echo "unknown case $case_name"; exit 2 ;;
 esac
 
