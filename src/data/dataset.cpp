@@ -319,9 +319,14 @@ using nlohmann::json;
 inline constexpr uint32_t kMaxBrickSize = 64;
 inline constexpr size_t kMaxVariables = 1024;
 
-// A short excerpt of a JSON value for a message (an outside file may hold anything).
+// A short excerpt of a JSON value for a message (an outside file may hold anything). Containers are
+// described, not printed: dump() recurses, and a manifest may nest deeply.
 std::string excerpt(const json& value)
 {
+    if (value.is_array())
+        return value.empty() ? "[]" : fmt::format("an array of {} entries", value.size());
+    if (value.is_object())
+        return value.empty() ? "{}" : fmt::format("an object of {} members", value.size());
     std::string text = value.dump();
     if (text.size() > 40)
         text = text.substr(0, 37) + "...";

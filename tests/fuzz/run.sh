@@ -10,15 +10,18 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 build=$(cd "${1:-$root/build-sanitize}" && pwd)
 seconds=${2:-60}
 status=0
-for target in netcdf_reader render_state protocol; do
+for target in netcdf_reader render_state protocol dataset_manifest; do
   exe=$build/tests/fuzz/fuzz_$target
   work=$build/fuzz/$target
   mkdir -p "$work/corpus"
   seeds=("$root/tests/fuzz/corpus/$target")
   [[ $target == render_state ]] && seeds+=("$root/examples")
-  # Small inputs: the reader's seeds are under 2 KB; leaks are findings too (detect_leaks).
+  # Small inputs: the reader's seeds are under 2 KB; a manifest (11 variables' histograms) is
+  # 78 KB and the nesting seed 200 KB. Leaks are findings too (detect_leaks).
+  max_len=8192
+  [[ $target == dataset_manifest ]] && max_len=262144
   ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1} \
-  "$exe" -max_total_time="$seconds" -max_len=8192 -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
+  "$exe" -max_total_time="$seconds" -max_len="$max_len" -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
     -artifact_prefix="$work/" "$work/corpus" "${seeds[@]}" > "$work/log.txt" 2>&1
   rc=$?
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$work/log.txt" | grep -o '[0-9]*$')
