@@ -13,11 +13,15 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <cerrno>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 namespace raypc {
 
@@ -104,8 +108,10 @@ std::shared_ptr<StepVolume> StepVolume::fromSnapshot(const Snapshot& snapshot, u
 }
 
 std::shared_ptr<StepVolume> StepVolume::open(const std::filesystem::path& dir, const LevelInfo& level,
-                                             const std::vector<std::string>& fileStems, ValueEncoding encoding)
+                                             const std::vector<std::string>& fileStems, ValueEncoding encoding,
+                                             std::span<const ValueRange> ranges)
 {
+    RAYPC_CHECK(ranges.empty() || ranges.size() == fileStems.size());
     auto volume = std::make_shared<StepVolume>();
     volume->m_grid = level.grid;
     volume->m_bricks = level.bricks;
@@ -118,33 +124,70 @@ std::shared_ptr<StepVolume> StepVolume::open(const std::filesystem::path& dir, c
     volume->m_valuesStorage = std::make_unique<std::atomic<const float*>[]>(count);
     volume->m_values = {volume->m_valuesStorage.get(), count};
     volume->m_decoded.resize(count);
-    volume->m_mapped.reserve(2 * count);  // references below must stay valid
+    volume->m_mapped.reserve(count);  // references below must stay valid
+    volume->m_owned.reserve(count);
+    volume->m_ranges.assign(count, ValueRange{-std::numeric_limits<float>::max(), std::numeric_limits<float>::max()});
     for (size_t i = 0; i < count; ++i) {
+        if (!ranges.empty())
+            volume->m_ranges[i] = ranges[i];
+        const ValueRange range = volume->m_ranges[i];
         const auto valuesPath = encoded ? format::encodedValuesFile(dir, fileStems[i]) : format::valuesFile(dir, fileStems[i]);
         const auto boundsPath = format::boundsFile(dir, fileStems[i]);
         const MappedFile& values = volume->m_mapped.emplace_back(valuesPath);
         if (values.size() != valueBytes)
             fail("{}: {} bytes, expected {} ({} points of {})", valuesPath.string(), values.size(), valueBytes, n,
                  encodingName(encoding));
-        const MappedFile& boundsFile = volume->m_mapped.emplace_back(boundsPath);
+        // The bounds are small (two floats per brick) and read by every pass: copied, so that a file cut
+        // short later cannot take them away under a renderer (only the values stay mapped).
+        const MappedFile boundsFile(boundsPath);
         if (boundsFile.size() != boundBytes)
             fail("{}: {} bytes, expected {}", boundsPath.string(), boundsFile.size(), boundBytes);
-        const auto* bounds = reinterpret_cast<const float*>(boundsFile.bytes().data());
-        volume->m_bounds.push_back(bounds);
-        if (encoded) {
-            // Decoding trusts the bounds (value_encoding.h); checked here, where a bad file is an error.
-            for (size_t b = 0; b < brickCount; ++b)
-                if (!(std::isfinite(bounds[2 * b]) && std::isfinite(bounds[2 * b + 1]) &&
-                      bounds[2 * b] <= bounds[2 * b + 1]))
-                    fail("{}: brick {} has bounds ({}, {}), expected finite values with min <= max (a damaged "
-                         "file; preprocess the step again)",
-                         boundsPath.string(), b, bounds[2 * b], bounds[2 * b + 1]);
-            volume->m_encoded.push_back(reinterpret_cast<const uint16_t*>(values.bytes().data()));
-        } else {
-            volume->m_values[i].store(reinterpret_cast<const float*>(values.bytes().data()));
-        }
+        const auto* stored = reinterpret_cast<const float*>(boundsFile.bytes().data());
+        auto& bounds = volume->m_owned.emplace_back(stored, stored + 2 * brickCount);
+        volume->m_bounds.push_back(bounds.data());
+        // Decoding (u16) and brick skipping trust the bounds; checked here, where a bad file is an
+        // error. Within the step's range (the manifest's exact statistics), so that a finite but
+        // absurd bound (3.4e38) is refused too.
+        for (size_t b = 0; b < brickCount; ++b)
+            if (!(bounds[2 * b] >= range.min && bounds[2 * b] <= bounds[2 * b + 1] && bounds[2 * b + 1] <= range.max))
+                fail("{}: brick {} has bounds ({}, {}), expected finite values with min <= max within the step's "
+                     "range [{}, {}] (a damaged file; preprocess the step again)",
+                     boundsPath.string(), b, bounds[2 * b], bounds[2 * b + 1], range.min, range.max);
+        volume->m_valueFiles.push_back(values.bytes().data());
     }
     return volume;
+}
+
+namespace {
+
+// The first index in `values` outside [min, max] (NaN included), or values.size().
+size_t firstOutsideRange(std::span<const float> values, ValueRange range)
+{
+    std::atomic<size_t> first{values.size()};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, values.size(), size_t(1) << 16), [&](const auto& r) {
+        if (r.begin() >= first.load(std::memory_order_relaxed))
+            return;
+        for (size_t i = r.begin(); i < r.end(); ++i)
+            if (!(values[i] >= range.min && values[i] <= range.max)) {
+                size_t seen = first.load(std::memory_order_relaxed);
+                while (i < seen && !first.compare_exchange_weak(seen, i, std::memory_order_relaxed)) {
+                }
+                return;
+            }
+    });
+    return first.load();
+}
+
+}  // namespace
+
+[[noreturn]] void StepVolume::failValue(size_t var, size_t index, float value) const
+{
+    const size_t iLon = index % m_grid.nLon(), iR = (index / m_grid.nLon()) % m_grid.nR(),
+                 iLat = index / (m_grid.nLon() * m_grid.nR());
+    fail("{}: point {} (lat {:.4g} deg, r {:.6g} km, lon {:.4g} deg) holds {}, expected a finite value within the "
+         "step's range [{}, {}] (a damaged file; preprocess the step again)",
+         m_mapped[var].path().string(), index, m_grid.latDeg[iLat], m_grid.rKm[iR], m_grid.lonDeg[iLon], value,
+         m_ranges[var].min, m_ranges[var].max);
 }
 
 const float* StepVolume::decode(size_t var) const
@@ -153,14 +196,29 @@ const float* StepVolume::decode(size_t var) const
     std::lock_guard lock(m_decodeMutex);
     if (const float* p = m_values[var].load(std::memory_order_acquire))
         return p;  // another thread decoded it while this one waited
-    RAYPC_CHECK(m_encoding == ValueEncoding::Uint16);
+    RAYPC_CHECK(var < m_mapped.size());
+    // The first read of a mapped array since it was opened: a file cut short meanwhile (a server
+    // keeps steps for minutes) is an error here instead of SIGBUS in the loop below.
+    m_mapped[var].checkNotCutShort();
     const size_t n = m_grid.cellCount();
+    if (m_encoding == ValueEncoding::Float32) {
+        // Mapped as they are; preprocessing never writes a value outside the step's range, so one that
+        // is (NaN, Inf, 3.4e38 in a damaged file) is refused before anything computes with it. One
+        // read of the array on first use, as a u16 variable's decoding is.
+        const auto* values = static_cast<const float*>(m_valueFiles[var]);
+        size_t bad = 0;
+        tbb::this_task_arena::isolate([&] { bad = firstOutsideRange({values, n}, m_ranges[var]); });
+        if (bad < n)
+            failValue(var, bad, values[bad]);
+        m_values[var].store(values, std::memory_order_release);
+        return values;
+    }
     auto values = std::make_unique_for_overwrite<float[]>(n);
     // Isolated: while this thread waits inside the parallel loop it must not pick up another task
     // that asks this volume for values and blocks on the lock it holds.
     tbb::this_task_arena::isolate([&] {
-        decodeUint16(m_grid, m_bricks, {m_encoded[var], n}, {m_bounds[var], 2 * m_bricks.brickCount()},
-                     {values.get(), n});
+        decodeUint16(m_grid, m_bricks, {static_cast<const uint16_t*>(m_valueFiles[var]), n},
+                     {m_bounds[var], 2 * m_bricks.brickCount()}, {values.get(), n});
     });
     const float* p = values.get();
     m_decoded[var] = std::move(values);
@@ -173,7 +231,17 @@ float StepVolume::value(size_t var, size_t iLat, size_t iR, size_t iLon) const
 {
     if (const float* p = m_values[var].load(std::memory_order_acquire))
         return p[m_grid.index(iLat, iR, iLon)];
-    return decodeUint16Point(m_grid, m_bricks, m_encoded[var], m_bounds[var], iLat, iR, iLon);
+    m_mapped[var].checkNotCutShort();
+    if (m_encoding == ValueEncoding::Float32) {
+        // Not yet checked as a whole (decode): this one value is.
+        const size_t index = m_grid.index(iLat, iR, iLon);
+        const float v = static_cast<const float*>(m_valueFiles[var])[index];
+        if (!(v >= m_ranges[var].min && v <= m_ranges[var].max))
+            failValue(var, index, v);
+        return v;
+    }
+    return decodeUint16Point(m_grid, m_bricks, static_cast<const uint16_t*>(m_valueFiles[var]), m_bounds[var], iLat,
+                             iR, iLon);
 }
 
 double StepVolume::errorBound(size_t var, size_t iLat, size_t iR, size_t iLon) const
@@ -196,10 +264,19 @@ size_t StepVolume::memoryBytes() const
     return bytes;
 }
 
+bool StepVolume::filesCutShort() const noexcept
+{
+    for (const auto& file : m_mapped)
+        if (file.cutShort())
+            return true;
+    return false;
+}
+
 void StepVolume::touchPages() const
 {
     volatile uint8_t sink = 0;
     for (const auto& file : m_mapped) {
+        file.checkNotCutShort();
         const auto bytes = file.bytes();
         for (size_t i = 0; i < bytes.size(); i += 4096)
             sink = sink + uint8_t(bytes[i]);
@@ -236,6 +313,196 @@ const NodeGradient& StepVolume::nodeGradient(size_t var) const
     return it->second;
 }
 
+namespace {
+
+using nlohmann::json;
+
+inline constexpr uint32_t kMaxBrickSize = 64;
+inline constexpr size_t kMaxVariables = 1024;
+
+// A short excerpt of a JSON value for a message (an outside file may hold anything). Containers are
+// described, not printed: dump() recurses, and a manifest may nest deeply.
+std::string excerpt(const json& value)
+{
+    if (value.is_array())
+        return value.empty() ? "[]" : fmt::format("an array of {} entries", value.size());
+    if (value.is_object())
+        return value.empty() ? "{}" : fmt::format("an object of {} members", value.size());
+    std::string text = value.dump();
+    if (text.size() > 40)
+        text = text.substr(0, 37) + "...";
+    return text;
+}
+
+// Reads the manifest field by field; every problem is one raypc::Error
+// "<manifest>: <field>: <found>, expected <what>", the field as a path (`levels[0].lat_deg[3]`).
+class ManifestReader {
+public:
+    explicit ManifestReader(std::string file) : m_file(std::move(file)) {}
+
+    template <typename... Args>
+    [[noreturn]] void bad(const std::string& field, const std::string& found, fmt::format_string<Args...> expected,
+                          Args&&... args) const
+    {
+        fail("{}: {}: {}, expected {}", m_file, field, found, fmt::format(expected, std::forward<Args>(args)...));
+    }
+
+    const json& member(const json& object, const std::string& objectField, const char* key) const
+    {
+        const std::string field = objectField.empty() ? key : objectField + "." + key;
+        if (!object.is_object())
+            bad(objectField.empty() ? "the manifest" : objectField, excerpt(object), "an object");
+        const auto it = object.find(key);
+        if (it == object.end())
+            bad(field, "missing", "a value");
+        return *it;
+    }
+    static std::string path(const std::string& objectField, const char* key)
+    {
+        return objectField.empty() ? key : objectField + "." + key;
+    }
+    static std::string path(const std::string& arrayField, size_t index)
+    {
+        return fmt::format("{}[{}]", arrayField, index);
+    }
+
+    std::string string(const json& object, const std::string& objectField, const char* key) const
+    {
+        const json& v = member(object, objectField, key);
+        if (!v.is_string())
+            bad(path(objectField, key), excerpt(v), "a string");
+        return v.get<std::string>();
+    }
+    bool boolean(const json& object, const std::string& objectField, const char* key) const
+    {
+        const json& v = member(object, objectField, key);
+        if (!v.is_boolean())
+            bad(path(objectField, key), excerpt(v), "true or false");
+        return v.get<bool>();
+    }
+    // An integer within [lo, hi].
+    uint64_t integer(const json& v, const std::string& field, uint64_t lo, uint64_t hi) const
+    {
+        if (v.is_number_unsigned() && v.get<uint64_t>() >= lo && v.get<uint64_t>() <= hi)
+            return v.get<uint64_t>();
+        if (v.is_number_integer() && v.get<int64_t>() >= 0 && uint64_t(v.get<int64_t>()) >= lo &&
+            uint64_t(v.get<int64_t>()) <= hi)
+            return uint64_t(v.get<int64_t>());
+        bad(field, excerpt(v), "an integer {}..{}", lo, hi);
+    }
+    uint64_t integer(const json& object, const std::string& objectField, const char* key, uint64_t lo,
+                     uint64_t hi) const
+    {
+        return integer(member(object, objectField, key), path(objectField, key), lo, hi);
+    }
+    // A finite number.
+    double number(const json& v, const std::string& field) const
+    {
+        if (!v.is_number() || !std::isfinite(v.get<double>()))
+            bad(field, excerpt(v), "a finite number");
+        return v.get<double>();
+    }
+    double number(const json& object, const std::string& objectField, const char* key) const
+    {
+        return number(member(object, objectField, key), path(objectField, key));
+    }
+    // A finite number that float32 holds.
+    float float32(const json& object, const std::string& objectField, const char* key) const
+    {
+        const double v = number(object, objectField, key);
+        if (std::abs(v) > double(std::numeric_limits<float>::max()))
+            bad(path(objectField, key), excerpt(object.at(key)), "a finite float32 value");
+        return static_cast<float>(v);
+    }
+    const json& array(const json& object, const std::string& objectField, const char* key, size_t minSize,
+                      size_t maxSize) const
+    {
+        const json& v = member(object, objectField, key);
+        if (!v.is_array())
+            bad(path(objectField, key), excerpt(v), "an array");
+        if (v.size() < minSize || v.size() > maxSize)
+            bad(path(objectField, key), fmt::format("{} entries", v.size()), "{}..{}", minSize, maxSize);
+        return v;
+    }
+
+    // One coordinate axis: finite numbers, strictly ascending, within [lo, hi] (`loOpen`: (lo, ...,
+    // `hiOpen`: ..., hi)); `expected` says that in a message.
+    std::vector<double> axis(const json& level, const std::string& levelField, const char* key, size_t minSize,
+                             double lo, double hi, bool loOpen, bool hiOpen, const char* expected) const
+    {
+        const json& a = array(level, levelField, key, minSize, std::numeric_limits<size_t>::max());
+        std::vector<double> values;
+        values.reserve(a.size());
+        for (size_t i = 0; i < a.size(); ++i) {
+            const std::string field = path(path(levelField, key), i);
+            const double v = number(a[i], field);
+            if ((loOpen ? v <= lo : v < lo) || (hiOpen ? v >= hi : v > hi))
+                bad(field, excerpt(a[i]), "{}", expected);
+            if (i > 0 && v <= values.back())
+                bad(field, fmt::format("{} after {}", excerpt(a[i]), values.back()), "strictly ascending values");
+            values.push_back(v);
+        }
+        return values;
+    }
+
+    SphericalGrid grid(const json& level, const std::string& field) const
+    {
+        SphericalGrid g;
+        g.latDeg = axis(level, field, "lat_deg", 1, -90, 90, false, false, "a value within [-90, 90] degrees");
+        g.rKm = axis(level, field, "r_km", 1, 0, std::numeric_limits<double>::infinity(), true, false,
+                     "a positive radius in km");
+        g.lonDeg = axis(level, field, "lon_deg", 1, 0, 360, false, true, "a value within [0, 360) degrees");
+        return g;
+    }
+
+    VariableStats stats(const json& j, const std::string& field) const
+    {
+        VariableStats s;
+        s.range = {float32(j, field, "min"), float32(j, field, "max")};
+        if (!(s.range.min <= s.range.max))
+            bad(path(field, "max"), excerpt(j.at("max")), "a value >= min ({})", s.range.min);
+        s.mean = number(j, field, "mean");
+        const json& h = array(j, field, "histogram", kHistogramBins, kHistogramBins);
+        for (size_t i = 0; i < h.size(); ++i) {
+            const double v = number(h[i], path(path(field, "histogram"), i));
+            if (!(v >= 0 && v <= 1.0 + 1e-6))
+                bad(path(path(field, "histogram"), i), excerpt(h[i]), "a volume fraction within [0, 1]");
+            s.histogram.push_back(v);
+        }
+        return s;
+    }
+
+    const std::string& file() const { return m_file; }
+
+private:
+    std::string m_file;
+};
+
+// Whether `stem` names a file inside a level directory: letters, digits, '-', '.', '_', not "." or "..".
+bool plainFileStem(const std::string& stem)
+{
+    if (stem.empty() || stem == "." || stem == ".." || stem.size() > 200)
+        return false;
+    return std::all_of(stem.begin(), stem.end(), [](char c) {
+        return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' || c == '.' ||
+               c == '_';
+    });
+}
+
+// The size of `file` must be `expected` bytes (`what` says where that comes from).
+void checkFileSize(const std::filesystem::path& file, uint64_t expected, const std::string& what)
+{
+    std::error_code ec;
+    const uintmax_t size = std::filesystem::file_size(file, ec);
+    if (ec)
+        fail("{}: {}, expected {} bytes ({})", file.string(), ec.message(), expected, what);
+    if (size != expected)
+        fail("{}: {} bytes, expected {} ({}; a damaged dataset: preprocess it again)", file.string(), size, expected,
+             what);
+}
+
+}  // namespace
+
 std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
 {
     const auto manifestPath = dir / format::kManifest;
@@ -243,58 +510,147 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
         fail("{}: not a directory (expected a RayPC dataset made by `raypc preprocess`)", dir.string());
     if (!std::filesystem::exists(manifestPath))
         fail("{}: no {} (expected a RayPC dataset made by `raypc preprocess`)", dir.string(), format::kManifest);
-    nlohmann::json j = parseJsonInput(readFile(manifestPath), manifestPath.string());
+    const json j = parseJsonInput(readFile(manifestPath), manifestPath.string());
     auto dataset = std::make_shared<Dataset>();
     dataset->m_dir = dir;
-    try {
-        if (j.at("format").get<std::string>() != format::kFormatName)
-            fail("{}: format is '{}', expected '{}'", manifestPath.string(), j.at("format").get<std::string>(),
-                 format::kFormatName);
-        const int version = j.at("version").get<int>();
-        if (version < format::kOldestReadableVersion || version > format::kVersion)
-            fail("{}: format version {}, this raypc reads versions {} to {}", manifestPath.string(), version,
-                 format::kOldestReadableVersion, format::kVersion);
-        // Version 1 stored float32 only; version 2 names its encoding.
-        dataset->m_encoding = version == 1 ? ValueEncoding::Float32
-                                           : parseEncoding(j.at("encoding").get<std::string>(), manifestPath.string());
-        if (j.at("status").get<std::string>() != "complete")
-            fail("{}: preprocessing did not finish (status '{}'); run `raypc preprocess` again to resume",
-                 dir.string(), j.at("status").get<std::string>());
-        dataset->m_dtMyr = j.at("dt_myr").get<double>();
-        const uint32_t brickSize = j.at("brick_size").get<uint32_t>();
-        for (const auto& level : j.at("levels")) {
-            LevelInfo info;
-            info.grid = format::gridFromJson(level);
-            info.bricks = BrickLayout::forGrid(info.grid, brickSize);
-            dataset->m_levels.push_back(std::move(info));
+    // Every field is checked here, at open, so that what reads the dataset later (grids, bricks, the
+    // kernels) may trust it: a manifest is outside input (a damaged or edited file), never an internal
+    // check failing later.
+    const ManifestReader r(manifestPath.string());
+    const std::string formatName = r.string(j, "", "format");
+    if (formatName != format::kFormatName)
+        r.bad("format", excerpt(j.at("format")), "'{}'", format::kFormatName);
+    const json& versionField = r.member(j, "", "version");
+    if (!versionField.is_number_integer())
+        r.bad("version", excerpt(versionField), "an integer");
+    const int64_t version = versionField.get<int64_t>();
+    if (version < format::kOldestReadableVersion || version > format::kVersion)
+        fail("{}: format version {}, this raypc reads versions {} to {}", manifestPath.string(), version,
+             format::kOldestReadableVersion, format::kVersion);
+    // Version 1 stored float32 only; version 2 names its encoding.
+    dataset->m_encoding = version == 1 ? ValueEncoding::Float32
+                                       : parseEncoding(r.string(j, "", "encoding"), manifestPath.string());
+    const std::string status = r.string(j, "", "status");
+    if (status != "complete")
+        fail("{}: preprocessing did not finish (status '{}'); run `raypc preprocess` again to resume", dir.string(),
+             status);
+    dataset->m_dtMyr = r.number(j, "", "dt_myr");
+    if (!(dataset->m_dtMyr > 0))
+        r.bad("dt_myr", excerpt(j.at("dt_myr")), "a positive number of Myr");
+    const auto brickSize = static_cast<uint32_t>(r.integer(j, "", "brick_size", 1, kMaxBrickSize));
+
+    // Levels: level 0 a valid global grid; each coarser one level 0 merged in pairs (docs/format.md).
+    const json& levels = r.array(j, "", "levels", 1, kLevelCount);
+    for (size_t l = 0; l < levels.size(); ++l) {
+        const std::string field = ManifestReader::path("levels", l);
+        LevelInfo info;
+        info.grid = r.grid(levels[l], field);
+        if (l == 0) {
+            info.grid.validate(fmt::format("{}: {}", manifestPath.string(), field));
+            const double points = double(info.grid.nLat()) * double(info.grid.nR()) * double(info.grid.nLon());
+            if (points > double(kMaxGridPoints))
+                r.bad(field, fmt::format("{}x{}x{} points", info.grid.nLat(), info.grid.nR(), info.grid.nLon()),
+                      "at most {} points", kMaxGridPoints);
+        } else {
+            const SphericalGrid expected = dataset->m_levels.back().grid.coarsened();
+            const std::pair<const char*, std::pair<const std::vector<double>*, const std::vector<double>*>> axes[] = {
+                {"lat_deg", {&info.grid.latDeg, &expected.latDeg}},
+                {"r_km", {&info.grid.rKm, &expected.rKm}},
+                {"lon_deg", {&info.grid.lonDeg, &expected.lonDeg}}};
+            for (const auto& [key, arrays] : axes) {
+                const auto& [got, want] = arrays;
+                const std::string axisField = ManifestReader::path(field, key);
+                if (got->size() != want->size())
+                    r.bad(axisField, fmt::format("{} values", got->size()),
+                          "{} (level {}'s merged in pairs)", want->size(), l - 1);
+                for (size_t i = 0; i < got->size(); ++i)
+                    if (std::abs((*got)[i] - (*want)[i]) > 1e-6 * std::max(1.0, std::abs((*want)[i])))
+                        r.bad(ManifestReader::path(axisField, i), fmt::format("{}", (*got)[i]),
+                              "{} (the mean of level {}'s pair)", (*want)[i], l - 1);
+            }
         }
-        for (const auto& v : j.at("variables")) {
-            VariableInfo info;
-            info.name = v.at("name").get<std::string>();
-            info.units = v.at("units").get<std::string>();
-            info.derived = v.at("derived").get<bool>();
-            info.fileStem = v.at("file_stem").get<std::string>();
-            info.global = format::statsFromJson(v.at("global"));
-            dataset->m_variables.push_back(std::move(info));
-        }
-        for (const auto& s : j.at("steps")) {
-            StepInfo info;
-            info.index = s.at("index").get<int>();
-            info.timeMyr = s.at("time_myr").get<double>();
-            info.source = s.at("source").get<std::string>();
-            for (const auto& st : s.at("stats"))
-                info.stats.push_back(format::statsFromJson(st));
-            if (info.stats.size() != dataset->m_variables.size())
-                fail("{}: step {} has stats for {} variables, expected {}", manifestPath.string(), info.index,
-                     info.stats.size(), dataset->m_variables.size());
-            dataset->m_steps.push_back(std::move(info));
-        }
-        dataset->m_sampleRows = j.at("sample").at("rows").get<size_t>();
-    } catch (const nlohmann::json::exception& e) {
-        fail("{}: malformed manifest: {}", manifestPath.string(), e.what());
+        info.bricks = BrickLayout::forGrid(info.grid, brickSize);
+        dataset->m_levels.push_back(std::move(info));
     }
-    if (dataset->m_levels.empty() || dataset->m_steps.empty() || dataset->m_variables.empty())
-        fail("{}: the manifest lists no levels, steps or variables", manifestPath.string());
+
+    // Variables: unique names and file stems, exact global statistics.
+    const json& variables = r.array(j, "", "variables", 1, kMaxVariables);
+    for (size_t i = 0; i < variables.size(); ++i) {
+        const std::string field = ManifestReader::path("variables", i);
+        const json& v = variables[i];
+        VariableInfo info;
+        info.name = r.string(v, field, "name");
+        if (info.name.empty())
+            r.bad(ManifestReader::path(field, "name"), "\"\"", "a name");
+        info.units = r.string(v, field, "units");
+        info.derived = r.boolean(v, field, "derived");
+        info.fileStem = r.string(v, field, "file_stem");
+        if (!plainFileStem(info.fileStem))
+            r.bad(ManifestReader::path(field, "file_stem"), excerpt(v.at("file_stem")),
+                  "a file name of letters, digits, '-', '.' and '_'");
+        for (const auto& other : dataset->m_variables) {
+            if (other.name == info.name)
+                r.bad(ManifestReader::path(field, "name"), excerpt(v.at("name")), "a name no other variable has");
+            if (other.fileStem == info.fileStem)
+                r.bad(ManifestReader::path(field, "file_stem"), excerpt(v.at("file_stem")),
+                      "a file stem no other variable has");
+        }
+        info.global = r.stats(r.member(v, field, "global"), ManifestReader::path(field, "global"));
+        dataset->m_variables.push_back(std::move(info));
+    }
+
+    // Steps: in order (step i's arrays are in steps/i), times finite and increasing, statistics per variable
+    // within the global ones.
+    const json& steps = r.array(j, "", "steps", 1, 1000000);
+    for (size_t s = 0; s < steps.size(); ++s) {
+        const std::string field = ManifestReader::path("steps", s);
+        const json& step = steps[s];
+        StepInfo info;
+        info.index = static_cast<int>(r.integer(step, field, "index", s, s));
+        info.timeMyr = r.number(step, field, "time_myr");
+        if (!dataset->m_steps.empty() && !(info.timeMyr > dataset->m_steps.back().timeMyr))
+            r.bad(ManifestReader::path(field, "time_myr"),
+                  fmt::format("{} after {}", info.timeMyr, dataset->m_steps.back().timeMyr), "increasing times");
+        info.source = r.string(step, field, "source");
+        const json& stats = r.array(step, field, "stats", variables.size(), variables.size());
+        for (size_t v = 0; v < stats.size(); ++v) {
+            const std::string statsField = ManifestReader::path(ManifestReader::path(field, "stats"), v);
+            VariableStats st = r.stats(stats[v], statsField);
+            const ValueRange global = dataset->m_variables[v].global.range;
+            if (st.range.min < global.min || st.range.max > global.max)
+                r.bad(statsField, fmt::format("range [{}, {}]", st.range.min, st.range.max),
+                      "a range within variables[{}].global [{}, {}]", v, global.min, global.max);
+            info.stats.push_back(std::move(st));
+        }
+        dataset->m_steps.push_back(std::move(info));
+    }
+    const json& sample = r.member(j, "", "sample");
+    dataset->m_sampleRows = r.integer(sample, "sample", "rows", 0, kMaxGridPoints);
+
+    // The files: every array's size as the grid, the bricks and the encoding say, so that a damaged
+    // dataset is refused now, naming the file, and mapping never meets a short file.
+    const size_t valueSize = dataset->m_encoding == ValueEncoding::Uint16 ? sizeof(uint16_t) : sizeof(float);
+    const std::string encoding(encodingName(dataset->m_encoding));
+    for (size_t s = 0; s < dataset->m_steps.size(); ++s) {
+        const auto stepDir = format::stepDir(dir, static_cast<int>(s));
+        checkFileSize(stepDir / format::kStepSample, uint64_t(dataset->m_sampleRows) * variables.size() * sizeof(float),
+                      fmt::format("sample.rows {} x {} variables of float32", dataset->m_sampleRows, variables.size()));
+        for (size_t l = 0; l < dataset->m_levels.size(); ++l) {
+            const auto levelDir = format::levelDir(stepDir, static_cast<int>(l));
+            const LevelInfo& level = dataset->m_levels[l];
+            for (const auto& v : dataset->m_variables) {
+                checkFileSize(dataset->m_encoding == ValueEncoding::Uint16 ? format::encodedValuesFile(levelDir, v.fileStem)
+                                                                           : format::valuesFile(levelDir, v.fileStem),
+                              uint64_t(level.grid.cellCount()) * valueSize,
+                              fmt::format("levels[{}]: {} points of {}", l, level.grid.cellCount(), encoding));
+                checkFileSize(format::boundsFile(levelDir, v.fileStem), uint64_t(level.bricks.brickCount()) * 2 * sizeof(float),
+                              fmt::format("{} bricks of brick_size {} in levels[{}], two float32 each",
+                                          level.bricks.brickCount(), brickSize, l));
+            }
+        }
+    }
+    checkFileSize(dir / format::kSampleCoords, uint64_t(dataset->m_sampleRows) * coordinateInfos().size() * sizeof(float),
+                  fmt::format("sample.rows {} x {} coordinates of float32", dataset->m_sampleRows, coordinateInfos().size()));
     return dataset;
 }
 
@@ -334,9 +690,13 @@ std::shared_ptr<const StepVolume> Dataset::load(int step, int level) const
         fail("{}: level {} out of range, the dataset has levels 0..{}", m_dir.string(), level,
              m_levels.size() - 1);
     std::vector<std::string> stems;
-    for (const auto& v : m_variables)
-        stems.push_back(v.fileStem);
-    return StepVolume::open(format::levelDir(format::stepDir(m_dir, step), level), m_levels[level], stems, m_encoding);
+    std::vector<ValueRange> ranges;
+    for (size_t v = 0; v < m_variables.size(); ++v) {
+        stems.push_back(m_variables[v].fileStem);
+        ranges.push_back(m_steps[step].stats[v].range);
+    }
+    return StepVolume::open(format::levelDir(format::stepDir(m_dir, step), level), m_levels[level], stems, m_encoding,
+                            ranges);
 }
 
 SampleTable Dataset::loadSample(int step, SampleColumns which) const

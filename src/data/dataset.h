@@ -74,10 +74,13 @@ public:
     static std::shared_ptr<StepVolume> fromSnapshot(const Snapshot& snapshot, uint32_t brickSize = 8);
 
     // Maps the arrays of one level directory (docs/format.md): per variable `<stem>.f32` or
-    // `<stem>.u16`, and `<stem>.bricks.f32`. Throws raypc::Error naming the file when one is missing,
-    // has the wrong size, or (u16) holds bounds that are not finite with min <= max.
+    // `<stem>.u16`, and `<stem>.bricks.f32` (the bounds are copied into memory, the values stay
+    // mapped). `ranges`: per variable the step's exact range (the manifest's statistics), or empty
+    // for any finite value. Throws raypc::Error naming the file when one is missing, has the wrong
+    // size, or holds brick bounds that are not finite with min <= max within the range.
     static std::shared_ptr<StepVolume> open(const std::filesystem::path& levelDir, const LevelInfo& level,
-                                            const std::vector<std::string>& fileStems, ValueEncoding encoding);
+                                            const std::vector<std::string>& fileStems, ValueEncoding encoding,
+                                            std::span<const ValueRange> ranges = {});
 
     const SphericalGrid& grid() const { return m_grid; }
     const BrickLayout& bricks() const { return m_bricks; }
@@ -85,15 +88,19 @@ public:
     ValueEncoding encoding() const { return m_encoding; }
     // grid().cellCount() values of variable `var`, canonical order. Thread-safe; the first call for a
     // variable of a u16 volume decodes it (about 14 ms for 13 M points on 2 cores,
-    // bench/value_encoding_bench.cpp; other threads asking for it meanwhile wait), later calls are
-    // one atomic load.
+    // bench/value_encoding_bench.cpp; other threads asking for it meanwhile wait), of a mapped float32
+    // volume reads it once to check every value lies within the step's range; later calls are one
+    // atomic load. The first call throws raypc::Error naming the file if it was cut short since it
+    // was mapped, or (float32) for the first value outside the range (NaN, Inf, 3.4e38), with its
+    // position.
     const float* values(size_t var) const
     {
         const float* p = m_values[var].load(std::memory_order_acquire);
         return p ? p : decode(var);
     }
     // values(var)[grid().index(iLat, iR, iLon)], without decoding the whole variable when it is not
-    // decoded yet (for a few samples, such as the pathline phase's attributes). Thread-safe.
+    // decoded yet (for a few samples, such as the pathline phase's attributes). Thread-safe. Throws
+    // as values() does (float32: for this value only).
     float value(size_t var, size_t iLat, size_t iR, size_t iLon) const;
     // Whether values(var) is ready without decoding.
     bool valuesReady(size_t var) const { return m_values[var].load(std::memory_order_acquire) != nullptr; }
@@ -118,10 +125,15 @@ public:
     // Bytes of decoded values held in memory (u16 volumes; 0 for mapped float32). Thread-safe.
     size_t decodedBytes() const { return m_decodedBytes.load(std::memory_order_relaxed); }
     // Reads one value per page of every mapped file, so that a later pass does not wait for the disk.
+    // Throws raypc::Error naming a file cut short since it was mapped.
     void touchPages() const;
+    // Whether a mapped file is shorter now than when it was mapped (MappedFile::cutShort): reading it
+    // would raise SIGBUS. The server's step cache asks before it hands out a cached volume.
+    bool filesCutShort() const noexcept;
 
 private:
     const float* decode(size_t var) const;
+    [[noreturn]] void failValue(size_t var, size_t index, float value) const;
 
     SphericalGrid m_grid;
     BrickLayout m_bricks;
@@ -129,14 +141,15 @@ private:
     std::unique_ptr<std::atomic<const float*>[]> m_valuesStorage;
     std::span<std::atomic<const float*>> m_values;
     std::vector<const float*> m_bounds;
-    std::vector<const uint16_t*> m_encoded;  // u16: per variable, decoded by decode()
+    std::vector<const void*> m_valueFiles;  // per variable its mapped values (u16 or float32), read by decode()
+    std::vector<ValueRange> m_ranges;       // per variable the step's range (open)
     mutable std::mutex m_decodeMutex;
     mutable std::vector<std::unique_ptr<float[]>> m_decoded;
     mutable std::atomic<size_t> m_decodedBytes{0};
     mutable std::mutex m_derivedMutex;
     mutable std::map<std::pair<size_t, uint32_t>, std::vector<float>> m_derivedBounds;
     mutable std::map<size_t, NodeGradient> m_gradients;
-    std::vector<MappedFile> m_mapped;              // when loaded from disk
+    std::vector<MappedFile> m_mapped;              // when loaded from disk: per variable its values
     std::vector<std::vector<float>> m_owned;       // when built in memory
 };
 

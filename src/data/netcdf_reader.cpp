@@ -6,6 +6,7 @@
 #include "core/system_memory.h"
 #include "data/netcdf_classic.h"
 
+#include <hdf5.h>
 #include <netcdf.h>
 #include <tbb/parallel_for.h>
 
@@ -53,6 +54,20 @@ void checkClassicFileSize(const std::filesystem::path& path)
              needed);
 }
 
+// HDF5 prints its error stack (HDF5-DIAG lines) for every failed call, also for the calls netCDF-C
+// makes expecting them to fail while it opens a netCDF-4 file. netCDF-C switches that printing off
+// when it initialises, but in a thread-safe HDF5 (Debian's) the setting is per thread: a thread
+// other than the first to open a file (`raypc serve FILES` preprocesses on a background thread)
+// printed hundreds of stacks. So every thread switches it off for itself before it opens a file.
+void silenceHdf5ErrorStack()
+{
+    thread_local bool silenced = false;
+    if (!silenced) {
+        H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+        silenced = true;
+    }
+}
+
 // An open file that closes itself.
 class NcFile {
 public:
@@ -64,6 +79,7 @@ public:
         if (std::filesystem::is_directory(path, ec))
             fail("{}: is a directory, expected a netCDF file", path.string());
         checkClassicFileSize(path);
+        silenceHdf5ErrorStack();
         const int status = nc_open(path.c_str(), NC_NOWRITE, &m_id);
         if (status != NC_NOERR) {
             if (status == NC_ENOTNC)

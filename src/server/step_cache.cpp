@@ -36,6 +36,15 @@ std::shared_ptr<const StepVolume> StepCache::findLocked(int step, int level)
 {
     for (auto it = m_lru.begin(); it != m_lru.end(); ++it)
         if (it->step == step && it->level == level) {
+            // A file cut short since it was mapped (outside interference): reading it would raise
+            // SIGBUS, so the entry goes and the caller loads the step again, which names the file.
+            if (it->volume->filesCutShort()) {
+                spdlog::warn("step {} level {}: a file of the step was cut short while cached; loading it again",
+                             step, level);
+                m_bytes -= it->bytes;
+                m_lru.erase(it);
+                return nullptr;
+            }
             m_lru.splice(m_lru.begin(), m_lru, it);
             // A u16 volume grows as renderers decode its variables: counted now.
             Entry& e = m_lru.front();
@@ -87,7 +96,7 @@ std::shared_ptr<const StepVolume> StepCache::getWithoutEvicting(int step, int le
     {
         std::lock_guard lock(m_mutex);
         for (const auto& e : m_lru)
-            if (e.step == step && e.level == level)
+            if (e.step == step && e.level == level && !e.volume->filesCutShort())
                 return e.volume;
         ++m_loads;
     }
@@ -164,8 +173,9 @@ void StepCache::prefetchLoop()
         if (!cached) {
             try {
                 auto volume = m_loader(step, level);
-                // Read the mapped data now, not during the next pass, and decode what the session
-                // shows: the variables the most recently used volume of this level has decoded.
+                // Read the mapped data now, not during the next pass, and decode (u16) or check
+                // (float32) what the session shows: the variables the most recently used volume of
+                // this level has ready.
                 volume->touchPages();
                 std::vector<size_t> shown;
                 {
@@ -173,7 +183,7 @@ void StepCache::prefetchLoop()
                     for (const auto& e : m_lru)
                         if (e.level == level && e.volume->variableCount() == volume->variableCount()) {
                             for (size_t v = 0; v < e.volume->variableCount(); ++v)
-                                if (e.volume->encoding() == ValueEncoding::Uint16 && e.volume->valuesReady(v))
+                                if (e.volume->valuesReady(v))
                                     shown.push_back(v);
                             break;
                         }

@@ -33,6 +33,8 @@ public:
     StepCache(const StepCache&) = delete;
     StepCache& operator=(const StepCache&) = delete;
 
+    // A cached volume one of whose files was cut short since it was mapped (StepVolume::filesCutShort)
+    // is dropped and loaded again, so the loader's error names the file instead of a read raising SIGBUS.
     std::shared_ptr<const StepVolume> get(int step, int level);
     // For scans over many steps (statistics): a cached volume without changing the order of use, or
     // a fresh load that is kept only when it fits without evicting anything, so that a scan never

@@ -2,7 +2,9 @@
 
 #include "core/error.h"
 #include "data/netcdf_reader.h"
+#include "data/dataset_format.h"
 #include "data/preprocess.h"
+#include "data/synth.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -186,6 +188,50 @@ TEST(StepCache, CountsDecodedValuesAndPrefetchDecodesWhatIsShown)
         EXPECT_TRUE(b->valuesReady(5));
         EXPECT_FALSE(b->valuesReady(0));
         EXPECT_EQ(cache.bytes(), 2 * (mapped + 2 * floats + 3 * floats));
+    }
+    std::filesystem::remove_all(dir);
+}
+
+
+// Issue 31, item 4: `truncate -s 0` of an array of a cached step killed the server with SIGBUS when a
+// session next read it. A cut file now makes the cache drop the step and load it again, which names the file.
+TEST(StepCache, AFileCutShortWhileCachedIsDroppedAndTheReloadNamesIt)
+{
+    const auto dir = std::filesystem::temp_directory_path() / ("raypc_step_cache_cut_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    SynthOptions synth;
+    synth.steps = 2;
+    synth.nLat = 12;
+    synth.nR = 9;
+    synth.nLon = 16;
+    writeSyntheticSeries(dir / "nc", synth);
+    PreprocessOptions o;
+    o.quiet = true;
+    o.sampleRows = 100;
+    o.pathlines.enabled = false;
+    preprocess(listSnapshotFiles({dir / "nc"}), dir / "ds", o);
+    {
+        const auto dataset = Dataset::open(dir / "ds");
+        StepCache cache([dataset](int step, int level) { return dataset->load(step, level); }, size_t(1) << 30, 8);
+        const auto a = cache.get(0, 0);
+        a->values(0);  // a first frame
+        const auto file = format::encodedValuesFile(format::levelDir(format::stepDir(dir / "ds", 0), 0), "vx");
+        std::filesystem::resize_file(file, 0);
+        try {
+            cache.get(0, 0)->values(static_cast<size_t>(dataset->variableIndex("vx")));
+            ADD_FAILURE() << "no error";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(file.string() + ": 0 bytes, expected"), std::string::npos) << e.what();
+        }
+        EXPECT_FALSE(cache.contains(0, 0));
+        EXPECT_EQ(cache.get(1, 0)->values(0)[0], cache.get(1, 0)->values(0)[0]);  // other steps serve on
+        // The volume a renderer still holds refuses the cut file too.
+        try {
+            a->values(static_cast<size_t>(dataset->variableIndex("vx")));
+            ADD_FAILURE() << "no error";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("cut short while in use"), std::string::npos) << e.what();
+        }
     }
     std::filesystem::remove_all(dir);
 }

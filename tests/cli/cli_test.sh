@@ -386,6 +386,58 @@ non_finite_options)
   expect_error "--dt-myr: inf is not a finite number" synth -o "$work/sy" --dt-myr inf
   check "nothing was written" test ! -e "$work/x.png" -a ! -e "$work/s.csv" -a ! -e "$work/x" -a ! -e "$work/sy"
   ;;
+damaged_dataset)
+  # Issue 31, items 2, 5 and 6: a damaged manifest or array is one line naming the file and the field,
+  # exit 1, never an internal check's abort (134).
+  # expect_refusal "FRAGMENT" ARGS...: exit status 1 or 2 (not a signal), one line on stderr naming FRAGMENT.
+  expect_refusal() {
+    local fragment=$1; shift
+    local err status
+    err=$("$raypc" "$@" 2>&1 >/dev/null); status=$?
+    check "raypc $* exits 1 or 2 (got $status)" test "$status" -ge 1 -a "$status" -le 2
+    check "raypc $* prints one line" test "$(printf '%s\n' "$err" | wc -l)" -eq 1
+    check "raypc $* names '$fragment' ($err)" grep -qF -- "$fragment" <<<"$err"
+  }
+  "$raypc" synth -o "$work/nc" --steps 2 --grid 12x9x16 >/dev/null
+  "$raypc" preprocess "$work/nc" -o "$work/ds" --quiet --sample-rows 200 --no-pathlines >/dev/null
+  "$raypc" preprocess "$work/nc" -o "$work/f32" --quiet --sample-rows 200 --no-pathlines --encoding float32 >/dev/null
+  cp "$work/ds/dataset.json" "$work/manifest.json"
+  sed -E 's/"brick_size": *8/"brick_size": 0/' "$work/manifest.json" > "$work/ds/dataset.json"
+  check "the manifest now says brick_size 0" grep -qE '"brick_size": *0' "$work/ds/dataset.json"
+  expect_refusal "$work/ds/dataset.json: brick_size: 0, expected an integer 1..64" info "$work/ds"
+  expect_refusal "brick_size: 0" probe "$work/ds" --lat 0 --lon 0 --r 5000
+  expect_refusal "brick_size: 0" render "$work/ds" -o "$work/x.png" --size 32x32
+  expect_refusal "brick_size: 0" stats "$work/ds" -o "$work/s.csv" -q
+  check "no picture from a damaged dataset" test ! -e "$work/x.png"
+  # The first lat row at 500 degrees (the line after "lat_deg" holds lat[0]).
+  awk '!done && prev ~ /"lat_deg"/ { sub(/-?[0-9.]+/, "500.0"); done = 1 } { print; prev = $0 }' \
+    "$work/manifest.json" > "$work/ds/dataset.json"
+  expect_refusal "dataset.json: levels[0].lat_deg[0]: 500.0, expected a value within [-90, 90] degrees" info "$work/ds"
+  cp "$work/manifest.json" "$work/ds/dataset.json"
+  "$raypc" info "$work/ds" >/dev/null
+  check "the restored manifest opens" test $? -eq 0
+  # A level array cut short: named at open.
+  truncate -s 100 "$work/ds/steps/0001/L0/vx.u16"
+  expect_refusal "steps/0001/L0/vx.u16: 100 bytes, expected 3456" info "$work/ds"
+  # NaN in every value of a float32 array: probe and stats refuse it instead of printing null.
+  for _ in $(seq 1728); do printf '\x00\x00\xc0\x7f'; done > "$work/f32/steps/0000/L0/temperature.f32"
+  expect_refusal "steps/0000/L0/temperature.f32: point" probe "$work/f32" --lat 0 --lon 0 --r 5000 --var temperature
+  expect_refusal "holds nan, expected a finite value" stats "$work/f32" --range temperature=1000:2000 -o "$work/s.csv" -q
+  ;;
+netcdf4_serve_quiet)
+  # Issue 31, item 9: `raypc serve DIR` of netCDF-4 files preprocesses on a background thread, which
+  # printed HDF5's error stacks (HDF5-DIAG) for the calls netCDF-C expects to fail.
+  "$raypc" synth -o "$work/nc4" --steps 3 --grid 12x9x16 --format netcdf4 >/dev/null
+  "$raypc" serve "$work/nc4" --port 0 --dataset "$work/nc4.raypc" > "$work/serve.log" 2>&1 &
+  pid=$!
+  for _ in $(seq 300); do grep -q "steps are ready" "$work/serve.log" && break; sleep 0.1; done
+  kill "$pid"; wait "$pid" 2>/dev/null
+  check "the whole series was served" grep -q "all 3 steps are ready" "$work/serve.log"
+  diag=$(grep -c "HDF5-DIAG" "$work/serve.log")
+  check "no HDF5-DIAG lines in the server's log ($diag)" test "$diag" -eq 0
+  "$raypc" info "$work/nc4/spherical002.nc" > "$work/info.log" 2>&1
+  check "nor from info of a netCDF-4 file" test "$(grep -c HDF5-DIAG "$work/info.log")" -eq 0
+  ;;
 *) echo "unknown case $case_name"; exit 2 ;;
 esac
 

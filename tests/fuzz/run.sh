@@ -25,9 +25,12 @@ for target in "${targets[@]}"; do
   mkdir -p "$work/corpus"
   seeds=("$root/tests/fuzz/corpus/$target")
   [[ $target == render_state ]] && seeds+=("$root/examples")
-  # Small inputs: the reader's seeds are under 2 KB; leaks are findings too (detect_leaks).
+  # Small inputs: the reader's seeds are under 2 KB; a dataset manifest is larger. Leaks are
+  # findings too (detect_leaks).
+  max_len=8192
+  [[ $target == dataset_manifest ]] && max_len=262144
   ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1} \
-  "$exe" -max_total_time="$seconds" -max_len=8192 -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
+  "$exe" -max_total_time="$seconds" -max_len="$max_len" -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
     -artifact_prefix="$work/" "$work/corpus" "${seeds[@]}" > "$work/log.txt" 2>&1
   rc=$?
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$work/log.txt" | grep -o '[0-9]*$')

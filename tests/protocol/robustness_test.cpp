@@ -578,4 +578,38 @@ TEST(Messages, DeeplyNestedJsonIsRefusedAndTheServerLives)
     EXPECT_TRUE(server.alive());
 }
 
+// Issue 31, item 4: a dataset file cut short while it is served (`truncate -s 0`) killed the server with
+// SIGBUS when a session next read it. Now the session gets an error naming the file and the server
+// serves on.
+TEST(DamagedDataset, AFileCutShortWhileServedIsAnErrorReplyNotACrash)
+{
+    const auto work = servertest::WorkDirEnvironment::work();
+    const auto copy = work / "ds-cut";
+    std::filesystem::remove_all(copy);
+    std::filesystem::copy(work / "ds", copy, std::filesystem::copy_options::recursive);
+    servertest::ServerProcess server(RAYPC_EXE, work, {}, false, {}, {copy.string()});
+    WsClient ws(server.port);
+    ws.hello();
+    ws.send({{"type", "state"}, {"id", 1}, {"state", smallState()}});  // step 1, coloured by temperature
+    ws.framesUntilConverged(1);
+    for (int level = 0; level < 3; ++level)
+        std::filesystem::resize_file(copy / "steps" / "0001" / ("L" + std::to_string(level)) / "vx.u16", 0);
+    json byVx = smallState();
+    byVx["color"]["variable"] = "vx";
+    ws.send({{"type", "state"}, {"id", 2}, {"state", byVx}});
+    const json reply = ws.receiveText();
+    EXPECT_EQ(reply.value("type", ""), "error") << reply.dump();
+    EXPECT_NE(reply.value("message", "").find("vx.u16"), std::string::npos) << reply.dump();
+    EXPECT_TRUE(server.alive());
+    // The session and the server go on: temperature at step 1, and vx at another step.
+    ws.send({{"type", "state"}, {"id", 3}, {"state", smallState(60)}});
+    ws.framesUntilConverged(3);
+    json step0 = byVx;
+    step0["step"] = 0;
+    ws.send({{"type", "state"}, {"id", 4}, {"state", step0}});
+    ws.framesUntilConverged(4);
+    EXPECT_TRUE(server.alive());
+    EXPECT_EQ(httpGet(server.port, "/api/info").status, 200);
+}
+
 }  // namespace
