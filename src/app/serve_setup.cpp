@@ -38,7 +38,7 @@ void ServeFlags::add(CLI::App& cmd)
     cmd.add_option("--port", port, "TCP port; 0 picks a free one (printed at start)")
         ->capture_default_str()
         ->check(CLI::Range(0, 65535));
-    cmd.add_option("--host", host, "Address to listen on; anything but loopback requires the access token printed at start")
+    cmd.add_option("--host", host, "Address to listen on; anything but 127.0.0.1 and ::1 requires the access token printed at start")
         ->capture_default_str();
     cmd.add_option("--assets", assets, "Directory of the built UI (default: $RAYPC_ASSETS, web/dist, ...)");
     cmd.add_option("--examples", examples,

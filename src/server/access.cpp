@@ -35,6 +35,11 @@ bool isLoopbackHost(std::string_view host)
     return dots == 2 && digits > 0;
 }
 
+bool isTokenFreeListenAddress(std::string_view host)
+{
+    return host == "127.0.0.1" || host == "localhost" || host == "::1" || host == "[::1]";
+}
+
 std::string makeAccessToken()
 {
     std::random_device device;

@@ -13,8 +13,13 @@
 
 namespace raypc::server {
 
-// True for 127.0.0.0/8, ::1 and "localhost": no token is needed there.
+// True for 127.0.0.0/8, ::1 and "localhost": the names a Host header may give on loopback.
 bool isLoopbackHost(std::string_view host);
+
+// True for the listening addresses that need no token: 127.0.0.1, ::1 and "localhost" (which the
+// server binds as 127.0.0.1). Every other address, 127.0.0.2 included, needs the token
+// (docs/protocol.md, Access): other loopback addresses are less expected and not worth the doubt.
+bool isTokenFreeListenAddress(std::string_view host);
 
 // 32 hex digits from std::random_device.
 std::string makeAccessToken();

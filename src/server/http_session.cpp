@@ -145,6 +145,17 @@ private:
                 return std::nullopt;
             return std::string_view(it->value().data(), it->value().size());
         };
+        // Two Host (or Origin) headers are ambiguous: which one a check reads and which one a proxy
+        // or browser meant differ. RFC 7230, 5.4: a request with more than one Host gets 400.
+        for (const http::field f : {http::field::host, http::field::origin})
+            if (request.count(f) > 1) {
+                const std::string why = fmt::format("{} {} headers, expected at most one",
+                                                    request.count(f), std::string(http::to_string(f)));
+                spdlog::warn("http: {} {}: 400 {}", std::string(request.method_string()),
+                             std::string(targetPath(target)).substr(0, 200), why);
+                send(errorResponse(http::status::bad_request, why, request.version(), false));
+                return;
+            }
         if (const auto why = crossSiteRefusal(m_server.site, header(http::field::host), header(http::field::origin))) {
             spdlog::warn("http: {} {}: 403 {}", std::string(request.method_string()),
                          std::string(targetPath(target)).substr(0, 200), *why);

@@ -139,7 +139,7 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     s.site.loopback = isLoopbackHost(s.options.host);
     for (const auto& origin : s.options.allowedOrigins)
         s.site.allowedOrigins.push_back(normaliseOrigin(origin, "--allow-origin"));
-    if (!s.site.loopback)
+    if (!isTokenFreeListenAddress(s.options.host))
         s.token = s.options.token.empty() ? makeAccessToken() : s.options.token;
 
     const std::string host = s.options.host == "localhost" ? "127.0.0.1" : s.options.host;
