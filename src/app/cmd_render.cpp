@@ -174,6 +174,8 @@ RenderSetup setUp(const RenderArgs& args)
 
     const auto [first, last] = parseStepRange(*dataset, args.time);
     state.step = first;
+    // Before anything is allocated: a picture larger than memory is refused with the figures.
+    checkPictureFitsMemory(state, depth.has_value(), availableMemory());
     return {dataset, resolveState(state, *dataset), first, last, sequence, lodAuto, std::move(output), std::move(depth)};
 }
 

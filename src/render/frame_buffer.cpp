@@ -24,6 +24,11 @@ FrameBuffer::~FrameBuffer() = default;
 FrameBuffer::FrameBuffer(FrameBuffer&&) noexcept = default;
 FrameBuffer& FrameBuffer::operator=(FrameBuffer&&) noexcept = default;
 
+size_t FrameBuffer::bytesPerPixel()
+{
+    return 4 * sizeof(float) + sizeof(float) + sizeof(uint16_t) + sizeof(kernel::PixelOut);
+}
+
 void FrameBuffer::clear()
 {
     const size_t n = size_t(m_width) * size_t(m_height);

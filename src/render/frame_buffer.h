@@ -61,6 +61,8 @@ public:
     // Passes rendered into the frame (the pass number of the next one); with refinement a block
     // that stopped holds fewer (blockPasses).
     int passes() const { return m_passes; }
+    // The memory the buffer holds per pixel (bytes): its sums, depth counts and a pass's scratch.
+    static size_t bytesPerPixel();
     void clear();  // restart accumulation (after a restart-class change); keeps the refinement
 
     // Refinement for the passes to come (Refinement{}: off). Set it on an empty frame.

@@ -295,6 +295,28 @@ StateRenderer::Still StateRenderer::renderStill(const ResolvedState& resolved, i
     return still;
 }
 
+uint64_t pictureMemoryBytes(const RenderState& state, bool withDepth)
+{
+    const StereoLayout layout = stereoLayout(state.stereo.mode, state.width, state.height);
+    const uint64_t eyePixels = uint64_t(layout.renderedPixels());
+    // Each view: its frame buffer, then its picture (averaged RGBA and depth for the reference
+    // geometry, 8-bit RGBA); the composed image; the depth map (each view's, side by side, the file).
+    uint64_t perEyePixel = FrameBuffer::bytesPerPixel() + 4 * sizeof(float) + sizeof(float) + 4;
+    if (withDepth)
+        perEyePixel += 3 * sizeof(float);
+    return eyePixels * perEyePixel + uint64_t(layout.width) * uint64_t(layout.height) * 4;
+}
+
+void checkPictureFitsMemory(const RenderState& state, bool withDepth, const AvailableMemory& available)
+{
+    const uint64_t needed = pictureMemoryBytes(state, withDepth);
+    if (needed > available.bytes)
+        fail("a picture of {}x{} pixels{} needs {} of memory to render, {} available ({}); choose a smaller --size",
+             state.width, state.height,
+             state.stereo.mode == StereoMode::Off ? "" : fmt::format(" ({} stereo)", stereoModeName(state.stereo.mode)),
+             formatBytes(needed), formatBytes(available.bytes), available.limitedBy);
+}
+
 ImageRgba8 StateRenderer::picture(const ViewFrames& frames, const ResolvedState& resolved, bool withLegends) const
 {
     const std::vector<ResolvedState> views = stereoViews(resolved);

@@ -14,6 +14,7 @@
 // sources it is given must be thread-safe when shared.
 #pragma once
 
+#include "core/system_memory.h"
 #include "data/dataset.h"
 #include "data/pathline_storage.h"
 #include "render/pathline_scene.h"
@@ -66,6 +67,17 @@ using ViewFrames = std::vector<FrameBuffer>;
 // The mean depth of every view (FrameBuffer::averagedDepthKm), the eyes side by side (left |
 // right) for a stereo pair whatever its mode; the size in `width` x `height`.
 std::vector<float> averagedDepthKm(const ViewFrames& frames, int& width, int& height);
+
+// The memory a picture of `state` takes at its peak (bytes), an upper bound: the accumulation
+// buffers of every view (FrameBuffer::bytesPerPixel), each view's picture in float and 8-bit RGBA,
+// a stereo pair's composed image, and with `withDepth` the depth map with its file's bytes. The
+// volumes are mapped from the dataset and not counted. Measured against peak RSS in
+// docs/reliability.md.
+uint64_t pictureMemoryBytes(const RenderState& state, bool withDepth);
+// Throws raypc::Error when pictureMemoryBytes exceeds `available`, with both figures, e.g.
+// "a picture of 16384x16384 pixels needs 18.8 GB of memory to render, 3.9 GB available (ulimit -v);
+// choose a smaller --size".
+void checkPictureFitsMemory(const RenderState& state, bool withDepth, const AvailableMemory& available);
 
 // Where a StateRenderer gets volumes and pathlines. Unset members read the dataset directly
 // (Dataset::load, loadPathlineWindow); the server passes its shared caches.

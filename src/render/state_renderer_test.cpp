@@ -1,6 +1,9 @@
 // The state-to-pixels path's own rules that need no dataset: the pathline tubes' minimum width on
-// screen (tubeRadiusKm) against the pixel footprint at the camera target's distance.
+// screen (tubeRadiusKm) against the pixel footprint at the camera target's distance; the memory a
+// picture needs, checked before anything is allocated (issue 31, item 8).
 #include "render/state_renderer.h"
+
+#include "core/error.h"
 
 #include <gtest/gtest.h>
 
@@ -27,6 +30,44 @@ TEST(StateRenderer, TubesKeepAMinimumWidthOnScreen)
     s.height = 1000;  // twice the pixels over the same view: half the footprint
     s.camera.distanceKm = 20000;
     EXPECT_NEAR(tubeRadiusKm(s), kmPerPixel / 2, 1e-3);
+}
+
+TEST(PictureMemory, GrowsWithPixelsEyesAndDepth)
+{
+    RenderState s;
+    s.width = 1000;
+    s.height = 500;
+    const uint64_t mono = pictureMemoryBytes(s, false);
+    // At least the frame buffer's sums (RGBA and depth, 20 bytes a pixel) and the 8-bit picture.
+    EXPECT_GE(mono, 500'000ull * (20 + 4));
+    EXPECT_LT(mono, 500'000ull * 200);
+    s.width = 2000;  // twice the pixels
+    EXPECT_EQ(pictureMemoryBytes(s, false), 2 * mono);
+    s.width = 1000;
+    EXPECT_GT(pictureMemoryBytes(s, true), mono);  // the depth map
+    s.stereo.mode = StereoMode::SideBySide;         // two eyes of 1000x500
+    EXPECT_EQ(pictureMemoryBytes(s, false), 2 * mono);
+    s.stereo.mode = StereoMode::SideBySideHalf;  // two eyes of 500x500: the pixels of one
+    EXPECT_EQ(pictureMemoryBytes(s, false), mono);
+}
+
+TEST(PictureMemory, APictureLargerThanMemoryIsRefusedWithItsFigures)
+{
+    RenderState s;
+    s.width = s.height = 16384;
+    const uint64_t needed = pictureMemoryBytes(s, false);
+    EXPECT_GT(needed, 16'000'000'000ull);  // 268 M pixels
+    try {
+        checkPictureFitsMemory(s, false, {4'000'000'000, "ulimit -v"});
+        FAIL() << "a 16384x16384 picture with 4 GB available was accepted";
+    } catch (const Error& e) {
+        EXPECT_EQ(std::string(e.what()), "a picture of 16384x16384 pixels needs " + formatBytes(needed) +
+                                             " of memory to render, 4.0 GB available (ulimit -v); choose a smaller "
+                                             "--size");
+    }
+    EXPECT_NO_THROW(checkPictureFitsMemory(s, false, {needed, "MemAvailable"}));
+    s.width = s.height = 512;
+    EXPECT_NO_THROW(checkPictureFitsMemory(s, true, {100'000'000, "cgroup memory.max"}));
 }
 
 }  // namespace

@@ -26,6 +26,15 @@ TEST(Token, LoopbackNeedsNoToken)
     EXPECT_FALSE(isLoopbackHost("1270.0.0.1"));
 }
 
+TEST(Token, OnlyTheTwoLoopbackAddressesNeedNoToken)
+{
+    // Issue 31, item 10: --host 127.0.0.2 answered without a token.
+    for (const char* host : {"127.0.0.1", "::1", "[::1]", "localhost"})
+        EXPECT_TRUE(isTokenFreeListenAddress(host)) << host;
+    for (const char* host : {"127.0.0.2", "127.1.2.3", "0.0.0.0", "::", "192.168.1.4", "127.0.0.1.evil.com", ""})
+        EXPECT_FALSE(isTokenFreeListenAddress(host)) << host;
+}
+
 TEST(Token, RandomHex)
 {
     const std::string a = makeAccessToken(), b = makeAccessToken();

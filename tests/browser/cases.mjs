@@ -1086,6 +1086,15 @@ const cases = {
     await page.setInputFiles('#pvImport', bad);
     await page.waitForFunction((n) => window.__raypc.errors.length > n, errorsBefore, { timeout: 5000 });
     check(/RGBPoints/.test(await page.textContent('#error')), `bad ParaView file: ${await page.textContent('#error')}`);
+    // Nested 100 000 deep (issue 31: such JSON crashed the server's parser; the browser parses
+    // colour maps itself): one short error, and the page goes on.
+    const deep = join(tmp, 'deep-pv.json');
+    writeFileSync(deep, '['.repeat(100000) + ']'.repeat(100000));
+    const errorsBeforeDeep = await page.evaluate(() => window.__raypc.errors.length);
+    await page.setInputFiles('#pvImport', deep);
+    await page.waitForFunction((n) => window.__raypc.errors.length > n, errorsBeforeDeep, { timeout: 5000 });
+    const deepError = await page.textContent('#error');
+    check(/RGBPoints/.test(deepError) && deepError.length < 300, `deeply nested ParaView file: ${deepError.slice(0, 300)}`);
 
     // Reversed.
     await page.check('#colorReversed');

@@ -386,6 +386,21 @@ non_finite_options)
   expect_error "--dt-myr: inf is not a finite number" synth -o "$work/sy" --dt-myr inf
   check "nothing was written" test ! -e "$work/x.png" -a ! -e "$work/s.csv" -a ! -e "$work/x" -a ! -e "$work/sy"
   ;;
+render_memory)
+  # Issue 31, item 8: a picture larger than the memory left is refused before allocating, with the
+  # figures (a 16384x16384 render printed only "std::bad_alloc"); one that fits still renders.
+  preprocess_fixture
+  limited() { (ulimit -v 3000000 && "$raypc" "$@"); }  # 3 GB of address space
+  err=$(limited render "$work/ds" --size 16384x16384 -o "$work/huge.png" 2>&1 >/dev/null); status=$?
+  check "16384x16384 under 3 GB exits 1 (got $status)" test "$status" -eq 1
+  check "one line naming the figures: $err" \
+    grep -Eq '^raypc: error: a picture of 16384x16384 pixels needs [0-9.]+ GB of memory to render, [0-9.]+ (GB|MB) available \(ulimit -v\); choose a smaller --size$' <<<"$err"
+  err=$(limited render "$work/ds" --size 8192x8192 --stereo side-by-side -o "$work/pair.png" 2>&1 >/dev/null)
+  check "a side-by-side pair of 8192x8192 eyes is refused too: $err" grep -q "picture of 8192x8192 pixels (side-by-side stereo) needs" <<<"$err"
+  check "nothing was written" test ! -e "$work/huge.png" -a ! -e "$work/pair.png"
+  limited render "$work/ds" --size 256x128 --passes 1 -o "$work/small.png" >/dev/null
+  check "a 256x128 picture under the same limit is written" test -s "$work/small.png"
+  ;;
 damaged_dataset)
   # Issue 31, items 2, 5 and 6: a damaged manifest or array is one line naming the file and the field,
   # exit 1, never an internal check's abort (134).

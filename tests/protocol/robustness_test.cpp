@@ -612,4 +612,47 @@ TEST(DamagedDataset, AFileCutShortWhileServedIsAnErrorReplyNotACrash)
     EXPECT_EQ(httpGet(server.port, "/api/info").status, 200);
 }
 
+// Issue 31, item 10: duplicate Host headers, the token on other loopback addresses.
+
+// The status of one raw HTTP request (`text` sent as it is) to `address`:`port`; 0 if none came.
+int rawHttpStatus(const std::string& address, uint16_t port, const std::string& text)
+{
+    net::io_context ioc;
+    tcp::socket socket{ioc};
+    socket.connect(tcp::endpoint(net::ip::make_address(address), port));
+    net::write(socket, net::buffer(text));
+    servertest::setReceiveTimeout(socket, 10);
+    beast::flat_buffer buffer;
+    http::response_parser<http::string_body> parser;
+    beast::error_code ec;
+    http::read(socket, buffer, parser, ec);
+    return ec ? 0 : int(parser.get().result_int());
+}
+
+TEST(CrossSite, TwoHostHeadersAreRefused)
+{
+    ServerProcess server;
+    const std::string port = std::to_string(server.port);
+    const std::string one = "GET /api/info HTTP/1.1\r\nHost: 127.0.0.1:" + port + "\r\nConnection: close\r\n\r\n";
+    EXPECT_EQ(rawHttpStatus("127.0.0.1", server.port, one), 200);
+    const std::string two = "GET /api/info HTTP/1.1\r\nHost: 127.0.0.1:" + port + "\r\nHost: evil.example:" + port +
+                            "\r\nConnection: close\r\n\r\n";
+    EXPECT_EQ(rawHttpStatus("127.0.0.1", server.port, two), 400);
+}
+
+TEST(CrossSite, OtherLoopbackAddressesNeedTheToken)
+{
+    ServerProcess server({"--host", "127.0.0.2"});
+    ASSERT_EQ(server.token.size(), 32u) << server.banner;
+    const std::string port = std::to_string(server.port);
+    const std::string request = "GET /api/info{} HTTP/1.1\r\nHost: 127.0.0.2:" + port + "\r\nConnection: close\r\n\r\n";
+    auto withTarget = [&](const std::string& query) {
+        std::string r = request;
+        r.replace(r.find("{}"), 2, query);
+        return r;
+    };
+    EXPECT_EQ(rawHttpStatus("127.0.0.2", server.port, withTarget("")), 401);
+    EXPECT_EQ(rawHttpStatus("127.0.0.2", server.port, withTarget("?token=" + server.token)), 200);
+}
+
 }  // namespace
