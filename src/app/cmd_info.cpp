@@ -5,6 +5,7 @@
 #include "data/dataset.h"
 #include "data/netcdf_reader.h"
 #include "data/preprocess.h"
+#include "data/series_input.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -31,11 +32,25 @@ json describeGrid(const SphericalGrid& g)
             {"cells", g.cellCount()}, {"volume_km3", g.totalVolumeKm3()}};
 }
 
+// A netCDF file, or a VTK XML series's first step (a .pvd collection, its directory, a .pvtu or
+// .vtu), as the dataset pipeline would read it: resampled, with how.
 json describeFile(const std::filesystem::path& path, const ReaderOptions& options)
 {
-    const FileHeader header = readHeader(path, options);
-    const Snapshot snap = readSnapshot(path, options);
-    json j{{"kind", "netcdf"}, {"path", path.string()}, {"format", header.format}, {"grid", describeGrid(snap.grid)}};
+    const SeriesListing listing = listSeries({path}, options);
+    const std::filesystem::path& step = listing.steps.front();
+    const FileHeader header = readStepHeader(step, options);
+    ReaderOptions fixed = options;
+    fixed.targetGrid = header.grid;
+    const Snapshot snap = readStep(step, fixed);
+    json j{{"kind", listing.vtk ? "vtk" : "netcdf"}, {"path", path.string()}, {"format", header.format},
+           {"grid", describeGrid(snap.grid)}};
+    if (listing.vtk) {
+        j["steps"] = json::array();
+        for (size_t s = 0; s < listing.steps.size(); ++s)
+            j["steps"].push_back({{"source", listing.steps[s].string()},
+                                  {"time_myr", listing.timesMyr.empty() ? json(nullptr) : json(listing.timesMyr[s])}});
+        j["resampled"] = snap.origin;
+    }
     j["variables"] = json::array();
     for (size_t i = 0; i < snap.fields.size(); ++i) {
         const auto stats = computeStats(snap.grid, snap.fields[i].values);
@@ -93,6 +108,18 @@ void printText(const json& j)
     if (j["kind"] == "netcdf") {
         fmt::print("{} (netCDF, {})\n  grid: {}\n", j["path"].get<std::string>(), j["format"].get<std::string>(),
                    gridLine(j["grid"]));
+    } else if (j["kind"] == "vtk") {
+        const auto& steps = j["steps"];
+        const json& r = j["resampled"];
+        fmt::print("{} ({})\n  steps: {}", j["path"].get<std::string>(), j["format"].get<std::string>(), steps.size());
+        if (!steps.front()["time_myr"].is_null())
+            fmt::print(" ({:g} .. {:g} Myr)", steps.front()["time_myr"].get<double>(), steps.back()["time_myr"].get<double>());
+        fmt::print("\n  first step: {} cells in {} pieces, resampled onto {}\n", r["cells"].get<size_t>(),
+                   r["pieces"].get<size_t>(), gridLine(j["grid"]));
+        const double points = r["grid_points"].get<double>();
+        fmt::print("  grid points inside a cell {:.2f} %, snapped to the nearest cell {:.2f} %, in none {}\n",
+                   100 * r["inside"].get<double>() / points, 100 * r["snapped"].get<double>() / points,
+                   r["missing"].get<size_t>());
     } else {
         fmt::print("{} (RayPC dataset, level arrays {})\n", j["path"].get<std::string>(),
                    j["encoding"].get<std::string>() == "u16" ? "u16, quantised per brick" : "float32");
@@ -128,13 +155,16 @@ const CommandRegistration kInfoCommand(
     "info", "Describe a netCDF snapshot or a RayPC dataset: grid, variables with units and ranges, steps, levels",
     [](CLI::App& cmd) {
         auto args = std::make_shared<InfoArgs>();
-        cmd.add_option("path", args->path, "A netCDF file or a dataset directory")->required();
+        cmd.add_option("path", args->path,
+                       "A netCDF file, a dataset directory, or ASPECT's output (solution.pvd or its directory, a "
+                       ".pvtu or .vtu step; the first step is described as resampled)")
+            ->required();
         cmd.add_flag("--json", args->json, "Print JSON");
         args->reader.add(cmd);
         cmd.callback([args] {
             const std::filesystem::path path = args->path;
-            const json j = std::filesystem::is_directory(path) ? describeDataset(*Dataset::open(path))
-                                                                : describeFile(path, args->reader.toOptions());
+            const bool dataset = std::filesystem::is_directory(path) && std::filesystem::exists(path / "dataset.json");
+            const json j = dataset ? describeDataset(*Dataset::open(path)) : describeFile(path, args->reader.toOptions());
             if (args->json)
                 fmt::print("{}\n", j.dump(2));
             else

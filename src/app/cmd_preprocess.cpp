@@ -4,6 +4,7 @@
 #include "core/error.h"
 #include "core/mpi.h"
 #include "data/preprocess.h"
+#include "data/series_input.h"
 
 #include <fmt/format.h>
 
@@ -17,10 +18,12 @@ struct PreprocessArgs {
 };
 
 const CommandRegistration kPreprocessCommand(
-    "preprocess", "Turn netCDF snapshots into a render-ready dataset (resumable)",
+    "preprocess", "Turn netCDF snapshots or an ASPECT (VTK XML) series into a render-ready dataset (resumable)",
     [](CLI::App& cmd) {
         auto args = std::make_shared<PreprocessArgs>();
-        cmd.add_option("inputs", args->inputs, "netCDF files, or directories of *.nc (steps in natural order)")
+        cmd.add_option("inputs", args->inputs,
+                       "netCDF files or directories of *.nc (steps in natural order); or ASPECT's output: solution.pvd, "
+                       "its directory, or .pvtu / .vtu steps (resampled onto a spherical grid, see --grid)")
             ->required();
         cmd.add_option("-o,--output", args->output, "Dataset directory to write")->required();
         args->flags.add(cmd);
@@ -29,7 +32,10 @@ const CommandRegistration kPreprocessCommand(
             PreprocessOptions options;
             mpi::together([&] {
                 options = args->flags.toOptions(cmd);
-                files = listSnapshotFiles(std::vector<std::filesystem::path>(args->inputs.begin(), args->inputs.end()));
+                SeriesListing listing =
+                    listSeries(std::vector<std::filesystem::path>(args->inputs.begin(), args->inputs.end()), options.reader);
+                files = std::move(listing.steps);
+                options.timesMyr = std::move(listing.timesMyr);
             });
             // Under mpirun every rank takes steps (preprocess.h); rank 0 reports.
             const auto summary = preprocess(files, args->output, options);

@@ -38,6 +38,12 @@ void ReaderFlags::add(CLI::App& app)
     app.add_option("--lon-name", lonName, "Name of the longitude coordinate variable (default: found)");
     app.add_flag("--fill-missing", fillMissing,
                  "Replace missing values (_FillValue, missing_value, NaN) by their shell's mean instead of failing");
+    app.add_option("--time-units", timeUnits,
+                   "Unit of the times in a .pvd collection (ASPECT's output): years (ASPECT's default), seconds or Myr")
+        ->capture_default_str();
+    app.add_option("--grid", grid,
+                   "Grid LATxRxLON that an ASPECT (VTK XML) mesh is resampled onto, e.g. 180x201x360 (default: as fine "
+                   "as the mesh's finest cell, within memory)");
 }
 
 ReaderOptions ReaderFlags::toOptions() const
@@ -57,6 +63,27 @@ ReaderOptions ReaderFlags::toOptions() const
     o.rName = rName;
     o.lonName = lonName;
     o.fillMissing = fillMissing;
+    if (timeUnits == "years")
+        o.myrPerTimeUnit = 1e-6;
+    else if (timeUnits == "seconds")
+        o.myrPerTimeUnit = 1e-6 / (365.25 * 86400);
+    else if (timeUnits == "Myr" || timeUnits == "myr")
+        o.myrPerTimeUnit = 1;
+    else
+        fail("--time-units '{}': expected years, seconds or Myr", timeUnits);
+    if (!grid.empty()) {
+        const auto parts = split(grid, 'x');
+        std::array<size_t, 3> n{};
+        bool ok = parts.size() == 3;
+        for (size_t i = 0; ok && i < 3; ++i) {
+            const auto [end, ec] = std::from_chars(parts[i].data(), parts[i].data() + parts[i].size(), n[i]);
+            ok = ec == std::errc() && end == parts[i].data() + parts[i].size() && n[i] >= (i == 2 ? 4u : 2u) &&
+                 n[i] <= 100000;
+        }
+        if (!ok)
+            fail("--grid '{}': expected LATxRxLON, at least 2x2x4, e.g. 180x201x360", grid);
+        o.resampleSize = n;
+    }
     return o;
 }
 

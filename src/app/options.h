@@ -23,6 +23,7 @@ struct ReaderFlags {
     std::vector<std::string> variableMap;  // NAME=FILE_NAME
     std::string latName, rName, lonName;
     bool fillMissing = false;
+    std::string timeUnits = "years", grid;  // VTK XML series (ASPECT's output)
 
     void add(CLI::App& app);
     // Throws raypc::Error for a malformed --map.

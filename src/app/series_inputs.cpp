@@ -6,6 +6,7 @@
 #include "data/dataset.h"
 #include "data/dataset_format.h"
 #include "data/netcdf_reader.h"
+#include "data/series_input.h"
 
 #include <spdlog/spdlog.h>
 
@@ -53,7 +54,8 @@ void checkWritable(const fs::path& dir)
 
 }  // namespace
 
-SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std::string& datasetOption)
+SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std::string& datasetOption,
+                                 const ReaderOptions& reader)
 {
     if (args.empty())
         fail("no input: give a dataset directory or netCDF files");
@@ -63,13 +65,18 @@ SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std
         return {fs::path(args.front()), {}};
     }
     SeriesInputs inputs;
+    SeriesListing listing;
     try {
-        inputs.files = listSnapshotFiles(std::vector<fs::path>(args.begin(), args.end()));
+        listing = listSeries(std::vector<fs::path>(args.begin(), args.end()), reader);
     } catch (const Error& e) {
-        fail("{} (expected a RayPC dataset directory, which holds {}, or netCDF files)", e.what(), format::kManifest);
+        fail("{} (expected a RayPC dataset directory, which holds {}, netCDF files or an ASPECT .pvd collection)",
+             e.what(), format::kManifest);
     }
+    inputs.files = listing.steps;
+    inputs.timesMyr = listing.timesMyr;
+    const fs::path beside = listing.collection.empty() ? inputs.files.front() : listing.collection;
     inputs.dataset = datasetOption.empty()
-                         ? fs::absolute(inputs.files.front()).parent_path() / (seriesName(inputs.files) + ".raypc")
+                         ? fs::absolute(beside).parent_path() / (seriesName(inputs.files) + ".raypc")
                          : fs::path(datasetOption);
     return inputs;
 }
@@ -104,6 +111,8 @@ double preparePreview(const SeriesInputs& inputs, PreprocessOptions options)
         checkWritable(inputs.dataset);
         options.pathlines.enabled = false;
         options.quiet = true;
+        if (!options.timesMyr.empty())
+            options.timesMyr.resize(1);
         preprocess(first, dir, options);
     }
     return secondsSince(start);
@@ -119,10 +128,12 @@ void prepareSeries(const SeriesInputs& inputs, const PreprocessOptions& options)
 
 void SeriesFlags::add(CLI::App& cmd, const std::string& inputsHelp)
 {
-    cmd.add_option("inputs", inputs, "A dataset directory (raypc preprocess), or netCDF files / directories of *.nc: " + inputsHelp)
+    cmd.add_option("inputs", inputs,
+                   "A dataset directory (raypc preprocess), or netCDF files / directories of *.nc, or ASPECT's output "
+                   "(solution.pvd or its directory): " + inputsHelp)
         ->required();
     cmd.add_option("--dataset", dataset,
-                   "Where the dataset of netCDF inputs is written and found again (default: beside the first file, "
+                   "Where the dataset of netCDF or ASPECT inputs is written and found again (default: beside the first file, "
                    "e.g. spherical.raypc)");
     m_group = cmd.add_option_group("preprocessing", "For netCDF inputs: as raypc preprocess");
     preprocess.add(*m_group, false);
@@ -132,8 +143,9 @@ std::pair<SeriesInputs, PreprocessOptions> SeriesFlags::resolve() const
 {
     std::pair<SeriesInputs, PreprocessOptions> result;
     mpi::together([&] {
-        result.first = resolveSeriesInputs(inputs, dataset);
         result.second = preprocess.toOptions(*m_group);
+        result.first = resolveSeriesInputs(inputs, dataset, result.second.reader);
+        result.second.timesMyr = result.first.timesMyr;
     });
     return result;
 }

@@ -16,17 +16,20 @@ namespace raypc::app {
 struct SeriesInputs {
     std::filesystem::path dataset;             // given, or where the files are preprocessed to
     std::vector<std::filesystem::path> files;  // in step order; empty when a dataset was given
+    std::vector<double> timesMyr;              // the files' own times (a .pvd's), else empty
 
     bool fromFiles() const { return !files.empty(); }
     // The one-step dataset of the first file, shown while the series is preprocessed.
     std::filesystem::path previewDir() const { return dataset / "preview"; }
 };
 
-// `args`: one dataset directory (it holds dataset.json), or netCDF files and directories of *.nc.
-// `datasetOption` (--dataset): where a dataset made from files goes; empty: beside the first file,
-// named after the files' common name and ".raypc" (spherical001.nc … spherical251.nc ->
-// spherical.raypc). Throws raypc::Error naming an argument that is neither.
-SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std::string& datasetOption);
+// `args`: one dataset directory (it holds dataset.json), or the inputs of listSeries (netCDF files
+// and directories of *.nc, an ASPECT .pvd collection or its directory, .pvtu / .vtu steps).
+// `datasetOption` (--dataset): where a dataset made from files goes; empty: beside the first file
+// (beside a .pvd collection), named after the files' common name and ".raypc" (spherical001.nc …
+// spherical251.nc -> spherical.raypc). Throws raypc::Error naming an argument that is none of these.
+SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std::string& datasetOption,
+                                 const ReaderOptions& reader);
 
 // True when `dir` holds a complete dataset of exactly `files` (by name, in order).
 bool datasetOfFiles(const std::filesystem::path& dir, const std::vector<std::filesystem::path>& files);

@@ -10,7 +10,9 @@
 
 #include "data/snapshot.h"
 
+#include <array>
 #include <filesystem>
+#include <optional>
 #include <map>
 #include <string>
 #include <vector>
@@ -29,6 +31,16 @@ struct ReaderOptions {
     // Cells that hold the fill value / missing value (or NaN) are an error unless this is set;
     // then they are replaced by the mean of the valid values on the same radius shell.
     bool fillMissing = false;
+
+    // VTK XML series (ASPECT's output; series_input.h):
+    // the unit of a .pvd's `timestep` in Myr (ASPECT writes years unless told to write seconds);
+    double myrPerTimeUnit = 1e-6;
+    // the unit of the mesh's coordinates in km (ASPECT writes metres);
+    double meshKmPerUnit = 1e-3;
+    // the grid to resample onto: its sizes lat x r x lon (0: chosen from the mesh's finest cell),
+    std::array<size_t, 3> resampleSize{};
+    // or, once chosen for a series's first step, the grid itself (every step takes the same).
+    std::optional<SphericalGrid> targetGrid;
 };
 
 struct FileHeader {
@@ -37,7 +49,7 @@ struct FileHeader {
         std::string name, fileName, units;
     };
     std::vector<Variable> variables;  // the ones requested, all present
-    std::string format;  // "classic", "64-bit offset", "netCDF-4", ...
+    std::string format;  // "classic", "64-bit offset", "netCDF-4", "VTK XML (ASPECT layout)", ...
 };
 
 // Reads coordinates and checks that every requested variable exists with the right dims.

@@ -11,7 +11,9 @@
 #include "data/bricks.h"
 #include "data/dataset_format.h"
 #include "data/preprocess_phases.h"
+#include "data/series_input.h"
 
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 
@@ -70,10 +72,27 @@ std::vector<VariableSpec> variableSpecs(const FileHeader& header)
         specs.push_back({v.name, v.units, false});
     specs.push_back({"radial velocity", "cm/yr", true});
     specs.push_back({"velocity magnitude", "cm/yr", true});
+    const auto has = [&](const std::string& name) {
+        return std::any_of(header.variables.begin(), header.variables.end(), [&](const auto& v) { return v.name == name; });
+    };
     for (const auto& v : header.variables)
         if (v.name == "thermal expansivity")
             specs.push_back({"thermal expansivity anomaly", v.units, true});
+    // As addDerivedVariables: a model with a temperature but no anomaly (ASPECT writes T) gets one.
+    if (!has("temperature anomaly"))
+        for (const auto& v : header.variables)
+            if (v.name == "temperature" || v.name == "T") {
+                specs.push_back({"temperature anomaly", v.units, true});
+                break;
+            }
     return specs;
+}
+
+// dt_myr of the manifest: --dt-myr, or the mean interval of the inputs' own times.
+double stepIntervalMyr(const PreprocessOptions& options)
+{
+    const auto& t = options.timesMyr;
+    return t.size() >= 2 ? (t.back() - t.front()) / double(t.size() - 1) : options.dtMyr;
 }
 
 json manifest(const std::vector<SphericalGrid>& levels, const std::vector<VariableSpec>& specs,
@@ -84,7 +103,7 @@ json manifest(const std::vector<SphericalGrid>& levels, const std::vector<Variab
     j["version"] = format::kVersion;
     j["encoding"] = encodingName(options.encoding);
     j["status"] = "incomplete";
-    j["dt_myr"] = options.dtMyr;
+    j["dt_myr"] = stepIntervalMyr(options);
     j["brick_size"] = options.brickSize;
     j["levels"] = json::array();
     for (const auto& g : levels)
@@ -100,6 +119,12 @@ json manifest(const std::vector<SphericalGrid>& levels, const std::vector<Variab
     return j;
 }
 
+// The time of step s (Myr): the inputs' own (a .pvd's), else s dt_myr.
+double stepTimeMyr(const PreprocessOptions& options, int s)
+{
+    return options.timesMyr.empty() ? s * options.dtMyr : options.timesMyr[size_t(s)];
+}
+
 void checkSameGrid(const fs::path& input, const SphericalGrid& grid, const SphericalGrid& first,
                    const fs::path& firstInput)
 {
@@ -112,6 +137,7 @@ void checkSameGrid(const fs::path& input, const SphericalGrid& grid, const Spher
 // What a run will write, known from the options and the inputs' headers alone.
 struct RunPlan {
     FileHeader header;                   // of the first input: the grid and the variables
+    ReaderOptions reader;                // as given, with a resampled series's grid fixed
     std::vector<SphericalGrid> levels;   // level 0 first
     std::vector<VariableSpec> specs;     // stored, then derived
     json manifest;                       // "incomplete", without steps
@@ -127,14 +153,35 @@ RunPlan planRun(const std::vector<fs::path>& inputs, const PreprocessOptions& op
         fail("--dt-myr: {} is not a positive time step", options.dtMyr);
     if (options.sampleRows == 0)
         fail("--sample-rows: must be at least 1");
+    if (!options.timesMyr.empty()) {
+        RAYPC_CHECK_EQ(options.timesMyr.size(), inputs.size());
+        for (size_t s = 0; s < inputs.size(); ++s)
+            if (!std::isfinite(options.timesMyr[s]) || (s > 0 && !(options.timesMyr[s] > options.timesMyr[s - 1])))
+                fail("{}: time {} Myr, expected a finite time after the step before's", inputs[s].string(),
+                     options.timesMyr[s]);
+    }
     RunPlan plan;
-    // The first file fixes the grid and the variables; every other step must match them.
-    plan.header = readHeader(inputs.front(), options.reader);
+    // The first file fixes the grid and the variables; every other step must match them. A
+    // resampled series takes the grid chosen for its first step.
+    plan.reader = options.reader;
+    plan.header = readStepHeader(inputs.front(), plan.reader);
+    if (isVtkStep(inputs.front()))
+        plan.reader.targetGrid = plan.header.grid;
     plan.levels = {plan.header.grid};
     for (int l = 1; l < kLevelCount; ++l)
         plan.levels.push_back(plan.levels.back().coarsened());
-    for (size_t s = 1; s < inputs.size(); ++s)
-        checkSameGrid(inputs[s], readHeader(inputs[s], options.reader).grid, plan.header.grid, inputs.front());
+    for (size_t s = 1; s < inputs.size(); ++s) {
+        const FileHeader h = readStepHeader(inputs[s], plan.reader);
+        checkSameGrid(inputs[s], h.grid, plan.header.grid, inputs.front());
+        std::vector<std::string> names, firstNames;
+        for (const auto& v : h.variables)
+            names.push_back(v.name);
+        for (const auto& v : plan.header.variables)
+            firstNames.push_back(v.name);
+        if (names != firstNames)
+            fail("{}: variables {}, the first step's {} has {}", inputs[s].string(), fmt::join(names, ", "),
+                 inputs.front().filename().string(), fmt::join(firstNames, ", "));
+    }
     plan.specs = variableSpecs(plan.header);
     preprocessing::checkPathlineOptions(options.pathlines, plan.specs);
     // A u16 dataset's pathline phase decodes the velocities of every step it traces through.
@@ -279,7 +326,7 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
     const auto& specs = plan.specs;
     const auto stepStart = std::chrono::steady_clock::now();
     auto elapsed = [&] { return secondsSince(stepStart); };
-    Snapshot snap = readSnapshot(input, options.reader);
+    Snapshot snap = readStep(input, plan.reader);
     spdlog::debug("{}: read in {:.2f} s", input.filename().string(), elapsed());
     checkSameGrid(input, snap.grid, plan.header.grid, inputs.front());
     addDerivedVariables(snap);
@@ -294,7 +341,9 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
         std::error_code ec;
         fs::remove_all(tmpDir, ec);
     });
-    json stepJson = {{"index", s}, {"time_myr", s * options.dtMyr}, {"source", input.filename().string()}};
+    json stepJson = {{"index", s}, {"time_myr", stepTimeMyr(options, s)}, {"source", input.filename().string()}};
+    if (!snap.origin.is_null())
+        stepJson["origin"] = snap.origin;
     stepJson["stats"] = json::array();
     std::vector<std::vector<float>> current(snap.fields.size());
     for (size_t v = 0; v < snap.fields.size(); ++v)

@@ -42,6 +42,9 @@ struct PreprocessProgress {
 struct PreprocessOptions {
     ReaderOptions reader;
     double dtMyr = 2.0;          // time between consecutive input files
+    // Each input's time (Myr) when the inputs give it (SeriesListing::timesMyr); dt_myr is then their
+    // mean interval. Empty: step s is at s dtMyr.
+    std::vector<double> timesMyr;
     size_t sampleRows = 100000;  // parallel-coordinates sample size (cells, with replacement)
     uint64_t seed = 1;           // for the sample
     uint32_t brickSize = 8;

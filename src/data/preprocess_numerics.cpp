@@ -26,7 +26,7 @@ void addDerivedVariables(Snapshot& snapshot)
     const Field* vy = snapshot.find("vy");
     const Field* vz = snapshot.find("vz");
     if (!vx || !vy || !vz)
-        fail("derived variables need vx, vy and vz, which are not all present");
+        fail("derived variables need the velocity's components vx, vy and vz (ASPECT: velocity), which are not all present");
     const auto& g = snapshot.grid;
     Field radial{"radial velocity", "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
     Field magnitude{"velocity magnitude", "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
@@ -50,6 +50,15 @@ void addDerivedVariables(Snapshot& snapshot)
     // deviation from the area-weighted lateral mean of each shell, like the temperature anomaly.
     if (const Field* alpha = snapshot.find("thermal expansivity"))
         snapshot.fields.push_back(lateralAnomaly(g, *alpha, "thermal expansivity anomaly"));
+    // A model that writes a temperature but no anomaly (ASPECT: T) gets the contest's anomaly: the
+    // deviation from the area-weighted mean of each shell.
+    if (!snapshot.find("temperature anomaly")) {
+        const Field* t = snapshot.find("temperature");
+        if (!t)
+            t = snapshot.find("T");
+        if (t)
+            snapshot.fields.push_back(lateralAnomaly(g, *t, "temperature anomaly"));
+    }
 }
 
 Field lateralAnomaly(const SphericalGrid& g, const Field& field, const std::string& name)

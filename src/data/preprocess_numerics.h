@@ -18,7 +18,8 @@ namespace raypc {
 float toFloat32(double value);
 
 // Appends "radial velocity" and "velocity magnitude" (cm/yr) computed from vx, vy, vz (m/s),
-// and, when "thermal expansivity" is present, "thermal expansivity anomaly" (see lateralAnomaly).
+// and, when "thermal expansivity" is present, "thermal expansivity anomaly" (see lateralAnomaly);
+// when "temperature anomaly" is absent, it from "temperature" or (ASPECT) "T" the same way.
 // Values too large for float32 become infinite (see checkFinite). Throws raypc::Error if a
 // velocity component is missing.
 void addDerivedVariables(Snapshot& snapshot);

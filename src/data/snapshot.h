@@ -4,6 +4,8 @@
 #include "core/system_memory.h"
 #include "data/grid.h"
 
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -23,6 +25,9 @@ struct Field {
 struct Snapshot {
     SphericalGrid grid;
     std::vector<Field> fields;
+    // How the step was made from an input that is not on the grid (a resampled mesh: its cells and
+    // how many grid points were inside one, snapped to one or missing); null for netCDF steps.
+    nlohmann::json origin;
 
     // The field named `name`, or nullptr.
     const Field* find(const std::string& name) const;
@@ -38,6 +43,10 @@ void checkGridFitsMemory(const SphericalGrid& grid, uint64_t neededBytes, const 
 // Where grid point `index` (canonical order) is, for messages: its coordinates and its indices
 // in ascending order, e.g. "lat -87.5°, r 3485 km, lon 0° (point 0, 0, 0 of lat, r, lon ascending)".
 std::string describeGridPoint(const SphericalGrid& grid, size_t index);
+
+// Replaces every NaN of `field` by the mean of the other values on its radius shell (--fill-missing).
+// Throws raypc::Error naming `source` and the shell when all of a shell's values are NaN.
+void fillMissingByShellMean(const SphericalGrid& grid, Field& field, const std::string& source);
 
 // Throws raypc::Error if a value of `field` is NaN or infinite, naming `source` (the input
 // file), the field, the first such point and, for a derived field, its inputs' values there.

@@ -386,6 +386,40 @@ non_finite_options)
   expect_error "--dt-myr: inf is not a finite number" synth -o "$work/sy" --dt-myr inf
   check "nothing was written" test ! -e "$work/x.png" -a ! -e "$work/s.csv" -a ! -e "$work/x" -a ! -e "$work/sy"
   ;;
+aspect_series)
+  # Issue 25: ASPECT's output (deal.II DataOut's files in tests/data/aspect-layout) preprocessed,
+  # probed against its analytic truth, rendered; its times from the .pvd; bad series refused.
+  aspect=$(cd "$(dirname "$0")/../data/aspect-layout" && pwd)
+  "$raypc" preprocess "$aspect/shell-amr" -o "$work/amr" --quiet >"$work/pre.txt" 2>&1
+  check "preprocess of the adaptive series: $(cat "$work/pre.txt")" grep -q "3 steps (3 written, 0 already done) of 133x34x266" "$work/pre.txt"
+  "$raypc" info "$work/amr" >"$work/info.txt"
+  check "times from the .pvd (years)" grep -q "steps: 3 (0 .. 4 Myr, 2 Myr apart; solution-00000.pvtu .. solution-00002.pvtu)" "$work/info.txt"
+  check "temperature anomaly derived from T" grep -Eq "temperature anomaly .*\(derived\)" "$work/info.txt"
+  # At the centre of the blob at 60°N 20°E, 5300 km, step 0: T = 1600 + 2000 (6371 - 5300) / 2886 + 300
+  # (+ 0.04 K from the other blobs) = 2642.2 K; the mesh interpolates within 26 K (docs/format.md).
+  "$raypc" probe "$work/amr" --lat 60 --lon 20 --r 5300 --var T >"$work/probe.json"
+  check "probe T at the blob's centre within 26 K of 2642.2 K: $(tr -d ' \n' <"$work/probe.json")" python3 - "$work/probe.json" <<'PY'
+import json, sys
+v = json.load(open(sys.argv[1]))["values"]["T"]["value"]
+sys.exit(0 if abs(v - 2642.2) < 26 else 1)
+PY
+  "$raypc" probe "$work/amr" --lat 0 --lon 0 --r 5000 --var "radial velocity" >"$work/vr.json"
+  check "radial velocity is u0 = 1 cm/yr: $(tr -d ' \n' <"$work/vr.json")" python3 - "$work/vr.json" <<'PY'
+import json, sys
+v = json.load(open(sys.argv[1]))["values"]["radial velocity"]["value"]
+sys.exit(0 if abs(v - 1.0) < 0.01 else 1)
+PY
+  "$raypc" render "$work/amr" -o "$work/amr.png" --size 96x96 --passes 1 >/dev/null
+  check "a rendered picture" test -s "$work/amr.png"
+  "$raypc" info "$aspect/shell-lagrange/solution.pvd" --time-units seconds >"$work/lag.txt"
+  check "info of a .pvd names the resampling: $(sed -n 3,4p "$work/lag.txt")" grep -q "768 cells in 2 pieces, resampled onto 32 x 9 x 64" "$work/lag.txt"
+  check "--time-units seconds" grep -q "steps: 2 (0 .. 6.3376[0-9]*e-08 Myr)" "$work/lag.txt"
+  printf '<VTKFile type="Collection"><Collection><DataSet timestep="0" file="gone/solution-00000.pvtu"/></Collection></VTKFile>' >"$work/bad.pvd"
+  expect_error "which does not exist" preprocess "$work/bad.pvd" -o "$work/bad"
+  expect_error "--time-units 'days'" preprocess "$aspect/shell-amr" -o "$work/bad" --time-units days
+  expect_error "--grid '10x10'" preprocess "$aspect/shell-amr" -o "$work/bad" --grid 10x10
+  check "no output of refused runs" test ! -e "$work/bad"
+  ;;
 render_memory)
   # Issue 31, item 8: a picture larger than the memory left is refused before allocating, with the
   # figures (a 16384x16384 render printed only "std::bad_alloc"); one that fits still renders.

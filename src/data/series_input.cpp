@@ -1,0 +1,279 @@
+#include "data/series_input.h"
+
+#include "core/error.h"
+#include "core/strings.h"
+#include "core/system_memory.h"
+#include "data/mesh_resample.h"
+#include "data/vtk_xml.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <system_error>
+
+namespace raypc {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kSecondsPerYear = 365.25 * 86400;  // the Julian year, as kMpsToCmPerYr
+
+bool hasExtension(const fs::path& p, const char* ext)
+{
+    return p.extension() == ext;
+}
+
+// The units of the variables ASPECT writes under these names (its manual, "Visualization
+// postprocessors"), for the variables' metadata; other names get none.
+std::string aspectUnits(const std::string& name)
+{
+    static const std::map<std::string, std::string> units = {
+        {"T", "K"},          {"temperature", "K"},        {"nonadiabatic_temperature", "K"},
+        {"p", "Pa"},         {"nonadiabatic_pressure", "Pa"}, {"density", "kg/m^3"},
+        {"viscosity", "Pa s"}, {"thermal_expansivity", "1/K"}, {"thermal_conductivity", "W/m/K"},
+        {"specific_heat", "J/kg/K"}, {"strain_rate", "1/s"}, {"adiabat", "K"}};
+    const auto it = units.find(name);
+    return it == units.end() ? std::string() : it->second;
+}
+
+// A step's point arrays as the dataset's variables: the file's array and component of each.
+struct VtkVariable {
+    std::string name, units;
+    ArrayComponent source;
+};
+
+std::vector<VtkVariable> vtkVariables(const std::vector<std::pair<std::string, int>>& arrays, const fs::path& step)
+{
+    std::vector<VtkVariable> out;
+    std::vector<std::string> left;
+    for (const auto& [name, components] : arrays) {
+        if (components == 1) {
+            out.push_back({name, aspectUnits(name), {name, -1}});
+        } else if (components == 3) {
+            const bool velocity = name == "velocity";
+            for (int c = 0; c < 3; ++c) {
+                const std::string axis(1, "xyz"[c]);
+                out.push_back({velocity ? "v" + axis : name + "_" + axis, velocity ? "m/s" : aspectUnits(name), {name, c}});
+            }
+        } else {
+            left.push_back(fmt::format("{} ({} components)", name, components));
+        }
+    }
+    if (!left.empty())
+        spdlog::debug("{}: left out: {}", step.string(), fmt::join(left, ", "));
+    if (out.empty())
+        fail("{}: no scalar or 3-component point array to read", step.string());
+    return out;
+}
+
+// The pieces of a step: a .pvtu record's, or the .vtu itself.
+std::vector<fs::path> piecesOf(const fs::path& step)
+{
+    if (hasExtension(step, ".pvtu"))
+        return vtk::readPvtu(step).pieces;
+    return {step};
+}
+
+std::vector<vtk::Piece> readPieces(const fs::path& step)
+{
+    const std::vector<fs::path> paths = piecesOf(step);
+    std::vector<vtk::Piece> pieces(paths.size());
+    std::vector<std::string> errors(paths.size());
+    // The pieces are independent files (one per MPI rank of the model): read them in parallel.
+    tbb::parallel_for(size_t(0), paths.size(), [&](size_t i) {
+        try {
+            pieces[i] = vtk::readVtu(paths[i]);
+        } catch (const Error& e) {
+            errors[i] = e.what();
+        }
+    });
+    for (const std::string& e : errors)
+        if (!e.empty())
+            fail("{}", e);
+    return pieces;
+}
+
+// The point arrays a step announces: a .pvtu's PPointData, or a .vtu's own arrays.
+std::vector<std::pair<std::string, int>> announcedArrays(const fs::path& step, const std::vector<vtk::Piece>* pieces)
+{
+    if (hasExtension(step, ".pvtu"))
+        return vtk::readPvtu(step).pointArrays;
+    std::vector<std::pair<std::string, int>> out;
+    const vtk::Piece piece = pieces ? pieces->front() : vtk::readVtu(step);
+    for (const auto& a : piece.pointData)
+        out.emplace_back(a.name, a.components);
+    return out;
+}
+
+SphericalGrid chooseGrid(const ShellMesh& mesh, const ReaderOptions& options, size_t variables, const fs::path& step)
+{
+    if (options.targetGrid)
+        return *options.targetGrid;
+    const auto [nLat, nR, nLon] = options.resampleSize;
+    if (nLat > 0)
+        return resampleGrid(mesh, nLat, nR, nLon);
+    // As fine as the finest cell, but the preprocessing of a step must fit in a quarter of the
+    // memory available now (the arrays of every variable, stored and derived, at float32).
+    const uint64_t bytesPerPoint = (variables + 4) * sizeof(float) * 2;
+    const uint64_t memoryPoints = availableMemory().bytes / 4 / bytesPerPoint;
+    const SphericalGrid grid = defaultResampleGrid(mesh, std::min<uint64_t>(memoryPoints, kMaxGridPoints));
+    spdlog::debug("{}: finest cell {:.3g}° along a shell, {:.3g} km across: grid {}x{}x{} (lat x r x lon)",
+                  step.string(), mesh.finestArcDeg, mesh.finestRadialKm, grid.nLat(), grid.nR(), grid.nLon());
+    return grid;
+}
+
+FileHeader vtkHeader(const fs::path& step, const ReaderOptions& options)
+{
+    FileHeader h;
+    h.format = "VTK XML (ASPECT layout), resampled";
+    std::vector<vtk::Piece> pieces;
+    if (!options.targetGrid)
+        pieces = readPieces(step);
+    for (const auto& v : vtkVariables(announcedArrays(step, pieces.empty() ? nullptr : &pieces), step))
+        h.variables.push_back({v.name, v.source.name, v.units});
+    if (options.targetGrid) {
+        h.grid = *options.targetGrid;
+    } else {
+        const ShellMesh mesh = makeShellMesh(std::move(pieces), options.meshKmPerUnit, step.string());
+        h.grid = chooseGrid(mesh, options, h.variables.size(), step);
+    }
+    return h;
+}
+
+Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
+{
+    std::vector<vtk::Piece> pieces = readPieces(step);
+    const std::vector<VtkVariable> variables = vtkVariables(announcedArrays(step, &pieces), step);
+    const ShellMesh mesh = makeShellMesh(std::move(pieces), options.meshKmPerUnit, step.string());
+    Snapshot snap;
+    snap.grid = chooseGrid(mesh, options, variables.size(), step);
+    checkGridFitsMemory(snap.grid, uint64_t(variables.size() + 1) * snap.grid.cellCount() * sizeof(float),
+                        step.string(), "resample", availableMemory());
+    std::vector<ArrayComponent> arrays;
+    for (const auto& v : variables)
+        arrays.push_back(v.source);
+    ResampleCounts counts;
+    std::vector<std::vector<float>> values = resampleOntoGrid(mesh, snap.grid, arrays, step.string(), &counts);
+    for (size_t a = 0; a < variables.size(); ++a) {
+        Field field{variables[a].name, variables[a].units, std::move(values[a])};
+        if (variables[a].source.name == "velocity")
+            for (float& v : field.values)
+                v = float(double(v) / kSecondsPerYear);  // m/year -> m/s
+        snap.fields.push_back(std::move(field));
+    }
+    if (counts.missing > 0) {
+        const auto& first = snap.fields.front().values;
+        const size_t at = size_t(std::find_if(first.begin(), first.end(), [](float v) { return std::isnan(v); }) - first.begin());
+        if (!options.fillMissing)
+            fail("{}: {} of {} grid points lie in no cell of the mesh ({} cells), the first at {}; use "
+                 "--fill-missing to give them the mean of their radius shell",
+                 step.string(), counts.missing, counts.points, mesh.cellCount, describeGridPoint(snap.grid, at));
+        for (Field& f : snap.fields)
+            fillMissingByShellMean(snap.grid, f, step.string());
+    }
+    snap.origin = {{"format", "VTK XML (ASPECT layout)"},
+                   {"pieces", mesh.pieces.size()},
+                   {"cells", mesh.cellCount},
+                   {"points", mesh.pointCount},
+                   {"grid_points", counts.points},
+                   {"inside", counts.inside},
+                   {"snapped", counts.snapped},
+                   {"missing", counts.missing}};
+    return snap;
+}
+
+}  // namespace
+
+bool isVtkStep(const fs::path& step)
+{
+    return hasExtension(step, ".pvtu") || hasExtension(step, ".vtu");
+}
+
+SeriesListing listSeries(const std::vector<fs::path>& args, const ReaderOptions& options)
+{
+    SeriesListing out;
+    std::vector<fs::path> netcdf;
+    const auto addCollection = [&](const fs::path& pvd) {
+        out.collection = pvd;
+        for (const auto& step : vtk::readPvd(pvd)) {
+            std::error_code ec;
+            if (!fs::is_regular_file(step.file, ec))
+                fail("{}: names {}, which does not exist", pvd.string(), step.file.string());
+            if (!isVtkStep(step.file))
+                fail("{}: names {}, expected a .pvtu or .vtu file", pvd.string(), step.file.string());
+            out.steps.push_back(step.file);
+            out.timesMyr.push_back(step.time * options.myrPerTimeUnit);
+        }
+    };
+    bool collection = false, vtkFiles = false;
+    for (const auto& arg : args) {
+        std::error_code ec;
+        if (fs::is_directory(arg, ec)) {
+            std::vector<fs::path> pvds;
+            bool hasNc = false;
+            for (const auto& entry : fs::directory_iterator(arg)) {
+                if (entry.path().extension() == ".pvd")
+                    pvds.push_back(entry.path());
+                hasNc = hasNc || entry.path().extension() == ".nc";
+            }
+            std::sort(pvds.begin(), pvds.end());
+            const auto solution = std::find_if(pvds.begin(), pvds.end(),
+                                               [](const fs::path& p) { return p.filename() == "solution.pvd"; });
+            if (solution != pvds.end()) {
+                addCollection(*solution), collection = true;
+            } else if (pvds.size() == 1 && !hasNc) {
+                addCollection(pvds.front()), collection = true;
+            } else if (pvds.size() > 1 && !hasNc) {
+                std::vector<std::string> names;
+                for (const auto& p : pvds)
+                    names.push_back(p.filename().string());
+                fail("{}: holds several collections ({}) and no solution.pvd; give the one to read", arg.string(),
+                     fmt::join(names, ", "));
+            } else {
+                netcdf.push_back(arg);
+            }
+        } else if (hasExtension(arg, ".pvd")) {
+            if (!fs::exists(arg, ec))
+                fail("{}: no such file", arg.string());
+            addCollection(arg), collection = true;
+        } else if (isVtkStep(arg)) {
+            if (!fs::exists(arg, ec))
+                fail("{}: no such file", arg.string());
+            out.steps.push_back(arg), vtkFiles = true;
+        } else {
+            netcdf.push_back(arg);
+        }
+    }
+    if (!out.steps.empty() && !netcdf.empty())
+        fail("{}: netCDF inputs and VTK inputs ({}) cannot make one series", netcdf.front().string(),
+             out.steps.front().string());
+    if (collection && (vtkFiles || args.size() > 1))
+        fail("a .pvd collection (or a directory holding one) is a whole series: give it alone");
+    if (!out.steps.empty()) {
+        out.vtk = true;
+        if (vtkFiles)  // given one by one: natural order, no times
+            std::sort(out.steps.begin(), out.steps.end(), [](const fs::path& a, const fs::path& b) {
+                return naturalLess(a.filename().string(), b.filename().string());
+            });
+        return out;
+    }
+    out.steps = listSnapshotFiles(netcdf);
+    return out;
+}
+
+FileHeader readStepHeader(const fs::path& step, const ReaderOptions& options)
+{
+    return isVtkStep(step) ? vtkHeader(step, options) : readHeader(step, options);
+}
+
+Snapshot readStep(const fs::path& step, const ReaderOptions& options)
+{
+    return isVtkStep(step) ? vtkSnapshot(step, options) : readSnapshot(step, options);
+}
+
+}  // namespace raypc
