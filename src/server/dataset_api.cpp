@@ -62,7 +62,7 @@ const std::map<std::string, std::string> kPresetTitles = {
 
 }  // namespace
 
-json presetsJson(const std::optional<fs::path>& dir)
+json presetsJson(const std::optional<fs::path>& dir, const Dataset* dataset)
 {
     json out = json::array();
     if (!dir)
@@ -90,7 +90,18 @@ json presetsJson(const std::optional<fs::path>& dir)
             title = it->second;
         else
             std::replace(title.begin(), title.end(), '-', ' ');
-        out.push_back({{"name", name}, {"title", title}, {"state", std::move(state)}});
+        json entry = {{"name", name}, {"title", title}, {"state", state}};
+        if (dataset) {
+            json applied = state;
+            if (applied.is_object() && applied.contains("step") && applied["step"].is_number_integer())
+                applied["step"] = std::min<int64_t>(applied["step"].get<int64_t>(), int64_t(dataset->steps().size()) - 1);
+            try {
+                render::resolveState(applied, *dataset, name + ".json");
+            } catch (const Error& e) {
+                entry["unavailable"] = fmt::format("not for this dataset: {}", e.what());
+            }
+        }
+        out.push_back(std::move(entry));
     }
     return out;
 }
@@ -459,7 +470,7 @@ ApiAnswer screenshot(const ApiContext& api, const ApiRequest& request)
 
 ApiAnswer presets(const ApiContext& api, const ApiRequest&)
 {
-    return jsonAnswer(presetsJson(api.examples));
+    return jsonAnswer(presetsJson(api.examples, api.dataset.get()));
 }
 
 ApiAnswer stats(const ApiContext& api, const ApiRequest& request)

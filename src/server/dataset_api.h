@@ -38,8 +38,10 @@ std::optional<std::filesystem::path> findExamplesDir(const std::optional<std::fi
 // Every *.json in `dir` except demo.json, sorted by file name, as [{name, title, state}]: name is
 // the file name without .json, title a short human title (a table of the known presets; else the
 // name with spaces), state the parsed document. A file that is not JSON is left out with a warning.
-// An empty array when `dir` is nullopt.
-nlohmann::json presetsJson(const std::optional<std::filesystem::path>& dir);
+// With `dataset`, a preset that cannot be applied to it (its step clamped to the last, as the UI
+// does) gets `unavailable`: why, from resolveState (e.g. a variable the dataset lacks), so that the
+// UI shows it disabled with the reason. An empty array when `dir` is nullopt.
+nlohmann::json presetsJson(const std::optional<std::filesystem::path>& dir, const Dataset* dataset = nullptr);
 
 // The selected volume of every step and the depth profile of `profileStep`, at `level`
 // ({level, steps: [{step, timeMyr, volumeKm3, fractionOfMantle}], profile: {step, radiusKm,

@@ -1513,6 +1513,59 @@ const cases = {
     const azimuth = await page.evaluate(() => window.__raypc.state().camera.azimuthDeg);
     check(azimuth === 123, `the view after the reload has azimuth ${azimuth}, not the 123 set before`);
   },
+
+  // Issue 25, §4: a model that is not the contest's (ASPECT's output, deal.II's files in
+  // tests/data/aspect-layout/shell-amr, resampled): the first view colours the temperature anomaly
+  // derived from T and shows the blobs; presets naming variables the dataset lacks are greyed with
+  // the server's reason, the others apply.
+  async aspect({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const state = await rState(page);
+    check(state.color.variable === 'temperature anomaly', `the first view colours '${state.color.variable}', not the derived temperature anomaly`);
+    const coloured = await page.evaluate(() => {
+      const src = document.getElementById('view3d');
+      const c = document.createElement('canvas');
+      c.width = src.width; c.height = src.height;
+      const ctx = c.getContext('2d', { willReadFrequently: true });
+      ctx.drawImage(src, 0, 0);
+      const d = ctx.getImageData(0, 0, c.width, c.height).data;
+      let n = 0;
+      for (let i = 0; i < d.length; i += 4) if (Math.abs(d[i] - d[i + 2]) > 40) n++;
+      return n;
+    });
+    check(coloured > 200, `the first view shows ${coloured} red or blue pixels: no anomaly visible`);
+    const presets = await (await fetch(url + 'api/presets')).json();
+    const unavailable = presets.filter((p) => p.unavailable);
+    check(unavailable.length > 0 && unavailable.length < presets.length,
+      `${unavailable.length} of ${presets.length} presets unavailable; expected the expansivity and density ones only`);
+    for (const p of unavailable)
+      check(/unknown/.test(p.unavailable) && /thermal expansivity anomaly|spin transition|'temperature'/.test(p.unavailable),
+        `${p.name}: reason '${p.unavailable}'`);
+    const buttons = await page.evaluate(() => [...document.querySelectorAll('#presets button')].map((b) => ({ name: b.dataset.preset, disabled: b.disabled, title: b.title })));
+    for (const p of presets) {
+      const b = buttons.find((x) => x.name === p.name);
+      check(b && b.disabled === Boolean(p.unavailable), `${p.name}: button ${b?.disabled ? 'disabled' : 'enabled'}, the server says ${p.unavailable ?? 'usable'}`);
+      if (p.unavailable) check(b.title.includes(p.unavailable), `${p.name}: the button's tooltip '${b.title}' does not give the reason`);
+    }
+    const note = await page.textContent('#presetNote');
+    check(note.includes(`${unavailable.length} of ${presets.length} presets are not for this dataset`), `preset note '${note}'`);
+    // A usable preset (cold slabs at 660 km: temperature anomaly and depth) applies without error.
+    const usable = presets.find((p) => p.name === 'task1-slabs-660km' && !p.unavailable);
+    check(usable, 'task1-slabs-660km is unavailable on a model with a temperature anomaly');
+    const sentBefore = await page.evaluate(() => window.__raypc.lastSentId);
+    await page.click('#presets button[data-preset="task1-slabs-660km"]');
+    await page.waitForFunction((n) => window.__raypc.lastSentId > n, sentBefore, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('clicking task1-slabs-660km sent no state'); });
+    await waitConverged(page);
+    const errors = await page.evaluate(() => window.__raypc.errors);
+    check(errors.length === 0, `errors after the preset: ${JSON.stringify(errors)}`);
+    // A greyed button does nothing when clicked.
+    const sent = await page.evaluate(() => window.__raypc.lastSentId);
+    await page.click(`#presets button[data-preset="${unavailable[0].name}"]`, { force: true }).catch(() => {});
+    await page.waitForTimeout(300);
+    check(await page.evaluate(() => window.__raypc.lastSentId) === sent, 'a greyed preset sent a state');
+  },
 };
 
 // Chromium context options per case (default: 1280x860 at devicePixelRatio 1).

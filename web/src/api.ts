@@ -168,6 +168,7 @@ export interface Preset {
   name: string; // file name without .json
   title: string;
   state: unknown; // a state document (checked when applied)
+  unavailable?: string; // why it cannot be applied to this dataset (the server resolved it), e.g. a missing variable
 }
 
 export async function fetchPresets(): Promise<Preset[]> {

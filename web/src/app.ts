@@ -242,9 +242,18 @@ export class App {
           b.textContent = p.title;
           b.title = `${p.name}.json`;
           b.dataset.preset = p.name;
+          if (p.unavailable) {
+            // The server tried it on this dataset (a model without the contest's variables, say).
+            b.disabled = true;
+            b.classList.add('unavailable');
+            b.title = `${p.name}.json: ${p.unavailable}`;
+          }
           b.addEventListener('click', () => this.applyPreset(p));
           box.appendChild(b);
         }
+        const unavailable = presets.filter((p) => p.unavailable).length;
+        if (unavailable)
+          $('presetNote').textContent = `${unavailable} of ${presets.length} presets are not for this dataset (greyed; hover one for why)`;
       })
       .catch((e) => this.showError((e as Error).message));
   }
