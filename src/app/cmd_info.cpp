@@ -90,8 +90,11 @@ json describeDataset(const Dataset& d)
     for (const auto& c : coordinateInfos())
         j["coordinates"].push_back({{"name", c.name}, {"units", c.units}});
     j["steps"] = json::array();
-    for (const auto& s : d.steps())
+    for (const auto& s : d.steps()) {
         j["steps"].push_back({{"index", s.index}, {"time_myr", s.timeMyr}, {"source", s.source}});
+        if (!s.origin.is_null())
+            j["steps"].back()["resampled"] = s.origin;
+    }
     return j;
 }
 
@@ -131,6 +134,15 @@ void printText(const json& j)
                    steps.front()["time_myr"].get<double>(), steps.back()["time_myr"].get<double>(),
                    j["dt_myr"].get<double>(), steps.front()["source"].get<std::string>(),
                    steps.back()["source"].get<std::string>());
+        if (const auto& first = steps.front(); first.contains("resampled")) {
+            const json& r = first["resampled"];
+            const double points = r.value("grid_points", 1.0);
+            fmt::print("  source: {}, resampled onto level 0; step 0: {} cells in {} pieces, grid points inside a "
+                       "cell {:.2f} %, snapped to the nearest cell {:.2f} %, in none {}\n",
+                       r.value("format", std::string("a mesh")), r.value("cells", size_t(0)), r.value("pieces", size_t(0)),
+                       100 * r.value("inside", 0.0) / points, 100 * r.value("snapped", 0.0) / points,
+                       r.value("missing", size_t(0)));
+        }
     }
     fmt::print("  variables{}:\n", j["kind"] == "dataset" ? " (ranges over all steps)" : "");
     for (const auto& v : j["variables"])

@@ -612,6 +612,11 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
             r.bad(ManifestReader::path(field, "time_myr"),
                   fmt::format("{} after {}", info.timeMyr, dataset->m_steps.back().timeMyr), "increasing times");
         info.source = r.string(step, field, "source");
+        if (step.contains("origin")) {
+            info.origin = step.at("origin");
+            if (!info.origin.is_object())
+                r.bad(ManifestReader::path(field, "origin"), excerpt(info.origin), "an object");
+        }
         const json& stats = r.array(step, field, "stats", variables.size(), variables.size());
         for (size_t v = 0; v < stats.size(); ++v) {
             const std::string statsField = ManifestReader::path(ManifestReader::path(field, "stats"), v);

@@ -55,6 +55,9 @@ struct StepInfo {
     double timeMyr = 0;
     std::string source;  // input file name
     std::vector<VariableStats> stats;  // one per variable, same order as Dataset::variables()
+    // How the step was made from a mesh (Snapshot::origin: format, cells, grid points inside a cell,
+    // snapped, missing); null for a step read from a netCDF file.
+    nlohmann::json origin;
 };
 
 struct LevelInfo {

@@ -395,6 +395,8 @@ aspect_series)
   "$raypc" info "$work/amr" >"$work/info.txt"
   check "times from the .pvd (years)" grep -q "steps: 3 (0 .. 4 Myr, 2 Myr apart; solution-00000.pvtu .. solution-00002.pvtu)" "$work/info.txt"
   check "temperature anomaly derived from T" grep -Eq "temperature anomaly .*\(derived\)" "$work/info.txt"
+  check "info names the source and the resampling: $(grep source: "$work/info.txt")" \
+    grep -Eq "source: VTK XML \(ASPECT layout\), resampled onto level 0; step 0: 53296 cells in 3 pieces, grid points inside a cell 9[0-9.]+ %, snapped to the nearest cell [0-9.]+ %, in none 0" "$work/info.txt"
   # At the centre of the blob at 60°N 20°E, 5300 km, step 0: T = 1600 + 2000 (6371 - 5300) / 2886 + 300
   # (+ 0.04 K from the other blobs) = 2642.2 K; the mesh interpolates within 26 K (docs/format.md).
   "$raypc" probe "$work/amr" --lat 60 --lon 20 --r 5300 --var T >"$work/probe.json"
