@@ -326,10 +326,17 @@ std::string fileNameOf(const ReaderOptions& options, const std::string& canonica
     return it == options.variableNames.end() ? canonicalName : it->second;
 }
 
-// Checks that the variable exists and has the three grid dims; returns its id and, for each
-// file dim in order, which axis it is.
-std::pair<int, std::array<Axis, 3>> checkVariable(const NcFile& file, const OpenedHeader& h,
-                                                  const std::string& canonicalName, const std::string& fileName)
+// Where a variable's values are: its id and, for each grid axis, the distance in elements between
+// neighbours along it in the file.
+struct VariableLayout {
+    int id = -1;
+    std::array<size_t, 3> stride{};
+};
+
+// Checks that the variable exists, is numeric and has the three grid dims in any order, and besides
+// them only dims of length 1 (one time step: CF files often have (time, lat, r, lon)).
+VariableLayout checkVariable(const NcFile& file, const OpenedHeader& h, const std::string& canonicalName,
+                             const std::string& fileName)
 {
     const auto id = file.findVar(fileName);
     if (!id) {
@@ -344,29 +351,48 @@ std::pair<int, std::array<Axis, 3>> checkVariable(const NcFile& file, const Open
             names.push_back(file.dimName(d));
         return fmt::format("({})", fmt::join(names, ", "));
     };
-    if (dims.size() != 3)
-        fail("{}: {}: dims {}, expected 3 dims ({}, {}, {})", file.path().string(), fileName, describe(),
-             file.dimName(h.axes[kLat].dimId), file.dimName(h.axes[kR].dimId), file.dimName(h.axes[kLon].dimId));
-    std::array<Axis, 3> order{};
+    const std::string gridDims = fmt::format("({}, {}, {})", file.dimName(h.axes[kLat].dimId),
+                                             file.dimName(h.axes[kR].dimId), file.dimName(h.axes[kLon].dimId));
+    // Which grid axis each of the variable's dims is, if any.
+    std::vector<std::optional<Axis>> axisOfDim(dims.size());
     std::array<bool, 3> seen{};
-    for (size_t i = 0; i < 3; ++i) {
-        bool found = false;
+    for (size_t i = 0; i < dims.size(); ++i)
         for (int a = 0; a < 3; ++a)
             if (dims[i] == h.axes[a].dimId && !seen[a]) {
-                order[i] = static_cast<Axis>(a);
+                axisOfDim[i] = static_cast<Axis>(a);
                 seen[a] = true;
-                found = true;
             }
-        if (!found)
-            fail("{}: {}: dims {}, expected the grid's dims ({}, {}, {}) in any order", file.path().string(),
-                 fileName, describe(), file.dimName(h.axes[kLat].dimId), file.dimName(h.axes[kR].dimId),
-                 file.dimName(h.axes[kLon].dimId));
+    if (!seen[kLat] || !seen[kR] || !seen[kLon]) {
+        if (dims.size() < 3)
+            fail("{}: {}: dims {}, expected 3 dims {}", file.path().string(), fileName, describe(), gridDims);
+        fail("{}: {}: dims {}, expected the grid's dims {} in any order", file.path().string(), fileName, describe(),
+             gridDims);
+    }
+    VariableLayout layout;
+    layout.id = *id;
+    // Element strides in the file's dim order (last dim fastest); other dims have length 1.
+    size_t s = 1;
+    for (size_t i = dims.size(); i-- > 0;) {
+        if (axisOfDim[i]) {
+            layout.stride[*axisOfDim[i]] = s;
+            s *= h.axes[*axisOfDim[i]].fileValues.size();
+            continue;
+        }
+        const size_t length = file.dimLength(dims[i]);
+        if (length == 0)
+            fail("{}: {}: dims {}: dimension '{}' has length 0, the file holds no step", file.path().string(),
+                 fileName, describe(), file.dimName(dims[i]));
+        if (length != 1)
+            fail("{}: {}: dims {}: dimension '{}' has length {}; RayPC reads one step per file (the grid's dims {} "
+                 "and dims of length 1): split the file, e.g. with NCO's ncks -d {},K,K",
+                 file.path().string(), fileName, describe(), file.dimName(dims[i]), length, gridDims,
+                 file.dimName(dims[i]));
     }
     int type = 0;
     file.check(nc_inq_vartype(file.id(), *id, &type), "reading a variable type");
     if (type == NC_CHAR || type == NC_STRING)
         fail("{}: {}: text variable, expected numbers", file.path().string(), fileName);
-    return {*id, order};
+    return layout;
 }
 
 // The value netCDF gives a cell of variable `varId` that was never written when the variable
@@ -402,8 +428,8 @@ FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& op
     header.format = file.formatName();
     for (const auto& name : requestedVariables(options)) {
         const auto fileName = fileNameOf(options, name);
-        const auto [id, order] = checkVariable(file, h, name, fileName);
-        header.variables.push_back({name, fileName, file.textAttribute(id, "units").value_or("")});
+        const auto layout = checkVariable(file, h, name, fileName);
+        header.variables.push_back({name, fileName, file.textAttribute(layout.id, "units").value_or("")});
     }
     return header;
 }
@@ -428,19 +454,14 @@ Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& op
 
     for (const auto& name : requested) {
         const auto fileName = fileNameOf(options, name);
-        const auto [id, order] = checkVariable(file, h, name, fileName);
+        const VariableLayout layout = checkVariable(file, h, name, fileName);
+        const int id = layout.id;
+        const auto& stride = layout.stride;
         const int status = nc_get_var_float(file.id(), id, buffer.data());
         if (status != NC_NOERR)
             fail("{}: {}: cannot read the values ({}); the file may be truncated or damaged", path.string(),
                  fileName, errorText(status));
 
-        // Element strides of each axis in the file's dim order (last dim fastest).
-        std::array<size_t, 3> stride{};
-        size_t s = 1;
-        for (int i = 2; i >= 0; --i) {
-            stride[order[i]] = s;
-            s *= fileLength[order[i]];
-        }
         // Missing values: _FillValue (or, without one, netCDF's default fill value of the type: what
         // a cell never written holds), missing_value, and anything non-finite.
         const auto fillValue = file.numberAttribute(id, "_FillValue");

@@ -1,0 +1,189 @@
+// The netCDF reader against files in the shapes CF-conforming models and tomography tools write
+// (issue 25, §3), written at test time by Python's netCDF4 (tests/data/cf-variants): each variant
+// is read and compared with the analytic truth, and each refusal must be one error naming the file
+// and what is wrong.
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "data/dataset.h"
+#include "data/netcdf_reader.h"
+#include "data/preprocess.h"
+#include "data/test_util.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+
+// A namespace of its own: the unity build compiles the test files together (vtk_xml_test.cpp has a
+// variantsDir() too).
+namespace raypc::cf_variants_test {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path variantsDir() { return fs::path(RAYPC_TEST_DATA_DIR) / "cf-variants"; }
+
+const nlohmann::json& truth()
+{
+    static const nlohmann::json j = nlohmann::json::parse(readFile(variantsDir() / "truth.json"));
+    return j;
+}
+
+const nlohmann::json& variant(const std::string& name)
+{
+    const auto& variants = truth()["variants"];
+    if (!variants.contains(name))
+        throw std::runtime_error("truth.json has no variant " + name);
+    return variants[name];
+}
+
+fs::path fileOf(const std::string& name) { return variantsDir() / variant(name)["file"].get<std::string>(); }
+
+// The options a variant's truth names, for the two variables every variant holds.
+ReaderOptions optionsOf(const std::string& name)
+{
+    ReaderOptions o;
+    o.variables = {"temperature", "vx"};
+    const auto& v = variant(name);
+    if (!v.contains("options"))
+        return o;
+    const auto& given = v["options"];
+    if (given.contains("map"))
+        for (const auto& [canonical, inFile] : given["map"].items())
+            o.variableNames[canonical] = inFile.get<std::string>();
+    o.fillMissing = given.value("fill_missing", false);
+    return o;
+}
+
+void expectAxis(const std::vector<double>& got, const nlohmann::json& expected, double tolerance, const char* axis)
+{
+    ASSERT_EQ(got.size(), expected.size()) << axis;
+    for (size_t i = 0; i < got.size(); ++i)
+        ASSERT_NEAR(got[i], expected[i].get<double>(), tolerance) << axis << "[" << i << "]";
+}
+
+// Reads variant `name` with `options` and compares its header, grid and values with the truth.
+void expectMatchesTruth(const std::string& name, const ReaderOptions& options)
+{
+    const auto& v = variant(name);
+    const auto path = variantsDir() / v["file"].get<std::string>();
+    const FileHeader header = readHeader(path, options);
+    const Snapshot s = readSnapshot(path, options);
+    ASSERT_TRUE(header.grid.sameAs(s.grid, 0.0));
+    expectAxis(s.grid.latDeg, truth()["lat_deg"], 1e-9, "lat");
+    expectAxis(s.grid.rKm, truth()["r_km"], 1e-9, "r");
+    expectAxis(s.grid.lonDeg, truth()["lon_deg"], 1e-9, "lon");
+    ASSERT_EQ(s.fields.size(), 2u);
+    for (size_t f = 0; f < s.fields.size(); ++f) {
+        const Field& field = s.fields[f];
+        EXPECT_EQ(field.units, v["units"][field.name].get<std::string>()) << field.name;
+        EXPECT_EQ(header.variables[f].units, v["units"][field.name].get<std::string>()) << field.name;
+        const auto& expected = v.contains("values") ? v["values"][field.name] : truth()["values"][field.name];
+        const double tolerance = v["tolerance"][field.name];
+        ASSERT_EQ(field.values.size(), expected.size()) << field.name;
+        size_t wrong = 0, first = 0;
+        for (size_t i = 0; i < field.values.size(); ++i)
+            if (!(std::abs(field.values[i] - expected[i].get<double>()) <= tolerance) && wrong++ == 0)
+                first = i;
+        EXPECT_EQ(wrong, 0u) << name << ": " << field.name << ": " << wrong << " values differ from the truth, the first at "
+                             << describeGridPoint(s.grid, first) << ": " << field.values[first] << ", expected "
+                             << expected[first].get<double>();
+    }
+}
+
+void expectMatchesTruth(const std::string& name) { expectMatchesTruth(name, optionsOf(name)); }
+
+// Expects readHeader and readSnapshot to throw one Error whose message contains every fragment.
+void expectRefused(const fs::path& path, const ReaderOptions& options, const std::vector<std::string>& fragments,
+                   bool headerToo = true)
+{
+    auto check = [&](const char* what, auto&& read) {
+        try {
+            read();
+            ADD_FAILURE() << what << " accepted " << path;
+        } catch (const Error& e) {
+            const std::string message = e.what();
+            EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+            for (const auto& f : fragments)
+                EXPECT_NE(message.find(f), std::string::npos) << what << ": '" << message << "' lacks '" << f << "'";
+        }
+    };
+    if (headerToo)
+        check("readHeader", [&] { readHeader(path, options); });
+    check("readSnapshot", [&] { readSnapshot(path, options); });
+}
+
+// 1. One time step per file.
+
+TEST(CfVariants, TimeDimensionOfLengthOne)
+{
+    expectMatchesTruth("time_fixed");
+}
+
+TEST(CfVariants, UnlimitedTimeDimensionOfLengthOne)
+{
+    expectMatchesTruth("time_unlimited");      // a record dimension of a 64-bit-offset file
+    expectMatchesTruth("time_unlimited_nc4");  // compressed netCDF-4, dims (time, lon, lat, r), lat descending
+}
+
+TEST(CfVariants, TimeDimensionLongerThanOneIsRefused)
+{
+    const auto& v = variant("time_three_steps");
+    expectRefused(fileOf("time_three_steps"), optionsOf("time_three_steps"),
+                  {"time_three_steps.nc", "temperature", fmt::format("'{}'", v["dimension"].get<std::string>()),
+                   fmt::format("length {}", v["length"].get<int>()), "one step per file"});
+}
+
+// 4. Series: the errors of a variable missing in one step and of a grid that differs stay.
+
+PreprocessOptions seriesOptions()
+{
+    PreprocessOptions options;
+    options.reader.variables = {"temperature", "vx"};
+    options.quiet = true;
+    options.sampleRows = 100;
+    options.pathlines.enabled = false;
+    return options;
+}
+
+std::vector<fs::path> seriesFiles(const std::string& name)
+{
+    std::vector<fs::path> files;
+    for (const auto& f : variant(name)["files"])
+        files.push_back(variantsDir() / f.get<std::string>());
+    return files;
+}
+
+void expectPreprocessRefused(const std::string& name, const std::vector<std::string>& fragments)
+{
+    testing::TempDir dir("cfseries");
+    try {
+        preprocess(seriesFiles(name), dir / "out", seriesOptions());
+        ADD_FAILURE() << name << " was preprocessed";
+    } catch (const Error& e) {
+        for (const auto& f : fragments)
+            EXPECT_NE(std::string(e.what()).find(f), std::string::npos) << "'" << e.what() << "' lacks '" << f << "'";
+    }
+    EXPECT_FALSE(fs::exists(dir / "out"));  // refused before anything was written
+}
+
+TEST(CfVariants, VariableMissingInOneStep)
+{
+    const auto& v = variant("series_missing_variable");
+    expectPreprocessRefused("series_missing_variable",
+                            {v["in"].get<std::string>(),
+                             fmt::format("missing variable '{}'", v["missing"].get<std::string>())});
+}
+
+TEST(CfVariants, GridThatDiffersBetweenSteps)
+{
+    // Step 2 holds the radius in metres: the same grid once converted; step 3's lat is shifted.
+    expectPreprocessRefused("series_grid_differs",
+                            {variant("series_grid_differs")["differs"].get<std::string>(), "differ from the first step"});
+    const auto files = seriesFiles("series_grid_differs");
+    EXPECT_TRUE(readHeader(files[1], seriesOptions().reader).grid.sameAs(readHeader(files[0], seriesOptions().reader).grid));
+}
+
+}  // namespace
+}  // namespace raypc::cf_variants_test
