@@ -114,6 +114,12 @@ void expectRefused(const fs::path& path, const ReaderOptions& options, const std
     check("readSnapshot", [&] { readSnapshot(path, options); });
 }
 
+std::string pointText(const nlohmann::json& at)
+{
+    return fmt::format("lat {:g}°, r {:g} km, lon {:g}°", at["lat_deg"].get<double>(), at["r_km"].get<double>(),
+                       at["lon_deg"].get<double>());
+}
+
 // 1. One time step per file.
 
 TEST(CfVariants, TimeDimensionOfLengthOne)
@@ -133,6 +139,41 @@ TEST(CfVariants, TimeDimensionLongerThanOneIsRefused)
     expectRefused(fileOf("time_three_steps"), optionsOf("time_three_steps"),
                   {"time_three_steps.nc", "temperature", fmt::format("'{}'", v["dimension"].get<std::string>()),
                    fmt::format("length {}", v["length"].get<int>()), "one step per file"});
+}
+
+// 2. Doubles are read as doubles; packed values are unpacked in double.
+
+TEST(CfVariants, DoubleFillValueBeyondFloatIsMissing)
+{
+    const auto& fill = variant("double_fill_1e300")["fill"];
+    ReaderOptions strict = optionsOf("double_fill_1e300");
+    strict.fillMissing = false;
+    expectRefused(fileOf("double_fill_1e300"), strict,
+                  {"double_fill_1e300.nc", "temperature",
+                   fmt::format("{} of 1728 values are missing", fill["count"].get<int>()), "_FillValue 1e+300",
+                   pointText(fill["first"]), "--fill-missing"},
+                  false);
+    expectMatchesTruth("double_fill_1e300");  // with --fill-missing: the shell's mean
+}
+
+TEST(CfVariants, DoubleValueBeyondFloatIsRefused)
+{
+    const auto& v = variant("double_beyond_float");
+    for (const bool fill : {false, true}) {
+        ReaderOptions options = optionsOf("double_beyond_float");
+        options.fillMissing = fill;
+        expectRefused(fileOf("double_beyond_float"), options,
+                      {"double_beyond_float.nc", "temperature", fmt::format("{:g}", v["value"].get<double>()),
+                       pointText(v["at"]), "float32"},
+                      false);
+    }
+}
+
+// Packed unsigned shorts.
+
+TEST(CfVariants, UnsignedShorts)
+{
+    expectMatchesTruth("unsigned_short");
 }
 
 // 4. Series: the errors of a variable missing in one step and of a grid that differs stay.

@@ -14,9 +14,11 @@
 #include <array>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <mutex>
 #include <numeric>
 #include <optional>
+#include <type_traits>
 
 namespace raypc {
 namespace {
@@ -416,6 +418,191 @@ std::optional<double> defaultFillValue(const NcFile& file, int varId)
     }
 }
 
+// netCDF converts integers to float exactly up to 16 bits; doubles and wider integers are read as
+// double and converted here, so that a fill value beyond float (1e300) is recognised and a value
+// beyond float is named rather than failing the whole read ("Numeric conversion not representable").
+bool readsAsDouble(const NcFile& file, int varId)
+{
+    nc_type type = 0;
+    file.check(nc_inq_vartype(file.id(), varId, &type), "reading a variable type");
+    return type == NC_DOUBLE || type == NC_INT || type == NC_UINT || type == NC_INT64 || type == NC_UINT64;
+}
+
+void readValues(const NcFile& file, int varId, const std::string& fileName, float* out)
+{
+    if (const int status = nc_get_var_float(file.id(), varId, out); status != NC_NOERR)
+        fail("{}: {}: cannot read the values ({}); the file may be truncated or damaged", file.path().string(),
+             fileName, errorText(status));
+}
+
+void readValues(const NcFile& file, int varId, const std::string& fileName, double* out)
+{
+    if (const int status = nc_get_var_double(file.id(), varId, out); status != NC_NOERR)
+        fail("{}: {}: cannot read the values ({}); the file may be truncated or damaged", file.path().string(),
+             fileName, errorText(status));
+}
+
+// How a variable's stored numbers become values (CF conventions, section 8.1, and the NUG's
+// _Unsigned): which are missing, how they are unpacked. Comparisons are on the stored numbers.
+struct ValueRule {
+    std::optional<double> fill;  // _FillValue, or without one netCDF's default fill value of the type
+    bool fillIsDefault = false;
+    std::optional<double> missing;  // missing_value
+    double scale = 1.0, offset = 0.0;
+    // For an integer variable with _Unsigned = "true": 2^bits, added to negative stored numbers.
+    double unsignedWrap = 0.0;
+
+    bool packed() const { return scale != 1.0 || offset != 0.0; }
+    bool isFill(double stored) const { return fill && stored == *fill; }
+};
+
+ValueRule valueRule(const NcFile& file, int varId)
+{
+    ValueRule rule;
+    nc_type type = 0;
+    file.check(nc_inq_vartype(file.id(), varId, &type), "reading a variable type");
+    const auto isUnsigned = file.textAttribute(varId, "_Unsigned");
+    if (isUnsigned && (*isUnsigned == "true" || *isUnsigned == "True" || *isUnsigned == "TRUE")) {
+        switch (type) {
+        case NC_BYTE: rule.unsignedWrap = 0x1p8; break;
+        case NC_SHORT: rule.unsignedWrap = 0x1p16; break;
+        case NC_INT: rule.unsignedWrap = 0x1p32; break;
+        case NC_INT64: rule.unsignedWrap = 0x1p64; break;
+        default: break;
+        }
+    }
+    // A fill or missing value given as the unsigned number (65535) matches the stored one (-1).
+    auto stored = [&](std::optional<double> v) {
+        if (v && rule.unsignedWrap > 0 && *v >= rule.unsignedWrap / 2)
+            *v -= rule.unsignedWrap;
+        return v;
+    };
+    rule.fill = stored(file.numberAttribute(varId, "_FillValue"));
+    if (!rule.fill) {
+        rule.fill = defaultFillValue(file, varId);
+        rule.fillIsDefault = rule.fill.has_value();
+    }
+    rule.missing = stored(file.numberAttribute(varId, "missing_value"));
+    rule.scale = file.numberAttribute(varId, "scale_factor").value_or(1.0);
+    rule.offset = file.numberAttribute(varId, "add_offset").value_or(0.0);
+    return rule;
+}
+
+// What turning one variable into canonical order found.
+struct ConversionReport {
+    std::vector<size_t> missingPerShell;
+    size_t firstMissing = SIZE_MAX;  // canonical index, for the message
+    double firstMissingValue = 0;
+    size_t firstBeyondFloat = SIZE_MAX;  // canonical index of the first value beyond float32
+    double beyondFloatValue = 0;
+};
+
+// A fill or missing value as the buffer's type T holds it: none when T cannot hold it (a
+// missing_value of 1e300 on a float variable matches nothing).
+template <typename T>
+std::optional<T> asStored(std::optional<double> v)
+{
+    if (!v || (std::isfinite(*v) && std::abs(*v) > double(std::numeric_limits<T>::max())))
+        return std::nullopt;
+    return static_cast<T>(*v);
+}
+
+// Reorders `buffer` (one variable in the file's order) into canonical order in `out`, marking missing
+// values (fill value, missing_value, NaN, Inf) as NaN, unpacking the others, and noting values that
+// float32 cannot hold.
+template <typename T>
+ConversionReport toCanonical(const std::vector<T>& buffer, const OpenedHeader& h, const VariableLayout& layout,
+                             const ValueRule& rule, std::vector<float>& out)
+{
+    const auto fill = asStored<T>(rule.fill), missing = asStored<T>(rule.missing);
+    const auto& stride = layout.stride;
+    const auto& latIdx = h.axes[kLat].fileIndex;
+    const auto& rIdx = h.axes[kR].fileIndex;
+    const auto& lonIdx = h.axes[kLon].fileIndex;
+    const SphericalGrid& grid = h.grid;
+    const size_t nR = grid.nR(), nLon = grid.nLon();
+    const bool convert = rule.packed() || rule.unsignedWrap > 0;
+    constexpr double kFloatMax = std::numeric_limits<float>::max();
+    ConversionReport report;
+    report.missingPerShell.assign(nR, 0);
+    std::mutex reportMutex;
+    tbb::parallel_for(size_t(0), grid.nLat(), [&](size_t iLat) {
+        ConversionReport local;
+        local.missingPerShell.assign(nR, 0);
+        for (size_t iR = 0; iR < nR; ++iR) {
+            const size_t base = latIdx[iLat] * stride[kLat] + rIdx[iR] * stride[kR];
+            float* row = out.data() + grid.index(iLat, iR, 0);
+            for (size_t iLon = 0; iLon < nLon; ++iLon) {
+                const T v = buffer[base + lonIdx[iLon] * stride[kLon]];
+                if ((fill && v == *fill) || (missing && v == *missing) || !std::isfinite(v)) {
+                    if (local.firstMissing == SIZE_MAX) {
+                        local.firstMissing = grid.index(iLat, iR, iLon);
+                        local.firstMissingValue = double(v);
+                    }
+                    row[iLon] = std::numeric_limits<float>::quiet_NaN();
+                    ++local.missingPerShell[iR];
+                    continue;
+                }
+                double value = double(v);
+                if (convert) {
+                    if (value < 0 && rule.unsignedWrap > 0)
+                        value += rule.unsignedWrap;
+                    value = value * rule.scale + rule.offset;
+                }
+                if (std::is_same_v<T, float> && !convert) {
+                    row[iLon] = float(v);
+                } else if (std::abs(value) <= kFloatMax) {
+                    row[iLon] = static_cast<float>(value);
+                } else {
+                    if (local.firstBeyondFloat == SIZE_MAX) {
+                        local.firstBeyondFloat = grid.index(iLat, iR, iLon);
+                        local.beyondFloatValue = value;
+                    }
+                    row[iLon] = std::numeric_limits<float>::quiet_NaN();
+                }
+            }
+        }
+        std::lock_guard l(reportMutex);
+        for (size_t iR = 0; iR < nR; ++iR)
+            report.missingPerShell[iR] += local.missingPerShell[iR];
+        if (local.firstMissing < report.firstMissing) {
+            report.firstMissing = local.firstMissing;
+            report.firstMissingValue = local.firstMissingValue;
+        }
+        if (local.firstBeyondFloat < report.firstBeyondFloat) {
+            report.firstBeyondFloat = local.firstBeyondFloat;
+            report.beyondFloatValue = local.beyondFloatValue;
+        }
+    });
+    return report;
+}
+
+// Replaces each missing value (NaN) by the mean of the valid values on its radius shell.
+void fillFromShellMeans(std::vector<float>& values, const SphericalGrid& grid,
+                        const std::vector<size_t>& missingPerShell, const std::filesystem::path& path,
+                        const std::string& fileName)
+{
+    for (size_t iR = 0; iR < grid.nR(); ++iR) {
+        if (missingPerShell[iR] == 0)
+            continue;
+        double sum = 0;
+        size_t count = 0;
+        for (size_t iLat = 0; iLat < grid.nLat(); ++iLat)
+            for (size_t iLon = 0; iLon < grid.nLon(); ++iLon)
+                if (const float v = values[grid.index(iLat, iR, iLon)]; !std::isnan(v)) {
+                    sum += v;
+                    ++count;
+                }
+        if (count == 0)
+            fail("{}: {}: every value on the shell r = {} km is missing", path.string(), fileName, grid.rKm[iR]);
+        const float mean = static_cast<float>(sum / count);
+        for (size_t iLat = 0; iLat < grid.nLat(); ++iLat)
+            for (size_t iLon = 0; iLon < grid.nLon(); ++iLon)
+                if (float& v = values[grid.index(iLat, iR, iLon)]; std::isnan(v))
+                    v = mean;
+    }
+}
+
 }  // namespace
 
 FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& options)
@@ -442,114 +629,69 @@ Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& op
     Snapshot snapshot;
     snapshot.grid = h.grid;
     const size_t n = h.grid.cellCount();
-    std::array<size_t, 3> fileLength{};
-    for (int a = 0; a < 3; ++a)
-        fileLength[a] = h.axes[a].fileValues.size();
-    const size_t fileCount = fileLength[0] * fileLength[1] * fileLength[2];
-    // The fields and one variable's buffer in file order.
+    size_t fileCount = 1;
+    for (const auto& axis : h.axes)
+        fileCount *= axis.fileValues.size();
+    // Every variable is checked before any is read.
     const auto requested = requestedVariables(options);
-    checkGridFitsMemory(h.grid, (requested.size() + 1) * fileCount * sizeof(float), path.string(), "read",
-                        availableMemory());
-    std::vector<float> buffer(fileCount);
-
+    std::vector<std::pair<std::string, VariableLayout>> layouts;
+    size_t bufferBytesPerValue = sizeof(float);
     for (const auto& name : requested) {
         const auto fileName = fileNameOf(options, name);
-        const VariableLayout layout = checkVariable(file, h, name, fileName);
-        const int id = layout.id;
-        const auto& stride = layout.stride;
-        const int status = nc_get_var_float(file.id(), id, buffer.data());
-        if (status != NC_NOERR)
-            fail("{}: {}: cannot read the values ({}); the file may be truncated or damaged", path.string(),
-                 fileName, errorText(status));
+        layouts.emplace_back(fileName, checkVariable(file, h, name, fileName));
+        if (readsAsDouble(file, layouts.back().second.id))
+            bufferBytesPerValue = sizeof(double);
+    }
+    // The fields and one variable's buffer in file order.
+    checkGridFitsMemory(h.grid, requested.size() * fileCount * sizeof(float) + fileCount * bufferBytesPerValue,
+                        path.string(), "read", availableMemory());
+    std::vector<float> floatBuffer;
+    std::vector<double> doubleBuffer;
 
-        // Missing values: _FillValue (or, without one, netCDF's default fill value of the type: what
-        // a cell never written holds), missing_value, and anything non-finite.
-        const auto fillValue = file.numberAttribute(id, "_FillValue");
-        const auto defaultFill = fillValue ? std::nullopt : defaultFillValue(file, id);
-        const auto fillValueOrDefault = fillValue ? fillValue : defaultFill;
-        const auto missingValue = file.numberAttribute(id, "missing_value");
-        const double scale = file.numberAttribute(id, "scale_factor").value_or(1.0);
-        const double offset = file.numberAttribute(id, "add_offset").value_or(0.0);
-        const auto fillF =
-            fillValueOrDefault ? std::optional<float>(static_cast<float>(*fillValueOrDefault)) : std::nullopt;
-        const auto missF = missingValue ? std::optional<float>(static_cast<float>(*missingValue)) : std::nullopt;
-
+    for (size_t v = 0; v < requested.size(); ++v) {
+        const std::string& name = requested[v];
+        const auto& [fileName, layout] = layouts[v];
+        const ValueRule rule = valueRule(file, layout.id);
         Field field;
         field.name = name;
-        field.units = file.textAttribute(id, "units").value_or("");
+        field.units = file.textAttribute(layout.id, "units").value_or("");
         field.values.resize(n);
-        const auto& latIdx = h.axes[kLat].fileIndex;
-        const auto& rIdx = h.axes[kR].fileIndex;
-        const auto& lonIdx = h.axes[kLon].fileIndex;
-        const size_t nR = h.grid.nR(), nLon = h.grid.nLon();
-        std::vector<size_t> missingPerShell(nR, 0);
-        size_t firstMissing = n;  // canonical index, for the message
-        float firstMissingValue = 0;
-        std::mutex missingMutex;
-        // Reorder into canonical order, marking missing values as NaN.
-        tbb::parallel_for(size_t(0), h.grid.nLat(), [&](size_t iLat) {
-            std::vector<size_t> localMissing(nR, 0);
-            size_t localFirst = n;
-            float localFirstValue = 0;
-            for (size_t iR = 0; iR < nR; ++iR) {
-                const size_t base = latIdx[iLat] * stride[kLat] + rIdx[iR] * stride[kR];
-                float* out = field.values.data() + h.grid.index(iLat, iR, 0);
-                for (size_t iLon = 0; iLon < nLon; ++iLon) {
-                    float v = buffer[base + lonIdx[iLon] * stride[kLon]];
-                    if ((fillF && v == *fillF) || (missF && v == *missF) || !std::isfinite(v)) {
-                        if (localFirst == n) {
-                            localFirst = h.grid.index(iLat, iR, iLon);
-                            localFirstValue = v;
-                        }
-                        v = std::numeric_limits<float>::quiet_NaN();
-                        ++localMissing[iR];
-                    } else if (scale != 1.0 || offset != 0.0) {
-                        v = static_cast<float>(v * scale + offset);
-                    }
-                    out[iLon] = v;
-                }
-            }
-            std::lock_guard l(missingMutex);
-            for (size_t iR = 0; iR < nR; ++iR)
-                missingPerShell[iR] += localMissing[iR];
-            if (localFirst < firstMissing) {
-                firstMissing = localFirst;
-                firstMissingValue = localFirstValue;
-            }
-        });
-        const size_t missing = std::accumulate(missingPerShell.begin(), missingPerShell.end(), size_t(0));
+        ConversionReport report;
+        // Only one buffer is held at a time: the memory checked above.
+        if (readsAsDouble(file, layout.id)) {
+            std::vector<float>().swap(floatBuffer);
+            doubleBuffer.resize(fileCount);
+            readValues(file, layout.id, fileName, doubleBuffer.data());
+            report = toCanonical(doubleBuffer, h, layout, rule, field.values);
+        } else {
+            std::vector<double>().swap(doubleBuffer);
+            floatBuffer.resize(fileCount);
+            readValues(file, layout.id, fileName, floatBuffer.data());
+            report = toCanonical(floatBuffer, h, layout, rule, field.values);
+        }
+        if (report.firstBeyondFloat < n)
+            fail("{}: {}: the value {:g} at {} is beyond float32's range (±{:g}), in which RayPC keeps values; if it "
+                 "marks missing cells, give it as the variable's _FillValue or missing_value",
+                 path.string(), fileName, report.beyondFloatValue, describeGridPoint(h.grid, report.firstBeyondFloat),
+                 double(std::numeric_limits<float>::max()));
+        const size_t missing =
+            std::accumulate(report.missingPerShell.begin(), report.missingPerShell.end(), size_t(0));
         if (missing > 0) {
             if (!options.fillMissing) {
-                const std::string what = !std::isfinite(firstMissingValue) ? fmt::format("{}", firstMissingValue)
-                                         : fillF && firstMissingValue == *fillF
-                                             ? fmt::format("{} {:g}", fillValue ? "_FillValue" : "netCDF's default fill value (never written)",
-                                                           *fillValueOrDefault)
-                                             : fmt::format("missing_value {:g}", *missingValue);
+                const double first = report.firstMissingValue;
+                const std::string what =
+                    !std::isfinite(first)       ? fmt::format("{}", first)
+                    : rule.isFill(first)        ? fmt::format("{} {:g}",
+                                                              rule.fillIsDefault
+                                                                  ? "netCDF's default fill value (never written)"
+                                                                  : "_FillValue",
+                                                              *rule.fill)
+                                                : fmt::format("missing_value {:g}", *rule.missing);
                 fail("{}: {}: {} of {} values are missing (fill value, missing_value or NaN/Inf), the first at {}: {}; "
                      "use --fill-missing to replace them by the mean of their radius shell",
-                     path.string(), fileName, missing, n, describeGridPoint(h.grid, firstMissing), what);
+                     path.string(), fileName, missing, n, describeGridPoint(h.grid, report.firstMissing), what);
             }
-            // Replace each missing value by the mean of the valid values on its shell.
-            for (size_t iR = 0; iR < nR; ++iR) {
-                if (missingPerShell[iR] == 0)
-                    continue;
-                double sum = 0;
-                size_t count = 0;
-                for (size_t iLat = 0; iLat < h.grid.nLat(); ++iLat)
-                    for (size_t iLon = 0; iLon < nLon; ++iLon)
-                        if (const float v = field.values[h.grid.index(iLat, iR, iLon)]; !std::isnan(v)) {
-                            sum += v;
-                            ++count;
-                        }
-                if (count == 0)
-                    fail("{}: {}: every value on the shell r = {} km is missing", path.string(), fileName,
-                         h.grid.rKm[iR]);
-                const float mean = static_cast<float>(sum / count);
-                for (size_t iLat = 0; iLat < h.grid.nLat(); ++iLat)
-                    for (size_t iLon = 0; iLon < nLon; ++iLon)
-                        if (float& v = field.values[h.grid.index(iLat, iR, iLon)]; std::isnan(v))
-                            v = mean;
-            }
+            fillFromShellMeans(field.values, h.grid, report.missingPerShell, path, fileName);
         }
         snapshot.fields.push_back(std::move(field));
     }
