@@ -21,6 +21,7 @@ namespace raypc::cf_variants_test {
 namespace {
 
 namespace fs = std::filesystem;
+using RadiusUnits = ReaderOptions::RadiusUnits;
 
 fs::path variantsDir() { return fs::path(RAYPC_TEST_DATA_DIR) / "cf-variants"; }
 
@@ -53,6 +54,19 @@ ReaderOptions optionsOf(const std::string& name)
         for (const auto& [canonical, inFile] : given["map"].items())
             o.variableNames[canonical] = inFile.get<std::string>();
     o.fillMissing = given.value("fill_missing", false);
+    const std::string units = given.value("radius_units", "");
+    o.radiusUnits = units == "km" ? RadiusUnits::Km
+                    : units == "m" ? RadiusUnits::M
+                    : units == "nondimensional" ? RadiusUnits::Nondimensional
+                                                : RadiusUnits::FromFile;
+    return o;
+}
+
+// The options of variant `name` without its --radius-units.
+ReaderOptions withoutRadiusUnits(const std::string& name)
+{
+    ReaderOptions o = optionsOf(name);
+    o.radiusUnits = RadiusUnits::FromFile;
     return o;
 }
 
@@ -120,6 +134,13 @@ std::string pointText(const nlohmann::json& at)
                        at["lon_deg"].get<double>());
 }
 
+// The range of a coordinate's stored numbers as an error message gives it.
+std::string storedRange(const std::string& name)
+{
+    const auto& range = variant(name)["stored_range"];
+    return fmt::format("{:g}..{:g}", range[0].get<double>(), range[1].get<double>());
+}
+
 // 1. One time step per file.
 
 TEST(CfVariants, TimeDimensionOfLengthOne)
@@ -174,6 +195,75 @@ TEST(CfVariants, DoubleValueBeyondFloatIsRefused)
 TEST(CfVariants, UnsignedShorts)
 {
     expectMatchesTruth("unsigned_short");
+}
+
+// 3. Units and names read from CF attributes.
+
+TEST(CfVariants, RadiusInMetresWithStringAttributes)
+{
+    expectMatchesTruth("radius_m_string_units");  // units NC_STRING, of the coordinates and the variables
+}
+
+TEST(CfVariants, RadiusInMetresWithoutUnits)
+{
+    expectRefused(fileOf("radius_m_no_units"), withoutRadiusUnits("radius_m_no_units"),
+                  {"radius_m_no_units.nc", "'r'", "no units", storedRange("radius_m_no_units"), "--radius-units"});
+    expectMatchesTruth("radius_m_no_units");  // --radius-units m
+}
+
+TEST(CfVariants, NondimensionalRadius)
+{
+    expectRefused(fileOf("radius_nondimensional"), withoutRadiusUnits("radius_nondimensional"),
+                  {"radius_nondimensional.nc", "'r'", "no units", storedRange("radius_nondimensional"),
+                   "--radius-units"});
+    expectMatchesTruth("radius_nondimensional");  // --radius-units nondimensional
+}
+
+TEST(CfVariants, RadiusInKmWithoutUnits)
+{
+    expectMatchesTruth("radius_km_no_units");
+}
+
+TEST(CfVariants, RadiusWithUnknownUnitsIsRefused)
+{
+    expectRefused(fileOf("radius_unknown_units"), optionsOf("radius_unknown_units"),
+                  {"radius_unknown_units.nc", "'r'", "'miles'", "--radius-units"});
+}
+
+TEST(CfVariants, AnglesInRadians)
+{
+    expectMatchesTruth("angles_radians");
+}
+
+TEST(CfVariants, LatitudeInRadiansWithoutUnitsIsRefused)
+{
+    expectRefused(fileOf("lat_radians_no_units"), optionsOf("lat_radians_no_units"),
+                  {"lat_radians_no_units.nc", "'lat'", "no units", "radians"});
+}
+
+TEST(CfVariants, DegreesSouth)
+{
+    expectMatchesTruth("lat_degrees_south");
+}
+
+TEST(CfVariants, DegreesWest)
+{
+    expectMatchesTruth("lon_degrees_west");
+}
+
+TEST(CfVariants, DepthInKm)
+{
+    expectMatchesTruth("depth_km");
+}
+
+TEST(CfVariants, DepthInMetresFoundByAxisAndPositive)
+{
+    expectMatchesTruth("depth_m_cf");
+}
+
+TEST(CfVariants, CoordinatesFoundByStandardNameAndAxis)
+{
+    expectMatchesTruth("cf_names");
 }
 
 // 4. Series: the errors of a variable missing in one step and of a grid that differs stay.

@@ -12,10 +12,12 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <mutex>
+#include <numbers>
 #include <numeric>
 #include <optional>
 #include <type_traits>
@@ -141,17 +143,31 @@ public:
         return n;
     }
 
+    // A text attribute, NC_CHAR (classic files) or NC_STRING (netCDF-4 writes these, e.g. Python's
+    // netCDF4 for str values); the first string of an NC_STRING array. Trimmed of blanks and NULs.
     std::optional<std::string> textAttribute(int varId, const char* name) const
     {
         nc_type type;
         size_t len = 0;
-        if (nc_inq_att(m_id, varId, name, &type, &len) != NC_NOERR || type != NC_CHAR)
+        if (nc_inq_att(m_id, varId, name, &type, &len) != NC_NOERR)
             return std::nullopt;
-        std::string value(len, '\0');
-        check(nc_get_att_text(m_id, varId, name, value.data()), std::string("reading attribute ") + name);
+        std::string value;
+        if (type == NC_CHAR) {
+            value.resize(len);
+            check(nc_get_att_text(m_id, varId, name, value.data()), std::string("reading attribute ") + name);
+        } else if (type == NC_STRING) {
+            if (len == 0)
+                return std::string();
+            std::vector<char*> strings(len, nullptr);
+            check(nc_get_att_string(m_id, varId, name, strings.data()), std::string("reading attribute ") + name);
+            value = strings[0] ? strings[0] : "";
+            nc_free_string(len, strings.data());
+        } else {
+            return std::nullopt;
+        }
         while (!value.empty() && value.back() == '\0')
             value.pop_back();
-        return value;
+        return trim(value);
     }
 
     std::optional<double> numberAttribute(int varId, const char* name) const
@@ -191,58 +207,200 @@ constexpr std::array<const char*, 3> kAxisNames = {"lat", "r", "lon"};
 struct CoordinateAxis {
     int varId = -1;
     int dimId = -1;
-    std::vector<double> fileValues;  // in file order, converted to degrees / km
+    std::vector<double> fileValues;  // in file order, converted to degrees / km (of radius)
     // canonical index -> index in the file
     std::vector<size_t> fileIndex;
     std::vector<double> canonical;
 };
 
+std::string lowerCase(std::string text)
+{
+    std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return text;
+}
+
+// Units compare without regard to case ("KM", "Degrees_North").
 bool unitsMatch(const std::optional<std::string>& units, std::initializer_list<const char*> accepted)
 {
     if (!units)
         return false;
+    const std::string u = lowerCase(*units);
     for (const char* a : accepted)
-        if (*units == a)
+        if (u == a)
             return true;
     return false;
 }
 
-// Finds a coordinate variable by explicit name, by customary names, or by CF units.
+// The spellings of CF's units of latitude and longitude (CF conventions, sections 4.1 and 4.2).
+constexpr std::initializer_list<const char*> kDegreesNorth = {"degrees_north", "degree_north", "degree_n",
+                                                              "degrees_n", "degreen", "degreesn"};
+constexpr std::initializer_list<const char*> kDegreesSouth = {"degrees_south", "degree_south", "degree_s",
+                                                              "degrees_s", "degreess"};
+constexpr std::initializer_list<const char*> kDegreesEast = {"degrees_east", "degree_east", "degree_e",
+                                                             "degrees_e", "degreee", "degreese"};
+constexpr std::initializer_list<const char*> kDegreesWest = {"degrees_west", "degree_west", "degree_w",
+                                                             "degrees_w", "degreew", "degreesw"};
+constexpr std::initializer_list<const char*> kDegrees = {"degrees", "degree", "deg"};
+constexpr std::initializer_list<const char*> kRadians = {"radians", "radian", "rad"};
+constexpr std::initializer_list<const char*> kKilometres = {"km", "kilometer", "kilometers", "kilometre",
+                                                            "kilometres"};
+constexpr std::initializer_list<const char*> kMetres = {"m", "meter", "meters", "metre", "metres"};
+
+// Radii RayPC takes for a mantle's when a coordinate's units do not say what its numbers are.
+constexpr double kMantleMinKm = 3000.0, kMantleMaxKm = 7000.0;
+
+// Whether variable `v` says by CF attributes that it is the coordinate of `axis`: standard_name,
+// axis, units of latitude or longitude, or (vertical) positive.
+bool hasCfMarks(const NcFile& file, int v, Axis axis)
+{
+    const std::string standardName = lowerCase(file.textAttribute(v, "standard_name").value_or(""));
+    const std::string axisAttribute = lowerCase(file.textAttribute(v, "axis").value_or(""));
+    const auto units = file.textAttribute(v, "units");
+    switch (axis) {
+    case kLat:
+        return standardName == "latitude" || axisAttribute == "y" || unitsMatch(units, kDegreesNorth) ||
+               unitsMatch(units, kDegreesSouth);
+    case kLon:
+        return standardName == "longitude" || axisAttribute == "x" || unitsMatch(units, kDegreesEast) ||
+               unitsMatch(units, kDegreesWest);
+    case kR:
+        return standardName == "depth" || axisAttribute == "z" || file.textAttribute(v, "positive").has_value();
+    }
+    return false;
+}
+
+// Finds a coordinate variable by explicit name, by CF attributes (preferring coordinate variables,
+// those named as their dimension), or by customary names.
 int findCoordinateVar(const NcFile& file, Axis axis, const std::string& explicitName)
 {
+    static constexpr std::array<const char*, 3> kOptions = {"--lat-name", "--r-name", "--lon-name"};
     if (!explicitName.empty()) {
         if (auto id = file.findVar(explicitName))
             return *id;
         fail("{}: no coordinate variable '{}' (given for {})", file.path().string(), explicitName,
              kAxisNames[axis]);
     }
+    int nVars = 0;
+    file.check(nc_inq_nvars(file.id(), &nVars), "listing variables");
+    std::vector<int> marked, coordinates;
+    for (int v = 0; v < nVars; ++v) {
+        const auto dims = file.varDims(v);
+        if (dims.size() != 1 || !hasCfMarks(file, v, axis))
+            continue;
+        marked.push_back(v);
+        if (file.varName(v) == file.dimName(dims[0]))
+            coordinates.push_back(v);
+    }
+    const auto& found = coordinates.empty() ? marked : coordinates;
+    if (found.size() == 1)
+        return found[0];
+    if (found.size() > 1) {
+        std::vector<std::string> names;
+        for (int v : found)
+            names.push_back(file.varName(v));
+        fail("{}: the variables {} all say by their CF attributes that they are the {} coordinate; name one with {}",
+             file.path().string(), fmt::join(names, ", "), kAxisNames[axis], kOptions[axis]);
+    }
     static const std::array<std::vector<std::string>, 3> names = {
         std::vector<std::string>{"lat", "latitude", "Lat", "LAT"},
-        std::vector<std::string>{"r", "radius", "R", "rad"},
+        std::vector<std::string>{"r", "radius", "R", "rad", "depth", "Depth"},
         std::vector<std::string>{"lon", "longitude", "Lon", "LON"}};
     for (const auto& name : names[axis])
         if (auto id = file.findVar(name))
             return *id;
-    int nVars = 0;
-    file.check(nc_inq_nvars(file.id(), &nVars), "listing variables");
-    for (int v = 0; v < nVars; ++v) {
-        if (file.varDims(v).size() != 1)
-            continue;
-        const auto units = file.textAttribute(v, "units");
-        if (axis == kLat && unitsMatch(units, {"degrees_north", "degree_north", "degrees_N", "degreesN"}))
-            return v;
-        if (axis == kLon && unitsMatch(units, {"degrees_east", "degree_east", "degrees_E", "degreesE"}))
-            return v;
+    fail("{}: no {} coordinate variable found (looked for CF attributes standard_name, axis, units{} and the names "
+         "{}); name it with {}",
+         file.path().string(), kAxisNames[axis], axis == kR ? ", positive" : "",
+         axis == kLat ? "lat/latitude" : axis == kR ? "r/radius/depth" : "lon/longitude", kOptions[axis]);
+}
+
+// "'lat'", or "'phi' (lat)" when the name does not say which axis it is.
+std::string describeCoordinate(const std::string& name, Axis axis)
+{
+    return name == kAxisNames[axis] ? fmt::format("'{}'", name) : fmt::format("'{}' ({})", name, kAxisNames[axis]);
+}
+
+// Latitude and longitude into degrees north and east: radians, degrees_south and degrees_west
+// converted; without units degrees, unless every value lies within what radians could be.
+void anglesToDegrees(const NcFile& file, Axis axis, int varId, const std::string& name, std::vector<double>& values)
+{
+    const auto units = file.textAttribute(varId, "units");
+    const auto [minIt, maxIt] = std::minmax_element(values.begin(), values.end());
+    const double lo = *minIt, hi = *maxIt;
+    if (!units || units->empty()) {
+        // A global grid in degrees does not fit within ±π/2 (lat) or ±2π (lon).
+        const double radiansBound = axis == kLat ? std::numbers::pi / 2 : 2 * std::numbers::pi;
+        if (std::max(std::abs(lo), std::abs(hi)) <= radiansBound + 1e-9)
+            fail("{}: coordinate {} has no units and its values {:g}..{:g} lie within ±{}: radians, or a sliver of "
+                 "degrees? Give it a units attribute (radians or {}), e.g. ncatted -a units,{},c,c,radians FILE",
+                 file.path().string(), describeCoordinate(name, axis), lo, hi, axis == kLat ? "π/2" : "2π",
+                 axis == kLat ? "degrees_north" : "degrees_east", name);
+        return;
     }
-    fail("{}: no {} coordinate variable found (looked for {} and CF units); name it with an option",
-         file.path().string(), kAxisNames[axis],
-         axis == kLat ? "lat/latitude" : axis == kR ? "r/radius" : "lon/longitude");
+    double scale = 1.0;  // to degrees north / east
+    if (unitsMatch(units, kRadians))
+        scale = radToDeg(1.0);
+    else if (axis == kLat && unitsMatch(units, kDegreesSouth))
+        scale = -1.0;
+    else if (axis == kLon && unitsMatch(units, kDegreesWest))
+        scale = -1.0;
+    else if (!unitsMatch(units, kDegrees) && !unitsMatch(units, axis == kLat ? kDegreesNorth : kDegreesEast))
+        fail("{}: coordinate {} has units '{}', expected {}", file.path().string(), describeCoordinate(name, axis),
+             *units,
+             axis == kLat ? "degrees_north, degrees_south, degrees or radians"
+                          : "degrees_east, degrees_west, degrees or radians");
+    for (double& v : values)
+        v *= scale;
+}
+
+// The vertical coordinate into radius in km: radius or depth (positive down: radius = 6371 km -
+// depth), in km, m or fractions of 6371 km as the units attribute or options.radiusUnits say.
+void verticalToRadiusKm(const NcFile& file, int varId, const std::string& name, std::vector<double>& values,
+                        ReaderOptions::RadiusUnits given)
+{
+    using RadiusUnits = ReaderOptions::RadiusUnits;
+    const auto positive = file.textAttribute(varId, "positive");
+    const bool depth = positive ? lowerCase(*positive) == "down"
+                                : file.textAttribute(varId, "standard_name") == "depth" || lowerCase(name) == "depth";
+    const char* what = depth ? "depth" : "radius";
+    const auto units = file.textAttribute(varId, "units");
+    const bool noUnits = !units || units->empty();
+    const auto [minIt, maxIt] = std::minmax_element(values.begin(), values.end());
+    const double lo = *minIt, hi = *maxIt;
+    constexpr const char* kSay =
+        "say what they are with --radius-units km|m|nondimensional (nondimensional: fractions of 6371 km)";
+    double kmPerUnit = 1.0;
+    switch (given) {
+    case RadiusUnits::Km: kmPerUnit = 1.0; break;
+    case RadiusUnits::M: kmPerUnit = 1e-3; break;
+    case RadiusUnits::Nondimensional: kmPerUnit = kSurfaceRadiusKm; break;
+    case RadiusUnits::FromFile:
+        if (unitsMatch(units, kMetres))
+            kmPerUnit = 1e-3;
+        else if (!noUnits && !unitsMatch(units, kKilometres))
+            fail("{}: coordinate '{}' ({}) has units '{}', expected km or m; {}", file.path().string(), name, what,
+                 *units, kSay);
+        break;
+    }
+    for (double& v : values)
+        v = depth ? kSurfaceRadiusKm - v * kmPerUnit : v * kmPerUnit;
+    // Numbers without units are taken as km only where they are a mantle's.
+    if (given == RadiusUnits::FromFile && noUnits) {
+        const auto [rMin, rMax] = std::minmax_element(values.begin(), values.end());
+        if (*rMin < kMantleMinKm || *rMax > kMantleMaxKm) {
+            const std::string radii = depth ? fmt::format(", as km of depth, give radii {:g}..{:g} km,", *rMin, *rMax)
+                                            : std::string(" as km are");
+            fail("{}: coordinate '{}' ({}) has no units and its values {:g}..{:g}{} not a mantle's radii ({:g}..{:g} "
+                 "km); {}",
+                 file.path().string(), name, what, lo, hi, radii, kMantleMinKm, kMantleMaxKm, kSay);
+        }
+    }
 }
 
 // An axis keeps its values in file and canonical order, a sorting copy and an index.
 constexpr uint64_t kAxisBytesPerValue = 3 * sizeof(double) + sizeof(size_t);
 
-CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explicitName)
+CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explicitName, const ReaderOptions& options)
 {
     CoordinateAxis a;
     a.varId = findCoordinateVar(file, axis, explicitName);
@@ -267,14 +425,10 @@ CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explic
     for (double v : a.fileValues)
         if (!std::isfinite(v))
             fail("{}: coordinate '{}' holds a non-finite value", file.path().string(), name);
-    if (axis == kR) {
-        const auto units = file.textAttribute(a.varId, "units");
-        if (unitsMatch(units, {"m", "meter", "meters", "metre", "metres"}))
-            for (double& v : a.fileValues)
-                v /= 1000.0;
-        else if (units && !unitsMatch(units, {"km", "kilometer", "kilometers", "kilometre", "kilometres"}))
-            fail("{}: coordinate '{}' has units '{}', expected km or m", file.path().string(), name, *units);
-    }
+    if (axis == kR)
+        verticalToRadiusKm(file, a.varId, name, a.fileValues, options.radiusUnits);
+    else
+        anglesToDegrees(file, axis, a.varId, name, a.fileValues);
 
     // Canonical order: ascending; lon wrapped into [0, 360) with a repeated seam dropped.
     std::vector<double> values = a.fileValues;
@@ -307,9 +461,9 @@ struct OpenedHeader {
 OpenedHeader readAxes(const NcFile& file, const ReaderOptions& options)
 {
     OpenedHeader h;
-    h.axes[kLat] = readAxis(file, kLat, options.latName);
-    h.axes[kR] = readAxis(file, kR, options.rName);
-    h.axes[kLon] = readAxis(file, kLon, options.lonName);
+    h.axes[kLat] = readAxis(file, kLat, options.latName, options);
+    h.axes[kR] = readAxis(file, kR, options.rName, options);
+    h.axes[kLon] = readAxis(file, kLon, options.lonName, options);
     h.grid.latDeg = h.axes[kLat].canonical;
     h.grid.rKm = h.axes[kR].canonical;
     h.grid.lonDeg = h.axes[kLon].canonical;
