@@ -54,6 +54,7 @@ ReaderOptions optionsOf(const std::string& name)
         for (const auto& [canonical, inFile] : given["map"].items())
             o.variableNames[canonical] = inFile.get<std::string>();
     o.fillMissing = given.value("fill_missing", false);
+    o.latName = given.value("lat_name", "");
     const std::string units = given.value("radius_units", "");
     o.radiusUnits = units == "km" ? RadiusUnits::Km
                     : units == "m" ? RadiusUnits::M
@@ -264,6 +265,22 @@ TEST(CfVariants, DepthInMetresFoundByAxisAndPositive)
 TEST(CfVariants, CoordinatesFoundByStandardNameAndAxis)
 {
     expectMatchesTruth("cf_names");
+}
+
+TEST(CfVariants, StaggeredCoordinateOnAnotherDimIsNotTheGrids)
+{
+    expectMatchesTruth("staggered_lat");
+}
+
+TEST(CfVariants, TwoClaimantsOfAnAxisAreRefused)
+{
+    ReaderOptions options = optionsOf("ambiguous_lat");
+    options.latName.clear();
+    const auto& claimants = variant("ambiguous_lat")["claimants"];
+    expectRefused(fileOf("ambiguous_lat"), options,
+                  {"ambiguous_lat.nc", fmt::format("{}, {}", claimants[0].get<std::string>(), claimants[1].get<std::string>()),
+                   "lat coordinate", "--lat-name"});
+    expectMatchesTruth("ambiguous_lat");  // --lat-name lat_b
 }
 
 // 4. Series: the errors of a variable missing in one step and of a grid that differs stay.

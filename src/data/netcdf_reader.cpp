@@ -15,6 +15,7 @@
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <mutex>
 #include <numbers>
@@ -249,6 +250,17 @@ constexpr std::initializer_list<const char*> kMetres = {"m", "meter", "meters", 
 // Radii RayPC takes for a mantle's when a coordinate's units do not say what its numbers are.
 constexpr double kMantleMinKm = 3000.0, kMantleMaxKm = 7000.0;
 
+std::vector<std::string> requestedVariables(const ReaderOptions& options)
+{
+    return options.variables.empty() ? contestVariableNames() : options.variables;
+}
+
+std::string fileNameOf(const ReaderOptions& options, const std::string& canonicalName)
+{
+    const auto it = options.variableNames.find(canonicalName);
+    return it == options.variableNames.end() ? canonicalName : it->second;
+}
+
 // Whether variable `v` says by CF attributes that it is the coordinate of `axis`: standard_name,
 // axis, units of latitude or longitude, or (vertical) positive.
 bool hasCfMarks(const NcFile& file, int v, Axis axis)
@@ -269,9 +281,20 @@ bool hasCfMarks(const NcFile& file, int v, Axis axis)
     return false;
 }
 
-// Finds a coordinate variable by explicit name, by CF attributes (preferring coordinate variables,
-// those named as their dimension), or by customary names.
-int findCoordinateVar(const NcFile& file, Axis axis, const std::string& explicitName)
+// The customary names of each axis's coordinate variable.
+const std::array<std::vector<std::string>, 3>& customaryNames()
+{
+    static const std::array<std::vector<std::string>, 3> names = {
+        std::vector<std::string>{"lat", "latitude", "Lat", "LAT"},
+        std::vector<std::string>{"r", "radius", "R", "rad", "depth", "Depth"},
+        std::vector<std::string>{"lon", "longitude", "Lon", "LON"}};
+    return names;
+}
+
+// Finds a coordinate variable by explicit name, by CF attributes, or by customary names. Of several
+// variables with CF attributes of the axis, those on a dim of the requested variables (`dataDims`),
+// then coordinate variables (named as their dim), then those with a customary name are taken.
+int findCoordinateVar(const NcFile& file, Axis axis, const std::string& explicitName, const std::vector<int>& dataDims)
 {
     static constexpr std::array<const char*, 3> kOptions = {"--lat-name", "--r-name", "--lon-name"};
     if (!explicitName.empty()) {
@@ -282,30 +305,33 @@ int findCoordinateVar(const NcFile& file, Axis axis, const std::string& explicit
     }
     int nVars = 0;
     file.check(nc_inq_nvars(file.id(), &nVars), "listing variables");
-    std::vector<int> marked, coordinates;
-    for (int v = 0; v < nVars; ++v) {
-        const auto dims = file.varDims(v);
-        if (dims.size() != 1 || !hasCfMarks(file, v, axis))
-            continue;
-        marked.push_back(v);
-        if (file.varName(v) == file.dimName(dims[0]))
-            coordinates.push_back(v);
-    }
-    const auto& found = coordinates.empty() ? marked : coordinates;
+    std::vector<int> found;
+    for (int v = 0; v < nVars; ++v)
+        if (file.varDims(v).size() == 1 && hasCfMarks(file, v, axis))
+            found.push_back(v);
+    const auto& names = customaryNames()[axis];
+    // Keeps the candidates that `keep` accepts, if any.
+    auto prefer = [&](auto keep) {
+        std::vector<int> kept;
+        std::copy_if(found.begin(), found.end(), std::back_inserter(kept), keep);
+        if (!kept.empty())
+            found = std::move(kept);
+    };
+    prefer([&](int v) {
+        return std::find(dataDims.begin(), dataDims.end(), file.varDims(v)[0]) != dataDims.end();
+    });
+    prefer([&](int v) { return file.varName(v) == file.dimName(file.varDims(v)[0]); });
+    prefer([&](int v) { return std::find(names.begin(), names.end(), file.varName(v)) != names.end(); });
     if (found.size() == 1)
         return found[0];
     if (found.size() > 1) {
-        std::vector<std::string> names;
+        std::vector<std::string> claimants;
         for (int v : found)
-            names.push_back(file.varName(v));
+            claimants.push_back(file.varName(v));
         fail("{}: the variables {} all say by their CF attributes that they are the {} coordinate; name one with {}",
-             file.path().string(), fmt::join(names, ", "), kAxisNames[axis], kOptions[axis]);
+             file.path().string(), fmt::join(claimants, ", "), kAxisNames[axis], kOptions[axis]);
     }
-    static const std::array<std::vector<std::string>, 3> names = {
-        std::vector<std::string>{"lat", "latitude", "Lat", "LAT"},
-        std::vector<std::string>{"r", "radius", "R", "rad", "depth", "Depth"},
-        std::vector<std::string>{"lon", "longitude", "Lon", "LON"}};
-    for (const auto& name : names[axis])
+    for (const auto& name : names)
         if (auto id = file.findVar(name))
             return *id;
     fail("{}: no {} coordinate variable found (looked for CF attributes standard_name, axis, units{} and the names "
@@ -400,10 +426,11 @@ void verticalToRadiusKm(const NcFile& file, int varId, const std::string& name, 
 // An axis keeps its values in file and canonical order, a sorting copy and an index.
 constexpr uint64_t kAxisBytesPerValue = 3 * sizeof(double) + sizeof(size_t);
 
-CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explicitName, const ReaderOptions& options)
+CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explicitName, const ReaderOptions& options,
+                        const std::vector<int>& dataDims)
 {
     CoordinateAxis a;
-    a.varId = findCoordinateVar(file, axis, explicitName);
+    a.varId = findCoordinateVar(file, axis, explicitName, dataDims);
     const std::string name = file.varName(a.varId);
     const auto dims = file.varDims(a.varId);
     if (dims.size() != 1)
@@ -460,26 +487,21 @@ struct OpenedHeader {
 
 OpenedHeader readAxes(const NcFile& file, const ReaderOptions& options)
 {
+    // The dims of the requested variables that the file has (a missing one is named later).
+    std::vector<int> dataDims;
+    for (const auto& name : requestedVariables(options))
+        if (const auto id = file.findVar(fileNameOf(options, name)))
+            for (int d : file.varDims(*id))
+                dataDims.push_back(d);
     OpenedHeader h;
-    h.axes[kLat] = readAxis(file, kLat, options.latName, options);
-    h.axes[kR] = readAxis(file, kR, options.rName, options);
-    h.axes[kLon] = readAxis(file, kLon, options.lonName, options);
+    h.axes[kLat] = readAxis(file, kLat, options.latName, options, dataDims);
+    h.axes[kR] = readAxis(file, kR, options.rName, options, dataDims);
+    h.axes[kLon] = readAxis(file, kLon, options.lonName, options, dataDims);
     h.grid.latDeg = h.axes[kLat].canonical;
     h.grid.rKm = h.axes[kR].canonical;
     h.grid.lonDeg = h.axes[kLon].canonical;
     h.grid.validate(file.path().string());
     return h;
-}
-
-std::vector<std::string> requestedVariables(const ReaderOptions& options)
-{
-    return options.variables.empty() ? contestVariableNames() : options.variables;
-}
-
-std::string fileNameOf(const ReaderOptions& options, const std::string& canonicalName)
-{
-    const auto it = options.variableNames.find(canonicalName);
-    return it == options.variableNames.end() ? canonicalName : it->second;
 }
 
 // Where a variable's values are: its id and, for each grid axis, the distance in elements between

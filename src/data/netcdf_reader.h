@@ -3,8 +3,9 @@
 // The reader reads what the file says, by its CF attributes (CF conventions 1.x) where it has them:
 // - Coordinates: lat, lon and the vertical coordinate are found by name given in the options, by CF
 //   attributes (standard_name latitude / longitude / depth, axis Y / X / Z, units degrees_north /
-//   degrees_east and their spellings, positive; coordinate variables first), or by customary names
-//   (lat/latitude, lon/longitude, r/radius/depth).
+//   degrees_east and their spellings, positive; of several, those on the variables' dims, then
+//   coordinate variables, then customary names), or by customary names (lat/latitude, lon/longitude,
+//   r/radius/depth).
 // - Units: lat and lon in degrees or radians; degrees_south and degrees_west are negated. The
 //   vertical coordinate is a radius, or a depth (positive = "down"; without positive, standard_name
 //   or name depth) turned into radius = 6371 km - depth; its numbers are km or m as its units say, or

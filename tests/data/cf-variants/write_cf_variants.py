@@ -81,10 +81,10 @@ def set_text(var, name, value, as_string):
         var.setncattr(name, value)
 
 
-def write(path, layout, values=None, edit=None, skip=()):
+def write(path, layout, values=None, edit=None, skip=(), extra=None):
     """Writes `values` (canonical [lat, r, lon] arrays, default TRUTH) in `layout`, but not the variables
     in `skip`. `edit(name)` may return attributes of a variable, its fill_value and a function `data`
-    from its canonical values to the numbers stored."""
+    from its canonical values to the numbers stored. `extra(ds)` may add variables."""
     values = TRUTH if values is None else values
     index = {"lat": np.arange(NLAT), "r": np.arange(NR), "lon": np.arange(NLON)}
     for axis in layout.flip:
@@ -110,6 +110,8 @@ def write(path, layout, values=None, edit=None, skip=()):
             for k, a in layout.attrs[axis].items():
                 set_text(v, k, a, layout.string_attrs)
             v[:] = stored[axis](canonical[axis][index[axis]])
+        if extra:
+            extra(ds)
         dims += [layout.names[a] for a in layout.order]
         axes = {"lat": 0, "r": 1, "lon": 2}
         for name in ("temperature", "vx"):
@@ -310,6 +312,27 @@ def write_variants(out):
                         "lon": {"units": "degrees", "axis": "X"}},
                  var_names={"temperature": "T", "vx": "u_east"}))
     variants["cf_names"] = accepted("cf_names.nc", map={"temperature": "T", "vx": "u_east"})
+
+    # Several variables with CF attributes of latitude: a staggered coordinate variable on a dim the
+    # data do not use (lat_u, cell edges) is not the data's; two auxiliary variables on the data's dim,
+    # neither named as a coordinate, are refused unless an option names one.
+    def lat_edges(ds):
+        ds.createDimension("lat_u", NLAT + 1)
+        v = ds.createVariable("lat_u", "f8", ("lat_u",))
+        v.units = "degrees_north"
+        v[:] = np.linspace(-90.0, 90.0, NLAT + 1)
+    write(os.path.join(out, "staggered_lat.nc"), Layout(), extra=lat_edges)
+    variants["staggered_lat"] = accepted("staggered_lat.nc")
+
+    def two_lats(ds):
+        for name in ("lat_a", "lat_b"):
+            v = ds.createVariable(name, "f8", ("y",))
+            v.units = "degrees_north"
+            v[:] = LAT_DEG
+    write(os.path.join(out, "ambiguous_lat.nc"),
+          Layout(names={"lat": "y", "r": "r", "lon": "lon"}, attrs={"lat": {"long_name": "row"}}), extra=two_lats)
+    variants["ambiguous_lat"] = accepted("ambiguous_lat.nc", lat_name="lat_b")
+    variants["ambiguous_lat"]["claimants"] = ["lat_a", "lat_b"]
 
     # 4. Two-step series with a time dimension: vx missing in the second step; a grid that differs.
     for series in ("series_missing_variable", "series_grid_differs"):
