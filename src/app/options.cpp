@@ -36,6 +36,11 @@ void ReaderFlags::add(CLI::App& app)
     app.add_option("--lat-name", latName, "Name of the latitude coordinate variable (default: found)");
     app.add_option("--r-name", rName, "Name of the radius coordinate variable (default: found)");
     app.add_option("--lon-name", lonName, "Name of the longitude coordinate variable (default: found)");
+    app.add_option("--radius-units", radiusUnits,
+                   "What the radius (or depth) coordinate's numbers are, whatever its units attribute says: km, m, "
+                   "or nondimensional (fractions of 6371 km). Default: its units attribute; without one, km if the "
+                   "radii lie within 3000..7000 km")
+        ->check(CLI::IsMember({"km", "m", "nondimensional"}));
     app.add_flag("--fill-missing", fillMissing,
                  "Replace missing values (_FillValue, missing_value, NaN) by their shell's mean instead of failing");
     app.add_option("--time-units", timeUnits,
@@ -62,6 +67,11 @@ ReaderOptions ReaderFlags::toOptions() const
     o.latName = latName;
     o.rName = rName;
     o.lonName = lonName;
+    using RadiusUnits = ReaderOptions::RadiusUnits;
+    o.radiusUnits = radiusUnits == "km"               ? RadiusUnits::Km
+                    : radiusUnits == "m"              ? RadiusUnits::M
+                    : radiusUnits == "nondimensional" ? RadiusUnits::Nondimensional
+                                                      : RadiusUnits::FromFile;
     o.fillMissing = fillMissing;
     if (timeUnits == "years")
         o.myrPerTimeUnit = 1e-6;

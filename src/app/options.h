@@ -22,6 +22,7 @@ void requireFiniteNumbers(CLI::App& app);
 struct ReaderFlags {
     std::vector<std::string> variableMap;  // NAME=FILE_NAME
     std::string latName, rName, lonName;
+    std::string radiusUnits;  // km | m | nondimensional; empty: the file's units attribute
     bool fillMissing = false;
     std::string timeUnits = "years", grid;  // VTK XML series (ASPECT's output)
 

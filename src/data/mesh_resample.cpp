@@ -405,8 +405,8 @@ ShellMesh makeShellMesh(std::vector<vtk::Piece> pieces, double kmPerUnit, const 
         fail("{}: the mesh has no cells", what);
     if (!(mesh.rMinKm >= 3000 && mesh.rMaxKm <= 7000 && mesh.rMaxKm > mesh.rMinKm))
         fail("{}: the mesh's points lie at radii {:.6g} to {:.6g} km (coordinates taken as {}), not a mantle shell "
-             "within 3000 to 7000 km; a non-dimensional model needs its radius unit given",
-             what, mesh.rMinKm, mesh.rMaxKm, kmPerUnit == 1e-3 ? "metres" : fmt::format("{:g} km each", kmPerUnit));
+             "within 3000 to 7000 km; give their unit with --radius-units km|m|nondimensional",
+             what, mesh.rMinKm, mesh.rMaxKm, kmPerUnit == 1e-3 ? std::string("metres") : fmt::format("{:g} km each", kmPerUnit));
     // The shell's radii to the metre: float32 coordinates put 3485 km at 3484.99985.
     mesh.rMinKm = std::round(mesh.rMinKm * 1e3) / 1e3, mesh.rMaxKm = std::round(mesh.rMaxKm * 1e3) / 1e3;
     if (!std::isfinite(mesh.finestArcDeg) || !std::isfinite(mesh.finestRadialKm))

@@ -12,11 +12,16 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <fstream>
+#include <iterator>
+#include <limits>
 #include <mutex>
+#include <numbers>
 #include <numeric>
 #include <optional>
+#include <type_traits>
 
 namespace raypc {
 namespace {
@@ -139,17 +144,31 @@ public:
         return n;
     }
 
+    // A text attribute, NC_CHAR (classic files) or NC_STRING (netCDF-4 writes these, e.g. Python's
+    // netCDF4 for str values); the first string of an NC_STRING array. Trimmed of blanks and NULs.
     std::optional<std::string> textAttribute(int varId, const char* name) const
     {
         nc_type type;
         size_t len = 0;
-        if (nc_inq_att(m_id, varId, name, &type, &len) != NC_NOERR || type != NC_CHAR)
+        if (nc_inq_att(m_id, varId, name, &type, &len) != NC_NOERR)
             return std::nullopt;
-        std::string value(len, '\0');
-        check(nc_get_att_text(m_id, varId, name, value.data()), std::string("reading attribute ") + name);
+        std::string value;
+        if (type == NC_CHAR) {
+            value.resize(len);
+            check(nc_get_att_text(m_id, varId, name, value.data()), std::string("reading attribute ") + name);
+        } else if (type == NC_STRING) {
+            if (len == 0)
+                return std::string();
+            std::vector<char*> strings(len, nullptr);
+            check(nc_get_att_string(m_id, varId, name, strings.data()), std::string("reading attribute ") + name);
+            value = strings[0] ? strings[0] : "";
+            nc_free_string(len, strings.data());
+        } else {
+            return std::nullopt;
+        }
         while (!value.empty() && value.back() == '\0')
             value.pop_back();
-        return value;
+        return trim(value);
     }
 
     std::optional<double> numberAttribute(int varId, const char* name) const
@@ -189,61 +208,229 @@ constexpr std::array<const char*, 3> kAxisNames = {"lat", "r", "lon"};
 struct CoordinateAxis {
     int varId = -1;
     int dimId = -1;
-    std::vector<double> fileValues;  // in file order, converted to degrees / km
+    std::vector<double> fileValues;  // in file order, converted to degrees / km (of radius)
     // canonical index -> index in the file
     std::vector<size_t> fileIndex;
     std::vector<double> canonical;
 };
 
+std::string lowerCase(std::string text)
+{
+    std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return text;
+}
+
+// Units compare without regard to case ("KM", "Degrees_North").
 bool unitsMatch(const std::optional<std::string>& units, std::initializer_list<const char*> accepted)
 {
     if (!units)
         return false;
+    const std::string u = lowerCase(*units);
     for (const char* a : accepted)
-        if (*units == a)
+        if (u == a)
             return true;
     return false;
 }
 
-// Finds a coordinate variable by explicit name, by customary names, or by CF units.
-int findCoordinateVar(const NcFile& file, Axis axis, const std::string& explicitName)
+// The spellings of CF's units of latitude and longitude (CF conventions, sections 4.1 and 4.2).
+constexpr std::initializer_list<const char*> kDegreesNorth = {"degrees_north", "degree_north", "degree_n",
+                                                              "degrees_n", "degreen", "degreesn"};
+constexpr std::initializer_list<const char*> kDegreesSouth = {"degrees_south", "degree_south", "degree_s",
+                                                              "degrees_s", "degreess"};
+constexpr std::initializer_list<const char*> kDegreesEast = {"degrees_east", "degree_east", "degree_e",
+                                                             "degrees_e", "degreee", "degreese"};
+constexpr std::initializer_list<const char*> kDegreesWest = {"degrees_west", "degree_west", "degree_w",
+                                                             "degrees_w", "degreew", "degreesw"};
+constexpr std::initializer_list<const char*> kDegrees = {"degrees", "degree", "deg"};
+constexpr std::initializer_list<const char*> kRadians = {"radians", "radian", "rad"};
+constexpr std::initializer_list<const char*> kKilometres = {"km", "kilometer", "kilometers", "kilometre",
+                                                            "kilometres"};
+constexpr std::initializer_list<const char*> kMetres = {"m", "meter", "meters", "metre", "metres"};
+
+// Radii RayPC takes for a mantle's when a coordinate's units do not say what its numbers are.
+constexpr double kMantleMinKm = 3000.0, kMantleMaxKm = 7000.0;
+
+std::vector<std::string> requestedVariables(const ReaderOptions& options)
 {
+    return options.variables.empty() ? contestVariableNames() : options.variables;
+}
+
+std::string fileNameOf(const ReaderOptions& options, const std::string& canonicalName)
+{
+    const auto it = options.variableNames.find(canonicalName);
+    return it == options.variableNames.end() ? canonicalName : it->second;
+}
+
+// Whether variable `v` says by CF attributes that it is the coordinate of `axis`: standard_name,
+// axis, units of latitude or longitude, or (vertical) positive.
+bool hasCfMarks(const NcFile& file, int v, Axis axis)
+{
+    const std::string standardName = lowerCase(file.textAttribute(v, "standard_name").value_or(""));
+    const std::string axisAttribute = lowerCase(file.textAttribute(v, "axis").value_or(""));
+    const auto units = file.textAttribute(v, "units");
+    switch (axis) {
+    case kLat:
+        return standardName == "latitude" || axisAttribute == "y" || unitsMatch(units, kDegreesNorth) ||
+               unitsMatch(units, kDegreesSouth);
+    case kLon:
+        return standardName == "longitude" || axisAttribute == "x" || unitsMatch(units, kDegreesEast) ||
+               unitsMatch(units, kDegreesWest);
+    case kR:
+        return standardName == "depth" || axisAttribute == "z" || file.textAttribute(v, "positive").has_value();
+    }
+    return false;
+}
+
+// The customary names of each axis's coordinate variable.
+const std::array<std::vector<std::string>, 3>& customaryNames()
+{
+    static const std::array<std::vector<std::string>, 3> names = {
+        std::vector<std::string>{"lat", "latitude", "Lat", "LAT"},
+        std::vector<std::string>{"r", "radius", "R", "rad", "depth", "Depth"},
+        std::vector<std::string>{"lon", "longitude", "Lon", "LON"}};
+    return names;
+}
+
+// Finds a coordinate variable by explicit name, by CF attributes, or by customary names. Of several
+// variables with CF attributes of the axis, those on a dim of the requested variables (`dataDims`),
+// then coordinate variables (named as their dim), then those with a customary name are taken.
+int findCoordinateVar(const NcFile& file, Axis axis, const std::string& explicitName, const std::vector<int>& dataDims)
+{
+    static constexpr std::array<const char*, 3> kOptions = {"--lat-name", "--r-name", "--lon-name"};
     if (!explicitName.empty()) {
         if (auto id = file.findVar(explicitName))
             return *id;
         fail("{}: no coordinate variable '{}' (given for {})", file.path().string(), explicitName,
              kAxisNames[axis]);
     }
-    static const std::array<std::vector<std::string>, 3> names = {
-        std::vector<std::string>{"lat", "latitude", "Lat", "LAT"},
-        std::vector<std::string>{"r", "radius", "R", "rad"},
-        std::vector<std::string>{"lon", "longitude", "Lon", "LON"}};
-    for (const auto& name : names[axis])
-        if (auto id = file.findVar(name))
-            return *id;
     int nVars = 0;
     file.check(nc_inq_nvars(file.id(), &nVars), "listing variables");
-    for (int v = 0; v < nVars; ++v) {
-        if (file.varDims(v).size() != 1)
-            continue;
-        const auto units = file.textAttribute(v, "units");
-        if (axis == kLat && unitsMatch(units, {"degrees_north", "degree_north", "degrees_N", "degreesN"}))
-            return v;
-        if (axis == kLon && unitsMatch(units, {"degrees_east", "degree_east", "degrees_E", "degreesE"}))
-            return v;
+    std::vector<int> found;
+    for (int v = 0; v < nVars; ++v)
+        if (file.varDims(v).size() == 1 && hasCfMarks(file, v, axis))
+            found.push_back(v);
+    const auto& names = customaryNames()[axis];
+    // Keeps the candidates that `keep` accepts, if any.
+    auto prefer = [&](auto keep) {
+        std::vector<int> kept;
+        std::copy_if(found.begin(), found.end(), std::back_inserter(kept), keep);
+        if (!kept.empty())
+            found = std::move(kept);
+    };
+    prefer([&](int v) {
+        return std::find(dataDims.begin(), dataDims.end(), file.varDims(v)[0]) != dataDims.end();
+    });
+    prefer([&](int v) { return file.varName(v) == file.dimName(file.varDims(v)[0]); });
+    prefer([&](int v) { return std::find(names.begin(), names.end(), file.varName(v)) != names.end(); });
+    if (found.size() == 1)
+        return found[0];
+    if (found.size() > 1) {
+        std::vector<std::string> claimants;
+        for (int v : found)
+            claimants.push_back(file.varName(v));
+        fail("{}: the variables {} all say by their CF attributes that they are the {} coordinate; name one with {}",
+             file.path().string(), fmt::join(claimants, ", "), kAxisNames[axis], kOptions[axis]);
     }
-    fail("{}: no {} coordinate variable found (looked for {} and CF units); name it with an option",
-         file.path().string(), kAxisNames[axis],
-         axis == kLat ? "lat/latitude" : axis == kR ? "r/radius" : "lon/longitude");
+    for (const auto& name : names)
+        if (auto id = file.findVar(name))
+            return *id;
+    fail("{}: no {} coordinate variable found (looked for CF attributes standard_name, axis, units{} and the names "
+         "{}); name it with {}",
+         file.path().string(), kAxisNames[axis], axis == kR ? ", positive" : "",
+         axis == kLat ? "lat/latitude" : axis == kR ? "r/radius/depth" : "lon/longitude", kOptions[axis]);
+}
+
+// "'lat'", or "'phi' (lat)" when the name does not say which axis it is.
+std::string describeCoordinate(const std::string& name, Axis axis)
+{
+    return name == kAxisNames[axis] ? fmt::format("'{}'", name) : fmt::format("'{}' ({})", name, kAxisNames[axis]);
+}
+
+// Latitude and longitude into degrees north and east: radians, degrees_south and degrees_west
+// converted; without units degrees, unless every value lies within what radians could be.
+void anglesToDegrees(const NcFile& file, Axis axis, int varId, const std::string& name, std::vector<double>& values)
+{
+    const auto units = file.textAttribute(varId, "units");
+    const auto [minIt, maxIt] = std::minmax_element(values.begin(), values.end());
+    const double lo = *minIt, hi = *maxIt;
+    if (!units || units->empty()) {
+        // A global grid in degrees does not fit within ±π/2 (lat) or ±2π (lon).
+        const double radiansBound = axis == kLat ? std::numbers::pi / 2 : 2 * std::numbers::pi;
+        if (std::max(std::abs(lo), std::abs(hi)) <= radiansBound + 1e-9)
+            fail("{}: coordinate {} has no units and its values {:g}..{:g} lie within ±{}: radians, or a sliver of "
+                 "degrees? Give it a units attribute (radians or {}), e.g. ncatted -a units,{},c,c,radians FILE",
+                 file.path().string(), describeCoordinate(name, axis), lo, hi, axis == kLat ? "π/2" : "2π",
+                 axis == kLat ? "degrees_north" : "degrees_east", name);
+        return;
+    }
+    double scale = 1.0;  // to degrees north / east
+    if (unitsMatch(units, kRadians))
+        scale = radToDeg(1.0);
+    else if (axis == kLat && unitsMatch(units, kDegreesSouth))
+        scale = -1.0;
+    else if (axis == kLon && unitsMatch(units, kDegreesWest))
+        scale = -1.0;
+    else if (!unitsMatch(units, kDegrees) && !unitsMatch(units, axis == kLat ? kDegreesNorth : kDegreesEast))
+        fail("{}: coordinate {} has units '{}', expected {}", file.path().string(), describeCoordinate(name, axis),
+             *units,
+             axis == kLat ? "degrees_north, degrees_south, degrees or radians"
+                          : "degrees_east, degrees_west, degrees or radians");
+    for (double& v : values)
+        v *= scale;
+}
+
+// The vertical coordinate into radius in km: radius or depth (positive down: radius = 6371 km -
+// depth), in km, m or fractions of 6371 km as the units attribute or options.radiusUnits say.
+void verticalToRadiusKm(const NcFile& file, int varId, const std::string& name, std::vector<double>& values,
+                        ReaderOptions::RadiusUnits given)
+{
+    using RadiusUnits = ReaderOptions::RadiusUnits;
+    const auto positive = file.textAttribute(varId, "positive");
+    const bool depth = positive ? lowerCase(*positive) == "down"
+                                : file.textAttribute(varId, "standard_name") == "depth" || lowerCase(name) == "depth";
+    const char* what = depth ? "depth" : "radius";
+    const auto units = file.textAttribute(varId, "units");
+    const bool noUnits = !units || units->empty();
+    const auto [minIt, maxIt] = std::minmax_element(values.begin(), values.end());
+    const double lo = *minIt, hi = *maxIt;
+    constexpr const char* kSay =
+        "say what they are with --radius-units km|m|nondimensional (nondimensional: fractions of 6371 km)";
+    double kmPerUnit = 1.0;
+    switch (given) {
+    case RadiusUnits::Km: kmPerUnit = 1.0; break;
+    case RadiusUnits::M: kmPerUnit = 1e-3; break;
+    case RadiusUnits::Nondimensional: kmPerUnit = kSurfaceRadiusKm; break;
+    case RadiusUnits::FromFile:
+        if (unitsMatch(units, kMetres))
+            kmPerUnit = 1e-3;
+        else if (!noUnits && !unitsMatch(units, kKilometres))
+            fail("{}: coordinate '{}' ({}) has units '{}', expected km or m; {}", file.path().string(), name, what,
+                 *units, kSay);
+        break;
+    }
+    for (double& v : values)
+        v = depth ? kSurfaceRadiusKm - v * kmPerUnit : v * kmPerUnit;
+    // Numbers without units are taken as km only where they are a mantle's.
+    if (given == RadiusUnits::FromFile && noUnits) {
+        const auto [rMin, rMax] = std::minmax_element(values.begin(), values.end());
+        if (*rMin < kMantleMinKm || *rMax > kMantleMaxKm) {
+            const std::string radii = depth ? fmt::format(", as km of depth, give radii {:g}..{:g} km,", *rMin, *rMax)
+                                            : std::string(" as km are");
+            fail("{}: coordinate '{}' ({}) has no units and its values {:g}..{:g}{} not a mantle's radii ({:g}..{:g} "
+                 "km); {}",
+                 file.path().string(), name, what, lo, hi, radii, kMantleMinKm, kMantleMaxKm, kSay);
+        }
+    }
 }
 
 // An axis keeps its values in file and canonical order, a sorting copy and an index.
 constexpr uint64_t kAxisBytesPerValue = 3 * sizeof(double) + sizeof(size_t);
 
-CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explicitName)
+CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explicitName, const ReaderOptions& options,
+                        const std::vector<int>& dataDims)
 {
     CoordinateAxis a;
-    a.varId = findCoordinateVar(file, axis, explicitName);
+    a.varId = findCoordinateVar(file, axis, explicitName, dataDims);
     const std::string name = file.varName(a.varId);
     const auto dims = file.varDims(a.varId);
     if (dims.size() != 1)
@@ -265,14 +452,10 @@ CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explic
     for (double v : a.fileValues)
         if (!std::isfinite(v))
             fail("{}: coordinate '{}' holds a non-finite value", file.path().string(), name);
-    if (axis == kR) {
-        const auto units = file.textAttribute(a.varId, "units");
-        if (unitsMatch(units, {"m", "meter", "meters", "metre", "metres"}))
-            for (double& v : a.fileValues)
-                v /= 1000.0;
-        else if (units && !unitsMatch(units, {"km", "kilometer", "kilometers", "kilometre", "kilometres"}))
-            fail("{}: coordinate '{}' has units '{}', expected km or m", file.path().string(), name, *units);
-    }
+    if (axis == kR)
+        verticalToRadiusKm(file, a.varId, name, a.fileValues, options.radiusUnits);
+    else
+        anglesToDegrees(file, axis, a.varId, name, a.fileValues);
 
     // Canonical order: ascending; lon wrapped into [0, 360) with a repeated seam dropped.
     std::vector<double> values = a.fileValues;
@@ -304,10 +487,16 @@ struct OpenedHeader {
 
 OpenedHeader readAxes(const NcFile& file, const ReaderOptions& options)
 {
+    // The dims of the requested variables that the file has (a missing one is named later).
+    std::vector<int> dataDims;
+    for (const auto& name : requestedVariables(options))
+        if (const auto id = file.findVar(fileNameOf(options, name)))
+            for (int d : file.varDims(*id))
+                dataDims.push_back(d);
     OpenedHeader h;
-    h.axes[kLat] = readAxis(file, kLat, options.latName);
-    h.axes[kR] = readAxis(file, kR, options.rName);
-    h.axes[kLon] = readAxis(file, kLon, options.lonName);
+    h.axes[kLat] = readAxis(file, kLat, options.latName, options, dataDims);
+    h.axes[kR] = readAxis(file, kR, options.rName, options, dataDims);
+    h.axes[kLon] = readAxis(file, kLon, options.lonName, options, dataDims);
     h.grid.latDeg = h.axes[kLat].canonical;
     h.grid.rKm = h.axes[kR].canonical;
     h.grid.lonDeg = h.axes[kLon].canonical;
@@ -315,21 +504,17 @@ OpenedHeader readAxes(const NcFile& file, const ReaderOptions& options)
     return h;
 }
 
-std::vector<std::string> requestedVariables(const ReaderOptions& options)
-{
-    return options.variables.empty() ? contestVariableNames() : options.variables;
-}
+// Where a variable's values are: its id and, for each grid axis, the distance in elements between
+// neighbours along it in the file.
+struct VariableLayout {
+    int id = -1;
+    std::array<size_t, 3> stride{};
+};
 
-std::string fileNameOf(const ReaderOptions& options, const std::string& canonicalName)
-{
-    const auto it = options.variableNames.find(canonicalName);
-    return it == options.variableNames.end() ? canonicalName : it->second;
-}
-
-// Checks that the variable exists and has the three grid dims; returns its id and, for each
-// file dim in order, which axis it is.
-std::pair<int, std::array<Axis, 3>> checkVariable(const NcFile& file, const OpenedHeader& h,
-                                                  const std::string& canonicalName, const std::string& fileName)
+// Checks that the variable exists, is numeric and has the three grid dims in any order, and besides
+// them only dims of length 1 (one time step: CF files often have (time, lat, r, lon)).
+VariableLayout checkVariable(const NcFile& file, const OpenedHeader& h, const std::string& canonicalName,
+                             const std::string& fileName)
 {
     const auto id = file.findVar(fileName);
     if (!id) {
@@ -344,29 +529,48 @@ std::pair<int, std::array<Axis, 3>> checkVariable(const NcFile& file, const Open
             names.push_back(file.dimName(d));
         return fmt::format("({})", fmt::join(names, ", "));
     };
-    if (dims.size() != 3)
-        fail("{}: {}: dims {}, expected 3 dims ({}, {}, {})", file.path().string(), fileName, describe(),
-             file.dimName(h.axes[kLat].dimId), file.dimName(h.axes[kR].dimId), file.dimName(h.axes[kLon].dimId));
-    std::array<Axis, 3> order{};
+    const std::string gridDims = fmt::format("({}, {}, {})", file.dimName(h.axes[kLat].dimId),
+                                             file.dimName(h.axes[kR].dimId), file.dimName(h.axes[kLon].dimId));
+    // Which grid axis each of the variable's dims is, if any.
+    std::vector<std::optional<Axis>> axisOfDim(dims.size());
     std::array<bool, 3> seen{};
-    for (size_t i = 0; i < 3; ++i) {
-        bool found = false;
+    for (size_t i = 0; i < dims.size(); ++i)
         for (int a = 0; a < 3; ++a)
             if (dims[i] == h.axes[a].dimId && !seen[a]) {
-                order[i] = static_cast<Axis>(a);
+                axisOfDim[i] = static_cast<Axis>(a);
                 seen[a] = true;
-                found = true;
             }
-        if (!found)
-            fail("{}: {}: dims {}, expected the grid's dims ({}, {}, {}) in any order", file.path().string(),
-                 fileName, describe(), file.dimName(h.axes[kLat].dimId), file.dimName(h.axes[kR].dimId),
-                 file.dimName(h.axes[kLon].dimId));
+    if (!seen[kLat] || !seen[kR] || !seen[kLon]) {
+        if (dims.size() < 3)
+            fail("{}: {}: dims {}, expected 3 dims {}", file.path().string(), fileName, describe(), gridDims);
+        fail("{}: {}: dims {}, expected the grid's dims {} in any order", file.path().string(), fileName, describe(),
+             gridDims);
+    }
+    VariableLayout layout;
+    layout.id = *id;
+    // Element strides in the file's dim order (last dim fastest); other dims have length 1.
+    size_t s = 1;
+    for (size_t i = dims.size(); i-- > 0;) {
+        if (axisOfDim[i]) {
+            layout.stride[*axisOfDim[i]] = s;
+            s *= h.axes[*axisOfDim[i]].fileValues.size();
+            continue;
+        }
+        const size_t length = file.dimLength(dims[i]);
+        if (length == 0)
+            fail("{}: {}: dims {}: dimension '{}' has length 0, the file holds no step", file.path().string(),
+                 fileName, describe(), file.dimName(dims[i]));
+        if (length != 1)
+            fail("{}: {}: dims {}: dimension '{}' has length {}; RayPC reads one step per file (the grid's dims {} "
+                 "and dims of length 1): split the file, e.g. with NCO's ncks -d {},K,K",
+                 file.path().string(), fileName, describe(), file.dimName(dims[i]), length, gridDims,
+                 file.dimName(dims[i]));
     }
     int type = 0;
     file.check(nc_inq_vartype(file.id(), *id, &type), "reading a variable type");
     if (type == NC_CHAR || type == NC_STRING)
         fail("{}: {}: text variable, expected numbers", file.path().string(), fileName);
-    return {*id, order};
+    return layout;
 }
 
 // The value netCDF gives a cell of variable `varId` that was never written when the variable
@@ -390,6 +594,165 @@ std::optional<double> defaultFillValue(const NcFile& file, int varId)
     }
 }
 
+// netCDF converts integers to float exactly up to 16 bits; doubles and wider integers are read as
+// double and converted here, so that a fill value beyond float (1e300) is recognised and a value
+// beyond float is named rather than failing the whole read ("Numeric conversion not representable").
+bool readsAsDouble(const NcFile& file, int varId)
+{
+    nc_type type = 0;
+    file.check(nc_inq_vartype(file.id(), varId, &type), "reading a variable type");
+    return type == NC_DOUBLE || type == NC_INT || type == NC_UINT || type == NC_INT64 || type == NC_UINT64;
+}
+
+void readValues(const NcFile& file, int varId, const std::string& fileName, float* out)
+{
+    if (const int status = nc_get_var_float(file.id(), varId, out); status != NC_NOERR)
+        fail("{}: {}: cannot read the values ({}); the file may be truncated or damaged", file.path().string(),
+             fileName, errorText(status));
+}
+
+void readValues(const NcFile& file, int varId, const std::string& fileName, double* out)
+{
+    if (const int status = nc_get_var_double(file.id(), varId, out); status != NC_NOERR)
+        fail("{}: {}: cannot read the values ({}); the file may be truncated or damaged", file.path().string(),
+             fileName, errorText(status));
+}
+
+// How a variable's stored numbers become values (CF conventions, section 8.1, and the NUG's
+// _Unsigned): which are missing, how they are unpacked. Comparisons are on the stored numbers.
+struct ValueRule {
+    std::optional<double> fill;  // _FillValue, or without one netCDF's default fill value of the type
+    bool fillIsDefault = false;
+    std::optional<double> missing;  // missing_value
+    double scale = 1.0, offset = 0.0;
+    // For an integer variable with _Unsigned = "true": 2^bits, added to negative stored numbers.
+    double unsignedWrap = 0.0;
+
+    bool packed() const { return scale != 1.0 || offset != 0.0; }
+    bool isFill(double stored) const { return fill && stored == *fill; }
+};
+
+ValueRule valueRule(const NcFile& file, int varId)
+{
+    ValueRule rule;
+    nc_type type = 0;
+    file.check(nc_inq_vartype(file.id(), varId, &type), "reading a variable type");
+    const auto isUnsigned = file.textAttribute(varId, "_Unsigned");
+    if (isUnsigned && (*isUnsigned == "true" || *isUnsigned == "True" || *isUnsigned == "TRUE")) {
+        switch (type) {
+        case NC_BYTE: rule.unsignedWrap = 0x1p8; break;
+        case NC_SHORT: rule.unsignedWrap = 0x1p16; break;
+        case NC_INT: rule.unsignedWrap = 0x1p32; break;
+        case NC_INT64: rule.unsignedWrap = 0x1p64; break;
+        default: break;
+        }
+    }
+    // A fill or missing value given as the unsigned number (65535) matches the stored one (-1).
+    auto stored = [&](std::optional<double> v) {
+        if (v && rule.unsignedWrap > 0 && *v >= rule.unsignedWrap / 2)
+            *v -= rule.unsignedWrap;
+        return v;
+    };
+    rule.fill = stored(file.numberAttribute(varId, "_FillValue"));
+    if (!rule.fill) {
+        rule.fill = defaultFillValue(file, varId);
+        rule.fillIsDefault = rule.fill.has_value();
+    }
+    rule.missing = stored(file.numberAttribute(varId, "missing_value"));
+    rule.scale = file.numberAttribute(varId, "scale_factor").value_or(1.0);
+    rule.offset = file.numberAttribute(varId, "add_offset").value_or(0.0);
+    return rule;
+}
+
+// What turning one variable into canonical order found.
+struct ConversionReport {
+    std::vector<size_t> missingPerShell;
+    size_t firstMissing = SIZE_MAX;  // canonical index, for the message
+    double firstMissingValue = 0;
+    size_t firstBeyondFloat = SIZE_MAX;  // canonical index of the first value beyond float32
+    double beyondFloatValue = 0;
+};
+
+// A fill or missing value as the buffer's type T holds it: none when T cannot hold it (a
+// missing_value of 1e300 on a float variable matches nothing).
+template <typename T>
+std::optional<T> asStored(std::optional<double> v)
+{
+    if (!v || (std::isfinite(*v) && std::abs(*v) > double(std::numeric_limits<T>::max())))
+        return std::nullopt;
+    return static_cast<T>(*v);
+}
+
+// Reorders `buffer` (one variable in the file's order) into canonical order in `out`, marking missing
+// values (fill value, missing_value, NaN, Inf) as NaN, unpacking the others, and noting values that
+// float32 cannot hold.
+template <typename T>
+ConversionReport toCanonical(const std::vector<T>& buffer, const OpenedHeader& h, const VariableLayout& layout,
+                             const ValueRule& rule, std::vector<float>& out)
+{
+    const auto fill = asStored<T>(rule.fill), missing = asStored<T>(rule.missing);
+    const auto& stride = layout.stride;
+    const auto& latIdx = h.axes[kLat].fileIndex;
+    const auto& rIdx = h.axes[kR].fileIndex;
+    const auto& lonIdx = h.axes[kLon].fileIndex;
+    const SphericalGrid& grid = h.grid;
+    const size_t nR = grid.nR(), nLon = grid.nLon();
+    const bool convert = rule.packed() || rule.unsignedWrap > 0;
+    constexpr double kFloatMax = std::numeric_limits<float>::max();
+    ConversionReport report;
+    report.missingPerShell.assign(nR, 0);
+    std::mutex reportMutex;
+    tbb::parallel_for(size_t(0), grid.nLat(), [&](size_t iLat) {
+        ConversionReport local;
+        local.missingPerShell.assign(nR, 0);
+        for (size_t iR = 0; iR < nR; ++iR) {
+            const size_t base = latIdx[iLat] * stride[kLat] + rIdx[iR] * stride[kR];
+            float* row = out.data() + grid.index(iLat, iR, 0);
+            for (size_t iLon = 0; iLon < nLon; ++iLon) {
+                const T v = buffer[base + lonIdx[iLon] * stride[kLon]];
+                if ((fill && v == *fill) || (missing && v == *missing) || !std::isfinite(v)) {
+                    if (local.firstMissing == SIZE_MAX) {
+                        local.firstMissing = grid.index(iLat, iR, iLon);
+                        local.firstMissingValue = double(v);
+                    }
+                    row[iLon] = std::numeric_limits<float>::quiet_NaN();
+                    ++local.missingPerShell[iR];
+                    continue;
+                }
+                double value = double(v);
+                if (convert) {
+                    if (value < 0 && rule.unsignedWrap > 0)
+                        value += rule.unsignedWrap;
+                    value = value * rule.scale + rule.offset;
+                }
+                if (std::is_same_v<T, float> && !convert) {
+                    row[iLon] = float(v);
+                } else if (std::abs(value) <= kFloatMax) {
+                    row[iLon] = static_cast<float>(value);
+                } else {
+                    if (local.firstBeyondFloat == SIZE_MAX) {
+                        local.firstBeyondFloat = grid.index(iLat, iR, iLon);
+                        local.beyondFloatValue = value;
+                    }
+                    row[iLon] = std::numeric_limits<float>::quiet_NaN();
+                }
+            }
+        }
+        std::lock_guard l(reportMutex);
+        for (size_t iR = 0; iR < nR; ++iR)
+            report.missingPerShell[iR] += local.missingPerShell[iR];
+        if (local.firstMissing < report.firstMissing) {
+            report.firstMissing = local.firstMissing;
+            report.firstMissingValue = local.firstMissingValue;
+        }
+        if (local.firstBeyondFloat < report.firstBeyondFloat) {
+            report.firstBeyondFloat = local.firstBeyondFloat;
+            report.beyondFloatValue = local.beyondFloatValue;
+        }
+    });
+    return report;
+}
+
 }  // namespace
 
 FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& options)
@@ -402,8 +765,8 @@ FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& op
     header.format = file.formatName();
     for (const auto& name : requestedVariables(options)) {
         const auto fileName = fileNameOf(options, name);
-        const auto [id, order] = checkVariable(file, h, name, fileName);
-        header.variables.push_back({name, fileName, file.textAttribute(id, "units").value_or("")});
+        const auto layout = checkVariable(file, h, name, fileName);
+        header.variables.push_back({name, fileName, file.textAttribute(layout.id, "units").value_or("")});
     }
     return header;
 }
@@ -416,119 +779,69 @@ Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& op
     Snapshot snapshot;
     snapshot.grid = h.grid;
     const size_t n = h.grid.cellCount();
-    std::array<size_t, 3> fileLength{};
-    for (int a = 0; a < 3; ++a)
-        fileLength[a] = h.axes[a].fileValues.size();
-    const size_t fileCount = fileLength[0] * fileLength[1] * fileLength[2];
-    // The fields and one variable's buffer in file order.
+    size_t fileCount = 1;
+    for (const auto& axis : h.axes)
+        fileCount *= axis.fileValues.size();
+    // Every variable is checked before any is read.
     const auto requested = requestedVariables(options);
-    checkGridFitsMemory(h.grid, (requested.size() + 1) * fileCount * sizeof(float), path.string(), "read",
-                        availableMemory());
-    std::vector<float> buffer(fileCount);
-
+    std::vector<std::pair<std::string, VariableLayout>> layouts;
+    size_t bufferBytesPerValue = sizeof(float);
     for (const auto& name : requested) {
         const auto fileName = fileNameOf(options, name);
-        const auto [id, order] = checkVariable(file, h, name, fileName);
-        const int status = nc_get_var_float(file.id(), id, buffer.data());
-        if (status != NC_NOERR)
-            fail("{}: {}: cannot read the values ({}); the file may be truncated or damaged", path.string(),
-                 fileName, errorText(status));
+        layouts.emplace_back(fileName, checkVariable(file, h, name, fileName));
+        if (readsAsDouble(file, layouts.back().second.id))
+            bufferBytesPerValue = sizeof(double);
+    }
+    // The fields and one variable's buffer in file order.
+    checkGridFitsMemory(h.grid, requested.size() * fileCount * sizeof(float) + fileCount * bufferBytesPerValue,
+                        path.string(), "read", availableMemory());
+    std::vector<float> floatBuffer;
+    std::vector<double> doubleBuffer;
 
-        // Element strides of each axis in the file's dim order (last dim fastest).
-        std::array<size_t, 3> stride{};
-        size_t s = 1;
-        for (int i = 2; i >= 0; --i) {
-            stride[order[i]] = s;
-            s *= fileLength[order[i]];
-        }
-        // Missing values: _FillValue (or, without one, netCDF's default fill value of the type: what
-        // a cell never written holds), missing_value, and anything non-finite.
-        const auto fillValue = file.numberAttribute(id, "_FillValue");
-        const auto defaultFill = fillValue ? std::nullopt : defaultFillValue(file, id);
-        const auto fillValueOrDefault = fillValue ? fillValue : defaultFill;
-        const auto missingValue = file.numberAttribute(id, "missing_value");
-        const double scale = file.numberAttribute(id, "scale_factor").value_or(1.0);
-        const double offset = file.numberAttribute(id, "add_offset").value_or(0.0);
-        const auto fillF =
-            fillValueOrDefault ? std::optional<float>(static_cast<float>(*fillValueOrDefault)) : std::nullopt;
-        const auto missF = missingValue ? std::optional<float>(static_cast<float>(*missingValue)) : std::nullopt;
-
+    for (size_t v = 0; v < requested.size(); ++v) {
+        const std::string& name = requested[v];
+        const auto& [fileName, layout] = layouts[v];
+        const ValueRule rule = valueRule(file, layout.id);
         Field field;
         field.name = name;
-        field.units = file.textAttribute(id, "units").value_or("");
+        field.units = file.textAttribute(layout.id, "units").value_or("");
         field.values.resize(n);
-        const auto& latIdx = h.axes[kLat].fileIndex;
-        const auto& rIdx = h.axes[kR].fileIndex;
-        const auto& lonIdx = h.axes[kLon].fileIndex;
-        const size_t nR = h.grid.nR(), nLon = h.grid.nLon();
-        std::vector<size_t> missingPerShell(nR, 0);
-        size_t firstMissing = n;  // canonical index, for the message
-        float firstMissingValue = 0;
-        std::mutex missingMutex;
-        // Reorder into canonical order, marking missing values as NaN.
-        tbb::parallel_for(size_t(0), h.grid.nLat(), [&](size_t iLat) {
-            std::vector<size_t> localMissing(nR, 0);
-            size_t localFirst = n;
-            float localFirstValue = 0;
-            for (size_t iR = 0; iR < nR; ++iR) {
-                const size_t base = latIdx[iLat] * stride[kLat] + rIdx[iR] * stride[kR];
-                float* out = field.values.data() + h.grid.index(iLat, iR, 0);
-                for (size_t iLon = 0; iLon < nLon; ++iLon) {
-                    float v = buffer[base + lonIdx[iLon] * stride[kLon]];
-                    if ((fillF && v == *fillF) || (missF && v == *missF) || !std::isfinite(v)) {
-                        if (localFirst == n) {
-                            localFirst = h.grid.index(iLat, iR, iLon);
-                            localFirstValue = v;
-                        }
-                        v = std::numeric_limits<float>::quiet_NaN();
-                        ++localMissing[iR];
-                    } else if (scale != 1.0 || offset != 0.0) {
-                        v = static_cast<float>(v * scale + offset);
-                    }
-                    out[iLon] = v;
-                }
-            }
-            std::lock_guard l(missingMutex);
-            for (size_t iR = 0; iR < nR; ++iR)
-                missingPerShell[iR] += localMissing[iR];
-            if (localFirst < firstMissing) {
-                firstMissing = localFirst;
-                firstMissingValue = localFirstValue;
-            }
-        });
-        const size_t missing = std::accumulate(missingPerShell.begin(), missingPerShell.end(), size_t(0));
+        ConversionReport report;
+        // Only one buffer is held at a time: the memory checked above.
+        if (readsAsDouble(file, layout.id)) {
+            std::vector<float>().swap(floatBuffer);
+            doubleBuffer.resize(fileCount);
+            readValues(file, layout.id, fileName, doubleBuffer.data());
+            report = toCanonical(doubleBuffer, h, layout, rule, field.values);
+        } else {
+            std::vector<double>().swap(doubleBuffer);
+            floatBuffer.resize(fileCount);
+            readValues(file, layout.id, fileName, floatBuffer.data());
+            report = toCanonical(floatBuffer, h, layout, rule, field.values);
+        }
+        if (report.firstBeyondFloat < n)
+            fail("{}: {}: the value {:g} at {} is beyond float32's range (±{:g}), in which RayPC keeps values; if it "
+                 "marks missing cells, give it as the variable's _FillValue or missing_value",
+                 path.string(), fileName, report.beyondFloatValue, describeGridPoint(h.grid, report.firstBeyondFloat),
+                 double(std::numeric_limits<float>::max()));
+        const size_t missing =
+            std::accumulate(report.missingPerShell.begin(), report.missingPerShell.end(), size_t(0));
         if (missing > 0) {
             if (!options.fillMissing) {
-                const std::string what = !std::isfinite(firstMissingValue) ? fmt::format("{}", firstMissingValue)
-                                         : fillF && firstMissingValue == *fillF
-                                             ? fmt::format("{} {:g}", fillValue ? "_FillValue" : "netCDF's default fill value (never written)",
-                                                           *fillValueOrDefault)
-                                             : fmt::format("missing_value {:g}", *missingValue);
+                const double first = report.firstMissingValue;
+                const std::string what =
+                    !std::isfinite(first)       ? fmt::format("{}", first)
+                    : rule.isFill(first)        ? fmt::format("{} {:g}",
+                                                              rule.fillIsDefault
+                                                                  ? "netCDF's default fill value (never written)"
+                                                                  : "_FillValue",
+                                                              *rule.fill)
+                                                : fmt::format("missing_value {:g}", *rule.missing);
                 fail("{}: {}: {} of {} values are missing (fill value, missing_value or NaN/Inf), the first at {}: {}; "
                      "use --fill-missing to replace them by the mean of their radius shell",
-                     path.string(), fileName, missing, n, describeGridPoint(h.grid, firstMissing), what);
+                     path.string(), fileName, missing, n, describeGridPoint(h.grid, report.firstMissing), what);
             }
-            // Replace each missing value by the mean of the valid values on its shell.
-            for (size_t iR = 0; iR < nR; ++iR) {
-                if (missingPerShell[iR] == 0)
-                    continue;
-                double sum = 0;
-                size_t count = 0;
-                for (size_t iLat = 0; iLat < h.grid.nLat(); ++iLat)
-                    for (size_t iLon = 0; iLon < nLon; ++iLon)
-                        if (const float v = field.values[h.grid.index(iLat, iR, iLon)]; !std::isnan(v)) {
-                            sum += v;
-                            ++count;
-                        }
-                if (count == 0)
-                    fail("{}: {}: every value on the shell r = {} km is missing", path.string(), fileName,
-                         h.grid.rKm[iR]);
-                const float mean = static_cast<float>(sum / count);
-                for (size_t iLat = 0; iLat < h.grid.nLat(); ++iLat)
-                    for (size_t iLon = 0; iLon < nLon; ++iLon)
-                        if (float& v = field.values[h.grid.index(iLat, iR, iLon)]; std::isnan(v))
-                            v = mean;
-            }
+            fillMissingByShellMean(h.grid, field.values, fmt::format("{}: {}", path.string(), fileName));
         }
         snapshot.fields.push_back(std::move(field));
     }

@@ -110,6 +110,16 @@ std::vector<std::pair<std::string, int>> announcedArrays(const fs::path& step, c
     return out;
 }
 
+// The mesh's coordinates in km: ASPECT writes SI metres; --radius-units overrides.
+double meshKmPerUnit(const ReaderOptions& options)
+{
+    switch (options.radiusUnits) {
+    case ReaderOptions::RadiusUnits::Km: return 1;
+    case ReaderOptions::RadiusUnits::Nondimensional: return 6371;
+    default: return 1e-3;
+    }
+}
+
 SphericalGrid chooseGrid(const ShellMesh& mesh, const ReaderOptions& options, size_t variables, const fs::path& step)
 {
     if (options.targetGrid)
@@ -139,7 +149,7 @@ FileHeader vtkHeader(const fs::path& step, const ReaderOptions& options)
     if (options.targetGrid) {
         h.grid = *options.targetGrid;
     } else {
-        const ShellMesh mesh = makeShellMesh(std::move(pieces), options.meshKmPerUnit, step.string());
+        const ShellMesh mesh = makeShellMesh(std::move(pieces), meshKmPerUnit(options), step.string());
         h.grid = chooseGrid(mesh, options, h.variables.size(), step);
     }
     return h;
@@ -149,7 +159,7 @@ Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
 {
     std::vector<vtk::Piece> pieces = readPieces(step);
     const std::vector<VtkVariable> variables = vtkVariables(announcedArrays(step, &pieces), step);
-    const ShellMesh mesh = makeShellMesh(std::move(pieces), options.meshKmPerUnit, step.string());
+    const ShellMesh mesh = makeShellMesh(std::move(pieces), meshKmPerUnit(options), step.string());
     Snapshot snap;
     snap.grid = chooseGrid(mesh, options, variables.size(), step);
     checkGridFitsMemory(snap.grid, uint64_t(variables.size() + 1) * snap.grid.cellCount() * sizeof(float),
@@ -174,7 +184,7 @@ Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
                  "--fill-missing to give them the mean of their radius shell",
                  step.string(), counts.missing, counts.points, mesh.cellCount, describeGridPoint(snap.grid, at));
         for (Field& f : snap.fields)
-            fillMissingByShellMean(snap.grid, f, step.string());
+            fillMissingByShellMean(snap.grid, f.values, fmt::format("{}: {}", step.string(), f.name));
     }
     snap.origin = {{"format", "VTK XML (ASPECT layout)"},
                    {"pieces", mesh.pieces.size()},

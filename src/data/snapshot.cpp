@@ -38,24 +38,24 @@ void checkGridFitsMemory(const SphericalGrid& grid, uint64_t neededBytes, const 
              available.limitedBy);
 }
 
-void fillMissingByShellMean(const SphericalGrid& grid, Field& field, const std::string& source)
+void fillMissingByShellMean(const SphericalGrid& grid, std::vector<float>& values, const std::string& what)
 {
     for (size_t iR = 0; iR < grid.nR(); ++iR) {
         double sum = 0;
         size_t count = 0, missing = 0;
         for (size_t iLat = 0; iLat < grid.nLat(); ++iLat)
             for (size_t iLon = 0; iLon < grid.nLon(); ++iLon) {
-                const float v = field.values[grid.index(iLat, iR, iLon)];
+                const float v = values[grid.index(iLat, iR, iLon)];
                 std::isnan(v) ? ++missing : (sum += v, ++count);
             }
         if (missing == 0)
             continue;
         if (count == 0)
-            fail("{}: {}: every value on the shell r = {} km is missing", source, field.name, grid.rKm[iR]);
+            fail("{}: every value on the shell r = {} km is missing", what, grid.rKm[iR]);
         const float mean = static_cast<float>(sum / double(count));
         for (size_t iLat = 0; iLat < grid.nLat(); ++iLat)
             for (size_t iLon = 0; iLon < grid.nLon(); ++iLon)
-                if (float& v = field.values[grid.index(iLat, iR, iLon)]; std::isnan(v))
+                if (float& v = values[grid.index(iLat, iR, iLon)]; std::isnan(v))
                     v = mean;
     }
 }

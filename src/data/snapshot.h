@@ -44,9 +44,10 @@ void checkGridFitsMemory(const SphericalGrid& grid, uint64_t neededBytes, const 
 // in ascending order, e.g. "lat -87.5°, r 3485 km, lon 0° (point 0, 0, 0 of lat, r, lon ascending)".
 std::string describeGridPoint(const SphericalGrid& grid, size_t index);
 
-// Replaces every NaN of `field` by the mean of the other values on its radius shell (--fill-missing).
-// Throws raypc::Error naming `source` and the shell when all of a shell's values are NaN.
-void fillMissingByShellMean(const SphericalGrid& grid, Field& field, const std::string& source);
+// Replaces every NaN of `values` (canonical order) by the mean of the other values on its radius
+// shell (--fill-missing). Throws raypc::Error naming `what` (file and variable) and the shell when all
+// of a shell's values are NaN.
+void fillMissingByShellMean(const SphericalGrid& grid, std::vector<float>& values, const std::string& what);
 
 // Throws raypc::Error if a value of `field` is NaN or infinite, naming `source` (the input
 // file), the field, the first such point and, for a derived field, its inputs' values there.

@@ -301,6 +301,20 @@ reproducible)
   check "dataset.json of runs 1 and 3 byte-identical" cmp "$work/ds1/dataset.json" "$work/ds3/dataset.json"
   check "every file of runs 1 and 2 byte-identical" diff -r --exclude=.lock "$work/ds1" "$work/ds2"
   ;;
+cf_netcdf_options)
+  # --radius-units says what the radius coordinate's numbers are (issue 25, §3; the files are the
+  # reader's CF variants, tests/data/cf-variants, beside the contest layout).
+  cf="$fixture/../cf-variants"
+  expect_error "radius_m_no_units.nc: coordinate 'r' (radius) has no units" info "$cf/radius_m_no_units.nc"
+  expect_error "--radius-units km|m|nondimensional" info "$cf/radius_nondimensional.nc"
+  expect_error "--radius-units: feet not in" info "$cf/radius_m_no_units.nc" --radius-units feet
+  # Read as metres the radii fit; the file then lacks the contest's other variables.
+  expect_error "radius_m_no_units.nc: missing variable 'vy'" info "$cf/radius_m_no_units.nc" --radius-units m
+  expect_error "radius_nondimensional.nc: missing variable 'vy'" info "$cf/radius_nondimensional.nc" \
+    --radius-units nondimensional
+  expect_error "dimension 'time' has length 3" preprocess "$cf/time_three_steps.nc" -o "$work/x"
+  check "no dataset from the refused run" test ! -e "$work/x"
+  ;;
 netcdf_inputs)
   # raypc render FILE.nc…: the files are preprocessed into --dataset first (a later run reuses it);
   # the picture is the one of a dataset preprocessed on its own with the same options.
