@@ -51,7 +51,7 @@ cd "$build"
 excluded='^browser\.|^server\.soak_short$|^server\.Sessions\.(AClientThatDoesNotReadIsClosedAndMemoryStaysBounded|AFrameThatIsNotTakenClosesTheConnection)$|^server\.Descriptors\.|^cli\.(huge_pages|render_memory)$'
 subset=()
 if [[ ${2:-} == --inputs ]]; then
-  subset=(-R '^(NetcdfReader|NetcdfReaderBadInput|VtkXml|VtkXmlBadInput|test_data|NetcdfClassicLayout|Flavours/SynthNetcdf|EncodedDatasets|Preprocess|RenderState|StateSchema|state_schema|ProtocolCodec|QueryParameters|Token|CrossSite|StaticPaths|MimeTypes|protocol|server|cli|fuzz)\.')
+  subset=(-R '^(NetcdfReader|NetcdfReaderBadInput|CfVariants|VtkXml|VtkXmlBadInput|Resample|LagrangeHex|test_data|NetcdfClassicLayout|Flavours/SynthNetcdf|EncodedDatasets|Preprocess|RenderState|StateSchema|state_schema|ProtocolCodec|QueryParameters|Token|CrossSite|StaticPaths|MimeTypes|protocol|server|cli|fuzz)\.')
 fi
 ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:strict_string_checks=1} \
 LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/tests/sanitize/lsan.supp} \
