@@ -50,6 +50,8 @@ json describeFile(const std::filesystem::path& path, const ReaderOptions& option
             j["steps"].push_back({{"source", listing.steps[s].string()},
                                   {"time_myr", listing.timesMyr.empty() ? json(nullptr) : json(listing.timesMyr[s])}});
         j["resampled"] = snap.origin;
+        // How the .pvd's timesteps were read (--time-units).
+        j["time_unit"] = options.myrPerTimeUnit == 1 ? "Myr" : options.myrPerTimeUnit == 1e-6 ? "years" : "seconds";
     }
     j["variables"] = json::array();
     for (size_t i = 0; i < snap.fields.size(); ++i) {
@@ -116,7 +118,9 @@ void printText(const json& j)
         const json& r = j["resampled"];
         fmt::print("{} ({})\n  steps: {}", j["path"].get<std::string>(), j["format"].get<std::string>(), steps.size());
         if (!steps.front()["time_myr"].is_null())
-            fmt::print(" ({:g} .. {:g} Myr)", steps.front()["time_myr"].get<double>(), steps.back()["time_myr"].get<double>());
+            fmt::print(" ({:g} .. {:g} Myr; the collection's times read as {}, see --time-units)",
+                       steps.front()["time_myr"].get<double>(), steps.back()["time_myr"].get<double>(),
+                       j["time_unit"].get<std::string>());
         fmt::print("\n  first step: {} cells in {} pieces, resampled onto {}\n", r["cells"].get<size_t>(),
                    r["pieces"].get<size_t>(), gridLine(j["grid"]));
         const double points = r["grid_points"].get<double>();

@@ -1,14 +1,18 @@
 #include "data/mesh_resample.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -120,6 +124,24 @@ void shapeFunctions(const Cell& cell, const double ref[3], double* value, double
         return;
     }
     case CellType::Hexahedron:
+        if (cell.degree == 1) {
+            // The trilinear hexahedron, VTK's vertex order: (0,0,0) (1,0,0) (1,1,0) (0,1,0), then z = 1.
+            const double X[2] = {1 - x, x}, Y[2] = {1 - y, y}, Z[2] = {1 - z, z};
+            constexpr int corner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                          {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+            for (int n = 0; n < 8; ++n) {
+                const int i = corner[n][0], j = corner[n][1], k = corner[n][2];
+                value[n] = X[i] * Y[j] * Z[k];
+                if (grad) {
+                    const double si = i ? 1 : -1, sj = j ? 1 : -1, sk = k ? 1 : -1;
+                    grad[3 * n] = si * Y[j] * Z[k];
+                    grad[3 * n + 1] = X[i] * sj * Z[k];
+                    grad[3 * n + 2] = X[i] * Y[j] * sk;
+                }
+            }
+            return;
+        }
+        [[fallthrough]];
     case CellType::LagrangeHexahedron: {
         const int p = cell.degree;
         double l[3][11], d[3][11];
@@ -167,12 +189,17 @@ void clampToCell(CellType type, double ref[3])
     }
 }
 
-// Newton's method for the reference coordinates of `target` in `cell`. Returns false when the
-// iteration does not converge (a point far outside a strongly curved cell, a degenerate cell).
-bool invertMap(const Cell& cell, const double target[3], double ref[3], std::vector<double>& value,
+// Newton's method for the reference coordinates of `target` in `cell`, from `ref` when `warm` (a
+// neighbouring point's), else from the cell's centre. Returns false when the iteration does not
+// converge (a point far outside a strongly curved cell, a degenerate cell), or, for a linear cell
+// (nearly affine: the second estimate is close), when after two steps the point lies farther
+// outside than any point that could be snapped.
+bool invertMap(const Cell& cell, const double target[3], double ref[3], bool warm, std::vector<double>& value,
                std::vector<double>& grad)
 {
-    if (cell.type == CellType::Wedge)
+    if (warm)
+        ;
+    else if (cell.type == CellType::Wedge)
         ref[0] = ref[1] = 1.0 / 3, ref[2] = 0.5;
     else if (cell.type == CellType::Tetra)
         ref[0] = ref[1] = ref[2] = 0.25;
@@ -218,6 +245,8 @@ bool invertMap(const Cell& cell, const double target[3], double ref[3], std::vec
             return false;
         if (step < 1e-10)
             return true;
+        if (iteration == 1 && cell.degree == 1 && outsideBy(cell.type, ref) > 2 * kSnapReference)
+            return false;
         if (cell.type == CellType::Tetra)
             return true;  // linear: one step is exact
     }
@@ -255,11 +284,11 @@ struct CellBox {
     std::array<double, 3> lo{}, hi{};  // Cartesian box of the nodes, widened (km)
 };
 
-CellBox boxOf(const Cell& cell, const SphericalGrid& grid)
+CellBox boxOf(const Cell& cell, const SphericalGrid& grid, std::vector<double>& lons)
 {
     double latLo = 90, latHi = -90, rLo = INFINITY, rHi = 0;
     std::array<double, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
-    std::vector<double> lons(size_t(cell.nodeCount));
+    lons.resize(size_t(cell.nodeCount));
     for (int n = 0; n < cell.nodeCount; ++n) {
         const auto& X = cell.nodes[size_t(n)];
         const Spherical s = toSpherical(X);
@@ -269,8 +298,15 @@ CellBox boxOf(const Cell& cell, const SphericalGrid& grid)
         for (int a = 0; a < 3; ++a)
             lo[size_t(a)] = std::min(lo[size_t(a)], X[size_t(a)]), hi[size_t(a)] = std::max(hi[size_t(a)], X[size_t(a)]);
     }
+    // A linear cell lies within its nodes' convex hull, so within their Cartesian box; widened by how
+    // far a grid point on the curved boundary shell may lie outside a flat face between nodes (the
+    // chord's sag, r θ² / 8 for an arc of θ) to be snapped. A Lagrange cell bulges: by a share of itself.
+    const double diagonal = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                      (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    const double theta = diagonal / std::max(rLo, 1.0), sag = rHi * theta * theta / 8;
     for (int a = 0; a < 3; ++a) {
-        const double pad = kBoxPadding * (hi[size_t(a)] - lo[size_t(a)]) + 1e-9;
+        const double extent = hi[size_t(a)] - lo[size_t(a)];
+        const double pad = cell.degree == 1 ? 0.01 * extent + 2 * sag + 1e-6 : kBoxPadding * extent + 1e-6;
         lo[size_t(a)] -= pad, hi[size_t(a)] += pad;
     }
     // Longitudes: the shorter way round; a cell across the seam is taken from below 360° to above it.
@@ -286,7 +322,21 @@ CellBox boxOf(const Cell& cell, const SphericalGrid& grid)
     // Still more than half the circle: the cell surrounds the polar axis; it takes every longitude
     // and reaches the pole on its side.
     const bool aroundAxis = lonHi - lonLo > 180;
-    const double latPad = kBoxPadding * (latHi - latLo) + 1e-9, rPad = kBoxPadding * (rHi - rLo) + 1e-9;
+    // A linear cell's (lat, r, lon) extent beyond its nodes': its edges are great-circle arcs seen from
+    // the centre, which keep within their ends' longitudes and exceed their latitudes by about
+    // θ² tan|lat| / 8 (at most θ / 2); its flat faces sag below the nodes' radii by r θ² / 8. A
+    // Lagrange cell bulges: a share of its extent.
+    double latPad, lonShare, rPadBelow, rPadAbove;
+    if (cell.degree == 1) {
+        const double tanLat = std::tan(std::min(std::max(std::abs(latLo), std::abs(latHi)), 89.9) * kRadPerDeg);
+        latPad = 0.02 * (latHi - latLo) + std::min(theta / 2, theta * theta * tanLat / 8) / kRadPerDeg + 1e-9;
+        lonShare = 0.02;
+        rPadBelow = 0.02 * (rHi - rLo) + 2 * sag + 1e-9, rPadAbove = 0.02 * (rHi - rLo) + 1e-9;
+    } else {
+        latPad = kBoxPadding * (latHi - latLo) + 1e-9;
+        lonShare = kBoxPadding;
+        rPadBelow = rPadAbove = kBoxPadding * (rHi - rLo) + 1e-9;
+    }
     latLo -= latPad, latHi += latPad;
     if (aroundAxis) {
         if (latHi + latLo > 0)
@@ -297,13 +347,13 @@ CellBox boxOf(const Cell& cell, const SphericalGrid& grid)
     CellBox box;
     box.lo = lo, box.hi = hi;
     const auto [lat0, lat1] = indexRange(grid.latDeg, latLo, latHi);
-    const auto [r0, r1] = indexRange(grid.rKm, rLo - rPad, rHi + rPad);
+    const auto [r0, r1] = indexRange(grid.rKm, rLo - rPadBelow, rHi + rPadAbove);
     box.lat0 = uint32_t(lat0), box.lat1 = uint32_t(lat1), box.r0 = uint32_t(r0), box.r1 = uint32_t(r1);
     if (aroundAxis || lonHi - lonLo >= 360) {
         box.lon[0] = {0, uint32_t(grid.nLon())};
         return box;
     }
-    const double lonPad = kBoxPadding * (lonHi - lonLo) + 1e-9;
+    const double lonPad = lonShare * (lonHi - lonLo) + 1e-9;
     lonLo -= lonPad, lonHi += lonPad;
     // [lonLo, lonHi] may reach below 0 or above 360: split at the seam.
     const auto part = [&](double a, double b) {
@@ -368,39 +418,49 @@ ShellMesh makeShellMesh(std::vector<vtk::Piece> pieces, double kmPerUnit, const 
     mesh.kmPerUnit = kmPerUnit;
     mesh.rMinKm = INFINITY;
     mesh.finestArcDeg = INFINITY, mesh.finestRadialKm = INFINITY;
+    // The shell's radii and the finest cell, over every cell's nodes, in parallel.
+    struct Extent {
+        double rMin = INFINITY, rMax = 0, arcDeg = INFINITY, radialKm = INFINITY;
+    };
+    tbb::combinable<Extent> partial;
     for (auto& piece : pieces) {
-        for (double& x : piece.points)
-            x *= kmPerUnit;
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, piece.points.size(), 1 << 16),
+                          [&](const tbb::blocked_range<size_t>& range) {
+                              for (size_t i = range.begin(); i != range.end(); ++i)
+                                  piece.points[i] *= kmPerUnit;
+                          });
         mesh.cellCount += piece.cellCount();
         mesh.pointCount += piece.pointCount();
-        for (size_t pt = 0; pt < piece.pointCount(); ++pt) {
-            const double* p = &piece.points[3 * pt];
-            const double r = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-            mesh.rMinKm = std::min(mesh.rMinKm, r);
-            mesh.rMaxKm = std::max(mesh.rMaxKm, r);
-        }
-        Cell cell;
-        for (size_t c = 0; c < piece.cellCount(); ++c) {
-            cell.gather(piece, c);
-            double latLo = 90, latHi = -90, rLo = INFINITY, rHi = 0, arc = 0;
-            const Spherical first = toSpherical(cell.nodes[0]);
-            for (const auto& X : cell.nodes) {
-                const Spherical s = toSpherical(X);
-                latLo = std::min(latLo, s.latDeg), latHi = std::max(latHi, s.latDeg);
-                rLo = std::min(rLo, s.rKm), rHi = std::max(rHi, s.rKm);
-                // The angle between this node's direction and the first node's.
-                const double dot = (X[0] * cell.nodes[0][0] + X[1] * cell.nodes[0][1] + X[2] * cell.nodes[0][2]) /
-                                   (s.rKm * first.rKm);
-                arc = std::max(arc, std::acos(std::clamp(dot, -1.0, 1.0)) / kRadPerDeg);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, piece.cellCount(), 4096), [&](const tbb::blocked_range<size_t>& range) {
+            Extent& e = partial.local();
+            Cell cell;
+            for (size_t c = range.begin(); c != range.end(); ++c) {
+                cell.gather(piece, c);
+                const auto& first = cell.nodes[0];
+                const double rFirst = std::sqrt(first[0] * first[0] + first[1] * first[1] + first[2] * first[2]);
+                double rLo = INFINITY, rHi = 0, arc = 0;
+                for (const auto& X : cell.nodes) {
+                    const double r = std::sqrt(X[0] * X[0] + X[1] * X[1] + X[2] * X[2]);
+                    rLo = std::min(rLo, r), rHi = std::max(rHi, r);
+                    // The angle between this node's direction and the first node's.
+                    const double dot = (X[0] * first[0] + X[1] * first[1] + X[2] * first[2]) / (r * rFirst);
+                    arc = std::max(arc, std::acos(std::clamp(dot, -1.0, 1.0)) / kRadPerDeg);
+                }
+                e.rMin = std::min(e.rMin, rLo), e.rMax = std::max(e.rMax, rHi);
+                // A cell's arc between its farthest nodes is about √2 (a face's diagonal) to √3 times
+                // its edge; the radial extent is one edge when the cell's radial edges are radial.
+                if (arc > 0)
+                    e.arcDeg = std::min(e.arcDeg, arc / std::sqrt(2.0) / cell.degree);
+                if (rHi > rLo)
+                    e.radialKm = std::min(e.radialKm, (rHi - rLo) / cell.degree);
             }
-            // A cell's arc between its farthest nodes is about √2 (a face's diagonal) to √3 times its
-            // edge; the radial extent is one edge when the cell's radial edges are radial.
-            if (arc > 0)
-                mesh.finestArcDeg = std::min(mesh.finestArcDeg, arc / std::sqrt(2.0) / cell.degree);
-            if (rHi > rLo)
-                mesh.finestRadialKm = std::min(mesh.finestRadialKm, (rHi - rLo) / cell.degree);
-        }
+        });
     }
+    partial.combine_each([&](const Extent& e) {
+        mesh.rMinKm = std::min(mesh.rMinKm, e.rMin), mesh.rMaxKm = std::max(mesh.rMaxKm, e.rMax);
+        mesh.finestArcDeg = std::min(mesh.finestArcDeg, e.arcDeg);
+        mesh.finestRadialKm = std::min(mesh.finestRadialKm, e.radialKm);
+    });
     if (mesh.cellCount == 0)
         fail("{}: the mesh has no cells", what);
     if (!(mesh.rMinKm >= 3000 && mesh.rMaxKm <= 7000 && mesh.rMaxKm > mesh.rMinKm))
@@ -460,6 +520,7 @@ std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const Sp
         }
     }
 
+    const auto start = std::chrono::steady_clock::now();
     // Every cell's candidate box, then the cells of each lat row.
     struct CellRef {
         uint32_t piece;
@@ -473,9 +534,10 @@ std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const Sp
     std::vector<CellBox> boxes(cells.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, cells.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
         Cell cell;
+        std::vector<double> lons;
         for (size_t i = range.begin(); i != range.end(); ++i) {
             cell.gather(mesh.pieces[cells[i].piece], cells[i].cell);
-            boxes[i] = boxOf(cell, grid);
+            boxes[i] = boxOf(cell, grid, lons);
         }
     });
     std::vector<size_t> rowStart(grid.nLat() + 1, 0);
@@ -492,6 +554,7 @@ std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const Sp
                 rowCells[fill[row]++] = uint32_t(i);
     }
 
+    const double boxSeconds = secondsSince(start);
     std::vector<std::vector<float>> out(arrays.size(), std::vector<float>(grid.cellCount(), NAN));
     std::vector<double> cosLon(grid.nLon()), sinLon(grid.nLon());
     for (size_t i = 0; i < grid.nLon(); ++i)
@@ -503,13 +566,14 @@ std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const Sp
         const size_t rowPoints = grid.nR() * grid.nLon();
         std::vector<float> best(rowPoints, INFINITY);  // how far outside the best cell so far (0: inside)
         Cell cell;
-        std::vector<double> value, grad;
+        std::vector<double> value, grad, nodeValues;
         const double cosLat = std::cos(grid.latDeg[row] * kRadPerDeg), sinLat = std::sin(grid.latDeg[row] * kRadPerDeg);
         for (size_t k = rowStart[row]; k < rowStart[row + 1]; ++k) {
             const size_t i = rowCells[k];
             const CellBox& box = boxes[i];
             const vtk::Piece& piece = mesh.pieces[cells[i].piece];
-            bool gathered = false;
+            bool gathered = false, warm = false;
+            double warmRef[3] = {0, 0, 0};
             for (uint32_t iR = box.r0; iR < box.r1; ++iR) {
                 const double r = grid.rKm[iR];
                 for (const auto& [lon0, lon1] : box.lon)
@@ -523,11 +587,25 @@ std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const Sp
                             continue;
                         if (!gathered) {
                             cell.gather(piece, cells[i].cell);
+                            // The cell's values of every array, node by node, gathered once.
+                            nodeValues.resize(arrays.size() * size_t(cell.nodeCount));
+                            for (size_t a = 0; a < arrays.size(); ++a) {
+                                const vtk::PointArray& src = *sources[cells[i].piece][a];
+                                const size_t stride = size_t(src.components),
+                                             component = size_t(std::max(arrays[a].component, 0));
+                                for (int n = 0; n < cell.nodeCount; ++n)
+                                    nodeValues[a * size_t(cell.nodeCount) + size_t(n)] =
+                                        src.values[cell.pointIndex(n) * stride + component];
+                            }
                             gathered = true;
                         }
-                        double ref[3];
-                        if (!invertMap(cell, target, ref, value, grad))
+                        double ref[3] = {warmRef[0], warmRef[1], warmRef[2]};
+                        if (!invertMap(cell, target, ref, warm, value, grad))
                             continue;
+                        if (outsideBy(cell.type, ref) <= kSnapReference) {
+                            std::copy(ref, ref + 3, warmRef);
+                            warm = true;
+                        }
                         double outside = outsideBy(cell.type, ref);
                         if (outside <= kInsideTolerance)
                             outside = 0;
@@ -539,11 +617,10 @@ std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const Sp
                         shapeFunctions(cell, ref, value.data(), nullptr);
                         const size_t index = grid.index(row, iR, iLon);
                         for (size_t a = 0; a < arrays.size(); ++a) {
-                            const vtk::PointArray& src = *sources[cells[i].piece][a];
-                            const size_t stride = size_t(src.components), component = size_t(std::max(arrays[a].component, 0));
+                            const double* v = &nodeValues[a * size_t(cell.nodeCount)];
                             double sum = 0;
                             for (int n = 0; n < cell.nodeCount; ++n)
-                                sum += value[size_t(n)] * src.values[cell.pointIndex(n) * stride + component];
+                                sum += value[size_t(n)] * v[n];
                             out[a][index] = float(sum);
                         }
                     }
@@ -555,6 +632,8 @@ std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const Sp
         std::lock_guard lock(countMutex);
         total.inside += local.inside, total.snapped += local.snapped, total.missing += local.missing;
     });
+    spdlog::debug("{}: {} candidate boxes in {:.2f} s ({} cell rows), points located in {:.2f} s", what, cells.size(),
+                  boxSeconds, rowCells.size(), secondsSince(start) - boxSeconds);
     if (counts)
         *counts = total;
     return out;

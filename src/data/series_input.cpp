@@ -1,5 +1,6 @@
 #include "data/series_input.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/strings.h"
 #include "core/system_memory.h"
@@ -12,6 +13,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <system_error>
@@ -157,7 +159,9 @@ FileHeader vtkHeader(const fs::path& step, const ReaderOptions& options)
 
 Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
 {
+    const auto start = std::chrono::steady_clock::now();
     std::vector<vtk::Piece> pieces = readPieces(step);
+    const double readSeconds = secondsSince(start);
     const std::vector<VtkVariable> variables = vtkVariables(announcedArrays(step, &pieces), step);
     const ShellMesh mesh = makeShellMesh(std::move(pieces), meshKmPerUnit(options), step.string());
     Snapshot snap;
@@ -169,6 +173,8 @@ Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
         arrays.push_back(v.source);
     ResampleCounts counts;
     std::vector<std::vector<float>> values = resampleOntoGrid(mesh, snap.grid, arrays, step.string(), &counts);
+    spdlog::debug("{}: {} cells read in {:.2f} s, resampled onto {}x{}x{} in {:.2f} s", step.string(), mesh.cellCount,
+                  readSeconds, snap.grid.nLat(), snap.grid.nR(), snap.grid.nLon(), secondsSince(start) - readSeconds);
     for (size_t a = 0; a < variables.size(); ++a) {
         Field field{variables[a].name, variables[a].units, std::move(values[a])};
         if (variables[a].source.name == "velocity")

@@ -429,7 +429,7 @@ PY
   check "a rendered picture" test -s "$work/amr.png"
   "$raypc" info "$aspect/shell-lagrange/solution.pvd" --time-units seconds >"$work/lag.txt"
   check "info of a .pvd names the resampling: $(sed -n 3,4p "$work/lag.txt")" grep -q "768 cells in 2 pieces, resampled onto 32 x 9 x 64" "$work/lag.txt"
-  check "--time-units seconds" grep -q "steps: 2 (0 .. 6.3376[0-9]*e-08 Myr)" "$work/lag.txt"
+  check "--time-units seconds" grep -q "steps: 2 (0 .. 6.3376[0-9]*e-08 Myr; the collection's times read as seconds, see --time-units)" "$work/lag.txt"
   printf '<VTKFile type="Collection"><Collection><DataSet timestep="0" file="gone/solution-00000.pvtu"/></Collection></VTKFile>' >"$work/bad.pvd"
   expect_error "which does not exist" preprocess "$work/bad.pvd" -o "$work/bad"
   expect_error "--time-units 'days'" preprocess "$aspect/shell-amr" -o "$work/bad" --time-units days

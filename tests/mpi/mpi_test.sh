@@ -150,6 +150,17 @@ preprocess)
   check "step 7's temperature holds 24x31x48 u16 values" \
     test "$(stat -c %s "$work/ds3/steps/0007/L0/temperature.u16")" -eq $((24 * 31 * 48 * 2))
   ;;
+preprocess_aspect)
+  # Issue 25: an ASPECT series (deal.II's files, tests/data/aspect-layout) resampled on 2 ranks, the
+  # steps shared out as for netCDF: the same dataset as one process's.
+  series=$(cd "$(dirname "$0")/../data/aspect-layout/shell-lagrange" && pwd)
+  "$raypc" preprocess "$series" -o "$work/ds1" --quiet --sample-rows 2000 >/dev/null
+  ranks 2 preprocess "$series" -o "$work/ds2" --quiet --sample-rows 2000 >"$work/out2" 2>&1
+  status=$?
+  check "preprocess of an ASPECT series on 2 ranks exits 0: $(cat "$work/out2")" test "$status" -eq 0
+  check "on 2 ranks: the same files as one process's" same_tree "$work/ds1" "$work/ds2"
+  check "both steps, resampled" test "$(grep -c '"origin"' "$work/ds2/dataset.json")" -ge 2
+  ;;
 preprocess_resume)
   "$raypc" synth -o "$work/nc" --steps 8 --grid 24x31x48 >/dev/null 2>&1
   "$raypc" preprocess "$work/nc" -o "$work/ds1" --quiet --sample-rows 2000 >/dev/null
