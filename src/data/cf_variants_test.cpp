@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "data/dataset.h"
 #include "data/netcdf_reader.h"
+#include "data/series_input.h"
 #include "data/preprocess.h"
 #include "data/test_util.h"
 
@@ -155,12 +156,35 @@ TEST(CfVariants, UnlimitedTimeDimensionOfLengthOne)
     expectMatchesTruth("time_unlimited_nc4");  // compressed netCDF-4, dims (time, lon, lat, r), lat descending
 }
 
-TEST(CfVariants, TimeDimensionLongerThanOneIsRefused)
+// A time dimension longer than 1: the file is that many steps, FILE#K, each read from its own
+// hyperslab (step k holds the values + 100 k).
+TEST(CfVariants, ATimeDimensionLongerThanOneIsASeriesOfSteps)
 {
     const auto& v = variant("time_three_steps");
-    expectRefused(fileOf("time_three_steps"), optionsOf("time_three_steps"),
-                  {"time_three_steps.nc", "temperature", fmt::format("'{}'", v["dimension"].get<std::string>()),
-                   fmt::format("length {}", v["length"].get<int>()), "one step per file"});
+    const fs::path file = fileOf("time_three_steps");
+    const ReaderOptions options = optionsOf("time_three_steps");
+    EXPECT_EQ(readHeader(file, options).steps, 3u);
+    const SeriesListing listing = listSeries({file}, options);
+    ASSERT_EQ(listing.steps.size(), v["length"].get<size_t>());
+    EXPECT_FALSE(listing.vtk);
+    EXPECT_EQ(listing.steps[2].filename().string(), "time_three_steps.nc#2");
+    const Snapshot first = readStep(listing.steps[0], options);
+    const Snapshot one = readSnapshot(fileOf("time_unlimited"), optionsOf("time_unlimited"));
+    ASSERT_TRUE(first.grid.sameAs(one.grid));
+    for (size_t f = 0; f < first.fields.size(); ++f)
+        for (size_t i = 0; i < first.fields[f].values.size(); ++i)
+            ASSERT_NEAR(first.fields[f].values[i], one.fields[f].values[i], 1e-3) << first.fields[f].name << " " << i;
+    for (size_t k = 1; k < listing.steps.size(); ++k) {
+        const Snapshot step = readStep(listing.steps[k], options);
+        for (size_t f = 0; f < step.fields.size(); ++f)
+            for (size_t i = 0; i < step.fields[f].values.size(); ++i)
+                ASSERT_NEAR(step.fields[f].values[i] - first.fields[f].values[i],
+                            v["step_offset"].get<double>() * double(k), 1e-3)
+                    << "step " << k << " " << step.fields[f].name << " " << i;
+    }
+    ReaderOptions beyond = options;
+    beyond.timeIndex = 3;
+    expectRefused(file, beyond, {"time_three_steps.nc", "step 3 of a file holding 3"});
 }
 
 // 2. Doubles are read as doubles; packed values are unpacked in double.

@@ -509,12 +509,16 @@ OpenedHeader readAxes(const NcFile& file, const ReaderOptions& options)
 struct VariableLayout {
     int id = -1;
     std::array<size_t, 3> stride{};
+    // The hyperslab of one step, in the file's dim order: the whole grid, `timeIndex` of the time dim.
+    std::vector<size_t> start, count;
+    size_t steps = 1;  // the time dim's length (1 without one)
 };
 
 // Checks that the variable exists, is numeric and has the three grid dims in any order, and besides
-// them only dims of length 1 (one time step: CF files often have (time, lat, r, lon)).
+// them dims of length 1 and at most one longer (CF's time, (time, lat, r, lon): a series in one file,
+// of which step `timeIndex` is read).
 VariableLayout checkVariable(const NcFile& file, const OpenedHeader& h, const std::string& canonicalName,
-                             const std::string& fileName)
+                             const std::string& fileName, size_t timeIndex)
 {
     const auto id = file.findVar(fileName);
     if (!id) {
@@ -548,24 +552,37 @@ VariableLayout checkVariable(const NcFile& file, const OpenedHeader& h, const st
     }
     VariableLayout layout;
     layout.id = *id;
-    // Element strides in the file's dim order (last dim fastest); other dims have length 1.
+    layout.start.assign(dims.size(), 0);
+    layout.count.assign(dims.size(), 1);
+    // Element strides of one step in the file's dim order (last dim fastest); other dims count 1.
     size_t s = 1;
+    std::optional<size_t> timeDim;
     for (size_t i = dims.size(); i-- > 0;) {
         if (axisOfDim[i]) {
             layout.stride[*axisOfDim[i]] = s;
-            s *= h.axes[*axisOfDim[i]].fileValues.size();
+            layout.count[i] = h.axes[*axisOfDim[i]].fileValues.size();
+            s *= layout.count[i];
             continue;
         }
         const size_t length = file.dimLength(dims[i]);
         if (length == 0)
             fail("{}: {}: dims {}: dimension '{}' has length 0, the file holds no step", file.path().string(),
                  fileName, describe(), file.dimName(dims[i]));
-        if (length != 1)
-            fail("{}: {}: dims {}: dimension '{}' has length {}; RayPC reads one step per file (the grid's dims {} "
-                 "and dims of length 1): split the file, e.g. with NCO's ncks -d {},K,K",
-                 file.path().string(), fileName, describe(), file.dimName(dims[i]), length, gridDims,
-                 file.dimName(dims[i]));
+        if (length == 1)
+            continue;
+        if (timeDim)
+            fail("{}: {}: dims {}: dimensions '{}' and '{}' both have more than one entry; besides the grid's dims {} "
+                 "RayPC reads one dimension of steps (time)",
+                 file.path().string(), fileName, describe(), file.dimName(dims[i]), file.dimName(dims[*timeDim]),
+                 gridDims);
+        timeDim = i;
+        layout.steps = length;
+        if (timeIndex >= length)
+            fail("{}: {}: step {} of a file holding {} (dimension '{}')", file.path().string(), fileName, timeIndex,
+                 length, file.dimName(dims[i]));
+        layout.start[i] = timeIndex;
     }
+
     int type = 0;
     file.check(nc_inq_vartype(file.id(), *id, &type), "reading a variable type");
     if (type == NC_CHAR || type == NC_STRING)
@@ -604,16 +621,18 @@ bool readsAsDouble(const NcFile& file, int varId)
     return type == NC_DOUBLE || type == NC_INT || type == NC_UINT || type == NC_INT64 || type == NC_UINT64;
 }
 
-void readValues(const NcFile& file, int varId, const std::string& fileName, float* out)
+void readValues(const NcFile& file, const VariableLayout& layout, const std::string& fileName, float* out)
 {
-    if (const int status = nc_get_var_float(file.id(), varId, out); status != NC_NOERR)
+    if (const int status = nc_get_vara_float(file.id(), layout.id, layout.start.data(), layout.count.data(), out);
+        status != NC_NOERR)
         fail("{}: {}: cannot read the values ({}); the file may be truncated or damaged", file.path().string(),
              fileName, errorText(status));
 }
 
-void readValues(const NcFile& file, int varId, const std::string& fileName, double* out)
+void readValues(const NcFile& file, const VariableLayout& layout, const std::string& fileName, double* out)
 {
-    if (const int status = nc_get_var_double(file.id(), varId, out); status != NC_NOERR)
+    if (const int status = nc_get_vara_double(file.id(), layout.id, layout.start.data(), layout.count.data(), out);
+        status != NC_NOERR)
         fail("{}: {}: cannot read the values ({}); the file may be truncated or damaged", file.path().string(),
              fileName, errorText(status));
 }
@@ -765,9 +784,16 @@ FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& op
     header.format = file.formatName();
     for (const auto& name : requestedVariables(options)) {
         const auto fileName = fileNameOf(options, name);
-        const auto layout = checkVariable(file, h, name, fileName);
+        const auto layout = checkVariable(file, h, name, fileName, options.timeIndex);
         header.variables.push_back({name, fileName, file.textAttribute(layout.id, "units").value_or("")});
+        // Variables without the time dimension (constant in time) are read for every step.
+        if (layout.steps > 1 && header.steps > 1 && layout.steps != header.steps)
+            fail("{}: {} has {} steps, {} has {}: the variables' time dimensions differ", path.string(), fileName,
+                 layout.steps, header.variables.front().fileName, header.steps);
+        header.steps = std::max(header.steps, layout.steps);
     }
+    if (options.timeIndex >= header.steps)
+        fail("{}: step {} of a file holding {}", path.string(), options.timeIndex, header.steps);
     return header;
 }
 
@@ -788,10 +814,15 @@ Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& op
     size_t bufferBytesPerValue = sizeof(float);
     for (const auto& name : requested) {
         const auto fileName = fileNameOf(options, name);
-        layouts.emplace_back(fileName, checkVariable(file, h, name, fileName));
+        layouts.emplace_back(fileName, checkVariable(file, h, name, fileName, options.timeIndex));
         if (readsAsDouble(file, layouts.back().second.id))
             bufferBytesPerValue = sizeof(double);
     }
+    size_t steps = 1;
+    for (const auto& l : layouts)
+        steps = std::max(steps, l.second.steps);
+    if (options.timeIndex >= steps)
+        fail("{}: step {} of a file holding {}", path.string(), options.timeIndex, steps);
     // The fields and one variable's buffer in file order.
     checkGridFitsMemory(h.grid, requested.size() * fileCount * sizeof(float) + fileCount * bufferBytesPerValue,
                         path.string(), "read", availableMemory());
@@ -811,12 +842,12 @@ Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& op
         if (readsAsDouble(file, layout.id)) {
             std::vector<float>().swap(floatBuffer);
             doubleBuffer.resize(fileCount);
-            readValues(file, layout.id, fileName, doubleBuffer.data());
+            readValues(file, layout, fileName, doubleBuffer.data());
             report = toCanonical(doubleBuffer, h, layout, rule, field.values);
         } else {
             std::vector<double>().swap(doubleBuffer);
             floatBuffer.resize(fileCount);
-            readValues(file, layout.id, fileName, floatBuffer.data());
+            readValues(file, layout, fileName, floatBuffer.data());
             report = toCanonical(floatBuffer, h, layout, rule, field.values);
         }
         if (report.firstBeyondFloat < n)

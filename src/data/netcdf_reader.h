@@ -50,6 +50,9 @@ struct ReaderOptions {
     // The others override the attribute; Nondimensional: fractions of Earth's radius (6371 km).
     enum class RadiusUnits { FromFile, Km, M, Nondimensional };
     RadiusUnits radiusUnits = RadiusUnits::FromFile;
+    // The step to read of a file holding several (a dimension besides the grid's longer than 1,
+    // CF's time): 0 .. FileHeader::steps - 1.
+    size_t timeIndex = 0;
 
     // VTK XML series (ASPECT's output; series_input.h), whose coordinates are metres unless
     // radiusUnits says otherwise:
@@ -68,6 +71,7 @@ struct FileHeader {
     };
     std::vector<Variable> variables;  // the ones requested, all present
     std::string format;  // "classic", "64-bit offset", "netCDF-4", "VTK XML (ASPECT layout)", ...
+    size_t steps = 1;    // steps in the file: the length of its time dimension (1 without one)
 };
 
 // Reads coordinates and checks that every requested variable exists with the right dims.

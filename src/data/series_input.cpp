@@ -203,6 +203,25 @@ Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
     return snap;
 }
 
+// A step of a netCDF file holding several: "FILE#K" names step K (from 0) of FILE (listSeries).
+struct NetcdfStep {
+    fs::path file;
+    size_t index = 0;
+};
+
+NetcdfStep netcdfStep(const fs::path& step)
+{
+    const std::string text = step.string();
+    const size_t hash = text.rfind('#');
+    if (hash == std::string::npos || hash + 1 == text.size() ||
+        text.find_first_not_of("0123456789", hash + 1) != std::string::npos)
+        return {step, 0};
+    std::error_code ec;
+    if (fs::exists(step, ec))  // a file whose name ends in #digits
+        return {step, 0};
+    return {text.substr(0, hash), size_t(std::stoull(text.substr(hash + 1)))};
+}
+
 }  // namespace
 
 bool isVtkStep(const fs::path& step)
@@ -278,18 +297,37 @@ SeriesListing listSeries(const std::vector<fs::path>& args, const ReaderOptions&
             });
         return out;
     }
-    out.steps = listSnapshotFiles(netcdf);
+    // A file whose variables have a time dimension longer than 1 holds that many steps: FILE#0, FILE#1, …
+    for (const fs::path& file : listSnapshotFiles(netcdf)) {
+        const size_t steps = readHeader(file, options).steps;
+        if (steps == 1) {
+            out.steps.push_back(file);
+            continue;
+        }
+        for (size_t k = 0; k < steps; ++k)
+            out.steps.push_back(file.string() + "#" + std::to_string(k));
+    }
     return out;
 }
 
 FileHeader readStepHeader(const fs::path& step, const ReaderOptions& options)
 {
-    return isVtkStep(step) ? vtkHeader(step, options) : readHeader(step, options);
+    if (isVtkStep(step))
+        return vtkHeader(step, options);
+    const auto [file, index] = netcdfStep(step);
+    ReaderOptions o = options;
+    o.timeIndex = index;
+    return readHeader(file, o);
 }
 
 Snapshot readStep(const fs::path& step, const ReaderOptions& options)
 {
-    return isVtkStep(step) ? vtkSnapshot(step, options) : readSnapshot(step, options);
+    if (isVtkStep(step))
+        return vtkSnapshot(step, options);
+    const auto [file, index] = netcdfStep(step);
+    ReaderOptions o = options;
+    o.timeIndex = index;
+    return readSnapshot(file, o);
 }
 
 }  // namespace raypc

@@ -28,7 +28,8 @@ struct SeriesListing {
 };
 
 // Expands the arguments into steps: netCDF files and directories of *.nc (natural order, as
-// listSnapshotFiles); a .pvd collection (its steps in time order, with their times); a directory
+// listSnapshotFiles; a file whose variables have a time dimension longer than 1 is that many steps,
+// named FILE#0, FILE#1, … in messages and manifests); a .pvd collection (its steps in time order, with their times); a directory
 // holding solution.pvd (ASPECT's output directory) or exactly one .pvd; .pvtu records or .vtu
 // pieces given one by one (natural order). Throws raypc::Error naming an argument that is none of
 // these, a .pvd naming a missing file, or a mix of netCDF and VTK inputs.

@@ -124,7 +124,9 @@ def write(path, layout, values=None, edit=None, skip=(), extra=None):
             data = data[np.ix_(index["lat"], index["r"], index["lon"])]
             data = np.transpose(data, [axes[a] for a in layout.order])
             if layout.time:
-                data = np.broadcast_to(data, (layout.time[0],) + data.shape)
+                # Step k holds the values + 100 k (in stored numbers), so that a reader that takes
+                # the wrong step shows.
+                data = np.stack([data + 100.0 * k for k in range(layout.time[0])])
             file_name = layout.var_names.get(name, name)
             var_type = layout.types[name]
             kwargs = {"zlib": True, "complevel": 4} if layout.compress else {}
@@ -189,7 +191,8 @@ def write_variants(out):
     variants["time_unlimited_nc4"] = accepted("time_unlimited_nc4.nc")
     # Three steps in one file: refused, naming the dimension and its length.
     write(os.path.join(out, "time_three_steps.nc"), Layout(time=(3, True)))
-    variants["time_three_steps"] = {"file": "time_three_steps.nc", "dimension": "time", "length": 3}
+    variants["time_three_steps"] = {"file": "time_three_steps.nc", "dimension": "time", "length": 3,
+                                    "step_offset": 100.0}
 
     # 2. Doubles: a _FillValue of 1e300 in three cells (read with --fill-missing: the shell's mean), and
     # a value of 1e39, beyond float32, in one cell.
