@@ -298,8 +298,14 @@ SeriesListing listSeries(const std::vector<fs::path>& args, const ReaderOptions&
         return out;
     }
     // A file whose variables have a time dimension longer than 1 holds that many steps: FILE#0, FILE#1, …
+    // A file that cannot be read counts one step here: its error comes when the step is read (a
+    // served series shows its first steps while a later file is bad).
     for (const fs::path& file : listSnapshotFiles(netcdf)) {
-        const size_t steps = readHeader(file, options).steps;
+        size_t steps = 1;
+        try {
+            steps = readHeader(file, options).steps;
+        } catch (const Error&) {
+        }
         if (steps == 1) {
             out.steps.push_back(file);
             continue;
