@@ -229,6 +229,51 @@ TEST(Resample, LagrangeCellsReproduceTheirPolynomialsExactly)
     }
 }
 
+// A tetrahedron and a wedge (VTK types 10 and 13, which ASPECT does not write but other deal.II
+// and VTK writers do) carrying a linear field f = 2x - y + 3z (km): every grid point inside takes f
+// exactly (the points snapped to their faces from outside take it at the face).
+TEST(Resample, TetrahedraAndWedgesReproduceLinearFieldsExactly)
+{
+    const auto fOf = [](double x, double y, double z) { return 2 * x - y + 3 * z; };
+    const std::vector<std::array<double, 3>> tet = {{5000, -300, -300}, {5600, -300, -300}, {5000, 300, -300}, {5000, -300, 300}};
+    const std::vector<std::array<double, 3>> wedge = {{5000, -300, -300}, {5600, -300, -300}, {5000, 300, -300},
+                                                      {5000, -300, 300},  {5600, -300, 300},  {5000, 300, 300}};
+    for (const auto& [type, nodes] : {std::pair{vtk::CellType::Tetra, tet}, std::pair{vtk::CellType::Wedge, wedge}}) {
+        SCOPED_TRACE(int(type));
+        vtk::Piece piece;
+        vtk::PointArray f{"f", 1, {}};
+        for (size_t n = 0; n < nodes.size(); ++n) {
+            for (int a = 0; a < 3; ++a)
+                piece.points.push_back(nodes[n][size_t(a)] * 1e3);
+            f.values.push_back(float(fOf(nodes[n][0], nodes[n][1], nodes[n][2])));
+            piece.connectivity.push_back(int64_t(n));
+        }
+        piece.offsets.push_back(int64_t(nodes.size()));
+        piece.types.push_back(type);
+        piece.pointData.push_back(f);
+        std::vector<vtk::Piece> pieces;
+        pieces.push_back(std::move(piece));
+        const ShellMesh mesh = makeShellMesh(std::move(pieces), 1e-3, "one cell");
+        const SphericalGrid grid = resampleGrid(mesh, 180, 12, 360);
+        ResampleCounts counts;
+        const auto values = resampleOntoGrid(mesh, grid, {{"f", -1}}, "one cell", &counts);
+        size_t exact = 0;
+        for (size_t iLat = 0; iLat < grid.nLat(); ++iLat)
+            for (size_t iR = 0; iR < grid.nR(); ++iR)
+                for (size_t iLon = 0; iLon < grid.nLon(); ++iLon) {
+                    const float v = values[0][grid.index(iLat, iR, iLon)];
+                    if (std::isnan(v))
+                        continue;
+                    const double lat = degToRad(grid.latDeg[iLat]), lon = degToRad(grid.lonDeg[iLon]), r = grid.rKm[iR];
+                    const double expected = fOf(r * std::cos(lat) * std::cos(lon), r * std::cos(lat) * std::sin(lon),
+                                                r * std::sin(lat));
+                    exact += std::abs(v - expected) < 1e-6 * 1e4;
+                }
+        EXPECT_GT(counts.inside, 20u);
+        EXPECT_GE(exact, counts.inside) << "a point inside the cell took another value than f";
+    }
+}
+
 // A grid chosen by --grid: any sizes; a coarse one samples the same fields.
 TEST(Resample, AChosenGridIsUsed)
 {
