@@ -104,6 +104,17 @@ void compareWithTruth(const Snapshot& snap, const ShellTruth& truth, double year
             }
 }
 
+// Point array "f" of a piece of one cell (km × 1e3, as metres), resampled onto a 180x12x360 grid over
+// the cell's radii (returned in `grid`).
+std::vector<std::vector<float>> resampleOneCell(vtk::Piece piece, SphericalGrid& grid, ResampleCounts& counts)
+{
+    std::vector<vtk::Piece> pieces;
+    pieces.push_back(std::move(piece));
+    const ShellMesh mesh = makeShellMesh(std::move(pieces), 1e-3, "one cell");
+    grid = resampleGrid(mesh, 180, 12, 360);
+    return resampleOntoGrid(mesh, grid, {{"f", -1}}, "one cell", &counts);
+}
+
 TEST(LagrangeHex, VtkNumberingIsABijectionWithTheVerticesFirst)
 {
     for (int p = 1; p <= 5; ++p) {
@@ -199,12 +210,9 @@ TEST(Resample, LagrangeCellsReproduceTheirPolynomialsExactly)
         piece.offsets.push_back(n);
         piece.types.push_back(vtk::CellType::LagrangeHexahedron);
         piece.pointData.push_back(f);
-        std::vector<vtk::Piece> pieces;
-        pieces.push_back(std::move(piece));
-        const ShellMesh mesh = makeShellMesh(std::move(pieces), 1e-3, "one cell");
-        const SphericalGrid grid = resampleGrid(mesh, 180, 12, 360);
+        SphericalGrid grid;
         ResampleCounts counts;
-        const auto values = resampleOntoGrid(mesh, grid, {{"f", -1}}, "one cell", &counts);
+        const auto values = resampleOneCell(std::move(piece), grid, counts);
         size_t checked = 0;
         double worst = 0;
         for (size_t iLat = 0; iLat < grid.nLat(); ++iLat)
@@ -251,12 +259,9 @@ TEST(Resample, TetrahedraAndWedgesReproduceLinearFieldsExactly)
         piece.offsets.push_back(int64_t(nodes.size()));
         piece.types.push_back(type);
         piece.pointData.push_back(f);
-        std::vector<vtk::Piece> pieces;
-        pieces.push_back(std::move(piece));
-        const ShellMesh mesh = makeShellMesh(std::move(pieces), 1e-3, "one cell");
-        const SphericalGrid grid = resampleGrid(mesh, 180, 12, 360);
+        SphericalGrid grid;
         ResampleCounts counts;
-        const auto values = resampleOntoGrid(mesh, grid, {{"f", -1}}, "one cell", &counts);
+        const auto values = resampleOneCell(std::move(piece), grid, counts);
         size_t exact = 0;
         for (size_t iLat = 0; iLat < grid.nLat(); ++iLat)
             for (size_t iR = 0; iR < grid.nR(); ++iR)
