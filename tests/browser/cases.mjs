@@ -793,6 +793,54 @@ const cases = {
     check(JSON.stringify(await rState(page)) === JSON.stringify(stateA), 'a refused state file changed the state');
   },
 
+  // Issue 26, items 2 and 3: a state saved on a longer series (step 99 on this one) is clamped to
+  // the last step with a note and asks for no sample in a loop; a state the server refuses (an
+  // unknown brush variable, min > max) changes nothing, sends nothing and shows no figure of its own.
+  async load_checks({ context, url, tmp }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const last = (await info(url)).steps.length - 1;
+    const start = await rState(page);
+    let samples = 0;
+    page.on('request', (r) => { if (r.url().includes('api/sample')) samples++; });
+    const far = join(tmp, 'far.json');
+    writeFileSync(far, JSON.stringify({ ...start, step: 99 }));
+    await page.setInputFiles('#load', far);
+    await page.waitForFunction(() => /written for step 99/.test(document.getElementById('status').textContent), null, { timeout: 10000 })
+      .catch(async () => { throw new TestFailure(`no note of the clamped step; status '${await page.textContent('#status')}'`); });
+    await waitConverged(page);
+    const clamped = await rState(page);
+    check(clamped.step === last, `a state of step 99 shows step ${clamped.step}, expected the last, ${last}`);
+    const label = await page.textContent('#stepLabel');
+    check(label.startsWith(`step ${last} of`), `the step label after loading step 99: '${label}'`);
+    const headerStep = await page.evaluate(() => window.__raypc.headers[window.__raypc.headers.length - 1].step);
+    check(headerStep === last, `the picture shows step ${headerStep}, expected ${last}`);
+    samples = 0;
+    await page.waitForTimeout(2000);
+    check(samples <= 1, `${samples} sample requests in the 2 s after loading (a retry loop?)`);
+
+    const before = await rState(page);
+    for (const [name, brushes, expect] of [
+      ['unknown.json', [{ name: 'pressure', min: 0, max: 1 }], /pressure/],
+      ['reversed.json', [{ name: 'depth', min: 700, max: 600 }], /min|max/],
+    ]) {
+      const file = join(tmp, name);
+      writeFileSync(file, JSON.stringify({ ...before, brushes }));
+      const sentBefore = await page.evaluate(() => window.__raypc.lastSentId);
+      const errorsBefore = await page.evaluate(() => window.__raypc.errors.length);
+      await page.setInputFiles('#load', file);
+      await page.waitForFunction((n) => window.__raypc.errors.length > n, errorsBefore, { timeout: 10000 })
+        .catch(() => { throw new TestFailure(`loading ${name} showed no error`); });
+      const msg = await page.evaluate(() => window.__raypc.errors[window.__raypc.errors.length - 1]);
+      check(/not applied/.test(msg) && expect.test(msg), `${name}: error '${msg}'`);
+      await page.waitForTimeout(300);
+      check(JSON.stringify(await rState(page)) === JSON.stringify(before), `${name}: the refused state changed the state in force`);
+      check(await page.evaluate(() => window.__raypc.lastSentId) === sentBefore, `${name}: the refused state was sent`);
+      const status = await page.textContent('#status');
+      check(!/selected/.test(status), `${name}: the status shows a selection: '${status}'`);
+    }
+  },
+
   // Two tabs hold different states and render independently: each tab's frames carry its own
   // camera, and work in one tab sends no frames to the other.
   async two_tabs({ context, url }) {

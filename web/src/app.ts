@@ -2,7 +2,7 @@
 // docs/protocol.md), and the parts that read and change it: camera input, the transfer-function
 // panel, presets, the volume's parallel coordinates and its sample, the selection and pathline
 // panels, playback, the other controls and the status line.
-import { fetchPresets, fetchSample, type Info, type Preset } from './api';
+import { fetchPresets, fetchSample, postSelection, type Info, type Preset } from './api';
 import { setUpCameraInput } from './camera_input';
 import { ContextPanel, showLegends, type LegendEntry } from './context_panel';
 import { download, maxImageSide, setUpControls, syncControls, writeStateToUrl } from './controls';
@@ -15,7 +15,7 @@ import { setUpScreenshot } from './screenshot';
 import { SelectionPanel } from './selection_panel';
 import { watchSeriesProgress } from './series_progress';
 import { describePreset } from './presets';
-import { type Brush } from './state';
+import { normaliseState, type Brush, type RenderState } from './state';
 import { StateStore } from './store';
 import { TfPanel } from './tf_panel';
 import { displayUnits } from './units';
@@ -51,6 +51,8 @@ export class App {
   readonly errors: string[] = [];
   private sampleLoading = false;
   private lastSampleLoad = 0;
+  private sampleFailedStep = -1;
+  private sampleFailedAt = 0;
   private errorTimer = 0;
   private statusNote = '';
 
@@ -124,6 +126,7 @@ export class App {
     setUpControls(store, {
       commit: (i) => this.commit(i),
       loadState: (doc) => this.loadState(doc),
+      loadOutsideState: (doc, what) => this.loadOutsideState(doc, what),
       showError: (m) => this.showError(m),
       setStatusNote: (t) => this.setStatusNote(t),
       setStep: (step, interactive) => this.setStep(step, interactive),
@@ -182,6 +185,33 @@ export class App {
     } else if (prev.color.variable !== state.color.variable) this.tf.loadHistogram();
     this.updateLineColors();
     this.commit(false);
+  }
+
+  // A state from outside the page (a file, a link): checked by the server against this dataset first
+  // (POST /api/selection resolves it with the rules it renders with: names, ranges, step), so that a
+  // state it refuses changes nothing and no figure of it is shown. A step beyond the dataset's last
+  // is clamped to it, with a note, as presets are.
+  async loadOutsideState(doc: unknown, what: string): Promise<void> {
+    let candidate: RenderState;
+    try {
+      candidate = normaliseState(doc, this.store.defaults);
+    } catch (e) {
+      this.showError(`${what}: ${(e as Error).message}`);
+      return;
+    }
+    const last = this.info.steps.length - 1;
+    const asked = candidate.step;
+    candidate.step = Math.min(asked, last);
+    try {
+      await postSelection(candidate);
+    } catch (e) {
+      this.showError(`${what} not applied: ${(e as Error).message}`);
+      return;
+    }
+    this.loadState(candidate);
+    this.setStatusNote(asked > last
+      ? `loaded ${what}: written for step ${asked}, this dataset ends at step ${last}, shown`
+      : `loaded ${what}`);
   }
 
   // Sends the state; a final (not interactive) one also goes into the page URL, and once its frame
@@ -379,6 +409,9 @@ export class App {
     if (this.sampleLoading) return;
     const step = this.store.state.step;
     if (step === this.sampleStep) return;
+    // A step whose sample failed is asked for again only when the step changes (or after a pause):
+    // never in a loop.
+    if (step === this.sampleFailedStep && performance.now() - this.sampleFailedAt < 5000) return;
     this.sampleLoading = true;
     this.lastSampleLoad = performance.now();
     // The first sample whole; later steps only their variables (the rows' coordinates stay).
@@ -392,7 +425,11 @@ export class App {
         if (this.sampleStep < 0) this.updateLineColors();
         this.sampleStep = step;
       })
-      .catch((e) => this.showError((e as Error).message))
+      .catch((e) => {
+        this.sampleFailedStep = step;
+        this.sampleFailedAt = performance.now();
+        this.showError((e as Error).message);
+      })
       .finally(() => {
         this.sampleLoading = false;
         if (this.store.state.step !== this.sampleStep && !this.playback.playing) this.loadSample();

@@ -8,6 +8,7 @@ const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getEleme
 export interface ControlsHost {
   commit(interactive: boolean): void;
   loadState(doc: unknown): void;
+  loadOutsideState(doc: unknown, what: string): Promise<void>;
   showError(message: string): void;
   setStatusNote(text: string): void;
   setStep(step: number, interactive: boolean): void;
@@ -148,8 +149,7 @@ export function setUpControls(store: StateStore, host: ControlsHost): void {
     download(new Blob([JSON.stringify(store.state, null, 2) + '\n'], { type: 'application/json' }), `raypc-state-step${store.state.step}.json`);
   });
   onFileChosen($<HTMLInputElement>('load'), '', (text, name) => {
-    host.loadState(JSON.parse(text));
-    host.setStatusNote(`loaded ${name}`);
+    void host.loadOutsideState(JSON.parse(text), name);
   }, (m) => host.showError(m));
   $('share').addEventListener('click', async () => {
     const url = `${location.origin}${location.pathname}${location.search}#state=${encodeStateForUrl(store.state)}`;
@@ -163,7 +163,7 @@ export function setUpControls(store: StateStore, host: ControlsHost): void {
   window.addEventListener('hashchange', () => {
     try {
       const s = stateFromHash(location.hash);
-      if (s && JSON.stringify(s) !== JSON.stringify(store.state)) host.loadState(s);
+      if (s && JSON.stringify(s) !== JSON.stringify(store.state)) void host.loadOutsideState(s, 'the state in the URL');
     } catch (e) {
       host.showError(`state in the URL: ${(e as Error).message}`);
     }
