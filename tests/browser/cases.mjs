@@ -925,6 +925,24 @@ const cases = {
     console.log(`  image change per preset: ${diffs.join(', ')}`);
     check(pathlinesSeen, 'no preset showed pathlines, so resetting them was not tested');
 
+    // Issue 26, item 11: a preset's open ends read as such (task 1's T anomaly -1e4 … -25 K is "≤ -25");
+    // once its brushes are cleared (Escape) it is no longer highlighted and its note says so.
+    await page.click('#presets button[data-preset="task1-slabs-660km"]');
+    await waitConverged(page);
+    const task1Note = await page.textContent('#presetNote');
+    check(/temperature anomaly ≤ -25 K/.test(task1Note) && !/e\+4|10000/.test(task1Note), `task 1's note: '${task1Note}'`);
+    check(await page.evaluate(() => document.querySelector('#presets button.active')?.dataset.preset) === 'task1-slabs-660km',
+      'task 1 is not highlighted after its click');
+    await page.locator('#view3d').click({ position: { x: 5, y: 5 } }).catch(() => {});
+    await page.keyboard.press('Escape');
+    await waitConverged(page);
+    check((await rState(page)).brushes.length === 0, 'Escape left brushes');
+    check(await page.evaluate(() => document.querySelector('#presets button.active') === null), 'a preset stays highlighted after its brushes were cleared');
+    const clearedNote = await page.textContent('#presetNote');
+    check(/brushes changed/.test(clearedNote), `the note after clearing the brushes: '${clearedNote}'`);
+    await page.click(`#presets button[data-preset="${presets[presets.length - 1].name}"]`);
+    await waitConverged(page);
+
     // Selection over time of the last preset (brushed): exact by default (level 0), then approximate
     // at level 1 and labelled so.
     const last = presets[presets.length - 1];

@@ -138,6 +138,7 @@ export class App {
         this.pc.setBrushes([]);
         store.state.brushes = [];
         this.selection.updateText();
+        this.presetLeft();
         this.commit(false);
       },
     });
@@ -397,8 +398,18 @@ export class App {
 
   // ---- brushes and the sample ----------------------------------------------------------------
 
+  // The brushes no longer are a preset's: its button is no longer highlighted, and its note (which
+  // lists its brushes) says that the selection was changed.
+  private presetLeft(): void {
+    const active = document.querySelector<HTMLButtonElement>('#presets button.active');
+    if (!active) return;
+    active.classList.remove('active');
+    $('presetNote').textContent = `${active.textContent}: brushes changed since (no preset in force)`;
+  }
+
   private onBrush(brushes: Brush[], interactive: boolean): void {
     this.store.state.brushes = brushes;
+    this.presetLeft();
     if (!interactive) this.pc.showAxes(this.shownAxes()); // an axis hidden once its brush is gone
     this.commit(interactive);
     this.selection.updateText();

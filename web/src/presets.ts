@@ -5,6 +5,16 @@ import { fmt } from './selection_panel';
 import { rangesByName, type RenderState } from './state';
 import { displayUnits } from './units';
 
+// A range as a reader says it: an end beyond the axis's data is open ("≤ -25", "≥ 100"), not the
+// placeholder a preset writes there (-1e4).
+function describeRange(lo: number, hi: number, axis: AxisInfo | undefined): string {
+  const openBelow = axis !== undefined && lo <= axis.min, openAbove = axis !== undefined && hi >= axis.max;
+  if (openBelow && openAbove) return 'any value';
+  if (openBelow) return `≤ ${fmt(hi)}`;
+  if (openAbove) return `≥ ${fmt(lo)}`;
+  return `${fmt(lo)} … ${fmt(hi)}`;
+}
+
 export function describePreset(s: RenderState, axes: AxisInfo[]): string {
   const units = (name: string) => {
     const u = axes.find((a) => a.name === name)?.units ?? '';
@@ -13,7 +23,7 @@ export function describePreset(s: RenderState, axes: AxisInfo[]): string {
   const parts = [`step ${s.step}`, `colour ${s.color.variable} (${s.color.points.length ? 'custom colours' : s.color.colorMap})`];
   if (s.brushes.length)
     parts.push(`selects ${[...rangesByName(s.brushes)].map(([name, ranges]) =>
-      `${name} ${ranges.map(([lo, hi]) => `${fmt(lo)} … ${fmt(hi)}`).join(' or ')}${units(name)}`).join(' and ')}`);
+      `${name} ${ranges.map(([lo, hi]) => describeRange(lo, hi, axes.find((a) => a.name === name))).join(' or ')}${units(name)}`).join(' and ')}`);
   else parts.push('no brushes');
   if (s.pathlines?.visible) parts.push(`pathlines of the last ${s.pathlines.window} steps`);
   return parts.join('; ');
