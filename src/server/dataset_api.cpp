@@ -305,7 +305,7 @@ std::string pathlineAttributesPayload(const PathlineCache::Window& sets, int ste
     return out;
 }
 
-json infoJson(const Dataset& dataset)
+json infoJson(const Dataset& dataset, const ServerLimits& limits)
 {
     json variables = json::array();
     for (const auto& v : dataset.variables())
@@ -346,7 +346,12 @@ json infoJson(const Dataset& dataset)
             {"levels", levels},
             {"sample", {{"rows", sample.rows}, {"columns", sample.columns}, {"units", sample.units}}},
             {"colorMaps", maps},
-            {"defaultState", render::toJson(render::defaultState(dataset))}};
+            {"defaultState", render::toJson(render::defaultState(dataset))},
+            // What POST /api/screenshot takes (checkScreenshotLimits), so that the UI states it.
+            {"limits",
+             {{"screenshotPixels", limits.maxScreenshotPixels},
+              {"screenshotPasses", limits.maxScreenshotPasses},
+              {"screenshotPixelPasses", limits.maxScreenshotPixelPasses}}}};
 }
 
 // ---------------------------------------------------------------------------------------------

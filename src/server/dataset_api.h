@@ -170,6 +170,6 @@ std::span<const Route> apiRoutes();
 
 // GET /api/info: the dataset's variables, coordinates, steps, levels, sample shape, colour maps and
 // default state (docs/protocol.md).
-nlohmann::json infoJson(const Dataset& dataset);
+nlohmann::json infoJson(const Dataset& dataset, const ServerLimits& limits = {});
 
 }  // namespace raypc::server

@@ -132,7 +132,7 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     s.api.pathlines = s.pathlines.get();
     s.api.persistence = s.persistence.get();
     s.api.examples = s.options.examples;
-    s.api.infoJson = infoJson(*s.dataset).dump(-1, ' ', false, json::error_handler_t::replace);
+    s.api.infoJson = infoJson(*s.dataset, s.options.limits).dump(-1, ' ', false, json::error_handler_t::replace);
     s.api.limits = s.options.limits;
     s.api.series = s.options.series;
     s.assets = s.options.assets;

@@ -839,6 +839,36 @@ const cases = {
       const status = await page.textContent('#status');
       check(!/selected/.test(status), `${name}: the status shows a selection: '${status}'`);
     }
+
+    // Issue 26, item 10: the screenshot dialog states the server's limit (GET /api/info) and refuses
+    // a size beyond it before sending; a screenshot the server fails is shown as failed.
+    const limits = (await info(url)).limits;
+    const passes = (await rState(page)).passes;
+    const most = Math.min(limits.screenshotPixels, Math.floor(limits.screenshotPixelPasses / passes));
+    await page.click('#screenshot');
+    const limitText = await page.textContent('#shotLimit');
+    check(limitText.includes(most.toLocaleString('en')), `the dialog's limit '${limitText}', the server's ${most} pixels at ${passes} passes`);
+    await page.check('input[name="shotSize"][value="custom"]');
+    await page.fill('#shotWidth', '8000');
+    await page.fill('#shotHeight', '4000');
+    let errorsBefore = await page.evaluate(() => window.__raypc.errors.length);
+    await page.click('#shotRender');
+    await page.waitForFunction((n) => window.__raypc.errors.length > n, errorsBefore, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('an 8000 x 4000 screenshot was not refused'); });
+    const tooLarge = await page.evaluate(() => window.__raypc.errors[window.__raypc.errors.length - 1]);
+    check(/more than the/.test(tooLarge), `8000 x 4000: '${tooLarge}'`);
+    check(!/rendering a/.test(await page.textContent('#status')), 'the status says a refused screenshot is rendering');
+    await page.click('#shotCancel');
+    await page.route('**/api/screenshot', (r) => r.fulfill({ status: 503, contentType: 'text/plain', body: 'screenshot: the server is busy' }));
+    errorsBefore = await page.evaluate(() => window.__raypc.errors.length);
+    await page.click('#screenshot');
+    await page.check('input[name="shotSize"][value="view"]');
+    await page.click('#shotRender');
+    await page.waitForFunction((n) => window.__raypc.errors.length > n, errorsBefore, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('a failed screenshot showed no error'); });
+    const failedStatus = await page.textContent('#status');
+    check(/screenshot .* failed/.test(failedStatus) && !/rendering a/.test(failedStatus), `the status after a failed screenshot: '${failedStatus}'`);
+    await page.unroute('**/api/screenshot');
   },
 
   // Two tabs hold different states and render independently: each tab's frames carry its own

@@ -32,6 +32,8 @@ export interface Info {
   sample: { rows: number; columns: string[]; units: string[] };
   colorMaps: string[];
   defaultState: RenderState;
+  // What POST /api/screenshot takes (the server's limits).
+  limits: { screenshotPixels: number; screenshotPasses: number; screenshotPixelPasses: number };
 }
 export interface Histogram {
   name: string;

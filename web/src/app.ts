@@ -148,6 +148,7 @@ export class App {
       setStatusNote: (t) => this.setStatusNote(t),
       download,
       fileStem: () => `raypc-step${store.state.step}`,
+      limits: () => this.info.limits,
     });
     this.setUpAxisChoice();
     setUpCameraInput(this.link.view.canvas, store, (i) => this.commit(i));

@@ -17,6 +17,12 @@ export interface ScreenshotHost {
   setStatusNote(text: string): void;
   download(blob: Blob, name: string): void;
   fileStem(): string;
+  limits(): { screenshotPixels: number; screenshotPasses: number; screenshotPixelPasses: number };
+}
+
+// The most pixels the server renders for a screenshot of `passes` passes (its limits, GET /api/info).
+export function maxScreenshotPixels(limits: ReturnType<ScreenshotHost['limits']>, passes: number): number {
+  return Math.min(limits.screenshotPixels, Math.floor(limits.screenshotPixelPasses / Math.max(1, passes)));
 }
 
 export type ShotChoice = 'view' | '2x' | '4k' | 'custom';
@@ -43,6 +49,9 @@ export function setUpScreenshot(host: ScreenshotHost): void {
     label('shotViewSize', screenshotSize('view', image, image));
     label('shot2xSize', screenshotSize('2x', image, image));
     label('shot4kSize', screenshotSize('4k', image, image));
+    const most = maxScreenshotPixels(host.limits(), host.state().passes);
+    const side = Math.floor(Math.sqrt(most));
+    $('shotLimit').textContent = `The server renders at most ${most.toLocaleString('en')} pixels at this state's ${host.state().passes} passes (e.g. ${side} × ${side}).`;
     if (!$<HTMLInputElement>('shotWidth').value) {
       $<HTMLInputElement>('shotWidth').value = String(image.width);
       $<HTMLInputElement>('shotHeight').value = String(image.height);
@@ -56,6 +65,11 @@ export function setUpScreenshot(host: ScreenshotHost): void {
       host.showError(`screenshot size ${size.width} × ${size.height}: each side must be 1 … ${kMaxImageSide} pixels`);
       return;
     }
+    const most = maxScreenshotPixels(host.limits(), host.state().passes);
+    if (size.width * size.height > most) {
+      host.showError(`screenshot size ${size.width} × ${size.height}: more than the ${most.toLocaleString('en')} pixels the server renders at ${host.state().passes} passes`);
+      return;
+    }
     dialog.close();
     const button = $<HTMLButtonElement>('screenshot');
     button.disabled = true;
@@ -66,6 +80,7 @@ export function setUpScreenshot(host: ScreenshotHost): void {
       host.download(await postScreenshot(state), `${host.fileStem()}-${size.width}x${size.height}.png`);
       host.setStatusNote(`screenshot ${size.width} × ${size.height} saved`);
     } catch (err) {
+      host.setStatusNote(`screenshot ${size.width} × ${size.height} failed`);
       host.showError((err as Error).message);
     } finally {
       button.disabled = false;
