@@ -556,6 +556,14 @@ const cases = {
     const last = ds.steps.length - 1;
     const page = await openUi(context, url);
     await standardView(page);
+    // Issue 26, item 13: with the pathlines hidden, stepping through time asks for no diagrams.
+    let diagrams = 0;
+    page.on('request', (r) => { if (r.url().includes('api/persistence')) diagrams++; });
+    for (const step of [1, 2, 3].filter((k) => k <= last)) {
+      await page.evaluate((n) => window.__raypc.setState({ ...window.__raypc.state(), step: n }), step);
+      await waitConverged(page);
+    }
+    check(diagrams === 0, `${diagrams} persistence diagrams asked for while the pathlines were hidden`);
     await page.evaluate((n) => {
       const s = window.__raypc.state();
       window.__raypc.setState({ ...s, step: n, core: { ...s.core, visible: false }, color: { ...s.color, opacity: [[0, 0], [1, 0]] },

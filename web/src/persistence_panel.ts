@@ -48,9 +48,15 @@ export class PersistencePanel {
     return fs.length ? Math.min(...fs.map((f) => f.min)) : null;
   }
 
-  // Loads the diagram of the step shown when it changed and the section is open.
+  // Loads the diagram of the step shown when it changed, the section is open and the pathlines (whose
+  // seeds it shows) are shown: stepping through time without them asks for no diagrams.
   refresh(): void {
     if (!this.store.state.pathlines || !$<HTMLDetailsElement>('persistenceDetails').open) return;
+    if (!this.store.state.pathlines.visible) {
+      if (this.key !== String(this.store.state.step))
+        $('persistenceNote').textContent = 'the diagram of the seeds is loaded while the pathlines are shown';
+      return;
+    }
     const key = String(this.store.state.step);
     if (key === this.key) {
       this.draw();
