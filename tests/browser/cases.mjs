@@ -848,6 +848,25 @@ const cases = {
       check(!/selected/.test(status), `${name}: the status shows a selection: '${status}'`);
     }
 
+    // Issue 26, item 9: a state file without an image size (an example state) keeps the view's size,
+    // and the picture follows the view when the window is resized.
+    const viewImage = (await rState(page)).image;
+    const noImage = join(tmp, 'no-image.json');
+    const { image: _drop, ...withoutImage } = await rState(page);
+    writeFileSync(noImage, JSON.stringify({ ...withoutImage, camera: { ...withoutImage.camera, azimuthDeg: 77 } }));
+    const sentNoImage = await page.evaluate(() => window.__raypc.lastSentId);
+    await page.setInputFiles('#load', noImage);
+    await page.waitForFunction((n) => window.__raypc.lastSentId > n, sentNoImage, { timeout: 10000 })
+      .catch(() => { throw new TestFailure('loading a state without an image size sent nothing'); });
+    await waitConverged(page);
+    const loadedImage = (await rState(page)).image;
+    check(loadedImage.width === viewImage.width && loadedImage.height === viewImage.height,
+      `a state without an image renders at ${loadedImage.width}x${loadedImage.height}, the view is ${viewImage.width}x${viewImage.height}`);
+    await page.setViewportSize({ width: 1100, height: 760 });
+    await page.waitForFunction((w) => window.__raypc.state().image.width !== w, loadedImage.width, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('after loading a state without an image size, resizing the window did not resize the picture'); });
+    await waitConverged(page);
+
     // Issue 26, item 10: the screenshot dialog states the server's limit (GET /api/info) and refuses
     // a size beyond it before sending; a screenshot the server fails is shown as failed.
     const limits = (await info(url)).limits;

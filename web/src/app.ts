@@ -210,7 +210,15 @@ export class App {
       this.showError(`${what} not applied: ${(e as Error).message}`);
       return;
     }
+    // A document that names no image size (an example state, a hand-written one) keeps the view's:
+    // the picture goes on following the view, as after a preset.
+    const namesImage = typeof doc === 'object' && doc !== null && 'image' in doc;
+    if (!namesImage) candidate.image = { ...this.store.state.image };
     this.loadState(candidate);
+    if (!namesImage) {
+      this.store.autoFitImage = true;
+      if (this.fitImage()) this.commit(false);
+    }
     this.setStatusNote(asked > last
       ? `loaded ${what}: written for step ${asked}, this dataset ends at step ${last}, shown`
       : `loaded ${what}`);
