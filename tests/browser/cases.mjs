@@ -801,6 +801,39 @@ const cases = {
     check(JSON.stringify(await rState(page)) === JSON.stringify(stateA), 'a refused state file changed the state');
   },
 
+  // Issue 26, item 1: a selection with samples shows its lines in the parallel coordinates whatever
+  // the brushed axis: a coordinate (depth, an inverted axis: 0 at the top), a stored variable and a
+  // derived one. Counted as lines drawn and as painted pixels of the brushed layer beyond its veil.
+  async brush_kinds({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const linePixels = () => page.evaluate(() => {
+      const c = document.querySelector('#parcoords canvas.brushed');
+      const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+      const key = (i) => `${d[i]},${d[i + 1]},${d[i + 2]},${d[i + 3]}`;
+      const counts = new Map();
+      for (let i = 0; i < d.length; i += 4 * 13) counts.set(key(i), (counts.get(key(i)) ?? 0) + 1);
+      const veil = [...counts].sort((a, b) => b[1] - a[1])[0][0];  // the most common value
+      let n = 0;
+      for (let i = 0; i < d.length; i += 4) if (key(i) !== veil) n++;
+      return n;
+    });
+    for (const [kind, brushes] of [
+      ['coordinate', [{ name: 'depth', min: 560, max: 760 }]],
+      ['variable', [{ name: 'temperature anomaly', min: -10000, max: -25 }]],
+      ['derived', [{ name: 'velocity magnitude', min: 0, max: 5 }]],
+    ]) {
+      await page.evaluate((b) => window.__raypc.setState({ ...window.__raypc.state(), brushes: b }), brushes);
+      await waitConverged(page);
+      await page.waitForFunction(() => window.__raypc.parcoords.timing.lines.brushed > 0, null, { timeout: 10000 })
+        .catch(() => { throw new TestFailure(`${kind} brush ${JSON.stringify(brushes)}: no line drawn in the brushed layer`); });
+      await page.waitForTimeout(500);
+      const px = await linePixels();
+      check(px > 1000, `${kind} brush ${JSON.stringify(brushes)}: ${px} painted pixels besides the veil`);
+      console.log(`  ${kind}: ${await page.evaluate(() => window.__raypc.parcoords.timing.lines.brushed)} lines, ${px} pixels`);
+    }
+  },
+
   // Issue 26, items 2 and 3: a state saved on a longer series (step 99 on this one) is clamped to
   // the last step with a note and asks for no sample in a loop; a state the server refuses (an
   // unknown brush variable, min > max) changes nothing, sends nothing and shows no figure of its own.

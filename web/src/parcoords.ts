@@ -5,7 +5,7 @@
 // Brushes are reported as state.brushes ranges in each column's units, one entry per range.
 import ParCoords from 'parcoord-es';
 import * as d3 from 'd3';
-import { rangesByName, type Brush } from './state';
+import { inRanges, rangesByName, type Brush } from './state';
 import type { Sample } from './api';
 import { displayUnits } from './units';
 
@@ -373,10 +373,13 @@ export class ParallelCoordinates {
   // axes, brushes, filtering and reordering) with the sliced renderer below.
   private installRenderer(): void {
     const pc = this.pc;
+    // The brushed rows by the selection's own rule (state.ts: OR within an axis, AND over axes, as
+    // raypc resolves it), not parcoord-es's filter, which found no row on an inverted axis (depth,
+    // 0 at the top): a depth brush veiled every line and highlighted none.
     const brushed = () => {
-      const rows = pc.brushed() as Row[] | false;
-      const active = !!rows && (rows.length !== this.rows.length || this.brushes().length > 0);
-      this.drawLayer('brushed', active ? (rows as Row[]) : [], this.dragging || this.coarse);
+      const ranges = [...rangesByName(this.brushes())];
+      const rows = ranges.length ? this.rows.filter((r) => ranges.every(([name, rs]) => inRanges(r[name], rs))) : [];
+      this.drawLayer('brushed', rows, this.dragging || this.coarse);
     };
     this.redrawBrushed = brushed;
     pc.renderBrushed.queue = brushed;
