@@ -834,6 +834,26 @@ const cases = {
     }
   },
 
+  // Issue 26, item 14: "?" shows the mouse and keyboard help; Escape closes it.
+  async help({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    check(!(await page.isVisible('#helpDialog')), 'the help is open before asked for');
+    await page.locator('body').press('?');
+    await page.waitForSelector('#helpDialog[open]', { timeout: 3000 })
+      .catch(() => { throw new TestFailure('"?" did not open the help'); });
+    const text = await page.textContent('#helpDialog');
+    for (const words of ['orbit', 'pan', 'zoom', 'Escape', 'Space', 'brush'])
+      check(text.includes(words), `the help does not mention ${words}: '${text.slice(0, 200)}…'`);
+    await page.keyboard.press('Escape');
+    await page.waitForFunction(() => !document.getElementById('helpDialog').open, null, { timeout: 3000 })
+      .catch(() => { throw new TestFailure('Escape did not close the help'); });
+    await page.click('#help');
+    await page.waitForSelector('#helpDialog[open]', { timeout: 3000 })
+      .catch(() => { throw new TestFailure('the ? button did not open the help'); });
+    await page.click('#helpClose');
+  },
+
   // Issue 26, items 2 and 3: a state saved on a longer series (step 99 on this one) is clamped to
   // the last step with a note and asks for no sample in a loop; a state the server refuses (an
   // unknown brush variable, min > max) changes nothing, sends nothing and shows no figure of its own.

@@ -137,8 +137,17 @@ export function setUpControls(store: StateStore, host: ControlsHost): void {
   stepIn.addEventListener('input', () => host.setStep(Number(stepIn.value), true));
   stepIn.addEventListener('change', () => host.setStep(Number(stepIn.value), false));
   $('play').addEventListener('click', () => host.togglePlay());
+  // "?" (or the header's ? button) shows the mouse and keyboard help.
+  const help = $<HTMLDialogElement>('helpDialog');
+  $('help').addEventListener('click', () => help.showModal());
+  $('helpClose').addEventListener('click', () => help.close());
   document.addEventListener('keydown', (e) => {
     const t = e.target as HTMLElement;
+    if (e.key === '?' && !(t instanceof HTMLInputElement || t instanceof HTMLSelectElement) && !document.querySelector('dialog[open]')) {
+      e.preventDefault();
+      help.showModal();
+      return;
+    }
     if (e.key === ' ' && !(t instanceof HTMLInputElement || t instanceof HTMLSelectElement || t instanceof HTMLButtonElement)) {
       e.preventDefault();
       host.togglePlay();
