@@ -832,6 +832,13 @@ const cases = {
       check(px > 1000, `${kind} brush ${JSON.stringify(brushes)}: ${px} painted pixels besides the veil`);
       console.log(`  ${kind}: ${await page.evaluate(() => window.__raypc.parcoords.timing.lines.brushed)} lines, ${px} pixels`);
     }
+    // Item 12: tick labels and titles carry a dark halo over the lines.
+    const halo = await page.evaluate(() => {
+      const t = document.querySelector('#parcoords .tick text');
+      const st = getComputedStyle(t);
+      return { order: st.paintOrder, width: parseFloat(st.strokeWidth), stroke: st.stroke };
+    });
+    check(/^stroke/.test(halo.order) && halo.width >= 2 && halo.stroke !== 'none', `tick labels without a halo: ${JSON.stringify(halo)}`);
   },
 
   // Issue 26, item 14: "?" shows the mouse and keyboard help; Escape closes it.
