@@ -110,8 +110,11 @@ public:
                 fail("{}: data ends after {} of {} bytes (truncated file?)", m_what, m_in.size(), total);
             return m_in.substr(0, total);
         }
-        if (m_out.capacity() < total)
-            m_out.reserve(std::max(total, 2 * m_out.capacity()));
+        // Room for what is asked, but never more than the rest of the input can decode to: a header
+        // claiming gigabytes in a small file ends with "data ends", not with that allocation.
+        const size_t decodable = m_out.size() + (m_in.size() - m_pos) / 4 * 3 + 3;
+        if (m_out.capacity() < std::min(total, decodable))
+            m_out.reserve(std::min(std::max(total, 2 * m_out.capacity()), decodable));
         // The common case first: whole quanta of plain base64 characters, decoded four at a time.
         while (m_out.size() + 3 <= total && m_pos + 4 <= m_in.size()) {
             const int a = base64Value(m_in[m_pos]), b = base64Value(m_in[m_pos + 1]),
