@@ -1,6 +1,7 @@
 #include "app/options.h"
 
 #include "core/error.h"
+#include "core/spherical.h"
 #include "core/strings.h"
 #include "data/value_encoding.h"
 
@@ -76,7 +77,7 @@ ReaderOptions ReaderFlags::toOptions() const
     if (timeUnits == "years")
         o.myrPerTimeUnit = 1e-6;
     else if (timeUnits == "seconds")
-        o.myrPerTimeUnit = 1e-6 / (365.25 * 86400);
+        o.myrPerTimeUnit = 1 / kSecondsPerMyr;
     else if (timeUnits == "Myr" || timeUnits == "myr")
         o.myrPerTimeUnit = 1;
     else

@@ -2,6 +2,7 @@
 
 #include "core/clock.h"
 #include "core/error.h"
+#include "core/spherical.h"
 #include "core/strings.h"
 #include "core/system_memory.h"
 #include "data/mesh_resample.h"
@@ -23,7 +24,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kSecondsPerYear = 365.25 * 86400;  // the Julian year, as kMpsToCmPerYr
 
 bool hasExtension(const fs::path& p, const char* ext)
 {
@@ -179,7 +179,7 @@ Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
         Field field{variables[a].name, variables[a].units, std::move(values[a])};
         if (variables[a].source.name == "velocity")
             for (float& v : field.values)
-                v = float(double(v) / kSecondsPerYear);  // m/year -> m/s
+                v = float(double(v) / (kSecondsPerMyr / 1e6));  // m/year -> m/s (Julian years)
         snap.fields.push_back(std::move(field));
     }
     if (counts.missing > 0) {
