@@ -841,6 +841,31 @@ const cases = {
     check(/^stroke/.test(halo.order) && halo.width >= 2 && halo.stroke !== 'none', `tick labels without a halo: ${JSON.stringify(halo)}`);
   },
 
+  // Issue 26, item 8: from 1366x768 to 2560x1440 the presets, the time bar and the 3D view are
+  // visible without scrolling; at 1000x700 the transfer-function editor still is.
+  async layout({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const boxes = () => page.evaluate(() => {
+      const box = (sel) => { const b = document.querySelector(sel).getBoundingClientRect(); return { top: b.top, bottom: b.bottom, height: b.height }; };
+      return { presets: box('#presets'), tf: box('#tf'), side: box('#side'), view: box('#view3d'), play: box('#play'),
+        sideScroll: document.getElementById('side').scrollTop, pageScroll: document.documentElement.scrollHeight - window.innerHeight };
+    });
+    for (const [w, h] of [[1366, 768], [1920, 1080], [2560, 1440]]) {
+      await page.setViewportSize({ width: w, height: h });
+      await page.waitForTimeout(500);
+      const b = await boxes();
+      check(b.pageScroll <= 0 && b.sideScroll === 0, `${w}x${h}: the page or the side panel is scrolled (${b.pageScroll}, ${b.sideScroll})`);
+      check(b.presets.height > 40 && b.presets.top >= b.side.top && b.presets.bottom <= b.side.bottom,
+        `${w}x${h}: the presets (${Math.round(b.presets.top)}-${Math.round(b.presets.bottom)} px) are not within the side panel's visible ${Math.round(b.side.top)}-${Math.round(b.side.bottom)} px`);
+      check(b.play.bottom <= h && b.view.height >= 0.4 * h, `${w}x${h}: time bar at ${Math.round(b.play.bottom)} px, view ${Math.round(b.view.height)} px high`);
+    }
+    await page.setViewportSize({ width: 1000, height: 700 });
+    await page.waitForTimeout(500);
+    const small = await boxes();
+    check(small.tf.bottom <= small.side.bottom, `1000x700: the transfer-function editor ends at ${Math.round(small.tf.bottom)} px, below the side panel's ${Math.round(small.side.bottom)} px`);
+  },
+
   // Issue 26, item 14: "?" shows the mouse and keyboard help; Escape closes it.
   async help({ context, url }) {
     const page = await openUi(context, url);
