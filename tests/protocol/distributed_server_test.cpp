@@ -139,38 +139,46 @@ TEST(DistributedServer, RanksPrepareAStillFrameAheadOfItsFirstPass)
 }
 
 // A new state while a long still is being rendered: the ranks drop the old pass, the new state's
-// frames follow at once and the old state never converges.
+// frames follow at once and the old state never converges; and the worker stops part-way through
+// its tiles. Whether the new state reaches rank 0 while a pass is shared out or just before the next
+// is handed out is timing (then no rank has anything to stop), so the scenario runs up to three
+// times, each on a fresh server, until a part-way stop is seen; every run checks the rest.
 TEST(DistributedServer, NewStateCancelsThePassOnEveryRank)
 {
-    Server server(2);
-    WsClient ws(server.port);
-    ws.hello();
-    json slow = smallState(10, "viridis", 400);
-    slow["image"] = {{"width", 1024}, {"height", 768}};
-    ws.send({{"type", "state"}, {"id", 1}, {"state", slow}, {"interactive", false}});
-    const WsClient::Message first = ws.receive();
-    ASSERT_TRUE(first.binary) << first.raw;
-    EXPECT_EQ(first.frame.header["id"], 1);
-    EXPECT_EQ(first.frame.header["ranks"], 2);
-    ws.send({{"type", "state"}, {"id", 2}, {"state", smallState(50)}, {"interactive", false}});
-    const auto sent = std::chrono::steady_clock::now();
-    const std::vector<WsClient::Message> frames = ws.framesUntilConverged(2);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
-    for (const auto& m : frames)
-        if (m.frame.header["id"] == 1)
-            EXPECT_FALSE(m.frame.header["converged"].get<bool>()) << "the old state went on to converge";
-    // 400 passes of 1024x768 take minutes; the new state's 2 small passes come after one old pass at most.
-    EXPECT_LT(seconds, 60.0);
-    EXPECT_LT(frames.size(), 12u) << "old frames kept coming after the new state";
-    // Rank 1 was in one of the old state's later passes when the new state came: it stopped between
-    // tiles, and rank 0 says so once it has gathered that pass (waited for: the line may follow the
-    // new state's frames).
     const std::regex stopped("session 1 frame 1 pass [0-9]+: 1 of 1 other ranks stopped part-way");
-    for (int i = 0; i < 50 && !std::regex_search(server.output(), stopped); ++i)
-        std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    EXPECT_TRUE(std::regex_search(server.output(), stopped)) << server.output();
-    ws.close();
-    expectCleanStop(server, 2);
+    bool seen = false;
+    std::string lastOutput;
+    for (int attempt = 0; attempt < 3 && !seen; ++attempt) {
+        Server server(2);
+        WsClient ws(server.port);
+        ws.hello();
+        json slow = smallState(10, "viridis", 400);
+        slow["image"] = {{"width", 1024}, {"height", 768}};
+        ws.send({{"type", "state"}, {"id", 1}, {"state", slow}, {"interactive", false}});
+        const WsClient::Message first = ws.receive();
+        ASSERT_TRUE(first.binary) << first.raw;
+        EXPECT_EQ(first.frame.header["id"], 1);
+        EXPECT_EQ(first.frame.header["ranks"], 2);
+        ws.send({{"type", "state"}, {"id", 2}, {"state", smallState(50)}, {"interactive", false}});
+        const auto sent = std::chrono::steady_clock::now();
+        const std::vector<WsClient::Message> frames = ws.framesUntilConverged(2);
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
+        for (const auto& m : frames)
+            if (m.frame.header["id"] == 1)
+                EXPECT_FALSE(m.frame.header["converged"].get<bool>()) << "the old state went on to converge";
+        // 400 passes of 1024x768 take minutes; the new state's 2 small passes come after one old pass at most.
+        EXPECT_LT(seconds, 60.0);
+        EXPECT_LT(frames.size(), 12u) << "old frames kept coming after the new state";
+        // Rank 0 says so once it has gathered the pass (waited for: the line may follow the new
+        // state's frames).
+        for (int i = 0; i < 20 && !std::regex_search(server.output(), stopped); ++i)
+            std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        seen = std::regex_search(server.output(), stopped);
+        lastOutput = server.output();
+        ws.close();
+        expectCleanStop(server, 2);
+    }
+    EXPECT_TRUE(seen) << "in three runs no worker stopped part-way; the last run's log:\n" << lastOutput;
 }
 
 // Rank 1 exits in the middle of a pass (the test hook of docs/scaling.md): the job ends with an
