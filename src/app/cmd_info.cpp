@@ -38,10 +38,12 @@ json describeFile(const std::filesystem::path& path, const ReaderOptions& option
 {
     const SeriesListing listing = listSeries({path}, options);
     const std::filesystem::path& step = listing.steps.front();
-    const FileHeader header = readStepHeader(step, options);
+    // The step first (a mesh is read and resampled once), then its header on that grid (for a mesh
+    // only its record is read again).
+    const Snapshot snap = readStep(step, options);
     ReaderOptions fixed = options;
-    fixed.targetGrid = header.grid;
-    const Snapshot snap = readStep(step, fixed);
+    fixed.targetGrid = snap.grid;
+    const FileHeader header = readStepHeader(step, fixed);
     json j{{"kind", listing.vtk ? "vtk" : "netcdf"}, {"path", path.string()}, {"format", header.format},
            {"grid", describeGrid(snap.grid)}};
     if (listing.vtk) {

@@ -204,22 +204,25 @@ Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
 }
 
 // A step of a netCDF file holding several: "FILE#K" names step K (from 0) of FILE (listSeries).
+// The file and the reader's options with that step.
 struct NetcdfStep {
     fs::path file;
-    size_t index = 0;
+    ReaderOptions options;
 };
 
-NetcdfStep netcdfStep(const fs::path& step)
+NetcdfStep netcdfStep(const fs::path& step, const ReaderOptions& options)
 {
+    NetcdfStep at{step, options};
+    at.options.timeIndex = 0;
     const std::string text = step.string();
     const size_t hash = text.rfind('#');
-    if (hash == std::string::npos || hash + 1 == text.size() ||
-        text.find_first_not_of("0123456789", hash + 1) != std::string::npos)
-        return {step, 0};
     std::error_code ec;
-    if (fs::exists(step, ec))  // a file whose name ends in #digits
-        return {step, 0};
-    return {text.substr(0, hash), size_t(std::stoull(text.substr(hash + 1)))};
+    if (hash == std::string::npos || hash + 1 == text.size() ||
+        text.find_first_not_of("0123456789", hash + 1) != std::string::npos || fs::exists(step, ec))
+        return at;  // a plain file (also one whose name ends in #digits)
+    at.file = text.substr(0, hash);
+    at.options.timeIndex = size_t(std::stoull(text.substr(hash + 1)));
+    return at;
 }
 
 }  // namespace
@@ -320,20 +323,16 @@ FileHeader readStepHeader(const fs::path& step, const ReaderOptions& options)
 {
     if (isVtkStep(step))
         return vtkHeader(step, options);
-    const auto [file, index] = netcdfStep(step);
-    ReaderOptions o = options;
-    o.timeIndex = index;
-    return readHeader(file, o);
+    const NetcdfStep at = netcdfStep(step, options);
+    return readHeader(at.file, at.options);
 }
 
 Snapshot readStep(const fs::path& step, const ReaderOptions& options)
 {
     if (isVtkStep(step))
         return vtkSnapshot(step, options);
-    const auto [file, index] = netcdfStep(step);
-    ReaderOptions o = options;
-    o.timeIndex = index;
-    return readSnapshot(file, o);
+    const NetcdfStep at = netcdfStep(step, options);
+    return readSnapshot(at.file, at.options);
 }
 
 }  // namespace raypc
