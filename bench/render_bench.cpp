@@ -18,8 +18,11 @@
 #include "data/selection.h"
 #include "data/synth.h"
 #include "render/image_io.h"
+#include "render/reference_geometry.h"
 #include "render/render_state.h"
 #include "render/shadow_volume.h"
+#include "render/slice_view.h"
+#include "server/image_codec.h"
 #include "render/state_renderer.h"
 #include "render/volume_renderer.h"
 
@@ -29,6 +32,7 @@
 
 #include <sys/resource.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -99,7 +103,8 @@ RenderParams params(int size)
 
 // The UI's first view (render::defaultState: temperature anomaly, lit, the middle of the range
 // transparent) resolved against the benchmark volume's variables and ranges, at size x size.
-RenderParams defaultViewParams(int size, bool lit, bool shadows = false)
+// The benchmark step's variables with their ranges, for defaultState.
+VariableCatalog benchCatalog()
 {
     const StepVolume& v = *data().levels[0];
     VariableCatalog catalog;
@@ -108,6 +113,12 @@ RenderParams defaultViewParams(int size, bool lit, bool shadows = false)
         const auto [lo, hi] = std::minmax_element(v.values(i), v.values(i) + v.grid().cellCount());
         catalog.ranges.push_back({*lo, *hi});
     }
+    return catalog;
+}
+
+RenderParams defaultViewParams(int size, bool lit, bool shadows = false)
+{
+    const VariableCatalog catalog = benchCatalog();
     RenderState s = defaultState(catalog);
     s.width = s.height = size;
     s.shading.enabled = lit;
@@ -287,6 +298,99 @@ void BM_ShadowLightOnly(benchmark::State& state)
     }
 }
 BENCHMARK(BM_ShadowLightOnly)->Arg(0)->Arg(2)->Unit(benchmark::kMillisecond);
+// What the server does to a pass's accumulation before it is a JPEG (StateRenderer::picture with
+// the default view's reference shells, and the frame's depth map): at the 3D view's size at
+// 1920x1080, 1500x628. Per stage: averaged colour, averaged depth, the shells composited, 8-bit.
+void BM_FramePicture1500(benchmark::State& state)
+{
+    RenderState s = defaultState(benchCatalog());
+    s.width = 1500;
+    s.height = 628;
+    RenderParams p = defaultViewParams(16, true);
+    p.width = s.width;
+    p.height = s.height;
+    VolumeRenderer r(data().levels[0]);
+    r.setParams(p);
+    FrameBuffer f(p.width, p.height);
+    r.renderPass(f);
+    const SphericalGrid& grid = data().levels[0]->grid();
+    double colour = 0, depth = 0, shells = 0, bytes = 0;
+    using Clock = std::chrono::steady_clock;
+    auto since = [](Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); };
+    for (auto _ : state) {
+        auto t = Clock::now();
+        std::vector<float> rgba = f.averagedRgba();
+        colour += since(t);
+        t = Clock::now();
+        const std::vector<float> depthKm = f.averagedDepthKm();
+        depth += since(t);
+        t = Clock::now();
+        drawReferenceGeometry(s.reference, s.camera, p.width, p.height, float(grid.rKm.back()), float(grid.rKm.front()),
+                              rgba, depthKm, nullptr);
+        shells += since(t);
+        t = Clock::now();
+        benchmark::DoNotOptimize(toRgba8(rgba, s.background));
+        bytes += since(t);
+    }
+    const double n = double(state.iterations());
+    state.counters["colour_ms"] = colour / n;
+    state.counters["depth_ms"] = depth / n;
+    state.counters["shells_ms"] = shells / n;
+    state.counters["rgba8_ms"] = bytes / n;
+}
+BENCHMARK(BM_FramePicture1500)->Unit(benchmark::kMillisecond);
+
+// Maps and sections (issue 29: >= 10 pictures/s at 1920x1080 on 2 cores for full-resolution data)
+// of the temperature anomaly, the state's colours: first arg 0 map, 1 map with contours and flow
+// arrows, 2 section, 3 section with contours and flow; then width and height. The server sends them as PNG (POST /api/slice):
+// png1_ms is its encoding at zlib level 1, what it sends, png6_ms at level 6 (screenshots'), apart.
+void BM_SlicePicture1920(benchmark::State& state)
+{
+    const VariableCatalog catalog = benchCatalog();
+    ResolvedState r;
+    r.state = defaultState(catalog);
+    r.state.width = int(state.range(1));
+    r.state.height = int(state.range(2));
+    r.state.reference.coastlines.visible = false;  // the coastline file is the UI build's; not needed here
+    const int kind = int(state.range(0));
+    const bool extras = kind == 1 || kind == 3;
+    if (extras) {
+        r.state.map.contours = {-100, 100};
+        r.state.map.flow = r.state.section.flow = true;
+    }
+    r.state.section.from = {30, -20};
+    r.state.section.to = {30, 60};
+    r.params = resolveParams(r.state, catalog);
+    const SliceInputs in{data().levels[0].get(), &r, catalog.names, "temperature anomaly [K]", "step 0", nullptr};
+    for (auto _ : state)
+        benchmark::DoNotOptimize(kind < 2 ? mapPicture(in) : sectionPicture(in));
+    const ImageRgba8 image = kind < 2 ? mapPicture(in) : sectionPicture(in);
+    for (const int level : {1, 6}) {
+        const auto t = std::chrono::steady_clock::now();
+        benchmark::DoNotOptimize(server::encodePng(image.pixels, image.width, image.height, level));
+        state.counters[fmt::format("png{}_ms", level)] =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+    }
+    state.counters["pictures/s"] = benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate);
+}
+// At 1920x1080, and at the size of the UI's map pane in a 1920x1080 window (about 950x340).
+BENCHMARK(BM_SlicePicture1920)
+    ->ArgsProduct({{0, 1, 2, 3}, {1920}, {1080}})
+    ->Args({0, 950, 340})
+    ->Args({2, 950, 340})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The sampling alone, without projection or drawing: the slice on a 0.2-degree lat-lon grid
+// (900 x 1800 = 1.6 M points, as in a 1920x1080 map's sphere).
+void BM_LatLonSlice(benchmark::State& state)
+{
+    const size_t var = size_t(std::find(data().names.begin(), data().names.end(), "temperature anomaly") - data().names.begin());
+    for (auto _ : state)
+        benchmark::DoNotOptimize(latLonSlice(*data().levels[0], var, 660, 0.2));
+}
+BENCHMARK(BM_LatLonSlice)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 void BM_Level2Pass1024(benchmark::State& state) { runPasses(state, 2, params(1024), 1); }
 BENCHMARK(BM_Level2Pass1024)->Unit(benchmark::kMillisecond);
 void BM_Level1Pass512(benchmark::State& state) { runPasses(state, 1, params(512), 1); }
@@ -595,3 +699,4 @@ int main(int argc, char** argv)
     std::fprintf(stderr, "load average at end: %s\n", firstLine("/proc/loadavg").c_str());
     benchmark::Shutdown();
 }
+

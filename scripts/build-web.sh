@@ -12,6 +12,7 @@ if [[ ! -f $stamp || package-lock.json -nt $stamp || package.json -nt $stamp ]];
   npm ci --no-audit --no-fund --loglevel=error >/dev/null
   touch "$stamp"
 fi
-if [[ ! -f dist/app.js || ! -f dist/sample_worker.js || -n $(find src build.mjs package-lock.json -newer dist/app.js -print -quit) ]]; then
+if [[ ! -f dist/app.js || ! -f dist/sample_worker.js || ! -f dist-test/app.js ||
+      -n $(find src build.mjs package-lock.json -newer dist/app.js -print -quit) ]]; then
   node build.mjs
 fi

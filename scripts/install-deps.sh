@@ -13,14 +13,21 @@ packages=(
   libopenmpi-dev openmpi-bin        # MPI: one binary, alone or under mpirun (docs/scaling.md)
   libfreetype-dev fonts-dejavu-core # legends in rendered pictures
   libgtest-dev libgmock-dev libbenchmark-dev
+  pybind11-dev python3-dev python3-numpy # Python's raypc module (src/python, docs/python.md)
+  python3-xarray python3-pandas     # its to_xarray and DataFrames
   chromium                          # the web UI's browser tests
 )
 # Only the test command needs these: an independent XML parser and ParaView's Python, which
 # check that ParaView opens the exported pathlines and critical points; Python's netCDF4, which
-# writes the contest-layout fixture at test time (tests/data); clang with its sanitizer and
-# libFuzzer runtimes and llvm-symbolizer for `scripts/test.sh --sanitize` and tests/fuzz/.
+# writes the contest-layout fixture at test time (tests/data); pytest, Jupyter's nbclient and kernel,
+# matplotlib, Pillow and a WebSocket client (a stand-in UI tab) for the Python module's tests and
+# its example notebook (tests/python); clang with its sanitizer and libFuzzer runtimes and
+# llvm-symbolizer for `scripts/test.sh --sanitize` and tests/fuzz/; GMT, which checks that it
+# reads the maps and sections RayPC exports as netCDF grids (tests/cli, maps_sections).
 if [[ ${1:-} == --tests ]]; then
-  packages+=(libxml2-utils python3-paraview python3-netcdf4 clang libclang-rt-14-dev llvm)
+  packages+=(libxml2-utils python3-paraview python3-netcdf4 clang libclang-rt-14-dev llvm
+             python3-pytest python3-nbclient python3-nbformat python3-ipykernel python3-matplotlib python3-pil
+             python3-websocket gmt)
 fi
 # Node.js and npm build the web UI; a machine may carry them from elsewhere (npm bundled with
 # nodejs), so ask for Debian's only when the commands are missing.

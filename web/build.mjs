@@ -57,8 +57,9 @@ async function generateStateModules() {
   }));
 }
 
-async function bundle() {
-  const dist = join(here, 'dist');
+// The UI into `dist`; with `testHooks` the browser tests' hooks (test_hooks.ts) are built in, which
+// the UI users get (web/dist) leaves out (esbuild drops the code behind RAYPC_TEST_HOOKS = false).
+async function bundle(dist, testHooks) {
   mkdirSync(dist, { recursive: true });
   // The page (an ES module) and the worker that fetches samples (api.ts starts it as
   // dist/sample_worker.js; a classic worker script).
@@ -75,6 +76,7 @@ async function bundle() {
       // parcoord-es: use its ES module build (package.json "module"), which imports d3 v1/v2 modules
       // that npm deduplicates with d3@5's; one d3-selection instance keeps d3.event working.
       mainFields: ['module', 'main'],
+      define: { RAYPC_TEST_HOOKS: String(testHooks) },
     });
   }
   const css = readFileSync(join(here, 'src/style.css'), 'utf8') + '\n' +
@@ -103,7 +105,11 @@ function writeCoastlines(dist) {
 if (process.argv[1] === fileURLToPath(import.meta.url)) {
   await generateStateModules();
   if (!process.argv.includes('--generate')) {
-    await bundle();
-    writeCoastlines(join(here, 'dist'));
+    // web/dist: what `raypc serve` serves and `cmake --install` installs; web/dist-test: the same
+    // with the test hooks, for tests/browser.
+    for (const [dir, testHooks] of [['dist', false], ['dist-test', true]]) {
+      await bundle(join(here, dir), testHooks);
+      writeCoastlines(join(here, dir));
+    }
   }
 }

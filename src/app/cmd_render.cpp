@@ -1,7 +1,13 @@
 // raypc render DATASET|FILE.nc… [--dataset DIR] --time T -o out.png [--size WxH] [--state STATE.json] [--var NAME]
 //   [--colormap NAME] [--range NAME=MIN:MAX]... [--lod N|auto] [--passes N] [--depth depth.pfm] [--stats]
 //   [--pathlines] [--pathline-radius KM] [--legend] [--reference shells|graticule|coastlines]...
-//   [--stereo off|side-by-side|side-by-side-half|anaglyph]
+//   [--stereo off|side-by-side|side-by-side-half|anaglyph] [--view 3d|map|section]
+// raypc map DATASET … [--depth KM] [--projection NAME] [--central-meridian DEG] [--contours V,…] [--flow]
+//   [--netcdf slice.nc [--grid-step DEG]]
+// raypc section DATASET … --from LAT,LON --to LAT,LON [--contours V,…] [--flow]
+//   [--netcdf section.nc [--grid-step DEG] [--depth-step KM]]
+// All three draw through StateRenderer (render/state_renderer.h); maps and sections are
+// render/slice_view.h's pictures of the state's "map" and "section" (docs/maps.md).
 #include "app/command.h"
 #include "app/options.h"
 #include "app/series_inputs.h"
@@ -9,10 +15,12 @@
 #include "core/mpi.h"
 #include "core/numbered_name.h"
 #include "core/strings.h"
+#include "data/cf_grid.h"
 #include "data/dataset.h"
 #include "render/image_io.h"
 #include "render/pathline_scene.h"
 #include "render/render_state.h"
+#include "render/slice_view.h"
 #include "render/state_renderer.h"
 
 #include <fmt/format.h>
@@ -20,6 +28,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <array>
 #include <optional>
 #include <functional>
@@ -32,7 +41,7 @@ using namespace raypc::render;
 
 struct RenderArgs {
     SeriesFlags series;  // a dataset, or netCDF files
-    std::string dataset, time = "0", output, size, statePath, var, colormap, lod, depthPath;
+    std::string dataset, time, output, size, statePath, var, colormap, lod, depthPath;
     std::vector<std::string> ranges;
     int passes = 0;
     bool stats = false;
@@ -41,7 +50,142 @@ struct RenderArgs {
     bool legend = false;
     std::vector<std::string> reference;  // shells, graticule, coastlines
     std::string stereo;                  // a stereo mode; empty: the state's
+    // Maps and sections: the picture drawn, and what the flags change in the state's map and section.
+    std::string view = "3d";  // 3d | map | section
+    CLI::Option *sliceDepth = nullptr, *centralMeridian = nullptr, *centralLatitude = nullptr, *contoursOption = nullptr;
+    double sliceDepthKm = 0, centralMeridianDeg = 0, centralLatitudeDeg = 0;
+    std::string projection, from, to, netcdf;
+    std::vector<double> contours;
+    bool flow = false, allColour = false;
+    double gridStepDeg = 0, depthStepKm = 10;  // gridStepDeg 0: 1 on maps, 0.5 along sections
 };
+
+// "LAT,LON" in degrees -> a section's end.
+SectionState::Point parsePoint(const std::string& text, const std::string& option)
+{
+    const auto parts = split(text, ',');
+    if (parts.size() == 2) {
+        try {
+            size_t a = 0, b = 0;
+            const double lat = std::stod(parts[0], &a), lon = std::stod(parts[1], &b);
+            if (a == parts[0].size() && b == parts[1].size() && lat >= -90 && lat <= 90 && lon >= -360 && lon <= 360)
+                return {float(lat), float(lon)};
+        } catch (const std::exception&) {
+        }
+    }
+    fail("{} '{}': expected LAT,LON in degrees (lat in [-90, 90], lon in [-360, 360]), e.g. -20,170", option, text);
+}
+
+// What --view and the commands map and section draw.
+std::optional<StateRenderer::Slice> sliceOf(const RenderArgs& args)
+{
+    if (args.view == "map")
+        return StateRenderer::Slice::Map;
+    if (args.view == "section")
+        return StateRenderer::Slice::Section;
+    if (args.view != "3d")
+        fail("--view '{}': expected 3d, map or section", args.view);
+    return std::nullopt;
+}
+
+// The flags of maps and sections over the state's "map" and "section".
+void applySliceFlags(const RenderArgs& args, RenderState& state)
+{
+    if (args.sliceDepth && args.sliceDepth->count())
+        state.map.depthKm = float(args.sliceDepthKm);
+    if (!args.projection.empty()) {
+        try {
+            state.map.projection = parseMapProjection(args.projection);
+        } catch (const Error& e) {
+            fail("--projection: {}", e.what());
+        }
+    }
+    if (args.centralMeridian && args.centralMeridian->count()) {
+        if (!(args.centralMeridianDeg >= -180 && args.centralMeridianDeg <= 180))
+            fail("--central-meridian {}: expected degrees east in [-180, 180]", args.centralMeridianDeg);
+        state.map.centralMeridianDeg = float(args.centralMeridianDeg);
+    }
+    if (args.centralLatitude && args.centralLatitude->count()) {
+        if (!(args.centralLatitudeDeg >= -90 && args.centralLatitudeDeg <= 90))
+            fail("--central-latitude {}: expected degrees north in [-90, 90]", args.centralLatitudeDeg);
+        state.map.centralLatitudeDeg = float(args.centralLatitudeDeg);
+    }
+    if (args.contoursOption && args.contoursOption->count()) {
+        if (args.contours.size() > 16)
+            fail("--contours: {} values; at most 16", args.contours.size());
+        state.map.contours.assign(args.contours.begin(), args.contours.end());
+    }
+    if (args.allColour)
+        state.map.greyUnselected = false;
+    if (args.flow)
+        (args.view == "map" ? state.map.flow : state.section.flow) = true;
+    if (!args.from.empty())
+        state.section.from = parsePoint(args.from, "--from");
+    if (!args.to.empty())
+        state.section.to = parsePoint(args.to, "--to");
+    if (!(args.gridStepDeg >= 0) || !(args.depthStepKm > 0))
+        fail("--grid-step {} / --depth-step {}: expected positive numbers", args.gridStepDeg, args.depthStepKm);
+    if (args.view == "map" && args.gridStepDeg > 0) {
+        const double n = 180 / args.gridStepDeg;
+        if (std::abs(n - std::round(n)) > 1e-9 || n > 36000)
+            fail("--grid-step {}: expected degrees that divide 180 (e.g. 0.25, 0.5, 1, 2)", args.gridStepDeg);
+    }
+    if (args.view == "section" && args.gridStepDeg > 0 && args.gridStepDeg < 0.001)
+        fail("--grid-step {}: at least 0.001 degrees", args.gridStepDeg);
+    if (args.view == "section" && args.depthStepKm < 0.1)
+        fail("--depth-step {}: at least 0.1 km", args.depthStepKm);
+}
+
+// The slice of `step` as a CF netCDF grid (`--netcdf`): a map's lat-lon grid or a section's
+// distance-depth grid of the colour variable, sampled as the picture is.
+CfGridFile sliceGridFile(const Dataset& dataset, const ResolvedState& resolved, StateRenderer::Slice slice,
+                         const RenderArgs& args)
+{
+    const RenderState& state = resolved.state;
+    const auto volume = dataset.load(state.step, state.level.value_or(0));
+    const size_t var = size_t(resolved.params.colorVariable);
+    const VariableInfo& info = dataset.variables().at(var);
+    CfGridFile file;
+    file.name = cfName(info.name);
+    file.units = info.units;
+    file.longName = info.name;
+    const double timeMyr = dataset.steps().at(size_t(state.step)).timeMyr;
+    const CfVariable1D lat{"lat", "degrees_north", "latitude", "latitude", "Y", "", {}, ""};
+    const CfVariable1D lon{"lon", "degrees_east", "longitude", "longitude", "X", "", {}, ""};
+    if (slice == StateRenderer::Slice::Map) {
+        const SliceGrid g = latLonSlice(*volume, var, state.map.depthKm, args.gridStepDeg > 0 ? args.gridStepDeg : 1.0,
+                                        "--depth");  // the step was checked with the options
+        file.rows = lat;
+        file.rows.values = g.rows;
+        file.columns = lon;
+        file.columns.values = g.columns;
+        file.scalars.push_back({"depth", "km", "depth", "depth below the surface", "Z", "down", {state.map.depthKm}, ""});
+        file.values = g.values;
+        file.globalAttributes.emplace_back(
+            "title", fmt::format("{} at {:g} km depth, step {} ({:.3f} Myr)", info.name, state.map.depthKm, state.step, timeMyr));
+    } else {
+        const GreatCircle circle(state.section.from, state.section.to);
+        const double step = args.gridStepDeg > 0 ? args.gridStepDeg : 0.5;
+        const int columns = std::max(2, int(std::ceil(circle.lengthDeg() / step)) + 1);
+        const double depthSpan = kSurfaceRadiusKm - volume->grid().rKm.front();
+        const int rows = std::max(2, int(std::ceil(depthSpan / args.depthStepKm)) + 1);
+        const SectionGrid g = sectionGrid(*volume, var, state.section, columns, rows);
+        file.rows = {"depth", "km", "depth", "depth below the surface", "Z", "down", g.grid.rows, ""};
+        file.columns = {"distance", "km", "", "distance along the great circle from the section's start, at the surface", "X", "", g.grid.columns, ""};
+        file.auxiliary.push_back({"distance_deg", "degree", "", "angle along the great circle from the section's start", "", "", g.distanceDeg, "distance"});
+        file.auxiliary.push_back({"lat", "degrees_north", "latitude", "latitude", "", "", g.latDeg, "distance"});
+        file.auxiliary.push_back({"lon", "degrees_east", "longitude", "longitude", "", "", g.lonDeg, "distance"});
+        file.values = g.grid.values;
+        file.globalAttributes.emplace_back(
+            "title", fmt::format("{} on the great-circle section from {} to {}, step {} ({:.3f} Myr)", info.name,
+                                 latLonText(state.section.from.latDeg, state.section.from.lonDeg),
+                                 latLonText(state.section.to.latDeg, state.section.to.lonDeg), state.step, timeMyr));
+    }
+    file.globalAttributes.emplace_back("source", "RayPC (raypc " + args.view + "), sampled on the model's native grid as "
+                                                 "raypc probe samples (trilinear, lon seam and pole caps joined)");
+    file.globalAttributes.emplace_back("time", fmt::format("{:.6g} Myr", timeMyr));
+    return file;
+}
 
 // "1024x768" -> width, height.
 std::pair<int, int> parseSize(const std::string& text)
@@ -68,6 +212,8 @@ struct RenderSetup {
     bool sequence = false, lodAuto = false;
     // -o and --depth: the step goes where they say %d or %03d (core/numbered_name.h).
     std::optional<NumberedName> output, depth;
+    std::optional<StateRenderer::Slice> slice;  // a map or a section instead of the 3D view
+    std::optional<NumberedName> netcdf;          // the slice's grid (maps and sections)
 };
 
 // -o and --depth, checked before anything is read: one step number at most, and a --time range
@@ -93,6 +239,23 @@ RenderSetup setUp(const RenderArgs& args)
     // Steps: one index/time, or A:B for a numbered sequence.
     const bool sequence = args.time.find(':') != std::string::npos;
     auto [output, depth] = outputNames(args, sequence);
+    const std::optional<StateRenderer::Slice> slice = sliceOf(args);
+    std::optional<NumberedName> netcdf;
+    if (!args.netcdf.empty()) {
+        netcdf.emplace(args.netcdf, "--netcdf");
+        if (sequence && !netcdf->numbered())
+            fail("--netcdf '{}': a --time range needs a numbered pattern such as maps/slice_%03d.nc", args.netcdf);
+        if ((*netcdf)(0) == output(0))
+            fail("--netcdf '{}' names the same file as -o", args.netcdf);
+    }
+    if (slice) {
+        // What only the 3D view has.
+        if (depth)
+            fail("--depth (the depth along the view rays) is only for --view 3d");
+        if (!args.stereo.empty() || args.pathlines || args.pathlineRadiusKm != 0 || args.passes != 0)
+            fail("--stereo, --pathlines, --pathline-radius and --passes are only for the 3D view, not for a {}",
+                 args.view);
+    }
     const auto dataset = Dataset::open(args.dataset);
     // Without a state: the UI's first view (render::defaultState), so that a figure made from the
     // command line and the browser's first picture are the same.
@@ -172,11 +335,19 @@ RenderSetup setUp(const RenderArgs& args)
         state.pathlines.visible = true;
     }
 
-    const auto [first, last] = parseStepRange(*dataset, args.time);
+    // Without --time: the state's step (0 without a state), so that a state saved at step 6 renders
+    // step 6, as the UI showed it.
+    const auto [first, last] = args.time.empty() ? std::pair<int, int>(state.step, state.step)
+                                                 : parseStepRange(*dataset, args.time);
     state.step = first;
+    applySliceFlags(args, state);
     // Before anything is allocated: a picture larger than memory is refused with the figures.
     checkPictureFitsMemory(state, depth.has_value(), availableMemory());
-    return {dataset, resolveState(state, *dataset), first, last, sequence, lodAuto, std::move(output), std::move(depth)};
+    ResolvedState resolved = resolveState(state, *dataset);
+    if (slice == StateRenderer::Slice::Section)
+        GreatCircle(resolved.state.section.from, resolved.state.section.to, "--from/--to");  // checked before reading
+    return {dataset,          resolved,          first, last, sequence, lodAuto, std::move(output), std::move(depth),
+            slice,            std::move(netcdf)};
 }
 
 // Renders one step (only the tiles of `share`; rank 0 then gathers them all when `share` is shared
@@ -188,6 +359,42 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
     const Dataset& dataset = *setup.dataset;
     ResolvedState resolved = setup.resolved;
     resolved.state.step = step;
+    const auto makeParent = [](const std::string& file) {
+        if (const auto parent = std::filesystem::path(file).parent_path(); !parent.empty()) {
+            // Ranks writing frames may create the directory at the same time: existing is fine.
+            std::error_code ec;
+            std::filesystem::create_directories(parent, ec);
+            if (ec && !std::filesystem::is_directory(parent))
+                fail("{}: cannot create the directory ({})", parent.string(), ec.message());
+        }
+    };
+    if (setup.slice) {
+        // A map or a section: one rank draws it whole.
+        const auto t0 = std::chrono::steady_clock::now();
+        const ImageRgba8 image = renderer.slicePicture(resolved, *setup.slice);
+        // Both made before either is written: a grid that cannot be made leaves no picture.
+        std::optional<CfGridFile> grid;
+        if (setup.netcdf)
+            grid = sliceGridFile(dataset, resolved, *setup.slice, args);
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const std::string out = (*setup.output)(step);
+        makeParent(out);
+        writePng(out, image);
+        nlohmann::json stats{{"step", step},
+                             {"timeMyr", dataset.steps()[size_t(step)].timeMyr},
+                             {"level", resolved.state.level.value_or(0)},
+                             {"view", args.view},
+                             {"output", out},
+                             {"size", {image.width, image.height}},
+                             {"seconds", seconds}};
+        if (grid) {
+            const std::string path = (*setup.netcdf)(step);
+            makeParent(path);
+            writeCfGrid(path, *grid);
+            stats["netcdf"] = path;
+        }
+        return stats;
+    }
     ViewFrames frames;  // one, or a stereo pair's two eyes
     nlohmann::json passes = nlohmann::json::array();
     PassStats total;
@@ -221,25 +428,20 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
         for (FrameBuffer& frame : frames)
             gatherTilesToRoot(frame);
         // The work of every rank; "passes" and "seconds" stay rank 0's.
-        std::array<int64_t, 4> counts{int64_t(total.samples), int64_t(total.samplesSkipped), int64_t(total.chunks),
-                                      int64_t(total.chunksJumped)};
-        mpi::sum(counts);
-        total.samples = uint64_t(counts[0]);
-        total.samplesSkipped = uint64_t(counts[1]);
-        total.chunks = uint64_t(counts[2]);
-        total.chunksJumped = uint64_t(counts[3]);
+        const PassStats::Counts mine = total.counts();
+        std::array<int64_t, std::tuple_size_v<PassStats::Counts>> all;
+        std::copy(mine.begin(), mine.end(), all.begin());
+        mpi::sum(all);
+        PassStats::Counts others;  // the other ranks' counters
+        for (size_t i = 0; i < mine.size(); ++i)
+            others[i] = uint64_t(all[i]) - mine[i];
+        total.addCounts(others);
     }
     const std::string out = (*setup.output)(step);
     phase([&] {
         if (!share.all() && !mpi::isRoot())
             return;
-        if (const auto parent = std::filesystem::path(out).parent_path(); !parent.empty()) {
-            // Ranks writing frames may create the directory at the same time: existing is fine.
-            std::error_code ec;
-            std::filesystem::create_directories(parent, ec);
-            if (ec && !std::filesystem::is_directory(parent))
-                fail("{}: cannot create the directory ({})", parent.string(), ec.message());
-        }
+        makeParent(out);
         writePng(out, renderer.picture(frames, resolved, true));
         if (setup.depth) {
             int width = 0, height = 0;
@@ -278,7 +480,7 @@ void run(const RenderArgs& args)
     mpi::together([&] { setup = setUp(args); });
     StateRenderer renderer(setup.dataset);
     LevelPolicy policy;  // level 0 unless the state names one
-    if (setup.lodAuto && !setup.resolved.state.level) {
+    if (setup.lodAuto && !setup.resolved.state.level && !setup.slice) {
         mpi::together([&] {
             if (mpi::isRoot())
                 policy.samplesPerSecond = renderer.measureSamplesPerSecond(setup.first, setup.resolved.params);
@@ -287,7 +489,7 @@ void run(const RenderArgs& args)
         policy.samplesPerSecond = std::stod(mpi::broadcast(fmt::format("{:.17g}", policy.samplesPerSecond)));
     }
     nlohmann::json statsJson = nlohmann::json::array();
-    if (mpi::distributed() && setup.first == setup.last) {
+    if (mpi::distributed() && setup.first == setup.last && !setup.slice) {
         statsJson.push_back(renderStep(args, setup, renderer, policy, setup.first, rankTileShare()));
     } else {
         mpi::forEachDynamic(setup.last - setup.first + 1, [&](int64_t item) {
@@ -307,50 +509,116 @@ void run(const RenderArgs& args)
         fmt::print("{}\n", (setup.sequence ? statsJson : statsJson[0]).dump(2));
 }
 
+// Preprocesses netCDF files given instead of a dataset (quick when complete; collective under
+// mpirun), then draws.
+void runCommand(RenderArgs& args)
+{
+    const auto [series, options] = args.series.resolve();
+    if (series.fromFiles())
+        prepareSeries(series, options);
+    args.dataset = series.dataset.string();
+    run(args);
+}
+
+// The options every picture takes (the 3D view, maps and sections).
+void addPictureOptions(CLI::App& cmd, RenderArgs& args)
+{
+    args.series.add(cmd, "preprocessed first, reused by later runs");
+    cmd.add_option("-t,--time", args.time,
+                   "Step index (0-based) or time like 24Myr; A:B renders steps A..B into a numbered sequence "
+                   "(default: the state's step, else 0)");
+    cmd.add_option("-o,--output", args.output,
+                   "Output PNG; for --time A:B a pattern like frames/frame_%03d.png (%d or %0Nd, N <= 9: the step; %%: a %)")
+        ->required();
+    cmd.add_option("--size", args.size, "Image size WIDTHxHEIGHT (default 512x512 or the state's)");
+    cmd.add_option("--state", args.statePath, "STATE.json saved by the browser UI (docs/state.md)");
+    cmd.add_option("--var", args.var, "Colouring variable (default: the state's, else temperature anomaly as in the UI's first view)");
+    std::vector<std::string> mapNames;
+    for (const ColorMapId map : allColorMaps())
+        mapNames.emplace_back(colorMapName(map));
+    cmd.add_option("--colormap", args.colormap, fmt::format("Colour map of the colouring variable: {}", fmt::join(mapNames, ", ")));
+    cmd.add_option("--range", args.ranges,
+                   "Brush NAME=MIN:MAX on a variable or coordinate (x, y, z, lat, lon, radius, depth); repeatable, a "
+                   "name given twice selects either range (OR); replaces the state's ranges of that name");
+    cmd.add_option("--lod", args.lod, "Level of detail: 0 (full), 1, 2, or auto (fit the state's time budget)");
+    cmd.add_flag("--stats", args.stats, "Print JSON statistics: time per pass, samples, bricks, rate");
+    cmd.add_option("--reference", args.reference,
+                   "Reference geometry to draw: shells (410, 660, 1000, 1600, 2200 km or the state's), "
+                   "graticule, coastlines; repeatable");
+}
+
+// The options of maps and sections (the state's "map" and "section"); `view` is map or section.
+void addSliceOptions(CLI::App& cmd, RenderArgs& args, const std::string& view)
+{
+    args.view = view;
+    args.contoursOption = cmd.add_option("--contours", args.contours, "Contour lines at these values of the colouring variable (comma-separated)")
+                              ->delimiter(',');
+    cmd.add_flag("--flow", args.flow,
+                 view == "map" ? "Arrows of the horizontal flow at the depth (needs vx, vy, vz)"
+                               : "Arrows of the flow in the section's plane: along the profile and radial (needs vx, vy, vz)");
+    cmd.add_flag("--all-colour", args.allColour, "Colour what lies outside the brushes too (default: grey)");
+    cmd.add_option("--netcdf", args.netcdf,
+                   view == "map" ? "Also write the slice as a CF netCDF lat-lon grid (GMT, xarray, Panoply read it)"
+                                 : "Also write the section as a CF netCDF distance-depth grid");
+    cmd.add_option("--grid-step", args.gridStepDeg,
+                   view == "map" ? "Spacing of the --netcdf grid, degrees (divides 180; default 1)"
+                                 : "Spacing of the --netcdf grid along the profile, degrees (default 0.5)");
+}
+
 const CommandRegistration kRenderCommand(
     "render", "Render a step (or a sequence of steps) of a dataset to PNG with the spherical volume ray caster",
     [](CLI::App& cmd) {
         auto args = std::make_shared<RenderArgs>();
-        args->series.add(cmd, "preprocessed first, reused by later runs");
-        cmd.add_option("-t,--time", args->time,
-                       "Step index (0-based) or time like 24Myr; A:B renders steps A..B into a numbered sequence")
-            ->capture_default_str();
-        cmd.add_option("-o,--output", args->output, "Output PNG; for --time A:B a pattern like frames/frame_%03d.png (%d or %0Nd, N <= 9: the step; %%: a %)")
-            ->required();
-        cmd.add_option("--size", args->size, "Image size WIDTHxHEIGHT (default 512x512 or the state's)");
-        cmd.add_option("--state", args->statePath, "STATE.json saved by the browser UI (docs/state.md)");
-        cmd.add_option("--var", args->var, "Colouring variable (default: the state's, else temperature anomaly as in the UI's first view)");
-        std::vector<std::string> mapNames;
-        for (const ColorMapId map : allColorMaps())
-            mapNames.emplace_back(colorMapName(map));
-        cmd.add_option("--colormap", args->colormap,
-                       fmt::format("Colour map of the colouring variable: {}", fmt::join(mapNames, ", ")));
-        cmd.add_option("--range", args->ranges,
-                       "Brush NAME=MIN:MAX on a variable or coordinate (x, y, z, lat, lon, radius, depth); repeatable, a "
-                       "name given twice selects either range (OR); replaces the state's ranges of that name");
-        cmd.add_option("--lod", args->lod, "Level of detail: 0 (full), 1, 2, or auto (fit the state's time budget)");
+        addPictureOptions(cmd, *args);
         cmd.add_option("--passes", args->passes, "Progressive passes to accumulate (default: the state's, 8)");
         cmd.add_option("--depth", args->depthPath, "Also write the depth (km along the view ray) as PFM (a pattern as -o)");
-        cmd.add_flag("--stats", args->stats, "Print JSON statistics: time per pass, samples, bricks, rate");
         cmd.add_flag("--pathlines", args->pathlines,
                      "Show the pathlines injected in the last 10 steps (or the state's window) as tubes");
         cmd.add_option("--pathline-radius", args->pathlineRadiusKm, "Tube radius in km (implies --pathlines; default 12)");
         cmd.add_flag("--legend", args->legend, "Draw colour legends (variable, units, range; pathlines' colouring)");
-        cmd.add_option("--reference", args->reference,
-                       "Reference geometry to draw: shells (410, 660, 1000, 1600, 2200 km or the state's), "
-                       "graticule, coastlines; repeatable");
         cmd.add_option("--stereo", args->stereo,
                        "Stereo pair: off, side-by-side (2W x H), side-by-side-half (W x H), anaglyph (red-cyan); eye "
                        "separation and convergence from the state (docs/state.md)");
-        cmd.callback([args] {
-            const auto [series, options] = args->series.resolve();
-            if (series.fromFiles())
-                prepareSeries(series, options);  // quick when complete; collective under mpirun
-            args->dataset = series.dataset.string();
-            run(*args);
-        });
+        cmd.add_option("--view", args->view,
+                       "What to draw: 3d (the volume, default), map or section (the state's map or section, as "
+                       "raypc map and raypc section draw them)");
+        cmd.callback([args] { runCommand(*args); });
     },
     60, Ranks::AllRanks);
+
+const CommandRegistration kMapCommand(
+    "map",
+    "Draw a map of a depth slice (the colouring variable on the sphere at one depth, in a map projection, with "
+    "coastlines, contours, flow arrows and the brushes greyed out) to PNG; optionally export it as CF netCDF",
+    [](CLI::App& cmd) {
+        auto args = std::make_shared<RenderArgs>();
+        addPictureOptions(cmd, *args);
+        addSliceOptions(cmd, *args, "map");
+        args->sliceDepth = cmd.add_option("--depth", args->sliceDepthKm, "Depth of the slice below the surface, km (default: the state's, 660)");
+        std::vector<std::string> names;
+        for (const MapProjection p : allMapProjections())
+            names.emplace_back(mapProjectionName(p));
+        cmd.add_option("--projection", args->projection, fmt::format("Map projection: {} (default: the state's, mollweide)", fmt::join(names, ", ")));
+        args->centralMeridian = cmd.add_option("--central-meridian", args->centralMeridianDeg, "Longitude at the map's centre, degrees east");
+        args->centralLatitude = cmd.add_option("--central-latitude", args->centralLatitudeDeg, "Latitude at the centre of the orthographic projection, degrees north");
+        cmd.callback([args] { runCommand(*args); });
+    },
+    61, Ranks::AllRanks);
+
+const CommandRegistration kSectionCommand(
+    "section",
+    "Draw a vertical section along a great circle (surface to the core-mantle boundary, depth down, distance in km "
+    "and degrees, reference depths as lines, contours, flow arrows) to PNG; optionally export it as CF netCDF",
+    [](CLI::App& cmd) {
+        auto args = std::make_shared<RenderArgs>();
+        addPictureOptions(cmd, *args);
+        addSliceOptions(cmd, *args, "section");
+        cmd.add_option("--from", args->from, "Start of the section on the surface, LAT,LON degrees (default: the state's)");
+        cmd.add_option("--to", args->to, "End of the section on the surface, LAT,LON degrees (the shorter arc is drawn)");
+        cmd.add_option("--depth-step", args->depthStepKm, "Spacing of the --netcdf grid in depth, km (default 10)");
+        cmd.callback([args] { runCommand(*args); });
+    },
+    62, Ranks::AllRanks);
 
 }  // namespace
 }  // namespace raypc::app

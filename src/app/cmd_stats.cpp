@@ -8,7 +8,6 @@
 #include "core/spherical.h"
 #include "data/dataset.h"
 #include "data/selection.h"
-#include "render/render_state.h"
 
 #include <fmt/format.h>
 
@@ -18,9 +17,8 @@ namespace raypc::app {
 namespace {
 
 struct StatsArgs {
-    std::string dataset, statePath, output, profile, time;
-    std::vector<std::string> ranges;
-    int level = 0;
+    SeriesSelectionFlags selection;
+    std::string output, profile;
     bool quiet = false;
 };
 
@@ -51,22 +49,12 @@ StatsRows formatRows(const std::vector<StepSelection>& selections, const Spheric
 // same); rank 0 gathers the rows in rank order, which is step order, and writes the files.
 void run(const StatsArgs& args)
 {
-    std::shared_ptr<const Dataset> dataset;
-    std::vector<RangeFilter> filters;
-    int first = 0, last = 0;
-    mpi::together([&] {
-        dataset = Dataset::open(args.dataset);
-        std::vector<NamedRange> ranges;
-        if (!args.statePath.empty())
-            ranges = render::loadRenderState(args.statePath).brushes;
-        applyRangeOptions(ranges, args.ranges);
-        filters = resolveRangeFilters(*dataset, ranges, args.statePath.empty() ? "--range" : "brushes");
-        dataset->checkLevel(args.level, "--lod");
-        std::tie(first, last) = args.time.empty()
-                                    ? std::pair<int, int>(0, static_cast<int>(dataset->steps().size()) - 1)
-                                    : parseStepRange(*dataset, args.time);
-    });
-    const SphericalGrid& grid = dataset->levels()[args.level].grid;
+    SeriesSelection sel;
+    mpi::together([&] { sel = resolveSeriesSelection(args.selection); });
+    const Dataset& dataset = *sel.dataset;
+    const std::vector<RangeFilter>& filters = sel.filters;
+    const int first = sel.first, last = sel.last, level = args.selection.level;
+    const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
     const mpi::Block block = mpi::blockOf(last - first + 1);
 
     StatsRows mine;
@@ -76,7 +64,7 @@ void run(const StatsArgs& args)
                          block.end - block.begin, "steps");
     mpi::together([&] {
         if (block.end > block.begin) {
-            const auto selections = selectionOverTime(*dataset, filters, args.level, first + int(block.begin),
+            const auto selections = selectionOverTime(dataset, filters, level, first + int(block.begin),
                                                       first + int(block.end) - 1, {}, [&] {
                                                           if (progress)
                                                               progress->advance();
@@ -113,13 +101,9 @@ const CommandRegistration kStatsCommand(
     "Selected volume (km³, % of the mantle) and its depth distribution for every step, exact from the grid",
     [](CLI::App& cmd) {
         auto args = std::make_shared<StatsArgs>();
-        cmd.add_option("dataset", args->dataset, "Dataset directory")->required();
-        cmd.add_option("--state", args->statePath, "STATE.json whose brushes define the selection");
-        cmd.add_option("--range", args->ranges, "Brush NAME=MIN:MAX on a variable or coordinate; repeatable, overrides the state");
+        args->selection.add(cmd);
         cmd.add_option("-o,--output", args->output, "CSV: step, time, selected volume, percent of the mantle")->required();
         cmd.add_option("--profile", args->profile, "CSV: selected volume per radius (depth distribution) of every step");
-        cmd.add_option("-t,--time", args->time, "Steps A or A:B (index or time like 24Myr); default all");
-        cmd.add_option("--lod", args->level, "Level of detail (0 = full resolution, exact)")->capture_default_str();
         cmd.add_flag("-q,--quiet", args->quiet, "No progress output");
         cmd.callback([args] { run(*args); });
     },

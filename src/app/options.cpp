@@ -1,6 +1,7 @@
 #include "app/options.h"
 
 #include "core/error.h"
+#include "render/render_state.h"
 #include "core/spherical.h"
 #include "core/strings.h"
 #include "data/value_encoding.h"
@@ -100,7 +101,6 @@ ReaderOptions ReaderFlags::toOptions() const
 
 int parseStep(const Dataset& dataset, const std::string& text, const std::string& option)
 {
-    const int count = static_cast<int>(dataset.steps().size());
     const std::string t = trim(text);
     if (t.size() > 3 && (t.ends_with("Myr") || t.ends_with("myr"))) {
         const std::string number = trim(t.substr(0, t.size() - 3));
@@ -118,8 +118,7 @@ int parseStep(const Dataset& dataset, const std::string& text, const std::string
     const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), step);
     if (ec != std::errc() || end != t.data() + t.size())
         fail("{}: '{}' is neither a step index nor a time like 24Myr", option, text);
-    if (step < 0 || step >= count)
-        fail("{}: step {} out of range, the dataset has steps 0..{}", option, step, count - 1);
+    dataset.checkStep(step, option);
     return step;
 }
 
@@ -229,6 +228,31 @@ PreprocessOptions PreprocessFlags::toOptions(const CLI::App& cmd) const
     o.reader = reader.toOptions();
     o.pathlines.enabled = !noPathlines;
     return o;
+}
+
+void SeriesSelectionFlags::add(CLI::App& cmd)
+{
+    cmd.add_option("dataset", dataset, "Dataset directory")->required();
+    cmd.add_option("--state", statePath, "STATE.json whose brushes define the selection");
+    cmd.add_option("--range", ranges, "Brush NAME=MIN:MAX on a variable or coordinate; repeatable, overrides the state");
+    cmd.add_option("-t,--time", time, "Steps A or A:B (index or time like 24Myr); default all");
+    cmd.add_option("--lod", level, "Level of detail (0 = full resolution, exact)")->capture_default_str();
+}
+
+SeriesSelection resolveSeriesSelection(const SeriesSelectionFlags& flags)
+{
+    SeriesSelection s;
+    s.dataset = Dataset::open(flags.dataset);
+    std::vector<NamedRange> ranges;
+    if (!flags.statePath.empty())
+        ranges = render::loadRenderState(flags.statePath).brushes;
+    applyRangeOptions(ranges, flags.ranges);
+    s.filters = resolveRangeFilters(*s.dataset, ranges, flags.statePath.empty() ? "--range" : "brushes");
+    s.dataset->checkLevel(flags.level, "--lod");
+    std::tie(s.first, s.last) = flags.time.empty()
+                                    ? std::pair<int, int>(0, static_cast<int>(s.dataset->steps().size()) - 1)
+                                    : parseStepRange(*s.dataset, flags.time);
+    return s;
 }
 
 }  // namespace raypc::app

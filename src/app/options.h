@@ -61,4 +61,22 @@ void applyRangeOptions(std::vector<NamedRange>& ranges, const std::vector<std::s
 // Parses "A" or "A:B" (each a step index or a time like 24Myr) into the inclusive step range.
 std::pair<int, int> parseStepRange(const Dataset& dataset, const std::string& text, const std::string& option = "--time");
 
+// The options of a command over a selection in a dataset's steps (stats, features): DATASET,
+// --state (whose brushes select), --range (replacing the state's ranges per name), -t/--time and --lod.
+struct SeriesSelectionFlags {
+    std::string dataset, statePath, time;
+    std::vector<std::string> ranges;
+    int level = 0;
+
+    void add(CLI::App& cmd);
+};
+struct SeriesSelection {
+    std::shared_ptr<const Dataset> dataset;
+    std::vector<RangeFilter> filters;
+    int first = 0, last = 0;  // the steps, inclusive
+};
+// Opens the dataset and resolves the flags. Throws raypc::Error for a bad state, range, level or
+// step range, naming the option.
+SeriesSelection resolveSeriesSelection(const SeriesSelectionFlags& flags);
+
 }  // namespace raypc::app

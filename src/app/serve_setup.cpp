@@ -19,6 +19,8 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -89,6 +91,67 @@ void announce(const server::ServerOptions& options, const server::Server& srv)
     std::fflush(stdout);
 }
 
+// `raypc serve` on every rank of the job (one process: just the Server): rank 0 builds the Server
+// (with a RankPool when there are other ranks) and serves until SIGINT/SIGTERM; the other ranks run
+// WorkerRank. Opening the dataset and binding the port are agreed on by all ranks, so a bad dataset
+// or a busy port stops every rank with one message. `onServing` runs on rank 0 once the port is
+// bound (to print the URL). MPI stays on the calling (main) thread; the network runs on another.
+// Throws raypc::Error as Server's constructor does, and when a rank stopped answering.
+void serveOnRanks(server::ServerOptions options, const std::function<void(const server::Server&)>& onServing)
+{
+    std::optional<server::RankPool> pool;
+    std::unique_ptr<server::Server> srv;
+    std::unique_ptr<server::WorkerRank> worker;
+    mpi::together([&] {
+        if (!mpi::isRoot()) {
+            worker = std::make_unique<server::WorkerRank>(options.dataset, options.cacheBytes, options.cacheEntries);
+            return;
+        }
+        if (mpi::distributed())
+            options.ranks = &pool.emplace();
+        srv = std::make_unique<server::Server>(options);
+    });
+    if (worker) {
+        worker->run();
+        return;
+    }
+    if (pool)
+        spdlog::info("distributed: every pass is shared out over {} ranks", pool->ranks());
+    onServing(*srv);
+    if (!pool) {
+        srv->run();
+        return;
+    }
+    // MPI calls stay on this (the main) thread (core/mpi.h): the network runs on another, and the
+    // server, whose sessions may wait on the pool, is destroyed there before the pool stops.
+    std::exception_ptr failure;
+    std::mutex serverMutex;  // srv: reset on the network thread, stopped from this one
+    std::thread network([&] {
+        try {
+            srv->run();
+        } catch (...) {
+            failure = std::current_exception();
+        }
+        {
+            std::lock_guard lock(serverMutex);
+            srv.reset();
+        }
+        pool->stop();
+    });
+    std::string broken;
+    const bool clean = pool->run([&](const std::string& why) {
+        broken = why;
+        std::lock_guard lock(serverMutex);
+        if (srv)
+            srv->stop();
+    });
+    network.join();
+    if (failure)
+        std::rethrow_exception(failure);
+    if (!clean)
+        fail("{}", broken);
+}
+
 // The background thread's share of the machine: one thread (a task arena of one), at a lower
 // priority than the renderer's (nice 10 for this thread alone, Linux's per-thread priority).
 void yieldToRendering()
@@ -114,7 +177,7 @@ void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
 {
     keepLargeBlocksForReuse();  // frame buffers come and go with every state
     server::ServerOptions options = serverOptions(dataset, flags);
-    server::serveOnRanks(options, [&](const server::Server& srv) { announce(options, srv); });
+    serveOnRanks(options, [&](const server::Server& srv) { announce(options, srv); });
 }
 
 void serveSeries(const SeriesInputs& inputs, const PreprocessOptions& preprocessOptions, const ServeFlags& flags)

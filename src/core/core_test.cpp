@@ -1,6 +1,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json_input.h"
+#include "core/lru_cache.h"
 #include "core/numbered_name.h"
 #include "core/spherical.h"
 #include "core/strings.h"
@@ -12,6 +13,27 @@
 
 namespace raypc {
 namespace {
+
+TEST(LruCache, KeepsTheMostRecentlyUsedAndCachesNoFailure)
+{
+    LruCache<int, std::string> cache(2);
+    int made = 0;
+    auto make = [&](int key) { return [&made, key] { ++made; return std::to_string(key); }; };
+    const auto one = cache.get(1, make(1));
+    EXPECT_EQ(*one, "1");
+    EXPECT_EQ(cache.get(1, make(1)), one);  // the same shared value, not made again
+    cache.get(2, make(2));
+    cache.get(1, make(1));  // 1 is now the most recently used: 2 goes when 3 comes
+    cache.get(3, make(3));
+    EXPECT_EQ(made, 3);
+    cache.get(1, make(1));
+    EXPECT_EQ(made, 3);
+    cache.get(2, make(2));
+    EXPECT_EQ(made, 4);
+    EXPECT_THROW(cache.get(5, []() -> std::string { fail("cannot read"); }), Error);
+    EXPECT_EQ(*cache.get(5, make(5)), "5");  // the failure was not cached
+    EXPECT_EQ(made, 5);
+}
 
 TEST(Strings, NaturalOrderComparesDigitRunsByValue)
 {

@@ -50,12 +50,3 @@ namespace detail {
 #define RAYPC_CHECK_LT(a, b) RAYPC_CHECK_OP(a, <, b)
 #define RAYPC_CHECK_LE(a, b) RAYPC_CHECK_OP(a, <=, b)
 #define RAYPC_CHECK_GE(a, b) RAYPC_CHECK_OP(a, >=, b)
-
-// Debug-only variants for hot loops.
-#ifdef NDEBUG
-#define RAYPC_DCHECK(cond) do { } while (false)
-#define RAYPC_DCHECK_LT(a, b) do { } while (false)
-#else
-#define RAYPC_DCHECK(cond) RAYPC_CHECK(cond)
-#define RAYPC_DCHECK_LT(a, b) RAYPC_CHECK_LT(a, b)
-#endif

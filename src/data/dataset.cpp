@@ -689,11 +689,8 @@ void Dataset::checkLevel(int level, std::string_view what) const
 
 std::shared_ptr<const StepVolume> Dataset::load(int step, int level) const
 {
-    if (step < 0 || step >= static_cast<int>(m_steps.size()))
-        fail("{}: step {} out of range, the dataset has steps 0..{}", m_dir.string(), step, m_steps.size() - 1);
-    if (level < 0 || level >= static_cast<int>(m_levels.size()))
-        fail("{}: level {} out of range, the dataset has levels 0..{}", m_dir.string(), level,
-             m_levels.size() - 1);
+    checkStep(step, m_dir.string() + ": step");
+    checkLevel(level, m_dir.string() + ": level");
     std::vector<std::string> stems;
     std::vector<ValueRange> ranges;
     for (size_t v = 0; v < m_variables.size(); ++v) {
@@ -706,8 +703,7 @@ std::shared_ptr<const StepVolume> Dataset::load(int step, int level) const
 
 SampleTable Dataset::loadSample(int step, SampleColumns which) const
 {
-    if (step < 0 || step >= static_cast<int>(m_steps.size()))
-        fail("{}: step {} out of range, the dataset has steps 0..{}", m_dir.string(), step, m_steps.size() - 1);
+    checkStep(step, m_dir.string() + ": step");
     const bool withCoords = which == SampleColumns::All;
     SampleTable table;
     if (withCoords)

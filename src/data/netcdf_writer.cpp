@@ -1,16 +1,21 @@
-// Writing snapshots in the layout of the SciVis 2021 contest files (see synth.h).
+// Writing netCDF files: snapshots in the layout of the SciVis 2021 contest files (see synth.h),
+// and two-dimensional CF grids (data/cf_grid.h).
 //
 // The file has dims (lat, r, lon) with lon fastest and lat descending (north first), while
 // snapshots in memory are lat ascending, so rows are written in reverse order. netCDF-C is
 // not thread-safe: call from one thread at a time.
 #include "data/synth.h"
+#include "data/cf_grid.h"
 
 #include "core/atomic_file.h"
 #include "core/error.h"
 
 #include <netcdf.h>
 
+#include <algorithm>
 #include <array>
+#include <cctype>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -138,6 +143,93 @@ void writeContestFile(const std::filesystem::path& path, const Snapshot& snapsho
                        fmt::format("cannot write variable '{}'", snapshot.fields[v].name));
         }
     }
+    file.commit();
+}
+
+}  // namespace raypc
+
+namespace raypc {
+
+std::string cfName(const std::string& name)
+{
+    std::string out;
+    for (const char c : name)
+        out += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+    if (out.empty() || std::isdigit(static_cast<unsigned char>(out[0])))
+        out = "v_" + out;
+    return out;
+}
+
+void writeCfGrid(const std::filesystem::path& path, const CfGridFile& grid)
+{
+    const size_t nRows = grid.rows.values.size(), nColumns = grid.columns.values.size();
+    if (nRows == 0 || nColumns == 0 || grid.values.size() != nRows * nColumns)
+        fail("{}: a grid of {} values over {} x {} points", path.string(), grid.values.size(), nRows, nColumns);
+    TemporaryNcFile file(path, NC_64BIT_OFFSET);
+    const int nc = file.id();
+    int rowDim = -1, columnDim = -1;
+    file.check(nc_def_dim(nc, grid.rows.name.c_str(), nRows, &rowDim), "cannot define dim " + grid.rows.name);
+    file.check(nc_def_dim(nc, grid.columns.name.c_str(), nColumns, &columnDim), "cannot define dim " + grid.columns.name);
+    auto define = [&](const CfVariable1D& v, int ndims, const int* dims) {
+        int id = -1;
+        file.check(nc_def_var(nc, v.name.c_str(), NC_DOUBLE, ndims, dims, &id), "cannot define variable " + v.name);
+        putText(file, id, "units", v.units, v.name);
+        if (!v.standardName.empty())
+            putText(file, id, "standard_name", v.standardName, v.name);
+        putText(file, id, "long_name", v.longName, v.name);
+        if (!v.axis.empty())
+            putText(file, id, "axis", v.axis, v.name);
+        if (!v.positive.empty())
+            putText(file, id, "positive", v.positive, v.name);
+        return id;
+    };
+    std::vector<std::pair<int, const CfVariable1D*>> written;
+    written.emplace_back(define(grid.rows, 1, &rowDim), &grid.rows);
+    written.emplace_back(define(grid.columns, 1, &columnDim), &grid.columns);
+    std::string coordinates;
+    for (const CfVariable1D& a : grid.auxiliary) {
+        const int dim = a.dimension == grid.rows.name ? rowDim : a.dimension == grid.columns.name ? columnDim : -1;
+        if (dim < 0 || a.values.size() != (dim == rowDim ? nRows : nColumns))
+            fail("{}: auxiliary coordinate {} along '{}' has {} values", path.string(), a.name, a.dimension,
+                 a.values.size());
+        written.emplace_back(define(a, 1, &dim), &a);
+        coordinates += (coordinates.empty() ? "" : " ") + a.name;
+    }
+    for (const CfVariable1D& s : grid.scalars) {
+        if (s.values.size() != 1)
+            fail("{}: scalar coordinate {} has {} values", path.string(), s.name, s.values.size());
+        written.emplace_back(define(s, 0, nullptr), &s);
+        coordinates += (coordinates.empty() ? "" : " ") + s.name;
+    }
+    const int dims[2] = {rowDim, columnDim};
+    int var = -1;
+    file.check(nc_def_var(nc, grid.name.c_str(), NC_FLOAT, 2, dims, &var), "cannot define variable " + grid.name);
+    putText(file, var, "units", grid.units, grid.name);
+    putText(file, var, "long_name", grid.longName, grid.name);
+    const float fill = NC_FILL_FLOAT;
+    file.check(nc_put_att_float(nc, var, "_FillValue", NC_FLOAT, 1, &fill), "cannot write _FillValue");
+    if (!coordinates.empty())
+        putText(file, var, "coordinates", coordinates, grid.name);
+    // The values' range (what GMT's grdinfo shows from the header).
+    float range[2] = {INFINITY, -INFINITY};
+    for (const float x : grid.values)
+        if (!std::isnan(x)) {
+            range[0] = std::min(range[0], x);
+            range[1] = std::max(range[1], x);
+        }
+    if (range[0] <= range[1])
+        file.check(nc_put_att_float(nc, var, "actual_range", NC_FLOAT, 2, range), "cannot write actual_range");
+    putText(file, NC_GLOBAL, "Conventions", "CF-1.8", "the file");
+    for (const auto& [key, value] : grid.globalAttributes)
+        putText(file, NC_GLOBAL, key.c_str(), value, "the file");
+    file.check(nc_enddef(nc), "cannot leave define mode");
+    for (const auto& [id, v] : written)
+        file.check(nc_put_var_double(nc, id, v->values.data()), "cannot write " + v->name);
+    std::vector<float> values(grid.values);
+    for (float& x : values)
+        if (std::isnan(x))
+            x = fill;
+    file.check(nc_put_var_float(nc, var, values.data()), "cannot write " + grid.name);
     file.commit();
 }
 

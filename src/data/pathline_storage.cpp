@@ -113,8 +113,15 @@ PathlineSet loadPathlineSet(const fs::path& dataset, int step)
     return set;
 }
 
+void checkPathlineWindow(int window, const std::string& what)
+{
+    if (window < 1 || window > kMaxPathlineWindow)
+        fail("{}: {} out of range 1..{}", what, window, kMaxPathlineWindow);
+}
+
 std::vector<PathlineSet> loadPathlineWindow(const fs::path& dataset, int step, int window)
 {
+    checkPathlineWindow(window);
     std::vector<PathlineSet> sets;
     for (int s = std::max(0, step - window + 1); s <= step; ++s)
         sets.push_back(loadPathlineSet(dataset, s));

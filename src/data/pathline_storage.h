@@ -7,6 +7,7 @@
 #include "data/pathlines.h"
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace raypc {
@@ -27,8 +28,15 @@ void writePathlineSet(const std::filesystem::path& dir, const PathlineSet& set);
 // wrong size or malformed.
 PathlineSet loadPathlineSet(const std::filesystem::path& dataset, int step);
 
+// The longest window of injection steps shown at once (the state's pathlines.window, the server's
+// /api/pathlines, Python's Dataset.pathlines).
+inline constexpr int kMaxPathlineWindow = 1000;
+// Throws raypc::Error "<what>: 0 out of range 1..1000" unless 1 <= window <= kMaxPathlineWindow.
+void checkPathlineWindow(int window, const std::string& what = "window");
+
 // What a renderer shows at step s (paper: "all pathlines spawned during the last 10 time steps"):
-// the sets injected at steps max(0, s - window + 1) .. s, oldest first. Throws like loadPathlineSet.
+// the sets injected at steps max(0, s - window + 1) .. s, oldest first. Throws like loadPathlineSet,
+// and like checkPathlineWindow.
 std::vector<PathlineSet> loadPathlineWindow(const std::filesystem::path& dataset, int step, int window = 10);
 
 }  // namespace raypc

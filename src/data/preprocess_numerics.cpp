@@ -212,16 +212,15 @@ std::vector<uint32_t> drawVolumeWeightedSample(const SphericalGrid& grid, size_t
 
 std::vector<float> sampleCoordinates(const SphericalGrid& grid, std::span<const uint32_t> cells)
 {
-    const size_t nc = coordinateInfos().size();
+    const auto& coordinates = coordinateInfos();
+    const size_t nc = coordinates.size();
     std::vector<float> out(cells.size() * nc);
     for (size_t i = 0; i < cells.size(); ++i) {
         const size_t c = cells[i];
         const size_t iLon = c % grid.nLon(), iR = (c / grid.nLon()) % grid.nR(), iLat = c / (grid.nLon() * grid.nR());
-        const double lat = grid.latDeg[iLat], lon = grid.lonDeg[iLon], r = grid.rKm[iR];
-        const Vec3d p = sphericalToCartesianKm(lat, lon, r);
-        const double row[] = {p.x, p.y, p.z, lat, lon, r, kSurfaceRadiusKm - r};
         for (size_t k = 0; k < nc; ++k)
-            out[i * nc + k] = static_cast<float>(row[k]);
+            out[i * nc + k] =
+                static_cast<float>(coordinateValue(coordinates[k].id, grid.latDeg[iLat], grid.lonDeg[iLon], grid.rKm[iR]));
     }
     return out;
 }

@@ -124,6 +124,19 @@ SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFil
     return stats;
 }
 
+std::vector<uint8_t> selectedPoints(const StepVolume& volume, std::span<const RangeFilter> filters)
+{
+    checkFilters(volume, filters);
+    const auto& g = volume.grid();
+    std::vector<uint8_t> out(g.cellCount(), 0);
+    tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
+        for (size_t iR = 0; iR < g.nR(); ++iR)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+                out[g.index(iLat, iR, iLon)] = pointSelected(volume, filters, iLat, iR, iLon) ? 1 : 0;
+    });
+    return out;
+}
+
 ClassVolumes selectedVolumeByClass(const StepVolume& volume, std::span<const RangeFilter> filters,
                                    std::span<const uint32_t> classes, size_t classCount)
 {

@@ -76,6 +76,10 @@ struct SelectionStats {
 // range, a filter without ranges or min > max. Parallel over lat rows.
 SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters);
 
+// Whether each grid point is selected (1) or not (0), canonical order, by the rule of
+// selectedVolume. Throws raypc::Error as selectedVolume does. Parallel over lat rows.
+std::vector<uint8_t> selectedPoints(const StepVolume& volume, std::span<const RangeFilter> filters);
+
 // The selection split by a labelling of the grid's points: `classes` holds one class in
 // [0, classCount) per grid point (canonical order), e.g. what the synthetic generator put there
 // (syntheticTruth), and the answer the whole and the selected dual-cell volume of each class. The

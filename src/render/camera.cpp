@@ -62,6 +62,15 @@ OrbitCamera stereoEye(const OrbitCamera& camera, Eye eye, double eyeSeparationKm
     return e;
 }
 
+double framingDistanceKm(double fovYDeg, int width, int height, double radiusKm, double fill)
+{
+    RAYPC_CHECK(width > 0 && height > 0 && fill > 0 && fill <= 1 && radiusKm > 0);
+    // The shorter side's half-angle tangent; the sphere's silhouette is at tangent R / sqrt(D² - R²).
+    const double tanHalf = std::tan(fovYDeg * M_PI / 360.0) * std::min(1.0, double(width) / double(height));
+    const double k = fill * tanHalf;
+    return radiusKm * std::sqrt(1.0 + 1.0 / (k * k));
+}
+
 CameraFrame::CameraFrame(const OrbitCamera& camera, int width_, int height_) : width(width_), height(height_)
 {
     RAYPC_CHECK_LT(camera.views.size(), size_t(2));

@@ -68,6 +68,11 @@ struct OrbitCamera {
     void validate() const;
 };
 
+// The orbit distance at which a sphere of `radiusKm` around the target fills `fill` (0..1) of the
+// image's shorter side, for a vertical field of view of fovYDeg and an image of width x height
+// pixels (a landscape image is bound by its height, a portrait one by its width), km.
+double framingDistanceKm(double fovYDeg, int width, int height, double radiusKm, double fill);
+
 enum class Eye { Left, Right };
 
 // The camera of one eye of a stereo pair: parallel view axes, the eyes eyeSeparationKm apart

@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <memory>
 
 namespace raypc::render {
 namespace {
@@ -97,6 +98,18 @@ private:
     FT_Face m_face = nullptr;
 };
 
+// This thread's face at `pixelSize`, opened once: server sessions draw shell labels and legends
+// into frame after frame, and opening the font file per frame is needless I/O. FreeType faces are
+// not shared between threads, hence one cache per thread.
+Font& cachedFont(int pixelSize)
+{
+    thread_local std::map<std::pair<std::string, int>, std::unique_ptr<Font>> fonts;  // by (file, size)
+    std::unique_ptr<Font>& font = fonts[{fontPath(), pixelSize}];
+    if (!font)
+        font = std::make_unique<Font>(pixelSize);
+    return *font;
+}
+
 void blend(std::vector<uint8_t>& rgba, int width, int height, int x0, int y0, int x1, int y1, const float c[3], float a)
 {
     for (int y = std::max(0, y0); y < std::min(height, y1); ++y)
@@ -148,18 +161,62 @@ std::string legendNumber(double v)
     return fmt::format("{:.4g}", v);
 }
 
-void drawLegends(std::vector<uint8_t>& rgba, int width, int height, std::span<const LegendSpec> legends)
+namespace {
+
+// The legends' font size for a picture: readable at 512 px, not dominant at 4K.
+// The height of one legend's panel (title, bar, values) for the text size.
+int legendBlockPx(int fontPx)
 {
-    if (legends.empty())
+    const int pad = fontPx / 2, barH = std::max(6, fontPx * 3 / 4);
+    return pad + fontPx + pad / 2 + barH + pad / 2 + fontPx + pad;
+}
+
+}  // namespace
+
+int legendFontPx(int width, int height) { return std::clamp(std::min(width, height) / 36, 10, 48); }
+
+int legendsHeightPx(int width, int height, size_t count)
+{
+    if (count == 0)
+        return 0;
+    const int fontPx = legendFontPx(width, height);
+    return fontPx + int(count) * (legendBlockPx(fontPx) + fontPx / 2);
+}
+
+void drawTextLabels(std::vector<uint8_t>& rgba, int width, int height, std::span<const TextLabel> labels)
+{
+    if (labels.empty())
+        return;
+    if (rgba.size() != size_t(width) * size_t(height) * 4)
+        fail("labels: image of {} bytes for {}x{} pixels", rgba.size(), width, height);
+    const int fontPx = std::max(10, legendFontPx(width, height) * 5 / 6);
+    Font& font = cachedFont(fontPx);
+    const int pad = std::max(2, fontPx / 4);
+    const float panel[3] = {0.05f, 0.06f, 0.08f};
+    for (const TextLabel& l : labels) {
+        const uint8_t c[3] = {uint8_t(std::lround(std::clamp(l.color.r, 0.0f, 1.0f) * 255)),
+                              uint8_t(std::lround(std::clamp(l.color.g, 0.0f, 1.0f) * 255)),
+                              uint8_t(std::lround(std::clamp(l.color.b, 0.0f, 1.0f) * 255))};
+        const int w = font.text(rgba, width, height, 0, 0, l.text, c, false);
+        const int left = int(std::lround(l.x)) - (l.rightAligned ? w + pad : w / 2), top = int(std::lround(l.y)) - fontPx / 2 - pad;
+        blend(rgba, width, height, left - pad, top, left + w + pad, top + fontPx + 2 * pad, panel, 0.7f);
+        font.text(rgba, width, height, left, top + pad + fontPx * 4 / 5, l.text, c);
+    }
+}
+
+void drawLegends(std::vector<uint8_t>& rgba, int width, int height, std::span<const LegendSpec> legends,
+                 std::span<const TextLabel> shellKey)
+{
+    if (legends.empty() && shellKey.empty())
         return;
     if (rgba.size() != size_t(width) * size_t(height) * 4)
         fail("legend: image of {} bytes for {}x{} pixels", rgba.size(), width, height);
     // Sizes follow the picture: readable at 512 px, not dominant at 4K.
-    const int fontPx = std::clamp(std::min(width, height) / 36, 10, 48);
-    Font font(fontPx);
+    const int fontPx = legendFontPx(width, height);
+    Font& font = cachedFont(fontPx);
     const int margin = fontPx, pad = fontPx / 2;
     const int barW = std::clamp(width / 4, 8 * fontPx, 20 * fontPx), barH = std::max(6, fontPx * 3 / 4);
-    const int blockH = pad + fontPx + pad / 2 + barH + pad / 2 + fontPx + pad;
+    const int blockH = legendBlockPx(fontPx);
     const uint8_t white[3] = {235, 235, 235};
     const float panel[3] = {0.05f, 0.06f, 0.08f};
     for (size_t n = 0; n < legends.size(); ++n) {
@@ -190,6 +247,27 @@ void drawLegends(std::vector<uint8_t>& rgba, int width, int height, std::span<co
         font.text(rgba, width, height, left + pad + barW / 2 - mw / 2, y, m, white);
         const int bw = font.text(rgba, width, height, 0, 0, b, white, false);
         font.text(rgba, width, height, left + pad + barW - bw, y, b, white);
+    }
+    if (shellKey.empty())
+        return;
+    // The shells' key: "shells" and a swatch of each shell's colour before its depth, in one row
+    // above the colour bars.
+    const int keyH = pad + fontPx + pad;
+    const int top = height - margin - int(legends.size()) * (blockH + pad) - keyH - pad;
+    const int left = margin, swatchW = fontPx, gap = fontPx / 2;
+    int rowW = font.text(rgba, width, height, 0, 0, "shells", white, false);
+    for (const TextLabel& k : shellKey)
+        rowW += gap + swatchW + pad / 2 + font.text(rgba, width, height, 0, 0, k.text, white, false);
+    blend(rgba, width, height, left, top, left + rowW + 2 * pad, top + keyH, panel, 0.6f);
+    const int baseline = top + pad + fontPx * 4 / 5;
+    int x = left + pad + font.text(rgba, width, height, left + pad, baseline, "shells", white);
+    for (const TextLabel& k : shellKey) {
+        x += gap;
+        const float c[3] = {k.color.r, k.color.g, k.color.b};
+        const int mid = top + keyH / 2, thick = std::max(2, fontPx / 5);
+        blend(rgba, width, height, x, mid - thick / 2, x + swatchW, mid - thick / 2 + thick, c, 1.0f);
+        x += swatchW + pad / 2;
+        x += font.text(rgba, width, height, x, baseline, k.text, white);
     }
 }
 

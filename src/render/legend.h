@@ -21,6 +21,15 @@ struct LegendSpec {
     TransferFunction colors;  // range, map or points, reversal, log scale (the opacity is not drawn)
 };
 
+// A short text on the picture in a small dark box centred at (x, y) pixels (e.g. a reference
+// shell's depth on its ring), in `color`.
+struct TextLabel {
+    std::string text;
+    float x = 0, y = 0;
+    Rgb color{1, 1, 1};
+    bool rightAligned = false;  // (x, y): the middle of the box's right edge instead of its centre
+};
+
 // Units as written in pictures: exponents as superscripts ("kg/m^3" -> "kg/m³", as the UI writes
 // them), CF names of angles as symbols ("degrees_north" -> "°N").
 std::string displayUnits(const std::string& units);
@@ -28,8 +37,21 @@ std::string displayUnits(const std::string& units);
 // The label of a value on a legend: 4 significant digits, exponent form for very large or small values.
 std::string legendNumber(double value);
 
+// The legends' text size in a picture of this size, pixels.
+int legendFontPx(int width, int height);
+// How far up from the bottom `count` legends (without a shell key) reach, margin included: what a
+// picture keeps free of data below them (maps and sections).
+int legendsHeightPx(int width, int height, size_t count);
+
 // Draws `legends` into `rgba` (width x height, 8-bit RGBA, row-major from the top left). Throws
 // raypc::Error when the font cannot be found or read.
-void drawLegends(std::vector<uint8_t>& rgba, int width, int height, std::span<const LegendSpec> legends);
+// `shellKey` (may be empty) adds one block above the colour bars naming each reference shell's
+// depth beside a swatch of its colour (the labels' text and colour; their position is not used).
+void drawLegends(std::vector<uint8_t>& rgba, int width, int height, std::span<const LegendSpec> legends,
+                 std::span<const TextLabel> shellKey = {});
+
+// Draws each label's text centred at its position on a small dark box, at the legends' font size
+// for the picture. Throws raypc::Error when the font cannot be found or read.
+void drawTextLabels(std::vector<uint8_t>& rgba, int width, int height, std::span<const TextLabel> labels);
 
 }  // namespace raypc::render

@@ -432,13 +432,7 @@ PathlineStyle PathlineScene::styleFor(const PathlineState& pl) const
     }
     if (!(lo <= hi))
         lo = 0, hi = 1;
-    if (isCentredOnZero(style.colorMap)) {
-        const float m = std::max(std::abs(lo), std::abs(hi));
-        lo = -m, hi = m;
-    }
-    if (!(lo < hi))
-        lo -= 0.5f, hi += 0.5f;
-    style.range = {lo, hi};
+    style.range = defaultColorRange({lo, hi}, isCentredOnZero(style.colorMap));
     return style;
 }
 

@@ -5,7 +5,9 @@
 #include "core/install_paths.h"
 #include "core/json_input.h"
 #include "core/spherical.h"
+#include "render/line_raster.h"
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
 
@@ -87,45 +89,10 @@ struct Fragment {
     float r, g, b, a;
 };
 
-// A line layer: per pixel the strongest coverage drawn and its distance along the ray.
-struct LineLayer {
-    int width, height;
-    std::vector<float> coverage, t;
-    LineLayer(int w, int h) : width(w), height(h), coverage(size_t(w) * size_t(h), 0.0f), t(size_t(w) * size_t(h), INFINITY) {}
-};
-
 Vec3 onSphere(float lonDeg, float latDeg, float radiusKm)
 {
     const float lat = latDeg * float(M_PI / 180.0), lon = lonDeg * float(M_PI / 180.0);
     return {radiusKm * std::cos(lat) * std::cos(lon), radiusKm * std::cos(lat) * std::sin(lon), radiusKm * std::sin(lat)};
-}
-
-// An anti-aliased segment: coverage falls off over one pixel beyond half the width.
-void drawSegment(LineLayer& layer, float x0, float y0, float t0, float x1, float y1, float t1, float widthPx)
-{
-    const float half = 0.5f * widthPx;
-    const float pad = half + 1.0f;
-    const int ix0 = std::max(0, int(std::floor(std::min(x0, x1) - pad)));
-    const int ix1 = std::min(layer.width - 1, int(std::ceil(std::max(x0, x1) + pad)));
-    const int iy0 = std::max(0, int(std::floor(std::min(y0, y1) - pad)));
-    const int iy1 = std::min(layer.height - 1, int(std::ceil(std::max(y0, y1) + pad)));
-    const float dx = x1 - x0, dy = y1 - y0;
-    const float len2 = dx * dx + dy * dy;
-    for (int y = iy0; y <= iy1; ++y)
-        for (int x = ix0; x <= ix1; ++x) {
-            const float cx = float(x) + 0.5f, cy = float(y) + 0.5f;
-            const float u = len2 > 0 ? std::clamp(((cx - x0) * dx + (cy - y0) * dy) / len2, 0.0f, 1.0f) : 0.0f;
-            const float ex = x0 + u * dx - cx, ey = y0 + u * dy - cy;
-            const float dist = std::sqrt(ex * ex + ey * ey);
-            const float c = std::clamp(half + 0.5f - dist, 0.0f, 1.0f);
-            if (c <= 0)
-                continue;
-            const size_t i = size_t(y) * size_t(layer.width) + size_t(x);
-            if (c > layer.coverage[i]) {
-                layer.coverage[i] = c;
-                layer.t[i] = t0 + u * (t1 - t0);
-            }
-        }
 }
 
 // A polyline on the sphere of radius `radiusKm`, subdivided to at most 1 degree per segment so that
@@ -154,11 +121,92 @@ void drawPolyline(LineLayer& layer, const CameraFrame& cam, const std::vector<st
     }
 }
 
+// Whether a shell at `depthKm` lies inside the drawn shell of the planet.
+bool shellDrawn(float depthKm, float surfaceRadiusKm, float coreRadiusKm)
+{
+    const float r = float(kSurfaceRadiusKm) - depthKm;
+    return r > coreRadiusKm && r <= surfaceRadiusKm + 1e-3f;
+}
+
+std::string depthText(float depthKm) { return fmt::format("{:g} km", depthKm); }
+
+// The shells' palette in the order of shells.depthsKm (see shellColor).
+std::span<const Rgb> shellPalette()
+{
+    static constexpr std::array<Rgb, 5> kPalette{{{0.96f, 0.88f, 0.25f},    // yellow
+                                                  {0.35f, 0.90f, 0.45f},    // green
+                                                  {0.95f, 0.45f, 0.90f},    // magenta
+                                                  {1.00f, 0.62f, 0.15f},    // orange
+                                                  {0.70f, 0.62f, 1.00f}}};  // violet
+    return kPalette;
+}
+
 }  // namespace
+
+Rgb shellColor(const ReferenceState::Shells& shells, size_t index)
+{
+    const auto palette = shellPalette();
+    const Rgb p = palette[index % palette.size()];
+    return {p.r * shells.color.r, p.g * shells.color.g, p.b * shells.color.b};
+}
+
+std::vector<TextLabel> shellKey(const ReferenceState& reference, float surfaceRadiusKm, float coreRadiusKm)
+{
+    std::vector<TextLabel> key;
+    const auto& shells = reference.shells;
+    if (!shells.visible || shells.opacity <= 0)
+        return key;
+    for (size_t k = 0; k < shells.depthsKm.size(); ++k)
+        if (shellDrawn(shells.depthsKm[k], surfaceRadiusKm, coreRadiusKm))
+            key.push_back({depthText(shells.depthsKm[k]), 0, 0, shellColor(shells, k)});
+    return key;
+}
+
+std::vector<TextLabel> shellLabels(const ReferenceState& reference, const OrbitCamera& camera, int width, int height,
+                                   float surfaceRadiusKm, float coreRadiusKm)
+{
+    std::vector<TextLabel> labels;
+    const auto& shells = reference.shells;
+    if (!shells.visible || shells.opacity <= 0)
+        return labels;
+    const CameraFrame cam(camera, width, height);
+    const float eyeDistance = std::sqrt(dot(cam.eye, cam.eye));
+    if (eyeDistance <= 0)
+        return labels;
+    const Vec3 toEye = cam.eye * (1.0f / eyeDistance);
+    // The image's right and up directions made orthogonal to the line from the centre to the eye:
+    // the plane of the silhouette circles.
+    const Vec3 u = normalize(cam.right - toEye * dot(cam.right, toEye));
+    const Vec3 v = normalize(cam.up - toEye * dot(cam.up, toEye) - u * dot(cam.up, u));
+    // Shells in depth order, each label 13° further clockwise from 40° above the right.
+    std::vector<size_t> order;
+    for (size_t k = 0; k < shells.depthsKm.size(); ++k)
+        if (shellDrawn(shells.depthsKm[k], surfaceRadiusKm, coreRadiusKm))
+            order.push_back(k);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return shells.depthsKm[a] < shells.depthsKm[b]; });
+    for (size_t n = 0; n < order.size(); ++n) {
+        const size_t k = order[n];
+        const float r = float(kSurfaceRadiusKm) - shells.depthsKm[k];
+        if (eyeDistance <= r * 1.0001f)
+            continue;  // inside the shell: no silhouette
+        // The silhouette: the circle where the lines from the eye touch the sphere.
+        const float q = r / eyeDistance;
+        const Vec3 centre = toEye * (r * q);
+        const float rho = r * std::sqrt(1.0f - q * q);
+        const float angle = float((40.0 - 13.0 * double(n)) * M_PI / 180.0);
+        const Vec3 p = centre + (u * std::cos(angle) + v * std::sin(angle)) * rho;
+        float x, y, t;
+        if (!cam.project(p, x, y, t) || x < 0 || y < 0 || x >= float(width) || y >= float(height))
+            continue;
+        labels.push_back({depthText(shells.depthsKm[k]), x, y, shellColor(shells, k)});
+    }
+    return labels;
+}
 
 void drawReferenceGeometry(const ReferenceState& reference, const OrbitCamera& camera, int width, int height,
                            float surfaceRadiusKm, float coreRadiusKm, std::vector<float>& rgba,
-                           const std::vector<float>& depthKm, const Coastlines* coastlines)
+                           const std::vector<float>& depthKm, const Coastlines* coastlines, const SliceMarks* marks)
 {
     const size_t pixels = size_t(width) * size_t(height);
     if (rgba.size() != pixels * 4 || depthKm.size() != pixels)
@@ -167,7 +215,7 @@ void drawReferenceGeometry(const ReferenceState& reference, const OrbitCamera& c
     const auto& shells = reference.shells;
     const auto& graticule = reference.graticule;
     const bool drawCoast = reference.coastlines.visible;
-    if (!shells.visible && !graticule.visible && !drawCoast)
+    if (!shells.visible && !graticule.visible && !drawCoast && !marks)
         return;
     if (drawCoast && !coastlines)
         fail("reference.coastlines: visible, but no coastlines were given");
@@ -197,14 +245,44 @@ void drawReferenceGeometry(const ReferenceState& reference, const OrbitCamera& c
             drawPolyline(*coastLayer, cam, line, surfaceRadiusKm, reference.lineWidthPx);
     }
 
-    // Shell radii inside the drawn shell of the planet.
-    std::vector<float> shellRadii;
-    if (shells.visible && shells.opacity > 0)
-        for (float d : shells.depthsKm) {
-            const float r = float(kSurfaceRadiusKm) - d;
-            if (r > coreRadiusKm && r <= surfaceRadiusKm + 1e-3f)
-                shellRadii.push_back(r);
+    // The section's curtain: its arc at the surface (the near side only) and at the innermost
+    // radius, and the radial lines at its ends (inside the planet: composited by depth).
+    std::optional<LineLayer> markLayer;
+    if (marks) {
+        markLayer.emplace(width, height);
+        const Vec3 a = onSphere(marks->from.lonDeg, marks->from.latDeg, 1.0f), b = onSphere(marks->to.lonDeg, marks->to.latDeg, 1.0f);
+        const float angle = std::acos(std::clamp(dot(a, b), -1.0f, 1.0f));
+        if (angle > 1e-4f && angle < float(M_PI) - 1e-4f) {
+            const Vec3 ortho = normalize(b - a * dot(a, b));
+            auto at = [&](float f, float r) { return (a * std::cos(f * angle) + ortho * std::sin(f * angle)) * r; };
+            auto segment = [&](Vec3 p, Vec3 q, bool nearSideOnly) {
+                float x0, y0, t0, x1, y1, t1;
+                if (nearSideOnly && (dot(p, cam.eye - p) <= 0 || dot(q, cam.eye - q) <= 0))
+                    return;
+                if (cam.project(p, x0, y0, t0) && cam.project(q, x1, y1, t1))
+                    drawSegment(*markLayer, x0, y0, t0, x1, y1, t1, 1.5f * reference.lineWidthPx);
+            };
+            const int n = std::max(2, int(std::ceil(angle * 180 / float(M_PI))));
+            for (int k = 0; k < n; ++k) {
+                const float f0 = float(k) / n, f1 = float(k + 1) / n;
+                segment(at(f0, surfaceRadiusKm), at(f1, surfaceRadiusKm), true);
+                segment(at(f0, coreRadiusKm), at(f1, coreRadiusKm), false);
+            }
+            for (const float f : {0.0f, 1.0f})
+                for (int k = 0; k < 16; ++k)
+                    segment(at(f, coreRadiusKm + (surfaceRadiusKm - coreRadiusKm) * k / 16.0f),
+                            at(f, coreRadiusKm + (surfaceRadiusKm - coreRadiusKm) * (k + 1) / 16.0f), false);
         }
+    }
+
+    // Shell radii inside the drawn shell of the planet, each with its colour; the map's depth in its own.
+    std::vector<std::pair<float, Rgb>> shellRadii;
+    if (shells.visible && shells.opacity > 0)
+        for (size_t k = 0; k < shells.depthsKm.size(); ++k)
+            if (shellDrawn(shells.depthsKm[k], surfaceRadiusKm, coreRadiusKm))
+                shellRadii.emplace_back(float(kSurfaceRadiusKm) - shells.depthsKm[k], shellColor(shells, k));
+    if (marks && shellDrawn(marks->depthKm, surfaceRadiusKm, coreRadiusKm))
+        shellRadii.emplace_back(float(kSurfaceRadiusKm) - marks->depthKm, kSliceMarkColor);
     // Transmittance of a shell seen face-on; along a path 1/|cos| as long, its power.
     const float faceOnTransmittance = 1.0f - std::min(shells.opacity, 0.999f);
 
@@ -215,7 +293,7 @@ void drawReferenceGeometry(const ReferenceState& reference, const OrbitCamera& c
             fragments.clear();
             if (!shellRadii.empty()) {
                 const Vec3 d = cam.direction(float(x) + 0.5f, float(y) + 0.5f);
-                for (float r : shellRadii) {
+                for (const auto& [r, color] : shellRadii) {
                     float t0, t1;
                     if (!intersectSphere(cam.eye, d, r, t0, t1))
                         continue;
@@ -225,7 +303,7 @@ void drawReferenceGeometry(const ReferenceState& reference, const OrbitCamera& c
                         const Vec3 n = (cam.eye + d * t) * (1.0f / r);
                         const float cosAngle = std::max(std::abs(dot(n, d)), 0.02f);
                         const float a = 1.0f - std::pow(faceOnTransmittance, 1.0f / cosAngle);
-                        fragments.push_back({t, shells.color.r * a, shells.color.g * a, shells.color.b * a, a});
+                        fragments.push_back({t, color.r * a, color.g * a, color.b * a, a});
                     }
                 }
             }
@@ -237,6 +315,7 @@ void drawReferenceGeometry(const ReferenceState& reference, const OrbitCamera& c
             };
             addLine(graticuleLayer, graticule.opacity, graticule.color);
             addLine(coastLayer, reference.coastlines.opacity, reference.coastlines.color);
+            addLine(markLayer, 0.95f, kSliceMarkColor);
             if (fragments.empty())
                 continue;
             std::sort(fragments.begin(), fragments.end(), [](const Fragment& a, const Fragment& b) { return a.t < b.t; });

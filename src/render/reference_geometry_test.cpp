@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -81,9 +82,10 @@ TEST(ReferenceGeometry, ShellsAreCompositedByTheVolumesDepth)
             EXPECT_FLOAT_EQ(p[0], 1.0f);  // the shell hides behind the opaque volume
             EXPECT_FLOAT_EQ(p[1], 0.0f);
         } else {
-            // Shell (grey 0.85, alpha 0.5) over the red volume.
-            EXPECT_NEAR(p[0], 0.5f * 0.85f + 0.5f, 1e-4f);
-            EXPECT_NEAR(p[1], 0.5f * 0.85f, 1e-4f);
+            // Shell (its palette colour, alpha 0.5) over the red volume.
+            const Rgb c = shellColor(shellsOnly(660, 0.5f).shells, 0);
+            EXPECT_NEAR(p[0], 0.5f * c.r + 0.5f, 1e-4f);
+            EXPECT_NEAR(p[1], 0.5f * c.g, 1e-4f);
             EXPECT_NEAR(p[3], 1.0f, 1e-6f);
         }
     }
@@ -96,6 +98,46 @@ TEST(ReferenceGeometry, ShellsOutsideThePlanetsShellDrawNothing)
     drawReferenceGeometry(r, frontCamera(), kSize, kSize, 6371, 3481, im.rgba, im.depth, nullptr);
     for (float v : im.rgba)
         ASSERT_EQ(v, 0.0f);
+}
+
+// Issue 26, 7: from the default camera the 410 and 660 km rings are 4 % apart in radius; each gets
+// a colour of its own and its depth written on its ring, the labels apart.
+TEST(ReferenceGeometry, ShellsHaveTheirOwnColoursAndTheirDepthsOnTheirRings)
+{
+    ReferenceState r;
+    r.shells.visible = true;
+    r.shells.depthsKm = {410, 660, 3000};  // 3000 km lies inside the core: no label, no key entry
+    const Rgb a = shellColor(r.shells, 0), b = shellColor(r.shells, 1);
+    EXPECT_GT(std::abs(a.r - b.r) + std::abs(a.g - b.g) + std::abs(a.b - b.b), 0.5f);
+    const auto key = shellKey(r, 6371, 3481);
+    ASSERT_EQ(key.size(), 2u);
+    EXPECT_EQ(key[0].text, "410 km");
+    EXPECT_EQ(key[1].text, "660 km");
+
+    const int w = 800, h = 450;
+    OrbitCamera cam = frontCamera();
+    cam.distanceKm = framingDistanceKm(cam.fovYDeg, w, h, 6371, 0.94);
+    const auto labels = shellLabels(r, cam, w, h, 6371, 3481);
+    ASSERT_EQ(labels.size(), 2u);
+    const CameraFrame frame(cam, w, h);
+    float t0, t1;
+    for (size_t k = 0; k < 2; ++k) {
+        EXPECT_EQ(labels[k].text, key[k].text);
+        // On the ring: the ray through the label grazes the shell (within two pixels).
+        const float radius = 6371.0f - r.shells.depthsKm[k];
+        const Vec3 outward{labels[k].x - w / 2.0f, labels[k].y - h / 2.0f, 0};
+        const float len = std::sqrt(outward.x * outward.x + outward.y * outward.y);
+        const float ox = labels[k].x + 2 * outward.x / len, oy = labels[k].y + 2 * outward.y / len;
+        const float ix = labels[k].x - 2 * outward.x / len, iy = labels[k].y - 2 * outward.y / len;
+        EXPECT_FALSE(intersectSphere(frame.eye, frame.direction(ox, oy), radius, t0, t1)) << k;
+        EXPECT_TRUE(intersectSphere(frame.eye, frame.direction(ix, iy), radius, t0, t1)) << k;
+    }
+    // Staggered: the two labels' centres are more than a label's height apart.
+    EXPECT_GT(std::hypot(labels[0].x - labels[1].x, labels[0].y - labels[1].y), 30.0f);
+    // The framing (render::framingDistanceKm): the surface's silhouette lies 94 % of the height apart.
+    const float edge = h / 2.0f - 0.94f * h / 2.0f;
+    EXPECT_TRUE(intersectSphere(frame.eye, frame.direction(w / 2.0f, edge + 1), 6371, t0, t1));
+    EXPECT_FALSE(intersectSphere(frame.eye, frame.direction(w / 2.0f, edge - 1), 6371, t0, t1));
 }
 
 TEST(ReferenceGeometry, GraticuleLinesLieWhereTheyProjectAndOnlyOnTheNearSide)
@@ -120,6 +162,39 @@ TEST(ReferenceGeometry, GraticuleLinesLieWhereTheyProjectAndOnlyOnTheNearSide)
     }
     drawReferenceGeometry(r, frontCamera(), kSize, kSize, 6371, 3481, hidden.rgba, hidden.depth, nullptr);
     EXPECT_EQ(hidden.rgba[(size_t(kSize / 2) * kSize + kSize / 2 + 10) * 4], 0.0f);
+}
+
+// The map's and the section's marks (state.map.showInView): seen from (0, 0), a section along the
+// equator from 30°W to 30°E has its radial end lines at the projected end points and its arc across
+// the middle row; the map's depth is a cyan shell; nothing is drawn without marks.
+TEST(ReferenceGeometry, SliceMarksLieWhereTheSectionAndTheDepthAre)
+{
+    ReferenceState r;  // no shells, graticule or coastlines
+    SliceMarks marks;
+    marks.depthKm = 1000;
+    marks.from = {0, -30};
+    marks.to = {0, 30};
+    Image none, im;
+    drawReferenceGeometry(r, frontCamera(), kSize, kSize, 6371, 3481, none.rgba, none.depth, nullptr);
+    EXPECT_EQ(*std::max_element(none.rgba.begin(), none.rgba.end()), 0.0f);
+    drawReferenceGeometry(r, frontCamera(), kSize, kSize, 6371, 3481, im.rgba, im.depth, nullptr, &marks);
+    const CameraFrame cam(frontCamera(), kSize, kSize);
+    float x, y, t;
+    auto at = [](double lat, double lon, double r) {
+        const Vec3d p = sphericalToCartesianKm(lat, lon, r);
+        return Vec3{float(p.x), float(p.y), float(p.z)};
+    };
+    // The end at 30°E, half way down: its radial line.
+    ASSERT_TRUE(cam.project(at(0, 30, 5000), x, y, t));
+    EXPECT_GT(im.alpha(int(x), int(y)), 0.5f) << "no radial line at the section's end (" << x << ", " << y << ")";
+    const float* p = &im.rgba[(size_t(y) * kSize + size_t(x)) * 4];
+    EXPECT_GT(p[2], p[0]) << "the mark is not cyan";
+    // The arc at the surface crosses the middle row at lon 0; between the ends and off the
+    // equator, only the faint depth shell.
+    EXPECT_GT(im.alpha(kSize / 2, kSize / 2), 0.5f);
+    ASSERT_TRUE(cam.project(at(20, 0, 6371), x, y, t));
+    EXPECT_LT(im.alpha(int(x), int(y)), 0.3f);
+    EXPECT_GT(im.alpha(int(x), int(y)), 0.0f) << "no depth shell";
 }
 
 TEST(ReferenceGeometry, CoastlineFileIsCheckedAndDrawn)

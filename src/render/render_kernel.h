@@ -134,6 +134,10 @@ struct KernelParams {
     const KernelBrush* brushes = nullptr;
     int brushCount = 0;
     bool multiRangeBrushes = false;  // some brush has rangeCount > 1 (the SIMD kernel's variant)
+    // "Show the selection" (the state's `selection`): a selected sample's extinction is at least this,
+    // whatever the table says, so that a selection in values the transfer function hides is seen.
+    // 0: the table alone. Non-zero only while brushes are set (VolumeRenderer::fillKernelParams).
+    float selectionSigmaPerKm = 0;
 
     // Samples: about stepFactor cells apart (mean radial spacing drKm, smaller mean angular spacing
     // dAngleRad), see RaySampling.
@@ -174,7 +178,6 @@ struct KernelParams {
     CameraFrame camera;
     int pass = 0;
     uint32_t seed = 0x9e3779b9u;
-    int chunkLanes = kChunkSamples;  // samples per chunk (fixed; kept for the estimators)
 };
 
 struct TileStats {
@@ -640,8 +643,8 @@ void sampleBatchScalar(const KernelParams& k, const KernelVariable& v, const flo
 void sampleBatchSimd(const KernelParams& k, const KernelVariable& v, const float* x, const float* y,
                      const float* z, int n, float* out);
 // The extinction (per km) the kernels give a sample at each of n points: the transfer table's
-// sigma of the colouring variable where the point lies in the shell, in an active brick and
-// inside every brush; 0 elsewhere. For the shadow volume (shadow_volume.h).
+// sigma of the colouring variable (at least selectionSigmaPerKm) where the point lies in the shell,
+// in an active brick and inside every brush; 0 elsewhere. For the shadow volume (shadow_volume.h).
 void extinctionBatchScalar(const KernelParams& k, const float* x, const float* y, const float* z, int n, float* out);
 void extinctionBatchSimd(const KernelParams& k, const float* x, const float* y, const float* z, int n, float* out);
 

@@ -61,7 +61,7 @@ void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, floa
             if (!insideBrushes(k, p, L))
                 continue;
             const int idx = k.table.indexOf(sampleAt(k, k.color, L));
-            const float sigma = k.table.sigmaPerKm[idx];
+            const float sigma = std::max(k.table.sigmaPerKm[idx], k.selectionSigmaPerKm);
             if (!(sigma > 0.0f))
                 continue;
             const float alpha = std::max(0.0f, 1.0f - std::exp(-sigma * len));
@@ -104,7 +104,7 @@ void extinctionBatchScalar(const KernelParams& k, const float* x, const float* y
         const Located L = locate(k, p.x, p.y, p.z);
         const bool inShell = L.rKm >= k.rInnerKm && L.rKm <= k.rOuterKm;
         out[i] = inShell && brickActive(k, L) && insideBrushes(k, p, L)
-                     ? k.table.sigmaPerKm[k.table.indexOf(sampleAt(k, k.color, L))]
+                     ? std::max(k.table.sigmaPerKm[k.table.indexOf(sampleAt(k, k.color, L))], k.selectionSigmaPerKm)
                      : 0.0f;
     }
 }

@@ -408,7 +408,9 @@ HWY_INLINE ClassifiedV Classify(DF d, const KernelParams& k, const LocatedV& L, 
                        zero, hn::Set(d, float(k.table.size - 1)));
     ClassifiedV c;
     c.index = hn::IfThenElseZero(hn::RebindMask(di, keep), hn::ConvertTo(di, u));
-    const VF sigma = hn::IfThenElseZero(keep, hn::GatherIndex(d, k.table.sigmaPerKm, c.index));
+    // At least the selection's floor (0 unless the selection is shown), as the scalar kernel.
+    const VF sigma = hn::IfThenElseZero(
+        keep, hn::Max(hn::GatherIndex(d, k.table.sigmaPerKm, c.index), hn::Set(d, k.selectionSigmaPerKm)));
     c.opaque = hn::Gt(sigma, zero);
     c.alpha = hn::IfThenElseZero(c.opaque, hn::Max(zero, hn::Sub(hn::Set(d, 1.0f), hn::Exp(d, hn::Neg(hn::Mul(sigma, len))))));
     return c;
@@ -557,7 +559,8 @@ void ExtinctionBatch(const KernelParams& k, const float* x, const float* y, cons
                                           hn::Set(d, 0.5f)),
                                hn::Zero(d), hn::Set(d, float(k.table.size - 1)));
             const VI index = hn::IfThenElseZero(hn::RebindMask(di, keep), hn::ConvertTo(di, u));
-            sigma = hn::IfThenElseZero(keep, hn::GatherIndex(d, k.table.sigmaPerKm, index));
+            sigma = hn::IfThenElseZero(
+                keep, hn::Max(hn::GatherIndex(d, k.table.sigmaPerKm, index), hn::Set(d, k.selectionSigmaPerKm)));
         }
         return sigma;
     });

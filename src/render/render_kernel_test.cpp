@@ -135,6 +135,57 @@ TEST(Sampler, PolesGiveOneValueForAllLongitudesAndBlendContinuously)
     }
 }
 
+// The selection's floor (KernelParams::selectionSigmaPerKm) in the extinction both kernels give: a
+// selected sample at a value the table makes transparent gets the floor, an opaque one keeps the
+// table's larger extinction, an unselected one stays 0; SIMD equals scalar.
+TEST(Kernel, SelectionFloorIsTheSameInBothKernelsAndLeavesUnselectedSamplesAlone)
+{
+    auto volume = makeVolume(makeGrid(30, 21, 60), {{"f", testing::plumeField}});
+    VolumeRenderer renderer(volume);
+    RenderParams p;
+    p.transfer.range = {-0.8f, 1.0f};
+    p.transfer.opacity = {{0, 0.9f}, {0.35f, 0}, {0.65f, 0}, {1, 0.9f}};
+    p.brushes = {{-1, Coordinate::Lon, {{0, 180}}}};  // the eastern half selected
+    p.selectionMinOpacity = 0.2f;
+    renderer.setParams(p);
+    const kernel::KernelParams& k = renderer.kernelParams();
+    const float floor = float(-std::log1p(-0.2) / p.transfer.opacityUnitKm);
+    EXPECT_NEAR(k.selectionSigmaPerKm, floor, 1e-9f);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> lat(-89, 89), lon(0.5, 359.5), r(3500, 6360);
+    std::vector<float> x, y, z;
+    for (int i = 0; i < 4000; ++i) {
+        const double o = lon(rng);
+        if (std::abs(o - 180) < 0.01)  // the brush's edge, within the kernel's angle approximation
+            continue;
+        const Vec3 q = toXyz(lat(rng), o, r(rng));
+        x.push_back(q.x), y.push_back(q.y), z.push_back(q.z);
+    }
+    const int n = int(x.size());
+    std::vector<float> scalar(n), simd(n), value(n);
+    kernel::extinctionBatchScalar(k, x.data(), y.data(), z.data(), n, scalar.data());
+    kernel::extinctionBatchSimd(k, x.data(), y.data(), z.data(), n, simd.data());
+    kernel::sampleBatchScalar(k, k.color, x.data(), y.data(), z.data(), n, value.data());
+    int floored = 0, unselected = 0, opaque = 0;
+    for (int i = 0; i < n; ++i) {
+        ASSERT_NEAR(scalar[i], simd[i], 1e-6f * (1 + scalar[i])) << "point " << i;
+        const float table = k.table.sigmaPerKm[k.table.indexOf(value[i])];
+        if (std::atan2(y[i], x[i]) < 0) {  // western half: not selected
+            ASSERT_EQ(scalar[i], 0.0f) << "point " << i;
+            ++unselected;
+        } else if (table < floor) {
+            ASSERT_NEAR(scalar[i], floor, 1e-9f) << "point " << i;
+            floored += table == 0.0f;
+        } else {
+            ASSERT_EQ(scalar[i], table) << "point " << i;
+            ++opaque;
+        }
+    }
+    EXPECT_GT(floored, 200);  // selected samples at values of opacity 0, made visible
+    EXPECT_GT(unselected, 1000);
+    EXPECT_GT(opaque, 10);
+}
+
 // The closed-form sample count along a ray: increasing, inverted by tAt, continuous at the crossover,
 // and about stepFactor cells per sample — dr on a radial ray, h dθ at a tangential closest approach.
 // Shading's gradient on the native grid (nativeGradient) points along the analytic gradient of

@@ -57,14 +57,8 @@ RenderParams resolveParams(const RenderState& s, const VariableCatalog& catalog)
     p.height = s.height;
     p.colorVariable = s.colorVariable.empty() ? 0 : variableIndex(s.colorVariable, "colouring");
     auto defaultRange = [&](int var, ColorMapId map) {
-        ValueRange r = var < int(catalog.ranges.size()) ? catalog.ranges[size_t(var)] : ValueRange{0, 1};
-        if (isCentredOnZero(map)) {
-            const float m = std::max(std::abs(r.min), std::abs(r.max));
-            r = {-m, m};
-        }
-        if (!(r.min < r.max))
-            r = {r.min - 0.5f, r.max + 0.5f};  // a constant variable still gets a usable range
-        return r;
+        return defaultColorRange(var < int(catalog.ranges.size()) ? catalog.ranges[size_t(var)] : ValueRange{0, 1},
+                                 isCentredOnZero(map));
     };
     p.transfer.colorMap = s.colorMap;
     p.transfer.range = s.colorRange ? *s.colorRange : defaultRange(p.colorVariable, s.colorMap);
@@ -89,6 +83,7 @@ RenderParams resolveParams(const RenderState& s, const VariableCatalog& catalog)
     p.shading = s.shading;
     p.stepFactor = s.stepFactor;
     p.depthOpacity = s.depthOpacity;
+    p.selectionMinOpacity = s.selection.show ? s.selection.minOpacity : 0.0f;
     return p;
 }
 

@@ -8,6 +8,7 @@
 // and the docs table are derived from that description; a new key is an entry there and a member here.
 #pragma once
 
+#include "render/map_projection.h"
 #include "render/stereo.h"
 #include "render/volume_renderer.h"
 
@@ -23,8 +24,10 @@ namespace raypc::render {
 // Version 2 added "pathlines", version 3 "reference" (shells, graticule, coastlines) and "legend",
 // version 4 several ranges on one axis (a repeated brush name ORs its ranges) and "axes", version
 // 5 "stereo", version 6 "shading.shadows" and "shading.shadowStrength", version 7 "camera.views"
-// (explicit camera poses, e.g. WebXR eyes); older documents are still read (they have none of these).
-inline constexpr int kRenderStateVersion = 7;
+// (explicit camera poses, e.g. WebXR eyes), version 8 "selection" (show the selection whatever the
+// transfer function's opacity), version 9 "map" and "section" (depth slices and great-circle
+// sections, render/slice_view.h); older documents are still read (they have none of these).
+inline constexpr int kRenderStateVersion = 9;
 
 // A brush range: a variable or a coordinate (x, y, z, lat, lon, radius, depth) and [min, max]. The
 // brush model is data/selection.h's: a name that repeats adds a range to its axis (OR).
@@ -65,7 +68,7 @@ struct ReferenceState {
         bool visible = false;
         std::vector<float> depthsKm{410.0f, 660.0f, 1000.0f, 1600.0f, 2200.0f};
         float opacity = 0.04f;  // of a shell seen face-on; towards its silhouette the path through it lengthens
-        Rgb color{0.85f, 0.85f, 0.85f};
+        Rgb color{1.0f, 1.0f, 1.0f};  // multiplies each shell's palette colour (shellColor)
     } shells;
     struct Graticule {
         bool visible = false;
@@ -79,6 +82,29 @@ struct ReferenceState {
         Rgb color{0.95f, 0.95f, 0.75f};
     } coastlines;
     float lineWidthPx = 1.5f;  // graticule and coastline width in pixels of the image
+};
+
+// The "map" object (version 9): the colour variable on the sphere at one depth, projected
+// (render/slice_view.h; `raypc map`, the UI's map panel). Restart class: nothing is reloaded.
+struct MapState {
+    float depthKm = 660.0f;
+    MapProjection projection = MapProjection::Mollweide;
+    float centralMeridianDeg = 0.0f;
+    float centralLatitudeDeg = 0.0f;  // the orthographic projection's centre; the others' is the equator
+    bool greyUnselected = true;       // with brushes: what lies outside the selection in grey
+    std::vector<float> contours;      // lines at these values of the colour variable
+    bool flow = false;                // arrows of the horizontal flow at the depth
+    bool showInView = false;          // the 3D view marks the depth and the section (SliceMarks)
+};
+
+// The "section" object (version 9): a vertical section along the great circle from `from` to `to`
+// (the shorter arc), from the surface to the core-mantle boundary.
+struct SectionState {
+    struct Point {
+        float latDeg = 0.0f, lonDeg = 0.0f;
+    };
+    Point from{0.0f, -60.0f}, to{0.0f, 60.0f};
+    bool flow = false;  // arrows of the flow in the section's plane (along the profile and radial)
 };
 
 struct RenderState {
@@ -118,6 +144,15 @@ struct RenderState {
     ReferenceState reference;  // version 3
     bool legend = false;       // version 3: colour legends in still pictures (raypc render, screenshots)
     StereoState stereo;        // version 5: stereo pairs (render/stereo.h)
+    // Version 8: "show the selection". While brushes are set and `show` is on, a selected sample's
+    // opacity (over opacityUnitKm) is at least minOpacity, whatever `opacity` says there: a
+    // selection in values the transfer function hides is still seen. Restart class.
+    struct Selection {
+        bool show = false;
+        float minOpacity = 0.5f;
+    } selection;
+    MapState map;          // version 9
+    SectionState section;  // version 9
 };
 
 // The opacity used when the state gives none: a ramp from 0 to 0.5 over the range, or for maps

@@ -43,8 +43,8 @@ ShadowBuildStats ShadowVolume::update(const kernel::KernelParams& k, float stren
     const float extentKm = k.rOuterKm * float(m_n - 1) / float(m_n - 3);
     const float cellKm = 2.0f * extentKm / float(m_n - 1);
 
-    // What the volume's extinction depends on: the field, the transfer table, the brushes and the
-    // brick flags (which follow from those), the grid's shell.
+    // What the volume's extinction depends on: the field, the transfer table, the brushes, the
+    // selection's floor and the brick flags (which follow from those), the grid's shell.
     Hasher v;
     v.value(k.color.values);
     v.value(k.nLat);
@@ -56,6 +56,7 @@ ShadowBuildStats ShadowVolume::update(const kernel::KernelParams& k, float stren
     v.bytes(k.table.sigmaPerKm, sizeof(float) * size_t(k.table.size));
     v.value(k.table.valueMin);
     v.value(k.table.indexScale);
+    v.value(k.selectionSigmaPerKm);
     for (int b = 0; b < k.brushCount; ++b) {
         const kernel::KernelBrush& brush = k.brushes[b];
         v.value(brush.onCoordinate);

@@ -3,8 +3,10 @@
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/mpi.h"
+#include "core/spherical.h"
 #include "render/legend.h"
 #include "render/reference_geometry.h"
+#include "render/slice_view.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -15,6 +17,15 @@
 #include <cmath>
 
 namespace raypc::render {
+namespace {
+
+// A variable as legends and titles name it: "temperature anomaly [K]".
+std::string variableTitle(const VariableInfo& info)
+{
+    return info.units.empty() ? info.name : fmt::format("{} [{}]", info.name, displayUnits(info.units));
+}
+
+}  // namespace
 
 float tubeRadiusKm(const RenderState& s)
 {
@@ -37,9 +48,21 @@ RenderState defaultState(const VariableCatalog& catalog)
     const float m = 0.6f * std::max(std::abs(r.min), std::abs(r.max));
     if (m > 0)
         s.colorRange = ValueRange{-m, m};
-    s.opacity = {{0.0f, 0.8f}, {0.3f, 0.05f}, {0.4f, 0.0f}, {0.6f, 0.0f}, {0.7f, 0.05f}, {1.0f, 0.8f}};
-    s.opacityUnitKm = 200.0f;
-    s.camera.distanceKm = 22000.0;
+    // Plumes and slabs as bodies with edges: the tails opaque over 80 km (200 km made them soft,
+    // translucent blobs), nothing in the middle 30 % of the range.
+    s.opacity = {{0.0f, 1.0f}, {0.25f, 0.6f}, {0.35f, 0.0f}, {0.65f, 0.0f}, {0.75f, 0.6f}, {1.0f, 1.0f}};
+    s.opacityUnitKm = 80.0f;
+    // A dark core: the light grey one outshone the anomalies in front of it.
+    s.core.color = Rgb{0.22f, 0.22f, 0.24f};
+    // The mantle fills 94 % of the picture's shorter side (a landscape view is bound by its height,
+    // whatever its width; the UI's views are landscape).
+    s.camera.distanceKm = framingDistanceKm(s.camera.fovYDeg, s.width, s.height, kSurfaceRadiusKm, 0.94);
+    // Where and how deep: the 410 and 660 km discontinuities as labelled rings, and the legend
+    // naming the variable, its units and range (in the UI's view, screenshots and pictures).
+    s.reference.shells.visible = true;
+    s.reference.shells.depthsKm = {410.0f, 660.0f};
+    s.reference.shells.opacity = 0.012f;  // rings at the silhouette; face-on a 2 % tint, not a veil
+    s.legend = true;
     s.passes = 8;
     s.pathlines.minWidthPx = 2.0f;  // 12 km tubes are a hair wide at this distance
     // Lit: plumes and slabs read as shapes and which is in front shows (docs/rendering.md,
@@ -98,18 +121,22 @@ std::vector<ResolvedState> stereoViews(const ResolvedState& resolved)
     return views;
 }
 
-std::vector<float> averagedDepthKm(const ViewFrames& frames, int& width, int& height)
+std::vector<float> averagedDepthKm(const ViewFrames& frames, int& width, int& height, const DepthTransform& eachView)
 {
-    RAYPC_CHECK(!frames.empty());
-    const FrameBuffer& first = frames.front();
-    width = first.width();
-    height = first.height();
+    RAYPC_CHECK(!frames.empty() && frames.size() <= 2);
+    std::vector<float> views[2];
+    for (size_t v = 0; v < frames.size(); ++v) {
+        width = frames[v].width();
+        height = frames[v].height();
+        views[v] = frames[v].averagedDepthKm();
+        if (eachView)
+            views[v] = eachView(std::move(views[v]), width, height);
+    }
     if (frames.size() == 1)
-        return first.averagedDepthKm();
-    RAYPC_CHECK_EQ(frames.size(), size_t(2));
-    const StereoLayout eyes{first.width(), first.height(), 2 * first.width(), first.height(), 1.0, 2};
+        return std::move(views[0]);
+    const StereoLayout eyes{width, height, 2 * width, height, 1.0, 2};
     width = eyes.width;
-    return sideBySide(eyes, first.averagedDepthKm(), frames[1].averagedDepthKm());
+    return sideBySide(eyes, views[0], views[1]);
 }
 
 StateRenderer::StateRenderer(std::shared_ptr<const Dataset> dataset, StateSources sources)
@@ -279,7 +306,8 @@ void gatherTilesToRoot(FrameBuffer& frame)
 }
 
 StateRenderer::Still StateRenderer::renderStill(const ResolvedState& resolved, int passes,
-                                                const std::atomic<bool>* cancel, TileShare share)
+                                                const std::atomic<bool>* cancel, TileShare share,
+                                                const std::function<void(int done, int total)>& onPass)
 {
     const Prepared p = prepare(resolved);
     Still still{p.frames(), p.level, p.scene ? p.scene->visibleCount() : 0, {}};
@@ -291,6 +319,8 @@ StateRenderer::Still StateRenderer::renderStill(const ResolvedState& resolved, i
         if (s.cancelled)
             break;
         still.passes.push_back(s);
+        if (onPass)
+            onPass(pass + 1, n);
     }
     return still;
 }
@@ -339,21 +369,25 @@ std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const 
     const RenderState& state = resolved.state;
     const auto& ref = state.reference;
     std::vector<uint8_t> out;
-    if (ref.shells.visible || ref.graticule.visible || ref.coastlines.visible) {
+    if (ref.shells.visible || ref.graticule.visible || ref.coastlines.visible || state.map.showInView) {
         std::vector<float> rgba = frame.averagedRgba();
         const SphericalGrid& grid = m_dataset->levels().front().grid;
         const auto coastlines = ref.coastlines.visible ? defaultCoastlines() : nullptr;
+        const SliceMarks marks{state.map.depthKm, state.section.from, state.section.to};
         drawReferenceGeometry(ref, state.camera, frame.width(), frame.height(), float(grid.rKm.back()),
-                              float(grid.rKm.front()), rgba, frame.averagedDepthKm(), coastlines.get());
+                              float(grid.rKm.front()), rgba, frame.averagedDepthKm(), coastlines.get(),
+                              state.map.showInView ? &marks : nullptr);
         out = toRgba8(rgba, state.background);
+        // Each shell's depth on its ring, in every frame that draws the shells (the UI's too).
+        drawTextLabels(out, frame.width(), frame.height(),
+                       shellLabels(ref, state.camera, frame.width(), frame.height(), float(grid.rKm.back()),
+                                   float(grid.rKm.front())));
     } else {
         out = frame.resolveRgba8(state.background);
     }
     if (withLegends && state.legend) {
         std::vector<LegendSpec> legends;
-        const int var = resolved.params.colorVariable;
-        const auto& info = m_dataset->variables().at(size_t(var));
-        legends.push_back({info.units.empty() ? info.name : fmt::format("{} [{}]", info.name, displayUnits(info.units)),
+        legends.push_back({variableTitle(m_dataset->variables().at(size_t(resolved.params.colorVariable))),
                            resolved.params.transfer});
         if (state.pathlines.visible && m_scene && m_sceneStep == state.step) {
             const PathlineStyle& style = m_scene->style();
@@ -366,9 +400,26 @@ std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const 
             colors.range = style.range;
             legends.push_back({what, colors});
         }
-        drawLegends(out, frame.width(), frame.height(), legends);
+        const SphericalGrid& grid = m_dataset->levels().front().grid;
+        drawLegends(out, frame.width(), frame.height(), legends,
+                    shellKey(ref, float(grid.rKm.back()), float(grid.rKm.front())));
     }
     return out;
+}
+
+ImageRgba8 StateRenderer::slicePicture(const ResolvedState& resolved, Slice slice) const
+{
+    const RenderState& state = resolved.state;
+    const int level = state.level.value_or(0);
+    const auto volume = m_sources.volume ? m_sources.volume(state.step, level) : m_dataset->load(state.step, level);
+    const auto coastlines = slice == Slice::Map && state.reference.coastlines.visible ? defaultCoastlines() : nullptr;
+    SliceInputs inputs{.volume = volume.get(),
+                       .resolved = &resolved,
+                       .variableNames = m_dataset->variableNames(),
+                       .colorTitle = variableTitle(m_dataset->variables().at(size_t(resolved.params.colorVariable))),
+                       .when = fmt::format("step {}, {:.1f} Myr", state.step, m_dataset->steps().at(size_t(state.step)).timeMyr),
+                       .coastlines = coastlines.get()};
+    return slice == Slice::Map ? mapPicture(inputs) : sectionPicture(inputs);
 }
 
 double StateRenderer::measureSamplesPerSecond(int step, const RenderParams& params)

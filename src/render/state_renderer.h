@@ -35,9 +35,10 @@
 
 namespace raypc::render {
 
-// A state that shows the data well without tuning (the UI's first view and `raypc demo`'s
-// picture): the temperature anomaly (if the dataset has it, else the first variable) on the
-// blue-white-red map, opacity only on the hot and cold tails.
+// A state that shows the data well without tuning (the UI's first view, `raypc render` without a
+// state and `raypc demo`'s picture): the temperature anomaly (if the dataset has it, else the first
+// variable) on the blue-white-red map, opaque only on the hot and cold tails, lit, a dark core, the
+// planet filling 94 % of the image's shorter side, the 410 and 660 km shells and the legend.
 RenderState defaultState(const Dataset& dataset);
 // The same for any volume's variables (their names and global ranges).
 RenderState defaultState(const VariableCatalog& catalog);
@@ -66,7 +67,12 @@ std::vector<ResolvedState> stereoViews(const ResolvedState& resolved);
 using ViewFrames = std::vector<FrameBuffer>;
 // The mean depth of every view (FrameBuffer::averagedDepthKm), the eyes side by side (left |
 // right) for a stereo pair whatever its mode; the size in `width` x `height`.
-std::vector<float> averagedDepthKm(const ViewFrames& frames, int& width, int& height);
+// `eachView`, when given, transforms each view's map before they are put side by side (e.g. the
+// server's downsampling; it sets the map's new size in its width and height arguments), so that no
+// block of a transform straddles the eyes.
+using DepthTransform = std::function<std::vector<float>(std::vector<float> depthKm, int& width, int& height)>;
+std::vector<float> averagedDepthKm(const ViewFrames& frames, int& width, int& height,
+                                   const DepthTransform& eachView = {});
 
 // The memory a picture of `state` takes at its peak (bytes), an upper bound: the accumulation
 // buffers of every view (FrameBuffer::bytesPerPixel), each view's picture in float and 8-bit RGBA,
@@ -166,8 +172,9 @@ public:
         std::vector<PassStats> passes;
     };
     // With a TileShare, only its tiles are rendered (gatherTilesToRoot assembles the frame).
+    // `onPass(done, total)` is called after each pass (progress; Python's render).
     Still renderStill(const ResolvedState& resolved, int passes = 0, const std::atomic<bool>* cancel = nullptr,
-                      TileShare share = {});
+                      TileShare share = {}, const std::function<void(int done, int total)>& onPass = {});
 
     // The finished picture of `frames`, rendered for `resolved` (after prepare or renderStill with
     // that state): per view, the state's reference geometry (shells, graticule, coastlines)
@@ -177,6 +184,12 @@ public:
     // 8-bit RGBA, row-major from the top left. Throws raypc::Error when the coastlines or the
     // legend font cannot be read.
     ImageRgba8 picture(const ViewFrames& frames, const ResolvedState& resolved, bool withLegends) const;
+
+    // A map or a section of `resolved` (state.map, state.section; render/slice_view.h) at the state's
+    // size, from the volume of its step at its level (0 unless the state names one), with its title
+    // and legend. Throws raypc::Error as mapPicture and sectionPicture do.
+    enum class Slice { Map, Section };
+    ImageRgba8 slicePicture(const ResolvedState& resolved, Slice slice) const;
 
     // The machine's throughput now, in estimated samples per second (all threads): two passes at
     // the coarsest level of `step` (the first also starts the worker threads). For `--lod auto`.

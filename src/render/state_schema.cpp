@@ -4,6 +4,7 @@
 
 #include "core/error.h"
 #include "core/json_input.h"
+#include "data/pathline_storage.h"
 #include "render/render_state.h"
 
 #include <algorithm>
@@ -399,25 +400,38 @@ Kind<std::vector<ColorStop>> colorPoints()
             "[[u, r, g, b], …], each in [0, 1], u ascending; [] or at least 2 points"};
 }
 
-Kind<StereoMode> stereoMode()
+// One of an enumeration's names (`what`: "a stereo mode"), read with its parser (whose message says
+// what the names are) and written with its name.
+template <class E>
+Kind<E> enumeration(std::span<const E> all, std::string_view (*name)(E), E (*parse)(std::string_view), std::string what)
 {
     json names = json::array();
     std::string list;
-    for (StereoMode m : allStereoModes()) {
-        names.push_back(std::string(stereoModeName(m)));
-        list += (list.empty() ? "" : ", ") + ("`" + std::string(stereoModeName(m)) + "`");
+    for (E m : all) {
+        names.push_back(std::string(name(m)));
+        list += (list.empty() ? "" : ", ") + ("`" + std::string(name(m)) + "`");
     }
-    return {[](const json& v, StereoMode& target, Reader& r, const std::string& key) {
+    return {[parse, what](const json& v, E& target, Reader& r, const std::string& key) {
                 if (!v.is_string())
-                    r.failAt(key, "expected a stereo mode name, found " + jsonExcerpt(v));
+                    r.failAt(key, "expected " + what + " name, found " + jsonExcerpt(v));
                 try {
-                    target = parseStereoMode(v.get<std::string>());
+                    target = parse(v.get<std::string>());
                 } catch (const Error& e) {
                     r.failAt(key, e.what());
                 }
             },
-            [](const StereoMode& m) { return json(std::string(stereoModeName(m))); },
+            [name](const E& m) { return json(std::string(name(m))); },
             {{"type", "string"}, {"enum", names}}, "one of " + list};
+}
+
+Kind<StereoMode> stereoMode()
+{
+    return enumeration<StereoMode>(allStereoModes(), stereoModeName, parseStereoMode, "a stereo mode");
+}
+
+Kind<MapProjection> mapProjection()
+{
+    return enumeration<MapProjection>(allMapProjections(), mapProjectionName, parseMapProjection, "a map projection");
 }
 
 // A number in [lo, hi] or null (nullopt: a default that depends on other keys).
@@ -965,6 +979,17 @@ const Object<RenderState>& document()
                     {.meaning = "colour legends (variable, units, range; the pathlines' colouring when shown) in "
                                 "still pictures: `raypc render` and screenshots (the UI draws its own on the view)",
                      .since = 3}),
+            group<S>("selection", "",
+                     {leaf<S>("show", at(&S::selection, &S::Selection::show), boolean(),
+                              {.meaning = "show the selection: while `brushes` are set, every selected sample is "
+                                          "drawn with at least `minOpacity`, whatever `color.opacity` gives its "
+                                          "value (its colour stays the transfer function's); no effect without "
+                                          "brushes. The UI turns it on when brushing starts from the default "
+                                          "view"}),
+                      leaf<S>("minOpacity", at(&S::selection, &S::Selection::minOpacity), number<float>(0, 1),
+                              {.meaning = "the least opacity of a selected sample over `color.opacityUnitKm` when "
+                                          "`show` is on"})},
+                     {.meaning = "selected samples made visible whatever the transfer function says", .since = 8}),
             group<S>(
                 "pathlines", "PathlineState",
                 {leaf<S>("visible", at(&S::pathlines, &P::visible), boolean(),
@@ -975,7 +1000,7 @@ const Object<RenderState>& document()
                          {.meaning = "tubes at least this many pixels wide at the camera target's distance (the "
                                      "radius grows when zoomed out); 0: `radiusKm` alone",
                           .since = 3}),
-                 leaf<S>("window", at(&S::pathlines, &P::window), integer(1, 1000),
+                 leaf<S>("window", at(&S::pathlines, &P::window), integer(1, kMaxPathlineWindow),
                          {.meaning = "show lines injected in steps [`step` − window + 1, `step`] (a change reloads "
                                      "the line window and its BVH)",
                           .cost = Cost::Reload}),
@@ -1017,7 +1042,9 @@ const Object<RenderState>& document()
                                    {.meaning = "opacity of a shell seen face-on; it grows towards the silhouette, "
                                                "where the line of sight runs along the shell"}),
                            leaf<S>("color", at(&S::reference, &R::shells, &R::Shells::color), color(),
-                                   {.meaning = "shell colour"})},
+                                   {.meaning = "tint of the shells: each shell has its own colour from a fixed "
+                                               "palette in the list's order (yellow, green, magenta, orange, violet), "
+                                               "multiplied by this; white shows the palette"})},
                           {.meaning = "reference shells at fixed depths"}),
                  group<S>("graticule", "",
                           {leaf<S>("visible", at(&S::reference, &R::graticule, &R::Graticule::visible), boolean(),
@@ -1041,6 +1068,56 @@ const Object<RenderState>& document()
                  leaf<S>("lineWidthPx", at(&S::reference, &R::lineWidthPx), number<float>(0.25, 32),
                          {.meaning = "width of graticule and coastline lines, pixels of the image"})},
                 {.meaning = "reference geometry drawn with the volume and composited by depth", .since = 3}),
+            group<S>(
+                "map", "MapState",
+                {leaf<S>("depthKm", at(&S::map, &MapState::depthKm), number<float>(0, 6371),
+                         {.meaning = "depth of the slice below the surface, km; a map needs it within the grid's "
+                                     "radii (from the outermost to the innermost)"}),
+                 leaf<S>("projection", at(&S::map, &MapState::projection), mapProjection(),
+                         {.meaning = "map projection (d3-geo's and d3-geo-projection's formulas, in the UI and in "
+                                     "figures alike)"}),
+                 leaf<S>("centralMeridianDeg", at(&S::map, &MapState::centralMeridianDeg), number<float>(-180, 180),
+                         {.meaning = "longitude at the map's centre, degrees east"}),
+                 leaf<S>("centralLatitudeDeg", at(&S::map, &MapState::centralLatitudeDeg), number<float>(-90, 90),
+                         {.meaning = "latitude at the centre of the `orthographic` projection, degrees north (the "
+                                     "other projections are centred on the equator)"}),
+                 leaf<S>("greyUnselected", at(&S::map, &MapState::greyUnselected), boolean(),
+                         {.meaning = "while `brushes` are set, what lies outside the selection is drawn in grey "
+                                     "(its value's lightness kept), so the selection stands out in colour"}),
+                 leaf<S>("contours", at(&S::map, &MapState::contours), numberList(-INFINITY, INFINITY, 16),
+                         {.meaning = "contour lines at these values of the colour variable (on maps and sections)"}),
+                 leaf<S>("flow", at(&S::map, &MapState::flow), boolean(),
+                         {.meaning = "arrows of the horizontal flow at the depth (east and north components of the "
+                                     "velocity; needs `vx`, `vy`, `vz`)"}),
+                 leaf<S>("showInView", at(&S::map, &MapState::showInView), boolean(),
+                         {.meaning = "the 3D view marks where the map and the section lie: the map's depth as a cyan "
+                                     "shell, the section's curtain as cyan lines (its arc at the surface and at the "
+                                     "innermost radius, radial lines at its ends); the UI turns it on while its Map "
+                                     "& section tab is shown"})},
+                {.meaning = "a map of the colour variable on the sphere at one depth (`raypc map`, the UI's map "
+                            "panel); the colours are the transfer function's, its opacity does not apply",
+                 .since = 9}),
+            group<S>(
+                "section", "SectionState",
+                {group<S>("from", "",
+                          {leaf<S>("latDeg", at(&S::section, &SectionState::from, &SectionState::Point::latDeg),
+                                   number<float>(-90, 90), {.meaning = "latitude, degrees north"}),
+                           leaf<S>("lonDeg", at(&S::section, &SectionState::from, &SectionState::Point::lonDeg),
+                                   number<float>(-360, 360), {.meaning = "longitude, degrees east"})},
+                          {.meaning = "the section's start on the surface"}),
+                 group<S>("to", "",
+                          {leaf<S>("latDeg", at(&S::section, &SectionState::to, &SectionState::Point::latDeg),
+                                   number<float>(-90, 90), {.meaning = "latitude, degrees north"}),
+                           leaf<S>("lonDeg", at(&S::section, &SectionState::to, &SectionState::Point::lonDeg),
+                                   number<float>(-360, 360), {.meaning = "longitude, degrees east"})},
+                          {.meaning = "the section's end on the surface (not the start nor its antipode)"}),
+                 leaf<S>("flow", at(&S::section, &SectionState::flow), boolean(),
+                         {.meaning = "arrows of the flow in the section's plane (the velocity's components along "
+                                     "the profile and radial; needs `vx`, `vy`, `vz`)"})},
+                {.meaning = "a vertical section along the great circle from `from` to `to` (the shorter arc), from "
+                            "the surface to the core-mantle boundary (`raypc section`); colours, contours and "
+                            "brushes as on the map",
+                 .since = 9}),
             group<S>(
                 "stereo", "StereoState",
                 {leaf<S>("mode", at(&S::stereo, &StereoState::mode), stereoMode(),

@@ -47,8 +47,8 @@ TEST(StateSchema, CarriesTheParsersBoundsAndVersions)
     const json& camera = schema["properties"]["camera"]["properties"];
     EXPECT_EQ(camera["elevationDeg"]["minimum"], -90);
     EXPECT_EQ(camera["elevationDeg"]["maximum"], 90);
-    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5, 6, 7}));
-    EXPECT_EQ(kRenderStateVersion, 7);
+    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5, 6, 7, 8, 9}));
+    EXPECT_EQ(kRenderStateVersion, 9);
     EXPECT_EQ(schema["properties"]["brushes"]["items"]["required"], json::array({"name", "min", "max"}));
     // A version-1 document may not have pathlines, as parseRenderState says.
     ASSERT_TRUE(schema.contains("allOf"));
@@ -72,6 +72,15 @@ TEST(StateSchema, CarriesTheParsersBoundsAndVersions)
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("shading.shadows"), std::string::npos) << e.what();
     }
+    // Version 8 added "show the selection": refused in a version-7 document, read in a version-8 one.
+    EXPECT_EQ(schema["allOf"][6]["if"]["properties"]["version"]["const"], 7);
+    EXPECT_EQ(schema["allOf"][6]["then"]["properties"]["selection"]["description"], "needs version 8");
+    EXPECT_THROW(parseRenderState(json::parse(R"({"version": 7, "selection": {"show": true}})")), Error);
+    EXPECT_THROW(parseRenderState(json::parse(R"({"version": 8, "selection": {"minOpacity": 1.5}})")), Error);
+    const RenderState shown = parseRenderState(json::parse(R"({"version": 8, "selection": {"show": true, "minOpacity": 0.3}})"));
+    EXPECT_TRUE(shown.selection.show);
+    EXPECT_FLOAT_EQ(shown.selection.minOpacity, 0.3f);
+    EXPECT_FALSE(RenderState{}.selection.show);
     const RenderState s = parseRenderState(json::parse(
         R"({"version": 3, "legend": true, "reference": {"shells": {"visible": true, "depthsKm": [660]}, "lineWidthPx": 2}})"));
     EXPECT_TRUE(s.legend);

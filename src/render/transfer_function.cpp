@@ -7,6 +7,17 @@
 
 namespace raypc::render {
 
+ValueRange defaultColorRange(ValueRange r, bool centredOnZero)
+{
+    if (centredOnZero) {
+        const float m = std::max(std::abs(r.min), std::abs(r.max));
+        r = {-m, m};
+    }
+    if (!(r.min < r.max))
+        r = {r.min - 0.5f, r.max + 0.5f};
+    return r;
+}
+
 void TransferFunction::validate() const
 {
     if (!std::isfinite(range.min) || !std::isfinite(range.max) || !(range.min < range.max))
@@ -50,7 +61,7 @@ float TransferFunction::positionOf(float value) const
     return std::clamp(std::isfinite(u) ? u : 0.0f, 0.0f, 1.0f);
 }
 
-Rgb TransferFunction::colorOf(float value) const
+float TransferFunction::colorPositionOf(float value) const
 {
     float u;
     if (colorPoints.empty() && !logScale && isCentredOnZero(colorMap)) {
@@ -60,10 +71,15 @@ Rgb TransferFunction::colorOf(float value) const
     } else {
         u = positionOf(value);
     }
-    if (reversed)
-        u = 1.0f - u;
+    return reversed ? 1.0f - u : u;
+}
+
+Rgb TransferFunction::colorAt(float u) const
+{
     return colorPoints.empty() ? sampleColorMap(colorMap, u) : sampleStops(colorPoints, u);
 }
+
+Rgb TransferFunction::colorOf(float value) const { return colorAt(colorPositionOf(value)); }
 
 float TransferFunction::opacityAt(float u) const
 {

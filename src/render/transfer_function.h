@@ -19,6 +19,12 @@ struct OpacityPoint {
     float position = 0, opacity = 0;
 };
 
+// The colour range a value range gets when none is chosen (the one rule for the volume, the
+// pathlines and the UI, which takes it from /api/info): symmetric about zero for maps centred on
+// zero (isCentredOnZero: ±the larger magnitude), and a constant (or empty) range widened by 0.5
+// each way so that it stays usable.
+ValueRange defaultColorRange(ValueRange values, bool centredOnZero);
+
 struct TransferFunction {
     ColorMapId colorMap = ColorMapId::Viridis;
     ValueRange range{0, 1};  // values outside are clamped to the ends
@@ -36,6 +42,11 @@ struct TransferFunction {
     // The colour of a value (the map or the colour points, reversed if asked; centred maps put 0 in
     // the middle).
     Rgb colorOf(float value) const;
+    // colorOf in two parts: where a value falls on the colours (in [0, 1], centring and reversal
+    // applied), and the colour there (the map or the colour points); a table of colorAt serves
+    // pictures of millions of values.
+    float colorPositionOf(float value) const;
+    Rgb colorAt(float u) const;
 
     // Throws raypc::Error on an empty or inverted range, positions not ascending in [0, 1],
     // opacities outside [0, 1], a non-positive unit distance, colour points not ascending in

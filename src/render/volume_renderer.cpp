@@ -130,6 +130,17 @@ Interval trigRange(double aDeg, double bDeg, double phaseDeg)
     return r;
 }
 
+// The extinction floor of selected samples (KernelParams::selectionSigmaPerKm): the selection's
+// minimum opacity over the transfer function's unit distance, as TransferTable bakes opacities;
+// 0 without brushes (nothing is selected, the whole volume would turn opaque) or with the mode off.
+float selectionSigmaPerKm(const RenderParams& p)
+{
+    if (p.brushes.empty() || !(p.selectionMinOpacity > 0.0f))
+        return 0.0f;
+    const float a = std::min(p.selectionMinOpacity, 1.0f - 1e-6f);
+    return float(-std::log1p(-double(a)) / p.transfer.opacityUnitKm);
+}
+
 kernel::ColorTable viewOf(const TransferTable& t)
 {
     return {t.red.data(), t.green.data(), t.blue.data(), t.sigmaPerKm.data(), t.valueMin, t.indexScale,
@@ -286,6 +297,8 @@ void VolumeRenderer::validateParams(const RenderParams& p) const
         fail("depth opacity threshold {}: expected a value in (0, 1)", p.depthOpacity);
     if (!(p.stopOpacity > 0.5f && p.stopOpacity <= 1.0f))
         fail("stop opacity {}: expected a value in (0.5, 1]", p.stopOpacity);
+    if (!(p.selectionMinOpacity >= 0.0f && p.selectionMinOpacity <= 1.0f))
+        fail("selection's minimum opacity {}: expected a value in [0, 1]", p.selectionMinOpacity);
     for (const RangeFilter& b : p.brushes) {
         if (!b.coordinate && (b.variable < 0 || b.variable >= varCount))
             fail("brush variable index {}: the volume has {} variables", b.variable, varCount);
@@ -371,10 +384,15 @@ void VolumeRenderer::bakeTables(const RenderParams& p)
 }
 
 // A brick is skipped when a brush excludes its bounds or the transfer function is transparent over
-// the colouring variable's bounds there (bounds contain every trilinear value).
+// the colouring variable's bounds there (bounds contain every trilinear value), unless the selection
+// is shown (then selected samples are visible whatever the transfer function says).
 void VolumeRenderer::flagActiveBricks(const RenderParams& p)
 {
     Impl& im = *m_impl;
+    auto countSkipped = [&] {
+        im.bricksSkipped = size_t(std::count(im.brickActive.begin(), im.brickActive.end(), 0));
+        im.estimatedSamples = -1;
+    };
     const StepVolume& vol = *m_volume;
     const BrickLayout& bl = im.activity;
     auto boundsOf = [&](int v) { return vol.brickBounds(size_t(v), bl.size); };
@@ -400,12 +418,14 @@ void VolumeRenderer::flagActiveBricks(const RenderParams& p)
             excludeOutside(boundsOf(b.variable), b.ranges);
         }
     }
+    // With the selection shown every selected sample is visible: only the brushes decide.
+    if (selectionSigmaPerKm(p) > 0.0f)
+        return countSkipped();
     const float* colorBounds = boundsOf(p.colorVariable);
     for (size_t b = 0; b < bl.brickCount(); ++b)
         if (im.table.transparentOver(colorBounds[2 * b], colorBounds[2 * b + 1]))
             im.brickActive[b] = 0;
-    im.bricksSkipped = size_t(std::count(im.brickActive.begin(), im.brickActive.end(), 0));
-    im.estimatedSamples = -1;
+    countSkipped();
 }
 
 void VolumeRenderer::fillKernelParams(const RenderParams& p)
@@ -440,6 +460,7 @@ void VolumeRenderer::fillKernelParams(const RenderParams& p)
     k.brushCount = int(im.brushes.size());
     k.multiRangeBrushes = std::any_of(im.brushes.begin(), im.brushes.end(),
                                       [](const kernel::KernelBrush& b) { return b.rangeCount > 1; });
+    k.selectionSigmaPerKm = selectionSigmaPerKm(p);
     k.stepFactor = p.stepFactor;
     k.drKm = im.drKm;
     k.dAngleRad = im.dAngleRad;
@@ -463,7 +484,6 @@ void VolumeRenderer::fillKernelParams(const RenderParams& p)
         k.coreTable = viewOf(im.coreTable);
     }
     k.seed = p.seed;
-    k.chunkLanes = kernel::kChunkSamples;
 }
 
 void VolumeRenderer::buildSkipGrid()

@@ -24,6 +24,7 @@
 #include "render/frame_buffer.h"
 #include "render/transfer_function.h"
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -73,6 +74,9 @@ struct RenderParams {
     float depthOpacity = 0.5f;  // accumulated opacity that defines the depth
     float stopOpacity = 0.995f; // early ray termination
     bool skipBricks = true;     // empty-space skipping (never changes the image; off for testing)
+    // "Show the selection": while brushes are set, a selected sample's opacity over
+    // transfer.opacityUnitKm is at least this, whatever transfer.opacity says; 0: off. In [0, 1].
+    float selectionMinOpacity = 0.0f;
     KernelKind kernel = KernelKind::Simd;
     uint32_t seed = 0x9e3779b9u;
 };
@@ -94,17 +98,25 @@ struct PassStats {
     double samplesPerSecondPerThread() const { return seconds > 0 ? double(samples + samplesSkipped) / seconds / threads : 0; }
     // Samples that read data per second per thread: the sampling rate proper.
     double dataSamplesPerSecondPerThread() const { return seconds > 0 ? double(samples) / seconds / threads : 0; }
+    // The counters that add up over passes, eyes and ranks, in this order (the messages between
+    // ranks carry them so): samples, samplesSkipped, chunks, chunksSkipped, chunksJumped, rays.
+    using Counts = std::array<uint64_t, 6>;
+    Counts counts() const { return {samples, samplesSkipped, chunks, chunksSkipped, chunksJumped, rays}; }
+    void addCounts(const Counts& c)
+    {
+        samples += c[0];
+        samplesSkipped += c[1];
+        chunks += c[2];
+        chunksSkipped += c[3];
+        chunksJumped += c[4];
+        rays += c[5];
+    }
     // Adds a later pass (or the other eye's): times and counts sum, the machine and brick figures
     // are the later one's.
     PassStats& operator+=(const PassStats& s)
     {
         seconds += s.seconds;
-        samples += s.samples;
-        samplesSkipped += s.samplesSkipped;
-        chunks += s.chunks;
-        chunksSkipped += s.chunksSkipped;
-        chunksJumped += s.chunksJumped;
-        rays += s.rays;
+        addCounts(s.counts());
         bricksTotal = s.bricksTotal;
         bricksSkipped = s.bricksSkipped;
         threads = s.threads;

@@ -257,6 +257,60 @@ TEST(Renderer, BrushedOutVolumeShowsOnlyBackgroundAndCore)
         }
 }
 
+// "Show the selection" (RenderState::selection): a selection in values the transfer function makes
+// transparent is seen with the floor and not without it, in both kernels alike; skipping stays exact
+// (bricks the transfer function alone would skip hold selected samples now); without brushes, or
+// with brushes that select nothing, the floor changes nothing.
+TEST(Renderer, ShownSelectionIsVisibleWhateverTheTransferFunctionSays)
+{
+    auto volume = makeVolume(makeGrid(36, 33, 72), {{"f", testing::plumeField}});
+    VolumeRenderer renderer(volume);
+    RenderParams p = smallParams();
+    p.transfer.range = {-0.8f, 1.0f};
+    p.transfer.opacity = {{0, 0.8f}, {0.35f, 0}, {0.65f, 0}, {1, 0.8f}};  // transparent over [-0.17, 0.37]
+    p.brushes = {{0, std::nullopt, {{-0.1f, 0.3f}}}};
+    // Pixels where the volume shows: those that differ from the picture of a selection of nothing
+    // (the core and the background alone).
+    RenderParams none = p;
+    none.brushes = {{0, std::nullopt, {{5, 6}}}};
+    const auto background = render(renderer, none, 2);
+    auto volumePixels = [&](const std::vector<float>& img) {
+        int n = 0;
+        for (size_t i = 3; i < img.size(); i += 4)
+            n += std::abs(img[i] - background[i]) > 0.05f;
+        return n;
+    };
+    PassStats hiddenStats, shownStats;
+    const auto hidden = render(renderer, p, 2, &hiddenStats);
+    EXPECT_EQ(volumePixels(hidden), 0);
+    p.selectionMinOpacity = 0.5f;
+    const auto shown = render(renderer, p, 2, &shownStats);
+    EXPECT_GT(volumePixels(shown), p.width * p.height / 10);
+    EXPECT_LT(shownStats.bricksSkipped, hiddenStats.bricksSkipped);
+    EXPECT_GT(shownStats.bricksSkipped, 0u);  // the brush still excludes bricks
+    p.skipBricks = false;
+    EXPECT_LE(maxAbsDiff(render(renderer, p, 2), shown), 1e-6);
+    p.skipBricks = true;
+    p.kernel = KernelKind::Scalar;
+    const auto scalar = render(renderer, p, 2);
+    EXPECT_LT(maxAbsDiff(shown, scalar), 0.02);
+    EXPECT_LT(meanAbsDiff(shown, scalar), 2e-4);
+    for (const KernelKind kernel : {KernelKind::Simd, KernelKind::Scalar}) {
+        p.kernel = kernel;
+        p.brushes = {{0, std::nullopt, {{5, 6}}}};  // selects nothing
+        p.selectionMinOpacity = 0;
+        const auto noneOff = render(renderer, p, 1);
+        p.selectionMinOpacity = 0.5f;
+        EXPECT_LE(maxAbsDiff(render(renderer, p, 1), noneOff), 0.0);
+        p.brushes.clear();  // nothing brushed: the transfer function alone
+        const auto plainOn = render(renderer, p, 1);
+        p.selectionMinOpacity = 0;
+        EXPECT_LE(maxAbsDiff(render(renderer, p, 1), plainOn), 0.0);
+    }
+    p.selectionMinOpacity = 1.5f;
+    EXPECT_THROW(renderer.setParams(p), Error);
+}
+
 TEST(Renderer, CancelledPassLeavesTheFrameUnchanged)
 {
     auto volume = makeVolume(makeGrid(18, 9, 36), {{"f", testing::plumeField}});

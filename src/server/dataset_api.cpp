@@ -5,24 +5,30 @@
 #include "core/install_paths.h"
 #include "core/json_input.h"
 #include "core/spherical.h"
+#include "data/probe.h"
 #include "render/color_map.h"
 #include "render/pathline_scene.h"
+#include "render/reference_geometry.h"
+#include "render/slice_view.h"
 #include "render/state_renderer.h"
 #include "render/volume_renderer.h"
 #include "server/access.h"
 #include "server/image_codec.h"
 #include "server/protocol.h"
+#include "server/render_session.h"
 
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <type_traits>
 
 namespace raypc::server {
 
@@ -164,54 +170,26 @@ DatasetCaches openDatasetCaches(const fs::path& dir, size_t cacheBytes, size_t c
     return c;
 }
 
-PathlineCache::PathlineCache(fs::path datasetDir, size_t maxEntries)
-    : m_dir(std::move(datasetDir)), m_maxEntries(std::max<size_t>(1, maxEntries))
+PathlineCache::PathlineCache(fs::path datasetDir, size_t maxEntries) : m_dir(std::move(datasetDir)), m_cache(maxEntries)
 {
 }
 
 std::shared_ptr<const PathlineCache::Window> PathlineCache::get(int step, int window)
 {
-    {
-        std::lock_guard lock(m_mutex);
-        for (auto it = m_lru.begin(); it != m_lru.end(); ++it)
-            if (it->step == step && it->window == window) {
-                m_lru.splice(m_lru.begin(), m_lru, it);
-                return it->sets;
-            }
-    }
-    // Load outside the lock; two threads may load the same window once each, which is harmless.
-    auto sets = std::make_shared<const Window>(loadPathlineWindow(m_dir, step, window));
-    std::lock_guard lock(m_mutex);
-    m_lru.push_front({step, window, sets});
-    while (m_lru.size() > m_maxEntries)
-        m_lru.pop_back();
-    return sets;
+    return m_cache.get({step, window}, [&] { return loadPathlineWindow(m_dir, step, window); });
 }
 
-PersistenceCache::PersistenceCache(StepCache* volumes, size_t maxEntries)
-    : m_volumes(volumes), m_maxEntries(std::max<size_t>(1, maxEntries))
+PersistenceCache::PersistenceCache(StepCache* volumes, size_t maxEntries) : m_volumes(volumes), m_cache(maxEntries)
 {
 }
 
 std::shared_ptr<const PersistenceCache::Pairs> PersistenceCache::get(int step, int variable)
 {
-    {
-        std::lock_guard lock(m_mutex);
-        for (auto it = m_lru.begin(); it != m_lru.end(); ++it)
-            if (it->step == step && it->variable == variable) {
-                m_lru.splice(m_lru.begin(), m_lru, it);
-                return it->pairs;
-            }
-    }
-    // Computed outside the lock; two threads may compute the same step once each, which is harmless.
-    const auto volume = m_volumes->getWithoutEvicting(step, 0);
-    const std::span<const float> values(volume->values(size_t(variable)), volume->grid().cellCount());
-    auto pairs = std::make_shared<const Pairs>(persistencePairs(volume->grid(), values));
-    std::lock_guard lock(m_mutex);
-    m_lru.push_front({step, variable, pairs});
-    while (m_lru.size() > m_maxEntries)
-        m_lru.pop_back();
-    return pairs;
+    return m_cache.get({step, variable}, [&] {
+        const auto volume = m_volumes->getWithoutEvicting(step, 0);
+        const std::span<const float> values(volume->values(size_t(variable)), volume->grid().cellCount());
+        return persistencePairs(volume->grid(), values);
+    });
 }
 
 json persistenceDiagramJson(const SphericalGrid& grid, const std::vector<PersistencePair>& pairs, int step,
@@ -305,6 +283,13 @@ std::string pathlineAttributesPayload(const PathlineCache::Window& sets, int ste
     return out;
 }
 
+namespace {
+json rangeJson(ValueRange r)
+{
+    return json::array({r.min, r.max});
+}
+}  // namespace
+
 json infoJson(const Dataset& dataset, const ServerLimits& limits)
 {
     json variables = json::array();
@@ -315,7 +300,12 @@ json infoJson(const Dataset& dataset, const ServerLimits& limits)
                              {"min", v.global.range.min},
                              {"max", v.global.range.max},
                              {"mean", v.global.mean},
-                             {"histogram", v.global.histogram}});
+                             {"histogram", v.global.histogram},
+                             // The colour range without a chosen one (render::defaultColorRange), for
+                             // maps centred on zero and for the others.
+                             {"defaultColorRange",
+                              {{"centred", rangeJson(render::defaultColorRange(v.global.range, true))},
+                               {"other", rangeJson(render::defaultColorRange(v.global.range, false))}}}});
     json coordinates = json::array();
     for (const auto& c : coordinateInfos()) {
         const CoordinateRange r = coordinateRange(dataset.levels().front().grid, c.id);
@@ -359,20 +349,25 @@ json infoJson(const Dataset& dataset, const ServerLimits& limits)
 
 namespace {
 
-int parseIntParameter(std::string_view query, const char* name)
+// A query parameter as an integer or a finite number; throws raypc::Error naming it when missing or
+// malformed.
+template <class T>
+T parseParameter(std::string_view query, const char* name)
 {
     const auto text = queryParameter(query, name);
     if (!text)
         fail("missing parameter '{}'", name);
     try {
         size_t used = 0;
-        const int v = std::stoi(*text, &used);
-        if (used == text->size())
+        const T v = std::is_integral_v<T> ? T(std::stoi(*text, &used)) : T(std::stod(*text, &used));
+        if (used == text->size() && std::isfinite(double(v)))
             return v;
     } catch (const std::exception&) {
     }
-    fail("{}: expected an integer, found '{}'", name, text->substr(0, 40));
+    fail("{}: expected {}, found '{}'", name, std::is_integral_v<T> ? "an integer" : "a finite number", text->substr(0, 40));
 }
+int parseIntParameter(std::string_view query, const char* name) { return parseParameter<int>(query, name); }
+double parseNumberParameter(std::string_view query, const char* name) { return parseParameter<double>(query, name); }
 
 int checkedStep(const Dataset& dataset, std::string_view query)
 {
@@ -473,6 +468,77 @@ ApiAnswer screenshot(const ApiContext& api, const ApiRequest& request)
     return {std::move(png), "image/png"};
 }
 
+// POST /api/slice?view=map|section with a state: the state's map or section picture
+// (render/slice_view.h) at its size, and where the picture puts the sphere or the section, so that
+// the UI finds the point under the pointer: [u32 little-endian n][n bytes of JSON][PNG].
+ApiAnswer slice(const ApiContext& api, const ApiRequest& request)
+{
+    const auto view = queryParameter(request.query, "view");
+    if (!view || (*view != "map" && *view != "section"))
+        fail("view: expected 'map' or 'section', found '{}'", view ? view->substr(0, 40) : "nothing");
+    const render::ResolvedState resolved = render::resolveState(parseBody(request.body), *api.dataset);
+    const render::RenderState& state = resolved.state;
+    if (int64_t(state.width) * state.height > api.limits.maxScreenshotPixels)
+        fail("slice: image {}x{} is over the limit of {} pixels", state.width, state.height, api.limits.maxScreenshotPixels);
+    const auto start = std::chrono::steady_clock::now();
+    const bool map = *view == "map";
+    render::StateRenderer renderer(api.dataset, cacheSources(api.cache, api.pathlines));
+    const render::ImageRgba8 picture =
+        renderer.slicePicture(resolved, map ? render::StateRenderer::Slice::Map : render::StateRenderer::Slice::Section);
+    json header{{"view", *view}, {"width", picture.width}, {"height", picture.height}, {"step", state.step}};
+    if (map) {
+        const render::MapFrame frame = render::mapFrameOf(state);
+        header["projection"] = std::string(render::mapProjectionName(state.map.projection));
+        header["centralMeridianDeg"] = state.map.centralMeridianDeg;
+        header["centralLatitudeDeg"] = state.map.projection == render::MapProjection::Orthographic ? state.map.centralLatitudeDeg : 0.0f;
+        header["scale"] = frame.scale();
+        header["centre"] = frame.centrePx();
+        header["depthKm"] = state.map.depthKm;
+    } else {
+        const render::SectionLayout l = render::sectionLayoutOf(state, api.cache->get(state.step, state.level.value_or(0))->grid());
+        header["plot"] = {{"left", l.left}, {"right", l.right}, {"top", l.top}, {"bottom", l.bottom}};
+        header["depthSpanKm"] = l.depthSpanKm;
+        header["from"] = {state.section.from.latDeg, state.section.from.lonDeg};
+        header["to"] = {state.section.to.latDeg, state.section.to.lonDeg};
+    }
+    const std::string text = header.dump();
+    const std::string png = encodePng(picture.pixels, picture.width, picture.height, 1);
+    std::string body(4, '\0');
+    const uint32_t n = uint32_t(text.size());
+    for (int i = 0; i < 4; ++i)
+        body[size_t(i)] = char((n >> (8 * i)) & 0xff);
+    body += text;
+    body += png;
+    spdlog::debug("slice: {} of step {} {}x{} in {:.0f} ms", *view, state.step, picture.width, picture.height,
+                  millisecondsSince(start));
+    return {std::move(body), "application/octet-stream"};
+}
+
+// GET /api/probe?step=S&lat=A&lon=B&depthKm=D[&var=NAME][&level=L]: the values at a point (data/probe.h).
+ApiAnswer probe(const ApiContext& api, const ApiRequest& request)
+{
+    const Dataset& dataset = *api.dataset;
+    const int step = checkedStep(dataset, request.query);
+    const int level = queryParameter(request.query, "level") ? parseIntParameter(request.query, "level") : 0;
+    dataset.checkLevel(level, "level");
+    const double lat = parseNumberParameter(request.query, "lat"), lon = parseNumberParameter(request.query, "lon");
+    const double depth = parseNumberParameter(request.query, "depthKm");
+    if (!(lat >= -90 && lat <= 90))
+        fail("lat: {} is outside [-90, 90] degrees", lat);
+    const auto volume = api.cache->get(step, level);
+    const double top = kSurfaceRadiusKm - volume->grid().rKm.back(), bottom = kSurfaceRadiusKm - volume->grid().rKm.front();
+    if (!(depth >= top - 1e-6 && depth <= bottom + 1e-6))
+        fail("depthKm: {} is outside the grid's depths, {:g} to {:g} km", depth, top, bottom);
+    std::string var;
+    if (const auto name = queryParameter(request.query, "var")) {
+        var = *name;
+        if (dataset.variableIndex(var) < 0)
+            fail("var: unknown variable '{}'", var.substr(0, 80));
+    }
+    return jsonAnswer(probeJson(dataset, *volume, step, level, lat, lon,
+                                std::clamp(kSurfaceRadiusKm - depth, volume->grid().rKm.front(), volume->grid().rKm.back()), var));
+}
+
 ApiAnswer presets(const ApiContext& api, const ApiRequest&)
 {
     return jsonAnswer(presetsJson(api.examples, api.dataset.get()));
@@ -498,8 +564,7 @@ ApiAnswer pathlines(const ApiContext& api, const ApiRequest& request)
 {
     const int step = checkedStep(*api.dataset, request.query);
     const int window = queryParameter(request.query, "window") ? parseIntParameter(request.query, "window") : 10;
-    if (window < 1 || window > 1000)
-        fail("window: {} out of range 1..1000", window);
+    checkPathlineWindow(window);  // before the cache is asked
     const auto sets = api.pathlines->get(step, window);
     return {pathlineAttributesPayload(*sets, step, window), "application/octet-stream"};
 }
@@ -542,6 +607,35 @@ ApiAnswer persistence(const ApiContext& api, const ApiRequest& request)
     return jsonAnswer(result);
 }
 
+LinkedState& linkedState(const ApiContext& api)
+{
+    if (!api.link)
+        fail("this server has no linked state");
+    return *api.link;
+}
+
+ApiAnswer linkGet(const ApiContext& api, const ApiRequest&)
+{
+    return jsonAnswer(linkedState(api).toJson());
+}
+
+// A program sets the state the UI shows: checked as a WebSocket `state` message's state is (the
+// same parser and resolver, the same messages), then pushed to every session.
+ApiAnswer linkPost(const ApiContext& api, const ApiRequest& request)
+{
+    const json body = parseBody(request.body);
+    if (!body.is_object() || !body.contains("state"))
+        fail("body: expected {{\"state\": {{…state document…}}}}, found {}", jsonExcerpt(body));
+    for (const auto& [key, value] : body.items())
+        if (key != "state")
+            fail("body: unknown field '{}', expected only 'state'", key.substr(0, 60));
+    const json& state = body["state"];
+    const render::ResolvedState resolved = render::resolveState(state, *api.dataset, "state");
+    checkSessionImage(resolved.state);
+    const LinkedState::Pushed pushed = linkedState(api).setFromApi(state);
+    return jsonAnswer({{"version", pushed.version}, {"sessions", pushed.sessions}});
+}
+
 const Route kRoutes[] = {
     {HttpMethod::Get, "/api/info", Lane::Network, info},
     {HttpMethod::Get, "/api/progress", Lane::Network, progress},
@@ -549,10 +643,14 @@ const Route kRoutes[] = {
     {HttpMethod::Get, "/api/sample", Lane::Worker, sample},
     {HttpMethod::Post, "/api/selection", Lane::Worker, selection},
     {HttpMethod::Post, "/api/screenshot", Lane::Screenshot, screenshot},
+    {HttpMethod::Post, "/api/slice", Lane::Worker, slice},
+    {HttpMethod::Get, "/api/probe", Lane::Worker, probe},
     {HttpMethod::Get, "/api/presets", Lane::Worker, presets},
     {HttpMethod::Post, "/api/stats", Lane::Statistics, stats},
     {HttpMethod::Get, "/api/pathlines", Lane::Worker, pathlines},
     {HttpMethod::Get, "/api/persistence", Lane::Worker, persistence},
+    {HttpMethod::Get, "/api/link", Lane::Worker, linkGet},
+    {HttpMethod::Post, "/api/link", Lane::Worker, linkPost},
 };
 
 }  // namespace

@@ -6,12 +6,14 @@
 // any thread.
 #pragma once
 
+#include "core/lru_cache.h"
 #include "data/dataset.h"
 #include "data/pathline_storage.h"
 #include "data/persistence.h"
 #include "data/selection.h"
 #include "render/state_renderer.h"
 #include "server/limits.h"
+#include "server/linked_state.h"
 #include "server/series_progress.h"
 #include "server/step_cache.h"
 
@@ -19,7 +21,6 @@
 
 #include <atomic>
 #include <filesystem>
-#include <list>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -60,14 +61,8 @@ public:
     std::shared_ptr<const Window> get(int step, int window);
 
 private:
-    struct Entry {
-        int step, window;
-        std::shared_ptr<const Window> sets;
-    };
     std::filesystem::path m_dir;
-    size_t m_maxEntries;
-    std::mutex m_mutex;
-    std::list<Entry> m_lru;
+    LruCache<std::pair<int, int>, Window> m_cache;  // by (step, window)
 };
 
 // The line attributes of a window as one binary answer: u32 little-endian header length, a UTF-8
@@ -85,14 +80,8 @@ public:
     std::shared_ptr<const Pairs> get(int step, int variable);
 
 private:
-    struct Entry {
-        int step, variable;
-        std::shared_ptr<const Pairs> pairs;
-    };
     StepCache* m_volumes;
-    size_t m_maxEntries;
-    std::mutex m_mutex;
-    std::list<Entry> m_lru;
+    LruCache<std::pair<int, int>, Pairs> m_cache;  // by (step, variable)
 };
 
 // GET /api/persistence (docs/protocol.md): the persistence diagram of `variable` at `step`, at most
@@ -121,7 +110,7 @@ struct DatasetCaches {
 DatasetCaches openDatasetCaches(const std::filesystem::path& dir, size_t cacheBytes, size_t cacheEntries);
 
 // What the handlers read: shared by every connection of a server, immutable after start (the caches
-// are thread-safe).
+// and the linked state are thread-safe).
 
 struct ApiContext {
     std::shared_ptr<const Dataset> dataset;
@@ -132,6 +121,7 @@ struct ApiContext {
     std::string infoJson;                           // GET /api/info, built once (infoJson())
     ServerLimits limits;
     std::shared_ptr<const SeriesProgress> series;   // GET /api/progress; nullptr: a complete dataset
+    LinkedState* link = nullptr;                    // GET/POST /api/link (the server's, server_context.h)
 };
 
 // One API request as the handlers see it: the percent-encoded query, the body, and a flag that

@@ -29,7 +29,7 @@ std::string encodeJpeg(std::span<const uint8_t> rgba, int width, int height, int
     return out;
 }
 
-std::string encodePng(std::span<const uint8_t> rgba, int width, int height)
+std::string encodePng(std::span<const uint8_t> rgba, int width, int height, int compressionLevel)
 {
     RAYPC_CHECK_EQ(rgba.size(), size_t(width) * size_t(height) * 4);
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
@@ -51,7 +51,11 @@ std::string encodePng(std::span<const uint8_t> rgba, int width, int height)
         nullptr);
     png_set_IHDR(png, info, png_uint_32(width), png_uint_32(height), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                  PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-    png_set_compression_level(png, 6);
+    png_set_compression_level(png, compressionLevel);
+    // The quickest levels filter each row by its left neighbour only (the adaptive choice of
+    // filters costs more than it saves there).
+    if (compressionLevel <= 2)
+        png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB);
     png_write_info(png, info);
     for (int y = 0; y < height; ++y) {
         const uint8_t* src = rgba.data() + size_t(y) * size_t(width) * 4;

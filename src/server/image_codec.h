@@ -12,6 +12,8 @@ namespace raypc::server {
 
 // `rgba` is width x height x 4 bytes, row-major from the top-left; alpha is ignored.
 std::string encodeJpeg(std::span<const uint8_t> rgba, int width, int height, int quality);
-std::string encodePng(std::span<const uint8_t> rgba, int width, int height);
+// zlib's `compressionLevel` (1 quickest .. 9 smallest): 6 for screenshots; the interactive maps
+// and sections take 1 (a 1920x1080 map in about a fifth of the time, bench/render_bench.cpp).
+std::string encodePng(std::span<const uint8_t> rgba, int width, int height, int compressionLevel = 6);
 
 }  // namespace raypc::server

@@ -16,6 +16,13 @@ namespace raypc::server {
 // encode a frame (averaged RGBA, 8-bit RGBA, depth: 24 bytes), rounded up.
 inline constexpr size_t kFrameBytesPerPixel = 72;
 
+// The largest image of a session's state (stereo: both eyes together); larger ones get an error
+// naming /api/screenshot. A frame buffer of 4096² takes about 0.7 GB with its scratch.
+inline constexpr int64_t kMaxSessionPixels = int64_t(4096) * 4096;
+// Beyond this a WebSocket message closes the connection (code 1009); between the protocol's
+// kMaxClientMessageBytes (protocol.h) and this it gets an error reply and the connection stays.
+inline constexpr size_t kHardMessageLimit = 4 * 1024 * 1024;
+
 struct ServerLimits {
     // Open TCP connections (HTTP and WebSocket together); one more is answered 503 and closed.
     size_t maxConnections = 256;

@@ -58,6 +58,16 @@ void putU32(std::string& out, uint32_t v)
 
 }  // namespace
 
+const char* frameModeName(FrameMode mode)
+{
+    switch (mode) {
+    case FrameMode::interactive: return "interactive";
+    case FrameMode::playback: return "playback";
+    case FrameMode::still: break;
+    }
+    return "still";
+}
+
 ClientMessage parseClientMessage(std::string_view text)
 {
     if (text.size() > kMaxClientMessageBytes)
@@ -76,7 +86,7 @@ ClientMessage parseClientMessage(std::string_view text)
         return HelloMessage{int(std::clamp<int64_t>(integerField(message, "hello", "protocol"), -1, 1 << 30))};
     }
     if (type == "state") {
-        rejectUnknownKeys(message, "state", {"type", "id", "state", "interactive"});
+        rejectUnknownKeys(message, "state", {"type", "id", "state", "interactive", "playback"});
         StateMessage m;
         m.id = integerField(message, "state", "id");
         const auto st = message.find("state");
@@ -85,11 +95,18 @@ ClientMessage parseClientMessage(std::string_view text)
         if (!st->is_object())
             fail("state: field 'state' must be an object (docs/state.md)");
         m.state = *st;
-        if (const auto in = message.find("interactive"); in != message.end()) {
+        const auto flag = [&](const char* name) {
+            const auto in = message.find(name);
+            if (in == message.end())
+                return false;
             if (!in->is_boolean())
-                fail("state: field 'interactive' must be true or false");
-            m.interactive = in->get<bool>();
-        }
+                fail("state: field '{}' must be true or false", name);
+            return in->get<bool>();
+        };
+        const bool interactive = flag("interactive"), playback = flag("playback");
+        if (interactive && playback)
+            fail("state: 'interactive' and 'playback' cannot both be true");
+        m.mode = interactive ? FrameMode::interactive : playback ? FrameMode::playback : FrameMode::still;
         return m;
     }
     if (type == "cancel") {
@@ -111,6 +128,12 @@ std::string helloReply(const std::string& sessionId)
 std::string pongReply(int64_t id)
 {
     return json{{"type", "pong"}, {"id", id}}.dump();
+}
+
+std::string linkMessage(uint64_t version, const json& state)
+{
+    return json{{"type", "link"}, {"version", version}, {"state", state}}.dump(-1, ' ', false,
+                                                                               json::error_handler_t::replace);
 }
 
 std::string errorReply(const std::string& message, std::optional<int64_t> id)

@@ -24,10 +24,19 @@ inline constexpr size_t kMaxHttpBodyBytes = 1024 * 1024;      // larger HTTP bod
 struct HelloMessage {
     int protocol = 0;
 };
+// How a session renders a state (docs/protocol.md, the state message):
+// - still: progressive passes at the state's level (level 0 when "auto") until state.passes;
+// - interactive (the user drags): one pass at the finest level that fits state.timeBudgetMs, at
+//   1/2 or 1/4 of the size per axis when even the coarsest level misses it;
+// - playback (a step of playback, shown for timeBudgetMs): the level chosen as for interactive, then
+//   progressive passes at that level until state.passes or the next state.
+enum class FrameMode { still, interactive, playback };
+const char* frameModeName(FrameMode mode);
+
 struct StateMessage {
     int64_t id = 0;
     nlohmann::json state;  // the render state document, validated later against the dataset
-    bool interactive = false;
+    FrameMode mode = FrameMode::still;
 };
 struct CancelMessage {};
 struct PingMessage {
@@ -44,6 +53,8 @@ ClientMessage parseClientMessage(std::string_view text);
 std::string helloReply(const std::string& sessionId);
 std::string pongReply(int64_t id);
 std::string errorReply(const std::string& message, std::optional<int64_t> id = std::nullopt);
+// The linked state a program set (POST /api/link, server/linked_state.h), for the UI to apply.
+std::string linkMessage(uint64_t version, const nlohmann::json& state);
 
 // A binary frame: u32 LE header length, UTF-8 JSON header, JPEG bytes, depth as float32 LE.
 // The header's jpegBytes/depthBytes/depthWidth/depthHeight are filled in here.

@@ -37,9 +37,12 @@ TEST(ProtocolCodec, ParsesEachClientMessage)
     EXPECT_EQ(parseAs<HelloMessage>(R"({"type": "hello", "protocol": 7})").protocol, 7);
     const auto s = parseAs<StateMessage>(R"({"type": "state", "id": 17, "state": {"version": 1, "step": 2}, "interactive": true})");
     EXPECT_EQ(s.id, 17);
-    EXPECT_TRUE(s.interactive);
+    EXPECT_EQ(s.mode, FrameMode::interactive);
     EXPECT_EQ(s.state["step"], 2);
-    EXPECT_FALSE(parseAs<StateMessage>(R"({"type": "state", "id": 3, "state": {}})").interactive);
+    EXPECT_EQ(parseAs<StateMessage>(R"({"type": "state", "id": 3, "state": {}})").mode, FrameMode::still);
+    EXPECT_EQ(parseAs<StateMessage>(R"({"type": "state", "id": 4, "state": {}, "playback": true})").mode, FrameMode::playback);
+    EXPECT_EQ(parseAs<StateMessage>(R"({"type": "state", "id": 5, "state": {}, "playback": false, "interactive": false})").mode,
+              FrameMode::still);
     parseAs<CancelMessage>(R"({"type": "cancel"})");
     EXPECT_EQ(parseAs<PingMessage>(R"({"type": "ping", "id": 99})").id, 99);
     EXPECT_EQ(parseAs<PingMessage>(R"({"type": "ping", "id": 5.0})").id, 5);
@@ -91,6 +94,10 @@ TEST(ProtocolCodec, RejectsMissingOrIllTypedFields)
     EXPECT_NE(errorOf(R"({"type": "state", "id": 1})").find("missing field 'state'"), std::string::npos);
     EXPECT_NE(errorOf(R"({"type": "state", "id": 1, "state": [1]})").find("must be an object"), std::string::npos);
     EXPECT_NE(errorOf(R"({"type": "state", "id": 1.5, "state": {}})").find("must be an integer"), std::string::npos);
+    EXPECT_NE(errorOf(R"({"type": "state", "id": 1, "state": {}, "playback": "yes"})").find("'playback' must be true or false"),
+              std::string::npos);
+    EXPECT_NE(errorOf(R"({"type": "state", "id": 1, "state": {}, "interactive": true, "playback": true})").find("cannot both"),
+              std::string::npos);
     EXPECT_NE(errorOf(R"({"type": "state", "id": 1, "state": {}, "interactive": 1})").find("true or false"),
               std::string::npos);
     EXPECT_NE(errorOf(R"({"type": "ping"})").find("ping: missing field 'id'"), std::string::npos);

@@ -27,11 +27,6 @@ namespace {
 // Message tags (core/mpi.h send/tryReceive).
 enum Tag : int { kTagPass = 1, kTagCancel = 2, kTagDrop = 3, kTagStop = 4, kTagAnswer = 5, kTagPrepare = 6 };
 
-// The counters of a pass that add up over ranks (the machine and brick figures stay rank 0's).
-json countsJson(const render::PassStats& s)
-{
-    return {s.samples, s.samplesSkipped, s.chunks, s.chunksSkipped, s.chunksJumped, s.rays};
-}
 
 // What a rank needs to prepare a session's frame (kTagPrepare; a pass adds "seq" and "pass").
 json frameJob(uint64_t session, uint64_t frame, const render::ResolvedState& resolved, render::LevelPolicy::Choice choice)
@@ -41,16 +36,6 @@ json frameJob(uint64_t session, uint64_t frame, const render::ResolvedState& res
             {"level", choice.level},
             {"divisor", choice.divisor},
             {"state", render::toJson(resolved.state)}};
-}
-
-void addCounts(render::PassStats& total, const json& counts)
-{
-    total.samples += counts.at(0).get<uint64_t>();
-    total.samplesSkipped += counts.at(1).get<uint64_t>();
-    total.chunks += counts.at(2).get<uint64_t>();
-    total.chunksSkipped += counts.at(3).get<uint64_t>();
-    total.chunksJumped += counts.at(4).get<uint64_t>();
-    total.rays += counts.at(5).get<uint64_t>();
 }
 
 }  // namespace
@@ -128,6 +113,11 @@ render::PassStats RankPool::renderPass(uint64_t session, uint64_t frame, int pas
     // Rank 0's own tiles while the others render theirs; then theirs, whatever happened here, so
     // that the answers of this pass are taken before the next.
     render::PassStats total = prepared.renderPass(frames, cancel, {0, m_ranks});
+    // When rank 0's own tiles stopped part-way, the pass is abandoned (a new state or the server's
+    // stop follows): a rank that finished its tiles before the cancel reached it is not gathered,
+    // since its blocks would be a pass ahead of rank 0's frame (FrameBuffer::unpackTiles refuses
+    // that).
+    const bool ownCancelled = total.cancelled;
     const std::vector<std::string> got = answers.get();  // throws when a rank stopped answering
     int stoppedPartWay = 0;
     for (size_t i = 0; i < got.size(); ++i) {
@@ -143,7 +133,10 @@ render::PassStats RankPool::renderPass(uint64_t session, uint64_t frame, int pas
             ++stoppedPartWay;
             continue;
         }
-        addCounts(total, header.at("counts"));
+        if (ownCancelled)
+            continue;
+        // The counters add up over ranks; the machine and brick figures stay rank 0's.
+        total.addCounts(header.at("counts").get<render::PassStats::Counts>());
         // The floats follow the header; copied out, since the string's bytes need not be aligned.
         const size_t bytes = got[i].size() - eol - 1;
         RAYPC_CHECK_EQ(bytes % sizeof(float), size_t(0));
@@ -403,7 +396,7 @@ std::string WorkerRank::renderPass(const std::string& text)
                 cancel = true;
         const render::PassStats stats = rendered.get();
         mpi::dieHook("serve-pass");
-        header = {{"seq", seq}, {"cancelled", stats.cancelled}, {"counts", countsJson(stats)}};
+        header = {{"seq", seq}, {"cancelled", stats.cancelled}, {"counts", stats.counts()}};
         if (!stats.cancelled)
             for (const render::FrameBuffer& f : s.frames) {
                 const std::vector<float> packed = f.packTiles(share);
@@ -416,61 +409,6 @@ std::string WorkerRank::renderPass(const std::string& text)
         tiles.clear();
     }
     return header.dump() + '\n' + tiles;
-}
-
-void serveOnRanks(ServerOptions options, const std::function<void(const Server&)>& onServing)
-{
-    std::optional<RankPool> pool;
-    std::unique_ptr<Server> srv;
-    std::unique_ptr<WorkerRank> worker;
-    mpi::together([&] {
-        if (!mpi::isRoot()) {
-            worker = std::make_unique<WorkerRank>(options.dataset, options.cacheBytes, options.cacheEntries);
-            return;
-        }
-        if (mpi::distributed())
-            options.ranks = &pool.emplace();
-        srv = std::make_unique<Server>(options);
-    });
-    if (worker) {
-        worker->run();
-        return;
-    }
-    if (pool)
-        spdlog::info("distributed: every pass is shared out over {} ranks", pool->ranks());
-    onServing(*srv);
-    if (!pool) {
-        srv->run();
-        return;
-    }
-    // MPI calls stay on this (the main) thread (core/mpi.h): the network runs on another, and the
-    // server, whose sessions may wait on the pool, is destroyed there before the pool stops.
-    std::exception_ptr failure;
-    std::mutex serverMutex;  // srv: reset on the network thread, stopped from this one
-    std::thread network([&] {
-        try {
-            srv->run();
-        } catch (...) {
-            failure = std::current_exception();
-        }
-        {
-            std::lock_guard lock(serverMutex);
-            srv.reset();
-        }
-        pool->stop();
-    });
-    std::string broken;
-    const bool clean = pool->run([&](const std::string& why) {
-        broken = why;
-        std::lock_guard lock(serverMutex);
-        if (srv)
-            srv->stop();
-    });
-    network.join();
-    if (failure)
-        std::rethrow_exception(failure);
-    if (!clean)
-        fail("{}", broken);
 }
 
 }  // namespace raypc::server

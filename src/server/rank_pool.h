@@ -122,13 +122,5 @@ private:
     std::map<uint64_t, std::unique_ptr<Session>> m_sessions;
 };
 
-// `raypc serve` on every rank of the job (one process: just the Server): rank 0 builds the Server
-// (with a RankPool when there are other ranks) and serves until SIGINT/SIGTERM; the other ranks run
-// WorkerRank. Opening the dataset and binding the port are agreed on by all ranks, so a bad dataset
-// or a busy port stops every rank with one message. `onServing` runs on rank 0 once the port is
-// bound (to print the URL). MPI stays on the calling (main) thread; the network runs on another.
-// Throws raypc::Error as Server's constructor does, and when a rank stopped answering.
-void serveOnRanks(ServerOptions options, const std::function<void(const Server&)>& onServing);
-
 }  // namespace raypc::server
 

@@ -3,6 +3,7 @@
 #include "core/clock.h"
 #include "core/error.h"
 #include "data/selection.h"
+#include "render/reference_geometry.h"
 #include "server/image_codec.h"
 #include "server/rank_pool.h"
 
@@ -20,13 +21,7 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 constexpr int kDepthDownsample = 4;
-constexpr int kMaxSessionPixels = 4096 * 4096;  // a frame buffer of 4096² takes ~0.7 GB with its scratch
 constexpr int kJpegQualityInteractive = 75, kJpegQualityStill = 90;
-
-nlohmann::json cameraJson(const RenderState& state)
-{
-    return toJson(state)["camera"];
-}
 
 // What the UI needs to re-project each eye of a stereo frame (docs/protocol.md): the eyes' size as
 // rendered (the depth map holds them side by side) and their cameras' offsets.
@@ -60,17 +55,21 @@ RenderSession::~RenderSession()
         m_context.ranks->closeSession(m_rankSession);
 }
 
-void RenderSession::submit(const StateMessage& message)
+void checkSessionImage(const RenderState& state)
+{
+    if (stereoLayout(state.stereo.mode, state.width, state.height).renderedPixels() > kMaxSessionPixels)
+        fail("image: {}x{}{} is over the limit of {} pixels for a session (use /api/screenshot for larger images)",
+             state.width, state.height, state.stereo.enabled() ? " (stereo: two eyes)" : "", kMaxSessionPixels);
+}
+
+void RenderSession::submit(int64_t id, render::RenderState state, FrameMode mode)
 {
     Request request;
     request.received = Clock::now();
-    request.id = message.id;
-    request.resolved = render::resolveState(message.state, *m_context.dataset);  // throws: the old state stays
-    const auto& st = request.resolved.state;
-    if (render::stereoLayout(st.stereo.mode, st.width, st.height).renderedPixels() > int64_t(kMaxSessionPixels))
-        fail("image: {}x{}{} is over the limit of {} pixels for a session (use /api/screenshot for larger images)",
-             st.width, st.height, st.stereo.enabled() ? " (stereo: two eyes)" : "", kMaxSessionPixels);
-    request.interactive = message.interactive;
+    request.id = id;
+    request.resolved = render::resolveState(std::move(state), *m_context.dataset);  // throws: the old state stays
+    checkSessionImage(request.resolved.state);
+    request.mode = mode;
     {
         std::lock_guard lock(m_mutex);
         m_pending = std::move(request);  // drops a state that has not started
@@ -117,7 +116,7 @@ void RenderSession::loop()
             render(request);
         } catch (const std::exception& e) {
             spdlog::warn("{}: state {}: {}", m_name, request.id, e.what());
-            m_sink.sendText(errorReply(e.what(), request.id));
+            m_sink.sendText(errorReply(e.what(), request.id), request.id);
         }
     }
 }
@@ -126,30 +125,126 @@ void RenderSession::render(const Request& request)
 {
     const auto renderStart = Clock::now();
     const RenderState& state = request.resolved.state;
+    nlohmann::json shellKey = nlohmann::json::array();
+    {
+        const SphericalGrid& grid = m_context.dataset->levels().front().grid;
+        for (const TextLabel& k : render::shellKey(state.reference, float(grid.rKm.back()), float(grid.rKm.front())))
+            shellKey.push_back({{"label", k.text}, {"color", {k.color.r, k.color.g, k.color.b}}});
+    }
     const Dataset& dataset = *m_context.dataset;
     const int step = state.step;
+    // The state as the document says it (once a state, not a pass): the frames' camera, the
+    // selection's cache key.
+    const nlohmann::json document = toJson(state);
 
-    // Interactive: the finest level within the time budget at the measured throughput (until a pass
-    // has been measured, an assumed 100 M samples/s per thread), 1/2 or 1/4 of the pixels per axis
-    // when even the coarsest misses it. Still: the state's level, else level 0.
-    LevelPolicy policy;
-    if (request.interactive) {
-        const double measured = m_context.samplesPerSecond.load();
-        policy.samplesPerSecond = measured > 0 ? measured : 100e6 * tbb::this_task_arena::max_concurrency();
-        policy.reduceResolution = measured > 0;
-    }
+    // Interactive and playback: the finest level within the time budget at the measured throughput
+    // (until a pass has been measured, an assumed 100 M samples/s per thread), 1/2 or 1/4 of the
+    // pixels per axis when even the coarsest misses it. Still: the state's level, else level 0.
+    const bool interactive = request.mode == FrameMode::interactive;
+    const double measuredRate = m_context.samplesPerSecond.load();
+    LevelPolicy quickPolicy;
+    quickPolicy.samplesPerSecond = measuredRate > 0 ? measuredRate : 100e6 * tbb::this_task_arena::max_concurrency();
+    quickPolicy.reduceResolution = measuredRate > 0;
+    const LevelPolicy policy = request.mode != FrameMode::still ? quickPolicy : LevelPolicy{};
+    const int passes = interactive ? 1 : std::max(1, state.passes);
+    const int ranks = m_context.ranks ? m_context.ranks->ranks() : 1;
+
+    // Encodes the accumulation of a pass as one binary frame (protocol.h) and sends it.
+    double encodeMsTotal = 0;
+    auto sendFrame = [&](const ViewFrames& frames, const StateRenderer::Prepared& prepared, const PassStats& stats,
+                         int pass, bool last, bool preview, const nlohmann::json& selection) {
+        const auto encodeStart = Clock::now();
+        const ImageRgba8 picture = m_renderer.picture(frames, request.resolved, false);  // the UI draws legends
+        const std::string jpeg = encodeJpeg(picture.pixels, picture.width, picture.height,
+                                            interactive || preview ? kJpegQualityInteractive : kJpegQualityStill);
+        // A stereo pair's depth is the two eyes' side by side, whatever the picture's layout, each
+        // downsampled on its own.
+        int depthWidth = 0, depthHeight = 0;
+        const std::vector<float> depth =
+            averagedDepthKm(frames, depthWidth, depthHeight, [](std::vector<float> eye, int& width, int& height) {
+                int w = 0, h = 0;
+                std::vector<float> out = downsampleDepth(eye, width, height, kDepthDownsample, w, h);
+                width = w;
+                height = h;
+                return out;
+            });
+        const uint64_t samples = stats.samples + stats.samplesSkipped;
+        nlohmann::json header{{"type", "frame"},
+                              {"id", request.id},
+                              {"step", step},
+                              {"level", prepared.level},
+                              {"pass", pass},
+                              {"passes", passes},
+                              {"converged", last},
+                              {"interactive", interactive},
+                              {"playback", request.mode == FrameMode::playback},
+                              {"preview", preview},
+                              {"ranks", ranks},
+                              {"width", picture.width},
+                              {"height", picture.height},
+                              {"camera", document["camera"]},
+                              {"stats",
+                               {{"passMs", stats.seconds * 1000.0},
+                                {"samples", samples},
+                                {"samplesPerSecond", stats.seconds > 0 ? double(samples) / stats.seconds : 0.0},
+                                {"bricksSkipped", stats.bricksSkipped},
+                                {"bricksTotal", stats.bricksTotal}}},
+                              {"selection", selection}};
+        if (prepared.scene)
+            header["pathlines"] = {{"lines", prepared.scene->lineCount()}, {"visible", prepared.scene->visibleCount()}};
+        if (state.stereo.enabled())
+            header["stereo"] = stereoJson(state, frames.front().width(), frames.front().height());
+        // The reference shells drawn, as the pictures' legend names them (render::shellKey): the
+        // UI's legend key.
+        if (!shellKey.empty())
+            header["shellKey"] = shellKey;
+        std::string bytes = encodeFrame(std::move(header), {reinterpret_cast<const uint8_t*>(jpeg.data()), jpeg.size()},
+                                        depth, depthWidth, depthHeight);
+        encodeMsTotal += millisecondsSince(encodeStart);
+        m_sink.sendBinary(std::move(bytes), request.id);
+    };
+    // One pass of `prepared` into `frames` (on every rank of a distributed server). A pass that
+    // rendered every pixel measures the throughput (later passes of adaptive refinement render only
+    // the blocks that still refine and would overstate it): an exponential average shared with the
+    // other sessions.
+    auto renderPass = [&](uint64_t frameNumber, int pass, const StateRenderer::Prepared& prepared, ViewFrames& frames) {
+        const PassStats stats =
+            m_context.ranks
+                ? m_context.ranks->renderPass(m_rankSession, frameNumber, pass, request.resolved, prepared, frames, &m_cancel)
+                : prepared.renderPass(frames, &m_cancel);
+        if (!stats.cancelled && stats.seconds > 0 && stats.everyBlock) {
+            const double measured = prepared.estimatedSamplesPerPass / stats.seconds;
+            const double old = m_context.samplesPerSecond.load();
+            m_context.samplesPerSecond.store(old > 0 ? 0.7 * old + 0.3 * measured : measured);
+        }
+        return stats;
+    };
     // The other ranks of a distributed server prepare the frame while this one does, when its level
     // is known before preparing (still frames).
     const uint64_t frameNumber = ++m_frames;
     if (m_context.ranks)
         if (const auto choice = StateRenderer::knownChoice(state, policy))
             m_context.ranks->prepare(m_rankSession, frameNumber, request.resolved, *choice);
-    const StateRenderer::Prepared prepared = m_renderer.prepare(request.resolved, policy);
+    // Preview (issue 26): a still state at level "auto" (level 0) is first prepared as an interactive
+    // state is; when that chooses a coarser level or fewer pixels (level 0 would miss the state's
+    // timeBudgetMs), one pass of that choice is sent first, as pass 0 with "preview": true, and its
+    // passes at level 0 then refine it. So the picture changes at once after a brush is released, a
+    // step is chosen or the page opens; level 0 is not even loaded before the preview is sent.
+    double previewMs = 0;
+    const bool mayPreview = request.mode == FrameMode::still && !state.level;
+    StateRenderer::Prepared prepared = m_renderer.prepare(request.resolved, mayPreview ? quickPolicy : policy);
+    if (mayPreview && (prepared.level != 0 || prepared.divisor != 1)) {
+        ViewFrames previewFrames = prepared.frames();
+        const PassStats stats = renderPass(++m_frames, 1, prepared, previewFrames);
+        if (stats.cancelled)
+            return;
+        previewMs = stats.seconds * 1000.0;
+        sendFrame(previewFrames, prepared, stats, 0, false, true, nlohmann::json());
+        prepared = m_renderer.prepare(request.resolved, policy);  // the preview's renderers are no longer valid
+    }
     const int level = prepared.level;
     const RenderParams& params = prepared.views.front().params;  // the first view's (all share brushes)
     VolumeRenderer& renderer = *prepared.views.front().renderer;
-    const auto& scene = prepared.scene;
-    const double estimatedSamples = prepared.estimatedSamplesPerPass;
 
     // Playback (step = previous step + 1): load the next step in the background at this level.
     if (m_lastStep >= 0 && step == m_lastStep + 1 && step + 1 < int(dataset.steps().size())) {
@@ -162,10 +257,11 @@ void RenderSession::render(const Request& request)
     // volume change. At full resolution they take tens of ms (docs/rendering.md), so interactive frames take them from the
     // coarsest level (under a millisecond), and a still state computes them on its own level after
     // its first frame is sent (that frame says null; the UI asks POST /api/selection for final
-    // states anyway).
-    const int selectionLevel = request.interactive ? int(dataset.levels().size()) - 1 : level;
+    // states anyway). A step of playback takes them from the coarsest level too.
+    const bool quickSelection = request.mode != FrameMode::still;
+    const int selectionLevel = quickSelection ? int(dataset.levels().size()) - 1 : level;
     const std::string selectionKey =
-        fmt::format("{}/{}/{}", step, selectionLevel, nlohmann::json(toJson(state)["brushes"]).dump());
+        fmt::format("{}/{}/{}", step, selectionLevel, document["brushes"].dump());
     auto updateSelection = [&] {
         if (selectionKey == m_selectionKey)
             return;
@@ -174,94 +270,49 @@ void RenderSession::render(const Request& request)
         m_selection = {{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}};
         m_selectionKey = selectionKey;
     };
-    if (request.interactive)
+    if (quickSelection)
         updateSelection();
 
     const double waitedMs = std::chrono::duration<double, std::milli>(renderStart - request.received).count();
     const double preparedMs = millisecondsSince(renderStart);
-    const int passes = request.interactive ? 1 : std::max(1, state.passes);
     ViewFrames frames = prepared.frames();
-    const int ranks = m_context.ranks ? m_context.ranks->ranks() : 1;
-    double renderMsTotal = 0, encodeMsTotal = 0, firstPassMs = 0;
-    int done = 0;
+    double renderMsTotal = 0, firstPassMs = 0;
+    int done = 0, unsent = 0;
     for (int pass = 1; pass <= passes; ++pass) {
         if (m_cancel)
             break;
-        const PassStats stats =
-            m_context.ranks
-                ? m_context.ranks->renderPass(m_rankSession, frameNumber, pass, request.resolved, prepared, frames, &m_cancel)
-                : prepared.renderPass(frames, &m_cancel);
+        const PassStats stats = renderPass(frameNumber, pass, prepared, frames);
         if (stats.cancelled)
             break;
-        // Only a pass that rendered every pixel measures the throughput: later ones may render only
-        // the blocks that still refine (adaptive refinement) and would overstate it.
-        if (stats.seconds > 0 && stats.everyBlock) {
-            // Exponential average of the throughput, shared with the other sessions.
-            const double measured = estimatedSamples / stats.seconds;
-            const double old = m_context.samplesPerSecond.load();
-            m_context.samplesPerSecond.store(old > 0 ? 0.7 * old + 0.3 * measured : measured);
-        }
         // Adaptive refinement (a still state's convergenceGreyLevels) may have stopped every block:
         // this frame is final, further passes would render nothing.
         const bool refined = std::all_of(frames.begin(), frames.end(), [](const FrameBuffer& f) { return f.converged(); });
         const bool last = pass == passes || refined;
-        const auto encodeStart = Clock::now();
-        const ImageRgba8 picture = m_renderer.picture(frames, request.resolved, false);  // the UI draws legends
-        const std::string jpeg = encodeJpeg(picture.pixels, picture.width, picture.height,
-                                            request.interactive ? kJpegQualityInteractive : kJpegQualityStill);
-        // A stereo pair's depth is the two eyes' side by side, whatever the picture's layout, each
-        // downsampled on its own (so that no block straddles the eyes).
-        int depthWidth = 0, depthHeight = 0;
-        std::vector<float> depth;
-        for (const FrameBuffer& frame : frames) {
-            const std::vector<float> eye = downsampleDepth(frame.averagedDepthKm(), frame.width(), frame.height(),
-                                                           kDepthDownsample, depthWidth, depthHeight);
-            depth = depth.empty() ? eye : sideBySide({depthWidth, depthHeight, 2 * depthWidth, depthHeight, 1.0, 2}, depth, eye);
-        }
-        depthWidth *= int(frames.size());
-        const double passMs = stats.seconds * 1000.0;
-        const uint64_t samples = stats.samples + stats.samplesSkipped;
-        nlohmann::json header{{"type", "frame"},
-                              {"id", request.id},
-                              {"step", step},
-                              {"level", level},
-                              {"pass", pass},
-                              {"passes", passes},
-                              {"converged", last},
-                              {"interactive", request.interactive},
-                              {"ranks", ranks},
-                              {"width", picture.width},
-                              {"height", picture.height},
-                              {"camera", cameraJson(state)},
-                              {"stats",
-                               {{"passMs", passMs},
-                                {"samples", samples},
-                                {"samplesPerSecond", stats.seconds > 0 ? double(samples) / stats.seconds : 0.0},
-                                {"bricksSkipped", stats.bricksSkipped},
-                                {"bricksTotal", stats.bricksTotal}}},
-                              {"selection", selectionKey == m_selectionKey ? m_selection : nlohmann::json()}};
-        if (scene)
-            header["pathlines"] = {{"lines", scene->lineCount()}, {"visible", scene->visibleCount()}};
-        if (state.stereo.enabled())
-            header["stereo"] = stereoJson(state, frames.front().width(), frames.front().height());
-        std::string bytes = encodeFrame(std::move(header), {reinterpret_cast<const uint8_t*>(jpeg.data()), jpeg.size()},
-                                        depth, depthWidth, depthHeight);
-        encodeMsTotal += millisecondsSince(encodeStart);
-        renderMsTotal += passMs;
+        renderMsTotal += stats.seconds * 1000.0;
         if (pass == 1)
-            firstPassMs = passMs;
+            firstPassMs = stats.seconds * 1000.0;
         done = pass;
-        m_sink.sendBinary(std::move(bytes));
+        // A step of playback is shown when its time is up (timeBudgetMs after it came), with the
+        // newest pass that has arrived: a later pass is neither encoded nor sent when the next one
+        // is predicted (from this one's time, with a quarter to spare) to be done before then.
+        if (request.mode == FrameMode::playback && pass > 1 && !last &&
+            1.25 * stats.seconds * 1000.0 < state.timeBudgetMs - millisecondsSince(request.received)) {
+            ++unsent;
+            continue;
+        }
+        sendFrame(frames, prepared, stats, pass, last, false, selectionKey == m_selectionKey ? m_selection : nlohmann::json());
         updateSelection();
         if (last)
             break;
     }
     if (done > 0)
         spdlog::info("{}: state {} step {} level {} {}x{} {}: waited {:.1f} ms, prepared {:.1f} ms, {}/{} passes, "
-                     "first {:.1f} ms, mean {:.1f} ms/pass, encode {:.1f} ms/frame",
+                     "first {:.1f} ms, mean {:.1f} ms/pass, encode {:.1f} ms/frame{}{}",
                      m_name, request.id, step, level, frames.front().width() * int(frames.size()), params.height,
-                     request.interactive ? "interactive" : "still", waitedMs, preparedMs, done, passes, firstPassMs,
-                     renderMsTotal / done, encodeMsTotal / done);
+                     frameModeName(request.mode), waitedMs, preparedMs, done, passes, firstPassMs,
+                     renderMsTotal / done, encodeMsTotal / std::max(1, done - unsent),
+                     unsent > 0 ? fmt::format(", {} passes not sent", unsent) : std::string(),
+                     previewMs > 0 ? fmt::format(", after a preview of {:.1f} ms", previewMs) : std::string());
 }
 
 }  // namespace raypc::server

@@ -4,8 +4,9 @@
 // flight (the renderer checks the flag before every tile); states in between are dropped, never
 // queued. An interactive state gets one pass at the finest level whose estimated pass time fits the
 // state's time budget (from a throughput measured on earlier passes); a still state gets
-// state.passes progressive passes at the state's level (level 0 when "auto"). Every pass is sent as
-// one binary frame (protocol.h) through the sink.
+// state.passes progressive passes at the state's level (level 0 when "auto"); a step of playback
+// gets its level as an interactive state does and then progressive passes (FrameMode). Every pass
+// is sent as one binary frame (protocol.h) through the sink.
 //
 // Thread safety: submit, cancel and stop may be called from any one thread (the network thread);
 // the sink is called from the render thread and must hand the bytes over (e.g. post them).
@@ -45,9 +46,15 @@ struct RenderContext {
     RankPool* ranks = nullptr;  // a distributed server's (rank_pool.h): passes go to every rank
 };
 
+// Throws raypc::Error when a resolved state's image is over what a session renders (4096 x 4096
+// pixels, both eyes of a stereo pair counted; larger images are for POST /api/screenshot).
+void checkSessionImage(const render::RenderState& state);
+
+// Where a session's output goes, with the id of the state it answers (frames, and the errors of a
+// state), so that the receiver need not parse it back out of the bytes.
 struct SessionSink {
-    std::function<void(std::string)> sendText;
-    std::function<void(std::string)> sendBinary;
+    std::function<void(std::string text, int64_t stateId)> sendText;
+    std::function<void(std::string frame, int64_t stateId)> sendBinary;
 };
 
 class RenderSession {
@@ -59,7 +66,7 @@ public:
 
     // Validates the state against the dataset (throws raypc::Error naming the key; the previous
     // state stays in force) and makes it the newest request.
-    void submit(const StateMessage& message);
+    void submit(int64_t id, render::RenderState state, FrameMode mode);
     // Stops the current work; no more frames until the next submit.
     void cancel();
     // Cancels and joins the render thread. Idempotent.
@@ -71,7 +78,7 @@ private:
     struct Request {
         int64_t id = 0;
         render::ResolvedState resolved;
-        bool interactive = false;
+        FrameMode mode = FrameMode::still;
         std::chrono::steady_clock::time_point received;  // for the log: waiting and preparation time
     };
     void loop();

@@ -135,6 +135,7 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     s.api.infoJson = infoJson(*s.dataset, s.options.limits).dump(-1, ' ', false, json::error_handler_t::replace);
     s.api.limits = s.options.limits;
     s.api.series = s.options.series;
+    s.api.link = &s.link;
     s.assets = s.options.assets;
     s.site.loopback = isLoopbackHost(s.options.host);
     for (const auto& origin : s.options.allowedOrigins)

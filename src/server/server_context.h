@@ -1,10 +1,11 @@
 // What every connection of one `raypc serve` shares: the options, the dataset and its caches, the
-// thread pools the work runs on, the registry of render sessions, and the accounting behind the
-// limits of limits.h. Internal to the server library (Asio types are allowed here; nothing outside
-// src/server includes this header).
+// thread pools the work runs on, the registry of render sessions, the linked state, and the
+// accounting behind the limits of limits.h. Internal to the server library (Asio types are allowed
+// here; nothing outside src/server includes this header).
 //
 // Thread safety: the options, dataset, caches, token, assets and API context are set before the first
-// connection and only read after; the caches are thread-safe; every other member guards itself.
+// connection and only read after; the caches and the linked state are thread-safe; every other member
+// guards itself.
 #pragma once
 
 #include "server/access.h"
@@ -127,6 +128,7 @@ struct ServerContext {
     std::unique_ptr<PersistenceCache> persistence;
     ApiContext api;
     RenderContext render;
+    LinkedState link;  // the state the UI shows, for programs (GET/POST /api/link); api.link points here
     std::string token;  // empty on loopback
     SitePolicy site;
     std::optional<std::filesystem::path> assets;

@@ -22,21 +22,7 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-// Beyond this a WebSocket message closes the connection (code 1009); between kMaxClientMessageBytes
-// and this it gets an error reply and the connection stays.
-constexpr size_t kHardMessageLimit = 4 * 1024 * 1024;
-
 constexpr size_t kMiB = size_t(1) << 20;
-
-// The id of a server text message ({"type": "error", "id": N}), if it has one.
-std::optional<int64_t> replyId(const std::string& text)
-{
-    const auto j = nlohmann::json::parse(text, nullptr, false);
-    if (j.is_object())
-        if (const auto it = j.find("id"); it != j.end() && it->is_number_integer())
-            return it->get<int64_t>();
-    return std::nullopt;
-}
 
 // A WebSocket session in two halves. The network half (network thread) reads one message at a time
 // and writes a bounded queue; the control half (a strand on the message pool) parses each message,
@@ -58,6 +44,7 @@ public:
     }
     ~WsSession()
     {
+        m_server.link.removeSession(m_linkKey.exchange(0));
         if (m_render)
             m_render->stop();
         m_server.frameBudget.release(m_frameBytes);
@@ -85,12 +72,8 @@ private:
         // The render thread hands its output to the network thread (to write) and tells the control
         // half which state it served (for pacing); a closed session ignores both.
         auto sink = [weak = weak_from_this(), executor = m_ws.get_executor(), control = m_control](bool binary) {
-            return [weak, executor, control, binary](std::string bytes) {
-                std::optional<int64_t> id;
-                if (binary)
-                    id = frameHeader(bytes).value("id", int64_t(0));
-                else
-                    id = replyId(bytes);
+            return [weak, executor, control, binary](std::string bytes, int64_t stateId) {
+                const std::optional<int64_t> id = stateId;
                 net::post(control, [weak, id] {
                     if (auto self = weak.lock())
                         self->onStateServed(id);
@@ -163,6 +146,7 @@ private:
     {
         m_ended = true;
         m_closed = true;
+        m_server.link.removeSession(m_linkKey.exchange(0));
         m_queue.clear();
         m_queuedTextBytes = 0;
         m_stallTimer.cancel();
@@ -298,6 +282,17 @@ private:
             }
             m_helloDone = true;
             send(helloReply(m_name.substr(m_name.find(' ') + 1)));
+            // From now on the session gets the states a program sets (POST /api/link), in order after
+            // the hello reply (both are posted to the network thread).
+            if (m_linkKey == 0) {
+                auto sink = [weak = weak_from_this(), executor = m_ws.get_executor()](std::string text) {
+                    net::post(executor, [weak, text = std::move(text)]() mutable {
+                        if (auto self = weak.lock())
+                            self->enqueue(false, std::move(text));
+                    });
+                };
+                m_linkKey = m_server.link.addSession(std::move(sink));
+            }
             return;
         }
         if (!m_helloDone) {
@@ -315,12 +310,20 @@ private:
         }
     }
 
-    void onState(StateMessage state)
+    // A state message with its document parsed (once: the render session resolves the parsed state).
+    struct ParsedState {
+        StateMessage message;
+        render::RenderState state;
+    };
+
+    void onState(StateMessage message)
     {
         // Frame memory: the session's newest state counts against the server's budget.
         const size_t previous = m_frameBytes;
+        ParsedState state{std::move(message), {}};
         try {
-            const render::RenderState s = render::parseRenderState(state.state, "state");
+            state.state = render::parseRenderState(state.message.state, "state");
+            const render::RenderState& s = state.state;
             // A stereo pair holds two eyes' frames.
             const size_t wanted =
                 size_t(render::stereoLayout(s.stereo.mode, s.width, s.height).renderedPixels()) * kFrameBytesPerPixel;
@@ -332,7 +335,7 @@ private:
                      m_server.frameBudget.limit() / kMiB,
                      (others + kMiB - 1) / kMiB);
         } catch (const Error& e) {
-            reject(e.what(), state.id);
+            reject(e.what(), state.message.id);
             return;
         }
         // Fairness: once the work in flight has gone frameGuarantee without a frame, a newer state no
@@ -344,19 +347,24 @@ private:
         submit(std::move(state), previous);
     }
 
-    void submit(StateMessage state, size_t previousFrameBytes)
+    void submit(ParsedState state, size_t previousFrameBytes)
     {
+        const StateMessage& message = state.message;
         try {
-            m_render->submit(state);
+            m_render->submit(message.id, std::move(state.state), message.mode);
         } catch (const Error& e) {
             size_t others = 0;
             m_server.frameBudget.replace(m_frameBytes, previousFrameBytes, others);
-            reject(e.what(), state.id);
+            reject(e.what(), message.id);
             return;
         }
         if (!m_awaiting)
             m_busySince = Clock::now();
-        m_awaiting = state.id;
+        m_awaiting = message.id;
+        // A settled state that goes to rendering is what the UI shows: the linked state (GET /api/link);
+        // the steps of playback and dragging are not settled.
+        if (message.mode == FrameMode::still)
+            m_server.link.commitFromUi(message.state);
     }
 
     // The render thread sent a frame of state `id`, or an error about it.
@@ -366,7 +374,7 @@ private:
             return;
         m_awaiting.reset();
         if (m_held) {
-            StateMessage next = std::move(*m_held);
+            ParsedState next = std::move(*m_held);
             m_held.reset();
             submit(std::move(next), m_frameBytes);
         }
@@ -388,13 +396,14 @@ private:
     // Shared: set on the network thread before the first message, then only read.
     std::shared_ptr<RenderSession> m_render;
     std::atomic<bool> m_ended{false};
+    std::atomic<uint64_t> m_linkKey{0};  // in the linked state's sessions (set on hello; 0: not there)
 
     // Control half (m_control only).
     net::strand<net::thread_pool::executor_type> m_control;
     bool m_helloDone = false;
     std::optional<int64_t> m_awaiting;  // the submitted state whose first frame has not come yet
     Clock::time_point m_busySince;      // since when the session has been without a frame
-    std::optional<StateMessage> m_held;
+    std::optional<ParsedState> m_held;
     size_t m_frameBytes = 0;  // this session's share of the frame budget (also released on destruction)
 };
 

@@ -1,12 +1,12 @@
 // End-to-end browser tests of the UI against the real server:
 //   node tests/browser/cases.mjs CASE RAYPC FIXTURE_DIR
 // CASE: brush | warp | play | save_load | two_tabs | presets | pathlines | resolution | context | colours |
-// brush_values | multi_brush | axes | camera | responsive | stereo | light | persistence [gpu].
+// brush_values | multi_brush | axes | camera | responsive | stereo | light | persistence | link [gpu].
 // Each case starts its own server and browser.
 import { readFileSync, writeFileSync } from 'node:fs';
 import { spawnSync } from 'node:child_process';
 import { join } from 'node:path';
-import { check, meanAbsDiff, openUi, postJson, runCase, standardView, TestFailure, viewPixels, waitConverged } from './harness.mjs';
+import { check, meanAbsDiff, openUi, postJson, runCase, standardView, TestFailure, viewPixels, volumeOnly, waitConverged } from './harness.mjs';
 
 // A fourth argument `gpu` runs chromium with GPU rasterisation on a software GL (SwiftShader), as a
 // machine without a GPU does, instead of --disable-gpu (ctest runs the drawing-heavy cases both ways: tests/browser/CMakeLists.txt).
@@ -239,9 +239,7 @@ const cases = {
   async warp({ context, url }) {
     const page = await openUi(context, url);
     await standardView(page);
-    // Without the core: its shading follows the camera (light in the camera frame), which no
-    // re-projection of an image can reproduce; the volume alone must warp into place.
-    await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, core: { ...s.core, visible: false } }); });
+    await volumeOnly(page);
     await waitConverged(page);
     for (const [label, act] of [
       ['orbit', () => drag(page, 45, 20)],
@@ -280,8 +278,7 @@ const cases = {
   async stereo({ context, url }) {
     const page = await openUi(context, url);
     await standardView(page);
-    // Without the core, as in warp: its shading follows the camera, which no re-projection reproduces.
-    await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, core: { ...s.core, visible: false } }); });
+    await volumeOnly(page);
     await waitConverged(page);
     const mono = await viewPixels(page);
     check((await rState(page)).stereo.mode === 'off', 'stereo is not off by default');
@@ -636,13 +633,15 @@ const cases = {
 
   // Play runs over all steps in order, sends the next step only after a frame of the current one
   // arrived, keeps the colour range, and pausing leaves a converged frame of the current step.
-  async play({ context, url }) {
+  // Each step is rendered while the one before it shows (issue 26, item 4): its frame is shown a
+  // period after it was sent, at the state's full size.
+  async play({ context, url, gpu }) {
     const page = await openUi(context, url);
     const ds = await info(url);
     const nSteps = ds.steps.length;
     check(nSteps >= 3, `fixture has ${nSteps} steps`);
     const rangeBefore = await page.evaluate(() => [document.getElementById('rangeMin').value, document.getElementById('rangeMax').value]);
-    await page.selectOption('#fps', '10');
+    await page.selectOption('#fps', '2');
     const rows = await page.evaluate(() => window.__raypc.parcoords.rowCount);
     const firstSampleStep = await page.evaluate(() => window.__raypc.sampleStep);
     check(rows === 20000, `the sample has ${rows} rows, the case asked for 20000`);
@@ -653,7 +652,7 @@ const cases = {
     // While playing, each new step's sample is drawn coarsely: a quarter of its 20 000 lines.
     let playingLines = 0;
     await page.waitForFunction((n) => {
-      const steps = window.__raypc.sentLog.filter((e) => e.interactive).map((e) => e.step);
+      const steps = window.__raypc.sentLog.filter((e) => e.playback).map((e) => e.step);
       return steps.length >= n + 2;
     }, nSteps, { timeout: 40000 }).catch(() => { throw new TestFailure('playback did not advance through every step within 40 s'); });
     // (the sample of a later step has been loaded meanwhile: it loads at most once a second)
@@ -686,19 +685,46 @@ const cases = {
     const log = await page.evaluate((since) => ({
       sent: window.__raypc.sentLog.filter((e) => e.t >= since),
       frames: window.__raypc.frameLog.filter((e) => e.t >= since),
+      shown: window.__raypc.shownLog.filter((e) => e.t >= since && e.playback),
+      image: window.__raypc.state().image,
       step: window.__raypc.state().step,
       last: window.__raypc.headers[window.__raypc.headers.length - 1],
     }), t0);
-    const playSent = log.sent.filter((e) => e.interactive);
+    const playSent = log.sent.filter((e) => e.playback);
     for (let i = 1; i < playSent.length; i++) {
       const prev = playSent[i - 1], cur = playSent[i];
       check(cur.step === (prev.step + 1) % nSteps, `playback went from step ${prev.step} to ${cur.step}`);
       const answered = log.frames.some((f) => f.id === prev.id && f.t <= cur.t);
       check(answered, `step ${cur.step} (state ${cur.id}) was sent before any frame of step ${prev.step} (state ${prev.id}) arrived`);
     }
+    // Shown three quarters of a period or more (375 ms at 2 steps/s) after it was sent: the server
+    // had that time for it (playback.ts keeps it even when a step came late). Each step is either
+    // at the size asked and level 0 (a level-0 pass of this small grid fits half a second many
+    // times over on an idle machine) or refined by several passes at the level the server's
+    // measured throughput chose (under load, e.g. a full ctest run: CI once saw level 2 at half
+    // size, 8 passes): never the single coarse pass playback used to show. At least one step is
+    // at the size and level asked.
+    check(log.shown.length >= nSteps, `${log.shown.length} frames of playback shown, expected one a step at least`);
+    let full = 0;
+    for (const s of log.shown) {
+      const sent = playSent.find((e) => e.id === s.id);
+      check(sent && s.t - sent.t >= 370, `step ${s.step} (state ${s.id}) was shown ${sent ? (s.t - sent.t).toFixed(0) : '?'} ms after it was sent, expected 375 ms or more`);
+      const asked = s.level === 0 && s.width === log.image.width && s.height === log.image.height;
+      full += asked ? 1 : 0;
+      check(asked || s.pass > 1,
+        `step ${s.step} was shown at ${s.width}x${s.height} (level ${s.level}) after ${s.pass} pass: neither the size and level asked (${log.image.width}x${log.image.height}, 0) nor refined`);
+    }
+    console.log(`  ${full} of ${log.shown.length} playback frames at the size asked and level 0`);
+    check(full >= 1, `no playback frame at the size asked (${log.image.width}x${log.image.height}) and level 0: ${JSON.stringify(log.shown.map((s) => [s.width, s.level, s.pass]))}`);
     const stepsSeen = new Set(log.frames.map((f) => f.step));
     check(stepsSeen.size === nSteps, `frames of steps ${[...stepsSeen].join(',')} arrived, expected all ${nSteps}`);
     check(log.last.step === log.step && log.last.converged, `after pausing, the last frame is ${JSON.stringify(log.last)} for step ${log.step}`);
+    // Issue 26, item 15: "GPU stall due to ReadPixels" is Chrome's note that its software compositor
+    // (--disable-gpu) reads the WebGL canvas back to show it (at most four times, then Chrome stops
+    // repeating it); with GPU compositing (browser.gpu.play) nothing of the page reads pixels back.
+    const stalls = page.raypcWarnings.filter((w) => w.includes('GPU stall due to ReadPixels'));
+    console.log(`  "GPU stall due to ReadPixels" logged ${stalls.length} times (${gpu ? 'GPU' : 'software'} compositing)`);
+    if (gpu) check(stalls.length === 0, `with GPU compositing the page logged ${stalls.length} ReadPixels stalls: ${stalls[0] ?? ''}`);
     const rangeAfter = await page.evaluate(() => [document.getElementById('rangeMin').value, document.getElementById('rangeMax').value]);
     check(JSON.stringify(rangeBefore) === JSON.stringify(rangeAfter), `the colour range changed during playback: ${rangeBefore} -> ${rangeAfter}`);
     const label = await page.textContent('#stepLabel');
@@ -841,6 +867,73 @@ const cases = {
     check(/^stroke/.test(halo.order) && halo.width >= 2 && halo.stroke !== 'none', `tick labels without a halo: ${JSON.stringify(halo)}`);
   },
 
+  // Issue 26, item 5: task 1's ranges brushed by hand from the default view turn "show the
+  // selection" on, and the 3D view then shows the selected material (pixels brighter than the
+  // background and the core, counted with the mode on and off); dragged ends land on their axis'
+  // snap step (a tenth of the labelled tick step), a value typed in the Selection panel stays exact.
+  async show_selection({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const ds = await info(url);
+    check(!(await rState(page)).selection.show, 'the default view shows the selection before anything is brushed');
+    const range = (name) => ds.variables.find((v) => v.name === name) ?? ds.coordinates.find((c) => c.name === name);
+    // The fraction down the axis of a value: depth grows downwards, every other axis upwards.
+    const down = (name, v) => { const r = range(name); const u = (v - r.min) / (r.max - r.min); return name === 'depth' ? u : 1 - u; };
+    const clamp = (u) => Math.min(0.999, Math.max(0.001, u));
+    const task1 = [['depth', 560, 760], ['radial velocity', -1e9, 0], ['temperature anomaly', -1e9, -25]];
+    // The fixture's radial velocity may not straddle 0 (then its brush would select all or nothing):
+    // brushed only where it does, as on the demo.
+    const v = range('radial velocity');
+    const brushed = task1.filter(([name]) => name !== 'radial velocity' || (v && v.min < 0 && v.max > 0));
+    for (const [name, lo, hi] of brushed) {
+      const from = clamp(down(name, name === 'depth' ? lo : hi)), to = clamp(down(name, name === 'depth' ? hi : lo));
+      await brushAxis(page, name, from, to);
+    }
+    await waitConverged(page);
+    await page.waitForFunction((n) => window.__raypc.selection && Number.isFinite(window.__raypc.selection.fractionOfMantle) && window.__raypc.state().brushes.length === n,
+      brushed.length, { timeout: 10000 }).catch(async () => { throw new TestFailure(`no selection after brushing task 1 by hand: brushes ${JSON.stringify((await rState(page)).brushes)}, selection ${JSON.stringify(await page.evaluate(() => window.__raypc.selection))}`); });
+    const s = await rState(page);
+    const fraction = await page.evaluate(() => window.__raypc.selection.fractionOfMantle);
+    console.log(`  brushed by hand: ${s.brushes.map((b) => `${b.name} ${b.min}…${b.max}`).join(', ')}; ${(100 * fraction).toFixed(2)} % selected`);
+    check(fraction > 0, 'the hand-brushed task-1 selection is empty on the fixture: the test would be vacuous');
+    check(s.selection.show, 'brushing from the default view did not turn "show the selection" on');
+    check(await page.isChecked('#showSelection'), 'the "show the selection" box is not ticked');
+    // Every dragged end on its axis' snap step (or at the axis' end, where the drag was clamped).
+    for (const b of s.brushes) {
+      const r = range(b.name);
+      const step = await page.evaluate(([lo, hi]) => window.__raypc.snapStep({ name: '', units: '', min: lo, max: hi }), [r.min, r.max]);
+      for (const v of [b.min, b.max]) {
+        const k = v / step;
+        check(Math.abs(k - Math.round(k)) < 1e-6, `${b.name}: brush end ${v} is not a multiple of the snap step ${step}`);
+      }
+    }
+    const visible = () => page.evaluate(() => {
+      // Full-resolution pixels brighter than the dark core and the background.
+      const { data: d } = window.__viewImageData();
+      let n = 0;
+      for (let i = 0; i < d.length; i += 4) if (Math.max(d[i], d[i + 1], d[i + 2]) > 90) n++;
+      return n;
+    });
+    const shown = await visible();
+    await page.click('#showSelection');
+    await waitConverged(page);
+    check(!(await rState(page)).selection.show, 'unticking the box left the mode on');
+    const hidden = await visible();
+    console.log(`  bright pixels: ${shown} with the selection shown, ${hidden} without`);
+    check(shown > 2 * hidden + 500, `the shown selection adds too little to the view: ${shown} bright pixels with it, ${hidden} without`);
+    // Once turned off it stays off: clearing and brushing again does not turn it on.
+    await page.click('#clearBrushes');
+    await brushAxis(page, 'depth', clamp(down('depth', 560)), clamp(down('depth', 760)));
+    await waitConverged(page);
+    check(!(await rState(page)).selection.show, 'the mode came back on after the user turned it off');
+    // A typed value stays exact.
+    await page.fill('#selection input.brushMin', '557.6');
+    await page.press('#selection input.brushMin', 'Enter');
+    await waitConverged(page);
+    const typed = (await rState(page)).brushes.find((b) => b.name === 'depth');
+    check(typed.min === 557.6, `the typed depth minimum became ${typed.min}`);
+  },
+
   // Issue 26, item 8: from 1366x768 to 2560x1440 the presets, the time bar and the 3D view are
   // visible without scrolling; at 1000x700 the transfer-function editor still is.
   async layout({ context, url }) {
@@ -849,13 +942,14 @@ const cases = {
     const boxes = () => page.evaluate(() => {
       const box = (sel) => { const b = document.querySelector(sel).getBoundingClientRect(); return { top: b.top, bottom: b.bottom, height: b.height }; };
       return { presets: box('#presets'), tf: box('#tf'), side: box('#side'), view: box('#view3d'), play: box('#play'),
-        sideScroll: document.getElementById('side').scrollTop, pageScroll: document.documentElement.scrollHeight - window.innerHeight };
+        sideScroll: document.getElementById('side').scrollTop, pageScroll: document.documentElement.scrollHeight - window.innerHeight,
+        error: document.getElementById('error').hidden ? '' : document.getElementById('error').textContent };
     });
     for (const [w, h] of [[1366, 768], [1920, 1080], [2560, 1440]]) {
       await page.setViewportSize({ width: w, height: h });
       await page.waitForTimeout(500);
       const b = await boxes();
-      check(b.pageScroll <= 0 && b.sideScroll === 0, `${w}x${h}: the page or the side panel is scrolled (${b.pageScroll}, ${b.sideScroll})`);
+      check(b.pageScroll <= 0 && b.sideScroll === 0, `${w}x${h}: the page or the side panel is scrolled (${b.pageScroll}, ${b.sideScroll})${b.error ? `; error shown: ${b.error}` : ''}`);
       check(b.presets.height > 40 && b.presets.top >= b.side.top && b.presets.bottom <= b.side.bottom,
         `${w}x${h}: the presets (${Math.round(b.presets.top)}-${Math.round(b.presets.bottom)} px) are not within the side panel's visible ${Math.round(b.side.top)}-${Math.round(b.side.bottom)} px`);
       check(b.play.bottom <= h && b.view.height >= 0.4 * h, `${w}x${h}: time bar at ${Math.round(b.play.bottom)} px, view ${Math.round(b.view.height)} px high`);
@@ -864,6 +958,129 @@ const cases = {
     await page.waitForTimeout(500);
     const small = await boxes();
     check(small.tf.bottom <= small.side.bottom, `1000x700: the transfer-function editor ends at ${Math.round(small.tf.bottom)} px, below the side panel's ${Math.round(small.side.bottom)} px`);
+  },
+
+  // Issue 29: the map and the section (the bottom panel's tab): the pictures are the pane's size in
+  // device pixels; the depth slider changes the map; the brushes grey what they leave out; the pointer
+  // reads the value under it (the server's probe); two clicks on the map set the section's ends and
+  // change the section; the map's settings live in the state (the URL) and come back on reload.
+  async slices({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    // Cyan pixels of the 3D view: the marks of the map's depth and the section (map.showInView).
+    const cyan = () => page.evaluate(() => {
+      const { data: d } = window.__viewImageData();
+      let n = 0;
+      for (let i = 0; i < d.length; i += 4) if (d[i + 2] > d[i] + 60 && d[i + 1] > d[i] + 60) n++;
+      return n;
+    });
+    const cyanBefore = await cyan();
+    await page.click('#pcTabSlices');
+    await page.waitForFunction(() => window.__raypc.state().map.showInView === true, null, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('showing the tab did not set map.showInView'); });
+    await waitConverged(page);
+    const cyanShown = await cyan();
+    console.log(`  cyan pixels in the 3D view: ${cyanBefore} before the tab, ${cyanShown} with it`);
+    check(cyanShown > cyanBefore + 200, `the 3D view does not mark the map's depth and the section: ${cyanBefore} -> ${cyanShown} cyan pixels`);
+    const shown = () => page.evaluate(() => ({ map: window.__raypc.slices.map.shown, section: window.__raypc.slices.section.shown }));
+    const nextPicture = async (which, before) => page.waitForFunction(([w, b]) => window.__raypc.slices[w].shown > b
+        && document.getElementById(w === 'map' ? 'mapImage' : 'sectionImage').complete, [which, before], { timeout: 20000 })
+      .catch(async () => { throw new TestFailure(`no new ${which} picture (${JSON.stringify(await shown())}); errors: ${await page.evaluate(() => window.__raypc.errors.join('; '))}`); });
+    await nextPicture('map', 0);
+    await nextPicture('section', 0);
+    // A picture's pixels: grey levels on a 48 x 24 grid, and the grey (r = g = b) and coloured
+    // pixels of the upper and lower halves (the background, black, counts as neither).
+    const look = (id) => page.evaluate((id) => {
+      const img = document.getElementById(id);
+      const c = document.createElement('canvas');
+      c.width = img.naturalWidth;
+      c.height = img.naturalHeight;
+      const g = c.getContext('2d');
+      g.drawImage(img, 0, 0);
+      const d = g.getImageData(0, 0, c.width, c.height).data;
+      const grid = [], halves = [{ grey: 0, colour: 0 }, { grey: 0, colour: 0 }];
+      for (let y = 0; y < c.height; y++)
+        for (let x = 0; x < c.width; x++) {
+          const i = 4 * (y * c.width + x), [r, gg, b] = [d[i], d[i + 1], d[i + 2]];
+          if (Math.max(r, gg, b) < 30) continue;
+          halves[y < c.height / 2 ? 0 : 1][r === gg && gg === b ? 'grey' : 'colour']++;
+        }
+      for (let j = 0; j < 24; j++)
+        for (let k = 0; k < 48; k++) {
+          const i = 4 * (Math.floor((j + 0.5) * c.height / 24) * c.width + Math.floor((k + 0.5) * c.width / 48));
+          grid.push((d[i] + d[i + 1] + d[i + 2]) / 3);
+        }
+      const box = img.parentElement.getBoundingClientRect();
+      return { width: c.width, height: c.height, paneWidth: box.width * devicePixelRatio, grid, halves };
+    }, id);
+    const map0 = await look('mapImage');
+    check(Math.abs(map0.width - map0.paneWidth) <= 2, `the map is ${map0.width} px wide for a pane of ${map0.paneWidth} device pixels`);
+    const header = await page.evaluate(() => window.__raypc.slices.map.header);
+    check(header.width === map0.width && header.projection === 'mollweide', `the map's header: ${JSON.stringify(header)}`);
+
+    // The slider: another depth, another map.
+    const before = (await shown()).map;
+    await page.fill('#mapDepthValue', '2000');
+    await page.press('#mapDepthValue', 'Enter');
+    await nextPicture('map', before);
+    check((await rState(page)).map.depthKm === 2000, `map.depthKm after typing 2000: ${(await rState(page)).map.depthKm}`);
+    const map1 = await look('mapImage');
+    if (process.env.RAYPC_TEST_DEBUG) await page.screenshot({ path: join(process.env.RAYPC_TEST_DEBUG, 'slices.png') });
+    const changed = map0.grid.filter((v, i) => Math.abs(v - map1.grid[i]) > 8).length;
+    console.log(`  map at 660 vs 2000 km: ${changed} of ${map0.grid.length} grid points differ`);
+    check(changed > 15, `the map at 2000 km looks like the one at 660 km (${changed} grid points differ)`);
+
+    // The brushes: the northern hemisphere selected, the southern half of the map grey.
+    const b2 = (await shown()).map;
+    await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, brushes: [{ name: 'lat', min: 0, max: 90 }] }); });
+    await nextPicture('map', b2);
+    const grey = await look('mapImage');
+    console.log(`  brushed lat 0..90: upper half ${JSON.stringify(grey.halves[0])}, lower half ${JSON.stringify(grey.halves[1])}; unbrushed ${JSON.stringify(map1.halves)}`);
+    // (White, the blue-white-red map's zero, counts as grey too: the halves are compared with themselves.)
+    check(grey.halves[1].colour < 0.2 * map1.halves[1].colour && grey.halves[0].colour > 0.6 * map1.halves[0].colour,
+      `brushing the north: the lower half ${JSON.stringify(grey.halves[1])}, the upper ${JSON.stringify(grey.halves[0])}; unbrushed ${JSON.stringify(map1.halves)}`);
+
+    // The pointer: the map's centre is the equator on the central meridian; the readout gives the
+    // probe's value there.
+    const img = await page.locator('#mapImage').boundingBox();
+    const dpr = await page.evaluate(() => devicePixelRatio);
+    const centre = [img.x + header.centre[0] / dpr, img.y + header.centre[1] / dpr];
+    await page.mouse.move(centre[0], centre[1]);
+    await page.waitForFunction(() => /°N|°S/.test(document.getElementById('mapReadout').textContent), null, { timeout: 10000 })
+      .catch(async () => { throw new TestFailure(`no readout at the map's centre: '${await page.textContent('#mapReadout')}'`); });
+    const readout = await page.textContent('#mapReadout');
+    const m = readout.match(/^([0-9.]+)°([NS]) ([0-9.]+)°([EW]), 2000 km deep: .* (-?[0-9.]+(?:e[-+]?[0-9]+)?) [^ ]*$/);
+    check(m, `the readout at the map's centre: '${readout}'`);
+    const lat = Number(m[1]) * (m[2] === 'S' ? -1 : 1), lon = Number(m[3]) * (m[4] === 'W' ? -1 : 1);
+    const probe = await (await fetch(`${url}api/probe?step=${(await rState(page)).step}&lat=${lat}&lon=${lon}&depthKm=2000&var=${encodeURIComponent((await rState(page)).color.variable)}`)).json();
+    const value = Object.values(probe.values)[0].value;
+    console.log(`  readout at the centre: '${readout}'; probe there: ${value}`);
+    check(Math.abs(lat) < 1.5 && Math.abs(lon) < 1.5, `the map's centre reads ${lat}, ${lon}, not the equator on the central meridian`);
+    check(Math.abs(Number(m[5]) - value) <= 0.02 * Math.abs(value) + 0.5, `the readout '${readout}' is not the probe's ${value} there`);
+
+    // Two clicks: the section's start and end; a new section picture.
+    const s0 = (await shown()).section;
+    await page.mouse.click(centre[0], centre[1]);
+    await page.mouse.click(centre[0] + 0.25 * header.scale / dpr * 2, centre[1] - 0.2 * header.scale / dpr * 2);
+    await nextPicture('section', s0);
+    const sec = (await rState(page)).section;
+    console.log(`  section after two clicks: ${JSON.stringify(sec)}`);
+    check(Math.abs(sec.from.latDeg) < 1 && Math.abs(sec.from.lonDeg) < 1, `the first click set the start to ${JSON.stringify(sec.from)}`);
+    check(sec.to.latDeg > 5 && sec.to.lonDeg > 5, `the second click set the end to ${JSON.stringify(sec.to)} (north-east of the centre)`);
+
+    // The state holds the map: a reload of the page's URL brings it back.
+    await page.waitForFunction(() => location.hash.includes('state='), null, { timeout: 5000 });
+    const hashUrl = await page.evaluate(() => location.href);
+    const again = await openUi(context, hashUrl);
+    await waitConverged(again);
+    const reloaded = await again.evaluate(() => window.__raypc.state());
+    check(reloaded.map.depthKm === 2000 && JSON.stringify(reloaded.section) === JSON.stringify(sec),
+      `after a reload: map ${JSON.stringify(reloaded.map)}, section ${JSON.stringify(reloaded.section)}`);
+    check(await again.inputValue('#mapDepthValue') === '2000', `the depth field after a reload: ${await again.inputValue('#mapDepthValue')}`);
+    // Back to the volume's plot: the marks go.
+    await page.click('#pcTabVolume');
+    await page.waitForFunction(() => window.__raypc.state().map.showInView === false, null, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('leaving the tab left map.showInView on'); });
   },
 
   // Issue 26, item 14: "?" shows the mouse and keyboard help; Escape closes it.
@@ -1171,11 +1388,16 @@ const cases = {
   async context({ context, url, tmp, raypc, dataset }) {
     const page = await openUi(context, url);
     await standardView(page);
+    // The first view shows the 410 and 660 km shells and the legend: off for a plain picture.
+    const defaultDepths = JSON.stringify((await info(url)).defaultState.reference.shells.depthsKm);
+    await page.uncheck('#refShells');
+    await page.uncheck('#legend');
+    await waitConverged(page);
     const plain = await viewPixels(page);
     await page.check('#refShells');
     await waitConverged(page);
     const s1 = await rState(page);
-    check(s1.reference.shells.visible && JSON.stringify(s1.reference.shells.depthsKm) === '[410,660,1000,1600,2200]',
+    check(s1.reference.shells.visible && JSON.stringify(s1.reference.shells.depthsKm) === defaultDepths,
       `state.reference.shells after ticking Shells: ${JSON.stringify(s1.reference.shells)}`);
     const shells = await viewPixels(page);
     const dShells = meanAbsDiff(plain, shells);
@@ -1185,7 +1407,7 @@ const cases = {
     await waitConverged(page);
     check(JSON.stringify((await rState(page)).reference.shells.depthsKm) === '[660]', `edited depths: ${JSON.stringify((await rState(page)).reference.shells)}`);
     const one = await viewPixels(page);
-    check(meanAbsDiff(shells, one) > 0.1, 'one shell looks like five');
+    check(meanAbsDiff(shells, one) > 0.1, `one shell looks like ${defaultDepths}`);
     await page.uncheck('#refShells');
     await page.check('#refCoastlines');
     await page.check('#refGraticule');
@@ -1540,8 +1762,8 @@ const cases = {
     check(c.azimuthDeg !== def.azimuthDeg && c.distanceKm < def.distanceKm, `keys: azimuth ${def.azimuthDeg} -> ${c.azimuthDeg}, distance ${def.distanceKm} -> ${c.distanceKm}`);
   },
 
-  // Responsiveness with 100 000 lines: the page answers a click within 1 s while the lines are
-  // being drawn — right after the sample arrived and right after a brush release (run with GPU
+  // Responsiveness with 100 000 lines: the page answers a click while the lines are still being
+  // drawn — right after the sample arrived and right after a brush release (run with GPU
   // rasterisation on by ctest's browser.gpu.responsive, where it used to stall for minutes).
   async responsive({ context, url }) {
     const t0 = Date.now();
@@ -1549,29 +1771,59 @@ const cases = {
     await page.waitForFunction(() => window.__raypc.sampleStep >= 0, null, { timeout: 60000 });
     const rows = await page.evaluate(() => window.__raypc.parcoords.rowCount);
     check(rows >= 50000, `the sample has ${rows} rows, expected the 100 000 asked for (at least 50 000)`);
-    // From the click's input event (its timeStamp, when it was sent) to the first frame painted
-    // after the page handled it: what the user waits for.
+    // Each click: when the first frame after the page handled it was painted (ms since the epoch,
+    // as the test's own clock, which says when the click was sent: a page whose main thread is busy
+    // gives its input events a late timeStamp).
     await page.evaluate(() => {
-      window.addEventListener('click', (e) => {
-        const t0 = e.timeStamp;
-        requestAnimationFrame(() => { window.__clickMs = performance.now() - t0; });
+      window.addEventListener('click', () => {
+        requestAnimationFrame(() => { window.__click = { painted: performance.timeOrigin + performance.now() }; });
       }, true);
     });
-    const clickMs = async (id, key) => {
-      const before = await page.evaluate((k) => window.__raypc.state()[k], key);
-      await page.locator(id).scrollIntoViewIfNeeded();
-      const box = await page.locator(id).boundingBox();
-      await page.evaluate(() => { window.__clickMs = undefined; });
-      await page.mouse.click(box.x + box.width / 2, box.y + box.height / 2);
-      await page.waitForFunction(([k, b]) => window.__raypc.state()[k] !== b && window.__clickMs !== undefined, [key, before], { timeout: 30000, polling: 20 });
-      return Math.round(await page.evaluate(() => window.__clickMs));
+    // A click sent while a layer's lines are still being drawn must be answered before the last of
+    // them is drawn: a page that drew them in one task could answer only after it. (Not a time
+    // limit: on a loaded machine both take longer, the order stays.) `start` begins a drawing; a
+    // try whose lines were all drawn before the click was sent says nothing, and is made again.
+    const clickWhileDrawing = async (layer, start) => {
+      let last = null;
+      for (let attempt = 1; attempt <= 3; attempt++) {
+        await start(attempt);
+        await page.waitForFunction((l) => window.__raypc.parcoords.timing.drawnAt[l] === 0, layer, { timeout: 3000, polling: 10 }).catch(() => {});
+        const before = await page.evaluate(() => window.__raypc.state().legend);
+        await page.locator('#legend').scrollIntoViewIfNeeded();
+        const box = await page.locator('#legend').boundingBox();
+        await page.evaluate(() => { window.__click = undefined; });
+        const sent = Date.now();
+        await page.mouse.click(box.x + box.width / 2, box.y + box.height / 2);
+        await page.waitForFunction((b) => window.__raypc.state().legend !== b && window.__click !== undefined, before, { timeout: 30000, polling: 20 });
+        await page.waitForFunction((l) => window.__raypc.parcoords.timing.drawnAt[l] > 0, layer, { timeout: 120000, polling: 50 })
+          .catch(() => { throw new TestFailure(`the ${layer} lines were not all drawn within 120 s`); });
+        const t = await page.evaluate((l) => ({ ...window.__click, drawnAt: performance.timeOrigin + window.__raypc.parcoords.timing.drawnAt[l] }), layer);
+        t.sent = sent;
+        if (t.sent < t.drawnAt) {
+          last = { ms: Math.round(t.painted - t.sent), rest: Math.round(t.drawnAt - t.painted) };
+          if (last.rest > 0) return last;
+          // Under load a click sent near the end of a drawing may be answered just after it: again,
+          // with a new drawing (a page drawing in one task answers every try after it).
+          console.log(`  try ${attempt} (${layer}): answered ${-last.rest} ms after the last line, ${last.ms} ms after it was sent`);
+        } else {
+          console.log(`  try ${attempt} (${layer}): the lines were all drawn ${Math.round(t.sent - t.drawnAt)} ms before the click was sent`);
+        }
+      }
+      return last;
     };
-    const atOpen = await clickMs('#legend', 'legend');
+    const atOpen = await clickWhileDrawing('foreground', async (attempt) => {
+      // After the first try, a new window size draws every line again.
+      if (attempt > 1) await page.setViewportSize({ width: 1280 + 40 * attempt, height: 860 });
+    });
     await page.locator('#parcoords').scrollIntoViewIfNeeded();
-    await brushAxis(page, 'temperature', 0.2, 0.6);
-    const afterBrush = await clickMs('#legend', 'legend');
-    console.log(`  ${rows} lines; opened in ${Date.now() - t0} ms; click answered in ${atOpen} ms while the lines were drawn, ${afterBrush} ms after a brush release`);
-    check(atOpen < 1000 && afterBrush < 1000, `a click took ${atOpen} ms while the lines were drawn and ${afterBrush} ms after a brush release (limit 1000 ms)`);
+    const afterBrush = await clickWhileDrawing('brushed', (attempt) => brushAxis(page, 'temperature', 0.15 + 0.05 * attempt, 0.55 + 0.05 * attempt));
+    const text = (r) => (r ? `in ${r.ms} ms, ${r.rest} ms before the last line` : 'never while they were drawn');
+    console.log(`  ${rows} lines; opened in ${Date.now() - t0} ms; a click answered ${text(atOpen)} (all lines), ${text(afterBrush)} (after a brush release)`);
+    // A page that draws in one task also answers the test's own calls (state, box of the button)
+    // only after the lines: then no click is ever sent while they are drawn.
+    check(afterBrush !== null, 'in 3 brushes no click could be sent before the brushed lines were all drawn: the page was busy throughout (or drew them at once)');
+    check((atOpen === null || atOpen.rest > 0) && afterBrush.rest > 0,
+      `a click was answered only after the lines were drawn: ${text(atOpen)} (all lines), ${text(afterBrush)} (after a brush release)`);
   },
 
   // Pathlines: showing them changes the image; the second parallel-coordinates plot holds one line
@@ -1732,12 +1984,7 @@ const cases = {
     const state = await rState(page);
     check(state.color.variable === 'temperature anomaly', `the first view colours '${state.color.variable}', not the derived temperature anomaly`);
     const coloured = await page.evaluate(() => {
-      const src = document.getElementById('view3d');
-      const c = document.createElement('canvas');
-      c.width = src.width; c.height = src.height;
-      const ctx = c.getContext('2d', { willReadFrequently: true });
-      ctx.drawImage(src, 0, 0);
-      const d = ctx.getImageData(0, 0, c.width, c.height).data;
+      const { data: d } = window.__viewImageData();
       let n = 0;
       for (let i = 0; i < d.length; i += 4) if (Math.abs(d[i] - d[i + 2]) > 40) n++;
       return n;
@@ -1774,6 +2021,126 @@ const cases = {
     await page.waitForTimeout(300);
     check(await page.evaluate(() => window.__raypc.lastSentId) === sent, 'a greyed preset sent a state');
   },
+
+  // Issue 30, the UI linked both ways (docs/protocol.md, GET/POST /api/link): a state a program sets
+  // is applied by the open page as a loaded file is, with a note; what the user then brushes is the
+  // linked state a program reads, from the UI, at a higher version.
+  async link({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const linkOf = async () => (await fetch(url + 'api/link')).json();
+    // Object keys in one order: the server writes them sorted.
+    const canonical = (v) => JSON.stringify(v, (k, x) => (x && typeof x === 'object' && !Array.isArray(x)
+      ? Object.fromEntries(Object.keys(x).sort().map((key) => [key, x[key]])) : x));
+    const start = await linkOf();
+    check(start.sessions === 1 && start.source === 'ui', `/api/link with the page open: ${JSON.stringify(start)}`);
+
+    const { image: _image, ...doc } = await rState(page);
+    const viewImage = (await rState(page)).image;
+    const set = await postJson(url + 'api/link', { state: { ...doc, brushes: [{ name: 'depth', min: 560, max: 760 }] } });
+    check(set.status === 200 && set.body.sessions === 1 && set.body.version === start.version + 1,
+      `POST /api/link: ${set.status} ${JSON.stringify(set.body)} (before: version ${start.version})`);
+    await page.waitForFunction(() => /loaded the linked state/.test(document.getElementById('status').textContent), null, { timeout: 10000 })
+      .catch(async () => { throw new TestFailure(`no note of the linked state; status '${await page.textContent('#status')}'`); });
+    const linked = await rState(page);
+    check(canonical(linked.brushes) === canonical([{ name: 'depth', min: 560, max: 760 }]),
+      `the page's brushes after POST /api/link: ${JSON.stringify(linked.brushes)}`);
+    check(linked.image.width === viewImage.width && linked.image.height === viewImage.height,
+      `a linked state without an image size renders at ${linked.image.width}x${linked.image.height}, the view is ${viewImage.width}x${viewImage.height}`);
+    await waitConverged(page);
+
+    // A state the server refuses is not pushed and changes nothing.
+    const bad = await postJson(url + 'api/link', { state: { ...doc, brushes: [{ name: 'pressure', min: 0, max: 1 }] } });
+    check(bad.status === 400 && /pressure/.test(bad.body.error), `POST /api/link of an unknown variable: ${bad.status} ${JSON.stringify(bad.body)}`);
+
+    // (The parallel coordinates redraw the depth brush from the axis and may give it back a rounding
+    // off, e.g. 560.0000000000001.)
+    await brushAxis(page, 'temperature', 0.1, 0.4);
+    await waitConverged(page);
+    const shown = await rState(page);
+    check(shown.brushes.some((b) => b.name === 'temperature') && shown.brushes.some((b) => b.name === 'depth' && Math.abs(b.min - 560) < 1e-6 && Math.abs(b.max - 760) < 1e-6),
+      `the page's brushes after brushing temperature: ${JSON.stringify(shown.brushes)}`);
+    let read = await linkOf();
+    for (let i = 0; i < 50 && canonical(read.state) !== canonical(shown); i++) {
+      await page.waitForTimeout(100);
+      read = await linkOf();
+    }
+    check(read.source === 'ui' && read.version > set.body.version,
+      `/api/link after brushing: source ${read.source}, version ${read.version} (POST gave ${set.body.version})`);
+    check(canonical(read.state) === canonical(shown), `/api/link's state is not the page's:\n${canonical(read.state)}\n${canonical(shown)}`);
+    const errors = await page.evaluate(() => window.__raypc.errors);
+    check(errors.length === 0, `errors in the page: ${JSON.stringify(errors)}`);
+  },
+
+  // Issue 26, items 6 and 7: the first view at 1920x1080 frames the mantle (measured in pixels of
+  // the picture: the 410 km ring spans most of the view's height), shows the legend with the
+  // variable and the shells' key with each depth, draws the 410 and 660 km rings in colours of
+  // their own (the key's), and a preset that switches the colour variable says so on the view.
+  async first_view({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const s = await rState(page);
+    // The shells' colours as the server drew them (the frame header's key, the UI's legend).
+    const shellKey = await page.evaluate(() => window.__raypc.headers.at(-1).shellKey ?? []);
+    check(shellKey.length === 2, `the frame header's shell key ${JSON.stringify(shellKey)}: expected 410 and 660 km`);
+    // The view's picture at full resolution: the extent of what is drawn (any channel > 40) and
+    // the pixels in each shell's colour.
+    const measure = () => page.evaluate((palette) => {
+      const { data: d, width, height } = window.__viewImageData();
+      let top = height, bottom = -1, left = width, right = -1;
+      const near = palette.map(() => 0);
+      for (let y = 0; y < height; y++)
+        for (let x = 0; x < width; x++) {
+          const o = (y * width + x) * 4;
+          const [r, g, b] = [d[o], d[o + 1], d[o + 2]];
+          if (Math.max(r, g, b) <= 40) continue;
+          top = Math.min(top, y); bottom = Math.max(bottom, y); left = Math.min(left, x); right = Math.max(right, x);
+          // Pixels of a shell's hue (its colour at any brightness): the ring and its label.
+          const top3 = Math.max(r, g, b);
+          palette.forEach(([pr, pg, pb], k) => {
+            const pm = Math.max(pr, pg, pb);
+            if (Math.abs(r / top3 - pr / pm) < 0.12 && Math.abs(g / top3 - pg / pm) < 0.12 && Math.abs(b / top3 - pb / pm) < 0.12) near[k]++;
+          });
+        }
+      return { width, height, top, bottom, left, right, near };
+    }, shellKey.map((k) => k.color));
+    const m = await measure();
+    const spanY = (m.bottom - m.top + 1) / m.height, spanX = (m.right - m.left + 1) / m.width;
+    const centreY = (m.top + m.bottom) / 2 / m.height;
+    console.log(`  first view ${m.width}x${m.height}: drawn ${m.right - m.left + 1}x${m.bottom - m.top + 1} px (${(100 * spanX).toFixed(0)} % of the width, ${(100 * spanY).toFixed(0)} % of the height); shell-coloured pixels ${m.near.join(', ')}`);
+    check(m.width >= 1200, `the view is ${m.width} px wide at 1920x1080`);
+    check(spanY >= 0.8 && Math.abs(centreY - 0.5) < 0.05,
+      `the mantle spans ${(100 * spanY).toFixed(0)} % of the view's height, centred at ${(100 * centreY).toFixed(0)} %: expected at least 80 %, centred`);
+    // The legend: the variable with its units, and the shells' key naming each depth.
+    check(await page.isVisible('#legends'), 'no legend on the first view');
+    const titles = await page.evaluate(() => [...document.querySelectorAll('#legends .legendTitle')].map((e) => e.textContent));
+    check(titles.length >= 1 && titles[0].startsWith(s.color.variable) && /\[.+\]/.test(titles[0]), `legend titles ${JSON.stringify(titles)} for ${s.color.variable}`);
+    const key = await page.textContent('#legends .shellKey').catch(() => '');
+    check(s.reference.shells.visible && /410 km/.test(key) && /660 km/.test(key), `shells ${JSON.stringify(s.reference.shells)}, key '${key}'`);
+    // The 410 and 660 km rings in their own colours: both hues are on the picture.
+    check(m.near[0] > 100 && m.near[1] > 100, `pixels in the 410 km shell's colour: ${m.near[0]}, in the 660 km one's: ${m.near[1]}`);
+    await page.uncheck('#refShells');
+    await waitConverged(page);
+    const off = await measure();
+    check(off.near[0] < m.near[0] / 5 && off.near[1] < m.near[1] / 5, `without shells still ${off.near.join(', ')} shell-coloured pixels (with: ${m.near.join(', ')})`);
+    check(!(await page.isVisible('#legends .shellKey')), 'the shells\' key stays without shells');
+
+    // A preset that colours by another variable says so on the view.
+    check(!(await page.isVisible('#viewNote')), 'a note on the first view');
+    const presets = await (await fetch(url + 'api/presets')).json();
+    const other = presets.find((p) => !p.unavailable && p.state.color && p.state.color.variable && p.state.color.variable !== s.color.variable);
+    check(other, 'no preset colours by another variable');
+    await page.click(`#presets button[data-preset="${other.name}"]`);
+    await waitConverged(page);
+    const note = await page.textContent('#viewNote');
+    check(await page.isVisible('#viewNote') && note.includes(`colour now: ${other.state.color.variable}`) && note.includes(other.title),
+      `the note on the view after preset ${other.name}: '${note}'`);
+    const after = await page.evaluate(() => [...document.querySelectorAll('#legends .legendTitle')].map((e) => e.textContent));
+    check(after[0].startsWith(other.state.color.variable), `the legend after preset ${other.name}: ${JSON.stringify(after)}`);
+    await page.selectOption('#variable', s.color.variable);
+    await page.waitForFunction(() => document.getElementById('viewNote').hidden, null, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('choosing a variable left the preset\'s note on the view'); });
+  },
 };
 
 // Chromium context options per case (default: 1280x860 at devicePixelRatio 1).
@@ -1783,6 +2150,7 @@ const caseOptions = {
   distributed: { ranks: 2 },
   series: { netcdf: true },
   play: { sampleRows: 20000 },
+  first_view: { contextOptions: { viewport: { width: 1920, height: 1080 } } },
 };
 
 const body = cases[caseName];

@@ -76,7 +76,7 @@ export async function runCase(name, raypc, fixture, body, { limitMs = 100000, co
     check(existsSync(chromiumPath), `chromium is not installed at ${chromiumPath} (Debian package 'chromium'; scripts/install-deps.sh installs it)`);
     check(raypc && existsSync(raypc), `raypc binary not found: ${raypc}`);
     check(fixture && existsSync(fixture), `fixture not found: ${fixture}`);
-    const dist = join(repoRoot, 'web', 'dist');
+    const dist = join(repoRoot, 'web', 'dist-test'); // the UI with its test hooks (web/build.mjs)
     check(existsSync(join(dist, 'index.html')), `the UI is not built (${dist}/index.html missing): run scripts/build-web.sh`);
     const { chromium } = loadPlaywright();
 
@@ -107,9 +107,20 @@ export async function runCase(name, raypc, fixture, body, { limitMs = 100000, co
         '--no-first-run', '--disable-background-networking', '--disable-component-update', '--disable-sync',
         '--disable-features=Translate,MediaRouter,OptimizationHints', '--disable-dev-shm-usage'],
     });
-    // The UI installs window.__raypc (web/src/test_hooks.ts) only when asked before it loads.
-    await context.addInitScript(() => { window.__raypcTestHooks = true; });
-    await body({ context, url, dataset, tmp, raypc });
+    // The UI installs window.__raypc (web/src/test_hooks.ts) only when asked before it loads; the
+    // tests' own page helper __viewImageData reads the 3D view at full resolution (ImageData).
+    await context.addInitScript(() => {
+      window.__raypcTestHooks = true;
+      window.__viewImageData = () => {
+        const src = document.getElementById('view3d');
+        const c = document.createElement('canvas');
+        c.width = src.width; c.height = src.height;
+        const ctx = c.getContext('2d', { willReadFrequently: true });
+        ctx.drawImage(src, 0, 0);
+        return ctx.getImageData(0, 0, c.width, c.height);
+      };
+    });
+    await body({ context, url, dataset, tmp, raypc, gpu });
     console.log(`PASS ${name} (${((Date.now() - started) / 1000).toFixed(1)} s)`);
     clearTimeout(watchdog);
     await cleanup();
@@ -127,13 +138,29 @@ export async function openUi(context, url, { hash = '', timeoutMs = 30000 } = {}
   const page = await context.newPage();
   const errors = [];
   page.on('pageerror', (e) => errors.push(String(e)));
-  page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
+  const warnings = [];
+  page.on('console', (m) => {
+    if (m.type() === 'error') errors.push(m.text());
+    else if (m.type() === 'warning') warnings.push(m.text());
+  });
   page.raypcErrors = errors;
+  page.raypcWarnings = warnings;
   await page.goto(url + hash);
   await page.waitForFunction(() => window.__raypc && window.__raypc.headers.length > 0, null, { timeout: timeoutMs })
     .catch(() => { throw new TestFailure(`no frame arrived within ${timeoutMs} ms; page errors: ${errors.join(' | ')}`); });
   await waitConverged(page, timeoutMs);
   return page;
+}
+
+// The volume alone, for the re-projection checks (warp, stereo): without the core, whose shading
+// follows the camera (light in the camera frame), and the reference shells, whose depth labels are
+// written in screen space; no re-projection of an image can reproduce either.
+export async function volumeOnly(page) {
+  await page.evaluate(() => {
+    const s = window.__raypc.state();
+    window.__raypc.setState({ ...s, core: { ...s.core, visible: false },
+      reference: { ...s.reference, shells: { ...s.reference.shells, visible: false } } });
+  });
 }
 
 // A square image with the planet filling most of it, so image differences are not diluted.

@@ -1,8 +1,10 @@
 // Measurements of the UI on a real dataset (not part of ctest; speed is reported, not asserted):
-//   node tests/browser/measure.mjs RAYPC DATASET [SCREENSHOT.png] [--play FPS [--seconds S] [--only-play]]
+//   node tests/browser/measure.mjs RAYPC DATASET [SCREENSHOT.png] [--play FPS[,FPS...] [--seconds S] [--only-play]]
 //                                  [--server-log FILE]   (the server's log, for where the time goes)
 //                                  [--assets DIR]        (another build of the UI, for A/B runs)
-//                                  [--size WxH]          (the state's image size; default 512x512)
+//                                  [--size WxH|view]     (the state's image size; default 512x512; view: the 3D view's own)
+//                                  [--viewport WxH]      (the browser window; default 1280x860)
+//                                  [--orbit S]           (5. below)
 //                                  [--profile FILE]      (the page's CPU profiles while brushing and playing: FILE.brushing.cpuprofile …)
 // 1. brush-to-updated-frame latency at --size (512x512): a brush on the temperature axis is dragged with
 //    the mouse; for every state the brush sent, the time from sending it to its first frame on
@@ -12,10 +14,15 @@
 //    for each mouse move of a brush, the time from the input event to the next animation frame
 //    (parcoord-es filters every line and starts redrawing inside that frame), and the longest task.
 // 3. optionally a screenshot of the whole UI.
-// 4. with --play FPS: playback at --size at FPS steps/s (the UI's speed menu) for S seconds
-//    (default 10): steps shown per second, and per step the time from the state sent to its frame
-//    received (server) and to its frame on screen (browser), with the level the server chose.
+// 4. with --play FPS: playback at --size at FPS steps/s (the UI's speed menu; several, comma-separated,
+//    one after the other) for S seconds (default 10): steps shown per second; per step the time from
+//    the state sent to its first frame received and to its frame on screen (a period later: the step
+//    is rendered while the one before it shows); and the level, size and pass of the frames shown.
 //    --only-play skips 1-3.
+// 0. always: the first picture, from the page's navigation to its first frame on screen and to the
+//    first converged frame (at the view's own size: measured before --size applies).
+// 5. with --orbit S: the camera dragged on the 3D view for S seconds (a mouse move every 16 ms):
+//    frames received and shown per second, and their levels and sizes.
 import { spawn } from 'node:child_process';
 import { createRequire } from 'node:module';
 import { join } from 'node:path';
@@ -25,8 +32,12 @@ import { chromiumPath, repoRoot, waitConverged } from './harness.mjs';
 
 const args = process.argv.slice(2);
 const flag = (name) => { const i = args.indexOf(name); return i < 0 ? null : args.splice(i, name === '--only-play' ? 1 : 2).at(-1); };
-const size = (flag('--size') ?? '512x512').split('x').map(Number);
-const serverLog = flag('--server-log'), assets = flag('--assets') ?? join(repoRoot, 'web', 'dist');
+const sizeFlag = flag('--size') ?? '512x512';
+const size = sizeFlag === 'view' ? null : sizeFlag.split('x').map(Number);
+const viewport = (flag('--viewport') ?? '1280x860').split('x').map(Number);
+const orbitSeconds = Number(flag('--orbit') ?? 0);
+let sizeText = ''; // the state's image size measured at
+const serverLog = flag('--server-log'), assets = flag('--assets') ?? join(repoRoot, 'web', 'dist-test');
 const profileFile = flag('--profile');
 const playFps = flag('--play'), playSeconds = Number(flag('--seconds') ?? 10), onlyPlay = flag('--only-play') !== null;
 const [raypc, dataset, screenshot] = args;
@@ -43,7 +54,7 @@ const url = await new Promise((resolve, reject) => {
 });
 const profile = mkdtempSync(join(tmpdir(), 'raypc-measure-'));
 const context = await chromium.launchPersistentContext(profile, {
-  executablePath: chromiumPath, headless: true, viewport: { width: 1280, height: 860 },
+  executablePath: chromiumPath, headless: true, viewport: { width: viewport[0], height: viewport[1] },
   args: ['--no-sandbox', '--disable-gpu', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-quic', '--no-first-run',
     '--disable-background-networking', '--disable-component-update', '--disable-sync'],
 });
@@ -52,23 +63,54 @@ try {
   const page = await context.newPage();
   await page.goto(url);
   await page.waitForFunction(() => window.__raypc && window.__raypc.parcoords.rowCount > 0 && window.__raypc.headers.length > 0, null, { timeout: 60000 });
-  await page.evaluate(([width, height]) => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, image: { width, height } }); }, size);
   await waitConverged(page, 60000);
+  const first = await page.evaluate(() => ({ shown: window.__raypc.shownLog[0], converged: performance.now(), image: window.__raypc.state().image }));
+  console.log(`first picture at ${first.image.width}x${first.image.height} (window ${viewport.join('x')}): on screen ${first.shown.t.toFixed(0)} ms after navigation (level ${first.shown.level}, ${first.shown.width}x${first.shown.height}), converged by ${first.converged.toFixed(0)} ms`);
+  if (size) {
+    await page.evaluate(([width, height]) => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, image: { width, height } }); }, size);
+    await waitConverged(page, 60000);
+  }
+  sizeText = size ? size.join('x') : `${first.image.width}x${first.image.height}`;
+  if (orbitSeconds > 0) await measureOrbit(page);
   const rows = await page.evaluate(() => window.__raypc.parcoords.rowCount);
   if (!onlyPlay) await brushAndScreenshot(page, rows);
-  if (playFps) await measurePlayback(page);
+  if (playFps) for (const fps of playFps.split(',')) await measurePlayback(page, Number(fps));
 } finally {
   await context.close();
   server.kill('SIGTERM');
   rmSync(profile, { recursive: true, force: true });
 }
 
-async function measurePlayback(page) {
+async function measureOrbit(page) {
+  const box = await page.evaluate(() => { const r = document.getElementById('view3d').getBoundingClientRect(); return { x: r.x, y: r.y, w: r.width, h: r.height }; });
+  const since = await page.evaluate(() => ({ headers: window.__raypc.frameLog.length, shown: window.__raypc.shownLog.length, t: performance.now() }));
+  const cx = box.x + box.w / 2, cy = box.y + box.h / 2;
+  await page.mouse.move(cx, cy);
+  await page.mouse.down();
+  const t0 = Date.now();
+  for (let i = 0; Date.now() - t0 < orbitSeconds * 1000; i++) {
+    await page.mouse.move(cx + 200 * Math.sin(i / 40), cy + 40 * Math.sin(i / 70));
+    await page.waitForTimeout(16);
+  }
+  const r = await page.evaluate((n) => ({
+    received: window.__raypc.frameLog.slice(n.headers).filter((f) => f.t >= n.t),
+    shown: window.__raypc.shownLog.slice(n.shown).filter((f) => f.t >= n.t),
+    now: performance.now(),
+  }), since);
+  await page.mouse.up();
+  await waitConverged(page, 60000);
+  const seconds = (r.now - since.t) / 1000;
+  const count = (list, key) => { const c = {}; for (const s of list) c[key(s)] = (c[key(s)] ?? 0) + 1; return JSON.stringify(c); };
+  console.log(`orbit for ${seconds.toFixed(1)} s at ${sizeText}: ${(r.received.length / seconds).toFixed(1)} frames/s received, ${(r.shown.length / seconds).toFixed(1)} shown; shown by level ${count(r.shown, (s) => s.level)}, by size ${count(r.shown, (s) => `${s.width}x${s.height}`)}`);
+}
+
+async function measurePlayback(page, playFps) {
   const nSteps = await page.evaluate(() => window.__raypc.info.steps.length);
   await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, step: 0 }); });
   await waitConverged(page, 60000);
   await page.selectOption('#fps', String(playFps));
-  const since = await page.evaluate(() => ({ sent: window.__raypc.sentLog.length, lat: window.__raypc.latencies.length, headers: window.__raypc.headers.length }));
+  const since = await page.evaluate(() => ({ sent: window.__raypc.sentLog.length, lat: window.__raypc.latencies.length,
+    headers: window.__raypc.headers.length, shown: window.__raypc.shownLog.length }));
   await page.evaluate(() => {
     window.__playTasks = [];
     new PerformanceObserver((l) => { for (const e of l.getEntries()) window.__playTasks.push(e.duration); }).observe({ type: 'longtask', buffered: false });
@@ -81,9 +123,10 @@ async function measurePlayback(page) {
   await stopProfile(cdp, 'playback');
   const seconds = (Date.now() - t0) / 1000;
   const r = await page.evaluate((n) => ({
-    sent: window.__raypc.sentLog.slice(n.sent).filter((e) => e.interactive),
-    lat: window.__raypc.latencies.slice(n.lat).filter((l) => l.interactive),
-    headers: window.__raypc.headers.slice(n.headers).filter((h) => h.interactive),
+    sent: window.__raypc.sentLog.slice(n.sent).filter((e) => e.playback),
+    lat: window.__raypc.latencies.slice(n.lat).filter((l) => l.playback),
+    headers: window.__raypc.headers.slice(n.headers).filter((h) => h.playback),
+    shown: window.__raypc.shownLog.slice(n.shown).filter((h) => h.playback),
     tasks: window.__playTasks,
   }), since);
   // From a step's frame on screen to the next step sent: the UI's own time (and the speed's wait).
@@ -97,10 +140,12 @@ async function measurePlayback(page) {
   const passMs = r.headers.map((h) => h.stats?.passMs ?? 0);
   // The rate between the first and the last step sent (the wall time also holds the clicks' round trips).
   const span = r.sent.length > 1 ? (r.sent.at(-1).t - r.sent[0].t) / 1000 : NaN;
-  console.log(`playback of ${nSteps} steps at ${playFps} steps/s asked, ${size.join('x')}, ${seconds.toFixed(1)} s: ${r.sent.length} steps sent, ${((r.sent.length - 1) / span).toFixed(2)} steps/s (${(r.sent.length / seconds).toFixed(2)} over the wall time)`);
+  console.log(`playback of ${nSteps} steps at ${playFps} steps/s asked, ${sizeText}, ${seconds.toFixed(1)} s: ${r.sent.length} steps sent, ${((r.sent.length - 1) / span).toFixed(2)} steps/s (${(r.sent.length / seconds).toFixed(2)} over the wall time)`);
   console.log(`  per step: sent to frame received median ${median(r.lat.map((l) => l.firstFrameMs)).toFixed(0)} ms, 90th percentile ${pct(r.lat.map((l) => l.firstFrameMs), 0.9).toFixed(0)} ms; received to on screen median ${median(r.lat.map((l) => l.shownMs - l.firstFrameMs)).toFixed(0)} ms`);
   console.log(`  frame on screen to the next step sent: median ${median(gaps).toFixed(0)} ms, 90th percentile ${pct(gaps, 0.9).toFixed(0)} ms; long tasks ${r.tasks.length}, ${r.tasks.reduce((a, b) => a + b, 0).toFixed(0)} ms in all, longest ${Math.max(0, ...r.tasks).toFixed(0)} ms`);
-  console.log(`  server pass median ${median(passMs).toFixed(0)} ms; levels ${JSON.stringify(levels)}; frame sizes ${[...new Set(r.headers.map((h) => `${h.width}x${h.height}`))].join(', ')}`);
+  console.log(`  server pass median ${median(passMs).toFixed(0)} ms; frames received by level ${JSON.stringify(levels)}`);
+  const shownBy = (key) => { const c = {}; for (const s of r.shown) c[key(s)] = (c[key(s)] ?? 0) + 1; return JSON.stringify(c); };
+  console.log(`  frames shown: ${r.shown.length}; by level ${shownBy((s) => s.level)}; by size ${shownBy((s) => `${s.width}x${s.height}`)}; by pass ${shownBy((s) => s.pass)}`);
 }
 
 // With --profile: a CPU profile of the page from startProfile to stopProfile, written whole to
@@ -169,7 +214,7 @@ async function brushAndScreenshot(page, rows) {
   const inter = r.lat.filter((l) => l.interactive).map((l) => l.shownMs);
   const fin = r.lat.filter((l) => !l.interactive).map((l) => l.shownMs);
   console.log(`parallel coordinates: ${rows} lines, ${r.moves.length} brush moves: input to next frame median ${median(r.moves).toFixed(1)} ms, 90th percentile ${pct(r.moves, 0.9).toFixed(1)} ms; longest task ${r.longest.toFixed(0)} ms`);
-  console.log(`brush to updated frame at ${size.join('x')}: interactive states (n=${inter.length}) median ${median(inter).toFixed(0)} ms; final states, first pass (n=${fin.length}) median ${median(fin).toFixed(0)} ms`);
+  console.log(`brush to updated frame at ${sizeText}: interactive states (n=${inter.length}) median ${median(inter).toFixed(0)} ms; final states, first pass (n=${fin.length}) median ${median(fin).toFixed(0)} ms`);
   const arrive = r.lat.filter((l) => l.interactive).map((l) => l.firstFrameMs), onScreen = r.lat.filter((l) => l.interactive).map((l) => l.shownMs - l.firstFrameMs);
   console.log(`  interactive states: send to frame received median ${median(arrive).toFixed(0)} ms (server), received to on screen median ${median(onScreen).toFixed(0)} ms, 90th percentile ${pct(onScreen, 0.9).toFixed(0)} ms (browser)`);
   const finArrive = r.lat.filter((l) => !l.interactive).map((l) => l.firstFrameMs), finOnScreen = r.lat.filter((l) => !l.interactive).map((l) => l.shownMs - l.firstFrameMs);

@@ -6,6 +6,10 @@ case_name=$1 raypc=$2 fixture=$3
 source "$(dirname "$0")/../lib/check.sh"
 make_work "cli-$case_name"
 
+# The checks' Python is Debian's (RAYPC_PYTHON, set by ctest), whose netCDF4 and PIL they import: a
+# python3 earlier on PATH (pyenv, a venv) lacks them.
+python3() { "${RAYPC_PYTHON:-/usr/bin/python3}" "$@"; }
+
 # expect_error "FRAGMENT" ARGS...: exit status 1, exactly one line on stderr, naming FRAGMENT.
 expect_error() {
   local fragment=$1; shift
@@ -38,11 +42,11 @@ bad_options)
   expect_error "unknown variable 'pressure'" probe "$work/ds" --lat 0 --lon 0 --r 5000 --var pressure
   expect_error "outside the mantle shell" probe "$work/ds" --lat 0 --lon 0 --r 7000
   expect_error "--lat" probe "$work/ds" --lat 95 --lon 0 --r 5000
-  expect_error "step 9 out of range" probe "$work/ds" --time 9 --lat 0 --lon 0 --r 5000
+  expect_error "--time: 9 out of range 0..2" probe "$work/ds" --time 9 --lat 0 --lon 0 --r 5000
   expect_error "no step at 3 Myr" probe "$work/ds" --time 3Myr --lat 0 --lon 0 --r 5000
   expect_error "--time" export "$work/ds" --time abc -o "$work/s.csv"
   expect_error "--what" export "$work/ds" --what volume -o "$work/s.csv"
-  expect_error "level 5 out of range" probe "$work/ds" --lod 5 --lat 0 --lon 0 --r 5000
+  expect_error "--lod: 5 out of range 0..2" probe "$work/ds" --lod 5 --lat 0 --lon 0 --r 5000
   expect_error "--dataset DIR" serve "$fixture/spherical001.nc" "$fixture/spherical002.nc" --dataset /proc/raypc-x --port 0
   expect_error "missing.nc: no such file" serve "$work/missing.nc" --port 0
   expect_error "--dataset: only for netCDF inputs" serve "$work/ds" --dataset "$work/y" --port 0
@@ -146,6 +150,128 @@ stats_analytic_selection)
   expect_error "unknown variable or coordinate 'pressure'" stats "$work/ds" --range "pressure=0:1" -o "$work/x.csv"
   expect_error "min 3 is greater than max 1" stats "$work/ds" --range "depth=3:1" -o "$work/x.csv"
   check "no output after errors" test ! -e "$work/x.csv"
+  ;;
+features)
+  # raypc features (issue 28): the connected regions of a selection, each measured.
+  preprocess_fixture
+  vol() { "$raypc" stats "$work/ds" --quiet -o "$work/v.csv" "$@" >/dev/null && awk -F, 'NR > 1 { print $3 }' "$work/v.csv"; }
+  "$raypc" features "$work/ds" --range depth=0:660 -o "$work/shell.csv" --quiet >/dev/null
+  check "a shell is one feature a step" test "$(awk -F, 'NR > 1' "$work/shell.csv" | wc -l)" -eq 3
+  check "  with the volume raypc stats gives" \
+    awk -F, -v v="$(vol --range depth=0:660 | head -1)" 'NR == 2 { exit ($5 - v)^2 > (1e-6 * v)^2 }' "$work/shell.csv"
+  # Two polar caps: each joined around its pole, apart from the other: two features a step, whose
+  # volumes add up to the selection's.
+  "$raypc" features "$work/ds" --range depth=0:660 --range lat=-90:-60 --range lat=60:90 -o "$work/caps.csv" --quiet >/dev/null
+  check "two polar caps are two features a step" test "$(awk -F, 'NR > 1 && $1 == 0' "$work/caps.csv" | wc -l)" -eq 2
+  check "  one in each hemisphere" awk -F, 'NR > 1 && $1 == 0 { if ($10 > 60) n++; if ($10 < -60) s++ } END { exit !(n == 1 && s == 1) }' "$work/caps.csv"
+  check "  adding up to the selected volume" awk -F, -v v="$(vol --range depth=0:660 --range lat=-90:-60 --range lat=60:90 | head -1)" \
+    'NR > 1 && $1 == 0 { t += $5 } END { exit (t - v)^2 > (1e-6 * v)^2 }' "$work/caps.csv"
+  check "  the header names units and bands" grep -q "temperature mean \[K\].*percent_within_50km_of_660km" "$work/caps.csv"
+  # Followed through the 3 steps (the fixture's flow is slow: each cap stays itself): two tracks of
+  # three steps each, no events.
+  "$raypc" features "$work/ds" --range depth=0:660 --range lat=-90:-60 --range lat=60:90 -o "$work/caps2.csv" \
+    --tracks "$work/tracks.csv" --events "$work/events.csv" --quiet >/dev/null
+  check "the caps are two tracks of 3 steps" test "$(awk -F, 'NR > 1 { n[$1]++ } END { for (t in n) if (n[t] == 3) k++; print k }' "$work/tracks.csv")" -eq 2
+  check "  with no events" test "$(wc -l < "$work/events.csv")" -eq 1
+  check "  and the same features as without tracking" cmp -s "$work/caps.csv" "$work/caps2.csv"
+  # Their mean depth (the shell 0-660 km, weighted by volume: about 310 km) stays in a band of
+  # 250-350 km for the whole series: a stall of every step, still there at the end.
+  "$raypc" features "$work/ds" --range depth=0:660 --range lat=-90:-60 --range lat=60:90 -o "$work/caps3.csv" \
+    --depth 300 --band-half-width 50 --stalls "$work/stalls.csv" --quiet >/dev/null
+  check "each cap stalls at 300 km from step 0 to 2" \
+    awk -F, 'NR > 1 { n++; if ($2 != 300 || $3 != 0 || $4 != 2 || $7 != "") bad = 1 } END { exit bad || n != 2 }' "$work/stalls.csv"
+  "$raypc" features "$work/ds" --range "radial velocity=0.2:0.3" -o "$work/none.csv" --quiet > "$work/none.out"
+  check "an empty selection writes the header alone" test "$(wc -l < "$work/none.csv")" -eq 1
+  check "  and says 0 features" grep -q "0 features in 3 steps" "$work/none.out"
+  expect_error "no selection" features "$work/ds" -o "$work/x.csv"
+  expect_error "--min-volume" features "$work/ds" --range depth=0:660 --min-volume -1 -o "$work/x.csv"
+  expect_error "unknown variable or coordinate 'pressure'" features "$work/ds" --range pressure=0:1 -o "$work/x.csv"
+  check "no output after errors" test ! -e "$work/x.csv"
+  ;;
+flux)
+  # raypc flux (issue 28): the fixture's radial velocity is u0 = 0.15779 cm/yr everywhere (its
+  # truth.json), so the flux up across a shell of radius r is 4 pi r^2 u0 (km^3/yr with 1e-5 km/cm).
+  preprocess_fixture
+  "$raypc" flux "$work/ds" --depth 660 --depth 1600 --range lat=0:90 -o "$work/flux.csv" --quiet >/dev/null
+  check "a row per step and depth" test "$(awk -F, 'NR > 1' "$work/flux.csv" | wc -l)" -eq 6
+  check "up is 4 pi r^2 u0, down 0, at both depths" awk -F, 'NR > 1 { pi = atan2(0, -1); up = 4 * pi * $4^2 * 0.15779e-5;
+      if (($6 - up)^2 > (1e-3 * up)^2 || $5 != 0 || ($7 - $6)^2 > (1e-9 * up)^2) bad = 1 } END { exit bad }' "$work/flux.csv"
+  check "the selection (the northern half) carries half" \
+    awk -F, 'NR > 1 { if (($9 - $6 / 2)^2 > (1e-3 * $6)^2 || ($10 - 50)^2 > 0.5) bad = 1 } END { exit bad }' "$work/flux.csv"
+  check "a steady flow has no avalanche" awk -F, 'NR > 1 && $11 != 0 { bad = 1 } END { exit bad }' "$work/flux.csv"
+  expect_error "outside the grid's radii" flux "$work/ds" --depth 3000 -o "$work/x.csv"
+  expect_error "--sigmas" flux "$work/ds" --sigmas -1 -o "$work/x.csv"
+  check "no output after errors" test ! -e "$work/x.csv"
+  ;;
+maps_sections)
+  # Maps and sections (issue 29; docs/maps.md) on the analytic fixture (its truth.json), in float32.
+  "$raypc" preprocess "$fixture" -o "$work/ds" --quiet --sample-rows 2000 --encoding float32 >/dev/null
+  "$raypc" map "$work/ds" --time 1 --depth 1000 --var temperature --size 600x360 -o "$work/t.png" \
+    --netcdf "$work/t.nc" --grid-step 2 >/dev/null
+  "$raypc" map "$work/ds" --time 1 --depth 1000 --var "temperature anomaly" --size 600x360 -o "$work/a.png" \
+    --netcdf "$work/a.nc" --grid-step 2 --flow --contours=-100,100 --reference coastlines --reference graticule >/dev/null
+  "$raypc" section "$work/ds" --time 0 --var "temperature anomaly" --from=-20,40 --to 60,40 --size 600x360 \
+    -o "$work/s.png" --netcdf "$work/s.nc" --grid-step 1 --depth-step 20 --flow >/dev/null
+  check "the pictures are 600x360 PNGs" python3 -c "
+from PIL import Image
+import sys
+sys.exit(any(Image.open('$work/' + f).size != (600, 360) for f in ('t.png', 'a.png', 's.png')))"
+  # The temperature less its anomaly is 300 + 3700 (6371 - r) / 2886 K (truth.json): at 1000 km the
+  # same everywhere, poles (the 89° rows lie in the grid's pole caps) and the lon seam (359°) included.
+  check "netCDF map: CF coordinates, and T - T' is the truth's radial profile at every point" python3 -c "
+import netCDF4, numpy as np, sys
+t, a = netCDF4.Dataset('$work/t.nc'), netCDF4.Dataset('$work/a.nc')
+lat, lon, d = t['lat'], t['lon'], t['depth']
+ok = lat.units == 'degrees_north' and lon.units == 'degrees_east' and lat.standard_name == 'latitude'
+ok &= d.units == 'km' and d.positive == 'down' and float(d[...]) == 1000 and t.Conventions == 'CF-1.8'
+ok &= lat.shape == (90,) and lon.shape == (180,) and lat[0] == -89 and lat[-1] == 89 and lon[0] == 1 and lon[-1] == 359
+T, A = t['temperature'], a['temperature_anomaly']
+ok &= T.units == 'K' and A.long_name == 'temperature anomaly' and T.dimensions == ('lat', 'lon')
+diff = np.asarray(T[:], float) - np.asarray(A[:], float) - (300 + 3700 * 1000 / 2886)
+print('largest |T - T\' - profile|:', np.abs(diff).max(), 'K')
+sys.exit(not (ok and np.abs(diff).max() < 0.01))"
+  # The section along the meridian 40°E from 20°S to 60°N meets the fixture's first blob (amplitude
+  # 400 K, at 20°N 40°E, r 4300 km, i.e. 2071 km deep, at step 0) 40° along, at its depth.
+  check "netCDF section: the blob's peak at 40 degrees along and 2071 km deep" python3 -c "
+import netCDF4, numpy as np, sys
+s = netCDF4.Dataset('$work/s.nc')
+v = np.asarray(s['temperature_anomaly'][:], float)
+i, j = np.unravel_index(np.argmax(v), v.shape)
+# On 5-degree cells the interpolated peak sits on a grid row (17.5 N): the centre is the centroid of
+# the values above half the peak, along the peak's depth and down the peak's column.
+row, col = np.clip(v[i] - v[i, j] / 2, 0, None), np.clip(v[:, j] - v[i, j] / 2, 0, None)
+along = float((row * s['distance_deg'][:]).sum() / row.sum())
+depth = float((col * s['depth'][:]).sum() / col.sum())
+lat = float(np.interp(along, s['distance_deg'][:], s['lat'][:]))
+print('peak', v[i, j], 'K; centre', along, 'deg along (lat', lat, '),', depth, 'km deep')
+ok = s['depth'].positive == 'down' and s['distance'].units == 'km' and abs(float(s['distance'][-1]) - 80 * np.pi / 180 * 6371) < 1
+sys.exit(not (ok and abs(along - 40) <= 1 and abs(depth - 2071) <= 60 and abs(lat - 20) <= 1 and v[i, j] > 250))"
+  check "GMT reads the map as a geographic grid, 0..360 x -90..90 at 2 degrees" bash -c "
+    gmt grdinfo '$work/t.nc' | grep -q 'Geographic grid' &&
+    gmt grdinfo -C '$work/t.nc' | awk '{ exit !(\$2 == 0 && \$3 == 360 && \$4 == -90 && \$5 == 90 && \$8 == 2 && \$10 == 180 && \$11 == 90) }'"
+  # One description: the state's map drawn by render --view map is raypc map's picture.
+  printf '%s' '{"version": 9, "color": {"variable": "temperature anomaly"}, "map": {"depthKm": 660,
+    "projection": "hammer", "centralMeridianDeg": -100, "contours": [0]}, "section": {"from": {"latDeg": 0, "lonDeg": 0},
+    "to": {"latDeg": 45, "lonDeg": 90}}}' > "$work/state.json"
+  "$raypc" map "$work/ds" --state "$work/state.json" --size 400x240 -o "$work/m1.png" >/dev/null
+  "$raypc" render "$work/ds" --state "$work/state.json" --size 400x240 --view map -o "$work/m2.png" >/dev/null
+  "$raypc" section "$work/ds" --state "$work/state.json" --size 400x240 -o "$work/s1.png" >/dev/null
+  "$raypc" render "$work/ds" --state "$work/state.json" --size 400x240 --view section -o "$work/s2.png" >/dev/null
+  check "render --view map draws raypc map's picture" cmp -s "$work/m1.png" "$work/m2.png"
+  check "render --view section draws raypc section's picture" cmp -s "$work/s1.png" "$work/s2.png"
+  "$raypc" map "$work/ds" --state "$work/state.json" --size 400x240 --projection orthographic -o "$work/m3.png" >/dev/null
+  check "--projection changes the state's" bash -c "! cmp -s '$work/m1.png' '$work/m3.png'"
+  expect_error "less than 0.01° apart" section "$work/ds" --from 10,20 --to 10,20 -o "$work/x.png"
+  expect_error "antipodal" section "$work/ds" --from 30,20 --to=-30,200 -o "$work/x.png"
+  expect_error "--from '95,0'" section "$work/ds" --from 95,0 --to 0,0 -o "$work/x.png"
+  expect_error "unknown map projection 'mercator'" map "$work/ds" --projection mercator -o "$work/x.png"
+  expect_error "outside the grid's depths" map "$work/ds" --depth 3000 -o "$work/x.png"
+  expect_error "--grid-step 0.7" map "$work/ds" --netcdf "$work/x.nc" --grid-step 0.7 -o "$work/x.png"
+  expect_error "--view 'globe'" render "$work/ds" --view globe -o "$work/x.png"
+  expect_error "only for --view 3d" render "$work/ds" --view map --depth "$work/x.pfm" -o "$work/x.png"
+  printf '%s' '{"version": 8, "map": {"depthKm": 660}}' > "$work/old.json"
+  expect_error "map: needs version 9" map "$work/ds" --state "$work/old.json" -o "$work/x.png"
+  check "no output after errors" test ! -e "$work/x.png" -a ! -e "$work/x.nc" -a ! -e "$work/x.pfm"
   ;;
 multi_range)
   # Several ranges on one axis (a name given twice) select their union, in raypc stats and render,
@@ -342,7 +468,12 @@ huge_pages)
   server_memory() {
     env "$@" "$raypc" serve "$work/ds" --port 0 > "$work/serve.log" 2>&1 &
     local pid=$!
-    for _ in $(seq 200); do grep -q "http://" "$work/serve.log" && break; sleep 0.1; done
+    # Up to a minute: under a full ctest run on 2 cores a start once took longer than the 20 s
+    # this waited before, and the case then read a server that was not serving yet ("none, 0 kB").
+    for _ in $(seq 600); do grep -q "http://" "$work/serve.log" && break; sleep 0.1; done
+    if ! grep -q "http://" "$work/serve.log"; then
+      echo "FAIL: the server ($*) did not start within 60 s: $(tail -n 3 "$work/serve.log")" >&2
+    fi
     local t h
     t=$(tr '\0' '\n' < "/proc/$pid/environ" | sed -n 's/^GLIBC_TUNABLES=//p')
     h=$(awk '/^AnonHugePages:/ {print $2}' "/proc/$pid/smaps_rollup")

@@ -9,7 +9,10 @@ pid=
 cleanup() { [[ -n $pid ]] && kill "$pid" 2>/dev/null; wait 2>/dev/null; rm -rf "$work"; }
 trap cleanup EXIT
 
-"$raypc" demo --dir "$work/demo" --port 0 >"$work/out.txt" 2>"$work/err.txt" </dev/null &
+# The files exist before the loop reads them: the background job opens them when it is scheduled,
+# which under a loaded test run can be after the first read.
+: >"$work/out.txt"; : >"$work/err.txt"
+"$raypc" demo --dir "$work/demo" --port 0 >>"$work/out.txt" 2>>"$work/err.txt" </dev/null &
 pid=$!
 url=
 for _ in $(seq 1 1200); do  # the data and the picture take about a minute on 2 cores

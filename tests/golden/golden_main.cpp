@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "render/image_io.h"
 #include "render/pathline_scene.h"
+#include "render/slice_view.h"
 #include "render/test_pathlines.h"
 #include "render/test_volumes.h"
 #include "render/volume_renderer.h"
@@ -63,6 +64,29 @@ struct Case {
     std::function<std::shared_ptr<PathlineScene>()> tubes = {};  // pathline tubes (issue 5), optional
 };
 
+// Maps and sections (render/slice_view.h): a state document each, drawn from the level-0 volume.
+struct SliceCase {
+    StateRenderer::Slice slice;
+    const char* state;
+};
+const std::map<std::string, SliceCase> kSliceCases = {
+    {"map_mollweide", {StateRenderer::Slice::Map, R"({"version": 9, "image": {"width": 256, "height": 150}, "color": {"variable": "plume", "colorMap": "vik", "range": [-1, 1]}, "map": {"projection": "mollweide", "depthKm": 800, "centralMeridianDeg": 60, "contours": [0], "flow": false}})"}},
+    {"map_orthographic_brushed", {StateRenderer::Slice::Map, R"({"version": 9, "image": {"width": 200, "height": 200}, "color": {"variable": "pattern", "colorMap": "batlow", "range": [-1, 1]}, "brushes": [{"name": "lat", "min": 30, "max": 90}], "reference": {"graticule": {"visible": true, "spacingDeg": 30}}, "map": {"projection": "orthographic", "depthKm": 100, "centralLatitudeDeg": 60, "centralMeridianDeg": -20}})"}},
+    {"section_plume", {StateRenderer::Slice::Section, R"({"version": 9, "image": {"width": 256, "height": 160}, "color": {"variable": "plume", "colorMap": "vik", "range": [-1, 1]}, "reference": {"shells": {"visible": true, "depthsKm": [660, 1600]}}, "map": {"contours": [0.5]}, "section": {"from": {"latDeg": 10, "lonDeg": -30}, "to": {"latDeg": 30, "lonDeg": 70}}})"}},
+};
+
+// A slice case's picture: the state document parsed and resolved as raypc map and section do.
+ImageRgba8 slicePicture(const SliceCase& c)
+{
+    const auto volume = volumeAt(0);
+    ResolvedState r;
+    r.state = parseRenderState(nlohmann::json::parse(c.state), "golden case");
+    const VariableCatalog catalog{{"plume", "radial", "pattern"}, {{-1, 1}, {0, 1}, {-1, 1}}};
+    r.params = resolveParams(r.state, catalog);
+    const SliceInputs in{volume.get(), &r, catalog.names, r.state.colorVariable, "golden", nullptr};
+    return c.slice == StateRenderer::Slice::Map ? mapPicture(in) : sectionPicture(in);
+}
+
 // Eight helices rising through the mantle on the side facing the camera, injected at steps 0 and 1
 // (2 Myr apart) and traced for 16 Myr: coloured by age they run from blue to red.
 std::shared_ptr<PathlineScene> helixTubes(float radiusKm, bool ambientOcclusion, std::vector<uint8_t> mask = {})
@@ -105,6 +129,15 @@ std::map<std::string, Case> cases()
                                  p.transfer.range = {0, 1};
                                  p.transfer.opacity = {{0, 0}, {0.3f, 0}, {0.31f, 0.4f}, {0.4f, 0.4f}, {0.41f, 0}, {1, 0}};
                              }};
+    // "Show the selection": a selection in the transparent middle of the V (values in [-0.3, 0.3]
+    // inside 4000-5000 km) drawn with the floor's opacity in the colour map's pale middle.
+    c["selection_shown"] = {0, [](RenderParams& p) {
+                                p.transfer.colorMap = ColorMapId::BlueWhiteRed;
+                                p.transfer.range = {-1, 1};
+                                p.transfer.opacity = {{0, 0.8f}, {0.35f, 0}, {0.65f, 0}, {1, 0.8f}};
+                                p.brushes = {{0, std::nullopt, {{-0.3f, 0.3f}}}, {-1, Coordinate::Radius, {{4000, 5000}}}};
+                                p.selectionMinOpacity = 0.5f;
+                            }};
     c["brush_one_variable"] = {0, [](RenderParams& p) { p.brushes = {{1, std::nullopt, {{0.3f, 0.7f}}}}; }};
     c["brush_several_variables"] = {0, [](RenderParams& p) {
                                         p.brushes = {{1, std::nullopt, {{0.2f, 0.9f}}},
@@ -263,20 +296,25 @@ int main(int argc, char** argv)
         const std::filesystem::path goldenDir = argv[2], outDir = argv[3];
         if (name == "view_equals_orbit")
             return viewEqualsOrbit(outDir);
-        const auto all = cases();
-        const auto it = all.find(name);
-        if (it == all.end())
-            fail("unknown golden case '{}'", name);
-        RenderParams params = baseParams();
-        it->second.setup(params);
-        VolumeRenderer renderer(volumeAt(it->second.level));
-        renderer.setParams(params);
-        if (it->second.tubes)
-            renderer.setPathlines(it->second.tubes());
-        FrameBuffer frame(params.width, params.height);
-        for (int pass = 0; pass < 6; ++pass)
-            renderer.renderPass(frame);
-        const ImageRgba8 actual{kSize, kSize, frame.resolveRgba8({0.1f, 0.1f, 0.12f})};
+        ImageRgba8 actual;
+        if (const auto slice = kSliceCases.find(name); slice != kSliceCases.end()) {
+            actual = slicePicture(slice->second);
+        } else {
+            const auto all = cases();
+            const auto it = all.find(name);
+            if (it == all.end())
+                fail("unknown golden case '{}'", name);
+            RenderParams params = baseParams();
+            it->second.setup(params);
+            VolumeRenderer renderer(volumeAt(it->second.level));
+            renderer.setParams(params);
+            if (it->second.tubes)
+                renderer.setPathlines(it->second.tubes());
+            FrameBuffer frame(params.width, params.height);
+            for (int pass = 0; pass < 6; ++pass)
+                renderer.renderPass(frame);
+            actual = {kSize, kSize, frame.resolveRgba8({0.1f, 0.1f, 0.12f})};
+        }
         const auto golden = goldenDir / (name + ".png");
         const char* update = std::getenv("RAYPC_UPDATE_GOLDEN");
         if (update && std::string(update) == "1") {
@@ -293,7 +331,7 @@ int main(int argc, char** argv)
         if (expected.width != actual.width || expected.height != actual.height)
             fail("{}: golden is {}x{}, rendered {}x{}", golden.string(), expected.width, expected.height, actual.width,
                  actual.height);
-        ImageRgba8 diff{kSize, kSize, std::vector<uint8_t>(actual.pixels.size(), 255)};
+        ImageRgba8 diff{actual.width, actual.height, std::vector<uint8_t>(actual.pixels.size(), 255)};
         size_t bad = 0;
         double sum = 0;
         for (size_t i = 0; i < actual.pixels.size(); i += 4) {
@@ -306,7 +344,7 @@ int main(int argc, char** argv)
             }
             bad += worst > 10;
         }
-        const double pixels = double(kSize) * kSize;
+        const double pixels = double(actual.width) * actual.height;
         const double mean = sum / (3 * pixels);
         const double badFraction = double(bad) / pixels;
         std::printf("%s: %.3f%% pixels off by > 10/255, mean difference %.3f/255\n", name.c_str(), 100 * badFraction,

@@ -45,6 +45,17 @@ stats)
   ranks 7 stats "$work/ds" "${sel[@]}" -o "$work/s7.csv" --time 1:4 --quiet >/dev/null 2>&1
   "$raypc" stats "$work/ds" "${sel[@]}" -o "$work/s1b.csv" --time 1:4 --quiet >/dev/null
   check "stats of 4 steps on 7 ranks: the same CSV" cmp -s "$work/s1b.csv" "$work/s7.csv"
+  # raypc features shares its steps out the same way: the same file, byte for byte.
+  "$raypc" features "$work/ds" "${sel[@]}" -o "$work/f1.csv" --quiet >/dev/null
+  ranks 3 features "$work/ds" "${sel[@]}" -o "$work/f3.csv" --quiet >"$work/fout3" 2>&1
+  check "features with 3 ranks exits 0" test $? -eq 0
+  check "features with 3 ranks: the same CSV as one process" cmp -s "$work/f1.csv" "$work/f3.csv"
+  check "features found some ($(($(wc -l < "$work/f1.csv") - 1)) rows)" test "$(wc -l < "$work/f1.csv")" -gt 6
+  # Tracking goes from step to step on rank 0: the same files again.
+  "$raypc" features "$work/ds" "${sel[@]}" -o "$work/g1.csv" --tracks "$work/t1.csv" --events "$work/e1.csv" --quiet >/dev/null
+  ranks 2 features "$work/ds" "${sel[@]}" -o "$work/g2.csv" --tracks "$work/t2.csv" --events "$work/e2.csv" --quiet >/dev/null 2>&1
+  check "features --tracks with 2 ranks: the same three files" \
+    bash -c "cmp -s '$work/g1.csv' '$work/g2.csv' && cmp -s '$work/t1.csv' '$work/t2.csv' && cmp -s '$work/e1.csv' '$work/e2.csv' && cmp -s '$work/f1.csv' '$work/g1.csv'"
   ;;
 errors)
   make_data

@@ -284,6 +284,96 @@ TEST(Serve, DefaultStateOfInfoRendersAndInteractiveFitsTheBudget)
     EXPECT_EQ(h["depthWidth"], (h["width"].get<int>() + 3) / 4);
 }
 
+// A step of playback (issue 26, item 4): the level fits the time the step is shown
+// (timeBudgetMs), the frame keeps its size when a level fits, and the passes go on refining at that
+// level until state.passes or the next state, sending the passes that may be the newest when the
+// step's time is up; playback does not change the linked state.
+TEST(Serve, PlaybackStepsGetTheirLevelFromTheBudgetThenRefine)
+{
+    ServerProcess server;
+    json state = json::parse(httpGet(server.port, "/api/info").body)["defaultState"];
+    WsClient ws(server.port);
+    ws.hello();
+    state["passes"] = 1;
+    ws.send({{"type", "state"}, {"id", 1}, {"state", state}});  // measures the throughput
+    ws.framesUntilConverged(1);
+    const json linked = json::parse(httpGet(server.port, "/api/link").body);
+
+    // Ample time: level 0 at the state's size; the first pass and the last are sent (the ones
+    // between would be shown by no one: the next is done well before the step's time is up).
+    state["step"] = 1;
+    state["passes"] = 4;
+    state["convergenceGreyLevels"] = 0;  // no adaptive stop: all four passes are rendered
+    state["timeBudgetMs"] = 60000;
+    ws.send({{"type", "state"}, {"id", 2}, {"state", state}, {"playback", true}});
+    const auto frames = ws.framesUntilConverged(2);
+    ASSERT_EQ(frames.size(), 2u);
+    for (size_t i = 0; i < frames.size(); ++i) {
+        const json& h = frames[i].frame.header;
+        EXPECT_EQ(h["playback"], true);
+        EXPECT_EQ(h["interactive"], false);
+        EXPECT_EQ(h["level"], 0);
+        EXPECT_EQ(h["pass"], i == 0 ? 1 : 4);
+        EXPECT_EQ(h["width"], state["image"]["width"]);
+        EXPECT_EQ(h["height"], state["image"]["height"]);
+        EXPECT_TRUE(h["selection"]["fractionOfMantle"].is_number()) << "pass " << i + 1;
+    }
+    // No time: the coarsest level, refined as well, every pass sent.
+    state["step"] = 2;
+    state["timeBudgetMs"] = 0.001;
+    state["passes"] = 2;
+    ws.send({{"type", "state"}, {"id", 3}, {"state", state}, {"playback", true}});
+    const auto coarse = ws.framesUntilConverged(3);
+    EXPECT_EQ(coarse.back().frame.header["level"], 2);
+    EXPECT_EQ(coarse.back().frame.header["pass"], 2);
+    EXPECT_EQ(json::parse(httpGet(server.port, "/api/link").body)["version"], linked["version"])
+        << "a step of playback changed the linked state";
+}
+
+// A still state whose level-0 pass misses its time budget is shown first by a preview (pass 0, at the
+// level an interactive state would get), then its passes at level 0; with a level of its own, or a
+// budget its pass fits, it has none.
+TEST(Serve, SlowStillStatesAreShownFirstByAPreview)
+{
+    ServerProcess server;
+    json state = json::parse(httpGet(server.port, "/api/info").body)["defaultState"];
+    WsClient ws(server.port);
+    ws.hello();
+    state["passes"] = 2;
+    state["convergenceGreyLevels"] = 0;
+    state["timeBudgetMs"] = 60000;
+    ws.send({{"type", "state"}, {"id", 1}, {"state", state}});
+    auto frames = ws.framesUntilConverged(1);
+    ASSERT_EQ(frames.size(), 2u);
+    EXPECT_EQ(frames[0].frame.header["pass"], 1) << "no preview within the budget";
+    EXPECT_EQ(frames[0].frame.header["preview"], false);
+
+    state["timeBudgetMs"] = 0.001;
+    state["camera"]["azimuthDeg"] = 70;
+    ws.send({{"type", "state"}, {"id", 2}, {"state", state}});
+    frames = ws.framesUntilConverged(2);
+    ASSERT_EQ(frames.size(), 3u);
+    const json& p = frames[0].frame.header;
+    EXPECT_EQ(p["preview"], true);
+    EXPECT_EQ(p["pass"], 0);
+    EXPECT_EQ(p["converged"], false);
+    EXPECT_EQ(p["level"], 2);
+    EXPECT_EQ(p["camera"]["azimuthDeg"], 70.0);
+    for (int i = 1; i <= 2; ++i) {
+        EXPECT_EQ(frames[size_t(i)].frame.header["preview"], false);
+        EXPECT_EQ(frames[size_t(i)].frame.header["pass"], i);
+        EXPECT_EQ(frames[size_t(i)].frame.header["level"], 0);
+        EXPECT_EQ(frames[size_t(i)].frame.header["width"], state["image"]["width"]);
+    }
+
+    state["level"] = 0;
+    state["camera"]["azimuthDeg"] = 80;
+    ws.send({{"type", "state"}, {"id", 3}, {"state", state}});
+    frames = ws.framesUntilConverged(3);
+    ASSERT_EQ(frames.size(), 2u);
+    EXPECT_EQ(frames[0].frame.header["pass"], 1) << "a state with its own level has no preview";
+}
+
 TEST(Serve, PlaybackPrefetchesTheNextStep)
 {
     ServerProcess server({}, true);
@@ -296,8 +386,10 @@ TEST(Serve, PlaybackPrefetchesTheNextStep)
         ws.send({{"type", "state"}, {"id", step}, {"state", state}, {"interactive", true}});
         EXPECT_EQ(ws.framesUntilConverged(step).back().frame.header["step"], step);
     }
-    ws.send({{"type", "ping"}, {"id", 1}});
-    ws.receiveText();
+    // The render thread logs the prefetch after the frame is sent: wait for the line (under load it
+    // came after the ping's reply).
+    for (int i = 0; i < 50 && server.output().find("playback: prefetching step 2 level 1") == std::string::npos; ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
     EXPECT_NE(server.output().find("playback: prefetching step 2 level 1"), std::string::npos) << server.output();
 }
 
@@ -477,6 +569,72 @@ TEST(Serve, ScreenshotSelectionAndBodyLimit)
     EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/selection", "{nope").status, 400);
     const auto big = httpRequest(server.port, http::verb::post, "/api/selection", std::string(2 * 1024 * 1024, ' '));
     EXPECT_EQ(big.status, 413);
+}
+
+// Maps and sections (issue 29): POST /api/slice answers the picture and where it put things; GET
+// /api/probe the values at a point; bad requests get 400 naming what is wrong.
+TEST(Serve, SliceAndProbe)
+{
+    ServerProcess server;
+    json state = smallState(30, "viridis", 2);
+    state["version"] = 9;
+    state["map"] = {{"depthKm", 1000}, {"projection", "robinson"}, {"centralMeridianDeg", 40}};
+    state["image"] = {{"width", 400}, {"height", 240}};
+    for (const std::string view : {"map", "section"}) {
+        const auto a = httpRequest(server.port, http::verb::post, "/api/slice?view=" + view, state.dump());
+        ASSERT_EQ(a.status, 200) << a.body;
+        EXPECT_EQ(a.contentType, "application/octet-stream");
+        ASSERT_GT(a.body.size(), 4u);
+        const uint32_t n = uint32_t(uint8_t(a.body[0])) | uint32_t(uint8_t(a.body[1])) << 8 |
+                           uint32_t(uint8_t(a.body[2])) << 16 | uint32_t(uint8_t(a.body[3])) << 24;
+        ASSERT_LT(4 + n, a.body.size());
+        const json header = json::parse(a.body.substr(4, n));
+        EXPECT_EQ(header["view"], view);
+        EXPECT_EQ(header["width"], state["image"]["width"]);
+        EXPECT_EQ(header["step"], 1);
+        if (view == "map") {
+            EXPECT_EQ(header["projection"], "robinson");
+            EXPECT_EQ(header["centralMeridianDeg"], 40);
+            EXPECT_GT(header["scale"].get<double>(), 1);
+        } else {
+            EXPECT_LT(header["plot"]["left"].get<double>(), header["plot"]["right"].get<double>());
+            EXPECT_NEAR(header["depthSpanKm"].get<double>(), 6371 - 3485, 1e-6);
+        }
+        EXPECT_EQ(a.body.substr(4 + n, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+    }
+    auto refused = [&](const std::string& target, const std::string& body, const std::string& names) {
+        const auto a = body.empty() ? httpRequest(server.port, http::verb::get, target)
+                                    : httpRequest(server.port, http::verb::post, target, body);
+        EXPECT_EQ(a.status, 400) << target;
+        EXPECT_NE(a.body.find(names), std::string::npos) << target << ": " << a.body;
+    };
+    refused("/api/slice?view=globe", state.dump(), "view");
+    json deep = state;
+    deep["map"]["depthKm"] = 3000;
+    refused("/api/slice?view=map", deep.dump(), "map.depthKm");
+    json antipodal = state;
+    antipodal["section"] = {{"from", {{"latDeg", 10}, {"lonDeg", 0}}}, {"to", {{"latDeg", -10}, {"lonDeg", 180}}}};
+    refused("/api/slice?view=section", antipodal.dump(), "antipodal");
+    json huge = state;
+    huge["image"] = {{"width", 16000}, {"height", 16000}};
+    refused("/api/slice?view=map", huge.dump(), "limit");
+
+    const auto p = httpRequest(server.port, http::verb::get, "/api/probe?step=1&lat=20&lon=40&depthKm=1000&var=temperature");
+    ASSERT_EQ(p.status, 200) << p.body;
+    const json probe = json::parse(p.body);
+    EXPECT_NEAR(probe["point"]["radius"]["value"].get<double>(), 5371, 1e-9);
+    // The fixture's temperature less its anomaly is 300 + 3700 (6371 - r) / 2886 K (its truth.json).
+    const auto q = httpRequest(server.port, http::verb::get, "/api/probe?step=1&lat=20&lon=40&depthKm=1000");
+    ASSERT_EQ(q.status, 200) << q.body;
+    const json all = json::parse(q.body)["values"];
+    EXPECT_NEAR(all["temperature"]["value"].get<double>() - all["temperature anomaly"]["value"].get<double>(),
+                300 + 3700 * 1000.0 / 2886, 0.05);
+    refused("/api/probe?step=1&lat=100&lon=0&depthKm=10", "", "lat");
+    refused("/api/probe?step=1&lat=0&lon=0&depthKm=4000", "", "depthKm");
+    refused("/api/probe?step=1&lat=0&lon=nan&depthKm=10", "", "lon");
+    refused("/api/probe?step=1&lat=0&lon=0", "", "depthKm");
+    refused("/api/probe?step=1&lat=0&lon=0&depthKm=10&var=pressure", "", "pressure");
+    refused("/api/probe?step=9&lat=0&lon=0&depthKm=10", "", "step");
 }
 
 // GET /api/presets: every example state but demo.json, with a title, exactly as in the file; each
@@ -760,6 +918,118 @@ TEST(Serve, NonLoopbackNeedsTheToken)
     EXPECT_THROW(WsClient(server.port, "/ws"), beast::system_error);
     WsClient ws(server.port, "/ws?token=" + server.token);
     ws.hello();
+}
+
+// The linked state (issue 30; docs/protocol.md, GET/POST /api/link): what a program reads and sets
+// of the state the UI shows.
+json linkOf(uint16_t port)
+{
+    const auto answer = httpGet(port, "/api/link");
+    EXPECT_EQ(answer.status, 200) << answer.body;
+    EXPECT_EQ(answer.contentType, "application/json");
+    return json::parse(answer.body);
+}
+
+servertest::HttpAnswer postLink(uint16_t port, const std::string& body,
+                                const std::vector<std::pair<http::field, std::string>>& headers = {})
+{
+    return httpRequest(port, http::verb::post, "/api/link", body, headers);
+}
+
+json brushedState(double minKm, double maxKm)
+{
+    json state = smallState(30, "viridis", 1);
+    state["brushes"] = json::array({{{"name", "depth"}, {"min", minKm}, {"max", maxKm}}});
+    return state;
+}
+
+TEST(Serve, LinkedStateIsReadAndSetBothWays)
+{
+    ServerProcess server;
+    EXPECT_EQ(linkOf(server.port), json::parse(R"({"version": 0, "state": null, "source": null, "sessions": 0})"));
+    WsClient ws(server.port);
+    ws.hello();
+    EXPECT_EQ(linkOf(server.port)["sessions"], 1);
+
+    // A bad state gets the message a WebSocket state message gets, and changes nothing.
+    json unknownVar = brushedState(560, 760);
+    unknownVar["brushes"][0]["name"] = "pressure";
+    json badKey = brushedState(560, 760);
+    badKey["camera"]["zoom"] = 2;
+    json badStep = brushedState(560, 760);
+    badStep["step"] = 300;
+    int64_t id = 100;
+    for (const json& bad : {unknownVar, badKey, badStep}) {
+        const auto answer = postLink(server.port, json{{"state", bad}}.dump());
+        EXPECT_EQ(answer.status, 400) << answer.body;
+        ws.send({{"type", "state"}, {"id", ++id}, {"state", bad}});
+        const json reply = ws.receiveText();
+        ASSERT_EQ(reply["type"], "error") << reply;
+        EXPECT_EQ(json::parse(answer.body)["error"], reply["message"]) << bad.dump();
+    }
+    const auto bare = postLink(server.port, brushedState(560, 760).dump());  // the document without {"state": …}
+    EXPECT_EQ(bare.status, 400);
+    EXPECT_NE(bare.body.find(R"(body: expected {\"state\": )"), std::string::npos) << bare.body;
+    const auto extra = postLink(server.port, json{{"state", brushedState(560, 760)}, {"id", 1}}.dump());
+    EXPECT_EQ(extra.status, 400);
+    EXPECT_NE(extra.body.find("body: unknown field 'id', expected only 'state'"), std::string::npos) << extra.body;
+    EXPECT_EQ(postLink(server.port, "{\"state\": ").status, 400);
+    EXPECT_EQ(linkOf(server.port)["version"], 0);
+
+    // A good state: the new version, pushed to the open session.
+    const auto set = postLink(server.port, json{{"state", brushedState(560, 760)}}.dump());
+    ASSERT_EQ(set.status, 200) << set.body;
+    EXPECT_EQ(json::parse(set.body), (json{{"version", 1}, {"sessions", 1}}));
+    EXPECT_EQ(ws.receiveText(), (json{{"type", "link"}, {"version", 1}, {"state", brushedState(560, 760)}}));
+    json link = linkOf(server.port);
+    EXPECT_EQ(link["version"], 1);
+    EXPECT_EQ(link["source"], "api");
+    EXPECT_EQ(link["state"], brushedState(560, 760));
+
+    // The UI sends it back unchanged (keys in another order): no new version.
+    ws.sendText(json{{"type", "state"}, {"id", 1}, {"state", json::parse(brushedState(560, 760).dump())}}.dump());
+    ws.framesUntilConverged(1);
+    EXPECT_EQ(linkOf(server.port)["version"], 1);
+    EXPECT_EQ(linkOf(server.port)["source"], "api");
+
+    // Dragging does not change the linked state; the released brush does.
+    ws.send({{"type", "state"}, {"id", 2}, {"state", brushedState(100, 200)}, {"interactive", true}});
+    ws.framesUntilConverged(2);
+    EXPECT_EQ(linkOf(server.port)["version"], 1);
+    ws.send({{"type", "state"}, {"id", 3}, {"state", brushedState(100, 300)}, {"interactive", false}});
+    ws.framesUntilConverged(3);
+    link = linkOf(server.port);
+    EXPECT_EQ(link["version"], 2);
+    EXPECT_EQ(link["source"], "ui");
+    EXPECT_EQ(link["state"], brushedState(100, 300));
+
+    // A closed tab is no longer counted (nor sent to).
+    ws.close();
+    for (int i = 0; i < 100 && linkOf(server.port)["sessions"] != 0; ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    EXPECT_EQ(linkOf(server.port)["sessions"], 0);
+    const auto nobody = postLink(server.port, json{{"state", brushedState(560, 760)}}.dump());
+    EXPECT_EQ(json::parse(nobody.body), (json{{"version", 3}, {"sessions", 0}}));
+}
+
+TEST(Serve, LinkedStateKeepsTheAccessRules)
+{
+    const std::string body = json{{"state", brushedState(560, 760)}}.dump();
+    {
+        ServerProcess server({"--host", "0.0.0.0"});
+        ASSERT_FALSE(server.token.empty()) << server.banner;
+        EXPECT_EQ(httpGet(server.port, "/api/link").status, 401);
+        EXPECT_EQ(postLink(server.port, body).status, 401);
+        EXPECT_EQ(httpGet(server.port, "/api/link?token=" + server.token).status, 200);
+        EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/link?token=" + server.token, body).status, 200);
+    }
+    ServerProcess server;
+    const auto crossSite = postLink(
+        server.port, body, {{http::field::content_type, "text/plain"}, {http::field::origin, "http://evil.example"}});
+    EXPECT_EQ(crossSite.status, 403) << crossSite.body;
+    EXPECT_EQ(linkOf(server.port)["version"], 0);
+    EXPECT_EQ(postLink(server.port, std::string(2 << 20, ' ')).status, 413);
+    EXPECT_EQ(httpRequest(server.port, http::verb::put, "/api/link", body).status, 405);
 }
 
 TEST(Serve, StopsCleanlyOnSigtermWhileRendering)

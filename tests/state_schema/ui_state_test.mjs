@@ -171,7 +171,11 @@ const defaults = JSON.parse(run(stateCases, ['default', dataset]));
     [{ version: 6, shading: { shadows: 'yes' } }, 'shading.shadows'],
     [{ version: 5, shading: { shadows: true } }, 'shading.shadows'],
     [{ step: 1 }, 'version'],
-    [{ version: 9 }, 'version'],
+    [{ version: 10 }, 'version'],
+    [{ version: 8, map: { depthKm: 660 } }, 'map'],
+    [{ version: 9, map: { projection: 'mercator' } }, 'map.projection'],
+    [{ version: 9, map: { depthKm: -1 } }, 'map.depthKm'],
+    [{ version: 9, section: { from: { latDeg: 95 } } }, 'section.from.latDeg'],
   ];
   const cpp = cppParse(bad.map(([d]) => d));
   bad.forEach(([doc, key], i) => {

@@ -11,6 +11,9 @@ export interface VariableInfo {
   max: number;
   mean: number;
   histogram: number[];
+  // The colour range without a chosen one, by the renderer's rule (render::defaultColorRange):
+  // for maps centred on zero, and for the others.
+  defaultColorRange: { centred: [number, number]; other: [number, number] };
 }
 export interface CoordinateInfo {
   name: string;
@@ -243,4 +246,44 @@ export interface PersistenceDiagram {
 // The persistence diagram of `step` (GET /api/persistence): the `top` most persistent pairs.
 export async function fetchPersistence(step: number, top: number, signal?: AbortSignal): Promise<PersistenceDiagram> {
   return (await check(await fetch(`api/persistence?step=${step}&top=${top}`, { signal }), 'GET /api/persistence')).json();
+}
+
+// What the server drew for POST /api/slice (docs/protocol.md): the picture's size and where it put
+// the sphere (maps: d3's scale and translation of the projection) or the section's plot.
+export interface SliceHeader {
+  view: 'map' | 'section';
+  width: number;
+  height: number;
+  step: number;
+  projection?: string;
+  centralMeridianDeg?: number;
+  centralLatitudeDeg?: number;
+  scale?: number;
+  centre?: [number, number];
+  depthKm?: number;
+  plot?: { left: number; right: number; top: number; bottom: number };
+  depthSpanKm?: number;
+  from?: [number, number]; // lat, lon
+  to?: [number, number];
+}
+
+export async function postSlice(view: 'map' | 'section', state: RenderState): Promise<{ header: SliceHeader; png: Blob }> {
+  const r = await fetch(`api/slice?view=${view}`, {
+    method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(state),
+  });
+  const body = await (await check(r, `POST /api/slice?view=${view}`)).arrayBuffer();
+  const n = body.byteLength >= 4 ? new DataView(body).getUint32(0, true) : -1;
+  if (n < 0 || 4 + n > body.byteLength) throw new Error(`POST /api/slice: an answer of ${body.byteLength} bytes without its header`);
+  const header = JSON.parse(new TextDecoder().decode(new Uint8Array(body, 4, n))) as SliceHeader;
+  return { header, png: new Blob([new Uint8Array(body, 4 + n)], { type: 'image/png' }) };
+}
+
+export interface ProbeAnswer {
+  values: Record<string, { value: number; units: string }>;
+}
+
+// The values at a point (GET /api/probe; data/probe.h, as `raypc probe`).
+export async function fetchProbe(step: number, lat: number, lon: number, depthKm: number, variable: string): Promise<ProbeAnswer> {
+  const q = new URLSearchParams({ step: String(step), lat: String(lat), lon: String(lon), depthKm: String(depthKm), var: variable });
+  return (await check(await fetch(`api/probe?${q}`), 'GET /api/probe')).json();
 }

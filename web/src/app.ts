@@ -4,6 +4,7 @@
 // panels, playback, the other controls and the status line.
 import { fetchPresets, fetchSample, postSelection, type Info, type Preset } from './api';
 import { setUpCameraInput } from './camera_input';
+import type { ShellKeyEntry } from './connection';
 import { ContextPanel, showLegends, type LegendEntry } from './context_panel';
 import { download, maxImageSide, setUpControls, syncControls, writeStateToUrl } from './controls';
 import { ParallelCoordinates } from './parcoords';
@@ -13,6 +14,7 @@ import { Playback } from './playback';
 import { RenderLink } from './render_link';
 import { setUpScreenshot } from './screenshot';
 import { SelectionPanel } from './selection_panel';
+import { SlicePanel } from './slice_panel';
 import { watchSeriesProgress } from './series_progress';
 import { describePreset } from './presets';
 import { normaliseState, type Brush, type RenderState } from './state';
@@ -23,11 +25,11 @@ import { setUpXr, type XrSession } from './xr';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
 
-// The size of a still frame for a view of viewW x viewH device pixels: the view's own, or scaled
-// down to `maxSide` on the longer side (the aspect kept).
 // Axes of the volume's plot hidden until ticked under Axes (or brushed).
 const kHiddenByDefault = ['x', 'y', 'z', 'radius'];
 
+// The size of a still frame for a view of viewW x viewH device pixels: the view's own, or scaled
+// down to `maxSide` on the longer side (the aspect kept).
 export function fitImageSize(viewW: number, viewH: number, maxSide: number): { width: number; height: number } {
   const w = Math.max(1, viewW), h = Math.max(1, viewH);
   const scale = Math.min(1, maxSide / Math.max(w, h));
@@ -44,6 +46,7 @@ export class App {
   readonly persistence: PersistencePanel;
   readonly playback: Playback;
   readonly context: ContextPanel;
+  readonly slices: SlicePanel;
   presets: Preset[] = [];
   // The WebXR session control once the browser has said whether it offers immersive-vr (null: not).
   readonly xr: Promise<XrSession | null>;
@@ -55,6 +58,8 @@ export class App {
   private sampleFailedAt = 0;
   private errorTimer = 0;
   private statusNote = '';
+  private linkedStates: Promise<void> = Promise.resolve(); // the linked states being applied, in order
+  private shellKey: ShellKeyEntry[] = []; // the reference shells the last frame shown drew
 
   constructor(readonly info: Info) {
     this.store = new StateStore(info);
@@ -69,19 +74,38 @@ export class App {
       onFrameArrived: (h) => {
         // Interactive frames carry the selection on the level they rendered: quick feedback while
         // brushing; final states get the exact volume from POST /api/selection (refreshSelection).
-        if (h.selection && h.interactive && store.state.brushes.length) this.selection.setSelection({ ...h.selection, step: h.step });
+        if (h.selection && (h.interactive || h.playback) && store.state.brushes.length) this.selection.setSelection({ ...h.selection, step: h.step });
         if (this.playback.playing) this.playback.maybeAdvance();
       },
-      onFrameShown: () => this.updateStatus(),
+      onFrameHeld: (f) => this.playback.frameHeld(f),
+      onFrameShown: (h) => {
+        this.updateStatus();
+        this.pathlines.frameShown(h);
+        const key = h.shellKey ?? [];
+        if (JSON.stringify(key) !== JSON.stringify(this.shellKey)) {
+          this.shellKey = key;
+          this.updateLegends();
+        }
+      },
       onError: (m) => this.showError(m),
       onStatus: (t) => this.setStatusNote(t),
+      // A program set the linked state (issue 30: a notebook's `view.state = s`): applied as "Load
+      // state" applies a file, one at a time in the order they came; what the page then commits goes
+      // back to the server, which makes it the linked state.
+      onLink: (doc, version) => {
+        this.linkedStates = this.linkedStates.then(() =>
+          this.loadOutsideState(doc, `the linked state (version ${version}, from /api/link)`));
+      },
     });
     this.tf = new TfPanel(store, {
       commit: (i) => this.commit(i),
       showError: (m) => this.showError(m),
       setStatusNote: (t) => this.setStatusNote(t),
       colorsChanged: () => this.updateLineColors(),
-      variableChanged: () => this.pathlines.variableChanged(),
+      variableChanged: () => {
+        this.pathlines.variableChanged();
+        this.showViewNote('');
+      },
     });
     this.pc = new ParallelCoordinates($('parcoords'), this.shownAxes(), {
       onBrush: (brushes, interactive) => this.onBrush(brushes, interactive),
@@ -94,7 +118,18 @@ export class App {
       showError: (m) => this.showError(m),
       linesLoaded: () => this.updateLegends(),
       filtersChanged: () => this.persistence.draw(),
+      showTab: (tab) => this.showTab(tab),
     });
+    this.slices = new SlicePanel(store, {
+      changed: () => {
+        if (store.state.map.showInView) this.link.send(false);
+        writeStateToUrl(store);
+      },
+      showError: (m) => this.showError(m),
+    });
+    $('pcTabVolume').addEventListener('click', () => this.showTab('volume'));
+    $('pcTabPathlines').addEventListener('click', () => this.showTab('pathlines'));
+    $('pcTabSlices').addEventListener('click', () => this.showTab('slices'));
     this.persistence = new PersistencePanel(store, {
       commit: (i) => this.commit(i),
       showError: (m) => this.showError(m),
@@ -113,11 +148,20 @@ export class App {
       },
       playing: () => this.playback.playing,
       selectionChanged: () => this.updateStatus(),
+      commit: (i) => this.commit(i),
     });
     this.playback = new Playback({
       stepCount: info.steps.length,
       currentStep: () => store.state.step,
+      sendStep: (step, budgetMs) => this.link.sendPlayback(step, budgetMs),
+      hasHeld: (id) => this.link.hasHeld(id),
+      showHeld: (step) => {
+        this.link.releaseHeld();
+        this.stepShown(step);
+      },
+      lastSentId: () => this.link.lastSentId,
       caughtUp: () => this.link.caughtUp,
+      stopHolding: () => this.link.stopHolding(),
       setStep: (step, interactive) => this.setStep(step, interactive),
       // While playing, the parallel coordinates draw a twentieth of the lines of each new step's
       // sample (the full redraw of 100 000 lines per sample held playback to ~5 steps/s).
@@ -179,6 +223,7 @@ export class App {
 
   loadState(s: unknown): void {
     const prev = this.store.replace(s);
+    this.showViewNote(''); // a preset shows its own after loading
     const state = this.store.state;
     this.syncControls();
     if (prev.step !== state.step) {
@@ -229,6 +274,7 @@ export class App {
   commit(interactive: boolean): void {
     this.link.send(interactive);
     this.updateLegends();
+    this.slices.stateChanged();
     if (interactive) return;
     writeStateToUrl(this.store);
     this.link.afterFrameShown(() => {
@@ -237,6 +283,17 @@ export class App {
     });
     this.pathlines.refresh();
     this.persistence.refresh();
+  }
+
+  // The bottom panel's tab: the volume's parallel coordinates, the pathlines', or the map and the
+  // section (docs/maps.md).
+  showTab(tab: 'volume' | 'pathlines' | 'slices'): void {
+    $('parcoords').hidden = tab !== 'volume';
+    this.pathlines.setVisible(tab === 'pathlines');
+    this.slices.setVisible(tab === 'slices');
+    $('pcTabVolume').classList.toggle('active', tab === 'volume');
+    $('pcTabPathlines').classList.toggle('active', tab === 'pathlines');
+    $('pcTabSlices').classList.toggle('active', tab === 'slices');
   }
 
   // The colour legends on the view (state.legend): the volume's variable, and the pathlines'
@@ -252,7 +309,8 @@ export class App {
       const pl = this.pathlines.legend();
       if (pl) entries.push(pl);
     }
-    showLegends(entries);
+    // The shells' key with the legends, as the last frame shown drew the shells (its header).
+    showLegends(entries, s.legend ? this.shellKey : []);
   }
 
   // Puts the state into every control (after load, undo, URL).
@@ -265,6 +323,7 @@ export class App {
     this.pc.setBrushes(this.store.state.brushes);
     this.selection.updateText();
     this.pathlines.sync();
+    this.slices.sync();
     this.persistence.draw();
   }
 
@@ -305,6 +364,7 @@ export class App {
   applyPreset(p: Preset): void {
     try {
       const state = this.store.state;
+      const previousVariable = state.color.variable;
       const doc = { ...(p.state as Record<string, unknown>) };
       const last = this.info.steps.length - 1;
       const asked = typeof doc.step === 'number' ? doc.step : 0;
@@ -318,6 +378,12 @@ export class App {
       const note = describePreset(this.store.state, this.store.axes());
       $('presetNote').textContent = `${p.title}: ${note}${asked > last ? ` (written for step ${asked}; this dataset ends at step ${last})` : ''}`;
       this.setStatusNote(`preset ${p.title}`);
+      // The colouring on the view itself: a preset may switch the colour variable (task 1 colours
+      // by radial velocity), which the picture alone does not tell.
+      const v = this.store.variableInfo();
+      const units = displayUnits(v.units);
+      const switched = previousVariable !== v.name ? ' now' : '';
+      this.showViewNote(`colour${switched}: ${v.name}${units ? ` [${units}]` : ''} (preset ${p.title})`);
     } catch (e) {
       this.showError(`preset ${p.name}: ${(e as Error).message}`);
     }
@@ -414,10 +480,20 @@ export class App {
     if (!active) return;
     active.classList.remove('active');
     $('presetNote').textContent = `${active.textContent}: brushes changed since (no preset in force)`;
+    this.showViewNote('');
+  }
+
+  // The note over the 3D view (#viewNote): what a preset coloured the volume by; '' hides it.
+  private showViewNote(text: string): void {
+    const note = $('viewNote');
+    note.textContent = text;
+    note.hidden = text === '';
   }
 
   private onBrush(brushes: Brush[], interactive: boolean): void {
+    const started = !this.store.state.brushes.length && brushes.length > 0;
     this.store.state.brushes = brushes;
+    if (started) this.selection.brushingStarted();
     this.presetLeft();
     if (!interactive) this.pc.showAxes(this.shownAxes()); // an axis hidden once its brush is gone
     this.commit(interactive);
@@ -479,6 +555,14 @@ export class App {
     } else if (performance.now() - this.lastSampleLoad > 1000) this.loadSample();
   }
 
+  // Playback showed a frame of `step` (its state was sent a period earlier): the step is the
+  // store's now; the parallel coordinates follow at most once a second.
+  private stepShown(step: number): void {
+    this.store.state.step = step;
+    this.updateStepLabel();
+    if (performance.now() - this.lastSampleLoad > 1000) this.loadSample();
+  }
+
   private updateStepLabel(): void {
     const s = this.info.steps[this.store.state.step];
     // Steps are numbered from 0 everywhere: the state's step, file names, `raypc render --time`.
@@ -497,7 +581,7 @@ export class App {
     const parts: string[] = [];
     if (h) {
       const st = h.stats ?? {};
-      parts.push(`frame ${h.id}`, `step ${h.step}`, `level ${h.level}`, `pass ${h.pass}/${h.passes}${h.converged ? ' ✓' : ''}`);
+      parts.push(`frame ${h.id}`, `step ${h.step}`, `level ${h.level}`, h.preview ? 'preview' : `pass ${h.pass}/${h.passes}${h.converged ? ' ✓' : ''}`);
       if (st.passMs !== undefined) parts.push(`${st.passMs.toFixed(1)} ms/pass`);
       if (st.samplesPerSecond !== undefined) parts.push(`${(st.samplesPerSecond / 1e6).toFixed(1)} M samples/s`);
       if (st.bricksTotal) parts.push(`${(((st.bricksSkipped ?? 0) / st.bricksTotal) * 100).toFixed(0)} % bricks skipped`);

@@ -1,8 +1,13 @@
 // The WebSocket side of docs/protocol.md: hello, whole states with a client id, cancel, and
 // binary frames (u32 header length, JSON header, JPEG, float32 depth map). Reconnects after a
-// drop and resends the last state, so a restarted server picks the view up again.
+// drop and resends the last state, so a restarted server picks the view up again. The server's
+// text messages: hello, error, pong, and link (a state a program set through POST /api/link).
 import type { CameraState, RenderState } from './state';
 
+export interface ShellKeyEntry {
+  label: string;
+  color: [number, number, number];
+}
 export interface FrameHeader {
   type: 'frame';
   id: number;
@@ -12,6 +17,8 @@ export interface FrameHeader {
   passes: number;
   converged: boolean;
   interactive: boolean;
+  playback?: boolean; // a step of playback: level chosen for the state's timeBudgetMs, then passes
+  preview?: boolean; // pass 0 of a still state: one quick pass before its passes (docs/protocol.md)
   ranks?: number; // MPI ranks that rendered the pass (docs/protocol.md); 1 alone
   width: number;
   height: number;
@@ -22,10 +29,18 @@ export interface FrameHeader {
   depthBytes: number;
   stats?: { passMs?: number; samples?: number; samplesPerSecond?: number; bricksSkipped?: number; bricksTotal?: number };
   selection?: { fractionOfMantle: number; volumeKm3: number } | null; // null on the first frame of a new still state
+  // While pathlines are shown: the lines of the window and those the filters and brushes let through.
+  pathlines?: { lines: number; visible: number };
+  // With reference shells drawn: each shell's label ("410 km") and colour, as the legend names it.
+  shellKey?: ShellKeyEntry[];
   // A stereo frame (docs/protocol.md): the image is the composed pair (width x height), the depth
   // map the two eyes' side by side; eyeWidth x eyeHeight is each eye as rendered.
   stereo?: { mode: string; eyeSeparationKm: number; convergenceKm: number; eyeWidth: number; eyeHeight: number; pixelAspect: number };
 }
+// How the server renders a state (docs/protocol.md, the state message): a still state's passes,
+// one interactive pass, or a step of playback.
+export type SendMode = 'still' | 'interactive' | 'playback';
+
 export interface Frame {
   header: FrameHeader;
   jpeg: Blob;
@@ -50,16 +65,25 @@ export function decodeFrame(buffer: ArrayBuffer): Frame {
   return { header, jpeg, depth, receivedAt: performance.now() };
 }
 
+// The server's text messages (docs/protocol.md, Server → client).
+type ServerText =
+  | { type: 'hello'; protocol: number; session: string }
+  | { type: 'error'; message?: string; id?: number }
+  | { type: 'pong'; id: number }
+  | { type: 'link'; version: number; state: unknown };
+
 export interface ConnectionEvents {
   onFrame(frame: Frame): void;
   onError(message: string, id?: number): void;
   onStatus(text: string): void;
+  // A state a program set (POST /api/link), unchecked: to be applied as a state from outside the page.
+  onLink(state: unknown, version: number): void;
 }
 
 export class Connection {
   private ws: WebSocket | null = null;
   private nextId = 1;
-  private lastSent: { state: RenderState; interactive: boolean } | null = null;
+  private lastSent: { state: RenderState; mode: SendMode } | null = null;
   private open = false;
   private retryMs = 500;
   lastSentId = 0;
@@ -82,7 +106,7 @@ export class Connection {
     };
     ws.onmessage = (ev) => {
       if (typeof ev.data === 'string') {
-        let msg: { type?: string; message?: string; id?: number; protocol?: number };
+        let msg: ServerText;
         try {
           msg = JSON.parse(ev.data);
         } catch {
@@ -93,11 +117,13 @@ export class Connection {
           this.open = true;
           this.retryMs = 500;
           this.events.onStatus('connected');
-          if (this.lastSent) this.sendNow(this.lastSent.state, this.lastSent.interactive);
+          if (this.lastSent) this.sendNow(this.lastSent.state, this.lastSent.mode);
         } else if (msg.type === 'error') {
           // A refused state gets no frame: count it as answered so playback does not wait for it.
           if (typeof msg.id === 'number') this.lastFrameId = Math.max(this.lastFrameId, msg.id);
           this.events.onError(msg.message ?? 'error', msg.id);
+        } else if (msg.type === 'link') {
+          this.events.onLink(msg.state, msg.version);
         }
         return;
       }
@@ -119,15 +145,15 @@ export class Connection {
   }
 
   // Sends the whole state; returns its id (frames echo it).
-  send(state: RenderState, interactive: boolean): number {
-    this.lastSent = { state, interactive };
-    return this.open ? this.sendNow(state, interactive) : this.nextId;
+  send(state: RenderState, mode: SendMode): number {
+    this.lastSent = { state, mode };
+    return this.open ? this.sendNow(state, mode) : this.nextId;
   }
 
-  private sendNow(state: RenderState, interactive: boolean): number {
+  private sendNow(state: RenderState, mode: SendMode): number {
     const id = this.nextId++;
     this.lastSentId = id;
-    this.ws?.send(JSON.stringify({ type: 'state', id, state, interactive }));
+    this.ws?.send(JSON.stringify({ type: 'state', id, state, interactive: mode === 'interactive', playback: mode === 'playback' }));
     return id;
   }
 

@@ -3,6 +3,7 @@
 // and the colour legends (state.legend: drawn here on the view, and by the server into screenshots
 // and `raypc render` pictures).
 import type { StateStore } from './store';
+import type { ShellKeyEntry } from './connection';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
 
@@ -68,11 +69,28 @@ function legendNumber(v: number): string {
   return m >= 1e5 || m < 1e-2 ? v.toExponential(2) : String(+v.toPrecision(4));
 }
 
-// Draws the legends into the view's overlay (#legends); none when `entries` is empty.
-export function showLegends(entries: LegendEntry[]): void {
+// Draws the legends into the view's overlay (#legends), and the reference shells' key (each shell's
+// label beside a swatch of its colour, from the frame header: as the server draws and names them);
+// none when both are empty.
+export function showLegends(entries: LegendEntry[], shells: ShellKeyEntry[] = []): void {
   const box = $('legends');
   box.innerHTML = '';
-  box.hidden = entries.length === 0;
+  box.hidden = entries.length === 0 && shells.length === 0;
+  if (shells.length) {
+    const div = document.createElement('div');
+    div.className = 'legend shellKey';
+    div.append('shells');
+    for (const s of shells) {
+      const item = document.createElement('span');
+      item.className = 'shellKeyItem';
+      const swatch = document.createElement('span');
+      swatch.className = 'shellSwatch';
+      swatch.style.background = `rgb(${s.color.map((c) => Math.round(Math.min(1, Math.max(0, c)) * 255)).join(',')})`;
+      item.append(swatch, s.label);
+      div.appendChild(item);
+    }
+    box.appendChild(div);
+  }
   for (const e of entries) {
     const div = document.createElement('div');
     div.className = 'legend';

@@ -4,10 +4,13 @@ import { fetchInfo } from './api';
 import { App } from './app';
 import { installTestHooks, testHooksWanted } from './test_hooks';
 
+// Set by web/build.mjs: true only in the tests' build (web/dist-test); false, the hooks are not in the bundle.
+declare const RAYPC_TEST_HOOKS: boolean;
+
 fetchInfo()
   .then((info) => {
     const app = new App(info);
-    if (testHooksWanted()) installTestHooks(app);
+    if (RAYPC_TEST_HOOKS && testHooksWanted()) installTestHooks(app);
     app.start();
   })
   .catch((e) => {

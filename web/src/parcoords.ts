@@ -38,6 +38,8 @@ export interface ParcoordsTiming {
   brushEvents: number;
   // The lines the last drawing of each layer draws (fewer than its rows while dragging or coarse).
   lines: { foreground: number; brushed: number };
+  // When (performance.now()) the last drawing of each layer drew its last line; 0 while it draws.
+  drawnAt: { foreground: number; brushed: number };
 }
 
 type Row = Record<string, number>;
@@ -102,6 +104,23 @@ function tickFormatFor(lo: number, hi: number): (v: number) => string {
   return d3.format('~g');
 }
 
+// The step brush ends snap to while dragged: a tenth of the step between the axis' labelled ticks
+// (d3's ticks of its scale, 5 per axis), e.g. 50 km on depth (ticks 500 km apart), 0.5 K on a
+// temperature anomaly ticked every 5 K. The labelled step itself is too coarse (560–760 km would be
+// out of reach); a tenth is a few pixels on a plot a few hundred pixels high. 0: no snapping.
+export function snapStep(a: AxisInfo): number {
+  if (a.categories) return 0;
+  const hi = a.max > a.min ? a.max : a.min + 1;
+  return d3.tickStep(a.min, hi, 5) / 10;
+}
+
+// v on the grid of `step`, written without binary noise (0.1 * 3 is 0.30000000000000004).
+export function snapTo(v: number, step: number): number {
+  if (!(step > 0)) return v;
+  const decimals = Math.max(0, -Math.floor(Math.log10(step)) + 1);
+  return +(Math.round(v / step) * step).toFixed(decimals);
+}
+
 export class ParallelCoordinates {
   private pc: any = null; // eslint-disable-line @typescript-eslint/no-explicit-any
   private rows: Row[] = [];
@@ -110,12 +129,15 @@ export class ParallelCoordinates {
   private shownOrder = '';
   private pending: Brush[] = [];
   private lineColor: (row: Row) => string = () => '#4a90d9';
-  readonly timing: ParcoordsTiming = { lastBrushMs: 0, brushEvents: 0, lines: { foreground: 0, brushed: 0 } };
+  readonly timing: ParcoordsTiming = { lastBrushMs: 0, brushEvents: 0, lines: { foreground: 0, brushed: 0 }, drawnAt: { foreground: 0, brushed: 0 } };
   private readonly jobs: Record<string, number> = { foreground: 0, brushed: 0 };
   private readonly channel = new MessageChannel();
   private readonly slices: (() => void)[] = [];
   private dragging = false;
   private coarse = false;
+  // The brushes last reported or set, in data units (typed values exact): an end of a brush that
+  // a drag did not move keeps its value here, one it moved snaps (snapDragged).
+  private known: Brush[] = [];
 
   constructor(private readonly container: HTMLElement, private axes: AxisInfo[], private readonly options: ParcoordsOptions) {
     this.channel.port1.onmessage = () => {
@@ -234,6 +256,7 @@ export class ParallelCoordinates {
 
   // Shows the given brushes (e.g. from a loaded state) without reporting them back.
   setBrushes(brushes: Brush[]): void {
+    this.known = brushes.map((b) => ({ ...b }));
     if (!this.pc) {
       this.pending = brushes.map((b) => ({ ...b })); // shown once the sample has arrived
       return;
@@ -402,11 +425,12 @@ export class ParallelCoordinates {
     };
   }
 
-  // Clears the layer (parcoord-es's clear: the brushed layer then veils the foreground while something
-  // is brushed) and draws
-  // the rows' polylines in time-limited slices; a newer call for the layer cancels this one.
+  // Draws the brushed layer again (installRenderer sets it to its own rule).
   private redrawBrushed: () => void = () => {};
 
+  // Clears the layer (parcoord-es's clear: the brushed layer then veils the foreground while something
+  // is brushed) and draws the rows' polylines in time-limited slices; a newer call for the layer
+  // cancels this one.
   private drawLayer(layer: 'foreground' | 'brushed', rows: Row[], coarse = false): void {
     const job = ++this.jobs[layer];
     const pc = this.pc;
@@ -426,6 +450,7 @@ export class ParallelCoordinates {
     }
     if (!rows.length) {
       this.timing.lines[layer] = 0;
+      this.timing.drawnAt[layer] = performance.now();
       return;
     }
     const ctx = pc.ctx[layer] as CanvasRenderingContext2D;
@@ -450,6 +475,7 @@ export class ParallelCoordinates {
     const m = ks.length;
     const stride = coarse ? Math.max(1, Math.ceil(rows.length / kDragLines)) : 1;
     this.timing.lines[layer] = Math.ceil(rows.length / stride);
+    this.timing.drawnAt[layer] = 0;
     const alpha = this.options.alpha ?? 0.06;
     let next = 0;
     const slice = () => {
@@ -475,6 +501,7 @@ export class ParallelCoordinates {
         if (performance.now() - t0 > kSliceMs) break;
       }
       if (next < rows.length) this.yieldThen(slice);
+      else this.timing.drawnAt[layer] = performance.now();
     };
     this.yieldThen(slice);
   }
@@ -497,7 +524,9 @@ export class ParallelCoordinates {
   private drawBrushLabels(): void {
     if (!this.pc) return;
     const dims = this.pc.dimensions() as Record<string, { yscale: (v: number) => number }>;
-    const brushes = rangesByName(this.brushes());
+    // The values reported (snapped or typed) where they are known for every range shown.
+    const shown = this.brushes();
+    const brushes = rangesByName(this.known.length === shown.length ? this.known : shown);
     d3.select(this.container).selectAll<SVGGElement, string>('g.dimension').each((name, i, nodes) => {
       const g = d3.select(nodes[i]);
       g.selectAll('text.brushLabel').remove();
@@ -515,13 +544,36 @@ export class ParallelCoordinates {
     });
   }
 
+  // The brushes as the plot has them, with the ends a drag moved on their axis' snap step and the
+  // others as last known (a value typed in the Selection panel stays exact while another axis or
+  // the other end is dragged). An end counts as unmoved within half a pixel of its known value.
+  private snapDragged(raw: Brush[]): Brush[] {
+    if (!this.pc) return raw;
+    const dims = this.pc.dimensions() as Record<string, { yscale: { domain(): number[]; range(): number[] } }>;
+    return raw.map((b) => {
+      const a = this.axes.find((x) => x.name === b.name), dim = dims[b.name];
+      if (!a || !dim) return b;
+      const d = dim.yscale.domain(), r = dim.yscale.range();
+      const halfPixel = 0.5 * Math.abs((d[1] - d[0]) / ((r[1] - r[0]) || 1));
+      const same = this.known.filter((k) => k.name === b.name);
+      const k = same.sort((p, q) => (Math.abs(p.min - b.min) + Math.abs(p.max - b.max)) - (Math.abs(q.min - b.min) + Math.abs(q.max - b.max)))[0];
+      const step = snapStep(a);
+      const end = (v: number, knownV: number | undefined) =>
+        knownV !== undefined && Math.abs(v - knownV) <= halfPixel ? knownV : snapTo(v, step);
+      const min = end(b.min, k?.min), max = end(b.max, k?.max);
+      return min <= max ? { name: b.name, min, max } : { name: b.name, min: b.min, max: b.max };
+    });
+  }
+
   private emit(interactive: boolean): void {
     if (this.suppress) return;
+    const brushes = this.snapDragged(this.brushes());
+    this.known = brushes.map((b) => ({ ...b }));
     this.drawBrushLabels();
     const t0 = performance.now();
     this.timing.brushEvents++;
     this.dragging = interactive;
-    this.options.onBrush(this.brushes(), interactive);
+    this.options.onBrush(brushes, interactive);
     this.timing.lastBrushMs = performance.now() - t0;
     if (interactive) return;
     // Every line once the brush is released (after the still frame it asked for is on screen).

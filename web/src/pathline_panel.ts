@@ -2,9 +2,10 @@
 // parallel-coordinates plot with one line per pathline of the window (GET /api/pathlines) whose
 // brushes set pathlines.filters, and the count of lines shown.
 import { fetchPathlines, type PathlineAttributes } from './api';
+import type { FrameHeader } from './connection';
 import { sampleColorMap } from './colormaps';
 import { ParallelCoordinates, type AxisInfo } from './parcoords';
-import { inRanges, rangesByName, type Brush, type PathlineState } from './state';
+import { type Brush, type PathlineState } from './state';
 import type { LegendEntry } from './context_panel';
 import type { StateStore } from './store';
 import { displayUnits } from './units';
@@ -21,6 +22,8 @@ export interface PathlinePanelHost {
   linesLoaded(): void;
   // The line filters were brushed (the persistence diagram shows its threshold).
   filtersChanged(): void;
+  // Shows a tab of the bottom panel (app.ts: the volume's plot, the pathlines', maps and sections).
+  showTab(tab: 'volume' | 'pathlines'): void;
 }
 
 export interface PathlineCount {
@@ -35,6 +38,7 @@ export class PathlinePanel {
   // What the count line says (the browser tests read it); null before the lines arrived.
   count: PathlineCount | null = null;
   private data: PathlineAttributes | null = null;
+  private shown: { lines: number; visible: number } | null = null; // the last shown frame's count
   private key = '';
   private abort: AbortController | null = null;
 
@@ -140,43 +144,13 @@ export class PathlinePanel {
     return hi > -Infinity ? hi : null;
   }
 
-  // How many lines of the window pass the line filters and, with filterByBrushes, start inside the
-  // volume brushes (variables by their "start <name>" column; coordinates from the start position).
-  private countVisibleLines(): number {
-    const d = this.data, pl = this.pathlines;
-    if (!d || !pl) return 0;
-    const nc = d.columns.length, col = (n: string) => d.columns.indexOf(n);
-    const tests: ((row: number) => boolean)[] = [];
-    for (const [name, ranges] of rangesByName(pl.filters)) {
-      const k = col(name);
-      if (k >= 0) tests.push((i) => inRanges(d.values[i * nc + k], ranges));
-    }
-    if (pl.filterByBrushes) {
-      const kLat = col('start lat'), kLon = col('start lon'), kR = col('start radius');
-      for (const [name, ranges] of rangesByName(this.store.state.brushes)) {
-        const inside = (v: number) => inRanges(v, ranges);
-        const k = col(`start ${name}`);
-        if (k >= 0) { tests.push((i) => inside(d.values[i * nc + k])); continue; }
-        const pos = (i: number) => {
-          const lat = (d.values[i * nc + kLat] * Math.PI) / 180, lon = (d.values[i * nc + kLon] * Math.PI) / 180, r = d.values[i * nc + kR];
-          return { lat, lon, r };
-        };
-        const coordinate: Record<string, (i: number) => number> = {
-          lat: (i) => d.values[i * nc + kLat],
-          lon: (i) => d.values[i * nc + kLon],
-          radius: (i) => d.values[i * nc + kR],
-          depth: (i) => 6371 - d.values[i * nc + kR],
-          x: (i) => { const p = pos(i); return p.r * Math.cos(p.lat) * Math.cos(p.lon); },
-          y: (i) => { const p = pos(i); return p.r * Math.cos(p.lat) * Math.sin(p.lon); },
-          z: (i) => { const p = pos(i); return p.r * Math.sin(p.lat); },
-        };
-        const get = coordinate[name];
-        if (get && kLat >= 0 && kLon >= 0 && kR >= 0) tests.push((i) => inside(get(i)));
-      }
-    }
-    let n = 0;
-    for (let i = 0; i < d.lines; i++) if (tests.every((t) => t(i))) n++;
-    return n;
+  // A frame was shown: its header says how many lines the server drew (docs/protocol.md), by the
+  // one rule of line filters and brushes (render/pathline_scene.h); the count line shows that.
+  frameShown(header: FrameHeader): void {
+    const shown = header.pathlines ?? null;
+    if (shown?.lines === this.shown?.lines && shown?.visible === this.shown?.visible) return;
+    this.shown = shown;
+    this.updateLineCount();
   }
 
   updateLineCount(): void {
@@ -186,7 +160,12 @@ export class PathlinePanel {
       this.count = null;
       return;
     }
-    const visible = pl.visible ? this.countVisibleLines() : 0;
+    if (pl.visible && !this.shown) {
+      $('plCount').textContent = 'counting lines…';
+      this.count = null;
+      return;
+    }
+    const visible = pl.visible && this.shown ? this.shown.visible : 0;
     this.count = { step: d.step, window: d.window, lines: d.lines, visibleLines: visible };
     $('plCount').textContent = pl.visible ? `${visible.toLocaleString()} of ${d.lines.toLocaleString()} lines shown` : 'hidden';
   }
@@ -246,13 +225,11 @@ export class PathlinePanel {
     return { title: `pathlines: ${pl.colorBy}${units ? ` [${units}]` : ''}`, colorAt: (u) => sampleColorMap(map, u), valueAt: (u) => lo + u * (hi - lo) };
   }
 
-  showTab(pathlines: boolean): void {
-    $('parcoords').hidden = pathlines;
+  // The pathlines' plot shown or hidden (app.ts's showTab).
+  setVisible(pathlines: boolean): void {
     $('plParcoords').hidden = !pathlines;
     // Until lines are shown the tab says how to get them instead of staying blank.
     $('plEmpty').hidden = !pathlines || Boolean(this.pathlines?.visible && this.data);
-    $('pcTabVolume').classList.toggle('active', !pathlines);
-    $('pcTabPathlines').classList.toggle('active', pathlines);
   }
 
   private setUpControls(): void {
@@ -272,7 +249,7 @@ export class PathlinePanel {
     };
     $('plVisible').addEventListener('change', change((pl) => {
       pl.visible = $<HTMLInputElement>('plVisible').checked;
-      if (pl.visible) this.showTab(true);
+      if (pl.visible) this.host.showTab('pathlines');
     }));
     $('plRadius').addEventListener('change', change((pl) => {
       const v = Number($<HTMLInputElement>('plRadius').value);
@@ -299,8 +276,6 @@ export class PathlinePanel {
       this.pc.setBrushes([]);
       this.host.filtersChanged();
     }));
-    $('pcTabVolume').addEventListener('click', () => this.showTab(false));
-    $('pcTabPathlines').addEventListener('click', () => this.showTab(true));
   }
 
   // Puts state.pathlines into the controls (after load, preset, URL).

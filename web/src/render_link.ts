@@ -5,8 +5,9 @@
 // Cost classes (docs/state.md): camera, transfer function and brushes restart progressive passes;
 // step and level reload data. While the user drags, states go out as `interactive` (one pass at
 // the interactive level), at most one per display frame and only when the server has answered
-// the previous one or 120 ms passed; on release the final state asks for all passes.
-import { Connection, type Frame, type FrameHeader } from './connection';
+// the previous one or 120 ms passed; on release the final state asks for all passes. Playback
+// sends the step ahead (sendPlayback) and holds its frames until its time comes (releaseHeld).
+import { Connection, type Frame, type FrameHeader, type SendMode } from './connection';
 import { cloneState, type Brush, type CameraState, type RenderState } from './state';
 import type { StateStore } from './store';
 import { View3D } from './view';
@@ -17,10 +18,14 @@ const kAfterFrameMs = 1000;
 export interface RenderLinkEvents {
   // A frame arrived for the newest state or a newer one than shown (before it is decoded).
   onFrameArrived(header: FrameHeader): void;
+  // A frame of the state being held (holdFramesOf) arrived and was kept, not shown.
+  onFrameHeld(frame: Frame): void;
   // A frame is on screen.
   onFrameShown(header: FrameHeader): void;
   onError(message: string): void;
   onStatus(text: string): void;
+  // A state a program set (POST /api/link; Connection's onLink).
+  onLink(state: unknown, version: number): void;
 }
 
 // What the browser tests observe (test_hooks.ts); absent in normal use.
@@ -38,6 +43,7 @@ export interface SentEntry {
   t: number;
   step: number;
   interactive: boolean;
+  playback: boolean;
   brushes: Brush[];
   camera: CameraState;
   stereoMode: string;
@@ -47,8 +53,9 @@ export interface SentEntry {
 export interface Latency {
   id: number;
   interactive: boolean;
+  playback: boolean;
   firstFrameMs: number; // sent -> first frame received
-  shownMs: number; // sent -> first frame on screen
+  shownMs: number; // sent -> first frame on screen (for a step of playback, when its time came)
 }
 
 export class RenderLink {
@@ -62,7 +69,11 @@ export class RenderLink {
   private drawPending = false;
   private interactivePending = false;
   private lastSendTime = 0;
-  private readonly sendTimes = new Map<number, { t: number; interactive: boolean; first?: number }>();
+  private readonly sendTimes = new Map<number, { t: number; mode: SendMode; first?: number; shown?: boolean }>();
+  // Playback: the frames of this state are kept (the newest in `held`) until releaseHeld.
+  private holdId = 0;
+  private held: Frame | null = null;
+  private droppedId = 0; // a step of playback shown or stopped: its later passes are not shown
   private afterFrame: { id: number; run: (() => void)[]; timer: number } | null = null;
   // While a WebXR session runs (xr.ts): what is sent is the store's state made into the session's
   // (the eyes' views, a side-by-side pair), and the session's animation frames draw, not this link.
@@ -74,6 +85,7 @@ export class RenderLink {
       onFrame: (f) => this.receive(f),
       onError: (m, id) => events.onError(id !== undefined ? `state ${id}: ${m}` : m),
       onStatus: (t) => events.onStatus(t),
+      onLink: (state, version) => events.onLink(state, version),
     });
   }
 
@@ -95,7 +107,40 @@ export class RenderLink {
       return;
     }
     this.interactivePending = false;
-    this.sendNow(false);
+    this.sendNow('still');
+  }
+
+  // Sends the store's state at `step` as a step of playback, shown for about `budgetMs` (the
+  // server's level choice), and holds its frames; returns its id.
+  sendPlayback(step: number, budgetMs: number): number {
+    this.interactivePending = false;
+    this.held = null;
+    const id = this.sendNow('playback', (s) => ({ ...s, step, timeBudgetMs: budgetMs }));
+    this.holdId = id;
+    return id;
+  }
+
+  // True when a frame of state `id` is held.
+  hasHeld(id: number): boolean {
+    return this.held?.header.id === id;
+  }
+
+  // Shows the held frame (the newest pass that arrived) and stops holding; the passes of that state
+  // still in flight are dropped (the next step is being sent: decoding them would only compete
+  // with it for the CPU).
+  releaseHeld(): void {
+    const frame = this.held;
+    this.droppedId = Math.max(this.droppedId, this.holdId);
+    this.holdId = 0;
+    this.held = null;
+    if (frame) this.show(frame);
+  }
+
+  // Frames are shown as they arrive again; the held state's frames are dropped.
+  stopHolding(): void {
+    this.droppedId = Math.max(this.droppedId, this.holdId);
+    this.holdId = 0;
+    this.held = null;
   }
 
   private pumpInteractive(): void {
@@ -103,22 +148,26 @@ export class RenderLink {
     const now = performance.now();
     if (this.connection.caughtUp || now - this.lastSendTime > 120) {
       this.interactivePending = false;
-      this.sendNow(true);
+      this.sendNow('interactive');
     } else {
       requestAnimationFrame(() => this.pumpInteractive());
     }
   }
 
-  // Sends the store's state at once (the XR session coalesces its own requests).
-  sendNow(interactive: boolean): void {
-    const state = this.xr ? this.xr.stateToSend(cloneState(this.store.state)) : this.store.state;
-    const id = this.connection.send(cloneState(state), interactive);
+  // Sends the store's state at once (the XR session coalesces its own requests), as `adjust`
+  // makes it when given; returns its id.
+  sendNow(mode: SendMode, adjust?: (s: RenderState) => RenderState): number {
+    let state = this.xr ? this.xr.stateToSend(cloneState(this.store.state)) : cloneState(this.store.state);
+    if (adjust) state = adjust(state);
+    const id = this.connection.send(state, mode);
     this.lastSendTime = performance.now();
-    this.sendTimes.set(id, { t: this.lastSendTime, interactive });
+    this.sendTimes.set(id, { t: this.lastSendTime, mode });
     if (this.sendTimes.size > 200) this.sendTimes.delete(this.sendTimes.keys().next().value as number);
     this.lastSentId = id;
-    this.observer?.sent({ id, t: this.lastSendTime, step: state.step, interactive, brushes: state.brushes.map((b) => ({ ...b })),
-      camera: cloneState(state).camera, stereoMode: state.stereo.mode, image: { ...state.image } });
+    this.observer?.sent({ id, t: this.lastSendTime, step: state.step, interactive: mode === 'interactive', playback: mode === 'playback',
+      brushes: state.brushes.map((b) => ({ ...b })), camera: cloneState(state).camera, stereoMode: state.stereo.mode,
+      image: { ...state.image } });
+    return id;
   }
 
   receive(frame: Frame): void {
@@ -126,14 +175,27 @@ export class RenderLink {
     const h = frame.header;
     const sent = this.sendTimes.get(h.id);
     if (sent && sent.first === undefined) sent.first = frame.receivedAt - sent.t;
-    if (h.id < this.lastShownId) return; // a pass of an older state that was still in flight
+    if (h.id < this.lastShownId || h.id === this.droppedId) return; // a pass of an older state still in flight
+    if (h.id === this.holdId) {
+      if (!this.held || this.held.header.pass < h.pass) this.held = frame;
+      this.events.onFrameHeld(frame);
+      return;
+    }
+    this.show(frame);
+  }
+
+  private show(frame: Frame): void {
+    const h = frame.header;
+    const sent = this.sendTimes.get(h.id);
     this.lastHeader = h;
     this.events.onFrameArrived(h);
     void this.view.setFrame(frame).then(() => {
       if (h.id >= this.lastShownId) this.lastShownId = h.id;
       let latency: Latency | null = null;
-      if (sent && h.pass === 1) {
-        latency = { id: h.id, interactive: sent.interactive, firstFrameMs: sent.first ?? NaN, shownMs: performance.now() - sent.t };
+      if (sent && !sent.shown) {
+        sent.shown = true;
+        latency = { id: h.id, interactive: sent.mode === 'interactive', playback: sent.mode === 'playback',
+          firstFrameMs: sent.first ?? NaN, shownMs: performance.now() - sent.t };
         this.lastLatency = latency;
       }
       this.observer?.shown(h, latency);

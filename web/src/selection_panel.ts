@@ -17,6 +17,7 @@ export interface SelectionPanelHost {
   playing(): boolean;
   // The selection changed (the status line shows it).
   selectionChanged(): void;
+  commit(interactive: boolean): void;
 }
 
 // What the browser tests observe (test_hooks.ts).
@@ -38,8 +39,17 @@ export class SelectionPanel {
   private statsKey = '';
   private statsAbort: AbortController | null = null;
   private statsTimer = 0;
+  // The user turned "show the selection" off: brushing no longer turns it on by itself.
+  private showDeclined = false;
 
   constructor(private readonly store: StateStore, private readonly host: SelectionPanelHost) {
+    $<HTMLInputElement>('showSelection').addEventListener('change', (e) => {
+      const on = (e.target as HTMLInputElement).checked;
+      this.showDeclined = !on;
+      this.store.state.selection.show = on;
+      this.syncShow();
+      this.host.commit(false);
+    });
     $('statsExact').addEventListener('change', () => this.refreshStats());
     $('statsCsv').addEventListener('click', () => {
       const st = this.stats;
@@ -49,6 +59,27 @@ export class SelectionPanel {
       for (const s of st.steps) csv += `${s.step},${s.timeMyr},${s.volumeKm3.toExponential(6)},${(100 * s.fractionOfMantle).toFixed(6)},${st.level}\n`;
       download(new Blob([csv], { type: 'text/csv' }), `raypc-selection-over-time-step${this.store.state.step}.csv`);
     });
+  }
+
+  // Brushing begins (the first brush after none): from the default view, whose opacity curve hides
+  // anomalies of a few tens of kelvin, "show the selection" is turned on, so that what is
+  // brushed is seen (issue 26, item 5), unless the user turned it off before. Call before the
+  // state is sent.
+  brushingStarted(): void {
+    const s = this.store.state, d = this.store.defaults;
+    if (this.showDeclined || s.selection.show) return;
+    if (JSON.stringify(s.color) !== JSON.stringify(d.color)) return;
+    s.selection.show = true;
+    this.syncShow();
+  }
+
+  // The toggle and its note from the state.
+  syncShow(): void {
+    const s = this.store.state;
+    $<HTMLInputElement>('showSelection').checked = s.selection.show;
+    $('showSelectionNote').textContent = s.selection.show && s.brushes.length
+      ? `selected material ≥ ${Math.round(100 * s.selection.minOpacity)} % opaque per ${+s.color.opacityUnitKm.toPrecision(4)} km`
+      : '';
   }
 
   refreshSelection(): void {
@@ -73,6 +104,7 @@ export class SelectionPanel {
   }
 
   updateText(): void {
+    this.syncShow();
     const el = $('selection');
     const state = this.store.state;
     if (!state.brushes.length) {

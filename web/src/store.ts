@@ -39,15 +39,12 @@ export class StateStore {
     return this.info.variables.find((v) => v.name === name) ?? this.info.variables[0];
   }
 
-  // The colour range in force: the state's, or the global range (symmetric for centred maps).
+  // The colour range in force: the state's, or the one the renderer takes without it (from
+  // /api/info: the global range, symmetric for centred maps, a constant one widened).
   effectiveRange(): [number, number] {
     if (this.state.color.range) return this.state.color.range;
-    const v = this.variableInfo();
-    if (centredMaps.has(this.state.color.colorMap)) {
-      const m = Math.max(Math.abs(v.min), Math.abs(v.max)) || 1;
-      return [-m, m];
-    }
-    return v.max > v.min ? [v.min, v.max] : [v.min, v.min + 1];
+    const d = this.variableInfo().defaultColorRange;
+    return centredMaps.has(this.state.color.colorMap) ? d.centred : d.other;
   }
 
   // The normalised position of a value over the colour range: linear, or over log10 with

@@ -4,7 +4,8 @@
 import type { Selection, SelectionOverTime } from './api';
 import type { App } from './app';
 import type { Frame, FrameHeader } from './connection';
-import type { ParallelCoordinates } from './parcoords';
+import { snapStep, type AxisInfo, type ParallelCoordinates } from './parcoords';
+import type { SlicePanel } from './slice_panel';
 import type { PathlineCount } from './pathline_panel';
 import type { Latency, SentEntry } from './render_link';
 import { cloneState, type Brush, type RenderState } from './state';
@@ -32,6 +33,8 @@ export interface TestHooks {
   // incoming frames back (to look at a warped view deterministically).
   sentLog: SentEntry[];
   frameLog: { id: number; step: number; pass: number; t: number }[];
+  // Frames on screen, when (performance.now()) and what the server rendered them as.
+  shownLog: { id: number; step: number; pass: number; level: number; width: number; height: number; playback: boolean; t: number }[];
   warpedWhileWaiting: number;
   // Deferred work (the full line redraw after a brush release): the state it waited for, whether
   // that state's frame was on screen when it ran (false: it ran on the timeout or was superseded).
@@ -47,6 +50,10 @@ export interface TestHooks {
   readonly persistence: PersistenceDiagram | null;
   // The WebXR session (null when the browser offers no immersive-vr), once known.
   xr(): Promise<XrSession | null>;
+  // The step dragged brush ends snap to on an axis (parcoords.ts).
+  snapStep(a: AxisInfo): number;
+  // The map and section panel (its pictures' headers and counts, the point under a pixel).
+  slices: SlicePanel;
 }
 
 export function testHooksWanted(): boolean {
@@ -78,6 +85,7 @@ export function installTestHooks(app: App): TestHooks {
     get sampleStep() { return app.sampleStep; },
     sentLog: [],
     frameLog: [],
+    shownLog: [],
     warpedWhileWaiting: 0,
     afterFrames: [],
     holdFrames: false,
@@ -99,6 +107,8 @@ export function installTestHooks(app: App): TestHooks {
     plParcoords: app.pathlines.pc,
     get persistence() { return app.persistence.diagram; },
     xr: () => app.xr,
+    snapStep,
+    slices: app.slices,
   };
   app.link.observer = {
     sent: (e) => {
@@ -116,7 +126,11 @@ export function installTestHooks(app: App): TestHooks {
       push(hooks.headers, h, 100);
       return true;
     },
-    shown: (_h, latency) => { if (latency) push(hooks.latencies, latency, 200); },
+    shown: (h, latency) => {
+      if (latency) push(hooks.latencies, latency, 200);
+      push(hooks.shownLog, { id: h.id, step: h.step, pass: h.pass, level: h.level, width: h.width, height: h.height,
+        playback: !!h.playback, t: performance.now() }, 500);
+    },
     drawn: (kind, waiting) => { if (kind === 'warped' && waiting) hooks.warpedWhileWaiting++; },
     afterFrame: (record) => push(hooks.afterFrames, record, 50),
   };

@@ -170,12 +170,12 @@ export class XrSession {
         this.sentKey = key;
         this.stillSent = false;
         this.lastSend = now;
-        this.link.sendNow(true);
+        this.link.sendNow('interactive');
       }
     } else if (!this.stillSent && this.link.caughtUp) {
       this.stillSent = true;
       this.lastSend = now;
-      this.link.sendNow(false);
+      this.link.sendNow('still');
     }
     const bg = (this.store.state.background as [number, number, number] | undefined) ?? [0, 0, 0];
     this.link.view.drawViews(layer.framebuffer, eyes, bg);

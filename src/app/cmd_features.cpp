@@ -1,0 +1,215 @@
+// raypc features DATASET --state S.json -o features.csv: the features (connected regions) of the
+// selection in every step, each measured (data/features.h, docs/features.md).
+#include "app/command.h"
+#include "app/feature_table.h"
+#include "app/options.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/mpi.h"
+#include "core/progress.h"
+#include "data/dataset.h"
+#include "data/features.h"
+#include "data/selection.h"
+
+#include <fmt/format.h>
+
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <optional>
+
+namespace raypc::app {
+namespace {
+
+struct FeaturesArgs {
+    SeriesSelectionFlags selection;
+    std::string output, tracks, events, stalls;
+    std::vector<double> depths{410, 660, 1000, 1600};
+    double bandHalfWidthKm = 50, minVolumeKm3 = 0, minOverlapShare = 0.1;
+    bool quiet = false;
+};
+
+// Tracking (--tracks, --events): the features of each step are linked to the previous step's
+// (linkFeatures, FeatureTracker); the tracks' rows follow each track through its steps, the events'
+// say what happened where.
+struct Tracking {
+    VelocityVariables velocity;
+    FeatureTracker tracker;
+    std::shared_ptr<const StepVolume> previousVolume;
+    StepFeatures previousFeatures;
+    double previousTimeMyr = 0;
+    std::map<std::pair<int, int>, Feature> features;  // (step, id): for the events' positions
+    std::optional<size_t> radialVelocity;             // variable index, for the stalls
+    std::map<int, std::vector<TrackPoint>> points;    // by track
+    std::string tracks;
+
+    void add(int step, double timeMyr, std::shared_ptr<const StepVolume> volume, StepFeatures f)
+    {
+        const std::vector<FeatureLink> links =
+            previousVolume ? linkFeatures(*previousVolume, previousFeatures, f, velocity, timeMyr - previousTimeMyr)
+                           : std::vector<FeatureLink>{};
+        const std::vector<int> ids = tracker.add(step, f, links);
+        for (size_t k = 0; k < f.features.size(); ++k) {
+            const Feature& x = f.features[k];
+            fmt::format_to(std::back_inserter(tracks), "{},{},{},{},{:.6e},{:.3f},{:.4f},{:.4f},{:.3f}\n", ids[k], step,
+                           timeMyr, x.id, x.volumeKm3, x.meanDepthKm, x.centroidLatDeg, x.centroidLonDeg,
+                           x.centroidDepthKm);
+            features[{step, x.id}] = x;
+            points[ids[k]].push_back({step, timeMyr, x.meanDepthKm,
+                                      radialVelocity ? x.variables[*radialVelocity].mean : std::nan("")});
+        }
+        previousVolume = std::move(volume);
+        previousFeatures = std::move(f);
+        previousTimeMyr = timeMyr;
+    }
+
+    std::string stallRows(const FeatureOptions& options, int lastStep) const
+    {
+        std::string rows = "track,depth_km,first_step,last_step,duration_myr,mean_radial_velocity_cm_per_yr,left\n";
+        for (const auto& [track, series] : points)
+            for (const Stall& s : stallTimes(series, options.bandDepthsKm, options.bandHalfWidthKm, lastStep))
+                fmt::format_to(std::back_inserter(rows), "{},{:g},{},{},{},{},{}\n", track, s.depthKm, s.firstStep,
+                               s.lastStep, s.durationMyr,
+                               std::isfinite(s.meanRadialVelocityCmPerYr) ? fmt::format("{:.4g}", s.meanRadialVelocityCmPerYr) : "",
+                               s.left);
+        return rows;
+    }
+
+    std::string eventRows(const Dataset& dataset) const
+    {
+        std::string rows = "step,time_myr,event,track,feature,other_features,centroid_lat_deg,centroid_lon_deg,mean_depth_km\n";
+        for (const TrackEvent& e : tracker.events()) {
+            const Feature& x = features.at({e.step, e.feature});
+            fmt::format_to(std::back_inserter(rows), "{},{},{},{},{},{},{:.4f},{:.4f},{:.3f}\n", e.step,
+                           dataset.steps()[size_t(e.step)].timeMyr, trackEventName(e.kind), e.track, e.feature,
+                           fmt::join(e.others, " "), x.centroidLatDeg, x.centroidLonDeg, x.meanDepthKm);
+        }
+        return rows;
+    }
+};
+
+VelocityVariables velocityVariables(const Dataset& dataset)
+{
+    const std::vector<std::string> names = dataset.variableNames();
+    VelocityVariables v;
+    for (const auto& [name, index] : {std::pair<const char*, size_t*>{"vx", &v.x}, {"vy", &v.y}, {"vz", &v.z}}) {
+        const auto it = std::find(names.begin(), names.end(), name);
+        if (it == names.end())
+            fail("--tracks/--events: the dataset has no velocity component '{}' (vx, vy, vz in m/s) to move features with",
+                 name);
+        *index = size_t(it - names.begin());
+    }
+    return v;
+}
+
+// Under mpirun the steps are split into contiguous blocks over the ranks (as `raypc stats` does);
+// rank 0 gathers the rows in rank order, which is step order, and writes the file. Tracking goes
+// from step to step: rank 0 does every step then, the other ranks wait.
+void run(const FeaturesArgs& args)
+{
+    SeriesSelection sel;
+    FeatureOptions options;
+    mpi::together([&] {
+        sel = resolveSeriesSelection(args.selection);
+        if (sel.filters.empty())
+            fail("features: no selection: give --state with brushes or --range NAME=MIN:MAX (the whole mantle "
+                 "would be one feature)");
+        if (!(args.minVolumeKm3 >= 0))
+            fail("--min-volume: {} km³ is negative", args.minVolumeKm3);
+        if (!(args.bandHalfWidthKm >= 0))
+            fail("--band-half-width: {} km is negative", args.bandHalfWidthKm);
+        options.minVolumeKm3 = args.minVolumeKm3;
+        options.bandDepthsKm = args.depths;
+        options.bandHalfWidthKm = args.bandHalfWidthKm;
+    });
+    const Dataset& dataset = *sel.dataset;
+    const std::vector<RangeFilter>& filters = sel.filters;
+    const int first = sel.first, last = sel.last;
+    const bool tracking = !args.tracks.empty() || !args.events.empty() || !args.stalls.empty();
+    std::optional<Tracking> tracks;
+    mpi::together([&] {
+        if (!tracking)
+            return;
+        tracks.emplace(Tracking{velocityVariables(dataset), FeatureTracker(args.minOverlapShare), {}, {}, 0, {}, {}, {}, {}});
+        const std::vector<std::string> names = dataset.variableNames();
+        if (const auto it = std::find(names.begin(), names.end(), "radial velocity"); it != names.end())
+            tracks->radialVelocity = size_t(it - names.begin());
+    });
+    const mpi::Block block = !tracking ? mpi::blockOf(last - first + 1)
+                                       : mpi::Block{0, mpi::isRoot() ? int64_t(last - first + 1) : int64_t(0)};
+    std::string mine;
+    size_t count = 0;
+    std::optional<Progress> progress;
+    if (!args.quiet && mpi::isRoot())
+        progress.emplace(mpi::distributed() ? fmt::format("features (rank 0 of {})", mpi::size()) : "features",
+                         block.end - block.begin, "steps");
+    mpi::together([&] {
+        for (int step = first + int(block.begin); step < first + int(block.end); ++step) {
+            const auto volume = dataset.load(step, args.selection.level);
+            StepFeatures f = extractFeatures(*volume, filters, options);
+            const double timeMyr = dataset.steps()[size_t(step)].timeMyr;
+            count += f.features.size();
+            mine += featureTableRows(step, timeMyr, f);
+            if (tracks)
+                tracks->add(step, timeMyr, volume, std::move(f));
+            if (progress)
+                progress->advance();
+        }
+    });
+    if (progress)
+        progress->finish();
+    const auto parts = mpi::gatherToRoot(mine);
+    const auto counts = mpi::gatherToRoot(std::to_string(count));
+    mpi::together([&] {
+        if (!mpi::isRoot())
+            return;
+        std::string csv = featureTableHeader(dataset, options);
+        size_t total = 0;
+        for (const auto& part : parts)
+            csv += part;
+        for (const auto& c : counts)
+            total += std::stoull(c);
+        writeFileAtomic(args.output, csv);
+        if (!args.tracks.empty())
+            writeFileAtomic(args.tracks, "track,step,time_myr,feature,volume_km3,mean_depth_km,centroid_lat_deg,"
+                                         "centroid_lon_deg,centroid_depth_km\n" + tracks->tracks);
+        if (!args.events.empty())
+            writeFileAtomic(args.events, tracks->eventRows(dataset));
+        if (!args.stalls.empty())
+            writeFileAtomic(args.stalls, tracks->stallRows(options, last));
+        fmt::print("{}: {} features in {} steps ({}..{}) of {} range(s){}\n", args.output, total, last - first + 1,
+                   first, last, filters.size(), mpi::distributed() ? fmt::format(" on {} ranks", mpi::size()) : "");
+    });
+}
+
+const CommandRegistration kFeaturesCommand(
+    "features",
+    "The features of a selection in every step: its connected regions, with volume, depths, centroid and variables",
+    [](CLI::App& cmd) {
+        auto args = std::make_shared<FeaturesArgs>();
+        args->selection.add(cmd);
+        cmd.add_option("-o,--output", args->output,
+                       "CSV: a row per feature and step (volume, depths, centroid, each variable's mean/min/max, "
+                       "percent near each --depth)")
+            ->required();
+        cmd.add_option("--min-volume", args->minVolumeKm3, "Drop features smaller than this, km³")->capture_default_str();
+        cmd.add_option("--depth", args->depths, "Depths (km) to report each feature's share near; repeatable")
+            ->capture_default_str();
+        cmd.add_option("--band-half-width", args->bandHalfWidthKm, "Half-width of the band around each --depth, km")
+            ->capture_default_str();
+        cmd.add_option("--tracks", args->tracks, "CSV: each feature's track through the steps (moved with the flow)");
+        cmd.add_option("--events", args->events, "CSV: births, deaths, merges and splits of the tracks");
+        cmd.add_option("--stalls", args->stalls,
+                       "CSV: how long each track stays at each --depth (its mean depth within the band) and how it left");
+        cmd.add_option("--min-overlap", args->minOverlapShare,
+                       "Share of a feature's volume carried onto another for a link between steps")
+            ->capture_default_str();
+        cmd.add_flag("-q,--quiet", args->quiet, "No progress output");
+        cmd.callback([args] { run(*args); });
+    },
+    71, Ranks::AllRanks);
+
+}  // namespace
+}  // namespace raypc::app

@@ -1,0 +1,103 @@
+// raypc flux DATASET --depth 660 -o flux.csv: the volume flux across shells in every step, down and
+// up, over the whole shell and within a selection, with the avalanche steps marked (data/flux.h).
+#include "app/command.h"
+#include "app/options.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/progress.h"
+#include "data/dataset.h"
+#include "data/flux.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <optional>
+
+namespace raypc::app {
+namespace {
+
+struct FluxArgs {
+    SeriesSelectionFlags selection;
+    std::string output;
+    std::vector<double> depths{660};
+    double sigmas = 2;
+    bool quiet = false;
+};
+
+constexpr const char* kRadialVelocity = "radial velocity";  // derived at preprocessing (docs/format.md), cm/yr
+
+void run(const FluxArgs& args)
+{
+    const SeriesSelection sel = resolveSeriesSelection(args.selection);
+    const Dataset& dataset = *sel.dataset;
+    const std::vector<std::string> names = dataset.variableNames();
+    const auto vr = std::find(names.begin(), names.end(), kRadialVelocity);
+    if (vr == names.end())
+        fail("flux: the dataset has no '{}' variable (preprocessing derives it from the velocity components)",
+             kRadialVelocity);
+    if (!(args.sigmas >= 0))
+        fail("--sigmas: {} is negative", args.sigmas);
+    for (const double depth : args.depths)
+        checkShellDepth(dataset.levels()[size_t(args.selection.level)].grid, depth);
+
+    std::vector<std::vector<ShellFlux>> bySteps;  // [step - first][depth]
+    std::optional<Progress> progress;
+    if (!args.quiet)
+        progress.emplace("flux", sel.last - sel.first + 1, "steps");
+    for (int step = sel.first; step <= sel.last; ++step) {
+        bySteps.push_back(shellFluxes(*dataset.load(step, args.selection.level), size_t(vr - names.begin()),
+                                      args.depths, sel.filters));
+        if (progress)
+            progress->advance();
+    }
+    if (progress)
+        progress->finish();
+
+    // Avalanches per depth, over the series' steps.
+    std::vector<std::vector<bool>> avalanche(args.depths.size(), std::vector<bool>(bySteps.size(), false));
+    size_t avalanches = 0;
+    for (size_t d = 0; d < args.depths.size(); ++d) {
+        std::vector<double> down;
+        for (const auto& fluxes : bySteps)
+            down.push_back(fluxes[d].downKm3PerYr);
+        for (const size_t i : avalancheSteps(down, args.sigmas)) {
+            avalanche[d][i] = true;
+            ++avalanches;
+        }
+    }
+    std::string csv = "step,time_myr,depth_km,radius_km,down_km3_per_yr,up_km3_per_yr,net_km3_per_yr,"
+                      "selected_down_km3_per_yr,selected_up_km3_per_yr,selected_percent_of_shell,avalanche\n";
+    for (size_t i = 0; i < bySteps.size(); ++i) {
+        const int step = sel.first + int(i);
+        for (size_t d = 0; d < args.depths.size(); ++d) {
+            const ShellFlux& f = bySteps[i][d];
+            fmt::format_to(std::back_inserter(csv), "{},{},{:g},{:.3f},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.4f},{}\n", step,
+                           dataset.steps()[size_t(step)].timeMyr, f.depthKm, f.radiusKm, f.downKm3PerYr, f.upKm3PerYr,
+                           f.downKm3PerYr + f.upKm3PerYr, f.selectedDownKm3PerYr, f.selectedUpKm3PerYr,
+                           100.0 * f.selectedAreaKm2 / f.areaKm2, avalanche[d][i] ? 1 : 0);
+        }
+    }
+    writeFileAtomic(args.output, csv);
+    fmt::print("{}: flux across {} shell(s) in {} steps ({}..{}); {} avalanche step(s) (downward flux over mean + {:g} sigma)\n",
+               args.output, args.depths.size(), bySteps.size(), sel.first, sel.last, avalanches, args.sigmas);
+}
+
+const CommandRegistration kFluxCommand(
+    "flux",
+    "Volume flux across shells (km³/yr, down and up, whole shell and selection) in every step, avalanches marked",
+    [](CLI::App& cmd) {
+        auto args = std::make_shared<FluxArgs>();
+        args->selection.add(cmd);
+        cmd.add_option("-o,--output", args->output,
+                       "CSV: a row per step and depth (down, up, net; the selection's down and up; avalanche)")
+            ->required();
+        cmd.add_option("--depth", args->depths, "Depth of a shell, km; repeatable")->capture_default_str();
+        cmd.add_option("--sigmas", args->sigmas, "Avalanche: downward flux over the series' mean + this many standard deviations")
+            ->capture_default_str();
+        cmd.add_flag("-q,--quiet", args->quiet, "No progress output");
+        cmd.callback([args] { run(*args); });
+    },
+    72);
+
+}  // namespace
+}  // namespace raypc::app

@@ -1,0 +1,44 @@
+// Volume flux across spherical shells (issue 28, "avalanches"): how much material crosses a depth
+// per unit time, downward and upward separately, over the whole shell and within a selection.
+// docs/features.md gives the definitions.
+//
+// Thread safety: pure functions of their arguments.
+#pragma once
+
+#include "data/dataset.h"
+#include "data/selection.h"
+
+#include <span>
+#include <vector>
+
+namespace raypc {
+
+struct ShellFlux {
+    double depthKm = 0, radiusKm = 0;
+    // km³/yr: the integral of the radial velocity over the shell, its negative part (downward,
+    // <= 0) and positive part (upward, >= 0); net = down + up.
+    double downKm3PerYr = 0, upKm3PerYr = 0;
+    // The same over the shell's points that lie in the selection (the whole shell without filters).
+    double selectedDownKm3PerYr = 0, selectedUpKm3PerYr = 0;
+    double areaKm2 = 0, selectedAreaKm2 = 0;  // of the shell, and of its selected part
+};
+
+// The flux across the shell at each depth (km below the surface, inside the grid's radii). At
+// every (lat, lon) column of the grid the radial velocity (variable `radialVelocity`, cm/yr) is
+// interpolated linearly in radius between the two grid radii around the shell — the ray caster's
+// and the probe's rule along r — and weighted by the column's area on the shell, r² (sin φ+ −
+// sin φ−) Δλ with the dual cells' edges (SphericalGrid::volumeFactors). A column is in the selection
+// when the grid point nearer the shell is (selectedPoints). Throws raypc::Error for a depth outside
+// the grid's radii, a variable index out of range, or bad filters.
+std::vector<ShellFlux> shellFluxes(const StepVolume& volume, size_t radialVelocity, std::span<const double> depthsKm,
+                                   std::span<const RangeFilter> filters = {});
+
+// Throws raypc::Error unless `depthKm` lies within the grid's radii, naming them.
+void checkShellDepth(const SphericalGrid& grid, double depthKm);
+
+// The steps (indices into `downKm3PerYr`, one value per step) whose downward flux is stronger than
+// the series' mean by more than k standard deviations: |down| > mean(|down|) + k σ(|down|) — an
+// avalanche of material across the shell. Empty for fewer than two steps or a constant series.
+std::vector<size_t> avalancheSteps(std::span<const double> downKm3PerYr, double k);
+
+}  // namespace raypc

@@ -1,0 +1,78 @@
+#include "data/flux.h"
+
+#include "core/error.h"
+#include "core/spherical.h"
+#include "data/test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace raypc {
+namespace {
+
+std::shared_ptr<StepVolume> radialFlow(const SphericalGrid& g, const std::function<double(size_t, size_t, size_t)>& vr)
+{
+    Snapshot snap;
+    snap.grid = g;
+    snap.fields.push_back({"radial velocity", "cm/yr", testing::fillGrid(g, vr)});
+    return StepVolume::fromSnapshot(snap);
+}
+
+TEST(ShellFlux, AUniformRadialFlowCarriesFourPiRSquaredU0)
+{
+    const SphericalGrid g = testing::centredGrid(36, 21, 72);
+    const double u0 = 0.7;  // cm/yr, upward everywhere
+    const auto volume = radialFlow(g, [&](size_t, size_t, size_t) { return u0; });
+    const std::vector<double> depths{660.0, 1600.0};
+    const auto f = shellFluxes(*volume, 0, depths);
+    ASSERT_EQ(f.size(), 2u);
+    for (const ShellFlux& s : f) {
+        const double r = kSurfaceRadiusKm - s.depthKm;
+        EXPECT_DOUBLE_EQ(s.radiusKm, r);
+        EXPECT_NEAR(s.areaKm2, 4 * std::numbers::pi * r * r, 1e-9 * s.areaKm2);
+        EXPECT_NEAR(s.upKm3PerYr, 4 * std::numbers::pi * r * r * u0 * 1e-5, 1e-7 * s.upKm3PerYr);  // the field is float32
+        EXPECT_EQ(s.downKm3PerYr, 0.0);
+        EXPECT_EQ(s.selectedUpKm3PerYr, s.upKm3PerYr) << "no filters: the whole shell";
+    }
+}
+
+TEST(ShellFlux, DownAndUpAreApartAndTheSelectionTakesItsColumns)
+{
+    const SphericalGrid g = testing::centredGrid(36, 21, 72);
+    // Rising in the north, sinking in the south, at 2 cm/yr; linear in radius, so the value at the
+    // shell is the interpolation between the two grid radii around it.
+    const auto volume = radialFlow(g, [&](size_t a, size_t r, size_t) { return (g.latDeg[a] > 0 ? 2.0 : -2.0) * g.rKm[r] / 6000.0; });
+    const std::vector<double> depths{1000.0};
+    const std::vector<RangeFilter> north{RangeFilter{-1, Coordinate::Lat, {{0.0f, 90.0f}}}};
+    const ShellFlux s = shellFluxes(*volume, 0, depths, north).front();
+    const double r = kSurfaceRadiusKm - 1000.0;
+    const double half = 2 * std::numbers::pi * r * r * 2.0 * r / 6000.0 * 1e-5;
+    EXPECT_NEAR(s.upKm3PerYr, half, 1e-7 * half);
+    EXPECT_NEAR(s.downKm3PerYr, -half, 1e-7 * half);
+    EXPECT_NEAR(s.selectedUpKm3PerYr, half, 1e-7 * half);
+    EXPECT_EQ(s.selectedDownKm3PerYr, 0.0);
+    EXPECT_NEAR(s.selectedAreaKm2, 0.5 * s.areaKm2, 1e-9 * s.areaKm2);
+}
+
+TEST(ShellFlux, DepthsOutsideTheGridAreRefused)
+{
+    const SphericalGrid g = testing::centredGrid(8, 5, 16);
+    const auto volume = radialFlow(g, [](size_t, size_t, size_t) { return 1.0; });
+    const std::vector<double> tooDeep{3000.0};
+    EXPECT_THROW(shellFluxes(*volume, 0, tooDeep), Error);
+    const std::vector<double> ok{660.0};
+    EXPECT_THROW(shellFluxes(*volume, 1, ok), Error);
+}
+
+TEST(ShellFlux, AvalanchesStandOutOfTheSeries)
+{
+    const std::vector<double> down{-1.0, -1.2, -0.9, -6.0, -1.1, -1.0};
+    EXPECT_EQ(avalancheSteps(down, 2.0), std::vector<size_t>{3});
+    EXPECT_TRUE(avalancheSteps(std::vector<double>{-1.0, -1.0, -1.0}, 0.0).empty()) << "a constant series";
+    EXPECT_TRUE(avalancheSteps(std::vector<double>{-5.0}, 1.0).empty());
+}
+
+}  // namespace
+}  // namespace raypc

@@ -1,0 +1,446 @@
+// The compiled half of Python's `raypc` package (raypc/_raypc): thin bindings of what the `raypc`
+// executable calls, so that Python runs the same code — the dataset pipeline (app/series_inputs),
+// the state's one description (render/render_state), the one path from a state to pixels
+// (render/state_renderer), exact statistics (data/selection), probing (data/probe) and the server
+// (server/server). The Pythonic layer (xarray, pandas, the notebook view) is raypc/__init__.py.
+//
+// Errors: raypc::Error becomes raypc.Error with the CLI's one-line message. Long work (preprocessing,
+// rendering, statistics, reading a field) releases the GIL and runs on every core as the executable
+// does; progress callbacks take the GIL only while they run, and a KeyboardInterrupt seen there
+// cancels the work between steps.
+#include "app/feature_table.h"
+#include "app/options.h"
+#include "data/probe.h"
+#include "app/series_inputs.h"
+#include "core/error.h"
+#include "core/spherical.h"
+#include "data/critical_points.h"
+#include "data/dataset.h"
+#include "data/features.h"
+#include "data/pathline_storage.h"
+#include "data/selection.h"
+#include "render/render_state.h"
+#include "render/state_renderer.h"
+#include "server/dataset_api.h"
+#include "server/server.h"
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstring>
+#include <thread>
+
+namespace py = pybind11;
+
+namespace raypc::python {
+namespace {
+
+using Json = nlohmann::json;
+
+// A NumPy array that owns a copy of `values` in the given shape.
+template <typename T>
+py::array_t<T> arrayOf(const std::vector<T>& values, std::vector<py::ssize_t> shape)
+{
+    py::array_t<T> out(shape);
+    std::memcpy(out.mutable_data(), values.data(), values.size() * sizeof(T));
+    return out;
+}
+
+py::array_t<double> doubles(const std::vector<double>& values)
+{
+    return arrayOf(values, {py::ssize_t(values.size())});
+}
+
+// The state document (docs/state.md) as the one description parses it: a malformed one throws
+// raypc::Error with the schema's message.
+render::RenderState parseState(const std::string& text, const std::string& what)
+{
+    Json document = Json::parse(text, nullptr, false);
+    if (document.is_discarded())
+        fail("{}: not valid JSON", what);
+    return render::parseRenderState(document, what);
+}
+
+// Calls `callback(done, total)` with the GIL; a KeyboardInterrupt (or any Python exception) there
+// sets `cancel` and is kept for the caller to raise once the C++ work has stopped.
+class ProgressBridge {
+public:
+    explicit ProgressBridge(py::object callback) : m_callback(std::move(callback)) {}
+    void operator()(const std::string& phase, int done, int total)
+    {
+        py::gil_scoped_acquire gil;
+        if (m_error || m_callback.is_none())
+            return;
+        try {
+            if (PyErr_CheckSignals() != 0)
+                throw py::error_already_set();
+            m_callback(phase, done, total);
+        } catch (py::error_already_set& e) {
+            m_error = std::make_unique<py::error_already_set>(std::move(e));
+            cancel = true;
+        }
+    }
+    // After the work: raises what the callback raised, if anything.
+    void rethrow()
+    {
+        if (m_error) {
+            py::gil_scoped_acquire gil;
+            auto error = std::move(m_error);
+            throw std::move(*error);
+        }
+    }
+    ~ProgressBridge()
+    {
+        py::gil_scoped_acquire gil;
+        m_error.reset();
+        m_callback = py::none();
+    }
+    std::atomic<bool> cancel{false};
+
+private:
+    py::object m_callback;
+    std::unique_ptr<py::error_already_set> m_error;
+};
+
+// `raypc.open` of files: the arguments of `raypc serve`/`render` (INPUT… --dataset and the
+// preprocessing options, parsed by the same option group), preprocessed where not done yet.
+// Returns the dataset directory.
+std::string prepare(std::vector<std::string> args, py::object progress)
+{
+    CLI::App app("raypc.open", "raypc.open");
+    app::SeriesFlags flags;
+    flags.add(app, "preprocessed first, reused later");
+    app::requireFiniteNumbers(app);
+    std::reverse(args.begin(), args.end());  // CLI11 takes them last first
+    try {
+        app.parse(args);
+    } catch (const CLI::ParseError& e) {
+        fail("{}", e.what());
+    }
+    auto [inputs, options] = flags.resolve();
+    if (!inputs.fromFiles())
+        return inputs.dataset.string();
+    ProgressBridge bridge(std::move(progress));
+    options.quiet = true;
+    options.onProgress = [&bridge](const PreprocessProgress& p) { bridge(p.phase, p.done, p.total); };
+    options.cancel = &bridge.cancel;
+    {
+        py::gil_scoped_release release;
+        try {
+            app::prepareSeries(inputs, options);
+        } catch (const Error&) {
+            if (!bridge.cancel)
+                throw;
+        }
+    }
+    bridge.rethrow();
+    return inputs.dataset.string();
+}
+
+class PyDataset {
+public:
+    explicit PyDataset(const std::string& dir) : m_dataset(Dataset::open(dir)) {}
+
+    const Dataset& dataset() const { return *m_dataset; }
+
+    py::list variables() const
+    {
+        py::list out;
+        for (const VariableInfo& v : m_dataset->variables())
+            out.append(py::dict(py::arg("name") = v.name, py::arg("units") = v.units, py::arg("derived") = v.derived,
+                                py::arg("min") = v.global.range.min, py::arg("max") = v.global.range.max));
+        return out;
+    }
+    py::array_t<double> timesMyr() const
+    {
+        std::vector<double> t;
+        for (const StepInfo& s : m_dataset->steps())
+            t.push_back(s.timeMyr);
+        return doubles(t);
+    }
+    py::list levels() const
+    {
+        py::list out;
+        for (const LevelInfo& level : m_dataset->levels())
+            out.append(py::dict(py::arg("lat") = doubles(level.grid.latDeg), py::arg("r") = doubles(level.grid.rKm),
+                                py::arg("lon") = doubles(level.grid.lonDeg)));
+        return out;
+    }
+    std::string encoding() const { return m_dataset->encoding() == ValueEncoding::Float32 ? "float32" : "u16"; }
+    std::string dir() const { return m_dataset->dir().string(); }
+
+    // Step "12" or "24Myr" as the CLI's --time takes it.
+    int step(const std::string& text) const { return app::parseStep(*m_dataset, text, "step"); }
+
+    // One variable of one step at one level, (lat, r, lon), float32, a copy.
+    py::array_t<float> field(const std::string& name, int step, int level) const
+    {
+        const int var = m_dataset->variableIndex(name);
+        if (var < 0)
+            fail("variable: unknown variable '{}'; the dataset has: {}", name,
+                 fmt::join(m_dataset->variableNames(), ", "));
+        m_dataset->checkStep(step);
+        m_dataset->checkLevel(level);
+        const SphericalGrid& grid = m_dataset->levels()[size_t(level)].grid;
+        py::array_t<float> out({py::ssize_t(grid.nLat()), py::ssize_t(grid.nR()), py::ssize_t(grid.nLon())});
+        float* dst = out.mutable_data();
+        {
+            py::gil_scoped_release release;
+            const auto volume = m_dataset->load(step, level);
+            std::memcpy(dst, volume->values(size_t(var)), grid.cellCount() * sizeof(float));
+        }
+        return out;
+    }
+
+    std::string probe(double lat, double lon, double rKm, int step, int level, const std::string& var) const
+    {
+        py::gil_scoped_release release;
+        return probeJson(*m_dataset, step, level, lat, lon, rKm, var).dump();
+    }
+
+    // The parallel-coordinates sample of a step: (columns, units, rows x columns float32).
+    py::tuple sample(int step) const
+    {
+        SampleTable t;  // loadSample checks the step
+        {
+            py::gil_scoped_release release;
+            t = m_dataset->loadSample(step);
+        }
+        return py::make_tuple(t.columns, t.units,
+                              arrayOf(t.values, {py::ssize_t(t.rows), py::ssize_t(t.columns.size())}));
+    }
+
+    // The pathline sets injected in the `window` steps up to `step`: per set its injection step and
+    // time, seed field, attribute columns and units, per-line attributes, points (x, y, z km, time
+    // Myr) and the line offsets into them.
+    py::list pathlines(int step, int window) const
+    {
+        m_dataset->checkStep(step);
+        checkPathlineWindow(window);
+        std::vector<PathlineSet> sets;
+        {
+            py::gil_scoped_release release;
+            sets = loadPathlineWindow(m_dataset->dir(), step, window);
+        }
+        py::list out;
+        for (const PathlineSet& s : sets) {
+            std::vector<int64_t> offsets(s.offsets.begin(), s.offsets.end());
+            out.append(py::dict(
+                py::arg("injection_step") = s.injectionStep, py::arg("injection_time_myr") = s.injectionTimeMyr,
+                py::arg("end_step") = s.endStep, py::arg("seed_field") = s.seedField,
+                py::arg("threshold") = s.threshold, py::arg("columns") = s.columns, py::arg("units") = s.units,
+                py::arg("attributes") =
+                    arrayOf(s.attributes, {py::ssize_t(s.lineCount()), py::ssize_t(s.columns.size())}),
+                py::arg("points") = arrayOf(s.points, {py::ssize_t(s.pointCount()), 4}),
+                py::arg("offsets") = arrayOf(offsets, {py::ssize_t(offsets.size())})));
+        }
+        return out;
+    }
+
+    // The state `raypc render` draws without --state (the UI's first view), as JSON.
+    std::string defaultState() const { return render::toJson(render::defaultState(*m_dataset)).dump(); }
+
+    // The state checked against this dataset (names, step, level: resolveState), normalised.
+    std::string checkState(const std::string& text) const
+    {
+        const render::ResolvedState resolved = render::resolveState(parseState(text, "state"), *m_dataset);
+        return render::toJson(resolved.state).dump();
+    }
+
+    // The picture `raypc render --state` writes for this state (the same path: StateRenderer, its
+    // passes, reference geometry and legends), (height, width, 4) uint8 RGBA. `passes` 0: the state's.
+    py::array_t<uint8_t> render(const std::string& text, int passes, py::object progress) const
+    {
+        const render::RenderState state = parseState(text, "state");
+        if (passes < 0)
+            fail("passes: {} is negative", passes);
+        render::checkPictureFitsMemory(state, false, availableMemory());
+        ProgressBridge bridge(std::move(progress));
+        render::ImageRgba8 image;
+        {
+            py::gil_scoped_release release;
+            const render::ResolvedState resolved = render::resolveState(state, *m_dataset);
+            render::StateRenderer renderer(m_dataset);
+            // A KeyboardInterrupt seen by the progress callback stops the pass in flight.
+            const render::StateRenderer::Still still = renderer.renderStill(
+                resolved, passes, &bridge.cancel, {}, [&](int done, int total) { bridge("passes", done, total); });
+            if (!bridge.cancel)
+                image = renderer.picture(still.frames, resolved, true);
+        }
+        bridge.rethrow();
+        return arrayOf(image.pixels, {py::ssize_t(image.height), py::ssize_t(image.width), 4});
+    }
+
+    // The exact selected volume of the state's brushes over steps first..last (raypc stats): per step
+    // (step, time_myr, volume_km3, fraction_of_mantle, volume_by_radius_km3, shell_volume_km3).
+    py::list stats(const std::string& text, int first, int last, int level, py::object progress) const
+    {
+        const render::RenderState state = parseState(text, "state");
+        const std::vector<RangeFilter> filters = resolveRangeFilters(*m_dataset, state.brushes, "brushes");
+        if (first > last)  // selectionOverTime checks the steps and the level
+            fail("steps: {}..{} is empty", first, last);
+        ProgressBridge bridge(std::move(progress));
+        std::vector<StepSelection> selections;
+        {
+            py::gil_scoped_release release;
+            int done = 0;  // onStep runs on this thread, after each step
+            const int total = last - first + 1;
+            try {
+                selections = selectionOverTime(*m_dataset, filters, level, first, last, {}, [&] {
+                    bridge("steps", ++done, total);
+                    if (bridge.cancel)
+                        fail("cancelled");
+                });
+            } catch (const Error&) {
+                if (!bridge.cancel)
+                    throw;
+            }
+        }
+        bridge.rethrow();
+        py::list out;
+        for (const StepSelection& s : selections)
+            out.append(py::make_tuple(s.step, s.timeMyr, s.stats.volumeKm3, s.stats.fractionOfMantle,
+                                      doubles(s.stats.volumeByRadiusKm3), doubles(s.stats.shellVolumeByRadiusKm3)));
+        return out;
+    }
+
+    // The features of the state's brushes in steps first..last (raypc features): the table's CSV text
+    // (app/feature_table.h), for pandas to read.
+    std::string features(const std::string& text, int first, int last, int level, double minVolumeKm3,
+                         std::vector<double> depthsKm, double bandHalfWidthKm, py::object progress) const
+    {
+        const render::RenderState state = parseState(text, "state");
+        const std::vector<RangeFilter> filters = resolveRangeFilters(*m_dataset, state.brushes, "brushes");
+        if (filters.empty())
+            fail("features: the state has no brushes (the whole mantle would be one feature)");
+        if (first > last)
+            fail("steps: {}..{} is empty", first, last);
+        m_dataset->checkLevel(level, "level");
+        FeatureOptions options;
+        options.minVolumeKm3 = minVolumeKm3;
+        options.bandDepthsKm = std::move(depthsKm);
+        options.bandHalfWidthKm = bandHalfWidthKm;
+        ProgressBridge bridge(std::move(progress));
+        std::string csv = app::featureTableHeader(*m_dataset, options);
+        {
+            py::gil_scoped_release release;
+            for (int step = first; step <= last && !bridge.cancel; ++step) {
+                m_dataset->checkStep(step, "steps");
+                const StepFeatures f = extractFeatures(*m_dataset->load(step, level), filters, options);
+                csv += app::featureTableRows(step, m_dataset->steps()[size_t(step)].timeMyr, f);
+                bridge("steps", step - first + 1, last - first + 1);
+            }
+        }
+        bridge.rethrow();
+        return csv;
+    }
+
+private:
+    std::shared_ptr<const Dataset> m_dataset;
+};
+
+// `raypc serve` of one dataset inside this process, on its own thread (the notebook view).
+class PyServer {
+public:
+    PyServer(const std::string& dataset, const std::string& host, int port)
+    {
+        if (port < 0 || port > 65535)
+            fail("port: {} out of range 0..65535", port);
+        server::ServerOptions options;
+        options.dataset = dataset;
+        options.host = host;
+        options.port = uint16_t(port);
+        options.handleSignals = false;  // the Python process's signals stay Python's
+        options.assets = server::findAssetDir(std::nullopt);
+        options.examples = server::findExamplesDir(std::nullopt);
+        m_server = std::make_unique<server::Server>(std::move(options));
+        m_thread = std::thread([this] { m_server->run(); });
+    }
+    ~PyServer() { stop(); }
+    void stop()
+    {
+        if (!m_thread.joinable())
+            return;
+        py::gil_scoped_release release;
+        m_server->stop();
+        m_thread.join();
+    }
+    std::string url() const { return m_server->url(); }
+    int port() const { return m_server->port(); }
+    std::string token() const { return m_server->token(); }
+
+private:
+    std::unique_ptr<server::Server> m_server;
+    std::thread m_thread;
+};
+
+}  // namespace
+}  // namespace raypc::python
+
+PYBIND11_MODULE(_raypc, m)
+{
+    using namespace raypc::python;
+    m.doc() = "RayPC's compiled core (use the raypc package)";
+    static py::exception<raypc::Error> error(m, "Error");
+    py::register_exception_translator([](std::exception_ptr p) {
+        try {
+            if (p)
+                std::rethrow_exception(p);
+        } catch (const raypc::Error& e) {
+            error(e.what());
+        }
+    });
+
+    m.def("prepare", &prepare, py::arg("args"), py::arg("progress") = py::none(),
+          "Preprocess inputs as `raypc serve INPUT…` does; returns the dataset directory");
+    m.def(
+        "check_state",
+        [](const std::string& text) { return raypc::render::toJson(parseState(text, "state")).dump(); },
+        py::arg("json"), "The state document parsed by the one state schema, normalised (JSON)");
+    m.def("surface_radius_km", [] { return raypc::kSurfaceRadiusKm; });
+    m.def("state_version", [] { return raypc::render::kRenderStateVersion; });
+    m.def(
+        "critical_kind_name",
+        [](int kind) {
+            if (kind < 0 || kind > int(raypc::CriticalKind::MultiSaddle))
+                raypc::fail("critical point kind {} out of range 0..{}", kind, int(raypc::CriticalKind::MultiSaddle));
+            return std::string(raypc::criticalKindName(raypc::CriticalKind(kind)));
+        },
+        py::arg("kind"));
+
+    py::class_<PyDataset>(m, "Dataset")
+        .def(py::init<const std::string&>(), py::arg("dir"))
+        .def_property_readonly("dir", &PyDataset::dir)
+        .def_property_readonly("variables", &PyDataset::variables)
+        .def_property_readonly("times_myr", &PyDataset::timesMyr)
+        .def_property_readonly("levels", &PyDataset::levels)
+        .def_property_readonly("encoding", &PyDataset::encoding)
+        .def("step", &PyDataset::step, py::arg("text"))
+        .def("field", &PyDataset::field, py::arg("variable"), py::arg("step"), py::arg("level"))
+        .def("probe", &PyDataset::probe, py::arg("lat"), py::arg("lon"), py::arg("r_km"), py::arg("step"),
+             py::arg("level"), py::arg("variable"))
+        .def("sample", &PyDataset::sample, py::arg("step"))
+        .def("pathlines", &PyDataset::pathlines, py::arg("step"), py::arg("window"))
+        .def("default_state", &PyDataset::defaultState)
+        .def("check_state", &PyDataset::checkState, py::arg("json"))
+        .def("render", &PyDataset::render, py::arg("json"), py::arg("passes"), py::arg("progress") = py::none())
+        .def("features", &PyDataset::features, py::arg("json"), py::arg("first"), py::arg("last"), py::arg("level"),
+             py::arg("min_volume_km3"), py::arg("depths_km"), py::arg("band_half_width_km"), py::arg("progress") = py::none())
+        .def("stats", &PyDataset::stats, py::arg("json"), py::arg("first"), py::arg("last"), py::arg("level"),
+             py::arg("progress") = py::none());
+
+    py::class_<PyServer>(m, "Server")
+        .def(py::init<const std::string&, const std::string&, int>(), py::arg("dataset"), py::arg("host"),
+             py::arg("port"))
+        .def_property_readonly("url", &PyServer::url)
+        .def_property_readonly("port", &PyServer::port)
+        .def_property_readonly("token", &PyServer::token)
+        .def("stop", &PyServer::stop);
+}

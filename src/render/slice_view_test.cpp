@@ -1,0 +1,226 @@
+// Maps and sections of analytic volumes: the picture's colours are the truth's at pixel centres
+// (poles and the lon seam included), the brushes grey what they leave out, a section through a
+// blob finds it at its distance and depth, and the exported grids hold the truth.
+#include "render/slice_view.h"
+
+#include "core/error.h"
+#include "core/spherical.h"
+#include "data/selection.h"
+#include "render/test_volumes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace raypc::render {
+namespace {
+
+using testing::makeGrid;
+using testing::makeVolume;
+
+// Smooth over the sphere, linear in r: the trilinear sampler's error is small and known in size.
+double field(double latDeg, double rKm, double lonDeg)
+{
+    return std::cos(degToRad(latDeg)) * std::cos(degToRad(lonDeg)) + 0.5 * std::sin(degToRad(latDeg)) + 1e-4 * rKm;
+}
+
+ResolvedState stateFor(int width, int height)
+{
+    ResolvedState r;
+    r.state.width = width;
+    r.state.height = height;
+    r.state.reference.shells.visible = false;
+    r.state.reference.graticule.visible = false;
+    r.state.reference.coastlines.visible = false;
+    r.params.colorVariable = 0;
+    r.params.transfer.colorMap = ColorMapId::Viridis;
+    r.params.transfer.range = {-1.2f, 2.2f};
+    return r;
+}
+
+std::array<float, 3> pixel(const ImageRgba8& image, int x, int y)
+{
+    const uint8_t* p = &image.pixels[(size_t(y) * size_t(image.width) + size_t(x)) * 4];
+    return {p[0] / 255.0f, p[1] / 255.0f, p[2] / 255.0f};
+}
+
+float colourError(const std::array<float, 3>& a, Rgb b)
+{
+    return std::max({std::abs(a[0] - b.r), std::abs(a[1] - b.g), std::abs(a[2] - b.b)});
+}
+
+class Slices : public ::testing::Test {
+protected:
+    // 2° cells; the outermost rows at ±89°, so the poles lie in the caps the sampler blends.
+    SphericalGrid grid = makeGrid(90, 21, 180);
+    std::shared_ptr<StepVolume> volume = makeVolume(grid, {{"f", field}});
+    std::vector<std::string> names{"f"};
+};
+
+TEST_F(Slices, MapColoursAreTheTruthAtPixelCentresInEveryProjection)
+{
+    for (const MapProjection projection : allMapProjections()) {
+        ResolvedState r = stateFor(720, 400);
+        r.state.map.projection = projection;
+        r.state.map.depthKm = 1000;
+        r.state.map.centralMeridianDeg = projection == MapProjection::Orthographic ? 0.0f : 150.0f;
+        r.state.map.centralLatitudeDeg = 60;  // the orthographic view looks at the north pole's side
+        const SliceInputs in{volume.get(), &r, names, "f", "step 0", nullptr};
+        const ImageRgba8 image = mapPicture(in);
+        ASSERT_EQ(image.width, 720);
+        const MapFrame frame = mapFrameOf(r.state);
+        // Points over the whole sphere: near both poles, on both sides of the seam (0°/360°) and of
+        // the map's own edge (the antimeridian of 150°E is -30°).
+        int checked = 0;
+        for (const double lat : {-88.9, -60.0, -20.0, 0.5, 33.0, 75.0, 88.9})
+            for (const double lon : {-179.0, -31.0, -29.0, -0.5, 0.5, 90.0, 149.0, 179.0}) {
+                const auto p = frame.pixelOf(lon, lat);
+                if (!p)
+                    continue;  // the far side of the orthographic globe
+                const int x = int((*p)[0]), y = int((*p)[1]);
+                const auto ll = frame.lonLatAt(x + 0.5, y + 0.5);
+                if (!ll)
+                    continue;  // a pixel whose centre lies just off the sphere's edge
+                // The outline is drawn over the sphere's rim: only pixels a few pixels inside it count.
+                bool inside = true;
+                for (const auto [dx, dy] : {std::pair{-3, 0}, {3, 0}, {0, -3}, {0, 3}})
+                    inside = inside && frame.lonLatAt(x + 0.5 + dx, y + 0.5 + dy).has_value();
+                if (!inside)
+                    continue;
+                const double truth = field((*ll)[1], kSurfaceRadiusKm - 1000, (*ll)[0]);
+                // 2° cells: the sampler's error is below 3e-3 here (1e-2 in the pole caps), a colour
+                // difference far below the 8-bit step (2/255) plus the map's slope.
+                const float err = colourError(pixel(image, x, y), r.params.transfer.colorOf(float(truth)));
+                EXPECT_LT(err, 0.025f) << mapProjectionName(projection) << " at " << lon << ", " << lat;
+                ++checked;
+            }
+        EXPECT_GT(checked, projection == MapProjection::Orthographic ? 12 : 24) << mapProjectionName(projection);
+        // Outside the sphere: the background.
+        if (projection != MapProjection::Equirectangular) {
+            const auto corner = pixel(image, 12, int(mapFrameOf(r.state).centrePx()[1] * 0.35));
+            EXPECT_LT(std::max({corner[0], corner[1], corner[2]}), 0.05f) << mapProjectionName(projection);
+        }
+    }
+}
+
+TEST_F(Slices, BrushesGreyWhatTheyLeaveOut)
+{
+    ResolvedState r = stateFor(400, 240);
+    r.state.map.projection = MapProjection::Equirectangular;
+    r.params.brushes = {RangeFilter{-1, Coordinate::Lat, {{0.0f, 90.0f}}}};  // the northern hemisphere
+    const SliceInputs in{volume.get(), &r, names, "f", "step 0", nullptr};
+    const ImageRgba8 image = mapPicture(in);
+    const MapFrame frame = mapFrameOf(r.state);
+    for (const double lon : {-120.0, 10.0, 100.0}) {
+        const auto north = frame.pixelOf(lon, 40), south = frame.pixelOf(lon, -40);
+        const auto n = pixel(image, int((*north)[0]), int((*north)[1]));
+        const auto s = pixel(image, int((*south)[0]), int((*south)[1]));
+        EXPECT_TRUE(s[0] == s[1] && s[1] == s[2]) << "the south at " << lon << " is not grey";
+        EXPECT_FALSE(n[0] == n[1] && n[1] == n[2]) << "the north at " << lon << " is grey";
+    }
+    r.state.map.greyUnselected = false;
+    const ImageRgba8 colour = mapPicture(in);
+    const auto south = frame.pixelOf(10, -40);
+    const auto s = pixel(colour, int((*south)[0]), int((*south)[1]));
+    EXPECT_FALSE(s[0] == s[1] && s[1] == s[2]) << "greyUnselected off still greys";
+}
+
+TEST_F(Slices, LatLonSliceIsTheTruthAtPolesAndSeam)
+{
+    const SliceGrid g = latLonSlice(*volume, 0, 660, 0.5);
+    ASSERT_EQ(g.rows.size(), 360u);
+    ASSERT_EQ(g.columns.size(), 720u);
+    EXPECT_DOUBLE_EQ(g.rows.front(), -89.75);
+    EXPECT_DOUBLE_EQ(g.columns.back(), 359.75);
+    double worst = 0;
+    for (size_t i = 0; i < g.rows.size(); ++i)
+        for (size_t j = 0; j < g.columns.size(); ++j)
+            worst = std::max(worst, std::abs(g.values[i * g.columns.size() + j] - field(g.rows[i], kSurfaceRadiusKm - 660, g.columns[j])));
+    EXPECT_LT(worst, 1e-2);
+    EXPECT_THROW(latLonSlice(*volume, 0, 3000, 1), Error);  // below the core-mantle boundary
+    EXPECT_THROW(latLonSlice(*volume, 0, 660, 0.7), Error);  // does not divide 180
+}
+
+TEST_F(Slices, GreatCircleLengthsPointsAndRefusals)
+{
+    const GreatCircle c({0, 0}, {0, 90});
+    EXPECT_NEAR(c.lengthDeg(), 90, 1e-9);
+    EXPECT_NEAR(c.lengthKm(), 0.5 * M_PI * kSurfaceRadiusKm, 1e-6);
+    const SphericalPoint mid = cartesianToSpherical(c.at(0.5));
+    EXPECT_NEAR(mid.latDeg, 0, 1e-9);
+    EXPECT_NEAR(mid.lonDeg, 45, 1e-9);
+    // The shorter arc across the seam: from 170°E to 170°W passes 180°.
+    const GreatCircle seam({10, 170}, {10, -170});
+    EXPECT_NEAR(cartesianToSpherical(seam.at(0.5)).lonDeg, 180, 1e-6);
+    EXPECT_LT(seam.lengthDeg(), 21);
+    EXPECT_THROW(GreatCircle({10, 20}, {10, 20}), Error);
+    EXPECT_THROW(GreatCircle({30, 20}, {-30, 200}), Error);  // antipodal
+    // Over a pole.
+    const GreatCircle pole({80, 0}, {80, 180});
+    EXPECT_NEAR(cartesianToSpherical(pole.at(0.5)).latDeg, 90, 1e-6);
+}
+
+// A blob at 30°E on the equator, 1000 km deep: the section from 0°E to 60°E meets it half way.
+TEST(SectionOfABlob, CrossesItAtItsDistanceAndDepth)
+{
+    const SphericalGrid grid = makeGrid(90, 41, 180);
+    const Vec3d centre = sphericalToCartesianKm(0, 30, kSurfaceRadiusKm - 1000);
+    const auto blob = [&](double lat, double r, double lon) {
+        const Vec3d d = sphericalToCartesianKm(lat, lon, r) - centre;
+        return float(std::exp(-dot(d, d) / (2 * 300.0 * 300.0)));
+    };
+    const auto volume = makeVolume(grid, {{"blob", blob}});
+    SectionState section;
+    section.from = {0, 0};
+    section.to = {0, 60};
+    const SectionGrid g = sectionGrid(*volume, 0, section, 121, 289);
+    size_t best = 0;
+    for (size_t i = 0; i < g.grid.values.size(); ++i)
+        if (g.grid.values[i] > g.grid.values[best])
+            best = i;
+    const double distanceKm = g.grid.columns[best % 121], depthKm = g.grid.rows[best / 121];
+    EXPECT_NEAR(distanceKm, degToRad(30) * kSurfaceRadiusKm, 60) << "distance of the blob's peak";
+    EXPECT_NEAR(depthKm, 1000, 40) << "depth of the blob's peak";
+    EXPECT_NEAR(g.latDeg[60], 0, 1e-9);
+    EXPECT_NEAR(g.lonDeg[60], 30, 1e-9);
+    EXPECT_NEAR(g.grid.rows.back(), kSurfaceRadiusKm - grid.rKm.front(), 1e-9);
+
+    // The picture: the blob's colour at its place, the background colour far from it.
+    ResolvedState r = stateFor(800, 500);
+    r.state.section = section;
+    r.params.transfer.range = {0, 1};
+    const std::vector<std::string> names{"blob"};
+    const SliceInputs in{volume.get(), &r, names, "blob", "step 0", nullptr};
+    const ImageRgba8 image = sectionPicture(in);
+    if (const char* out = std::getenv("RAYPC_TEST_PICTURES"))
+        writePng(std::string(out) + "/section_blob.png", image);
+    const SectionLayout l = sectionLayoutOf(r.state, grid);
+    const int x = int(l.left + 0.5 * (l.right - l.left)), y = int(l.top + 1000 / l.depthSpanKm * (l.bottom - l.top));
+    // There the picture shows what the grid export holds (the blob's peak, as 2° cells sample it).
+    const float peak = g.grid.values[size_t(std::lround(1000 / (g.grid.rows[1] - g.grid.rows[0]))) * 121 + 60];
+    EXPECT_GT(peak, 0.5f);
+    EXPECT_LT(colourError(pixel(image, x, y), r.params.transfer.colorOf(peak)), 0.03f);
+    const int x0 = int(l.left + 0.05 * (l.right - l.left));
+    EXPECT_LT(colourError(pixel(image, x0, y), r.params.transfer.colorOf(0.0f)), 0.03f);
+    r.state.section.to = {0, 180};
+    EXPECT_THROW(sectionPicture(in), Error);  // antipodal ends
+}
+
+TEST(MapFlow, NeedsTheVelocity)
+{
+    const SphericalGrid grid = makeGrid(18, 5, 36);
+    const auto volume = makeVolume(grid, {{"f", field}});
+    ResolvedState r = stateFor(200, 120);
+    r.state.map.flow = true;
+    const std::vector<std::string> names{"f"};
+    const SliceInputs in{volume.get(), &r, names, "f", "step 0", nullptr};
+    try {
+        mapPicture(in);
+        FAIL() << "a flow without vx, vy, vz was drawn";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("map.flow"), std::string::npos) << e.what();
+    }
+}
+
+}  // namespace
+}  // namespace raypc::render

@@ -1,0 +1,289 @@
+// The map of a depth slice and the great-circle section (docs/maps.md; state.map and
+// state.section): the server draws both for the state in force (POST /api/slice, the renderer's
+// render/slice_view.h, as `raypc map` and `raypc section` draw them) in the bottom panel's "Map &
+// section" tab; their controls are the side panel's "Map and section". The pointer reads the point
+// under it with d3's projection placed as the server placed it (the same formulas, tested against
+// each other) and its values from the server (GET /api/probe); a click on the map sets the
+// section's start, the next its end.
+import { geoEquirectangular, geoInterpolate, geoOrthographic, type GeoProjection } from 'd3-geo';
+import { geoHammer, geoMollweide, geoRobinson } from 'd3-geo-projection';
+import { fetchProbe, postSlice, type SliceHeader } from './api';
+import type { RenderState } from './state';
+import type { StateStore } from './store';
+import { displayUnits } from './units';
+
+const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
+
+const kProjections: Record<string, () => GeoProjection> = {
+  equirectangular: geoEquirectangular,
+  mollweide: geoMollweide,
+  hammer: geoHammer,
+  robinson: geoRobinson,
+  orthographic: geoOrthographic,
+};
+
+export interface SlicePanelHost {
+  // The state changed only in its map or section: kept (the URL), and a new frame of the 3D view
+  // only while it marks them (map.showInView).
+  changed(): void;
+  showError(message: string): void;
+}
+
+type View = 'map' | 'section';
+
+// One picture: at most one request in flight; a state that changes meanwhile is drawn next.
+class SlicePicture {
+  header: SliceHeader | null = null;
+  private busy = false;
+  private dirty = false;
+  private url = '';
+  // How many pictures have been shown (tests wait for the next one).
+  shown = 0;
+
+  constructor(readonly view: View, readonly image: HTMLImageElement, private readonly state: () => RenderState | null,
+    private readonly showError: (m: string) => void) {}
+
+  request(): void {
+    if (this.busy) {
+      this.dirty = true;
+      return;
+    }
+    const state = this.state();
+    if (!state) return;
+    this.busy = true;
+    this.dirty = false;
+    postSlice(this.view, state)
+      .then(({ header, png }) => {
+        if (this.url) URL.revokeObjectURL(this.url);
+        this.url = URL.createObjectURL(png);
+        this.image.src = this.url;
+        this.header = header;
+        this.shown++;
+      })
+      .catch((e: Error) => this.showError(e.message))
+      .finally(() => {
+        this.busy = false;
+        if (this.dirty) this.request();
+      });
+  }
+
+  // The point of the picture under a mouse event, in the picture's pixels.
+  pixelOf(e: MouseEvent): [number, number] | null {
+    if (!this.header || !this.image.clientWidth) return null;
+    // The picture is drawn whole at the element's top left (object-fit: contain).
+    const r = this.image.getBoundingClientRect();
+    const cssPerPixel = Math.min(r.width / this.header.width, r.height / this.header.height);
+    return [(e.clientX - r.left) / cssPerPixel, (e.clientY - r.top) / cssPerPixel];
+  }
+}
+
+export class SlicePanel {
+  readonly map: SlicePicture;
+  readonly section: SlicePicture;
+  private visible = false;
+  private nextEnd: 'from' | 'to' = 'from';
+  private probeBusy = false;
+  private probeNext: (() => void) | null = null;
+
+  constructor(private readonly store: StateStore, private readonly host: SlicePanelHost) {
+    const sized = (image: HTMLImageElement) => (): RenderState | null => {
+      const box = image.parentElement!.getBoundingClientRect();
+      const dpr = window.devicePixelRatio || 1;
+      const width = Math.round(box.width * dpr), height = Math.round((box.height - 20) * dpr);
+      if (width < 64 || height < 64) return null;
+      return { ...this.store.state, image: { width, height } };
+    };
+    this.map = new SlicePicture('map', $<HTMLImageElement>('mapImage'), sized($<HTMLImageElement>('mapImage')), host.showError);
+    this.section = new SlicePicture('section', $<HTMLImageElement>('sectionImage'),
+      sized($<HTMLImageElement>('sectionImage')), host.showError);
+    this.setUpControls();
+    this.setUpPointer();
+    new ResizeObserver(() => this.stateChanged()).observe($('slices'));
+  }
+
+  // The tab is shown or hidden (app.ts's bottom tabs).
+  setVisible(visible: boolean): void {
+    const was = this.visible;
+    this.visible = visible;
+    $('slices').hidden = !visible;
+    // While the tab is shown the 3D view marks the map's depth and the section (state.map.showInView).
+    if (was !== visible && this.store.state.map.showInView !== visible) {
+      this.store.state.map = { ...this.store.state.map, showInView: visible };
+      this.host.changed();
+    }
+    if (visible) this.stateChanged();
+  }
+
+  // The state in force changed: both pictures follow while they are shown.
+  stateChanged(): void {
+    if (!this.visible) return;
+    this.map.request();
+    this.section.request();
+  }
+
+  // Puts the state into the controls (after a load, a preset, the URL).
+  sync(): void {
+    const m = this.store.state.map, s = this.store.state.section;
+    $<HTMLInputElement>('mapDepth').value = String(m.depthKm);
+    $<HTMLInputElement>('mapDepthValue').value = String(m.depthKm);
+    $<HTMLSelectElement>('mapProjection').value = m.projection;
+    $<HTMLInputElement>('mapMeridian').value = String(m.centralMeridianDeg);
+    $<HTMLInputElement>('mapContours').value = m.contours.join(', ');
+    $<HTMLInputElement>('mapFlow').checked = m.flow;
+    $<HTMLInputElement>('mapGrey').checked = m.greyUnselected;
+    $<HTMLInputElement>('sectionFrom').value = `${s.from.latDeg}, ${s.from.lonDeg}`;
+    $<HTMLInputElement>('sectionTo').value = `${s.to.latDeg}, ${s.to.lonDeg}`;
+    $<HTMLInputElement>('sectionFlow').checked = s.flow;
+    this.updateDepthPicks();
+  }
+
+  private setUpControls(): void {
+    const info = this.store.info;
+    // The slider spans the grid's depths (level 0's radii).
+    const coordinate = info.coordinates.find((c) => c.name === 'depth');
+    const slider = $<HTMLInputElement>('mapDepth');
+    slider.min = String(Math.ceil(coordinate?.min ?? 0));
+    slider.max = String(Math.floor(coordinate?.max ?? 2886));
+    const setDepth = (depth: number, final: boolean) => {
+      const lo = Number(slider.min), hi = Number(slider.max);
+      if (!Number.isFinite(depth)) return;
+      this.store.state.map = { ...this.store.state.map, depthKm: Math.min(hi, Math.max(lo, depth)) };
+      $<HTMLInputElement>('mapDepthValue').value = String(this.store.state.map.depthKm);
+      slider.value = String(this.store.state.map.depthKm);
+      if (final) this.host.changed();
+      this.stateChanged();
+    };
+    slider.addEventListener('input', () => setDepth(Number(slider.value), false));
+    slider.addEventListener('change', () => setDepth(Number(slider.value), true));
+    $<HTMLInputElement>('mapDepthValue').addEventListener('change', (e) => setDepth(Number((e.target as HTMLInputElement).value), true));
+    $('mapDepthPicks').addEventListener('click', (e) => {
+      const depth = (e.target as HTMLElement).dataset.depth;
+      if (depth) setDepth(Number(depth), true);
+    });
+    const change = (f: (s: RenderState) => void) => () => {
+      f(this.store.state);
+      this.host.changed();
+      this.stateChanged();
+    };
+    $('mapProjection').addEventListener('change', change((s) => { s.map = { ...s.map, projection: $<HTMLSelectElement>('mapProjection').value as RenderState['map']['projection'] }; }));
+    $('mapMeridian').addEventListener('change', change((s) => {
+      const v = Number($<HTMLInputElement>('mapMeridian').value);
+      if (Number.isFinite(v)) s.map = { ...s.map, centralMeridianDeg: Math.max(-180, Math.min(180, v)) };
+    }));
+    $('mapContours').addEventListener('change', change((s) => {
+      const text = $<HTMLInputElement>('mapContours').value.trim();
+      const values = text ? text.split(/[,\s]+/).map(Number) : [];
+      if (values.some((v) => !Number.isFinite(v)) || values.length > 16) {
+        this.host.showError(`contours: '${text}': expected up to 16 numbers separated by commas`);
+        return;
+      }
+      s.map = { ...s.map, contours: values as RenderState['map']['contours'] };
+    }));
+    $('mapFlow').addEventListener('change', change((s) => { s.map = { ...s.map, flow: $<HTMLInputElement>('mapFlow').checked }; }));
+    $('mapGrey').addEventListener('change', change((s) => { s.map = { ...s.map, greyUnselected: $<HTMLInputElement>('mapGrey').checked }; }));
+    $('sectionFlow').addEventListener('change', change((s) => { s.section = { ...s.section, flow: $<HTMLInputElement>('sectionFlow').checked }; }));
+    for (const end of ['from', 'to'] as const) {
+      const input = $<HTMLInputElement>(end === 'from' ? 'sectionFrom' : 'sectionTo');
+      input.addEventListener('change', () => {
+        const parts = input.value.split(',').map((t) => Number(t.trim()));
+        if (parts.length !== 2 || !parts.every(Number.isFinite) || Math.abs(parts[0]) > 90 || Math.abs(parts[1]) > 360) {
+          this.host.showError(`section ${end}: '${input.value}': expected LAT, LON in degrees (lat in [-90, 90])`);
+          return;
+        }
+        this.setEnd(end, parts[0], parts[1]);
+      });
+    }
+  }
+
+  // The reference shells' depths as quick picks beside the slider.
+  private updateDepthPicks(): void {
+    const picks = $('mapDepthPicks');
+    const depths = this.store.state.reference.shells.depthsKm;
+    const text = depths.join(',');
+    if (picks.dataset.depths === text) return;
+    picks.dataset.depths = text;
+    picks.replaceChildren(...depths.map((d) => {
+      const b = document.createElement('button');
+      b.textContent = `${d} km`;
+      b.dataset.depth = String(d);
+      b.title = `Map at ${d} km depth`;
+      return b;
+    }));
+  }
+
+  private setEnd(end: 'from' | 'to', latDeg: number, lonDeg: number): void {
+    const s = this.store.state;
+    s.section = { ...s.section, [end]: { latDeg: Math.round(latDeg * 100) / 100, lonDeg: Math.round(lonDeg * 100) / 100 } };
+    $<HTMLInputElement>(end === 'from' ? 'sectionFrom' : 'sectionTo').value = `${s.section[end].latDeg}, ${s.section[end].lonDeg}`;
+    this.host.changed();
+    this.stateChanged();
+  }
+
+  // The map's (lon, lat) under a point of its picture, or null off the sphere: d3's projection
+  // with the server's scale and centre (a round trip within half a pixel, d3's inverse being
+  // defined beyond the sphere too).
+  lonLatOnMap(px: number, py: number): [number, number] | null {
+    const h = this.map.header;
+    const make = h?.projection ? kProjections[h.projection] : undefined;
+    if (!h || !make || h.scale === undefined || !h.centre) return null;
+    const p = make().scale(h.scale).translate(h.centre).rotate([-(h.centralMeridianDeg ?? 0), -(h.centralLatitudeDeg ?? 0)]);
+    const ll = p.invert?.([px, py]);
+    if (!ll || !ll.every(Number.isFinite)) return null;
+    const back = p(ll);
+    if (!back || Math.hypot(back[0] - px, back[1] - py) > 0.5) return null;
+    return [((ll[0] + 540) % 360) - 180, ll[1]];
+  }
+
+  // The section's (lon, lat, depth) under a point of its picture, or null outside its plot.
+  pointOnSection(px: number, py: number): { lon: number; lat: number; depthKm: number } | null {
+    const h = this.section.header;
+    if (!h?.plot || !h.from || !h.to || h.depthSpanKm === undefined) return null;
+    const { left, right, top, bottom } = h.plot;
+    if (px < left || px > right || py < top || py > bottom) return null;
+    const [lon, lat] = geoInterpolate([h.from[1], h.from[0]], [h.to[1], h.to[0]])((px - left) / (right - left));
+    return { lon, lat, depthKm: ((py - top) / (bottom - top)) * h.depthSpanKm };
+  }
+
+  private setUpPointer(): void {
+    const variable = () => this.store.state.color.variable || this.store.info.variables[0].name;
+    const readout = (id: string, lat: number, lon: number, depthKm: number) => {
+      const ask = () => {
+        this.probeBusy = true;
+        fetchProbe(this.store.state.step, lat, lon, depthKm, variable())
+          .then((a) => {
+            const v = a.values[variable()];
+            const where = `${Math.abs(lat).toFixed(1)}°${lat < 0 ? 'S' : 'N'} ${Math.abs(lon).toFixed(1)}°${lon < 0 ? 'W' : 'E'}, ${depthKm.toFixed(0)} km deep`;
+            $(id).textContent = v ? `${where}: ${variable()} ${v.value.toPrecision(4)} ${displayUnits(v.units)}` : where;
+          })
+          .catch(() => { $(id).textContent = ''; })
+          .finally(() => {
+            this.probeBusy = false;
+            const next = this.probeNext;
+            this.probeNext = null;
+            next?.();
+          });
+      };
+      if (this.probeBusy) this.probeNext = ask;
+      else ask();
+    };
+    const mapImage = this.map.image, sectionImage = this.section.image;
+    mapImage.addEventListener('mousemove', (e) => {
+      const p = this.map.pixelOf(e);
+      const ll = p && this.lonLatOnMap(p[0], p[1]);
+      if (ll) readout('mapReadout', ll[1], ll[0], this.store.state.map.depthKm);
+      else $('mapReadout').textContent = 'click the map: the section\u2019s start, then its end';
+    });
+    mapImage.addEventListener('click', (e) => {
+      const p = this.map.pixelOf(e);
+      const ll = p && this.lonLatOnMap(p[0], p[1]);
+      if (!ll) return;
+      this.setEnd(this.nextEnd, ll[1], ll[0]);
+      this.nextEnd = this.nextEnd === 'from' ? 'to' : 'from';
+    });
+    sectionImage.addEventListener('mousemove', (e) => {
+      const p = this.section.pixelOf(e);
+      const q = p && this.pointOnSection(p[0], p[1]);
+      if (q) readout('sectionReadout', q.lat, q.lon, q.depthKm);
+    });
+  }
+}
