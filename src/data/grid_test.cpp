@@ -167,5 +167,71 @@ TEST(Sampler, ReproducesTrilinearFunctionsAndIsContinuousAtSeamAndPoles)
     EXPECT_NEAR(s.sample(byLon.data(), *s.locate(g.latDeg.back() + 1e-6, 0, 5000)), 1.0, 1e-6);
 }
 
+// The constant-time bracket of an evenly spaced axis finds what a binary search finds, at nodes,
+// between them, at and beyond the ends; an uneven axis is searched.
+TEST(Sampler, AxisBracketEqualsBinarySearch)
+{
+    std::vector<double> even, uneven;
+    for (int i = 0; i < 180; ++i)
+        even.push_back(-89.5 + i);
+    for (int i = 0; i < 50; ++i)
+        uneven.push_back(3480 + 60.0 * i + 0.3 * i * i);
+    auto reference = [](const std::vector<double>& c, double x) {
+        const auto it = std::upper_bound(c.begin(), c.end(), x);
+        const size_t i = it == c.begin() ? 0 : std::min(c.size() - 2, size_t(it - c.begin()) - 1);
+        return std::pair{i, std::clamp((x - c[i]) / (c[i + 1] - c[i]), 0.0, 1.0)};
+    };
+    std::mt19937 rng(7);
+    for (const auto* c : {&even, &uneven}) {
+        const GridSampler::Axis axis(*c);
+        std::vector<double> xs{c->front(), c->back(), c->front() - 5, c->back() + 5, -1e300, 1e300};
+        for (const double node : *c)
+            xs.insert(xs.end(), {node, std::nextafter(node, -1e300), std::nextafter(node, 1e300)});
+        std::uniform_real_distribution<double> u(c->front() - 1, c->back() + 1);
+        for (int k = 0; k < 10000; ++k)
+            xs.push_back(u(rng));
+        for (const double x : xs) {
+            const auto [i, t] = axis.bracket(x);
+            const auto [iRef, tRef] = reference(*c, x);
+            ASSERT_EQ(i, iRef) << "x = " << x;
+            ASSERT_EQ(t, tRef) << "x = " << x;
+        }
+    }
+}
+
+// locate(lat, lon, r) is its two parts combined; sampleLateral on a shell's values is the
+// trilinear value at that shell's radius.
+TEST(Sampler, PartsCombineToLocateAndAShellSamplesAsTheVolume)
+{
+    const SphericalGrid g = centredGrid(18, 9, 36);
+    std::vector<float> f(g.cellCount());
+    for (size_t a = 0; a < g.nLat(); ++a)
+        for (size_t b = 0; b < g.nR(); ++b)
+            for (size_t c = 0; c < g.nLon(); ++c)
+                f[g.index(a, b, c)] = float(std::sin(0.3 * double(a)) * g.rKm[b] + std::cos(0.2 * double(c)));
+    const GridSampler s(g);
+    const double r = 4321.0;
+    const auto radial = *s.locateRadius(r);
+    std::vector<double> shell(g.nLat() * g.nLon());
+    for (size_t a = 0; a < g.nLat(); ++a)
+        for (size_t c = 0; c < g.nLon(); ++c) {
+            const double lo = f[g.index(a, radial.r0, c)], hi = f[g.index(a, radial.r1, c)];
+            shell[a * g.nLon() + c] = lo + (hi - lo) * radial.tR;
+        }
+    for (const auto& [lat, lon] : {std::pair{12.3, 45.6}, {89.99, 200.0}, {-90.0, 0.0}, {0.0, 359.9}, {-45.0, -10.0}}) {
+        const auto whole = *s.locate(lat, lon, r);
+        const auto combined = GridSampler::combine(*s.locateLatLon(lat, lon), radial);
+        EXPECT_EQ(whole.lat0, combined.lat0);
+        EXPECT_EQ(whole.lon1, combined.lon1);
+        EXPECT_EQ(whole.tLon, combined.tLon);
+        EXPECT_EQ(whole.poleWeight, combined.poleWeight);
+        const double onShell =
+            s.sampleLateral([&](size_t a, size_t c) { return shell[a * g.nLon() + c]; }, *s.locateLatLon(lat, lon));
+        EXPECT_NEAR(onShell, s.sample(f.data(), whole), 1e-9 * 5000) << lat << ", " << lon;
+    }
+    EXPECT_FALSE(s.locateRadius(3000));
+    EXPECT_FALSE(s.locateLatLon(90.5, 0));
+}
+
 }  // namespace
 }  // namespace raypc

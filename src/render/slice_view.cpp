@@ -1,6 +1,7 @@
 #include "render/slice_view.h"
 
 #include "core/error.h"
+#include "core/lru_cache.h"
 #include "core/spherical.h"
 #include "data/coordinates.h"
 #include "data/sampler.h"
@@ -12,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <span>
 
 namespace raypc::render {
@@ -62,14 +64,52 @@ public:
         const auto where = m_sampler.locate(latDeg, lonDeg, rKm);
         if (!where)
             return std::nullopt;
-        bool selected = true;
-        for (size_t i = 0; i < m_params.brushes.size() && selected; ++i) {
-            const RangeFilter& f = m_params.brushes[i];
-            const double v = f.variable >= 0 ? m_sampler.sample(m_brushValues[i], *where)
-                                             : coordinateValue(*f.coordinate, latDeg, lonDeg, rKm);
-            selected = f.contains(v);
-        }
-        return Sample{float(m_sampler.sample(m_color, *where)), selected};
+        return at(*where, latDeg, lonDeg, rKm);
+    }
+    // The same where the point's location on the grid is known (a section locates its columns and
+    // its rows once).
+    Sample at(const GridSampler::Location& where, double latDeg, double lonDeg, double rKm) const
+    {
+        auto value = [&](size_t slot) { return m_sampler.sample(slot == 0 ? m_color : m_brushValues[slot - 1], where); };
+        return evaluate(value, latDeg, lonDeg, rKm);
+    }
+
+    // From now on `onShell` samples the shell of radius rKm (a map's): the colour's and the brushes'
+    // variables interpolated in radius once, then in lat and lon per point (the same trilinear
+    // value; GridSampler::sampleLateral).
+    void fixRadius(double rKm)
+    {
+        const auto radial = m_sampler.locateRadius(rKm);
+        if (!radial)
+            fail("a shell of radius {} km is outside the grid", rKm);
+        m_shellRKm = rKm;
+        const SphericalGrid& g = m_sampler.grid();
+        auto layerOf = [&](const float* values) {
+            std::vector<double> layer(g.nLat() * g.nLon());
+            tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
+                const float* a = values + g.index(iLat, radial->r0, 0);
+                const float* b = values + g.index(iLat, radial->r1, 0);
+                for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+                    layer[iLat * g.nLon() + iLon] = a[iLon] + (double(b[iLon]) - a[iLon]) * radial->tR;
+            });
+            return layer;
+        };
+        m_layers.clear();
+        m_layers.push_back(layerOf(m_color));
+        for (const float* values : m_brushValues)
+            m_layers.push_back(values ? layerOf(values) : std::vector<double>{});
+    }
+    std::optional<Sample> onShell(double latDeg, double lonDeg) const
+    {
+        const auto where = m_sampler.locateLatLon(latDeg, lonDeg);
+        if (!where)
+            return std::nullopt;
+        const size_t nLon = m_sampler.grid().nLon();
+        auto value = [&](size_t slot) {
+            const std::vector<double>& layer = m_layers[slot];
+            return m_sampler.sampleLateral([&](size_t iLat, size_t iLon) { return layer[iLat * nLon + iLon]; }, *where);
+        };
+        return evaluate(value, latDeg, lonDeg, m_shellRKm);
     }
 
     // The velocity (cm/yr, Cartesian components in the contest frame) at a point.
@@ -83,12 +123,30 @@ public:
                kMpsToCmPerYr;
     }
 
+    const GridSampler& sampler() const { return m_sampler; }
+
 private:
+    // The colour and whether the brushes select the point, with `value(slot)` the interpolated value
+    // there of the colour variable (slot 0) or of brush i's variable (slot 1 + i).
+    template <class Value>
+    Sample evaluate(const Value& value, double latDeg, double lonDeg, double rKm) const
+    {
+        bool selected = true;
+        for (size_t i = 0; i < m_params.brushes.size() && selected; ++i) {
+            const RangeFilter& f = m_params.brushes[i];
+            const double v = f.variable >= 0 ? value(1 + i) : coordinateValue(*f.coordinate, latDeg, lonDeg, rKm);
+            selected = f.contains(v);
+        }
+        return Sample{float(value(size_t(0))), selected};
+    }
+
     GridSampler m_sampler;
     const RenderParams& m_params;
     const float* m_color;
     std::vector<const float*> m_brushValues;  // per brush: its variable's values, or null for a coordinate
     std::array<const float*, 3> m_velocity{};
+    double m_shellRKm = NAN;                   // fixRadius's
+    std::vector<std::vector<double>> m_layers;  // fixRadius's: the colour's, then per brush (empty: a coordinate)
 };
 
 // Per pixel: the colour variable (NaN where nothing is drawn) and whether it is selected.
@@ -99,22 +157,19 @@ struct PixelSamples {
     PixelSamples(int w, int h) : width(w), height(h), value(size_t(w) * size_t(h), NAN), selected(value.size(), 1) {}
 };
 
-// Samples every pixel whose centre `where` places on a point (lat, lon, r).
-template <class Where>
-PixelSamples samplePixels(int width, int height, const PointProbe& probe, const Where& where)
+// Samples every pixel: `sampleAt(x, y)` gives the sample at the centre of pixel (x, y), or nullopt
+// where nothing is drawn.
+template <class SampleAt>
+PixelSamples samplePixels(int width, int height, const SampleAt& sampleAt)
 {
     PixelSamples out(width, height);
     tbb::parallel_for(0, height, [&](int y) {
-        for (int x = 0; x < width; ++x) {
-            const std::optional<std::array<double, 3>> p = where(x + 0.5, y + 0.5);
-            if (!p)
-                continue;
-            if (const auto s = probe.at((*p)[0], (*p)[1], (*p)[2])) {
+        for (int x = 0; x < width; ++x)
+            if (const std::optional<PointProbe::Sample> s = sampleAt(x, y)) {
                 const size_t i = size_t(y) * size_t(width) + size_t(x);
                 out.value[i] = s->value;
                 out.selected[i] = s->selected ? 1 : 0;
             }
-        }
     });
     return out;
 }
@@ -429,6 +484,38 @@ Vec3d GreatCircle::tangentAt(double fraction) const
     return m_ortho * std::cos(a) - m_from * std::sin(a);
 }
 
+namespace {
+
+// Every pixel's point (lat, lon in degrees; NaN off the sphere) of a map frame: the inverse
+// projection of each pixel centre, the bulk of a map's cost. The same for every depth and step, so
+// the last frames' are kept: dragging the depth (or playing the series) redraws without it.
+struct MapPixelsKey {
+    MapProjection projection;
+    double centralMeridianDeg, centralLatitudeDeg, scale, cx, cy;
+    int width, height;
+    bool operator==(const MapPixelsKey&) const = default;
+};
+using MapPixelPoints = std::vector<std::array<float, 2>>;
+
+std::shared_ptr<const MapPixelPoints> mapPixelPoints(const MapState& map, const MapFrame& frame, int width, int height)
+{
+    // Two frames (the map pane's and a full-size figure's, say): 16 MB each at 1920 x 1080.
+    static LruCache<MapPixelsKey, MapPixelPoints> cache(2);
+    const auto [cx, cy] = frame.centrePx();
+    const MapPixelsKey key{map.projection, map.centralMeridianDeg, map.centralLatitudeDeg, frame.scale(), cx, cy, width, height};
+    return cache.get(key, [&] {
+        MapPixelPoints points(size_t(width) * size_t(height), {NAN, NAN});
+        tbb::parallel_for(0, height, [&](int y) {
+            for (int x = 0; x < width; ++x)
+                if (const auto ll = frame.lonLatAt(x + 0.5, y + 0.5))
+                    points[size_t(y) * size_t(width) + size_t(x)] = {float((*ll)[1]), float((*ll)[0])};
+        });
+        return points;
+    });
+}
+
+}  // namespace
+
 ImageRgba8 mapPicture(const SliceInputs& in)
 {
     const RenderState& state = stateOf(in);
@@ -437,16 +524,18 @@ ImageRgba8 mapPicture(const SliceInputs& in)
     const int width = state.width, height = state.height;
     const SphericalGrid& grid = in.volume->grid();
     const double rKm = radiusAtDepth(grid, map.depthKm, "map.depthKm");
-    const PointProbe probe(*in.volume, params, in.variableNames, map.flow, "map.flow");
+    PointProbe probe(*in.volume, params, in.variableNames, map.flow, "map.flow");
 
     const int fontPx = legendFontPx(width, height);
     const double top = mapTopPx(state), bottom = mapBottomPx(state);
     const MapFrame frame = mapFrameOf(state);
-    const PixelSamples samples = samplePixels(width, height, probe, [&](double x, double y) -> std::optional<std::array<double, 3>> {
-        const auto ll = frame.lonLatAt(x, y);
-        if (!ll)
+    probe.fixRadius(rKm);
+    const std::shared_ptr<const MapPixelPoints> points = mapPixelPoints(map, frame, width, height);
+    const PixelSamples samples = samplePixels(width, height, [&](int x, int y) -> std::optional<PointProbe::Sample> {
+        const auto [lat, lon] = (*points)[size_t(y) * size_t(width) + size_t(x)];
+        if (std::isnan(lat))
             return std::nullopt;
-        return std::array{(*ll)[1], (*ll)[0], rKm};
+        return probe.onShell(lat, lon);
     });
     const bool grey = map.greyUnselected && !params.brushes.empty();
     ImageRgba8 image{width, height, colorPixels(samples, params.transfer, state.background, grey)};
@@ -581,7 +670,29 @@ ImageRgba8 sectionPicture(const SliceInputs& in)
         const SphericalPoint p = cartesianToSpherical(circle.at(f));
         return std::array{p.latDeg, p.lonDeg, std::clamp(r, grid.rKm.front(), grid.rKm.back())};
     };
-    const PixelSamples samples = samplePixels(width, height, probe, pointAt);
+    // Every column's point on the arc and every row's radius located once.
+    const GridSampler& sampler = probe.sampler();
+    struct Column {
+        double latDeg, lonDeg;
+        GridSampler::LateralPart where;
+    };
+    std::vector<std::optional<Column>> columns(static_cast<size_t>(width));
+    for (int x = 0; x < width; ++x)
+        if (const auto p = pointAt(x + 0.5, top))
+            if (const auto where = sampler.locateLatLon((*p)[0], (*p)[1]))
+                columns[size_t(x)] = Column{(*p)[0], (*p)[1], *where};
+    std::vector<std::optional<std::pair<double, GridSampler::RadialPart>>> rows(static_cast<size_t>(height));
+    for (int y = 0; y < height; ++y)
+        if (const auto p = pointAt(0.5 * (left + right), y + 0.5))
+            if (const auto where = sampler.locateRadius((*p)[2]))
+                rows[size_t(y)] = {(*p)[2], *where};
+    const PixelSamples samples = samplePixels(width, height, [&](int x, int y) -> std::optional<PointProbe::Sample> {
+        const auto& column = columns[size_t(x)];
+        const auto& row = rows[size_t(y)];
+        if (!column || !row)
+            return std::nullopt;
+        return probe.at(GridSampler::combine(column->where, row->second), column->latDeg, column->lonDeg, row->first);
+    });
     const bool grey = state.map.greyUnselected && !params.brushes.empty();
     ImageRgba8 image{width, height, colorPixels(samples, params.transfer, state.background, grey)};
     const Rgb ink = inkFor(state.background);

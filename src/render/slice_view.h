@@ -2,7 +2,8 @@
 // `raypc map`, `raypc section`, `raypc render --view map|section`).
 //
 // Both sample the native grid at every pixel (GridSampler: the interpolation of the ray caster and
-// `raypc probe`, pole caps and the lon seam included; no resampled copy), colour the state's colour
+// `raypc probe`, pole caps and the lon seam included; no resampled copy: a map interpolates in radius
+// once, into the shell's lat-lon layer, then each pixel in lat and lon), colour the state's colour
 // variable by its transfer function's colours (not its opacity), grey what lies outside the
 // brushes, and draw contours, the flow as arrows, coastlines and graticule (maps), the reference
 // shells' depths (sections), a title and the legend. The grids they export (CF netCDF, for GMT,
@@ -10,7 +11,9 @@
 //
 // Units: km (radius, depth, distance along the surface), degrees (lat north, lon east), the
 // variable's own units; velocities (vx, vy, vz: m/s in the contest's Cartesian frame) in cm/yr.
-// Thread safety: plain functions over immutable inputs; parallel over rows (oneTBB) inside.
+// Thread safety: plain functions over immutable inputs; parallel over rows (oneTBB) inside. Maps keep
+// every pixel's inverse projection of the last two frames (projection, centre, size) in a
+// thread-safe cache shared by all callers.
 #pragma once
 
 #include "core/vec3.h"
