@@ -4,7 +4,7 @@
 //   [--stereo off|side-by-side|side-by-side-half|anaglyph] [--view 3d|map|section]
 // raypc map DATASET … [--depth KM] [--projection NAME] [--central-meridian DEG] [--contours V,…] [--flow]
 //   [--netcdf slice.nc [--grid-step DEG]]
-// raypc section DATASET … --from LAT,LON --to LAT,LON [--contours V,…] [--flow]
+// raypc section DATASET … --from LAT,LON (--to LAT,LON | --azimuth DEG --length DEG) [--contours V,…] [--flow]
 //   [--netcdf section.nc [--grid-step DEG] [--depth-step KM]]
 // All three draw through StateRenderer (render/state_renderer.h); maps and sections are
 // render/slice_view.h's pictures of the state's "map" and "section" (docs/maps.md).
@@ -55,6 +55,8 @@ struct RenderArgs {
     CLI::Option *sliceDepth = nullptr, *centralMeridian = nullptr, *centralLatitude = nullptr, *contoursOption = nullptr;
     double sliceDepthKm = 0, centralMeridianDeg = 0, centralLatitudeDeg = 0;
     std::string projection, from, to, netcdf;
+    CLI::Option *azimuth = nullptr, *length = nullptr;  // a section's end by azimuth and length
+    double azimuthDeg = 0, lengthDeg = 0;
     std::vector<double> contours;
     bool flow = false, allColour = false;
     double gridStepDeg = 0, depthStepKm = 10;  // gridStepDeg 0: 1 on maps, 0.5 along sections
@@ -123,6 +125,19 @@ void applySliceFlags(const RenderArgs& args, RenderState& state)
         state.section.from = parsePoint(args.from, "--from");
     if (!args.to.empty())
         state.section.to = parsePoint(args.to, "--to");
+    const bool byAzimuth = args.azimuth && args.azimuth->count();
+    if (byAzimuth != (args.length && args.length->count()))
+        fail("--azimuth and --length: give both (the section's end, from its start)");
+    if (byAzimuth) {
+        if (!args.to.empty())
+            fail("--to and --azimuth: give the section's end by one of them");
+        if (!(args.azimuthDeg >= -360 && args.azimuthDeg <= 360))
+            fail("--azimuth {}: expected degrees clockwise from north in [-360, 360]", args.azimuthDeg);
+        if (!(args.lengthDeg >= 0.01 && args.lengthDeg <= 179.99))
+            fail("--length {}: expected degrees along the surface in [0.01, 179.99] (the shorter arc; 1° is {:.0f} km)",
+                 args.lengthDeg, degToRad(1.0) * kSurfaceRadiusKm);
+        state.section.to = GreatCircle::pointAlong(state.section.from, args.azimuthDeg, args.lengthDeg);
+    }
     if (!(args.gridStepDeg >= 0) || !(args.depthStepKm > 0))
         fail("--grid-step {} / --depth-step {}: expected positive numbers", args.gridStepDeg, args.depthStepKm);
     if (args.view == "map" && args.gridStepDeg > 0) {
@@ -615,6 +630,10 @@ const CommandRegistration kSectionCommand(
         addSliceOptions(cmd, *args, "section");
         cmd.add_option("--from", args->from, "Start of the section on the surface, LAT,LON degrees (default: the state's)");
         cmd.add_option("--to", args->to, "End of the section on the surface, LAT,LON degrees (the shorter arc is drawn)");
+        args->azimuth = cmd.add_option("--azimuth", args->azimuthDeg,
+                                       "Instead of --to: the direction the section leaves its start in, degrees clockwise from north");
+        args->length = cmd.add_option("--length", args->lengthDeg,
+                                      "With --azimuth: the section's length, degrees along the surface (below 180; 1° is 111 km)");
         cmd.add_option("--depth-step", args->depthStepKm, "Spacing of the --netcdf grid in depth, km (default 10)");
         cmd.callback([args] { runCommand(*args); });
     },

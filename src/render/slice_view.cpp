@@ -472,6 +472,37 @@ GreatCircle::GreatCircle(SectionState::Point from, SectionState::Point to, const
 
 double GreatCircle::lengthKm() const { return m_angleRad * kSurfaceRadiusKm; }
 
+namespace {
+
+// Unit vectors east and north at a surface point (contest frame); at a pole, those of the point's
+// meridian.
+std::pair<Vec3d, Vec3d> eastNorth(double latDeg, double lonDeg)
+{
+    const double la = degToRad(latDeg), lo = degToRad(lonDeg);
+    return {Vec3d{-std::sin(lo), std::cos(lo), 0},
+            Vec3d{-std::sin(la) * std::cos(lo), -std::sin(la) * std::sin(lo), std::cos(la)}};
+}
+
+}  // namespace
+
+double GreatCircle::azimuthDeg() const
+{
+    const SphericalPoint a = cartesianToSpherical(m_from);
+    const auto [east, north] = eastNorth(a.latDeg, a.lonDeg);
+    const double az = radToDeg(std::atan2(dot(m_ortho, east), dot(m_ortho, north)));
+    return az < 0 ? az + 360 : az;
+}
+
+SectionState::Point GreatCircle::pointAlong(SectionState::Point from, double azimuthDeg, double distanceDeg)
+{
+    const Vec3d a = normalize(sphericalToCartesianKm(from.latDeg, from.lonDeg, 1.0));
+    const auto [east, north] = eastNorth(from.latDeg, from.lonDeg);
+    const double az = degToRad(azimuthDeg), d = degToRad(distanceDeg);
+    const SphericalPoint p =
+        cartesianToSpherical(a * std::cos(d) + (north * std::cos(az) + east * std::sin(az)) * std::sin(d));
+    return {float(p.latDeg), float(p.lonDeg > 180 ? p.lonDeg - 360 : p.lonDeg)};
+}
+
 Vec3d GreatCircle::at(double fraction) const
 {
     const double a = fraction * m_angleRad;
@@ -771,7 +802,8 @@ ImageRgba8 sectionPicture(const SliceInputs& in)
     const std::string title = fitTitle({in.colorTitle, in.when,
                                         fmt::format("section from {} to {}", latLonText(a.latDeg, a.lonDeg),
                                                     latLonText(z.latDeg, z.lonDeg)),
-                                        fmt::format("{:.1f}°, {:.0f} km along the surface", circle.lengthDeg(), circle.lengthKm())},
+                                        fmt::format("{:.1f}°, {:.0f} km along the surface, azimuth {:.0f}°",
+                                                    circle.lengthDeg(), circle.lengthKm(), circle.azimuthDeg())},
                                        width, height);
     labels.push_back({title, width / 2.0f, 1.1f * fontPx, {1, 1, 1}});
     addNotes(labels, width, height, grey, flowText);

@@ -62,6 +62,12 @@ public:
     GreatCircle(SectionState::Point from, SectionState::Point to, const std::string& what = "section");
     double lengthDeg() const { return m_angleRad * 180 / M_PI; }
     double lengthKm() const;  // along the surface
+    // The direction the arc leaves `from` in, degrees clockwise from north in [0, 360) (at a pole:
+    // the limit of a start approaching it along the meridian of its longitude).
+    double azimuthDeg() const;
+    // The surface point `distanceDeg` along the great circle leaving `from` at `azimuthDeg` (lon in
+    // [-180, 180]): a section given by its start, azimuth and length.
+    static SectionState::Point pointAlong(SectionState::Point from, double azimuthDeg, double distanceDeg);
     // The unit vector (contest frame) at `fraction` of the arc (0: from, 1: to).
     Vec3d at(double fraction) const;
     // The unit tangent there, pointing along the arc towards `to`.

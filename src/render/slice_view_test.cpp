@@ -160,6 +160,36 @@ TEST_F(Slices, GreatCircleLengthsPointsAndRefusals)
     EXPECT_NEAR(cartesianToSpherical(pole.at(0.5)).latDeg, 90, 1e-6);
 }
 
+// A section given by its start, azimuth and length: the destination formula of spherical
+// trigonometry, and the arc it makes leaves at that azimuth with that length.
+TEST_F(Slices, SectionByAzimuthAndLength)
+{
+    // Due east along the equator, due north along a meridian, due south.
+    auto near = [](SectionState::Point p, double lat, double lon) {
+        EXPECT_NEAR(p.latDeg, lat, 1e-4);
+        EXPECT_NEAR(p.lonDeg, lon, 1e-4);
+    };
+    near(GreatCircle::pointAlong({0, 0}, 90, 30), 0, 30);
+    near(GreatCircle::pointAlong({0, 0}, 0, 30), 30, 0);
+    near(GreatCircle::pointAlong({10, 20}, 180, 10), 0, 20);
+    near(GreatCircle::pointAlong({0, 170}, 90, 20), 0, -170);  // across the date line
+    for (const auto& [lat, lon, az, d] : {std::array{-40.0, 170.0, 45.0, 60.0}, {80.0, -10.0, 200.0, 50.0}, {5.0, 5.0, 300.0, 120.0}}) {
+        // sin(lat2) = sin(lat1) cos(d) + cos(lat1) sin(d) cos(az)
+        const SectionState::Point to = GreatCircle::pointAlong({float(lat), float(lon)}, az, d);
+        const double r = M_PI / 180;
+        EXPECT_NEAR(std::sin(to.latDeg * r), std::sin(lat * r) * std::cos(d * r) + std::cos(lat * r) * std::sin(d * r) * std::cos(az * r), 1e-6);
+        const GreatCircle arc({float(lat), float(lon)}, to);
+        EXPECT_NEAR(arc.lengthDeg(), d, 1e-4);
+        EXPECT_NEAR(arc.azimuthDeg(), az, 1e-3);
+    }
+    // From a pole: the limit of a start approaching it along its meridian (north continues over
+    // the pole, down the opposite meridian).
+    EXPECT_NEAR(GreatCircle({90, 0}, {0, 180}).azimuthDeg(), 0, 1e-6);
+    EXPECT_NEAR(GreatCircle({89.999f, 0}, {0, 180}).azimuthDeg(), 0, 1e-3);
+    EXPECT_NEAR(GreatCircle({90, 0}, {0, 90}).azimuthDeg(), GreatCircle({89.999f, 0}, {0, 90}).azimuthDeg(), 0.01);
+    near(GreatCircle::pointAlong({90, 0}, 90, 90), 0, 90);
+}
+
 // A blob at 30°E on the equator, 1000 km deep: the section from 0°E to 60°E meets it half way.
 TEST(SectionOfABlob, CrossesItAtItsDistanceAndDepth)
 {

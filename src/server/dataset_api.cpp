@@ -500,6 +500,10 @@ ApiAnswer slice(const ApiContext& api, const ApiRequest& request)
         header["depthSpanKm"] = l.depthSpanKm;
         header["from"] = {state.section.from.latDeg, state.section.from.lonDeg};
         header["to"] = {state.section.to.latDeg, state.section.to.lonDeg};
+        const render::GreatCircle circle(state.section.from, state.section.to);
+        header["azimuthDeg"] = circle.azimuthDeg();
+        header["lengthDeg"] = circle.lengthDeg();
+        header["lengthKm"] = circle.lengthKm();
     }
     const std::string text = header.dump();
     const std::string png = encodePng(picture.pixels, picture.width, picture.height, 1);

@@ -1077,6 +1077,24 @@ const cases = {
     check(reloaded.map.depthKm === 2000 && JSON.stringify(reloaded.section) === JSON.stringify(sec),
       `after a reload: map ${JSON.stringify(reloaded.map)}, section ${JSON.stringify(reloaded.section)}`);
     check(await again.inputValue('#mapDepthValue') === '2000', `the depth field after a reload: ${await again.inputValue('#mapDepthValue')}`);
+    // The section by azimuth and length: the end the UI sets is where the server measures that
+    // azimuth and length (the section picture's header), and the fields show them.
+    const s1 = (await shown()).section;
+    await page.fill('#sectionFrom', '-20, 40');
+    await page.press('#sectionFrom', 'Enter');
+    await nextPicture('section', s1);
+    const s2 = (await shown()).section;
+    await page.fill('#sectionAzimuth', '30');
+    await page.fill('#sectionLength', '50');
+    await page.press('#sectionLength', 'Enter');
+    await nextPicture('section', s2);
+    const arc = await page.evaluate(() => window.__raypc.slices.section.header);
+    const fields = [await page.inputValue('#sectionAzimuth'), await page.inputValue('#sectionLength'), await page.textContent('#sectionLengthKm')];
+    console.log(`  azimuth 30, length 50 from 20S 40E: to ${JSON.stringify((await rState(page)).section.to)}; the server measures azimuth ${arc.azimuthDeg}, length ${arc.lengthDeg} deg, ${arc.lengthKm} km; fields ${JSON.stringify(fields)}`);
+    check(Math.abs(arc.azimuthDeg - 30) < 0.05 && Math.abs(arc.lengthDeg - 50) < 0.02,
+      `the section set by azimuth 30 and length 50 has azimuth ${arc.azimuthDeg} and length ${arc.lengthDeg} (the server's)`);
+    check(Math.abs(Number(fields[1]) - 50) <= 0.1 && /^5\d\d\d km$/.test(fields[2]), `the fields show ${JSON.stringify(fields)}`);
+
     // Back to the volume's plot: the marks go.
     await page.click('#pcTabVolume');
     await page.waitForFunction(() => window.__raypc.state().map.showInView === false, null, { timeout: 5000 })

@@ -261,6 +261,26 @@ sys.exit(not (ok and abs(along - 40) <= 1 and abs(depth - 2071) <= 60 and abs(la
   check "render --view section draws raypc section's picture" cmp -s "$work/s1.png" "$work/s2.png"
   "$raypc" map "$work/ds" --state "$work/state.json" --size 400x240 --projection orthographic -o "$work/m3.png" >/dev/null
   check "--projection changes the state's" bash -c "! cmp -s '$work/m1.png' '$work/m3.png'"
+  # A section by azimuth and length: its far end (the netCDF's last column) where spherical
+  # trigonometry puts it, and its picture that of the same section given by --to.
+  "$raypc" section "$work/ds" --from=-20,40 --azimuth 30 --length 50 --size 400x240 -o "$work/z1.png" \
+    --netcdf "$work/z.nc" --grid-step 1 --depth-step 100 >/dev/null
+  check "--azimuth 30 --length 50 from 20S 40E ends where the destination formula says" python3 -c "
+import netCDF4, numpy as np, sys
+s = netCDF4.Dataset('$work/z.nc')
+r = np.pi / 180; la, lo, az, d = -20 * r, 40 * r, 30 * r, 50 * r
+lat2 = np.arcsin(np.sin(la) * np.cos(d) + np.cos(la) * np.sin(d) * np.cos(az))
+lon2 = lo + np.arctan2(np.sin(az) * np.sin(d) * np.cos(la), np.cos(d) - np.sin(la) * np.sin(lat2))
+print('end', float(s['lat'][-1]), float(s['lon'][-1]), 'expected', lat2 / r, lon2 / r, 'length', float(s['distance_deg'][-1]))
+sys.exit(not (abs(s['lat'][-1] - lat2 / r) < 1e-3 and abs((s['lon'][-1] - lon2 / r + 180) % 360 - 180) < 1e-3
+              and abs(s['distance_deg'][-1] - 50) < 1e-3))"
+  to=$(python3 -c "
+import netCDF4; s = netCDF4.Dataset('$work/z.nc'); print('%.6f,%.6f' % (s['lat'][-1], s['lon'][-1]))")
+  "$raypc" section "$work/ds" --from=-20,40 --to "$to" --size 400x240 -o "$work/z2.png" >/dev/null
+  check "the same picture as --to $to" cmp -s "$work/z1.png" "$work/z2.png"
+  expect_error "--azimuth and --length: give both" section "$work/ds" --from 10,20 --azimuth 30 -o "$work/x.png"
+  expect_error "--to and --azimuth" section "$work/ds" --from 10,20 --to 0,0 --azimuth 30 --length 10 -o "$work/x.png"
+  expect_error "--length 200" section "$work/ds" --from 10,20 --azimuth 30 --length 200 -o "$work/x.png"
   expect_error "less than 0.01° apart" section "$work/ds" --from 10,20 --to 10,20 -o "$work/x.png"
   expect_error "antipodal" section "$work/ds" --from 30,20 --to=-30,200 -o "$work/x.png"
   expect_error "--from '95,0'" section "$work/ds" --from 95,0 --to 0,0 -o "$work/x.png"

@@ -265,6 +265,9 @@ export interface SliceHeader {
   depthSpanKm?: number;
   from?: [number, number]; // lat, lon
   to?: [number, number];
+  azimuthDeg?: number; // the arc's direction leaving `from`, clockwise from north
+  lengthDeg?: number; // along the surface
+  lengthKm?: number;
 }
 
 export async function postSlice(view: 'map' | 'section', state: RenderState): Promise<{ header: SliceHeader; png: Blob }> {

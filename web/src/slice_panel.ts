@@ -5,7 +5,7 @@
 // under it with d3's projection placed as the server placed it (the same formulas, tested against
 // each other) and its values from the server (GET /api/probe); a click on the map sets the
 // section's start, the next its end.
-import { geoEquirectangular, geoInterpolate, geoOrthographic, type GeoProjection } from 'd3-geo';
+import { geoEquirectangular, geoInterpolate, geoOrthographic, geoRotation, type GeoProjection } from 'd3-geo';
 import { geoHammer, geoMollweide, geoRobinson } from 'd3-geo-projection';
 import { fetchProbe, postSlice, type SliceHeader } from './api';
 import type { RenderState } from './state';
@@ -41,7 +41,7 @@ class SlicePicture {
   shown = 0;
 
   constructor(readonly view: View, readonly image: HTMLImageElement, private readonly state: () => RenderState | null,
-    private readonly showError: (m: string) => void) {}
+    private readonly showError: (m: string) => void, private readonly onShown: (h: SliceHeader) => void = () => {}) {}
 
   request(): void {
     if (this.busy) {
@@ -59,6 +59,7 @@ class SlicePicture {
         this.image.src = this.url;
         this.header = header;
         this.shown++;
+        this.onShown(header);
       })
       .catch((e: Error) => this.showError(e.message))
       .finally(() => {
@@ -95,7 +96,7 @@ export class SlicePanel {
     };
     this.map = new SlicePicture('map', $<HTMLImageElement>('mapImage'), sized($<HTMLImageElement>('mapImage')), host.showError);
     this.section = new SlicePicture('section', $<HTMLImageElement>('sectionImage'),
-      sized($<HTMLImageElement>('sectionImage')), host.showError);
+      sized($<HTMLImageElement>('sectionImage')), host.showError, (h) => this.showArc(h));
     this.setUpControls();
     this.setUpPointer();
     new ResizeObserver(() => this.stateChanged()).observe($('slices'));
@@ -193,6 +194,33 @@ export class SlicePanel {
         this.setEnd(end, parts[0], parts[1]);
       });
     }
+    for (const id of ['sectionAzimuth', 'sectionLength']) $(id).addEventListener('change', () => this.setEndByAzimuth());
+  }
+
+  // The section's azimuth and length as the server measured them (the header of its picture),
+  // unless the user is typing one.
+  private showArc(h: SliceHeader): void {
+    if (h.azimuthDeg === undefined || h.lengthDeg === undefined) return;
+    for (const [id, v] of [['sectionAzimuth', h.azimuthDeg], ['sectionLength', h.lengthDeg]] as const) {
+      const input = $<HTMLInputElement>(id);
+      if (document.activeElement !== input) input.value = String(Math.round(v * 10) / 10);
+    }
+    $('sectionLengthKm').textContent = h.lengthKm !== undefined ? `${Math.round(h.lengthKm)} km` : '';
+  }
+
+  // The section's end from its start, an azimuth and a length (degrees): d3-geo's rotations, the
+  // point `length` north of (0, 0) turned by the azimuth, then (0, 0) moved to the start.
+  private setEndByAzimuth(): void {
+    const az = Number($<HTMLInputElement>('sectionAzimuth').value);
+    const length = Number($<HTMLInputElement>('sectionLength').value);
+    if (!Number.isFinite(az) || !(length >= 0.01 && length <= 179.99)) {
+      this.host.showError(`section: azimuth '${$<HTMLInputElement>('sectionAzimuth').value}' and length ` +
+        `'${$<HTMLInputElement>('sectionLength').value}': expected degrees, the length in [0.01, 179.99]`);
+      return;
+    }
+    const from = this.store.state.section.from;
+    const [lon, lat] = geoRotation([-from.lonDeg, -from.latDeg]).invert(geoRotation([0, 0, -az])([0, length]));
+    this.setEnd('to', lat, lon);
   }
 
   // The reference shells' depths as quick picks beside the slider.
