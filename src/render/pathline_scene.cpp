@@ -40,18 +40,14 @@ std::string columnList(const std::vector<std::string>& columns)
 }  // namespace
 
 struct PathlineScene::Impl {
-    std::vector<PathlineSet> sets;
-    std::vector<std::string> columns;
-    // Per global line: its set and index in the set.
-    std::vector<uint32_t> lineSet, lineLocal;
-    std::vector<float> lineInjectionMyr;
+    explicit Impl(std::shared_ptr<const std::vector<PathlineSet>> sets) : lines(std::move(sets)) {}
+
+    PathlineLines lines;
     // Per segment (Embree primID): its line; per vertex: the point's time (Myr).
     std::vector<uint32_t> segmentLine;
     std::vector<float> vertexTimeMyr;
     std::vector<uint32_t> segmentStart;  // first vertex of each segment (the index buffer's contents)
     float boundRadiusKm = 0;             // all vertices lie within this distance of the origin
-    double stepMyr = 0;
-    float maxAgeMyr = 0;
 
     RTCScene scene = nullptr;
     RTCGeometry geometry = nullptr;
@@ -145,9 +141,10 @@ kernel::TubeHit traceTubes(const void* ctx, const kernel::KernelParams& k, Vec3 
     if (im.style.colorColumn < 0) {
         const uint32_t v0 = im.segmentStart[prim];
         const float u = std::clamp(rh.hit.u, 0.0f, 1.0f);
-        value = im.vertexTimeMyr[v0] + u * (im.vertexTimeMyr[v0 + 1] - im.vertexTimeMyr[v0]) - im.lineInjectionMyr[line];
+        value = im.vertexTimeMyr[v0] + u * (im.vertexTimeMyr[v0 + 1] - im.vertexTimeMyr[v0]) -
+                float(im.lines.injectionTimeMyr(line));
     } else {
-        value = im.sets[im.lineSet[line]].attribute(im.lineLocal[line], size_t(im.style.colorColumn));
+        value = im.lines.attribute(line, size_t(im.style.colorColumn));
     }
     const float span = im.style.range.max - im.style.range.min;
     const float pos = std::isfinite(value) ? std::clamp((value - im.style.range.min) / span, 0.0f, 1.0f) : 0.0f;
@@ -208,47 +205,95 @@ kernel::TubeHit traceTubes(const void* ctx, const kernel::KernelParams& k, Vec3 
 
 }  // namespace
 
-PathlineScene::PathlineScene(std::vector<PathlineSet> sets, float radiusKm) : m_impl(std::make_unique<Impl>())
+PathlineLines::PathlineLines(std::shared_ptr<const std::vector<PathlineSet>> sets) : m_sets(std::move(sets))
 {
-    if (!(radiusKm > 0.0f) || !std::isfinite(radiusKm))
-        fail("pathlines: tube radius {} km, expected a positive number", radiusKm);
-    Impl& im = *m_impl;
-    im.sets = std::move(sets);
-    im.radiusKm = radiusKm;
-    for (size_t s = 0; s < im.sets.size(); ++s) {
-        const PathlineSet& set = im.sets[s];
+    const std::vector<PathlineSet>& all = *m_sets;
+    for (size_t s = 0; s < all.size(); ++s) {
+        const PathlineSet& set = all[s];
         if (s == 0)
-            im.columns = set.columns;
-        else if (set.columns != im.columns)
+            m_columns = set.columns;
+        else if (set.columns != m_columns)
             fail("pathlines: the set of step {} has columns ({}), the set of step {} has ({})", set.injectionStep,
-                 columnList(set.columns), im.sets[0].injectionStep, columnList(im.columns));
+                 columnList(set.columns), all[0].injectionStep, columnList(m_columns));
         if (set.lineCount() > 0 && (set.offsets.back() != set.pointCount() || set.offsets.front() != 0))
             fail("pathlines: the set of step {} has offsets ending at {} for {} points", set.injectionStep,
                  set.offsets.back(), set.pointCount());
         if (set.attributes.size() != set.lineCount() * set.columns.size())
             fail("pathlines: the set of step {} has {} attribute values, expected {} lines x {} columns",
                  set.injectionStep, set.attributes.size(), set.lineCount(), set.columns.size());
-    }
-
-    // Global numbering of lines, segments and vertices.
-    size_t segments = 0, vertices = 0;
-    for (uint32_t s = 0; s < im.sets.size(); ++s) {
-        const PathlineSet& set = im.sets[s];
         for (uint32_t i = 0; i < set.lineCount(); ++i) {
-            im.lineSet.push_back(s);
-            im.lineLocal.push_back(i);
-            im.lineInjectionMyr.push_back(float(set.injectionTimeMyr));
-            const size_t n = set.offsets[i + 1] - set.offsets[i];
             if (set.offsets[i + 1] < set.offsets[i])
                 fail("pathlines: the set of step {} has decreasing offsets at line {}", set.injectionStep, i);
-            if (n >= 2) {
-                segments += n - 1;
-                vertices += n;
-            }
+            m_lineSet.push_back(uint32_t(s));
+            m_lineLocal.push_back(i);
+            for (size_t p = set.offsets[i]; p < set.offsets[i + 1]; ++p)
+                m_maxAgeMyr = std::max(m_maxAgeMyr, set.points[4 * p + 3] - float(set.injectionTimeMyr));
         }
     }
-    im.mask.assign(im.lineSet.size(), 1);
-    im.visible = im.lineSet.size();
+
+    // Step length: from the injection times of distinct steps, else from the lines that reached
+    // their end step in a single set.
+    int s0 = std::numeric_limits<int>::max(), s1 = std::numeric_limits<int>::min();
+    double t0 = 0, t1 = 0;
+    for (const PathlineSet& set : all) {
+        if (set.injectionStep < s0)
+            s0 = set.injectionStep, t0 = set.injectionTimeMyr;
+        if (set.injectionStep > s1)
+            s1 = set.injectionStep, t1 = set.injectionTimeMyr;
+    }
+    if (!all.empty() && s1 > s0) {
+        m_stepMyr = (t1 - t0) / double(s1 - s0);
+    } else if (!all.empty()) {
+        const PathlineSet& set = all.front();
+        const int duration = set.column("duration"), reason = set.column("end reason");
+        double longest = 0;
+        for (size_t i = 0; duration >= 0 && i < set.lineCount(); ++i)
+            if (reason < 0 || set.attribute(i, size_t(reason)) == float(PathlineEnd::ReachedEndTime))
+                longest = std::max(longest, double(set.attribute(i, size_t(duration))));
+        if (set.endStep > set.injectionStep && longest > 0)
+            m_stepMyr = longest / double(set.endStep - set.injectionStep);
+    }
+}
+
+std::span<const float> PathlineLines::points(size_t line) const
+{
+    const PathlineSet& s = set(line);
+    const size_t first = s.offsets[m_lineLocal[line]], last = s.offsets[m_lineLocal[line] + 1];
+    return std::span<const float>(s.points).subspan(4 * first, 4 * (last - first));
+}
+
+float PathlineLines::colorValue(const PathlineStyle& style, size_t line, size_t point) const
+{
+    if (style.colorColumn >= 0)
+        return attribute(line, size_t(style.colorColumn));
+    return points(line)[4 * point + 3] - float(injectionTimeMyr(line));
+}
+
+PathlineScene::PathlineScene(std::vector<PathlineSet> sets, float radiusKm)
+    : PathlineScene(std::make_shared<const std::vector<PathlineSet>>(std::move(sets)), radiusKm)
+{
+}
+
+PathlineScene::PathlineScene(std::shared_ptr<const std::vector<PathlineSet>> sets, float radiusKm)
+{
+    if (!(radiusKm > 0.0f) || !std::isfinite(radiusKm))
+        fail("pathlines: tube radius {} km, expected a positive number", radiusKm);
+    m_impl = std::make_unique<Impl>(std::move(sets));
+    Impl& im = *m_impl;
+    im.radiusKm = radiusKm;
+    const PathlineLines& lines = im.lines;
+
+    // Global numbering of segments and vertices.
+    size_t segments = 0, vertices = 0;
+    for (size_t line = 0; line < lines.lineCount(); ++line) {
+        const size_t n = lines.points(line).size() / 4;
+        if (n >= 2) {
+            segments += n - 1;
+            vertices += n;
+        }
+    }
+    im.mask.assign(lines.lineCount(), 1);
+    im.visible = lines.lineCount();
     im.vertexCount = vertices;
 
     im.scene = rtcNewScene(sharedDevice());
@@ -267,26 +312,23 @@ PathlineScene::PathlineScene(std::vector<PathlineSet> sets, float radiusKm) : m_
         im.segmentStart.reserve(segments);
         float bound = 0;
         size_t v = 0;
-        uint32_t line = 0;
-        for (const PathlineSet& set : im.sets) {
-            for (size_t i = 0; i < set.lineCount(); ++i, ++line) {
-                const size_t first = set.offsets[i], last = set.offsets[i + 1];
-                if (last - first < 2)
-                    continue;
-                for (size_t p = first; p < last; ++p, ++v) {
-                    const float* q = &set.points[4 * p];
-                    im.vertices[4 * v] = q[0];
-                    im.vertices[4 * v + 1] = q[1];
-                    im.vertices[4 * v + 2] = q[2];
-                    im.vertices[4 * v + 3] = radiusKm;
-                    im.vertexTimeMyr.push_back(q[3]);
-                    bound = std::max(bound, std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]));
-                    if (p + 1 < last) {
-                        index[im.segmentStart.size()] = uint32_t(v);
-                        im.segmentStart.push_back(uint32_t(v));
-                        im.segmentLine.push_back(line);
-                    }
-                    im.maxAgeMyr = std::max(im.maxAgeMyr, q[3] - float(set.injectionTimeMyr));
+        for (uint32_t line = 0; line < lines.lineCount(); ++line) {
+            const std::span<const float> points = lines.points(line);
+            const size_t n = points.size() / 4;
+            if (n < 2)
+                continue;
+            for (size_t p = 0; p < n; ++p, ++v) {
+                const float* q = &points[4 * p];
+                im.vertices[4 * v] = q[0];
+                im.vertices[4 * v + 1] = q[1];
+                im.vertices[4 * v + 2] = q[2];
+                im.vertices[4 * v + 3] = radiusKm;
+                im.vertexTimeMyr.push_back(q[3]);
+                bound = std::max(bound, std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]));
+                if (p + 1 < n) {
+                    index[im.segmentStart.size()] = uint32_t(v);
+                    im.segmentStart.push_back(uint32_t(v));
+                    im.segmentLine.push_back(line);
                 }
             }
         }
@@ -301,57 +343,42 @@ PathlineScene::PathlineScene(std::vector<PathlineSet> sets, float radiusKm) : m_
     if (const RTCError e = rtcGetDeviceError(sharedDevice()); e != RTC_ERROR_NONE)
         fail("Embree: building the tube scene of {} segments failed (error {})", segments, int(e));
     im.boundRadiusKm += radiusKm;
-
-    // Step length: from the injection times of distinct steps, else from the lines that reached
-    // their end step in a single set.
-    int s0 = std::numeric_limits<int>::max(), s1 = std::numeric_limits<int>::min();
-    double t0 = 0, t1 = 0;
-    for (const PathlineSet& set : im.sets) {
-        if (set.injectionStep < s0)
-            s0 = set.injectionStep, t0 = set.injectionTimeMyr;
-        if (set.injectionStep > s1)
-            s1 = set.injectionStep, t1 = set.injectionTimeMyr;
-    }
-    if (!im.sets.empty() && s1 > s0) {
-        im.stepMyr = (t1 - t0) / double(s1 - s0);
-    } else if (!im.sets.empty()) {
-        const PathlineSet& set = im.sets.front();
-        const int duration = set.column("duration"), reason = set.column("end reason");
-        double longest = 0;
-        for (size_t i = 0; duration >= 0 && i < set.lineCount(); ++i)
-            if (reason < 0 || set.attribute(i, size_t(reason)) == float(PathlineEnd::ReachedEndTime))
-                longest = std::max(longest, double(set.attribute(i, size_t(duration))));
-        if (set.endStep > set.injectionStep && longest > 0)
-            im.stepMyr = longest / double(set.endStep - set.injectionStep);
-    }
-    im.style.range = {0.0f, float(im.stepMyr > 0 ? 10.0 * im.stepMyr : std::max(1.0f, im.maxAgeMyr))};
+    im.style.range = {0.0f, float(lines.stepMyr() > 0 ? 10.0 * lines.stepMyr() : std::max(1.0f, lines.maxAgeMyr()))};
     im.bakeColors();
 }
 
 PathlineScene::~PathlineScene() = default;
 
-const std::vector<PathlineSet>& PathlineScene::sets() const { return m_impl->sets; }
-size_t PathlineScene::lineCount() const { return m_impl->lineSet.size(); }
-const std::vector<std::string>& PathlineScene::columns() const { return m_impl->columns; }
-float PathlineScene::attribute(size_t line, size_t column) const
-{
-    return m_impl->sets[m_impl->lineSet[line]].attribute(m_impl->lineLocal[line], column);
-}
-int PathlineScene::injectionStep(size_t line) const { return m_impl->sets[m_impl->lineSet[line]].injectionStep; }
-double PathlineScene::stepMyr() const { return m_impl->stepMyr; }
+const std::vector<PathlineSet>& PathlineScene::sets() const { return m_impl->lines.sets(); }
+const PathlineLines& PathlineScene::lines() const { return m_impl->lines; }
+size_t PathlineScene::lineCount() const { return m_impl->lines.lineCount(); }
+const std::vector<std::string>& PathlineScene::columns() const { return m_impl->lines.columns(); }
+float PathlineScene::attribute(size_t line, size_t column) const { return m_impl->lines.attribute(line, column); }
+int PathlineScene::injectionStep(size_t line) const { return m_impl->lines.injectionStep(line); }
+double PathlineScene::stepMyr() const { return m_impl->lines.stepMyr(); }
 
-std::vector<uint8_t> PathlineScene::visibilityFor(const RenderState& state) const
+std::vector<uint8_t> PathlineScene::visibilityFor(const RenderState& state) const { return m_impl->lines.visibilityFor(state); }
+
+PathlineStyle PathlineScene::styleFor(const PathlineState& state) const
 {
-    const Impl& im = *m_impl;
+    // The tracer's settings (occlusion rays and reach) are the scene's own.
+    PathlineStyle style = m_impl->lines.styleFor(state);
+    style.aoRays = m_impl->style.aoRays;
+    style.aoDistanceFactor = m_impl->style.aoDistanceFactor;
+    return style;
+}
+
+std::vector<uint8_t> PathlineLines::visibilityFor(const RenderState& state) const
+{
     const PathlineState& pl = state.pathlines;
     std::vector<uint8_t> mask(lineCount(), 0);
     if (!pl.visible)
         return mask;
     auto columnOf = [&](const std::string& name, const std::string& role) {
-        const auto it = std::find(im.columns.begin(), im.columns.end(), name);
-        if (it == im.columns.end())
-            fail("pathlines: {}: the lines have no attribute '{}'; they have: {}", role, name, columnList(im.columns));
-        return size_t(it - im.columns.begin());
+        const auto it = std::find(m_columns.begin(), m_columns.end(), name);
+        if (it == m_columns.end())
+            fail("pathlines: {}: the lines have no attribute '{}'; they have: {}", role, name, columnList(m_columns));
+        return size_t(it - m_columns.begin());
     };
     // Each test: a column, or a coordinate computed from the start position (filter.coordinate),
     // and the filter's ranges, OR-ed.
@@ -403,23 +430,22 @@ std::vector<uint8_t> PathlineScene::visibilityFor(const RenderState& state) cons
     return mask;
 }
 
-PathlineStyle PathlineScene::styleFor(const PathlineState& pl) const
+PathlineStyle PathlineLines::styleFor(const PathlineState& pl) const
 {
-    const Impl& im = *m_impl;
-    PathlineStyle style = im.style;
+    PathlineStyle style;
     style.colorMap = pl.effectiveColorMap();
     style.ambientOcclusion = pl.ambientOcclusion;
     if (pl.colorBy == "age") {
         style.colorColumn = -1;
-        const double span = im.stepMyr > 0 ? double(pl.window) * im.stepMyr : std::max(1.0, double(im.maxAgeMyr));
+        const double span = m_stepMyr > 0 ? double(pl.window) * m_stepMyr : std::max(1.0, double(m_maxAgeMyr));
         style.range = pl.range ? *pl.range : ValueRange{0.0f, float(span)};
         return style;
     }
-    const auto it = std::find(im.columns.begin(), im.columns.end(), pl.colorBy);
-    if (it == im.columns.end())
+    const auto it = std::find(m_columns.begin(), m_columns.end(), pl.colorBy);
+    if (it == m_columns.end())
         fail("pathlines: colorBy '{}' is neither \"age\" nor a line attribute; the lines have: {}", pl.colorBy,
-             columnList(im.columns));
-    style.colorColumn = int(it - im.columns.begin());
+             columnList(m_columns));
+    style.colorColumn = int(it - m_columns.begin());
     if (pl.range) {
         style.range = *pl.range;
         return style;
@@ -465,8 +491,8 @@ void PathlineScene::setStyle(const PathlineStyle& style)
 {
     if (!(style.range.min < style.range.max))
         fail("pathlines: colour range [{}, {}]: expected min < max", style.range.min, style.range.max);
-    if (style.colorColumn >= int(m_impl->columns.size()))
-        fail("pathlines: colour column {} of {}", style.colorColumn, m_impl->columns.size());
+    if (style.colorColumn >= int(m_impl->lines.columns().size()))
+        fail("pathlines: colour column {} of {}", style.colorColumn, m_impl->lines.columns().size());
     m_impl->style = style;
     m_impl->bakeColors();
 }

@@ -25,6 +25,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -44,17 +45,59 @@ struct PathlineStyle {
     float aoDistanceFactor = 12;  // occlusion rays reach this many tube radii
 };
 
+// The lines of a step window without geometry: numbered over the sets (set 0's lines first),
+// checked, with their attributes, which of them a state shows and how it colours them. The tubes
+// (PathlineScene) and the maps and sections (slice_view.h) draw from it.
+//
+// Thread safety: immutable after construction.
+class PathlineLines {
+public:
+    // Throws raypc::Error when the sets' columns differ or a set is malformed (offsets, attributes).
+    explicit PathlineLines(std::shared_ptr<const std::vector<PathlineSet>> sets);
+
+    const std::vector<PathlineSet>& sets() const { return *m_sets; }
+    size_t lineCount() const { return m_lineSet.size(); }
+    const std::vector<std::string>& columns() const { return m_columns; }
+    float attribute(size_t line, size_t column) const { return set(line).attribute(m_lineLocal[line], column); }
+    int injectionStep(size_t line) const { return set(line).injectionStep; }
+    double injectionTimeMyr(size_t line) const { return set(line).injectionTimeMyr; }
+    // The line's points, 4 floats each: x, y, z (km), time (Myr).
+    std::span<const float> points(size_t line) const;
+    // Time between steps (Myr) from the sets' injection times, or from the lines' durations for a
+    // single set; 0 if unknown.
+    double stepMyr() const { return m_stepMyr; }
+    float maxAgeMyr() const { return m_maxAgeMyr; }
+
+    // See PathlineScene::visibilityFor and styleFor.
+    std::vector<uint8_t> visibilityFor(const RenderState& state) const;
+    PathlineStyle styleFor(const PathlineState& state) const;
+    // The value `style` colours point `point` (0 = the line's first) of `line` by: its age (Myr)
+    // or the line's attribute.
+    float colorValue(const PathlineStyle& style, size_t line, size_t point) const;
+
+private:
+    const PathlineSet& set(size_t line) const { return (*m_sets)[m_lineSet[line]]; }
+
+    std::shared_ptr<const std::vector<PathlineSet>> m_sets;
+    std::vector<std::string> m_columns;
+    std::vector<uint32_t> m_lineSet, m_lineLocal;  // per global line: its set and index in the set
+    double m_stepMyr = 0;
+    float m_maxAgeMyr = 0;
+};
+
 class PathlineScene {
 public:
     // Builds the BVH of every line of `sets` (any order; typically a window, oldest first) with
     // tubes of `radiusKm`. Lines with fewer than 2 points draw nothing. Throws raypc::Error when
     // the radius is not positive, the sets' columns differ, or a set is malformed (offsets).
     explicit PathlineScene(std::vector<PathlineSet> sets, float radiusKm = 12.0f);
+    PathlineScene(std::shared_ptr<const std::vector<PathlineSet>> sets, float radiusKm);
     ~PathlineScene();
     PathlineScene(const PathlineScene&) = delete;
     PathlineScene& operator=(const PathlineScene&) = delete;
 
     const std::vector<PathlineSet>& sets() const;
+    const PathlineLines& lines() const;
     // Lines over all sets, numbered set by set (set 0's lines first). Masks are in this order.
     size_t lineCount() const;
     // Attribute columns shared by all sets (empty without lines).
