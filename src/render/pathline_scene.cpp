@@ -269,6 +269,18 @@ float PathlineLines::colorValue(const PathlineStyle& style, size_t line, size_t 
     return points(line)[4 * point + 3] - float(injectionTimeMyr(line));
 }
 
+LegendSpec pathlineLegend(const PathlineStyle& style, const std::vector<std::string>& columns)
+{
+    const std::string what = style.colorColumn < 0 ? std::string("pathline age [Myr]")
+                                                   : "pathlines: " + columns.at(size_t(style.colorColumn));
+    // The tubes map their range linearly, not centred on 0: the map's stops.
+    TransferFunction colors;
+    const auto stops = colorMapStops(style.colorMap);
+    colors.colorPoints.assign(stops.begin(), stops.end());
+    colors.range = style.range;
+    return {what, colors};
+}
+
 PathlineScene::PathlineScene(std::vector<PathlineSet> sets, float radiusKm)
     : PathlineScene(std::make_shared<const std::vector<PathlineSet>>(std::move(sets)), radiusKm)
 {

@@ -21,6 +21,7 @@
 #pragma once
 
 #include "data/pathline_storage.h"
+#include "render/legend.h"
 #include "render/render_state.h"
 
 #include <cstdint>
@@ -84,6 +85,10 @@ private:
     double m_stepMyr = 0;
     float m_maxAgeMyr = 0;
 };
+
+// The legend of pathlines drawn in `style`: its colour map over its range (linear, as the tubes
+// map it), titled by what it colours ("pathline age [Myr]" or the attribute).
+LegendSpec pathlineLegend(const PathlineStyle& style, const std::vector<std::string>& columns);
 
 class PathlineScene {
 public:

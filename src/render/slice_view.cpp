@@ -371,17 +371,74 @@ std::string fitTitle(const std::vector<std::string>& parts, int width, int heigh
 
 // What else a picture says, right-aligned above its bottom edge, one line each: what grey means and
 // the arrows' scale.
-void addNotes(std::vector<TextLabel>& labels, int width, int height, bool grey, const std::string& flowText)
+void addNotes(std::vector<TextLabel>& labels, int width, int height, bool grey, const std::string& flowText,
+              const std::string& pathlineText)
 {
     std::vector<std::string> notes;
     if (grey)
         notes.emplace_back("grey: outside the brushes");
     if (!flowText.empty())
         notes.push_back(flowText);
+    if (!pathlineText.empty())
+        notes.push_back(pathlineText);
     const int fontPx = legendFontPx(width, height);
     for (size_t i = 0; i < notes.size(); ++i)
         labels.push_back({notes[i], float(width - fontPx), float(height - fontPx * (1.2 + 1.6 * double(notes.size() - 1 - i))),
                           {0.9f, 0.9f, 0.9f}, true});
+}
+
+// Where a pathline's point (x, y, z km) lies on the picture, and how strongly its segments are
+// drawn there (0: not at all).
+struct PlacedPoint {
+    float x, y, weight;
+};
+
+// Draws the pathlines the state shows (the 3D view's rule: window, brushes at their starts,
+// attribute filters), each segment in the tubes' colour of its start over a dark halo, placed by
+// `place`; returns the note saying how many were drawn and how, and the legend in `legends`.
+template <class Place>
+std::string drawPathlines(std::vector<uint8_t>& rgba, int width, int height, const SliceInputs& in, const Place& place,
+                          const std::string& how, std::vector<LegendSpec>& legends)
+{
+    const RenderState& state = in.resolved->state;
+    if (!state.pathlines.visible)
+        return {};
+    if (!in.pathlines)
+        fail("pathlines: visible, but no pathlines were given");
+    const PathlineLines& lines = *in.pathlines;
+    const std::vector<uint8_t> shown = lines.visibilityFor(state);
+    const PathlineStyle style = lines.styleFor(state.pathlines);
+    const float span = style.range.max - style.range.min;
+    const float widthPx = std::max(2.0f, float(std::min(width, height)) / 300.0f);
+    LineLayer halo(width, height, false, true), layer(width, height, false, true);
+    size_t drawn = 0;
+    for (size_t line = 0; line < lines.lineCount(); ++line) {
+        if (!shown[line])
+            continue;
+        const std::span<const float> points = lines.points(line);
+        bool any = false;
+        std::optional<PlacedPoint> previous;
+        for (size_t p = 0; 4 * p < points.size(); ++p) {
+            const std::optional<PlacedPoint> here = place(points[4 * p], points[4 * p + 1], points[4 * p + 2]);
+            if (previous && here && std::abs(here->x - previous->x) < 0.25f * float(width)) {
+                const float weight = std::min(previous->weight, here->weight);
+                if (weight > 0) {
+                    const float value = lines.colorValue(style, line, p - 1);
+                    const float at = std::isfinite(value) ? std::clamp((value - style.range.min) / span, 0.0f, 1.0f) : 0.0f;
+                    drawSegment(halo, previous->x, previous->y, here->x, here->y, widthPx + 2, Rgb{0, 0, 0}, weight);
+                    drawSegment(layer, previous->x, previous->y, here->x, here->y, widthPx, sampleColorMap(style.colorMap, at), weight);
+                    any = true;
+                }
+            }
+            previous = here;
+        }
+        drawn += any;
+    }
+    compositeLines(rgba, halo, 0.6f);
+    compositeLines(rgba, layer, 1.0f);
+    legends.push_back(pathlineLegend(style, lines.columns()));
+    const size_t total = size_t(std::count_if(shown.begin(), shown.end(), [](uint8_t b) { return b != 0; }));
+    return fmt::format("pathlines: {} of {} shown lines {}", drawn, total, how);
 }
 
 const RenderState& stateOf(const SliceInputs& in)
@@ -405,7 +462,9 @@ namespace {
 
 // A map's band: below the title, above the legend.
 double mapTopPx(const RenderState& s) { return 2.2 * legendFontPx(s.width, s.height); }
-double mapBottomPx(const RenderState& s) { return s.height - legendsHeightPx(s.width, s.height, 1); }
+// The colour legend, and the pathlines' when they are shown.
+size_t legendCount(const RenderState& s) { return s.pathlines.visible ? 2 : 1; }
+double mapBottomPx(const RenderState& s) { return s.height - legendsHeightPx(s.width, s.height, legendCount(s)); }
 
 }  // namespace
 
@@ -424,7 +483,7 @@ SectionLayout sectionLayoutOf(const RenderState& s, const SphericalGrid& grid)
     // Depth labels at the left, the shells' names at the right, the title above, distance labels
     // and the legend below.
     SectionLayout l{5.5 * fontPx, s.width - 4.5 * fontPx, 2.4 * fontPx,
-                    s.height - legendsHeightPx(s.width, s.height, 1) - 2.2 * fontPx, depthRangeKm(grid).second};
+                    s.height - legendsHeightPx(s.width, s.height, legendCount(s)) - 2.2 * fontPx, depthRangeKm(grid).second};
     if (!(l.right - l.left >= 8 && l.bottom - l.top >= 8))
         fail("section: a picture of {}x{} pixels has no room for the section; choose a larger size", s.width, s.height);
     return l;
@@ -484,6 +543,12 @@ std::pair<Vec3d, Vec3d> eastNorth(double latDeg, double lonDeg)
 }
 
 }  // namespace
+
+std::array<double, 2> GreatCircle::locate(const Vec3d& p) const
+{
+    const Vec3d u = normalize(p), normal = cross(m_from, m_ortho);
+    return {std::atan2(dot(u, m_ortho), dot(u, m_from)) / m_angleRad, std::asin(std::clamp(dot(u, normal), -1.0, 1.0))};
+}
 
 double GreatCircle::azimuthDeg() const
 {
@@ -663,15 +728,27 @@ ImageRgba8 mapPicture(const SliceInputs& in)
         flowText = drawArrows(image.pixels, width, height, arrows, spacing, "horizontal flow");
     }
 
+    std::vector<LegendSpec> legends{{in.colorTitle, params.transfer}};
+    const std::string pathlineText = drawPathlines(
+        image.pixels, width, height, in,
+        [&](float x, float y, float z) -> std::optional<PlacedPoint> {
+            const SphericalPoint p = cartesianToSpherical({x, y, z});
+            const auto px = frame.pixelOf(p.lonDeg, p.latDeg);
+            if (!px)
+                return std::nullopt;
+            const double off = std::max(0.0, std::abs(kSurfaceRadiusKm - p.rKm - map.depthKm) - kMapPathlineBandKm);
+            return PlacedPoint{float((*px)[0]), float((*px)[1]), float(0.15 + 0.85 * std::exp(-std::pow(off / kMapPathlineBandKm, 2)))};
+        },
+        fmt::format("(full within {:g} km of this depth, fainter beyond)", kMapPathlineBandKm), legends);
+
     std::string where = fmt::format("{} centred on {}", mapProjectionTitle(map.projection), lonText(map.centralMeridianDeg));
     if (map.projection == MapProjection::Orthographic)
         where += ", " + latText(map.centralLatitudeDeg);
     const std::string title = fitTitle({fmt::format("{} at {:g} km depth", in.colorTitle, map.depthKm), in.when, where}, width, height);
     std::vector<TextLabel> labels{{title, width / 2.0f, 1.1f * fontPx, {1, 1, 1}}};
-    addNotes(labels, width, height, grey, flowText);
+    addNotes(labels, width, height, grey, flowText, pathlineText);
     drawTextLabels(image.pixels, width, height, labels);
-    const LegendSpec legend{in.colorTitle, params.transfer};
-    drawLegends(image.pixels, width, height, std::span(&legend, 1));
+    drawLegends(image.pixels, width, height, legends);
     return image;
 }
 
@@ -773,6 +850,21 @@ ImageRgba8 sectionPicture(const SliceInputs& in)
         flowText = drawArrows(image.pixels, width, height, arrows, spacing,
                               "flow in the section's plane (directions on the picture's axes)");
     }
+    std::vector<LegendSpec> legends{{in.colorTitle, params.transfer}};
+    const std::string pathlineText = drawPathlines(
+        image.pixels, width, height, in,
+        [&](float x, float y, float z) -> std::optional<PlacedPoint> {
+            const Vec3d p{x, y, z};
+            const double r = length(p);
+            if (!(r > 0))
+                return std::nullopt;
+            const auto [fraction, offRad] = circle.locate(p);
+            const double offKm = std::abs(offRad) * r;
+            if (fraction < 0 || fraction > 1 || offKm > kSectionPathlineBandKm)
+                return std::nullopt;
+            return PlacedPoint{xOfFraction(fraction), yOfDepth(kSurfaceRadiusKm - r), float(1 - 0.8 * offKm / kSectionPathlineBandKm)};
+        },
+        fmt::format("within {:g} km of the section's plane", kSectionPathlineBandKm), legends);
     {
         // The frame, depth ticks every 500 km (or 250) and distance ticks in round degrees.
         LineLayer layer(width, height, false);
@@ -806,10 +898,9 @@ ImageRgba8 sectionPicture(const SliceInputs& in)
                                                     circle.lengthDeg(), circle.lengthKm(), circle.azimuthDeg())},
                                        width, height);
     labels.push_back({title, width / 2.0f, 1.1f * fontPx, {1, 1, 1}});
-    addNotes(labels, width, height, grey, flowText);
+    addNotes(labels, width, height, grey, flowText, pathlineText);
     drawTextLabels(image.pixels, width, height, labels);
-    const LegendSpec legend{in.colorTitle, params.transfer};
-    drawLegends(image.pixels, width, height, std::span(&legend, 1));
+    drawLegends(image.pixels, width, height, legends);
     return image;
 }
 

@@ -20,6 +20,7 @@
 #include "data/dataset.h"
 #include "render/image_io.h"
 #include "render/map_projection.h"
+#include "render/pathline_scene.h"
 #include "render/reference_geometry.h"
 #include "render/render_state.h"
 #include "render/state_renderer.h"
@@ -70,6 +71,9 @@ public:
     static SectionState::Point pointAlong(SectionState::Point from, double azimuthDeg, double distanceDeg);
     // The unit vector (contest frame) at `fraction` of the arc (0: from, 1: to).
     Vec3d at(double fraction) const;
+    // Where a point (any radius) lies: the fraction of the arc its direction projects to (outside
+    // [0, 1] before `from` or beyond `to`) and its angle off the great circle's plane (radians).
+    std::array<double, 2> locate(const Vec3d& p) const;
     // The unit tangent there, pointing along the arc towards `to`.
     Vec3d tangentAt(double fraction) const;
 
@@ -102,7 +106,13 @@ struct SliceInputs {
     std::string colorTitle;                   // "temperature anomaly [K]"
     std::string when;                         // "step 3, 12.0 Myr"
     const Coastlines* coastlines = nullptr;   // needed when state.reference.coastlines is visible
+    const PathlineLines* pathlines = nullptr;  // the state's window; needed when state.pathlines.visible
 };
+
+// Pathlines (state.pathlines, the lines the 3D view shows, coloured as its tubes): on a map each
+// line's track, fainter the farther it is from the map's depth (full within kMapPathlineBandKm);
+// on a section the parts within kSectionPathlineBandKm of its plane, fainter the farther.
+inline constexpr double kMapPathlineBandKm = 100, kSectionPathlineBandKm = 300;
 
 // The map picture of inputs.resolved->state.map at the state's size. Throws raypc::Error for a
 // flow without vx, vy, vz, or when the coastlines or the legend font cannot be read.

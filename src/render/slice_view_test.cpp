@@ -252,5 +252,72 @@ TEST(MapFlow, NeedsTheVelocity)
     }
 }
 
+// Pathlines on maps and sections: a line along the equator at 660 km depth is drawn in its age
+// colours on the map of that depth and on a section in its plane, and not on a section 10° away;
+// a line 2000 km deep shows only faintly on the map at 660 km.
+TEST_F(Slices, PathlinesOnMapsAndSections)
+{
+    PathlineSet set;
+    set.endStep = 1;
+    set.offsets = {0};
+    auto addLine = [&](auto pointAt) {
+        for (int k = 0; k <= 40; ++k) {
+            const auto [lat, lon, depth] = pointAt(k);
+            const Vec3d p = sphericalToCartesianKm(lat, lon, kSurfaceRadiusKm - depth);
+            set.points.insert(set.points.end(), {float(p.x), float(p.y), float(p.z), float(0.25 * k)});  // 10 Myr in all
+        }
+        set.offsets.push_back(uint32_t(set.pointCount()));
+    };
+    addLine([](int k) { return std::array{0.0, double(k), 660.0}; });         // the equator, 0 to 40°E
+    addLine([](int k) { return std::array{double(k) - 20, 100.0, 2000.0}; });  // 100°E, 20°S to 20°N, deep
+    const PathlineLines lines(std::make_shared<const std::vector<PathlineSet>>(std::vector{set}));
+
+    ResolvedState r = stateFor(900, 520);
+    r.state.pathlines.visible = true;
+    r.state.pathlines.window = 1;
+    r.state.map.projection = MapProjection::Equirectangular;
+    r.state.map.depthKm = 660;
+    SliceInputs in{volume.get(), &r, names, "f", "step 0", nullptr, &lines};
+    const PathlineStyle style = lines.styleFor(r.state.pathlines);
+    auto lineColour = [&](double ageMyr) {
+        return sampleColorMap(style.colorMap, float((ageMyr - style.range.min) / (style.range.max - style.range.min)));
+    };
+    auto fieldColour = [&](double lat, double lon, double depth) {
+        return r.params.transfer.colorAt(r.params.transfer.colorPositionOf(float(field(lat, kSurfaceRadiusKm - depth, lon))));
+    };
+
+    // The line is 2 pixels wide: the pixel nearest its centre within one of a point.
+    auto nearest = [](const ImageRgba8& image, double px, double py, Rgb colour) {
+        float best = 1;
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx)
+                best = std::min(best, colourError(pixel(image, int(px) + dx, int(py) + dy), colour));
+        return best;
+    };
+    const ImageRgba8 map = mapPicture(in);
+    const MapFrame frame = mapFrameOf(r.state);
+    const auto onLine = *frame.pixelOf(20.5, 0);  // between points 20 and 21: age 5 Myr
+    EXPECT_LT(nearest(map, onLine[0], onLine[1], lineColour(5.0)), 0.04);
+    const auto deep = *frame.pixelOf(100, 0.5);
+    const auto deepPixel = pixel(map, int(deep[0]), int(deep[1]));
+    EXPECT_LT(colourError(deepPixel, fieldColour(0.5, 100, 660)), colourError(deepPixel, lineColour(5.1)));
+    EXPECT_LT(colourError(deepPixel, fieldColour(0.5, 100, 660)), 0.25);  // at most faint
+
+    r.state.section.from = {0, -10};
+    r.state.section.to = {0, 60};
+    const ImageRgba8 inPlane = sectionPicture(in);
+    const SectionLayout l = sectionLayoutOf(r.state, grid);
+    const double x = l.left + (20.5 + 10) / 70 * (l.right - l.left), y = l.top + 660 / l.depthSpanKm * (l.bottom - l.top);
+    EXPECT_LT(nearest(inPlane, x, y, lineColour(5.0)), 0.04);
+    r.state.section.from = {10, -10};
+    r.state.section.to = {10, 60};
+    const ImageRgba8 away = sectionPicture(in);
+    EXPECT_GT(nearest(away, x, y, lineColour(5.0)), 0.2);
+
+    // Shown but not given: one error.
+    in.pathlines = nullptr;
+    EXPECT_THROW(mapPicture(in), Error);
+}
+
 }  // namespace
 }  // namespace raypc::render

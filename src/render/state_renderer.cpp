@@ -179,7 +179,7 @@ std::shared_ptr<const PathlineScene> StateRenderer::pathlinesFor(const RenderSta
         }
         const auto start = std::chrono::steady_clock::now();
         m_scene.reset();
-        m_scene = std::make_shared<PathlineScene>(*window, state.pathlines.radiusKm);
+        m_scene = std::make_shared<PathlineScene>(window, state.pathlines.radiusKm);
         m_sceneStep = state.step;
         m_sceneWindow = state.pathlines.window;
         spdlog::debug("pathline scene of step {} window {}: {} lines in {:.0f} ms", state.step, state.pathlines.window,
@@ -390,15 +390,7 @@ std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const 
         legends.push_back({variableTitle(m_dataset->variables().at(size_t(resolved.params.colorVariable))),
                            resolved.params.transfer});
         if (state.pathlines.visible && m_scene && m_sceneStep == state.step) {
-            const PathlineStyle& style = m_scene->style();
-            const std::string what = style.colorColumn < 0 ? std::string("pathline age [Myr]")
-                                                           : "pathlines: " + m_scene->columns()[size_t(style.colorColumn)];
-            // The tubes map their range linearly (PathlineScene), not centred on 0: the map's stops.
-            TransferFunction colors;
-            const auto stops = colorMapStops(style.colorMap);
-            colors.colorPoints.assign(stops.begin(), stops.end());
-            colors.range = style.range;
-            legends.push_back({what, colors});
+            legends.push_back(pathlineLegend(m_scene->style(), m_scene->columns()));
         }
         const SphericalGrid& grid = m_dataset->levels().front().grid;
         drawLegends(out, frame.width(), frame.height(), legends,
@@ -413,12 +405,21 @@ ImageRgba8 StateRenderer::slicePicture(const ResolvedState& resolved, Slice slic
     const int level = state.level.value_or(0);
     const auto volume = m_sources.volume ? m_sources.volume(state.step, level) : m_dataset->load(state.step, level);
     const auto coastlines = slice == Slice::Map && state.reference.coastlines.visible ? defaultCoastlines() : nullptr;
+    std::optional<PathlineLines> pathlines;
+    if (state.pathlines.visible) {
+        try {
+            pathlines.emplace(m_sources.pathlines(state.step, state.pathlines.window));
+        } catch (const Error& e) {
+            fail("pathlines: {}", e.what());
+        }
+    }
     SliceInputs inputs{.volume = volume.get(),
                        .resolved = &resolved,
                        .variableNames = m_dataset->variableNames(),
                        .colorTitle = variableTitle(m_dataset->variables().at(size_t(resolved.params.colorVariable))),
                        .when = fmt::format("step {}, {:.1f} Myr", state.step, m_dataset->steps().at(size_t(state.step)).timeMyr),
-                       .coastlines = coastlines.get()};
+                       .coastlines = coastlines.get(),
+                       .pathlines = pathlines ? &*pathlines : nullptr};
     return slice == Slice::Map ? mapPicture(inputs) : sectionPicture(inputs);
 }
 
