@@ -153,11 +153,10 @@ void applySliceFlags(const RenderArgs& args, RenderState& state)
 
 // The slice of `step` as a CF netCDF grid (`--netcdf`): a map's lat-lon grid or a section's
 // distance-depth grid of the colour variable, sampled as the picture is.
-CfGridFile sliceGridFile(const Dataset& dataset, const ResolvedState& resolved, StateRenderer::Slice slice,
-                         const RenderArgs& args)
+CfGridFile sliceGridFile(const Dataset& dataset, const StepVolume* volume, const ResolvedState& resolved,
+                         StateRenderer::Slice slice, const RenderArgs& args)
 {
     const RenderState& state = resolved.state;
-    const auto volume = dataset.load(state.step, state.level.value_or(0));
     const size_t var = size_t(resolved.params.colorVariable);
     const VariableInfo& info = dataset.variables().at(var);
     CfGridFile file;
@@ -229,7 +228,23 @@ struct RenderSetup {
     std::optional<NumberedName> output, depth;
     std::optional<StateRenderer::Slice> slice;  // a map or a section instead of the 3D view
     std::optional<NumberedName> netcdf;          // the slice's grid (maps and sections)
+    // The volume of a step and level: the last one read kept, so that a slice's picture and its
+    // --netcdf grid read a step once.
+    std::function<std::shared_ptr<const StepVolume>(int step, int level)> volume;
 };
+
+std::function<std::shared_ptr<const StepVolume>(int, int)> lastVolumeKept(std::shared_ptr<const Dataset> dataset)
+{
+    struct Kept {
+        int step = -1, level = -1;
+        std::shared_ptr<const StepVolume> volume;
+    };
+    return [dataset = std::move(dataset), kept = std::make_shared<Kept>()](int step, int level) {
+        if (!kept->volume || kept->step != step || kept->level != level)
+            *kept = {step, level, dataset->load(step, level)};
+        return kept->volume;
+    };
+}
 
 // -o and --depth, checked before anything is read: one step number at most, and a --time range
 // needs one, so that no two frames share a name.
@@ -390,7 +405,8 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
         // Both made before either is written: a grid that cannot be made leaves no picture.
         std::optional<CfGridFile> grid;
         if (setup.netcdf)
-            grid = sliceGridFile(dataset, resolved, *setup.slice, args);
+            grid = sliceGridFile(dataset, setup.volume(step, resolved.state.level.value_or(0)).get(), resolved,
+                                 *setup.slice, args);
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         const std::string out = (*setup.output)(step);
         makeParent(out);
@@ -493,7 +509,8 @@ void run(const RenderArgs& args)
 {
     RenderSetup setup;
     mpi::together([&] { setup = setUp(args); });
-    StateRenderer renderer(setup.dataset);
+    setup.volume = lastVolumeKept(setup.dataset);
+    StateRenderer renderer(setup.dataset, setup.slice ? StateSources{.volume = setup.volume} : StateSources{});
     LevelPolicy policy;  // level 0 unless the state names one
     if (setup.lodAuto && !setup.resolved.state.level && !setup.slice) {
         mpi::together([&] {

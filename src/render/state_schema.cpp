@@ -1083,7 +1083,8 @@ const Object<RenderState>& document()
                                      "other projections are centred on the equator)"}),
                  leaf<S>("greyUnselected", at(&S::map, &MapState::greyUnselected), boolean(),
                          {.meaning = "while `brushes` are set, what lies outside the selection is drawn in grey "
-                                     "(its value's lightness kept), so the selection stands out in colour"}),
+                                     "(its value's lightness kept), so the selection stands out in colour (on maps "
+                                     "and sections)"}),
                  leaf<S>("contours", at(&S::map, &MapState::contours), numberList(-INFINITY, INFINITY, 16),
                          {.meaning = "contour lines at these values of the colour variable (on maps and sections)"}),
                  leaf<S>("flow", at(&S::map, &MapState::flow), boolean(),
