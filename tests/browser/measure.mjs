@@ -23,6 +23,10 @@
 //    first converged frame (at the view's own size: measured before --size applies).
 // 5. with --orbit S: the camera dragged on the 3D view for S seconds (a mouse move every 16 ms):
 //    frames received and shown per second, and their levels and sizes.
+// 6. with --slices S: the Map & section tab shown and the map's depth slider dragged for S seconds
+//    (an input event every 33 ms across the mantle and back): maps shown per second and their size
+//    in device pixels (the pane's; --viewport sets it), and the 3D view's frames meanwhile (it marks
+//    the depth).
 import { spawn } from 'node:child_process';
 import { createRequire } from 'node:module';
 import { join } from 'node:path';
@@ -36,6 +40,7 @@ const sizeFlag = flag('--size') ?? '512x512';
 const size = sizeFlag === 'view' ? null : sizeFlag.split('x').map(Number);
 const viewport = (flag('--viewport') ?? '1280x860').split('x').map(Number);
 const orbitSeconds = Number(flag('--orbit') ?? 0);
+const sliceSeconds = Number(flag('--slices') ?? 0);
 let sizeText = ''; // the state's image size measured at
 const serverLog = flag('--server-log'), assets = flag('--assets') ?? join(repoRoot, 'web', 'dist-test');
 const profileFile = flag('--profile');
@@ -72,6 +77,7 @@ try {
   }
   sizeText = size ? size.join('x') : `${first.image.width}x${first.image.height}`;
   if (orbitSeconds > 0) await measureOrbit(page);
+  if (sliceSeconds > 0) await measureSlices(page);
   const rows = await page.evaluate(() => window.__raypc.parcoords.rowCount);
   if (!onlyPlay) await brushAndScreenshot(page, rows);
   if (playFps) for (const fps of playFps.split(',')) await measurePlayback(page, Number(fps));
@@ -102,6 +108,36 @@ async function measureOrbit(page) {
   const seconds = (r.now - since.t) / 1000;
   const count = (list, key) => { const c = {}; for (const s of list) c[key(s)] = (c[key(s)] ?? 0) + 1; return JSON.stringify(c); };
   console.log(`orbit for ${seconds.toFixed(1)} s at ${sizeText}: ${(r.received.length / seconds).toFixed(1)} frames/s received, ${(r.shown.length / seconds).toFixed(1)} shown; shown by level ${count(r.shown, (s) => s.level)}, by size ${count(r.shown, (s) => `${s.width}x${s.height}`)}`);
+}
+
+async function measureSlices(page) {
+  await page.click('#pcTabSlices');
+  await page.waitForFunction(() => window.__raypc.slices.map.shown > 0, null, { timeout: 60000 });
+  const since = await page.evaluate(() => ({ maps: window.__raypc.slices.map.shown, shown: window.__raypc.shownLog.length, t: performance.now() }));
+  const t0 = Date.now();
+  for (let i = 0; Date.now() - t0 < sliceSeconds * 1000; i++) {
+    await page.evaluate((k) => {
+      const slider = document.getElementById('mapDepth');
+      const lo = Number(slider.min), hi = Number(slider.max), phase = (k % 120) / 60;
+      slider.value = String(Math.round(lo + (hi - lo) * (phase < 1 ? phase : 2 - phase)));
+      slider.dispatchEvent(new Event('input'));
+    }, i);
+    await page.waitForTimeout(33);
+  }
+  const r = await page.evaluate((n) => ({
+    maps: window.__raypc.slices.map.shown - n.maps, header: window.__raypc.slices.map.header,
+    shown: window.__raypc.shownLog.length - n.shown, now: performance.now(),
+  }), since);
+  const seconds = (r.now - since.t) / 1000;
+  console.log(`depth dragged for ${seconds.toFixed(1)} s: ${(r.maps / seconds).toFixed(1)} maps/s shown at ${r.header.width}x${r.header.height} (window ${viewport.join('x')}); the 3D view meanwhile ${(r.shown / seconds).toFixed(1)} frames/s`);
+  if (screenshot) {
+    // The tab at 660 km, for docs/maps.md: SCREENSHOT with -slices before .png.
+    await page.fill('#mapDepthValue', '660');
+    await page.press('#mapDepthValue', 'Enter');
+    await page.waitForTimeout(1500);
+    await waitConverged(page, 60000);
+    await page.screenshot({ path: screenshot.replace(/(\.png)?$/, '-slices.png') });
+  }
 }
 
 async function measurePlayback(page, playFps) {

@@ -31,12 +31,23 @@ export interface SlicePanelHost {
 
 type View = 'map' | 'section';
 
-// One picture: at most one request in flight; a state that changes meanwhile is drawn next.
+// What of a state a picture depends on: not the 3D view's camera, stereo, shading, core or axes,
+// nor the other picture's settings (a dragged map depth redraws no section). JSON, to compare.
+function pictureKey(view: View, state: RenderState): string {
+  const { camera: _c, stereo: _s, shading: _sh, core: _co, axes: _a, map, section, ...rest } = state;
+  return JSON.stringify(view === 'map'
+    ? { ...rest, map: { ...map, showInView: false } }
+    : { ...rest, section, greyUnselected: map.greyUnselected, contours: map.contours });
+}
+
+// One picture: at most one request in flight; a state that changes meanwhile is drawn next; a
+// state that changes nothing the picture shows asks for none.
 class SlicePicture {
   header: SliceHeader | null = null;
   private busy = false;
   private dirty = false;
   private url = '';
+  private key = ''; // pictureKey of the picture shown or asked for
   // How many pictures have been shown (tests wait for the next one).
   shown = 0;
 
@@ -50,6 +61,9 @@ class SlicePicture {
     }
     const state = this.state();
     if (!state) return;
+    const key = pictureKey(this.view, state);
+    if (key === this.key) return;
+    this.key = key;
     this.busy = true;
     this.dirty = false;
     postSlice(this.view, state)
@@ -61,7 +75,10 @@ class SlicePicture {
         this.shown++;
         this.onShown(header);
       })
-      .catch((e: Error) => this.showError(e.message))
+      .catch((e: Error) => {
+        this.key = ''; // asked again next time
+        this.showError(e.message);
+      })
       .finally(() => {
         this.busy = false;
         if (this.dirty) this.request();
