@@ -134,6 +134,7 @@ async function measureSlices(page) {
     // The tab at 660 km, for docs/maps.md: SCREENSHOT with -slices before .png.
     await page.fill('#mapDepthValue', '660');
     await page.press('#mapDepthValue', 'Enter');
+    await page.evaluate(() => document.getElementById('sliceSection').scrollIntoView());
     await page.waitForTimeout(1500);
     await waitConverged(page, 60000);
     await page.screenshot({ path: screenshot.replace(/(\.png)?$/, '-slices.png') });
