@@ -59,15 +59,8 @@ public:
         float value;
         bool selected;
     };
-    std::optional<Sample> at(double latDeg, double lonDeg, double rKm) const
-    {
-        const auto where = m_sampler.locate(latDeg, lonDeg, rKm);
-        if (!where)
-            return std::nullopt;
-        return at(*where, latDeg, lonDeg, rKm);
-    }
-    // The same where the point's location on the grid is known (a section locates its columns and
-    // its rows once).
+    // At a point whose location on the grid is known (a section locates its columns and its rows
+    // once).
     Sample at(const GridSampler::Location& where, double latDeg, double lonDeg, double rKm) const
     {
         auto value = [&](size_t slot) { return m_sampler.sample(slot == 0 ? m_color : m_brushValues[slot - 1], where); };
@@ -369,8 +362,8 @@ std::string fitTitle(const std::vector<std::string>& parts, int width, int heigh
     return title;
 }
 
-// What else a picture says, right-aligned above its bottom edge, one line each: what grey means and
-// the arrows' scale.
+// What else a picture says, right-aligned above its bottom edge, one line each: what grey means,
+// the arrows' scale and the pathlines drawn.
 void addNotes(std::vector<TextLabel>& labels, int width, int height, bool grey, const std::string& flowText,
               const std::string& pathlineText)
 {
@@ -595,11 +588,7 @@ using MapPixelPoints = std::vector<std::array<float, 2>>;
 
 std::shared_ptr<const MapPixelPoints> mapPixelPoints(const MapState& map, const MapFrame& frame, int width, int height)
 {
-    // Two frames (the map pane's and a full-size figure's, say): 16 MB each at 1920 x 1080.
-    static LruCache<MapPixelsKey, MapPixelPoints> cache(2);
-    const auto [cx, cy] = frame.centrePx();
-    const MapPixelsKey key{map.projection, map.centralMeridianDeg, map.centralLatitudeDeg, frame.scale(), cx, cy, width, height};
-    return cache.get(key, [&] {
+    auto make = [&] {
         MapPixelPoints points(size_t(width) * size_t(height), {NAN, NAN});
         tbb::parallel_for(0, height, [&](int y) {
             for (int x = 0; x < width; ++x)
@@ -607,7 +596,17 @@ std::shared_ptr<const MapPixelPoints> mapPixelPoints(const MapState& map, const 
                     points[size_t(y) * size_t(width) + size_t(x)] = {float((*ll)[1]), float((*ll)[0])};
         });
         return points;
-    });
+    };
+    // Two frames (the map pane's and a full-size figure's, say): 16 MB each at 1920 x 1080; larger
+    // pictures (screenshots, figures) are not kept.
+    constexpr int64_t kMostPixelsKept = int64_t(3840) * 2160;
+    if (int64_t(width) * height > kMostPixelsKept)
+        return std::make_shared<const MapPixelPoints>(make());
+    static LruCache<MapPixelsKey, MapPixelPoints> cache(2);
+    const auto [cx, cy] = frame.centrePx();
+    const double centralLatitudeDeg = map.projection == MapProjection::Orthographic ? map.centralLatitudeDeg : 0.0;
+    return cache.get(MapPixelsKey{map.projection, map.centralMeridianDeg, centralLatitudeDeg, frame.scale(), cx, cy, width, height},
+                     make);
 }
 
 }  // namespace
