@@ -256,14 +256,26 @@ public:
 
     // The picture `raypc render --state` writes for this state (the same path: StateRenderer, its
     // passes, reference geometry and legends), (height, width, 4) uint8 RGBA. `passes` 0: the state's.
-    py::array_t<uint8_t> render(const std::string& text, int passes, py::object progress) const
+    py::array_t<uint8_t> render(const std::string& text, int passes, const std::string& view, py::object progress) const
     {
         const render::RenderState state = parseState(text, "state");
         if (passes < 0)
             fail("passes: {} is negative", passes);
+        if (view != "3d" && view != "map" && view != "section")
+            fail("view '{}': expected '3d', 'map' or 'section'", view);
         render::checkPictureFitsMemory(state, false, availableMemory());
         ProgressBridge bridge(std::move(progress));
         render::ImageRgba8 image;
+        if (view != "3d") {
+            // The state's map or section (raypc map / raypc section): one picture, no passes.
+            {
+                py::gil_scoped_release release;
+                const render::ResolvedState resolved = render::resolveState(state, *m_dataset);
+                image = render::StateRenderer(m_dataset).slicePicture(
+                    resolved, view == "map" ? render::StateRenderer::Slice::Map : render::StateRenderer::Slice::Section);
+            }
+            return arrayOf(image.pixels, {py::ssize_t(image.height), py::ssize_t(image.width), 4});
+        }
         {
             py::gil_scoped_release release;
             const render::ResolvedState resolved = render::resolveState(state, *m_dataset);
@@ -430,7 +442,8 @@ PYBIND11_MODULE(_raypc, m)
         .def("pathlines", &PyDataset::pathlines, py::arg("step"), py::arg("window"))
         .def("default_state", &PyDataset::defaultState)
         .def("check_state", &PyDataset::checkState, py::arg("json"))
-        .def("render", &PyDataset::render, py::arg("json"), py::arg("passes"), py::arg("progress") = py::none())
+        .def("render", &PyDataset::render, py::arg("json"), py::arg("passes"), py::arg("view") = "3d",
+             py::arg("progress") = py::none())
         .def("features", &PyDataset::features, py::arg("json"), py::arg("first"), py::arg("last"), py::arg("level"),
              py::arg("min_volume_km3"), py::arg("depths_km"), py::arg("band_half_width_km"), py::arg("progress") = py::none())
         .def("stats", &PyDataset::stats, py::arg("json"), py::arg("first"), py::arg("last"), py::arg("level"),

@@ -88,6 +88,22 @@ def test_render_equals_the_cli_bit_for_bit(contest, tmp_path, state):
     assert len(np.unique(cli.reshape(-1, 3), axis=0)) > 20
 
 
+@pytest.mark.parametrize("view", ["map", "section"])
+def test_map_and_section_equal_the_cli_bit_for_bit(contest, tmp_path, view):
+    state = dict(BRUSHED, image={"width": 320, "height": 200}, version=9,
+                 map={"depthKm": 1000, "projection": "robinson", "contours": [0]},
+                 section={"from": {"latDeg": -20, "lonDeg": 40}, "to": {"latDeg": 60, "lonDeg": 40}})
+    raypc.State(state).save(tmp_path / "s.json")
+    run_cli(view, contest.path, "--state", tmp_path / "s.json", "-o", tmp_path / "cli.png")
+    cli = np.asarray(Image.open(tmp_path / "cli.png").convert("RGB"))
+    picture = contest.render(state, view=view)
+    assert picture.shape == (200, 320, 4)
+    np.testing.assert_array_equal(np.asarray(picture)[..., :3], cli)
+    assert len(np.unique(cli.reshape(-1, 3), axis=0)) > 20
+    with pytest.raises(raypc.Error, match="view 'globe'"):
+        contest.render(state, view="globe")
+
+
 def test_render_overrides_and_refuses(contest):
     a = contest.render(BRUSHED, step=0, passes=1)
     b = contest.render(BRUSHED, step=2, passes=1)

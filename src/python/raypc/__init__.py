@@ -410,11 +410,14 @@ class Dataset:
         return State(self._core.check_state(_state_of(state, self).to_json(None)))
 
     def render(self, state: Union[None, State, dict, str, os.PathLike] = None, size: Optional[tuple] = None,
-               passes: Optional[int] = None, step: Optional[StepLike] = None, progress: bool = True) -> Picture:
+               passes: Optional[int] = None, step: Optional[StepLike] = None, progress: bool = True,
+               view: str = "3d") -> Picture:
         """The picture of a state (default: the UI's first view), as ``raypc render --state`` writes
         it: (height, width, 4) uint8 RGBA. ``size`` (width, height) and ``step`` override the
         state's; ``passes`` the state's number of progressive passes. Runs on all cores without the
-        GIL, with a progress bar per pass (``progress=False`` silences it); Ctrl-C stops it."""
+        GIL, with a progress bar per pass (``progress=False`` silences it); Ctrl-C stops it.
+        ``view="map"`` or ``"section"`` draws the state's map or section instead (its ``map`` and
+        ``section`` keys, docs/maps.md), as ``raypc map`` and ``raypc section`` do."""
         s = _state_of(state, self).to_dict()
         if size is not None:
             w, h = size
@@ -423,7 +426,7 @@ class Dataset:
             s["step"] = self._step(step)
         bar = _Progress("render", progress, delay=0.5)
         try:
-            pixels = self._core.render(json.dumps(s), 0 if passes is None else int(passes), bar)
+            pixels = self._core.render(json.dumps(s), 0 if passes is None else int(passes), view, bar)
         finally:
             bar.close()
         return pixels.view(Picture)
