@@ -92,25 +92,58 @@ bool pointSelected(const StepVolume& volume, std::span<const RangeFilter> filter
 
 }  // namespace
 
-SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters)
+SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters,
+                              std::optional<size_t> meanVariable)
 {
     checkFilters(volume, filters);
     const auto& g = volume.grid();
+    if (meanVariable && *meanVariable >= volume.variableCount())
+        fail("mean variable: index {} of {} variables", *meanVariable, volume.variableCount());
+    const float* values = meanVariable ? volume.values(*meanVariable) : nullptr;
     const auto w = g.volumeFactors();
     const double total = g.totalVolumeKm3();
-    tbb::enumerable_thread_specific<std::vector<double>> perThread(std::vector<double>(g.nR(), 0.0));
+    // Per radius: the selected volume and, with a mean variable, the volume-weighted sums of its
+    // finite values over the selected points and over the shell, and the volumes they weigh.
+    struct Sums {
+        std::vector<double> volume, selectedSum, shellSum, selectedWeight, shellWeight;
+    };
+    const size_t n = g.nR(), m = values ? n : 0;
+    tbb::enumerable_thread_specific<Sums> perThread(Sums{std::vector<double>(n, 0.0), std::vector<double>(m, 0.0),
+                                                         std::vector<double>(m, 0.0), std::vector<double>(m, 0.0),
+                                                         std::vector<double>(m, 0.0)});
     tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
-        auto& byR = perThread.local();
-        for (size_t iR = 0; iR < g.nR(); ++iR)
-            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
-                if (pointSelected(volume, filters, iLat, iR, iLon))
-                    byR[iR] += w.at(iLat, iR, iLon);
+        Sums& sums = perThread.local();
+        for (size_t iR = 0; iR < n; ++iR)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                const double cell = w.at(iLat, iR, iLon);
+                const bool selected = pointSelected(volume, filters, iLat, iR, iLon);
+                if (selected)
+                    sums.volume[iR] += cell;
+                const float v = values ? values[g.index(iLat, iR, iLon)] : 0.0f;
+                if (values && std::isfinite(v)) {
+                    sums.shellSum[iR] += v * cell;
+                    sums.shellWeight[iR] += cell;
+                    if (selected) {
+                        sums.selectedSum[iR] += v * cell;
+                        sums.selectedWeight[iR] += cell;
+                    }
+                }
+            }
     });
     SelectionStats stats;
-    stats.volumeByRadiusKm3.assign(g.nR(), 0.0);
-    for (const auto& byR : perThread)
-        for (size_t iR = 0; iR < g.nR(); ++iR)
-            stats.volumeByRadiusKm3[iR] += byR[iR];
+    stats.volumeByRadiusKm3.assign(n, 0.0);
+    Sums all{{}, std::vector<double>(m, 0.0), std::vector<double>(m, 0.0), std::vector<double>(m, 0.0),
+             std::vector<double>(m, 0.0)};
+    for (const Sums& sums : perThread) {
+        for (size_t iR = 0; iR < n; ++iR)
+            stats.volumeByRadiusKm3[iR] += sums.volume[iR];
+        for (size_t iR = 0; iR < m; ++iR) {
+            all.selectedSum[iR] += sums.selectedSum[iR];
+            all.shellSum[iR] += sums.shellSum[iR];
+            all.selectedWeight[iR] += sums.selectedWeight[iR];
+            all.shellWeight[iR] += sums.shellWeight[iR];
+        }
+    }
     for (double v : stats.volumeByRadiusKm3)
         stats.volumeKm3 += v;
     double latSum = 0, lonSum = 0;
@@ -121,6 +154,10 @@ SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFil
     for (double rFactor : w.r)
         stats.shellVolumeByRadiusKm3.push_back(rFactor * latSum * lonSum);
     stats.fractionOfMantle = stats.volumeKm3 / total;
+    for (size_t iR = 0; iR < m; ++iR) {
+        stats.selectedMeanByRadius.push_back(all.selectedWeight[iR] > 0 ? all.selectedSum[iR] / all.selectedWeight[iR] : NAN);
+        stats.shellMeanByRadius.push_back(all.shellWeight[iR] > 0 ? all.shellSum[iR] / all.shellWeight[iR] : NAN);
+    }
     return stats;
 }
 
@@ -179,7 +216,7 @@ namespace raypc {
 
 std::vector<StepSelection> selectionOverTime(const Dataset& dataset, std::span<const RangeFilter> filters, int level,
                                              int firstStep, int lastStep, const VolumeLoader& load,
-                                             const std::function<void()>& onStep)
+                                             const std::function<void()>& onStep, std::optional<size_t> meanVariable)
 {
     dataset.checkLevel(level);
     dataset.checkStep(firstStep);
@@ -187,7 +224,7 @@ std::vector<StepSelection> selectionOverTime(const Dataset& dataset, std::span<c
     std::vector<StepSelection> out;
     for (int step = firstStep; step <= lastStep; ++step) {
         const auto volume = load ? load(step, level) : dataset.load(step, level);
-        out.push_back({step, dataset.steps()[size_t(step)].timeMyr, selectedVolume(*volume, filters)});
+        out.push_back({step, dataset.steps()[size_t(step)].timeMyr, selectedVolume(*volume, filters, meanVariable)});
         if (onStep)
             onStep();
     }

@@ -69,12 +69,17 @@ struct SelectionStats {
     double fractionOfMantle = 0;             // of the grid's whole shell volume
     std::vector<double> volumeByRadiusKm3;   // per radius index of the grid (ascending r)
     std::vector<double> shellVolumeByRadiusKm3;  // whole dual-cell shell of each radius index
+    // With a mean variable: its volume-weighted mean per radius index over the selected points
+    // (NaN where none is selected) and over the whole shell; otherwise empty.
+    std::vector<double> selectedMeanByRadius, shellMeanByRadius;
 };
 
 // A grid point is selected when every filter holds at it (its value lies in one of the filter's
-// ranges); it counts with its dual-cell volume. Throws raypc::Error for a variable index out of
-// range, a filter without ranges or min > max. Parallel over lat rows.
-SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters);
+// ranges); it counts with its dual-cell volume. With `meanVariable` (an index of the volume's
+// variables) also that variable's means per radius (a time-depth view of it). Throws raypc::Error
+// for a variable index out of range, a filter without ranges or min > max. Parallel over lat rows.
+SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters,
+                              std::optional<size_t> meanVariable = std::nullopt);
 
 // Whether each grid point is selected (1) or not (0), canonical order, by the rule of
 // selectedVolume. Throws raypc::Error as selectedVolume does. Parallel over lat rows.
@@ -103,6 +108,7 @@ struct StepSelection {
 using VolumeLoader = std::function<std::shared_ptr<const StepVolume>(int step, int level)>;
 std::vector<StepSelection> selectionOverTime(const Dataset& dataset, std::span<const RangeFilter> filters, int level,
                                              int firstStep, int lastStep, const VolumeLoader& load = {},
-                                             const std::function<void()>& onStep = {});
+                                             const std::function<void()>& onStep = {},
+                                             std::optional<size_t> meanVariable = std::nullopt);
 
 }  // namespace raypc

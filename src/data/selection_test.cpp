@@ -14,6 +14,32 @@
 namespace raypc {
 namespace {
 
+// The mean of a variable per radius is weighted by the points' dual-cell volumes: the latitude
+// over the northern hemisphere averages to the area-weighted pi/2 - 1 radians (32.70°), not to
+// the plain mean of its rows (45°), and over the whole shell to 0; in shells with nothing
+// selected the selected mean is NaN.
+TEST(Selection, MeansPerRadiusAreVolumeWeighted)
+{
+    Snapshot snap;
+    snap.grid = testing::centredGrid(90, 5, 36);
+    snap.fields.push_back({"lat", "degree", testing::fillGrid(snap.grid, [&](size_t a, size_t, size_t) { return snap.grid.latDeg[a]; })});
+    const auto volume = StepVolume::fromSnapshot(snap);
+    const std::vector<RangeFilter> north{{-1, Coordinate::Lat, {{0.0f, 90.0f}}},
+                                         {-1, Coordinate::Radius, {{0.0f, float(snap.grid.rKm[3])}}}};
+    const SelectionStats s = selectedVolume(*volume, north, 0);
+    ASSERT_EQ(s.selectedMeanByRadius.size(), snap.grid.nR());
+    const double expected = (std::numbers::pi / 2 - 1) * 180 / std::numbers::pi;  // 32.70°
+    for (size_t iR = 0; iR < snap.grid.nR(); ++iR) {
+        EXPECT_NEAR(s.shellMeanByRadius[iR], 0.0, 1e-9);
+        if (iR <= 3)
+            EXPECT_NEAR(s.selectedMeanByRadius[iR], expected, 0.05) << iR;  // 2° rows: the midpoint rule's error
+        else
+            EXPECT_TRUE(std::isnan(s.selectedMeanByRadius[iR])) << iR;
+    }
+    EXPECT_TRUE(selectedVolume(*volume, north).shellMeanByRadius.empty());
+    EXPECT_THROW(selectedVolume(*volume, north, 1), Error);
+}
+
 TEST(Selection, ExactVolumesOfAnalyticSelections)
 {
     Snapshot snap = readSnapshot(testing::contestLayoutDir() / "spherical001.nc");

@@ -145,6 +145,31 @@ stats_analytic_selection)
     'NR > 1 { n++; if (($3 - v)^2 > (1e-6 * v)^2 || ($4 - p)^2 > 1e-8) bad = 1 } END { exit bad || n != 3 }' "$work/stats.csv"
   check "profile: no selected volume below 660 km" awk -F, 'NR > 1 && $4 > 660 && $5 != 0 { bad = 1 } END { exit bad }' "$work/profile.csv"
   check "profile: shells above 660 km fully selected" awk -F, 'NR > 1 && $4 < 600 && ($7 - 100)^2 > 1e-6 { bad = 1 } END { exit bad }' "$work/profile.csv"
+  # A variable's mean per depth (--profile-var): the temperature less its anomaly is the truth's
+  # radial profile, 300 + 3700 (6371 - r) / 2886 K, in every shell's mean (u16 values: 0.1 K); in the
+  # depth range every shell is selected whole (selected mean = shell mean), outside none (empty).
+  for var in temperature "temperature anomaly"; do
+    "$raypc" stats "$work/ds" --range "depth=500:1500" -o "$work/m.csv" --profile "$work/m-$var.csv" \
+      --profile-var "$var" --quiet >/dev/null
+  done
+  check "--profile-var: shell means of T - T' are the truth's profile; selected = shell within the range, empty outside" \
+    python3 - "$work/m-temperature.csv" "$work/m-temperature anomaly.csv" <<'PY'
+import csv, sys
+t, a = (list(csv.DictReader(open(f))) for f in sys.argv[1:])
+worst, ok = 0.0, len(t) == len(a) == 3 * 41
+for rt, ra in zip(t, a):
+    d = float(rt["depth_km"])
+    worst = max(worst, abs(float(rt["temperature shell mean [K]"]) - float(ra["temperature anomaly shell mean [K]"]) - (300 + 3700 * d / 2886)))
+    sel = rt["temperature selected mean [K]"]
+    if float(rt["selected_volume_km3"]) > 0:
+        ok &= float(rt["selected_percent_of_shell"]) > 99.999 and abs(float(sel) - float(rt["temperature shell mean [K]"])) < 1e-6 * 4000
+    else:
+        ok &= sel == ""
+print("largest |T - T' - profile| over the shells:", worst, "K")
+sys.exit(not (ok and worst < 0.1))
+PY
+  expect_error "--profile-var: unknown variable 'pressure'" stats "$work/ds" --profile "$work/x.csv" --profile-var pressure -o "$work/x.csv"
+  expect_error "--profile-var: needs --profile" stats "$work/ds" --profile-var temperature -o "$work/x.csv"
   "$raypc" stats "$work/ds" --range "radial velocity=0.2:0.3" -o "$work/none.csv" --quiet >/dev/null
   check "a range beside u0 selects nothing" awk -F, 'NR > 1 && $3 != 0 { bad = 1 } END { exit bad }' "$work/none.csv"
   expect_error "unknown variable or coordinate 'pressure'" stats "$work/ds" --range "pressure=0:1" -o "$work/x.csv"
