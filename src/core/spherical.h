@@ -28,6 +28,18 @@ inline Vec3d sphericalToCartesianKm(double latDeg, double lonDeg, double rKm)
     return {rKm * std::cos(lat) * std::cos(lon), rKm * std::cos(lat) * std::sin(lon), rKm * std::sin(lat)};
 }
 
+// Unit vectors east and north at (lat, lon) in the contest frame; at a pole, those of the meridian
+// of `lonDeg` (north there points on over the pole).
+struct EastNorth {
+    Vec3d east, north;
+};
+inline EastNorth eastNorthAt(double latDeg, double lonDeg)
+{
+    const double la = degToRad(latDeg), lo = degToRad(lonDeg);
+    return {Vec3d{-std::sin(lo), std::cos(lo), 0},
+            Vec3d{-std::sin(la) * std::cos(lo), -std::sin(la) * std::sin(lo), std::cos(la)}};
+}
+
 struct SphericalPoint {
     double latDeg = 0, lonDeg = 0, rKm = 0;  // lon in [0, 360)
 };

@@ -524,19 +524,6 @@ GreatCircle::GreatCircle(SectionState::Point from, SectionState::Point to, const
 
 double GreatCircle::lengthKm() const { return m_angleRad * kSurfaceRadiusKm; }
 
-namespace {
-
-// Unit vectors east and north at a surface point (contest frame); at a pole, those of the point's
-// meridian.
-std::pair<Vec3d, Vec3d> eastNorth(double latDeg, double lonDeg)
-{
-    const double la = degToRad(latDeg), lo = degToRad(lonDeg);
-    return {Vec3d{-std::sin(lo), std::cos(lo), 0},
-            Vec3d{-std::sin(la) * std::cos(lo), -std::sin(la) * std::sin(lo), std::cos(la)}};
-}
-
-}  // namespace
-
 std::array<double, 2> GreatCircle::locate(const Vec3d& p) const
 {
     const Vec3d u = normalize(p), normal = cross(m_from, m_ortho);
@@ -546,7 +533,7 @@ std::array<double, 2> GreatCircle::locate(const Vec3d& p) const
 double GreatCircle::azimuthDeg() const
 {
     const SphericalPoint a = cartesianToSpherical(m_from);
-    const auto [east, north] = eastNorth(a.latDeg, a.lonDeg);
+    const auto [east, north] = eastNorthAt(a.latDeg, a.lonDeg);
     const double az = radToDeg(std::atan2(dot(m_ortho, east), dot(m_ortho, north)));
     return az < 0 ? az + 360 : az;
 }
@@ -554,7 +541,7 @@ double GreatCircle::azimuthDeg() const
 SectionState::Point GreatCircle::pointAlong(SectionState::Point from, double azimuthDeg, double distanceDeg)
 {
     const Vec3d a = normalize(sphericalToCartesianKm(from.latDeg, from.lonDeg, 1.0));
-    const auto [east, north] = eastNorth(from.latDeg, from.lonDeg);
+    const auto [east, north] = eastNorthAt(from.latDeg, from.lonDeg);
     const double az = degToRad(azimuthDeg), d = degToRad(distanceDeg);
     const SphericalPoint p =
         cartesianToSpherical(a * std::cos(d) + (north * std::cos(az) + east * std::sin(az)) * std::sin(d));
@@ -707,16 +694,14 @@ ImageRgba8 mapPicture(const SliceInputs& in)
                 const auto v = probe.velocityCmPerYr(lat, lon, rKm);
                 if (!v)
                     continue;
-                const double la = degToRad(lat), lo = degToRad(lon);
-                const Vec3d east{-std::sin(lo), std::cos(lo), 0};
-                const Vec3d north{-std::sin(la) * std::cos(lo), -std::sin(la) * std::sin(lo), std::cos(la)};
-                const double ve = dot(*v, east), vn = dot(*v, north), speed = std::hypot(ve, vn);
+                const EastNorth basis = eastNorthAt(lat, lon);
+                const double ve = dot(*v, basis.east), vn = dot(*v, basis.north), speed = std::hypot(ve, vn);
                 if (!(speed > 0))
                     continue;
                 // The flow's direction on the map: a step of a tenth of a degree along it, projected.
                 const double d = 0.1;
                 const auto p0 = frame.pixelOf(lon, lat);
-                const auto p1 = frame.pixelOf(lon + d * ve / speed / std::max(1e-6, std::cos(la)), lat + d * vn / speed);
+                const auto p1 = frame.pixelOf(lon + d * ve / speed / std::max(1e-6, std::cos(degToRad(lat))), lat + d * vn / speed);
                 if (!p0 || !p1)
                     continue;
                 const double ux = (*p1)[0] - (*p0)[0], uy = (*p1)[1] - (*p0)[1], ul = std::hypot(ux, uy);
