@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 namespace raypc {
 
@@ -111,24 +112,37 @@ SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFil
     tbb::enumerable_thread_specific<Sums> perThread(Sums{std::vector<double>(n, 0.0), std::vector<double>(m, 0.0),
                                                          std::vector<double>(m, 0.0), std::vector<double>(m, 0.0),
                                                          std::vector<double>(m, 0.0)});
-    tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
+    // The selection's loop as it was without a mean variable (the brushes' hot path: /api/selection
+    // and the frame header ask on every release); the sums of the mean only when asked for.
+    auto sumRow = [&](size_t iLat, auto withMean) {
         Sums& sums = perThread.local();
         for (size_t iR = 0; iR < n; ++iR)
             for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
-                const double cell = w.at(iLat, iR, iLon);
                 const bool selected = pointSelected(volume, filters, iLat, iR, iLon);
-                if (selected)
-                    sums.volume[iR] += cell;
-                const float v = values ? values[g.index(iLat, iR, iLon)] : 0.0f;
-                if (values && std::isfinite(v)) {
-                    sums.shellSum[iR] += v * cell;
-                    sums.shellWeight[iR] += cell;
-                    if (selected) {
-                        sums.selectedSum[iR] += v * cell;
-                        sums.selectedWeight[iR] += cell;
+                if constexpr (!withMean) {
+                    if (selected)
+                        sums.volume[iR] += w.at(iLat, iR, iLon);
+                } else {
+                    const double cell = w.at(iLat, iR, iLon);
+                    if (selected)
+                        sums.volume[iR] += cell;
+                    const float v = values[g.index(iLat, iR, iLon)];
+                    if (std::isfinite(v)) {
+                        sums.shellSum[iR] += v * cell;
+                        sums.shellWeight[iR] += cell;
+                        if (selected) {
+                            sums.selectedSum[iR] += v * cell;
+                            sums.selectedWeight[iR] += cell;
+                        }
                     }
                 }
             }
+    };
+    tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
+        if (values)
+            sumRow(iLat, std::true_type{});
+        else
+            sumRow(iLat, std::false_type{});
     });
     SelectionStats stats;
     stats.volumeByRadiusKm3.assign(n, 0.0);
