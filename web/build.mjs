@@ -55,6 +55,19 @@ async function generateStateModules() {
   writeIfChanged('state_types.ts', await compile(completeSchema(schema), 'RenderState', {
     bannerComment: banner, additionalProperties: false, format: true,
   }));
+
+  // The protocol's messages (`raypc protocol-schema`, src/server/protocol_schema.cpp): one type per
+  // definition, named by its title; a state document is the RenderState above (its `tsType`).
+  const protocolFile = join(generated, 'protocol.schema.json');
+  if (!existsSync(protocolFile))
+    throw new Error(`${protocolFile} is missing: the C++ build writes it (cmake --build build, or scripts/build.sh)`);
+  const protocol = JSON.parse(readFileSync(protocolFile, 'utf8'));
+  const protocolTypes = await compile({ ...protocol, title: 'ProtocolMessages', type: 'object' }, 'ProtocolMessages', {
+    bannerComment: `${banner.replace('state.schema.json (`raypc state-schema`)', 'protocol.schema.json (`raypc protocol-schema`)')}\n` +
+      "import type { CameraState, RenderState } from './state_types';",
+    additionalProperties: false, format: true, unreachableDefinitions: true,
+  });
+  writeIfChanged('protocol_types.ts', protocolTypes);
 }
 
 // The UI into `dist`; with `testHooks` the browser tests' hooks (test_hooks.ts) are built in, which

@@ -377,7 +377,7 @@ RenderSetup setUp(const RenderArgs& args)
     if (slice == StateRenderer::Slice::Section)
         GreatCircle(resolved.state.section.from, resolved.state.section.to, "--from/--to");  // checked before reading
     return {dataset,          resolved,          first, last, sequence, lodAuto, std::move(output), std::move(depth),
-            slice,            std::move(netcdf)};
+            slice,            std::move(netcdf), {}};
 }
 
 // Renders one step (only the tiles of `share`; rank 0 then gathers them all when `share` is shared
@@ -510,7 +510,7 @@ void run(const RenderArgs& args)
     RenderSetup setup;
     mpi::together([&] { setup = setUp(args); });
     setup.volume = lastVolumeKept(setup.dataset);
-    StateRenderer renderer(setup.dataset, setup.slice ? StateSources{.volume = setup.volume} : StateSources{});
+    StateRenderer renderer(setup.dataset, setup.slice ? StateSources{.volume = setup.volume, .pathlines = {}} : StateSources{});
     LevelPolicy policy;  // level 0 unless the state names one
     if (setup.lodAuto && !setup.resolved.state.level && !setup.slice) {
         mpi::together([&] {

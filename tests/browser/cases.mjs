@@ -1087,7 +1087,15 @@ const cases = {
     await page.fill('#sectionAzimuth', '30');
     await page.fill('#sectionLength', '50');
     await page.press('#sectionLength', 'Enter');
+    // Leaving the azimuth field commits it with the length shown then (a picture of its own): wait
+    // for the picture of the end the Enter set (the state's end, which the server holds as float32).
     await nextPicture('section', s2);
+    await page.waitForFunction(() => {
+      const h = window.__raypc.slices.section.header, to = window.__raypc.state().section.to;
+      return h && Math.abs(h.to[0] - to.latDeg) < 1e-4 && Math.abs(h.to[1] - to.lonDeg) < 1e-4 && document.getElementById('sectionImage').complete;
+    }, null, { timeout: 20000 }).catch(async () => {
+      throw new TestFailure(`no section picture of the end set by azimuth and length: ${JSON.stringify(await page.evaluate(() => [window.__raypc.slices.section.header, window.__raypc.state().section]))}`);
+    });
     const arc = await page.evaluate(() => window.__raypc.slices.section.header);
     const fields = [await page.inputValue('#sectionAzimuth'), await page.inputValue('#sectionLength'), await page.textContent('#sectionLengthKm')];
     console.log(`  azimuth 30, length 50 from 20S 40E: to ${JSON.stringify((await rState(page)).section.to)}; the server measures azimuth ${arc.azimuthDeg}, length ${arc.lengthDeg} deg, ${arc.lengthKm} km; fields ${JSON.stringify(fields)}`);

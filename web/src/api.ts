@@ -3,53 +3,18 @@
 // and the server's message on a non-2xx answer.
 import type { RenderState } from './state';
 
-export interface VariableInfo {
-  name: string;
-  units: string;
-  derived: boolean;
-  min: number;
-  max: number;
-  mean: number;
-  histogram: number[];
-  // The colour range without a chosen one, by the renderer's rule (render::defaultColorRange):
-  // for maps centred on zero, and for the others.
-  defaultColorRange: { centred: [number, number]; other: [number, number] };
-}
-export interface CoordinateInfo {
-  name: string;
-  units: string;
-  min: number;
-  max: number;
-}
-export interface StepInfo {
-  index: number;
-  timeMyr: number;
-  source: string;
-}
-export interface Info {
-  protocol: number;
-  variables: VariableInfo[];
-  coordinates: CoordinateInfo[];
-  steps: StepInfo[];
-  levels: { level: number; nLat: number; nR: number; nLon: number }[];
-  sample: { rows: number; columns: string[]; units: string[] };
-  colorMaps: string[];
-  defaultState: RenderState;
-  // What POST /api/screenshot takes (the server's limits).
-  limits: { screenshotPixels: number; screenshotPasses: number; screenshotPixelPasses: number };
-}
-export interface Histogram {
-  name: string;
-  units: string;
-  min: number;
-  max: number;
-  histogram: number[];
-}
-export interface Selection {
-  fractionOfMantle: number;
-  volumeKm3: number;
-  step?: number;
-}
+// The server's answers are typed from their one description (src/server/protocol_schema.cpp,
+// `raypc protocol-schema`, generated into generated/protocol_types.ts).
+import type {
+  CoordinateInfo, Histogram, Info, MapHeader, PathlinesHeader, PersistenceDiagram, PersistencePair, Preset,
+  ProbeAnswer, SectionHeader, Selection, SelectionOverTime, SeriesProgress, StepInfo, VariableInfo,
+} from './generated/protocol_types';
+export type {
+  CoordinateInfo, Histogram, Info, PersistenceDiagram, PersistencePair, Preset, ProbeAnswer, Selection,
+  SelectionOverTime, SeriesProgress, StepInfo, VariableInfo,
+};
+// What POST /api/slice drew: a map's projection or a section's plot (`view` tells which).
+export type SliceHeader = MapHeader | SectionHeader;
 export interface Sample {
   rows: number;
   columns: string[];
@@ -74,18 +39,6 @@ export async function fetchInfo(): Promise<Info> {
 
 // GET /api/progress (docs/protocol.md): a series of netCDF files preprocessed in the background
 // while its first step is shown; 'complete' when the server shows a whole dataset.
-export interface SeriesProgress {
-  state: 'complete' | 'preparing' | 'ready' | 'failed';
-  dataset?: string;
-  steps?: number;
-  phase?: 'steps' | 'pathlines';
-  done?: number;
-  total?: number;
-  elapsedSeconds?: number;
-  etaSeconds?: number | null;
-  message?: string;
-}
-
 export async function fetchProgress(): Promise<SeriesProgress> {
   return (await check(await fetch('api/progress', { cache: 'no-store' }), 'GET /api/progress')).json();
 }
@@ -169,21 +122,8 @@ export async function postScreenshot(state: RenderState): Promise<Blob> {
   return (await check(r, 'POST /api/screenshot')).blob();
 }
 
-export interface Preset {
-  name: string; // file name without .json
-  title: string;
-  state: unknown; // a state document (checked when applied)
-  unavailable?: string; // why it cannot be applied to this dataset (the server resolved it), e.g. a missing variable
-}
-
 export async function fetchPresets(): Promise<Preset[]> {
   return (await check(await fetch('api/presets'), 'GET /api/presets')).json();
-}
-
-export interface SelectionOverTime {
-  level: number;
-  steps: { step: number; timeMyr: number; volumeKm3: number; fractionOfMantle: number }[];
-  profile: { step: number; radiusKm: number[]; depthKm: number[]; volumeKm3: number[]; shellVolumeKm3: number[] };
 }
 
 // Selected volume of every step and the depth profile of the state's step (POST /api/stats).
@@ -194,15 +134,7 @@ export async function postStats(state: RenderState, level: number | undefined, s
   return (await check(r, 'POST /api/stats')).json();
 }
 
-export interface PathlineAttributes {
-  step: number;
-  window: number;
-  lines: number;
-  columns: string[];
-  units: string[];
-  sets: { injectionStep: number; injectionTimeMyr: number; lines: number }[];
-  values: Float32Array; // lines x columns, row-major
-}
+export type PathlineAttributes = PathlinesHeader & { values: Float32Array }; // lines x columns, row-major
 
 // The line attributes of the pathlines shown at `step` (GET /api/pathlines): u32 LE header length,
 // JSON header, float32 LE values.
@@ -212,7 +144,7 @@ export async function fetchPathlines(step: number, window: number, signal?: Abor
   if (buffer.byteLength < 4) throw new Error('GET /api/pathlines: answer shorter than its header length');
   const n = new DataView(buffer).getUint32(0, true);
   if (4 + n > buffer.byteLength) throw new Error(`GET /api/pathlines: header of ${n} bytes does not fit in ${buffer.byteLength}`);
-  const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buffer, 4, n)));
+  const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buffer, 4, n))) as PathlinesHeader;
   const valueBytes = buffer.byteLength - 4 - n;
   const expected = header.lines * header.columns.length * 4;
   if (valueBytes !== expected) throw new Error(`GET /api/pathlines: ${valueBytes} bytes of values, expected ${expected}`);
@@ -221,53 +153,9 @@ export async function fetchPathlines(step: number, window: number, signal?: Abor
   return { ...header, values };
 }
 
-export interface PersistencePairInfo {
-  kind: 'minimum-saddle' | 'saddle-maximum' | 'global';
-  birth: number;
-  death: number;
-  persistence: number;
-  birthLat: number; birthLon: number; birthDepthKm: number; // the lower end
-  lat: number; lon: number; depthKm: number; // the extremum (the seed, when stored)
-}
-
-export interface PersistenceDiagram {
-  step: number;
-  variable: string;
-  units: string;
-  range: number; // the global pair's persistence: the step's max - min
-  pairCount: number;
-  counts: Record<string, number>;
-  pairs: PersistencePairInfo[]; // the most persistent first
-  rest: { count: number; maxPersistence: number };
-  // How the step's stored pathlines were seeded, or null (no pathlines, or another variable).
-  stored: { threshold: number; rule: string; lines: number; seedPersistenceColumn: boolean } | null;
-}
-
 // The persistence diagram of `step` (GET /api/persistence): the `top` most persistent pairs.
 export async function fetchPersistence(step: number, top: number, signal?: AbortSignal): Promise<PersistenceDiagram> {
   return (await check(await fetch(`api/persistence?step=${step}&top=${top}`, { signal }), 'GET /api/persistence')).json();
-}
-
-// What the server drew for POST /api/slice (docs/protocol.md): the picture's size and where it put
-// the sphere (maps: d3's scale and translation of the projection) or the section's plot.
-export interface SliceHeader {
-  view: 'map' | 'section';
-  width: number;
-  height: number;
-  step: number;
-  projection?: string;
-  centralMeridianDeg?: number;
-  centralLatitudeDeg?: number;
-  scale?: number;
-  centre?: [number, number];
-  depthKm?: number;
-  plot?: { left: number; right: number; top: number; bottom: number };
-  depthSpanKm?: number;
-  from?: [number, number]; // lat, lon
-  to?: [number, number];
-  azimuthDeg?: number; // the arc's direction leaving `from`, clockwise from north
-  lengthDeg?: number; // along the surface
-  lengthKm?: number;
 }
 
 export async function postSlice(view: 'map' | 'section', state: RenderState): Promise<{ header: SliceHeader; png: Blob }> {
@@ -279,10 +167,6 @@ export async function postSlice(view: 'map' | 'section', state: RenderState): Pr
   if (n < 0 || 4 + n > body.byteLength) throw new Error(`POST /api/slice: an answer of ${body.byteLength} bytes without its header`);
   const header = JSON.parse(new TextDecoder().decode(new Uint8Array(body, 4, n))) as SliceHeader;
   return { header, png: new Blob([new Uint8Array(body, 4 + n)], { type: 'image/png' }) };
-}
-
-export interface ProbeAnswer {
-  values: Record<string, { value: number; units: string }>;
 }
 
 // The values at a point (GET /api/probe; data/probe.h, as `raypc probe`).

@@ -2,41 +2,13 @@
 // binary frames (u32 header length, JSON header, JPEG, float32 depth map). Reconnects after a
 // drop and resends the last state, so a restarted server picks the view up again. The server's
 // text messages: hello, error, pong, and link (a state a program set through POST /api/link).
-import type { CameraState, RenderState } from './state';
+import type { RenderState } from './state';
+import type {
+  ClientCancel, ClientHello, ClientState, FrameHeader, ServerError, ServerHello, ServerLink, ServerPong,
+} from './generated/protocol_types';
 
-export interface ShellKeyEntry {
-  label: string;
-  color: [number, number, number];
-}
-export interface FrameHeader {
-  type: 'frame';
-  id: number;
-  step: number;
-  level: number;
-  pass: number;
-  passes: number;
-  converged: boolean;
-  interactive: boolean;
-  playback?: boolean; // a step of playback: level chosen for the state's timeBudgetMs, then passes
-  preview?: boolean; // pass 0 of a still state: one quick pass before its passes (docs/protocol.md)
-  ranks?: number; // MPI ranks that rendered the pass (docs/protocol.md); 1 alone
-  width: number;
-  height: number;
-  camera: CameraState;
-  jpegBytes: number;
-  depthWidth: number;
-  depthHeight: number;
-  depthBytes: number;
-  stats?: { passMs?: number; samples?: number; samplesPerSecond?: number; bricksSkipped?: number; bricksTotal?: number };
-  selection?: { fractionOfMantle: number; volumeKm3: number } | null; // null on the first frame of a new still state
-  // While pathlines are shown: the lines of the window and those the filters and brushes let through.
-  pathlines?: { lines: number; visible: number };
-  // With reference shells drawn: each shell's label ("410 km") and colour, as the legend names it.
-  shellKey?: ShellKeyEntry[];
-  // A stereo frame (docs/protocol.md): the image is the composed pair (width x height), the depth
-  // map the two eyes' side by side; eyeWidth x eyeHeight is each eye as rendered.
-  stereo?: { mode: string; eyeSeparationKm: number; convergenceKm: number; eyeWidth: number; eyeHeight: number; pixelAspect: number };
-}
+// The server's messages are typed from their one description (src/server/protocol_schema.cpp).
+export type { FrameHeader, ShellKeyEntry } from './generated/protocol_types';
 // How the server renders a state (docs/protocol.md, the state message): a still state's passes,
 // one interactive pass, or a step of playback.
 export type SendMode = 'still' | 'interactive' | 'playback';
@@ -66,11 +38,7 @@ export function decodeFrame(buffer: ArrayBuffer): Frame {
 }
 
 // The server's text messages (docs/protocol.md, Server → client).
-type ServerText =
-  | { type: 'hello'; protocol: number; session: string }
-  | { type: 'error'; message?: string; id?: number }
-  | { type: 'pong'; id: number }
-  | { type: 'link'; version: number; state: unknown };
+type ServerText = ServerHello | ServerError | ServerPong | ServerLink;
 
 export interface ConnectionEvents {
   onFrame(frame: Frame): void;
@@ -102,7 +70,7 @@ export class Connection {
     ws.binaryType = 'arraybuffer';
     this.ws = ws;
     ws.onopen = () => {
-      ws.send(JSON.stringify({ type: 'hello', protocol: 1 }));
+      ws.send(JSON.stringify({ type: 'hello', protocol: 1 } satisfies ClientHello));
     };
     ws.onmessage = (ev) => {
       if (typeof ev.data === 'string') {
@@ -153,12 +121,12 @@ export class Connection {
   private sendNow(state: RenderState, mode: SendMode): number {
     const id = this.nextId++;
     this.lastSentId = id;
-    this.ws?.send(JSON.stringify({ type: 'state', id, state, interactive: mode === 'interactive', playback: mode === 'playback' }));
+    this.ws?.send(JSON.stringify({ type: 'state', id, state, interactive: mode === 'interactive', playback: mode === 'playback' } satisfies ClientState));
     return id;
   }
 
   cancel(): void {
-    if (this.open) this.ws?.send(JSON.stringify({ type: 'cancel' }));
+    if (this.open) this.ws?.send(JSON.stringify({ type: 'cancel' } satisfies ClientCancel));
   }
 
   // True when the newest sent state has been answered by at least one frame.

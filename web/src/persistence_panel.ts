@@ -5,7 +5,7 @@
 // brushes), so only lines whose seed persistence is at least T are shown, and it highlights the
 // pairs kept.
 import * as d3 from 'd3';
-import { fetchPersistence, type PersistenceDiagram, type PersistencePairInfo } from './api';
+import { fetchPersistence, type PersistenceDiagram, type PersistencePair } from './api';
 import type { StateStore } from './store';
 import { displayUnits } from './units';
 
@@ -138,7 +138,7 @@ export class PersistencePanel {
 
     // The pairs: bright when a line of theirs passes the threshold (and was stored), dim otherwise.
     const t = this.threshold();
-    const kept = (p: PersistencePairInfo) => Boolean(stored) && p.persistence > stored!.threshold && (t === null || p.persistence >= t);
+    const kept = (p: PersistencePair) => Boolean(stored) && p.persistence > stored!.threshold && (t === null || p.persistence >= t);
     g.append('g').attr('class', 'pairs').selectAll('circle').data(pairs).enter().append('circle')
       .attr('class', (p) => (kept(p) ? 'pair kept' : 'pair'))
       .attr('cx', (p) => x(p.birth)).attr('cy', (p) => y(p.persistence)).attr('r', (p) => (kept(p) ? 3.2 : 1.8))
@@ -194,7 +194,7 @@ export class PersistencePanel {
     d3.select('#persistenceHandleLabel').text(t === null ? 'every stored line' : `≥ ${fmt(t)}`);
   }
 
-  private describe(t: number | null, kept: (p: PersistencePairInfo) => boolean): void {
+  private describe(t: number | null, kept: (p: PersistencePair) => boolean): void {
     const d = this.diagram;
     if (!d) return;
     const units = displayUnits(d.units);

@@ -8,13 +8,15 @@
 import { geoEquirectangular, geoInterpolate, geoOrthographic, geoRotation, type GeoProjection } from 'd3-geo';
 import { geoHammer, geoMollweide, geoRobinson } from 'd3-geo-projection';
 import { fetchProbe, postSlice, type SliceHeader } from './api';
+import type { MapHeader } from './generated/protocol_types';
 import type { RenderState } from './state';
 import type { StateStore } from './store';
 import { displayUnits } from './units';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
 
-const kProjections: Record<string, () => GeoProjection> = {
+// Every projection the server draws (its names are the protocol's, so a new one is a type error here).
+const kProjections: Record<MapHeader['projection'], () => GeoProjection> = {
   equirectangular: geoEquirectangular,
   mollweide: geoMollweide,
   hammer: geoHammer,
@@ -217,12 +219,12 @@ export class SlicePanel {
   // The section's azimuth and length as the server measured them (the header of its picture),
   // unless the user is typing one.
   private showArc(h: SliceHeader): void {
-    if (h.azimuthDeg === undefined || h.lengthDeg === undefined) return;
+    if (h.view !== 'section') return;
     for (const [id, v] of [['sectionAzimuth', h.azimuthDeg], ['sectionLength', h.lengthDeg]] as const) {
       const input = $<HTMLInputElement>(id);
       if (document.activeElement !== input) input.value = String(Math.round(v * 10) / 10);
     }
-    $('sectionLengthKm').textContent = h.lengthKm !== undefined ? `${Math.round(h.lengthKm)} km` : '';
+    $('sectionLengthKm').textContent = `${Math.round(h.lengthKm)} km`;
   }
 
   // The section's end from its start, an azimuth and a length (degrees): d3-geo's rotations, the
@@ -269,9 +271,8 @@ export class SlicePanel {
   // defined beyond the sphere too).
   lonLatOnMap(px: number, py: number): [number, number] | null {
     const h = this.map.header;
-    const make = h?.projection ? kProjections[h.projection] : undefined;
-    if (!h || !make || h.scale === undefined || !h.centre) return null;
-    const p = make().scale(h.scale).translate(h.centre).rotate([-(h.centralMeridianDeg ?? 0), -(h.centralLatitudeDeg ?? 0)]);
+    if (h?.view !== 'map') return null;
+    const p = kProjections[h.projection]().scale(h.scale).translate(h.centre).rotate([-h.centralMeridianDeg, -h.centralLatitudeDeg]);
     const ll = p.invert?.([px, py]);
     if (!ll || !ll.every(Number.isFinite)) return null;
     const back = p(ll);
@@ -282,7 +283,7 @@ export class SlicePanel {
   // The section's (lon, lat, depth) under a point of its picture, or null outside its plot.
   pointOnSection(px: number, py: number): { lon: number; lat: number; depthKm: number } | null {
     const h = this.section.header;
-    if (!h?.plot || !h.from || !h.to || h.depthSpanKm === undefined) return null;
+    if (h?.view !== 'section') return null;
     const { left, right, top, bottom } = h.plot;
     if (px < left || px > right || py < top || py > bottom) return null;
     const [lon, lat] = geoInterpolate([h.from[1], h.from[0]], [h.to[1], h.to[0]])((px - left) / (right - left));
