@@ -188,8 +188,9 @@ void runPasses(benchmark::State& state, int level, const RenderParams& p, int pa
 }
 
 // The interactive mode: the level (and, if even the coarsest level is too slow, a reduced internal
-// resolution) is chosen from the throughput measured on recent passes (VolumeRenderer keeps an
-// exponential average), as the server does; the first choice starts from the coarsest level.
+// resolution) chosen as the server chooses it (interactiveLevelPolicy, chooseLevel, the throughput
+// averaged by averagedThroughput over passes); the first choice assumes a throughput, as a new
+// server does.
 void BM_InteractivePass512(benchmark::State& state)
 {
     const RenderParams p = params(512);
@@ -199,23 +200,30 @@ void BM_InteractivePass512(benchmark::State& state)
         renderers.push_back(std::make_unique<VolumeRenderer>(v));
         renderers.back()->setParams(p);
     }
-    // Warm-up as a session would start: passes at the coarsest level measure the machine.
-    double rate = 0;
-    InteractiveChoice choice{int(levels.size()) - 1, p.width, p.height};
-    for (int i = 0; i < 4; ++i) {
+    auto choose = [&](double measured) {
+        const LevelPolicy policy = interactiveLevelPolicy(measured);
+        return chooseLevel(int(levels.size()), kInteractiveBudgetShare * 0.050, policy.samplesPerSecond,
+                           policy.reduceResolution, [&](int l) { return renderers[size_t(l)]->estimateSamplesPerPass(); });
+    };
+    auto reduced = [&](LevelChoice c) {
         RenderParams q = p;
-        q.width = choice.width;
-        q.height = choice.height;
+        q.width = std::max(1, (p.width + c.divisor - 1) / c.divisor);
+        q.height = std::max(1, (p.height + c.divisor - 1) / c.divisor);
+        return q;
+    };
+    // Warm-up as a session would start: each pass measures the machine.
+    double rate = 0;
+    LevelChoice choice = choose(rate);
+    for (int i = 0; i < 4; ++i) {
+        const RenderParams q = reduced(choice);
         VolumeRenderer& r = *renderers[size_t(choice.level)];
         r.setParams(q);
         FrameBuffer f(q.width, q.height);
-        r.renderPass(f);
-        rate = r.measuredSamplesPerSecond();
-        choice = chooseInteractive(levels, p, 0.050, rate);
+        const PassStats s = r.renderPass(f);
+        rate = averagedThroughput(rate, r.estimateSamplesPerPass() / s.seconds);
+        choice = choose(rate);
     }
-    RenderParams q = p;
-    q.width = choice.width;
-    q.height = choice.height;
+    const RenderParams q = reduced(choice);
     VolumeRenderer& r = *renderers[size_t(choice.level)];
     r.setParams(q);
     Totals t;
@@ -226,8 +234,8 @@ void BM_InteractivePass512(benchmark::State& state)
     }
     report(state, t);
     state.counters["level"] = choice.level;
-    state.counters["internal_px"] = choice.width;
-    state.counters["est_ms"] = 1e3 * choice.estimatedSeconds;
+    state.counters["internal_px"] = q.width;
+    state.counters["est_ms"] = 1e3 * r.estimateSamplesPerPass() / rate;
 }
 BENCHMARK(BM_InteractivePass512)->Unit(benchmark::kMillisecond);
 

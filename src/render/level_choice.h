@@ -1,6 +1,6 @@
-// Choosing the level of detail for a time budget, from predicted pass times.
-// StateRenderer::prepare is the one caller on the path from a state to pixels; the benchmarks call
-// chooseInteractive directly on in-memory volumes.
+// Choosing the level of detail for a time budget, from predicted pass times and the measured
+// throughput. StateRenderer::prepare chooses with chooseLevel (the one rule; the benchmarks call it
+// too), the server keeps the throughput with averagedThroughput.
 #pragma once
 
 #include "data/dataset.h"
@@ -38,33 +38,44 @@ int finestLevelWithin(int levelCount, double budgetSeconds, SecondsAt&& secondsA
 
 // When even the coarsest level misses the budget: the image is rendered with 1/divisor of the pixels
 // per axis and upscaled — 1, 2 or 4, the smallest whose predicted pass time (proportional to the
-// pixels) fits. Used by StateRenderer::prepare and chooseInteractive.
+// pixels) fits. Used by chooseLevel.
 inline int resolutionDivisor(double seconds, double budgetSeconds)
 {
     return seconds <= budgetSeconds ? 1 : seconds / 4 <= budgetSeconds ? 2 : 4;
 }
-
-// What the interactive mode renders: a level and an internal image size (the requested size, or
-// smaller when even the coarsest level would miss the budget; the caller upscales the result or
-// asks for the smaller image), with the pass time predicted from the throughput.
-struct InteractiveChoice {
-    int level = 0;
-    int width = 0, height = 0;
-    double estimatedSeconds = 0;
-};
 
 // The share of an interactive time budget the predicted pass time may use. The prediction counts
 // samples; per-pixel work it does not model made real passes ~20% slower than predicted on the
 // full-resolution benchmark (docs/rendering.md, "Measured choices"), so keep that much in reserve.
 inline constexpr double kInteractiveBudgetShare = 0.75;
 
-// The finest level whose predicted pass time (estimateSamplesPerPass / samplesPerSecond) fits
-// kInteractiveBudgetShare of `budgetSeconds`; if none does, the coarsest level at an internal resolution
-// divided by resolutionDivisor. `samplesPerSecond` should be measured (measuredSamplesPerSecond of recent
-// passes); without a measurement (<= 0) the coarsest level at full size is returned so that its
-// pass measures the machine. `levels[i]` are the volumes of level i (finest first). Throws
-// raypc::Error if `levels` is empty or the params are invalid.
-InteractiveChoice chooseInteractive(const std::vector<std::shared_ptr<const StepVolume>>& levels,
-                                    const RenderParams& params, double budgetSeconds, double samplesPerSecond);
+// A level of detail and the image's size divisor per axis (1, 2 or 4).
+struct LevelChoice {
+    int level = 0;
+    int divisor = 1;
+};
+
+// The finest of `levelCount` levels whose predicted pass (`samplesAt(level)` samples at
+// `samplesPerSecond`) fits `budgetSeconds`; if none does, the coarsest, and with `reduceResolution`
+// 1/2 or 1/4 of the pixels per axis (resolutionDivisor). `samplesAt` prepares a level's renderer
+// when asked (coarse to fine, finestLevelWithin).
+template <class SamplesAt>
+LevelChoice chooseLevel(int levelCount, double budgetSeconds, double samplesPerSecond, bool reduceResolution,
+                        SamplesAt&& samplesAt)
+{
+    const int fits =
+        finestLevelWithin(levelCount, budgetSeconds, [&](int l) { return double(samplesAt(l)) / samplesPerSecond; });
+    LevelChoice c{fits >= 0 ? fits : levelCount - 1, 1};
+    if (fits < 0 && reduceResolution)
+        c.divisor = resolutionDivisor(double(samplesAt(c.level)) / samplesPerSecond, budgetSeconds);
+    return c;
+}
+
+// The throughput the level choice predicts with: an exponential average of the passes measured
+// (`measured` samples per second) with `average` (0: none yet).
+inline double averagedThroughput(double average, double measured)
+{
+    return average > 0 ? 0.7 * average + 0.3 * measured : measured;
+}
 
 }  // namespace raypc::render

@@ -193,15 +193,24 @@ std::shared_ptr<const PathlineScene> StateRenderer::pathlinesFor(const RenderSta
     return m_scene;
 }
 
-std::optional<LevelPolicy::Choice> StateRenderer::knownChoice(const RenderState& state, const LevelPolicy& policy)
+std::optional<LevelChoice> StateRenderer::knownChoice(const RenderState& state, const LevelPolicy& policy)
 {
     if (policy.chosen)
         return policy.chosen;
     if (state.level)
-        return LevelPolicy::Choice{*state.level, 1};
+        return LevelChoice{*state.level, 1};
     if (policy.samplesPerSecond > 0)
         return std::nullopt;
-    return LevelPolicy::Choice{0, 1};
+    return LevelChoice{0, 1};
+}
+
+LevelPolicy interactiveLevelPolicy(double measuredSamplesPerSecond)
+{
+    LevelPolicy policy;
+    policy.samplesPerSecond =
+        measuredSamplesPerSecond > 0 ? measuredSamplesPerSecond : 100e6 * tbb::this_task_arena::max_concurrency();
+    policy.reduceResolution = measuredSamplesPerSecond > 0;
+    return policy;
 }
 
 StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, const LevelPolicy& policy)
@@ -225,17 +234,13 @@ StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, co
         // Coarse to fine (finestLevelWithin): while only the coarse levels fit, the finer ones of a
         // new step are neither loaded nor prepared. Reload class when the level changes. The first
         // view stands for all (the eyes differ by a small shift).
-        const int fits = finestLevelWithin(levels, budget, [&](int l) {
+        const LevelChoice c = chooseLevel(levels, budget, rate, policy.reduceResolution, [&](int l) {
             VolumeRenderer& r = rendererFor(step, l, 0);
             r.setParams(p.views[0].params);
-            return r.estimateSamplesPerPass() / rate;
+            return r.estimateSamplesPerPass();
         });
-        p.level = fits >= 0 ? fits : levels - 1;
-        // Even the coarsest level misses the budget: 1/2 or 1/4 of the pixels per axis.
-        if (fits < 0 && policy.reduceResolution) {
-            const double seconds = rendererFor(step, p.level, 0).estimateSamplesPerPass() / rate;
-            p.divisor = resolutionDivisor(seconds, budget);
-        }
+        p.level = c.level;
+        p.divisor = c.divisor;
     }
     for (View& v : p.views) {
         v.params.width = std::max(1, (v.params.width + p.divisor - 1) / p.divisor);

@@ -104,12 +104,15 @@ struct LevelPolicy {
     bool reduceResolution = false;
     // Set: the level and the size divisor another process's prepare() chose (Prepared::level and
     // ::divisor), used as they are: a worker rank of the distributed server repeats rank 0's choice.
-    struct Choice {
-        int level = 0;
-        int divisor = 1;
-    };
-    std::optional<Choice> chosen;
+    std::optional<LevelChoice> chosen;
 };
+
+// The policy of interactive frames and playback steps (docs/protocol.md, the state message): the
+// finest level within the budget at `measuredSamplesPerSecond` (averagedThroughput of the passes
+// rendered so far) and 1/2 or 1/4 of the pixels when even the coarsest misses it; before any pass
+// was measured (0), an assumed 100 M samples/s per thread and the full size, so that the first pass
+// measures the machine.
+LevelPolicy interactiveLevelPolicy(double measuredSamplesPerSecond);
 
 // Image-parallel frames under mpirun (core/mpi.h, docs/scaling.md): rank r of N renders the tiles
 // t with t % N == r of every pass (the jitter of a sample depends only on its pixel and the pass
@@ -153,7 +156,7 @@ public:
     Prepared prepare(const ResolvedState& resolved, const LevelPolicy& policy = {});
     // The level and divisor prepare() will choose when they do not depend on estimated pass times
     // (a given choice, the state's level, or level 0 without a throughput); nullopt when they do.
-    static std::optional<LevelPolicy::Choice> knownChoice(const RenderState& state, const LevelPolicy& policy);
+    static std::optional<LevelChoice> knownChoice(const RenderState& state, const LevelPolicy& policy);
 
     // The renderer of (step, level) for view `view` (each eye of a stereo pair keeps its own, so
     // that alternating eyes do not redo setParams), created on first use; a new step drops the

@@ -32,6 +32,19 @@ TEST(StateRenderer, TubesKeepAMinimumWidthOnScreen)
     EXPECT_NEAR(tubeRadiusKm(s), kmPerPixel / 2, 1e-3);
 }
 
+// Interactive frames: the measured throughput and smaller images once there is one; before, an
+// assumed rate per thread at full size (the first pass measures the machine).
+TEST(StateRenderer, InteractivePolicyUsesTheMeasuredThroughput)
+{
+    const LevelPolicy none = interactiveLevelPolicy(0);
+    EXPECT_GT(none.samplesPerSecond, 0);
+    EXPECT_FALSE(none.reduceResolution);
+    EXPECT_FALSE(none.chosen);
+    const LevelPolicy measured = interactiveLevelPolicy(3.5e7);
+    EXPECT_EQ(measured.samplesPerSecond, 3.5e7);
+    EXPECT_TRUE(measured.reduceResolution);
+}
+
 TEST(PictureMemory, GrowsWithPixelsEyesAndDepth)
 {
     RenderState s;

@@ -215,7 +215,6 @@ struct VolumeRenderer::Impl {
     std::vector<uint8_t> cellDistance;
     size_t bricksSkipped = 0;
     double estimatedSamples = -1;  // estimateSamplesPerPass of the current params, computed lazily
-    double measuredRate = 0;       // exponential average of estimatedSamples / seconds of recent passes
     kernel::KernelParams params;
     std::shared_ptr<const PathlineScene> pathlines;  // tubes (optional), bound per pass
     std::unique_ptr<ShadowVolume> shadows;          // made on the first pass with shading.shadows
@@ -648,10 +647,6 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
         ++frame.m_passes;
     }
     const double seconds = secondsSince(start);
-    if (!cancelled.load() && everyBlock && seconds > 0) {
-        const double rate = estimateSamplesPerPass() / seconds;
-        m_impl->measuredRate = m_impl->measuredRate > 0 ? 0.7 * m_impl->measuredRate + 0.3 * rate : rate;
-    }
     stats.everyBlock = everyBlock;
     stats.seconds = seconds;
     stats.samples = samples;
@@ -724,7 +719,6 @@ double VolumeRenderer::estimateSamplesPerPass() const
     return im.estimatedSamples;
 }
 
-double VolumeRenderer::measuredSamplesPerSecond() const { return m_impl->measuredRate; }
 
 const kernel::KernelParams& VolumeRenderer::kernelParams() const { return m_impl->params; }
 

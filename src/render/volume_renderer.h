@@ -160,11 +160,6 @@ public:
     // is a throughput that transfers between levels, views and image sizes. Cached per setParams.
     double estimateSamplesPerPass() const;
 
-    // Exponential average (weight 0.3 for the newest) of estimateSamplesPerPass() / seconds over the
-    // passes this renderer has rendered; 0 before the first. Use it (or the caller's own average
-    // over renderers) with chooseInteractive.
-    double measuredSamplesPerSecond() const;
-
     // The baked kernel view (for tests and benchmarks of the kernels themselves).
     const kernel::KernelParams& kernelParams() const;
 

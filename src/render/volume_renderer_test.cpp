@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace raypc::render {
@@ -402,7 +403,9 @@ TEST(Renderer, LevelSearchGoesFromCoarseToFineAndStopsAtTheFirstMiss)
     EXPECT_EQ(s, 0.9);
 }
 
-TEST(Renderer, InteractiveChoiceUsesTheMeasuredRateAndShrinksTheImageWhenNeeded)
+// chooseLevel, the rule StateRenderer::prepare chooses interactive levels with, on two real levels'
+// predicted costs.
+TEST(Renderer, LevelChoiceUsesTheThroughputAndShrinksTheImageWhenNeeded)
 {
     auto fine = makeVolume(makeGrid(72, 41, 144), {{"f", testing::plumeField}});
     auto coarse = makeVolume(makeGrid(18, 11, 36), {{"f", testing::plumeField}});
@@ -413,32 +416,36 @@ TEST(Renderer, InteractiveChoiceUsesTheMeasuredRateAndShrinksTheImageWhenNeeded)
     rc.setParams(p);
     const double fineCost = rf.estimateSamplesPerPass(), coarseCost = rc.estimateSamplesPerPass();
     ASSERT_GT(fineCost, coarseCost);
-    // No measurement yet: the coarsest level at full size, whose pass will measure the machine.
-    InteractiveChoice c = chooseInteractive({fine, coarse}, p, 0.05, 0);
-    EXPECT_EQ(c.level, 1);
-    EXPECT_EQ(c.width, 256);
-    c = chooseInteractive({fine, coarse}, p, 1.0, fineCost * 2);
+    std::vector<int> asked;
+    auto samplesAt = [&](int level) {
+        asked.push_back(level);
+        return level == 0 ? fineCost : coarseCost;
+    };
+    // Twice the fine level's samples per second: its pass takes 0.5 s of a 1 s budget.
+    LevelChoice c = chooseLevel(2, 1.0, fineCost * 2, true, samplesAt);
     EXPECT_EQ(c.level, 0);
-    EXPECT_NEAR(c.estimatedSeconds, 0.5, 1e-9);
-    c = chooseInteractive({fine, coarse}, p, 1.0, fineCost / 2);
+    EXPECT_EQ(c.divisor, 1);
+    EXPECT_EQ(asked, (std::vector<int>{1, 0}));  // coarse to fine
+    asked.clear();
+    c = chooseLevel(2, 1.0, fineCost / 2, true, samplesAt);
     EXPECT_EQ(c.level, 1);
-    EXPECT_EQ(c.width, 256);
-    // Even the coarsest level misses the budget fourfold: a quarter of the pixels (half per side).
-    c = chooseInteractive({fine, coarse}, p, 1.0, coarseCost / 4 / kInteractiveBudgetShare);
+    EXPECT_EQ(c.divisor, 1);
+    // Even the coarsest level misses the budget fourfold: half the pixels per side; the finer level
+    // is not asked about.
+    asked.clear();
+    c = chooseLevel(2, 1.0, coarseCost / 4, true, samplesAt);
     EXPECT_EQ(c.level, 1);
-    EXPECT_EQ(c.width, 128);
-    EXPECT_LE(c.estimatedSeconds, kInteractiveBudgetShare + 1e-3);
-    // Beyond fourfold: a quarter per side, never less.
-    c = chooseInteractive({fine, coarse}, p, 1.0, coarseCost / 64 / kInteractiveBudgetShare);
-    EXPECT_EQ(c.width, 64);
+    EXPECT_EQ(c.divisor, 2);
+    EXPECT_EQ(std::count(asked.begin(), asked.end(), 0), 0);
+    // Beyond fourfold: a quarter per side, never less; without reduceResolution the full size.
+    EXPECT_EQ(chooseLevel(2, 1.0, coarseCost / 64, true, samplesAt).divisor, 4);
+    EXPECT_EQ(chooseLevel(2, 1.0, coarseCost / 64, false, samplesAt).divisor, 1);
     EXPECT_EQ(resolutionDivisor(1.0, 1.0), 1);
     EXPECT_EQ(resolutionDivisor(4.0, 1.0), 2);
     EXPECT_EQ(resolutionDivisor(4.01, 1.0), 4);
-    // The renderer's own average of the throughput after a pass.
-    FrameBuffer f(p.width, p.height);
-    EXPECT_EQ(rc.measuredSamplesPerSecond(), 0.0);
-    rc.renderPass(f);
-    EXPECT_GT(rc.measuredSamplesPerSecond(), 0.0);
+    // The server's average of the throughput: the first measurement, then weight 0.3 for the newest.
+    EXPECT_EQ(averagedThroughput(0, 5e7), 5e7);
+    EXPECT_DOUBLE_EQ(averagedThroughput(5e7, 1e8), 0.7 * 5e7 + 0.3 * 1e8);
 }
 
 }  // namespace

@@ -29,7 +29,7 @@ enum Tag : int { kTagPass = 1, kTagCancel = 2, kTagDrop = 3, kTagStop = 4, kTagA
 
 
 // What a rank needs to prepare a session's frame (kTagPrepare; a pass adds "seq" and "pass").
-json frameJob(uint64_t session, uint64_t frame, const render::ResolvedState& resolved, render::LevelPolicy::Choice choice)
+json frameJob(uint64_t session, uint64_t frame, const render::ResolvedState& resolved, render::LevelChoice choice)
 {
     return {{"session", session},
             {"frame", frame},
@@ -70,7 +70,7 @@ void RankPool::closeSession(uint64_t session)
 }
 
 void RankPool::prepare(uint64_t session, uint64_t frame, const render::ResolvedState& resolved,
-                       render::LevelPolicy::Choice choice)
+                       render::LevelChoice choice)
 {
     {
         std::lock_guard lock(m_mutex);
@@ -340,7 +340,7 @@ void WorkerRank::prepare(Session& s, const json& job)
 {
     s.prepared.reset();
     render::LevelPolicy policy;
-    policy.chosen = render::LevelPolicy::Choice{job.at("level").get<int>(), job.at("divisor").get<int>()};
+    policy.chosen = render::LevelChoice{job.at("level").get<int>(), job.at("divisor").get<int>()};
     s.prepared = s.renderer.prepare(render::resolveState(job.at("state"), *m_caches.dataset), policy);
     s.frames = s.prepared->frames();
     s.frame = job.at("frame").get<uint64_t>();

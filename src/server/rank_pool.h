@@ -66,7 +66,7 @@ public:
     // took about as long as its pass). Optional: renderPass prepares what was not. Never throws for
     // a rank's failure: that rank reports it with the first pass.
     void prepare(uint64_t session, uint64_t frame, const render::ResolvedState& resolved,
-                 render::LevelPolicy::Choice choice);
+                 render::LevelChoice choice);
 
     // One pass of `prepared` (prepared for `resolved` on rank 0) into `frames`, on every rank.
     // `frame` numbers the session's frames: a new number (with pass 1) makes the other ranks prepare

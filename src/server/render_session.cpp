@@ -138,13 +138,9 @@ void RenderSession::render(const Request& request)
     const nlohmann::json document = toJson(state);
 
     // Interactive and playback: the finest level within the time budget at the measured throughput
-    // (until a pass has been measured, an assumed 100 M samples/s per thread), 1/2 or 1/4 of the
-    // pixels per axis when even the coarsest misses it. Still: the state's level, else level 0.
+    // (interactiveLevelPolicy). Still: the state's level, else level 0.
     const bool interactive = request.mode == FrameMode::interactive;
-    const double measuredRate = m_context.samplesPerSecond.load();
-    LevelPolicy quickPolicy;
-    quickPolicy.samplesPerSecond = measuredRate > 0 ? measuredRate : 100e6 * tbb::this_task_arena::max_concurrency();
-    quickPolicy.reduceResolution = measuredRate > 0;
+    const LevelPolicy quickPolicy = interactiveLevelPolicy(m_context.samplesPerSecond.load());
     const LevelPolicy policy = request.mode != FrameMode::still ? quickPolicy : LevelPolicy{};
     const int passes = interactive ? 1 : std::max(1, state.passes);
     const int ranks = m_context.ranks ? m_context.ranks->ranks() : 1;
@@ -214,8 +210,7 @@ void RenderSession::render(const Request& request)
                 : prepared.renderPass(frames, &m_cancel);
         if (!stats.cancelled && stats.seconds > 0 && stats.everyBlock) {
             const double measured = prepared.estimatedSamplesPerPass / stats.seconds;
-            const double old = m_context.samplesPerSecond.load();
-            m_context.samplesPerSecond.store(old > 0 ? 0.7 * old + 0.3 * measured : measured);
+            m_context.samplesPerSecond.store(averagedThroughput(m_context.samplesPerSecond.load(), measured));
         }
         return stats;
     };
