@@ -51,20 +51,30 @@ std::optional<fs::path> findExamplesDir(const std::optional<fs::path>& explicitD
 
 namespace {
 
-// Short titles of the contest presets (docs/tasks.md); other files are titled by their name.
-const std::map<std::string, std::string> kPresetTitles = {
-    {"task1-slabs-660km", "1 · Cold slabs at 660 km"},
-    {"task2-slabs-1600km", "2 · Cold slabs at 1600 km"},
-    {"task3-plumes-1600km", "3 · Hot plumes at 1600 km"},
-    {"task4-plumes-660km", "4 · Hot plumes at 660 km"},
-    {"task5a-expansivity-negative", "5a · Negative expansivity anomaly"},
-    {"task5b-expansivity-negative-cold-high", "5b · Negative expansivity, cold, shallow"},
-    {"task5c-expansivity-negative-hot-deep", "5c · Negative expansivity, hot, deep"},
-    {"task5d-expansivity-positive", "5d · Positive expansivity anomaly"},
-    {"task5e-expansivity-negative-pathlines", "5e · Negative expansivity, pathlines"},
-    {"appendix-cut-by-x", "Appendix · Cut at x = 0"},
-    {"appendix-hot-with-pathlines", "Appendix · Hot mantle with pathlines"},
-};
+constexpr const char* kPresetTitlesFile = "titles.tsv";
+
+// The examples directory's titles.tsv: lines "file name without .json<TAB>short human title", `#`
+// comments (examples/titles.tsv titles the contest presets, docs/tasks.md). A preset it does not
+// list is titled by its name; a line without a tab is left out with a warning.
+std::map<std::string, std::string> presetTitles(const fs::path& dir)
+{
+    std::map<std::string, std::string> titles;
+    std::ifstream in(dir / kPresetTitlesFile);
+    std::string line;
+    for (int number = 1; std::getline(in, line); ++number) {
+        if (line.empty() || line[0] == '#')
+            continue;
+        const size_t tab = line.find('\t');
+        if (tab == std::string::npos || tab == 0 || tab + 1 == line.size()) {
+            spdlog::warn("presets: {}:{}: expected a name, a tab and a title; left out",
+                         (dir / kPresetTitlesFile).string(), number);
+            continue;
+        }
+        titles[line.substr(0, tab)] = line.substr(tab + 1);
+    }
+    return titles;
+}
+
 
 }  // namespace
 
@@ -79,6 +89,7 @@ json presetsJson(const std::optional<fs::path>& dir, const Dataset* dataset)
         if (entry.is_regular_file() && entry.path().extension() == ".json" && entry.path().filename() != "demo.json")
             files.push_back(entry.path());
     std::sort(files.begin(), files.end());
+    const auto titles = presetTitles(*dir);
     for (const auto& file : files) {
         std::ifstream in(file, std::ios::binary);
         std::ostringstream text;
@@ -92,7 +103,7 @@ json presetsJson(const std::optional<fs::path>& dir, const Dataset* dataset)
         }
         const std::string name = file.stem().string();
         std::string title = name;
-        if (const auto it = kPresetTitles.find(name); it != kPresetTitles.end())
+        if (const auto it = titles.find(name); it != titles.end())
             title = it->second;
         else
             std::replace(title.begin(), title.end(), '-', ' ');

@@ -637,7 +637,7 @@ TEST(Serve, SliceAndProbe)
     refused("/api/probe?step=9&lat=0&lon=0&depthKm=10", "", "step");
 }
 
-// GET /api/presets: every example state but demo.json, with a title, exactly as in the file; each
+// GET /api/presets: every example state but demo.json, with a title (examples/titles.tsv), exactly as in the file; each
 // is a valid state for the fixture once its step is one of the fixture's. A file that is not JSON is
 // left out.
 TEST(Serve, PresetsAreTheExampleStates)
@@ -677,11 +677,15 @@ TEST(Serve, PresetsAreTheExampleStates)
     std::ofstream(own / "demo.json") << R"({"version": 1})";
     std::ofstream(own / "broken.json") << "{not json";
     std::ofstream(own / "my-view.json") << R"({"version": 1, "step": 0})";
+    std::ofstream(own / "other-view.json") << R"({"version": 1, "step": 0})";
+    std::ofstream(own / "titles.tsv") << "# titles\nother-view\tThe other view\nno tab here\n";
     ServerProcess second({"--examples", own.string()});
     const json mine = json::parse(httpGet(second.port, "/api/presets").body);
-    ASSERT_EQ(mine.size(), 1u) << mine.dump();
+    ASSERT_EQ(mine.size(), 2u) << mine.dump();
     EXPECT_EQ(mine[0]["name"], "my-view");
-    EXPECT_EQ(mine[0]["title"], "my view");
+    EXPECT_EQ(mine[0]["title"], "my view");  // not in titles.tsv: its name
+    EXPECT_EQ(mine[1]["name"], "other-view");
+    EXPECT_EQ(mine[1]["title"], "The other view");
 }
 
 // POST /api/stats: the selected volume of every step at level 0 equals `raypc stats` and the
