@@ -203,7 +203,10 @@ void BM_InteractivePass512(benchmark::State& state)
     auto choose = [&](double measured) {
         const LevelPolicy policy = interactiveLevelPolicy(measured);
         return chooseLevel(int(levels.size()), kInteractiveBudgetShare * 0.050, policy.samplesPerSecond,
-                           policy.reduceResolution, [&](int l) { return renderers[size_t(l)]->estimateSamplesPerPass(); });
+                           policy.reduceResolution, [&](int l) {
+                               renderers[size_t(l)]->setParams(p);  // the full size: the estimate's
+                               return renderers[size_t(l)]->estimateSamplesPerPass();
+                           });
     };
     auto reduced = [&](LevelChoice c) {
         RenderParams q = p;

@@ -1,6 +1,7 @@
 #include "app/serve_setup.h"
 
 #include "core/error.h"
+#include "core/install_paths.h"
 #include "core/mpi.h"
 #include "core/system_memory.h"
 #include "server/rank_pool.h"
@@ -70,8 +71,8 @@ server::ServerOptions serverOptions(const std::filesystem::path& dataset, const 
     options.dataset = dataset;
     options.host = flags.host;
     options.port = uint16_t(flags.port);
-    options.assets = server::findAssetDir(given(flags.assets));
-    options.examples = server::findExamplesDir(given(flags.examples));
+    options.assets = findAssetDir(given(flags.assets));
+    options.examples = findExamplesDir(given(flags.examples));
     options.allowedOrigins = flags.allowOrigins;
     options.limits = flags.limits;
     options.limits.sessionFrameBytes = flags.sessionMemoryMiB << 20;

@@ -1,5 +1,7 @@
 #include "core/install_paths.h"
 
+#include "core/error.h"
+
 #include <cstdlib>
 #include <initializer_list>
 #include <system_error>
@@ -37,6 +39,39 @@ std::vector<fs::path> uiAssetCandidates()
 std::vector<fs::path> exampleCandidates()
 {
     return candidates("RAYPC_EXAMPLES", RAYPC_EXAMPLES_DIR, {"examples"});
+}
+
+namespace {
+
+// `explicitDir` (named by `option` in the error), else the first candidate `accept` takes.
+template <class Accept>
+std::optional<fs::path> findDir(const std::optional<fs::path>& explicitDir, const char* option,
+                                const std::vector<fs::path>& candidates, Accept&& accept)
+{
+    if (explicitDir) {
+        if (!fs::is_directory(*explicitDir))
+            fail("{} {}: not a directory", option, explicitDir->string());
+        return fs::weakly_canonical(*explicitDir);
+    }
+    std::error_code ec;
+    for (const auto& dir : candidates)
+        if (accept(dir, ec))
+            return fs::weakly_canonical(dir, ec);
+    return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<fs::path> findAssetDir(const std::optional<fs::path>& explicitDir)
+{
+    return findDir(explicitDir, "--assets", uiAssetCandidates(),
+                   [](const fs::path& dir, std::error_code& ec) { return fs::is_regular_file(dir / "index.html", ec); });
+}
+
+std::optional<fs::path> findExamplesDir(const std::optional<fs::path>& explicitDir)
+{
+    return findDir(explicitDir, "--examples", exampleCandidates(),
+                   [](const fs::path& dir, std::error_code& ec) { return fs::is_directory(dir, ec); });
 }
 
 }  // namespace raypc

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <vector>
 
 namespace raypc {
@@ -15,5 +16,13 @@ std::vector<std::filesystem::path> uiAssetCandidates();
 // The example states (presets), in order: $RAYPC_EXAMPLES, the source tree's examples/, examples/
 // beside the running executable.
 std::vector<std::filesystem::path> exampleCandidates();
+
+// The directory of the UI's files (`--assets`): `explicitDir` if given (throws raypc::Error if it is
+// not a directory), else the first of uiAssetCandidates holding an index.html; nullopt when none.
+std::optional<std::filesystem::path> findAssetDir(const std::optional<std::filesystem::path>& explicitDir);
+
+// The directory of example states (`--examples`): `explicitDir` if given (throws raypc::Error if it
+// is not a directory), else the first of exampleCandidates that exists; nullopt when none.
+std::optional<std::filesystem::path> findExamplesDir(const std::optional<std::filesystem::path>& explicitDir);
 
 }  // namespace raypc

@@ -1,5 +1,5 @@
 // A small thread-safe cache of shared values by key, least recently used out: the server's caches of
-// pathline windows and persistence pairs (server/dataset_api.h). The step cache (server/step_cache.h)
+// pathline windows and persistence pairs (server/dataset_caches.h). The step cache (server/step_cache.h)
 // bounds bytes and pins what renderers hold, so it has its own.
 //
 // Thread safety: get() from any thread; values are made outside the lock.

@@ -21,8 +21,8 @@ AvailableMemory availableMemory();
 // server: a frame buffer, its picture and depth map per state and pass): glibc then keeps blocks up
 // to 256 MB in its heap and reuses them, instead of mapping fresh pages for each (every page a
 // fault and a zeroing by the kernel) and unmapping them when freed; freed memory beyond 256 MB at
-// the heap's top is still returned. Measured on a 1920x1080 still (docs/reliability.md): the
-// picture, depth map and JPEG of a pass 212-319 ms without, 53-125 ms with. Never throws.
+// the heap's top is still returned (what it saves a 1920x1080 still: docs/reliability.md). Never
+// throws.
 void keepLargeBlocksForReuse();
 
 // Runs this program again, in place (the same process and arguments; the environment gains one

@@ -90,8 +90,8 @@ public:
     size_t variableCount() const { return m_values.size(); }
     ValueEncoding encoding() const { return m_encoding; }
     // grid().cellCount() values of variable `var`, canonical order. Thread-safe; the first call for a
-    // variable of a u16 volume decodes it (about 14 ms for 13 M points on 2 cores,
-    // bench/value_encoding_bench.cpp; other threads asking for it meanwhile wait), of a mapped float32
+    // variable of a u16 volume decodes it (its cost: bench/value_encoding_bench.cpp; other threads
+    // asking for it meanwhile wait), of a mapped float32
     // volume reads it once to check every value lies within the step's range; later calls are one
     // atomic load. The first call throws raypc::Error naming the file if it was cut short since it
     // was mapped, or (float32) for the first value outside the range (NaN, Inf, 3.4e38), with its

@@ -13,6 +13,7 @@
 #include "data/probe.h"
 #include "app/series_inputs.h"
 #include "core/error.h"
+#include "core/install_paths.h"
 #include "core/spherical.h"
 #include "data/critical_points.h"
 #include "data/dataset.h"
@@ -21,7 +22,6 @@
 #include "data/selection.h"
 #include "render/render_state.h"
 #include "render/state_renderer.h"
-#include "server/dataset_api.h"
 #include "server/server.h"
 
 #include <CLI/CLI.hpp>
@@ -370,8 +370,8 @@ public:
         options.host = host;
         options.port = uint16_t(port);
         options.handleSignals = false;  // the Python process's signals stay Python's
-        options.assets = server::findAssetDir(std::nullopt);
-        options.examples = server::findExamplesDir(std::nullopt);
+        options.assets = findAssetDir(std::nullopt);
+        options.examples = findExamplesDir(std::nullopt);
         m_server = std::make_unique<server::Server>(std::move(options));
         m_thread = std::thread([this] { m_server->run(); });
     }

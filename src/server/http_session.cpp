@@ -1,7 +1,6 @@
 #include "server/http_session.h"
 
 #include "core/error.h"
-#include "core/install_paths.h"
 #include "server/access.h"
 #include "server/protocol.h"
 #include "server/ws_session.h"
@@ -32,20 +31,6 @@ using tcp = net::ip::tcp;
 using nlohmann::json;
 using Request = http::request<http::string_body>;
 using Response = http::response<http::string_body>;
-
-std::optional<fs::path> findAssetDir(const std::optional<fs::path>& explicitDir)
-{
-    if (explicitDir) {
-        if (!fs::is_directory(*explicitDir))
-            fail("--assets {}: not a directory", explicitDir->string());
-        return fs::weakly_canonical(*explicitDir);
-    }
-    std::error_code ec;
-    for (const auto& dir : uiAssetCandidates())
-        if (fs::is_regular_file(dir / "index.html", ec))
-            return fs::weakly_canonical(dir, ec);
-    return std::nullopt;
-}
 
 namespace {
 

@@ -4,7 +4,7 @@
 // come the UI's TypeScript types (`raypc protocol-schema` → web/src/generated/protocol_types.ts,
 // web/build.mjs), the key tables of docs/protocol.md (`--markdown`, checked by a test) and the test
 // that every answer the server gives matches its description (tests/protocol/messages_test.mjs).
-// The server builds its answers where it computes them (dataset_api.cpp, render_session.cpp, …);
+// The server builds its answers where it computes them (api_views.cpp, render_session.cpp, …);
 // a key added there without its entry here fails that test.
 #pragma once
 

@@ -92,9 +92,8 @@ struct Server::Impl {
     void admit(tcp::socket socket)
     {
         // Without TCP_NODELAY the kernel holds the tail of a frame until the browser acknowledges the
-        // data before it, and the browser delays that acknowledgement by up to 40 ms (Nagle's algorithm
-        // meeting delayed ACKs): median 44 ms from a frame handed to the socket to the page's message
-        // event during playback, against 1 ms inbound (docs/ui.md, Time).
+        // data before it, and the browser delays that acknowledgement (Nagle's algorithm meeting
+        // delayed ACKs): tens of ms added to every frame of a playback (measured in docs/ui.md, Time).
         beast::error_code ignored;
         socket.set_option(tcp::no_delay(true), ignored);
         const size_t limit = state.options.limits.maxConnections;

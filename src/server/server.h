@@ -48,10 +48,6 @@ struct ServerOptions {
     std::shared_ptr<const SeriesProgress> series;
 };
 
-// The UI's asset directory: `explicitDir` if given (throws raypc::Error if it is not a directory),
-// else $RAYPC_ASSETS, the source tree's web/dist (compiled in), <exe dir>/web, <exe dir>/../web/dist;
-// nullopt when none holds an index.html.
-std::optional<std::filesystem::path> findAssetDir(const std::optional<std::filesystem::path>& explicitDir);
 
 class Server {
 public:

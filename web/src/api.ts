@@ -49,10 +49,9 @@ export async function fetchHistogram(step: number, variable: string): Promise<Hi
 }
 
 // GET /api/sample (docs/protocol.md). 'variables' leaves out the coordinate columns, which are the
-// same in every step (what a new step's sample changes). The body (7.2 MB for 100 000 rows of 18
-// columns) is fetched by a worker (sample_worker.ts): received on the page's main thread, such a
-// body held it in tasks of 60–85 ms (headless chromium's trace: ResourceReceivedData,
-// ResourceFinish), during which the 3D frames of a playback waited. Without workers, here.
+// same in every step (what a new step's sample changes). The body (megabytes) is fetched by a
+// worker (sample_worker.ts): received on the page's main thread, such a body held it in long tasks
+// during which the 3D frames of a playback waited (measured in docs/ui.md). Without workers, here.
 type SampleColumns = 'all' | 'variables';
 
 function sampleUrl(step: number, which: SampleColumns): string {

@@ -1,0 +1,290 @@
+#include "server/api_views.h"
+
+#include "core/error.h"
+#include "core/json_input.h"
+#include "core/spherical.h"
+#include "data/coordinates.h"
+#include "render/color_map.h"
+#include "render/render_state.h"
+#include "render/transfer_function.h"
+#include "server/protocol.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <array>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace raypc::server {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr const char* kPresetTitlesFile = "titles.tsv";
+
+// The examples directory's titles.tsv: lines "file name without .json<TAB>short human title", `#`
+// comments (examples/titles.tsv titles the contest presets, docs/tasks.md). A preset it does not
+// list is titled by its name; a line without a tab is left out with a warning.
+std::map<std::string, std::string> presetTitles(const fs::path& dir)
+{
+    std::map<std::string, std::string> titles;
+    std::ifstream in(dir / kPresetTitlesFile);
+    std::string line;
+    for (int number = 1; std::getline(in, line); ++number) {
+        if (line.empty() || line[0] == '#')
+            continue;
+        const size_t tab = line.find('\t');
+        if (tab == std::string::npos || tab == 0 || tab + 1 == line.size()) {
+            spdlog::warn("presets: {}:{}: expected a name, a tab and a title; left out",
+                         (dir / kPresetTitlesFile).string(), number);
+            continue;
+        }
+        titles[line.substr(0, tab)] = line.substr(tab + 1);
+    }
+    return titles;
+}
+
+
+}  // namespace
+
+json presetsJson(const std::optional<fs::path>& dir, const Dataset* dataset)
+{
+    json out = json::array();
+    if (!dir)
+        return out;
+    std::vector<fs::path> files;
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(*dir, ec))
+        if (entry.is_regular_file() && entry.path().extension() == ".json" && entry.path().filename() != "demo.json")
+            files.push_back(entry.path());
+    std::sort(files.begin(), files.end());
+    const auto titles = presetTitles(*dir);
+    for (const auto& file : files) {
+        std::ifstream in(file, std::ios::binary);
+        std::ostringstream text;
+        text << in.rdbuf();
+        json state;
+        try {
+            state = parseJsonInput(text.str(), file.string());
+        } catch (const Error& e) {
+            spdlog::warn("presets: {}, left out", e.what());
+            continue;
+        }
+        const std::string name = file.stem().string();
+        std::string title = name;
+        if (const auto it = titles.find(name); it != titles.end())
+            title = it->second;
+        else
+            std::replace(title.begin(), title.end(), '-', ' ');
+        json entry = {{"name", name}, {"title", title}, {"state", state}};
+        if (dataset) {
+            json applied = state;
+            if (applied.is_object() && applied.contains("step") && applied["step"].is_number_integer())
+                applied["step"] = std::min<int64_t>(applied["step"].get<int64_t>(), int64_t(dataset->steps().size()) - 1);
+            try {
+                render::resolveState(applied, *dataset, name + ".json");
+            } catch (const Error& e) {
+                entry["unavailable"] = fmt::format("not for this dataset: {}", e.what());
+            }
+        }
+        out.push_back(std::move(entry));
+    }
+    return out;
+}
+
+json selectionStatsJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters, int level,
+                        int profileStep, const std::atomic<bool>* cancel)
+{
+    dataset.checkLevel(level);
+    dataset.checkStep(profileStep);
+    const int nSteps = int(dataset.steps().size());
+    const auto selections = selectionOverTime(dataset, filters, level, 0, nSteps - 1, [&](int step, int l) {
+        if (cancel && *cancel)
+            fail("statistics cancelled at step {} of {} (the client went away or the server is stopping)", step, nSteps);
+        return cache.getWithoutEvicting(step, l);
+    });
+    json steps = json::array();
+    for (const StepSelection& sel : selections)
+        steps.push_back({{"step", sel.step},
+                         {"timeMyr", sel.timeMyr},
+                         {"volumeKm3", sel.stats.volumeKm3},
+                         {"fractionOfMantle", sel.stats.fractionOfMantle}});
+    const SelectionStats& profile = selections[size_t(profileStep)].stats;
+    const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
+    json radius = json::array(), depth = json::array(), selected = json::array(), shell = json::array();
+    for (size_t iR = 0; iR < grid.nR(); ++iR) {
+        radius.push_back(grid.rKm[iR]);
+        depth.push_back(kSurfaceRadiusKm - grid.rKm[iR]);
+        selected.push_back(iR < profile.volumeByRadiusKm3.size() ? profile.volumeByRadiusKm3[iR] : 0.0);
+        shell.push_back(iR < profile.shellVolumeByRadiusKm3.size() ? profile.shellVolumeByRadiusKm3[iR] : 0.0);
+    }
+    return {{"level", level},
+            {"steps", std::move(steps)},
+            {"profile",
+             {{"step", profileStep},
+              {"radiusKm", std::move(radius)},
+              {"depthKm", std::move(depth)},
+              {"volumeKm3", std::move(selected)},
+              {"shellVolumeKm3", std::move(shell)}}}};
+}
+
+json persistenceDiagramJson(const SphericalGrid& grid, const std::vector<PersistencePair>& pairs, int step,
+                            const std::string& variable, const std::string& units, size_t top,
+                            const PathlineSet* stored)
+{
+    const size_t nLon = grid.nLon(), nR = grid.nR();
+    auto position = [&](size_t index) {
+        return std::array<double, 3>{grid.latDeg[index / (nLon * nR)], grid.lonDeg[index % nLon],
+                                     kSurfaceRadiusKm - grid.rKm[(index / nLon) % nR]};
+    };
+    json shown = json::array();
+    std::array<size_t, 3> counts{};
+    double range = 0;
+    for (const auto& p : pairs) {
+        ++counts[size_t(p.kind)];
+        if (p.kind == PairKind::Global)
+            range = p.persistence();
+    }
+    for (size_t i = 0; i < std::min(top, pairs.size()); ++i) {
+        const PersistencePair& p = pairs[i];
+        const auto b = position(p.birthIndex), e = position(p.extremumIndex());
+        shown.push_back({{"kind", pairKindName(p.kind)},
+                         {"birth", p.birth},
+                         {"death", p.death},
+                         {"persistence", p.persistence()},
+                         {"birthLat", b[0]},
+                         {"birthLon", b[1]},
+                         {"birthDepthKm", b[2]},
+                         {"lat", e[0]},
+                         {"lon", e[1]},
+                         {"depthKm", e[2]}});
+    }
+    const size_t rest = pairs.size() - shown.size();
+    const double restMax = rest ? pairs[shown.size()].persistence() : 0.0;
+    json storedJson = nullptr;
+    if (stored) {
+        const json settings = stored->settingsJson.empty() ? json() : json::parse(stored->settingsJson);
+        const std::string rule = settings.is_object() && settings.contains("filter")
+                                     ? settings["filter"].value("rule", std::string("persistence"))
+                                     : std::string("persistence");
+        storedJson = {{"threshold", stored->threshold},
+                      {"rule", rule},
+                      {"lines", stored->lineCount()},
+                      {"seedPersistenceColumn", stored->column("seed persistence") >= 0}};
+    }
+    return {{"step", step},
+            {"variable", variable},
+            {"units", units},
+            {"range", range},
+            {"pairCount", pairs.size()},
+            {"counts",
+             {{pairKindName(PairKind::MinimumSaddle), counts[0]},
+              {pairKindName(PairKind::SaddleMaximum), counts[1]},
+              {pairKindName(PairKind::Global), counts[2]}}},
+            {"pairs", std::move(shown)},
+            {"rest", {{"count", rest}, {"maxPersistence", restMax}}},
+            {"stored", std::move(storedJson)}};
+}
+
+std::string pathlineAttributesPayload(const PathlineCache::Window& sets, int step, int window)
+{
+    std::vector<std::string> columns, units;
+    if (!sets.empty())
+        columns = sets.front().columns, units = sets.front().units;
+    size_t lines = 0;
+    json setInfo = json::array();
+    for (const auto& s : sets) {
+        if (s.columns != columns)
+            fail("pathlines: the set injected at step {} has other attribute columns than the first of the window",
+                 s.injectionStep);
+        lines += s.lineCount();
+        setInfo.push_back({{"injectionStep", s.injectionStep},
+                           {"injectionTimeMyr", s.injectionTimeMyr},
+                           {"lines", s.lineCount()}});
+    }
+    const std::string header = json{{"step", step},
+                                    {"window", window},
+                                    {"lines", lines},
+                                    {"columns", columns},
+                                    {"units", units},
+                                    {"sets", setInfo}}
+                                   .dump(-1, ' ', false, json::error_handler_t::replace);
+    std::string out(4, '\0');
+    const uint32_t n = uint32_t(header.size());
+    for (int i = 0; i < 4; ++i)
+        out[size_t(i)] = char((n >> (8 * i)) & 0xff);
+    out += header;
+    for (const auto& s : sets)  // float32 little-endian (the host order on every supported target)
+        out.append(reinterpret_cast<const char*>(s.attributes.data()), s.attributes.size() * sizeof(float));
+    return out;
+}
+
+namespace {
+json rangeJson(ValueRange r)
+{
+    return json::array({r.min, r.max});
+}
+}  // namespace
+
+json infoJson(const Dataset& dataset, const ServerLimits& limits)
+{
+    json variables = json::array();
+    for (const auto& v : dataset.variables())
+        variables.push_back({{"name", v.name},
+                             {"units", v.units},
+                             {"derived", v.derived},
+                             {"min", v.global.range.min},
+                             {"max", v.global.range.max},
+                             {"mean", v.global.mean},
+                             {"histogram", v.global.histogram},
+                             // The colour range without a chosen one (render::defaultColorRange), for
+                             // maps centred on zero and for the others.
+                             {"defaultColorRange",
+                              {{"centred", rangeJson(render::defaultColorRange(v.global.range, true))},
+                               {"other", rangeJson(render::defaultColorRange(v.global.range, false))}}}});
+    json coordinates = json::array();
+    for (const auto& c : coordinateInfos()) {
+        const CoordinateRange r = coordinateRange(dataset.levels().front().grid, c.id);
+        coordinates.push_back({{"name", c.name}, {"units", c.units}, {"min", r.min}, {"max", r.max}});
+    }
+    json steps = json::array();
+    for (const auto& s : dataset.steps())
+        steps.push_back({{"index", s.index}, {"timeMyr", s.timeMyr}, {"source", s.source}});
+    json levels = json::array();
+    for (size_t l = 0; l < dataset.levels().size(); ++l) {
+        const auto& lg = dataset.levels()[l].grid;
+        levels.push_back({{"level", l}, {"nLat", lg.nLat()}, {"nR", lg.nR()}, {"nLon", lg.nLon()}});
+    }
+    // The sample's shape without reading it: coordinates then variables.
+    json columns = json::array(), units = json::array();
+    for (const auto& c : coordinateInfos())
+        columns.push_back(c.name), units.push_back(c.units);
+    for (const auto& v : dataset.variables())
+        columns.push_back(v.name), units.push_back(v.units);
+    const SampleTable sample = dataset.loadSample(0);
+    json maps = json::array();
+    for (const auto m : render::allColorMaps())
+        maps.push_back(std::string(render::colorMapName(m)));
+    return {{"protocol", kProtocolVersion},
+            {"variables", variables},
+            {"coordinates", coordinates},
+            {"steps", steps},
+            {"levels", levels},
+            {"sample", {{"rows", sample.rows}, {"columns", sample.columns}, {"units", sample.units}}},
+            {"colorMaps", maps},
+            {"defaultState", render::toJson(render::defaultState(dataset))},
+            // What POST /api/screenshot takes (checkScreenshotLimits), so that the UI states it.
+            {"limits",
+             {{"screenshotPixels", limits.maxScreenshotPixels},
+              {"screenshotPasses", limits.maxScreenshotPasses},
+              {"screenshotPixelPasses", limits.maxScreenshotPixelPasses}}}};
+}
+
+// ---------------------------------------------------------------------------------------------
+// The route handlers.
+
+}  // namespace raypc::server

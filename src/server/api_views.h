@@ -1,0 +1,63 @@
+// What the HTTP endpoints answer (docs/protocol.md; their shapes described once in
+// server/protocol_schema.cpp), computed from the dataset and the caches without network types, so
+// that each is tested on its own: the dataset's info, the presets, the selection over time, the
+// pathline attributes' payload and the persistence diagram.
+//
+// Thread safety: reentrant.
+#pragma once
+
+#include "data/dataset.h"
+#include "data/persistence.h"
+#include "data/selection.h"
+#include "server/dataset_caches.h"
+#include "server/limits.h"
+#include "server/step_cache.h"
+
+#include <nlohmann/json.hpp>
+
+#include <atomic>
+#include <filesystem>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace raypc::server {
+
+// GET /api/info: the dataset's variables, coordinates, steps, levels, sample shape, colour maps and
+// default state (docs/protocol.md).
+nlohmann::json infoJson(const Dataset& dataset, const ServerLimits& limits = {});
+
+// Every *.json in `dir` except demo.json, sorted by file name, as [{name, title, state}]: name is
+// the file name without .json, title a short human title (the directory's titles.tsv; else the
+// name with spaces), state the parsed document. A file that is not JSON is left out with a warning.
+// With `dataset`, a preset that cannot be applied to it (its step clamped to the last, as the UI
+// does) gets `unavailable`: why, from resolveState (e.g. a variable the dataset lacks), so that the
+// UI shows it disabled with the reason. An empty array when `dir` is nullopt.
+nlohmann::json presetsJson(const std::optional<std::filesystem::path>& dir, const Dataset* dataset = nullptr);
+
+// The selected volume of every step and the depth profile of `profileStep`, at `level`
+// ({level, steps: [{step, timeMyr, volumeKm3, fractionOfMantle}], profile: {step, radiusKm,
+// depthKm, volumeKm3, shellVolumeKm3}}). Volumes come through `cache` without evicting what the
+// renderers use. Throws raypc::Error for a level out of range, or when `cancel` becomes true (checked
+// before every step).
+nlohmann::json selectionStatsJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
+                                  int level, int profileStep, const std::atomic<bool>* cancel = nullptr);
+
+// The line attributes of a window as one binary answer: u32 little-endian header length, a UTF-8
+// JSON header {step, window, lines, columns, units, sets: [{injectionStep, injectionTimeMyr, lines}]},
+// then lines x columns float32 little-endian, row-major, lines in set order (oldest set first).
+std::string pathlineAttributesPayload(const PathlineCache::Window& sets, int step, int window);
+
+// GET /api/persistence (docs/protocol.md): the persistence diagram of `variable` at `step`, at most
+// `top` pairs by decreasing persistence ({kind, birth, death, persistence, birthLat, birthLon,
+// birthDepthKm, lat, lon, depthKm}: the lower end's position and the extremum's, degrees and km),
+// the count and largest persistence of the rest, the count of each kind, the step's range; and
+// `stored`: the threshold and rule the stored pathline set of the step was seeded with, its line count
+// and whether its lines carry the "seed persistence" column, or null when the dataset has no
+// pathlines or they were seeded on another variable.
+nlohmann::json persistenceDiagramJson(const SphericalGrid& grid, const std::vector<PersistencePair>& pairs, int step,
+                                      const std::string& variable, const std::string& units, size_t top,
+                                      const PathlineSet* stored);
+
+}  // namespace raypc::server
