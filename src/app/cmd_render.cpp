@@ -201,21 +201,6 @@ CfGridFile sliceGridFile(const Dataset& dataset, const StepVolume* volume, const
     return file;
 }
 
-// "1024x768" -> width, height.
-std::pair<int, int> parseSize(const std::string& text)
-{
-    const auto parts = split(text, 'x');
-    try {
-        if (parts.size() == 2) {
-            size_t a = 0, b = 0;
-            const int w = std::stoi(parts[0], &a), h = std::stoi(parts[1], &b);
-            if (a == parts[0].size() && b == parts[1].size() && w >= 1 && h >= 1 && w <= 16384 && h <= 16384)
-                return {w, h};
-        }
-    } catch (const std::exception&) {
-    }
-    fail("--size '{}': expected WIDTHxHEIGHT with 1..16384 pixels per side, e.g. 1024x768", text);
-}
 
 
 // What the options resolve to, before anything is rendered.

@@ -1,5 +1,7 @@
-// raypc stats DATASET --state S.json -o stats.csv [--profile p.csv [--profile-var NAME]]: the selected
-// volume of every step, exactly; its depth profile, and a variable's mean per depth.
+// raypc stats DATASET --state S.json -o stats.csv [--profile p.csv] [--profile-var NAME]
+// [--hovmoller hov.png [--hovmoller-of share|selected-mean|shell-mean] [--depth KM]... [--size WxH]]:
+// the selected volume of every step, exactly; its depth profile, a variable's mean per depth, and
+// a time–depth picture of either.
 #include "app/command.h"
 #include "app/options.h"
 #include "core/atomic_file.h"
@@ -9,6 +11,10 @@
 #include "core/spherical.h"
 #include "data/dataset.h"
 #include "data/selection.h"
+#include "render/image_io.h"
+#include "render/legend.h"
+#include "render/render_state.h"
+#include "render/slice_view.h"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -22,8 +28,60 @@ namespace {
 struct StatsArgs {
     SeriesSelectionFlags selection;
     std::string output, profile, profileVar;
+    std::string hovmoller, hovmollerOf = "share", size = "960x540";
+    std::vector<double> depthsKm;
     bool quiet = false;
 };
+
+// What a time–depth picture shows of each step and radius.
+enum class HovmollerOf { Share, SelectedMean, ShellMean };
+HovmollerOf parseHovmollerOf(const std::string& text)
+{
+    if (text == "share")
+        return HovmollerOf::Share;
+    if (text == "selected-mean")
+        return HovmollerOf::SelectedMean;
+    if (text == "shell-mean")
+        return HovmollerOf::ShellMean;
+    fail("--hovmoller-of '{}': expected share, selected-mean or shell-mean", text);
+}
+
+// The picture's values of the steps in `selections`, step-major (NaN: nothing selected there).
+void appendHovmollerValues(const std::vector<StepSelection>& selections, HovmollerOf of, std::vector<float>& out)
+{
+    for (const StepSelection& sel : selections) {
+        const SelectionStats& s = sel.stats;
+        for (size_t iR = 0; iR < s.volumeByRadiusKm3.size(); ++iR)
+            out.push_back(float(of == HovmollerOf::Share          ? 100.0 * s.volumeByRadiusKm3[iR] / s.shellVolumeByRadiusKm3[iR]
+                                : of == HovmollerOf::SelectedMean ? s.selectedMeanByRadius[iR]
+                                                                  : s.shellMeanByRadius[iR]));
+    }
+}
+
+// The colours of a time–depth picture: a share over [0, its largest] (viridis); a mean over its
+// range, centred (vik) when the values take both signs.
+render::TransferFunction hovmollerColors(std::span<const float> values, HovmollerOf of)
+{
+    float lo = INFINITY, hi = -INFINITY;
+    for (const float v : values)
+        if (std::isfinite(v))
+            lo = std::min(lo, v), hi = std::max(hi, v);
+    render::TransferFunction tf;
+    if (!(lo <= hi))  // nothing selected anywhere
+        lo = 0, hi = 1;
+    if (of == HovmollerOf::Share) {
+        tf.colorMap = render::ColorMapId::Viridis;
+        tf.range = {0, std::max(hi, 1e-3f)};
+    } else if (lo < 0 && hi > 0) {
+        tf.colorMap = render::ColorMapId::Vik;
+        const float m = std::max(-lo, hi);
+        tf.range = {-m, m};
+    } else {
+        tf.colorMap = render::ColorMapId::Viridis;
+        tf.range = {lo, hi > lo ? hi : lo + 1};
+    }
+    return tf;
+}
 
 // The CSV rows of the steps in `selections`: the selected volume, and its depth profile.
 struct StatsRows {
@@ -67,9 +125,20 @@ void run(const StatsArgs& args)
     const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
     const mpi::Block block = mpi::blockOf(last - first + 1);
     std::optional<size_t> meanVariable;
+    const HovmollerOf hovmollerOf = parseHovmollerOf(args.hovmollerOf);
+    const auto [pictureWidth, pictureHeight] = parseSize(args.size);
+    if (!args.hovmoller.empty())
+        render::checkTimeDepthPictureSize(pictureWidth, pictureHeight);
+    if (args.hovmoller.empty() && (args.hovmollerOf != "share" || !args.depthsKm.empty()))
+        fail("--hovmoller-of, --depth: need --hovmoller (the picture they describe)");
+    if (hovmollerOf != HovmollerOf::Share && args.profileVar.empty())
+        fail("--hovmoller-of {}: needs --profile-var NAME (the variable whose mean it shows)", args.hovmollerOf);
+    for (const double d : args.depthsKm)
+        if (!(d > 0 && d < kSurfaceRadiusKm))
+            fail("--depth {}: expected a depth in km between 0 and {}", d, kSurfaceRadiusKm);
     if (!args.profileVar.empty()) {
-        if (args.profile.empty())
-            fail("--profile-var: needs --profile (the depth profile it adds columns to)");
+        if (args.profile.empty() && args.hovmoller.empty())
+            fail("--profile-var: needs --profile or --hovmoller (the depth profile or picture it adds to)");
         const int index = dataset.variableIndex(args.profileVar);
         if (index < 0)
             fail("--profile-var: unknown variable '{}'; the dataset has: {}", args.profileVar,
@@ -78,6 +147,7 @@ void run(const StatsArgs& args)
     }
 
     StatsRows mine;
+    std::vector<float> hovmollerMine;
     std::optional<Progress> progress;
     if (!args.quiet && mpi::isRoot())
         progress.emplace(mpi::distributed() ? fmt::format("stats (rank 0 of {})", mpi::size()) : "stats",
@@ -90,12 +160,15 @@ void run(const StatsArgs& args)
                                                               progress->advance();
                                                       }, meanVariable);
             mine = formatRows(selections, grid);
+            if (!args.hovmoller.empty())
+                appendHovmollerValues(selections, hovmollerOf, hovmollerMine);
         }
     });
     if (progress)
         progress->finish();
     const auto csvParts = mpi::gatherToRoot(mine.csv);
     const auto profileParts = mpi::gatherToRoot(mine.profile);
+    const std::vector<float> hovmollerValues = args.hovmoller.empty() ? std::vector<float>{} : mpi::gatherToRoot(hovmollerMine);
     mpi::together([&] {
         if (!mpi::isRoot())
             return;
@@ -110,12 +183,40 @@ void run(const StatsArgs& args)
             csv += part;
         for (const auto& part : profileParts)
             profile += part;
+        // The picture first: a picture that cannot be drawn leaves no file written.
+        std::optional<render::ImageRgba8> picture;
+        if (!args.hovmoller.empty()) {
+            render::TimeDepthInputs in;
+            for (int step = first; step <= last; ++step)
+                in.timesMyr.push_back(dataset.steps()[size_t(step)].timeMyr);
+            in.radiiKm = grid.rKm;
+            in.values = hovmollerValues;
+            in.colors = hovmollerColors(in.values, hovmollerOf);
+            const VariableInfo* mean = meanVariable ? &dataset.variables()[*meanVariable] : nullptr;
+            in.colorTitle = hovmollerOf == HovmollerOf::Share ? std::string("selected share of the shell [%]")
+                            : fmt::format("{} mean over the {} [{}]", mean->name,
+                                          hovmollerOf == HovmollerOf::SelectedMean ? "selection" : "shell",
+                                          render::displayUnits(mean->units));
+            in.title = fmt::format("{} · steps {}–{} ({:g}–{:g} Myr) · {} range(s), level {}", in.colorTitle, first, last,
+                                   in.timesMyr.front(), in.timesMyr.back(), filters.size(), level);
+            in.width = pictureWidth;
+            in.height = pictureHeight;
+            if (!args.selection.statePath.empty())
+                in.marks = render::loadRenderState(args.selection.statePath).reference.shells;
+            in.marks.visible = true;
+            if (!args.depthsKm.empty())
+                in.marks.depthsKm.assign(args.depthsKm.begin(), args.depthsKm.end());
+            picture = render::timeDepthPicture(in);
+        }
         writeFileAtomic(args.output, csv);
         if (!args.profile.empty())
             writeFileAtomic(args.profile, profile);
+        if (picture)
+            render::writePng(args.hovmoller, *picture);
         fmt::print("{}: selected volume of {} steps ({}..{}) for {} range(s){}{}\n", args.output, last - first + 1,
                    first, last, filters.size(),
-                   args.profile.empty() ? "" : fmt::format("; depth profile in {}", args.profile),
+                   (args.profile.empty() ? "" : fmt::format("; depth profile in {}", args.profile)) +
+                       (args.hovmoller.empty() ? "" : fmt::format("; time-depth picture in {}", args.hovmoller)),
                    mpi::distributed() ? fmt::format(" on {} ranks", mpi::size()) : "");
     });
 }
@@ -130,7 +231,16 @@ const CommandRegistration kStatsCommand(
         cmd.add_option("--profile", args->profile, "CSV: selected volume per radius (depth distribution) of every step");
         cmd.add_option("--profile-var", args->profileVar,
                        "With --profile: also this variable's volume-weighted mean per radius over the selection and over "
-                       "the whole shell (a time-depth view of it)");
+                       "the whole shell (a time-depth view of it); with --hovmoller: the variable of its means");
+        cmd.add_option("--hovmoller", args->hovmoller,
+                       "PNG: a time-depth (Hovmoller) picture of every step's depth profile, the chosen depths marked");
+        cmd.add_option("--hovmoller-of", args->hovmollerOf,
+                       "What the picture shows: share (of each shell selected, %), selected-mean or shell-mean (of "
+                       "--profile-var)")
+            ->default_str("share");
+        cmd.add_option("--depth", args->depthsKm, "Depth in km marked on the picture; repeatable (default: the state's "
+                                                 "reference shells, 410, 660, 1000, 1600, 2200)");
+        cmd.add_option("--size", args->size, "The picture's size WIDTHxHEIGHT")->default_str("960x540");
         cmd.add_flag("-q,--quiet", args->quiet, "No progress output");
         cmd.callback([args] { run(*args); });
     },

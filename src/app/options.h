@@ -59,6 +59,9 @@ void applyRangeOptions(std::vector<NamedRange>& ranges, const std::vector<std::s
                        const std::string& option = "--range");
 
 // Parses "A" or "A:B" (each a step index or a time like 24Myr) into the inclusive step range.
+// "1024x768" -> width, height (1..16384 each); throws raypc::Error naming --size otherwise.
+std::pair<int, int> parseSize(const std::string& text);
+
 std::pair<int, int> parseStepRange(const Dataset& dataset, const std::string& text, const std::string& option = "--time");
 
 // The options of a command over a selection in a dataset's steps (stats, features): DATASET,

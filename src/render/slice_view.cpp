@@ -362,18 +362,67 @@ std::string fitTitle(const std::vector<std::string>& parts, int width, int heigh
     return title;
 }
 
+// A depth plot's box (sections, time–depth pictures): pixels, depth 0 at `top`, `depthSpanKm` at
+// `bottom`.
+struct DepthPlot {
+    double left, right, top, bottom, depthSpanKm;
+    float yOfDepth(double d) const { return float(top + d / depthSpanKm * (bottom - top)); }
+};
+
+// Dashed lines across the plot at the reference shells' depths (when visible), labelled at the right.
+void drawDepthMarks(std::vector<uint8_t>& rgba, int width, int height, const DepthPlot& plot,
+                    const ReferenceState::Shells& shells, std::vector<TextLabel>& labels)
+{
+    const int fontPx = legendFontPx(width, height);
+    for (size_t k = 0; k < shells.depthsKm.size(); ++k) {
+        const double d = shells.depthsKm[k];
+        if (!shells.visible || d <= 0 || d >= plot.depthSpanKm)
+            continue;
+        LineLayer layer(width, height, false);
+        const float y = plot.yOfDepth(d);
+        // Dashed: the data shows between the dashes.
+        for (float x = float(plot.left); x < plot.right; x += 12)
+            drawSegment(layer, x, y, std::min(float(plot.right), x + 7), y, 1.5f);
+        const Rgb c = shellColor(shells, k);
+        compositeLines(rgba, layer, c, 0.95f);
+        labels.push_back({fmt::format("{:g} km", d), float(plot.right + 2.2 * fontPx), y, c});
+    }
+}
+
+// The plot's frame, depth ticks every 250, 500, … km at the left and `xTicks` (position, label) below.
+void drawDepthPlotFrame(std::vector<uint8_t>& rgba, int width, int height, const DepthPlot& plot,
+                        std::span<const std::pair<float, std::string>> xTicks, Rgb ink, std::vector<TextLabel>& labels)
+{
+    const int fontPx = legendFontPx(width, height);
+    LineLayer layer(width, height, false);
+    const float l = float(plot.left), r = float(plot.right), t = float(plot.top), b = float(plot.bottom);
+    drawSegment(layer, l, t, r, t, 1.2f);
+    drawSegment(layer, l, b, r, b, 1.2f);
+    drawSegment(layer, l, t, l, b, 1.2f);
+    drawSegment(layer, r, t, r, b, 1.2f);
+    // As many ticks as their labels have room for.
+    const double depthStep =
+        niceStep(plot.depthSpanKm, std::max(1.0, (plot.bottom - plot.top) / (2.2 * fontPx)), {250, 500, 1000, 1500, 3000});
+    for (double d = 0; d <= plot.depthSpanKm + 1e-6; d += depthStep) {
+        const float y = plot.yOfDepth(d);
+        drawSegment(layer, l - 0.4f * fontPx, y, l, y, 1.2f);
+        labels.push_back({fmt::format("{:g} km", d), float(plot.left - 2.6 * fontPx), y, ink});
+    }
+    for (const auto& [x, text] : xTicks) {
+        drawSegment(layer, x, b, x, b + 0.4f * fontPx, 1.2f);
+        labels.push_back({text, x, float(plot.bottom + 1.1 * fontPx), ink});
+    }
+    compositeLines(rgba, layer, ink, 0.9f);
+}
+
 // What else a picture says, right-aligned above its bottom edge, one line each: what grey means,
 // the arrows' scale and the pathlines drawn.
-void addNotes(std::vector<TextLabel>& labels, int width, int height, bool grey, const std::string& flowText,
-              const std::string& pathlineText)
+void addNotes(std::vector<TextLabel>& labels, int width, int height, const std::vector<std::string>& given)
 {
     std::vector<std::string> notes;
-    if (grey)
-        notes.emplace_back("grey: outside the brushes");
-    if (!flowText.empty())
-        notes.push_back(flowText);
-    if (!pathlineText.empty())
-        notes.push_back(pathlineText);
+    for (const std::string& n : given)
+        if (!n.empty())
+            notes.push_back(n);
     const int fontPx = legendFontPx(width, height);
     for (size_t i = 0; i < notes.size(); ++i)
         labels.push_back({notes[i], float(width - fontPx), float(height - fontPx * (1.2 + 1.6 * double(notes.size() - 1 - i))),
@@ -730,7 +779,7 @@ ImageRgba8 mapPicture(const SliceInputs& in)
         where += ", " + latText(map.centralLatitudeDeg);
     const std::string title = fitTitle({fmt::format("{} at {:g} km depth", in.colorTitle, map.depthKm), in.when, where}, width, height);
     std::vector<TextLabel> labels{{title, width / 2.0f, 1.1f * fontPx, {1, 1, 1}}};
-    addNotes(labels, width, height, grey, flowText, pathlineText);
+    addNotes(labels, width, height, {grey ? "grey: outside the brushes" : "", flowText, pathlineText});
     drawTextLabels(image.pixels, width, height, labels);
     drawLegends(image.pixels, width, height, legends);
     return image;
@@ -788,26 +837,12 @@ ImageRgba8 sectionPicture(const SliceInputs& in)
     const bool grey = state.map.greyUnselected && !params.brushes.empty();
     ImageRgba8 image{width, height, colorPixels(samples, params.transfer, state.background, grey)};
     const Rgb ink = inkFor(state.background);
-    auto yOfDepth = [&](double d) { return float(top + d / depthSpan * (bottom - top)); };
+    const DepthPlot plot{left, right, top, bottom, depthSpan};
     auto xOfFraction = [&](double f) { return float(left + f * (right - left)); };
 
     drawContourLines(image.pixels, samples, state.map.contours);
     std::vector<TextLabel> labels;
-    // The reference shells' depths as lines across the section, labelled at the right.
-    const auto& shells = state.reference.shells;
-    for (size_t k = 0; k < shells.depthsKm.size(); ++k) {
-        const double d = shells.depthsKm[k];
-        if (!shells.visible || d <= 0 || d >= depthSpan)
-            continue;
-        LineLayer layer(width, height, false);
-        const float y = yOfDepth(d);
-        // Dashed: the data shows between the dashes.
-        for (float x = float(left); x < right; x += 12)
-            drawSegment(layer, x, y, std::min(float(right), x + 7), y, 1.5f);
-        const Rgb c = shellColor(shells, k);
-        compositeLines(image.pixels, layer, c, 0.95f);
-        labels.push_back({fmt::format("{:g} km", d), float(right + 2.2 * fontPx), y, c});
-    }
+    drawDepthMarks(image.pixels, width, height, plot, state.reference.shells, labels);
     std::string flowText;
     if (section.flow) {
         const int spacing = arrowSpacingPx(width, height);
@@ -846,33 +881,17 @@ ImageRgba8 sectionPicture(const SliceInputs& in)
             const double offKm = std::abs(offRad) * r;
             if (fraction < 0 || fraction > 1 || offKm > kSectionPathlineBandKm)
                 return std::nullopt;
-            return PlacedPoint{xOfFraction(fraction), yOfDepth(kSurfaceRadiusKm - r), float(1 - 0.8 * offKm / kSectionPathlineBandKm)};
+            return PlacedPoint{xOfFraction(fraction), plot.yOfDepth(kSurfaceRadiusKm - r), float(1 - 0.8 * offKm / kSectionPathlineBandKm)};
         },
         fmt::format("within {:g} km of the section's plane", kSectionPathlineBandKm), legends);
     {
-        // The frame, depth ticks every 500 km (or 250) and distance ticks in round degrees.
-        LineLayer layer(width, height, false);
-        const float l = float(left), r = float(right), t = float(top), b = float(bottom);
-        drawSegment(layer, l, t, r, t, 1.2f);
-        drawSegment(layer, l, b, r, b, 1.2f);
-        drawSegment(layer, l, t, l, b, 1.2f);
-        drawSegment(layer, r, t, r, b, 1.2f);
-        // As many ticks as their labels have room for.
-        const double depthStep = niceStep(depthSpan, std::max(1.0, (bottom - top) / (2.2 * fontPx)), {250, 500, 1000, 1500, 3000});
-        for (double d = 0; d <= depthSpan + 1e-6; d += depthStep) {
-            const float y = yOfDepth(d);
-            drawSegment(layer, l - 0.4f * fontPx, y, l, y, 1.2f);
-            labels.push_back({fmt::format("{:g} km", d), float(left - 2.6 * fontPx), y, ink});
-        }
+        // Distance ticks in round degrees, as many as their labels have room for.
         const double lengthDeg = circle.lengthDeg();
         const double degStep = niceStep(lengthDeg, std::max(1.0, (right - left) / (11.0 * fontPx)), {1, 2, 5, 10, 15, 20, 30, 45, 60, 90, 180});
-        for (double a = 0; a <= lengthDeg + 1e-9; a += degStep) {
-            const float x = xOfFraction(a / lengthDeg);
-            drawSegment(layer, x, b, x, b + 0.4f * fontPx, 1.2f);
-            labels.push_back({fmt::format("{:g}° · {:.0f} km", a, degToRad(a) * kSurfaceRadiusKm), x,
-                              float(bottom + 1.1 * fontPx), ink});
-        }
-        compositeLines(image.pixels, layer, ink, 0.9f);
+        std::vector<std::pair<float, std::string>> ticks;
+        for (double a = 0; a <= lengthDeg + 1e-9; a += degStep)
+            ticks.emplace_back(xOfFraction(a / lengthDeg), fmt::format("{:g}° · {:.0f} km", a, degToRad(a) * kSurfaceRadiusKm));
+        drawDepthPlotFrame(image.pixels, width, height, plot, ticks, ink, labels);
     }
     const SphericalPoint a = cartesianToSpherical(circle.at(0)), z = cartesianToSpherical(circle.at(1));
     const std::string title = fitTitle({in.colorTitle, in.when,
@@ -882,9 +901,86 @@ ImageRgba8 sectionPicture(const SliceInputs& in)
                                                     circle.lengthDeg(), circle.lengthKm(), circle.azimuthDeg())},
                                        width, height);
     labels.push_back({title, width / 2.0f, 1.1f * fontPx, {1, 1, 1}});
-    addNotes(labels, width, height, grey, flowText, pathlineText);
+    addNotes(labels, width, height, {grey ? "grey: outside the brushes" : "", flowText, pathlineText});
     drawTextLabels(image.pixels, width, height, labels);
     drawLegends(image.pixels, width, height, legends);
+    return image;
+}
+
+namespace {
+// Depth labels at the left, the marks' names at the right, the title above, time labels and the
+// legend below (a section's layout).
+DepthPlot timeDepthPlot(int width, int height, double depthSpanKm)
+{
+    const int fontPx = legendFontPx(width, height);
+    const DepthPlot plot{5.5 * fontPx, width - 4.5 * fontPx, 2.4 * fontPx,
+                         height - legendsHeightPx(width, height, 1) - 2.2 * fontPx, depthSpanKm};
+    if (!(plot.right - plot.left >= 8 && plot.bottom - plot.top >= 8))
+        fail("time-depth picture: {}x{} pixels have no room for the plot; choose a larger size", width, height);
+    return plot;
+}
+}  // namespace
+
+void checkTimeDepthPictureSize(int width, int height) { timeDepthPlot(width, height, 1.0); }
+
+ImageRgba8 timeDepthPicture(const TimeDepthInputs& in)
+{
+    const size_t nSteps = in.timesMyr.size(), nR = in.radiiKm.size();
+    if (nSteps == 0 || nR < 2 || in.values.size() != nSteps * nR)
+        fail("time-depth picture: {} values for {} steps and {} radii", in.values.size(), nSteps, nR);
+    const int width = in.width, height = in.height, fontPx = legendFontPx(width, height);
+    const DepthPlot plot = timeDepthPlot(width, height, kSurfaceRadiusKm - in.radiiKm.front());
+    // The time axis spans the steps' times, half a step beyond the first and last (one step: 1 Myr).
+    const double dt = nSteps > 1 ? (in.timesMyr.back() - in.timesMyr.front()) / double(nSteps - 1) : 1.0;
+    const double t0 = in.timesMyr.front() - dt / 2, t1 = in.timesMyr.back() + dt / 2;
+    auto xOfTime = [&](double t) { return float(plot.left + (t - t0) / (t1 - t0) * (plot.right - plot.left)); };
+    // The nearest of sorted `axis` to v (ties to the lower), or nullopt beyond half a spacing outside.
+    auto nearest = [](const std::vector<double>& axis, double v) -> std::optional<size_t> {
+        const auto it = std::lower_bound(axis.begin(), axis.end(), v);
+        if (it == axis.begin())
+            return axis.size() > 1 && v < axis[0] - (axis[1] - axis[0]) / 2 ? std::nullopt : std::optional<size_t>(0);
+        if (it == axis.end()) {
+            const size_t n = axis.size();
+            return n > 1 && v > axis[n - 1] + (axis[n - 1] - axis[n - 2]) / 2 ? std::nullopt : std::optional<size_t>(n - 1);
+        }
+        const size_t hi = size_t(it - axis.begin());
+        return v - axis[hi - 1] <= axis[hi] - v ? hi - 1 : hi;
+    };
+    std::vector<std::optional<size_t>> columns(static_cast<size_t>(width)), rows(static_cast<size_t>(height));
+    for (int x = 0; x < width; ++x)
+        if (x + 0.5 >= plot.left && x + 0.5 <= plot.right)
+            columns[size_t(x)] = nSteps == 1 ? std::optional<size_t>(0)
+                                             : nearest(in.timesMyr, t0 + (x + 0.5 - plot.left) / (plot.right - plot.left) * (t1 - t0));
+    for (int y = 0; y < height; ++y)
+        if (y + 0.5 >= plot.top && y + 0.5 <= plot.bottom)
+            rows[size_t(y)] = nearest(in.radiiKm, kSurfaceRadiusKm - (y + 0.5 - plot.top) / (plot.bottom - plot.top) * plot.depthSpanKm);
+    PixelSamples samples(width, height);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+            if (columns[size_t(x)] && rows[size_t(y)])
+                samples.value[size_t(y) * size_t(width) + size_t(x)] = in.values[*columns[size_t(x)] * nR + *rows[size_t(y)]];
+    ImageRgba8 image{width, height, colorPixels(samples, in.colors, in.background, false)};
+
+    const Rgb ink = inkFor(in.background);
+    std::vector<TextLabel> labels;
+    drawDepthMarks(image.pixels, width, height, plot, in.marks, labels);
+    std::vector<std::pair<float, std::string>> ticks;
+    const double span = in.timesMyr.back() - in.timesMyr.front();
+    if (span > 0) {
+        const double step = niceStep(span, std::max(1.0, (plot.right - plot.left) / (6.0 * fontPx)),
+                                     {0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000});
+        for (double t = std::ceil(in.timesMyr.front() / step) * step; t <= in.timesMyr.back() + 1e-9; t += step)
+            ticks.emplace_back(xOfTime(t), fmt::format("{:g} Myr", t));
+    } else {
+        ticks.emplace_back(xOfTime(in.timesMyr.front()), fmt::format("{:g} Myr", in.timesMyr.front()));
+    }
+    drawDepthPlotFrame(image.pixels, width, height, plot, ticks, ink, labels);
+    labels.push_back({fitTitle({in.title}, width, height), width / 2.0f, 1.1f * fontPx, {1, 1, 1}});
+    const bool blank = std::any_of(in.values.begin(), in.values.end(), [](float v) { return std::isnan(v); });
+    addNotes(labels, width, height, {blank ? "background: nothing selected at that depth and time" : ""});
+    drawTextLabels(image.pixels, width, height, labels);
+    const LegendSpec legend{in.colorTitle, in.colors};
+    drawLegends(image.pixels, width, height, std::span(&legend, 1));
     return image;
 }
 

@@ -121,6 +121,28 @@ ImageRgba8 mapPicture(const SliceInputs& inputs);
 // as mapPicture does, and for a section whose ends coincide or are antipodal.
 ImageRgba8 sectionPicture(const SliceInputs& inputs);
 
+// A time–depth (Hovmöller) picture of a quantity per step and radius (`raypc stats --hovmoller`):
+// model time to the right, depth down; each step a column reaching half way to its neighbours' times
+// and each radius a row reaching half way to its neighbours (values are not interpolated), NaN drawn
+// as the background; `marks` (when visible) as dashed lines across, labelled at the right; the
+// title, ticks and colour legend laid out as a section's.
+struct TimeDepthInputs {
+    std::vector<double> timesMyr;  // per step (column), ascending
+    std::vector<double> radiiKm;   // the grid's radii (rows), ascending
+    std::vector<float> values;     // steps x radii, step-major
+    TransferFunction colors;       // colour map and range (the opacity is not used)
+    std::string colorTitle;        // the legend's, e.g. "selected share of the shell [%]"
+    std::string title;
+    int width = 960, height = 540;
+    Rgb background{0, 0, 0};
+    ReferenceState::Shells marks;
+};
+// Throws raypc::Error when the inputs disagree in size or the picture has no room for the plot.
+ImageRgba8 timeDepthPicture(const TimeDepthInputs& inputs);
+// Throws raypc::Error when a time–depth picture of this size has no room for its plot (what
+// timeDepthPicture checks first; callers check before computing its values).
+void checkTimeDepthPictureSize(int width, int height);
+
 // A regular grid of samples of one variable (row-major: rows along the first axis).
 struct SliceGrid {
     std::vector<double> rows, columns;  // lat ascending (deg), or distance along the profile (km)

@@ -168,6 +168,36 @@ for rt, ra in zip(t, a):
 print("largest |T - T' - profile| over the shells:", worst, "K")
 sys.exit(not (ok and worst < 0.1))
 PY
+  # The time-depth picture (--hovmoller) of depth <= 660 km: every step's shells above 660 km at the
+  # top of the colours (100 %), those below at the bottom (0 %); rows show the nearest radius, so the
+  # top colour reaches down to half way between the radii at 659.7 and 731.8 km: 695.7 of 2886 km.
+  "$raypc" stats "$work/ds" --range "depth=0:660" -o "$work/h.csv" --hovmoller "$work/hov.png" --size 640x400 --quiet >/dev/null
+  check "--hovmoller: the share is 100 % above 660 km and 0 below, in the picture's rows" python3 - "$work/hov.png" <<'PY'
+import sys
+from PIL import Image
+im = Image.open(sys.argv[1]).convert("RGB")
+assert im.size == (640, 400), im.size
+near = lambda c, ref: sum((a - b) ** 2 for a, b in zip(c, ref)) < 30 ** 2
+top, bottom = (253, 231, 37), (68, 1, 84)  # viridis at 1 and 0
+for x in (200, 320, 440):  # three columns: the three steps
+    col = [im.getpixel((x, y)) for y in range(im.height)]
+    ys_top = [y for y, c in enumerate(col) if near(c, top)]
+    ys_bottom = [y for y, c in enumerate(col) if near(c, bottom)]
+    span = max(ys_bottom) - min(ys_top) + 1
+    share = (max(ys_top) - min(ys_top) + 1) / span
+    print(f"column {x}: top colour over {share:.3f} of the plot's height (expected {695.7 / 2886:.3f})")
+    assert max(ys_top) < min(ys_bottom) and abs(share - 695.7 / 2886) < 0.01
+PY
+  "$raypc" stats "$work/ds" --range "depth=500:1500" -o "$work/h.csv" --hovmoller "$work/hov-t.png" --profile-var temperature \
+    --hovmoller-of shell-mean --depth 660 --quiet >/dev/null
+  check "--hovmoller-of shell-mean: the picture is written" test -s "$work/hov-t.png"
+  expect_error "--hovmoller-of 'mean': expected share, selected-mean or shell-mean" stats "$work/ds" -o "$work/x.csv" --hovmoller "$work/x.png" --hovmoller-of mean
+  expect_error "--hovmoller-of selected-mean: needs --profile-var" stats "$work/ds" -o "$work/x.csv" --hovmoller "$work/x.png" --hovmoller-of selected-mean
+  expect_error "--depth 7000: expected a depth in km between 0 and 6371" stats "$work/ds" -o "$work/x.csv" --hovmoller "$work/x.png" --depth 7000
+  expect_error "--hovmoller-of, --depth: need --hovmoller" stats "$work/ds" -o "$work/x.csv" --depth 660
+  expect_error "time-depth picture: 40x30 pixels have no room for the plot" stats "$work/ds" -o "$work/x.csv" --hovmoller "$work/x.png" --size 40x30
+  expect_error "--size '0x10': expected WIDTHxHEIGHT" stats "$work/ds" -o "$work/x.csv" --hovmoller "$work/x.png" --size 0x10
+  check "no picture after errors" test ! -e "$work/x.png"
   expect_error "--profile-var: unknown variable 'pressure'" stats "$work/ds" --profile "$work/x.csv" --profile-var pressure -o "$work/x.csv"
   expect_error "--profile-var: needs --profile" stats "$work/ds" --profile-var temperature -o "$work/x.csv"
   "$raypc" stats "$work/ds" --range "radial velocity=0.2:0.3" -o "$work/none.csv" --quiet >/dev/null

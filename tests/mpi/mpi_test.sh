@@ -33,11 +33,13 @@ case $case_name in
 stats)
   make_data
   sel=(--range "depth=0:660" --range "temperature anomaly=100:1000")
-  "$raypc" stats "$work/ds" "${sel[@]}" -o "$work/s1.csv" --profile "$work/p1.csv" --quiet >/dev/null
+  "$raypc" stats "$work/ds" "${sel[@]}" -o "$work/s1.csv" --profile "$work/p1.csv" --hovmoller "$work/h1.png" --quiet >/dev/null
   for n in 2 3; do
-    ranks "$n" stats "$work/ds" "${sel[@]}" -o "$work/s$n.csv" --profile "$work/p$n.csv" --quiet >"$work/out$n" 2>&1
+    ranks "$n" stats "$work/ds" "${sel[@]}" -o "$work/s$n.csv" --profile "$work/p$n.csv" --hovmoller "$work/h$n.png" \
+      --quiet >"$work/out$n" 2>&1
     check "stats with $n ranks exits 0" test $? -eq 0
     check "stats with $n ranks: the same CSV as one process" cmp -s "$work/s1.csv" "$work/s$n.csv"
+    check "stats with $n ranks: the same time-depth picture as one process" cmp -s "$work/h1.png" "$work/h$n.png"
     check "stats with $n ranks: the same profile as one process" cmp -s "$work/p1.csv" "$work/p$n.csv"
     check "stats with $n ranks reports once" test "$(grep -c 'selected volume of 6 steps' "$work/out$n")" -eq 1
   done
