@@ -26,6 +26,7 @@
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
@@ -291,11 +292,21 @@ public:
     }
 
     // The exact selected volume of the state's brushes over steps first..last (raypc stats): per step
-    // (step, time_myr, volume_km3, fraction_of_mantle, volume_by_radius_km3, shell_volume_km3).
-    py::list stats(const std::string& text, int first, int last, int level, py::object progress) const
+    // (step, time_myr, volume_km3, fraction_of_mantle, volume_by_radius_km3, shell_volume_km3,
+    // selected_mean_by_radius, shell_mean_by_radius); the means of `meanOf` (raypc stats
+    // --profile-var; NaN where nothing is selected), empty without it.
+    py::list stats(const std::string& text, int first, int last, int level, const std::string& meanOf,
+                   py::object progress) const
     {
         const render::RenderState state = parseState(text, "state");
         const std::vector<RangeFilter> filters = resolveRangeFilters(*m_dataset, state.brushes, "brushes");
+        std::optional<size_t> meanVariable;
+        if (!meanOf.empty()) {
+            const int index = m_dataset->variableIndex(meanOf);
+            if (index < 0)
+                fail("mean_of: unknown variable '{}'; the dataset has: {}", meanOf, fmt::join(m_dataset->variableNames(), ", "));
+            meanVariable = size_t(index);
+        }
         if (first > last)  // selectionOverTime checks the steps and the level
             fail("steps: {}..{} is empty", first, last);
         ProgressBridge bridge(std::move(progress));
@@ -309,7 +320,7 @@ public:
                     bridge("steps", ++done, total);
                     if (bridge.cancel)
                         fail("cancelled");
-                });
+                }, meanVariable);
             } catch (const Error&) {
                 if (!bridge.cancel)
                     throw;
@@ -319,7 +330,8 @@ public:
         py::list out;
         for (const StepSelection& s : selections)
             out.append(py::make_tuple(s.step, s.timeMyr, s.stats.volumeKm3, s.stats.fractionOfMantle,
-                                      doubles(s.stats.volumeByRadiusKm3), doubles(s.stats.shellVolumeByRadiusKm3)));
+                                      doubles(s.stats.volumeByRadiusKm3), doubles(s.stats.shellVolumeByRadiusKm3),
+                                      doubles(s.stats.selectedMeanByRadius), doubles(s.stats.shellMeanByRadius)));
         return out;
     }
 
@@ -447,7 +459,7 @@ PYBIND11_MODULE(_raypc, m)
         .def("features", &PyDataset::features, py::arg("json"), py::arg("first"), py::arg("last"), py::arg("level"),
              py::arg("min_volume_km3"), py::arg("depths_km"), py::arg("band_half_width_km"), py::arg("progress") = py::none())
         .def("stats", &PyDataset::stats, py::arg("json"), py::arg("first"), py::arg("last"), py::arg("level"),
-             py::arg("progress") = py::none());
+             py::arg("mean_of") = "", py::arg("progress") = py::none());
 
     py::class_<PyServer>(m, "Server")
         .def(py::init<const std::string&, const std::string&, int>(), py::arg("dataset"), py::arg("host"),

@@ -127,6 +127,19 @@ def test_stats_equal_the_cli(contest, tmp_path):
     profile = contest.stats(BRUSHED, by="depth", progress=False)
     assert list(profile.columns) == list(cli_profile.columns)
     pd.testing.assert_frame_equal(profile, cli_profile, check_exact=False, rtol=1e-6, atol=1e-3, check_dtype=False)
+    # The means per depth (mean_of, the CLI's --profile-var): the same columns and numbers.
+    run_cli("stats", contest.path, "--state", tmp_path / "s.json", "-o", tmp_path / "stats.csv", "--profile",
+            tmp_path / "means.csv", "--profile-var", "temperature anomaly", "--quiet")
+    cli_means = pd.read_csv(tmp_path / "means.csv")
+    means = contest.stats(BRUSHED, by="depth", mean_of="temperature anomaly", progress=False)
+    assert list(means.columns) == list(cli_means.columns)
+    selected = "temperature anomaly selected mean [K]"
+    assert means[selected].notna().any() and means[selected].isna().any()  # rows with and without a selection
+    pd.testing.assert_frame_equal(means, cli_means, check_exact=False, rtol=1e-6, atol=1e-3, check_dtype=False)
+    with pytest.raises(raypc.Error, match="mean_of: unknown variable 'pressure'"):
+        contest.stats(BRUSHED, by="depth", mean_of="pressure", progress=False)
+    with pytest.raises(raypc.Error, match="by='depth'"):
+        contest.stats(BRUSHED, mean_of="temperature anomaly", progress=False)
     one = contest.stats(BRUSHED, steps=(1, 2), progress=False)
     assert list(one["step"]) == [1, 2]
     with pytest.raises(raypc.Error, match="by"):

@@ -432,19 +432,25 @@ class Dataset:
         return pixels.view(Picture)
 
     def stats(self, state: Union[None, State, dict, str, os.PathLike] = None, steps: Optional[Any] = None,
-              level: int = 0, by: str = "step", progress: bool = True):
+              level: int = 0, by: str = "step", mean_of: Optional[str] = None, progress: bool = True):
         """The exact selected volume of the state's brushes (``raypc stats``) as a DataFrame.
         ``by="step"``: step, time_myr, selected_volume_km3, selected_percent_of_mantle;
-        ``by="depth"``: per step and radius, the depth profile (``raypc stats --profile``).
+        ``by="depth"``: per step and radius, the depth profile (``raypc stats --profile``), and with
+        ``mean_of=NAME`` that variable's volume-weighted mean per radius over the selection (NaN
+        where nothing is selected) and over the whole shell (``--profile-var``), columns named as
+        the CLI's (``NAME selected mean [units]``, ``NAME shell mean [units]``): a time-depth table
+        (``df.pivot(index="depth_km", columns="time_myr", values=...)``).
         ``steps``: None (all), a step, a (first, last) pair or a range."""
         import pandas as pd
 
         if by not in ("step", "depth"):
             raise Error(f"by: expected 'step' or 'depth', not {by!r}")
+        if mean_of is not None and by != "depth":
+            raise Error("mean_of: the means are per depth; ask for by='depth'")
         first, last = self._step_range(steps)
         bar = _Progress("stats", progress, delay=0.5)
         try:
-            rows = self._core.stats(_state_of(state, self).to_json(None), first, last, level, bar)
+            rows = self._core.stats(_state_of(state, self).to_json(None), first, last, level, mean_of or "", bar)
         finally:
             bar.close()
         if by == "step":
@@ -452,12 +458,16 @@ class Dataset:
                                  "selected_volume_km3": [r[2] for r in rows],
                                  "selected_percent_of_mantle": [100.0 * r[3] for r in rows]})
         r_km = self._levels[level].r
+        units = {v.name: v.units for v in self.variables}.get(mean_of, "")
         parts = []
-        for step, t, _, _, by_radius, shell in rows:
-            parts.append(pd.DataFrame({"step": step, "time_myr": t, "radius_km": r_km,
-                                       "depth_km": SURFACE_RADIUS_KM - r_km, "selected_volume_km3": by_radius,
-                                       "shell_volume_km3": shell,
-                                       "selected_percent_of_shell": 100.0 * by_radius / shell}))
+        for step, t, _, _, by_radius, shell, selected_mean, shell_mean in rows:
+            columns = {"step": step, "time_myr": t, "radius_km": r_km, "depth_km": SURFACE_RADIUS_KM - r_km,
+                       "selected_volume_km3": by_radius, "shell_volume_km3": shell,
+                       "selected_percent_of_shell": 100.0 * by_radius / shell}
+            if mean_of is not None:
+                columns[f"{mean_of} selected mean [{units}]"] = selected_mean
+                columns[f"{mean_of} shell mean [{units}]"] = shell_mean
+            parts.append(pd.DataFrame(columns))
         return pd.concat(parts, ignore_index=True)
 
     def features(self, state: Union[None, State, dict, str, os.PathLike] = None, steps: Optional[Any] = None,
