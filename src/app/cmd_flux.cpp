@@ -1,5 +1,6 @@
-// raypc flux DATASET --depth 660 -o flux.csv: the volume flux across shells in every step, down and
-// up, over the whole shell and within a selection, with the avalanche steps marked (data/flux.h).
+// raypc flux DATASET --depth 660 -o flux.csv [--heat-flux [--density 3300] [--heat-capacity 1250]]:
+// the volume flux across shells in every step, down and up, over the whole shell and within a
+// selection, with the avalanche steps marked, and the advective heat flux (data/flux.h).
 #include "app/command.h"
 #include "app/options.h"
 #include "core/atomic_file.h"
@@ -21,10 +22,13 @@ struct FluxArgs {
     std::string output;
     std::vector<double> depths{660};
     double sigmas = 2;
+    bool heatFlux = false;
+    double densityKgM3 = HeatFluxInputs{}.densityKgM3, heatCapacity = HeatFluxInputs{}.heatCapacityJPerKgK;
     bool quiet = false;
 };
 
 constexpr const char* kRadialVelocity = "radial velocity";  // derived at preprocessing (docs/format.md), cm/yr
+constexpr const char* kTemperatureAnomaly = "temperature anomaly";  // T′, K (the contest's files carry it)
 
 void run(const FluxArgs& args)
 {
@@ -39,6 +43,19 @@ void run(const FluxArgs& args)
         fail("--sigmas: {} is negative", args.sigmas);
     for (const double depth : args.depths)
         checkShellDepth(dataset.levels()[size_t(args.selection.level)].grid, depth);
+    std::optional<HeatFluxInputs> heat;
+    if (args.heatFlux) {
+        const auto anomaly = std::find(names.begin(), names.end(), kTemperatureAnomaly);
+        if (anomaly == names.end())
+            fail("--heat-flux: the dataset has no '{}' variable (T' of Q = rho c_p T' v_r)", kTemperatureAnomaly);
+        if (!(args.densityKgM3 > 0))
+            fail("--density: {} kg/m3 is not positive", args.densityKgM3);
+        if (!(args.heatCapacity > 0))
+            fail("--heat-capacity: {} J/(kg K) is not positive", args.heatCapacity);
+        heat = HeatFluxInputs{size_t(anomaly - names.begin()), args.densityKgM3, args.heatCapacity};
+    } else if (args.densityKgM3 != HeatFluxInputs{}.densityKgM3 || args.heatCapacity != HeatFluxInputs{}.heatCapacityJPerKgK) {
+        fail("--density, --heat-capacity: need --heat-flux (the flux they enter)");
+    }
 
     std::vector<std::vector<ShellFlux>> bySteps;  // [step - first][depth]
     std::optional<Progress> progress;
@@ -46,7 +63,7 @@ void run(const FluxArgs& args)
         progress.emplace("flux", sel.last - sel.first + 1, "steps");
     for (int step = sel.first; step <= sel.last; ++step) {
         bySteps.push_back(shellFluxes(*dataset.load(step, args.selection.level), size_t(vr - names.begin()),
-                                      args.depths, sel.filters));
+                                      args.depths, sel.filters, heat));
         if (progress)
             progress->advance();
     }
@@ -66,15 +83,19 @@ void run(const FluxArgs& args)
         }
     }
     std::string csv = "step,time_myr,depth_km,radius_km,down_km3_per_yr,up_km3_per_yr,net_km3_per_yr,"
-                      "selected_down_km3_per_yr,selected_up_km3_per_yr,selected_percent_of_shell,avalanche\n";
+                      "selected_down_km3_per_yr,selected_up_km3_per_yr,selected_percent_of_shell,avalanche";
+    csv += heat ? ",heat_flux_w,selected_heat_flux_w\n" : "\n";
     for (size_t i = 0; i < bySteps.size(); ++i) {
         const int step = sel.first + int(i);
         for (size_t d = 0; d < args.depths.size(); ++d) {
             const ShellFlux& f = bySteps[i][d];
-            fmt::format_to(std::back_inserter(csv), "{},{},{:g},{:.3f},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.4f},{}\n", step,
+            fmt::format_to(std::back_inserter(csv), "{},{},{:g},{:.3f},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.4f},{}", step,
                            dataset.steps()[size_t(step)].timeMyr, f.depthKm, f.radiusKm, f.downKm3PerYr, f.upKm3PerYr,
                            f.downKm3PerYr + f.upKm3PerYr, f.selectedDownKm3PerYr, f.selectedUpKm3PerYr,
                            100.0 * f.selectedAreaKm2 / f.areaKm2, avalanche[d][i] ? 1 : 0);
+            if (heat)
+                fmt::format_to(std::back_inserter(csv), ",{:.6e},{:.6e}", f.heatW, f.selectedHeatW);
+            csv += '\n';
         }
     }
     writeFileAtomic(args.output, csv);
@@ -93,6 +114,12 @@ const CommandRegistration kFluxCommand(
             ->required();
         cmd.add_option("--depth", args->depths, "Depth of a shell, km; repeatable")->capture_default_str();
         cmd.add_option("--sigmas", args->sigmas, "Avalanche: downward flux over the series' mean + this many standard deviations")
+            ->capture_default_str();
+        cmd.add_flag("--heat-flux", args->heatFlux,
+                     "Also the advective heat flux Q = rho c_p T' v_r over the shell and the selection, W (positive upward; "
+                     "T' is the temperature anomaly)");
+        cmd.add_option("--density", args->densityKgM3, "rho of the heat flux, kg/m3 (a constant)")->capture_default_str();
+        cmd.add_option("--heat-capacity", args->heatCapacity, "c_p of the heat flux, J/(kg K) (a constant)")
             ->capture_default_str();
         cmd.add_flag("-q,--quiet", args->quiet, "No progress output");
         cmd.callback([args] { run(*args); });

@@ -17,16 +17,25 @@ void checkShellDepth(const SphericalGrid& g, double depthKm)
 }
 
 std::vector<ShellFlux> shellFluxes(const StepVolume& volume, size_t radialVelocity, std::span<const double> depthsKm,
-                                   std::span<const RangeFilter> filters)
+                                   std::span<const RangeFilter> filters, const std::optional<HeatFluxInputs>& heat)
 {
-    if (radialVelocity >= volume.variableCount())
-        fail("flux: variable index {} out of range 0..{}", radialVelocity, volume.variableCount() - 1);
+    for (const size_t variable : {radialVelocity, heat ? heat->temperatureAnomaly : radialVelocity})
+        if (variable >= volume.variableCount())
+            fail("flux: variable index {} out of range 0..{}", variable, volume.variableCount() - 1);
+    if (heat && !(heat->densityKgM3 > 0 && std::isfinite(heat->densityKgM3)))
+        fail("flux: density {} kg/m³ is not positive", heat->densityKgM3);
+    if (heat && !(heat->heatCapacityJPerKgK > 0 && std::isfinite(heat->heatCapacityJPerKgK)))
+        fail("flux: heat capacity {} J/(kg K) is not positive", heat->heatCapacityJPerKgK);
     const SphericalGrid& g = volume.grid();
     const std::vector<uint8_t> selected =
         filters.empty() ? std::vector<uint8_t>(g.cellCount(), 1) : selectedPoints(volume, filters);
     const float* v = volume.values(radialVelocity);
+    const float* anomaly = heat ? volume.values(heat->temperatureAnomaly) : nullptr;
     const auto w = g.volumeFactors();
     constexpr double kKmPerCm = 1e-5;
+    // ρ c_p × (cm/yr → m/s) × (km² → m²): W per (K · cm/yr · km²).
+    constexpr double kSecondsPerYear = 365.25 * 86400;
+    const double heatFactor = heat ? heat->densityKgM3 * heat->heatCapacityJPerKgK * (0.01 / kSecondsPerYear) * 1e6 : 0;
     std::vector<ShellFlux> out;
     for (const double depth : depthsKm) {
         checkShellDepth(g, depth);
@@ -44,11 +53,17 @@ std::vector<ShellFlux> shellFluxes(const StepVolume& volume, size_t radialVeloci
                 const double area = r * r * w.lat[iLat] * w.lon[iLon];
                 const double vr = (1.0 - t) * v[g.index(iLat, lower, iLon)] + t * v[g.index(iLat, upper, iLon)];
                 const double flux = vr * kKmPerCm * area;
+                double heatW = 0;
+                if (anomaly)
+                    heatW = heatFactor * area * vr *
+                            ((1.0 - t) * anomaly[g.index(iLat, lower, iLon)] + t * anomaly[g.index(iLat, upper, iLon)]);
                 f.areaKm2 += area;
                 (flux < 0 ? f.downKm3PerYr : f.upKm3PerYr) += flux;
+                f.heatW += heatW;
                 if (selected[g.index(iLat, nearer, iLon)]) {
                     f.selectedAreaKm2 += area;
                     (flux < 0 ? f.selectedDownKm3PerYr : f.selectedUpKm3PerYr) += flux;
+                    f.selectedHeatW += heatW;
                 }
             }
         out.push_back(f);

@@ -8,6 +8,7 @@
 #include "data/dataset.h"
 #include "data/selection.h"
 
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -21,6 +22,17 @@ struct ShellFlux {
     // The same over the shell's points that lie in the selection (the whole shell without filters).
     double selectedDownKm3PerYr = 0, selectedUpKm3PerYr = 0;
     double areaKm2 = 0, selectedAreaKm2 = 0;  // of the shell, and of its selected part
+    // With HeatFluxInputs: the net advective heat flux across the shell, W, positive upward,
+    // Q = ∫ ρ c_p T′ v_r dA, over the shell and over its selected part.
+    double heatW = 0, selectedHeatW = 0;
+};
+
+// What the advective heat flux takes: the temperature anomaly T′ (a variable, K) and the density ρ
+// (kg/m³) and heat capacity c_p (J/(kg·K)), constants (the contest's files carry neither).
+struct HeatFluxInputs {
+    size_t temperatureAnomaly = 0;
+    double densityKgM3 = 3300;
+    double heatCapacityJPerKgK = 1250;
 };
 
 // The flux across the shell at each depth (km below the surface, inside the grid's radii). At
@@ -28,10 +40,13 @@ struct ShellFlux {
 // interpolated linearly in radius between the two grid radii around the shell — the ray caster's
 // and the probe's rule along r — and weighted by the column's area on the shell, r² (sin φ+ −
 // sin φ−) Δλ with the dual cells' edges (SphericalGrid::volumeFactors). A column is in the selection
-// when the grid point nearer the shell is (selectedPoints). Throws raypc::Error for a depth outside
-// the grid's radii, a variable index out of range, or bad filters.
+// when the grid point nearer the shell is (selectedPoints). With `heat`, T′ is interpolated at the
+// shell as v_r is and the heat flux summed alike. Throws raypc::Error for a depth outside the grid's
+// radii, a variable index out of range, a density or heat capacity that is not positive, or bad
+// filters.
 std::vector<ShellFlux> shellFluxes(const StepVolume& volume, size_t radialVelocity, std::span<const double> depthsKm,
-                                   std::span<const RangeFilter> filters = {});
+                                   std::span<const RangeFilter> filters = {},
+                                   const std::optional<HeatFluxInputs>& heat = std::nullopt);
 
 // Throws raypc::Error unless `depthKm` lies within the grid's radii, naming them.
 void checkShellDepth(const SphericalGrid& grid, double depthKm);

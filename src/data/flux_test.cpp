@@ -38,6 +38,39 @@ TEST(ShellFlux, AUniformRadialFlowCarriesFourPiRSquaredU0)
     }
 }
 
+// Q = ρ c_p ∫ T′ v_r dA: a uniform upward flow u0 of material T′ = c warmer than its shell carries
+// ρ c_p c u0 4πr² upward; with T′ = +c in the north and −c in the south the net is zero and the
+// northern half (selected by lat) carries half the first.
+TEST(ShellFlux, AdvectiveHeatFluxIsDensityHeatCapacityAnomalyAndVelocityOverTheShell)
+{
+    const SphericalGrid g = testing::centredGrid(36, 21, 72);
+    const double u0 = 0.7, c = 150;  // cm/yr, K
+    Snapshot snap;
+    snap.grid = g;
+    snap.fields.push_back({"radial velocity", "cm/yr", testing::fillGrid(g, [&](size_t, size_t, size_t) { return u0; })});
+    snap.fields.push_back({"uniform anomaly", "K", testing::fillGrid(g, [&](size_t, size_t, size_t) { return c; })});
+    snap.fields.push_back({"hemispheres", "K", testing::fillGrid(g, [&](size_t iLat, size_t, size_t) {
+                               return g.latDeg[iLat] > 0 ? c : -c;
+                           })});
+    const auto volume = StepVolume::fromSnapshot(snap);
+    const HeatFluxInputs heat{1, 3300, 1250};
+    const std::vector<double> depths{660.0};
+    const double r = kSurfaceRadiusKm - 660.0;
+    const double metresPerSecond = u0 * 0.01 / (365.25 * 86400), areaM2 = 4 * std::numbers::pi * r * r * 1e6;
+    const double expected = 3300 * 1250 * c * metresPerSecond * areaM2;  // about 3.3e13 W
+    const ShellFlux uniform = shellFluxes(*volume, 0, depths, {}, heat).at(0);
+    EXPECT_NEAR(uniform.heatW, expected, 1e-6 * expected);
+    EXPECT_EQ(uniform.selectedHeatW, uniform.heatW);
+    EXPECT_EQ(shellFluxes(*volume, 0, depths).at(0).heatW, 0.0) << "without HeatFluxInputs, no heat flux";
+    const RangeFilter north{-1, Coordinate::Lat, {{0.0f, 90.0f}}};
+    const ShellFlux halves = shellFluxes(*volume, 0, depths, std::span(&north, 1), HeatFluxInputs{2, 3300, 1250}).at(0);
+    EXPECT_NEAR(halves.heatW, 0.0, 1e-9 * expected);
+    EXPECT_NEAR(halves.selectedHeatW, expected / 2, 1e-6 * expected);
+    EXPECT_THROW(shellFluxes(*volume, 0, depths, {}, HeatFluxInputs{1, 0, 1250}), Error);
+    EXPECT_THROW(shellFluxes(*volume, 0, depths, {}, HeatFluxInputs{1, 3300, -1}), Error);
+    EXPECT_THROW(shellFluxes(*volume, 0, depths, {}, HeatFluxInputs{7, 3300, 1250}), Error);
+}
+
 TEST(ShellFlux, DownAndUpAreApartAndTheSelectionTakesItsColumns)
 {
     const SphericalGrid g = testing::centredGrid(36, 21, 72);

@@ -254,6 +254,29 @@ flux)
   check "the selection (the northern half) carries half" \
     awk -F, 'NR > 1 { if (($9 - $6 / 2)^2 > (1e-3 * $6)^2 || ($10 - 50)^2 > 0.5) bad = 1 } END { exit bad }' "$work/flux.csv"
   check "a steady flow has no avalanche" awk -F, 'NR > 1 && $11 != 0 { bad = 1 } END { exit bad }' "$work/flux.csv"
+  # The advective heat flux (--heat-flux; its analytic value for a uniform flow and anomaly is
+  # ShellFlux.AdvectiveHeatFlux…): the northern and southern selections add up to the whole shell,
+  # and twice the density gives twice the flux.
+  for half in 0:90 -90:0; do
+    "$raypc" flux "$work/ds" --depth 660 --depth 1600 --range "lat=$half" --heat-flux -o "$work/heat$half.csv" --quiet >/dev/null
+  done
+  "$raypc" flux "$work/ds" --depth 660 --depth 1600 --heat-flux --density 6600 -o "$work/heat2.csv" --quiet >/dev/null
+  check "--heat-flux: columns heat_flux_w and selected_heat_flux_w" \
+    awk -F, 'NR == 1 { exit !($12 == "heat_flux_w" && $13 == "selected_heat_flux_w") }' "$work/heat0:90.csv"
+  check "--heat-flux: north + south = the whole shell; twice the density, twice the flux" python3 - "$work" <<'PY'
+import csv, sys
+w = sys.argv[1]
+north, south, double = (list(csv.DictReader(open(f"{w}/{n}.csv"))) for n in ("heat0:90", "heat-90:0", "heat2"))
+ok = len(north) == len(south) == len(double) == 6
+for n, s, d in zip(north, south, double):
+    whole = float(n["heat_flux_w"])
+    parts = float(n["selected_heat_flux_w"]) + float(s["selected_heat_flux_w"])
+    print(f"step {n['step']} depth {n['depth_km']}: Q = {whole:.4e} W, north + south = {parts:.4e} W, 2 rho: {float(d['heat_flux_w']):.4e} W")
+    ok &= whole != 0 and abs(parts - whole) <= 1e-6 * abs(whole) + 1e3 and abs(float(d["heat_flux_w"]) - 2 * whole) <= 1e-5 * abs(whole)
+sys.exit(not ok)
+PY
+  expect_error "--density: -1 kg/m3 is not positive" flux "$work/ds" --heat-flux --density -1 -o "$work/x.csv"
+  expect_error "--density, --heat-capacity: need --heat-flux" flux "$work/ds" --heat-capacity 1000 -o "$work/x.csv"
   expect_error "outside the grid's radii" flux "$work/ds" --depth 3000 -o "$work/x.csv"
   expect_error "--sigmas" flux "$work/ds" --sigmas -1 -o "$work/x.csv"
   check "no output after errors" test ! -e "$work/x.csv"
