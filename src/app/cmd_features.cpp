@@ -10,6 +10,7 @@
 #include "data/dataset.h"
 #include "data/features.h"
 #include "data/selection.h"
+#include "render/render_state.h"
 
 #include <fmt/format.h>
 
@@ -29,7 +30,30 @@ struct FeaturesArgs {
     std::vector<double> depths{410, 660, 1000, 1600};
     double bandHalfWidthKm = 50, minVolumeKm3 = 0, minOverlapShare = 0.1;
     bool quiet = false;
+    // Which settings the command line gave: the others come from the state's `features` (version 10)
+    // when --state is given.
+    bool depthsGiven = false, bandGiven = false, minVolumeGiven = false, minOverlapGiven = false, levelGiven = false;
 };
+
+// The state's feature settings for what the command line left out.
+void applyStateSettings(FeaturesArgs& args)
+{
+    if (args.selection.statePath.empty())
+        return;
+    const render::FeatureSettings s = render::loadRenderState(args.selection.statePath).features;
+    if (!args.depthsGiven)
+        args.depths.assign(s.depthsKm.begin(), s.depthsKm.end());
+    if (!args.bandGiven)
+        args.bandHalfWidthKm = s.bandHalfWidthKm;
+    if (!args.minVolumeGiven)
+        args.minVolumeKm3 = s.minVolumeKm3;
+    if (!args.minOverlapGiven)
+        args.minOverlapShare = s.minOverlapShare;
+    if (!args.levelGiven) {
+        args.selection.level = s.level;
+        args.selection.levelFrom = args.selection.statePath + ": features.level";
+    }
+}
 
 // Tracking (--tracks, --events): the features of each step are linked to the previous step's
 // (linkFeatures, FeatureTracker); the tracks' rows follow each track through its steps, the events'
@@ -107,11 +131,12 @@ VelocityVariables velocityVariables(const Dataset& dataset)
 // Under mpirun the steps are split into contiguous blocks over the ranks (as `raypc stats` does);
 // rank 0 gathers the rows in rank order, which is step order, and writes the file. Tracking goes
 // from step to step: rank 0 does every step then, the other ranks wait.
-void run(const FeaturesArgs& args)
+void run(FeaturesArgs args)
 {
     SeriesSelection sel;
     FeatureOptions options;
     mpi::together([&] {
+        applyStateSettings(args);
         sel = resolveSeriesSelection(args.selection);
         if (sel.filters.empty())
             fail("features: no selection: give --state with brushes or --range NAME=MIN:MAX (the whole mantle "
@@ -194,20 +219,31 @@ const CommandRegistration kFeaturesCommand(
                        "CSV: a row per feature and step (volume, depths, centroid, each variable's mean/min/max, "
                        "percent near each --depth)")
             ->required();
-        cmd.add_option("--min-volume", args->minVolumeKm3, "Drop features smaller than this, km³")->capture_default_str();
-        cmd.add_option("--depth", args->depths, "Depths (km) to report each feature's share near; repeatable")
-            ->capture_default_str();
-        cmd.add_option("--band-half-width", args->bandHalfWidthKm, "Half-width of the band around each --depth, km")
-            ->capture_default_str();
+        const auto* minVolume =
+            cmd.add_option("--min-volume", args->minVolumeKm3, "Drop features smaller than this, km³ (default: the state's "
+                                                               "features.minVolumeKm3, else 0)");
+        const auto* depths = cmd.add_option("--depth", args->depths,
+                                            "Depths (km) to report each feature's share near; repeatable (default: the "
+                                            "state's features.depthsKm, else 410, 660, 1000, 1600)");
+        const auto* band = cmd.add_option("--band-half-width", args->bandHalfWidthKm,
+                                          "Half-width of the band around each --depth, km (default: the state's, else 50)");
         cmd.add_option("--tracks", args->tracks, "CSV: each feature's track through the steps (moved with the flow)");
         cmd.add_option("--events", args->events, "CSV: births, deaths, merges and splits of the tracks");
         cmd.add_option("--stalls", args->stalls,
                        "CSV: how long each track stays at each --depth (its mean depth within the band) and how it left");
-        cmd.add_option("--min-overlap", args->minOverlapShare,
-                       "Share of a feature's volume carried onto another for a link between steps")
-            ->capture_default_str();
+        const auto* minOverlap = cmd.add_option("--min-overlap", args->minOverlapShare,
+                                                "Share of a feature's volume carried onto another for a link between steps "
+                                                "(default: the state's, else 0.1)");
         cmd.add_flag("-q,--quiet", args->quiet, "No progress output");
-        cmd.callback([args] { run(*args); });
+        const auto* lod = cmd.get_option("--lod");
+        cmd.callback([args, minVolume, depths, band, minOverlap, lod] {
+            args->minVolumeGiven = minVolume->count() > 0;
+            args->depthsGiven = depths->count() > 0;
+            args->bandGiven = band->count() > 0;
+            args->minOverlapGiven = minOverlap->count() > 0;
+            args->levelGiven = lod->count() > 0;
+            run(*args);
+        });
     },
     71, Ranks::AllRanks);
 

@@ -263,7 +263,7 @@ SeriesSelection resolveSeriesSelection(const SeriesSelectionFlags& flags)
         ranges = render::loadRenderState(flags.statePath).brushes;
     applyRangeOptions(ranges, flags.ranges);
     s.filters = resolveRangeFilters(*s.dataset, ranges, flags.statePath.empty() ? "--range" : "brushes");
-    s.dataset->checkLevel(flags.level, "--lod");
+    s.dataset->checkLevel(flags.level, flags.levelFrom);
     std::tie(s.first, s.last) = flags.time.empty()
                                     ? std::pair<int, int>(0, static_cast<int>(s.dataset->steps().size()) - 1)
                                     : parseStepRange(*s.dataset, flags.time);

@@ -70,6 +70,7 @@ struct SeriesSelectionFlags {
     std::string dataset, statePath, time;
     std::vector<std::string> ranges;
     int level = 0;
+    std::string levelFrom = "--lod";  // what set `level`, for messages (e.g. a state's features.level)
 
     void add(CLI::App& cmd);
 };

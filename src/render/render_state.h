@@ -27,7 +27,7 @@ namespace raypc::render {
 // (explicit camera poses, e.g. WebXR eyes), version 8 "selection" (show the selection whatever the
 // transfer function's opacity), version 9 "map" and "section" (depth slices and great-circle
 // sections, render/slice_view.h); older documents are still read (they have none of these).
-inline constexpr int kRenderStateVersion = 9;
+inline constexpr int kRenderStateVersion = 10;
 
 // A brush range: a variable or a coordinate (x, y, z, lat, lon, radius, depth) and [min, max]. The
 // brush model is data/selection.h's: a name that repeats adds a range to its axis (OR).
@@ -107,6 +107,17 @@ struct SectionState {
     bool flow = false;  // arrows of the flow in the section's plane (along the profile and radial)
 };
 
+// The "features" object (version 10): how the connected regions of the selection are found and
+// followed (data/features.h; `raypc features`, Python's Dataset.features), so that a saved state
+// reproduces their table.
+struct FeatureSettings {
+    float minVolumeKm3 = 0.0f;                               // smaller regions are dropped
+    std::vector<float> depthsKm{410.0f, 660.0f, 1000.0f, 1600.0f};  // each feature's share near them; the stall depths
+    float bandHalfWidthKm = 50.0f;                          // the band around each depth
+    int level = 0;                                          // of detail the regions are found at
+    float minOverlapShare = 0.1f;                           // of a feature carried onto another for a link
+};
+
 struct RenderState {
     int version = kRenderStateVersion;
     int step = 0;  // time step index (reload class)
@@ -153,6 +164,7 @@ struct RenderState {
     } selection;
     MapState map;          // version 9
     SectionState section;  // version 9
+    FeatureSettings features;  // version 10
 };
 
 // The opacity used when the state gives none: a ramp from 0 to 0.5 over the range, or for maps

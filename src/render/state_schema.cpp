@@ -1120,6 +1120,25 @@ const Object<RenderState>& document()
                             "brushes as on the map",
                  .since = 9}),
             group<S>(
+                "features", "FeatureSettings",
+                {leaf<S>("minVolumeKm3", at(&S::features, &FeatureSettings::minVolumeKm3), number<float>(0, 1e12),
+                         {.meaning = "regions of the selection smaller than this, km³, are dropped (specks)"}),
+                 leaf<S>("depthsKm", at(&S::features, &FeatureSettings::depthsKm), numberList(0, 6371, 32),
+                         {.meaning = "depths, km, at which each feature reports the share of its volume within "
+                                     "`bandHalfWidthKm`, and at which tracks' stalls are timed"}),
+                 leaf<S>("bandHalfWidthKm", at(&S::features, &FeatureSettings::bandHalfWidthKm), number<float>(0, 3000),
+                         {.meaning = "half-width of the band around each of `depthsKm`, km"}),
+                 leaf<S>("level", at(&S::features, &FeatureSettings::level), integer(0, 2),
+                         {.meaning = "level of detail the regions are found at (0: full resolution; the dataset "
+                                     "must have it)"}),
+                 leaf<S>("minOverlapShare", at(&S::features, &FeatureSettings::minOverlapShare), number<float>(0, 1),
+                         {.meaning = "share of a feature's volume that, moved with the flow over a step, must fall "
+                                     "on a feature of the next step to link them into one track"})},
+                {.meaning = "how the connected regions of the selection (features) are found and followed through "
+                            "the steps (`raypc features --state`, docs/features.md); a saved state reproduces their "
+                            "table",
+                 .since = 10}),
+            group<S>(
                 "stereo", "StereoState",
                 {leaf<S>("mode", at(&S::stereo, &StereoState::mode), stereoMode(),
                          {.meaning = "stereo pairs: `side-by-side` puts the left eye's picture beside the right "

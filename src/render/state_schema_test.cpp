@@ -47,8 +47,8 @@ TEST(StateSchema, CarriesTheParsersBoundsAndVersions)
     const json& camera = schema["properties"]["camera"]["properties"];
     EXPECT_EQ(camera["elevationDeg"]["minimum"], -90);
     EXPECT_EQ(camera["elevationDeg"]["maximum"], 90);
-    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5, 6, 7, 8, 9}));
-    EXPECT_EQ(kRenderStateVersion, 9);
+    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5, 6, 7, 8, 9, 10}));
+    EXPECT_EQ(kRenderStateVersion, 10);
     EXPECT_EQ(schema["properties"]["brushes"]["items"]["required"], json::array({"name", "min", "max"}));
     // A version-1 document may not have pathlines, as parseRenderState says.
     ASSERT_TRUE(schema.contains("allOf"));
@@ -120,6 +120,30 @@ TEST(StateSchema, ShadowsRoundTripAndBadValuesNameTheKey)
     EXPECT_NE(refusal(R"({"version": 6, "shading": {"shadowStrength": 1.5}})").find("shading.shadowStrength"), std::string::npos);
     EXPECT_NE(refusal(R"({"version": 6, "shading": {"shadowStrength": -0.1}})").find("shading.shadowStrength"), std::string::npos);
     EXPECT_NE(refusal(R"({"version": 6, "shading": {"shadows": "yes"}})").find("shading.shadows"), std::string::npos);
+}
+
+// Version 10: the feature settings round-trip; bad values and a version-9 document with them are
+// refused naming the key.
+TEST(StateSchema, FeatureSettingsRoundTripAndBadValuesNameTheKey)
+{
+    const RenderState s = parseRenderState(json::parse(
+        R"({"version": 10, "features": {"minVolumeKm3": 1e7, "depthsKm": [660, 1600], "bandHalfWidthKm": 80, "level": 1, "minOverlapShare": 0.3}})"));
+    EXPECT_FLOAT_EQ(s.features.minVolumeKm3, 1e7f);
+    EXPECT_EQ(s.features.depthsKm, (std::vector<float>{660, 1600}));
+    EXPECT_FLOAT_EQ(s.features.bandHalfWidthKm, 80);
+    EXPECT_EQ(s.features.level, 1);
+    EXPECT_FLOAT_EQ(s.features.minOverlapShare, 0.3f);
+    const RenderState back = parseRenderState(toJson(s));
+    EXPECT_EQ(back.features.depthsKm, s.features.depthsKm);
+    EXPECT_EQ(back.features.level, 1);
+    const RenderState plain = parseRenderState(json{{"version", 9}});  // the defaults
+    EXPECT_EQ(plain.features.depthsKm, (std::vector<float>{410, 660, 1000, 1600}));
+    EXPECT_FLOAT_EQ(plain.features.bandHalfWidthKm, 50);
+    auto refusal = [](const char* text) { return refusalOf(json::parse(text)); };
+    EXPECT_NE(refusal(R"({"version": 10, "features": {"level": 3}})").find("features.level"), std::string::npos);
+    EXPECT_NE(refusal(R"({"version": 10, "features": {"minVolumeKm3": -1}})").find("features.minVolumeKm3"), std::string::npos);
+    EXPECT_NE(refusal(R"({"version": 10, "features": {"depthsKm": [7000]}})").find("features.depthsKm"), std::string::npos);
+    EXPECT_NE(refusal(R"({"version": 9, "features": {"level": 0}})").find("features"), std::string::npos);
 }
 
 // Version 7: explicit camera views (WebXR eyes) round-trip; bad ones are refused naming the key.

@@ -235,6 +235,20 @@ features)
     --depth 300 --band-half-width 50 --stalls "$work/stalls.csv" --quiet >/dev/null
   check "each cap stalls at 300 km from step 0 to 2" \
     awk -F, 'NR > 1 { n++; if ($2 != 300 || $3 != 0 || $4 != 2 || $7 != "") bad = 1 } END { exit bad || n != 2 }' "$work/stalls.csv"
+  # The same from a state whose `features` (version 10) hold the depth and band: the same files;
+  # an option given on the command line overrides the state's; a level the dataset lacks names the key.
+  printf '%s' '{"version": 10, "brushes": [{"name": "depth", "min": 0, "max": 660}, {"name": "lat", "min": -90, "max": -60},
+    {"name": "lat", "min": 60, "max": 90}], "features": {"depthsKm": [300], "bandHalfWidthKm": 50}}' > "$work/caps.json"
+  "$raypc" features "$work/ds" --state "$work/caps.json" -o "$work/caps4.csv" --stalls "$work/stalls4.csv" --quiet >/dev/null
+  check "the state's feature settings give the same features and stalls as the options" \
+    bash -c "cmp -s '$work/caps3.csv' '$work/caps4.csv' && cmp -s '$work/stalls.csv' '$work/stalls4.csv'"
+  "$raypc" features "$work/ds" --state "$work/caps.json" --depth 660 -o "$work/caps5.csv" --quiet >/dev/null
+  check "  --depth overrides the state's depths" grep -q "percent_within_50km_of_660km" "$work/caps5.csv"
+  printf '%s' '{"version": 10, "brushes": [{"name": "depth", "min": 0, "max": 660}], "features": {"level": 1}}' > "$work/lod.json"
+  "$raypc" features "$work/ds" --state "$work/lod.json" -o "$work/lod-state.csv" --quiet >/dev/null
+  "$raypc" features "$work/ds" --range depth=0:660 --lod 1 -o "$work/lod-option.csv" --quiet >/dev/null
+  check "  features.level is --lod's" cmp -s "$work/lod-state.csv" "$work/lod-option.csv"
+  check "  and not level 0's" bash -c "! cmp -s '$work/lod-state.csv' '$work/shell.csv'"
   "$raypc" features "$work/ds" --range "radial velocity=0.2:0.3" -o "$work/none.csv" --quiet > "$work/none.out"
   check "an empty selection writes the header alone" test "$(wc -l < "$work/none.csv")" -eq 1
   check "  and says 0 features" grep -q "0 features in 3 steps" "$work/none.out"

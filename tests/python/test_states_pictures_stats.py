@@ -160,6 +160,9 @@ def test_features_equal_the_cli(contest, tmp_path):
     assert list(contest.features(caps, steps=1, progress=False)["step"]) == [1, 1]
     with pytest.raises(raypc.Error, match="no brushes"):
         contest.features({"version": 4}, progress=False)
+    # The state's feature settings (version 10) stand for the arguments left out.
+    saved = dict(caps, version=10, features={"depthsKm": [300], "minVolumeKm3": 0})
+    pd.testing.assert_frame_equal(contest.features(saved, progress=False), cli)
 
 
 def test_render_and_stats_release_the_gil(contest):

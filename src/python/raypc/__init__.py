@@ -471,20 +471,29 @@ class Dataset:
         return pd.concat(parts, ignore_index=True)
 
     def features(self, state: Union[None, State, dict, str, os.PathLike] = None, steps: Optional[Any] = None,
-                 level: int = 0, min_volume_km3: float = 0.0, depths_km: Sequence[float] = (410, 660, 1000, 1600),
-                 band_half_width_km: float = 50.0, progress: bool = True):
+                 level: Optional[int] = None, min_volume_km3: Optional[float] = None,
+                 depths_km: Optional[Sequence[float]] = None, band_half_width_km: Optional[float] = None,
+                 progress: bool = True):
         """The features of the state's brushes in each step (``raypc features``, docs/features.md) as a
         DataFrame: a row per feature and step with its volume, depths, centroid, every variable's
         mean/min/max (units in the column names) and the percent of its volume near each depth.
-        ``steps`` as for :meth:`stats`."""
+        ``steps`` as for :meth:`stats`. The settings left at None come from the state's ``features``
+        (level, minVolumeKm3, depthsKm, bandHalfWidthKm; state version 10), as ``raypc features
+        --state`` takes them."""
         import io
 
         import pandas as pd
 
+        state = _state_of(state, self)
+        settings = state.to_dict()["features"]
+        level = settings["level"] if level is None else level
+        min_volume_km3 = settings["minVolumeKm3"] if min_volume_km3 is None else min_volume_km3
+        depths_km = settings["depthsKm"] if depths_km is None else depths_km
+        band_half_width_km = settings["bandHalfWidthKm"] if band_half_width_km is None else band_half_width_km
         first, last = self._step_range(steps)
         bar = _Progress("features", progress, delay=0.5)
         try:
-            text = self._core.features(_state_of(state, self).to_json(None), first, last, level, float(min_volume_km3),
+            text = self._core.features(state.to_json(None), first, last, level, float(min_volume_km3),
                                        [float(d) for d in depths_km], float(band_half_width_km), bar)
         finally:
             bar.close()
