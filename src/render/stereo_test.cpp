@@ -64,13 +64,14 @@ TEST(StereoState, BadValuesAndOlderDocumentsAreRefusedByName)
     EXPECT_NE(refusalOf(j).find("stereo.parallax: unknown key"), std::string::npos) << refusalOf(j);
     j = toJson(RenderState{});
     j["version"] = 4;
-    j["shading"].erase("shadows");  // version 6 to 9 keys, refused first otherwise
+    j["shading"].erase("shadows");  // version 6 to 10 keys, refused first otherwise
     j["shading"].erase("shadowStrength");
     j.erase("convergenceGreyLevels");
     j["camera"].erase("views");
     j.erase("selection");
     j.erase("map");
     j.erase("section");
+    j.erase("features");
     EXPECT_NE(refusalOf(j).find("stereo: needs version 5, the document says version 4"), std::string::npos) << refusalOf(j);
     j.erase("stereo");
     EXPECT_EQ(parseRenderState(j).stereo.mode, StereoMode::Off);  // a version-4 document still reads

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/json_input.h"
+#include "server/protocol_schema.h"
 
 #include <algorithm>
 #include <cmath>
@@ -43,10 +44,12 @@ int64_t integerField(const json& message, const char* type, const char* key)
     fail("{}: field '{}' must be an integer, found {}", type, key, jsonExcerpt(*it, 40));
 }
 
-void rejectUnknownKeys(const json& message, const char* type, std::initializer_list<const char*> known)
+// Keys outside the description of the message (server/protocol_schema.cpp, `definition`) are refused.
+void rejectUnknownKeys(const json& message, const char* type, std::string_view definition)
 {
+    const std::vector<std::string>& known = messageKeys(definition);
     for (const auto& item : message.items())
-        if (std::none_of(known.begin(), known.end(), [&](const char* k) { return item.key() == k; }))
+        if (std::find(known.begin(), known.end(), item.key()) == known.end())
             fail("{}: unknown field '{}'", type, item.key());
 }
 
@@ -82,11 +85,11 @@ ClientMessage parseClientMessage(std::string_view text)
         fail("field 'type' must be a string");
     const std::string type = typeIt->get<std::string>();
     if (type == "hello") {
-        rejectUnknownKeys(message, "hello", {"type", "protocol"});
+        rejectUnknownKeys(message, "hello", "ClientHello");
         return HelloMessage{int(std::clamp<int64_t>(integerField(message, "hello", "protocol"), -1, 1 << 30))};
     }
     if (type == "state") {
-        rejectUnknownKeys(message, "state", {"type", "id", "state", "interactive", "playback"});
+        rejectUnknownKeys(message, "state", "ClientState");
         StateMessage m;
         m.id = integerField(message, "state", "id");
         const auto st = message.find("state");
@@ -110,11 +113,11 @@ ClientMessage parseClientMessage(std::string_view text)
         return m;
     }
     if (type == "cancel") {
-        rejectUnknownKeys(message, "cancel", {"type"});
+        rejectUnknownKeys(message, "cancel", "ClientCancel");
         return CancelMessage{};
     }
     if (type == "ping") {
-        rejectUnknownKeys(message, "ping", {"type", "id"});
+        rejectUnknownKeys(message, "ping", "ClientPing");
         return PingMessage{integerField(message, "ping", "id")};
     }
     fail("unknown message type '{}'; expected hello, state, cancel or ping", type.substr(0, 64));

@@ -2,6 +2,7 @@
 // Schema the UI's types come from and the key tables of docs/protocol.md.
 #include "server/protocol_schema.h"
 
+#include "core/error.h"
 #include "render/map_projection.h"
 #include "render/stereo.h"
 #include "server/protocol.h"
@@ -10,6 +11,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <map>
 #include <optional>
 #include <string_view>
 #include <utility>
@@ -528,6 +530,22 @@ nlohmann::json protocolJsonSchema()
                          "protocol-schema` from src/server/protocol_schema.cpp; do not edit.",
                          kProtocolVersion)},
             {"definitions", std::move(definitions)}};
+}
+
+const std::vector<std::string>& messageKeys(std::string_view title)
+{
+    static const std::map<std::string, std::vector<std::string>, std::less<>> keys = [] {
+        std::map<std::string, std::vector<std::string>, std::less<>> out;
+        for (const Definition& d : messages())
+            if (d.schema.contains("properties"))
+                for (const auto& [key, value] : d.schema["properties"].items())
+                    out[d.title].push_back(key);
+        return out;
+    }();
+    const auto it = keys.find(title);
+    if (it == keys.end())
+        fail("protocol: no message '{}' in the description", title);
+    return it->second;
 }
 
 std::string protocolMessageTables()

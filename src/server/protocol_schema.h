@@ -11,6 +11,8 @@
 #include <nlohmann/json.hpp>
 
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace raypc::server {
 
@@ -22,5 +24,10 @@ nlohmann::json protocolJsonSchema();
 
 // The key tables of docs/protocol.md (markdown, a heading and a table per message).
 std::string protocolMessageTables();
+
+// The keys a message of the definition `title` may have (e.g. "ClientState": type, id, state,
+// interactive, playback): what the client messages' parser accepts (protocol.cpp). Throws
+// raypc::Error for an unknown title.
+const std::vector<std::string>& messageKeys(std::string_view title);
 
 }  // namespace raypc::server

@@ -1,12 +1,15 @@
 #include "server/protocol.h"
 
 #include "core/error.h"
+#include "server/protocol_schema.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
 
 namespace raypc::server {
 namespace {
@@ -29,6 +32,42 @@ std::string errorOf(const std::string& text)
         return e.what();
     }
     return "<accepted>";
+}
+
+// The client messages' parser and their description (protocol_schema.cpp, from which the UI's
+// types come) agree: a message with every key the description lists is accepted, one with a key it
+// does not list is refused, and so is one without a key the description requires.
+TEST(ProtocolCodec, ParserAcceptsWhatTheDescriptionSays)
+{
+    const json schema = protocolJsonSchema()["definitions"];
+    const std::map<std::string, json> full = {
+        {"ClientHello", {{"type", "hello"}, {"protocol", 1}}},
+        {"ClientState", {{"type", "state"}, {"id", 3}, {"state", {{"version", 1}}}, {"interactive", false}, {"playback", true}}},
+        {"ClientCancel", {{"type", "cancel"}}},
+        {"ClientPing", {{"type", "ping"}, {"id", 4}}},
+    };
+    for (const auto& [title, message] : full) {
+        const json& d = schema.at(title);
+        std::vector<std::string> keys;
+        for (const auto& [key, value] : d["properties"].items())
+            keys.push_back(key);
+        std::vector<std::string> given;
+        for (const auto& [key, value] : message.items())
+            given.push_back(key);
+        std::sort(keys.begin(), keys.end());
+        EXPECT_EQ(given, keys) << title << ": the test's message has every key the description lists";
+        EXPECT_EQ(errorOf(message.dump()), "<accepted>") << title;
+        json extra = message;
+        extra["colour"] = "red";
+        EXPECT_NE(errorOf(extra.dump()).find("unknown field 'colour'"), std::string::npos) << title;
+        for (const auto& key : d["required"]) {
+            if (key == "type")
+                continue;
+            json missing = message;
+            missing.erase(key.get<std::string>());
+            EXPECT_NE(errorOf(missing.dump()), "<accepted>") << title << " without " << key;
+        }
+    }
 }
 
 TEST(ProtocolCodec, ParsesEachClientMessage)
