@@ -126,7 +126,10 @@ void run(const StatsArgs& args)
     const mpi::Block block = mpi::blockOf(last - first + 1);
     std::optional<size_t> meanVariable;
     const HovmollerOf hovmollerOf = parseHovmollerOf(args.hovmollerOf);
-    const auto [pictureWidth, pictureHeight] = parseSize(args.size);
+    // Plain variables, not a structured binding: the lambda below captures them (clang 14 cannot
+    // capture bindings).
+    const std::pair<int, int> pictureSize = parseSize(args.size);
+    const int pictureWidth = pictureSize.first, pictureHeight = pictureSize.second;
     if (!args.hovmoller.empty())
         render::checkTimeDepthPictureSize(pictureWidth, pictureHeight);
     if (args.hovmoller.empty() && (args.hovmollerOf != "share" || !args.depthsKm.empty()))

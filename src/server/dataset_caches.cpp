@@ -1,5 +1,7 @@
 #include "server/dataset_caches.h"
 
+#include "core/error.h"
+
 #include <algorithm>
 
 namespace raypc::server {
