@@ -6,11 +6,13 @@ namespace raypc::server {
 
 using nlohmann::json;
 
-uint64_t LinkedState::addSession(Sink sink)
+uint64_t LinkedState::addSession(Sink sink, const std::function<void()>& first)
 {
     std::lock_guard lock(m_mutex);
     const uint64_t key = ++m_nextKey;
     m_sessions.emplace(key, std::move(sink));
+    if (first)
+        first();
     return key;
 }
 

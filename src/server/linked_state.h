@@ -27,7 +27,10 @@ public:
     using Sink = std::function<void(std::string text)>;
 
     // A session that receives `link` messages until it is removed; returns its key for removeSession.
-    uint64_t addSession(Sink sink);
+    // `first` (optional) runs once the session counts and before any state can be pushed to it
+    // (under the lock): what must reach it before any link message, e.g. its hello reply, so that a
+    // client that has its reply is already among the sessions GET /api/link counts.
+    uint64_t addSession(Sink sink, const std::function<void()>& first = {});
     // Removing a key that is not there (or twice) does nothing.
     void removeSession(uint64_t key);
 

@@ -80,5 +80,23 @@ TEST(LinkedState, APushedStateGoesToEverySessionInOrderUntilItIsRemoved)
     EXPECT_EQ(json::parse(b[1]), json({{"type", "link"}, {"version", 3}, {"state", brushed(600, 700)}}));
 }
 
+// What must reach a session first (its hello reply) runs once it counts and before any push to it.
+TEST(LinkedState, WhatASessionGetsFirstComesBeforeAnyPush)
+{
+    LinkedState link;
+    std::vector<std::string> got;
+    int firstCalls = 0;
+    link.addSession([&](std::string text) { got.push_back(std::move(text)); }, [&] {
+        ++firstCalls;
+        got.push_back("hello");
+    });
+    EXPECT_EQ(firstCalls, 1);
+    EXPECT_EQ(link.toJson()["sessions"], 1);
+    link.setFromApi(brushed(100, 200));
+    ASSERT_EQ(got.size(), 2u);
+    EXPECT_EQ(got[0], "hello");
+    EXPECT_EQ(json::parse(got[1])["type"], "link");
+}
+
 }  // namespace
 }  // namespace raypc::server

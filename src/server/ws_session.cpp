@@ -281,9 +281,10 @@ private:
                 return;
             }
             m_helloDone = true;
-            send(helloReply(m_name.substr(m_name.find(' ') + 1)));
+            std::string reply = helloReply(m_name.substr(m_name.find(' ') + 1));
             // From now on the session gets the states a program sets (POST /api/link), in order after
-            // the hello reply (both are posted to the network thread).
+            // the hello reply (both are posted to the network thread); the reply is posted once the
+            // session counts, so a client that has it finds itself among GET /api/link's sessions.
             if (m_linkKey == 0) {
                 auto sink = [weak = weak_from_this(), executor = m_ws.get_executor()](std::string text) {
                     net::post(executor, [weak, text = std::move(text)]() mutable {
@@ -291,7 +292,9 @@ private:
                             self->enqueue(false, std::move(text));
                     });
                 };
-                m_linkKey = m_server.link.addSession(std::move(sink));
+                m_linkKey = m_server.link.addSession(std::move(sink), [&] { send(std::move(reply)); });
+            } else {
+                send(std::move(reply));
             }
             return;
         }
