@@ -22,7 +22,7 @@ struct FluxArgs {
     std::string output;
     std::vector<double> depths{660};
     double sigmas = 2;
-    bool heatFlux = false;
+    bool heatFlux = false, heatConstantsGiven = false;  // --density or --heat-capacity on the command line
     double densityKgM3 = HeatFluxInputs{}.densityKgM3, heatCapacity = HeatFluxInputs{}.heatCapacityJPerKgK;
     bool quiet = false;
 };
@@ -53,7 +53,7 @@ void run(const FluxArgs& args)
         if (!(args.heatCapacity > 0))
             fail("--heat-capacity: {} J/(kg K) is not positive", args.heatCapacity);
         heat = HeatFluxInputs{size_t(anomaly - names.begin()), args.densityKgM3, args.heatCapacity};
-    } else if (args.densityKgM3 != HeatFluxInputs{}.densityKgM3 || args.heatCapacity != HeatFluxInputs{}.heatCapacityJPerKgK) {
+    } else if (args.heatConstantsGiven) {
         fail("--density, --heat-capacity: need --heat-flux (the flux they enter)");
     }
 
@@ -118,11 +118,16 @@ const CommandRegistration kFluxCommand(
         cmd.add_flag("--heat-flux", args->heatFlux,
                      "Also the advective heat flux Q = rho c_p T' v_r over the shell and the selection, W (positive upward; "
                      "T' is the temperature anomaly)");
-        cmd.add_option("--density", args->densityKgM3, "rho of the heat flux, kg/m3 (a constant)")->capture_default_str();
-        cmd.add_option("--heat-capacity", args->heatCapacity, "c_p of the heat flux, J/(kg K) (a constant)")
-            ->capture_default_str();
+        const auto* density =
+            cmd.add_option("--density", args->densityKgM3, "rho of the heat flux, kg/m3 (a constant)")->capture_default_str();
+        const auto* heatCapacity = cmd.add_option("--heat-capacity", args->heatCapacity,
+                                                  "c_p of the heat flux, J/(kg K) (a constant)")
+                                       ->capture_default_str();
         cmd.add_flag("-q,--quiet", args->quiet, "No progress output");
-        cmd.callback([args] { run(*args); });
+        cmd.callback([args, density, heatCapacity] {
+            args->heatConstantsGiven = density->count() > 0 || heatCapacity->count() > 0;
+            run(*args);
+        });
     },
     72);
 

@@ -30,6 +30,7 @@ struct StatsArgs {
     std::string output, profile, profileVar;
     std::string hovmoller, hovmollerOf = "share", size = "960x540";
     std::vector<double> depthsKm;
+    bool pictureOptionsGiven = false;  // --hovmoller-of, --depth or --size on the command line
     bool quiet = false;
 };
 
@@ -132,8 +133,8 @@ void run(const StatsArgs& args)
     const int pictureWidth = pictureSize.first, pictureHeight = pictureSize.second;
     if (!args.hovmoller.empty())
         render::checkTimeDepthPictureSize(pictureWidth, pictureHeight);
-    if (args.hovmoller.empty() && (args.hovmollerOf != "share" || !args.depthsKm.empty()))
-        fail("--hovmoller-of, --depth: need --hovmoller (the picture they describe)");
+    if (args.hovmoller.empty() && args.pictureOptionsGiven)
+        fail("--hovmoller-of, --depth: need --hovmoller (the picture they describe, as --size does)");
     if (hovmollerOf != HovmollerOf::Share && args.profileVar.empty())
         fail("--hovmoller-of {}: needs --profile-var NAME (the variable whose mean it shows)", args.hovmollerOf);
     for (const double d : args.depthsKm)
@@ -237,15 +238,18 @@ const CommandRegistration kStatsCommand(
                        "the whole shell (a time-depth view of it); with --hovmoller: the variable of its means");
         cmd.add_option("--hovmoller", args->hovmoller,
                        "PNG: a time-depth (Hovmoller) picture of every step's depth profile, the chosen depths marked");
-        cmd.add_option("--hovmoller-of", args->hovmollerOf,
+        const auto* of = cmd.add_option("--hovmoller-of", args->hovmollerOf,
                        "What the picture shows: share (of each shell selected, %), selected-mean or shell-mean (of "
                        "--profile-var)")
             ->default_str("share");
-        cmd.add_option("--depth", args->depthsKm, "Depth in km marked on the picture; repeatable (default: the state's "
+        const auto* depth = cmd.add_option("--depth", args->depthsKm, "Depth in km marked on the picture; repeatable (default: the state's "
                                                  "reference shells, 410, 660, 1000, 1600, 2200)");
-        cmd.add_option("--size", args->size, "The picture's size WIDTHxHEIGHT")->default_str("960x540");
+        const auto* size = cmd.add_option("--size", args->size, "The picture's size WIDTHxHEIGHT")->default_str("960x540");
         cmd.add_flag("-q,--quiet", args->quiet, "No progress output");
-        cmd.callback([args] { run(*args); });
+        cmd.callback([args, of, depth, size] {
+            args->pictureOptionsGiven = of->count() > 0 || depth->count() > 0 || size->count() > 0;
+            run(*args);
+        });
     },
     70, Ranks::AllRanks);
 
