@@ -8,6 +8,7 @@
 #include "core/mpi.h"
 #include "core/progress.h"
 #include "data/dataset.h"
+#include "data/feature_series.h"
 #include "data/features.h"
 #include "data/selection.h"
 #include "render/render_state.h"
@@ -55,77 +56,41 @@ void applyStateSettings(FeaturesArgs& args)
     }
 }
 
-// Tracking (--tracks, --events): the features of each step are linked to the previous step's
-// (linkFeatures, FeatureTracker); the tracks' rows follow each track through its steps, the events'
-// say what happened where.
-struct Tracking {
-    VelocityVariables velocity;
-    FeatureTracker tracker;
-    std::shared_ptr<const StepVolume> previousVolume;
-    StepFeatures previousFeatures;
-    double previousTimeMyr = 0;
-    std::map<std::pair<int, int>, Feature> features;  // (step, id): for the events' positions
-    std::optional<size_t> radialVelocity;             // variable index, for the stalls
-    std::map<int, std::vector<TrackPoint>> points;    // by track
-    std::string tracks;
-
-    void add(int step, double timeMyr, std::shared_ptr<const StepVolume> volume, StepFeatures f)
-    {
-        const std::vector<FeatureLink> links =
-            previousVolume ? linkFeatures(*previousVolume, previousFeatures, f, velocity, timeMyr - previousTimeMyr)
-                           : std::vector<FeatureLink>{};
-        const std::vector<int> ids = tracker.add(step, f, links);
-        for (size_t k = 0; k < f.features.size(); ++k) {
-            const Feature& x = f.features[k];
-            fmt::format_to(std::back_inserter(tracks), "{},{},{},{},{:.6e},{:.3f},{:.4f},{:.4f},{:.3f}\n", ids[k], step,
-                           timeMyr, x.id, x.volumeKm3, x.meanDepthKm, x.centroidLatDeg, x.centroidLonDeg,
-                           x.centroidDepthKm);
-            features[{step, x.id}] = x;
-            points[ids[k]].push_back({step, timeMyr, x.meanDepthKm,
-                                      radialVelocity ? x.variables[*radialVelocity].mean : std::nan("")});
-        }
-        previousVolume = std::move(volume);
-        previousFeatures = std::move(f);
-        previousTimeMyr = timeMyr;
-    }
-
-    std::string stallRows(const FeatureOptions& options, int lastStep) const
-    {
-        std::string rows = "track,depth_km,first_step,last_step,duration_myr,mean_radial_velocity_cm_per_yr,left\n";
-        for (const auto& [track, series] : points)
-            for (const Stall& s : stallTimes(series, options.bandDepthsKm, options.bandHalfWidthKm, lastStep))
-                fmt::format_to(std::back_inserter(rows), "{},{:g},{},{},{},{},{}\n", track, s.depthKm, s.firstStep,
-                               s.lastStep, s.durationMyr,
-                               std::isfinite(s.meanRadialVelocityCmPerYr) ? fmt::format("{:.4g}", s.meanRadialVelocityCmPerYr) : "",
-                               s.left);
-        return rows;
-    }
-
-    std::string eventRows(const Dataset& dataset) const
-    {
-        std::string rows = "step,time_myr,event,track,feature,other_features,centroid_lat_deg,centroid_lon_deg,mean_depth_km\n";
-        for (const TrackEvent& e : tracker.events()) {
-            const Feature& x = features.at({e.step, e.feature});
-            fmt::format_to(std::back_inserter(rows), "{},{},{},{},{},{},{:.4f},{:.4f},{:.3f}\n", e.step,
-                           dataset.steps()[size_t(e.step)].timeMyr, trackEventName(e.kind), e.track, e.feature,
-                           fmt::join(e.others, " "), x.centroidLatDeg, x.centroidLonDeg, x.meanDepthKm);
-        }
-        return rows;
-    }
-};
-
-VelocityVariables velocityVariables(const Dataset& dataset)
+// The CSV files of tracking (--tracks, --events, --stalls), from the series of FeatureSeries.
+std::string trackRows(const FeatureSeries& series)
 {
-    const std::vector<std::string> names = dataset.variableNames();
-    VelocityVariables v;
-    for (const auto& [name, index] : {std::pair<const char*, size_t*>{"vx", &v.x}, {"vy", &v.y}, {"vz", &v.z}}) {
-        const auto it = std::find(names.begin(), names.end(), name);
-        if (it == names.end())
-            fail("--tracks/--events: the dataset has no velocity component '{}' (vx, vy, vz in m/s) to move features with",
-                 name);
-        *index = size_t(it - names.begin());
+    std::string rows = "track,step,time_myr,feature,volume_km3,mean_depth_km,centroid_lat_deg,centroid_lon_deg,"
+                       "centroid_depth_km\n";
+    for (const FeatureSeries::Row& r : series.rows()) {
+        const Feature& x = r.feature;
+        fmt::format_to(std::back_inserter(rows), "{},{},{},{},{:.6e},{:.3f},{:.4f},{:.4f},{:.3f}\n", r.track, r.step,
+                       r.timeMyr, x.id, x.volumeKm3, x.meanDepthKm, x.centroidLatDeg, x.centroidLonDeg,
+                       x.centroidDepthKm);
     }
-    return v;
+    return rows;
+}
+
+std::string stallRows(const FeatureSeries& series, const FeatureOptions& options, int lastStep)
+{
+    std::string rows = "track,depth_km,first_step,last_step,duration_myr,mean_radial_velocity_cm_per_yr,left\n";
+    for (const auto& [track, s] : series.stalls(options.bandDepthsKm, options.bandHalfWidthKm, lastStep))
+        fmt::format_to(std::back_inserter(rows), "{},{:g},{},{},{},{},{}\n", track, s.depthKm, s.firstStep,
+                       s.lastStep, s.durationMyr,
+                       std::isfinite(s.meanRadialVelocityCmPerYr) ? fmt::format("{:.4g}", s.meanRadialVelocityCmPerYr) : "",
+                       s.left);
+    return rows;
+}
+
+std::string eventRows(const FeatureSeries& series, const Dataset& dataset)
+{
+    std::string rows = "step,time_myr,event,track,feature,other_features,centroid_lat_deg,centroid_lon_deg,mean_depth_km\n";
+    for (const TrackEvent& e : series.events()) {
+        const Feature& x = series.feature(e.step, e.feature);
+        fmt::format_to(std::back_inserter(rows), "{},{},{},{},{},{},{:.4f},{:.4f},{:.3f}\n", e.step,
+                       dataset.steps()[size_t(e.step)].timeMyr, trackEventName(e.kind), e.track, e.feature,
+                       fmt::join(e.others, " "), x.centroidLatDeg, x.centroidLonDeg, x.meanDepthKm);
+    }
+    return rows;
 }
 
 // Under mpirun the steps are split into contiguous blocks over the ranks (as `raypc stats` does);
@@ -153,14 +118,10 @@ void run(FeaturesArgs args)
     const std::vector<RangeFilter>& filters = sel.filters;
     const int first = sel.first, last = sel.last;
     const bool tracking = !args.tracks.empty() || !args.events.empty() || !args.stalls.empty();
-    std::optional<Tracking> tracks;
+    std::optional<FeatureSeries> tracks;
     mpi::together([&] {
-        if (!tracking)
-            return;
-        tracks.emplace(Tracking{velocityVariables(dataset), FeatureTracker(args.minOverlapShare), {}, {}, 0, {}, {}, {}, {}});
-        const std::vector<std::string> names = dataset.variableNames();
-        if (const auto it = std::find(names.begin(), names.end(), "radial velocity"); it != names.end())
-            tracks->radialVelocity = size_t(it - names.begin());
+        if (tracking)
+            tracks.emplace(dataset, args.minOverlapShare, "--tracks/--events/--stalls");
     });
     const mpi::Block block = !tracking ? mpi::blockOf(last - first + 1)
                                        : mpi::Block{0, mpi::isRoot() ? int64_t(last - first + 1) : int64_t(0)};
@@ -173,12 +134,11 @@ void run(FeaturesArgs args)
     mpi::together([&] {
         for (int step = first + int(block.begin); step < first + int(block.end); ++step) {
             const auto volume = dataset.load(step, args.selection.level);
-            StepFeatures f = extractFeatures(*volume, filters, options);
-            const double timeMyr = dataset.steps()[size_t(step)].timeMyr;
+            const StepFeatures f = extractFeatures(*volume, filters, options);
             count += f.features.size();
-            mine += featureTableRows(step, timeMyr, f);
+            mine += featureTableRows(step, dataset.steps()[size_t(step)].timeMyr, f);
             if (tracks)
-                tracks->add(step, timeMyr, volume, std::move(f));
+                tracks->add(step, volume, f);
             if (progress)
                 progress->advance();
         }
@@ -198,12 +158,11 @@ void run(FeaturesArgs args)
             total += std::stoull(c);
         writeFileAtomic(args.output, csv);
         if (!args.tracks.empty())
-            writeFileAtomic(args.tracks, "track,step,time_myr,feature,volume_km3,mean_depth_km,centroid_lat_deg,"
-                                         "centroid_lon_deg,centroid_depth_km\n" + tracks->tracks);
+            writeFileAtomic(args.tracks, trackRows(*tracks));
         if (!args.events.empty())
-            writeFileAtomic(args.events, tracks->eventRows(dataset));
+            writeFileAtomic(args.events, eventRows(*tracks, dataset));
         if (!args.stalls.empty())
-            writeFileAtomic(args.stalls, tracks->stallRows(options, last));
+            writeFileAtomic(args.stalls, stallRows(*tracks, options, last));
         fmt::print("{}: {} features in {} steps ({}..{}) of {} range(s){}\n", args.output, total, last - first + 1,
                    first, last, filters.size(), mpi::distributed() ? fmt::format(" on {} ranks", mpi::size()) : "");
     });

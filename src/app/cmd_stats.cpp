@@ -34,56 +34,6 @@ struct StatsArgs {
     bool quiet = false;
 };
 
-// What a time–depth picture shows of each step and radius.
-enum class HovmollerOf { Share, SelectedMean, ShellMean };
-HovmollerOf parseHovmollerOf(const std::string& text)
-{
-    if (text == "share")
-        return HovmollerOf::Share;
-    if (text == "selected-mean")
-        return HovmollerOf::SelectedMean;
-    if (text == "shell-mean")
-        return HovmollerOf::ShellMean;
-    fail("--hovmoller-of '{}': expected share, selected-mean or shell-mean", text);
-}
-
-// The picture's values of the steps in `selections`, step-major (NaN: nothing selected there).
-void appendHovmollerValues(const std::vector<StepSelection>& selections, HovmollerOf of, std::vector<float>& out)
-{
-    for (const StepSelection& sel : selections) {
-        const SelectionStats& s = sel.stats;
-        for (size_t iR = 0; iR < s.volumeByRadiusKm3.size(); ++iR)
-            out.push_back(float(of == HovmollerOf::Share          ? 100.0 * s.volumeByRadiusKm3[iR] / s.shellVolumeByRadiusKm3[iR]
-                                : of == HovmollerOf::SelectedMean ? s.selectedMeanByRadius[iR]
-                                                                  : s.shellMeanByRadius[iR]));
-    }
-}
-
-// The colours of a time–depth picture: a share over [0, its largest] (viridis); a mean over its
-// range, centred (vik) when the values take both signs.
-render::TransferFunction hovmollerColors(std::span<const float> values, HovmollerOf of)
-{
-    float lo = INFINITY, hi = -INFINITY;
-    for (const float v : values)
-        if (std::isfinite(v))
-            lo = std::min(lo, v), hi = std::max(hi, v);
-    render::TransferFunction tf;
-    if (!(lo <= hi))  // nothing selected anywhere
-        lo = 0, hi = 1;
-    if (of == HovmollerOf::Share) {
-        tf.colorMap = render::ColorMapId::Viridis;
-        tf.range = {0, std::max(hi, 1e-3f)};
-    } else if (lo < 0 && hi > 0) {
-        tf.colorMap = render::ColorMapId::Vik;
-        const float m = std::max(-lo, hi);
-        tf.range = {-m, m};
-    } else {
-        tf.colorMap = render::ColorMapId::Viridis;
-        tf.range = {lo, hi > lo ? hi : lo + 1};
-    }
-    return tf;
-}
-
 // The CSV rows of the steps in `selections`: the selected volume, and its depth profile.
 struct StatsRows {
     std::string csv, profile;
@@ -126,7 +76,7 @@ void run(const StatsArgs& args)
     const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
     const mpi::Block block = mpi::blockOf(last - first + 1);
     std::optional<size_t> meanVariable;
-    const HovmollerOf hovmollerOf = parseHovmollerOf(args.hovmollerOf);
+    const render::TimeDepthOf hovmollerOf = render::parseTimeDepthOf(args.hovmollerOf, "--hovmoller-of");
     // Plain variables, not a structured binding: the lambda below captures them (clang 14 cannot
     // capture bindings).
     const std::pair<int, int> pictureSize = parseSize(args.size);
@@ -135,7 +85,7 @@ void run(const StatsArgs& args)
         render::checkTimeDepthPictureSize(pictureWidth, pictureHeight);
     if (args.hovmoller.empty() && args.pictureOptionsGiven)
         fail("--hovmoller-of, --depth: need --hovmoller (the picture they describe, as --size does)");
-    if (hovmollerOf != HovmollerOf::Share && args.profileVar.empty())
+    if (hovmollerOf != render::TimeDepthOf::Share && args.profileVar.empty())
         fail("--hovmoller-of {}: needs --profile-var NAME (the variable whose mean it shows)", args.hovmollerOf);
     for (const double d : args.depthsKm)
         if (!(d > 0 && d < kSurfaceRadiusKm))
@@ -165,7 +115,7 @@ void run(const StatsArgs& args)
                                                       }, meanVariable);
             mine = formatRows(selections, grid);
             if (!args.hovmoller.empty())
-                appendHovmollerValues(selections, hovmollerOf, hovmollerMine);
+                render::appendTimeDepthValues(selections, hovmollerOf, hovmollerMine);
         }
     });
     if (progress)
@@ -190,19 +140,9 @@ void run(const StatsArgs& args)
         // The picture first: a picture that cannot be drawn leaves no file written.
         std::optional<render::ImageRgba8> picture;
         if (!args.hovmoller.empty()) {
-            render::TimeDepthInputs in;
-            for (int step = first; step <= last; ++step)
-                in.timesMyr.push_back(dataset.steps()[size_t(step)].timeMyr);
-            in.radiiKm = grid.rKm;
-            in.values = hovmollerValues;
-            in.colors = hovmollerColors(in.values, hovmollerOf);
-            const VariableInfo* mean = meanVariable ? &dataset.variables()[*meanVariable] : nullptr;
-            in.colorTitle = hovmollerOf == HovmollerOf::Share ? std::string("selected share of the shell [%]")
-                            : fmt::format("{} mean over the {} [{}]", mean->name,
-                                          hovmollerOf == HovmollerOf::SelectedMean ? "selection" : "shell",
-                                          render::displayUnits(mean->units));
-            in.title = fmt::format("{} · steps {}–{} ({:g}–{:g} Myr) · {} range(s), level {}", in.colorTitle, first, last,
-                                   in.timesMyr.front(), in.timesMyr.back(), filters.size(), level);
+            render::TimeDepthInputs in = render::timeDepthInputs(
+                dataset, first, last, level, hovmollerValues, hovmollerOf,
+                meanVariable ? &dataset.variables()[*meanVariable] : nullptr, filters.size());
             in.width = pictureWidth;
             in.height = pictureHeight;
             if (!args.selection.statePath.empty())

@@ -1039,4 +1039,62 @@ SectionGrid sectionGrid(const StepVolume& volume, size_t variable, const Section
     return out;
 }
 
+TimeDepthOf parseTimeDepthOf(const std::string& text, const std::string& what)
+{
+    if (text == "share")
+        return TimeDepthOf::Share;
+    if (text == "selected-mean")
+        return TimeDepthOf::SelectedMean;
+    if (text == "shell-mean")
+        return TimeDepthOf::ShellMean;
+    fail("{} '{}': expected share, selected-mean or shell-mean", what, text.substr(0, 40));
+}
+
+void appendTimeDepthValues(std::span<const StepSelection> selections, TimeDepthOf of, std::vector<float>& out)
+{
+    for (const StepSelection& sel : selections) {
+        const SelectionStats& s = sel.stats;
+        for (size_t iR = 0; iR < s.volumeByRadiusKm3.size(); ++iR)
+            out.push_back(float(of == TimeDepthOf::Share          ? 100.0 * s.volumeByRadiusKm3[iR] / s.shellVolumeByRadiusKm3[iR]
+                                : of == TimeDepthOf::SelectedMean ? s.selectedMeanByRadius[iR]
+                                                                  : s.shellMeanByRadius[iR]));
+    }
+}
+
+TimeDepthInputs timeDepthInputs(const Dataset& dataset, int first, int last, int level, std::vector<float> values,
+                                TimeDepthOf of, const VariableInfo* mean, size_t ranges)
+{
+    if (of != TimeDepthOf::Share && !mean)
+        fail("time-depth picture: the mean of which variable? (none given)");
+    TimeDepthInputs in;
+    for (int step = first; step <= last; ++step)
+        in.timesMyr.push_back(dataset.steps().at(size_t(step)).timeMyr);
+    in.radiiKm = dataset.levels().at(size_t(level)).grid.rKm;
+    in.values = std::move(values);
+    float lo = INFINITY, hi = -INFINITY;
+    for (const float v : in.values)
+        if (std::isfinite(v))
+            lo = std::min(lo, v), hi = std::max(hi, v);
+    if (!(lo <= hi))  // nothing selected anywhere
+        lo = 0, hi = 1;
+    if (of == TimeDepthOf::Share) {
+        in.colors.colorMap = ColorMapId::Viridis;
+        in.colors.range = {0, std::max(hi, 1e-3f)};
+    } else if (lo < 0 && hi > 0) {
+        in.colors.colorMap = ColorMapId::Vik;
+        const float m = std::max(-lo, hi);
+        in.colors.range = {-m, m};
+    } else {
+        in.colors.colorMap = ColorMapId::Viridis;
+        in.colors.range = {lo, hi > lo ? hi : lo + 1};
+    }
+    in.colorTitle = of == TimeDepthOf::Share
+                        ? std::string("selected share of the shell [%]")
+                        : fmt::format("{} mean over the {} [{}]", mean->name,
+                                      of == TimeDepthOf::SelectedMean ? "selection" : "shell", displayUnits(mean->units));
+    in.title = fmt::format("{} · steps {}–{} ({:g}–{:g} Myr) · {} range(s), level {}", in.colorTitle, first, last,
+                           in.timesMyr.front(), in.timesMyr.back(), ranges, level);
+    return in;
+}
+
 }  // namespace raypc::render

@@ -18,6 +18,7 @@
 
 #include "core/vec3.h"
 #include "data/dataset.h"
+#include "data/selection.h"
 #include "render/image_io.h"
 #include "render/map_projection.h"
 #include "render/pathline_scene.h"
@@ -27,6 +28,7 @@
 
 #include <array>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -142,6 +144,23 @@ ImageRgba8 timeDepthPicture(const TimeDepthInputs& inputs);
 // Throws raypc::Error when a time–depth picture of this size has no room for its plot (what
 // timeDepthPicture checks first; callers check before computing its values).
 void checkTimeDepthPictureSize(int width, int height);
+
+// What a time–depth picture of a selection over time shows at each step and radius: the selected
+// share of the shell (%), or a variable's mean over the selected points or over the whole shell
+// (selectionOverTime's means, data/selection.h).
+enum class TimeDepthOf { Share, SelectedMean, ShellMean };
+// "share", "selected-mean" or "shell-mean"; throws raypc::Error naming `what` otherwise.
+TimeDepthOf parseTimeDepthOf(const std::string& text, const std::string& what);
+// Appends the picture's values of `selections` (steps in order), step-major; NaN where a mean has
+// nothing selected.
+void appendTimeDepthValues(std::span<const StepSelection> selections, TimeDepthOf of, std::vector<float>& out);
+// The picture of steps first..last of `dataset` at `level` from their `values` (appendTimeDepthValues):
+// colours (a share over [0, its largest], viridis; a mean over its range, centred vik when the values
+// take both signs), the legend's and the picture's titles; `mean` (the means' variable) is needed
+// unless `of` is Share; `ranges`: the selection's range count, for the title. Size, background and
+// marks are left at their defaults for the caller.
+TimeDepthInputs timeDepthInputs(const Dataset& dataset, int first, int last, int level, std::vector<float> values,
+                                TimeDepthOf of, const VariableInfo* mean, size_t ranges);
 
 // A regular grid of samples of one variable (row-major: rows along the first axis).
 struct SliceGrid {

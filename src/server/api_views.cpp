@@ -4,6 +4,8 @@
 #include "core/json_input.h"
 #include "core/spherical.h"
 #include "data/coordinates.h"
+#include "data/feature_series.h"
+#include "data/flux.h"
 #include "render/color_map.h"
 #include "render/render_state.h"
 #include "render/transfer_function.h"
@@ -13,8 +15,10 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 namespace raypc::server {
@@ -130,6 +134,159 @@ json selectionStatsJson(const Dataset& dataset, StepCache& cache, std::span<cons
               {"depthKm", std::move(depth)},
               {"volumeKm3", std::move(selected)},
               {"shellVolumeKm3", std::move(shell)}}}};
+}
+
+namespace {
+
+// A number, or null when it is not finite (a mean of nothing).
+json finiteOrNull(double v)
+{
+    return std::isfinite(v) ? json(v) : json(nullptr);
+}
+
+json featurePointJson(const FeatureSeries::Row& r, std::optional<size_t> radialVelocity)
+{
+    const Feature& f = r.feature;
+    return {{"step", r.step},
+            {"timeMyr", r.timeMyr},
+            {"feature", f.id},
+            {"volumeKm3", f.volumeKm3},
+            {"percentOfMantle", 100.0 * f.fractionOfMantle},
+            {"meanDepthKm", f.meanDepthKm},
+            {"topDepthKm", f.topDepthKm},
+            {"bottomDepthKm", f.bottomDepthKm},
+            {"centroidLatDeg", f.centroidLatDeg},
+            {"centroidLonDeg", f.centroidLonDeg},
+            {"centroidDepthKm", f.centroidDepthKm},
+            {"radialVelocityCmPerYr", radialVelocity ? finiteOrNull(f.variables[*radialVelocity].mean) : json(nullptr)},
+            {"bandPercent", [&] {
+                 json b = json::array();
+                 for (const double x : f.bandFractions)
+                     b.push_back(100.0 * x);
+                 return b;
+             }()}};
+}
+
+}  // namespace
+
+json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
+                       const FeatureOptions& options, double minOverlapShare, int level, double sigmas,
+                       const std::atomic<bool>* cancel)
+{
+    dataset.checkLevel(level);
+    if (filters.empty())
+        fail("features: no selection: brush an axis first (the whole mantle would be one feature)");
+    if (!(sigmas >= 0))
+        fail("sigmas: {} is negative", sigmas);
+    const int nSteps = int(dataset.steps().size());
+    const int vr = dataset.variableIndex("radial velocity");
+    const std::optional<size_t> radialVelocity = vr >= 0 ? std::optional<size_t>(size_t(vr)) : std::nullopt;
+    const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
+    std::vector<double> fluxDepths;  // the options' depths inside the grid's shell
+    for (const double d : options.bandDepthsKm)
+        if (kSurfaceRadiusKm - d >= grid.rKm.front() && kSurfaceRadiusKm - d <= grid.rKm.back())
+            fluxDepths.push_back(d);
+
+    FeatureSeries series(dataset, minOverlapShare, "features");
+    json steps = json::array();
+    std::vector<std::vector<ShellFlux>> fluxes;  // [step][depth]
+    for (int step = 0; step < nSteps; ++step) {
+        if (cancel && *cancel)
+            fail("features cancelled at step {} of {} (the client went away or the server is stopping)", step, nSteps);
+        const auto volume = cache.getWithoutEvicting(step, level);
+        const StepFeatures f = extractFeatures(*volume, filters, options);
+        steps.push_back({{"step", step}, {"timeMyr", dataset.steps()[size_t(step)].timeMyr}, {"features", f.features.size()}});
+        if (radialVelocity && !fluxDepths.empty())
+            fluxes.push_back(shellFluxes(*volume, *radialVelocity, fluxDepths, filters));
+        series.add(step, volume, f);
+    }
+
+    // Tracks: their points (step order), stalls and a summary for the table.
+    std::map<int, std::vector<const FeatureSeries::Row*>> rowsOf;
+    for (const FeatureSeries::Row& r : series.rows())
+        rowsOf[r.track].push_back(&r);
+    std::map<int, json> stallsOf;
+    for (const auto& [track, s] : series.stalls(options.bandDepthsKm, options.bandHalfWidthKm, nSteps - 1))
+        stallsOf[track].push_back({{"depthKm", s.depthKm},
+                                   {"firstStep", s.firstStep},
+                                   {"lastStep", s.lastStep},
+                                   {"durationMyr", s.durationMyr},
+                                   {"meanRadialVelocityCmPerYr", finiteOrNull(s.meanRadialVelocityCmPerYr)},
+                                   {"left", s.left}});
+    json tracks = json::array();
+    for (const auto& [track, rows] : rowsOf) {
+        json points = json::array();
+        double maxVolume = 0, depthSum = 0;
+        for (const FeatureSeries::Row* r : rows) {
+            points.push_back(featurePointJson(*r, radialVelocity));
+            maxVolume = std::max(maxVolume, r->feature.volumeKm3);
+            depthSum += r->feature.meanDepthKm;
+        }
+        tracks.push_back({{"track", track},
+                          {"firstStep", rows.front()->step},
+                          {"lastStep", rows.back()->step},
+                          {"lifetimeMyr", rows.back()->timeMyr - rows.front()->timeMyr},
+                          {"maxVolumeKm3", maxVolume},
+                          {"meanDepthKm", depthSum / double(rows.size())},
+                          {"points", std::move(points)},
+                          {"stalls", stallsOf.count(track) ? std::move(stallsOf[track]) : json::array()}});
+    }
+    json events = json::array();
+    for (const TrackEvent& e : series.events()) {
+        const Feature& x = series.feature(e.step, e.feature);
+        events.push_back({{"step", e.step},
+                          {"timeMyr", dataset.steps()[size_t(e.step)].timeMyr},
+                          {"kind", trackEventName(e.kind)},
+                          {"track", e.track},
+                          {"feature", e.feature},
+                          {"others", e.others},
+                          {"centroidLatDeg", x.centroidLatDeg},
+                          {"centroidLonDeg", x.centroidLonDeg},
+                          {"meanDepthKm", x.meanDepthKm}});
+    }
+    std::stable_sort(events.begin(), events.end(),
+                     [](const json& a, const json& b) { return a["step"].get<int>() < b["step"].get<int>(); });
+
+    json flux = nullptr;
+    if (!fluxes.empty()) {
+        json fluxSteps = json::array(), avalanches = json::array();
+        for (size_t i = 0; i < fluxes.size(); ++i) {
+            json down = json::array(), up = json::array(), selDown = json::array(), selUp = json::array(),
+                 selShare = json::array();
+            for (const ShellFlux& f : fluxes[i]) {
+                down.push_back(f.downKm3PerYr);
+                up.push_back(f.upKm3PerYr);
+                selDown.push_back(f.selectedDownKm3PerYr);
+                selUp.push_back(f.selectedUpKm3PerYr);
+                selShare.push_back(100.0 * f.selectedAreaKm2 / f.areaKm2);
+            }
+            fluxSteps.push_back({{"step", int(i)},
+                                 {"timeMyr", dataset.steps()[i].timeMyr},
+                                 {"downKm3PerYr", std::move(down)},
+                                 {"upKm3PerYr", std::move(up)},
+                                 {"selectedDownKm3PerYr", std::move(selDown)},
+                                 {"selectedUpKm3PerYr", std::move(selUp)},
+                                 {"selectedPercentOfShell", std::move(selShare)}});
+        }
+        for (size_t d = 0; d < fluxDepths.size(); ++d) {
+            std::vector<double> down;
+            for (const auto& f : fluxes)
+                down.push_back(f[d].downKm3PerYr);
+            for (const size_t i : avalancheSteps(down, sigmas))
+                avalanches.push_back({{"depthKm", fluxDepths[d]}, {"step", int(i)}});
+        }
+        flux = {{"depthsKm", fluxDepths}, {"sigmas", sigmas}, {"steps", std::move(fluxSteps)},
+                {"avalanches", std::move(avalanches)}};
+    }
+    return {{"level", level},
+            {"minVolumeKm3", options.minVolumeKm3},
+            {"depthsKm", options.bandDepthsKm},
+            {"bandHalfWidthKm", options.bandHalfWidthKm},
+            {"minOverlapShare", minOverlapShare},
+            {"steps", std::move(steps)},
+            {"tracks", std::move(tracks)},
+            {"events", std::move(events)},
+            {"flux", std::move(flux)}};
 }
 
 json persistenceDiagramJson(const SphericalGrid& grid, const std::vector<PersistencePair>& pairs, int step,

@@ -7,6 +7,7 @@
 #pragma once
 
 #include "data/dataset.h"
+#include "data/features.h"
 #include "data/persistence.h"
 #include "data/selection.h"
 #include "server/dataset_caches.h"
@@ -43,6 +44,17 @@ nlohmann::json presetsJson(const std::optional<std::filesystem::path>& dir, cons
 // before every step).
 nlohmann::json selectionStatsJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
                                   int level, int profileStep, const std::atomic<bool>* cancel = nullptr);
+
+// POST /api/features (docs/protocol.md, FeatureSeries): the features of the selection `filters` in
+// every step at `level` (extractFeatures with `options`), followed through the steps (FeatureSeries,
+// links counting from `minOverlapShare`): every track with its points, stalls at the options' depths
+// and events; the events in step order; and, when the dataset has a radial velocity, the flux across
+// the shells at those depths (inside the grid) per step with the avalanche steps (`sigmas`).
+// Volumes come through `cache` without evicting. Throws raypc::Error for no filters, a level out of
+// range, a dataset without velocity, or when `cancel` becomes true (checked before every step).
+nlohmann::json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
+                                 const FeatureOptions& options, double minOverlapShare, int level, double sigmas,
+                                 const std::atomic<bool>* cancel = nullptr);
 
 // The line attributes of a window as one binary answer: u32 little-endian header length, a UTF-8
 // JSON header {step, window, lines, columns, units, sets: [{injectionStep, injectionTimeMyr, lines}]},

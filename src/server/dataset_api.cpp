@@ -252,6 +252,83 @@ ApiAnswer stats(const ApiContext& api, const ApiRequest& request)
     return {result.dump(), "application/json"};
 }
 
+// The level of a features or time–depth request: ?level=, else the state's features.level.
+int featureLevel(const Dataset& dataset, const ApiRequest& request, const render::RenderState& state)
+{
+    const int level = queryParameter(request.query, "level") ? parseIntParameter(request.query, "level")
+                                                             : state.features.level;
+    dataset.checkLevel(level);
+    return level;
+}
+
+// The features of the state's selection through the series, with the state's feature settings.
+ApiAnswer features(const ApiContext& api, const ApiRequest& request)
+{
+    const Dataset& dataset = *api.dataset;
+    const render::ResolvedState resolved = render::resolveState(parseBody(request.body), dataset);
+    const render::FeatureSettings& settings = resolved.state.features;
+    const int level = featureLevel(dataset, request, resolved.state);
+    const double sigmas = queryParameter(request.query, "sigmas") ? parseNumberParameter(request.query, "sigmas") : 2.0;
+    FeatureOptions options;
+    options.minVolumeKm3 = settings.minVolumeKm3;
+    options.bandDepthsKm.assign(settings.depthsKm.begin(), settings.depthsKm.end());
+    options.bandHalfWidthKm = settings.bandHalfWidthKm;
+    const auto start = std::chrono::steady_clock::now();
+    json result = featureSeriesJson(dataset, *api.cache, resolved.params.brushes, options, settings.minOverlapShare,
+                                    level, sigmas, request.cancel);
+    spdlog::info("features: {} tracks in {} steps at level {} in {:.0f} ms", result["tracks"].size(),
+                 result["steps"].size(), level, millisecondsSince(start));
+    return jsonAnswer(result);
+}
+
+// The time–depth picture (PNG) of the state's selection over the series: ?of=share (default),
+// selected-mean or shell-mean of ?var=NAME; ?width, ?height (default 960 x 540); the state's
+// feature depths marked.
+ApiAnswer timeDepth(const ApiContext& api, const ApiRequest& request)
+{
+    const Dataset& dataset = *api.dataset;
+    const render::ResolvedState resolved = render::resolveState(parseBody(request.body), dataset);
+    const int level = featureLevel(dataset, request, resolved.state);
+    const auto ofText = queryParameter(request.query, "of");
+    const render::TimeDepthOf of = render::parseTimeDepthOf(ofText ? std::string(*ofText) : "share", "of");
+    std::optional<size_t> mean;
+    if (const auto var = queryParameter(request.query, "var")) {
+        const int index = dataset.variableIndex(*var);
+        if (index < 0)
+            fail("var: unknown variable '{}'", var->substr(0, 80));
+        mean = size_t(index);
+    } else if (of != render::TimeDepthOf::Share) {
+        fail("of={}: needs var=NAME (the variable whose mean it shows)", *ofText);
+    }
+    const int width = queryParameter(request.query, "width") ? parseIntParameter(request.query, "width") : 960;
+    const int height = queryParameter(request.query, "height") ? parseIntParameter(request.query, "height") : 540;
+    if (int64_t(width) * height > api.limits.maxScreenshotPixels)
+        fail("time-depth: image {}x{} is over the limit of {} pixels", width, height, api.limits.maxScreenshotPixels);
+    render::checkTimeDepthPictureSize(width, height);
+    const int last = int(dataset.steps().size()) - 1;
+    const std::vector<StepSelection> selections = selectionOverTime(
+        dataset, resolved.params.brushes, level, 0, last,
+        [&](int step, int l) {
+            if (request.cancel && *request.cancel)
+                fail("time-depth cancelled at step {} (the client went away or the server is stopping)", step);
+            return api.cache->getWithoutEvicting(step, l);
+        },
+        {}, mean);
+    std::vector<float> values;
+    render::appendTimeDepthValues(selections, of, values);
+    render::TimeDepthInputs in = render::timeDepthInputs(dataset, 0, last, level, std::move(values), of,
+                                                         mean ? &dataset.variables()[*mean] : nullptr,
+                                                         resolved.params.brushes.size());
+    in.width = width;
+    in.height = height;
+    in.background = resolved.state.background;
+    in.marks = resolved.state.reference.shells;
+    in.marks.visible = true;
+    in.marks.depthsKm = resolved.state.features.depthsKm;
+    const render::ImageRgba8 picture = render::timeDepthPicture(in);
+    return {encodePng(picture.pixels, picture.width, picture.height, 1), "image/png"};
+}
+
 ApiAnswer pathlines(const ApiContext& api, const ApiRequest& request)
 {
     const int step = checkedStep(*api.dataset, request.query);
@@ -339,6 +416,8 @@ const Route kRoutes[] = {
     {HttpMethod::Get, "/api/probe", Lane::Worker, probe},
     {HttpMethod::Get, "/api/presets", Lane::Worker, presets},
     {HttpMethod::Post, "/api/stats", Lane::Statistics, stats},
+    {HttpMethod::Post, "/api/features", Lane::Statistics, features},
+    {HttpMethod::Post, "/api/time-depth", Lane::Statistics, timeDepth},
     {HttpMethod::Get, "/api/pathlines", Lane::Worker, pathlines},
     {HttpMethod::Get, "/api/persistence", Lane::Worker, persistence},
     {HttpMethod::Get, "/api/link", Lane::Worker, linkGet},

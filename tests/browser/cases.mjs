@@ -1110,6 +1110,93 @@ const cases = {
   },
 
   // Issue 26, item 14: "?" shows the mouse and keyboard help; Escape closes it.
+  // The Features panel (issue 28): two polar caps of the contest-layout fixture are two tracks over
+  // the three steps with no events, as `raypc features --tracks` finds them; the table, a track's
+  // timeline, the flux plot, the time–depth picture and the tracks' CSV.
+  async features({ context, url, tmp, raypc, dataset }) {
+    const page = await openUi(context, url);
+    const pageErrors = [];
+    page.on('pageerror', (e) => pageErrors.push(e.message));
+    await waitConverged(page);
+    const brushes = [{ name: 'depth', min: 0, max: 660 }, { name: 'lat', min: -90, max: -60 }, { name: 'lat', min: 60, max: 90 }];
+    await page.evaluate((b) => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, step: 2, brushes: b }); }, brushes);
+    await waitConverged(page);
+    check(await page.evaluate(() => window.__raypc.featureAnswers.length === 0), 'the closed panel asked for features');
+    await page.click('#featuresDetails summary');
+    await page.waitForFunction(() => window.__raypc.featureAnswers.some((f) => f) && window.__raypc.timeDepthPictures.length > 0, null, { timeout: 30000 })
+      .catch(async () => { throw new TestFailure(`no features after opening the panel; note: ${await page.textContent('#featuresNote')}; errors: ${await page.evaluate(() => window.__raypc.errors.join('; '))}`); });
+    const f = await page.evaluate(() => window.__raypc.featureAnswers.filter((x) => x).at(-1));
+    console.log(`  ${f.tracks.length} tracks, ${f.events.length} events; note: ${await page.textContent('#featuresNote')}`);
+    check(f.level === 0 && f.steps.length === 3, `level ${f.level}, ${f.steps.length} steps`);
+    check(f.tracks.length === 2 && f.tracks.every((t) => t.firstStep === 0 && t.lastStep === 2) && f.events.length === 0,
+      `two caps should be two tracks over steps 0–2 without events: ${JSON.stringify(f.tracks.map((t) => [t.track, t.firstStep, t.lastStep]))}, events ${JSON.stringify(f.events)}`);
+    const north = f.tracks.map((t) => t.points[0].centroidLatDeg).sort((a, b) => a - b);
+    check(north[0] < -60 && north[1] > 60, `the tracks' centroids are not one per cap: ${north}`);
+    check(await page.evaluate(() => document.getElementById('featuresNote').textContent.startsWith('exact')), 'the figures are not labelled exact');
+
+    // The same tracks as the command line's, volume for volume.
+    const cli = spawnSync(raypc, ['features', dataset, '--range', 'depth=0:660', '--range', 'lat=-90:-60', '--range', 'lat=60:90',
+      '-o', join(tmp, 'f.csv'), '--tracks', join(tmp, 'tracks.csv'), '--quiet'], { encoding: 'utf8', timeout: 60000 });
+    check(cli.status === 0, `raypc features: ${cli.stderr}`);
+    const cliRows = readFileSync(join(tmp, 'tracks.csv'), 'utf8').trim().split('\n').slice(1).map((l) => l.split(','));
+    const uiRows = f.tracks.flatMap((t) => t.points.map((p) => [t.track, p.step, p.feature, p.volumeKm3]));
+    check(cliRows.length === uiRows.length && cliRows.every((r) => uiRows.some((u) => u[0] === +r[0] && u[1] === +r[1] && u[2] === +r[3]
+      && Math.abs(u[3] - +r[4]) <= 1e-5 * u[3])), `the UI's tracks differ from raypc features --tracks: ${JSON.stringify(uiRows)} vs ${JSON.stringify(cliRows)}`);
+
+    // The table: a row per track; a click chooses the track, draws its timeline and goes to its first step.
+    const rows = await page.$$eval('#featuresTable tr[data-track]', (r) => r.length);
+    check(rows === 2, `${rows} rows in the tracks' table`);
+    await page.click('#featuresTable tr[data-track]');
+    await page.waitForFunction(() => window.__raypc.state().step === 0, null, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('choosing a track did not move the time slider to its first step'); });
+    const timeline = await page.$$eval('#featuresTimeline path.trackDepth, #featuresTimeline circle.point', (e) => e.length);
+    check(timeline === 4, `the track's timeline has ${timeline} of its line and three points`);
+    // Sorting by a column reorders the rows.
+    const order = () => page.$$eval('#featuresTable tr[data-track]', (r) => r.map((x) => x.dataset.track).join());
+    const o1 = await order();
+    await page.click('#featuresTable th[data-sort="track"]');
+    const o2 = await order();
+    await page.click('#featuresTable th[data-sort="track"]');
+    const o3 = await order();
+    check(o2 !== o3, `sorting by track twice gives ${o2} and ${o3}`);
+    console.log(`  table order by volume ${o1}, by track ${o2} then ${o3}`);
+    // Flux: the fixture's uniform rising flow: nothing down, no avalanche; the plot drawn.
+    check(f.flux && f.flux.depthsKm.length === 4 && f.flux.avalanches.length === 0 && f.flux.steps.every((s) => s.downKm3PerYr.every((v) => v === 0) && s.upKm3PerYr.every((v) => v > 0)),
+      `flux of a uniform rising flow: ${JSON.stringify(f.flux?.steps[0])}`);
+    check(await page.$$eval('#featuresFlux path', (p) => p.length) >= 8, 'the flux plot has no lines');
+    // The time–depth picture: drawn at the panel's width, coloured where the caps are.
+    const pic = await page.evaluate(() => {
+      const img = document.getElementById('featuresTimeDepth');
+      const c = document.createElement('canvas');
+      c.width = img.naturalWidth; c.height = img.naturalHeight;
+      const g = c.getContext('2d');
+      g.drawImage(img, 0, 0);
+      const d = g.getImageData(0, 0, c.width, c.height).data;
+      // Viridis' top (the selected shells' share) is yellow: the upper 660 km of every step's column.
+      let yellow = 0;
+      for (let i = 0; i < d.length; i += 4) if (d[i] > 200 && d[i + 1] > 180 && d[i + 2] < 100) yellow++;
+      return { w: c.width, h: c.height, yellow };
+    });
+    console.log(`  time-depth picture ${pic.w}x${pic.h}, ${pic.yellow} yellow pixels`);
+    check(pic.w >= 320 && pic.yellow > 0.05 * pic.w * pic.h, `time-depth picture ${JSON.stringify(pic)}`);
+    // The tracks' CSV: the command line's columns and rows.
+    const [csv] = await Promise.all([page.waitForEvent('download', { timeout: 10000 }), page.click('#featuresTracksCsv')])
+      .catch(async (e) => { throw new TestFailure(`no download of the tracks' CSV: ${e.message.split('\n')[0]}; errors: ${await page.evaluate(() => window.__raypc.errors.join('; '))} ${pageErrors.join('; ')}`); });
+    await csv.saveAs(join(tmp, 'ui-tracks.csv'));
+    const uiCsv = readFileSync(join(tmp, 'ui-tracks.csv'), 'utf8').trim().split('\n');
+    const cliCsv = readFileSync(join(tmp, 'tracks.csv'), 'utf8').trim().split('\n');
+    check(uiCsv[0] === cliCsv[0] && uiCsv.length === cliCsv.length, `the tracks' CSV: ${uiCsv[0]} (${uiCsv.length} lines) vs ${cliCsv[0]} (${cliCsv.length})`);
+
+    // A new selection cancels nothing visible and asks again; no brushes: an empty panel, no error.
+    const answers = await page.evaluate(() => window.__raypc.featureAnswers.length);
+    await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, brushes: [] }); });
+    await page.waitForFunction((n) => window.__raypc.featureAnswers.length > n && window.__raypc.featureAnswers.at(-1) === null, answers, { timeout: 10000 })
+      .catch(() => { throw new TestFailure('clearing the brushes did not empty the panel'); });
+    check(await page.$$eval('#featuresTable tr', (r) => r.length) === 0, 'rows left in the table without brushes');
+    const errors = await page.evaluate(() => window.__raypc.errors);
+    check(errors.length === 0, `errors: ${errors.join('; ')}`);
+  },
+
   async help({ context, url }) {
     const page = await openUi(context, url);
     await waitConverged(page);

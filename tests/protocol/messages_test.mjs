@@ -103,6 +103,14 @@ try {
   if (!presets.some((p) => p.unavailable)) fail('GET /api/presets: the preset for another dataset is not unavailable');
   expectMessage('Presets', presets, 'GET /api/presets');
   expectMessage('SelectionOverTime', await getJson('api/stats?level=0', post({ ...state, brushes: [{ name: 'depth', min: 500, max: 1500 }] })), 'POST /api/stats');
+  const caps = { ...state, brushes: [{ name: 'depth', min: 0, max: 660 }, { name: 'lat', min: -90, max: -60 }, { name: 'lat', min: 60, max: 90 }],
+    features: { ...state.features, depthsKm: [300, 660], bandHalfWidthKm: 100 } };
+  const features = await getJson('api/features', post(caps));
+  if (!features.tracks.some((t) => t.stalls.length)) fail('POST /api/features: no stall to check the shape of');
+  expectMessage('FeatureSeries', features, 'POST /api/features');
+  const picture = await get('api/time-depth?of=selected-mean&var=temperature&width=400&height=240', post(caps));
+  if (picture.status !== 200 || picture.type !== 'image/png' || picture.body.readUInt32BE(16) !== 400)
+    fail(`POST /api/time-depth: status ${picture.status}, ${picture.type}, ${picture.body.length} bytes`);
   const lines = await get('api/pathlines?step=1&window=2');
   if (lines.status !== 200) fail(`GET /api/pathlines: status ${lines.status}: ${lines.body.toString().slice(0, 200)}`);
   else expectMessage('PathlinesHeader', headerOf(lines.body), 'GET /api/pathlines header');
@@ -121,7 +129,9 @@ try {
   expectMessage('ProbeAnswer', await getJson(`api/probe?step=0&lat=90&lon=180&depthKm=660&var=${encodeURIComponent(variable)}`), 'GET /api/probe (pole, one variable)');
   expectMessage('LinkedState', await getJson('api/link'), 'GET /api/link at start');
   for (const [path, init] of [['api/histogram?step=99&var=x', undefined], ['api/probe?step=0&lat=95&lon=0&depthKm=100', undefined],
-    ['api/selection', post({ ...state, brushes: [{ name: 'pressure', min: 0, max: 1 }] })]])
+    ['api/selection', post({ ...state, brushes: [{ name: 'pressure', min: 0, max: 1 }] })],
+    ['api/features', post(state)], ['api/time-depth?of=mean', post(caps)], ['api/time-depth?of=shell-mean', post(caps)],
+    ['api/time-depth?width=100000&height=100000', post(caps)]])
     expectMessage('HttpError', await getJson(path, init, 400), `${path} (refused)`);
 
   // ---- WebSocket ----

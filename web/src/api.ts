@@ -6,11 +6,11 @@ import type { RenderState } from './state';
 // The server's answers are typed from their one description (src/server/protocol_schema.cpp,
 // `raypc protocol-schema`, generated into generated/protocol_types.ts).
 import type {
-  CoordinateInfo, Histogram, Info, MapHeader, PathlinesHeader, PersistenceDiagram, PersistencePair, Preset,
+  CoordinateInfo, FeatureSeries, FeatureTrack, Histogram, Info, MapHeader, PathlinesHeader, PersistenceDiagram, PersistencePair, Preset,
   ProbeAnswer, SectionHeader, Selection, SelectionOverTime, SeriesProgress, StepInfo, VariableInfo,
 } from './generated/protocol_types';
 export type {
-  CoordinateInfo, Histogram, Info, PersistenceDiagram, PersistencePair, Preset, ProbeAnswer, Selection,
+  CoordinateInfo, FeatureSeries, FeatureTrack, Histogram, Info, PersistenceDiagram, PersistencePair, Preset, ProbeAnswer, Selection,
   SelectionOverTime, SeriesProgress, StepInfo, VariableInfo,
 };
 // What POST /api/slice drew: a map's projection or a section's plot (`view` tells which).
@@ -131,6 +131,27 @@ export async function postStats(state: RenderState, level: number | undefined, s
     method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(state), signal,
   });
   return (await check(r, 'POST /api/stats')).json();
+}
+
+// The features of the state's selection followed through the series, with the state's feature
+// settings (POST /api/features, docs/features.md).
+export async function postFeatures(state: RenderState, signal?: AbortSignal): Promise<FeatureSeries> {
+  const r = await fetch('api/features', {
+    method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(state), signal,
+  });
+  return (await check(r, 'POST /api/features')).json();
+}
+
+// The time–depth picture of the state's selection (POST /api/time-depth): a PNG drawn by the server
+// (`of`: share, selected-mean or shell-mean of `variable`).
+export async function postTimeDepth(state: RenderState, of: string, variable: string | undefined, width: number, height: number,
+  signal?: AbortSignal): Promise<Blob> {
+  const q = new URLSearchParams({ of, width: String(width), height: String(height) });
+  if (variable !== undefined) q.set('var', variable);
+  const r = await fetch(`api/time-depth?${q}`, {
+    method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(state), signal,
+  });
+  return (await check(r, 'POST /api/time-depth')).blob();
 }
 
 export type PathlineAttributes = PathlinesHeader & { values: Float32Array }; // lines x columns, row-major

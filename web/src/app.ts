@@ -10,6 +10,7 @@ import { download, maxImageSide, setUpControls, syncControls, writeStateToUrl } 
 import { ParallelCoordinates } from './parcoords';
 import { PathlinePanel } from './pathline_panel';
 import { PersistencePanel } from './persistence_panel';
+import { FeaturesPanel } from './features_panel';
 import { Playback } from './playback';
 import { RenderLink } from './render_link';
 import { setUpScreenshot } from './screenshot';
@@ -44,6 +45,7 @@ export class App {
   readonly selection: SelectionPanel;
   readonly pathlines: PathlinePanel;
   readonly persistence: PersistencePanel;
+  readonly features: FeaturesPanel;
   readonly playback: Playback;
   readonly context: ContextPanel;
   readonly slices: SlicePanel;
@@ -135,6 +137,11 @@ export class App {
       showError: (m) => this.showError(m),
       filtersChanged: (i) => this.pathlines.filtersChanged(i),
       columnMax: (name) => this.pathlines.columnMax(name),
+    });
+    this.features = new FeaturesPanel(store, {
+      showError: (m) => this.showError(m),
+      setStep: (step, interactive) => this.setStep(step, interactive),
+      commit: (i) => this.commit(i),
     });
     this.context = new ContextPanel(store, { commit: (i) => this.commit(i), showError: (m) => this.showError(m) });
     this.selection = new SelectionPanel(store, {
@@ -280,6 +287,7 @@ export class App {
     this.link.afterFrameShown(() => {
       this.selection.refreshSelection();
       this.selection.refreshStats();
+      this.features.refresh();
     });
     this.pathlines.refresh();
     this.persistence.refresh();
@@ -324,6 +332,7 @@ export class App {
     this.selection.updateText();
     this.pathlines.sync();
     this.slices.sync();
+    this.features.sync();
     this.persistence.draw();
   }
 

@@ -1,7 +1,8 @@
 // What the browser tests (tests/browser) read and drive, as `window.__raypc`. Installed only when
 // the page is opened with `window.__raypcTestHooks = true` set before it loads (the tests' init
 // script); otherwise nothing here runs and nothing is recorded.
-import type { Selection, SelectionOverTime } from './api';
+import type { FeatureSeries, Selection, SelectionOverTime } from './api';
+import type { FeaturesPanel } from './features_panel';
 import type { App } from './app';
 import type { Frame, FrameHeader } from './connection';
 import { snapStep, type AxisInfo, type ParallelCoordinates } from './parcoords';
@@ -54,6 +55,11 @@ export interface TestHooks {
   snapStep(a: AxisInfo): number;
   // The map and section panel (its pictures' headers and counts, the point under a pixel).
   slices: SlicePanel;
+  // The Features panel: its last answer (null: none or no brushes), answers and time–depth pictures
+  // received (true) or failed (false).
+  features: FeaturesPanel;
+  featureAnswers: (FeatureSeries | null)[];
+  timeDepthPictures: boolean[];
 }
 
 export function testHooksWanted(): boolean {
@@ -109,6 +115,9 @@ export function installTestHooks(app: App): TestHooks {
     xr: () => app.xr,
     snapStep,
     slices: app.slices,
+    features: app.features,
+    featureAnswers: [],
+    timeDepthPictures: [],
   };
   app.link.observer = {
     sent: (e) => {
@@ -138,6 +147,10 @@ export function installTestHooks(app: App): TestHooks {
     selection: (s) => { hooks.selection = s; },
     stats: (s) => { hooks.stats = s; },
     statsRequested: () => { hooks.statsRequests++; },
+  };
+  app.features.observer = {
+    features: (f) => push(hooks.featureAnswers, f, 20),
+    timeDepth: (ok) => push(hooks.timeDepthPictures, ok, 20),
   };
   (window as unknown as { __raypc: TestHooks }).__raypc = hooks;
   return hooks;

@@ -1,0 +1,164 @@
+// Features, their links and shell fluxes (issue 28) on the synthetic model built in memory
+// (synthesizeSnapshot), two full-resolution (180 x 201 x 360, 13 M points) steps at 0 and 2 Myr
+// (default seed), with the derived variables preprocessing adds (addDerivedVariables: radial
+// velocity among them), as StepVolume::fromSnapshot. The selection is task 1's preset
+// (examples/task1-slabs-660km.json): depth 560-760 km, radial velocity <= 0 cm/yr, temperature
+// anomaly <= -25 K, resolved by name as the server and the CLI resolve brushes.
+//   BM_ExtractFeatures: extractFeatures of one step (selection, connected components, every
+//     feature's statistics), with 1 thread and with every core. Target: <= 1 s on 2 cores.
+//   BM_LinkFeatures: linkFeatures of the two steps' features (extracted once, outside the timed
+//     loop) over 2 Myr in the earlier step's vx, vy, vz. Target: <= 0.5 s. It runs on one thread
+//     (the "all cores" run shows that the other cores do not help).
+//   BM_ShellFlux: shellFluxes of one step at 660 and 1600 km depth within the selection.
+// Counters: cpu_s/thread (process CPU time per iteration divided by the threads, as in
+// persistence_bench.cpp), Mpoints/s (extraction and flux: the grid's points; linking: the points
+// of the earlier step's features, the ones it moves), features, links.
+//   build/bench/features_bench --benchmark_min_time=1
+#include "core/error.h"
+#include "core/system_memory.h"
+#include "data/dataset.h"
+#include "data/features.h"
+#include "data/flux.h"
+#include "data/preprocess_numerics.h"
+#include "data/selection.h"
+#include "data/synth.h"
+
+#include <benchmark/benchmark.h>
+#include <fmt/format.h>
+#include <tbb/task_arena.h>
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+using namespace raypc;
+
+namespace {
+
+struct Steps {
+    std::shared_ptr<StepVolume> volumes[2];  // 0 and 2 Myr
+    std::vector<std::string> names;          // the volumes' variables, in order
+    std::vector<RangeFilter> filters;        // task 1's selection
+    VelocityVariables velocity;
+    size_t radialVelocity = 0;
+};
+
+size_t variableIndex(const std::vector<std::string>& names, const std::string& name)
+{
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it == names.end())
+        fail("features_bench: the synthetic step has no variable '{}'", name);
+    return size_t(it - names.begin());
+}
+
+// Built once: the snapshots are dropped as soon as their volumes hold the values (two steps of
+// eleven variables take about 1.2 GB as it is).
+const Steps& steps()
+{
+    static const Steps s = [] {
+        SynthOptions o;
+        o.nLat = 180;
+        o.nR = 201;
+        o.nLon = 360;
+        Steps out;
+        for (int k = 0; k < 2; ++k) {
+            Snapshot snapshot = synthesizeSnapshot(o, k * o.dtMyr);
+            addDerivedVariables(snapshot);  // what preprocessing stores with the step
+            if (k == 0)
+                for (const Field& f : snapshot.fields)
+                    out.names.push_back(f.name);
+            out.volumes[k] = StepVolume::fromSnapshot(snapshot);
+        }
+        const std::vector<NamedRange> brushes = {
+            {"depth", 560, 760}, {"radial velocity", -100, 0}, {"temperature anomaly", -10000, -25}};
+        out.filters = resolveRangeFilters(out.names, brushes);
+        out.velocity = {variableIndex(out.names, "vx"), variableIndex(out.names, "vy"), variableIndex(out.names, "vz")};
+        out.radialVelocity = variableIndex(out.names, "radial velocity");
+        return out;
+    }();
+    return s;
+}
+
+int threadsFor(int arg) { return arg == 0 ? static_cast<int>(std::thread::hardware_concurrency()) : arg; }
+
+double processCpuSeconds()
+{
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+// Runs `work` in an arena of the benchmark's threads and sets the shared counters; `points` is what
+// one iteration goes through (for Mpoints/s).
+template <typename F>
+void timed(benchmark::State& state, size_t points, F work)
+{
+    const int threads = threadsFor(static_cast<int>(state.range(0)));
+    tbb::task_arena arena(threads);
+    const double cpu0 = processCpuSeconds();
+    for (auto _ : state)
+        arena.execute(work);
+    state.counters["cpu_s/thread"] = (processCpuSeconds() - cpu0) / double(state.iterations()) / threads;
+    state.counters["Mpoints/s"] =
+        benchmark::Counter(static_cast<double>(points) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["threads"] = threads;
+}
+
+void BM_ExtractFeatures(benchmark::State& state)
+{
+    const Steps& s = steps();
+    size_t found = 0;
+    timed(state, s.volumes[0]->grid().cellCount(), [&] {
+        StepFeatures f = extractFeatures(*s.volumes[0], s.filters);
+        found = f.features.size();
+        benchmark::DoNotOptimize(f);
+    });
+    state.counters["features"] = static_cast<double>(found);
+}
+
+void BM_LinkFeatures(benchmark::State& state)
+{
+    const Steps& s = steps();
+    // Extracted once: only the linking is timed.
+    static const StepFeatures a = extractFeatures(*s.volumes[0], s.filters);
+    static const StepFeatures b = extractFeatures(*s.volumes[1], s.filters);
+    const size_t moved = a.labels.size() - size_t(std::count(a.labels.begin(), a.labels.end(), 0));
+    size_t links = 0;
+    timed(state, moved, [&] {
+        auto l = linkFeatures(*s.volumes[0], a, b, s.velocity, 2.0);
+        links = l.size();
+        benchmark::DoNotOptimize(l);
+    });
+    state.counters["features"] = static_cast<double>(a.features.size());
+    state.counters["links"] = static_cast<double>(links);
+}
+
+void BM_ShellFlux(benchmark::State& state)
+{
+    const Steps& s = steps();
+    const std::vector<double> depthsKm = {660, 1600};
+    timed(state, s.volumes[0]->grid().cellCount(), [&] {
+        auto fluxes = shellFluxes(*s.volumes[0], s.radialVelocity, depthsKm, s.filters);
+        benchmark::DoNotOptimize(fluxes);
+    });
+}
+
+}  // namespace
+
+BENCHMARK(BM_ExtractFeatures)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_LinkFeatures)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ShellFlux)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+int main(int argc, char** argv)
+{
+    raypc::restartWithTransparentHugePages(argv);  // memory as `raypc` has it (render_bench.cpp)
+    benchmark::Initialize(&argc, argv);
+    fmt::print("machine: {} hardware threads\n", std::thread::hardware_concurrency());
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}

@@ -1,0 +1,385 @@
+// The Features panel (docs/features.md, "In the UI"): the connected regions of the selection followed
+// through the series (POST /api/features, the server's FeatureSeries as `raypc features --tracks`
+// computes it), as a sortable table of tracks; a chosen track's timeline (mean depth and volume
+// against time, the state's depths marked); the flux across those depths with the avalanche steps;
+// the time–depth picture of the selection (POST /api/time-depth, drawn by the server as
+// `raypc stats --hovmoller`). Asked for while the panel is open, after each final state whose
+// selection or feature settings changed; the next change cancels a request still running.
+import * as d3 from 'd3';
+import { postFeatures, postTimeDepth, type FeatureSeries, type FeatureTrack } from './api';
+import { download } from './controls';
+import { cloneState } from './state';
+import type { StateStore } from './store';
+
+const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
+
+export interface FeaturesPanelHost {
+  showError(message: string): void;
+  setStep(step: number, interactive: boolean): void;
+  commit(interactive: boolean): void;
+}
+
+// What the browser tests observe (test_hooks.ts).
+export interface FeaturesPanelObserver {
+  features(f: FeatureSeries | null): void;
+  timeDepth(ok: boolean): void;
+}
+
+type SortKey = 'track' | 'firstStep' | 'lifetimeMyr' | 'maxVolumeKm3' | 'meanDepthKm' | 'stallMyr' | 'events';
+
+const kMargin = { top: 8, right: 12, bottom: 22, left: 50 };
+
+function frame(svg: SVGSVGElement) {
+  const parentW = (svg.parentElement?.clientWidth ?? 0) - 4;
+  if (parentW > 100) svg.setAttribute('width', String(parentW));
+  const w = Number(svg.getAttribute('width')), h = Number(svg.getAttribute('height'));
+  const root = d3.select(svg);
+  root.selectAll('*').remove();
+  const g = root.append('g').attr('transform', `translate(${kMargin.left},${kMargin.top})`);
+  return { g, iw: w - kMargin.left - kMargin.right, ih: h - kMargin.top - kMargin.bottom };
+}
+
+function fmtVolume(v: number): string {
+  return v.toExponential(2);
+}
+
+export class FeaturesPanel {
+  observer: FeaturesPanelObserver | null = null;
+  result: FeatureSeries | null = null;
+  selectedTrack: number | null = null;
+  private key = '';
+  private abort: AbortController | null = null;
+  private timer = 0;
+  private ticker = 0;
+  private sort: { key: SortKey; descending: boolean } = { key: 'maxVolumeKm3', descending: true };
+  private timeDepthUrl = '';
+
+  constructor(private readonly store: StateStore, private readonly host: FeaturesPanelHost) {
+    $('featuresDetails').addEventListener('toggle', () => this.refresh());
+    $('featuresCancel').addEventListener('click', () => {
+      this.abort?.abort();
+      this.key = '';
+      this.stopTicker('cancelled: change the selection or press Find to ask again');
+    });
+    $('featuresFind').addEventListener('click', () => { this.key = ''; this.refresh(true); });
+    $('featuresTimeDepthOf').addEventListener('change', () => { this.key = ''; this.refresh(true); });
+    const settings = () => {
+      const s = this.store.state.features;
+      const minVolume = Number($<HTMLInputElement>('featuresMinVolume').value);
+      const band = Number($<HTMLInputElement>('featuresBand').value);
+      const depths = $<HTMLInputElement>('featuresDepths').value.split(',').map((t) => t.trim()).filter((t) => t !== '').map(Number);
+      if (!(minVolume >= 0)) { this.host.showError(`features: minimum volume ${$<HTMLInputElement>('featuresMinVolume').value} km³ must be a number ≥ 0`); this.sync(); return; }
+      if (!(band >= 0)) { this.host.showError(`features: band half-width ${$<HTMLInputElement>('featuresBand').value} km must be a number ≥ 0`); this.sync(); return; }
+      if (!depths.length || depths.some((d) => !(d > 0 && d < 2886))) { this.host.showError('features: depths must be numbers between 0 and 2886 km, comma-separated'); this.sync(); return; }
+      s.minVolumeKm3 = minVolume;
+      s.bandHalfWidthKm = band;
+      s.depthsKm = depths;
+      this.host.commit(false);
+    };
+    for (const id of ['featuresMinVolume', 'featuresBand', 'featuresDepths']) $(id).addEventListener('change', settings);
+    for (const [id, what] of [['featuresTracksCsv', 'tracks'], ['featuresEventsCsv', 'events'], ['featuresStallsCsv', 'stalls'], ['featuresFluxCsv', 'flux']] as const)
+      $(id).addEventListener('click', () => this.exportCsv(what));
+    $('featuresTable').addEventListener('click', (e) => {
+      const th = (e.target as HTMLElement).closest('th');
+      if (th?.dataset.sort) {
+        const key = th.dataset.sort as SortKey;
+        this.sort = { key, descending: this.sort.key === key ? !this.sort.descending : key !== 'track' && key !== 'firstStep' };
+        this.drawTable();
+        return;
+      }
+      const tr = (e.target as HTMLElement).closest('tr');
+      if (tr?.dataset.track) this.selectTrack(Number(tr.dataset.track), true);
+    });
+  }
+
+  // The settings' fields from the state.
+  sync(): void {
+    const s = this.store.state.features;
+    $<HTMLInputElement>('featuresMinVolume').value = String(s.minVolumeKm3);
+    $<HTMLInputElement>('featuresBand').value = String(s.bandHalfWidthKm);
+    $<HTMLInputElement>('featuresDepths').value = s.depthsKm.join(', ');
+  }
+
+  private open(): boolean {
+    return $<HTMLDetailsElement>('featuresDetails').open;
+  }
+
+  // Asks for the features when the panel is open and the selection, the feature settings or the
+  // picture's choice changed (debounced; `now` asks at once).
+  refresh(now = false): void {
+    const state = this.store.state;
+    if (!this.open()) return;
+    if (!state.brushes.length) {
+      this.abort?.abort();
+      this.key = '';
+      this.setResult(null);
+      $('featuresNote').textContent = 'Brush an axis: its connected regions are followed through the series here.';
+      return;
+    }
+    const of = $<HTMLSelectElement>('featuresTimeDepthOf').value;
+    const key = JSON.stringify([state.brushes, state.features, of]);
+    if (key === this.key) {
+      this.drawTimeline();
+      this.drawFlux();
+      return;
+    }
+    clearTimeout(this.timer);
+    this.timer = window.setTimeout(() => this.ask(key, of), now ? 0 : 300);
+  }
+
+  private ask(key: string, of: string): void {
+    this.abort?.abort();
+    const ctl = new AbortController();
+    this.abort = ctl;
+    this.key = key;
+    const state = cloneState(this.store.state);
+    const steps = this.store.info.steps.length;
+    const start = performance.now();
+    $('featuresCancel').hidden = false;
+    const tick = () => {
+      $('featuresNote').textContent = `finding the features of ${steps} steps at level ${state.features.level}… ${((performance.now() - start) / 1000).toFixed(1)} s`;
+    };
+    tick();
+    clearInterval(this.ticker);
+    this.ticker = window.setInterval(tick, 200);
+    postFeatures(state, ctl.signal)
+      .then((f) => {
+        if (ctl.signal.aborted) return;
+        this.stopTicker('');
+        this.setResult(f, performance.now() - start);
+      })
+      .catch((e) => {
+        if (ctl.signal.aborted) return;
+        this.key = '';
+        this.stopTicker(`not found: ${(e as Error).message}`);
+        this.host.showError((e as Error).message);
+      });
+    const width = Math.max(320, Math.round(($('featuresPanel').clientWidth || 300) * devicePixelRatio));
+    const meanVar = of === 'share' ? undefined : state.color.variable;
+    postTimeDepth(state, of, meanVar, width, Math.round(width * 0.6), ctl.signal)
+      .then((png) => {
+        if (ctl.signal.aborted) return;
+        if (this.timeDepthUrl) URL.revokeObjectURL(this.timeDepthUrl);
+        this.timeDepthUrl = URL.createObjectURL(png);
+        $<HTMLImageElement>('featuresTimeDepth').src = this.timeDepthUrl;
+        this.observer?.timeDepth(true);
+      })
+      .catch((e) => {
+        if (ctl.signal.aborted) return;
+        this.observer?.timeDepth(false);
+        this.host.showError((e as Error).message);
+      });
+  }
+
+  private stopTicker(note: string): void {
+    clearInterval(this.ticker);
+    $('featuresCancel').hidden = true;
+    if (note) $('featuresNote').textContent = note;
+  }
+
+  private setResult(f: FeatureSeries | null, ms = 0): void {
+    this.result = f;
+    this.observer?.features(f);
+    if (f && this.selectedTrack !== null && !f.tracks.some((t) => t.track === this.selectedTrack)) this.selectedTrack = null;
+    if (f) {
+      const counts = new Map<string, number>();
+      for (const e of f.events) counts.set(e.kind, (counts.get(e.kind) ?? 0) + 1);
+      const events = ['birth', 'death', 'merge', 'split'].map((k) => `${counts.get(k) ?? 0} ${k}${(counts.get(k) ?? 0) === 1 ? '' : k === 'birth' ? 's' : 's'}`).join(', ');
+      const n = f.steps.reduce((a, s) => a + s.features, 0);
+      $('featuresNote').textContent = `${f.level === 0 ? 'exact (level 0 grid)' : `approximate (level ${f.level} grid)`}: ${n} features in ${f.steps.length} steps, ${f.tracks.length} tracks; ${events}${ms ? ` · ${(ms / 1000).toFixed(1)} s` : ''}`;
+    }
+    this.drawTable();
+    this.drawTimeline();
+    this.drawFlux();
+  }
+
+  private stallMyr(t: FeatureTrack): number {
+    return t.stalls.reduce((a, s) => Math.max(a, s.durationMyr), -1);
+  }
+
+  private eventCount(track: number): number {
+    return this.result ? this.result.events.filter((e) => e.track === track).length : 0;
+  }
+
+  private drawTable(): void {
+    const table = $('featuresTable');
+    table.innerHTML = '';
+    const f = this.result;
+    if (!f) return;
+    const value = (t: FeatureTrack): number => {
+      switch (this.sort.key) {
+        case 'stallMyr': return this.stallMyr(t);
+        case 'events': return this.eventCount(t.track);
+        default: return t[this.sort.key];
+      }
+    };
+    const tracks = [...f.tracks].sort((a, b) => (this.sort.descending ? value(b) - value(a) : value(a) - value(b)) || a.track - b.track);
+    const head = document.createElement('tr');
+    const columns: [SortKey, string, string][] = [
+      ['track', 'track', 'track id'],
+      ['firstStep', 'steps', 'first and last step'],
+      ['lifetimeMyr', 'Myr', 'lifetime, Myr'],
+      ['maxVolumeKm3', 'max km³', 'largest volume, km³'],
+      ['meanDepthKm', 'depth km', 'mean over its steps of its mean depth, km'],
+      ['stallMyr', 'stalls', 'time at each depth (its mean depth within the band), Myr, and how it left (↓ down, ↑ up, † ended)'],
+      ['events', 'events', 'births, deaths, merges and splits of this track'],
+    ];
+    for (const [key, text, title] of columns) {
+      const th = document.createElement('th');
+      th.dataset.sort = key;
+      th.title = `${title}; click to sort`;
+      th.textContent = text + (this.sort.key === key ? (this.sort.descending ? ' ▾' : ' ▴') : '');
+      head.appendChild(th);
+    }
+    table.appendChild(head);
+    const arrow: Record<string, string> = { down: ' ↓', up: ' ↑', ended: ' †', '': '' };
+    for (const t of tracks) {
+      const tr = document.createElement('tr');
+      tr.dataset.track = String(t.track);
+      if (t.track === this.selectedTrack) tr.classList.add('selected');
+      const events = f.events.filter((e) => e.track === t.track).map((e) => `${e.kind} @${e.step}`);
+      const cells = [
+        String(t.track),
+        t.firstStep === t.lastStep ? String(t.firstStep) : `${t.firstStep}–${t.lastStep}`,
+        t.lifetimeMyr.toFixed(1),
+        fmtVolume(t.maxVolumeKm3),
+        t.meanDepthKm.toFixed(0),
+        t.stalls.map((s) => `${s.depthKm}: ${s.durationMyr.toFixed(0)}${arrow[s.left] ?? ''}`).join(', '),
+        events.join(', '),
+      ];
+      for (const c of cells) {
+        const td = document.createElement('td');
+        td.textContent = c;
+        tr.appendChild(td);
+      }
+      tr.title = `track ${t.track}: click to show it from its first step`;
+      table.appendChild(tr);
+    }
+  }
+
+  // Chooses a track: its row is marked, its timeline drawn and (`move`) the time slider goes to its
+  // first step.
+  selectTrack(track: number, move: boolean): void {
+    const t = this.result?.tracks.find((x) => x.track === track);
+    if (!t) return;
+    this.selectedTrack = track;
+    for (const tr of $('featuresTable').querySelectorAll<HTMLElement>('tr[data-track]'))
+      tr.classList.toggle('selected', Number(tr.dataset.track) === track);
+    this.drawTimeline();
+    if (move && this.store.state.step !== t.firstStep) this.host.setStep(t.firstStep, false);
+  }
+
+  // The chosen track's mean depth (depth down, the state's depths dashed, the stall bands shaded)
+  // and its volume against time, the current step marked.
+  private drawTimeline(): void {
+    const svg = $('featuresTimeline') as unknown as SVGSVGElement;
+    const f = this.result;
+    const t = f?.tracks.find((x) => x.track === this.selectedTrack);
+    $('featuresTimelineNote').textContent = t ? `track ${t.track}: steps ${t.firstStep}–${t.lastStep}` : 'Click a track in the table for its timeline.';
+    if (!f || !t) {
+      d3.select(svg).selectAll('*').remove();
+      return;
+    }
+    const { g, iw, ih } = frame(svg);
+    const times = f.steps.map((s) => s.timeMyr);
+    const xs = d3.scaleLinear().domain(d3.extent(times) as [number, number]).range([0, iw]);
+    if (times.length < 2) xs.domain([times[0] - 1, times[0] + 1]);
+    const depths = [...t.points.flatMap((p) => [p.topDepthKm, p.bottomDepthKm]), ...f.depthsKm];
+    const ys = d3.scaleLinear().domain([d3.min(depths) ?? 0, d3.max(depths) ?? 2886]).nice().range([0, ih]);
+    const vs = d3.scaleLinear().domain([0, d3.max(t.points, (p) => p.volumeKm3) ?? 1]).nice().range([ih, 0]);
+    const x = (v: number) => xs(v) as number, y = (v: number) => ys(v) as number;
+    g.append('g').attr('class', 'axis').attr('transform', `translate(0,${ih})`).call(d3.axisBottom(xs).ticks(5).tickFormat(d3.format('~g')));
+    g.append('g').attr('class', 'axis').call(d3.axisLeft(ys).ticks(5).tickFormat(d3.format('~g')));
+    g.append('g').attr('class', 'axis').attr('transform', `translate(${iw},0)`).call(d3.axisRight(vs).ticks(3).tickFormat(d3.format('.1e')));
+    g.append('text').attr('x', iw).attr('y', ih + 20).attr('text-anchor', 'end').text('time [Myr]');
+    g.append('text').attr('x', 4).attr('y', ih - 4).text('depth [km]');
+    for (const d of f.depthsKm) {
+      if (d < ys.domain()[0] || d > ys.domain()[1]) continue;
+      g.append('rect').attr('x', 0).attr('width', iw).attr('y', y(d - f.bandHalfWidthKm)).attr('height', Math.max(1, y(d + f.bandHalfWidthKm) - y(d - f.bandHalfWidthKm)))
+        .attr('fill', 'rgba(255,255,255,0.06)');
+      g.append('line').attr('x1', 0).attr('x2', iw).attr('y1', y(d)).attr('y2', y(d)).attr('stroke', '#aaa').attr('stroke-dasharray', '4,3');
+      g.append('text').attr('x', 2).attr('y', y(d) - 2).attr('class', 'mark').text(`${d} km`);
+    }
+    // The depth extent as a band, the mean depth as a line; the volume on the right axis.
+    g.append('path').datum(t.points).attr('fill', 'rgba(138,180,248,0.2)')
+      .attr('d', d3.area<(typeof t.points)[number]>().x((p) => x(p.timeMyr)).y0((p) => y(p.topDepthKm)).y1((p) => y(p.bottomDepthKm)));
+    g.append('path').datum(t.points).attr('class', 'trackDepth').attr('fill', 'none').attr('stroke', '#8ab4f8').attr('stroke-width', 1.8)
+      .attr('d', d3.line<(typeof t.points)[number]>().x((p) => x(p.timeMyr)).y((p) => y(p.meanDepthKm)));
+    g.append('path').datum(t.points).attr('fill', 'none').attr('stroke', '#f4a259').attr('stroke-width', 1.2).attr('stroke-dasharray', '5,2')
+      .attr('d', d3.line<(typeof t.points)[number]>().x((p) => x(p.timeMyr)).y((p) => vs(p.volumeKm3) as number));
+    g.selectAll('circle.point').data(t.points).enter().append('circle').attr('class', 'point')
+      .attr('cx', (p) => x(p.timeMyr)).attr('cy', (p) => y(p.meanDepthKm)).attr('r', 2.2).attr('fill', '#8ab4f8')
+      .append('title').text((p) => `step ${p.step}, ${p.timeMyr.toFixed(1)} Myr: feature ${p.feature}, mean depth ${p.meanDepthKm.toFixed(0)} km (${p.topDepthKm.toFixed(0)}–${p.bottomDepthKm.toFixed(0)}), ${p.volumeKm3.toExponential(2)} km³${p.radialVelocityCmPerYr === null ? '' : `, v_r ${p.radialVelocityCmPerYr.toFixed(2)} cm/yr`}`);
+    const cur = f.steps.find((s) => s.step === this.store.state.step);
+    if (cur) g.append('line').attr('x1', x(cur.timeMyr)).attr('x2', x(cur.timeMyr)).attr('y1', 0).attr('y2', ih).attr('stroke', '#ffcc4d').attr('stroke-dasharray', '3,2');
+    g.append('text').attr('x', iw - 2).attr('y', 10).attr('text-anchor', 'end').attr('fill', '#f4a259').text('volume [km³] – –');
+  }
+
+  // The downward flux across each depth of the state (whole shell, and within the selection dashed)
+  // against time; avalanche steps marked.
+  private drawFlux(): void {
+    const svg = $('featuresFlux') as unknown as SVGSVGElement;
+    const flux = this.result?.flux;
+    if (!flux || !flux.steps.length) {
+      d3.select(svg).selectAll('*').remove();
+      $('featuresFluxNote').textContent = this.result ? 'no flux: the dataset has no radial velocity' : '';
+      return;
+    }
+    const { g, iw, ih } = frame(svg);
+    const xs = d3.scaleLinear().domain(d3.extent(flux.steps, (s) => s.timeMyr) as [number, number]).range([0, iw]);
+    const all = flux.steps.flatMap((s) => s.downKm3PerYr.map((v) => -v));
+    const ys = d3.scaleLinear().domain([0, (d3.max(all) ?? 1) * 1.05]).nice().range([ih, 0]);
+    const x = (v: number) => xs(v) as number, y = (v: number) => ys(v) as number;
+    g.append('g').attr('class', 'axis').attr('transform', `translate(0,${ih})`).call(d3.axisBottom(xs).ticks(5).tickFormat(d3.format('~g')));
+    g.append('g').attr('class', 'axis').call(d3.axisLeft(ys).ticks(4).tickFormat(d3.format('~g')));
+    g.append('text').attr('x', iw).attr('y', ih + 20).attr('text-anchor', 'end').text('time [Myr]');
+    g.append('text').attr('x', 2).attr('y', 2).attr('dominant-baseline', 'hanging').text('downward flux [km³/yr]');
+    const colors = d3.schemeTableau10;
+    flux.depthsKm.forEach((depth, d) => {
+      const c = colors[d % colors.length];
+      const pts = flux.steps.map((s) => ({ t: s.timeMyr, v: -s.downKm3PerYr[d], sel: -s.selectedDownKm3PerYr[d], step: s.step }));
+      g.append('path').datum(pts).attr('fill', 'none').attr('stroke', c).attr('stroke-width', 1.5)
+        .attr('d', d3.line<{ t: number; v: number }>().x((p) => x(p.t)).y((p) => y(p.v)));
+      g.append('path').datum(pts).attr('fill', 'none').attr('stroke', c).attr('stroke-width', 1).attr('stroke-dasharray', '3,2')
+        .attr('d', d3.line<{ t: number; sel: number }>().x((p) => x(p.t)).y((p) => y(p.sel)));
+      g.append('text').attr('x', iw - 2).attr('y', 14 + 12 * d).attr('text-anchor', 'end').attr('fill', c).text(`${depth} km`);
+      for (const a of flux.avalanches.filter((a) => a.depthKm === depth)) {
+        const p = pts.find((q) => q.step === a.step);
+        if (p) g.append('circle').attr('class', 'avalanche').attr('cx', x(p.t)).attr('cy', y(p.v)).attr('r', 4.5)
+          .attr('fill', 'none').attr('stroke', '#ff5252').attr('stroke-width', 2)
+          .append('title').text(`avalanche across ${depth} km at step ${a.step}: ${p.v.toFixed(1)} km³/yr down`);
+      }
+    });
+    const n = flux.avalanches.length;
+    $('featuresFluxNote').textContent = `solid: the whole shell, dashed: within the selection; ${n ? `${n} avalanche step${n === 1 ? '' : 's'} (red: downward flux above the mean + ${flux.sigmas} σ)` : `no avalanche (no step's downward flux above the mean + ${flux.sigmas} σ)`}`;
+  }
+
+  // The CSV files of `raypc features --tracks/--events/--stalls` and `raypc flux` (their columns).
+  private exportCsv(what: 'tracks' | 'events' | 'stalls' | 'flux'): void {
+    const f = this.result;
+    if (!f) { this.host.showError('features: nothing to export yet'); return; }
+    let csv = '';
+    if (what === 'tracks') {
+      csv = 'track,step,time_myr,feature,volume_km3,mean_depth_km,centroid_lat_deg,centroid_lon_deg,centroid_depth_km\n';
+      for (const t of f.tracks) for (const p of t.points)
+        csv += `${t.track},${p.step},${p.timeMyr},${p.feature},${p.volumeKm3.toExponential(6)},${p.meanDepthKm.toFixed(3)},${p.centroidLatDeg.toFixed(4)},${p.centroidLonDeg.toFixed(4)},${p.centroidDepthKm.toFixed(3)}\n`;
+    } else if (what === 'events') {
+      csv = 'step,time_myr,event,track,feature,other_features,centroid_lat_deg,centroid_lon_deg,mean_depth_km\n';
+      for (const e of f.events)
+        csv += `${e.step},${e.timeMyr},${e.kind},${e.track},${e.feature},${e.others.join(' ')},${e.centroidLatDeg.toFixed(4)},${e.centroidLonDeg.toFixed(4)},${e.meanDepthKm.toFixed(3)}\n`;
+    } else if (what === 'stalls') {
+      csv = 'track,depth_km,first_step,last_step,duration_myr,mean_radial_velocity_cm_per_yr,left\n';
+      for (const t of f.tracks) for (const s of t.stalls)
+        csv += `${t.track},${s.depthKm},${s.firstStep},${s.lastStep},${s.durationMyr},${s.meanRadialVelocityCmPerYr ?? ''},${s.left}\n`;
+    } else {
+      if (!f.flux) { this.host.showError('features: no flux (the dataset has no radial velocity)'); return; }
+      const avalanche = new Set(f.flux.avalanches.map((a) => `${a.depthKm}/${a.step}`));
+      csv = 'step,time_myr,depth_km,radius_km,down_km3_per_yr,up_km3_per_yr,net_km3_per_yr,selected_down_km3_per_yr,selected_up_km3_per_yr,selected_percent_of_shell,avalanche\n';
+      const e6 = (v: number) => v.toExponential(6);
+      for (const s of f.flux.steps) f.flux.depthsKm.forEach((d, i) => {
+        csv += `${s.step},${s.timeMyr},${d},${(6371 - d).toFixed(3)},${e6(s.downKm3PerYr[i])},${e6(s.upKm3PerYr[i])},${e6(s.downKm3PerYr[i] + s.upKm3PerYr[i])},${e6(s.selectedDownKm3PerYr[i])},${e6(s.selectedUpKm3PerYr[i])},${s.selectedPercentOfShell[i].toFixed(4)},${avalanche.has(`${d}/${s.step}`) ? 1 : 0}\n`;
+      });
+    }
+    download(new Blob([csv], { type: 'text/csv' }), `raypc-features-${what}.csv`);
+  }
+}
