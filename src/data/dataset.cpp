@@ -107,6 +107,32 @@ std::shared_ptr<StepVolume> StepVolume::fromSnapshot(const Snapshot& snapshot, u
     return volume;
 }
 
+std::shared_ptr<StepVolume> StepVolume::withVariable(std::shared_ptr<const StepVolume> base, std::vector<float> values)
+{
+    RAYPC_CHECK(base);
+    if (values.size() != base->grid().cellCount())
+        fail("derived variable: {} values, expected {} for the grid", values.size(), base->grid().cellCount());
+    auto volume = std::make_shared<StepVolume>();
+    volume->m_grid = base->grid();
+    volume->m_bricks = base->bricks();
+    const size_t count = base->variableCount() + 1;
+    volume->m_valuesStorage = std::make_unique<std::atomic<const float*>[]>(count);
+    volume->m_values = {volume->m_valuesStorage.get(), count};
+    for (size_t i = 0; i + 1 < count; ++i) {
+        // Not decoded by the base yet: decode() asks the base on first use.
+        volume->m_values[i].store(base->valuesReady(i) ? base->values(i) : nullptr);
+        volume->m_bounds.push_back(base->brickBounds(i));
+    }
+    volume->m_owned.reserve(2);  // references below must stay valid
+    auto& own = volume->m_owned.emplace_back(std::move(values));
+    auto& bounds = volume->m_owned.emplace_back(2 * volume->m_bricks.brickCount());
+    computeBrickBounds(volume->m_grid, volume->m_bricks, own, bounds);
+    volume->m_values[count - 1].store(own.data());
+    volume->m_bounds.push_back(bounds.data());
+    volume->m_base = std::move(base);
+    return volume;
+}
+
 std::shared_ptr<StepVolume> StepVolume::open(const std::filesystem::path& dir, const LevelInfo& level,
                                              const std::vector<std::string>& fileStems, ValueEncoding encoding,
                                              std::span<const ValueRange> ranges)
@@ -193,6 +219,11 @@ size_t firstOutsideRange(std::span<const float> values, ValueRange range)
 const float* StepVolume::decode(size_t var) const
 {
     RAYPC_CHECK(var < variableCount());
+    if (m_base && var < m_base->variableCount()) {
+        const float* p = m_base->values(var);
+        m_values[var].store(p, std::memory_order_release);
+        return p;
+    }
     std::lock_guard lock(m_decodeMutex);
     if (const float* p = m_values[var].load(std::memory_order_acquire))
         return p;  // another thread decoded it while this one waited
@@ -231,6 +262,8 @@ float StepVolume::value(size_t var, size_t iLat, size_t iR, size_t iLon) const
 {
     if (const float* p = m_values[var].load(std::memory_order_acquire))
         return p[m_grid.index(iLat, iR, iLon)];
+    if (m_base && var < m_base->variableCount())
+        return m_base->value(var, iLat, iR, iLon);
     m_mapped[var].checkNotCutShort();
     if (m_encoding == ValueEncoding::Float32) {
         // Not yet checked as a whole (decode): this one value is.
@@ -247,6 +280,8 @@ float StepVolume::value(size_t var, size_t iLat, size_t iR, size_t iLon) const
 double StepVolume::errorBound(size_t var, size_t iLat, size_t iR, size_t iLon) const
 {
     RAYPC_CHECK(var < variableCount());
+    if (m_base && var < m_base->variableCount())
+        return m_base->errorBound(var, iLat, iR, iLon);
     if (m_encoding != ValueEncoding::Uint16)
         return 0;
     const uint32_t s = m_bricks.size;
@@ -261,11 +296,15 @@ size_t StepVolume::memoryBytes() const
         bytes += file.size();
     for (const auto& array : m_owned)
         bytes += array.size() * sizeof(float);
+    if (m_base)
+        bytes += m_base->memoryBytes();
     return bytes;
 }
 
 bool StepVolume::filesCutShort() const noexcept
 {
+    if (m_base && m_base->filesCutShort())
+        return true;
     for (const auto& file : m_mapped)
         if (file.cutShort())
             return true;
@@ -274,6 +313,8 @@ bool StepVolume::filesCutShort() const noexcept
 
 void StepVolume::touchPages() const
 {
+    if (m_base)
+        m_base->touchPages();
     volatile uint8_t sink = 0;
     for (const auto& file : m_mapped) {
         file.checkNotCutShort();

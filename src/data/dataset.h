@@ -85,6 +85,13 @@ public:
                                             const std::vector<std::string>& fileStems, ValueEncoding encoding,
                                             std::span<const ValueRange> ranges = {});
 
+    // A volume of `base`'s variables and one more, the last: `values` (grid().cellCount() of them,
+    // canonical order; brick bounds computed here). The base's variables are read through it as the
+    // base gives them (decoded on first use), and the base lives as long as this volume. For a
+    // field that exists only for one picture (the features painted by id, render/feature_paint.h).
+    // Throws raypc::Error when `values` has the wrong size.
+    static std::shared_ptr<StepVolume> withVariable(std::shared_ptr<const StepVolume> base, std::vector<float> values);
+
     const SphericalGrid& grid() const { return m_grid; }
     const BrickLayout& bricks() const { return m_bricks; }
     size_t variableCount() const { return m_values.size(); }
@@ -154,6 +161,7 @@ private:
     mutable std::map<size_t, NodeGradient> m_gradients;
     std::vector<MappedFile> m_mapped;              // when loaded from disk: per variable its values
     std::vector<std::vector<float>> m_owned;       // when built in memory
+    std::shared_ptr<const StepVolume> m_base;      // withVariable: the volume whose variables come first
 };
 
 // The parallel-coordinates sample of one step: `rows` cells, columns = coordinates

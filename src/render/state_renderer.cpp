@@ -4,11 +4,14 @@
 #include "core/error.h"
 #include "core/mpi.h"
 #include "core/spherical.h"
+#include "data/features.h"
+#include "render/feature_paint.h"
 #include "render/legend.h"
 #include "render/reference_geometry.h"
 #include "render/slice_view.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 #include <tbb/task_arena.h>
 
@@ -161,8 +164,49 @@ VolumeRenderer& StateRenderer::rendererFor(int step, int level, int view)
     }
     auto& slot = m_renderers[{level, view}];
     if (!slot)
-        slot = std::make_unique<VolumeRenderer>(m_sources.volume(step, level));
+        slot = std::make_unique<VolumeRenderer>(volumeFor(step, level));
     return *slot;
+}
+
+bool StateRenderer::usePaint(const ResolvedState& resolved)
+{
+    const RenderState& state = resolved.state;
+    std::string key;
+    if (paintsFeatures(state)) {
+        const FeatureSettings& f = state.features;
+        key = fmt::format("{}|{}|{}|{}|{}", state.step, f.level, f.minVolumeKm3, f.colorById, fmt::join(f.highlight, ","));
+        for (const RangeFilter& b : resolved.params.brushes) {
+            key += fmt::format("|{}/{}", b.variable, b.coordinate ? int(*b.coordinate) : -1);
+            for (const ValueRange& r : b.ranges)
+                key += fmt::format(":{},{}", r.min, r.max);
+        }
+        m_paintFilters = resolved.params.brushes;
+        m_paintSettings = f;
+    }
+    if (key != m_paintKey) {
+        m_renderers.clear();  // their volumes hold the old paint
+        m_paintKey = key;
+    }
+    return !key.empty();
+}
+
+std::shared_ptr<const StepVolume> StateRenderer::volumeFor(int step, int level)
+{
+    auto volume = m_sources.volume(step, level);
+    if (m_paintKey.empty())
+        return volume;
+    const auto start = std::chrono::steady_clock::now();
+    const int labelLevel = std::min(m_paintSettings.level, int(m_dataset->levels().size()) - 1);
+    const auto labelVolume = labelLevel == level ? volume : m_sources.volume(step, labelLevel);
+    FeatureOptions options;
+    options.minVolumeKm3 = m_paintSettings.minVolumeKm3;
+    options.bandDepthsKm.clear();
+    const StepFeatures features = extractFeatures(*labelVolume, m_paintFilters, options);
+    auto painted = StepVolume::withVariable(
+        volume, featurePaintField(volume->grid(), labelVolume->grid(), features.labels, m_paintSettings));
+    spdlog::debug("features painted on step {} level {}: {} features in {:.0f} ms", step, level,
+                  features.features.size(), millisecondsSince(start));
+    return painted;
 }
 
 std::shared_ptr<const PathlineScene> StateRenderer::pathlinesFor(const RenderState& state)
@@ -219,8 +263,12 @@ StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, co
     const std::vector<ResolvedState> views = stereoViews(resolved);
     Prepared p;
     p.refinement.errorGreyLevels = state.convergenceGreyLevels;
-    for (const ResolvedState& v : views)
+    const bool paint = usePaint(resolved);
+    for (const ResolvedState& v : views) {
         p.views.push_back({v.params, nullptr});
+        if (paint)
+            applyFeaturePaint(p.views.back().params, int(m_dataset->variables().size()));
+    }
     const int step = state.step;
     const int levels = int(m_dataset->levels().size());
     // The views share the budget: each eye of a stereo pair gets half.
@@ -392,8 +440,12 @@ std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const 
     }
     if (withLegends && state.legend) {
         std::vector<LegendSpec> legends;
-        legends.push_back({variableTitle(m_dataset->variables().at(size_t(resolved.params.colorVariable))),
-                           resolved.params.transfer});
+        if (paintsFeatures(state)) {
+            legends.push_back({featurePaintTitle(state.features), featurePaintLegendColors(state.features)});
+        } else {
+            legends.push_back({variableTitle(m_dataset->variables().at(size_t(resolved.params.colorVariable))),
+                               resolved.params.transfer});
+        }
         if (state.pathlines.visible && m_scene && m_sceneStep == state.step) {
             legends.push_back(pathlineLegend(m_scene->style(), m_scene->columns()));
         }

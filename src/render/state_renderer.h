@@ -203,8 +203,18 @@ private:
     // One view's picture (`resolved` is the view's).
     std::vector<uint8_t> viewPicture(const FrameBuffer& frame, const ResolvedState& resolved, bool withLegends) const;
 
+    // The features painted (feature_paint.h): sets the key of what the renderers' volumes hold; a new
+    // key drops the renderers. Returns whether the state paints features.
+    bool usePaint(const ResolvedState& resolved);
+    // The volume a renderer of (step, level) draws: the source's, with the painted features' slots
+    // as a last variable while the state paints them.
+    std::shared_ptr<const StepVolume> volumeFor(int step, int level);
+
     std::shared_ptr<const Dataset> m_dataset;
     StateSources m_sources;
+    std::string m_paintKey;  // empty: nothing painted
+    std::vector<RangeFilter> m_paintFilters;
+    FeatureSettings m_paintSettings;
     int m_rendererStep = -1;
     std::map<std::pair<int, int>, std::unique_ptr<VolumeRenderer>> m_renderers;  // by (level, view), of m_rendererStep
     std::shared_ptr<PathlineScene> m_scene;

@@ -216,6 +216,24 @@ Kind<std::vector<float>> numberList(double lo, double hi, size_t maxItems)
             schema, fmt::format("array of at most {} numbers in [{}, {}]", maxItems, boundText(lo), boundText(hi))};
 }
 
+// Whole numbers in [lo, hi], at most maxItems.
+Kind<std::vector<int>> integerList(int lo, int hi, size_t maxItems)
+{
+    json schema{{"type", "array"}, {"items", numberSchema("integer", lo, hi)}, {"maxItems", maxItems}};
+    return {[lo, hi, maxItems](const json& v, std::vector<int>& target, Reader& r, const std::string& key) {
+                if (!v.is_array() || v.size() > maxItems)
+                    r.failAt(key, fmt::format("expected an array of at most {} integers, found {}", maxItems, jsonExcerpt(v)));
+                target.clear();
+                for (const json& e : v) {
+                    if (!e.is_number_integer() || e.get<int64_t>() < lo || e.get<int64_t>() > hi)
+                        r.failAt(key, fmt::format("expected integers in [{}, {}], found {}", lo, hi, jsonExcerpt(e)));
+                    target.push_back(int(e.get<int64_t>()));
+                }
+            },
+            [](const std::vector<int>& x) { return json(x); }, schema,
+            fmt::format("array of at most {} integers in [{}, {}]", maxItems, lo, hi)};
+}
+
 // Non-empty names, each at most once, or null (nullopt: a default that depends on the dataset).
 Kind<std::optional<std::vector<std::string>>> nameList(size_t maxItems)
 {
@@ -1133,7 +1151,16 @@ const Object<RenderState>& document()
                                      "must have it)"}),
                  leaf<S>("minOverlapShare", at(&S::features, &FeatureSettings::minOverlapShare), number<float>(0, 1),
                          {.meaning = "share of a feature's volume that, moved with the flow over a step, must fall "
-                                     "on a feature of the next step to link them into one track"})},
+                                     "on a feature of the next step to link them into one track"}),
+                 leaf<S>("colorById", at(&S::features, &FeatureSettings::colorById), boolean(),
+                         {.meaning = "the 3D view colours the selection by feature: each feature of the step in its "
+                                     "own colour (its id modulo 10, the UI's table's colours), other selected material "
+                                     "grey and faint",
+                          .since = 11}),
+                 leaf<S>("highlight", at(&S::features, &FeatureSettings::highlight), integerList(1, 1000000, 64),
+                         {.meaning = "ids of features of the state's step drawn highlighted (amber, or their own "
+                                     "colour with `colorById`); the rest of the selection grey and faint; empty: none",
+                          .since = 11})},
                 {.meaning = "how the connected regions of the selection (features) are found and followed through "
                             "the steps (`raypc features --state`, docs/features.md); a saved state reproduces their "
                             "table",

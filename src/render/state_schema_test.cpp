@@ -47,8 +47,8 @@ TEST(StateSchema, CarriesTheParsersBoundsAndVersions)
     const json& camera = schema["properties"]["camera"]["properties"];
     EXPECT_EQ(camera["elevationDeg"]["minimum"], -90);
     EXPECT_EQ(camera["elevationDeg"]["maximum"], 90);
-    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5, 6, 7, 8, 9, 10}));
-    EXPECT_EQ(kRenderStateVersion, 10);
+    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}));
+    EXPECT_EQ(kRenderStateVersion, 11);
     EXPECT_EQ(schema["properties"]["brushes"]["items"]["required"], json::array({"name", "min", "max"}));
     // A version-1 document may not have pathlines, as parseRenderState says.
     ASSERT_TRUE(schema.contains("allOf"));

@@ -1151,6 +1151,36 @@ const cases = {
       .catch(() => { throw new TestFailure('choosing a track did not move the time slider to its first step'); });
     const timeline = await page.$$eval('#featuresTimeline path.trackDepth, #featuresTimeline circle.point', (e) => e.length);
     check(timeline === 4, `the track's timeline has ${timeline} of its line and three points`);
+    // The chosen track's feature is highlighted in the 3D view (amber), and follows it to step 2.
+    const amber = () => page.evaluate(() => {
+      const { data: d } = window.__viewImageData();
+      let n = 0;
+      for (let i = 0; i < d.length; i += 4) if (d[i] > 150 && d[i + 1] > 0.55 * d[i] && d[i + 1] < 0.9 * d[i] && d[i + 2] < 0.35 * d[i]) n++;
+      return n;
+    });
+    const chosen = await page.evaluate(() => window.__raypc.features.selectedTrack);
+    const track = f.tracks.find((t) => t.track === chosen);
+    const st0 = await rState(page);
+    check(JSON.stringify(st0.features.highlight) === JSON.stringify([track.points[0].feature]),
+      `highlight ${JSON.stringify(st0.features.highlight)} for track ${chosen}'s feature ${track.points[0].feature} of step 0`);
+    await waitConverged(page);
+    const amberShown = await amber();
+    await page.click('#featuresClearHighlight');
+    await page.waitForFunction(() => window.__raypc.state().features.highlight.length === 0, null, { timeout: 5000 });
+    await waitConverged(page);
+    const amberCleared = await amber();
+    console.log(`  amber pixels: ${amberShown} with track ${chosen} highlighted, ${amberCleared} after Clear highlight`);
+    check(amberShown > 300 && amberCleared < amberShown / 10, `the highlighted feature is not seen in amber: ${amberShown} then ${amberCleared} pixels`);
+    await page.click(`#featuresTable tr[data-track="${chosen}"]`);
+    await page.evaluate(() => { document.getElementById('step').value = '2'; document.getElementById('step').dispatchEvent(new Event('change')); });
+    await page.waitForFunction(() => window.__raypc.state().step === 2, null, { timeout: 5000 });
+    const st2 = await rState(page);
+    check(JSON.stringify(st2.features.highlight) === JSON.stringify([track.points[2].feature]),
+      `at step 2 the highlight is ${JSON.stringify(st2.features.highlight)}, the track's feature there is ${track.points[2].feature}`);
+    await page.click('#featuresColorById');
+    check((await rState(page)).features.colorById === true, 'the checkbox did not set features.colorById');
+    await page.click('#featuresClearHighlight');
+    await page.click('#featuresColorById');
     // Sorting by a column reorders the rows.
     const order = () => page.$$eval('#featuresTable tr[data-track]', (r) => r.map((x) => x.dataset.track).join());
     const o1 = await order();

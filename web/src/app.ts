@@ -143,6 +143,7 @@ export class App {
       setStep: (step, interactive) => this.setStep(step, interactive),
       commit: (i) => this.commit(i),
     });
+    this.link.forStep = (s, step) => this.features.forStep(s, step);
     this.context = new ContextPanel(store, { commit: (i) => this.commit(i), showError: (m) => this.showError(m) });
     this.selection = new SelectionPanel(store, {
       showError: (m) => this.showError(m),
@@ -310,10 +311,14 @@ export class App {
     const s = this.store.state;
     const entries: LegendEntry[] = [];
     if (s.legend) {
-      const v = this.store.variableInfo();
-      const units = displayUnits(v.units);
-      const colorOf = this.store.colorOf();
-      entries.push({ title: units ? `${v.name} [${units}]` : v.name, colorAt: (u) => colorOf(this.store.valueAt(u)), valueAt: (u) => this.store.valueAt(u) });
+      const painted = this.features.paintLegend();
+      if (painted) entries.push(painted);
+      else {
+        const v = this.store.variableInfo();
+        const units = displayUnits(v.units);
+        const colorOf = this.store.colorOf();
+        entries.push({ title: units ? `${v.name} [${units}]` : v.name, colorAt: (u) => colorOf(this.store.valueAt(u)), valueAt: (u) => this.store.valueAt(u) });
+      }
       const pl = this.pathlines.legend();
       if (pl) entries.push(pl);
     }
@@ -556,6 +561,7 @@ export class App {
 
   private setStep(step: number, interactive: boolean): void {
     this.store.state.step = step;
+    this.features.stepChanged();
     this.updateStepLabel();
     this.commit(interactive);
     if (!interactive) {
@@ -568,6 +574,7 @@ export class App {
   // store's now; the parallel coordinates follow at most once a second.
   private stepShown(step: number): void {
     this.store.state.step = step;
+    this.features.stepChanged();
     this.updateStepLabel();
     if (performance.now() - this.lastSampleLoad > 1000) this.loadSample();
   }

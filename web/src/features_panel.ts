@@ -8,8 +8,9 @@
 import * as d3 from 'd3';
 import { postFeatures, postTimeDepth, type FeatureSeries, type FeatureTrack } from './api';
 import { download } from './controls';
-import { cloneState } from './state';
+import { cloneState, type RenderState } from './state';
 import type { StateStore } from './store';
+import type { LegendEntry } from './context_panel';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
 
@@ -27,16 +28,16 @@ export interface FeaturesPanelObserver {
 
 type SortKey = 'track' | 'firstStep' | 'lifetimeMyr' | 'maxVolumeKm3' | 'meanDepthKm' | 'stallMyr' | 'events';
 
-const kMargin = { top: 8, right: 12, bottom: 22, left: 50 };
+const kMargin = { top: 16, right: 12, bottom: 22, left: 50 };
 
-function frame(svg: SVGSVGElement) {
+function frame(svg: SVGSVGElement, right = kMargin.right) {
   const parentW = (svg.parentElement?.clientWidth ?? 0) - 4;
   if (parentW > 100) svg.setAttribute('width', String(parentW));
   const w = Number(svg.getAttribute('width')), h = Number(svg.getAttribute('height'));
   const root = d3.select(svg);
   root.selectAll('*').remove();
   const g = root.append('g').attr('transform', `translate(${kMargin.left},${kMargin.top})`);
-  return { g, iw: w - kMargin.left - kMargin.right, ih: h - kMargin.top - kMargin.bottom };
+  return { g, iw: w - kMargin.left - right, ih: h - kMargin.top - kMargin.bottom };
 }
 
 function fmtVolume(v: number): string {
@@ -63,6 +64,17 @@ export class FeaturesPanel {
     });
     $('featuresFind').addEventListener('click', () => { this.key = ''; this.refresh(true); });
     $('featuresTimeDepthOf').addEventListener('change', () => { this.key = ''; this.refresh(true); });
+    $<HTMLInputElement>('featuresColorById').addEventListener('change', (e) => {
+      this.store.state.features.colorById = (e.target as HTMLInputElement).checked;
+      this.host.commit(false);
+    });
+    $('featuresClearHighlight').addEventListener('click', () => {
+      this.selectedTrack = null;
+      this.store.state.features.highlight = [];
+      this.drawTable();
+      this.drawTimeline();
+      this.host.commit(false);
+    });
     const settings = () => {
       const s = this.store.state.features;
       const minVolume = Number($<HTMLInputElement>('featuresMinVolume').value);
@@ -95,6 +107,7 @@ export class FeaturesPanel {
   // The settings' fields from the state.
   sync(): void {
     const s = this.store.state.features;
+    $<HTMLInputElement>('featuresColorById').checked = s.colorById;
     $<HTMLInputElement>('featuresMinVolume').value = String(s.minVolumeKm3);
     $<HTMLInputElement>('featuresBand').value = String(s.bandHalfWidthKm);
     $<HTMLInputElement>('featuresDepths').value = s.depthsKm.join(', ');
@@ -117,7 +130,8 @@ export class FeaturesPanel {
       return;
     }
     const of = $<HTMLSelectElement>('featuresTimeDepthOf').value;
-    const key = JSON.stringify([state.brushes, state.features, of]);
+    const { highlight: _h, colorById: _c, ...settings } = state.features; // painting asks nothing new
+    const key = JSON.stringify([state.brushes, settings, of]);
     if (key === this.key) {
       this.drawTimeline();
       this.drawFlux();
@@ -180,7 +194,13 @@ export class FeaturesPanel {
   private setResult(f: FeatureSeries | null, ms = 0): void {
     this.result = f;
     this.observer?.features(f);
-    if (f && this.selectedTrack !== null && !f.tracks.some((t) => t.track === this.selectedTrack)) this.selectedTrack = null;
+    // A new answer numbers features and tracks anew: the highlight follows the chosen track if it is
+    // still there, else goes.
+    if (this.selectedTrack !== null && !(f && f.tracks.some((t) => t.track === this.selectedTrack))) this.selectedTrack = null;
+    const before = JSON.stringify(this.store.state.features.highlight);
+    if (this.selectedTrack === null) this.store.state.features.highlight = [];
+    else this.stepChanged();
+    if (JSON.stringify(this.store.state.features.highlight) !== before) this.host.commit(false);
     if (f) {
       const counts = new Map<string, number>();
       for (const e of f.events) counts.set(e.kind, (counts.get(e.kind) ?? 0) + 1);
@@ -252,6 +272,13 @@ export class FeaturesPanel {
         td.textContent = c;
         tr.appendChild(td);
       }
+      // The colour the 3D view paints the track's feature of the current step in (features.colorById).
+      const now = t.points.find((p) => p.step === this.store.state.step);
+      const swatch = tr.firstElementChild as HTMLElement;
+      if (now) {
+        swatch.style.borderLeft = `6px solid ${d3.schemeTableau10[(now.feature - 1) % 10]}`;
+        swatch.title = `feature ${now.feature} of step ${now.step}: this colour in the 3D view when coloured by feature`;
+      }
       tr.title = `track ${t.track}: click to show it from its first step`;
       table.appendChild(tr);
     }
@@ -266,7 +293,39 @@ export class FeaturesPanel {
     for (const tr of $('featuresTable').querySelectorAll<HTMLElement>('tr[data-track]'))
       tr.classList.toggle('selected', Number(tr.dataset.track) === track);
     this.drawTimeline();
-    if (move && this.store.state.step !== t.firstStep) this.host.setStep(t.firstStep, false);
+    if (move && this.store.state.step !== t.firstStep) this.host.setStep(t.firstStep, false); // highlights (stepChanged)
+    else {
+      this.stepChanged();
+      this.host.commit(false);
+    }
+  }
+
+  // The legend of the 3D view while it paints features (render/feature_paint.h: the same palette),
+  // else null.
+  paintLegend(): LegendEntry | null {
+    const s = this.store.state, f = s.features;
+    if (!s.brushes.length || (!f.colorById && !f.highlight.length)) return null;
+    const rgb = (hex: string): [number, number, number] => [1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16) / 255) as [number, number, number];
+    if (f.colorById)
+      return { title: `features by id (colours repeat every 10)${f.highlight.length ? `; highlighted: ${f.highlight.join(', ')}` : ''}; grey: the rest of the selection`,
+        colorAt: (u) => rgb(d3.schemeTableau10[Math.min(9, Math.floor(u * 10))]), valueAt: (u) => 1 + Math.round(u * 9) };
+    return { title: `highlighted feature${f.highlight.length > 1 ? 's' : ''} ${f.highlight.join(', ')} (amber); grey: the rest of the selection`,
+      colorAt: (u) => (u < 0.5 ? [0.55, 0.57, 0.62] : [1, 0.75, 0.1]), valueAt: (u) => (u < 0.5 ? 0 : f.highlight[0]) };
+  }
+
+  // The chosen track's feature at `step` highlighted in `s` (the store's state unless given): none
+  // where the track has no feature. Call before a state of a new step is sent.
+  forStep(s: RenderState, step: number): RenderState {
+    const t = this.result?.tracks.find((x) => x.track === this.selectedTrack);
+    if (!t) return s;
+    const p = t.points.find((x) => x.step === step);
+    return { ...s, features: { ...s.features, highlight: p ? [p.feature] : [] } };
+  }
+
+  stepChanged(): void {
+    const s = this.store.state;
+    if (this.selectedTrack !== null && this.result) s.features = this.forStep(s, s.step).features;
+    this.drawTimeline();
   }
 
   // The chosen track's mean depth (depth down, the state's depths dashed, the stall bands shaded)
@@ -280,7 +339,7 @@ export class FeaturesPanel {
       d3.select(svg).selectAll('*').remove();
       return;
     }
-    const { g, iw, ih } = frame(svg);
+    const { g, iw, ih } = frame(svg, 46); // the volume's axis on the right
     const times = f.steps.map((s) => s.timeMyr);
     const xs = d3.scaleLinear().domain(d3.extent(times) as [number, number]).range([0, iw]);
     if (times.length < 2) xs.domain([times[0] - 1, times[0] + 1]);
@@ -292,13 +351,13 @@ export class FeaturesPanel {
     g.append('g').attr('class', 'axis').call(d3.axisLeft(ys).ticks(5).tickFormat(d3.format('~g')));
     g.append('g').attr('class', 'axis').attr('transform', `translate(${iw},0)`).call(d3.axisRight(vs).ticks(3).tickFormat(d3.format('.1e')));
     g.append('text').attr('x', iw).attr('y', ih + 20).attr('text-anchor', 'end').text('time [Myr]');
-    g.append('text').attr('x', 4).attr('y', ih - 4).text('depth [km]');
+    g.append('text').attr('x', -kMargin.left + 2).attr('y', -kMargin.top).attr('dominant-baseline', 'hanging').text('depth [km]');
     for (const d of f.depthsKm) {
       if (d < ys.domain()[0] || d > ys.domain()[1]) continue;
       g.append('rect').attr('x', 0).attr('width', iw).attr('y', y(d - f.bandHalfWidthKm)).attr('height', Math.max(1, y(d + f.bandHalfWidthKm) - y(d - f.bandHalfWidthKm)))
         .attr('fill', 'rgba(255,255,255,0.06)');
       g.append('line').attr('x1', 0).attr('x2', iw).attr('y1', y(d)).attr('y2', y(d)).attr('stroke', '#aaa').attr('stroke-dasharray', '4,3');
-      g.append('text').attr('x', 2).attr('y', y(d) - 2).attr('class', 'mark').text(`${d} km`);
+      g.append('text').attr('x', iw - 2).attr('y', y(d) - 2).attr('text-anchor', 'end').attr('class', 'mark').text(`${d} km`);
     }
     // The depth extent as a band, the mean depth as a line; the volume on the right axis.
     g.append('path').datum(t.points).attr('fill', 'rgba(138,180,248,0.2)')
@@ -312,7 +371,8 @@ export class FeaturesPanel {
       .append('title').text((p) => `step ${p.step}, ${p.timeMyr.toFixed(1)} Myr: feature ${p.feature}, mean depth ${p.meanDepthKm.toFixed(0)} km (${p.topDepthKm.toFixed(0)}–${p.bottomDepthKm.toFixed(0)}), ${p.volumeKm3.toExponential(2)} km³${p.radialVelocityCmPerYr === null ? '' : `, v_r ${p.radialVelocityCmPerYr.toFixed(2)} cm/yr`}`);
     const cur = f.steps.find((s) => s.step === this.store.state.step);
     if (cur) g.append('line').attr('x1', x(cur.timeMyr)).attr('x2', x(cur.timeMyr)).attr('y1', 0).attr('y2', ih).attr('stroke', '#ffcc4d').attr('stroke-dasharray', '3,2');
-    g.append('text').attr('x', iw - 2).attr('y', 10).attr('text-anchor', 'end').attr('fill', '#f4a259').text('volume [km³] – –');
+    g.append('text').attr('x', iw + 44).attr('y', -kMargin.top).attr('dominant-baseline', 'hanging').attr('text-anchor', 'end')
+      .style('fill', '#f4a259').text('volume [km³]');
   }
 
   // The downward flux across each depth of the state (whole shell, and within the selection dashed)
@@ -333,7 +393,7 @@ export class FeaturesPanel {
     g.append('g').attr('class', 'axis').attr('transform', `translate(0,${ih})`).call(d3.axisBottom(xs).ticks(5).tickFormat(d3.format('~g')));
     g.append('g').attr('class', 'axis').call(d3.axisLeft(ys).ticks(4).tickFormat(d3.format('~g')));
     g.append('text').attr('x', iw).attr('y', ih + 20).attr('text-anchor', 'end').text('time [Myr]');
-    g.append('text').attr('x', 2).attr('y', 2).attr('dominant-baseline', 'hanging').text('downward flux [km³/yr]');
+    g.append('text').attr('x', -kMargin.left + 2).attr('y', -kMargin.top).attr('dominant-baseline', 'hanging').text('downward flux [km³/yr]');
     const colors = d3.schemeTableau10;
     flux.depthsKm.forEach((depth, d) => {
       const c = colors[d % colors.length];
@@ -342,7 +402,7 @@ export class FeaturesPanel {
         .attr('d', d3.line<{ t: number; v: number }>().x((p) => x(p.t)).y((p) => y(p.v)));
       g.append('path').datum(pts).attr('fill', 'none').attr('stroke', c).attr('stroke-width', 1).attr('stroke-dasharray', '3,2')
         .attr('d', d3.line<{ t: number; sel: number }>().x((p) => x(p.t)).y((p) => y(p.sel)));
-      g.append('text').attr('x', iw - 2).attr('y', 14 + 12 * d).attr('text-anchor', 'end').attr('fill', c).text(`${depth} km`);
+      g.append('text').attr('x', iw - 2).attr('y', 14 + 12 * d).attr('text-anchor', 'end').style('fill', c).text(`${depth} km`);
       for (const a of flux.avalanches.filter((a) => a.depthKm === depth)) {
         const p = pts.find((q) => q.step === a.step);
         if (p) g.append('circle').attr('class', 'avalanche').attr('cx', x(p.t)).attr('cy', y(p.v)).attr('r', 4.5)

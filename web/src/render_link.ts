@@ -112,10 +112,17 @@ export class RenderLink {
 
   // Sends the store's state at `step` as a step of playback, shown for about `budgetMs` (the
   // server's level choice), and holds its frames; returns its id.
+  // What a state sent for another step than the store's changes for that step (the Features
+  // panel's highlighted feature of that step); null: only the step.
+  forStep: ((s: RenderState, step: number) => RenderState) | null = null;
+
   sendPlayback(step: number, budgetMs: number): number {
     this.interactivePending = false;
     this.held = null;
-    const id = this.sendNow('playback', (s) => ({ ...s, step, timeBudgetMs: budgetMs }));
+    const id = this.sendNow('playback', (s) => {
+      const t = { ...s, step, timeBudgetMs: budgetMs };
+      return this.forStep ? this.forStep(t, step) : t;
+    });
     this.holdId = id;
     return id;
   }
