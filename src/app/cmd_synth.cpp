@@ -1,6 +1,7 @@
 // `raypc synth`: writes a synthetic mantle-convection time series in the contest layout.
 #include "app/command.h"
 #include "core/clock.h"
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "data/synth.h"
 
@@ -29,6 +30,7 @@ struct SynthArgs {
     uint64_t seed = SynthOptions{}.seed;
     double dtMyr = SynthOptions{}.dtMyr;
     std::string format = "classic";
+    std::string truth;  // --truth FILE
 };
 
 void run(const SynthArgs& args)
@@ -50,7 +52,16 @@ void run(const SynthArgs& args)
     options.flavour = parseFormat(args.format);
 
     const auto start = std::chrono::steady_clock::now();
+    // The truth before the series: a truth file that cannot be written leaves no series behind.
+    if (!args.truth.empty()) {
+        const std::filesystem::path dir = std::filesystem::absolute(args.truth).parent_path();
+        if (!std::filesystem::is_directory(dir))
+            fail("--truth {}: the directory {} does not exist", args.truth, dir.string());
+    }
+    const std::string truth = args.truth.empty() ? std::string() : syntheticTruthTable(options);
     writeSyntheticSeries(args.outDir, options);
+    if (!args.truth.empty())
+        writeFileAtomic(args.truth, truth);
     const double seconds = secondsSince(start);
     uintmax_t bytes = 0;
     for (int step = 1; step <= options.steps; ++step) {
@@ -74,6 +85,9 @@ const CommandRegistration kSynthCommand(
         cmd.add_option("--grid", args->grid, "Grid size LATxRxLON (default 64x81x128; contest: 180x201x360)");
         cmd.add_option("--seed", args->seed, "Seed of the feature placement")->capture_default_str();
         cmd.add_option("--dt-myr", args->dtMyr, "Time between steps in Myr")->capture_default_str();
+        cmd.add_option("--truth", args->truth,
+                       "CSV: the generator's plumes and slabs in every step (front depth, stall depth, core volumes), "
+                       "the ground truth of raypc features");
         cmd.add_option("--format", args->format, "netCDF flavour: classic (64-bit offset) or netcdf4")
             ->capture_default_str();
         cmd.callback([args] { run(*args); });

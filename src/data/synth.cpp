@@ -1200,6 +1200,46 @@ SynthTruth syntheticTruth(const SynthOptions& options, double timeMyr, const Sph
     return truth;
 }
 
+std::string syntheticTruthTable(const SynthOptions& options)
+{
+    if (options.steps < 1)
+        fail("synthetic truth: {} steps, expected at least 1", options.steps);
+    const SphericalGrid grid = syntheticGrid(options.nLat, options.nR, options.nLon);
+    const auto w = grid.volumeFactors();
+    std::string csv = "step,time_myr,feature,kind,front_depth_km,stall_depth_km,front_at_stall,lat_deg,lon_deg,"
+                      "core_volume_km3,pancake_660_core_km3,pancake_1600_core_km3\n";
+    for (int step = 0; step < options.steps; ++step) {
+        const double t = step * options.dtMyr;
+        const std::vector<SynthFeature> features = syntheticFeatures(options, t);
+        const SynthTruth truth = syntheticTruth(options, t, grid);
+        std::vector<std::array<double, 3>> volumes(features.size(), {0, 0, 0});  // core, pancake 660, 1600
+        for (size_t iLat = 0; iLat < grid.nLat(); ++iLat)
+            for (size_t iR = 0; iR < grid.nR(); ++iR)
+                for (size_t iLon = 0; iLon < grid.nLon(); ++iLon) {
+                    const size_t i = grid.index(iLat, iR, iLon);
+                    if (truth.feature[i] < 0 || !truth.inCore(i))
+                        continue;
+                    auto& v = volumes[size_t(truth.feature[i])];
+                    const double dv = w.at(iLat, iR, iLon);
+                    v[0] += dv;
+                    const SynthPart part = truth.part[i];
+                    if (part == SynthPart::PlumePancake660 || part == SynthPart::SlabPancake660)
+                        v[1] += dv;
+                    if (part == SynthPart::PlumePancake1600 || part == SynthPart::SlabPancake1600)
+                        v[2] += dv;
+                }
+        for (size_t k = 0; k < features.size(); ++k) {
+            const SynthFeature& f = features[k];
+            const double front = kSurfaceRadiusKm - f.frontRadiusKm;
+            const bool atStall = f.stallDepthKm > 0 && std::abs(front - f.stallDepthKm) <= 50.0;
+            csv += fmt::format("{},{},{},{},{:.3f},{:g},{},{:.4f},{:.4f},{:.6e},{:.6e},{:.6e}\n", step, t, k,
+                               f.kind == SynthFeature::Kind::Plume ? "plume" : "slab", front, f.stallDepthKm,
+                               atStall ? 1 : 0, f.latDeg, f.lonDeg, volumes[k][0], volumes[k][1], volumes[k][2]);
+        }
+    }
+    return csv;
+}
+
 void writeSyntheticSeries(const std::filesystem::path& outDir, const SynthOptions& options)
 {
     if (options.steps < 1)

@@ -115,6 +115,16 @@ struct SynthTruth {
 // over lat rows. Throws raypc::Error for a non-finite time.
 SynthTruth syntheticTruth(const SynthOptions& options, double timeMyr, const SphericalGrid& grid);
 
+// The generator's features in every step of a series (`raypc synth --truth FILE`, what a user compares
+// `raypc features` with; docs/synthetic-data.md, "Ground truth"): CSV, a row per step and feature of
+// syntheticFeatures — step, time_myr, feature (its index), kind (plume, slab), front_depth_km (a
+// plume's head, a slab's tip), stall_depth_km (660, 1600, or 0 when it passes through),
+// front_at_stall (1 when the front lies within 50 km of that depth), lat_deg and lon_deg (a plume's
+// axis, the middle of a slab's trench), and on `options`' grid the dual-cell volumes (km³) of its core
+// (syntheticTruth: points where its envelope is at least kSynthCore), of its core in the pancake at
+// 660 km and at 1600 km. Deterministic. Throws raypc::Error as synthesizeSnapshot does.
+std::string syntheticTruthTable(const SynthOptions& options);
+
 // The slow rigid rotation that carries the whole pattern (part of the velocity field):
 // v_rotation = omega x p with p in metres, omega (rad/s) in the Cartesian frame of spherical.h.
 std::array<double, 3> syntheticRotationRadPerSecond(const SynthOptions& options);

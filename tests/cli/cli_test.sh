@@ -538,6 +538,18 @@ reproducible)
   check "dataset.json of runs 1 and 2 byte-identical" cmp "$work/ds1/dataset.json" "$work/ds2/dataset.json"
   check "dataset.json of runs 1 and 3 byte-identical" cmp "$work/ds1/dataset.json" "$work/ds3/dataset.json"
   check "every file of runs 1 and 2 byte-identical" diff -r --exclude=.lock "$work/ds1" "$work/ds2"
+  # The generator's truth (issue 28): a row per step and feature, the same in every run.
+  "$raypc" synth -o "$work/nc2" --steps 2 --grid 48x61x96 --truth "$work/truth1.csv" >/dev/null 2>&1
+  "$raypc" synth -o "$work/nc3" --steps 2 --grid 48x61x96 --truth "$work/truth2.csv" >/dev/null 2>&1
+  check "synth --truth: the same file twice" cmp "$work/truth1.csv" "$work/truth2.csv"
+  check "  and the same series as without it" cmp "$work/nc/spherical002.nc" "$work/nc2/spherical002.nc"
+  check "  its header" grep -q '^step,time_myr,feature,kind,front_depth_km,stall_depth_km,front_at_stall,' "$work/truth1.csv"
+  features0=$(awk -F, 'NR > 1 && $1 == 0' "$work/truth1.csv" | wc -l)
+  check "  as many features in both steps" test "$(awk -F, 'NR > 1 && $1 == 1' "$work/truth1.csv" | wc -l)" -eq "$features0"
+  check "  plumes and slabs, some stalled at 660 km" test "$(awk -F, '$4 == "slab" && $6 == 660' "$work/truth1.csv" | wc -l)" -gt 0
+  check "  step 1 at 2 Myr" test "$(awk -F, 'NR > 1 && $1 == 1 { print $2; exit }' "$work/truth1.csv")" = 2
+  check "  every core has a volume" test "$(awk -F, 'NR > 1 && !($10 > 0)' "$work/truth1.csv" | wc -l)" -eq 0
+  expect_error "truth" synth -o "$work/nc4" --steps 1 --grid 48x61x96 --truth "$work/missing/dir/truth.csv"
   ;;
 cf_netcdf_options)
   # --radius-units says what the radius coordinate's numbers are (issue 25, §3; the files are the

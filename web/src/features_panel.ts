@@ -322,9 +322,12 @@ export class FeaturesPanel {
     return { ...s, features: { ...s.features, highlight: p ? [p.feature] : [] } };
   }
 
+  // The store's step changed: the chosen track's feature of that step is highlighted; the timeline's
+  // mark and the table's colour marks (the features' ids of that step) follow.
   stepChanged(): void {
     const s = this.store.state;
     if (this.selectedTrack !== null && this.result) s.features = this.forStep(s, s.step).features;
+    if (this.result) this.drawTable();
     this.drawTimeline();
   }
 
