@@ -14,6 +14,7 @@
 // persistence_bench.cpp), Mpoints/s (extraction and flux: the grid's points; linking: the points
 // of the earlier step's features, the ones it moves), features, links.
 //   build/bench/features_bench --benchmark_min_time=1
+#include "bench_util.h"
 #include "core/error.h"
 #include "core/system_memory.h"
 #include "data/dataset.h"
@@ -83,14 +84,8 @@ const Steps& steps()
     return s;
 }
 
-int threadsFor(int arg) { return arg == 0 ? static_cast<int>(std::thread::hardware_concurrency()) : arg; }
-
-double processCpuSeconds()
-{
-    rusage u{};
-    getrusage(RUSAGE_SELF, &u);
-    return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
+using bench::processCpuSeconds;
+using bench::threadsFor;
 
 // Runs `work` in an arena of the benchmark's threads and sets the shared counters; `points` is what
 // one iteration goes through (for Mpoints/s).

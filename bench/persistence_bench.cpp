@@ -14,6 +14,7 @@
 // (syntheticFeatures: the truth) have a seed of the right kind within 500 km of the plume's axis
 // (CMB to head) or the slab's sheet (trench to tip). RAYPC_BENCH_REPORT=0 skips it.
 //   build/bench/persistence_bench --benchmark_min_time=1
+#include "bench_util.h"
 #include "core/spherical.h"
 #include "core/system_memory.h"
 #include "data/critical_points.h"
@@ -60,14 +61,8 @@ const Step& fullStep()
     return s;
 }
 
-int threadsFor(int arg) { return arg == 0 ? static_cast<int>(std::thread::hardware_concurrency()) : arg; }
-
-double processCpuSeconds()
-{
-    rusage u{};
-    getrusage(RUSAGE_SELF, &u);
-    return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
+using bench::processCpuSeconds;
+using bench::threadsFor;
 
 // Runs `work` in an arena of the benchmark's threads and sets the shared counters.
 template <typename F>

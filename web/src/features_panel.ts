@@ -8,6 +8,7 @@
 import * as d3 from 'd3';
 import { postFeatures, postTimeDepth, type FeatureSeries, type FeatureTrack } from './api';
 import { download } from './controls';
+import { plotFrame } from './stats_plot';
 import { cloneState, type RenderState } from './state';
 import type { StateStore } from './store';
 import type { LegendEntry } from './context_panel';
@@ -30,15 +31,7 @@ type SortKey = 'track' | 'firstStep' | 'lifetimeMyr' | 'maxVolumeKm3' | 'meanDep
 
 const kMargin = { top: 16, right: 12, bottom: 22, left: 50 };
 
-function frame(svg: SVGSVGElement, right = kMargin.right) {
-  const parentW = (svg.parentElement?.clientWidth ?? 0) - 4;
-  if (parentW > 100) svg.setAttribute('width', String(parentW));
-  const w = Number(svg.getAttribute('width')), h = Number(svg.getAttribute('height'));
-  const root = d3.select(svg);
-  root.selectAll('*').remove();
-  const g = root.append('g').attr('transform', `translate(${kMargin.left},${kMargin.top})`);
-  return { g, iw: w - kMargin.left - right, ih: h - kMargin.top - kMargin.bottom };
-}
+const frame = (svg: SVGSVGElement, right = kMargin.right) => plotFrame(svg, { ...kMargin, right });
 
 function fmtVolume(v: number): string {
   return v.toExponential(2);

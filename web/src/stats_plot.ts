@@ -5,17 +5,20 @@ import * as d3 from 'd3';
 import type { SelectionOverTime } from './api';
 
 const kMargin = { top: 8, right: 12, bottom: 22, left: 50 };
+export type PlotMargin = typeof kMargin;
 
-function frame(svg: SVGSVGElement) {
-  // As wide as the panel holding it (docked in the side panel, which grows with the window).
+// A small plot's frame: the svg emptied, as wide as the panel holding it (docked in the side panel,
+// which grows with the window), a group inside `margin` and the inner size.
+export function plotFrame(svg: SVGSVGElement, margin: PlotMargin = kMargin) {
   const parentW = (svg.parentElement?.clientWidth ?? 0) - 4;
   if (parentW > 100) svg.setAttribute('width', String(parentW));
   const w = Number(svg.getAttribute('width')), h = Number(svg.getAttribute('height'));
   const root = d3.select(svg);
   root.selectAll('*').remove();
-  const g = root.append('g').attr('transform', `translate(${kMargin.left},${kMargin.top})`);
-  return { g, iw: w - kMargin.left - kMargin.right, ih: h - kMargin.top - kMargin.bottom };
+  const g = root.append('g').attr('transform', `translate(${margin.left},${margin.top})`);
+  return { g, iw: w - margin.left - margin.right, ih: h - margin.top - margin.bottom };
 }
+const frame = (svg: SVGSVGElement) => plotFrame(svg);
 
 export function drawTimePlot(svg: SVGSVGElement, s: SelectionOverTime, currentStep: number): void {
   const { g, iw, ih } = frame(svg);
