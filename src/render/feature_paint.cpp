@@ -35,7 +35,7 @@ std::vector<size_t> nearestIndices(const std::vector<double>& from, const std::v
 
 Rgb featurePaintColor(int slot)
 {
-    // Tableau 10 (d3.schemeTableau10), the UI's colours of the tracks' table.
+    // Tableau 10 (as d3.schemeTableau10); the UI takes these from GET /api/info (featurePalette).
     static constexpr std::array<Rgb, kFeaturePaintSlots> kPalette{{
         {0.55f, 0.57f, 0.62f},                                               // 0: no painted feature
         {0x4e / 255.f, 0x79 / 255.f, 0xa7 / 255.f}, {0xf2 / 255.f, 0x8e / 255.f, 0x2c / 255.f},

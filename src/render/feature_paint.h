@@ -20,7 +20,7 @@
 namespace raypc::render {
 
 // The palette's slots: 0 the selected material of no painted feature, 1..10 a feature by its id
-// (slot (id - 1) mod 10 + 1; Tableau 10, as the UI's table shows them), 11 a highlighted feature
+// (slot (id - 1) mod 10 + 1; Tableau 10, sent to the UI in GET /api/info), 11 a highlighted feature
 // without colorById.
 inline constexpr int kFeaturePaintSlots = 12;
 Rgb featurePaintColor(int slot);

@@ -7,6 +7,7 @@
 #include "data/feature_series.h"
 #include "data/flux.h"
 #include "render/color_map.h"
+#include "render/feature_paint.h"
 #include "render/render_state.h"
 #include "render/transfer_function.h"
 #include "server/protocol.h"
@@ -426,6 +427,11 @@ json infoJson(const Dataset& dataset, const ServerLimits& limits)
     json maps = json::array();
     for (const auto m : render::allColorMaps())
         maps.push_back(std::string(render::colorMapName(m)));
+    json palette = json::array();
+    for (int slot = 0; slot < render::kFeaturePaintSlots; ++slot) {
+        const render::Rgb c = render::featurePaintColor(slot);
+        palette.push_back({c.r, c.g, c.b});
+    }
     return {{"protocol", kProtocolVersion},
             {"variables", variables},
             {"coordinates", coordinates},
@@ -433,6 +439,7 @@ json infoJson(const Dataset& dataset, const ServerLimits& limits)
             {"levels", levels},
             {"sample", {{"rows", sample.rows}, {"columns", sample.columns}, {"units", sample.units}}},
             {"colorMaps", maps},
+            {"featurePalette", palette},
             {"defaultState", render::toJson(render::defaultState(dataset))},
             // What POST /api/screenshot takes (checkScreenshotLimits), so that the UI states it.
             {"limits",

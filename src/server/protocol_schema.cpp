@@ -210,6 +210,9 @@ const std::vector<Definition>& messages()
                      {"units", arrayOf(text(""), ""), "the columns' units"}}),
               "the shape of the parallel coordinates' sample"},
              {"colorMaps", arrayOf(text(""), ""), "the colour maps' names"},
+             {"featurePalette", arrayOf(arrayOf(number(""), ""), ""),
+              "the colours (r, g, b in 0..1) the 3D view paints features in (render/feature_paint.h): slot 0 the "
+              "rest of the selection, 1..10 a feature by its id ((id − 1) mod 10 + 1), 11 a highlighted one"},
              {"defaultState", stateDocument(""), "a full state document: the first view (`render::defaultState`)"},
              {"limits",
               named("ServerLimits", "",

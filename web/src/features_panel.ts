@@ -269,7 +269,8 @@ export class FeaturesPanel {
       const now = t.points.find((p) => p.step === this.store.state.step);
       const swatch = tr.firstElementChild as HTMLElement;
       if (now) {
-        swatch.style.borderLeft = `6px solid ${d3.schemeTableau10[(now.feature - 1) % 10]}`;
+        const [r, g, b] = this.store.info.featurePalette[(now.feature - 1) % 10 + 1].map((c) => Math.round(255 * c));
+        swatch.style.borderLeft = `6px solid rgb(${r},${g},${b})`;
         swatch.title = `feature ${now.feature} of step ${now.step}: this colour in the 3D view when coloured by feature`;
       }
       tr.title = `track ${t.track}: click to show it from its first step`;
@@ -298,12 +299,12 @@ export class FeaturesPanel {
   paintLegend(): LegendEntry | null {
     const s = this.store.state, f = s.features;
     if (!s.brushes.length || (!f.colorById && !f.highlight.length)) return null;
-    const rgb = (hex: string): [number, number, number] => [1, 3, 5].map((i) => parseInt(hex.slice(i, i + 2), 16) / 255) as [number, number, number];
+    const slot = (k: number) => this.store.info.featurePalette[k] as [number, number, number];
     if (f.colorById)
       return { title: `features by id (colours repeat every 10)${f.highlight.length ? `; highlighted: ${f.highlight.join(', ')}` : ''}; grey: the rest of the selection`,
-        colorAt: (u) => rgb(d3.schemeTableau10[Math.min(9, Math.floor(u * 10))]), valueAt: (u) => 1 + Math.round(u * 9) };
+        colorAt: (u) => slot(1 + Math.min(9, Math.floor(u * 10))), valueAt: (u) => 1 + Math.round(u * 9) };
     return { title: `highlighted feature${f.highlight.length > 1 ? 's' : ''} ${f.highlight.join(', ')} (amber); grey: the rest of the selection`,
-      colorAt: (u) => (u < 0.5 ? [0.55, 0.57, 0.62] : [1, 0.75, 0.1]), valueAt: (u) => (u < 0.5 ? 0 : f.highlight[0]) };
+      colorAt: (u) => slot(u < 0.5 ? 0 : 11), valueAt: (u) => (u < 0.5 ? 0 : f.highlight[0]) };
   }
 
   // The chosen track's feature at `step` highlighted in `s` (the store's state unless given): none
