@@ -73,15 +73,12 @@ void run(const FluxArgs& args)
     // Avalanches per depth, over the series' steps.
     std::vector<std::vector<bool>> avalanche(args.depths.size(), std::vector<bool>(bySteps.size(), false));
     size_t avalanches = 0;
-    for (size_t d = 0; d < args.depths.size(); ++d) {
-        std::vector<double> down;
-        for (const auto& fluxes : bySteps)
-            down.push_back(fluxes[d].downKm3PerYr);
-        for (const size_t i : avalancheSteps(down, args.sigmas)) {
+    const auto perShell = avalancheStepsPerShell(bySteps, args.sigmas);
+    for (size_t d = 0; d < perShell.size(); ++d)
+        for (const size_t i : perShell[d]) {
             avalanche[d][i] = true;
             ++avalanches;
         }
-    }
     std::string csv = "step,time_myr,depth_km,radius_km,down_km3_per_yr,up_km3_per_yr,net_km3_per_yr,"
                       "selected_down_km3_per_yr,selected_up_km3_per_yr,selected_percent_of_shell,avalanche";
     csv += heat ? ",heat_flux_w,selected_heat_flux_w\n" : "\n";

@@ -8,10 +8,15 @@
 
 namespace raypc {
 
-void checkShellDepth(const SphericalGrid& g, double depthKm)
+bool shellInsideGrid(const SphericalGrid& g, double depthKm)
 {
     const double r = kSurfaceRadiusKm - depthKm;
-    if (!(r >= g.rKm.front() && r <= g.rKm.back()))
+    return r >= g.rKm.front() && r <= g.rKm.back();
+}
+
+void checkShellDepth(const SphericalGrid& g, double depthKm)
+{
+    if (!shellInsideGrid(g, depthKm))
         fail("flux: depth {} km is outside the grid's radii ({:.1f}..{:.1f} km deep)", depthKm,
              kSurfaceRadiusKm - g.rKm.back(), kSurfaceRadiusKm - g.rKm.front());
 }
@@ -91,6 +96,19 @@ std::vector<size_t> avalancheSteps(std::span<const double> downKm3PerYr, double 
         if (std::abs(downKm3PerYr[i]) > mean + k * sigma)
             steps.push_back(i);
     return steps;
+}
+
+std::vector<std::vector<size_t>> avalancheStepsPerShell(std::span<const std::vector<ShellFlux>> bySteps, double k)
+{
+    const size_t shells = bySteps.empty() ? 0 : bySteps.front().size();
+    std::vector<std::vector<size_t>> out(shells);
+    for (size_t d = 0; d < shells; ++d) {
+        std::vector<double> down;
+        for (const auto& fluxes : bySteps)
+            down.push_back(fluxes.at(d).downKm3PerYr);
+        out[d] = avalancheSteps(down, k);
+    }
+    return out;
 }
 
 }  // namespace raypc

@@ -48,12 +48,17 @@ std::vector<ShellFlux> shellFluxes(const StepVolume& volume, size_t radialVeloci
                                    std::span<const RangeFilter> filters = {},
                                    const std::optional<HeatFluxInputs>& heat = std::nullopt);
 
-// Throws raypc::Error unless `depthKm` lies within the grid's radii, naming them.
+// Whether the shell at `depthKm` lies within the grid's radii; checkShellDepth throws raypc::Error
+// naming them when it does not.
+bool shellInsideGrid(const SphericalGrid& grid, double depthKm);
 void checkShellDepth(const SphericalGrid& grid, double depthKm);
 
 // The steps (indices into `downKm3PerYr`, one value per step) whose downward flux is stronger than
 // the series' mean by more than k standard deviations: |down| > mean(|down|) + k σ(|down|) — an
 // avalanche of material across the shell. Empty for fewer than two steps or a constant series.
 std::vector<size_t> avalancheSteps(std::span<const double> downKm3PerYr, double k);
+// avalancheSteps of each shell of a series of shellFluxes (bySteps[step][shell], every step with
+// the same shells): per shell, the indices of its avalanche steps.
+std::vector<std::vector<size_t>> avalancheStepsPerShell(std::span<const std::vector<ShellFlux>> bySteps, double k);
 
 }  // namespace raypc

@@ -17,6 +17,15 @@ RenderState loadRenderState(const std::filesystem::path& path)
     return parseRenderState(parseJsonInput(readFile(path), path.string()), path.filename().string());
 }
 
+FeatureOptions featureOptions(const FeatureSettings& settings)
+{
+    FeatureOptions o;
+    o.minVolumeKm3 = settings.minVolumeKm3;
+    o.bandDepthsKm.assign(settings.depthsKm.begin(), settings.depthsKm.end());
+    o.bandHalfWidthKm = settings.bandHalfWidthKm;
+    return o;
+}
+
 std::vector<OpacityPoint> defaultOpacity(ColorMapId map)
 {
     if (isCentredOnZero(map))

@@ -8,6 +8,7 @@
 // and the docs table are derived from that description; a new key is an entry there and a member here.
 #pragma once
 
+#include "data/features.h"
 #include "render/map_projection.h"
 #include "render/stereo.h"
 #include "render/volume_renderer.h"
@@ -120,6 +121,9 @@ struct FeatureSettings {
     bool colorById = false;
     std::vector<int> highlight;  // feature ids of the state's step
 };
+
+// The data layer's options of the state's feature settings (minimum volume, depths, band).
+FeatureOptions featureOptions(const FeatureSettings& settings);
 
 struct RenderState {
     int version = kRenderStateVersion;

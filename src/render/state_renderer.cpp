@@ -185,6 +185,8 @@ bool StateRenderer::usePaint(const ResolvedState& resolved)
     }
     if (key != m_paintKey) {
         m_renderers.clear();  // their volumes hold the old paint
+        m_paintLabels.reset();
+        m_paintedVolumes.clear();
         m_paintKey = key;
     }
     return !key.empty();
@@ -195,17 +197,19 @@ std::shared_ptr<const StepVolume> StateRenderer::volumeFor(int step, int level)
     auto volume = m_sources.volume(step, level);
     if (m_paintKey.empty())
         return volume;
+    if (const auto it = m_paintedVolumes.find(level); it != m_paintedVolumes.end())
+        return it->second;
     const auto start = std::chrono::steady_clock::now();
     const int labelLevel = std::min(m_paintSettings.level, int(m_dataset->levels().size()) - 1);
-    const auto labelVolume = labelLevel == level ? volume : m_sources.volume(step, labelLevel);
-    FeatureOptions options;
-    options.minVolumeKm3 = m_paintSettings.minVolumeKm3;
-    options.bandDepthsKm.clear();
-    const StepFeatures features = extractFeatures(*labelVolume, m_paintFilters, options);
+    const SphericalGrid& labelGrid = m_dataset->levels()[size_t(labelLevel)].grid;
+    if (!m_paintLabels) {
+        const auto labelVolume = labelLevel == level ? volume : m_sources.volume(step, labelLevel);
+        m_paintLabels = extractFeatures(*labelVolume, m_paintFilters, featureOptions(m_paintSettings)).labels;
+    }
     auto painted = StepVolume::withVariable(
-        volume, featurePaintField(volume->grid(), labelVolume->grid(), features.labels, m_paintSettings));
-    spdlog::debug("features painted on step {} level {}: {} features in {:.0f} ms", step, level,
-                  features.features.size(), millisecondsSince(start));
+        volume, featurePaintField(volume->grid(), labelGrid, *m_paintLabels, m_paintSettings));
+    spdlog::debug("features painted on step {} level {} in {:.0f} ms", step, level, millisecondsSince(start));
+    m_paintedVolumes[level] = painted;
     return painted;
 }
 

@@ -215,6 +215,10 @@ private:
     std::string m_paintKey;  // empty: nothing painted
     std::vector<RangeFilter> m_paintFilters;
     FeatureSettings m_paintSettings;
+    // Of m_paintKey, found on first use: the step's feature labels (on the grid of features.level),
+    // and the painted volume of each level (the views of a stereo pair share one).
+    std::optional<std::vector<int32_t>> m_paintLabels;
+    std::map<int, std::shared_ptr<const StepVolume>> m_paintedVolumes;
     int m_rendererStep = -1;
     std::map<std::pair<int, int>, std::unique_ptr<VolumeRenderer>> m_renderers;  // by (level, view), of m_rendererStep
     std::shared_ptr<PathlineScene> m_scene;

@@ -185,7 +185,7 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
     const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
     std::vector<double> fluxDepths;  // the options' depths inside the grid's shell
     for (const double d : options.bandDepthsKm)
-        if (kSurfaceRadiusKm - d >= grid.rKm.front() && kSurfaceRadiusKm - d <= grid.rKm.back())
+        if (shellInsideGrid(grid, d))
             fluxDepths.push_back(d);
 
     FeatureSeries series(dataset, minOverlapShare, "features");
@@ -269,13 +269,10 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
                                  {"selectedUpKm3PerYr", std::move(selUp)},
                                  {"selectedPercentOfShell", std::move(selShare)}});
         }
-        for (size_t d = 0; d < fluxDepths.size(); ++d) {
-            std::vector<double> down;
-            for (const auto& f : fluxes)
-                down.push_back(f[d].downKm3PerYr);
-            for (const size_t i : avalancheSteps(down, sigmas))
+        const auto perShell = avalancheStepsPerShell(fluxes, sigmas);
+        for (size_t d = 0; d < perShell.size(); ++d)
+            for (const size_t i : perShell[d])
                 avalanches.push_back({{"depthKm", fluxDepths[d]}, {"step", int(i)}});
-        }
         flux = {{"depthsKm", fluxDepths}, {"sigmas", sigmas}, {"steps", std::move(fluxSteps)},
                 {"avalanches", std::move(avalanches)}};
     }

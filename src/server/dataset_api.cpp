@@ -269,10 +269,7 @@ ApiAnswer features(const ApiContext& api, const ApiRequest& request)
     const render::FeatureSettings& settings = resolved.state.features;
     const int level = featureLevel(dataset, request, resolved.state);
     const double sigmas = queryParameter(request.query, "sigmas") ? parseNumberParameter(request.query, "sigmas") : 2.0;
-    FeatureOptions options;
-    options.minVolumeKm3 = settings.minVolumeKm3;
-    options.bandDepthsKm.assign(settings.depthsKm.begin(), settings.depthsKm.end());
-    options.bandHalfWidthKm = settings.bandHalfWidthKm;
+    const FeatureOptions options = render::featureOptions(settings);
     const auto start = std::chrono::steady_clock::now();
     json result = featureSeriesJson(dataset, *api.cache, resolved.params.brushes, options, settings.minOverlapShare,
                                     level, sigmas, request.cancel);

@@ -75,7 +75,10 @@ export class FeaturesPanel {
       const depths = $<HTMLInputElement>('featuresDepths').value.split(',').map((t) => t.trim()).filter((t) => t !== '').map(Number);
       if (!(minVolume >= 0)) { this.host.showError(`features: minimum volume ${$<HTMLInputElement>('featuresMinVolume').value} km³ must be a number ≥ 0`); this.sync(); return; }
       if (!(band >= 0)) { this.host.showError(`features: band half-width ${$<HTMLInputElement>('featuresBand').value} km must be a number ≥ 0`); this.sync(); return; }
-      if (!depths.length || depths.some((d) => !(d > 0 && d < 2886))) { this.host.showError('features: depths must be numbers between 0 and 2886 km, comma-separated'); this.sync(); return; }
+      // The grid's depths (the server's depth coordinate): a stall or a shell's flux needs them inside.
+      const grid = this.store.info.coordinates.find((c) => c.name === 'depth');
+      const [lo, hi] = grid ? [grid.min, grid.max] : [0, 6371];
+      if (!depths.length || depths.some((d) => !(d >= lo && d <= hi))) { this.host.showError(`features: depths must be numbers from ${+lo.toFixed(1)} to ${+hi.toFixed(1)} km (the grid's), comma-separated`); this.sync(); return; }
       s.minVolumeKm3 = minVolume;
       s.bandHalfWidthKm = band;
       s.depthsKm = depths;
