@@ -131,7 +131,8 @@ try {
   for (const [path, init] of [['api/histogram?step=99&var=x', undefined], ['api/probe?step=0&lat=95&lon=0&depthKm=100', undefined],
     ['api/selection', post({ ...state, brushes: [{ name: 'pressure', min: 0, max: 1 }] })],
     ['api/features', post(state)], ['api/time-depth?of=mean', post(caps)], ['api/time-depth?of=shell-mean', post(caps)],
-    ['api/time-depth?width=100000&height=100000', post(caps)]])
+    ['api/time-depth?width=100000&height=100000', post(caps)], ['api/features?sigmas=-1', post(caps)],
+    ['api/features?level=9', post(caps)], ['api/time-depth?of=selected-mean&var=pressure', post(caps)]])
     expectMessage('HttpError', await getJson(path, init, 400), `${path} (refused)`);
 
   // ---- WebSocket ----
