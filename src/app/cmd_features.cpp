@@ -30,6 +30,8 @@ struct FeaturesArgs {
     std::string output, tracks, events, stalls;
     std::vector<double> depths{410, 660, 1000, 1600};
     double bandHalfWidthKm = 50, minVolumeKm3 = 0, minOverlapShare = 0.1;
+    std::string stallBy;  // --stall-by; empty: the state's, else mean-depth
+    StallMeasure stallMeasure = StallMeasure::MeanDepth;
     bool quiet = false;
     // Which settings the command line gave: the others come from the state's `features` (version 10)
     // when --state is given.
@@ -50,6 +52,8 @@ void applyStateSettings(FeaturesArgs& args)
         args.minVolumeKm3 = s.minVolumeKm3;
     if (!args.minOverlapGiven)
         args.minOverlapShare = s.minOverlapShare;
+    if (args.stallBy.empty())
+        args.stallMeasure = s.stallBy;
     if (!args.levelGiven) {
         args.selection.level = s.level;
         args.selection.levelFrom = args.selection.statePath + ": features.level";
@@ -70,10 +74,10 @@ std::string trackRows(const FeatureSeries& series)
     return rows;
 }
 
-std::string stallRows(const FeatureSeries& series, const FeatureOptions& options, int lastStep)
+std::string stallRows(const FeatureSeries& series, const FeatureOptions& options, int lastStep, StallMeasure measure)
 {
     std::string rows = "track,depth_km,first_step,last_step,duration_myr,mean_radial_velocity_cm_per_yr,left\n";
-    for (const auto& [track, s] : series.stalls(options.bandDepthsKm, options.bandHalfWidthKm, lastStep))
+    for (const auto& [track, s] : series.stalls(options.bandDepthsKm, options.bandHalfWidthKm, lastStep, measure))
         fmt::format_to(std::back_inserter(rows), "{},{:g},{},{},{},{},{}\n", track, s.depthKm, s.firstStep,
                        s.lastStep, s.durationMyr,
                        std::isfinite(s.meanRadialVelocityCmPerYr) ? fmt::format("{:.4g}", s.meanRadialVelocityCmPerYr) : "",
@@ -101,6 +105,8 @@ void run(FeaturesArgs args)
     SeriesSelection sel;
     FeatureOptions options;
     mpi::together([&] {
+        if (!args.stallBy.empty())
+            args.stallMeasure = parseStallMeasure(args.stallBy);
         applyStateSettings(args);
         sel = resolveSeriesSelection(args.selection);
         if (sel.filters.empty())
@@ -162,7 +168,7 @@ void run(FeaturesArgs args)
         if (!args.events.empty())
             writeFileAtomic(args.events, eventRows(*tracks, dataset));
         if (!args.stalls.empty())
-            writeFileAtomic(args.stalls, stallRows(*tracks, options, last));
+            writeFileAtomic(args.stalls, stallRows(*tracks, options, last, args.stallMeasure));
         fmt::print("{}: {} features in {} steps ({}..{}) of {} range(s){}\n", args.output, total, last - first + 1,
                    first, last, filters.size(), mpi::distributed() ? fmt::format(" on {} ranks", mpi::size()) : "");
     });
@@ -189,7 +195,11 @@ const CommandRegistration kFeaturesCommand(
         cmd.add_option("--tracks", args->tracks, "CSV: each feature's track through the steps (moved with the flow)");
         cmd.add_option("--events", args->events, "CSV: births, deaths, merges and splits of the tracks");
         cmd.add_option("--stalls", args->stalls,
-                       "CSV: how long each track stays at each --depth (its mean depth within the band) and how it left");
+                       "CSV: how long each track stays at each --depth (its --stall-by depth within the band) and how "
+                       "it left");
+        cmd.add_option("--stall-by", args->stallBy,
+                       "Which depth of a feature times its stalls: mean-depth, deepest (a sinking slab's tip) or "
+                       "shallowest (a rising plume's head) (default: the state's features.stallBy, else mean-depth)");
         const auto* minOverlap = cmd.add_option("--min-overlap", args->minOverlapShare,
                                                 "Share of a feature's volume carried onto another for a link between steps "
                                                 "(default: the state's, else 0.1)");

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <stdexcept>
 
 namespace raypc::app {
 namespace {
@@ -31,7 +32,35 @@ struct SynthArgs {
     double dtMyr = SynthOptions{}.dtMyr;
     std::string format = "classic";
     std::string truth;  // --truth FILE
+    std::string avalanche;  // --avalanche T[:D] (Myr)
 };
+
+// "--avalanche T[:D]": an avalanche from T Myr for D Myr (default: one step).
+void parseAvalanche(const std::string& text, SynthOptions& options)
+{
+    const size_t colon = text.find(':');
+    double start = 0, duration = options.dtMyr;
+    size_t used = 0;
+    try {
+        start = std::stod(text.substr(0, colon), &used);
+        if (used != (colon == std::string::npos ? text.size() : colon))
+            throw std::invalid_argument("trailing text");
+        if (colon != std::string::npos) {
+            const std::string d = text.substr(colon + 1);
+            duration = std::stod(d, &used);
+            if (used != d.size())
+                throw std::invalid_argument("trailing text");
+        }
+    } catch (const std::exception&) {
+        fail("--avalanche '{}': expected START or START:DURATION in Myr (e.g. 11 or 11:2)", text);
+    }
+    if (!std::isfinite(start) || start < 0)
+        fail("--avalanche '{}': the start {} Myr is not a time of the series (>= 0)", text, start);
+    if (!std::isfinite(duration) || duration <= 0)
+        fail("--avalanche '{}': the duration {} Myr is not positive", text, duration);
+    options.avalancheMyr = start;
+    options.avalancheDurationMyr = duration;
+}
 
 void run(const SynthArgs& args)
 {
@@ -50,6 +79,8 @@ void run(const SynthArgs& args)
         fail("--dt-myr {}: expected a positive number of Myr", args.dtMyr);
     options.dtMyr = args.dtMyr;
     options.flavour = parseFormat(args.format);
+    if (!args.avalanche.empty())
+        parseAvalanche(args.avalanche, options);
 
     const auto start = std::chrono::steady_clock::now();
     // The truth before the series: a truth file that cannot be written leaves no series behind.
@@ -88,6 +119,9 @@ const CommandRegistration kSynthCommand(
         cmd.add_option("--truth", args->truth,
                        "CSV: the generator's plumes and slabs in every step (front depth, stall depth, core volumes), "
                        "the ground truth of raypc features");
+        cmd.add_option("--avalanche", args->avalanche,
+                       "START[:DURATION] in Myr: the first slab stalled at 660 km breaks through it then "
+                       "(default duration: one step); the truth file marks it (breaking_through)");
         cmd.add_option("--format", args->format, "netCDF flavour: classic (64-bit offset) or netcdf4")
             ->capture_default_str();
         cmd.callback([args] { run(*args); });

@@ -38,8 +38,9 @@ void FeatureSeries::add(int step, std::shared_ptr<const StepVolume> volume, cons
         const Feature& f = features.features[k];
         m_rowOf[{step, f.id}] = m_rows.size();
         m_rows.push_back({tracks[k], step, timeMyr, f});
-        m_points[tracks[k]].push_back(
-            {step, timeMyr, f.meanDepthKm, m_radialVelocity ? f.variables[*m_radialVelocity].mean : std::nan("")});
+        m_points[tracks[k]].push_back({step, timeMyr, f.meanDepthKm,
+                                       m_radialVelocity ? f.variables[*m_radialVelocity].mean : std::nan(""),
+                                       f.topDepthKm, f.bottomDepthKm});
     }
     m_previousVolume = std::move(volume);
     m_previousFeatures = features;
@@ -56,11 +57,11 @@ const Feature& FeatureSeries::feature(int step, int id) const
 }
 
 std::vector<std::pair<int, Stall>> FeatureSeries::stalls(std::span<const double> depthsKm, double halfWidthKm,
-                                                         int seriesLastStep) const
+                                                         int seriesLastStep, StallMeasure measure) const
 {
     std::vector<std::pair<int, Stall>> out;
     for (const auto& [track, points] : m_points)
-        for (Stall& s : stallTimes(points, depthsKm, halfWidthKm, seriesLastStep))
+        for (Stall& s : stallTimes(points, depthsKm, halfWidthKm, seriesLastStep, measure))
             out.emplace_back(track, std::move(s));
     return out;
 }

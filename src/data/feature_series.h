@@ -47,7 +47,8 @@ public:
     const std::map<int, std::vector<TrackPoint>>& trackPoints() const { return m_points; }
     // The stalls of every track at `depthsKm` (stallTimes), in track order: (track, stall).
     std::vector<std::pair<int, Stall>> stalls(std::span<const double> depthsKm, double halfWidthKm,
-                                              int seriesLastStep) const;
+                                              int seriesLastStep,
+                                              StallMeasure measure = StallMeasure::MeanDepth) const;
 
 private:
     const Dataset& m_dataset;

@@ -319,12 +319,40 @@ std::vector<int> FeatureTracker::add(int step, const StepFeatures& features, con
     return tracks;
 }
 
+std::string_view stallMeasureName(StallMeasure measure)
+{
+    switch (measure) {
+    case StallMeasure::MeanDepth: return "mean-depth";
+    case StallMeasure::Deepest: return "deepest";
+    case StallMeasure::Shallowest: return "shallowest";
+    }
+    return "?";
+}
+
+StallMeasure parseStallMeasure(std::string_view name)
+{
+    for (const StallMeasure m : kStallMeasures)
+        if (name == stallMeasureName(m))
+            return m;
+    fail("stall measure '{}': expected mean-depth, deepest or shallowest", name);
+}
+
+double TrackPoint::depthKm(StallMeasure measure) const
+{
+    switch (measure) {
+    case StallMeasure::Deepest: return bottomDepthKm;
+    case StallMeasure::Shallowest: return topDepthKm;
+    case StallMeasure::MeanDepth: break;
+    }
+    return meanDepthKm;
+}
+
 std::vector<Stall> stallTimes(std::span<const TrackPoint> points, std::span<const double> depthsKm, double halfWidthKm,
-                              int seriesLastStep)
+                              int seriesLastStep, StallMeasure measure)
 {
     std::vector<Stall> stalls;
     for (const double depth : depthsKm) {
-        auto at = [&](size_t k) { return std::abs(points[k].meanDepthKm - depth) <= halfWidthKm; };
+        auto at = [&](size_t k) { return std::abs(points[k].depthKm(measure) - depth) <= halfWidthKm; };
         for (size_t k = 0; k < points.size();) {
             if (!at(k)) {
                 ++k;
@@ -341,7 +369,7 @@ std::vector<Stall> stallTimes(std::span<const TrackPoint> points, std::span<cons
             s.durationMyr = points[end - 1].timeMyr - points[k].timeMyr;
             s.meanRadialVelocityCmPerYr = velocity / double(end - k);
             if (end < points.size())
-                s.left = points[end].meanDepthKm > depth ? "down" : "up";
+                s.left = points[end].depthKm(measure) > depth ? "down" : "up";
             else if (s.lastStep < seriesLastStep)
                 s.left = "ended";
             stalls.push_back(s);

@@ -14,8 +14,11 @@
 #include "data/dataset.h"
 #include "data/selection.h"
 
+#include <array>
 #include <cstdint>
 #include <span>
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace raypc {
@@ -96,15 +99,26 @@ struct TrackEvent {
 const char* trackEventName(TrackEvent::Kind kind);
 
 // Stall times: how long a track stays at a depth. A track's feature is "at" depth D in a step when
-// its volume-weighted mean depth lies within ±halfWidthKm of D; each run of consecutive steps of the
-// track at D is one stall, from its first to its last step (a stall of one step lasts 0 Myr: the
-// steps are the resolution), with the mean of the feature's mean radial velocity over the run, and
-// how it ended: "down" or "up" (the track's next step is deeper or shallower than the band),
-// "ended" (the track has no next step: it died or merged) or "" (still there at the last step).
+// its measured depth (StallMeasure: its volume-weighted mean depth, its deepest point — a sinking
+// slab's tip — or its shallowest — a rising plume's head) lies within ±halfWidthKm of D; each run of
+// consecutive steps of the track at D is one stall, from its first to its last step (a stall of one
+// step lasts 0 Myr: the steps are the resolution), with the mean of the feature's mean radial
+// velocity over the run, and how it ended: "down" or "up" (the track's next step measures deeper or
+// shallower than the band), "ended" (the track has no next step: it died or merged) or "" (still
+// there at the last step).
+enum class StallMeasure { MeanDepth, Deepest, Shallowest };
+inline constexpr std::array<StallMeasure, 3> kStallMeasures{StallMeasure::MeanDepth, StallMeasure::Deepest,
+                                                            StallMeasure::Shallowest};
+std::string_view stallMeasureName(StallMeasure measure);  // "mean-depth", "deepest", "shallowest"
+// Throws raypc::Error naming `name` and the measures.
+StallMeasure parseStallMeasure(std::string_view name);
+
 struct TrackPoint {
     int step = 0;
     double timeMyr = 0, meanDepthKm = 0;
     double radialVelocityCmPerYr = 0;  // NaN when the dataset has none
+    double topDepthKm = 0, bottomDepthKm = 0;  // the feature's shallowest and deepest points
+    double depthKm(StallMeasure measure) const;
 };
 struct Stall {
     double depthKm = 0;
@@ -115,7 +129,7 @@ struct Stall {
 };
 // `points` in step order, consecutive steps of one track; `seriesLastStep`: the last step asked.
 std::vector<Stall> stallTimes(std::span<const TrackPoint> points, std::span<const double> depthsKm, double halfWidthKm,
-                              int seriesLastStep);
+                              int seriesLastStep, StallMeasure measure = StallMeasure::MeanDepth);
 
 class FeatureTracker {
 public:

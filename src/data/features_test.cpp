@@ -276,5 +276,30 @@ TEST(FeatureTracks, StallsAreRunsOfStepsNearADepthAndSayHowTheyEnded)
     EXPECT_EQ(stallTimes(rising, std::vector<double>{700}, 20, 1)[0].left, "up");
 }
 
+TEST(Features, StallsCanBeTimedByTheDeepestOrShallowestPoint)
+{
+    // A slab: its mean depth stays at 450-470 km, its tip (deepest point) reaches 640 km at step 1,
+    // lies on 660 km to step 3 and falls through at step 4; its top stays at 300 km.
+    const std::vector<TrackPoint> slab{{0, 0, 450, -2, 300, 560}, {1, 5, 460, -1, 300, 640},
+                                       {2, 10, 465, -0.2, 300, 668}, {3, 15, 465, -0.1, 300, 700},
+                                       {4, 20, 470, -3, 300, 900}};
+    const std::vector<double> depths{300, 660};
+    EXPECT_TRUE(stallTimes(slab, std::vector<double>{660}, 50, 4).empty()) << "the mean depth is never at 660 km";
+    const auto byTip = stallTimes(slab, std::vector<double>{660}, 50, 4, StallMeasure::Deepest);
+    ASSERT_EQ(byTip.size(), 1u);
+    EXPECT_EQ(byTip[0].firstStep, 1);
+    EXPECT_EQ(byTip[0].lastStep, 3);
+    EXPECT_DOUBLE_EQ(byTip[0].durationMyr, 10.0);
+    EXPECT_EQ(byTip[0].left, "down");
+    const auto byTop = stallTimes(slab, depths, 10, 4, StallMeasure::Shallowest);
+    ASSERT_EQ(byTop.size(), 1u);
+    EXPECT_EQ(byTop[0].depthKm, 300);
+    EXPECT_EQ(byTop[0].lastStep, 4);
+    EXPECT_EQ(byTop[0].left, "");
+    for (const StallMeasure m : kStallMeasures)
+        EXPECT_EQ(parseStallMeasure(stallMeasureName(m)), m);
+    EXPECT_THROW(parseStallMeasure("tip"), Error);
+}
+
 }  // namespace
 }  // namespace raypc

@@ -197,14 +197,16 @@ double layerNotches(double rKm, int stallLayer)
 
 // Radial profile (dimensionless, 0 at both boundaries) of a feature's flow. `front` is the head
 // or tip radius; flow fades over `kAheadKm` beyond it; `direction` is +1 for rising plumes.
-double flowShape(double rKm, double frontKm, int stallLayer, double direction)
+// `released`: the feature is breaking through its stall layer (an avalanche, SynthOptions): its flow
+// crosses the layer, without the notch the layers it passes get.
+double flowShape(double rKm, double frontKm, int stallLayer, double direction, bool released = false)
 {
     constexpr double kAheadKm = 400.0;
     // sin(pi x) vanishes at both boundaries; it is not cut off outside them, so that f' (a
     // central difference) stays exact on the boundary rows themselves.
     const double x = (rKm - kCoreRadiusKm) / kMantleThicknessKm;
     double shape = std::sin(kPi * x) * layerNotches(rKm, stallLayer);
-    if (stallLayer != kNoLayer) {
+    if (stallLayer != kNoLayer && !released) {
         // The feature cannot cross this layer: its flow ends there, with a steep decline
         // just before it that turns vertical flow into lateral spreading.
         shape *= smootherstep(direction * (layerRadiusKm(stallLayer) - rKm) / 250.0);
@@ -319,24 +321,37 @@ double backgroundRadialVelocity(const Model& model, const std::vector<Vec3d>& ax
     return backgroundPotential(rKm) / (rKm * rKm) * up / model.poloidalNorm;
 }
 
+// An avalanche (SynthOptions::avalancheMyr): the feature's flow crosses its stall layer, twice as
+// fast, from avalancheMyr for avalancheDurationMyr.
+constexpr double kAvalancheSpeedFactor = 2.0;
+bool avalancheUnderWay(const SynthOptions& options, double timeMyr)
+{
+    return std::isfinite(options.avalancheMyr) && timeMyr >= options.avalancheMyr &&
+           timeMyr < options.avalancheMyr + options.avalancheDurationMyr;
+}
+
 // Moves a head or tip: dr/dt = direction * speed * shape(r) + background u_r at the front's
 // own position (`where(r)`, t = 0 frame, in which the features and background are at rest
-// apart from the common rotation). RK4 in steps of at most 0.05 Myr.
-template <class Where>
+// apart from the common rotation). `released(t)`: whether the feature breaks through its stall
+// layer at time t (an avalanche). RK4 in steps of at most 0.05 Myr.
+template <class Where, class Released>
 double integrateFrontKm(const Model& model, const std::vector<Vec3d>& axes0, double front0Km, double speedMps,
-                        int stallLayer, double direction, double timeMyr, Where where)
+                        int stallLayer, double direction, double timeMyr, Where where, Released released)
 {
-    const double kmPerMyr = speedMps * kSecondsPerMyr / 1000.0;
     const double kmPerMyrPerMps = kSecondsPerMyr / 1000.0;
-    auto rate = [&](double r) {
-        return direction * kmPerMyr * flowShape(r, r, stallLayer, direction) +
+    auto rate = [&](double r, double t) {
+        const bool free = released(t);
+        const double kmPerMyr = (free ? kAvalancheSpeedFactor : 1.0) * (speedMps * kSecondsPerMyr / 1000.0);
+        return direction * kmPerMyr * flowShape(r, r, stallLayer, direction, free) +
                kmPerMyrPerMps * backgroundRadialVelocity(model, axes0, where(r), r);
     };
     const int steps = std::max(1, static_cast<int>(std::ceil(std::abs(timeMyr) / 0.05)));
     const double h = timeMyr / steps;
     double r = front0Km;
     for (int i = 0; i < steps; ++i) {
-        const double k1 = rate(r), k2 = rate(r + 0.5 * h * k1), k3 = rate(r + 0.5 * h * k2), k4 = rate(r + h * k3);
+        const double t = i * h;
+        const double k1 = rate(r, t), k2 = rate(r + 0.5 * h * k1, t + 0.5 * h), k3 = rate(r + 0.5 * h * k2, t + 0.5 * h),
+                     k4 = rate(r + h * k3, t + h);
         r += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
         r = std::clamp(r, kCoreRadiusKm + 20.0, kSurfaceRadiusKm - 20.0);
     }
@@ -607,7 +622,7 @@ ModelAtTime modelAt(const SynthOptions& options, double timeMyr, const std::vect
         fa.axis = rotate(p.axis0, model.rotationAxis, turn);
         fa.flowWidthRad = p.size * kPlumeFlowWidthKm / kFlowReferenceRadiusKm;
         const double head = integrateFrontKm(model, axes0, p.headRadius0Km, p.speedMps, p.stallLayer, +1.0, timeMyr,
-                                             [&](double) { return p.axis0; });
+                                             [&](double) { return p.axis0; }, [](double) { return false; });
         // G = exp(-(1 - cos gamma) / s^2) has -lap_S G = 2 / s^2 on the axis; scaling f by
         // s^2 / 2 * r^2 makes the axis speed exactly speedMps * flowShape.
         const double s2 = fa.flowWidthRad * fa.flowWidthRad;
@@ -663,7 +678,16 @@ ModelAtTime modelAt(const SynthOptions& options, double timeMyr, const std::vect
         m.features.push_back(std::move(fa));
     }
 
+    const Slab* avalanching = nullptr;  // the first slab stalled at 660 km breaks through it (SynthOptions)
+    if (std::isfinite(options.avalancheMyr))
+        for (const Slab& s : model.slabs)
+            if (s.stallLayer == 0) {
+                avalanching = &s;
+                break;
+            }
     for (const Slab& s : model.slabs) {
+        auto released = [&](double t) { return &s == avalanching && avalancheUnderWay(options, t); };
+        const bool free = released(timeMyr);
         FeatureAtTime fa;
         fa.isPlume = false;
         fa.pole = rotate(s.pole0, model.rotationAxis, turn);
@@ -674,11 +698,13 @@ ModelAtTime modelAt(const SynthOptions& options, double timeMyr, const std::vect
         fa.flowWidthRad = kSlabFlowWidthKm / kFlowReferenceRadiusKm;
         const double midPsi = 0.5 * s.arcAngle;
         const double tip = integrateFrontKm(model, axes0, s.tipRadius0Km, s.speedMps, s.stallLayer, -1.0, timeMyr,
-                                            [&](double r) { return slabPoint(s.pole0, s.start0, s.beta0 + slabShift(s, r), midPsi); });
+                                            [&](double r) { return slabPoint(s.pole0, s.start0, s.beta0 + slabShift(s, r), midPsi); },
+                                            released);
         // On the sheet -lap_S G = A / w^2 (see columnTerms); the minus sign makes the flow go
         // down where the slab is.
         const double w2 = fa.flowWidthRad * fa.flowWidthRad;
-        auto potential = [&](double r) { return -s.speedMps * w2 * r * r * flowShape(r, tip, s.stallLayer, -1.0); };
+        const double speed = (free ? kAvalancheSpeedFactor : 1.0) * s.speedMps;
+        auto potential = [&](double r) { return -speed * w2 * r * r * flowShape(r, tip, s.stallLayer, -1.0, free); };
         // Separable terms: one pancake per layer (above it), a cold pool on the CMB.
         fa.termCount = 3;
         fa.termWidthRad = {kPancakeSigmaKm / layerRadiusKm(0), kPancakeSigmaKm / layerRadiusKm(1),
@@ -734,7 +760,8 @@ ModelAtTime modelAt(const SynthOptions& options, double timeMyr, const std::vect
         describePoint(slabPoint(fa.pole, fa.arcE1, s.beta0, s.arcAngle), d.endLatDeg, d.endLonDeg);
         d.frontRadiusKm = tip;
         d.stallDepthKm = s.stallLayer == kNoLayer ? 0.0 : kLayers[s.stallLayer].depthKm;
-        d.speedMps = s.speedMps;
+        d.breakingThrough = free;
+        d.speedMps = speed;
         d.temperatureK = s.amplitudeK;
         d.dipAtTrenchDeg = radToDeg(std::atan(s.dipScaleKm / (kSurfaceRadiusKm * s.dipOffsetRad)));
         m.features.push_back(std::move(fa));
@@ -1207,7 +1234,7 @@ std::string syntheticTruthTable(const SynthOptions& options)
     const SphericalGrid grid = syntheticGrid(options.nLat, options.nR, options.nLon);
     const auto w = grid.volumeFactors();
     std::string csv = "step,time_myr,feature,kind,front_depth_km,stall_depth_km,front_at_stall,lat_deg,lon_deg,"
-                      "core_volume_km3,pancake_660_core_km3,pancake_1600_core_km3\n";
+                      "core_volume_km3,pancake_660_core_km3,pancake_1600_core_km3,breaking_through\n";
     for (int step = 0; step < options.steps; ++step) {
         const double t = step * options.dtMyr;
         const std::vector<SynthFeature> features = syntheticFeatures(options, t);
@@ -1232,9 +1259,10 @@ std::string syntheticTruthTable(const SynthOptions& options)
             const SynthFeature& f = features[k];
             const double front = kSurfaceRadiusKm - f.frontRadiusKm;
             const bool atStall = f.stallDepthKm > 0 && std::abs(front - f.stallDepthKm) <= 50.0;
-            csv += fmt::format("{},{},{},{},{:.3f},{:g},{},{:.4f},{:.4f},{:.6e},{:.6e},{:.6e}\n", step, t, k,
+            csv += fmt::format("{},{},{},{},{:.3f},{:g},{},{:.4f},{:.4f},{:.6e},{:.6e},{:.6e},{}\n", step, t, k,
                                f.kind == SynthFeature::Kind::Plume ? "plume" : "slab", front, f.stallDepthKm,
-                               atStall ? 1 : 0, f.latDeg, f.lonDeg, volumes[k][0], volumes[k][1], volumes[k][2]);
+                               atStall ? 1 : 0, f.latDeg, f.lonDeg, volumes[k][0], volumes[k][1], volumes[k][2],
+                               f.breakingThrough ? 1 : 0);
         }
     }
     return csv;

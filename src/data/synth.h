@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,12 @@ struct SynthOptions {
     uint64_t seed = 1;
     double dtMyr = 2.0;  // time between steps
     NetcdfFlavour flavour = NetcdfFlavour::Classic64;
+    // An avalanche (docs/synthetic-data.md): from avalancheMyr, for avalancheDurationMyr, the first
+    // slab that stalls at 660 km (in syntheticFeatures' order) breaks through it — its flow crosses
+    // the layer at twice its speed, carrying its tip below it — then stalls again where its tip is.
+    // NaN (the default): no avalanche.
+    double avalancheMyr = std::numeric_limits<double>::quiet_NaN();
+    double avalancheDurationMyr = 2.0;
 };
 
 // The contest-like grid of the given size: lat cell-centred (nLat = 180 gives -89.5 ... 89.5,
@@ -59,6 +66,8 @@ struct SynthFeature {
     double frontRadiusKm = 0;
     // Depth (km) of the layer where the feature stalls (660 or 1600); 0 when it passes through.
     double stallDepthKm = 0;
+    // Slab only: it is breaking through that layer at this time (SynthOptions::avalancheMyr).
+    bool breakingThrough = false;
     // Peak vertical speed of the feature's flow (m/s, > 0 for both kinds) and its temperature
     // amplitude (K, > 0 for plumes, < 0 for slabs).
     double speedMps = 0, temperatureK = 0;
@@ -122,7 +131,7 @@ SynthTruth syntheticTruth(const SynthOptions& options, double timeMyr, const Sph
 // front_at_stall (1 when the front lies within 50 km of that depth), lat_deg and lon_deg (a plume's
 // axis, the middle of a slab's trench), and on `options`' grid the dual-cell volumes (km³) of its core
 // (syntheticTruth: points where its envelope is at least kSynthCore), of its core in the pancake at
-// 660 km and at 1600 km. Deterministic. Throws raypc::Error as synthesizeSnapshot does.
+// 660 km and at 1600 km, and breaking_through (1 while its avalanche is under way). Deterministic. Throws raypc::Error as synthesizeSnapshot does.
 std::string syntheticTruthTable(const SynthOptions& options);
 
 // The slow rigid rotation that carries the whole pattern (part of the velocity field):

@@ -10,6 +10,7 @@
 #include "render/slice_view.h"
 
 #include "data/features.h"
+#include "data/flux.h"
 #include "data/preprocess_numerics.h"
 #include "data/selection.h"
 #include "data/synth.h"
@@ -34,6 +35,10 @@ namespace {
 constexpr double kMinFound = 0.8, kMinPurity = 0.3;
 // A slab whose pancake's core is smaller has not spread on 660 km yet (pancakes grow with time).
 constexpr double kMinPancakeKm3 = 1e8;
+// A slab's stall is timed by its feature's deepest point only when, at every step, at least this share
+// of the feature's part inside the generator's features is the slab (else the region is the slab
+// joined with another feature, whose deepest point it takes).
+constexpr double kMinOwnShare = 0.5;
 
 TEST(FeatureTruth, Task1FindsEachSlabStalledAt660AsOneFeature)
 {
@@ -114,29 +119,32 @@ TEST(FeatureTruth, Task1FindsEachSlabStalledAt660AsOneFeature)
     }
 }
 
-// Through the demo's series (12 steps, 2 Myr apart): task 1's features linked step to step
-// (linkFeatures, FeatureTracker, as `raypc features --tracks`) follow each slab the generator stalls
-// at 660 km. For every such slab, from the first step its pancake has formed: the feature holding its
-// selected pancake core (kMinFound of it, as above) lies on a track that changes only where the
-// tracker records it (a split of its earlier track or a merge into the later one: slabs whose
-// pancakes touch are one feature until they part), the slabs' tracks of the last step differ, and
-// each is at 660 km (its mean depth within 50 km: stallTimes) from its first step to the last, not
-// left: the generator never lets these slabs through.
-// It prints, beside each slab, the first step the generator has its tip within 50 km of 660 km
-// (syntheticTruthTable's front_at_stall): the preset's depth brush (560-760 km) puts a track's mean
-// depth at 660 km from its first step, earlier than that. The table is in docs/features.md.
-TEST(FeatureTruth, Task1TracksFollowEachStalledSlabThroughTheSeries)
-{
-    const auto brushes =
-        loadRenderState(std::filesystem::path(RAYPC_SOURCE_DIR) / "examples" / "task1-slabs-660km.json").brushes;
-    const SynthOptions options;  // the demo's
+// A synthetic series built in memory, the features of a selection found in each step and linked
+// step to step (linkFeatures, FeatureTracker: as `raypc features --tracks` does), beside what the
+// generator put there: for every slab it stalls at 660 km, from the first step its pancake has
+// formed, the track of the feature holding most of its selected pancake core (and how much of that
+// core it holds), the first step its tip is within 50 km of 660 km, the steps it breaks through
+// (SynthOptions::avalancheMyr); and the flux across 660 km in each step, over the shell and within
+// the selection.
+struct TrackedSlabs {
     FeatureTracker tracker;
-    std::shared_ptr<const StepVolume> previousVolume;
-    StepFeatures previous;
     std::map<int, std::vector<TrackPoint>> points;  // by track
     std::map<int, std::map<int, int>> trackOf;      // slab -> step -> track of its pancake's feature
+    std::map<int, std::map<int, double>> foundShare;  // slab -> step -> share of its selected core in that feature
+    // slab -> step -> share of that feature's part inside the generator's features that is this slab
+    std::map<int, std::map<int, double>> purity;
     std::map<int, int> atStallFrom;                 // slab -> first step its tip is within 50 km of 660 km
-    std::optional<size_t> radialVelocity;
+    std::map<int, std::set<int>> breakingThrough;   // slab -> steps its avalanche is under way
+    std::vector<int> featureCount;                  // per step
+    std::vector<double> downKm3PerYr, selectedDownKm3PerYr;  // across 660 km, per step
+};
+
+TrackedSlabs trackSlabs(const SynthOptions& options, const std::vector<NamedRange>& brushes,
+                        const FeatureOptions& featureOptions = {})
+{
+    TrackedSlabs out;
+    std::shared_ptr<const StepVolume> previousVolume;
+    StepFeatures previous;
     for (int step = 0; step < options.steps; ++step) {
         const double t = step * options.dtMyr;
         Snapshot snap = synthesizeSnapshot(options, t);
@@ -147,18 +155,23 @@ TEST(FeatureTruth, Task1TracksFollowEachStalledSlabThroughTheSeries)
         const auto index = [&](const char* name) {
             return size_t(std::find(names.begin(), names.end(), name) - names.begin());
         };
-        radialVelocity = index("radial velocity");
         const auto volume = StepVolume::fromSnapshot(snap);
         const auto filters = resolveRangeFilters(std::span<const std::string>(names), brushes);
-        StepFeatures found = extractFeatures(*volume, filters);
+        StepFeatures found = extractFeatures(*volume, filters, featureOptions);
         const std::vector<FeatureLink> links =
             previousVolume ? linkFeatures(*previousVolume, previous, found, {index("vx"), index("vy"), index("vz")},
                                           options.dtMyr)
                            : std::vector<FeatureLink>{};
-        const std::vector<int> tracks = tracker.add(step, found, links);
-        for (size_t k = 0; k < found.features.size(); ++k)
-            points[tracks[k]].push_back({step, t, found.features[k].meanDepthKm,
-                                         found.features[k].variables[*radialVelocity].mean});
+        const std::vector<int> tracks = out.tracker.add(step, found, links);
+        for (size_t k = 0; k < found.features.size(); ++k) {
+            const Feature& f = found.features[k];
+            out.points[tracks[k]].push_back({step, t, f.meanDepthKm, f.variables[index("radial velocity")].mean,
+                                             f.topDepthKm, f.bottomDepthKm});
+        }
+        out.featureCount.push_back(int(found.features.size()));
+        const ShellFlux flux = shellFluxes(*volume, index("radial velocity"), std::vector<double>{660}, filters)[0];
+        out.downKm3PerYr.push_back(flux.downKm3PerYr);
+        out.selectedDownKm3PerYr.push_back(flux.selectedDownKm3PerYr);
 
         const SynthTruth truth = syntheticTruth(options, t, snap.grid);
         const std::vector<SynthFeature> synth = syntheticFeatures(options, t);
@@ -166,10 +179,13 @@ TEST(FeatureTruth, Task1TracksFollowEachStalledSlabThroughTheSeries)
         const auto w = g.volumeFactors();
         std::map<int, std::map<int, double>> pancakeIn;  // slab -> label -> km³ of its selected core
         std::map<int, double> pancake;
+        std::map<int, std::map<int, double>> inFeature;  // label -> generator feature -> km³
         for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
             for (size_t iR = 0; iR < g.nR(); ++iR)
                 for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
                     const size_t i = g.index(iLat, iR, iLon);
+                    if (found.labels[i] > 0 && truth.feature[i] >= 0)
+                        inFeature[found.labels[i]][truth.feature[i]] += w.at(iLat, iR, iLon);
                     if (truth.part[i] != SynthPart::SlabPancake660 || !truth.inCore(i))
                         continue;
                     pancake[truth.feature[i]] += w.at(iLat, iR, iLon);
@@ -179,8 +195,10 @@ TEST(FeatureTruth, Task1TracksFollowEachStalledSlabThroughTheSeries)
         for (size_t s = 0; s < synth.size(); ++s) {
             if (synth[s].kind != SynthFeature::Kind::Slab || synth[s].stallDepthKm != 660)
                 continue;
-            if (!atStallFrom.count(int(s)) && std::abs(kSurfaceRadiusKm - synth[s].frontRadiusKm - 660) <= 50)
-                atStallFrom[int(s)] = step;
+            if (!out.atStallFrom.count(int(s)) && std::abs(kSurfaceRadiusKm - synth[s].frontRadiusKm - 660) <= 50)
+                out.atStallFrom[int(s)] = step;
+            if (synth[s].breakingThrough)
+                out.breakingThrough[int(s)].insert(step);
             if (pancake[int(s)] < kMinPancakeKm3)
                 continue;
             double total = 0, best = 0;
@@ -190,28 +208,55 @@ TEST(FeatureTruth, Task1TracksFollowEachStalledSlabThroughTheSeries)
                 if (km3 > best)
                     best = km3, bestLabel = label;
             }
-            ASSERT_GT(total, 0) << "slab " << s << " at step " << step << ": no selected core of its pancake";
-            EXPECT_GE(best / total, kMinFound) << "slab " << s << " at step " << step << " is split";
-            trackOf[int(s)][step] = tracks[size_t(bestLabel - 1)];
+            if (bestLabel == 0)
+                continue;  // nothing of it selected
+            out.trackOf[int(s)][step] = tracks[size_t(bestLabel - 1)];
+            out.foundShare[int(s)][step] = best / total;
+            double all = 0;
+            for (const auto& [feature, km3] : inFeature[bestLabel])
+                all += km3;
+            out.purity[int(s)][step] = inFeature[bestLabel][int(s)] / all;
         }
         previousVolume = volume;
         previous = std::move(found);
         previous.features.clear();
     }
+    return out;
+}
+
+// Through the demo's series (12 steps, 2 Myr apart): task 1's features (trackSlabs) follow each slab
+// the generator stalls at 660 km. For every such slab, from the first step its pancake has formed:
+// the feature holding its selected pancake core (kMinFound of it, as above) lies on a track that
+// changes only where the tracker records it (a split of its earlier track or a merge into the later
+// one: slabs whose pancakes touch are one feature until they part), the slabs' tracks of the last
+// step differ, and each is at 660 km (its mean depth within 50 km: stallTimes) from its first step
+// to the last, not left: the generator never lets these slabs through.
+// It prints, beside each slab, the first step the generator has its tip within 50 km of 660 km
+// (syntheticTruthTable's front_at_stall): the preset's depth brush (560-760 km) puts a track's mean
+// depth at 660 km from its first step, earlier than that. The table is in docs/features.md.
+TEST(FeatureTruth, Task1TracksFollowEachStalledSlabThroughTheSeries)
+{
+    const auto brushes =
+        loadRenderState(std::filesystem::path(RAYPC_SOURCE_DIR) / "examples" / "task1-slabs-660km.json").brushes;
+    const SynthOptions options;  // the demo's
+    TrackedSlabs series = trackSlabs(options, brushes);
+    for (const auto& [slab, steps] : series.foundShare)
+        for (const auto& [step, share] : steps)
+            EXPECT_GE(share, kMinFound) << "slab " << slab << " at step " << step << " is split";
 
     const int last = options.steps - 1;
-    ASSERT_GE(trackOf.size(), 2u) << "the demo stalls slabs at 660 km";
+    ASSERT_GE(series.trackOf.size(), 2u) << "the demo stalls slabs at 660 km";
     // Where a track may change: a split of the earlier track (at the earlier step) or a merge of the
     // later one (at the later step).
     std::set<std::pair<int, int>> splits, merges;  // (step, track)
-    for (const TrackEvent& e : tracker.events()) {
+    for (const TrackEvent& e : series.tracker.events()) {
         if (e.kind == TrackEvent::Kind::Split)
             splits.insert({e.step, e.track});
         if (e.kind == TrackEvent::Kind::Merge)
             merges.insert({e.step, e.track});
     }
     std::map<int, std::set<int>> tracksAt;  // step -> tracks of stalled slabs (the last step's)
-    for (const auto& [slab, steps] : trackOf) {
+    for (const auto& [slab, steps] : series.trackOf) {
         std::vector<std::string> path;
         int previousStep = -1, previousTrack = -1;
         for (const auto& [step, track] : steps) {
@@ -223,10 +268,11 @@ TEST(FeatureTruth, Task1TracksFollowEachStalledSlabThroughTheSeries)
             previousStep = step, previousTrack = track;
         }
         const int track = steps.rbegin()->second;
-        const std::vector<Stall> stalls = stallTimes(points[track], std::vector<double>{660}, 50, last);
+        const std::vector<Stall> stalls = stallTimes(series.points[track], std::vector<double>{660}, 50, last);
         fmt::print("slab {:2}: pancake formed from step {:2}, tip within 50 km of 660 km from step {:2}; "
                    "(step:track) {}; the last track at 660 km: {}\n",
-                   slab, steps.begin()->first, atStallFrom.count(slab) ? atStallFrom[slab] : -1, fmt::join(path, " "),
+                   slab, steps.begin()->first, series.atStallFrom.count(slab) ? series.atStallFrom[slab] : -1,
+                   fmt::join(path, " "),
                    stalls.empty() ? std::string("never")
                                   : fmt::format("steps {}–{} ({} Myr), left '{}'", stalls.back().firstStep,
                                                 stalls.back().lastStep, stalls.back().durationMyr, stalls.back().left));
@@ -235,7 +281,119 @@ TEST(FeatureTruth, Task1TracksFollowEachStalledSlabThroughTheSeries)
         ASSERT_FALSE(stalls.empty()) << "slab " << slab << "'s track is never at 660 km";
         EXPECT_EQ(stalls.back().lastStep, last) << "slab " << slab;
         EXPECT_EQ(stalls.back().left, "") << "slab " << slab;
-        EXPECT_EQ(stalls.back().firstStep, points[track].front().step) << "slab " << slab << ": its track reaches 660 km late";
+        EXPECT_EQ(stalls.back().firstStep, series.points[track].front().step)
+            << "slab " << slab << ": its track reaches 660 km late";
+    }
+}
+
+// An avalanche with a known time (SynthOptions::avalancheMyr: the first slab the generator stalls at
+// 660 km breaks through it from 38 to 43 Myr, in a series of 12 steps 5 Myr apart, so step 8 at
+// 40 Myr is the one under way) against what RayPC finds, with cold material below the lithosphere
+// (temperature anomaly <= -120 K at 300-2000 km depth) as the selection:
+// - the downward flux across 660 km has exactly one avalanche step at 2 sigma (avalancheSteps), the
+//   generator's, over the whole shell and within the selection; the same series without the
+//   avalanche has none;
+// - that slab's track (trackSlabs) stalls at 660 km by its deepest point (StallMeasure::Deepest:
+//   its tip) from within one step of the step its pancake formed, and leaves downward within one step
+//   of the avalanche; the stall lasts the generator's (from the pancake's first step to the last step
+//   before the avalanche) within one step; the same slab without the avalanche is still there at the
+//   last step, and so is every other slab stalled at 660 km;
+// - the count of features: each slab stalled at 660 km is found whole (kMinFound of its selected
+//   pancake core in one feature), no two slabs share a feature in any step.
+// The figures it prints are in docs/features.md.
+TEST(FeatureTruth, AnAvalancheEndsItsSlabsStallAndIsTheFluxSpike)
+{
+    const std::vector<NamedRange> brushes{{"depth", 300, 2000}, {"temperature anomaly", -1e4, -120}};
+    FeatureOptions featureOptions;
+    featureOptions.minVolumeKm3 = 5e6;
+    SynthOptions calm;
+    calm.dtMyr = 5;
+    SynthOptions avalanche = calm;
+    avalanche.avalancheMyr = 38;
+    avalanche.avalancheDurationMyr = 5;
+    const int last = calm.steps - 1;
+
+    for (const SynthOptions& options : {avalanche, calm}) {
+        const bool withAvalanche = std::isfinite(options.avalancheMyr);
+        TrackedSlabs series = trackSlabs(options, brushes, featureOptions);
+        std::set<int> truthSteps;  // steps with an avalanche under way
+        int avalancheSlab = -1;
+        for (const auto& [slab, steps] : series.breakingThrough) {
+            truthSteps.insert(steps.begin(), steps.end());
+            avalancheSlab = slab;
+        }
+        const auto asSet = [](const std::vector<size_t>& v) { return std::set<int>(v.begin(), v.end()); };
+        const std::set<int> shell = asSet(avalancheSteps(series.downKm3PerYr, 2));
+        const std::set<int> selected = asSet(avalancheSteps(series.selectedDownKm3PerYr, 2));
+        fmt::print("{}: generator's avalanche steps {{{}}}; found across 660 km over the shell {{{}}}, within the "
+                   "selection {{{}}}; downward flux {:.1f} ... {:.1f} km³/yr\n",
+                   withAvalanche ? "avalanche at 38-43 Myr" : "no avalanche", fmt::join(truthSteps, ","),
+                   fmt::join(shell, ","), fmt::join(selected, ","),
+                   *std::max_element(series.downKm3PerYr.begin(), series.downKm3PerYr.end()),
+                   *std::min_element(series.downKm3PerYr.begin(), series.downKm3PerYr.end()));
+        if (withAvalanche) {
+            ASSERT_EQ(truthSteps, std::set<int>{8}) << "the generator's avalanche moved";
+        } else {
+            ASSERT_TRUE(truthSteps.empty());
+        }
+        EXPECT_EQ(shell, truthSteps);
+        EXPECT_EQ(selected, truthSteps);
+
+        ASSERT_GE(series.trackOf.size(), 2u);
+        int timed = 0;  // slabs whose stall is timed
+        std::map<int, std::set<int>> slabsIn;  // step -> tracks of slabs
+        for (const auto& [slab, steps] : series.trackOf) {
+            for (const auto& [step, track] : steps) {
+                EXPECT_GE(series.foundShare[slab][step], kMinFound) << "slab " << slab << " at step " << step << " is split";
+                EXPECT_TRUE(slabsIn[step].insert(track).second)
+                    << "slab " << slab << " shares a feature with another slab at step " << step;
+            }
+            const int formed = steps.begin()->first;
+            double leastPurity = 1;
+            for (const auto& [step, share] : series.purity[slab])
+                leastPurity = std::min(leastPurity, share);
+            const bool breaks = withAvalanche && slab == avalancheSlab;
+            // The track its pancake's feature is on at the step it forms: the stall begins there.
+            const int track = steps.begin()->second;
+            const std::vector<Stall> stalls =
+                stallTimes(series.points[track], std::vector<double>{660}, 50, last, StallMeasure::Deepest);
+            const Stall* stall = nullptr;
+            for (const Stall& x : stalls)
+                if (x.lastStep >= formed && (!stall || x.lastStep - x.firstStep > stall->lastStep - stall->firstStep))
+                    stall = &x;
+            const int truthEnd = breaks ? *series.breakingThrough[slab].begin() : last;
+            const double truthMyr = (truthEnd - (breaks ? 1 : 0) - formed) * options.dtMyr;
+            std::vector<std::string> path;
+            for (const auto& [step, tr] : steps)
+                path.push_back(fmt::format("{}:{}", step, tr));
+            fmt::print("  slab {:2}: pancake from step {:2}, tip within 50 km of 660 km from step {:2}, {}; (step:track) {}; "
+                       "least purity {:.2f}; track {:2} at 660 km by its deepest point: {}\n",
+                       slab, formed, series.atStallFrom.count(slab) ? series.atStallFrom[slab] : -1,
+                       breaks ? fmt::format("breaks through at step {} (stalled {} Myr)", truthEnd, truthMyr)
+                              : std::string("never breaks through"),
+                       fmt::join(path, " "), leastPurity, track,
+                       stall ? fmt::format("steps {}–{} ({} Myr), left '{}'", stall->firstStep, stall->lastStep,
+                                           stall->durationMyr, stall->left)
+                             : std::string("never"));
+            if (leastPurity < kMinOwnShare) {
+                // Joined with another feature (a sheet going deeper): the region's deepest point is not
+                // this slab's, so its stall cannot be timed by it; the avalanche's slab must not be one.
+                EXPECT_FALSE(breaks) << "slab " << slab << " is joined with other features";
+                continue;
+            }
+            ++timed;
+            ASSERT_NE(stall, nullptr) << "slab " << slab << "'s track never stalls at 660 km";
+            EXPECT_LE(std::abs(stall->firstStep - formed), 1) << "slab " << slab;
+            if (breaks) {
+                EXPECT_EQ(stall->left, "down") << "slab " << slab;
+                EXPECT_LE(std::abs(stall->lastStep + 1 - truthEnd), 1) << "slab " << slab << ": leaves at the wrong step";
+                EXPECT_LE(std::abs(stall->durationMyr - truthMyr), options.dtMyr) << "slab " << slab;
+            } else if (stall->left != "ended") {  // its track may end in a merge; else it is still there
+                EXPECT_EQ(stall->left, "") << "slab " << slab;
+                EXPECT_EQ(stall->lastStep, last) << "slab " << slab;
+            }
+        }
+        EXPECT_GE(timed, 2) << "the stalls of at least the avalanche's slab and one other are timed";
     }
 }
 

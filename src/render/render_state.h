@@ -28,7 +28,7 @@ namespace raypc::render {
 // (explicit camera poses, e.g. WebXR eyes), version 8 "selection" (show the selection whatever the
 // transfer function's opacity), version 9 "map" and "section" (depth slices and great-circle
 // sections, render/slice_view.h); older documents are still read (they have none of these).
-inline constexpr int kRenderStateVersion = 11;
+inline constexpr int kRenderStateVersion = 12;
 
 // A brush range: a variable or a coordinate (x, y, z, lat, lon, radius, depth) and [min, max]. The
 // brush model is data/selection.h's: a name that repeats adds a range to its axis (OR).
@@ -117,6 +117,7 @@ struct FeatureSettings {
     float bandHalfWidthKm = 50.0f;                          // the band around each depth
     int level = 0;                                          // of detail the regions are found at
     float minOverlapShare = 0.1f;                           // of a feature carried onto another for a link
+    StallMeasure stallBy = StallMeasure::MeanDepth;         // version 12: which depth of a feature stalls
     // Version 11: the 3D view paints the step's features (render/feature_paint.h).
     bool colorById = false;
     std::vector<int> highlight;  // feature ids of the state's step

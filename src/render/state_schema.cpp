@@ -447,6 +447,11 @@ Kind<StereoMode> stereoMode()
     return enumeration<StereoMode>(allStereoModes(), stereoModeName, parseStereoMode, "a stereo mode");
 }
 
+Kind<StallMeasure> stallMeasure()
+{
+    return enumeration<StallMeasure>(kStallMeasures, stallMeasureName, parseStallMeasure, "a stall measure");
+}
+
 Kind<MapProjection> mapProjection()
 {
     return enumeration<MapProjection>(allMapProjections(), mapProjectionName, parseMapProjection, "a map projection");
@@ -1152,6 +1157,11 @@ const Object<RenderState>& document()
                  leaf<S>("minOverlapShare", at(&S::features, &FeatureSettings::minOverlapShare), number<float>(0, 1),
                          {.meaning = "share of a feature's volume that, moved with the flow over a step, must fall "
                                      "on a feature of the next step to link them into one track"}),
+                 leaf<S>("stallBy", at(&S::features, &FeatureSettings::stallBy), stallMeasure(),
+                         {.meaning = "which depth of a feature times its stalls at `depthsKm`: `mean-depth` (its "
+                                     "volume-weighted mean depth), `deepest` (its deepest point: a sinking slab's "
+                                     "tip) or `shallowest` (its shallowest point: a rising plume's head)",
+                          .since = 12}),
                  leaf<S>("colorById", at(&S::features, &FeatureSettings::colorById), boolean(),
                          {.meaning = "the 3D view colours the selection by feature: each feature of the step in its "
                                      "own colour (its id modulo 10, the UI's table's colours), other selected material "

@@ -171,8 +171,8 @@ json featurePointJson(const FeatureSeries::Row& r, std::optional<size_t> radialV
 }  // namespace
 
 json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
-                       const FeatureOptions& options, double minOverlapShare, int level, double sigmas,
-                       const std::atomic<bool>* cancel)
+                       const FeatureOptions& options, double minOverlapShare, StallMeasure stallBy, int level,
+                       double sigmas, const std::atomic<bool>* cancel)
 {
     dataset.checkLevel(level);
     if (filters.empty())
@@ -207,7 +207,7 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
     for (const FeatureSeries::Row& r : series.rows())
         rowsOf[r.track].push_back(&r);
     std::map<int, json> stallsOf;
-    for (const auto& [track, s] : series.stalls(options.bandDepthsKm, options.bandHalfWidthKm, nSteps - 1))
+    for (const auto& [track, s] : series.stalls(options.bandDepthsKm, options.bandHalfWidthKm, nSteps - 1, stallBy))
         stallsOf[track].push_back({{"depthKm", s.depthKm},
                                    {"firstStep", s.firstStep},
                                    {"lastStep", s.lastStep},
@@ -281,6 +281,7 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
             {"depthsKm", options.bandDepthsKm},
             {"bandHalfWidthKm", options.bandHalfWidthKm},
             {"minOverlapShare", minOverlapShare},
+            {"stallBy", stallMeasureName(stallBy)},
             {"steps", std::move(steps)},
             {"tracks", std::move(tracks)},
             {"events", std::move(events)},

@@ -53,7 +53,8 @@ nlohmann::json selectionStatsJson(const Dataset& dataset, StepCache& cache, std:
 // Volumes come through `cache` without evicting. Throws raypc::Error for no filters, a level out of
 // range, a dataset without velocity, or when `cancel` becomes true (checked before every step).
 nlohmann::json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
-                                 const FeatureOptions& options, double minOverlapShare, int level, double sigmas,
+                                 const FeatureOptions& options, double minOverlapShare, StallMeasure stallBy,
+                                 int level, double sigmas,
                                  const std::atomic<bool>* cancel = nullptr);
 
 // The line attributes of a window as one binary answer: u32 little-endian header length, a UTF-8

@@ -272,7 +272,7 @@ ApiAnswer features(const ApiContext& api, const ApiRequest& request)
     const FeatureOptions options = render::featureOptions(settings);
     const auto start = std::chrono::steady_clock::now();
     json result = featureSeriesJson(dataset, *api.cache, resolved.params.brushes, options, settings.minOverlapShare,
-                                    level, sigmas, request.cancel);
+                                    settings.stallBy, level, sigmas, request.cancel);
     spdlog::info("features: {} tracks in {} steps at level {} in {:.0f} ms", result["tracks"].size(),
                  result["steps"].size(), level, millisecondsSince(start));
     return jsonAnswer(result);

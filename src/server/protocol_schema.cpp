@@ -3,6 +3,7 @@
 #include "server/protocol_schema.h"
 
 #include "core/error.h"
+#include "data/features.h"
 #include "render/map_projection.h"
 #include "render/stereo.h"
 #include "server/protocol.h"
@@ -47,6 +48,14 @@ Json constant(const Json& value, std::string_view meaning)
 Json oneOfTexts(std::vector<std::string> values, std::string_view meaning)
 {
     return {{"type", "string"}, {"enum", std::move(values)}, {"description", meaning}};
+}
+
+std::vector<std::string> stallMeasureNames()
+{
+    std::vector<std::string> names;
+    for (const StallMeasure m : kStallMeasures)
+        names.emplace_back(stallMeasureName(m));
+    return names;
 }
 Json arrayOf(Json items, std::string_view meaning)
 {
@@ -280,6 +289,8 @@ const std::vector<Definition>& messages()
              {"depthsKm", arrayOf(number(""), ""), "the depths of the stalls, the band shares and the fluxes, km"},
              {"bandHalfWidthKm", number(""), "half-width of the band around each depth, km"},
              {"minOverlapShare", number(""), "share of a feature's volume carried onto another for a link"},
+             {"stallBy", oneOfTexts(stallMeasureNames(), ""),
+              "which depth of a feature times its stalls (the state's `features.stallBy`)"},
              {"steps",
               arrayOf(named("FeatureStep", "",
                             {{"step", integer(""), "the step"},
@@ -317,7 +328,7 @@ const std::vector<Definition>& messages()
                              {"stalls",
                               arrayOf(named("TrackStall", "",
                                             {{"depthKm", number(""), "the depth it stalls at, km"},
-                                             {"firstStep", integer(""), "first step with its mean depth in the band"},
+                                             {"firstStep", integer(""), "first step with its `stallBy` depth in the band"},
                                              {"lastStep", integer(""), "last such step of the run"},
                                              {"durationMyr", number(""), "time from first to last step, Myr"},
                                              {"meanRadialVelocityCmPerYr", nullable(number("")),

@@ -1171,6 +1171,21 @@ const cases = {
     const amberCleared = await amber();
     console.log(`  amber pixels: ${amberShown} with track ${chosen} highlighted, ${amberCleared} after Clear highlight`);
     check(amberShown > 300 && amberCleared < amberShown / 10, `the highlighted feature is not seen in amber: ${amberShown} then ${amberCleared} pixels`);
+    // Hovering a row highlights its track's feature of the step without choosing the track; leaving the table ends it.
+    await page.hover(`#featuresTable tr[data-track="${chosen}"]`);
+    await page.waitForFunction((id) => JSON.stringify(window.__raypc.state().features.highlight) === JSON.stringify([id]), track.points[0].feature, { timeout: 5000 })
+      .catch(async () => { throw new TestFailure(`hovering track ${chosen}'s row gave the highlight ${JSON.stringify((await rState(page)).features.highlight)}`); });
+    await waitConverged(page);
+    const amberHovered = await amber();
+    const chosenWhileHovering = await page.evaluate(() => window.__raypc.features.selectedTrack);
+    await page.mouse.move(1, 1);
+    await page.waitForFunction(() => window.__raypc.state().features.highlight.length === 0, null, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('leaving the table kept the hovered track highlighted'); });
+    await waitConverged(page);
+    const amberLeft = await amber();
+    console.log(`  amber pixels: ${amberHovered} while hovering track ${chosen}'s row, ${amberLeft} after leaving the table`);
+    check(amberHovered > 300 && amberLeft < amberHovered / 10, `hovering a row: ${amberHovered} then ${amberLeft} amber pixels`);
+    check(chosenWhileHovering === null, `hovering chose track ${chosenWhileHovering}`);
     await page.click(`#featuresTable tr[data-track="${chosen}"]`);
     await page.evaluate(() => { document.getElementById('step').value = '2'; document.getElementById('step').dispatchEvent(new Event('change')); });
     await page.waitForFunction(() => window.__raypc.state().step === 2, null, { timeout: 5000 });
@@ -1216,6 +1231,21 @@ const cases = {
     const uiCsv = readFileSync(join(tmp, 'ui-tracks.csv'), 'utf8').trim().split('\n');
     const cliCsv = readFileSync(join(tmp, 'tracks.csv'), 'utf8').trim().split('\n');
     check(uiCsv[0] === cliCsv[0] && uiCsv.length === cliCsv.length, `the tracks' CSV: ${uiCsv[0]} (${uiCsv.length} lines) vs ${cliCsv[0]} (${cliCsv.length})`);
+
+    // Stalls timed by the deepest point: the caps reach down to 660 km, so both stall there in every
+    // step (by the mean depth they do not), as `raypc features --stall-by deepest` finds.
+    const stallsAt = (x, depth) => x.tracks.map((t) => t.stalls.filter((st) => st.depthKm === depth).map((st) => `${st.firstStep}-${st.lastStep}${st.left}`).join()).join(';');
+    await page.selectOption('#featuresStallBy', 'deepest');
+    await page.waitForFunction(() => window.__raypc.featureAnswers.at(-1)?.stallBy === 'deepest', null, { timeout: 30000 })
+      .catch(async () => { throw new TestFailure(`choosing stall by deepest asked nothing: state ${JSON.stringify((await rState(page)).features)}`); });
+    const deep = await page.evaluate(() => window.__raypc.featureAnswers.at(-1));
+    console.log(`  stalls at 660 km by mean depth '${stallsAt(f, 660)}', by the deepest point '${stallsAt(deep, 660)}'`);
+    check(stallsAt(deep, 660) === '0-2;0-2' && stallsAt(f, 660) === ';', `stalls at 660 km: by mean depth '${stallsAt(f, 660)}', by the deepest point '${stallsAt(deep, 660)}'`);
+    const cliDeep = spawnSync(raypc, ['features', dataset, '--range', 'depth=0:660', '--range', 'lat=-90:-60', '--range', 'lat=60:90',
+      '-o', join(tmp, 'f.csv'), '--stalls', join(tmp, 'stalls.csv'), '--stall-by', 'deepest', '--quiet'], { encoding: 'utf8', timeout: 60000 });
+    check(cliDeep.status === 0, `raypc features --stall-by deepest: ${cliDeep.stderr}`);
+    const cliStalls = readFileSync(join(tmp, 'stalls.csv'), 'utf8').trim().split('\n').slice(1).filter((l) => l.split(',')[1] === '660').length;
+    check(cliStalls === 2, `raypc features --stall-by deepest finds ${cliStalls} stalls at 660 km`);
 
     // A new selection cancels nothing visible and asks again; no brushes: an empty panel, no error.
     const answers = await page.evaluate(() => window.__raypc.featureAnswers.length);

@@ -550,6 +550,15 @@ reproducible)
   check "  step 1 at 2 Myr" test "$(awk -F, 'NR > 1 && $1 == 1 { print $2; exit }' "$work/truth1.csv")" = 2
   check "  every core has a volume" test "$(awk -F, 'NR > 1 && !($10 > 0)' "$work/truth1.csv" | wc -l)" -eq 0
   expect_error "truth" synth -o "$work/nc4" --steps 1 --grid 48x61x96 --truth "$work/missing/dir/truth.csv"
+  check "  no slab breaks through without --avalanche" test "$(awk -F, 'NR > 1 && $13 != 0' "$work/truth1.csv" | wc -l)" -eq 0
+  # An avalanche (docs/synthetic-data.md): at 2-4 Myr one slab stalled at 660 km breaks through it;
+  # step 1 (2 Myr) is under way, step 0 and 2 are not.
+  "$raypc" synth -o "$work/nc5" --steps 3 --grid 48x61x96 --avalanche 2:2 --truth "$work/truth3.csv" >/dev/null 2>&1
+  check "synth --avalanche 2:2: one slab at 660 km breaks through, in step 1 only" \
+    test "$(awk -F, 'NR > 1 && $13 == 1 { print $1 ":" $4 ":" $6 }' "$work/truth3.csv")" = "1:slab:660"
+  check "  and step 0 is the series without it" cmp "$work/nc2/spherical001.nc" "$work/nc5/spherical001.nc"
+  expect_error "--avalanche 'soon'" synth -o "$work/nc6" --steps 1 --grid 48x61x96 --avalanche soon
+  expect_error "duration -1 Myr is not positive" synth -o "$work/nc6" --steps 1 --grid 48x61x96 --avalanche 3:-1
   ;;
 cf_netcdf_options)
   # --radius-units says what the radius coordinate's numbers are (issue 25, §3; the files are the

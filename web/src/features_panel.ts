@@ -41,6 +41,8 @@ export class FeaturesPanel {
   observer: FeaturesPanelObserver | null = null;
   result: FeatureSeries | null = null;
   selectedTrack: number | null = null;
+  private hoverTrack: number | null = null; // the row under the pointer (hover)
+  private hoverTimer = 0;
   private key = '';
   private abort: AbortController | null = null;
   private timer = 0;
@@ -82,11 +84,24 @@ export class FeaturesPanel {
       s.minVolumeKm3 = minVolume;
       s.bandHalfWidthKm = band;
       s.depthsKm = depths;
+      s.stallBy = $<HTMLSelectElement>('featuresStallBy').value as typeof s.stallBy;
       this.host.commit(false);
     };
-    for (const id of ['featuresMinVolume', 'featuresBand', 'featuresDepths']) $(id).addEventListener('change', settings);
+    for (const id of ['featuresMinVolume', 'featuresBand', 'featuresDepths', 'featuresStallBy']) $(id).addEventListener('change', settings);
     for (const [id, what] of [['featuresTracksCsv', 'tracks'], ['featuresEventsCsv', 'events'], ['featuresStallsCsv', 'stalls'], ['featuresFluxCsv', 'flux']] as const)
       $(id).addEventListener('click', () => this.exportCsv(what));
+    // Hovering a row highlights its track's feature of the step in the 3D view (after 150 ms, so
+    // that moving across the table asks for no frames); leaving the table returns to the chosen track.
+    $('featuresTable').addEventListener('mouseover', (e) => {
+      const tr = (e.target as HTMLElement).closest('tr');
+      const track = tr?.dataset.track ? Number(tr.dataset.track) : null;
+      window.clearTimeout(this.hoverTimer);
+      if (track !== this.hoverTrack) this.hoverTimer = window.setTimeout(() => this.hover(track), 150);
+    });
+    $('featuresTable').addEventListener('mouseleave', () => {
+      window.clearTimeout(this.hoverTimer);
+      this.hover(null);
+    });
     $('featuresTable').addEventListener('click', (e) => {
       const th = (e.target as HTMLElement).closest('th');
       if (th?.dataset.sort) {
@@ -107,6 +122,7 @@ export class FeaturesPanel {
     $<HTMLInputElement>('featuresMinVolume').value = String(s.minVolumeKm3);
     $<HTMLInputElement>('featuresBand').value = String(s.bandHalfWidthKm);
     $<HTMLInputElement>('featuresDepths').value = s.depthsKm.join(', ');
+    $<HTMLSelectElement>('featuresStallBy').value = s.stallBy;
   }
 
   private open(): boolean {
@@ -193,6 +209,7 @@ export class FeaturesPanel {
     // A new answer numbers features and tracks anew: the highlight follows the chosen track if it is
     // still there, else goes.
     if (this.selectedTrack !== null && !(f && f.tracks.some((t) => t.track === this.selectedTrack))) this.selectedTrack = null;
+    this.hoverTrack = null;
     const before = JSON.stringify(this.store.state.features.highlight);
     if (this.selectedTrack === null) this.store.state.features.highlight = [];
     else this.stepChanged();
@@ -237,7 +254,7 @@ export class FeaturesPanel {
       ['lifetimeMyr', 'Myr', 'lifetime, Myr'],
       ['maxVolumeKm3', 'max km³', 'largest volume, km³'],
       ['meanDepthKm', 'depth km', 'mean over its steps of its mean depth, km'],
-      ['stallMyr', 'stalls', 'time at each depth (its mean depth within the band), Myr, and how it left (↓ down, ↑ up, † ended)'],
+      ['stallMyr', 'stalls', 'time at each depth (its stall-by depth within the band), Myr, and how it left (↓ down, ↑ up, † ended)'],
       ['events', 'events', 'births, deaths, merges and splits of this track'],
     ];
     for (const [key, text, title] of columns) {
@@ -276,9 +293,19 @@ export class FeaturesPanel {
         swatch.style.borderLeft = `6px solid rgb(${r},${g},${b})`;
         swatch.title = `feature ${now.feature} of step ${now.step}: this colour in the 3D view when coloured by feature`;
       }
-      tr.title = `track ${t.track}: click to show it from its first step`;
+      tr.title = `track ${t.track}: hover to highlight its feature of this step in the 3D view, click to show it from its first step`;
       table.appendChild(tr);
     }
+  }
+
+  // The track under the pointer (null: none) is highlighted in the 3D view, or else the chosen one.
+  private hover(track: number | null): void {
+    if (track === this.hoverTrack) return;
+    this.hoverTrack = track;
+    const s = this.store.state;
+    if ((this.hoverTrack ?? this.selectedTrack) === null) s.features = { ...s.features, highlight: [] };
+    else s.features = this.forStep(s, s.step).features;
+    this.host.commit(false);
   }
 
   // Chooses a track: its row is marked, its timeline drawn and (`move`) the time slider goes to its
@@ -310,10 +337,10 @@ export class FeaturesPanel {
       colorAt: (u) => slot(u < 0.5 ? 0 : 11), valueAt: (u) => (u < 0.5 ? 0 : f.highlight[0]) };
   }
 
-  // The chosen track's feature at `step` highlighted in `s` (the store's state unless given): none
-  // where the track has no feature. Call before a state of a new step is sent.
+  // The hovered or else the chosen track's feature at `step` highlighted in `s` (the store's state
+  // unless given): none where the track has no feature. Call before a state of a new step is sent.
   forStep(s: RenderState, step: number): RenderState {
-    const t = this.result?.tracks.find((x) => x.track === this.selectedTrack);
+    const t = this.result?.tracks.find((x) => x.track === (this.hoverTrack ?? this.selectedTrack));
     if (!t) return s;
     const p = t.points.find((x) => x.step === step);
     return { ...s, features: { ...s.features, highlight: p ? [p.feature] : [] } };
@@ -323,7 +350,7 @@ export class FeaturesPanel {
   // mark and the table's colour marks (the features' ids of that step) follow.
   stepChanged(): void {
     const s = this.store.state;
-    if (this.selectedTrack !== null && this.result) s.features = this.forStep(s, s.step).features;
+    if ((this.hoverTrack ?? this.selectedTrack) !== null && this.result) s.features = this.forStep(s, s.step).features;
     if (this.result) this.drawTable();
     this.drawTimeline();
   }
