@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <optional>
 
@@ -97,9 +98,89 @@ std::string eventRows(const FeatureSeries& series, const Dataset& dataset)
     return rows;
 }
 
+// A step's features and their links from the previous step's, packed for rank 0 (bytes as in
+// memory: the receiver is the same build on the same kind of machine).
+class Packer {
+public:
+    template <class T>
+    void put(const T& value)
+    {
+        m_bytes.append(reinterpret_cast<const char*>(&value), sizeof(T));
+    }
+    void putStep(int step, const StepFeatures& f, const std::vector<FeatureLink>& links)
+    {
+        put(int32_t(step));
+        put(uint32_t(f.features.size()));
+        for (const Feature& x : f.features) {
+            put(int32_t(x.id));
+            put(uint64_t(x.points));
+            for (const double v : {x.volumeKm3, x.fractionOfMantle, x.topDepthKm, x.bottomDepthKm, x.centroidLatDeg,
+                                   x.centroidLonDeg, x.centroidDepthKm, x.meanDepthKm})
+                put(v);
+            put(uint32_t(x.variables.size()));
+            for (const VariableSummary& v : x.variables)
+                put(v);
+            put(uint32_t(x.bandFractions.size()));
+            for (const double v : x.bandFractions)
+                put(v);
+        }
+        put(uint32_t(links.size()));
+        for (const FeatureLink& l : links)
+            put(l);
+    }
+    const std::string& bytes() const { return m_bytes; }
+
+private:
+    std::string m_bytes;
+};
+
+class Unpacker {
+public:
+    explicit Unpacker(const std::string& bytes) : m_bytes(bytes) {}
+    bool done() const { return m_at == m_bytes.size(); }
+    template <class T>
+    T get()
+    {
+        if (m_bytes.size() - m_at < sizeof(T))
+            fail("features: a rank's packed features end early ({} of {} bytes)", m_at, m_bytes.size());
+        T value;
+        std::memcpy(&value, m_bytes.data() + m_at, sizeof(T));
+        m_at += sizeof(T);
+        return value;
+    }
+    int getStep(StepFeatures& f, std::vector<FeatureLink>& links)
+    {
+        const int step = get<int32_t>();
+        f.features.resize(get<uint32_t>());
+        for (Feature& x : f.features) {
+            x.id = get<int32_t>();
+            x.points = get<uint64_t>();
+            for (double* v : {&x.volumeKm3, &x.fractionOfMantle, &x.topDepthKm, &x.bottomDepthKm, &x.centroidLatDeg,
+                              &x.centroidLonDeg, &x.centroidDepthKm, &x.meanDepthKm})
+                *v = get<double>();
+            x.variables.resize(get<uint32_t>());
+            for (VariableSummary& v : x.variables)
+                v = get<VariableSummary>();
+            x.bandFractions.resize(get<uint32_t>());
+            for (double& v : x.bandFractions)
+                v = get<double>();
+        }
+        links.resize(get<uint32_t>());
+        for (FeatureLink& l : links)
+            l = get<FeatureLink>();
+        return step;
+    }
+
+private:
+    const std::string& m_bytes;
+    size_t m_at = 0;
+};
+
 // Under mpirun the steps are split into contiguous blocks over the ranks (as `raypc stats` does);
-// rank 0 gathers the rows in rank order, which is step order, and writes the file. Tracking goes
-// from step to step: rank 0 does every step then, the other ranks wait.
+// rank 0 gathers the rows in rank order, which is step order, and writes the file. With tracking,
+// each rank also links its steps' features to the previous step's (finding the features of the step
+// before its block as well), and rank 0 follows the tracks through the gathered features and links:
+// the files are those of one process, byte for byte.
 void run(FeaturesArgs args)
 {
     SeriesSelection sel;
@@ -129,22 +210,37 @@ void run(FeaturesArgs args)
         if (tracking)
             tracks.emplace(dataset, args.minOverlapShare, "--tracks/--events/--stalls");
     });
-    const mpi::Block block = !tracking ? mpi::blockOf(last - first + 1)
-                                       : mpi::Block{0, mpi::isRoot() ? int64_t(last - first + 1) : int64_t(0)};
+    const mpi::Block block = mpi::blockOf(last - first + 1);
     std::string mine;
+    Packer linked;  // with tracking: this rank's steps' features and links
     size_t count = 0;
     std::optional<Progress> progress;
     if (!args.quiet && mpi::isRoot())
         progress.emplace(mpi::distributed() ? fmt::format("features (rank 0 of {})", mpi::size()) : "features",
                          block.end - block.begin, "steps");
     mpi::together([&] {
-        for (int step = first + int(block.begin); step < first + int(block.end); ++step) {
+        std::shared_ptr<const StepVolume> previousVolume;
+        StepFeatures previous;  // labels only
+        const int begin = first + int(block.begin), end = first + int(block.end);
+        if (tracks && begin > first && begin < end) {  // the step before the block, to link the block's first
+            previousVolume = dataset.load(begin - 1, args.selection.level);
+            previous = extractFeatures(*previousVolume, filters, options);
+        }
+        for (int step = begin; step < end; ++step) {
             const auto volume = dataset.load(step, args.selection.level);
-            const StepFeatures f = extractFeatures(*volume, filters, options);
+            StepFeatures f = extractFeatures(*volume, filters, options);
             count += f.features.size();
             mine += featureTableRows(step, dataset.steps()[size_t(step)].timeMyr, f);
-            if (tracks)
-                tracks->add(step, volume, f);
+            if (tracks) {
+                const std::vector<FeatureLink> links =
+                    previousVolume ? linkFeatures(*previousVolume, previous, f, tracks->velocity(),
+                                                  dataset.steps()[size_t(step)].timeMyr -
+                                                      dataset.steps()[size_t(step) - 1].timeMyr)
+                                   : std::vector<FeatureLink>{};
+                linked.putStep(step, f, links);
+                previousVolume = volume;
+                previous.labels = std::move(f.labels);
+            }
             if (progress)
                 progress->advance();
         }
@@ -153,6 +249,20 @@ void run(FeaturesArgs args)
         progress->finish();
     const auto parts = mpi::gatherToRoot(mine);
     const auto counts = mpi::gatherToRoot(std::to_string(count));
+    const auto linkedParts = mpi::gatherToRoot(linked.bytes());
+    mpi::together([&] {
+        if (!tracks || !mpi::isRoot())
+            return;
+        for (const std::string& part : linkedParts) {  // rank order: step order
+            Unpacker in(part);
+            while (!in.done()) {
+                StepFeatures f;
+                std::vector<FeatureLink> links;
+                const int step = in.getStep(f, links);
+                tracks->addLinked(step, f, links);
+            }
+        }
+    });
     mpi::together([&] {
         if (!mpi::isRoot())
             return;

@@ -33,6 +33,16 @@ void FeatureSeries::add(int step, std::shared_ptr<const StepVolume> volume, cons
         m_previousVolume
             ? linkFeatures(*m_previousVolume, m_previousFeatures, features, m_velocity, timeMyr - m_previousTimeMyr)
             : std::vector<FeatureLink>{};
+    addLinked(step, features, links);
+    m_previousVolume = std::move(volume);
+    m_previousFeatures = features;
+    m_previousFeatures.features.clear();  // linking needs the labels only
+    m_previousTimeMyr = timeMyr;
+}
+
+void FeatureSeries::addLinked(int step, const StepFeatures& features, const std::vector<FeatureLink>& links)
+{
+    const double timeMyr = m_dataset.steps().at(size_t(step)).timeMyr;
     const std::vector<int> tracks = m_tracker.add(step, features, links);
     for (size_t k = 0; k < features.features.size(); ++k) {
         const Feature& f = features.features[k];
@@ -42,10 +52,6 @@ void FeatureSeries::add(int step, std::shared_ptr<const StepVolume> volume, cons
                                        m_radialVelocity ? f.variables[*m_radialVelocity].mean : std::nan(""),
                                        f.topDepthKm, f.bottomDepthKm});
     }
-    m_previousVolume = std::move(volume);
-    m_previousFeatures = features;
-    m_previousFeatures.features.clear();  // linking needs the labels only
-    m_previousTimeMyr = timeMyr;
 }
 
 const Feature& FeatureSeries::feature(int step, int id) const

@@ -30,6 +30,11 @@ public:
     // Adds the next step's features (steps in increasing order, each once) with the volume they were
     // extracted from (kept until the next step is linked to it).
     void add(int step, std::shared_ptr<const StepVolume> volume, const StepFeatures& features);
+    // The same with the links from the previous step's features found elsewhere (linkFeatures of the
+    // previous step's volume and labels and these, with velocity() over the steps' interval; empty for
+    // the first step): an MPI rank that linked its own steps. `features`' labels are not used.
+    void addLinked(int step, const StepFeatures& features, const std::vector<FeatureLink>& links);
+    const VelocityVariables& velocity() const { return m_velocity; }
 
     // A feature of a track in one step.
     struct Row {

@@ -53,11 +53,17 @@ stats)
   check "features with 3 ranks exits 0" test $? -eq 0
   check "features with 3 ranks: the same CSV as one process" cmp -s "$work/f1.csv" "$work/f3.csv"
   check "features found some ($(($(wc -l < "$work/f1.csv") - 1)) rows)" test "$(wc -l < "$work/f1.csv")" -gt 6
-  # Tracking goes from step to step on rank 0: the same files again.
-  "$raypc" features "$work/ds" "${sel[@]}" -o "$work/g1.csv" --tracks "$work/t1.csv" --events "$work/e1.csv" --quiet >/dev/null
-  ranks 2 features "$work/ds" "${sel[@]}" -o "$work/g2.csv" --tracks "$work/t2.csv" --events "$work/e2.csv" --quiet >/dev/null 2>&1
-  check "features --tracks with 2 ranks: the same three files" \
-    bash -c "cmp -s '$work/g1.csv' '$work/g2.csv' && cmp -s '$work/t1.csv' '$work/t2.csv' && cmp -s '$work/e1.csv' '$work/e2.csv' && cmp -s '$work/f1.csv' '$work/g1.csv'"
+  # Tracking: each rank finds and links the features of its steps (and the step before them), rank 0
+  # follows the tracks: the same files again.
+  "$raypc" features "$work/ds" "${sel[@]}" -o "$work/g1.csv" --tracks "$work/t1.csv" --events "$work/e1.csv" \
+    --stalls "$work/st1.csv" --stall-by deepest --quiet >/dev/null
+  check "features --tracks found tracks ($(($(wc -l < "$work/t1.csv") - 1)) rows)" test "$(wc -l < "$work/t1.csv")" -gt 6
+  for n in 2 3; do
+    ranks $n features "$work/ds" "${sel[@]}" -o "$work/g$n.csv" --tracks "$work/t$n.csv" --events "$work/e$n.csv" \
+      --stalls "$work/st$n.csv" --stall-by deepest --quiet >/dev/null 2>&1
+    check "features --tracks/--events/--stalls with $n ranks: the same four files" \
+      bash -c "cmp -s '$work/g1.csv' '$work/g$n.csv' && cmp -s '$work/t1.csv' '$work/t$n.csv' && cmp -s '$work/e1.csv' '$work/e$n.csv' && cmp -s '$work/st1.csv' '$work/st$n.csv' && cmp -s '$work/f1.csv' '$work/g1.csv'"
+  done
   ;;
 errors)
   make_data
