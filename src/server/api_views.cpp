@@ -172,7 +172,8 @@ json featurePointJson(const FeatureSeries::Row& r, std::optional<size_t> radialV
 
 json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
                        const FeatureOptions& options, double minOverlapShare, StallMeasure stallBy, int level,
-                       double sigmas, const std::atomic<bool>* cancel)
+                       double sigmas, const std::atomic<bool>* cancel,
+                       const std::function<void(int done, int total)>& progress)
 {
     dataset.checkLevel(level);
     if (filters.empty())
@@ -194,6 +195,8 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
     for (int step = 0; step < nSteps; ++step) {
         if (cancel && *cancel)
             fail("features cancelled at step {} of {} (the client went away or the server is stopping)", step, nSteps);
+        if (progress)
+            progress(step, nSteps);
         const auto volume = cache.getWithoutEvicting(step, level);
         const StepFeatures f = extractFeatures(*volume, filters, options);
         steps.push_back({{"step", step}, {"timeMyr", dataset.steps()[size_t(step)].timeMyr}, {"features", f.features.size()}});
@@ -201,6 +204,8 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
             fluxes.push_back(shellFluxes(*volume, *radialVelocity, fluxDepths, filters));
         series.add(step, volume, f);
     }
+    if (progress)
+        progress(nSteps, nSteps);
 
     // Tracks: their points (step order), stalls and a summary for the table.
     std::map<int, std::vector<const FeatureSeries::Row*>> rowsOf;

@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include <atomic>
+#include <functional>
 #include <filesystem>
 #include <optional>
 #include <span>
@@ -52,10 +53,11 @@ nlohmann::json selectionStatsJson(const Dataset& dataset, StepCache& cache, std:
 // the shells at those depths (inside the grid) per step with the avalanche steps (`sigmas`).
 // Volumes come through `cache` without evicting. Throws raypc::Error for no filters, a level out of
 // range, a dataset without velocity, or when `cancel` becomes true (checked before every step).
+// `progress` hears the steps done before each step and at the end.
 nlohmann::json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
                                  const FeatureOptions& options, double minOverlapShare, StallMeasure stallBy,
-                                 int level, double sigmas,
-                                 const std::atomic<bool>* cancel = nullptr);
+                                 int level, double sigmas, const std::atomic<bool>* cancel = nullptr,
+                                 const std::function<void(int done, int total)>& progress = {});
 
 // The line attributes of a window as one binary answer: u32 little-endian header length, a UTF-8
 // JSON header {step, window, lines, columns, units, sets: [{injectionStep, injectionTimeMyr, lines}]},

@@ -270,9 +270,24 @@ ApiAnswer features(const ApiContext& api, const ApiRequest& request)
     const int level = featureLevel(dataset, request, resolved.state);
     const double sigmas = queryParameter(request.query, "sigmas") ? parseNumberParameter(request.query, "sigmas") : 2.0;
     const FeatureOptions options = render::featureOptions(settings);
+    const std::optional<std::string> job = queryParameter(request.query, "job");
+    if (job)
+        JobProgress::checkId(*job);
     const auto start = std::chrono::steady_clock::now();
-    json result = featureSeriesJson(dataset, *api.cache, resolved.params.brushes, options, settings.minOverlapShare,
-                                    settings.stallBy, level, sigmas, request.cancel);
+    std::function<void(int, int)> progress;
+    if (job && api.jobs)
+        progress = [&](int done, int total) { api.jobs->running(*job, done, total); };
+    json result;
+    try {
+        result = featureSeriesJson(dataset, *api.cache, resolved.params.brushes, options, settings.minOverlapShare,
+                                   settings.stallBy, level, sigmas, request.cancel, progress);
+    } catch (...) {
+        if (progress)
+            api.jobs->ended(*job, false);
+        throw;
+    }
+    if (progress)
+        api.jobs->ended(*job, true);
     spdlog::info("features: {} tracks in {} steps at level {} in {:.0f} ms", result["tracks"].size(),
                  result["steps"].size(), level, millisecondsSince(start));
     return jsonAnswer(result);
@@ -380,6 +395,18 @@ LinkedState& linkedState(const ApiContext& api)
     return *api.link;
 }
 
+// Where POST /api/features?job=ID is.
+ApiAnswer jobProgress(const ApiContext& api, const ApiRequest& request)
+{
+    const std::optional<std::string> job = queryParameter(request.query, "job");
+    if (!job)
+        fail("job: missing (GET /api/job-progress?job=ID, the id given to POST /api/features?job=ID)");
+    JobProgress::checkId(*job);
+    if (!api.jobs)
+        fail("job-progress: this server keeps no job progress");
+    return jsonAnswer(api.jobs->toJson(*job));
+}
+
 ApiAnswer linkGet(const ApiContext& api, const ApiRequest&)
 {
     return jsonAnswer(linkedState(api).toJson());
@@ -414,6 +441,7 @@ const Route kRoutes[] = {
     {HttpMethod::Get, "/api/presets", Lane::Worker, presets},
     {HttpMethod::Post, "/api/stats", Lane::Statistics, stats},
     {HttpMethod::Post, "/api/features", Lane::Statistics, features},
+    {HttpMethod::Get, "/api/job-progress", Lane::Network, jobProgress},
     {HttpMethod::Post, "/api/time-depth", Lane::Statistics, timeDepth},
     {HttpMethod::Get, "/api/pathlines", Lane::Worker, pathlines},
     {HttpMethod::Get, "/api/persistence", Lane::Worker, persistence},

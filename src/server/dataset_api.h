@@ -9,6 +9,7 @@
 #include "server/api_views.h"
 #include "server/dataset_caches.h"
 #include "server/limits.h"
+#include "server/job_progress.h"
 #include "server/linked_state.h"
 #include "server/series_progress.h"
 #include "server/step_cache.h"
@@ -40,6 +41,7 @@ struct ApiContext {
     ServerLimits limits;
     std::shared_ptr<const SeriesProgress> series;   // GET /api/progress; nullptr: a complete dataset
     LinkedState* link = nullptr;                    // GET/POST /api/link (the server's, server_context.h)
+    JobProgress* jobs = nullptr;                    // POST /api/features?job=, GET /api/job-progress
 };
 
 // One API request as the handlers see it: the percent-encoded query, the body, and a flag that

@@ -253,6 +253,16 @@ const std::vector<Definition>& messages()
              {"elapsedSeconds", number(""), "seconds since the run started", false},
              {"etaSeconds", nullable(number("")), "seconds left; null until this run finished an item", false},
              {"message", text(""), "why it failed (`failed` only)", false}}));
+        d.push_back(message(
+            "JobProgress", "GET /api/job-progress?job=ID",
+            "where the request `POST /api/features?job=ID` is (the id is the client's: 1-64 letters, digits, `-`, `_`)",
+            {{"job", text(""), "the id asked about"},
+             {"state", oneOfTexts({"unknown", "running", "done", "failed"}, ""),
+              "`unknown`: not started (waiting behind another request) or forgotten (the last 32 are kept); "
+              "`running`; `done`: answered; `failed`: refused or cancelled"},
+             {"done", integer(""), "steps done"},
+             {"total", integer(""), "steps of the series (0 until it runs)"},
+             {"elapsedSeconds", number(""), "seconds since it started running"}}));
         d.push_back(part("Preset", "an example state of the examples directory",
                          {{"name", text(""), "the file's name without `.json`"},
                           {"title", text(""), "a short human title"},

@@ -135,6 +135,7 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     s.api.limits = s.options.limits;
     s.api.series = s.options.series;
     s.api.link = &s.link;
+    s.api.jobs = &s.jobProgress;
     s.assets = s.options.assets;
     s.site.loopback = isLoopbackHost(s.options.host);
     for (const auto& origin : s.options.allowedOrigins)

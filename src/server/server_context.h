@@ -129,6 +129,7 @@ struct ServerContext {
     ApiContext api;
     RenderContext render;
     LinkedState link;  // the state the UI shows, for programs (GET/POST /api/link); api.link points here
+    JobProgress jobProgress;  // where long statistics requests are (GET /api/job-progress); api.jobs points here
     std::string token;  // empty on loopback
     SitePolicy site;
     std::optional<std::filesystem::path> assets;

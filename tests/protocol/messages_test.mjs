@@ -105,9 +105,15 @@ try {
   expectMessage('SelectionOverTime', await getJson('api/stats?level=0', post({ ...state, brushes: [{ name: 'depth', min: 500, max: 1500 }] })), 'POST /api/stats');
   const caps = { ...state, brushes: [{ name: 'depth', min: 0, max: 660 }, { name: 'lat', min: -90, max: -60 }, { name: 'lat', min: 60, max: 90 }],
     features: { ...state.features, depthsKm: [300, 660], bandHalfWidthKm: 100 } };
-  const features = await getJson('api/features', post(caps));
+  const features = await getJson('api/features?job=protocol-test_1', post(caps));
   if (!features.tracks.some((t) => t.stalls.length)) fail('POST /api/features: no stall to check the shape of');
   expectMessage('FeatureSeries', features, 'POST /api/features');
+  const job = await getJson('api/job-progress?job=protocol-test_1');
+  if (job.state !== 'done' || job.done !== features.steps.length || job.total !== features.steps.length)
+    fail(`GET /api/job-progress after the features: ${JSON.stringify(job)}`);
+  expectMessage('JobProgress', job, 'GET /api/job-progress');
+  const unknownJob = await getJson('api/job-progress?job=never-asked');
+  if (unknownJob.state !== 'unknown') fail(`GET /api/job-progress of an id never given: ${JSON.stringify(unknownJob)}`);
   const picture = await get('api/time-depth?of=selected-mean&var=temperature&width=400&height=240', post(caps));
   if (picture.status !== 200 || picture.type !== 'image/png' || picture.body.readUInt32BE(16) !== 400)
     fail(`POST /api/time-depth: status ${picture.status}, ${picture.type}, ${picture.body.length} bytes`);
@@ -132,7 +138,7 @@ try {
     ['api/selection', post({ ...state, brushes: [{ name: 'pressure', min: 0, max: 1 }] })],
     ['api/features', post(state)], ['api/time-depth?of=mean', post(caps)], ['api/time-depth?of=shell-mean', post(caps)],
     ['api/time-depth?width=100000&height=100000', post(caps)], ['api/features?sigmas=-1', post(caps)],
-    ['api/features?level=9', post(caps)], ['api/time-depth?of=selected-mean&var=pressure', post(caps)]])
+    ['api/features?level=9', post(caps)], ['api/features?job=a%20b', post(caps)], ['api/job-progress'], ['api/job-progress?job=' + 'x'.repeat(65)], ['api/time-depth?of=selected-mean&var=pressure', post(caps)]])
     expectMessage('HttpError', await getJson(path, init, 400), `${path} (refused)`);
 
   // ---- WebSocket ----

@@ -6,11 +6,11 @@ import type { RenderState } from './state';
 // The server's answers are typed from their one description (src/server/protocol_schema.cpp,
 // `raypc protocol-schema`, generated into generated/protocol_types.ts).
 import type {
-  CoordinateInfo, FeatureSeries, FeatureTrack, Histogram, Info, MapHeader, PathlinesHeader, PersistenceDiagram, PersistencePair, Preset,
+  CoordinateInfo, FeatureSeries, FeatureTrack, Histogram, Info, JobProgress, MapHeader, PathlinesHeader, PersistenceDiagram, PersistencePair, Preset,
   ProbeAnswer, SectionHeader, Selection, SelectionOverTime, SeriesProgress, StepInfo, VariableInfo,
 } from './generated/protocol_types';
 export type {
-  CoordinateInfo, FeatureSeries, FeatureTrack, Histogram, Info, PersistenceDiagram, PersistencePair, Preset, ProbeAnswer, Selection,
+  CoordinateInfo, FeatureSeries, FeatureTrack, Histogram, Info, JobProgress, PersistenceDiagram, PersistencePair, Preset, ProbeAnswer, Selection,
   SelectionOverTime, SeriesProgress, StepInfo, VariableInfo,
 };
 // What POST /api/slice drew: a map's projection or a section's plot (`view` tells which).
@@ -134,12 +134,18 @@ export async function postStats(state: RenderState, level: number | undefined, s
 }
 
 // The features of the state's selection followed through the series, with the state's feature
-// settings (POST /api/features, docs/features.md).
-export async function postFeatures(state: RenderState, signal?: AbortSignal): Promise<FeatureSeries> {
-  const r = await fetch('api/features', {
+// settings (POST /api/features, docs/features.md); `job` names the request for getJobProgress.
+export async function postFeatures(state: RenderState, job: string, signal?: AbortSignal): Promise<FeatureSeries> {
+  const r = await fetch(`api/features?job=${encodeURIComponent(job)}`, {
     method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(state), signal,
   });
   return (await check(r, 'POST /api/features')).json();
+}
+
+// Where the request postFeatures named `job` is (GET /api/job-progress).
+export async function getJobProgress(job: string, signal?: AbortSignal): Promise<JobProgress> {
+  const r = await fetch(`api/job-progress?job=${encodeURIComponent(job)}`, { signal });
+  return (await check(r, 'GET /api/job-progress')).json();
 }
 
 // The time–depth picture of the state's selection (POST /api/time-depth): a PNG drawn by the server

@@ -6,7 +6,7 @@
 // `raypc stats --hovmoller`). Asked for while the panel is open, after each final state whose
 // selection or feature settings changed; the next change cancels a request still running.
 import * as d3 from 'd3';
-import { postFeatures, postTimeDepth, type FeatureSeries, type FeatureTrack } from './api';
+import { getJobProgress, postFeatures, postTimeDepth, type FeatureSeries, type FeatureTrack, type JobProgress } from './api';
 import { download } from './controls';
 import { plotFrame } from './stats_plot';
 import { cloneState, type RenderState } from './state';
@@ -162,13 +162,29 @@ export class FeaturesPanel {
     const steps = this.store.info.steps.length;
     const start = performance.now();
     $('featuresCancel').hidden = false;
+    // The server says how many steps are done (GET /api/job-progress, asked every 400 ms, one at a time).
+    const job = `features-${Date.now().toString(36)}-${Math.random().toString(36).slice(2, 10)}`;
+    let progress: JobProgress | null = null, asking = false, lastAsked = 0;
     const tick = () => {
-      $('featuresNote').textContent = `finding the features of ${steps} steps at level ${state.features.level}… ${((performance.now() - start) / 1000).toFixed(1)} s`;
+      const seconds = ((performance.now() - start) / 1000).toFixed(1);
+      $('featuresNote').textContent = progress?.state === 'running'
+        ? `finding the features: step ${progress.done} of ${progress.total} done at level ${state.features.level}… ${seconds} s`
+        : progress?.state === 'unknown' && performance.now() - start > 1000
+          ? `waiting for another statistics request to finish… ${seconds} s`
+          : `finding the features of ${steps} steps at level ${state.features.level}… ${seconds} s`;
+      if (!asking && performance.now() - lastAsked >= 400) {
+        asking = true;
+        lastAsked = performance.now();
+        getJobProgress(job, ctl.signal)
+          .then((p) => { if (!ctl.signal.aborted) progress = p; })
+          .catch(() => {}) // the answer itself reports failures
+          .finally(() => { asking = false; });
+      }
     };
     tick();
     clearInterval(this.ticker);
     this.ticker = window.setInterval(tick, 200);
-    postFeatures(state, ctl.signal)
+    postFeatures(state, job, ctl.signal)
       .then((f) => {
         if (ctl.signal.aborted) return;
         this.stopTicker('');
