@@ -1247,6 +1247,25 @@ const cases = {
     const cliStalls = readFileSync(join(tmp, 'stalls.csv'), 'utf8').trim().split('\n').slice(1).filter((l) => l.split(',')[1] === '660').length;
     check(cliStalls === 2, `raypc features --stall-by deepest finds ${cliStalls} stalls at 660 km`);
 
+    // While it waits the note says how many steps the server has done (GET /api/job-progress of the
+    // request's job): the answer held back 1.5 s, the note reads "step 3 of 3 done".
+    const asked = [];
+    page.on('request', (r) => { if (/api\/(features|job-progress)/.test(r.url())) asked.push(r.url()); });
+    await page.route('**/api/features?*', async (route) => {
+      const answer = await route.fetch();
+      await new Promise((r) => setTimeout(r, 1500));
+      await route.fulfill({ response: answer });
+    });
+    await page.click('#featuresFind');
+    await page.waitForFunction(() => /step 3 of 3 done/.test(document.getElementById('featuresNote').textContent), null, { timeout: 10000 })
+      .catch(async () => { throw new TestFailure(`the note never said the steps done: '${await page.textContent('#featuresNote')}'; asked ${asked.join(' ')}`); });
+    await page.unroute('**/api/features?*');
+    const jobOf = (u) => new URL(u).searchParams.get('job');
+    const featureJob = jobOf(asked.find((u) => u.includes('api/features')));
+    check(featureJob && asked.some((u) => u.includes('job-progress') && jobOf(u) === featureJob),
+      `the panel asked the progress of another job: ${asked.join(' ')}`);
+    console.log(`  while waiting: '${await page.textContent('#featuresNote')}'`);
+
     // A new selection cancels nothing visible and asks again; no brushes: an empty panel, no error.
     const answers = await page.evaluate(() => window.__raypc.featureAnswers.length);
     await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, brushes: [] }); });

@@ -167,7 +167,7 @@ export class FeaturesPanel {
     let progress: JobProgress | null = null, asking = false, lastAsked = 0;
     const tick = () => {
       const seconds = ((performance.now() - start) / 1000).toFixed(1);
-      $('featuresNote').textContent = progress?.state === 'running'
+      $('featuresNote').textContent = progress?.state === 'running' || progress?.state === 'done'
         ? `finding the features: step ${progress.done} of ${progress.total} done at level ${state.features.level}… ${seconds} s`
         : progress?.state === 'unknown' && performance.now() - start > 1000
           ? `waiting for another statistics request to finish… ${seconds} s`
