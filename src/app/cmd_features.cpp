@@ -8,6 +8,7 @@
 #include "core/mpi.h"
 #include "core/progress.h"
 #include "data/dataset.h"
+#include "data/feature_csv.h"
 #include "data/feature_series.h"
 #include "data/features.h"
 #include "data/selection.h"
@@ -59,43 +60,6 @@ void applyStateSettings(FeaturesArgs& args)
         args.selection.level = s.level;
         args.selection.levelFrom = args.selection.statePath + ": features.level";
     }
-}
-
-// The CSV files of tracking (--tracks, --events, --stalls), from the series of FeatureSeries.
-std::string trackRows(const FeatureSeries& series)
-{
-    std::string rows = "track,step,time_myr,feature,volume_km3,mean_depth_km,centroid_lat_deg,centroid_lon_deg,"
-                       "centroid_depth_km\n";
-    for (const FeatureSeries::Row& r : series.rows()) {
-        const Feature& x = r.feature;
-        fmt::format_to(std::back_inserter(rows), "{},{},{},{},{:.6e},{:.3f},{:.4f},{:.4f},{:.3f}\n", r.track, r.step,
-                       r.timeMyr, x.id, x.volumeKm3, x.meanDepthKm, x.centroidLatDeg, x.centroidLonDeg,
-                       x.centroidDepthKm);
-    }
-    return rows;
-}
-
-std::string stallRows(const FeatureSeries& series, const FeatureOptions& options, int lastStep, StallMeasure measure)
-{
-    std::string rows = "track,depth_km,first_step,last_step,duration_myr,mean_radial_velocity_cm_per_yr,left\n";
-    for (const auto& [track, s] : series.stalls(options.bandDepthsKm, options.bandHalfWidthKm, lastStep, measure))
-        fmt::format_to(std::back_inserter(rows), "{},{:g},{},{},{},{},{}\n", track, s.depthKm, s.firstStep,
-                       s.lastStep, s.durationMyr,
-                       std::isfinite(s.meanRadialVelocityCmPerYr) ? fmt::format("{:.4g}", s.meanRadialVelocityCmPerYr) : "",
-                       s.left);
-    return rows;
-}
-
-std::string eventRows(const FeatureSeries& series, const Dataset& dataset)
-{
-    std::string rows = "step,time_myr,event,track,feature,other_features,centroid_lat_deg,centroid_lon_deg,mean_depth_km\n";
-    for (const TrackEvent& e : series.events()) {
-        const Feature& x = series.feature(e.step, e.feature);
-        fmt::format_to(std::back_inserter(rows), "{},{},{},{},{},{},{:.4f},{:.4f},{:.3f}\n", e.step,
-                       dataset.steps()[size_t(e.step)].timeMyr, trackEventName(e.kind), e.track, e.feature,
-                       fmt::join(e.others, " "), x.centroidLatDeg, x.centroidLonDeg, x.meanDepthKm);
-    }
-    return rows;
 }
 
 // A step's features and their links from the previous step's, packed for rank 0 (bytes as in
@@ -274,11 +238,12 @@ void run(FeaturesArgs args)
             total += std::stoull(c);
         writeFileAtomic(args.output, csv);
         if (!args.tracks.empty())
-            writeFileAtomic(args.tracks, trackRows(*tracks));
+            writeFileAtomic(args.tracks, trackCsv(*tracks));
         if (!args.events.empty())
-            writeFileAtomic(args.events, eventRows(*tracks, dataset));
+            writeFileAtomic(args.events, eventCsv(*tracks, dataset));
         if (!args.stalls.empty())
-            writeFileAtomic(args.stalls, stallRows(*tracks, options, last, args.stallMeasure));
+            writeFileAtomic(args.stalls,
+                            stallCsv(*tracks, options.bandDepthsKm, options.bandHalfWidthKm, last, args.stallMeasure));
         fmt::print("{}: {} features in {} steps ({}..{}) of {} range(s){}\n", args.output, total, last - first + 1,
                    first, last, filters.size(), mpi::distributed() ? fmt::format(" on {} ranks", mpi::size()) : "");
     });

@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "data/dataset.h"
+#include "data/feature_csv.h"
 #include "data/flux.h"
 
 #include <fmt/format.h>
@@ -57,13 +58,17 @@ void run(const FluxArgs& args)
         fail("--density, --heat-capacity: need --heat-flux (the flux they enter)");
     }
 
+    // The mass flux where the data have a density (ASPECT writes one; the contest's files do not).
+    std::optional<size_t> density;
+    if (const auto rho = std::find(names.begin(), names.end(), kDensityVariable); rho != names.end())
+        density = size_t(rho - names.begin());
     std::vector<std::vector<ShellFlux>> bySteps;  // [step - first][depth]
     std::optional<Progress> progress;
     if (!args.quiet)
         progress.emplace("flux", sel.last - sel.first + 1, "steps");
     for (int step = sel.first; step <= sel.last; ++step) {
         bySteps.push_back(shellFluxes(*dataset.load(step, args.selection.level), size_t(vr - names.begin()),
-                                      args.depths, sel.filters, heat));
+                                      args.depths, sel.filters, heat, density));
         if (progress)
             progress->advance();
     }
@@ -71,30 +76,11 @@ void run(const FluxArgs& args)
         progress->finish();
 
     // Avalanches per depth, over the series' steps.
-    std::vector<std::vector<bool>> avalanche(args.depths.size(), std::vector<bool>(bySteps.size(), false));
-    size_t avalanches = 0;
     const auto perShell = avalancheStepsPerShell(bySteps, args.sigmas);
-    for (size_t d = 0; d < perShell.size(); ++d)
-        for (const size_t i : perShell[d]) {
-            avalanche[d][i] = true;
-            ++avalanches;
-        }
-    std::string csv = "step,time_myr,depth_km,radius_km,down_km3_per_yr,up_km3_per_yr,net_km3_per_yr,"
-                      "selected_down_km3_per_yr,selected_up_km3_per_yr,selected_percent_of_shell,avalanche";
-    csv += heat ? ",heat_flux_w,selected_heat_flux_w\n" : "\n";
-    for (size_t i = 0; i < bySteps.size(); ++i) {
-        const int step = sel.first + int(i);
-        for (size_t d = 0; d < args.depths.size(); ++d) {
-            const ShellFlux& f = bySteps[i][d];
-            fmt::format_to(std::back_inserter(csv), "{},{},{:g},{:.3f},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.4f},{}", step,
-                           dataset.steps()[size_t(step)].timeMyr, f.depthKm, f.radiusKm, f.downKm3PerYr, f.upKm3PerYr,
-                           f.downKm3PerYr + f.upKm3PerYr, f.selectedDownKm3PerYr, f.selectedUpKm3PerYr,
-                           100.0 * f.selectedAreaKm2 / f.areaKm2, avalanche[d][i] ? 1 : 0);
-            if (heat)
-                fmt::format_to(std::back_inserter(csv), ",{:.6e},{:.6e}", f.heatW, f.selectedHeatW);
-            csv += '\n';
-        }
-    }
+    size_t avalanches = 0;
+    for (const auto& steps : perShell)
+        avalanches += steps.size();
+    const std::string csv = fluxCsv(dataset, sel.first, bySteps, args.depths, perShell, heat.has_value(), density.has_value());
     writeFileAtomic(args.output, csv);
     fmt::print("{}: flux across {} shell(s) in {} steps ({}..{}); {} avalanche step(s) (downward flux over mean + {:g} sigma)\n",
                args.output, args.depths.size(), bySteps.size(), sel.first, sel.last, avalanches, args.sigmas);

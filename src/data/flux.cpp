@@ -22,9 +22,11 @@ void checkShellDepth(const SphericalGrid& g, double depthKm)
 }
 
 std::vector<ShellFlux> shellFluxes(const StepVolume& volume, size_t radialVelocity, std::span<const double> depthsKm,
-                                   std::span<const RangeFilter> filters, const std::optional<HeatFluxInputs>& heat)
+                                   std::span<const RangeFilter> filters, const std::optional<HeatFluxInputs>& heat,
+                                   std::optional<size_t> density)
 {
-    for (const size_t variable : {radialVelocity, heat ? heat->temperatureAnomaly : radialVelocity})
+    for (const size_t variable :
+         {radialVelocity, heat ? heat->temperatureAnomaly : radialVelocity, density.value_or(radialVelocity)})
         if (variable >= volume.variableCount())
             fail("flux: variable index {} out of range 0..{}", variable, volume.variableCount() - 1);
     if (heat && !(heat->densityKgM3 > 0 && std::isfinite(heat->densityKgM3)))
@@ -36,6 +38,8 @@ std::vector<ShellFlux> shellFluxes(const StepVolume& volume, size_t radialVeloci
         filters.empty() ? std::vector<uint8_t>(g.cellCount(), 1) : selectedPoints(volume, filters);
     const float* v = volume.values(radialVelocity);
     const float* anomaly = heat ? volume.values(heat->temperatureAnomaly) : nullptr;
+    const float* rho = density ? volume.values(*density) : nullptr;
+    constexpr double kM3PerKm3 = 1e9;
     const auto w = g.volumeFactors();
     constexpr double kKmPerCm = 1e-5;
     // ρ c_p × (cm/yr → m/s) × (km² → m²): W per (K · cm/yr · km²).
@@ -62,12 +66,17 @@ std::vector<ShellFlux> shellFluxes(const StepVolume& volume, size_t radialVeloci
                 if (anomaly)
                     heatW = heatFactor * area * vr *
                             ((1.0 - t) * anomaly[g.index(iLat, lower, iLon)] + t * anomaly[g.index(iLat, upper, iLon)]);
+                const double mass =
+                    rho ? kM3PerKm3 * flux * ((1.0 - t) * rho[g.index(iLat, lower, iLon)] + t * rho[g.index(iLat, upper, iLon)])
+                        : 0.0;
                 f.areaKm2 += area;
                 (flux < 0 ? f.downKm3PerYr : f.upKm3PerYr) += flux;
+                (flux < 0 ? f.massDownKgPerYr : f.massUpKgPerYr) += mass;
                 f.heatW += heatW;
                 if (selected[g.index(iLat, nearer, iLon)]) {
                     f.selectedAreaKm2 += area;
                     (flux < 0 ? f.selectedDownKm3PerYr : f.selectedUpKm3PerYr) += flux;
+                    (flux < 0 ? f.selectedMassDownKgPerYr : f.selectedMassUpKgPerYr) += mass;
                     f.selectedHeatW += heatW;
                 }
             }

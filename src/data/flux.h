@@ -25,7 +25,14 @@ struct ShellFlux {
     // With HeatFluxInputs: the net advective heat flux across the shell, W, positive upward,
     // Q = ∫ ρ c_p T′ v_r dA, over the shell and over its selected part.
     double heatW = 0, selectedHeatW = 0;
+    // With a density variable (kg/m³): the mass flux, kg/yr, ∫ ρ v_r dA split as the volume flux is
+    // (by the sign of v_r), over the shell and over its selected part; 0 without one.
+    double massDownKgPerYr = 0, massUpKgPerYr = 0, selectedMassDownKgPerYr = 0, selectedMassUpKgPerYr = 0;
 };
+
+// The variable whose values are the density, kg/m³, for the mass flux: named "density" (as ASPECT
+// writes it). The contest's files have none.
+inline constexpr const char* kDensityVariable = "density";
 
 // What the advective heat flux takes: the temperature anomaly T′ (a variable, K) and the density ρ
 // (kg/m³) and heat capacity c_p (J/(kg·K)), constants (the contest's files carry neither).
@@ -41,12 +48,13 @@ struct HeatFluxInputs {
 // and the probe's rule along r — and weighted by the column's area on the shell, r² (sin φ+ −
 // sin φ−) Δλ with the dual cells' edges (SphericalGrid::volumeFactors). A column is in the selection
 // when the grid point nearer the shell is (selectedPoints). With `heat`, T′ is interpolated at the
-// shell as v_r is and the heat flux summed alike. Throws raypc::Error for a depth outside the grid's
-// radii, a variable index out of range, a density or heat capacity that is not positive, or bad
-// filters.
+// shell as v_r is and the heat flux summed alike; with `density` (a variable index, kg/m³), ρ is, and
+// the mass flux summed alike. Throws raypc::Error for a depth outside the grid's radii, a variable
+// index out of range, a density or heat capacity that is not positive, or bad filters.
 std::vector<ShellFlux> shellFluxes(const StepVolume& volume, size_t radialVelocity, std::span<const double> depthsKm,
                                    std::span<const RangeFilter> filters = {},
-                                   const std::optional<HeatFluxInputs>& heat = std::nullopt);
+                                   const std::optional<HeatFluxInputs>& heat = std::nullopt,
+                                   std::optional<size_t> density = std::nullopt);
 
 // Whether the shell at `depthKm` lies within the grid's radii; checkShellDepth throws raypc::Error
 // naming them when it does not.

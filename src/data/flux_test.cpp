@@ -38,6 +38,35 @@ TEST(ShellFlux, AUniformRadialFlowCarriesFourPiRSquaredU0)
     }
 }
 
+// The mass flux ∫ ρ v_r dA: a uniform upward flow u0 through material of density ρ(r) = 3000 +
+// (6371 - r) / 2 kg/m³ carries ρ(r_shell) 4πr² u0 upward (ρ linear in r: its interpolation is
+// exact); the northern half (selected by lat) carries half; without a density variable, none.
+TEST(ShellFlux, MassFluxIsDensityTimesVolumeFlux)
+{
+    const SphericalGrid g = testing::centredGrid(36, 21, 72);
+    const double u0 = 0.7;
+    auto rhoAt = [](double rKm) { return 3000 + (kSurfaceRadiusKm - rKm) / 2; };
+    Snapshot snap;
+    snap.grid = g;
+    snap.fields.push_back({"radial velocity", "cm/yr", testing::fillGrid(g, [&](size_t, size_t, size_t) { return u0; })});
+    snap.fields.push_back({"density", "kg/m^3", testing::fillGrid(g, [&](size_t, size_t iR, size_t) { return rhoAt(g.rKm[iR]); })});
+    const auto volume = StepVolume::fromSnapshot(snap);
+    const std::vector<double> depths{660.0, 1600.0};
+    const auto flux = shellFluxes(*volume, 0, depths, {}, std::nullopt, size_t(1));
+    for (const ShellFlux& f : flux) {
+        const double expected = rhoAt(f.radiusKm) * 1e9 * 4 * std::numbers::pi * f.radiusKm * f.radiusKm * u0 * 1e-5;
+        EXPECT_NEAR(f.massUpKgPerYr, expected, 1e-6 * expected) << f.depthKm << " km";  // about 9e17 kg/yr
+        EXPECT_EQ(f.massDownKgPerYr, 0.0);
+        EXPECT_EQ(f.selectedMassUpKgPerYr, f.massUpKgPerYr);
+    }
+    const std::vector<NamedRange> northRange{{"lat", 0, 90}};
+    const auto half = shellFluxes(*volume, 0, depths, resolveRangeFilters(std::vector<std::string>{"radial velocity", "density"},
+                                                                           northRange), std::nullopt, size_t(1));
+    EXPECT_NEAR(half[0].selectedMassUpKgPerYr, 0.5 * flux[0].massUpKgPerYr, 1e-6 * flux[0].massUpKgPerYr);
+    EXPECT_EQ(shellFluxes(*volume, 0, depths).at(0).massUpKgPerYr, 0.0) << "without a density, no mass flux";
+    EXPECT_THROW(shellFluxes(*volume, 0, depths, {}, std::nullopt, size_t(2)), Error);
+}
+
 // Q = ρ c_p ∫ T′ v_r dA: a uniform upward flow u0 of material T′ = c warmer than its shell carries
 // ρ c_p c u0 4πr² upward; with T′ = +c in the north and −c in the south the net is zero and the
 // northern half (selected by lat) carries half the first.

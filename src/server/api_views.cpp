@@ -4,6 +4,7 @@
 #include "core/json_input.h"
 #include "core/spherical.h"
 #include "data/coordinates.h"
+#include "data/feature_csv.h"
 #include "data/feature_series.h"
 #include "data/flux.h"
 #include "render/color_map.h"
@@ -183,6 +184,8 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
     const int nSteps = int(dataset.steps().size());
     const int vr = dataset.variableIndex("radial velocity");
     const std::optional<size_t> radialVelocity = vr >= 0 ? std::optional<size_t>(size_t(vr)) : std::nullopt;
+    const int rho = dataset.variableIndex(kDensityVariable);
+    const std::optional<size_t> density = rho >= 0 ? std::optional<size_t>(size_t(rho)) : std::nullopt;
     const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
     std::vector<double> fluxDepths;  // the options' depths inside the grid's shell
     for (const double d : options.bandDepthsKm)
@@ -201,7 +204,7 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
         const StepFeatures f = extractFeatures(*volume, filters, options);
         steps.push_back({{"step", step}, {"timeMyr", dataset.steps()[size_t(step)].timeMyr}, {"features", f.features.size()}});
         if (radialVelocity && !fluxDepths.empty())
-            fluxes.push_back(shellFluxes(*volume, *radialVelocity, fluxDepths, filters));
+            fluxes.push_back(shellFluxes(*volume, *radialVelocity, fluxDepths, filters, std::nullopt, density));
         series.add(step, volume, f);
     }
     if (progress)
@@ -258,21 +261,28 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
         json fluxSteps = json::array(), avalanches = json::array();
         for (size_t i = 0; i < fluxes.size(); ++i) {
             json down = json::array(), up = json::array(), selDown = json::array(), selUp = json::array(),
-                 selShare = json::array();
+                 selShare = json::array(), massDown = json::array(), massUp = json::array();
             for (const ShellFlux& f : fluxes[i]) {
                 down.push_back(f.downKm3PerYr);
                 up.push_back(f.upKm3PerYr);
                 selDown.push_back(f.selectedDownKm3PerYr);
                 selUp.push_back(f.selectedUpKm3PerYr);
                 selShare.push_back(100.0 * f.selectedAreaKm2 / f.areaKm2);
+                massDown.push_back(f.massDownKgPerYr);
+                massUp.push_back(f.massUpKgPerYr);
             }
-            fluxSteps.push_back({{"step", int(i)},
-                                 {"timeMyr", dataset.steps()[i].timeMyr},
-                                 {"downKm3PerYr", std::move(down)},
-                                 {"upKm3PerYr", std::move(up)},
-                                 {"selectedDownKm3PerYr", std::move(selDown)},
-                                 {"selectedUpKm3PerYr", std::move(selUp)},
-                                 {"selectedPercentOfShell", std::move(selShare)}});
+            json step = {{"step", int(i)},
+                         {"timeMyr", dataset.steps()[i].timeMyr},
+                         {"downKm3PerYr", std::move(down)},
+                         {"upKm3PerYr", std::move(up)},
+                         {"selectedDownKm3PerYr", std::move(selDown)},
+                         {"selectedUpKm3PerYr", std::move(selUp)},
+                         {"selectedPercentOfShell", std::move(selShare)}};
+            if (density) {
+                step["massDownKgPerYr"] = std::move(massDown);
+                step["massUpKgPerYr"] = std::move(massUp);
+            }
+            fluxSteps.push_back(std::move(step));
         }
         const auto perShell = avalancheStepsPerShell(fluxes, sigmas);
         for (size_t d = 0; d < perShell.size(); ++d)
@@ -281,6 +291,15 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
         flux = {{"depthsKm", fluxDepths}, {"sigmas", sigmas}, {"steps", std::move(fluxSteps)},
                 {"avalanches", std::move(avalanches)}};
     }
+    // The tables of `raypc features --tracks/--events/--stalls` and `raypc flux`, written by the same
+    // code (data/feature_csv.h), for the UI's CSV buttons.
+    json csv = {{"tracks", trackCsv(series)},
+                {"events", eventCsv(series, dataset)},
+                {"stalls", stallCsv(series, options.bandDepthsKm, options.bandHalfWidthKm, nSteps - 1, stallBy)},
+                {"flux", fluxes.empty() ? json(nullptr)
+                                        : json(fluxCsv(dataset, 0, fluxes, fluxDepths,
+                                                       avalancheStepsPerShell(fluxes, sigmas), false,
+                                                       density.has_value()))}};
     return {{"level", level},
             {"minVolumeKm3", options.minVolumeKm3},
             {"depthsKm", options.bandDepthsKm},
@@ -290,7 +309,8 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
             {"steps", std::move(steps)},
             {"tracks", std::move(tracks)},
             {"events", std::move(events)},
-            {"flux", std::move(flux)}};
+            {"flux", std::move(flux)},
+            {"csv", std::move(csv)}};
 }
 
 json persistenceDiagramJson(const SphericalGrid& grid, const std::vector<PersistencePair>& pairs, int step,

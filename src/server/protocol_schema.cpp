@@ -377,7 +377,11 @@ const std::vector<Definition>& messages()
                                    {"selectedDownKm3PerYr", arrayOf(number(""), ""), "the same within the selection"},
                                    {"selectedUpKm3PerYr", arrayOf(number(""), ""), "the same within the selection"},
                                    {"selectedPercentOfShell", arrayOf(number(""), ""),
-                                    "per shell, the share of its area in the selection, %"}}),
+                                    "per shell, the share of its area in the selection, %"},
+                                   {"massDownKgPerYr", arrayOf(number(""), ""),
+                                    "per shell, the downward mass flux (≤ 0), kg/yr: only where the data have a "
+                                    "`density` variable (kg/m³)", false},
+                                   {"massUpKgPerYr", arrayOf(number(""), ""), "the same upward (≥ 0)", false}}),
                             ""),
                     "every step"},
                    {"avalanches",
@@ -385,7 +389,16 @@ const std::vector<Definition>& messages()
                                   {{"depthKm", number(""), "the shell"}, {"step", integer(""), "the step"}}),
                             ""),
                     "steps whose downward flux is an avalanche"}})),
-              "the flux across the shells; null without a radial velocity"}}));
+              "the flux across the shells; null without a radial velocity"},
+             {"csv",
+              named("FeatureTables", "",
+                    {{"tracks", text(""), "the CSV of `raypc features --tracks` (docs/features.md)"},
+                     {"events", text(""), "the CSV of `raypc features --events`"},
+                     {"stalls", text(""), "the CSV of `raypc features --stalls` with `stallBy`"},
+                     {"flux", nullable(text("")),
+                      "the CSV of `raypc flux` at the shells of `flux` (mass columns where the data have a "
+                      "density); null without a radial velocity"}}),
+              "the tables as the command line writes them, for the UI's CSV buttons"}}));
         d.push_back(message(
             "PathlinesHeader", "GET /api/pathlines (JSON header)", "the attributes of the pathlines shown at a step",
             {{"step", integer(""), "the step"},

@@ -1230,7 +1230,7 @@ const cases = {
     await csv.saveAs(join(tmp, 'ui-tracks.csv'));
     const uiCsv = readFileSync(join(tmp, 'ui-tracks.csv'), 'utf8').trim().split('\n');
     const cliCsv = readFileSync(join(tmp, 'tracks.csv'), 'utf8').trim().split('\n');
-    check(uiCsv[0] === cliCsv[0] && uiCsv.length === cliCsv.length, `the tracks' CSV: ${uiCsv[0]} (${uiCsv.length} lines) vs ${cliCsv[0]} (${cliCsv.length})`);
+    check(uiCsv.join('\n') === cliCsv.join('\n'), `the tracks' CSV differs from raypc features --tracks: ${uiCsv[0]} (${uiCsv.length} lines) vs ${cliCsv[0]} (${cliCsv.length})`);
 
     // Stalls timed by the deepest point: the caps reach down to 660 km, so both stall there in every
     // step (by the mean depth they do not), as `raypc features --stall-by deepest` finds.

@@ -690,6 +690,20 @@ import json, sys
 v = json.load(open(sys.argv[1]))["values"]["radial velocity"]["value"]
 sys.exit(0 if abs(v - 1.0) < 0.01 else 1)
 PY
+  # The mass flux where the data have a density (issue 28): truth.json's density is 3300 (1 - 3e-5
+  # blob_sum) kg/m^3 and the flow u0 = 1 cm/yr outward, so across 1000 km the mass going up is
+  # 3300e9 kg/km^3 x 4 pi r^2 x 1e-5 km/yr (the blobs change it by far less than 1 %) and none goes down.
+  "$raypc" flux "$work/amr" --depth 1000 -o "$work/flux.csv" --quiet >/dev/null
+  check "flux of a series with density has the mass columns" grep -q ',mass_down_kg_per_yr,mass_up_kg_per_yr,selected_mass_down_kg_per_yr,selected_mass_up_kg_per_yr$' "$work/flux.csv"
+  check "the mass flux up across 1000 km is rho 4 pi r^2 u0: $(sed -n 2p "$work/flux.csv")" python3 - "$work/flux.csv" <<'PY'
+import csv, math, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+r = 6371 - 1000
+expected = 3300e9 * 4 * math.pi * r * r * 1e-5
+ok = len(rows) == 3 and all(abs(float(x["mass_up_kg_per_yr"]) / expected - 1) < 0.01 and float(x["mass_down_kg_per_yr"]) == 0
+                            and abs(float(x["mass_up_kg_per_yr"]) / (3300e9 * float(x["up_km3_per_yr"])) - 1) < 0.01 for x in rows)
+sys.exit(0 if ok else 1)
+PY
   "$raypc" render "$work/amr" -o "$work/amr.png" --size 96x96 --passes 1 >/dev/null
   check "a rendered picture" test -s "$work/amr.png"
   "$raypc" info "$aspect/shell-lagrange/solution.pvd" --time-units seconds >"$work/lag.txt"

@@ -457,32 +457,13 @@ export class FeaturesPanel {
     $('featuresFluxNote').textContent = `solid: the whole shell, dashed: within the selection; ${n ? `${n} avalanche step${n === 1 ? '' : 's'} (red: downward flux above the mean + ${flux.sigmas} σ)` : `no avalanche (no step's downward flux above the mean + ${flux.sigmas} σ)`}`;
   }
 
-  // The CSV files of `raypc features --tracks/--events/--stalls` and `raypc flux` (their columns).
+  // The CSV files of `raypc features --tracks/--events/--stalls` and `raypc flux`, as the server wrote them.
   private exportCsv(what: 'tracks' | 'events' | 'stalls' | 'flux'): void {
     const f = this.result;
     if (!f) { this.host.showError('features: nothing to export yet'); return; }
-    let csv = '';
-    if (what === 'tracks') {
-      csv = 'track,step,time_myr,feature,volume_km3,mean_depth_km,centroid_lat_deg,centroid_lon_deg,centroid_depth_km\n';
-      for (const t of f.tracks) for (const p of t.points)
-        csv += `${t.track},${p.step},${p.timeMyr},${p.feature},${p.volumeKm3.toExponential(6)},${p.meanDepthKm.toFixed(3)},${p.centroidLatDeg.toFixed(4)},${p.centroidLonDeg.toFixed(4)},${p.centroidDepthKm.toFixed(3)}\n`;
-    } else if (what === 'events') {
-      csv = 'step,time_myr,event,track,feature,other_features,centroid_lat_deg,centroid_lon_deg,mean_depth_km\n';
-      for (const e of f.events)
-        csv += `${e.step},${e.timeMyr},${e.kind},${e.track},${e.feature},${e.others.join(' ')},${e.centroidLatDeg.toFixed(4)},${e.centroidLonDeg.toFixed(4)},${e.meanDepthKm.toFixed(3)}\n`;
-    } else if (what === 'stalls') {
-      csv = 'track,depth_km,first_step,last_step,duration_myr,mean_radial_velocity_cm_per_yr,left\n';
-      for (const t of f.tracks) for (const s of t.stalls)
-        csv += `${t.track},${s.depthKm},${s.firstStep},${s.lastStep},${s.durationMyr},${s.meanRadialVelocityCmPerYr ?? ''},${s.left}\n`;
-    } else {
-      if (!f.flux) { this.host.showError('features: no flux (the dataset has no radial velocity)'); return; }
-      const avalanche = new Set(f.flux.avalanches.map((a) => `${a.depthKm}/${a.step}`));
-      csv = 'step,time_myr,depth_km,radius_km,down_km3_per_yr,up_km3_per_yr,net_km3_per_yr,selected_down_km3_per_yr,selected_up_km3_per_yr,selected_percent_of_shell,avalanche\n';
-      const e6 = (v: number) => v.toExponential(6);
-      for (const s of f.flux.steps) f.flux.depthsKm.forEach((d, i) => {
-        csv += `${s.step},${s.timeMyr},${d},${(6371 - d).toFixed(3)},${e6(s.downKm3PerYr[i])},${e6(s.upKm3PerYr[i])},${e6(s.downKm3PerYr[i] + s.upKm3PerYr[i])},${e6(s.selectedDownKm3PerYr[i])},${e6(s.selectedUpKm3PerYr[i])},${s.selectedPercentOfShell[i].toFixed(4)},${avalanche.has(`${d}/${s.step}`) ? 1 : 0}\n`;
-      });
-    }
+    // The server's tables, written by the command line's code (data/feature_csv.h).
+    const csv = f.csv[what];
+    if (csv === null) { this.host.showError('features: no flux (the dataset has no radial velocity)'); return; }
     download(new Blob([csv], { type: 'text/csv' }), `raypc-features-${what}.csv`);
   }
 }
