@@ -10,6 +10,7 @@
 #include "core/progress.h"
 #include "core/spherical.h"
 #include "data/dataset.h"
+#include "data/feature_csv.h"
 #include "data/selection.h"
 #include "render/image_io.h"
 #include "render/legend.h"
@@ -41,26 +42,10 @@ struct StatsRows {
 StatsRows formatRows(const std::vector<StepSelection>& selections, const SphericalGrid& grid)
 {
     StatsRows rows;
-    for (const StepSelection& sel : selections) {
-        const SelectionStats& s = sel.stats;
-        const int step = sel.step;
-        const double t = sel.timeMyr;
-        fmt::format_to(std::back_inserter(rows.csv), "{},{},{:.6e},{:.6f}\n", step, t, s.volumeKm3,
-                       100.0 * s.fractionOfMantle);
-        for (size_t iR = 0; iR < grid.nR(); ++iR) {
-            const double shell = s.shellVolumeByRadiusKm3[iR];
-            fmt::format_to(std::back_inserter(rows.profile), "{},{},{:.3f},{:.3f},{:.6e},{:.6e},{:.6f}", step, t,
-                           grid.rKm[iR], kSurfaceRadiusKm - grid.rKm[iR], s.volumeByRadiusKm3[iR], shell,
-                           100.0 * s.volumeByRadiusKm3[iR] / shell);
-            // The mean variable's columns (empty where nothing is selected).
-            if (!s.shellMeanByRadius.empty()) {
-                const double selected = s.selectedMeanByRadius[iR];
-                fmt::format_to(std::back_inserter(rows.profile), ",{},{:.9g}",
-                               std::isnan(selected) ? std::string() : fmt::format("{:.9g}", selected), s.shellMeanByRadius[iR]);
-            }
-            rows.profile += '\n';
-        }
-    }
+    for (const StepSelection& sel : selections)
+        fmt::format_to(std::back_inserter(rows.csv), "{},{},{:.6e},{:.6f}\n", sel.step, sel.timeMyr,
+                       sel.stats.volumeKm3, 100.0 * sel.stats.fractionOfMantle);
+    rows.profile = profileCsvRows(selections, grid);
     return rows;
 }
 
@@ -127,12 +112,7 @@ void run(const StatsArgs& args)
         if (!mpi::isRoot())
             return;
         std::string csv = "step,time_myr,selected_volume_km3,selected_percent_of_mantle\n";
-        std::string profile = "step,time_myr,radius_km,depth_km,selected_volume_km3,shell_volume_km3,selected_percent_of_shell";
-        if (meanVariable) {
-            const VariableInfo& v = dataset.variables()[*meanVariable];
-            profile += fmt::format(",{0} selected mean [{1}],{0} shell mean [{1}]", v.name, v.units);
-        }
-        profile += '\n';
+        std::string profile = profileCsvHeader(meanVariable ? &dataset.variables()[*meanVariable] : nullptr);
         for (const auto& part : csvParts)
             csv += part;
         for (const auto& part : profileParts)

@@ -1,5 +1,7 @@
 #include "data/feature_csv.h"
 
+#include "core/spherical.h"
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -78,6 +80,36 @@ std::string fluxCsv(const Dataset& dataset, int firstStep, std::span<const std::
         }
     }
     return csv;
+}
+
+std::string profileCsvHeader(const VariableInfo* mean)
+{
+    std::string header = "step,time_myr,radius_km,depth_km,selected_volume_km3,shell_volume_km3,selected_percent_of_shell";
+    if (mean)
+        header += fmt::format(",{0} selected mean [{1}],{0} shell mean [{1}]", mean->name, mean->units);
+    return header + '\n';
+}
+
+std::string profileCsvRows(std::span<const StepSelection> selections, const SphericalGrid& grid)
+{
+    std::string rows;
+    for (const StepSelection& sel : selections) {
+        const SelectionStats& s = sel.stats;
+        for (size_t iR = 0; iR < grid.nR(); ++iR) {
+            const double shell = s.shellVolumeByRadiusKm3[iR];
+            fmt::format_to(std::back_inserter(rows), "{},{},{:.3f},{:.3f},{:.6e},{:.6e},{:.6f}", sel.step, sel.timeMyr,
+                           grid.rKm[iR], kSurfaceRadiusKm - grid.rKm[iR], s.volumeByRadiusKm3[iR], shell,
+                           100.0 * s.volumeByRadiusKm3[iR] / shell);
+            // The mean variable's columns (empty where nothing is selected).
+            if (!s.shellMeanByRadius.empty()) {
+                const double selected = s.selectedMeanByRadius[iR];
+                fmt::format_to(std::back_inserter(rows), ",{},{:.9g}",
+                               std::isnan(selected) ? std::string() : fmt::format("{:.9g}", selected), s.shellMeanByRadius[iR]);
+            }
+            rows += '\n';
+        }
+    }
+    return rows;
 }
 
 }  // namespace raypc

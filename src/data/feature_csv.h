@@ -1,7 +1,8 @@
-// The CSV tables of features followed through a series and of the flux across shells: what `raypc
-// features --tracks/--events/--stalls` and `raypc flux` write, and what the UI's Features panel
-// exports (sent by POST /api/features), so that the columns and numbers are written in one place.
-// docs/features.md describes the columns.
+// The CSV tables of features followed through a series, of the flux across shells and of a
+// selection's depth profile over time: what `raypc features --tracks/--events/--stalls`, `raypc flux`
+// and `raypc stats --profile` write, and what the UI's Features panel exports (sent by POST
+// /api/features and POST /api/time-depth?format=csv), so that the columns and numbers are written in
+// one place. docs/features.md describes the columns.
 //
 // Thread safety: pure functions of their arguments.
 #pragma once
@@ -9,6 +10,7 @@
 #include "data/dataset.h"
 #include "data/feature_series.h"
 #include "data/flux.h"
+#include "data/selection.h"
 
 #include <span>
 #include <string>
@@ -32,5 +34,13 @@ std::string stallCsv(const FeatureSeries& series, std::span<const double> depths
 std::string fluxCsv(const Dataset& dataset, int firstStep, std::span<const std::vector<ShellFlux>> bySteps,
                     std::span<const double> depthsKm, const std::vector<std::vector<size_t>>& avalanches, bool heat,
                     bool mass);
+
+// The depth profile of a selection in every step (selectionOverTime): the header — step, time_myr,
+// radius_km, depth_km, selected_volume_km3, shell_volume_km3, selected_percent_of_shell, and with
+// `mean` (the variable whose mean per radius the selections hold) "NAME selected mean [UNITS]" and
+// "NAME shell mean [UNITS]" — and the rows, a row per step and radius of `grid` (the selected mean
+// empty where nothing is selected). Rows of consecutive blocks of steps concatenate (MPI ranks).
+std::string profileCsvHeader(const VariableInfo* mean);
+std::string profileCsvRows(std::span<const StepSelection> selections, const SphericalGrid& grid);
 
 }  // namespace raypc

@@ -1,10 +1,13 @@
 #include "server/dataset_api.h"
 
+#include "data/feature_csv.h"
+
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/install_paths.h"
 #include "core/json_input.h"
 #include "core/spherical.h"
+#include "data/feature_csv.h"
 #include "data/probe.h"
 #include "render/color_map.h"
 #include "render/pathline_scene.h"
@@ -312,6 +315,10 @@ ApiAnswer timeDepth(const ApiContext& api, const ApiRequest& request)
     } else if (of != render::TimeDepthOf::Share) {
         fail("of={}: needs var=NAME (the variable whose mean it shows)", *ofText);
     }
+    const auto format = queryParameter(request.query, "format");
+    if (format && *format != "png" && *format != "csv")
+        fail("format: '{}', expected png or csv", format->substr(0, 40));
+    const bool csv = format && *format == "csv";
     const int width = queryParameter(request.query, "width") ? parseIntParameter(request.query, "width") : 960;
     const int height = queryParameter(request.query, "height") ? parseIntParameter(request.query, "height") : 540;
     if (int64_t(width) * height > api.limits.maxScreenshotPixels)
@@ -326,6 +333,10 @@ ApiAnswer timeDepth(const ApiContext& api, const ApiRequest& request)
             return api.cache->getWithoutEvicting(step, l);
         },
         {}, mean);
+    if (csv)  // the values behind the picture: `raypc stats --profile [--profile-var]`'s table
+        return {profileCsvHeader(mean ? &dataset.variables()[*mean] : nullptr) +
+                    profileCsvRows(selections, dataset.levels()[size_t(level)].grid),
+                "text/csv"};
     std::vector<float> values;
     render::appendTimeDepthValues(selections, of, values);
     render::TimeDepthInputs in = render::timeDepthInputs(dataset, 0, last, level, std::move(values), of,

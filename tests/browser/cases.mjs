@@ -1231,6 +1231,16 @@ const cases = {
     const uiCsv = readFileSync(join(tmp, 'ui-tracks.csv'), 'utf8').trim().split('\n');
     const cliCsv = readFileSync(join(tmp, 'tracks.csv'), 'utf8').trim().split('\n');
     check(uiCsv.join('\n') === cliCsv.join('\n'), `the tracks' CSV differs from raypc features --tracks: ${uiCsv[0]} (${uiCsv.length} lines) vs ${cliCsv[0]} (${cliCsv.length})`);
+    // The time–depth picture's values: the table of raypc stats --profile, byte for byte.
+    const [tdCsv] = await Promise.all([page.waitForEvent('download', { timeout: 10000 }), page.click('#featuresTimeDepthCsv')])
+      .catch(async (e) => { throw new TestFailure(`no download of the time-depth CSV: ${e.message.split('\n')[0]}; errors: ${await page.evaluate(() => window.__raypc.errors.join('; '))}`); });
+    await tdCsv.saveAs(join(tmp, 'ui-time-depth.csv'));
+    const cliProfile = spawnSync(raypc, ['stats', dataset, '--range', 'depth=0:660', '--range', 'lat=-90:-60', '--range', 'lat=60:90',
+      '-o', join(tmp, 's.csv'), '--profile', join(tmp, 'profile.csv'), '--quiet'], { encoding: 'utf8', timeout: 60000 });
+    check(cliProfile.status === 0, `raypc stats --profile: ${cliProfile.stderr}`);
+    const uiProfile = readFileSync(join(tmp, 'ui-time-depth.csv'), 'utf8'), cliProfileText = readFileSync(join(tmp, 'profile.csv'), 'utf8');
+    check(uiProfile === cliProfileText && uiProfile.split('\n').length > 10,
+      `the time-depth CSV differs from raypc stats --profile: ${uiProfile.split('\n')[0]} (${uiProfile.length} bytes) vs ${cliProfileText.split('\n')[0]} (${cliProfileText.length})`);
 
     // Stalls timed by the deepest point: the caps reach down to 660 km, so both stall there in every
     // step (by the mean depth they do not), as `raypc features --stall-by deepest` finds.

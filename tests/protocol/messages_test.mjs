@@ -117,6 +117,9 @@ try {
   const picture = await get('api/time-depth?of=selected-mean&var=temperature&width=400&height=240', post(caps));
   if (picture.status !== 200 || picture.type !== 'image/png' || picture.body.readUInt32BE(16) !== 400)
     fail(`POST /api/time-depth: status ${picture.status}, ${picture.type}, ${picture.body.length} bytes`);
+  const table = await get('api/time-depth?format=csv&var=temperature', post(caps));
+  if (table.status !== 200 || !table.type.startsWith('text/csv') || !table.body.toString().startsWith('step,time_myr,radius_km,depth_km,selected_volume_km3,shell_volume_km3,selected_percent_of_shell,temperature selected mean ['))
+    fail(`POST /api/time-depth?format=csv: status ${table.status}, ${table.type}, ${table.body.toString().slice(0, 200)}`);
   const lines = await get('api/pathlines?step=1&window=2');
   if (lines.status !== 200) fail(`GET /api/pathlines: status ${lines.status}: ${lines.body.toString().slice(0, 200)}`);
   else expectMessage('PathlinesHeader', headerOf(lines.body), 'GET /api/pathlines header');
@@ -138,7 +141,7 @@ try {
     ['api/selection', post({ ...state, brushes: [{ name: 'pressure', min: 0, max: 1 }] })],
     ['api/features', post(state)], ['api/time-depth?of=mean', post(caps)], ['api/time-depth?of=shell-mean', post(caps)],
     ['api/time-depth?width=100000&height=100000', post(caps)], ['api/features?sigmas=-1', post(caps)],
-    ['api/features?level=9', post(caps)], ['api/features?job=a%20b', post(caps)], ['api/job-progress'], ['api/job-progress?job=' + 'x'.repeat(65)], ['api/time-depth?of=selected-mean&var=pressure', post(caps)]])
+    ['api/features?level=9', post(caps)], ['api/features?job=a%20b', post(caps)], ['api/job-progress'], ['api/job-progress?job=' + 'x'.repeat(65)], ['api/time-depth?format=gif', post(caps)], ['api/time-depth?of=selected-mean&var=pressure', post(caps)]])
     expectMessage('HttpError', await getJson(path, init, 400), `${path} (refused)`);
 
   // ---- WebSocket ----

@@ -148,6 +148,17 @@ export async function getJobProgress(job: string, signal?: AbortSignal): Promise
   return (await check(r, 'GET /api/job-progress')).json();
 }
 
+// The values of the time–depth picture (POST /api/time-depth?format=csv): `raypc stats --profile`'s
+// table, with the means of `variable` when given.
+export async function postTimeDepthCsv(state: RenderState, variable: string | undefined, signal?: AbortSignal): Promise<string> {
+  const q = new URLSearchParams({ format: 'csv' });
+  if (variable !== undefined) q.set('var', variable);
+  const r = await fetch(`api/time-depth?${q}`, {
+    method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(state), signal,
+  });
+  return (await check(r, 'POST /api/time-depth?format=csv')).text();
+}
+
 // The time–depth picture of the state's selection (POST /api/time-depth): a PNG drawn by the server
 // (`of`: share, selected-mean or shell-mean of `variable`).
 export async function postTimeDepth(state: RenderState, of: string, variable: string | undefined, width: number, height: number,

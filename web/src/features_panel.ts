@@ -6,7 +6,7 @@
 // `raypc stats --hovmoller`). Asked for while the panel is open, after each final state whose
 // selection or feature settings changed; the next change cancels a request still running.
 import * as d3 from 'd3';
-import { getJobProgress, postFeatures, postTimeDepth, type FeatureSeries, type FeatureTrack, type JobProgress } from './api';
+import { getJobProgress, postFeatures, postTimeDepth, postTimeDepthCsv, type FeatureSeries, type FeatureTrack, type JobProgress } from './api';
 import { download } from './controls';
 import { plotFrame } from './stats_plot';
 import { cloneState, type RenderState } from './state';
@@ -90,6 +90,14 @@ export class FeaturesPanel {
     for (const id of ['featuresMinVolume', 'featuresBand', 'featuresDepths', 'featuresStallBy']) $(id).addEventListener('change', settings);
     for (const [id, what] of [['featuresTracksCsv', 'tracks'], ['featuresEventsCsv', 'events'], ['featuresStallsCsv', 'stalls'], ['featuresFluxCsv', 'flux']] as const)
       $(id).addEventListener('click', () => this.exportCsv(what));
+    $('featuresTimeDepthCsv').addEventListener('click', () => {
+      const state = cloneState(this.store.state);
+      if (!state.brushes.length) { this.host.showError('features: brush an axis first'); return; }
+      const of = $<HTMLSelectElement>('featuresTimeDepthOf').value;
+      postTimeDepthCsv(state, of === 'share' ? undefined : state.color.variable)
+        .then((csv) => download(new Blob([csv], { type: 'text/csv' }), 'raypc-time-depth.csv'))
+        .catch((e) => this.host.showError((e as Error).message));
+    });
     // Hovering a row highlights its track's feature of the step in the 3D view (after 150 ms, so
     // that moving across the table asks for no frames); leaving the table returns to the chosen track.
     $('featuresTable').addEventListener('mouseover', (e) => {
