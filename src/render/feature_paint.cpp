@@ -122,29 +122,27 @@ void applyFeaturePaint(RenderParams& params, int variable)
     params.selectionMinOpacity = 0;
 }
 
-TransferFunction featurePaintLegendColors(const FeatureSettings& settings)
+LegendSpec featurePaintLegend(const FeatureSettings& settings)
 {
-    TransferFunction tf;
+    LegendSpec legend;
+    TransferFunction& tf = legend.colors;
     if (settings.colorById) {
         tf.range = {0.5f, 10.5f};
         for (int s = 1; s <= 10; ++s) {
             tf.colorPoints.push_back({(float(s) - 0.98f) / 10, featurePaintColor(s)});
             tf.colorPoints.push_back({(float(s) - 0.02f) / 10, featurePaintColor(s)});
+            legend.ticks.push_back({(float(s) - 0.5f) / 10, std::to_string(s)});
         }
+        legend.title = settings.highlight.empty() ? "feature id (colours repeat every 10); grey: the rest of the selection"
+                                                  : "highlighted features by id; the rest of the selection grey";
     } else {
         tf.range = {0, 1};
         tf.colorPoints = {{0, featurePaintColor(0)}, {0.49f, featurePaintColor(0)}, {0.51f, featurePaintColor(11)},
                           {1, featurePaintColor(11)}};
+        legend.ticks = {{0.25f, "rest"}, {0.75f, "highlighted"}};
+        legend.title = "highlighted features (amber); the rest of the selection grey";
     }
-    return tf;
-}
-
-std::string featurePaintTitle(const FeatureSettings& settings)
-{
-    if (settings.colorById)
-        return settings.highlight.empty() ? "feature id (colours repeat every 10); grey: the rest of the selection"
-                                          : "highlighted features by id; the rest of the selection grey";
-    return "highlighted features (amber); the rest of the selection grey";
+    return legend;
 }
 
 }  // namespace raypc::render

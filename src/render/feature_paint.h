@@ -10,6 +10,7 @@
 
 #include "data/dataset.h"
 #include "data/selection.h"
+#include "render/legend.h"
 #include "render/render_state.h"
 #include "render/volume_renderer.h"
 
@@ -41,9 +42,8 @@ std::vector<float> featurePaintField(const SphericalGrid& target, const Spherica
 // (opacity 0.08 per opacityUnitKm), painted slots 0.8.
 void applyFeaturePaint(RenderParams& params, int variable);
 
-// The legend's colours: ids 1..10 over [0.5, 10.5] (with colorById), else grey then amber over [0, 1].
-TransferFunction featurePaintLegendColors(const FeatureSettings& settings);
-// The legend's title: "features of the selection, coloured by id (mod 10)" or "highlighted features".
-std::string featurePaintTitle(const FeatureSettings& settings);
+// The legend of painted features: with colorById the ten colours of ids 1..10 (each labelled with its
+// id), else grey ("rest") then amber ("highlighted"); the title says which.
+LegendSpec featurePaintLegend(const FeatureSettings& settings);
 
 }  // namespace raypc::render

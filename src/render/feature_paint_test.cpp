@@ -132,3 +132,37 @@ TEST(FeaturePaint, TwoBlobsAreDrawnInTheirOwnColours)
 
 }  // namespace
 }  // namespace raypc::render
+
+namespace raypc::render {
+namespace {
+
+// The legend of painted features names each colour: with colorById a tick per id 1..10 at the middle
+// of its colour (the bar's colour there is that id's), else "rest" on grey and "highlighted" on amber.
+TEST(FeaturePaint, TheLegendLabelsEachColourWithItsId)
+{
+    FeatureSettings byId;
+    byId.colorById = true;
+    const LegendSpec legend = featurePaintLegend(byId);
+    ASSERT_EQ(legend.ticks.size(), 10u);
+    const TransferFunction& tf = legend.colors;
+    for (int id = 1; id <= 10; ++id) {
+        const LegendSpec::Tick& t = legend.ticks[size_t(id - 1)];
+        EXPECT_EQ(t.text, std::to_string(id));
+        const Rgb c = tf.colorOf(tf.range.min + t.at * (tf.range.max - tf.range.min));
+        const Rgb want = featurePaintColor(id);
+        EXPECT_NEAR(c.r, want.r, 1e-5) << "id " << id;
+        EXPECT_NEAR(c.g, want.g, 1e-5) << "id " << id;
+        EXPECT_NEAR(c.b, want.b, 1e-5) << "id " << id;
+    }
+    FeatureSettings highlight;
+    highlight.highlight = {3};
+    const LegendSpec h = featurePaintLegend(highlight);
+    ASSERT_EQ(h.ticks.size(), 2u);
+    EXPECT_EQ(h.ticks[1].text, "highlighted");
+    const Rgb amber = h.colors.colorOf(h.colors.range.min + h.ticks[1].at * (h.colors.range.max - h.colors.range.min));
+    EXPECT_NEAR(amber.r, featurePaintColor(11).r, 1e-5);
+    EXPECT_NEAR(amber.g, featurePaintColor(11).g, 1e-5);
+}
+
+}  // namespace
+}  // namespace raypc::render

@@ -241,6 +241,14 @@ void drawLegends(std::vector<uint8_t>& rgba, int width, int height, std::span<co
             blend(rgba, width, height, left + pad + x, barTop, left + pad + x + 1, barTop + barH, cc, 1.0f);
         }
         y = barTop + barH + pad / 2 + fontPx * 4 / 5;
+        if (!l.ticks.empty()) {  // each centred on its position, kept inside the bar's span
+            for (const LegendSpec::Tick& t : l.ticks) {
+                const int tw = font.text(rgba, width, height, 0, 0, t.text, white, false);
+                const int x = std::clamp(int(std::lround(t.at * float(barW))) - tw / 2, 0, std::max(0, barW - tw));
+                font.text(rgba, width, height, left + pad + x, y, t.text, white);
+            }
+            continue;
+        }
         const std::string a = legendNumber(valueAt(0)), m = legendNumber(valueAt(0.5)), b = legendNumber(valueAt(1));
         font.text(rgba, width, height, left + pad, y, a, white);
         const int mw = font.text(rgba, width, height, 0, 0, m, white, false);

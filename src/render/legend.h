@@ -19,6 +19,13 @@ namespace raypc::render {
 struct LegendSpec {
     std::string title;  // e.g. "temperature anomaly [K]" (UTF-8)
     TransferFunction colors;  // range, map or points, reversal, log scale (the opacity is not drawn)
+    // Labels at positions along the bar (0: its left end, 1: its right end) instead of the values at
+    // its ends and middle: for categories (feature ids), whose colours stand for names, not values.
+    struct Tick {
+        float at = 0;
+        std::string text;
+    };
+    std::vector<Tick> ticks;
 };
 
 // A short text on the picture in a small dark box centred at (x, y) pixels (e.g. a reference

@@ -445,7 +445,7 @@ std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const 
     if (withLegends && state.legend) {
         std::vector<LegendSpec> legends;
         if (paintsFeatures(state)) {
-            legends.push_back({featurePaintTitle(state.features), featurePaintLegendColors(state.features)});
+            legends.push_back(featurePaintLegend(state.features));
         } else {
             legends.push_back({variableTitle(m_dataset->variables().at(size_t(resolved.params.colorVariable))),
                                resolved.params.transfer});

@@ -61,6 +61,9 @@ export interface LegendEntry {
   title: string;
   colorAt(u: number): [number, number, number]; // along the bar, 0 = left
   valueAt(u: number): number;
+  // Labels at positions along the bar instead of the values at its ends and middle (categories such
+  // as feature ids, as the server's legends: render/legend.h).
+  ticks?: { at: number; text: string }[];
 }
 
 function legendNumber(v: number): string {
@@ -109,10 +112,23 @@ export function showLegends(entries: LegendEntry[], shells: ShellKeyEntry[] = []
     }
     const labels = document.createElement('div');
     labels.className = 'legendLabels';
-    for (const v of [e.valueAt(0), e.valueAt(0.5), e.valueAt(1)]) {
-      const span = document.createElement('span');
-      span.textContent = legendNumber(v);
-      labels.appendChild(span);
+    if (e.ticks) {
+      labels.style.position = 'relative';
+      labels.style.height = '1.2em';
+      for (const t of e.ticks) {
+        const span = document.createElement('span');
+        span.textContent = t.text;
+        span.style.position = 'absolute';
+        span.style.left = `${(t.at * 100).toFixed(2)}%`;
+        span.style.transform = 'translateX(-50%)';
+        labels.appendChild(span);
+      }
+    } else {
+      for (const v of [e.valueAt(0), e.valueAt(0.5), e.valueAt(1)]) {
+        const span = document.createElement('span');
+        span.textContent = legendNumber(v);
+        labels.appendChild(span);
+      }
     }
     div.append(title, bar, labels);
     box.appendChild(div);

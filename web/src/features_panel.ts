@@ -356,9 +356,11 @@ export class FeaturesPanel {
     const slot = (k: number) => this.store.info.featurePalette[k] as [number, number, number];
     if (f.colorById)
       return { title: `features by id (colours repeat every 10)${f.highlight.length ? `; highlighted: ${f.highlight.join(', ')}` : ''}; grey: the rest of the selection`,
-        colorAt: (u) => slot(1 + Math.min(9, Math.floor(u * 10))), valueAt: (u) => 1 + Math.round(u * 9) };
+        colorAt: (u) => slot(1 + Math.min(9, Math.floor(u * 10))), valueAt: (u) => 1 + Math.round(u * 9),
+        ticks: Array.from({ length: 10 }, (_, k) => ({ at: (k + 0.5) / 10, text: String(k + 1) })) };
     return { title: `highlighted feature${f.highlight.length > 1 ? 's' : ''} ${f.highlight.join(', ')} (amber); grey: the rest of the selection`,
-      colorAt: (u) => slot(u < 0.5 ? 0 : 11), valueAt: (u) => (u < 0.5 ? 0 : f.highlight[0]) };
+      colorAt: (u) => slot(u < 0.5 ? 0 : 11), valueAt: (u) => (u < 0.5 ? 0 : f.highlight[0]),
+      ticks: [{ at: 0.25, text: 'rest' }, { at: 0.75, text: 'highlighted' }] };
   }
 
   // The hovered or else the chosen track's feature at `step` highlighted in `s` (the store's state
