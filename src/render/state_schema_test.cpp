@@ -47,8 +47,8 @@ TEST(StateSchema, CarriesTheParsersBoundsAndVersions)
     const json& camera = schema["properties"]["camera"]["properties"];
     EXPECT_EQ(camera["elevationDeg"]["minimum"], -90);
     EXPECT_EQ(camera["elevationDeg"]["maximum"], 90);
-    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}));
-    EXPECT_EQ(kRenderStateVersion, 11);
+    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12}));
+    EXPECT_EQ(kRenderStateVersion, 12);
     EXPECT_EQ(schema["properties"]["brushes"]["items"]["required"], json::array({"name", "min", "max"}));
     // A version-1 document may not have pathlines, as parseRenderState says.
     ASSERT_TRUE(schema.contains("allOf"));
@@ -136,6 +136,13 @@ TEST(StateSchema, FeatureSettingsRoundTripAndBadValuesNameTheKey)
     const RenderState back = parseRenderState(toJson(s));
     EXPECT_EQ(back.features.depthsKm, s.features.depthsKm);
     EXPECT_EQ(back.features.level, 1);
+    // Version 12: which depth times the stalls.
+    const RenderState deepest = parseRenderState(json::parse(R"({"version": 12, "features": {"stallBy": "deepest"}})"));
+    EXPECT_EQ(deepest.features.stallBy, StallMeasure::Deepest);
+    EXPECT_EQ(parseRenderState(toJson(deepest)).features.stallBy, StallMeasure::Deepest);
+    EXPECT_EQ(s.features.stallBy, StallMeasure::MeanDepth) << "the default";
+    EXPECT_THROW(parseRenderState(json::parse(R"({"version": 11, "features": {"stallBy": "deepest"}})")), Error);
+    EXPECT_THROW(parseRenderState(json::parse(R"({"version": 12, "features": {"stallBy": "tip"}})")), Error);
     const RenderState plain = parseRenderState(json{{"version", 9}});  // the defaults
     EXPECT_EQ(plain.features.depthsKm, (std::vector<float>{410, 660, 1000, 1600}));
     EXPECT_FLOAT_EQ(plain.features.bandHalfWidthKm, 50);
