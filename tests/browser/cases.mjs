@@ -268,6 +268,22 @@ const cases = {
       check(dWarp < 0.5 * dOld, `${label}: the warped view (difference ${dWarp.toFixed(2)}) is not much closer to the new frame than the old frame (${dOld.toFixed(2)})`);
       console.log(`  ${label}: old frame differs by ${dOld.toFixed(2)}, warped by ${dWarp.toFixed(2)} grey levels`);
     }
+    // The drawing buffer: half the view's size per axis while the frame shown is an interactive one
+    // of at most half its size, the view's own size for every other frame and after the release.
+    const n = await page.evaluate(() => window.__raypc.shownLog.length);
+    await drag(page, 120, 30, { steps: 24 });
+    await waitConverged(page);
+    const shown = await page.evaluate((k) => window.__raypc.shownLog.slice(k), n);
+    const half = (s) => (s.interactive || s.playback) && 2 * s.width <= s.full[0] + 1 && 2 * s.height <= s.full[1] + 1;
+    for (const s of shown) {
+      const want = half(s) ? s.full.map((v) => Math.ceil(v / 2)) : s.full;
+      check(s.buffer[0] === want[0] && s.buffer[1] === want[1],
+        `frame of state ${s.id} (${s.width}x${s.height}${s.interactive ? ', interactive' : ''}) drawn into a ${s.buffer.join('x')} buffer, expected ${want.join('x')} for a ${s.full.join('x')} view`);
+    }
+    const last = shown.at(-1), canvas = await page.evaluate(() => { const c = document.getElementById('view3d'); return [c.width, c.height]; });
+    check(!!last && !last.interactive && canvas[0] === last.full[0] && canvas[1] === last.full[1],
+      `after the drag the still frame is drawn into ${canvas.join('x')}, the view is ${last?.full.join('x')}`);
+    console.log(`  drag: ${shown.length} frames shown, ${shown.filter(half).length} of them into a half-size buffer; the still frame into ${canvas.join('x')}`);
   },
 
   // Stereo (issue 14): choosing the anaglyph puts it in the state; the frame shown is the server's

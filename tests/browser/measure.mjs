@@ -5,7 +5,10 @@
 //                                  [--size WxH|view]     (the state's image size; default 512x512; view: the 3D view's own)
 //                                  [--viewport WxH]      (the browser window; default 1280x860)
 //                                  [--orbit S]           (5. below)
-//                                  [--profile FILE]      (the page's CPU profiles while brushing and playing: FILE.brushing.cpuprofile …)
+//                                  [--gpu]               (GPU compositing on SwiftShader, as browser.gpu.* run, instead of
+//                                                         --disable-gpu's software compositing, which reads the 3D
+//                                                         view's WebGL canvas back every frame: docs/ui.md)
+//                                  [--profile FILE]      (the page's CPU profiles while brushing, orbiting and playing: FILE.brushing.cpuprofile …)
 // 1. brush-to-updated-frame latency at --size (512x512): a brush on the temperature axis is dragged with
 //    the mouse; for every state the brush sent, the time from sending it to its first frame on
 //    screen (decoded and drawn), separately for interactive states (while dragging) and the final
@@ -21,8 +24,10 @@
 //    --only-play skips 1-3.
 // 0. always: the first picture, from the page's navigation to its first frame on screen and to the
 //    first converged frame (at the view's own size: measured before --size applies).
-// 5. with --orbit S: the camera dragged on the 3D view for S seconds (a mouse move every 16 ms):
-//    frames received and shown per second, and their levels and sizes.
+// 5. with --orbit S: the camera dragged on the 3D view for S seconds (a pointer move every display
+//    frame): frames received and shown per second, their levels, sizes and drawing buffers; per
+//    frame where the time went (sent -> received -> shown); then the same orbit over the protocol
+//    alone, without the page (node 20: run node with --experimental-websocket).
 // 6. with --slices S: the Map & section tab shown and the map's depth slider dragged for S seconds
 //    (an input event every 33 ms across the mantle and back): maps shown per second and their size
 //    in device pixels (the pane's; --viewport sets it), and the 3D view's frames meanwhile (it marks
@@ -35,7 +40,7 @@ import { tmpdir } from 'node:os';
 import { chromiumPath, repoRoot, waitConverged } from './harness.mjs';
 
 const args = process.argv.slice(2);
-const flag = (name) => { const i = args.indexOf(name); return i < 0 ? null : args.splice(i, name === '--only-play' ? 1 : 2).at(-1); };
+const flag = (name) => { const i = args.indexOf(name); return i < 0 ? null : args.splice(i, ['--only-play', '--gpu'].includes(name) ? 1 : 2).at(-1); };
 const sizeFlag = flag('--size') ?? '512x512';
 const size = sizeFlag === 'view' ? null : sizeFlag.split('x').map(Number);
 const viewport = (flag('--viewport') ?? '1280x860').split('x').map(Number);
@@ -44,6 +49,7 @@ const sliceSeconds = Number(flag('--slices') ?? 0);
 let sizeText = ''; // the state's image size measured at
 const serverLog = flag('--server-log'), assets = flag('--assets') ?? join(repoRoot, 'web', 'dist-test');
 const profileFile = flag('--profile');
+const gpu = flag('--gpu') !== null;
 const playFps = flag('--play'), playSeconds = Number(flag('--seconds') ?? 10), onlyPlay = flag('--only-play') !== null;
 const [raypc, dataset, screenshot] = args;
 const { chromium } = createRequire(join(repoRoot, 'web', 'package.json'))('playwright-core');
@@ -60,7 +66,7 @@ const url = await new Promise((resolve, reject) => {
 const profile = mkdtempSync(join(tmpdir(), 'raypc-measure-'));
 const context = await chromium.launchPersistentContext(profile, {
   executablePath: chromiumPath, headless: true, viewport: { width: viewport[0], height: viewport[1] },
-  args: ['--no-sandbox', '--disable-gpu', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-quic', '--no-first-run',
+  args: ['--no-sandbox', ...(gpu ? ['--enable-gpu-rasterization', '--ignore-gpu-blocklist'] : ['--disable-gpu']), '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-quic', '--no-first-run',
     '--disable-background-networking', '--disable-component-update', '--disable-sync'],
 });
 try {
@@ -92,6 +98,7 @@ async function measureOrbit(page) {
   const since = await page.evaluate(() => ({ headers: window.__raypc.frameLog.length, shown: window.__raypc.shownLog.length, t: performance.now() }));
   const cx = box.x + box.w / 2, cy = box.y + box.h / 2;
   await page.mouse.move(cx, cy);
+  const cdp = await startProfile(page);
   await page.mouse.down();
   // The pointer moves at the display's rate, as a hand on a mouse does: after the (trusted) press,
   // the page dispatches a pointermove of that pointer on every animation frame. (Moves driven one
@@ -111,15 +118,73 @@ async function measureOrbit(page) {
     requestAnimationFrame(step);
   }), [cx, cy, orbitSeconds * 1000]);
   const r = await page.evaluate((n) => ({
+    sent: window.__raypc.sentLog.filter((e) => e.t >= n.t),
     received: window.__raypc.frameLog.slice(n.headers).filter((f) => f.t >= n.t),
     shown: window.__raypc.shownLog.slice(n.shown).filter((f) => f.t >= n.t),
     now: performance.now(),
   }), since);
+  await stopProfile(cdp, 'orbit');
   await page.mouse.up();
   await waitConverged(page, 60000);
   const seconds = (r.now - since.t) / 1000;
   const count = (list, key) => { const c = {}; for (const s of list) c[key(s)] = (c[key(s)] ?? 0) + 1; return JSON.stringify(c); };
-  console.log(`orbit for ${seconds.toFixed(1)} s at ${sizeText}: ${(r.received.length / seconds).toFixed(1)} frames/s received, ${(r.shown.length / seconds).toFixed(1)} shown; shown by level ${count(r.shown, (s) => s.level)}, by size ${count(r.shown, (s) => `${s.width}x${s.height}`)}; ${(moves / seconds).toFixed(1)} pointer moves/s driven`);
+  console.log(`orbit for ${seconds.toFixed(1)} s at ${sizeText}: ${(r.received.length / seconds).toFixed(1)} frames/s received, ${(r.shown.length / seconds).toFixed(1)} shown; shown by level ${count(r.shown, (s) => s.level)}, by size ${count(r.shown, (s) => `${s.width}x${s.height}`)}, drawn into a buffer of ${count(r.shown, (s) => (s.buffer ?? ['?']).join('x'))}; ${(moves / seconds).toFixed(1)} pointer moves/s driven`);
+  // Where a round trip goes: state sent -> its frame received (the server and the socket), frame
+  // received -> on screen (decoded and drawn), frame received -> the next state sent (the page).
+  const sentAt = new Map(r.sent.map((e) => [e.id, e.t])), shownAt = new Map(r.shown.map((s) => [s.id, s.t]));
+  const trip = [], show = [], next = [];
+  for (const f of r.received) {
+    if (sentAt.has(f.id)) trip.push(f.t - sentAt.get(f.id));
+    if (shownAt.has(f.id)) show.push(shownAt.get(f.id) - f.t);
+    const after = r.sent.find((e) => e.t >= f.t);
+    if (after) next.push(after.t - f.t);
+  }
+  const ms = (a) => `median ${median(a).toFixed(0)}, 90 % ${pct(a, 0.9).toFixed(0)} ms`;
+  console.log(`  per frame: sent -> received ${ms(trip)}; received -> shown ${ms(show)}; received -> next state sent ${ms(next)}`);
+  await orbitWithoutPage(page, seconds);
+}
+
+// The same orbit driven over the protocol alone (no page decoding and drawing beside the server):
+// the page's state with the camera turning, one interactive state in flight as the page keeps it,
+// each sent as soon as the previous one's frame has arrived. What the server can deliver; needs
+// node's WebSocket (node 22, or node 20 with --experimental-websocket).
+async function orbitWithoutPage(page, seconds) {
+  if (typeof WebSocket === 'undefined') {
+    console.log('  (without the page: skipped, run node with --experimental-websocket)');
+    return;
+  }
+  const state = await page.evaluate(() => window.__raypc.state());
+  const ws = new WebSocket(url.replace('http', 'ws') + 'ws');
+  ws.binaryType = 'arraybuffer';
+  const sizes = {};
+  let id = 0, frames = 0, t0 = 0;
+  const send = () => {
+    const camera = { ...state.camera, azimuthDeg: (state.camera.azimuthDeg + 2 * ++id) % 360 };
+    ws.send(JSON.stringify({ type: 'state', id, state: { ...state, camera }, interactive: true, playback: false }));
+  };
+  await new Promise((resolve, reject) => {
+    ws.onerror = () => reject(new Error('orbit without the page: the WebSocket failed'));
+    ws.onopen = () => ws.send(JSON.stringify({ type: 'hello', protocol: 1 }));
+    ws.onmessage = (ev) => {
+      if (typeof ev.data === 'string') {
+        const m = JSON.parse(ev.data);
+        if (m.type === 'hello') { t0 = performance.now(); send(); }
+        else if (m.type === 'error') reject(new Error(`orbit without the page: ${m.message}`));
+        return;
+      }
+      const v = new DataView(ev.data), n = v.getUint32(0, true);
+      const h = JSON.parse(new TextDecoder().decode(new Uint8Array(ev.data, 4, n)));
+      if (h.id !== id) return;
+      frames++;
+      const key = `level ${h.level} ${h.width}x${h.height}`;
+      sizes[key] = (sizes[key] ?? 0) + 1;
+      if (performance.now() - t0 < seconds * 1000) send();
+      else resolve();
+    };
+  });
+  ws.close();
+  const s = (performance.now() - t0) / 1000;
+  console.log(`  without the page (the same states over the protocol, one in flight): ${(frames / s).toFixed(1)} frames/s received; ${JSON.stringify(sizes)}`);
 }
 
 async function measureSlices(page) {

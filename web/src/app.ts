@@ -406,13 +406,9 @@ export class App {
   // ---- view size ---------------------------------------------------------------------------
 
   private onResize(): void {
-    const canvas = this.link.view.canvas;
+    const view = this.link.view;
     const dpr = window.devicePixelRatio || 1;
-    const w = Math.max(1, Math.round(canvas.clientWidth * dpr)), h = Math.max(1, Math.round(canvas.clientHeight * dpr));
-    if (canvas.width !== w || canvas.height !== h) {
-      canvas.width = w;
-      canvas.height = h;
-    }
+    view.resize(Math.max(1, Math.round(view.canvas.clientWidth * dpr)), Math.max(1, Math.round(view.canvas.clientHeight * dpr)));
     if (this.store.autoFitImage) {
       const changed = this.fitImage();
       if (changed) this.commit(false);
@@ -425,9 +421,9 @@ export class App {
   // budget on the server (coarser level, then 1/2 or 1/4 of the pixels per axis; docs/protocol.md)
   // and are warped in between. Side by side at full width, each eye takes half the view.
   private fitImage(): boolean {
-    const canvas = this.link.view.canvas;
+    const view = this.link.view;
     const eyesAcross = this.store.state.stereo.mode === 'side-by-side' ? 2 : 1;
-    const { width, height } = fitImageSize(Math.max(1, Math.floor(canvas.width / eyesAcross)), canvas.height, maxImageSide());
+    const { width, height } = fitImageSize(Math.max(1, Math.floor(view.fullWidth / eyesAcross)), view.fullHeight, maxImageSide());
     const w = width, h = height;
     const image = this.store.state.image;
     if (w === image.width && h === image.height) return false;

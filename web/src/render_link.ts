@@ -67,6 +67,8 @@ export class RenderLink {
   lastHeader: FrameHeader | null = null;
   lastLatency: Latency | null = null;
   private drawPending = false;
+  private decodingFrame = false;
+  private nextFrame: Frame | null = null; // arrived while another was decoded: shown next
   private interactivePending = false;
   private lastSendTime = 0;
   private readonly sendTimes = new Map<number, { t: number; mode: SendMode; first?: number; shown?: boolean }>();
@@ -182,6 +184,9 @@ export class RenderLink {
     const h = frame.header;
     const sent = this.sendTimes.get(h.id);
     if (sent && sent.first === undefined) sent.first = frame.receivedAt - sent.t;
+    // A drag's next state goes as soon as the server has answered the last, not at the next display
+    // frame: the server renders it while this frame is decoded and drawn.
+    if (this.interactivePending && this.connection.caughtUp) this.pumpInteractive();
     if (h.id < this.lastShownId || h.id === this.droppedId) return; // a pass of an older state still in flight
     if (h.id === this.holdId) {
       if (!this.held || this.held.header.pass < h.pass) this.held = frame;
@@ -192,11 +197,33 @@ export class RenderLink {
   }
 
   private show(frame: Frame): void {
+    this.lastHeader = frame.header;
+    this.events.onFrameArrived(frame.header);
+    this.decode(frame);
+  }
+
+  // One frame is decoded at a time; of those that arrive meanwhile only the newest waits, the
+  // others are dropped. Frames that come faster than the page decodes them (a drag on shared
+  // cores) would otherwise queue, and the picture lag ever further behind the mouse.
+  private decode(frame: Frame): void {
+    if (this.decodingFrame) {
+      this.nextFrame = frame;
+      return;
+    }
+    this.decodingFrame = true;
+    const id = frame.header.id;
+    this.decodeAndDraw(frame).catch((e) => this.events.onError(`frame of state ${id}: ${(e as Error).message}`)).finally(() => {
+      this.decodingFrame = false;
+      const next = this.nextFrame;
+      this.nextFrame = null;
+      if (next && next.header.id >= this.lastShownId && next.header.id !== this.droppedId) this.decode(next);
+    });
+  }
+
+  private decodeAndDraw(frame: Frame): Promise<void> {
     const h = frame.header;
     const sent = this.sendTimes.get(h.id);
-    this.lastHeader = h;
-    this.events.onFrameArrived(h);
-    void this.view.setFrame(frame).then(() => {
+    return this.view.setFrame(frame).then(() => {
       if (h.id >= this.lastShownId) this.lastShownId = h.id;
       let latency: Latency | null = null;
       if (sent && !sent.shown) {

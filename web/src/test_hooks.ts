@@ -35,7 +35,9 @@ export interface TestHooks {
   sentLog: SentEntry[];
   frameLog: { id: number; step: number; pass: number; t: number }[];
   // Frames on screen, when (performance.now()) and what the server rendered them as.
-  shownLog: { id: number; step: number; pass: number; level: number; width: number; height: number; playback: boolean; t: number }[];
+  // buffer: the 3D view's drawing buffer when the frame was shown (View3D's fitBuffer), full: the view's size.
+  shownLog: { id: number; step: number; pass: number; level: number; width: number; height: number; playback: boolean; interactive: boolean;
+    buffer: [number, number]; full: [number, number]; t: number }[];
   warpedWhileWaiting: number;
   // Deferred work (the full line redraw after a brush release): the state it waited for, whether
   // that state's frame was on screen when it ran (false: it ran on the timeout or was superseded).
@@ -138,7 +140,8 @@ export function installTestHooks(app: App): TestHooks {
     shown: (h, latency) => {
       if (latency) push(hooks.latencies, latency, 200);
       push(hooks.shownLog, { id: h.id, step: h.step, pass: h.pass, level: h.level, width: h.width, height: h.height,
-        playback: !!h.playback, t: performance.now() }, 500);
+        playback: !!h.playback, interactive: !!h.interactive, buffer: [app.link.view.canvas.width, app.link.view.canvas.height],
+        full: [app.link.view.fullWidth, app.link.view.fullHeight], t: performance.now() }, 500);
     },
     drawn: (kind, waiting) => { if (kind === 'warped' && waiting) hooks.warpedWhileWaiting++; },
     afterFrame: (record) => push(hooks.afterFrames, record, 50),

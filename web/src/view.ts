@@ -112,6 +112,7 @@ export class View3D {
   private readonly quadVao: WebGLVertexArrayObject;
   private frame: Frame | null = null;
   private decoding: Promise<void> = Promise.resolve();
+  private size = { width: 1, height: 1 };
   readonly stats: ViewStats = { warpedDraws: 0, exactDraws: 0, framesShown: 0 };
 
   constructor(readonly canvas: HTMLCanvasElement) {
@@ -168,9 +169,35 @@ export class View3D {
     return this.frame;
   }
 
+  // The view's size in device pixels (its CSS size times devicePixelRatio): the size still frames
+  // are drawn at.
+  get fullWidth(): number { return this.size.width; }
+  get fullHeight(): number { return this.size.height; }
+
+  resize(width: number, height: number): void {
+    this.size = { width, height };
+    this.fitBuffer();
+  }
+
+  // The canvas' drawing buffer: the view's size, or half of it per axis while the frame shown is
+  // an interactive or playback one of at most half the view's size per axis (a drag's frames are
+  // 1/2 or 1/4 of it, docs/protocol.md). Nothing of such a frame is lost, and the page's work per
+  // display frame (the warp's pixels, and in software compositing the read-back of the whole
+  // canvas) is a quarter: measured in docs/ui.md ("Orbit").
+  private fitBuffer(): void {
+    const h = this.frame?.header;
+    const { width, height } = this.size;
+    const half = !!h && (h.interactive || h.playback) && 2 * h.width <= width + 1 && 2 * h.height <= height + 1;
+    const w = half ? Math.ceil(width / 2) : width, hh = half ? Math.ceil(height / 2) : height;
+    if (this.canvas.width !== w || this.canvas.height !== hh) {
+      this.canvas.width = w;
+      this.canvas.height = hh;
+    }
+  }
+
   // Decodes the frame's JPEG and makes it the one shown; frames are applied in arrival order.
   setFrame(frame: Frame): Promise<void> {
-    this.decoding = this.decoding.then(async () => {
+    this.decoding = this.decoding.catch(() => undefined).then(async () => {
       const bitmap = await createImageBitmap(frame.jpeg);
       const gl = this.gl;
       gl.bindTexture(gl.TEXTURE_2D, this.texture);
@@ -178,6 +205,7 @@ export class View3D {
       gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGB, gl.RGB, gl.UNSIGNED_BYTE, bitmap);
       bitmap.close();
       this.frame = frame; // its meshes are built when a draw first warps it (beginWarp)
+      this.fitBuffer();
       this.stats.framesShown++;
     });
     return this.decoding;
