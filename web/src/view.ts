@@ -181,9 +181,10 @@ export class View3D {
 
   // The canvas' drawing buffer: the view's size, or half of it per axis while the frame shown is
   // an interactive or playback one of at most half the view's size per axis (a drag's frames are
-  // 1/2 or 1/4 of it, docs/protocol.md). Nothing of such a frame is lost, and the page's work per
-  // display frame (the warp's pixels, and in software compositing the read-back of the whole
-  // canvas) is a quarter: measured in docs/ui.md ("Orbit").
+  // 1/2 or 1/4 of it, docs/protocol.md). Nothing of such a frame is lost, and each display frame
+  // of a drag has a quarter of the pixels to warp and to hand to the compositor (which in software
+  // compositing reads the canvas back): more frames received and shown, docs/ui.md ("Speed against
+  // issue 26's goals").
   private fitBuffer(): void {
     const h = this.frame?.header;
     const { width, height } = this.size;
