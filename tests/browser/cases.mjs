@@ -6,7 +6,7 @@
 import { readFileSync, writeFileSync } from 'node:fs';
 import { spawnSync } from 'node:child_process';
 import { join } from 'node:path';
-import { check, meanAbsDiff, openUi, postJson, runCase, standardView, TestFailure, viewPixels, volumeOnly, waitConverged } from './harness.mjs';
+import { binaryHeader, check, meanAbsDiff, openUi, postJson, runCase, standardView, TestFailure, viewPixels, volumeOnly, waitConverged } from './harness.mjs';
 
 // A fourth argument `gpu` runs chromium with GPU rasterisation on a software GL (SwiftShader), as a
 // machine without a GPU does, instead of --disable-gpu (ctest runs the drawing-heavy cases both ways: tests/browser/CMakeLists.txt).
@@ -615,10 +615,10 @@ const cases = {
     // Which lines pass, from the attributes the server stores.
     const r = await fetch(`${url}api/pathlines?step=${last}&window=${s1.pathlines.window}`);
     const buf = Buffer.from(await r.arrayBuffer());
-    const n = buf.readUInt32LE(0), header = JSON.parse(buf.subarray(4, 4 + n).toString());
+    const { header, bodyOffset } = binaryHeader(buf);
     const k = header.columns.indexOf('seed persistence');
     check(k >= 0, `no seed persistence column: ${header.columns.join(', ')}`);
-    const values = new Float32Array(buf.buffer.slice(buf.byteOffset + 4 + n, buf.byteOffset + buf.length));
+    const values = new Float32Array(buf.buffer.slice(buf.byteOffset + bodyOffset, buf.byteOffset + buf.length));
     let passing = 0;
     for (let i = 0; i < header.lines; i++) { const v = values[i * header.columns.length + k]; if (v >= f[0].min && v <= f[0].max) passing++; }
     const pl1 = await page.evaluate(() => window.__raypc.pathlines);

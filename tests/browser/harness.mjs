@@ -11,6 +11,22 @@ import { fileURLToPath } from 'node:url';
 export const repoRoot = resolve(dirname(fileURLToPath(import.meta.url)), '../..');
 export const chromiumPath = process.env.RAYPC_CHROMIUM ?? '/usr/bin/chromium';
 
+// A binary message of the server (a frame, pathlines, a map or section: docs/protocol.md): a u32
+// length, the JSON header, then the body. `bytes` an ArrayBuffer or a Buffer.
+export function binaryHeader(bytes) {
+  const buffer = Buffer.isBuffer(bytes) ? bytes : Buffer.from(bytes);
+  const n = buffer.readUInt32LE(0);
+  return { header: JSON.parse(buffer.subarray(4, 4 + n).toString('utf8')), bodyOffset: 4 + n };
+}
+
+// Chromium's switches for the tests and measure.mjs: software compositing (--disable-gpu), or with
+// `gpu` GPU compositing, both on SwiftShader; nothing contacted but 127.0.0.1.
+export function chromiumArgs(gpu) {
+  return ['--no-sandbox', ...(gpu ? ['--enable-gpu-rasterization', '--ignore-gpu-blocklist'] : ['--disable-gpu']), '--use-angle=swiftshader',
+    '--enable-unsafe-swiftshader', '--disable-quic', '--no-first-run', '--disable-background-networking', '--disable-component-update',
+    '--disable-sync', '--disable-features=Translate,MediaRouter,OptimizationHints', '--disable-dev-shm-usage'];
+}
+
 export class TestFailure extends Error {}
 
 export function check(condition, message) {
@@ -103,9 +119,7 @@ export async function runCase(name, raypc, fixture, body, { limitMs = 100000, co
       acceptDownloads: true,
       viewport: { width: 1280, height: 860 },
       ...contextOptions,
-      args: ['--no-sandbox', ...(gpu ? ['--enable-gpu-rasterization', '--ignore-gpu-blocklist'] : ['--disable-gpu']), '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-quic',
-        '--no-first-run', '--disable-background-networking', '--disable-component-update', '--disable-sync',
-        '--disable-features=Translate,MediaRouter,OptimizationHints', '--disable-dev-shm-usage'],
+      args: chromiumArgs(gpu),
     });
     // The UI installs window.__raypc (web/src/test_hooks.ts) only when asked before it loads; the
     // tests' own page helper __viewImageData reads the 3D view at full resolution (ImageData).

@@ -37,7 +37,7 @@ import { createRequire } from 'node:module';
 import { join } from 'node:path';
 import { createWriteStream, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { chromiumPath, repoRoot, waitConverged } from './harness.mjs';
+import { binaryHeader, chromiumArgs, chromiumPath, repoRoot, waitConverged } from './harness.mjs';
 
 const args = process.argv.slice(2);
 const flag = (name) => { const i = args.indexOf(name); return i < 0 ? null : args.splice(i, ['--only-play', '--gpu'].includes(name) ? 1 : 2).at(-1); };
@@ -66,8 +66,7 @@ const url = await new Promise((resolve, reject) => {
 const profile = mkdtempSync(join(tmpdir(), 'raypc-measure-'));
 const context = await chromium.launchPersistentContext(profile, {
   executablePath: chromiumPath, headless: true, viewport: { width: viewport[0], height: viewport[1] },
-  args: ['--no-sandbox', ...(gpu ? ['--enable-gpu-rasterization', '--ignore-gpu-blocklist'] : ['--disable-gpu']), '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-quic', '--no-first-run',
-    '--disable-background-networking', '--disable-component-update', '--disable-sync'],
+  args: chromiumArgs(gpu),
 });
 try {
   await context.addInitScript(() => { window.__raypcTestHooks = true; }); // web/src/test_hooks.ts
@@ -172,8 +171,7 @@ async function orbitWithoutPage(page, seconds) {
         else if (m.type === 'error') reject(new Error(`orbit without the page: ${m.message}`));
         return;
       }
-      const v = new DataView(ev.data), n = v.getUint32(0, true);
-      const h = JSON.parse(new TextDecoder().decode(new Uint8Array(ev.data, 4, n)));
+      const h = binaryHeader(ev.data).header;
       if (h.id !== id) return;
       frames++;
       const key = `level ${h.level} ${h.width}x${h.height}`;

@@ -15,6 +15,7 @@ import { createRequire } from 'node:module';
 import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { binaryHeader } from '../browser/harness.mjs';
 
 const [raypc, fixture, examples] = process.argv.slice(2);
 const repoRoot = resolve(dirname(fileURLToPath(import.meta.url)), '../..');
@@ -43,10 +44,7 @@ function expectMessage(name, value, where) {
     fail(`${where} does not match ${name}: ${ajv.errorsText(validate.errors, { dataVar: name })}; value: ${JSON.stringify(value).slice(0, 400)}`);
 }
 
-function headerOf(buffer) {
-  const n = buffer.readUInt32LE(0);
-  return JSON.parse(buffer.subarray(4, 4 + n).toString('utf8'));
-}
+const headerOf = (buffer) => binaryHeader(buffer).header;
 
 const tmp = mkdtempSync(join(tmpdir(), 'raypc-messages-'));
 let server = null;

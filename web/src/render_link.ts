@@ -184,10 +184,7 @@ export class RenderLink {
     const h = frame.header;
     const sent = this.sendTimes.get(h.id);
     if (sent && sent.first === undefined) sent.first = frame.receivedAt - sent.t;
-    // A drag's next state goes as soon as the server has answered the last, not at the next display
-    // frame: the server renders it while this frame is decoded and drawn.
-    if (this.interactivePending && this.connection.caughtUp) this.pumpInteractive();
-    if (h.id < this.lastShownId || h.id === this.droppedId) return; // a pass of an older state still in flight
+    if (this.superseded(frame)) return;
     if (h.id === this.holdId) {
       if (!this.held || this.held.header.pass < h.pass) this.held = frame;
       this.events.onFrameHeld(frame);
@@ -216,8 +213,13 @@ export class RenderLink {
       this.decodingFrame = false;
       const next = this.nextFrame;
       this.nextFrame = null;
-      if (next && next.header.id >= this.lastShownId && next.header.id !== this.droppedId) this.decode(next);
+      if (next && !this.superseded(next)) this.decode(next);
     });
+  }
+
+  // A pass of an older state than the one shown, or of a step of playback already shown or stopped.
+  private superseded(frame: Frame): boolean {
+    return frame.header.id < this.lastShownId || frame.header.id === this.droppedId;
   }
 
   private decodeAndDraw(frame: Frame): Promise<void> {

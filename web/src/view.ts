@@ -111,7 +111,6 @@ export class View3D {
   private meshFrame: Frame | null = null;
   private readonly quadVao: WebGLVertexArrayObject;
   private frame: Frame | null = null;
-  private decoding: Promise<void> = Promise.resolve();
   private size = { width: 1, height: 1 };
   readonly stats: ViewStats = { warpedDraws: 0, exactDraws: 0, framesShown: 0 };
 
@@ -196,20 +195,17 @@ export class View3D {
     }
   }
 
-  // Decodes the frame's JPEG and makes it the one shown; frames are applied in arrival order.
-  setFrame(frame: Frame): Promise<void> {
-    this.decoding = this.decoding.catch(() => undefined).then(async () => {
-      const bitmap = await createImageBitmap(frame.jpeg);
-      const gl = this.gl;
-      gl.bindTexture(gl.TEXTURE_2D, this.texture);
-      gl.pixelStorei(gl.UNPACK_FLIP_Y_WEBGL, false);
-      gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGB, gl.RGB, gl.UNSIGNED_BYTE, bitmap);
-      bitmap.close();
-      this.frame = frame; // its meshes are built when a draw first warps it (beginWarp)
-      this.fitBuffer();
-      this.stats.framesShown++;
-    });
-    return this.decoding;
+  // Decodes the frame's JPEG and makes it the one shown. One at a time: RenderLink waits for each.
+  async setFrame(frame: Frame): Promise<void> {
+    const bitmap = await createImageBitmap(frame.jpeg);
+    const gl = this.gl;
+    gl.bindTexture(gl.TEXTURE_2D, this.texture);
+    gl.pixelStorei(gl.UNPACK_FLIP_Y_WEBGL, false);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGB, gl.RGB, gl.UNSIGNED_BYTE, bitmap);
+    bitmap.close();
+    this.frame = frame; // its meshes are built when a draw first warps it (beginWarp)
+    this.fitBuffer();
+    this.stats.framesShown++;
   }
 
   // A mesh per view of the frame: a stereo frame's depth map holds the eyes side by side (each
