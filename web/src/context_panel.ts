@@ -72,10 +72,40 @@ function legendNumber(v: number): string {
   return m >= 1e5 || m < 1e-2 ? v.toExponential(2) : String(+v.toPrecision(4));
 }
 
+// What a legend shows: its title, the bar's colours and its labels.
+interface LegendContent {
+  title: string;
+  colors: string[];
+  labels: { at?: number; text: string }[];
+}
+
+const kLegendBarWidth = 200;
+
+function legendContent(e: LegendEntry): LegendContent {
+  const colors: string[] = [];
+  for (let x = 0; x < kLegendBarWidth; x++) {
+    const [r, g, b] = e.colorAt((x + 0.5) / kLegendBarWidth);
+    colors.push(`rgb(${Math.round(r * 255)},${Math.round(g * 255)},${Math.round(b * 255)})`);
+  }
+  const labels = e.ticks
+    ? e.ticks.map((t) => ({ at: t.at, text: t.text }))
+    : [e.valueAt(0), e.valueAt(0.5), e.valueAt(1)].map((v) => ({ text: legendNumber(v) }));
+  return { title: e.title, colors, labels };
+}
+
+// The content shown last (showLegends rebuilds the overlay only when it changes: the camera's
+// state changes at every pointer move of a drag, and rebuilding it each time made the page lay
+// out, paint and composite it 40-50 times a second).
+let shownLegends = '';
+
 // Draws the legends into the view's overlay (#legends), and the reference shells' key (each shell's
 // label beside a swatch of its colour, from the frame header: as the server draws and names them);
 // none when both are empty.
 export function showLegends(entries: LegendEntry[], shells: ShellKeyEntry[] = []): void {
+  const contents = entries.map(legendContent);
+  const key = JSON.stringify([contents, shells]);
+  if (key === shownLegends) return;
+  shownLegends = key;
   const box = $('legends');
   box.innerHTML = '';
   box.hidden = entries.length === 0 && shells.length === 0;
@@ -94,39 +124,37 @@ export function showLegends(entries: LegendEntry[], shells: ShellKeyEntry[] = []
     }
     box.appendChild(div);
   }
-  for (const e of entries) {
+  for (const e of contents) {
     const div = document.createElement('div');
     div.className = 'legend';
     const title = document.createElement('div');
     title.className = 'legendTitle';
     title.textContent = e.title;
     const bar = document.createElement('canvas');
-    bar.width = 200;
+    bar.width = kLegendBarWidth;
     bar.height = 1;
     const ctx = bar.getContext('2d')!;
-    for (let x = 0; x < bar.width; x++) {
-      const u = (x + 0.5) / bar.width;
-      const [r, g, b] = e.colorAt(u);
-      ctx.fillStyle = `rgb(${Math.round(r * 255)},${Math.round(g * 255)},${Math.round(b * 255)})`;
+    e.colors.forEach((c, x) => {
+      ctx.fillStyle = c;
       ctx.fillRect(x, 0, 1, 1);
-    }
+    });
     const labels = document.createElement('div');
     labels.className = 'legendLabels';
-    if (e.ticks) {
+    if (e.labels.some((l) => l.at !== undefined)) {
       labels.style.position = 'relative';
       labels.style.height = '1.2em';
-      for (const t of e.ticks) {
+      for (const t of e.labels) {
         const span = document.createElement('span');
         span.textContent = t.text;
         span.style.position = 'absolute';
-        span.style.left = `${(t.at * 100).toFixed(2)}%`;
+        span.style.left = `${((t.at ?? 0) * 100).toFixed(2)}%`;
         span.style.transform = 'translateX(-50%)';
         labels.appendChild(span);
       }
     } else {
-      for (const v of [e.valueAt(0), e.valueAt(0.5), e.valueAt(1)]) {
+      for (const t of e.labels) {
         const span = document.createElement('span');
-        span.textContent = legendNumber(v);
+        span.textContent = t.text;
         labels.appendChild(span);
       }
     }
