@@ -189,7 +189,7 @@ void runPasses(benchmark::State& state, int level, const RenderParams& p, int pa
 
 // The interactive mode: the level (and, if even the coarsest level is too slow, a reduced internal
 // resolution) chosen as the server chooses it (interactiveLevelPolicy, chooseLevel, the throughput
-// averaged by averagedThroughput over passes); the first choice assumes a throughput, as a new
+// averaged by averagedMeasure over passes); the first choice assumes a throughput, as a new
 // server does.
 void BM_InteractivePass512(benchmark::State& state)
 {
@@ -223,7 +223,7 @@ void BM_InteractivePass512(benchmark::State& state)
         r.setParams(q);
         FrameBuffer f(q.width, q.height);
         const PassStats s = r.renderPass(f);
-        rate = averagedThroughput(rate, r.estimateSamplesPerPass() / s.seconds);
+        rate = averagedMeasure(rate, r.estimateSamplesPerPass() / s.seconds);
         choice = choose(rate);
     }
     const RenderParams q = reduced(choice);

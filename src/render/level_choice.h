@@ -1,6 +1,6 @@
 // Choosing the level of detail for a time budget, from predicted pass times and the measured
 // throughput. StateRenderer::prepare chooses with chooseLevel (the one rule; the benchmarks call it
-// too), the server keeps the throughput with averagedThroughput.
+// too), the server keeps the throughput and a frame's overhead with averagedMeasure.
 #pragma once
 
 #include "data/dataset.h"
@@ -49,6 +49,20 @@ inline int resolutionDivisor(double seconds, double budgetSeconds)
 // full-resolution benchmark (docs/rendering.md, "Measured choices"), so keep that much in reserve.
 inline constexpr double kInteractiveBudgetShare = 0.75;
 
+// The time one view's pass may take of an interactive frame's budget (`budgetMs`, the state's
+// timeBudgetMs): kInteractiveBudgetShare of it, less the frame's measured time outside its pass
+// (`overheadSeconds`: preparing, the picture and its JPEG, on the server), shared by `views` views
+// (the eyes of a stereo pair). Whatever the overhead, at least a quarter of that share, so a slow
+// encoder does not push every frame to the smallest size. On 2 cores shared with the browser the
+// overhead was 10-16 ms of a 50 ms budget: counted, a drag's frames keep to the budget's rate
+// (docs/rendering.md, "Measured choices").
+inline double passBudgetSeconds(double budgetMs, double overheadSeconds, int views)
+{
+    const double share = kInteractiveBudgetShare * budgetMs / 1000.0;
+    const double pass = share - overheadSeconds > 0.25 * share ? share - overheadSeconds : 0.25 * share;
+    return pass / double(views > 0 ? views : 1);
+}
+
 // A level of detail and the image's size divisor per axis (1, 2 or 4).
 struct LevelChoice {
     int level = 0;
@@ -71,9 +85,9 @@ LevelChoice chooseLevel(int levelCount, double budgetSeconds, double samplesPerS
     return c;
 }
 
-// The throughput the level choice predicts with: an exponential average of the passes measured
-// (`measured` samples per second) with `average` (0: none yet).
-inline double averagedThroughput(double average, double measured)
+// What the level choice predicts with (the throughput, in samples per second; a frame's time outside
+// its pass, passBudgetSeconds): an exponential average of `measured` with `average` (0: none yet).
+inline double averagedMeasure(double average, double measured)
 {
     return average > 0 ? 0.7 * average + 0.3 * measured : measured;
 }

@@ -252,9 +252,10 @@ std::optional<LevelChoice> StateRenderer::knownChoice(const RenderState& state, 
     return LevelChoice{0, 1};
 }
 
-LevelPolicy interactiveLevelPolicy(double measuredSamplesPerSecond)
+LevelPolicy interactiveLevelPolicy(double measuredSamplesPerSecond, double overheadSeconds)
 {
     LevelPolicy policy;
+    policy.overheadSeconds = overheadSeconds;
     policy.samplesPerSecond =
         measuredSamplesPerSecond > 0 ? measuredSamplesPerSecond : 100e6 * tbb::this_task_arena::max_concurrency();
     policy.reduceResolution = measuredSamplesPerSecond > 0;
@@ -276,7 +277,7 @@ StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, co
     const int step = state.step;
     const int levels = int(m_dataset->levels().size());
     // The views share the budget: each eye of a stereo pair gets half.
-    const double budget = kInteractiveBudgetShare * state.timeBudgetMs / 1000.0 / double(views.size());
+    const double budget = passBudgetSeconds(state.timeBudgetMs, policy.overheadSeconds, int(views.size()));
     const double rate = policy.samplesPerSecond;
 
     if (const auto known = knownChoice(state, policy)) {

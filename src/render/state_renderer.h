@@ -99,6 +99,9 @@ struct LevelPolicy {
     // frames, `raypc render --lod auto`). 0: level 0 (still frames and scripted figures, so that a
     // figure does not depend on the machine's speed).
     double samplesPerSecond = 0;
+    // The measured time of an interactive frame outside its pass (preparing it, its picture and
+    // JPEG), which the budget must also hold: passBudgetSeconds (level_choice.h).
+    double overheadSeconds = 0;
     // When even the coarsest level misses the budget, render 1/2 or 1/4 of the pixels per axis (the
     // interactive UI scales the frame up).
     bool reduceResolution = false;
@@ -108,11 +111,11 @@ struct LevelPolicy {
 };
 
 // The policy of interactive frames and playback steps (docs/protocol.md, the state message): the
-// finest level within the budget at `measuredSamplesPerSecond` (averagedThroughput of the passes
+// finest level within the budget at `measuredSamplesPerSecond` (averagedMeasure of the passes
 // rendered so far) and 1/2 or 1/4 of the pixels when even the coarsest misses it; before any pass
 // was measured (0), an assumed 100 M samples/s per thread and the full size, so that the first pass
-// measures the machine.
-LevelPolicy interactiveLevelPolicy(double measuredSamplesPerSecond);
+// measures the machine. `overheadSeconds`: LevelPolicy::overheadSeconds.
+LevelPolicy interactiveLevelPolicy(double measuredSamplesPerSecond, double overheadSeconds = 0);
 
 // Image-parallel frames under mpirun (core/mpi.h, docs/scaling.md): rank r of N renders the tiles
 // t with t % N == r of every pass (the jitter of a sample depends only on its pixel and the pass

@@ -43,6 +43,8 @@ TEST(StateRenderer, InteractivePolicyUsesTheMeasuredThroughput)
     const LevelPolicy measured = interactiveLevelPolicy(3.5e7);
     EXPECT_EQ(measured.samplesPerSecond, 3.5e7);
     EXPECT_TRUE(measured.reduceResolution);
+    EXPECT_EQ(measured.overheadSeconds, 0);
+    EXPECT_EQ(interactiveLevelPolicy(3.5e7, 0.012).overheadSeconds, 0.012);
 }
 
 TEST(PictureMemory, GrowsWithPixelsEyesAndDepth)

@@ -444,8 +444,25 @@ TEST(Renderer, LevelChoiceUsesTheThroughputAndShrinksTheImageWhenNeeded)
     EXPECT_EQ(resolutionDivisor(4.0, 1.0), 2);
     EXPECT_EQ(resolutionDivisor(4.01, 1.0), 4);
     // The server's average of the throughput: the first measurement, then weight 0.3 for the newest.
-    EXPECT_EQ(averagedThroughput(0, 5e7), 5e7);
-    EXPECT_DOUBLE_EQ(averagedThroughput(5e7, 1e8), 0.7 * 5e7 + 0.3 * 1e8);
+    EXPECT_EQ(averagedMeasure(0, 5e7), 5e7);
+    EXPECT_DOUBLE_EQ(averagedMeasure(5e7, 1e8), 0.7 * 5e7 + 0.3 * 1e8);
+}
+
+// An interactive frame's budget holds its pass and the time around it on the server (preparing,
+// the picture and its JPEG): the pass gets what the measured overhead leaves of
+// kInteractiveBudgetShare, shared by the views, and never less than a quarter of that share.
+TEST(Renderer, ThePassGetsTheFramesBudgetLessItsOverhead)
+{
+    EXPECT_DOUBLE_EQ(passBudgetSeconds(50, 0, 1), kInteractiveBudgetShare * 0.05);
+    EXPECT_DOUBLE_EQ(passBudgetSeconds(50, 0.0125, 1), kInteractiveBudgetShare * 0.05 - 0.0125);
+    EXPECT_DOUBLE_EQ(passBudgetSeconds(50, 0.0125, 2), (kInteractiveBudgetShare * 0.05 - 0.0125) / 2);
+    EXPECT_DOUBLE_EQ(passBudgetSeconds(50, 1.0, 1), 0.25 * kInteractiveBudgetShare * 0.05);
+    // A pass predicted at 30 ms fits a 50 ms frame alone, not with 12.5 ms around it: the level
+    // choice then renders a quarter of the pixels.
+    const double samples = 3e6, rate = 1e8;  // 30 ms at `rate`
+    auto samplesAt = [&](int) { return samples; };
+    EXPECT_EQ(chooseLevel(1, passBudgetSeconds(50, 0, 1), rate, true, samplesAt).divisor, 1);
+    EXPECT_EQ(chooseLevel(1, passBudgetSeconds(50, 0.0125, 1), rate, true, samplesAt).divisor, 2);
 }
 
 }  // namespace

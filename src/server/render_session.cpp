@@ -140,7 +140,8 @@ void RenderSession::render(const Request& request)
     // Interactive and playback: the finest level within the time budget at the measured throughput
     // (interactiveLevelPolicy). Still: the state's level, else level 0.
     const bool interactive = request.mode == FrameMode::interactive;
-    const LevelPolicy quickPolicy = interactiveLevelPolicy(m_context.samplesPerSecond.load());
+    const LevelPolicy quickPolicy =
+        interactiveLevelPolicy(m_context.samplesPerSecond.load(), m_context.frameOverheadSeconds.load());
     const LevelPolicy policy = request.mode != FrameMode::still ? quickPolicy : LevelPolicy{};
     const int passes = interactive ? 1 : std::max(1, state.passes);
     const int ranks = m_context.ranks ? m_context.ranks->ranks() : 1;
@@ -210,7 +211,7 @@ void RenderSession::render(const Request& request)
                 : prepared.renderPass(frames, &m_cancel);
         if (!stats.cancelled && stats.seconds > 0 && stats.everyBlock) {
             const double measured = prepared.estimatedSamplesPerPass / stats.seconds;
-            m_context.samplesPerSecond.store(averagedThroughput(m_context.samplesPerSecond.load(), measured));
+            m_context.samplesPerSecond.store(averagedMeasure(m_context.samplesPerSecond.load(), measured));
         }
         return stats;
     };
@@ -296,6 +297,10 @@ void RenderSession::render(const Request& request)
             continue;
         }
         sendFrame(frames, prepared, stats, pass, last, false, selectionKey == m_selectionKey ? m_selection : nlohmann::json());
+        if (pass == 1 && request.mode != FrameMode::still) {
+            const double overhead = (preparedMs + encodeMsTotal) / 1000.0;
+            m_context.frameOverheadSeconds.store(averagedMeasure(m_context.frameOverheadSeconds.load(), overhead));
+        }
         updateSelection();
         if (last)
             break;
