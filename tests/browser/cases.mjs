@@ -49,6 +49,13 @@ async function drag(page, dx, dy, { steps = 6, button = 'left' } = {}) {
 
 const info = async (url) => (await fetch(url + 'api/info')).json();
 
+// The Rendering section's Re-project set to on (auto is off on headless chromium's software GL).
+const reprojectOn = (page) => page.evaluate(() => {
+  const s = document.getElementById('reproject');
+  s.value = 'on';
+  s.dispatchEvent(new Event('change'));
+});
+
 // The rotation of unit quaternion q = [x, y, z, w] applied to v.
 function rotate([x, y, z, w], v) {
   return [
@@ -233,13 +240,42 @@ const cases = {
     check(d2 < 1, `after clearing the brush the image differs from the unbrushed one by ${d2.toFixed(2)}`);
   },
 
-  // While a new frame is on its way the last one is re-projected with the current camera, and the
-  // warped picture is closer to the new frame than the unwarped old one (the camera math agrees
-  // with the server's).
+  // Headless chromium's WebGL runs in software (SwiftShader): Re-project's auto is off there and
+  // says why; while a drag's frames are held nothing is drawn into the view (every draw would be
+  // read back on the CPU the server needs), and each frame that then arrives is drawn once.
+  // With Re-project on, while a new frame is on its way the last one is re-projected with the
+  // current camera, and the warped picture is closer to the new frame than the unwarped old one
+  // (the camera math agrees with the server's).
   async warp({ context, url }) {
     const page = await openUi(context, url);
     await standardView(page);
     await volumeOnly(page);
+    await waitConverged(page);
+    const gl = await page.evaluate(() => ({ value: document.getElementById('reproject').value, note: document.getElementById('reprojectNote').textContent }));
+    check(gl.value === 'auto' && /^\(off: WebGL runs in software, .*SwiftShader/.test(gl.note), `Re-project on a software GL: ${JSON.stringify(gl)}`);
+    {
+      const old = await viewPixels(page);
+      const before = await page.evaluate(() => ({ draws: window.__raypc.view.glDraws, shown: window.__raypc.lastShownId }));
+      await page.evaluate(() => { window.__raypc.holdFrames = true; });
+      await drag(page, 45, 20);
+      await page.evaluate(frames);
+      const held = await viewPixels(page);
+      const during = await page.evaluate(() => ({ draws: window.__raypc.view.glDraws, shown: window.__raypc.lastShownId, sent: window.__raypc.lastSentId }));
+      check(during.draws === before.draws && during.shown === before.shown && during.sent > during.shown,
+        `re-projection off: the view was drawn while a drag's frames were held (${JSON.stringify({ before, during })})`);
+      check(meanAbsDiff(old, held) < 0.01, `re-projection off: the view changed while no frame arrived (${meanAbsDiff(old, held).toFixed(3)})`);
+      const n = await page.evaluate(() => window.__raypc.view.framesShown);
+      await page.evaluate(() => window.__raypc.releaseFrames());
+      await waitConverged(page);
+      const after = await page.evaluate((k) => ({ draws: window.__raypc.view.glDraws, frames: window.__raypc.view.framesShown - k }), n);
+      check(after.frames >= 1 && after.draws - during.draws <= after.frames + 2,
+        `re-projection off: ${after.draws - during.draws} draws for ${after.frames} frames shown`);
+      const fresh = await viewPixels(page);
+      check(meanAbsDiff(old, fresh) > 1.5, `re-projection off: the new frame hardly differs from the old (${meanAbsDiff(old, fresh).toFixed(2)})`);
+      console.log(`  re-projection off ${gl.note}: no draw while frames were held; ${after.draws - during.draws} draws for ${after.frames} frames after`);
+    }
+    await reprojectOn(page);
+    check(await page.evaluate(() => document.getElementById('reprojectNote').textContent === ''), 'Re-project on still shows the note of auto');
     await waitConverged(page);
     for (const [label, act] of [
       ['orbit', () => drag(page, 45, 20)],
@@ -293,6 +329,7 @@ const cases = {
   // the UI says that WebXR immersive-vr is not there.
   async stereo({ context, url }) {
     const page = await openUi(context, url);
+    await reprojectOn(page);
     await standardView(page);
     await volumeOnly(page);
     await waitConverged(page);

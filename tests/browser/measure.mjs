@@ -8,6 +8,8 @@
 //                                  [--gpu]               (GPU compositing on SwiftShader, as browser.gpu.* run, instead of
 //                                                         --disable-gpu's software compositing, which reads the 3D
 //                                                         view's WebGL canvas back every frame: docs/ui.md)
+//                                  [--reproject auto|on|off] (the 3D view's Re-project setting; default auto: off
+//                                                         where WebGL runs in software, as here)
 //                                  [--profile FILE]      (the page's CPU profiles while brushing, orbiting and playing: FILE.brushing.cpuprofile …)
 // 1. brush-to-updated-frame latency at --size (512x512): a brush on the temperature axis is dragged with
 //    the mouse; for every state the brush sent, the time from sending it to its first frame on
@@ -26,8 +28,11 @@
 //    first converged frame (at the view's own size: measured before --size applies).
 // 5. with --orbit S: the camera dragged on the 3D view for S seconds (a pointer move every display
 //    frame): frames received and shown per second, their levels, sizes and drawing buffers; per
-//    frame where the time went (sent -> received -> shown); then the same orbit over the protocol
-//    alone, without the page (node 20: run node with --experimental-websocket).
+//    frame where the time went (sent -> received -> shown); the CPU the server and chromium's
+//    processes used meanwhile (Linux: /proc; every chromium on the machine counts); then the same
+//    orbit over the protocol alone, without the page (node 20: run node with --experimental-websocket).
+//    The orbit starts once the parallel coordinates' lines are drawn (their first drawing after the
+//    page opens takes seconds of background slices).
 // 6. with --slices S: the Map & section tab shown and the map's depth slider dragged for S seconds
 //    (an input event every 33 ms across the mantle and back): maps shown per second and their size
 //    in device pixels (the pane's; --viewport sets it), and the 3D view's frames meanwhile (it marks
@@ -35,7 +40,7 @@
 import { spawn } from 'node:child_process';
 import { createRequire } from 'node:module';
 import { join } from 'node:path';
-import { createWriteStream, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
+import { createWriteStream, existsSync, mkdtempSync, readdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { binaryHeader, chromiumArgs, chromiumPath, repoRoot, waitConverged } from './harness.mjs';
 
@@ -50,6 +55,7 @@ let sizeText = ''; // the state's image size measured at
 const serverLog = flag('--server-log'), assets = flag('--assets') ?? join(repoRoot, 'web', 'dist-test');
 const profileFile = flag('--profile');
 const gpu = flag('--gpu') !== null;
+const reproject = flag('--reproject') ?? 'auto';
 const playFps = flag('--play'), playSeconds = Number(flag('--seconds') ?? 10), onlyPlay = flag('--only-play') !== null;
 const [raypc, dataset, screenshot] = args;
 const { chromium } = createRequire(join(repoRoot, 'web', 'package.json'))('playwright-core');
@@ -70,6 +76,7 @@ const context = await chromium.launchPersistentContext(profile, {
 });
 try {
   await context.addInitScript(() => { window.__raypcTestHooks = true; }); // web/src/test_hooks.ts
+  await context.addInitScript((v) => localStorage.setItem('raypc.reproject', v), reproject);
   const page = await context.newPage();
   await page.goto(url);
   await page.waitForFunction(() => window.__raypc && window.__raypc.parcoords.rowCount > 0 && window.__raypc.headers.length > 0, null, { timeout: 60000 });
@@ -94,10 +101,17 @@ try {
 
 async function measureOrbit(page) {
   const box = await page.evaluate(() => { const r = document.getElementById('view3d').getBoundingClientRect(); return { x: r.x, y: r.y, w: r.width, h: r.height }; });
-  const since = await page.evaluate(() => ({ headers: window.__raypc.frameLog.length, shown: window.__raypc.shownLog.length, t: performance.now() }));
   const cx = box.x + box.w / 2, cy = box.y + box.h / 2;
+  const linesMs = await page.evaluate(() => new Promise((resolve) => {
+    const t0 = performance.now();
+    const poll = () => window.__raypc.parcoords.timing.drawnAt.foreground > 0 ? resolve(performance.now() - t0) : setTimeout(poll, 50);
+    poll();
+  }));
+  if (linesMs > 100) console.log(`  (waited ${(linesMs / 1000).toFixed(1)} s for the parallel coordinates' lines before the orbit)`);
   await page.mouse.move(cx, cy);
+  const since = await page.evaluate(() => ({ headers: window.__raypc.frameLog.length, shown: window.__raypc.shownLog.length, t: performance.now() }));
   const cdp = await startProfile(page);
+  const cpuBefore = cpuTimes();
   await page.mouse.down();
   // The pointer moves at the display's rate, as a hand on a mouse does: after the (trusted) press,
   // the page dispatches a pointermove of that pointer on every animation frame. (Moves driven one
@@ -122,11 +136,14 @@ async function measureOrbit(page) {
     shown: window.__raypc.shownLog.slice(n.shown).filter((f) => f.t >= n.t),
     now: performance.now(),
   }), since);
+  const cpuAfter = cpuTimes();
   await stopProfile(cdp, 'orbit');
   await page.mouse.up();
   await waitConverged(page, 60000);
   const seconds = (r.now - since.t) / 1000;
   const count = (list, key) => { const c = {}; for (const s of list) c[key(s)] = (c[key(s)] ?? 0) + 1; return JSON.stringify(c); };
+  const gl = await page.evaluate(() => ({ reproject: document.getElementById('reproject').value, note: document.getElementById('reprojectNote').textContent }));
+  console.log(`re-project ${gl.reproject} ${gl.note}`);
   console.log(`orbit for ${seconds.toFixed(1)} s at ${sizeText}: ${(r.received.length / seconds).toFixed(1)} frames/s received, ${(r.shown.length / seconds).toFixed(1)} shown; shown by level ${count(r.shown, (s) => s.level)}, by size ${count(r.shown, (s) => `${s.width}x${s.height}`)}, drawn into a buffer of ${count(r.shown, (s) => (s.buffer ?? ['?']).join('x'))}; ${(moves / seconds).toFixed(1)} pointer moves/s driven`);
   // Where a round trip goes: state sent -> its frame received (the server and the socket), frame
   // received -> on screen (decoded and drawn), frame received -> the next state sent (the page).
@@ -140,7 +157,37 @@ async function measureOrbit(page) {
   }
   const ms = (a) => `median ${median(a).toFixed(0)}, 90 % ${pct(a, 0.9).toFixed(0)} ms`;
   console.log(`  per frame: sent -> received ${ms(trip)}; received -> shown ${ms(show)}; received -> next state sent ${ms(next)}`);
+  if (cpuBefore && cpuAfter) {
+    const used = [...cpuAfter].map(([k, v]) => [k, (v - (cpuBefore.get(k) ?? 0)) / seconds]).filter(([, v]) => v >= 0.005);
+    const server = (cpuAfter.get('raypc serve') - cpuBefore.get('raypc serve')) * 1000 / r.received.length;
+    console.log(`  CPU meanwhile (cores of ${navigatorCores()}; the server ${server.toFixed(0)} ms a frame received): ${used.sort((a, b) => b[1] - a[1]).map(([k, v]) => `${k} ${v.toFixed(2)}`).join(', ')}`);
+  }
   await orbitWithoutPage(page, seconds);
+}
+
+// CPU seconds used so far by the server and by chromium's processes, summed by chromium's
+// process type (--type=gpu-process, renderer, ...; the browser process has none), from /proc;
+// null where there is no /proc.
+function cpuTimes() {
+  if (!existsSync('/proc/self/stat')) return null;
+  const ticks = 100; // USER_HZ, 100 on Linux
+  const times = new Map();
+  for (const pid of readdirSync('/proc').filter((d) => /^\d+$/.test(d))) {
+    try {
+      const cmd = readFileSync(`/proc/${pid}/cmdline`, 'utf8').split(/[\0 ]/); // chromium rewrites its own
+      const name = Number(pid) === server.pid ? 'raypc serve'
+        : cmd[0].includes('chrom') ? `chromium ${(cmd.find((a) => a.startsWith('--type=')) ?? '--type=browser').slice(7)}` : null;
+      if (!name) continue;
+      const stat = readFileSync(`/proc/${pid}/stat`, 'utf8');
+      const f = stat.slice(stat.lastIndexOf(')') + 2).split(' '); // fields from the 3rd on
+      times.set(name, (times.get(name) ?? 0) + (Number(f[11]) + Number(f[12])) / ticks); // utime + stime
+    } catch { /* the process ended meanwhile */ }
+  }
+  return times;
+}
+
+function navigatorCores() {
+  return readFileSync('/proc/cpuinfo', 'utf8').split('\n').filter((l) => l.startsWith('processor')).length;
 }
 
 // The same orbit driven over the protocol alone (no page decoding and drawing beside the server):
@@ -156,7 +203,7 @@ async function orbitWithoutPage(page, seconds) {
   const ws = new WebSocket(url.replace('http', 'ws') + 'ws');
   ws.binaryType = 'arraybuffer';
   const sizes = {};
-  let id = 0, frames = 0, t0 = 0;
+  let id = 0, frames = 0, t0 = 0, cpu0 = null;
   const send = () => {
     const camera = { ...state.camera, azimuthDeg: (state.camera.azimuthDeg + 2 * ++id) % 360 };
     ws.send(JSON.stringify({ type: 'state', id, state: { ...state, camera }, interactive: true, playback: false }));
@@ -167,7 +214,7 @@ async function orbitWithoutPage(page, seconds) {
     ws.onmessage = (ev) => {
       if (typeof ev.data === 'string') {
         const m = JSON.parse(ev.data);
-        if (m.type === 'hello') { t0 = performance.now(); send(); }
+        if (m.type === 'hello') { t0 = performance.now(); cpu0 = cpuTimes(); send(); }
         else if (m.type === 'error') reject(new Error(`orbit without the page: ${m.message}`));
         return;
       }
@@ -180,9 +227,11 @@ async function orbitWithoutPage(page, seconds) {
       else resolve();
     };
   });
+  const cpu1 = cpuTimes();
   ws.close();
   const s = (performance.now() - t0) / 1000;
-  console.log(`  without the page (the same states over the protocol, one in flight): ${(frames / s).toFixed(1)} frames/s received; ${JSON.stringify(sizes)}`);
+  const server = cpu0 && cpu1 ? `; the server used ${((cpu1.get('raypc serve') - cpu0.get('raypc serve')) / s).toFixed(2)} cores, ${((cpu1.get('raypc serve') - cpu0.get('raypc serve')) * 1000 / frames).toFixed(0)} ms a frame` : '';
+  console.log(`  without the page (the same states over the protocol, one in flight): ${(frames / s).toFixed(1)} frames/s received; ${JSON.stringify(sizes)}${server}`);
 }
 
 async function measureSlices(page) {

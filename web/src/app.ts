@@ -186,6 +186,8 @@ export class App {
       stopPlaying: () => { if (this.playback.playing) this.playback.toggle(); },
       cancelRendering: () => this.link.cancel(),
       fitImage: () => this.fitImage(),
+      view: this.link.view,
+      redrawView: () => this.link.requestDraw(),
       clearBrushes: () => {
         this.pc.setBrushes([]);
         store.state.brushes = [];

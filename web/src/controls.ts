@@ -18,9 +18,13 @@ export interface ControlsHost {
   // The image size follows the view again; true when it changed.
   fitImage(): boolean;
   clearBrushes(): void;
+  // The 3D view's re-projection (view.ts) and the WebGL it runs on; redrawView after a change.
+  readonly view: { reproject: boolean; readonly softwareGl: string | null };
+  redrawView(): void;
 }
 
 const kMaxSizeKey = 'raypc.maxImageSide';
+const kReprojectKey = 'raypc.reproject';
 
 // The cap on the longer side of still frames (the Max size setting; default 4096 pixels).
 export function maxImageSide(): number {
@@ -64,6 +68,23 @@ export function setUpControls(store: StateStore, host: ControlsHost): void {
     localStorage.setItem(kMaxSizeKey, maxSize.value);
     store.autoFitImage = true;
     if (host.fitImage()) host.commit(false);
+  });
+  // Re-projection while a frame is on its way (a setting of this browser): auto is off where WebGL
+  // runs in software, as the note beside it says.
+  const reproject = $<HTMLSelectElement>('reproject');
+  const savedReproject = localStorage.getItem(kReprojectKey);
+  if (savedReproject && [...reproject.options].some((o) => o.value === savedReproject)) reproject.value = savedReproject;
+  const applyReproject = () => {
+    const v = host.view;
+    v.reproject = reproject.value === 'on' || (reproject.value === 'auto' && v.softwareGl === null);
+    $('reprojectNote').textContent = reproject.value === 'auto'
+      ? (v.softwareGl !== null ? `(off: WebGL runs in software, ${v.softwareGl})` : '(on)') : '';
+    host.redrawView();
+  };
+  applyReproject();
+  reproject.addEventListener('change', () => {
+    localStorage.setItem(kReprojectKey, reproject.value);
+    applyReproject();
   });
   $('passes').addEventListener('change', () => {
     const v = Math.round(Number($<HTMLInputElement>('passes').value));

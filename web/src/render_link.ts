@@ -10,7 +10,7 @@
 import { Connection, type Frame, type FrameHeader, type SendMode } from './connection';
 import { cloneState, type Brush, type CameraState, type RenderState } from './state';
 import type { StateStore } from './store';
-import { View3D } from './view';
+import { View3D, type DrawKind } from './view';
 
 // How long deferred work waits at most for the still frame it asked for.
 const kAfterFrameMs = 1000;
@@ -34,7 +34,7 @@ export interface RenderLinkObserver {
   // Returns false to hold the frame back (it is passed to `receive` later).
   received(frame: Frame): boolean;
   shown(header: FrameHeader, latency: Latency | null): void;
-  drawn(kind: 'exact' | 'warped' | 'none', waiting: boolean): void;
+  drawn(kind: DrawKind, waiting: boolean): void;
   afterFrame(record: { id: number; shownId: number; afterShown: boolean }): void;
 }
 

@@ -9,6 +9,11 @@
 // (side by side) or into its colour channels (anaglyph: red the left eye, green and blue the right).
 // A WebXR session (xr.ts) draws each eye of the last frame into its XRWebGLLayer viewport with the
 // eye's current pose (drawViews), the same re-projection.
+// Re-projection can be off (`reproject`; by default where WebGL runs in software, `softwareGl`):
+// then the view shows each frame as the server rendered it, drawn once when it arrives. On a
+// machine without a GPU every WebGL draw is rasterised and read back for the compositor on the CPU
+// the server renders with: re-projecting at the display's rate took a core of the two and halved
+// the frames a drag received (docs/ui.md, "Speed against issue 26's goals").
 import { CameraFrame, camerasEqual, stereoLayout, type CameraView, type EyeOffset } from './camera';
 import type { CameraState, StereoState } from './state';
 import type { Frame } from './connection';
@@ -81,7 +86,16 @@ export interface ViewStats {
   warpedDraws: number;
   exactDraws: number;
   framesShown: number;
+  // Draws into the canvas of any kind (a draw that would change nothing is skipped).
+  glDraws: number;
 }
+
+// What a draw did: the frame drawn with its own camera, re-projected to the current one, drawn
+// as it was rendered although the camera has changed since (re-projection off), or nothing to draw.
+export type DrawKind = 'exact' | 'warped' | 'unwarped' | 'none';
+
+// Renderer strings of WebGL implementations that run on the CPU.
+const kSoftwareRenderers = /SwiftShader|llvmpipe|softpipe|Software Rasterizer|Microsoft Basic Render/i;
 
 // The mesh of one view of a frame (the frame, or one eye of a stereo frame).
 interface Mesh {
@@ -112,12 +126,25 @@ export class View3D {
   private readonly quadVao: WebGLVertexArrayObject;
   private frame: Frame | null = null;
   private size = { width: 1, height: 1 };
-  readonly stats: ViewStats = { warpedDraws: 0, exactDraws: 0, framesShown: 0 };
+  readonly stats: ViewStats = { warpedDraws: 0, exactDraws: 0, framesShown: 0, glDraws: 0 };
+  // The WebGL implementation (its unmasked renderer string where the browser tells it), and the
+  // name of the rasteriser when it runs on the CPU (null on a GPU).
+  readonly glRenderer: string;
+  readonly softwareGl: string | null;
+  // Re-project the last frame to the current camera while a newer one is on its way (default: not
+  // on a software GL). Set by the Rendering section's "Re-project" setting.
+  reproject: boolean;
+  // What the canvas shows (drawKey): a draw that would draw the same is skipped.
+  private drawnKey = '';
 
   constructor(readonly canvas: HTMLCanvasElement) {
     const gl = canvas.getContext('webgl2', { antialias: false, preserveDrawingBuffer: true, alpha: false });
     if (!gl) throw new Error('WebGL2 is not available in this browser');
     this.gl = gl;
+    const info = gl.getExtension('WEBGL_debug_renderer_info');
+    this.glRenderer = String(gl.getParameter(info ? info.UNMASKED_RENDERER_WEBGL : gl.RENDERER) ?? '');
+    this.softwareGl = kSoftwareRenderers.exec(this.glRenderer)?.[0] ?? null;
+    this.reproject = this.softwareGl === null;
     this.warpProgram = compile(gl, warpVs, warpFs);
     this.quadProgram = compile(gl, quadVs, quadFs);
     this.texture = gl.createTexture()!;
@@ -298,36 +325,46 @@ export class View3D {
 
   // Draws the last frame for `camera` and `stereo` at image size width x height (each eye's, as the
   // state's image; letterboxed into the canvas as the composed picture). Returns 'exact' when the
-  // frame's own camera, stereo views and size match, 'warped' when re-projected.
+  // frame's own camera, stereo views and size match, 'warped' when re-projected, 'unwarped' when
+  // they differ and re-projection is off (the frame is shown letterboxed as rendered).
   draw(camera: CameraState, stereo: StereoState | undefined, width: number, height: number,
-    background: [number, number, number]): 'exact' | 'warped' | 'none' {
+    background: [number, number, number]): DrawKind {
+    const frame = this.frame;
+    const layout = stereoLayout(stereo, camera, width, height);
+    const h = frame?.header;
+    const frameStereo = h?.stereo ? stereoKey({ mode: h.stereo.mode, eyeSeparationKm: h.stereo.eyeSeparationKm, convergenceKm: h.stereo.convergenceKm }, h.camera) : 'off';
+    const exact = !!h && camerasEqual(camera, h.camera) && stereoKey(stereo, camera) === frameStereo &&
+      layout.width * h.height === layout.height * h.width;
+    const kind: DrawKind = !frame ? 'none' : exact ? 'exact' : this.reproject ? 'warped' : 'unwarped';
+    // What the canvas will show; the same as shown already: nothing to draw. (An exact or unwarped
+    // frame is the frame's picture whatever the camera; a warped one is drawn for each camera.)
+    const key = JSON.stringify([this.stats.framesShown, this.canvas.width, this.canvas.height, background,
+      kind === 'warped' ? [kind, camera, stereoKey(stereo, camera), layout.width, layout.height] : h ? ['frame', h.width, h.height] : kind]);
+    if (key === this.drawnKey) return kind;
+    this.drawnKey = key;
+    this.stats.glDraws++;
     const gl = this.gl;
     const cw = this.canvas.width, ch = this.canvas.height;
     gl.viewport(0, 0, cw, ch);
     gl.colorMask(true, true, true, true);
     gl.clearColor(background[0], background[1], background[2], 1);
     gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
-    const frame = this.frame;
-    if (!frame) return 'none';
-    const layout = stereoLayout(stereo, camera, width, height);
-    // Fit the composed image's aspect into the canvas.
-    const aspect = layout.width / layout.height;
+    if (!frame || !h) return 'none';
+    // Fit the composed image's aspect (the frame's own when it is shown as rendered) into the canvas.
+    const aspect = kind === 'unwarped' ? h.width / h.height : layout.width / layout.height;
     let vw = cw, vh = Math.round(cw / aspect);
     if (vh > ch) { vh = ch; vw = Math.round(ch * aspect); }
     const vx = Math.floor((cw - vw) / 2), vy = Math.floor((ch - vh) / 2);
     gl.viewport(vx, vy, vw, vh);
     gl.bindTexture(gl.TEXTURE_2D, this.texture);
-    const h = frame.header;
-    const frameStereo = h.stereo ? stereoKey({ mode: h.stereo.mode, eyeSeparationKm: h.stereo.eyeSeparationKm, convergenceKm: h.stereo.convergenceKm }, h.camera) : 'off';
-    if (camerasEqual(camera, h.camera) && stereoKey(stereo, camera) === frameStereo &&
-      layout.width * h.height === layout.height * h.width) {
+    if (kind !== 'warped') {
       gl.useProgram(this.quadProgram);
       gl.disable(gl.DEPTH_TEST);
       gl.bindVertexArray(this.quadVao);
       gl.drawArrays(gl.TRIANGLE_STRIP, 0, 4);
       gl.bindVertexArray(null);
-      this.stats.exactDraws++;
-      return 'exact';
+      if (kind === 'exact') this.stats.exactDraws++;
+      return kind;
     }
     this.beginWarp();
     const sideBySide = layout.mode === 'side-by-side' || layout.mode === 'side-by-side-half';
@@ -350,6 +387,7 @@ export class View3D {
   drawViews(framebuffer: WebGLFramebuffer | null, views: { view: CameraView; viewport: Viewport }[],
     background: [number, number, number]): boolean {
     const gl = this.gl;
+    this.drawnKey = ''; // the canvas is drawn anew when the session ends
     gl.bindFramebuffer(gl.FRAMEBUFFER, framebuffer);
     gl.colorMask(true, true, true, true);
     gl.clearColor(background[0], background[1], background[2], 1);
