@@ -948,7 +948,7 @@ const Object<RenderState>& document()
                     {.meaning = "level of detail; auto = finest level whose estimated pass time fits the pass's share of `timeBudgetMs`",
                      .cost = Cost::Reload}),
             leaf<S>("timeBudgetMs", at(&S::timeBudgetMs), number<double>(1e-3, 1e7),
-                    {.meaning = "time budget of one interactive frame (or step of playback) on the server, ms: its pass gets three quarters of it less the measured time of preparing and encoding a frame (docs/rendering.md, levels of detail)", .cost = Cost::Reload}),
+                    {.meaning = "time budget of one interactive frame on the server, ms: its pass gets three quarters of it less the measured time of preparing and encoding a frame (docs/rendering.md, level of detail); a step of playback is shown for about this long", .cost = Cost::Reload}),
             leaf<S>("passes", at(&S::passes), integer(1, 100000),
                     {.meaning = "progressive passes accumulated for a still image", .cost = Cost::None}),
             leaf<S>("convergenceGreyLevels", at(&S::convergenceGreyLevels), number<float>(0, 255),

@@ -140,8 +140,10 @@ void RenderSession::render(const Request& request)
     // Interactive and playback: the finest level within the time budget at the measured throughput
     // (interactiveLevelPolicy). Still: the state's level, else level 0.
     const bool interactive = request.mode == FrameMode::interactive;
-    const LevelPolicy quickPolicy =
-        interactiveLevelPolicy(m_context.samplesPerSecond.load(), m_context.frameOverheadSeconds.load());
+    // An interactive frame's budget also holds its time outside the pass (a drag waits for each
+    // frame before it sends the next state); a step of playback refines until its time is up.
+    const LevelPolicy quickPolicy = interactiveLevelPolicy(m_context.samplesPerSecond.load(),
+                                                           interactive ? m_context.frameOverheadSeconds.load() : 0.0);
     const LevelPolicy policy = request.mode != FrameMode::still ? quickPolicy : LevelPolicy{};
     const int passes = interactive ? 1 : std::max(1, state.passes);
     const int ranks = m_context.ranks ? m_context.ranks->ranks() : 1;
@@ -297,7 +299,7 @@ void RenderSession::render(const Request& request)
             continue;
         }
         sendFrame(frames, prepared, stats, pass, last, false, selectionKey == m_selectionKey ? m_selection : nlohmann::json());
-        if (pass == 1 && request.mode != FrameMode::still) {
+        if (pass == 1 && interactive) {
             const double overhead = (preparedMs + encodeMsTotal) / 1000.0;
             m_context.frameOverheadSeconds.store(averagedMeasure(m_context.frameOverheadSeconds.load(), overhead));
         }

@@ -43,9 +43,9 @@ struct RenderContext {
     // Throughput of the machine in estimated samples (VolumeRenderer::estimateSamplesPerPass) per
     // second, all threads; updated from every pass, used to choose the interactive level.
     std::atomic<double> samplesPerSecond{0.0};
-    // Seconds an interactive frame or step of playback takes outside its first pass (preparing it,
-    // its picture and JPEG): an exponential average over the sessions' frames, which the level
-    // choice leaves room for (LevelPolicy::overheadSeconds).
+    // Seconds an interactive frame takes outside its pass (preparing it, its picture and JPEG): an
+    // exponential average over the sessions' interactive frames, which their level choice leaves
+    // room for (LevelPolicy::overheadSeconds).
     std::atomic<double> frameOverheadSeconds{0.0};
     RankPool* ranks = nullptr;  // a distributed server's (rank_pool.h): passes go to every rank
 };
