@@ -134,7 +134,7 @@ export class View3D {
   // Re-project the last frame to the current camera while a newer one is on its way (default: not
   // on a software GL). Set by the Rendering section's "Re-project" setting.
   reproject: boolean;
-  // What the canvas shows (drawKey): a draw that would draw the same is skipped.
+  // What the canvas shows (draw's key): a draw that would draw the same is skipped.
   private drawnKey = '';
 
   constructor(readonly canvas: HTMLCanvasElement) {
