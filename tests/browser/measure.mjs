@@ -41,7 +41,7 @@ import { spawn } from 'node:child_process';
 import { createRequire } from 'node:module';
 import { join } from 'node:path';
 import { createWriteStream, existsSync, mkdtempSync, readdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
-import { tmpdir } from 'node:os';
+import { availableParallelism, tmpdir } from 'node:os';
 import { binaryHeader, chromiumArgs, chromiumPath, repoRoot, waitConverged } from './harness.mjs';
 
 const args = process.argv.slice(2);
@@ -159,8 +159,8 @@ async function measureOrbit(page) {
   console.log(`  per frame: sent -> received ${ms(trip)}; received -> shown ${ms(show)}; received -> next state sent ${ms(next)}`);
   if (cpuBefore && cpuAfter) {
     const used = [...cpuAfter].map(([k, v]) => [k, (v - (cpuBefore.get(k) ?? 0)) / seconds]).filter(([, v]) => v >= 0.005);
-    const server = (cpuAfter.get('raypc serve') - cpuBefore.get('raypc serve')) * 1000 / r.received.length;
-    console.log(`  CPU meanwhile (cores of ${navigatorCores()}; the server ${server.toFixed(0)} ms a frame received): ${used.sort((a, b) => b[1] - a[1]).map(([k, v]) => `${k} ${v.toFixed(2)}`).join(', ')}`);
+    const server = serverSeconds(cpuBefore, cpuAfter) * 1000 / r.received.length;
+    console.log(`  CPU meanwhile (cores of ${availableParallelism()}; the server ${server.toFixed(0)} ms a frame received): ${used.sort((a, b) => b[1] - a[1]).map(([k, v]) => `${k} ${v.toFixed(2)}`).join(', ')}`);
   }
   await orbitWithoutPage(page, seconds);
 }
@@ -186,8 +186,9 @@ function cpuTimes() {
   return times;
 }
 
-function navigatorCores() {
-  return readFileSync('/proc/cpuinfo', 'utf8').split('\n').filter((l) => l.startsWith('processor')).length;
+// The server's CPU seconds between two cpuTimes().
+function serverSeconds(before, after) {
+  return after.get('raypc serve') - before.get('raypc serve');
 }
 
 // The same orbit driven over the protocol alone (no page decoding and drawing beside the server):
@@ -230,7 +231,7 @@ async function orbitWithoutPage(page, seconds) {
   const cpu1 = cpuTimes();
   ws.close();
   const s = (performance.now() - t0) / 1000;
-  const server = cpu0 && cpu1 ? `; the server used ${((cpu1.get('raypc serve') - cpu0.get('raypc serve')) / s).toFixed(2)} cores, ${((cpu1.get('raypc serve') - cpu0.get('raypc serve')) * 1000 / frames).toFixed(0)} ms a frame` : '';
+  const server = cpu0 && cpu1 ? `; the server used ${(serverSeconds(cpu0, cpu1) / s).toFixed(2)} cores, ${(serverSeconds(cpu0, cpu1) * 1000 / frames).toFixed(0)} ms a frame` : '';
   console.log(`  without the page (the same states over the protocol, one in flight): ${(frames / s).toFixed(1)} frames/s received; ${JSON.stringify(sizes)}${server}`);
 }
 

@@ -127,9 +127,8 @@ export class View3D {
   private frame: Frame | null = null;
   private size = { width: 1, height: 1 };
   readonly stats: ViewStats = { warpedDraws: 0, exactDraws: 0, framesShown: 0, glDraws: 0 };
-  // The WebGL implementation (its unmasked renderer string where the browser tells it), and the
-  // name of the rasteriser when it runs on the CPU (null on a GPU).
-  readonly glRenderer: string;
+  // The name of the rasteriser when WebGL runs on the CPU (from the unmasked renderer string where
+  // the browser tells it), null on a GPU.
   readonly softwareGl: string | null;
   // Re-project the last frame to the current camera while a newer one is on its way (default: not
   // on a software GL). Set by the Rendering section's "Re-project" setting.
@@ -142,8 +141,8 @@ export class View3D {
     if (!gl) throw new Error('WebGL2 is not available in this browser');
     this.gl = gl;
     const info = gl.getExtension('WEBGL_debug_renderer_info');
-    this.glRenderer = String(gl.getParameter(info ? info.UNMASKED_RENDERER_WEBGL : gl.RENDERER) ?? '');
-    this.softwareGl = kSoftwareRenderers.exec(this.glRenderer)?.[0] ?? null;
+    const renderer = String(gl.getParameter(info ? info.UNMASKED_RENDERER_WEBGL : gl.RENDERER) ?? '');
+    this.softwareGl = kSoftwareRenderers.exec(renderer)?.[0] ?? null;
     this.reproject = this.softwareGl === null;
     this.warpProgram = compile(gl, warpVs, warpFs);
     this.quadProgram = compile(gl, quadVs, quadFs);
