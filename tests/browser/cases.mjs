@@ -251,6 +251,11 @@ const cases = {
     await standardView(page);
     await volumeOnly(page);
     await waitConverged(page);
+    // A value the setting does not know, kept by the browser (an older or edited one), is auto.
+    await page.evaluate(() => localStorage.setItem('raypc.reproject', 'sideways'));
+    await page.reload();
+    await page.waitForFunction(() => window.__raypc && window.__raypc.headers.length > 0, null, { timeout: 30000 });
+    await waitConverged(page);
     const gl = await page.evaluate(() => ({ value: document.getElementById('reproject').value, note: document.getElementById('reprojectNote').textContent }));
     check(gl.value === 'auto' && /^\(off: WebGL runs in software, .*SwiftShader/.test(gl.note), `Re-project on a software GL: ${JSON.stringify(gl)}`);
     {
