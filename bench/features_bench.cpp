@@ -17,12 +17,12 @@
 #include "bench_util.h"
 #include "core/error.h"
 #include "core/system_memory.h"
-#include "data/dataset.h"
-#include "data/features.h"
-#include "data/flux.h"
-#include "data/preprocess_numerics.h"
-#include "data/selection.h"
-#include "data/synth.h"
+#include "dataset/dataset.h"
+#include "analysis/features.h"
+#include "analysis/flux.h"
+#include "preprocess/preprocess_numerics.h"
+#include "analysis/selection.h"
+#include "synth/synth.h"
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>

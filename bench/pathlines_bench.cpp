@@ -6,10 +6,10 @@
 //     counter "lines/s" (and points per line), with 1 thread and with every core.
 // No peer is measured here: the paper traced pathlines outside its tool (ParaView).
 //   build-paths/bench/pathlines_bench --benchmark_min_time=1
-#include "data/critical_points.h"
-#include "data/pathlines.h"
-#include "data/persistence.h"
-#include "data/synth.h"
+#include "analysis/critical_points.h"
+#include "analysis/pathlines.h"
+#include "analysis/persistence.h"
+#include "synth/synth.h"
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>

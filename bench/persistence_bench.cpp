@@ -17,9 +17,9 @@
 #include "bench_util.h"
 #include "core/spherical.h"
 #include "core/system_memory.h"
-#include "data/critical_points.h"
-#include "data/persistence.h"
-#include "data/synth.h"
+#include "analysis/critical_points.h"
+#include "analysis/persistence.h"
+#include "synth/synth.h"
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>

@@ -12,11 +12,11 @@
 // 15: <= 0.5 s, and 1920x1080 <= 1 s, by adaptive refinement: BM_ConvergedAdaptive*),
 // >= 100 M samples/s/thread, brushing 4 variables (<= 20 % selected) not slower than no brushing.
 #include "core/system_memory.h"
-#include "data/bricks.h"
-#include "data/dataset.h"
-#include "data/preprocess.h"
-#include "data/selection.h"
-#include "data/synth.h"
+#include "dataset/bricks.h"
+#include "dataset/dataset.h"
+#include "preprocess/preprocess.h"
+#include "analysis/selection.h"
+#include "synth/synth.h"
 #include "render/image_io.h"
 #include "render/reference_geometry.h"
 #include "render/render_state.h"

@@ -6,9 +6,9 @@
 // The peer is a plain copy of the float32 array (what a float32 dataset's first touch of mapped
 // pages cannot beat), measured in the same run: BM_CopyFloat32.
 //   build/bench/value_encoding_bench --benchmark_min_time=1
-#include "data/bricks.h"
-#include "data/synth.h"
-#include "data/value_encoding.h"
+#include "dataset/bricks.h"
+#include "synth/synth.h"
+#include "dataset/value_encoding.h"
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>

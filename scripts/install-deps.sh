@@ -4,7 +4,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake ninja-build pkg-config time
+  build-essential cmake ninja-build pkg-config time ccache
   libnetcdf-dev netcdf-bin          # input files; ncgen/nccopy write independent test files
   libpugixml-dev zlib1g-dev         # VTK XML input (ASPECT's .pvd/.pvtu/.vtu), not VTK itself
   libtbb-dev libhwy-dev libembree-dev

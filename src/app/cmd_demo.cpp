@@ -3,8 +3,8 @@
 #include "app/command.h"
 #include "app/serve_setup.h"
 #include "core/error.h"
-#include "data/preprocess.h"
-#include "data/synth.h"
+#include "preprocess/preprocess.h"
+#include "synth/synth.h"
 #include "render/image_io.h"
 #include "render/state_renderer.h"
 

@@ -4,11 +4,11 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/strings.h"
-#include "data/dataset.h"
-#include "data/pathline_export.h"
-#include "data/pathline_storage.h"
-#include "data/pathlines.h"
-#include "data/persistence.h"
+#include "dataset/dataset.h"
+#include "analysis/pathline_export.h"
+#include "analysis/pathline_storage.h"
+#include "analysis/pathlines.h"
+#include "analysis/persistence.h"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>

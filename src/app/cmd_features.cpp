@@ -1,5 +1,5 @@
 // raypc features DATASET --state S.json -o features.csv: the features (connected regions) of the
-// selection in every step, each measured (data/features.h, docs/features.md).
+// selection in every step, each measured (analysis/features.h, docs/features.md).
 #include "app/command.h"
 #include "app/feature_table.h"
 #include "app/options.h"
@@ -7,11 +7,11 @@
 #include "core/error.h"
 #include "core/mpi.h"
 #include "core/progress.h"
-#include "data/dataset.h"
-#include "data/feature_csv.h"
-#include "data/feature_series.h"
-#include "data/features.h"
-#include "data/selection.h"
+#include "dataset/dataset.h"
+#include "analysis/feature_csv.h"
+#include "analysis/feature_series.h"
+#include "analysis/features.h"
+#include "analysis/selection.h"
 #include "render/render_state.h"
 
 #include <fmt/format.h>

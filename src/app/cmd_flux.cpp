@@ -1,14 +1,14 @@
 // raypc flux DATASET --depth 660 -o flux.csv [--heat-flux [--density 3300] [--heat-capacity 1250]]:
 // the volume flux across shells in every step, down and up, over the whole shell and within a
-// selection, with the avalanche steps marked, and the advective heat flux (data/flux.h).
+// selection, with the avalanche steps marked, and the advective heat flux (analysis/flux.h).
 #include "app/command.h"
 #include "app/options.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/progress.h"
-#include "data/dataset.h"
-#include "data/feature_csv.h"
-#include "data/flux.h"
+#include "dataset/dataset.h"
+#include "analysis/feature_csv.h"
+#include "analysis/flux.h"
 
 #include <fmt/format.h>
 

@@ -2,10 +2,10 @@
 #include "app/command.h"
 #include "app/options.h"
 #include "core/error.h"
-#include "data/dataset.h"
-#include "data/netcdf_reader.h"
-#include "data/preprocess.h"
-#include "data/series_input.h"
+#include "dataset/dataset.h"
+#include "io/netcdf_reader.h"
+#include "preprocess/preprocess.h"
+#include "io/series_input.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>

@@ -3,8 +3,8 @@
 #include "app/options.h"
 #include "core/error.h"
 #include "core/mpi.h"
-#include "data/preprocess.h"
-#include "data/series_input.h"
+#include "preprocess/preprocess.h"
+#include "io/series_input.h"
 
 #include <fmt/format.h>
 

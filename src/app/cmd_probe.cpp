@@ -1,8 +1,8 @@
 // raypc probe DATASET --time T --lat A --lon B --r R_KM [--var NAME]
 #include "app/command.h"
 #include "app/options.h"
-#include "data/probe.h"
-#include "data/dataset.h"
+#include "analysis/probe.h"
+#include "dataset/dataset.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>

@@ -3,7 +3,7 @@
 #include "core/clock.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "data/synth.h"
+#include "synth/synth.h"
 
 #include <cmath>
 #include <chrono>

@@ -2,8 +2,8 @@
 // `raypc features` and Python's Dataset.features.
 #pragma once
 
-#include "data/dataset.h"
-#include "data/features.h"
+#include "dataset/dataset.h"
+#include "analysis/features.h"
 
 #include <string>
 

@@ -4,7 +4,7 @@
 #include "render/render_state.h"
 #include "core/spherical.h"
 #include "core/strings.h"
-#include "data/value_encoding.h"
+#include "dataset/value_encoding.h"
 
 #include <algorithm>
 #include <charconv>

@@ -1,10 +1,10 @@
 // Option parsing shared by several subcommands.
 #pragma once
 
-#include "data/dataset.h"
-#include "data/netcdf_reader.h"
-#include "data/preprocess.h"
-#include "data/selection.h"
+#include "dataset/dataset.h"
+#include "io/netcdf_reader.h"
+#include "preprocess/preprocess.h"
+#include "analysis/selection.h"
 
 #include <CLI/CLI.hpp>
 
@@ -54,7 +54,7 @@ int parseStep(const Dataset& dataset, const std::string& text, const std::string
 NamedRange parseRangeOption(const std::string& text, const std::string& option = "--range");
 
 // Applies --range options over the ranges of a state: a name given on the command line replaces
-// that name's ranges, and a name given several times gets them all (OR, data/selection.h).
+// that name's ranges, and a name given several times gets them all (OR, analysis/selection.h).
 void applyRangeOptions(std::vector<NamedRange>& ranges, const std::vector<std::string>& options,
                        const std::string& option = "--range");
 

@@ -3,10 +3,10 @@
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/mpi.h"
-#include "data/dataset.h"
-#include "data/dataset_format.h"
-#include "data/netcdf_reader.h"
-#include "data/series_input.h"
+#include "dataset/dataset.h"
+#include "dataset/dataset_format.h"
+#include "io/netcdf_reader.h"
+#include "io/series_input.h"
 
 #include <spdlog/spdlog.h>
 

@@ -4,7 +4,7 @@
 #pragma once
 
 #include "app/options.h"
-#include "data/preprocess.h"
+#include "preprocess/preprocess.h"
 
 #include <filesystem>
 #include <string>

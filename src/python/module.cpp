@@ -1,7 +1,7 @@
 // The compiled half of Python's `raypc` package (raypc/_raypc): thin bindings of what the `raypc`
 // executable calls, so that Python runs the same code — the dataset pipeline (app/series_inputs),
 // the state's one description (render/render_state), the one path from a state to pixels
-// (render/state_renderer), exact statistics (data/selection), probing (data/probe) and the server
+// (render/state_renderer), exact statistics (analysis/selection), probing (analysis/probe) and the server
 // (server/server). The Pythonic layer (xarray, pandas, the notebook view) is raypc/__init__.py.
 //
 // Errors: raypc::Error becomes raypc.Error with the CLI's one-line message. Long work (preprocessing,
@@ -10,16 +10,16 @@
 // cancels the work between steps.
 #include "app/feature_table.h"
 #include "app/options.h"
-#include "data/probe.h"
+#include "analysis/probe.h"
 #include "app/series_inputs.h"
 #include "core/error.h"
 #include "core/install_paths.h"
 #include "core/spherical.h"
-#include "data/critical_points.h"
-#include "data/dataset.h"
-#include "data/features.h"
-#include "data/pathline_storage.h"
-#include "data/selection.h"
+#include "analysis/critical_points.h"
+#include "dataset/dataset.h"
+#include "analysis/features.h"
+#include "analysis/pathline_storage.h"
+#include "analysis/selection.h"
 #include "render/render_state.h"
 #include "render/state_renderer.h"
 #include "server/server.h"

@@ -7,10 +7,10 @@
 #include "render/frame_buffer.h"
 #include "render/image_io.h"
 
-#include "data/dataset.h"
-#include "data/netcdf_reader.h"
-#include "data/preprocess.h"
-#include "data/test_util.h"
+#include "dataset/dataset.h"
+#include "io/netcdf_reader.h"
+#include "preprocess/preprocess.h"
+#include "grid/test_util.h"
 
 #include <gtest/gtest.h>
 

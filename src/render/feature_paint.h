@@ -1,5 +1,5 @@
 // The features of a step painted in the 3D view (state.features.colorById and .highlight, state
-// version 11; docs/features.md): the connected regions of the state's selection (data/features.h,
+// version 11; docs/features.md): the connected regions of the state's selection (analysis/features.h,
 // found at features.level with features.minVolumeKm3) each in its own colour, or the highlighted
 // ones in amber, and the rest of the selection grey and faint. What the renderer draws is an extra
 // variable of the step's volume (StepVolume::withVariable) holding each grid point's palette slot,
@@ -8,8 +8,8 @@
 // Thread safety: pure functions of their arguments.
 #pragma once
 
-#include "data/dataset.h"
-#include "data/selection.h"
+#include "dataset/dataset.h"
+#include "analysis/selection.h"
 #include "render/legend.h"
 #include "render/render_state.h"
 #include "render/volume_renderer.h"

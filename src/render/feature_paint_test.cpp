@@ -3,7 +3,7 @@
 #include "render/feature_paint.h"
 
 #include "core/error.h"
-#include "data/features.h"
+#include "analysis/features.h"
 #include "render/test_volumes.h"
 #include "render/volume_renderer.h"
 

@@ -9,11 +9,11 @@
 #include "render/render_state.h"
 #include "render/slice_view.h"
 
-#include "data/features.h"
-#include "data/flux.h"
-#include "data/preprocess_numerics.h"
-#include "data/selection.h"
-#include "data/synth.h"
+#include "analysis/features.h"
+#include "analysis/flux.h"
+#include "preprocess/preprocess_numerics.h"
+#include "analysis/selection.h"
+#include "synth/synth.h"
 #include "core/spherical.h"
 
 #include <fmt/format.h>

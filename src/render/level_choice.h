@@ -3,7 +3,7 @@
 // too), the server keeps the throughput and a frame's overhead with averagedMeasure.
 #pragma once
 
-#include "data/dataset.h"
+#include "dataset/dataset.h"
 
 #include <memory>
 #include <vector>

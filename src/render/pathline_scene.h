@@ -13,14 +13,14 @@
 //
 // Colouring: "age" = point time - the line's injection time (Myr), or one line attribute column
 // (constant along a line), through a colour map over a range (PathlineStyle).
-// Units: km, Myr, degrees (as in data/pathlines.h).
+// Units: km, Myr, degrees (as in analysis/pathlines.h).
 //
 // Thread safety: const member functions may be called from any thread (the renderer traces from
 // all cores). applyState, setVisibility, setStyle and setRadiusKm must not run while a renderPass
 // uses this scene (the same rule as VolumeRenderer::setParams). Embree types stay in the .cpp.
 #pragma once
 
-#include "data/pathline_storage.h"
+#include "analysis/pathline_storage.h"
 #include "render/legend.h"
 #include "render/render_state.h"
 

@@ -9,7 +9,7 @@
 // depend on the machine's SIMD width and tests can compare the two kernels.
 #pragma once
 
-#include "data/dataset.h"
+#include "dataset/dataset.h"
 #include "render/camera.h"
 #include "render/color_map.h"
 
@@ -78,7 +78,7 @@ struct KernelVariable {
 };
 
 // A brush on a variable or on a coordinate, whose value is scale * component + offset
-// (coordinateDefinition in data/coordinates.h).
+// (coordinateDefinition in grid/coordinates.h).
 struct KernelBrush {
     bool onCoordinate = false;
     PointComponent component = PointComponent::X;  // when onCoordinate
@@ -150,7 +150,7 @@ struct KernelParams {
     bool shade = false;
     Vec3 lightDir{0, 0, 1};  // unit, towards the light, world frame
     float ambient = 0.35f, diffuse = 0.65f, specular = 0, shininess = 32;
-    // The colouring variable's gradient at the grid points (nodeGradient, data/grid.h: per degree of
+    // The colouring variable's gradient at the grid points (nodeGradient, grid/grid.h: per degree of
     // lat, per km of r, per degree of lon), interpolated like the field (bound when shade is set). In
     // the pole caps the lat and lon components fade to 0 and the radial one blends towards the
     // radial derivative of the ring mean, as differences of the blended field would.

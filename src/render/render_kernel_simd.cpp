@@ -246,7 +246,7 @@ HWY_INLINE VF UnlitFactor(DF d, const KernelParams& k, const OcclusionV& occ)
     return hn::MulAdd(hn::Set(d, k.ambient / sum), occ.ambient, hn::Mul(hn::Set(d, k.diffuse / sum), occ.light));
 }
 
-// scale * component + offset (KernelBrush; the table is coordinateDefinition in data/coordinates.h).
+// scale * component + offset (KernelBrush; the table is coordinateDefinition in grid/coordinates.h).
 HWY_INLINE VF CoordinateValue(DF d, const KernelBrush& brush, VF x, VF y, VF z, const LocatedV& L)
 {
     VF v = x;

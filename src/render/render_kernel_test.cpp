@@ -1,6 +1,6 @@
 // The samplers: SIMD equals scalar on random inputs; analytic values at grid points, across the lon
 // seam and at the poles; the angle approximation.
-#include "data/sampler.h"
+#include "grid/sampler.h"
 #include "render/render_kernel.h"
 #include "render/test_volumes.h"
 #include "render/volume_renderer.h"

@@ -8,7 +8,7 @@
 // and the docs table are derived from that description; a new key is an entry there and a member here.
 #pragma once
 
-#include "data/features.h"
+#include "analysis/features.h"
 #include "render/map_projection.h"
 #include "render/stereo.h"
 #include "render/volume_renderer.h"
@@ -31,7 +31,7 @@ namespace raypc::render {
 inline constexpr int kRenderStateVersion = 12;
 
 // A brush range: a variable or a coordinate (x, y, z, lat, lon, radius, depth) and [min, max]. The
-// brush model is data/selection.h's: a name that repeats adds a range to its axis (OR).
+// brush model is analysis/selection.h's: a name that repeats adds a range to its axis (OR).
 using BrushSpec = NamedRange;
 
 // A range over one pathline attribute column (the pathline parallel-coordinates plot), e.g.
@@ -109,7 +109,7 @@ struct SectionState {
 };
 
 // The "features" object (version 10): how the connected regions of the selection are found and
-// followed (data/features.h; `raypc features`, Python's Dataset.features), so that a saved state
+// followed (analysis/features.h; `raypc features`, Python's Dataset.features), so that a saved state
 // reproduces their table.
 struct FeatureSettings {
     float minVolumeKm3 = 0.0f;                               // smaller regions are dropped

@@ -13,7 +13,7 @@
 // block of cells around it without meeting an active sample.
 #pragma once
 
-#include "data/grid.h"
+#include "grid/grid.h"
 #include "render/render_kernel.h"
 
 #include <cstdint>

@@ -3,8 +3,8 @@
 #include "core/error.h"
 #include "core/lru_cache.h"
 #include "core/spherical.h"
-#include "data/coordinates.h"
-#include "data/sampler.h"
+#include "grid/coordinates.h"
+#include "grid/sampler.h"
 #include "render/legend.h"
 #include "render/line_raster.h"
 

@@ -17,8 +17,8 @@
 #pragma once
 
 #include "core/vec3.h"
-#include "data/dataset.h"
-#include "data/selection.h"
+#include "dataset/dataset.h"
+#include "analysis/selection.h"
 #include "render/image_io.h"
 #include "render/map_projection.h"
 #include "render/pathline_scene.h"
@@ -147,7 +147,7 @@ void checkTimeDepthPictureSize(int width, int height);
 
 // What a time–depth picture of a selection over time shows at each step and radius: the selected
 // share of the shell (%), or a variable's mean over the selected points or over the whole shell
-// (selectionOverTime's means, data/selection.h).
+// (selectionOverTime's means, analysis/selection.h).
 enum class TimeDepthOf { Share, SelectedMean, ShellMean };
 // "share", "selected-mean" or "shell-mean"; throws raypc::Error naming `what` otherwise.
 TimeDepthOf parseTimeDepthOf(const std::string& text, const std::string& what);

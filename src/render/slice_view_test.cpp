@@ -5,7 +5,7 @@
 
 #include "core/error.h"
 #include "core/spherical.h"
-#include "data/selection.h"
+#include "analysis/selection.h"
 #include "render/test_volumes.h"
 
 #include <gtest/gtest.h>

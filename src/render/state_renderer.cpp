@@ -4,7 +4,7 @@
 #include "core/error.h"
 #include "core/mpi.h"
 #include "core/spherical.h"
-#include "data/features.h"
+#include "analysis/features.h"
 #include "render/feature_paint.h"
 #include "render/legend.h"
 #include "render/reference_geometry.h"

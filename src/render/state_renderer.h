@@ -15,8 +15,8 @@
 #pragma once
 
 #include "core/system_memory.h"
-#include "data/dataset.h"
-#include "data/pathline_storage.h"
+#include "dataset/dataset.h"
+#include "analysis/pathline_storage.h"
 #include "render/pathline_scene.h"
 #include "render/image_io.h"
 #include "render/render_state.h"

@@ -4,7 +4,7 @@
 
 #include "core/error.h"
 #include "core/json_input.h"
-#include "data/pathline_storage.h"
+#include "analysis/pathline_storage.h"
 #include "render/render_state.h"
 
 #include <algorithm>

@@ -6,9 +6,9 @@
 #include "render/render_state.h"
 
 #include "core/spherical.h"
-#include "data/preprocess_numerics.h"
-#include "data/selection.h"
-#include "data/synth.h"
+#include "preprocess/preprocess_numerics.h"
+#include "analysis/selection.h"
+#include "synth/synth.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>

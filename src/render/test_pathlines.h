@@ -5,7 +5,7 @@
 #pragma once
 
 #include "core/spherical.h"
-#include "data/pathlines.h"
+#include "analysis/pathlines.h"
 
 #include <cmath>
 #include <functional>

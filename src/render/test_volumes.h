@@ -2,7 +2,7 @@
 // renderer itself). Fields are closed-form functions of (lat, r, lon) so the truth is known.
 #pragma once
 
-#include "data/dataset.h"
+#include "dataset/dataset.h"
 
 #include <cmath>
 #include <functional>

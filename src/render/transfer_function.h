@@ -7,7 +7,7 @@
 // look does not depend on the sampling rate.
 #pragma once
 
-#include "data/dataset.h"
+#include "dataset/dataset.h"
 #include "render/color_map.h"
 
 #include <vector>

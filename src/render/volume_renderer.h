@@ -17,8 +17,8 @@
 // renderer or frame buffer; setParams must not race with renderPass. Distinct renderers are independent.
 #pragma once
 
-#include "data/dataset.h"
-#include "data/selection.h"
+#include "dataset/dataset.h"
+#include "analysis/selection.h"
 #include "render/camera.h"
 #include "render/color_map.h"
 #include "render/frame_buffer.h"
@@ -67,7 +67,7 @@ struct RenderParams {
     int width = 512, height = 512;
     int colorVariable = 0;
     TransferFunction transfer;
-    std::vector<RangeFilter> brushes;  // a sample outside any brush contributes nothing (data/selection.h)
+    std::vector<RangeFilter> brushes;  // a sample outside any brush contributes nothing (analysis/selection.h)
     CoreStyle core;
     ShadingStyle shading;
     float stepFactor = 0.5f;    // step = stepFactor x local cell extent along the ray

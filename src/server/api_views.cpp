@@ -3,10 +3,10 @@
 #include "core/error.h"
 #include "core/json_input.h"
 #include "core/spherical.h"
-#include "data/coordinates.h"
-#include "data/feature_csv.h"
-#include "data/feature_series.h"
-#include "data/flux.h"
+#include "grid/coordinates.h"
+#include "analysis/feature_csv.h"
+#include "analysis/feature_series.h"
+#include "analysis/flux.h"
 #include "render/color_map.h"
 #include "render/feature_paint.h"
 #include "render/render_state.h"
@@ -292,7 +292,7 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
                 {"avalanches", std::move(avalanches)}};
     }
     // The tables of `raypc features --tracks/--events/--stalls` and `raypc flux`, written by the same
-    // code (data/feature_csv.h), for the UI's CSV buttons.
+    // code (analysis/feature_csv.h), for the UI's CSV buttons.
     json csv = {{"tracks", trackCsv(series)},
                 {"events", eventCsv(series, dataset)},
                 {"stalls", stallCsv(series, options.bandDepthsKm, options.bandHalfWidthKm, nSteps - 1, stallBy)},

@@ -6,10 +6,10 @@
 // Thread safety: reentrant.
 #pragma once
 
-#include "data/dataset.h"
-#include "data/features.h"
-#include "data/persistence.h"
-#include "data/selection.h"
+#include "dataset/dataset.h"
+#include "analysis/features.h"
+#include "analysis/persistence.h"
+#include "analysis/selection.h"
 #include "server/dataset_caches.h"
 #include "server/limits.h"
 #include "server/step_cache.h"

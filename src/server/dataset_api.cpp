@@ -1,14 +1,14 @@
 #include "server/dataset_api.h"
 
-#include "data/feature_csv.h"
+#include "analysis/feature_csv.h"
 
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/install_paths.h"
 #include "core/json_input.h"
 #include "core/spherical.h"
-#include "data/feature_csv.h"
-#include "data/probe.h"
+#include "analysis/feature_csv.h"
+#include "analysis/probe.h"
 #include "render/color_map.h"
 #include "render/pathline_scene.h"
 #include "render/reference_geometry.h"
@@ -209,7 +209,7 @@ ApiAnswer slice(const ApiContext& api, const ApiRequest& request)
     return {std::move(body), "application/octet-stream"};
 }
 
-// GET /api/probe?step=S&lat=A&lon=B&depthKm=D[&var=NAME][&level=L]: the values at a point (data/probe.h).
+// GET /api/probe?step=S&lat=A&lon=B&depthKm=D[&var=NAME][&level=L]: the values at a point (analysis/probe.h).
 ApiAnswer probe(const ApiContext& api, const ApiRequest& request)
 {
     const Dataset& dataset = *api.dataset;

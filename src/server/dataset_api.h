@@ -5,7 +5,7 @@
 // Thread safety: the handlers are reentrant.
 #pragma once
 
-#include "data/dataset.h"
+#include "dataset/dataset.h"
 #include "server/api_views.h"
 #include "server/dataset_caches.h"
 #include "server/limits.h"

@@ -6,9 +6,9 @@
 #pragma once
 
 #include "core/lru_cache.h"
-#include "data/dataset.h"
-#include "data/pathline_storage.h"
-#include "data/persistence.h"
+#include "dataset/dataset.h"
+#include "analysis/pathline_storage.h"
+#include "analysis/persistence.h"
 #include "render/state_renderer.h"
 #include "server/step_cache.h"
 
@@ -32,7 +32,7 @@ private:
     LruCache<std::pair<int, int>, Window> m_cache;  // by (step, window)
 };
 
-// The persistence pairs (data/persistence.h) of one step's variable at level 0, computed once per
+// The persistence pairs (analysis/persistence.h) of one step's variable at level 0, computed once per
 // (step, variable) and kept for the last `maxEntries`, least recently used out: a full-resolution
 // step takes seconds (docs/persistence.md). get() throws raypc::Error like the volume loader.
 class PersistenceCache {

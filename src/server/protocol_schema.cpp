@@ -3,7 +3,7 @@
 #include "server/protocol_schema.h"
 
 #include "core/error.h"
-#include "data/features.h"
+#include "analysis/features.h"
 #include "render/map_projection.h"
 #include "render/stereo.h"
 #include "server/protocol.h"
@@ -196,7 +196,7 @@ const std::vector<Definition>& messages()
             "Info", "GET /api/info", "the dataset",
             {{"protocol", integer(""), fmt::format("the protocol's version ({})", kProtocolVersion)},
              {"variables", arrayOf(ref("VariableInfo"), ""), "the variables, in the dataset's order"},
-             {"coordinates", arrayOf(ref("CoordinateInfo"), ""), "the coordinates (data/coordinates.h)"},
+             {"coordinates", arrayOf(ref("CoordinateInfo"), ""), "the coordinates (grid/coordinates.h)"},
              {"steps",
               arrayOf(named("StepInfo", "",
                             {{"index", integer(""), "the step's index"},
@@ -481,7 +481,7 @@ const std::vector<Definition>& messages()
         d.push_back(part("ProbeValue", "a value at the probed point",
                          {{"value", number(""), "the value"}, {"units", text(""), "its units"}}));
         d.push_back(message(
-            "ProbeAnswer", "GET /api/probe", "the values at a point, as `raypc probe` prints them (data/probe.h)",
+            "ProbeAnswer", "GET /api/probe", "the values at a point, as `raypc probe` prints them (analysis/probe.h)",
             {{"step", integer(""), "the step"},
              {"time_myr", number(""), "its time, Myr"},
              {"level", integer(""), "the level sampled"},

@@ -2,7 +2,7 @@
 
 #include "core/clock.h"
 #include "core/error.h"
-#include "data/selection.h"
+#include "analysis/selection.h"
 #include "render/reference_geometry.h"
 #include "server/image_codec.h"
 #include "server/rank_pool.h"

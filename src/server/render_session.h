@@ -12,7 +12,7 @@
 // the sink is called from the render thread and must hand the bytes over (e.g. post them).
 #pragma once
 
-#include "data/dataset.h"
+#include "dataset/dataset.h"
 #include "render/pathline_scene.h"
 #include "render/state_renderer.h"
 #include "render/volume_renderer.h"

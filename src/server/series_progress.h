@@ -5,7 +5,7 @@
 // Thread safety: every member function may be called from any thread.
 #pragma once
 
-#include "data/preprocess.h"
+#include "preprocess/preprocess.h"
 
 #include <nlohmann/json.hpp>
 

@@ -10,7 +10,7 @@
 // Thread safety: every member function may be called from any thread.
 #pragma once
 
-#include "data/dataset.h"
+#include "dataset/dataset.h"
 
 #include <condition_variable>
 #include <functional>

@@ -1,10 +1,10 @@
 #include "server/step_cache.h"
 
 #include "core/error.h"
-#include "data/netcdf_reader.h"
-#include "data/dataset_format.h"
-#include "data/preprocess.h"
-#include "data/synth.h"
+#include "io/netcdf_reader.h"
+#include "dataset/dataset_format.h"
+#include "preprocess/preprocess.h"
+#include "synth/synth.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -5,10 +5,10 @@
 // written once at start by the project's synth and preprocess, as corpus/dataset_manifest/valid.json
 // was by `raypc synth --steps 2 --grid 8x5x8` and `raypc preprocess --sample-rows 50 --no-pathlines`.
 #include "core/error.h"
-#include "data/dataset.h"
-#include "data/netcdf_reader.h"
-#include "data/preprocess.h"
-#include "data/synth.h"
+#include "dataset/dataset.h"
+#include "io/netcdf_reader.h"
+#include "preprocess/preprocess.h"
+#include "synth/synth.h"
 
 #include <cstddef>
 #include <cstdint>

@@ -7,8 +7,8 @@
 // Only classic files (CDF-1/2/5): netCDF-4 files are HDF5, a parser of its own that this
 // target does not aim at.
 #include "core/error.h"
-#include "data/netcdf_classic.h"
-#include "data/netcdf_reader.h"
+#include "io/netcdf_classic.h"
+#include "io/netcdf_reader.h"
 
 #include <unistd.h>
 

@@ -1,8 +1,8 @@
-// libFuzzer target: the VTK XML UnstructuredGrid reader (data/vtk_xml.h) on arbitrary bytes. Any
+// libFuzzer target: the VTK XML UnstructuredGrid reader (io/vtk_xml.h) on arbitrary bytes. Any
 // input must give a Piece or one raypc::Error; never a crash, a hang or an allocation far beyond
 // what the bytes can hold (run.sh caps RSS).
 #include "core/error.h"
-#include "data/vtk_xml.h"
+#include "io/vtk_xml.h"
 
 #include <cstddef>
 #include <cstdint>

@@ -12,7 +12,7 @@
 //     equal to the picture rendered here.
 // Exit 0 when all hold; otherwise prints each failure.
 #include "core/error.h"
-#include "data/dataset.h"
+#include "dataset/dataset.h"
 #include "render/camera.h"
 #include "render/image_io.h"
 #include "render/state_renderer.h"

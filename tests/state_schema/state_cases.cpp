@@ -5,7 +5,7 @@
 //                                 document: {"ok": true, "json": toJson(parsed)} or {"ok": false, "error": ...}
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "data/dataset.h"
+#include "dataset/dataset.h"
 #include "render/render_state.h"
 #include "render/state_renderer.h"
 

@@ -206,7 +206,7 @@ export async function postSlice(view: 'map' | 'section', state: RenderState): Pr
   return { header, png: new Blob([new Uint8Array(body, 4 + n)], { type: 'image/png' }) };
 }
 
-// The values at a point (GET /api/probe; data/probe.h, as `raypc probe`).
+// The values at a point (GET /api/probe; analysis/probe.h, as `raypc probe`).
 export async function fetchProbe(step: number, lat: number, lon: number, depthKm: number, variable: string): Promise<ProbeAnswer> {
   const q = new URLSearchParams({ step: String(step), lat: String(lat), lon: String(lon), depthKm: String(depthKm), var: variable });
   return (await check(await fetch(`api/probe?${q}`), 'GET /api/probe')).json();

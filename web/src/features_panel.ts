@@ -471,7 +471,7 @@ export class FeaturesPanel {
   private exportCsv(what: 'tracks' | 'events' | 'stalls' | 'flux'): void {
     const f = this.result;
     if (!f) { this.host.showError('features: nothing to export yet'); return; }
-    // The server's tables, written by the command line's code (data/feature_csv.h).
+    // The server's tables, written by the command line's code (analysis/feature_csv.h).
     const csv = f.csv[what];
     if (csv === null) { this.host.showError('features: no flux (the dataset has no radial velocity)'); return; }
     download(new Blob([csv], { type: 'text/csv' }), `raypc-features-${what}.csv`);

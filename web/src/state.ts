@@ -16,7 +16,7 @@ export const kStateVersions: number[] = schema.properties.version.enum;
 
 // The ranges of each brushed name (brushes, pathlines.filters), in the order the names first appear.
 // A name that repeats adds a range to its axis: a value is selected when it lies in one of them (OR
-// within an axis, AND over axes), as raypc resolves them (data/selection.h).
+// within an axis, AND over axes), as raypc resolves them (analysis/selection.h).
 export function rangesByName(ranges: readonly { name: string; min: number; max: number }[]): Map<string, [number, number][]> {
   const out = new Map<string, [number, number][]>();
   for (const r of ranges) {

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Writes small VTK XML UnstructuredGrid files in every encoding the VTK file format allows, for the
-reader's tests (src/data/vtk_xml_test.cpp), with Python's standard library only (struct, zlib,
+reader's tests (src/io/vtk_xml_test.cpp), with Python's standard library only (struct, zlib,
 base64): a writer independent of RayPC's reader.
 
     write_vtu_variants.py OUT_DIR

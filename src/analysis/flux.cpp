@@ -1,0 +1,123 @@
+#include "analysis/flux.h"
+
+#include "core/error.h"
+#include "core/spherical.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace raypc {
+
+bool shellInsideGrid(const SphericalGrid& g, double depthKm)
+{
+    const double r = kSurfaceRadiusKm - depthKm;
+    return r >= g.rKm.front() && r <= g.rKm.back();
+}
+
+void checkShellDepth(const SphericalGrid& g, double depthKm)
+{
+    if (!shellInsideGrid(g, depthKm))
+        fail("flux: depth {} km is outside the grid's radii ({:.1f}..{:.1f} km deep)", depthKm,
+             kSurfaceRadiusKm - g.rKm.back(), kSurfaceRadiusKm - g.rKm.front());
+}
+
+std::vector<ShellFlux> shellFluxes(const StepVolume& volume, size_t radialVelocity, std::span<const double> depthsKm,
+                                   std::span<const RangeFilter> filters, const std::optional<HeatFluxInputs>& heat,
+                                   std::optional<size_t> density)
+{
+    for (const size_t variable :
+         {radialVelocity, heat ? heat->temperatureAnomaly : radialVelocity, density.value_or(radialVelocity)})
+        if (variable >= volume.variableCount())
+            fail("flux: variable index {} out of range 0..{}", variable, volume.variableCount() - 1);
+    if (heat && !(heat->densityKgM3 > 0 && std::isfinite(heat->densityKgM3)))
+        fail("flux: density {} kg/m³ is not positive", heat->densityKgM3);
+    if (heat && !(heat->heatCapacityJPerKgK > 0 && std::isfinite(heat->heatCapacityJPerKgK)))
+        fail("flux: heat capacity {} J/(kg K) is not positive", heat->heatCapacityJPerKgK);
+    const SphericalGrid& g = volume.grid();
+    const std::vector<uint8_t> selected =
+        filters.empty() ? std::vector<uint8_t>(g.cellCount(), 1) : selectedPoints(volume, filters);
+    const float* v = volume.values(radialVelocity);
+    const float* anomaly = heat ? volume.values(heat->temperatureAnomaly) : nullptr;
+    const float* rho = density ? volume.values(*density) : nullptr;
+    constexpr double kM3PerKm3 = 1e9;
+    const auto w = g.volumeFactors();
+    constexpr double kKmPerCm = 1e-5;
+    // ρ c_p × (cm/yr → m/s) × (km² → m²): W per (K · cm/yr · km²).
+    constexpr double kSecondsPerYear = 365.25 * 86400;
+    const double heatFactor = heat ? heat->densityKgM3 * heat->heatCapacityJPerKgK * (0.01 / kSecondsPerYear) * 1e6 : 0;
+    std::vector<ShellFlux> out;
+    for (const double depth : depthsKm) {
+        checkShellDepth(g, depth);
+        const double r = kSurfaceRadiusKm - depth;
+        // The radii around the shell and the weight of the upper one.
+        const size_t upper = std::min(size_t(std::lower_bound(g.rKm.begin(), g.rKm.end(), r) - g.rKm.begin()), g.nR() - 1);
+        const size_t lower = upper > 0 ? upper - 1 : 0;
+        const double t = upper == lower ? 1.0 : (r - g.rKm[lower]) / (g.rKm[upper] - g.rKm[lower]);
+        const size_t nearer = t >= 0.5 ? upper : lower;
+        ShellFlux f;
+        f.depthKm = depth;
+        f.radiusKm = r;
+        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                const double area = r * r * w.lat[iLat] * w.lon[iLon];
+                const double vr = (1.0 - t) * v[g.index(iLat, lower, iLon)] + t * v[g.index(iLat, upper, iLon)];
+                const double flux = vr * kKmPerCm * area;
+                double heatW = 0;
+                if (anomaly)
+                    heatW = heatFactor * area * vr *
+                            ((1.0 - t) * anomaly[g.index(iLat, lower, iLon)] + t * anomaly[g.index(iLat, upper, iLon)]);
+                const double mass =
+                    rho ? kM3PerKm3 * flux * ((1.0 - t) * rho[g.index(iLat, lower, iLon)] + t * rho[g.index(iLat, upper, iLon)])
+                        : 0.0;
+                f.areaKm2 += area;
+                (flux < 0 ? f.downKm3PerYr : f.upKm3PerYr) += flux;
+                (flux < 0 ? f.massDownKgPerYr : f.massUpKgPerYr) += mass;
+                f.heatW += heatW;
+                if (selected[g.index(iLat, nearer, iLon)]) {
+                    f.selectedAreaKm2 += area;
+                    (flux < 0 ? f.selectedDownKm3PerYr : f.selectedUpKm3PerYr) += flux;
+                    (flux < 0 ? f.selectedMassDownKgPerYr : f.selectedMassUpKgPerYr) += mass;
+                    f.selectedHeatW += heatW;
+                }
+            }
+        out.push_back(f);
+    }
+    return out;
+}
+
+std::vector<size_t> avalancheSteps(std::span<const double> downKm3PerYr, double k)
+{
+    const size_t n = downKm3PerYr.size();
+    if (n < 2)
+        return {};
+    double mean = 0;
+    for (const double d : downKm3PerYr)
+        mean += std::abs(d);
+    mean /= double(n);
+    double var = 0;
+    for (const double d : downKm3PerYr)
+        var += (std::abs(d) - mean) * (std::abs(d) - mean);
+    const double sigma = std::sqrt(var / double(n));
+    std::vector<size_t> steps;
+    if (sigma <= 0)
+        return steps;
+    for (size_t i = 0; i < n; ++i)
+        if (std::abs(downKm3PerYr[i]) > mean + k * sigma)
+            steps.push_back(i);
+    return steps;
+}
+
+std::vector<std::vector<size_t>> avalancheStepsPerShell(std::span<const std::vector<ShellFlux>> bySteps, double k)
+{
+    const size_t shells = bySteps.empty() ? 0 : bySteps.front().size();
+    std::vector<std::vector<size_t>> out(shells);
+    for (size_t d = 0; d < shells; ++d) {
+        std::vector<double> down;
+        for (const auto& fluxes : bySteps)
+            down.push_back(fluxes.at(d).downKm3PerYr);
+        out[d] = avalancheSteps(down, k);
+    }
+    return out;
+}
+
+}  // namespace raypc

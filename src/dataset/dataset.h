@@ -1,0 +1,241 @@
+// A preprocessed RayPC dataset: what the renderer, the server and the CLI load.
+// The on-disk format is documented in docs/format.md; arrays are memory-mapped raw
+// little-endian float32 in canonical grid order (grid.h), so a step loads without parsing.
+//
+// Variables: the stored ones of the input (contest names and units) plus derived ones
+// ("radial velocity" and "velocity magnitude" in cm/yr). Coordinates (x, y, z in km,
+// lat/lon in degrees, radius and depth in km) are not stored: they are functions of the grid.
+//
+// Thread safety: a Dataset and the StepVolumes it returns are immutable and may be shared.
+#pragma once
+
+#include "core/mapped_file.h"
+#include "grid/coordinates.h"
+#include "grid/grid.h"
+#include "grid/snapshot.h"
+#include "dataset/value_encoding.h"
+
+#include <atomic>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace raypc {
+
+inline constexpr int kHistogramBins = 256;
+inline constexpr int kLevelCount = 3;  // level 0 = full resolution, 1 and 2 coarser (1/8 each)
+
+struct ValueRange {
+    float min = 0, max = 0;
+};
+
+// Per-variable statistics, volume-weighted (each grid point counts with its dual-cell volume).
+struct VariableStats {
+    ValueRange range;  // exact min and max over the grid points
+    double mean = 0;   // volume-weighted mean
+    std::vector<double> histogram;  // kHistogramBins volume fractions over `range`; sums to 1
+};
+
+struct VariableInfo {
+    std::string name;   // e.g. "temperature anomaly", "radial velocity"
+    std::string units;  // e.g. "K", "cm/yr"
+    bool derived = false;
+    std::string fileStem;  // file-safe name of its arrays
+    VariableStats global;  // over all steps (histogram rebinned from the steps' histograms)
+};
+
+struct StepInfo {
+    int index = 0;
+    double timeMyr = 0;
+    std::string source;  // input file name
+    std::vector<VariableStats> stats;  // one per variable, same order as Dataset::variables()
+    // How the step was made from a mesh (Snapshot::origin: format, cells, grid points inside a cell,
+    // snapped, missing); null for a step read from a netCDF file.
+    nlohmann::json origin;
+};
+
+struct LevelInfo {
+    SphericalGrid grid;
+    BrickLayout bricks;
+};
+
+
+// One step at one level of detail: every variable's values plus per-brick bounds.
+//
+// A dataset of encoding u16 (value_encoding.h) decodes a variable's values on first use of
+// values(var) (in parallel) and keeps them with the volume; float32 datasets map their values.
+class StepVolume {
+public:
+    // Builds a volume in memory from a snapshot (computing brick bounds); used by tests
+    // and by preprocessing. Field order becomes variable order.
+    static std::shared_ptr<StepVolume> fromSnapshot(const Snapshot& snapshot, uint32_t brickSize = 8);
+
+    // Maps the arrays of one level directory (docs/format.md): per variable `<stem>.f32` or
+    // `<stem>.u16`, and `<stem>.bricks.f32` (the bounds are copied into memory, the values stay
+    // mapped). `ranges`: per variable the step's exact range (the manifest's statistics), or empty
+    // for any finite value. Throws raypc::Error naming the file when one is missing, has the wrong
+    // size, or holds brick bounds that are not finite with min <= max within the range.
+    static std::shared_ptr<StepVolume> open(const std::filesystem::path& levelDir, const LevelInfo& level,
+                                            const std::vector<std::string>& fileStems, ValueEncoding encoding,
+                                            std::span<const ValueRange> ranges = {});
+
+    // A volume of `base`'s variables and one more, the last: `values` (grid().cellCount() of them,
+    // canonical order; brick bounds computed here). The base's variables are read through it as the
+    // base gives them (decoded on first use), and the base lives as long as this volume. For a
+    // field that exists only for one picture (the features painted by id, render/feature_paint.h).
+    // Throws raypc::Error when `values` has the wrong size.
+    static std::shared_ptr<StepVolume> withVariable(std::shared_ptr<const StepVolume> base, std::vector<float> values);
+
+    const SphericalGrid& grid() const { return m_grid; }
+    const BrickLayout& bricks() const { return m_bricks; }
+    size_t variableCount() const { return m_values.size(); }
+    ValueEncoding encoding() const { return m_encoding; }
+    // grid().cellCount() values of variable `var`, canonical order. Thread-safe; the first call for a
+    // variable of a u16 volume decodes it (its cost: bench/value_encoding_bench.cpp; other threads
+    // asking for it meanwhile wait), of a mapped float32
+    // volume reads it once to check every value lies within the step's range; later calls are one
+    // atomic load. The first call throws raypc::Error naming the file if it was cut short since it
+    // was mapped, or (float32) for the first value outside the range (NaN, Inf, 3.4e38), with its
+    // position.
+    const float* values(size_t var) const
+    {
+        const float* p = m_values[var].load(std::memory_order_acquire);
+        return p ? p : decode(var);
+    }
+    // values(var)[grid().index(iLat, iR, iLon)], without decoding the whole variable when it is not
+    // decoded yet (for a few samples, such as the pathline phase's attributes). Thread-safe. Throws
+    // as values() does (float32: for this value only).
+    float value(size_t var, size_t iLat, size_t iR, size_t iLon) const;
+    // Whether values(var) is ready without decoding.
+    bool valuesReady(size_t var) const { return m_values[var].load(std::memory_order_acquire) != nullptr; }
+    // bricks().brickCount() pairs (min, max) of variable `var`.
+    const float* brickBounds(size_t var) const { return m_bounds[var]; }
+    // The same over bricks of `brickSize` points (BrickLayout::forGrid(grid(), brickSize)): the stored
+    // bounds at bricks().size, otherwise computed from the values on first use and kept with the
+    // volume (the renderer skips smaller bricks on coarse levels). Thread-safe.
+    const float* brickBounds(size_t var, uint32_t brickSize) const;
+    // nodeGradient (grid/grid.h) of variable `var`: computed from the values on first use and kept
+    // with the volume (the ray caster's shading interpolates it). Thread-safe.
+    const NodeGradient& nodeGradient(size_t var) const;
+
+    // The largest error of value (iLat, iR, iLon) of variable `var` against the exact value: 0 for
+    // float32, for u16 uint16ErrorBound of the brick that owns the point (value_encoding.h; without
+    // the half ulp of float32 rounding).
+    double errorBound(size_t var, size_t iLat, size_t iR, size_t iLon) const;
+
+    // Bytes of the values and bounds the volume holds now: mapped files (page cache), arrays built in
+    // memory, and the values of u16 variables decoded so far. Thread-safe.
+    size_t memoryBytes() const;
+    // Bytes of decoded values held in memory (u16 volumes; 0 for mapped float32). Thread-safe.
+    size_t decodedBytes() const { return m_decodedBytes.load(std::memory_order_relaxed); }
+    // Reads one value per page of every mapped file, so that a later pass does not wait for the disk.
+    // Throws raypc::Error naming a file cut short since it was mapped.
+    void touchPages() const;
+    // Whether a mapped file is shorter now than when it was mapped (MappedFile::cutShort): reading it
+    // would raise SIGBUS. The server's step cache asks before it hands out a cached volume.
+    bool filesCutShort() const noexcept;
+
+private:
+    const float* decode(size_t var) const;
+    [[noreturn]] void failValue(size_t var, size_t index, float value) const;
+
+    SphericalGrid m_grid;
+    BrickLayout m_bricks;
+    ValueEncoding m_encoding = ValueEncoding::Float32;
+    std::unique_ptr<std::atomic<const float*>[]> m_valuesStorage;
+    std::span<std::atomic<const float*>> m_values;
+    std::vector<const float*> m_bounds;
+    std::vector<const void*> m_valueFiles;  // per variable its mapped values (u16 or float32), read by decode()
+    std::vector<ValueRange> m_ranges;       // per variable the step's range (open)
+    mutable std::mutex m_decodeMutex;
+    mutable std::vector<std::unique_ptr<float[]>> m_decoded;
+    mutable std::atomic<size_t> m_decodedBytes{0};
+    mutable std::mutex m_derivedMutex;
+    mutable std::map<std::pair<size_t, uint32_t>, std::vector<float>> m_derivedBounds;
+    mutable std::map<size_t, NodeGradient> m_gradients;
+    std::vector<MappedFile> m_mapped;              // when loaded from disk: per variable its values
+    std::vector<std::vector<float>> m_owned;       // when built in memory
+    std::shared_ptr<const StepVolume> m_base;      // withVariable: the volume whose variables come first
+};
+
+// The parallel-coordinates sample of one step: `rows` cells, columns = coordinates
+// (coordinateInfos() order) then variables (Dataset::variables() order), row-major. The rows are
+// the same cells in every step, so the coordinates are the same too: SampleColumns::Variables
+// leaves them out (what a step changes).
+enum class SampleColumns { All, Variables };
+struct SampleTable {
+    std::vector<std::string> columns;
+    std::vector<std::string> units;
+    size_t rows = 0;
+    std::vector<float> values;  // rows * columns.size()
+    float at(size_t row, size_t column) const { return values[row * columns.size() + column]; }
+};
+
+// Exclusive write access to a dataset directory, so that two `raypc preprocess` runs into one
+// directory cannot interleave: flock(2) on DIR/.lock, released when the object is destroyed or
+// the process ends (also when it is killed, so a stale lock never blocks a rerun). The file
+// holds the holder's pid and host name, for the message to the one refused. Reading a dataset
+// takes no lock (Dataset::open refuses an unfinished one).
+class DatasetWriteLock {
+public:
+    // Creates `dir` if needed and locks it. Throws raypc::Error naming the directory and the
+    // holder (pid, host) when another process holds the lock, or naming the file on an I/O error.
+    explicit DatasetWriteLock(const std::filesystem::path& dir);
+    ~DatasetWriteLock();
+    DatasetWriteLock(const DatasetWriteLock&) = delete;
+    DatasetWriteLock& operator=(const DatasetWriteLock&) = delete;
+
+    // Removes the lock file while still holding the lock (before removing the directory of a
+    // run that leaves nothing); a process that opened the old file sees it is gone and retries.
+    void removeFile();
+
+private:
+    std::filesystem::path m_path;
+    int m_fd = -1;
+};
+
+class Dataset {
+public:
+    // Opens a dataset directory. Throws raypc::Error naming the directory if it is not a
+    // complete RayPC dataset of a supported format version.
+    static std::shared_ptr<const Dataset> open(const std::filesystem::path& dir);
+
+    const std::filesystem::path& dir() const { return m_dir; }
+    const std::vector<VariableInfo>& variables() const { return m_variables; }
+    // The variables' names, in order (for messages and catalogs).
+    std::vector<std::string> variableNames() const;
+    // Index of the variable named `name`, or -1.
+    int variableIndex(const std::string& name) const;
+    const std::vector<StepInfo>& steps() const { return m_steps; }
+    const std::vector<LevelInfo>& levels() const { return m_levels; }
+    double dtMyr() const { return m_dtMyr; }
+    // How the level arrays are stored: float32 (format version 1, or `--encoding float32`) or u16.
+    ValueEncoding encoding() const { return m_encoding; }
+
+    // The range checks of every request that names a step or a level (CLI options, state documents,
+    // HTTP parameters): throw raypc::Error "<what>: 300 out of range 0..11" unless valid.
+    void checkStep(int step, std::string_view what = "step") const;
+    void checkLevel(int level, std::string_view what = "level") const;
+
+    // Maps step `step` at level `level` (StepVolume::open). Throws raypc::Error if out of range or
+    // unreadable.
+    std::shared_ptr<const StepVolume> load(int step, int level) const;
+    SampleTable loadSample(int step, SampleColumns which = SampleColumns::All) const;
+
+private:
+    std::filesystem::path m_dir;
+    std::vector<VariableInfo> m_variables;
+    std::vector<StepInfo> m_steps;
+    std::vector<LevelInfo> m_levels;
+    double m_dtMyr = 2.0;
+    size_t m_sampleRows = 0;
+    ValueEncoding m_encoding = ValueEncoding::Float32;
+};
+
+}  // namespace raypc

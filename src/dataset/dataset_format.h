@@ -1,0 +1,34 @@
+// Names and JSON encodings of the dataset format (docs/format.md), shared by its writer
+// (preprocess/preprocess.cpp) and its reader (dataset/dataset.cpp) alone.
+#pragma once
+
+#include "dataset/dataset.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+
+namespace raypc::format {
+
+inline constexpr const char* kManifest = "dataset.json";
+inline constexpr const char* kFormatName = "raypc-dataset";
+inline constexpr int kVersion = 2;               // 2: the manifest names the arrays' `encoding`
+inline constexpr int kOldestReadableVersion = 1;  // 1: float32 arrays
+inline constexpr const char* kSampleCoords = "sample_coords.f32";
+inline constexpr const char* kStepManifest = "step.json";
+inline constexpr const char* kStepSample = "sample.f32";
+inline constexpr const char* kLockFile = ".lock";  // DatasetWriteLock
+
+std::filesystem::path stepDir(const std::filesystem::path& dataset, int step);
+std::filesystem::path levelDir(const std::filesystem::path& stepDir, int level);
+std::filesystem::path valuesFile(const std::filesystem::path& levelDir, const std::string& stem);
+std::filesystem::path encodedValuesFile(const std::filesystem::path& levelDir, const std::string& stem);  // u16
+std::filesystem::path boundsFile(const std::filesystem::path& levelDir, const std::string& stem);
+
+nlohmann::json toJson(const SphericalGrid& grid);
+SphericalGrid gridFromJson(const nlohmann::json& j);
+nlohmann::json toJson(const VariableStats& stats);
+VariableStats statsFromJson(const nlohmann::json& j);
+
+}  // namespace raypc::format

@@ -1,0 +1,188 @@
+#include "dataset/value_encoding.h"
+
+#include "core/error.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+namespace raypc {
+namespace {
+
+constexpr double kLevels = 65535.0;
+
+// The bricks along one axis whose stored bounds include a point: the owner first (i / size),
+// then the others. computeBrickBounds' rule: brick b covers points [b·s, (b+1)·s], clamped at the
+// last point, or for lon k = 0 … min(s + 1, n) − 1 points from b·s on, wrapping to column 0.
+struct AxisCover {
+    std::array<uint32_t, 3> bricks{};
+    uint32_t count = 0;
+};
+
+AxisCover coverOf(size_t i, size_t n, uint32_t size, uint32_t brickCount, bool wraps)
+{
+    AxisCover c{{uint32_t(i / size)}, 1};
+    if (!wraps) {
+        // b·s <= i <= min((b + 1)·s, n − 1): the owner, and the brick before when i starts a brick.
+        if (i % size == 0 && i > 0)
+            c.bricks[c.count++] = uint32_t(i / size - 1);
+        return c;
+    }
+    const size_t points = std::min<size_t>(size + 1, n);
+    for (uint32_t b = 0; b < brickCount; ++b)
+        if (b != c.bricks[0] && (i + n - (size_t(b) * size) % n) % n < points) {
+            RAYPC_CHECK_LT(c.count, 3u);
+            c.bricks[c.count++] = b;
+        }
+    return c;
+}
+
+std::vector<AxisCover> axisCover(size_t n, uint32_t size, uint32_t brickCount, bool wraps)
+{
+    std::vector<AxisCover> cover(n);
+    for (size_t i = 0; i < n; ++i)
+        cover[i] = coverOf(i, n, size, brickCount, wraps);
+    return cover;
+}
+
+struct Covers {
+    std::vector<AxisCover> lat, r, lon;
+    Covers(const SphericalGrid& g, const BrickLayout& l)
+        : lat(axisCover(g.nLat(), l.size, l.count[0], false)), r(axisCover(g.nR(), l.size, l.count[1], false)),
+          lon(axisCover(g.nLon(), l.size, l.count[2], true))
+    {
+    }
+};
+
+// Narrows [lo, hi] to the bounds of every brick in lat × r × lon.
+void intersectBounds(const BrickLayout& layout, std::span<const float> bounds, const AxisCover& lat,
+                     const AxisCover& r, const AxisCover& lon, float& lo, float& hi)
+{
+    for (uint32_t a = 0; a < lat.count; ++a)
+        for (uint32_t b = 0; b < r.count; ++b)
+            for (uint32_t c = 0; c < lon.count; ++c) {
+                const size_t brick = layout.index(lat.bricks[a], r.bricks[b], lon.bricks[c]);
+                lo = std::max(lo, bounds[2 * brick]);
+                hi = std::min(hi, bounds[2 * brick + 1]);
+            }
+}
+
+}  // namespace
+
+std::string_view encodingName(ValueEncoding encoding)
+{
+    return encoding == ValueEncoding::Uint16 ? "u16" : "float32";
+}
+
+ValueEncoding parseEncoding(std::string_view name, std::string_view what)
+{
+    if (name == "u16")
+        return ValueEncoding::Uint16;
+    if (name == "float32")
+        return ValueEncoding::Float32;
+    fail("{}: encoding '{}' is unknown, expected float32 or u16", what, name);
+}
+
+double uint16ErrorBound(float min, float max)
+{
+    return (double(max) - double(min)) / (2 * kLevels);
+}
+
+void encodeUint16(const SphericalGrid& grid, const BrickLayout& layout, std::span<const float> values,
+                  std::span<const float> bounds, std::span<uint16_t> out)
+{
+    RAYPC_CHECK_EQ(values.size(), grid.cellCount());
+    RAYPC_CHECK_EQ(out.size(), grid.cellCount());
+    RAYPC_CHECK_EQ(bounds.size(), 2 * layout.brickCount());
+    const size_t nR = grid.nR(), nLon = grid.nLon(), s = layout.size;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.nLat() * nR), [&](const auto& rows) {
+        for (size_t row = rows.begin(); row != rows.end(); ++row) {
+            const size_t iLat = row / nR, iR = row % nR, first = row * nLon;
+            for (uint32_t c = 0; c < layout.count[2]; ++c) {
+                // Each point with the bounds of the brick that owns it.
+                const size_t brick = layout.index(uint32_t(iLat / s), uint32_t(iR / s), c);
+                const double lo = bounds[2 * brick], hi = bounds[2 * brick + 1];
+                RAYPC_CHECK(std::isfinite(lo) && std::isfinite(hi) && lo <= hi);
+                const double perUnit = hi > lo ? kLevels / (hi - lo) : 0.0;
+                const size_t end = std::min(size_t(c + 1) * s, nLon);
+                for (size_t iLon = size_t(c) * s; iLon < end; ++iLon) {
+                    const double t = std::clamp((double(values[first + iLon]) - lo) * perUnit, 0.0, kLevels);
+                    // t >= 0: rounding half up is lround's half away from zero, without its call.
+                    out[first + iLon] = uint16_t(t + 0.5);
+                }
+            }
+        }
+    });
+}
+
+void decodeUint16(const SphericalGrid& grid, const BrickLayout& layout, std::span<const uint16_t> encoded,
+                  std::span<const float> bounds, std::span<float> out)
+{
+    RAYPC_CHECK_EQ(encoded.size(), grid.cellCount());
+    RAYPC_CHECK_EQ(out.size(), grid.cellCount());
+    RAYPC_CHECK_EQ(bounds.size(), 2 * layout.brickCount());
+    const Covers cover(grid, layout);
+    const size_t nR = grid.nR(), nLon = grid.nLon(), s = layout.size;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.nLat() * nR), [&](const auto& rows) {
+        for (size_t row = rows.begin(); row != rows.end(); ++row) {
+            const size_t iLat = row / nR, iR = row % nR, first = row * nLon;
+            const AxisCover& lat = cover.lat[iLat];
+            const AxisCover& r = cover.r[iR];
+            for (uint32_t c = 0; c < layout.count[2]; ++c) {
+                const size_t brick = layout.index(lat.bricks[0], r.bricks[0], c);
+                const float min = bounds[2 * brick], max = bounds[2 * brick + 1];
+                // Points this row shares with lat or r neighbours' bricks are clamped into theirs too.
+                float lo = min, hi = max;
+                if (lat.count > 1 || r.count > 1)
+                    intersectBounds(layout, bounds, lat, r, AxisCover{{c}, 1}, lo, hi);
+                const double scale = (double(max) - double(min)) / kLevels;
+                const size_t begin = size_t(c) * s, end = std::min(begin + s, nLon);
+                // The brick's points in one tight loop (clamped in double, so that rounding to float
+                // cannot leave [lo, hi]), then the few shared with lon neighbours' bricks.
+                for (size_t iLon = begin; iLon < end; ++iLon) {
+                    const double v = double(min) + double(encoded[first + iLon]) * scale;
+                    out[first + iLon] = float(std::clamp(v, double(lo), double(hi)));
+                }
+                for (size_t iLon = begin; iLon < end; ++iLon)
+                    if (cover.lon[iLon].count > 1) {
+                        float l = lo, h = hi;
+                        intersectBounds(layout, bounds, lat, r, cover.lon[iLon], l, h);
+                        out[first + iLon] = std::clamp(out[first + iLon], l, h);
+                    }
+            }
+        }
+    });
+}
+
+}  // namespace raypc
+
+namespace raypc {
+
+float decodeUint16Point(const SphericalGrid& grid, const BrickLayout& layout, const uint16_t* encoded,
+                        const float* bounds, size_t iLat, size_t iR, size_t iLon)
+{
+    const AxisCover lat = coverOf(iLat, grid.nLat(), layout.size, layout.count[0], false);
+    const AxisCover r = coverOf(iR, grid.nR(), layout.size, layout.count[1], false);
+    const AxisCover lon = coverOf(iLon, grid.nLon(), layout.size, layout.count[2], true);
+    const size_t brick = layout.index(lat.bricks[0], r.bricks[0], lon.bricks[0]);
+    const float min = bounds[2 * brick], max = bounds[2 * brick + 1];
+    // The steps of decodeUint16, so that both give the same bits.
+    float lo = min, hi = max;
+    const std::span<const float> all(bounds, 2 * layout.brickCount());
+    if (lat.count > 1 || r.count > 1)
+        intersectBounds(layout, all, lat, r, AxisCover{{lon.bricks[0]}, 1}, lo, hi);
+    const double scale = (double(max) - double(min)) / kLevels;
+    const double v = double(min) + double(encoded[grid.index(iLat, iR, iLon)]) * scale;
+    float value = float(std::clamp(v, double(lo), double(hi)));
+    if (lon.count > 1) {
+        intersectBounds(layout, all, lat, r, lon, lo, hi);
+        value = std::clamp(value, lo, hi);
+    }
+    return value;
+}
+
+}  // namespace raypc

@@ -1,0 +1,237 @@
+#include "grid/grid.h"
+
+#include "core/error.h"
+#include "core/spherical.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <tbb/parallel_for.h>
+
+namespace raypc {
+namespace {
+
+// Midpoints between neighbours; the two ends extend by half the end spacing.
+std::vector<double> midpointEdges(const std::vector<double>& c)
+{
+    const size_t n = c.size();
+    std::vector<double> e(n + 1);
+    if (n == 1) {
+        e[0] = c[0];
+        e[1] = c[0];
+        return e;
+    }
+    for (size_t i = 1; i < n; ++i)
+        e[i] = 0.5 * (c[i - 1] + c[i]);
+    e[0] = c[0] - 0.5 * (c[1] - c[0]);
+    e[n] = c[n - 1] + 0.5 * (c[n - 1] - c[n - 2]);
+    return e;
+}
+
+// Mean of pairs (2i, 2i+1); an odd last value stays alone.
+std::vector<double> pairMeans(const std::vector<double>& c)
+{
+    std::vector<double> out((c.size() + 1) / 2);
+    for (size_t i = 0; i < out.size(); ++i)
+        out[i] = 2 * i + 1 < c.size() ? 0.5 * (c[2 * i] + c[2 * i + 1]) : c[2 * i];
+    return out;
+}
+
+bool strictlyAscending(const std::vector<double>& c)
+{
+    for (size_t i = 1; i < c.size(); ++i)
+        if (!(c[i] > c[i - 1]))
+            return false;
+    return true;
+}
+
+}  // namespace
+
+std::vector<double> SphericalGrid::latEdgesDeg() const
+{
+    auto e = midpointEdges(latDeg);
+    e.front() = std::max(e.front(), -90.0);
+    e.back() = std::min(e.back(), 90.0);
+    return e;
+}
+
+std::vector<double> SphericalGrid::rEdgesKm() const
+{
+    auto e = midpointEdges(rKm);
+    e.front() = rKm.front();
+    e.back() = rKm.back();
+    return e;
+}
+
+std::vector<double> SphericalGrid::lonEdgesDeg() const
+{
+    const size_t n = lonDeg.size();
+    std::vector<double> e(n + 1);
+    if (n == 1) {
+        e[0] = lonDeg[0] - 180.0;
+        e[1] = lonDeg[0] + 180.0;
+        return e;
+    }
+    for (size_t i = 1; i < n; ++i)
+        e[i] = 0.5 * (lonDeg[i - 1] + lonDeg[i]);
+    // The seam: the gap between the last column and the first one plus 360°.
+    const double seamMid = 0.5 * (lonDeg[n - 1] + lonDeg[0] + 360.0);
+    e[0] = seamMid - 360.0;
+    e[n] = seamMid;
+    return e;
+}
+
+std::vector<double> SphericalGrid::lonWidthsDeg() const
+{
+    const auto e = lonEdgesDeg();
+    std::vector<double> w(nLon());
+    for (size_t i = 0; i < nLon(); ++i)
+        w[i] = e[i + 1] - e[i];
+    return w;
+}
+
+double SphericalGrid::ringMean(const float* values, size_t iLat, size_t iR, const std::vector<double>& lonWidthsDeg) const
+{
+    const float* row = values + index(iLat, iR, 0);
+    double sum = 0;
+    for (size_t i = 0; i < nLon(); ++i)
+        sum += double(row[i]) * lonWidthsDeg[i];
+    return sum / 360.0;
+}
+
+NodeGradient nodeGradient(const SphericalGrid& grid, const float* values)
+{
+    const size_t nLat = grid.nLat(), nR = grid.nR(), nLon = grid.nLon();
+    RAYPC_CHECK(nLat >= 2 && nR >= 2 && nLon >= 2);
+    NodeGradient out;
+    out.count = grid.cellCount();
+    out.values.reset(new float[3 * out.count]);  // not zeroed: the threads write (and first touch) it
+    // Neighbours i - 1 and i + 1 (clamped) and the inverse of the coordinate difference between them.
+    struct Stencil {
+        size_t lo, hi;
+        float inv;
+    };
+    auto stencils = [](const std::vector<double>& c, bool periodic) {
+        const size_t n = c.size();
+        std::vector<Stencil> s(n);
+        for (size_t i = 0; i < n; ++i) {
+            size_t lo = i == 0 ? (periodic ? n - 1 : 0) : i - 1;
+            size_t hi = i + 1 == n ? (periodic ? 0 : n - 1) : i + 1;
+            double span = c[hi] - c[lo];
+            if (periodic && span <= 0.0)
+                span += 360.0;
+            s[i] = {lo, hi, float(1.0 / span)};
+        }
+        return s;
+    };
+    const std::vector<Stencil> sLat = stencils(grid.latDeg, false), sR = stencils(grid.rKm, false),
+                               sLon = stencils(grid.lonDeg, true);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nLat * nR), [&](const tbb::blocked_range<size_t>& rows) {
+        for (size_t row = rows.begin(); row != rows.end(); ++row) {
+            const size_t iLat = row / nR, iR = row % nR;
+            const float* v = values + row * nLon;
+            const float* vLatLo = values + grid.index(sLat[iLat].lo, iR, 0);
+            const float* vLatHi = values + grid.index(sLat[iLat].hi, iR, 0);
+            const float* vRLo = values + grid.index(iLat, sR[iR].lo, 0);
+            const float* vRHi = values + grid.index(iLat, sR[iR].hi, 0);
+            float* gLat = out.values.get() + row * nLon;
+            float* gR = gLat + out.count;
+            float* gLon = gR + out.count;
+            for (size_t i = 0; i < nLon; ++i) {
+                gLat[i] = (vLatHi[i] - vLatLo[i]) * sLat[iLat].inv;
+                gR[i] = (vRHi[i] - vRLo[i]) * sR[iR].inv;
+                gLon[i] = (v[sLon[i].hi] - v[sLon[i].lo]) * sLon[i].inv;
+            }
+        }
+    });
+    return out;
+}
+
+SphericalGrid::VolumeFactors SphericalGrid::volumeFactors() const
+{
+    VolumeFactors f;
+    const auto le = latEdgesDeg(), re = rEdgesKm(), oe = lonEdgesDeg();
+    f.lat.resize(nLat());
+    for (size_t i = 0; i < nLat(); ++i)
+        f.lat[i] = std::sin(degToRad(le[i + 1])) - std::sin(degToRad(le[i]));
+    f.r.resize(nR());
+    for (size_t i = 0; i < nR(); ++i)
+        f.r[i] = (re[i + 1] * re[i + 1] * re[i + 1] - re[i] * re[i] * re[i]) / 3.0;
+    f.lon.resize(nLon());
+    for (size_t i = 0; i < nLon(); ++i)
+        f.lon[i] = degToRad(oe[i + 1] - oe[i]);
+    return f;
+}
+
+double SphericalGrid::totalVolumeKm3() const
+{
+    const auto f = volumeFactors();
+    double a = 0, b = 0, c = 0;
+    for (double v : f.lat)
+        a += v;
+    for (double v : f.r)
+        b += v;
+    for (double v : f.lon)
+        c += v;
+    return a * b * c;
+}
+
+SphericalGrid SphericalGrid::coarsened() const
+{
+    SphericalGrid g;
+    g.latDeg = pairMeans(latDeg);
+    g.rKm = pairMeans(rKm);
+    // Lon pairs never straddle the seam (pairs start at column 0), so a plain mean is the
+    // circular mean; an odd last column stays alone.
+    g.lonDeg = pairMeans(lonDeg);
+    return g;
+}
+
+void SphericalGrid::validate(const std::string& what) const
+{
+    if (nLat() < 2 || nR() < 2 || nLon() < 3)
+        fail("{}: grid {}x{}x{} (lat x r x lon) is too small, expected at least 2x2x3", what, nLat(), nR(),
+             nLon());
+    if (!strictlyAscending(latDeg) || latDeg.front() < -90.0 || latDeg.back() > 90.0)
+        fail("{}: lat coordinates are not strictly monotonic within [-90, 90] degrees", what);
+    if (!strictlyAscending(rKm) || rKm.front() <= 0.0)
+        fail("{}: r coordinates are not strictly monotonic and positive", what);
+    if (!strictlyAscending(lonDeg) || lonDeg.front() < 0.0 || lonDeg.back() >= 360.0)
+        fail("{}: lon coordinates are not strictly monotonic within [0, 360) degrees", what);
+    // The renderer wraps lon: a regional grid would be stretched over the globe.
+    std::vector<double> gaps;
+    for (size_t i = 1; i < nLon(); ++i)
+        gaps.push_back(lonDeg[i] - lonDeg[i - 1]);
+    const double seamGap = lonDeg.front() + 360.0 - lonDeg.back();
+    std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
+    const double median = gaps[gaps.size() / 2];
+    if (seamGap > 2.0 * median + 1e-9)
+        fail("{}: lon covers {:.3g}..{:.3g} degrees, expected a global grid (a gap of {:.3g} degrees at the "
+             "seam against a spacing of {:.3g})",
+             what, lonDeg.front(), lonDeg.back(), seamGap, median);
+}
+
+bool SphericalGrid::sameAs(const SphericalGrid& other, double tolerance) const
+{
+    auto same = [tolerance](const std::vector<double>& a, const std::vector<double>& b) {
+        if (a.size() != b.size())
+            return false;
+        for (size_t i = 0; i < a.size(); ++i)
+            if (std::abs(a[i] - b[i]) > tolerance)
+                return false;
+        return true;
+    };
+    return same(latDeg, other.latDeg) && same(rKm, other.rKm) && same(lonDeg, other.lonDeg);
+}
+
+BrickLayout BrickLayout::forGrid(const SphericalGrid& grid, uint32_t size)
+{
+    RAYPC_CHECK(size > 0);
+    BrickLayout b;
+    b.size = size;
+    auto bricks = [size](size_t n) { return static_cast<uint32_t>((n + size - 1) / size); };
+    b.count = {bricks(grid.nLat()), bricks(grid.nR()), bricks(grid.nLon())};
+    return b;
+}
+
+}  // namespace raypc

@@ -1,0 +1,86 @@
+#include "grid/snapshot.h"
+
+#include "core/error.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace raypc {
+
+const Field* Snapshot::find(const std::string& name) const
+{
+    for (const auto& f : fields)
+        if (f.name == name)
+            return &f;
+    return nullptr;
+}
+
+Field* Snapshot::find(const std::string& name)
+{
+    for (auto& f : fields)
+        if (f.name == name)
+            return &f;
+    return nullptr;
+}
+
+void checkGridFitsMemory(const SphericalGrid& grid, uint64_t neededBytes, const std::string& file,
+                         const std::string& purpose, const AvailableMemory& available)
+{
+    const uint64_t points = uint64_t(grid.nLat()) * grid.nR() * grid.nLon();
+    if (points > kMaxGridPoints)
+        fail("{}: grid {}x{}x{} (lat x r x lon) has {} points, more than the {} RayPC can index", file, grid.nLat(),
+             grid.nR(), grid.nLon(), points, kMaxGridPoints);
+    if (neededBytes > available.bytes)
+        fail("{}: grid {}x{}x{} (lat x r x lon) needs {} of memory to {}, {} available ({})", file, grid.nLat(),
+             grid.nR(), grid.nLon(), formatBytes(neededBytes), purpose, formatBytes(available.bytes),
+             available.limitedBy);
+}
+
+void fillMissingByShellMean(const SphericalGrid& grid, std::vector<float>& values, const std::string& what)
+{
+    for (size_t iR = 0; iR < grid.nR(); ++iR) {
+        double sum = 0;
+        size_t count = 0, missing = 0;
+        for (size_t iLat = 0; iLat < grid.nLat(); ++iLat)
+            for (size_t iLon = 0; iLon < grid.nLon(); ++iLon) {
+                const float v = values[grid.index(iLat, iR, iLon)];
+                std::isnan(v) ? ++missing : (sum += v, ++count);
+            }
+        if (missing == 0)
+            continue;
+        if (count == 0)
+            fail("{}: every value on the shell r = {} km is missing", what, grid.rKm[iR]);
+        const float mean = static_cast<float>(sum / double(count));
+        for (size_t iLat = 0; iLat < grid.nLat(); ++iLat)
+            for (size_t iLon = 0; iLon < grid.nLon(); ++iLon)
+                if (float& v = values[grid.index(iLat, iR, iLon)]; std::isnan(v))
+                    v = mean;
+    }
+}
+
+std::string describeGridPoint(const SphericalGrid& grid, size_t index)
+{
+    const size_t iLon = index % grid.nLon(), iR = index / grid.nLon() % grid.nR(), iLat = index / grid.nLon() / grid.nR();
+    return fmt::format("lat {:g}°, r {:g} km, lon {:g}° (point {}, {}, {} of lat, r, lon ascending)", grid.latDeg[iLat],
+                       grid.rKm[iR], grid.lonDeg[iLon], iLat, iR, iLon);
+}
+
+void checkFinite(const Snapshot& snapshot, const Field& field, const std::string& source)
+{
+    const auto bad = std::find_if(field.values.begin(), field.values.end(), [](float v) { return !std::isfinite(v); });
+    if (bad == field.values.end())
+        return;
+    const size_t i = static_cast<size_t>(bad - field.values.begin());
+    std::string inputs;
+    for (const auto& name : field.derivedFrom)
+        if (const Field* f = snapshot.find(name))
+            inputs += fmt::format("{}{} = {:g} {}", inputs.empty() ? "" : ", ", name, f->values[i], f->units);
+    if (inputs.empty())
+        fail("{}: {}: value {} at {}", source, field.name, *bad, describeGridPoint(snapshot.grid, i));
+    fail("{}: {}: {} (beyond float32) at {}, computed from {}; check the input values there", source, field.name,
+         *bad, describeGridPoint(snapshot.grid, i), inputs);
+}
+
+}  // namespace raypc

@@ -1,0 +1,90 @@
+// Reading mantle snapshots from netCDF files (netCDF-3 classic / 64-bit offset and netCDF-4).
+//
+// The reader reads what the file says, by its CF attributes (CF conventions 1.x) where it has them:
+// - Coordinates: lat, lon and the vertical coordinate are found by name given in the options, by CF
+//   attributes (standard_name latitude / longitude / depth, axis Y / X / Z, units degrees_north /
+//   degrees_east and their spellings, positive; of several, those on the variables' dims, then
+//   coordinate variables, then customary names), or by customary names (lat/latitude, lon/longitude,
+//   r/radius/depth).
+// - Units: lat and lon in degrees or radians; degrees_south and degrees_west are negated. The
+//   vertical coordinate is a radius, or a depth (positive = "down"; without positive, standard_name
+//   or name depth) turned into radius = 6371 km - depth; its numbers are km or m as its units say, or
+//   as ReaderOptions::radiusUnits says. Without units, numbers that cannot be what they would be taken
+//   for (radii outside 3000..7000 km; lat within ±π/2, lon within ±2π: radians?) are refused.
+// - Dims: the three grid dims in any order, and other dims of length 1 (one time step per file);
+//   coordinates ascending or descending, lon in [-180, 180) or [0, 360] with or without the
+//   repeated seam, float or double.
+// - Values: any numeric type (doubles and integers wider than 16 bits are read as double);
+//   _FillValue (or netCDF's default fill value), missing_value, NaN and Inf are missing;
+//   scale_factor / add_offset and _Unsigned are applied; a value beyond float32 is an error.
+//   Text attributes may be NC_CHAR or NC_STRING.
+// Fields are returned in canonical order (grid.h): lat ascending (degrees north), r ascending (km),
+// lon ascending in [0, 360) (degrees east). netCDF-C is not thread-safe: call from one thread at a time.
+#pragma once
+
+#include "grid/snapshot.h"
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace raypc {
+
+struct ReaderOptions {
+    // Canonical variable name -> name in the file, for CF outputs that name things differently
+    // (e.g. "temperature" -> "T"). Unmapped variables are looked up by their canonical name.
+    std::map<std::string, std::string> variableNames;
+    // Names of the coordinate variables (rName: the radius or depth); empty: found by CF attributes
+    // or customary names (above).
+    std::string latName, rName, lonName;
+    // Variables to read (canonical names); empty: the eight contest variables.
+    std::vector<std::string> variables;
+    // Cells that hold the fill value / missing value (or NaN) are an error unless this is set;
+    // then they are replaced by the mean of the valid values on the same radius shell.
+    bool fillMissing = false;
+    // What the numbers of the radius (or depth) coordinate are. FromFile: its units attribute
+    // (km or m); without one, km when the radii lie within a mantle (3000..7000 km), else an error.
+    // The others override the attribute; Nondimensional: fractions of Earth's radius (6371 km).
+    enum class RadiusUnits { FromFile, Km, M, Nondimensional };
+    RadiusUnits radiusUnits = RadiusUnits::FromFile;
+    // The step to read of a file holding several (a dimension besides the grid's longer than 1,
+    // CF's time): 0 .. FileHeader::steps - 1.
+    size_t timeIndex = 0;
+
+    // VTK XML series (ASPECT's output; series_input.h), whose coordinates are metres unless
+    // radiusUnits says otherwise:
+    // the unit of a .pvd's `timestep` in Myr (ASPECT writes years unless told to write seconds);
+    double myrPerTimeUnit = 1e-6;
+    // the grid to resample onto: its sizes lat x r x lon (0: chosen from the mesh's finest cell),
+    std::array<size_t, 3> resampleSize{};
+    // or, once chosen for a series's first step, the grid itself (every step takes the same).
+    std::optional<SphericalGrid> targetGrid;
+};
+
+struct FileHeader {
+    SphericalGrid grid;
+    struct Variable {
+        std::string name, fileName, units;
+    };
+    std::vector<Variable> variables;  // the ones requested, all present
+    std::string format;  // "classic", "64-bit offset", "netCDF-4", "VTK XML (ASPECT layout)", ...
+    size_t steps = 1;    // steps in the file: the length of its time dimension (1 without one)
+};
+
+// Reads coordinates and checks that every requested variable exists with the right dims.
+// Throws raypc::Error naming the file and what is wrong (as readSnapshot, values aside).
+FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& options = {});
+
+// Reads the whole snapshot. Throws raypc::Error naming the file (and variable) on a missing
+// or unreadable file, a non-netCDF or truncated file, a missing variable, wrong dims (a time
+// dimension longer than 1), coordinates whose units are unknown or missing where the numbers do not
+// fit, missing / non-finite values (unless options.fillMissing), or a value beyond float32.
+Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& options = {});
+
+// Expands files and directories (all *.nc inside) and sorts them in natural order.
+std::vector<std::filesystem::path> listSnapshotFiles(const std::vector<std::filesystem::path>& inputs);
+
+}  // namespace raypc

@@ -1,0 +1,422 @@
+#include "io/netcdf_reader.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/spherical.h"
+#include "io/netcdf_classic.h"
+#include "preprocess/preprocess.h"
+#include "grid/test_util.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace raypc {
+namespace {
+
+using testing::contestLayoutDir;
+using testing::ncgen;
+using testing::TempDir;
+
+// The analytic fields of the contest-layout fixture (truth.json), evaluated independently.
+struct Truth {
+    nlohmann::json j = nlohmann::json::parse(readFile(contestLayoutDir() / "truth.json"));
+    double omega = j["omega_rad_per_s"], u0 = j["u0_m_per_s"], dtMyr = j["dt_myr"];
+
+    // The blob sum before the per-shell mean is removed.
+    double blobs(double latDeg, double lonDeg, double rKm, double tS) const
+    {
+        const Vec3d p = sphericalToCartesianKm(latDeg, lonDeg, rKm);
+        double sum = 0;
+        for (const auto& b : j["blobs_lat_lon_rkm_amp_sigma"]) {
+            const double lon = b[1].get<double>() + radToDeg(omega * tS);
+            const double r = b[2].get<double>() + u0 * tS / 1000.0;
+            const Vec3d c = sphericalToCartesianKm(b[0].get<double>(), lon, r);
+            const double d2 = (p.x - c.x) * (p.x - c.x) + (p.y - c.y) * (p.y - c.y) + (p.z - c.z) * (p.z - c.z);
+            const double sigma = b[4].get<double>();
+            sum += b[3].get<double>() * std::exp(-d2 / (2 * sigma * sigma));
+        }
+        return sum;
+    }
+};
+
+TEST(NetcdfReader, ContestLayoutMatchesTruth)
+{
+    const Truth truth;
+    for (int k = 0; k < 3; ++k) {
+        const auto path = contestLayoutDir() / fmt::format("spherical{:03d}.nc", k + 1);
+        const Snapshot s = readSnapshot(path);
+        const auto& g = s.grid;
+        ASSERT_EQ(g.nLat(), 36u);
+        ASSERT_EQ(g.nR(), 41u);
+        ASSERT_EQ(g.nLon(), 72u);
+        EXPECT_DOUBLE_EQ(g.latDeg.front(), -87.5);  // canonical: ascending, although the file descends
+        EXPECT_DOUBLE_EQ(g.rKm.front(), 3485.0);
+        EXPECT_DOUBLE_EQ(g.rKm.back(), 6371.0);
+        ASSERT_EQ(s.fields.size(), 8u);
+        const double tS = k * truth.dtMyr * kSecondsPerMyr;
+        const auto& T = s.find("temperature")->values;
+        const auto& dT = s.find("temperature anomaly")->values;
+        const auto& vx = s.find("vx")->values;
+        const auto& vy = s.find("vy")->values;
+        const auto& vz = s.find("vz")->values;
+        const auto& k_ = s.find("thermal conductivity")->values;
+        const auto& rho = s.find("spin transition-induced density anomaly")->values;
+        for (size_t iR = 0; iR < g.nR(); ++iR) {
+            const double r = g.rKm[iR];
+            double mean = 0;
+            for (size_t a = 0; a < g.nLat(); ++a)
+                for (size_t c = 0; c < g.nLon(); ++c)
+                    mean += truth.blobs(g.latDeg[a], g.lonDeg[c], r, tS);
+            mean /= g.nLat() * g.nLon();
+            for (size_t a = 0; a < g.nLat(); a += 5)
+                for (size_t c = 0; c < g.nLon(); c += 7) {
+                    const size_t i = g.index(a, iR, c);
+                    const double anomaly = truth.blobs(g.latDeg[a], g.lonDeg[c], r, tS) - mean;
+                    ASSERT_NEAR(dT[i], anomaly, 1e-3 * 400) << "lat " << g.latDeg[a] << " lon " << g.lonDeg[c];
+                    ASSERT_NEAR(T[i], 300 + 3700 * (6371 - r) / (6371 - 3485) + anomaly, 0.05);
+                    ASSERT_NEAR(k_[i], -1e-3 * anomaly, 1e-3);
+                    ASSERT_NEAR(rho[i], -0.05 * anomaly * std::exp(-std::pow((6371 - r - 1800) / 300, 2)), 1e-2);
+                    const Vec3d p = sphericalToCartesianKm(g.latDeg[a], g.lonDeg[c], r);
+                    const double ex = truth.omega * -p.y * 1000 + truth.u0 * p.x / r;
+                    const double ey = truth.omega * p.x * 1000 + truth.u0 * p.y / r;
+                    const double ez = truth.u0 * p.z / r;
+                    ASSERT_NEAR(vx[i], ex, 1e-6 * 3e-9);
+                    ASSERT_NEAR(vy[i], ey, 1e-6 * 3e-9);
+                    ASSERT_NEAR(vz[i], ez, 1e-6 * 3e-9);
+                }
+        }
+    }
+}
+
+TEST(NetcdfReader, DerivedRadialVelocityIsU0)
+{
+    const Truth truth;
+    Snapshot s = readSnapshot(contestLayoutDir() / "spherical002.nc");
+    addDerivedVariables(s);
+    const Field* ur = s.find("radial velocity");
+    ASSERT_TRUE(ur);
+    EXPECT_EQ(ur->units, "cm/yr");
+    const double expected = truth.u0 * kMpsToCmPerYr;  // radial velocity == u0 everywhere
+    for (float v : ur->values)
+        ASSERT_NEAR(v, expected, 1e-4 * expected + 1e-6);
+    // |v|² = (omega * distance from the axis)² + u0²
+    const Field* mag = s.find("velocity magnitude");
+    const auto& g = s.grid;
+    const size_t i = g.index(20, 30, 10);
+    const double axisKm = g.rKm[30] * std::cos(degToRad(g.latDeg[20]));
+    EXPECT_NEAR(mag->values[i], std::hypot(truth.omega * axisKm * 1000, truth.u0) * kMpsToCmPerYr, 1e-4);
+}
+
+// The expansivity anomaly has zero area-weighted mean on every shell and differs from the
+// expansivity by that shell's mean only.
+TEST(NetcdfReader, DerivedExpansivityAnomalyIsTheLateralDeviation)
+{
+    Snapshot s = readSnapshot(contestLayoutDir() / "spherical001.nc");
+    addDerivedVariables(s);
+    const Field* alpha = s.find("thermal expansivity");
+    const Field* anomaly = s.find("thermal expansivity anomaly");
+    ASSERT_TRUE(anomaly);
+    EXPECT_EQ(anomaly->units, alpha->units);
+    const auto& g = s.grid;
+    for (size_t iR = 0; iR < g.nR(); iR += 5) {
+        double sum = 0, area = 0;
+        for (size_t a = 0; a < g.nLat(); ++a) {
+            const double w = std::sin(degToRad(std::min(90.0, g.latDeg[a] + 2.5))) - std::sin(degToRad(std::max(-90.0, g.latDeg[a] - 2.5)));
+            for (size_t c = 0; c < g.nLon(); ++c) {
+                sum += w * anomaly->values[g.index(a, iR, c)];
+                area += w;
+            }
+        }
+        EXPECT_NEAR(sum / area, 0.0, 1e-12) << "r " << g.rKm[iR];
+        const double offset = alpha->values[g.index(3, iR, 5)] - anomaly->values[g.index(3, iR, 5)];
+        EXPECT_NEAR(alpha->values[g.index(30, iR, 60)] - anomaly->values[g.index(30, iR, 60)], offset, 1e-12);
+    }
+}
+
+TEST(NetcdfReader, BothNetcdfFlavoursGiveIdenticalValues)
+{
+    TempDir dir("flavours");
+    const auto source = contestLayoutDir() / "spherical001.nc";
+    const Snapshot reference = readSnapshot(source);
+    for (const std::string kind : {"nc4", "classic"}) {
+        const auto copy = dir / (kind + ".nc");
+        ASSERT_EQ(testing::run(fmt::format("nccopy -k {} '{}' '{}'", kind, source.string(), copy.string())), 0);
+        const auto header = readHeader(copy);
+        EXPECT_EQ(header.format, kind == "nc4" ? "netCDF-4" : "classic");
+        const Snapshot s = readSnapshot(copy);
+        ASSERT_TRUE(s.grid.sameAs(reference.grid, 0.0));
+        for (size_t f = 0; f < s.fields.size(); ++f)
+            ASSERT_EQ(s.fields[f].values, reference.fields[f].values) << kind << " " << s.fields[f].name;
+    }
+}
+
+// A file that differs from the contest layout in every way the reader must handle: dims
+// (lon, r, lat), lat ascending as float, r descending in metres, lon in [-180, 180] with the
+// seam repeated, other names (mapped by options).
+TEST(NetcdfReader, ReordersAnyLayoutIntoCanonicalOrder)
+{
+    TempDir dir("layout");
+    const std::vector<double> lats = {-45, 45}, rsM = {6371000, 4900000, 3485000},
+                              lons = {-180, -90, 0, 90, 180};
+    // The value encodes the canonical position: 100*iLat + 10*iR + iLon.
+    auto canonLat = [&](size_t i) { return i; };
+    auto canonR = [&](size_t i) { return 2 - i; };
+    auto canonLon = [&](size_t i) { return i == 4 ? size_t(2) : (i + 2) % 4; };  // 180 -> 0 -> ...
+    std::string data;
+    for (size_t o = 0; o < lons.size(); ++o)
+        for (size_t r = 0; r < rsM.size(); ++r)
+            for (size_t a = 0; a < lats.size(); ++a)
+                data += fmt::format("{}{}", data.empty() ? "" : ", ", 100 * canonLat(a) + 10 * canonR(r) + canonLon(o));
+    const std::string cdl = fmt::format(R"(netcdf layout {{
+dimensions: longitude = 5 ; radius = 3 ; latitude = 2 ;
+variables:
+  double longitude(longitude) ; longitude:units = "degrees_east" ;
+  double radius(radius) ; radius:units = "m" ;
+  float latitude(latitude) ; latitude:units = "degrees_north" ;
+  float T(longitude, radius, latitude) ; T:units = "K" ;
+data:
+  longitude = -180, -90, 0, 90, 180 ;
+  radius = 6371000, 4900000, 3485000 ;
+  latitude = -45, 45 ;
+  T = {} ;
+}})",
+                                        data);
+    const auto path = ncgen(dir.path(), "layout", cdl);
+    ReaderOptions options;
+    options.variables = {"temperature"};
+    options.variableNames["temperature"] = "T";
+    const Snapshot s = readSnapshot(path, options);
+    EXPECT_EQ(s.grid.latDeg, (std::vector<double>{-45, 45}));
+    EXPECT_EQ(s.grid.rKm, (std::vector<double>{3485, 4900, 6371}));
+    EXPECT_EQ(s.grid.lonDeg, (std::vector<double>{0, 90, 180, 270}));
+    const auto& v = s.fields[0].values;
+    for (size_t a = 0; a < 2; ++a)
+        for (size_t r = 0; r < 3; ++r)
+            for (size_t o = 0; o < 4; ++o)
+                ASSERT_EQ(v[s.grid.index(a, r, o)], 100 * a + 10 * r + o) << a << r << o;
+    EXPECT_EQ(s.fields[0].units, "K");
+    EXPECT_EQ(s.fields[0].name, "temperature");
+}
+
+// A minimal valid file; `values` fills "temperature" (lat 2 x r 2 x lon 4).
+std::string smallCdl(const std::string& values, const std::string& extra = "", const std::string& r = "3485, 6371")
+{
+    return fmt::format(R"(netcdf small {{
+dimensions: lat = 2 ; r = 2 ; lon = 4 ;
+variables:
+  double lat(lat) ; lat:units = "degrees_north" ;
+  double r(r) ; r:units = "km" ;
+  double lon(lon) ; lon:units = "degrees_east" ;
+  float temperature(lat, r, lon) ; temperature:units = "K" ; {}
+data:
+  lat = 45, -45 ; r = {} ; lon = 0, 90, 180, 270 ;
+  temperature = {} ;
+}})",
+                       extra, r, values);
+}
+
+ReaderOptions temperatureOnly()
+{
+    ReaderOptions o;
+    o.variables = {"temperature"};
+    return o;
+}
+
+// Expects readSnapshot to throw an Error whose message contains every fragment.
+void expectReadError(const std::filesystem::path& path, const ReaderOptions& options,
+                     std::initializer_list<std::string> fragments)
+{
+    try {
+        readSnapshot(path, options);
+        ADD_FAILURE() << "no error for " << path;
+    } catch (const Error& e) {
+        for (const auto& f : fragments)
+            EXPECT_NE(std::string(e.what()).find(f), std::string::npos) << "'" << e.what() << "' lacks '" << f << "'";
+    }
+}
+
+TEST(NetcdfReaderBadInput, MissingFile)
+{
+    expectReadError("/nonexistent/spherical001.nc", {}, {"/nonexistent/spherical001.nc", "no such file"});
+}
+
+TEST(NetcdfReaderBadInput, NotNetcdf)
+{
+    TempDir dir("notnc");
+    writeFileAtomic(dir / "text.nc", std::string_view("this is not a netCDF file\n"));
+    expectReadError(dir / "text.nc", {}, {"text.nc", "not a netCDF file"});
+}
+
+TEST(NetcdfReaderBadInput, TruncatedFile)
+{
+    TempDir dir("truncated");
+    const auto copy = dir / "spherical001.nc";
+    std::filesystem::copy_file(contestLayoutDir() / "spherical001.nc", copy);
+    std::filesystem::resize_file(copy, std::filesystem::file_size(copy) * 6 / 10);
+    expectReadError(copy, {}, {"spherical001.nc", "truncated"});
+    // A netCDF-4 (HDF5) file cut short fails too, with the file's name.
+    const auto nc4 = dir / "nc4.nc";
+    ASSERT_EQ(testing::run(fmt::format("nccopy -k nc4 '{}' '{}'", (contestLayoutDir() / "spherical001.nc").string(),
+                                       nc4.string())),
+              0);
+    std::filesystem::resize_file(nc4, std::filesystem::file_size(nc4) / 2);
+    expectReadError(nc4, {}, {"nc4.nc"});
+}
+
+// A classic file cut by less than its header's size (about 1.4 KB here) was read with the
+// missing values as zeros: the size check assumed a 32-byte header.
+TEST(NetcdfReaderBadInput, ShortTruncationsOfAClassicFile)
+{
+    TempDir dir("shortcut");
+    const auto original = contestLayoutDir() / "spherical001.nc";
+    const auto size = std::filesystem::file_size(original);
+    for (const uintmax_t cut : {1, 3, 4, 100, 1000, 1400}) {
+        const auto copy = dir / fmt::format("cut{}.nc", cut);
+        std::filesystem::copy_file(original, copy);
+        std::filesystem::resize_file(copy, size - cut);
+        expectReadError(copy, {}, {copy.filename().string(), "truncated", fmt::format("{} bytes", size - cut)});
+        EXPECT_THROW(readHeader(copy), Error) << cut;
+    }
+    // Every classic flavour, with record variables too: the exact size reads, one byte less does not.
+    for (const char* kind : {"nc3", "nc6", "nc5"}) {
+        const std::string cdl = R"(netcdf rec {
+dimensions: t = UNLIMITED ; x = 3 ;
+variables: short a(t, x) ; byte b(t) ; double c(x) ; c:note = "padded" ;
+data: a = 1, 2, 3, 4, 5, 6 ; b = 7, 8 ; c = 1, 2, 3 ;
+})";
+        const auto path = ncgen(dir.path(), std::string("rec-") + kind, cdl, kind);
+        std::ifstream in(path, std::ios::binary);
+        const uint64_t end = classicDataEndBytes(in, path.string());
+        EXPECT_LE(end, std::filesystem::file_size(path)) << kind;
+        // The last record's data ends within the file's padding of at most 3 bytes.
+        EXPECT_GE(end + 3, std::filesystem::file_size(path)) << kind;
+    }
+}
+
+TEST(NetcdfClassicLayout, RefusesWhatIsNotAClassicHeader)
+{
+    for (const std::string& bytes : {std::string("CDF"), std::string("HDF\x01", 4), std::string("CDF\x02\0\0\0\0\0\0\0\x0a", 12),
+                                    std::string("CDF\x01\0\0\0\0\0\0\0\x0b\0\0\0\x01", 16)}) {
+        std::istringstream in(bytes);
+        EXPECT_THROW(classicDataEndBytes(in, "x.nc"), Error) << bytes.size();
+    }
+}
+
+// A variable without _FillValue whose cells were never written holds netCDF's default fill
+// value (9.96921e36 for float): it was taken as a temperature.
+TEST(NetcdfReaderBadInput, DefaultFillValuesAreMissing)
+{
+    TempDir dir("defaultfill");
+    for (const char* kind : {"nc6", "nc4"}) {
+        // ncgen writes the type's default fill value for `_` when the variable has no _FillValue.
+        const auto path = ncgen(dir.path(), std::string("unwritten-") + kind,
+                                smallCdl("1, 2, 3, 4, 5, _, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16"), kind);
+        expectReadError(path, temperatureOnly(),
+                        {"temperature", "1 of 16 values are missing", "default fill value", "9.96921e+36",
+                         "lat 45°, r 6371 km, lon 90°"});
+        ReaderOptions fill = temperatureOnly();
+        fill.fillMissing = true;
+        const Snapshot s = readSnapshot(path, fill);
+        EXPECT_NEAR(s.fields[0].values[s.grid.index(1, 1, 1)], (5 + 7 + 8 + 13 + 14 + 15 + 16) / 7.0, 1e-5) << kind;
+    }
+    // Integer variables too (NC_FILL_SHORT = -32767).
+    const std::string cdl = R"(netcdf small {
+dimensions: lat = 2 ; r = 2 ; lon = 4 ;
+variables:
+  double lat(lat) ; lat:units = "degrees_north" ; double r(r) ; r:units = "km" ; double lon(lon) ;
+  short temperature(lat, r, lon) ;
+data:
+  lat = 45, -45 ; r = 3485, 6371 ; lon = 0, 90, 180, 270 ;
+  temperature = 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, _, 13, 14, 15, 16 ;
+})";
+    expectReadError(ncgen(dir.path(), "short", cdl), temperatureOnly(), {"1 of 16 values are missing", "-32767"});
+}
+
+TEST(NetcdfReaderBadInput, MissingVariable)
+{
+    TempDir dir("missingvar");
+    const auto path = ncgen(dir.path(), "small", smallCdl("1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16"));
+    expectReadError(path, {}, {"small.nc", "missing variable 'vx'"});
+    ReaderOptions mapped = temperatureOnly();
+    mapped.variableNames["temperature"] = "T";
+    expectReadError(path, mapped, {"missing variable 'T'", "mapped from 'temperature'"});
+}
+
+TEST(NetcdfReaderBadInput, WrongDimensions)
+{
+    TempDir dir("wrongdims");
+    const std::string cdl = R"(netcdf small {
+dimensions: lat = 2 ; r = 2 ; lon = 4 ;
+variables:
+  double lat(lat) ; double r(r) ; r:units = "km" ; double lon(lon) ;
+  float temperature(r, lat) ;
+data:
+  lat = -45, 45 ; r = 3485, 6371 ; lon = 0, 90, 180, 270 ; temperature = 1, 2, 3, 4 ;
+})";
+    const auto path = ncgen(dir.path(), "small", cdl);
+    expectReadError(path, temperatureOnly(), {"small.nc", "temperature", "dims (r, lat)", "expected 3 dims"});
+}
+
+TEST(NetcdfReaderBadInput, NanAndFillValues)
+{
+    TempDir dir("nan");
+    const auto nan = ncgen(dir.path(), "nan", smallCdl("1, 2, 3, 4, 5, NaN, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16"));
+    expectReadError(nan, temperatureOnly(), {"nan.nc", "temperature", "1 of 16 values are missing"});
+    const auto filled = ncgen(dir.path(), "fill",
+                              smallCdl("1, 2, 3, 4, 5, -999, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16",
+                                       "temperature:_FillValue = -999.f ;"));
+    expectReadError(filled, temperatureOnly(), {"fill.nc", "missing"});
+    ReaderOptions fill = temperatureOnly();
+    fill.fillMissing = true;
+    const Snapshot s = readSnapshot(filled, fill);
+    // File row lat=45 becomes canonical row 1; its r=6371 shell holds 5, -999, 7, 8 and the
+    // other row's 13..16: the mean of the valid values on that shell.
+    const double shellMean = (5 + 7 + 8 + 13 + 14 + 15 + 16) / 7.0;
+    EXPECT_NEAR(s.fields[0].values[s.grid.index(1, 1, 1)], shellMean, 1e-5);
+}
+
+TEST(NetcdfReaderBadInput, GridsThatDifferBetweenStepsStopPreprocessing)
+{
+    TempDir dir("griddiff");
+    const std::string values = "1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16";
+    auto withVelocity = [&](const std::string& r) {
+        std::string cdl = smallCdl(values, "float vx(lat, r, lon) ; float vy(lat, r, lon) ; float vz(lat, r, lon) ;", r);
+        cdl.insert(cdl.rfind('}'), "vx = " + values + " ; vy = " + values + " ; vz = " + values + " ;\n");
+        return cdl;
+    };
+    const auto a = ncgen(dir.path(), "step1", withVelocity("3485, 6371"));
+    const auto b = ncgen(dir.path(), "step2", withVelocity("3500, 6371"));
+    PreprocessOptions options;
+    options.reader.variables = {"temperature", "vx", "vy", "vz"};
+    options.quiet = true;
+    options.sampleRows = 100;
+    try {
+        preprocess({a, b}, dir / "out", options);
+        FAIL() << "grids that differ were accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("step2.nc"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("differ from the first step"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(Dataset::open(dir / "out"), Error);  // no complete dataset was left behind
+}
+
+TEST(NetcdfReader, ListsFilesInNaturalOrder)
+{
+    TempDir dir("natural");
+    for (const char* name : {"spherical10.nc", "spherical9.nc", "spherical100.nc", "notes.txt"})
+        writeFileAtomic(dir / name, std::string_view("x"));
+    const auto files = listSnapshotFiles({dir.path()});
+    ASSERT_EQ(files.size(), 3u);
+    EXPECT_EQ(files[0].filename(), "spherical9.nc");
+    EXPECT_EQ(files[1].filename(), "spherical10.nc");
+    EXPECT_EQ(files[2].filename(), "spherical100.nc");
+    EXPECT_THROW(listSnapshotFiles({dir / "missing.nc"}), Error);
+}
+
+}  // namespace
+}  // namespace raypc

@@ -1,0 +1,527 @@
+#include "preprocess/preprocess.h"
+
+#include "core/atomic_file.h"
+#include "core/clock.h"
+#include "core/error.h"
+#include "core/json_input.h"
+#include "core/mpi.h"
+#include "core/progress.h"
+#include "core/strings.h"
+#include "core/system_memory.h"
+#include "dataset/bricks.h"
+#include "dataset/dataset_format.h"
+#include "preprocess/preprocess_phases.h"
+#include "io/series_input.h"
+
+#include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <exception>
+#include <fstream>
+#include <functional>
+#include <optional>
+#include <utility>
+
+namespace raypc {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using preprocessing::VariableSpec;
+
+// Runs an action when the scope is left by an exception, unless dismissed first.
+class ScopeCleanup {
+public:
+    explicit ScopeCleanup(std::function<void()> action) : m_action(std::move(action)) {}
+    ~ScopeCleanup()
+    {
+        if (m_action && std::uncaught_exceptions() > m_exceptions)
+            m_action();
+    }
+    ScopeCleanup(const ScopeCleanup&) = delete;
+    ScopeCleanup& operator=(const ScopeCleanup&) = delete;
+    void dismiss() { m_action = nullptr; }
+
+private:
+    std::function<void()> m_action;
+    int m_exceptions = std::uncaught_exceptions();
+};
+
+template <typename T>
+void writeArray(const fs::path& path, std::span<const T> values)
+{
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    if (!f)
+        fail("{}: cannot create", path.string());
+    const size_t written = std::fwrite(values.data(), sizeof(T), values.size(), f);
+    const bool ok = written == values.size() && std::fclose(f) == 0;
+    if (!ok)
+        fail("{}: write failed (disk full?)", path.string());
+}
+
+// The variables of the dataset, in order: the stored ones as the reader returns them, then
+// the derived ones. Units of derived variables are fixed by addDerivedVariables.
+std::vector<VariableSpec> variableSpecs(const FileHeader& header)
+{
+    std::vector<VariableSpec> specs;
+    for (const auto& v : header.variables)
+        specs.push_back({v.name, v.units, false});
+    specs.push_back({"radial velocity", "cm/yr", true});
+    specs.push_back({"velocity magnitude", "cm/yr", true});
+    const auto has = [&](const std::string& name) {
+        return std::any_of(header.variables.begin(), header.variables.end(), [&](const auto& v) { return v.name == name; });
+    };
+    for (const auto& v : header.variables)
+        if (v.name == "thermal expansivity")
+            specs.push_back({"thermal expansivity anomaly", v.units, true});
+    // As addDerivedVariables: a model with a temperature but no anomaly (ASPECT writes T) gets one.
+    if (!has("temperature anomaly"))
+        for (const auto& v : header.variables)
+            if (v.name == "temperature" || v.name == "T") {
+                specs.push_back({"temperature anomaly", v.units, true});
+                break;
+            }
+    return specs;
+}
+
+// dt_myr of the manifest: --dt-myr, or the mean interval of the inputs' own times.
+double stepIntervalMyr(const PreprocessOptions& options)
+{
+    const auto& t = options.timesMyr;
+    return t.size() >= 2 ? (t.back() - t.front()) / double(t.size() - 1) : options.dtMyr;
+}
+
+json manifest(const std::vector<SphericalGrid>& levels, const std::vector<VariableSpec>& specs,
+              const std::vector<fs::path>& inputs, const PreprocessOptions& options, size_t sampleRows)
+{
+    json j;
+    j["format"] = format::kFormatName;
+    j["version"] = format::kVersion;
+    j["encoding"] = encodingName(options.encoding);
+    j["status"] = "incomplete";
+    j["dt_myr"] = stepIntervalMyr(options);
+    j["brick_size"] = options.brickSize;
+    j["levels"] = json::array();
+    for (const auto& g : levels)
+        j["levels"].push_back(format::toJson(g));
+    j["variables"] = json::array();
+    for (const auto& v : specs)
+        j["variables"].push_back(
+            {{"name", v.name}, {"units", v.units}, {"derived", v.derived}, {"file_stem", fileSafeName(v.name)}});
+    j["inputs"] = json::array();
+    for (const auto& p : inputs)
+        j["inputs"].push_back(p.filename().string());
+    j["sample"] = {{"rows", sampleRows}, {"seed", options.seed}};
+    return j;
+}
+
+// The time of step s (Myr): the inputs' own (a .pvd's), else s dt_myr.
+double stepTimeMyr(const PreprocessOptions& options, int s)
+{
+    return options.timesMyr.empty() ? s * options.dtMyr : options.timesMyr[size_t(s)];
+}
+
+void checkSameGrid(const fs::path& input, const SphericalGrid& grid, const SphericalGrid& first,
+                   const fs::path& firstInput)
+{
+    if (!grid.sameAs(first))
+        fail("{}: grid {}x{}x{} (lat x r x lon) or its coordinates differ from the first step's {}x{}x{} in {}",
+             input.string(), grid.nLat(), grid.nR(), grid.nLon(), first.nLat(), first.nR(), first.nLon(),
+             firstInput.filename().string());
+}
+
+// What a run will write, known from the options and the inputs' headers alone.
+struct RunPlan {
+    FileHeader header;                   // of the first input: the grid and the variables
+    ReaderOptions reader;                // as given, with a resampled series's grid fixed
+    std::vector<SphericalGrid> levels;   // level 0 first
+    std::vector<VariableSpec> specs;     // stored, then derived
+    json manifest;                       // "incomplete", without steps
+};
+
+// Phase 1: the options, every input's header, the grid's size and memory. Nothing is written
+// yet, so a bad file, a missing variable or a different grid stops the run before it starts.
+RunPlan planRun(const std::vector<fs::path>& inputs, const PreprocessOptions& options)
+{
+    if (inputs.empty())
+        fail("preprocess: no input files");
+    if (!(options.dtMyr > 0))
+        fail("--dt-myr: {} is not a positive time step", options.dtMyr);
+    if (options.sampleRows == 0)
+        fail("--sample-rows: must be at least 1");
+    if (!options.timesMyr.empty()) {
+        RAYPC_CHECK_EQ(options.timesMyr.size(), inputs.size());
+        for (size_t s = 0; s < inputs.size(); ++s)
+            if (!std::isfinite(options.timesMyr[s]) || (s > 0 && !(options.timesMyr[s] > options.timesMyr[s - 1])))
+                fail("{}: time {} Myr, expected a finite time after the step before's", inputs[s].string(),
+                     options.timesMyr[s]);
+    }
+    RunPlan plan;
+    // The first file fixes the grid and the variables; every other step must match them. A
+    // resampled series takes the grid chosen for its first step.
+    plan.reader = options.reader;
+    plan.header = readStepHeader(inputs.front(), plan.reader);
+    if (isVtkStep(inputs.front()))
+        plan.reader.targetGrid = plan.header.grid;
+    plan.levels = {plan.header.grid};
+    for (int l = 1; l < kLevelCount; ++l)
+        plan.levels.push_back(plan.levels.back().coarsened());
+    for (size_t s = 1; s < inputs.size(); ++s) {
+        const FileHeader h = readStepHeader(inputs[s], plan.reader);
+        checkSameGrid(inputs[s], h.grid, plan.header.grid, inputs.front());
+        std::vector<std::string> names, firstNames;
+        for (const auto& v : h.variables)
+            names.push_back(v.name);
+        for (const auto& v : plan.header.variables)
+            firstNames.push_back(v.name);
+        if (names != firstNames)
+            fail("{}: variables {}, the first step's {} has {}", inputs[s].string(), fmt::join(names, ", "),
+                 inputs.front().filename().string(), fmt::join(firstNames, ", "));
+    }
+    plan.specs = variableSpecs(plan.header);
+    preprocessing::checkPathlineOptions(options.pathlines, plan.specs);
+    // A u16 dataset's pathline phase decodes the velocities of every step it traces through.
+    uint64_t bytes = preprocessMemoryBytes(plan.header.grid, plan.specs.size());
+    if (options.encoding == ValueEncoding::Uint16 && options.pathlines.enabled) {
+        const uint64_t traced = uint64_t(std::min<size_t>(size_t(std::max(options.pathlines.steps, 0)), inputs.size() - 1)) + 1;
+        bytes = std::max(bytes, (3 * traced + 1) * plan.header.grid.cellCount() * sizeof(float));
+    }
+    checkGridFitsMemory(plan.header.grid, bytes, inputs.front().string(), "preprocess", availableMemory());
+    plan.manifest = manifest(plan.levels, plan.specs, inputs, options, options.sampleRows);
+    return plan;
+}
+
+// Phase 2: the output directory, locked for this run, checked for resuming, cleared of a killed
+// run's leftovers, with the "incomplete" manifest written. Until keep() a fresh run that fails
+// leaves nothing: what it created goes (docs/format.md, "What a failed run leaves").
+class OutputDirectory {
+public:
+    OutputDirectory(const fs::path& dir, const json& manifest)
+        : m_dir(dir), m_existed(fs::exists(dir)), m_lock(dir), m_fresh(!fs::exists(manifestPath()))
+    {
+        for (const fs::path name : {format::kSampleCoords, "steps", "pathlines"})
+            if (!fs::exists(m_dir / name))
+                m_created.push_back(m_dir / name);
+        if (!m_fresh) {
+            keep();
+            checkResumable(manifest);
+        }
+        fs::create_directories(m_dir / "steps");
+        removeLeftovers();
+        writeManifest(manifest);
+    }
+
+    const fs::path& path() const { return m_dir; }
+    fs::path manifestPath() const { return m_dir / format::kManifest; }
+    void writeManifest(const json& j) const { writeFileAtomic(manifestPath(), j.dump(1)); }
+    // A step is finished: from now on a failure leaves the finished steps for a rerun.
+    void keep() { m_leaveNothing.dismiss(); }
+
+private:
+    // Resuming is only safe into a dataset made from the same inputs with the same settings.
+    void checkResumable(const json& j) const
+    {
+        json old;
+        try {
+            old = parseJsonInput(readFile(manifestPath()), manifestPath().string());
+        } catch (const Error& e) {
+            fail("{} (it exists already); remove the directory to start over", e.what());
+        }
+        // A finished manifest adds global statistics to the variables: not a setting.
+        if (old.contains("variables") && old["variables"].is_array())
+            for (auto& v : old["variables"])
+                if (v.is_object())
+                    v.erase("global");
+        for (const char* key : {"format", "version", "encoding", "levels", "variables", "dt_myr", "brick_size", "sample"})
+            if (old.value(key, json()) != j[key])
+                fail("{}: holds a dataset made with a different '{}' (other inputs or options); "
+                     "use another output directory or remove it",
+                     m_dir.string(), key);
+        const auto oldInputs = old.value("inputs", json::array());
+        for (size_t i = 0; i < std::min(oldInputs.size(), j["inputs"].size()); ++i)
+            if (oldInputs[i] != j["inputs"][i] && fs::exists(format::stepDir(m_dir, static_cast<int>(i))))
+                fail("{}: step {} was made from {}, now the input is {}; use another output directory",
+                     m_dir.string(), i, oldInputs[i].get<std::string>(), j["inputs"][i].get<std::string>());
+    }
+
+    // Leftovers of a killed run: temporary step directories are never valid.
+    void removeLeftovers() const
+    {
+        for (const auto& entry : fs::directory_iterator(m_dir / "steps"))
+            if (entry.path().filename().string().starts_with("."))
+                fs::remove_all(entry.path());
+        for (const auto& entry : fs::directory_iterator(m_dir))
+            if (entry.path().filename().string().starts_with(".") &&
+                entry.path().filename().string().find(".tmp-") != std::string::npos)
+                fs::remove_all(entry.path());
+    }
+
+    void removeCreated()
+    {
+        std::error_code ec;
+        m_lock.removeFile();
+        if (!m_existed) {
+            fs::remove_all(m_dir, ec);
+            return;
+        }
+        fs::remove(manifestPath(), ec);
+        for (const auto& path : m_created)
+            fs::remove_all(path, ec);
+    }
+
+    fs::path m_dir;
+    bool m_existed;
+    DatasetWriteLock m_lock;  // before m_leaveNothing: held while that removes
+    bool m_fresh;
+    std::vector<fs::path> m_created;
+    ScopeCleanup m_leaveNothing{[this] { removeCreated(); }};
+};
+
+// Phase 3: the sample's grid points, the same for every step so that lines are comparable over
+// time; their coordinates are written once.
+// Every rank draws the same cells (the draw is seeded); rank 0 writes them.
+std::vector<uint32_t> writeSampleCoordinates(const fs::path& dir, const SphericalGrid& grid,
+                                             const PreprocessOptions& options)
+{
+    auto cells = drawVolumeWeightedSample(grid, options.sampleRows, options.seed);
+    if (mpi::isRoot() && !fs::exists(dir / format::kSampleCoords)) {
+        const auto coords = sampleCoordinates(grid, cells);
+        writeFileAtomic(dir / format::kSampleCoords, std::as_bytes(std::span(coords)));
+    }
+    return cells;
+}
+
+// Phase 4: the steps an earlier run finished (their step.json, kept) and the ones to do (a step
+// directory without step.json is removed).
+std::vector<int> findStepsToDo(const OutputDirectory& out, size_t stepCount, std::vector<json>& stepJsons,
+                               PreprocessSummary& summary)
+{
+    std::vector<int> todo;
+    for (size_t s = 0; s < stepCount; ++s) {
+        const fs::path stepPath = format::stepDir(out.path(), static_cast<int>(s));
+        if (fs::exists(stepPath / format::kStepManifest)) {
+            stepJsons[s] = parseJsonInput(readFile(stepPath / format::kStepManifest),
+                                          (stepPath / format::kStepManifest).string());
+            ++summary.stepsSkipped;
+        } else {
+            if (fs::exists(stepPath))
+                fs::remove_all(stepPath);
+            todo.push_back(static_cast<int>(s));
+        }
+    }
+    return todo;
+}
+
+// Phase 5, for one step: read, derive, check, statistics and sample values at full resolution,
+// then level by level values and brick bounds of every variable, written into a temporary
+// directory renamed when whole (removed if anything fails). Returns the step's manifest.
+json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs::path>& inputs, int s,
+               std::span<const uint32_t> cells, const PreprocessOptions& options)
+{
+    const fs::path& input = inputs[s];
+    const auto& specs = plan.specs;
+    const auto stepStart = std::chrono::steady_clock::now();
+    auto elapsed = [&] { return secondsSince(stepStart); };
+    Snapshot snap = readStep(input, plan.reader);
+    spdlog::debug("{}: read in {:.2f} s", input.filename().string(), elapsed());
+    checkSameGrid(input, snap.grid, plan.header.grid, inputs.front());
+    addDerivedVariables(snap);
+    RAYPC_CHECK_EQ(snap.fields.size(), specs.size());
+    // The reader refused non-finite inputs; a finite input can still derive an infinity.
+    for (const auto& field : snap.fields)
+        checkFinite(snap, field, input.string());
+
+    const fs::path finalDir = format::stepDir(outDir, s);
+    const fs::path tmpDir = temporarySibling(finalDir);
+    ScopeCleanup removeTmp([&] {
+        std::error_code ec;
+        fs::remove_all(tmpDir, ec);
+    });
+    json stepJson = {{"index", s}, {"time_myr", stepTimeMyr(options, s)}, {"source", input.filename().string()}};
+    if (!snap.origin.is_null())
+        stepJson["origin"] = snap.origin;
+    stepJson["stats"] = json::array();
+    std::vector<std::vector<float>> current(snap.fields.size());
+    for (size_t v = 0; v < snap.fields.size(); ++v)
+        current[v] = std::move(snap.fields[v].values);
+    std::vector<float> sample(cells.size() * specs.size());
+    std::vector<VariableStats> stats(specs.size());
+    tbb::parallel_for(size_t(0), specs.size(), [&](size_t v) {
+        stats[v] = computeStats(plan.header.grid, current[v]);
+        for (size_t i = 0; i < cells.size(); ++i)
+            sample[i * specs.size() + v] = current[v][cells[i]];
+    });
+    for (const auto& st : stats)
+        stepJson["stats"].push_back(format::toJson(st));
+    spdlog::debug("{}: derived, stats and sample done at {:.2f} s", input.filename().string(), elapsed());
+    for (int level = 0; level < kLevelCount; ++level)
+        fs::create_directories(format::levelDir(tmpDir, level));
+    // Variables in parallel: writing into the page cache costs as much CPU as computing,
+    // so both cores write while they compute bounds and coarser levels.
+    tbb::parallel_for(size_t(0), specs.size(), [&](size_t v) {
+        const auto stem = fileSafeName(specs[v].name);
+        for (int level = 0; level < kLevelCount; ++level) {
+            const SphericalGrid& grid = plan.levels[level];
+            const BrickLayout layout = BrickLayout::forGrid(grid, options.brickSize);
+            const fs::path dir = format::levelDir(tmpDir, level);
+            std::vector<float> bounds(2 * layout.brickCount());
+            computeBrickBounds(grid, layout, current[v], bounds);
+            if (options.encoding == ValueEncoding::Uint16) {
+                // Quantised from the exact values; coarser levels are computed from the exact ones too.
+                std::vector<uint16_t> encoded(current[v].size());
+                encodeUint16(grid, layout, current[v], bounds, encoded);
+                writeArray<uint16_t>(format::encodedValuesFile(dir, stem), encoded);
+            } else {
+                writeArray<float>(format::valuesFile(dir, stem), current[v]);
+            }
+            writeArray<float>(format::boundsFile(dir, stem), bounds);
+            if (level + 1 < kLevelCount)
+                current[v] = coarsenField(grid, current[v]);
+        }
+    });
+    writeArray<float>(tmpDir / format::kStepSample, sample);
+    {
+        std::ofstream file(tmpDir / format::kStepManifest);
+        file << stepJson.dump(1);
+        if (!file)
+            fail("{}: write failed", (tmpDir / format::kStepManifest).string());
+    }
+    renameAtomic(tmpDir, finalDir);
+    removeTmp.dismiss();
+    spdlog::debug("{}: levels, bricks and files done at {:.2f} s", input.filename().string(), elapsed());
+    return stepJson;
+}
+
+// Phase 6: every step's statistics and the global ranges and histograms in the manifest.
+void addStepsToManifest(json& j, const std::vector<json>& stepJsons, size_t variableCount)
+{
+    j["steps"] = json::array();
+    for (const auto& sj : stepJsons)
+        j["steps"].push_back(sj);
+    for (size_t v = 0; v < variableCount; ++v) {
+        std::vector<VariableStats> perStep;
+        for (const auto& sj : stepJsons)
+            perStep.push_back(format::statsFromJson(sj.at("stats").at(v)));
+        j["variables"][v]["global"] = format::toJson(statsOverSteps(perStep));
+    }
+}
+
+}  // namespace
+
+void preprocessing::throwIfCancelled(const PreprocessOptions& options)
+{
+    if (options.cancel && options.cancel->load())
+        fail("preprocess: cancelled");
+}
+
+uint64_t preprocessMemoryBytes(const SphericalGrid& grid, size_t variableCount)
+{
+    return (variableCount + 1) * uint64_t(grid.nLat()) * grid.nR() * grid.nLon() * sizeof(float);
+}
+
+PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path& outDir,
+                             const PreprocessOptions& options)
+{
+    // Under mpirun (core/mpi.h, docs/scaling.md) every rank plans the run; rank 0 owns the output
+    // directory (lock, manifest, cleanup of a failed fresh run); the steps are handed out one at a
+    // time to whichever rank is free, each written atomically by it; the steps' manifests are then
+    // gathered, and rank 0 writes the global statistics. Each phase ends with every rank agreeing.
+    const auto start = std::chrono::steady_clock::now();
+    RunPlan plan;
+    mpi::together([&] { plan = planRun(inputs, options); });
+    // From here on the run writes; one run at a time per directory.
+    std::optional<OutputDirectory> out;
+    mpi::together([&] {
+        if (mpi::isRoot())
+            out.emplace(outDir, plan.manifest);
+    });
+    std::vector<uint32_t> cells;
+    mpi::together([&] { cells = writeSampleCoordinates(outDir, plan.header.grid, options); });
+
+    PreprocessSummary summary;
+    std::vector<json> stepJsons(inputs.size());
+    std::vector<int> todo;
+    mpi::together([&] {
+        if (mpi::isRoot())
+            todo = findStepsToDo(*out, inputs.size(), stepJsons, summary);
+    });
+    if (mpi::distributed()) {
+        // Rank 0 found what an earlier run left; every rank needs the list and the finished steps.
+        const json found = json::parse(mpi::broadcast(
+            json{{"todo", todo}, {"skipped", summary.stepsSkipped}, {"steps", stepJsons}}.dump()));
+        todo = found.at("todo").get<std::vector<int>>();
+        summary.stepsSkipped = found.at("skipped").get<int>();
+        stepJsons = found.at("steps").get<std::vector<json>>();
+    }
+    if (summary.stepsSkipped > 0 && !options.quiet && mpi::isRoot())
+        spdlog::info("{}: {} of {} steps already done by an earlier run, skipping them", outDir.string(),
+                     summary.stepsSkipped, inputs.size());
+    std::optional<Progress> progress;
+    if (!options.quiet && !todo.empty() && mpi::isRoot())
+        progress.emplace("preprocess", static_cast<int64_t>(todo.size()), "steps");
+    int64_t reported = 0;
+    json written = json::object();  // this rank's steps: index -> step manifest
+    try {
+        mpi::forEachDynamic(
+            int64_t(todo.size()),
+            [&](int64_t item) {
+                preprocessing::throwIfCancelled(options);
+                const int s = todo[size_t(item)];
+                written[std::to_string(s)] = writeStep(outDir, plan, inputs, s, cells, options);
+                if (out)
+                    out->keep();
+                ++summary.stepsWritten;
+                if (options.onProgress)
+                    options.onProgress({"steps", summary.stepsSkipped + summary.stepsWritten, int(inputs.size())});
+                mpi::dieHook("preprocess-step");
+            },
+            [&](int64_t handedOut) {
+                if (progress)
+                    progress->advance(handedOut - std::exchange(reported, handedOut));
+            });
+    } catch (const Error& e) {
+        // What the run finished stays (the failed step's temporary directory does not), whichever
+        // rank finished it.
+        const int64_t kept = mpi::sum(int64_t(summary.stepsWritten)) + summary.stepsSkipped;
+        if (kept == 0)
+            throw;
+        if (out)
+            out->keep();
+        throw mpi::AgreedError(fmt::format("{} ({} finished steps stay in {}: a rerun resumes from them)", e.what(),
+                                           kept, outDir.string()));
+    }
+    if (progress)
+        progress->finish();
+    summary.stepsWritten = int(mpi::sum(int64_t(summary.stepsWritten)));
+    if (out && summary.stepsWritten > 0)
+        out->keep();
+    for (const std::string& part : mpi::allgather(written.dump())) {
+        const json steps = json::parse(part);
+        for (const auto& [index, stepJson] : steps.items())
+            stepJsons[size_t(std::stoi(index))] = stepJson;
+    }
+
+    mpi::together([&] {
+        addStepsToManifest(plan.manifest, stepJsons, plan.specs.size());
+        // Phase 7 reads the finished steps back: the manifest says "complete" only after it.
+        if (out)
+            out->writeManifest(plan.manifest);
+    });
+    mpi::dieHook("preprocess-pathlines");
+    preprocessing::writePathlines(outDir, plan.header.grid, plan.specs, stepJsons, options, summary);
+    mpi::together([&] {
+        plan.manifest["pathlines"] =
+            options.pathlines.enabled ? preprocessing::pathlineSettings(options.pathlines) : json();
+        plan.manifest["status"] = "complete";
+        if (out)
+            out->writeManifest(plan.manifest);
+    });
+    summary.seconds = secondsSince(start);
+    return summary;
+}
+
+}  // namespace raypc

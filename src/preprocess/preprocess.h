@@ -1,0 +1,92 @@
+// Preprocessing: snapshots -> a render-ready dataset (docs/format.md).
+//
+// Per step: derived variables, two coarser levels of detail by volume-weighted averaging,
+// per-brick bounds at every level, volume-weighted statistics and histograms, and the values
+// of the parallel-coordinates sample. Over all steps: global ranges and histograms, so that
+// a transfer function does not jump during an animation.
+#pragma once
+
+#include "analysis/critical_points.h"
+#include "dataset/dataset.h"
+#include "io/netcdf_reader.h"
+#include "analysis/pathlines.h"
+#include "preprocess/preprocess_numerics.h"
+
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace raypc {
+
+// The pathline phase (docs/format.md, "Pathlines"): after every step is written, the significant
+// critical points of `field` at each step seed pathlines traced through the next `steps` steps.
+struct PathlineOptions {
+    bool enabled = true;
+    std::string field = "temperature anomaly";
+    int steps = 10;  // traced from step s to min(s + steps, last step)
+    CriticalPointFilter filter;
+    TracerOptions tracer;
+};
+
+// Where a run is: `phase` "steps" (done of total steps, counting those an earlier run finished)
+// or "pathlines" (done of total pathline sets).
+struct PreprocessProgress {
+    std::string phase;
+    int done = 0, total = 0;
+};
+
+struct PreprocessOptions {
+    ReaderOptions reader;
+    double dtMyr = 2.0;          // time between consecutive input files
+    // Each input's time (Myr) when the inputs give it (SeriesListing::timesMyr); dt_myr is then their
+    // mean interval. Empty: step s is at s dtMyr.
+    std::vector<double> timesMyr;
+    size_t sampleRows = 100000;  // parallel-coordinates sample size (cells, with replacement)
+    uint64_t seed = 1;           // for the sample
+    uint32_t brickSize = 8;
+    // Level arrays as u16 quantised per brick (half the size; docs/format.md) or exact float32.
+    ValueEncoding encoding = ValueEncoding::Uint16;
+    bool quiet = false;          // no progress output
+    PathlineOptions pathlines;
+    // For a run in the background (`raypc serve FILES`, app/series_inputs.h), one process only:
+    // `onProgress` is called after each step or pathline set this run finishes; `cancel`, once set,
+    // stops the run before its next step or pathline set with raypc::Error "cancelled" (what was
+    // finished stays, as after any failure: a rerun resumes).
+    std::function<void(const PreprocessProgress&)> onProgress;
+    const std::atomic<bool>* cancel = nullptr;
+};
+
+
+struct PreprocessSummary {
+    int stepsWritten = 0;
+    int stepsSkipped = 0;  // already finished by an earlier run
+    int pathlineSetsWritten = 0;
+    int pathlineSetsSkipped = 0;  // finished by an earlier run with the same settings
+    size_t pathlineCount = 0;     // lines in the sets written by this run
+    double seconds = 0;
+};
+
+// Preprocesses `inputs` (files, in step order) into `outDir`, in phases (preprocess.cpp):
+// 1. plan: options and every input's header, the grid's size and the memory a step needs,
+//    before anything is written; 2. the output directory: locked (DatasetWriteLock), checked
+//    for resuming, the "incomplete" manifest written; 3. the sample's coordinates; 4. the steps
+//    an earlier run finished; 5. each remaining step (preprocess_numerics.h), written under a
+//    temporary name and renamed; 6. statistics over all steps in the manifest; 7. critical
+//    points and pathlines (preprocess_pathlines.cpp: they need later steps' velocities, read
+//    back from the written level-0 arrays); 8. the manifest says "complete".
+// Resumable: finished steps of an earlier run into the same directory are kept. What a failed
+// or killed run leaves is in docs/format.md. Throws raypc::Error naming the file and the
+// problem on bad input, when another run holds `outDir`, and when `outDir` holds a dataset
+// made from other inputs.
+PreprocessSummary preprocess(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& outDir,
+                             const PreprocessOptions& options);
+
+// Bytes of memory preprocessing one step of `grid` takes at its peak: `variableCount` (stored and
+// derived) full-resolution float32 arrays and the reader's buffer for one variable.
+uint64_t preprocessMemoryBytes(const SphericalGrid& grid, size_t variableCount);
+
+}  // namespace raypc

@@ -1,0 +1,258 @@
+#include "preprocess/preprocess_numerics.h"
+
+#include "core/error.h"
+#include "core/spherical.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+
+namespace raypc {
+
+float toFloat32(double value)
+{
+    if (std::abs(value) > std::numeric_limits<float>::max())
+        return std::copysign(std::numeric_limits<float>::infinity(), value);
+    return static_cast<float>(value);
+}
+
+void addDerivedVariables(Snapshot& snapshot)
+{
+    const Field* vx = snapshot.find("vx");
+    const Field* vy = snapshot.find("vy");
+    const Field* vz = snapshot.find("vz");
+    if (!vx || !vy || !vz)
+        fail("derived variables need the velocity's components vx, vy and vz (ASPECT: velocity), which are not all present");
+    const auto& g = snapshot.grid;
+    Field radial{"radial velocity", "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
+    Field magnitude{"velocity magnitude", "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
+    tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
+        const double lat = degToRad(g.latDeg[iLat]);
+        for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+            const double lon = degToRad(g.lonDeg[iLon]);
+            // The outward unit vector is the same on every shell of this column.
+            const double ux = std::cos(lat) * std::cos(lon), uy = std::cos(lat) * std::sin(lon), uz = std::sin(lat);
+            for (size_t iR = 0; iR < g.nR(); ++iR) {
+                const size_t i = g.index(iLat, iR, iLon);
+                const double x = vx->values[i], y = vy->values[i], z = vz->values[i];
+                radial.values[i] = toFloat32((x * ux + y * uy + z * uz) * kMpsToCmPerYr);
+                magnitude.values[i] = toFloat32(std::sqrt(x * x + y * y + z * z) * kMpsToCmPerYr);
+            }
+        }
+    });
+    snapshot.fields.push_back(std::move(radial));
+    snapshot.fields.push_back(std::move(magnitude));
+    // The contest's correlation task asks for the sign of the expansivity *anomaly*: its
+    // deviation from the area-weighted lateral mean of each shell, like the temperature anomaly.
+    if (const Field* alpha = snapshot.find("thermal expansivity"))
+        snapshot.fields.push_back(lateralAnomaly(g, *alpha, "thermal expansivity anomaly"));
+    // A model that writes a temperature but no anomaly (ASPECT: T) gets the contest's anomaly: the
+    // deviation from the area-weighted mean of each shell.
+    if (!snapshot.find("temperature anomaly")) {
+        const Field* t = snapshot.find("temperature");
+        if (!t)
+            t = snapshot.find("T");
+        if (t)
+            snapshot.fields.push_back(lateralAnomaly(g, *t, "temperature anomaly"));
+    }
+}
+
+Field lateralAnomaly(const SphericalGrid& g, const Field& field, const std::string& name)
+{
+    const auto w = g.volumeFactors();
+    double area = 0;
+    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+        for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+            area += w.lat[iLat] * w.lon[iLon];
+    Field out{name, field.units, std::vector<float>(g.cellCount()), {field.name}};
+    tbb::parallel_for(size_t(0), g.nR(), [&](size_t iR) {
+        double sum = 0;
+        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+                sum += w.lat[iLat] * w.lon[iLon] * field.values[g.index(iLat, iR, iLon)];
+        const double mean = sum / area;
+        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                const size_t i = g.index(iLat, iR, iLon);
+                out.values[i] = toFloat32(field.values[i] - mean);
+            }
+    });
+    return out;
+}
+
+std::vector<float> coarsenField(const SphericalGrid& fine, std::span<const float> values)
+{
+    RAYPC_CHECK_EQ(values.size(), fine.cellCount());
+    const SphericalGrid coarse = fine.coarsened();
+    const auto w = fine.volumeFactors();
+    std::vector<float> out(coarse.cellCount());
+    tbb::parallel_for(size_t(0), coarse.nLat(), [&](size_t cLat) {
+        const size_t lat0 = 2 * cLat, lat1 = std::min(lat0 + 2, fine.nLat());
+        for (size_t cR = 0; cR < coarse.nR(); ++cR) {
+            const size_t r0 = 2 * cR, r1 = std::min(r0 + 2, fine.nR());
+            for (size_t cLon = 0; cLon < coarse.nLon(); ++cLon) {
+                const size_t lon0 = 2 * cLon, lon1 = std::min(lon0 + 2, fine.nLon());
+                double sum = 0, weight = 0;
+                for (size_t iLat = lat0; iLat < lat1; ++iLat)
+                    for (size_t iR = r0; iR < r1; ++iR)
+                        for (size_t iLon = lon0; iLon < lon1; ++iLon) {
+                            const double wi = w.at(iLat, iR, iLon);
+                            sum += wi * values[fine.index(iLat, iR, iLon)];
+                            weight += wi;
+                        }
+                out[coarse.index(cLat, cR, cLon)] = static_cast<float>(sum / weight);
+            }
+        }
+    });
+    return out;
+}
+
+VariableStats computeStats(const SphericalGrid& grid, std::span<const float> values)
+{
+    RAYPC_CHECK_EQ(values.size(), grid.cellCount());
+    const auto w = grid.volumeFactors();
+    const size_t rowSize = grid.nR() * grid.nLon();
+    const auto extremes = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, values.size(), 1 << 16), std::pair<float, float>(INFINITY, -INFINITY),
+        [&](const auto& range, std::pair<float, float> acc) {
+            for (size_t i = range.begin(); i != range.end(); ++i) {
+                acc.first = std::min(acc.first, values[i]);
+                acc.second = std::max(acc.second, values[i]);
+            }
+            return acc;
+        },
+        [](auto a, auto b) { return std::pair(std::min(a.first, b.first), std::max(a.second, b.second)); });
+    // Named copies, not structured bindings: clang 14 (the fuzzing build) cannot capture those.
+    const float lo = extremes.first, hi = extremes.second;
+
+    // Callers check that values are finite (checkFinite): an infinite range has no bins.
+    RAYPC_CHECK(std::isfinite(lo) && std::isfinite(hi));
+    VariableStats stats;
+    stats.range = {lo, hi};
+    const double span = static_cast<double>(hi) - lo;
+    const double scale = span > 0 ? kHistogramBins / span : 0.0;
+    // One partial sum per lat row, added in row order: the sums do not depend on how rows were
+    // spread over threads, so a rerun writes the same bytes (dataset.json is reproducible).
+    struct Partial {
+        double weighted = 0, weight = 0;
+    };
+    std::vector<Partial> rows(grid.nLat());
+    std::vector<double> rowHistograms(grid.nLat() * kHistogramBins, 0.0);
+    tbb::parallel_for(size_t(0), grid.nLat(), [&](size_t iLat) {
+        Partial& p = rows[iLat];
+        double* histogram = rowHistograms.data() + iLat * kHistogramBins;
+        for (size_t iR = 0; iR < grid.nR(); ++iR) {
+            const double wRow = w.lat[iLat] * w.r[iR];
+            const float* row = values.data() + iLat * rowSize + iR * grid.nLon();
+            for (size_t iLon = 0; iLon < grid.nLon(); ++iLon) {
+                const double wi = wRow * w.lon[iLon];
+                // In double: the difference of two finite floats may overflow float.
+                const int bin = std::min(kHistogramBins - 1, static_cast<int>((double(row[iLon]) - lo) * scale));
+                histogram[bin] += wi;
+                p.weighted += wi * row[iLon];
+                p.weight += wi;
+            }
+        }
+    });
+    stats.histogram.assign(kHistogramBins, 0.0);
+    double weighted = 0, weight = 0;
+    for (size_t iLat = 0; iLat < grid.nLat(); ++iLat) {
+        for (int b = 0; b < kHistogramBins; ++b)
+            stats.histogram[b] += rowHistograms[iLat * kHistogramBins + b];
+        weighted += rows[iLat].weighted;
+        weight += rows[iLat].weight;
+    }
+    for (double& h : stats.histogram)
+        h /= weight;
+    stats.mean = weighted / weight;
+    return stats;
+}
+
+VariableStats statsOverSteps(std::span<const VariableStats> perStep)
+{
+    RAYPC_CHECK(!perStep.empty());
+    VariableStats global;
+    global.range = perStep.front().range;
+    double mean = 0;
+    for (const auto& st : perStep) {
+        global.range.min = std::min(global.range.min, st.range.min);
+        global.range.max = std::max(global.range.max, st.range.max);
+        mean += st.mean / perStep.size();
+    }
+    global.mean = mean;
+    global.histogram.assign(kHistogramBins, 0.0);
+    for (const auto& st : perStep)
+        rebinHistogram(st, global.range, global.histogram);
+    for (double& h : global.histogram)
+        h /= perStep.size();
+    return global;
+}
+
+std::vector<uint32_t> drawVolumeWeightedSample(const SphericalGrid& grid, size_t rows, uint64_t seed)
+{
+    // Dual-cell volumes factor into lat, r and lon parts, so drawing each index independently
+    // from its own factor draws grid points with probability proportional to volume.
+    const auto w = grid.volumeFactors();
+    std::mt19937_64 rng(seed);
+    std::discrete_distribution<size_t> lat(w.lat.begin(), w.lat.end());
+    std::discrete_distribution<size_t> r(w.r.begin(), w.r.end());
+    std::discrete_distribution<size_t> lon(w.lon.begin(), w.lon.end());
+    std::vector<uint32_t> cells(rows);
+    for (auto& c : cells) {
+        const size_t iLat = lat(rng), iR = r(rng), iLon = lon(rng);
+        c = static_cast<uint32_t>(grid.index(iLat, iR, iLon));
+    }
+    std::sort(cells.begin(), cells.end());
+    return cells;
+}
+
+std::vector<float> sampleCoordinates(const SphericalGrid& grid, std::span<const uint32_t> cells)
+{
+    const auto& coordinates = coordinateInfos();
+    const size_t nc = coordinates.size();
+    std::vector<float> out(cells.size() * nc);
+    for (size_t i = 0; i < cells.size(); ++i) {
+        const size_t c = cells[i];
+        const size_t iLon = c % grid.nLon(), iR = (c / grid.nLon()) % grid.nR(), iLat = c / (grid.nLon() * grid.nR());
+        for (size_t k = 0; k < nc; ++k)
+            out[i * nc + k] =
+                static_cast<float>(coordinateValue(coordinates[k].id, grid.latDeg[iLat], grid.lonDeg[iLon], grid.rKm[iR]));
+    }
+    return out;
+}
+
+void rebinHistogram(const VariableStats& stats, ValueRange range, std::span<double> histogram)
+{
+    const size_t nOut = histogram.size();
+    const size_t nIn = stats.histogram.size();
+    const double outLo = range.min, outSpan = static_cast<double>(range.max) - range.min;
+    const double inLo = stats.range.min, inSpan = static_cast<double>(stats.range.max) - stats.range.min;
+    auto outBin = [&](double v) {
+        if (outSpan <= 0)
+            return size_t(0);
+        return std::min(nOut - 1, static_cast<size_t>(std::max(0.0, (v - outLo) / outSpan * nOut)));
+    };
+    for (size_t b = 0; b < nIn; ++b) {
+        const double mass = stats.histogram[b];
+        if (mass == 0)
+            continue;
+        if (inSpan <= 0 || outSpan <= 0) {
+            histogram[outBin(inLo)] += mass;
+            continue;
+        }
+        const double a = inLo + inSpan * b / nIn, c = inLo + inSpan * (b + 1) / nIn;
+        const size_t first = outBin(a), last = outBin(c);
+        for (size_t o = first; o <= last; ++o) {
+            const double oLo = outLo + outSpan * o / nOut, oHi = outLo + outSpan * (o + 1) / nOut;
+            const double overlap = std::min(c, oHi) - std::max(a, oLo);
+            if (overlap > 0)
+                histogram[o] += mass * overlap / (c - a);
+        }
+    }
+}
+
+}  // namespace raypc

@@ -1,0 +1,53 @@
+// The numerics of preprocessing (docs/format.md): derived variables, coarser levels by
+// volume-weighted averaging, volume-weighted statistics and histograms, and the
+// parallel-coordinates sample. Pure functions of their arguments, reproducible bit for bit
+// whatever the number of threads; preprocess.cpp runs them, step by step.
+#pragma once
+
+#include "dataset/dataset.h"
+#include "grid/snapshot.h"
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace raypc {
+
+// `value` as float32; ±infinity beyond float32's range (where a plain conversion is undefined).
+float toFloat32(double value);
+
+// Appends "radial velocity" and "velocity magnitude" (cm/yr) computed from vx, vy, vz (m/s),
+// and, when "thermal expansivity" is present, "thermal expansivity anomaly" (see lateralAnomaly);
+// when "temperature anomaly" is absent, it from "temperature" or (ASPECT) "T" the same way.
+// Values too large for float32 become infinite (see checkFinite). Throws raypc::Error if a
+// velocity component is missing.
+void addDerivedVariables(Snapshot& snapshot);
+
+// `field` minus its area-weighted mean over each radius shell (the lateral mean), named `name`.
+Field lateralAnomaly(const SphericalGrid& grid, const Field& field, const std::string& name);
+
+// The next coarser level: each coarse point is the volume-weighted mean of the (up to) 2x2x2
+// fine points it merges (grid.coarsened() gives its coordinates).
+std::vector<float> coarsenField(const SphericalGrid& fine, std::span<const float> values);
+
+// Exact range, volume-weighted mean and kHistogramBins-bin volume-fraction histogram of finite
+// values (a non-finite value is a broken invariant: checked, aborts).
+VariableStats computeStats(const SphericalGrid& grid, std::span<const float> values);
+
+// One variable over all steps: min and max over the steps, the mean of the step means, and the
+// steps' histograms rebinned onto the global range and averaged. `perStep` must not be empty.
+VariableStats statsOverSteps(std::span<const VariableStats> perStep);
+
+// `rows` grid-point indices drawn independently with probability proportional to each
+// point's dual-cell volume (deterministic for `seed`), sorted ascending.
+std::vector<uint32_t> drawVolumeWeightedSample(const SphericalGrid& grid, size_t rows, uint64_t seed);
+
+// The sample's coordinate columns (coordinateInfos() order) of every sampled point, row-major.
+std::vector<float> sampleCoordinates(const SphericalGrid& grid, std::span<const uint32_t> cells);
+
+// Adds `stats.histogram` (over stats.range) into `histogram` over `range`, spreading each bin's
+// mass over the bins it overlaps.
+void rebinHistogram(const VariableStats& stats, ValueRange range, std::span<double> histogram);
+
+}  // namespace raypc

@@ -1,0 +1,37 @@
+// Internal to src/preprocess: what the phases of preprocess() share (preprocess.cpp runs them;
+// the pathline phase lives in preprocess_pathlines.cpp).
+#pragma once
+
+#include "preprocess/preprocess.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace raypc::preprocessing {
+
+// A variable of the dataset: stored (as the reader returns it) or derived.
+struct VariableSpec {
+    std::string name, units;
+    bool derived;
+};
+
+// Throws raypc::Error "preprocess: cancelled" once options.cancel is set (between steps and sets).
+void throwIfCancelled(const PreprocessOptions& options);
+
+// The pathline settings as the manifest and every set's lines.json store them.
+nlohmann::json pathlineSettings(const PathlineOptions& options);
+
+// Throws raypc::Error naming the option when the pathline options do not fit the variables.
+void checkPathlineOptions(const PathlineOptions& options, const std::vector<VariableSpec>& specs);
+
+// The pathline phase: critical points and pathlines of every step, each step's set written
+// atomically and skipped on a rerun when it was made with the same settings and reaches the
+// same last step. Reads the written level-0 arrays back; `stepJsons` are the steps' manifests.
+void writePathlines(const std::filesystem::path& outDir, const SphericalGrid& grid,
+                    const std::vector<VariableSpec>& specs, const std::vector<nlohmann::json>& stepJsons,
+                    const PreprocessOptions& options, PreprocessSummary& summary);
+
+}  // namespace raypc::preprocessing

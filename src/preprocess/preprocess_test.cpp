@@ -1,0 +1,455 @@
+#include "preprocess/preprocess.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/spherical.h"
+#include "dataset/dataset_format.h"
+#include "synth/synth.h"
+#include "grid/test_util.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+#include <unistd.h>
+#include <nlohmann/json.hpp>
+
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+
+namespace raypc {
+namespace {
+
+using testing::centredGrid;
+
+using testing::contestLayoutDir;
+using testing::TempDir;
+
+
+// Volume of one grid point's dual cell, from first principles (not SphericalGrid's factors).
+double dualVolume(const SphericalGrid& g, size_t a, size_t b, size_t c)
+{
+    auto mid = [](const std::vector<double>& v, size_t i, bool upper, double lo, double hi) {
+        if (upper)
+            return i + 1 < v.size() ? 0.5 * (v[i] + v[i + 1]) : hi;
+        return i > 0 ? 0.5 * (v[i - 1] + v[i]) : lo;
+    };
+    const double la0 = mid(g.latDeg, a, false, -90, 90), la1 = mid(g.latDeg, a, true, -90, 90);
+    const double r0 = mid(g.rKm, b, false, g.rKm.front(), 0), r1 = mid(g.rKm, b, true, 0, g.rKm.back());
+    const double dLon = 360.0 / g.nLon();  // uniform lon in these tests
+    return (std::sin(degToRad(la1)) - std::sin(degToRad(la0))) * (r1 * r1 * r1 - r0 * r0 * r0) / 3 * degToRad(dLon);
+}
+
+std::vector<float> randomValues(const SphericalGrid& grid, unsigned seed, float lo, float hi)
+{
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(lo, hi);
+    std::vector<float> values(grid.cellCount());
+    for (auto& v : values)
+        v = u(rng);
+    return values;
+}
+
+TEST(Lod, CoarseValuesAreVolumeWeightedMeansAtOddSizes)
+{
+    const SphericalGrid fine = centredGrid(7, 5, 9);
+    const std::vector<float> values = randomValues(fine, 3, -1, 1);
+    const auto coarse = coarsenField(fine, values);
+    const SphericalGrid cg = fine.coarsened();
+    ASSERT_EQ(coarse.size(), cg.cellCount());
+    for (size_t a = 0; a < cg.nLat(); ++a)
+        for (size_t b = 0; b < cg.nR(); ++b)
+            for (size_t c = 0; c < cg.nLon(); ++c) {
+                double sum = 0, weight = 0;
+                for (size_t i = 2 * a; i < std::min(2 * a + 2, fine.nLat()); ++i)
+                    for (size_t j = 2 * b; j < std::min(2 * b + 2, fine.nR()); ++j)
+                        for (size_t k = 2 * c; k < std::min(2 * c + 2, fine.nLon()); ++k) {
+                            const double w = dualVolume(fine, i, j, k);
+                            sum += w * values[fine.index(i, j, k)];
+                            weight += w;
+                        }
+                ASSERT_NEAR(coarse[cg.index(a, b, c)], sum / weight, 1e-5) << a << " " << b << " " << c;
+            }
+    // A constant stays constant, also in the pole rows and the odd last column.
+    const auto constant = coarsenField(fine, std::vector<float>(fine.cellCount(), 2.5f));
+    for (float v : constant)
+        ASSERT_FLOAT_EQ(v, 2.5f);
+}
+
+TEST(Stats, VolumeWeightedMeanAndHistogram)
+{
+    const SphericalGrid g = centredGrid(36, 81, 72);
+    std::vector<float> lat(g.cellCount()), r(g.cellCount());
+    for (size_t a = 0; a < g.nLat(); ++a)
+        for (size_t b = 0; b < g.nR(); ++b)
+            for (size_t c = 0; c < g.nLon(); ++c) {
+                lat[g.index(a, b, c)] = static_cast<float>(g.latDeg[a]);
+                r[g.index(a, b, c)] = static_cast<float>(g.rKm[b]);
+            }
+    const auto sLat = computeStats(g, lat);
+    EXPECT_NEAR(sLat.mean, 0.0, 1e-9);
+    double total = 0;
+    for (double h : sLat.histogram)
+        total += h;
+    EXPECT_NEAR(total, 1.0, 1e-12);
+    // Volume with lat above 60°: the rows at 62.5..87.5 fill exactly (1 - sin 60°) / 2.
+    double north = 0;
+    for (int b = 0; b < kHistogramBins; ++b)
+        if (sLat.range.min + (b + 0.5) * (sLat.range.max - sLat.range.min) / kHistogramBins > 60)
+            north += sLat.histogram[b];
+    EXPECT_NEAR(north, (1 - std::sin(degToRad(60.0))) / 2, 1e-9);
+    // The mean radius of a shell's volume is 3/4 (R⁴ - r⁴) / (R³ - r³), up to the discretisation.
+    const double R = kSurfaceRadiusKm, c = kCoreRadiusKm;
+    const double expected = 0.75 * (std::pow(R, 4) - std::pow(c, 4)) / (std::pow(R, 3) - std::pow(c, 3));
+    EXPECT_NEAR(computeStats(g, r).mean, expected, 2.0);
+    EXPECT_FLOAT_EQ(computeStats(g, r).range.min, 3485.0f);
+}
+
+// The sample must show volume fractions: as many samples above the radius that halves the
+// shell's volume as below, and 13.4 % beyond ±60° latitude; an index-uniform sample gives
+// other fractions, which the tolerance rejects.
+TEST(Sample, DrawsGridPointsInProportionToVolume)
+{
+    const SphericalGrid g = centredGrid(36, 41, 72);
+    const size_t n = 100000;
+    const auto cells = drawVolumeWeightedSample(g, n, 42);
+    ASSERT_EQ(cells.size(), n);
+    ASSERT_TRUE(std::is_sorted(cells.begin(), cells.end()));
+    // Exact volume fraction of the dual cells above r = 5200 km and poleward of 60°.
+    double above = 0, polar = 0, total = 0;
+    for (size_t a = 0; a < g.nLat(); ++a)
+        for (size_t b = 0; b < g.nR(); ++b) {
+            const double v = dualVolume(g, a, b, 0);
+            total += v;
+            above += g.rKm[b] > 5200 ? v : 0;
+            polar += std::abs(g.latDeg[a]) > 60 ? v : 0;
+        }
+    above /= total;
+    polar /= total;
+    size_t nAbove = 0, nPolar = 0, gridAbove = 0;
+    for (uint32_t c : cells) {
+        const size_t b = (c / g.nLon()) % g.nR(), a = c / (g.nLon() * g.nR());
+        nAbove += g.rKm[b] > 5200;
+        nPolar += std::abs(g.latDeg[a]) > 60;
+    }
+    for (double r : g.rKm)
+        gridAbove += r > 5200;
+    const double sigma = std::sqrt(0.25 / n);
+    EXPECT_NEAR(double(nAbove) / n, above, 5 * sigma);
+    EXPECT_NEAR(double(nPolar) / n, polar, 5 * sigma);
+    EXPECT_NEAR(polar, 1 - std::sin(degToRad(60.0)), 1e-9);
+    // Sanity of the test itself: counting grid points would be far off.
+    EXPECT_GT(std::abs(double(gridAbove) / g.nR() - above), 20 * sigma);
+    EXPECT_EQ(drawVolumeWeightedSample(g, 1000, 42), drawVolumeWeightedSample(g, 1000, 42));
+    EXPECT_NE(drawVolumeWeightedSample(g, 1000, 42), drawVolumeWeightedSample(g, 1000, 43));
+}
+
+TEST(Rebin, KeepsMassAndPlacesIt)
+{
+    VariableStats s;
+    s.range = {0, 10};
+    s.histogram.assign(10, 0.0);
+    s.histogram[2] = 0.5;  // [2, 3)
+    s.histogram[9] = 0.5;  // [9, 10]
+    std::vector<double> out(5, 0.0);  // over [0, 20): bins of 4
+    rebinHistogram(s, {0, 20}, out);
+    EXPECT_NEAR(out[0], 0.5, 1e-12);
+    EXPECT_NEAR(out[2], 0.5, 1e-12);  // [8, 12) holds [9, 10]
+    std::vector<double> split(2, 0.0);
+    s.histogram.assign(10, 0.0);
+    s.histogram[4] = 1.0;  // [4, 5) over two output bins [0, 4.5) and [4.5, 9)
+    rebinHistogram(s, {0, 9}, split);
+    EXPECT_NEAR(split[0], 0.5, 1e-12);
+    EXPECT_NEAR(split[1], 0.5, 1e-12);
+}
+
+std::vector<std::filesystem::path> fixtureFiles()
+{
+    return listSnapshotFiles({contestLayoutDir()});
+}
+
+PreprocessOptions quiet()
+{
+    PreprocessOptions o;
+    o.quiet = true;
+    o.sampleRows = 5000;
+    return o;
+}
+
+// Float32's extremes in one field: the histogram's bin arithmetic overflowed float (the
+// difference of the two is beyond float32) and indexed the histogram at INT_MIN.
+TEST(Stats, FiniteExtremesOfFloat32)
+{
+    const SphericalGrid g = centredGrid(6, 5, 8);
+    std::vector<float> values(g.cellCount(), 0.0f);
+    values.front() = -3.4e38f;
+    values.back() = 3.4e38f;
+    const auto s = computeStats(g, values);
+    EXPECT_EQ(s.range.min, -3.4e38f);
+    EXPECT_EQ(s.range.max, 3.4e38f);
+    double total = 0;
+    for (double h : s.histogram)
+        total += h;
+    EXPECT_NEAR(total, 1.0, 1e-12);
+    EXPECT_GT(s.histogram.front(), 0);
+    EXPECT_GT(s.histogram.back(), 0);
+    EXPECT_GT(s.histogram[kHistogramBins / 2 - 1] + s.histogram[kHistogramBins / 2], 0.9);  // the zeros, mid-range
+}
+
+// The statistics must not depend on how many threads share the work: dataset.json is the same
+// bytes on every run (issue 16, 11). Thread-local partial sums gave other last digits.
+TEST(Stats, SameBitsWithAnyNumberOfThreads)
+{
+    const SphericalGrid g = centredGrid(90, 41, 180);
+    const std::vector<float> values = randomValues(g, 7, -1000, 3000);
+    VariableStats reference;
+    tbb::task_arena(1).execute([&] { reference = computeStats(g, values); });
+    for (int threads : {2, 3, 4, 8})
+        for (int repeat = 0; repeat < 3; ++repeat) {
+            VariableStats s;
+            tbb::task_arena(threads).execute([&] { s = computeStats(g, values); });
+            ASSERT_EQ(std::bit_cast<uint64_t>(s.mean), std::bit_cast<uint64_t>(reference.mean)) << threads;
+            ASSERT_EQ(s.histogram, reference.histogram) << threads;
+        }
+}
+
+TEST(Derived, ValuesBeyondFloat32BecomeInfiniteAndAreRefusedWithTheirPlace)
+{
+    EXPECT_EQ(toFloat32(1e39), std::numeric_limits<float>::infinity());
+    EXPECT_EQ(toFloat32(-1e39), -std::numeric_limits<float>::infinity());
+    EXPECT_EQ(toFloat32(3.4e38), 3.4e38f);
+    Snapshot snap;
+    snap.grid = centredGrid(2, 2, 4);
+    for (const char* name : {"vx", "vy", "vz"})
+        snap.fields.push_back({name, "m/s", std::vector<float>(snap.grid.cellCount(), 0.01f)});
+    snap.fields[0].values[snap.grid.index(1, 0, 2)] = 1e30f;
+    addDerivedVariables(snap);
+    const Field* magnitude = snap.find("velocity magnitude");
+    ASSERT_NE(magnitude, nullptr);
+    EXPECT_TRUE(std::isinf(magnitude->values[snap.grid.index(1, 0, 2)]));
+    for (const char* stored : {"vx", "vy", "vz"})
+        EXPECT_NO_THROW(checkFinite(snap, *snap.find(stored), "in.nc"));
+    try {
+        checkFinite(snap, *magnitude, "in.nc");
+        FAIL() << "an infinite magnitude passed";
+    } catch (const Error& e) {
+        const std::string m = e.what();
+        for (const char* fragment :
+             {"in.nc: velocity magnitude: inf", "lat 45°, r 3485 km, lon 180° (point 1, 0, 2 of lat, r, lon ascending)",
+              "vx = 1e+30 m/s, vy = 0.01 m/s, vz = 0.01 m/s"})
+            EXPECT_NE(m.find(fragment), std::string::npos) << m << " lacks " << fragment;
+    }
+}
+
+TEST(Memory, AGridTooLargeIsRefusedBeforeAllocating)
+{
+    SphericalGrid g = centredGrid(1000, 500, 1000);
+    EXPECT_EQ(preprocessMemoryBytes(g, 11), 12ull * 500'000'000 * 4);
+    try {
+        checkGridFitsMemory(g, preprocessMemoryBytes(g, 11), "huge.nc", "preprocess", {8'000'000'000, "ulimit -v"});
+        FAIL() << "24 GB fit into 8 GB";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "huge.nc: grid 1000x500x1000 (lat x r x lon) needs 24.0 GB of memory to preprocess, "
+                               "8.0 GB available (ulimit -v)");
+    }
+    EXPECT_NO_THROW(checkGridFitsMemory(g, preprocessMemoryBytes(g, 11), "huge.nc", "preprocess", {24'000'000'000, "x"}));
+    g = centredGrid(2000, 1000, 4000);
+    EXPECT_THROW(checkGridFitsMemory(g, 0, "many.nc", "read", {UINT64_MAX, "x"}), Error);
+}
+
+TEST(DatasetWriteLock, OneWriterAtATimeAndTheOtherIsToldWho)
+{
+    TempDir dir("lock");
+    {
+        DatasetWriteLock first(dir / "ds");
+        try {
+            DatasetWriteLock second(dir / "ds");
+            FAIL() << "two writers";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(fmt::format("(pid {} on host", getpid())), std::string::npos)
+                << e.what();
+        }
+        // The holder may remove the file (a run that leaves nothing); the next writer still locks.
+        first.removeFile();
+        DatasetWriteLock third(dir / "ds");
+        EXPECT_THROW(DatasetWriteLock(dir / "ds"), Error);
+    }
+    EXPECT_NO_THROW(DatasetWriteLock(dir / "ds"));
+}
+
+TEST(Preprocess, AFreshRunThatFailsLeavesNothing)
+{
+    TempDir dir("fresh");
+    Snapshot broken = readSnapshot(fixtureFiles()[0]);
+    broken.find("vx")->values[7] = 1e30f;
+    writeContestFile(dir / "spherical001.nc", broken);
+    try {
+        preprocess({dir / "spherical001.nc"}, dir / "ds", quiet());
+        FAIL() << "vx = 1e30 passed";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("spherical001.nc: velocity magnitude: inf"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir / "ds"));
+    std::filesystem::create_directories(dir / "empty");
+    EXPECT_THROW(preprocess({dir / "spherical001.nc"}, dir / "empty", quiet()), Error);
+    EXPECT_TRUE(std::filesystem::is_empty(dir / "empty"));
+}
+
+// `raypc serve FILE.nc…` runs preprocessing in the background: it reports every step and pathline
+// set, and a cancel stops it between steps with what was finished kept for the next run.
+TEST(Preprocess, ACancelledRunKeepsItsStepsAndProgressCountsEveryItem)
+{
+    TempDir dir("cancel");
+    std::atomic<bool> cancel{false};
+    std::vector<std::string> events;
+    PreprocessOptions o = quiet();
+    o.cancel = &cancel;
+    o.onProgress = [&](const PreprocessProgress& p) {
+        events.push_back(fmt::format("{} {}/{}", p.phase, p.done, p.total));
+        if (p.done == 1)
+            cancel = true;
+    };
+    try {
+        preprocess(fixtureFiles(), dir / "ds", o);
+        FAIL() << "the cancelled run finished";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("cancelled"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(events, std::vector<std::string>{"steps 1/3"});
+    EXPECT_TRUE(std::filesystem::exists(dir / "ds" / "steps" / "0000" / "step.json"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "ds" / "steps" / "0001"));
+    EXPECT_THROW(Dataset::open(dir / "ds"), Error);
+
+    cancel = false;
+    events.clear();
+    o.onProgress = [&](const PreprocessProgress& p) { events.push_back(fmt::format("{} {}/{}", p.phase, p.done, p.total)); };
+    const auto summary = preprocess(fixtureFiles(), dir / "ds", o);
+    EXPECT_EQ(summary.stepsSkipped, 1);
+    EXPECT_EQ(summary.stepsWritten, 2);
+    EXPECT_EQ(events, (std::vector<std::string>{"steps 2/3", "steps 3/3", "pathlines 1/3", "pathlines 2/3",
+                                                "pathlines 3/3"}));
+    EXPECT_EQ(Dataset::open(dir / "ds")->steps().size(), 3u);
+}
+
+TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)
+{
+    TempDir dir("pp");
+    const auto summary = preprocess(fixtureFiles(), dir / "ds", quiet());
+    EXPECT_EQ(summary.stepsWritten, 3);
+    const auto ds = Dataset::open(dir / "ds");
+    ASSERT_EQ(ds->steps().size(), 3u);
+    EXPECT_DOUBLE_EQ(ds->steps()[2].timeMyr, 4.0);
+    EXPECT_EQ(ds->steps()[1].source, "spherical002.nc");
+    ASSERT_EQ(ds->variables().size(), 11u);
+    EXPECT_EQ(ds->variables()[8].name, "radial velocity");
+    EXPECT_TRUE(ds->variables()[8].derived);
+    EXPECT_EQ(ds->variables()[10].name, "thermal expansivity anomaly");
+    EXPECT_EQ(ds->variables()[10].units, "1/K");
+    ASSERT_EQ(ds->levels().size(), 3u);
+    EXPECT_EQ(ds->levels()[1].grid.nLat(), 18u);
+    EXPECT_EQ(ds->levels()[1].grid.nR(), 21u);
+    EXPECT_EQ(ds->levels()[2].grid.nR(), 11u);
+
+    const Snapshot snap = readSnapshot(fixtureFiles()[1]);
+    const int anomaly = ds->variableIndex("temperature anomaly");
+    ASSERT_GE(anomaly, 0);
+    for (int level = 0; level < 3; ++level) {
+        const auto vol = ds->load(1, level);
+        const auto& g = vol->grid();
+        // Level 0 is the input, quantised (u16, the default) within a 65535th of its brick's range
+        // (value_encoding_test checks the exact bound); every level's bricks bound its values.
+        const auto& layout = vol->bricks();
+        if (level == 0) {
+            for (size_t i = 0; i < g.cellCount(); ++i) {
+                const size_t brick = layout.index(uint32_t(i / (g.nR() * g.nLon()) / layout.size),
+                                                  uint32_t(i / g.nLon() % g.nR() / layout.size),
+                                                  uint32_t(i % g.nLon() / layout.size));
+                const float range = vol->brickBounds(anomaly)[2 * brick + 1] - vol->brickBounds(anomaly)[2 * brick];
+                ASSERT_NEAR(vol->values(anomaly)[i], snap.find("temperature anomaly")->values[i], range / 65535 + 1e-4);
+            }
+        }
+        for (size_t a = 0; a < g.nLat(); ++a)
+            for (size_t b = 0; b < g.nR(); ++b)
+                for (size_t c = 0; c < g.nLon(); ++c) {
+                    const size_t brick = layout.index(a / layout.size, b / layout.size, c / layout.size);
+                    const float v = vol->values(anomaly)[g.index(a, b, c)];
+                    ASSERT_GE(v, vol->brickBounds(anomaly)[2 * brick]);
+                    ASSERT_LE(v, vol->brickBounds(anomaly)[2 * brick + 1]);
+                }
+    }
+    // Global ranges cover every step's range.
+    for (const auto& step : ds->steps())
+        for (size_t v = 0; v < ds->variables().size(); ++v) {
+            EXPECT_LE(ds->variables()[v].global.range.min, step.stats[v].range.min);
+            EXPECT_GE(ds->variables()[v].global.range.max, step.stats[v].range.max);
+        }
+    // The sample: coordinates consistent with each other, values those of the sampled points.
+    const auto table = ds->loadSample(1);
+    ASSERT_EQ(table.rows, 5000u);
+    ASSERT_EQ(table.columns.size(), 7u + 11u);
+    EXPECT_EQ(table.columns[6], "depth");
+    const SphericalGrid& g = snap.grid;
+    for (size_t row = 0; row < table.rows; row += 97) {
+        const double lat = table.at(row, 3), lon = table.at(row, 4), r = table.at(row, 5);
+        const Vec3d p = sphericalToCartesianKm(lat, lon, r);
+        ASSERT_NEAR(table.at(row, 0), p.x, 1e-2);
+        ASSERT_NEAR(table.at(row, 6), kSurfaceRadiusKm - r, 1e-3);
+        // The sample stores float coordinates: find the grid point they round from.
+        auto nearest = [](const std::vector<double>& axis, double x) {
+            size_t best = 0;
+            for (size_t i = 1; i < axis.size(); ++i)
+                if (std::abs(axis[i] - x) < std::abs(axis[best] - x))
+                    best = i;
+            EXPECT_NEAR(axis[best], x, 1e-3 * std::max(1.0, std::abs(x)));
+            return best;
+        };
+        const size_t a = nearest(g.latDeg, lat), b = nearest(g.rKm, r), c = nearest(g.lonDeg, lon);
+        ASSERT_EQ(table.at(row, 7 + anomaly), snap.find("temperature anomaly")->values[g.index(a, b, c)]);
+    }
+}
+
+TEST(Preprocess, ResumesAfterAFailedRunAndSkipsFinishedSteps)
+{
+    TempDir dir("resume");
+    // The third input holds a NaN, which only shows when its data are read: the run stops
+    // there, leaving two finished steps.
+    auto files = fixtureFiles();
+    std::filesystem::copy_file(files[0], dir / "spherical001.nc");
+    std::filesystem::copy_file(files[1], dir / "spherical002.nc");
+    Snapshot broken = readSnapshot(files[2]);
+    broken.fields[0].values[100] = std::nanf("");
+    writeContestFile(dir / "spherical003.nc", broken);
+    const std::vector<std::filesystem::path> inputs = {dir / "spherical001.nc", dir / "spherical002.nc",
+                                                       dir / "spherical003.nc"};
+    EXPECT_THROW(preprocess(inputs, dir / "ds", quiet()), Error);
+    try {
+        Dataset::open(dir / "ds");
+        FAIL() << "an unfinished dataset opened";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("did not finish"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(std::filesystem::exists(format::stepDir(dir / "ds", 1) / format::kStepManifest));
+    EXPECT_FALSE(std::filesystem::exists(format::stepDir(dir / "ds", 2)));
+    // A stale temporary step directory (as a kill would leave) is cleaned up.
+    std::filesystem::create_directories(dir / "ds" / "steps" / ".0002.tmp-1-0");
+
+    std::filesystem::remove(dir / "spherical003.nc");
+    std::filesystem::copy_file(files[2], dir / "spherical003.nc");
+    const auto summary = preprocess(inputs, dir / "ds", quiet());
+    EXPECT_EQ(summary.stepsSkipped, 2);
+    EXPECT_EQ(summary.stepsWritten, 1);
+    EXPECT_FALSE(std::filesystem::exists(dir / "ds" / "steps" / ".0002.tmp-1-0"));
+    EXPECT_EQ(Dataset::open(dir / "ds")->steps().size(), 3u);
+
+    // Other settings into the same directory are refused rather than mixed.
+    auto other = quiet();
+    other.dtMyr = 5;
+    EXPECT_THROW(preprocess(inputs, dir / "ds", other), Error);
+}
+
+}  // namespace
+}  // namespace raypc
