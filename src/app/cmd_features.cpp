@@ -150,6 +150,10 @@ void run(FeaturesArgs args)
     SeriesSelection sel;
     FeatureOptions options;
     mpi::together([&] {
+        for (const auto& [path, option] : {std::pair{args.output, "-o"}, {args.tracks, "--tracks"},
+                                           {args.events, "--events"}, {args.stalls, "--stalls"}})
+            if (!path.empty())
+                checkOutputExtension(path, {".csv", ".txt"}, "CSV", option);
         if (!args.stallBy.empty())
             args.stallMeasure = parseStallMeasure(args.stallBy);
         applyStateSettings(args);
@@ -157,10 +161,15 @@ void run(FeaturesArgs args)
         if (sel.filters.empty())
             fail("features: no selection: give --state with brushes or --range NAME=MIN:MAX (the whole mantle "
                  "would be one feature)");
-        if (!(args.minVolumeKm3 >= 0))
-            fail("--min-volume: {} km³ is negative", args.minVolumeKm3);
-        if (!(args.bandHalfWidthKm >= 0))
-            fail("--band-half-width: {} km is negative", args.bandHalfWidthKm);
+        render::FeatureSettings settings;
+        settings.minVolumeKm3 = float(args.minVolumeKm3);
+        settings.depthsKm.assign(args.depths.begin(), args.depths.end());
+        settings.bandHalfWidthKm = float(args.bandHalfWidthKm);
+        settings.minOverlapShare = float(args.minOverlapShare);
+        render::checkFeatureSettings(settings, {{"minVolumeKm3", "--min-volume"},
+                                                {"depthsKm", "--depth"},
+                                                {"bandHalfWidthKm", "--band-half-width"},
+                                                {"minOverlapShare", "--min-overlap"}});
         options.minVolumeKm3 = args.minVolumeKm3;
         options.bandDepthsKm = args.depths;
         options.bandHalfWidthKm = args.bandHalfWidthKm;

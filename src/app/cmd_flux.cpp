@@ -33,6 +33,7 @@ constexpr const char* kTemperatureAnomaly = "temperature anomaly";  // T′, K (
 
 void run(const FluxArgs& args)
 {
+    checkOutputExtension(args.output, {".csv", ".txt"}, "CSV", "-o");
     const SeriesSelection sel = resolveSeriesSelection(args.selection);
     const Dataset& dataset = *sel.dataset;
     const std::vector<std::string> names = dataset.variableNames();
@@ -53,6 +54,11 @@ void run(const FluxArgs& args)
             fail("--density: {} kg/m3 is not positive", args.densityKgM3);
         if (!(args.heatCapacity > 0))
             fail("--heat-capacity: {} J/(kg K) is not positive", args.heatCapacity);
+        // Bounds far beyond any rock (about 3300 kg/m³, 1250 J/(kg K)) keep the product finite.
+        if (args.densityKgM3 > 1e5)
+            fail("--density: {} kg/m3, expected at most 100000 (rock is about 3300)", args.densityKgM3);
+        if (args.heatCapacity > 1e5)
+            fail("--heat-capacity: {} J/(kg K), expected at most 100000 (rock is about 1250)", args.heatCapacity);
         heat = HeatFluxInputs{size_t(anomaly - names.begin()), args.densityKgM3, args.heatCapacity};
     } else if (args.heatConstantsGiven) {
         fail("--density, --heat-capacity: need --heat-flux (the flux they enter)");

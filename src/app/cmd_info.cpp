@@ -57,6 +57,7 @@ json describeFile(const std::filesystem::path& path, const ReaderOptions& option
     }
     j["variables"] = json::array();
     for (size_t i = 0; i < snap.fields.size(); ++i) {
+        checkFinite(snap, snap.fields[i], step.string());  // as preprocess does: no range of a NaN
         const auto stats = computeStats(snap.grid, snap.fields[i].values);
         j["variables"].push_back({{"name", snap.fields[i].name},
                                   {"name_in_file", header.variables[i].fileName},

@@ -11,6 +11,7 @@
 #include "app/command.h"
 #include "app/options.h"
 #include "app/series_inputs.h"
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/mpi.h"
 #include "core/numbered_name.h"
@@ -246,6 +247,9 @@ std::pair<NumberedName, std::optional<NumberedName>> outputNames(const RenderArg
         if ((*depth)(0) == output(0))
             fail("--depth '{}' names the same file as -o", args.depthPath);
     }
+    checkOutputExtension(args.output, {".png"}, "PNG", "-o");
+    if (depth)
+        checkOutputExtension(args.depthPath, {".pfm"}, "PFM", "--depth");
     return {std::move(output), std::move(depth)};
 }
 
@@ -262,6 +266,8 @@ RenderSetup setUp(const RenderArgs& args)
             fail("--netcdf '{}': a --time range needs a numbered pattern such as maps/slice_%03d.nc", args.netcdf);
         if ((*netcdf)(0) == output(0))
             fail("--netcdf '{}' names the same file as -o", args.netcdf);
+        checkOutputExtension(args.netcdf, {".nc", ".nc4", ".cdf"}, "netCDF", "--netcdf");
+        regularOutputPath((*netcdf)(0), "the --netcdf grid");  // before the picture is written
     }
     if (slice) {
         // What only the 3D view has.

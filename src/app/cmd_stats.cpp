@@ -9,6 +9,7 @@
 #include "core/mpi.h"
 #include "core/progress.h"
 #include "core/spherical.h"
+#include "core/system_memory.h"
 #include "dataset/dataset.h"
 #include "analysis/feature_csv.h"
 #include "analysis/selection.h"
@@ -16,6 +17,7 @@
 #include "render/legend.h"
 #include "render/render_state.h"
 #include "render/slice_view.h"
+#include "render/state_renderer.h"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -54,7 +56,14 @@ StatsRows formatRows(const std::vector<StepSelection>& selections, const Spheric
 void run(const StatsArgs& args)
 {
     SeriesSelection sel;
-    mpi::together([&] { sel = resolveSeriesSelection(args.selection); });
+    mpi::together([&] {
+        checkOutputExtension(args.output, {".csv", ".txt"}, "CSV", "-o");
+        if (!args.profile.empty())
+            checkOutputExtension(args.profile, {".csv", ".txt"}, "CSV", "--profile");
+        if (!args.hovmoller.empty())
+            checkOutputExtension(args.hovmoller, {".png"}, "PNG", "--hovmoller");
+        sel = resolveSeriesSelection(args.selection);
+    });
     const Dataset& dataset = *sel.dataset;
     const std::vector<RangeFilter>& filters = sel.filters;
     const int first = sel.first, last = sel.last, level = args.selection.level;
@@ -66,8 +75,15 @@ void run(const StatsArgs& args)
     // capture bindings).
     const std::pair<int, int> pictureSize = parseSize(args.size);
     const int pictureWidth = pictureSize.first, pictureHeight = pictureSize.second;
-    if (!args.hovmoller.empty())
+    if (!args.hovmoller.empty()) {
         render::checkTimeDepthPictureSize(pictureWidth, pictureHeight);
+        // Before anything is allocated, as for `raypc render`: a picture larger than memory is
+        // refused with the figures.
+        render::RenderState pictureState;
+        pictureState.width = pictureWidth;
+        pictureState.height = pictureHeight;
+        render::checkPictureFitsMemory(pictureState, false, availableMemory());
+    }
     if (args.hovmoller.empty() && args.pictureOptionsGiven)
         fail("--hovmoller-of, --depth: need --hovmoller (the picture they describe, as --size does)");
     if (hovmollerOf != render::TimeDepthOf::Share && args.profileVar.empty())

@@ -176,8 +176,19 @@ std::pair<int, int> parseStepRange(const Dataset& dataset, const std::string& te
 void PreprocessFlags::add(CLI::App& cmd, bool withQuiet)
 {
     cmd.add_option("--dt-myr", options.dtMyr, "Time between steps in Myr")->capture_default_str();
-    cmd.add_option("--sample-rows", options.sampleRows, "Cells in the parallel-coordinates sample")
-        ->capture_default_str();
+    // As text: CLI11 reads "-1" into an unsigned count as 2^64 - 1.
+    cmd.add_option_function<std::string>(
+           "--sample-rows",
+           [this](const std::string& text) {
+               unsigned long long rows = 0;
+               const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), rows);
+               if (text.empty() || ec != std::errc() || end != text.data() + text.size() || rows == 0 ||
+                   rows > kMaxSampleRows)
+                   fail("--sample-rows: '{}', expected a whole number of rows from 1 to {}", text, kMaxSampleRows);
+               options.sampleRows = size_t(rows);
+           },
+           fmt::format("Cells in the parallel-coordinates sample (1 to {})", kMaxSampleRows))
+        ->default_str(std::to_string(options.sampleRows));
     cmd.add_option("--seed", options.seed, "Seed of the sample")->capture_default_str();
     if (withQuiet)
         cmd.add_flag("-q,--quiet", options.quiet, "No progress output");

@@ -7,6 +7,7 @@
 #include "core/strings.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -85,6 +86,71 @@ TEST(AtomicFile, WritesWholeFileAndLeavesNoTemporary)
     EXPECT_THROW(writeFileAtomic(dir / "missing" / "b.txt", std::string_view("x")), Error);
     EXPECT_THROW(readFile(dir / "nope.txt"), Error);
     std::filesystem::remove_all(dir);
+}
+
+// Outputs never replace what is not a regular file: a link is written through, a character device
+// or FIFO written straight to, a directory refused (resolveOutputTarget).
+TEST(AtomicFile, WritesThroughLinksAndNeverReplacesDevices)
+{
+    namespace fs = std::filesystem;
+    const auto dir = fs::temp_directory_path() / "raypc_output_targets_test";
+    fs::remove_all(dir);
+    fs::create_directories(dir / "real");
+    writeFileAtomic(dir / "real" / "target.csv", std::string_view("old"));
+    fs::create_symlink("real/target.csv", dir / "link.csv");
+    writeFileAtomic(dir / "link.csv", std::string_view("new"));
+    EXPECT_TRUE(fs::is_symlink(dir / "link.csv"));
+    EXPECT_EQ(readFile(dir / "real" / "target.csv"), "new");
+    // A dangling link names the file to create; a chain of links is followed to its end.
+    fs::create_symlink("real/later.csv", dir / "dangling.csv");
+    fs::create_symlink("dangling.csv", dir / "chain.csv");
+    writeFileAtomic(dir / "chain.csv", std::string_view("made"));
+    EXPECT_TRUE(fs::is_symlink(dir / "chain.csv") && fs::is_symlink(dir / "dangling.csv"));
+    EXPECT_EQ(readFile(dir / "real" / "later.csv"), "made");
+    // Nothing but the links and their targets: no temporary file left anywhere.
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir / "real"), fs::directory_iterator()), 2);
+
+    // Devices: /dev/null takes the bytes and stays a device; /dev/full refuses them with an error.
+    writeFileAtomic("/dev/null", std::string_view("discarded"));
+    EXPECT_TRUE(fs::is_character_file("/dev/null"));
+    if (fs::is_character_file("/dev/full")) {
+        EXPECT_THROW(writeFileAtomic("/dev/full", std::string_view("x")), Error);
+        EXPECT_TRUE(fs::is_character_file("/dev/full"));
+    }
+    fs::create_symlink("/dev/null", dir / "null-link");
+    writeFileAtomic(dir / "null-link", std::string_view("discarded"));
+    EXPECT_TRUE(fs::is_symlink(dir / "null-link"));
+    EXPECT_TRUE(fs::is_character_file("/dev/null"));
+    // A FIFO without a reader fails at once instead of waiting for one.
+    ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0600), 0);
+    EXPECT_THROW(writeFileAtomic(dir / "fifo", std::string_view("x")), Error);
+    EXPECT_TRUE(fs::is_fifo(dir / "fifo"));
+    // A directory is refused, and so is a netCDF-style whole-file output to a device.
+    try {
+        writeFileAtomic(dir / "real", std::string_view("x"));
+        ADD_FAILURE() << "a directory was written";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("it is a directory"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(fs::is_directory(dir / "real"));
+    EXPECT_THROW(regularOutputPath("/dev/null", "a netCDF file"), Error);
+    EXPECT_EQ(regularOutputPath(dir / "link.csv", "a table"), dir / "real" / "target.csv");
+    fs::remove_all(dir);
+}
+
+TEST(AtomicFile, AnExtensionNamingAnotherFormatIsRefused)
+{
+    EXPECT_NO_THROW(checkOutputExtension("map.png", {".png"}, "PNG", "-o"));
+    EXPECT_NO_THROW(checkOutputExtension("MAP.PNG", {".png"}, "PNG", "-o"));
+    EXPECT_NO_THROW(checkOutputExtension("map", {".png"}, "PNG", "-o"));
+    EXPECT_NO_THROW(checkOutputExtension("map.figure", {".png"}, "PNG", "-o"));
+    try {
+        checkOutputExtension("out/map.nc", {".png"}, "PNG", "-o");
+        ADD_FAILURE() << "map.nc accepted for a PNG";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "-o out/map.nc: the name says .nc but -o writes PNG (name it .png)");
+    }
+    EXPECT_THROW(checkOutputExtension("table.png", {".csv", ".txt"}, "CSV", "--tracks"), Error);
 }
 
 TEST(Error, FailFormatsTheMessage)

@@ -18,6 +18,9 @@ inline constexpr int kOldestReadableVersion = 1;  // 1: float32 arrays
 inline constexpr const char* kSampleCoords = "sample_coords.f32";
 inline constexpr const char* kStepManifest = "step.json";
 inline constexpr const char* kStepSample = "sample.f32";
+// The size and modification time of every file a step was made from, so that a resumed run redoes
+// a finished step whose input changed since (preprocess.cpp); the reader does not use it.
+inline constexpr const char* kStepInputs = "inputs.json";
 inline constexpr const char* kLockFile = ".lock";  // DatasetWriteLock
 
 std::filesystem::path stepDir(const std::filesystem::path& dataset, int step);

@@ -209,6 +209,19 @@ void SphericalGrid::validate(const std::string& what) const
         fail("{}: lon covers {:.3g}..{:.3g} degrees, expected a global grid (a gap of {:.3g} degrees at the "
              "seam against a spacing of {:.3g})",
              what, lonDeg.front(), lonDeg.back(), seamGap, median);
+    // The same for lat: the pole caps blend the rows nearest each pole toward it, so a grid that
+    // stops short of a pole would have values invented there. Regional grids are not read yet.
+    std::vector<double> latGaps;
+    for (size_t i = 1; i < nLat(); ++i)
+        latGaps.push_back(latDeg[i] - latDeg[i - 1]);
+    std::nth_element(latGaps.begin(), latGaps.begin() + latGaps.size() / 2, latGaps.end());
+    const double latMedian = latGaps[latGaps.size() / 2];
+    const double southGap = latDeg.front() + 90.0, northGap = 90.0 - latDeg.back();
+    if (std::max(southGap, northGap) > 2.0 * latMedian + 1e-9)
+        fail("{}: lat covers {:.3g}..{:.3g} degrees, expected a global grid (a gap of {:.3g} degrees at the {} "
+             "pole against a spacing of {:.3g}); regional grids are not supported yet",
+             what, latDeg.front(), latDeg.back(), std::max(southGap, northGap),
+             southGap >= northGap ? "south" : "north", latMedian);
 }
 
 bool SphericalGrid::sameAs(const SphericalGrid& other, double tolerance) const

@@ -54,6 +54,26 @@ TEST(Grid, ValidateRejectsRegionalAndUnsortedGrids)
     SphericalGrid unsorted = g;
     std::swap(unsorted.rKm[0], unsorted.rKm[1]);
     EXPECT_THROW(unsorted.validate("unsorted"), Error);
+    // Latitudes that stop short of a pole: the pole cap would invent the values there.
+    SphericalGrid north = centredGrid(72, 3, 8);
+    north.latDeg.clear();
+    for (int i = 0; i <= 35; ++i)
+        north.latDeg.push_back(2.5 * i);  // 0 ... 87.5
+    try {
+        north.validate("north.nc");
+        ADD_FAILURE() << "a grid of lat 0..87.5 was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("north.nc: lat covers 0..87.5 degrees, expected a global grid (a gap of "
+                                             "90 degrees at the south pole"),
+                  std::string::npos)
+            << e.what();
+    }
+    // Rows at the poles themselves, or half a spacing from them, are global.
+    SphericalGrid poles = north;
+    poles.latDeg.clear();
+    for (int i = 0; i <= 36; ++i)
+        poles.latDeg.push_back(-90.0 + 5.0 * i);
+    EXPECT_NO_THROW(poles.validate("poles"));
 }
 
 // Every trilinear value a sample can take lies within the bounds of the brick it falls in,

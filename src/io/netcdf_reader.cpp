@@ -423,6 +423,8 @@ void verticalToRadiusKm(const NcFile& file, int varId, const std::string& name, 
     }
 }
 
+std::optional<double> defaultFillValue(const NcFile& file, int varId);
+
 // An axis keeps its values in file and canonical order, a sorting copy and an index.
 constexpr uint64_t kAxisBytesPerValue = 3 * sizeof(double) + sizeof(size_t);
 
@@ -449,6 +451,16 @@ CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explic
     a.fileValues.resize(n);
     file.check(nc_get_var_double(file.id(), a.varId, a.fileValues.data()),
                fmt::format("reading coordinate '{}'", name));
+    // A coordinate never written holds its fill value: say so, rather than "repeats the value 9.97e+36".
+    std::optional<double> fill = file.numberAttribute(a.varId, "_FillValue");
+    if (!fill)
+        fill = defaultFillValue(file, a.varId);
+    if (fill) {
+        const auto unset = std::count(a.fileValues.begin(), a.fileValues.end(), *fill);
+        if (unset > 0)
+            fail("{}: coordinate '{}' holds its fill value ({:g}) at {} of its {} points: it was never written",
+                 file.path().string(), name, *fill, unset, n);
+    }
     for (double v : a.fileValues)
         if (!std::isfinite(v))
             fail("{}: coordinate '{}' holds a non-finite value", file.path().string(), name);

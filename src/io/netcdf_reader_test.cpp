@@ -337,6 +337,25 @@ data:
     expectReadError(ncgen(dir.path(), "short", cdl), temperatureOnly(), {"1 of 16 values are missing", "-32767"});
 }
 
+// A coordinate variable declared but never written holds the fill value: named as such, not as a
+// coordinate that "repeats the value 9.97e+36".
+TEST(NetcdfReaderBadInput, UnwrittenCoordinate)
+{
+    TempDir dir("unwrittencoord");
+    const std::string cdl = R"(netcdf small {
+dimensions: lat = 2 ; r = 2 ; lon = 4 ;
+variables:
+  double lat(lat) ; lat:units = "degrees_north" ; double r(r) ; r:units = "km" ; double lon(lon) ;
+  float temperature(lat, r, lon) ;
+data:
+  lat = _, _ ; r = 3485, 6371 ; lon = 0, 90, 180, 270 ;
+  temperature = 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16 ;
+})";
+    expectReadError(ncgen(dir.path(), "unwritten", cdl), temperatureOnly(),
+                    {"unwritten.nc: coordinate 'lat' holds its fill value (9.96921e+36) at 2 of its 2 points: it was "
+                     "never written"});
+}
+
 TEST(NetcdfReaderBadInput, MissingVariable)
 {
     TempDir dir("missingvar");

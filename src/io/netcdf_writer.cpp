@@ -27,7 +27,7 @@ namespace {
 class TemporaryNcFile {
 public:
     TemporaryNcFile(std::filesystem::path finalPath, int mode)
-        : m_final(std::move(finalPath)), m_temporary(temporarySibling(m_final))
+        : m_final(regularOutputPath(finalPath, "a netCDF file")), m_temporary(temporarySibling(m_final))
     {
         check(nc_create(m_temporary.c_str(), mode | NC_CLOBBER, &m_id), "cannot create");
         m_open = true;

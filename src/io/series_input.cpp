@@ -227,6 +227,15 @@ NetcdfStep netcdfStep(const fs::path& step, const ReaderOptions& options)
 
 }  // namespace
 
+std::vector<fs::path> stepSourceFiles(const fs::path& step)
+{
+    std::vector<fs::path> files{step};
+    if (hasExtension(step, ".pvtu"))
+        for (const fs::path& piece : vtk::readPvtu(step).pieces)
+            files.push_back(piece);
+    return files;
+}
+
 bool isVtkStep(const fs::path& step)
 {
     return hasExtension(step, ".pvtu") || hasExtension(step, ".vtu");
@@ -240,12 +249,22 @@ SeriesListing listSeries(const std::vector<fs::path>& args, const ReaderOptions&
         out.collection = pvd;
         for (const auto& step : vtk::readPvd(pvd)) {
             std::error_code ec;
-            if (!fs::is_regular_file(step.file, ec))
+            const fs::file_status status = fs::status(step.file, ec);
+            if (!fs::exists(status))
                 fail("{}: names {}, which does not exist", pvd.string(), step.file.string());
+            if (!fs::is_regular_file(status))
+                fail("{}: names {}, which is {}, not a file", pvd.string(), step.file.string(),
+                     fs::is_directory(status) ? "a directory" : fs::is_fifo(status) ? "a FIFO" : "a device or socket");
             if (!isVtkStep(step.file))
                 fail("{}: names {}, expected a .pvtu or .vtu file", pvd.string(), step.file.string());
             out.steps.push_back(step.file);
-            out.timesMyr.push_back(step.time * options.myrPerTimeUnit);
+            // The Universe is 13 800 Myr old: a later time is a unit mistaken (or a broken file).
+            const double timeMyr = step.time * options.myrPerTimeUnit;
+            if (!(std::abs(timeMyr) <= 13'800.0))
+                fail("{}: DataSet {}: timestep {:g} is {:g} Myr, beyond the age of the Universe; give the unit of the "
+                     "timesteps with --time-units years|seconds|Myr",
+                     pvd.string(), step.file.filename().string(), step.time, timeMyr);
+            out.timesMyr.push_back(timeMyr);
         }
     };
     bool collection = false, vtkFiles = false;

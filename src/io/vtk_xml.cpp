@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -199,6 +200,8 @@ std::string decodeBinary(ByteSource& source, const FileContext& ctx, uint64_t ex
     const uint64_t blockSize = readUnsigned(head.data() + h, h, ctx.bigEndian);
     const uint64_t lastSize = readUnsigned(head.data() + 2 * h, h, ctx.bigEndian);
     const uint64_t lastBytes = lastSize == 0 ? blockSize : lastSize;
+    if (blocks > 0 && blockSize == 0)
+        fail("{}: the compressed data's header gives {} blocks of 0 bytes each (corrupt header?)", what, blocks);
     if (blocks == 0 ? expectedBytes != 0
                     : (lastBytes > blockSize || blockSize == 0 || blocks - 1 > expectedBytes / blockSize ||
                        (blocks - 1) * blockSize + lastBytes != expectedBytes))
@@ -267,6 +270,20 @@ std::string excerpt(std::string_view text)
     return text.size() > 40 ? s + "…" : s;
 }
 
+// An attribute that holds a whole number (a count, an offset): digits only, or `fallback` when the
+// attribute is absent. pugixml's as_llong reads "abc" as 0 and "-1" as a huge unsigned count.
+uint64_t wholeNumber(const pugi::xml_attribute& a, uint64_t fallback, const std::string& file, const std::string& what)
+{
+    if (!a)
+        return fallback;
+    const std::string text = a.as_string();
+    uint64_t value = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (text.empty() || ec != std::errc() || end != text.data() + text.size())
+        fail("{}: {} \"{}\", expected a whole number", file, what, excerpt(text));
+    return value;
+}
+
 // A DataArray's `count` values (tuples × components) as T. Integer destinations take integer types
 // only; float destinations any type.
 template <typename T>
@@ -322,7 +339,7 @@ std::vector<T> readArray(const pugi::xml_node& node, uint64_t count, const FileC
         const auto offsetAttr = node.attribute("offset");
         if (!offsetAttr)
             fail("{}: appended data without an offset", label);
-        const uint64_t offset = offsetAttr.as_ullong(std::numeric_limits<uint64_t>::max());
+        const uint64_t offset = wholeNumber(offsetAttr, 0, ctx.file, what + " offset");
         if (offset > ctx.appended.size())
             fail("{}: offset {} is past the end of the appended data ({} bytes; truncated file?)", label,
                  offsetAttr.as_string(), ctx.appended.size());
@@ -340,7 +357,12 @@ std::vector<T> readArray(const pugi::xml_node& node, uint64_t count, const FileC
 int components(const pugi::xml_node& node)
 {
     const auto a = node.attribute("NumberOfComponents");
-    return a ? a.as_int(-1) : 1;
+    if (!a)
+        return 1;
+    const std::string text = a.as_string();
+    int value = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    return text.empty() || ec != std::errc() || end != text.data() + text.size() ? -1 : value;
 }
 
 // Loads `text` (the file without its appended data) as XML; `root` is the VTKFile element of `type`.
@@ -418,7 +440,7 @@ Piece parseVtu(const std::string& bytes, const std::string& file)
         const std::string name = a.attribute("Name").as_string();
         if (name != "TIME" && name != "CYCLE")
             continue;
-        const uint64_t tuples = a.attribute("NumberOfTuples").as_ullong(1);
+        const uint64_t tuples = wholeNumber(a.attribute("NumberOfTuples"), 1, file, "FieldData " + name + " NumberOfTuples");
         if (tuples != 1)
             fail("{}: FieldData {} has {} tuples, expected 1", file, name, a.attribute("NumberOfTuples").as_string());
         if (name == "TIME") {
@@ -444,11 +466,11 @@ Piece parseVtu(const std::string& bytes, const std::string& file)
              std::distance(pieces.begin(), pieces.end()));
     const auto count = [&](const char* attr) {
         const auto a = p.attribute(attr);
-        const long long n = a.as_llong(-1);
-        if (!a || n < 0)
-            fail("{}: Piece {} \"{}\", expected a count", file, attr, excerpt(a.as_string()));
+        if (!a)
+            fail("{}: Piece without {}", file, attr);
+        const uint64_t n = wholeNumber(a, 0, file, fmt::format("Piece {}", attr));
         // A point or cell takes at least one byte of the file, compressed: more is a corrupt count.
-        if (uint64_t(n) > bytes.size() * 1032)
+        if (n > bytes.size() * 1032)
             fail("{}: Piece {} {} is more than a file of {} bytes can hold", file, attr, n, bytes.size());
         return uint64_t(n);
     };
@@ -514,7 +536,22 @@ Piece parseVtu(const std::string& bytes, const std::string& file)
         if (array.components < 1 || array.components > 9)
             fail("{}: PointData {}: NumberOfComponents \"{}\", expected 1 … 9", file, array.name,
                  excerpt(a.attribute("NumberOfComponents").as_string()));
-        array.values = readArray<float>(a, nPoints * uint64_t(array.components), ctx, "PointData " + array.name);
+        // Read as double: a Float64 beyond float32's range is named as written, not as the infinity
+        // it would become. A value is needed at every point: NaN and infinities are refused here, so
+        // that no command (info, preprocess, serve) meets them downstream.
+        const std::vector<double> values =
+            readArray<double>(a, nPoints * uint64_t(array.components), ctx, "PointData " + array.name);
+        array.values.resize(values.size());
+        for (size_t i = 0; i < values.size(); ++i) {
+            const double v = values[i];
+            if (!std::isfinite(v) || std::abs(v) > double(std::numeric_limits<float>::max()))
+                fail("{}: PointData {}: {} at point {}{} {}", file, excerpt(array.name), v, i / size_t(array.components),
+                     array.components > 1 ? fmt::format(" (component {})", i % size_t(array.components)) : "",
+                     std::isfinite(v) ? "is beyond float32's range (±3.4e38)"
+                     : std::isnan(v)  ? "is not a number; RayPC needs a finite value at every point"
+                                      : "is infinite; RayPC needs a finite value at every point");
+            array.values[i] = static_cast<float>(v);
+        }
         piece.pointData.push_back(std::move(array));
     }
     return piece;
@@ -537,8 +574,14 @@ PieceRecord readPvtu(const fs::path& path)
         const std::string source = piece.attribute("Source").as_string();
         if (source.empty())
             fail("{}: a Piece without a Source", file);
+        // Pieces lie beside their record or below it (deal.II and VTK write them so): a record that
+        // names a file elsewhere (an absolute path, "..") would make RayPC read whatever it names.
         const fs::path p(source);
-        record.pieces.push_back(p.is_absolute() ? p : path.parent_path() / p);
+        if (p.is_absolute() || std::any_of(p.begin(), p.end(), [](const fs::path& part) { return part == ".."; }))
+            fail("{}: Piece Source \"{}\" lies outside the record's folder (an absolute path or '..'); pieces are read "
+                 "from the record's folder only",
+                 file, excerpt(source));
+        record.pieces.push_back(path.parent_path() / p);
     }
     if (record.pieces.empty())
         fail("{}: names no Piece", file);
@@ -557,7 +600,11 @@ std::vector<CollectionStep> readPvd(const fs::path& path)
         const std::string name = d.attribute("file").as_string();
         if (name.empty())
             fail("{}: a DataSet without a file", file);
-        const std::string text = d.attribute("timestep").as_string("0");
+        const pugi::xml_attribute timestep = d.attribute("timestep");
+        if (!timestep && root.child("Collection").child("DataSet").next_sibling("DataSet"))
+            fail("{}: DataSet {} has no timestep (every DataSet of a collection of several steps needs one)", file,
+                 excerpt(name));
+        const std::string text = timestep.as_string("0");
         char* end = nullptr;
         const double t = std::strtod(text.c_str(), &end);
         if (end == text.c_str() || *end != '\0' || !std::isfinite(t))

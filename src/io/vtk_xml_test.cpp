@@ -177,6 +177,11 @@ TEST(VtkXmlBadInput, OneClearErrorEach)
         {"bad-cell.vtu", "cell 3 has VTK type 42"},
         {"bad-index.vtu", "point index 999"},
         {"big-count.vtu", "expected 48000000 bytes"},
+        {"count-not-a-number.vtu", "NumberOfPoints \"abc\", expected a whole number"},
+        {"zero-block-size.vtu", "blocks of 0 bytes each"},
+        {"nan-value.vtu", "PointData f: nan at point 30 is not a number"},
+        {"inf-value.vtu", "PointData v: inf at point 0 (component 0) is infinite"},
+        {"huge-value.vtu", "PointData f: 1e+39 at point 3 is beyond float32's range"},
         {"no-such-file.vtu", "no such file"},
     };
     for (const auto& c : cases) {
@@ -187,6 +192,10 @@ TEST(VtkXmlBadInput, OneClearErrorEach)
         EXPECT_LT(message.size(), path.string().size() + 200) << message;
     }
     EXPECT_NE(errorOf([] { readPvd(variantsDir() / "times-backwards.pvd"); }).find("does not follow"), std::string::npos);
+    EXPECT_NE(errorOf([] { readPvtu(variantsDir() / "outside.pvtu"); }).find("Piece Source \"../secret.vtu\" lies outside"),
+              std::string::npos);
+    EXPECT_NE(errorOf([] { readPvd(variantsDir() / "no-timestep.pvd"); }).find("DataSet record.pvtu has no timestep"),
+              std::string::npos);
     EXPECT_NE(errorOf([] { readPvtu(variantsDir() / "nowhere.pvtu"); }).find("no such file"), std::string::npos);
     EXPECT_NE(errorOf([] { readPvd(variantsDir() / "record.pvtu"); }).find("expected Collection"), std::string::npos);
 }

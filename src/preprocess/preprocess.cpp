@@ -151,8 +151,8 @@ RunPlan planRun(const std::vector<fs::path>& inputs, const PreprocessOptions& op
         fail("preprocess: no input files");
     if (!(options.dtMyr > 0))
         fail("--dt-myr: {} is not a positive time step", options.dtMyr);
-    if (options.sampleRows == 0)
-        fail("--sample-rows: must be at least 1");
+    if (options.sampleRows == 0 || options.sampleRows > kMaxSampleRows)
+        fail("--sample-rows: {}, expected 1 to {} rows", options.sampleRows, kMaxSampleRows);
     if (!options.timesMyr.empty()) {
         RAYPC_CHECK_EQ(options.timesMyr.size(), inputs.size());
         for (size_t s = 0; s < inputs.size(); ++s)
@@ -295,14 +295,42 @@ std::vector<uint32_t> writeSampleCoordinates(const fs::path& dir, const Spherica
     return cells;
 }
 
+// The size and modification time of each file step `input` is read from (format::kStepInputs).
+json inputFingerprint(const fs::path& input)
+{
+    json files = json::array();
+    for (const fs::path& file : stepSourceFiles(input)) {
+        std::error_code ec;
+        const auto size = fs::file_size(file, ec);
+        const auto mtime = fs::last_write_time(file, ec);
+        if (ec)
+            fail("{}: cannot read its size and time: {}", file.string(), ec.message());
+        files.push_back({{"file", file.filename().string()},
+                         {"bytes", size},
+                         {"modified_ns", int64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                     mtime.time_since_epoch())
+                                                     .count())}});
+    }
+    return files;
+}
+
 // Phase 4: the steps an earlier run finished (their step.json, kept) and the ones to do (a step
-// directory without step.json is removed).
-std::vector<int> findStepsToDo(const OutputDirectory& out, size_t stepCount, std::vector<json>& stepJsons,
-                               PreprocessSummary& summary)
+// directory without step.json is removed, and so is a finished step whose input files changed
+// since that run: their size or modification time differs from its inputs.json).
+std::vector<int> findStepsToDo(const OutputDirectory& out, const std::vector<fs::path>& inputs,
+                               std::vector<json>& stepJsons, PreprocessSummary& summary)
 {
     std::vector<int> todo;
-    for (size_t s = 0; s < stepCount; ++s) {
+    for (size_t s = 0; s < inputs.size(); ++s) {
         const fs::path stepPath = format::stepDir(out.path(), static_cast<int>(s));
+        const fs::path fingerprint = stepPath / format::kStepInputs;
+        if (fs::exists(stepPath / format::kStepManifest) && fs::exists(fingerprint) &&
+            parseJsonInput(readFile(fingerprint), fingerprint.string()) != inputFingerprint(inputs[s])) {
+            spdlog::warn("{}: changed since an earlier run made step {} from it (size or modification time); "
+                         "making the step again",
+                         inputs[s].string(), s);
+            fs::remove_all(stepPath);
+        }
         if (fs::exists(stepPath / format::kStepManifest)) {
             stepJsons[s] = parseJsonInput(readFile(stepPath / format::kStepManifest),
                                           (stepPath / format::kStepManifest).string());
@@ -326,6 +354,7 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
     const auto& specs = plan.specs;
     const auto stepStart = std::chrono::steady_clock::now();
     auto elapsed = [&] { return secondsSince(stepStart); };
+    const json fingerprint = inputFingerprint(input);  // before reading: a change while reading is seen next time
     Snapshot snap = readStep(input, plan.reader);
     spdlog::debug("{}: read in {:.2f} s", input.filename().string(), elapsed());
     checkSameGrid(input, snap.grid, plan.header.grid, inputs.front());
@@ -384,6 +413,7 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
         }
     });
     writeArray<float>(tmpDir / format::kStepSample, sample);
+    writeFileAtomic(tmpDir / format::kStepInputs, fingerprint.dump(1));
     {
         std::ofstream file(tmpDir / format::kStepManifest);
         file << stepJson.dump(1);
@@ -447,7 +477,7 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
     std::vector<int> todo;
     mpi::together([&] {
         if (mpi::isRoot())
-            todo = findStepsToDo(*out, inputs.size(), stepJsons, summary);
+            todo = findStepsToDo(*out, inputs, stepJsons, summary);
     });
     if (mpi::distributed()) {
         // Rank 0 found what an earlier run left; every rank needs the list and the finished steps.

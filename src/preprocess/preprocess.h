@@ -39,6 +39,9 @@ struct PreprocessProgress {
     int done = 0, total = 0;
 };
 
+// The largest parallel-coordinates sample: 10⁸ rows of 8 variables are 3.2 GB in memory.
+inline constexpr size_t kMaxSampleRows = 100'000'000;
+
 struct PreprocessOptions {
     ReaderOptions reader;
     double dtMyr = 2.0;          // time between consecutive input files

@@ -347,6 +347,13 @@ public:
         if (first > last)
             fail("steps: {}..{} is empty", first, last);
         m_dataset->checkLevel(level, "level");
+        render::FeatureSettings settings;
+        settings.minVolumeKm3 = float(minVolumeKm3);
+        settings.depthsKm.assign(depthsKm.begin(), depthsKm.end());
+        settings.bandHalfWidthKm = float(bandHalfWidthKm);
+        render::checkFeatureSettings(settings, {{"minVolumeKm3", "min_volume_km3"},
+                                                {"depthsKm", "depths_km"},
+                                                {"bandHalfWidthKm", "band_half_width_km"}});
         FeatureOptions options;
         options.minVolumeKm3 = minVolumeKm3;
         options.bandDepthsKm = std::move(depthsKm);

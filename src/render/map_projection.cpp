@@ -45,6 +45,24 @@ RobinsonRow robinsonAt(double absPhi)
     return {f(a.x, b.x, c.x), f(a.y, b.y, c.y) * kRobinsonYScale};
 }
 
+// The inverse of robinsonAt's y: |phi| (radians) at the distance `absY` from the equator. Between
+// two rows Stirling's interpolation is a quadratic in the fraction d of the 5° step, increasing
+// from the row's y (d = 0) to the next row's (d = 1): the row is found in the table and the
+// quadratic solved in closed form (a map's every pixel is inverted: 60 bisections per pixel made
+// a 4096² Robinson map take 20 s).
+double robinsonLatitude(double absY)
+{
+    const double t = std::min(absY / kRobinsonYScale, kRobinson[19].y);
+    int i0 = 0;  // the interval [i0 · 5°, (i0 + 1) · 5°] spans rows i0 + 1 .. i0 + 2 of the table
+    while (i0 < 17 && kRobinson[i0 + 2].y < t)
+        ++i0;
+    const double a = kRobinson[i0].y, b = kRobinson[i0 + 1].y, c = kRobinson[i0 + 2].y;
+    const double qa = (c - 2 * b + a) / 2, qb = (c - a) / 2, rhs = t - b;
+    // qa d² + qb d = rhs, in the form that stays exact as qa goes to 0.
+    const double d = 2 * rhs / (qb + std::sqrt(std::max(0.0, qb * qb + 4 * qa * rhs)));
+    return (i0 + std::clamp(d, 0.0, 1.0)) * kPi / 36;
+}
+
 // Mollweide's auxiliary angle theta: 2 theta + sin 2 theta = pi sin phi (Newton's method).
 double mollweideTheta(double phi)
 {
@@ -206,13 +224,7 @@ std::optional<std::array<double, 2>> Projector::inverse(double x, double y) cons
         const double yMax = kRobinson[19].y * kRobinsonYScale;
         if (std::abs(y) > yMax * (1 + 1e-9))
             return std::nullopt;
-        // The distance from the equator grows with |phi|: bisection to the row's latitude.
-        double lo = 0, hi = kHalfPi;
-        for (int i = 0; i < 60; ++i) {
-            const double mid = (lo + hi) / 2;
-            (robinsonAt(mid).y < std::abs(y) ? lo : hi) = mid;
-        }
-        phi = std::copysign((lo + hi) / 2, y);
+        phi = std::copysign(robinsonLatitude(std::abs(y)), y);
         lambda = x / robinsonAt(std::abs(phi)).x;
         if (std::abs(lambda) > kPi * (1 + 1e-9))
             return std::nullopt;

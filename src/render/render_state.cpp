@@ -26,6 +26,27 @@ FeatureOptions featureOptions(const FeatureSettings& settings)
     return o;
 }
 
+void checkFeatureSettings(const FeatureSettings& settings,
+                          std::initializer_list<std::pair<std::string_view, std::string_view>> optionNames)
+{
+    RenderState state;
+    state.features = settings;
+    try {
+        parseRenderState(toJson(state), "options");
+    } catch (const Error& e) {
+        // "options: features.depthsKm[0]: expected ..." -> "--depth: expected ..."
+        const std::string message = e.what();
+        for (const auto& [key, option] : optionNames) {
+            const std::string prefix = fmt::format("options: features.{}", key);
+            if (message.starts_with(prefix)) {
+                const size_t colon = message.find(": ", prefix.size());
+                fail("{}{}", option, colon == std::string::npos ? message.substr(prefix.size()) : message.substr(colon));
+            }
+        }
+        throw;
+    }
+}
+
 std::vector<OpacityPoint> defaultOpacity(ColorMapId map)
 {
     if (isCentredOnZero(map))

@@ -16,8 +16,11 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <initializer_list>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 namespace raypc::render {
@@ -125,6 +128,13 @@ struct FeatureSettings {
 
 // The data layer's options of the state's feature settings (minimum volume, depths, band).
 FeatureOptions featureOptions(const FeatureSettings& settings);
+
+// Checks feature settings given outside a state document (command-line options, Python's arguments)
+// against the state's description of `features` (state_schema.cpp), so that both accept the same
+// values. Throws raypc::Error naming the option that `optionNames` gives for the state's key
+// (e.g. {"depthsKm", "--depth"}).
+void checkFeatureSettings(const FeatureSettings& settings,
+                          std::initializer_list<std::pair<std::string_view, std::string_view>> optionNames);
 
 struct RenderState {
     int version = kRenderStateVersion;

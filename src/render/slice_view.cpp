@@ -516,6 +516,9 @@ MapFrame mapFrameOf(const RenderState& s)
 {
     const int fontPx = legendFontPx(s.width, s.height);
     const double top = mapTopPx(s), bottom = mapBottomPx(s);
+    // The picture's size in the message: the frame's own is what is left after titles and legends.
+    if (!(s.width - 2.0 * fontPx >= 8 && bottom - top - 0.5 * fontPx >= 8))
+        fail("map: a picture of {}x{} pixels has no room for the map; choose a larger size", s.width, s.height);
     return MapFrame(s.map, fontPx, top, s.width - 2.0 * fontPx, bottom - top - 0.5 * fontPx);
 }
 

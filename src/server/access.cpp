@@ -89,14 +89,41 @@ std::string lowerCase(std::string_view s)
     return out;
 }
 
-// The host name of a Host header or URL authority "host[:port]" / "[v6]:port", lower case.
+// The host name of a Host header or URL authority "host[:port]" / "[v6]:port", lower case. An
+// authority of another form ("127.0.0.1:1@evil.example", a port that is not a number, characters
+// no host name has) comes back whole, so that it matches no host name.
 std::string hostName(std::string_view authority)
 {
+    std::string_view host = authority, rest;
     if (authority.starts_with('[')) {
         const size_t close = authority.find(']');
-        return lowerCase(authority.substr(0, close == std::string_view::npos ? authority.size() : close + 1));
+        if (close == std::string_view::npos)
+            return lowerCase(authority);
+        host = authority.substr(0, close + 1);
+        rest = authority.substr(close + 1);
+        const bool v6 = std::all_of(host.begin() + 1, host.end() - 1,
+                                    [](char c) { return std::isxdigit(static_cast<unsigned char>(c)) || c == ':' || c == '.'; });
+        if (!v6)
+            return lowerCase(authority);
+    } else {
+        const size_t colon = authority.rfind(':');
+        if (colon != std::string_view::npos) {
+            host = authority.substr(0, colon);
+            rest = authority.substr(colon);
+        }
+        const bool name = std::all_of(host.begin(), host.end(), [](char c) {
+            return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-';
+        });
+        if (!name)
+            return lowerCase(authority);
     }
-    return lowerCase(authority.substr(0, authority.rfind(':')));
+    if (!rest.empty()) {
+        const std::string_view port = rest.substr(1);
+        if (rest[0] != ':' || port.empty() || port.size() > 5 ||
+            !std::all_of(port.begin(), port.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); }))
+            return lowerCase(authority);
+    }
+    return lowerCase(host);
 }
 
 // "scheme://authority" split, or nullopt when `origin` is not of that form.
@@ -198,8 +225,19 @@ std::optional<std::string> queryParameter(std::string_view query, std::string_vi
         const std::string_view pair = query.substr(0, amp);
         const size_t eq = pair.find('=');
         const auto key = percentDecode(pair.substr(0, eq), true);
-        if (key && *key == name)
-            return eq == std::string_view::npos ? std::optional<std::string>("") : percentDecode(pair.substr(eq + 1), true);
+        if (key && *key == name) {
+            if (eq == std::string_view::npos)
+                return std::string();
+            const auto value = percentDecode(pair.substr(eq + 1), true);
+            if (!value)
+                return value;
+            std::string shown;
+            for (const char c : *value)
+                shown += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+                             ? fmt::format("\\x{:02X}", static_cast<unsigned>(static_cast<unsigned char>(c)))
+                             : std::string(1, c);
+            return shown;
+        }
         if (amp == std::string_view::npos)
             break;
         query.remove_prefix(amp + 1);

@@ -55,7 +55,9 @@ std::optional<std::string> crossSiteRefusal(const SitePolicy& policy, std::optio
 // Splits "/a/b?x=1" into path and query.
 std::string_view targetPath(std::string_view target);
 std::string_view targetQuery(std::string_view target);
-// The percent-decoded value of query parameter `name`, if present.
+// The percent-decoded value of query parameter `name`, if present. Control characters (%00 …
+// %1F, %7F) come back written out as \xNN: no name or number RayPC takes holds one, and a NUL
+// would cut short the error message that quotes the value.
 std::optional<std::string> queryParameter(std::string_view query, std::string_view name);
 // Decodes %XX and (when `plusIsSpace`) '+'. Returns nullopt on a malformed escape.
 std::optional<std::string> percentDecode(std::string_view text, bool plusIsSpace = false);

@@ -69,6 +69,9 @@ TEST(QueryParameters, DecodeAndSplit)
     EXPECT_EQ(queryParameter("step=3&var=temperature+anomaly", "var"), "temperature anomaly");
     EXPECT_EQ(queryParameter("var=radial%20velocity", "var"), "radial velocity");
     EXPECT_FALSE(queryParameter("step=3", "var"));
+    // A NUL or another control character is written out, so that a message quoting it is whole.
+    EXPECT_EQ(queryParameter("job=ab%00cd&x=1", "job"), "ab\\x00cd");
+    EXPECT_EQ(queryParameter("job=a%0Ab%7F", "job"), "a\\x0Ab\\x7F");
     EXPECT_FALSE(percentDecode("%2"));
     EXPECT_FALSE(percentDecode("%zz"));
     EXPECT_EQ(percentDecode("%2e%2E"), "..");
@@ -127,7 +130,8 @@ TEST(CrossSite, LoopbackAnswersOnlyLoopbackHostNames)
     for (const char* host : {"127.0.0.1:8080", "localhost:8080", "LOCALHOST", "[::1]:8080", "127.0.0.1", "127.3.4.5:1"})
         EXPECT_FALSE(crossSiteRefusal(loopback, host, std::nullopt)) << host;
     for (const char* host : {"evil.example", "evil.example:8080", "127.0.0.1.evil.example:8080", "localhost.evil:8080",
-                             "192.168.1.2:8080", "[::2]:8080", ""}) {
+                             "192.168.1.2:8080", "[::2]:8080", "", "127.0.0.1:1@evil.example",
+                             "127.0.0.1:80/x", "localhost:abc", "[::1]x", "127.0.0.1 :8080"}) {
         const auto why = crossSiteRefusal(loopback, host, std::nullopt);
         ASSERT_TRUE(why) << host;
         EXPECT_NE(why->find("Host '" + std::string(host) + "'"), std::string::npos) << *why;

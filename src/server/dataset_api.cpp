@@ -447,7 +447,7 @@ const Route kRoutes[] = {
     {HttpMethod::Get, "/api/sample", Lane::Worker, sample},
     {HttpMethod::Post, "/api/selection", Lane::Worker, selection},
     {HttpMethod::Post, "/api/screenshot", Lane::Screenshot, screenshot},
-    {HttpMethod::Post, "/api/slice", Lane::Worker, slice},
+    {HttpMethod::Post, "/api/slice", Lane::Slice, slice},
     {HttpMethod::Get, "/api/probe", Lane::Worker, probe},
     {HttpMethod::Get, "/api/presets", Lane::Worker, presets},
     {HttpMethod::Post, "/api/stats", Lane::Statistics, stats},

@@ -63,7 +63,7 @@ enum class HttpMethod { Get, Post };
 // Where a handler runs (server_context.h): on the network thread (only answers that are ready or take
 // microseconds, without a body to parse), on the worker pool (quick requests), or one at a time in the
 // lane of statistics over time or of screenshots (long requests, with a bounded queue).
-enum class Lane { Network, Worker, Statistics, Screenshot };
+enum class Lane { Network, Worker, Statistics, Screenshot, Slice };
 
 // A handler throws raypc::Error for a bad request (the connection answers 400 with its message).
 using ApiHandler = ApiAnswer (*)(const ApiContext&, const ApiRequest&);

@@ -264,6 +264,7 @@ private:
         switch (lane) {
         case Lane::Screenshot: return m_server.screenshots;
         case Lane::Statistics: return m_server.statistics;
+        case Lane::Slice: return m_server.slices;
         default: return m_server.workers;
         }
     }

@@ -47,7 +47,7 @@ struct ServerLimits {
     int64_t maxScreenshotPixels = int64_t(4096) * 4096;
     int maxScreenshotPasses = 1024;
     int64_t maxScreenshotPixelPasses = int64_t(1024) * 1024 * 256;
-    // Requests of the one-at-a-time lanes (screenshots; statistics over time) that may wait behind
+    // Requests of the one-at-a-time lanes (screenshots; statistics over time; maps and sections) that may wait behind
     // the one running; more are answered 503.
     size_t maxWaitingJobs = 4;
 

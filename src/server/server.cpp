@@ -175,7 +175,7 @@ Server::~Server()
             if (auto session = weak.lock())
                 session->cancel();
     }
-    for (JobLane* lane : {&s.workers, &s.screenshots, &s.statistics})
+    for (JobLane* lane : {&s.workers, &s.screenshots, &s.statistics, &s.slices})
         lane->pool().join();
     s.messages.join();
     std::lock_guard lock(s.sessionsMutex);

@@ -116,7 +116,8 @@ struct ServerContext {
         : options(std::move(serverOptions)),
           frameBudget(options.limits.sessionFrameBytes),
           screenshots("screenshots", 1, 1 + options.limits.maxWaitingJobs),
-          statistics("statistics", 1, 1 + options.limits.maxWaitingJobs)
+          statistics("statistics", 1, 1 + options.limits.maxWaitingJobs),
+          slices("slices", 1, 1 + options.limits.maxWaitingJobs)
     {
     }
 
@@ -135,10 +136,11 @@ struct ServerContext {
     std::optional<std::filesystem::path> assets;
 
     // Where work runs besides the network thread (docs/reliability.md, Server): the quick API
-    // requests; screenshots and statistics over time one at a time each, so that neither can hold up
-    // the quick requests or the other; the WebSocket messages (parsing, validation, hand-over to the
-    // render thread), which never wait behind an API request.
-    JobLane screenshots, statistics;
+    // requests; screenshots, statistics over time and map or section pictures one at a time each
+    // (a 4096² Robinson map takes seconds), so that none can hold up the quick requests or the
+    // others; the WebSocket messages (parsing, validation, hand-over to the render thread), which
+    // never wait behind an API request.
+    JobLane screenshots, statistics, slices;
     JobLane workers{"workers", 2, SIZE_MAX};
     boost::asio::thread_pool messages{1};
     JobRegistry jobs;

@@ -782,6 +782,65 @@ netcdf4_serve_quiet)
   "$raypc" info "$work/nc4/spherical002.nc" > "$work/info.log" 2>&1
   check "nor from info of a netCDF-4 file" test "$(grep -c HDF5-DIAG "$work/info.log")" -eq 0
   ;;
+outputs_and_options)
+  # Outputs never replace a device or a link; options are checked as the state checks them; an
+  # output named for another format is refused; the messages name the option.
+  "$raypc" synth -o "$work/nc" --steps 2 --grid 24x21x48 >/dev/null
+  "$raypc" preprocess "$work/nc" -o "$work/ds" --quiet --sample-rows 500 --no-pathlines >/dev/null
+  if [[ -c /dev/full ]]; then
+    expect_error "/dev/full: write failed" features "$work/ds" --range "temperature anomaly=-1000:-100" -o /dev/full --quiet
+    check "/dev/full is still a character device" test -c /dev/full
+  fi
+  "$raypc" render "$work/ds" --size 64x64 --passes 1 -o /dev/null >/dev/null
+  check "render -o /dev/null succeeds and /dev/null stays a device" test $? -eq 0 -a -c /dev/null
+  mkdir -p "$work/real"
+  ln -s real/stats.csv "$work/link.csv"
+  "$raypc" stats "$work/ds" --range "depth=0:660" -o "$work/link.csv" --quiet >/dev/null
+  check "an output through a symbolic link keeps the link" test -L "$work/link.csv"
+  check "  and writes its target" grep -q '^step,' "$work/real/stats.csv"
+  expect_error "-o $work/map.nc: the name says .nc but -o writes PNG" map "$work/ds" --depth 660 -o "$work/map.nc"
+  expect_error "/dev/null: not a regular file (a device or a pipe); the --netcdf grid is written to a regular file" map "$work/ds" --depth 660 -o "$work/map.png" --netcdf /dev/null
+  expect_error "--tracks $work/t.png: the name says .png but --tracks writes CSV" features "$work/ds" \
+    --range "depth=0:660" -o "$work/f.csv" --tracks "$work/t.png"
+  expect_error "--depth: expected" features "$work/ds" --range "depth=0:660" -o "$work/f.csv" --depth -5
+  expect_error "--depth: expected" features "$work/ds" --range "depth=0:660" -o "$work/f.csv" --depth 1e30
+  expect_error "--band-half-width: expected" features "$work/ds" --range "depth=0:660" -o "$work/f.csv" --band-half-width 1e30
+  expect_error "--min-overlap: expected" features "$work/ds" --range "depth=0:660" -o "$work/f.csv" --min-overlap 2
+  expect_error "--heat-capacity: 1e+300" flux "$work/ds" --range "depth=0:660" -o "$work/x.csv" --heat-flux --heat-capacity 1e300
+  expect_error "--sample-rows: '-1'" preprocess "$work/nc" -o "$work/y" --sample-rows -1
+  expect_error "--sample-rows: '1e11'" preprocess "$work/nc" -o "$work/y" --sample-rows 1e11
+  expect_error "--sample-rows: '18446744073709551615'" preprocess "$work/nc" -o "$work/y" --sample-rows 18446744073709551615
+  expect_error "a picture of 1x1 pixels has no room for the map" map "$work/ds" --depth 660 --size 1x1 -o "$work/tiny.png"
+  # A non-finite value in a VTK array: one line naming it (`info` crashed on NaN, aborted on Inf).
+  vtk="$(dirname "$fixture")/vtk-xml"
+  expect_error "PointData f: nan at point 30 is not a number" info "$vtk/nan-value.vtu"
+  expect_error "PointData f: 1e+39 at point 3 is beyond float32's range" info "$vtk/huge-value.vtu"
+  check "nothing written by the refused commands" test ! -e "$work/map.nc" -a ! -e "$work/map.png" -a ! -e "$work/f.csv" \
+    -a ! -e "$work/x.csv" -a ! -e "$work/y" -a ! -e "$work/tiny.png"
+  ;;
+resume_changed_input)
+  # A resumed preprocess redoes a finished step whose input changed since (size or modification time).
+  "$raypc" synth -o "$work/nc" --steps 8 --grid 48x61x96 >/dev/null 2>&1
+  "$raypc" synth -o "$work/other" --steps 1 --grid 48x61x96 --seed 7 >/dev/null 2>&1
+  "$raypc" preprocess "$work/nc" -o "$work/ds" --quiet --no-pathlines >/dev/null 2>&1 &
+  pid=$!
+  for _ in $(seq 1 600); do
+    [[ -f $work/ds/steps/0000/step.json ]] && break
+    sleep 0.05
+  done
+  kill -9 "$pid" 2>/dev/null; wait "$pid" 2>/dev/null
+  check "step 0 was finished before the kill" test -f "$work/ds/steps/0000/step.json"
+  cp "$work/other/spherical001.nc" "$work/nc/spherical001.nc"
+  touch -d '2000-01-01' "$work/nc/spherical001.nc"
+  "$raypc" preprocess "$work/nc" -o "$work/ds" --no-pathlines > "$work/resume.log" 2>&1
+  check "the resumed run names the changed input" grep -q "spherical001.nc: changed since an earlier run made step 0" "$work/resume.log"
+  "$raypc" preprocess "$work/nc" -o "$work/fresh" --quiet --no-pathlines >/dev/null
+  for point in "--lat 10 --lon 20 --r 5000" "--lat -60 --lon 300 --r 4000"; do
+    # shellcheck disable=SC2086
+    check "step 0 at ($point) equals a fresh run's" test "$("$raypc" probe "$work/ds" --time 0 $point | sed 1d)" = \
+      "$("$raypc" probe "$work/fresh" --time 0 $point | sed 1d)"
+  done
+  ;;
 *) echo "unknown case $case_name"; exit 2 ;;
 esac
 

@@ -290,6 +290,30 @@ TEST(Screenshot, WaitingScreenshotsAreBounded)
     EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/screenshot", smallState().dump()).status, 200);
 }
 
+// Map and section pictures run on a lane of their own, bounded as screenshots are: large maps
+// asked for at once get 503 beyond one running and four waiting, and the quick requests (presets,
+// which waited 40 s behind eight 4096² Robinson maps) are answered while they run.
+TEST(Slices, WaitingSlicesAreBoundedAndQuickRequestsAnswer)
+{
+    ServerProcess server;
+    json state = smallState(30, "viridis", 1);
+    state["version"] = 9;
+    state["map"] = {{"depthKm", 1000}, {"projection", "robinson"}};
+    state["image"] = {{"width", 4096}, {"height", 4096}};
+    std::vector<std::unique_ptr<PendingRequest>> maps;
+    for (int i = 0; i < 5; ++i)  // one draws, four wait
+        maps.push_back(std::make_unique<PendingRequest>(server.port, "/api/slice?view=map", state.dump()));
+    PendingRequest sixth(server.port, "/api/slice?view=map", state.dump());
+    const auto busy = sixth.read(30);
+    EXPECT_EQ(busy.status, 503);
+    EXPECT_NE(errorOf(busy).find("busy: 5 requests of /api/slice"), std::string::npos) << busy.body;
+    EXPECT_EQ(httpGet(server.port, "/api/presets").status, 200);
+    EXPECT_EQ(httpGet(server.port, "/api/info").status, 200);
+    EXPECT_FALSE(maps.back()->answered()) << "the last map was drawn before the quick requests were answered";
+    const auto first = maps.front()->read(120);
+    EXPECT_EQ(first.status, 200) << first.body;
+}
+
 TEST(Screenshot, SigtermDuringALongScreenshotExitsWithinFiveSeconds)
 {
     ServerProcess server;

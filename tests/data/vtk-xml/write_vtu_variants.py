@@ -135,6 +135,25 @@ def corrupt_first_block(data):
     return data[: start + 2] + b"\xff" * 6 + data[start + 8:]
 
 
+def points_of_mesh():
+    return mesh()[0]
+
+
+def replace_value(data, array_name, index, text):
+    """`data` (an ascii .vtu) with value `index` of the DataArray named by `array_name` replaced by `text`."""
+    start = data.index(b">", data.index(array_name)) + 1
+    end = data.index(b"</DataArray>", start)
+    values = data[start:end].split()
+    values[index] = text
+    return data[:start] + b"\n" + b" ".join(values) + b"\n" + data[end:]
+
+
+def zero_block_size(data):
+    """`data` (appended raw, zlib, UInt32 headers) with the first array's block size set to 0."""
+    start = data.index(b"_", data.index(b"<AppendedData")) + 1
+    return data[: start + 4] + struct.pack("<I", 0) + data[start + 8:]
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit("usage: write_vtu_variants.py OUT_DIR")
@@ -180,13 +199,28 @@ def main():
         "bad-index.vtu": open(os.path.join(tmp, "ascii-plain-UInt32-Float32.vtu"), "rb").read().replace(
             b'Name="connectivity" format="ascii">\n0 ', b'Name="connectivity" format="ascii">\n999 ', 1),
         "big-count.vtu": good.replace(b'NumberOfPoints="45"', b'NumberOfPoints="4000000"', 1),
+        "count-not-a-number.vtu": good.replace(b'NumberOfPoints="45"', b'NumberOfPoints="abc"', 1),
+        "zero-block-size.vtu": zero_block_size(raw),
     }
+    # Values a reader must refuse rather than carry on (a NaN crashed `raypc info`): the value 30 of
+    # "f" as NaN, the first component of "v" infinite, and a Float64 beyond float32's range.
+    ascii64 = open(os.path.join(tmp, "ascii-plain-UInt32-Float64.vtu"), "rb").read()
+    bad["nan-value.vtu"] = replace_value(ascii64, b'Name="f"', 30, b"nan")
+    bad["inf-value.vtu"] = replace_value(ascii64, b'Name="v"', 0, b"inf")
+    bad["huge-value.vtu"] = replace_value(ascii64, b'Name="f"', 3, b"1e39")
     for name, data in bad.items():
         with open(os.path.join(tmp, name), "wb") as fh:
             fh.write(data)
     with open(os.path.join(tmp, "missing-piece.pvd"), "w") as fh:
         fh.write('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1"><Collection>\n'
                  '<DataSet timestep="0" file="nowhere.pvtu"/>\n</Collection>\n</VTKFile>\n')
+    with open(os.path.join(tmp, "outside.pvtu"), "w") as fh:
+        fh.write('<?xml version="1.0"?>\n<VTKFile type="PUnstructuredGrid" version="0.1" byte_order="LittleEndian">\n'
+                 '<PUnstructuredGrid GhostLevel="0">\n<Piece Source="../secret.vtu"/>\n'
+                 '</PUnstructuredGrid>\n</VTKFile>\n')
+    with open(os.path.join(tmp, "no-timestep.pvd"), "w") as fh:
+        fh.write('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1"><Collection>\n'
+                 '<DataSet file="record.pvtu"/>\n<DataSet file="sub/record.pvtu"/>\n</Collection>\n</VTKFile>\n')
     with open(os.path.join(tmp, "times-backwards.pvd"), "w") as fh:
         fh.write('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1"><Collection>\n'
                  '<DataSet timestep="5" file="a.pvtu"/>\n<DataSet timestep="1" file="b.pvtu"/>\n</Collection>\n</VTKFile>\n')
