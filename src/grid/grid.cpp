@@ -195,7 +195,7 @@ void SphericalGrid::validate(const std::string& what) const
     if (!strictlyAscending(latDeg) || latDeg.front() < -90.0 || latDeg.back() > 90.0)
         fail("{}: lat coordinates are not strictly monotonic within [-90, 90] degrees", what);
     if (!strictlyAscending(rKm) || rKm.front() <= 0.0)
-        fail("{}: r coordinates are not strictly monotonic and positive", what);
+        fail("{}: the radii (from the radius or depth coordinate) are not strictly monotonic and positive", what);
     if (!strictlyAscending(lonDeg) || lonDeg.front() < 0.0 || lonDeg.back() >= 360.0)
         fail("{}: lon coordinates are not strictly monotonic within [0, 360) degrees", what);
     // The renderer wraps lon: a regional grid would be stretched over the globe.

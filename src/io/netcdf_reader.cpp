@@ -300,8 +300,7 @@ int findCoordinateVar(const NcFile& file, Axis axis, const std::string& explicit
     if (!explicitName.empty()) {
         if (auto id = file.findVar(explicitName))
             return *id;
-        fail("{}: no coordinate variable '{}' (given for {})", file.path().string(), explicitName,
-             kAxisNames[axis]);
+        fail("{}: no coordinate variable '{}' (given with {})", file.path().string(), explicitName, kOptions[axis]);
     }
     int nVars = 0;
     file.check(nc_inq_nvars(file.id(), &nVars), "listing variables");
@@ -329,14 +328,15 @@ int findCoordinateVar(const NcFile& file, Axis axis, const std::string& explicit
         for (int v : found)
             claimants.push_back(file.varName(v));
         fail("{}: the variables {} all say by their CF attributes that they are the {} coordinate; name one with {}",
-             file.path().string(), fmt::join(claimants, ", "), kAxisNames[axis], kOptions[axis]);
+             file.path().string(), fmt::join(claimants, ", "), axis == kR ? "radius or depth" : kAxisNames[axis],
+             kOptions[axis]);
     }
     for (const auto& name : names)
         if (auto id = file.findVar(name))
             return *id;
     fail("{}: no {} coordinate variable found (looked for CF attributes standard_name, axis, units{} and the names "
          "{}); name it with {}",
-         file.path().string(), kAxisNames[axis], axis == kR ? ", positive" : "",
+         file.path().string(), axis == kR ? "radius or depth" : kAxisNames[axis], axis == kR ? ", positive" : "",
          axis == kLat ? "lat/latitude" : axis == kR ? "r/radius/depth" : "lon/longitude", kOptions[axis]);
 }
 

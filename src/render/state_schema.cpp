@@ -122,10 +122,11 @@ Kind<T> number(double lo = -INFINITY, double hi = INFINITY)
                 if (!v.is_number())
                     r.failAt(key, "expected a number, found " + jsonExcerpt(v));
                 const double x = v.get<double>();
-                if (!fitsFloat32(x))
-                    r.failAt(key, fmt::format("{} is beyond the float32 range", x));
+                // The bounds first: a NaN (a program's value; JSON text holds none) is out of them.
                 if (!(x >= lo && x <= hi))
                     r.failAt(key, fmt::format("expected a number in [{}, {}], found {}", lo, hi, x));
+                if (!fitsFloat32(x))
+                    r.failAt(key, fmt::format("{} is beyond the float32 range", x));
                 target = T(x);
             },
             [](const T& x) { return json(x); }, numberSchema("number", lo, hi), rangeText("number", lo, hi)};

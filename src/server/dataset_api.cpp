@@ -441,23 +441,23 @@ ApiAnswer linkPost(const ApiContext& api, const ApiRequest& request)
 }
 
 const Route kRoutes[] = {
-    {HttpMethod::Get, "/api/info", Lane::Network, info},
-    {HttpMethod::Get, "/api/progress", Lane::Network, progress},
-    {HttpMethod::Get, "/api/histogram", Lane::Network, histogram},
-    {HttpMethod::Get, "/api/sample", Lane::Worker, sample},
-    {HttpMethod::Post, "/api/selection", Lane::Worker, selection},
-    {HttpMethod::Post, "/api/screenshot", Lane::Screenshot, screenshot},
-    {HttpMethod::Post, "/api/slice", Lane::Slice, slice},
-    {HttpMethod::Get, "/api/probe", Lane::Worker, probe},
-    {HttpMethod::Get, "/api/presets", Lane::Worker, presets},
-    {HttpMethod::Post, "/api/stats", Lane::Statistics, stats},
-    {HttpMethod::Post, "/api/features", Lane::Statistics, features},
-    {HttpMethod::Get, "/api/job-progress", Lane::Network, jobProgress},
-    {HttpMethod::Post, "/api/time-depth", Lane::Statistics, timeDepth},
-    {HttpMethod::Get, "/api/pathlines", Lane::Worker, pathlines},
-    {HttpMethod::Get, "/api/persistence", Lane::Worker, persistence},
-    {HttpMethod::Get, "/api/link", Lane::Worker, linkGet},
-    {HttpMethod::Post, "/api/link", Lane::Worker, linkPost},
+    {HttpMethod::Get, "/api/info", Lane::Network, info, ""},
+    {HttpMethod::Get, "/api/progress", Lane::Network, progress, ""},
+    {HttpMethod::Get, "/api/histogram", Lane::Network, histogram, "step,var"},
+    {HttpMethod::Get, "/api/sample", Lane::Worker, sample, "step,columns"},
+    {HttpMethod::Post, "/api/selection", Lane::Worker, selection, ""},
+    {HttpMethod::Post, "/api/screenshot", Lane::Screenshot, screenshot, ""},
+    {HttpMethod::Post, "/api/slice", Lane::Slice, slice, "view"},
+    {HttpMethod::Get, "/api/probe", Lane::Worker, probe, "step,lat,lon,depthKm,var,level"},
+    {HttpMethod::Get, "/api/presets", Lane::Worker, presets, ""},
+    {HttpMethod::Post, "/api/stats", Lane::Statistics, stats, "level"},
+    {HttpMethod::Post, "/api/features", Lane::Statistics, features, "level,sigmas,job"},
+    {HttpMethod::Get, "/api/job-progress", Lane::Network, jobProgress, "job"},
+    {HttpMethod::Post, "/api/time-depth", Lane::Statistics, timeDepth, "level,of,var,format,width,height"},
+    {HttpMethod::Get, "/api/pathlines", Lane::Worker, pathlines, "step,window"},
+    {HttpMethod::Get, "/api/persistence", Lane::Worker, persistence, "step,top,var"},
+    {HttpMethod::Get, "/api/link", Lane::Worker, linkGet, ""},
+    {HttpMethod::Post, "/api/link", Lane::Worker, linkPost, ""},
 };
 
 }  // namespace
@@ -465,6 +465,35 @@ const Route kRoutes[] = {
 std::span<const Route> apiRoutes()
 {
     return kRoutes;
+}
+
+void checkQueryParameters(const Route& route, std::string_view query)
+{
+    std::vector<std::string> seen;
+    while (!query.empty()) {
+        const size_t amp = query.find('&');
+        const std::string_view pair = query.substr(0, amp);
+        query.remove_prefix(amp == std::string_view::npos ? query.size() : amp + 1);
+        if (pair.empty())
+            continue;
+        const std::string key = percentDecode(pair.substr(0, pair.find('=')), true).value_or(std::string(pair));
+        const std::string shown = key.substr(0, 60);
+        if (std::find(seen.begin(), seen.end(), key) != seen.end())
+            fail("query: parameter '{}' is given twice", shown);
+        seen.push_back(key);
+        if (key == "token")
+            continue;
+        bool known = false;
+        for (std::string_view rest = route.parameters; !rest.empty() && !known;) {
+            const size_t comma = rest.find(',');
+            known = rest.substr(0, comma) == key;
+            rest.remove_prefix(comma == std::string_view::npos ? rest.size() : comma + 1);
+        }
+        if (!known)
+            fail("query: unknown parameter '{}' for {} ({})", shown, route.path,
+                 route.parameters.empty() ? std::string("it takes none")
+                                          : fmt::format("it takes {}", route.parameters));
+    }
 }
 
 }  // namespace raypc::server

@@ -73,9 +73,14 @@ struct Route {
     std::string_view path;
     Lane lane;
     ApiHandler handler;
+    std::string_view parameters;  // the query parameters it takes, comma-separated (besides `token`)
 };
 
 // Every /api/ endpoint of docs/protocol.md.
 std::span<const Route> apiRoutes();
+
+// Throws raypc::Error (answered 400) for a query parameter `route` does not take or one given
+// twice, naming it and the parameters the route takes, as unknown JSON keys are refused.
+void checkQueryParameters(const Route& route, std::string_view query);
 
 }  // namespace raypc::server

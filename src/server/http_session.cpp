@@ -198,6 +198,7 @@ private:
                 const auto found = std::find_if(routes.begin(), routes.end(),
                                                 [&](const Route& r) { return r.path == path && r.method == method; });
                 if (found != routes.end()) {
+                    checkQueryParameters(*found, targetQuery(target));
                     if (found->lane == Lane::Network)
                         send(answerResponse(found->handler(m_server.api, {targetQuery(target), request.body(), nullptr}),
                                             version, keepAlive));

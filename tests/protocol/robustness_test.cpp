@@ -290,6 +290,28 @@ TEST(Screenshot, WaitingScreenshotsAreBounded)
     EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/screenshot", smallState().dump()).status, 200);
 }
 
+// Query parameters are checked as JSON keys are: one the endpoint does not take, or one given twice,
+// is 400 naming it; a NUL in a value does not cut the message short.
+TEST(Query, UnknownRepeatedAndControlCharactersAreRefusedWhole)
+{
+    ServerProcess server;
+    const auto unknown = httpGet(server.port, "/api/histogram?step=0&var=temperature&colour=red");
+    EXPECT_EQ(unknown.status, 400);
+    EXPECT_NE(errorOf(unknown).find("unknown parameter 'colour' for /api/histogram (it takes step,var)"),
+              std::string::npos)
+        << unknown.body;
+    const auto twice = httpGet(server.port, "/api/histogram?step=0&step=1&var=temperature");
+    EXPECT_EQ(twice.status, 400);
+    EXPECT_NE(errorOf(twice).find("parameter 'step' is given twice"), std::string::npos) << twice.body;
+    const auto none = httpGet(server.port, "/api/info?verbose=1");
+    EXPECT_EQ(none.status, 400);
+    EXPECT_NE(errorOf(none).find("(it takes none)"), std::string::npos) << none.body;
+    const auto nul = httpGet(server.port, "/api/job-progress?job=ab%00cd");
+    EXPECT_EQ(nul.status, 400);
+    EXPECT_NE(errorOf(nul).find("'ab\\x00cd' is not a job id"), std::string::npos) << nul.body;
+    EXPECT_EQ(httpGet(server.port, "/api/histogram?step=0&var=temperature").status, 200);
+}
+
 // Map and section pictures run on a lane of their own, bounded as screenshots are: large maps
 // asked for at once get 503 beyond one running and four waiting, and the quick requests (presets,
 // which waited 40 s behind eight 4096² Robinson maps) are answered while they run.

@@ -112,6 +112,10 @@ def test_render_overrides_and_refuses(contest):
         contest.render(BRUSHED, step=5)
     with pytest.raises(raypc.Error, match="image.width"):
         contest.render(BRUSHED, size=(0, 10))
+    # A long string that is not JSON (taken for a path) is not quoted whole in the message.
+    with pytest.raises(raypc.Error, match="200000 characters") as refused:
+        contest.render("x" * 200_000)
+    assert len(str(refused.value)) < 300
 
 
 def test_stats_equal_the_cli(contest, tmp_path):
@@ -160,6 +164,10 @@ def test_features_equal_the_cli(contest, tmp_path):
     assert list(contest.features(caps, steps=1, progress=False)["step"]) == [1, 1]
     with pytest.raises(raypc.Error, match="no brushes"):
         contest.features({"version": 4}, progress=False)
+    # The arguments are checked as a state's features are, and named as Python names them.
+    for bad in ({"min_volume_km3": float("nan")}, {"depths_km": [-5]}, {"band_half_width_km": 1e30}):
+        with pytest.raises(raypc.Error, match=f"^{next(iter(bad))}: expected"):
+            contest.features(caps, progress=False, **bad)
     # The state's feature settings (version 10) stand for the arguments left out.
     saved = dict(caps, version=10, features={"depthsKm": [300], "minVolumeKm3": 0})
     pd.testing.assert_frame_equal(contest.features(saved, progress=False), cli)

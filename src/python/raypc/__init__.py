@@ -162,7 +162,8 @@ class State:
             try:
                 text = path.read_text()
             except OSError as e:
-                raise Error(f"{path}: cannot read the state ({e.strerror})") from None
+                shown = str(path) if len(str(path)) <= 120 else f"{str(path)[:80]}… ({len(str(path))} characters)"
+                raise Error(f"{shown}: cannot read the state ({e.strerror})") from None
             object.__setattr__(self, "_doc", json.loads(_raypc.check_state(text)))
             return
         elif isinstance(source, str):
