@@ -250,15 +250,19 @@ constexpr std::initializer_list<const char*> kMetres = {"m", "meter", "meters", 
 // Radii RayPC takes for a mantle's when a coordinate's units do not say what its numbers are.
 constexpr double kMantleMinKm = 3000.0, kMantleMaxKm = 7000.0;
 
-std::vector<std::string> requestedVariables(const ReaderOptions& options)
-{
-    return options.variables.empty() ? contestVariableNames() : options.variables;
-}
-
 std::string fileNameOf(const ReaderOptions& options, const std::string& canonicalName)
 {
     const auto it = options.variableNames.find(canonicalName);
     return it == options.variableNames.end() ? canonicalName : it->second;
+}
+
+// The name a variable of the file is read as: the one --map gives it, else its own.
+std::string canonicalNameOf(const ReaderOptions& options, const std::string& fileName)
+{
+    for (const auto& [canonical, inFile] : options.variableNames)
+        if (inFile == fileName)
+            return canonical;
+    return fileName;
 }
 
 // Whether variable `v` says by CF attributes that it is the coordinate of `axis`: standard_name,
@@ -497,11 +501,48 @@ struct OpenedHeader {
     SphericalGrid grid;
 };
 
+// The variables to read (canonical names): those given (ReaderOptions::variables); else the
+// contest's eight when the file holds them all (in their order); else every numeric variable of
+// three or more dims, in the file's order, whatever a model or a tomography file calls them (one
+// `vs`, a CF output's own names). With `h` (the axes found), only those on the grid's three dims:
+// a file's surface maps or other grids are not the model's fields.
+std::vector<std::string> requestedVariables(const NcFile& file, const ReaderOptions& options,
+                                            const OpenedHeader* h = nullptr)
+{
+    if (!options.variables.empty())
+        return options.variables;
+    const auto& contest = contestVariableNames();
+    if (std::all_of(contest.begin(), contest.end(),
+                    [&](const std::string& name) { return file.findVar(fileNameOf(options, name)).has_value(); }))
+        return contest;
+    int nVars = 0;
+    file.check(nc_inq_nvars(file.id(), &nVars), "listing variables");
+    std::vector<std::string> names;
+    for (int v = 0; v < nVars; ++v) {
+        const std::vector<int> dims = file.varDims(v);
+        nc_type type = 0;
+        file.check(nc_inq_vartype(file.id(), v, &type), "reading a variable type");
+        if (dims.size() < 3 || type == NC_CHAR || type == NC_STRING)
+            continue;
+        if (h && std::any_of(h->axes.begin(), h->axes.end(), [&](const CoordinateAxis& a) {
+                return std::find(dims.begin(), dims.end(), a.dimId) == dims.end();
+            }))
+            continue;
+        names.push_back(canonicalNameOf(options, file.varName(v)));
+    }
+    if (names.empty() && h)
+        fail("{}: no variable on the grid's dims ({}, {}, {}); a variable RayPC reads has these three dims in any "
+             "order",
+             file.path().string(), file.dimName(h->axes[kLat].dimId), file.dimName(h->axes[kR].dimId),
+             file.dimName(h->axes[kLon].dimId));
+    return names;
+}
+
 OpenedHeader readAxes(const NcFile& file, const ReaderOptions& options)
 {
     // The dims of the requested variables that the file has (a missing one is named later).
     std::vector<int> dataDims;
-    for (const auto& name : requestedVariables(options))
+    for (const auto& name : requestedVariables(file, options))
         if (const auto id = file.findVar(fileNameOf(options, name)))
             for (int d : file.varDims(*id))
                 dataDims.push_back(d);
@@ -794,7 +835,7 @@ FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& op
     FileHeader header;
     header.grid = h.grid;
     header.format = file.formatName();
-    for (const auto& name : requestedVariables(options)) {
+    for (const auto& name : requestedVariables(file, options, &h)) {
         const auto fileName = fileNameOf(options, name);
         const auto layout = checkVariable(file, h, name, fileName, options.timeIndex);
         header.variables.push_back({name, fileName, file.textAttribute(layout.id, "units").value_or("")});
@@ -821,7 +862,7 @@ Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& op
     for (const auto& axis : h.axes)
         fileCount *= axis.fileValues.size();
     // Every variable is checked before any is read.
-    const auto requested = requestedVariables(options);
+    const auto requested = requestedVariables(file, options, &h);
     std::vector<std::pair<std::string, VariableLayout>> layouts;
     size_t bufferBytesPerValue = sizeof(float);
     for (const auto& name : requested) {

@@ -40,7 +40,8 @@ struct ReaderOptions {
     // Names of the coordinate variables (rName: the radius or depth); empty: found by CF attributes
     // or customary names (above).
     std::string latName, rName, lonName;
-    // Variables to read (canonical names); empty: the eight contest variables.
+    // Variables to read (canonical names); empty: the eight contest variables when a file holds
+    // them all, else every variable on the grid's three dims (a tomography model's one `vs`).
     std::vector<std::string> variables;
     // Cells that hold the fill value / missing value (or NaN) are an error unless this is set;
     // then they are replaced by the mean of the valid values on the same radius shell.

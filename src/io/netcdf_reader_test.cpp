@@ -360,10 +360,62 @@ TEST(NetcdfReaderBadInput, MissingVariable)
 {
     TempDir dir("missingvar");
     const auto path = ncgen(dir.path(), "small", smallCdl("1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16"));
-    expectReadError(path, {}, {"small.nc", "missing variable 'vx'"});
+    // Variables asked for by name must be there; without a list the file's own are read (below).
+    ReaderOptions contest;
+    contest.variables = contestVariableNames();
+    expectReadError(path, contest, {"small.nc", "missing variable 'vx'"});
     ReaderOptions mapped = temperatureOnly();
     mapped.variableNames["temperature"] = "T";
     expectReadError(path, mapped, {"missing variable 'T'", "mapped from 'temperature'"});
+}
+
+// A file of a model (or a tomography) with its own variables: without a list, every variable on the
+// grid's three dims is read, under its own name (or the one --map gives it), in the file's order;
+// what is on other dims (a surface map) is not among them.
+TEST(NetcdfReader, AnyVariablesAreReadWithoutAList)
+{
+    TempDir dir("anyvars");
+    const std::string cdl = R"(netcdf own {
+dimensions: depth = 2 ; latitude = 2 ; longitude = 4 ;
+variables:
+  double depth(depth) ; depth:units = "km" ; depth:positive = "down" ;
+  double latitude(latitude) ; latitude:units = "degrees_north" ;
+  double longitude(longitude) ; longitude:units = "degrees_east" ;
+  float vs(depth, latitude, longitude) ; vs:units = "km/s" ;
+  float topography(latitude, longitude) ; topography:units = "m" ;
+  float rho(depth, latitude, longitude) ; rho:units = "g/cc" ;
+data:
+  depth = 100, 2000 ; latitude = -45, 45 ; longitude = 0, 90, 180, 270 ;
+  vs = 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16 ;
+  topography = 0, 0, 0, 0, 0, 0, 0, 0 ;
+  rho = 3, 3, 3, 3, 3, 3, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4 ;
+})";
+    const auto path = ncgen(dir.path(), "own", cdl);
+    const FileHeader header = readHeader(path, {});
+    ASSERT_EQ(header.variables.size(), 2u);
+    EXPECT_EQ(header.variables[0].name, "vs");
+    EXPECT_EQ(header.variables[0].units, "km/s");
+    EXPECT_EQ(header.variables[1].name, "rho");
+    const Snapshot s = readSnapshot(path, {});
+    ASSERT_EQ(s.fields.size(), 2u);
+    // depth 100 km is radius 6271 km (the upper shell), lat 45 the upper row, lon 90 the second column.
+    EXPECT_FLOAT_EQ(s.fields[0].values[s.grid.index(1, 1, 1)], 6.0f);
+    EXPECT_FLOAT_EQ(s.fields[0].values[s.grid.index(1, 0, 1)], 14.0f);
+    EXPECT_FLOAT_EQ(s.fields[1].values[s.grid.index(0, 0, 0)], 4.0f);
+    // --map names a variable as the program knows it.
+    ReaderOptions mapped;
+    mapped.variableNames["shear velocity"] = "vs";
+    EXPECT_EQ(readHeader(path, mapped).variables[0].name, "shear velocity");
+    // A file with nothing on its grid says so.
+    const std::string flat = R"(netcdf flat {
+dimensions: depth = 2 ; latitude = 2 ; longitude = 4 ;
+variables:
+  double depth(depth) ; depth:units = "km" ; double latitude(latitude) ; double longitude(longitude) ;
+  float topography(latitude, longitude) ;
+data:
+  depth = 100, 2000 ; latitude = -45, 45 ; longitude = 0, 90, 180, 270 ; topography = 0, 0, 0, 0, 0, 0, 0, 0 ;
+})";
+    expectReadError(ncgen(dir.path(), "flat", flat), {}, {"flat.nc: no variable on the grid's dims"});
 }
 
 TEST(NetcdfReaderBadInput, WrongDimensions)

@@ -229,6 +229,8 @@ NetcdfStep netcdfStep(const fs::path& step, const ReaderOptions& options)
 
 std::vector<fs::path> stepSourceFiles(const fs::path& step)
 {
+    if (!isVtkStep(step))
+        return {netcdfStep(step, {}).file};  // FILE#K: step K of a file of several
     std::vector<fs::path> files{step};
     if (hasExtension(step, ".pvtu"))
         for (const fs::path& piece : vtk::readPvtu(step).pieces)

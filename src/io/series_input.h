@@ -46,7 +46,8 @@ bool isVtkStep(const std::filesystem::path& step);
 FileHeader readStepHeader(const std::filesystem::path& step, const ReaderOptions& options);
 Snapshot readStep(const std::filesystem::path& step, const ReaderOptions& options);
 
-// Every file readStep reads for `step`: the file itself, and a .pvtu's pieces. Throws raypc::Error
+// Every file readStep reads for `step`: the file itself (of a `FILE#K` step, FILE), and a .pvtu's
+// pieces. Throws raypc::Error
 // as readStep does for a .pvtu that cannot be read.
 std::vector<std::filesystem::path> stepSourceFiles(const std::filesystem::path& step);
 

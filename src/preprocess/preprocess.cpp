@@ -70,11 +70,13 @@ std::vector<VariableSpec> variableSpecs(const FileHeader& header)
     std::vector<VariableSpec> specs;
     for (const auto& v : header.variables)
         specs.push_back({v.name, v.units, false});
-    specs.push_back({"radial velocity", "cm/yr", true});
-    specs.push_back({"velocity magnitude", "cm/yr", true});
     const auto has = [&](const std::string& name) {
         return std::any_of(header.variables.begin(), header.variables.end(), [&](const auto& v) { return v.name == name; });
     };
+    if (has("vx") && has("vy") && has("vz")) {
+        specs.push_back({"radial velocity", "cm/yr", true});
+        specs.push_back({"velocity magnitude", "cm/yr", true});
+    }
     for (const auto& v : header.variables)
         if (v.name == "thermal expansivity")
             specs.push_back({"thermal expansivity anomaly", v.units, true});
@@ -145,7 +147,7 @@ struct RunPlan {
 
 // Phase 1: the options, every input's header, the grid's size and memory. Nothing is written
 // yet, so a bad file, a missing variable or a different grid stops the run before it starts.
-RunPlan planRun(const std::vector<fs::path>& inputs, const PreprocessOptions& options)
+RunPlan planRun(const std::vector<fs::path>& inputs, PreprocessOptions& options)
 {
     if (inputs.empty())
         fail("preprocess: no input files");
@@ -165,8 +167,13 @@ RunPlan planRun(const std::vector<fs::path>& inputs, const PreprocessOptions& op
     // resampled series takes the grid chosen for its first step.
     plan.reader = options.reader;
     plan.header = readStepHeader(inputs.front(), plan.reader);
-    if (isVtkStep(inputs.front()))
+    if (isVtkStep(inputs.front())) {
         plan.reader.targetGrid = plan.header.grid;
+    } else if (plan.reader.variables.empty()) {
+        // The variables the first file holds are every step's: a step that lacks one is named.
+        for (const auto& v : plan.header.variables)
+            plan.reader.variables.push_back(v.name);
+    }
     plan.levels = {plan.header.grid};
     for (int l = 1; l < kLevelCount; ++l)
         plan.levels.push_back(plan.levels.back().coarsened());
@@ -183,6 +190,22 @@ RunPlan planRun(const std::vector<fs::path>& inputs, const PreprocessOptions& op
                  inputs.front().filename().string(), fmt::join(firstNames, ", "));
     }
     plan.specs = variableSpecs(plan.header);
+    const auto hasSpec = [&](const std::string& name) {
+        return std::any_of(plan.specs.begin(), plan.specs.end(), [&](const VariableSpec& v) { return v.name == name; });
+    };
+    // Pathlines follow the flow: a model without a velocity (a tomography model) has none. Their
+    // seeds default to the temperature anomaly's critical points, else the first stored variable's.
+    if (options.pathlines.enabled && !(hasSpec("vx") && hasSpec("vy") && hasSpec("vz"))) {
+        options.pathlines.enabled = false;
+        if (!options.quiet && mpi::isRoot())
+            spdlog::info("{}: no velocity (vx, vy, vz): no pathlines", inputs.front().string());
+    }
+    if (options.pathlines.enabled && options.pathlines.field == PathlineOptions{}.field && !hasSpec(options.pathlines.field))
+        for (const VariableSpec& v : plan.specs)
+            if (v.name != "vx" && v.name != "vy" && v.name != "vz") {
+                options.pathlines.field = v.name;
+                break;
+            }
     preprocessing::checkPathlineOptions(options.pathlines, plan.specs);
     // A u16 dataset's pathline phase decodes the velocities of every step it traces through.
     uint64_t bytes = preprocessMemoryBytes(plan.header.grid, plan.specs.size());
@@ -454,8 +477,10 @@ uint64_t preprocessMemoryBytes(const SphericalGrid& grid, size_t variableCount)
 }
 
 PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path& outDir,
-                             const PreprocessOptions& options)
+                             const PreprocessOptions& given)
 {
+    // What the inputs allow: planRun turns pathlines off for a model without a velocity.
+    PreprocessOptions options = given;
     // Under mpirun (core/mpi.h, docs/scaling.md) every rank plans the run; rank 0 owns the output
     // directory (lock, manifest, cleanup of a failed fresh run); the steps are handed out one at a
     // time to whichever rank is free, each written atomically by it; the steps' manifests are then

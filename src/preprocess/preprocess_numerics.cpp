@@ -22,11 +22,35 @@ float toFloat32(double value)
 
 void addDerivedVariables(Snapshot& snapshot)
 {
+    const auto& g = snapshot.grid;
+    if (hasVelocity(snapshot))
+        addVelocityVariables(snapshot);
+    // The contest's correlation task asks for the sign of the expansivity *anomaly*: its
+    // deviation from the area-weighted lateral mean of each shell, like the temperature anomaly.
+    if (const Field* alpha = snapshot.find("thermal expansivity"))
+        snapshot.fields.push_back(lateralAnomaly(g, *alpha, "thermal expansivity anomaly"));
+    // A model that writes a temperature but no anomaly (ASPECT: T) gets the contest's anomaly: the
+    // deviation from the area-weighted mean of each shell.
+    if (!snapshot.find("temperature anomaly")) {
+        const Field* t = snapshot.find("temperature");
+        if (!t)
+            t = snapshot.find("T");
+        if (t)
+            snapshot.fields.push_back(lateralAnomaly(g, *t, "temperature anomaly"));
+    }
+}
+
+bool hasVelocity(const Snapshot& snapshot)
+{
+    return snapshot.find("vx") && snapshot.find("vy") && snapshot.find("vz");
+}
+
+void addVelocityVariables(Snapshot& snapshot)
+{
     const Field* vx = snapshot.find("vx");
     const Field* vy = snapshot.find("vy");
     const Field* vz = snapshot.find("vz");
-    if (!vx || !vy || !vz)
-        fail("derived variables need the velocity's components vx, vy and vz (ASPECT: velocity), which are not all present");
+    RAYPC_CHECK(vx && vy && vz);
     const auto& g = snapshot.grid;
     Field radial{"radial velocity", "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
     Field magnitude{"velocity magnitude", "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
@@ -46,19 +70,6 @@ void addDerivedVariables(Snapshot& snapshot)
     });
     snapshot.fields.push_back(std::move(radial));
     snapshot.fields.push_back(std::move(magnitude));
-    // The contest's correlation task asks for the sign of the expansivity *anomaly*: its
-    // deviation from the area-weighted lateral mean of each shell, like the temperature anomaly.
-    if (const Field* alpha = snapshot.find("thermal expansivity"))
-        snapshot.fields.push_back(lateralAnomaly(g, *alpha, "thermal expansivity anomaly"));
-    // A model that writes a temperature but no anomaly (ASPECT: T) gets the contest's anomaly: the
-    // deviation from the area-weighted mean of each shell.
-    if (!snapshot.find("temperature anomaly")) {
-        const Field* t = snapshot.find("temperature");
-        if (!t)
-            t = snapshot.find("T");
-        if (t)
-            snapshot.fields.push_back(lateralAnomaly(g, *t, "temperature anomaly"));
-    }
 }
 
 Field lateralAnomaly(const SphericalGrid& g, const Field& field, const std::string& name)

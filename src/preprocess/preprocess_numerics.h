@@ -17,12 +17,18 @@ namespace raypc {
 // `value` as float32; ±infinity beyond float32's range (where a plain conversion is undefined).
 float toFloat32(double value);
 
-// Appends "radial velocity" and "velocity magnitude" (cm/yr) computed from vx, vy, vz (m/s),
-// and, when "thermal expansivity" is present, "thermal expansivity anomaly" (see lateralAnomaly);
-// when "temperature anomaly" is absent, it from "temperature" or (ASPECT) "T" the same way.
-// Values too large for float32 become infinite (see checkFinite). Throws raypc::Error if a
-// velocity component is missing.
+// Appends what derives from the fields there are: with a velocity (vx, vy, vz in m/s) "radial
+// velocity" and "velocity magnitude" (cm/yr); with "thermal expansivity", "thermal expansivity
+// anomaly" (see lateralAnomaly); without "temperature anomaly", it from "temperature" or (ASPECT)
+// "T" the same way. A model without a velocity (a tomography model) gets none of the velocity's.
+// Values too large for float32 become infinite (see checkFinite).
 void addDerivedVariables(Snapshot& snapshot);
+
+// Whether the snapshot has the three Cartesian velocity components vx, vy, vz.
+bool hasVelocity(const Snapshot& snapshot);
+
+// Appends "radial velocity" and "velocity magnitude" (cm/yr) from vx, vy, vz (m/s), which must exist.
+void addVelocityVariables(Snapshot& snapshot);
 
 // `field` minus its area-weighted mean over each radius shell (the lateral mean), named `name`.
 Field lateralAnomaly(const SphericalGrid& grid, const Field& field, const std::string& name);

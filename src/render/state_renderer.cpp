@@ -45,16 +45,21 @@ RenderState defaultState(const VariableCatalog& catalog)
     const auto anomaly = std::find(catalog.names.begin(), catalog.names.end(), "temperature anomaly");
     const size_t var = anomaly != catalog.names.end() ? size_t(anomaly - catalog.names.begin()) : 0;
     s.colorVariable = catalog.names.at(var);
-    s.colorMap = ColorMapId::BlueWhiteRed;
-    // Symmetric range over the bulk of the values, so that plumes and slabs saturate.
     const ValueRange r = catalog.ranges.at(var);
-    const float m = 0.6f * std::max(std::abs(r.min), std::abs(r.max));
-    if (m > 0)
+    if (r.min < 0 && r.max > 0) {
+        // An anomaly (values either side of zero): symmetric range over the bulk of the values, so
+        // that plumes and slabs saturate, as bodies with edges: the tails opaque over 80 km (200 km
+        // made them soft, translucent blobs), nothing in the middle 30 % of the range.
+        s.colorMap = ColorMapId::BlueWhiteRed;
+        const float m = 0.6f * std::max(std::abs(r.min), std::abs(r.max));
         s.colorRange = ValueRange{-m, m};
-    // Plumes and slabs as bodies with edges: the tails opaque over 80 km (200 km made them soft,
-    // translucent blobs), nothing in the middle 30 % of the range.
-    s.opacity = {{0.0f, 1.0f}, {0.25f, 0.6f}, {0.35f, 0.0f}, {0.65f, 0.0f}, {0.75f, 0.6f}, {1.0f, 1.0f}};
-    s.opacityUnitKm = 80.0f;
+        s.opacity = {{0.0f, 1.0f}, {0.25f, 0.6f}, {0.35f, 0.0f}, {0.65f, 0.0f}, {0.75f, 0.6f}, {1.0f, 1.0f}};
+        s.opacityUnitKm = 80.0f;
+    } else {
+        // A quantity of one sign (a seismic velocity, a density): a sequential map over its
+        // range, the default ramp of opacity.
+        s.colorMap = ColorMapId::Viridis;
+    }
     // A dark core: the light grey one outshone the anomalies in front of it.
     s.core.color = Rgb{0.22f, 0.22f, 0.24f};
     // The mantle fills 94 % of the picture's shorter side (a landscape view is bound by its height,

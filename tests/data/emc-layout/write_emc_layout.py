@@ -1,0 +1,94 @@
+#!/usr/bin/python3
+"""Writes a small global seismic tomography model in the layout of the IRIS Earth Model
+Collaboration (EMC) netCDF files, for the tests of opening a model with its own variables
+(tests/cli, case `tomography`).
+
+    write_emc_layout.py OUT_DIR
+
+Written with Python's netCDF4 module (Debian's python3-netcdf4) and NumPy, independently of RayPC's
+own netCDF code, following the EMC conventions as its models are published (e.g. S362ANI+M,
+GLAD-M25, as EarthScope's emc-tools read them): dimensions `depth`, `latitude`, `longitude`; the
+coordinate variables with CF units (`depth` in km, positive down, 50 ... 2850 km; `latitude`
+-90 ... 90 in 5 degree steps, the poles included; `longitude` -180 ... 180 in 5 degree steps, the
+seam stored twice); one float variable `vs` (depth, latitude, longitude) in km/s with a
+`long_name` and a `_FillValue` of 99999, and global attributes as EMC writes them. No
+temperature, no velocity of flow: nothing of a mantle-convection model's variables.
+
+    vs = 4.4 + 0.0007 depth + 0.1 cos(lat) cos(lon - 30 deg) (1 - depth / 2891)   [km/s, depth in km]
+
+(the lateral part is largest at the surface and changes sign across the globe; its maximum at
+lat 0, lon 30 and its minimum at lat 0, lon -150). truth.json gives the grid and the formula.
+The file is written into a temporary folder and moved into place, and not written again while this
+script is unchanged (a stamp records its hash).
+"""
+import hashlib
+import json
+import os
+import shutil
+import sys
+import tempfile
+
+import netCDF4
+import numpy as np
+
+DEPTH_KM = np.linspace(50.0, 2850.0, 15)
+LAT_DEG = np.arange(-90.0, 90.0 + 1e-9, 5.0)
+LON_DEG = np.arange(-180.0, 180.0 + 1e-9, 5.0)
+
+
+def vs(depth_km, lat_deg, lon_deg):
+    lat = np.radians(lat_deg)
+    lon = np.radians(lon_deg - 30.0)
+    return 4.4 + 0.0007 * depth_km + 0.1 * np.cos(lat) * np.cos(lon) * (1.0 - depth_km / 2891.0)
+
+
+def write(path):
+    with netCDF4.Dataset(path, "w", format="NETCDF3_CLASSIC") as nc:
+        nc.title = "RayPC test model in the EMC layout (analytic)"
+        nc.id = "raypc-emc-test"
+        nc.geospatial_lat_min, nc.geospatial_lat_max = -90.0, 90.0
+        nc.geospatial_lon_min, nc.geospatial_lon_max = -180.0, 180.0
+        nc.geospatial_vertical_min, nc.geospatial_vertical_max = float(DEPTH_KM[0]), float(DEPTH_KM[-1])
+        nc.geospatial_vertical_units = "km"
+        nc.geospatial_vertical_positive = "down"
+        nc.createDimension("depth", len(DEPTH_KM))
+        nc.createDimension("latitude", len(LAT_DEG))
+        nc.createDimension("longitude", len(LON_DEG))
+        d = nc.createVariable("depth", "f4", ("depth",))
+        d.long_name, d.units, d.positive = "depth below earth surface", "km", "down"
+        d[:] = DEPTH_KM
+        la = nc.createVariable("latitude", "f4", ("latitude",))
+        la.long_name, la.units, la.standard_name = "Latitude; positive north", "degrees_north", "latitude"
+        la[:] = LAT_DEG
+        lo = nc.createVariable("longitude", "f4", ("longitude",))
+        lo.long_name, lo.units, lo.standard_name = "Longitude; positive east", "degrees_east", "longitude"
+        lo[:] = LON_DEG
+        v = nc.createVariable("vs", "f4", ("depth", "latitude", "longitude"), fill_value=99999.0)
+        v.long_name, v.display_name, v.units = "Shear-wave velocity", "S Velocity (km/s)", "km/s"
+        D, LA, LO = np.meshgrid(DEPTH_KM, LAT_DEG, LON_DEG, indexing="ij")
+        v[:] = vs(D, LA, LO).astype(np.float32)
+
+
+def main():
+    if len(sys.argv) != 2:
+        sys.exit("usage: write_emc_layout.py OUT_DIR")
+    out = os.path.abspath(sys.argv[1])
+    stamp = hashlib.sha256(open(__file__, "rb").read()).hexdigest()
+    if os.path.exists(os.path.join(out, ".stamp")) and open(os.path.join(out, ".stamp")).read() == stamp:
+        return
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    tmp = tempfile.mkdtemp(prefix=".emc-layout.", dir=os.path.dirname(out))
+    write(os.path.join(tmp, "global_vs.nc"))
+    truth = {"file": "global_vs.nc", "variable": "vs", "units": "km/s", "depth_km": DEPTH_KM.tolist(),
+             "lat_deg": LAT_DEG.tolist(), "lon_deg": LON_DEG.tolist(),
+             "vs": "4.4 + 0.0007 depth + 0.1 cos(lat) cos(lon - 30 deg) (1 - depth / 2891)"}
+    with open(os.path.join(tmp, "truth.json"), "w") as fh:
+        json.dump(truth, fh, indent=1)
+    with open(os.path.join(tmp, ".stamp"), "w") as fh:
+        fh.write(stamp)
+    shutil.rmtree(out, ignore_errors=True)
+    os.rename(tmp, out)
+
+
+if __name__ == "__main__":
+    main()
