@@ -23,11 +23,12 @@ packages=(
 # matplotlib, Pillow and a WebSocket client (a stand-in UI tab) for the Python module's tests and
 # its example notebook (tests/python); clang with its sanitizer and libFuzzer runtimes and
 # llvm-symbolizer for `scripts/test.sh --sanitize` and tests/fuzz/; GMT, which checks that it
-# reads the maps and sections RayPC exports as netCDF grids (tests/cli, maps_sections).
+# reads the maps and sections RayPC exports as netCDF grids (tests/cli, maps_sections); h5py, which
+# writes the CitcomS HDF5 fixture at test time (tests/data/citcoms-layout).
 if [[ ${1:-} == --tests ]]; then
   packages+=(libxml2-utils python3-paraview python3-netcdf4 clang libclang-rt-14-dev llvm
              python3-pytest python3-nbclient python3-nbformat python3-ipykernel python3-matplotlib python3-pil
-             python3-websocket gmt)
+             python3-websocket gmt python3-h5py)
 fi
 # Node.js and npm build the web UI; a machine may carry them from elsewhere (npm bundled with
 # nodejs), so ask for Debian's only when the commands are missing.

@@ -44,7 +44,7 @@ json describeFile(const std::filesystem::path& path, const ReaderOptions& option
     ReaderOptions fixed = options;
     fixed.targetGrid = snap.grid;
     const FileHeader header = readStepHeader(step, fixed);
-    json j{{"kind", listing.vtk ? "vtk" : "netcdf"}, {"path", path.string()}, {"format", header.format},
+    json j{{"kind", listing.kind}, {"path", path.string()}, {"format", header.format},
            {"grid", describeGrid(snap.grid)}};
     if (listing.vtk) {
         j["steps"] = json::array();
@@ -116,14 +116,17 @@ void printText(const json& j)
     if (j["kind"] == "netcdf") {
         fmt::print("{} (netCDF, {})\n  grid: {}\n", j["path"].get<std::string>(), j["format"].get<std::string>(),
                    gridLine(j["grid"]));
-    } else if (j["kind"] == "vtk") {
+    } else if (j["kind"] == "vtk" || j["kind"] == "citcoms") {
         const auto& steps = j["steps"];
         const json& r = j["resampled"];
         fmt::print("{} ({})\n  steps: {}", j["path"].get<std::string>(), j["format"].get<std::string>(), steps.size());
-        if (!steps.front()["time_myr"].is_null())
+        if (!steps.front()["time_myr"].is_null() && j["kind"] == "vtk")
             fmt::print(" ({:g} .. {:g} Myr; the collection's times read as {}, see --time-units)",
                        steps.front()["time_myr"].get<double>(), steps.back()["time_myr"].get<double>(),
                        j["time_unit"].get<std::string>());
+        else if (!steps.front()["time_myr"].is_null())
+            fmt::print(" ({:g} .. {:g} Myr: the nondimensional times in R^2/kappa, see --diffusivity)",
+                       steps.front()["time_myr"].get<double>(), steps.back()["time_myr"].get<double>());
         fmt::print("\n  first step: {} cells in {} pieces, resampled onto {}\n", r["cells"].get<size_t>(),
                    r["pieces"].get<size_t>(), gridLine(j["grid"]));
         const double points = r["grid_points"].get<double>();

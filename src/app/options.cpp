@@ -49,8 +49,16 @@ void ReaderFlags::add(CLI::App& app)
                    "Unit of the times in a .pvd collection (ASPECT's output): years (ASPECT's default), seconds or Myr")
         ->capture_default_str();
     app.add_option("--grid", grid,
-                   "Grid LATxRxLON that an ASPECT (VTK XML) mesh is resampled onto, e.g. 180x201x360 (default: as fine "
-                   "as the mesh's finest cell, within memory)");
+                   "Grid LATxRxLON that an ASPECT (VTK XML) mesh or CitcomS' caps are resampled onto, e.g. "
+                   "180x201x360 (default: as fine as the mesh's finest cell, within memory)");
+    app.add_option("--temperature-scale", temperatureScaleK,
+                   "CitcomS output: the temperature difference, K, its nondimensional temperatures are multiplied "
+                   "by (default: kept as written, 0..1)");
+    app.add_option("--planet-radius", planetRadiusKm,
+                   "CitcomS output: the radius, km, of its radius 1 (default: the run's radius_km, else 6371)");
+    app.add_option("--diffusivity", diffusivityM2s,
+                   "CitcomS output: the thermal diffusivity, m^2/s, that scales its velocities (kappa/R) and times "
+                   "(R^2/kappa) (default: the run's thermdiff, else 1e-6)");
 }
 
 ReaderOptions ReaderFlags::toOptions() const
@@ -75,6 +83,15 @@ ReaderOptions ReaderFlags::toOptions() const
                     : radiusUnits == "nondimensional" ? RadiusUnits::Nondimensional
                                                       : RadiusUnits::FromFile;
     o.fillMissing = fillMissing;
+    for (const auto& [value, option] : {std::pair{temperatureScaleK, "--temperature-scale"},
+                                        {planetRadiusKm, "--planet-radius"}, {diffusivityM2s, "--diffusivity"}})
+        if (value < 0)
+            fail("{}: {} is negative", option, value);
+    o.temperatureScaleK = temperatureScaleK;
+    if (planetRadiusKm > 0)
+        o.planetRadiusKm = planetRadiusKm;
+    if (diffusivityM2s > 0)
+        o.diffusivityM2s = diffusivityM2s;
     if (timeUnits == "years")
         o.myrPerTimeUnit = 1e-6;
     else if (timeUnits == "seconds")

@@ -25,6 +25,8 @@ struct ReaderFlags {
     std::string radiusUnits;  // km | m | nondimensional; empty: the file's units attribute
     bool fillMissing = false;
     std::string timeUnits = "years", grid;  // VTK XML series (ASPECT's output)
+    // CitcomS output: ΔT (K; 0: temperatures as written), R (km) and κ (m²/s); 0: the run's own.
+    double temperatureScaleK = 0, planetRadiusKm = 0, diffusivityM2s = 0;
 
     void add(CLI::App& app);
     // Throws raypc::Error for a malformed --map.

@@ -63,6 +63,13 @@ struct ReaderOptions {
     std::array<size_t, 3> resampleSize{};
     // or, once chosen for a series's first step, the grid itself (every step takes the same).
     std::optional<SphericalGrid> targetGrid;
+
+    // CitcomS output (citcoms.h), nondimensional: ΔT in K that temperatures are multiplied by (0:
+    // kept as written), and the radius R (km) and thermal diffusivity κ (m²/s) that scale radii,
+    // velocities (κ/R) and times (R²/κ); without them the run's own (HDF5 `/input`), else 6371 km
+    // and 1e-6 m²/s.
+    double temperatureScaleK = 0;
+    std::optional<double> planetRadiusKm, diffusivityM2s;
 };
 
 struct FileHeader {

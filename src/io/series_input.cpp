@@ -5,6 +5,7 @@
 #include "core/spherical.h"
 #include "core/strings.h"
 #include "core/system_memory.h"
+#include "io/citcoms.h"
 #include "io/mesh_resample.h"
 #include "io/vtk_xml.h"
 
@@ -157,13 +158,12 @@ FileHeader vtkHeader(const fs::path& step, const ReaderOptions& options)
     return h;
 }
 
-Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
+// The variables of a mesh step resampled onto the grid (chooseGrid): one field per variable, points
+// in no cell refused or (--fill-missing) filled; `origin` says what was read and how it went.
+Snapshot resampleMesh(const ShellMesh& mesh, const std::vector<VtkVariable>& variables, const ReaderOptions& options,
+                      const fs::path& step, const char* format, double readSeconds)
 {
     const auto start = std::chrono::steady_clock::now();
-    std::vector<vtk::Piece> pieces = readPieces(step);
-    const double readSeconds = secondsSince(start);
-    const std::vector<VtkVariable> variables = vtkVariables(announcedArrays(step, &pieces), step);
-    const ShellMesh mesh = makeShellMesh(std::move(pieces), meshKmPerUnit(options), step.string());
     Snapshot snap;
     snap.grid = chooseGrid(mesh, options, variables.size(), step);
     checkGridFitsMemory(snap.grid, uint64_t(variables.size() + 1) * snap.grid.cellCount() * sizeof(float),
@@ -174,14 +174,9 @@ Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
     ResampleCounts counts;
     std::vector<std::vector<float>> values = resampleOntoGrid(mesh, snap.grid, arrays, step.string(), &counts);
     spdlog::debug("{}: {} cells read in {:.2f} s, resampled onto {}x{}x{} in {:.2f} s", step.string(), mesh.cellCount,
-                  readSeconds, snap.grid.nLat(), snap.grid.nR(), snap.grid.nLon(), secondsSince(start) - readSeconds);
-    for (size_t a = 0; a < variables.size(); ++a) {
-        Field field{variables[a].name, variables[a].units, std::move(values[a])};
-        if (variables[a].source.name == "velocity")
-            for (float& v : field.values)
-                v = float(double(v) / (kSecondsPerMyr / 1e6));  // m/year -> m/s (Julian years)
-        snap.fields.push_back(std::move(field));
-    }
+                  readSeconds, snap.grid.nLat(), snap.grid.nR(), snap.grid.nLon(), secondsSince(start));
+    for (size_t a = 0; a < variables.size(); ++a)
+        snap.fields.push_back(Field{variables[a].name, variables[a].units, std::move(values[a])});
     if (counts.missing > 0) {
         const auto& first = snap.fields.front().values;
         const size_t at = size_t(std::find_if(first.begin(), first.end(), [](float v) { return std::isnan(v); }) - first.begin());
@@ -192,7 +187,7 @@ Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
         for (Field& f : snap.fields)
             fillMissingByShellMean(snap.grid, f.values, fmt::format("{}: {}", step.string(), f.name));
     }
-    snap.origin = {{"format", "VTK XML (ASPECT layout)"},
+    snap.origin = {{"format", format},
                    {"pieces", mesh.pieces.size()},
                    {"cells", mesh.cellCount},
                    {"points", mesh.pointCount},
@@ -201,6 +196,76 @@ Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
                    {"snapped", counts.snapped},
                    {"missing", counts.missing}};
     return snap;
+}
+
+Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
+{
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<vtk::Piece> pieces = readPieces(step);
+    const double readSeconds = secondsSince(start);
+    const std::vector<VtkVariable> variables = vtkVariables(announcedArrays(step, &pieces), step);
+    const ShellMesh mesh = makeShellMesh(std::move(pieces), meshKmPerUnit(options), step.string());
+    Snapshot snap = resampleMesh(mesh, variables, options, step, "VTK XML (ASPECT layout)", readSeconds);
+    for (size_t a = 0; a < variables.size(); ++a)
+        if (variables[a].source.name == "velocity")
+            for (float& v : snap.fields[a].values)
+                v = float(double(v) / (kSecondsPerMyr / 1e6));  // m/year -> m/s (Julian years)
+    return snap;
+}
+
+// CitcomS output: the options' scales (citcoms.h), and whether the command line gave R or κ.
+citcoms::Scales citcomsScales(const ReaderOptions& options)
+{
+    citcoms::Scales s;
+    s.temperatureK = options.temperatureScaleK;
+    s.radiusKm = options.planetRadiusKm.value_or(s.radiusKm);
+    s.diffusivityM2s = options.diffusivityM2s.value_or(s.diffusivityM2s);
+    return s;
+}
+bool citcomsScalesGiven(const ReaderOptions& options) { return options.planetRadiusKm || options.diffusivityM2s; }
+
+// A CitcomS step's variables: temperature, the velocity as vx, vy, vz (m/s, Cartesian), viscosity,
+// and pressure where the output has it.
+std::vector<VtkVariable> citcomsVariables(const vtk::Piece& cap, const citcoms::Scales& scales)
+{
+    std::vector<VtkVariable> out;
+    for (const vtk::PointArray& a : cap.pointData) {
+        if (a.components == 3) {
+            for (int c = 0; c < 3; ++c)
+                out.push_back({std::string("v") + "xyz"[c], citcoms::unitsOf(a.name, scales), {a.name, c}});
+        } else {
+            out.push_back({a.name, citcoms::unitsOf(a.name, scales), {a.name, -1}});
+        }
+    }
+    return out;
+}
+
+FileHeader citcomsHeader(const fs::path& step, const ReaderOptions& options)
+{
+    const citcoms::Scales scales = citcomsScales(options);
+    citcoms::Step read = citcoms::readStep(step, scales, citcomsScalesGiven(options));
+    FileHeader h;
+    h.format = read.format + ", resampled";
+    for (const auto& v : citcomsVariables(read.caps.front(), scales))
+        h.variables.push_back({v.name, v.source.name, v.units});
+    if (options.targetGrid) {
+        h.grid = *options.targetGrid;
+    } else {
+        const ShellMesh mesh = makeShellMesh(std::move(read.caps), 1.0, step.string());
+        h.grid = chooseGrid(mesh, options, h.variables.size(), step);
+    }
+    return h;
+}
+
+Snapshot citcomsSnapshot(const fs::path& step, const ReaderOptions& options)
+{
+    const auto start = std::chrono::steady_clock::now();
+    const citcoms::Scales scales = citcomsScales(options);
+    citcoms::Step read = citcoms::readStep(step, scales, citcomsScalesGiven(options));
+    const double readSeconds = secondsSince(start);
+    const std::vector<VtkVariable> variables = citcomsVariables(read.caps.front(), scales);
+    const ShellMesh mesh = makeShellMesh(std::move(read.caps), 1.0, step.string());
+    return resampleMesh(mesh, variables, options, step, read.format.c_str(), readSeconds);
 }
 
 // A step of a netCDF file holding several: "FILE#K" names step K (from 0) of FILE (listSeries).
@@ -229,6 +294,8 @@ NetcdfStep netcdfStep(const fs::path& step, const ReaderOptions& options)
 
 std::vector<fs::path> stepSourceFiles(const fs::path& step)
 {
+    if (citcoms::isStep(step))
+        return citcoms::stepFiles(step);
     if (!isVtkStep(step))
         return {netcdfStep(step, {}).file};  // FILE#K: step K of a file of several
     std::vector<fs::path> files{step};
@@ -241,6 +308,11 @@ std::vector<fs::path> stepSourceFiles(const fs::path& step)
 bool isVtkStep(const fs::path& step)
 {
     return hasExtension(step, ".pvtu") || hasExtension(step, ".vtu");
+}
+
+bool isMeshStep(const fs::path& step)
+{
+    return isVtkStep(step) || citcoms::isStep(step);
 }
 
 SeriesListing listSeries(const std::vector<fs::path>& args, const ReaderOptions& options)
@@ -270,9 +342,17 @@ SeriesListing listSeries(const std::vector<fs::path>& args, const ReaderOptions&
         }
     };
     bool collection = false, vtkFiles = false;
+    std::map<long, fs::path> citcomsSteps;  // by step number: a step's caps given one by one count once
     for (const auto& arg : args) {
         std::error_code ec;
-        if (fs::is_directory(arg, ec)) {
+        if (fs::is_directory(arg, ec) && !citcoms::stepsIn(arg).empty()) {
+            for (const fs::path& step : citcoms::stepsIn(arg))
+                citcomsSteps[citcoms::stepNumber(step)] = step;
+        } else if (citcoms::isStep(arg)) {
+            if (!fs::exists(arg, ec))
+                fail("{}: no such file", arg.string());
+            citcomsSteps.emplace(citcoms::stepNumber(arg), arg);
+        } else if (fs::is_directory(arg, ec)) {
             std::vector<fs::path> pvds;
             bool hasNc = false;
             for (const auto& entry : fs::directory_iterator(arg)) {
@@ -308,6 +388,22 @@ SeriesListing listSeries(const std::vector<fs::path>& args, const ReaderOptions&
             netcdf.push_back(arg);
         }
     }
+    if (!citcomsSteps.empty()) {
+        if (!out.steps.empty() || !netcdf.empty())
+            fail("{}: CitcomS output and other inputs ({}) cannot make one series", citcomsSteps.begin()->second.string(),
+                 (out.steps.empty() ? netcdf.front() : out.steps.front()).string());
+        const citcoms::Scales scales = citcomsScales(options);
+        for (const auto& [number, step] : citcomsSteps) {
+            out.steps.push_back(step);
+            if (const auto t = citcoms::stepTimeMyr(step, scales, citcomsScalesGiven(options)))
+                out.timesMyr.push_back(*t);
+        }
+        if (out.timesMyr.size() != out.steps.size())  // the ASCII caps carry no time: dt_myr apart
+            out.timesMyr.clear();
+        out.vtk = true;
+        out.kind = "citcoms";
+        return out;
+    }
     if (!out.steps.empty() && !netcdf.empty())
         fail("{}: netCDF inputs and VTK inputs ({}) cannot make one series", netcdf.front().string(),
              out.steps.front().string());
@@ -315,6 +411,7 @@ SeriesListing listSeries(const std::vector<fs::path>& args, const ReaderOptions&
         fail("a .pvd collection (or a directory holding one) is a whole series: give it alone");
     if (!out.steps.empty()) {
         out.vtk = true;
+        out.kind = "vtk";
         if (vtkFiles)  // given one by one: natural order, no times
             std::sort(out.steps.begin(), out.steps.end(), [](const fs::path& a, const fs::path& b) {
                 return naturalLess(a.filename().string(), b.filename().string());
@@ -342,6 +439,8 @@ SeriesListing listSeries(const std::vector<fs::path>& args, const ReaderOptions&
 
 FileHeader readStepHeader(const fs::path& step, const ReaderOptions& options)
 {
+    if (citcoms::isStep(step))
+        return citcomsHeader(step, options);
     if (isVtkStep(step))
         return vtkHeader(step, options);
     const NetcdfStep at = netcdfStep(step, options);
@@ -350,6 +449,8 @@ FileHeader readStepHeader(const fs::path& step, const ReaderOptions& options)
 
 Snapshot readStep(const fs::path& step, const ReaderOptions& options)
 {
+    if (citcoms::isStep(step))
+        return citcomsSnapshot(step, options);
     if (isVtkStep(step))
         return vtkSnapshot(step, options);
     const NetcdfStep at = netcdfStep(step, options);

@@ -23,7 +23,8 @@ struct SeriesListing {
     // Each step's time (Myr) when the inputs give it (a .pvd's `timestep`, in options.timeUnit);
     // empty otherwise (steps are then dt_myr apart).
     std::vector<double> timesMyr;
-    bool vtk = false;
+    bool vtk = false;            // a mesh resampled when read: VTK XML or CitcomS output
+    const char* kind = "netcdf";  // "netcdf", "vtk" or "citcoms"
     std::filesystem::path collection;  // the .pvd the steps come from, if any
 };
 
@@ -37,6 +38,8 @@ SeriesListing listSeries(const std::vector<std::filesystem::path>& args, const R
 
 // True for a VTK step (.pvtu or .vtu).
 bool isVtkStep(const std::filesystem::path& step);
+// True for a step whose mesh is resampled when read: a VTK step or CitcomS output (citcoms.h).
+bool isMeshStep(const std::filesystem::path& step);
 
 // readHeader / readSnapshot for any step. A VTK step's header reads the step's whole mesh to choose
 // the grid unless options.targetGrid is set (then only its record, for the variables); its snapshot

@@ -167,7 +167,7 @@ RunPlan planRun(const std::vector<fs::path>& inputs, PreprocessOptions& options)
     // resampled series takes the grid chosen for its first step.
     plan.reader = options.reader;
     plan.header = readStepHeader(inputs.front(), plan.reader);
-    if (isVtkStep(inputs.front())) {
+    if (isMeshStep(inputs.front())) {
         plan.reader.targetGrid = plan.header.grid;
     } else if (plan.reader.variables.empty()) {
         // The variables the first file holds are every step's: a step that lacks one is named.

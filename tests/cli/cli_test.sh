@@ -855,6 +855,49 @@ sys.exit(0 if abs(p['value'] - vs) <= p['quantisation_error_max'] + 1e-5 else 1)
   expect_error "no velocity component 'vx'" features "$work/ds" --range "vs=4:4.45" -o "$work/f2.csv" --tracks "$work/t.csv"
   expect_error "no 'radial velocity' variable" flux "$work/ds" --range "vs=4:4.45" -o "$work/x.csv"
   ;;
+citcoms)
+  # CitcomS output (tests/data/citcoms-layout, written by h5py from CitcomS' own description): 12
+  # caps of 9 x 9 x 7 nodes, two steps, as HDF5 output and as combined ASCII cap files.
+  cit="$(dirname "$fixture")/citcoms-layout"
+  for form in "$cit/run.0.h5" "$cit/ascii/run.cap05.0" "$cit/ascii/run.cap00.0.general"; do
+    info=$("$raypc" info "$form")
+    check "info $(basename "$form"): 12 caps of hexahedra, resampled" grep -q "4608 cells in 12 pieces" <<<"$info"
+    check "  temperature, the velocity's components, viscosity" \
+      test "$(grep -cE '^ +(temperature|vx|vy|vz|viscosity) ' <<<"$info")" -eq 5
+  done
+  "$raypc" preprocess "$cit" -o "$work/h5" --quiet >/dev/null
+  check "the HDF5 run: 2 steps, 128.6 Myr apart (1e-4 R^2/kappa)" grep -q "steps: 2 (0 .. 128.62" <<<"$("$raypc" info "$work/h5")"
+  "$raypc" preprocess "$cit/ascii" -o "$work/ascii" --quiet --temperature-scale 3000 >/dev/null
+  check "the ASCII caps: 2 steps, with a temperature in K" grep -qE '^ +temperature +\[K ' <<<"$("$raypc" info "$work/ascii")"
+  # The resampled temperature against its formula (nondimensional; with --temperature-scale 3000 K),
+  # within the error of the caps' flat-faced hexahedra on the curved shell.
+  for point in "30 60 5000" "-70 200 4000" "85 300 6000" "-10 359 3600"; do
+    read -r lat lon r <<<"$point"
+    for ds in h5 ascii; do
+      got=$("$raypc" probe "$work/$ds" --time 1 --lat "$lat" --lon "$lon" --r "$r" --var temperature)
+      check "$ds: temperature at lat $lat, lon $lon, r $r km is the formula's" python3 -c "
+import json, math, sys
+v = json.loads(sys.argv[1])['values']['temperature']['value']
+lat, lon, r, scale = float(sys.argv[2]), float(sys.argv[3]), float(sys.argv[4]) / 6371, float(sys.argv[5])
+c = math.radians(90 - lat)
+t = 0.5 + 0.2 * math.cos(c) + 0.1 * math.sin(c) * math.cos(math.radians(lon)) + 0.3 * (1 - r) / 0.45 + 0.01
+sys.exit(0 if abs(v / scale - t) < 0.01 else 1)" "$got" "$lat" "$lon" "$r" "$([[ $ds == ascii ]] && echo 3000 || echo 1)"
+    done
+  done
+  # The velocity: a solid-body rotation, 100 kappa/R r sin(colat) eastward: no radial part.
+  got=$("$raypc" probe "$work/h5" --lat 0 --lon 90 --r 6000)
+  check "velocity: eastward 100 kappa/R r, no radial velocity" python3 -c "
+import json, sys
+v = json.loads(sys.argv[1])['values']
+expect = 100 * 1e-6 / 6.371e6 * 6000 / 6371
+sys.exit(0 if abs(v['vx']['value'] + expect) < 0.03 * expect and abs(v['radial velocity']['value']) < 0.005 else 1)" "$got"
+  expect_error "run.cap03.0: 4528 values (566 rows of 8), its header \"9 x 9 x 7\" announces 567 nodes" \
+    preprocess "$cit/bad/rows/run.cap00.0" -o "$work/x"
+  expect_error "11 caps of step 0 found; a full sphere has 12 (missing: 7)" info "$cit/bad/missing"
+  expect_error "run.h5: no dataset 'coord'" preprocess "$cit/bad/nocoord/run.0.h5" -o "$work/x"
+  expect_error "--temperature-scale: -5 is negative" info "$cit/run.0.h5" --temperature-scale -5
+  check "no dataset from the refused runs" test ! -e "$work/x"
+  ;;
 resume_changed_input)
   # A resumed preprocess redoes a finished step whose input changed since (size or modification time).
   "$raypc" synth -o "$work/nc" --steps 8 --grid 48x61x96 >/dev/null 2>&1
