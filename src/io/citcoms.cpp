@@ -201,8 +201,11 @@ Step readCapStep(const fs::path& step, const Scales& scales)
              step.string(), present.size(), number, fmt::join(missing, ", "));
     Step out;
     out.format = "CitcomS combined caps (ASCII)";
-    for (const int cap : present)
-        out.caps.push_back(toPiece(readCapFile(capPath(cap)), scales, capPath(cap).string()));
+    for (const int cap : present) {
+        const CapValues values = readCapFile(capPath(cap));
+        out.nx = values.block.nx, out.ny = values.block.ny, out.nz = values.block.nz;
+        out.caps.push_back(toPiece(values, scales, capPath(cap).string()));
+    }
     return out;
 }
 
@@ -362,6 +365,7 @@ Step readH5Step(const fs::path& step, Scales scales, bool scalesGiven)
 
     Step out;
     out.format = "CitcomS HDF5";
+    out.nx = block.nx, out.ny = block.ny, out.nz = block.nz;
     const size_t nodes = block.nodes();
     for (size_t cap = 0; cap < caps; ++cap) {
         // HDF5's arrays are [cap][x][y][z], CapBlock's order within a cap.
@@ -462,6 +466,14 @@ std::vector<fs::path> stepFiles(const fs::path& step)
             files.push_back(p);
     }
     return files;
+}
+
+std::array<size_t, 3> naturalGridSize(const Step& step)
+{
+    if (step.caps.size() == 1)
+        return {step.nx, step.nz, step.ny};
+    const size_t around = 4 * (std::max(step.nx, step.ny) - 1);
+    return {around / 2, step.nz, around};
 }
 
 std::string unitsOf(const std::string& array, const Scales& scales)

@@ -21,6 +21,7 @@
 
 #include "io/vtk_xml.h"
 
+#include <array>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -53,7 +54,13 @@ struct Step {
     std::vector<vtk::Piece> caps;
     std::optional<double> timeMyr;  // HDF5's `time` scaled; the ASCII caps carry none
     std::string format;             // "CitcomS combined caps (ASCII)" or "CitcomS HDF5"
+    size_t nx = 0, ny = 0, nz = 0;  // nodes of a cap
 };
+
+// The grid a run's caps resample onto by default, lat x r x lon: its own resolution, 4 (nx - 1)
+// nodes around the equator, half as many from pole to pole (the cells are a little finer near the
+// caps' corners), its nz radii; for a regional cap, nx x nz x ny.
+std::array<size_t, 3> naturalGridSize(const Step& step);
 
 // Reads a step. Scales' radius and diffusivity default to the values of the run's `/input`
 // attributes (radius_km, thermdiff) when the HDF5 output has them and `scales` was not given.

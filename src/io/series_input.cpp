@@ -251,8 +251,11 @@ FileHeader citcomsHeader(const fs::path& step, const ReaderOptions& options)
     if (options.targetGrid) {
         h.grid = *options.targetGrid;
     } else {
+        ReaderOptions natural = options;
+        if (natural.resampleSize[0] == 0)
+            natural.resampleSize = citcoms::naturalGridSize(read);
         const ShellMesh mesh = makeShellMesh(std::move(read.caps), 1.0, step.string());
-        h.grid = chooseGrid(mesh, options, h.variables.size(), step);
+        h.grid = chooseGrid(mesh, natural, h.variables.size(), step);
     }
     return h;
 }
@@ -264,8 +267,11 @@ Snapshot citcomsSnapshot(const fs::path& step, const ReaderOptions& options)
     citcoms::Step read = citcoms::readStep(step, scales, citcomsScalesGiven(options));
     const double readSeconds = secondsSince(start);
     const std::vector<VtkVariable> variables = citcomsVariables(read.caps.front(), scales);
+    ReaderOptions natural = options;
+    if (natural.resampleSize[0] == 0)
+        natural.resampleSize = citcoms::naturalGridSize(read);
     const ShellMesh mesh = makeShellMesh(std::move(read.caps), 1.0, step.string());
-    return resampleMesh(mesh, variables, options, step, read.format.c_str(), readSeconds);
+    return resampleMesh(mesh, variables, natural, step, read.format.c_str(), readSeconds);
 }
 
 // A step of a netCDF file holding several: "FILE#K" names step K (from 0) of FILE (listSeries).

@@ -2,7 +2,7 @@
 """Writes a small 12-cap CitcomS run with analytic fields in both forms CitcomS' output takes, for
 the tests of the CitcomS reader (tests/cli, case `citcoms`).
 
-    write_citcoms.py OUT_DIR
+    write_citcoms.py OUT_DIR [--nodes NXxNYxNZ --hdf5-only]   (the options: bench/open_models.sh)
 
 Written with Python, NumPy and h5py (Debian's python3-h5py), independently of RayPC's own code,
 from CitcomS' own description of its output (the public geodynamics/citcoms repository):
@@ -72,17 +72,16 @@ def unit(colat, lon):
 def cap_nodes(corners):
     """(nx, ny, nz, 3) colatitude, longitude, radius of a cap's nodes."""
     c = [unit(*p) for p in corners]
+    u, v = np.meshgrid(np.linspace(0, 1, NX), np.linspace(0, 1, NY), indexing="ij")
+    p = ((1 - u) * (1 - v))[..., None] * c[0] + (u * (1 - v))[..., None] * c[1] + (u * v)[..., None] * c[2] \
+        + ((1 - u) * v)[..., None] * c[3]
+    p /= np.linalg.norm(p, axis=-1, keepdims=True)
+    colat = np.arccos(np.clip(p[..., 2], -1.0, 1.0))
+    lon = np.arctan2(p[..., 1], p[..., 0]) % (2 * math.pi)
     out = np.zeros((NX, NY, NZ, 3))
-    radii = np.linspace(R_INNER, 1.0, NZ)
-    for i in range(NX):
-        for j in range(NY):
-            u, v = i / (NX - 1), j / (NY - 1)
-            p = (1 - u) * (1 - v) * c[0] + u * (1 - v) * c[1] + u * v * c[2] + (1 - u) * v * c[3]
-            p /= np.linalg.norm(p)
-            colat = math.acos(max(-1.0, min(1.0, p[2])))
-            lon = math.atan2(p[1], p[0]) % (2 * math.pi)
-            for k, r in enumerate(radii):
-                out[i, j, k] = (colat, lon, r)
+    out[..., 0] = colat[..., None]
+    out[..., 1] = lon[..., None]
+    out[..., 2] = np.linspace(R_INNER, 1.0, NZ)[None, None, :]
     return out
 
 
@@ -116,7 +115,7 @@ def write_cap_file(path, nodes, temperature, velocity, viscosity, drop_row=False
                  % (os.path.basename(path), NY, NX, NZ))
 
 
-def write(out):
+def write(out, hdf5_only=False):
     caps = [cap_nodes(c) for c in cap_corners()]
     coord = np.stack(caps)
     with h5py.File(os.path.join(out, "run.h5"), "w") as f:
@@ -126,6 +125,14 @@ def write(out):
             g.attrs[name] = np.int32(value)
         g.attrs["radius_km"] = np.float32(6371.0)
         g.attrs["thermdiff"] = np.float32(1e-6)
+    if hdf5_only:
+        for step, time in STEPS.items():
+            per_cap = [fields(nodes, step) for nodes in caps]
+            with h5py.File(os.path.join(out, "run.%d.h5" % step), "w") as f:
+                for n, name in enumerate(("temperature", "velocity", "viscosity")):
+                    f.create_dataset(name, data=np.stack([x[n] for x in per_cap]).astype(np.float32))
+                f.attrs["time"] = np.float32(time)
+        return
     os.makedirs(os.path.join(out, "ascii"))
     os.makedirs(os.path.join(out, "bad", "rows"))
     os.makedirs(os.path.join(out, "bad", "missing"))
@@ -150,15 +157,21 @@ def write(out):
 
 
 def main():
-    if len(sys.argv) != 2:
-        sys.exit("usage: write_citcoms.py OUT_DIR")
-    out = os.path.abspath(sys.argv[1])
-    stamp = hashlib.sha256(open(__file__, "rb").read()).hexdigest()
+    global NX, NY, NZ
+    args = sys.argv[1:]
+    hdf5_only = "--hdf5-only" in args
+    if "--nodes" in args:
+        NX, NY, NZ = (int(n) for n in args[args.index("--nodes") + 1].split("x"))
+    positional = [a for i, a in enumerate(args) if not a.startswith("--") and (i == 0 or args[i - 1] != "--nodes")]
+    if len(positional) != 1:
+        sys.exit("usage: write_citcoms.py OUT_DIR [--nodes NXxNYxNZ --hdf5-only]")
+    out = os.path.abspath(positional[0])
+    stamp = hashlib.sha256(open(__file__, "rb").read() + " ".join(args[1:]).encode()).hexdigest()
     if os.path.exists(os.path.join(out, ".stamp")) and open(os.path.join(out, ".stamp")).read() == stamp:
         return
     os.makedirs(os.path.dirname(out), exist_ok=True)
     tmp = tempfile.mkdtemp(prefix=".citcoms-layout.", dir=os.path.dirname(out))
-    write(tmp)
+    write(tmp, hdf5_only)
     truth = {"caps": 12, "nodes": [NX, NY, NZ], "radius_inner": R_INNER, "steps": STEPS,
              "temperature": "0.5 + 0.2 z/r + 0.1 x/r + 0.3 (1 - r) / 0.45 + 0.01 step / 100",
              "velocity": "(v_colat, v_lon, v_r) = (0, 100 r sin(colat), 0), in kappa/R",

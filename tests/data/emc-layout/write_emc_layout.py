@@ -3,7 +3,7 @@
 Collaboration (EMC) netCDF files, for the tests of opening a model with its own variables
 (tests/cli, case `tomography`).
 
-    write_emc_layout.py OUT_DIR
+    write_emc_layout.py OUT_DIR [--grid NDEPTHxNLATxNLON]   (the option: bench/open_models.sh)
 
 Written with Python's netCDF4 module (Debian's python3-netcdf4) and NumPy, independently of RayPC's
 own netCDF code, following the EMC conventions as its models are published (e.g. S362ANI+M,
@@ -70,10 +70,18 @@ def write(path):
 
 
 def main():
-    if len(sys.argv) != 2:
-        sys.exit("usage: write_emc_layout.py OUT_DIR")
-    out = os.path.abspath(sys.argv[1])
-    stamp = hashlib.sha256(open(__file__, "rb").read()).hexdigest()
+    global DEPTH_KM, LAT_DEG, LON_DEG
+    args = sys.argv[1:]
+    if "--grid" in args:
+        nd, nla, nlo = (int(n) for n in args[args.index("--grid") + 1].split("x"))
+        DEPTH_KM = np.linspace(50.0, 2850.0, nd)
+        LAT_DEG = np.linspace(-90.0, 90.0, nla)
+        LON_DEG = np.linspace(-180.0, 180.0, nlo)
+        del args[args.index("--grid"):args.index("--grid") + 2]
+    if len(args) != 1:
+        sys.exit("usage: write_emc_layout.py OUT_DIR [--grid NDEPTHxNLATxNLON]")
+    out = os.path.abspath(args[0])
+    stamp = hashlib.sha256(open(__file__, "rb").read() + " ".join(sys.argv[2:]).encode()).hexdigest()
     if os.path.exists(os.path.join(out, ".stamp")) and open(os.path.join(out, ".stamp")).read() == stamp:
         return
     os.makedirs(os.path.dirname(out), exist_ok=True)
