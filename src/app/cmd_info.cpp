@@ -88,6 +88,7 @@ json describeDataset(const Dataset& d)
         j["variables"].push_back({{"name", v.name},
                                   {"units", v.units},
                                   {"derived", v.derived},
+                                  {"source", v.source},
                                   {"min", v.global.range.min},
                                   {"max", v.global.range.max},
                                   {"mean", v.global.mean}});
@@ -101,6 +102,17 @@ json describeDataset(const Dataset& d)
             j["steps"].back()["resampled"] = s.origin;
     }
     return j;
+}
+
+// Where a dataset's variable comes from: "  (derived from vx, vy, vz)", "  (from 'T')" when the
+// input names it otherwise; a file's variables say so when --map renamed them.
+std::string sourceNote(const json& v)
+{
+    const std::string source = v.value("source", std::string());
+    if (v.value("derived", false))
+        return source.empty() ? "  (derived)" : fmt::format("  (derived from {})", source);
+    const std::string inFile = v.value("name_in_file", source);
+    return !inFile.empty() && inFile != v["name"].get<std::string>() ? fmt::format("  (from '{}')", inFile) : "";
 }
 
 void printText(const json& j)
@@ -158,7 +170,7 @@ void printText(const json& j)
     for (const auto& v : j["variables"])
         fmt::print("    {:<42} [{:<8}] {:>12.5g} .. {:<12.5g} mean {:.5g}{}\n", v["name"].get<std::string>(),
                    v["units"].get<std::string>(), v["min"].get<double>(), v["max"].get<double>(),
-                   v["mean"].get<double>(), v.value("derived", false) ? "  (derived)" : "");
+                   v["mean"].get<double>(), sourceNote(v));
     if (j.contains("coordinates")) {
         std::vector<std::string> names;
         for (const auto& c : j["coordinates"])

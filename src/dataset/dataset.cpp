@@ -625,6 +625,8 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
             r.bad(ManifestReader::path(field, "name"), "\"\"", "a name");
         info.units = r.string(v, field, "units");
         info.derived = r.boolean(v, field, "derived");
+        if (v.is_object() && v.contains("source"))
+            info.source = r.string(v, field, "source");
         info.fileStem = r.string(v, field, "file_stem");
         if (!plainFileStem(info.fileStem))
             r.bad(ManifestReader::path(field, "file_stem"), excerpt(v.at("file_stem")),

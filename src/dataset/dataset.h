@@ -46,6 +46,9 @@ struct VariableInfo {
     std::string name;   // e.g. "temperature anomaly", "radial velocity"
     std::string units;  // e.g. "K", "cm/yr"
     bool derived = false;
+    // A stored variable's name in the input files, a derived one's inputs ("vx, vy, vz"); empty in
+    // datasets written before it was recorded.
+    std::string source;
     std::string fileStem;  // file-safe name of its arrays
     VariableStats global;  // over all steps (histogram rebinned from the steps' histograms)
 };

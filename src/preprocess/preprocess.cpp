@@ -69,22 +69,22 @@ std::vector<VariableSpec> variableSpecs(const FileHeader& header)
 {
     std::vector<VariableSpec> specs;
     for (const auto& v : header.variables)
-        specs.push_back({v.name, v.units, false});
+        specs.push_back({v.name, v.units, false, v.fileName});
     const auto has = [&](const std::string& name) {
         return std::any_of(header.variables.begin(), header.variables.end(), [&](const auto& v) { return v.name == name; });
     };
     if (has("vx") && has("vy") && has("vz")) {
-        specs.push_back({"radial velocity", "cm/yr", true});
-        specs.push_back({"velocity magnitude", "cm/yr", true});
+        specs.push_back({"radial velocity", "cm/yr", true, "vx, vy, vz"});
+        specs.push_back({"velocity magnitude", "cm/yr", true, "vx, vy, vz"});
     }
     for (const auto& v : header.variables)
         if (v.name == "thermal expansivity")
-            specs.push_back({"thermal expansivity anomaly", v.units, true});
+            specs.push_back({"thermal expansivity anomaly", v.units, true, v.name});
     // As addDerivedVariables: a model with a temperature but no anomaly (ASPECT writes T) gets one.
     if (!has("temperature anomaly"))
         for (const auto& v : header.variables)
             if (v.name == "temperature" || v.name == "T") {
-                specs.push_back({"temperature anomaly", v.units, true});
+                specs.push_back({"temperature anomaly", v.units, true, v.name});
                 break;
             }
     return specs;
@@ -113,7 +113,8 @@ json manifest(const std::vector<SphericalGrid>& levels, const std::vector<Variab
     j["variables"] = json::array();
     for (const auto& v : specs)
         j["variables"].push_back(
-            {{"name", v.name}, {"units", v.units}, {"derived", v.derived}, {"file_stem", fileSafeName(v.name)}});
+            {{"name", v.name}, {"units", v.units}, {"derived", v.derived}, {"source", v.source},
+             {"file_stem", fileSafeName(v.name)}});
     j["inputs"] = json::array();
     for (const auto& p : inputs)
         j["inputs"].push_back(p.filename().string());

@@ -16,6 +16,8 @@ namespace raypc::preprocessing {
 struct VariableSpec {
     std::string name, units;
     bool derived;
+    // What it comes from: a stored variable's name in the input, a derived one's inputs.
+    std::string source;
 };
 
 // Throws raypc::Error "preprocess: cancelled" once options.cancel is set (between steps and sets).
