@@ -1,4 +1,4 @@
-// Features of a selection (issue 28, its first part): the connected regions of the selected grid
+// Features of a selection: the connected regions of the selected grid
 // points of one step, each measured — volume, depth extent, centroid, every variable's mean, min and
 // max, and how much of it lies near chosen depths (so "how much of this slab is within 50 km of
 // 660 km" is a number). docs/features.md gives the definitions.

@@ -223,7 +223,7 @@ void RenderSession::render(const Request& request)
     if (m_context.ranks)
         if (const auto choice = StateRenderer::knownChoice(state, policy))
             m_context.ranks->prepare(m_rankSession, frameNumber, request.resolved, *choice);
-    // Preview (issue 26): a still state at level "auto" (level 0) is first prepared as an interactive
+    // Preview: a still state at level "auto" (level 0) is first prepared as an interactive
     // state is; when that chooses a coarser level or fewer pixels (level 0 would miss the state's
     // timeBudgetMs), one pass of that choice is sent first, as pass 0 with "preview": true, and its
     // passes at level 0 then refine it. So the picture changes at once after a brush is released, a
