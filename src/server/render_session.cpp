@@ -167,7 +167,6 @@ void RenderSession::render(const Request& request)
                 height = h;
                 return out;
             });
-        const uint64_t samples = stats.samples + stats.samplesSkipped;
         nlohmann::json header{{"type", "frame"},
                               {"id", request.id},
                               {"step", step},
@@ -182,12 +181,7 @@ void RenderSession::render(const Request& request)
                               {"width", picture.width},
                               {"height", picture.height},
                               {"camera", document["camera"]},
-                              {"stats",
-                               {{"passMs", stats.seconds * 1000.0},
-                                {"samples", samples},
-                                {"samplesPerSecond", stats.seconds > 0 ? double(samples) / stats.seconds : 0.0},
-                                {"bricksSkipped", stats.bricksSkipped},
-                                {"bricksTotal", stats.bricksTotal}}},
+                              {"stats", toJson(stats, PassStatsJson::frameHeader)},
                               {"selection", selection}};
         if (prepared.scene)
             header["pathlines"] = {{"lines", prepared.scene->lineCount()}, {"visible", prepared.scene->visibleCount()}};
