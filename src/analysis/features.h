@@ -58,6 +58,11 @@ struct StepFeatures {
     std::vector<int32_t> labels;
 };
 
+// The options of feature settings however they are given (a state's `features`, through
+// render::featureOptions; the command line's options; Python's arguments): minimum volume (km³),
+// depths (km) and their band's half-width (km). Checks nothing (extractFeatures does).
+FeatureOptions featureOptions(double minVolumeKm3, std::vector<double> depthsKm, double bandHalfWidthKm);
+
 // Throws raypc::Error as selectedVolume does (filters), and for a negative minimum volume or band
 // half-width. An empty selection gives no features.
 StepFeatures extractFeatures(const StepVolume& volume, std::span<const RangeFilter> filters,
