@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Keeps the ray caster's speed from drifting (issue 27): builds render_bench at a reference commit
+# Keeps the ray caster's speed from drifting: builds render_bench at a reference commit
 # beside the working tree, then runs interleaved pairs of its main cases (reference and this tree
 # in turn, the order alternating) and prints per case the median ratio this tree / reference with
 # its spread. A change "within noise" of the one before shows here when several such changes add up.

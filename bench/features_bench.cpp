@@ -1,4 +1,4 @@
-// Features, their links and shell fluxes (issue 28) on the synthetic model built in memory
+// Features, their links and shell fluxes on the synthetic model built in memory
 // (synthesizeSnapshot), two full-resolution (180 x 201 x 360, 13 M points) steps at 0 and 2 Myr
 // (default seed), with the derived variables preprocessing adds (addDerivedVariables: radial
 // velocity among them), as StepVolume::fromSnapshot. The selection is task 1's preset

@@ -1,4 +1,4 @@
-// Persistence pairs and seed selection (issue 14, part 1) on the synthetic model built in memory
+// Persistence pairs and seed selection on the synthetic model built in memory
 // (synthesizeSnapshot), temperature anomaly.
 //   BM_Persistence: persistencePairs of one full-resolution (180 x 201 x 360, 13 M vertices) step,
 //     with 1 thread and with every core. Target: <= 10 s on 2 cores.

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Benchmark (not a test): preprocess one full-resolution 180x201x360 step with the file in the
 # page cache; prints wall seconds and peak memory of `raypc preprocess`.
-# Targets (issue 2, 2 cores): <= 5 s and <= 2.5 GB.
+# Targets (2 cores): <= 5 s and <= 2.5 GB.
 # Usage: bench/preprocess_full_step.sh [BUILD_DIR] [WORK_DIR]
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)

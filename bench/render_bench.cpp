@@ -1,4 +1,4 @@
-// Ray-caster benchmarks (issue 3) on a full-resolution (180 x 201 x 360) synthetic step built in memory
+// Ray-caster benchmarks on a full-resolution (180 x 201 x 360) synthetic step built in memory
 // (synthesizeSnapshot), or on RAYPC_BENCH_DATASET (a preprocessed dataset directory, step 0).
 //   build-perf/bench/render_bench --benchmark_min_time=1
 // Counters per benchmark:
@@ -8,8 +8,8 @@
 //   Msteps/s/thread    every sample position along the rays, including those in skipped space
 //   Mdata/s/thread     samples that read data (in active bricks): the honest sampling rate
 //   jumped%            share of chunks passed over by interval skipping without locating a sample
-// Targets (2 cores): interactive 512² pass <= 50 ms, converged 1024² full resolution <= 3 s (issue
-// 15: <= 0.5 s, and 1920x1080 <= 1 s, by adaptive refinement: BM_ConvergedAdaptive*),
+// Targets (2 cores): interactive 512² pass <= 50 ms, converged 1024² full resolution <= 3 s (the
+// aim: <= 0.5 s, and 1920x1080 <= 1 s, by adaptive refinement: BM_ConvergedAdaptive*),
 // >= 100 M samples/s/thread, brushing 4 variables (<= 20 % selected) not slower than no brushing.
 #include "core/system_memory.h"
 #include "dataset/bricks.h"
@@ -351,7 +351,7 @@ void BM_FramePicture1500(benchmark::State& state)
 }
 BENCHMARK(BM_FramePicture1500)->Unit(benchmark::kMillisecond);
 
-// Maps and sections (issue 29: dragging the depth or a section's end updates at >= 10 pictures/s at
+// Maps and sections (the goal: dragging the depth or a section's end updates at >= 10 pictures/s at
 // 1920x1080 on 2 cores for full-resolution data) of the temperature anomaly, the state's colours:
 // first arg 0 map, 1 map with contours and flow arrows, 2 section, 3 section with contours and
 // flow, 4 map of a new central meridian each time (the first map of a projection and size: every

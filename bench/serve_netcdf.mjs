@@ -1,5 +1,5 @@
-// Benchmark (not a test): time to the first picture of netCDF files (`raypc serve FILE.nc…`, issue 15
-// goal 6). Starts `raypc serve FILES --dataset DIR --port 0` with DIR empty, then measures from the
+// Benchmark (not a test): time to the first picture of netCDF files (`raypc serve
+// FILE.nc…`). Starts `raypc serve FILES --dataset DIR --port 0` with DIR empty, then measures from the
 // start of the process: the "serving" line (the first step preprocessed alone), the first frame and
 // the converged frame of the UI's default state at WxH, and the whole series served (GET
 // /api/progress says "complete" on the server that replaced the first), then the server's log lines of

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Benchmark (not a test), issue 25 §2 "Speed": the time from ASPECT's output (a VTK XML series:
+# Benchmark (not a test): the time from ASPECT's output (a VTK XML series:
 # .pvd -> .pvtu -> zlib-compressed .vtu pieces) to the first picture, RayPC against ParaView in
 # the same run, on the same files (bench/aspect_resample/README.md):
 #   RayPC:    raypc preprocess SERIES --grid GRID --no-pathlines (one step), then

@@ -1,4 +1,4 @@
-// The features of a selection followed through a series of steps (issue 28): each step's features
+// The features of a selection followed through a series of steps: each step's features
 // linked to the previous step's (linkFeatures), their tracks (FeatureTracker), events and stall
 // times, kept in one object that `raypc features` writes as CSV and the server's POST /api/features
 // answers as JSON. docs/features.md gives the rules.

@@ -12,6 +12,7 @@
 #include <numeric>
 #include <optional>
 #include <string>
+#include <utility>
 
 namespace raypc {
 namespace {
@@ -53,6 +54,15 @@ struct Sums {
 };
 
 }  // namespace
+
+FeatureOptions featureOptions(double minVolumeKm3, std::vector<double> depthsKm, double bandHalfWidthKm)
+{
+    FeatureOptions o;
+    o.minVolumeKm3 = minVolumeKm3;
+    o.bandDepthsKm = std::move(depthsKm);
+    o.bandHalfWidthKm = bandHalfWidthKm;
+    return o;
+}
 
 StepFeatures extractFeatures(const StepVolume& volume, std::span<const RangeFilter> filters, const FeatureOptions& options)
 {

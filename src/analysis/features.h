@@ -1,4 +1,4 @@
-// Features of a selection (issue 28, its first part): the connected regions of the selected grid
+// Features of a selection: the connected regions of the selected grid
 // points of one step, each measured — volume, depth extent, centroid, every variable's mean, min and
 // max, and how much of it lies near chosen depths (so "how much of this slab is within 50 km of
 // 660 km" is a number). docs/features.md gives the definitions.
@@ -57,6 +57,11 @@ struct StepFeatures {
     // Per grid point (canonical order): the id of its feature, 0 when unselected or dropped.
     std::vector<int32_t> labels;
 };
+
+// The options of feature settings however they are given (a state's `features`, through
+// render::featureOptions; the command line's options; Python's arguments): minimum volume (km³),
+// depths (km) and their band's half-width (km). Checks nothing (extractFeatures does).
+FeatureOptions featureOptions(double minVolumeKm3, std::vector<double> depthsKm, double bandHalfWidthKm);
 
 // Throws raypc::Error as selectedVolume does (filters), and for a negative minimum volume or band
 // half-width. An empty selection gives no features.

@@ -1,4 +1,4 @@
-// Volume flux across spherical shells (issue 28, "avalanches"): how much material crosses a depth
+// Volume flux across spherical shells (to find "avalanches"): how much material crosses a depth
 // per unit time, downward and upward separately, over the whole shell and within a selection.
 // docs/features.md gives the definitions.
 //

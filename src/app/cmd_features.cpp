@@ -9,6 +9,7 @@
 #include "core/progress.h"
 #include "dataset/dataset.h"
 #include "analysis/feature_csv.h"
+#include "analysis/feature_run.h"
 #include "analysis/feature_series.h"
 #include "analysis/features.h"
 #include "analysis/selection.h"
@@ -140,6 +141,53 @@ private:
     size_t m_at = 0;
 };
 
+// A rank's block of steps, begin..end-1: its rows of the features table, how many features they
+// hold, and with tracking (`tracks`) its steps' features with their links from the previous step's,
+// found for the block's first step too (its previous step is another rank's), packed for rank 0.
+struct BlockFeatures {
+    std::string rows;
+    size_t count = 0;
+    Packer linked;
+};
+
+BlockFeatures blockFeatures(const SeriesSelection& sel, const FeatureOptions& options, int level, int begin, int end,
+                            const FeatureSeries* tracks, Progress* progress)
+{
+    const Dataset& dataset = *sel.dataset;
+    const std::vector<RangeFilter>& filters = sel.filters;
+    BlockFeatures out;
+    std::shared_ptr<const StepVolume> previousVolume;
+    StepFeatures previous;  // labels only
+    const StepVolumeLoader load = [&](int step) { return dataset.load(step, level); };
+    if (tracks && begin > sel.first && begin < end) {  // the step before the block, to link the block's first
+        previousVolume = load(begin - 1);
+        previous = extractFeatures(*previousVolume, filters, options);
+    }
+    FeatureRunControl control;
+    if (progress)
+        control.progress = [&](int done, int) {
+            if (done > 0)
+                progress->advance();
+        };
+    forEachStepFeatures(begin, end - 1, load, filters, options, [&](FeatureStep& s) {
+        const int step = s.step;
+        StepFeatures& f = s.features;
+        out.count += f.features.size();
+        out.rows += featureTableRows(step, dataset.steps()[size_t(step)].timeMyr, f);
+        if (tracks) {
+            const std::vector<FeatureLink> links =
+                previousVolume ? linkFeatures(*previousVolume, previous, f, tracks->velocity(),
+                                              dataset.steps()[size_t(step)].timeMyr -
+                                                  dataset.steps()[size_t(step) - 1].timeMyr)
+                               : std::vector<FeatureLink>{};
+            out.linked.putStep(step, f, links);
+            previousVolume = s.volume;
+            previous.labels = std::move(f.labels);
+        }
+    }, control);
+    return out;
+}
+
 // Under mpirun the steps are split into contiguous blocks over the ranks (as `raypc stats` does);
 // rank 0 gathers the rows in rank order, which is step order, and writes the file. With tracking,
 // each rank also links its steps' features to the previous step's (finding the features of the step
@@ -170,9 +218,7 @@ void run(FeaturesArgs args)
                                                 {"depthsKm", "--depth"},
                                                 {"bandHalfWidthKm", "--band-half-width"},
                                                 {"minOverlapShare", "--min-overlap"}});
-        options.minVolumeKm3 = args.minVolumeKm3;
-        options.bandDepthsKm = args.depths;
-        options.bandHalfWidthKm = args.bandHalfWidthKm;
+        options = featureOptions(args.minVolumeKm3, args.depths, args.bandHalfWidthKm);
     });
     const Dataset& dataset = *sel.dataset;
     const std::vector<RangeFilter>& filters = sel.filters;
@@ -184,45 +230,20 @@ void run(FeaturesArgs args)
             tracks.emplace(dataset, args.minOverlapShare, "--tracks/--events/--stalls");
     });
     const mpi::Block block = mpi::blockOf(last - first + 1);
-    std::string mine;
-    Packer linked;  // with tracking: this rank's steps' features and links
-    size_t count = 0;
+    BlockFeatures mine;
     std::optional<Progress> progress;
     if (!args.quiet && mpi::isRoot())
         progress.emplace(mpi::distributed() ? fmt::format("features (rank 0 of {})", mpi::size()) : "features",
                          block.end - block.begin, "steps");
     mpi::together([&] {
-        std::shared_ptr<const StepVolume> previousVolume;
-        StepFeatures previous;  // labels only
-        const int begin = first + int(block.begin), end = first + int(block.end);
-        if (tracks && begin > first && begin < end) {  // the step before the block, to link the block's first
-            previousVolume = dataset.load(begin - 1, args.selection.level);
-            previous = extractFeatures(*previousVolume, filters, options);
-        }
-        for (int step = begin; step < end; ++step) {
-            const auto volume = dataset.load(step, args.selection.level);
-            StepFeatures f = extractFeatures(*volume, filters, options);
-            count += f.features.size();
-            mine += featureTableRows(step, dataset.steps()[size_t(step)].timeMyr, f);
-            if (tracks) {
-                const std::vector<FeatureLink> links =
-                    previousVolume ? linkFeatures(*previousVolume, previous, f, tracks->velocity(),
-                                                  dataset.steps()[size_t(step)].timeMyr -
-                                                      dataset.steps()[size_t(step) - 1].timeMyr)
-                                   : std::vector<FeatureLink>{};
-                linked.putStep(step, f, links);
-                previousVolume = volume;
-                previous.labels = std::move(f.labels);
-            }
-            if (progress)
-                progress->advance();
-        }
+        mine = blockFeatures(sel, options, args.selection.level, first + int(block.begin), first + int(block.end),
+                             tracks ? &*tracks : nullptr, progress ? &*progress : nullptr);
     });
     if (progress)
         progress->finish();
-    const auto parts = mpi::gatherToRoot(mine);
-    const auto counts = mpi::gatherToRoot(std::to_string(count));
-    const auto linkedParts = mpi::gatherToRoot(linked.bytes());
+    const auto parts = mpi::gatherToRoot(mine.rows);
+    const auto counts = mpi::gatherToRoot(std::to_string(mine.count));
+    const auto linkedParts = mpi::gatherToRoot(mine.linked.bytes());
     mpi::together([&] {
         if (!tracks || !mpi::isRoot())
             return;

@@ -437,11 +437,7 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
         frames = prepared.frames();
         for (int pass = 0; pass < resolved.state.passes; ++pass) {
             const PassStats s = prepared.renderPass(frames, nullptr, share);
-            passes.push_back({{"seconds", s.seconds},
-                              {"samples", s.samples},
-                              {"samplesSkipped", s.samplesSkipped},
-                              {"samplesPerSecondPerThread", s.samplesPerSecondPerThread()},
-                              {"dataSamplesPerSecondPerThread", s.dataSamplesPerSecondPerThread()}});
+            passes.push_back(toJson(s, PassStatsJson::pass));
             total += s;
         }
     });
@@ -472,25 +468,16 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
         }
     });
     const StereoLayout layout = stereoLayout(resolved.state.stereo.mode, resolved.state.width, resolved.state.height);
-    return {{"step", step},
-            {"timeMyr", dataset.steps()[size_t(step)].timeMyr},
-            {"level", level},
-            {"pathlinesShown", pathlinesShown},
-            {"output", out},
-            {"size", {layout.width, layout.height}},
-            {"ranks", share.count},
-            {"threads", total.threads},
-            {"simdLanes", total.simdLanes},
-            {"passes", passes},
-            {"seconds", total.seconds},
-            {"samples", total.samples},
-            {"samplesSkipped", total.samplesSkipped},
-            {"bricksVisited", total.bricksTotal - total.bricksSkipped},
-            {"bricksSkipped", total.bricksSkipped},
-            {"chunks", total.chunks},
-            {"chunksJumped", total.chunksJumped},
-            {"samplesPerSecondPerThread", total.samplesPerSecondPerThread()},
-            {"dataSamplesPerSecondPerThread", total.dataSamplesPerSecondPerThread()}};
+    nlohmann::json stats = toJson(total, PassStatsJson::frame);
+    stats.update({{"step", step},
+                  {"timeMyr", dataset.steps()[size_t(step)].timeMyr},
+                  {"level", level},
+                  {"pathlinesShown", pathlinesShown},
+                  {"output", out},
+                  {"size", {layout.width, layout.height}},
+                  {"ranks", share.count},
+                  {"passes", passes}});
+    return stats;
 }
 
 // Under mpirun: a sequence spreads its frames over the ranks (handed out one at a time, each

@@ -16,7 +16,7 @@
 #include "render/image_io.h"
 #include "render/legend.h"
 #include "render/render_state.h"
-#include "render/slice_view.h"
+#include "render/time_depth_view.h"
 #include "render/state_renderer.h"
 
 #include <fmt/format.h>

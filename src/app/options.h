@@ -14,7 +14,7 @@
 namespace raypc::app {
 
 // Adds to every floating-point option of `app` and its subcommands a check that refuses NaN and
-// infinities ("nan", "inf", "1e999"): no command works with a non-finite number (issue 31: `probe
+// infinities ("nan", "inf", "1e999"): no command works with a non-finite number (unchecked, `probe
 // --lon nan` answered with null values and exit 0). Call once every option is added.
 void requireFiniteNumbers(CLI::App& app);
 

@@ -163,7 +163,7 @@ TEST(Error, FailFormatsTheMessage)
     }
 }
 
-// JSON from outside: nesting bounded before nlohmann's recursive parser sees it (issue 31).
+// JSON from outside: nesting bounded before nlohmann's recursive parser sees it (deep input crashed it).
 TEST(JsonInput, NestingIsBoundedBeforeParsing)
 {
     const auto nested = [](int depth) { return std::string(size_t(depth), '[') + std::string(size_t(depth), ']'); };
@@ -195,7 +195,7 @@ TEST(JsonInput, ExcerptsAreShort)
     EXPECT_EQ(u, "\"é…");
 }
 
-// `raypc render -o` patterns (issue 31, item 3): one %d / %0Nd, %% for %, nothing else.
+// `raypc render -o` patterns, never printf formats: one %d / %0Nd, %% for %, nothing else.
 TEST(NumberedName, ExpandsOneStepNumberWithoutPrintf)
 {
     EXPECT_EQ(NumberedName("f_%03d.png", "-o")(7), "f_007.png");

@@ -1,7 +1,7 @@
 // A file name with at most one number in it, as `raypc render -o frames/frame_%03d.png --time 0:9`
 // takes: "%d" or "%0Nd" (N = 1…9, zero-padded to N characters) stands for the number, "%%" for a
 // literal "%", and nothing else may follow a "%". Expanded without printf, so no user text is ever a
-// format string (issue 31: "%s%03d" crashed, "%x%d" and "%p%d" wrote stack values into names,
+// format string (through printf, "%s%03d" crashed, "%x%d" and "%p%d" wrote stack values into names,
 // "%999999999d" cut names so that frames overwrote each other).
 #pragma once
 

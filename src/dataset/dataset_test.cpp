@@ -1,4 +1,4 @@
-// Reading a dataset that is damaged or edited (issue 31): every field of the manifest is checked at
+// Reading a dataset that is damaged or edited: every field of the manifest is checked at
 // Dataset::open with one raypc::Error naming the manifest and the field; the arrays' sizes agree
 // with the manifest; a float32 array holding NaN, Inf or a value beyond the step's range is refused
 // when it is first read; a file cut short after it was mapped is an error, not SIGBUS.

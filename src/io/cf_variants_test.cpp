@@ -1,5 +1,5 @@
-// The netCDF reader against files in the shapes CF-conforming models and tomography tools write
-// (issue 25, §3), written at test time by Python's netCDF4 (tests/data/cf-variants): each variant
+// The netCDF reader against files in the shapes CF-conforming models and tomography tools write,
+// written at test time by Python's netCDF4 (tests/data/cf-variants): each variant
 // is read and compared with the analytic truth, and each refusal must be one error naming the file
 // and what is wrong.
 #include "core/atomic_file.h"

@@ -200,7 +200,7 @@ TEST(Stats, FiniteExtremesOfFloat32)
 }
 
 // The statistics must not depend on how many threads share the work: dataset.json is the same
-// bytes on every run (issue 16, 11). Thread-local partial sums gave other last digits.
+// bytes on every run. Thread-local partial sums gave other last digits.
 TEST(Stats, SameBitsWithAnyNumberOfThreads)
 {
     const SphericalGrid g = centredGrid(90, 41, 180);

@@ -17,6 +17,7 @@
 #include "core/spherical.h"
 #include "analysis/critical_points.h"
 #include "dataset/dataset.h"
+#include "analysis/feature_run.h"
 #include "analysis/features.h"
 #include "analysis/pathline_storage.h"
 #include "analysis/selection.h"
@@ -354,20 +355,22 @@ public:
         render::checkFeatureSettings(settings, {{"minVolumeKm3", "min_volume_km3"},
                                                 {"depthsKm", "depths_km"},
                                                 {"bandHalfWidthKm", "band_half_width_km"}});
-        FeatureOptions options;
-        options.minVolumeKm3 = minVolumeKm3;
-        options.bandDepthsKm = std::move(depthsKm);
-        options.bandHalfWidthKm = bandHalfWidthKm;
+        const FeatureOptions options = featureOptions(minVolumeKm3, std::move(depthsKm), bandHalfWidthKm);
         ProgressBridge bridge(std::move(progress));
         std::string csv = app::featureTableHeader(*m_dataset, options);
         {
             py::gil_scoped_release release;
-            for (int step = first; step <= last && !bridge.cancel; ++step) {
+            const StepVolumeLoader load = [&](int step) {
                 m_dataset->checkStep(step, "steps");
-                const StepFeatures f = extractFeatures(*m_dataset->load(step, level), filters, options);
-                csv += app::featureTableRows(step, m_dataset->steps()[size_t(step)].timeMyr, f);
-                bridge("steps", step - first + 1, last - first + 1);
-            }
+                return m_dataset->load(step, level);
+            };
+            FeatureRunControl control{&bridge.cancel, [&](int done, int total) {
+                                          if (done > 0)  // after each step
+                                              bridge("steps", done, total);
+                                      }};
+            forEachStepFeatures(first, last, load, filters, options, [&](FeatureStep& s) {
+                csv += app::featureTableRows(s.step, m_dataset->steps()[size_t(s.step)].timeMyr, s.features);
+            }, control);
         }
         bridge.rethrow();
         return csv;

@@ -403,7 +403,7 @@ TEST(FeatureTruth, AnAvalancheEndsItsSlabsStallAndIsTheFluxSpike)
 namespace raypc::render {
 namespace {
 
-// Issue 29: a section along the dip of a slab the generator stalls at 660 km (through its sheet's
+// A section along the dip of a slab the generator stalls at 660 km (through its sheet's
 // centre at 150 and 500 km depth, extended 15° either way) shows it where the generator put it: the
 // section's points in the core of that slab's sheet and pancake are cold (the temperature anomaly at
 // most a fifth of the slab's amplitude), the cold points of the section (below that) lie in the

@@ -1,4 +1,4 @@
-// Tubes along pathlines, ray traced with Embree in the same frame as the volume (issue 5).
+// Tubes along pathlines, ray traced with Embree in the same frame as the volume.
 //
 // A PathlineScene holds the lines of one step window (loadPathlineWindow) as round linear curves
 // (cones between points, spheres at the joints) of one radius in one Embree BVH, built once.

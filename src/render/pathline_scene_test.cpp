@@ -1,4 +1,4 @@
-// Tubes along pathlines (issue 5): visibility rules, state keys, and the composite with the volume
+// Tubes along pathlines: visibility rules, state keys, and the composite with the volume
 // checked analytically (a constant medium of known transmittance, ray-cylinder distance).
 #include "render/pathline_scene.h"
 

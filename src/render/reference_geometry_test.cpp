@@ -100,7 +100,7 @@ TEST(ReferenceGeometry, ShellsOutsideThePlanetsShellDrawNothing)
         ASSERT_EQ(v, 0.0f);
 }
 
-// Issue 26, 7: from the default camera the 410 and 660 km rings are 4 % apart in radius; each gets
+// From the default camera the 410 and 660 km rings are only 4 % apart in radius, so each gets
 // a colour of its own and its depth written on its ring, the labels apart.
 TEST(ReferenceGeometry, ShellsHaveTheirOwnColoursAndTheirDepthsOnTheirRings)
 {

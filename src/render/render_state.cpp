@@ -19,11 +19,8 @@ RenderState loadRenderState(const std::filesystem::path& path)
 
 FeatureOptions featureOptions(const FeatureSettings& settings)
 {
-    FeatureOptions o;
-    o.minVolumeKm3 = settings.minVolumeKm3;
-    o.bandDepthsKm.assign(settings.depthsKm.begin(), settings.depthsKm.end());
-    o.bandHalfWidthKm = settings.bandHalfWidthKm;
-    return o;
+    return raypc::featureOptions(settings.minVolumeKm3, {settings.depthsKm.begin(), settings.depthsKm.end()},
+                                 settings.bandHalfWidthKm);
 }
 
 void checkFeatureSettings(const FeatureSettings& settings,

@@ -1,5 +1,5 @@
-// Internal to raypc_render: volumetric occlusion of the volume, the core and the tubes (issue 14,
-// docs/rendering.md "Shadows and ambient occlusion").
+// Internal to raypc_render: volumetric occlusion of the volume, the core and the tubes
+// (docs/rendering.md, "Shadows and ambient occlusion").
 //
 // A coarse Cartesian grid of nodes over the planet's bounding cube holds, per node:
 //   - the extinction (per km) of the cell around it: the mean of the kernels' own sigma (transfer

@@ -1,6 +1,6 @@
 // The state-to-pixels path's own rules that need no dataset: the pathline tubes' minimum width on
 // screen (tubeRadiusKm) against the pixel footprint at the camera target's distance; the memory a
-// picture needs, checked before anything is allocated (issue 31, item 8).
+// picture needs, checked before anything is allocated (a huge picture is refused with its figures, not std::bad_alloc).
 #include "render/state_renderer.h"
 
 #include "core/error.h"

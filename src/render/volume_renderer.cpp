@@ -498,6 +498,31 @@ void VolumeRenderer::buildSkipGrid()
     k.cellStepPastKm = 0.5f * kSkipCellPadKm;
 }
 
+nlohmann::json toJson(const PassStats& stats, PassStatsJson form)
+{
+    if (form == PassStatsJson::frameHeader) {
+        const uint64_t positions = stats.samples + stats.samplesSkipped;
+        return {{"passMs", stats.seconds * 1000.0},
+                {"samples", positions},
+                {"samplesPerSecond", stats.seconds > 0 ? double(positions) / stats.seconds : 0.0},
+                {"bricksSkipped", stats.bricksSkipped},
+                {"bricksTotal", stats.bricksTotal}};
+    }
+    nlohmann::json out{{"seconds", stats.seconds},
+                       {"samples", stats.samples},
+                       {"samplesSkipped", stats.samplesSkipped},
+                       {"samplesPerSecondPerThread", stats.samplesPerSecondPerThread()},
+                       {"dataSamplesPerSecondPerThread", stats.dataSamplesPerSecondPerThread()}};
+    if (form == PassStatsJson::frame)
+        out.update({{"threads", stats.threads},
+                    {"simdLanes", stats.simdLanes},
+                    {"bricksVisited", stats.bricksTotal - stats.bricksSkipped},
+                    {"bricksSkipped", stats.bricksSkipped},
+                    {"chunks", stats.chunks},
+                    {"chunksJumped", stats.chunksJumped}});
+    return out;
+}
+
 PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>* cancel, TileShare share)
 {
     if (frame.width() != m_params.width || frame.height() != m_params.height)

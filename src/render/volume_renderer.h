@@ -28,6 +28,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <vector>
 
@@ -126,6 +127,17 @@ struct PassStats {
         return *this;
     }
 };
+
+// The JSON forms of PassStats, one for each of its readers. Their keys differ because the readers
+// do: a frame header on the WebSocket (docs/protocol.md, "PassStats") counts every sample position
+// and times in ms; `raypc render --stats` keeps the samples read and skipped apart, with rates per
+// thread, and adds the machine and brick figures to a frame's total.
+enum class PassStatsJson {
+    pass,         // a pass of `raypc render --stats`: seconds, samples, samplesSkipped, the two rates
+    frame,        // a frame's total there: a pass's keys and threads, simdLanes, bricks and chunks
+    frameHeader,  // the "stats" of a frame header: passMs, samples, samplesPerSecond, bricks
+};
+nlohmann::json toJson(const PassStats& stats, PassStatsJson form);
 
 class VolumeRenderer {
 public:

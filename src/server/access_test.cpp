@@ -28,7 +28,7 @@ TEST(Token, LoopbackNeedsNoToken)
 
 TEST(Token, OnlyTheTwoLoopbackAddressesNeedNoToken)
 {
-    // Issue 31, item 10: --host 127.0.0.2 answered without a token.
+    // Only the two loopback addresses go without a token: --host 127.0.0.2 once answered without one.
     for (const char* host : {"127.0.0.1", "::1", "[::1]", "localhost"})
         EXPECT_TRUE(isTokenFreeListenAddress(host)) << host;
     for (const char* host : {"127.0.0.2", "127.1.2.3", "0.0.0.0", "::", "192.168.1.4", "127.0.0.1.evil.com", ""})

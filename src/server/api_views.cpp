@@ -5,6 +5,7 @@
 #include "core/spherical.h"
 #include "grid/coordinates.h"
 #include "analysis/feature_csv.h"
+#include "analysis/feature_run.h"
 #include "analysis/feature_series.h"
 #include "analysis/flux.h"
 #include "render/color_map.h"
@@ -169,53 +170,55 @@ json featurePointJson(const FeatureSeries::Row& r, std::optional<size_t> radialV
              }()}};
 }
 
-}  // namespace
-
-json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
-                       const FeatureOptions& options, double minOverlapShare, StallMeasure stallBy, int level,
-                       double sigmas, const std::atomic<bool>* cancel,
-                       const std::function<void(int done, int total)>& progress)
+// The index of the variable `name`, if the dataset has it.
+std::optional<size_t> variableIfAny(const Dataset& dataset, const std::string& name)
 {
-    dataset.checkLevel(level);
-    if (filters.empty())
-        fail("features: no selection: brush an axis first (the whole mantle would be one feature)");
-    if (!(sigmas >= 0))
-        fail("sigmas: {} is negative", sigmas);
-    const int nSteps = int(dataset.steps().size());
-    const int vr = dataset.variableIndex("radial velocity");
-    const std::optional<size_t> radialVelocity = vr >= 0 ? std::optional<size_t>(size_t(vr)) : std::nullopt;
-    const int rho = dataset.variableIndex(kDensityVariable);
-    const std::optional<size_t> density = rho >= 0 ? std::optional<size_t>(size_t(rho)) : std::nullopt;
-    const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
-    std::vector<double> fluxDepths;  // the options' depths inside the grid's shell
-    for (const double d : options.bandDepthsKm)
-        if (shellInsideGrid(grid, d))
-            fluxDepths.push_back(d);
+    const int i = dataset.variableIndex(name);
+    return i >= 0 ? std::optional<size_t>(size_t(i)) : std::nullopt;
+}
 
-    FeatureSeries series(dataset, minOverlapShare, "features");
+// The steps' features through the series: what each step has, its flux across the shells at
+// `fluxDepths` (with a radial velocity and depths) and the features followed through the steps.
+struct FeatureSteps {
     json steps = json::array();
     std::vector<std::vector<ShellFlux>> fluxes;  // [step][depth]
-    for (int step = 0; step < nSteps; ++step) {
-        if (cancel && *cancel)
-            fail("features cancelled at step {} of {} (the client went away or the server is stopping)", step, nSteps);
-        if (progress)
-            progress(step, nSteps);
-        const auto volume = cache.getWithoutEvicting(step, level);
-        const StepFeatures f = extractFeatures(*volume, filters, options);
-        steps.push_back({{"step", step}, {"timeMyr", dataset.steps()[size_t(step)].timeMyr}, {"features", f.features.size()}});
-        if (radialVelocity && !fluxDepths.empty())
-            fluxes.push_back(shellFluxes(*volume, *radialVelocity, fluxDepths, filters, std::nullopt, density));
-        series.add(step, volume, f);
-    }
-    if (progress)
-        progress(nSteps, nSteps);
+    FeatureSeries series;
+};
 
-    // Tracks: their points (step order), stalls and a summary for the table.
+FeatureSteps featureSteps(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
+                          const FeatureOptions& options, double minOverlapShare, int level,
+                          std::optional<size_t> radialVelocity, std::optional<size_t> density,
+                          std::span<const double> fluxDepths, const std::atomic<bool>* cancel,
+                          const std::function<void(int done, int total)>& progress)
+{
+    const int nSteps = int(dataset.steps().size());
+    FeatureSteps out{json::array(), {}, FeatureSeries(dataset, minOverlapShare, "features")};
+    const auto stopped = forEachStepFeatures(
+        0, nSteps - 1, [&](int step) { return cache.getWithoutEvicting(step, level); }, filters, options,
+        [&](FeatureStep& s) {
+            out.steps.push_back({{"step", s.step},
+                                 {"timeMyr", dataset.steps()[size_t(s.step)].timeMyr},
+                                 {"features", s.features.features.size()}});
+            if (radialVelocity && !fluxDepths.empty())
+                out.fluxes.push_back(shellFluxes(*s.volume, *radialVelocity, fluxDepths, filters, std::nullopt, density));
+            out.series.add(s.step, s.volume, s.features);
+        },
+        {cancel, progress});
+    if (stopped)
+        fail("features cancelled at step {} of {} (the client went away or the server is stopping)", *stopped, nSteps);
+    return out;
+}
+
+// Every track with its points (step order), its stalls at the options' depths and a summary for
+// the table.
+json tracksJson(const FeatureSeries& series, const FeatureOptions& options, int lastStep, StallMeasure stallBy,
+                std::optional<size_t> radialVelocity)
+{
     std::map<int, std::vector<const FeatureSeries::Row*>> rowsOf;
     for (const FeatureSeries::Row& r : series.rows())
         rowsOf[r.track].push_back(&r);
     std::map<int, json> stallsOf;
-    for (const auto& [track, s] : series.stalls(options.bandDepthsKm, options.bandHalfWidthKm, nSteps - 1, stallBy))
+    for (const auto& [track, s] : series.stalls(options.bandDepthsKm, options.bandHalfWidthKm, lastStep, stallBy))
         stallsOf[track].push_back({{"depthKm", s.depthKm},
                                    {"firstStep", s.firstStep},
                                    {"lastStep", s.lastStep},
@@ -240,6 +243,12 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
                           {"points", std::move(points)},
                           {"stalls", stallsOf.count(track) ? std::move(stallsOf[track]) : json::array()}});
     }
+    return tracks;
+}
+
+// The tracks' events in step order.
+json eventsJson(const FeatureSeries& series, const Dataset& dataset)
+{
     json events = json::array();
     for (const TrackEvent& e : series.events()) {
         const Feature& x = series.feature(e.step, e.feature);
@@ -255,47 +264,77 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
     }
     std::stable_sort(events.begin(), events.end(),
                      [](const json& a, const json& b) { return a["step"].get<int>() < b["step"].get<int>(); });
+    return events;
+}
 
-    json flux = nullptr;
-    if (!fluxes.empty()) {
-        json fluxSteps = json::array(), avalanches = json::array();
-        for (size_t i = 0; i < fluxes.size(); ++i) {
-            json down = json::array(), up = json::array(), selDown = json::array(), selUp = json::array(),
-                 selShare = json::array(), massDown = json::array(), massUp = json::array();
-            for (const ShellFlux& f : fluxes[i]) {
-                down.push_back(f.downKm3PerYr);
-                up.push_back(f.upKm3PerYr);
-                selDown.push_back(f.selectedDownKm3PerYr);
-                selUp.push_back(f.selectedUpKm3PerYr);
-                selShare.push_back(100.0 * f.selectedAreaKm2 / f.areaKm2);
-                massDown.push_back(f.massDownKgPerYr);
-                massUp.push_back(f.massUpKgPerYr);
-            }
-            json step = {{"step", int(i)},
-                         {"timeMyr", dataset.steps()[i].timeMyr},
-                         {"downKm3PerYr", std::move(down)},
-                         {"upKm3PerYr", std::move(up)},
-                         {"selectedDownKm3PerYr", std::move(selDown)},
-                         {"selectedUpKm3PerYr", std::move(selUp)},
-                         {"selectedPercentOfShell", std::move(selShare)}};
-            if (density) {
-                step["massDownKgPerYr"] = std::move(massDown);
-                step["massUpKgPerYr"] = std::move(massUp);
-            }
-            fluxSteps.push_back(std::move(step));
+// The flux across the shells at `fluxDepths` per step, with the avalanche steps of each shell
+// (`sigmas`); the mass flux too where the dataset has a density.
+json fluxJson(const Dataset& dataset, const std::vector<std::vector<ShellFlux>>& fluxes,
+              const std::vector<double>& fluxDepths, double sigmas, bool density)
+{
+    json fluxSteps = json::array(), avalanches = json::array();
+    for (size_t i = 0; i < fluxes.size(); ++i) {
+        json down = json::array(), up = json::array(), selDown = json::array(), selUp = json::array(),
+             selShare = json::array(), massDown = json::array(), massUp = json::array();
+        for (const ShellFlux& f : fluxes[i]) {
+            down.push_back(f.downKm3PerYr);
+            up.push_back(f.upKm3PerYr);
+            selDown.push_back(f.selectedDownKm3PerYr);
+            selUp.push_back(f.selectedUpKm3PerYr);
+            selShare.push_back(100.0 * f.selectedAreaKm2 / f.areaKm2);
+            massDown.push_back(f.massDownKgPerYr);
+            massUp.push_back(f.massUpKgPerYr);
         }
-        const auto perShell = avalancheStepsPerShell(fluxes, sigmas);
-        for (size_t d = 0; d < perShell.size(); ++d)
-            for (const size_t i : perShell[d])
-                avalanches.push_back({{"depthKm", fluxDepths[d]}, {"step", int(i)}});
-        flux = {{"depthsKm", fluxDepths}, {"sigmas", sigmas}, {"steps", std::move(fluxSteps)},
-                {"avalanches", std::move(avalanches)}};
+        json step = {{"step", int(i)},
+                     {"timeMyr", dataset.steps()[i].timeMyr},
+                     {"downKm3PerYr", std::move(down)},
+                     {"upKm3PerYr", std::move(up)},
+                     {"selectedDownKm3PerYr", std::move(selDown)},
+                     {"selectedUpKm3PerYr", std::move(selUp)},
+                     {"selectedPercentOfShell", std::move(selShare)}};
+        if (density) {
+            step["massDownKgPerYr"] = std::move(massDown);
+            step["massUpKgPerYr"] = std::move(massUp);
+        }
+        fluxSteps.push_back(std::move(step));
     }
+    const auto perShell = avalancheStepsPerShell(fluxes, sigmas);
+    for (size_t d = 0; d < perShell.size(); ++d)
+        for (const size_t i : perShell[d])
+            avalanches.push_back({{"depthKm", fluxDepths[d]}, {"step", int(i)}});
+    return {{"depthsKm", fluxDepths}, {"sigmas", sigmas}, {"steps", std::move(fluxSteps)},
+            {"avalanches", std::move(avalanches)}};
+}
+
+}  // namespace
+
+json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
+                       const FeatureOptions& options, double minOverlapShare, StallMeasure stallBy, int level,
+                       double sigmas, const std::atomic<bool>* cancel,
+                       const std::function<void(int done, int total)>& progress)
+{
+    dataset.checkLevel(level);
+    if (filters.empty())
+        fail("features: no selection: brush an axis first (the whole mantle would be one feature)");
+    if (!(sigmas >= 0))
+        fail("sigmas: {} is negative", sigmas);
+    const int nSteps = int(dataset.steps().size());
+    const std::optional<size_t> radialVelocity = variableIfAny(dataset, "radial velocity");
+    const std::optional<size_t> density = variableIfAny(dataset, kDensityVariable);
+    const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
+    std::vector<double> fluxDepths;  // the options' depths inside the grid's shell
+    for (const double d : options.bandDepthsKm)
+        if (shellInsideGrid(grid, d))
+            fluxDepths.push_back(d);
+
+    FeatureSteps run = featureSteps(dataset, cache, filters, options, minOverlapShare, level, radialVelocity, density,
+                                    fluxDepths, cancel, progress);
+    const auto& fluxes = run.fluxes;
     // The tables of `raypc features --tracks/--events/--stalls` and `raypc flux`, written by the same
     // code (analysis/feature_csv.h), for the UI's CSV buttons.
-    json csv = {{"tracks", trackCsv(series)},
-                {"events", eventCsv(series, dataset)},
-                {"stalls", stallCsv(series, options.bandDepthsKm, options.bandHalfWidthKm, nSteps - 1, stallBy)},
+    json csv = {{"tracks", trackCsv(run.series)},
+                {"events", eventCsv(run.series, dataset)},
+                {"stalls", stallCsv(run.series, options.bandDepthsKm, options.bandHalfWidthKm, nSteps - 1, stallBy)},
                 {"flux", fluxes.empty() ? json(nullptr)
                                         : json(fluxCsv(dataset, 0, fluxes, fluxDepths,
                                                        avalancheStepsPerShell(fluxes, sigmas), false,
@@ -306,10 +345,10 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
             {"bandHalfWidthKm", options.bandHalfWidthKm},
             {"minOverlapShare", minOverlapShare},
             {"stallBy", stallMeasureName(stallBy)},
-            {"steps", std::move(steps)},
-            {"tracks", std::move(tracks)},
-            {"events", std::move(events)},
-            {"flux", std::move(flux)},
+            {"steps", std::move(run.steps)},
+            {"tracks", tracksJson(run.series, options, nSteps - 1, stallBy, radialVelocity)},
+            {"events", eventsJson(run.series, dataset)},
+            {"flux", fluxes.empty() ? json(nullptr) : fluxJson(dataset, fluxes, fluxDepths, sigmas, density.has_value())},
             {"csv", std::move(csv)}};
 }
 

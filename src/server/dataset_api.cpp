@@ -14,6 +14,7 @@
 #include "render/reference_geometry.h"
 #include "render/slice_view.h"
 #include "render/state_renderer.h"
+#include "render/time_depth_view.h"
 #include "render/volume_renderer.h"
 #include "server/access.h"
 #include "server/image_codec.h"

@@ -1,5 +1,5 @@
 // The linked state (docs/protocol.md, GET/POST /api/link): the state the UI shows, readable and
-// settable by a program (issue 30: a notebook's `view.state`). It is the last settled state a
+// settable by a program (e.g. a notebook's `view.state`). It is the last settled state a
 // WebSocket session committed (source "ui") or the last state a program set (source "api"), with a
 // version that counts its changes; a state a program sets is pushed to every open session as a
 // `link` message. No network types here: a session registers a sink that hands text to its

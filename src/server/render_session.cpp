@@ -167,7 +167,6 @@ void RenderSession::render(const Request& request)
                 height = h;
                 return out;
             });
-        const uint64_t samples = stats.samples + stats.samplesSkipped;
         nlohmann::json header{{"type", "frame"},
                               {"id", request.id},
                               {"step", step},
@@ -182,12 +181,7 @@ void RenderSession::render(const Request& request)
                               {"width", picture.width},
                               {"height", picture.height},
                               {"camera", document["camera"]},
-                              {"stats",
-                               {{"passMs", stats.seconds * 1000.0},
-                                {"samples", samples},
-                                {"samplesPerSecond", stats.seconds > 0 ? double(samples) / stats.seconds : 0.0},
-                                {"bricksSkipped", stats.bricksSkipped},
-                                {"bricksTotal", stats.bricksTotal}}},
+                              {"stats", toJson(stats, PassStatsJson::frameHeader)},
                               {"selection", selection}};
         if (prepared.scene)
             header["pathlines"] = {{"lines", prepared.scene->lineCount()}, {"visible", prepared.scene->visibleCount()}};
@@ -223,7 +217,7 @@ void RenderSession::render(const Request& request)
     if (m_context.ranks)
         if (const auto choice = StateRenderer::knownChoice(state, policy))
             m_context.ranks->prepare(m_rankSession, frameNumber, request.resolved, *choice);
-    // Preview (issue 26): a still state at level "auto" (level 0) is first prepared as an interactive
+    // Preview: a still state at level "auto" (level 0) is first prepared as an interactive
     // state is; when that chooses a coarser level or fewer pixels (level 0 would miss the state's
     // timeBudgetMs), one pass of that choice is sent first, as pass 0 with "preview": true, and its
     // passes at level 0 then refine it. So the picture changes at once after a brush is released, a

@@ -193,7 +193,7 @@ TEST(StepCache, CountsDecodedValuesAndPrefetchDecodesWhatIsShown)
 }
 
 
-// Issue 31, item 4: `truncate -s 0` of an array of a cached step killed the server with SIGBUS when a
+// `truncate -s 0` of an array of a cached step once killed the server with SIGBUS when a
 // session next read it. A cut file now makes the cache drop the step and load it again, which names the file.
 TEST(StepCache, AFileCutShortWhileCachedIsDroppedAndTheReloadNamesIt)
 {

@@ -327,7 +327,7 @@ const cases = {
     console.log(`  drag: ${shown.length} frames shown, ${shown.filter(half).length} of them into a half-size buffer; the still frame into ${canvas.join('x')}`);
   },
 
-  // Stereo (issue 14): choosing the anaglyph puts it in the state; the frame shown is the server's
+  // Stereo: choosing the anaglyph puts it in the state; the frame shown is the server's
   // anaglyph of two eyes (its header says so, at the state's size) and differs from the mono
   // picture; while a new frame is pending after an orbit, each eye is re-projected (the warped view
   // is much closer to the new frame than the old frame is); headless chromium has no headset, and
@@ -379,7 +379,7 @@ const cases = {
     check((await rState(page)).stereo.mode === 'off' && !off.stereo, 'stereo off did not give a mono frame');
   },
 
-  // WebXR immersive-vr (issue 14, part 3) with a mock headset: headless chromium has none, so an
+  // WebXR immersive-vr with a mock headset: headless chromium has none, so an
   // init script (xrMock below) installs a fake navigator.xr whose session's animation frames the test
   // drives, with two eyes 0.2 m apart and mirrored asymmetric frusta, drawing into the halves of the
   // canvas. Only the core is shown (flat white), so each eye's picture is a disc whose limb tangents
@@ -611,7 +611,7 @@ const cases = {
     const last = ds.steps.length - 1;
     const page = await openUi(context, url);
     await standardView(page);
-    // Issue 26, item 13: with the pathlines hidden, stepping through time asks for no diagrams.
+    // With the pathlines hidden, stepping through time asks for no diagrams.
     let diagrams = 0;
     page.on('request', (r) => { if (r.url().includes('api/persistence')) diagrams++; });
     for (const step of [1, 2, 3].filter((k) => k <= last)) {
@@ -691,7 +691,7 @@ const cases = {
 
   // Play runs over all steps in order, sends the next step only after a frame of the current one
   // arrived, keeps the colour range, and pausing leaves a converged frame of the current step.
-  // Each step is rendered while the one before it shows (issue 26, item 4): its frame is shown a
+  // Each step is rendered while the one before it shows: its frame is shown a
   // period after it was sent, at the state's full size.
   async play({ context, url, gpu }) {
     const page = await openUi(context, url);
@@ -777,7 +777,7 @@ const cases = {
     const stepsSeen = new Set(log.frames.map((f) => f.step));
     check(stepsSeen.size === nSteps, `frames of steps ${[...stepsSeen].join(',')} arrived, expected all ${nSteps}`);
     check(log.last.step === log.step && log.last.converged, `after pausing, the last frame is ${JSON.stringify(log.last)} for step ${log.step}`);
-    // Issue 26, item 15: "GPU stall due to ReadPixels" is Chrome's note that its software compositor
+    // "GPU stall due to ReadPixels" is Chrome's note that its software compositor
     // (--disable-gpu) reads the WebGL canvas back to show it (at most four times, then Chrome stops
     // repeating it); with GPU compositing (browser.gpu.play) nothing of the page reads pixels back.
     const stalls = page.raypcWarnings.filter((w) => w.includes('GPU stall due to ReadPixels'));
@@ -885,7 +885,7 @@ const cases = {
     check(JSON.stringify(await rState(page)) === JSON.stringify(stateA), 'a refused state file changed the state');
   },
 
-  // Issue 26, item 1: a selection with samples shows its lines in the parallel coordinates whatever
+  // A selection with samples shows its lines in the parallel coordinates whatever
   // the brushed axis: a coordinate (depth, an inverted axis: 0 at the top), a stored variable and a
   // derived one. Counted as lines drawn and as painted pixels of the brushed layer beyond its veil.
   async brush_kinds({ context, url }) {
@@ -925,7 +925,7 @@ const cases = {
     check(/^stroke/.test(halo.order) && halo.width >= 2 && halo.stroke !== 'none', `tick labels without a halo: ${JSON.stringify(halo)}`);
   },
 
-  // Issue 26, item 5: task 1's ranges brushed by hand from the default view turn "show the
+  // Task 1's ranges brushed by hand from the default view turn "show the
   // selection" on, and the 3D view then shows the selected material (pixels brighter than the
   // background and the core, counted with the mode on and off); dragged ends land on their axis'
   // snap step (a tenth of the labelled tick step), a value typed in the Selection panel stays exact.
@@ -992,7 +992,7 @@ const cases = {
     check(typed.min === 557.6, `the typed depth minimum became ${typed.min}`);
   },
 
-  // Issue 26, item 8: from 1366x768 to 2560x1440 the presets, the time bar and the 3D view are
+  // From 1366x768 to 2560x1440 the presets, the time bar and the 3D view are
   // visible without scrolling; at 1000x700 the transfer-function editor still is.
   async layout({ context, url }) {
     const page = await openUi(context, url);
@@ -1018,7 +1018,7 @@ const cases = {
     check(small.tf.bottom <= small.side.bottom, `1000x700: the transfer-function editor ends at ${Math.round(small.tf.bottom)} px, below the side panel's ${Math.round(small.side.bottom)} px`);
   },
 
-  // Issue 29: the map and the section (the bottom panel's tab): the pictures are the pane's size in
+  // The map and the section (the bottom panel's tab): the pictures are the pane's size in
   // device pixels; the depth slider changes the map; the brushes grey what they leave out; the pointer
   // reads the value under it (the server's probe); two clicks on the map set the section's ends and
   // change the section; the map's settings live in the state (the URL) and come back on reload.
@@ -1167,8 +1167,8 @@ const cases = {
       .catch(() => { throw new TestFailure('leaving the tab left map.showInView on'); });
   },
 
-  // Issue 26, item 14: "?" shows the mouse and keyboard help; Escape closes it.
-  // The Features panel (issue 28): two polar caps of the contest-layout fixture are two tracks over
+  // "?" shows the mouse and keyboard help; Escape closes it.
+  // The Features panel: two polar caps of the contest-layout fixture are two tracks over
   // the three steps with no events, as `raypc features --tracks` finds them; the table, a track's
   // timeline, the flux plot, the time–depth picture and the tracks' CSV.
   async features({ context, url, tmp, raypc, dataset }) {
@@ -1363,7 +1363,7 @@ const cases = {
     await page.click('#helpClose');
   },
 
-  // Issue 26, items 2 and 3: a state saved on a longer series (step 99 on this one) is clamped to
+  // A state saved on a longer series (step 99 on this one) is clamped to
   // the last step with a note and asks for no sample in a loop; a state the server refuses (an
   // unknown brush variable, min > max) changes nothing, sends nothing and shows no figure of its own.
   async load_checks({ context, url, tmp }) {
@@ -1410,7 +1410,7 @@ const cases = {
       check(!/selected/.test(status), `${name}: the status shows a selection: '${status}'`);
     }
 
-    // Issue 26, item 9: a state file without an image size (an example state) keeps the view's size,
+    // A state file without an image size (an example state) keeps the view's size,
     // and the picture follows the view when the window is resized.
     const viewImage = (await rState(page)).image;
     const noImage = join(tmp, 'no-image.json');
@@ -1429,7 +1429,7 @@ const cases = {
       .catch(() => { throw new TestFailure('after loading a state without an image size, resizing the window did not resize the picture'); });
     await waitConverged(page);
 
-    // Issue 26, item 10: the screenshot dialog states the server's limit (GET /api/info) and refuses
+    // The screenshot dialog states the server's limit (GET /api/info) and refuses
     // a size beyond it before sending; a screenshot the server fails is shown as failed.
     const limits = (await info(url)).limits;
     const passes = (await rState(page)).passes;
@@ -1544,7 +1544,7 @@ const cases = {
     console.log(`  image change per preset: ${diffs.join(', ')}`);
     check(pathlinesSeen, 'no preset showed pathlines, so resetting them was not tested');
 
-    // Issue 26, item 11: a preset's open ends read as such (task 1's T anomaly -1e4 … -25 K is "≤ -25");
+    // A preset's open ends read as such (task 1's T anomaly -1e4 … -25 K is "≤ -25");
     // once its brushes are cleared (Escape) it is no longer highlighted and its note says so.
     await page.click('#presets button[data-preset="task1-slabs-660km"]');
     await waitConverged(page);
@@ -1776,7 +1776,7 @@ const cases = {
     await page.setInputFiles('#pvImport', bad);
     await page.waitForFunction((n) => window.__raypc.errors.length > n, errorsBefore, { timeout: 5000 });
     check(/RGBPoints/.test(await page.textContent('#error')), `bad ParaView file: ${await page.textContent('#error')}`);
-    // Nested 100 000 deep (issue 31: such JSON crashed the server's parser; the browser parses
+    // Nested 100 000 deep (such JSON crashed the server's parser; the browser parses
     // colour maps itself): one short error, and the page goes on.
     const deep = join(tmp, 'deep-pv.json');
     writeFileSync(deep, '['.repeat(100000) + ']'.repeat(100000));
@@ -2234,7 +2234,7 @@ const cases = {
     check(azimuth === 123, `the view after the reload has azimuth ${azimuth}, not the 123 set before`);
   },
 
-  // Issue 25, §4: a model that is not the contest's (ASPECT's output, deal.II's files in
+  // A model that is not the contest's (ASPECT's output, deal.II's files in
   // tests/data/aspect-layout/shell-amr, resampled): the first view colours the temperature anomaly
   // derived from T and shows the blobs; presets naming variables the dataset lacks are greyed with
   // the server's reason, the others apply.
@@ -2282,7 +2282,7 @@ const cases = {
     check(await page.evaluate(() => window.__raypc.lastSentId) === sent, 'a greyed preset sent a state');
   },
 
-  // Issue 30, the UI linked both ways (docs/protocol.md, GET/POST /api/link): a state a program sets
+  // The UI linked both ways (docs/protocol.md, GET/POST /api/link): a state a program sets
   // is applied by the open page as a loaded file is, with a note; what the user then brushes is the
   // linked state a program reads, from the UI, at a higher version.
   async link({ context, url }) {
@@ -2332,7 +2332,7 @@ const cases = {
     check(errors.length === 0, `errors in the page: ${JSON.stringify(errors)}`);
   },
 
-  // Issue 26, items 6 and 7: the first view at 1920x1080 frames the mantle (measured in pixels of
+  // The first view at 1920x1080 frames the mantle (measured in pixels of
   // the picture: the 410 km ring spans most of the view's height), shows the legend with the
   // variable and the shells' key with each depth, draws the 410 and 660 km rings in colours of
   // their own (the key's), and a preset that switches the colour variable says so on the view.

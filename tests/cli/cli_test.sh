@@ -207,7 +207,7 @@ PY
   check "no output after errors" test ! -e "$work/x.csv"
   ;;
 features)
-  # raypc features (issue 28): the connected regions of a selection, each measured.
+  # raypc features: the connected regions of a selection, each measured.
   preprocess_fixture
   vol() { "$raypc" stats "$work/ds" --quiet -o "$work/v.csv" "$@" >/dev/null && awk -F, 'NR > 1 { print $3 }' "$work/v.csv"; }
   "$raypc" features "$work/ds" --range depth=0:660 -o "$work/shell.csv" --quiet >/dev/null
@@ -258,7 +258,7 @@ features)
   check "no output after errors" test ! -e "$work/x.csv"
   ;;
 flux)
-  # raypc flux (issue 28): the fixture's radial velocity is u0 = 0.15779 cm/yr everywhere (its
+  # raypc flux: the fixture's radial velocity is u0 = 0.15779 cm/yr everywhere (its
   # truth.json), so the flux up across a shell of radius r is 4 pi r^2 u0 (km^3/yr with 1e-5 km/cm).
   preprocess_fixture
   "$raypc" flux "$work/ds" --depth 660 --depth 1600 --range lat=0:90 -o "$work/flux.csv" --quiet >/dev/null
@@ -296,7 +296,7 @@ PY
   check "no output after errors" test ! -e "$work/x.csv"
   ;;
 maps_sections)
-  # Maps and sections (issue 29; docs/maps.md) on the analytic fixture (its truth.json), in float32.
+  # Maps and sections (docs/maps.md) on the analytic fixture (its truth.json), in float32.
   "$raypc" preprocess "$fixture" -o "$work/ds" --quiet --sample-rows 2000 --encoding float32 >/dev/null
   "$raypc" map "$work/ds" --time 1 --depth 1000 --var temperature --size 600x360 -o "$work/t.png" \
     --netcdf "$work/t.nc" --grid-step 2 >/dev/null
@@ -419,7 +419,7 @@ multi_range)
   check "no output after errors" test ! -e "$work/x.csv" -a ! -e "$work/x.png"
   ;;
 finite_overflow)
-  # Issue 16, 1: one vx = 1e30 (finite) makes the velocity magnitude overflow float32; it crashed
+  # One vx = 1e30 (finite) makes the velocity magnitude overflow float32; it crashed
   # in the histogram. The first value in the file is at lat 87.5 (the file descends), r 3485, lon 0.
   mkdir -p "$work/in"
   ncdump "$fixture/spherical001.nc" |
@@ -437,7 +437,7 @@ finite_overflow)
   check "float32 extremes preprocess" grep -q '"complete"' "$work/ext/dataset.json"
   ;;
 truncated_and_fill)
-  # Issue 16, 2: cuts shorter than the header (~1.4 KB) were read as zeros with exit 0.
+  # Cuts shorter than the header (~1.4 KB) were once read as zeros with exit 0.
   size=$(stat -c %s "$fixture/spherical001.nc")
   for cut in 1 4 1000 1400; do
     head -c $((size - cut)) "$fixture/spherical001.nc" > "$work/cut$cut.nc"
@@ -455,7 +455,7 @@ truncated_and_fill)
   check "--fill-missing accepts them" grep -q '"complete"' "$work/filled/dataset.json"
   ;;
 huge_grid)
-  # Issue 16, 4: a netCDF-4 file may declare a grid larger than memory (its data never written,
+  # A netCDF-4 file may declare a grid larger than memory (its data never written,
   # so the file is small); the run must say so before allocating.
   make_grid() {  # make_grid NAME NLAT NR NLON
     awk -v name="$1" -v nlat="$2" -v nr="$3" -v nlon="$4" 'function axis(n, lo, hi,   i, s) {
@@ -481,7 +481,7 @@ huge_grid)
   check "no output after grids too large" test ! -e "$work/out"
   ;;
 lock)
-  # Issue 16, 5: two runs into one directory. The first is stopped while it holds the lock, so
+  # Two runs into one directory. The first is stopped while it holds the lock, so
   # the second surely meets it; it must be refused, naming the holder, and leave the first intact.
   "$raypc" synth -o "$work/nc" --steps 3 --grid 48x61x96 >/dev/null 2>&1
   "$raypc" preprocess "$work/nc" -o "$work/ds" --quiet >/dev/null 2>&1 &
@@ -501,7 +501,7 @@ lock)
   check "a later run is not blocked ($out)" grep -q "0 written, 3 already done" <<<"$out"
   ;;
 failed_run_leaves)
-  # Issue 16, 3 (docs/format.md, "What a failed run leaves").
+  # What a failed run may leave and what it must not (docs/format.md, "What a failed run leaves").
   mkdir -p "$work/in" "$work/empty"
   cp "$fixture"/spherical00{1,2}.nc "$work/in/"
   ncdump "$fixture/spherical003.nc" |
@@ -530,7 +530,7 @@ failed_run_leaves)
   check "rerun resumes ($out)" grep -q "1 written, 2 already done" <<<"$out"
   ;;
 reproducible)
-  # Issue 16, 11: parallel sums made global means differ in the last digits between runs.
+  # Parallel sums once made global means differ in the last digits between runs.
   "$raypc" synth -o "$work/nc" --steps 2 --grid 48x61x96 >/dev/null 2>&1
   for run in 1 2 3; do
     "$raypc" preprocess "$work/nc" -o "$work/ds$run" --quiet --pathline-steps 1 >/dev/null
@@ -538,7 +538,7 @@ reproducible)
   check "dataset.json of runs 1 and 2 byte-identical" cmp "$work/ds1/dataset.json" "$work/ds2/dataset.json"
   check "dataset.json of runs 1 and 3 byte-identical" cmp "$work/ds1/dataset.json" "$work/ds3/dataset.json"
   check "every file of runs 1 and 2 byte-identical" diff -r --exclude=.lock "$work/ds1" "$work/ds2"
-  # The generator's truth (issue 28): a row per step and feature, the same in every run.
+  # The generator's truth: a row per step and feature, the same in every run.
   "$raypc" synth -o "$work/nc2" --steps 2 --grid 48x61x96 --truth "$work/truth1.csv" >/dev/null 2>&1
   "$raypc" synth -o "$work/nc3" --steps 2 --grid 48x61x96 --truth "$work/truth2.csv" >/dev/null 2>&1
   check "synth --truth: the same file twice" cmp "$work/truth1.csv" "$work/truth2.csv"
@@ -561,7 +561,7 @@ reproducible)
   expect_error "duration -1 Myr is not positive" synth -o "$work/nc6" --steps 1 --grid 48x61x96 --avalanche 3:-1
   ;;
 cf_netcdf_options)
-  # --radius-units says what the radius coordinate's numbers are (issue 25, §3; the files are the
+  # --radius-units says what the radius coordinate's numbers are (the files are the
   # reader's CF variants, tests/data/cf-variants, beside the contest layout).
   cf="$fixture/../cf-variants"
   expect_error "radius_m_no_units.nc: coordinate 'r' (radius) has no units" info "$cf/radius_m_no_units.nc"
@@ -632,7 +632,7 @@ huge_pages)
   check "the user's own hugetlb setting stands ($t)" test "$t" = "glibc.malloc.hugetlb=0"
   ;;
 deep_json)
-  # Issue 31, item 1: JSON nested 100 000 deep (200 KB) in a state file and in a dataset manifest
+  # JSON nested 100 000 deep (200 KB) in a state file and in a dataset manifest
   # gets one short line (no crash, no 20 KB value quoted); 10 000 deep likewise.
   preprocess_fixture
   for depth in 100000 10000; do
@@ -651,7 +651,7 @@ deep_json)
   expect_error "nested deeper than" info "$work/ds-deep"
   ;;
 non_finite_options)
-  # Issue 31, item 7: every numeric option refuses NaN and infinities with one line (probe --lon nan
+  # Every numeric option refuses NaN and infinities with one line (unchecked, probe --lon nan
   # answered null values with exit 0; --time infMyr rendered step 0; --range 0:inf ran).
   preprocess_fixture
   for v in nan inf -inf 1e999 NAN; do
@@ -669,7 +669,7 @@ non_finite_options)
   check "nothing was written" test ! -e "$work/x.png" -a ! -e "$work/s.csv" -a ! -e "$work/x" -a ! -e "$work/sy"
   ;;
 aspect_series)
-  # Issue 25: ASPECT's output (deal.II DataOut's files in tests/data/aspect-layout) preprocessed,
+  # ASPECT's output (deal.II DataOut's files in tests/data/aspect-layout) preprocessed,
   # probed against its analytic truth, rendered; its times from the .pvd; bad series refused.
   aspect=$(cd "$(dirname "$0")/../data/aspect-layout" && pwd)
   "$raypc" preprocess "$aspect/shell-amr" -o "$work/amr" --quiet >"$work/pre.txt" 2>&1
@@ -693,7 +693,7 @@ import json, sys
 v = json.load(open(sys.argv[1]))["values"]["radial velocity"]["value"]
 sys.exit(0 if abs(v - 1.0) < 0.01 else 1)
 PY
-  # The mass flux where the data have a density (issue 28): truth.json's density is 3300 (1 - 3e-5
+  # The mass flux where the data have a density: truth.json's density is 3300 (1 - 3e-5
   # blob_sum) kg/m^3 and the flow u0 = 1 cm/yr outward, so across 1000 km the mass going up is
   # 3300e9 kg/km^3 x 4 pi r^2 x 1e-5 km/yr (the blobs change it by far less than 1 %) and none goes down.
   "$raypc" flux "$work/amr" --depth 1000 -o "$work/flux.csv" --quiet >/dev/null
@@ -719,7 +719,7 @@ PY
   check "no output of refused runs" test ! -e "$work/bad"
   ;;
 render_memory)
-  # Issue 31, item 8: a picture larger than the memory left is refused before allocating, with the
+  # A picture larger than the memory left is refused before allocating, with the
   # figures (a 16384x16384 render printed only "std::bad_alloc"); one that fits still renders.
   preprocess_fixture
   limited() { (ulimit -v 3000000 && "$raypc" "$@"); }  # 3 GB of address space
@@ -734,7 +734,7 @@ render_memory)
   check "a 256x128 picture under the same limit is written" test -s "$work/small.png"
   ;;
 damaged_dataset)
-  # Issue 31, items 2, 5 and 6: a damaged manifest or array is one line naming the file and the field,
+  # A damaged manifest or array is one line naming the file and the field,
   # exit 1, never an internal check's abort (134).
   # expect_refusal "FRAGMENT" ARGS...: exit status 1 or 2 (not a signal), one line on stderr naming FRAGMENT.
   expect_refusal() {
@@ -772,7 +772,7 @@ damaged_dataset)
   expect_refusal "holds nan, expected a finite value" stats "$work/f32" --range temperature=1000:2000 -o "$work/s.csv" -q
   ;;
 netcdf4_serve_quiet)
-  # Issue 31, item 9: `raypc serve DIR` of netCDF-4 files preprocesses on a background thread, which
+  # `raypc serve DIR` of netCDF-4 files preprocesses on a background thread, which
   # printed HDF5's error stacks (HDF5-DIAG) for the calls netCDF-C expects to fail.
   "$raypc" synth -o "$work/nc4" --steps 3 --grid 12x9x16 --format netcdf4 >/dev/null
   "$raypc" serve "$work/nc4" --port 0 --dataset "$work/nc4.raypc" > "$work/serve.log" 2>&1 &

@@ -1,4 +1,4 @@
-"""README's command-line synopsis names every option of every subcommand (issue 27: it left out
+"""README's command-line synopsis names every option of every subcommand (it once left out
 `render --pathlines`, `--pathline-radius`, `stats --lod`). The options come from the CLI's own help
 (`raypc CMD --help`); a command's synopsis is its lines in README's "Command line" block, from
 `raypc CMD` to the next command. Options of an option group that the synopsis covers in words

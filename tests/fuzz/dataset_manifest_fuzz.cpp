@@ -1,5 +1,5 @@
 // libFuzzer target: bytes as the manifest (dataset.json) of a small real dataset, whose arrays stay
-// beside it, to Dataset::open (every field, every array's size: issue 31), then, when it opens, a
+// beside it, to Dataset::open (every field, every array's size), then, when it opens, a
 // load of every step and level, every variable's values, and the sample. Only raypc::Error may come
 // out. The dataset (2 steps of an 8 x 5 x 8 synthetic grid, u16, 50 sample rows, no pathlines) is
 // written once at start by the project's synth and preprocess, as corpus/dataset_manifest/valid.json

@@ -170,7 +170,7 @@ preprocess)
     test "$(stat -c %s "$work/ds3/steps/0007/L0/temperature.u16")" -eq $((24 * 31 * 48 * 2))
   ;;
 preprocess_aspect)
-  # Issue 25: an ASPECT series (deal.II's files, tests/data/aspect-layout) resampled on 2 ranks, the
+  # An ASPECT series (deal.II's files, tests/data/aspect-layout) resampled on 2 ranks, the
   # steps shared out as for netCDF: the same dataset as one process's.
   series=$(cd "$(dirname "$0")/../data/aspect-layout/shell-lagrange" && pwd)
   "$raypc" preprocess "$series" -o "$work/ds1" --quiet --sample-rows 2000 >/dev/null

@@ -1,4 +1,4 @@
-// The distributed server (issue 13 part 4, docs/scaling.md): `raypc serve` under mpirun
+// The distributed server (docs/scaling.md): `raypc serve` under mpirun
 // (scripts/mpirun-local.sh) against the same server alone, through the WebSocket protocol. A
 // still state's frames must be the same bytes whatever the number of ranks (the tiles are gathered
 // as sums, so the picture is bit for bit one process's, and the JPEG encoder is deterministic); a

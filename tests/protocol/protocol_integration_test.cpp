@@ -284,7 +284,7 @@ TEST(Serve, DefaultStateOfInfoRendersAndInteractiveFitsTheBudget)
     EXPECT_EQ(h["depthWidth"], (h["width"].get<int>() + 3) / 4);
 }
 
-// A step of playback (issue 26, item 4): the level fits the time the step is shown
+// A step of playback: the level fits the time the step is shown
 // (timeBudgetMs), the frame keeps its size when a level fits, and the passes go on refining at that
 // level until state.passes or the next state, sending the passes that may be the newest when the
 // step's time is up; playback does not change the linked state.
@@ -571,7 +571,7 @@ TEST(Serve, ScreenshotSelectionAndBodyLimit)
     EXPECT_EQ(big.status, 413);
 }
 
-// Maps and sections (issue 29): POST /api/slice answers the picture and where it put things; GET
+// Maps and sections: POST /api/slice answers the picture and where it put things; GET
 // /api/probe the values at a point; bad requests get 400 naming what is wrong.
 TEST(Serve, SliceAndProbe)
 {
@@ -924,7 +924,7 @@ TEST(Serve, NonLoopbackNeedsTheToken)
     ws.hello();
 }
 
-// The linked state (issue 30; docs/protocol.md, GET/POST /api/link): what a program reads and sets
+// The linked state (docs/protocol.md, GET/POST /api/link): what a program reads and sets
 // of the state the UI shows.
 json linkOf(uint16_t port)
 {
@@ -1046,7 +1046,7 @@ TEST(Serve, StopsCleanlyOnSigtermWhileRendering)
     EXPECT_TRUE(server.stop());
 }
 
-// ---- netCDF files served at once (issue 15, goal 6) ----------------------------------------
+// ---- netCDF files served at once -----------------------------------------------------------
 
 // The contest-layout files copied into `dir` (the dataset goes beside them by default); `broken`:
 // the second file cut short, so that only the background run fails.

@@ -1,4 +1,4 @@
-// Robustness of `raypc serve` (issue 16, server items; docs/reliability.md, Server): requests from
+// Robustness of `raypc serve` (docs/reliability.md, Server): requests from
 // other web sites, screenshot limits, cancellation and scheduling, bounded sessions and queues, a
 // failed thread creation, descriptor exhaustion and message ids. Each case starts the real server on
 // the contest-layout fixture and talks to it on 127.0.0.1; limits are lowered per process with
@@ -601,7 +601,7 @@ TEST(Messages, IdsAreEchoedExactlyOrRefused)
     EXPECT_NE(reply.raw.find("out of range"), std::string::npos) << reply.raw;
 }
 
-// Issue 31, item 1: JSON nested 100 000 deep (200 KB, under the body and message limits) crashed
+// JSON nested 100 000 deep (200 KB, under the body and message limits) crashed
 // the server through every path that takes JSON from a client. Each now gets a short error reply
 // naming the nesting, and the server and the connection live on.
 TEST(Messages, DeeplyNestedJsonIsRefusedAndTheServerLives)
@@ -626,7 +626,7 @@ TEST(Messages, DeeplyNestedJsonIsRefusedAndTheServerLives)
     EXPECT_TRUE(server.alive());
 }
 
-// Issue 31, item 4: a dataset file cut short while it is served (`truncate -s 0`) killed the server with
+// A dataset file cut short while it is served (`truncate -s 0`) killed the server with
 // SIGBUS when a session next read it. Now the session gets an error naming the file and the server
 // serves on.
 TEST(DamagedDataset, AFileCutShortWhileServedIsAnErrorReplyNotACrash)
@@ -660,7 +660,7 @@ TEST(DamagedDataset, AFileCutShortWhileServedIsAnErrorReplyNotACrash)
     EXPECT_EQ(httpGet(server.port, "/api/info").status, 200);
 }
 
-// Issue 31, item 10: duplicate Host headers, the token on other loopback addresses.
+// What counts as a local request: duplicate Host headers, the token on other loopback addresses.
 
 // The status of one raw HTTP request (`text` sent as it is) to `address`:`port`; 0 if none came.
 int rawHttpStatus(const std::string& address, uint16_t port, const std::string& text)

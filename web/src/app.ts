@@ -91,7 +91,7 @@ export class App {
       },
       onError: (m) => this.showError(m),
       onStatus: (t) => this.setStatusNote(t),
-      // A program set the linked state (issue 30: a notebook's `view.state = s`): applied as "Load
+      // A program set the linked state (e.g. a notebook's `view.state = s`): applied as "Load
       // state" applies a file, one at a time in the order they came; what the page then commits goes
       // back to the server, which makes it the linked state.
       onLink: (doc, version) => {

@@ -58,7 +58,7 @@ const kDragLines = 5000;
 
 // Chromium rasterises 2D canvases on the GPU when it can. With only a software GL (SwiftShader, what a
 // machine without a GPU has when GPU rasterisation is on) drawing 100 000 polylines there stalled
-// the page for minutes ("GPU stall due to ReadPixels"; issue 12). A context asked for with
+// the page for minutes (Chrome logged "GPU stall due to ReadPixels"). A context asked for with
 // willReadFrequently stays in CPU memory and is drawn by Skia's software rasteriser, in the time
 // budget of a slice, GPU rasterisation on or off. parcoord-es creates its layers' contexts itself,
 // synchronously in its constructor: they are asked for with that option while `make` runs.

@@ -1,5 +1,5 @@
 // Playback over all steps at the chosen speed, each step rendered while the one before it shows
-// (issue 26, item 4). At a step's due time the frame of the step ahead that has arrived (the
+// (so that its frame is there at its due time). At a step's due time the frame of the step ahead that has arrived (the
 // newest pass of it) is shown and the step after it is sent; the server renders that one for the
 // whole period: its level is the finest whose pass fits the period less the transport (the state's
 // timeBudgetMs, docs/protocol.md "playback"), at full size, and its passes refine it until the next

@@ -63,7 +63,7 @@ export class SelectionPanel {
 
   // Brushing begins (the first brush after none): from the default view, whose opacity curve hides
   // anomalies of a few tens of kelvin, "show the selection" is turned on, so that what is
-  // brushed is seen (issue 26, item 5), unless the user turned it off before. Call before the
+  // brushed is seen, unless the user turned it off before. Call before the
   // state is sent.
   brushingStarted(): void {
     const s = this.store.state, d = this.store.defaults;

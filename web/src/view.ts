@@ -13,7 +13,7 @@
 // then the view shows each frame as the server rendered it, drawn once when it arrives. On a
 // machine without a GPU every WebGL draw is rasterised and read back for the compositor on the CPU
 // the server renders with: re-projecting at the display's rate took a core of the two and halved
-// the frames a drag received (docs/ui.md, "Speed against issue 26's goals").
+// the frames a drag received (docs/ui.md, the section on speed).
 import { CameraFrame, camerasEqual, stereoLayout, type CameraView, type EyeOffset } from './camera';
 import type { CameraState, StereoState } from './state';
 import type { Frame } from './connection';
@@ -208,8 +208,8 @@ export class View3D {
   // an interactive or playback one of at most half the view's size per axis (a drag's frames are
   // 1/2 or 1/4 of it, docs/protocol.md). Nothing of such a frame is lost, and each display frame
   // of a drag has a quarter of the pixels to warp and to hand to the compositor (which in software
-  // compositing reads the canvas back): more frames received and shown, docs/ui.md ("Speed against
-  // issue 26's goals").
+  // compositing reads the canvas back): more frames received and shown, docs/ui.md (the section
+  // on speed).
   private fitBuffer(): void {
     const h = this.frame?.header;
     const { width, height } = this.size;

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Writes small netCDF files that hold one analytic mantle field in the shapes CF-conforming models
-and tomography tools write (issue 25, section 3), for the reader's tests CfVariants.* in
+and tomography tools write, for the reader's tests CfVariants.* in
 src/io/netcdf_reader_test.cpp.
 
     write_cf_variants.py OUT_DIR
