@@ -676,7 +676,7 @@ aspect_series)
   check "preprocess of the adaptive series: $(cat "$work/pre.txt")" grep -q "3 steps (3 written, 0 already done) of 133x34x266" "$work/pre.txt"
   "$raypc" info "$work/amr" >"$work/info.txt"
   check "times from the .pvd (years)" grep -q "steps: 3 (0 .. 4 Myr, 2 Myr apart; solution-00000.pvtu .. solution-00002.pvtu)" "$work/info.txt"
-  check "temperature anomaly derived from T" grep -Eq "temperature anomaly .*\(derived\)" "$work/info.txt"
+  check "temperature anomaly derived from T" grep -Eq "temperature anomaly .*\(derived from T\)" "$work/info.txt"
   check "info names the source and the resampling: $(grep source: "$work/info.txt")" \
     grep -Eq "source: VTK XML \(ASPECT layout\), resampled onto level 0; step 0: 53296 cells in 3 pieces, grid points inside a cell 9[0-9.]+ %, snapped to the nearest cell [0-9.]+ %, in none 0" "$work/info.txt"
   # At the centre of the blob at 60°N 20°E, 5300 km, step 0: T = 1600 + 2000 (6371 - 5300) / 2886 + 300
