@@ -43,6 +43,16 @@ void ReaderFlags::add(CLI::App& app)
                    "or nondimensional (fractions of 6371 km). Default: its units attribute; without one, km if the "
                    "radii lie within 3000..7000 km")
         ->check(CLI::IsMember({"km", "m", "nondimensional"}));
+    app.add_option("--velocity", velocity,
+                   "The velocity's three variables in the input when they are not vx, vy, vz: x,y,z or, with "
+                   "--velocity-frame spherical, radial,north,east (m/s, cm/yr, mm/yr or m/yr)")
+        ->delimiter(',')
+        ->expected(3);
+    app.add_option("--velocity-frame", velocityFrame,
+                   "What --velocity's (or vx, vy, vz's) components are: cartesian (x, y, z) or spherical (radial, "
+                   "north, east)")
+        ->check(CLI::IsMember({"cartesian", "spherical"}))
+        ->capture_default_str();
     app.add_flag("--fill-missing", fillMissing,
                  "Replace missing values (_FillValue, missing_value, NaN) by their shell's mean instead of failing");
     app.add_option("--time-units", timeUnits,
@@ -74,6 +84,14 @@ ReaderOptions ReaderFlags::toOptions() const
             fail("--map: '{}' is not one of the variables RayPC reads ({})", name, fmt::join(known, ", "));
         o.variableNames[name] = m.substr(eq + 1);
     }
+    if (!velocity.empty()) {
+        if (velocity.size() != 3 || std::any_of(velocity.begin(), velocity.end(), [](const auto& v) { return v.empty(); }))
+            fail("--velocity: '{}', expected three variable names A,B,C", fmt::join(velocity, ","));
+        for (int c = 0; c < 3; ++c)
+            o.variableNames[std::string("v") + "xyz"[c]] = velocity[size_t(c)];
+    }
+    o.velocityFrame = velocityFrame == "spherical" ? ReaderOptions::VelocityFrame::Spherical
+                                                   : ReaderOptions::VelocityFrame::Cartesian;
     o.latName = latName;
     o.rName = rName;
     o.lonName = lonName;

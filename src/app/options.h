@@ -23,6 +23,8 @@ struct ReaderFlags {
     std::vector<std::string> variableMap;  // NAME=FILE_NAME
     std::string latName, rName, lonName;
     std::string radiusUnits;  // km | m | nondimensional; empty: the file's units attribute
+    std::vector<std::string> velocity;  // --velocity A,B,C: the velocity's three variables in the file
+    std::string velocityFrame = "cartesian";
     bool fillMissing = false;
     std::string timeUnits = "years", grid;  // VTK XML series (ASPECT's output)
     // CitcomS output: ΔT (K; 0: temperatures as written), R (km) and κ (m²/s); 0: the run's own.

@@ -17,6 +17,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <numbers>
 #include <numeric>
@@ -530,6 +531,11 @@ std::vector<std::string> requestedVariables(const NcFile& file, const ReaderOpti
             continue;
         names.push_back(canonicalNameOf(options, file.varName(v)));
     }
+    // A variable named on the command line (--map, --velocity) must be there: asked for, it is
+    // named as missing instead of left out.
+    for (const auto& [canonical, inFile] : options.variableNames)
+        if (std::find(names.begin(), names.end(), canonical) == names.end())
+            names.push_back(canonical);
     if (names.empty() && h)
         fail("{}: no variable on the grid's dims ({}, {}, {}); a variable RayPC reads has these three dims in any "
              "order",
@@ -838,7 +844,10 @@ FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& op
     for (const auto& name : requestedVariables(file, options, &h)) {
         const auto fileName = fileNameOf(options, name);
         const auto layout = checkVariable(file, h, name, fileName, options.timeIndex);
-        header.variables.push_back({name, fileName, file.textAttribute(layout.id, "units").value_or("")});
+        std::string units = file.textAttribute(layout.id, "units").value_or("");
+        if (name == "vx" || name == "vy" || name == "vz")
+            units = "m/s";  // converted when read (normaliseVelocity)
+        header.variables.push_back({name, fileName, units});
         // Variables without the time dimension (constant in time) are read for every step.
         if (layout.steps > 1 && header.steps > 1 && layout.steps != header.steps)
             fail("{}: {} has {} steps, {} has {}: the variables' time dimensions differ", path.string(), fileName,
@@ -929,7 +938,67 @@ Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& op
         }
         snapshot.fields.push_back(std::move(field));
     }
+    normaliseVelocity(snapshot, options.velocityFrame, path.string());
     return snapshot;
+}
+
+namespace {
+
+// Metres per second in one unit of a velocity as CF and models spell it; nullopt when unknown.
+std::optional<double> metresPerSecondIn(std::string units)
+{
+    std::erase_if(units, [](char c) { return c == ' ' || c == '.' || c == '*'; });
+    units = lowerCase(units);
+    constexpr double kYear = 3.15576e7;  // Julian year, s
+    static const std::map<std::string, double> known = {
+        {"", 1.0},           {"m/s", 1.0},          {"ms-1", 1.0},          {"ms^-1", 1.0},
+        {"m/sec", 1.0},      {"meter/second", 1.0}, {"meters/second", 1.0}, {"metre/second", 1.0},
+        {"cm/yr", 0.01 / kYear}, {"cm/year", 0.01 / kYear}, {"cm/a", 0.01 / kYear}, {"cmyr-1", 0.01 / kYear},
+        {"cma-1", 0.01 / kYear}, {"mm/yr", 1e-3 / kYear},  {"mm/year", 1e-3 / kYear}, {"mm/a", 1e-3 / kYear},
+        {"mmyr-1", 1e-3 / kYear}, {"m/yr", 1.0 / kYear},   {"m/year", 1.0 / kYear},   {"m/a", 1.0 / kYear},
+        {"myr-1", 1.0 / kYear}};
+    const auto it = known.find(units);
+    return it == known.end() ? std::nullopt : std::optional<double>(it->second);
+}
+
+}  // namespace
+
+void normaliseVelocity(Snapshot& snapshot, ReaderOptions::VelocityFrame frame, const std::string& what)
+{
+    std::array<Field*, 3> v{};
+    for (int c = 0; c < 3; ++c)
+        for (Field& f : snapshot.fields)
+            if (f.name == std::string("v") + "xyz"[c])
+                v[size_t(c)] = &f;
+    if (!v[0] || !v[1] || !v[2])
+        return;
+    for (Field* f : v) {
+        const auto scale = metresPerSecondIn(f->units);
+        if (!scale)
+            fail("{}: {}: velocity units '{}', expected m/s, cm/yr, mm/yr or m/yr (or their CF spellings)", what, f->name,
+                 f->units);
+        if (*scale != 1.0)
+            for (float& x : f->values)
+                x = float(double(x) * *scale);
+        f->units = "m/s";
+    }
+    if (frame != ReaderOptions::VelocityFrame::Spherical)
+        return;
+    // (radial, north, east) at each point into (x, y, z): v = v_r e_r + v_n e_n + v_e e_e.
+    const SphericalGrid& g = snapshot.grid;
+    for (size_t iLat = 0; iLat < g.nLat(); ++iLat) {
+        const double lat = degToRad(g.latDeg[iLat]), sLat = std::sin(lat), cLat = std::cos(lat);
+        for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+            const double lon = degToRad(g.lonDeg[iLon]), sLon = std::sin(lon), cLon = std::cos(lon);
+            for (size_t iR = 0; iR < g.nR(); ++iR) {
+                const size_t i = g.index(iLat, iR, iLon);
+                const double up = v[0]->values[i], north = v[1]->values[i], east = v[2]->values[i];
+                v[0]->values[i] = float(up * cLat * cLon - north * sLat * cLon - east * sLon);
+                v[1]->values[i] = float(up * cLat * sLon - north * sLat * sLon + east * cLon);
+                v[2]->values[i] = float(up * sLat + north * cLat);
+            }
+        }
+    }
 }
 
 std::vector<std::filesystem::path> listSnapshotFiles(const std::vector<std::filesystem::path>& inputs)

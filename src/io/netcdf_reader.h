@@ -37,6 +37,12 @@ struct ReaderOptions {
     // Canonical variable name -> name in the file, for CF outputs that name things differently
     // (e.g. "temperature" -> "T"). Unmapped variables are looked up by their canonical name.
     std::map<std::string, std::string> variableNames;
+    // The velocity's components vx, vy, vz (variableNames may name them in the file: --velocity)
+    // are Cartesian, or spherical: radial (up), north, east (--velocity-frame spherical), turned
+    // into Cartesian ones at each grid point when read. Either way they are converted into m/s
+    // from the units they have (m/s, cm/yr, mm/yr, m/yr and their CF spellings; none: m/s).
+    enum class VelocityFrame { Cartesian, Spherical };
+    VelocityFrame velocityFrame = VelocityFrame::Cartesian;
     // Names of the coordinate variables (rName: the radius or depth); empty: found by CF attributes
     // or customary names (above).
     std::string latName, rName, lonName;
@@ -93,6 +99,11 @@ FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& op
 Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& options = {});
 
 // Expands files and directories (all *.nc inside) and sorts them in natural order.
+// The velocity's components vx, vy, vz of `snapshot`, when it has all three, into Cartesian m/s:
+// their units converted, and spherical ones (radial, north, east) turned at each grid point. Throws
+// raypc::Error naming `what` and the component for units that are not a velocity's.
+void normaliseVelocity(Snapshot& snapshot, ReaderOptions::VelocityFrame frame, const std::string& what);
+
 std::vector<std::filesystem::path> listSnapshotFiles(const std::vector<std::filesystem::path>& inputs);
 
 }  // namespace raypc

@@ -418,6 +418,59 @@ data:
     expectReadError(ncgen(dir.path(), "flat", flat), {}, {"flat.nc: no variable on the grid's dims"});
 }
 
+// A velocity given as spherical components (radial, north, east) in cm/yr under other names
+// (--velocity vr,vn,ve --velocity-frame spherical) is read as Cartesian vx, vy, vz in m/s.
+TEST(NetcdfReader, SphericalVelocityInOtherUnitsBecomesCartesianMetresPerSecond)
+{
+    TempDir dir("sphvel");
+    const std::string cdl = R"(netcdf vel {
+dimensions: depth = 2 ; lat = 2 ; lon = 4 ;
+variables:
+  double depth(depth) ; depth:units = "km" ; depth:positive = "down" ;
+  double lat(lat) ; lat:units = "degrees_north" ; double lon(lon) ; lon:units = "degrees_east" ;
+  float vr(depth, lat, lon) ; vr:units = "cm/yr" ;
+  float vn(depth, lat, lon) ; vn:units = "cm yr-1" ;
+  float ve(depth, lat, lon) ; ve:units = "cm/a" ;
+data:
+  depth = 100, 2000 ; lat = -45, 45 ; lon = 0, 90, 180, 270 ;
+  vr = 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1 ;
+  vn = 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 ;
+  ve = 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2 ;
+})";
+    const auto path = ncgen(dir.path(), "vel", cdl);
+    ReaderOptions o;
+    o.variableNames = {{"vx", "vr"}, {"vy", "vn"}, {"vz", "ve"}};
+    o.velocityFrame = ReaderOptions::VelocityFrame::Spherical;
+    const FileHeader header = readHeader(path, o);
+    ASSERT_EQ(header.variables.size(), 3u);
+    EXPECT_EQ(header.variables[0].name, "vx");
+    EXPECT_EQ(header.variables[0].units, "m/s");
+    const Snapshot s = readSnapshot(path, o);
+    const double cmPerYr = 0.01 / 3.15576e7;
+    // At lat 45, lon 90: up = (0, cos 45, sin 45), east = (-1, 0, 0).
+    const size_t i = s.grid.index(1, 0, 1);
+    EXPECT_NEAR(s.find("vx")->values[i], -2 * cmPerYr, 1e-6 * cmPerYr);
+    EXPECT_NEAR(s.find("vy")->values[i], std::sqrt(0.5) * cmPerYr, 1e-6 * cmPerYr);
+    EXPECT_NEAR(s.find("vz")->values[i], std::sqrt(0.5) * cmPerYr, 1e-6 * cmPerYr);
+    EXPECT_EQ(s.find("vz")->units, "m/s");
+    // A name that is not in the file, and units that are not a velocity's, are named.
+    ReaderOptions missing = o;
+    missing.variableNames["vy"] = "vnorth";
+    expectReadError(path, missing, {"vel.nc", "missing variable 'vnorth' (mapped from 'vy')"});
+    const std::string furlongs = R"(netcdf odd {
+dimensions: depth = 2 ; lat = 2 ; lon = 4 ;
+variables:
+  double depth(depth) ; depth:units = "km" ; depth:positive = "down" ;
+  double lat(lat) ; lat:units = "degrees_north" ; double lon(lon) ; lon:units = "degrees_east" ;
+  float vx(depth, lat, lon) ; vx:units = "furlongs/fortnight" ; float vy(depth, lat, lon) ; float vz(depth, lat, lon) ;
+data:
+  depth = 100, 2000 ; lat = -45, 45 ; lon = 0, 90, 180, 270 ;
+  vx = 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 ; vy = 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 ;
+  vz = 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 ;
+})";
+    expectReadError(ncgen(dir.path(), "odd", furlongs), {}, {"odd.nc: vx: velocity units 'furlongs/fortnight'"});
+}
+
 TEST(NetcdfReaderBadInput, WrongDimensions)
 {
     TempDir dir("wrongdims");
