@@ -61,6 +61,7 @@ json describeFile(const std::filesystem::path& path, const ReaderOptions& option
         const auto stats = computeStats(snap.grid, snap.fields[i].values);
         j["variables"].push_back({{"name", snap.fields[i].name},
                                   {"name_in_file", header.variables[i].fileName},
+                                  {"long_name", header.variables[i].longName},
                                   {"units", snap.fields[i].units},
                                   {"min", stats.range.min},
                                   {"max", stats.range.max},
@@ -89,6 +90,7 @@ json describeDataset(const Dataset& d)
                                   {"units", v.units},
                                   {"derived", v.derived},
                                   {"source", v.source},
+                                  {"long_name", v.longName},
                                   {"min", v.global.range.min},
                                   {"max", v.global.range.max},
                                   {"mean", v.global.mean}});
@@ -111,8 +113,10 @@ std::string sourceNote(const json& v)
     const std::string source = v.value("source", std::string());
     if (v.value("derived", false))
         return source.empty() ? "  (derived)" : fmt::format("  (derived from {})", source);
-    const std::string inFile = v.value("name_in_file", source);
-    return !inFile.empty() && inFile != v["name"].get<std::string>() ? fmt::format("  (from '{}')", inFile) : "";
+    const std::string inFile = v.value("name_in_file", source), longName = v.value("long_name", std::string());
+    const std::string from =
+        !inFile.empty() && inFile != v["name"].get<std::string>() ? fmt::format("  (from '{}')", inFile) : "";
+    return longName.empty() ? from : fmt::format("{}  {}", from, longName);
 }
 
 void printText(const json& j)

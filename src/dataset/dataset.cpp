@@ -627,6 +627,8 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
         info.derived = r.boolean(v, field, "derived");
         if (v.is_object() && v.contains("source"))
             info.source = r.string(v, field, "source");
+        if (v.is_object() && v.contains("long_name"))
+            info.longName = r.string(v, field, "long_name");
         info.fileStem = r.string(v, field, "file_stem");
         if (!plainFileStem(info.fileStem))
             r.bad(ManifestReader::path(field, "file_stem"), excerpt(v.at("file_stem")),

@@ -49,6 +49,7 @@ struct VariableInfo {
     // A stored variable's name in the input files, a derived one's inputs ("vx, vy, vz"); empty in
     // datasets written before it was recorded.
     std::string source;
+    std::string longName;  // the input's CF long_name, or empty
     std::string fileStem;  // file-safe name of its arrays
     VariableStats global;  // over all steps (histogram rebinned from the steps' histograms)
 };

@@ -847,7 +847,7 @@ FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& op
         std::string units = file.textAttribute(layout.id, "units").value_or("");
         if (name == "vx" || name == "vy" || name == "vz")
             units = "m/s";  // converted when read (normaliseVelocity)
-        header.variables.push_back({name, fileName, units});
+        header.variables.push_back({name, fileName, units, file.textAttribute(layout.id, "long_name").value_or("")});
         // Variables without the time dimension (constant in time) are read for every step.
         if (layout.steps > 1 && header.steps > 1 && layout.steps != header.steps)
             fail("{}: {} has {} steps, {} has {}: the variables' time dimensions differ", path.string(), fileName,

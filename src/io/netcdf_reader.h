@@ -82,6 +82,7 @@ struct FileHeader {
     SphericalGrid grid;
     struct Variable {
         std::string name, fileName, units;
+        std::string longName;  // CF's long_name (e.g. "Shear-wave velocity"), or empty
     };
     std::vector<Variable> variables;  // the ones requested, all present
     std::string format;  // "classic", "64-bit offset", "netCDF-4", "VTK XML (ASPECT layout)", ...

@@ -69,7 +69,7 @@ std::vector<VariableSpec> variableSpecs(const FileHeader& header)
 {
     std::vector<VariableSpec> specs;
     for (const auto& v : header.variables)
-        specs.push_back({v.name, v.units, false, v.fileName});
+        specs.push_back({v.name, v.units, false, v.fileName, v.longName});
     const auto has = [&](const std::string& name) {
         return std::any_of(header.variables.begin(), header.variables.end(), [&](const auto& v) { return v.name == name; });
     };
@@ -111,10 +111,13 @@ json manifest(const std::vector<SphericalGrid>& levels, const std::vector<Variab
     for (const auto& g : levels)
         j["levels"].push_back(format::toJson(g));
     j["variables"] = json::array();
-    for (const auto& v : specs)
+    for (const auto& v : specs) {
         j["variables"].push_back(
             {{"name", v.name}, {"units", v.units}, {"derived", v.derived}, {"source", v.source},
              {"file_stem", fileSafeName(v.name)}});
+        if (!v.longName.empty())
+            j["variables"].back()["long_name"] = v.longName;
+    }
     j["inputs"] = json::array();
     for (const auto& p : inputs)
         j["inputs"].push_back(p.filename().string());

@@ -18,6 +18,7 @@ struct VariableSpec {
     bool derived;
     // What it comes from: a stored variable's name in the input, a derived one's inputs.
     std::string source;
+    std::string longName;  // the input's long_name, where it has one
 };
 
 // Throws raypc::Error "preprocess: cancelled" once options.cancel is set (between steps and sets).

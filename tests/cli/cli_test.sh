@@ -828,10 +828,10 @@ tomography)
   emc="$(dirname "$fixture")/emc-layout"
   info=$("$raypc" info "$emc/global_vs.nc")
   check "info: a 37 x 15 x 72 grid (the seam once)" grep -q "grid: 37 x 15 x 72" <<<"$info"
-  check "info: the variable vs in km/s" grep -qE '^ +vs +\[km/s' <<<"$info"
+  check "info: the variable vs in km/s, with its long_name" grep -qE '^ +vs +\[km/s .*Shear-wave velocity$' <<<"$info"
   out=$("$raypc" preprocess "$emc/global_vs.nc" -o "$work/ds" 2>&1)
   check "preprocess says there are no pathlines without a velocity" grep -q "no velocity (vx, vy, vz): no pathlines" <<<"$out"
-  check "the dataset holds vs alone" grep -qE '^ +vs ' <<<"$("$raypc" info "$work/ds")"
+  check "the dataset holds vs alone, its long_name kept" grep -qE '^ +vs .*Shear-wave velocity$' <<<"$("$raypc" info "$work/ds")"
   check "  and no derived velocity" test "$("$raypc" info "$work/ds" | grep -c "radial velocity")" -eq 0
   # Probe at grid points equals the file (u16: within the quantisation error it reports).
   for point in "0 30 50" "45 -90 1050" "-85 175 2850"; do
