@@ -2282,6 +2282,37 @@ const cases = {
     check(await page.evaluate(() => window.__raypc.lastSentId) === sent, 'a greyed preset sent a state');
   },
 
+  // A seismic tomography model (tests/data/emc-layout: one variable vs in km/s, no velocity, no
+  // temperature): the UI opens on what is there. The first view colours vs over its range, the
+  // parallel coordinates have its axis and brushing it selects, every preset says why it does not
+  // apply, and nothing reports an error.
+  async tomography({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const state = await rState(page);
+    check(state.color.variable === 'vs', `the first view colours '${state.color.variable}', not vs`);
+    check(state.color.colorMap === 'viridis', `the first view of a velocity uses '${state.color.colorMap}', not viridis`);
+    const lit = await page.evaluate(() => {
+      const { data: d } = window.__viewImageData();
+      let n = 0;
+      for (let i = 0; i < d.length; i += 4) if (d[i] + d[i + 1] + d[i + 2] > 60) n++;
+      return n;
+    });
+    check(lit > 1000, `the first view shows ${lit} lit pixels: the model is not drawn`);
+    const presets = await (await fetch(url + 'api/presets')).json();
+    check(presets.length > 0 && presets.every((p) => p.unavailable && /the dataset has: vs/.test(p.unavailable)),
+      `presets on a vs model: ${JSON.stringify(presets.map((p) => [p.name, p.unavailable]))}`);
+    const note = await page.textContent('#presetNote');
+    check(note.includes(`${presets.length} of ${presets.length} presets are not for this dataset`), `preset note '${note}'`);
+    await brushAxis(page, 'vs', 0.1, 0.4);
+    await waitConverged(page);
+    const brushed = await rState(page);
+    check(brushed.brushes.length === 1 && brushed.brushes[0].name === 'vs',
+      `the brush on the vs axis: ${JSON.stringify(brushed.brushes)}`);
+    const errors = await page.evaluate(() => window.__raypc.errors);
+    check(errors.length === 0, `errors on a tomography model: ${JSON.stringify(errors)}`);
+  },
+
   // The UI linked both ways (docs/protocol.md, GET/POST /api/link): a state a program sets
   // is applied by the open page as a loaded file is, with a note; what the user then brushes is the
   // linked state a program reads, from the UI, at a higher version.
