@@ -1,4 +1,5 @@
 #include "analysis/feature_series.h"
+#include "grid/variable_names.h"
 
 #include "core/error.h"
 
@@ -22,7 +23,7 @@ VelocityVariables velocityVariables(const Dataset& dataset, const char* what)
 FeatureSeries::FeatureSeries(const Dataset& dataset, double minOverlapShare, const char* what)
     : m_dataset(dataset), m_velocity(velocityVariables(dataset, what)), m_tracker(minOverlapShare)
 {
-    if (const int i = dataset.variableIndex("radial velocity"); i >= 0)
+    if (const int i = dataset.variableIndex(varname::kRadialVelocity); i >= 0)
         m_radialVelocity = size_t(i);
 }
 

@@ -1,5 +1,6 @@
 // raypc export DATASET --time T --what sample|pathlines|critical-points|persistence -o FILE.{csv,vtp,vtk}
 #include "app/command.h"
+#include "grid/variable_names.h"
 #include "app/options.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -22,7 +23,7 @@ namespace raypc::app {
 namespace {
 
 struct ExportArgs {
-    std::string dataset, time = "0", what = "sample", output, var = "temperature anomaly";
+    std::string dataset, time = "0", what = "sample", output, var = varname::kTemperatureAnomaly;
 };
 
 

@@ -2,6 +2,7 @@
 // the volume flux across shells in every step, down and up, over the whole shell and within a
 // selection, with the avalanche steps marked, and the advective heat flux (analysis/flux.h).
 #include "app/command.h"
+#include "grid/variable_names.h"
 #include "app/options.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -28,28 +29,25 @@ struct FluxArgs {
     bool quiet = false;
 };
 
-constexpr const char* kRadialVelocity = "radial velocity";  // derived at preprocessing (docs/format.md), cm/yr
-constexpr const char* kTemperatureAnomaly = "temperature anomaly";  // T′, K (the contest's files carry it)
-
 void run(const FluxArgs& args)
 {
     checkOutputExtension(args.output, {".csv", ".txt"}, "CSV", "-o");
     const SeriesSelection sel = resolveSeriesSelection(args.selection);
     const Dataset& dataset = *sel.dataset;
     const std::vector<std::string> names = dataset.variableNames();
-    const auto vr = std::find(names.begin(), names.end(), kRadialVelocity);
+    const auto vr = std::find(names.begin(), names.end(), varname::kRadialVelocity);
     if (vr == names.end())
         fail("flux: the dataset has no '{}' variable (preprocessing derives it from the velocity components)",
-             kRadialVelocity);
+             varname::kRadialVelocity);
     if (!(args.sigmas >= 0))
         fail("--sigmas: {} is negative", args.sigmas);
     for (const double depth : args.depths)
         checkShellDepth(dataset.levels()[size_t(args.selection.level)].grid, depth);
     std::optional<HeatFluxInputs> heat;
     if (args.heatFlux) {
-        const auto anomaly = std::find(names.begin(), names.end(), kTemperatureAnomaly);
+        const auto anomaly = std::find(names.begin(), names.end(), varname::kTemperatureAnomaly);
         if (anomaly == names.end())
-            fail("--heat-flux: the dataset has no '{}' variable (T' of Q = rho c_p T' v_r)", kTemperatureAnomaly);
+            fail("--heat-flux: the dataset has no '{}' variable (T' of Q = rho c_p T' v_r)", varname::kTemperatureAnomaly);
         if (!(args.densityKgM3 > 0))
             fail("--density: {} kg/m3 is not positive", args.densityKgM3);
         if (!(args.heatCapacity > 0))

@@ -1,4 +1,5 @@
 #include "preprocess/preprocess.h"
+#include "grid/variable_names.h"
 
 #include "core/atomic_file.h"
 #include "core/clock.h"
@@ -74,17 +75,17 @@ std::vector<VariableSpec> variableSpecs(const FileHeader& header)
         return std::any_of(header.variables.begin(), header.variables.end(), [&](const auto& v) { return v.name == name; });
     };
     if (has("vx") && has("vy") && has("vz")) {
-        specs.push_back({"radial velocity", "cm/yr", true, "vx, vy, vz"});
-        specs.push_back({"velocity magnitude", "cm/yr", true, "vx, vy, vz"});
+        specs.push_back({varname::kRadialVelocity, "cm/yr", true, "vx, vy, vz"});
+        specs.push_back({varname::kVelocityMagnitude, "cm/yr", true, "vx, vy, vz"});
     }
     for (const auto& v : header.variables)
         if (v.name == "thermal expansivity")
-            specs.push_back({"thermal expansivity anomaly", v.units, true, v.name});
+            specs.push_back({varname::kThermalExpansivityAnomaly, v.units, true, v.name});
     // As addDerivedVariables: a model with a temperature but no anomaly (ASPECT writes T) gets one.
-    if (!has("temperature anomaly"))
+    if (!has(varname::kTemperatureAnomaly))
         for (const auto& v : header.variables)
             if (v.name == "temperature" || v.name == "T") {
-                specs.push_back({"temperature anomaly", v.units, true, v.name});
+                specs.push_back({varname::kTemperatureAnomaly, v.units, true, v.name});
                 break;
             }
     return specs;

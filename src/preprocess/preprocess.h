@@ -7,6 +7,7 @@
 #pragma once
 
 #include "analysis/critical_points.h"
+#include "grid/variable_names.h"
 #include "dataset/dataset.h"
 #include "io/netcdf_reader.h"
 #include "analysis/pathlines.h"
@@ -26,7 +27,7 @@ namespace raypc {
 // critical points of `field` at each step seed pathlines traced through the next `steps` steps.
 struct PathlineOptions {
     bool enabled = true;
-    std::string field = "temperature anomaly";
+    std::string field = varname::kTemperatureAnomaly;
     int steps = 10;  // traced from step s to min(s + steps, last step)
     CriticalPointFilter filter;
     TracerOptions tracer;

@@ -1,4 +1,5 @@
 #include "preprocess/preprocess_numerics.h"
+#include "grid/variable_names.h"
 
 #include "core/error.h"
 #include "core/spherical.h"
@@ -28,15 +29,15 @@ void addDerivedVariables(Snapshot& snapshot)
     // The contest's correlation task asks for the sign of the expansivity *anomaly*: its
     // deviation from the area-weighted lateral mean of each shell, like the temperature anomaly.
     if (const Field* alpha = snapshot.find("thermal expansivity"))
-        snapshot.fields.push_back(lateralAnomaly(g, *alpha, "thermal expansivity anomaly"));
+        snapshot.fields.push_back(lateralAnomaly(g, *alpha, varname::kThermalExpansivityAnomaly));
     // A model that writes a temperature but no anomaly (ASPECT: T) gets the contest's anomaly: the
     // deviation from the area-weighted mean of each shell.
-    if (!snapshot.find("temperature anomaly")) {
+    if (!snapshot.find(varname::kTemperatureAnomaly)) {
         const Field* t = snapshot.find("temperature");
         if (!t)
             t = snapshot.find("T");
         if (t)
-            snapshot.fields.push_back(lateralAnomaly(g, *t, "temperature anomaly"));
+            snapshot.fields.push_back(lateralAnomaly(g, *t, varname::kTemperatureAnomaly));
     }
 }
 
@@ -52,8 +53,8 @@ void addVelocityVariables(Snapshot& snapshot)
     const Field* vz = snapshot.find("vz");
     RAYPC_CHECK(vx && vy && vz);
     const auto& g = snapshot.grid;
-    Field radial{"radial velocity", "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
-    Field magnitude{"velocity magnitude", "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
+    Field radial{varname::kRadialVelocity, "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
+    Field magnitude{varname::kVelocityMagnitude, "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
     tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
         const double lat = degToRad(g.latDeg[iLat]);
         for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {

@@ -1,4 +1,5 @@
 #include "render/state_renderer.h"
+#include "grid/variable_names.h"
 
 #include "core/clock.h"
 #include "core/error.h"
@@ -42,7 +43,7 @@ RenderState defaultState(const Dataset& dataset) { return defaultState(catalogOf
 RenderState defaultState(const VariableCatalog& catalog)
 {
     RenderState s;
-    const auto anomaly = std::find(catalog.names.begin(), catalog.names.end(), "temperature anomaly");
+    const auto anomaly = std::find(catalog.names.begin(), catalog.names.end(), varname::kTemperatureAnomaly);
     const size_t var = anomaly != catalog.names.end() ? size_t(anomaly - catalog.names.begin()) : 0;
     s.colorVariable = catalog.names.at(var);
     const ValueRange r = catalog.ranges.at(var);

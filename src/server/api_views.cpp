@@ -1,4 +1,5 @@
 #include "server/api_views.h"
+#include "grid/variable_names.h"
 
 #include "core/error.h"
 #include "core/json_input.h"
@@ -319,7 +320,7 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
     if (!(sigmas >= 0))
         fail("sigmas: {} is negative", sigmas);
     const int nSteps = int(dataset.steps().size());
-    const std::optional<size_t> radialVelocity = variableIfAny(dataset, "radial velocity");
+    const std::optional<size_t> radialVelocity = variableIfAny(dataset, varname::kRadialVelocity);
     const std::optional<size_t> density = variableIfAny(dataset, kDensityVariable);
     const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
     std::vector<double> fluxDepths;  // the options' depths inside the grid's shell

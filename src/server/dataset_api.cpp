@@ -1,4 +1,5 @@
 #include "server/dataset_api.h"
+#include "grid/variable_names.h"
 
 #include "analysis/feature_csv.h"
 
@@ -380,7 +381,7 @@ ApiAnswer persistence(const ApiContext& api, const ApiRequest& request)
     if (fs::exists(pathlineDir(dataset.dir(), step) / "lines.json"))
         set = loadPathlineSet(dataset.dir(), step);
     const PathlineSet* stored = set ? &*set : nullptr;
-    std::string name = stored ? stored->seedField : std::string("temperature anomaly");
+    std::string name = stored ? stored->seedField : std::string(varname::kTemperatureAnomaly);
     if (const auto var = queryParameter(request.query, "var"))
         name = *var;
     const int var = dataset.variableIndex(name);
