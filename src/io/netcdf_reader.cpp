@@ -4,6 +4,7 @@
 #include "core/spherical.h"
 #include "core/strings.h"
 #include "core/system_memory.h"
+#include "grid/variable_names.h"
 #include "io/netcdf_classic.h"
 
 #include <hdf5.h>
@@ -841,11 +842,15 @@ FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& op
     FileHeader header;
     header.grid = h.grid;
     header.format = file.formatName();
-    for (const auto& name : requestedVariables(file, options, &h)) {
+    const std::vector<std::string> requested = requestedVariables(file, options, &h);
+    const bool velocity = std::all_of(varname::kVelocity.begin(), varname::kVelocity.end(), [&](const char* v) {
+        return std::find(requested.begin(), requested.end(), v) != requested.end();
+    });
+    for (const auto& name : requested) {
         const auto fileName = fileNameOf(options, name);
         const auto layout = checkVariable(file, h, name, fileName, options.timeIndex);
         std::string units = file.textAttribute(layout.id, "units").value_or("");
-        if (name == "vx" || name == "vy" || name == "vz")
+        if (velocity && (name == "vx" || name == "vy" || name == "vz"))
             units = "m/s";  // converted when read (normaliseVelocity)
         header.variables.push_back({name, fileName, units, file.textAttribute(layout.id, "long_name").value_or("")});
         // Variables without the time dimension (constant in time) are read for every step.
