@@ -3,7 +3,9 @@
 // dataset's manifest give them.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <string_view>
 
 namespace raypc::varname {
 
@@ -15,5 +17,18 @@ inline constexpr const char* kThermalExpansivity = "thermal expansivity";
 inline constexpr const char* kThermalExpansivityAnomaly = "thermal expansivity anomaly";  // 1/K, derived
 // The velocity's Cartesian components, m/s.
 inline constexpr std::array<const char*, 3> kVelocity = {"vx", "vy", "vz"};
+
+// Whether `name` is one of kVelocity.
+inline bool isVelocityComponent(std::string_view name)
+{
+    return std::find(kVelocity.begin(), kVelocity.end(), name) != kVelocity.end();
+}
+
+// Whether `has(name)` holds for the three velocity components.
+template <class Has>
+bool hasVelocity(Has has)
+{
+    return std::all_of(kVelocity.begin(), kVelocity.end(), [&](const char* c) { return has(c); });
+}
 
 }  // namespace raypc::varname

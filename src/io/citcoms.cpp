@@ -2,6 +2,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/spherical.h"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -10,7 +11,6 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -73,18 +73,16 @@ vtk::Piece toPiece(const CapValues& cap, const Scales& scales, const std::string
     vtk::PointArray viscosity{"viscosity", 1, std::vector<float>(b.nodes())};
     vtk::PointArray pressure{"pressure", 1, std::vector<float>(cap.pressure.empty() ? 0 : b.nodes())};
     for (size_t n = 0; n < b.nodes(); ++n) {
-        const double theta = cap.colatLonR[3 * n], phi = cap.colatLonR[3 * n + 1], r = cap.colatLonR[3 * n + 2];
-        const double st = std::sin(theta), ct = std::cos(theta), sp = std::sin(phi), cp = std::cos(phi);
-        const double rKm = r * scales.radiusKm;
-        piece.points[3 * n] = rKm * st * cp;
-        piece.points[3 * n + 1] = rKm * st * sp;
-        piece.points[3 * n + 2] = rKm * ct;
-        // v = v_θ e_θ + v_φ e_φ + v_r e_r, with e_θ pointing south (colatitude grows).
-        const double vt = cap.velocity[3 * n], vp = cap.velocity[3 * n + 1], vr = cap.velocity[3 * n + 2];
-        const std::array<double, 3> v = {vt * ct * cp - vp * sp + vr * st * cp, vt * ct * sp + vp * cp + vr * st * sp,
-                                         -vt * st + vr * ct};
-        for (int c = 0; c < 3; ++c)
-            velocity.values[3 * n + size_t(c)] = float(v[size_t(c)] * velocityScale);
+        const double latDeg = 90.0 - radToDeg(cap.colatLonR[3 * n]), lonDeg = radToDeg(cap.colatLonR[3 * n + 1]);
+        const Vec3d up = sphericalToCartesianKm(latDeg, lonDeg, 1.0);
+        const Vec3d p = cap.colatLonR[3 * n + 2] * scales.radiusKm * up;
+        piece.points[3 * n] = p.x, piece.points[3 * n + 1] = p.y, piece.points[3 * n + 2] = p.z;
+        // v = v_θ e_θ + v_φ e_φ + v_r e_r, with e_θ (colatitude growing) pointing south: -north.
+        const EastNorth en = eastNorthAt(latDeg, lonDeg);
+        const Vec3d v = (-cap.velocity[3 * n]) * en.north + cap.velocity[3 * n + 1] * en.east + cap.velocity[3 * n + 2] * up;
+        velocity.values[3 * n] = float(v.x * velocityScale);
+        velocity.values[3 * n + 1] = float(v.y * velocityScale);
+        velocity.values[3 * n + 2] = float(v.z * velocityScale);
         temperature.values[n] = float(cap.temperature[n] * temperatureScale);
         viscosity.values[n] = float(cap.viscosity[n]);
         if (!cap.pressure.empty())
@@ -200,7 +198,7 @@ Step readCapStep(const fs::path& step, const Scales& scales)
         fail("{}: {} caps of step {} found; a full sphere has 12 (missing: {}), a regional model one (cap 00)",
              step.string(), present.size(), number, fmt::join(missing, ", "));
     Step out;
-    out.format = "CitcomS combined caps (ASCII)";
+    out.format = formatName(step);
     for (const int cap : present) {
         const CapValues values = readCapFile(capPath(cap));
         out.nx = values.block.nx, out.ny = values.block.ny, out.nz = values.block.nz;
@@ -364,7 +362,7 @@ Step readH5Step(const fs::path& step, Scales scales, bool scalesGiven)
         fail("{}: coord holds {} caps; a full sphere has 12, a regional model one", coordWhat, caps);
 
     Step out;
-    out.format = "CitcomS HDF5";
+    out.format = formatName(step);
     out.nx = block.nx, out.ny = block.ny, out.nz = block.nz;
     const size_t nodes = block.nodes();
     for (size_t cap = 0; cap < caps; ++cap) {
@@ -433,6 +431,24 @@ Step readStep(const fs::path& step, const Scales& scales, bool scalesGiven)
     return readCapStep(path, scales);
 }
 
+std::vector<std::pair<std::string, int>> stepArrays(const fs::path& step)
+{
+    std::vector<std::pair<std::string, int>> arrays = {{"temperature", 1}, {"velocity", 3}, {"viscosity", 1}};
+    const fs::path path = withoutGeneral(step);
+    if (path.extension() != ".h5") {
+        std::error_code ec;
+        if (!fs::is_regular_file(path, ec))
+            fail("{}: no such file", path.string());
+        return arrays;
+    }
+    std::lock_guard lock(hdf5Mutex());
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    const Handle stepFile = openFile(path);
+    if (H5Lexists(stepFile.id(), "pressure", H5P_DEFAULT) > 0)
+        arrays.emplace_back("pressure", 1);
+    return arrays;
+}
+
 std::optional<double> stepTimeMyr(const fs::path& step, const Scales& scales, bool scalesGiven)
 {
     const fs::path path = withoutGeneral(step);
@@ -474,6 +490,11 @@ std::array<size_t, 3> naturalGridSize(const Step& step)
         return {step.nx, step.nz, step.ny};
     const size_t around = 4 * (std::max(step.nx, step.ny) - 1);
     return {around / 2, step.nz, around};
+}
+
+std::string formatName(const fs::path& step)
+{
+    return withoutGeneral(step).extension() == ".h5" ? "CitcomS HDF5" : "CitcomS combined caps (ASCII)";
 }
 
 std::string unitsOf(const std::string& array, const Scales& scales)

@@ -25,6 +25,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace raypc::citcoms {
@@ -53,7 +54,7 @@ long stepNumber(const std::filesystem::path& step);
 struct Step {
     std::vector<vtk::Piece> caps;
     std::optional<double> timeMyr;  // HDF5's `time` scaled; the ASCII caps carry none
-    std::string format;             // "CitcomS combined caps (ASCII)" or "CitcomS HDF5"
+    std::string format;             // formatName(step)
     size_t nx = 0, ny = 0, nz = 0;  // nodes of a cap
 };
 
@@ -68,12 +69,20 @@ std::array<size_t, 3> naturalGridSize(const Step& step);
 // header, a cap missing of 12, an HDF5 file without `coord`, arrays whose shapes disagree.
 Step readStep(const std::filesystem::path& step, const Scales& scales, bool scalesGiven = false);
 
+// The point arrays readStep gives for `step` (name and components), found without reading the
+// values: what a series's later steps are checked against. Throws raypc::Error naming a file that
+// is missing or not HDF5.
+std::vector<std::pair<std::string, int>> stepArrays(const std::filesystem::path& step);
+
 // The time of an HDF5 step (its root attribute `time`, scaled as readStep scales it); nullopt for
 // the ASCII caps, which carry none.
 std::optional<double> stepTimeMyr(const std::filesystem::path& step, const Scales& scales, bool scalesGiven = false);
 
 // Every file readStep reads for `step`.
 std::vector<std::filesystem::path> stepFiles(const std::filesystem::path& step);
+
+// The form of `step`'s output: "CitcomS HDF5" or "CitcomS combined caps (ASCII)".
+std::string formatName(const std::filesystem::path& step);
 
 // The units of the arrays readStep gives.
 std::string unitsOf(const std::string& array, const Scales& scales);

@@ -843,14 +843,13 @@ FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& op
     header.grid = h.grid;
     header.format = file.formatName();
     const std::vector<std::string> requested = requestedVariables(file, options, &h);
-    const bool velocity = std::all_of(varname::kVelocity.begin(), varname::kVelocity.end(), [&](const char* v) {
-        return std::find(requested.begin(), requested.end(), v) != requested.end();
-    });
+    const bool velocity = varname::hasVelocity(
+        [&](const char* v) { return std::find(requested.begin(), requested.end(), v) != requested.end(); });
     for (const auto& name : requested) {
         const auto fileName = fileNameOf(options, name);
         const auto layout = checkVariable(file, h, name, fileName, options.timeIndex);
         std::string units = file.textAttribute(layout.id, "units").value_or("");
-        if (velocity && (name == "vx" || name == "vy" || name == "vz"))
+        if (velocity && varname::isVelocityComponent(name))
             units = "m/s";  // converted when read (normaliseVelocity)
         header.variables.push_back({name, fileName, units, file.textAttribute(layout.id, "long_name").value_or("")});
         // Variables without the time dimension (constant in time) are read for every step.
@@ -971,10 +970,10 @@ std::optional<double> metresPerSecondIn(std::string units)
 void normaliseVelocity(Snapshot& snapshot, ReaderOptions::VelocityFrame frame, const std::string& what)
 {
     std::array<Field*, 3> v{};
-    for (int c = 0; c < 3; ++c)
+    for (size_t c = 0; c < 3; ++c)
         for (Field& f : snapshot.fields)
-            if (f.name == std::string("v") + "xyz"[c])
-                v[size_t(c)] = &f;
+            if (f.name == varname::kVelocity[c])
+                v[c] = &f;
     if (!v[0] || !v[1] || !v[2])
         return;
     for (Field* f : v) {
@@ -991,19 +990,17 @@ void normaliseVelocity(Snapshot& snapshot, ReaderOptions::VelocityFrame frame, c
         return;
     // (radial, north, east) at each point into (x, y, z): v = v_r e_r + v_n e_n + v_e e_e.
     const SphericalGrid& g = snapshot.grid;
-    for (size_t iLat = 0; iLat < g.nLat(); ++iLat) {
-        const double lat = degToRad(g.latDeg[iLat]), sLat = std::sin(lat), cLat = std::cos(lat);
+    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
         for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
-            const double lon = degToRad(g.lonDeg[iLon]), sLon = std::sin(lon), cLon = std::cos(lon);
+            const Vec3d up = sphericalToCartesianKm(g.latDeg[iLat], g.lonDeg[iLon], 1.0);
+            const EastNorth en = eastNorthAt(g.latDeg[iLat], g.lonDeg[iLon]);
             for (size_t iR = 0; iR < g.nR(); ++iR) {
                 const size_t i = g.index(iLat, iR, iLon);
-                const double up = v[0]->values[i], north = v[1]->values[i], east = v[2]->values[i];
-                v[0]->values[i] = float(up * cLat * cLon - north * sLat * cLon - east * sLon);
-                v[1]->values[i] = float(up * cLat * sLon - north * sLat * sLon + east * cLon);
-                v[2]->values[i] = float(up * sLat + north * cLat);
+                const Vec3d c = double(v[0]->values[i]) * up + double(v[1]->values[i]) * en.north +
+                                double(v[2]->values[i]) * en.east;
+                v[0]->values[i] = float(c.x), v[1]->values[i] = float(c.y), v[2]->values[i] = float(c.z);
             }
         }
-    }
 }
 
 std::vector<std::filesystem::path> listSnapshotFiles(const std::vector<std::filesystem::path>& inputs)

@@ -5,6 +5,7 @@
 #include "core/spherical.h"
 #include "core/strings.h"
 #include "core/system_memory.h"
+#include "grid/variable_names.h"
 #include "io/citcoms.h"
 #include "io/mesh_resample.h"
 #include "io/vtk_xml.h"
@@ -226,37 +227,46 @@ bool citcomsScalesGiven(const ReaderOptions& options) { return options.planetRad
 
 // A CitcomS step's variables: temperature, the velocity as vx, vy, vz (m/s, Cartesian), viscosity,
 // and pressure where the output has it.
-std::vector<VtkVariable> citcomsVariables(const vtk::Piece& cap, const citcoms::Scales& scales)
+std::vector<VtkVariable> citcomsVariables(const std::vector<std::pair<std::string, int>>& arrays,
+                                          const citcoms::Scales& scales)
 {
     std::vector<VtkVariable> out;
-    for (const vtk::PointArray& a : cap.pointData) {
-        if (a.components == 3) {
+    for (const auto& [name, components] : arrays) {
+        if (components == 3) {
             for (int c = 0; c < 3; ++c)
-                out.push_back({std::string("v") + "xyz"[c], citcoms::unitsOf(a.name, scales), {a.name, c}});
+                out.push_back({varname::kVelocity[size_t(c)], citcoms::unitsOf(name, scales), {name, c}});
         } else {
-            out.push_back({a.name, citcoms::unitsOf(a.name, scales), {a.name, -1}});
+            out.push_back({name, citcoms::unitsOf(name, scales), {name, -1}});
         }
     }
     return out;
 }
 
+// The reader's options for a CitcomS step: the run's own resolution unless --grid says another.
+ReaderOptions citcomsGridOptions(const ReaderOptions& options, const citcoms::Step& read)
+{
+    ReaderOptions natural = options;
+    if (natural.resampleSize[0] == 0)
+        natural.resampleSize = citcoms::naturalGridSize(read);
+    return natural;
+}
+
 FileHeader citcomsHeader(const fs::path& step, const ReaderOptions& options)
 {
     const citcoms::Scales scales = citcomsScales(options);
-    citcoms::Step read = citcoms::readStep(step, scales, citcomsScalesGiven(options));
     FileHeader h;
-    h.format = read.format + ", resampled";
-    for (const auto& v : citcomsVariables(read.caps.front(), scales))
+    h.format = citcoms::formatName(step) + ", resampled";
+    for (const auto& v : citcomsVariables(citcoms::stepArrays(step), scales))
         h.variables.push_back({v.name, v.source.name, v.units});
+    // A later step of a series takes the first's grid: its values are read once, when the step is.
     if (options.targetGrid) {
         h.grid = *options.targetGrid;
-    } else {
-        ReaderOptions natural = options;
-        if (natural.resampleSize[0] == 0)
-            natural.resampleSize = citcoms::naturalGridSize(read);
-        const ShellMesh mesh = makeShellMesh(std::move(read.caps), 1.0, step.string());
-        h.grid = chooseGrid(mesh, natural, h.variables.size(), step);
+        return h;
     }
+    citcoms::Step read = citcoms::readStep(step, scales, citcomsScalesGiven(options));
+    const ReaderOptions natural = citcomsGridOptions(options, read);
+    const ShellMesh mesh = makeShellMesh(std::move(read.caps), 1.0, step.string());
+    h.grid = chooseGrid(mesh, natural, h.variables.size(), step);
     return h;
 }
 
@@ -266,10 +276,11 @@ Snapshot citcomsSnapshot(const fs::path& step, const ReaderOptions& options)
     const citcoms::Scales scales = citcomsScales(options);
     citcoms::Step read = citcoms::readStep(step, scales, citcomsScalesGiven(options));
     const double readSeconds = secondsSince(start);
-    const std::vector<VtkVariable> variables = citcomsVariables(read.caps.front(), scales);
-    ReaderOptions natural = options;
-    if (natural.resampleSize[0] == 0)
-        natural.resampleSize = citcoms::naturalGridSize(read);
+    std::vector<std::pair<std::string, int>> arrays;
+    for (const vtk::PointArray& a : read.caps.front().pointData)
+        arrays.emplace_back(a.name, a.components);
+    const std::vector<VtkVariable> variables = citcomsVariables(arrays, scales);
+    const ReaderOptions natural = citcomsGridOptions(options, read);
     const ShellMesh mesh = makeShellMesh(std::move(read.caps), 1.0, step.string());
     return resampleMesh(mesh, variables, natural, step, read.format.c_str(), readSeconds);
 }
@@ -351,8 +362,9 @@ SeriesListing listSeries(const std::vector<fs::path>& args, const ReaderOptions&
     std::map<long, fs::path> citcomsSteps;  // by step number: a step's caps given one by one count once
     for (const auto& arg : args) {
         std::error_code ec;
-        if (fs::is_directory(arg, ec) && !citcoms::stepsIn(arg).empty()) {
-            for (const fs::path& step : citcoms::stepsIn(arg))
+        const std::vector<fs::path> citcomsIn = fs::is_directory(arg, ec) ? citcoms::stepsIn(arg) : std::vector<fs::path>{};
+        if (!citcomsIn.empty()) {
+            for (const fs::path& step : citcomsIn)
                 citcomsSteps[citcoms::stepNumber(step)] = step;
         } else if (citcoms::isStep(arg)) {
             if (!fs::exists(arg, ec))

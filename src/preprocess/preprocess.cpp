@@ -74,7 +74,7 @@ std::vector<VariableSpec> variableSpecs(const FileHeader& header)
     const auto has = [&](const std::string& name) {
         return std::any_of(header.variables.begin(), header.variables.end(), [&](const auto& v) { return v.name == name; });
     };
-    if (has("vx") && has("vy") && has("vz")) {
+    if (varname::hasVelocity(has)) {
         specs.push_back({varname::kRadialVelocity, "cm/yr", true, "vx, vy, vz"});
         specs.push_back({varname::kVelocityMagnitude, "cm/yr", true, "vx, vy, vz"});
     }
@@ -200,14 +200,14 @@ RunPlan planRun(const std::vector<fs::path>& inputs, PreprocessOptions& options)
     };
     // Pathlines follow the flow: a model without a velocity (a tomography model) has none. Their
     // seeds default to the temperature anomaly's critical points, else the first stored variable's.
-    if (options.pathlines.enabled && !(hasSpec("vx") && hasSpec("vy") && hasSpec("vz"))) {
+    if (options.pathlines.enabled && !varname::hasVelocity(hasSpec)) {
         options.pathlines.enabled = false;
         if (!options.quiet && mpi::isRoot())
             spdlog::info("{}: no velocity (vx, vy, vz): no pathlines", inputs.front().string());
     }
     if (options.pathlines.enabled && options.pathlines.field == PathlineOptions{}.field && !hasSpec(options.pathlines.field))
         for (const VariableSpec& v : plan.specs)
-            if (v.name != "vx" && v.name != "vy" && v.name != "vz") {
+            if (!varname::isVelocityComponent(v.name)) {
                 options.pathlines.field = v.name;
                 break;
             }

@@ -21,36 +21,14 @@ float toFloat32(double value)
     return static_cast<float>(value);
 }
 
-void addDerivedVariables(Snapshot& snapshot)
-{
-    const auto& g = snapshot.grid;
-    if (hasVelocity(snapshot))
-        addVelocityVariables(snapshot);
-    // The contest's correlation task asks for the sign of the expansivity *anomaly*: its
-    // deviation from the area-weighted lateral mean of each shell, like the temperature anomaly.
-    if (const Field* alpha = snapshot.find("thermal expansivity"))
-        snapshot.fields.push_back(lateralAnomaly(g, *alpha, varname::kThermalExpansivityAnomaly));
-    // A model that writes a temperature but no anomaly (ASPECT: T) gets the contest's anomaly: the
-    // deviation from the area-weighted mean of each shell.
-    if (!snapshot.find(varname::kTemperatureAnomaly)) {
-        const Field* t = snapshot.find("temperature");
-        if (!t)
-            t = snapshot.find("T");
-        if (t)
-            snapshot.fields.push_back(lateralAnomaly(g, *t, varname::kTemperatureAnomaly));
-    }
-}
+namespace {
 
-bool hasVelocity(const Snapshot& snapshot)
-{
-    return snapshot.find("vx") && snapshot.find("vy") && snapshot.find("vz");
-}
-
+// Appends "radial velocity" and "velocity magnitude" (cm/yr) from vx, vy, vz (m/s), which must exist.
 void addVelocityVariables(Snapshot& snapshot)
 {
-    const Field* vx = snapshot.find("vx");
-    const Field* vy = snapshot.find("vy");
-    const Field* vz = snapshot.find("vz");
+    const Field* vx = snapshot.find(varname::kVelocity[0]);
+    const Field* vy = snapshot.find(varname::kVelocity[1]);
+    const Field* vz = snapshot.find(varname::kVelocity[2]);
     RAYPC_CHECK(vx && vy && vz);
     const auto& g = snapshot.grid;
     Field radial{varname::kRadialVelocity, "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
@@ -71,6 +49,28 @@ void addVelocityVariables(Snapshot& snapshot)
     });
     snapshot.fields.push_back(std::move(radial));
     snapshot.fields.push_back(std::move(magnitude));
+}
+
+}  // namespace
+
+void addDerivedVariables(Snapshot& snapshot)
+{
+    const auto& g = snapshot.grid;
+    if (varname::hasVelocity([&](const char* c) { return snapshot.find(c) != nullptr; }))
+        addVelocityVariables(snapshot);
+    // The contest's correlation task asks for the sign of the expansivity *anomaly*: its
+    // deviation from the area-weighted lateral mean of each shell, like the temperature anomaly.
+    if (const Field* alpha = snapshot.find("thermal expansivity"))
+        snapshot.fields.push_back(lateralAnomaly(g, *alpha, varname::kThermalExpansivityAnomaly));
+    // A model that writes a temperature but no anomaly (ASPECT: T) gets the contest's anomaly: the
+    // deviation from the area-weighted mean of each shell.
+    if (!snapshot.find(varname::kTemperatureAnomaly)) {
+        const Field* t = snapshot.find("temperature");
+        if (!t)
+            t = snapshot.find("T");
+        if (t)
+            snapshot.fields.push_back(lateralAnomaly(g, *t, varname::kTemperatureAnomaly));
+    }
 }
 
 Field lateralAnomaly(const SphericalGrid& g, const Field& field, const std::string& name)

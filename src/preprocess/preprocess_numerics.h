@@ -24,11 +24,6 @@ float toFloat32(double value);
 // Values too large for float32 become infinite (see checkFinite).
 void addDerivedVariables(Snapshot& snapshot);
 
-// Whether the snapshot has the three Cartesian velocity components vx, vy, vz.
-bool hasVelocity(const Snapshot& snapshot);
-
-// Appends "radial velocity" and "velocity magnitude" (cm/yr) from vx, vy, vz (m/s), which must exist.
-void addVelocityVariables(Snapshot& snapshot);
 
 // `field` minus its area-weighted mean over each radius shell (the lateral mean), named `name`.
 Field lateralAnomaly(const SphericalGrid& grid, const Field& field, const std::string& name);
