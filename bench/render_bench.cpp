@@ -19,7 +19,7 @@
 #include "synth/synth.h"
 #include "render/image_io.h"
 #include "render/reference_geometry.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 #include "render/shadow_volume.h"
 #include "render/slice_view.h"
 #include "server/image_codec.h"
@@ -119,7 +119,7 @@ VariableCatalog benchCatalog()
 RenderParams defaultViewParams(int size, bool lit, bool shadows = false)
 {
     const VariableCatalog catalog = benchCatalog();
-    RenderState s = defaultState(catalog);
+    state::RenderState s = defaultState(catalog);
     s.width = s.height = size;
     s.shading.enabled = lit;
     s.shading.shadows = shadows;
@@ -314,7 +314,7 @@ BENCHMARK(BM_ShadowLightOnly)->Arg(0)->Arg(2)->Unit(benchmark::kMillisecond);
 // 1920x1080, 1500x628. Per stage: averaged colour, averaged depth, the shells composited, 8-bit.
 void BM_FramePicture1500(benchmark::State& state)
 {
-    RenderState s = defaultState(benchCatalog());
+    state::RenderState s = defaultState(benchCatalog());
     s.width = 1500;
     s.height = 628;
     RenderParams p = defaultViewParams(16, true);

@@ -33,7 +33,7 @@ export function completeSchema(schema) {
 }
 
 // The C++ build writes src/generated/state.schema.json (`raypc state-schema`, web/CMakeLists.txt),
-// derived from the one description of the document (src/render/state_schema.cpp). From it:
+// derived from the one description of the document (src/state/state_schema.cpp). From it:
 //  - src/generated/state_types.ts: the types of a complete document (json-schema-to-typescript);
 //  - src/generated/validate_state.ts: the validator as ajv standalone code, so that the page
 //    compiles no schema at run time.

@@ -59,7 +59,7 @@ struct StepFeatures {
 };
 
 // The options of feature settings however they are given (a state's `features`, through
-// render::featureOptions; the command line's options; Python's arguments): minimum volume (km³),
+// state::featureOptions; the command line's options; Python's arguments): minimum volume (km³),
 // depths (km) and their band's half-width (km). Checks nothing (extractFeatures does).
 FeatureOptions featureOptions(double minVolumeKm3, std::vector<double> depthsKm, double bandHalfWidthKm);
 

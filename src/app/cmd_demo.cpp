@@ -27,7 +27,7 @@ struct DemoArgs {
 // blue-white-red, opacity on the hot and cold tails) at full resolution, converged.
 void renderDemoPicture(std::shared_ptr<const Dataset> dataset, int step, const fs::path& output)
 {
-    render::RenderState state = render::defaultState(*dataset);
+    state::RenderState state = render::defaultState(*dataset);
     state.step = step;
     const render::ResolvedState resolved = render::resolveState(state, *dataset);
     render::StateRenderer renderer(dataset);

@@ -13,7 +13,7 @@
 #include "analysis/feature_series.h"
 #include "analysis/features.h"
 #include "analysis/selection.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 
 #include <fmt/format.h>
 
@@ -46,7 +46,7 @@ void applyStateSettings(FeaturesArgs& args)
 {
     if (args.selection.statePath.empty())
         return;
-    const render::FeatureSettings s = render::loadRenderState(args.selection.statePath).features;
+    const state::FeatureSettings s = state::loadRenderState(args.selection.statePath).features;
     if (!args.depthsGiven)
         args.depths.assign(s.depthsKm.begin(), s.depthsKm.end());
     if (!args.bandGiven)
@@ -209,12 +209,12 @@ void run(FeaturesArgs args)
         if (sel.filters.empty())
             fail("features: no selection: give --state with brushes or --range NAME=MIN:MAX (the whole mantle "
                  "would be one feature)");
-        render::FeatureSettings settings;
+        state::FeatureSettings settings;
         settings.minVolumeKm3 = float(args.minVolumeKm3);
         settings.depthsKm.assign(args.depths.begin(), args.depths.end());
         settings.bandHalfWidthKm = float(args.bandHalfWidthKm);
         settings.minOverlapShare = float(args.minOverlapShare);
-        render::checkFeatureSettings(settings, {{"minVolumeKm3", "--min-volume"},
+        state::checkFeatureSettings(settings, {{"minVolumeKm3", "--min-volume"},
                                                 {"depthsKm", "--depth"},
                                                 {"bandHalfWidthKm", "--band-half-width"},
                                                 {"minOverlapShare", "--min-overlap"}});

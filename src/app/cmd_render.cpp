@@ -20,7 +20,7 @@
 #include "dataset/dataset.h"
 #include "render/image_io.h"
 #include "render/pathline_scene.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 #include "render/slice_view.h"
 #include "render/state_renderer.h"
 
@@ -64,7 +64,7 @@ struct RenderArgs {
 };
 
 // "LAT,LON" in degrees -> a section's end.
-SectionState::Point parsePoint(const std::string& text, const std::string& option)
+state::SectionState::Point parsePoint(const std::string& text, const std::string& option)
 {
     const auto parts = split(text, ',');
     if (parts.size() == 2) {
@@ -92,13 +92,13 @@ std::optional<StateRenderer::Slice> sliceOf(const RenderArgs& args)
 }
 
 // The flags of maps and sections over the state's "map" and "section".
-void applySliceFlags(const RenderArgs& args, RenderState& state)
+void applySliceFlags(const RenderArgs& args, state::RenderState& state)
 {
     if (args.sliceDepth && args.sliceDepth->count())
         state.map.depthKm = float(args.sliceDepthKm);
     if (!args.projection.empty()) {
         try {
-            state.map.projection = parseMapProjection(args.projection);
+            state.map.projection = state::parseMapProjection(args.projection);
         } catch (const Error& e) {
             fail("--projection: {}", e.what());
         }
@@ -157,7 +157,7 @@ void applySliceFlags(const RenderArgs& args, RenderState& state)
 CfGridFile sliceGridFile(const Dataset& dataset, const StepVolume* volume, const ResolvedState& resolved,
                          StateRenderer::Slice slice, const RenderArgs& args)
 {
-    const RenderState& state = resolved.state;
+    const state::RenderState& state = resolved.state;
     const size_t var = size_t(resolved.params.colorVariable);
     const VariableInfo& info = dataset.variables().at(var);
     CfGridFile file;
@@ -280,7 +280,7 @@ RenderSetup setUp(const RenderArgs& args)
     const auto dataset = Dataset::open(args.dataset);
     // Without a state: the UI's first view (render::defaultState), so that a figure made from the
     // command line and the browser's first picture are the same.
-    RenderState state = args.statePath.empty() ? defaultState(*dataset) : loadRenderState(args.statePath);
+    state::RenderState state = args.statePath.empty() ? defaultState(*dataset) : state::loadRenderState(args.statePath);
 
     // Flags override the state.
     if (!args.size.empty())
@@ -296,7 +296,7 @@ RenderSetup setUp(const RenderArgs& args)
     }
     if (!args.colormap.empty()) {
         try {
-            state.colorMap = parseColorMap(args.colormap);
+            state.colorMap = state::parseColorMap(args.colormap);
         } catch (const Error& e) {
             fail("--colormap: {}", e.what());
         }
@@ -344,7 +344,7 @@ RenderSetup setUp(const RenderArgs& args)
     }
     if (!args.stereo.empty()) {
         try {
-            state.stereo.mode = parseStereoMode(args.stereo);
+            state.stereo.mode = state::parseStereoMode(args.stereo);
         } catch (const Error& e) {
             fail("--stereo: {}", e.what());
         }
@@ -544,8 +544,8 @@ void addPictureOptions(CLI::App& cmd, RenderArgs& args)
     cmd.add_option("--state", args.statePath, "STATE.json saved by the browser UI (docs/state.md)");
     cmd.add_option("--var", args.var, "Colouring variable (default: the state's, else temperature anomaly as in the UI's first view)");
     std::vector<std::string> mapNames;
-    for (const ColorMapId map : allColorMaps())
-        mapNames.emplace_back(colorMapName(map));
+    for (const ColorMapId map : state::allColorMaps())
+        mapNames.emplace_back(state::colorMapName(map));
     cmd.add_option("--colormap", args.colormap, fmt::format("Colour map of the colouring variable: {}", fmt::join(mapNames, ", ")));
     cmd.add_option("--range", args.ranges,
                    "Brush NAME=MIN:MAX on a variable or coordinate (x, y, z, lat, lon, radius, depth); repeatable, a "
@@ -606,8 +606,8 @@ const CommandRegistration kMapCommand(
         addSliceOptions(cmd, *args, "map");
         args->sliceDepth = cmd.add_option("--depth", args->sliceDepthKm, "Depth of the slice below the surface, km (default: the state's, 660)");
         std::vector<std::string> names;
-        for (const MapProjection p : allMapProjections())
-            names.emplace_back(mapProjectionName(p));
+        for (const MapProjection p : state::allMapProjections())
+            names.emplace_back(state::mapProjectionName(p));
         cmd.add_option("--projection", args->projection, fmt::format("Map projection: {} (default: the state's, mollweide)", fmt::join(names, ", ")));
         args->centralMeridian = cmd.add_option("--central-meridian", args->centralMeridianDeg, "Longitude at the map's centre, degrees east");
         args->centralLatitude = cmd.add_option("--central-latitude", args->centralLatitudeDeg, "Latitude at the centre of the orthographic projection, degrees north");

@@ -5,7 +5,7 @@
 // web/src/generated/ for the UI (web/CMakeLists.txt).
 #include "app/command.h"
 #include "core/atomic_file.h"
-#include "render/state_schema.h"
+#include "state/state_schema.h"
 #include "server/protocol_schema.h"
 
 #include <fmt/format.h>
@@ -37,7 +37,7 @@ CommandSetup schemaCommand(nlohmann::json (*schema)(), std::string (*tables)(), 
 
 const CommandRegistration kStateSchemaCommand(
     "state-schema", "Write the JSON Schema of the state document (STATE.json), or its docs table",
-    schemaCommand(render::stateJsonSchema, render::stateFieldTable, "docs/state.md"), 90);
+    schemaCommand(state::stateJsonSchema, state::stateFieldTable, "docs/state.md"), 90);
 
 const CommandRegistration kProtocolSchemaCommand(
     "protocol-schema", "Write the JSON Schema of the server protocol's messages, or their docs tables",

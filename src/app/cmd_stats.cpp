@@ -15,7 +15,7 @@
 #include "analysis/selection.h"
 #include "render/image_io.h"
 #include "render/legend.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 #include "render/time_depth_view.h"
 #include "render/state_renderer.h"
 
@@ -79,7 +79,7 @@ void run(const StatsArgs& args)
         render::checkTimeDepthPictureSize(pictureWidth, pictureHeight);
         // Before anything is allocated, as for `raypc render`: a picture larger than memory is
         // refused with the figures.
-        render::RenderState pictureState;
+        state::RenderState pictureState;
         pictureState.width = pictureWidth;
         pictureState.height = pictureHeight;
         render::checkPictureFitsMemory(pictureState, false, availableMemory());
@@ -142,7 +142,7 @@ void run(const StatsArgs& args)
             in.width = pictureWidth;
             in.height = pictureHeight;
             if (!args.selection.statePath.empty())
-                in.marks = render::loadRenderState(args.selection.statePath).reference.shells;
+                in.marks = state::loadRenderState(args.selection.statePath).reference.shells;
             in.marks.visible = true;
             if (!args.depthsKm.empty())
                 in.marks.depthsKm.assign(args.depthsKm.begin(), args.depthsKm.end());

@@ -1,7 +1,7 @@
 #include "app/options.h"
 
 #include "core/error.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 #include "core/spherical.h"
 #include "core/strings.h"
 #include "dataset/value_encoding.h"
@@ -306,7 +306,7 @@ SeriesSelection resolveSeriesSelection(const SeriesSelectionFlags& flags)
     s.dataset = Dataset::open(flags.dataset);
     std::vector<NamedRange> ranges;
     if (!flags.statePath.empty())
-        ranges = render::loadRenderState(flags.statePath).brushes;
+        ranges = state::loadRenderState(flags.statePath).brushes;
     applyRangeOptions(ranges, flags.ranges);
     s.filters = resolveRangeFilters(*s.dataset, ranges, flags.statePath.empty() ? "--range" : "brushes");
     s.dataset->checkLevel(flags.level, flags.levelFrom);

@@ -21,7 +21,7 @@
 #include "analysis/features.h"
 #include "analysis/pathline_storage.h"
 #include "analysis/selection.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 #include "render/state_renderer.h"
 #include "server/server.h"
 
@@ -62,12 +62,12 @@ py::array_t<double> doubles(const std::vector<double>& values)
 
 // The state document (docs/state.md) as the one description parses it: a malformed one throws
 // raypc::Error with the schema's message.
-render::RenderState parseState(const std::string& text, const std::string& what)
+state::RenderState parseState(const std::string& text, const std::string& what)
 {
     Json document = Json::parse(text, nullptr, false);
     if (document.is_discarded())
         fail("{}: not valid JSON", what);
-    return render::parseRenderState(document, what);
+    return state::parseRenderState(document, what);
 }
 
 // Calls `callback(done, total)` with the GIL; a KeyboardInterrupt (or any Python exception) there
@@ -247,20 +247,20 @@ public:
     }
 
     // The state `raypc render` draws without --state (the UI's first view), as JSON.
-    std::string defaultState() const { return render::toJson(render::defaultState(*m_dataset)).dump(); }
+    std::string defaultState() const { return state::toJson(render::defaultState(*m_dataset)).dump(); }
 
     // The state checked against this dataset (names, step, level: resolveState), normalised.
     std::string checkState(const std::string& text) const
     {
         const render::ResolvedState resolved = render::resolveState(parseState(text, "state"), *m_dataset);
-        return render::toJson(resolved.state).dump();
+        return state::toJson(resolved.state).dump();
     }
 
     // The picture `raypc render --state` writes for this state (the same path: StateRenderer, its
     // passes, reference geometry and legends), (height, width, 4) uint8 RGBA. `passes` 0: the state's.
     py::array_t<uint8_t> render(const std::string& text, int passes, const std::string& view, py::object progress) const
     {
-        const render::RenderState state = parseState(text, "state");
+        const state::RenderState state = parseState(text, "state");
         if (passes < 0)
             fail("passes: {} is negative", passes);
         if (view != "3d" && view != "map" && view != "section")
@@ -299,7 +299,7 @@ public:
     py::list stats(const std::string& text, int first, int last, int level, const std::string& meanOf,
                    py::object progress) const
     {
-        const render::RenderState state = parseState(text, "state");
+        const state::RenderState state = parseState(text, "state");
         const std::vector<RangeFilter> filters = resolveRangeFilters(*m_dataset, state.brushes, "brushes");
         std::optional<size_t> meanVariable;
         if (!meanOf.empty()) {
@@ -341,18 +341,18 @@ public:
     std::string features(const std::string& text, int first, int last, int level, double minVolumeKm3,
                          std::vector<double> depthsKm, double bandHalfWidthKm, py::object progress) const
     {
-        const render::RenderState state = parseState(text, "state");
+        const state::RenderState state = parseState(text, "state");
         const std::vector<RangeFilter> filters = resolveRangeFilters(*m_dataset, state.brushes, "brushes");
         if (filters.empty())
             fail("features: the state has no brushes (the whole mantle would be one feature)");
         if (first > last)
             fail("steps: {}..{} is empty", first, last);
         m_dataset->checkLevel(level, "level");
-        render::FeatureSettings settings;
+        state::FeatureSettings settings;
         settings.minVolumeKm3 = float(minVolumeKm3);
         settings.depthsKm.assign(depthsKm.begin(), depthsKm.end());
         settings.bandHalfWidthKm = float(bandHalfWidthKm);
-        render::checkFeatureSettings(settings, {{"minVolumeKm3", "min_volume_km3"},
+        state::checkFeatureSettings(settings, {{"minVolumeKm3", "min_volume_km3"},
                                                 {"depthsKm", "depths_km"},
                                                 {"bandHalfWidthKm", "band_half_width_km"}});
         const FeatureOptions options = featureOptions(minVolumeKm3, std::move(depthsKm), bandHalfWidthKm);
@@ -436,10 +436,10 @@ PYBIND11_MODULE(_raypc, m)
           "Preprocess inputs as `raypc serve INPUT…` does; returns the dataset directory");
     m.def(
         "check_state",
-        [](const std::string& text) { return raypc::render::toJson(parseState(text, "state")).dump(); },
+        [](const std::string& text) { return raypc::state::toJson(parseState(text, "state")).dump(); },
         py::arg("json"), "The state document parsed by the one state schema, normalised (JSON)");
     m.def("surface_radius_km", [] { return raypc::kSurfaceRadiusKm; });
-    m.def("state_version", [] { return raypc::render::kRenderStateVersion; });
+    m.def("state_version", [] { return raypc::state::kRenderStateVersion; });
     m.def(
         "critical_kind_name",
         [](int kind) {

@@ -7,45 +7,6 @@
 
 namespace raypc::render {
 
-void CameraView::validate() const
-{
-    const auto finite = [](auto values) {
-        return std::all_of(values.begin(), values.end(), [](float x) { return std::isfinite(x); });
-    };
-    if (!finite(std::array<float, 3>{positionKm.x, positionKm.y, positionKm.z}) || !finite(orientation) ||
-        !finite(frustum))
-        fail("camera view: expected finite numbers");
-    const double length = std::sqrt(double(orientation[0]) * orientation[0] + double(orientation[1]) * orientation[1] +
-                                    double(orientation[2]) * orientation[2] + double(orientation[3]) * orientation[3]);
-    if (!(std::abs(length - 1.0) <= kUnitTolerance))
-        fail("camera view orientation [{}, {}, {}, {}]: length {}, expected a unit quaternion (within {})", orientation[0],
-             orientation[1], orientation[2], orientation[3], length, kUnitTolerance);
-    const auto [left, right, down, up] = frustum;
-    if (!(left < right && down < up) || std::max({std::abs(left), std::abs(right), std::abs(down), std::abs(up)}) > 1e4f)
-        fail("camera view frustum [{}, {}, {}, {}]: expected tangents [left, right, down, up] with left < right, "
-             "down < up, each within ±10000",
-             left, right, down, up);
-}
-
-void OrbitCamera::validate() const
-{
-    if (!(distanceKm > 0.0) || !std::isfinite(distanceKm))
-        fail("camera distance: {} km, expected a positive distance", distanceKm);
-    if (!(fovYDeg > 0.0 && fovYDeg < 180.0))
-        fail("camera field of view: {} degrees, expected a value in (0, 180)", fovYDeg);
-    if (!std::isfinite(azimuthDeg) || !std::isfinite(elevationDeg))
-        fail("camera azimuth/elevation must be finite numbers");
-    if (!std::isfinite(eyeOffsetKm) || !std::isfinite(convergenceKm) || (eyeOffsetKm != 0 && !(convergenceKm > 0)))
-        fail("camera eye offset {} km, convergence {} km: expected finite numbers and a positive convergence",
-             eyeOffsetKm, convergenceKm);
-    if (!(pixelAspect > 0) || !std::isfinite(pixelAspect))
-        fail("camera pixel aspect {}: expected a positive number", pixelAspect);
-    if (views.size() > 2)
-        fail("camera views: {} views, expected at most 2 (one, or a stereo pair's left and right eye)", views.size());
-    for (const CameraView& v : views)
-        v.validate();
-}
-
 OrbitCamera stereoEye(const OrbitCamera& camera, Eye eye, double eyeSeparationKm, double convergenceKm)
 {
     if (!(eyeSeparationKm >= 0) || !std::isfinite(eyeSeparationKm))

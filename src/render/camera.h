@@ -13,6 +13,7 @@
 #pragma once
 
 #include "core/vec3.h"
+#include "state/view_types.h"
 
 #include <array>
 #include <cmath>
@@ -22,51 +23,9 @@ namespace raypc::render {
 
 using Vec3 = Vec3f;  // core/vec3.h
 
-// A general camera pose and frustum, as WebXR gives one per eye (an XRView's transform and
-// projection matrix): the eye at positionKm, turned by the unit quaternion `orientation`
-// [x, y, z, w] from camera axes to the contest frame, where the camera looks along its -z with +y
-// up and +x right (the WebXR/OpenGL convention); the image spans the signed tangents
-// frustum = [left, right, down, up] of the angles of its edges from the view axis (left < right,
-// down < up; a symmetric 90° frustum is [-1, 1, -1, 1]). The image's width and height map onto
-// the frustum whatever their ratio (a headset's pixels need not be square).
-struct CameraView {
-    Vec3 positionKm{};
-    std::array<float, 4> orientation{0, 0, 0, 1};
-    std::array<float, 4> frustum{-1, 1, -1, 1};
-
-    // |orientation| may differ from 1 by this much (float JSON round trips); it is normalised.
-    static constexpr float kUnitTolerance = 1e-3f;
-    // Throws raypc::Error for a non-finite value, an orientation whose length is not 1 within
-    // kUnitTolerance, or a degenerate frustum (left >= right or down >= up, or a tangent beyond 1e4).
-    void validate() const;
-};
-
-struct OrbitCamera {
-    double azimuthDeg = 30.0;
-    double elevationDeg = 20.0;
-    double distanceKm = 20000.0;  // from target to eye
-    double fovYDeg = 40.0;        // vertical field of view
-    Vec3 targetKm{};              // point looked at, km
-
-    // One eye of a stereo pair (stereoEye sets these; the state document has no such keys): the eye
-    // moved by eyeOffsetKm along the image's right axis (negative: to the left), and the image
-    // window shifted so that points at convergenceKm along the view axis have no parallax.
-    double eyeOffsetKm = 0;
-    double convergenceKm = 0;  // <= 0: no shift (only with eyeOffsetKm = 0)
-    // Width / height of one pixel: 2 renders each eye of a half-width side-by-side pair squeezed
-    // into half the columns (a display stretches it back).
-    double pixelAspect = 1;
-
-    // Explicit views (state key camera.views): none, the orbit defines the camera; one, it replaces
-    // the orbit's pose and frustum (the orbit keys stay, e.g. for the UI's navigation and the tubes'
-    // minimum width); two, the left and right eye of a stereo pair (stereoEye picks one). The eye
-    // offset, convergence and pixel aspect do not apply to an explicit view.
-    std::vector<CameraView> views;
-
-    // Throws raypc::Error if distance <= 0, the field of view is outside (0, 180), the eye
-    // offset, convergence or pixel aspect are not usable, or a view is invalid (CameraView::validate).
-    void validate() const;
-};
+// The camera's pose and frustum are the state's (state/view_types.h).
+using state::CameraView;
+using state::OrbitCamera;
 
 // The orbit distance at which a sphere of `radiusKm` around the target fills `fill` (0..1) of the
 // image's shorter side, for a vertical field of view of fovYDeg and an image of width x height

@@ -49,13 +49,13 @@ Rgb featurePaintColor(int slot)
     return kPalette[size_t(slot)];
 }
 
-bool paintsFeatures(const RenderState& state)
+bool paintsFeatures(const state::RenderState& state)
 {
     return !state.brushes.empty() && (state.features.colorById || !state.features.highlight.empty());
 }
 
 std::vector<float> featurePaintField(const SphericalGrid& target, const SphericalGrid& labelGrid,
-                                     std::span<const int32_t> labels, const FeatureSettings& settings)
+                                     std::span<const int32_t> labels, const state::FeatureSettings& settings)
 {
     if (labels.size() != labelGrid.cellCount())
         fail("feature paint: {} labels for a grid of {} points", labels.size(), labelGrid.cellCount());
@@ -122,7 +122,7 @@ void applyFeaturePaint(RenderParams& params, int variable)
     params.selectionMinOpacity = 0;
 }
 
-LegendSpec featurePaintLegend(const FeatureSettings& settings)
+LegendSpec featurePaintLegend(const state::FeatureSettings& settings)
 {
     LegendSpec legend;
     TransferFunction& tf = legend.colors;

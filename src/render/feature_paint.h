@@ -11,7 +11,7 @@
 #include "dataset/dataset.h"
 #include "analysis/selection.h"
 #include "render/legend.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 #include "render/volume_renderer.h"
 
 #include <span>
@@ -27,7 +27,7 @@ inline constexpr int kFeaturePaintSlots = 12;
 Rgb featurePaintColor(int slot);
 
 // Whether the state paints features.
-bool paintsFeatures(const RenderState& state);
+bool paintsFeatures(const state::RenderState& state);
 
 // The slot of every grid point of `target` (canonical order): the feature labels of `labels` (a
 // StepFeatures::labels on `labelGrid`, any level of the same dataset: each target point takes the
@@ -36,7 +36,7 @@ bool paintsFeatures(const RenderState& state);
 // neighbours, the longitude seam joined), so that interpolation at a feature's edge stays in its
 // colour; where there is none, 0.
 std::vector<float> featurePaintField(const SphericalGrid& target, const SphericalGrid& labelGrid,
-                                     std::span<const int32_t> labels, const FeatureSettings& settings);
+                                     std::span<const int32_t> labels, const state::FeatureSettings& settings);
 
 // Colours the volume by the slots of variable `variable`: the fixed palette, slot 0 faint
 // (opacity 0.08 per opacityUnitKm), painted slots 0.8.
@@ -44,6 +44,6 @@ void applyFeaturePaint(RenderParams& params, int variable);
 
 // The legend of painted features: with colorById the ten colours of ids 1..10 (each labelled with its
 // id), else grey ("rest") then amber ("highlighted"); the title says which.
-LegendSpec featurePaintLegend(const FeatureSettings& settings);
+LegendSpec featurePaintLegend(const state::FeatureSettings& settings);
 
 }  // namespace raypc::render

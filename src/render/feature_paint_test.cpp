@@ -36,7 +36,7 @@ TEST(FeaturePaint, SlotsFollowTheLabelsAndSpreadOnePointBeyondThem)
     std::vector<int32_t> labels(g.cellCount(), 0);
     labels[g.index(1, 1, 0)] = 1;   // beside the seam: its neighbour across it is column 7
     labels[g.index(2, 1, 4)] = 12;  // id 12: slot 2
-    FeatureSettings s;
+    state::FeatureSettings s;
     s.colorById = true;
     const std::vector<float> slots = featurePaintField(g, g, labels, s);
     EXPECT_EQ(slots[g.index(1, 1, 0)], 1.0f);
@@ -91,7 +91,7 @@ TEST(FeaturePaint, TwoBlobsAreDrawnInTheirOwnColours)
     const std::vector<RangeFilter> brushes{{0, std::nullopt, {{0.3f, 2.0f}}}};
     const StepFeatures f = extractFeatures(*base, brushes);
     ASSERT_EQ(f.features.size(), 2u);
-    FeatureSettings s;
+    state::FeatureSettings s;
     s.colorById = true;
     auto painted = StepVolume::withVariable(base, featurePaintField(base->grid(), base->grid(), f.labels, s));
     VolumeRenderer renderer(painted);
@@ -140,7 +140,7 @@ namespace {
 // of its colour (the bar's colour there is that id's), else "rest" on grey and "highlighted" on amber.
 TEST(FeaturePaint, TheLegendLabelsEachColourWithItsId)
 {
-    FeatureSettings byId;
+    state::FeatureSettings byId;
     byId.colorById = true;
     const LegendSpec legend = featurePaintLegend(byId);
     ASSERT_EQ(legend.ticks.size(), 10u);
@@ -154,7 +154,7 @@ TEST(FeaturePaint, TheLegendLabelsEachColourWithItsId)
         EXPECT_NEAR(c.g, want.g, 1e-5) << "id " << id;
         EXPECT_NEAR(c.b, want.b, 1e-5) << "id " << id;
     }
-    FeatureSettings highlight;
+    state::FeatureSettings highlight;
     highlight.highlight = {3};
     const LegendSpec h = featurePaintLegend(highlight);
     ASSERT_EQ(h.ticks.size(), 2u);

@@ -6,7 +6,7 @@
 // the feature is cold sinking background flow, which the preset selects too, or a feature touching
 // the slab; the table says how much). The table it prints is the one in docs/features.md:
 //   build/src/render/raypc_render_tests --gtest_filter='FeatureTruth.*'
-#include "render/render_state.h"
+#include "state/render_state.h"
 #include "render/slice_view.h"
 
 #include "analysis/features.h"
@@ -43,7 +43,7 @@ constexpr double kMinOwnShare = 0.5;
 TEST(FeatureTruth, Task1FindsEachSlabStalledAt660AsOneFeature)
 {
     const auto brushes =
-        loadRenderState(std::filesystem::path(RAYPC_SOURCE_DIR) / "examples" / "task1-slabs-660km.json").brushes;
+        state::loadRenderState(std::filesystem::path(RAYPC_SOURCE_DIR) / "examples" / "task1-slabs-660km.json").brushes;
     const SynthOptions options;
     for (const double t : {0.0, 12.0, 22.0}) {
         Snapshot snap = synthesizeSnapshot(options, t);
@@ -237,7 +237,7 @@ TrackedSlabs trackSlabs(const SynthOptions& options, const std::vector<NamedRang
 TEST(FeatureTruth, Task1TracksFollowEachStalledSlabThroughTheSeries)
 {
     const auto brushes =
-        loadRenderState(std::filesystem::path(RAYPC_SOURCE_DIR) / "examples" / "task1-slabs-660km.json").brushes;
+        state::loadRenderState(std::filesystem::path(RAYPC_SOURCE_DIR) / "examples" / "task1-slabs-660km.json").brushes;
     const SynthOptions options;  // the demo's
     TrackedSlabs series = trackSlabs(options, brushes);
     for (const auto& [slab, steps] : series.foundShare)
@@ -439,7 +439,7 @@ TEST(SectionTruth, ASlabStalledAt660IsWhereTheGeneratorPutIt)
         // 15 degrees before and after along the same great circle.
         const double extend = 15.0 / dip.lengthDeg();
         const SphericalPoint p0 = cartesianToSpherical(dip.at(-extend)), p1 = cartesianToSpherical(dip.at(1 + extend));
-        SectionState section;
+        state::SectionState section;
         section.from = {float(p0.latDeg), float(p0.lonDeg)};
         section.to = {float(p1.latDeg), float(p1.lonDeg)};
         const SectionGrid s = sectionGrid(*volume, anomaly, section, 241, 145);

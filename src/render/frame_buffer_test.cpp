@@ -4,7 +4,7 @@
 #include "render/frame_buffer.h"
 
 #include "core/error.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 #include "render/test_volumes.h"
 #include "render/volume_renderer.h"
 
@@ -98,7 +98,7 @@ TEST(Refinement, AdaptiveStillMatchesTheFullStill)
     r.setParams(p);
     const FrameBuffer full = renderFrame(r, p.width, p.height, {});
     EXPECT_EQ(blockPassesTotal(full), kMaxPasses * full.blockCount());
-    for (const float threshold : {0.5f, RenderState{}.convergenceGreyLevels}) {
+    for (const float threshold : {0.5f, state::RenderState{}.convergenceGreyLevels}) {
         const FrameBuffer adaptive = renderFrame(r, p.width, p.height, {threshold});
         const Difference d = difference8(adaptive, full);
         EXPECT_LE(d.over10, 0.005) << "threshold " << threshold;

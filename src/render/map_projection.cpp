@@ -15,8 +15,6 @@ constexpr double kHalfPi = M_PI / 2;
 constexpr double kRadians = M_PI / 180;
 const double kSqrt2 = std::sqrt(2.0);
 
-constexpr MapProjection kAll[] = {MapProjection::Equirectangular, MapProjection::Mollweide, MapProjection::Hammer,
-                                  MapProjection::Robinson, MapProjection::Orthographic};
 
 // Robinson's table (Robinson 1974, as d3-geo-projection gives it): per 5° of latitude from -5° to
 // 90°, the length of the parallel and its distance from the equator; the distances scaled so that
@@ -89,43 +87,6 @@ double wrapLambda(double lambda)
 }
 
 }  // namespace
-
-std::span<const MapProjection> allMapProjections() { return kAll; }
-
-std::string_view mapProjectionName(MapProjection projection)
-{
-    switch (projection) {
-    case MapProjection::Equirectangular: return "equirectangular";
-    case MapProjection::Mollweide: return "mollweide";
-    case MapProjection::Hammer: return "hammer";
-    case MapProjection::Robinson: return "robinson";
-    case MapProjection::Orthographic: return "orthographic";
-    }
-    return "?";
-}
-
-std::string_view mapProjectionTitle(MapProjection projection)
-{
-    switch (projection) {
-    case MapProjection::Equirectangular: return "equirectangular";
-    case MapProjection::Mollweide: return "Mollweide";
-    case MapProjection::Hammer: return "Hammer";
-    case MapProjection::Robinson: return "Robinson";
-    case MapProjection::Orthographic: return "orthographic";
-    }
-    return "?";
-}
-
-MapProjection parseMapProjection(std::string_view name)
-{
-    std::string known;
-    for (MapProjection p : kAll) {
-        if (mapProjectionName(p) == name)
-            return p;
-        known += (known.empty() ? "" : ", ") + std::string(mapProjectionName(p));
-    }
-    fail("unknown map projection '{}'; expected one of: {}", name, known);
-}
 
 Projector::Projector(MapProjection projection, double centralMeridianDeg, double centralLatitudeDeg)
     : m_projection(projection), m_lambda0(centralMeridianDeg * kRadians), m_phi0(centralLatitudeDeg * kRadians),

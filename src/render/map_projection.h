@@ -10,6 +10,8 @@
 // Thread safety: immutable.
 #pragma once
 
+#include "state/view_types.h"
+
 #include <array>
 #include <optional>
 #include <span>
@@ -18,13 +20,8 @@
 
 namespace raypc::render {
 
-enum class MapProjection { Equirectangular, Mollweide, Hammer, Robinson, Orthographic };
-
-std::span<const MapProjection> allMapProjections();
-std::string_view mapProjectionName(MapProjection projection);  // "mollweide", as the state writes it
-std::string_view mapProjectionTitle(MapProjection projection);  // "Mollweide", as a figure writes it
-// Throws raypc::Error listing the known names.
-MapProjection parseMapProjection(std::string_view name);
+// The projections' names are the state's (state/view_types.h).
+using state::MapProjection;
 
 class Projector {
 public:

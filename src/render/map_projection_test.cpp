@@ -32,7 +32,7 @@ TEST(MapProjection, ForwardEqualsD3)
 {
     size_t compared = 0;
     for (const auto& c : d3Cases()) {
-        const Projector p(parseMapProjection(c["projection"].get<std::string>()), c["centralMeridianDeg"], c["centralLatitudeDeg"]);
+        const Projector p(state::parseMapProjection(c["projection"].get<std::string>()), c["centralMeridianDeg"], c["centralLatitudeDeg"]);
         for (const auto& f : c["forward"]) {
             const double lon = f[0], lat = f[1], x = f[2], y = f[3];
             const auto xy = p.forward(lon, lat);
@@ -56,7 +56,7 @@ TEST(MapProjection, InverseEqualsD3AndUndoesForward)
 {
     size_t compared = 0;
     for (const auto& c : d3Cases()) {
-        const Projector p(parseMapProjection(c["projection"].get<std::string>()), c["centralMeridianDeg"], c["centralLatitudeDeg"]);
+        const Projector p(state::parseMapProjection(c["projection"].get<std::string>()), c["centralMeridianDeg"], c["centralLatitudeDeg"]);
         for (const auto& f : c["inverse"]) {
             const double x = f[0], y = f[1], lon = f[2], lat = f[3];
             const auto ll = p.inverse(x, y);
@@ -77,17 +77,17 @@ TEST(MapProjection, InverseEqualsD3AndUndoesForward)
 
 TEST(MapProjection, OutsideTheSphereIsNothing)
 {
-    for (MapProjection m : allMapProjections()) {
+    for (MapProjection m : state::allMapProjections()) {
         const Projector p(m, 0);
         const auto e = p.extent();
-        EXPECT_FALSE(p.inverse(e.xMax * 1.01, 0)) << mapProjectionName(m);
-        EXPECT_FALSE(p.inverse(0, e.yMax * 1.01)) << mapProjectionName(m);
-        EXPECT_TRUE(p.inverse(0.99 * e.xMax, 0)) << mapProjectionName(m);
+        EXPECT_FALSE(p.inverse(e.xMax * 1.01, 0)) << state::mapProjectionName(m);
+        EXPECT_FALSE(p.inverse(0, e.yMax * 1.01)) << state::mapProjectionName(m);
+        EXPECT_TRUE(p.inverse(0.99 * e.xMax, 0)) << state::mapProjectionName(m);
         // Corners lie outside every projection but the equirectangular one.
-        EXPECT_EQ(bool(p.inverse(0.99 * e.xMax, 0.99 * e.yMax)), m == MapProjection::Equirectangular) << mapProjectionName(m);
+        EXPECT_EQ(bool(p.inverse(0.99 * e.xMax, 0.99 * e.yMax)), m == MapProjection::Equirectangular) << state::mapProjectionName(m);
     }
     EXPECT_FALSE(Projector(MapProjection::Orthographic, 0).forward(180, 0));
-    EXPECT_THROW(parseMapProjection("mercator"), Error);
+    EXPECT_THROW(state::parseMapProjection("mercator"), Error);
     EXPECT_THROW(Projector(MapProjection::Hammer, 200), Error);
 }
 

@@ -23,8 +23,8 @@ namespace raypc::render {
 namespace {
 
 // A map's band: below the title, above the legend.
-double mapTopPx(const RenderState& s) { return 2.2 * legendFontPx(s.width, s.height); }
-double mapBottomPx(const RenderState& s)
+double mapTopPx(const state::RenderState& s) { return 2.2 * legendFontPx(s.width, s.height); }
+double mapBottomPx(const state::RenderState& s)
 {
     return s.height - legendsHeightPx(s.width, s.height, slice::legendCount(s));
 }
@@ -71,7 +71,7 @@ struct MapPixelsKey {
 };
 using MapPixelPoints = std::vector<std::array<float, 2>>;
 
-std::shared_ptr<const MapPixelPoints> mapPixelPoints(const MapState& map, const MapFrame& frame, int width, int height)
+std::shared_ptr<const MapPixelPoints> mapPixelPoints(const state::MapState& map, const MapFrame& frame, int width, int height)
 {
     auto make = [&] {
         MapPixelPoints points(size_t(width) * size_t(height), {NAN, NAN});
@@ -96,7 +96,7 @@ std::shared_ptr<const MapPixelPoints> mapPixelPoints(const MapState& map, const 
 
 }  // namespace
 
-MapFrame mapFrameOf(const RenderState& s)
+MapFrame mapFrameOf(const state::RenderState& s)
 {
     const int fontPx = legendFontPx(s.width, s.height);
     const double top = mapTopPx(s), bottom = mapBottomPx(s);
@@ -106,7 +106,7 @@ MapFrame mapFrameOf(const RenderState& s)
     return MapFrame(s.map, fontPx, top, s.width - 2.0 * fontPx, bottom - top - 0.5 * fontPx);
 }
 
-MapFrame::MapFrame(const MapState& map, double left, double top, double width, double height)
+MapFrame::MapFrame(const state::MapState& map, double left, double top, double width, double height)
     : m_projector(map.projection, map.centralMeridianDeg,
                   map.projection == MapProjection::Orthographic ? map.centralLatitudeDeg : 0.0)
 {
@@ -134,9 +134,9 @@ std::optional<std::array<double, 2>> MapFrame::pixelOf(double lonDeg, double lat
 ImageRgba8 mapPicture(const SliceInputs& in)
 {
     using namespace slice;  // slice_sampling.h, slice_drawing.h
-    const RenderState& state = stateOf(in);
+    const state::RenderState& state = stateOf(in);
     const RenderParams& params = in.resolved->params;
-    const MapState& map = state.map;
+    const state::MapState& map = state.map;
     const int width = state.width, height = state.height;
     const SphericalGrid& grid = in.volume->grid();
     const double rKm = radiusAtDepth(grid, map.depthKm, "map.depthKm");
@@ -159,7 +159,7 @@ ImageRgba8 mapPicture(const SliceInputs& in)
     const double jumpPx = 0.25 * width;
 
     // The graticule and the coastlines of the state's reference, the sphere's outline always.
-    const ReferenceState& ref = state.reference;
+    const state::ReferenceState& ref = state.reference;
     if (ref.graticule.visible && ref.graticule.opacity > 0) {
         LineLayer layer(width, height, false);
         const float step = ref.graticule.spacingDeg;
@@ -259,7 +259,7 @@ ImageRgba8 mapPicture(const SliceInputs& in)
         },
         fmt::format("(full within {:g} km of this depth, fainter beyond)", kMapPathlineBandKm), legends);
 
-    std::string where = fmt::format("{} centred on {}", mapProjectionTitle(map.projection), lonText(map.centralMeridianDeg));
+    std::string where = fmt::format("{} centred on {}", state::mapProjectionTitle(map.projection), lonText(map.centralMeridianDeg));
     if (map.projection == MapProjection::Orthographic)
         where += ", " + latText(map.centralLatitudeDeg);
     const std::string title = fitTitle({fmt::format("{} at {:g} km depth", in.colorTitle, map.depthKm), in.when, where}, width, height);

@@ -275,7 +275,7 @@ LegendSpec pathlineLegend(const PathlineStyle& style, const std::vector<std::str
                                                    : "pathlines: " + columns.at(size_t(style.colorColumn));
     // The tubes map their range linearly, not centred on 0: the map's stops.
     TransferFunction colors;
-    const auto stops = colorMapStops(style.colorMap);
+    const auto stops = state::colorMapStops(style.colorMap);
     colors.colorPoints.assign(stops.begin(), stops.end());
     colors.range = style.range;
     return {what, colors};
@@ -369,9 +369,9 @@ float PathlineScene::attribute(size_t line, size_t column) const { return m_impl
 int PathlineScene::injectionStep(size_t line) const { return m_impl->lines.injectionStep(line); }
 double PathlineScene::stepMyr() const { return m_impl->lines.stepMyr(); }
 
-std::vector<uint8_t> PathlineScene::visibilityFor(const RenderState& state) const { return m_impl->lines.visibilityFor(state); }
+std::vector<uint8_t> PathlineScene::visibilityFor(const state::RenderState& state) const { return m_impl->lines.visibilityFor(state); }
 
-PathlineStyle PathlineScene::styleFor(const PathlineState& state) const
+PathlineStyle PathlineScene::styleFor(const state::PathlineState& state) const
 {
     // The tracer's settings (occlusion rays and reach) are the scene's own.
     PathlineStyle style = m_impl->lines.styleFor(state);
@@ -380,9 +380,9 @@ PathlineStyle PathlineScene::styleFor(const PathlineState& state) const
     return style;
 }
 
-std::vector<uint8_t> PathlineLines::visibilityFor(const RenderState& state) const
+std::vector<uint8_t> PathlineLines::visibilityFor(const state::RenderState& state) const
 {
-    const PathlineState& pl = state.pathlines;
+    const state::PathlineState& pl = state.pathlines;
     std::vector<uint8_t> mask(lineCount(), 0);
     if (!pl.visible)
         return mask;
@@ -409,7 +409,7 @@ std::vector<uint8_t> PathlineLines::visibilityFor(const RenderState& state) cons
     }
     for (NamedRanges& f : groupRanges(pl.filters, "filters")) {
         const auto first = std::find_if(pl.filters.begin(), pl.filters.end(),
-                                        [&](const PathlineFilter& x) { return x.name == f.name; });
+                                        [&](const state::PathlineFilter& x) { return x.name == f.name; });
         tests.push_back({int(columnOf(f.name, fmt::format("filters[{}]", first - pl.filters.begin()))),
                          {-1, std::nullopt, std::move(f.ranges)}});
     }
@@ -442,7 +442,7 @@ std::vector<uint8_t> PathlineLines::visibilityFor(const RenderState& state) cons
     return mask;
 }
 
-PathlineStyle PathlineLines::styleFor(const PathlineState& pl) const
+PathlineStyle PathlineLines::styleFor(const state::PathlineState& pl) const
 {
     PathlineStyle style;
     style.colorMap = pl.effectiveColorMap();
@@ -470,11 +470,11 @@ PathlineStyle PathlineLines::styleFor(const PathlineState& pl) const
     }
     if (!(lo <= hi))
         lo = 0, hi = 1;
-    style.range = defaultColorRange({lo, hi}, isCentredOnZero(style.colorMap));
+    style.range = defaultColorRange({lo, hi}, state::isCentredOnZero(style.colorMap));
     return style;
 }
 
-size_t PathlineScene::applyState(const RenderState& state)
+size_t PathlineScene::applyState(const state::RenderState& state)
 {
     // Everything is computed before anything changes, so a bad state leaves the scene as it was.
     PathlineStyle style = styleFor(state.pathlines);

@@ -22,7 +22,7 @@
 
 #include "analysis/pathline_storage.h"
 #include "render/legend.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 
 #include <cstdint>
 #include <memory>
@@ -70,8 +70,8 @@ public:
     float maxAgeMyr() const { return m_maxAgeMyr; }
 
     // See PathlineScene::visibilityFor and styleFor.
-    std::vector<uint8_t> visibilityFor(const RenderState& state) const;
-    PathlineStyle styleFor(const PathlineState& state) const;
+    std::vector<uint8_t> visibilityFor(const state::RenderState& state) const;
+    PathlineStyle styleFor(const state::PathlineState& state) const;
     // The value `style` colours point `point` (0 = the line's first) of `line` by: its age (Myr)
     // or the line's attribute.
     float colorValue(const PathlineStyle& style, size_t line, size_t point) const;
@@ -121,14 +121,14 @@ public:
     // "start lat/lon/radius" columns, variables from "start <variable>") when filterByBrushes, and
     // inside every attribute filter. All zero when pathlines are not visible. Throws raypc::Error
     // naming a filter or brush whose column the lines do not have (listing the columns).
-    std::vector<uint8_t> visibilityFor(const RenderState& state) const;
+    std::vector<uint8_t> visibilityFor(const state::RenderState& state) const;
     // The style the state asks for: colorBy resolved to a column (or age), the colour map and the
     // range (default: age [0, window x stepMyr]; a column's range over all loaded lines, symmetric
     // for maps centred on zero). Throws raypc::Error for an unknown colorBy (listing the columns).
-    PathlineStyle styleFor(const PathlineState& state) const;
+    PathlineStyle styleFor(const state::PathlineState& state) const;
 
     // Radius, style and visibility from the state; returns the number of visible lines.
-    size_t applyState(const RenderState& state);
+    size_t applyState(const state::RenderState& state);
     // One byte per line (non-zero = visible); returns the number of visible lines. Throws
     // raypc::Error if the mask has the wrong size.
     size_t setVisibility(std::vector<uint8_t> mask);

@@ -38,9 +38,9 @@ std::vector<PathlineSet> windowSets()
     return sets;
 }
 
-RenderState visibleState(int step)
+state::RenderState visibleState(int step)
 {
-    RenderState s;
+    state::RenderState s;
     s.step = step;
     s.pathlines.visible = true;
     return s;
@@ -55,7 +55,7 @@ TEST(PathlineScene, WindowRule)
     const PathlineScene scene(windowSets());
     ASSERT_EQ(scene.lineCount(), 6u);
     EXPECT_NEAR(scene.stepMyr(), 2.0, 1e-9);
-    RenderState s = visibleState(5);
+    state::RenderState s = visibleState(5);
     EXPECT_EQ(scene.visibilityFor(s), mask({1, 1, 1, 1, 1, 1}));
     s.pathlines.window = 2;  // steps 4, 5
     EXPECT_EQ(scene.visibilityFor(s), mask({0, 0, 1, 1, 1, 1}));
@@ -68,7 +68,7 @@ TEST(PathlineScene, WindowRule)
 TEST(PathlineScene, StartMustSatisfyBrushes)
 {
     const PathlineScene scene(windowSets());
-    RenderState s = visibleState(5);
+    state::RenderState s = visibleState(5);
     s.brushes = {{"lat", 20, 90}};
     EXPECT_EQ(scene.visibilityFor(s), mask({0, 1, 0, 1, 0, 1}));
     s.brushes = {{"depth", 0, 1000}};  // start radius 5000 -> depth 1371: none; 4000 -> 2371: none
@@ -102,7 +102,7 @@ TEST(PathlineScene, StartMustSatisfyBrushes)
 TEST(PathlineScene, AttributeFilters)
 {
     const PathlineScene scene(windowSets());
-    RenderState s = visibleState(5);
+    state::RenderState s = visibleState(5);
     s.pathlines.filters = {{"length", 600, 1000}};  // lengths 500 and 800
     EXPECT_EQ(scene.visibilityFor(s), mask({0, 1, 0, 1, 0, 1}));
     s.pathlines.filters = {{"length", 0, 1000}, {"injection time", 7, 9}};  // step 4 (8 Myr)
@@ -131,7 +131,7 @@ TEST(PathlineScene, AttributeFilters)
 TEST(PathlineScene, ApplyStateSetsStyleRadiusAndMask)
 {
     PathlineScene scene(windowSets());
-    RenderState s = visibleState(5);
+    state::RenderState s = visibleState(5);
     s.pathlines.radiusKm = 30;
     s.pathlines.filters = {{"length", 600, 1000}};
     EXPECT_EQ(scene.applyState(s), 3u);
@@ -157,7 +157,7 @@ TEST(RenderStatePathlines, ParsesAndRoundTrips)
         "visible": true, "radiusKm": 20, "window": 5, "colorBy": "length", "colorMap": "inferno",
         "range": [0, 3000], "filterByBrushes": false, "filters": [{"name": "length", "min": 100, "max": 5000}],
         "ambientOcclusion": false}})");
-    const RenderState s = parseRenderState(j);
+    const state::RenderState s = state::parseRenderState(j);
     EXPECT_TRUE(s.pathlines.visible);
     EXPECT_EQ(s.pathlines.radiusKm, 20.0f);
     EXPECT_EQ(s.pathlines.window, 5);
@@ -169,11 +169,11 @@ TEST(RenderStatePathlines, ParsesAndRoundTrips)
     ASSERT_EQ(s.pathlines.filters.size(), 1u);
     EXPECT_EQ(s.pathlines.filters[0].name, "length");
     EXPECT_FALSE(s.pathlines.ambientOcclusion);
-    const RenderState back = parseRenderState(toJson(s));
+    const state::RenderState back = state::parseRenderState(toJson(s));
     EXPECT_EQ(toJson(back), toJson(s));
 
     // Defaults, and version 1 documents (no pathlines) still load.
-    const RenderState d = parseRenderState(json{{"version", 1}});
+    const state::RenderState d = state::parseRenderState(json{{"version", 1}});
     EXPECT_FALSE(d.pathlines.visible);
     EXPECT_EQ(d.pathlines.radiusKm, 12.0f);
     EXPECT_EQ(d.pathlines.window, 10);
@@ -181,14 +181,14 @@ TEST(RenderStatePathlines, ParsesAndRoundTrips)
     EXPECT_EQ(d.pathlines.effectiveColorMap(), ColorMapId::BlueWhiteRed);
     EXPECT_TRUE(d.pathlines.filterByBrushes);
     EXPECT_TRUE(d.pathlines.ambientOcclusion);
-    EXPECT_EQ(toJson(d)["version"], kRenderStateVersion);  // written in the current version
+    EXPECT_EQ(toJson(d)["version"], state::kRenderStateVersion);  // written in the current version
 }
 
 TEST(RenderStatePathlines, RejectsBadValuesNamingTheKey)
 {
     auto errorOf = [](const std::string& text) {
         try {
-            parseRenderState(json::parse(text), "STATE.json");
+            state::parseRenderState(json::parse(text), "STATE.json");
         } catch (const Error& e) {
             return std::string(e.what());
         }

@@ -143,14 +143,14 @@ std::span<const Rgb> shellPalette()
 
 }  // namespace
 
-Rgb shellColor(const ReferenceState::Shells& shells, size_t index)
+Rgb shellColor(const state::ReferenceState::Shells& shells, size_t index)
 {
     const auto palette = shellPalette();
     const Rgb p = palette[index % palette.size()];
     return {p.r * shells.color.r, p.g * shells.color.g, p.b * shells.color.b};
 }
 
-std::vector<TextLabel> shellKey(const ReferenceState& reference, float surfaceRadiusKm, float coreRadiusKm)
+std::vector<TextLabel> shellKey(const state::ReferenceState& reference, float surfaceRadiusKm, float coreRadiusKm)
 {
     std::vector<TextLabel> key;
     const auto& shells = reference.shells;
@@ -162,7 +162,7 @@ std::vector<TextLabel> shellKey(const ReferenceState& reference, float surfaceRa
     return key;
 }
 
-std::vector<TextLabel> shellLabels(const ReferenceState& reference, const OrbitCamera& camera, int width, int height,
+std::vector<TextLabel> shellLabels(const state::ReferenceState& reference, const OrbitCamera& camera, int width, int height,
                                    float surfaceRadiusKm, float coreRadiusKm)
 {
     std::vector<TextLabel> labels;
@@ -204,7 +204,7 @@ std::vector<TextLabel> shellLabels(const ReferenceState& reference, const OrbitC
     return labels;
 }
 
-void drawReferenceGeometry(const ReferenceState& reference, const OrbitCamera& camera, int width, int height,
+void drawReferenceGeometry(const state::ReferenceState& reference, const OrbitCamera& camera, int width, int height,
                            float surfaceRadiusKm, float coreRadiusKm, std::vector<float>& rgba,
                            const std::vector<float>& depthKm, const Coastlines* coastlines, const SliceMarks* marks)
 {

@@ -15,7 +15,7 @@
 
 #include "render/camera.h"
 #include "render/legend.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 
 #include <filesystem>
 #include <memory>
@@ -45,18 +45,18 @@ std::shared_ptr<const Coastlines> defaultCoastlines();
 // The colour of the shell at `index` of shells.depthsKm: a fixed palette (yellow, green, magenta,
 // orange, violet, then again) that keeps clear of the volume maps' blues, reds and whites, so that
 // neighbouring shells such as 410 and 660 km differ, multiplied by shells.color (white: the palette).
-Rgb shellColor(const ReferenceState::Shells& shells, size_t index);
+Rgb shellColor(const state::ReferenceState::Shells& shells, size_t index);
 
 // Each drawn shell's depth ("660 km") where it goes on the picture: on the shell's silhouette ring,
 // the shells' labels staggered in angle from the upper right down (deeper shells lower), so that
 // the labels of close shells do not overlap; none for a shell the eye is inside or whose label
 // would fall outside the image. Coloured as the shell (shellColor).
-std::vector<TextLabel> shellLabels(const ReferenceState& reference, const OrbitCamera& camera, int width, int height,
+std::vector<TextLabel> shellLabels(const state::ReferenceState& reference, const OrbitCamera& camera, int width, int height,
                                    float surfaceRadiusKm, float coreRadiusKm);
 
 // The shells' key of a legend: each drawn shell's depth and colour (positions unused); pictures'
 // legends draw it, and the server's frame headers carry it for the UI's legend.
-std::vector<TextLabel> shellKey(const ReferenceState& reference, float surfaceRadiusKm, float coreRadiusKm);
+std::vector<TextLabel> shellKey(const state::ReferenceState& reference, float surfaceRadiusKm, float coreRadiusKm);
 
 // Where the map and the section lie, drawn in the 3D view while they are shown (state.map.showInView):
 // the map's depth as a shell of its own colour (cyan) and the section's curtain, the great-circle arc
@@ -64,7 +64,7 @@ std::vector<TextLabel> shellKey(const ReferenceState& reference, float surfaceRa
 // as the other lines.
 struct SliceMarks {
     float depthKm = 0;
-    SectionState::Point from, to;
+    state::SectionState::Point from, to;
 };
 inline constexpr Rgb kSliceMarkColor{0.2f, 0.9f, 1.0f};
 
@@ -74,7 +74,7 @@ inline constexpr Rgb kSliceMarkColor{0.2f, 0.9f, 1.0f};
 // lie at surfaceRadiusKm - depth, drawn only between `coreRadiusKm` and the surface. `coastlines`
 // may be null when reference.coastlines is hidden.
 // `marks`, when given, adds the map's and the section's marks.
-void drawReferenceGeometry(const ReferenceState& reference, const OrbitCamera& camera, int width, int height,
+void drawReferenceGeometry(const state::ReferenceState& reference, const OrbitCamera& camera, int width, int height,
                            float surfaceRadiusKm, float coreRadiusKm, std::vector<float>& rgba,
                            const std::vector<float>& depthKm, const Coastlines* coastlines,
                            const SliceMarks* marks = nullptr);

@@ -34,9 +34,9 @@ struct Image {
     float alpha(int x, int y) const { return rgba[(size_t(y) * kSize + size_t(x)) * 4 + 3]; }
 };
 
-ReferenceState shellsOnly(float depthKm, float opacity)
+state::ReferenceState shellsOnly(float depthKm, float opacity)
 {
-    ReferenceState r;
+    state::ReferenceState r;
     r.shells.visible = true;
     r.shells.depthsKm = {depthKm};
     r.shells.opacity = opacity;
@@ -94,7 +94,7 @@ TEST(ReferenceGeometry, ShellsAreCompositedByTheVolumesDepth)
 TEST(ReferenceGeometry, ShellsOutsideThePlanetsShellDrawNothing)
 {
     Image im;
-    ReferenceState r = shellsOnly(3000, 0.5f);  // radius 3371 km: inside the core (3481 km)
+    state::ReferenceState r = shellsOnly(3000, 0.5f);  // radius 3371 km: inside the core (3481 km)
     drawReferenceGeometry(r, frontCamera(), kSize, kSize, 6371, 3481, im.rgba, im.depth, nullptr);
     for (float v : im.rgba)
         ASSERT_EQ(v, 0.0f);
@@ -104,7 +104,7 @@ TEST(ReferenceGeometry, ShellsOutsideThePlanetsShellDrawNothing)
 // a colour of its own and its depth written on its ring, the labels apart.
 TEST(ReferenceGeometry, ShellsHaveTheirOwnColoursAndTheirDepthsOnTheirRings)
 {
-    ReferenceState r;
+    state::ReferenceState r;
     r.shells.visible = true;
     r.shells.depthsKm = {410, 660, 3000};  // 3000 km lies inside the core: no label, no key entry
     const Rgb a = shellColor(r.shells, 0), b = shellColor(r.shells, 1);
@@ -142,7 +142,7 @@ TEST(ReferenceGeometry, ShellsHaveTheirOwnColoursAndTheirDepthsOnTheirRings)
 
 TEST(ReferenceGeometry, GraticuleLinesLieWhereTheyProjectAndOnlyOnTheNearSide)
 {
-    ReferenceState r;
+    state::ReferenceState r;
     r.graticule.visible = true;
     r.graticule.spacingDeg = 90;  // the equator, and meridians 0, 90, 180, 270
     r.graticule.opacity = 1;
@@ -169,7 +169,7 @@ TEST(ReferenceGeometry, GraticuleLinesLieWhereTheyProjectAndOnlyOnTheNearSide)
 // the middle row; the map's depth is a cyan shell; nothing is drawn without marks.
 TEST(ReferenceGeometry, SliceMarksLieWhereTheSectionAndTheDepthAre)
 {
-    ReferenceState r;  // no shells, graticule or coastlines
+    state::ReferenceState r;  // no shells, graticule or coastlines
     SliceMarks marks;
     marks.depthKm = 1000;
     marks.from = {0, -30};
@@ -209,7 +209,7 @@ TEST(ReferenceGeometry, CoastlineFileIsCheckedAndDrawn)
     const Coastlines c = readCoastlines(write("ok.json", R"({"source": "test", "lines": [[-10, -10, 10, -10, 10, 10, -10, 10, -10, -10]]})"));
     ASSERT_EQ(c.lines.size(), 1u);
     EXPECT_EQ(c.pointCount(), 5u);
-    ReferenceState r;
+    state::ReferenceState r;
     r.coastlines.visible = true;
     r.coastlines.opacity = 1;
     Image im;

@@ -18,7 +18,7 @@
 
 namespace raypc::render {
 
-SectionLayout sectionLayoutOf(const RenderState& s, const SphericalGrid& grid)
+SectionLayout sectionLayoutOf(const state::RenderState& s, const SphericalGrid& grid)
 {
     const int fontPx = legendFontPx(s.width, s.height);
     // Depth labels at the left, the shells' names at the right, the title above, distance labels
@@ -31,7 +31,7 @@ SectionLayout sectionLayoutOf(const RenderState& s, const SphericalGrid& grid)
     return l;
 }
 
-GreatCircle::GreatCircle(SectionState::Point from, SectionState::Point to, const std::string& what)
+GreatCircle::GreatCircle(state::SectionState::Point from, state::SectionState::Point to, const std::string& what)
 {
     using namespace slice;  // slice_sampling.h, slice_drawing.h
     m_from = normalize(sphericalToCartesianKm(from.latDeg, from.lonDeg, 1.0));
@@ -63,7 +63,7 @@ double GreatCircle::azimuthDeg() const
     return az < 0 ? az + 360 : az;
 }
 
-SectionState::Point GreatCircle::pointAlong(SectionState::Point from, double azimuthDeg, double distanceDeg)
+state::SectionState::Point GreatCircle::pointAlong(state::SectionState::Point from, double azimuthDeg, double distanceDeg)
 {
     const Vec3d a = normalize(sphericalToCartesianKm(from.latDeg, from.lonDeg, 1.0));
     const auto [east, north] = eastNorthAt(from.latDeg, from.lonDeg);
@@ -88,9 +88,9 @@ Vec3d GreatCircle::tangentAt(double fraction) const
 ImageRgba8 sectionPicture(const SliceInputs& in)
 {
     using namespace slice;  // slice_sampling.h, slice_drawing.h
-    const RenderState& state = stateOf(in);
+    const state::RenderState& state = stateOf(in);
     const RenderParams& params = in.resolved->params;
-    const SectionState& section = state.section;
+    const state::SectionState& section = state.section;
     const int width = state.width, height = state.height;
     const SphericalGrid& grid = in.volume->grid();
     const GreatCircle circle(section.from, section.to);
@@ -208,7 +208,7 @@ ImageRgba8 sectionPicture(const SliceInputs& in)
     return image;
 }
 
-SectionGrid sectionGrid(const StepVolume& volume, size_t variable, const SectionState& section, int columns, int rows)
+SectionGrid sectionGrid(const StepVolume& volume, size_t variable, const state::SectionState& section, int columns, int rows)
 {
     if (columns < 2 || rows < 2)
         fail("section: a grid of {} x {} points; expected at least 2 x 2", columns, rows);

@@ -167,7 +167,7 @@ std::string fitTitle(const std::vector<std::string>& parts, int width, int heigh
 }
 
 void drawDepthMarks(std::vector<uint8_t>& rgba, int width, int height, const DepthPlot& plot,
-                    const ReferenceState::Shells& shells, std::vector<TextLabel>& labels)
+                    const state::ReferenceState::Shells& shells, std::vector<TextLabel>& labels)
 {
     const int fontPx = legendFontPx(width, height);
     for (size_t k = 0; k < shells.depthsKm.size(); ++k) {
@@ -222,7 +222,7 @@ void addNotes(std::vector<TextLabel>& labels, int width, int height, const std::
                           {0.9f, 0.9f, 0.9f}, true});
 }
 
-const RenderState& stateOf(const SliceInputs& in)
+const state::RenderState& stateOf(const SliceInputs& in)
 {
     if (!in.volume || !in.resolved)
         fail("slice: no volume or state given");
@@ -235,7 +235,7 @@ Rgb inkFor(Rgb background)
     return luma > 0.5f ? Rgb{0.1f, 0.1f, 0.1f} : Rgb{0.85f, 0.85f, 0.85f};
 }
 
-size_t legendCount(const RenderState& s) { return s.pathlines.visible ? 2 : 1; }
+size_t legendCount(const state::RenderState& s) { return s.pathlines.visible ? 2 : 1; }
 
 }  // namespace slice
 

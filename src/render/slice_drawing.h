@@ -67,7 +67,7 @@ struct DepthPlot {
 
 // Dashed lines across the plot at the reference shells' depths (when visible), labelled at the right.
 void drawDepthMarks(std::vector<uint8_t>& rgba, int width, int height, const DepthPlot& plot,
-                    const ReferenceState::Shells& shells, std::vector<TextLabel>& labels);
+                    const state::ReferenceState::Shells& shells, std::vector<TextLabel>& labels);
 
 // The plot's frame, depth ticks every 250, 500, … km at the left and `xTicks` (position, label) below.
 void drawDepthPlotFrame(std::vector<uint8_t>& rgba, int width, int height, const DepthPlot& plot,
@@ -90,7 +90,7 @@ template <class Place>
 std::string drawPathlines(std::vector<uint8_t>& rgba, int width, int height, const SliceInputs& in, const Place& place,
                           const std::string& how, std::vector<LegendSpec>& legends)
 {
-    const RenderState& state = in.resolved->state;
+    const state::RenderState& state = in.resolved->state;
     if (!state.pathlines.visible)
         return {};
     if (!in.pathlines)
@@ -132,13 +132,13 @@ std::string drawPathlines(std::vector<uint8_t>& rgba, int width, int height, con
 }
 
 // The state of `in`; throws raypc::Error when it has no volume or state.
-const RenderState& stateOf(const SliceInputs& in);
+const state::RenderState& stateOf(const SliceInputs& in);
 
 // The colour of the lines drawn over the data (contours, frame): dark over a light background,
 // light over a dark one.
 Rgb inkFor(Rgb background);
 
 // The colour legend, and the pathlines' when they are shown.
-size_t legendCount(const RenderState& s);
+size_t legendCount(const state::RenderState& s);
 
 }  // namespace raypc::render::slice

@@ -27,7 +27,7 @@
 #include "render/map_projection.h"
 #include "render/pathline_scene.h"
 #include "render/reference_geometry.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 #include "render/state_renderer.h"
 
 #include <array>
@@ -42,7 +42,7 @@ class MapFrame {
 public:
     // `left`, `top`, `width`, `height`: the rectangle in pixels. Throws raypc::Error for a centre
     // outside [-180, 180] x [-90, 90] (Projector) or an empty rectangle.
-    MapFrame(const MapState& map, double left, double top, double width, double height);
+    MapFrame(const state::MapState& map, double left, double top, double width, double height);
 
     // (lon, lat) degrees at a point of the picture (pixel centres at +0.5), or nullopt off the sphere.
     std::optional<std::array<double, 2>> lonLatAt(double px, double py) const;
@@ -65,7 +65,7 @@ class GreatCircle {
 public:
     // Throws raypc::Error when the points coincide or are antipodal (no unique arc), naming
     // `what` (e.g. "section").
-    GreatCircle(SectionState::Point from, SectionState::Point to, const std::string& what = "section");
+    GreatCircle(state::SectionState::Point from, state::SectionState::Point to, const std::string& what = "section");
     double lengthDeg() const { return m_angleRad * 180 / M_PI; }
     double lengthKm() const;  // along the surface
     // The direction the arc leaves `from` in, degrees clockwise from north in [0, 360) (at a pole:
@@ -73,7 +73,7 @@ public:
     double azimuthDeg() const;
     // The surface point `distanceDeg` along the great circle leaving `from` at `azimuthDeg` (lon in
     // [-180, 180]): a section given by its start, azimuth and length.
-    static SectionState::Point pointAlong(SectionState::Point from, double azimuthDeg, double distanceDeg);
+    static state::SectionState::Point pointAlong(state::SectionState::Point from, double azimuthDeg, double distanceDeg);
     // The unit vector (contest frame) at `fraction` of the arc (0: from, 1: to).
     Vec3d at(double fraction) const;
     // Where a point (any radius) lies: the fraction of the arc its direction projects to (outside
@@ -89,7 +89,7 @@ private:
 
 // The frame mapPicture draws a state's map in: the picture less a title band above and the
 // legend's band below (the UI's pointer and tests find a pixel's point with it).
-MapFrame mapFrameOf(const RenderState& state);
+MapFrame mapFrameOf(const state::RenderState& state);
 
 // Where sectionPicture draws a state's section: the plot's rectangle in pixels, depth 0 at `top`
 // down to `depthSpanKm` (the grid's innermost radius) at `bottom`, the arc from `left` to `right`.
@@ -97,7 +97,7 @@ struct SectionLayout {
     double left, right, top, bottom, depthSpanKm;
 };
 // Throws raypc::Error when the picture is too small for the section.
-SectionLayout sectionLayoutOf(const RenderState& state, const SphericalGrid& grid);
+SectionLayout sectionLayoutOf(const state::RenderState& state, const SphericalGrid& grid);
 
 // "30.0°S 160.0°W": a point as titles write it.
 std::string latLonText(double latDeg, double lonDeg);
@@ -143,6 +143,6 @@ struct SectionGrid {
     SliceGrid grid;  // rows: depth (km) in grid.rows, columns: distance (km)
     std::vector<double> distanceDeg, latDeg, lonDeg;  // per column
 };
-SectionGrid sectionGrid(const StepVolume& volume, size_t variable, const SectionState& section, int columns, int rows);
+SectionGrid sectionGrid(const StepVolume& volume, size_t variable, const state::SectionState& section, int columns, int rows);
 
 }  // namespace raypc::render

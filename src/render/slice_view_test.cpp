@@ -59,7 +59,7 @@ protected:
 
 TEST_F(Slices, MapColoursAreTheTruthAtPixelCentresInEveryProjection)
 {
-    for (const MapProjection projection : allMapProjections()) {
+    for (const MapProjection projection : state::allMapProjections()) {
         ResolvedState r = stateFor(720, 400);
         r.state.map.projection = projection;
         r.state.map.depthKm = 1000;
@@ -91,14 +91,14 @@ TEST_F(Slices, MapColoursAreTheTruthAtPixelCentresInEveryProjection)
                 // 2° cells: the sampler's error is below 3e-3 here (1e-2 in the pole caps), a colour
                 // difference far below the 8-bit step (2/255) plus the map's slope.
                 const float err = colourError(pixel(image, x, y), r.params.transfer.colorOf(float(truth)));
-                EXPECT_LT(err, 0.025f) << mapProjectionName(projection) << " at " << lon << ", " << lat;
+                EXPECT_LT(err, 0.025f) << state::mapProjectionName(projection) << " at " << lon << ", " << lat;
                 ++checked;
             }
-        EXPECT_GT(checked, projection == MapProjection::Orthographic ? 12 : 24) << mapProjectionName(projection);
+        EXPECT_GT(checked, projection == MapProjection::Orthographic ? 12 : 24) << state::mapProjectionName(projection);
         // Outside the sphere: the background.
         if (projection != MapProjection::Equirectangular) {
             const auto corner = pixel(image, 12, int(mapFrameOf(r.state).centrePx()[1] * 0.35));
-            EXPECT_LT(std::max({corner[0], corner[1], corner[2]}), 0.05f) << mapProjectionName(projection);
+            EXPECT_LT(std::max({corner[0], corner[1], corner[2]}), 0.05f) << state::mapProjectionName(projection);
         }
     }
 }
@@ -165,7 +165,7 @@ TEST_F(Slices, GreatCircleLengthsPointsAndRefusals)
 TEST_F(Slices, SectionByAzimuthAndLength)
 {
     // Due east along the equator, due north along a meridian, due south.
-    auto near = [](SectionState::Point p, double lat, double lon) {
+    auto near = [](state::SectionState::Point p, double lat, double lon) {
         EXPECT_NEAR(p.latDeg, lat, 1e-4);
         EXPECT_NEAR(p.lonDeg, lon, 1e-4);
     };
@@ -175,7 +175,7 @@ TEST_F(Slices, SectionByAzimuthAndLength)
     near(GreatCircle::pointAlong({0, 170}, 90, 20), 0, -170);  // across the date line
     for (const auto& [lat, lon, az, d] : {std::array{-40.0, 170.0, 45.0, 60.0}, {80.0, -10.0, 200.0, 50.0}, {5.0, 5.0, 300.0, 120.0}}) {
         // sin(lat2) = sin(lat1) cos(d) + cos(lat1) sin(d) cos(az)
-        const SectionState::Point to = GreatCircle::pointAlong({float(lat), float(lon)}, az, d);
+        const state::SectionState::Point to = GreatCircle::pointAlong({float(lat), float(lon)}, az, d);
         const double r = M_PI / 180;
         EXPECT_NEAR(std::sin(to.latDeg * r), std::sin(lat * r) * std::cos(d * r) + std::cos(lat * r) * std::sin(d * r) * std::cos(az * r), 1e-6);
         const GreatCircle arc({float(lat), float(lon)}, to);
@@ -200,7 +200,7 @@ TEST(SectionOfABlob, CrossesItAtItsDistanceAndDepth)
         return float(std::exp(-dot(d, d) / (2 * 300.0 * 300.0)));
     };
     const auto volume = makeVolume(grid, {{"blob", blob}});
-    SectionState section;
+    state::SectionState section;
     section.from = {0, 0};
     section.to = {0, 60};
     const SectionGrid g = sectionGrid(*volume, 0, section, 121, 289);

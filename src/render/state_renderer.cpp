@@ -31,103 +31,11 @@ std::string variableTitle(const VariableInfo& info)
 
 }  // namespace
 
-float tubeRadiusKm(const RenderState& s)
+float tubeRadiusKm(const state::RenderState& s)
 {
     const double kmPerPixel =
         2.0 * s.camera.distanceKm * std::tan(s.camera.fovYDeg * M_PI / 360.0) / double(std::max(1, s.height));
     return std::max(s.pathlines.radiusKm, float(0.5 * s.pathlines.minWidthPx * kmPerPixel));
-}
-
-RenderState defaultState(const Dataset& dataset) { return defaultState(catalogOf(dataset)); }
-
-RenderState defaultState(const VariableCatalog& catalog)
-{
-    RenderState s;
-    const auto anomaly = std::find(catalog.names.begin(), catalog.names.end(), varname::kTemperatureAnomaly);
-    const size_t var = anomaly != catalog.names.end() ? size_t(anomaly - catalog.names.begin()) : 0;
-    s.colorVariable = catalog.names.at(var);
-    const ValueRange r = catalog.ranges.at(var);
-    if (r.min < 0 && r.max > 0) {
-        // An anomaly (values either side of zero): symmetric range over the bulk of the values, so
-        // that plumes and slabs saturate, as bodies with edges: the tails opaque over 80 km (200 km
-        // made them soft, translucent blobs), nothing in the middle 30 % of the range.
-        s.colorMap = ColorMapId::BlueWhiteRed;
-        const float m = 0.6f * std::max(std::abs(r.min), std::abs(r.max));
-        s.colorRange = ValueRange{-m, m};
-        s.opacity = {{0.0f, 1.0f}, {0.25f, 0.6f}, {0.35f, 0.0f}, {0.65f, 0.0f}, {0.75f, 0.6f}, {1.0f, 1.0f}};
-        s.opacityUnitKm = 80.0f;
-    } else {
-        // A quantity of one sign (a seismic velocity, a density): a sequential map over its
-        // range, the default ramp of opacity.
-        s.colorMap = ColorMapId::Viridis;
-    }
-    // A dark core: the light grey one outshone the anomalies in front of it.
-    s.core.color = Rgb{0.22f, 0.22f, 0.24f};
-    // The mantle fills 94 % of the picture's shorter side (a landscape view is bound by its height,
-    // whatever its width; the UI's views are landscape).
-    s.camera.distanceKm = framingDistanceKm(s.camera.fovYDeg, s.width, s.height, kSurfaceRadiusKm, 0.94);
-    // Where and how deep: the 410 and 660 km discontinuities as labelled rings, and the legend
-    // naming the variable, its units and range (in the UI's view, screenshots and pictures).
-    s.reference.shells.visible = true;
-    s.reference.shells.depthsKm = {410.0f, 660.0f};
-    s.reference.shells.opacity = 0.012f;  // rings at the silhouette; face-on a 2 % tint, not a veil
-    s.legend = true;
-    s.passes = 8;
-    s.pathlines.minWidthPx = 2.0f;  // 12 km tubes are a hair wide at this distance
-    // Lit: plumes and slabs read as shapes and which is in front shows (docs/rendering.md,
-    // "Shading"); a document without the key stays unlit, as it was written.
-    s.shading.enabled = true;
-    return s;
-}
-
-ResolvedState resolveState(RenderState state, const Dataset& dataset)
-{
-    dataset.checkStep(state.step);
-    if (state.level)
-        dataset.checkLevel(*state.level);
-    // Pathline attributes are checked even while the lines are hidden, so that a state that shows
-    // them later does not fail then (the columns follow from the dataset's variables).
-    const std::vector<std::string> columns = pathlineColumns(dataset.variableNames());
-    auto checkColumn = [&](const std::string& name, const std::string& key) {
-        if (std::find(columns.begin(), columns.end(), name) == columns.end())
-            fail("pathlines: {}: the lines have no attribute '{}'; they have: {}", key, name, fmt::join(columns, ", "));
-    };
-    if (state.pathlines.colorBy != "age")
-        checkColumn(state.pathlines.colorBy, "colorBy");
-    for (size_t i = 0; i < state.pathlines.filters.size(); ++i)
-        checkColumn(state.pathlines.filters[i].name, fmt::format("filters[{}]", i));
-    ResolvedState r;
-    r.params = resolveParams(state, catalogOf(dataset));
-    r.state = std::move(state);
-    return r;
-}
-
-ResolvedState resolveState(const nlohmann::json& document, const Dataset& dataset, const std::string& what)
-{
-    return resolveState(parseRenderState(document, what), dataset);
-}
-
-std::vector<ResolvedState> stereoViews(const ResolvedState& resolved)
-{
-    const StereoState& stereo = resolved.state.stereo;
-    if (!stereo.enabled())
-        return {resolved};
-    const StereoLayout layout = stereoLayout(stereo.mode, resolved.state.width, resolved.state.height);
-    const double convergenceKm = stereo.convergenceOr(resolved.state.camera.distanceKm);
-    std::vector<ResolvedState> views;
-    for (Eye eye : {Eye::Left, Eye::Right}) {
-        ResolvedState v = resolved;
-        v.state.stereo.mode = StereoMode::Off;
-        v.state.camera = stereoEye(resolved.state.camera, eye, stereo.eyeSeparationKm, convergenceKm);
-        v.state.camera.pixelAspect = layout.pixelAspect;
-        v.state.width = layout.eyeWidth;
-        v.state.height = layout.eyeHeight;
-        v.params.camera = v.state.camera;
-        v.params.width = layout.eyeWidth;
-        v.params.height = layout.eyeHeight;
-        views.push_back(std::move(v));
-    }
-    return views;
 }
 
 std::vector<float> averagedDepthKm(const ViewFrames& frames, int& width, int& height, const DepthTransform& eachView)
@@ -176,10 +84,10 @@ VolumeRenderer& StateRenderer::rendererFor(int step, int level, int view)
 
 bool StateRenderer::usePaint(const ResolvedState& resolved)
 {
-    const RenderState& state = resolved.state;
+    const state::RenderState& state = resolved.state;
     std::string key;
     if (paintsFeatures(state)) {
-        const FeatureSettings& f = state.features;
+        const state::FeatureSettings& f = state.features;
         key = fmt::format("{}|{}|{}|{}|{}", state.step, f.level, f.minVolumeKm3, f.colorById, fmt::join(f.highlight, ","));
         for (const RangeFilter& b : resolved.params.brushes) {
             key += fmt::format("|{}/{}", b.variable, b.coordinate ? int(*b.coordinate) : -1);
@@ -219,7 +127,7 @@ std::shared_ptr<const StepVolume> StateRenderer::volumeFor(int step, int level)
     return painted;
 }
 
-std::shared_ptr<const PathlineScene> StateRenderer::pathlinesFor(const RenderState& state)
+std::shared_ptr<const PathlineScene> StateRenderer::pathlinesFor(const state::RenderState& state)
 {
     if (!state.pathlines.visible)
         return nullptr;
@@ -241,13 +149,13 @@ std::shared_ptr<const PathlineScene> StateRenderer::pathlinesFor(const RenderSta
                       millisecondsSince(start));
     }
     // Restart class: radius, style and the visibility mask (attribute filters, brushes).
-    RenderState shown = state;
+    state::RenderState shown = state;
     shown.pathlines.radiusKm = tubeRadiusKm(state);
     m_scene->applyState(shown);
     return m_scene;
 }
 
-std::optional<LevelChoice> StateRenderer::knownChoice(const RenderState& state, const LevelPolicy& policy)
+std::optional<LevelChoice> StateRenderer::knownChoice(const state::RenderState& state, const LevelPolicy& policy)
 {
     if (policy.chosen)
         return policy.chosen;
@@ -270,7 +178,7 @@ LevelPolicy interactiveLevelPolicy(double measuredSamplesPerSecond, double overh
 
 StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, const LevelPolicy& policy)
 {
-    const RenderState& state = resolved.state;
+    const state::RenderState& state = resolved.state;
     const std::vector<ResolvedState> views = stereoViews(resolved);
     Prepared p;
     p.refinement.errorGreyLevels = state.convergenceGreyLevels;
@@ -389,7 +297,7 @@ StateRenderer::Still StateRenderer::renderStill(const ResolvedState& resolved, i
     return still;
 }
 
-uint64_t pictureMemoryBytes(const RenderState& state, bool withDepth)
+uint64_t pictureMemoryBytes(const state::RenderState& state, bool withDepth)
 {
     const StereoLayout layout = stereoLayout(state.stereo.mode, state.width, state.height);
     const uint64_t eyePixels = uint64_t(layout.renderedPixels());
@@ -401,13 +309,13 @@ uint64_t pictureMemoryBytes(const RenderState& state, bool withDepth)
     return eyePixels * perEyePixel + uint64_t(layout.width) * uint64_t(layout.height) * 4;
 }
 
-void checkPictureFitsMemory(const RenderState& state, bool withDepth, const AvailableMemory& available)
+void checkPictureFitsMemory(const state::RenderState& state, bool withDepth, const AvailableMemory& available)
 {
     const uint64_t needed = pictureMemoryBytes(state, withDepth);
     if (needed > available.bytes)
         fail("a picture of {}x{} pixels{} needs {} of memory to render, {} available ({}); choose a smaller --size",
              state.width, state.height,
-             state.stereo.mode == StereoMode::Off ? "" : fmt::format(" ({} stereo)", stereoModeName(state.stereo.mode)),
+             state.stereo.mode == StereoMode::Off ? "" : fmt::format(" ({} stereo)", state::stereoModeName(state.stereo.mode)),
              formatBytes(needed), formatBytes(available.bytes), available.limitedBy);
 }
 
@@ -430,7 +338,7 @@ ImageRgba8 StateRenderer::picture(const ViewFrames& frames, const ResolvedState&
 std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const ResolvedState& resolved,
                                                 bool withLegends) const
 {
-    const RenderState& state = resolved.state;
+    const state::RenderState& state = resolved.state;
     const auto& ref = state.reference;
     std::vector<uint8_t> out;
     if (ref.shells.visible || ref.graticule.visible || ref.coastlines.visible || state.map.showInView) {
@@ -469,7 +377,7 @@ std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const 
 
 ImageRgba8 StateRenderer::slicePicture(const ResolvedState& resolved, Slice slice) const
 {
-    const RenderState& state = resolved.state;
+    const state::RenderState& state = resolved.state;
     const int level = state.level.value_or(0);
     const auto volume = m_sources.volume ? m_sources.volume(state.step, level) : m_dataset->load(state.step, level);
     const auto coastlines = slice == Slice::Map && state.reference.coastlines.visible ? defaultCoastlines() : nullptr;

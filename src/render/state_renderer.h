@@ -19,7 +19,7 @@
 #include "analysis/pathline_storage.h"
 #include "render/pathline_scene.h"
 #include "render/image_io.h"
-#include "render/render_state.h"
+#include "render/resolve_state.h"
 #include "render/stereo.h"
 #include "render/volume_renderer.h"
 
@@ -35,33 +35,9 @@
 
 namespace raypc::render {
 
-// A state that shows the data well without tuning (the UI's first view, `raypc render` without a
-// state and `raypc demo`'s picture): the temperature anomaly (if the dataset has it, else the first
-// variable) on the blue-white-red map, opaque only on the hot and cold tails, lit, a dark core, the
-// planet filling 94 % of the image's shorter side, the 410 and 660 km shells and the legend.
-RenderState defaultState(const Dataset& dataset);
-// The same for any volume's variables (their names and global ranges).
-RenderState defaultState(const VariableCatalog& catalog);
-
 // The tube radius that draws the pathlines at least pathlines.minWidthPx pixels wide at the camera
 // target's distance (the state's radiusKm when that is wider), km.
-float tubeRadiusKm(const RenderState& state);
-
-struct ResolvedState {
-    RenderState state;
-    RenderParams params;
-};
-// Checks a state against the dataset (step and level in range, names known) and resolves it.
-// Throws raypc::Error naming the key, e.g. "step: 300 out of range 0..11".
-ResolvedState resolveState(RenderState state, const Dataset& dataset);
-// Parses a state document first (parseRenderState; `what` names the source in messages).
-ResolvedState resolveState(const nlohmann::json& document, const Dataset& dataset, const std::string& what = "state");
-
-// What a state is rendered as: the state itself when stereo is off, else its left and right eye
-// (render/stereo.h): each with its eye's camera (stereoEye: parallel axes, off-axis frustum
-// converging at stereo.convergenceKm), its eye's size and pixel aspect (stereoLayout) and stereo
-// off. Throws raypc::Error for an unusable separation or convergence.
-std::vector<ResolvedState> stereoViews(const ResolvedState& resolved);
+float tubeRadiusKm(const state::RenderState& state);
 
 // The accumulation buffers of a picture: one per view (stereoViews), in the same order.
 using ViewFrames = std::vector<FrameBuffer>;
@@ -79,11 +55,11 @@ std::vector<float> averagedDepthKm(const ViewFrames& frames, int& width, int& he
 // a stereo pair's composed image, and with `withDepth` the depth map with its file's bytes. The
 // volumes are mapped from the dataset and not counted. Measured against peak RSS in
 // docs/reliability.md.
-uint64_t pictureMemoryBytes(const RenderState& state, bool withDepth);
+uint64_t pictureMemoryBytes(const state::RenderState& state, bool withDepth);
 // Throws raypc::Error when pictureMemoryBytes exceeds `available`, with both figures, e.g.
 // "a picture of 16384x16384 pixels needs 18.8 GB of memory to render, 3.9 GB available (ulimit -v);
 // choose a smaller --size".
-void checkPictureFitsMemory(const RenderState& state, bool withDepth, const AvailableMemory& available);
+void checkPictureFitsMemory(const state::RenderState& state, bool withDepth, const AvailableMemory& available);
 
 // Where a StateRenderer gets volumes and pathlines. Unset members read the dataset directly
 // (Dataset::load, loadPathlineWindow); the server passes its shared caches.
@@ -159,7 +135,7 @@ public:
     Prepared prepare(const ResolvedState& resolved, const LevelPolicy& policy = {});
     // The level and divisor prepare() will choose when they do not depend on estimated pass times
     // (a given choice, the state's level, or level 0 without a throughput); nullopt when they do.
-    static std::optional<LevelChoice> knownChoice(const RenderState& state, const LevelPolicy& policy);
+    static std::optional<LevelChoice> knownChoice(const state::RenderState& state, const LevelPolicy& policy);
 
     // The renderer of (step, level) for view `view` (each eye of a stereo pair keeps its own, so
     // that alternating eyes do not redo setParams), created on first use; a new step drops the
@@ -202,7 +178,7 @@ public:
     double measureSamplesPerSecond(int step, const RenderParams& params);
 
 private:
-    std::shared_ptr<const PathlineScene> pathlinesFor(const RenderState& state);
+    std::shared_ptr<const PathlineScene> pathlinesFor(const state::RenderState& state);
     // One view's picture (`resolved` is the view's).
     std::vector<uint8_t> viewPicture(const FrameBuffer& frame, const ResolvedState& resolved, bool withLegends) const;
 
@@ -217,7 +193,7 @@ private:
     StateSources m_sources;
     std::string m_paintKey;  // empty: nothing painted
     std::vector<RangeFilter> m_paintFilters;
-    FeatureSettings m_paintSettings;
+    state::FeatureSettings m_paintSettings;
     // Of m_paintKey, found on first use: the step's feature labels (on the grid of features.level),
     // and the painted volume of each level (the views of a stereo pair share one).
     std::optional<std::vector<int32_t>> m_paintLabels;

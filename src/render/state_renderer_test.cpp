@@ -14,7 +14,7 @@ namespace {
 
 TEST(StateRenderer, TubesKeepAMinimumWidthOnScreen)
 {
-    RenderState s;
+    state::RenderState s;
     s.camera.distanceKm = 20000;
     s.camera.fovYDeg = 40;
     s.height = 500;
@@ -49,7 +49,7 @@ TEST(StateRenderer, InteractivePolicyUsesTheMeasuredThroughput)
 
 TEST(PictureMemory, GrowsWithPixelsEyesAndDepth)
 {
-    RenderState s;
+    state::RenderState s;
     s.width = 1000;
     s.height = 500;
     const uint64_t mono = pictureMemoryBytes(s, false);
@@ -68,7 +68,7 @@ TEST(PictureMemory, GrowsWithPixelsEyesAndDepth)
 
 TEST(PictureMemory, APictureLargerThanMemoryIsRefusedWithItsFigures)
 {
-    RenderState s;
+    state::RenderState s;
     s.width = s.height = 16384;
     const uint64_t needed = pictureMemoryBytes(s, false);
     EXPECT_GT(needed, 16'000'000'000ull);  // 268 M pixels

@@ -8,35 +8,6 @@
 
 namespace raypc::render {
 
-std::string_view stereoModeName(StereoMode mode)
-{
-    switch (mode) {
-    case StereoMode::Off: return "off";
-    case StereoMode::SideBySide: return "side-by-side";
-    case StereoMode::SideBySideHalf: return "side-by-side-half";
-    case StereoMode::Anaglyph: return "anaglyph";
-    }
-    return "off";
-}
-
-const std::vector<StereoMode>& allStereoModes()
-{
-    static const std::vector<StereoMode> modes{StereoMode::Off, StereoMode::SideBySide, StereoMode::SideBySideHalf,
-                                               StereoMode::Anaglyph};
-    return modes;
-}
-
-StereoMode parseStereoMode(std::string_view name)
-{
-    std::string known;
-    for (StereoMode m : allStereoModes()) {
-        if (name == stereoModeName(m))
-            return m;
-        known += (known.empty() ? "" : ", ") + std::string(stereoModeName(m));
-    }
-    fail("stereo mode '{}' is unknown, expected one of: {}", name, known);
-}
-
 StereoLayout stereoLayout(StereoMode mode, int width, int height)
 {
     StereoLayout l{width, height, width, height, 1.0, mode == StereoMode::Off ? 1 : 2};

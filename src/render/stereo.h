@@ -10,6 +10,8 @@
 // Thread safety: pure functions.
 #pragma once
 
+#include "state/view_types.h"
+
 #include <cstdint>
 #include <optional>
 #include <string_view>
@@ -17,29 +19,9 @@
 
 namespace raypc::render {
 
-// How a state's picture shows the two eyes (state key stereo.mode).
-enum class StereoMode {
-    Off,             // one picture from the orbit camera
-    SideBySide,      // left eye | right eye, each the state's width: 2W x H
-    SideBySideHalf,  // left | right, each squeezed into half the width: W x H (a 3D display stretches it)
-    Anaglyph,        // red-cyan, W x H: red from the left eye, green and blue from the right
-};
-
-std::string_view stereoModeName(StereoMode mode);  // "off", "side-by-side", "side-by-side-half", "anaglyph"
-// Throws raypc::Error listing the names.
-StereoMode parseStereoMode(std::string_view name);
-const std::vector<StereoMode>& allStereoModes();
-
-// The state's "stereo" object (docs/state.md). Restart class: it changes the cameras and the size.
-struct StereoState {
-    StereoMode mode = StereoMode::Off;
-    float eyeSeparationKm = 600.0f;  // between the two eyes, km (about 1/35 of the default view distance)
-    // Distance in front of the eyes of the zero-parallax plane (the screen), km; nullopt: the
-    // camera's distance to its target (the target appears on the screen plane).
-    std::optional<float> convergenceKm;
-    bool enabled() const { return mode != StereoMode::Off; }
-    double convergenceOr(double cameraDistanceKm) const { return convergenceKm ? *convergenceKm : cameraDistanceKm; }
-};
+// The stereo mode and settings are the state's (state/view_types.h).
+using state::StereoMode;
+using state::StereoState;
 
 // Sizes of one eye's picture and of the composed image for a state of width x height.
 struct StereoLayout {

@@ -5,8 +5,8 @@
 
 #include "core/error.h"
 #include "render/camera.h"
-#include "render/render_state.h"
-#include "render/test_states.h"
+#include "state/render_state.h"
+#include "state/test_states.h"
 
 #include <gtest/gtest.h>
 
@@ -16,19 +16,19 @@ namespace raypc::render {
 namespace {
 
 using nlohmann::json;
-using testing::refusalOf;
+using state::testing::refusalOf;
 
 TEST(StereoState, RoundTripsAndDefaultsOff)
 {
-    const RenderState d;
+    const state::RenderState d;
     EXPECT_EQ(d.stereo.mode, StereoMode::Off);
     EXPECT_EQ(toJson(d)["stereo"], json::parse(R"({"mode": "off", "eyeSeparationKm": 600, "convergenceKm": null})"));
-    for (StereoMode mode : allStereoModes()) {
-        RenderState s;
+    for (StereoMode mode : state::allStereoModes()) {
+        state::RenderState s;
         s.stereo.mode = mode;
         s.stereo.eyeSeparationKm = 321.5f;
         s.stereo.convergenceKm = 18000.0f;
-        const RenderState t = parseRenderState(toJson(s));
+        const state::RenderState t = state::parseRenderState(toJson(s));
         EXPECT_EQ(t.stereo.mode, mode);
         EXPECT_EQ(t.stereo.eyeSeparationKm, 321.5f);
         ASSERT_TRUE(t.stereo.convergenceKm.has_value());
@@ -36,9 +36,9 @@ TEST(StereoState, RoundTripsAndDefaultsOff)
         EXPECT_EQ(toJson(t), toJson(s));
     }
     // null convergence: the camera's distance.
-    json j = toJson(RenderState{});
+    json j = toJson(state::RenderState{});
     j["stereo"] = {{"mode", "anaglyph"}};
-    const RenderState a = parseRenderState(j);
+    const state::RenderState a = state::parseRenderState(j);
     EXPECT_EQ(a.stereo.mode, StereoMode::Anaglyph);
     EXPECT_FALSE(a.stereo.convergenceKm.has_value());
     EXPECT_EQ(a.stereo.convergenceOr(a.camera.distanceKm), a.camera.distanceKm);
@@ -46,23 +46,23 @@ TEST(StereoState, RoundTripsAndDefaultsOff)
 
 TEST(StereoState, BadValuesAndOlderDocumentsAreRefusedByName)
 {
-    json j = toJson(RenderState{});
+    json j = toJson(state::RenderState{});
     j["stereo"]["mode"] = "top-bottom";
     EXPECT_NE(refusalOf(j).find("stereo.mode: stereo mode 'top-bottom' is unknown, expected one of: off, side-by-side, "
                               "side-by-side-half, anaglyph"),
               std::string::npos)
         << refusalOf(j);
-    j = toJson(RenderState{});
+    j = toJson(state::RenderState{});
     j["stereo"]["eyeSeparationKm"] = -1;
     EXPECT_NE(refusalOf(j).find("stereo.eyeSeparationKm: expected a number in [0, 1000000], found -1"), std::string::npos)
         << refusalOf(j);
-    j = toJson(RenderState{});
+    j = toJson(state::RenderState{});
     j["stereo"]["convergenceKm"] = 0;
     EXPECT_NE(refusalOf(j).find("stereo.convergenceKm"), std::string::npos) << refusalOf(j);
-    j = toJson(RenderState{});
+    j = toJson(state::RenderState{});
     j["stereo"]["parallax"] = 1;
     EXPECT_NE(refusalOf(j).find("stereo.parallax: unknown key"), std::string::npos) << refusalOf(j);
-    j = toJson(RenderState{});
+    j = toJson(state::RenderState{});
     j["version"] = 4;
     j["shading"].erase("shadows");  // version 6 to 10 keys, refused first otherwise
     j["shading"].erase("shadowStrength");
@@ -74,7 +74,7 @@ TEST(StereoState, BadValuesAndOlderDocumentsAreRefusedByName)
     j.erase("features");
     EXPECT_NE(refusalOf(j).find("stereo: needs version 5, the document says version 4"), std::string::npos) << refusalOf(j);
     j.erase("stereo");
-    EXPECT_EQ(parseRenderState(j).stereo.mode, StereoMode::Off);  // a version-4 document still reads
+    EXPECT_EQ(state::parseRenderState(j).stereo.mode, StereoMode::Off);  // a version-4 document still reads
 }
 
 // A point at depth z along the view axis is seen by the two eyes with the horizontal screen

@@ -3,7 +3,7 @@
 // select most of what its task names (recall) and mostly that (precision) on the demo's grid at
 // 0, 12 and 22 Myr. The table the test prints is the one in docs/tasks.md:
 //   build/src/render/raypc_render_tests --gtest_filter='TaskPresets.*'
-#include "render/render_state.h"
+#include "state/render_state.h"
 
 #include "core/spherical.h"
 #include "preprocess/preprocess_numerics.h"
@@ -168,7 +168,7 @@ struct Figures {
     double recall = 0, precision = 0, avoided = 0;
 };
 
-Figures measure(const DemoTime& demo, const PresetCase& preset, std::span<const BrushSpec> brushes)
+Figures measure(const DemoTime& demo, const PresetCase& preset, std::span<const state::BrushSpec> brushes)
 {
     const auto filters = resolveRangeFilters(std::span<const std::string>(demo.variableNames), brushes);
     const ClassVolumes v = selectedVolumeByClass(*demo.volume, filters, demo.classes, demo.classCount);
@@ -191,9 +191,9 @@ Figures measure(const DemoTime& demo, const PresetCase& preset, std::span<const 
             selected > 0 ? avoided / selected : 0};
 }
 
-std::vector<BrushSpec> presetBrushes(const char* file)
+std::vector<state::BrushSpec> presetBrushes(const char* file)
 {
-    return loadRenderState(std::filesystem::path(RAYPC_SOURCE_DIR) / "examples" / file).brushes;
+    return state::loadRenderState(std::filesystem::path(RAYPC_SOURCE_DIR) / "examples" / file).brushes;
 }
 
 TEST(TaskPresets, FindWhatTheyNameInTheSyntheticTruth)
@@ -205,7 +205,7 @@ TEST(TaskPresets, FindWhatTheyNameInTheSyntheticTruth)
     };
     for (const PresetCase& preset : presetCases()) {
         SCOPED_TRACE(preset.file);
-        const std::vector<BrushSpec> brushes = presetBrushes(preset.file);
+        const std::vector<state::BrushSpec> brushes = presetBrushes(preset.file);
         std::array<double, 3> recall{}, precision{}, avoided{};
         for (size_t t = 0; t < demoTimes().size(); ++t) {
             const DemoTime& demo = demoTimes()[t];
@@ -236,16 +236,16 @@ TEST(TaskPresets, BrokenPresetsFail)
     auto find = [&](const char* file) {
         return *std::find_if(cases.begin(), cases.end(), [&](const PresetCase& c) { return std::string(c.file) == file; });
     };
-    auto with = [](std::vector<BrushSpec> brushes, const std::string& name, float min, float max) {
-        std::erase_if(brushes, [&](const BrushSpec& b) { return b.name == name; });
+    auto with = [](std::vector<state::BrushSpec> brushes, const std::string& name, float min, float max) {
+        std::erase_if(brushes, [&](const state::BrushSpec& b) { return b.name == name; });
         brushes.push_back({name, min, max});
         return brushes;
     };
-    auto without = [](std::vector<BrushSpec> brushes, const std::string& name) {
-        std::erase_if(brushes, [&](const BrushSpec& b) { return b.name == name; });
+    auto without = [](std::vector<state::BrushSpec> brushes, const std::string& name) {
+        std::erase_if(brushes, [&](const state::BrushSpec& b) { return b.name == name; });
         return brushes;
     };
-    auto broken = [&](const PresetCase& preset, const char* change, const std::vector<BrushSpec>& brushes) {
+    auto broken = [&](const PresetCase& preset, const char* change, const std::vector<state::BrushSpec>& brushes) {
         const Figures f = measure(demo, preset, brushes);
         fmt::print("{} {}: recall {:.2f}, precision {:.2f}, share of {} {:.3f}\n", preset.file, change, f.recall,
                    f.precision, preset.avoided, f.avoided);

@@ -8,7 +8,7 @@
 #include "dataset/dataset.h"
 #include "analysis/selection.h"
 #include "render/image_io.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 #include "render/transfer_function.h"
 
 #include <span>
@@ -31,7 +31,7 @@ struct TimeDepthInputs {
     std::string title;
     int width = 960, height = 540;
     Rgb background{0, 0, 0};
-    ReferenceState::Shells marks;
+    state::ReferenceState::Shells marks;
 };
 // Throws raypc::Error when the inputs disagree in size or the picture has no room for the plot.
 ImageRgba8 timeDepthPicture(const TimeDepthInputs& inputs);

@@ -64,7 +64,7 @@ float TransferFunction::positionOf(float value) const
 float TransferFunction::colorPositionOf(float value) const
 {
     float u;
-    if (colorPoints.empty() && !logScale && isCentredOnZero(colorMap)) {
+    if (colorPoints.empty() && !logScale && state::isCentredOnZero(colorMap)) {
         // Centred maps put value 0 at the middle colour, scaled by the larger magnitude.
         const float magnitude = std::max(std::abs(range.min), std::abs(range.max));
         u = std::clamp(0.5f + 0.5f * value / magnitude, 0.0f, 1.0f);

@@ -9,15 +9,13 @@
 
 #include "dataset/dataset.h"
 #include "render/color_map.h"
+#include "state/view_types.h"
 
 #include <vector>
 
 namespace raypc::render {
 
-// `position` is normalised over the value range (0 = range.min, 1 = range.max); opacity in [0, 1].
-struct OpacityPoint {
-    float position = 0, opacity = 0;
-};
+using state::OpacityPoint;  // state/view_types.h
 
 // The colour range a value range gets when none is chosen (the one rule for the volume, the
 // pathlines and the UI, which takes it from /api/info): symmetric about zero for maps centred on

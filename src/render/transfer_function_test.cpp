@@ -67,8 +67,8 @@ TEST(ColorMap, KnownEndsAndCentredZero)
     EXPECT_GT(t.blue[zero], 0.9f);
     EXPECT_GT(t.blue[0], t.red[0]);
     EXPECT_GT(t.red.back(), t.blue.back());
-    EXPECT_EQ(parseColorMap("cool-to-warm"), ColorMapId::CoolToWarm);
-    EXPECT_THROW(parseColorMap("rainbow"), Error);
+    EXPECT_EQ(state::parseColorMap("cool-to-warm"), ColorMapId::CoolToWarm);
+    EXPECT_THROW(state::parseColorMap("rainbow"), Error);
 }
 
 // The perceptually uniform maps come from the shared table with their published end colours
@@ -86,14 +86,14 @@ TEST(ColorMap, ScientificMapsFromTheSharedTable)
     const Rgb t0 = sampleColorMap(ColorMapId::Thermal, 0);
     EXPECT_LT(t0.r + t0.g + t0.b, 0.4f);
     for (ColorMapId m : {ColorMapId::Vik, ColorMapId::Roma, ColorMapId::Balance, ColorMapId::BlueWhiteRed}) {
-        EXPECT_TRUE(isCentredOnZero(m)) << colorMapName(m);
-        EXPECT_TRUE(isDiverging(m)) << colorMapName(m);
+        EXPECT_TRUE(state::isCentredOnZero(m)) << state::colorMapName(m);
+        EXPECT_TRUE(state::isDiverging(m)) << state::colorMapName(m);
     }
     for (ColorMapId m : {ColorMapId::Batlow, ColorMapId::Lajolla, ColorMapId::Thermal, ColorMapId::Viridis})
-        EXPECT_FALSE(isDiverging(m)) << colorMapName(m);
-    for (ColorMapId m : allColorMaps())
-        EXPECT_EQ(parseColorMap(colorMapName(m)), m);
-    EXPECT_EQ(allColorMaps().size(), 11u);
+        EXPECT_FALSE(state::isDiverging(m)) << state::colorMapName(m);
+    for (ColorMapId m : state::allColorMaps())
+        EXPECT_EQ(state::parseColorMap(state::colorMapName(m)), m);
+    EXPECT_EQ(state::allColorMaps().size(), 11u);
 }
 
 TEST(TransferFunction, ColorPointsReversedAndLogScale)

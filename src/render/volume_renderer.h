@@ -21,6 +21,7 @@
 #include "analysis/selection.h"
 #include "render/camera.h"
 #include "render/color_map.h"
+#include "state/view_types.h"
 #include "render/frame_buffer.h"
 #include "render/transfer_function.h"
 
@@ -49,17 +50,7 @@ struct CoreStyle {
     ValueRange range{0, 1};
 };
 
-struct ShadingStyle {
-    bool enabled = false;  // gradient shading of the volume (the core is always Lambert-shaded)
-    Vec3 lightFromCamera{0.4f, 0.6f, 1.0f};  // towards the light in the camera frame: x right, y up, z to the viewer
-    float ambient = 0.35f, diffuse = 0.65f;
-    float specular = 0.2f, shininess = 24;  // Blinn-Phong highlight weight and exponent
-    // Volumetric occlusion (shadow_volume.h): soft shadows from the light and ambient occlusion by
-    // the volume, the tubes and the core, on the volume, the core and the tubes; with or without
-    // `enabled`. Strength in [0, 1]: how much of the occluded light is taken away.
-    bool shadows = false;
-    float shadowStrength = 0.8f;
-};
+using state::ShadingStyle;  // state/view_types.h
 
 enum class KernelKind { Simd, Scalar };
 

@@ -11,7 +11,7 @@
 #include "analysis/flux.h"
 #include "render/color_map.h"
 #include "render/feature_paint.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 #include "render/transfer_function.h"
 #include "server/protocol.h"
 
@@ -488,8 +488,8 @@ json infoJson(const Dataset& dataset, const ServerLimits& limits)
         columns.push_back(v.name), units.push_back(v.units);
     const SampleTable sample = dataset.loadSample(0);
     json maps = json::array();
-    for (const auto m : render::allColorMaps())
-        maps.push_back(std::string(render::colorMapName(m)));
+    for (const auto m : state::allColorMaps())
+        maps.push_back(std::string(state::colorMapName(m)));
     json palette = json::array();
     for (int slot = 0; slot < render::kFeaturePaintSlots; ++slot) {
         const render::Rgb c = render::featurePaintColor(slot);
@@ -503,7 +503,7 @@ json infoJson(const Dataset& dataset, const ServerLimits& limits)
             {"sample", {{"rows", sample.rows}, {"columns", sample.columns}, {"units", sample.units}}},
             {"colorMaps", maps},
             {"featurePalette", palette},
-            {"defaultState", render::toJson(render::defaultState(dataset))},
+            {"defaultState", state::toJson(render::defaultState(dataset))},
             // What POST /api/screenshot takes (checkScreenshotLimits), so that the UI states it.
             {"limits",
              {{"screenshotPixels", limits.maxScreenshotPixels},

@@ -126,7 +126,7 @@ ApiAnswer selection(const ApiContext& api, const ApiRequest& request)
 }
 
 // The bounds of limits.h, checked before anything is allocated.
-void checkScreenshotLimits(const render::RenderState& state, const ServerLimits& limits)
+void checkScreenshotLimits(const state::RenderState& state, const ServerLimits& limits)
 {
     // A stereo pair renders two eyes.
     const render::StereoLayout layout = render::stereoLayout(state.stereo.mode, state.width, state.height);
@@ -170,7 +170,7 @@ ApiAnswer slice(const ApiContext& api, const ApiRequest& request)
     if (!view || (*view != "map" && *view != "section"))
         fail("view: expected 'map' or 'section', found '{}'", view ? view->substr(0, 40) : "nothing");
     const render::ResolvedState resolved = render::resolveState(parseBody(request.body), *api.dataset);
-    const render::RenderState& state = resolved.state;
+    const state::RenderState& state = resolved.state;
     if (int64_t(state.width) * state.height > api.limits.maxScreenshotPixels)
         fail("slice: image {}x{} is over the limit of {} pixels", state.width, state.height, api.limits.maxScreenshotPixels);
     const auto start = std::chrono::steady_clock::now();
@@ -181,7 +181,7 @@ ApiAnswer slice(const ApiContext& api, const ApiRequest& request)
     json header{{"view", *view}, {"width", picture.width}, {"height", picture.height}, {"step", state.step}};
     if (map) {
         const render::MapFrame frame = render::mapFrameOf(state);
-        header["projection"] = std::string(render::mapProjectionName(state.map.projection));
+        header["projection"] = std::string(state::mapProjectionName(state.map.projection));
         header["centralMeridianDeg"] = state.map.centralMeridianDeg;
         header["centralLatitudeDeg"] = state.map.projection == render::MapProjection::Orthographic ? state.map.centralLatitudeDeg : 0.0f;
         header["scale"] = frame.scale();
@@ -258,7 +258,7 @@ ApiAnswer stats(const ApiContext& api, const ApiRequest& request)
 }
 
 // The level of a features or time–depth request: ?level=, else the state's features.level.
-int featureLevel(const Dataset& dataset, const ApiRequest& request, const render::RenderState& state)
+int featureLevel(const Dataset& dataset, const ApiRequest& request, const state::RenderState& state)
 {
     const int level = queryParameter(request.query, "level") ? parseIntParameter(request.query, "level")
                                                              : state.features.level;
@@ -271,10 +271,10 @@ ApiAnswer features(const ApiContext& api, const ApiRequest& request)
 {
     const Dataset& dataset = *api.dataset;
     const render::ResolvedState resolved = render::resolveState(parseBody(request.body), dataset);
-    const render::FeatureSettings& settings = resolved.state.features;
+    const state::FeatureSettings& settings = resolved.state.features;
     const int level = featureLevel(dataset, request, resolved.state);
     const double sigmas = queryParameter(request.query, "sigmas") ? parseNumberParameter(request.query, "sigmas") : 2.0;
-    const FeatureOptions options = render::featureOptions(settings);
+    const FeatureOptions options = state::featureOptions(settings);
     const std::optional<std::string> job = queryParameter(request.query, "job");
     if (job)
         JobProgress::checkId(*job);

@@ -455,7 +455,7 @@ const std::vector<Definition>& messages()
         d.push_back(message(
             "MapHeader", "POST /api/slice?view=map (JSON header)", "where a map puts the sphere",
             sliceKeys("map",
-                      {{"projection", namesOf<render::MapProjection>(render::allMapProjections(), render::mapProjectionName, ""),
+                      {{"projection", namesOf<render::MapProjection>(state::allMapProjections(), state::mapProjectionName, ""),
                          "the map projection"},
                         {"centralMeridianDeg", number(""), "the projection's central meridian, °E"},
                         {"centralLatitudeDeg", number(""), "its central latitude, °N (0 but for `orthographic`)"},
@@ -579,7 +579,7 @@ const std::vector<Definition>& messages()
              {"shellKey", arrayOf(ref("ShellKeyEntry"), ""), "with reference shells drawn: each shell drawn", false},
              {"stereo",
               named("FrameStereo", "",
-                    {{"mode", namesOf<render::StereoMode>(render::allStereoModes(), render::stereoModeName, "", render::StereoMode::Off), "the stereo mode"},
+                    {{"mode", namesOf<render::StereoMode>(state::allStereoModes(), state::stereoModeName, "", render::StereoMode::Off), "the stereo mode"},
                      {"eyeSeparationKm", number(""), "km"},
                      {"convergenceKm", number(""), "the convergence in effect, km"},
                      {"eyeWidth", integer(""), "each eye's width as rendered"},

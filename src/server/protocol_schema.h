@@ -1,5 +1,5 @@
 // The one description of the protocol's messages (docs/protocol.md) other than the state document
-// (render/state_schema.h, which they reference): every HTTP answer, the WebSocket messages both
+// (state/state_schema.h, which they reference): every HTTP answer, the WebSocket messages both
 // ways and the JSON headers of the binary answers, with every key's JSON type and meaning. From it
 // come the UI's TypeScript types (`raypc protocol-schema` → web/src/generated/protocol_types.ts,
 // web/build.mjs), the key tables of docs/protocol.md (`--markdown`, checked by a test) and the test

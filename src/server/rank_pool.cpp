@@ -35,7 +35,7 @@ json frameJob(uint64_t session, uint64_t frame, const render::ResolvedState& res
             {"frame", frame},
             {"level", choice.level},
             {"divisor", choice.divisor},
-            {"state", render::toJson(resolved.state)}};
+            {"state", state::toJson(resolved.state)}};
 }
 
 }  // namespace

@@ -25,10 +25,10 @@ constexpr int kJpegQualityInteractive = 75, kJpegQualityStill = 90;
 
 // What the UI needs to re-project each eye of a stereo frame (docs/protocol.md): the eyes' size as
 // rendered (the depth map holds them side by side) and their cameras' offsets.
-nlohmann::json stereoJson(const RenderState& state, int eyeWidth, int eyeHeight)
+nlohmann::json stereoJson(const state::RenderState& state, int eyeWidth, int eyeHeight)
 {
     const StereoLayout layout = stereoLayout(state.stereo.mode, state.width, state.height);
-    return {{"mode", std::string(stereoModeName(state.stereo.mode))},
+    return {{"mode", std::string(state::stereoModeName(state.stereo.mode))},
             {"eyeSeparationKm", state.stereo.eyeSeparationKm},
             {"convergenceKm", state.stereo.convergenceOr(state.camera.distanceKm)},
             {"eyeWidth", eyeWidth},
@@ -55,14 +55,14 @@ RenderSession::~RenderSession()
         m_context.ranks->closeSession(m_rankSession);
 }
 
-void checkSessionImage(const RenderState& state)
+void checkSessionImage(const state::RenderState& state)
 {
     if (stereoLayout(state.stereo.mode, state.width, state.height).renderedPixels() > kMaxSessionPixels)
         fail("image: {}x{}{} is over the limit of {} pixels for a session (use /api/screenshot for larger images)",
              state.width, state.height, state.stereo.enabled() ? " (stereo: two eyes)" : "", kMaxSessionPixels);
 }
 
-void RenderSession::submit(int64_t id, render::RenderState state, FrameMode mode)
+void RenderSession::submit(int64_t id, state::RenderState state, FrameMode mode)
 {
     Request request;
     request.received = Clock::now();
@@ -124,7 +124,7 @@ void RenderSession::loop()
 void RenderSession::render(const Request& request)
 {
     const auto renderStart = Clock::now();
-    const RenderState& state = request.resolved.state;
+    const state::RenderState& state = request.resolved.state;
     nlohmann::json shellKey = nlohmann::json::array();
     {
         const SphericalGrid& grid = m_context.dataset->levels().front().grid;

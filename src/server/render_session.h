@@ -52,7 +52,7 @@ struct RenderContext {
 
 // Throws raypc::Error when a resolved state's image is over what a session renders (4096 x 4096
 // pixels, both eyes of a stereo pair counted; larger images are for POST /api/screenshot).
-void checkSessionImage(const render::RenderState& state);
+void checkSessionImage(const state::RenderState& state);
 
 // Where a session's output goes, with the id of the state it answers (frames, and the errors of a
 // state), so that the receiver need not parse it back out of the bytes.
@@ -70,7 +70,7 @@ public:
 
     // Validates the state against the dataset (throws raypc::Error naming the key; the previous
     // state stays in force) and makes it the newest request.
-    void submit(int64_t id, render::RenderState state, FrameMode mode);
+    void submit(int64_t id, state::RenderState state, FrameMode mode);
     // Stops the current work; no more frames until the next submit.
     void cancel();
     // Cancels and joins the render thread. Idempotent.

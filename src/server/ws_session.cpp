@@ -1,7 +1,7 @@
 #include "server/ws_session.h"
 
 #include "core/error.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 #include "server/protocol.h"
 
 #include <boost/asio.hpp>
@@ -316,7 +316,7 @@ private:
     // A state message with its document parsed (once: the render session resolves the parsed state).
     struct ParsedState {
         StateMessage message;
-        render::RenderState state;
+        state::RenderState state;
     };
 
     void onState(StateMessage message)
@@ -325,8 +325,8 @@ private:
         const size_t previous = m_frameBytes;
         ParsedState state{std::move(message), {}};
         try {
-            state.state = render::parseRenderState(state.message.state, "state");
-            const render::RenderState& s = state.state;
+            state.state = state::parseRenderState(state.message.state, "state");
+            const state::RenderState& s = state.state;
             // A stereo pair holds two eyes' frames.
             const size_t wanted =
                 size_t(render::stereoLayout(s.stereo.mode, s.width, s.height).renderedPixels()) * kFrameBytesPerPixel;

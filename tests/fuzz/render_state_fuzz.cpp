@@ -4,7 +4,7 @@
 // second parse unchanged (so a state the server or the UI saves loads back as it was), and
 // resolve against a catalog or give raypc::Error. Anything else is a finding.
 #include "core/error.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -18,16 +18,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     const auto document = nlohmann::json::parse(data, data + size, nullptr, /*allow_exceptions=*/false);
     if (document.is_discarded())
         return 0;
-    render::RenderState state;
+    state::RenderState state;
     try {
-        state = render::parseRenderState(document);
+        state = state::parseRenderState(document);
     } catch (const Error&) {
         return 0;
     }
     const nlohmann::json saved = render::toJson(state);
-    render::RenderState reloaded;
+    state::RenderState reloaded;
     try {
-        reloaded = render::parseRenderState(saved);
+        reloaded = state::parseRenderState(saved);
     } catch (const Error& e) {
         std::fprintf(stderr, "a state's own toJson does not parse: %s\n%s\n", e.what(), saved.dump().c_str());
         std::abort();

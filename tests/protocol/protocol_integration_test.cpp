@@ -1,7 +1,7 @@
 // Integration tests of `raypc serve` against docs/protocol.md: a real server process on an ephemeral
 // port, a client built with Beast. Connects to 127.0.0.1 only.
 #include "harness.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
@@ -88,7 +88,7 @@ TEST(Serve, InfoHistogramSampleOverHttp)
     EXPECT_EQ(j["variables"][0]["histogram"].size(), 256u);
     EXPECT_EQ(j["coordinates"].size(), 7u);
     EXPECT_TRUE(j["defaultState"].is_object());
-    EXPECT_EQ(j["defaultState"]["version"], raypc::render::kRenderStateVersion);
+    EXPECT_EQ(j["defaultState"]["version"], raypc::state::kRenderStateVersion);
     EXPECT_FALSE(j["colorMaps"].empty());
 
     const auto h = httpGet(server.port, "/api/histogram?step=2&var=temperature");

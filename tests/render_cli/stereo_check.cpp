@@ -43,9 +43,9 @@ void expect(bool ok, const std::string& what)
 
 // The core alone: a transparent volume, a flat white core (ambient 1, no diffuse) over black, seen
 // edge-on from the equator.
-RenderState coreOnly()
+state::RenderState coreOnly()
 {
-    RenderState s;
+    state::RenderState s;
     s.camera.azimuthDeg = 0;
     s.camera.elevationDeg = 0;
     s.camera.distanceKm = 16000;
@@ -88,7 +88,7 @@ std::pair<double, double> limbOnCentreRow(const FrameBuffer& frame)
 // The tangents from an eye (in the horizontal plane through the view axis: the eye at `offsetKm`
 // along the image's right axis, the core's centre `distanceKm` ahead) to a sphere of `radiusKm`,
 // in pixels of an image whose window is shifted for convergence at `convergenceKm`.
-std::pair<double, double> predictedLimb(const RenderState& s, double offsetKm, double convergenceKm, double radiusKm)
+std::pair<double, double> predictedLimb(const state::RenderState& s, double offsetKm, double convergenceKm, double radiusKm)
 {
     const double d = s.camera.distanceKm;
     const double towardsCentre = std::atan2(-offsetKm, d);
@@ -103,7 +103,7 @@ void checkParallax(const std::shared_ptr<const Dataset>& dataset)
 {
     const double coreKm = dataset->levels().front().grid.rKm.front();
     StateRenderer renderer(dataset);
-    RenderState mono = coreOnly();
+    state::RenderState mono = coreOnly();
     const auto monoStill = renderer.renderStill(resolveState(mono, *dataset));
     const auto monoLimb = limbOnCentreRow(monoStill.frames[0]);
     const auto monoPredicted = predictedLimb(mono, 0, 0, coreKm);
@@ -117,7 +117,7 @@ void checkParallax(const std::shared_ptr<const Dataset>& dataset)
     };
     for (const Case c : {Case{0, std::nullopt}, Case{1200, std::nullopt}, Case{1200, 11000.0f}, Case{2500, 40000.0f},
                          Case{800, 12400.0f}}) {
-        RenderState s = coreOnly();
+        state::RenderState s = coreOnly();
         s.stereo.mode = StereoMode::SideBySide;
         s.stereo.eyeSeparationKm = float(c.separationKm);
         s.stereo.convergenceKm = c.convergenceKm;
@@ -150,9 +150,9 @@ void checkParallax(const std::shared_ptr<const Dataset>& dataset)
     }
 }
 
-RenderState pairState(StereoMode mode)
+state::RenderState pairState(StereoMode mode)
 {
-    RenderState s = coreOnly();
+    state::RenderState s = coreOnly();
     s.width = 160;
     s.height = 96;
     s.passes = 2;
@@ -213,11 +213,11 @@ void checkCli(const std::shared_ptr<const Dataset>& dataset, const std::string& 
     fs::create_directories(work);
     StateRenderer renderer(dataset);
     for (StereoMode mode : {StereoMode::SideBySide, StereoMode::SideBySideHalf, StereoMode::Anaglyph}) {
-        RenderState s = pairState(mode);
+        state::RenderState s = pairState(mode);
         s.width = 101;  // odd: half width is 2 x 50
         s.height = 64;
         s.legend = true;
-        const std::string name(stereoModeName(mode));
+        const std::string name(state::stereoModeName(mode));
         const fs::path statePath = work / (name + ".json"), png = work / (name + ".png");
         std::ofstream(statePath) << toJson(s).dump(2);
         const std::string command = fmt::format("'{}' render '{}' --state '{}' -o '{}'", raypc, dataset->dir().string(),

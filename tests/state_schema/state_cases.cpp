@@ -6,7 +6,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "dataset/dataset.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 #include "render/state_renderer.h"
 
 #include <fmt/format.h>
@@ -22,14 +22,14 @@ int main(int argc, char** argv)
     try {
         if (what == "default") {
             const auto dataset = Dataset::open(argv[2]);
-            fmt::print("{}\n", render::toJson(render::defaultState(*dataset)).dump());
+            fmt::print("{}\n", state::toJson(render::defaultState(*dataset)).dump());
             return 0;
         }
         if (what == "parse") {
             json results = json::array();
             for (const json& doc : json::parse(readFile(argv[2]))) {
                 try {
-                    results.push_back({{"ok", true}, {"json", render::toJson(render::parseRenderState(doc, "state"))}});
+                    results.push_back({{"ok", true}, {"json", state::toJson(state::parseRenderState(doc, "state"))}});
                 } catch (const Error& e) {
                     results.push_back({{"ok", false}, {"error", e.what()}});
                 }

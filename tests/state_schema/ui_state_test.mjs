@@ -1,4 +1,4 @@
-// The state document has one description (src/render/state_schema.cpp); this test checks that the
+// The state document has one description (src/state/state_schema.cpp); this test checks that the
 // three things derived from it agree: raypc's parser (via state_cases), the JSON Schema
 // (`raypc state-schema`) and the UI's loader (web/src/state.ts, bundled for node with esbuild and
 // run on the schema's generated validator).

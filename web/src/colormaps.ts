@@ -1,7 +1,7 @@
-// The colour maps of the renderer, from the one table both read (src/render/color_maps.json,
+// The colour maps of the renderer, from the one table both read (src/state/color_maps.json,
 // bundled here and compiled into raypc): stops [u, r, g, b] interpolated linearly in RGB, as
-// src/render/color_map.cpp does. Custom maps are the state's colour control points in the same form.
-import table from '../../src/render/color_maps.json';
+// src/state/color_maps.cpp does. Custom maps are the state's colour control points in the same form.
+import table from '../../src/state/color_maps.json';
 
 export type ColorStop = [number, number, number, number]; // u, r, g, b, each in [0, 1]
 

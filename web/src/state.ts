@@ -1,6 +1,6 @@
 // The render state document (docs/state.md), its shareable URL form and file form.
 // Its types and its validator are generated (web/build.mjs) from the JSON Schema that raypc derives
-// from the one description of the document (src/render/state_schema.cpp), so the UI checks a loaded
+// from the one description of the document (src/state/state_schema.cpp), so the UI checks a loaded
 // document as strictly as the server parses it (an unknown key is an error) and keeps no copy of it.
 import type { ErrorObject, ValidateFunction } from 'ajv';
 import schema from './generated/state.schema.json';

@@ -1,6 +1,7 @@
 // The render state document (STATE.json): what the browser UI saves and loads and what
 // `raypc render --state` reads. Schema: docs/state.md. Names of variables and coordinates are
-// strings here; resolveParams turns them into indices for one volume.
+// strings here; render/resolve_state.h checks them against a dataset and turns them into the
+// renderer's parameters.
 //
 // Parsing is strict: unknown keys and bad values throw raypc::Error naming the key
 // (e.g. "STATE.json: camera.distanceKm: expected a number in [0.001, 1000000000], found -3").
@@ -9,9 +10,10 @@
 #pragma once
 
 #include "analysis/features.h"
-#include "render/map_projection.h"
-#include "render/stereo.h"
-#include "render/volume_renderer.h"
+#include "analysis/selection.h"
+#include "dataset/dataset.h"
+#include "state/color_maps.h"
+#include "state/view_types.h"
 
 #include <nlohmann/json.hpp>
 
@@ -23,14 +25,16 @@
 #include <utility>
 #include <vector>
 
-namespace raypc::render {
+namespace raypc::state {
 
 // Version 2 added "pathlines", version 3 "reference" (shells, graticule, coastlines) and "legend",
 // version 4 several ranges on one axis (a repeated brush name ORs its ranges) and "axes", version
 // 5 "stereo", version 6 "shading.shadows" and "shading.shadowStrength", version 7 "camera.views"
 // (explicit camera poses, e.g. WebXR eyes), version 8 "selection" (show the selection whatever the
 // transfer function's opacity), version 9 "map" and "section" (depth slices and great-circle
-// sections, render/slice_view.h); older documents are still read (they have none of these).
+// sections, render/slice_view.h), version 10 "features" (how features are found), version 11
+// "features.colorById" and "features.highlight", version 12 "features.stallBy"; older documents are
+// still read (they have none of these).
 inline constexpr int kRenderStateVersion = 12;
 
 // A brush range: a variable or a coordinate (x, y, z, lat, lon, radius, depth) and [min, max]. The
@@ -199,18 +203,4 @@ RenderState parseRenderState(const nlohmann::json& json, const std::string& what
 RenderState loadRenderState(const std::filesystem::path& path);
 nlohmann::json toJson(const RenderState& state);
 
-// What a volume offers to resolve names against: variable names and their global ranges.
-struct VariableCatalog {
-    std::vector<std::string> names;
-    std::vector<ValueRange> ranges;
-};
-
-// The catalog of a dataset: its variables' names and global ranges (over all steps).
-VariableCatalog catalogOf(const Dataset& dataset);
-
-// Resolves names and defaults. Throws raypc::Error for an unknown variable or coordinate (listing
-// the known ones), a brush with min > max, a degenerate colour range, or camera views that do not
-// fit the stereo mode.
-RenderParams resolveParams(const RenderState& state, const VariableCatalog& catalog);
-
-}  // namespace raypc::render
+}  // namespace raypc::state

@@ -10,7 +10,7 @@
 
 #include <string>
 
-namespace raypc::render {
+namespace raypc::state {
 
 // JSON Schema (draft-07) of a state document as a file holds it: every key optional except
 // `version`, with the bounds, enums and strictness (no unknown keys) of parseRenderState, keys
@@ -22,4 +22,4 @@ nlohmann::json stateJsonSchema();
 // The field table of docs/state.md (markdown, one row per key, in document order).
 std::string stateFieldTable();
 
-}  // namespace raypc::render
+}  // namespace raypc::state

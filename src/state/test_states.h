@@ -2,13 +2,13 @@
 #pragma once
 
 #include "core/error.h"
-#include "render/render_state.h"
+#include "state/render_state.h"
 
 #include <nlohmann/json.hpp>
 
 #include <string>
 
-namespace raypc::render::testing {
+namespace raypc::state::testing {
 
 // The message with which parseRenderState refuses `document` (named STATE.json), or "accepted".
 inline std::string refusalOf(const nlohmann::json& document)
@@ -21,4 +21,4 @@ inline std::string refusalOf(const nlohmann::json& document)
     return "accepted";
 }
 
-}  // namespace raypc::render::testing
+}  // namespace raypc::state::testing

@@ -1,12 +1,12 @@
-#include "render/state_schema.h"
+#include "state/state_schema.h"
 
 #include "core/error.h"
-#include "render/render_state.h"
-#include "render/test_states.h"
+#include "state/render_state.h"
+#include "state/test_states.h"
 
 #include <gtest/gtest.h>
 
-namespace raypc::render {
+namespace raypc::state {
 namespace {
 
 using nlohmann::json;
@@ -205,4 +205,4 @@ TEST(StateSchema, CameraViewsRoundTripAndBadViewsAreRefused)
 }
 
 }  // namespace
-}  // namespace raypc::render
+}  // namespace raypc::state
