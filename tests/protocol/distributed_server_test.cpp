@@ -144,8 +144,7 @@ TEST(DistributedServer, NewStateCancelsThePassOnEveryRank)
         Server server(2);
         WsClient ws(server.port);
         ws.hello();
-        json slow = smallState(10, "viridis", 400);
-        slow["image"] = {{"width", 1024}, {"height", 768}};
+        const json slow = slowState(400, 1024, 768);
         ws.send({{"type", "state"}, {"id", 1}, {"state", slow}, {"interactive", false}});
         const WsClient::Message first = ws.receive();
         ASSERT_TRUE(first.binary) << first.raw;
@@ -185,8 +184,7 @@ TEST(DistributedServer, NewStatesAtAnyMomentOfAStillGetFramesNotErrors)
     ws.hello();
     int64_t id = 0;
     for (int delayMs : {0, 60, 150, 250, 330, 420, 520, 650, 800, 1000}) {
-        json slow = smallState(10 + delayMs / 10.0, "viridis", 400);
-        slow["image"] = {{"width", 1024}, {"height", 768}};
+        const json slow = slowState(400, 1024, 768, 10 + delayMs / 10.0);
         ws.send({{"type", "state"}, {"id", ++id}, {"state", slow}, {"interactive", false}});
         const WsClient::Message first = ws.receive();
         ASSERT_TRUE(first.binary) << "delay " << delayMs << " ms: " << first.raw;

@@ -470,8 +470,7 @@ TEST(Serve, NewestStateWinsAndCancelStops)
     FixtureServer server;
     WsClient ws(server.port);
     ws.hello();
-    json slow = smallState(10, "viridis", 200);
-    slow["image"] = {{"width", 256}, {"height", 256}};
+    const json slow = slowState(200, 256, 256);
     ws.send({{"type", "state"}, {"id", 1}, {"state", slow}});
     ws.send({{"type", "state"}, {"id", 2}, {"state", smallState(20, "viridis", 1)}});
     const auto frames = ws.framesUntilConverged(2);
@@ -508,8 +507,7 @@ TEST(Serve, ClosingATabStopsItsWork)
     {
         WsClient ws(server.port);
         ws.hello();
-        json slow = smallState(10, "viridis", 100000);
-        slow["image"] = {{"width", 256}, {"height", 256}};
+        const json slow = slowState(100000, 256, 256);
         ws.send({{"type", "state"}, {"id", 1}, {"state", slow}});
         ws.receive();
         ws.close();

@@ -113,6 +113,17 @@ struct PendingRequest {
     }
 };
 
+// `count` connections to the server that send nothing, open until the caller drops them.
+std::vector<tcp::socket> openIdleConnections(net::io_context& ioc, uint16_t port, int count)
+{
+    std::vector<tcp::socket> held;
+    for (int i = 0; i < count; ++i) {
+        held.emplace_back(ioc);
+        held.back().connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
+    }
+    return held;
+}
+
 // A screenshot that takes tens of seconds on the fixture (at the pixel-pass limit).
 json longScreenshot()
 {
@@ -527,11 +538,7 @@ TEST(Descriptors, OutOfDescriptorsTheAcceptLoopBacksOffAndLogsOnce)
     // Two connections take the last descriptors; the others wait in the listen backlog while every
     // accept fails.
     net::io_context ioc;
-    std::vector<tcp::socket> held;
-    for (int i = 0; i < 8; ++i) {
-        held.emplace_back(ioc);
-        held.back().connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), server.port));
-    }
+    std::vector<tcp::socket> held = openIdleConnections(ioc, server.port, 8);
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
     const double cpuBefore = cpuSeconds(server.pid());
     std::this_thread::sleep_for(std::chrono::seconds(3));
@@ -549,11 +556,7 @@ TEST(Connections, OneMoreThanTheLimitIsAnswered503)
 {
     Server server({"--max-connections", "4"});
     net::io_context ioc;
-    std::vector<tcp::socket> held;
-    for (int i = 0; i < 4; ++i) {
-        held.emplace_back(ioc);
-        held.back().connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), server.port));
-    }
+    std::vector<tcp::socket> held = openIdleConnections(ioc, server.port, 4);
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
     const auto refused = httpGet(server.port, "/api/info");
     EXPECT_EQ(refused.status, 503);
