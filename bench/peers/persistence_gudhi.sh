@@ -10,7 +10,7 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 build=${1:-$root/build}
 grid=${2:-64x81x128}
 work=${WORK:-/tmp/raypc-persistence-peer}
-raypc=$build/src/app/raypc
+raypc=$build/raypc
 [[ -x $raypc ]] || { echo "no $raypc: build first (cmake --build $build --target raypc)" >&2; exit 1; }
 py=/usr/bin/python3  # Debian's, where python3-gudhi installs (a python3 earlier on PATH may not see it)
 if ! $py -c "import gudhi, numpy" 2>/dev/null; then

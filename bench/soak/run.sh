@@ -13,7 +13,7 @@ clients=${CLIENTS:-8}
 minutes=${MINUTES:-3}
 size=${SIZE:-512x512}
 grid=${GRID:-90x101x180}
-raypc=$build/src/app/raypc
+raypc=$build/raypc
 soak=$build/tests/protocol/raypc_soak
 [[ -x $raypc && -x $soak ]] || { echo "no $raypc or $soak: build first (with tests)" >&2; exit 1; }
 
