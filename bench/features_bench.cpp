@@ -61,10 +61,7 @@ size_t variableIndex(const std::vector<std::string>& names, const std::string& n
 const Steps& steps()
 {
     static const Steps s = [] {
-        SynthOptions o;
-        o.nLat = 180;
-        o.nR = 201;
-        o.nLon = 360;
+        const SynthOptions o = bench::fullResolution();
         Steps out;
         for (int k = 0; k < 2; ++k) {
             Snapshot snapshot = synthesizeSnapshot(o, k * o.dtMyr);
@@ -84,23 +81,12 @@ const Steps& steps()
     return s;
 }
 
-using bench::processCpuSeconds;
-using bench::threadsFor;
-
 // Runs `work` in an arena of the benchmark's threads and sets the shared counters; `points` is what
 // one iteration goes through (for Mpoints/s).
 template <typename F>
 void timed(benchmark::State& state, size_t points, F work)
 {
-    const int threads = threadsFor(static_cast<int>(state.range(0)));
-    tbb::task_arena arena(threads);
-    const double cpu0 = processCpuSeconds();
-    for (auto _ : state)
-        arena.execute(work);
-    state.counters["cpu_s/thread"] = (processCpuSeconds() - cpu0) / double(state.iterations()) / threads;
-    state.counters["Mpoints/s"] =
-        benchmark::Counter(static_cast<double>(points) * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
-    state.counters["threads"] = threads;
+    bench::timedInArena(state, "Mpoints/s", static_cast<double>(points) * 1e-6, work);
 }
 
 void BM_ExtractFeatures(benchmark::State& state)

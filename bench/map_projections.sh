@@ -9,17 +9,13 @@
 #     100 ms; beyond one map drawing and four waiting the others are answered 503.
 # Usage: bench/map_projections.sh [BUILD_DIR] [WORK_DIR]     (needs curl)
 set -euo pipefail
-root=$(cd "$(dirname "$0")/.." && pwd)
-build=${1:-$root/build}
-work=${2:-${TMPDIR:-/tmp}/raypc-bench-maps}
-raypc=$build/raypc
-[[ -x $raypc ]] || { echo "no $raypc: build first (scripts/build.sh)" >&2; exit 1; }
-mkdir -p "$work"
+. "$(dirname "$0")/common.sh"
+bench_dirs maps "$@"
 if [[ ! -f $work/ds/dataset.json ]]; then
   "$raypc" synth -o "$work/nc" --steps 2 >/dev/null
   "$raypc" preprocess "$work/nc" -o "$work/ds" --quiet --no-pathlines >/dev/null
 fi
-echo "machine: $(nproc) cores; load $(cut -d' ' -f1 /proc/loadavg)"
+echo "machine: $(machine); load $(cut -d' ' -f1 /proc/loadavg)"
 for round in 1 2 3; do
   for size in 1920x1080 4096x4096; do
     for projection in mollweide robinson; do

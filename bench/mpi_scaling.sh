@@ -8,15 +8,11 @@
 #     and ~2.5 GB of dataset in WORK_DIR) with 1 process and 2 ranks.
 # Usage: [FULL=1] bench/mpi_scaling.sh [BUILD_DIR] [WORK_DIR] [RUNS]
 set -euo pipefail
-root=$(cd "$(dirname "$0")/.." && pwd)
-build=${1:-$root/build}
-work=${2:-${TMPDIR:-/tmp}/raypc-bench-mpi}
+. "$(dirname "$0")/common.sh"
+bench_dirs mpi "$@"
 runs=${3:-3}
-raypc=$build/raypc
 mpirun_local=$root/scripts/mpirun-local.sh
-[[ -x $raypc ]] || { echo "no $raypc: build first" >&2; exit 1; }
 
-mkdir -p "$work"
 if [[ ! -f $work/nc/spherical012.nc ]]; then
   echo "writing the 12 demo steps (64x81x128) to $work/nc" >&2
   "$raypc" synth -o "$work/nc" --steps 12 --grid 64x81x128 >/dev/null 2>&1
@@ -35,7 +31,7 @@ best() {  # best LABEL COMMAND...: the least wall time of $runs runs, in seconds
   echo "$min"
 }
 
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
+echo "machine: $(machine)"
 echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 pre1=$(best preprocess "$raypc" preprocess "$work/nc" -o "$work/ds-run" --quiet)
 pre2=$(best preprocess "$mpirun_local" -np 2 "$raypc" preprocess "$work/nc" -o "$work/ds-run" --quiet)

@@ -9,16 +9,12 @@
 # Three runs each, with the inputs in the page cache; prints the load before each.
 # Usage: bench/open_models.sh [BUILD_DIR] [WORK_DIR]
 set -euo pipefail
-root=$(cd "$(dirname "$0")/.." && pwd)
-build=${1:-$root/build}
-work=${2:-${TMPDIR:-/tmp}/raypc-bench-models}
-raypc=$build/raypc
-[[ -x $raypc ]] || { echo "no $raypc: build first (scripts/build.sh)" >&2; exit 1; }
-mkdir -p "$work"
+. "$(dirname "$0")/common.sh"
+bench_dirs models "$@"
 /usr/bin/python3 "$root/tests/data/emc-layout/write_emc_layout.py" "$work/emc" --grid 25x181x361
 /usr/bin/python3 "$root/tests/data/citcoms-layout/write_citcoms.py" "$work/citcoms" --nodes 65x65x65 --hdf5-only
 cat "$work"/emc/*.nc "$work"/citcoms/*.h5 >/dev/null
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
+echo "machine: $(machine)"
 for run in 1 2 3; do
   rm -rf "$work/emc.ds" "$work/vs.png"
   echo "load $(cut -d' ' -f1 /proc/loadavg)"

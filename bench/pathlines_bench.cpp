@@ -6,6 +6,7 @@
 //     counter "lines/s" (and points per line), with 1 thread and with every core.
 // No peer is measured here: the paper traced pathlines outside its tool (ParaView).
 //   build-paths/bench/pathlines_bench --benchmark_min_time=1
+#include "bench_util.h"
 #include "analysis/critical_points.h"
 #include "analysis/pathlines.h"
 #include "analysis/persistence.h"
@@ -33,10 +34,7 @@ const Data& data()
 {
     static const Data d = [] {
         Data out;
-        SynthOptions o;
-        o.nLat = 180;
-        o.nR = 201;
-        o.nLon = 360;
+        const SynthOptions o = bench::fullResolution();
         const int steps = 11;
         out.velocity.reserve(3 * steps);
         for (int k = 0; k < steps; ++k) {
@@ -61,7 +59,7 @@ const Data& data()
     return d;
 }
 
-int threadsFor(int arg) { return arg == 0 ? static_cast<int>(std::thread::hardware_concurrency()) : arg; }
+using bench::threadsFor;
 
 void BM_CriticalPoints(benchmark::State& state)
 {

@@ -51,33 +51,16 @@ Step synthesizeAnomaly(const SynthOptions& o, double timeMyr)
 
 const Step& fullStep()
 {
-    static const Step s = [] {
-        SynthOptions o;
-        o.nLat = 180;
-        o.nR = 201;
-        o.nLon = 360;
-        return synthesizeAnomaly(o, 0.0);
-    }();
+    static const Step s = synthesizeAnomaly(bench::fullResolution(), 0.0);
     return s;
 }
 
-using bench::processCpuSeconds;
-using bench::threadsFor;
-
-// Runs `work` in an arena of the benchmark's threads and sets the shared counters.
+// Runs `work` on the full step in an arena of the benchmark's threads and sets the shared counters.
 template <typename F>
 void timed(benchmark::State& state, F work)
 {
     const Step& s = fullStep();
-    const int threads = threadsFor(static_cast<int>(state.range(0)));
-    tbb::task_arena arena(threads);
-    const double cpu0 = processCpuSeconds();
-    for (auto _ : state)
-        arena.execute([&] { work(s); });
-    state.counters["cpu_s/thread"] = (processCpuSeconds() - cpu0) / double(state.iterations()) / threads;
-    state.counters["Mvertices/s"] = benchmark::Counter(static_cast<double>(s.anomaly.size()) * 1e-6,
-                                                       benchmark::Counter::kIsIterationInvariantRate);
-    state.counters["threads"] = threads;
+    bench::timedInArena(state, "Mvertices/s", static_cast<double>(s.anomaly.size()) * 1e-6, [&] { work(s); });
 }
 
 void BM_Persistence(benchmark::State& state)

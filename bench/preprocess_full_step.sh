@@ -4,20 +4,16 @@
 # Targets (2 cores): <= 5 s and <= 2.5 GB.
 # Usage: bench/preprocess_full_step.sh [BUILD_DIR] [WORK_DIR]
 set -euo pipefail
-root=$(cd "$(dirname "$0")/.." && pwd)
-build=${1:-$root/build}
-work=${2:-${TMPDIR:-/tmp}/raypc-bench-full}
-raypc=$build/raypc
-[[ -x $raypc ]] || { echo "no $raypc: build first (scripts/build.sh)" >&2; exit 1; }
+. "$(dirname "$0")/common.sh"
+bench_dirs full "$@"
 command -v /usr/bin/time >/dev/null || { echo "needs /usr/bin/time (Debian package 'time')" >&2; exit 1; }
 
-mkdir -p "$work"
 if [[ ! -f $work/nc/spherical001.nc ]]; then
   echo "writing one synthetic 180x201x360 step to $work/nc" >&2
   "$raypc" synth -o "$work/nc" --steps 1 --grid 180x201x360 >/dev/null
 fi
 cat "$work/nc/spherical001.nc" >/dev/null   # into the page cache
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
+echo "machine: $(machine)"
 echo "input: $(du -h "$work/nc/spherical001.nc" | cut -f1) $work/nc/spherical001.nc"
 for run in 1 2 3; do
   rm -rf "$work/dataset"

@@ -11,6 +11,7 @@
 // Targets (2 cores): interactive 512² pass <= 50 ms, converged 1024² full resolution <= 3 s (the
 // aim: <= 0.5 s, and 1920x1080 <= 1 s, by adaptive refinement: BM_ConvergedAdaptive*),
 // >= 100 M samples/s/thread, brushing 4 variables (<= 20 % selected) not slower than no brushing.
+#include "bench_util.h"
 #include "core/system_memory.h"
 #include "dataset/bricks.h"
 #include "dataset/dataset.h"
@@ -62,11 +63,7 @@ const Data& data()
                 out.names.push_back(v.name);
             return out;
         }
-        SynthOptions o;
-        o.nLat = 180;
-        o.nR = 201;
-        o.nLon = 360;
-        Snapshot s = synthesizeSnapshot(o, 0.0);
+        Snapshot s = synthesizeSnapshot(bench::fullResolution(), 0.0);
         for (const auto& f : s.fields)
             out.names.push_back(f.name);
         for (int l = 0; l < kLevelCount; ++l) {
@@ -126,12 +123,7 @@ RenderParams defaultViewParams(int size, bool lit, bool shadows = false)
     return resolveParams(s, catalog);
 }
 
-double processCpuSeconds()
-{
-    rusage u{};
-    getrusage(RUSAGE_SELF, &u);
-    return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
+using bench::processCpuSeconds;
 
 struct Totals {
     uint64_t samples = 0, skipped = 0, chunks = 0, jumped = 0;

@@ -6,6 +6,7 @@
 // The peer is a plain copy of the float32 array (what a float32 dataset's first touch of mapped
 // pages cannot beat), measured in the same run: BM_CopyFloat32.
 //   build/bench/value_encoding_bench --benchmark_min_time=1
+#include "bench_util.h"
 #include "dataset/bricks.h"
 #include "synth/synth.h"
 #include "dataset/value_encoding.h"
@@ -32,10 +33,7 @@ const Data& data()
 {
     static const Data d = [] {
         Data out;
-        SynthOptions o;
-        o.nLat = 180;
-        o.nR = 201;
-        o.nLon = 360;
+        const SynthOptions o = bench::fullResolution();
         Snapshot s = synthesizeSnapshot(o, 0);
         out.grid = s.grid;
         out.layout = BrickLayout::forGrid(out.grid, 8);
@@ -56,28 +54,30 @@ void report(benchmark::State& state, size_t points)
     state.counters["points/s"] = benchmark::Counter(double(points), benchmark::Counter::kIsIterationInvariantRate);
 }
 
-void BM_Decode(benchmark::State& state)
+// Runs `code(out)` once an iteration in an arena of the benchmark's threads; `out` holds one T a point.
+template <typename T, typename F>
+void timedCoding(benchmark::State& state, F code)
 {
-    const Data& d = data();
-    std::vector<float> out(d.values.size());
+    std::vector<T> out(data().values.size());
     tbb::task_arena arena(int(state.range(0)));
     for (auto _ : state) {
-        arena.execute([&] { decodeUint16(d.grid, d.layout, d.encoded, d.bounds, out); });
+        arena.execute([&] { code(out); });
         benchmark::DoNotOptimize(out.data());
     }
     report(state, out.size());
 }
 
+void BM_Decode(benchmark::State& state)
+{
+    const Data& d = data();
+    timedCoding<float>(state, [&](std::vector<float>& out) { decodeUint16(d.grid, d.layout, d.encoded, d.bounds, out); });
+}
+
 void BM_Encode(benchmark::State& state)
 {
     const Data& d = data();
-    std::vector<uint16_t> out(d.values.size());
-    tbb::task_arena arena(int(state.range(0)));
-    for (auto _ : state) {
-        arena.execute([&] { encodeUint16(d.grid, d.layout, d.values, d.bounds, out); });
-        benchmark::DoNotOptimize(out.data());
-    }
-    report(state, out.size());
+    timedCoding<uint16_t>(state,
+                          [&](std::vector<uint16_t>& out) { encodeUint16(d.grid, d.layout, d.values, d.bounds, out); });
 }
 
 void BM_CopyFloat32(benchmark::State& state)

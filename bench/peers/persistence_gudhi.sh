@@ -6,11 +6,11 @@
 # this script prints both times. Installs python3-gudhi (apt-get) if missing.
 # Usage: bench/peers/persistence_gudhi.sh [BUILD_DIR] [GRID=64x81x128]
 set -euo pipefail
-root=$(cd "$(dirname "$0")/../.." && pwd)
+. "$(dirname "$0")/../common.sh"
 build=${1:-$root/build}
 grid=${2:-64x81x128}
 work=${WORK:-/tmp/raypc-persistence-peer}
-raypc=$build/src/app/raypc
+raypc=$build/raypc
 [[ -x $raypc ]] || { echo "no $raypc: build first (cmake --build $build --target raypc)" >&2; exit 1; }
 py=/usr/bin/python3  # Debian's, where python3-gudhi installs (a python3 earlier on PATH may not see it)
 if ! $py -c "import gudhi, numpy" 2>/dev/null; then
@@ -25,7 +25,7 @@ if [[ ! -f $work/$grid/dataset.json ]]; then
   "$raypc" preprocess "$work/nc-$grid" -o "$work/$grid" --no-pathlines --encoding float32 --quiet >/dev/null  # gudhi reads the .f32 array
 fi
 IFS=x read -r nlat nr nlon <<<"$grid"
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
+echo "machine: $(machine)"
 echo "field: temperature anomaly, step 0 of the synthetic model, $grid (lat x r x lon)"
 start=$(date +%s.%N)
 "$raypc" export "$work/$grid" --time 0 --what persistence -o "$work/diagram.csv"

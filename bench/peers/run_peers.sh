@@ -14,7 +14,7 @@
 # Data lives in $WORK (default /tmp/raypc-peers) and the big files are deleted at the end
 # (KEEP=1 keeps them).
 set -euo pipefail
-root=$(cd "$(dirname "$0")/../.." && pwd)
+. "$(dirname "$0")/../common.sh"
 build=${1:-$root/build-perf}
 size=${2:-1024}
 n=${3:-256}
@@ -60,7 +60,7 @@ cat >"$state" <<JSON
  "timeBudgetMs": 50}
 JSON
 
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'); load: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "machine: $(machine); load: $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "data: $(du -h "$nc" | cut -f1) $nc (180x201x360), image ${size}x${size}, variable '$var'"
 
 # RayPC: seconds of the render passes (from --stats), best of 3 runs.

@@ -6,25 +6,22 @@
 # 60 states a second (a user dragging). The short version is the ctest case server.soak_short.
 # Usage: bench/soak/run.sh [BUILD_DIR] [WORK_DIR]   (env: CLIENTS=8 MINUTES=3 SIZE=512x512 GRID=90x101x180)
 set -euo pipefail
-root=$(cd "$(dirname "$0")/../.." && pwd)
-build=${1:-$root/build}
-work=${2:-${TMPDIR:-/tmp}/raypc-bench-soak}
+. "$(dirname "$0")/../common.sh"
+bench_dirs soak "$@"
 clients=${CLIENTS:-8}
 minutes=${MINUTES:-3}
 size=${SIZE:-512x512}
 grid=${GRID:-90x101x180}
-raypc=$build/src/app/raypc
 soak=$build/tests/protocol/raypc_soak
-[[ -x $raypc && -x $soak ]] || { echo "no $raypc or $soak: build first (with tests)" >&2; exit 1; }
+[[ -x $soak ]] || { echo "no $soak: build first (with tests)" >&2; exit 1; }
 
 # A synthetic dataset of 6 steps (the soak needs a directory named ds).
-mkdir -p "$work"
 if [[ ! -f $work/ds/dataset.json ]]; then
   echo "writing 6 synthetic $grid steps to $work/nc and preprocessing them" >&2
   "$raypc" synth -o "$work/nc" --steps 6 --grid "$grid" >/dev/null
   "$raypc" preprocess "$work/nc" -o "$work/ds" --quiet >/dev/null
 fi
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
+echo "machine: $(machine)"
 seconds=$((minutes * 60))
 bounds=(--max-gap-s 5 --max-info-ms 2000)
 echo "== overload: states as fast as the connection takes them"

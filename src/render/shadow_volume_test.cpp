@@ -53,6 +53,20 @@ RenderParams slabParams(bool slab)
     return p;
 }
 
+// A renderer of `volume` (by default the plane field along l) with `p`, and its kernels' parameters
+// with the light along l. The parameters point into the renderer, so the two are kept together.
+struct LitRenderer {
+    LitRenderer(Vec3 l, const RenderParams& p, std::shared_ptr<StepVolume> volume = nullptr)
+        : renderer(volume ? std::move(volume) : planeVolume(l))
+    {
+        renderer.setParams(p);
+        k = renderer.kernelParams();
+        k.lightDir = l;
+    }
+    VolumeRenderer renderer;
+    kernel::KernelParams k;
+};
+
 kernel::Occlusion lookup(const ShadowVolume& shadows, kernel::KernelParams k, Vec3 p)
 {
     shadows.bind(k);
@@ -71,10 +85,8 @@ TEST_P(LightDirections, SlabTowardsTheLightTransmitsItsOpticalDepth)
     const Vec3 behind = l * 3000.0f + u * 3000.0f;  // s = 3000: the slab lies towards the light
     const Vec3 front = l * 4900.0f + u * 3000.0f;   // s = 4900: beyond the slab, empty towards the light
     for (bool slab : {true, false}) {
-        VolumeRenderer renderer(volume);
-        renderer.setParams(slabParams(slab));
-        kernel::KernelParams k = renderer.kernelParams();
-        k.lightDir = l;
+        const LitRenderer lit(l, slabParams(slab), volume);
+        const kernel::KernelParams& k = lit.k;
         ShadowVolume shadows;
         shadows.update(k, 1.0f, nullptr);
         const kernel::Occlusion b = lookup(shadows, k, behind), f = lookup(shadows, k, front);
@@ -97,10 +109,8 @@ INSTANTIATE_TEST_SUITE_P(Shadows, LightDirections,
 TEST(Shadows, StrengthScalesTheOcclusion)
 {
     const Vec3 l{1, 0, 0};
-    VolumeRenderer renderer(planeVolume(l));
-    renderer.setParams(slabParams(true));
-    kernel::KernelParams k = renderer.kernelParams();
-    k.lightDir = l;
+    const LitRenderer lit(l, slabParams(true));
+    const kernel::KernelParams& k = lit.k;
     ShadowVolume full, half;
     full.update(k, 1.0f, nullptr);
     half.update(k, 0.5f, nullptr);
@@ -114,10 +124,8 @@ TEST(Shadows, InsideASlabTheAmbientVisibilityIsTheMeanOverTheAxes)
     // At the middle of a slab perpendicular to x, 300 km from its faces: along +-x the ambient rays
     // (kAmbientReachKm = 400 km) leave it after 300 km, along +-y and +-z they stay in it.
     const Vec3 l{1, 0, 0};
-    VolumeRenderer renderer(planeVolume(l));
-    renderer.setParams(slabParams(true));
-    kernel::KernelParams k = renderer.kernelParams();
-    k.lightDir = l;
+    const LitRenderer lit(l, slabParams(true));
+    const kernel::KernelParams& k = lit.k;
     ShadowVolume shadows;
     shadows.update(k, 1.0f, nullptr);
     const double sigma = kSlabOpticalDepth / 600.0;
@@ -132,12 +140,10 @@ TEST(Shadows, InsideASlabTheAmbientVisibilityIsTheMeanOverTheAxes)
 TEST(Shadows, TheDrawnCoreCastsAShadowAndDoesNotShadeItsLitSide)
 {
     const Vec3 l = unit(Vec3{0.3f, 0.5f, 0.8f});
-    VolumeRenderer renderer(planeVolume(l));
     RenderParams p = slabParams(false);
     p.core.visible = true;
-    renderer.setParams(p);
-    kernel::KernelParams k = renderer.kernelParams();
-    k.lightDir = l;
+    const LitRenderer lit(l, p);
+    kernel::KernelParams k = lit.k;
     ASSERT_TRUE(k.drawCore);
     ShadowVolume shadows;
     shadows.update(k, 1.0f, nullptr);
@@ -250,10 +256,8 @@ TEST(Shadows, TubesShadowTheVolume)
     // the light's visibility drops by about its splatted optical depth, pi r / cell (<= 1.6 here),
     // in front of it nothing changes.
     const Vec3 l{1, 0, 0};
-    VolumeRenderer renderer(planeVolume(l));
-    renderer.setParams(slabParams(false));
-    kernel::KernelParams k = renderer.kernelParams();
-    k.lightDir = l;
+    const LitRenderer lit(l, slabParams(false));
+    const kernel::KernelParams& k = lit.k;
     const auto tube = straightTube(4500, 0, 50);
     ShadowVolume withTube, without;
     withTube.update(k, 1.0f, tube.get());

@@ -1,9 +1,10 @@
-// libFuzzer target: the render state document parser (render::parseRenderState, docs/state.md).
+// libFuzzer target: the render state document parser (state::parseRenderState, docs/state.md).
 //
 // Any JSON document must parse or give raypc::Error; a parsed state must survive toJson and a
 // second parse unchanged (so a state the server or the UI saves loads back as it was), and
 // resolve against a catalog or give raypc::Error. Anything else is a finding.
 #include "core/error.h"
+#include "render/resolve_state.h"
 #include "state/render_state.h"
 
 #include <cstddef>
@@ -24,7 +25,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     } catch (const Error&) {
         return 0;
     }
-    const nlohmann::json saved = render::toJson(state);
+    const nlohmann::json saved = state::toJson(state);
     state::RenderState reloaded;
     try {
         reloaded = state::parseRenderState(saved);
@@ -32,9 +33,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         std::fprintf(stderr, "a state's own toJson does not parse: %s\n%s\n", e.what(), saved.dump().c_str());
         std::abort();
     }
-    if (render::toJson(reloaded) != saved) {
+    if (state::toJson(reloaded) != saved) {
         std::fprintf(stderr, "toJson(parse(toJson(s))) != toJson(s):\n%s\n%s\n", saved.dump().c_str(),
-                     render::toJson(reloaded).dump().c_str());
+                     state::toJson(reloaded).dump().c_str());
         std::abort();
     }
     // The contest's variables with plausible global ranges.

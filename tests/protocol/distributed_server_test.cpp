@@ -3,7 +3,7 @@
 // still state's frames must be the same bytes whatever the number of ranks (the tiles are gathered
 // as sums, so the picture is bit for bit one process's, and the JPEG encoder is deterministic); a
 // new state must cancel a pass on every rank; a rank that dies must end the job, not hang it.
-#include "harness.h"
+#include "fixture_server.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -12,7 +12,6 @@
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
-#include <filesystem>
 #include <regex>
 #include <string>
 #include <sys/wait.h>
@@ -21,26 +20,15 @@
 
 namespace {
 
-namespace fs = std::filesystem;
-namespace servertest = raypc::servertest;
-using namespace servertest::aliases;
-using servertest::jpegOf;
-using servertest::smallState;
-using servertest::WsClient;
-
-const auto* const g_environment =
-    ::testing::AddGlobalTestEnvironment(new servertest::WorkDirEnvironment(RAYPC_EXE, RAYPC_CONTEST_LAYOUT_DIR));
-
-const fs::path& g_work = servertest::WorkDirEnvironment::work();
+using namespace raypc::servertest;
 
 // `raypc serve` of the prepared dataset on `ranks` ranks (1: alone, without mpirun).
-class Server : public servertest::ServerProcess {
+class Server : public FixtureServer {
 public:
     explicit Server(int ranks, bool verbose = false)
-        : servertest::ServerProcess(RAYPC_EXE, g_work, {}, verbose,
-                                    ranks == 1 ? std::vector<std::string>{}
-                                               : std::vector<std::string>{RAYPC_MPIRUN_LOCAL, "-np",
-                                                                          std::to_string(ranks)})
+        : FixtureServer({}, verbose,
+                        ranks == 1 ? std::vector<std::string>{}
+                                   : std::vector<std::string>{RAYPC_MPIRUN_LOCAL, "-np", std::to_string(ranks)})
     {
     }
 };
@@ -156,8 +144,7 @@ TEST(DistributedServer, NewStateCancelsThePassOnEveryRank)
         Server server(2);
         WsClient ws(server.port);
         ws.hello();
-        json slow = smallState(10, "viridis", 400);
-        slow["image"] = {{"width", 1024}, {"height", 768}};
+        const json slow = slowState(400, 1024, 768);
         ws.send({{"type", "state"}, {"id", 1}, {"state", slow}, {"interactive", false}});
         const WsClient::Message first = ws.receive();
         ASSERT_TRUE(first.binary) << first.raw;
@@ -197,8 +184,7 @@ TEST(DistributedServer, NewStatesAtAnyMomentOfAStillGetFramesNotErrors)
     ws.hello();
     int64_t id = 0;
     for (int delayMs : {0, 60, 150, 250, 330, 420, 520, 650, 800, 1000}) {
-        json slow = smallState(10 + delayMs / 10.0, "viridis", 400);
-        slow["image"] = {{"width", 1024}, {"height", 768}};
+        const json slow = slowState(400, 1024, 768, 10 + delayMs / 10.0);
         ws.send({{"type", "state"}, {"id", ++id}, {"state", slow}, {"interactive", false}});
         const WsClient::Message first = ws.receive();
         ASSERT_TRUE(first.binary) << "delay " << delayMs << " ms: " << first.raw;
@@ -225,7 +211,7 @@ TEST(DistributedServer, RankThatDiesEndsTheJobWithoutHanging)
     ::unsetenv("RAYPC_TEST_DIE_AT");
     WsClient ws(server.port);
     ws.hello();
-    servertest::setReceiveTimeout(ws.stream().next_layer(), 60);
+    setReceiveTimeout(ws.stream().next_layer(), 60);
     ws.send({{"type", "state"}, {"id", 1}, {"state", smallState()}, {"interactive", false}});
     bool closed = false;
     try {

@@ -309,6 +309,13 @@ json smallState(double azimuthDeg, const std::string& colorMap, int passes)
     return state;
 }
 
+json slowState(int passes, int width, int height, double azimuthDeg)
+{
+    json state = smallState(azimuthDeg, "viridis", passes);
+    state["image"] = {{"width", width}, {"height", height}};
+    return state;
+}
+
 std::string jpegOf(const WsClient::Message& m)
 {
     const auto& h = m.frame.header;

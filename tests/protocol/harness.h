@@ -134,6 +134,8 @@ private:
 // kLongStillPasses passes, adaptive refinement is off, so that every pass renders every pixel.
 constexpr int kLongStillPasses = 8;
 json smallState(double azimuthDeg = 30, const std::string& colorMap = "viridis", int passes = 2);
+// A still that keeps the server busy: smallState(azimuthDeg, "viridis", passes) at width x height.
+json slowState(int passes, int width, int height, double azimuthDeg = 10);
 std::string jpegOf(const WsClient::Message& m);
 
 // From /proc/PID: anonymous resident memory (kB, RssAnon), its peak as sampled by the caller is up

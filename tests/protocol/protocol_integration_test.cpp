@@ -1,6 +1,6 @@
 // Integration tests of `raypc serve` against docs/protocol.md: a real server process on an ephemeral
 // port, a client built with Beast. Connects to 127.0.0.1 only.
-#include "harness.h"
+#include "fixture_server.h"
 #include "state/render_state.h"
 
 #include <boost/asio.hpp>
@@ -37,20 +37,10 @@
 namespace {
 
 namespace fs = std::filesystem;
-namespace servertest = raypc::servertest;
-using namespace servertest::aliases;
-using servertest::httpGet;
-using servertest::httpRequest;
-using servertest::jpegOf;
-using servertest::smallState;
-using servertest::WsClient;
+using namespace raypc::servertest;
 
-// The dataset (preprocessed once per test process into a temporary directory) and server processes.
-
-const auto* const g_environment =
-    ::testing::AddGlobalTestEnvironment(new servertest::WorkDirEnvironment(RAYPC_EXE, RAYPC_CONTEST_LAYOUT_DIR));
-
-const fs::path& g_work = servertest::WorkDirEnvironment::work();
+// The dataset, preprocessed once per test process into a temporary directory (fixture_server.h).
+const fs::path& g_work = WorkDirEnvironment::work();
 
 void runOrDie(const std::string& command)
 {
@@ -58,21 +48,11 @@ void runOrDie(const std::string& command)
     ASSERT_EQ(status, 0) << command;
 }
 
-// `raypc serve` of the prepared dataset.
-class ServerProcess : public servertest::ServerProcess {
-public:
-    explicit ServerProcess(std::vector<std::string> extra = {}, bool verbose = false,
-                           std::vector<std::string> launcher = {}, std::vector<std::string> inputs = {})
-        : servertest::ServerProcess(RAYPC_EXE, g_work, std::move(extra), verbose, std::move(launcher), std::move(inputs))
-    {
-    }
-};
-
 // ---------------------------------------------------------------------------------------------
 
 TEST(Serve, InfoHistogramSampleOverHttp)
 {
-    ServerProcess server;
+    FixtureServer server;
     EXPECT_TRUE(server.token.empty()) << "no token on loopback";
     const auto info = httpGet(server.port, "/api/info");
     ASSERT_EQ(info.status, 200) << info.body;
@@ -160,7 +140,7 @@ std::optional<std::vector<int>> noDelayOfAcceptedSockets(pid_t pid, uint16_t por
 
 TEST(Serve, AcceptedConnectionsSendWithoutDelay)
 {
-    ServerProcess server;
+    FixtureServer server;
     WsClient ws(server.port);
     ws.hello();
     const auto noDelay = noDelayOfAcceptedSockets(server.pid(), server.port);
@@ -173,7 +153,7 @@ TEST(Serve, AcceptedConnectionsSendWithoutDelay)
 
 TEST(Serve, StaticFilesAndPathTraversal)
 {
-    ServerProcess server;
+    FixtureServer server;
     const auto index = httpGet(server.port, "/");
     EXPECT_EQ(index.status, 200);
     EXPECT_NE(index.body.find("raypc test page"), std::string::npos);
@@ -197,7 +177,7 @@ TEST(Serve, StaticFilesAndPathTraversal)
 
 TEST(Serve, WebSocketFrameLayout)
 {
-    ServerProcess server;
+    FixtureServer server;
     WsClient ws(server.port);
     ws.hello();
     ws.send({{"type", "ping"}, {"id", 7}});
@@ -264,7 +244,7 @@ TEST(Serve, WebSocketFrameLayout)
 
 TEST(Serve, DefaultStateOfInfoRendersAndInteractiveFitsTheBudget)
 {
-    ServerProcess server;
+    FixtureServer server;
     json state = json::parse(httpGet(server.port, "/api/info").body)["defaultState"];
     WsClient ws(server.port);
     ws.hello();
@@ -290,7 +270,7 @@ TEST(Serve, DefaultStateOfInfoRendersAndInteractiveFitsTheBudget)
 // step's time is up; playback does not change the linked state.
 TEST(Serve, PlaybackStepsGetTheirLevelFromTheBudgetThenRefine)
 {
-    ServerProcess server;
+    FixtureServer server;
     json state = json::parse(httpGet(server.port, "/api/info").body)["defaultState"];
     WsClient ws(server.port);
     ws.hello();
@@ -335,7 +315,7 @@ TEST(Serve, PlaybackStepsGetTheirLevelFromTheBudgetThenRefine)
 // budget its pass fits, it has none.
 TEST(Serve, SlowStillStatesAreShownFirstByAPreview)
 {
-    ServerProcess server;
+    FixtureServer server;
     json state = json::parse(httpGet(server.port, "/api/info").body)["defaultState"];
     WsClient ws(server.port);
     ws.hello();
@@ -376,7 +356,7 @@ TEST(Serve, SlowStillStatesAreShownFirstByAPreview)
 
 TEST(Serve, PlaybackPrefetchesTheNextStep)
 {
-    ServerProcess server({}, true);
+    FixtureServer server({}, true);
     WsClient ws(server.port);
     ws.hello();
     for (int step = 0; step < 2; ++step) {
@@ -395,7 +375,7 @@ TEST(Serve, PlaybackPrefetchesTheNextStep)
 
 TEST(Serve, BadMessagesGetErrorsAndTheConnectionStays)
 {
-    ServerProcess server;
+    FixtureServer server;
     WsClient ws(server.port);
     // Before hello: an error, not a crash.
     ws.send({{"type", "ping"}, {"id", 1}});
@@ -454,7 +434,7 @@ TEST(Serve, BadMessagesGetErrorsAndTheConnectionStays)
 
 TEST(Serve, WrongProtocolVersionIsRefusedAndClosed)
 {
-    ServerProcess server;
+    FixtureServer server;
     WsClient ws(server.port);
     ws.send({{"type", "hello"}, {"protocol", 2}});
     const json reply = ws.receiveText();
@@ -469,7 +449,7 @@ TEST(Serve, WrongProtocolVersionIsRefusedAndClosed)
 
 TEST(Serve, TwoSessionsKeepTheirOwnStates)
 {
-    ServerProcess server;
+    FixtureServer server;
     WsClient a(server.port), b(server.port);
     a.hello();
     b.hello();
@@ -487,11 +467,10 @@ TEST(Serve, TwoSessionsKeepTheirOwnStates)
 
 TEST(Serve, NewestStateWinsAndCancelStops)
 {
-    ServerProcess server;
+    FixtureServer server;
     WsClient ws(server.port);
     ws.hello();
-    json slow = smallState(10, "viridis", 200);
-    slow["image"] = {{"width", 256}, {"height", 256}};
+    const json slow = slowState(200, 256, 256);
     ws.send({{"type", "state"}, {"id", 1}, {"state", slow}});
     ws.send({{"type", "state"}, {"id", 2}, {"state", smallState(20, "viridis", 1)}});
     const auto frames = ws.framesUntilConverged(2);
@@ -524,12 +503,11 @@ TEST(Serve, NewestStateWinsAndCancelStops)
 
 TEST(Serve, ClosingATabStopsItsWork)
 {
-    ServerProcess server;
+    FixtureServer server;
     {
         WsClient ws(server.port);
         ws.hello();
-        json slow = smallState(10, "viridis", 100000);
-        slow["image"] = {{"width", 256}, {"height", 256}};
+        const json slow = slowState(100000, 256, 256);
         ws.send({{"type", "state"}, {"id", 1}, {"state", slow}});
         ws.receive();
         ws.close();
@@ -546,7 +524,7 @@ TEST(Serve, ClosingATabStopsItsWork)
 
 TEST(Serve, ScreenshotSelectionAndBodyLimit)
 {
-    ServerProcess server;
+    FixtureServer server;
     json state = smallState(30, "viridis", 2);
     const auto png = httpRequest(server.port, http::verb::post, "/api/screenshot", state.dump());
     ASSERT_EQ(png.status, 200) << png.body;
@@ -575,7 +553,7 @@ TEST(Serve, ScreenshotSelectionAndBodyLimit)
 // /api/probe the values at a point; bad requests get 400 naming what is wrong.
 TEST(Serve, SliceAndProbe)
 {
-    ServerProcess server;
+    FixtureServer server;
     json state = smallState(30, "viridis", 2);
     state["version"] = 9;
     state["map"] = {{"depthKm", 1000}, {"projection", "robinson"}, {"centralMeridianDeg", 40}};
@@ -650,7 +628,7 @@ TEST(Serve, PresetsAreTheExampleStates)
     std::sort(expected.begin(), expected.end());
     ASSERT_GE(expected.size(), 6u);
 
-    ServerProcess server({"--examples", examples.string()});
+    FixtureServer server({"--examples", examples.string()});
     const auto answer = httpGet(server.port, "/api/presets");
     ASSERT_EQ(answer.status, 200) << answer.body;
     const json presets = json::parse(answer.body);
@@ -679,7 +657,7 @@ TEST(Serve, PresetsAreTheExampleStates)
     std::ofstream(own / "my-view.json") << R"({"version": 1, "step": 0})";
     std::ofstream(own / "other-view.json") << R"({"version": 1, "step": 0})";
     std::ofstream(own / "titles.tsv") << "# titles\nother-view\tThe other view\nno tab here\n";
-    ServerProcess second({"--examples", own.string()});
+    FixtureServer second({"--examples", own.string()});
     const json mine = json::parse(httpGet(second.port, "/api/presets").body);
     ASSERT_EQ(mine.size(), 2u) << mine.dump();
     EXPECT_EQ(mine[0]["name"], "my-view");
@@ -694,7 +672,7 @@ TEST(Serve, PresetsAreTheExampleStates)
 // below 660 km and full shells above; bad levels are 400.
 TEST(Serve, StatsOverTimeMatchTheCliAndTheAnalyticSelection)
 {
-    ServerProcess server;
+    FixtureServer server;
     json state = smallState();
     state["step"] = 2;
     state["brushes"] = {{{"name", "depth"}, {"min", 0}, {"max", 660}},
@@ -784,7 +762,7 @@ TEST(Serve, StatsOverTimeMatchTheCliAndTheAnalyticSelection)
 // are those injected at steps max(0, step - window + 1)..step; bad parameters are 400.
 TEST(Serve, PathlineAttributesOfAWindow)
 {
-    ServerProcess server;
+    FixtureServer server;
     auto fetch = [&](const std::string& query) {
         const auto a = httpGet(server.port, "/api/pathlines?" + query);
         EXPECT_EQ(a.status, 200) << query << ": " << a.body;
@@ -847,7 +825,7 @@ TEST(Serve, PathlineAttributesOfAWindow)
 // preprocess default, 5 % of the step's range. Bad parameters are 400 with a message.
 TEST(Serve, PersistenceDiagramOfAStep)
 {
-    ServerProcess server;
+    FixtureServer server;
     const auto a = httpGet(server.port, "/api/persistence?step=1&top=5");
     ASSERT_EQ(a.status, 200) << a.body;
     EXPECT_EQ(a.contentType, "application/json");
@@ -907,7 +885,7 @@ TEST(Serve, PersistenceDiagramOfAStep)
 
 TEST(Serve, NonLoopbackNeedsTheToken)
 {
-    ServerProcess server({"--host", "0.0.0.0"});
+    FixtureServer server({"--host", "0.0.0.0"});
     ASSERT_EQ(server.token.size(), 32u) << server.banner;
     EXPECT_EQ(httpGet(server.port, "/api/info").status, 401);
     EXPECT_EQ(httpGet(server.port, "/").status, 401);
@@ -934,7 +912,7 @@ json linkOf(uint16_t port)
     return json::parse(answer.body);
 }
 
-servertest::HttpAnswer postLink(uint16_t port, const std::string& body,
+HttpAnswer postLink(uint16_t port, const std::string& body,
                                 const std::vector<std::pair<http::field, std::string>>& headers = {})
 {
     return httpRequest(port, http::verb::post, "/api/link", body, headers);
@@ -949,7 +927,7 @@ json brushedState(double minKm, double maxKm)
 
 TEST(Serve, LinkedStateIsReadAndSetBothWays)
 {
-    ServerProcess server;
+    FixtureServer server;
     EXPECT_EQ(linkOf(server.port), json::parse(R"({"version": 0, "state": null, "source": null, "sessions": 0})"));
     WsClient ws(server.port);
     ws.hello();
@@ -1020,14 +998,14 @@ TEST(Serve, LinkedStateKeepsTheAccessRules)
 {
     const std::string body = json{{"state", brushedState(560, 760)}}.dump();
     {
-        ServerProcess server({"--host", "0.0.0.0"});
+        FixtureServer server({"--host", "0.0.0.0"});
         ASSERT_FALSE(server.token.empty()) << server.banner;
         EXPECT_EQ(httpGet(server.port, "/api/link").status, 401);
         EXPECT_EQ(postLink(server.port, body).status, 401);
         EXPECT_EQ(httpGet(server.port, "/api/link?token=" + server.token).status, 200);
         EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/link?token=" + server.token, body).status, 200);
     }
-    ServerProcess server;
+    FixtureServer server;
     const auto crossSite = postLink(
         server.port, body, {{http::field::content_type, "text/plain"}, {http::field::origin, "http://evil.example"}});
     EXPECT_EQ(crossSite.status, 403) << crossSite.body;
@@ -1038,7 +1016,7 @@ TEST(Serve, LinkedStateKeepsTheAccessRules)
 
 TEST(Serve, StopsCleanlyOnSigtermWhileRendering)
 {
-    ServerProcess server;
+    FixtureServer server;
     WsClient ws(server.port);
     ws.hello();
     ws.send({{"type", "state"}, {"id", 1}, {"state", smallState(0, "viridis", 100000)}});
@@ -1090,7 +1068,7 @@ TEST(ServeNetcdf, FirstStepAtOnceThenTheWholeSeriesOnTheSameAddress)
     const auto files = copyContestFiles(dir);
     std::vector<std::string> extra = {"--host", "0.0.0.0", "--sample-rows", "2000"};
     {
-        ServerProcess server(extra, false, {}, files);
+        FixtureServer server(extra, false, {}, files);
         ASSERT_EQ(server.token.size(), 32u) << server.banner;
         const json done = waitForProgress(server.port, server.token, "complete", 60);
         ASSERT_EQ(done.value("state", ""), "complete") << done.dump() << server.output();
@@ -1117,7 +1095,7 @@ TEST(ServeNetcdf, FirstStepAtOnceThenTheWholeSeriesOnTheSameAddress)
         EXPECT_TRUE(server.stop()) << server.output();
     }
     // A second run finds the dataset complete and serves it without a preview.
-    ServerProcess again(extra, false, {}, files);
+    FixtureServer again(extra, false, {}, files);
     EXPECT_EQ(waitForProgress(again.port, again.token, "complete", 5).value("state", ""), "complete");
     const std::string out = again.output();
     EXPECT_NE(out.find("3 of 3 steps already done"), std::string::npos) << out;
@@ -1129,7 +1107,7 @@ TEST(ServeNetcdf, ALaterBadFileStopsTheBackgroundRunAndTheFirstStepStaysServed)
 {
     const fs::path dir = g_work / "nc-broken";
     const auto files = copyContestFiles(dir, true);
-    ServerProcess server({"--sample-rows", "2000"}, false, {}, files);
+    FixtureServer server({"--sample-rows", "2000"}, false, {}, files);
     const json failed = waitForProgress(server.port, "", "failed", 60);
     ASSERT_EQ(failed.value("state", ""), "failed") << failed.dump() << server.output();
     EXPECT_NE(failed.value("message", "").find("spherical002.nc"), std::string::npos) << failed.dump();

@@ -3,7 +3,7 @@
 // failed thread creation, descriptor exhaustion and message ids. Each case starts the real server on
 // the contest-layout fixture and talks to it on 127.0.0.1; limits are lowered per process with
 // prlimit(2) where the case needs the machine to run out of something.
-#include "harness.h"
+#include "fixture_server.h"
 
 #include <gtest/gtest.h>
 
@@ -17,24 +17,14 @@
 namespace {
 
 namespace fs = std::filesystem;
-namespace servertest = raypc::servertest;
-using namespace servertest::aliases;
-using servertest::httpGet;
-using servertest::httpRequest;
-using servertest::smallState;
-using servertest::WsClient;
+using namespace raypc::servertest;
 using Clock = std::chrono::steady_clock;
 using Headers = std::vector<std::pair<http::field, std::string>>;
 
-const auto* const g_environment =
-    ::testing::AddGlobalTestEnvironment(new servertest::WorkDirEnvironment(RAYPC_EXE, RAYPC_CONTEST_LAYOUT_DIR));
-
-class ServerProcess : public servertest::ServerProcess {
+// `raypc serve` of the prepared dataset, with waits on its log.
+class Server : public FixtureServer {
 public:
-    explicit ServerProcess(std::vector<std::string> extra = {})
-        : servertest::ServerProcess(RAYPC_EXE, servertest::WorkDirEnvironment::work(), std::move(extra))
-    {
-    }
+    using FixtureServer::FixtureServer;
     // Waits up to `seconds` for `text` to appear in the server's log.
     bool waitForLog(const std::string& text, double seconds)
     {
@@ -71,7 +61,7 @@ public:
     }
 };
 
-std::string errorOf(const servertest::HttpAnswer& a)
+std::string errorOf(const HttpAnswer& a)
 {
     const json j = json::parse(a.body, nullptr, false);
     return j.is_object() && j.contains("error") ? j["error"].get<std::string>() : a.body;
@@ -108,9 +98,9 @@ struct PendingRequest {
         pollfd p{socket.native_handle(), POLLIN, 0};
         return ::poll(&p, 1, 0) > 0;
     }
-    servertest::HttpAnswer read(int timeoutSeconds)
+    HttpAnswer read(int timeoutSeconds)
     {
-        servertest::setReceiveTimeout(socket, timeoutSeconds);
+        setReceiveTimeout(socket, timeoutSeconds);
         beast::flat_buffer buffer;
         http::response_parser<http::string_body> parser;
         http::read(socket, buffer, parser);
@@ -122,6 +112,17 @@ struct PendingRequest {
         socket.close(ignored);
     }
 };
+
+// `count` connections to the server that send nothing, open until the caller drops them.
+std::vector<tcp::socket> openIdleConnections(net::io_context& ioc, uint16_t port, int count)
+{
+    std::vector<tcp::socket> held;
+    for (int i = 0; i < count; ++i) {
+        held.emplace_back(ioc);
+        held.back().connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
+    }
+    return held;
+}
 
 // A screenshot that takes tens of seconds on the fixture (at the pixel-pass limit).
 json longScreenshot()
@@ -136,7 +137,7 @@ json longScreenshot()
 
 TEST(CrossSite, ForeignOriginsAndHostsAreRefusedOnLoopback)
 {
-    ServerProcess server;
+    Server server;
     const std::string port = std::to_string(server.port);
     const std::string own = "http://127.0.0.1:" + port;
 
@@ -181,7 +182,7 @@ TEST(CrossSite, ForeignOriginsAndHostsAreRefusedOnLoopback)
 
 TEST(CrossSite, AllowOriginAddsATrustedPage)
 {
-    ServerProcess server({"--allow-origin", "http://viz.lab:9000"});
+    Server server({"--allow-origin", "http://viz.lab:9000"});
     EXPECT_EQ(httpGet(server.port, "/api/info", {{http::field::origin, "http://viz.lab:9000"}}).status, 200);
     EXPECT_EQ(httpGet(server.port, "/ws", upgradeFrom("http://viz.lab:9000")).status, 101);
     EXPECT_EQ(httpGet(server.port, "/api/info", {{http::field::host, "viz.lab:9000"}}).status, 200)
@@ -191,7 +192,7 @@ TEST(CrossSite, AllowOriginAddsATrustedPage)
 
     // A malformed value is refused at start with one line naming the option.
     const std::string command = std::string(RAYPC_EXE) + " serve " +
-                                (servertest::WorkDirEnvironment::work() / "ds").string() +
+                                (WorkDirEnvironment::work() / "ds").string() +
                                 " --port 0 --allow-origin viz.lab:9000 2>&1";
     FILE* pipe = ::popen(command.c_str(), "r");
     ASSERT_NE(pipe, nullptr);
@@ -207,7 +208,7 @@ TEST(CrossSite, AllowOriginAddsATrustedPage)
 
 TEST(CrossSite, OffLoopbackTheTokenIsKeptAndOriginsAreChecked)
 {
-    ServerProcess server({"--host", "0.0.0.0"});
+    Server server({"--host", "0.0.0.0"});
     ASSERT_EQ(server.token.size(), 32u);
     const Headers bearer{{http::field::authorization, "Bearer " + server.token}};
     EXPECT_EQ(httpGet(server.port, "/api/info").status, 401);
@@ -225,7 +226,7 @@ TEST(CrossSite, OffLoopbackTheTokenIsKeptAndOriginsAreChecked)
 
 TEST(Screenshot, LimitsOnPassesAndSizeAreClearErrors)
 {
-    ServerProcess server;
+    Server server;
     auto shoot = [&](int width, int height, int passes) {
         json state = smallState(30, "viridis", passes);
         state["image"] = {{"width", width}, {"height", height}};
@@ -252,7 +253,7 @@ TEST(Screenshot, LimitsOnPassesAndSizeAreClearErrors)
 // they have); when its client goes away it is cancelled, and the next screenshot starts at once.
 TEST(Screenshot, DoesNotBlockOthersAndIsCancelledWhenItsClientGoesAway)
 {
-    ServerProcess server;
+    Server server;
     PendingRequest shot(server.port, "/api/screenshot", longScreenshot().dump());
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
 
@@ -272,7 +273,7 @@ TEST(Screenshot, DoesNotBlockOthersAndIsCancelledWhenItsClientGoesAway)
 
 TEST(Screenshot, WaitingScreenshotsAreBounded)
 {
-    ServerProcess server;
+    Server server;
     std::vector<std::unique_ptr<PendingRequest>> shots;
     for (int i = 0; i < 5; ++i)  // one renders, four wait
         shots.push_back(std::make_unique<PendingRequest>(server.port, "/api/screenshot", longScreenshot().dump()));
@@ -294,7 +295,7 @@ TEST(Screenshot, WaitingScreenshotsAreBounded)
 // is 400 naming it; a NUL in a value does not cut the message short.
 TEST(Query, UnknownRepeatedAndControlCharactersAreRefusedWhole)
 {
-    ServerProcess server;
+    Server server;
     const auto unknown = httpGet(server.port, "/api/histogram?step=0&var=temperature&colour=red");
     EXPECT_EQ(unknown.status, 400);
     EXPECT_NE(errorOf(unknown).find("unknown parameter 'colour' for /api/histogram (it takes step,var)"),
@@ -317,7 +318,7 @@ TEST(Query, UnknownRepeatedAndControlCharactersAreRefusedWhole)
 // which waited 40 s behind eight 4096² Robinson maps) are answered while they run.
 TEST(Slices, WaitingSlicesAreBoundedAndQuickRequestsAnswer)
 {
-    ServerProcess server;
+    Server server;
     json state = smallState(30, "viridis", 1);
     state["version"] = 9;
     state["map"] = {{"depthKm", 1000}, {"projection", "robinson"}};
@@ -338,7 +339,7 @@ TEST(Slices, WaitingSlicesAreBoundedAndQuickRequestsAnswer)
 
 TEST(Screenshot, SigtermDuringALongScreenshotExitsWithinFiveSeconds)
 {
-    ServerProcess server;
+    Server server;
     PendingRequest shot(server.port, "/api/screenshot", longScreenshot().dump());
     std::this_thread::sleep_for(std::chrono::seconds(1));
     ASSERT_FALSE(shot.answered());
@@ -354,10 +355,10 @@ TEST(Screenshot, SigtermDuringALongScreenshotExitsWithinFiveSeconds)
 // bound, then the server closes the connection; the server's memory does not follow the client.
 TEST(Sessions, AClientThatDoesNotReadIsClosedAndMemoryStaysBounded)
 {
-    ServerProcess server;
+    Server server;
     WsClient ws(server.port);
     ws.hello();
-    const long baselineKb = servertest::rssAnonKb(server.pid());
+    const long baselineKb = rssAnonKb(server.pid());
     long peakKb = baselineKb;
     bool closed = false;
     const auto deadline = Clock::now() + std::chrono::seconds(60);
@@ -370,7 +371,7 @@ TEST(Sessions, AClientThatDoesNotReadIsClosedAndMemoryStaysBounded)
             break;
         }
         if (i % 2000 == 0)
-            peakKb = std::max(peakKb, servertest::rssAnonKb(server.pid()));
+            peakKb = std::max(peakKb, rssAnonKb(server.pid()));
     }
     EXPECT_TRUE(closed) << "a client that does not read was not closed within 60 s";
     EXPECT_LT(peakKb - baselineKb, 64 * 1024) << "anonymous memory grew by " << (peakKb - baselineKb) << " kB";
@@ -383,7 +384,7 @@ TEST(Sessions, AClientThatDoesNotReadIsClosedAndMemoryStaysBounded)
 // write not taken within 30 s closes the connection.
 TEST(Sessions, AFrameThatIsNotTakenClosesTheConnection)
 {
-    ServerProcess server;
+    Server server;
     {
         net::io_context ioc;
         websocket::stream<tcp::socket> ws(ioc);
@@ -396,13 +397,13 @@ TEST(Sessions, AFrameThatIsNotTakenClosesTheConnection)
         json state = smallState(30, "viridis", 100000);
         state["image"] = {{"width", 512}, {"height", 512}};
         ws.write(net::buffer(json{{"type", "state"}, {"id", 1}, {"state", state}}.dump()));
-        const long baselineKb = servertest::rssAnonKb(server.pid());
+        const long baselineKb = rssAnonKb(server.pid());
         long peakKb = baselineKb;
         const auto deadline = Clock::now() + std::chrono::seconds(75);
         bool closedByServer = false;
         while (Clock::now() < deadline && !closedByServer) {
             std::this_thread::sleep_for(std::chrono::milliseconds(500));
-            peakKb = std::max(peakKb, servertest::rssAnonKb(server.pid()));
+            peakKb = std::max(peakKb, rssAnonKb(server.pid()));
             closedByServer = server.output().find("was not taken within 30 s") != std::string::npos;
         }
         EXPECT_TRUE(closedByServer) << "not closed within 75 s";
@@ -417,7 +418,7 @@ TEST(Sessions, AFrameThatIsNotTakenClosesTheConnection)
 
 TEST(Sessions, TheNumberOfSessionsIsCapped)
 {
-    ServerProcess server({"--max-sessions", "2"});
+    Server server({"--max-sessions", "2"});
     auto a = std::make_unique<WsClient>(server.port);
     a->hello();
     WsClient b(server.port);
@@ -440,7 +441,7 @@ TEST(Sessions, TheNumberOfSessionsIsCapped)
 
 TEST(Sessions, FrameMemoryIsSharedWithinABudget)
 {
-    ServerProcess server({"--session-memory", "100"});
+    Server server({"--session-memory", "100"});
     json big = smallState(30, "viridis", 1);
     big["image"] = {{"width", 1024}, {"height", 1024}};  // 72 MiB of frame memory
     json small = smallState(30, "viridis", 1);
@@ -483,7 +484,7 @@ TEST(Sessions, FrameMemoryIsSharedWithinABudget)
 // session gets an error and a close, the server and the sessions it has keep working.
 TEST(Sessions, AFailedThreadCreationEndsOnlyThatSession)
 {
-    ServerProcess server;
+    Server server;
     WsClient first(server.port);
     first.hello();
     long vmKb = -1;
@@ -527,8 +528,8 @@ TEST(Sessions, AFailedThreadCreationEndsOnlyThatSession)
 
 TEST(Descriptors, OutOfDescriptorsTheAcceptLoopBacksOffAndLogsOnce)
 {
-    ServerProcess server;
-    const int open = servertest::openFileDescriptors(server.pid());
+    Server server;
+    const int open = openFileDescriptors(server.pid());
     rlimit limited{rlim_t(open + 2), 0}, old{};
     ASSERT_EQ(::prlimit(server.pid(), RLIMIT_NOFILE, nullptr, &old), 0);
     limited.rlim_max = old.rlim_max;
@@ -537,15 +538,11 @@ TEST(Descriptors, OutOfDescriptorsTheAcceptLoopBacksOffAndLogsOnce)
     // Two connections take the last descriptors; the others wait in the listen backlog while every
     // accept fails.
     net::io_context ioc;
-    std::vector<tcp::socket> held;
-    for (int i = 0; i < 8; ++i) {
-        held.emplace_back(ioc);
-        held.back().connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), server.port));
-    }
+    std::vector<tcp::socket> held = openIdleConnections(ioc, server.port, 8);
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
-    const double cpuBefore = servertest::cpuSeconds(server.pid());
+    const double cpuBefore = cpuSeconds(server.pid());
     std::this_thread::sleep_for(std::chrono::seconds(3));
-    const double cpuSpent = servertest::cpuSeconds(server.pid()) - cpuBefore;
+    const double cpuSpent = cpuSeconds(server.pid()) - cpuBefore;
     EXPECT_LT(cpuSpent, 0.5) << "the accept loop spins";
     EXPECT_EQ(server.countInLog("Too many open files"), 1u) << server.output().substr(0, 2000);
 
@@ -557,13 +554,9 @@ TEST(Descriptors, OutOfDescriptorsTheAcceptLoopBacksOffAndLogsOnce)
 
 TEST(Connections, OneMoreThanTheLimitIsAnswered503)
 {
-    ServerProcess server({"--max-connections", "4"});
+    Server server({"--max-connections", "4"});
     net::io_context ioc;
-    std::vector<tcp::socket> held;
-    for (int i = 0; i < 4; ++i) {
-        held.emplace_back(ioc);
-        held.back().connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), server.port));
-    }
+    std::vector<tcp::socket> held = openIdleConnections(ioc, server.port, 4);
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
     const auto refused = httpGet(server.port, "/api/info");
     EXPECT_EQ(refused.status, 503);
@@ -582,7 +575,7 @@ TEST(Connections, OneMoreThanTheLimitIsAnswered503)
 
 TEST(Messages, IdsAreEchoedExactlyOrRefused)
 {
-    ServerProcess server;
+    Server server;
     WsClient ws(server.port);
     ws.hello();
     ws.sendText(R"({"type": "ping", "id": 18446744073709551615})");
@@ -606,7 +599,7 @@ TEST(Messages, IdsAreEchoedExactlyOrRefused)
 // naming the nesting, and the server and the connection live on.
 TEST(Messages, DeeplyNestedJsonIsRefusedAndTheServerLives)
 {
-    ServerProcess server;
+    Server server;
     const std::string deep = std::string(100000, '[') + std::string(100000, ']');
     const auto post = httpRequest(server.port, http::verb::post, "/api/selection", R"({"version": 7, "step": )" + deep + "}");
     EXPECT_EQ(post.status, 400);
@@ -631,11 +624,11 @@ TEST(Messages, DeeplyNestedJsonIsRefusedAndTheServerLives)
 // serves on.
 TEST(DamagedDataset, AFileCutShortWhileServedIsAnErrorReplyNotACrash)
 {
-    const auto work = servertest::WorkDirEnvironment::work();
+    const auto work = WorkDirEnvironment::work();
     const auto copy = work / "ds-cut";
     std::filesystem::remove_all(copy);
     std::filesystem::copy(work / "ds", copy, std::filesystem::copy_options::recursive);
-    servertest::ServerProcess server(RAYPC_EXE, work, {}, false, {}, {copy.string()});
+    FixtureServer server({}, false, {}, {copy.string()});
     WsClient ws(server.port);
     ws.hello();
     ws.send({{"type", "state"}, {"id", 1}, {"state", smallState()}});  // step 1, coloured by temperature
@@ -669,7 +662,7 @@ int rawHttpStatus(const std::string& address, uint16_t port, const std::string& 
     tcp::socket socket{ioc};
     socket.connect(tcp::endpoint(net::ip::make_address(address), port));
     net::write(socket, net::buffer(text));
-    servertest::setReceiveTimeout(socket, 10);
+    setReceiveTimeout(socket, 10);
     beast::flat_buffer buffer;
     http::response_parser<http::string_body> parser;
     beast::error_code ec;
@@ -679,7 +672,7 @@ int rawHttpStatus(const std::string& address, uint16_t port, const std::string& 
 
 TEST(CrossSite, TwoHostHeadersAreRefused)
 {
-    ServerProcess server;
+    Server server;
     const std::string port = std::to_string(server.port);
     const std::string one = "GET /api/info HTTP/1.1\r\nHost: 127.0.0.1:" + port + "\r\nConnection: close\r\n\r\n";
     EXPECT_EQ(rawHttpStatus("127.0.0.1", server.port, one), 200);
@@ -690,7 +683,7 @@ TEST(CrossSite, TwoHostHeadersAreRefused)
 
 TEST(CrossSite, OtherLoopbackAddressesNeedTheToken)
 {
-    ServerProcess server({"--host", "127.0.0.2"});
+    Server server({"--host", "127.0.0.2"});
     ASSERT_EQ(server.token.size(), 32u) << server.banner;
     const std::string port = std::to_string(server.port);
     const std::string request = "GET /api/info{} HTTP/1.1\r\nHost: 127.0.0.2:" + port + "\r\nConnection: close\r\n\r\n";

@@ -21,15 +21,16 @@ variant the file, the reader options a test passes and either a tolerance (and t
 differ from the truth's: fill values replaced, packing) or the facts a refusal must name. The files are written into a temporary folder and moved into
 place, and not written again while this script is unchanged (a stamp records its hash).
 """
-import hashlib
 import json
 import os
-import shutil
 import sys
-import tempfile
 
 import netCDF4
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # tests/data
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+from fixture_dir import stamp_of, write_fixture  # noqa: E402
 
 R_CMB_KM, R_SURFACE_KM = 3485.0, 6371.0
 NLAT, NR, NLON = 12, 9, 16
@@ -360,26 +361,13 @@ def write_variants(out):
 def main():
     if len(sys.argv) != 2:
         sys.exit("usage: write_cf_variants.py OUT_DIR")
-    out = os.path.abspath(sys.argv[1])
-    with open(os.path.abspath(__file__), "rb") as f:
-        digest = hashlib.sha256(f.read()).hexdigest()
-    stamp = os.path.join(out, ".stamp")
-    if os.path.exists(stamp) and open(stamp).read() == digest:
-        return
-    parent = os.path.dirname(out)
-    os.makedirs(parent, exist_ok=True)
-    tmp = tempfile.mkdtemp(prefix=".cf-variants.", dir=parent)
-    try:
+
+    def write_all(tmp):
         truth = write_variants(tmp)
         with open(os.path.join(tmp, "truth.json"), "w") as f:
             json.dump(truth, f)
-        with open(os.path.join(tmp, ".stamp"), "w") as f:
-            f.write(digest)
-        shutil.rmtree(out, ignore_errors=True)
-        os.rename(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+
+    write_fixture(sys.argv[1], write_all, stamp_of([os.path.abspath(__file__)]))
 
 
 if __name__ == "__main__":

@@ -33,16 +33,18 @@ Also broken inputs for the error tests: a cap file with a row missing (bad/rows)
 missing (bad/missing), an HDF5 coordinates file without /coord (bad/nocoord). truth.json names the
 files and gives the formulas.
 """
-import hashlib
 import json
 import math
 import os
 import shutil
 import sys
-import tempfile
 
 import h5py
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # tests/data
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+from fixture_dir import stamp_of, write_fixture  # noqa: E402
 
 NX = NY = 9
 NZ = 7
@@ -165,23 +167,17 @@ def main():
     positional = [a for i, a in enumerate(args) if not a.startswith("--") and (i == 0 or args[i - 1] != "--nodes")]
     if len(positional) != 1:
         sys.exit("usage: write_citcoms.py OUT_DIR [--nodes NXxNYxNZ --hdf5-only]")
-    out = os.path.abspath(positional[0])
-    stamp = hashlib.sha256(open(__file__, "rb").read() + " ".join(args[1:]).encode()).hexdigest()
-    if os.path.exists(os.path.join(out, ".stamp")) and open(os.path.join(out, ".stamp")).read() == stamp:
-        return
-    os.makedirs(os.path.dirname(out), exist_ok=True)
-    tmp = tempfile.mkdtemp(prefix=".citcoms-layout.", dir=os.path.dirname(out))
-    write(tmp, hdf5_only)
-    truth = {"caps": 12, "nodes": [NX, NY, NZ], "radius_inner": R_INNER, "steps": STEPS,
-             "temperature": "0.5 + 0.2 z/r + 0.1 x/r + 0.3 (1 - r) / 0.45 + 0.01 step / 100",
-             "velocity": "(v_colat, v_lon, v_r) = (0, 100 r sin(colat), 0), in kappa/R",
-             "viscosity": "1 + r"}
-    with open(os.path.join(tmp, "truth.json"), "w") as fh:
-        json.dump(truth, fh, indent=1)
-    with open(os.path.join(tmp, ".stamp"), "w") as fh:
-        fh.write(stamp)
-    shutil.rmtree(out, ignore_errors=True)
-    os.rename(tmp, out)
+
+    def write_all(tmp):
+        write(tmp, hdf5_only)
+        truth = {"caps": 12, "nodes": [NX, NY, NZ], "radius_inner": R_INNER, "steps": STEPS,
+                 "temperature": "0.5 + 0.2 z/r + 0.1 x/r + 0.3 (1 - r) / 0.45 + 0.01 step / 100",
+                 "velocity": "(v_colat, v_lon, v_r) = (0, 100 r sin(colat), 0), in kappa/R",
+                 "viscosity": "1 + r"}
+        with open(os.path.join(tmp, "truth.json"), "w") as fh:
+            json.dump(truth, fh, indent=1)
+
+    write_fixture(positional[0], write_all, stamp_of([os.path.abspath(__file__)], " ".join(args[1:])))
 
 
 if __name__ == "__main__":

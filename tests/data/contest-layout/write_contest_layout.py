@@ -10,15 +10,17 @@ spherical001.nc ... spherical003.nc and a copy of truth.json. The files are writ
 folder and moved into place, and not written again when this script and truth.json are unchanged
 (a stamp file records their hash), so that every ctest run can ask for them cheaply.
 """
-import hashlib
 import json
 import os
 import shutil
 import sys
-import tempfile
 
 import netCDF4
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # tests/data
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+from fixture_dir import stamp_of, write_fixture  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SECONDS_PER_MYR = 3.15576e13
@@ -87,15 +89,7 @@ def write_step(path, truth, lat, r, lon, t_s):
 def main():
     if len(sys.argv) != 2:
         sys.exit("usage: write_contest_layout.py OUT_DIR")
-    out = os.path.abspath(sys.argv[1])
     truth_path = os.path.join(HERE, "truth.json")
-    digest = hashlib.sha256()
-    for p in (os.path.abspath(__file__), truth_path):
-        with open(p, "rb") as f:
-            digest.update(f.read())
-    stamp = os.path.join(out, ".stamp")
-    if os.path.exists(stamp) and open(stamp).read() == digest.hexdigest():
-        return
     with open(truth_path) as f:
         truth = json.load(f)
     g = truth["grid"]
@@ -106,21 +100,13 @@ def main():
     lon = step_lon * np.arange(g["nlon"])                         # 0 ... 355: the seam not repeated
     r = np.linspace(R_CMB_KM, R_SURFACE_KM, g["nr"])
 
-    parent = os.path.dirname(out)
-    os.makedirs(parent, exist_ok=True)
-    tmp = tempfile.mkdtemp(prefix=".contest-layout.", dir=parent)
-    try:
+    def write_all(tmp):
         for k in range(3):
             t_s = k * truth["dt_myr"] * SECONDS_PER_MYR
             write_step(os.path.join(tmp, f"spherical{k + 1:03d}.nc"), truth, lat, r, lon, t_s)
         shutil.copyfile(truth_path, os.path.join(tmp, "truth.json"))
-        with open(os.path.join(tmp, ".stamp"), "w") as f:
-            f.write(digest.hexdigest())
-        shutil.rmtree(out, ignore_errors=True)
-        os.rename(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+
+    write_fixture(sys.argv[1], write_all, stamp_of([os.path.abspath(__file__), truth_path]))
 
 
 if __name__ == "__main__":

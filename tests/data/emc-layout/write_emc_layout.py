@@ -21,15 +21,16 @@ lat 0, lon 30 and its minimum at lat 0, lon -150). truth.json gives the grid and
 The file is written into a temporary folder and moved into place, and not written again while this
 script is unchanged (a stamp records its hash).
 """
-import hashlib
 import json
 import os
-import shutil
 import sys
-import tempfile
 
 import netCDF4
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # tests/data
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+from fixture_dir import stamp_of, write_fixture  # noqa: E402
 
 DEPTH_KM = np.linspace(50.0, 2850.0, 15)
 LAT_DEG = np.arange(-90.0, 90.0 + 1e-9, 5.0)
@@ -80,22 +81,16 @@ def main():
         del args[args.index("--grid"):args.index("--grid") + 2]
     if len(args) != 1:
         sys.exit("usage: write_emc_layout.py OUT_DIR [--grid NDEPTHxNLATxNLON]")
-    out = os.path.abspath(args[0])
-    stamp = hashlib.sha256(open(__file__, "rb").read() + " ".join(sys.argv[2:]).encode()).hexdigest()
-    if os.path.exists(os.path.join(out, ".stamp")) and open(os.path.join(out, ".stamp")).read() == stamp:
-        return
-    os.makedirs(os.path.dirname(out), exist_ok=True)
-    tmp = tempfile.mkdtemp(prefix=".emc-layout.", dir=os.path.dirname(out))
-    write(os.path.join(tmp, "global_vs.nc"))
-    truth = {"file": "global_vs.nc", "variable": "vs", "units": "km/s", "depth_km": DEPTH_KM.tolist(),
-             "lat_deg": LAT_DEG.tolist(), "lon_deg": LON_DEG.tolist(),
-             "vs": "4.4 + 0.0007 depth + 0.1 cos(lat) cos(lon - 30 deg) (1 - depth / 2891)"}
-    with open(os.path.join(tmp, "truth.json"), "w") as fh:
-        json.dump(truth, fh, indent=1)
-    with open(os.path.join(tmp, ".stamp"), "w") as fh:
-        fh.write(stamp)
-    shutil.rmtree(out, ignore_errors=True)
-    os.rename(tmp, out)
+
+    def write_all(tmp):
+        write(os.path.join(tmp, "global_vs.nc"))
+        truth = {"file": "global_vs.nc", "variable": "vs", "units": "km/s", "depth_km": DEPTH_KM.tolist(),
+                 "lat_deg": LAT_DEG.tolist(), "lon_deg": LON_DEG.tolist(),
+                 "vs": "4.4 + 0.0007 depth + 0.1 cos(lat) cos(lon - 30 deg) (1 - depth / 2891)"}
+        with open(os.path.join(tmp, "truth.json"), "w") as fh:
+            json.dump(truth, fh, indent=1)
+
+    write_fixture(args[0], write_all, stamp_of([os.path.abspath(__file__)], " ".join(sys.argv[2:])))
 
 
 if __name__ == "__main__":

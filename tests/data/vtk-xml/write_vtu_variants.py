@@ -17,8 +17,11 @@ import os
 import shutil
 import struct
 import sys
-import tempfile
 import zlib
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # tests/data
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+from fixture_dir import write_fixture  # noqa: E402
 
 HEX = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
 WEDGE = [(2, 0, 0), (3, 0, 0), (2, 1, 0), (2, 0, 1), (3, 0, 1), (2, 1, 1)]
@@ -154,13 +157,8 @@ def zero_block_size(data):
     return data[: start + 4] + struct.pack("<I", 0) + data[start + 8:]
 
 
-def main():
-    if len(sys.argv) != 2:
-        sys.exit("usage: write_vtu_variants.py OUT_DIR")
-    out = os.path.abspath(sys.argv[1])
-    parent = os.path.dirname(out)
-    os.makedirs(parent, exist_ok=True)
-    tmp = tempfile.mkdtemp(prefix=".vtk-xml.", dir=parent)
+def write_variants(tmp):
+    """Every file of the fixture, and truth.json, into the folder `tmp`."""
     variants = []
     for mode in ("ascii", "binary", "appended-raw", "appended-base64"):
         for compressed in ((False,) if mode == "ascii" else (False, True)):
@@ -233,8 +231,12 @@ def main():
     os.makedirs(os.path.join(tmp, "sub"))
     for name in ("record.pvtu", "binary-zlib-UInt32-Float32.vtu", "ascii-plain-UInt32-Float32.vtu"):
         shutil.copyfile(os.path.join(tmp, name), os.path.join(tmp, "sub", name))
-    shutil.rmtree(out, ignore_errors=True)
-    os.rename(tmp, out)
+
+
+def main():
+    if len(sys.argv) != 2:
+        sys.exit("usage: write_vtu_variants.py OUT_DIR")
+    write_fixture(sys.argv[1], write_variants)
 
 
 if __name__ == "__main__":
