@@ -131,6 +131,105 @@ std::optional<std::array<double, 2>> MapFrame::pixelOf(double lonDeg, double lat
     return std::array{m_cx + (*xy)[0] * m_scale, m_cy - (*xy)[1] * m_scale};
 }
 
+namespace {
+
+// The state's graticule and coastlines on the map.
+void drawMapReference(std::vector<uint8_t>& pixels, int width, int height, const MapFrame& frame,
+                      const state::ReferenceState& ref, const Coastlines* coastlines, double centralMeridianDeg)
+{
+    // A segment longer than this crosses the map's edge (the seam behind the central meridian).
+    const double jumpPx = 0.25 * width;
+    if (ref.graticule.visible && ref.graticule.opacity > 0) {
+        LineLayer layer(width, height, false);
+        const float step = ref.graticule.spacingDeg;
+        const double lon0 = centralMeridianDeg;
+        for (float lat = -90.0f + step; lat < 90.0f - 1e-3f; lat += step) {
+            std::vector<std::pair<float, float>> parallel;
+            for (int k = 0; k <= 720; ++k)
+                parallel.emplace_back(float(lon0 - 180 + 0.5 * k), lat);
+            drawMapPolyline(layer, frame, parallel, ref.lineWidthPx * 0.75f, jumpPx);
+        }
+        for (float lon = 0.0f; lon < 360.0f - 1e-3f; lon += step) {
+            std::vector<std::pair<float, float>> meridian;
+            for (int lat = -90; lat <= 90; ++lat)
+                meridian.emplace_back(lon, float(lat));
+            drawMapPolyline(layer, frame, meridian, ref.lineWidthPx * 0.75f, jumpPx);
+        }
+        compositeLines(pixels, layer, ref.graticule.color, ref.graticule.opacity);
+    }
+    if (ref.coastlines.visible && ref.coastlines.opacity > 0) {
+        if (!coastlines)
+            fail("reference.coastlines: visible, but no coastlines were given");
+        // Over a dark halo, so that the state's colour (chosen for the globe) reads on light colours too.
+        LineLayer halo(width, height, false), layer(width, height, false);
+        for (const auto& line : coastlines->lines) {
+            drawMapPolyline(halo, frame, line, ref.lineWidthPx + 1.5f, jumpPx);
+            drawMapPolyline(layer, frame, line, ref.lineWidthPx, jumpPx);
+        }
+        compositeLines(pixels, halo, {0, 0, 0}, 0.55f * ref.coastlines.opacity);
+        compositeLines(pixels, layer, ref.coastlines.color, ref.coastlines.opacity);
+    }
+}
+
+// The sphere's outline: along rays from the map's centre, the last point the projection inverts
+// (bisection), joined in the picture's plane.
+void drawSphereOutline(std::vector<uint8_t>& pixels, int width, int height, const MapFrame& frame, Rgb ink)
+{
+    LineLayer layer(width, height, false);
+    const Projector::Extent e = frame.projector().extent();
+    const auto [cx, cy] = frame.centrePx();
+    std::optional<std::array<float, 2>> last;
+    const int n = 1440;
+    for (int k = 0; k <= n; ++k) {
+        const double a = 2 * M_PI * k / n, dx = std::cos(a), dy = std::sin(a);
+        double lo = 0, hi = 1.01 * std::hypot(e.xMax, e.yMax);
+        for (int i = 0; i < 40; ++i) {
+            const double mid = (lo + hi) / 2;
+            (frame.projector().inverse(dx * mid, dy * mid) ? lo : hi) = mid;
+        }
+        const std::array p{float(cx + dx * lo * frame.scale()), float(cy - dy * lo * frame.scale())};
+        if (last)
+            drawSegment(layer, (*last)[0], (*last)[1], p[0], p[1], 1.2f);
+        last = p;
+    }
+    compositeLines(pixels, layer, ink, 0.8f);
+}
+
+// Arrows of the horizontal flow on a regular grid of the picture (`spacing` pixels apart, between
+// the rows `top` and `bottom`), their length the horizontal speed over the largest one among them.
+std::vector<slice::Arrow> mapFlowArrows(const MapFrame& frame, const slice::PointProbe& probe, double rKm, int width,
+                                        double top, double bottom, int spacing)
+{
+    std::vector<slice::Arrow> arrows;
+    for (int y = int(top) + spacing / 2; y < int(bottom); y += spacing)
+        for (int x = spacing / 2; x < width; x += spacing) {
+            const auto ll = frame.lonLatAt(x, y);
+            if (!ll)
+                continue;
+            const double lon = (*ll)[0], lat = (*ll)[1];
+            const auto v = probe.velocityCmPerYr(lat, lon, rKm);
+            if (!v)
+                continue;
+            const EastNorth basis = eastNorthAt(lat, lon);
+            const double ve = dot(*v, basis.east), vn = dot(*v, basis.north), speed = std::hypot(ve, vn);
+            if (!(speed > 0))
+                continue;
+            // The flow's direction on the map: a step of a tenth of a degree along it, projected.
+            const double d = 0.1;
+            const auto p0 = frame.pixelOf(lon, lat);
+            const auto p1 = frame.pixelOf(lon + d * ve / speed / std::max(1e-6, std::cos(degToRad(lat))), lat + d * vn / speed);
+            if (!p0 || !p1)
+                continue;
+            const double ux = (*p1)[0] - (*p0)[0], uy = (*p1)[1] - (*p0)[1], ul = std::hypot(ux, uy);
+            if (!(ul > 0) || ul > 0.1 * width)
+                continue;
+            arrows.push_back({float(x), float(y), float(ux / ul), float(uy / ul), speed});
+        }
+    return arrows;
+}
+
+}  // namespace
+
 ImageRgba8 mapPicture(const SliceInputs& in)
 {
     using namespace slice;  // slice_sampling.h, slice_drawing.h
@@ -155,94 +254,15 @@ ImageRgba8 mapPicture(const SliceInputs& in)
     });
     const bool grey = map.greyUnselected && !params.brushes.empty();
     ImageRgba8 image{width, height, colorPixels(samples, params.transfer, state.background, grey)};
-    const Rgb ink = inkFor(state.background);
-    const double jumpPx = 0.25 * width;
 
     // The graticule and the coastlines of the state's reference, the sphere's outline always.
-    const state::ReferenceState& ref = state.reference;
-    if (ref.graticule.visible && ref.graticule.opacity > 0) {
-        LineLayer layer(width, height, false);
-        const float step = ref.graticule.spacingDeg;
-        const double lon0 = map.centralMeridianDeg;
-        for (float lat = -90.0f + step; lat < 90.0f - 1e-3f; lat += step) {
-            std::vector<std::pair<float, float>> parallel;
-            for (int k = 0; k <= 720; ++k)
-                parallel.emplace_back(float(lon0 - 180 + 0.5 * k), lat);
-            drawMapPolyline(layer, frame, parallel, ref.lineWidthPx * 0.75f, jumpPx);
-        }
-        for (float lon = 0.0f; lon < 360.0f - 1e-3f; lon += step) {
-            std::vector<std::pair<float, float>> meridian;
-            for (int lat = -90; lat <= 90; ++lat)
-                meridian.emplace_back(lon, float(lat));
-            drawMapPolyline(layer, frame, meridian, ref.lineWidthPx * 0.75f, jumpPx);
-        }
-        compositeLines(image.pixels, layer, ref.graticule.color, ref.graticule.opacity);
-    }
-    if (ref.coastlines.visible && ref.coastlines.opacity > 0) {
-        if (!in.coastlines)
-            fail("reference.coastlines: visible, but no coastlines were given");
-        // Over a dark halo, so that the state's colour (chosen for the globe) reads on light colours too.
-        LineLayer halo(width, height, false), layer(width, height, false);
-        for (const auto& line : in.coastlines->lines) {
-            drawMapPolyline(halo, frame, line, ref.lineWidthPx + 1.5f, jumpPx);
-            drawMapPolyline(layer, frame, line, ref.lineWidthPx, jumpPx);
-        }
-        compositeLines(image.pixels, halo, {0, 0, 0}, 0.55f * ref.coastlines.opacity);
-        compositeLines(image.pixels, layer, ref.coastlines.color, ref.coastlines.opacity);
-    }
-    {
-        // The sphere's outline: along rays from the map's centre, the last point the projection
-        // inverts (bisection), joined in the picture's plane.
-        LineLayer layer(width, height, false);
-        const Projector::Extent e = frame.projector().extent();
-        const auto [cx, cy] = frame.centrePx();
-        std::optional<std::array<float, 2>> last;
-        const int n = 1440;
-        for (int k = 0; k <= n; ++k) {
-            const double a = 2 * M_PI * k / n, dx = std::cos(a), dy = std::sin(a);
-            double lo = 0, hi = 1.01 * std::hypot(e.xMax, e.yMax);
-            for (int i = 0; i < 40; ++i) {
-                const double mid = (lo + hi) / 2;
-                (frame.projector().inverse(dx * mid, dy * mid) ? lo : hi) = mid;
-            }
-            const std::array p{float(cx + dx * lo * frame.scale()), float(cy - dy * lo * frame.scale())};
-            if (last)
-                drawSegment(layer, (*last)[0], (*last)[1], p[0], p[1], 1.2f);
-            last = p;
-        }
-        compositeLines(image.pixels, layer, ink, 0.8f);
-    }
+    drawMapReference(image.pixels, width, height, frame, state.reference, in.coastlines, map.centralMeridianDeg);
+    drawSphereOutline(image.pixels, width, height, frame, inkFor(state.background));
     drawContourLines(image.pixels, samples, map.contours);
     std::string flowText;
     if (map.flow) {
-        // Arrows on a regular grid of the picture, their length the horizontal speed over the
-        // largest one among them.
         const int spacing = arrowSpacingPx(width, height);
-        std::vector<Arrow> arrows;
-        for (int y = int(top) + spacing / 2; y < int(bottom); y += spacing)
-            for (int x = spacing / 2; x < width; x += spacing) {
-                const auto ll = frame.lonLatAt(x, y);
-                if (!ll)
-                    continue;
-                const double lon = (*ll)[0], lat = (*ll)[1];
-                const auto v = probe.velocityCmPerYr(lat, lon, rKm);
-                if (!v)
-                    continue;
-                const EastNorth basis = eastNorthAt(lat, lon);
-                const double ve = dot(*v, basis.east), vn = dot(*v, basis.north), speed = std::hypot(ve, vn);
-                if (!(speed > 0))
-                    continue;
-                // The flow's direction on the map: a step of a tenth of a degree along it, projected.
-                const double d = 0.1;
-                const auto p0 = frame.pixelOf(lon, lat);
-                const auto p1 = frame.pixelOf(lon + d * ve / speed / std::max(1e-6, std::cos(degToRad(lat))), lat + d * vn / speed);
-                if (!p0 || !p1)
-                    continue;
-                const double ux = (*p1)[0] - (*p0)[0], uy = (*p1)[1] - (*p0)[1], ul = std::hypot(ux, uy);
-                if (!(ul > 0) || ul > 0.1 * width)
-                    continue;
-                arrows.push_back({float(x), float(y), float(ux / ul), float(uy / ul), speed});
-            }
+        const std::vector<Arrow> arrows = mapFlowArrows(frame, probe, rKm, width, top, bottom, spacing);
         flowText = drawArrows(image.pixels, width, height, arrows, spacing, "horizontal flow");
     }
 

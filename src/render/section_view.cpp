@@ -85,6 +85,87 @@ Vec3d GreatCircle::tangentAt(double fraction) const
     return m_ortho * std::cos(a) - m_from * std::sin(a);
 }
 
+namespace {
+
+// Where a pixel of the section's picture lies: along the great circle left to right, from the
+// surface down to the core-mantle boundary top to bottom.
+struct SectionPlane {
+    const GreatCircle& circle;
+    const SphericalGrid& grid;
+    double left, right, top, bottom, depthSpanKm;
+
+    // (lat, lon, r) of the pixel position (x, y); nullopt outside the plot or below the grid.
+    std::optional<std::array<double, 3>> pointAt(double x, double y) const
+    {
+        if (x < left || x > right || y < top || y > bottom)
+            return std::nullopt;
+        const double f = (x - left) / (right - left), depth = (y - top) / (bottom - top) * depthSpanKm;
+        const double r = kSurfaceRadiusKm - depth;
+        if (r < grid.rKm.front() - 1e-6)
+            return std::nullopt;
+        const SphericalPoint p = cartesianToSpherical(circle.at(f));
+        return std::array{p.latDeg, p.lonDeg, std::clamp(r, grid.rKm.front(), grid.rKm.back())};
+    }
+};
+
+// The colour variable at every pixel: every column's point on the arc and every row's radius
+// located once.
+slice::PixelSamples sampleSection(const SectionPlane& plane, const slice::PointProbe& probe, int width, int height)
+{
+    using slice::PointProbe;
+    const GridSampler& sampler = probe.sampler();
+    struct Column {
+        double latDeg, lonDeg;
+        GridSampler::LateralPart where;
+    };
+    std::vector<std::optional<Column>> columns(static_cast<size_t>(width));
+    for (int x = 0; x < width; ++x)
+        if (const auto p = plane.pointAt(x + 0.5, plane.top))
+            if (const auto where = sampler.locateLatLon((*p)[0], (*p)[1]))
+                columns[size_t(x)] = Column{(*p)[0], (*p)[1], *where};
+    std::vector<std::optional<std::pair<double, GridSampler::RadialPart>>> rows(static_cast<size_t>(height));
+    for (int y = 0; y < height; ++y)
+        if (const auto p = plane.pointAt(0.5 * (plane.left + plane.right), y + 0.5))
+            if (const auto where = sampler.locateRadius((*p)[2]))
+                rows[size_t(y)] = {(*p)[2], *where};
+    return slice::samplePixels(width, height, [&](int x, int y) -> std::optional<PointProbe::Sample> {
+        const auto& column = columns[size_t(x)];
+        const auto& row = rows[size_t(y)];
+        if (!column || !row)
+            return std::nullopt;
+        return probe.at(GridSampler::combine(column->where, row->second), column->latDeg, column->lonDeg, row->first);
+    });
+}
+
+// Arrows of the flow in the section's plane on a regular grid of the picture (`spacing` pixels
+// apart): along the profile to the right, radial up, each axis at its own km per pixel (the
+// section is not drawn at true scale).
+std::vector<slice::Arrow> sectionFlowArrows(const SectionPlane& plane, const slice::PointProbe& probe, int spacing)
+{
+    std::vector<slice::Arrow> arrows;
+    const double kmPerPxX = plane.circle.lengthKm() / (plane.right - plane.left);
+    const double kmPerPxY = plane.depthSpanKm / (plane.bottom - plane.top);
+    for (double y = plane.top + spacing / 2.0; y < plane.bottom; y += spacing)
+        for (double x = plane.left + spacing / 2.0; x < plane.right; x += spacing) {
+            const auto p = plane.pointAt(x, y);
+            if (!p)
+                continue;
+            const auto v = probe.velocityCmPerYr((*p)[0], (*p)[1], (*p)[2]);
+            if (!v)
+                continue;
+            const double f = (x - plane.left) / (plane.right - plane.left);
+            const double along = dot(*v, plane.circle.tangentAt(f)), radial = dot(*v, plane.circle.at(f));
+            const double sx = along / kmPerPxX, sy = -radial / kmPerPxY, sl = std::hypot(sx, sy);
+            const double speed = std::hypot(along, radial);
+            if (!(sl > 0))
+                continue;
+            arrows.push_back({float(x), float(y), float(sx / sl), float(sy / sl), speed});
+        }
+    return arrows;
+}
+
+}  // namespace
+
 ImageRgba8 sectionPicture(const SliceInputs& in)
 {
     using namespace slice;  // slice_sampling.h, slice_drawing.h
@@ -100,45 +181,13 @@ ImageRgba8 sectionPicture(const SliceInputs& in)
     // Plain variables, not a structured binding: the lambdas below capture them (clang 14 cannot
     // capture bindings).
     const SectionLayout layout = sectionLayoutOf(state, grid);
-    const double left = layout.left, right = layout.right, top = layout.top, bottom = layout.bottom;
-    const double depthSpan = layout.depthSpanKm;
-    auto pointAt = [&](double x, double y) -> std::optional<std::array<double, 3>> {
-        if (x < left || x > right || y < top || y > bottom)
-            return std::nullopt;
-        const double f = (x - left) / (right - left), depth = (y - top) / (bottom - top) * depthSpan;
-        const double r = kSurfaceRadiusKm - depth;
-        if (r < grid.rKm.front() - 1e-6)
-            return std::nullopt;
-        const SphericalPoint p = cartesianToSpherical(circle.at(f));
-        return std::array{p.latDeg, p.lonDeg, std::clamp(r, grid.rKm.front(), grid.rKm.back())};
-    };
-    // Every column's point on the arc and every row's radius located once.
-    const GridSampler& sampler = probe.sampler();
-    struct Column {
-        double latDeg, lonDeg;
-        GridSampler::LateralPart where;
-    };
-    std::vector<std::optional<Column>> columns(static_cast<size_t>(width));
-    for (int x = 0; x < width; ++x)
-        if (const auto p = pointAt(x + 0.5, top))
-            if (const auto where = sampler.locateLatLon((*p)[0], (*p)[1]))
-                columns[size_t(x)] = Column{(*p)[0], (*p)[1], *where};
-    std::vector<std::optional<std::pair<double, GridSampler::RadialPart>>> rows(static_cast<size_t>(height));
-    for (int y = 0; y < height; ++y)
-        if (const auto p = pointAt(0.5 * (left + right), y + 0.5))
-            if (const auto where = sampler.locateRadius((*p)[2]))
-                rows[size_t(y)] = {(*p)[2], *where};
-    const PixelSamples samples = samplePixels(width, height, [&](int x, int y) -> std::optional<PointProbe::Sample> {
-        const auto& column = columns[size_t(x)];
-        const auto& row = rows[size_t(y)];
-        if (!column || !row)
-            return std::nullopt;
-        return probe.at(GridSampler::combine(column->where, row->second), column->latDeg, column->lonDeg, row->first);
-    });
+    const double left = layout.left, right = layout.right;
+    const SectionPlane plane{circle, grid, left, right, layout.top, layout.bottom, layout.depthSpanKm};
+    const PixelSamples samples = sampleSection(plane, probe, width, height);
     const bool grey = state.map.greyUnselected && !params.brushes.empty();
     ImageRgba8 image{width, height, colorPixels(samples, params.transfer, state.background, grey)};
     const Rgb ink = inkFor(state.background);
-    const DepthPlot plot{left, right, top, bottom, depthSpan};
+    const DepthPlot plot{left, right, layout.top, layout.bottom, layout.depthSpanKm};
     auto xOfFraction = [&](double f) { return float(left + f * (right - left)); };
 
     drawContourLines(image.pixels, samples, state.map.contours);
@@ -147,27 +196,7 @@ ImageRgba8 sectionPicture(const SliceInputs& in)
     std::string flowText;
     if (section.flow) {
         const int spacing = arrowSpacingPx(width, height);
-        std::vector<Arrow> arrows;
-        const double kmPerPxX = circle.lengthKm() / (right - left), kmPerPxY = depthSpan / (bottom - top);
-        for (double y = top + spacing / 2.0; y < bottom; y += spacing)
-            for (double x = left + spacing / 2.0; x < right; x += spacing) {
-                const auto p = pointAt(x, y);
-                if (!p)
-                    continue;
-                const auto v = probe.velocityCmPerYr((*p)[0], (*p)[1], (*p)[2]);
-                if (!v)
-                    continue;
-                const double f = (x - left) / (right - left);
-                const double along = dot(*v, circle.tangentAt(f)), radial = dot(*v, circle.at(f));
-                // On the picture: along the profile to the right, radial up, each axis at its own km
-                // per pixel (the section is not drawn at true scale).
-                const double sx = along / kmPerPxX, sy = -radial / kmPerPxY, sl = std::hypot(sx, sy);
-                const double speed = std::hypot(along, radial);
-                if (!(sl > 0))
-                    continue;
-                arrows.push_back({float(x), float(y), float(sx / sl), float(sy / sl), speed});
-            }
-        flowText = drawArrows(image.pixels, width, height, arrows, spacing,
+        flowText = drawArrows(image.pixels, width, height, sectionFlowArrows(plane, probe, spacing), spacing,
                               "flow in the section's plane (directions on the picture's axes)");
     }
     std::vector<LegendSpec> legends{{in.colorTitle, params.transfer}};

@@ -523,32 +523,29 @@ nlohmann::json toJson(const PassStats& stats, PassStatsJson form)
     return out;
 }
 
-PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>* cancel, TileShare share)
+namespace {
+
+void renderTile(const kernel::KernelParams& k, bool simd, const kernel::Tile& tile, kernel::PixelOut* out,
+                kernel::TileStats& stats)
 {
-    if (frame.width() != m_params.width || frame.height() != m_params.height)
-        fail("frame buffer {}x{} does not match the render size {}x{}", frame.width(), frame.height(),
-             m_params.width, m_params.height);
-    const auto start = std::chrono::steady_clock::now();
-    if (frame.converged()) {
-        // Adaptive refinement has stopped every block: the pass renders nothing.
-        ++frame.m_passes;
-        PassStats stats;
-        stats.threads = tbb::this_task_arena::max_concurrency();
-        stats.simdLanes = m_params.kernel == KernelKind::Simd ? kernel::simdLanes() : 1;
-        stats.bricksTotal = m_impl->activity.brickCount();
-        stats.bricksSkipped = m_params.skipBricks ? m_impl->bricksSkipped : 0;
-        return stats;
-    }
-    kernel::KernelParams k = m_impl->params;
-    k.pass = frame.passes();
-    if (m_impl->pathlines)
-        m_impl->pathlines->bind(k);
-    bindShadows(k);
-    // The blocks this pass renders: those of the tiles `share` owns that still refine (all of them
-    // without refinement).
-    std::vector<uint8_t> rendered(size_t(frame.blockCount()), 0);
-    std::vector<int> tiles;
-    bool everyBlock = true;  // PassStats::everyBlock
+    if (simd)
+        kernel::renderTileSimd(k, tile, out, stats);
+    else
+        kernel::renderTileScalar(k, tile, out, stats);
+}
+
+// The blocks a pass renders: those of the tiles `share` owns that still refine (all of them
+// without refinement).
+struct PassBlocks {
+    std::vector<uint8_t> rendered;  // per block of the frame: 1 if this pass renders it
+    std::vector<int> tiles;         // the tiles with at least one such block
+    bool everyBlock = true;         // PassStats::everyBlock
+};
+
+PassBlocks passBlocks(const FrameBuffer& frame, TileShare share)
+{
+    PassBlocks p;
+    p.rendered.assign(size_t(frame.blockCount()), 0);
     for (int t = 0; t < frame.tileCount(); ++t) {
         if (!share.owns(t))
             continue;
@@ -557,133 +554,171 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
         bool any = false;
         for (int j = 0; j < nb; ++j) {
             if (frame.blockRefining(blocks[j])) {
-                rendered[size_t(blocks[j])] = 1;
+                p.rendered[size_t(blocks[j])] = 1;
                 any = true;
             } else
-                everyBlock = false;
+                p.everyBlock = false;
         }
         if (any)
-            tiles.push_back(t);
+            p.tiles.push_back(t);
     }
-    std::atomic<uint64_t> samples{0}, skipped{0}, chunks{0}, chunksSkipped{0}, chunksJumped{0}, rays{0};
-    std::atomic<bool> cancelled{false};
-    const bool simd = m_params.kernel == KernelKind::Simd;
-    kernel::PixelOut* out = frame.m_pass.data();
-    const int tileCount = int(tiles.size());
+    return p;
+}
 
+// The counters of a pass, summed over the threads.
+struct PassCounts {
+    std::atomic<uint64_t> samples{0}, skipped{0}, chunks{0}, chunksSkipped{0}, chunksJumped{0}, rays{0};
+    void add(const kernel::TileStats& st)
+    {
+        samples += st.samples;
+        skipped += st.samplesSkipped;
+        chunks += st.chunks;
+        chunksSkipped += st.chunksSkipped;
+        chunksJumped += st.chunksJumped;
+        rays += st.rays;
+    }
+};
+
+// Renders the pass's blocks into `out`, tile by tile on every core. Returns false when cancelled.
+bool renderBlocks(const kernel::KernelParams& k, bool simd, const FrameBuffer& frame, const PassBlocks& pass,
+                  kernel::PixelOut* out, const std::atomic<bool>* cancel, PassCounts& counts)
+{
+    std::atomic<bool> cancelled{false};
     tbb::parallel_for(
-        tbb::blocked_range<int>(0, tileCount, 1),
+        tbb::blocked_range<int>(0, int(pass.tiles.size()), 1),
         [&](const tbb::blocked_range<int>& range) {
             for (int i = range.begin(); i != range.end(); ++i) {
                 if (cancel && cancel->load(std::memory_order_relaxed)) {
                     cancelled.store(true, std::memory_order_relaxed);
                     return;
                 }
-                const int t = tiles[size_t(i)];
+                const int t = pass.tiles[size_t(i)];
                 // The refining blocks of the tile: per row of blocks, runs of them as one rectangle
                 // (the whole tile in one call when all refine).
                 int blocks[FrameBuffer::kMaxBlocksPerTile];
                 const int nb = frame.blocksOfTile(t, blocks);
                 kernel::TileStats st;
                 for (int j = 0; j < nb;) {
-                    if (!rendered[size_t(blocks[j])]) {
+                    if (!pass.rendered[size_t(blocks[j])]) {
                         ++j;
                         continue;
                     }
                     TileRect rect = frame.block(blocks[j]);
-                    for (++j; j < nb && rendered[size_t(blocks[j])] && frame.block(blocks[j]).y0 == rect.y0; ++j)
+                    for (++j; j < nb && pass.rendered[size_t(blocks[j])] && frame.block(blocks[j]).y0 == rect.y0; ++j)
                         rect.x1 = frame.block(blocks[j]).x1;
-                    const kernel::Tile tile{rect.x0, rect.y0, rect.x1, rect.y1};
-                    if (simd)
-                        kernel::renderTileSimd(k, tile, out, st);
-                    else
-                        kernel::renderTileScalar(k, tile, out, st);
+                    renderTile(k, simd, {rect.x0, rect.y0, rect.x1, rect.y1}, out, st);
                 }
-                samples += st.samples;
-                skipped += st.samplesSkipped;
-                chunks += st.chunks;
-                chunksSkipped += st.chunksSkipped;
-                chunksJumped += st.chunksJumped;
-                rays += st.rays;
+                counts.add(st);
             }
         },
         tbb::simple_partitioner());
+    return !cancelled.load();
+}
 
-    // First-pass estimates read the pixels next to a block; those in tiles not rendered here
-    // (another worker's under TileShare) are rendered too, into m_pass where they lie: a pixel's
-    // value depends only on the pixel and the pass, so every worker decides as one whole frame
-    // does. They are work for the estimate only and not counted in the statistics (so the workers'
-    // counts still add up to one whole frame's).
-    if (frame.firstPassEstimates() && !share.all() && !cancelled.load() && !(cancel && cancel->load())) {
-        const int w = frame.width(), h = frame.height();
-        std::vector<uint8_t> inRendered(size_t(frame.tileCount()), 0);
-        for (int t : tiles)
-            inRendered[size_t(t)] = 1;
-        const int tilesX = (w + FrameBuffer::kTileSize - 1) / FrameBuffer::kTileSize;
-        auto tileOf = [&](int x, int y) { return (y / FrameBuffer::kTileSize) * tilesX + x / FrameBuffer::kTileSize; };
-        std::vector<uint8_t> ring(size_t(w) * size_t(h), 0);
-        for (int t : tiles) {
-            const TileRect r = frame.tile(t);
-            auto mark = [&](int x, int y) {
-                if (x >= 0 && y >= 0 && x < w && y < h && !inRendered[size_t(tileOf(x, y))])
-                    ring[size_t(y) * size_t(w) + size_t(x)] = 1;
-            };
-            for (int x = r.x0; x < r.x1; ++x) {
-                mark(x, r.y0 - 1);
-                mark(x, r.y1);
-            }
-            for (int y = r.y0; y < r.y1; ++y) {
-                mark(r.x0 - 1, y);
-                mark(r.x1, y);
-            }
+// First-pass estimates read the pixels next to a block; those in tiles not rendered here
+// (another worker's under TileShare) are rendered too, into `out` where they lie: a pixel's value
+// depends only on the pixel and the pass, so every worker decides as one whole frame does. They
+// are work for the estimate only and not counted in the statistics (so the workers' counts still
+// add up to one whole frame's).
+void renderEstimateRing(const kernel::KernelParams& k, bool simd, const FrameBuffer& frame, const PassBlocks& pass,
+                        kernel::PixelOut* out)
+{
+    const int w = frame.width(), h = frame.height();
+    std::vector<uint8_t> inRendered(size_t(frame.tileCount()), 0);
+    for (int t : pass.tiles)
+        inRendered[size_t(t)] = 1;
+    const int tilesX = (w + FrameBuffer::kTileSize - 1) / FrameBuffer::kTileSize;
+    auto tileOf = [&](int x, int y) { return (y / FrameBuffer::kTileSize) * tilesX + x / FrameBuffer::kTileSize; };
+    std::vector<uint8_t> ring(size_t(w) * size_t(h), 0);
+    for (int t : pass.tiles) {
+        const TileRect r = frame.tile(t);
+        auto mark = [&](int x, int y) {
+            if (x >= 0 && y >= 0 && x < w && y < h && !inRendered[size_t(tileOf(x, y))])
+                ring[size_t(y) * size_t(w) + size_t(x)] = 1;
+        };
+        for (int x = r.x0; x < r.x1; ++x) {
+            mark(x, r.y0 - 1);
+            mark(x, r.y1);
         }
-        // By rows of the frame, runs of marked pixels: no two calls write one pixel.
-        tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
-            kernel::TileStats uncounted;
-            for (int y = rows.begin(); y != rows.end(); ++y)
-                for (int x = 0; x < w;) {
-                    if (!ring[size_t(y) * size_t(w) + size_t(x)]) {
-                        ++x;
-                        continue;
-                    }
-                    const int x0 = x;
-                    while (x < w && ring[size_t(y) * size_t(w) + size_t(x)])
-                        ++x;
-                    const kernel::Tile run{x0, y, x, y + 1};
-                    if (simd)
-                        kernel::renderTileSimd(k, run, out, uncounted);
-                    else
-                        kernel::renderTileScalar(k, run, out, uncounted);
+        for (int y = r.y0; y < r.y1; ++y) {
+            mark(r.x0 - 1, y);
+            mark(r.x1, y);
+        }
+    }
+    // By rows of the frame, runs of marked pixels: no two calls write one pixel.
+    tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& rows) {
+        kernel::TileStats uncounted;
+        for (int y = rows.begin(); y != rows.end(); ++y)
+            for (int x = 0; x < w;) {
+                if (!ring[size_t(y) * size_t(w) + size_t(x)]) {
+                    ++x;
+                    continue;
                 }
-        });
-    }
+                const int x0 = x;
+                while (x < w && ring[size_t(y) * size_t(w) + size_t(x)])
+                    ++x;
+                renderTile(k, simd, {x0, y, x, y + 1}, out, uncounted);
+            }
+    });
+}
 
+}  // namespace
+
+PassStats VolumeRenderer::passStats(bool simd) const
+{
     PassStats stats;
-    stats.cancelled = cancelled.load() || (cancel && cancel->load());
-    if (!stats.cancelled) {
-        // Only the blocks rendered here: the others' pixels of m_pass hold nothing of this pass.
-        // Tiles are disjoint, and so is what their accumulation writes.
-        tbb::parallel_for(
-            tbb::blocked_range<int>(0, tileCount, 4),
-            [&](const tbb::blocked_range<int>& range) {
-                for (int i = range.begin(); i != range.end(); ++i)
-                    frame.accumulateTile(tiles[size_t(i)], rendered);
-            });
-        ++frame.m_passes;
-    }
-    const double seconds = secondsSince(start);
-    stats.everyBlock = everyBlock;
-    stats.seconds = seconds;
-    stats.samples = samples;
-    stats.samplesSkipped = skipped;
-    stats.chunks = chunks;
-    stats.chunksSkipped = chunksSkipped;
-    stats.chunksJumped = chunksJumped;
-    stats.rays = rays;
     stats.bricksTotal = m_impl->activity.brickCount();
     stats.bricksSkipped = m_params.skipBricks ? m_impl->bricksSkipped : 0;
     stats.threads = tbb::this_task_arena::max_concurrency();
     stats.simdLanes = simd ? kernel::simdLanes() : 1;
+    return stats;
+}
+
+PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>* cancel, TileShare share)
+{
+    if (frame.width() != m_params.width || frame.height() != m_params.height)
+        fail("frame buffer {}x{} does not match the render size {}x{}", frame.width(), frame.height(),
+             m_params.width, m_params.height);
+    const auto start = std::chrono::steady_clock::now();
+    const bool simd = m_params.kernel == KernelKind::Simd;
+    if (frame.converged()) {
+        // Adaptive refinement has stopped every block: the pass renders nothing.
+        ++frame.m_passes;
+        return passStats(simd);
+    }
+    kernel::KernelParams k = m_impl->params;
+    k.pass = frame.passes();
+    if (m_impl->pathlines)
+        m_impl->pathlines->bind(k);
+    bindShadows(k);
+    const PassBlocks pass = passBlocks(frame, share);
+    kernel::PixelOut* out = frame.m_pass.data();
+    PassCounts counts;
+    const bool rendered = renderBlocks(k, simd, frame, pass, out, cancel, counts);
+    if (frame.firstPassEstimates() && !share.all() && rendered && !(cancel && cancel->load()))
+        renderEstimateRing(k, simd, frame, pass, out);
+
+    PassStats stats = passStats(simd);
+    stats.cancelled = !rendered || (cancel && cancel->load());
+    if (!stats.cancelled) {
+        // Only the blocks rendered here: the others' pixels of m_pass hold nothing of this pass.
+        // Tiles are disjoint, and so is what their accumulation writes.
+        tbb::parallel_for(
+            tbb::blocked_range<int>(0, int(pass.tiles.size()), 4),
+            [&](const tbb::blocked_range<int>& range) {
+                for (int i = range.begin(); i != range.end(); ++i)
+                    frame.accumulateTile(pass.tiles[size_t(i)], pass.rendered);
+            });
+        ++frame.m_passes;
+    }
+    stats.everyBlock = pass.everyBlock;
+    stats.seconds = secondsSince(start);
+    stats.samples = counts.samples;
+    stats.samplesSkipped = counts.skipped;
+    stats.chunks = counts.chunks;
+    stats.chunksSkipped = counts.chunksSkipped;
+    stats.chunksJumped = counts.chunksJumped;
+    stats.rays = counts.rays;
     return stats;
 }
 

@@ -186,6 +186,8 @@ private:
     // With shading.shadows: brings the shadow volume up to date (what changed since the last pass)
     // and binds it into `k`, the pass's kernel view.
     void bindShadows(kernel::KernelParams& k);
+    // A pass's statistics that do not depend on what it rendered: bricks, threads, SIMD lanes.
+    PassStats passStats(bool simd) const;
     // Points the kernel's gradient (KernelParams::gradLat, gradR, gradLon) at the volume's
     // nodeGradient of `variable` (computed on the volume's first use of it).
     void bindGradient(int variable);

@@ -121,96 +121,113 @@ void RenderSession::loop()
     }
 }
 
+nlohmann::json shellKeyJson(const state::RenderState& state, const Dataset& dataset)
+{
+    nlohmann::json key = nlohmann::json::array();
+    const SphericalGrid& grid = dataset.levels().front().grid;
+    for (const TextLabel& k : render::shellKey(state.reference, float(grid.rKm.back()), float(grid.rKm.front())))
+        key.push_back({{"label", k.text}, {"color", {k.color.r, k.color.g, k.color.b}}});
+    return key;
+}
+
+void RenderSession::sendFrame(Job& job, const ViewFrames& frames, const StateRenderer::Prepared& prepared,
+                              const PassStats& stats, int pass, bool last, bool preview, const nlohmann::json& selection)
+{
+    const Request& request = job.request;
+    const state::RenderState& state = request.resolved.state;
+    const auto encodeStart = Clock::now();
+    const ImageRgba8 picture = m_renderer.picture(frames, request.resolved, false);  // the UI draws legends
+    const std::string jpeg = encodeJpeg(picture.pixels, picture.width, picture.height,
+                                        job.interactive || preview ? kJpegQualityInteractive : kJpegQualityStill);
+    // A stereo pair's depth is the two eyes' side by side, whatever the picture's layout, each
+    // downsampled on its own.
+    int depthWidth = 0, depthHeight = 0;
+    const std::vector<float> depth =
+        averagedDepthKm(frames, depthWidth, depthHeight, [](std::vector<float> eye, int& width, int& height) {
+            int w = 0, h = 0;
+            std::vector<float> out = downsampleDepth(eye, width, height, kDepthDownsample, w, h);
+            width = w;
+            height = h;
+            return out;
+        });
+    nlohmann::json header{{"type", "frame"},
+                          {"id", request.id},
+                          {"step", state.step},
+                          {"level", prepared.level},
+                          {"pass", pass},
+                          {"passes", job.passes},
+                          {"converged", last},
+                          {"interactive", job.interactive},
+                          {"playback", request.mode == FrameMode::playback},
+                          {"preview", preview},
+                          {"ranks", job.ranks},
+                          {"width", picture.width},
+                          {"height", picture.height},
+                          {"camera", job.document["camera"]},
+                          {"stats", toJson(stats, PassStatsJson::frameHeader)},
+                          {"selection", selection}};
+    if (prepared.scene)
+        header["pathlines"] = {{"lines", prepared.scene->lineCount()}, {"visible", prepared.scene->visibleCount()}};
+    if (state.stereo.enabled())
+        header["stereo"] = stereoJson(state, frames.front().width(), frames.front().height());
+    // The reference shells drawn, as the pictures' legend names them (render::shellKey): the UI's
+    // legend key.
+    if (!job.shellKey.empty())
+        header["shellKey"] = job.shellKey;
+    std::string bytes = encodeFrame(std::move(header), {reinterpret_cast<const uint8_t*>(jpeg.data()), jpeg.size()},
+                                    depth, depthWidth, depthHeight);
+    job.encodeMs += millisecondsSince(encodeStart);
+    m_sink.sendBinary(std::move(bytes), request.id);
+}
+
+PassStats RenderSession::renderPass(const Job& job, uint64_t frameNumber, int pass,
+                                    const StateRenderer::Prepared& prepared, ViewFrames& frames)
+{
+    const PassStats stats = m_context.ranks ? m_context.ranks->renderPass(m_rankSession, frameNumber, pass,
+                                                                          job.request.resolved, prepared, frames, &m_cancel)
+                                            : prepared.renderPass(frames, &m_cancel);
+    // Later passes of adaptive refinement render only the blocks that still refine and would
+    // overstate the throughput: only a pass over every pixel measures it (an exponential average
+    // shared with the other sessions).
+    if (!stats.cancelled && stats.seconds > 0 && stats.everyBlock) {
+        const double measured = prepared.estimatedSamplesPerPass / stats.seconds;
+        m_context.samplesPerSecond.store(averagedMeasure(m_context.samplesPerSecond.load(), measured));
+    }
+    return stats;
+}
+
+void RenderSession::updateSelection(const std::string& key, int step, int level, const StateRenderer::Prepared& prepared)
+{
+    if (key == m_selectionKey)
+        return;
+    const StateRenderer::View& view = prepared.views.front();  // all views share the brushes
+    const auto volume = level == prepared.level ? view.renderer->volume() : m_context.cache->get(step, level);
+    const SelectionStats s = selectedVolume(*volume, view.params.brushes);
+    m_selection = {{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}};
+    m_selectionKey = key;
+}
+
 void RenderSession::render(const Request& request)
 {
     const auto renderStart = Clock::now();
     const state::RenderState& state = request.resolved.state;
-    nlohmann::json shellKey = nlohmann::json::array();
-    {
-        const SphericalGrid& grid = m_context.dataset->levels().front().grid;
-        for (const TextLabel& k : render::shellKey(state.reference, float(grid.rKm.back()), float(grid.rKm.front())))
-            shellKey.push_back({{"label", k.text}, {"color", {k.color.r, k.color.g, k.color.b}}});
-    }
     const Dataset& dataset = *m_context.dataset;
     const int step = state.step;
-    // The state as the document says it (once a state, not a pass): the frames' camera, the
-    // selection's cache key.
-    const nlohmann::json document = toJson(state);
+    Job job{.request = request,
+            .document = state::toJson(state),
+            .shellKey = shellKeyJson(state, dataset),
+            .interactive = request.mode == FrameMode::interactive,
+            .passes = request.mode == FrameMode::interactive ? 1 : std::max(1, state.passes),
+            .ranks = m_context.ranks ? m_context.ranks->ranks() : 1};
 
     // Interactive and playback: the finest level within the time budget at the measured throughput
     // (interactiveLevelPolicy). Still: the state's level, else level 0.
-    const bool interactive = request.mode == FrameMode::interactive;
     // An interactive frame's budget also holds its time outside the pass (a drag waits for each
     // frame before it sends the next state); a step of playback refines until its time is up.
-    const LevelPolicy quickPolicy = interactiveLevelPolicy(m_context.samplesPerSecond.load(),
-                                                           interactive ? m_context.frameOverheadSeconds.load() : 0.0);
+    const LevelPolicy quickPolicy = interactiveLevelPolicy(
+        m_context.samplesPerSecond.load(), job.interactive ? m_context.frameOverheadSeconds.load() : 0.0);
     const LevelPolicy policy = request.mode != FrameMode::still ? quickPolicy : LevelPolicy{};
-    const int passes = interactive ? 1 : std::max(1, state.passes);
-    const int ranks = m_context.ranks ? m_context.ranks->ranks() : 1;
 
-    // Encodes the accumulation of a pass as one binary frame (protocol.h) and sends it.
-    double encodeMsTotal = 0;
-    auto sendFrame = [&](const ViewFrames& frames, const StateRenderer::Prepared& prepared, const PassStats& stats,
-                         int pass, bool last, bool preview, const nlohmann::json& selection) {
-        const auto encodeStart = Clock::now();
-        const ImageRgba8 picture = m_renderer.picture(frames, request.resolved, false);  // the UI draws legends
-        const std::string jpeg = encodeJpeg(picture.pixels, picture.width, picture.height,
-                                            interactive || preview ? kJpegQualityInteractive : kJpegQualityStill);
-        // A stereo pair's depth is the two eyes' side by side, whatever the picture's layout, each
-        // downsampled on its own.
-        int depthWidth = 0, depthHeight = 0;
-        const std::vector<float> depth =
-            averagedDepthKm(frames, depthWidth, depthHeight, [](std::vector<float> eye, int& width, int& height) {
-                int w = 0, h = 0;
-                std::vector<float> out = downsampleDepth(eye, width, height, kDepthDownsample, w, h);
-                width = w;
-                height = h;
-                return out;
-            });
-        nlohmann::json header{{"type", "frame"},
-                              {"id", request.id},
-                              {"step", step},
-                              {"level", prepared.level},
-                              {"pass", pass},
-                              {"passes", passes},
-                              {"converged", last},
-                              {"interactive", interactive},
-                              {"playback", request.mode == FrameMode::playback},
-                              {"preview", preview},
-                              {"ranks", ranks},
-                              {"width", picture.width},
-                              {"height", picture.height},
-                              {"camera", document["camera"]},
-                              {"stats", toJson(stats, PassStatsJson::frameHeader)},
-                              {"selection", selection}};
-        if (prepared.scene)
-            header["pathlines"] = {{"lines", prepared.scene->lineCount()}, {"visible", prepared.scene->visibleCount()}};
-        if (state.stereo.enabled())
-            header["stereo"] = stereoJson(state, frames.front().width(), frames.front().height());
-        // The reference shells drawn, as the pictures' legend names them (render::shellKey): the
-        // UI's legend key.
-        if (!shellKey.empty())
-            header["shellKey"] = shellKey;
-        std::string bytes = encodeFrame(std::move(header), {reinterpret_cast<const uint8_t*>(jpeg.data()), jpeg.size()},
-                                        depth, depthWidth, depthHeight);
-        encodeMsTotal += millisecondsSince(encodeStart);
-        m_sink.sendBinary(std::move(bytes), request.id);
-    };
-    // One pass of `prepared` into `frames` (on every rank of a distributed server). A pass that
-    // rendered every pixel measures the throughput (later passes of adaptive refinement render only
-    // the blocks that still refine and would overstate it): an exponential average shared with the
-    // other sessions.
-    auto renderPass = [&](uint64_t frameNumber, int pass, const StateRenderer::Prepared& prepared, ViewFrames& frames) {
-        const PassStats stats =
-            m_context.ranks
-                ? m_context.ranks->renderPass(m_rankSession, frameNumber, pass, request.resolved, prepared, frames, &m_cancel)
-                : prepared.renderPass(frames, &m_cancel);
-        if (!stats.cancelled && stats.seconds > 0 && stats.everyBlock) {
-            const double measured = prepared.estimatedSamplesPerPass / stats.seconds;
-            m_context.samplesPerSecond.store(averagedMeasure(m_context.samplesPerSecond.load(), measured));
-        }
-        return stats;
-    };
     // The other ranks of a distributed server prepare the frame while this one does, when its level
     // is known before preparing (still frames).
     const uint64_t frameNumber = ++m_frames;
@@ -227,16 +244,14 @@ void RenderSession::render(const Request& request)
     StateRenderer::Prepared prepared = m_renderer.prepare(request.resolved, mayPreview ? quickPolicy : policy);
     if (mayPreview && (prepared.level != 0 || prepared.divisor != 1)) {
         ViewFrames previewFrames = prepared.frames();
-        const PassStats stats = renderPass(++m_frames, 1, prepared, previewFrames);
+        const PassStats stats = renderPass(job, ++m_frames, 1, prepared, previewFrames);
         if (stats.cancelled)
             return;
         previewMs = stats.seconds * 1000.0;
-        sendFrame(previewFrames, prepared, stats, 0, false, true, nlohmann::json());
+        sendFrame(job, previewFrames, prepared, stats, 0, false, true, nlohmann::json());
         prepared = m_renderer.prepare(request.resolved, policy);  // the preview's renderers are no longer valid
     }
     const int level = prepared.level;
-    const RenderParams& params = prepared.views.front().params;  // the first view's (all share brushes)
-    VolumeRenderer& renderer = *prepared.views.front().renderer;
 
     // Playback (step = previous step + 1): load the next step in the background at this level.
     if (m_lastStep >= 0 && step == m_lastStep + 1 && step + 1 < int(dataset.steps().size())) {
@@ -252,34 +267,25 @@ void RenderSession::render(const Request& request)
     // states anyway). A step of playback takes them from the coarsest level too.
     const bool quickSelection = request.mode != FrameMode::still;
     const int selectionLevel = quickSelection ? int(dataset.levels().size()) - 1 : level;
-    const std::string selectionKey =
-        fmt::format("{}/{}/{}", step, selectionLevel, document["brushes"].dump());
-    auto updateSelection = [&] {
-        if (selectionKey == m_selectionKey)
-            return;
-        const auto volume = selectionLevel == level ? renderer.volume() : m_context.cache->get(step, selectionLevel);
-        const SelectionStats s = selectedVolume(*volume, params.brushes);
-        m_selection = {{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}};
-        m_selectionKey = selectionKey;
-    };
+    const std::string selectionKey = fmt::format("{}/{}/{}", step, selectionLevel, job.document["brushes"].dump());
     if (quickSelection)
-        updateSelection();
+        updateSelection(selectionKey, step, selectionLevel, prepared);
 
     const double waitedMs = std::chrono::duration<double, std::milli>(renderStart - request.received).count();
     const double preparedMs = millisecondsSince(renderStart);
     ViewFrames frames = prepared.frames();
     double renderMsTotal = 0, firstPassMs = 0;
     int done = 0, unsent = 0;
-    for (int pass = 1; pass <= passes; ++pass) {
+    for (int pass = 1; pass <= job.passes; ++pass) {
         if (m_cancel)
             break;
-        const PassStats stats = renderPass(frameNumber, pass, prepared, frames);
+        const PassStats stats = renderPass(job, frameNumber, pass, prepared, frames);
         if (stats.cancelled)
             break;
         // Adaptive refinement (a still state's convergenceGreyLevels) may have stopped every block:
         // this frame is final, further passes would render nothing.
         const bool refined = std::all_of(frames.begin(), frames.end(), [](const FrameBuffer& f) { return f.converged(); });
-        const bool last = pass == passes || refined;
+        const bool last = pass == job.passes || refined;
         renderMsTotal += stats.seconds * 1000.0;
         if (pass == 1)
             firstPassMs = stats.seconds * 1000.0;
@@ -292,21 +298,22 @@ void RenderSession::render(const Request& request)
             ++unsent;
             continue;
         }
-        sendFrame(frames, prepared, stats, pass, last, false, selectionKey == m_selectionKey ? m_selection : nlohmann::json());
-        if (pass == 1 && interactive) {
-            const double overhead = (preparedMs + encodeMsTotal) / 1000.0;
+        sendFrame(job, frames, prepared, stats, pass, last, false,
+                  selectionKey == m_selectionKey ? m_selection : nlohmann::json());
+        if (pass == 1 && job.interactive) {
+            const double overhead = (preparedMs + job.encodeMs) / 1000.0;
             m_context.frameOverheadSeconds.store(averagedMeasure(m_context.frameOverheadSeconds.load(), overhead));
         }
-        updateSelection();
+        updateSelection(selectionKey, step, selectionLevel, prepared);
         if (last)
             break;
     }
     if (done > 0)
         spdlog::info("{}: state {} step {} level {} {}x{} {}: waited {:.1f} ms, prepared {:.1f} ms, {}/{} passes, "
                      "first {:.1f} ms, mean {:.1f} ms/pass, encode {:.1f} ms/frame{}{}",
-                     m_name, request.id, step, level, frames.front().width() * int(frames.size()), params.height,
-                     frameModeName(request.mode), waitedMs, preparedMs, done, passes, firstPassMs,
-                     renderMsTotal / done, encodeMsTotal / std::max(1, done - unsent),
+                     m_name, request.id, step, level, frames.front().width() * int(frames.size()), frames.front().height(),
+                     frameModeName(request.mode), waitedMs, preparedMs, done, job.passes, firstPassMs,
+                     renderMsTotal / done, job.encodeMs / std::max(1, done - unsent),
                      unsent > 0 ? fmt::format(", {} passes not sent", unsent) : std::string(),
                      previewMs > 0 ? fmt::format(", after a preview of {:.1f} ms", previewMs) : std::string());
 }

@@ -85,8 +85,30 @@ private:
         FrameMode mode = FrameMode::still;
         std::chrono::steady_clock::time_point received;  // for the log: waiting and preparation time
     };
+    // One request's frames: what every frame of it shares.
+    struct Job {
+        const Request& request;
+        nlohmann::json document;  // the state as the document says it: the frames' camera, the selection's key
+        nlohmann::json shellKey;  // the reference shells drawn, as the pictures' legend names them
+        bool interactive = false;
+        int passes = 1;
+        int ranks = 1;
+        double encodeMs = 0;  // all frames' encoding so far
+    };
     void loop();
+    // Prepares the request's state (a preview first where it helps), renders its passes and sends
+    // each frame the client should see.
     void render(const Request& request);
+    // One pass of `prepared` into `frames`, on every rank of a distributed server; a pass that
+    // rendered every pixel updates the shared throughput measure.
+    render::PassStats renderPass(const Job& job, uint64_t frameNumber, int pass,
+                                 const render::StateRenderer::Prepared& prepared, render::ViewFrames& frames);
+    // Encodes the accumulation of a pass as one binary frame (protocol.h) and sends it.
+    void sendFrame(Job& job, const render::ViewFrames& frames, const render::StateRenderer::Prepared& prepared,
+                   const render::PassStats& stats, int pass, bool last, bool preview, const nlohmann::json& selection);
+    // The selection's statistics of the prepared state's brushes on `level` of `step`, unless `key`
+    // (step, level, brushes) says they are the last ones computed.
+    void updateSelection(const std::string& key, int step, int level, const render::StateRenderer::Prepared& prepared);
 
     RenderContext& m_context;
     SessionSink m_sink;
