@@ -53,29 +53,11 @@ struct Sums {
     std::vector<double> band;                   // per band depth
 };
 
-}  // namespace
-
-FeatureOptions featureOptions(double minVolumeKm3, std::vector<double> depthsKm, double bandHalfWidthKm)
+// Connected components of the selected points: each selected point joins its 13 forward neighbours of
+// the 26-neighbourhood (the other 13 join it), the lon index wrapping at the seam.
+DisjointSets connectNeighbours(const SphericalGrid& g, const std::vector<uint8_t>& selected)
 {
-    FeatureOptions o;
-    o.minVolumeKm3 = minVolumeKm3;
-    o.bandDepthsKm = std::move(depthsKm);
-    o.bandHalfWidthKm = bandHalfWidthKm;
-    return o;
-}
-
-StepFeatures extractFeatures(const StepVolume& volume, std::span<const RangeFilter> filters, const FeatureOptions& options)
-{
-    if (!(options.minVolumeKm3 >= 0))
-        fail("features: minimum volume {} km³ is negative", options.minVolumeKm3);
-    if (!(options.bandHalfWidthKm >= 0))
-        fail("features: band half-width {} km is negative", options.bandHalfWidthKm);
-    const std::vector<uint8_t> selected = selectedPoints(volume, filters);  // checks the filters
-    const SphericalGrid& g = volume.grid();
     const size_t nLat = g.nLat(), nR = g.nR(), nLon = g.nLon();
-
-    // Connected components: each selected point joins its 13 forward neighbours of the
-    // 26-neighbourhood (the other 13 join it), the lon index wrapping at the seam.
     DisjointSets sets(g.cellCount());
     for (size_t iLat = 0; iLat < nLat; ++iLat)
         for (size_t iR = 0; iR < nR; ++iR)
@@ -97,7 +79,13 @@ StepFeatures extractFeatures(const StepVolume& volume, std::span<const RangeFilt
                                 sets.unite(int64_t(i), int64_t(j));
                         }
             }
-    // Around each pole: the outermost row's points at one radius and the next are one region.
+    return sets;
+}
+
+// Around each pole: the outermost row's points at one radius and the next are one region.
+void joinPoleRings(const SphericalGrid& g, const std::vector<uint8_t>& selected, DisjointSets& sets)
+{
+    const size_t nLat = g.nLat(), nR = g.nR(), nLon = g.nLon();
     for (const size_t iLat : {size_t(0), nLat - 1}) {
         int64_t previous = -1;  // a selected point of the ring at the radius below
         for (size_t iR = 0; iR < nR; ++iR) {
@@ -115,10 +103,16 @@ StepFeatures extractFeatures(const StepVolume& volume, std::span<const RangeFilt
             previous = anchor;
         }
     }
+}
 
-    // Labels in index order (a set's root, its smallest index, is met first), and the sums.
-    StepFeatures out;
-    out.labels.assign(g.cellCount(), 0);
+// Labels in index order (a set's root, its smallest index, is met first): each selected point's set
+// numbered from 1 in `labels`, and the sums of each set (by label - 1) over its points.
+std::vector<Sums> labelAndSum(const StepVolume& volume, const std::vector<uint8_t>& selected, DisjointSets& sets,
+                              const FeatureOptions& options, std::vector<int32_t>& labels)
+{
+    const SphericalGrid& g = volume.grid();
+    const size_t nLat = g.nLat(), nR = g.nR(), nLon = g.nLon();
+    labels.assign(g.cellCount(), 0);
     std::vector<Sums> sums;
     const auto w = g.volumeFactors();
     const size_t nVar = volume.variableCount();
@@ -142,11 +136,11 @@ StepFeatures extractFeatures(const StepVolume& volume, std::span<const RangeFilt
                     s.min.assign(nVar, std::numeric_limits<double>::infinity());
                     s.max.assign(nVar, -std::numeric_limits<double>::infinity());
                     s.band.assign(nBands, 0.0);
-                    out.labels[i] = int32_t(sums.size());
+                    labels[i] = int32_t(sums.size());
                 } else {
-                    out.labels[i] = out.labels[size_t(root)];
+                    labels[i] = labels[size_t(root)];
                 }
-                Sums& s = sums[size_t(out.labels[i]) - 1];
+                Sums& s = sums[size_t(labels[i]) - 1];
                 const double v = w.at(iLat, iR, iLon);
                 const Vec3d p = sphericalToCartesianKm(g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR]);
                 ++s.points;
@@ -171,8 +165,15 @@ StepFeatures extractFeatures(const StepVolume& volume, std::span<const RangeFilt
                         s.band[b] += v;
             }
         }
+    return sums;
+}
 
-    // Features by decreasing volume (ties: the one met first in index order first), specks dropped.
+// Features by decreasing volume (ties: the one met first in index order first), specks dropped, into
+// `out`; its labels renumbered to the features' ids (0 where a speck was).
+void rankFeatures(const std::vector<Sums>& sums, const SphericalGrid& g, size_t nVar, const FeatureOptions& options,
+                  StepFeatures& out)
+{
+    const size_t nBands = options.bandDepthsKm.size();
     std::vector<size_t> order(sums.size());
     std::iota(order.begin(), order.end(), size_t(0));
     std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return sums[a].volume > sums[b].volume; });
@@ -204,6 +205,32 @@ StepFeatures extractFeatures(const StepVolume& volume, std::span<const RangeFilt
     }
     for (int32_t& label : out.labels)
         label = newId[size_t(label)];
+}
+
+}  // namespace
+
+FeatureOptions featureOptions(double minVolumeKm3, std::vector<double> depthsKm, double bandHalfWidthKm)
+{
+    FeatureOptions o;
+    o.minVolumeKm3 = minVolumeKm3;
+    o.bandDepthsKm = std::move(depthsKm);
+    o.bandHalfWidthKm = bandHalfWidthKm;
+    return o;
+}
+
+StepFeatures extractFeatures(const StepVolume& volume, std::span<const RangeFilter> filters, const FeatureOptions& options)
+{
+    if (!(options.minVolumeKm3 >= 0))
+        fail("features: minimum volume {} km³ is negative", options.minVolumeKm3);
+    if (!(options.bandHalfWidthKm >= 0))
+        fail("features: band half-width {} km is negative", options.bandHalfWidthKm);
+    const std::vector<uint8_t> selected = selectedPoints(volume, filters);  // checks the filters
+    const SphericalGrid& g = volume.grid();
+    DisjointSets sets = connectNeighbours(g, selected);
+    joinPoleRings(g, selected, sets);
+    StepFeatures out;
+    const std::vector<Sums> sums = labelAndSum(volume, selected, sets, options, out.labels);
+    rankFeatures(sums, g, volume.variableCount(), options, out);
     return out;
 }
 

@@ -542,22 +542,9 @@ void checkFileSize(const std::filesystem::path& file, uint64_t expected, const s
              what);
 }
 
-}  // namespace
-
-std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
+// The manifest's format and version (one this raypc reads), and so the encoding of its arrays.
+ValueEncoding readFormat(const ManifestReader& r, const json& j, const std::filesystem::path& manifestPath)
 {
-    const auto manifestPath = dir / format::kManifest;
-    if (!std::filesystem::is_directory(dir))
-        fail("{}: not a directory (expected a RayPC dataset made by `raypc preprocess`)", dir.string());
-    if (!std::filesystem::exists(manifestPath))
-        fail("{}: no {} (expected a RayPC dataset made by `raypc preprocess`)", dir.string(), format::kManifest);
-    const json j = parseJsonInput(readFile(manifestPath), manifestPath.string());
-    auto dataset = std::make_shared<Dataset>();
-    dataset->m_dir = dir;
-    // Every field is checked here, at open, so that what reads the dataset later (grids, bricks, the
-    // kernels) may trust it: a manifest is outside input (a damaged or edited file), never an internal
-    // check failing later.
-    const ManifestReader r(manifestPath.string());
     const std::string formatName = r.string(j, "", "format");
     if (formatName != format::kFormatName)
         r.bad("format", excerpt(j.at("format")), "'{}'", format::kFormatName);
@@ -569,18 +556,14 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
         fail("{}: format version {}, this raypc reads versions {} to {}", manifestPath.string(), version,
              format::kOldestReadableVersion, format::kVersion);
     // Version 1 stored float32 only; version 2 names its encoding.
-    dataset->m_encoding = version == 1 ? ValueEncoding::Float32
-                                       : parseEncoding(r.string(j, "", "encoding"), manifestPath.string());
-    const std::string status = r.string(j, "", "status");
-    if (status != "complete")
-        fail("{}: preprocessing did not finish (status '{}'); run `raypc preprocess` again to resume", dir.string(),
-             status);
-    dataset->m_dtMyr = r.number(j, "", "dt_myr");
-    if (!(dataset->m_dtMyr > 0))
-        r.bad("dt_myr", excerpt(j.at("dt_myr")), "a positive number of Myr");
-    const auto brickSize = static_cast<uint32_t>(r.integer(j, "", "brick_size", 1, kMaxBrickSize));
+    return version == 1 ? ValueEncoding::Float32 : parseEncoding(r.string(j, "", "encoding"), manifestPath.string());
+}
 
-    // Levels: level 0 a valid global grid; each coarser one level 0 merged in pairs (docs/format.md).
+// Levels: level 0 a valid global grid; each coarser one level 0 merged in pairs (docs/format.md).
+std::vector<LevelInfo> readLevels(const ManifestReader& r, const json& j, const std::filesystem::path& manifestPath,
+                                  uint32_t brickSize)
+{
+    std::vector<LevelInfo> out;
     const json& levels = r.array(j, "", "levels", 1, kLevelCount);
     for (size_t l = 0; l < levels.size(); ++l) {
         const std::string field = ManifestReader::path("levels", l);
@@ -593,7 +576,7 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
                 r.bad(field, fmt::format("{}x{}x{} points", info.grid.nLat(), info.grid.nR(), info.grid.nLon()),
                       "at most {} points", kMaxGridPoints);
         } else {
-            const SphericalGrid expected = dataset->m_levels.back().grid.coarsened();
+            const SphericalGrid expected = out.back().grid.coarsened();
             const std::pair<const char*, std::pair<const std::vector<double>*, const std::vector<double>*>> axes[] = {
                 {"lat_deg", {&info.grid.latDeg, &expected.latDeg}},
                 {"r_km", {&info.grid.rKm, &expected.rKm}},
@@ -611,10 +594,15 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
             }
         }
         info.bricks = BrickLayout::forGrid(info.grid, brickSize);
-        dataset->m_levels.push_back(std::move(info));
+        out.push_back(std::move(info));
     }
+    return out;
+}
 
-    // Variables: unique names and file stems, exact global statistics.
+// Variables: unique names and file stems, exact global statistics.
+std::vector<VariableInfo> readVariables(const ManifestReader& r, const json& j)
+{
+    std::vector<VariableInfo> out;
     const json& variables = r.array(j, "", "variables", 1, kMaxVariables);
     for (size_t i = 0; i < variables.size(); ++i) {
         const std::string field = ManifestReader::path("variables", i);
@@ -633,7 +621,7 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
         if (!plainFileStem(info.fileStem))
             r.bad(ManifestReader::path(field, "file_stem"), excerpt(v.at("file_stem")),
                   "a file name of letters, digits, '-', '.' and '_'");
-        for (const auto& other : dataset->m_variables) {
+        for (const auto& other : out) {
             if (other.name == info.name)
                 r.bad(ManifestReader::path(field, "name"), excerpt(v.at("name")), "a name no other variable has");
             if (other.fileStem == info.fileStem)
@@ -641,11 +629,16 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
                       "a file stem no other variable has");
         }
         info.global = r.stats(r.member(v, field, "global"), ManifestReader::path(field, "global"));
-        dataset->m_variables.push_back(std::move(info));
+        out.push_back(std::move(info));
     }
+    return out;
+}
 
-    // Steps: in order (step i's arrays are in steps/i), times finite and increasing, statistics per variable
-    // within the global ones.
+// Steps: in order (step i's arrays are in steps/i), times finite and increasing, statistics per variable
+// within the global ones of `variables`.
+std::vector<StepInfo> readSteps(const ManifestReader& r, const json& j, const std::vector<VariableInfo>& variables)
+{
+    std::vector<StepInfo> out;
     const json& steps = r.array(j, "", "steps", 1, 1000000);
     for (size_t s = 0; s < steps.size(); ++s) {
         const std::string field = ManifestReader::path("steps", s);
@@ -653,9 +646,9 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
         StepInfo info;
         info.index = static_cast<int>(r.integer(step, field, "index", s, s));
         info.timeMyr = r.number(step, field, "time_myr");
-        if (!dataset->m_steps.empty() && !(info.timeMyr > dataset->m_steps.back().timeMyr))
+        if (!out.empty() && !(info.timeMyr > out.back().timeMyr))
             r.bad(ManifestReader::path(field, "time_myr"),
-                  fmt::format("{} after {}", info.timeMyr, dataset->m_steps.back().timeMyr), "increasing times");
+                  fmt::format("{} after {}", info.timeMyr, out.back().timeMyr), "increasing times");
         info.source = r.string(step, field, "source");
         if (step.contains("origin")) {
             info.origin = step.at("origin");
@@ -666,31 +659,36 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
         for (size_t v = 0; v < stats.size(); ++v) {
             const std::string statsField = ManifestReader::path(ManifestReader::path(field, "stats"), v);
             VariableStats st = r.stats(stats[v], statsField);
-            const ValueRange global = dataset->m_variables[v].global.range;
+            const ValueRange global = variables[v].global.range;
             if (st.range.min < global.min || st.range.max > global.max)
                 r.bad(statsField, fmt::format("range [{}, {}]", st.range.min, st.range.max),
                       "a range within variables[{}].global [{}, {}]", v, global.min, global.max);
             info.stats.push_back(std::move(st));
         }
-        dataset->m_steps.push_back(std::move(info));
+        out.push_back(std::move(info));
     }
-    const json& sample = r.member(j, "", "sample");
-    dataset->m_sampleRows = r.integer(sample, "sample", "rows", 0, kMaxGridPoints);
+    return out;
+}
 
-    // The files: every array's size as the grid, the bricks and the encoding say, so that a damaged
-    // dataset is refused now, naming the file, and mapping never meets a short file.
-    const size_t valueSize = dataset->m_encoding == ValueEncoding::Uint16 ? sizeof(uint16_t) : sizeof(float);
-    const std::string encoding(encodingName(dataset->m_encoding));
-    for (size_t s = 0; s < dataset->m_steps.size(); ++s) {
+// The files: every array's size as the grid, the bricks and the encoding say, so that a damaged
+// dataset is refused now, naming the file, and mapping never meets a short file.
+void checkArrayFiles(const Dataset& dataset, size_t sampleRows, uint32_t brickSize)
+{
+    const std::filesystem::path& dir = dataset.dir();
+    const std::vector<VariableInfo>& variables = dataset.variables();
+    const bool encoded = dataset.encoding() == ValueEncoding::Uint16;
+    const size_t valueSize = encoded ? sizeof(uint16_t) : sizeof(float);
+    const std::string encoding(encodingName(dataset.encoding()));
+    for (size_t s = 0; s < dataset.steps().size(); ++s) {
         const auto stepDir = format::stepDir(dir, static_cast<int>(s));
-        checkFileSize(stepDir / format::kStepSample, uint64_t(dataset->m_sampleRows) * variables.size() * sizeof(float),
-                      fmt::format("sample.rows {} x {} variables of float32", dataset->m_sampleRows, variables.size()));
-        for (size_t l = 0; l < dataset->m_levels.size(); ++l) {
+        checkFileSize(stepDir / format::kStepSample, uint64_t(sampleRows) * variables.size() * sizeof(float),
+                      fmt::format("sample.rows {} x {} variables of float32", sampleRows, variables.size()));
+        for (size_t l = 0; l < dataset.levels().size(); ++l) {
             const auto levelDir = format::levelDir(stepDir, static_cast<int>(l));
-            const LevelInfo& level = dataset->m_levels[l];
-            for (const auto& v : dataset->m_variables) {
-                checkFileSize(dataset->m_encoding == ValueEncoding::Uint16 ? format::encodedValuesFile(levelDir, v.fileStem)
-                                                                           : format::valuesFile(levelDir, v.fileStem),
+            const LevelInfo& level = dataset.levels()[l];
+            for (const auto& v : variables) {
+                checkFileSize(encoded ? format::encodedValuesFile(levelDir, v.fileStem)
+                                      : format::valuesFile(levelDir, v.fileStem),
                               uint64_t(level.grid.cellCount()) * valueSize,
                               fmt::format("levels[{}]: {} points of {}", l, level.grid.cellCount(), encoding));
                 checkFileSize(format::boundsFile(levelDir, v.fileStem), uint64_t(level.bricks.brickCount()) * 2 * sizeof(float),
@@ -699,8 +697,41 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
             }
         }
     }
-    checkFileSize(dir / format::kSampleCoords, uint64_t(dataset->m_sampleRows) * coordinateInfos().size() * sizeof(float),
-                  fmt::format("sample.rows {} x {} coordinates of float32", dataset->m_sampleRows, coordinateInfos().size()));
+    checkFileSize(dir / format::kSampleCoords, uint64_t(sampleRows) * coordinateInfos().size() * sizeof(float),
+                  fmt::format("sample.rows {} x {} coordinates of float32", sampleRows, coordinateInfos().size()));
+}
+
+}  // namespace
+
+std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
+{
+    const auto manifestPath = dir / format::kManifest;
+    if (!std::filesystem::is_directory(dir))
+        fail("{}: not a directory (expected a RayPC dataset made by `raypc preprocess`)", dir.string());
+    if (!std::filesystem::exists(manifestPath))
+        fail("{}: no {} (expected a RayPC dataset made by `raypc preprocess`)", dir.string(), format::kManifest);
+    const json j = parseJsonInput(readFile(manifestPath), manifestPath.string());
+    auto dataset = std::make_shared<Dataset>();
+    dataset->m_dir = dir;
+    // Every field is checked here, at open, so that what reads the dataset later (grids, bricks, the
+    // kernels) may trust it: a manifest is outside input (a damaged or edited file), never an internal
+    // check failing later.
+    const ManifestReader r(manifestPath.string());
+    dataset->m_encoding = readFormat(r, j, manifestPath);
+    const std::string status = r.string(j, "", "status");
+    if (status != "complete")
+        fail("{}: preprocessing did not finish (status '{}'); run `raypc preprocess` again to resume", dir.string(),
+             status);
+    dataset->m_dtMyr = r.number(j, "", "dt_myr");
+    if (!(dataset->m_dtMyr > 0))
+        r.bad("dt_myr", excerpt(j.at("dt_myr")), "a positive number of Myr");
+    const auto brickSize = static_cast<uint32_t>(r.integer(j, "", "brick_size", 1, kMaxBrickSize));
+    dataset->m_levels = readLevels(r, j, manifestPath, brickSize);
+    dataset->m_variables = readVariables(r, j);
+    dataset->m_steps = readSteps(r, j, dataset->m_variables);
+    const json& sample = r.member(j, "", "sample");
+    dataset->m_sampleRows = r.integer(sample, "sample", "rows", 0, kMaxGridPoints);
+    checkArrayFiles(*dataset, dataset->m_sampleRows, brickSize);
     return dataset;
 }
 

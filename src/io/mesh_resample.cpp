@@ -502,11 +502,13 @@ SphericalGrid defaultResampleGrid(const ShellMesh& mesh, uint64_t maxPoints)
     return resampleGrid(mesh, size_t(std::max(nLat, 2.0)), size_t(std::max(nR, 2.0)), size_t(std::max(nLon, 4.0)));
 }
 
-std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const SphericalGrid& grid,
-                                                 const std::vector<ArrayComponent>& arrays, const std::string& what,
-                                                 ResampleCounts* counts)
+namespace {
+
+// Each piece's point arrays named in `arrays`, checked: present, with the component asked for.
+std::vector<std::vector<const vtk::PointArray*>> arraySources(const ShellMesh& mesh,
+                                                              const std::vector<ArrayComponent>& arrays,
+                                                              const std::string& what)
 {
-    // Each piece's arrays, checked.
     std::vector<std::vector<const vtk::PointArray*>> sources(mesh.pieces.size());
     for (size_t p = 0; p < mesh.pieces.size(); ++p) {
         for (const auto& a : arrays) {
@@ -519,19 +521,32 @@ std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const Sp
             sources[p].push_back(found);
         }
     }
+    return sources;
+}
 
-    const auto start = std::chrono::steady_clock::now();
-    // Every cell's candidate box, then the cells of each lat row.
+// The mesh's cells found by lat row: every cell's candidate box, and the cells whose box reaches
+// each lat row of the grid (rowCells[rowStart[row]] up to rowCells[rowStart[row + 1]], indices into
+// cells and boxes).
+struct CellsByRow {
     struct CellRef {
         uint32_t piece;
         uint32_t cell;
     };
     std::vector<CellRef> cells;
+    std::vector<CellBox> boxes;
+    std::vector<size_t> rowStart;
+    std::vector<uint32_t> rowCells;
+};
+
+CellsByRow cellsByRow(const ShellMesh& mesh, const SphericalGrid& grid)
+{
+    CellsByRow byRow;
+    auto& [cells, boxes, rowStart, rowCells] = byRow;
     cells.reserve(mesh.cellCount);
     for (size_t p = 0; p < mesh.pieces.size(); ++p)
         for (size_t c = 0; c < mesh.pieces[p].cellCount(); ++c)
             cells.push_back({uint32_t(p), uint32_t(c)});
-    std::vector<CellBox> boxes(cells.size());
+    boxes.resize(cells.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, cells.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
         Cell cell;
         std::vector<double> lons;
@@ -540,20 +555,116 @@ std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const Sp
             boxes[i] = boxOf(cell, grid, lons);
         }
     });
-    std::vector<size_t> rowStart(grid.nLat() + 1, 0);
+    rowStart.assign(grid.nLat() + 1, 0);
     for (const CellBox& b : boxes)
         for (uint32_t row = b.lat0; row < b.lat1; ++row)
             ++rowStart[row + 1];
     for (size_t row = 0; row < grid.nLat(); ++row)
         rowStart[row + 1] += rowStart[row];
-    std::vector<uint32_t> rowCells(rowStart.back());
+    rowCells.resize(rowStart.back());
     {
         std::vector<size_t> fill(rowStart.begin(), rowStart.end() - 1);
         for (size_t i = 0; i < boxes.size(); ++i)
             for (uint32_t row = boxes[i].lat0; row < boxes[i].lat1; ++row)
                 rowCells[fill[row]++] = uint32_t(i);
     }
+    return byRow;
+}
 
+// The cell's values of every array (`sources`: its piece's), node by node: nodeValues[a * nodeCount + n]
+// is array a at node n.
+void gatherNodeValues(const Cell& cell, const std::vector<const vtk::PointArray*>& sources,
+                      const std::vector<ArrayComponent>& arrays, std::vector<double>& nodeValues)
+{
+    nodeValues.resize(arrays.size() * size_t(cell.nodeCount));
+    for (size_t a = 0; a < arrays.size(); ++a) {
+        const vtk::PointArray& src = *sources[a];
+        const size_t stride = size_t(src.components), component = size_t(std::max(arrays[a].component, 0));
+        for (int n = 0; n < cell.nodeCount; ++n)
+            nodeValues[a * size_t(cell.nodeCount) + size_t(n)] = src.values[cell.pointIndex(n) * stride + component];
+    }
+}
+
+// Resamples the grid's lat row `row` into `out` (arrays x grid points): a point takes the values of the
+// first cell it lies in, else of the cell it lies nearest to within kSnapReference (its values at
+// the nearest boundary), else stays NaN. Returns the row's counts (points left 0).
+ResampleCounts resampleRow(size_t row, const ShellMesh& mesh, const SphericalGrid& grid, const CellsByRow& byRow,
+                           const std::vector<std::vector<const vtk::PointArray*>>& sources,
+                           const std::vector<ArrayComponent>& arrays, const std::vector<double>& cosLon,
+                           const std::vector<double>& sinLon, std::vector<std::vector<float>>& out)
+{
+    const auto& [cells, boxes, rowStart, rowCells] = byRow;
+    const size_t rowPoints = grid.nR() * grid.nLon();
+    std::vector<float> best(rowPoints, INFINITY);  // how far outside the best cell so far (0: inside)
+    Cell cell;
+    std::vector<double> value, grad, nodeValues;
+    const double cosLat = std::cos(grid.latDeg[row] * kRadPerDeg), sinLat = std::sin(grid.latDeg[row] * kRadPerDeg);
+    for (size_t k = rowStart[row]; k < rowStart[row + 1]; ++k) {
+        const size_t i = rowCells[k];
+        const CellBox& box = boxes[i];
+        const vtk::Piece& piece = mesh.pieces[cells[i].piece];
+        bool gathered = false, warm = false;
+        double warmRef[3] = {0, 0, 0};
+        for (uint32_t iR = box.r0; iR < box.r1; ++iR) {
+            const double r = grid.rKm[iR];
+            for (const auto& [lon0, lon1] : box.lon)
+                for (uint32_t iLon = lon0; iLon < lon1; ++iLon) {
+                    const size_t local = size_t(iR) * grid.nLon() + iLon;
+                    if (best[local] == 0)
+                        continue;  // already inside an earlier cell
+                    const double target[3] = {r * cosLat * cosLon[iLon], r * cosLat * sinLon[iLon], r * sinLat};
+                    if (target[0] < box.lo[0] || target[0] > box.hi[0] || target[1] < box.lo[1] ||
+                        target[1] > box.hi[1] || target[2] < box.lo[2] || target[2] > box.hi[2])
+                        continue;
+                    if (!gathered) {
+                        cell.gather(piece, cells[i].cell);
+                        // The cell's values of every array, node by node, gathered once.
+                        gatherNodeValues(cell, sources[cells[i].piece], arrays, nodeValues);
+                        gathered = true;
+                    }
+                    double ref[3] = {warmRef[0], warmRef[1], warmRef[2]};
+                    if (!invertMap(cell, target, ref, warm, value, grad))
+                        continue;
+                    if (outsideBy(cell.type, ref) <= kSnapReference) {
+                        std::copy(ref, ref + 3, warmRef);
+                        warm = true;
+                    }
+                    double outside = outsideBy(cell.type, ref);
+                    if (outside <= kInsideTolerance)
+                        outside = 0;
+                    if (outside > kSnapReference || !(outside < best[local]))
+                        continue;
+                    best[local] = float(outside);
+                    if (outside > 0)
+                        clampToCell(cell.type, ref);
+                    shapeFunctions(cell, ref, value.data(), nullptr);
+                    const size_t index = grid.index(row, iR, iLon);
+                    for (size_t a = 0; a < arrays.size(); ++a) {
+                        const double* v = &nodeValues[a * size_t(cell.nodeCount)];
+                        double sum = 0;
+                        for (int n = 0; n < cell.nodeCount; ++n)
+                            sum += value[size_t(n)] * v[n];
+                        out[a][index] = float(sum);
+                    }
+                }
+        }
+    }
+    ResampleCounts local;
+    for (const float b : best)
+        (b == 0 ? local.inside : std::isfinite(b) ? local.snapped : local.missing) += 1;
+    return local;
+}
+
+}  // namespace
+
+std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const SphericalGrid& grid,
+                                                 const std::vector<ArrayComponent>& arrays, const std::string& what,
+                                                 ResampleCounts* counts)
+{
+    const auto sources = arraySources(mesh, arrays, what);
+    const auto start = std::chrono::steady_clock::now();
+    // Every cell's candidate box, then the cells of each lat row.
+    const CellsByRow byRow = cellsByRow(mesh, grid);
     const double boxSeconds = secondsSince(start);
     std::vector<std::vector<float>> out(arrays.size(), std::vector<float>(grid.cellCount(), NAN));
     std::vector<double> cosLon(grid.nLon()), sinLon(grid.nLon());
@@ -563,77 +674,12 @@ std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const Sp
     ResampleCounts total;
     total.points = grid.cellCount();
     tbb::parallel_for(size_t(0), grid.nLat(), [&](size_t row) {
-        const size_t rowPoints = grid.nR() * grid.nLon();
-        std::vector<float> best(rowPoints, INFINITY);  // how far outside the best cell so far (0: inside)
-        Cell cell;
-        std::vector<double> value, grad, nodeValues;
-        const double cosLat = std::cos(grid.latDeg[row] * kRadPerDeg), sinLat = std::sin(grid.latDeg[row] * kRadPerDeg);
-        for (size_t k = rowStart[row]; k < rowStart[row + 1]; ++k) {
-            const size_t i = rowCells[k];
-            const CellBox& box = boxes[i];
-            const vtk::Piece& piece = mesh.pieces[cells[i].piece];
-            bool gathered = false, warm = false;
-            double warmRef[3] = {0, 0, 0};
-            for (uint32_t iR = box.r0; iR < box.r1; ++iR) {
-                const double r = grid.rKm[iR];
-                for (const auto& [lon0, lon1] : box.lon)
-                    for (uint32_t iLon = lon0; iLon < lon1; ++iLon) {
-                        const size_t local = size_t(iR) * grid.nLon() + iLon;
-                        if (best[local] == 0)
-                            continue;  // already inside an earlier cell
-                        const double target[3] = {r * cosLat * cosLon[iLon], r * cosLat * sinLon[iLon], r * sinLat};
-                        if (target[0] < box.lo[0] || target[0] > box.hi[0] || target[1] < box.lo[1] ||
-                            target[1] > box.hi[1] || target[2] < box.lo[2] || target[2] > box.hi[2])
-                            continue;
-                        if (!gathered) {
-                            cell.gather(piece, cells[i].cell);
-                            // The cell's values of every array, node by node, gathered once.
-                            nodeValues.resize(arrays.size() * size_t(cell.nodeCount));
-                            for (size_t a = 0; a < arrays.size(); ++a) {
-                                const vtk::PointArray& src = *sources[cells[i].piece][a];
-                                const size_t stride = size_t(src.components),
-                                             component = size_t(std::max(arrays[a].component, 0));
-                                for (int n = 0; n < cell.nodeCount; ++n)
-                                    nodeValues[a * size_t(cell.nodeCount) + size_t(n)] =
-                                        src.values[cell.pointIndex(n) * stride + component];
-                            }
-                            gathered = true;
-                        }
-                        double ref[3] = {warmRef[0], warmRef[1], warmRef[2]};
-                        if (!invertMap(cell, target, ref, warm, value, grad))
-                            continue;
-                        if (outsideBy(cell.type, ref) <= kSnapReference) {
-                            std::copy(ref, ref + 3, warmRef);
-                            warm = true;
-                        }
-                        double outside = outsideBy(cell.type, ref);
-                        if (outside <= kInsideTolerance)
-                            outside = 0;
-                        if (outside > kSnapReference || !(outside < best[local]))
-                            continue;
-                        best[local] = float(outside);
-                        if (outside > 0)
-                            clampToCell(cell.type, ref);
-                        shapeFunctions(cell, ref, value.data(), nullptr);
-                        const size_t index = grid.index(row, iR, iLon);
-                        for (size_t a = 0; a < arrays.size(); ++a) {
-                            const double* v = &nodeValues[a * size_t(cell.nodeCount)];
-                            double sum = 0;
-                            for (int n = 0; n < cell.nodeCount; ++n)
-                                sum += value[size_t(n)] * v[n];
-                            out[a][index] = float(sum);
-                        }
-                    }
-            }
-        }
-        ResampleCounts local;
-        for (const float b : best)
-            (b == 0 ? local.inside : std::isfinite(b) ? local.snapped : local.missing) += 1;
+        const ResampleCounts local = resampleRow(row, mesh, grid, byRow, sources, arrays, cosLon, sinLon, out);
         std::lock_guard lock(countMutex);
         total.inside += local.inside, total.snapped += local.snapped, total.missing += local.missing;
     });
-    spdlog::debug("{}: {} candidate boxes in {:.2f} s ({} cell rows), points located in {:.2f} s", what, cells.size(),
-                  boxSeconds, rowCells.size(), secondsSince(start) - boxSeconds);
+    spdlog::debug("{}: {} candidate boxes in {:.2f} s ({} cell rows), points located in {:.2f} s", what,
+                  byRow.cells.size(), boxSeconds, byRow.rowCells.size(), secondsSince(start) - boxSeconds);
     if (counts)
         *counts = total;
     return out;

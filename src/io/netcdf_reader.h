@@ -99,12 +99,12 @@ FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& op
 // fit, missing / non-finite values (unless options.fillMissing), or a value beyond float32.
 Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& options = {});
 
-// Expands files and directories (all *.nc inside) and sorts them in natural order.
 // The velocity's components vx, vy, vz of `snapshot`, when it has all three, into Cartesian m/s:
 // their units converted, and spherical ones (radial, north, east) turned at each grid point. Throws
 // raypc::Error naming `what` and the component for units that are not a velocity's.
 void normaliseVelocity(Snapshot& snapshot, ReaderOptions::VelocityFrame frame, const std::string& what);
 
+// Expands files and directories (all *.nc inside) and sorts them in natural order.
 std::vector<std::filesystem::path> listSnapshotFiles(const std::vector<std::filesystem::path>& inputs);
 
 }  // namespace raypc

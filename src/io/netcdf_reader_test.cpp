@@ -220,6 +220,39 @@ data:
                        extra, r, values);
 }
 
+// A file "small" like smallCdl's with fewer attributes (lon and temperature without units) and a
+// temperature of CDL `type`; `lat` and `temperature` are their data (`_`: a value never written).
+std::string plainCdl(const std::string& type, const std::string& lat, const std::string& temperature)
+{
+    return fmt::format(R"(netcdf small {{
+dimensions: lat = 2 ; r = 2 ; lon = 4 ;
+variables:
+  double lat(lat) ; lat:units = "degrees_north" ; double r(r) ; r:units = "km" ; double lon(lon) ;
+  {} temperature(lat, r, lon) ;
+data:
+  lat = {} ; r = 3485, 6371 ; lon = 0, 90, 180, 270 ;
+  temperature = {} ;
+}})",
+                       type, lat, temperature);
+}
+
+// A file `name` on a grid of depth 2 (km, positive down) x lat 2 x lon 4 holding `variables` (CDL
+// declarations on those dims) with their `data`.
+std::string depthGridCdl(const std::string& name, const std::string& variables, const std::string& data)
+{
+    return fmt::format(R"(netcdf {} {{
+dimensions: depth = 2 ; lat = 2 ; lon = 4 ;
+variables:
+  double depth(depth) ; depth:units = "km" ; depth:positive = "down" ;
+  double lat(lat) ; lat:units = "degrees_north" ; double lon(lon) ; lon:units = "degrees_east" ;
+{}
+data:
+  depth = 100, 2000 ; lat = -45, 45 ; lon = 0, 90, 180, 270 ;
+{}
+}})",
+                       name, variables, data);
+}
+
 ReaderOptions temperatureOnly()
 {
     ReaderOptions o;
@@ -325,15 +358,7 @@ TEST(NetcdfReaderBadInput, DefaultFillValuesAreMissing)
         EXPECT_NEAR(s.fields[0].values[s.grid.index(1, 1, 1)], (5 + 7 + 8 + 13 + 14 + 15 + 16) / 7.0, 1e-5) << kind;
     }
     // Integer variables too (NC_FILL_SHORT = -32767).
-    const std::string cdl = R"(netcdf small {
-dimensions: lat = 2 ; r = 2 ; lon = 4 ;
-variables:
-  double lat(lat) ; lat:units = "degrees_north" ; double r(r) ; r:units = "km" ; double lon(lon) ;
-  short temperature(lat, r, lon) ;
-data:
-  lat = 45, -45 ; r = 3485, 6371 ; lon = 0, 90, 180, 270 ;
-  temperature = 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, _, 13, 14, 15, 16 ;
-})";
+    const std::string cdl = plainCdl("short", "45, -45", "1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, _, 13, 14, 15, 16");
     expectReadError(ncgen(dir.path(), "short", cdl), temperatureOnly(), {"1 of 16 values are missing", "-32767"});
 }
 
@@ -342,15 +367,7 @@ data:
 TEST(NetcdfReaderBadInput, UnwrittenCoordinate)
 {
     TempDir dir("unwrittencoord");
-    const std::string cdl = R"(netcdf small {
-dimensions: lat = 2 ; r = 2 ; lon = 4 ;
-variables:
-  double lat(lat) ; lat:units = "degrees_north" ; double r(r) ; r:units = "km" ; double lon(lon) ;
-  float temperature(lat, r, lon) ;
-data:
-  lat = _, _ ; r = 3485, 6371 ; lon = 0, 90, 180, 270 ;
-  temperature = 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16 ;
-})";
+    const std::string cdl = plainCdl("float", "_, _", "1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16");
     expectReadError(ncgen(dir.path(), "unwritten", cdl), temperatureOnly(),
                     {"unwritten.nc: coordinate 'lat' holds its fill value (9.96921e+36) at 2 of its 2 points: it was "
                      "never written"});
@@ -423,20 +440,14 @@ data:
 TEST(NetcdfReader, SphericalVelocityInOtherUnitsBecomesCartesianMetresPerSecond)
 {
     TempDir dir("sphvel");
-    const std::string cdl = R"(netcdf vel {
-dimensions: depth = 2 ; lat = 2 ; lon = 4 ;
-variables:
-  double depth(depth) ; depth:units = "km" ; depth:positive = "down" ;
-  double lat(lat) ; lat:units = "degrees_north" ; double lon(lon) ; lon:units = "degrees_east" ;
+    const std::string cdl = depthGridCdl("vel", R"(
   float vr(depth, lat, lon) ; vr:units = "cm/yr" ;
   float vn(depth, lat, lon) ; vn:units = "cm yr-1" ;
-  float ve(depth, lat, lon) ; ve:units = "cm/a" ;
-data:
-  depth = 100, 2000 ; lat = -45, 45 ; lon = 0, 90, 180, 270 ;
+  float ve(depth, lat, lon) ; ve:units = "cm/a" ;)",
+                                         R"(
   vr = 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1 ;
   vn = 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 ;
-  ve = 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2 ;
-})";
+  ve = 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2 ;)");
     const auto path = ncgen(dir.path(), "vel", cdl);
     ReaderOptions o;
     o.variableNames = {{"vx", "vr"}, {"vy", "vn"}, {"vz", "ve"}};
@@ -457,17 +468,11 @@ data:
     ReaderOptions missing = o;
     missing.variableNames["vy"] = "vnorth";
     expectReadError(path, missing, {"vel.nc", "missing variable 'vnorth' (mapped from 'vy')"});
-    const std::string furlongs = R"(netcdf odd {
-dimensions: depth = 2 ; lat = 2 ; lon = 4 ;
-variables:
-  double depth(depth) ; depth:units = "km" ; depth:positive = "down" ;
-  double lat(lat) ; lat:units = "degrees_north" ; double lon(lon) ; lon:units = "degrees_east" ;
-  float vx(depth, lat, lon) ; vx:units = "furlongs/fortnight" ; float vy(depth, lat, lon) ; float vz(depth, lat, lon) ;
-data:
-  depth = 100, 2000 ; lat = -45, 45 ; lon = 0, 90, 180, 270 ;
+    const std::string furlongs = depthGridCdl("odd", R"(
+  float vx(depth, lat, lon) ; vx:units = "furlongs/fortnight" ; float vy(depth, lat, lon) ; float vz(depth, lat, lon) ;)",
+                                              R"(
   vx = 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 ; vy = 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 ;
-  vz = 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 ;
-})";
+  vz = 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 ;)");
     expectReadError(ncgen(dir.path(), "odd", furlongs), {}, {"odd.nc: vx: velocity units 'furlongs/fortnight'"});
 }
 

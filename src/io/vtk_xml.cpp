@@ -381,21 +381,11 @@ pugi::xml_node loadVtkFile(pugi::xml_document& doc, std::string_view text, const
     return root;
 }
 
-}  // namespace
-
-Piece readVtu(const fs::path& path)
+// The XML of a .vtu file's `bytes`: raw appended data may hold any byte, so the XML parser sees the
+// file only up to AppendedData. Notes in `ctx` where the appended data starts and how it is encoded.
+std::string xmlBeforeAppendedData(const std::string& bytes, FileContext& ctx)
 {
-    if (!fs::is_regular_file(path))
-        fail("{}: no such file", path.string());
-    return parseVtu(readFile(path), path.string());
-}
-
-Piece parseVtu(const std::string& bytes, const std::string& file)
-{
-
-    // Raw appended data may hold any byte, so the XML parser sees the file only up to AppendedData.
-    FileContext ctx;
-    ctx.file = file;
+    const std::string& file = ctx.file;
     std::string xml = bytes;
     const size_t appendedAt = bytes.find("<AppendedData");
     if (appendedAt != std::string::npos) {
@@ -414,9 +404,13 @@ Piece parseVtu(const std::string& bytes, const std::string& file)
         ctx.appended = std::string_view(bytes).substr(underscore + 1);
         xml = bytes.substr(0, appendedAt) + "</VTKFile>";
     }
+    return xml;
+}
 
-    pugi::xml_document doc;
-    const pugi::xml_node root = loadVtkFile(doc, xml, file, "UnstructuredGrid");
+// How the file's binary data is laid out (VTKFile's byte_order, header_type, compressor), into `ctx`.
+void readBinaryLayout(const pugi::xml_node& root, FileContext& ctx)
+{
+    const std::string& file = ctx.file;
     const std::string order = root.attribute("byte_order").as_string("LittleEndian");
     if (order != "LittleEndian" && order != "BigEndian")
         fail("{}: byte_order \"{}\", expected LittleEndian or BigEndian", file, excerpt(order));
@@ -431,11 +425,12 @@ Piece parseVtu(const std::string& bytes, const std::string& file)
              "with zlib)",
              file, excerpt(compressor));
     ctx.zlib = !compressor.empty();
+}
 
-    const pugi::xml_node grid = root.child("UnstructuredGrid");
-    if (!grid)
-        fail("{}: no UnstructuredGrid element", file);
-    Piece piece;
+// The grid's FieldData: its TIME and CYCLE (deal.II writes them) into `piece`.
+void readFieldData(const pugi::xml_node& grid, const FileContext& ctx, Piece& piece)
+{
+    const std::string& file = ctx.file;
     for (const pugi::xml_node a : grid.child("FieldData").children("DataArray")) {
         const std::string name = a.attribute("Name").as_string();
         if (name != "TIME" && name != "CYCLE")
@@ -456,7 +451,11 @@ Piece parseVtu(const std::string& bytes, const std::string& file)
             piece.cycle = int64_t(cycle);
         }
     }
+}
 
+// The grid's one Piece element (deal.II and VTK write one per file).
+pugi::xml_node onlyPiece(const pugi::xml_node& grid, const std::string& file)
+{
     const auto pieces = grid.children("Piece");
     const pugi::xml_node p = grid.child("Piece");
     if (!p)
@@ -464,18 +463,26 @@ Piece parseVtu(const std::string& bytes, const std::string& file)
     if (std::distance(pieces.begin(), pieces.end()) != 1)
         fail("{}: {} Piece elements in one file, expected 1 (as deal.II and VTK write)", file,
              std::distance(pieces.begin(), pieces.end()));
-    const auto count = [&](const char* attr) {
-        const auto a = p.attribute(attr);
-        if (!a)
-            fail("{}: Piece without {}", file, attr);
-        const uint64_t n = wholeNumber(a, 0, file, fmt::format("Piece {}", attr));
-        // A point or cell takes at least one byte of the file, compressed: more is a corrupt count.
-        if (n > bytes.size() * 1032)
-            fail("{}: Piece {} {} is more than a file of {} bytes can hold", file, attr, n, bytes.size());
-        return uint64_t(n);
-    };
-    const uint64_t nPoints = count("NumberOfPoints"), nCells = count("NumberOfCells");
+    return p;
+}
 
+// A Piece's count of points or cells (`attr`), at most what a file of `fileBytes` bytes can hold.
+uint64_t pieceCount(const pugi::xml_node& p, const char* attr, size_t fileBytes, const std::string& file)
+{
+    const auto a = p.attribute(attr);
+    if (!a)
+        fail("{}: Piece without {}", file, attr);
+    const uint64_t n = wholeNumber(a, 0, file, fmt::format("Piece {}", attr));
+    // A point or cell takes at least one byte of the file, compressed: more is a corrupt count.
+    if (n > fileBytes * 1032)
+        fail("{}: Piece {} {} is more than a file of {} bytes can hold", file, attr, n, fileBytes);
+    return uint64_t(n);
+}
+
+// The Piece's points (x, y, z each), all finite, into `piece`.
+void readPoints(const pugi::xml_node& p, uint64_t nPoints, const FileContext& ctx, Piece& piece)
+{
+    const std::string& file = ctx.file;
     const pugi::xml_node pointsArray = p.child("Points").child("DataArray");
     if (!pointsArray)
         fail("{}: no Points DataArray", file);
@@ -485,7 +492,13 @@ Piece parseVtu(const std::string& bytes, const std::string& file)
     for (size_t i = 0; i < piece.points.size(); ++i)
         if (!std::isfinite(piece.points[i]))
             fail("{}: point {} has a non-finite coordinate ({})", file, i / 3, piece.points[i]);
+}
 
+// The Piece's cells into `piece`: offsets increasing, connectivity within the points, types RayPC
+// reads with as many points as the type has.
+void readCells(const pugi::xml_node& p, uint64_t nCells, uint64_t nPoints, const FileContext& ctx, Piece& piece)
+{
+    const std::string& file = ctx.file;
     const pugi::xml_node cells = p.child("Cells");
     pugi::xml_node conn, offs, types;
     for (const pugi::xml_node a : cells.children("DataArray")) {
@@ -524,7 +537,13 @@ Piece parseVtu(const std::string& bytes, const std::string& file)
         if (cellDegree(piece.types[c], n) == 0)
             fail("{}: cell {} of VTK type {} has {} points", file, c, code, n);
     }
+}
 
+// The Piece's PointData arrays into `piece`: uniquely named, 1 to 9 components, a finite value within
+// float32's range at every point.
+void readPointData(const pugi::xml_node& p, uint64_t nPoints, const FileContext& ctx, Piece& piece)
+{
+    const std::string& file = ctx.file;
     for (const pugi::xml_node a : p.child("PointData").children("DataArray")) {
         PointArray array;
         array.name = a.attribute("Name").as_string();
@@ -554,6 +573,36 @@ Piece parseVtu(const std::string& bytes, const std::string& file)
         }
         piece.pointData.push_back(std::move(array));
     }
+}
+
+}  // namespace
+
+Piece readVtu(const fs::path& path)
+{
+    if (!fs::is_regular_file(path))
+        fail("{}: no such file", path.string());
+    return parseVtu(readFile(path), path.string());
+}
+
+Piece parseVtu(const std::string& bytes, const std::string& file)
+{
+    FileContext ctx;
+    ctx.file = file;
+    const std::string xml = xmlBeforeAppendedData(bytes, ctx);
+    pugi::xml_document doc;
+    const pugi::xml_node root = loadVtkFile(doc, xml, file, "UnstructuredGrid");
+    readBinaryLayout(root, ctx);
+    const pugi::xml_node grid = root.child("UnstructuredGrid");
+    if (!grid)
+        fail("{}: no UnstructuredGrid element", file);
+    Piece piece;
+    readFieldData(grid, ctx, piece);
+    const pugi::xml_node p = onlyPiece(grid, file);
+    const uint64_t nPoints = pieceCount(p, "NumberOfPoints", bytes.size(), file);
+    const uint64_t nCells = pieceCount(p, "NumberOfCells", bytes.size(), file);
+    readPoints(p, nPoints, ctx, piece);
+    readCells(p, nCells, nPoints, ctx, piece);
+    readPointData(p, nPoints, ctx, piece);
     return piece;
 }
 

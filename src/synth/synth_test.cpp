@@ -10,6 +10,7 @@
 #include <netcdf.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -37,6 +38,20 @@ LocalVelocity localVelocity(const Snapshot& s, size_t idx, double latDeg, double
 }
 
 double depthOf(const SphericalGrid& g, size_t iR) { return kSurfaceRadiusKm - g.rKm[iR]; }
+
+// Calls fn(iLat, iR, iLon, index) for every grid point whose depth lies within [d0, d1] km, in
+// canonical order.
+template <class Fn>
+void forEachPointAtDepths(const SphericalGrid& g, double d0, double d1, Fn fn)
+{
+    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+        for (size_t iR = 0; iR < g.nR(); ++iR) {
+            if (depthOf(g, iR) < d0 || depthOf(g, iR) > d1)
+                continue;
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+                fn(iLat, iR, iLon, g.index(iLat, iR, iLon));
+        }
+}
 
 // Area weight of a lat row's dual cell, computed here independently of the generator.
 double rowArea(const SphericalGrid& g, size_t iLat)
@@ -66,6 +81,26 @@ SynthOptions demoOptions(uint64_t seed = 1)
     SynthOptions o;
     o.seed = seed;
     return o;
+}
+
+// The demo's model on a small grid, for tests that need only a few cells (the writer, determinism).
+SynthOptions smallOptions(int nLat, int nR, int nLon)
+{
+    SynthOptions o = demoOptions();
+    o.nLat = nLat;
+    o.nR = nR;
+    o.nLon = nLon;
+    return o;
+}
+
+// The names of the files in `dir`, sorted.
+std::vector<std::string> fileNames(const fs::path& dir)
+{
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir))
+        names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
 }
 
 const Snapshot& demoSnapshot()
@@ -244,16 +279,10 @@ TEST(SynthModel, RadialVelocityFollowsTemperature)
     }
     // Over the whole mid mantle, radial velocity and temperature anomaly are positively correlated.
     std::vector<double> ur, anomaly;
-    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
-        for (size_t iR = 0; iR < g.nR(); ++iR) {
-            if (depthOf(g, iR) < 800.0 || depthOf(g, iR) > 2600.0)
-                continue;
-            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
-                const size_t i = g.index(iLat, iR, iLon);
-                ur.push_back(localVelocity(s, i, g.latDeg[iLat], g.lonDeg[iLon]).ur);
-                anomaly.push_back(dT[i]);
-            }
-        }
+    forEachPointAtDepths(g, 800.0, 2600.0, [&](size_t iLat, size_t, size_t iLon, size_t i) {
+        ur.push_back(localVelocity(s, i, g.latDeg[iLat], g.lonDeg[iLon]).ur);
+        anomaly.push_back(dT[i]);
+    });
     const double c = correlation(ur, anomaly);
     std::printf("corr(ur, dT) in the mid mantle: %.3f\n", c);
     EXPECT_GT(c, 0.3);
@@ -338,23 +367,18 @@ std::pair<double, double> meanSpeeds(const Snapshot& s, double d0, double d1)
     const SphericalGrid& g = s.grid;
     const auto omega = syntheticRotationRadPerSecond(demoOptions());
     double ur = 0, horizontal = 0, weight = 0;
-    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
-        for (size_t iR = 0; iR < g.nR(); ++iR) {
-            if (depthOf(g, iR) < d0 || depthOf(g, iR) > d1)
-                continue;
-            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
-                const LocalVelocity u = localVelocity(s, g.index(iLat, iR, iLon), g.latDeg[iLat], g.lonDeg[iLon]);
-                // Rotation omega x p at this point, in east/north components.
-                const Vec3d p = sphericalToCartesianKm(g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR] * 1000.0);
-                const Vec3d w{omega[1] * p.z - omega[2] * p.y, omega[2] * p.x - omega[0] * p.z, omega[0] * p.y - omega[1] * p.x};
-                const double lat = degToRad(g.latDeg[iLat]), lon = degToRad(g.lonDeg[iLon]);
-                const double wEast = -w.x * std::sin(lon) + w.y * std::cos(lon);
-                const double wNorth = -w.x * std::sin(lat) * std::cos(lon) - w.y * std::sin(lat) * std::sin(lon) + w.z * std::cos(lat);
-                ur += rowArea(g, iLat) * std::abs(u.ur);
-                horizontal += rowArea(g, iLat) * std::hypot(u.east - wEast, u.north - wNorth);
-                weight += rowArea(g, iLat);
-            }
-        }
+    forEachPointAtDepths(g, d0, d1, [&](size_t iLat, size_t iR, size_t iLon, size_t i) {
+        const LocalVelocity u = localVelocity(s, i, g.latDeg[iLat], g.lonDeg[iLon]);
+        // Rotation omega x p at this point, in east/north components.
+        const Vec3d p = sphericalToCartesianKm(g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR] * 1000.0);
+        const Vec3d w{omega[1] * p.z - omega[2] * p.y, omega[2] * p.x - omega[0] * p.z, omega[0] * p.y - omega[1] * p.x};
+        const double lat = degToRad(g.latDeg[iLat]), lon = degToRad(g.lonDeg[iLon]);
+        const double wEast = -w.x * std::sin(lon) + w.y * std::cos(lon);
+        const double wNorth = -w.x * std::sin(lat) * std::cos(lon) - w.y * std::sin(lat) * std::sin(lon) + w.z * std::cos(lat);
+        ur += rowArea(g, iLat) * std::abs(u.ur);
+        horizontal += rowArea(g, iLat) * std::hypot(u.east - wEast, u.north - wNorth);
+        weight += rowArea(g, iLat);
+    });
     return {ur / weight, horizontal / weight};
 }
 
@@ -377,10 +401,7 @@ TEST(SynthModel, StagnationLayersSlowVerticalButNotLateralFlow)
 
 TEST(SynthModel, DeterministicForASeed)
 {
-    SynthOptions o = demoOptions();
-    o.nLat = 16;
-    o.nR = 12;
-    o.nLon = 32;
+    SynthOptions o = smallOptions(16, 12, 32);
     const Snapshot a = synthesizeSnapshot(o, 4.0), b = synthesizeSnapshot(o, 4.0);
     o.seed = 2;
     const Snapshot c = synthesizeSnapshot(o, 4.0);
@@ -814,16 +835,10 @@ TEST(SynthModel, ColdStagnatingMaterialNear660)
     const SphericalGrid& g = s.grid;
     const auto& dT = s.find("temperature anomaly")->values;
     double volume = 0;
-    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
-        for (size_t iR = 0; iR < g.nR(); ++iR) {
-            if (depthOf(g, iR) < 560.0 || depthOf(g, iR) > 760.0)
-                continue;
-            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
-                const size_t i = g.index(iLat, iR, iLon);
-                if (dT[i] < -100.0 && localVelocity(s, i, g.latDeg[iLat], g.lonDeg[iLon]).ur <= 0.0)
-                    volume += rowArea(g, iLat);
-            }
-        }
+    forEachPointAtDepths(g, 560.0, 760.0, [&](size_t iLat, size_t, size_t iLon, size_t i) {
+        if (dT[i] < -100.0 && localVelocity(s, i, g.latDeg[iLat], g.lonDeg[iLon]).ur <= 0.0)
+            volume += rowArea(g, iLat);
+    });
     std::printf("cold, non-rising cells at 560-760 km: %.3g (area-weighted)\n", volume);
     EXPECT_GT(volume, 0.05);
 }
@@ -840,6 +855,13 @@ protected:
         fs::create_directories(m_dir);
     }
     void TearDown() override { fs::remove_all(m_dir); }
+    // The model on `options`' grid at `timeMyr`, written to `path` in the flavour under test.
+    Snapshot writeSnapshot(const fs::path& path, const SynthOptions& options, double timeMyr) const
+    {
+        Snapshot snap = synthesizeSnapshot(options, timeMyr);
+        writeContestFile(path, snap, GetParam());
+        return snap;
+    }
     fs::path m_dir;
 };
 
@@ -847,13 +869,8 @@ protected:
 
 TEST_P(SynthNetcdf, WritesTheContestLayout)
 {
-    SynthOptions o = demoOptions();
-    o.nLat = 6;
-    o.nR = 5;
-    o.nLon = 8;
-    const Snapshot snap = synthesizeSnapshot(o, 2.0);
     const fs::path path = m_dir / "spherical001.nc";
-    writeContestFile(path, snap, GetParam());
+    const Snapshot snap = writeSnapshot(path, smallOptions(6, 5, 8), 2.0);
 
     int nc = -1;
     NC_OK(nc_open(path.c_str(), NC_NOWRITE, &nc));
@@ -917,21 +934,13 @@ TEST_P(SynthNetcdf, WritesTheContestLayout)
     }
     NC_OK(nc_close(nc));
     // Only the final file remains: no temporaries.
-    std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(m_dir))
-        names.push_back(e.path().filename().string());
-    EXPECT_EQ(names, std::vector<std::string>{"spherical001.nc"});
+    EXPECT_EQ(fileNames(m_dir), std::vector<std::string>{"spherical001.nc"});
 }
 
 TEST_P(SynthNetcdf, ReplacesAnExistingFileAndFailsClearly)
 {
-    SynthOptions o = demoOptions();
-    o.nLat = 4;
-    o.nR = 3;
-    o.nLon = 6;
-    const Snapshot snap = synthesizeSnapshot(o, 0.0);
     const fs::path path = m_dir / "out.nc";
-    writeContestFile(path, snap, GetParam());
+    const Snapshot snap = writeSnapshot(path, smallOptions(4, 3, 6), 0.0);
     writeContestFile(path, snap, GetParam());  // overwrites
     const fs::path missing = m_dir / "no-such-dir" / "out.nc";
     try {
@@ -943,22 +952,14 @@ TEST_P(SynthNetcdf, ReplacesAnExistingFileAndFailsClearly)
     Snapshot broken = snap;
     broken.fields[3].values.pop_back();
     EXPECT_THROW(writeContestFile(m_dir / "broken.nc", broken, GetParam()), Error);
-    std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(m_dir))
-        names.push_back(e.path().filename().string());
-    EXPECT_EQ(names, std::vector<std::string>{"out.nc"});
+    EXPECT_EQ(fileNames(m_dir), std::vector<std::string>{"out.nc"});
 }
 
 // RayPC's own reader sees the written file as the snapshot that was written (canonical order).
 TEST_P(SynthNetcdf, ReadsBackThroughTheReader)
 {
-    SynthOptions o = demoOptions();
-    o.nLat = 6;
-    o.nR = 5;
-    o.nLon = 8;
-    const Snapshot snap = synthesizeSnapshot(o, 2.0);
     const fs::path path = m_dir / "spherical001.nc";
-    writeContestFile(path, snap, GetParam());
+    const Snapshot snap = writeSnapshot(path, smallOptions(6, 5, 8), 2.0);
     const Snapshot back = readSnapshot(path);
     EXPECT_TRUE(back.grid.sameAs(snap.grid));
     for (const Field& f : snap.fields) {
@@ -976,17 +977,11 @@ TEST(SynthSeries, WritesNumberedStepsAndRejectsBadOptions)
 {
     const fs::path dir = fs::temp_directory_path() / fmt::format("raypc-synth-series-{}", ::getpid());
     fs::remove_all(dir);
-    SynthOptions o = demoOptions();
+    SynthOptions o = smallOptions(4, 3, 6);
     o.steps = 3;
-    o.nLat = 4;
-    o.nR = 3;
-    o.nLon = 6;
     writeSyntheticSeries(dir / "nested", o);
-    std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(dir / "nested"))
-        names.push_back(e.path().filename().string());
-    std::sort(names.begin(), names.end());
-    EXPECT_EQ(names, (std::vector<std::string>{"spherical001.nc", "spherical002.nc", "spherical003.nc"}));
+    EXPECT_EQ(fileNames(dir / "nested"),
+              (std::vector<std::string>{"spherical001.nc", "spherical002.nc", "spherical003.nc"}));
     o.steps = 0;
     EXPECT_THROW(writeSyntheticSeries(dir, o), Error);
     o.steps = 1;
