@@ -713,12 +713,7 @@ PassStats VolumeRenderer::renderPass(FrameBuffer& frame, const std::atomic<bool>
     }
     stats.everyBlock = pass.everyBlock;
     stats.seconds = secondsSince(start);
-    stats.samples = counts.samples;
-    stats.samplesSkipped = counts.skipped;
-    stats.chunks = counts.chunks;
-    stats.chunksSkipped = counts.chunksSkipped;
-    stats.chunksJumped = counts.chunksJumped;
-    stats.rays = counts.rays;
+    stats.addCounts({counts.samples, counts.skipped, counts.chunks, counts.chunksSkipped, counts.chunksJumped, counts.rays});
     return stats;
 }
 
