@@ -12,7 +12,9 @@ if [[ ! -f $stamp || package-lock.json -nt $stamp || package.json -nt $stamp ]];
   npm ci --no-audit --no-fund --loglevel=error >/dev/null
   touch "$stamp"
 fi
+# The tables the UI imports from ../src (names.json, display_units.json, the colour maps) count as sources.
 if [[ ! -f dist/app.js || ! -f dist/sample_worker.js || ! -f dist-test/app.js ||
-      -n $(find src build.mjs package-lock.json -newer dist/app.js -print -quit) ]]; then
+      -n $(find src build.mjs package-lock.json -newer dist/app.js -print -quit) ||
+      -n $(find ../src -name '*.json' -newer dist/app.js -print -quit) ]]; then
   node build.mjs
 fi

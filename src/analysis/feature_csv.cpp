@@ -1,6 +1,7 @@
 #include "analysis/feature_csv.h"
 
 #include "core/spherical.h"
+#include "grid/names.h"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -84,9 +85,11 @@ std::string fluxCsv(const Dataset& dataset, int firstStep, std::span<const std::
 
 std::string profileCsvHeader(const VariableInfo* mean)
 {
-    std::string header = "step,time_myr,radius_km,depth_km,selected_volume_km3,shell_volume_km3,selected_percent_of_shell";
+    // The columns as src/grid/names.json names them (Python's Dataset.stats too).
+    std::string header = columns::csvHeader(columns::kProfile);
     if (mean)
-        header += fmt::format(",{0} selected mean [{1}],{0} shell mean [{1}]", mean->name, mean->units);
+        for (const char* pattern : columns::kProfileMeans)
+            header += "," + fmt::format(fmt::runtime(pattern), fmt::arg("name", mean->name), fmt::arg("units", mean->units));
     return header + '\n';
 }
 

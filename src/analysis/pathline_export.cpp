@@ -40,8 +40,13 @@ LineRange lineRange(const PathlineSet& set, size_t i) { return {set.offsets[i], 
 
 std::string pathlinesCsv(const PathlineSet& set)
 {
-    std::string out = "line,point,x [km],y [km],z [km],lat [degrees_north],lon [degrees_east],radius [km],"
-                      "time [Myr],age [Myr]";
+    // The stored values x, y, z and time as src/grid/names.json names them; lat, lon, radius and age
+    // follow from them.
+    const auto& stored = columns::kPathlinePoints;
+    std::string out = "line,point";
+    for (size_t k = 0; k < 3; ++k)
+        out += "," + header(stored[k].name, stored[k].units);
+    out += ",lat [degrees_north],lon [degrees_east],radius [km]," + header(stored[3].name, stored[3].units) + ",age [Myr]";
     for (size_t c = 0; c < set.columns.size(); ++c)
         out += "," + header(set.columns[c], set.units[c]);
     out += '\n';

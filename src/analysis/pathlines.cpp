@@ -247,8 +247,10 @@ int PathlineSet::column(const std::string& name) const
 
 std::vector<std::string> pathlineColumns(const std::vector<std::string>& variableNames)
 {
-    std::vector<std::string> columns(std::begin(kPathlineFixedColumns), std::end(kPathlineFixedColumns));
-    for (const char* prefix : {"start ", "end "})
+    std::vector<std::string> columns;
+    for (const TableColumn& c : kPathlineFixedColumns)
+        columns.push_back(c.name);
+    for (const char* prefix : columns::kPathlineVariablePrefixes)
         for (const auto& name : variableNames)
             columns.push_back(prefix + name);
     return columns;
@@ -265,11 +267,10 @@ PathlineSet tracePathlines(const FieldSeries& series, const PathlineTracer& trac
     set.injectionStep = injectionStep;
     set.injectionTimeMyr = series.timesMyr[injectionStep];
     set.endStep = endStep;
-    const std::string fixedUnits[] = {"", "", "", "Myr", "Myr", "km", "", "degrees_north", "degrees_east", "km",
-                                      "degrees_north", "degrees_east", "km"};
     set.columns = pathlineColumns(names);
-    set.units.assign(std::begin(fixedUnits), std::end(fixedUnits));
-    for (int side = 0; side < 2; ++side)
+    for (const TableColumn& c : kPathlineFixedColumns)
+        set.units.push_back(c.units);
+    for (size_t side = 0; side < columns::kPathlineVariablePrefixes.size(); ++side)
         set.units.insert(set.units.end(), units.begin(), units.end());
 
     const double t0 = series.timesMyr[injectionStep], t1 = series.timesMyr[endStep];

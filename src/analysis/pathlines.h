@@ -15,6 +15,7 @@
 #include "analysis/critical_points.h"
 #include "dataset/dataset.h"
 #include "grid/grid.h"
+#include "grid/names.h"
 #include "grid/sampler.h"
 
 #include <cstdint>
@@ -125,14 +126,12 @@ struct PathlineSet {
     int column(const std::string& name) const;
 };
 
-// Fixed attribute columns, before the "start <variable>" and "end <variable>" columns (one each per
-// dataset variable, in dataset order). Codes: seed kind = CriticalKind, end reason = PathlineEnd.
-// "seed persistence" is the persistence of the seed's pair (the largest of its pairs; 0 for a
-// saddle the value rule chose that ends no extremum pair), in the seed field's units; sets stored
-// before it (lines.json version 1) lack the column.
-inline constexpr const char* kPathlineFixedColumns[] = {
-    "seed kind", "seed value", "seed persistence", "injection time", "duration", "length", "end reason",
-    "start lat", "start lon", "start radius", "end lat", "end lon", "end radius"};
+// Fixed attribute columns (names and units from src/grid/names.json), before the "start <variable>"
+// and "end <variable>" columns (one each per dataset variable, in dataset order). Codes: seed kind =
+// CriticalKind, end reason = PathlineEnd. "seed persistence" is the persistence of the seed's pair
+// (the largest of its pairs; 0 for a saddle the value rule chose that ends no extremum pair), in the
+// seed field's units; sets stored before it (lines.json version 1) lack the column.
+inline constexpr const auto& kPathlineFixedColumns = columns::kPathlineAttributes;
 inline constexpr size_t kPathlineFixedColumnCount = std::size(kPathlineFixedColumns);
 
 // Every attribute column of the pathline sets of a dataset with these variables, in stored order:

@@ -11,6 +11,7 @@
 #include "core/spherical.h"
 #include "core/system_memory.h"
 #include "dataset/dataset.h"
+#include "grid/names.h"
 #include "analysis/feature_csv.h"
 #include "analysis/selection.h"
 #include "render/image_io.h"
@@ -127,7 +128,8 @@ void run(const StatsArgs& args)
     mpi::together([&] {
         if (!mpi::isRoot())
             return;
-        std::string csv = "step,time_myr,selected_volume_km3,selected_percent_of_mantle\n";
+        // The columns as src/grid/names.json names them (Python's Dataset.stats and the UI too).
+        std::string csv = columns::csvHeader(columns::kSelectionOverTime) + '\n';
         std::string profile = profileCsvHeader(meanVariable ? &dataset.variables()[*meanVariable] : nullptr);
         for (const auto& part : csvParts)
             csv += part;

@@ -1,22 +1,14 @@
 // The names of the variables the program derives (preprocess/preprocess_numerics.h) or looks for
-// by name, in one place for the C++ code: the UI and Python take the names the server and the
-// dataset's manifest give them.
+// by name, for the C++ code: the constants (varname::kTemperatureAnomaly, …, varname::kVelocity)
+// come from src/grid/names.json (grid/names.h), which the UI and Python read too.
 #pragma once
 
+#include "grid/names.h"
+
 #include <algorithm>
-#include <array>
 #include <string_view>
 
 namespace raypc::varname {
-
-inline constexpr const char* kTemperature = "temperature";
-inline constexpr const char* kTemperatureAnomaly = "temperature anomaly";      // K, derived where absent
-inline constexpr const char* kRadialVelocity = "radial velocity";              // cm/yr, derived, outward
-inline constexpr const char* kVelocityMagnitude = "velocity magnitude";        // cm/yr, derived
-inline constexpr const char* kThermalExpansivity = "thermal expansivity";
-inline constexpr const char* kThermalExpansivityAnomaly = "thermal expansivity anomaly";  // 1/K, derived
-// The velocity's Cartesian components, m/s.
-inline constexpr std::array<const char*, 3> kVelocity = {"vx", "vy", "vz"};
 
 // Whether `name` is one of kVelocity.
 inline bool isVelocityComponent(std::string_view name)

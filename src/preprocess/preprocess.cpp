@@ -75,16 +75,19 @@ std::vector<VariableSpec> variableSpecs(const FileHeader& header)
         return std::any_of(header.variables.begin(), header.variables.end(), [&](const auto& v) { return v.name == name; });
     };
     if (varname::hasVelocity(has)) {
-        specs.push_back({varname::kRadialVelocity, "cm/yr", true, "vx, vy, vz"});
-        specs.push_back({varname::kVelocityMagnitude, "cm/yr", true, "vx, vy, vz"});
+        specs.push_back({varname::kRadialVelocity, varname::kRadialVelocityUnits, true,
+                         fmt::format("{}", fmt::join(varname::kRadialVelocityFrom, ", "))});
+        specs.push_back({varname::kVelocityMagnitude, varname::kVelocityMagnitudeUnits, true,
+                         fmt::format("{}", fmt::join(varname::kVelocityMagnitudeFrom, ", "))});
     }
     for (const auto& v : header.variables)
-        if (v.name == "thermal expansivity")
+        if (v.name == varname::kThermalExpansivity)
             specs.push_back({varname::kThermalExpansivityAnomaly, v.units, true, v.name});
     // As addDerivedVariables: a model with a temperature but no anomaly (ASPECT writes T) gets one.
     if (!has(varname::kTemperatureAnomaly))
         for (const auto& v : header.variables)
-            if (v.name == "temperature" || v.name == "T") {
+            if (std::find(varname::kTemperatureAnomalyFrom.begin(), varname::kTemperatureAnomalyFrom.end(), v.name) !=
+                varname::kTemperatureAnomalyFrom.end()) {
                 specs.push_back({varname::kTemperatureAnomaly, v.units, true, v.name});
                 break;
             }

@@ -31,8 +31,10 @@ void addVelocityVariables(Snapshot& snapshot)
     const Field* vz = snapshot.find(varname::kVelocity[2]);
     RAYPC_CHECK(vx && vy && vz);
     const auto& g = snapshot.grid;
-    Field radial{varname::kRadialVelocity, "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
-    Field magnitude{varname::kVelocityMagnitude, "cm/yr", std::vector<float>(g.cellCount()), {"vx", "vy", "vz"}};
+    Field radial{varname::kRadialVelocity, varname::kRadialVelocityUnits, std::vector<float>(g.cellCount()),
+                 {varname::kRadialVelocityFrom.begin(), varname::kRadialVelocityFrom.end()}};
+    Field magnitude{varname::kVelocityMagnitude, varname::kVelocityMagnitudeUnits, std::vector<float>(g.cellCount()),
+                    {varname::kVelocityMagnitudeFrom.begin(), varname::kVelocityMagnitudeFrom.end()}};
     tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
         const double lat = degToRad(g.latDeg[iLat]);
         for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
@@ -60,17 +62,16 @@ void addDerivedVariables(Snapshot& snapshot)
         addVelocityVariables(snapshot);
     // The contest's correlation task asks for the sign of the expansivity *anomaly*: its
     // deviation from the area-weighted lateral mean of each shell, like the temperature anomaly.
-    if (const Field* alpha = snapshot.find("thermal expansivity"))
+    if (const Field* alpha = snapshot.find(varname::kThermalExpansivity))
         snapshot.fields.push_back(lateralAnomaly(g, *alpha, varname::kThermalExpansivityAnomaly));
     // A model that writes a temperature but no anomaly (ASPECT: T) gets the contest's anomaly: the
     // deviation from the area-weighted mean of each shell.
-    if (!snapshot.find(varname::kTemperatureAnomaly)) {
-        const Field* t = snapshot.find("temperature");
-        if (!t)
-            t = snapshot.find("T");
-        if (t)
-            snapshot.fields.push_back(lateralAnomaly(g, *t, varname::kTemperatureAnomaly));
-    }
+    if (!snapshot.find(varname::kTemperatureAnomaly))
+        for (const char* source : varname::kTemperatureAnomalyFrom)
+            if (const Field* t = snapshot.find(source)) {
+                snapshot.fields.push_back(lateralAnomaly(g, *t, varname::kTemperatureAnomaly));
+                break;
+            }
 }
 
 Field lateralAnomaly(const SphericalGrid& g, const Field& field, const std::string& name)

@@ -46,6 +46,12 @@ namespace {
 
 using Json = nlohmann::json;
 
+// src/grid/names.json, the table the C++ constants were generated from, compiled in: the package
+// names what this build writes whether it runs from the build tree or installed.
+constexpr const char* kNamesJson =
+#include "grid/names_json.inc"
+    ;
+
 // A NumPy array that owns a copy of `values` in the given shape.
 template <typename T>
 py::array_t<T> arrayOf(const std::vector<T>& values, std::vector<py::ssize_t> shape)
@@ -440,6 +446,8 @@ PYBIND11_MODULE(_raypc, m)
         py::arg("json"), "The state document parsed by the one state schema, normalised (JSON)");
     m.def("surface_radius_km", [] { return raypc::kSurfaceRadiusKm; });
     m.def("state_version", [] { return raypc::state::kRenderStateVersion; });
+    m.def("names_json", [] { return std::string(kNamesJson); },
+          "src/grid/names.json: the names of derived variables and of the columns of the tables raypc writes");
     m.def(
         "critical_kind_name",
         [](int kind) {

@@ -245,7 +245,7 @@ PathlineLines::PathlineLines(std::shared_ptr<const std::vector<PathlineSet>> set
         m_stepMyr = (t1 - t0) / double(s1 - s0);
     } else if (!all.empty()) {
         const PathlineSet& set = all.front();
-        const int duration = set.column("duration"), reason = set.column("end reason");
+        const int duration = set.column(columns::pathline::kDuration), reason = set.column(columns::pathline::kEndReason);
         double longest = 0;
         for (size_t i = 0; duration >= 0 && i < set.lineCount(); ++i)
             if (reason < 0 || set.attribute(i, size_t(reason)) == float(PathlineEnd::ReachedEndTime))
@@ -414,9 +414,9 @@ std::vector<uint8_t> PathlineLines::visibilityFor(const state::RenderState& stat
                          {-1, std::nullopt, std::move(f.ranges)}});
     }
     const bool needStart = std::any_of(tests.begin(), tests.end(), [](const Test& t) { return t.column < 0; });
-    const size_t cLat = needStart ? columnOf("start lat", "brushes") : 0;
-    const size_t cLon = needStart ? columnOf("start lon", "brushes") : 0;
-    const size_t cR = needStart ? columnOf("start radius", "brushes") : 0;
+    const size_t cLat = needStart ? columnOf(columns::pathline::kStartLat, "brushes") : 0;
+    const size_t cLon = needStart ? columnOf(columns::pathline::kStartLon, "brushes") : 0;
+    const size_t cR = needStart ? columnOf(columns::pathline::kStartRadius, "brushes") : 0;
 
     for (size_t line = 0; line < lineCount(); ++line) {
         const int injected = injectionStep(line);

@@ -29,11 +29,7 @@ inline PathlineSet makePathlineSet(int injectionStep, double injectionTimeMyr, i
     set.injectionTimeMyr = injectionTimeMyr;
     set.endStep = endStep;
     set.seedField = "temperature anomaly";
-    for (const char* c : kPathlineFixedColumns)
-        set.columns.push_back(c);
-    for (const char* prefix : {"start ", "end "})
-        for (const auto& v : variables)
-            set.columns.push_back(prefix + v);
+    set.columns = pathlineColumns(variables);
     set.units.assign(set.columns.size(), "");
     set.offsets.push_back(0);
     for (const TestLine& line : lines) {

@@ -395,7 +395,7 @@ json persistenceDiagramJson(const SphericalGrid& grid, const std::vector<Persist
         storedJson = {{"threshold", stored->threshold},
                       {"rule", rule},
                       {"lines", stored->lineCount()},
-                      {"seedPersistenceColumn", stored->column("seed persistence") >= 0}};
+                      {"seedPersistenceColumn", stored->column(columns::pathline::kSeedPersistence) >= 0}};
     }
     return {{"step", step},
             {"variable", variable},

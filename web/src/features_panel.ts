@@ -12,8 +12,11 @@ import { plotFrame } from './stats_plot';
 import { cloneState, type RenderState } from './state';
 import type { StateStore } from './store';
 import type { LegendEntry } from './context_panel';
+import { derivedVariable } from './names';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
+// The flux is that of the radial velocity (raypc flux).
+const kRadialVelocity = derivedVariable('radialVelocity');
 
 export interface FeaturesPanelHost {
   showError(message: string): void;
@@ -435,7 +438,7 @@ export class FeaturesPanel {
     const flux = this.result?.flux;
     if (!flux || !flux.steps.length) {
       d3.select(svg).selectAll('*').remove();
-      $('featuresFluxNote').textContent = this.result ? 'no flux: the dataset has no radial velocity' : '';
+      $('featuresFluxNote').textContent = this.result ? `no flux: the dataset has no ${kRadialVelocity}` : '';
       return;
     }
     const { g, iw, ih } = frame(svg);
@@ -473,7 +476,7 @@ export class FeaturesPanel {
     if (!f) { this.host.showError('features: nothing to export yet'); return; }
     // The server's tables, written by the command line's code (analysis/feature_csv.h).
     const csv = f.csv[what];
-    if (csv === null) { this.host.showError('features: no flux (the dataset has no radial velocity)'); return; }
+    if (csv === null) { this.host.showError(`features: no flux (the dataset has no ${kRadialVelocity})`); return; }
     download(new Blob([csv], { type: 'text/csv' }), `raypc-features-${what}.csv`);
   }
 }

@@ -7,6 +7,7 @@ import ParCoords from 'parcoord-es';
 import * as d3 from 'd3';
 import { inRanges, rangesByName, type Brush } from './state';
 import type { Sample } from './api';
+import { pathlineVariablePrefixes, shortTitles } from './names';
 import { displayUnits } from './units';
 
 export interface AxisInfo {
@@ -79,21 +80,13 @@ function withCpuCanvases<T>(make: () => T): T {
 // Axes whose values grow downwards.
 const kDownwards = new Set(['depth']);
 
-// Short axis titles for the long dataset names (the full name is the axis' tooltip).
-const kShortNames: Record<string, string> = {
-  'temperature anomaly': 'T anomaly',
-  'spin transition-induced density anomaly': 'spin Δρ',
-  'thermal conductivity': 'conductivity',
-  'thermal expansivity': 'expansivity',
-  'radial velocity': 'v radial',
-  'velocity magnitude': '|v|',
-  'thermal expansivity anomaly': 'α anomaly',
-};
+// Short axis titles for the long dataset names (src/grid/names.json; the full name is the axis'
+// tooltip).
 export function axisTitle(a: AxisInfo): string {
   const units = displayUnits(a.units);
   // Pathline attributes: "start temperature anomaly" -> "start T anomaly".
-  const m = /^(start|end) (.*)$/.exec(a.name);
-  const name = kShortNames[a.name] ?? (m && kShortNames[m[2]] ? `${m[1]} ${kShortNames[m[2]]}` : a.name);
+  const prefix = pathlineVariablePrefixes.find((p) => a.name.startsWith(p) && shortTitles.has(a.name.slice(p.length)));
+  const name = shortTitles.get(a.name) ?? (prefix === undefined ? a.name : prefix + shortTitles.get(a.name.slice(prefix.length)));
   return units ? `${name} [${units}]` : name;
 }
 

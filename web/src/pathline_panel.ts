@@ -7,12 +7,14 @@ import { sampleColorMap } from './colormaps';
 import { ParallelCoordinates, type AxisInfo } from './parcoords';
 import { type Brush, type PathlineState } from './state';
 import type { LegendEntry } from './context_panel';
+import { pathlineAttribute, pathlineAttributeNames, pathlineVariablePrefixes } from './names';
 import type { StateStore } from './store';
 import { displayUnits } from './units';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
 
 // The seed kinds of docs/format.md (critical points of the seeding field), by their stored value.
+const kSeedKind = pathlineAttribute('seedKind');
 const kSeedKinds: Record<number, string> = { 0: 'minimum', 1: '1-saddle', 2: '2-saddle', 3: 'maximum', 4: 'multi-saddle' };
 
 export interface PathlinePanelHost {
@@ -96,8 +98,8 @@ export class PathlinePanel {
     if (!d || !pl) return [];
     const v = this.store.state.color.variable;
     const filtered = new Set(pl.filters.map((f) => f.name));
-    const shown = (c: string) => !/^(start|end) /.test(c) || /^(start|end) (lat|lon|radius)$/.test(c) ||
-      c === `start ${v}` || c === `end ${v}` || filtered.has(c);
+    const shown = (c: string) => pathlineAttributeNames.has(c) || pathlineVariablePrefixes.some((p) => c === p + v) ||
+      filtered.has(c);
     return d.columns.flatMap((name, k) => {
       if (!shown(name)) return [];
       let lo = Infinity, hi = -Infinity;
@@ -107,7 +109,7 @@ export class PathlinePanel {
       }
       if (!(lo <= hi)) { lo = 0; hi = 1; }
       for (const f of pl.filters) if (f.name === name) { lo = Math.min(lo, f.min); hi = Math.max(hi, f.max); }
-      if (name === 'seed kind') return [{ name, units: '', min: -0.2, max: 4.2, categories: kSeedKinds }];
+      if (name === kSeedKind) return [{ name, units: '', min: -0.2, max: 4.2, categories: kSeedKinds }];
       return [{ name, units: d.units[k] ?? '', min: lo, max: hi > lo ? hi : lo + 1 }];
     });
   }

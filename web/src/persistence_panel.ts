@@ -6,13 +6,14 @@
 // pairs kept.
 import * as d3 from 'd3';
 import { fetchPersistence, type PersistenceDiagram, type PersistencePair } from './api';
+import { pathlineAttribute } from './names';
 import type { StateStore } from './store';
 import { displayUnits } from './units';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
 
 // The pathline attribute the threshold filters (docs/format.md).
-export const kSeedPersistence = 'seed persistence';
+export const kSeedPersistence = pathlineAttribute('seedPersistence');
 const kMargin = { top: 16, right: 10, bottom: 30, left: 44 };
 const kKindColors: Record<string, string> = { 'minimum-saddle': '#6fa8ff', 'saddle-maximum': '#ff7a5c', global: '#f0f0f0' };
 

@@ -5,6 +5,7 @@ import { postSelection, postStats, type Selection, type SelectionOverTime } from
 import { cloneState } from './state';
 import { drawProfilePlot, drawTimePlot } from './stats_plot';
 import { download } from './controls';
+import { selectionOverTimeColumns } from './names';
 import type { StateStore } from './store';
 import { displayUnits } from './units';
 
@@ -55,7 +56,7 @@ export class SelectionPanel {
       const st = this.stats;
       if (!st) return;
       // The columns of `raypc stats -o` (docs/ui.md), plus the level the figures are exact on.
-      let csv = 'step,time_myr,selected_volume_km3,selected_percent_of_mantle,level\n';
+      let csv = `${[...selectionOverTimeColumns, 'level'].join(',')}\n`;
       for (const s of st.steps) csv += `${s.step},${s.timeMyr},${s.volumeKm3.toExponential(6)},${(100 * s.fractionOfMantle).toFixed(6)},${st.level}\n`;
       download(new Blob([csv], { type: 'text/csv' }), `raypc-selection-over-time-step${this.store.state.step}.csv`);
     });

@@ -31,10 +31,16 @@ import numpy as np
 from . import _raypc
 from ._raypc import Error
 
-__all__ = ["Error", "open", "Dataset", "State", "Field", "Grid", "Variable", "Picture", "View", "show"]
+__all__ = ["Error", "open", "Dataset", "State", "Field", "Grid", "Variable", "Picture", "View", "show", "NAMES"]
 
 SURFACE_RADIUS_KM: float = _raypc.surface_radius_km()
 STATE_VERSION: int = _raypc.state_version()  # of the state document this module writes
+# The names of the variables raypc derives and of the columns of the tables it writes
+# (src/grid/names.json, from which the C++ code's names are generated too): the columns this module
+# builds are named from it, so that they are the CLI's.
+NAMES: dict = json.loads(_raypc.names_json())
+_COLUMNS = NAMES["columns"]
+_PATHLINE_ATTRIBUTE = {c["key"]: c["name"] for c in _COLUMNS["pathlineAttributes"]}
 
 StepLike = Union[int, str]  # 12, or a time such as "24Myr"
 
@@ -376,7 +382,7 @@ class Dataset:
             lines.attrs["units"] = dict(zip(s["columns"], s["units"]))
             offsets = s["offsets"]
             line_of_point = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
-            points = pd.DataFrame(s["points"], columns=["x_km", "y_km", "z_km", "time_myr"])
+            points = pd.DataFrame(s["points"], columns=[c["column"] for c in _COLUMNS["pathlinePoints"]])
             points["line"] = line_of_point
             out.append({"injection_step": s["injection_step"], "injection_time_myr": s["injection_time_myr"],
                         "end_step": s["end_step"], "seed_field": s["seed_field"], "threshold": s["threshold"],
@@ -391,12 +397,13 @@ class Dataset:
 
         (stored,) = self._core.pathlines(self._step(step), 1)  # the set injected at the step
         lines = pd.DataFrame(stored["attributes"], columns=stored["columns"])
-        kinds = lines["seed kind"].astype(int)
+        a = _PATHLINE_ATTRIBUTE
+        kinds = lines[a["seedKind"]].astype(int)
         df = pd.DataFrame({
             "kind": [_raypc.critical_kind_name(k) for k in kinds],
-            "lat": lines["start lat"], "lon": lines["start lon"], "radius_km": lines["start radius"],
-            "depth_km": SURFACE_RADIUS_KM - lines["start radius"], "value": lines["seed value"],
-            "persistence": lines["seed persistence"] if "seed persistence" in lines else np.nan})
+            "lat": lines[a["startLat"]], "lon": lines[a["startLon"]], "radius_km": lines[a["startRadius"]],
+            "depth_km": SURFACE_RADIUS_KM - lines[a["startRadius"]], "value": lines[a["seedValue"]],
+            "persistence": lines[a["seedPersistence"]] if a["seedPersistence"] in lines else np.nan})
         df.attrs["seed_field"] = stored["seed_field"]
         return df
 
@@ -454,20 +461,21 @@ class Dataset:
             rows = self._core.stats(_state_of(state, self).to_json(None), first, last, level, mean_of or "", bar)
         finally:
             bar.close()
+        # The columns as NAMES names them, the values in its order (the CLI's CSV files).
         if by == "step":
-            return pd.DataFrame({"step": [r[0] for r in rows], "time_myr": [r[1] for r in rows],
-                                 "selected_volume_km3": [r[2] for r in rows],
-                                 "selected_percent_of_mantle": [100.0 * r[3] for r in rows]})
+            names = [c["name"] for c in _COLUMNS["selectionOverTime"]]
+            values = ([r[0] for r in rows], [r[1] for r in rows], [r[2] for r in rows], [100.0 * r[3] for r in rows])
+            return pd.DataFrame(dict(zip(names, values, strict=True)))
         r_km = self._levels[level].r
         units = {v.name: v.units for v in self.variables}.get(mean_of, "")
+        names = [c["name"] for c in _COLUMNS["profile"]]
+        means = [p.format(name=mean_of, units=units) for p in _COLUMNS["profileMeans"]] if mean_of is not None else []
         parts = []
         for step, t, _, _, by_radius, shell, selected_mean, shell_mean in rows:
-            columns = {"step": step, "time_myr": t, "radius_km": r_km, "depth_km": SURFACE_RADIUS_KM - r_km,
-                       "selected_volume_km3": by_radius, "shell_volume_km3": shell,
-                       "selected_percent_of_shell": 100.0 * by_radius / shell}
-            if mean_of is not None:
-                columns[f"{mean_of} selected mean [{units}]"] = selected_mean
-                columns[f"{mean_of} shell mean [{units}]"] = shell_mean
+            columns = dict(zip(names, (step, t, r_km, SURFACE_RADIUS_KM - r_km, by_radius, shell,
+                                       100.0 * by_radius / shell), strict=True))
+            if means:
+                columns.update(zip(means, (selected_mean, shell_mean), strict=True))
             parts.append(pd.DataFrame(columns))
         return pd.concat(parts, ignore_index=True)
 
