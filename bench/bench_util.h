@@ -15,9 +15,9 @@ namespace raypc::bench {
 
 // The synthetic model at the contest data's full resolution: 180 x 201 x 360 (lat x r x lon), 13 M
 // points a step.
-inline SynthOptions fullResolution()
+inline synth::SynthOptions fullResolution()
 {
-    SynthOptions o;
+    synth::SynthOptions o;
     o.nLat = 180;
     o.nR = 201;
     o.nLon = 360;

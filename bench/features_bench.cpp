@@ -41,10 +41,10 @@ using namespace raypc;
 namespace {
 
 struct Steps {
-    std::shared_ptr<StepVolume> volumes[2];  // 0 and 2 Myr
+    std::shared_ptr<dataset::StepVolume> volumes[2];  // 0 and 2 Myr
     std::vector<std::string> names;          // the volumes' variables, in order
-    std::vector<RangeFilter> filters;        // task 1's selection
-    VelocityVariables velocity;
+    std::vector<analysis::RangeFilter> filters;        // task 1's selection
+    analysis::VelocityVariables velocity;
     size_t radialVelocity = 0;
 };
 
@@ -61,19 +61,19 @@ size_t variableIndex(const std::vector<std::string>& names, const std::string& n
 const Steps& steps()
 {
     static const Steps s = [] {
-        const SynthOptions o = bench::fullResolution();
+        const synth::SynthOptions o = bench::fullResolution();
         Steps out;
         for (int k = 0; k < 2; ++k) {
-            Snapshot snapshot = synthesizeSnapshot(o, k * o.dtMyr);
-            addDerivedVariables(snapshot);  // what preprocessing stores with the step
+            grid::Snapshot snapshot = synth::synthesizeSnapshot(o, k * o.dtMyr);
+            preprocess::addDerivedVariables(snapshot);  // what preprocessing stores with the step
             if (k == 0)
-                for (const Field& f : snapshot.fields)
+                for (const grid::Field& f : snapshot.fields)
                     out.names.push_back(f.name);
-            out.volumes[k] = StepVolume::fromSnapshot(snapshot);
+            out.volumes[k] = dataset::StepVolume::fromSnapshot(snapshot);
         }
-        const std::vector<NamedRange> brushes = {
+        const std::vector<analysis::NamedRange> brushes = {
             {"depth", 560, 760}, {"radial velocity", -100, 0}, {"temperature anomaly", -10000, -25}};
-        out.filters = resolveRangeFilters(out.names, brushes);
+        out.filters = analysis::resolveRangeFilters(out.names, brushes);
         out.velocity = {variableIndex(out.names, "vx"), variableIndex(out.names, "vy"), variableIndex(out.names, "vz")};
         out.radialVelocity = variableIndex(out.names, "radial velocity");
         return out;
@@ -94,7 +94,7 @@ void BM_ExtractFeatures(benchmark::State& state)
     const Steps& s = steps();
     size_t found = 0;
     timed(state, s.volumes[0]->grid().cellCount(), [&] {
-        StepFeatures f = extractFeatures(*s.volumes[0], s.filters);
+        analysis::StepFeatures f = analysis::extractFeatures(*s.volumes[0], s.filters);
         found = f.features.size();
         benchmark::DoNotOptimize(f);
     });
@@ -105,12 +105,12 @@ void BM_LinkFeatures(benchmark::State& state)
 {
     const Steps& s = steps();
     // Extracted once: only the linking is timed.
-    static const StepFeatures a = extractFeatures(*s.volumes[0], s.filters);
-    static const StepFeatures b = extractFeatures(*s.volumes[1], s.filters);
+    static const analysis::StepFeatures a = analysis::extractFeatures(*s.volumes[0], s.filters);
+    static const analysis::StepFeatures b = analysis::extractFeatures(*s.volumes[1], s.filters);
     const size_t moved = a.labels.size() - size_t(std::count(a.labels.begin(), a.labels.end(), 0));
     size_t links = 0;
     timed(state, moved, [&] {
-        auto l = linkFeatures(*s.volumes[0], a, b, s.velocity, 2.0);
+        auto l = analysis::linkFeatures(*s.volumes[0], a, b, s.velocity, 2.0);
         links = l.size();
         benchmark::DoNotOptimize(l);
     });
@@ -123,7 +123,7 @@ void BM_ShellFlux(benchmark::State& state)
     const Steps& s = steps();
     const std::vector<double> depthsKm = {660, 1600};
     timed(state, s.volumes[0]->grid().cellCount(), [&] {
-        auto fluxes = shellFluxes(*s.volumes[0], s.radialVelocity, depthsKm, s.filters);
+        auto fluxes = analysis::shellFluxes(*s.volumes[0], s.radialVelocity, depthsKm, s.filters);
         benchmark::DoNotOptimize(fluxes);
     });
 }

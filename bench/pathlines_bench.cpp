@@ -24,21 +24,21 @@ using namespace raypc;
 namespace {
 
 struct Data {
-    FieldSeries series;
+    analysis::FieldSeries series;
     std::vector<std::vector<float>> velocity;  // 3 per step
     std::vector<float> anomaly;                // step 0
-    std::vector<CriticalPoint> seeds;
+    std::vector<analysis::CriticalPoint> seeds;
 };
 
 const Data& data()
 {
     static const Data d = [] {
         Data out;
-        const SynthOptions o = bench::fullResolution();
+        const synth::SynthOptions o = bench::fullResolution();
         const int steps = 11;
         out.velocity.reserve(3 * steps);
         for (int k = 0; k < steps; ++k) {
-            Snapshot s = synthesizeSnapshot(o, k * o.dtMyr);
+            grid::Snapshot s = synth::synthesizeSnapshot(o, k * o.dtMyr);
             if (k == 0) {
                 out.series.grid = s.grid;
                 out.anomaly = std::move(s.find("temperature anomaly")->values);
@@ -49,8 +49,8 @@ const Data& data()
             out.series.timesMyr.push_back(k * o.dtMyr);
             out.series.fields.push_back(fields);
         }
-        const auto all = findCriticalPoints(out.series.grid, out.anomaly);
-        const SeedSelection selection = selectSeeds(out.series.grid, out.anomaly, all, CriticalPointFilter{});
+        const auto all = analysis::findCriticalPoints(out.series.grid, out.anomaly);
+        const analysis::SeedSelection selection = analysis::selectSeeds(out.series.grid, out.anomaly, all, analysis::CriticalPointFilter{});
         out.seeds = selection.seeds;
         fmt::print(stderr, "grid {}x{}x{}, {} critical points in step 0, {} seeds (persistence > {:.1f} K)\n", o.nLat,
                    o.nR, o.nLon, all.size(), out.seeds.size(), selection.threshold);
@@ -67,7 +67,7 @@ void BM_CriticalPoints(benchmark::State& state)
     tbb::task_arena arena(threadsFor(static_cast<int>(state.range(0))));
     size_t found = 0;
     for (auto _ : state)
-        arena.execute([&] { found = findCriticalPoints(d.series.grid, d.anomaly).size(); });
+        arena.execute([&] { found = analysis::findCriticalPoints(d.series.grid, d.anomaly).size(); });
     state.counters["critical_points"] = static_cast<double>(found);
     state.counters["Mvertices/s"] = benchmark::Counter(static_cast<double>(d.anomaly.size()) * 1e-6,
                                                        benchmark::Counter::kIsIterationInvariantRate);
@@ -77,12 +77,12 @@ void BM_CriticalPoints(benchmark::State& state)
 void BM_Pathlines(benchmark::State& state)
 {
     const Data& d = data();
-    const PathlineTracer tracer(d.series, 0, 1, 2);
+    const analysis::PathlineTracer tracer(d.series, 0, 1, 2);
     tbb::task_arena arena(threadsFor(static_cast<int>(state.range(0))));
-    PathlineSet set;
+    analysis::PathlineSet set;
     for (auto _ : state)
         arena.execute([&] {
-            set = tracePathlines(d.series, tracer, d.seeds, 0, 10, {"vx", "vy", "vz"}, {"m/s", "m/s", "m/s"});
+            set = analysis::tracePathlines(d.series, tracer, d.seeds, 0, 10, {"vx", "vy", "vz"}, {"m/s", "m/s", "m/s"});
         });
     state.counters["lines/s"] =
         benchmark::Counter(static_cast<double>(set.lineCount()), benchmark::Counter::kIsIterationInvariantRate);

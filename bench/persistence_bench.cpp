@@ -39,13 +39,13 @@ using namespace raypc;
 namespace {
 
 struct Step {
-    SphericalGrid grid;
+    grid::SphericalGrid grid;
     std::vector<float> anomaly;
 };
 
-Step synthesizeAnomaly(const SynthOptions& o, double timeMyr)
+Step synthesizeAnomaly(const synth::SynthOptions& o, double timeMyr)
 {
-    Snapshot s = synthesizeSnapshot(o, timeMyr);
+    grid::Snapshot s = synth::synthesizeSnapshot(o, timeMyr);
     return {s.grid, std::move(s.find("temperature anomaly")->values)};
 }
 
@@ -66,50 +66,50 @@ void timed(benchmark::State& state, F work)
 void BM_Persistence(benchmark::State& state)
 {
     size_t pairs = 0;
-    timed(state, [&](const Step& s) { pairs = persistencePairs(s.grid, s.anomaly).size(); });
+    timed(state, [&](const Step& s) { pairs = analysis::persistencePairs(s.grid, s.anomaly).size(); });
     state.counters["pairs"] = static_cast<double>(pairs);
 }
 
 void BM_CriticalPoints(benchmark::State& state)
 {
     size_t found = 0;
-    timed(state, [&](const Step& s) { found = findCriticalPoints(s.grid, s.anomaly).size(); });
+    timed(state, [&](const Step& s) { found = analysis::findCriticalPoints(s.grid, s.anomaly).size(); });
     state.counters["critical_points"] = static_cast<double>(found);
 }
 
 void BM_SelectSeeds(benchmark::State& state)
 {
-    CriticalPointFilter filter;
-    filter.rule = state.range(1) ? SeedRule::Value : SeedRule::Persistence;
+    analysis::CriticalPointFilter filter;
+    filter.rule = state.range(1) ? analysis::SeedRule::Value : analysis::SeedRule::Persistence;
     size_t seeds = 0;
     timed(state, [&](const Step& s) {
-        seeds = selectSeeds(s.grid, s.anomaly, findCriticalPoints(s.grid, s.anomaly), filter).seeds.size();
+        seeds = analysis::selectSeeds(s.grid, s.anomaly, analysis::findCriticalPoints(s.grid, s.anomaly), filter).seeds.size();
     });
     state.counters["seeds"] = static_cast<double>(seeds);
-    state.SetLabel(seedRuleName(filter.rule));
+    state.SetLabel(analysis::seedRuleName(filter.rule));
 }
 
 // --- Seed report ------------------------------------------------------------------------------
 
 struct Rule {
     std::string name;
-    CriticalPointFilter filter;
+    analysis::CriticalPointFilter filter;
 };
 
 std::vector<Rule> rules()
 {
     std::vector<Rule> out;
-    CriticalPointFilter before;  // the rule before persistence: top 200 by |value|, saddles too
-    before.rule = SeedRule::Value;
+    analysis::CriticalPointFilter before;  // the rule before persistence: top 200 by |value|, saddles too
+    before.rule = analysis::SeedRule::Value;
     before.saddles = true;
     out.push_back({"value (before)", before});
     for (const char* threshold : {"2%", "5%", "10%"}) {
-        CriticalPointFilter f;
-        parsePersistenceThreshold(threshold, f);
+        analysis::CriticalPointFilter f;
+        analysis::parsePersistenceThreshold(threshold, f);
         const bool isDefault = std::string(threshold) == "5%";
         out.push_back({fmt::format("persistence {}{}", threshold, isDefault ? " (default)" : ""), f});
     }
-    CriticalPointFilter withSaddles;
+    analysis::CriticalPointFilter withSaddles;
     withSaddles.saddles = true;
     out.push_back({"persistence 5% + saddles", withSaddles});
     return out;
@@ -128,25 +128,25 @@ constexpr double kNearKm = 500;
 
 // Which seeds lie within kNearKm of feature f's centre line (a plume's axis from the CMB to its
 // head, a slab's sheet from its tip to the trench) and are of its kind (maxima for plumes).
-std::vector<bool> nearFeature(const SynthOptions& o, double timeMyr, const SynthFeature& feature, size_t f,
-                              const std::vector<CriticalPoint>& seeds)
+std::vector<bool> nearFeature(const synth::SynthOptions& o, double timeMyr, const synth::SynthFeature& feature, size_t f,
+                              const std::vector<analysis::CriticalPoint>& seeds)
 {
-    const bool plume = feature.kind == SynthFeature::Kind::Plume;
+    const bool plume = feature.kind == synth::SynthFeature::Kind::Plume;
     const double r0 = plume ? kCoreRadiusKm : feature.frontRadiusKm;
     const double r1 = plume ? feature.frontRadiusKm : kSurfaceRadiusKm;
     std::vector<bool> near(seeds.size(), false);
     for (double r = r0; r <= r1 + 1e-9; r += 25) {
-        const auto c = syntheticFeatureCentreDeg(o, timeMyr, f, r);
+        const auto c = synth::syntheticFeatureCentreDeg(o, timeMyr, f, r);
         const Vec3d p = sphericalToCartesianKm(c[0], c[1], r);
         for (size_t k = 0; k < seeds.size(); ++k)
-            near[k] = near[k] || (seeds[k].kind == (plume ? CriticalKind::Maximum : CriticalKind::Minimum) &&
+            near[k] = near[k] || (seeds[k].kind == (plume ? analysis::CriticalKind::Maximum : analysis::CriticalKind::Minimum) &&
                                   distanceKm(p, sphericalToCartesianKm(seeds[k].latDeg, seeds[k].lonDeg,
                                                                        seeds[k].rKm)) <= kNearKm);
     }
     return near;
 }
 
-void addStep(Tally& t, const SynthOptions& o, double timeMyr, const std::vector<CriticalPoint>& seeds)
+void addStep(Tally& t, const synth::SynthOptions& o, double timeMyr, const std::vector<analysis::CriticalPoint>& seeds)
 {
     std::vector<Vec3d> at;
     for (const auto& s : seeds)
@@ -158,11 +158,11 @@ void addStep(Tally& t, const SynthOptions& o, double timeMyr, const std::vector<
             n += distanceKm(a, b) <= kNearKm;
         cluster = std::max(cluster, n);
     }
-    const auto features = syntheticFeatures(o, timeMyr);
+    const auto features = synth::syntheticFeatures(o, timeMyr);
     std::vector<bool> onAFeature(seeds.size(), false);
     for (size_t f = 0; f < features.size(); ++f) {
         const auto near = nearFeature(o, timeMyr, features[f], f, seeds);
-        (features[f].kind == SynthFeature::Kind::Plume ? t.plumes : t.slabs) +=
+        (features[f].kind == synth::SynthFeature::Kind::Plume ? t.plumes : t.slabs) +=
             std::find(near.begin(), near.end(), true) != near.end();
         for (size_t k = 0; k < seeds.size(); ++k)
             onAFeature[k] = onAFeature[k] || near[k];
@@ -170,21 +170,21 @@ void addStep(Tally& t, const SynthOptions& o, double timeMyr, const std::vector<
     t.elsewhere += double(std::count(onAFeature.begin(), onAFeature.end(), false));
     t.seeds += double(seeds.size());
     for (const auto& s : seeds)
-        t.saddles += s.kind != CriticalKind::Maximum && s.kind != CriticalKind::Minimum;
+        t.saddles += s.kind != analysis::CriticalKind::Maximum && s.kind != analysis::CriticalKind::Minimum;
     t.cluster += double(cluster);
     t.steps += 1;
 }
 
 void seedReport()
 {
-    const SynthOptions o;  // the demo
+    const synth::SynthOptions o;  // the demo
     const auto all = rules();
     std::vector<Tally> tallies(all.size());
     for (int k = 0; k < o.steps; ++k) {
         const Step s = synthesizeAnomaly(o, k * o.dtMyr);
-        const auto points = findCriticalPoints(s.grid, s.anomaly);
+        const auto points = analysis::findCriticalPoints(s.grid, s.anomaly);
         for (size_t r = 0; r < all.size(); ++r)
-            addStep(tallies[r], o, k * o.dtMyr, selectSeeds(s.grid, s.anomaly, points, all[r].filter).seeds);
+            addStep(tallies[r], o, k * o.dtMyr, analysis::selectSeeds(s.grid, s.anomaly, points, all[r].filter).seeds);
     }
     fmt::print("seed report: demo data ({}x{}x{}, {} steps, seed {}), temperature anomaly; means per step\n", o.nLat,
                o.nR, o.nLon, o.steps, o.seed);
@@ -198,16 +198,16 @@ void seedReport()
     }
     // How far each feature stands out: the largest persistence of an extremum of its kind near it,
     // in % of the step's range (a feature is lost above that threshold), over all steps.
-    std::vector<double> lowest(syntheticFeatures(o, 0).size(), 1e9), highest(lowest.size(), 0);
+    std::vector<double> lowest(synth::syntheticFeatures(o, 0).size(), 1e9), highest(lowest.size(), 0);
     for (int k = 0; k < o.steps; ++k) {
         const Step s = synthesizeAnomaly(o, k * o.dtMyr);
-        CriticalPointFilter everything;
+        analysis::CriticalPointFilter everything;
         everything.minPersistence = 0;
         everything.persistenceIsFraction = false;
         everything.maxCount = s.anomaly.size();
-        const auto seeds = selectSeeds(s.grid, s.anomaly, findCriticalPoints(s.grid, s.anomaly), everything).seeds;
+        const auto seeds = analysis::selectSeeds(s.grid, s.anomaly, analysis::findCriticalPoints(s.grid, s.anomaly), everything).seeds;
         const auto [lo, hi] = std::minmax_element(s.anomaly.begin(), s.anomaly.end());
-        const auto features = syntheticFeatures(o, k * o.dtMyr);
+        const auto features = synth::syntheticFeatures(o, k * o.dtMyr);
         for (size_t f = 0; f < features.size(); ++f) {
             const auto near = nearFeature(o, k * o.dtMyr, features[f], f, seeds);
             double best = 0;
@@ -218,11 +218,11 @@ void seedReport()
             highest[f] = std::max(highest[f], 100 * best / (*hi - *lo));
         }
     }
-    const auto features = syntheticFeatures(o, 0);
+    const auto features = synth::syntheticFeatures(o, 0);
     fmt::print("persistence of each feature's extremum, % of the step's range (lowest - highest over the steps):\n");
     for (size_t f = 0; f < features.size(); ++f)
         fmt::print("  {} {:>2} ({:>4.0f} K, front at {:>4.0f} km depth at t = 0): {:5.1f} - {:5.1f} %\n",
-                   features[f].kind == SynthFeature::Kind::Plume ? "plume" : "slab ", f, features[f].temperatureK,
+                   features[f].kind == synth::SynthFeature::Kind::Plume ? "plume" : "slab ", f, features[f].temperatureK,
                    kSurfaceRadiusKm - features[f].frontRadiusKm, lowest[f], highest[f]);
     std::fflush(stdout);
 }

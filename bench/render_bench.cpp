@@ -47,7 +47,7 @@ using namespace raypc::render;
 namespace {
 
 struct Data {
-    std::vector<std::shared_ptr<const StepVolume>> levels;
+    std::vector<std::shared_ptr<const dataset::StepVolume>> levels;
     std::vector<std::string> names;
 };
 
@@ -56,22 +56,22 @@ const Data& data()
     static const Data d = [] {
         Data out;
         if (const char* dir = std::getenv("RAYPC_BENCH_DATASET")) {
-            const auto ds = Dataset::open(dir);
+            const auto ds = dataset::Dataset::open(dir);
             for (int l = 0; l < int(ds->levels().size()); ++l)
                 out.levels.push_back(ds->load(0, l));
             for (const auto& v : ds->variables())
                 out.names.push_back(v.name);
             return out;
         }
-        Snapshot s = synthesizeSnapshot(bench::fullResolution(), 0.0);
+        grid::Snapshot s = synth::synthesizeSnapshot(bench::fullResolution(), 0.0);
         for (const auto& f : s.fields)
             out.names.push_back(f.name);
-        for (int l = 0; l < kLevelCount; ++l) {
-            out.levels.push_back(StepVolume::fromSnapshot(s, 8));
-            Snapshot coarse;
+        for (int l = 0; l < dataset::kLevelCount; ++l) {
+            out.levels.push_back(dataset::StepVolume::fromSnapshot(s, 8));
+            grid::Snapshot coarse;
             coarse.grid = s.grid.coarsened();
             for (const auto& f : s.fields)
-                coarse.fields.push_back({f.name, f.units, coarsenField(s.grid, f.values)});
+                coarse.fields.push_back({f.name, f.units, preprocess::coarsenField(s.grid, f.values)});
             s = std::move(coarse);
         }
         return out;
@@ -103,7 +103,7 @@ RenderParams params(int size)
 // The benchmark step's variables with their ranges, for defaultState.
 VariableCatalog benchCatalog()
 {
-    const StepVolume& v = *data().levels[0];
+    const dataset::StepVolume& v = *data().levels[0];
     VariableCatalog catalog;
     catalog.names = data().names;
     for (size_t i = 0; i < v.variableCount(); ++i) {
@@ -316,7 +316,7 @@ void BM_FramePicture1500(benchmark::State& state)
     r.setParams(p);
     FrameBuffer f(p.width, p.height);
     r.renderPass(f);
-    const SphericalGrid& grid = data().levels[0]->grid();
+    const grid::SphericalGrid& grid = data().levels[0]->grid();
     double colour = 0, depth = 0, shells = 0, bytes = 0;
     using Clock = std::chrono::steady_clock;
     auto since = [](Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); };
@@ -457,11 +457,11 @@ BENCHMARK(BM_SetParams)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 // are derived from the values once per volume (StepVolume::brickBounds(var, 4)).
 void BM_DeriveBrickBounds4(benchmark::State& state)
 {
-    const StepVolume& v = *data().levels[0];
-    const BrickLayout layout = BrickLayout::forGrid(v.grid(), 4);
+    const dataset::StepVolume& v = *data().levels[0];
+    const grid::BrickLayout layout = grid::BrickLayout::forGrid(v.grid(), 4);
     std::vector<float> bounds(2 * layout.brickCount());
     for (auto _ : state)
-        computeBrickBounds(v.grid(), layout, {v.values(size_t(var("temperature anomaly"))), v.grid().cellCount()}, bounds);
+        dataset::computeBrickBounds(v.grid(), layout, {v.values(size_t(var("temperature anomaly"))), v.grid().cellCount()}, bounds);
 }
 BENCHMARK(BM_DeriveBrickBounds4)->Unit(benchmark::kMillisecond);
 
@@ -469,9 +469,9 @@ BENCHMARK(BM_DeriveBrickBounds4)->Unit(benchmark::kMillisecond);
 // every grid point (nodeGradient, kept with the volume).
 void BM_NodeGradient(benchmark::State& state)
 {
-    const StepVolume& v = *data().levels[0];
+    const dataset::StepVolume& v = *data().levels[0];
     for (auto _ : state)
-        benchmark::DoNotOptimize(nodeGradient(v.grid(), v.values(size_t(var("temperature anomaly")))));
+        benchmark::DoNotOptimize(grid::nodeGradient(v.grid(), v.values(size_t(var("temperature anomaly")))));
 }
 BENCHMARK(BM_NodeGradient)->Unit(benchmark::kMillisecond);
 
@@ -649,7 +649,7 @@ BENCHMARK(BM_ConvergedFixed8_1920x1080)->Unit(benchmark::kMillisecond)->Iteratio
 
 // Brushing four variables against no brushing; the selected share of the mantle is computed exactly
 // (selectedVolume over dual cells) and printed as counter selected%.
-std::vector<RangeFilter> fourBrushes()
+std::vector<analysis::RangeFilter> fourBrushes()
 {
     return {{var("temperature"), std::nullopt, {{1800, 4000}}},
             {var("thermal conductivity"), std::nullopt, {{0, 100}}},
@@ -658,17 +658,17 @@ std::vector<RangeFilter> fourBrushes()
 }
 // The same selection with the anomaly's range split in two touching ranges (OR): the cost of an
 // axis with several ranges.
-std::vector<RangeFilter> fourBrushesSplit()
+std::vector<analysis::RangeFilter> fourBrushesSplit()
 {
-    std::vector<RangeFilter> b = fourBrushes();
+    std::vector<analysis::RangeFilter> b = fourBrushes();
     b.back().ranges = {{50, 400}, {400, 1000}};
     return b;
 }
-double selectedPercent(const std::vector<RangeFilter>& brushes)
+double selectedPercent(const std::vector<analysis::RangeFilter>& brushes)
 {
     return 100.0 * selectedVolume(*data().levels[0], brushes).fractionOfMantle;
 }
-void brushedPass(benchmark::State& state, std::vector<RangeFilter> brushes)
+void brushedPass(benchmark::State& state, std::vector<analysis::RangeFilter> brushes)
 {
     RenderParams p = params(512);
     p.brushes = std::move(brushes);

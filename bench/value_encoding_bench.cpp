@@ -23,8 +23,8 @@ using namespace raypc;
 namespace {
 
 struct Data {
-    SphericalGrid grid;
-    BrickLayout layout;
+    grid::SphericalGrid grid;
+    grid::BrickLayout layout;
     std::vector<float> values, bounds;
     std::vector<uint16_t> encoded;
 };
@@ -33,15 +33,15 @@ const Data& data()
 {
     static const Data d = [] {
         Data out;
-        const SynthOptions o = bench::fullResolution();
-        Snapshot s = synthesizeSnapshot(o, 0);
+        const synth::SynthOptions o = bench::fullResolution();
+        grid::Snapshot s = synth::synthesizeSnapshot(o, 0);
         out.grid = s.grid;
-        out.layout = BrickLayout::forGrid(out.grid, 8);
+        out.layout = grid::BrickLayout::forGrid(out.grid, 8);
         out.values = std::move(s.find("temperature anomaly")->values);
         out.bounds.resize(2 * out.layout.brickCount());
-        computeBrickBounds(out.grid, out.layout, out.values, out.bounds);
+        dataset::computeBrickBounds(out.grid, out.layout, out.values, out.bounds);
         out.encoded.resize(out.values.size());
-        encodeUint16(out.grid, out.layout, out.values, out.bounds, out.encoded);
+        dataset::encodeUint16(out.grid, out.layout, out.values, out.bounds, out.encoded);
         fmt::print(stderr, "grid {}x{}x{} = {} points; {} cores\n", o.nLat, o.nR, o.nLon, out.values.size(),
                    std::thread::hardware_concurrency());
         return out;
@@ -70,14 +70,14 @@ void timedCoding(benchmark::State& state, F code)
 void BM_Decode(benchmark::State& state)
 {
     const Data& d = data();
-    timedCoding<float>(state, [&](std::vector<float>& out) { decodeUint16(d.grid, d.layout, d.encoded, d.bounds, out); });
+    timedCoding<float>(state, [&](std::vector<float>& out) { dataset::decodeUint16(d.grid, d.layout, d.encoded, d.bounds, out); });
 }
 
 void BM_Encode(benchmark::State& state)
 {
     const Data& d = data();
     timedCoding<uint16_t>(state,
-                          [&](std::vector<uint16_t>& out) { encodeUint16(d.grid, d.layout, d.values, d.bounds, out); });
+                          [&](std::vector<uint16_t>& out) { dataset::encodeUint16(d.grid, d.layout, d.values, d.bounds, out); });
 }
 
 void BM_CopyFloat32(benchmark::State& state)

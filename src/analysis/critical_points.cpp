@@ -12,17 +12,17 @@
 #include <charconv>
 #include <cmath>
 
-namespace raypc {
+namespace raypc::analysis {
 namespace {
 
-using triangulation::kLinkSize;
-using triangulation::linkTables;
-using triangulation::VertexMasks;
-using triangulation::vertexMasks;
+using grid::triangulation::kLinkSize;
+using grid::triangulation::linkTables;
+using grid::triangulation::VertexMasks;
+using grid::triangulation::vertexMasks;
 
-void checkInput(const SphericalGrid& grid, std::span<const float> values)
+void checkInput(const grid::SphericalGrid& grid, std::span<const float> values)
 {
-    triangulation::checkTriangulable(grid, values.size(), "critical points");
+    grid::triangulation::checkTriangulable(grid, values.size(), "critical points");
 }
 
 }  // namespace
@@ -54,7 +54,7 @@ const char* criticalKindName(CriticalKind kind)
     return "?";
 }
 
-std::vector<CriticalPoint> findCriticalPoints(const SphericalGrid& grid, std::span<const float> values)
+std::vector<CriticalPoint> findCriticalPoints(const grid::SphericalGrid& grid, std::span<const float> values)
 {
     checkInput(grid, values);
     const auto& tables = linkTables();
@@ -154,7 +154,7 @@ std::vector<CriticalPoint> selectSignificant(std::vector<CriticalPoint> points, 
     return points;
 }
 
-int lowerStarEulerContribution(const SphericalGrid& grid, std::span<const float> values, size_t index)
+int lowerStarEulerContribution(const grid::SphericalGrid& grid, std::span<const float> values, size_t index)
 {
     checkInput(grid, values);
     const auto& tables = linkTables();
@@ -172,4 +172,4 @@ int lowerStarEulerContribution(const SphericalGrid& grid, std::span<const float>
     return 1 - (vertices - edges + triangles);
 }
 
-}  // namespace raypc
+}  // namespace raypc::analysis

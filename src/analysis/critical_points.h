@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::analysis {
 
 enum class CriticalKind : uint8_t { Minimum = 0, Saddle1 = 1, Saddle2 = 2, Maximum = 3, MultiSaddle = 4 };
 
@@ -51,7 +51,7 @@ std::optional<CriticalKind> classifyLink(int lower, int upper);
 // Every non-regular vertex of `values` (grid.cellCount() values, canonical order), sorted by
 // index. NaN values are not expected (the reader rejects them). Throws raypc::Error when the
 // sizes differ or the grid has fewer than 2 lat rows, 2 radii or 3 lon columns.
-std::vector<CriticalPoint> findCriticalPoints(const SphericalGrid& grid, std::span<const float> values);
+std::vector<CriticalPoint> findCriticalPoints(const grid::SphericalGrid& grid, std::span<const float> values);
 
 // Which critical points seed pathlines (docs/persistence.md).
 //   SeedRule::Persistence (the default, as TTK practice): the extrema whose persistence (see
@@ -103,6 +103,6 @@ std::vector<CriticalPoint> selectSignificant(std::vector<CriticalPoint> points, 
 // 1 - χ(lower link of vertex `index`): the vertex's contribution to the Euler characteristic of
 // the triangulated domain (each simplex counted at its highest vertex). Summed over all vertices
 // it is 0 for this grid's solid torus, whatever the field: a test of the triangulation's links.
-int lowerStarEulerContribution(const SphericalGrid& grid, std::span<const float> values, size_t index);
+int lowerStarEulerContribution(const grid::SphericalGrid& grid, std::span<const float> values, size_t index);
 
-}  // namespace raypc
+}  // namespace raypc::analysis

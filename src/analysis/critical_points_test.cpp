@@ -14,14 +14,14 @@
 #include <functional>
 #include <random>
 
-namespace raypc {
+namespace raypc::analysis {
 namespace {
 
 using testing::centredGrid;
 using testing::fillGrid;
 
 // A Gaussian blob in Cartesian km (the contest fixture's shape).
-std::vector<float> blob(const SphericalGrid& g, double latDeg, double lonDeg, double rKm, double sigmaKm)
+std::vector<float> blob(const grid::SphericalGrid& g, double latDeg, double lonDeg, double rKm, double sigmaKm)
 {
     return fillGrid(g, [&](size_t a, size_t b, size_t k) {
         return testing::gaussianBlob(g, a, b, k, latDeg, lonDeg, rKm, sigmaKm);
@@ -48,7 +48,7 @@ std::vector<CriticalPoint> blobMaxima(const std::vector<CriticalPoint>& points)
     return out;
 }
 
-int eulerSum(const SphericalGrid& g, const std::vector<float>& v)
+int eulerSum(const grid::SphericalGrid& g, const std::vector<float>& v)
 {
     int sum = 0;
     for (size_t i = 0; i < g.cellCount(); ++i)
@@ -61,7 +61,7 @@ int eulerSum(const SphericalGrid& g, const std::vector<float>& v)
 // their edges and triangles, wrapping across the seam, cut at the boundaries) fit together.
 TEST(CriticalPoints, LowerStarsSumToTheSolidTorusEulerCharacteristic)
 {
-    const SphericalGrid g = centredGrid(6, 5, 8);
+    const grid::SphericalGrid g = centredGrid(6, 5, 8);
     std::mt19937 rng(7);
     std::uniform_int_distribution<int> small(0, 3);  // many ties: Simulation of Simplicity decides
     std::uniform_real_distribution<float> real(-1, 1);
@@ -85,7 +85,7 @@ TEST(CriticalPoints, LowerStarsSumToTheSolidTorusEulerCharacteristic)
 // upper neighbours are the columns on either side). Nothing else is critical.
 TEST(CriticalPoints, ConstantFieldHasOnlyWhatSimulationOfSimplicityImplies)
 {
-    const SphericalGrid g = centredGrid(6, 5, 8);
+    const grid::SphericalGrid g = centredGrid(6, 5, 8);
     const auto points = findCriticalPoints(g, std::vector<float>(g.cellCount(), 3.0f));
     ASSERT_EQ(points.size(), 4u);
     EXPECT_EQ(points[0].index, 0u);
@@ -100,7 +100,7 @@ TEST(CriticalPoints, ConstantFieldHasOnlyWhatSimulationOfSimplicityImplies)
 
 TEST(CriticalPoints, SingleGaussianHasOneMaximumAtItsCentre)
 {
-    const SphericalGrid g = centredGrid(18, 21, 36);
+    const grid::SphericalGrid g = centredGrid(18, 21, 36);
     const auto values = blob(g, 25, 100, 4900, 800);  // (25, 100, 4909) is a grid point
     const auto maxima = blobMaxima(findCriticalPoints(g, values));
     ASSERT_EQ(maxima.size(), 1u);
@@ -116,7 +116,7 @@ TEST(CriticalPoints, SingleGaussianHasOneMaximumAtItsCentre)
 // that no neighbour ties the centre (f(±1, ±1, 0) = -1, f(0, ±1, ±1) = 1).
 TEST(CriticalPoints, QuadraticSaddlesOfBothKinds)
 {
-    const SphericalGrid g = centredGrid(9, 9, 12);
+    const grid::SphericalGrid g = centredGrid(9, 9, 12);
     const size_t a0 = 4, b0 = 4, c0 = 6;
     for (const double sign : {1.0, -1.0}) {
         const auto values = fillGrid(g, [&](size_t a, size_t b, size_t c) {
@@ -144,7 +144,7 @@ TEST(CriticalPoints, QuadraticSaddlesOfBothKinds)
 // in the right column, and no critical points from the wrap.
 TEST(CriticalPoints, MaximumOnAndAcrossTheLonSeam)
 {
-    const SphericalGrid g = centredGrid(18, 21, 36);
+    const grid::SphericalGrid g = centredGrid(18, 21, 36);
     for (const double lon : {0.0, 355.0, 357.0}) {
         const auto values = blob(g, -15, lon, 5200, 700);
         const auto maxima = blobMaxima(findCriticalPoints(g, values));
@@ -158,7 +158,7 @@ TEST(CriticalPoints, MaximumOnAndAcrossTheLonSeam)
 // on it (all of the ring ties, Simulation of Simplicity picks one), gives one maximum on that row.
 TEST(CriticalPoints, MaximumNextToAndOnAPole)
 {
-    const SphericalGrid g = centredGrid(18, 21, 36);
+    const grid::SphericalGrid g = centredGrid(18, 21, 36);
     for (const double lat : {85.0, 88.0, -88.0, 90.0, -90.0}) {
         auto values = blob(g, lat, 40, 4500, 700);
         if (std::abs(lat) == 90) {
@@ -217,7 +217,7 @@ TEST(CriticalPoints, SelectionKeepsTheSignificantAndCaps)
     // Noise: thousands of tiny extrema are capped.
     std::mt19937 rng(1);
     std::uniform_real_distribution<float> u(-1, 1);
-    const SphericalGrid g = centredGrid(18, 21, 36);
+    const grid::SphericalGrid g = centredGrid(18, 21, 36);
     std::vector<float> noise(g.cellCount());
     for (auto& x : noise)
         x = u(rng);
@@ -235,10 +235,10 @@ TEST(CriticalPoints, ContestFixtureBlobs)
 {
     const auto truth = nlohmann::json::parse(std::ifstream(testing::contestLayoutDir() / "truth.json"));
     const double omega = truth["omega_rad_per_s"], u0 = truth["u0_m_per_s"], dt = truth["dt_myr"];
-    const auto files = listSnapshotFiles({testing::contestLayoutDir()});
+    const auto files = io::listSnapshotFiles({testing::contestLayoutDir()});
     ASSERT_EQ(files.size(), 3u);
     for (size_t step = 0; step < files.size(); ++step) {
-        const Snapshot snap = readSnapshot(files[step]);
+        const grid::Snapshot snap = io::readSnapshot(files[step]);
         const auto& g = snap.grid;
         const auto& values = snap.find("temperature anomaly")->values;
         const auto all = findCriticalPoints(g, values);
@@ -275,10 +275,10 @@ TEST(CriticalPoints, ContestFixtureBlobs)
 
 TEST(CriticalPoints, RejectsWrongSizes)
 {
-    const SphericalGrid g = centredGrid(6, 5, 8);
+    const grid::SphericalGrid g = centredGrid(6, 5, 8);
     EXPECT_THROW(findCriticalPoints(g, std::vector<float>(10)), Error);
     EXPECT_THROW(findCriticalPoints(centredGrid(1, 5, 8), std::vector<float>(40)), Error);
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <iterator>
 
-namespace raypc {
+namespace raypc::analysis {
 
 std::string trackCsv(const FeatureSeries& series)
 {
@@ -36,7 +36,7 @@ std::string stallCsv(const FeatureSeries& series, std::span<const double> depths
     return rows;
 }
 
-std::string eventCsv(const FeatureSeries& series, const Dataset& dataset)
+std::string eventCsv(const FeatureSeries& series, const dataset::Dataset& dataset)
 {
     std::string rows = "step,time_myr,event,track,feature,other_features,centroid_lat_deg,centroid_lon_deg,mean_depth_km\n";
     for (const TrackEvent& e : series.events()) {
@@ -48,7 +48,7 @@ std::string eventCsv(const FeatureSeries& series, const Dataset& dataset)
     return rows;
 }
 
-std::string fluxCsv(const Dataset& dataset, int firstStep, std::span<const std::vector<ShellFlux>> bySteps,
+std::string fluxCsv(const dataset::Dataset& dataset, int firstStep, std::span<const std::vector<ShellFlux>> bySteps,
                     std::span<const double> depthsKm, const std::vector<std::vector<size_t>>& avalanches, bool heat,
                     bool mass)
 {
@@ -83,7 +83,7 @@ std::string fluxCsv(const Dataset& dataset, int firstStep, std::span<const std::
     return csv;
 }
 
-std::string profileCsvHeader(const VariableInfo* mean)
+std::string profileCsvHeader(const dataset::VariableInfo* mean)
 {
     // The columns as src/grid/names.json names them (Python's Dataset.stats too).
     std::string header = columns::csvHeader(columns::kProfile);
@@ -93,7 +93,7 @@ std::string profileCsvHeader(const VariableInfo* mean)
     return header + '\n';
 }
 
-std::string profileCsvRows(std::span<const StepSelection> selections, const SphericalGrid& grid)
+std::string profileCsvRows(std::span<const StepSelection> selections, const grid::SphericalGrid& grid)
 {
     std::string rows;
     for (const StepSelection& sel : selections) {
@@ -115,4 +115,4 @@ std::string profileCsvRows(std::span<const StepSelection> selections, const Sphe
     return rows;
 }
 
-}  // namespace raypc
+}  // namespace raypc::analysis

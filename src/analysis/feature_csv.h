@@ -16,12 +16,12 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::analysis {
 
 // A row per track and step: track, step, time_myr, feature, volume_km3, mean_depth_km, centroid.
 std::string trackCsv(const FeatureSeries& series);
 // A row per event: step, time_myr, event, track, feature, other_features, centroid, mean_depth_km.
-std::string eventCsv(const FeatureSeries& series, const Dataset& dataset);
+std::string eventCsv(const FeatureSeries& series, const dataset::Dataset& dataset);
 // A row per stall (FeatureSeries::stalls): track, depth_km, first_step, last_step, duration_myr,
 // mean_radial_velocity_cm_per_yr (empty without one), left.
 std::string stallCsv(const FeatureSeries& series, std::span<const double> depthsKm, double halfWidthKm,
@@ -31,7 +31,7 @@ std::string stallCsv(const FeatureSeries& series, std::span<const double> depths
 // selected_percent_of_shell, avalanche (1 for the steps of `avalanches`, avalancheStepsPerShell); with
 // `heat` the heat flux (W, shell and selection); with `mass` the mass flux (kg/yr, down and up, shell
 // and selection).
-std::string fluxCsv(const Dataset& dataset, int firstStep, std::span<const std::vector<ShellFlux>> bySteps,
+std::string fluxCsv(const dataset::Dataset& dataset, int firstStep, std::span<const std::vector<ShellFlux>> bySteps,
                     std::span<const double> depthsKm, const std::vector<std::vector<size_t>>& avalanches, bool heat,
                     bool mass);
 
@@ -40,7 +40,7 @@ std::string fluxCsv(const Dataset& dataset, int firstStep, std::span<const std::
 // `mean` (the variable whose mean per radius the selections hold) "NAME selected mean [UNITS]" and
 // "NAME shell mean [UNITS]" — and the rows, a row per step and radius of `grid` (the selected mean
 // empty where nothing is selected). Rows of consecutive blocks of steps concatenate (MPI ranks).
-std::string profileCsvHeader(const VariableInfo* mean);
-std::string profileCsvRows(std::span<const StepSelection> selections, const SphericalGrid& grid);
+std::string profileCsvHeader(const dataset::VariableInfo* mean);
+std::string profileCsvRows(std::span<const StepSelection> selections, const grid::SphericalGrid& grid);
 
-}  // namespace raypc
+}  // namespace raypc::analysis

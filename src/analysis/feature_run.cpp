@@ -1,6 +1,6 @@
 #include "analysis/feature_run.h"
 
-namespace raypc {
+namespace raypc::analysis {
 
 std::optional<int> forEachStepFeatures(int first, int last, const StepVolumeLoader& load,
                                        std::span<const RangeFilter> filters, const FeatureOptions& options,
@@ -27,4 +27,4 @@ std::optional<int> forEachStepFeatures(int first, int last, const StepVolumeLoad
     return std::nullopt;
 }
 
-}  // namespace raypc
+}  // namespace raypc::analysis

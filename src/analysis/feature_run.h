@@ -16,16 +16,16 @@
 #include <optional>
 #include <span>
 
-namespace raypc {
+namespace raypc::analysis {
 
 // A step's volume, as the caller loads it (e.g. Dataset::load at a level). May throw raypc::Error.
-using StepVolumeLoader = std::function<std::shared_ptr<const StepVolume>(int step)>;
+using StepVolumeLoader = std::function<std::shared_ptr<const dataset::StepVolume>(int step)>;
 
 // One step's features with the volume they were extracted from. The callback may move from them
 // (e.g. keep the labels for linking to the next step).
 struct FeatureStep {
     int step = 0;
-    std::shared_ptr<const StepVolume> volume;
+    std::shared_ptr<const dataset::StepVolume> volume;
     StepFeatures features;
 };
 
@@ -44,4 +44,4 @@ std::optional<int> forEachStepFeatures(int first, int last, const StepVolumeLoad
                                        const std::function<void(FeatureStep&)>& onStep,
                                        const FeatureRunControl& control = {});
 
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -10,14 +10,14 @@
 #include <utility>
 #include <vector>
 
-namespace raypc {
+namespace raypc::analysis {
 namespace {
 
 // Step k's volume: k + 1 separate blobs of "f" along the equator, so that each step's feature count
 // names the step.
-std::shared_ptr<const StepVolume> blobsOfStep(const SphericalGrid& g, int step)
+std::shared_ptr<const dataset::StepVolume> blobsOfStep(const grid::SphericalGrid& g, int step)
 {
-    Snapshot snap;
+    grid::Snapshot snap;
     snap.grid = g;
     snap.fields.push_back({"f", "K", testing::fillGrid(g, [&](size_t a, size_t r, size_t o) {
                                double v = 0;
@@ -25,14 +25,14 @@ std::shared_ptr<const StepVolume> blobsOfStep(const SphericalGrid& g, int step)
                                    v += testing::gaussianBlob(g, a, r, o, 0.0, 60.0 * k, kSurfaceRadiusKm - 1500.0, 700.0);
                                return v;
                            })});
-    return StepVolume::fromSnapshot(snap);
+    return dataset::StepVolume::fromSnapshot(snap);
 }
 
 const std::vector<RangeFilter> kAboveHalf{RangeFilter{0, std::nullopt, {{0.5f, 1e30f}}}};
 
 TEST(FeatureRun, EveryStepInOrderWithItsVolumeAndProgressBeforeEachAndAfterTheLast)
 {
-    const SphericalGrid g = testing::centredGrid(36, 21, 72);
+    const grid::SphericalGrid g = testing::centredGrid(36, 21, 72);
     std::vector<int> loaded, counts;
     std::vector<std::pair<int, int>> progress;
     const auto stopped = forEachStepFeatures(
@@ -56,7 +56,7 @@ TEST(FeatureRun, EveryStepInOrderWithItsVolumeAndProgressBeforeEachAndAfterTheLa
 
 TEST(FeatureRun, CancellingStopsBeforeTheNextStepAndSaysWhich)
 {
-    const SphericalGrid g = testing::centredGrid(36, 21, 72);
+    const grid::SphericalGrid g = testing::centredGrid(36, 21, 72);
     std::atomic<bool> cancel{false};
     std::vector<int> done;
     std::vector<std::pair<int, int>> progress;
@@ -75,10 +75,10 @@ TEST(FeatureRun, CancellingStopsBeforeTheNextStepAndSaysWhich)
     EXPECT_EQ(progress.back(), (std::pair<int, int>{2, 5})) << "no last report after a cancelled run";
     // Cancelled before it starts: nothing is loaded.
     const auto none = forEachStepFeatures(
-        0, 4, [&](int) -> std::shared_ptr<const StepVolume> { throw Error("loaded"); }, kAboveHalf, {},
+        0, 4, [&](int) -> std::shared_ptr<const dataset::StepVolume> { throw Error("loaded"); }, kAboveHalf, {},
         [](FeatureStep&) {}, {&cancel, {}});
     EXPECT_EQ(none, std::optional<int>(0));
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::analysis

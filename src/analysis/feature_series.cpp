@@ -5,9 +5,9 @@
 
 #include <cmath>
 
-namespace raypc {
+namespace raypc::analysis {
 
-VelocityVariables velocityVariables(const Dataset& dataset, const char* what)
+VelocityVariables velocityVariables(const dataset::Dataset& dataset, const char* what)
 {
     VelocityVariables v;
     for (const auto& [name, index] : {std::pair<const char*, size_t*>{"vx", &v.x}, {"vy", &v.y}, {"vz", &v.z}}) {
@@ -20,14 +20,14 @@ VelocityVariables velocityVariables(const Dataset& dataset, const char* what)
     return v;
 }
 
-FeatureSeries::FeatureSeries(const Dataset& dataset, double minOverlapShare, const char* what)
+FeatureSeries::FeatureSeries(const dataset::Dataset& dataset, double minOverlapShare, const char* what)
     : m_dataset(dataset), m_velocity(velocityVariables(dataset, what)), m_tracker(minOverlapShare)
 {
     if (const int i = dataset.variableIndex(varname::kRadialVelocity); i >= 0)
         m_radialVelocity = size_t(i);
 }
 
-void FeatureSeries::add(int step, std::shared_ptr<const StepVolume> volume, const StepFeatures& features)
+void FeatureSeries::add(int step, std::shared_ptr<const dataset::StepVolume> volume, const StepFeatures& features)
 {
     const double timeMyr = m_dataset.steps().at(size_t(step)).timeMyr;
     const std::vector<FeatureLink> links =
@@ -73,4 +73,4 @@ std::vector<std::pair<int, Stall>> FeatureSeries::stalls(std::span<const double>
     return out;
 }
 
-}  // namespace raypc
+}  // namespace raypc::analysis

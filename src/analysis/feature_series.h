@@ -15,21 +15,21 @@
 #include <utility>
 #include <vector>
 
-namespace raypc {
+namespace raypc::analysis {
 
 // The variable indices of vx, vy, vz (m/s), which linking moves the features with. Throws
 // raypc::Error naming `what` and the missing component.
-VelocityVariables velocityVariables(const Dataset& dataset, const char* what);
+VelocityVariables velocityVariables(const dataset::Dataset& dataset, const char* what);
 
 class FeatureSeries {
 public:
     // `dataset` must outlive the series. Throws raypc::Error (velocityVariables, naming `what`) when
     // it has no velocity to link steps with.
-    FeatureSeries(const Dataset& dataset, double minOverlapShare, const char* what = "tracking");
+    FeatureSeries(const dataset::Dataset& dataset, double minOverlapShare, const char* what = "tracking");
 
     // Adds the next step's features (steps in increasing order, each once) with the volume they were
     // extracted from (kept until the next step is linked to it).
-    void add(int step, std::shared_ptr<const StepVolume> volume, const StepFeatures& features);
+    void add(int step, std::shared_ptr<const dataset::StepVolume> volume, const StepFeatures& features);
     // The same with the links from the previous step's features found elsewhere (linkFeatures of the
     // previous step's volume and labels and these, with velocity() over the steps' interval; empty for
     // the first step): an MPI rank that linked its own steps. `features`' labels are not used.
@@ -56,11 +56,11 @@ public:
                                               StallMeasure measure = StallMeasure::MeanDepth) const;
 
 private:
-    const Dataset& m_dataset;
+    const dataset::Dataset& m_dataset;
     VelocityVariables m_velocity;
     std::optional<size_t> m_radialVelocity;  // variable index, for the stalls' speeds
     FeatureTracker m_tracker;
-    std::shared_ptr<const StepVolume> m_previousVolume;
+    std::shared_ptr<const dataset::StepVolume> m_previousVolume;
     StepFeatures m_previousFeatures;
     double m_previousTimeMyr = 0;
     std::vector<Row> m_rows;
@@ -68,4 +68,4 @@ private:
     std::map<int, std::vector<TrackPoint>> m_points;
 };
 
-}  // namespace raypc
+}  // namespace raypc::analysis

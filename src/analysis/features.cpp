@@ -14,7 +14,7 @@
 #include <string>
 #include <utility>
 
-namespace raypc {
+namespace raypc::analysis {
 namespace {
 
 // Union-find over grid point indices; the root of a set is its smallest index.
@@ -55,7 +55,7 @@ struct Sums {
 
 // Connected components of the selected points: each selected point joins its 13 forward neighbours of
 // the 26-neighbourhood (the other 13 join it), the lon index wrapping at the seam.
-DisjointSets connectNeighbours(const SphericalGrid& g, const std::vector<uint8_t>& selected)
+DisjointSets connectNeighbours(const grid::SphericalGrid& g, const std::vector<uint8_t>& selected)
 {
     const size_t nLat = g.nLat(), nR = g.nR(), nLon = g.nLon();
     DisjointSets sets(g.cellCount());
@@ -83,7 +83,7 @@ DisjointSets connectNeighbours(const SphericalGrid& g, const std::vector<uint8_t
 }
 
 // Around each pole: the outermost row's points at one radius and the next are one region.
-void joinPoleRings(const SphericalGrid& g, const std::vector<uint8_t>& selected, DisjointSets& sets)
+void joinPoleRings(const grid::SphericalGrid& g, const std::vector<uint8_t>& selected, DisjointSets& sets)
 {
     const size_t nLat = g.nLat(), nR = g.nR(), nLon = g.nLon();
     for (const size_t iLat : {size_t(0), nLat - 1}) {
@@ -107,10 +107,10 @@ void joinPoleRings(const SphericalGrid& g, const std::vector<uint8_t>& selected,
 
 // Labels in index order (a set's root, its smallest index, is met first): each selected point's set
 // numbered from 1 in `labels`, and the sums of each set (by label - 1) over its points.
-std::vector<Sums> labelAndSum(const StepVolume& volume, const std::vector<uint8_t>& selected, DisjointSets& sets,
+std::vector<Sums> labelAndSum(const dataset::StepVolume& volume, const std::vector<uint8_t>& selected, DisjointSets& sets,
                               const FeatureOptions& options, std::vector<int32_t>& labels)
 {
-    const SphericalGrid& g = volume.grid();
+    const grid::SphericalGrid& g = volume.grid();
     const size_t nLat = g.nLat(), nR = g.nR(), nLon = g.nLon();
     labels.assign(g.cellCount(), 0);
     std::vector<Sums> sums;
@@ -122,7 +122,7 @@ std::vector<Sums> labelAndSum(const StepVolume& volume, const std::vector<uint8_
     const size_t nBands = options.bandDepthsKm.size();
     for (size_t iLat = 0; iLat < nLat; ++iLat)
         for (size_t iR = 0; iR < nR; ++iR) {
-            const double depth = coordinateValue(Coordinate::Depth, 0.0, 0.0, g.rKm[iR]);
+            const double depth = grid::coordinateValue(grid::Coordinate::Depth, 0.0, 0.0, g.rKm[iR]);
             for (size_t iLon = 0; iLon < nLon; ++iLon) {
                 const size_t i = g.index(iLat, iR, iLon);
                 if (!selected[i])
@@ -170,7 +170,7 @@ std::vector<Sums> labelAndSum(const StepVolume& volume, const std::vector<uint8_
 
 // Features by decreasing volume (ties: the one met first in index order first), specks dropped, into
 // `out`; its labels renumbered to the features' ids (0 where a speck was).
-void rankFeatures(const std::vector<Sums>& sums, const SphericalGrid& g, size_t nVar, const FeatureOptions& options,
+void rankFeatures(const std::vector<Sums>& sums, const grid::SphericalGrid& g, size_t nVar, const FeatureOptions& options,
                   StepFeatures& out)
 {
     const size_t nBands = options.bandDepthsKm.size();
@@ -194,7 +194,7 @@ void rankFeatures(const std::vector<Sums>& sums, const SphericalGrid& g, size_t 
         const SphericalPoint c = cartesianToSpherical({s.x / s.volume, s.y / s.volume, s.z / s.volume});
         f.centroidLatDeg = c.latDeg;
         f.centroidLonDeg = c.lonDeg;
-        f.centroidDepthKm = coordinateValue(Coordinate::Depth, 0.0, 0.0, c.rKm);
+        f.centroidDepthKm = grid::coordinateValue(grid::Coordinate::Depth, 0.0, 0.0, c.rKm);
         f.meanDepthKm = s.depth / s.volume;
         for (size_t v = 0; v < nVar; ++v)
             f.variables.push_back(s.weight[v] > 0 ? VariableSummary{s.sum[v] / s.weight[v], s.min[v], s.max[v]}
@@ -218,14 +218,14 @@ FeatureOptions featureOptions(double minVolumeKm3, std::vector<double> depthsKm,
     return o;
 }
 
-StepFeatures extractFeatures(const StepVolume& volume, std::span<const RangeFilter> filters, const FeatureOptions& options)
+StepFeatures extractFeatures(const dataset::StepVolume& volume, std::span<const RangeFilter> filters, const FeatureOptions& options)
 {
     if (!(options.minVolumeKm3 >= 0))
         fail("features: minimum volume {} km³ is negative", options.minVolumeKm3);
     if (!(options.bandHalfWidthKm >= 0))
         fail("features: band half-width {} km is negative", options.bandHalfWidthKm);
     const std::vector<uint8_t> selected = selectedPoints(volume, filters);  // checks the filters
-    const SphericalGrid& g = volume.grid();
+    const grid::SphericalGrid& g = volume.grid();
     DisjointSets sets = connectNeighbours(g, selected);
     joinPoleRings(g, selected, sets);
     StepFeatures out;
@@ -234,17 +234,17 @@ StepFeatures extractFeatures(const StepVolume& volume, std::span<const RangeFilt
     return out;
 }
 
-std::vector<FeatureLink> linkFeatures(const StepVolume& earlier, const StepFeatures& a, const StepFeatures& b,
+std::vector<FeatureLink> linkFeatures(const dataset::StepVolume& earlier, const StepFeatures& a, const StepFeatures& b,
                                       const VelocityVariables& velocity, double intervalMyr)
 {
-    const SphericalGrid& g = earlier.grid();
+    const grid::SphericalGrid& g = earlier.grid();
     if (a.labels.size() != g.cellCount() || b.labels.size() != g.cellCount())
         fail("features: linking steps of {} and {} points on a grid of {}", a.labels.size(), b.labels.size(),
              g.cellCount());
     for (const size_t v : {velocity.x, velocity.y, velocity.z})
         if (v >= earlier.variableCount())
             fail("features: velocity variable index {} out of range 0..{}", v, earlier.variableCount() - 1);
-    const GridSampler sampler(g);
+    const grid::GridSampler sampler(g);
     const float* vx = earlier.values(velocity.x);
     const float* vy = earlier.values(velocity.y);
     const float* vz = earlier.values(velocity.z);
@@ -416,4 +416,4 @@ std::vector<Stall> stallTimes(std::span<const TrackPoint> points, std::span<cons
     return stalls;
 }
 
-}  // namespace raypc
+}  // namespace raypc::analysis

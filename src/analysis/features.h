@@ -21,7 +21,7 @@
 #include <string_view>
 #include <vector>
 
-namespace raypc {
+namespace raypc::analysis {
 
 struct FeatureOptions {
     // Features of a smaller volume (km³) are dropped (specks); their points are labelled 0.
@@ -65,7 +65,7 @@ FeatureOptions featureOptions(double minVolumeKm3, std::vector<double> depthsKm,
 
 // Throws raypc::Error as selectedVolume does (filters), and for a negative minimum volume or band
 // half-width. An empty selection gives no features.
-StepFeatures extractFeatures(const StepVolume& volume, std::span<const RangeFilter> filters,
+StepFeatures extractFeatures(const dataset::StepVolume& volume, std::span<const RangeFilter> filters,
                              const FeatureOptions& options = {});
 
 // Linking the features of two consecutive steps. Every point of a feature of the earlier step is
@@ -82,7 +82,7 @@ struct FeatureLink {
 struct VelocityVariables {
     size_t x = 0, y = 0, z = 0;  // variable indices of vx, vy, vz (m/s)
 };
-std::vector<FeatureLink> linkFeatures(const StepVolume& earlier, const StepFeatures& a, const StepFeatures& b,
+std::vector<FeatureLink> linkFeatures(const dataset::StepVolume& earlier, const StepFeatures& a, const StepFeatures& b,
                                       const VelocityVariables& velocity, double intervalMyr);
 
 // Features followed through a series of steps (tracks) and what happens to them (events).
@@ -154,4 +154,4 @@ private:
     std::vector<TrackEvent> m_events;
 };
 
-}  // namespace raypc
+}  // namespace raypc::analysis

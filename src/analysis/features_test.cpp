@@ -12,17 +12,17 @@
 #include <cmath>
 #include <map>
 
-namespace raypc {
+namespace raypc::analysis {
 namespace {
 
 // A volume of one field "f" on a centred grid (no pole rows), given per grid point.
-std::shared_ptr<StepVolume> volumeOf(const SphericalGrid& g, const std::function<double(size_t, size_t, size_t)>& f,
+std::shared_ptr<dataset::StepVolume> volumeOf(const grid::SphericalGrid& g, const std::function<double(size_t, size_t, size_t)>& f,
                                      const std::string& units = "K")
 {
-    Snapshot snap;
+    grid::Snapshot snap;
     snap.grid = g;
     snap.fields.push_back({"f", units, testing::fillGrid(g, f)});
-    return StepVolume::fromSnapshot(snap);
+    return dataset::StepVolume::fromSnapshot(snap);
 }
 
 std::vector<RangeFilter> above(float threshold) { return {RangeFilter{0, std::nullopt, {{threshold, 1e30f}}}}; }
@@ -36,7 +36,7 @@ double lonDistance(double a, double b)
 
 TEST(Features, ABlobAcrossTheSeamIsOneFeatureWithItsVolumeAndCentroid)
 {
-    const SphericalGrid g = testing::centredGrid(36, 21, 72);
+    const grid::SphericalGrid g = testing::centredGrid(36, 21, 72);
     // Centred on the seam (lon 0) at 1000 km depth: half its points have lon near 360.
     const auto volume = volumeOf(g, [&](size_t a, size_t r, size_t o) {
         return testing::gaussianBlob(g, a, r, o, 10.0, 0.0, kSurfaceRadiusKm - 1000.0, 600.0);
@@ -74,7 +74,7 @@ TEST(Features, ABlobAcrossTheSeamIsOneFeatureWithItsVolumeAndCentroid)
 
 TEST(Features, ARingAroundAPoleIsOneFeature)
 {
-    const SphericalGrid g = testing::centredGrid(36, 11, 72);
+    const grid::SphericalGrid g = testing::centredGrid(36, 11, 72);
     // Selected: the outermost northern row only, four arcs of 45 degrees with gaps of 45 degrees
     // between them: connected only through the pole.
     const auto volume = volumeOf(g, [&](size_t a, size_t, size_t o) {
@@ -90,7 +90,7 @@ TEST(Features, ARingAroundAPoleIsOneFeature)
 
 TEST(Features, SeparateBlobsAreFeaturesByDecreasingVolumeAndSpecksAreDropped)
 {
-    const SphericalGrid g = testing::centredGrid(36, 21, 72);
+    const grid::SphericalGrid g = testing::centredGrid(36, 21, 72);
     const auto volume = volumeOf(g, [&](size_t a, size_t r, size_t o) {
         return testing::gaussianBlob(g, a, r, o, -20.0, 90.0, 5000.0, 300.0) +
                testing::gaussianBlob(g, a, r, o, 30.0, 250.0, 4500.0, 700.0);
@@ -124,9 +124,9 @@ TEST(Features, SeparateBlobsAreFeaturesByDecreasingVolumeAndSpecksAreDropped)
 
 TEST(Features, AShellSelectedByDepthIsOneFeatureWithItsBandShares)
 {
-    const SphericalGrid g = testing::centredGrid(18, 41, 36);
+    const grid::SphericalGrid g = testing::centredGrid(18, 41, 36);
     const auto volume = volumeOf(g, [](size_t, size_t, size_t) { return 3.0; });
-    const std::vector<RangeFilter> filters{RangeFilter{-1, Coordinate::Depth, {{500.0f, 900.0f}}}};
+    const std::vector<RangeFilter> filters{RangeFilter{-1, grid::Coordinate::Depth, {{500.0f, 900.0f}}}};
     FeatureOptions options;
     options.bandDepthsKm = {660.0, 2000.0};
     const StepFeatures f = extractFeatures(*volume, filters, options);
@@ -152,7 +152,7 @@ TEST(Features, AShellSelectedByDepthIsOneFeatureWithItsBandShares)
 
 TEST(Features, AnEmptySelectionHasNoFeaturesAndBadOptionsAreRefused)
 {
-    const SphericalGrid g = testing::centredGrid(8, 5, 16);
+    const grid::SphericalGrid g = testing::centredGrid(8, 5, 16);
     const auto volume = volumeOf(g, [](size_t, size_t, size_t) { return 0.0; });
     const StepFeatures f = extractFeatures(*volume, above(1.0f));
     EXPECT_TRUE(f.features.empty());
@@ -167,10 +167,10 @@ TEST(Features, AnEmptySelectionHasNoFeaturesAndBadOptionsAreRefused)
 
 // A blob (variable 0) at (latDeg, lonDeg, 5000 km) in a solid-body rotation about the z axis by
 // `degreesPerMyr` (variables 1-3: vx, vy, vz in m/s).
-std::shared_ptr<StepVolume> rotatingBlobs(const SphericalGrid& g, const std::vector<std::pair<double, double>>& blobs,
+std::shared_ptr<dataset::StepVolume> rotatingBlobs(const grid::SphericalGrid& g, const std::vector<std::pair<double, double>>& blobs,
                                           double degreesPerMyr)
 {
-    Snapshot snap;
+    grid::Snapshot snap;
     snap.grid = g;
     snap.fields.push_back({"f", "1", testing::fillGrid(g, [&](size_t a, size_t r, size_t o) {
                                double v = 0;
@@ -185,15 +185,15 @@ std::shared_ptr<StepVolume> rotatingBlobs(const SphericalGrid& g, const std::vec
                                    const Vec3d v{-omega * p.y * 1e3, omega * p.x * 1e3, 0.0};  // m/s
                                    return axis == 0 ? v.x : axis == 1 ? v.y : v.z;
                                })});
-    return StepVolume::fromSnapshot(snap);
+    return dataset::StepVolume::fromSnapshot(snap);
 }
 
 TEST(FeatureTracks, AFastBlobIsLinkedAfterMovingItsPointsWithTheFlow)
 {
-    const SphericalGrid g = testing::centredGrid(72, 41, 144);
+    const grid::SphericalGrid g = testing::centredGrid(72, 41, 144);
     const VelocityVariables velocity{1, 2, 3};
     // 15 degrees a step, 2 Myr apart: at 5000 km about 1300 km, four times the blob's radius.
-    std::vector<std::shared_ptr<StepVolume>> steps;
+    std::vector<std::shared_ptr<dataset::StepVolume>> steps;
     std::vector<StepFeatures> features;
     for (int k = 0; k < 3; ++k) {
         steps.push_back(rotatingBlobs(g, {{20.0, 40.0 + 15.0 * k}}, 7.5));
@@ -219,7 +219,7 @@ TEST(FeatureTracks, AFastBlobIsLinkedAfterMovingItsPointsWithTheFlow)
 
 TEST(FeatureTracks, TouchingBlobsMergeAndMovingApartSplitAndLoneOnesAreBornAndDie)
 {
-    const SphericalGrid g = testing::centredGrid(72, 41, 144);
+    const grid::SphericalGrid g = testing::centredGrid(72, 41, 144);
     const VelocityVariables velocity{1, 2, 3};
     // Step 0: two blobs 16 degrees (1400 km) apart; step 1: a chain of blobs 4 degrees apart over
     // both (one feature; the flow at rest); step 2: the two again; step 3: a blob somewhere else.
@@ -227,7 +227,7 @@ TEST(FeatureTracks, TouchingBlobsMergeAndMovingApartSplitAndLoneOnesAreBornAndDi
     const std::vector<std::vector<std::pair<double, double>>> layout{
         two, {{0.0, 100.0}, {0.0, 104.0}, {0.0, 108.0}, {0.0, 112.0}, {0.0, 116.0}}, two, {{-40.0, 250.0}}};
     FeatureTracker tracker;
-    std::shared_ptr<StepVolume> previous;
+    std::shared_ptr<dataset::StepVolume> previous;
     StepFeatures previousFeatures;
     std::vector<std::vector<int>> tracks;
     for (size_t k = 0; k < layout.size(); ++k) {
@@ -302,4 +302,4 @@ TEST(Features, StallsCanBeTimedByTheDeepestOrShallowestPoint)
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -6,22 +6,22 @@
 #include <algorithm>
 #include <cmath>
 
-namespace raypc {
+namespace raypc::analysis {
 
-bool shellInsideGrid(const SphericalGrid& g, double depthKm)
+bool shellInsideGrid(const grid::SphericalGrid& g, double depthKm)
 {
     const double r = kSurfaceRadiusKm - depthKm;
     return r >= g.rKm.front() && r <= g.rKm.back();
 }
 
-void checkShellDepth(const SphericalGrid& g, double depthKm)
+void checkShellDepth(const grid::SphericalGrid& g, double depthKm)
 {
     if (!shellInsideGrid(g, depthKm))
         fail("flux: depth {} km is outside the grid's radii ({:.1f}..{:.1f} km deep)", depthKm,
              kSurfaceRadiusKm - g.rKm.back(), kSurfaceRadiusKm - g.rKm.front());
 }
 
-std::vector<ShellFlux> shellFluxes(const StepVolume& volume, size_t radialVelocity, std::span<const double> depthsKm,
+std::vector<ShellFlux> shellFluxes(const dataset::StepVolume& volume, size_t radialVelocity, std::span<const double> depthsKm,
                                    std::span<const RangeFilter> filters, const std::optional<HeatFluxInputs>& heat,
                                    std::optional<size_t> density)
 {
@@ -33,7 +33,7 @@ std::vector<ShellFlux> shellFluxes(const StepVolume& volume, size_t radialVeloci
         fail("flux: density {} kg/m³ is not positive", heat->densityKgM3);
     if (heat && !(heat->heatCapacityJPerKgK > 0 && std::isfinite(heat->heatCapacityJPerKgK)))
         fail("flux: heat capacity {} J/(kg K) is not positive", heat->heatCapacityJPerKgK);
-    const SphericalGrid& g = volume.grid();
+    const grid::SphericalGrid& g = volume.grid();
     const std::vector<uint8_t> selected =
         filters.empty() ? std::vector<uint8_t>(g.cellCount(), 1) : selectedPoints(volume, filters);
     const float* v = volume.values(radialVelocity);
@@ -120,4 +120,4 @@ std::vector<std::vector<size_t>> avalancheStepsPerShell(std::span<const std::vec
     return out;
 }
 
-}  // namespace raypc
+}  // namespace raypc::analysis

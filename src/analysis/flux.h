@@ -12,7 +12,7 @@
 #include <span>
 #include <vector>
 
-namespace raypc {
+namespace raypc::analysis {
 
 struct ShellFlux {
     double depthKm = 0, radiusKm = 0;
@@ -51,15 +51,15 @@ struct HeatFluxInputs {
 // shell as v_r is and the heat flux summed alike; with `density` (a variable index, kg/m³), ρ is, and
 // the mass flux summed alike. Throws raypc::Error for a depth outside the grid's radii, a variable
 // index out of range, a density or heat capacity that is not positive, or bad filters.
-std::vector<ShellFlux> shellFluxes(const StepVolume& volume, size_t radialVelocity, std::span<const double> depthsKm,
+std::vector<ShellFlux> shellFluxes(const dataset::StepVolume& volume, size_t radialVelocity, std::span<const double> depthsKm,
                                    std::span<const RangeFilter> filters = {},
                                    const std::optional<HeatFluxInputs>& heat = std::nullopt,
                                    std::optional<size_t> density = std::nullopt);
 
 // Whether the shell at `depthKm` lies within the grid's radii; checkShellDepth throws raypc::Error
 // naming them when it does not.
-bool shellInsideGrid(const SphericalGrid& grid, double depthKm);
-void checkShellDepth(const SphericalGrid& grid, double depthKm);
+bool shellInsideGrid(const grid::SphericalGrid& grid, double depthKm);
+void checkShellDepth(const grid::SphericalGrid& grid, double depthKm);
 
 // The steps (indices into `downKm3PerYr`, one value per step) whose downward flux is stronger than
 // the series' mean by more than k standard deviations: |down| > mean(|down|) + k σ(|down|) — an
@@ -69,4 +69,4 @@ std::vector<size_t> avalancheSteps(std::span<const double> downKm3PerYr, double 
 // the same shells): per shell, the indices of its avalanche steps.
 std::vector<std::vector<size_t>> avalancheStepsPerShell(std::span<const std::vector<ShellFlux>> bySteps, double k);
 
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -9,20 +9,20 @@
 #include <cmath>
 #include <numbers>
 
-namespace raypc {
+namespace raypc::analysis {
 namespace {
 
-std::shared_ptr<StepVolume> radialFlow(const SphericalGrid& g, const std::function<double(size_t, size_t, size_t)>& vr)
+std::shared_ptr<dataset::StepVolume> radialFlow(const grid::SphericalGrid& g, const std::function<double(size_t, size_t, size_t)>& vr)
 {
-    Snapshot snap;
+    grid::Snapshot snap;
     snap.grid = g;
     snap.fields.push_back({"radial velocity", "cm/yr", testing::fillGrid(g, vr)});
-    return StepVolume::fromSnapshot(snap);
+    return dataset::StepVolume::fromSnapshot(snap);
 }
 
 TEST(ShellFlux, AUniformRadialFlowCarriesFourPiRSquaredU0)
 {
-    const SphericalGrid g = testing::centredGrid(36, 21, 72);
+    const grid::SphericalGrid g = testing::centredGrid(36, 21, 72);
     const double u0 = 0.7;  // cm/yr, upward everywhere
     const auto volume = radialFlow(g, [&](size_t, size_t, size_t) { return u0; });
     const std::vector<double> depths{660.0, 1600.0};
@@ -43,14 +43,14 @@ TEST(ShellFlux, AUniformRadialFlowCarriesFourPiRSquaredU0)
 // exact); the northern half (selected by lat) carries half; without a density variable, none.
 TEST(ShellFlux, MassFluxIsDensityTimesVolumeFlux)
 {
-    const SphericalGrid g = testing::centredGrid(36, 21, 72);
+    const grid::SphericalGrid g = testing::centredGrid(36, 21, 72);
     const double u0 = 0.7;
     auto rhoAt = [](double rKm) { return 3000 + (kSurfaceRadiusKm - rKm) / 2; };
-    Snapshot snap;
+    grid::Snapshot snap;
     snap.grid = g;
     snap.fields.push_back({"radial velocity", "cm/yr", testing::fillGrid(g, [&](size_t, size_t, size_t) { return u0; })});
     snap.fields.push_back({"density", "kg/m^3", testing::fillGrid(g, [&](size_t, size_t iR, size_t) { return rhoAt(g.rKm[iR]); })});
-    const auto volume = StepVolume::fromSnapshot(snap);
+    const auto volume = dataset::StepVolume::fromSnapshot(snap);
     const std::vector<double> depths{660.0, 1600.0};
     const auto flux = shellFluxes(*volume, 0, depths, {}, std::nullopt, size_t(1));
     for (const ShellFlux& f : flux) {
@@ -72,16 +72,16 @@ TEST(ShellFlux, MassFluxIsDensityTimesVolumeFlux)
 // northern half (selected by lat) carries half the first.
 TEST(ShellFlux, AdvectiveHeatFluxIsDensityHeatCapacityAnomalyAndVelocityOverTheShell)
 {
-    const SphericalGrid g = testing::centredGrid(36, 21, 72);
+    const grid::SphericalGrid g = testing::centredGrid(36, 21, 72);
     const double u0 = 0.7, c = 150;  // cm/yr, K
-    Snapshot snap;
+    grid::Snapshot snap;
     snap.grid = g;
     snap.fields.push_back({"radial velocity", "cm/yr", testing::fillGrid(g, [&](size_t, size_t, size_t) { return u0; })});
     snap.fields.push_back({"uniform anomaly", "K", testing::fillGrid(g, [&](size_t, size_t, size_t) { return c; })});
     snap.fields.push_back({"hemispheres", "K", testing::fillGrid(g, [&](size_t iLat, size_t, size_t) {
                                return g.latDeg[iLat] > 0 ? c : -c;
                            })});
-    const auto volume = StepVolume::fromSnapshot(snap);
+    const auto volume = dataset::StepVolume::fromSnapshot(snap);
     const HeatFluxInputs heat{1, 3300, 1250};
     const std::vector<double> depths{660.0};
     const double r = kSurfaceRadiusKm - 660.0;
@@ -91,7 +91,7 @@ TEST(ShellFlux, AdvectiveHeatFluxIsDensityHeatCapacityAnomalyAndVelocityOverTheS
     EXPECT_NEAR(uniform.heatW, expected, 1e-6 * expected);
     EXPECT_EQ(uniform.selectedHeatW, uniform.heatW);
     EXPECT_EQ(shellFluxes(*volume, 0, depths).at(0).heatW, 0.0) << "without HeatFluxInputs, no heat flux";
-    const RangeFilter north{-1, Coordinate::Lat, {{0.0f, 90.0f}}};
+    const RangeFilter north{-1, grid::Coordinate::Lat, {{0.0f, 90.0f}}};
     const ShellFlux halves = shellFluxes(*volume, 0, depths, std::span(&north, 1), HeatFluxInputs{2, 3300, 1250}).at(0);
     EXPECT_NEAR(halves.heatW, 0.0, 1e-9 * expected);
     EXPECT_NEAR(halves.selectedHeatW, expected / 2, 1e-6 * expected);
@@ -102,12 +102,12 @@ TEST(ShellFlux, AdvectiveHeatFluxIsDensityHeatCapacityAnomalyAndVelocityOverTheS
 
 TEST(ShellFlux, DownAndUpAreApartAndTheSelectionTakesItsColumns)
 {
-    const SphericalGrid g = testing::centredGrid(36, 21, 72);
+    const grid::SphericalGrid g = testing::centredGrid(36, 21, 72);
     // Rising in the north, sinking in the south, at 2 cm/yr; linear in radius, so the value at the
     // shell is the interpolation between the two grid radii around it.
     const auto volume = radialFlow(g, [&](size_t a, size_t r, size_t) { return (g.latDeg[a] > 0 ? 2.0 : -2.0) * g.rKm[r] / 6000.0; });
     const std::vector<double> depths{1000.0};
-    const std::vector<RangeFilter> north{RangeFilter{-1, Coordinate::Lat, {{0.0f, 90.0f}}}};
+    const std::vector<RangeFilter> north{RangeFilter{-1, grid::Coordinate::Lat, {{0.0f, 90.0f}}}};
     const ShellFlux s = shellFluxes(*volume, 0, depths, north).front();
     const double r = kSurfaceRadiusKm - 1000.0;
     const double half = 2 * std::numbers::pi * r * r * 2.0 * r / 6000.0 * 1e-5;
@@ -120,7 +120,7 @@ TEST(ShellFlux, DownAndUpAreApartAndTheSelectionTakesItsColumns)
 
 TEST(ShellFlux, DepthsOutsideTheGridAreRefused)
 {
-    const SphericalGrid g = testing::centredGrid(8, 5, 16);
+    const grid::SphericalGrid g = testing::centredGrid(8, 5, 16);
     const auto volume = radialFlow(g, [](size_t, size_t, size_t) { return 1.0; });
     const std::vector<double> tooDeep{3000.0};
     EXPECT_THROW(shellFluxes(*volume, 0, tooDeep), Error);
@@ -137,4 +137,4 @@ TEST(ShellFlux, AvalanchesStandOutOfTheSeries)
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -7,7 +7,7 @@
 
 #include <cmath>
 
-namespace raypc {
+namespace raypc::analysis {
 namespace {
 
 std::string xmlEscape(const std::string& s)
@@ -208,4 +208,4 @@ std::string criticalPointsVtp(const PathlineSet& set) { return vtpDocument(set, 
 std::string pathlinesLegacyVtk(const PathlineSet& set) { return legacyDocument(set, true); }
 std::string criticalPointsLegacyVtk(const PathlineSet& set) { return legacyDocument(set, false); }
 
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -6,7 +6,7 @@
 
 #include <string>
 
-namespace raypc {
+namespace raypc::analysis {
 
 // One row per point: line, point, x, y, z, lat, lon, radius, time, age, then the line's attributes.
 std::string pathlinesCsv(const PathlineSet& set);
@@ -19,4 +19,4 @@ std::string pathlinesLegacyVtk(const PathlineSet& set);
 std::string criticalPointsVtp(const PathlineSet& set);
 std::string criticalPointsLegacyVtk(const PathlineSet& set);
 
-}  // namespace raypc
+}  // namespace raypc::analysis

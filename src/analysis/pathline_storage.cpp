@@ -11,7 +11,7 @@
 #include <cstring>
 #include <fstream>
 
-namespace raypc {
+namespace raypc::analysis {
 namespace {
 
 namespace fs = std::filesystem;
@@ -128,4 +128,4 @@ std::vector<PathlineSet> loadPathlineWindow(const fs::path& dataset, int step, i
     return sets;
 }
 
-}  // namespace raypc
+}  // namespace raypc::analysis

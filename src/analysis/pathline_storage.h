@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::analysis {
 
 // The version of lines.json this build writes: 2 added the "seed persistence" column; version 1
 // sets (without it) are still read.
@@ -39,4 +39,4 @@ void checkPathlineWindow(int window, const std::string& what = "window");
 // and like checkPathlineWindow.
 std::vector<PathlineSet> loadPathlineWindow(const std::filesystem::path& dataset, int step, int window = 10);
 
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace raypc {
+namespace raypc::analysis {
 namespace {
 
 namespace fs = std::filesystem;
@@ -57,7 +57,7 @@ PathlineTracer::PathlineTracer(const FieldSeries& series, size_t vx, size_t vy, 
     m_rToleranceKm = 1e-3 * minDr;
 }
 
-std::optional<GridSampler::Location> PathlineTracer::locate(const Vec3d& pKm) const
+std::optional<grid::GridSampler::Location> PathlineTracer::locate(const Vec3d& pKm) const
 {
     const SphericalPoint s = cartesianToSpherical(pKm);
     if (!(s.rKm >= m_rMinKm - m_rToleranceKm && s.rKm <= m_rMaxKm + m_rToleranceKm))
@@ -248,7 +248,7 @@ int PathlineSet::column(const std::string& name) const
 std::vector<std::string> pathlineColumns(const std::vector<std::string>& variableNames)
 {
     std::vector<std::string> columns;
-    for (const TableColumn& c : kPathlineFixedColumns)
+    for (const columns::TableColumn& c : kPathlineFixedColumns)
         columns.push_back(c.name);
     for (const char* prefix : columns::kPathlineVariablePrefixes)
         for (const auto& name : variableNames)
@@ -268,7 +268,7 @@ PathlineSet tracePathlines(const FieldSeries& series, const PathlineTracer& trac
     set.injectionTimeMyr = series.timesMyr[injectionStep];
     set.endStep = endStep;
     set.columns = pathlineColumns(names);
-    for (const TableColumn& c : kPathlineFixedColumns)
+    for (const columns::TableColumn& c : kPathlineFixedColumns)
         set.units.push_back(c.units);
     for (size_t side = 0; side < columns::kPathlineVariablePrefixes.size(); ++side)
         set.units.insert(set.units.end(), units.begin(), units.end());
@@ -310,4 +310,4 @@ PathlineSet tracePathlines(const FieldSeries& series, const PathlineTracer& trac
     return set;
 }
 
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::analysis {
 
 inline constexpr double kMpsToKmPerMyr = kSecondsPerMyr / 1000.0;  // 3.15576e10
 
@@ -33,10 +33,10 @@ inline constexpr double kMpsToKmPerMyr = kSecondsPerMyr / 1000.0;  // 3.15576e10
 // in canonical order (not owned); or, when `volumes` is set, each step's values come from its
 // volume, so that a u16 dataset decodes only the arrays a trace reads (StepVolume::values).
 struct FieldSeries {
-    SphericalGrid grid;
+    grid::SphericalGrid grid;
     std::vector<double> timesMyr;                  // ascending, one per step
     std::vector<std::vector<const float*>> fields;  // [step][variable]; empty when `volumes` is set
-    std::vector<std::shared_ptr<const StepVolume>> volumes;  // [step]
+    std::vector<std::shared_ptr<const dataset::StepVolume>> volumes;  // [step]
 
     size_t stepCount() const { return volumes.empty() ? fields.size() : volumes.size(); }
     size_t variableCount(size_t step) const
@@ -92,12 +92,12 @@ public:
     TracedPathline trace(const Vec3d& startKm, double startMyr, double endMyr) const;
 
 private:
-    std::optional<GridSampler::Location> locate(const Vec3d& pKm) const;
+    std::optional<grid::GridSampler::Location> locate(const Vec3d& pKm) const;
     // The bracketing steps of `timeMyr` and the weight of the later one.
     void bracketTime(double timeMyr, size_t& k0, size_t& k1, double& w) const;
 
     const FieldSeries& m_series;
-    GridSampler m_sampler;
+    grid::GridSampler m_sampler;
     size_t m_v[3];
     TracerOptions m_options;
     double m_rMinKm, m_rMaxKm, m_rToleranceKm;
@@ -145,4 +145,4 @@ PathlineSet tracePathlines(const FieldSeries& series, const PathlineTracer& trac
                            const std::vector<CriticalPoint>& seeds, int injectionStep, int endStep,
                            const std::vector<std::string>& names, const std::vector<std::string>& units);
 
-}  // namespace raypc
+}  // namespace raypc::analysis

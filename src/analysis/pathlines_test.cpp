@@ -17,7 +17,7 @@
 #include <functional>
 #include <sstream>
 
-namespace raypc {
+namespace raypc::analysis {
 namespace {
 
 using testing::centredGrid;
@@ -30,7 +30,7 @@ struct Series {
     std::vector<std::vector<float>> storage;
     FieldSeries series;
 
-    Series(const SphericalGrid& g, std::vector<double> times, const std::function<Vec3d(size_t, const Vec3d&)>& v)
+    Series(const grid::SphericalGrid& g, std::vector<double> times, const std::function<Vec3d(size_t, const Vec3d&)>& v)
     {
         series.grid = g;
         series.timesMyr = times;
@@ -62,7 +62,7 @@ double radiusOf(const Vec3d& p) { return std::sqrt(p.x * p.x + p.y * p.y + p.z *
 // rises by u0 t. It crosses the lon seam on the way.
 TEST(Tracer, RotationWithTimeVaryingRateAndRadialRise)
 {
-    const SphericalGrid g = centredGrid(36, 41, 72);
+    const grid::SphericalGrid g = centredGrid(36, 41, 72);
     const double omega0 = 1e-15;  // rad/s: 1.8°/Myr
     const double u0 = 5e-10;      // m/s: 15.8 km/Myr
     const std::vector<double> times = {0, 2, 4, 6};
@@ -110,7 +110,7 @@ TEST(Tracer, RotationWithTimeVaryingRateAndRadialRise)
 // interpolated radial flow is exact.
 TEST(Tracer, StopsWhereTheLineLeavesTheShell)
 {
-    const SphericalGrid g = centredGrid(18, 21, 36);
+    const grid::SphericalGrid g = centredGrid(18, 21, 36);
     const double u0 = 1e-8;  // m/s: 315.6 km/Myr
     Series s(g, {0, 2, 4, 6, 8, 10}, [&](size_t, const Vec3d& p) {
         const double r = radiusOf(p);
@@ -141,7 +141,7 @@ TEST(Tracer, StopsWhereTheLineLeavesTheShell)
 // close to the true one.
 TEST(Tracer, CrossesThePole)
 {
-    const SphericalGrid g = centredGrid(36, 41, 72);
+    const grid::SphericalGrid g = centredGrid(36, 41, 72);
     const double omega = 2e-15;  // rad/s: 3.6°/Myr
     Series s(g, {0, 10, 20, 30, 40}, [&](size_t, const Vec3d& p) { return Vec3d{0, -omega * p.z * 1000, omega * p.y * 1000}; });
     const PathlineTracer tracer(s.series, 0, 1, 2);
@@ -163,7 +163,7 @@ TEST(Tracer, CrossesThePole)
 
 PathlineSet smallSet()
 {
-    const SphericalGrid g = centredGrid(18, 21, 36);
+    const grid::SphericalGrid g = centredGrid(18, 21, 36);
     static Series s(g, {0, 2, 4}, [](size_t, const Vec3d& p) {
         const double r = radiusOf(p);
         return Vec3d{-1e-15 * p.y * 1000 + 1e-9 * p.x / r, 1e-15 * p.x * 1000 + 1e-9 * p.y / r, 1e-9 * p.z / r};
@@ -292,13 +292,13 @@ TEST(PathlinePreprocess, ContestFixtureLinesFollowTheAnalyticFlow)
     const auto truth = nlohmann::json::parse(std::ifstream(testing::contestLayoutDir() / "truth.json"));
     const double omega = truth["omega_rad_per_s"], u0 = truth["u0_m_per_s"];
     TempDir dir("plpp");
-    PreprocessOptions o;
+    preprocess::PreprocessOptions o;
     o.quiet = true;
     o.sampleRows = 1000;
-    const auto files = listSnapshotFiles({testing::contestLayoutDir()});
-    const auto summary = preprocess(files, dir / "ds", o);
+    const auto files = io::listSnapshotFiles({testing::contestLayoutDir()});
+    const auto summary = preprocess::preprocess(files, dir / "ds", o);
     EXPECT_EQ(summary.pathlineSetsWritten, 3);
-    const auto ds = Dataset::open(dir / "ds");
+    const auto ds = dataset::Dataset::open(dir / "ds");
     const auto window = loadPathlineWindow(ds->dir(), 2);
     ASSERT_EQ(window.size(), 3u);
     EXPECT_EQ(window[0].injectionStep, 0);
@@ -328,28 +328,28 @@ TEST(PathlinePreprocess, ContestFixtureLinesFollowTheAnalyticFlow)
     }
 
     // Resume: a finished run redoes nothing; a lost set (or one made with other settings) is redone.
-    auto again = preprocess(files, dir / "ds", o);
+    auto again = preprocess::preprocess(files, dir / "ds", o);
     EXPECT_EQ(again.pathlineSetsSkipped, 3);
     EXPECT_EQ(again.pathlineSetsWritten, 0);
     std::filesystem::remove_all(pathlineDir(dir / "ds", 1));
     std::filesystem::create_directories(dir / "ds" / "pathlines" / ".0001.tmp-9-9");
-    again = preprocess(files, dir / "ds", o);
+    again = preprocess::preprocess(files, dir / "ds", o);
     EXPECT_EQ(again.pathlineSetsWritten, 1);
     EXPECT_FALSE(std::filesystem::exists(dir / "ds" / "pathlines" / ".0001.tmp-9-9"));
     o.pathlines.filter.maxCount = 2;
-    again = preprocess(files, dir / "ds", o);
+    again = preprocess::preprocess(files, dir / "ds", o);
     EXPECT_EQ(again.pathlineSetsWritten, 3);
     EXPECT_EQ(loadPathlineSet(dir / "ds", 0).lineCount(), 2u);
     // --no-pathlines removes them; the dataset still opens.
     o.pathlines.enabled = false;
-    preprocess(files, dir / "ds", o);
+    preprocess::preprocess(files, dir / "ds", o);
     EXPECT_FALSE(std::filesystem::exists(dir / "ds" / "pathlines"));
     EXPECT_THROW(loadPathlineSet(dir / "ds", 0), Error);
-    EXPECT_NO_THROW(Dataset::open(dir / "ds"));
+    EXPECT_NO_THROW(dataset::Dataset::open(dir / "ds"));
     // Bad options are refused before anything is written.
     o.pathlines.enabled = true;
     o.pathlines.field = "no such field";
-    EXPECT_THROW(preprocess(files, dir / "other", o), Error);
+    EXPECT_THROW(preprocess::preprocess(files, dir / "other", o), Error);
     EXPECT_FALSE(std::filesystem::exists(dir / "other"));
 }
 
@@ -364,19 +364,19 @@ TEST(PathlinePreprocess, SeedPersistenceIsThePersistenceOfTheSeedsPair)
 {
     const auto truth = nlohmann::json::parse(std::ifstream(testing::contestLayoutDir() / "truth.json"));
     TempDir dir("plpersist");
-    PreprocessOptions o;
+    preprocess::PreprocessOptions o;
     o.quiet = true;
     o.sampleRows = 1000;
     o.pathlines.steps = 1;
-    const auto files = listSnapshotFiles({testing::contestLayoutDir()});
-    preprocess(files, dir / "ds", o);
-    const auto ds = Dataset::open(dir / "ds");
+    const auto files = io::listSnapshotFiles({testing::contestLayoutDir()});
+    preprocess::preprocess(files, dir / "ds", o);
+    const auto ds = dataset::Dataset::open(dir / "ds");
     const PathlineSet set = loadPathlineSet(ds->dir(), 0);
     const int column = set.column("seed persistence");
     ASSERT_EQ(column, 2);
     ASSERT_GE(set.lineCount(), 4u);
     const auto volume = ds->load(0, 0);
-    const SphericalGrid& g = volume->grid();
+    const grid::SphericalGrid& g = volume->grid();
     const std::span<const float> values(volume->values(size_t(ds->variableIndex("temperature anomaly"))), g.cellCount());
     const auto pairs = persistencePairs(g, values);
     auto nearestIndex = [&](double latDeg, double lonDeg, double rKm) {
@@ -456,10 +456,10 @@ TEST(PathlinePreprocess, SeedPersistenceIsThePersistenceOfTheSeedsPair)
     EXPECT_THROW(loadPathlineSet(dir / "ds", 0), Error);
     lines["version"] = 1;
     std::ofstream(dir0 / "lines.json") << lines.dump();
-    const auto again = preprocess(files, dir / "ds", o);
+    const auto again = preprocess::preprocess(files, dir / "ds", o);
     EXPECT_EQ(again.pathlineSetsWritten, 1);
     EXPECT_EQ(loadPathlineSet(dir / "ds", 0).column("seed persistence"), column);
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -18,11 +18,11 @@
 #include <limits>
 #include <unordered_map>
 
-namespace raypc {
+namespace raypc::analysis {
 namespace {
 
-using triangulation::kLinkSize;
-using triangulation::linkTables;
+using grid::triangulation::kLinkSize;
+using grid::triangulation::linkTables;
 
 // A vertex whose lower (or upper) link has several components: where sublevel (superlevel)
 // components may meet.
@@ -45,12 +45,12 @@ inline uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t x)
 // `parent` are minima and a lower-link component's representative is any of its vertices.
 // `Up` = true: superlevel sets, everything mirrored. Appends one pair per dying extremum.
 template <bool Up>
-void sweep(const SphericalGrid& grid, const float* values, std::vector<Saddle>& saddles, std::vector<uint32_t>& parent,
+void sweep(const grid::SphericalGrid& grid, const float* values, std::vector<Saddle>& saddles, std::vector<uint32_t>& parent,
            std::vector<PersistencePair>& pairs)
 {
     // SoS order along the sweep: "earlier" is lower sweeping up, higher sweeping down.
     auto earlier = [values](size_t a, size_t b) {
-        return Up ? triangulation::below(values, b, a) : triangulation::below(values, a, b);
+        return Up ? grid::triangulation::below(values, b, a) : grid::triangulation::below(values, a, b);
     };
     std::sort(saddles.begin(), saddles.end(),
               [&](const Saddle& a, const Saddle& b) { return earlier(a.index, b.index); });
@@ -61,7 +61,7 @@ void sweep(const SphericalGrid& grid, const float* values, std::vector<Saddle>& 
     std::array<uint32_t, kLinkSize> roots{};
     for (const Saddle& s : saddles) {
         const size_t iLon = s.index % nLon, iR = (s.index / nLon) % nR, iLat = s.index / (nLon * nR);
-        const auto m = triangulation::vertexMasks(grid, values, iLat, iR, iLon, neighbours.data());
+        const auto m = grid::triangulation::vertexMasks(grid, values, iLat, iR, iLon, neighbours.data());
         const uint32_t side = Up ? (m.valid & ~m.lower) : m.lower;
         const int count = tables.componentMasks(side, components);
         // The distinct sweep components that the link components belong to.
@@ -105,9 +105,9 @@ const char* pairKindName(PairKind kind)
     return "?";
 }
 
-std::vector<PersistencePair> persistencePairs(const SphericalGrid& grid, std::span<const float> values)
+std::vector<PersistencePair> persistencePairs(const grid::SphericalGrid& grid, std::span<const float> values)
 {
-    triangulation::checkTriangulable(grid, values.size(), "persistence");
+    grid::triangulation::checkTriangulable(grid, values.size(), "persistence");
     if (grid.cellCount() >= std::numeric_limits<uint32_t>::max())
         fail("persistence: grid of {} points, at most {} are supported", grid.cellCount(),
              std::numeric_limits<uint32_t>::max() - 1);
@@ -126,17 +126,17 @@ std::vector<PersistencePair> persistencePairs(const SphericalGrid& grid, std::sp
             for (size_t iR = 0; iR < grid.nR(); ++iR)
                 for (size_t iLon = 0; iLon < grid.nLon(); ++iLon) {
                     const size_t self = grid.index(iLat, iR, iLon);
-                    const auto m = triangulation::vertexMasks(grid, v, iLat, iR, iLon, nb.data());
+                    const auto m = grid::triangulation::vertexMasks(grid, v, iLat, iR, iLon, nb.data());
                     const uint32_t lower = m.lower, upper = m.valid & ~m.lower;
                     size_t lowest = self, highest = self;
                     for (uint32_t bits = lower; bits; bits &= bits - 1) {
                         const size_t n = nb[std::countr_zero(bits)];
-                        if (triangulation::below(v, n, lowest))
+                        if (grid::triangulation::below(v, n, lowest))
                             lowest = n;
                     }
                     for (uint32_t bits = upper; bits; bits &= bits - 1) {
                         const size_t n = nb[std::countr_zero(bits)];
-                        if (triangulation::below(v, highest, n))
+                        if (grid::triangulation::below(v, highest, n))
                             highest = n;
                     }
                     down[self] = static_cast<uint32_t>(lowest);
@@ -183,11 +183,11 @@ std::vector<PersistencePair> persistencePairs(const SphericalGrid& grid, std::sp
     return pairs;
 }
 
-SeedSelection selectSeeds(const SphericalGrid& grid, std::span<const float> values,
+SeedSelection selectSeeds(const grid::SphericalGrid& grid, std::span<const float> values,
                           const std::vector<CriticalPoint>& all, const CriticalPointFilter& filter)
 {
     checkCriticalPointFilter(filter);
-    triangulation::checkTriangulable(grid, values.size(), "seed selection");
+    grid::triangulation::checkTriangulable(grid, values.size(), "seed selection");
     SeedSelection out;
     if (filter.rule == SeedRule::Value) {
         double maxAbs = 0;
@@ -249,7 +249,7 @@ SeedSelection selectSeeds(const SphericalGrid& grid, std::span<const float> valu
     return out;
 }
 
-std::string persistenceDiagramCsv(const SphericalGrid& grid, const std::vector<PersistencePair>& pairs,
+std::string persistenceDiagramCsv(const grid::SphericalGrid& grid, const std::vector<PersistencePair>& pairs,
                                   const std::string& units)
 {
     const std::string u = units.empty() ? "" : " [" + units + "]";
@@ -276,4 +276,4 @@ std::string persistenceDiagramCsv(const SphericalGrid& grid, const std::vector<P
     return out;
 }
 
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -36,7 +36,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::analysis {
 
 enum class PairKind : uint8_t { MinimumSaddle = 0, SaddleMaximum = 1, Global = 2 };
 
@@ -59,7 +59,7 @@ struct PersistencePair {
 // order) and the global pair, by decreasing persistence (ties: kind, then extremum index).
 // Throws raypc::Error when the sizes differ, the grid is smaller than 2x2x3 or has 2^32 points
 // or more.
-std::vector<PersistencePair> persistencePairs(const SphericalGrid& grid, std::span<const float> values);
+std::vector<PersistencePair> persistencePairs(const grid::SphericalGrid& grid, std::span<const float> values);
 
 // The seeds the filter's rule chooses among `all` (findCriticalPoints(grid, values)), most
 // significant first, and the threshold it applied in the field's units.
@@ -75,13 +75,13 @@ struct SeedSelection {
     std::vector<CriticalPoint> seeds;
     double threshold = 0;
 };
-SeedSelection selectSeeds(const SphericalGrid& grid, std::span<const float> values,
+SeedSelection selectSeeds(const grid::SphericalGrid& grid, std::span<const float> values,
                           const std::vector<CriticalPoint>& all, const CriticalPointFilter& filter);
 
 // The persistence diagram as CSV, one row per pair in the given order: kind, birth, death,
 // persistence (in `units`), then for the birth end and the death end: critical kind, lat, lon,
 // radius, x, y, z (degrees, km; frame of core/spherical.h).
-std::string persistenceDiagramCsv(const SphericalGrid& grid, const std::vector<PersistencePair>& pairs,
+std::string persistenceDiagramCsv(const grid::SphericalGrid& grid, const std::vector<PersistencePair>& pairs,
                                   const std::string& units);
 
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -14,7 +14,7 @@
 #include <random>
 #include <tuple>
 
-namespace raypc {
+namespace raypc::analysis {
 namespace {
 
 using testing::centredGrid;
@@ -27,7 +27,7 @@ struct Blob {
 };
 
 // Sum of blobs centred on grid points, plus uniform noise in [-noise, noise].
-std::vector<float> blobField(const SphericalGrid& g, const std::vector<Blob>& blobs, double noise, unsigned seed = 1)
+std::vector<float> blobField(const grid::SphericalGrid& g, const std::vector<Blob>& blobs, double noise, unsigned seed = 1)
 {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> u(-noise, noise);
@@ -50,7 +50,7 @@ std::vector<PersistencePair> above(const std::vector<PersistencePair>& pairs, do
 }
 
 // Grid steps between two indices along each axis (lon on the circle).
-std::array<size_t, 3> stepsApart(const SphericalGrid& g, size_t i, size_t j)
+std::array<size_t, 3> stepsApart(const grid::SphericalGrid& g, size_t i, size_t j)
 {
     const size_t nLon = g.nLon(), nR = g.nR();
     auto split = [&](size_t k) { return std::array<size_t, 3>{k / (nLon * nR), (k / nLon) % nR, k % nLon}; };
@@ -59,7 +59,7 @@ std::array<size_t, 3> stepsApart(const SphericalGrid& g, size_t i, size_t j)
     return {apart(a[0], b[0]), apart(a[1], b[1]), std::min(apart(a[2], b[2]), nLon - apart(a[2], b[2]))};
 }
 
-bool near(const SphericalGrid& g, size_t i, size_t j, size_t steps = 1)
+bool near(const grid::SphericalGrid& g, size_t i, size_t j, size_t steps = 1)
 {
     const auto d = stepsApart(g, i, j);
     return d[0] <= steps && d[1] <= steps && d[2] <= steps;
@@ -68,7 +68,7 @@ bool near(const SphericalGrid& g, size_t i, size_t j, size_t steps = 1)
 // The textbook algorithm, independent of the forest shortcut: every vertex in (value, index)
 // order, union with every lower neighbour (Freudenthal: offsets whose components are all >= 0 or
 // all <= 0), elder rule at each merge. Returns (kind, birth index, death index) of every pair.
-std::multiset<std::tuple<int, size_t, size_t>> textbookPairs(const SphericalGrid& g, const std::vector<float>& v)
+std::multiset<std::tuple<int, size_t, size_t>> textbookPairs(const grid::SphericalGrid& g, const std::vector<float>& v)
 {
     const size_t n = g.cellCount();
     std::vector<size_t> order(n);
@@ -176,7 +176,7 @@ TEST(Persistence, SameAsTheTextbookSweep)
 // essential pair, whose persistence is the range.
 TEST(Persistence, BlobsOnNoiseGiveOnePairEachWithTheirAmplitude)
 {
-    const SphericalGrid g = centredGrid(36, 41, 72);
+    const grid::SphericalGrid g = centredGrid(36, 41, 72);
     const std::vector<Blob> blobs = {{24, 20, 12, 1000, 600}, {10, 14, 40, 600, 600}, {18, 32, 62, 300, 600},
                                      {16, 8, 26, -800, 600},  {30, 28, 50, -400, 600}};
     const double noise = 0.5;
@@ -238,7 +238,7 @@ TEST(Persistence, BlobsOnNoiseGiveOnePairEachWithTheirAmplitude)
 // persistence, so a threshold above the noise level selects nothing.
 TEST(Persistence, NoiseAloneGivesNoPairAboveItsLevel)
 {
-    const SphericalGrid g = centredGrid(18, 21, 36);
+    const grid::SphericalGrid g = centredGrid(18, 21, 36);
     const double noise = 2.0;
     const auto v = blobField(g, {}, noise, 7);
     const auto pairs = persistencePairs(g, v);
@@ -258,7 +258,7 @@ TEST(Persistence, NoiseAloneGivesNoPairAboveItsLevel)
 // grid point nearest to it.
 TEST(Persistence, TwoBlobsPairTheSmallerWithTheSaddleBetweenThem)
 {
-    const SphericalGrid g = centredGrid(36, 41, 72);
+    const grid::SphericalGrid g = centredGrid(36, 41, 72);
     const Blob big{20, 8, 30, 1000, 400}, small{20, 26, 30, 600, 400};
     const auto v = blobField(g, {big, small}, 0);
     const double d = g.rKm[small.iR] - g.rKm[big.iR], s2 = 2 * 400.0 * 400.0;
@@ -295,7 +295,7 @@ TEST(Persistence, TwoBlobsPairTheSmallerWithTheSaddleBetweenThem)
 // whose persistence is the range, and it is the only pair with positive persistence.
 TEST(Persistence, GlobalPairOfARamp)
 {
-    const SphericalGrid g = centredGrid(6, 5, 8);
+    const grid::SphericalGrid g = centredGrid(6, 5, 8);
     const auto v = fillGrid(g, [&](size_t, size_t b, size_t) { return g.rKm[b]; });
     const auto pairs = persistencePairs(g, v);
     const auto positive = above(pairs, 0);
@@ -313,7 +313,7 @@ TEST(Persistence, GlobalPairOfARamp)
 // the blob is highest on the grid), not two halves joined far away.
 TEST(Persistence, BlobAcrossTheSeamAndOnThePoles)
 {
-    const SphericalGrid g = centredGrid(36, 41, 72);  // lat rows at ±87.5, lon columns every 5°
+    const grid::SphericalGrid g = centredGrid(36, 41, 72);  // lat rows at ±87.5, lon columns every 5°
     const double sigma = 700, rBlob = g.rKm[20];
     const Blob reference{12, 20, 36, 1000, 600};  // the global maximum, far from both
     for (const double lon : {0.0, 357.5}) {
@@ -384,7 +384,7 @@ TEST(Persistence, ThresholdOptions)
 // The value rule is still there: selectSeeds then applies selectSignificant.
 TEST(Persistence, ValueRuleIsTheOldSelection)
 {
-    const SphericalGrid g = centredGrid(18, 21, 36);
+    const grid::SphericalGrid g = centredGrid(18, 21, 36);
     const auto v = blobField(g, {{6, 10, 5, 100, 600}, {12, 4, 20, -50, 600}}, 1.0);
     const auto all = findCriticalPoints(g, v);
     CriticalPointFilter f;
@@ -403,11 +403,11 @@ TEST(Persistence, ValueRuleIsTheOldSelection)
 
 TEST(Persistence, RejectsWrongSizes)
 {
-    const SphericalGrid g = centredGrid(6, 5, 8);
+    const grid::SphericalGrid g = centredGrid(6, 5, 8);
     EXPECT_THROW(persistencePairs(g, std::vector<float>(10)), Error);
     EXPECT_THROW(persistencePairs(centredGrid(6, 1, 8), std::vector<float>(48)), Error);
     EXPECT_THROW(selectSeeds(g, std::vector<float>(10), {}, CriticalPointFilter{}), Error);
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -9,15 +9,15 @@
 
 #include <algorithm>
 
-namespace raypc {
+namespace raypc::analysis {
 namespace {
 
 // The largest error a sample's value can have from quantisation (docs/format.md, "Encoding of the
 // level arrays"): the sample is a weighted mean of grid values (trilinear, and in a pole cap also
 // the outermost row's ring means), so its error is at most the largest bound among those points.
-double quantisationBound(const StepVolume& volume, size_t var, const GridSampler::Location& at)
+double quantisationBound(const dataset::StepVolume& volume, size_t var, const grid::GridSampler::Location& at)
 {
-    if (volume.encoding() == ValueEncoding::Float32)
+    if (volume.encoding() == dataset::ValueEncoding::Float32)
         return 0;
     double bound = 0;
     for (size_t iLat : {at.lat0, at.lat1})
@@ -35,7 +35,7 @@ double quantisationBound(const StepVolume& volume, size_t var, const GridSampler
 
 }  // namespace
 
-nlohmann::json probeJson(const Dataset& dataset, int step, int level, double latDeg, double lonDeg, double rKm,
+nlohmann::json probeJson(const dataset::Dataset& dataset, int step, int level, double latDeg, double lonDeg, double rKm,
                          const std::string& var)
 {
     dataset.checkStep(step, "--time");
@@ -43,7 +43,7 @@ nlohmann::json probeJson(const Dataset& dataset, int step, int level, double lat
     return probeJson(dataset, *dataset.load(step, level), step, level, latDeg, lonDeg, rKm, var);
 }
 
-nlohmann::json probeJson(const Dataset& dataset, const StepVolume& volumeAtStep, int step, int level, double latDeg,
+nlohmann::json probeJson(const dataset::Dataset& dataset, const dataset::StepVolume& volumeAtStep, int step, int level, double latDeg,
                          double lonDeg, double rKm, const std::string& var)
 {
     if (!(latDeg >= -90 && latDeg <= 90))
@@ -53,15 +53,15 @@ nlohmann::json probeJson(const Dataset& dataset, const StepVolume& volumeAtStep,
         fail("--var: unknown variable '{}'; the dataset has: {}", var,
              fmt::join(dataset.variableNames(), ", "));
     }
-    const StepVolume* volume = &volumeAtStep;  // the code below reads it through a pointer
-    const GridSampler sampler(volume->grid());
+    const dataset::StepVolume* volume = &volumeAtStep;  // the code below reads it through a pointer
+    const grid::GridSampler sampler(volume->grid());
     const auto at = sampler.locate(latDeg, lonDeg, rKm);
     if (!at)
         fail("--r: {} km is outside the mantle shell {}..{} km", rKm, volume->grid().rKm.front(),
              volume->grid().rKm.back());
     nlohmann::json point = nlohmann::json::object();  // x, y, z, lat, lon, radius, depth (grid/coordinates.h)
-    for (const CoordinateInfo& c : coordinateInfos())
-        point[c.name] = {{"value", coordinateValue(c.id, latDeg, lonDeg, rKm)}, {"units", c.units}};
+    for (const grid::CoordinateInfo& c : grid::coordinateInfos())
+        point[c.name] = {{"value", grid::coordinateValue(c.id, latDeg, lonDeg, rKm)}, {"units", c.units}};
     nlohmann::json j{{"step", step}, {"time_myr", dataset.steps()[step].timeMyr}, {"level", level}, {"point", point}};
     nlohmann::json values = nlohmann::json::object();
     for (size_t v = 0; v < dataset.variables().size(); ++v) {
@@ -78,4 +78,4 @@ nlohmann::json probeJson(const Dataset& dataset, const StepVolume& volumeAtStep,
     return j;
 }
 
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -11,7 +11,7 @@
 #include <cmath>
 #include <type_traits>
 
-namespace raypc {
+namespace raypc::analysis {
 
 std::vector<NamedRanges> groupRanges(std::span<const NamedRange> ranges, const std::string& what)
 {
@@ -38,14 +38,14 @@ std::vector<RangeFilter> resolveRangeFilters(std::span<const std::string> variab
         const std::string& name = group.name;
         if (const auto it = std::find(variableNames.begin(), variableNames.end(), name); it != variableNames.end()) {
             f.variable = int(it - variableNames.begin());
-        } else if (const auto c = findCoordinate(name)) {
+        } else if (const auto c = grid::findCoordinate(name)) {
             f.coordinate = c;
         } else {
             const size_t i = size_t(std::find_if(ranges.begin(), ranges.end(),
                                                  [&](const NamedRange& r) { return r.name == name; }) -
                                     ranges.begin());
             std::vector<std::string> coordinates;
-            for (const auto& info : coordinateInfos())
+            for (const auto& info : grid::coordinateInfos())
                 coordinates.push_back(info.name);
             fail("{}[{}] ({}): unknown variable or coordinate '{}'; variables: {}; coordinates: {}", what, i, name,
                  name, fmt::join(variableNames, ", "), fmt::join(coordinates, ", "));
@@ -55,7 +55,7 @@ std::vector<RangeFilter> resolveRangeFilters(std::span<const std::string> variab
     return filters;
 }
 
-std::vector<RangeFilter> resolveRangeFilters(const Dataset& dataset, std::span<const NamedRange> ranges,
+std::vector<RangeFilter> resolveRangeFilters(const dataset::Dataset& dataset, std::span<const NamedRange> ranges,
                                              const std::string& what)
 {
     const std::vector<std::string> names = dataset.variableNames();
@@ -64,26 +64,26 @@ std::vector<RangeFilter> resolveRangeFilters(const Dataset& dataset, std::span<c
 
 namespace {
 
-void checkFilters(const StepVolume& volume, std::span<const RangeFilter> filters)
+void checkFilters(const dataset::StepVolume& volume, std::span<const RangeFilter> filters)
 {
     for (const auto& f : filters) {
         if (!f.coordinate && (f.variable < 0 || static_cast<size_t>(f.variable) >= volume.variableCount()))
             fail("selection: variable index {} out of range 0..{}", f.variable, volume.variableCount() - 1);
         if (f.ranges.empty())
             fail("selection: a filter without ranges");
-        for (const ValueRange& r : f.ranges)
+        for (const dataset::ValueRange& r : f.ranges)
             if (!(r.min <= r.max))
                 fail("selection: range [{}, {}] has min > max", r.min, r.max);
     }
 }
 
 // Whether the grid point (iLat, iR, iLon) is selected: every filter holds at it.
-bool pointSelected(const StepVolume& volume, std::span<const RangeFilter> filters, size_t iLat, size_t iR, size_t iLon)
+bool pointSelected(const dataset::StepVolume& volume, std::span<const RangeFilter> filters, size_t iLat, size_t iR, size_t iLon)
 {
     const auto& g = volume.grid();
     const size_t i = g.index(iLat, iR, iLon);
     for (const auto& f : filters) {
-        const double v = f.coordinate ? coordinateValue(*f.coordinate, g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR])
+        const double v = f.coordinate ? grid::coordinateValue(*f.coordinate, g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR])
                                       : volume.values(f.variable)[i];
         if (!f.contains(v))
             return false;
@@ -93,7 +93,7 @@ bool pointSelected(const StepVolume& volume, std::span<const RangeFilter> filter
 
 }  // namespace
 
-SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters,
+SelectionStats selectedVolume(const dataset::StepVolume& volume, std::span<const RangeFilter> filters,
                               std::optional<size_t> meanVariable)
 {
     checkFilters(volume, filters);
@@ -175,7 +175,7 @@ SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFil
     return stats;
 }
 
-std::vector<uint8_t> selectedPoints(const StepVolume& volume, std::span<const RangeFilter> filters)
+std::vector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::span<const RangeFilter> filters)
 {
     checkFilters(volume, filters);
     const auto& g = volume.grid();
@@ -188,7 +188,7 @@ std::vector<uint8_t> selectedPoints(const StepVolume& volume, std::span<const Ra
     return out;
 }
 
-ClassVolumes selectedVolumeByClass(const StepVolume& volume, std::span<const RangeFilter> filters,
+ClassVolumes selectedVolumeByClass(const dataset::StepVolume& volume, std::span<const RangeFilter> filters,
                                    std::span<const uint32_t> classes, size_t classCount)
 {
     checkFilters(volume, filters);
@@ -224,11 +224,11 @@ ClassVolumes selectedVolumeByClass(const StepVolume& volume, std::span<const Ran
     return out;
 }
 
-}  // namespace raypc
+}  // namespace raypc::analysis
 
-namespace raypc {
+namespace raypc::analysis {
 
-std::vector<StepSelection> selectionOverTime(const Dataset& dataset, std::span<const RangeFilter> filters, int level,
+std::vector<StepSelection> selectionOverTime(const dataset::Dataset& dataset, std::span<const RangeFilter> filters, int level,
                                              int firstStep, int lastStep, const VolumeLoader& load,
                                              const std::function<void()>& onStep, std::optional<size_t> meanVariable)
 {
@@ -245,4 +245,4 @@ std::vector<StepSelection> selectionOverTime(const Dataset& dataset, std::span<c
     return out;
 }
 
-}  // namespace raypc
+}  // namespace raypc::analysis

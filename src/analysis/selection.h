@@ -12,7 +12,7 @@
 #include <span>
 #include <vector>
 
-namespace raypc {
+namespace raypc::analysis {
 
 // The one brush model of RayPC. A brush names a variable or a coordinate (NamedRange, as in the
 // state document and the --range options) and resolves against a volume's variable names into a
@@ -25,13 +25,13 @@ namespace raypc {
 // One brushed axis: a variable (index into the volume's variables) or a coordinate, and its ranges.
 struct RangeFilter {
     int variable = -1;
-    std::optional<Coordinate> coordinate;
-    std::vector<ValueRange> ranges;  // inclusive, min <= max each; at least one; may overlap
+    std::optional<grid::Coordinate> coordinate;
+    std::vector<dataset::ValueRange> ranges;  // inclusive, min <= max each; at least one; may overlap
 
     // True when `v` lies in at least one range (false for NaN).
     bool contains(double v) const
     {
-        for (const ValueRange& r : ranges)
+        for (const dataset::ValueRange& r : ranges)
             if (v >= r.min && v <= r.max)
                 return true;
         return false;
@@ -47,7 +47,7 @@ struct NamedRange {
 // The ranges of one name, in the order given.
 struct NamedRanges {
     std::string name;
-    std::vector<ValueRange> ranges;
+    std::vector<dataset::ValueRange> ranges;
 };
 
 // Groups ranges by name, in the order the names first appear (each name's ranges in their order).
@@ -61,7 +61,7 @@ std::vector<NamedRanges> groupRanges(std::span<const NamedRange> ranges, const s
 // or "brushes[0] (depth): min 3 is greater than max 1".
 std::vector<RangeFilter> resolveRangeFilters(std::span<const std::string> variableNames,
                                              std::span<const NamedRange> ranges, const std::string& what = "brushes");
-std::vector<RangeFilter> resolveRangeFilters(const Dataset& dataset, std::span<const NamedRange> ranges,
+std::vector<RangeFilter> resolveRangeFilters(const dataset::Dataset& dataset, std::span<const NamedRange> ranges,
                                              const std::string& what = "brushes");
 
 struct SelectionStats {
@@ -78,12 +78,12 @@ struct SelectionStats {
 // ranges); it counts with its dual-cell volume. With `meanVariable` (an index of the volume's
 // variables) also that variable's means per radius (a time-depth view of it). Throws raypc::Error
 // for a variable index out of range, a filter without ranges or min > max. Parallel over lat rows.
-SelectionStats selectedVolume(const StepVolume& volume, std::span<const RangeFilter> filters,
+SelectionStats selectedVolume(const dataset::StepVolume& volume, std::span<const RangeFilter> filters,
                               std::optional<size_t> meanVariable = std::nullopt);
 
 // Whether each grid point is selected (1) or not (0), canonical order, by the rule of
 // selectedVolume. Throws raypc::Error as selectedVolume does. Parallel over lat rows.
-std::vector<uint8_t> selectedPoints(const StepVolume& volume, std::span<const RangeFilter> filters);
+std::vector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::span<const RangeFilter> filters);
 
 // The selection split by a labelling of the grid's points: `classes` holds one class in
 // [0, classCount) per grid point (canonical order), e.g. what the synthetic generator put there
@@ -93,7 +93,7 @@ std::vector<uint8_t> selectedPoints(const StepVolume& volume, std::span<const Ra
 struct ClassVolumes {
     std::vector<double> totalKm3, selectedKm3;  // per class
 };
-ClassVolumes selectedVolumeByClass(const StepVolume& volume, std::span<const RangeFilter> filters,
+ClassVolumes selectedVolumeByClass(const dataset::StepVolume& volume, std::span<const RangeFilter> filters,
                                    std::span<const uint32_t> classes, size_t classCount);
 
 // The selection of every step in [firstStep, lastStep] at one level, in step order: what
@@ -105,10 +105,10 @@ struct StepSelection {
     double timeMyr = 0;
     SelectionStats stats;
 };
-using VolumeLoader = std::function<std::shared_ptr<const StepVolume>(int step, int level)>;
-std::vector<StepSelection> selectionOverTime(const Dataset& dataset, std::span<const RangeFilter> filters, int level,
+using VolumeLoader = std::function<std::shared_ptr<const dataset::StepVolume>(int step, int level)>;
+std::vector<StepSelection> selectionOverTime(const dataset::Dataset& dataset, std::span<const RangeFilter> filters, int level,
                                              int firstStep, int lastStep, const VolumeLoader& load = {},
                                              const std::function<void()>& onStep = {},
                                              std::optional<size_t> meanVariable = std::nullopt);
 
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -11,7 +11,7 @@
 #include <cmath>
 #include <numbers>
 
-namespace raypc {
+namespace raypc::analysis {
 namespace {
 
 // The mean of a variable per radius is weighted by the points' dual-cell volumes: the latitude
@@ -20,12 +20,12 @@ namespace {
 // selected the selected mean is NaN.
 TEST(Selection, MeansPerRadiusAreVolumeWeighted)
 {
-    Snapshot snap;
+    grid::Snapshot snap;
     snap.grid = testing::centredGrid(90, 5, 36);
     snap.fields.push_back({"lat", "degree", testing::fillGrid(snap.grid, [&](size_t a, size_t, size_t) { return snap.grid.latDeg[a]; })});
-    const auto volume = StepVolume::fromSnapshot(snap);
-    const std::vector<RangeFilter> north{{-1, Coordinate::Lat, {{0.0f, 90.0f}}},
-                                         {-1, Coordinate::Radius, {{0.0f, float(snap.grid.rKm[3])}}}};
+    const auto volume = dataset::StepVolume::fromSnapshot(snap);
+    const std::vector<RangeFilter> north{{-1, grid::Coordinate::Lat, {{0.0f, 90.0f}}},
+                                         {-1, grid::Coordinate::Radius, {{0.0f, float(snap.grid.rKm[3])}}}};
     const SelectionStats s = selectedVolume(*volume, north, 0);
     ASSERT_EQ(s.selectedMeanByRadius.size(), snap.grid.nR());
     const double expected = (std::numbers::pi / 2 - 1) * 180 / std::numbers::pi;  // 32.70°
@@ -42,9 +42,9 @@ TEST(Selection, MeansPerRadiusAreVolumeWeighted)
 
 TEST(Selection, ExactVolumesOfAnalyticSelections)
 {
-    Snapshot snap = readSnapshot(testing::contestLayoutDir() / "spherical001.nc");
-    addDerivedVariables(snap);
-    const auto volume = StepVolume::fromSnapshot(snap);
+    grid::Snapshot snap = io::readSnapshot(testing::contestLayoutDir() / "spherical001.nc");
+    preprocess::addDerivedVariables(snap);
+    const auto volume = dataset::StepVolume::fromSnapshot(snap);
     const double shell = 4.0 / 3.0 * std::numbers::pi * (std::pow(6371.0, 3) - std::pow(3485.0, 3));
 
     const auto all = selectedVolume(*volume, {});
@@ -52,12 +52,12 @@ TEST(Selection, ExactVolumesOfAnalyticSelections)
     EXPECT_NEAR(all.volumeKm3 / shell, 1.0, 1e-12);
 
     // North of 60°: the rows 62.5..87.5 end at the 60° edge, so this is exact.
-    const RangeFilter north{-1, Coordinate::Lat, {{60.0f, 90.0f}}};
+    const RangeFilter north{-1, grid::Coordinate::Lat, {{60.0f, 90.0f}}};
     EXPECT_NEAR(selectedVolume(*volume, std::span(&north, 1)).fractionOfMantle, (1 - std::sin(std::numbers::pi / 3)) / 2,
                 1e-9);
 
     // Depth <= 660 km: the radii >= 5711 km; their dual cells start halfway below the first one.
-    const RangeFilter upper{-1, Coordinate::Depth, {{0.0f, 660.0f}}};
+    const RangeFilter upper{-1, grid::Coordinate::Depth, {{0.0f, 660.0f}}};
     const auto& r = snap.grid.rKm;
     size_t first = 0;
     while (r[first] < 6371.0 - 660.0)
@@ -94,8 +94,8 @@ TEST(Selection, ExactVolumesOfAnalyticSelections)
 // what their merged range selects; names that repeat in a list of NamedRanges become one axis.
 TEST(Selection, RangesOnOneAxisSelectTheirUnion)
 {
-    Snapshot snap = readSnapshot(testing::contestLayoutDir() / "spherical001.nc");
-    const auto volume = StepVolume::fromSnapshot(snap);
+    grid::Snapshot snap = io::readSnapshot(testing::contestLayoutDir() / "spherical001.nc");
+    const auto volume = dataset::StepVolume::fromSnapshot(snap);
     std::vector<std::string> names;
     for (const auto& field : snap.fields)
         names.push_back(field.name);
@@ -120,7 +120,7 @@ TEST(Selection, RangesOnOneAxisSelectTheirUnion)
     const auto filters = resolveRangeFilters(std::span<const std::string>(names),
                                              std::vector<NamedRange>{{"lat", 60, 90}, {"depth", 0, 660}, {"lat", -90, -60}});
     ASSERT_EQ(filters.size(), 2u);
-    EXPECT_EQ(*filters[0].coordinate, Coordinate::Lat);
+    EXPECT_EQ(*filters[0].coordinate, grid::Coordinate::Lat);
     ASSERT_EQ(filters[0].ranges.size(), 2u);
     EXPECT_EQ(filters[0].ranges[1].min, -90.0f);
     EXPECT_TRUE(filters[0].contains(-70) && filters[0].contains(89) && !filters[0].contains(0));
@@ -133,7 +133,7 @@ TEST(Selection, RangesOnOneAxisSelectTheirUnion)
     } catch (const Error& e) {
         EXPECT_STREQ(e.what(), "brushes[2] (lat): min -60 is greater than max -90");
     }
-    const RangeFilter noRange{-1, Coordinate::Lat, {}};
+    const RangeFilter noRange{-1, grid::Coordinate::Lat, {}};
     EXPECT_THROW(selectedVolume(*volume, std::span(&noRange, 1)), Error);
 }
 
@@ -141,9 +141,9 @@ TEST(Selection, RangesOnOneAxisSelectTheirUnion)
 // is a lat cap holds exactly the cap's volume, and its selected part the cap's share of the selection.
 TEST(Selection, VolumesByClassAddUpToTheSelection)
 {
-    Snapshot snap = readSnapshot(testing::contestLayoutDir() / "spherical001.nc");
-    const auto volume = StepVolume::fromSnapshot(snap);
-    const SphericalGrid& g = snap.grid;
+    grid::Snapshot snap = io::readSnapshot(testing::contestLayoutDir() / "spherical001.nc");
+    const auto volume = dataset::StepVolume::fromSnapshot(snap);
+    const grid::SphericalGrid& g = snap.grid;
     const double shell = g.totalVolumeKm3();
     // Class 0: south of -60°, 1: north of 60° (the lat rows' dual cells end at multiples of 2.5°),
     // 2: the rest.
@@ -152,7 +152,7 @@ TEST(Selection, VolumesByClassAddUpToTheSelection)
         for (size_t iR = 0; iR < g.nR(); ++iR)
             for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
                 classes[g.index(iLat, iR, iLon)] = g.latDeg[iLat] < -60 ? 0 : g.latDeg[iLat] > 60 ? 1 : 2;
-    const RangeFilter upper{-1, Coordinate::Depth, {{0.0f, 660.0f}}};
+    const RangeFilter upper{-1, grid::Coordinate::Depth, {{0.0f, 660.0f}}};
     const auto whole = selectedVolume(*volume, std::span(&upper, 1));
     const ClassVolumes byClass = selectedVolumeByClass(*volume, std::span(&upper, 1), classes, 3);
     ASSERT_EQ(byClass.totalKm3.size(), 3u);
@@ -173,9 +173,9 @@ TEST(Selection, VolumesByClassAddUpToTheSelection)
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("class 2, expected < 2"), std::string::npos) << e.what();
     }
-    const RangeFilter noRange{-1, Coordinate::Lat, {}};
+    const RangeFilter noRange{-1, grid::Coordinate::Lat, {}};
     EXPECT_THROW(selectedVolumeByClass(*volume, std::span(&noRange, 1), classes, 3), Error);
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::analysis

@@ -25,7 +25,7 @@ struct DemoArgs {
 
 // The picture of the demo: the UI's first view (render::defaultState: temperature anomaly,
 // blue-white-red, opacity on the hot and cold tails) at full resolution, converged.
-void renderDemoPicture(std::shared_ptr<const Dataset> dataset, int step, const fs::path& output)
+void renderDemoPicture(std::shared_ptr<const dataset::Dataset> dataset, int step, const fs::path& output)
 {
     state::RenderState state = render::defaultState(*dataset);
     state.step = step;
@@ -60,16 +60,16 @@ const CommandRegistration kDemoCommand(
         cmd.callback([args] {
             const fs::path root = args->dir;
             const fs::path ncDir = root / "snapshots", datasetDir = root / "dataset";
-            const SynthOptions synth;
+            const synth::SynthOptions synth;
             if (!demoSnapshotsPresent(ncDir, synth.steps)) {
                 spdlog::info("demo: writing {} synthetic snapshots of {}x{}x{} (lat x r x lon) to {}", synth.steps,
                              synth.nLat, synth.nR, synth.nLon, ncDir.string());
-                writeSyntheticSeries(ncDir, synth);
+                synth::writeSyntheticSeries(ncDir, synth);
             }
-            PreprocessOptions options;
+            preprocess::PreprocessOptions options;
             options.dtMyr = synth.dtMyr;
-            const auto summary = preprocess(listSnapshotFiles({ncDir}), datasetDir, options);
-            const auto dataset = Dataset::open(datasetDir);
+            const auto summary = preprocess::preprocess(io::listSnapshotFiles({ncDir}), datasetDir, options);
+            const auto dataset = dataset::Dataset::open(datasetDir);
             const auto& g = dataset->levels().front().grid;
             fmt::print("demo dataset {}: {} steps ({} preprocessed now, {} already done), {}x{}x{} (lat x r x lon), "
                        "{:.0f} Myr\n",

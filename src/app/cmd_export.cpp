@@ -27,7 +27,7 @@ struct ExportArgs {
 };
 
 
-std::string sampleCsv(const SampleTable& table)
+std::string sampleCsv(const dataset::SampleTable& table)
 {
     std::string out;
     out.reserve(table.rows * table.columns.size() * 12);
@@ -80,7 +80,7 @@ const CommandRegistration kExportCommand(
             const std::string format = args->what == "sample" ? "csv" : formatOf(args->output);
             if (args->what == "persistence" && format != "csv")
                 fail("-o: '{}': the persistence diagram is written as CSV only (.csv)", args->output);
-            const auto dataset = Dataset::open(args->dataset);
+            const auto dataset = dataset::Dataset::open(args->dataset);
             const int step = parseStep(*dataset, args->time);
             if (args->what == "sample") {
                 const auto table = dataset->loadSample(step);
@@ -96,23 +96,23 @@ const CommandRegistration kExportCommand(
                          fmt::join(dataset->variableNames(), ", "));
                 const auto volume = dataset->load(step, 0);
                 const std::span<const float> values(volume->values(var), volume->grid().cellCount());
-                const auto pairs = persistencePairs(volume->grid(), values);
+                const auto pairs = analysis::persistencePairs(volume->grid(), values);
                 writeFileAtomic(args->output,
-                                persistenceDiagramCsv(volume->grid(), pairs, dataset->variables()[var].units));
+                                analysis::persistenceDiagramCsv(volume->grid(), pairs, dataset->variables()[var].units));
                 fmt::print("{}: {} persistence pairs of {} at step {} ({} Myr), the largest {:.4g} {}\n", args->output,
                            pairs.size(), args->var, step, dataset->steps()[step].timeMyr,
                            pairs.front().persistence(), dataset->variables()[var].units);
                 return;
             }
-            const PathlineSet set = loadPathlineSet(dataset->dir(), step);
+            const analysis::PathlineSet set = analysis::loadPathlineSet(dataset->dir(), step);
             const bool lines = args->what == "pathlines";
             std::string text;
             if (format == "csv")
-                text = lines ? pathlinesCsv(set) : criticalPointsCsv(set);
+                text = lines ? analysis::pathlinesCsv(set) : analysis::criticalPointsCsv(set);
             else if (format == "vtp")
-                text = lines ? pathlinesVtp(set) : criticalPointsVtp(set);
+                text = lines ? analysis::pathlinesVtp(set) : analysis::criticalPointsVtp(set);
             else
-                text = lines ? pathlinesLegacyVtk(set) : criticalPointsLegacyVtk(set);
+                text = lines ? analysis::pathlinesLegacyVtk(set) : analysis::criticalPointsLegacyVtk(set);
             writeFileAtomic(args->output, text);
             if (lines)
                 fmt::print("{}: {} pathlines ({} points) injected at step {} ({} Myr), traced to step {}\n",

@@ -34,7 +34,7 @@ struct FeaturesArgs {
     std::vector<double> depths{410, 660, 1000, 1600};
     double bandHalfWidthKm = 50, minVolumeKm3 = 0, minOverlapShare = 0.1;
     std::string stallBy;  // --stall-by; empty: the state's, else mean-depth
-    StallMeasure stallMeasure = StallMeasure::MeanDepth;
+    analysis::StallMeasure stallMeasure = analysis::StallMeasure::MeanDepth;
     bool quiet = false;
     // Which settings the command line gave: the others come from the state's `features` (version 10)
     // when --state is given.
@@ -72,25 +72,25 @@ public:
     {
         m_bytes.append(reinterpret_cast<const char*>(&value), sizeof(T));
     }
-    void putStep(int step, const StepFeatures& f, const std::vector<FeatureLink>& links)
+    void putStep(int step, const analysis::StepFeatures& f, const std::vector<analysis::FeatureLink>& links)
     {
         put(int32_t(step));
         put(uint32_t(f.features.size()));
-        for (const Feature& x : f.features) {
+        for (const analysis::Feature& x : f.features) {
             put(int32_t(x.id));
             put(uint64_t(x.points));
             for (const double v : {x.volumeKm3, x.fractionOfMantle, x.topDepthKm, x.bottomDepthKm, x.centroidLatDeg,
                                    x.centroidLonDeg, x.centroidDepthKm, x.meanDepthKm})
                 put(v);
             put(uint32_t(x.variables.size()));
-            for (const VariableSummary& v : x.variables)
+            for (const analysis::VariableSummary& v : x.variables)
                 put(v);
             put(uint32_t(x.bandFractions.size()));
             for (const double v : x.bandFractions)
                 put(v);
         }
         put(uint32_t(links.size()));
-        for (const FeatureLink& l : links)
+        for (const analysis::FeatureLink& l : links)
             put(l);
     }
     const std::string& bytes() const { return m_bytes; }
@@ -113,26 +113,26 @@ public:
         m_at += sizeof(T);
         return value;
     }
-    int getStep(StepFeatures& f, std::vector<FeatureLink>& links)
+    int getStep(analysis::StepFeatures& f, std::vector<analysis::FeatureLink>& links)
     {
         const int step = get<int32_t>();
         f.features.resize(get<uint32_t>());
-        for (Feature& x : f.features) {
+        for (analysis::Feature& x : f.features) {
             x.id = get<int32_t>();
             x.points = get<uint64_t>();
             for (double* v : {&x.volumeKm3, &x.fractionOfMantle, &x.topDepthKm, &x.bottomDepthKm, &x.centroidLatDeg,
                               &x.centroidLonDeg, &x.centroidDepthKm, &x.meanDepthKm})
                 *v = get<double>();
             x.variables.resize(get<uint32_t>());
-            for (VariableSummary& v : x.variables)
-                v = get<VariableSummary>();
+            for (analysis::VariableSummary& v : x.variables)
+                v = get<analysis::VariableSummary>();
             x.bandFractions.resize(get<uint32_t>());
             for (double& v : x.bandFractions)
                 v = get<double>();
         }
         links.resize(get<uint32_t>());
-        for (FeatureLink& l : links)
-            l = get<FeatureLink>();
+        for (analysis::FeatureLink& l : links)
+            l = get<analysis::FeatureLink>();
         return step;
     }
 
@@ -150,36 +150,36 @@ struct BlockFeatures {
     Packer linked;
 };
 
-BlockFeatures blockFeatures(const SeriesSelection& sel, const FeatureOptions& options, int level, int begin, int end,
-                            const FeatureSeries* tracks, Progress* progress)
+BlockFeatures blockFeatures(const SeriesSelection& sel, const analysis::FeatureOptions& options, int level, int begin, int end,
+                            const analysis::FeatureSeries* tracks, Progress* progress)
 {
-    const Dataset& dataset = *sel.dataset;
-    const std::vector<RangeFilter>& filters = sel.filters;
+    const dataset::Dataset& dataset = *sel.dataset;
+    const std::vector<analysis::RangeFilter>& filters = sel.filters;
     BlockFeatures out;
-    std::shared_ptr<const StepVolume> previousVolume;
-    StepFeatures previous;  // labels only
-    const StepVolumeLoader load = [&](int step) { return dataset.load(step, level); };
+    std::shared_ptr<const dataset::StepVolume> previousVolume;
+    analysis::StepFeatures previous;  // labels only
+    const analysis::StepVolumeLoader load = [&](int step) { return dataset.load(step, level); };
     if (tracks && begin > sel.first && begin < end) {  // the step before the block, to link the block's first
         previousVolume = load(begin - 1);
-        previous = extractFeatures(*previousVolume, filters, options);
+        previous = analysis::extractFeatures(*previousVolume, filters, options);
     }
-    FeatureRunControl control;
+    analysis::FeatureRunControl control;
     if (progress)
         control.progress = [&](int done, int) {
             if (done > 0)
                 progress->advance();
         };
-    forEachStepFeatures(begin, end - 1, load, filters, options, [&](FeatureStep& s) {
+    analysis::forEachStepFeatures(begin, end - 1, load, filters, options, [&](analysis::FeatureStep& s) {
         const int step = s.step;
-        StepFeatures& f = s.features;
+        analysis::StepFeatures& f = s.features;
         out.count += f.features.size();
         out.rows += featureTableRows(step, dataset.steps()[size_t(step)].timeMyr, f);
         if (tracks) {
-            const std::vector<FeatureLink> links =
-                previousVolume ? linkFeatures(*previousVolume, previous, f, tracks->velocity(),
+            const std::vector<analysis::FeatureLink> links =
+                previousVolume ? analysis::linkFeatures(*previousVolume, previous, f, tracks->velocity(),
                                               dataset.steps()[size_t(step)].timeMyr -
                                                   dataset.steps()[size_t(step) - 1].timeMyr)
-                               : std::vector<FeatureLink>{};
+                               : std::vector<analysis::FeatureLink>{};
             out.linked.putStep(step, f, links);
             previousVolume = s.volume;
             previous.labels = std::move(f.labels);
@@ -196,14 +196,14 @@ BlockFeatures blockFeatures(const SeriesSelection& sel, const FeatureOptions& op
 void run(FeaturesArgs args)
 {
     SeriesSelection sel;
-    FeatureOptions options;
+    analysis::FeatureOptions options;
     mpi::together([&] {
         for (const auto& [path, option] : {std::pair{args.output, "-o"}, {args.tracks, "--tracks"},
                                            {args.events, "--events"}, {args.stalls, "--stalls"}})
             if (!path.empty())
                 checkOutputExtension(path, {".csv", ".txt"}, "CSV", option);
         if (!args.stallBy.empty())
-            args.stallMeasure = parseStallMeasure(args.stallBy);
+            args.stallMeasure = analysis::parseStallMeasure(args.stallBy);
         applyStateSettings(args);
         sel = resolveSeriesSelection(args.selection);
         if (sel.filters.empty())
@@ -218,13 +218,13 @@ void run(FeaturesArgs args)
                                                 {"depthsKm", "--depth"},
                                                 {"bandHalfWidthKm", "--band-half-width"},
                                                 {"minOverlapShare", "--min-overlap"}});
-        options = featureOptions(args.minVolumeKm3, args.depths, args.bandHalfWidthKm);
+        options = analysis::featureOptions(args.minVolumeKm3, args.depths, args.bandHalfWidthKm);
     });
-    const Dataset& dataset = *sel.dataset;
-    const std::vector<RangeFilter>& filters = sel.filters;
+    const dataset::Dataset& dataset = *sel.dataset;
+    const std::vector<analysis::RangeFilter>& filters = sel.filters;
     const int first = sel.first, last = sel.last;
     const bool tracking = !args.tracks.empty() || !args.events.empty() || !args.stalls.empty();
-    std::optional<FeatureSeries> tracks;
+    std::optional<analysis::FeatureSeries> tracks;
     mpi::together([&] {
         if (tracking)
             tracks.emplace(dataset, args.minOverlapShare, "--tracks/--events/--stalls");
@@ -250,8 +250,8 @@ void run(FeaturesArgs args)
         for (const std::string& part : linkedParts) {  // rank order: step order
             Unpacker in(part);
             while (!in.done()) {
-                StepFeatures f;
-                std::vector<FeatureLink> links;
+                analysis::StepFeatures f;
+                std::vector<analysis::FeatureLink> links;
                 const int step = in.getStep(f, links);
                 tracks->addLinked(step, f, links);
             }
@@ -268,12 +268,12 @@ void run(FeaturesArgs args)
             total += std::stoull(c);
         writeFileAtomic(args.output, csv);
         if (!args.tracks.empty())
-            writeFileAtomic(args.tracks, trackCsv(*tracks));
+            writeFileAtomic(args.tracks, analysis::trackCsv(*tracks));
         if (!args.events.empty())
-            writeFileAtomic(args.events, eventCsv(*tracks, dataset));
+            writeFileAtomic(args.events, analysis::eventCsv(*tracks, dataset));
         if (!args.stalls.empty())
             writeFileAtomic(args.stalls,
-                            stallCsv(*tracks, options.bandDepthsKm, options.bandHalfWidthKm, last, args.stallMeasure));
+                            analysis::stallCsv(*tracks, options.bandDepthsKm, options.bandHalfWidthKm, last, args.stallMeasure));
         fmt::print("{}: {} features in {} steps ({}..{}) of {} range(s){}\n", args.output, total, last - first + 1,
                    first, last, filters.size(), mpi::distributed() ? fmt::format(" on {} ranks", mpi::size()) : "");
     });

@@ -25,7 +25,7 @@ struct FluxArgs {
     std::vector<double> depths{660};
     double sigmas = 2;
     bool heatFlux = false, heatConstantsGiven = false;  // --density or --heat-capacity on the command line
-    double densityKgM3 = HeatFluxInputs{}.densityKgM3, heatCapacity = HeatFluxInputs{}.heatCapacityJPerKgK;
+    double densityKgM3 = analysis::HeatFluxInputs{}.densityKgM3, heatCapacity = analysis::HeatFluxInputs{}.heatCapacityJPerKgK;
     bool quiet = false;
 };
 
@@ -33,7 +33,7 @@ void run(const FluxArgs& args)
 {
     checkOutputExtension(args.output, {".csv", ".txt"}, "CSV", "-o");
     const SeriesSelection sel = resolveSeriesSelection(args.selection);
-    const Dataset& dataset = *sel.dataset;
+    const dataset::Dataset& dataset = *sel.dataset;
     const std::vector<std::string> names = dataset.variableNames();
     const auto vr = std::find(names.begin(), names.end(), varname::kRadialVelocity);
     if (vr == names.end())
@@ -42,8 +42,8 @@ void run(const FluxArgs& args)
     if (!(args.sigmas >= 0))
         fail("--sigmas: {} is negative", args.sigmas);
     for (const double depth : args.depths)
-        checkShellDepth(dataset.levels()[size_t(args.selection.level)].grid, depth);
-    std::optional<HeatFluxInputs> heat;
+        analysis::checkShellDepth(dataset.levels()[size_t(args.selection.level)].grid, depth);
+    std::optional<analysis::HeatFluxInputs> heat;
     if (args.heatFlux) {
         const auto anomaly = std::find(names.begin(), names.end(), varname::kTemperatureAnomaly);
         if (anomaly == names.end())
@@ -57,21 +57,21 @@ void run(const FluxArgs& args)
             fail("--density: {} kg/m3, expected at most 100000 (rock is about 3300)", args.densityKgM3);
         if (args.heatCapacity > 1e5)
             fail("--heat-capacity: {} J/(kg K), expected at most 100000 (rock is about 1250)", args.heatCapacity);
-        heat = HeatFluxInputs{size_t(anomaly - names.begin()), args.densityKgM3, args.heatCapacity};
+        heat = analysis::HeatFluxInputs{size_t(anomaly - names.begin()), args.densityKgM3, args.heatCapacity};
     } else if (args.heatConstantsGiven) {
         fail("--density, --heat-capacity: need --heat-flux (the flux they enter)");
     }
 
     // The mass flux where the data have a density (ASPECT writes one; the contest's files do not).
     std::optional<size_t> density;
-    if (const auto rho = std::find(names.begin(), names.end(), kDensityVariable); rho != names.end())
+    if (const auto rho = std::find(names.begin(), names.end(), analysis::kDensityVariable); rho != names.end())
         density = size_t(rho - names.begin());
-    std::vector<std::vector<ShellFlux>> bySteps;  // [step - first][depth]
+    std::vector<std::vector<analysis::ShellFlux>> bySteps;  // [step - first][depth]
     std::optional<Progress> progress;
     if (!args.quiet)
         progress.emplace("flux", sel.last - sel.first + 1, "steps");
     for (int step = sel.first; step <= sel.last; ++step) {
-        bySteps.push_back(shellFluxes(*dataset.load(step, args.selection.level), size_t(vr - names.begin()),
+        bySteps.push_back(analysis::shellFluxes(*dataset.load(step, args.selection.level), size_t(vr - names.begin()),
                                       args.depths, sel.filters, heat, density));
         if (progress)
             progress->advance();
@@ -80,11 +80,11 @@ void run(const FluxArgs& args)
         progress->finish();
 
     // Avalanches per depth, over the series' steps.
-    const auto perShell = avalancheStepsPerShell(bySteps, args.sigmas);
+    const auto perShell = analysis::avalancheStepsPerShell(bySteps, args.sigmas);
     size_t avalanches = 0;
     for (const auto& steps : perShell)
         avalanches += steps.size();
-    const std::string csv = fluxCsv(dataset, sel.first, bySteps, args.depths, perShell, heat.has_value(), density.has_value());
+    const std::string csv = analysis::fluxCsv(dataset, sel.first, bySteps, args.depths, perShell, heat.has_value(), density.has_value());
     writeFileAtomic(args.output, csv);
     fmt::print("{}: flux across {} shell(s) in {} steps ({}..{}); {} avalanche step(s) (downward flux over mean + {:g} sigma)\n",
                args.output, args.depths.size(), bySteps.size(), sel.first, sel.last, avalanches, args.sigmas);

@@ -17,7 +17,7 @@ namespace {
 
 using nlohmann::json;
 
-json describeGrid(const SphericalGrid& g)
+json describeGrid(const grid::SphericalGrid& g)
 {
     auto axis = [](const std::vector<double>& c) {
         double minStep = c.size() > 1 ? c[1] - c[0] : 0, maxStep = minStep;
@@ -34,16 +34,16 @@ json describeGrid(const SphericalGrid& g)
 
 // A netCDF file, or a VTK XML series's first step (a .pvd collection, its directory, a .pvtu or
 // .vtu), as the dataset pipeline would read it: resampled, with how.
-json describeFile(const std::filesystem::path& path, const ReaderOptions& options)
+json describeFile(const std::filesystem::path& path, const io::ReaderOptions& options)
 {
-    const SeriesListing listing = listSeries({path}, options);
+    const io::SeriesListing listing = io::listSeries({path}, options);
     const std::filesystem::path& step = listing.steps.front();
     // The step first (a mesh is read and resampled once), then its header on that grid (for a mesh
     // only its record is read again).
-    const Snapshot snap = readStep(step, options);
-    ReaderOptions fixed = options;
+    const grid::Snapshot snap = io::readStep(step, options);
+    io::ReaderOptions fixed = options;
     fixed.targetGrid = snap.grid;
-    const FileHeader header = readStepHeader(step, fixed);
+    const io::FileHeader header = io::readStepHeader(step, fixed);
     json j{{"kind", listing.kind}, {"path", path.string()}, {"format", header.format},
            {"grid", describeGrid(snap.grid)}};
     if (listing.vtk) {
@@ -57,8 +57,8 @@ json describeFile(const std::filesystem::path& path, const ReaderOptions& option
     }
     j["variables"] = json::array();
     for (size_t i = 0; i < snap.fields.size(); ++i) {
-        checkFinite(snap, snap.fields[i], step.string());  // as preprocess does: no range of a NaN
-        const auto stats = computeStats(snap.grid, snap.fields[i].values);
+        grid::checkFinite(snap, snap.fields[i], step.string());  // as preprocess does: no range of a NaN
+        const auto stats = preprocess::computeStats(snap.grid, snap.fields[i].values);
         j["variables"].push_back({{"name", snap.fields[i].name},
                                   {"name_in_file", header.variables[i].fileName},
                                   {"long_name", header.variables[i].longName},
@@ -70,12 +70,12 @@ json describeFile(const std::filesystem::path& path, const ReaderOptions& option
     return j;
 }
 
-json describeDataset(const Dataset& d)
+json describeDataset(const dataset::Dataset& d)
 {
     json j{{"kind", "dataset"},
            {"path", d.dir().string()},
            {"dt_myr", d.dtMyr()},
-           {"encoding", std::string(encodingName(d.encoding()))}};
+           {"encoding", std::string(dataset::encodingName(d.encoding()))}};
     j["levels"] = json::array();
     for (size_t l = 0; l < d.levels().size(); ++l) {
         const auto& level = d.levels()[l];
@@ -95,7 +95,7 @@ json describeDataset(const Dataset& d)
                                   {"max", v.global.range.max},
                                   {"mean", v.global.mean}});
     j["coordinates"] = json::array();
-    for (const auto& c : coordinateInfos())
+    for (const auto& c : grid::coordinateInfos())
         j["coordinates"].push_back({{"name", c.name}, {"units", c.units}});
     j["steps"] = json::array();
     for (const auto& s : d.steps()) {
@@ -202,7 +202,7 @@ const CommandRegistration kInfoCommand(
         cmd.callback([args] {
             const std::filesystem::path path = args->path;
             const bool dataset = std::filesystem::is_directory(path) && std::filesystem::exists(path / "dataset.json");
-            const json j = dataset ? describeDataset(*Dataset::open(path)) : describeFile(path, args->reader.toOptions());
+            const json j = dataset ? describeDataset(*dataset::Dataset::open(path)) : describeFile(path, args->reader.toOptions());
             if (args->json)
                 fmt::print("{}\n", j.dump(2));
             else

@@ -29,20 +29,20 @@ const CommandRegistration kPreprocessCommand(
         args->flags.add(cmd);
         cmd.callback([args, &cmd] {
             std::vector<std::filesystem::path> files;
-            PreprocessOptions options;
+            preprocess::PreprocessOptions options;
             mpi::together([&] {
                 options = args->flags.toOptions(cmd);
-                SeriesListing listing =
-                    listSeries(std::vector<std::filesystem::path>(args->inputs.begin(), args->inputs.end()), options.reader);
+                io::SeriesListing listing =
+                    io::listSeries(std::vector<std::filesystem::path>(args->inputs.begin(), args->inputs.end()), options.reader);
                 files = std::move(listing.steps);
                 options.timesMyr = std::move(listing.timesMyr);
             });
             // Under mpirun every rank takes steps (preprocess.h); rank 0 reports.
-            const auto summary = preprocess(files, args->output, options);
+            const auto summary = preprocess::preprocess(files, args->output, options);
             mpi::together([&] {
                 if (!mpi::isRoot())
                     return;
-                const auto dataset = Dataset::open(args->output);
+                const auto dataset = dataset::Dataset::open(args->output);
                 const auto& g = dataset->levels().front().grid;
                 fmt::print("{}: {} steps ({} written, {} already done) of {}x{}x{} (lat x r x lon), {} variables, "
                            "in {:.1f} s\n",

@@ -28,9 +28,9 @@ const CommandRegistration kProbeCommand(
         cmd.add_option("--var", args->var, "Only this variable");
         cmd.add_option("--lod", args->level, "Level of detail (0 = full resolution)")->capture_default_str();
         cmd.callback([args] {
-            const auto dataset = Dataset::open(args->dataset);
+            const auto dataset = dataset::Dataset::open(args->dataset);
             const int step = parseStep(*dataset, args->time);
-            const nlohmann::json j = probeJson(*dataset, step, args->level, args->latDeg, args->lonDeg, args->rKm, args->var);
+            const nlohmann::json j = analysis::probeJson(*dataset, step, args->level, args->latDeg, args->lonDeg, args->rKm, args->var);
             fmt::print("{}\n", j.dump(2));
         });
     },

@@ -154,19 +154,19 @@ void applySliceFlags(const RenderArgs& args, state::RenderState& state)
 
 // The slice of `step` as a CF netCDF grid (`--netcdf`): a map's lat-lon grid or a section's
 // distance-depth grid of the colour variable, sampled as the picture is.
-CfGridFile sliceGridFile(const Dataset& dataset, const StepVolume* volume, const ResolvedState& resolved,
+io::CfGridFile sliceGridFile(const dataset::Dataset& dataset, const dataset::StepVolume* volume, const ResolvedState& resolved,
                          StateRenderer::Slice slice, const RenderArgs& args)
 {
     const state::RenderState& state = resolved.state;
     const size_t var = size_t(resolved.params.colorVariable);
-    const VariableInfo& info = dataset.variables().at(var);
-    CfGridFile file;
-    file.name = cfName(info.name);
+    const dataset::VariableInfo& info = dataset.variables().at(var);
+    io::CfGridFile file;
+    file.name = io::cfName(info.name);
     file.units = info.units;
     file.longName = info.name;
     const double timeMyr = dataset.steps().at(size_t(state.step)).timeMyr;
-    const CfVariable1D lat{"lat", "degrees_north", "latitude", "latitude", "Y", "", {}, ""};
-    const CfVariable1D lon{"lon", "degrees_east", "longitude", "longitude", "X", "", {}, ""};
+    const io::CfVariable1D lat{"lat", "degrees_north", "latitude", "latitude", "Y", "", {}, ""};
+    const io::CfVariable1D lon{"lon", "degrees_east", "longitude", "longitude", "X", "", {}, ""};
     if (slice == StateRenderer::Slice::Map) {
         const SliceGrid g = latLonSlice(*volume, var, state.map.depthKm, args.gridStepDeg > 0 ? args.gridStepDeg : 1.0,
                                         "--depth");  // the step was checked with the options
@@ -206,7 +206,7 @@ CfGridFile sliceGridFile(const Dataset& dataset, const StepVolume* volume, const
 
 // What the options resolve to, before anything is rendered.
 struct RenderSetup {
-    std::shared_ptr<const Dataset> dataset;
+    std::shared_ptr<const dataset::Dataset> dataset;
     ResolvedState resolved;
     int first = 0, last = 0;
     bool sequence = false, lodAuto = false;
@@ -216,14 +216,14 @@ struct RenderSetup {
     std::optional<NumberedName> netcdf;          // the slice's grid (maps and sections)
     // The volume of a step and level: the last one read kept, so that a slice's picture and its
     // --netcdf grid read a step once.
-    std::function<std::shared_ptr<const StepVolume>(int step, int level)> volume;
+    std::function<std::shared_ptr<const dataset::StepVolume>(int step, int level)> volume;
 };
 
-std::function<std::shared_ptr<const StepVolume>(int, int)> lastVolumeKept(std::shared_ptr<const Dataset> dataset)
+std::function<std::shared_ptr<const dataset::StepVolume>(int, int)> lastVolumeKept(std::shared_ptr<const dataset::Dataset> dataset)
 {
     struct Kept {
         int step = -1, level = -1;
-        std::shared_ptr<const StepVolume> volume;
+        std::shared_ptr<const dataset::StepVolume> volume;
     };
     return [dataset = std::move(dataset), kept = std::make_shared<Kept>()](int step, int level) {
         if (!kept->volume || kept->step != step || kept->level != level)
@@ -277,7 +277,7 @@ RenderSetup setUp(const RenderArgs& args)
             fail("--stereo, --pathlines, --pathline-radius and --passes are only for the 3D view, not for a {}",
                  args.view);
     }
-    const auto dataset = Dataset::open(args.dataset);
+    const auto dataset = dataset::Dataset::open(args.dataset);
     // Without a state: the UI's first view (render::defaultState), so that a figure made from the
     // command line and the browser's first picture are the same.
     state::RenderState state = args.statePath.empty() ? defaultState(*dataset) : state::loadRenderState(args.statePath);
@@ -377,7 +377,7 @@ RenderSetup setUp(const RenderArgs& args)
 nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, StateRenderer& renderer,
                           const LevelPolicy& policy, int step, TileShare share)
 {
-    const Dataset& dataset = *setup.dataset;
+    const dataset::Dataset& dataset = *setup.dataset;
     ResolvedState resolved = setup.resolved;
     resolved.state.step = step;
     const auto makeParent = [](const std::string& file) {
@@ -394,7 +394,7 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
         const auto t0 = std::chrono::steady_clock::now();
         const ImageRgba8 image = renderer.slicePicture(resolved, *setup.slice);
         // Both made before either is written: a grid that cannot be made leaves no picture.
-        std::optional<CfGridFile> grid;
+        std::optional<io::CfGridFile> grid;
         if (setup.netcdf)
             grid = sliceGridFile(dataset, setup.volume(step, resolved.state.level.value_or(0)).get(), resolved,
                                  *setup.slice, args);
@@ -412,7 +412,7 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
         if (grid) {
             const std::string path = (*setup.netcdf)(step);
             makeParent(path);
-            writeCfGrid(path, *grid);
+            io::writeCfGrid(path, *grid);
             stats["netcdf"] = path;
         }
         return stats;

@@ -42,13 +42,13 @@ struct StatsArgs {
 struct StatsRows {
     std::string csv, profile;
 };
-StatsRows formatRows(const std::vector<StepSelection>& selections, const SphericalGrid& grid)
+StatsRows formatRows(const std::vector<analysis::StepSelection>& selections, const grid::SphericalGrid& grid)
 {
     StatsRows rows;
-    for (const StepSelection& sel : selections)
+    for (const analysis::StepSelection& sel : selections)
         fmt::format_to(std::back_inserter(rows.csv), "{},{},{:.6e},{:.6f}\n", sel.step, sel.timeMyr,
                        sel.stats.volumeKm3, 100.0 * sel.stats.fractionOfMantle);
-    rows.profile = profileCsvRows(selections, grid);
+    rows.profile = analysis::profileCsvRows(selections, grid);
     return rows;
 }
 
@@ -65,10 +65,10 @@ void run(const StatsArgs& args)
             checkOutputExtension(args.hovmoller, {".png"}, "PNG", "--hovmoller");
         sel = resolveSeriesSelection(args.selection);
     });
-    const Dataset& dataset = *sel.dataset;
-    const std::vector<RangeFilter>& filters = sel.filters;
+    const dataset::Dataset& dataset = *sel.dataset;
+    const std::vector<analysis::RangeFilter>& filters = sel.filters;
     const int first = sel.first, last = sel.last, level = args.selection.level;
-    const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
+    const grid::SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
     const mpi::Block block = mpi::blockOf(last - first + 1);
     std::optional<size_t> meanVariable;
     const render::TimeDepthOf hovmollerOf = render::parseTimeDepthOf(args.hovmollerOf, "--hovmoller-of");
@@ -110,7 +110,7 @@ void run(const StatsArgs& args)
                          block.end - block.begin, "steps");
     mpi::together([&] {
         if (block.end > block.begin) {
-            const auto selections = selectionOverTime(dataset, filters, level, first + int(block.begin),
+            const auto selections = analysis::selectionOverTime(dataset, filters, level, first + int(block.begin),
                                                       first + int(block.end) - 1, {}, [&] {
                                                           if (progress)
                                                               progress->advance();
@@ -130,7 +130,7 @@ void run(const StatsArgs& args)
             return;
         // The columns as src/grid/names.json names them (Python's Dataset.stats and the UI too).
         std::string csv = columns::csvHeader(columns::kSelectionOverTime) + '\n';
-        std::string profile = profileCsvHeader(meanVariable ? &dataset.variables()[*meanVariable] : nullptr);
+        std::string profile = analysis::profileCsvHeader(meanVariable ? &dataset.variables()[*meanVariable] : nullptr);
         for (const auto& part : csvParts)
             csv += part;
         for (const auto& part : profileParts)

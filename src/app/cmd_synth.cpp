@@ -15,28 +15,28 @@
 namespace raypc::app {
 namespace {
 
-NetcdfFlavour parseFormat(const std::string& text)
+io::NetcdfFlavour parseFormat(const std::string& text)
 {
     if (text == "classic")
-        return NetcdfFlavour::Classic64;
+        return io::NetcdfFlavour::Classic64;
     if (text == "netcdf4")
-        return NetcdfFlavour::Netcdf4;
+        return io::NetcdfFlavour::Netcdf4;
     fail("--format '{}': expected classic or netcdf4", text);
 }
 
 struct SynthArgs {
     std::string outDir;
-    int steps = SynthOptions{}.steps;
+    int steps = synth::SynthOptions{}.steps;
     std::string grid;
-    uint64_t seed = SynthOptions{}.seed;
-    double dtMyr = SynthOptions{}.dtMyr;
+    uint64_t seed = synth::SynthOptions{}.seed;
+    double dtMyr = synth::SynthOptions{}.dtMyr;
     std::string format = "classic";
     std::string truth;  // --truth FILE
     std::string avalanche;  // --avalanche T[:D] (Myr)
 };
 
 // "--avalanche T[:D]": an avalanche from T Myr for D Myr (default: one step).
-void parseAvalanche(const std::string& text, SynthOptions& options)
+void parseAvalanche(const std::string& text, synth::SynthOptions& options)
 {
     const size_t colon = text.find(':');
     double start = 0, duration = options.dtMyr;
@@ -64,12 +64,12 @@ void parseAvalanche(const std::string& text, SynthOptions& options)
 
 void run(const SynthArgs& args)
 {
-    SynthOptions options;
+    synth::SynthOptions options;
     if (args.steps < 1)
         fail("--steps {}: expected at least 1", args.steps);
     options.steps = args.steps;
     if (!args.grid.empty()) {
-        const auto sizes = parseSynthGridSize(args.grid, "--grid");
+        const auto sizes = synth::parseSynthGridSize(args.grid, "--grid");
         options.nLat = sizes[0];
         options.nR = sizes[1];
         options.nLon = sizes[2];
@@ -89,8 +89,8 @@ void run(const SynthArgs& args)
         if (!std::filesystem::is_directory(dir))
             fail("--truth {}: the directory {} does not exist", args.truth, dir.string());
     }
-    const std::string truth = args.truth.empty() ? std::string() : syntheticTruthTable(options);
-    writeSyntheticSeries(args.outDir, options);
+    const std::string truth = args.truth.empty() ? std::string() : synth::syntheticTruthTable(options);
+    synth::writeSyntheticSeries(args.outDir, options);
     if (!args.truth.empty())
         writeFileAtomic(args.truth, truth);
     const double seconds = secondsSince(start);

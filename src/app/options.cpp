@@ -71,15 +71,15 @@ void ReaderFlags::add(CLI::App& app)
                    "(R^2/kappa) (default: the run's thermdiff, else 1e-6)");
 }
 
-ReaderOptions ReaderFlags::toOptions() const
+io::ReaderOptions ReaderFlags::toOptions() const
 {
-    ReaderOptions o;
+    io::ReaderOptions o;
     for (const auto& m : variableMap) {
         const auto eq = m.find('=');
         if (eq == std::string::npos || eq == 0 || eq + 1 == m.size())
             fail("--map: '{}' is not NAME=FILE_NAME", m);
         const auto name = m.substr(0, eq);
-        const auto& known = contestVariableNames();
+        const auto& known = grid::contestVariableNames();
         if (std::find(known.begin(), known.end(), name) == known.end())
             fail("--map: '{}' is not one of the variables RayPC reads ({})", name, fmt::join(known, ", "));
         o.variableNames[name] = m.substr(eq + 1);
@@ -90,12 +90,12 @@ ReaderOptions ReaderFlags::toOptions() const
         for (int c = 0; c < 3; ++c)
             o.variableNames[std::string("v") + "xyz"[c]] = velocity[size_t(c)];
     }
-    o.velocityFrame = velocityFrame == "spherical" ? ReaderOptions::VelocityFrame::Spherical
-                                                   : ReaderOptions::VelocityFrame::Cartesian;
+    o.velocityFrame = velocityFrame == "spherical" ? io::ReaderOptions::VelocityFrame::Spherical
+                                                   : io::ReaderOptions::VelocityFrame::Cartesian;
     o.latName = latName;
     o.rName = rName;
     o.lonName = lonName;
-    using RadiusUnits = ReaderOptions::RadiusUnits;
+    using RadiusUnits = io::ReaderOptions::RadiusUnits;
     o.radiusUnits = radiusUnits == "km"               ? RadiusUnits::Km
                     : radiusUnits == "m"              ? RadiusUnits::M
                     : radiusUnits == "nondimensional" ? RadiusUnits::Nondimensional
@@ -134,7 +134,7 @@ ReaderOptions ReaderFlags::toOptions() const
     return o;
 }
 
-int parseStep(const Dataset& dataset, const std::string& text, const std::string& option)
+int parseStep(const dataset::Dataset& dataset, const std::string& text, const std::string& option)
 {
     const std::string t = trim(text);
     if (t.size() > 3 && (t.ends_with("Myr") || t.ends_with("myr"))) {
@@ -157,13 +157,13 @@ int parseStep(const Dataset& dataset, const std::string& text, const std::string
     return step;
 }
 
-NamedRange parseRangeOption(const std::string& text, const std::string& option)
+analysis::NamedRange parseRangeOption(const std::string& text, const std::string& option)
 {
     const size_t eq = text.rfind('=');
     const size_t colon = eq == std::string::npos ? std::string::npos : text.find(':', eq + 1);
     if (eq == std::string::npos || eq == 0 || colon == std::string::npos)
         fail("{} '{}': expected NAME=MIN:MAX", option, text);
-    NamedRange r;
+    analysis::NamedRange r;
     r.name = trim(text.substr(0, eq));
     const std::string lo = trim(text.substr(eq + 1, colon - eq - 1)), hi = trim(text.substr(colon + 1));
     auto number = [&](const std::string& s) {
@@ -182,19 +182,19 @@ NamedRange parseRangeOption(const std::string& text, const std::string& option)
     return r;
 }
 
-void applyRangeOptions(std::vector<NamedRange>& ranges, const std::vector<std::string>& options,
+void applyRangeOptions(std::vector<analysis::NamedRange>& ranges, const std::vector<std::string>& options,
                        const std::string& option)
 {
-    std::vector<NamedRange> given;
+    std::vector<analysis::NamedRange> given;
     for (const std::string& text : options)
         given.push_back(parseRangeOption(text, option));
-    std::erase_if(ranges, [&](const NamedRange& r) {
-        return std::any_of(given.begin(), given.end(), [&](const NamedRange& g) { return g.name == r.name; });
+    std::erase_if(ranges, [&](const analysis::NamedRange& r) {
+        return std::any_of(given.begin(), given.end(), [&](const analysis::NamedRange& g) { return g.name == r.name; });
     });
     ranges.insert(ranges.end(), given.begin(), given.end());
 }
 
-std::pair<int, int> parseStepRange(const Dataset& dataset, const std::string& text, const std::string& option)
+std::pair<int, int> parseStepRange(const dataset::Dataset& dataset, const std::string& text, const std::string& option)
 {
     const size_t colon = text.find(':');
     if (colon == std::string::npos) {
@@ -218,20 +218,20 @@ void PreprocessFlags::add(CLI::App& cmd, bool withQuiet)
                unsigned long long rows = 0;
                const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), rows);
                if (text.empty() || ec != std::errc() || end != text.data() + text.size() || rows == 0 ||
-                   rows > kMaxSampleRows)
-                   fail("--sample-rows: '{}', expected a whole number of rows from 1 to {}", text, kMaxSampleRows);
+                   rows > preprocess::kMaxSampleRows)
+                   fail("--sample-rows: '{}', expected a whole number of rows from 1 to {}", text, preprocess::kMaxSampleRows);
                options.sampleRows = size_t(rows);
            },
-           fmt::format("Cells in the parallel-coordinates sample (1 to {})", kMaxSampleRows))
+           fmt::format("Cells in the parallel-coordinates sample (1 to {})", preprocess::kMaxSampleRows))
         ->default_str(std::to_string(options.sampleRows));
     cmd.add_option("--seed", options.seed, "Seed of the sample")->capture_default_str();
     if (withQuiet)
         cmd.add_flag("-q,--quiet", options.quiet, "No progress output");
     cmd.add_option_function<std::string>(
-           "--encoding", [this](const std::string& text) { options.encoding = parseEncoding(text, "--encoding"); },
+           "--encoding", [this](const std::string& text) { options.encoding = dataset::parseEncoding(text, "--encoding"); },
            "Level arrays: 'u16' (quantised per brick, error <= brick range / 131070; half the size) or 'float32' "
            "(exact)")
-        ->default_str(std::string(encodingName(options.encoding)));
+        ->default_str(std::string(dataset::encodingName(options.encoding)));
     auto& pl = options.pathlines;
     cmd.add_flag("--no-pathlines", noPathlines,
                  "Skip the critical points of --pathline-field and the pathlines seeded there");
@@ -239,12 +239,12 @@ void PreprocessFlags::add(CLI::App& cmd, bool withQuiet)
         ->capture_default_str();
     cmd.add_option("--pathline-steps", pl.steps, "Steps each pathline is traced forward")->capture_default_str();
     cmd.add_option_function<std::string>(
-           "--cp-select", [this](const std::string& text) { options.pathlines.filter.rule = parseSeedRule(text); },
+           "--cp-select", [this](const std::string& text) { options.pathlines.filter.rule = analysis::parseSeedRule(text); },
            "Seeds: 'persistence' (extrema of persistent pairs) or 'value' (the largest |value|)")
-        ->default_str(seedRuleName(pl.filter.rule));
+        ->default_str(analysis::seedRuleName(pl.filter.rule));
     cmd.add_option_function<std::string>(
            "--cp-persistence",
-           [this](const std::string& text) { parsePersistenceThreshold(text, options.pathlines.filter); },
+           [this](const std::string& text) { analysis::parsePersistenceThreshold(text, options.pathlines.filter); },
            "Seeds by persistence: extrema whose persistence exceeds K (field units) or P% of the step's range")
         ->default_str("5%");
     cmd.add_option("--cp-min-abs", pl.filter.minAbsValue,
@@ -262,15 +262,15 @@ void PreprocessFlags::add(CLI::App& cmd, bool withQuiet)
     reader.add(cmd);
 }
 
-PreprocessOptions PreprocessFlags::toOptions(const CLI::App& cmd) const
+preprocess::PreprocessOptions PreprocessFlags::toOptions(const CLI::App& cmd) const
 {
     // An option of the other seed rule would be silently ignored.
-    const bool byValue = options.pathlines.filter.rule == SeedRule::Value;
+    const bool byValue = options.pathlines.filter.rule == analysis::SeedRule::Value;
     for (const char* option : {"--cp-persistence", "--cp-min-abs", "--cp-min-fraction"})
         if (cmd.count(option) && byValue == (option == std::string("--cp-persistence")))
             fail("{}: applies to seeds chosen by {}, but --cp-select is {}", option, byValue ? "persistence" : "value",
-                 seedRuleName(options.pathlines.filter.rule));
-    PreprocessOptions o = options;
+                 analysis::seedRuleName(options.pathlines.filter.rule));
+    preprocess::PreprocessOptions o = options;
     o.reader = reader.toOptions();
     o.pathlines.enabled = !noPathlines;
     return o;
@@ -303,12 +303,12 @@ std::pair<int, int> parseSize(const std::string& text)
 SeriesSelection resolveSeriesSelection(const SeriesSelectionFlags& flags)
 {
     SeriesSelection s;
-    s.dataset = Dataset::open(flags.dataset);
-    std::vector<NamedRange> ranges;
+    s.dataset = dataset::Dataset::open(flags.dataset);
+    std::vector<analysis::NamedRange> ranges;
     if (!flags.statePath.empty())
         ranges = state::loadRenderState(flags.statePath).brushes;
     applyRangeOptions(ranges, flags.ranges);
-    s.filters = resolveRangeFilters(*s.dataset, ranges, flags.statePath.empty() ? "--range" : "brushes");
+    s.filters = analysis::resolveRangeFilters(*s.dataset, ranges, flags.statePath.empty() ? "--range" : "brushes");
     s.dataset->checkLevel(flags.level, flags.levelFrom);
     std::tie(s.first, s.last) = flags.time.empty()
                                     ? std::pair<int, int>(0, static_cast<int>(s.dataset->steps().size()) - 1)

@@ -32,13 +32,13 @@ struct ReaderFlags {
 
     void add(CLI::App& app);
     // Throws raypc::Error for a malformed --map.
-    ReaderOptions toOptions() const;
+    io::ReaderOptions toOptions() const;
 };
 
 // The options of a preprocessing run (`raypc preprocess`, and `raypc serve`/`render` given netCDF
 // files): the sample, the time step, the reader's names and the pathline seeds.
 struct PreprocessFlags {
-    PreprocessOptions options;
+    preprocess::PreprocessOptions options;
     ReaderFlags reader;
     bool noPathlines = false;
 
@@ -46,27 +46,27 @@ struct PreprocessFlags {
     void add(CLI::App& cmd, bool withQuiet = true);
     // The options as given. Throws raypc::Error for a malformed --map, or an option of the seed rule
     // --cp-select does not use (it would be silently ignored); `cmd` is the command they were added to.
-    PreprocessOptions toOptions(const CLI::App& cmd) const;
+    preprocess::PreprocessOptions toOptions(const CLI::App& cmd) const;
 };
 
 // A step given as an index ("12") or a time ("24Myr"); throws raypc::Error naming the option
 // and the dataset's valid steps when it is out of range or malformed.
-int parseStep(const Dataset& dataset, const std::string& text, const std::string& option = "--time");
+int parseStep(const dataset::Dataset& dataset, const std::string& text, const std::string& option = "--time");
 
 // Parses "NAME=MIN:MAX" (names may contain spaces; the last '=' splits) for --range.
 // Throws raypc::Error naming the option for a malformed text or min > max.
-NamedRange parseRangeOption(const std::string& text, const std::string& option = "--range");
+analysis::NamedRange parseRangeOption(const std::string& text, const std::string& option = "--range");
 
 // Applies --range options over the ranges of a state: a name given on the command line replaces
 // that name's ranges, and a name given several times gets them all (OR, analysis/selection.h).
-void applyRangeOptions(std::vector<NamedRange>& ranges, const std::vector<std::string>& options,
+void applyRangeOptions(std::vector<analysis::NamedRange>& ranges, const std::vector<std::string>& options,
                        const std::string& option = "--range");
 
 // Parses "A" or "A:B" (each a step index or a time like 24Myr) into the inclusive step range.
 // "1024x768" -> width, height (1..16384 each); throws raypc::Error naming --size otherwise.
 std::pair<int, int> parseSize(const std::string& text);
 
-std::pair<int, int> parseStepRange(const Dataset& dataset, const std::string& text, const std::string& option = "--time");
+std::pair<int, int> parseStepRange(const dataset::Dataset& dataset, const std::string& text, const std::string& option = "--time");
 
 // The options of a command over a selection in a dataset's steps (stats, features): DATASET,
 // --state (whose brushes select), --range (replacing the state's ranges per name), -t/--time and --lod.
@@ -79,8 +79,8 @@ struct SeriesSelectionFlags {
     void add(CLI::App& cmd);
 };
 struct SeriesSelection {
-    std::shared_ptr<const Dataset> dataset;
-    std::vector<RangeFilter> filters;
+    std::shared_ptr<const dataset::Dataset> dataset;
+    std::vector<analysis::RangeFilter> filters;
     int first = 0, last = 0;  // the steps, inclusive
 };
 // Opens the dataset and resolves the flags. Throws raypc::Error for a bad state, range, level or

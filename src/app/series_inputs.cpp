@@ -55,22 +55,22 @@ void checkWritable(const fs::path& dir)
 }  // namespace
 
 SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std::string& datasetOption,
-                                 const ReaderOptions& reader)
+                                 const io::ReaderOptions& reader)
 {
     if (args.empty())
         fail("no input: give a dataset directory or netCDF files");
-    if (args.size() == 1 && fs::is_directory(args.front()) && fs::exists(fs::path(args.front()) / format::kManifest)) {
+    if (args.size() == 1 && fs::is_directory(args.front()) && fs::exists(fs::path(args.front()) / dataset::format::kManifest)) {
         if (!datasetOption.empty())
             fail("--dataset: only for netCDF inputs; '{}' is a dataset already", args.front());
         return {fs::path(args.front()), {}};
     }
     SeriesInputs inputs;
-    SeriesListing listing;
+    io::SeriesListing listing;
     try {
-        listing = listSeries(std::vector<fs::path>(args.begin(), args.end()), reader);
+        listing = io::listSeries(std::vector<fs::path>(args.begin(), args.end()), reader);
     } catch (const Error& e) {
         fail("{} (expected a RayPC dataset directory, which holds {}, netCDF files or an ASPECT .pvd collection)",
-             e.what(), format::kManifest);
+             e.what(), dataset::format::kManifest);
     }
     inputs.files = listing.steps;
     inputs.timesMyr = listing.timesMyr;
@@ -83,11 +83,11 @@ SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std
 
 bool datasetOfFiles(const fs::path& dir, const std::vector<fs::path>& files)
 {
-    if (!fs::exists(dir / format::kManifest))
+    if (!fs::exists(dir / dataset::format::kManifest))
         return false;
-    std::shared_ptr<const Dataset> dataset;
+    std::shared_ptr<const dataset::Dataset> dataset;
     try {
-        dataset = Dataset::open(dir);
+        dataset = dataset::Dataset::open(dir);
     } catch (const Error&) {
         return false;  // unfinished or unreadable: preprocessing resumes or says what is wrong
     }
@@ -100,7 +100,7 @@ bool datasetOfFiles(const fs::path& dir, const std::vector<fs::path>& files)
     return true;
 }
 
-double preparePreview(const SeriesInputs& inputs, PreprocessOptions options)
+double preparePreview(const SeriesInputs& inputs, preprocess::PreprocessOptions options)
 {
     const auto start = std::chrono::steady_clock::now();
     const std::vector<fs::path> first = {inputs.files.front()};
@@ -113,15 +113,15 @@ double preparePreview(const SeriesInputs& inputs, PreprocessOptions options)
         options.quiet = true;
         if (!options.timesMyr.empty())
             options.timesMyr.resize(1);
-        preprocess(first, dir, options);
+        preprocess::preprocess(first, dir, options);
     }
     return secondsSince(start);
 }
 
-void prepareSeries(const SeriesInputs& inputs, const PreprocessOptions& options)
+void prepareSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions& options)
 {
     checkWritable(inputs.dataset);
-    preprocess(inputs.files, inputs.dataset, options);
+    preprocess::preprocess(inputs.files, inputs.dataset, options);
     std::error_code ec;
     fs::remove_all(inputs.previewDir(), ec);
 }
@@ -139,9 +139,9 @@ void SeriesFlags::add(CLI::App& cmd, const std::string& inputsHelp)
     preprocess.add(*m_group, false);
 }
 
-std::pair<SeriesInputs, PreprocessOptions> SeriesFlags::resolve() const
+std::pair<SeriesInputs, preprocess::PreprocessOptions> SeriesFlags::resolve() const
 {
-    std::pair<SeriesInputs, PreprocessOptions> result;
+    std::pair<SeriesInputs, preprocess::PreprocessOptions> result;
     mpi::together([&] {
         result.second = preprocess.toOptions(*m_group);
         result.first = resolveSeriesInputs(inputs, dataset, result.second.reader);

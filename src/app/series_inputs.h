@@ -29,7 +29,7 @@ struct SeriesInputs {
 // (beside a .pvd collection), named after the files' common name and ".raypc" (spherical001.nc …
 // spherical251.nc -> spherical.raypc). Throws raypc::Error naming an argument that is none of these.
 SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std::string& datasetOption,
-                                 const ReaderOptions& reader);
+                                 const io::ReaderOptions& reader);
 
 // True when `dir` holds a complete dataset of exactly `files` (by name, in order).
 bool datasetOfFiles(const std::filesystem::path& dir, const std::vector<std::filesystem::path>& files);
@@ -37,12 +37,12 @@ bool datasetOfFiles(const std::filesystem::path& dir, const std::vector<std::fil
 // The first file alone, without pathlines, preprocessed into inputs.previewDir() (a preview of those
 // files made earlier is reused; anything else there is replaced). Returns the seconds it took.
 // Throws raypc::Error like prepareSeries.
-double preparePreview(const SeriesInputs& inputs, PreprocessOptions options);
+double preparePreview(const SeriesInputs& inputs, preprocess::PreprocessOptions options);
 
 // Preprocesses what is missing of the series into inputs.dataset (progress as `options` say), then
 // removes the preview. Throws raypc::Error like preprocess(), and naming the directory and --dataset
 // when it cannot be written.
-void prepareSeries(const SeriesInputs& inputs, const PreprocessOptions& options);
+void prepareSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions& options);
 
 // What serve and render take on the command line: INPUT… (a dataset or netCDF files), --dataset and
 // the preprocessing options of `raypc preprocess` (an option group).
@@ -55,7 +55,7 @@ struct SeriesFlags {
     void add(CLI::App& cmd, const std::string& inputsHelp);
     // The inputs and the preprocessing options; under mpirun agreed over the ranks (one message for
     // a bad input, not one per rank). Throws raypc::Error as resolveSeriesInputs and PreprocessFlags.
-    std::pair<SeriesInputs, PreprocessOptions> resolve() const;
+    std::pair<SeriesInputs, preprocess::PreprocessOptions> resolve() const;
 
 private:
     CLI::App* m_group = nullptr;

@@ -181,7 +181,7 @@ void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
     serveOnRanks(options, [&](const server::Server& srv) { announce(options, srv); });
 }
 
-void serveSeries(const SeriesInputs& inputs, const PreprocessOptions& preprocessOptions, const ServeFlags& flags)
+void serveSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions& preprocessOptions, const ServeFlags& flags)
 {
     if (!inputs.fromFiles()) {
         serveDataset(inputs.dataset, flags);
@@ -217,11 +217,11 @@ void serveSeries(const SeriesInputs& inputs, const PreprocessOptions& preprocess
     std::thread background([&] {
         yieldToRendering();
         holdForTest(cancel);
-        PreprocessOptions o = preprocessOptions;
+        preprocess::PreprocessOptions o = preprocessOptions;
         o.quiet = true;
         o.cancel = &cancel;
         int loggedTenth = -1;
-        o.onProgress = [&](const PreprocessProgress& p) {
+        o.onProgress = [&](const preprocess::PreprocessProgress& p) {
             progress->update(p);
             const int tenth = p.total > 0 ? 10 * p.done / p.total : 10;
             if (tenth != loggedTenth)

@@ -33,6 +33,6 @@ void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
 // while the rest of the series is preprocessed in the background (one thread, lower priority; GET
 // /api/progress says where it is), then the server of the whole series replaces it on the same port.
 // SIGINT/SIGTERM stop the background run between steps (a later run resumes). One process only.
-void serveSeries(const SeriesInputs& inputs, const PreprocessOptions& preprocessOptions, const ServeFlags& flags);
+void serveSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions& preprocessOptions, const ServeFlags& flags);
 
 }  // namespace raypc::app

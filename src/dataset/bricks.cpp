@@ -7,9 +7,9 @@
 #include <algorithm>
 #include <limits>
 
-namespace raypc {
+namespace raypc::dataset {
 
-void computeBrickBounds(const SphericalGrid& grid, const BrickLayout& layout, std::span<const float> values,
+void computeBrickBounds(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, std::span<const float> values,
                         std::span<float> bounds)
 {
     RAYPC_CHECK_EQ(values.size(), grid.cellCount());
@@ -42,4 +42,4 @@ void computeBrickBounds(const SphericalGrid& grid, const BrickLayout& layout, st
     });
 }
 
-}  // namespace raypc
+}  // namespace raypc::dataset

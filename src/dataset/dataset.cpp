@@ -23,7 +23,7 @@
 #include <cstring>
 #include <limits>
 
-namespace raypc {
+namespace raypc::dataset {
 
 namespace format {
 
@@ -52,14 +52,14 @@ std::filesystem::path boundsFile(const std::filesystem::path& levelDir, const st
     return levelDir / (stem + ".bricks.f32");
 }
 
-nlohmann::json toJson(const SphericalGrid& grid)
+nlohmann::json toJson(const grid::SphericalGrid& grid)
 {
     return {{"lat_deg", grid.latDeg}, {"r_km", grid.rKm}, {"lon_deg", grid.lonDeg}};
 }
 
-SphericalGrid gridFromJson(const nlohmann::json& j)
+grid::SphericalGrid gridFromJson(const nlohmann::json& j)
 {
-    SphericalGrid g;
+    grid::SphericalGrid g;
     g.latDeg = j.at("lat_deg").get<std::vector<double>>();
     g.rKm = j.at("r_km").get<std::vector<double>>();
     g.lonDeg = j.at("lon_deg").get<std::vector<double>>();
@@ -83,11 +83,11 @@ VariableStats statsFromJson(const nlohmann::json& j)
 
 }  // namespace format
 
-std::shared_ptr<StepVolume> StepVolume::fromSnapshot(const Snapshot& snapshot, uint32_t brickSize)
+std::shared_ptr<StepVolume> StepVolume::fromSnapshot(const grid::Snapshot& snapshot, uint32_t brickSize)
 {
     auto volume = std::make_shared<StepVolume>();
     volume->m_grid = snapshot.grid;
-    volume->m_bricks = BrickLayout::forGrid(snapshot.grid, brickSize);
+    volume->m_bricks = grid::BrickLayout::forGrid(snapshot.grid, brickSize);
     const size_t n = snapshot.grid.cellCount();
     volume->m_owned.reserve(2 * snapshot.fields.size());  // references below must stay valid
     for (const auto& field : snapshot.fields) {
@@ -332,7 +332,7 @@ const float* StepVolume::brickBounds(size_t var, uint32_t brickSize) const
     std::lock_guard lock(m_derivedMutex);
     std::vector<float>& bounds = m_derivedBounds[{var, brickSize}];
     if (bounds.empty()) {
-        const BrickLayout layout = BrickLayout::forGrid(m_grid, brickSize);
+        const grid::BrickLayout layout = grid::BrickLayout::forGrid(m_grid, brickSize);
         bounds.resize(2 * layout.brickCount());
         // Isolated: while this thread waits inside the parallel loop it must not pick up another
         // task that asks this volume for derived data and blocks on the lock it holds.
@@ -342,14 +342,14 @@ const float* StepVolume::brickBounds(size_t var, uint32_t brickSize) const
     return bounds.data();
 }
 
-const NodeGradient& StepVolume::nodeGradient(size_t var) const
+const grid::NodeGradient& StepVolume::nodeGradient(size_t var) const
 {
     RAYPC_CHECK(var < variableCount());
     std::lock_guard lock(m_derivedMutex);
     auto it = m_gradients.find(var);
     if (it == m_gradients.end())
         it = m_gradients
-                 .emplace(var, tbb::this_task_arena::isolate([&] { return raypc::nodeGradient(m_grid, values(var)); }))
+                 .emplace(var, tbb::this_task_arena::isolate([&] { return raypc::grid::nodeGradient(m_grid, values(var)); }))
                  .first;  // isolated as above
     return it->second;
 }
@@ -486,9 +486,9 @@ public:
         return values;
     }
 
-    SphericalGrid grid(const json& level, const std::string& field) const
+    grid::SphericalGrid grid(const json& level, const std::string& field) const
     {
-        SphericalGrid g;
+        grid::SphericalGrid g;
         g.latDeg = axis(level, field, "lat_deg", 1, -90, 90, false, false, "a value within [-90, 90] degrees");
         g.rKm = axis(level, field, "r_km", 1, 0, std::numeric_limits<double>::infinity(), true, false,
                      "a positive radius in km");
@@ -572,11 +572,11 @@ std::vector<LevelInfo> readLevels(const ManifestReader& r, const json& j, const 
         if (l == 0) {
             info.grid.validate(fmt::format("{}: {}", manifestPath.string(), field));
             const double points = double(info.grid.nLat()) * double(info.grid.nR()) * double(info.grid.nLon());
-            if (points > double(kMaxGridPoints))
+            if (points > double(grid::kMaxGridPoints))
                 r.bad(field, fmt::format("{}x{}x{} points", info.grid.nLat(), info.grid.nR(), info.grid.nLon()),
-                      "at most {} points", kMaxGridPoints);
+                      "at most {} points", grid::kMaxGridPoints);
         } else {
-            const SphericalGrid expected = out.back().grid.coarsened();
+            const grid::SphericalGrid expected = out.back().grid.coarsened();
             const std::pair<const char*, std::pair<const std::vector<double>*, const std::vector<double>*>> axes[] = {
                 {"lat_deg", {&info.grid.latDeg, &expected.latDeg}},
                 {"r_km", {&info.grid.rKm, &expected.rKm}},
@@ -593,7 +593,7 @@ std::vector<LevelInfo> readLevels(const ManifestReader& r, const json& j, const 
                               "{} (the mean of level {}'s pair)", (*want)[i], l - 1);
             }
         }
-        info.bricks = BrickLayout::forGrid(info.grid, brickSize);
+        info.bricks = grid::BrickLayout::forGrid(info.grid, brickSize);
         out.push_back(std::move(info));
     }
     return out;
@@ -697,8 +697,8 @@ void checkArrayFiles(const Dataset& dataset, size_t sampleRows, uint32_t brickSi
             }
         }
     }
-    checkFileSize(dir / format::kSampleCoords, uint64_t(sampleRows) * coordinateInfos().size() * sizeof(float),
-                  fmt::format("sample.rows {} x {} coordinates of float32", sampleRows, coordinateInfos().size()));
+    checkFileSize(dir / format::kSampleCoords, uint64_t(sampleRows) * grid::coordinateInfos().size() * sizeof(float),
+                  fmt::format("sample.rows {} x {} coordinates of float32", sampleRows, grid::coordinateInfos().size()));
 }
 
 }  // namespace
@@ -730,7 +730,7 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
     dataset->m_variables = readVariables(r, j);
     dataset->m_steps = readSteps(r, j, dataset->m_variables);
     const json& sample = r.member(j, "", "sample");
-    dataset->m_sampleRows = r.integer(sample, "sample", "rows", 0, kMaxGridPoints);
+    dataset->m_sampleRows = r.integer(sample, "sample", "rows", 0, grid::kMaxGridPoints);
     checkArrayFiles(*dataset, dataset->m_sampleRows, brickSize);
     return dataset;
 }
@@ -783,7 +783,7 @@ SampleTable Dataset::loadSample(int step, SampleColumns which) const
     const bool withCoords = which == SampleColumns::All;
     SampleTable table;
     if (withCoords)
-        for (const auto& c : coordinateInfos()) {
+        for (const auto& c : grid::coordinateInfos()) {
             table.columns.push_back(c.name);
             table.units.push_back(c.units);
         }
@@ -791,7 +791,7 @@ SampleTable Dataset::loadSample(int step, SampleColumns which) const
         table.columns.push_back(v.name);
         table.units.push_back(v.units);
     }
-    const size_t nCoords = withCoords ? coordinateInfos().size() : 0, nVars = m_variables.size(), rows = m_sampleRows;
+    const size_t nCoords = withCoords ? grid::coordinateInfos().size() : 0, nVars = m_variables.size(), rows = m_sampleRows;
     const MappedFile vars(format::stepDir(m_dir, step) / format::kStepSample);
     if (vars.size() != rows * nVars * sizeof(float))
         fail("{}: sample files do not hold {} rows", m_dir.string(), rows);
@@ -863,4 +863,4 @@ void DatasetWriteLock::removeFile()
     std::filesystem::remove(m_path, ec);
 }
 
-}  // namespace raypc
+}  // namespace raypc::dataset

@@ -26,7 +26,7 @@
 #include <string_view>
 #include <vector>
 
-namespace raypc {
+namespace raypc::dataset {
 
 inline constexpr int kHistogramBins = 256;
 inline constexpr int kLevelCount = 3;  // level 0 = full resolution, 1 and 2 coarser (1/8 each)
@@ -65,8 +65,8 @@ struct StepInfo {
 };
 
 struct LevelInfo {
-    SphericalGrid grid;
-    BrickLayout bricks;
+    grid::SphericalGrid grid;
+    grid::BrickLayout bricks;
 };
 
 
@@ -78,7 +78,7 @@ class StepVolume {
 public:
     // Builds a volume in memory from a snapshot (computing brick bounds); used by tests
     // and by preprocessing. Field order becomes variable order.
-    static std::shared_ptr<StepVolume> fromSnapshot(const Snapshot& snapshot, uint32_t brickSize = 8);
+    static std::shared_ptr<StepVolume> fromSnapshot(const grid::Snapshot& snapshot, uint32_t brickSize = 8);
 
     // Maps the arrays of one level directory (docs/format.md): per variable `<stem>.f32` or
     // `<stem>.u16`, and `<stem>.bricks.f32` (the bounds are copied into memory, the values stay
@@ -96,8 +96,8 @@ public:
     // Throws raypc::Error when `values` has the wrong size.
     static std::shared_ptr<StepVolume> withVariable(std::shared_ptr<const StepVolume> base, std::vector<float> values);
 
-    const SphericalGrid& grid() const { return m_grid; }
-    const BrickLayout& bricks() const { return m_bricks; }
+    const grid::SphericalGrid& grid() const { return m_grid; }
+    const grid::BrickLayout& bricks() const { return m_bricks; }
     size_t variableCount() const { return m_values.size(); }
     ValueEncoding encoding() const { return m_encoding; }
     // grid().cellCount() values of variable `var`, canonical order. Thread-safe; the first call for a
@@ -126,7 +126,7 @@ public:
     const float* brickBounds(size_t var, uint32_t brickSize) const;
     // nodeGradient (grid/grid.h) of variable `var`: computed from the values on first use and kept
     // with the volume (the ray caster's shading interpolates it). Thread-safe.
-    const NodeGradient& nodeGradient(size_t var) const;
+    const grid::NodeGradient& nodeGradient(size_t var) const;
 
     // The largest error of value (iLat, iR, iLon) of variable `var` against the exact value: 0 for
     // float32, for u16 uint16ErrorBound of the brick that owns the point (value_encoding.h; without
@@ -149,8 +149,8 @@ private:
     const float* decode(size_t var) const;
     [[noreturn]] void failValue(size_t var, size_t index, float value) const;
 
-    SphericalGrid m_grid;
-    BrickLayout m_bricks;
+    grid::SphericalGrid m_grid;
+    grid::BrickLayout m_bricks;
     ValueEncoding m_encoding = ValueEncoding::Float32;
     std::unique_ptr<std::atomic<const float*>[]> m_valuesStorage;
     std::span<std::atomic<const float*>> m_values;
@@ -162,7 +162,7 @@ private:
     mutable std::atomic<size_t> m_decodedBytes{0};
     mutable std::mutex m_derivedMutex;
     mutable std::map<std::pair<size_t, uint32_t>, std::vector<float>> m_derivedBounds;
-    mutable std::map<size_t, NodeGradient> m_gradients;
+    mutable std::map<size_t, grid::NodeGradient> m_gradients;
     std::vector<MappedFile> m_mapped;              // when loaded from disk: per variable its values
     std::vector<std::vector<float>> m_owned;       // when built in memory
     std::shared_ptr<const StepVolume> m_base;      // withVariable: the volume whose variables come first
@@ -242,4 +242,4 @@ private:
     ValueEncoding m_encoding = ValueEncoding::Float32;
 };
 
-}  // namespace raypc
+}  // namespace raypc::dataset

@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <string>
 
-namespace raypc::format {
+namespace raypc::dataset::format {
 
 inline constexpr const char* kManifest = "dataset.json";
 inline constexpr const char* kFormatName = "raypc-dataset";
@@ -29,9 +29,9 @@ std::filesystem::path valuesFile(const std::filesystem::path& levelDir, const st
 std::filesystem::path encodedValuesFile(const std::filesystem::path& levelDir, const std::string& stem);  // u16
 std::filesystem::path boundsFile(const std::filesystem::path& levelDir, const std::string& stem);
 
-nlohmann::json toJson(const SphericalGrid& grid);
-SphericalGrid gridFromJson(const nlohmann::json& j);
+nlohmann::json toJson(const grid::SphericalGrid& grid);
+grid::SphericalGrid gridFromJson(const nlohmann::json& j);
 nlohmann::json toJson(const VariableStats& stats);
 VariableStats statsFromJson(const nlohmann::json& j);
 
-}  // namespace raypc::format
+}  // namespace raypc::dataset::format

@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::dataset {
 namespace {
 
 using nlohmann::json;
@@ -36,20 +36,20 @@ protected:
     static void SetUpTestSuite()
     {
         s_dir = std::make_unique<TempDir>("damaged-datasets");
-        SynthOptions synth;
+        synth::SynthOptions synth;
         synth.steps = 2;
         synth.nLat = 12;
         synth.nR = 9;
         synth.nLon = 16;
-        writeSyntheticSeries(s_dir->path() / "nc", synth);
-        const auto files = listSnapshotFiles({s_dir->path() / "nc"});
+        synth::writeSyntheticSeries(s_dir->path() / "nc", synth);
+        const auto files = io::listSnapshotFiles({s_dir->path() / "nc"});
         for (const auto encoding : {ValueEncoding::Uint16, ValueEncoding::Float32}) {
-            PreprocessOptions o;
+            preprocess::PreprocessOptions o;
             o.quiet = true;
             o.sampleRows = 200;
             o.encoding = encoding;
             o.pathlines.enabled = false;
-            preprocess(files, s_dir->path() / std::string(encodingName(encoding)), o);
+            preprocess::preprocess(files, s_dir->path() / std::string(encodingName(encoding)), o);
         }
     }
     static void TearDownTestSuite() { s_dir.reset(); }
@@ -280,4 +280,4 @@ TEST_F(DamagedDatasets, AFileCutShortAfterItWasMappedIsAnErrorNotSigbus)
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::dataset

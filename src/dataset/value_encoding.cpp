@@ -10,7 +10,7 @@
 #include <cmath>
 #include <vector>
 
-namespace raypc {
+namespace raypc::dataset {
 namespace {
 
 constexpr double kLevels = 65535.0;
@@ -51,7 +51,7 @@ std::vector<AxisCover> axisCover(size_t n, uint32_t size, uint32_t brickCount, b
 
 struct Covers {
     std::vector<AxisCover> lat, r, lon;
-    Covers(const SphericalGrid& g, const BrickLayout& l)
+    Covers(const grid::SphericalGrid& g, const grid::BrickLayout& l)
         : lat(axisCover(g.nLat(), l.size, l.count[0], false)), r(axisCover(g.nR(), l.size, l.count[1], false)),
           lon(axisCover(g.nLon(), l.size, l.count[2], true))
     {
@@ -59,7 +59,7 @@ struct Covers {
 };
 
 // Narrows [lo, hi] to the bounds of every brick in lat × r × lon.
-void intersectBounds(const BrickLayout& layout, std::span<const float> bounds, const AxisCover& lat,
+void intersectBounds(const grid::BrickLayout& layout, std::span<const float> bounds, const AxisCover& lat,
                      const AxisCover& r, const AxisCover& lon, float& lo, float& hi)
 {
     for (uint32_t a = 0; a < lat.count; ++a)
@@ -92,7 +92,7 @@ double uint16ErrorBound(float min, float max)
     return (double(max) - double(min)) / (2 * kLevels);
 }
 
-void encodeUint16(const SphericalGrid& grid, const BrickLayout& layout, std::span<const float> values,
+void encodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, std::span<const float> values,
                   std::span<const float> bounds, std::span<uint16_t> out)
 {
     RAYPC_CHECK_EQ(values.size(), grid.cellCount());
@@ -119,7 +119,7 @@ void encodeUint16(const SphericalGrid& grid, const BrickLayout& layout, std::spa
     });
 }
 
-void decodeUint16(const SphericalGrid& grid, const BrickLayout& layout, std::span<const uint16_t> encoded,
+void decodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, std::span<const uint16_t> encoded,
                   std::span<const float> bounds, std::span<float> out)
 {
     RAYPC_CHECK_EQ(encoded.size(), grid.cellCount());
@@ -158,11 +158,11 @@ void decodeUint16(const SphericalGrid& grid, const BrickLayout& layout, std::spa
     });
 }
 
-}  // namespace raypc
+}  // namespace raypc::dataset
 
-namespace raypc {
+namespace raypc::dataset {
 
-float decodeUint16Point(const SphericalGrid& grid, const BrickLayout& layout, const uint16_t* encoded,
+float decodeUint16Point(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, const uint16_t* encoded,
                         const float* bounds, size_t iLat, size_t iR, size_t iLon)
 {
     const AxisCover lat = coverOf(iLat, grid.nLat(), layout.size, layout.count[0], false);
@@ -185,4 +185,4 @@ float decodeUint16Point(const SphericalGrid& grid, const BrickLayout& layout, co
     return value;
 }
 
-}  // namespace raypc
+}  // namespace raypc::dataset

@@ -18,7 +18,7 @@
 #include <span>
 #include <string_view>
 
-namespace raypc {
+namespace raypc::dataset {
 
 enum class ValueEncoding { Float32, Uint16 };
 
@@ -33,17 +33,17 @@ double uint16ErrorBound(float min, float max);
 
 // Encodes `values` (grid.cellCount(), canonical order, finite) with the brick bounds `bounds`
 // (layout.brickCount() pairs, as computeBrickBounds writes them) into `out`. Parallel over rows.
-void encodeUint16(const SphericalGrid& grid, const BrickLayout& layout, std::span<const float> values,
+void encodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, std::span<const float> values,
                   std::span<const float> bounds, std::span<uint16_t> out);
 
 // Decodes what encodeUint16 wrote, with the same bounds. Bounds must be finite with min <= max
 // (Dataset::load checks them). Parallel over rows (oneTBB); allocates only per-axis tables.
-void decodeUint16(const SphericalGrid& grid, const BrickLayout& layout, std::span<const uint16_t> encoded,
+void decodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, std::span<const uint16_t> encoded,
                   std::span<const float> bounds, std::span<float> out);
 
 // The value decodeUint16 gives point (iLat, iR, iLon), bit for bit, decoding that point alone (for
 // sparse reads: a few samples of a variable that is not decoded).
-float decodeUint16Point(const SphericalGrid& grid, const BrickLayout& layout, const uint16_t* encoded,
+float decodeUint16Point(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, const uint16_t* encoded,
                         const float* bounds, size_t iLat, size_t iR, size_t iLon);
 
-}  // namespace raypc
+}  // namespace raypc::dataset

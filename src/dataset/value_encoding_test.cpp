@@ -24,7 +24,7 @@
 #include <limits>
 #include <random>
 
-namespace raypc {
+namespace raypc::dataset {
 namespace {
 
 using testing::centredGrid;
@@ -53,9 +53,9 @@ struct Checked {
 
 // Encodes and decodes `values`, checking every point against its owning brick's bound and every
 // brick's decoded values against its exact bounds (both computed here).
-Checked checkRoundTrip(const SphericalGrid& g, const std::vector<float>& values, uint32_t size = 8)
+Checked checkRoundTrip(const grid::SphericalGrid& g, const std::vector<float>& values, uint32_t size = 8)
 {
-    const BrickLayout layout = BrickLayout::forGrid(g, size);
+    const grid::BrickLayout layout = grid::BrickLayout::forGrid(g, size);
     std::vector<float> bounds(2 * layout.brickCount());
     computeBrickBounds(g, layout, values, bounds);
     std::vector<uint16_t> encoded(values.size());
@@ -115,7 +115,7 @@ Checked checkRoundTrip(const SphericalGrid& g, const std::vector<float>& values,
 TEST(Uint16Encoding, RandomValuesStayWithinTheBoundOfTheirBrick)
 {
     // Odd sizes: the last lat and r bricks hold one point, the last lon brick wraps past column 0.
-    const SphericalGrid g = centredGrid(17, 9, 21);
+    const grid::SphericalGrid g = centredGrid(17, 9, 21);
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> u(-500, 1500);
     std::vector<float> values(g.cellCount());
@@ -130,7 +130,7 @@ TEST(Uint16Encoding, RandomValuesStayWithinTheBoundOfTheirBrick)
 
 TEST(Uint16Encoding, AConstantBrickDecodesExactly)
 {
-    const SphericalGrid g = centredGrid(16, 16, 32);
+    const grid::SphericalGrid g = centredGrid(16, 16, 32);
     // Constant 3.25 in the lat and r bricks 0 away from their shared points, a gradient elsewhere.
     auto values = testing::fillGrid(g, [](size_t i, size_t j, size_t k) {
         return i < 8 && j < 8 && k < 24 ? 3.25 : 3.25 + double(i + j + k);
@@ -144,7 +144,7 @@ TEST(Uint16Encoding, AConstantBrickDecodesExactly)
 
 TEST(Uint16Encoding, ExtremeRangesOfFloat32)
 {
-    const SphericalGrid g = centredGrid(9, 9, 16);
+    const grid::SphericalGrid g = centredGrid(9, 9, 16);
     // Float32's largest magnitudes beside tiny ones in one brick (max − min overflows float, not
     // double), a brick of denormals, and one of values 1 ulp apart.
     const float big = std::numeric_limits<float>::max();
@@ -163,7 +163,7 @@ TEST(Uint16Encoding, JumpsAtTheLonSeamAndAtThePoles)
 {
     // A field that jumps by 1e6 between the last column and column 0 and at the pole rows: the shared
     // points clamp into the neighbouring bricks' bounds, so each brick still bounds what it holds.
-    const SphericalGrid g = centredGrid(18, 10, 36);
+    const grid::SphericalGrid g = centredGrid(18, 10, 36);
     auto values = testing::fillGrid(g, [&](size_t i, size_t j, size_t k) {
         const double jump = (k == 0 ? 1e6 : 0) + (i == 0 || i == g.nLat() - 1 ? -1e6 : 0);
         return jump + double(j) * 0.5 + std::sin(double(k));
@@ -189,9 +189,9 @@ TEST(Uint16Encoding, EncodingNames)
 
 // --- Datasets ------------------------------------------------------------------------------------
 
-PreprocessOptions options(ValueEncoding encoding)
+preprocess::PreprocessOptions options(ValueEncoding encoding)
 {
-    PreprocessOptions o;
+    preprocess::PreprocessOptions o;
     o.quiet = true;
     o.sampleRows = 2000;
     o.encoding = encoding;
@@ -204,9 +204,9 @@ protected:
     static void SetUpTestSuite()
     {
         s_dir = std::make_unique<TempDir>("encodings");
-        const auto files = listSnapshotFiles({testing::contestLayoutDir()});
-        preprocess(files, s_dir->path() / "u16", options(ValueEncoding::Uint16));
-        preprocess(files, s_dir->path() / "f32", options(ValueEncoding::Float32));
+        const auto files = io::listSnapshotFiles({testing::contestLayoutDir()});
+        preprocess::preprocess(files, s_dir->path() / "u16", options(ValueEncoding::Uint16));
+        preprocess::preprocess(files, s_dir->path() / "f32", options(ValueEncoding::Float32));
     }
     static void TearDownTestSuite() { s_dir.reset(); }
     static std::filesystem::path dir(const char* name) { return s_dir->path() / name; }
@@ -220,13 +220,13 @@ TEST_F(EncodedDatasets, EveryPointOfTheContestFilesIsWithinTheBound)
     const auto f32 = Dataset::open(dir("f32"));
     EXPECT_EQ(u16->encoding(), ValueEncoding::Uint16);
     EXPECT_EQ(f32->encoding(), ValueEncoding::Float32);
-    const auto files = listSnapshotFiles({testing::contestLayoutDir()});
+    const auto files = io::listSnapshotFiles({testing::contestLayoutDir()});
     size_t checked = 0;
     double worst = 0;
     for (int step = 0; step < int(files.size()); ++step) {
         // The truth at level 0: the file's values (and the derived ones from them).
-        Snapshot truth = readSnapshot(files[size_t(step)]);
-        addDerivedVariables(truth);
+        grid::Snapshot truth = io::readSnapshot(files[size_t(step)]);
+        preprocess::addDerivedVariables(truth);
         ASSERT_EQ(truth.fields.size(), u16->variables().size());
         for (int level = 0; level < kLevelCount; ++level) {
             const auto a = u16->load(step, level);
@@ -296,8 +296,8 @@ TEST_F(EncodedDatasets, PathlinesOfBothEncodingsAgree)
     constexpr double kToleranceKm = 0.05;
     double worstKm = 0;
     for (int s = 0; s < 3; ++s) {
-        const PathlineSet a = loadPathlineSet(dir("u16"), s);
-        const PathlineSet b = loadPathlineSet(dir("f32"), s);
+        const analysis::PathlineSet a = analysis::loadPathlineSet(dir("u16"), s);
+        const analysis::PathlineSet b = analysis::loadPathlineSet(dir("f32"), s);
         ASSERT_EQ(a.lineCount(), b.lineCount()) << "step " << s;
         ASSERT_EQ(a.offsets, b.offsets) << "step " << s;
         for (size_t i = 0; i < a.points.size(); i += 4) {
@@ -324,7 +324,7 @@ TEST_F(EncodedDatasets, VersionOneDatasetsStillOpen)
     writeFileAtomic(manifest, j.dump(1));
     const auto v1 = Dataset::open(tmp / "v1");
     EXPECT_EQ(v1->encoding(), ValueEncoding::Float32);
-    const Snapshot truth = readSnapshot(listSnapshotFiles({testing::contestLayoutDir()})[2]);
+    const grid::Snapshot truth = io::readSnapshot(io::listSnapshotFiles({testing::contestLayoutDir()})[2]);
     const auto volume = v1->load(2, 0);
     for (size_t i = 0; i < truth.grid.cellCount(); ++i)
         ASSERT_EQ(volume->values(0)[i], truth.fields[0].values[i]);
@@ -345,7 +345,7 @@ TEST_F(EncodedDatasets, ARerunWithTheOtherEncodingIsRefused)
     TempDir tmp("rerun_encoding");
     std::filesystem::copy(dir("u16"), tmp / "ds", std::filesystem::copy_options::recursive);
     try {
-        preprocess(listSnapshotFiles({testing::contestLayoutDir()}), tmp / "ds", options(ValueEncoding::Float32));
+        preprocess::preprocess(io::listSnapshotFiles({testing::contestLayoutDir()}), tmp / "ds", options(ValueEncoding::Float32));
         FAIL() << "a float32 run resumed a u16 dataset";
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("a different 'encoding'"), std::string::npos) << e.what();
@@ -388,4 +388,4 @@ TEST_F(EncodedDatasets, ADamagedFileIsOneErrorNamingIt)
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::dataset

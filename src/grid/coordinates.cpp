@@ -1,6 +1,6 @@
 #include "grid/coordinates.h"
 
-namespace raypc {
+namespace raypc::grid {
 
 const std::vector<CoordinateInfo>& coordinateInfos()
 {
@@ -35,4 +35,4 @@ CoordinateRange coordinateRange(const SphericalGrid& grid, Coordinate c)
     return {};
 }
 
-}  // namespace raypc
+}  // namespace raypc::grid

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::grid {
 
 enum class Coordinate { X, Y, Z, Lat, Lon, Radius, Depth };
 
@@ -74,4 +74,4 @@ struct CoordinateRange {
 // sphere in lat and lon): x, y, z within ±rKm.back(), lat -90..90, lon 0..360.
 CoordinateRange coordinateRange(const SphericalGrid& grid, Coordinate c);
 
-}  // namespace raypc
+}  // namespace raypc::grid

@@ -8,7 +8,7 @@
 
 #include <cmath>
 
-namespace raypc {
+namespace raypc::grid {
 namespace {
 
 TEST(Coordinates, ValuesAtKnownPoints)
@@ -57,17 +57,17 @@ TEST(Coordinates, RangesCoverTheShellOfTheGrid)
 TEST(Brushes, OneResolverForVariablesAndCoordinates)
 {
     const std::vector<std::string> names = {"temperature", "depth"};  // a variable shadows a coordinate
-    const std::vector<NamedRange> ranges = {{"temperature", 1, 2}, {"lat", -10, 10}, {"depth", 0, 5}};
-    const auto filters = resolveRangeFilters(std::span<const std::string>(names), ranges);
+    const std::vector<analysis::NamedRange> ranges = {{"temperature", 1, 2}, {"lat", -10, 10}, {"depth", 0, 5}};
+    const auto filters = analysis::resolveRangeFilters(std::span<const std::string>(names), ranges);
     ASSERT_EQ(filters.size(), 3u);
     EXPECT_EQ(filters[0].variable, 0);
     EXPECT_FALSE(filters[0].coordinate);
     EXPECT_EQ(filters[1].coordinate, Coordinate::Lat);
     EXPECT_EQ(filters[2].variable, 1);
 
-    const std::vector<NamedRange> unknown = {{"lat", 0, 1}, {"pressure", 0, 1}};
+    const std::vector<analysis::NamedRange> unknown = {{"lat", 0, 1}, {"pressure", 0, 1}};
     try {
-        resolveRangeFilters(std::span<const std::string>(names), unknown, "brushes");
+        analysis::resolveRangeFilters(std::span<const std::string>(names), unknown, "brushes");
         FAIL() << "an unknown name was accepted";
     } catch (const Error& e) {
         const std::string m = e.what();
@@ -75,9 +75,9 @@ TEST(Brushes, OneResolverForVariablesAndCoordinates)
         EXPECT_NE(m.find("variables: temperature, depth"), std::string::npos) << m;
         EXPECT_NE(m.find("coordinates: x, y, z, lat, lon, radius, depth"), std::string::npos) << m;
     }
-    const std::vector<NamedRange> reversed = {{"lat", 5, 1}};
-    EXPECT_THROW(resolveRangeFilters(std::span<const std::string>(names), reversed, "--range"), Error);
+    const std::vector<analysis::NamedRange> reversed = {{"lat", 5, 1}};
+    EXPECT_THROW(analysis::resolveRangeFilters(std::span<const std::string>(names), reversed, "--range"), Error);
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::grid

@@ -8,7 +8,7 @@
 
 #include <tbb/parallel_for.h>
 
-namespace raypc {
+namespace raypc::grid {
 namespace {
 
 // Midpoints between neighbours; the two ends extend by half the end spacing.
@@ -247,4 +247,4 @@ BrickLayout BrickLayout::forGrid(const SphericalGrid& grid, uint32_t size)
     return b;
 }
 
-}  // namespace raypc
+}  // namespace raypc::grid

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::grid {
 
 struct SphericalGrid {
     std::vector<double> latDeg;  // ascending, within [-90, 90]
@@ -101,4 +101,4 @@ struct BrickLayout {
     }
 };
 
-}  // namespace raypc
+}  // namespace raypc::grid

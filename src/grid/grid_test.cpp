@@ -14,7 +14,7 @@
 #include <numbers>
 #include <random>
 
-namespace raypc {
+namespace raypc::grid {
 namespace {
 
 using testing::centredGrid;
@@ -88,7 +88,7 @@ TEST(Bricks, BoundsContainEveryInterpolatedValue)
         v = noise(rng);
     const BrickLayout layout = BrickLayout::forGrid(g, 4);
     std::vector<float> bounds(2 * layout.brickCount());
-    computeBrickBounds(g, layout, values, bounds);
+    dataset::computeBrickBounds(g, layout, values, bounds);
     const GridSampler sampler(g);
     std::uniform_real_distribution<double> u(0, 1);
     for (int i = 0; i < 200000; ++i) {
@@ -113,11 +113,11 @@ TEST(Bricks, VolumesDeriveBoundsOfSmallerBricksOnceAndKeepThem)
     for (auto& v : f.values)
         v = noise(rng);
     snap.fields = {f};
-    const auto volume = StepVolume::fromSnapshot(snap, 8);
+    const auto volume = dataset::StepVolume::fromSnapshot(snap, 8);
     EXPECT_EQ(volume->brickBounds(0, 8), volume->brickBounds(0));
     const BrickLayout layout = BrickLayout::forGrid(snap.grid, 2);
     std::vector<float> expected(2 * layout.brickCount());
-    computeBrickBounds(snap.grid, layout, f.values, expected);
+    dataset::computeBrickBounds(snap.grid, layout, f.values, expected);
     const float* derived = volume->brickBounds(0, 2);
     EXPECT_EQ(std::vector<float>(derived, derived + expected.size()), expected);
     EXPECT_EQ(volume->brickBounds(0, 2), derived);  // kept, not recomputed
@@ -152,7 +152,7 @@ TEST(Grid, NodeGradientIsTheCentralDifferenceInEachGridDirection)
     Snapshot snap;
     snap.grid = g;
     snap.fields = {{"f", "1", f}};
-    const auto volume = StepVolume::fromSnapshot(snap, 8);
+    const auto volume = dataset::StepVolume::fromSnapshot(snap, 8);
     EXPECT_EQ(&volume->nodeGradient(0), &volume->nodeGradient(0));
     EXPECT_TRUE(std::equal(n.perKmR(), n.perKmR() + n.count, volume->nodeGradient(0).perKmR()));
 }
@@ -254,4 +254,4 @@ TEST(Sampler, PartsCombineToLocateAndAShellSamplesAsTheVolume)
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::grid

@@ -8,7 +8,7 @@
 #include <cstddef>
 #include <string>
 
-namespace raypc {
+namespace raypc::columns {
 
 // A column of a table the program writes: its name, the units of its values ("" for none or a
 // count) and, for a value that some tables name with its units folded in, that name ("x_km" for x
@@ -19,7 +19,7 @@ struct TableColumn {
     const char* column;
 };
 
-}  // namespace raypc
+}  // namespace raypc::columns
 
 #include "grid/names_table.inc"
 

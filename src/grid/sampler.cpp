@@ -6,7 +6,7 @@
 #include <cmath>
 #include <tuple>
 
-namespace raypc {
+namespace raypc::grid {
 
 GridSampler::Axis::Axis(const std::vector<double>& c) : m_c(c)
 {
@@ -104,4 +104,4 @@ std::optional<GridSampler::LateralPart> GridSampler::locateLatLon(double latDeg,
     return at;
 }
 
-}  // namespace raypc
+}  // namespace raypc::grid

@@ -19,7 +19,7 @@
 #include <utility>
 #include <vector>
 
-namespace raypc {
+namespace raypc::grid {
 
 class GridSampler {
 public:
@@ -114,4 +114,4 @@ private:
     Axis m_lat, m_r, m_lon;  // m_grid's coordinates
 };
 
-}  // namespace raypc
+}  // namespace raypc::grid

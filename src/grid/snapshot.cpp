@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace raypc {
+namespace raypc::grid {
 
 const Field* Snapshot::find(const std::string& name) const
 {
@@ -83,4 +83,4 @@ void checkFinite(const Snapshot& snapshot, const Field& field, const std::string
          *bad, describeGridPoint(snapshot.grid, i), inputs);
 }
 
-}  // namespace raypc
+}  // namespace raypc::grid

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::grid {
 
 // The most grid points RayPC reads: the parallel-coordinates sample indexes points with 32 bits.
 inline constexpr uint64_t kMaxGridPoints = UINT32_MAX;
@@ -62,4 +62,4 @@ inline const std::vector<std::string>& contestVariableNames()
     return names;
 }
 
-}  // namespace raypc
+}  // namespace raypc::grid

@@ -27,9 +27,9 @@ TempDir::~TempDir()
 
 std::filesystem::path contestLayoutDir() { return std::filesystem::path(RAYPC_TEST_DATA_DIR) / "contest-layout"; }
 
-SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon)
+grid::SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon)
 {
-    SphericalGrid g;
+    grid::SphericalGrid g;
     for (size_t i = 0; i < nLat; ++i)
         g.latDeg.push_back(-90.0 + (i + 0.5) * 180.0 / nLat);
     for (size_t i = 0; i < nR; ++i)
@@ -39,7 +39,7 @@ SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon)
     return g;
 }
 
-std::vector<float> fillGrid(const SphericalGrid& g, const std::function<double(size_t, size_t, size_t)>& f)
+std::vector<float> fillGrid(const grid::SphericalGrid& g, const std::function<double(size_t, size_t, size_t)>& f)
 {
     std::vector<float> v(g.cellCount());
     for (size_t a = 0; a < g.nLat(); ++a)
@@ -49,7 +49,7 @@ std::vector<float> fillGrid(const SphericalGrid& g, const std::function<double(s
     return v;
 }
 
-double gaussianBlob(const SphericalGrid& g, size_t iLat, size_t iR, size_t iLon, double latDeg, double lonDeg,
+double gaussianBlob(const grid::SphericalGrid& g, size_t iLat, size_t iR, size_t iLon, double latDeg, double lonDeg,
                     double rKm, double sigmaKm)
 {
     const Vec3d c = sphericalToCartesianKm(latDeg, lonDeg, rKm);

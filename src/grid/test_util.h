@@ -35,14 +35,14 @@ std::filesystem::path ncgen(const std::filesystem::path& dir, const std::string&
 
 // A global grid with cell-centred lat rows (no pole rows), nR radii evenly from the core-mantle
 // boundary to the surface, and lon columns at i * 360 / nLon.
-SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon);
+grid::SphericalGrid centredGrid(size_t nLat, size_t nR, size_t nLon);
 
 // f(iLat, iR, iLon) at every grid point, canonical order.
-std::vector<float> fillGrid(const SphericalGrid& g, const std::function<double(size_t, size_t, size_t)>& f);
+std::vector<float> fillGrid(const grid::SphericalGrid& g, const std::function<double(size_t, size_t, size_t)>& f);
 
 // exp(-d² / 2σ²), d the Cartesian distance (km) from (latDeg, lonDeg, rKm): a field with one
 // maximum of 1 at the centre, the same shape across the lon seam and the poles.
-double gaussianBlob(const SphericalGrid& g, size_t iLat, size_t iR, size_t iLon, double latDeg, double lonDeg,
+double gaussianBlob(const grid::SphericalGrid& g, size_t iLat, size_t iR, size_t iLon, double latDeg, double lonDeg,
                     double rKm, double sigmaKm);
 
 // Runs a shell command; returns its exit status.

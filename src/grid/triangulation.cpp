@@ -4,7 +4,7 @@
 
 #include <bit>
 
-namespace raypc::triangulation {
+namespace raypc::grid::triangulation {
 namespace {
 
 bool isOffset(int dLat, int dR, int dLon)
@@ -69,4 +69,4 @@ void checkTriangulable(const SphericalGrid& grid, size_t valueCount, const char*
              grid.nLon());
 }
 
-}  // namespace raypc::triangulation
+}  // namespace raypc::grid::triangulation

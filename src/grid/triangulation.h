@@ -23,7 +23,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace raypc::triangulation {
+namespace raypc::grid::triangulation {
 
 inline constexpr int kLinkSize = 14;
 
@@ -96,4 +96,4 @@ inline bool below(const float* values, size_t a, size_t b)
 // fewer than 2 lat rows, 2 radii or 3 lon columns (a smaller grid has no such triangulation).
 void checkTriangulable(const SphericalGrid& grid, size_t valueCount, const char* what);
 
-}  // namespace raypc::triangulation
+}  // namespace raypc::grid::triangulation

@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-namespace raypc {
+namespace raypc::io {
 
 // A coordinate variable along one dimension (its name is the dimension's), or, when `dimension` is
 // set, an auxiliary coordinate along another one (e.g. the latitude of every point of a section).
@@ -41,4 +41,4 @@ void writeCfGrid(const std::filesystem::path& path, const CfGridFile& grid);
 // "temperature_anomaly").
 std::string cfName(const std::string& name);
 
-}  // namespace raypc
+}  // namespace raypc::io

@@ -18,7 +18,7 @@
 
 // A namespace of its own: the unity build compiles the test files together (vtk_xml_test.cpp has a
 // variantsDir() too).
-namespace raypc::cf_variants_test {
+namespace raypc::io::cf_variants_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -85,14 +85,14 @@ void expectMatchesTruth(const std::string& name, const ReaderOptions& options)
     const auto& v = variant(name);
     const auto path = variantsDir() / v["file"].get<std::string>();
     const FileHeader header = readHeader(path, options);
-    const Snapshot s = readSnapshot(path, options);
+    const grid::Snapshot s = readSnapshot(path, options);
     ASSERT_TRUE(header.grid.sameAs(s.grid, 0.0));
     expectAxis(s.grid.latDeg, truth()["lat_deg"], 1e-9, "lat");
     expectAxis(s.grid.rKm, truth()["r_km"], 1e-9, "r");
     expectAxis(s.grid.lonDeg, truth()["lon_deg"], 1e-9, "lon");
     ASSERT_EQ(s.fields.size(), 2u);
     for (size_t f = 0; f < s.fields.size(); ++f) {
-        const Field& field = s.fields[f];
+        const grid::Field& field = s.fields[f];
         EXPECT_EQ(field.units, v["units"][field.name].get<std::string>()) << field.name;
         EXPECT_EQ(header.variables[f].units, v["units"][field.name].get<std::string>()) << field.name;
         const auto& expected = v.contains("values") ? v["values"][field.name] : truth()["values"][field.name];
@@ -103,7 +103,7 @@ void expectMatchesTruth(const std::string& name, const ReaderOptions& options)
             if (!(std::abs(field.values[i] - expected[i].get<double>()) <= tolerance) && wrong++ == 0)
                 first = i;
         EXPECT_EQ(wrong, 0u) << name << ": " << field.name << ": " << wrong << " values differ from the truth, the first at "
-                             << describeGridPoint(s.grid, first) << ": " << field.values[first] << ", expected "
+                             << grid::describeGridPoint(s.grid, first) << ": " << field.values[first] << ", expected "
                              << expected[first].get<double>();
     }
 }
@@ -168,14 +168,14 @@ TEST(CfVariants, ATimeDimensionLongerThanOneIsASeriesOfSteps)
     ASSERT_EQ(listing.steps.size(), v["length"].get<size_t>());
     EXPECT_FALSE(listing.vtk);
     EXPECT_EQ(listing.steps[2].filename().string(), "time_three_steps.nc#2");
-    const Snapshot first = readStep(listing.steps[0], options);
-    const Snapshot one = readSnapshot(fileOf("time_unlimited"), optionsOf("time_unlimited"));
+    const grid::Snapshot first = readStep(listing.steps[0], options);
+    const grid::Snapshot one = readSnapshot(fileOf("time_unlimited"), optionsOf("time_unlimited"));
     ASSERT_TRUE(first.grid.sameAs(one.grid));
     for (size_t f = 0; f < first.fields.size(); ++f)
         for (size_t i = 0; i < first.fields[f].values.size(); ++i)
             ASSERT_NEAR(first.fields[f].values[i], one.fields[f].values[i], 1e-3) << first.fields[f].name << " " << i;
     for (size_t k = 1; k < listing.steps.size(); ++k) {
-        const Snapshot step = readStep(listing.steps[k], options);
+        const grid::Snapshot step = readStep(listing.steps[k], options);
         for (size_t f = 0; f < step.fields.size(); ++f)
             for (size_t i = 0; i < step.fields[f].values.size(); ++i)
                 ASSERT_NEAR(step.fields[f].values[i] - first.fields[f].values[i],
@@ -309,9 +309,9 @@ TEST(CfVariants, TwoClaimantsOfAnAxisAreRefused)
 
 // 4. Series: the errors of a variable missing in one step and of a grid that differs stay.
 
-PreprocessOptions seriesOptions()
+preprocess::PreprocessOptions seriesOptions()
 {
-    PreprocessOptions options;
+    preprocess::PreprocessOptions options;
     options.reader.variables = {"temperature", "vx"};
     options.quiet = true;
     options.sampleRows = 100;
@@ -331,7 +331,7 @@ void expectPreprocessRefused(const std::string& name, const std::vector<std::str
 {
     testing::TempDir dir("cfseries");
     try {
-        preprocess(seriesFiles(name), dir / "out", seriesOptions());
+        preprocess::preprocess(seriesFiles(name), dir / "out", seriesOptions());
         ADD_FAILURE() << name << " was preprocessed";
     } catch (const Error& e) {
         for (const auto& f : fragments)
@@ -358,4 +358,4 @@ TEST(CfVariants, GridThatDiffersBetweenSteps)
 }
 
 }  // namespace
-}  // namespace raypc::cf_variants_test
+}  // namespace raypc::io::cf_variants_test

@@ -17,7 +17,7 @@
 #include <mutex>
 #include <regex>
 
-namespace raypc::citcoms {
+namespace raypc::io::citcoms {
 namespace {
 
 namespace fs = std::filesystem;
@@ -506,4 +506,4 @@ std::string unitsOf(const std::string& array, const Scales& scales)
     return "1";  // viscosity and pressure as written: nondimensional
 }
 
-}  // namespace raypc::citcoms
+}  // namespace raypc::io::citcoms

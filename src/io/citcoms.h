@@ -28,7 +28,7 @@
 #include <utility>
 #include <vector>
 
-namespace raypc::citcoms {
+namespace raypc::io::citcoms {
 
 // What scales CitcomS' nondimensional numbers to the Earth's (docs/format.md, "CitcomS output").
 struct Scales {
@@ -87,4 +87,4 @@ std::string formatName(const std::filesystem::path& step);
 // The units of the arrays readStep gives.
 std::string unitsOf(const std::string& array, const Scales& scales);
 
-}  // namespace raypc::citcoms
+}  // namespace raypc::io::citcoms

@@ -17,7 +17,7 @@
 #include <limits>
 #include <mutex>
 
-namespace raypc {
+namespace raypc::io {
 namespace {
 
 constexpr double kRadPerDeg = M_PI / 180.0;
@@ -284,7 +284,7 @@ struct CellBox {
     std::array<double, 3> lo{}, hi{};  // Cartesian box of the nodes, widened (km)
 };
 
-CellBox boxOf(const Cell& cell, const SphericalGrid& grid, std::vector<double>& lons)
+CellBox boxOf(const Cell& cell, const grid::SphericalGrid& grid, std::vector<double>& lons)
 {
     double latLo = 90, latHi = -90, rLo = INFINITY, rHi = 0;
     std::array<double, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
@@ -475,10 +475,10 @@ ShellMesh makeShellMesh(std::vector<vtk::Piece> pieces, double kmPerUnit, const 
     return mesh;
 }
 
-SphericalGrid resampleGrid(const ShellMesh& mesh, size_t nLat, size_t nR, size_t nLon)
+grid::SphericalGrid resampleGrid(const ShellMesh& mesh, size_t nLat, size_t nR, size_t nLon)
 {
     RAYPC_CHECK(nLat >= 2 && nR >= 2 && nLon >= 4);
-    SphericalGrid g;
+    grid::SphericalGrid g;
     for (size_t i = 0; i < nLat; ++i)
         g.latDeg.push_back(-90 + (double(i) + 0.5) * 180.0 / double(nLat));
     for (size_t i = 0; i < nR; ++i)
@@ -488,7 +488,7 @@ SphericalGrid resampleGrid(const ShellMesh& mesh, size_t nLat, size_t nR, size_t
     return g;
 }
 
-SphericalGrid defaultResampleGrid(const ShellMesh& mesh, uint64_t maxPoints)
+grid::SphericalGrid defaultResampleGrid(const ShellMesh& mesh, uint64_t maxPoints)
 {
     // A spacing that divides the extent (to rounding) gives that many intervals, not one more.
     const auto intervals = [](double extent, double spacing) { return std::ceil(extent / spacing * (1 - 1e-9)); };
@@ -538,7 +538,7 @@ struct CellsByRow {
     std::vector<uint32_t> rowCells;
 };
 
-CellsByRow cellsByRow(const ShellMesh& mesh, const SphericalGrid& grid)
+CellsByRow cellsByRow(const ShellMesh& mesh, const grid::SphericalGrid& grid)
 {
     CellsByRow byRow;
     auto& [cells, boxes, rowStart, rowCells] = byRow;
@@ -588,7 +588,7 @@ void gatherNodeValues(const Cell& cell, const std::vector<const vtk::PointArray*
 // Resamples the grid's lat row `row` into `out` (arrays x grid points): a point takes the values of the
 // first cell it lies in, else of the cell it lies nearest to within kSnapReference (its values at
 // the nearest boundary), else stays NaN. Returns the row's counts (points left 0).
-ResampleCounts resampleRow(size_t row, const ShellMesh& mesh, const SphericalGrid& grid, const CellsByRow& byRow,
+ResampleCounts resampleRow(size_t row, const ShellMesh& mesh, const grid::SphericalGrid& grid, const CellsByRow& byRow,
                            const std::vector<std::vector<const vtk::PointArray*>>& sources,
                            const std::vector<ArrayComponent>& arrays, const std::vector<double>& cosLon,
                            const std::vector<double>& sinLon, std::vector<std::vector<float>>& out)
@@ -657,7 +657,7 @@ ResampleCounts resampleRow(size_t row, const ShellMesh& mesh, const SphericalGri
 
 }  // namespace
 
-std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const SphericalGrid& grid,
+std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const grid::SphericalGrid& grid,
                                                  const std::vector<ArrayComponent>& arrays, const std::string& what,
                                                  ResampleCounts* counts)
 {
@@ -685,4 +685,4 @@ std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const Sp
     return out;
 }
 
-}  // namespace raypc
+}  // namespace raypc::io

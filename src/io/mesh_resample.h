@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::io {
 
 // How far outside a cell (in its reference coordinates, a cell being [0, 1]³) a grid point may lie
 // and still take the values of the cell's nearest boundary.
@@ -52,9 +52,9 @@ ShellMesh makeShellMesh(std::vector<vtk::Piece> pieces, double kmPerUnit, const 
 // The grid a mesh is resampled onto by default: spacings as fine as the mesh's finest cell (arc
 // and radial), lat at cell centres (no point on a pole), lon from 0° in equal steps, r from the
 // inner to the outer radius; coarsened evenly when it would have more than `maxPoints` points.
-SphericalGrid defaultResampleGrid(const ShellMesh& mesh, uint64_t maxPoints);
+grid::SphericalGrid defaultResampleGrid(const ShellMesh& mesh, uint64_t maxPoints);
 // A grid of the given sizes over the mesh's shell, laid out as defaultResampleGrid's.
-SphericalGrid resampleGrid(const ShellMesh& mesh, size_t nLat, size_t nR, size_t nLon);
+grid::SphericalGrid resampleGrid(const ShellMesh& mesh, size_t nLat, size_t nR, size_t nLon);
 
 struct ResampleCounts {
     size_t points = 0;   // grid points
@@ -70,7 +70,7 @@ struct ArrayComponent {
     std::string name;
     int component = -1;
 };
-std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const SphericalGrid& grid,
+std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const grid::SphericalGrid& grid,
                                                  const std::vector<ArrayComponent>& arrays, const std::string& what,
                                                  ResampleCounts* counts = nullptr);
 
@@ -80,4 +80,4 @@ std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const Sp
 // inner points, the faces', the interior's.
 int lagrangeHexPointIndex(int i, int j, int k, int p);
 
-}  // namespace raypc
+}  // namespace raypc::io

@@ -21,7 +21,7 @@
 
 #include <unistd.h>
 
-namespace raypc {
+namespace raypc::io {
 namespace {
 
 namespace fs = std::filesystem;
@@ -72,11 +72,11 @@ struct ResampleErrors {
 };
 
 // T and the velocity of `snap` (step at `years`) against the truth at every grid point.
-void compareWithTruth(const Snapshot& snap, const ShellTruth& truth, double years, ResampleErrors& t, double& worstVelocityMps)
+void compareWithTruth(const grid::Snapshot& snap, const ShellTruth& truth, double years, ResampleErrors& t, double& worstVelocityMps)
 {
-    const SphericalGrid& g = snap.grid;
-    const Field* T = snap.find("T");
-    const Field* v[3] = {snap.find("vx"), snap.find("vy"), snap.find("vz")};
+    const grid::SphericalGrid& g = snap.grid;
+    const grid::Field* T = snap.find("T");
+    const grid::Field* v[3] = {snap.find("vx"), snap.find("vy"), snap.find("vz")};
     ASSERT_TRUE(T && v[0] && v[1] && v[2]);
     EXPECT_EQ(T->units, "K");
     EXPECT_EQ(v[0]->units, "m/s");
@@ -106,7 +106,7 @@ void compareWithTruth(const Snapshot& snap, const ShellTruth& truth, double year
 
 // Point array "f" of a piece of one cell (km × 1e3, as metres), resampled onto a 180x12x360 grid over
 // the cell's radii (returned in `grid`).
-std::vector<std::vector<float>> resampleOneCell(vtk::Piece piece, SphericalGrid& grid, ResampleCounts& counts)
+std::vector<std::vector<float>> resampleOneCell(vtk::Piece piece, grid::SphericalGrid& grid, ResampleCounts& counts)
 {
     std::vector<vtk::Piece> pieces;
     pieces.push_back(std::move(piece));
@@ -162,7 +162,7 @@ TEST(Resample, DealIiSeriesMatchTheTruthEverywhere)
         double worstVelocity = 0;
         for (size_t s = 0; s < listing.steps.size(); ++s) {
             EXPECT_DOUBLE_EQ(listing.timesMyr[s], 2.0 * double(s));
-            const Snapshot snap = readStep(listing.steps[s], options);
+            const grid::Snapshot snap = readStep(listing.steps[s], options);
             ASSERT_TRUE(snap.grid.sameAs(header.grid));
             EXPECT_EQ(snap.origin.at("missing").get<size_t>(), 0u);
             // Snapped: points between the nodes of the curved boundary shells (2 of 9 to 34 shells).
@@ -210,7 +210,7 @@ TEST(Resample, LagrangeCellsReproduceTheirPolynomialsExactly)
         piece.offsets.push_back(n);
         piece.types.push_back(vtk::CellType::LagrangeHexahedron);
         piece.pointData.push_back(f);
-        SphericalGrid grid;
+        grid::SphericalGrid grid;
         ResampleCounts counts;
         const auto values = resampleOneCell(std::move(piece), grid, counts);
         size_t checked = 0;
@@ -259,7 +259,7 @@ TEST(Resample, TetrahedraAndWedgesReproduceLinearFieldsExactly)
         piece.offsets.push_back(int64_t(nodes.size()));
         piece.types.push_back(type);
         piece.pointData.push_back(f);
-        SphericalGrid grid;
+        grid::SphericalGrid grid;
         ResampleCounts counts;
         const auto values = resampleOneCell(std::move(piece), grid, counts);
         size_t exact = 0;
@@ -333,4 +333,4 @@ TEST(Resample, BadSeriesAreOneClearError)
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::io

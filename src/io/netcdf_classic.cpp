@@ -6,7 +6,7 @@
 #include <array>
 #include <vector>
 
-namespace raypc {
+namespace raypc::io {
 namespace {
 
 // Tags and sizes of the netCDF Classic Format Specification.
@@ -174,4 +174,4 @@ uint64_t classicDataEndBytes(std::istream& in, const std::string& what)
     return end;
 }
 
-}  // namespace raypc
+}  // namespace raypc::io

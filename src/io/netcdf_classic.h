@@ -11,7 +11,7 @@
 #include <istream>
 #include <string>
 
-namespace raypc {
+namespace raypc::io {
 
 // The number of bytes a classic file needs: the largest end of a variable's data (for record
 // variables, of its last record), as the header at the start of `in` describes. `what` names
@@ -19,4 +19,4 @@ namespace raypc {
 // a classic header, the header ends early or is malformed, or its sizes overflow 64 bits.
 uint64_t classicDataEndBytes(std::istream& in, const std::string& what);
 
-}  // namespace raypc
+}  // namespace raypc::io

@@ -15,7 +15,7 @@
 #include <numbers>
 #include <numeric>
 
-namespace raypc::netcdf {
+namespace raypc::io::netcdf {
 namespace {
 
 // Units compare without regard to case ("KM", "Degrees_North").
@@ -227,9 +227,9 @@ CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explic
     if (n == 0)
         fail("{}: coordinate '{}' is empty", file.path().string(), name);
     // A hostile or broken header may declare any length: check before allocating for it.
-    if (n > kMaxGridPoints)
+    if (n > grid::kMaxGridPoints)
         fail("{}: coordinate '{}' has {} values, more than a grid RayPC reads may have points ({})",
-             file.path().string(), name, n, kMaxGridPoints);
+             file.path().string(), name, n, grid::kMaxGridPoints);
     if (const auto available = availableMemory(); n * kAxisBytesPerValue > available.bytes)
         fail("{}: coordinate '{}' has {} values, which need {} of memory, {} available ({})", file.path().string(),
              name, n, formatBytes(n * kAxisBytesPerValue), formatBytes(available.bytes), available.limitedBy);
@@ -298,4 +298,4 @@ OpenedHeader readAxes(const NcFile& file, const ReaderOptions& options)
     return h;
 }
 
-}  // namespace raypc::netcdf
+}  // namespace raypc::io::netcdf

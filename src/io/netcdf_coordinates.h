@@ -10,7 +10,7 @@
 #include <cstddef>
 #include <vector>
 
-namespace raypc::netcdf {
+namespace raypc::io::netcdf {
 
 enum Axis { kLat = 0, kR = 1, kLon = 2 };
 constexpr std::array<const char*, 3> kAxisNames = {"lat", "r", "lon"};
@@ -27,7 +27,7 @@ struct CoordinateAxis {
 // The grid's three axes as a file holds them, and the grid in canonical order.
 struct OpenedHeader {
     std::array<CoordinateAxis, 3> axes;
-    SphericalGrid grid;
+    grid::SphericalGrid grid;
 
     // The grid's points as the file stores them (a repeated seam included).
     size_t fileCount() const
@@ -43,4 +43,4 @@ struct OpenedHeader {
 // checks the grid they make. Throws raypc::Error naming the file and the coordinate.
 OpenedHeader readAxes(const NcFile& file, const ReaderOptions& options);
 
-}  // namespace raypc::netcdf
+}  // namespace raypc::io::netcdf

@@ -8,7 +8,7 @@
 
 #include <fstream>
 
-namespace raypc::netcdf {
+namespace raypc::io::netcdf {
 namespace {
 
 // netCDF-C reads past the end of a truncated classic file without an error (the missing bytes
@@ -93,4 +93,4 @@ std::optional<double> defaultFillValue(const NcFile& file, int varId)
     }
 }
 
-}  // namespace raypc::netcdf
+}  // namespace raypc::io::netcdf

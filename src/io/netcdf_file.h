@@ -19,7 +19,7 @@
 #include <string_view>
 #include <vector>
 
-namespace raypc::netcdf {
+namespace raypc::io::netcdf {
 
 // netCDF-C is not thread-safe; every call into it holds this lock.
 std::mutex& netcdfMutex();
@@ -153,4 +153,4 @@ private:
 // has no _FillValue (NC_FILL_FLOAT etc.), or nothing for a type without one.
 std::optional<double> defaultFillValue(const NcFile& file, int varId);
 
-}  // namespace raypc::netcdf
+}  // namespace raypc::io::netcdf

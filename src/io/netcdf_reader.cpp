@@ -13,7 +13,7 @@
 #include <mutex>
 #include <utility>
 
-namespace raypc {
+namespace raypc::io {
 namespace netcdf {
 namespace {
 
@@ -77,14 +77,14 @@ std::vector<std::pair<std::string, VariableLayout>> checkBeforeReading(const NcF
     if (options.timeIndex >= steps)
         fail("{}: step {} of a file holding {}", file.path().string(), options.timeIndex, steps);
     // The fields and one variable's buffer in file order.
-    checkGridFitsMemory(h.grid, requested.size() * fileCount * sizeof(float) + fileCount * bufferBytesPerValue,
+    grid::checkGridFitsMemory(h.grid, requested.size() * fileCount * sizeof(float) + fileCount * bufferBytesPerValue,
                         file.path().string(), "read", availableMemory());
     return layouts;
 }
 
-Snapshot snapshotOf(const NcFile& file, const OpenedHeader& h, const ReaderOptions& options)
+grid::Snapshot snapshotOf(const NcFile& file, const OpenedHeader& h, const ReaderOptions& options)
 {
-    Snapshot snapshot;
+    grid::Snapshot snapshot;
     snapshot.grid = h.grid;
     // Every variable is checked before any is read.
     const auto requested = requestedVariables(file, options, &h);
@@ -106,7 +106,7 @@ FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& op
     return netcdf::readOpened(path, options, netcdf::headerOf);
 }
 
-Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& options)
+grid::Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& options)
 {
     return netcdf::readOpened(path, options, netcdf::snapshotOf);
 }
@@ -143,4 +143,4 @@ std::vector<std::filesystem::path> listSnapshotFiles(const std::vector<std::file
     return files;
 }
 
-}  // namespace raypc
+}  // namespace raypc::io

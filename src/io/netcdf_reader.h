@@ -31,7 +31,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::io {
 
 struct ReaderOptions {
     // Canonical variable name -> name in the file, for CF outputs that name things differently
@@ -68,7 +68,7 @@ struct ReaderOptions {
     // the grid to resample onto: its sizes lat x r x lon (0: chosen from the mesh's finest cell),
     std::array<size_t, 3> resampleSize{};
     // or, once chosen for a series's first step, the grid itself (every step takes the same).
-    std::optional<SphericalGrid> targetGrid;
+    std::optional<grid::SphericalGrid> targetGrid;
 
     // CitcomS output (citcoms.h), nondimensional: ΔT in K that temperatures are multiplied by (0:
     // kept as written), and the radius R (km) and thermal diffusivity κ (m²/s) that scale radii,
@@ -79,7 +79,7 @@ struct ReaderOptions {
 };
 
 struct FileHeader {
-    SphericalGrid grid;
+    grid::SphericalGrid grid;
     struct Variable {
         std::string name, fileName, units;
         std::string longName;  // CF's long_name (e.g. "Shear-wave velocity"), or empty
@@ -97,14 +97,14 @@ FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& op
 // or unreadable file, a non-netCDF or truncated file, a missing variable, wrong dims (a time
 // dimension longer than 1), coordinates whose units are unknown or missing where the numbers do not
 // fit, missing / non-finite values (unless options.fillMissing), or a value beyond float32.
-Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& options = {});
+grid::Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& options = {});
 
 // The velocity's components vx, vy, vz of `snapshot`, when it has all three, into Cartesian m/s:
 // their units converted, and spherical ones (radial, north, east) turned at each grid point. Throws
 // raypc::Error naming `what` and the component for units that are not a velocity's.
-void normaliseVelocity(Snapshot& snapshot, ReaderOptions::VelocityFrame frame, const std::string& what);
+void normaliseVelocity(grid::Snapshot& snapshot, ReaderOptions::VelocityFrame frame, const std::string& what);
 
 // Expands files and directories (all *.nc inside) and sorts them in natural order.
 std::vector<std::filesystem::path> listSnapshotFiles(const std::vector<std::filesystem::path>& inputs);
 
-}  // namespace raypc
+}  // namespace raypc::io

@@ -15,7 +15,7 @@
 #include <fstream>
 #include <sstream>
 
-namespace raypc {
+namespace raypc::io {
 namespace {
 
 using testing::contestLayoutDir;
@@ -49,7 +49,7 @@ TEST(NetcdfReader, ContestLayoutMatchesTruth)
     const Truth truth;
     for (int k = 0; k < 3; ++k) {
         const auto path = contestLayoutDir() / fmt::format("spherical{:03d}.nc", k + 1);
-        const Snapshot s = readSnapshot(path);
+        const grid::Snapshot s = readSnapshot(path);
         const auto& g = s.grid;
         ASSERT_EQ(g.nLat(), 36u);
         ASSERT_EQ(g.nR(), 41u);
@@ -96,16 +96,16 @@ TEST(NetcdfReader, ContestLayoutMatchesTruth)
 TEST(NetcdfReader, DerivedRadialVelocityIsU0)
 {
     const Truth truth;
-    Snapshot s = readSnapshot(contestLayoutDir() / "spherical002.nc");
-    addDerivedVariables(s);
-    const Field* ur = s.find("radial velocity");
+    grid::Snapshot s = readSnapshot(contestLayoutDir() / "spherical002.nc");
+    preprocess::addDerivedVariables(s);
+    const grid::Field* ur = s.find("radial velocity");
     ASSERT_TRUE(ur);
     EXPECT_EQ(ur->units, "cm/yr");
     const double expected = truth.u0 * kMpsToCmPerYr;  // radial velocity == u0 everywhere
     for (float v : ur->values)
         ASSERT_NEAR(v, expected, 1e-4 * expected + 1e-6);
     // |v|² = (omega * distance from the axis)² + u0²
-    const Field* mag = s.find("velocity magnitude");
+    const grid::Field* mag = s.find("velocity magnitude");
     const auto& g = s.grid;
     const size_t i = g.index(20, 30, 10);
     const double axisKm = g.rKm[30] * std::cos(degToRad(g.latDeg[20]));
@@ -116,10 +116,10 @@ TEST(NetcdfReader, DerivedRadialVelocityIsU0)
 // expansivity by that shell's mean only.
 TEST(NetcdfReader, DerivedExpansivityAnomalyIsTheLateralDeviation)
 {
-    Snapshot s = readSnapshot(contestLayoutDir() / "spherical001.nc");
-    addDerivedVariables(s);
-    const Field* alpha = s.find("thermal expansivity");
-    const Field* anomaly = s.find("thermal expansivity anomaly");
+    grid::Snapshot s = readSnapshot(contestLayoutDir() / "spherical001.nc");
+    preprocess::addDerivedVariables(s);
+    const grid::Field* alpha = s.find("thermal expansivity");
+    const grid::Field* anomaly = s.find("thermal expansivity anomaly");
     ASSERT_TRUE(anomaly);
     EXPECT_EQ(anomaly->units, alpha->units);
     const auto& g = s.grid;
@@ -142,13 +142,13 @@ TEST(NetcdfReader, BothNetcdfFlavoursGiveIdenticalValues)
 {
     TempDir dir("flavours");
     const auto source = contestLayoutDir() / "spherical001.nc";
-    const Snapshot reference = readSnapshot(source);
+    const grid::Snapshot reference = readSnapshot(source);
     for (const std::string kind : {"nc4", "classic"}) {
         const auto copy = dir / (kind + ".nc");
         ASSERT_EQ(testing::run(fmt::format("nccopy -k {} '{}' '{}'", kind, source.string(), copy.string())), 0);
         const auto header = readHeader(copy);
         EXPECT_EQ(header.format, kind == "nc4" ? "netCDF-4" : "classic");
-        const Snapshot s = readSnapshot(copy);
+        const grid::Snapshot s = readSnapshot(copy);
         ASSERT_TRUE(s.grid.sameAs(reference.grid, 0.0));
         for (size_t f = 0; f < s.fields.size(); ++f)
             ASSERT_EQ(s.fields[f].values, reference.fields[f].values) << kind << " " << s.fields[f].name;
@@ -190,7 +190,7 @@ data:
     ReaderOptions options;
     options.variables = {"temperature"};
     options.variableNames["temperature"] = "T";
-    const Snapshot s = readSnapshot(path, options);
+    const grid::Snapshot s = readSnapshot(path, options);
     EXPECT_EQ(s.grid.latDeg, (std::vector<double>{-45, 45}));
     EXPECT_EQ(s.grid.rKm, (std::vector<double>{3485, 4900, 6371}));
     EXPECT_EQ(s.grid.lonDeg, (std::vector<double>{0, 90, 180, 270}));
@@ -354,7 +354,7 @@ TEST(NetcdfReaderBadInput, DefaultFillValuesAreMissing)
                          "lat 45°, r 6371 km, lon 90°"});
         ReaderOptions fill = temperatureOnly();
         fill.fillMissing = true;
-        const Snapshot s = readSnapshot(path, fill);
+        const grid::Snapshot s = readSnapshot(path, fill);
         EXPECT_NEAR(s.fields[0].values[s.grid.index(1, 1, 1)], (5 + 7 + 8 + 13 + 14 + 15 + 16) / 7.0, 1e-5) << kind;
     }
     // Integer variables too (NC_FILL_SHORT = -32767).
@@ -379,7 +379,7 @@ TEST(NetcdfReaderBadInput, MissingVariable)
     const auto path = ncgen(dir.path(), "small", smallCdl("1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16"));
     // Variables asked for by name must be there; without a list the file's own are read (below).
     ReaderOptions contest;
-    contest.variables = contestVariableNames();
+    contest.variables = grid::contestVariableNames();
     expectReadError(path, contest, {"small.nc", "missing variable 'vx'"});
     ReaderOptions mapped = temperatureOnly();
     mapped.variableNames["temperature"] = "T";
@@ -413,7 +413,7 @@ data:
     EXPECT_EQ(header.variables[0].name, "vs");
     EXPECT_EQ(header.variables[0].units, "km/s");
     EXPECT_EQ(header.variables[1].name, "rho");
-    const Snapshot s = readSnapshot(path, {});
+    const grid::Snapshot s = readSnapshot(path, {});
     ASSERT_EQ(s.fields.size(), 2u);
     // depth 100 km is radius 6271 km (the upper shell), lat 45 the upper row, lon 90 the second column.
     EXPECT_FLOAT_EQ(s.fields[0].values[s.grid.index(1, 1, 1)], 6.0f);
@@ -456,7 +456,7 @@ TEST(NetcdfReader, SphericalVelocityInOtherUnitsBecomesCartesianMetresPerSecond)
     ASSERT_EQ(header.variables.size(), 3u);
     EXPECT_EQ(header.variables[0].name, "vx");
     EXPECT_EQ(header.variables[0].units, "m/s");
-    const Snapshot s = readSnapshot(path, o);
+    const grid::Snapshot s = readSnapshot(path, o);
     const double cmPerYr = 0.01 / 3.15576e7;
     // At lat 45, lon 90: up = (0, cos 45, sin 45), east = (-1, 0, 0).
     const size_t i = s.grid.index(1, 0, 1);
@@ -502,7 +502,7 @@ TEST(NetcdfReaderBadInput, NanAndFillValues)
     expectReadError(filled, temperatureOnly(), {"fill.nc", "missing"});
     ReaderOptions fill = temperatureOnly();
     fill.fillMissing = true;
-    const Snapshot s = readSnapshot(filled, fill);
+    const grid::Snapshot s = readSnapshot(filled, fill);
     // File row lat=45 becomes canonical row 1; its r=6371 shell holds 5, -999, 7, 8 and the
     // other row's 13..16: the mean of the valid values on that shell.
     const double shellMean = (5 + 7 + 8 + 13 + 14 + 15 + 16) / 7.0;
@@ -520,18 +520,18 @@ TEST(NetcdfReaderBadInput, GridsThatDifferBetweenStepsStopPreprocessing)
     };
     const auto a = ncgen(dir.path(), "step1", withVelocity("3485, 6371"));
     const auto b = ncgen(dir.path(), "step2", withVelocity("3500, 6371"));
-    PreprocessOptions options;
+    preprocess::PreprocessOptions options;
     options.reader.variables = {"temperature", "vx", "vy", "vz"};
     options.quiet = true;
     options.sampleRows = 100;
     try {
-        preprocess({a, b}, dir / "out", options);
+        preprocess::preprocess({a, b}, dir / "out", options);
         FAIL() << "grids that differ were accepted";
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("step2.nc"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("differ from the first step"), std::string::npos) << e.what();
     }
-    EXPECT_THROW(Dataset::open(dir / "out"), Error);  // no complete dataset was left behind
+    EXPECT_THROW(dataset::Dataset::open(dir / "out"), Error);  // no complete dataset was left behind
 }
 
 TEST(NetcdfReader, ListsFilesInNaturalOrder)
@@ -548,4 +548,4 @@ TEST(NetcdfReader, ListsFilesInNaturalOrder)
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::io

@@ -13,7 +13,7 @@
 #include <optional>
 #include <type_traits>
 
-namespace raypc::netcdf {
+namespace raypc::io::netcdf {
 namespace {
 
 // One step of the variable in file order into `out`, netCDF converting its type to float or double.
@@ -110,7 +110,7 @@ ConversionReport toCanonical(const std::vector<T>& buffer, const OpenedHeader& h
     const auto& latIdx = h.axes[kLat].fileIndex;
     const auto& rIdx = h.axes[kR].fileIndex;
     const auto& lonIdx = h.axes[kLon].fileIndex;
-    const SphericalGrid& grid = h.grid;
+    const grid::SphericalGrid& grid = h.grid;
     const size_t nR = grid.nR(), nLon = grid.nLon();
     const bool convert = rule.packed() || rule.unsignedWrap > 0;
     constexpr double kFloatMax = std::numeric_limits<float>::max();
@@ -191,12 +191,12 @@ bool readsAsDouble(const NcFile& file, int varId)
     return type == NC_DOUBLE || type == NC_INT || type == NC_UINT || type == NC_INT64 || type == NC_UINT64;
 }
 
-Field readField(const NcFile& file, const OpenedHeader& h, const std::string& name, const std::string& fileName,
+grid::Field readField(const NcFile& file, const OpenedHeader& h, const std::string& name, const std::string& fileName,
                 const VariableLayout& layout, const ReaderOptions& options, FileOrderBuffers& buffers)
 {
     const size_t n = h.grid.cellCount();
     const ValueRule rule = valueRule(file, layout.id);
-    Field field;
+    grid::Field field;
     field.name = name;
     field.units = file.textAttribute(layout.id, "units").value_or("");
     field.values.resize(n);
@@ -208,7 +208,7 @@ Field readField(const NcFile& file, const OpenedHeader& h, const std::string& na
         fail("{}: {}: the value {:g} at {} is beyond float32's range (±{:g}), in which RayPC keeps values; if it "
              "marks missing cells, give it as the variable's _FillValue or missing_value",
              file.path().string(), fileName, report.beyondFloatValue,
-             describeGridPoint(h.grid, report.firstBeyondFloat), double(std::numeric_limits<float>::max()));
+             grid::describeGridPoint(h.grid, report.firstBeyondFloat), double(std::numeric_limits<float>::max()));
     const size_t missing =
         std::accumulate(report.missingPerShell.begin(), report.missingPerShell.end(), size_t(0));
     if (missing > 0) {
@@ -224,11 +224,11 @@ Field readField(const NcFile& file, const OpenedHeader& h, const std::string& na
                                             : fmt::format("missing_value {:g}", *rule.missing);
             fail("{}: {}: {} of {} values are missing (fill value, missing_value or NaN/Inf), the first at {}: {}; "
                  "use --fill-missing to replace them by the mean of their radius shell",
-                 file.path().string(), fileName, missing, n, describeGridPoint(h.grid, report.firstMissing), what);
+                 file.path().string(), fileName, missing, n, grid::describeGridPoint(h.grid, report.firstMissing), what);
         }
-        fillMissingByShellMean(h.grid, field.values, fmt::format("{}: {}", file.path().string(), fileName));
+        grid::fillMissingByShellMean(h.grid, field.values, fmt::format("{}: {}", file.path().string(), fileName));
     }
     return field;
 }
 
-}  // namespace raypc::netcdf
+}  // namespace raypc::io::netcdf

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc::netcdf {
+namespace raypc::io::netcdf {
 
 // netCDF converts integers to float exactly up to 16 bits; doubles and wider integers are read as
 // double and converted here, so that a fill value beyond float (1e300) is recognised and a value
@@ -28,7 +28,7 @@ struct FileOrderBuffers {
 // packed values unpacked (ValueRule). Throws raypc::Error naming the file and the variable for a value
 // beyond float32 and, unless options.fillMissing (then each takes its radius shell's mean), for a
 // missing value.
-Field readField(const NcFile& file, const OpenedHeader& h, const std::string& name, const std::string& fileName,
+grid::Field readField(const NcFile& file, const OpenedHeader& h, const std::string& name, const std::string& fileName,
                 const VariableLayout& layout, const ReaderOptions& options, FileOrderBuffers& buffers);
 
-}  // namespace raypc::netcdf
+}  // namespace raypc::io::netcdf

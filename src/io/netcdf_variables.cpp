@@ -9,7 +9,7 @@
 #include <algorithm>
 #include <optional>
 
-namespace raypc::netcdf {
+namespace raypc::io::netcdf {
 namespace {
 
 // The name a variable of the file is read as: the one --map gives it, else its own.
@@ -34,7 +34,7 @@ std::vector<std::string> requestedVariables(const NcFile& file, const ReaderOpti
 {
     if (!options.variables.empty())
         return options.variables;
-    const auto& contest = contestVariableNames();
+    const auto& contest = grid::contestVariableNames();
     if (std::all_of(contest.begin(), contest.end(),
                     [&](const std::string& name) { return file.findVar(fileNameOf(options, name)).has_value(); }))
         return contest;
@@ -139,4 +139,4 @@ VariableLayout checkVariable(const NcFile& file, const OpenedHeader& h, const st
     return layout;
 }
 
-}  // namespace raypc::netcdf
+}  // namespace raypc::io::netcdf

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc::netcdf {
+namespace raypc::io::netcdf {
 
 // The name a variable has in the file: the one ReaderOptions::variableNames maps it to, else its own.
 std::string fileNameOf(const ReaderOptions& options, const std::string& canonicalName);
@@ -38,4 +38,4 @@ struct VariableLayout {
 VariableLayout checkVariable(const NcFile& file, const OpenedHeader& h, const std::string& canonicalName,
                              const std::string& fileName, size_t timeIndex);
 
-}  // namespace raypc::netcdf
+}  // namespace raypc::io::netcdf

@@ -12,7 +12,7 @@
 #include <optional>
 #include <string>
 
-namespace raypc {
+namespace raypc::io {
 namespace {
 
 // Metres per second in one unit of a velocity as CF and models spell it; nullopt when unknown.
@@ -34,16 +34,16 @@ std::optional<double> metresPerSecondIn(std::string units)
 
 }  // namespace
 
-void normaliseVelocity(Snapshot& snapshot, ReaderOptions::VelocityFrame frame, const std::string& what)
+void normaliseVelocity(grid::Snapshot& snapshot, ReaderOptions::VelocityFrame frame, const std::string& what)
 {
-    std::array<Field*, 3> v{};
+    std::array<grid::Field*, 3> v{};
     for (size_t c = 0; c < 3; ++c)
-        for (Field& f : snapshot.fields)
+        for (grid::Field& f : snapshot.fields)
             if (f.name == varname::kVelocity[c])
                 v[c] = &f;
     if (!v[0] || !v[1] || !v[2])
         return;
-    for (Field* f : v) {
+    for (grid::Field* f : v) {
         const auto scale = metresPerSecondIn(f->units);
         if (!scale)
             fail("{}: {}: velocity units '{}', expected m/s, cm/yr, mm/yr or m/yr (or their CF spellings)", what, f->name,
@@ -56,7 +56,7 @@ void normaliseVelocity(Snapshot& snapshot, ReaderOptions::VelocityFrame frame, c
     if (frame != ReaderOptions::VelocityFrame::Spherical)
         return;
     // (radial, north, east) at each point into (x, y, z): v = v_r e_r + v_n e_n + v_e e_e.
-    const SphericalGrid& g = snapshot.grid;
+    const grid::SphericalGrid& g = snapshot.grid;
     for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
         for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
             const Vec3d up = sphericalToCartesianKm(g.latDeg[iLat], g.lonDeg[iLon], 1.0);
@@ -70,4 +70,4 @@ void normaliseVelocity(Snapshot& snapshot, ReaderOptions::VelocityFrame frame, c
         }
 }
 
-}  // namespace raypc
+}  // namespace raypc::io

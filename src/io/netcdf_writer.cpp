@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::io {
 namespace {
 
 // Owns an open netCDF file under its temporary name: on any failure the file is closed and
@@ -82,13 +82,13 @@ std::string longNameOf(const std::string& variable)
 
 }  // namespace
 
-void writeContestFile(const std::filesystem::path& path, const Snapshot& snapshot, NetcdfFlavour flavour)
+void writeContestFile(const std::filesystem::path& path, const grid::Snapshot& snapshot, NetcdfFlavour flavour)
 {
-    const SphericalGrid& grid = snapshot.grid;
+    const grid::SphericalGrid& grid = snapshot.grid;
     const size_t nLat = grid.nLat(), nR = grid.nR(), nLon = grid.nLon();
     if (nLat == 0 || nR == 0 || nLon == 0)
         fail("{}: cannot write an empty grid ({}x{}x{})", path.string(), nLat, nR, nLon);
-    for (const Field& field : snapshot.fields)
+    for (const grid::Field& field : snapshot.fields)
         if (field.values.size() != grid.cellCount())
             fail("{}: variable '{}' has {} values, expected {} for a {}x{}x{} grid", path.string(), field.name,
                  field.values.size(), grid.cellCount(), nLat, nR, nLon);
@@ -119,7 +119,7 @@ void writeContestFile(const std::filesystem::path& path, const Snapshot& snapsho
     }
     std::vector<int> vars(snapshot.fields.size());
     for (size_t v = 0; v < snapshot.fields.size(); ++v) {
-        const Field& field = snapshot.fields[v];
+        const grid::Field& field = snapshot.fields[v];
         file.check(nc_def_var(nc, field.name.c_str(), NC_FLOAT, 3, dims.data(), &vars[v]),
                    fmt::format("cannot define variable '{}'", field.name));
         putText(file, vars[v], "units", field.units, field.name);
@@ -146,9 +146,9 @@ void writeContestFile(const std::filesystem::path& path, const Snapshot& snapsho
     file.commit();
 }
 
-}  // namespace raypc
+}  // namespace raypc::io
 
-namespace raypc {
+namespace raypc::io {
 
 std::string cfName(const std::string& name)
 {
@@ -233,4 +233,4 @@ void writeCfGrid(const std::filesystem::path& path, const CfGridFile& grid)
     file.commit();
 }
 
-}  // namespace raypc
+}  // namespace raypc::io

@@ -9,14 +9,14 @@
 
 #include <filesystem>
 
-namespace raypc {
+namespace raypc::io {
 
 // netCDF's 64-bit offset format (CDF-2, readable by every netCDF library) or netCDF-4 (HDF5).
 enum class NetcdfFlavour { Classic64, Netcdf4 };
 
 // Writes one snapshot in the contest layout: dims (lat, r, lon) with lat descending,
 // float32 variables with `units` attributes, double coordinates lat/r/lon. Atomic.
-void writeContestFile(const std::filesystem::path& path, const Snapshot& snapshot,
+void writeContestFile(const std::filesystem::path& path, const grid::Snapshot& snapshot,
                       NetcdfFlavour flavour = NetcdfFlavour::Classic64);
 
-}  // namespace raypc
+}  // namespace raypc::io

@@ -21,7 +21,7 @@
 #include <map>
 #include <system_error>
 
-namespace raypc {
+namespace raypc::io {
 namespace {
 
 namespace fs = std::filesystem;
@@ -124,7 +124,7 @@ double meshKmPerUnit(const ReaderOptions& options)
     }
 }
 
-SphericalGrid chooseGrid(const ShellMesh& mesh, const ReaderOptions& options, size_t variables, const fs::path& step)
+grid::SphericalGrid chooseGrid(const ShellMesh& mesh, const ReaderOptions& options, size_t variables, const fs::path& step)
 {
     if (options.targetGrid)
         return *options.targetGrid;
@@ -135,7 +135,7 @@ SphericalGrid chooseGrid(const ShellMesh& mesh, const ReaderOptions& options, si
     // memory available now (the arrays of every variable, stored and derived, at float32).
     const uint64_t bytesPerPoint = (variables + 4) * sizeof(float) * 2;
     const uint64_t memoryPoints = availableMemory().bytes / 4 / bytesPerPoint;
-    const SphericalGrid grid = defaultResampleGrid(mesh, std::min<uint64_t>(memoryPoints, kMaxGridPoints));
+    const grid::SphericalGrid grid = defaultResampleGrid(mesh, std::min<uint64_t>(memoryPoints, grid::kMaxGridPoints));
     spdlog::debug("{}: finest cell {:.3g}° along a shell, {:.3g} km across: grid {}x{}x{} (lat x r x lon)",
                   step.string(), mesh.finestArcDeg, mesh.finestRadialKm, grid.nLat(), grid.nR(), grid.nLon());
     return grid;
@@ -161,13 +161,13 @@ FileHeader vtkHeader(const fs::path& step, const ReaderOptions& options)
 
 // The variables of a mesh step resampled onto the grid (chooseGrid): one field per variable, points
 // in no cell refused or (--fill-missing) filled; `origin` says what was read and how it went.
-Snapshot resampleMesh(const ShellMesh& mesh, const std::vector<VtkVariable>& variables, const ReaderOptions& options,
+grid::Snapshot resampleMesh(const ShellMesh& mesh, const std::vector<VtkVariable>& variables, const ReaderOptions& options,
                       const fs::path& step, const char* format, double readSeconds)
 {
     const auto start = std::chrono::steady_clock::now();
-    Snapshot snap;
+    grid::Snapshot snap;
     snap.grid = chooseGrid(mesh, options, variables.size(), step);
-    checkGridFitsMemory(snap.grid, uint64_t(variables.size() + 1) * snap.grid.cellCount() * sizeof(float),
+    grid::checkGridFitsMemory(snap.grid, uint64_t(variables.size() + 1) * snap.grid.cellCount() * sizeof(float),
                         step.string(), "resample", availableMemory());
     std::vector<ArrayComponent> arrays;
     for (const auto& v : variables)
@@ -177,16 +177,16 @@ Snapshot resampleMesh(const ShellMesh& mesh, const std::vector<VtkVariable>& var
     spdlog::debug("{}: {} cells read in {:.2f} s, resampled onto {}x{}x{} in {:.2f} s", step.string(), mesh.cellCount,
                   readSeconds, snap.grid.nLat(), snap.grid.nR(), snap.grid.nLon(), secondsSince(start));
     for (size_t a = 0; a < variables.size(); ++a)
-        snap.fields.push_back(Field{variables[a].name, variables[a].units, std::move(values[a])});
+        snap.fields.push_back(grid::Field{variables[a].name, variables[a].units, std::move(values[a])});
     if (counts.missing > 0) {
         const auto& first = snap.fields.front().values;
         const size_t at = size_t(std::find_if(first.begin(), first.end(), [](float v) { return std::isnan(v); }) - first.begin());
         if (!options.fillMissing)
             fail("{}: {} of {} grid points lie in no cell of the mesh ({} cells), the first at {}; use "
                  "--fill-missing to give them the mean of their radius shell",
-                 step.string(), counts.missing, counts.points, mesh.cellCount, describeGridPoint(snap.grid, at));
-        for (Field& f : snap.fields)
-            fillMissingByShellMean(snap.grid, f.values, fmt::format("{}: {}", step.string(), f.name));
+                 step.string(), counts.missing, counts.points, mesh.cellCount, grid::describeGridPoint(snap.grid, at));
+        for (grid::Field& f : snap.fields)
+            grid::fillMissingByShellMean(snap.grid, f.values, fmt::format("{}: {}", step.string(), f.name));
     }
     snap.origin = {{"format", format},
                    {"pieces", mesh.pieces.size()},
@@ -199,14 +199,14 @@ Snapshot resampleMesh(const ShellMesh& mesh, const std::vector<VtkVariable>& var
     return snap;
 }
 
-Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
+grid::Snapshot vtkSnapshot(const fs::path& step, const ReaderOptions& options)
 {
     const auto start = std::chrono::steady_clock::now();
     std::vector<vtk::Piece> pieces = readPieces(step);
     const double readSeconds = secondsSince(start);
     const std::vector<VtkVariable> variables = vtkVariables(announcedArrays(step, &pieces), step);
     const ShellMesh mesh = makeShellMesh(std::move(pieces), meshKmPerUnit(options), step.string());
-    Snapshot snap = resampleMesh(mesh, variables, options, step, "VTK XML (ASPECT layout)", readSeconds);
+    grid::Snapshot snap = resampleMesh(mesh, variables, options, step, "VTK XML (ASPECT layout)", readSeconds);
     for (size_t a = 0; a < variables.size(); ++a)
         if (variables[a].source.name == "velocity")
             for (float& v : snap.fields[a].values)
@@ -270,7 +270,7 @@ FileHeader citcomsHeader(const fs::path& step, const ReaderOptions& options)
     return h;
 }
 
-Snapshot citcomsSnapshot(const fs::path& step, const ReaderOptions& options)
+grid::Snapshot citcomsSnapshot(const fs::path& step, const ReaderOptions& options)
 {
     const auto start = std::chrono::steady_clock::now();
     const citcoms::Scales scales = citcomsScales(options);
@@ -465,7 +465,7 @@ FileHeader readStepHeader(const fs::path& step, const ReaderOptions& options)
     return readHeader(at.file, at.options);
 }
 
-Snapshot readStep(const fs::path& step, const ReaderOptions& options)
+grid::Snapshot readStep(const fs::path& step, const ReaderOptions& options)
 {
     if (citcoms::isStep(step))
         return citcomsSnapshot(step, options);
@@ -475,4 +475,4 @@ Snapshot readStep(const fs::path& step, const ReaderOptions& options)
     return readSnapshot(at.file, at.options);
 }
 
-}  // namespace raypc
+}  // namespace raypc::io

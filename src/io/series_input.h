@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::io {
 
 struct SeriesListing {
     std::vector<std::filesystem::path> steps;  // netCDF files, or VTK steps (.pvtu records or .vtu pieces)
@@ -47,11 +47,11 @@ bool isMeshStep(const std::filesystem::path& step);
 // Grid points in no cell are an error naming the first unless options.fillMissing (then the mean
 // of their shell). Throws raypc::Error naming the file and what is wrong.
 FileHeader readStepHeader(const std::filesystem::path& step, const ReaderOptions& options);
-Snapshot readStep(const std::filesystem::path& step, const ReaderOptions& options);
+grid::Snapshot readStep(const std::filesystem::path& step, const ReaderOptions& options);
 
 // Every file readStep reads for `step`: the file itself (of a `FILE#K` step, FILE), and a .pvtu's
 // pieces. Throws raypc::Error
 // as readStep does for a .pvtu that cannot be read.
 std::vector<std::filesystem::path> stepSourceFiles(const std::filesystem::path& step);
 
-}  // namespace raypc
+}  // namespace raypc::io

@@ -18,7 +18,7 @@
 #include <string_view>
 #include <type_traits>
 
-namespace raypc::vtk {
+namespace raypc::io::vtk {
 
 namespace fs = std::filesystem;
 
@@ -669,4 +669,4 @@ std::vector<CollectionStep> readPvd(const fs::path& path)
     return steps;
 }
 
-}  // namespace raypc::vtk
+}  // namespace raypc::io::vtk

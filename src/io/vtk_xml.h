@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc::vtk {
+namespace raypc::io::vtk {
 
 // VTK's cell type numbers for the cells RayPC reads.
 enum class CellType : uint8_t { Tetra = 10, Hexahedron = 12, Wedge = 13, LagrangeHexahedron = 72 };
@@ -84,4 +84,4 @@ std::vector<CollectionStep> readPvd(const std::filesystem::path& path);
 // Lagrange), or 0 when `count` is not valid for `type`.
 int cellDegree(CellType type, int64_t count);
 
-}  // namespace raypc::vtk
+}  // namespace raypc::io::vtk

@@ -18,7 +18,7 @@
 #include <filesystem>
 #include <functional>
 
-namespace raypc::vtk {
+namespace raypc::io::vtk {
 namespace {
 
 namespace fs = std::filesystem;
@@ -248,4 +248,4 @@ TEST(VtkXml, DealIiLagrangeShellMatchesTruth)
 }
 
 }  // namespace
-}  // namespace raypc::vtk
+}  // namespace raypc::io::vtk

@@ -27,12 +27,12 @@
 #include <optional>
 #include <utility>
 
-namespace raypc {
+namespace raypc::preprocess {
 namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-using preprocessing::VariableSpec;
+using phases::VariableSpec;
 
 // Runs an action when the scope is left by an exception, unless dismissed first.
 class ScopeCleanup {
@@ -66,7 +66,7 @@ void writeArray(const fs::path& path, std::span<const T> values)
 
 // The variables of the dataset, in order: the stored ones as the reader returns them, then
 // the derived ones. Units of derived variables are fixed by addDerivedVariables.
-std::vector<VariableSpec> variableSpecs(const FileHeader& header)
+std::vector<VariableSpec> variableSpecs(const io::FileHeader& header)
 {
     std::vector<VariableSpec> specs;
     for (const auto& v : header.variables)
@@ -101,19 +101,19 @@ double stepIntervalMyr(const PreprocessOptions& options)
     return t.size() >= 2 ? (t.back() - t.front()) / double(t.size() - 1) : options.dtMyr;
 }
 
-json manifest(const std::vector<SphericalGrid>& levels, const std::vector<VariableSpec>& specs,
+json manifest(const std::vector<grid::SphericalGrid>& levels, const std::vector<VariableSpec>& specs,
               const std::vector<fs::path>& inputs, const PreprocessOptions& options, size_t sampleRows)
 {
     json j;
-    j["format"] = format::kFormatName;
-    j["version"] = format::kVersion;
-    j["encoding"] = encodingName(options.encoding);
+    j["format"] = dataset::format::kFormatName;
+    j["version"] = dataset::format::kVersion;
+    j["encoding"] = dataset::encodingName(options.encoding);
     j["status"] = "incomplete";
     j["dt_myr"] = stepIntervalMyr(options);
     j["brick_size"] = options.brickSize;
     j["levels"] = json::array();
     for (const auto& g : levels)
-        j["levels"].push_back(format::toJson(g));
+        j["levels"].push_back(dataset::format::toJson(g));
     j["variables"] = json::array();
     for (const auto& v : specs) {
         j["variables"].push_back(
@@ -135,7 +135,7 @@ double stepTimeMyr(const PreprocessOptions& options, int s)
     return options.timesMyr.empty() ? s * options.dtMyr : options.timesMyr[size_t(s)];
 }
 
-void checkSameGrid(const fs::path& input, const SphericalGrid& grid, const SphericalGrid& first,
+void checkSameGrid(const fs::path& input, const grid::SphericalGrid& grid, const grid::SphericalGrid& first,
                    const fs::path& firstInput)
 {
     if (!grid.sameAs(first))
@@ -146,9 +146,9 @@ void checkSameGrid(const fs::path& input, const SphericalGrid& grid, const Spher
 
 // What a run will write, known from the options and the inputs' headers alone.
 struct RunPlan {
-    FileHeader header;                   // of the first input: the grid and the variables
-    ReaderOptions reader;                // as given, with a resampled series's grid fixed
-    std::vector<SphericalGrid> levels;   // level 0 first
+    io::FileHeader header;                   // of the first input: the grid and the variables
+    io::ReaderOptions reader;                // as given, with a resampled series's grid fixed
+    std::vector<grid::SphericalGrid> levels;   // level 0 first
     std::vector<VariableSpec> specs;     // stored, then derived
     json manifest;                       // "incomplete", without steps
 };
@@ -174,8 +174,8 @@ RunPlan planRun(const std::vector<fs::path>& inputs, PreprocessOptions& options)
     // The first file fixes the grid and the variables; every other step must match them. A
     // resampled series takes the grid chosen for its first step.
     plan.reader = options.reader;
-    plan.header = readStepHeader(inputs.front(), plan.reader);
-    if (isMeshStep(inputs.front())) {
+    plan.header = io::readStepHeader(inputs.front(), plan.reader);
+    if (io::isMeshStep(inputs.front())) {
         plan.reader.targetGrid = plan.header.grid;
     } else if (plan.reader.variables.empty()) {
         // The variables the first file holds are every step's: a step that lacks one is named.
@@ -183,10 +183,10 @@ RunPlan planRun(const std::vector<fs::path>& inputs, PreprocessOptions& options)
             plan.reader.variables.push_back(v.name);
     }
     plan.levels = {plan.header.grid};
-    for (int l = 1; l < kLevelCount; ++l)
+    for (int l = 1; l < dataset::kLevelCount; ++l)
         plan.levels.push_back(plan.levels.back().coarsened());
     for (size_t s = 1; s < inputs.size(); ++s) {
-        const FileHeader h = readStepHeader(inputs[s], plan.reader);
+        const io::FileHeader h = io::readStepHeader(inputs[s], plan.reader);
         checkSameGrid(inputs[s], h.grid, plan.header.grid, inputs.front());
         std::vector<std::string> names, firstNames;
         for (const auto& v : h.variables)
@@ -214,14 +214,14 @@ RunPlan planRun(const std::vector<fs::path>& inputs, PreprocessOptions& options)
                 options.pathlines.field = v.name;
                 break;
             }
-    preprocessing::checkPathlineOptions(options.pathlines, plan.specs);
+    phases::checkPathlineOptions(options.pathlines, plan.specs);
     // A u16 dataset's pathline phase decodes the velocities of every step it traces through.
     uint64_t bytes = preprocessMemoryBytes(plan.header.grid, plan.specs.size());
-    if (options.encoding == ValueEncoding::Uint16 && options.pathlines.enabled) {
+    if (options.encoding == dataset::ValueEncoding::Uint16 && options.pathlines.enabled) {
         const uint64_t traced = uint64_t(std::min<size_t>(size_t(std::max(options.pathlines.steps, 0)), inputs.size() - 1)) + 1;
         bytes = std::max(bytes, (3 * traced + 1) * plan.header.grid.cellCount() * sizeof(float));
     }
-    checkGridFitsMemory(plan.header.grid, bytes, inputs.front().string(), "preprocess", availableMemory());
+    grid::checkGridFitsMemory(plan.header.grid, bytes, inputs.front().string(), "preprocess", availableMemory());
     plan.manifest = manifest(plan.levels, plan.specs, inputs, options, options.sampleRows);
     return plan;
 }
@@ -234,7 +234,7 @@ public:
     OutputDirectory(const fs::path& dir, const json& manifest)
         : m_dir(dir), m_existed(fs::exists(dir)), m_lock(dir), m_fresh(!fs::exists(manifestPath()))
     {
-        for (const fs::path name : {format::kSampleCoords, "steps", "pathlines"})
+        for (const fs::path name : {dataset::format::kSampleCoords, "steps", "pathlines"})
             if (!fs::exists(m_dir / name))
                 m_created.push_back(m_dir / name);
         if (!m_fresh) {
@@ -247,7 +247,7 @@ public:
     }
 
     const fs::path& path() const { return m_dir; }
-    fs::path manifestPath() const { return m_dir / format::kManifest; }
+    fs::path manifestPath() const { return m_dir / dataset::format::kManifest; }
     void writeManifest(const json& j) const { writeFileAtomic(manifestPath(), j.dump(1)); }
     // A step is finished: from now on a failure leaves the finished steps for a rerun.
     void keep() { m_leaveNothing.dismiss(); }
@@ -274,7 +274,7 @@ private:
                      m_dir.string(), key);
         const auto oldInputs = old.value("inputs", json::array());
         for (size_t i = 0; i < std::min(oldInputs.size(), j["inputs"].size()); ++i)
-            if (oldInputs[i] != j["inputs"][i] && fs::exists(format::stepDir(m_dir, static_cast<int>(i))))
+            if (oldInputs[i] != j["inputs"][i] && fs::exists(dataset::format::stepDir(m_dir, static_cast<int>(i))))
                 fail("{}: step {} was made from {}, now the input is {}; use another output directory",
                      m_dir.string(), i, oldInputs[i].get<std::string>(), j["inputs"][i].get<std::string>());
     }
@@ -306,7 +306,7 @@ private:
 
     fs::path m_dir;
     bool m_existed;
-    DatasetWriteLock m_lock;  // before m_leaveNothing: held while that removes
+    dataset::DatasetWriteLock m_lock;  // before m_leaveNothing: held while that removes
     bool m_fresh;
     std::vector<fs::path> m_created;
     ScopeCleanup m_leaveNothing{[this] { removeCreated(); }};
@@ -315,13 +315,13 @@ private:
 // Phase 3: the sample's grid points, the same for every step so that lines are comparable over
 // time; their coordinates are written once.
 // Every rank draws the same cells (the draw is seeded); rank 0 writes them.
-std::vector<uint32_t> writeSampleCoordinates(const fs::path& dir, const SphericalGrid& grid,
+std::vector<uint32_t> writeSampleCoordinates(const fs::path& dir, const grid::SphericalGrid& grid,
                                              const PreprocessOptions& options)
 {
     auto cells = drawVolumeWeightedSample(grid, options.sampleRows, options.seed);
-    if (mpi::isRoot() && !fs::exists(dir / format::kSampleCoords)) {
+    if (mpi::isRoot() && !fs::exists(dir / dataset::format::kSampleCoords)) {
         const auto coords = sampleCoordinates(grid, cells);
-        writeFileAtomic(dir / format::kSampleCoords, std::as_bytes(std::span(coords)));
+        writeFileAtomic(dir / dataset::format::kSampleCoords, std::as_bytes(std::span(coords)));
     }
     return cells;
 }
@@ -330,7 +330,7 @@ std::vector<uint32_t> writeSampleCoordinates(const fs::path& dir, const Spherica
 json inputFingerprint(const fs::path& input)
 {
     json files = json::array();
-    for (const fs::path& file : stepSourceFiles(input)) {
+    for (const fs::path& file : io::stepSourceFiles(input)) {
         std::error_code ec;
         const auto size = fs::file_size(file, ec);
         const auto mtime = fs::last_write_time(file, ec);
@@ -353,18 +353,18 @@ std::vector<int> findStepsToDo(const OutputDirectory& out, const std::vector<fs:
 {
     std::vector<int> todo;
     for (size_t s = 0; s < inputs.size(); ++s) {
-        const fs::path stepPath = format::stepDir(out.path(), static_cast<int>(s));
-        const fs::path fingerprint = stepPath / format::kStepInputs;
-        if (fs::exists(stepPath / format::kStepManifest) && fs::exists(fingerprint) &&
+        const fs::path stepPath = dataset::format::stepDir(out.path(), static_cast<int>(s));
+        const fs::path fingerprint = stepPath / dataset::format::kStepInputs;
+        if (fs::exists(stepPath / dataset::format::kStepManifest) && fs::exists(fingerprint) &&
             parseJsonInput(readFile(fingerprint), fingerprint.string()) != inputFingerprint(inputs[s])) {
             spdlog::warn("{}: changed since an earlier run made step {} from it (size or modification time); "
                          "making the step again",
                          inputs[s].string(), s);
             fs::remove_all(stepPath);
         }
-        if (fs::exists(stepPath / format::kStepManifest)) {
-            stepJsons[s] = parseJsonInput(readFile(stepPath / format::kStepManifest),
-                                          (stepPath / format::kStepManifest).string());
+        if (fs::exists(stepPath / dataset::format::kStepManifest)) {
+            stepJsons[s] = parseJsonInput(readFile(stepPath / dataset::format::kStepManifest),
+                                          (stepPath / dataset::format::kStepManifest).string());
             ++summary.stepsSkipped;
         } else {
             if (fs::exists(stepPath))
@@ -386,16 +386,16 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
     const auto stepStart = std::chrono::steady_clock::now();
     auto elapsed = [&] { return secondsSince(stepStart); };
     const json fingerprint = inputFingerprint(input);  // before reading: a change while reading is seen next time
-    Snapshot snap = readStep(input, plan.reader);
+    grid::Snapshot snap = io::readStep(input, plan.reader);
     spdlog::debug("{}: read in {:.2f} s", input.filename().string(), elapsed());
     checkSameGrid(input, snap.grid, plan.header.grid, inputs.front());
     addDerivedVariables(snap);
     RAYPC_CHECK_EQ(snap.fields.size(), specs.size());
     // The reader refused non-finite inputs; a finite input can still derive an infinity.
     for (const auto& field : snap.fields)
-        checkFinite(snap, field, input.string());
+        grid::checkFinite(snap, field, input.string());
 
-    const fs::path finalDir = format::stepDir(outDir, s);
+    const fs::path finalDir = dataset::format::stepDir(outDir, s);
     const fs::path tmpDir = temporarySibling(finalDir);
     ScopeCleanup removeTmp([&] {
         std::error_code ec;
@@ -409,47 +409,47 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
     for (size_t v = 0; v < snap.fields.size(); ++v)
         current[v] = std::move(snap.fields[v].values);
     std::vector<float> sample(cells.size() * specs.size());
-    std::vector<VariableStats> stats(specs.size());
+    std::vector<dataset::VariableStats> stats(specs.size());
     tbb::parallel_for(size_t(0), specs.size(), [&](size_t v) {
         stats[v] = computeStats(plan.header.grid, current[v]);
         for (size_t i = 0; i < cells.size(); ++i)
             sample[i * specs.size() + v] = current[v][cells[i]];
     });
     for (const auto& st : stats)
-        stepJson["stats"].push_back(format::toJson(st));
+        stepJson["stats"].push_back(dataset::format::toJson(st));
     spdlog::debug("{}: derived, stats and sample done at {:.2f} s", input.filename().string(), elapsed());
-    for (int level = 0; level < kLevelCount; ++level)
-        fs::create_directories(format::levelDir(tmpDir, level));
+    for (int level = 0; level < dataset::kLevelCount; ++level)
+        fs::create_directories(dataset::format::levelDir(tmpDir, level));
     // Variables in parallel: writing into the page cache costs as much CPU as computing,
     // so both cores write while they compute bounds and coarser levels.
     tbb::parallel_for(size_t(0), specs.size(), [&](size_t v) {
         const auto stem = fileSafeName(specs[v].name);
-        for (int level = 0; level < kLevelCount; ++level) {
-            const SphericalGrid& grid = plan.levels[level];
-            const BrickLayout layout = BrickLayout::forGrid(grid, options.brickSize);
-            const fs::path dir = format::levelDir(tmpDir, level);
+        for (int level = 0; level < dataset::kLevelCount; ++level) {
+            const grid::SphericalGrid& grid = plan.levels[level];
+            const grid::BrickLayout layout = grid::BrickLayout::forGrid(grid, options.brickSize);
+            const fs::path dir = dataset::format::levelDir(tmpDir, level);
             std::vector<float> bounds(2 * layout.brickCount());
-            computeBrickBounds(grid, layout, current[v], bounds);
-            if (options.encoding == ValueEncoding::Uint16) {
+            dataset::computeBrickBounds(grid, layout, current[v], bounds);
+            if (options.encoding == dataset::ValueEncoding::Uint16) {
                 // Quantised from the exact values; coarser levels are computed from the exact ones too.
                 std::vector<uint16_t> encoded(current[v].size());
-                encodeUint16(grid, layout, current[v], bounds, encoded);
-                writeArray<uint16_t>(format::encodedValuesFile(dir, stem), encoded);
+                dataset::encodeUint16(grid, layout, current[v], bounds, encoded);
+                writeArray<uint16_t>(dataset::format::encodedValuesFile(dir, stem), encoded);
             } else {
-                writeArray<float>(format::valuesFile(dir, stem), current[v]);
+                writeArray<float>(dataset::format::valuesFile(dir, stem), current[v]);
             }
-            writeArray<float>(format::boundsFile(dir, stem), bounds);
-            if (level + 1 < kLevelCount)
+            writeArray<float>(dataset::format::boundsFile(dir, stem), bounds);
+            if (level + 1 < dataset::kLevelCount)
                 current[v] = coarsenField(grid, current[v]);
         }
     });
-    writeArray<float>(tmpDir / format::kStepSample, sample);
-    writeFileAtomic(tmpDir / format::kStepInputs, fingerprint.dump(1));
+    writeArray<float>(tmpDir / dataset::format::kStepSample, sample);
+    writeFileAtomic(tmpDir / dataset::format::kStepInputs, fingerprint.dump(1));
     {
-        std::ofstream file(tmpDir / format::kStepManifest);
+        std::ofstream file(tmpDir / dataset::format::kStepManifest);
         file << stepJson.dump(1);
         if (!file)
-            fail("{}: write failed", (tmpDir / format::kStepManifest).string());
+            fail("{}: write failed", (tmpDir / dataset::format::kStepManifest).string());
     }
     renameAtomic(tmpDir, finalDir);
     removeTmp.dismiss();
@@ -464,22 +464,22 @@ void addStepsToManifest(json& j, const std::vector<json>& stepJsons, size_t vari
     for (const auto& sj : stepJsons)
         j["steps"].push_back(sj);
     for (size_t v = 0; v < variableCount; ++v) {
-        std::vector<VariableStats> perStep;
+        std::vector<dataset::VariableStats> perStep;
         for (const auto& sj : stepJsons)
-            perStep.push_back(format::statsFromJson(sj.at("stats").at(v)));
-        j["variables"][v]["global"] = format::toJson(statsOverSteps(perStep));
+            perStep.push_back(dataset::format::statsFromJson(sj.at("stats").at(v)));
+        j["variables"][v]["global"] = dataset::format::toJson(statsOverSteps(perStep));
     }
 }
 
 }  // namespace
 
-void preprocessing::throwIfCancelled(const PreprocessOptions& options)
+void phases::throwIfCancelled(const PreprocessOptions& options)
 {
     if (options.cancel && options.cancel->load())
         fail("preprocess: cancelled");
 }
 
-uint64_t preprocessMemoryBytes(const SphericalGrid& grid, size_t variableCount)
+uint64_t preprocessMemoryBytes(const grid::SphericalGrid& grid, size_t variableCount)
 {
     return (variableCount + 1) * uint64_t(grid.nLat()) * grid.nR() * grid.nLon() * sizeof(float);
 }
@@ -532,7 +532,7 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
         mpi::forEachDynamic(
             int64_t(todo.size()),
             [&](int64_t item) {
-                preprocessing::throwIfCancelled(options);
+                phases::throwIfCancelled(options);
                 const int s = todo[size_t(item)];
                 written[std::to_string(s)] = writeStep(outDir, plan, inputs, s, cells, options);
                 if (out)
@@ -575,10 +575,10 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
             out->writeManifest(plan.manifest);
     });
     mpi::dieHook("preprocess-pathlines");
-    preprocessing::writePathlines(outDir, plan.header.grid, plan.specs, stepJsons, options, summary);
+    phases::writePathlines(outDir, plan.header.grid, plan.specs, stepJsons, options, summary);
     mpi::together([&] {
         plan.manifest["pathlines"] =
-            options.pathlines.enabled ? preprocessing::pathlineSettings(options.pathlines) : json();
+            options.pathlines.enabled ? phases::pathlineSettings(options.pathlines) : json();
         plan.manifest["status"] = "complete";
         if (out)
             out->writeManifest(plan.manifest);
@@ -587,4 +587,4 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
     return summary;
 }
 
-}  // namespace raypc
+}  // namespace raypc::preprocess

@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::preprocess {
 
 // The pathline phase (docs/format.md, "Pathlines"): after every step is written, the significant
 // critical points of `field` at each step seed pathlines traced through the next `steps` steps.
@@ -29,8 +29,8 @@ struct PathlineOptions {
     bool enabled = true;
     std::string field = varname::kTemperatureAnomaly;
     int steps = 10;  // traced from step s to min(s + steps, last step)
-    CriticalPointFilter filter;
-    TracerOptions tracer;
+    analysis::CriticalPointFilter filter;
+    analysis::TracerOptions tracer;
 };
 
 // Where a run is: `phase` "steps" (done of total steps, counting those an earlier run finished)
@@ -44,7 +44,7 @@ struct PreprocessProgress {
 inline constexpr size_t kMaxSampleRows = 100'000'000;
 
 struct PreprocessOptions {
-    ReaderOptions reader;
+    io::ReaderOptions reader;
     double dtMyr = 2.0;          // time between consecutive input files
     // Each input's time (Myr) when the inputs give it (SeriesListing::timesMyr); dt_myr is then their
     // mean interval. Empty: step s is at s dtMyr.
@@ -53,7 +53,7 @@ struct PreprocessOptions {
     uint64_t seed = 1;           // for the sample
     uint32_t brickSize = 8;
     // Level arrays as u16 quantised per brick (half the size; docs/format.md) or exact float32.
-    ValueEncoding encoding = ValueEncoding::Uint16;
+    dataset::ValueEncoding encoding = dataset::ValueEncoding::Uint16;
     bool quiet = false;          // no progress output
     PathlineOptions pathlines;
     // For a run in the background (`raypc serve FILES`, app/series_inputs.h), one process only:
@@ -91,6 +91,6 @@ PreprocessSummary preprocess(const std::vector<std::filesystem::path>& inputs, c
 
 // Bytes of memory preprocessing one step of `grid` takes at its peak: `variableCount` (stored and
 // derived) full-resolution float32 arrays and the reader's buffer for one variable.
-uint64_t preprocessMemoryBytes(const SphericalGrid& grid, size_t variableCount);
+uint64_t preprocessMemoryBytes(const grid::SphericalGrid& grid, size_t variableCount);
 
-}  // namespace raypc
+}  // namespace raypc::preprocess

@@ -12,7 +12,7 @@
 #include <limits>
 #include <random>
 
-namespace raypc {
+namespace raypc::preprocess {
 
 float toFloat32(double value)
 {
@@ -24,16 +24,16 @@ float toFloat32(double value)
 namespace {
 
 // Appends "radial velocity" and "velocity magnitude" (cm/yr) from vx, vy, vz (m/s), which must exist.
-void addVelocityVariables(Snapshot& snapshot)
+void addVelocityVariables(grid::Snapshot& snapshot)
 {
-    const Field* vx = snapshot.find(varname::kVelocity[0]);
-    const Field* vy = snapshot.find(varname::kVelocity[1]);
-    const Field* vz = snapshot.find(varname::kVelocity[2]);
+    const grid::Field* vx = snapshot.find(varname::kVelocity[0]);
+    const grid::Field* vy = snapshot.find(varname::kVelocity[1]);
+    const grid::Field* vz = snapshot.find(varname::kVelocity[2]);
     RAYPC_CHECK(vx && vy && vz);
     const auto& g = snapshot.grid;
-    Field radial{varname::kRadialVelocity, varname::kRadialVelocityUnits, std::vector<float>(g.cellCount()),
+    grid::Field radial{varname::kRadialVelocity, varname::kRadialVelocityUnits, std::vector<float>(g.cellCount()),
                  {varname::kRadialVelocityFrom.begin(), varname::kRadialVelocityFrom.end()}};
-    Field magnitude{varname::kVelocityMagnitude, varname::kVelocityMagnitudeUnits, std::vector<float>(g.cellCount()),
+    grid::Field magnitude{varname::kVelocityMagnitude, varname::kVelocityMagnitudeUnits, std::vector<float>(g.cellCount()),
                     {varname::kVelocityMagnitudeFrom.begin(), varname::kVelocityMagnitudeFrom.end()}};
     tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
         const double lat = degToRad(g.latDeg[iLat]);
@@ -55,33 +55,33 @@ void addVelocityVariables(Snapshot& snapshot)
 
 }  // namespace
 
-void addDerivedVariables(Snapshot& snapshot)
+void addDerivedVariables(grid::Snapshot& snapshot)
 {
     const auto& g = snapshot.grid;
     if (varname::hasVelocity([&](const char* c) { return snapshot.find(c) != nullptr; }))
         addVelocityVariables(snapshot);
     // The contest's correlation task asks for the sign of the expansivity *anomaly*: its
     // deviation from the area-weighted lateral mean of each shell, like the temperature anomaly.
-    if (const Field* alpha = snapshot.find(varname::kThermalExpansivity))
+    if (const grid::Field* alpha = snapshot.find(varname::kThermalExpansivity))
         snapshot.fields.push_back(lateralAnomaly(g, *alpha, varname::kThermalExpansivityAnomaly));
     // A model that writes a temperature but no anomaly (ASPECT: T) gets the contest's anomaly: the
     // deviation from the area-weighted mean of each shell.
     if (!snapshot.find(varname::kTemperatureAnomaly))
         for (const char* source : varname::kTemperatureAnomalyFrom)
-            if (const Field* t = snapshot.find(source)) {
+            if (const grid::Field* t = snapshot.find(source)) {
                 snapshot.fields.push_back(lateralAnomaly(g, *t, varname::kTemperatureAnomaly));
                 break;
             }
 }
 
-Field lateralAnomaly(const SphericalGrid& g, const Field& field, const std::string& name)
+grid::Field lateralAnomaly(const grid::SphericalGrid& g, const grid::Field& field, const std::string& name)
 {
     const auto w = g.volumeFactors();
     double area = 0;
     for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
         for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
             area += w.lat[iLat] * w.lon[iLon];
-    Field out{name, field.units, std::vector<float>(g.cellCount()), {field.name}};
+    grid::Field out{name, field.units, std::vector<float>(g.cellCount()), {field.name}};
     tbb::parallel_for(size_t(0), g.nR(), [&](size_t iR) {
         double sum = 0;
         for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
@@ -97,10 +97,10 @@ Field lateralAnomaly(const SphericalGrid& g, const Field& field, const std::stri
     return out;
 }
 
-std::vector<float> coarsenField(const SphericalGrid& fine, std::span<const float> values)
+std::vector<float> coarsenField(const grid::SphericalGrid& fine, std::span<const float> values)
 {
     RAYPC_CHECK_EQ(values.size(), fine.cellCount());
-    const SphericalGrid coarse = fine.coarsened();
+    const grid::SphericalGrid coarse = fine.coarsened();
     const auto w = fine.volumeFactors();
     std::vector<float> out(coarse.cellCount());
     tbb::parallel_for(size_t(0), coarse.nLat(), [&](size_t cLat) {
@@ -124,7 +124,7 @@ std::vector<float> coarsenField(const SphericalGrid& fine, std::span<const float
     return out;
 }
 
-VariableStats computeStats(const SphericalGrid& grid, std::span<const float> values)
+dataset::VariableStats computeStats(const grid::SphericalGrid& grid, std::span<const float> values)
 {
     RAYPC_CHECK_EQ(values.size(), grid.cellCount());
     const auto w = grid.volumeFactors();
@@ -144,38 +144,38 @@ VariableStats computeStats(const SphericalGrid& grid, std::span<const float> val
 
     // Callers check that values are finite (checkFinite): an infinite range has no bins.
     RAYPC_CHECK(std::isfinite(lo) && std::isfinite(hi));
-    VariableStats stats;
+    dataset::VariableStats stats;
     stats.range = {lo, hi};
     const double span = static_cast<double>(hi) - lo;
-    const double scale = span > 0 ? kHistogramBins / span : 0.0;
+    const double scale = span > 0 ? dataset::kHistogramBins / span : 0.0;
     // One partial sum per lat row, added in row order: the sums do not depend on how rows were
     // spread over threads, so a rerun writes the same bytes (dataset.json is reproducible).
     struct Partial {
         double weighted = 0, weight = 0;
     };
     std::vector<Partial> rows(grid.nLat());
-    std::vector<double> rowHistograms(grid.nLat() * kHistogramBins, 0.0);
+    std::vector<double> rowHistograms(grid.nLat() * dataset::kHistogramBins, 0.0);
     tbb::parallel_for(size_t(0), grid.nLat(), [&](size_t iLat) {
         Partial& p = rows[iLat];
-        double* histogram = rowHistograms.data() + iLat * kHistogramBins;
+        double* histogram = rowHistograms.data() + iLat * dataset::kHistogramBins;
         for (size_t iR = 0; iR < grid.nR(); ++iR) {
             const double wRow = w.lat[iLat] * w.r[iR];
             const float* row = values.data() + iLat * rowSize + iR * grid.nLon();
             for (size_t iLon = 0; iLon < grid.nLon(); ++iLon) {
                 const double wi = wRow * w.lon[iLon];
                 // In double: the difference of two finite floats may overflow float.
-                const int bin = std::min(kHistogramBins - 1, static_cast<int>((double(row[iLon]) - lo) * scale));
+                const int bin = std::min(dataset::kHistogramBins - 1, static_cast<int>((double(row[iLon]) - lo) * scale));
                 histogram[bin] += wi;
                 p.weighted += wi * row[iLon];
                 p.weight += wi;
             }
         }
     });
-    stats.histogram.assign(kHistogramBins, 0.0);
+    stats.histogram.assign(dataset::kHistogramBins, 0.0);
     double weighted = 0, weight = 0;
     for (size_t iLat = 0; iLat < grid.nLat(); ++iLat) {
-        for (int b = 0; b < kHistogramBins; ++b)
-            stats.histogram[b] += rowHistograms[iLat * kHistogramBins + b];
+        for (int b = 0; b < dataset::kHistogramBins; ++b)
+            stats.histogram[b] += rowHistograms[iLat * dataset::kHistogramBins + b];
         weighted += rows[iLat].weighted;
         weight += rows[iLat].weight;
     }
@@ -185,10 +185,10 @@ VariableStats computeStats(const SphericalGrid& grid, std::span<const float> val
     return stats;
 }
 
-VariableStats statsOverSteps(std::span<const VariableStats> perStep)
+dataset::VariableStats statsOverSteps(std::span<const dataset::VariableStats> perStep)
 {
     RAYPC_CHECK(!perStep.empty());
-    VariableStats global;
+    dataset::VariableStats global;
     global.range = perStep.front().range;
     double mean = 0;
     for (const auto& st : perStep) {
@@ -197,7 +197,7 @@ VariableStats statsOverSteps(std::span<const VariableStats> perStep)
         mean += st.mean / perStep.size();
     }
     global.mean = mean;
-    global.histogram.assign(kHistogramBins, 0.0);
+    global.histogram.assign(dataset::kHistogramBins, 0.0);
     for (const auto& st : perStep)
         rebinHistogram(st, global.range, global.histogram);
     for (double& h : global.histogram)
@@ -205,7 +205,7 @@ VariableStats statsOverSteps(std::span<const VariableStats> perStep)
     return global;
 }
 
-std::vector<uint32_t> drawVolumeWeightedSample(const SphericalGrid& grid, size_t rows, uint64_t seed)
+std::vector<uint32_t> drawVolumeWeightedSample(const grid::SphericalGrid& grid, size_t rows, uint64_t seed)
 {
     // Dual-cell volumes factor into lat, r and lon parts, so drawing each index independently
     // from its own factor draws grid points with probability proportional to volume.
@@ -223,9 +223,9 @@ std::vector<uint32_t> drawVolumeWeightedSample(const SphericalGrid& grid, size_t
     return cells;
 }
 
-std::vector<float> sampleCoordinates(const SphericalGrid& grid, std::span<const uint32_t> cells)
+std::vector<float> sampleCoordinates(const grid::SphericalGrid& grid, std::span<const uint32_t> cells)
 {
-    const auto& coordinates = coordinateInfos();
+    const auto& coordinates = grid::coordinateInfos();
     const size_t nc = coordinates.size();
     std::vector<float> out(cells.size() * nc);
     for (size_t i = 0; i < cells.size(); ++i) {
@@ -233,12 +233,12 @@ std::vector<float> sampleCoordinates(const SphericalGrid& grid, std::span<const 
         const size_t iLon = c % grid.nLon(), iR = (c / grid.nLon()) % grid.nR(), iLat = c / (grid.nLon() * grid.nR());
         for (size_t k = 0; k < nc; ++k)
             out[i * nc + k] =
-                static_cast<float>(coordinateValue(coordinates[k].id, grid.latDeg[iLat], grid.lonDeg[iLon], grid.rKm[iR]));
+                static_cast<float>(grid::coordinateValue(coordinates[k].id, grid.latDeg[iLat], grid.lonDeg[iLon], grid.rKm[iR]));
     }
     return out;
 }
 
-void rebinHistogram(const VariableStats& stats, ValueRange range, std::span<double> histogram)
+void rebinHistogram(const dataset::VariableStats& stats, dataset::ValueRange range, std::span<double> histogram)
 {
     const size_t nOut = histogram.size();
     const size_t nIn = stats.histogram.size();
@@ -268,4 +268,4 @@ void rebinHistogram(const VariableStats& stats, ValueRange range, std::span<doub
     }
 }
 
-}  // namespace raypc
+}  // namespace raypc::preprocess

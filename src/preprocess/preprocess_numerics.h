@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::preprocess {
 
 // `value` as float32; ±infinity beyond float32's range (where a plain conversion is undefined).
 float toFloat32(double value);
@@ -22,33 +22,33 @@ float toFloat32(double value);
 // anomaly" (see lateralAnomaly); without "temperature anomaly", it from "temperature" or (ASPECT)
 // "T" the same way. A model without a velocity (a tomography model) gets none of the velocity's.
 // Values too large for float32 become infinite (see checkFinite).
-void addDerivedVariables(Snapshot& snapshot);
+void addDerivedVariables(grid::Snapshot& snapshot);
 
 
 // `field` minus its area-weighted mean over each radius shell (the lateral mean), named `name`.
-Field lateralAnomaly(const SphericalGrid& grid, const Field& field, const std::string& name);
+grid::Field lateralAnomaly(const grid::SphericalGrid& grid, const grid::Field& field, const std::string& name);
 
 // The next coarser level: each coarse point is the volume-weighted mean of the (up to) 2x2x2
 // fine points it merges (grid.coarsened() gives its coordinates).
-std::vector<float> coarsenField(const SphericalGrid& fine, std::span<const float> values);
+std::vector<float> coarsenField(const grid::SphericalGrid& fine, std::span<const float> values);
 
 // Exact range, volume-weighted mean and kHistogramBins-bin volume-fraction histogram of finite
 // values (a non-finite value is a broken invariant: checked, aborts).
-VariableStats computeStats(const SphericalGrid& grid, std::span<const float> values);
+dataset::VariableStats computeStats(const grid::SphericalGrid& grid, std::span<const float> values);
 
 // One variable over all steps: min and max over the steps, the mean of the step means, and the
 // steps' histograms rebinned onto the global range and averaged. `perStep` must not be empty.
-VariableStats statsOverSteps(std::span<const VariableStats> perStep);
+dataset::VariableStats statsOverSteps(std::span<const dataset::VariableStats> perStep);
 
 // `rows` grid-point indices drawn independently with probability proportional to each
 // point's dual-cell volume (deterministic for `seed`), sorted ascending.
-std::vector<uint32_t> drawVolumeWeightedSample(const SphericalGrid& grid, size_t rows, uint64_t seed);
+std::vector<uint32_t> drawVolumeWeightedSample(const grid::SphericalGrid& grid, size_t rows, uint64_t seed);
 
 // The sample's coordinate columns (coordinateInfos() order) of every sampled point, row-major.
-std::vector<float> sampleCoordinates(const SphericalGrid& grid, std::span<const uint32_t> cells);
+std::vector<float> sampleCoordinates(const grid::SphericalGrid& grid, std::span<const uint32_t> cells);
 
 // Adds `stats.histogram` (over stats.range) into `histogram` over `range`, spreading each bin's
 // mass over the bins it overlaps.
-void rebinHistogram(const VariableStats& stats, ValueRange range, std::span<double> histogram);
+void rebinHistogram(const dataset::VariableStats& stats, dataset::ValueRange range, std::span<double> histogram);
 
-}  // namespace raypc
+}  // namespace raypc::preprocess

@@ -18,7 +18,7 @@
 #include <optional>
 #include <utility>
 
-namespace raypc::preprocessing {
+namespace raypc::preprocess::phases {
 namespace {
 
 namespace fs = std::filesystem;
@@ -28,20 +28,20 @@ using nlohmann::json;
 // variable is decoded when a trace first reads it: the pathlines see the values every reader sees.
 class StepArrays {
 public:
-    StepArrays(fs::path dataset, const SphericalGrid& grid, const std::vector<VariableSpec>& specs,
+    StepArrays(fs::path dataset, const grid::SphericalGrid& grid, const std::vector<VariableSpec>& specs,
                const PreprocessOptions& options)
-        : m_dir(std::move(dataset)), m_level{grid, BrickLayout::forGrid(grid, options.brickSize)},
+        : m_dir(std::move(dataset)), m_level{grid, grid::BrickLayout::forGrid(grid, options.brickSize)},
           m_encoding(options.encoding)
     {
         for (const auto& v : specs)
             m_stems.push_back(fileSafeName(v.name));
     }
 
-    const std::shared_ptr<const StepVolume>& volume(int step)
+    const std::shared_ptr<const dataset::StepVolume>& volume(int step)
     {
         auto& v = m_steps[step];
         if (!v)
-            v = StepVolume::open(format::levelDir(format::stepDir(m_dir, step), 0), m_level, m_stems, m_encoding);
+            v = dataset::StepVolume::open(dataset::format::levelDir(dataset::format::stepDir(m_dir, step), 0), m_level, m_stems, m_encoding);
         return v;
     }
     // Releases the steps before `step`.
@@ -49,10 +49,10 @@ public:
 
 private:
     fs::path m_dir;
-    LevelInfo m_level;
-    ValueEncoding m_encoding;
+    dataset::LevelInfo m_level;
+    dataset::ValueEncoding m_encoding;
     std::vector<std::string> m_stems;
-    std::map<int, std::shared_ptr<const StepVolume>> m_steps;
+    std::map<int, std::shared_ptr<const dataset::StepVolume>> m_steps;
 };
 
 }  // namespace
@@ -62,7 +62,7 @@ json pathlineSettings(const PathlineOptions& o)
     return {{"field", o.field},
             {"steps", o.steps},
             {"filter",
-             {{"rule", seedRuleName(o.filter.rule)},
+             {{"rule", analysis::seedRuleName(o.filter.rule)},
               {"min_persistence", o.filter.minPersistence},
               {"persistence_is_fraction", o.filter.persistenceIsFraction},
               {"min_abs_value", o.filter.minAbsValue},
@@ -88,10 +88,10 @@ void checkPathlineOptions(const PathlineOptions& o, const std::vector<VariableSp
             names.push_back(v.name);
         fail("--pathline-field: no variable '{}' in the input; variables are {}", o.field, fmt::join(names, ", "));
     }
-    checkCriticalPointFilter(o.filter);
+    analysis::checkCriticalPointFilter(o.filter);
 }
 
-void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std::vector<VariableSpec>& specs,
+void writePathlines(const fs::path& outDir, const grid::SphericalGrid& grid, const std::vector<VariableSpec>& specs,
                     const std::vector<json>& stepJsons, const PreprocessOptions& options, PreprocessSummary& summary)
 {
     const PathlineOptions& po = options.pathlines;
@@ -114,13 +114,13 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
                 fs::remove_all(entry.path());
         for (int s = 0; s < nSteps; ++s) {
             const int endStep = std::min(s + po.steps, nSteps - 1);
-            const fs::path dir = pathlineDir(outDir, s);
+            const fs::path dir = analysis::pathlineDir(outDir, s);
             if (fs::exists(dir / "lines.json")) {
                 try {
                     const json old = parseJsonInput(readFile(dir / "lines.json"), (dir / "lines.json").string());
                     // A set of an older version lacks columns (seed persistence): redone.
                     if (old.at("settings") == settings && old.at("end_step").get<int>() == endStep &&
-                        old.at("version").get<int>() == kPathlineSetVersion) {
+                        old.at("version").get<int>() == analysis::kPathlineSetVersion) {
                         ++summary.pathlineSetsSkipped;
                         continue;
                     }
@@ -157,18 +157,18 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
         throwIfCancelled(options);
         const int endStep = std::min(s + po.steps, nSteps - 1);
         arrays.releaseBefore(s);
-        FieldSeries series;
+        analysis::FieldSeries series;
         series.grid = grid;
         for (int k = s; k <= endStep; ++k) {
             series.timesMyr.push_back(stepJsons[k].at("time_myr").get<double>());
             series.volumes.push_back(arrays.volume(k));
         }
         const std::span<const float> values(series.field(0, field), grid.cellCount());
-        const auto all = findCriticalPoints(grid, values);
-        const SeedSelection selection = selectSeeds(grid, values, all, po.filter);
+        const auto all = analysis::findCriticalPoints(grid, values);
+        const analysis::SeedSelection selection = analysis::selectSeeds(grid, values, all, po.filter);
         const auto& seeds = selection.seeds;
-        const PathlineTracer tracer(series, vx, vy, vz, po.tracer);
-        PathlineSet set = tracePathlines(series, tracer, seeds, 0, endStep - s, names, units);
+        const analysis::PathlineTracer tracer(series, vx, vy, vz, po.tracer);
+        analysis::PathlineSet set = analysis::tracePathlines(series, tracer, seeds, 0, endStep - s, names, units);
         set.injectionStep = s;
         set.endStep = endStep;
         set.seedField = po.field;
@@ -177,9 +177,9 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
             ++set.criticalCounts[static_cast<size_t>(p.kind)];
         set.settingsJson = settings.dump();
 
-        const fs::path finalDir = pathlineDir(outDir, s);
+        const fs::path finalDir = analysis::pathlineDir(outDir, s);
         const fs::path tmpDir = temporarySibling(finalDir);
-        writePathlineSet(tmpDir, set);
+        analysis::writePathlineSet(tmpDir, set);
         if (fs::exists(finalDir))
             fs::remove_all(finalDir);
         renameAtomic(tmpDir, finalDir);
@@ -215,4 +215,4 @@ void writePathlines(const fs::path& outDir, const SphericalGrid& grid, const std
     });
 }
 
-}  // namespace raypc::preprocessing
+}  // namespace raypc::preprocess::phases

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace raypc::preprocessing {
+namespace raypc::preprocess::phases {
 
 // A variable of the dataset: stored (as the reader returns it) or derived.
 struct VariableSpec {
@@ -33,8 +33,8 @@ void checkPathlineOptions(const PathlineOptions& options, const std::vector<Vari
 // The pathline phase: critical points and pathlines of every step, each step's set written
 // atomically and skipped on a rerun when it was made with the same settings and reaches the
 // same last step. Reads the written level-0 arrays back; `stepJsons` are the steps' manifests.
-void writePathlines(const std::filesystem::path& outDir, const SphericalGrid& grid,
+void writePathlines(const std::filesystem::path& outDir, const grid::SphericalGrid& grid,
                     const std::vector<VariableSpec>& specs, const std::vector<nlohmann::json>& stepJsons,
                     const PreprocessOptions& options, PreprocessSummary& summary);
 
-}  // namespace raypc::preprocessing
+}  // namespace raypc::preprocess::phases

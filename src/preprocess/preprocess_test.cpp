@@ -20,7 +20,7 @@
 #include <numbers>
 #include <random>
 
-namespace raypc {
+namespace raypc::preprocess {
 namespace {
 
 using testing::centredGrid;
@@ -30,7 +30,7 @@ using testing::TempDir;
 
 
 // Volume of one grid point's dual cell, from first principles (not SphericalGrid's factors).
-double dualVolume(const SphericalGrid& g, size_t a, size_t b, size_t c)
+double dualVolume(const grid::SphericalGrid& g, size_t a, size_t b, size_t c)
 {
     auto mid = [](const std::vector<double>& v, size_t i, bool upper, double lo, double hi) {
         if (upper)
@@ -43,7 +43,7 @@ double dualVolume(const SphericalGrid& g, size_t a, size_t b, size_t c)
     return (std::sin(degToRad(la1)) - std::sin(degToRad(la0))) * (r1 * r1 * r1 - r0 * r0 * r0) / 3 * degToRad(dLon);
 }
 
-std::vector<float> randomValues(const SphericalGrid& grid, unsigned seed, float lo, float hi)
+std::vector<float> randomValues(const grid::SphericalGrid& grid, unsigned seed, float lo, float hi)
 {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> u(lo, hi);
@@ -55,10 +55,10 @@ std::vector<float> randomValues(const SphericalGrid& grid, unsigned seed, float 
 
 TEST(Lod, CoarseValuesAreVolumeWeightedMeansAtOddSizes)
 {
-    const SphericalGrid fine = centredGrid(7, 5, 9);
+    const grid::SphericalGrid fine = centredGrid(7, 5, 9);
     const std::vector<float> values = randomValues(fine, 3, -1, 1);
     const auto coarse = coarsenField(fine, values);
-    const SphericalGrid cg = fine.coarsened();
+    const grid::SphericalGrid cg = fine.coarsened();
     ASSERT_EQ(coarse.size(), cg.cellCount());
     for (size_t a = 0; a < cg.nLat(); ++a)
         for (size_t b = 0; b < cg.nR(); ++b)
@@ -81,7 +81,7 @@ TEST(Lod, CoarseValuesAreVolumeWeightedMeansAtOddSizes)
 
 TEST(Stats, VolumeWeightedMeanAndHistogram)
 {
-    const SphericalGrid g = centredGrid(36, 81, 72);
+    const grid::SphericalGrid g = centredGrid(36, 81, 72);
     std::vector<float> lat(g.cellCount()), r(g.cellCount());
     for (size_t a = 0; a < g.nLat(); ++a)
         for (size_t b = 0; b < g.nR(); ++b)
@@ -97,8 +97,8 @@ TEST(Stats, VolumeWeightedMeanAndHistogram)
     EXPECT_NEAR(total, 1.0, 1e-12);
     // Volume with lat above 60°: the rows at 62.5..87.5 fill exactly (1 - sin 60°) / 2.
     double north = 0;
-    for (int b = 0; b < kHistogramBins; ++b)
-        if (sLat.range.min + (b + 0.5) * (sLat.range.max - sLat.range.min) / kHistogramBins > 60)
+    for (int b = 0; b < dataset::kHistogramBins; ++b)
+        if (sLat.range.min + (b + 0.5) * (sLat.range.max - sLat.range.min) / dataset::kHistogramBins > 60)
             north += sLat.histogram[b];
     EXPECT_NEAR(north, (1 - std::sin(degToRad(60.0))) / 2, 1e-9);
     // The mean radius of a shell's volume is 3/4 (R⁴ - r⁴) / (R³ - r³), up to the discretisation.
@@ -113,7 +113,7 @@ TEST(Stats, VolumeWeightedMeanAndHistogram)
 // other fractions, which the tolerance rejects.
 TEST(Sample, DrawsGridPointsInProportionToVolume)
 {
-    const SphericalGrid g = centredGrid(36, 41, 72);
+    const grid::SphericalGrid g = centredGrid(36, 41, 72);
     const size_t n = 100000;
     const auto cells = drawVolumeWeightedSample(g, n, 42);
     ASSERT_EQ(cells.size(), n);
@@ -149,7 +149,7 @@ TEST(Sample, DrawsGridPointsInProportionToVolume)
 
 TEST(Rebin, KeepsMassAndPlacesIt)
 {
-    VariableStats s;
+    dataset::VariableStats s;
     s.range = {0, 10};
     s.histogram.assign(10, 0.0);
     s.histogram[2] = 0.5;  // [2, 3)
@@ -168,7 +168,7 @@ TEST(Rebin, KeepsMassAndPlacesIt)
 
 std::vector<std::filesystem::path> fixtureFiles()
 {
-    return listSnapshotFiles({contestLayoutDir()});
+    return io::listSnapshotFiles({contestLayoutDir()});
 }
 
 PreprocessOptions quiet()
@@ -183,7 +183,7 @@ PreprocessOptions quiet()
 // difference of the two is beyond float32) and indexed the histogram at INT_MIN.
 TEST(Stats, FiniteExtremesOfFloat32)
 {
-    const SphericalGrid g = centredGrid(6, 5, 8);
+    const grid::SphericalGrid g = centredGrid(6, 5, 8);
     std::vector<float> values(g.cellCount(), 0.0f);
     values.front() = -3.4e38f;
     values.back() = 3.4e38f;
@@ -196,20 +196,20 @@ TEST(Stats, FiniteExtremesOfFloat32)
     EXPECT_NEAR(total, 1.0, 1e-12);
     EXPECT_GT(s.histogram.front(), 0);
     EXPECT_GT(s.histogram.back(), 0);
-    EXPECT_GT(s.histogram[kHistogramBins / 2 - 1] + s.histogram[kHistogramBins / 2], 0.9);  // the zeros, mid-range
+    EXPECT_GT(s.histogram[dataset::kHistogramBins / 2 - 1] + s.histogram[dataset::kHistogramBins / 2], 0.9);  // the zeros, mid-range
 }
 
 // The statistics must not depend on how many threads share the work: dataset.json is the same
 // bytes on every run. Thread-local partial sums gave other last digits.
 TEST(Stats, SameBitsWithAnyNumberOfThreads)
 {
-    const SphericalGrid g = centredGrid(90, 41, 180);
+    const grid::SphericalGrid g = centredGrid(90, 41, 180);
     const std::vector<float> values = randomValues(g, 7, -1000, 3000);
-    VariableStats reference;
+    dataset::VariableStats reference;
     tbb::task_arena(1).execute([&] { reference = computeStats(g, values); });
     for (int threads : {2, 3, 4, 8})
         for (int repeat = 0; repeat < 3; ++repeat) {
-            VariableStats s;
+            dataset::VariableStats s;
             tbb::task_arena(threads).execute([&] { s = computeStats(g, values); });
             ASSERT_EQ(std::bit_cast<uint64_t>(s.mean), std::bit_cast<uint64_t>(reference.mean)) << threads;
             ASSERT_EQ(s.histogram, reference.histogram) << threads;
@@ -221,19 +221,19 @@ TEST(Derived, ValuesBeyondFloat32BecomeInfiniteAndAreRefusedWithTheirPlace)
     EXPECT_EQ(toFloat32(1e39), std::numeric_limits<float>::infinity());
     EXPECT_EQ(toFloat32(-1e39), -std::numeric_limits<float>::infinity());
     EXPECT_EQ(toFloat32(3.4e38), 3.4e38f);
-    Snapshot snap;
+    grid::Snapshot snap;
     snap.grid = centredGrid(2, 2, 4);
     for (const char* name : {"vx", "vy", "vz"})
         snap.fields.push_back({name, "m/s", std::vector<float>(snap.grid.cellCount(), 0.01f)});
     snap.fields[0].values[snap.grid.index(1, 0, 2)] = 1e30f;
     addDerivedVariables(snap);
-    const Field* magnitude = snap.find("velocity magnitude");
+    const grid::Field* magnitude = snap.find("velocity magnitude");
     ASSERT_NE(magnitude, nullptr);
     EXPECT_TRUE(std::isinf(magnitude->values[snap.grid.index(1, 0, 2)]));
     for (const char* stored : {"vx", "vy", "vz"})
-        EXPECT_NO_THROW(checkFinite(snap, *snap.find(stored), "in.nc"));
+        EXPECT_NO_THROW(grid::checkFinite(snap, *snap.find(stored), "in.nc"));
     try {
-        checkFinite(snap, *magnitude, "in.nc");
+        grid::checkFinite(snap, *magnitude, "in.nc");
         FAIL() << "an infinite magnitude passed";
     } catch (const Error& e) {
         const std::string m = e.what();
@@ -246,27 +246,27 @@ TEST(Derived, ValuesBeyondFloat32BecomeInfiniteAndAreRefusedWithTheirPlace)
 
 TEST(Memory, AGridTooLargeIsRefusedBeforeAllocating)
 {
-    SphericalGrid g = centredGrid(1000, 500, 1000);
+    grid::SphericalGrid g = centredGrid(1000, 500, 1000);
     EXPECT_EQ(preprocessMemoryBytes(g, 11), 12ull * 500'000'000 * 4);
     try {
-        checkGridFitsMemory(g, preprocessMemoryBytes(g, 11), "huge.nc", "preprocess", {8'000'000'000, "ulimit -v"});
+        grid::checkGridFitsMemory(g, preprocessMemoryBytes(g, 11), "huge.nc", "preprocess", {8'000'000'000, "ulimit -v"});
         FAIL() << "24 GB fit into 8 GB";
     } catch (const Error& e) {
         EXPECT_STREQ(e.what(), "huge.nc: grid 1000x500x1000 (lat x r x lon) needs 24.0 GB of memory to preprocess, "
                                "8.0 GB available (ulimit -v)");
     }
-    EXPECT_NO_THROW(checkGridFitsMemory(g, preprocessMemoryBytes(g, 11), "huge.nc", "preprocess", {24'000'000'000, "x"}));
+    EXPECT_NO_THROW(grid::checkGridFitsMemory(g, preprocessMemoryBytes(g, 11), "huge.nc", "preprocess", {24'000'000'000, "x"}));
     g = centredGrid(2000, 1000, 4000);
-    EXPECT_THROW(checkGridFitsMemory(g, 0, "many.nc", "read", {UINT64_MAX, "x"}), Error);
+    EXPECT_THROW(grid::checkGridFitsMemory(g, 0, "many.nc", "read", {UINT64_MAX, "x"}), Error);
 }
 
 TEST(DatasetWriteLock, OneWriterAtATimeAndTheOtherIsToldWho)
 {
     TempDir dir("lock");
     {
-        DatasetWriteLock first(dir / "ds");
+        dataset::DatasetWriteLock first(dir / "ds");
         try {
-            DatasetWriteLock second(dir / "ds");
+            dataset::DatasetWriteLock second(dir / "ds");
             FAIL() << "two writers";
         } catch (const Error& e) {
             EXPECT_NE(std::string(e.what()).find(fmt::format("(pid {} on host", getpid())), std::string::npos)
@@ -274,18 +274,18 @@ TEST(DatasetWriteLock, OneWriterAtATimeAndTheOtherIsToldWho)
         }
         // The holder may remove the file (a run that leaves nothing); the next writer still locks.
         first.removeFile();
-        DatasetWriteLock third(dir / "ds");
-        EXPECT_THROW(DatasetWriteLock(dir / "ds"), Error);
+        dataset::DatasetWriteLock third(dir / "ds");
+        EXPECT_THROW(dataset::DatasetWriteLock(dir / "ds"), Error);
     }
-    EXPECT_NO_THROW(DatasetWriteLock(dir / "ds"));
+    EXPECT_NO_THROW(dataset::DatasetWriteLock(dir / "ds"));
 }
 
 TEST(Preprocess, AFreshRunThatFailsLeavesNothing)
 {
     TempDir dir("fresh");
-    Snapshot broken = readSnapshot(fixtureFiles()[0]);
+    grid::Snapshot broken = io::readSnapshot(fixtureFiles()[0]);
     broken.find("vx")->values[7] = 1e30f;
-    writeContestFile(dir / "spherical001.nc", broken);
+    io::writeContestFile(dir / "spherical001.nc", broken);
     try {
         preprocess({dir / "spherical001.nc"}, dir / "ds", quiet());
         FAIL() << "vx = 1e30 passed";
@@ -322,7 +322,7 @@ TEST(Preprocess, ACancelledRunKeepsItsStepsAndProgressCountsEveryItem)
     EXPECT_EQ(events, std::vector<std::string>{"steps 1/3"});
     EXPECT_TRUE(std::filesystem::exists(dir / "ds" / "steps" / "0000" / "step.json"));
     EXPECT_FALSE(std::filesystem::exists(dir / "ds" / "steps" / "0001"));
-    EXPECT_THROW(Dataset::open(dir / "ds"), Error);
+    EXPECT_THROW(dataset::Dataset::open(dir / "ds"), Error);
 
     cancel = false;
     events.clear();
@@ -332,7 +332,7 @@ TEST(Preprocess, ACancelledRunKeepsItsStepsAndProgressCountsEveryItem)
     EXPECT_EQ(summary.stepsWritten, 2);
     EXPECT_EQ(events, (std::vector<std::string>{"steps 2/3", "steps 3/3", "pathlines 1/3", "pathlines 2/3",
                                                 "pathlines 3/3"}));
-    EXPECT_EQ(Dataset::open(dir / "ds")->steps().size(), 3u);
+    EXPECT_EQ(dataset::Dataset::open(dir / "ds")->steps().size(), 3u);
 }
 
 TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)
@@ -340,7 +340,7 @@ TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)
     TempDir dir("pp");
     const auto summary = preprocess(fixtureFiles(), dir / "ds", quiet());
     EXPECT_EQ(summary.stepsWritten, 3);
-    const auto ds = Dataset::open(dir / "ds");
+    const auto ds = dataset::Dataset::open(dir / "ds");
     ASSERT_EQ(ds->steps().size(), 3u);
     EXPECT_DOUBLE_EQ(ds->steps()[2].timeMyr, 4.0);
     EXPECT_EQ(ds->steps()[1].source, "spherical002.nc");
@@ -354,7 +354,7 @@ TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)
     EXPECT_EQ(ds->levels()[1].grid.nR(), 21u);
     EXPECT_EQ(ds->levels()[2].grid.nR(), 11u);
 
-    const Snapshot snap = readSnapshot(fixtureFiles()[1]);
+    const grid::Snapshot snap = io::readSnapshot(fixtureFiles()[1]);
     const int anomaly = ds->variableIndex("temperature anomaly");
     ASSERT_GE(anomaly, 0);
     for (int level = 0; level < 3; ++level) {
@@ -392,7 +392,7 @@ TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)
     ASSERT_EQ(table.rows, 5000u);
     ASSERT_EQ(table.columns.size(), 7u + 11u);
     EXPECT_EQ(table.columns[6], "depth");
-    const SphericalGrid& g = snap.grid;
+    const grid::SphericalGrid& g = snap.grid;
     for (size_t row = 0; row < table.rows; row += 97) {
         const double lat = table.at(row, 3), lon = table.at(row, 4), r = table.at(row, 5);
         const Vec3d p = sphericalToCartesianKm(lat, lon, r);
@@ -420,20 +420,20 @@ TEST(Preprocess, ResumesAfterAFailedRunAndSkipsFinishedSteps)
     auto files = fixtureFiles();
     std::filesystem::copy_file(files[0], dir / "spherical001.nc");
     std::filesystem::copy_file(files[1], dir / "spherical002.nc");
-    Snapshot broken = readSnapshot(files[2]);
+    grid::Snapshot broken = io::readSnapshot(files[2]);
     broken.fields[0].values[100] = std::nanf("");
-    writeContestFile(dir / "spherical003.nc", broken);
+    io::writeContestFile(dir / "spherical003.nc", broken);
     const std::vector<std::filesystem::path> inputs = {dir / "spherical001.nc", dir / "spherical002.nc",
                                                        dir / "spherical003.nc"};
     EXPECT_THROW(preprocess(inputs, dir / "ds", quiet()), Error);
     try {
-        Dataset::open(dir / "ds");
+        dataset::Dataset::open(dir / "ds");
         FAIL() << "an unfinished dataset opened";
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("did not finish"), std::string::npos) << e.what();
     }
-    EXPECT_TRUE(std::filesystem::exists(format::stepDir(dir / "ds", 1) / format::kStepManifest));
-    EXPECT_FALSE(std::filesystem::exists(format::stepDir(dir / "ds", 2)));
+    EXPECT_TRUE(std::filesystem::exists(dataset::format::stepDir(dir / "ds", 1) / dataset::format::kStepManifest));
+    EXPECT_FALSE(std::filesystem::exists(dataset::format::stepDir(dir / "ds", 2)));
     // A stale temporary step directory (as a kill would leave) is cleaned up.
     std::filesystem::create_directories(dir / "ds" / "steps" / ".0002.tmp-1-0");
 
@@ -443,7 +443,7 @@ TEST(Preprocess, ResumesAfterAFailedRunAndSkipsFinishedSteps)
     EXPECT_EQ(summary.stepsSkipped, 2);
     EXPECT_EQ(summary.stepsWritten, 1);
     EXPECT_FALSE(std::filesystem::exists(dir / "ds" / "steps" / ".0002.tmp-1-0"));
-    EXPECT_EQ(Dataset::open(dir / "ds")->steps().size(), 3u);
+    EXPECT_EQ(dataset::Dataset::open(dir / "ds")->steps().size(), 3u);
 
     // Other settings into the same directory are refused rather than mixed.
     auto other = quiet();
@@ -452,4 +452,4 @@ TEST(Preprocess, ResumesAfterAFailedRunAndSkipsFinishedSteps)
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::preprocess

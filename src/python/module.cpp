@@ -137,7 +137,7 @@ std::string prepare(std::vector<std::string> args, py::object progress)
         return inputs.dataset.string();
     ProgressBridge bridge(std::move(progress));
     options.quiet = true;
-    options.onProgress = [&bridge](const PreprocessProgress& p) { bridge(p.phase, p.done, p.total); };
+    options.onProgress = [&bridge](const preprocess::PreprocessProgress& p) { bridge(p.phase, p.done, p.total); };
     options.cancel = &bridge.cancel;
     {
         py::gil_scoped_release release;
@@ -154,14 +154,14 @@ std::string prepare(std::vector<std::string> args, py::object progress)
 
 class PyDataset {
 public:
-    explicit PyDataset(const std::string& dir) : m_dataset(Dataset::open(dir)) {}
+    explicit PyDataset(const std::string& dir) : m_dataset(dataset::Dataset::open(dir)) {}
 
-    const Dataset& dataset() const { return *m_dataset; }
+    const dataset::Dataset& dataset() const { return *m_dataset; }
 
     py::list variables() const
     {
         py::list out;
-        for (const VariableInfo& v : m_dataset->variables())
+        for (const dataset::VariableInfo& v : m_dataset->variables())
             out.append(py::dict(py::arg("name") = v.name, py::arg("units") = v.units, py::arg("derived") = v.derived,
                                 py::arg("min") = v.global.range.min, py::arg("max") = v.global.range.max));
         return out;
@@ -169,19 +169,19 @@ public:
     py::array_t<double> timesMyr() const
     {
         std::vector<double> t;
-        for (const StepInfo& s : m_dataset->steps())
+        for (const dataset::StepInfo& s : m_dataset->steps())
             t.push_back(s.timeMyr);
         return doubles(t);
     }
     py::list levels() const
     {
         py::list out;
-        for (const LevelInfo& level : m_dataset->levels())
+        for (const dataset::LevelInfo& level : m_dataset->levels())
             out.append(py::dict(py::arg("lat") = doubles(level.grid.latDeg), py::arg("r") = doubles(level.grid.rKm),
                                 py::arg("lon") = doubles(level.grid.lonDeg)));
         return out;
     }
-    std::string encoding() const { return m_dataset->encoding() == ValueEncoding::Float32 ? "float32" : "u16"; }
+    std::string encoding() const { return m_dataset->encoding() == dataset::ValueEncoding::Float32 ? "float32" : "u16"; }
     std::string dir() const { return m_dataset->dir().string(); }
 
     // Step "12" or "24Myr" as the CLI's --time takes it.
@@ -196,7 +196,7 @@ public:
                  fmt::join(m_dataset->variableNames(), ", "));
         m_dataset->checkStep(step);
         m_dataset->checkLevel(level);
-        const SphericalGrid& grid = m_dataset->levels()[size_t(level)].grid;
+        const grid::SphericalGrid& grid = m_dataset->levels()[size_t(level)].grid;
         py::array_t<float> out({py::ssize_t(grid.nLat()), py::ssize_t(grid.nR()), py::ssize_t(grid.nLon())});
         float* dst = out.mutable_data();
         {
@@ -210,13 +210,13 @@ public:
     std::string probe(double lat, double lon, double rKm, int step, int level, const std::string& var) const
     {
         py::gil_scoped_release release;
-        return probeJson(*m_dataset, step, level, lat, lon, rKm, var).dump();
+        return analysis::probeJson(*m_dataset, step, level, lat, lon, rKm, var).dump();
     }
 
     // The parallel-coordinates sample of a step: (columns, units, rows x columns float32).
     py::tuple sample(int step) const
     {
-        SampleTable t;  // loadSample checks the step
+        dataset::SampleTable t;  // loadSample checks the step
         {
             py::gil_scoped_release release;
             t = m_dataset->loadSample(step);
@@ -231,14 +231,14 @@ public:
     py::list pathlines(int step, int window) const
     {
         m_dataset->checkStep(step);
-        checkPathlineWindow(window);
-        std::vector<PathlineSet> sets;
+        analysis::checkPathlineWindow(window);
+        std::vector<analysis::PathlineSet> sets;
         {
             py::gil_scoped_release release;
-            sets = loadPathlineWindow(m_dataset->dir(), step, window);
+            sets = analysis::loadPathlineWindow(m_dataset->dir(), step, window);
         }
         py::list out;
-        for (const PathlineSet& s : sets) {
+        for (const analysis::PathlineSet& s : sets) {
             std::vector<int64_t> offsets(s.offsets.begin(), s.offsets.end());
             out.append(py::dict(
                 py::arg("injection_step") = s.injectionStep, py::arg("injection_time_myr") = s.injectionTimeMyr,
@@ -306,7 +306,7 @@ public:
                    py::object progress) const
     {
         const state::RenderState state = parseState(text, "state");
-        const std::vector<RangeFilter> filters = resolveRangeFilters(*m_dataset, state.brushes, "brushes");
+        const std::vector<analysis::RangeFilter> filters = analysis::resolveRangeFilters(*m_dataset, state.brushes, "brushes");
         std::optional<size_t> meanVariable;
         if (!meanOf.empty()) {
             const int index = m_dataset->variableIndex(meanOf);
@@ -317,13 +317,13 @@ public:
         if (first > last)  // selectionOverTime checks the steps and the level
             fail("steps: {}..{} is empty", first, last);
         ProgressBridge bridge(std::move(progress));
-        std::vector<StepSelection> selections;
+        std::vector<analysis::StepSelection> selections;
         {
             py::gil_scoped_release release;
             int done = 0;  // onStep runs on this thread, after each step
             const int total = last - first + 1;
             try {
-                selections = selectionOverTime(*m_dataset, filters, level, first, last, {}, [&] {
+                selections = analysis::selectionOverTime(*m_dataset, filters, level, first, last, {}, [&] {
                     bridge("steps", ++done, total);
                     if (bridge.cancel)
                         fail("cancelled");
@@ -335,7 +335,7 @@ public:
         }
         bridge.rethrow();
         py::list out;
-        for (const StepSelection& s : selections)
+        for (const analysis::StepSelection& s : selections)
             out.append(py::make_tuple(s.step, s.timeMyr, s.stats.volumeKm3, s.stats.fractionOfMantle,
                                       doubles(s.stats.volumeByRadiusKm3), doubles(s.stats.shellVolumeByRadiusKm3),
                                       doubles(s.stats.selectedMeanByRadius), doubles(s.stats.shellMeanByRadius)));
@@ -348,7 +348,7 @@ public:
                          std::vector<double> depthsKm, double bandHalfWidthKm, py::object progress) const
     {
         const state::RenderState state = parseState(text, "state");
-        const std::vector<RangeFilter> filters = resolveRangeFilters(*m_dataset, state.brushes, "brushes");
+        const std::vector<analysis::RangeFilter> filters = analysis::resolveRangeFilters(*m_dataset, state.brushes, "brushes");
         if (filters.empty())
             fail("features: the state has no brushes (the whole mantle would be one feature)");
         if (first > last)
@@ -361,20 +361,20 @@ public:
         state::checkFeatureSettings(settings, {{"minVolumeKm3", "min_volume_km3"},
                                                 {"depthsKm", "depths_km"},
                                                 {"bandHalfWidthKm", "band_half_width_km"}});
-        const FeatureOptions options = featureOptions(minVolumeKm3, std::move(depthsKm), bandHalfWidthKm);
+        const analysis::FeatureOptions options = analysis::featureOptions(minVolumeKm3, std::move(depthsKm), bandHalfWidthKm);
         ProgressBridge bridge(std::move(progress));
         std::string csv = app::featureTableHeader(*m_dataset, options);
         {
             py::gil_scoped_release release;
-            const StepVolumeLoader load = [&](int step) {
+            const analysis::StepVolumeLoader load = [&](int step) {
                 m_dataset->checkStep(step, "steps");
                 return m_dataset->load(step, level);
             };
-            FeatureRunControl control{&bridge.cancel, [&](int done, int total) {
+            analysis::FeatureRunControl control{&bridge.cancel, [&](int done, int total) {
                                           if (done > 0)  // after each step
                                               bridge("steps", done, total);
                                       }};
-            forEachStepFeatures(first, last, load, filters, options, [&](FeatureStep& s) {
+            analysis::forEachStepFeatures(first, last, load, filters, options, [&](analysis::FeatureStep& s) {
                 csv += app::featureTableRows(s.step, m_dataset->steps()[size_t(s.step)].timeMyr, s.features);
             }, control);
         }
@@ -383,7 +383,7 @@ public:
     }
 
 private:
-    std::shared_ptr<const Dataset> m_dataset;
+    std::shared_ptr<const dataset::Dataset> m_dataset;
 };
 
 // `raypc serve` of one dataset inside this process, on its own thread (the notebook view).
@@ -451,9 +451,9 @@ PYBIND11_MODULE(_raypc, m)
     m.def(
         "critical_kind_name",
         [](int kind) {
-            if (kind < 0 || kind > int(raypc::CriticalKind::MultiSaddle))
-                raypc::fail("critical point kind {} out of range 0..{}", kind, int(raypc::CriticalKind::MultiSaddle));
-            return std::string(raypc::criticalKindName(raypc::CriticalKind(kind)));
+            if (kind < 0 || kind > int(raypc::analysis::CriticalKind::MultiSaddle))
+                raypc::fail("critical point kind {} out of range 0..{}", kind, int(raypc::analysis::CriticalKind::MultiSaddle));
+            return std::string(raypc::analysis::criticalKindName(raypc::analysis::CriticalKind(kind)));
         },
         py::arg("kind"));
 

@@ -23,7 +23,7 @@
 namespace raypc::render {
 namespace {
 
-std::vector<float> render(const std::shared_ptr<const StepVolume>& volume, const RenderParams& p, int passes)
+std::vector<float> render(const std::shared_ptr<const dataset::StepVolume>& volume, const RenderParams& p, int passes)
 {
     VolumeRenderer r(volume);
     r.setParams(p);
@@ -57,17 +57,17 @@ Difference compare(const std::vector<float>& a, const std::vector<float>& b)
 TEST(EncodingRender, U16AndFloat32DatasetsRenderWithinTheGoldenTolerance)
 {
     raypc::testing::TempDir dir("encoding_render");
-    const auto files = listSnapshotFiles({raypc::testing::contestLayoutDir()});
-    PreprocessOptions o;
+    const auto files = io::listSnapshotFiles({raypc::testing::contestLayoutDir()});
+    preprocess::PreprocessOptions o;
     o.quiet = true;
     o.sampleRows = 1000;
     o.pathlines.enabled = false;
-    o.encoding = ValueEncoding::Uint16;
-    preprocess(files, dir / "u16", o);
-    o.encoding = ValueEncoding::Float32;
-    preprocess(files, dir / "f32", o);
-    const auto u16 = Dataset::open(dir / "u16");
-    const auto f32 = Dataset::open(dir / "f32");
+    o.encoding = dataset::ValueEncoding::Uint16;
+    preprocess::preprocess(files, dir / "u16", o);
+    o.encoding = dataset::ValueEncoding::Float32;
+    preprocess::preprocess(files, dir / "f32", o);
+    const auto u16 = dataset::Dataset::open(dir / "u16");
+    const auto f32 = dataset::Dataset::open(dir / "f32");
     const int anomaly = u16->variableIndex("temperature anomaly");
     const int temperature = u16->variableIndex("temperature");
     const int conductivity = u16->variableIndex("thermal conductivity");  // −1e-3 × the anomaly (truth.json)
@@ -95,7 +95,7 @@ TEST(EncodingRender, U16AndFloat32DatasetsRenderWithinTheGoldenTolerance)
     brushed.transfer.range = u16->variables()[size_t(temperature)].global.range;
     brushed.transfer.opacity = {{0, 0.1f}, {1, 0.4f}};
     // The warm half: conductivity below 0.
-    const ValueRange kv = u16->variables()[size_t(conductivity)].global.range;
+    const dataset::ValueRange kv = u16->variables()[size_t(conductivity)].global.range;
     brushed.brushes.push_back({conductivity, std::nullopt, {{kv.min, 0.0f}}});
     cases.push_back({"temperature brushed by conductivity", brushed});
     for (int level = 0; level < 2; ++level)

@@ -54,7 +54,7 @@ bool paintsFeatures(const state::RenderState& state)
     return !state.brushes.empty() && (state.features.colorById || !state.features.highlight.empty());
 }
 
-std::vector<float> featurePaintField(const SphericalGrid& target, const SphericalGrid& labelGrid,
+std::vector<float> featurePaintField(const grid::SphericalGrid& target, const grid::SphericalGrid& labelGrid,
                                      std::span<const int32_t> labels, const state::FeatureSettings& settings)
 {
     if (labels.size() != labelGrid.cellCount())

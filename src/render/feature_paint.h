@@ -35,7 +35,7 @@ bool paintsFeatures(const state::RenderState& state);
 // the state's settings say. A point with no feature takes a neighbouring point's slot (6
 // neighbours, the longitude seam joined), so that interpolation at a feature's edge stays in its
 // colour; where there is none, 0.
-std::vector<float> featurePaintField(const SphericalGrid& target, const SphericalGrid& labelGrid,
+std::vector<float> featurePaintField(const grid::SphericalGrid& target, const grid::SphericalGrid& labelGrid,
                                      std::span<const int32_t> labels, const state::FeatureSettings& settings);
 
 // Colours the volume by the slots of variable `variable`: the fixed palette, slot 0 faint

@@ -32,7 +32,7 @@ float twoBlobs(double lat, double r, double lon)
 
 TEST(FeaturePaint, SlotsFollowTheLabelsAndSpreadOnePointBeyondThem)
 {
-    const SphericalGrid g = makeGrid(4, 3, 8);
+    const grid::SphericalGrid g = makeGrid(4, 3, 8);
     std::vector<int32_t> labels(g.cellCount(), 0);
     labels[g.index(1, 1, 0)] = 1;   // beside the seam: its neighbour across it is column 7
     labels[g.index(2, 1, 4)] = 12;  // id 12: slot 2
@@ -53,7 +53,7 @@ TEST(FeaturePaint, SlotsFollowTheLabelsAndSpreadOnePointBeyondThem)
     s.colorById = false;
     EXPECT_EQ(featurePaintField(g, g, labels, s)[g.index(2, 1, 4)], 11.0f);
     // A coarser target takes the nearest label point's label.
-    SphericalGrid coarse = makeGrid(2, 3, 4);  // lon 0, 90, 180, 270
+    grid::SphericalGrid coarse = makeGrid(2, 3, 4);  // lon 0, 90, 180, 270
     coarse.latDeg = {-20, 20};                 // nearest label rows: 1 (-22.5°) and 2 (22.5°)
     s.colorById = true;
     s.highlight.clear();
@@ -70,7 +70,7 @@ TEST(FeaturePaint, ADerivedVolumeCarriesTheBaseVariablesAndOneMore)
     std::vector<float> extra(base->grid().cellCount());
     for (size_t i = 0; i < extra.size(); ++i)
         extra[i] = float(i % 7);
-    auto v = StepVolume::withVariable(base, extra);
+    auto v = dataset::StepVolume::withVariable(base, extra);
     ASSERT_EQ(v->variableCount(), 3u);
     for (size_t var = 0; var < 2; ++var) {
         EXPECT_EQ(v->values(var), base->values(var));
@@ -82,18 +82,18 @@ TEST(FeaturePaint, ADerivedVolumeCarriesTheBaseVariablesAndOneMore)
         EXPECT_GE(b[2 * k], 0.0f);
         EXPECT_LE(b[2 * k + 1], 6.0f);
     }
-    EXPECT_THROW(StepVolume::withVariable(base, std::vector<float>(5)), Error);
+    EXPECT_THROW(dataset::StepVolume::withVariable(base, std::vector<float>(5)), Error);
 }
 
 TEST(FeaturePaint, TwoBlobsAreDrawnInTheirOwnColours)
 {
     auto base = makeVolume(makeGrid(48, 33, 96), {{"f", twoBlobs}});
-    const std::vector<RangeFilter> brushes{{0, std::nullopt, {{0.3f, 2.0f}}}};
-    const StepFeatures f = extractFeatures(*base, brushes);
+    const std::vector<analysis::RangeFilter> brushes{{0, std::nullopt, {{0.3f, 2.0f}}}};
+    const analysis::StepFeatures f = analysis::extractFeatures(*base, brushes);
     ASSERT_EQ(f.features.size(), 2u);
     state::FeatureSettings s;
     s.colorById = true;
-    auto painted = StepVolume::withVariable(base, featurePaintField(base->grid(), base->grid(), f.labels, s));
+    auto painted = dataset::StepVolume::withVariable(base, featurePaintField(base->grid(), base->grid(), f.labels, s));
     VolumeRenderer renderer(painted);
     RenderParams p;
     p.width = p.height = 96;

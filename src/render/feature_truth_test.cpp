@@ -44,19 +44,19 @@ TEST(FeatureTruth, Task1FindsEachSlabStalledAt660AsOneFeature)
 {
     const auto brushes =
         state::loadRenderState(std::filesystem::path(RAYPC_SOURCE_DIR) / "examples" / "task1-slabs-660km.json").brushes;
-    const SynthOptions options;
+    const synth::SynthOptions options;
     for (const double t : {0.0, 12.0, 22.0}) {
-        Snapshot snap = synthesizeSnapshot(options, t);
-        addDerivedVariables(snap);
+        grid::Snapshot snap = synth::synthesizeSnapshot(options, t);
+        preprocess::addDerivedVariables(snap);
         std::vector<std::string> names;
-        for (const Field& f : snap.fields)
+        for (const grid::Field& f : snap.fields)
             names.push_back(f.name);
-        const SynthTruth truth = syntheticTruth(options, t, snap.grid);
-        const std::vector<SynthFeature> synth = syntheticFeatures(options, t);
-        const auto volume = StepVolume::fromSnapshot(snap);
-        const auto filters = resolveRangeFilters(std::span<const std::string>(names), brushes);
-        const StepFeatures found = extractFeatures(*volume, filters);
-        const SphericalGrid& g = snap.grid;
+        const synth::SynthTruth truth = synth::syntheticTruth(options, t, snap.grid);
+        const std::vector<synth::SynthFeature> synth = synth::syntheticFeatures(options, t);
+        const auto volume = dataset::StepVolume::fromSnapshot(snap);
+        const auto filters = analysis::resolveRangeFilters(std::span<const std::string>(names), brushes);
+        const analysis::StepFeatures found = analysis::extractFeatures(*volume, filters);
+        const grid::SphericalGrid& g = snap.grid;
         const auto w = g.volumeFactors();
 
         // Volume of each (found feature, synthetic feature) pair, and of each slab's selected pancake core.
@@ -67,19 +67,19 @@ TEST(FeatureTruth, Task1FindsEachSlabStalledAt660AsOneFeature)
             for (size_t iR = 0; iR < g.nR(); ++iR)
                 for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
                     const size_t i = g.index(iLat, iR, iLon);
-                    if (truth.part[i] == SynthPart::SlabPancake660 && truth.inCore(i))
+                    if (truth.part[i] == synth::SynthPart::SlabPancake660 && truth.inCore(i))
                         pancake[truth.feature[i]] += w.at(iLat, iR, iLon);
                     const int label = found.labels[i];
                     if (label == 0)
                         continue;
                     pair[{label, truth.feature[i]}] += w.at(iLat, iR, iLon);
-                    if (truth.part[i] == SynthPart::SlabPancake660 && truth.inCore(i))
+                    if (truth.part[i] == synth::SynthPart::SlabPancake660 && truth.inCore(i))
                         pancakeIn[truth.feature[i]][label] += w.at(iLat, iR, iLon);
                 }
         std::set<int> used;
         int slabs = 0;
         for (size_t s = 0; s < synth.size(); ++s) {
-            if (synth[s].kind != SynthFeature::Kind::Slab || synth[s].stallDepthKm != 660)
+            if (synth[s].kind != synth::SynthFeature::Kind::Slab || synth[s].stallDepthKm != 660)
                 continue;
             if (pancake[int(s)] < kMinPancakeKm3) {  // still growing: not a stalled slab yet
                 fmt::print("{:4.0f} Myr  slab {:2}: pancake core {:.2g} km³, not formed yet\n", t, s, pancake[int(s)]);
@@ -127,8 +127,8 @@ TEST(FeatureTruth, Task1FindsEachSlabStalledAt660AsOneFeature)
 // (SynthOptions::avalancheMyr); and the flux across 660 km in each step, over the shell and within
 // the selection.
 struct TrackedSlabs {
-    FeatureTracker tracker;
-    std::map<int, std::vector<TrackPoint>> points;  // by track
+    analysis::FeatureTracker tracker;
+    std::map<int, std::vector<analysis::TrackPoint>> points;  // by track
     std::map<int, std::map<int, int>> trackOf;      // slab -> step -> track of its pancake's feature
     std::map<int, std::map<int, double>> foundShare;  // slab -> step -> share of its selected core in that feature
     // slab -> step -> share of that feature's part inside the generator's features that is this slab
@@ -139,43 +139,43 @@ struct TrackedSlabs {
     std::vector<double> downKm3PerYr, selectedDownKm3PerYr;  // across 660 km, per step
 };
 
-TrackedSlabs trackSlabs(const SynthOptions& options, const std::vector<NamedRange>& brushes,
-                        const FeatureOptions& featureOptions = {})
+TrackedSlabs trackSlabs(const synth::SynthOptions& options, const std::vector<analysis::NamedRange>& brushes,
+                        const analysis::FeatureOptions& featureOptions = {})
 {
     TrackedSlabs out;
-    std::shared_ptr<const StepVolume> previousVolume;
-    StepFeatures previous;
+    std::shared_ptr<const dataset::StepVolume> previousVolume;
+    analysis::StepFeatures previous;
     for (int step = 0; step < options.steps; ++step) {
         const double t = step * options.dtMyr;
-        Snapshot snap = synthesizeSnapshot(options, t);
-        addDerivedVariables(snap);
+        grid::Snapshot snap = synth::synthesizeSnapshot(options, t);
+        preprocess::addDerivedVariables(snap);
         std::vector<std::string> names;
-        for (const Field& f : snap.fields)
+        for (const grid::Field& f : snap.fields)
             names.push_back(f.name);
         const auto index = [&](const char* name) {
             return size_t(std::find(names.begin(), names.end(), name) - names.begin());
         };
-        const auto volume = StepVolume::fromSnapshot(snap);
-        const auto filters = resolveRangeFilters(std::span<const std::string>(names), brushes);
-        StepFeatures found = extractFeatures(*volume, filters, featureOptions);
-        const std::vector<FeatureLink> links =
-            previousVolume ? linkFeatures(*previousVolume, previous, found, {index("vx"), index("vy"), index("vz")},
+        const auto volume = dataset::StepVolume::fromSnapshot(snap);
+        const auto filters = analysis::resolveRangeFilters(std::span<const std::string>(names), brushes);
+        analysis::StepFeatures found = analysis::extractFeatures(*volume, filters, featureOptions);
+        const std::vector<analysis::FeatureLink> links =
+            previousVolume ? analysis::linkFeatures(*previousVolume, previous, found, {index("vx"), index("vy"), index("vz")},
                                           options.dtMyr)
-                           : std::vector<FeatureLink>{};
+                           : std::vector<analysis::FeatureLink>{};
         const std::vector<int> tracks = out.tracker.add(step, found, links);
         for (size_t k = 0; k < found.features.size(); ++k) {
-            const Feature& f = found.features[k];
+            const analysis::Feature& f = found.features[k];
             out.points[tracks[k]].push_back({step, t, f.meanDepthKm, f.variables[index("radial velocity")].mean,
                                              f.topDepthKm, f.bottomDepthKm});
         }
         out.featureCount.push_back(int(found.features.size()));
-        const ShellFlux flux = shellFluxes(*volume, index("radial velocity"), std::vector<double>{660}, filters)[0];
+        const analysis::ShellFlux flux = analysis::shellFluxes(*volume, index("radial velocity"), std::vector<double>{660}, filters)[0];
         out.downKm3PerYr.push_back(flux.downKm3PerYr);
         out.selectedDownKm3PerYr.push_back(flux.selectedDownKm3PerYr);
 
-        const SynthTruth truth = syntheticTruth(options, t, snap.grid);
-        const std::vector<SynthFeature> synth = syntheticFeatures(options, t);
-        const SphericalGrid& g = snap.grid;
+        const synth::SynthTruth truth = synth::syntheticTruth(options, t, snap.grid);
+        const std::vector<synth::SynthFeature> synth = synth::syntheticFeatures(options, t);
+        const grid::SphericalGrid& g = snap.grid;
         const auto w = g.volumeFactors();
         std::map<int, std::map<int, double>> pancakeIn;  // slab -> label -> km³ of its selected core
         std::map<int, double> pancake;
@@ -186,14 +186,14 @@ TrackedSlabs trackSlabs(const SynthOptions& options, const std::vector<NamedRang
                     const size_t i = g.index(iLat, iR, iLon);
                     if (found.labels[i] > 0 && truth.feature[i] >= 0)
                         inFeature[found.labels[i]][truth.feature[i]] += w.at(iLat, iR, iLon);
-                    if (truth.part[i] != SynthPart::SlabPancake660 || !truth.inCore(i))
+                    if (truth.part[i] != synth::SynthPart::SlabPancake660 || !truth.inCore(i))
                         continue;
                     pancake[truth.feature[i]] += w.at(iLat, iR, iLon);
                     if (found.labels[i] > 0)
                         pancakeIn[truth.feature[i]][found.labels[i]] += w.at(iLat, iR, iLon);
                 }
         for (size_t s = 0; s < synth.size(); ++s) {
-            if (synth[s].kind != SynthFeature::Kind::Slab || synth[s].stallDepthKm != 660)
+            if (synth[s].kind != synth::SynthFeature::Kind::Slab || synth[s].stallDepthKm != 660)
                 continue;
             if (!out.atStallFrom.count(int(s)) && std::abs(kSurfaceRadiusKm - synth[s].frontRadiusKm - 660) <= 50)
                 out.atStallFrom[int(s)] = step;
@@ -238,7 +238,7 @@ TEST(FeatureTruth, Task1TracksFollowEachStalledSlabThroughTheSeries)
 {
     const auto brushes =
         state::loadRenderState(std::filesystem::path(RAYPC_SOURCE_DIR) / "examples" / "task1-slabs-660km.json").brushes;
-    const SynthOptions options;  // the demo's
+    const synth::SynthOptions options;  // the demo's
     TrackedSlabs series = trackSlabs(options, brushes);
     for (const auto& [slab, steps] : series.foundShare)
         for (const auto& [step, share] : steps)
@@ -249,10 +249,10 @@ TEST(FeatureTruth, Task1TracksFollowEachStalledSlabThroughTheSeries)
     // Where a track may change: a split of the earlier track (at the earlier step) or a merge of the
     // later one (at the later step).
     std::set<std::pair<int, int>> splits, merges;  // (step, track)
-    for (const TrackEvent& e : series.tracker.events()) {
-        if (e.kind == TrackEvent::Kind::Split)
+    for (const analysis::TrackEvent& e : series.tracker.events()) {
+        if (e.kind == analysis::TrackEvent::Kind::Split)
             splits.insert({e.step, e.track});
-        if (e.kind == TrackEvent::Kind::Merge)
+        if (e.kind == analysis::TrackEvent::Kind::Merge)
             merges.insert({e.step, e.track});
     }
     std::map<int, std::set<int>> tracksAt;  // step -> tracks of stalled slabs (the last step's)
@@ -268,7 +268,7 @@ TEST(FeatureTruth, Task1TracksFollowEachStalledSlabThroughTheSeries)
             previousStep = step, previousTrack = track;
         }
         const int track = steps.rbegin()->second;
-        const std::vector<Stall> stalls = stallTimes(series.points[track], std::vector<double>{660}, 50, last);
+        const std::vector<analysis::Stall> stalls = analysis::stallTimes(series.points[track], std::vector<double>{660}, 50, last);
         fmt::print("slab {:2}: pancake formed from step {:2}, tip within 50 km of 660 km from step {:2}; "
                    "(step:track) {}; the last track at 660 km: {}\n",
                    slab, steps.begin()->first, series.atStallFrom.count(slab) ? series.atStallFrom[slab] : -1,
@@ -303,17 +303,17 @@ TEST(FeatureTruth, Task1TracksFollowEachStalledSlabThroughTheSeries)
 // The figures it prints are in docs/features.md.
 TEST(FeatureTruth, AnAvalancheEndsItsSlabsStallAndIsTheFluxSpike)
 {
-    const std::vector<NamedRange> brushes{{"depth", 300, 2000}, {"temperature anomaly", -1e4, -120}};
-    FeatureOptions featureOptions;
+    const std::vector<analysis::NamedRange> brushes{{"depth", 300, 2000}, {"temperature anomaly", -1e4, -120}};
+    analysis::FeatureOptions featureOptions;
     featureOptions.minVolumeKm3 = 5e6;
-    SynthOptions calm;
+    synth::SynthOptions calm;
     calm.dtMyr = 5;
-    SynthOptions avalanche = calm;
+    synth::SynthOptions avalanche = calm;
     avalanche.avalancheMyr = 38;
     avalanche.avalancheDurationMyr = 5;
     const int last = calm.steps - 1;
 
-    for (const SynthOptions& options : {avalanche, calm}) {
+    for (const synth::SynthOptions& options : {avalanche, calm}) {
         const bool withAvalanche = std::isfinite(options.avalancheMyr);
         TrackedSlabs series = trackSlabs(options, brushes, featureOptions);
         std::set<int> truthSteps;  // steps with an avalanche under way
@@ -323,8 +323,8 @@ TEST(FeatureTruth, AnAvalancheEndsItsSlabsStallAndIsTheFluxSpike)
             avalancheSlab = slab;
         }
         const auto asSet = [](const std::vector<size_t>& v) { return std::set<int>(v.begin(), v.end()); };
-        const std::set<int> shell = asSet(avalancheSteps(series.downKm3PerYr, 2));
-        const std::set<int> selected = asSet(avalancheSteps(series.selectedDownKm3PerYr, 2));
+        const std::set<int> shell = asSet(analysis::avalancheSteps(series.downKm3PerYr, 2));
+        const std::set<int> selected = asSet(analysis::avalancheSteps(series.selectedDownKm3PerYr, 2));
         fmt::print("{}: generator's avalanche steps {{{}}}; found across 660 km over the shell {{{}}}, within the "
                    "selection {{{}}}; downward flux {:.1f} ... {:.1f} km³/yr\n",
                    withAvalanche ? "avalanche at 38-43 Myr" : "no avalanche", fmt::join(truthSteps, ","),
@@ -355,10 +355,10 @@ TEST(FeatureTruth, AnAvalancheEndsItsSlabsStallAndIsTheFluxSpike)
             const bool breaks = withAvalanche && slab == avalancheSlab;
             // The track its pancake's feature is on at the step it forms: the stall begins there.
             const int track = steps.begin()->second;
-            const std::vector<Stall> stalls =
-                stallTimes(series.points[track], std::vector<double>{660}, 50, last, StallMeasure::Deepest);
-            const Stall* stall = nullptr;
-            for (const Stall& x : stalls)
+            const std::vector<analysis::Stall> stalls =
+                analysis::stallTimes(series.points[track], std::vector<double>{660}, 50, last, analysis::StallMeasure::Deepest);
+            const analysis::Stall* stall = nullptr;
+            for (const analysis::Stall& x : stalls)
                 if (x.lastStep >= formed && (!stall || x.lastStep - x.firstStep > stall->lastStep - stall->firstStep))
                     stall = &x;
             const int truthEnd = breaks ? *series.breakingThrough[slab].begin() : last;
@@ -412,29 +412,29 @@ namespace {
 // pancake in the band) are in docs/maps.md.
 TEST(SectionTruth, ASlabStalledAt660IsWhereTheGeneratorPutIt)
 {
-    const SynthOptions options;
+    const synth::SynthOptions options;
     const double t = 12;
-    Snapshot snap = synthesizeSnapshot(options, t);
-    const SynthTruth truth = syntheticTruth(options, t, snap.grid);
-    const std::vector<SynthFeature> features = syntheticFeatures(options, t);
+    grid::Snapshot snap = synth::synthesizeSnapshot(options, t);
+    const synth::SynthTruth truth = synth::syntheticTruth(options, t, snap.grid);
+    const std::vector<synth::SynthFeature> features = synth::syntheticFeatures(options, t);
     std::vector<std::string> names;
-    for (const Field& f : snap.fields)
+    for (const grid::Field& f : snap.fields)
         names.push_back(f.name);
-    const auto volume = StepVolume::fromSnapshot(snap);
+    const auto volume = dataset::StepVolume::fromSnapshot(snap);
     const size_t anomaly = size_t(std::find(names.begin(), names.end(), "temperature anomaly") - names.begin());
     ASSERT_LT(anomaly, names.size());
-    const SphericalGrid& g = snap.grid;
+    const grid::SphericalGrid& g = snap.grid;
     // The grid point nearest (lat, lon, r).
     auto nearest = [&](const std::vector<double>& c, double x) {
         return size_t(std::min_element(c.begin(), c.end(), [&](double a, double b) { return std::abs(a - x) < std::abs(b - x); }) - c.begin());
     };
     int slabs = 0;
     for (size_t k = 0; k < features.size(); ++k) {
-        const SynthFeature& f = features[k];
-        if (f.kind != SynthFeature::Kind::Slab || f.stallDepthKm != 660)
+        const synth::SynthFeature& f = features[k];
+        if (f.kind != synth::SynthFeature::Kind::Slab || f.stallDepthKm != 660)
             continue;
-        const auto a = syntheticFeatureCentreDeg(options, t, k, kSurfaceRadiusKm - 150);
-        const auto b = syntheticFeatureCentreDeg(options, t, k, kSurfaceRadiusKm - 500);
+        const auto a = synth::syntheticFeatureCentreDeg(options, t, k, kSurfaceRadiusKm - 150);
+        const auto b = synth::syntheticFeatureCentreDeg(options, t, k, kSurfaceRadiusKm - 500);
         const GreatCircle dip({float(a[0]), float(a[1])}, {float(b[0]), float(b[1])});
         // 15 degrees before and after along the same great circle.
         const double extend = 15.0 / dip.lengthDeg();
@@ -452,7 +452,7 @@ TEST(SectionTruth, ASlabStalledAt660IsWhereTheGeneratorPutIt)
                 const size_t n = g.index(nearest(g.latDeg, s.latDeg[j]), nearest(g.rKm, r), nearest(g.lonDeg, lon));
                 const float v = s.grid.values[i * s.grid.columns.size() + j];
                 const bool isSlab = truth.feature[n] == int16_t(k) && truth.inCore(n) &&
-                                    (truth.part[n] == SynthPart::SlabSheet || truth.part[n] == SynthPart::SlabPancake660);
+                                    (truth.part[n] == synth::SynthPart::SlabSheet || truth.part[n] == synth::SynthPart::SlabPancake660);
                 if (isSlab) {
                     ++slabPoints;
                     slabCold += v <= threshold;
@@ -461,7 +461,7 @@ TEST(SectionTruth, ASlabStalledAt660IsWhereTheGeneratorPutIt)
                     ++cold;
                     coldInFeatures += truth.feature[n] >= 0;
                 }
-                if (truth.feature[n] == int16_t(k) && truth.part[n] == SynthPart::SlabPancake660 && truth.inCore(n)) {
+                if (truth.feature[n] == int16_t(k) && truth.part[n] == synth::SynthPart::SlabPancake660 && truth.inCore(n)) {
                     ++pancake;
                     pancakeInBand += s.grid.rows[i] >= 560 && s.grid.rows[i] <= 760;
                 }

@@ -41,7 +41,7 @@ RenderParams plumeParams(int width, int height)
     return p;
 }
 
-std::shared_ptr<StepVolume> plumeVolume() { return makeVolume(makeGrid(36, 17, 72), {{"f", testing::plumeField}}); }
+std::shared_ptr<dataset::StepVolume> plumeVolume() { return makeVolume(makeGrid(36, 17, 72), {{"f", testing::plumeField}}); }
 
 FrameBuffer renderFrame(VolumeRenderer& r, int width, int height, Refinement refinement, TileShare share = {})
 {

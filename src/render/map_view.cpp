@@ -237,7 +237,7 @@ ImageRgba8 mapPicture(const SliceInputs& in)
     const RenderParams& params = in.resolved->params;
     const state::MapState& map = state.map;
     const int width = state.width, height = state.height;
-    const SphericalGrid& grid = in.volume->grid();
+    const grid::SphericalGrid& grid = in.volume->grid();
     const double rKm = radiusAtDepth(grid, map.depthKm, "map.depthKm");
     PointProbe probe(*in.volume, params, in.variableNames, map.flow, "map.flow");
 
@@ -290,9 +290,9 @@ ImageRgba8 mapPicture(const SliceInputs& in)
     return image;
 }
 
-SliceGrid latLonSlice(const StepVolume& volume, size_t variable, double depthKm, double stepDeg, const std::string& what)
+SliceGrid latLonSlice(const dataset::StepVolume& volume, size_t variable, double depthKm, double stepDeg, const std::string& what)
 {
-    const SphericalGrid& grid = volume.grid();
+    const grid::SphericalGrid& grid = volume.grid();
     const double rKm = slice::radiusAtDepth(grid, depthKm, what);
     const double n = 180.0 / stepDeg;
     if (!(stepDeg > 0) || std::abs(n - std::round(n)) > 1e-9 || n > 36000)
@@ -304,7 +304,7 @@ SliceGrid latLonSlice(const StepVolume& volume, size_t variable, double depthKm,
     for (size_t j = 0; j < nLon; ++j)
         out.columns.push_back((double(j) + 0.5) * stepDeg);
     out.values.assign(nLat * nLon, NAN);
-    const GridSampler sampler(grid);
+    const grid::GridSampler sampler(grid);
     const float* values = volume.values(variable);
     tbb::parallel_for(size_t(0), nLat, [&](size_t i) {
         for (size_t j = 0; j < nLon; ++j)

@@ -40,7 +40,7 @@ std::string columnList(const std::vector<std::string>& columns)
 }  // namespace
 
 struct PathlineScene::Impl {
-    explicit Impl(std::shared_ptr<const std::vector<PathlineSet>> sets) : lines(std::move(sets)) {}
+    explicit Impl(std::shared_ptr<const std::vector<analysis::PathlineSet>> sets) : lines(std::move(sets)) {}
 
     PathlineLines lines;
     // Per segment (Embree primID): its line; per vertex: the point's time (Myr).
@@ -205,11 +205,11 @@ kernel::TubeHit traceTubes(const void* ctx, const kernel::KernelParams& k, Vec3 
 
 }  // namespace
 
-PathlineLines::PathlineLines(std::shared_ptr<const std::vector<PathlineSet>> sets) : m_sets(std::move(sets))
+PathlineLines::PathlineLines(std::shared_ptr<const std::vector<analysis::PathlineSet>> sets) : m_sets(std::move(sets))
 {
-    const std::vector<PathlineSet>& all = *m_sets;
+    const std::vector<analysis::PathlineSet>& all = *m_sets;
     for (size_t s = 0; s < all.size(); ++s) {
-        const PathlineSet& set = all[s];
+        const analysis::PathlineSet& set = all[s];
         if (s == 0)
             m_columns = set.columns;
         else if (set.columns != m_columns)
@@ -235,7 +235,7 @@ PathlineLines::PathlineLines(std::shared_ptr<const std::vector<PathlineSet>> set
     // their end step in a single set.
     int s0 = std::numeric_limits<int>::max(), s1 = std::numeric_limits<int>::min();
     double t0 = 0, t1 = 0;
-    for (const PathlineSet& set : all) {
+    for (const analysis::PathlineSet& set : all) {
         if (set.injectionStep < s0)
             s0 = set.injectionStep, t0 = set.injectionTimeMyr;
         if (set.injectionStep > s1)
@@ -244,11 +244,11 @@ PathlineLines::PathlineLines(std::shared_ptr<const std::vector<PathlineSet>> set
     if (!all.empty() && s1 > s0) {
         m_stepMyr = (t1 - t0) / double(s1 - s0);
     } else if (!all.empty()) {
-        const PathlineSet& set = all.front();
+        const analysis::PathlineSet& set = all.front();
         const int duration = set.column(columns::pathline::kDuration), reason = set.column(columns::pathline::kEndReason);
         double longest = 0;
         for (size_t i = 0; duration >= 0 && i < set.lineCount(); ++i)
-            if (reason < 0 || set.attribute(i, size_t(reason)) == float(PathlineEnd::ReachedEndTime))
+            if (reason < 0 || set.attribute(i, size_t(reason)) == float(analysis::PathlineEnd::ReachedEndTime))
                 longest = std::max(longest, double(set.attribute(i, size_t(duration))));
         if (set.endStep > set.injectionStep && longest > 0)
             m_stepMyr = longest / double(set.endStep - set.injectionStep);
@@ -257,7 +257,7 @@ PathlineLines::PathlineLines(std::shared_ptr<const std::vector<PathlineSet>> set
 
 std::span<const float> PathlineLines::points(size_t line) const
 {
-    const PathlineSet& s = set(line);
+    const analysis::PathlineSet& s = set(line);
     const size_t first = s.offsets[m_lineLocal[line]], last = s.offsets[m_lineLocal[line] + 1];
     return std::span<const float>(s.points).subspan(4 * first, 4 * (last - first));
 }
@@ -281,12 +281,12 @@ LegendSpec pathlineLegend(const PathlineStyle& style, const std::vector<std::str
     return {what, colors};
 }
 
-PathlineScene::PathlineScene(std::vector<PathlineSet> sets, float radiusKm)
-    : PathlineScene(std::make_shared<const std::vector<PathlineSet>>(std::move(sets)), radiusKm)
+PathlineScene::PathlineScene(std::vector<analysis::PathlineSet> sets, float radiusKm)
+    : PathlineScene(std::make_shared<const std::vector<analysis::PathlineSet>>(std::move(sets)), radiusKm)
 {
 }
 
-PathlineScene::PathlineScene(std::shared_ptr<const std::vector<PathlineSet>> sets, float radiusKm)
+PathlineScene::PathlineScene(std::shared_ptr<const std::vector<analysis::PathlineSet>> sets, float radiusKm)
 {
     if (!(radiusKm > 0.0f) || !std::isfinite(radiusKm))
         fail("pathlines: tube radius {} km, expected a positive number", radiusKm);
@@ -361,7 +361,7 @@ PathlineScene::PathlineScene(std::shared_ptr<const std::vector<PathlineSet>> set
 
 PathlineScene::~PathlineScene() = default;
 
-const std::vector<PathlineSet>& PathlineScene::sets() const { return m_impl->lines.sets(); }
+const std::vector<analysis::PathlineSet>& PathlineScene::sets() const { return m_impl->lines.sets(); }
 const PathlineLines& PathlineScene::lines() const { return m_impl->lines; }
 size_t PathlineScene::lineCount() const { return m_impl->lines.lineCount(); }
 const std::vector<std::string>& PathlineScene::columns() const { return m_impl->lines.columns(); }
@@ -396,18 +396,18 @@ std::vector<uint8_t> PathlineLines::visibilityFor(const state::RenderState& stat
     // and the filter's ranges, OR-ed.
     struct Test {
         int column = -1;  // -1: filter.coordinate
-        RangeFilter filter;
+        analysis::RangeFilter filter;
     };
     std::vector<Test> tests;
     if (pl.filterByBrushes) {
-        for (NamedRanges& b : groupRanges(state.brushes, "brushes")) {
-            Test t{-1, {-1, findCoordinate(b.name), std::move(b.ranges)}};
+        for (analysis::NamedRanges& b : analysis::groupRanges(state.brushes, "brushes")) {
+            Test t{-1, {-1, grid::findCoordinate(b.name), std::move(b.ranges)}};
             if (!t.filter.coordinate)
                 t.column = int(columnOf("start " + b.name, "brush '" + b.name + "'"));
             tests.push_back(std::move(t));
         }
     }
-    for (NamedRanges& f : groupRanges(pl.filters, "filters")) {
+    for (analysis::NamedRanges& f : analysis::groupRanges(pl.filters, "filters")) {
         const auto first = std::find_if(pl.filters.begin(), pl.filters.end(),
                                         [&](const state::PathlineFilter& x) { return x.name == f.name; });
         tests.push_back({int(columnOf(f.name, fmt::format("filters[{}]", first - pl.filters.begin()))),
@@ -430,7 +430,7 @@ std::vector<uint8_t> PathlineLines::visibilityFor(const state::RenderState& stat
             } else {
                 const double lat = attribute(line, cLat), lon = wrapLonDeg(attribute(line, cLon)),
                              r = attribute(line, cR);
-                v = coordinateValue(*t.filter.coordinate, lat, lon, r);
+                v = grid::coordinateValue(*t.filter.coordinate, lat, lon, r);
             }
             if (!t.filter.contains(v)) {
                 inside = false;
@@ -450,7 +450,7 @@ PathlineStyle PathlineLines::styleFor(const state::PathlineState& pl) const
     if (pl.colorBy == "age") {
         style.colorColumn = -1;
         const double span = m_stepMyr > 0 ? double(pl.window) * m_stepMyr : std::max(1.0, double(m_maxAgeMyr));
-        style.range = pl.range ? *pl.range : ValueRange{0.0f, float(span)};
+        style.range = pl.range ? *pl.range : dataset::ValueRange{0.0f, float(span)};
         return style;
     }
     const auto it = std::find(m_columns.begin(), m_columns.end(), pl.colorBy);

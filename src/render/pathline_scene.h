@@ -40,7 +40,7 @@ struct KernelParams;
 struct PathlineStyle {
     int colorColumn = -1;  // -1: colour by age; otherwise an index into columns()
     ColorMapId colorMap = ColorMapId::BlueWhiteRed;
-    ValueRange range{0, 20};  // value (age in Myr or the column's units) mapped to the map's ends
+    dataset::ValueRange range{0, 20};  // value (age in Myr or the column's units) mapped to the map's ends
     bool ambientOcclusion = true;
     int aoRays = 4;            // occlusion rays per tube pixel and pass (the mean over passes converges)
     float aoDistanceFactor = 12;  // occlusion rays reach this many tube radii
@@ -54,9 +54,9 @@ struct PathlineStyle {
 class PathlineLines {
 public:
     // Throws raypc::Error when the sets' columns differ or a set is malformed (offsets, attributes).
-    explicit PathlineLines(std::shared_ptr<const std::vector<PathlineSet>> sets);
+    explicit PathlineLines(std::shared_ptr<const std::vector<analysis::PathlineSet>> sets);
 
-    const std::vector<PathlineSet>& sets() const { return *m_sets; }
+    const std::vector<analysis::PathlineSet>& sets() const { return *m_sets; }
     size_t lineCount() const { return m_lineSet.size(); }
     const std::vector<std::string>& columns() const { return m_columns; }
     float attribute(size_t line, size_t column) const { return set(line).attribute(m_lineLocal[line], column); }
@@ -77,9 +77,9 @@ public:
     float colorValue(const PathlineStyle& style, size_t line, size_t point) const;
 
 private:
-    const PathlineSet& set(size_t line) const { return (*m_sets)[m_lineSet[line]]; }
+    const analysis::PathlineSet& set(size_t line) const { return (*m_sets)[m_lineSet[line]]; }
 
-    std::shared_ptr<const std::vector<PathlineSet>> m_sets;
+    std::shared_ptr<const std::vector<analysis::PathlineSet>> m_sets;
     std::vector<std::string> m_columns;
     std::vector<uint32_t> m_lineSet, m_lineLocal;  // per global line: its set and index in the set
     double m_stepMyr = 0;
@@ -95,13 +95,13 @@ public:
     // Builds the BVH of every line of `sets` (any order; typically a window, oldest first) with
     // tubes of `radiusKm`. Lines with fewer than 2 points draw nothing. Throws raypc::Error when
     // the radius is not positive, the sets' columns differ, or a set is malformed (offsets).
-    explicit PathlineScene(std::vector<PathlineSet> sets, float radiusKm = 12.0f);
-    PathlineScene(std::shared_ptr<const std::vector<PathlineSet>> sets, float radiusKm);
+    explicit PathlineScene(std::vector<analysis::PathlineSet> sets, float radiusKm = 12.0f);
+    PathlineScene(std::shared_ptr<const std::vector<analysis::PathlineSet>> sets, float radiusKm);
     ~PathlineScene();
     PathlineScene(const PathlineScene&) = delete;
     PathlineScene& operator=(const PathlineScene&) = delete;
 
-    const std::vector<PathlineSet>& sets() const;
+    const std::vector<analysis::PathlineSet>& sets() const;
     const PathlineLines& lines() const;
     // Lines over all sets, numbered set by set (set 0's lines first). Masks are in this order.
     size_t lineCount() const;

@@ -21,9 +21,9 @@ namespace {
 
 // Three sets (steps 3, 4, 5; 2 Myr apart): per set one line starting at lat 0 and one at lat 40,
 // with "start plume" = the start radius / 1000.
-std::vector<PathlineSet> windowSets()
+std::vector<analysis::PathlineSet> windowSets()
 {
-    std::vector<PathlineSet> sets;
+    std::vector<analysis::PathlineSet> sets;
     for (int step = 3; step <= 5; ++step) {
         const double t0 = 2.0 * step;
         std::vector<TestLine> lines = {
@@ -237,7 +237,7 @@ constexpr int kSize = 65;
 constexpr float kTubeRadiusKm = 150;  // about 2 pixels wide at the tube
 const Vec3d kTubeX{5000, 0, -1500}, kTubeTop{5000, 0, 1500};  // a vertical tube at x = 5000 km
 
-std::shared_ptr<StepVolume> constantVolume()
+std::shared_ptr<dataset::StepVolume> constantVolume()
 {
     return makeVolume(makeGrid(16, 9, 32), {{"c", [](double, double, double) { return 1.0f; }},
                                             {"radial", [](double, double r, double) { return float(r); }}});
@@ -264,7 +264,7 @@ RenderParams analyticParams(float opacity)
 
 std::shared_ptr<PathlineScene> tubeScene(std::vector<TestLine> lines)
 {
-    auto scene = std::make_shared<PathlineScene>(std::vector<PathlineSet>{makePathlineSet(0, 0, 1, lines)},
+    auto scene = std::make_shared<PathlineScene>(std::vector<analysis::PathlineSet>{makePathlineSet(0, 0, 1, lines)},
                                                  kTubeRadiusKm);
     PathlineStyle style = scene->style();
     style.ambientOcclusion = false;
@@ -382,8 +382,8 @@ TEST(TubeRendering, MaskHidesLinesWithoutRebuilding)
     // Line A at y = -1500, line B at y = +1500; AO on, several passes (jitter and AO rays).
     const TestLine a = straightLine({5000, -1500, -1500}, {5000, -1500, 1500}, 20, 0, 10);
     const TestLine b = straightLine({5000, 1500, -1500}, {5000, 1500, 1500}, 20, 0, 10);
-    auto both = std::make_shared<PathlineScene>(std::vector<PathlineSet>{makePathlineSet(0, 0, 1, {a, b})}, 200.0f);
-    auto onlyA = std::make_shared<PathlineScene>(std::vector<PathlineSet>{makePathlineSet(0, 0, 1, {a})}, 200.0f);
+    auto both = std::make_shared<PathlineScene>(std::vector<analysis::PathlineSet>{makePathlineSet(0, 0, 1, {a, b})}, 200.0f);
+    auto onlyA = std::make_shared<PathlineScene>(std::vector<analysis::PathlineSet>{makePathlineSet(0, 0, 1, {a})}, 200.0f);
     RenderParams p = analyticParams(0.02f);
     p.core.visible = true;
     const Frame all = renderFrame(p, both, 3);

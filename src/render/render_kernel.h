@@ -81,13 +81,13 @@ struct KernelVariable {
 // (coordinateDefinition in grid/coordinates.h).
 struct KernelBrush {
     bool onCoordinate = false;
-    PointComponent component = PointComponent::X;  // when onCoordinate
+    grid::PointComponent component = grid::PointComponent::X;  // when onCoordinate
     float scale = 1, offset = 0;
     KernelVariable variable;                // otherwise
     // The only range, or with several (an axis' ranges OR-ed, RangeFilter) the hull of them all:
     // the single-range test is all the common case pays, and it rejects what lies outside the hull.
     float min = 0, max = 0;
-    const ValueRange* ranges = nullptr;  // rangeCount > 1: the value must also lie in one of these
+    const dataset::ValueRange* ranges = nullptr;  // rangeCount > 1: the value must also lie in one of these
     int rangeCount = 1;
 };
 

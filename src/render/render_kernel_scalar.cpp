@@ -9,12 +9,12 @@ float coordinateValue(const KernelBrush& brush, Vec3 p, const Located& L)
 {
     float v = 0;
     switch (brush.component) {
-    case PointComponent::X: v = p.x; break;
-    case PointComponent::Y: v = p.y; break;
-    case PointComponent::Z: v = p.z; break;
-    case PointComponent::LatDeg: v = L.latDeg; break;
-    case PointComponent::LonDeg: v = L.lonDeg; break;
-    case PointComponent::RKm: v = L.rKm; break;
+    case grid::PointComponent::X: v = p.x; break;
+    case grid::PointComponent::Y: v = p.y; break;
+    case grid::PointComponent::Z: v = p.z; break;
+    case grid::PointComponent::LatDeg: v = L.latDeg; break;
+    case grid::PointComponent::LonDeg: v = L.lonDeg; break;
+    case grid::PointComponent::RKm: v = L.rKm; break;
     }
     return brush.scale * v + brush.offset;
 }

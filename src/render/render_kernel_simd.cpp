@@ -251,12 +251,12 @@ HWY_INLINE VF CoordinateValue(DF d, const KernelBrush& brush, VF x, VF y, VF z, 
 {
     VF v = x;
     switch (brush.component) {
-    case PointComponent::X: v = x; break;
-    case PointComponent::Y: v = y; break;
-    case PointComponent::Z: v = z; break;
-    case PointComponent::LatDeg: v = L.latDeg; break;
-    case PointComponent::LonDeg: v = L.lonDeg; break;
-    case PointComponent::RKm: v = L.rKm; break;
+    case grid::PointComponent::X: v = x; break;
+    case grid::PointComponent::Y: v = y; break;
+    case grid::PointComponent::Z: v = z; break;
+    case grid::PointComponent::LatDeg: v = L.latDeg; break;
+    case grid::PointComponent::LonDeg: v = L.lonDeg; break;
+    case grid::PointComponent::RKm: v = L.rKm; break;
     }
     return hn::MulAdd(hn::Set(d, brush.scale), v, hn::Set(d, brush.offset));
 }

@@ -24,9 +24,9 @@ Vec3 toXyz(double latDeg, double lonDeg, double rKm)
 }
 
 struct Sampler {
-    std::shared_ptr<StepVolume> volume;
+    std::shared_ptr<dataset::StepVolume> volume;
     VolumeRenderer renderer;
-    explicit Sampler(std::shared_ptr<StepVolume> v) : volume(v), renderer(v)
+    explicit Sampler(std::shared_ptr<dataset::StepVolume> v) : volume(v), renderer(v)
     {
         RenderParams p;
         p.shading.enabled = true;  // binds the gradient (nativeGradient)
@@ -94,7 +94,7 @@ TEST(Sampler, ReproducesGridValuesAndLinearFieldsOnNonUniformGrids)
 {
     // f = lat + 0.01 r is linear in the coordinates; trilinear-in-index interpolation reproduces it
     // exactly at grid points and within the table resolution between them along one axis.
-    const SphericalGrid g = makeGrid(24, 17, 48, 0.5);
+    const grid::SphericalGrid g = makeGrid(24, 17, 48, 0.5);
     const Sampler s(makeVolume(g, {{"f", [](double lat, double r, double) { return float(lat + 0.01 * r); }}}));
     for (size_t a = 0; a < g.nLat(); a += 5)
         for (size_t r = 0; r < g.nR(); r += 4)
@@ -106,7 +106,7 @@ TEST(Sampler, ReproducesGridValuesAndLinearFieldsOnNonUniformGrids)
 
 TEST(Sampler, ContinuousAcrossTheLonSeam)
 {
-    const SphericalGrid g = makeGrid(20, 9, 36);  // 10° lon spacing, last column at 350°
+    const grid::SphericalGrid g = makeGrid(20, 9, 36);  // 10° lon spacing, last column at 350°
     const Sampler s(makeVolume(g, {{"f", [](double, double, double lon) { return float(std::cos(lon * M_PI / 180)); }}}));
     // Between 350° and 360° the value interpolates column 35 (cos 350°) and column 0 (cos 0°).
     const float at355 = s.scalar(toXyz(g.latDeg[10], 355, 5000));
@@ -116,7 +116,7 @@ TEST(Sampler, ContinuousAcrossTheLonSeam)
 
 TEST(Sampler, PolesGiveOneValueForAllLongitudesAndBlendContinuously)
 {
-    const SphericalGrid g = makeGrid(18, 9, 36);  // outermost rows at ±85°
+    const grid::SphericalGrid g = makeGrid(18, 9, 36);  // outermost rows at ±85°
     const Sampler s(makeVolume(g, {{"f", [](double lat, double r, double lon) {
                                         return float(std::sin(lon * M_PI / 180) + lat / 90 + r / 1000);
                                     }}}));
@@ -145,7 +145,7 @@ TEST(Kernel, SelectionFloorIsTheSameInBothKernelsAndLeavesUnselectedSamplesAlone
     RenderParams p;
     p.transfer.range = {-0.8f, 1.0f};
     p.transfer.opacity = {{0, 0.9f}, {0.35f, 0}, {0.65f, 0}, {1, 0.9f}};
-    p.brushes = {{-1, Coordinate::Lon, {{0, 180}}}};  // the eastern half selected
+    p.brushes = {{-1, grid::Coordinate::Lon, {{0, 180}}}};  // the eastern half selected
     p.selectionMinOpacity = 0.2f;
     renderer.setParams(p);
     const kernel::KernelParams& k = renderer.kernelParams();
@@ -191,7 +191,7 @@ TEST(Kernel, SelectionFloorIsTheSameInBothKernelsAndLeavesUnselectedSamplesAlone
 // Shading's gradient on the native grid (nativeGradient) points along the analytic gradient of
 // linear Cartesian fields and of r, on uniform and non-uniform grids, across the lon seam and up to
 // the outermost lat rows; a field constant in lon gives no east component even at the seam.
-void expectGradientDirection(const SphericalGrid& g, std::function<float(Vec3)> field, Vec3 expected,
+void expectGradientDirection(const grid::SphericalGrid& g, std::function<float(Vec3)> field, Vec3 expected,
                              bool radial, double maxDeg)
 {
     const Sampler s(makeVolume(g, {{"f", [&](double lat, double r, double lon) { return field(toXyz(lat, lon, r)); }}}));
@@ -217,7 +217,7 @@ TEST(NativeGradient, PointsAlongTheAnalyticGradient)
 {
     for (const double stretch : {0.0, 0.5}) {
         SCOPED_TRACE(stretch);
-        const SphericalGrid g = makeGrid(60, 41, 120, stretch);
+        const grid::SphericalGrid g = makeGrid(60, 41, 120, stretch);
         expectGradientDirection(g, [](Vec3 p) { return p.z; }, {0, 0, 1}, false, 6);
         expectGradientDirection(g, [](Vec3 p) { return p.x; }, {1, 0, 0}, false, 6);
         expectGradientDirection(g, [](Vec3 p) { return -2 * p.y; }, {0, -1, 0}, false, 6);
@@ -228,7 +228,7 @@ TEST(NativeGradient, PointsAlongTheAnalyticGradient)
 TEST(NativeGradient, MatchesTheFiniteDifferenceOfTheSampledField)
 {
     // Magnitude, not just direction: d/dz of f = 3 z is 3 per km (within the interpolation error).
-    const SphericalGrid g = makeGrid(90, 61, 180);
+    const grid::SphericalGrid g = makeGrid(90, 61, 180);
     const Sampler s(makeVolume(g, {{"f", [](double lat, double r, double lon) { return 3 * toXyz(lat, lon, r).z; }}}));
     for (const Vec3 p : {toXyz(30, 10, 5000), toXyz(-45, 200, 4000), toXyz(5, 359.9, 6000)}) {
         const Vec3 gr = kernel::nativeGradient(s.k(), kernel::locate(s.k(), p.x, p.y, p.z), p);
@@ -280,7 +280,7 @@ TEST(RaySampling, SamplesAreAboutStepFactorCellsApartAndTheMapInverts)
 // caps' ring mean (weighted by lon width) and the lon seam, on a grid whose lon axis is not uniform.
 TEST(Sampler, KernelsEqualGridSamplerOnRandomPointsWithNonUniformLonCapsAndSeam)
 {
-    SphericalGrid g = makeGrid(20, 13, 40, 0.4);
+    grid::SphericalGrid g = makeGrid(20, 13, 40, 0.4);
     g.lonDeg.clear();
     for (int i = 0; i < 40; ++i) {  // columns bunched towards 90° and sparse towards 270°
         const double u = i / 40.0;
@@ -290,7 +290,7 @@ TEST(Sampler, KernelsEqualGridSamplerOnRandomPointsWithNonUniformLonCapsAndSeam)
     const Sampler s(makeVolume(g, {{"f", [](double lat, double r, double lon) {
                                         return float(std::cos(lon * M_PI / 180) * (1 + lat / 90) + 0.0005 * r);
                                     }}}));
-    const GridSampler reference(g);
+    const grid::GridSampler reference(g);
     const float* values = s.volume->values(0);
 
     std::mt19937 rng(11);

@@ -40,7 +40,7 @@ RenderParams resolveParams(const state::RenderState& s, const VariableCatalog& c
     p.height = s.height;
     p.colorVariable = s.colorVariable.empty() ? 0 : variableIndex(s.colorVariable, "colouring");
     auto defaultRange = [&](int var, ColorMapId map) {
-        return defaultColorRange(var < int(catalog.ranges.size()) ? catalog.ranges[size_t(var)] : ValueRange{0, 1},
+        return defaultColorRange(var < int(catalog.ranges.size()) ? catalog.ranges[size_t(var)] : dataset::ValueRange{0, 1},
                                  state::isCentredOnZero(map));
     };
     p.transfer.colorMap = s.colorMap;
@@ -55,7 +55,7 @@ RenderParams resolveParams(const state::RenderState& s, const VariableCatalog& c
              "color.range)",
              catalog.names[size_t(p.colorVariable)], p.transfer.range.min, p.transfer.range.max);
     p.transfer.validate();
-    p.brushes = resolveRangeFilters(std::span<const std::string>(catalog.names), s.brushes, "brushes");
+    p.brushes = analysis::resolveRangeFilters(std::span<const std::string>(catalog.names), s.brushes, "brushes");
     p.core.visible = s.core.visible;
     p.core.color = s.core.color;
     p.core.colorMap = s.core.colorMap;
@@ -70,7 +70,7 @@ RenderParams resolveParams(const state::RenderState& s, const VariableCatalog& c
     return p;
 }
 
-VariableCatalog catalogOf(const Dataset& dataset)
+VariableCatalog catalogOf(const dataset::Dataset& dataset)
 {
     VariableCatalog catalog;
     catalog.names = dataset.variableNames();
@@ -79,7 +79,7 @@ VariableCatalog catalogOf(const Dataset& dataset)
     return catalog;
 }
 
-state::RenderState defaultState(const Dataset& dataset) { return defaultState(catalogOf(dataset)); }
+state::RenderState defaultState(const dataset::Dataset& dataset) { return defaultState(catalogOf(dataset)); }
 
 state::RenderState defaultState(const VariableCatalog& catalog)
 {
@@ -87,14 +87,14 @@ state::RenderState defaultState(const VariableCatalog& catalog)
     const auto anomaly = std::find(catalog.names.begin(), catalog.names.end(), varname::kTemperatureAnomaly);
     const size_t var = anomaly != catalog.names.end() ? size_t(anomaly - catalog.names.begin()) : 0;
     s.colorVariable = catalog.names.at(var);
-    const ValueRange r = catalog.ranges.at(var);
+    const dataset::ValueRange r = catalog.ranges.at(var);
     if (r.min < 0 && r.max > 0) {
         // An anomaly (values either side of zero): symmetric range over the bulk of the values, so
         // that plumes and slabs saturate, as bodies with edges: the tails opaque over 80 km (200 km
         // made them soft, translucent blobs), nothing in the middle 30 % of the range.
         s.colorMap = ColorMapId::BlueWhiteRed;
         const float m = 0.6f * std::max(std::abs(r.min), std::abs(r.max));
-        s.colorRange = ValueRange{-m, m};
+        s.colorRange = dataset::ValueRange{-m, m};
         s.opacity = {{0.0f, 1.0f}, {0.25f, 0.6f}, {0.35f, 0.0f}, {0.65f, 0.0f}, {0.75f, 0.6f}, {1.0f, 1.0f}};
         s.opacityUnitKm = 80.0f;
     } else {
@@ -121,14 +121,14 @@ state::RenderState defaultState(const VariableCatalog& catalog)
     return s;
 }
 
-ResolvedState resolveState(state::RenderState state, const Dataset& dataset)
+ResolvedState resolveState(state::RenderState state, const dataset::Dataset& dataset)
 {
     dataset.checkStep(state.step);
     if (state.level)
         dataset.checkLevel(*state.level);
     // Pathline attributes are checked even while the lines are hidden, so that a state that shows
     // them later does not fail then (the columns follow from the dataset's variables).
-    const std::vector<std::string> columns = pathlineColumns(dataset.variableNames());
+    const std::vector<std::string> columns = analysis::pathlineColumns(dataset.variableNames());
     auto checkColumn = [&](const std::string& name, const std::string& key) {
         if (std::find(columns.begin(), columns.end(), name) == columns.end())
             fail("pathlines: {}: the lines have no attribute '{}'; they have: {}", key, name, fmt::join(columns, ", "));
@@ -143,7 +143,7 @@ ResolvedState resolveState(state::RenderState state, const Dataset& dataset)
     return r;
 }
 
-ResolvedState resolveState(const nlohmann::json& document, const Dataset& dataset, const std::string& what)
+ResolvedState resolveState(const nlohmann::json& document, const dataset::Dataset& dataset, const std::string& what)
 {
     return resolveState(state::parseRenderState(document, what), dataset);
 }

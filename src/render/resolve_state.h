@@ -18,11 +18,11 @@ namespace raypc::render {
 // What a volume offers to resolve names against: variable names and their global ranges.
 struct VariableCatalog {
     std::vector<std::string> names;
-    std::vector<ValueRange> ranges;
+    std::vector<dataset::ValueRange> ranges;
 };
 
 // The catalog of a dataset: its variables' names and global ranges (over all steps).
-VariableCatalog catalogOf(const Dataset& dataset);
+VariableCatalog catalogOf(const dataset::Dataset& dataset);
 
 // Resolves names and defaults. Throws raypc::Error for an unknown variable or coordinate (listing
 // the known ones), a brush with min > max, a degenerate colour range, or camera views that do not
@@ -33,7 +33,7 @@ RenderParams resolveParams(const state::RenderState& state, const VariableCatalo
 // state and `raypc demo`'s picture): the temperature anomaly (if the dataset has it, else the first
 // variable) on the blue-white-red map, opaque only on the hot and cold tails, lit, a dark core, the
 // planet filling 94 % of the image's shorter side, the 410 and 660 km shells and the legend.
-state::RenderState defaultState(const Dataset& dataset);
+state::RenderState defaultState(const dataset::Dataset& dataset);
 // The same for any volume's variables (their names and global ranges).
 state::RenderState defaultState(const VariableCatalog& catalog);
 
@@ -43,9 +43,9 @@ struct ResolvedState {
 };
 // Checks a state against the dataset (step and level in range, names known) and resolves it.
 // Throws raypc::Error naming the key, e.g. "step: 300 out of range 0..11".
-ResolvedState resolveState(state::RenderState state, const Dataset& dataset);
+ResolvedState resolveState(state::RenderState state, const dataset::Dataset& dataset);
 // Parses a state document first (parseRenderState; `what` names the source in messages).
-ResolvedState resolveState(const nlohmann::json& document, const Dataset& dataset, const std::string& what = "state");
+ResolvedState resolveState(const nlohmann::json& document, const dataset::Dataset& dataset, const std::string& what = "state");
 
 // What a state is rendered as: the state itself when stereo is off, else its left and right eye
 // (render/stereo.h): each with its eye's camera (stereoEye: parallel axes, off-axis frustum

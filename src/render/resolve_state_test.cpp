@@ -26,7 +26,7 @@ TEST(RenderState, ResolvesNamesAndRejectsUnknownOnes)
     EXPECT_FLOAT_EQ(p.transfer.range.max, 500);
     ASSERT_EQ(p.brushes.size(), 2u);
     EXPECT_EQ(p.brushes[0].variable, 0);
-    EXPECT_EQ(*p.brushes[1].coordinate, Coordinate::Lat);
+    EXPECT_EQ(*p.brushes[1].coordinate, grid::Coordinate::Lat);
     s.brushes = {{"pressure", 0, 1}};
     try {
         resolveParams(s, catalog);
@@ -53,7 +53,7 @@ TEST(RenderState, RepeatedBrushNamesAreRangesOfOneAxis)
     EXPECT_EQ(toJson(s)["pathlines"]["filters"], doc["pathlines"]["filters"]);
     const RenderParams p = resolveParams(s, catalog);
     ASSERT_EQ(p.brushes.size(), 2u);
-    EXPECT_EQ(*p.brushes[0].coordinate, Coordinate::Depth);
+    EXPECT_EQ(*p.brushes[0].coordinate, grid::Coordinate::Depth);
     ASSERT_EQ(p.brushes[0].ranges.size(), 2u);
     EXPECT_FLOAT_EQ(p.brushes[0].ranges[1].min, 1500);
     EXPECT_EQ(p.brushes[1].variable, 0);

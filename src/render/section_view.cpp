@@ -18,7 +18,7 @@
 
 namespace raypc::render {
 
-SectionLayout sectionLayoutOf(const state::RenderState& s, const SphericalGrid& grid)
+SectionLayout sectionLayoutOf(const state::RenderState& s, const grid::SphericalGrid& grid)
 {
     const int fontPx = legendFontPx(s.width, s.height);
     // Depth labels at the left, the shells' names at the right, the title above, distance labels
@@ -91,7 +91,7 @@ namespace {
 // surface down to the core-mantle boundary top to bottom.
 struct SectionPlane {
     const GreatCircle& circle;
-    const SphericalGrid& grid;
+    const grid::SphericalGrid& grid;
     double left, right, top, bottom, depthSpanKm;
 
     // (lat, lon, r) of the pixel position (x, y); nullopt outside the plot or below the grid.
@@ -113,17 +113,17 @@ struct SectionPlane {
 slice::PixelSamples sampleSection(const SectionPlane& plane, const slice::PointProbe& probe, int width, int height)
 {
     using slice::PointProbe;
-    const GridSampler& sampler = probe.sampler();
+    const grid::GridSampler& sampler = probe.sampler();
     struct Column {
         double latDeg, lonDeg;
-        GridSampler::LateralPart where;
+        grid::GridSampler::LateralPart where;
     };
     std::vector<std::optional<Column>> columns(static_cast<size_t>(width));
     for (int x = 0; x < width; ++x)
         if (const auto p = plane.pointAt(x + 0.5, plane.top))
             if (const auto where = sampler.locateLatLon((*p)[0], (*p)[1]))
                 columns[size_t(x)] = Column{(*p)[0], (*p)[1], *where};
-    std::vector<std::optional<std::pair<double, GridSampler::RadialPart>>> rows(static_cast<size_t>(height));
+    std::vector<std::optional<std::pair<double, grid::GridSampler::RadialPart>>> rows(static_cast<size_t>(height));
     for (int y = 0; y < height; ++y)
         if (const auto p = plane.pointAt(0.5 * (plane.left + plane.right), y + 0.5))
             if (const auto where = sampler.locateRadius((*p)[2]))
@@ -133,7 +133,7 @@ slice::PixelSamples sampleSection(const SectionPlane& plane, const slice::PointP
         const auto& row = rows[size_t(y)];
         if (!column || !row)
             return std::nullopt;
-        return probe.at(GridSampler::combine(column->where, row->second), column->latDeg, column->lonDeg, row->first);
+        return probe.at(grid::GridSampler::combine(column->where, row->second), column->latDeg, column->lonDeg, row->first);
     });
 }
 
@@ -173,7 +173,7 @@ ImageRgba8 sectionPicture(const SliceInputs& in)
     const RenderParams& params = in.resolved->params;
     const state::SectionState& section = state.section;
     const int width = state.width, height = state.height;
-    const SphericalGrid& grid = in.volume->grid();
+    const grid::SphericalGrid& grid = in.volume->grid();
     const GreatCircle circle(section.from, section.to);
     const PointProbe probe(*in.volume, params, in.variableNames, section.flow, "section.flow");
 
@@ -237,11 +237,11 @@ ImageRgba8 sectionPicture(const SliceInputs& in)
     return image;
 }
 
-SectionGrid sectionGrid(const StepVolume& volume, size_t variable, const state::SectionState& section, int columns, int rows)
+SectionGrid sectionGrid(const dataset::StepVolume& volume, size_t variable, const state::SectionState& section, int columns, int rows)
 {
     if (columns < 2 || rows < 2)
         fail("section: a grid of {} x {} points; expected at least 2 x 2", columns, rows);
-    const SphericalGrid& grid = volume.grid();
+    const grid::SphericalGrid& grid = volume.grid();
     const GreatCircle circle(section.from, section.to);
     const double bottom = slice::depthRangeKm(grid).second;
     SectionGrid out;
@@ -257,7 +257,7 @@ SectionGrid sectionGrid(const StepVolume& volume, size_t variable, const state::
         out.grid.rows.push_back(bottom * i / (rows - 1));
     out.grid.depthsKm = out.grid.rows;
     out.grid.values.assign(size_t(rows) * size_t(columns), NAN);
-    const GridSampler sampler(grid);
+    const grid::GridSampler sampler(grid);
     const float* values = volume.values(variable);
     tbb::parallel_for(0, rows, [&](int i) {
         const double r = std::clamp(kSurfaceRadiusKm - out.grid.rows[size_t(i)], grid.rKm.front(), grid.rKm.back());

@@ -68,7 +68,7 @@ ShadowBuildStats ShadowVolume::update(const kernel::KernelParams& k, float stren
         v.value(brush.max);
         v.value(brush.rangeCount);
         if (brush.rangeCount > 1)
-            v.bytes(brush.ranges, sizeof(ValueRange) * size_t(brush.rangeCount));
+            v.bytes(brush.ranges, sizeof(dataset::ValueRange) * size_t(brush.rangeCount));
     }
     const bool rebuildVolume = !m_valid || v.h != m_volumeKey;
     if (rebuildVolume) {
@@ -208,7 +208,7 @@ void ShadowVolume::splatTubes(const PathlineScene* tubes)
     const float perKm = std::numbers::pi_v<float> * r / (h * h * h);
     const std::vector<uint8_t>& visible = tubes->visibility();
     size_t line = 0;
-    for (const PathlineSet& set : tubes->sets()) {
+    for (const analysis::PathlineSet& set : tubes->sets()) {
         for (size_t i = 0; i < set.lineCount(); ++i, ++line) {
             if (line >= visible.size() || !visible[line])
                 continue;

@@ -26,7 +26,7 @@ Vec3 unit(Vec3 v) { return normalize(v); }
 
 // A field whose value is the distance along `l` (a unit vector): a slab of it is a plane slab
 // perpendicular to l.
-std::shared_ptr<StepVolume> planeVolume(Vec3 l)
+std::shared_ptr<dataset::StepVolume> planeVolume(Vec3 l)
 {
     return makeVolume(makeGrid(90, 48, 180), {{"s", [l](double latDeg, double rKm, double lonDeg) {
                                                    const double lat = latDeg * M_PI / 180, lon = lonDeg * M_PI / 180;
@@ -56,7 +56,7 @@ RenderParams slabParams(bool slab)
 // A renderer of `volume` (by default the plane field along l) with `p`, and its kernels' parameters
 // with the light along l. The parameters point into the renderer, so the two are kept together.
 struct LitRenderer {
-    LitRenderer(Vec3 l, const RenderParams& p, std::shared_ptr<StepVolume> volume = nullptr)
+    LitRenderer(Vec3 l, const RenderParams& p, std::shared_ptr<dataset::StepVolume> volume = nullptr)
         : renderer(volume ? std::move(volume) : planeVolume(l))
     {
         renderer.setParams(p);
@@ -241,7 +241,7 @@ std::shared_ptr<PathlineScene> straightTube(double xKm, double yKm, float radius
         line.pointsKm.push_back({xKm, yKm, -1500.0 + 100.0 * i});
         line.timesMyr.push_back(double(i));
     }
-    auto scene = std::make_shared<PathlineScene>(std::vector<PathlineSet>{testing::makePathlineSet(0, 0, 1, {line})},
+    auto scene = std::make_shared<PathlineScene>(std::vector<analysis::PathlineSet>{testing::makePathlineSet(0, 0, 1, {line})},
                                                  radiusKm);
     scene->setVisibility({1});
     PathlineStyle style = scene->style();

@@ -88,7 +88,7 @@ void classifyCell(const kernel::KernelParams& k, const double lo[3], const doubl
     box[5] = uint16_t((last - first + k.bricksLon) % k.bricksLon + 1);
 }
 
-std::shared_ptr<const SkipGridGeometry> buildGeometry(const kernel::KernelParams& k, const BrickLayout& bricks,
+std::shared_ptr<const SkipGridGeometry> buildGeometry(const kernel::KernelParams& k, const grid::BrickLayout& bricks,
                                                       float cellKm)
 {
     auto g = std::make_shared<SkipGridGeometry>();
@@ -120,7 +120,7 @@ std::shared_ptr<const SkipGridGeometry> buildGeometry(const kernel::KernelParams
     return g;
 }
 
-uint64_t hashGrid(const SphericalGrid& grid, const BrickLayout& bricks, float cellKm)
+uint64_t hashGrid(const grid::SphericalGrid& grid, const grid::BrickLayout& bricks, float cellKm)
 {
     uint64_t h = 1469598103934665603ull;
     auto mix = [&](const void* p, size_t bytes) {
@@ -140,7 +140,7 @@ uint64_t hashGrid(const SphericalGrid& grid, const BrickLayout& bricks, float ce
 
 }  // namespace
 
-std::shared_ptr<const SkipGridGeometry> skipGridGeometry(const SphericalGrid& grid, const BrickLayout& bricks,
+std::shared_ptr<const SkipGridGeometry> skipGridGeometry(const grid::SphericalGrid& grid, const grid::BrickLayout& bricks,
                                                          const kernel::KernelParams& gridPart, float cellKm)
 {
     // A few recent grids (a dataset's levels); building one at full resolution takes tens of ms.

@@ -38,7 +38,7 @@ struct SkipGridGeometry {
 // The geometry of a grid whose kernel view (axis maps, caps, radii, brick shift and counts) is
 // `gridPart`, with cells about `cellKm` wide; built in parallel and cached by grid (the levels of a
 // dataset share their grids across steps).
-std::shared_ptr<const SkipGridGeometry> skipGridGeometry(const SphericalGrid& grid, const BrickLayout& bricks,
+std::shared_ptr<const SkipGridGeometry> skipGridGeometry(const grid::SphericalGrid& grid, const grid::BrickLayout& bricks,
                                                          const kernel::KernelParams& gridPart, float cellKm);
 
 // Chebyshev distance, in cells, from each cell to the nearest cell that may hold an active sample

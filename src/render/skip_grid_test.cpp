@@ -83,13 +83,13 @@ TEST(SkipGrid, LonBoxesWrapAcrossTheSeam)
 // A sparse active set on a stretched grid (lat rows at cell centres, so both poles have caps) whose
 // lon axis starts at 2.5 degrees.
 struct Scene {
-    std::shared_ptr<StepVolume> volume;
+    std::shared_ptr<dataset::StepVolume> volume;
     std::unique_ptr<VolumeRenderer> renderer;
 };
 
 Scene sparseScene()
 {
-    SphericalGrid grid = makeGrid(36, 33, 72, 0.3);
+    grid::SphericalGrid grid = makeGrid(36, 33, 72, 0.3);
     for (double& lon : grid.lonDeg)
         lon += 2.5;
     Scene s;

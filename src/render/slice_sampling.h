@@ -29,14 +29,14 @@
 namespace raypc::render::slice {
 
 // The depths a grid covers: from its outermost to its innermost radius.
-inline std::pair<double, double> depthRangeKm(const SphericalGrid& grid)
+inline std::pair<double, double> depthRangeKm(const grid::SphericalGrid& grid)
 {
     return {kSurfaceRadiusKm - grid.rKm.back(), kSurfaceRadiusKm - grid.rKm.front()};
 }
 
 // The radius of `depthKm`, clamped to the grid's; throws raypc::Error naming `what` for a depth
 // outside the grid's depths.
-inline double radiusAtDepth(const SphericalGrid& grid, double depthKm, const std::string& what)
+inline double radiusAtDepth(const grid::SphericalGrid& grid, double depthKm, const std::string& what)
 {
     const auto [top, bottom] = depthRangeKm(grid);
     constexpr double kTolerance = 1e-6;
@@ -48,11 +48,11 @@ inline double radiusAtDepth(const SphericalGrid& grid, double depthKm, const std
 // The values at a point: the colour variable, whether the brushes select it, and the velocity.
 class PointProbe {
 public:
-    PointProbe(const StepVolume& volume, const RenderParams& params, const std::vector<std::string>& names, bool flow,
+    PointProbe(const dataset::StepVolume& volume, const RenderParams& params, const std::vector<std::string>& names, bool flow,
                const std::string& flowKey)
         : m_sampler(volume.grid()), m_params(params), m_color(volume.values(size_t(params.colorVariable)))
     {
-        for (const RangeFilter& f : params.brushes)
+        for (const analysis::RangeFilter& f : params.brushes)
             m_brushValues.push_back(f.variable >= 0 ? volume.values(size_t(f.variable)) : nullptr);
         if (flow) {
             const char* component[3] = {"vx", "vy", "vz"};
@@ -72,7 +72,7 @@ public:
     };
     // At a point whose location on the grid is known (a section locates its columns and its rows
     // once).
-    Sample at(const GridSampler::Location& where, double latDeg, double lonDeg, double rKm) const
+    Sample at(const grid::GridSampler::Location& where, double latDeg, double lonDeg, double rKm) const
     {
         auto value = [&](size_t slot) { return m_sampler.sample(slot == 0 ? m_color : m_brushValues[slot - 1], where); };
         return evaluate(value, latDeg, lonDeg, rKm);
@@ -87,7 +87,7 @@ public:
         if (!radial)
             fail("a shell of radius {} km is outside the grid", rKm);
         m_shellRKm = rKm;
-        const SphericalGrid& g = m_sampler.grid();
+        const grid::SphericalGrid& g = m_sampler.grid();
         auto layerOf = [&](const float* values) {
             std::vector<double> layer(g.nLat() * g.nLon());
             tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
@@ -127,7 +127,7 @@ public:
                kMpsToCmPerYr;
     }
 
-    const GridSampler& sampler() const { return m_sampler; }
+    const grid::GridSampler& sampler() const { return m_sampler; }
 
 private:
     // The colour and whether the brushes select the point, with `value(slot)` the interpolated value
@@ -137,14 +137,14 @@ private:
     {
         bool selected = true;
         for (size_t i = 0; i < m_params.brushes.size() && selected; ++i) {
-            const RangeFilter& f = m_params.brushes[i];
-            const double v = f.variable >= 0 ? value(1 + i) : coordinateValue(*f.coordinate, latDeg, lonDeg, rKm);
+            const analysis::RangeFilter& f = m_params.brushes[i];
+            const double v = f.variable >= 0 ? value(1 + i) : grid::coordinateValue(*f.coordinate, latDeg, lonDeg, rKm);
             selected = f.contains(v);
         }
         return Sample{float(value(size_t(0))), selected};
     }
 
-    GridSampler m_sampler;
+    grid::GridSampler m_sampler;
     const RenderParams& m_params;
     const float* m_color;
     std::vector<const float*> m_brushValues;  // per brush: its variable's values, or null for a coordinate

@@ -97,7 +97,7 @@ struct SectionLayout {
     double left, right, top, bottom, depthSpanKm;
 };
 // Throws raypc::Error when the picture is too small for the section.
-SectionLayout sectionLayoutOf(const state::RenderState& state, const SphericalGrid& grid);
+SectionLayout sectionLayoutOf(const state::RenderState& state, const grid::SphericalGrid& grid);
 
 // "30.0°S 160.0°W": a point as titles write it.
 std::string latLonText(double latDeg, double lonDeg);
@@ -105,7 +105,7 @@ std::string latLonText(double latDeg, double lonDeg);
 // What a slice is drawn from: the volume of the state's step and level, the resolved state, and
 // the words of the title.
 struct SliceInputs {
-    const StepVolume* volume = nullptr;
+    const dataset::StepVolume* volume = nullptr;
     const ResolvedState* resolved = nullptr;  // render/state_renderer.h; params give colour and brushes
     std::vector<std::string> variableNames;   // the volume's, in order (brushes, the flow's vx, vy, vz)
     std::string colorTitle;                   // "temperature anomaly [K]"
@@ -135,7 +135,7 @@ struct SliceGrid {
 // The variable at `depthKm` on a lat-lon grid of cell centres: `stepDeg` apart, lat from
 // -90 + step/2 to 90 - step/2, lon from step/2 east. Throws raypc::Error for a depth outside the
 // grid's shell (naming `what`) or a step that does not divide 180.
-SliceGrid latLonSlice(const StepVolume& volume, size_t variable, double depthKm, double stepDeg,
+SliceGrid latLonSlice(const dataset::StepVolume& volume, size_t variable, double depthKm, double stepDeg,
                       const std::string& what = "--depth");
 // The variable on the section: `columns` distances (km along the surface, 0 at `from`) by `rows`
 // depths from the surface to the grid's innermost radius, both with their end points.
@@ -143,6 +143,6 @@ struct SectionGrid {
     SliceGrid grid;  // rows: depth (km) in grid.rows, columns: distance (km)
     std::vector<double> distanceDeg, latDeg, lonDeg;  // per column
 };
-SectionGrid sectionGrid(const StepVolume& volume, size_t variable, const state::SectionState& section, int columns, int rows);
+SectionGrid sectionGrid(const dataset::StepVolume& volume, size_t variable, const state::SectionState& section, int columns, int rows);
 
 }  // namespace raypc::render

@@ -52,8 +52,8 @@ float colourError(const std::array<float, 3>& a, Rgb b)
 class Slices : public ::testing::Test {
 protected:
     // 2° cells; the outermost rows at ±89°, so the poles lie in the caps the sampler blends.
-    SphericalGrid grid = makeGrid(90, 21, 180);
-    std::shared_ptr<StepVolume> volume = makeVolume(grid, {{"f", field}});
+    grid::SphericalGrid grid = makeGrid(90, 21, 180);
+    std::shared_ptr<dataset::StepVolume> volume = makeVolume(grid, {{"f", field}});
     std::vector<std::string> names{"f"};
 };
 
@@ -107,7 +107,7 @@ TEST_F(Slices, BrushesGreyWhatTheyLeaveOut)
 {
     ResolvedState r = stateFor(400, 240);
     r.state.map.projection = MapProjection::Equirectangular;
-    r.params.brushes = {RangeFilter{-1, Coordinate::Lat, {{0.0f, 90.0f}}}};  // the northern hemisphere
+    r.params.brushes = {analysis::RangeFilter{-1, grid::Coordinate::Lat, {{0.0f, 90.0f}}}};  // the northern hemisphere
     const SliceInputs in{volume.get(), &r, names, "f", "step 0", nullptr};
     const ImageRgba8 image = mapPicture(in);
     const MapFrame frame = mapFrameOf(r.state);
@@ -193,7 +193,7 @@ TEST_F(Slices, SectionByAzimuthAndLength)
 // A blob at 30°E on the equator, 1000 km deep: the section from 0°E to 60°E meets it half way.
 TEST(SectionOfABlob, CrossesItAtItsDistanceAndDepth)
 {
-    const SphericalGrid grid = makeGrid(90, 41, 180);
+    const grid::SphericalGrid grid = makeGrid(90, 41, 180);
     const Vec3d centre = sphericalToCartesianKm(0, 30, kSurfaceRadiusKm - 1000);
     const auto blob = [&](double lat, double r, double lon) {
         const Vec3d d = sphericalToCartesianKm(lat, lon, r) - centre;
@@ -238,7 +238,7 @@ TEST(SectionOfABlob, CrossesItAtItsDistanceAndDepth)
 
 TEST(MapFlow, NeedsTheVelocity)
 {
-    const SphericalGrid grid = makeGrid(18, 5, 36);
+    const grid::SphericalGrid grid = makeGrid(18, 5, 36);
     const auto volume = makeVolume(grid, {{"f", field}});
     ResolvedState r = stateFor(200, 120);
     r.state.map.flow = true;
@@ -257,7 +257,7 @@ TEST(MapFlow, NeedsTheVelocity)
 // a line 2000 km deep shows only faintly on the map at 660 km.
 TEST_F(Slices, PathlinesOnMapsAndSections)
 {
-    PathlineSet set;
+    analysis::PathlineSet set;
     set.endStep = 1;
     set.offsets = {0};
     auto addLine = [&](auto pointAt) {
@@ -270,7 +270,7 @@ TEST_F(Slices, PathlinesOnMapsAndSections)
     };
     addLine([](int k) { return std::array{0.0, double(k), 660.0}; });         // the equator, 0 to 40°E
     addLine([](int k) { return std::array{double(k) - 20, 100.0, 2000.0}; });  // 100°E, 20°S to 20°N, deep
-    const PathlineLines lines(std::make_shared<const std::vector<PathlineSet>>(std::vector{set}));
+    const PathlineLines lines(std::make_shared<const std::vector<analysis::PathlineSet>>(std::vector{set}));
 
     ResolvedState r = stateFor(900, 520);
     r.state.pathlines.visible = true;

@@ -24,7 +24,7 @@ namespace raypc::render {
 namespace {
 
 // A variable as legends and titles name it: "temperature anomaly [K]".
-std::string variableTitle(const VariableInfo& info)
+std::string variableTitle(const dataset::VariableInfo& info)
 {
     return info.units.empty() ? info.name : fmt::format("{} [{}]", info.name, displayUnits(info.units));
 }
@@ -56,14 +56,14 @@ std::vector<float> averagedDepthKm(const ViewFrames& frames, int& width, int& he
     return sideBySide(eyes, views[0], views[1]);
 }
 
-StateRenderer::StateRenderer(std::shared_ptr<const Dataset> dataset, StateSources sources)
+StateRenderer::StateRenderer(std::shared_ptr<const dataset::Dataset> dataset, StateSources sources)
     : m_dataset(std::move(dataset)), m_sources(std::move(sources))
 {
     if (!m_sources.volume)
         m_sources.volume = [d = m_dataset](int step, int level) { return d->load(step, level); };
     if (!m_sources.pathlines)
         m_sources.pathlines = [d = m_dataset](int step, int window) {
-            return std::make_shared<const std::vector<PathlineSet>>(loadPathlineWindow(d->dir(), step, window));
+            return std::make_shared<const std::vector<analysis::PathlineSet>>(analysis::loadPathlineWindow(d->dir(), step, window));
         };
 }
 
@@ -89,9 +89,9 @@ bool StateRenderer::usePaint(const ResolvedState& resolved)
     if (paintsFeatures(state)) {
         const state::FeatureSettings& f = state.features;
         key = fmt::format("{}|{}|{}|{}|{}", state.step, f.level, f.minVolumeKm3, f.colorById, fmt::join(f.highlight, ","));
-        for (const RangeFilter& b : resolved.params.brushes) {
+        for (const analysis::RangeFilter& b : resolved.params.brushes) {
             key += fmt::format("|{}/{}", b.variable, b.coordinate ? int(*b.coordinate) : -1);
-            for (const ValueRange& r : b.ranges)
+            for (const dataset::ValueRange& r : b.ranges)
                 key += fmt::format(":{},{}", r.min, r.max);
         }
         m_paintFilters = resolved.params.brushes;
@@ -106,7 +106,7 @@ bool StateRenderer::usePaint(const ResolvedState& resolved)
     return !key.empty();
 }
 
-std::shared_ptr<const StepVolume> StateRenderer::volumeFor(int step, int level)
+std::shared_ptr<const dataset::StepVolume> StateRenderer::volumeFor(int step, int level)
 {
     auto volume = m_sources.volume(step, level);
     if (m_paintKey.empty())
@@ -115,12 +115,12 @@ std::shared_ptr<const StepVolume> StateRenderer::volumeFor(int step, int level)
         return it->second;
     const auto start = std::chrono::steady_clock::now();
     const int labelLevel = std::min(m_paintSettings.level, int(m_dataset->levels().size()) - 1);
-    const SphericalGrid& labelGrid = m_dataset->levels()[size_t(labelLevel)].grid;
+    const grid::SphericalGrid& labelGrid = m_dataset->levels()[size_t(labelLevel)].grid;
     if (!m_paintLabels) {
         const auto labelVolume = labelLevel == level ? volume : m_sources.volume(step, labelLevel);
-        m_paintLabels = extractFeatures(*labelVolume, m_paintFilters, featureOptions(m_paintSettings)).labels;
+        m_paintLabels = analysis::extractFeatures(*labelVolume, m_paintFilters, state::featureOptions(m_paintSettings)).labels;
     }
-    auto painted = StepVolume::withVariable(
+    auto painted = dataset::StepVolume::withVariable(
         volume, featurePaintField(volume->grid(), labelGrid, *m_paintLabels, m_paintSettings));
     spdlog::debug("features painted on step {} level {} in {:.0f} ms", step, level, millisecondsSince(start));
     m_paintedVolumes[level] = painted;
@@ -133,7 +133,7 @@ std::shared_ptr<const PathlineScene> StateRenderer::pathlinesFor(const state::Re
         return nullptr;
     // Reload class: a new step or window loads that window and builds a new BVH.
     if (!m_scene || m_sceneStep != state.step || m_sceneWindow != state.pathlines.window) {
-        std::shared_ptr<const std::vector<PathlineSet>> window;
+        std::shared_ptr<const std::vector<analysis::PathlineSet>> window;
         try {
             window = m_sources.pathlines(state.step, state.pathlines.window);
         } catch (const Error& e) {
@@ -343,7 +343,7 @@ std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const 
     std::vector<uint8_t> out;
     if (ref.shells.visible || ref.graticule.visible || ref.coastlines.visible || state.map.showInView) {
         std::vector<float> rgba = frame.averagedRgba();
-        const SphericalGrid& grid = m_dataset->levels().front().grid;
+        const grid::SphericalGrid& grid = m_dataset->levels().front().grid;
         const auto coastlines = ref.coastlines.visible ? defaultCoastlines() : nullptr;
         const SliceMarks marks{state.map.depthKm, state.section.from, state.section.to};
         drawReferenceGeometry(ref, state.camera, frame.width(), frame.height(), float(grid.rKm.back()),
@@ -368,7 +368,7 @@ std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const 
         if (state.pathlines.visible && m_scene && m_sceneStep == state.step) {
             legends.push_back(pathlineLegend(m_scene->style(), m_scene->columns()));
         }
-        const SphericalGrid& grid = m_dataset->levels().front().grid;
+        const grid::SphericalGrid& grid = m_dataset->levels().front().grid;
         drawLegends(out, frame.width(), frame.height(), legends,
                     shellKey(ref, float(grid.rKm.back()), float(grid.rKm.front())));
     }

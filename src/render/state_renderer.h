@@ -64,8 +64,8 @@ void checkPictureFitsMemory(const state::RenderState& state, bool withDepth, con
 // Where a StateRenderer gets volumes and pathlines. Unset members read the dataset directly
 // (Dataset::load, loadPathlineWindow); the server passes its shared caches.
 struct StateSources {
-    std::function<std::shared_ptr<const StepVolume>(int step, int level)> volume;
-    std::function<std::shared_ptr<const std::vector<PathlineSet>>(int step, int window)> pathlines;
+    std::function<std::shared_ptr<const dataset::StepVolume>(int step, int level)> volume;
+    std::function<std::shared_ptr<const std::vector<analysis::PathlineSet>>(int step, int window)> pathlines;
 };
 
 // How the level is chosen when the state leaves it open (RenderState::level unset).
@@ -104,7 +104,7 @@ void gatherTilesToRoot(FrameBuffer& frame);
 
 class StateRenderer {
 public:
-    explicit StateRenderer(std::shared_ptr<const Dataset> dataset, StateSources sources = {});
+    explicit StateRenderer(std::shared_ptr<const dataset::Dataset> dataset, StateSources sources = {});
     ~StateRenderer();
     StateRenderer(const StateRenderer&) = delete;
     StateRenderer& operator=(const StateRenderer&) = delete;
@@ -187,17 +187,17 @@ private:
     bool usePaint(const ResolvedState& resolved);
     // The volume a renderer of (step, level) draws: the source's, with the painted features' slots
     // as a last variable while the state paints them.
-    std::shared_ptr<const StepVolume> volumeFor(int step, int level);
+    std::shared_ptr<const dataset::StepVolume> volumeFor(int step, int level);
 
-    std::shared_ptr<const Dataset> m_dataset;
+    std::shared_ptr<const dataset::Dataset> m_dataset;
     StateSources m_sources;
     std::string m_paintKey;  // empty: nothing painted
-    std::vector<RangeFilter> m_paintFilters;
+    std::vector<analysis::RangeFilter> m_paintFilters;
     state::FeatureSettings m_paintSettings;
     // Of m_paintKey, found on first use: the step's feature labels (on the grid of features.level),
     // and the painted volume of each level (the views of a stereo pair share one).
     std::optional<std::vector<int32_t>> m_paintLabels;
-    std::map<int, std::shared_ptr<const StepVolume>> m_paintedVolumes;
+    std::map<int, std::shared_ptr<const dataset::StepVolume>> m_paintedVolumes;
     int m_rendererStep = -1;
     std::map<std::pair<int, int>, std::unique_ptr<VolumeRenderer>> m_renderers;  // by (level, view), of m_rendererStep
     std::shared_ptr<PathlineScene> m_scene;

@@ -21,17 +21,17 @@ namespace {
 // What a grid point is, for a target: the generator's feature there (nullptr: background), its
 // part, whether it is in the part's core, and the point's depth.
 struct Point {
-    const SynthFeature* feature;
-    SynthPart part;
+    const synth::SynthFeature* feature;
+    synth::SynthPart part;
     bool core;
     double depthKm;
 };
 using Target = std::function<bool(const Point&)>;
 
-bool isSlab(const Point& p) { return p.feature && p.feature->kind == SynthFeature::Kind::Slab; }
-bool isPlume(const Point& p) { return p.feature && p.feature->kind == SynthFeature::Kind::Plume; }
+bool isSlab(const Point& p) { return p.feature && p.feature->kind == synth::SynthFeature::Kind::Slab; }
+bool isPlume(const Point& p) { return p.feature && p.feature->kind == synth::SynthFeature::Kind::Plume; }
 bool stallsAt(const Point& p, double depthKm) { return p.feature && p.feature->stallDepthKm == depthKm; }
-bool isStem(const Point& p) { return p.part == SynthPart::PlumeConduit || p.part == SynthPart::PlumeHead; }
+bool isStem(const Point& p) { return p.part == synth::SynthPart::PlumeConduit || p.part == synth::SynthPart::PlumeHead; }
 bool near660(const Point& p) { return p.depthKm >= 560 && p.depthKm <= 760; }
 
 // The expansivity's temperature sensitivity is fully positive above 1500 km, fully negative below
@@ -76,7 +76,7 @@ std::vector<PresetCase> presetCases()
         {"task3-plumes-1600km.json", "heads and pancakes of the plumes stalled at 1600 km",
          [](const Point& p) {
              return isPlume(p) && stallsAt(p, 1600) &&
-                    (p.part == SynthPart::PlumeHead || p.part == SynthPart::PlumePancake1600);
+                    (p.part == synth::SynthPart::PlumeHead || p.part == synth::SynthPart::PlumePancake1600);
          },
          "plumes", isPlume, "slabs", isSlab},
         {"task4-plumes-660km.json", "plumes stalled at 660 km, at 560–760 km",
@@ -101,7 +101,7 @@ std::vector<PresetCase> presetCases()
         // feature: its precision against features is printed, not asserted, and the cold pools
         // lying in that layer are selected too.
         {"appendix-hot-with-pathlines.json", "plume piles on the CMB",
-         [](const Point& p) { return p.part == SynthPart::PlumePile; }, "plumes", isPlume, "",
+         [](const Point& p) { return p.part == synth::SynthPart::PlumePile; }, "plumes", isPlume, "",
          [](const Point&) { return false; }, false},
     };
 }
@@ -111,34 +111,34 @@ std::vector<PresetCase> presetCases()
 // so that any selection is split by target in one pass.
 struct DemoTime {
     double timeMyr;
-    std::vector<SynthFeature> features;
+    std::vector<synth::SynthFeature> features;
     std::vector<double> rKm;
-    std::shared_ptr<StepVolume> volume;
+    std::shared_ptr<dataset::StepVolume> volume;
     std::vector<std::string> variableNames;
     std::vector<uint32_t> classes;
     size_t classCount = 0;
 
     explicit DemoTime(double t) : timeMyr(t)
     {
-        const SynthOptions options;
-        features = syntheticFeatures(options, t);
-        Snapshot snap = synthesizeSnapshot(options, t);
-        addDerivedVariables(snap);
-        for (const Field& f : snap.fields)
+        const synth::SynthOptions options;
+        features = synth::syntheticFeatures(options, t);
+        grid::Snapshot snap = synth::synthesizeSnapshot(options, t);
+        preprocess::addDerivedVariables(snap);
+        for (const grid::Field& f : snap.fields)
             variableNames.push_back(f.name);
-        const SynthTruth truth = syntheticTruth(options, t, snap.grid);
-        const SphericalGrid& g = snap.grid;
+        const synth::SynthTruth truth = synth::syntheticTruth(options, t, snap.grid);
+        const grid::SphericalGrid& g = snap.grid;
         rKm = g.rKm;
-        classCount = (features.size() + 1) * kSynthPartCount * 2 * g.nR();
+        classCount = (features.size() + 1) * synth::kSynthPartCount * 2 * g.nR();
         classes.resize(g.cellCount());
         for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
             for (size_t iR = 0; iR < g.nR(); ++iR)
                 for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
                     const size_t i = g.index(iLat, iR, iLon);
-                    const size_t featurePart = size_t(truth.feature[i] + 1) * kSynthPartCount + size_t(truth.part[i]);
+                    const size_t featurePart = size_t(truth.feature[i] + 1) * synth::kSynthPartCount + size_t(truth.part[i]);
                     classes[i] = static_cast<uint32_t>((featurePart * 2 + (truth.inCore(i) ? 1 : 0)) * g.nR() + iR);
                 }
-        volume = StepVolume::fromSnapshot(snap);
+        volume = dataset::StepVolume::fromSnapshot(snap);
     }
 
     Point decode(size_t c) const
@@ -147,8 +147,8 @@ struct DemoTime {
         c /= rKm.size();
         const bool core = c % 2 == 1;
         c /= 2;
-        const size_t f = c / kSynthPartCount;
-        return {f == 0 ? nullptr : &features[f - 1], static_cast<SynthPart>(c % kSynthPartCount), core,
+        const size_t f = c / synth::kSynthPartCount;
+        return {f == 0 ? nullptr : &features[f - 1], static_cast<synth::SynthPart>(c % synth::kSynthPartCount), core,
                 kSurfaceRadiusKm - rKm[iR]};
     }
 };
@@ -170,8 +170,8 @@ struct Figures {
 
 Figures measure(const DemoTime& demo, const PresetCase& preset, std::span<const state::BrushSpec> brushes)
 {
-    const auto filters = resolveRangeFilters(std::span<const std::string>(demo.variableNames), brushes);
-    const ClassVolumes v = selectedVolumeByClass(*demo.volume, filters, demo.classes, demo.classCount);
+    const auto filters = analysis::resolveRangeFilters(std::span<const std::string>(demo.variableNames), brushes);
+    const analysis::ClassVolumes v = analysis::selectedVolumeByClass(*demo.volume, filters, demo.classes, demo.classCount);
     double target = 0, targetSelected = 0, selected = 0, right = 0, avoided = 0;
     for (size_t c = 0; c < demo.classCount; ++c) {
         const Point p = demo.decode(c);

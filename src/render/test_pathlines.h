@@ -20,16 +20,16 @@ struct TestLine {
 };
 
 // `values(name, point)` gives a variable's value at a point (for the start/end columns).
-inline PathlineSet makePathlineSet(int injectionStep, double injectionTimeMyr, int endStep,
+inline analysis::PathlineSet makePathlineSet(int injectionStep, double injectionTimeMyr, int endStep,
                                    const std::vector<TestLine>& lines, const std::vector<std::string>& variables = {},
                                    const std::function<double(const std::string&, const Vec3d&)>& values = {})
 {
-    PathlineSet set;
+    analysis::PathlineSet set;
     set.injectionStep = injectionStep;
     set.injectionTimeMyr = injectionTimeMyr;
     set.endStep = endStep;
     set.seedField = "temperature anomaly";
-    set.columns = pathlineColumns(variables);
+    set.columns = analysis::pathlineColumns(variables);
     set.units.assign(set.columns.size(), "");
     set.offsets.push_back(0);
     for (const TestLine& line : lines) {

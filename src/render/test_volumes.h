@@ -15,9 +15,9 @@ namespace raypc::render::testing {
 
 // A centred grid: lat rows at cell centres (no pole rows), r from the CMB to the surface, lon from 0.
 // `stretch` > 0 makes r and lat non-uniform (denser near the ends) to exercise the coordinate maps.
-inline SphericalGrid makeGrid(int nLat, int nR, int nLon, double stretch = 0.0)
+inline grid::SphericalGrid makeGrid(int nLat, int nR, int nLon, double stretch = 0.0)
 {
-    SphericalGrid g;
+    grid::SphericalGrid g;
     for (int i = 0; i < nLat; ++i) {
         const double u = (i + 0.5) / nLat;  // (0, 1)
         const double w = u + stretch * std::sin(2 * M_PI * u) / (2 * M_PI);
@@ -40,13 +40,13 @@ struct NamedField {
     FieldFn fn;
 };
 
-inline std::shared_ptr<StepVolume> makeVolume(const SphericalGrid& grid, const std::vector<NamedField>& fields,
+inline std::shared_ptr<dataset::StepVolume> makeVolume(const grid::SphericalGrid& grid, const std::vector<NamedField>& fields,
                                               uint32_t brickSize = 8)
 {
-    Snapshot s;
+    grid::Snapshot s;
     s.grid = grid;
     for (const auto& f : fields) {
-        Field field;
+        grid::Field field;
         field.name = f.name;
         field.units = "1";
         field.values.resize(grid.cellCount());
@@ -56,7 +56,7 @@ inline std::shared_ptr<StepVolume> makeVolume(const SphericalGrid& grid, const s
                     field.values[grid.index(a, r, o)] = f.fn(grid.latDeg[a], grid.rKm[r], grid.lonDeg[o]);
         s.fields.push_back(std::move(field));
     }
-    return StepVolume::fromSnapshot(s, brickSize);
+    return dataset::StepVolume::fromSnapshot(s, brickSize);
 }
 
 // A smooth "plume" field with both signs: blobs at fixed places plus a radial trend.

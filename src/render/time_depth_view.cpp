@@ -104,10 +104,10 @@ TimeDepthOf parseTimeDepthOf(const std::string& text, const std::string& what)
     fail("{} '{}': expected share, selected-mean or shell-mean", what, text.substr(0, 40));
 }
 
-void appendTimeDepthValues(std::span<const StepSelection> selections, TimeDepthOf of, std::vector<float>& out)
+void appendTimeDepthValues(std::span<const analysis::StepSelection> selections, TimeDepthOf of, std::vector<float>& out)
 {
-    for (const StepSelection& sel : selections) {
-        const SelectionStats& s = sel.stats;
+    for (const analysis::StepSelection& sel : selections) {
+        const analysis::SelectionStats& s = sel.stats;
         for (size_t iR = 0; iR < s.volumeByRadiusKm3.size(); ++iR)
             out.push_back(float(of == TimeDepthOf::Share          ? 100.0 * s.volumeByRadiusKm3[iR] / s.shellVolumeByRadiusKm3[iR]
                                 : of == TimeDepthOf::SelectedMean ? s.selectedMeanByRadius[iR]
@@ -115,8 +115,8 @@ void appendTimeDepthValues(std::span<const StepSelection> selections, TimeDepthO
     }
 }
 
-TimeDepthInputs timeDepthInputs(const Dataset& dataset, int first, int last, int level, std::vector<float> values,
-                                TimeDepthOf of, const VariableInfo* mean, size_t ranges)
+TimeDepthInputs timeDepthInputs(const dataset::Dataset& dataset, int first, int last, int level, std::vector<float> values,
+                                TimeDepthOf of, const dataset::VariableInfo* mean, size_t ranges)
 {
     if (of != TimeDepthOf::Share && !mean)
         fail("time-depth picture: the mean of which variable? (none given)");

@@ -47,13 +47,13 @@ enum class TimeDepthOf { Share, SelectedMean, ShellMean };
 TimeDepthOf parseTimeDepthOf(const std::string& text, const std::string& what);
 // Appends the picture's values of `selections` (steps in order), step-major; NaN where a mean has
 // nothing selected.
-void appendTimeDepthValues(std::span<const StepSelection> selections, TimeDepthOf of, std::vector<float>& out);
+void appendTimeDepthValues(std::span<const analysis::StepSelection> selections, TimeDepthOf of, std::vector<float>& out);
 // The picture of steps first..last of `dataset` at `level` from their `values` (appendTimeDepthValues):
 // colours (a share over [0, its largest], viridis; a mean over its range, centred vik when the values
 // take both signs), the legend's and the picture's titles; `mean` (the means' variable) is needed
 // unless `of` is Share; `ranges`: the selection's range count, for the title. Size, background and
 // marks are left at their defaults for the caller.
-TimeDepthInputs timeDepthInputs(const Dataset& dataset, int first, int last, int level, std::vector<float> values,
-                                TimeDepthOf of, const VariableInfo* mean, size_t ranges);
+TimeDepthInputs timeDepthInputs(const dataset::Dataset& dataset, int first, int last, int level, std::vector<float> values,
+                                TimeDepthOf of, const dataset::VariableInfo* mean, size_t ranges);
 
 }  // namespace raypc::render

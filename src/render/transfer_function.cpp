@@ -7,7 +7,7 @@
 
 namespace raypc::render {
 
-ValueRange defaultColorRange(ValueRange r, bool centredOnZero)
+dataset::ValueRange defaultColorRange(dataset::ValueRange r, bool centredOnZero)
 {
     if (centredOnZero) {
         const float m = std::max(std::abs(r.min), std::abs(r.max));

@@ -21,11 +21,11 @@ using state::OpacityPoint;  // state/view_types.h
 // pathlines and the UI, which takes it from /api/info): symmetric about zero for maps centred on
 // zero (isCentredOnZero: ±the larger magnitude), and a constant (or empty) range widened by 0.5
 // each way so that it stays usable.
-ValueRange defaultColorRange(ValueRange values, bool centredOnZero);
+dataset::ValueRange defaultColorRange(dataset::ValueRange values, bool centredOnZero);
 
 struct TransferFunction {
     ColorMapId colorMap = ColorMapId::Viridis;
-    ValueRange range{0, 1};  // values outside are clamped to the ends
+    dataset::ValueRange range{0, 1};  // values outside are clamped to the ends
     std::vector<OpacityPoint> opacity = {{0, 0}, {1, 0.5f}};
     float opacityUnitKm = 100.0f;
     // Colour control points (the UI's editor, a ParaView colour map): when not empty they replace

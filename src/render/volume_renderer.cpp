@@ -149,7 +149,7 @@ kernel::ColorTable viewOf(const TransferTable& t)
 
 }  // namespace
 
-std::vector<float> coordinateBrickBounds(const SphericalGrid& g, const BrickLayout& bricks, Coordinate c)
+std::vector<float> coordinateBrickBounds(const grid::SphericalGrid& g, const grid::BrickLayout& bricks, grid::Coordinate c)
 {
     std::vector<float> out(bricks.brickCount() * 2);
     const uint32_t s = bricks.size;
@@ -165,19 +165,19 @@ std::vector<float> coordinateBrickBounds(const SphericalGrid& g, const BrickLayo
                 // Small pads absorb the kernel's angle approximation (about 1e-5 rad).
                 Interval v{};
                 switch (c) {
-                case Coordinate::Lat: v = {a0 - 0.01, a1 + 0.01}; break;
-                case Coordinate::Lon: v = wraps ? Interval{0, 360} : Interval{o0 - 0.01, o1 + 0.01}; break;
-                case Coordinate::Radius: v = {r0 - 0.01, r1 + 0.01}; break;
-                case Coordinate::Depth: v = {kSurfaceRadiusKm - r1 - 0.01, kSurfaceRadiusKm - r0 + 0.01}; break;
-                case Coordinate::X:
+                case grid::Coordinate::Lat: v = {a0 - 0.01, a1 + 0.01}; break;
+                case grid::Coordinate::Lon: v = wraps ? Interval{0, 360} : Interval{o0 - 0.01, o1 + 0.01}; break;
+                case grid::Coordinate::Radius: v = {r0 - 0.01, r1 + 0.01}; break;
+                case grid::Coordinate::Depth: v = {kSurfaceRadiusKm - r1 - 0.01, kSurfaceRadiusKm - r0 + 0.01}; break;
+                case grid::Coordinate::X:
                     v = mul(mul({r0, r1}, trigRange(a0, a1, 0)), trigRange(o0, o1, 0));
                     v = {v.lo - 1, v.hi + 1};
                     break;
-                case Coordinate::Y:
+                case grid::Coordinate::Y:
                     v = mul(mul({r0, r1}, trigRange(a0, a1, 0)), trigRange(o0, o1, 90));
                     v = {v.lo - 1, v.hi + 1};
                     break;
-                case Coordinate::Z:
+                case grid::Coordinate::Z:
                     v = mul({r0, r1}, trigRange(a0, a1, 90));
                     v = {v.lo - 1, v.hi + 1};
                     break;
@@ -202,14 +202,14 @@ struct VolumeRenderer::Impl {
     std::vector<float> zeroCapMean, gradRCapMean;
     int gradientVariable = -1;
     float drKm = 1, dAngleRad = 0.01f;
-    BrickLayout activity;  // the bricks skipping decides on (activityBrickSize)
-    std::map<Coordinate, std::vector<float>> coordinateBounds;  // coordinateBrickBounds, when first brushed
+    grid::BrickLayout activity;  // the bricks skipping decides on (activityBrickSize)
+    std::map<grid::Coordinate, std::vector<float>> coordinateBounds;  // coordinateBrickBounds, when first brushed
     int brickShift = 3;
 
     // Baked per setParams (restart class).
     TransferTable table, coreTable;
     std::vector<kernel::KernelBrush> brushes;
-    std::vector<ValueRange> brushRanges;  // the brushes' ranges, axis after axis
+    std::vector<dataset::ValueRange> brushRanges;  // the brushes' ranges, axis after axis
     std::vector<int32_t> brickActive;
     std::shared_ptr<const SkipGridGeometry> skipGeometry;  // per grid, shared
     std::vector<uint8_t> cellDistance;
@@ -220,12 +220,12 @@ struct VolumeRenderer::Impl {
     std::unique_ptr<ShadowVolume> shadows;          // made on the first pass with shading.shadows
 };
 
-VolumeRenderer::VolumeRenderer(std::shared_ptr<const StepVolume> volume)
+VolumeRenderer::VolumeRenderer(std::shared_ptr<const dataset::StepVolume> volume)
     : m_volume(std::move(volume)), m_impl(std::make_unique<Impl>())
 {
     if (!m_volume)
         fail("renderer: no volume");
-    const SphericalGrid& g = m_volume->grid();
+    const grid::SphericalGrid& g = m_volume->grid();
     if (g.nLat() < 2 || g.nR() < 2 || g.nLon() < 2)
         fail("renderer: grid {}x{}x{} (lat, r, lon), expected at least 2 points per axis", g.nLat(), g.nR(), g.nLon());
     if (g.cellCount() >= size_t(1) << 31)
@@ -238,7 +238,7 @@ VolumeRenderer::VolumeRenderer(std::shared_ptr<const StepVolume> volume)
     im.r = buildAxis(g.rKm, g.rKm.front(), g.rKm.back(), false);
     im.lon = buildAxis(g.lonDeg, 0.0, 360.0, true);
     im.drKm = float((g.rKm.back() - g.rKm.front()) / double(g.nR() - 1));
-    im.activity = BrickLayout::forGrid(g, activityBrickSize(bs, im.drKm));
+    im.activity = grid::BrickLayout::forGrid(g, activityBrickSize(bs, im.drKm));
     im.brickShift = std::countr_zero(im.activity.size);
     im.dAngleRad = float(degToRad(std::min((g.latDeg.back() - g.latDeg.front()) / double(g.nLat() - 1),
                                            360.0 / double(g.nLon()))));
@@ -254,7 +254,7 @@ const std::vector<float>& VolumeRenderer::capMeans(int variable) const
 {
     std::vector<float>& means = m_impl->capMeans[size_t(variable)];
     if (means.empty()) {
-        const SphericalGrid& g = m_volume->grid();
+        const grid::SphericalGrid& g = m_volume->grid();
         const std::vector<double> lonWidths = g.lonWidthsDeg();
         const float* values = m_volume->values(size_t(variable));
         means.resize(2 * g.nR());
@@ -298,12 +298,12 @@ void VolumeRenderer::validateParams(const RenderParams& p) const
         fail("stop opacity {}: expected a value in (0.5, 1]", p.stopOpacity);
     if (!(p.selectionMinOpacity >= 0.0f && p.selectionMinOpacity <= 1.0f))
         fail("selection's minimum opacity {}: expected a value in [0, 1]", p.selectionMinOpacity);
-    for (const RangeFilter& b : p.brushes) {
+    for (const analysis::RangeFilter& b : p.brushes) {
         if (!b.coordinate && (b.variable < 0 || b.variable >= varCount))
             fail("brush variable index {}: the volume has {} variables", b.variable, varCount);
         if (b.ranges.empty())
             fail("brush on variable index {}: no range", b.variable);
-        for (const ValueRange& r : b.ranges)
+        for (const dataset::ValueRange& r : b.ranges)
             if (!(r.min <= r.max))
                 fail("brush range [{}, {}]: min is greater than max", r.min, r.max);
     }
@@ -317,7 +317,7 @@ void VolumeRenderer::bindGradient(int variable)
 {
     Impl& im = *m_impl;
     const size_t nR = m_volume->grid().nR();
-    const NodeGradient& g = m_volume->nodeGradient(size_t(variable));
+    const grid::NodeGradient& g = m_volume->nodeGradient(size_t(variable));
     if (im.gradientVariable != variable) {
         // The radial derivative of the ring means, with nodeGradient's stencil (one-sided at the ends).
         const std::vector<double>& rKm = m_volume->grid().rKm;
@@ -354,11 +354,11 @@ void VolumeRenderer::bakeTables(const RenderParams& p)
         im.coreTable = TransferTable::bake(coreTf);
     }
     im.brushes.clear();
-    for (const RangeFilter& b : p.brushes) {
+    for (const analysis::RangeFilter& b : p.brushes) {
         kernel::KernelBrush kb;
         kb.onCoordinate = b.coordinate.has_value();
         if (b.coordinate) {
-            const CoordinateDefinition def = coordinateDefinition(*b.coordinate);
+            const grid::CoordinateDefinition def = grid::coordinateDefinition(*b.coordinate);
             kb.component = def.component;
             kb.scale = float(def.scale);
             kb.offset = float(def.offset);
@@ -367,7 +367,7 @@ void VolumeRenderer::bakeTables(const RenderParams& p)
         }
         kb.min = b.ranges[0].min;
         kb.max = b.ranges[0].max;
-        for (const ValueRange& r : b.ranges) {
+        for (const dataset::ValueRange& r : b.ranges) {
             kb.min = std::min(kb.min, r.min);
             kb.max = std::max(kb.max, r.max);
         }
@@ -376,7 +376,7 @@ void VolumeRenderer::bakeTables(const RenderParams& p)
     }
     // Every axis' ranges in one array that the kernel brushes point into (set once it is complete).
     im.brushRanges.clear();
-    for (const RangeFilter& b : p.brushes)
+    for (const analysis::RangeFilter& b : p.brushes)
         im.brushRanges.insert(im.brushRanges.end(), b.ranges.begin(), b.ranges.end());
     for (size_t i = 0, first = 0; i < im.brushes.size(); first += size_t(im.brushes[i].rangeCount), ++i)
         im.brushes[i].ranges = im.brushRanges.data() + first;
@@ -392,21 +392,21 @@ void VolumeRenderer::flagActiveBricks(const RenderParams& p)
         im.bricksSkipped = size_t(std::count(im.brickActive.begin(), im.brickActive.end(), 0));
         im.estimatedSamples = -1;
     };
-    const StepVolume& vol = *m_volume;
-    const BrickLayout& bl = im.activity;
+    const dataset::StepVolume& vol = *m_volume;
+    const grid::BrickLayout& bl = im.activity;
     auto boundsOf = [&](int v) { return vol.brickBounds(size_t(v), bl.size); };
     im.brickActive.assign(bl.brickCount(), 1);
     // A brick whose bounds miss every range of one brushed axis holds no selected sample.
-    auto excludeOutside = [&](const float* bounds, const std::vector<ValueRange>& ranges) {
+    auto excludeOutside = [&](const float* bounds, const std::vector<dataset::ValueRange>& ranges) {
         for (size_t b = 0; b < bl.brickCount(); ++b) {
-            const bool meetsOne = std::any_of(ranges.begin(), ranges.end(), [&](const ValueRange& r) {
+            const bool meetsOne = std::any_of(ranges.begin(), ranges.end(), [&](const dataset::ValueRange& r) {
                 return !(bounds[2 * b + 1] < r.min || bounds[2 * b] > r.max);
             });
             if (!meetsOne)
                 im.brickActive[b] = 0;
         }
     };
-    for (const RangeFilter& b : p.brushes) {
+    for (const analysis::RangeFilter& b : p.brushes) {
         if (b.coordinate) {
             // Per renderer: they depend on the grid only (docs/rendering.md has their cost).
             std::vector<float>& bounds = im.coordinateBounds[*b.coordinate];
@@ -430,8 +430,8 @@ void VolumeRenderer::flagActiveBricks(const RenderParams& p)
 void VolumeRenderer::fillKernelParams(const RenderParams& p)
 {
     Impl& im = *m_impl;
-    const SphericalGrid& g = m_volume->grid();
-    const BrickLayout& bl = im.activity;
+    const grid::SphericalGrid& g = m_volume->grid();
+    const grid::BrickLayout& bl = im.activity;
     kernel::KernelParams& k = im.params;
     k = {};
     k.nLat = int(g.nLat());

@@ -47,7 +47,7 @@ struct CoreStyle {
     int variable = -1;  // -1: plain colour; otherwise coloured by this variable at the core radius
     Rgb color{0.55f, 0.55f, 0.58f};
     ColorMapId colorMap = ColorMapId::Inferno;
-    ValueRange range{0, 1};
+    dataset::ValueRange range{0, 1};
 };
 
 using state::ShadingStyle;  // state/view_types.h
@@ -59,7 +59,7 @@ struct RenderParams {
     int width = 512, height = 512;
     int colorVariable = 0;
     TransferFunction transfer;
-    std::vector<RangeFilter> brushes;  // a sample outside any brush contributes nothing (analysis/selection.h)
+    std::vector<analysis::RangeFilter> brushes;  // a sample outside any brush contributes nothing (analysis/selection.h)
     CoreStyle core;
     ShadingStyle shading;
     float stepFactor = 0.5f;    // step = stepFactor x local cell extent along the ray
@@ -134,14 +134,14 @@ class VolumeRenderer {
 public:
     // Prepares per-volume tables (coordinate maps, pole ring means). Throws raypc::Error if the grid
     // has fewer than 2 points along an axis or the brick size is not a power of two.
-    explicit VolumeRenderer(std::shared_ptr<const StepVolume> volume);
+    explicit VolumeRenderer(std::shared_ptr<const dataset::StepVolume> volume);
     ~VolumeRenderer();
 
     // Validates and bakes: transfer table, brick flags. Throws raypc::Error on bad parameters
     // (variable index out of range, brush min > max, bad size, bad transfer function, bad camera).
     void setParams(const RenderParams& params);
     const RenderParams& params() const { return m_params; }
-    const std::shared_ptr<const StepVolume>& volume() const { return m_volume; }
+    const std::shared_ptr<const dataset::StepVolume>& volume() const { return m_volume; }
 
     // Renders one jittered pass (pass number = frame.passes()) and accumulates it into `frame`
     // unless `cancel` becomes true, which is checked before every tile; a cancelled pass leaves
@@ -193,14 +193,14 @@ private:
     void bindGradient(int variable);
 
     struct Impl;
-    std::shared_ptr<const StepVolume> m_volume;
+    std::shared_ptr<const dataset::StepVolume> m_volume;
     RenderParams m_params;
     std::unique_ptr<Impl> m_impl;
 };
 
 // Per-brick bounds of a coordinate over a grid's bricks (min, max pairs), conservative: every
 // trilinear sample inside the brick has its coordinate inside. Used for coordinate brushes.
-std::vector<float> coordinateBrickBounds(const SphericalGrid& grid, const BrickLayout& bricks, Coordinate coordinate);
+std::vector<float> coordinateBrickBounds(const grid::SphericalGrid& grid, const grid::BrickLayout& bricks, grid::Coordinate coordinate);
 
 }  // namespace raypc::render
 

@@ -127,7 +127,7 @@ TEST(Renderer, SimdImageEqualsScalarImage)
     p.transfer.range = {-0.8f, 1.0f};
     p.transfer.colorMap = ColorMapId::CoolToWarm;
     p.transfer.opacity = {{0, 0.3f}, {0.4f, 0.0f}, {1, 0.8f}};
-    p.brushes = {{1, std::nullopt, {{-60, 80}}}, {-1, Coordinate::Lon, {{20, 300}}}};
+    p.brushes = {{1, std::nullopt, {{-60, 80}}}, {-1, grid::Coordinate::Lon, {{20, 300}}}};
     p.shading.enabled = true;
     p.core.variable = 1;
     p.core.range = {0, 40};
@@ -151,24 +151,24 @@ TEST(Renderer, SkippingNeverChangesTheImage)
         if (variant >= 1 && variant <= 2)
             p.brushes.push_back({1, std::nullopt, {{4000, 6000}}});
         if (variant == 2)
-            p.brushes.push_back({-1, Coordinate::Z, {{-3000, 5000}}});
+            p.brushes.push_back({-1, grid::Coordinate::Z, {{-3000, 5000}}});
         // Large empty regions, so that interval skipping jumps over many chunks: a thin outer
         // shell; the polar regions next to the caps (caps are always sampled); a lon wedge
         // across the seam seen edge-on and from above.
         if (variant == 3)
-            p.brushes.push_back({-1, Coordinate::Radius, {{6000, 6371}}});
+            p.brushes.push_back({-1, grid::Coordinate::Radius, {{6000, 6371}}});
         if (variant == 4) {
-            p.brushes.push_back({-1, Coordinate::Lat, {{60, 90}}});
+            p.brushes.push_back({-1, grid::Coordinate::Lat, {{60, 90}}});
             p.camera.elevationDeg = 70;
         }
         if (variant == 5) {
-            p.brushes.push_back({-1, Coordinate::Lon, {{340, 360}}});
+            p.brushes.push_back({-1, grid::Coordinate::Lon, {{340, 360}}});
             p.camera.azimuthDeg = 80;
             p.transfer.opacity = {{0, 0.4f}, {1, 0.4f}};
         }
         // Several ranges on one axis: a brick is skipped only if it misses all of them.
         if (variant == 6)
-            p.brushes.push_back({-1, Coordinate::Radius, {{5900, 6371}, {3485, 3900}}});
+            p.brushes.push_back({-1, grid::Coordinate::Radius, {{5900, 6371}, {3485, 3900}}});
         if (variant == 7)
             p.brushes.push_back({1, std::nullopt, {{4000, 4300}, {5000, 5200}, {6200, 6600}}});
         PassStats on;
@@ -208,13 +208,13 @@ TEST(Renderer, RangesOnOneAxisSelectTheirUnion)
         EXPECT_GT(meanAbsDiff(merged, lower), 1e-3);  // the upper range adds to the picture
 
         // Apart: [4000, 4400] or [5200, 5600] (and a coordinate axis with two ranges beside it).
-        p.brushes = {{1, std::nullopt, {{4000, 4400}, {5200, 5600}}}, {-1, Coordinate::Lon, {{0, 90}, {180, 300}}}};
+        p.brushes = {{1, std::nullopt, {{4000, 4400}, {5200, 5600}}}, {-1, grid::Coordinate::Lon, {{0, 90}, {180, 300}}}};
         const auto apart = render(renderer, p, 2);
-        p.brushes = {{1, std::nullopt, {{4000, 4400}}}, {-1, Coordinate::Lon, {{0, 90}, {180, 300}}}};
+        p.brushes = {{1, std::nullopt, {{4000, 4400}}}, {-1, grid::Coordinate::Lon, {{0, 90}, {180, 300}}}};
         const auto first = render(renderer, p, 2);
-        p.brushes = {{1, std::nullopt, {{5200, 5600}}}, {-1, Coordinate::Lon, {{0, 90}, {180, 300}}}};
+        p.brushes = {{1, std::nullopt, {{5200, 5600}}}, {-1, grid::Coordinate::Lon, {{0, 90}, {180, 300}}}};
         const auto second = render(renderer, p, 2);
-        p.brushes = {{1, std::nullopt, {{4000, 5600}}}, {-1, Coordinate::Lon, {{0, 90}, {180, 300}}}};
+        p.brushes = {{1, std::nullopt, {{4000, 5600}}}, {-1, grid::Coordinate::Lon, {{0, 90}, {180, 300}}}};
         const auto hull = render(renderer, p, 2);
         EXPECT_GT(meanAbsDiff(apart, first), 1e-3);
         EXPECT_GT(meanAbsDiff(apart, second), 1e-3);

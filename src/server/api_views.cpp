@@ -59,7 +59,7 @@ std::map<std::string, std::string> presetTitles(const fs::path& dir)
 
 }  // namespace
 
-json presetsJson(const std::optional<fs::path>& dir, const Dataset* dataset)
+json presetsJson(const std::optional<fs::path>& dir, const dataset::Dataset* dataset)
 {
     json out = json::array();
     if (!dir)
@@ -104,25 +104,25 @@ json presetsJson(const std::optional<fs::path>& dir, const Dataset* dataset)
     return out;
 }
 
-json selectionStatsJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters, int level,
+json selectionStatsJson(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters, int level,
                         int profileStep, const std::atomic<bool>* cancel)
 {
     dataset.checkLevel(level);
     dataset.checkStep(profileStep);
     const int nSteps = int(dataset.steps().size());
-    const auto selections = selectionOverTime(dataset, filters, level, 0, nSteps - 1, [&](int step, int l) {
+    const auto selections = analysis::selectionOverTime(dataset, filters, level, 0, nSteps - 1, [&](int step, int l) {
         if (cancel && *cancel)
             fail("statistics cancelled at step {} of {} (the client went away or the server is stopping)", step, nSteps);
         return cache.getWithoutEvicting(step, l);
     });
     json steps = json::array();
-    for (const StepSelection& sel : selections)
+    for (const analysis::StepSelection& sel : selections)
         steps.push_back({{"step", sel.step},
                          {"timeMyr", sel.timeMyr},
                          {"volumeKm3", sel.stats.volumeKm3},
                          {"fractionOfMantle", sel.stats.fractionOfMantle}});
-    const SelectionStats& profile = selections[size_t(profileStep)].stats;
-    const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
+    const analysis::SelectionStats& profile = selections[size_t(profileStep)].stats;
+    const grid::SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
     json radius = json::array(), depth = json::array(), selected = json::array(), shell = json::array();
     for (size_t iR = 0; iR < grid.nR(); ++iR) {
         radius.push_back(grid.rKm[iR]);
@@ -148,9 +148,9 @@ json finiteOrNull(double v)
     return std::isfinite(v) ? json(v) : json(nullptr);
 }
 
-json featurePointJson(const FeatureSeries::Row& r, std::optional<size_t> radialVelocity)
+json featurePointJson(const analysis::FeatureSeries::Row& r, std::optional<size_t> radialVelocity)
 {
-    const Feature& f = r.feature;
+    const analysis::Feature& f = r.feature;
     return {{"step", r.step},
             {"timeMyr", r.timeMyr},
             {"feature", f.id},
@@ -172,7 +172,7 @@ json featurePointJson(const FeatureSeries::Row& r, std::optional<size_t> radialV
 }
 
 // The index of the variable `name`, if the dataset has it.
-std::optional<size_t> variableIfAny(const Dataset& dataset, const std::string& name)
+std::optional<size_t> variableIfAny(const dataset::Dataset& dataset, const std::string& name)
 {
     const int i = dataset.variableIndex(name);
     return i >= 0 ? std::optional<size_t>(size_t(i)) : std::nullopt;
@@ -182,26 +182,26 @@ std::optional<size_t> variableIfAny(const Dataset& dataset, const std::string& n
 // `fluxDepths` (with a radial velocity and depths) and the features followed through the steps.
 struct FeatureSteps {
     json steps = json::array();
-    std::vector<std::vector<ShellFlux>> fluxes;  // [step][depth]
-    FeatureSeries series;
+    std::vector<std::vector<analysis::ShellFlux>> fluxes;  // [step][depth]
+    analysis::FeatureSeries series;
 };
 
-FeatureSteps featureSteps(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
-                          const FeatureOptions& options, double minOverlapShare, int level,
+FeatureSteps featureSteps(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters,
+                          const analysis::FeatureOptions& options, double minOverlapShare, int level,
                           std::optional<size_t> radialVelocity, std::optional<size_t> density,
                           std::span<const double> fluxDepths, const std::atomic<bool>* cancel,
                           const std::function<void(int done, int total)>& progress)
 {
     const int nSteps = int(dataset.steps().size());
-    FeatureSteps out{json::array(), {}, FeatureSeries(dataset, minOverlapShare, "features")};
-    const auto stopped = forEachStepFeatures(
+    FeatureSteps out{json::array(), {}, analysis::FeatureSeries(dataset, minOverlapShare, "features")};
+    const auto stopped = analysis::forEachStepFeatures(
         0, nSteps - 1, [&](int step) { return cache.getWithoutEvicting(step, level); }, filters, options,
-        [&](FeatureStep& s) {
+        [&](analysis::FeatureStep& s) {
             out.steps.push_back({{"step", s.step},
                                  {"timeMyr", dataset.steps()[size_t(s.step)].timeMyr},
                                  {"features", s.features.features.size()}});
             if (radialVelocity && !fluxDepths.empty())
-                out.fluxes.push_back(shellFluxes(*s.volume, *radialVelocity, fluxDepths, filters, std::nullopt, density));
+                out.fluxes.push_back(analysis::shellFluxes(*s.volume, *radialVelocity, fluxDepths, filters, std::nullopt, density));
             out.series.add(s.step, s.volume, s.features);
         },
         {cancel, progress});
@@ -212,11 +212,11 @@ FeatureSteps featureSteps(const Dataset& dataset, StepCache& cache, std::span<co
 
 // Every track with its points (step order), its stalls at the options' depths and a summary for
 // the table.
-json tracksJson(const FeatureSeries& series, const FeatureOptions& options, int lastStep, StallMeasure stallBy,
+json tracksJson(const analysis::FeatureSeries& series, const analysis::FeatureOptions& options, int lastStep, analysis::StallMeasure stallBy,
                 std::optional<size_t> radialVelocity)
 {
-    std::map<int, std::vector<const FeatureSeries::Row*>> rowsOf;
-    for (const FeatureSeries::Row& r : series.rows())
+    std::map<int, std::vector<const analysis::FeatureSeries::Row*>> rowsOf;
+    for (const analysis::FeatureSeries::Row& r : series.rows())
         rowsOf[r.track].push_back(&r);
     std::map<int, json> stallsOf;
     for (const auto& [track, s] : series.stalls(options.bandDepthsKm, options.bandHalfWidthKm, lastStep, stallBy))
@@ -230,7 +230,7 @@ json tracksJson(const FeatureSeries& series, const FeatureOptions& options, int 
     for (const auto& [track, rows] : rowsOf) {
         json points = json::array();
         double maxVolume = 0, depthSum = 0;
-        for (const FeatureSeries::Row* r : rows) {
+        for (const analysis::FeatureSeries::Row* r : rows) {
             points.push_back(featurePointJson(*r, radialVelocity));
             maxVolume = std::max(maxVolume, r->feature.volumeKm3);
             depthSum += r->feature.meanDepthKm;
@@ -248,14 +248,14 @@ json tracksJson(const FeatureSeries& series, const FeatureOptions& options, int 
 }
 
 // The tracks' events in step order.
-json eventsJson(const FeatureSeries& series, const Dataset& dataset)
+json eventsJson(const analysis::FeatureSeries& series, const dataset::Dataset& dataset)
 {
     json events = json::array();
-    for (const TrackEvent& e : series.events()) {
-        const Feature& x = series.feature(e.step, e.feature);
+    for (const analysis::TrackEvent& e : series.events()) {
+        const analysis::Feature& x = series.feature(e.step, e.feature);
         events.push_back({{"step", e.step},
                           {"timeMyr", dataset.steps()[size_t(e.step)].timeMyr},
-                          {"kind", trackEventName(e.kind)},
+                          {"kind", analysis::trackEventName(e.kind)},
                           {"track", e.track},
                           {"feature", e.feature},
                           {"others", e.others},
@@ -270,14 +270,14 @@ json eventsJson(const FeatureSeries& series, const Dataset& dataset)
 
 // The flux across the shells at `fluxDepths` per step, with the avalanche steps of each shell
 // (`sigmas`); the mass flux too where the dataset has a density.
-json fluxJson(const Dataset& dataset, const std::vector<std::vector<ShellFlux>>& fluxes,
+json fluxJson(const dataset::Dataset& dataset, const std::vector<std::vector<analysis::ShellFlux>>& fluxes,
               const std::vector<double>& fluxDepths, double sigmas, bool density)
 {
     json fluxSteps = json::array(), avalanches = json::array();
     for (size_t i = 0; i < fluxes.size(); ++i) {
         json down = json::array(), up = json::array(), selDown = json::array(), selUp = json::array(),
              selShare = json::array(), massDown = json::array(), massUp = json::array();
-        for (const ShellFlux& f : fluxes[i]) {
+        for (const analysis::ShellFlux& f : fluxes[i]) {
             down.push_back(f.downKm3PerYr);
             up.push_back(f.upKm3PerYr);
             selDown.push_back(f.selectedDownKm3PerYr);
@@ -299,7 +299,7 @@ json fluxJson(const Dataset& dataset, const std::vector<std::vector<ShellFlux>>&
         }
         fluxSteps.push_back(std::move(step));
     }
-    const auto perShell = avalancheStepsPerShell(fluxes, sigmas);
+    const auto perShell = analysis::avalancheStepsPerShell(fluxes, sigmas);
     for (size_t d = 0; d < perShell.size(); ++d)
         for (const size_t i : perShell[d])
             avalanches.push_back({{"depthKm", fluxDepths[d]}, {"step", int(i)}});
@@ -309,8 +309,8 @@ json fluxJson(const Dataset& dataset, const std::vector<std::vector<ShellFlux>>&
 
 }  // namespace
 
-json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
-                       const FeatureOptions& options, double minOverlapShare, StallMeasure stallBy, int level,
+json featureSeriesJson(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters,
+                       const analysis::FeatureOptions& options, double minOverlapShare, analysis::StallMeasure stallBy, int level,
                        double sigmas, const std::atomic<bool>* cancel,
                        const std::function<void(int done, int total)>& progress)
 {
@@ -321,11 +321,11 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
         fail("sigmas: {} is negative", sigmas);
     const int nSteps = int(dataset.steps().size());
     const std::optional<size_t> radialVelocity = variableIfAny(dataset, varname::kRadialVelocity);
-    const std::optional<size_t> density = variableIfAny(dataset, kDensityVariable);
-    const SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
+    const std::optional<size_t> density = variableIfAny(dataset, analysis::kDensityVariable);
+    const grid::SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
     std::vector<double> fluxDepths;  // the options' depths inside the grid's shell
     for (const double d : options.bandDepthsKm)
-        if (shellInsideGrid(grid, d))
+        if (analysis::shellInsideGrid(grid, d))
             fluxDepths.push_back(d);
 
     FeatureSteps run = featureSteps(dataset, cache, filters, options, minOverlapShare, level, radialVelocity, density,
@@ -333,19 +333,19 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
     const auto& fluxes = run.fluxes;
     // The tables of `raypc features --tracks/--events/--stalls` and `raypc flux`, written by the same
     // code (analysis/feature_csv.h), for the UI's CSV buttons.
-    json csv = {{"tracks", trackCsv(run.series)},
-                {"events", eventCsv(run.series, dataset)},
-                {"stalls", stallCsv(run.series, options.bandDepthsKm, options.bandHalfWidthKm, nSteps - 1, stallBy)},
+    json csv = {{"tracks", analysis::trackCsv(run.series)},
+                {"events", analysis::eventCsv(run.series, dataset)},
+                {"stalls", analysis::stallCsv(run.series, options.bandDepthsKm, options.bandHalfWidthKm, nSteps - 1, stallBy)},
                 {"flux", fluxes.empty() ? json(nullptr)
-                                        : json(fluxCsv(dataset, 0, fluxes, fluxDepths,
-                                                       avalancheStepsPerShell(fluxes, sigmas), false,
+                                        : json(analysis::fluxCsv(dataset, 0, fluxes, fluxDepths,
+                                                       analysis::avalancheStepsPerShell(fluxes, sigmas), false,
                                                        density.has_value()))}};
     return {{"level", level},
             {"minVolumeKm3", options.minVolumeKm3},
             {"depthsKm", options.bandDepthsKm},
             {"bandHalfWidthKm", options.bandHalfWidthKm},
             {"minOverlapShare", minOverlapShare},
-            {"stallBy", stallMeasureName(stallBy)},
+            {"stallBy", analysis::stallMeasureName(stallBy)},
             {"steps", std::move(run.steps)},
             {"tracks", tracksJson(run.series, options, nSteps - 1, stallBy, radialVelocity)},
             {"events", eventsJson(run.series, dataset)},
@@ -353,9 +353,9 @@ json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const
             {"csv", std::move(csv)}};
 }
 
-json persistenceDiagramJson(const SphericalGrid& grid, const std::vector<PersistencePair>& pairs, int step,
+json persistenceDiagramJson(const grid::SphericalGrid& grid, const std::vector<analysis::PersistencePair>& pairs, int step,
                             const std::string& variable, const std::string& units, size_t top,
-                            const PathlineSet* stored)
+                            const analysis::PathlineSet* stored)
 {
     const size_t nLon = grid.nLon(), nR = grid.nR();
     auto position = [&](size_t index) {
@@ -367,13 +367,13 @@ json persistenceDiagramJson(const SphericalGrid& grid, const std::vector<Persist
     double range = 0;
     for (const auto& p : pairs) {
         ++counts[size_t(p.kind)];
-        if (p.kind == PairKind::Global)
+        if (p.kind == analysis::PairKind::Global)
             range = p.persistence();
     }
     for (size_t i = 0; i < std::min(top, pairs.size()); ++i) {
-        const PersistencePair& p = pairs[i];
+        const analysis::PersistencePair& p = pairs[i];
         const auto b = position(p.birthIndex), e = position(p.extremumIndex());
-        shown.push_back({{"kind", pairKindName(p.kind)},
+        shown.push_back({{"kind", analysis::pairKindName(p.kind)},
                          {"birth", p.birth},
                          {"death", p.death},
                          {"persistence", p.persistence()},
@@ -403,9 +403,9 @@ json persistenceDiagramJson(const SphericalGrid& grid, const std::vector<Persist
             {"range", range},
             {"pairCount", pairs.size()},
             {"counts",
-             {{pairKindName(PairKind::MinimumSaddle), counts[0]},
-              {pairKindName(PairKind::SaddleMaximum), counts[1]},
-              {pairKindName(PairKind::Global), counts[2]}}},
+             {{analysis::pairKindName(analysis::PairKind::MinimumSaddle), counts[0]},
+              {analysis::pairKindName(analysis::PairKind::SaddleMaximum), counts[1]},
+              {analysis::pairKindName(analysis::PairKind::Global), counts[2]}}},
             {"pairs", std::move(shown)},
             {"rest", {{"count", rest}, {"maxPersistence", restMax}}},
             {"stored", std::move(storedJson)}};
@@ -445,13 +445,13 @@ std::string pathlineAttributesPayload(const PathlineCache::Window& sets, int ste
 }
 
 namespace {
-json rangeJson(ValueRange r)
+json rangeJson(dataset::ValueRange r)
 {
     return json::array({r.min, r.max});
 }
 }  // namespace
 
-json infoJson(const Dataset& dataset, const ServerLimits& limits)
+json infoJson(const dataset::Dataset& dataset, const ServerLimits& limits)
 {
     json variables = json::array();
     for (const auto& v : dataset.variables())
@@ -468,8 +468,8 @@ json infoJson(const Dataset& dataset, const ServerLimits& limits)
                               {{"centred", rangeJson(render::defaultColorRange(v.global.range, true))},
                                {"other", rangeJson(render::defaultColorRange(v.global.range, false))}}}});
     json coordinates = json::array();
-    for (const auto& c : coordinateInfos()) {
-        const CoordinateRange r = coordinateRange(dataset.levels().front().grid, c.id);
+    for (const auto& c : grid::coordinateInfos()) {
+        const grid::CoordinateRange r = grid::coordinateRange(dataset.levels().front().grid, c.id);
         coordinates.push_back({{"name", c.name}, {"units", c.units}, {"min", r.min}, {"max", r.max}});
     }
     json steps = json::array();
@@ -482,11 +482,11 @@ json infoJson(const Dataset& dataset, const ServerLimits& limits)
     }
     // The sample's shape without reading it: coordinates then variables.
     json columns = json::array(), units = json::array();
-    for (const auto& c : coordinateInfos())
+    for (const auto& c : grid::coordinateInfos())
         columns.push_back(c.name), units.push_back(c.units);
     for (const auto& v : dataset.variables())
         columns.push_back(v.name), units.push_back(v.units);
-    const SampleTable sample = dataset.loadSample(0);
+    const dataset::SampleTable sample = dataset.loadSample(0);
     json maps = json::array();
     for (const auto m : state::allColorMaps())
         maps.push_back(std::string(state::colorMapName(m)));

@@ -28,7 +28,7 @@ namespace raypc::server {
 
 // GET /api/info: the dataset's variables, coordinates, steps, levels, sample shape, colour maps and
 // default state (docs/protocol.md).
-nlohmann::json infoJson(const Dataset& dataset, const ServerLimits& limits = {});
+nlohmann::json infoJson(const dataset::Dataset& dataset, const ServerLimits& limits = {});
 
 // Every *.json in `dir` except demo.json, sorted by file name, as [{name, title, state}]: name is
 // the file name without .json, title a short human title (the directory's titles.tsv; else the
@@ -36,14 +36,14 @@ nlohmann::json infoJson(const Dataset& dataset, const ServerLimits& limits = {})
 // With `dataset`, a preset that cannot be applied to it (its step clamped to the last, as the UI
 // does) gets `unavailable`: why, from resolveState (e.g. a variable the dataset lacks), so that the
 // UI shows it disabled with the reason. An empty array when `dir` is nullopt.
-nlohmann::json presetsJson(const std::optional<std::filesystem::path>& dir, const Dataset* dataset = nullptr);
+nlohmann::json presetsJson(const std::optional<std::filesystem::path>& dir, const dataset::Dataset* dataset = nullptr);
 
 // The selected volume of every step and the depth profile of `profileStep`, at `level`
 // ({level, steps: [{step, timeMyr, volumeKm3, fractionOfMantle}], profile: {step, radiusKm,
 // depthKm, volumeKm3, shellVolumeKm3}}). Volumes come through `cache` without evicting what the
 // renderers use. Throws raypc::Error for a level out of range, or when `cancel` becomes true (checked
 // before every step).
-nlohmann::json selectionStatsJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
+nlohmann::json selectionStatsJson(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters,
                                   int level, int profileStep, const std::atomic<bool>* cancel = nullptr);
 
 // POST /api/features (docs/protocol.md, FeatureSeries): the features of the selection `filters` in
@@ -54,8 +54,8 @@ nlohmann::json selectionStatsJson(const Dataset& dataset, StepCache& cache, std:
 // Volumes come through `cache` without evicting. Throws raypc::Error for no filters, a level out of
 // range, a dataset without velocity, or when `cancel` becomes true (checked before every step).
 // `progress` hears the steps done before each step and at the end.
-nlohmann::json featureSeriesJson(const Dataset& dataset, StepCache& cache, std::span<const RangeFilter> filters,
-                                 const FeatureOptions& options, double minOverlapShare, StallMeasure stallBy,
+nlohmann::json featureSeriesJson(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters,
+                                 const analysis::FeatureOptions& options, double minOverlapShare, analysis::StallMeasure stallBy,
                                  int level, double sigmas, const std::atomic<bool>* cancel = nullptr,
                                  const std::function<void(int done, int total)>& progress = {});
 
@@ -71,8 +71,8 @@ std::string pathlineAttributesPayload(const PathlineCache::Window& sets, int ste
 // `stored`: the threshold and rule the stored pathline set of the step was seeded with, its line count
 // and whether its lines carry the "seed persistence" column, or null when the dataset has no
 // pathlines or they were seeded on another variable.
-nlohmann::json persistenceDiagramJson(const SphericalGrid& grid, const std::vector<PersistencePair>& pairs, int step,
+nlohmann::json persistenceDiagramJson(const grid::SphericalGrid& grid, const std::vector<analysis::PersistencePair>& pairs, int step,
                                       const std::string& variable, const std::string& units, size_t top,
-                                      const PathlineSet* stored);
+                                      const analysis::PathlineSet* stored);
 
 }  // namespace raypc::server

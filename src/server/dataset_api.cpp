@@ -62,7 +62,7 @@ T parseParameter(std::string_view query, const char* name)
 int parseIntParameter(std::string_view query, const char* name) { return parseParameter<int>(query, name); }
 double parseNumberParameter(std::string_view query, const char* name) { return parseParameter<double>(query, name); }
 
-int checkedStep(const Dataset& dataset, std::string_view query)
+int checkedStep(const dataset::Dataset& dataset, std::string_view query)
 {
     const int step = parseIntParameter(query, "step");
     dataset.checkStep(step);
@@ -88,7 +88,7 @@ ApiAnswer progress(const ApiContext& api, const ApiRequest&)
 
 ApiAnswer histogram(const ApiContext& api, const ApiRequest& request)
 {
-    const Dataset& dataset = *api.dataset;
+    const dataset::Dataset& dataset = *api.dataset;
     const int step = checkedStep(dataset, request.query);
     const auto name = queryParameter(request.query, "var");
     if (!name)
@@ -96,7 +96,7 @@ ApiAnswer histogram(const ApiContext& api, const ApiRequest& request)
     const int var = dataset.variableIndex(*name);
     if (var < 0)
         fail("var: unknown variable '{}'", name->substr(0, 80));
-    const VariableStats& s = dataset.steps()[size_t(step)].stats[size_t(var)];
+    const dataset::VariableStats& s = dataset.steps()[size_t(step)].stats[size_t(var)];
     const auto& v = dataset.variables()[size_t(var)];
     return jsonAnswer(
         {{"name", v.name}, {"units", v.units}, {"min", s.range.min}, {"max", s.range.max}, {"histogram", s.histogram}});
@@ -105,14 +105,14 @@ ApiAnswer histogram(const ApiContext& api, const ApiRequest& request)
 ApiAnswer sample(const ApiContext& api, const ApiRequest& request)
 {
     const int step = checkedStep(*api.dataset, request.query);
-    SampleColumns which = SampleColumns::All;
+    dataset::SampleColumns which = dataset::SampleColumns::All;
     if (const auto columns = queryParameter(request.query, "columns")) {
         if (*columns == "variables")
-            which = SampleColumns::Variables;
+            which = dataset::SampleColumns::Variables;
         else if (*columns != "all")
             fail("columns: expected 'all' or 'variables', found '{}'", columns->substr(0, 40));
     }
-    const SampleTable t = api.dataset->loadSample(step, which);
+    const dataset::SampleTable t = api.dataset->loadSample(step, which);
     return {std::string(reinterpret_cast<const char*>(t.values.data()), t.values.size() * sizeof(float)),
             "application/octet-stream"};
 }
@@ -121,7 +121,7 @@ ApiAnswer selection(const ApiContext& api, const ApiRequest& request)
 {
     const render::ResolvedState resolved = render::resolveState(parseBody(request.body), *api.dataset);
     const auto volume = api.cache->get(resolved.state.step, 0);
-    const auto s = selectedVolume(*volume, resolved.params.brushes);
+    const auto s = analysis::selectedVolume(*volume, resolved.params.brushes);
     return jsonAnswer({{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}, {"step", resolved.state.step}});
 }
 
@@ -214,7 +214,7 @@ ApiAnswer slice(const ApiContext& api, const ApiRequest& request)
 // GET /api/probe?step=S&lat=A&lon=B&depthKm=D[&var=NAME][&level=L]: the values at a point (analysis/probe.h).
 ApiAnswer probe(const ApiContext& api, const ApiRequest& request)
 {
-    const Dataset& dataset = *api.dataset;
+    const dataset::Dataset& dataset = *api.dataset;
     const int step = checkedStep(dataset, request.query);
     const int level = queryParameter(request.query, "level") ? parseIntParameter(request.query, "level") : 0;
     dataset.checkLevel(level, "level");
@@ -232,7 +232,7 @@ ApiAnswer probe(const ApiContext& api, const ApiRequest& request)
         if (dataset.variableIndex(var) < 0)
             fail("var: unknown variable '{}'", var.substr(0, 80));
     }
-    return jsonAnswer(probeJson(dataset, *volume, step, level, lat, lon,
+    return jsonAnswer(analysis::probeJson(dataset, *volume, step, level, lat, lon,
                                 std::clamp(kSurfaceRadiusKm - depth, volume->grid().rKm.front(), volume->grid().rKm.back()), var));
 }
 
@@ -243,7 +243,7 @@ ApiAnswer presets(const ApiContext& api, const ApiRequest&)
 
 ApiAnswer stats(const ApiContext& api, const ApiRequest& request)
 {
-    const Dataset& dataset = *api.dataset;
+    const dataset::Dataset& dataset = *api.dataset;
     // Level 1 by default (quick); 0 is exact on the full grid.
     const int levels = int(dataset.levels().size());
     const int level =
@@ -258,7 +258,7 @@ ApiAnswer stats(const ApiContext& api, const ApiRequest& request)
 }
 
 // The level of a features or time–depth request: ?level=, else the state's features.level.
-int featureLevel(const Dataset& dataset, const ApiRequest& request, const state::RenderState& state)
+int featureLevel(const dataset::Dataset& dataset, const ApiRequest& request, const state::RenderState& state)
 {
     const int level = queryParameter(request.query, "level") ? parseIntParameter(request.query, "level")
                                                              : state.features.level;
@@ -269,12 +269,12 @@ int featureLevel(const Dataset& dataset, const ApiRequest& request, const state:
 // The features of the state's selection through the series, with the state's feature settings.
 ApiAnswer features(const ApiContext& api, const ApiRequest& request)
 {
-    const Dataset& dataset = *api.dataset;
+    const dataset::Dataset& dataset = *api.dataset;
     const render::ResolvedState resolved = render::resolveState(parseBody(request.body), dataset);
     const state::FeatureSettings& settings = resolved.state.features;
     const int level = featureLevel(dataset, request, resolved.state);
     const double sigmas = queryParameter(request.query, "sigmas") ? parseNumberParameter(request.query, "sigmas") : 2.0;
-    const FeatureOptions options = state::featureOptions(settings);
+    const analysis::FeatureOptions options = state::featureOptions(settings);
     const std::optional<std::string> job = queryParameter(request.query, "job");
     if (job)
         JobProgress::checkId(*job);
@@ -303,7 +303,7 @@ ApiAnswer features(const ApiContext& api, const ApiRequest& request)
 // feature depths marked.
 ApiAnswer timeDepth(const ApiContext& api, const ApiRequest& request)
 {
-    const Dataset& dataset = *api.dataset;
+    const dataset::Dataset& dataset = *api.dataset;
     const render::ResolvedState resolved = render::resolveState(parseBody(request.body), dataset);
     const int level = featureLevel(dataset, request, resolved.state);
     const auto ofText = queryParameter(request.query, "of");
@@ -327,7 +327,7 @@ ApiAnswer timeDepth(const ApiContext& api, const ApiRequest& request)
         fail("time-depth: image {}x{} is over the limit of {} pixels", width, height, api.limits.maxScreenshotPixels);
     render::checkTimeDepthPictureSize(width, height);
     const int last = int(dataset.steps().size()) - 1;
-    const std::vector<StepSelection> selections = selectionOverTime(
+    const std::vector<analysis::StepSelection> selections = analysis::selectionOverTime(
         dataset, resolved.params.brushes, level, 0, last,
         [&](int step, int l) {
             if (request.cancel && *request.cancel)
@@ -336,8 +336,8 @@ ApiAnswer timeDepth(const ApiContext& api, const ApiRequest& request)
         },
         {}, mean);
     if (csv)  // the values behind the picture: `raypc stats --profile [--profile-var]`'s table
-        return {profileCsvHeader(mean ? &dataset.variables()[*mean] : nullptr) +
-                    profileCsvRows(selections, dataset.levels()[size_t(level)].grid),
+        return {analysis::profileCsvHeader(mean ? &dataset.variables()[*mean] : nullptr) +
+                    analysis::profileCsvRows(selections, dataset.levels()[size_t(level)].grid),
                 "text/csv"};
     std::vector<float> values;
     render::appendTimeDepthValues(selections, of, values);
@@ -358,7 +358,7 @@ ApiAnswer pathlines(const ApiContext& api, const ApiRequest& request)
 {
     const int step = checkedStep(*api.dataset, request.query);
     const int window = queryParameter(request.query, "window") ? parseIntParameter(request.query, "window") : 10;
-    checkPathlineWindow(window);  // before the cache is asked
+    analysis::checkPathlineWindow(window);  // before the cache is asked
     const auto sets = api.pathlines->get(step, window);
     return {pathlineAttributesPayload(*sets, step, window), "application/octet-stream"};
 }
@@ -367,7 +367,7 @@ ApiAnswer pathlines(const ApiContext& api, const ApiRequest& request)
 // anomaly): `top` pairs (default 500, at most 20000) and the stored seeds' threshold.
 ApiAnswer persistence(const ApiContext& api, const ApiRequest& request)
 {
-    const Dataset& dataset = *api.dataset;
+    const dataset::Dataset& dataset = *api.dataset;
     const int step = checkedStep(dataset, request.query);
     int top = 500;
     if (queryParameter(request.query, "top")) {
@@ -377,10 +377,10 @@ ApiAnswer persistence(const ApiContext& api, const ApiRequest& request)
     }
     // The step's set read directly (one set, small), not through the pathline cache, whose few
     // entries hold the renderers' windows.
-    std::optional<PathlineSet> set;
-    if (fs::exists(pathlineDir(dataset.dir(), step) / "lines.json"))
-        set = loadPathlineSet(dataset.dir(), step);
-    const PathlineSet* stored = set ? &*set : nullptr;
+    std::optional<analysis::PathlineSet> set;
+    if (fs::exists(analysis::pathlineDir(dataset.dir(), step) / "lines.json"))
+        set = analysis::loadPathlineSet(dataset.dir(), step);
+    const analysis::PathlineSet* stored = set ? &*set : nullptr;
     std::string name = stored ? stored->seedField : std::string(varname::kTemperatureAnomaly);
     if (const auto var = queryParameter(request.query, "var"))
         name = *var;
@@ -393,7 +393,7 @@ ApiAnswer persistence(const ApiContext& api, const ApiRequest& request)
         fail("this server has no persistence cache");
     const auto start = std::chrono::steady_clock::now();
     const auto pairs = api.persistence->get(step, var);
-    const SphericalGrid& grid = dataset.levels().front().grid;
+    const grid::SphericalGrid& grid = dataset.levels().front().grid;
     json result = persistenceDiagramJson(grid, *pairs, step, name, dataset.variables()[size_t(var)].units,
                                          size_t(top), stored);
     spdlog::debug("persistence: step {} '{}': {} pairs in {:.0f} ms", step, name, pairs->size(),

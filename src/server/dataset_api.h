@@ -32,7 +32,7 @@ namespace raypc::server {
 // and the linked state are thread-safe).
 
 struct ApiContext {
-    std::shared_ptr<const Dataset> dataset;
+    std::shared_ptr<const dataset::Dataset> dataset;
     StepCache* cache = nullptr;
     PathlineCache* pathlines = nullptr;
     PersistenceCache* persistence = nullptr;

@@ -12,7 +12,7 @@ render::StateSources cacheSources(StepCache* volumes, PathlineCache* lines)
 {
     render::StateSources s;
     s.volume = [volumes](int step, int level) { return volumes->get(step, level); };
-    s.pathlines = [lines](int step, int window) -> std::shared_ptr<const std::vector<PathlineSet>> {
+    s.pathlines = [lines](int step, int window) -> std::shared_ptr<const std::vector<analysis::PathlineSet>> {
         if (!lines)
             fail("this server has no pathline cache");
         return lines->get(step, window);
@@ -23,7 +23,7 @@ render::StateSources cacheSources(StepCache* volumes, PathlineCache* lines)
 DatasetCaches openDatasetCaches(const fs::path& dir, size_t cacheBytes, size_t cacheEntries)
 {
     DatasetCaches c;
-    c.dataset = Dataset::open(dir);
+    c.dataset = dataset::Dataset::open(dir);
     c.volumes = std::make_unique<StepCache>([dataset = c.dataset](int step, int level) { return dataset->load(step, level); },
                                             cacheBytes, cacheEntries);
     c.pathlines = std::make_unique<PathlineCache>(dir);
@@ -36,7 +36,7 @@ PathlineCache::PathlineCache(fs::path datasetDir, size_t maxEntries) : m_dir(std
 
 std::shared_ptr<const PathlineCache::Window> PathlineCache::get(int step, int window)
 {
-    return m_cache.get({step, window}, [&] { return loadPathlineWindow(m_dir, step, window); });
+    return m_cache.get({step, window}, [&] { return analysis::loadPathlineWindow(m_dir, step, window); });
 }
 
 PersistenceCache::PersistenceCache(StepCache* volumes, size_t maxEntries) : m_volumes(volumes), m_cache(maxEntries)
@@ -48,7 +48,7 @@ std::shared_ptr<const PersistenceCache::Pairs> PersistenceCache::get(int step, i
     return m_cache.get({step, variable}, [&] {
         const auto volume = m_volumes->getWithoutEvicting(step, 0);
         const std::span<const float> values(volume->values(size_t(variable)), volume->grid().cellCount());
-        return persistencePairs(volume->grid(), values);
+        return analysis::persistencePairs(volume->grid(), values);
     });
 }
 

@@ -23,7 +23,7 @@ namespace raypc::server {
 // out. get() throws raypc::Error like loadPathlineWindow (e.g. a dataset without pathlines).
 class PathlineCache {
 public:
-    using Window = std::vector<PathlineSet>;
+    using Window = std::vector<analysis::PathlineSet>;
     PathlineCache(std::filesystem::path datasetDir, size_t maxEntries = 4);
     std::shared_ptr<const Window> get(int step, int window);
 
@@ -37,7 +37,7 @@ private:
 // step takes seconds (docs/persistence.md). get() throws raypc::Error like the volume loader.
 class PersistenceCache {
 public:
-    using Pairs = std::vector<PersistencePair>;
+    using Pairs = std::vector<analysis::PersistencePair>;
     PersistenceCache(StepCache* volumes, size_t maxEntries = 4);
     std::shared_ptr<const Pairs> get(int step, int variable);
 
@@ -52,7 +52,7 @@ render::StateSources cacheSources(StepCache* volumes, PathlineCache* lines);
 // What a server process reads a dataset through: the dataset and its volume and pathline caches,
 // built alike by the Server and by every other rank of a distributed server (rank_pool.h).
 struct DatasetCaches {
-    std::shared_ptr<const Dataset> dataset;
+    std::shared_ptr<const dataset::Dataset> dataset;
     std::unique_ptr<StepCache> volumes;
     std::unique_ptr<PathlineCache> pathlines;
 };

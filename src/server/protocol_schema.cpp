@@ -53,8 +53,8 @@ Json oneOfTexts(std::vector<std::string> values, std::string_view meaning)
 std::vector<std::string> stallMeasureNames()
 {
     std::vector<std::string> names;
-    for (const StallMeasure m : kStallMeasures)
-        names.emplace_back(stallMeasureName(m));
+    for (const analysis::StallMeasure m : analysis::kStallMeasures)
+        names.emplace_back(analysis::stallMeasureName(m));
     return names;
 }
 Json arrayOf(Json items, std::string_view meaning)

@@ -262,7 +262,7 @@ bool RankPool::run(const std::function<void(const std::string&)>& onBroken)
 // ---- ranks 1..N-1 ----------------------------------------------------------------------------
 
 struct WorkerRank::Session {
-    Session(std::shared_ptr<const Dataset> dataset, render::StateSources sources)
+    Session(std::shared_ptr<const dataset::Dataset> dataset, render::StateSources sources)
         : renderer(std::move(dataset), std::move(sources))
     {
     }

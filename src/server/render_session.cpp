@@ -121,10 +121,10 @@ void RenderSession::loop()
     }
 }
 
-nlohmann::json shellKeyJson(const state::RenderState& state, const Dataset& dataset)
+nlohmann::json shellKeyJson(const state::RenderState& state, const dataset::Dataset& dataset)
 {
     nlohmann::json key = nlohmann::json::array();
-    const SphericalGrid& grid = dataset.levels().front().grid;
+    const grid::SphericalGrid& grid = dataset.levels().front().grid;
     for (const TextLabel& k : render::shellKey(state.reference, float(grid.rKm.back()), float(grid.rKm.front())))
         key.push_back({{"label", k.text}, {"color", {k.color.r, k.color.g, k.color.b}}});
     return key;
@@ -202,7 +202,7 @@ void RenderSession::updateSelection(const std::string& key, int step, int level,
         return;
     const StateRenderer::View& view = prepared.views.front();  // all views share the brushes
     const auto volume = level == prepared.level ? view.renderer->volume() : m_context.cache->get(step, level);
-    const SelectionStats s = selectedVolume(*volume, view.params.brushes);
+    const analysis::SelectionStats s = analysis::selectedVolume(*volume, view.params.brushes);
     m_selection = {{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}};
     m_selectionKey = key;
 }
@@ -211,7 +211,7 @@ void RenderSession::render(const Request& request)
 {
     const auto renderStart = Clock::now();
     const state::RenderState& state = request.resolved.state;
-    const Dataset& dataset = *m_context.dataset;
+    const dataset::Dataset& dataset = *m_context.dataset;
     const int step = state.step;
     Job job{.request = request,
             .document = state::toJson(state),

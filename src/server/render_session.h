@@ -37,7 +37,7 @@ class RankPool;
 
 // Shared by all sessions of a server.
 struct RenderContext {
-    std::shared_ptr<const Dataset> dataset;
+    std::shared_ptr<const dataset::Dataset> dataset;
     StepCache* cache = nullptr;
     PathlineCache* pathlines = nullptr;  // line windows shared by the sessions (each builds its own scene)
     // Throughput of the machine in estimated samples (VolumeRenderer::estimateSamplesPerPass) per

@@ -12,7 +12,7 @@ SeriesProgress::SeriesProgress(std::filesystem::path dataset, int steps)
 {
 }
 
-void SeriesProgress::update(const PreprocessProgress& progress)
+void SeriesProgress::update(const preprocess::PreprocessProgress& progress)
 {
     std::lock_guard lock(m_mutex);
     const auto now = std::chrono::steady_clock::now();

@@ -21,7 +21,7 @@ public:
     // `dataset`: where the whole series is written; `steps`: how many input files it has.
     SeriesProgress(std::filesystem::path dataset, int steps);
 
-    void update(const PreprocessProgress& progress);
+    void update(const preprocess::PreprocessProgress& progress);
     // The whole series is written: the server switches to it (the UI reloads).
     void finished();
     // The run stopped with `message`; the server goes on showing the first step.

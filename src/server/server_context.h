@@ -123,7 +123,7 @@ struct ServerContext {
 
     ServerOptions options;
     FrameBudget frameBudget;
-    std::shared_ptr<const Dataset> dataset;
+    std::shared_ptr<const dataset::Dataset> dataset;
     std::unique_ptr<StepCache> cache;
     std::unique_ptr<PathlineCache> pathlines;
     std::unique_ptr<PersistenceCache> persistence;

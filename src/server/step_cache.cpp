@@ -24,15 +24,15 @@ StepCache::~StepCache()
     m_prefetchThread.join();
 }
 
-size_t StepCache::volumeBytes(const StepVolume& volume)
+size_t StepCache::volumeBytes(const dataset::StepVolume& volume)
 {
     const size_t floats = volume.grid().cellCount() * sizeof(float);
     const size_t decodeRoom =
-        volume.encoding() == ValueEncoding::Uint16 ? floats - std::min(floats, volume.decodedBytes()) : 0;
+        volume.encoding() == dataset::ValueEncoding::Uint16 ? floats - std::min(floats, volume.decodedBytes()) : 0;
     return volume.memoryBytes() + 3 * floats + decodeRoom;
 }
 
-std::shared_ptr<const StepVolume> StepCache::findLocked(int step, int level)
+std::shared_ptr<const dataset::StepVolume> StepCache::findLocked(int step, int level)
 {
     for (auto it = m_lru.begin(); it != m_lru.end(); ++it)
         if (it->step == step && it->level == level) {
@@ -65,7 +65,7 @@ void StepCache::evictLocked()
     }
 }
 
-void StepCache::insert(int step, int level, std::shared_ptr<const StepVolume> volume)
+void StepCache::insert(int step, int level, std::shared_ptr<const dataset::StepVolume> volume)
 {
     std::lock_guard lock(m_mutex);
     if (findLocked(step, level))
@@ -77,7 +77,7 @@ void StepCache::insert(int step, int level, std::shared_ptr<const StepVolume> vo
     evictLocked();
 }
 
-std::shared_ptr<const StepVolume> StepCache::get(int step, int level)
+std::shared_ptr<const dataset::StepVolume> StepCache::get(int step, int level)
 {
     {
         std::lock_guard lock(m_mutex);
@@ -91,7 +91,7 @@ std::shared_ptr<const StepVolume> StepCache::get(int step, int level)
     return volume;
 }
 
-std::shared_ptr<const StepVolume> StepCache::getWithoutEvicting(int step, int level)
+std::shared_ptr<const dataset::StepVolume> StepCache::getWithoutEvicting(int step, int level)
 {
     {
         std::lock_guard lock(m_mutex);

@@ -25,7 +25,7 @@ namespace raypc::server {
 
 class StepCache {
 public:
-    using Loader = std::function<std::shared_ptr<const StepVolume>(int step, int level)>;
+    using Loader = std::function<std::shared_ptr<const dataset::StepVolume>(int step, int level)>;
 
     // `loader` throws raypc::Error for a step or level it cannot load; get() passes that on.
     StepCache(Loader loader, size_t maxBytes, size_t maxEntries);
@@ -35,11 +35,11 @@ public:
 
     // A cached volume one of whose files was cut short since it was mapped (StepVolume::filesCutShort)
     // is dropped and loaded again, so the loader's error names the file instead of a read raising SIGBUS.
-    std::shared_ptr<const StepVolume> get(int step, int level);
+    std::shared_ptr<const dataset::StepVolume> get(int step, int level);
     // For scans over many steps (statistics): a cached volume without changing the order of use, or
     // a fresh load that is kept only when it fits without evicting anything, so that a scan never
     // pushes the renderers' working set out.
-    std::shared_ptr<const StepVolume> getWithoutEvicting(int step, int level);
+    std::shared_ptr<const dataset::StepVolume> getWithoutEvicting(int step, int level);
     // Queues a background load; replaces an earlier request that has not started.
     void prefetch(int step, int level);
     // Waits until no prefetch is queued or running (tests).
@@ -55,18 +55,18 @@ public:
     // StepVolume::nodeGradient), which it keeps once shown lit, and for a u16 volume room for at
     // least one decoded variable (the one a renderer colours by). Variables decoded after the volume
     // entered the cache are counted when it is next asked for.
-    static size_t volumeBytes(const StepVolume& volume);
+    static size_t volumeBytes(const dataset::StepVolume& volume);
 
 private:
     struct Entry {
         int step, level;
-        std::shared_ptr<const StepVolume> volume;
+        std::shared_ptr<const dataset::StepVolume> volume;
         size_t bytes;
     };
-    std::shared_ptr<const StepVolume> findLocked(int step, int level);
+    std::shared_ptr<const dataset::StepVolume> findLocked(int step, int level);
     // Evicts from the back until within bounds, always keeping the front entry.
     void evictLocked();
-    void insert(int step, int level, std::shared_ptr<const StepVolume> volume);
+    void insert(int step, int level, std::shared_ptr<const dataset::StepVolume> volume);
     void prefetchLoop();
 
     Loader m_loader;

@@ -16,9 +16,9 @@ namespace raypc::server {
 namespace {
 
 // A small in-memory volume whose values encode (step, level), 8 x 4 x 16 points, one variable.
-std::shared_ptr<const StepVolume> makeVolume(int step, int level)
+std::shared_ptr<const dataset::StepVolume> makeVolume(int step, int level)
 {
-    Snapshot s;
+    grid::Snapshot s;
     for (int i = 0; i < 8; ++i)
         s.grid.latDeg.push_back(-80.0 + 20.0 * i);
     for (int i = 0; i < 4; ++i)
@@ -26,12 +26,12 @@ std::shared_ptr<const StepVolume> makeVolume(int step, int level)
     for (int i = 0; i < 16; ++i)
         s.grid.lonDeg.push_back(22.5 * i);
     s.fields.push_back({"v", "1", std::vector<float>(s.grid.cellCount(), float(step * 10 + level))});
-    return StepVolume::fromSnapshot(s);
+    return dataset::StepVolume::fromSnapshot(s);
 }
 
 struct CountingLoader {
     std::shared_ptr<std::atomic<int>> calls = std::make_shared<std::atomic<int>>(0);
-    std::shared_ptr<const StepVolume> operator()(int step, int level) const
+    std::shared_ptr<const dataset::StepVolume> operator()(int step, int level) const
     {
         ++*calls;
         if (step < 0)
@@ -159,14 +159,14 @@ TEST(StepCache, CountsDecodedValuesAndPrefetchDecodesWhatIsShown)
 {
     const auto dir = std::filesystem::temp_directory_path() / ("raypc_step_cache_u16_" + std::to_string(::getpid()));
     std::filesystem::remove_all(dir);
-    PreprocessOptions o;
+    preprocess::PreprocessOptions o;
     o.quiet = true;
     o.sampleRows = 500;
     o.pathlines.enabled = false;
-    preprocess(listSnapshotFiles({std::filesystem::path(RAYPC_TEST_DATA_DIR) / "contest-layout"}), dir, o);
+    preprocess::preprocess(io::listSnapshotFiles({std::filesystem::path(RAYPC_TEST_DATA_DIR) / "contest-layout"}), dir, o);
     {
-        const auto dataset = Dataset::open(dir);
-        ASSERT_EQ(dataset->encoding(), ValueEncoding::Uint16);
+        const auto dataset = dataset::Dataset::open(dir);
+        ASSERT_EQ(dataset->encoding(), dataset::ValueEncoding::Uint16);
         StepCache cache([dataset](int step, int level) { return dataset->load(step, level); }, size_t(1) << 30, 8);
         const auto a = cache.get(0, 0);
         const size_t floats = a->grid().cellCount() * sizeof(float);
@@ -199,23 +199,23 @@ TEST(StepCache, AFileCutShortWhileCachedIsDroppedAndTheReloadNamesIt)
 {
     const auto dir = std::filesystem::temp_directory_path() / ("raypc_step_cache_cut_" + std::to_string(::getpid()));
     std::filesystem::remove_all(dir);
-    SynthOptions synth;
+    synth::SynthOptions synth;
     synth.steps = 2;
     synth.nLat = 12;
     synth.nR = 9;
     synth.nLon = 16;
-    writeSyntheticSeries(dir / "nc", synth);
-    PreprocessOptions o;
+    synth::writeSyntheticSeries(dir / "nc", synth);
+    preprocess::PreprocessOptions o;
     o.quiet = true;
     o.sampleRows = 100;
     o.pathlines.enabled = false;
-    preprocess(listSnapshotFiles({dir / "nc"}), dir / "ds", o);
+    preprocess::preprocess(io::listSnapshotFiles({dir / "nc"}), dir / "ds", o);
     {
-        const auto dataset = Dataset::open(dir / "ds");
+        const auto dataset = dataset::Dataset::open(dir / "ds");
         StepCache cache([dataset](int step, int level) { return dataset->load(step, level); }, size_t(1) << 30, 8);
         const auto a = cache.get(0, 0);
         a->values(0);  // a first frame
-        const auto file = format::encodedValuesFile(format::levelDir(format::stepDir(dir / "ds", 0), 0), "vx");
+        const auto file = dataset::format::encodedValuesFile(dataset::format::levelDir(dataset::format::stepDir(dir / "ds", 0), 0), "vx");
         std::filesystem::resize_file(file, 0);
         try {
             cache.get(0, 0)->values(static_cast<size_t>(dataset->variableIndex("vx")));

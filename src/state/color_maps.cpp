@@ -1,6 +1,7 @@
 #include "state/color_maps.h"
 
 #include "core/error.h"
+#include "core/strings.h"
 
 #include <nlohmann/json.hpp>
 
@@ -79,11 +80,8 @@ const std::vector<ColorMapId>& allColorMaps()
 ColorMapId parseColorMap(std::string_view name)
 {
     std::string known;
-    for (ColorMapId map : allColorMaps()) {
-        if (name == colorMapName(map))
-            return map;
-        known += (known.empty() ? "" : ", ") + std::string(colorMapName(map));
-    }
+    if (const auto map = findByName(name, allColorMaps(), colorMapName, known))
+        return *map;
     // Accepted aliases: the names ParaView and matplotlib users type.
     if (name == "coolwarm" || name == "Cool to Warm")
         return ColorMapId::CoolToWarm;

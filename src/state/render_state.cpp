@@ -17,9 +17,9 @@ RenderState loadRenderState(const std::filesystem::path& path)
     return parseRenderState(parseJsonInput(readFile(path), path.string()), path.filename().string());
 }
 
-FeatureOptions featureOptions(const FeatureSettings& settings)
+analysis::FeatureOptions featureOptions(const FeatureSettings& settings)
 {
-    return raypc::featureOptions(settings.minVolumeKm3, {settings.depthsKm.begin(), settings.depthsKm.end()},
+    return analysis::featureOptions(settings.minVolumeKm3, {settings.depthsKm.begin(), settings.depthsKm.end()},
                                  settings.bandHalfWidthKm);
 }
 

@@ -39,11 +39,11 @@ inline constexpr int kRenderStateVersion = 12;
 
 // A brush range: a variable or a coordinate (x, y, z, lat, lon, radius, depth) and [min, max]. The
 // brush model is analysis/selection.h's: a name that repeats adds a range to its axis (OR).
-using BrushSpec = NamedRange;
+using BrushSpec = analysis::NamedRange;
 
 // A range over one pathline attribute column (the pathline parallel-coordinates plot), e.g.
 // "length", "start temperature anomaly"; as brushes, a repeated column ORs its ranges.
-using PathlineFilter = NamedRange;
+using PathlineFilter = analysis::NamedRange;
 
 // The "pathlines" object: tubes along the pathlines injected in the last `window` steps
 // (docs/state.md). Cost classes: window (and the state's step) reload the line window and
@@ -57,7 +57,7 @@ struct PathlineState {
     int window = 10;         // steps: lines injected in [step - window + 1, step]
     std::string colorBy = "age";  // "age" or a line attribute column
     std::optional<ColorMapId> colorMap;  // nullopt: blue-white-red for age, viridis for attributes
-    std::optional<ValueRange> range;     // nullopt: [0, window x step length] for age, else the column's range
+    std::optional<dataset::ValueRange> range;     // nullopt: [0, window x step length] for age, else the column's range
     bool filterByBrushes = true;  // a line's start must satisfy the volume brushes
     std::vector<PathlineFilter> filters;
     bool ambientOcclusion = true;
@@ -124,14 +124,14 @@ struct FeatureSettings {
     float bandHalfWidthKm = 50.0f;                          // the band around each depth
     int level = 0;                                          // of detail the regions are found at
     float minOverlapShare = 0.1f;                           // of a feature carried onto another for a link
-    StallMeasure stallBy = StallMeasure::MeanDepth;         // version 12: which depth of a feature stalls
+    analysis::StallMeasure stallBy = analysis::StallMeasure::MeanDepth;         // version 12: which depth of a feature stalls
     // Version 11: the 3D view paints the step's features (render/feature_paint.h).
     bool colorById = false;
     std::vector<int> highlight;  // feature ids of the state's step
 };
 
 // The data layer's options of the state's feature settings (minimum volume, depths, band).
-FeatureOptions featureOptions(const FeatureSettings& settings);
+analysis::FeatureOptions featureOptions(const FeatureSettings& settings);
 
 // Checks feature settings given outside a state document (command-line options, Python's arguments)
 // against the state's description of `features` (state_schema.cpp), so that both accept the same
@@ -147,7 +147,7 @@ struct RenderState {
     int width = 512, height = 512;
     std::string colorVariable;  // empty: the first variable
     ColorMapId colorMap = ColorMapId::Viridis;
-    std::optional<ValueRange> colorRange;  // default: the variable's global range (symmetric for centred maps)
+    std::optional<dataset::ValueRange> colorRange;  // default: the variable's global range (symmetric for centred maps)
     std::vector<OpacityPoint> opacity;  // empty: defaultOpacity(colorMap)
     float opacityUnitKm = 100.0f;
     std::vector<ColorStop> colorPoints;  // version 3: custom colours replacing colorMap when not empty
@@ -169,7 +169,7 @@ struct RenderState {
         std::string variable;  // empty: plain colour
         Rgb color{0.55f, 0.55f, 0.58f};
         ColorMapId colorMap = ColorMapId::Inferno;
-        std::optional<ValueRange> range;
+        std::optional<dataset::ValueRange> range;
     } core;
     ShadingStyle shading;
     Rgb background{0.0f, 0.0f, 0.0f};

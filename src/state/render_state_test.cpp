@@ -18,7 +18,7 @@ TEST(RenderState, RoundTripsThroughJson)
     s.width = 300;
     s.colorVariable = "temperature anomaly";
     s.colorMap = ColorMapId::BlueWhiteRed;
-    s.colorRange = ValueRange{-300, 300};
+    s.colorRange = dataset::ValueRange{-300, 300};
     s.brushes = {{"temperature", 1000, 2000}, {"depth", 0, 660}};
     s.level = 1;
     s.core.variable = "temperature";

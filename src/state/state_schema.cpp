@@ -294,11 +294,11 @@ Kind<Vec3> vec3(bool direction)
 }
 
 // [min, max] with min < max, or null (nullopt: a default that depends on the data).
-Kind<std::optional<ValueRange>> range()
+Kind<std::optional<dataset::ValueRange>> range()
 {
     json schema = numbersSchema(2);
     schema["type"] = json::array({"array", "null"});
-    return {[](const json& v, std::optional<ValueRange>& target, Reader& r, const std::string& key) {
+    return {[](const json& v, std::optional<dataset::ValueRange>& target, Reader& r, const std::string& key) {
                 if (v.is_null()) {
                     target.reset();
                     return;
@@ -306,9 +306,9 @@ Kind<std::optional<ValueRange>> range()
                 const auto x = numbers(v, 2, r, key);
                 if (!(x[0] < x[1]))
                     r.failAt(key, fmt::format("expected [min, max] with min < max, found {}", jsonExcerpt(v)));
-                target = ValueRange{float(x[0]), float(x[1])};
+                target = dataset::ValueRange{float(x[0]), float(x[1])};
             },
-            [](const std::optional<ValueRange>& x) {
+            [](const std::optional<dataset::ValueRange>& x) {
                 return x ? json::array({x->min, x->max}) : json(nullptr);
             },
             schema, "[min, max] with min < max, or null"};
@@ -448,9 +448,9 @@ Kind<StereoMode> stereoMode()
     return enumeration<StereoMode>(allStereoModes(), stereoModeName, parseStereoMode, "a stereo mode");
 }
 
-Kind<StallMeasure> stallMeasure()
+Kind<analysis::StallMeasure> stallMeasure()
 {
-    return enumeration<StallMeasure>(kStallMeasures, stallMeasureName, parseStallMeasure, "a stall measure");
+    return enumeration<analysis::StallMeasure>(analysis::kStallMeasures, analysis::stallMeasureName, analysis::parseStallMeasure, "a stall measure");
 }
 
 Kind<MapProjection> mapProjection()
@@ -495,7 +495,7 @@ Kind<std::array<float, 4>> four(const std::string& type, double lo = -INFINITY, 
 // An explicit level or "auto" (nullopt).
 Kind<std::optional<int>> level()
 {
-    const int top = kLevelCount - 1;
+    const int top = dataset::kLevelCount - 1;
     return {[top](const json& v, std::optional<int>& target, Reader& r, const std::string& key) {
                 if (v.is_string() && v.get_ref<const std::string&>() == "auto") {
                     target.reset();
@@ -1024,7 +1024,7 @@ const Object<RenderState>& document()
                          {.meaning = "tubes at least this many pixels wide at the camera target's distance (the "
                                      "radius grows when zoomed out); 0: `radiusKm` alone",
                           .since = 3}),
-                 leaf<S>("window", at(&S::pathlines, &P::window), integer(1, kMaxPathlineWindow),
+                 leaf<S>("window", at(&S::pathlines, &P::window), integer(1, analysis::kMaxPathlineWindow),
                          {.meaning = "show lines injected in steps [`step` − window + 1, `step`] (a change reloads "
                                      "the line window and its BVH)",
                           .cost = Cost::Reload}),
@@ -1201,7 +1201,7 @@ const Object<RenderState>& document()
                 r.failAt("camera.views", problem);
             if (r.version() >= 4)
                 return;
-            auto refuseRepeats = [&](const std::vector<NamedRange>& ranges, const std::string& key) {
+            auto refuseRepeats = [&](const std::vector<analysis::NamedRange>& ranges, const std::string& key) {
                 for (size_t i = 0; i < ranges.size(); ++i)
                     for (size_t j = 0; j < i; ++j)
                         if (ranges[j].name == ranges[i].name)

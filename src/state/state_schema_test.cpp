@@ -138,9 +138,9 @@ TEST(StateSchema, FeatureSettingsRoundTripAndBadValuesNameTheKey)
     EXPECT_EQ(back.features.level, 1);
     // Version 12: which depth times the stalls.
     const RenderState deepest = parseRenderState(json::parse(R"({"version": 12, "features": {"stallBy": "deepest"}})"));
-    EXPECT_EQ(deepest.features.stallBy, StallMeasure::Deepest);
-    EXPECT_EQ(parseRenderState(toJson(deepest)).features.stallBy, StallMeasure::Deepest);
-    EXPECT_EQ(s.features.stallBy, StallMeasure::MeanDepth) << "the default";
+    EXPECT_EQ(deepest.features.stallBy, analysis::StallMeasure::Deepest);
+    EXPECT_EQ(parseRenderState(toJson(deepest)).features.stallBy, analysis::StallMeasure::Deepest);
+    EXPECT_EQ(s.features.stallBy, analysis::StallMeasure::MeanDepth) << "the default";
     EXPECT_THROW(parseRenderState(json::parse(R"({"version": 11, "features": {"stallBy": "deepest"}})")), Error);
     EXPECT_THROW(parseRenderState(json::parse(R"({"version": 12, "features": {"stallBy": "tip"}})")), Error);
     const RenderState plain = parseRenderState(json{{"version", 9}});  // the defaults

@@ -1,6 +1,7 @@
 #include "state/view_types.h"
 
 #include "core/error.h"
+#include "core/strings.h"
 
 #include <algorithm>
 #include <cmath>
@@ -74,11 +75,8 @@ const std::vector<StereoMode>& allStereoModes()
 StereoMode parseStereoMode(std::string_view name)
 {
     std::string known;
-    for (StereoMode m : allStereoModes()) {
-        if (name == stereoModeName(m))
-            return m;
-        known += (known.empty() ? "" : ", ") + std::string(stereoModeName(m));
-    }
+    if (const auto mode = findByName(name, allStereoModes(), stereoModeName, known))
+        return *mode;
     fail("stereo mode '{}' is unknown, expected one of: {}", name, known);
 }
 
@@ -111,11 +109,8 @@ std::string_view mapProjectionTitle(MapProjection projection)
 MapProjection parseMapProjection(std::string_view name)
 {
     std::string known;
-    for (MapProjection p : kAll) {
-        if (mapProjectionName(p) == name)
-            return p;
-        known += (known.empty() ? "" : ", ") + std::string(mapProjectionName(p));
-    }
+    if (const auto projection = findByName(name, allMapProjections(), mapProjectionName, known))
+        return *projection;
     fail("unknown map projection '{}'; expected one of: {}", name, known);
 }
 

@@ -13,14 +13,14 @@
 #include <string>
 #include <vector>
 
-namespace raypc {
+namespace raypc::synth {
 
 struct SynthOptions {
     int steps = 12;
     int nLat = 64, nR = 81, nLon = 128;  // the demo's default resolution
     uint64_t seed = 1;
     double dtMyr = 2.0;  // time between steps
-    NetcdfFlavour flavour = NetcdfFlavour::Classic64;
+    io::NetcdfFlavour flavour = io::NetcdfFlavour::Classic64;
     // An avalanche (docs/synthetic-data.md): from avalancheMyr, for avalancheDurationMyr, the first
     // slab that stalls at 660 km (in syntheticFeatures' order) breaks through it — its flow crosses
     // the layer at twice its speed, carrying its tip below it — then stalls again where its tip is.
@@ -33,18 +33,18 @@ struct SynthOptions {
 // ascending in memory), r uniform from the core-mantle boundary (3485 km) to the surface
 // (6371 km) inclusive, lon = i * 360 / nLon (0, 1, ..., 359 for 360; no repeated seam).
 // Throws raypc::Error unless nLat >= 2, nR >= 2 and nLon >= 3.
-SphericalGrid syntheticGrid(int nLat, int nR, int nLon);
+grid::SphericalGrid syntheticGrid(int nLat, int nR, int nLon);
 
 // The model's state at time `timeMyr`, on syntheticGrid(options.nLat, options.nR, options.nLon).
 // Deterministic for (options.seed, timeMyr, grid size). Uses oneTBB over lat rows.
-Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr);
+grid::Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr);
 
 // The same model sampled on any grid (options' grid size is ignored): every field except
 // "temperature anomaly" is a pointwise function of (seed, time, position), so a small local
 // grid gives exactly the values of a global one at the same points. "temperature anomaly" is
 // temperature minus its area-weighted mean over each r shell *of the given grid*, which is
 // only the physical anomaly on a global grid.
-Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr, const SphericalGrid& grid);
+grid::Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr, const grid::SphericalGrid& grid);
 
 // Parses a grid size "LATxRxLON" (e.g. "180x201x360") for the option named `option`.
 // Throws raypc::Error naming the option and the text unless it is three whole numbers with
@@ -121,7 +121,7 @@ struct SynthTruth {
 };
 // The truth on `grid` (any grid, like synthesizeSnapshot) at `timeMyr`. Deterministic; parallel
 // over lat rows. Throws raypc::Error for a non-finite time.
-SynthTruth syntheticTruth(const SynthOptions& options, double timeMyr, const SphericalGrid& grid);
+SynthTruth syntheticTruth(const SynthOptions& options, double timeMyr, const grid::SphericalGrid& grid);
 
 // The generator's features in every step of a series (`raypc synth --truth FILE`, what a user compares
 // `raypc features` with; docs/synthetic-data.md, "Ground truth"): CSV, a row per step and feature of
@@ -141,4 +141,4 @@ std::array<double, 3> syntheticRotationRadPerSecond(const SynthOptions& options)
 // written atomically. Shows progress on a terminal. Throws raypc::Error on I/O failure.
 void writeSyntheticSeries(const std::filesystem::path& outDir, const SynthOptions& options);
 
-}  // namespace raypc
+}  // namespace raypc::synth

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-namespace raypc::synth {
+namespace raypc::synth::synth {
 namespace {
 
 // Background magnitudes.
@@ -116,4 +116,4 @@ void backgroundTables(const std::vector<double>& rKm, ModelAtTime& m)
     }
 }
 
-}  // namespace raypc::synth
+}  // namespace raypc::synth::synth

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace raypc::synth {
+namespace raypc::synth::synth {
 namespace {
 
 // Angular part of a plume's flow potential at the unit vector n.
@@ -116,4 +116,4 @@ Vec3d featuresOfColumn(const ModelAtTime& model, double latDeg, double lonDeg, s
     return n;
 }
 
-}  // namespace raypc::synth
+}  // namespace raypc::synth::synth

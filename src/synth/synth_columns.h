@@ -17,7 +17,7 @@
 #include <cmath>
 #include <vector>
 
-namespace raypc::synth {
+namespace raypc::synth::synth {
 
 // Per-column values of one feature.
 struct ColumnTerms {
@@ -55,7 +55,7 @@ inline double sheetProfile(const FeatureAtTime& fa, double xi, size_t iR)
 // outward unit vector, terms and active features there, and rowDone(iLat) after the columns of each
 // lat row. Rows run in parallel; a row's columns in order on one thread.
 template <class Column, class RowDone>
-void forEachColumn(const ModelAtTime& model, const SphericalGrid& grid, Column column, RowDone rowDone)
+void forEachColumn(const ModelAtTime& model, const grid::SphericalGrid& grid, Column column, RowDone rowDone)
 {
     const size_t nFeatures = model.features.size();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.nLat()), [&](const tbb::blocked_range<size_t>& rows) {
@@ -72,4 +72,4 @@ void forEachColumn(const ModelAtTime& model, const SphericalGrid& grid, Column c
     });
 }
 
-}  // namespace raypc::synth
+}  // namespace raypc::synth::synth

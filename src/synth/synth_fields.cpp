@@ -11,7 +11,7 @@
 #include <array>
 #include <cmath>
 
-namespace raypc {
+namespace raypc::synth {
 namespace synth {
 namespace {
 
@@ -48,11 +48,11 @@ float spinDensityAnomaly(double depthKm, double temperatureK, double referenceK)
 }
 
 // The contest's eight variables on `grid`, zero, with their names and units.
-Snapshot contestSnapshot(const SphericalGrid& grid)
+grid::Snapshot contestSnapshot(const grid::SphericalGrid& grid)
 {
-    Snapshot snap;
+    grid::Snapshot snap;
     snap.grid = grid;
-    const auto& names = contestVariableNames();
+    const auto& names = grid::contestVariableNames();
     const std::array<const char*, 8> units = {"K", "m/s", "m/s", "m/s", "W/m/K", "1/K", "K", "kg/m^3"};
     snap.fields.resize(names.size());
     for (size_t v = 0; v < names.size(); ++v) {
@@ -99,9 +99,9 @@ void addFeatures(const ModelAtTime& model, const std::vector<ColumnTerms>& terms
 // grid (every field but the anomaly). Returns per (lat row, radius) the sums of the stored
 // temperature weighted by the dual cells' areas (`latWeights`, `lonWeights`), for the shell means.
 std::vector<double> evaluateFields(const ModelAtTime& model, const std::vector<double>& latWeights,
-                                   const std::vector<double>& lonWeights, Snapshot& snap)
+                                   const std::vector<double>& lonWeights, grid::Snapshot& snap)
 {
-    const SphericalGrid& grid = snap.grid;
+    const grid::SphericalGrid& grid = snap.grid;
     const size_t nLat = grid.nLat(), nR = grid.nR(), nLon = grid.nLon();
     float* temperature = snap.fields[0].values.data();
     float* vx = snap.fields[1].values.data();
@@ -162,9 +162,9 @@ std::vector<double> evaluateFields(const ModelAtTime& model, const std::vector<d
 // Temperature anomaly: temperature minus its area-weighted mean over each shell, from the row sums
 // of evaluateFields.
 void subtractShellMeans(const std::vector<double>& rowSums, const std::vector<double>& latWeights,
-                        const std::vector<double>& lonWeights, Snapshot& snap)
+                        const std::vector<double>& lonWeights, grid::Snapshot& snap)
 {
-    const SphericalGrid& grid = snap.grid;
+    const grid::SphericalGrid& grid = snap.grid;
     const size_t nLat = grid.nLat(), nR = grid.nR(), nLon = grid.nLon();
     const float* temperature = snap.fields[0].values.data();
     float* anomaly = snap.fields[6].values.data();
@@ -193,17 +193,17 @@ void subtractShellMeans(const std::vector<double>& rowSums, const std::vector<do
 }  // namespace
 }  // namespace synth
 
-Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr)
+grid::Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr)
 {
     return synthesizeSnapshot(options, timeMyr, syntheticGrid(options.nLat, options.nR, options.nLon));
 }
 
-Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr, const SphericalGrid& grid)
+grid::Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr, const grid::SphericalGrid& grid)
 {
     if (!std::isfinite(timeMyr))
         fail("synthetic snapshot: time {} Myr is not finite", timeMyr);
     const synth::ModelAtTime model = synth::modelAt(options, timeMyr, grid.rKm);
-    Snapshot snap = synth::contestSnapshot(grid);
+    grid::Snapshot snap = synth::contestSnapshot(grid);
     // Dual-cell area weights: lat rows by sin(upper edge) - sin(lower edge), lon columns by width.
     const std::vector<double> latWeights = grid.volumeFactors().lat;
     const std::vector<double> lonWeights = grid.lonWidthsDeg();
@@ -212,4 +212,4 @@ Snapshot synthesizeSnapshot(const SynthOptions& options, double timeMyr, const S
     return snap;
 }
 
-}  // namespace raypc
+}  // namespace raypc::synth

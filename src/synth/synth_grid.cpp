@@ -9,13 +9,13 @@
 
 #include <charconv>
 
-namespace raypc {
+namespace raypc::synth {
 
-SphericalGrid syntheticGrid(int nLat, int nR, int nLon)
+grid::SphericalGrid syntheticGrid(int nLat, int nR, int nLon)
 {
     if (nLat < 2 || nR < 2 || nLon < 3)
         fail("synthetic grid {}x{}x{}: expected at least 2 lat rows, 2 radii and 3 lon columns", nLat, nR, nLon);
-    SphericalGrid grid;
+    grid::SphericalGrid grid;
     grid.latDeg.resize(nLat);
     grid.rKm.resize(nR);
     grid.lonDeg.resize(nLon);
@@ -49,4 +49,4 @@ std::array<int, 3> parseSynthGridSize(const std::string& text, const std::string
     return sizes;
 }
 
-}  // namespace raypc
+}  // namespace raypc::synth

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-namespace raypc::synth {
+namespace raypc::synth::synth {
 namespace {
 
 // Deterministic across standard libraries: mt19937_64 is fully specified, while the
@@ -199,4 +199,4 @@ Model buildModel(uint64_t seed)
     return model;
 }
 
-}  // namespace raypc::synth
+}  // namespace raypc::synth::synth

@@ -34,7 +34,7 @@
 #include <numbers>
 #include <vector>
 
-namespace raypc::synth {
+namespace raypc::synth::synth {
 
 inline constexpr double kPi = std::numbers::pi;
 inline constexpr double kMantleThicknessKm = kSurfaceRadiusKm - kCoreRadiusKm;
@@ -235,4 +235,4 @@ void backgroundTables(const std::vector<double>& rKm, ModelAtTime& m);
 // Everything that depends on time but not on the grid, plus radial tables for `rKm`.
 ModelAtTime modelAt(const SynthOptions& options, double timeMyr, const std::vector<double>& rKm);
 
-}  // namespace raypc::synth
+}  // namespace raypc::synth::synth

@@ -10,7 +10,7 @@
 #include <array>
 #include <cmath>
 
-namespace raypc {
+namespace raypc::synth {
 namespace synth {
 namespace {
 
@@ -359,4 +359,4 @@ std::array<double, 3> syntheticRotationRadPerSecond(const SynthOptions& options)
     return {w * model.rotationAxis.x, w * model.rotationAxis.y, w * model.rotationAxis.z};
 }
 
-}  // namespace raypc
+}  // namespace raypc::synth

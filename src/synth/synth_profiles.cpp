@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace raypc::synth {
+namespace raypc::synth::synth {
 namespace {
 
 // Notches of vertical flow at the layers a flow passes (not the one where it stalls).
@@ -83,4 +83,4 @@ double toroidalShape(double rKm)
     return (rKm / kSurfaceRadiusKm) * std::exp(-depth / 700.0);
 }
 
-}  // namespace raypc::synth
+}  // namespace raypc::synth::synth

@@ -8,7 +8,7 @@
 
 #include <cmath>
 
-namespace raypc {
+namespace raypc::synth {
 
 void writeSyntheticSeries(const std::filesystem::path& outDir, const SynthOptions& options)
 {
@@ -22,11 +22,11 @@ void writeSyntheticSeries(const std::filesystem::path& outDir, const SynthOption
         fail("{}: cannot create output directory: {}", outDir.string(), ec.message());
     Progress progress("synth", options.steps, "steps");
     for (int step = 0; step < options.steps; ++step) {
-        const Snapshot snap = synthesizeSnapshot(options, step * options.dtMyr);
-        writeContestFile(outDir / fmt::format("spherical{:03d}.nc", step + 1), snap, options.flavour);
+        const grid::Snapshot snap = synthesizeSnapshot(options, step * options.dtMyr);
+        io::writeContestFile(outDir / fmt::format("spherical{:03d}.nc", step + 1), snap, options.flavour);
         progress.advance();
     }
     progress.finish();
 }
 
-}  // namespace raypc
+}  // namespace raypc::synth

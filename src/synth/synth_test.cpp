@@ -17,7 +17,7 @@
 #include <map>
 #include <numeric>
 
-namespace raypc {
+namespace raypc::synth {
 namespace {
 
 namespace fs = std::filesystem;
@@ -27,7 +27,7 @@ struct LocalVelocity {
     double ur, east, north;
 };
 
-LocalVelocity localVelocity(const Snapshot& s, size_t idx, double latDeg, double lonDeg)
+LocalVelocity localVelocity(const grid::Snapshot& s, size_t idx, double latDeg, double lonDeg)
 {
     const double lat = degToRad(latDeg), lon = degToRad(lonDeg);
     const double vx = s.find("vx")->values[idx], vy = s.find("vy")->values[idx], vz = s.find("vz")->values[idx];
@@ -37,12 +37,12 @@ LocalVelocity localVelocity(const Snapshot& s, size_t idx, double latDeg, double
     return {ur, east, north};
 }
 
-double depthOf(const SphericalGrid& g, size_t iR) { return kSurfaceRadiusKm - g.rKm[iR]; }
+double depthOf(const grid::SphericalGrid& g, size_t iR) { return kSurfaceRadiusKm - g.rKm[iR]; }
 
 // Calls fn(iLat, iR, iLon, index) for every grid point whose depth lies within [d0, d1] km, in
 // canonical order.
 template <class Fn>
-void forEachPointAtDepths(const SphericalGrid& g, double d0, double d1, Fn fn)
+void forEachPointAtDepths(const grid::SphericalGrid& g, double d0, double d1, Fn fn)
 {
     for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
         for (size_t iR = 0; iR < g.nR(); ++iR) {
@@ -54,7 +54,7 @@ void forEachPointAtDepths(const SphericalGrid& g, double d0, double d1, Fn fn)
 }
 
 // Area weight of a lat row's dual cell, computed here independently of the generator.
-double rowArea(const SphericalGrid& g, size_t iLat)
+double rowArea(const grid::SphericalGrid& g, size_t iLat)
 {
     const size_t n = g.nLat();
     const double lo = iLat == 0 ? -90.0 : 0.5 * (g.latDeg[iLat - 1] + g.latDeg[iLat]);
@@ -103,9 +103,9 @@ std::vector<std::string> fileNames(const fs::path& dir)
     return names;
 }
 
-const Snapshot& demoSnapshot()
+const grid::Snapshot& demoSnapshot()
 {
-    static const Snapshot s = synthesizeSnapshot(demoOptions(), 0.0);
+    static const grid::Snapshot s = synthesizeSnapshot(demoOptions(), 0.0);
     return s;
 }
 
@@ -118,7 +118,7 @@ size_t nearestIndex(const std::vector<double>& values, double x)
     return best;
 }
 
-size_t nearestLon(const SphericalGrid& g, double lonDeg)
+size_t nearestLon(const grid::SphericalGrid& g, double lonDeg)
 {
     size_t best = 0;
     double bestD = 1e9;
@@ -133,9 +133,9 @@ size_t nearestLon(const SphericalGrid& g, double lonDeg)
 }
 
 // A tiny grid around (lat, lon, r) with spacing `stepDeg`, `stepKm`.
-SphericalGrid localGrid(double latDeg, double lonDeg, double rKm, double stepDeg, double stepKm)
+grid::SphericalGrid localGrid(double latDeg, double lonDeg, double rKm, double stepDeg, double stepKm)
 {
-    SphericalGrid g;
+    grid::SphericalGrid g;
     g.latDeg = {latDeg - stepDeg, latDeg, latDeg + stepDeg};
     g.rKm = {rKm - stepKm, rKm, rKm + stepKm};
     g.lonDeg = {lonDeg - stepDeg, lonDeg, lonDeg + stepDeg};
@@ -144,7 +144,7 @@ SphericalGrid localGrid(double latDeg, double lonDeg, double rKm, double stepDeg
 
 TEST(SynthGrid, LayoutLikeTheContest)
 {
-    const SphericalGrid g = syntheticGrid(180, 201, 360);
+    const grid::SphericalGrid g = syntheticGrid(180, 201, 360);
     ASSERT_EQ(g.nLat(), 180u);
     EXPECT_DOUBLE_EQ(g.latDeg.front(), -89.5);
     EXPECT_DOUBLE_EQ(g.latDeg.back(), 89.5);
@@ -172,11 +172,11 @@ TEST(SynthGrid, ParsesSizesAndRejectsBadOnes)
 
 TEST(SynthModel, FiniteWithPlausibleMagnitudes)
 {
-    const Snapshot& s = demoSnapshot();
-    const SphericalGrid& g = s.grid;
+    const grid::Snapshot& s = demoSnapshot();
+    const grid::SphericalGrid& g = s.grid;
     ASSERT_EQ(s.fields.size(), 8u);
     for (size_t v = 0; v < 8; ++v) {
-        EXPECT_EQ(s.fields[v].name, contestVariableNames()[v]);
+        EXPECT_EQ(s.fields[v].name, grid::contestVariableNames()[v]);
         for (float x : s.fields[v].values)
             ASSERT_TRUE(std::isfinite(x)) << s.fields[v].name;
     }
@@ -225,8 +225,8 @@ TEST(SynthModel, FiniteWithPlausibleMagnitudes)
 
 TEST(SynthModel, TemperatureAnomalyHasZeroMeanOnEveryShell)
 {
-    const Snapshot& s = demoSnapshot();
-    const SphericalGrid& g = s.grid;
+    const grid::Snapshot& s = demoSnapshot();
+    const grid::SphericalGrid& g = s.grid;
     const auto& t = s.find("temperature")->values;
     const auto& dT = s.find("temperature anomaly")->values;
     for (size_t iR = 0; iR < g.nR(); ++iR) {
@@ -249,8 +249,8 @@ TEST(SynthModel, TemperatureAnomalyHasZeroMeanOnEveryShell)
 // Up where hot, down where cold: at each plume's axis in its tail and in each slab.
 TEST(SynthModel, RadialVelocityFollowsTemperature)
 {
-    const Snapshot& s = demoSnapshot();
-    const SphericalGrid& g = s.grid;
+    const grid::Snapshot& s = demoSnapshot();
+    const grid::SphericalGrid& g = s.grid;
     const auto& dT = s.find("temperature anomaly")->values;
     const auto features = syntheticFeatures(demoOptions(), 0.0);
     for (size_t fi = 0; fi < features.size(); ++fi) {
@@ -291,9 +291,9 @@ TEST(SynthModel, RadialVelocityFollowsTemperature)
 // Divergence (m/s per km) and the size of its radial term at the centre of a 3x3x3 grid,
 // by central differences in spherical coordinates:
 // div v = 1/r^2 d(r^2 ur)/dr + 1/(r cos lat) d(un cos lat)/dlat + 1/(r cos lat) d(ue)/dlon.
-std::pair<double, double> centralDivergence(const Snapshot& s)
+std::pair<double, double> centralDivergence(const grid::Snapshot& s)
 {
-    const SphericalGrid& g = s.grid;
+    const grid::SphericalGrid& g = s.grid;
     auto u = [&](size_t a, size_t b, size_t c) { return localVelocity(s, g.index(a, b, c), g.latDeg[a], g.lonDeg[c]); };
     const double r = g.rKm[1], lat = degToRad(g.latDeg[1]);
     const double dr = g.rKm[2] - g.rKm[0], dLat = degToRad(g.latDeg[2] - g.latDeg[0]), dLon = degToRad(g.lonDeg[2] - g.lonDeg[0]);
@@ -313,7 +313,7 @@ TEST(SynthModel, VelocityIsDivergenceFree)
     for (const SynthFeature& f : syntheticFeatures(o, 0.0)) {
         for (double offsetDeg : {1.5, 3.0, 5.0}) {
             for (double depth : {560.0, 760.0, 1500.0, 2200.0}) {
-                const Snapshot s = synthesizeSnapshot(o, 0.0, localGrid(f.latDeg + offsetDeg, f.lonDeg + 0.7 * offsetDeg, kSurfaceRadiusKm - depth, 0.01, 0.5));
+                const grid::Snapshot s = synthesizeSnapshot(o, 0.0, localGrid(f.latDeg + offsetDeg, f.lonDeg + 0.7 * offsetDeg, kSurfaceRadiusKm - depth, 0.01, 0.5));
                 const auto [div, scale] = centralDivergence(s);
                 // Where nothing but the rigid rotation flows, the terms are at float32 rounding level.
                 if (scale < 1e-13)
@@ -330,8 +330,8 @@ TEST(SynthModel, VelocityIsDivergenceFree)
 // each of its terms, with the terms themselves as large as |v| / (feature width).
 TEST(SynthModel, DiscreteDivergenceOnTheGridIsSmall)
 {
-    const Snapshot& s = demoSnapshot();
-    const SphericalGrid& g = s.grid;
+    const grid::Snapshot& s = demoSnapshot();
+    const grid::SphericalGrid& g = s.grid;
     double sumDiv = 0, sumRadial = 0;
     for (size_t iLat = 1; iLat + 1 < g.nLat(); ++iLat) {
         const double lat = degToRad(g.latDeg[iLat]);
@@ -362,9 +362,9 @@ TEST(SynthModel, DiscreteDivergenceOnTheGridIsSmall)
 
 // Mean |ur| and mean horizontal speed over the cells whose depth is within [d0, d1] km; the
 // horizontal speed without the model's rigid rotation, which is the same at every depth.
-std::pair<double, double> meanSpeeds(const Snapshot& s, double d0, double d1)
+std::pair<double, double> meanSpeeds(const grid::Snapshot& s, double d0, double d1)
 {
-    const SphericalGrid& g = s.grid;
+    const grid::SphericalGrid& g = s.grid;
     const auto omega = syntheticRotationRadPerSecond(demoOptions());
     double ur = 0, horizontal = 0, weight = 0;
     forEachPointAtDepths(g, d0, d1, [&](size_t iLat, size_t iR, size_t iLon, size_t i) {
@@ -386,7 +386,7 @@ std::pair<double, double> meanSpeeds(const Snapshot& s, double d0, double d1)
 // lateral flow (stronger than between the layers, where the features' flow is mostly vertical).
 TEST(SynthModel, StagnationLayersSlowVerticalButNotLateralFlow)
 {
-    const Snapshot& s = demoSnapshot();
+    const grid::Snapshot& s = demoSnapshot();
     const auto between = meanSpeeds(s, 950.0, 1300.0);
     const auto deep = meanSpeeds(s, 2000.0, 2400.0);
     for (double layer : {660.0, 1600.0}) {
@@ -402,9 +402,9 @@ TEST(SynthModel, StagnationLayersSlowVerticalButNotLateralFlow)
 TEST(SynthModel, DeterministicForASeed)
 {
     SynthOptions o = smallOptions(16, 12, 32);
-    const Snapshot a = synthesizeSnapshot(o, 4.0), b = synthesizeSnapshot(o, 4.0);
+    const grid::Snapshot a = synthesizeSnapshot(o, 4.0), b = synthesizeSnapshot(o, 4.0);
     o.seed = 2;
-    const Snapshot c = synthesizeSnapshot(o, 4.0);
+    const grid::Snapshot c = synthesizeSnapshot(o, 4.0);
     for (size_t v = 0; v < a.fields.size(); ++v) {
         EXPECT_EQ(a.fields[v].values, b.fields[v].values) << a.fields[v].name;
         EXPECT_NE(a.fields[v].values, c.fields[v].values) << a.fields[v].name;
@@ -417,13 +417,13 @@ TEST(SynthModel, DeterministicForASeed)
 // the anomaly, which is relative to the grid's own shell mean).
 TEST(SynthModel, LocalGridMatchesGlobalGrid)
 {
-    const Snapshot& global = demoSnapshot();
-    const SphericalGrid& g = global.grid;
-    SphericalGrid local;
+    const grid::Snapshot& global = demoSnapshot();
+    const grid::SphericalGrid& g = global.grid;
+    grid::SphericalGrid local;
     local.latDeg = {g.latDeg[20], g.latDeg[21]};
     local.rKm = {g.rKm[30], g.rKm[31], g.rKm[50]};
     local.lonDeg = {g.lonDeg[0], g.lonDeg[100], g.lonDeg[127]};
-    const Snapshot s = synthesizeSnapshot(demoOptions(), 0.0, local);
+    const grid::Snapshot s = synthesizeSnapshot(demoOptions(), 0.0, local);
     const std::array<size_t, 2> lats = {20, 21};
     const std::array<size_t, 3> rs = {30, 31, 50}, lons = {0, 100, 127};
     for (size_t v = 0; v < s.fields.size(); ++v) {
@@ -441,8 +441,8 @@ TEST(SynthModel, LocalGridMatchesGlobalGrid)
 // is no larger than between any other neighbouring columns, and the exact poles are finite.
 TEST(SynthModel, ContinuousAcrossTheSeamAndFiniteAtThePoles)
 {
-    const Snapshot& s = demoSnapshot();
-    const SphericalGrid& g = s.grid;
+    const grid::Snapshot& s = demoSnapshot();
+    const grid::SphericalGrid& g = s.grid;
     for (const char* name : {"temperature", "vx", "vy", "vz"}) {
         const auto& v = s.find(name)->values;
         double seam = 0, elsewhere = 0;
@@ -454,12 +454,12 @@ TEST(SynthModel, ContinuousAcrossTheSeamAndFiniteAtThePoles)
             }
         EXPECT_LE(seam, elsewhere) << name;
     }
-    SphericalGrid poles;
+    grid::SphericalGrid poles;
     poles.latDeg = {-90.0, 0.0, 90.0};
     poles.rKm = {kCoreRadiusKm, 5000.0, kSurfaceRadiusKm};
     poles.lonDeg = {0.0, 120.0, 240.0};
-    const Snapshot p = synthesizeSnapshot(demoOptions(), 0.0, poles);
-    for (const Field& f : p.fields)
+    const grid::Snapshot p = synthesizeSnapshot(demoOptions(), 0.0, poles);
+    for (const grid::Field& f : p.fields)
         for (size_t iR = 0; iR < 3; ++iR)
             for (size_t iLat : {size_t(0), size_t(2)}) {
                 // At a pole every lon is the same point: the Cartesian values must agree.
@@ -476,9 +476,9 @@ TEST(SynthModel, ContinuousAcrossTheSeamAndFiniteAtThePoles)
 TEST(SynthModel, CoherentMotionBetweenSteps)
 {
     const SynthOptions o = demoOptions();
-    const Snapshot& s0 = demoSnapshot();
-    const Snapshot s1 = synthesizeSnapshot(o, o.dtMyr);
-    const Snapshot s6 = synthesizeSnapshot(o, 6 * o.dtMyr);
+    const grid::Snapshot& s0 = demoSnapshot();
+    const grid::Snapshot s1 = synthesizeSnapshot(o, o.dtMyr);
+    const grid::Snapshot s6 = synthesizeSnapshot(o, 6 * o.dtMyr);
     const auto& a0 = s0.find("temperature anomaly")->values;
     const std::vector<double> d0(a0.begin(), a0.end());
     const auto& a1 = s1.find("temperature anomaly")->values;
@@ -496,7 +496,7 @@ TEST(SynthModel, CoherentMotionBetweenSteps)
         // The flow at the front, on the axis, from a tiny grid at the midpoint in time.
         const auto fm = syntheticFeatures(o, 0.5 * o.dtMyr)[i];
         const auto c = syntheticFeatureCentreDeg(o, 0.5 * o.dtMyr, i, fm.frontRadiusKm);
-        const Snapshot at = synthesizeSnapshot(o, 0.5 * o.dtMyr, localGrid(c[0], c[1], fm.frontRadiusKm, 0.01, 0.5));
+        const grid::Snapshot at = synthesizeSnapshot(o, 0.5 * o.dtMyr, localGrid(c[0], c[1], fm.frontRadiusKm, 0.01, 0.5));
         const double ur = localVelocity(at, at.grid.index(1, 1, 1), c[0], c[1]).ur;
         const double expectedKm = ur * o.dtMyr * kSecondsPerMyr / 1000.0;
         std::printf("feature %zu: front moved %.2f km, flow there moves it %.2f km\n", i, moved, expectedKm);
@@ -514,8 +514,8 @@ TEST(SynthModel, CoherentMotionBetweenSteps)
 // cold, negative in hot rock).
 TEST(SynthModel, SpinDensityAnomalyInTheMidMantleWithBothSigns)
 {
-    const Snapshot& s = demoSnapshot();
-    const SphericalGrid& g = s.grid;
+    const grid::Snapshot& s = demoSnapshot();
+    const grid::SphericalGrid& g = s.grid;
     const auto& rho = s.find("spin transition-induced density anomaly")->values;
     const auto& dT = s.find("temperature anomaly")->values;
     double inBand = 0, total = 0, minRho = 0, maxRho = 0, signAgreement = 0, signTotal = 0;
@@ -546,8 +546,8 @@ TEST(SynthModel, SpinDensityAnomalyInTheMidMantleWithBothSigns)
 // A negative expansivity anomaly marks cold shallow rock (slabs) and hot deep rock (plumes).
 TEST(SynthModel, NegativeExpansivityAnomalyInColdShallowAndHotDeepRock)
 {
-    const Snapshot& s = demoSnapshot();
-    const SphericalGrid& g = s.grid;
+    const grid::Snapshot& s = demoSnapshot();
+    const grid::SphericalGrid& g = s.grid;
     const auto& alpha = s.find("thermal expansivity")->values;
     const auto& dT = s.find("temperature anomaly")->values;
     double coldShallow = 0, hotShallow = 0, hotDeep = 0, coldDeep = 0;
@@ -631,8 +631,8 @@ TEST(SynthModel, ManyVariedFeatures)
 // 150 km above the CMB up to the head, on the demo grid.
 TEST(SynthModel, PlumeConduitsAreContinuousFromTheCmb)
 {
-    const Snapshot& s = demoSnapshot();
-    const SphericalGrid& g = s.grid;
+    const grid::Snapshot& s = demoSnapshot();
+    const grid::SphericalGrid& g = s.grid;
     const auto& dT = s.find("temperature anomaly")->values;
     int plumes = 0;
     for (const SynthFeature& f : syntheticFeatures(demoOptions(), 0.0)) {
@@ -640,14 +640,14 @@ TEST(SynthModel, PlumeConduitsAreContinuousFromTheCmb)
             continue;
         ++plumes;
         // Bilinear in lat/lon at each radius, so a conduit between grid columns counts.
-        SphericalGrid axis;
+        grid::SphericalGrid axis;
         axis.latDeg = {f.latDeg};
         axis.lonDeg = {f.lonDeg};
         for (size_t iR = 0; iR < g.nR(); ++iR)
             if (g.rKm[iR] >= kCoreRadiusKm + 150.0 && g.rKm[iR] <= f.frontRadiusKm)
                 axis.rKm.push_back(g.rKm[iR]);
         ASSERT_FALSE(axis.rKm.empty());
-        const Snapshot a = synthesizeSnapshot(demoOptions(), 0.0, axis);
+        const grid::Snapshot a = synthesizeSnapshot(demoOptions(), 0.0, axis);
         const auto& t = a.find("temperature")->values;
         double minExcess = 1e9;
         for (size_t iR = 0; iR < axis.rKm.size(); ++iR) {
@@ -677,8 +677,8 @@ TEST(SynthModel, PlumeConduitsAreContinuousFromTheCmb)
 // slab on the CMB, and a cold/hot pattern under the surface.
 TEST(SynthModel, BoundaryLayersVaryLaterally)
 {
-    const Snapshot& s = demoSnapshot();
-    const SphericalGrid& g = s.grid;
+    const grid::Snapshot& s = demoSnapshot();
+    const grid::SphericalGrid& g = s.grid;
     const auto& dT = s.find("temperature anomaly")->values;
     for (double depth : {150.0, 2750.0}) {
         const size_t iR = nearestIndex(g.rKm, kSurfaceRadiusKm - depth);
@@ -704,7 +704,7 @@ TEST(SynthModel, BackgroundFlowIsDivergenceFreeAndSlow)
     for (int k = 0; k < 40; ++k) {
         const double lat = -80.0 + 160.0 * std::fmod(k * 0.618034, 1.0), lon = std::fmod(k * 97.3, 360.0);
         const double depth = 100.0 + std::fmod(k * 431.0, 2700.0);
-        const Snapshot s = synthesizeSnapshot(o, 0.0, localGrid(lat, lon, kSurfaceRadiusKm - depth, 0.01, 0.5));
+        const grid::Snapshot s = synthesizeSnapshot(o, 0.0, localGrid(lat, lon, kSurfaceRadiusKm - depth, 0.01, 0.5));
         const auto [div, scale] = centralDivergence(s);
         const LocalVelocity u = localVelocity(s, s.grid.index(1, 1, 1), lat, lon);
         // Without the rigid rotation.
@@ -739,7 +739,7 @@ TEST(SynthTruth, NamesTheFeatureAtItsOwnCentre)
     const auto features = syntheticFeatures(o, t);
     ASSERT_EQ(features.size(), 20u);
     auto at = [&](double latDeg, double lonDeg, double rKm) {
-        SphericalGrid g;
+        grid::SphericalGrid g;
         g.latDeg = {latDeg};
         g.rKm = {rKm};
         g.lonDeg = {lonDeg};
@@ -782,11 +782,11 @@ TEST(SynthTruth, AgreesWithTheTemperatureAnomaly)
 {
     const SynthOptions o = demoOptions();
     const double t = 12.0;
-    const Snapshot snap = synthesizeSnapshot(o, t);
+    const grid::Snapshot snap = synthesizeSnapshot(o, t);
     const SynthTruth truth = syntheticTruth(o, t, snap.grid);
     const auto features = syntheticFeatures(o, t);
     const std::vector<float>& dT = snap.find("temperature anomaly")->values;
-    const SphericalGrid& g = snap.grid;
+    const grid::SphericalGrid& g = snap.grid;
     const auto w = g.volumeFactors();
     // Volume-weighted mean anomaly over plume cores, slab cores and the background of the mid
     // mantle (away from the boundary layers' own patterns).
@@ -831,8 +831,8 @@ TEST(SynthTruth, AgreesWithTheTemperatureAnomaly)
 
 TEST(SynthModel, ColdStagnatingMaterialNear660)
 {
-    const Snapshot& s = demoSnapshot();
-    const SphericalGrid& g = s.grid;
+    const grid::Snapshot& s = demoSnapshot();
+    const grid::SphericalGrid& g = s.grid;
     const auto& dT = s.find("temperature anomaly")->values;
     double volume = 0;
     forEachPointAtDepths(g, 560.0, 760.0, [&](size_t iLat, size_t, size_t iLon, size_t i) {
@@ -845,7 +845,7 @@ TEST(SynthModel, ColdStagnatingMaterialNear660)
 
 // ---- the netCDF writer, checked with plain netCDF-C calls ----
 
-class SynthNetcdf : public ::testing::TestWithParam<NetcdfFlavour> {
+class SynthNetcdf : public ::testing::TestWithParam<io::NetcdfFlavour> {
 protected:
     void SetUp() override
     {
@@ -856,10 +856,10 @@ protected:
     }
     void TearDown() override { fs::remove_all(m_dir); }
     // The model on `options`' grid at `timeMyr`, written to `path` in the flavour under test.
-    Snapshot writeSnapshot(const fs::path& path, const SynthOptions& options, double timeMyr) const
+    grid::Snapshot writeSnapshot(const fs::path& path, const SynthOptions& options, double timeMyr) const
     {
-        Snapshot snap = synthesizeSnapshot(options, timeMyr);
-        writeContestFile(path, snap, GetParam());
+        grid::Snapshot snap = synthesizeSnapshot(options, timeMyr);
+        io::writeContestFile(path, snap, GetParam());
         return snap;
     }
     fs::path m_dir;
@@ -870,13 +870,13 @@ protected:
 TEST_P(SynthNetcdf, WritesTheContestLayout)
 {
     const fs::path path = m_dir / "spherical001.nc";
-    const Snapshot snap = writeSnapshot(path, smallOptions(6, 5, 8), 2.0);
+    const grid::Snapshot snap = writeSnapshot(path, smallOptions(6, 5, 8), 2.0);
 
     int nc = -1;
     NC_OK(nc_open(path.c_str(), NC_NOWRITE, &nc));
     int format = 0;
     NC_OK(nc_inq_format(nc, &format));
-    EXPECT_EQ(format, GetParam() == NetcdfFlavour::Netcdf4 ? NC_FORMAT_NETCDF4 : NC_FORMAT_64BIT_OFFSET);
+    EXPECT_EQ(format, GetParam() == io::NetcdfFlavour::Netcdf4 ? NC_FORMAT_NETCDF4 : NC_FORMAT_64BIT_OFFSET);
     const std::array<std::pair<const char*, size_t>, 3> dims = {{{"lat", 6}, {"r", 5}, {"lon", 8}}};
     for (int d = 0; d < 3; ++d) {
         char name[NC_MAX_NAME + 1];
@@ -940,18 +940,18 @@ TEST_P(SynthNetcdf, WritesTheContestLayout)
 TEST_P(SynthNetcdf, ReplacesAnExistingFileAndFailsClearly)
 {
     const fs::path path = m_dir / "out.nc";
-    const Snapshot snap = writeSnapshot(path, smallOptions(4, 3, 6), 0.0);
-    writeContestFile(path, snap, GetParam());  // overwrites
+    const grid::Snapshot snap = writeSnapshot(path, smallOptions(4, 3, 6), 0.0);
+    io::writeContestFile(path, snap, GetParam());  // overwrites
     const fs::path missing = m_dir / "no-such-dir" / "out.nc";
     try {
-        writeContestFile(missing, snap, GetParam());
+        io::writeContestFile(missing, snap, GetParam());
         ADD_FAILURE() << "writing into a missing directory succeeded";
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find(missing.string()), std::string::npos) << e.what();
     }
-    Snapshot broken = snap;
+    grid::Snapshot broken = snap;
     broken.fields[3].values.pop_back();
-    EXPECT_THROW(writeContestFile(m_dir / "broken.nc", broken, GetParam()), Error);
+    EXPECT_THROW(io::writeContestFile(m_dir / "broken.nc", broken, GetParam()), Error);
     EXPECT_EQ(fileNames(m_dir), std::vector<std::string>{"out.nc"});
 }
 
@@ -959,19 +959,19 @@ TEST_P(SynthNetcdf, ReplacesAnExistingFileAndFailsClearly)
 TEST_P(SynthNetcdf, ReadsBackThroughTheReader)
 {
     const fs::path path = m_dir / "spherical001.nc";
-    const Snapshot snap = writeSnapshot(path, smallOptions(6, 5, 8), 2.0);
-    const Snapshot back = readSnapshot(path);
+    const grid::Snapshot snap = writeSnapshot(path, smallOptions(6, 5, 8), 2.0);
+    const grid::Snapshot back = io::readSnapshot(path);
     EXPECT_TRUE(back.grid.sameAs(snap.grid));
-    for (const Field& f : snap.fields) {
-        const Field* b = back.find(f.name);
+    for (const grid::Field& f : snap.fields) {
+        const grid::Field* b = back.find(f.name);
         ASSERT_NE(b, nullptr) << f.name;
         EXPECT_EQ(b->units, f.units);
         EXPECT_EQ(b->values, f.values) << f.name;
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Flavours, SynthNetcdf, ::testing::Values(NetcdfFlavour::Classic64, NetcdfFlavour::Netcdf4),
-                         [](const auto& info) { return info.param == NetcdfFlavour::Netcdf4 ? "Netcdf4" : "Classic64"; });
+INSTANTIATE_TEST_SUITE_P(Flavours, SynthNetcdf, ::testing::Values(io::NetcdfFlavour::Classic64, io::NetcdfFlavour::Netcdf4),
+                         [](const auto& info) { return info.param == io::NetcdfFlavour::Netcdf4 ? "Netcdf4" : "Classic64"; });
 
 TEST(SynthSeries, WritesNumberedStepsAndRejectsBadOptions)
 {
@@ -991,4 +991,4 @@ TEST(SynthSeries, WritesNumberedStepsAndRejectsBadOptions)
 }
 
 }  // namespace
-}  // namespace raypc
+}  // namespace raypc::synth

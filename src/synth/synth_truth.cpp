@@ -9,7 +9,7 @@
 #include <array>
 #include <cmath>
 
-namespace raypc {
+namespace raypc::synth {
 
 const char* synthPartName(SynthPart part)
 {
@@ -28,7 +28,7 @@ const char* synthPartName(SynthPart part)
     return "?";
 }
 
-SynthTruth syntheticTruth(const SynthOptions& options, double timeMyr, const SphericalGrid& grid)
+SynthTruth syntheticTruth(const SynthOptions& options, double timeMyr, const grid::SphericalGrid& grid)
 {
     if (!std::isfinite(timeMyr))
         fail("synthetic truth: time {} Myr is not finite", timeMyr);
@@ -89,7 +89,7 @@ std::string syntheticTruthTable(const SynthOptions& options)
 {
     if (options.steps < 1)
         fail("synthetic truth: {} steps, expected at least 1", options.steps);
-    const SphericalGrid grid = syntheticGrid(options.nLat, options.nR, options.nLon);
+    const grid::SphericalGrid grid = syntheticGrid(options.nLat, options.nR, options.nLon);
     const auto w = grid.volumeFactors();
     std::string csv = "step,time_myr,feature,kind,front_depth_km,stall_depth_km,front_at_stall,lat_deg,lon_deg,"
                       "core_volume_km3,pancake_660_core_km3,pancake_1600_core_km3,breaking_through\n";
@@ -126,4 +126,4 @@ std::string syntheticTruthTable(const SynthOptions& options)
     return csv;
 }
 
-}  // namespace raypc
+}  // namespace raypc::synth

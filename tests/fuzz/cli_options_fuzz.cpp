@@ -49,8 +49,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 parses a reversed vector
     try {
         app.parse(reversed);
-        const raypc::PreprocessOptions o = flags.toOptions(app);
-        if (!std::isfinite(o.dtMyr) || o.sampleRows < 1 || o.sampleRows > raypc::kMaxSampleRows ||
+        const raypc::preprocess::PreprocessOptions o = flags.toOptions(app);
+        if (!std::isfinite(o.dtMyr) || o.sampleRows < 1 || o.sampleRows > raypc::preprocess::kMaxSampleRows ||
             !std::isfinite(o.reader.temperatureScaleK) || o.reader.temperatureScaleK < 0 ||
             (o.reader.planetRadiusKm && !(*o.reader.planetRadiusKm > 0)) ||
             (o.reader.diffusivityM2s && !(*o.reader.diffusivityM2s > 0)))

@@ -36,17 +36,17 @@ extern "C" int LLVMFuzzerInitialize(int*, char***)
         std::abort();
     g_dir = pattern;
     std::atexit(removeDataset);
-    raypc::SynthOptions synth;
+    raypc::synth::SynthOptions synth;
     synth.steps = 2;
     synth.nLat = 8;
     synth.nR = 5;
     synth.nLon = 8;
-    raypc::writeSyntheticSeries(g_dir / "nc", synth);
-    raypc::PreprocessOptions options;
+    raypc::synth::writeSyntheticSeries(g_dir / "nc", synth);
+    raypc::preprocess::PreprocessOptions options;
     options.quiet = true;
     options.sampleRows = 50;
     options.pathlines.enabled = false;
-    raypc::preprocess(raypc::listSnapshotFiles({g_dir / "nc"}), g_dir / "ds", options);
+    raypc::preprocess::preprocess(raypc::io::listSnapshotFiles({g_dir / "nc"}), g_dir / "ds", options);
     return 0;
 }
 
@@ -58,7 +58,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
     }
     try {
-        const auto dataset = raypc::Dataset::open(dir);
+        const auto dataset = raypc::dataset::Dataset::open(dir);
         for (size_t step = 0; step < dataset->steps().size(); ++step)
             for (size_t level = 0; level < dataset->levels().size(); ++level) {
                 const auto volume = dataset->load(static_cast<int>(step), static_cast<int>(level));

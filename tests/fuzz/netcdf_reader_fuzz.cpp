@@ -41,7 +41,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     // The header walk on its own, also on what netCDF-C would refuse to open.
     try {
         std::istringstream in(bytes);
-        raypc::classicDataEndBytes(in, "input");
+        raypc::io::classicDataEndBytes(in, "input");
     } catch (const raypc::Error&) {
     }
     if (size < 4 || bytes.compare(0, 3, "CDF") != 0)
@@ -52,21 +52,21 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     }
     for (const bool fillMissing : {false, true}) {
-        raypc::ReaderOptions options;
+        raypc::io::ReaderOptions options;
         options.fillMissing = fillMissing;
         try {
-            raypc::readHeader(path, options);
-            raypc::readSnapshot(path, options);
+            raypc::io::readHeader(path, options);
+            raypc::io::readSnapshot(path, options);
         } catch (const raypc::Error&) {
         }
     }
     // Also with the axes named explicitly and one variable mapped, as --lat-name and --map do.
-    raypc::ReaderOptions named;
+    raypc::io::ReaderOptions named;
     named.latName = "lat";
     named.variables = {"temperature"};
     named.variableNames["temperature"] = "T";
     try {
-        raypc::readSnapshot(path, named);
+        raypc::io::readSnapshot(path, named);
     } catch (const raypc::Error&) {
     }
     return 0;

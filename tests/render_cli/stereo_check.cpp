@@ -99,7 +99,7 @@ std::pair<double, double> predictedLimb(const state::RenderState& s, double offs
     return {pixel(towardsCentre - halfAngle), pixel(towardsCentre + halfAngle)};
 }
 
-void checkParallax(const std::shared_ptr<const Dataset>& dataset)
+void checkParallax(const std::shared_ptr<const dataset::Dataset>& dataset)
 {
     const double coreKm = dataset->levels().front().grid.rKm.front();
     StateRenderer renderer(dataset);
@@ -169,7 +169,7 @@ uint8_t luma(const uint8_t* p)
     return uint8_t(std::lround(0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2]));
 }
 
-void checkAnaglyph(const std::shared_ptr<const Dataset>& dataset)
+void checkAnaglyph(const std::shared_ptr<const dataset::Dataset>& dataset)
 {
     StateRenderer renderer(dataset);
     const ResolvedState sbs = resolveState(pairState(StereoMode::SideBySide), *dataset);
@@ -208,7 +208,7 @@ void checkAnaglyph(const std::shared_ptr<const Dataset>& dataset)
                w * h - mismatches, leftOnly);
 }
 
-void checkCli(const std::shared_ptr<const Dataset>& dataset, const std::string& raypc, const fs::path& work)
+void checkCli(const std::shared_ptr<const dataset::Dataset>& dataset, const std::string& raypc, const fs::path& work)
 {
     fs::create_directories(work);
     StateRenderer renderer(dataset);
@@ -249,7 +249,7 @@ int main(int argc, char** argv)
         return 2;
     }
     try {
-        const auto dataset = Dataset::open(argv[1]);
+        const auto dataset = dataset::Dataset::open(argv[1]);
         checkParallax(dataset);
         checkAnaglyph(dataset);
         checkCli(dataset, argv[2], argv[3]);

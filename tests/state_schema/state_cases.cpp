@@ -21,7 +21,7 @@ int main(int argc, char** argv)
     const std::string what = argc == 3 ? argv[1] : "";
     try {
         if (what == "default") {
-            const auto dataset = Dataset::open(argv[2]);
+            const auto dataset = dataset::Dataset::open(argv[2]);
             fmt::print("{}\n", state::toJson(render::defaultState(*dataset)).dump());
             return 0;
         }
