@@ -1,0 +1,652 @@
+"""RayPC from Python: mantle convection datasets as NumPy arrays, xarray Datasets and pandas
+DataFrames; render states, pictures and exact statistics; the browser UI in a notebook, linked both
+ways (docs/python.md).
+
+Everything here calls the compiled module ``raypc._raypc``, which is linked to the same libraries as
+the ``raypc`` executable: a picture equals ``raypc render``'s, a table ``raypc stats``', a probe
+``raypc probe``'s. Errors are :class:`raypc.Error` with the command line's one-line messages.
+
+>>> import raypc
+>>> ds = raypc.open("demo-data/dataset")                     # a dataset, netCDF files or ASPECT's solution.pvd
+>>> ds.to_xarray(6)["temperature"].sel(r=5711, method="nearest").plot()
+>>> state = raypc.State("examples/task1-slabs-660km.json")
+>>> ds.stats(state).plot(x="time_myr", y="selected_percent_of_mantle")
+"""
+from __future__ import annotations
+
+import atexit
+import json
+import os
+import sys
+import threading
+import time
+import urllib.error
+import urllib.parse
+import urllib.request
+from pathlib import Path
+from typing import Any, Callable, Iterable, NamedTuple, Optional, Sequence, Union
+
+import numpy as np
+
+from . import _raypc
+from ._raypc import Error
+
+__all__ = ["Error", "open", "Dataset", "State", "Field", "Grid", "Variable", "Picture", "View", "show", "NAMES"]
+
+SURFACE_RADIUS_KM: float = _raypc.surface_radius_km()
+STATE_VERSION: int = _raypc.state_version()  # of the state document this module writes
+# The names of the variables raypc derives and of the columns of the tables it writes
+# (src/grid/names.json, from which the C++ code's names are generated too): the columns this module
+# builds are named from it, so that they are the CLI's.
+NAMES: dict = json.loads(_raypc.names_json())
+_COLUMNS = NAMES["columns"]
+_PATHLINE_ATTRIBUTE = {c["key"]: c["name"] for c in _COLUMNS["pathlineAttributes"]}
+
+StepLike = Union[int, str]  # 12, or a time such as "24Myr"
+
+
+class Variable(NamedTuple):
+    """A variable of a dataset: its global range over all steps, in its units."""
+
+    name: str
+    units: str
+    min: float
+    max: float
+    derived: bool
+
+
+class Grid(NamedTuple):
+    """The spherical grid of one level of detail: latitude (degrees north), radius (km) and
+    longitude (degrees east, [0, 360)), each ascending; values are stored (lat, r, lon)."""
+
+    lat: np.ndarray
+    r: np.ndarray
+    lon: np.ndarray
+
+    @property
+    def depth(self) -> np.ndarray:
+        """Depth below the surface (km) of every radius."""
+        return SURFACE_RADIUS_KM - self.r
+
+    @property
+    def shape(self) -> tuple:
+        return (len(self.lat), len(self.r), len(self.lon))
+
+
+class Field(NamedTuple):
+    """One variable of one step: ``values`` (lat, r, lon) float32 with the grid's coordinates."""
+
+    values: np.ndarray
+    lat: np.ndarray
+    r: np.ndarray
+    lon: np.ndarray
+    name: str
+    units: str
+    step: int
+    time_myr: float
+    level: int
+
+
+class _Progress:
+    """A one-line progress report on stderr ("\\r"-updated; a notebook shows it in place), once
+    the work has taken `delay` seconds (quick work prints nothing)."""
+
+    def __init__(self, label: str, enabled: bool, delay: float = 0.0):
+        self.label, self.enabled, self.shown = label, enabled, False
+        self.start, self.delay = time.monotonic(), delay
+
+    def __call__(self, phase: str, done: int, total: int) -> None:
+        if not self.enabled or (not self.shown and time.monotonic() - self.start < self.delay):
+            return
+        width = 30
+        filled = int(width * done / max(total, 1))
+        sys.stderr.write(f"\r{self.label} {phase}: [{'#' * filled}{'.' * (width - filled)}] {done}/{total}")
+        sys.stderr.flush()
+        self.shown = True
+
+    def close(self) -> None:
+        if self.shown:
+            sys.stderr.write("\n")
+            sys.stderr.flush()
+
+
+def _options_to_args(options: dict) -> list:
+    """Keyword options as the command line's: time_units="seconds" -> --time-units seconds."""
+    args = []
+    for key, value in options.items():
+        flag = "--" + key.replace("_", "-")
+        if value is True:
+            args.append(flag)
+        elif value is False or value is None:
+            continue
+        elif isinstance(value, (list, tuple)):
+            for item in value:
+                args += [flag, str(item)]
+        else:
+            args += [flag, str(value)]
+    return args
+
+
+def open(*paths: Union[str, os.PathLike], dataset: Optional[Union[str, os.PathLike]] = None,
+         progress: bool = True, **options: Any) -> "Dataset":
+    """Opens a dataset directory (``raypc preprocess``), or netCDF files / directories of ``*.nc``,
+    or ASPECT's output (``solution.pvd`` or its directory), which are preprocessed first as
+    ``raypc serve`` does (into ``dataset``, default beside the first file; a complete earlier
+    result is reused). ``options`` are ``raypc preprocess``'s, named with underscores, e.g.
+    ``raypc.open("output/solution.pvd", time_units="seconds", grid="90x101x180")``.
+    Ctrl-C (KeyboardInterrupt) stops preprocessing between steps; a later call resumes."""
+    if not paths:
+        raise Error("open: give a dataset directory, netCDF files or an ASPECT .pvd")
+    args = [os.fspath(p) for p in paths]
+    if dataset is not None:
+        args += ["--dataset", os.fspath(dataset)]
+    args += _options_to_args(options)
+    bar = _Progress("preprocessing", progress)
+    try:
+        directory = _raypc.prepare(args, bar)
+    finally:
+        bar.close()
+    return Dataset(directory)
+
+
+class State:
+    """A render state (docs/state.md): the view, colours, brushes, step … as the browser UI saves
+    it. Made from a dict (without "version": this version's), a JSON text, a JSON file (path) or
+    another State, and checked by the one state schema, with its messages (:class:`raypc.Error`). Top-level fields read and write as
+    attributes (``state.step = 3``, ``state.brushes.append({"name": "depth", "min": 560, "max":
+    760})``); a change is checked again when the state is used or by :meth:`validate`."""
+
+    def __init__(self, source: Union[None, dict, str, os.PathLike, "State"] = None):
+        if source is None:
+            document: Any = {}
+        elif isinstance(source, State):
+            document = source.to_dict()
+        elif isinstance(source, dict):
+            document = source
+        elif isinstance(source, os.PathLike) or (isinstance(source, str) and not source.lstrip().startswith("{")):
+            path = Path(source)
+            try:
+                text = path.read_text()
+            except OSError as e:
+                shown = str(path) if len(str(path)) <= 120 else f"{str(path)[:80]}… ({len(str(path))} characters)"
+                raise Error(f"{shown}: cannot read the state ({e.strerror})") from None
+            object.__setattr__(self, "_doc", json.loads(_raypc.check_state(text)))
+            return
+        elif isinstance(source, str):
+            object.__setattr__(self, "_doc", json.loads(_raypc.check_state(source)))
+            return
+        else:
+            raise TypeError(f"State: expected a dict, JSON text, path or State, not {type(source).__name__}")
+        if isinstance(document, dict) and "version" not in document:
+            document = dict(document, version=STATE_VERSION)  # written here, for this version
+        object.__setattr__(self, "_doc", json.loads(_raypc.check_state(json.dumps(document))))
+
+    def validate(self) -> "State":
+        """Checks the state again (after edits) and normalises it; returns self."""
+        object.__setattr__(self, "_doc", json.loads(_raypc.check_state(json.dumps(self._doc))))
+        return self
+
+    def to_dict(self) -> dict:
+        """A deep copy of the document."""
+        return json.loads(json.dumps(self._doc))
+
+    def to_json(self, indent: Optional[int] = 2) -> str:
+        return json.dumps(self.validate()._doc, indent=indent)
+
+    def save(self, path: Union[str, os.PathLike]) -> None:
+        """Writes the state as the UI's Save state does (``raypc render --state`` reads it)."""
+        Path(path).write_text(self.to_json() + "\n")
+
+    def __getattr__(self, name: str) -> Any:
+        doc = object.__getattribute__(self, "_doc")
+        if name in doc:
+            return doc[name]
+        raise AttributeError(f"State has no field '{name}' (fields: {', '.join(doc)})")
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        previous = self._doc.get(name, None)
+        had = name in self._doc
+        self._doc[name] = value
+        try:
+            self.validate()
+        except Error:
+            if had:
+                self._doc[name] = previous
+            else:
+                del self._doc[name]
+            raise
+
+    def __dir__(self) -> Iterable[str]:
+        return list(super().__dir__()) + list(self._doc)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, State) and self.to_dict() == other.to_dict()
+
+    def __repr__(self) -> str:
+        doc = self._doc
+        color = doc.get("color", {}).get("variable") or "(first variable)"
+        brushes = ", ".join(f"{b['name']} {b['min']:g}..{b['max']:g}" for b in doc.get("brushes", []))
+        return f"raypc.State(step={doc.get('step')}, color={color!r}, brushes=[{brushes}])"
+
+
+def _state_of(state: Union[None, State, dict, str, os.PathLike], dataset: "Dataset") -> State:
+    if state is None:
+        return dataset.default_state()
+    return state if isinstance(state, State) else State(state)
+
+
+class Picture(np.ndarray):
+    """A rendered picture: (height, width, 4) uint8 RGBA, row-major from the top left; a notebook
+    shows it as an image."""
+
+    def __repr__(self) -> str:
+        if self.ndim == 3:
+            return f"raypc.Picture({self.shape[1]} x {self.shape[0]} pixels, RGBA)"
+        return super().__repr__()
+
+    def _repr_png_(self) -> Optional[bytes]:
+        if self.ndim != 3 or self.shape[2] != 4:
+            return None
+        try:
+            from PIL import Image
+        except ImportError:
+            return None
+        import io
+
+        out = io.BytesIO()
+        Image.fromarray(np.asarray(self), "RGBA").save(out, format="PNG")
+        return out.getvalue()
+
+
+class Dataset:
+    """A preprocessed RayPC dataset (docs/format.md); see :func:`raypc.open`."""
+
+    def __init__(self, directory: Union[str, os.PathLike]):
+        self._core = _raypc.Dataset(os.fspath(directory))
+        # What the dataset is, read once (it does not change while open); arrays read-only, shared.
+        self._variables = [Variable(v["name"], v["units"], v["min"], v["max"], v["derived"])
+                           for v in self._core.variables]
+        self._units = {v.name: v.units for v in self._variables}
+        self._levels = [Grid(g["lat"], g["r"], g["lon"]) for g in self._core.levels]
+        self._times = self._core.times_myr
+        for a in [self._times] + [a for g in self._levels for a in g]:
+            a.flags.writeable = False
+
+    # ---- what it is -------------------------------------------------------------------------
+
+    @property
+    def path(self) -> Path:
+        return Path(self._core.dir)
+
+    @property
+    def variables(self) -> list:
+        """The variables (stored and derived) with units and global ranges, in dataset order."""
+        return list(self._variables)
+
+    @property
+    def steps(self) -> range:
+        return range(len(self._times))
+
+    @property
+    def times(self) -> np.ndarray:
+        """The time of every step, Myr."""
+        return self._times
+
+    @property
+    def levels(self) -> list:
+        """The grid of every level of detail (0 = full resolution)."""
+        return list(self._levels)
+
+    @property
+    def grid(self) -> Grid:
+        """The full-resolution grid (level 0)."""
+        return self._levels[0]
+
+    def __repr__(self) -> str:
+        g = self.grid
+        t = self.times
+        variables = ", ".join(f"{v.name} [{v.units}]" if v.units else v.name for v in self.variables)
+        return (f"<raypc.Dataset {str(self.path)!r}: {len(t)} steps, {t[0]:g}..{t[-1]:g} Myr; grid "
+                f"{len(g.lat)} lat x {len(g.r)} r x {len(g.lon)} lon ({g.r[0]:.0f}..{g.r[-1]:.0f} km), "
+                f"{len(self.levels)} levels, {self._core.encoding}; variables: {variables}>")
+
+    def _step(self, step: StepLike) -> int:
+        return self._core.step(str(step))
+
+    # ---- values -----------------------------------------------------------------------------
+
+    def field(self, variable: str, step: StepLike = 0, level: int = 0) -> Field:
+        """One variable of one step on the native grid, (lat, r, lon) float32 (a copy)."""
+        s = self._step(step)
+        values = self._core.field(variable, s, level)  # checks the variable and the level
+        g = self._levels[level]
+        return Field(values, g.lat, g.r, g.lon, variable, self._units[variable], s, float(self._times[s]), level)
+
+    def to_xarray(self, step: StepLike = 0, variables: Optional[Sequence[str]] = None, level: int = 0):
+        """The step as an ``xarray.Dataset`` on (lat, r, lon) with CF attributes and units, a depth
+        coordinate on r and the time (Myr): ``ds.to_xarray(6)["temperature"].sel(r=5711,
+        method="nearest").plot()``."""
+        import xarray as xr
+
+        s = self._step(step)
+        if isinstance(variables, str):
+            variables = [variables]
+        names = [v.name for v in self._variables] if variables is None else list(variables)
+        if not names:
+            raise Error("variables: none given")
+        data_vars = {}
+        for name in names:
+            f = self.field(name, s, level)
+            data_vars[name] = (("lat", "r", "lon"), f.values, {"long_name": name, "units": f.units})
+        g = self._levels[level]
+        coords = {
+            "lat": ("lat", g.lat, {"standard_name": "latitude", "units": "degrees_north", "axis": "Y"}),
+            "r": ("r", g.r, {"long_name": "radius", "units": "km", "axis": "Z", "positive": "up"}),
+            "lon": ("lon", g.lon, {"standard_name": "longitude", "units": "degrees_east", "axis": "X"}),
+            "depth": ("r", g.depth, {"standard_name": "depth", "long_name": "depth below the surface", "units": "km",
+                                     "positive": "down"}),
+            "time": ((), float(self._times[s]), {"standard_name": "time", "long_name": "model time", "units": "Myr"}),
+        }
+        return xr.Dataset(data_vars, coords=coords,
+                          attrs={"Conventions": "CF-1.8", "source": f"RayPC dataset {self.path}", "step": s,
+                                 "level_of_detail": level})
+
+    def probe(self, lat: float, lon: float, r_km: float, step: StepLike = 0, level: int = 0,
+              variable: Optional[str] = None) -> dict:
+        """The values at one point, interpolated as ``raypc probe`` does, in its JSON's shape:
+        ``{"step", "time_myr", "level", "point": {...}, "values": {NAME: {"value", "units",
+        "quantisation_error_max"}}}``."""
+        return json.loads(self._core.probe(float(lat), float(lon), float(r_km), self._step(step), level,
+                                           variable or ""))
+
+    def sample(self, step: StepLike = 0):
+        """The parallel-coordinates sample of a step (the same cells in every step) as a
+        ``pandas.DataFrame``: coordinate columns then variables; units in ``df.attrs["units"]``."""
+        import pandas as pd
+
+        columns, units, values = self._core.sample(self._step(step))
+        df = pd.DataFrame(values, columns=columns)
+        df.attrs["units"] = dict(zip(columns, units))
+        return df
+
+    def pathlines(self, step: StepLike = 0, window: int = 10) -> list:
+        """The pathline sets injected in the ``window`` steps up to ``step`` (as the UI shows them),
+        each a dict: ``injection_step``, ``injection_time_myr``, ``seed_field``, ``lines`` (a
+        DataFrame of per-line attributes, units in ``.attrs``) and ``points`` (a DataFrame of x, y, z
+        km, time Myr and the line index)."""
+        import pandas as pd
+
+        out = []
+        for s in self._core.pathlines(self._step(step), int(window)):
+            lines = pd.DataFrame(s["attributes"], columns=s["columns"])
+            lines.attrs["units"] = dict(zip(s["columns"], s["units"]))
+            offsets = s["offsets"]
+            line_of_point = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+            points = pd.DataFrame(s["points"], columns=[c["column"] for c in _COLUMNS["pathlinePoints"]])
+            points["line"] = line_of_point
+            out.append({"injection_step": s["injection_step"], "injection_time_myr": s["injection_time_myr"],
+                        "end_step": s["end_step"], "seed_field": s["seed_field"], "threshold": s["threshold"],
+                        "lines": lines, "points": points})
+        return out
+
+    def critical_points(self, step: StepLike = 0):
+        """The significant critical points of the seed field that seeded the pathlines of ``step``
+        (docs/persistence.md) as a DataFrame: kind, lat, lon, radius_km, depth_km, value,
+        persistence."""
+        import pandas as pd
+
+        (stored,) = self._core.pathlines(self._step(step), 1)  # the set injected at the step
+        lines = pd.DataFrame(stored["attributes"], columns=stored["columns"])
+        a = _PATHLINE_ATTRIBUTE
+        kinds = lines[a["seedKind"]].astype(int)
+        df = pd.DataFrame({
+            "kind": [_raypc.critical_kind_name(k) for k in kinds],
+            "lat": lines[a["startLat"]], "lon": lines[a["startLon"]], "radius_km": lines[a["startRadius"]],
+            "depth_km": SURFACE_RADIUS_KM - lines[a["startRadius"]], "value": lines[a["seedValue"]],
+            "persistence": lines[a["seedPersistence"]] if a["seedPersistence"] in lines else np.nan})
+        df.attrs["seed_field"] = stored["seed_field"]
+        return df
+
+    # ---- states, pictures, statistics ---------------------------------------------------------
+
+    def default_state(self) -> State:
+        """The UI's first view of this dataset (what ``raypc render`` draws without --state)."""
+        return State(self._core.default_state())
+
+    def check_state(self, state: Union[State, dict, str, os.PathLike]) -> State:
+        """The state checked against this dataset (variables, step, level), normalised."""
+        return State(self._core.check_state(_state_of(state, self).to_json(None)))
+
+    def render(self, state: Union[None, State, dict, str, os.PathLike] = None, size: Optional[tuple] = None,
+               passes: Optional[int] = None, step: Optional[StepLike] = None, progress: bool = True,
+               view: str = "3d") -> Picture:
+        """The picture of a state (default: the UI's first view), as ``raypc render --state`` writes
+        it: (height, width, 4) uint8 RGBA. ``size`` (width, height) and ``step`` override the
+        state's; ``passes`` the state's number of progressive passes. Runs on all cores without the
+        GIL, with a progress bar per pass (``progress=False`` silences it); Ctrl-C stops it.
+        ``view="map"`` or ``"section"`` draws the state's map or section instead (its ``map`` and
+        ``section`` keys, docs/maps.md), as ``raypc map`` and ``raypc section`` do."""
+        s = _state_of(state, self).to_dict()
+        if size is not None:
+            w, h = size
+            s["image"] = {"width": int(w), "height": int(h)}
+        if step is not None:
+            s["step"] = self._step(step)
+        bar = _Progress("render", progress, delay=0.5)
+        try:
+            pixels = self._core.render(json.dumps(s), 0 if passes is None else int(passes), view, bar)
+        finally:
+            bar.close()
+        return pixels.view(Picture)
+
+    def stats(self, state: Union[None, State, dict, str, os.PathLike] = None, steps: Optional[Any] = None,
+              level: int = 0, by: str = "step", mean_of: Optional[str] = None, progress: bool = True):
+        """The exact selected volume of the state's brushes (``raypc stats``) as a DataFrame.
+        ``by="step"``: step, time_myr, selected_volume_km3, selected_percent_of_mantle;
+        ``by="depth"``: per step and radius, the depth profile (``raypc stats --profile``), and with
+        ``mean_of=NAME`` that variable's volume-weighted mean per radius over the selection (NaN
+        where nothing is selected) and over the whole shell (``--profile-var``), columns named as
+        the CLI's (``NAME selected mean [units]``, ``NAME shell mean [units]``): a time-depth table
+        (``df.pivot(index="depth_km", columns="time_myr", values=...)``).
+        ``steps``: None (all), a step, a (first, last) pair or a range."""
+        import pandas as pd
+
+        if by not in ("step", "depth"):
+            raise Error(f"by: expected 'step' or 'depth', not {by!r}")
+        if mean_of is not None and by != "depth":
+            raise Error("mean_of: the means are per depth; ask for by='depth'")
+        first, last = self._step_range(steps)
+        bar = _Progress("stats", progress, delay=0.5)
+        try:
+            rows = self._core.stats(_state_of(state, self).to_json(None), first, last, level, mean_of or "", bar)
+        finally:
+            bar.close()
+        # The columns as NAMES names them, the values in its order (the CLI's CSV files).
+        if by == "step":
+            names = [c["name"] for c in _COLUMNS["selectionOverTime"]]
+            values = ([r[0] for r in rows], [r[1] for r in rows], [r[2] for r in rows], [100.0 * r[3] for r in rows])
+            return pd.DataFrame(dict(zip(names, values, strict=True)))
+        r_km = self._levels[level].r
+        units = {v.name: v.units for v in self.variables}.get(mean_of, "")
+        names = [c["name"] for c in _COLUMNS["profile"]]
+        means = [p.format(name=mean_of, units=units) for p in _COLUMNS["profileMeans"]] if mean_of is not None else []
+        parts = []
+        for step, t, _, _, by_radius, shell, selected_mean, shell_mean in rows:
+            columns = dict(zip(names, (step, t, r_km, SURFACE_RADIUS_KM - r_km, by_radius, shell,
+                                       100.0 * by_radius / shell), strict=True))
+            if means:
+                columns.update(zip(means, (selected_mean, shell_mean), strict=True))
+            parts.append(pd.DataFrame(columns))
+        return pd.concat(parts, ignore_index=True)
+
+    def features(self, state: Union[None, State, dict, str, os.PathLike] = None, steps: Optional[Any] = None,
+                 level: Optional[int] = None, min_volume_km3: Optional[float] = None,
+                 depths_km: Optional[Sequence[float]] = None, band_half_width_km: Optional[float] = None,
+                 progress: bool = True):
+        """The features of the state's brushes in each step (``raypc features``, docs/features.md) as a
+        DataFrame: a row per feature and step with its volume, depths, centroid, every variable's
+        mean/min/max (units in the column names) and the percent of its volume near each depth.
+        ``steps`` as for :meth:`stats`. The settings left at None come from the state's ``features``
+        (level, minVolumeKm3, depthsKm, bandHalfWidthKm; state version 10), as ``raypc features
+        --state`` takes them."""
+        import io
+
+        import pandas as pd
+
+        state = _state_of(state, self)
+        settings = state.to_dict()["features"]
+        level = settings["level"] if level is None else level
+        min_volume_km3 = settings["minVolumeKm3"] if min_volume_km3 is None else min_volume_km3
+        depths_km = settings["depthsKm"] if depths_km is None else depths_km
+        band_half_width_km = settings["bandHalfWidthKm"] if band_half_width_km is None else band_half_width_km
+        first, last = self._step_range(steps)
+        bar = _Progress("features", progress, delay=0.5)
+        try:
+            text = self._core.features(state.to_json(None), first, last, level, float(min_volume_km3),
+                                       [float(d) for d in depths_km], float(band_half_width_km), bar)
+        finally:
+            bar.close()
+        return pd.read_csv(io.StringIO(text))
+
+    def _step_range(self, steps: Any) -> tuple:
+        if steps is None:
+            return 0, len(self._times) - 1
+        if isinstance(steps, range):
+            if len(steps) == 0 or steps.step != 1:
+                raise Error(f"steps: {steps} is not a non-empty range of consecutive steps")
+            return self._step(steps[0]), self._step(steps[-1])
+        if isinstance(steps, (tuple, list)) and len(steps) == 2:
+            return self._step(steps[0]), self._step(steps[1])
+        s = self._step(steps)
+        return s, s
+
+    def show(self, **kwargs: Any) -> "View":
+        """The browser UI of this dataset, in a notebook: see :func:`raypc.show`."""
+        return show(self, **kwargs)
+
+
+# ---- the UI, linked both ways ------------------------------------------------------------------
+
+_servers: dict = {}  # (dataset dir, host, port) -> _raypc.Server, reused by show()
+
+
+@atexit.register
+def _stop_servers() -> None:
+    """Stops the servers show() started before the interpreter goes away under their threads."""
+    for server in list(_servers.values()):
+        server.stop()
+    _servers.clear()
+
+
+class View:
+    """The browser UI of a dataset served by this process (:func:`raypc.show`), or by any ``raypc
+    serve`` at ``url``. ``view.state`` is the state the UI shows (the last one a user settled:
+    brush released, slider let go, state loaded); setting it shows that state in every open UI
+    tab of the server. ``on_change(callback)`` calls back (on a background thread) with the new
+    state each time the user changes it."""
+
+    def __init__(self, url: str, width: Union[int, str] = "100%", height: int = 720, server: Any = None):
+        self.url, self.width, self.height = url, width, height
+        self._server = server
+        parts = urllib.parse.urlsplit(url)
+        self._base = f"{parts.scheme}://{parts.netloc}"
+        self._token = urllib.parse.parse_qs(parts.query).get("token", [None])[0]
+        self._watchers: list = []
+        self._stop = threading.Event()
+
+    def _request(self, method: str, path: str, body: Optional[dict] = None) -> dict:
+        headers = {"Content-Type": "application/json"}
+        if self._token:
+            headers["Authorization"] = f"Bearer {self._token}"
+        data = None if body is None else json.dumps(body).encode()
+        request = urllib.request.Request(self._base + path, data=data, method=method, headers=headers)
+        try:
+            with urllib.request.urlopen(request, timeout=30) as response:
+                return json.loads(response.read())
+        except urllib.error.HTTPError as e:
+            try:
+                message = json.loads(e.read()).get("error", str(e))
+            except ValueError:
+                message = str(e)
+            raise Error(f"{path}: {message}") from None
+        except urllib.error.URLError as e:
+            raise Error(f"{self._base}: the RayPC server does not answer ({e.reason})") from None
+
+    def link(self) -> dict:
+        """The server's linked state: {"version", "state", "source" ("ui"/"api"), "sessions"}."""
+        return self._request("GET", "/api/link")
+
+    @property
+    def state(self) -> Optional[State]:
+        """The state the UI shows now; None before a UI has shown one."""
+        doc = self.link().get("state")
+        return None if doc is None else State(doc)
+
+    @state.setter
+    def state(self, value: Union[State, dict, str, os.PathLike]) -> None:
+        s = value if isinstance(value, State) else State(value)
+        self._request("POST", "/api/link", {"state": s.to_dict()})
+
+    def on_change(self, callback: Callable[[State], None], interval: float = 0.25) -> None:
+        """Calls ``callback(state)`` each time a user settles a new state in the UI (polls the
+        server every ``interval`` seconds on a daemon thread; :meth:`close` stops it)."""
+        seen = self.link().get("version", 0)
+
+        def watch() -> None:
+            nonlocal seen
+            while not self._stop.wait(interval):
+                try:
+                    link = self.link()
+                except Error:
+                    continue
+                if link.get("version", 0) > seen:
+                    seen = link["version"]
+                    if link.get("source") == "ui" and link.get("state") is not None:
+                        callback(State(link["state"]))
+
+        thread = threading.Thread(target=watch, name="raypc-view-watch", daemon=True)
+        thread.start()
+        self._watchers.append(thread)
+
+    def wait_for_ui(self, timeout: float = 30) -> None:
+        """Returns once a UI tab is connected (raises raypc.Error after `timeout` seconds)."""
+        end = time.monotonic() + timeout
+        while self.link().get("sessions", 0) == 0:
+            if time.monotonic() > end:
+                raise Error(f"no browser tab opened {self.url} within {timeout:g} s")
+            time.sleep(0.1)
+
+    def close(self) -> None:
+        """Stops the callbacks and, when this view started it, the server."""
+        self._stop.set()
+        for thread in self._watchers:
+            thread.join(timeout=2)
+        if self._server is not None:
+            for key, server in list(_servers.items()):
+                if server is self._server:
+                    del _servers[key]
+            self._server.stop()
+            self._server = None
+
+    def _repr_html_(self) -> str:
+        width = self.width if isinstance(self.width, str) else f"{int(self.width)}px"
+        return (f'<iframe src="{self.url}" style="width:{width};height:{int(self.height)}px;border:0" '
+                f'allow="fullscreen; xr-spatial-tracking"></iframe>')
+
+    def __repr__(self) -> str:
+        return f"<raypc.View {self.url}>"
+
+
+def show(dataset: Union[Dataset, str, os.PathLike], host: str = "127.0.0.1", port: int = 0,
+         width: Union[int, str] = "100%", height: int = 720) -> View:
+    """Serves the dataset's browser UI from this process (``raypc serve``'s server on its own
+    thread, on loopback unless ``host`` says otherwise, where the token rules apply; ``port`` 0:
+    any free port) — or reuses the server started earlier for it — and returns a :class:`View`,
+    which a notebook displays inline."""
+    ds = dataset if isinstance(dataset, Dataset) else Dataset(dataset)
+    key = (str(ds.path), host, port)
+    server = _servers.get(key)
+    if server is None:
+        server = _raypc.Server(str(ds.path), host, port)
+        _servers[key] = server
+    return View(server.url, width, height, server)
