@@ -17,8 +17,9 @@ from __future__ import annotations
 from . import _raypc
 from ._raypc import Error
 from .dataset import (
-    NAMES, STATE_VERSION, SURFACE_RADIUS_KM, Dataset, Field, Grid, Picture, State, StepLike, Variable, View, open,
+    STATE_VERSION, SURFACE_RADIUS_KM, Dataset, Field, Grid, Picture, State, StepLike, Variable, View, open,
     show)
+from .names import NAMES
 
 __all__ = ["Error", "open", "Dataset", "State", "Field", "Grid", "Variable", "Picture", "View", "show", "NAMES"]
 
@@ -36,4 +37,5 @@ from typing import Any, Callable, Iterable, NamedTuple, Optional, Sequence, Unio
 
 import numpy as np
 
-from .dataset import _COLUMNS, _PATHLINE_ATTRIBUTE, _options_to_args, _Progress, _servers, _state_of, _stop_servers
+from .dataset import _options_to_args, _Progress, _servers, _state_of, _stop_servers
+from .names import _COLUMNS, _PATHLINE_ATTRIBUTE

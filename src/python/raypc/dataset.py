@@ -30,17 +30,10 @@ import numpy as np
 
 from . import _raypc
 from ._raypc import Error
-
-__all__ = ["Error", "open", "Dataset", "State", "Field", "Grid", "Variable", "Picture", "View", "show", "NAMES"]
+from .names import _COLUMNS, _PATHLINE_ATTRIBUTE
 
 SURFACE_RADIUS_KM: float = _raypc.surface_radius_km()
 STATE_VERSION: int = _raypc.state_version()  # of the state document this module writes
-# The names of the variables raypc derives and of the columns of the tables it writes
-# (src/grid/names.json, from which the C++ code's names are generated too): the columns this module
-# builds are named from it, so that they are the CLI's.
-NAMES: dict = json.loads(_raypc.names_json())
-_COLUMNS = NAMES["columns"]
-_PATHLINE_ATTRIBUTE = {c["key"]: c["name"] for c in _COLUMNS["pathlineAttributes"]}
 
 StepLike = Union[int, str]  # 12, or a time such as "24Myr"
 
