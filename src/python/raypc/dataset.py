@@ -24,60 +24,18 @@ import urllib.error
 import urllib.parse
 import urllib.request
 from pathlib import Path
-from typing import Any, Callable, Iterable, NamedTuple, Optional, Sequence, Union
+from typing import Any, Callable, Iterable, Optional, Sequence, Union
 
 import numpy as np
 
 from . import _raypc
 from ._raypc import Error
+from .grid import SURFACE_RADIUS_KM, Field, Grid, Variable
 from .names import _COLUMNS, _PATHLINE_ATTRIBUTE
 
-SURFACE_RADIUS_KM: float = _raypc.surface_radius_km()
 STATE_VERSION: int = _raypc.state_version()  # of the state document this module writes
 
 StepLike = Union[int, str]  # 12, or a time such as "24Myr"
-
-
-class Variable(NamedTuple):
-    """A variable of a dataset: its global range over all steps, in its units."""
-
-    name: str
-    units: str
-    min: float
-    max: float
-    derived: bool
-
-
-class Grid(NamedTuple):
-    """The spherical grid of one level of detail: latitude (degrees north), radius (km) and
-    longitude (degrees east, [0, 360)), each ascending; values are stored (lat, r, lon)."""
-
-    lat: np.ndarray
-    r: np.ndarray
-    lon: np.ndarray
-
-    @property
-    def depth(self) -> np.ndarray:
-        """Depth below the surface (km) of every radius."""
-        return SURFACE_RADIUS_KM - self.r
-
-    @property
-    def shape(self) -> tuple:
-        return (len(self.lat), len(self.r), len(self.lon))
-
-
-class Field(NamedTuple):
-    """One variable of one step: ``values`` (lat, r, lon) float32 with the grid's coordinates."""
-
-    values: np.ndarray
-    lat: np.ndarray
-    r: np.ndarray
-    lon: np.ndarray
-    name: str
-    units: str
-    step: int
-    time_myr: float
-    level: int
 
 
 class _Progress:
