@@ -36,5 +36,6 @@ from typing import Any, Callable, Iterable, NamedTuple, Optional, Sequence, Unio
 
 import numpy as np
 
-from .dataset import _options_to_args, _Progress, _servers, _state_of, _stop_servers
+from ._progress import _Progress
+from .dataset import _options_to_args, _servers, _state_of, _stop_servers
 from .names import _COLUMNS, _PATHLINE_ATTRIBUTE

@@ -17,7 +17,6 @@ from __future__ import annotations
 import atexit
 import json
 import os
-import sys
 import threading
 import time
 import urllib.error
@@ -30,35 +29,13 @@ import numpy as np
 
 from . import _raypc
 from ._raypc import Error
+from ._progress import _Progress
 from .grid import SURFACE_RADIUS_KM, Field, Grid, Variable
 from .names import _COLUMNS, _PATHLINE_ATTRIBUTE
 
 STATE_VERSION: int = _raypc.state_version()  # of the state document this module writes
 
 StepLike = Union[int, str]  # 12, or a time such as "24Myr"
-
-
-class _Progress:
-    """A one-line progress report on stderr ("\\r"-updated; a notebook shows it in place), once
-    the work has taken `delay` seconds (quick work prints nothing)."""
-
-    def __init__(self, label: str, enabled: bool, delay: float = 0.0):
-        self.label, self.enabled, self.shown = label, enabled, False
-        self.start, self.delay = time.monotonic(), delay
-
-    def __call__(self, phase: str, done: int, total: int) -> None:
-        if not self.enabled or (not self.shown and time.monotonic() - self.start < self.delay):
-            return
-        width = 30
-        filled = int(width * done / max(total, 1))
-        sys.stderr.write(f"\r{self.label} {phase}: [{'#' * filled}{'.' * (width - filled)}] {done}/{total}")
-        sys.stderr.flush()
-        self.shown = True
-
-    def close(self) -> None:
-        if self.shown:
-            sys.stderr.write("\n")
-            sys.stderr.flush()
 
 
 def _options_to_args(options: dict) -> list:
