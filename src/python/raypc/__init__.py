@@ -16,9 +16,10 @@ from __future__ import annotations
 
 from . import _raypc
 from ._raypc import Error
-from .dataset import Dataset, Picture, StepLike, View, open, show
+from .dataset import Dataset, StepLike, View, open, show
 from .grid import SURFACE_RADIUS_KM, Field, Grid, Variable
 from .names import NAMES
+from .picture import Picture
 from .state import STATE_VERSION, State
 
 __all__ = ["Error", "open", "Dataset", "State", "Field", "Grid", "Variable", "Picture", "View", "show", "NAMES"]

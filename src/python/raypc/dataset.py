@@ -32,6 +32,7 @@ from ._progress import _Progress
 from ._raypc import Error
 from .grid import SURFACE_RADIUS_KM, Field, Grid, Variable
 from .names import _COLUMNS, _PATHLINE_ATTRIBUTE
+from .picture import Picture
 from .state import State
 
 StepLike = Union[int, str]  # 12, or a time such as "24Myr"
@@ -80,29 +81,6 @@ def _state_of(state: Union[None, State, dict, str, os.PathLike], dataset: "Datas
     if state is None:
         return dataset.default_state()
     return state if isinstance(state, State) else State(state)
-
-
-class Picture(np.ndarray):
-    """A rendered picture: (height, width, 4) uint8 RGBA, row-major from the top left; a notebook
-    shows it as an image."""
-
-    def __repr__(self) -> str:
-        if self.ndim == 3:
-            return f"raypc.Picture({self.shape[1]} x {self.shape[0]} pixels, RGBA)"
-        return super().__repr__()
-
-    def _repr_png_(self) -> Optional[bytes]:
-        if self.ndim != 3 or self.shape[2] != 4:
-            return None
-        try:
-            from PIL import Image
-        except ImportError:
-            return None
-        import io
-
-        out = io.BytesIO()
-        Image.fromarray(np.asarray(self), "RGBA").save(out, format="PNG")
-        return out.getvalue()
 
 
 class Dataset:
