@@ -16,11 +16,12 @@ from __future__ import annotations
 
 from . import _raypc
 from ._raypc import Error
-from .dataset import Dataset, StepLike, View, open, show
+from .dataset import Dataset, StepLike, open
 from .grid import SURFACE_RADIUS_KM, Field, Grid, Variable
 from .names import NAMES
 from .picture import Picture
 from .state import STATE_VERSION, State
+from .view import View, show
 
 __all__ = ["Error", "open", "Dataset", "State", "Field", "Grid", "Variable", "Picture", "View", "show", "NAMES"]
 
@@ -39,5 +40,6 @@ from typing import Any, Callable, Iterable, NamedTuple, Optional, Sequence, Unio
 import numpy as np
 
 from ._progress import _Progress
-from .dataset import _options_to_args, _servers, _state_of, _stop_servers
+from .dataset import _options_to_args, _state_of
 from .names import _COLUMNS, _PATHLINE_ATTRIBUTE
+from .view import _servers, _stop_servers
