@@ -16,10 +16,11 @@ from __future__ import annotations
 
 from . import _raypc
 from ._raypc import Error
-from .dataset import Dataset, StepLike, open
+from .dataset import Dataset, StepLike
 from .grid import SURFACE_RADIUS_KM, Field, Grid, Variable
 from .names import NAMES
 from .picture import Picture
+from .preprocess import open
 from .state import STATE_VERSION, State
 from .view import View, show
 
@@ -40,6 +41,7 @@ from typing import Any, Callable, Iterable, NamedTuple, Optional, Sequence, Unio
 import numpy as np
 
 from ._progress import _Progress
-from .dataset import _options_to_args, _state_of
+from .dataset import _state_of
 from .names import _COLUMNS, _PATHLINE_ATTRIBUTE
+from .preprocess import _options_to_args
 from .view import _servers, _stop_servers
