@@ -1,17 +1,7 @@
-"""RayPC from Python: mantle convection datasets as NumPy arrays, xarray Datasets and pandas
-DataFrames; render states, pictures and exact statistics; the browser UI in a notebook, linked both
-ways (docs/python.md).
-
-Everything here calls the compiled module ``raypc._raypc``, which is linked to the same libraries as
-the ``raypc`` executable: a picture equals ``raypc render``'s, a table ``raypc stats``', a probe
-``raypc probe``'s. Errors are :class:`raypc.Error` with the command line's one-line messages.
-
->>> import raypc
->>> ds = raypc.open("demo-data/dataset")                     # a dataset, netCDF files or ASPECT's solution.pvd
->>> ds.to_xarray(6)["temperature"].sel(r=5711, method="nearest").plot()
->>> state = raypc.State("examples/task1-slabs-660km.json")
->>> ds.stats(state).plot(x="time_myr", y="selected_percent_of_mantle")
-"""
+"""A preprocessed dataset (docs/format.md) and what Python asks of it: its variables, steps and
+grids; fields as NumPy arrays and xarray Datasets; probes, samples, pathlines and critical points;
+states rendered to pictures, exact statistics and features. Each answer is computed by the code of
+the matching ``raypc`` command (render, stats, features, probe), so that the two agree."""
 from __future__ import annotations
 
 import json
