@@ -25,23 +25,3 @@ from .state import STATE_VERSION, State
 from .view import View, show
 
 __all__ = ["Error", "open", "Dataset", "State", "Field", "Grid", "Variable", "Picture", "View", "show", "NAMES"]
-
-# The names the package had when it was one file, its helpers and the modules it imported included,
-# stay importable from it, so that no `from raypc import X` that worked then stops working.
-import atexit
-import json
-import os
-import sys
-import threading
-import time
-import urllib
-from pathlib import Path
-from typing import Any, Callable, Iterable, NamedTuple, Optional, Sequence, Union
-
-import numpy as np
-
-from ._progress import _Progress
-from .dataset import _state_of
-from .names import _COLUMNS, _PATHLINE_ATTRIBUTE
-from .preprocess import _options_to_args
-from .view import _servers, _stop_servers
