@@ -10,12 +10,44 @@
 #include "io/netcdf_values.h"
 
 #include <algorithm>
+#include <array>
+#include <string_view>
 #include <mutex>
 #include <utility>
 
 namespace raypc::io {
 namespace netcdf {
 namespace {
+
+// A velocity the file names by CF standard names (upward_…, northward_…, eastward_… ending in
+// "velocity", as CF spells the components of a flow): taken as the spherical components (radial,
+// north, east) of vx, vy, vz, unless the user named the velocity or the file has vx, vy, vz. All
+// three or nothing: two of them alone stay scalars as the file has them.
+ReaderOptions withCfVelocity(const NcFile& file, ReaderOptions options)
+{
+    for (const char* component : varname::kVelocity)
+        if (options.variableNames.contains(component) || file.findVar(component))
+            return options;
+    static constexpr std::array<std::string_view, 3> kPrefixes = {"upward_", "northward_", "eastward_"};
+    std::array<std::vector<std::string>, 3> found;
+    int nVars = 0;
+    file.check(nc_inq_nvars(file.id(), &nVars), "listing variables");
+    for (int v = 0; v < nVars; ++v) {
+        const std::string standard = lowerCase(file.textAttribute(v, "standard_name").value_or(""));
+        if (!standard.ends_with("velocity"))
+            continue;
+        for (size_t c = 0; c < 3; ++c)
+            if (standard.starts_with(kPrefixes[c]))
+                found[c].push_back(file.varName(v));
+    }
+    // One of each: several candidates for a component (e.g. two upward velocities) are left to --velocity.
+    if (std::any_of(found.begin(), found.end(), [](const auto& names) { return names.size() != 1; }))
+        return options;
+    for (size_t c = 0; c < 3; ++c)
+        options.variableNames[varname::kVelocity[c]] = found[c].front();
+    options.velocityFrame = ReaderOptions::VelocityFrame::Spherical;
+    return options;
+}
 
 // Opens `path` under the netCDF lock and reads its coordinates, what reading a header and reading a
 // snapshot begin with; returns read(file, axes, options), the lock held until it returns.
@@ -24,7 +56,8 @@ auto readOpened(const std::filesystem::path& path, const ReaderOptions& options,
 {
     std::lock_guard lock(netcdfMutex());
     const NcFile file(path);
-    return read(file, readAxes(file, options), options);
+    const ReaderOptions effective = withCfVelocity(file, options);
+    return read(file, readAxes(file, effective), effective);
 }
 
 // The header of an open file: its grid, format and steps, and every requested variable (checked)

@@ -476,6 +476,60 @@ TEST(NetcdfReader, SphericalVelocityInOtherUnitsBecomesCartesianMetresPerSecond)
     expectReadError(ncgen(dir.path(), "odd", furlongs), {}, {"odd.nc: vx: velocity units 'furlongs/fortnight'"});
 }
 
+TEST(NetcdfReader, CfStandardNamesOfTheFlowAreTheSphericalVelocity)
+{
+    TempDir dir("cfvel");
+    // The components named only by CF standard names, in another order than (up, north, east), beside a scalar.
+    const std::string cdl = depthGridCdl("flow", R"(
+  float w(depth, lat, lon) ; w:standard_name = "upward_mantle_velocity" ; w:units = "mm/yr" ;
+  float u(depth, lat, lon) ; u:standard_name = "eastward_mantle_velocity" ; u:units = "mm/yr" ;
+  float vs(depth, lat, lon) ; vs:units = "km/s" ;
+  float v(depth, lat, lon) ; v:standard_name = "northward_mantle_velocity" ; v:units = "mm/yr" ;)",
+                                         R"(
+  w = 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1 ;
+  u = 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2 ;
+  vs = 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4 ;
+  v = 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0 ;)");
+    const auto path = ncgen(dir.path(), "flow", cdl);
+    const FileHeader header = readHeader(path, {});
+    std::map<std::string, FileHeader::Variable> byName;
+    for (const auto& v : header.variables)
+        byName[v.name] = v;
+    ASSERT_EQ(byName.size(), 4u);
+    ASSERT_TRUE(byName.contains("vx") && byName.contains("vy") && byName.contains("vz") && byName.contains("vs"));
+    EXPECT_EQ(byName["vx"].fileName, "w");
+    EXPECT_EQ(byName["vy"].fileName, "v");
+    EXPECT_EQ(byName["vz"].fileName, "u");
+    EXPECT_EQ(byName["vx"].units, "m/s");
+    const grid::Snapshot s = readSnapshot(path, {});
+    const double mmPerYr = 1e-3 / 3.15576e7;
+    // At lat 45, lon 90: up = (0, cos 45, sin 45), east = (-1, 0, 0): v = 1 up + 2 east, mm/yr.
+    const size_t i = s.grid.index(1, 0, 1);
+    EXPECT_NEAR(s.find("vx")->values[i], -2 * mmPerYr, 1e-6 * mmPerYr);
+    EXPECT_NEAR(s.find("vy")->values[i], std::sqrt(0.5) * mmPerYr, 1e-6 * mmPerYr);
+    EXPECT_NEAR(s.find("vz")->values[i], std::sqrt(0.5) * mmPerYr, 1e-6 * mmPerYr);
+    EXPECT_FLOAT_EQ(s.find("vs")->values[i], 4.0f);
+
+    // Two of the three are no velocity: they stay the file's scalars, under their own names.
+    const std::string two = depthGridCdl("two", R"(
+  float w(depth, lat, lon) ; w:standard_name = "upward_mantle_velocity" ;
+  float u(depth, lat, lon) ; u:standard_name = "eastward_mantle_velocity" ;)",
+                                         R"(
+  w = 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1 ;
+  u = 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2 ;)");
+    const FileHeader twoHeader = readHeader(ncgen(dir.path(), "two", two), {});
+    ASSERT_EQ(twoHeader.variables.size(), 2u);
+    EXPECT_EQ(twoHeader.variables[0].name, "w");
+    EXPECT_EQ(twoHeader.variables[1].name, "u");
+
+    // A velocity the user names wins over the standard names.
+    ReaderOptions named;
+    named.variableNames = {{"vx", "u"}, {"vy", "v"}, {"vz", "w"}};
+    const grid::Snapshot cartesian = readSnapshot(path, named);
+    EXPECT_NEAR(cartesian.find("vx")->values[i], 2 * mmPerYr, 1e-6 * mmPerYr);
+    EXPECT_NEAR(cartesian.find("vz")->values[i], 1 * mmPerYr, 1e-6 * mmPerYr);
+}
+
 TEST(NetcdfReaderBadInput, WrongDimensions)
 {
     TempDir dir("wrongdims");
