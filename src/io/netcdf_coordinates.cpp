@@ -210,6 +210,27 @@ void verticalToRadiusKm(const NcFile& file, int varId, const std::string& name, 
     }
 }
 
+// A discontinuity's two radii (equal, ascending) moved apart by a metre, half each way, or by a
+// hundredth of the nearest other spacing when that is less: the grid's radii stay strictly
+// ascending, each side keeps its own values, and what lies between them is a shell thinner than
+// any picture resolves (docs/format.md, discontinuities).
+void separateDiscontinuities(std::vector<double>& radiiKm)
+{
+    constexpr double kGapKm = 0.001;
+    for (size_t i = 1; i < radiiKm.size(); ++i) {
+        if (radiiKm[i] != radiiKm[i - 1])
+            continue;
+        double nearest = kGapKm * 100;
+        if (i >= 2)
+            nearest = std::min(nearest, radiiKm[i - 1] - radiiKm[i - 2]);
+        if (i + 1 < radiiKm.size())
+            nearest = std::min(nearest, radiiKm[i + 1] - radiiKm[i]);
+        const double gap = std::min(kGapKm, 0.01 * nearest);
+        radiiKm[i - 1] -= 0.5 * gap;
+        radiiKm[i] += 0.5 * gap;
+    }
+}
+
 // An axis keeps its values in file and canonical order, a sorting copy and an index.
 constexpr uint64_t kAxisBytesPerValue = 3 * sizeof(double) + sizeof(size_t);
 
@@ -267,13 +288,23 @@ CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explic
         for (double& v : values)
             v = wrapLonDeg(v);
     }
-    std::stable_sort(index.begin(), index.end(), [&](size_t i, size_t j) { return values[i] < values[j]; });
+    // A radius given twice is a discontinuity (410, 660 km, the CMB in reference and tomography
+    // models), the first value of the pair in the file's order on the side the file comes from: of
+    // two equal radii in ascending order, the one nearer the centre in the file's order first.
+    const bool inward = axis == kR && n > 1 && values.front() > values.back();
+    std::stable_sort(index.begin(), index.end(), [&](size_t i, size_t j) {
+        return values[i] < values[j] || (values[i] == values[j] && inward && i > j);
+    });
     a.fileIndex = index;
     for (size_t i : index)
         a.canonical.push_back(values[i]);
     for (size_t i = 1; i < a.canonical.size(); ++i)
-        if (a.canonical[i] == a.canonical[i - 1])
-            fail("{}: coordinate '{}' repeats the value {}", file.path().string(), name, a.canonical[i]);
+        if (a.canonical[i] == a.canonical[i - 1] &&
+            (axis != kR || (i >= 2 && a.canonical[i - 2] == a.canonical[i])))
+            fail("{}: coordinate '{}' repeats the value {}{}", file.path().string(), name, a.canonical[i],
+                 axis == kR ? " three times (a discontinuity is a radius given twice)" : "");
+    if (axis == kR)
+        separateDiscontinuities(a.canonical);
     return a;
 }
 

@@ -3,6 +3,8 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/spherical.h"
+#include "core/strings.h"
+#include "grid/sampler.h"
 #include "io/netcdf_classic.h"
 #include "preprocess/preprocess.h"
 #include "grid/test_util.h"
@@ -528,6 +530,67 @@ TEST(NetcdfReader, CfStandardNamesOfTheFlowAreTheSphericalVelocity)
     const grid::Snapshot cartesian = readSnapshot(path, named);
     EXPECT_NEAR(cartesian.find("vx")->values[i], 2 * mmPerYr, 1e-6 * mmPerYr);
     EXPECT_NEAR(cartesian.find("vz")->values[i], 1 * mmPerYr, 1e-6 * mmPerYr);
+}
+
+// A model with the 660 km discontinuity: its depth given twice, the values above it (3.5) and
+// below it (4.0), the axis in either direction.
+std::string discontinuityCdl(const std::string& name, bool depthDown)
+{
+    const std::string depths = depthDown ? "100, 660, 660, 2000" : "2000, 660, 660, 100";
+    const std::string rho = depthDown ? "3.2, 3.5, 4.0, 5.0" : "5.0, 4.0, 3.5, 3.2";
+    std::string values;
+    for (int d = 0; d < 4; ++d)
+        for (int k = 0; k < 8; ++k)
+            values += (values.empty() ? "" : ", ") + split(rho, ',')[size_t(d)];
+    return fmt::format(R"(netcdf {} {{
+dimensions: depth = 4 ; lat = 2 ; lon = 4 ;
+variables:
+  double depth(depth) ; depth:units = "km" ; depth:positive = "down" ;
+  double lat(lat) ; lat:units = "degrees_north" ; double lon(lon) ; lon:units = "degrees_east" ;
+  float rho(depth, lat, lon) ; rho:units = "g/cc" ;
+data:
+  depth = {} ; lat = -45, 45 ; lon = 0, 90, 180, 270 ;
+  rho = {} ;
+}})",
+                       name, depths, values);
+}
+
+TEST(NetcdfReader, ARepeatedDepthIsADiscontinuityWithBothSidesKept)
+{
+    TempDir dir("discontinuity");
+    for (const bool depthDown : {true, false}) {
+        SCOPED_TRACE(depthDown ? "depth ascending in the file" : "depth descending in the file");
+        const auto path = ncgen(dir.path(), depthDown ? "down" : "up", discontinuityCdl(depthDown ? "down" : "up", depthDown));
+        const grid::Snapshot s = readSnapshot(path, {});
+        const grid::SphericalGrid& g = s.grid;
+        ASSERT_EQ(g.nR(), 4u);
+        const double r660 = kSurfaceRadiusKm - 660;
+        // Both sides at 660 km, a metre apart, strictly ascending; the other radii as the file says.
+        EXPECT_NEAR(g.rKm[0], kSurfaceRadiusKm - 2000, 1e-9);
+        EXPECT_NEAR(g.rKm[1], r660, 0.001);
+        EXPECT_NEAR(g.rKm[2], r660, 0.001);
+        EXPECT_LT(g.rKm[1], g.rKm[2]);
+        EXPECT_LT(g.rKm[1], r660);
+        EXPECT_GT(g.rKm[2], r660);
+        const grid::Field& rho = *s.find("rho");
+        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                EXPECT_FLOAT_EQ(rho.values[g.index(iLat, 1, iLon)], 4.0f);  // below the discontinuity
+                EXPECT_FLOAT_EQ(rho.values[g.index(iLat, 2, iLon)], 3.5f);  // above it
+            }
+        // Nothing interpolates across it: a kilometre above and below, each side's values alone.
+        const grid::GridSampler sampler(g);
+        const auto above = sampler.locate(0, 45, r660 + 1);
+        const auto below = sampler.locate(0, 45, r660 - 1);
+        ASSERT_TRUE(above && below);
+        EXPECT_NEAR(sampler.sample(rho.values.data(), *above), 3.5 - 0.3 / 560, 1e-4);
+        EXPECT_NEAR(sampler.sample(rho.values.data(), *below), 4.0 + 1.0 / 1340, 1e-4);
+    }
+    // Three times is not a discontinuity.
+    TempDir bad("thrice");
+    std::string cdl = discontinuityCdl("thrice", true);
+    cdl.replace(cdl.find("100, 660, 660, 2000"), 19, "660, 660, 660, 2000");
+    expectReadError(ncgen(bad.path(), "thrice", cdl), {}, {"thrice.nc: coordinate 'depth' repeats the value", "three times"});
 }
 
 TEST(NetcdfReaderBadInput, WrongDimensions)
