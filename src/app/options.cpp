@@ -5,6 +5,8 @@
 #include "core/spherical.h"
 #include "core/strings.h"
 #include "dataset/value_encoding.h"
+#include "grid/coordinates.h"
+#include "grid/variable_names.h"
 
 #include <algorithm>
 #include <charconv>
@@ -33,8 +35,8 @@ void requireFiniteNumbers(CLI::App& app)
 void ReaderFlags::add(CLI::App& app)
 {
     app.add_option("--map", variableMap,
-                   "Read variable NAME from FILE_NAME in the input (NAME=FILE_NAME, repeatable), e.g. "
-                   "--map temperature=T");
+                   "Read the input's variable FILE_NAME as NAME (NAME=FILE_NAME, repeatable), e.g. --map "
+                   "temperature=T or --map 'shear velocity=vs'");
     app.add_option("--lat-name", latName, "Name of the latitude coordinate variable (default: found)");
     app.add_option("--r-name", rName, "Name of the radius coordinate variable (default: found)");
     app.add_option("--lon-name", lonName, "Name of the longitude coordinate variable (default: found)");
@@ -78,11 +80,19 @@ io::ReaderOptions ReaderFlags::toOptions() const
         const auto eq = m.find('=');
         if (eq == std::string::npos || eq == 0 || eq + 1 == m.size())
             fail("--map: '{}' is not NAME=FILE_NAME", m);
-        const auto name = m.substr(0, eq);
-        const auto& known = grid::contestVariableNames();
-        if (std::find(known.begin(), known.end(), name) == known.end())
-            fail("--map: '{}' is not one of the variables RayPC reads ({})", name, fmt::join(known, ", "));
-        o.variableNames[name] = m.substr(eq + 1);
+        const auto name = m.substr(0, eq), fileName = m.substr(eq + 1);
+        // Any name but a coordinate's (brushes and axes name both) and the velocity's derived
+        // quantities (computed, never read).
+        if (grid::findCoordinate(name))
+            fail("--map: '{}' is a coordinate's name; a variable needs another", name);
+        if (name == varname::kRadialVelocity || name == varname::kVelocityMagnitude)
+            fail("--map: '{}' is derived from the velocity; name the velocity with --velocity", name);
+        if (o.variableNames.contains(name))
+            fail("--map: '{}' is given twice", name);
+        for (const auto& [other, inFile] : o.variableNames)
+            if (inFile == fileName)
+                fail("--map: '{}' is read as both '{}' and '{}'", fileName, other, name);
+        o.variableNames[name] = fileName;
     }
     if (!velocity.empty()) {
         if (velocity.size() != 3 || std::any_of(velocity.begin(), velocity.end(), [](const auto& v) { return v.empty(); }))

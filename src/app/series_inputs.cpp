@@ -62,7 +62,7 @@ SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std
     if (args.size() == 1 && fs::is_directory(args.front()) && fs::exists(fs::path(args.front()) / dataset::format::kManifest)) {
         if (!datasetOption.empty())
             fail("--dataset: only for netCDF inputs; '{}' is a dataset already", args.front());
-        return {fs::path(args.front()), {}};
+        return {fs::path(args.front()), {}, {}};
     }
     SeriesInputs inputs;
     io::SeriesListing listing;

@@ -97,7 +97,7 @@ vtk::Piece toPiece(const CapValues& cap, const Scales& scales, const std::string
             for (size_t k = 0; k + 1 < b.nz; ++k) {
                 // VTK's hexahedron: the inner face counterclockwise, then the outer one above it.
                 for (const size_t kk : {k, k + 1})
-                    for (const auto [di, dj] : {std::pair{0, 0}, {1, 0}, {1, 1}, {0, 1}})
+                    for (const auto& [di, dj] : {std::pair{0, 0}, {1, 0}, {1, 1}, {0, 1}})
                         piece.connectivity.push_back(int64_t(b.index(i + size_t(di), j + size_t(dj), kk)));
                 piece.offsets.push_back(int64_t(piece.connectivity.size()));
             }

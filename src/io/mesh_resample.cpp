@@ -541,7 +541,12 @@ struct CellsByRow {
 CellsByRow cellsByRow(const ShellMesh& mesh, const grid::SphericalGrid& grid)
 {
     CellsByRow byRow;
-    auto& [cells, boxes, rowStart, rowCells] = byRow;
+    // Plain references, not a structured binding: the lambda below captures them (clang 14 cannot
+    // capture bindings).
+    std::vector<CellsByRow::CellRef>& cells = byRow.cells;
+    std::vector<CellBox>& boxes = byRow.boxes;
+    std::vector<size_t>& rowStart = byRow.rowStart;
+    std::vector<uint32_t>& rowCells = byRow.rowCells;
     cells.reserve(mesh.cellCount);
     for (size_t p = 0; p < mesh.pieces.size(); ++p)
         for (size_t c = 0; c < mesh.pieces[p].cellCount(); ++c)

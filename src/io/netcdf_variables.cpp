@@ -35,12 +35,14 @@ std::vector<std::string> requestedVariables(const NcFile& file, const ReaderOpti
     if (!options.variables.empty())
         return options.variables;
     const auto& contest = grid::contestVariableNames();
-    if (std::all_of(contest.begin(), contest.end(),
-                    [&](const std::string& name) { return file.findVar(fileNameOf(options, name)).has_value(); }))
-        return contest;
+    // The contest's eight variables when the file has them all, else every variable on the grid's dims.
+    const bool contestFile = std::all_of(contest.begin(), contest.end(), [&](const std::string& name) {
+        return file.findVar(fileNameOf(options, name)).has_value();
+    });
+    std::vector<std::string> names = contestFile ? contest : std::vector<std::string>{};
     int nVars = 0;
-    file.check(nc_inq_nvars(file.id(), &nVars), "listing variables");
-    std::vector<std::string> names;
+    if (!contestFile)
+        file.check(nc_inq_nvars(file.id(), &nVars), "listing variables");
     for (int v = 0; v < nVars; ++v) {
         const std::vector<int> dims = file.varDims(v);
         nc_type type = 0;

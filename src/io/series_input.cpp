@@ -149,7 +149,7 @@ FileHeader vtkHeader(const fs::path& step, const ReaderOptions& options)
     if (!options.targetGrid)
         pieces = readPieces(step);
     for (const auto& v : vtkVariables(announcedArrays(step, pieces.empty() ? nullptr : &pieces), step))
-        h.variables.push_back({v.name, v.source.name, v.units});
+        h.variables.push_back({.name = v.name, .fileName = v.source.name, .units = v.units, .longName = ""});
     if (options.targetGrid) {
         h.grid = *options.targetGrid;
     } else {
@@ -257,7 +257,7 @@ FileHeader citcomsHeader(const fs::path& step, const ReaderOptions& options)
     FileHeader h;
     h.format = citcoms::formatName(step) + ", resampled";
     for (const auto& v : citcomsVariables(citcoms::stepArrays(step), scales))
-        h.variables.push_back({v.name, v.source.name, v.units});
+        h.variables.push_back({.name = v.name, .fileName = v.source.name, .units = v.units, .longName = ""});
     // A later step of a series takes the first's grid: its values are read once, when the step is.
     if (options.targetGrid) {
         h.grid = *options.targetGrid;

@@ -37,7 +37,12 @@ bad_options)
   expect_error "--steps" synth -o "$work/s" --steps 0
   expect_error "--format" synth -o "$work/s" --format hdf9
   expect_error "--map" preprocess "$fixture" -o "$work/x" --map temperature
-  expect_error "--map" preprocess "$fixture" -o "$work/x" --map colour=T
+  expect_error "missing variable 'T' (mapped from 'colour')" preprocess "$fixture" -o "$work/x" --map colour=T
+  expect_error "--map: 'depth' is a coordinate's name" preprocess "$fixture" -o "$work/x" --map depth=temperature
+  expect_error "--map: 'radial velocity' is derived from the velocity" preprocess "$fixture" -o "$work/x" \
+    --map "radial velocity=vx"
+  expect_error "--map: 'temperature' is read as both 'a' and 'b'" preprocess "$fixture" -o "$work/x" \
+    --map a=temperature --map b=temperature
   expect_error "--dt-myr" preprocess "$fixture" -o "$work/x" --dt-myr -2
   expect_error "unknown variable 'pressure'" probe "$work/ds" --lat 0 --lon 0 --r 5000 --var pressure
   expect_error "outside the mantle shell" probe "$work/ds" --lat 0 --lon 0 --r 7000
@@ -829,6 +834,8 @@ tomography)
   info=$("$raypc" info "$emc/global_vs.nc")
   check "info: a 37 x 15 x 72 grid (the seam once)" grep -q "grid: 37 x 15 x 72" <<<"$info"
   check "info: the variable vs in km/s, with its long_name" grep -qE '^ +vs +\[km/s .*Shear-wave velocity$' <<<"$info"
+  named=$("$raypc" info "$emc/global_vs.nc" --map "shear velocity=vs")
+  check "--map gives a model's variable any name" grep -qE '^ +shear velocity +\[km/s .*Shear-wave velocity$' <<<"$named"
   out=$("$raypc" preprocess "$emc/global_vs.nc" -o "$work/ds" 2>&1)
   check "preprocess says there are no pathlines without a velocity" grep -q "no velocity (vx, vy, vz): no pathlines" <<<"$out"
   check "the dataset holds vs alone, its long_name kept" grep -qE '^ +vs .*Shear-wave velocity$' <<<"$("$raypc" info "$work/ds")"

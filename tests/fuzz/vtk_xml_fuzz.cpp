@@ -14,8 +14,8 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
 {
     try {
-        const io::vtk::Piece piece =
-            io::vtk::parseVtu(std::string(reinterpret_cast<const char*>(data), size), "fuzz.vtu");
+        const raypc::io::vtk::Piece piece =
+            raypc::io::vtk::parseVtu(std::string(reinterpret_cast<const char*>(data), size), "fuzz.vtu");
         const size_t points = piece.points.size() / 3;
         for (const auto& array : piece.pointData) {
             if (array.values.size() != points * size_t(array.components))
