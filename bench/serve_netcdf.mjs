@@ -3,15 +3,16 @@
 // start of the process: the "serving" line (the first step preprocessed alone), the first frame and
 // the converged frame of the UI's default state at WxH, and the whole series served (GET
 // /api/progress says "complete" on the server that replaced the first), then the server's log lines of
-// the first step's phases and of the first still. DIR is removed at the end.
+// the first step's phases and of the first still. DIR is removed at the end. One file (a tomography
+// model, tests/data/emc-layout/write_emc_layout.py --grid 25x181x361) is a series of one step.
 //   node --experimental-websocket bench/serve_netcdf.mjs BUILD_DIR DIR WxH FILE.nc…
 import { spawn } from 'node:child_process';
 import { readFileSync, rmSync } from 'node:fs';
 import { join } from 'node:path';
 
 const [build, dir, size, ...files] = process.argv.slice(2);
-if (!build || !dir || !/^\d+x\d+$/.test(size ?? '') || files.length < 2 || typeof WebSocket !== 'function') {
-  console.error('usage: node --experimental-websocket bench/serve_netcdf.mjs BUILD_DIR DIR WxH FILE.nc FILE.nc…');
+if (!build || !dir || !/^\d+x\d+$/.test(size ?? '') || files.length < 1 || typeof WebSocket !== 'function') {
+  console.error('usage: node --experimental-websocket bench/serve_netcdf.mjs BUILD_DIR DIR WxH FILE.nc…');
   process.exit(2);
 }
 const [width, height] = size.split('x').map(Number);
