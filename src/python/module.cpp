@@ -1,8 +1,8 @@
 // The compiled half of Python's `raypc` package (raypc/_raypc): thin bindings of what the `raypc`
 // executable calls, so that Python runs the same code — the dataset pipeline (app/series_inputs),
-// the state's one description (render/render_state), the one path from a state to pixels
+// the state's one description (state/render_state), the one path from a state to pixels
 // (render/state_renderer), exact statistics (analysis/selection), probing (analysis/probe) and the server
-// (server/server). The Pythonic layer (xarray, pandas, the notebook view) is raypc/__init__.py.
+// (server/server). The Pythonic layer (xarray, pandas, the notebook view) is the raypc package's modules.
 //
 // Errors: raypc::Error becomes raypc.Error with the CLI's one-line message. Long work (preprocessing,
 // rendering, statistics, reading a field) releases the GIL and runs on every core as the executable

@@ -2,7 +2,7 @@
 // makes and how the two eyes' pictures become one image.
 //
 // The eyes' cameras come from render/camera.h (stereoEye: parallel axes, off-axis frustum); the
-// eyes' render states from render/state_renderer.h (stereoViews). Here: the layout of the output
+// eyes' render states from render/resolve_state.h (stereoViews). Here: the layout of the output
 // and the composition of two finished 8-bit RGBA pictures (after reference geometry and legends,
 // so that every overlay of a picture is drawn once per eye by the one picture path).
 //
