@@ -270,6 +270,7 @@ CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explic
     for (double v : a.fileValues)
         if (!std::isfinite(v))
             fail("{}: coordinate '{}' holds a non-finite value", file.path().string(), name);
+    const std::vector<double> asWritten = axis == kR ? a.fileValues : std::vector<double>{};  // for messages
     if (axis == kR)
         verticalToRadiusKm(file, a.varId, name, a.fileValues, options.radiusUnits);
     else
@@ -292,6 +293,14 @@ CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explic
     // models), the first value of the pair in the file's order on the side the file comes from: of
     // two equal radii in ascending order, the one nearer the centre in the file's order first.
     const bool inward = axis == kR && n > 1 && values.front() > values.back();
+    // Which side of a discontinuity a value lies on follows from the axis' order: a vertical axis
+    // must run one way (apart from its repeats), not be sorted into place.
+    if (axis == kR)
+        for (size_t i = 1; i < n; ++i)
+            if (inward ? values[i] > values[i - 1] : values[i] < values[i - 1])
+                fail("{}: coordinate '{}' is not monotonic: {} after {} (apart from a repeated value at a "
+                     "discontinuity, its values must run one way)",
+                     file.path().string(), name, asWritten[i], asWritten[i - 1]);
     std::stable_sort(index.begin(), index.end(), [&](size_t i, size_t j) {
         return values[i] < values[j] || (values[i] == values[j] && inward && i > j);
     });

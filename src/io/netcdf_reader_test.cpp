@@ -591,6 +591,10 @@ TEST(NetcdfReader, ARepeatedDepthIsADiscontinuityWithBothSidesKept)
     std::string cdl = discontinuityCdl("thrice", true);
     cdl.replace(cdl.find("100, 660, 660, 2000"), 19, "660, 660, 660, 2000");
     expectReadError(ncgen(bad.path(), "thrice", cdl), {}, {"thrice.nc: coordinate 'depth' repeats the value", "three times"});
+    std::string zigzag = discontinuityCdl("zigzag", true);
+    zigzag.replace(zigzag.find("100, 660, 660, 2000"), 19, "660, 100, 660, 2000");
+    expectReadError(ncgen(bad.path(), "zigzag", zigzag), {},
+                    {"zigzag.nc: coordinate 'depth' is not monotonic: 100 after 660"});
 }
 
 TEST(NetcdfReaderBadInput, WrongDimensions)

@@ -902,6 +902,7 @@ sys.exit(0 if abs(v['vx']['value'] + expect) < 0.03 * expect and abs(v['radial v
     preprocess "$cit/bad/rows/run.cap00.0" -o "$work/x"
   expect_error "11 caps of step 0 found; a full sphere has 12 (missing: 7)" info "$cit/bad/missing"
   expect_error "run.h5: no dataset 'coord'" preprocess "$cit/bad/nocoord/run.0.h5" -o "$work/x"
+  expect_error "grid points lie in no cell of the mesh" info "$cit/bad/hole"
   expect_error "--temperature-scale: -5 is negative" info "$cit/run.0.h5" --temperature-scale -5
   check "no dataset from the refused runs" test ! -e "$work/x"
   ;;

@@ -30,7 +30,8 @@ vector; nondimensional):
     viscosity   = 1 + r
 
 Also broken inputs for the error tests: a cap file with a row missing (bad/rows), a step with a cap
-missing (bad/missing), an HDF5 coordinates file without /coord (bad/nocoord). truth.json names the
+missing (bad/missing), an HDF5 coordinates file without /coord (bad/nocoord), twelve caps that
+do not cover the sphere (bad/hole: cap 7 written where cap 6 lies). truth.json names the
 files and gives the formulas.
 """
 import json
@@ -139,6 +140,7 @@ def write(out, hdf5_only=False):
     os.makedirs(os.path.join(out, "bad", "rows"))
     os.makedirs(os.path.join(out, "bad", "missing"))
     os.makedirs(os.path.join(out, "bad", "nocoord"))
+    os.makedirs(os.path.join(out, "bad", "hole"))
     for step, time in STEPS.items():
         per_cap = [fields(nodes, step) for nodes in caps]
         with h5py.File(os.path.join(out, "run.%d.h5" % step), "w") as f:
@@ -153,6 +155,8 @@ def write(out, hdf5_only=False):
                 write_cap_file(os.path.join(out, "bad", "rows", "run.cap%02d.0" % n), nodes, t, v, h, drop_row=(n == 3))
                 if n != 7:
                     write_cap_file(os.path.join(out, "bad", "missing", "run.cap%02d.0" % n), nodes, t, v, h)
+                # Twelve caps that leave a hole: cap 7 lies where cap 6 does.
+                write_cap_file(os.path.join(out, "bad", "hole", "run.cap%02d.0" % n), caps[6] if n == 7 else nodes, t, v, h)
     with h5py.File(os.path.join(out, "bad", "nocoord", "run.h5"), "w") as f:
         f.create_group("input").attrs["caps"] = np.int32(12)
     shutil.copyfile(os.path.join(out, "run.0.h5"), os.path.join(out, "bad", "nocoord", "run.0.h5"))
