@@ -4,6 +4,7 @@
 #include "grid/coordinates.h"
 #include "grid/sampler.h"
 
+#include <cmath>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -70,9 +71,13 @@ nlohmann::json probeJson(const dataset::Dataset& dataset, const dataset::StepVol
         const auto& info = dataset.variables()[v];
         // Point reads: a u16 variable is not decoded whole for one sample.
         auto valueAt = [&](size_t iLat, size_t iR, size_t iLon) { return volume->value(v, iLat, iR, iLon); };
-        values[info.name] = {{"value", sampler.sample(valueAt, *at)},
-                             {"units", info.units},
-                             {"quantisation_error_max", quantisationBound(*volume, v, *at)}};
+        const double value = sampler.sample(valueAt, *at);
+        if (std::isnan(value))  // missing there, or outside a regional model's data
+            values[info.name] = {{"value", nullptr}, {"units", info.units}, {"no_data", true}};
+        else
+            values[info.name] = {{"value", value},
+                                 {"units", info.units},
+                                 {"quantisation_error_max", quantisationBound(*volume, v, *at)}};
     }
     j["values"] = values;
     return j;

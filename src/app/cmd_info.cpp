@@ -28,8 +28,13 @@ json describeGrid(const grid::SphericalGrid& g)
         return json{{"count", c.size()}, {"first", c.front()}, {"last", c.back()}, {"min_spacing", minStep},
                     {"max_spacing", maxStep}};
     };
-    return {{"lat_deg", axis(g.latDeg)}, {"r_km", axis(g.rKm)}, {"lon_deg", axis(g.lonDeg)},
-            {"cells", g.cellCount()}, {"volume_km3", g.totalVolumeKm3()}};
+    json j{{"lat_deg", axis(g.latDeg)}, {"r_km", axis(g.rKm)}, {"lon_deg", axis(g.lonDeg)},
+           {"cells", g.cellCount()}, {"volume_km3", g.totalVolumeKm3()}};
+    // A regional grid: padded to the globe with points of no data; the volume is the region's.
+    if (g.regional())
+        j["data_region"] = {{"lat_deg", g.dataLatDeg ? json(*g.dataLatDeg) : json(std::array<double, 2>{-90, 90})},
+                            {"lon_deg", g.dataLonDeg ? json(*g.dataLonDeg) : json(std::array<double, 2>{0, 360})}};
+    return j;
 }
 
 // A netCDF file, or a VTK XML series's first step (a .pvd collection, its directory, a .pvtu or
@@ -65,7 +70,8 @@ json describeFile(const std::filesystem::path& path, const io::ReaderOptions& op
                                   {"units", snap.fields[i].units},
                                   {"min", stats.range.min},
                                   {"max", stats.range.max},
-                                  {"mean", stats.mean}});
+                                  {"mean", stats.mean},
+                                  {"missing_percent", 100 * stats.missingFraction}});
     }
     return j;
 }
@@ -93,7 +99,8 @@ json describeDataset(const dataset::Dataset& d)
                                   {"long_name", v.longName},
                                   {"min", v.global.range.min},
                                   {"max", v.global.range.max},
-                                  {"mean", v.global.mean}});
+                                  {"mean", v.global.mean},
+                                  {"missing_percent", 100 * v.global.missingFraction}});
     j["coordinates"] = json::array();
     for (const auto& c : grid::coordinateInfos())
         j["coordinates"].push_back({{"name", c.name}, {"units", c.units}});
@@ -127,7 +134,13 @@ void printText(const json& j)
                            g["lon_deg"]["count"].get<size_t>(), g["cells"].get<size_t>(),
                            g["lat_deg"]["first"].get<double>(), g["lat_deg"]["last"].get<double>(),
                            g["r_km"]["first"].get<double>(), g["r_km"]["last"].get<double>(),
-                           g["lon_deg"]["first"].get<double>(), g["lon_deg"]["last"].get<double>());
+                           g["lon_deg"]["first"].get<double>(), g["lon_deg"]["last"].get<double>()) +
+               (g.contains("data_region")
+                    ? fmt::format("; regional: data within lat {:g}..{:g} deg, lon {:g}..{:g} deg east (padded to the "
+                                  "globe with points of no data; statistics are of the region)",
+                                  g["data_region"]["lat_deg"][0].get<double>(), g["data_region"]["lat_deg"][1].get<double>(),
+                                  g["data_region"]["lon_deg"][0].get<double>(), g["data_region"]["lon_deg"][1].get<double>())
+                    : std::string());
     };
     if (j["kind"] == "netcdf") {
         fmt::print("{} (netCDF, {})\n  grid: {}\n", j["path"].get<std::string>(), j["format"].get<std::string>(),
@@ -172,9 +185,13 @@ void printText(const json& j)
     }
     fmt::print("  variables{}:\n", j["kind"] == "dataset" ? " (ranges over all steps)" : "");
     for (const auto& v : j["variables"])
-        fmt::print("    {:<42} [{:<8}] {:>12.5g} .. {:<12.5g} mean {:.5g}{}\n", v["name"].get<std::string>(),
+        fmt::print("    {:<42} [{:<8}] {:>12.5g} .. {:<12.5g} mean {:.5g}{}{}\n", v["name"].get<std::string>(),
                    v["units"].get<std::string>(), v["min"].get<double>(), v["max"].get<double>(),
-                   v["mean"].get<double>(), sourceNote(v));
+                   v["mean"].get<double>(),
+                   v.value("missing_percent", 0.0) > 0
+                       ? fmt::format("  missing {:.3g} % (of the region)", v["missing_percent"].get<double>())
+                       : std::string(),
+                   sourceNote(v));
     if (j.contains("coordinates")) {
         std::vector<std::string> names;
         for (const auto& c : j["coordinates"])

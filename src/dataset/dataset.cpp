@@ -54,7 +54,12 @@ std::filesystem::path boundsFile(const std::filesystem::path& levelDir, const st
 
 nlohmann::json toJson(const grid::SphericalGrid& grid)
 {
-    return {{"lat_deg", grid.latDeg}, {"r_km", grid.rKm}, {"lon_deg", grid.lonDeg}};
+    nlohmann::json j = {{"lat_deg", grid.latDeg}, {"r_km", grid.rKm}, {"lon_deg", grid.lonDeg}};
+    if (grid.dataLatDeg)
+        j["data_lat_deg"] = *grid.dataLatDeg;
+    if (grid.dataLonDeg)
+        j["data_lon_deg"] = *grid.dataLonDeg;
+    return j;
 }
 
 grid::SphericalGrid gridFromJson(const nlohmann::json& j)
@@ -63,13 +68,22 @@ grid::SphericalGrid gridFromJson(const nlohmann::json& j)
     g.latDeg = j.at("lat_deg").get<std::vector<double>>();
     g.rKm = j.at("r_km").get<std::vector<double>>();
     g.lonDeg = j.at("lon_deg").get<std::vector<double>>();
+    if (j.contains("data_lat_deg"))
+        g.dataLatDeg = j.at("data_lat_deg").get<std::array<double, 2>>();
+    if (j.contains("data_lon_deg"))
+        g.dataLonDeg = j.at("data_lon_deg").get<std::array<double, 2>>();
     return g;
 }
 
 nlohmann::json toJson(const VariableStats& stats)
 {
-    return {{"min", stats.range.min}, {"max", stats.range.max}, {"mean", stats.mean},
-            {"histogram", stats.histogram}};
+    nlohmann::json j = {{"min", stats.range.min}, {"max", stats.range.max}, {"mean", stats.mean},
+                        {"histogram", stats.histogram}};
+    if (stats.missingPoints > 0) {
+        j["missing_fraction"] = stats.missingFraction;
+        j["missing_points"] = stats.missingPoints;
+    }
+    return j;
 }
 
 VariableStats statsFromJson(const nlohmann::json& j)
@@ -78,6 +92,10 @@ VariableStats statsFromJson(const nlohmann::json& j)
     s.range = {j.at("min").get<float>(), j.at("max").get<float>()};
     s.mean = j.at("mean").get<double>();
     s.histogram = j.at("histogram").get<std::vector<double>>();
+    s.missingFraction = j.value("missing_fraction", 0.0);
+    s.missingPoints = j.value("missing_points", size_t(0));
+    if (!(s.missingFraction >= 0 && s.missingFraction < 1))
+        fail("missing_fraction {} is not within [0, 1)", s.missingFraction);
     return s;
 }
 
@@ -135,9 +153,10 @@ std::shared_ptr<StepVolume> StepVolume::withVariable(std::shared_ptr<const StepV
 
 std::shared_ptr<StepVolume> StepVolume::open(const std::filesystem::path& dir, const LevelInfo& level,
                                              const std::vector<std::string>& fileStems, ValueEncoding encoding,
-                                             std::span<const ValueRange> ranges)
+                                             std::span<const ValueRange> ranges, std::span<const char> missing)
 {
     RAYPC_CHECK(ranges.empty() || ranges.size() == fileStems.size());
+    RAYPC_CHECK(missing.empty() || missing.size() == fileStems.size());
     auto volume = std::make_shared<StepVolume>();
     volume->m_grid = level.grid;
     volume->m_bricks = level.bricks;
@@ -153,9 +172,12 @@ std::shared_ptr<StepVolume> StepVolume::open(const std::filesystem::path& dir, c
     volume->m_mapped.reserve(count);  // references below must stay valid
     volume->m_owned.reserve(count);
     volume->m_ranges.assign(count, ValueRange{-std::numeric_limits<float>::max(), std::numeric_limits<float>::max()});
+    volume->m_missing.assign(count, 0);
     for (size_t i = 0; i < count; ++i) {
         if (!ranges.empty())
             volume->m_ranges[i] = ranges[i];
+        if (!missing.empty())
+            volume->m_missing[i] = missing[i];
         const ValueRange range = volume->m_ranges[i];
         const auto valuesPath = encoded ? format::encodedValuesFile(dir, fileStems[i]) : format::valuesFile(dir, fileStems[i]);
         const auto boundsPath = format::boundsFile(dir, fileStems[i]);
@@ -174,8 +196,11 @@ std::shared_ptr<StepVolume> StepVolume::open(const std::filesystem::path& dir, c
         // Decoding (u16) and brick skipping trust the bounds; checked here, where a bad file is an
         // error. Within the step's range (the manifest's exact statistics), so that a finite but
         // absurd bound (3.4e38) is refused too.
+        // A variable with missing values may have bricks of nothing but them: (+inf, -inf).
+        const bool mayBeEmpty = volume->m_missing[i];
         for (size_t b = 0; b < brickCount; ++b)
-            if (!(bounds[2 * b] >= range.min && bounds[2 * b] <= bounds[2 * b + 1] && bounds[2 * b + 1] <= range.max))
+            if (!(bounds[2 * b] >= range.min && bounds[2 * b] <= bounds[2 * b + 1] && bounds[2 * b + 1] <= range.max) &&
+                !(mayBeEmpty && bounds[2 * b] == INFINITY && bounds[2 * b + 1] == -INFINITY))
                 fail("{}: brick {} has bounds ({}, {}), expected finite values with min <= max within the step's "
                      "range [{}, {}] (a damaged file; preprocess the step again)",
                      boundsPath.string(), b, bounds[2 * b], bounds[2 * b + 1], range.min, range.max);
@@ -187,14 +212,14 @@ std::shared_ptr<StepVolume> StepVolume::open(const std::filesystem::path& dir, c
 namespace {
 
 // The first index in `values` outside [min, max] (NaN included), or values.size().
-size_t firstOutsideRange(std::span<const float> values, ValueRange range)
+size_t firstOutsideRange(std::span<const float> values, ValueRange range, bool missing)
 {
     std::atomic<size_t> first{values.size()};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, values.size(), size_t(1) << 16), [&](const auto& r) {
         if (r.begin() >= first.load(std::memory_order_relaxed))
             return;
         for (size_t i = r.begin(); i < r.end(); ++i)
-            if (!(values[i] >= range.min && values[i] <= range.max)) {
+            if (!(values[i] >= range.min && values[i] <= range.max) && !(missing && std::isnan(values[i]))) {
                 size_t seen = first.load(std::memory_order_relaxed);
                 while (i < seen && !first.compare_exchange_weak(seen, i, std::memory_order_relaxed)) {
                 }
@@ -238,7 +263,7 @@ const float* StepVolume::decode(size_t var) const
         // read of the array on first use, as a u16 variable's decoding is.
         const auto* values = static_cast<const float*>(m_valueFiles[var]);
         size_t bad = 0;
-        tbb::this_task_arena::isolate([&] { bad = firstOutsideRange({values, n}, m_ranges[var]); });
+        tbb::this_task_arena::isolate([&] { bad = firstOutsideRange({values, n}, m_ranges[var], hasMissing(var)); });
         if (bad < n)
             failValue(var, bad, values[bad]);
         m_values[var].store(values, std::memory_order_release);
@@ -249,7 +274,7 @@ const float* StepVolume::decode(size_t var) const
     // that asks this volume for values and blocks on the lock it holds.
     tbb::this_task_arena::isolate([&] {
         decodeUint16(m_grid, m_bricks, {static_cast<const uint16_t*>(m_valueFiles[var]), n},
-                     {m_bounds[var], 2 * m_bricks.brickCount()}, {values.get(), n});
+                     {m_bounds[var], 2 * m_bricks.brickCount()}, {values.get(), n}, hasMissing(var));
     });
     const float* p = values.get();
     m_decoded[var] = std::move(values);
@@ -269,12 +294,12 @@ float StepVolume::value(size_t var, size_t iLat, size_t iR, size_t iLon) const
         // Not yet checked as a whole (decode): this one value is.
         const size_t index = m_grid.index(iLat, iR, iLon);
         const float v = static_cast<const float*>(m_valueFiles[var])[index];
-        if (!(v >= m_ranges[var].min && v <= m_ranges[var].max))
+        if (!(v >= m_ranges[var].min && v <= m_ranges[var].max) && !(hasMissing(var) && std::isnan(v)))
             failValue(var, index, v);
         return v;
     }
     return decodeUint16Point(m_grid, m_bricks, static_cast<const uint16_t*>(m_valueFiles[var]), m_bounds[var], iLat,
-                             iR, iLon);
+                             iR, iLon, hasMissing(var));
 }
 
 double StepVolume::errorBound(size_t var, size_t iLat, size_t iR, size_t iLon) const
@@ -286,7 +311,7 @@ double StepVolume::errorBound(size_t var, size_t iLat, size_t iR, size_t iLon) c
         return 0;
     const uint32_t s = m_bricks.size;
     const size_t brick = m_bricks.index(uint32_t(iLat / s), uint32_t(iR / s), uint32_t(iLon / s));
-    return uint16ErrorBound(m_bounds[var][2 * brick], m_bounds[var][2 * brick + 1]);
+    return uint16ErrorBound(m_bounds[var][2 * brick], m_bounds[var][2 * brick + 1], hasMissing(var));
 }
 
 size_t StepVolume::memoryBytes() const
@@ -493,6 +518,18 @@ public:
         g.rKm = axis(level, field, "r_km", 1, 0, std::numeric_limits<double>::infinity(), true, false,
                      "a positive radius in km");
         g.lonDeg = axis(level, field, "lon_deg", 1, 0, 360, false, true, "a value within [0, 360) degrees");
+        // A regional grid's extent of data (grid.h): south <= north within [-90, 90]; west, east in [0, 360).
+        auto extent = [&](const char* key, double lo, double hi, bool ordered) -> std::optional<std::array<double, 2>> {
+            if (!level.is_object() || !level.contains(key))
+                return std::nullopt;
+            const json& e = array(level, field, key, 2, 2);
+            const std::array<double, 2> v{number(e[0], path(path(field, key), size_t(0))), number(e[1], path(path(field, key), size_t(1)))};
+            if (!(v[0] >= lo && v[0] <= hi && v[1] >= lo && v[1] <= hi) || (ordered && v[0] > v[1]))
+                bad(path(field, key), excerpt(e), "two values within [{}, {}]{}", lo, hi, ordered ? ", the first not larger" : "");
+            return v;
+        };
+        g.dataLatDeg = extent("data_lat_deg", -90, 90, true);
+        g.dataLonDeg = extent("data_lon_deg", 0, 360, false);
         return g;
     }
 
@@ -509,6 +546,15 @@ public:
             if (!(v >= 0 && v <= 1.0 + 1e-6))
                 bad(path(path(field, "histogram"), i), excerpt(h[i]), "a volume fraction within [0, 1]");
             s.histogram.push_back(v);
+        }
+        if (j.is_object() && j.contains("missing_fraction")) {
+            s.missingFraction = number(j, field, "missing_fraction");
+            if (!(s.missingFraction >= 0 && s.missingFraction < 1))
+                bad(path(field, "missing_fraction"), excerpt(j.at("missing_fraction")), "a volume fraction within [0, 1)");
+            const json& points = member(j, field, "missing_points");
+            if (!points.is_number_unsigned() || points.get<uint64_t>() == 0)
+                bad(path(field, "missing_points"), excerpt(points), "a positive count of grid points");
+            s.missingPoints = points.get<size_t>();
         }
         return s;
     }
@@ -769,12 +815,14 @@ std::shared_ptr<const StepVolume> Dataset::load(int step, int level) const
     checkLevel(level, m_dir.string() + ": level");
     std::vector<std::string> stems;
     std::vector<ValueRange> ranges;
+    std::vector<char> missing;
     for (size_t v = 0; v < m_variables.size(); ++v) {
         stems.push_back(m_variables[v].fileStem);
         ranges.push_back(m_steps[step].stats[v].range);
+        missing.push_back(m_steps[step].stats[v].missingPoints > 0);
     }
     return StepVolume::open(format::levelDir(format::stepDir(m_dir, step), level), m_levels[level], stems, m_encoding,
-                            ranges);
+                            ranges, missing);
 }
 
 SampleTable Dataset::loadSample(int step, SampleColumns which) const

@@ -40,6 +40,11 @@ struct VariableStats {
     ValueRange range;  // exact min and max over the grid points
     double mean = 0;   // volume-weighted mean
     std::vector<double> histogram;  // kHistogramBins volume fractions over `range`; sums to 1
+    // The volume fraction of the data's region where the variable is missing (NaN): left out of the
+    // range, mean and histogram; and the grid points where it is missing, those that pad a regional
+    // grid to the globe included (level 0). 0 in datasets written before missing values were kept.
+    double missingFraction = 0;
+    size_t missingPoints = 0;
 };
 
 struct VariableInfo {
@@ -84,10 +89,12 @@ public:
     // `<stem>.u16`, and `<stem>.bricks.f32` (the bounds are copied into memory, the values stay
     // mapped). `ranges`: per variable the step's exact range (the manifest's statistics), or empty
     // for any finite value. Throws raypc::Error naming the file when one is missing, has the wrong
-    // size, or holds brick bounds that are not finite with min <= max within the range.
+    // size, or holds brick bounds that are not finite with min <= max within the range. `missing`: per
+    // variable whether the step has missing values (NaN; VariableStats::missingPoints > 0), or empty
+    // for none.
     static std::shared_ptr<StepVolume> open(const std::filesystem::path& levelDir, const LevelInfo& level,
                                             const std::vector<std::string>& fileStems, ValueEncoding encoding,
-                                            std::span<const ValueRange> ranges = {});
+                                            std::span<const ValueRange> ranges = {}, std::span<const char> missing = {});
 
     // A volume of `base`'s variables and one more, the last: `values` (grid().cellCount() of them,
     // canonical order; brick bounds computed here). The base's variables are read through it as the
@@ -147,6 +154,7 @@ public:
 
 private:
     const float* decode(size_t var) const;
+    bool hasMissing(size_t var) const { return var < m_missing.size() && m_missing[var]; }
     [[noreturn]] void failValue(size_t var, size_t index, float value) const;
 
     grid::SphericalGrid m_grid;
@@ -157,6 +165,7 @@ private:
     std::vector<const float*> m_bounds;
     std::vector<const void*> m_valueFiles;  // per variable its mapped values (u16 or float32), read by decode()
     std::vector<ValueRange> m_ranges;       // per variable the step's range (open)
+    std::vector<char> m_missing;            // per variable whether the step has missing values (open)
     mutable std::mutex m_decodeMutex;
     mutable std::vector<std::unique_ptr<float[]>> m_decoded;
     mutable std::atomic<size_t> m_decodedBytes{0};

@@ -14,6 +14,10 @@ namespace raypc::dataset {
 namespace {
 
 constexpr double kLevels = 65535.0;
+// A variable with missing values keeps the highest code for them (kMissingCode: NaN) and quantises
+// into the others.
+constexpr uint16_t kMissingCode = 65535;
+double levelsOf(bool missing) { return missing ? kLevels - 1 : kLevels; }
 
 // The bricks along one axis whose stored bounds include a point: the owner first (i / size),
 // then the others. computeBrickBounds' rule: brick b covers points [b·s, (b+1)·s], clamped at the
@@ -87,14 +91,15 @@ ValueEncoding parseEncoding(std::string_view name, std::string_view what)
     fail("{}: encoding '{}' is unknown, expected float32 or u16", what, name);
 }
 
-double uint16ErrorBound(float min, float max)
+double uint16ErrorBound(float min, float max, bool missing)
 {
-    return (double(max) - double(min)) / (2 * kLevels);
+    return min <= max ? (double(max) - double(min)) / (2 * levelsOf(missing)) : 0.0;
 }
 
 void encodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, std::span<const float> values,
-                  std::span<const float> bounds, std::span<uint16_t> out)
+                  std::span<const float> bounds, std::span<uint16_t> out, bool missing)
 {
+    const double levels = levelsOf(missing);
     RAYPC_CHECK_EQ(values.size(), grid.cellCount());
     RAYPC_CHECK_EQ(out.size(), grid.cellCount());
     RAYPC_CHECK_EQ(bounds.size(), 2 * layout.brickCount());
@@ -106,11 +111,17 @@ void encodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layo
                 // Each point with the bounds of the brick that owns it.
                 const size_t brick = layout.index(uint32_t(iLat / s), uint32_t(iR / s), c);
                 const double lo = bounds[2 * brick], hi = bounds[2 * brick + 1];
-                RAYPC_CHECK(std::isfinite(lo) && std::isfinite(hi) && lo <= hi);
-                const double perUnit = hi > lo ? kLevels / (hi - lo) : 0.0;
                 const size_t end = std::min(size_t(c + 1) * s, nLon);
+                // A brick whose values are all missing has the bounds (+inf, -inf).
+                RAYPC_CHECK((std::isfinite(lo) && std::isfinite(hi) && lo <= hi) || (missing && lo > hi));
+                const double perUnit = hi > lo ? levels / (hi - lo) : 0.0;
                 for (size_t iLon = size_t(c) * s; iLon < end; ++iLon) {
-                    const double t = std::clamp((double(values[first + iLon]) - lo) * perUnit, 0.0, kLevels);
+                    if (std::isnan(values[first + iLon])) {
+                        RAYPC_CHECK(missing);
+                        out[first + iLon] = kMissingCode;
+                        continue;
+                    }
+                    const double t = std::clamp((double(values[first + iLon]) - lo) * perUnit, 0.0, levels);
                     // t >= 0: rounding half up is lround's half away from zero, without its call.
                     out[first + iLon] = uint16_t(t + 0.5);
                 }
@@ -120,8 +131,9 @@ void encodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layo
 }
 
 void decodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, std::span<const uint16_t> encoded,
-                  std::span<const float> bounds, std::span<float> out)
+                  std::span<const float> bounds, std::span<float> out, bool missing)
 {
+    const double levels = levelsOf(missing);
     RAYPC_CHECK_EQ(encoded.size(), grid.cellCount());
     RAYPC_CHECK_EQ(out.size(), grid.cellCount());
     RAYPC_CHECK_EQ(bounds.size(), 2 * layout.brickCount());
@@ -139,8 +151,13 @@ void decodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layo
                 float lo = min, hi = max;
                 if (lat.count > 1 || r.count > 1)
                     intersectBounds(layout, bounds, lat, r, AxisCover{{c}, 1}, lo, hi);
-                const double scale = (double(max) - double(min)) / kLevels;
                 const size_t begin = size_t(c) * s, end = std::min(begin + s, nLon);
+                // A row that lies in a brick of nothing but missing values is missing too.
+                if (missing && !(lo <= hi)) {
+                    std::fill(out.begin() + first + begin, out.begin() + first + end, NAN);
+                    continue;
+                }
+                const double scale = (double(max) - double(min)) / levels;
                 // The brick's points in one tight loop (clamped in double, so that rounding to float
                 // cannot leave [lo, hi]), then the few shared with lon neighbours' bricks.
                 for (size_t iLon = begin; iLon < end; ++iLon) {
@@ -148,10 +165,12 @@ void decodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layo
                     out[first + iLon] = float(std::clamp(v, double(lo), double(hi)));
                 }
                 for (size_t iLon = begin; iLon < end; ++iLon)
-                    if (cover.lon[iLon].count > 1) {
+                    if (missing && encoded[first + iLon] == kMissingCode)
+                        out[first + iLon] = NAN;
+                    else if (cover.lon[iLon].count > 1) {
                         float l = lo, h = hi;
                         intersectBounds(layout, bounds, lat, r, cover.lon[iLon], l, h);
-                        out[first + iLon] = std::clamp(out[first + iLon], l, h);
+                        out[first + iLon] = l <= h ? std::clamp(out[first + iLon], l, h) : NAN;
                     }
             }
         }
@@ -163,8 +182,10 @@ void decodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layo
 namespace raypc::dataset {
 
 float decodeUint16Point(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, const uint16_t* encoded,
-                        const float* bounds, size_t iLat, size_t iR, size_t iLon)
+                        const float* bounds, size_t iLat, size_t iR, size_t iLon, bool missing)
 {
+    if (missing && encoded[grid.index(iLat, iR, iLon)] == kMissingCode)
+        return NAN;
     const AxisCover lat = coverOf(iLat, grid.nLat(), layout.size, layout.count[0], false);
     const AxisCover r = coverOf(iR, grid.nR(), layout.size, layout.count[1], false);
     const AxisCover lon = coverOf(iLon, grid.nLon(), layout.size, layout.count[2], true);
@@ -175,12 +196,14 @@ float decodeUint16Point(const grid::SphericalGrid& grid, const grid::BrickLayout
     const std::span<const float> all(bounds, 2 * layout.brickCount());
     if (lat.count > 1 || r.count > 1)
         intersectBounds(layout, all, lat, r, AxisCover{{lon.bricks[0]}, 1}, lo, hi);
-    const double scale = (double(max) - double(min)) / kLevels;
+    if (missing && !(lo <= hi))
+        return NAN;
+    const double scale = (double(max) - double(min)) / levelsOf(missing);
     const double v = double(min) + double(encoded[grid.index(iLat, iR, iLon)]) * scale;
     float value = float(std::clamp(v, double(lo), double(hi)));
     if (lon.count > 1) {
         intersectBounds(layout, all, lat, r, lon, lo, hi);
-        value = std::clamp(value, lo, hi);
+        value = lo <= hi ? std::clamp(value, lo, hi) : NAN;
     }
     return value;
 }

@@ -9,7 +9,10 @@
 //   decoded value (half an ulp), and
 // - every decoded value lies within the stored bounds of every brick that covers it: skipping a
 //   brick by its bounds stays exact for the decoded field.
-// Float32: the values as they are.
+// A variable with missing values (NaN) encodes them as u = 65535 and quantises the others into 0 …
+// 65534 (`missing`: the step's missing_points > 0 in the manifest); a brick whose values are all
+// missing has the bounds (+inf, −inf).
+// Float32: the values as they are (NaN where missing).
 #pragma once
 
 #include "grid/grid.h"
@@ -29,21 +32,21 @@ ValueEncoding parseEncoding(std::string_view name, std::string_view what);
 
 // The largest quantisation error of a point owned by a brick with bounds [min, max], without the
 // float32 rounding of the decoded value: (max − min) / 131070.
-double uint16ErrorBound(float min, float max);
+double uint16ErrorBound(float min, float max, bool missing = false);
 
 // Encodes `values` (grid.cellCount(), canonical order, finite) with the brick bounds `bounds`
 // (layout.brickCount() pairs, as computeBrickBounds writes them) into `out`. Parallel over rows.
 void encodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, std::span<const float> values,
-                  std::span<const float> bounds, std::span<uint16_t> out);
+                  std::span<const float> bounds, std::span<uint16_t> out, bool missing = false);
 
 // Decodes what encodeUint16 wrote, with the same bounds. Bounds must be finite with min <= max
 // (Dataset::load checks them). Parallel over rows (oneTBB); allocates only per-axis tables.
 void decodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, std::span<const uint16_t> encoded,
-                  std::span<const float> bounds, std::span<float> out);
+                  std::span<const float> bounds, std::span<float> out, bool missing = false);
 
 // The value decodeUint16 gives point (iLat, iR, iLon), bit for bit, decoding that point alone (for
 // sparse reads: a few samples of a variable that is not decoded).
 float decodeUint16Point(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, const uint16_t* encoded,
-                        const float* bounds, size_t iLat, size_t iR, size_t iLon);
+                        const float* bounds, size_t iLat, size_t iR, size_t iLon, bool missing = false);
 
 }  // namespace raypc::dataset

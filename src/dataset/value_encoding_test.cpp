@@ -389,3 +389,56 @@ TEST_F(EncodedDatasets, ADamagedFileIsOneErrorNamingIt)
 
 }  // namespace
 }  // namespace raypc::dataset
+
+namespace raypc::dataset {
+namespace {
+
+// Missing values (NaN) round-trip as NaN and never enter a brick's bounds; a brick of nothing but
+// missing values has the bounds (+inf, -inf); the other points keep the error bound of 65534 levels,
+// the point decoder gives the same bits as the array decoder.
+TEST(ValueEncoding, MissingValuesStayMissing)
+{
+    const grid::SphericalGrid g = testing::centredGrid(20, 12, 24);
+    std::vector<float> values(g.cellCount());
+    for (size_t i = 0; i < values.size(); ++i)
+        values[i] = float(std::sin(0.37 * double(i)) * 100.0 + 50.0);
+    // A hole: every point of lat rows 0..9 (a whole brick and more), and scattered points elsewhere.
+    for (size_t iLat = 0; iLat < 10; ++iLat)
+        for (size_t iR = 0; iR < g.nR(); ++iR)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+                values[g.index(iLat, iR, iLon)] = NAN;
+    for (size_t i = 0; i < values.size(); i += 97)
+        values[i] = NAN;
+    const grid::BrickLayout layout = grid::BrickLayout::forGrid(g, 8);
+    std::vector<float> bounds(2 * layout.brickCount());
+    computeBrickBounds(g, layout, values, bounds);
+    EXPECT_EQ(bounds[0], INFINITY);  // brick (0, 0, 0): lat rows 0..8, all missing
+    EXPECT_EQ(bounds[1], -INFINITY);
+    std::vector<uint16_t> encoded(values.size());
+    encodeUint16(g, layout, values, bounds, encoded, true);
+    std::vector<float> decoded(values.size());
+    decodeUint16(g, layout, encoded, bounds, decoded, true);
+    size_t missing = 0;
+    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+        for (size_t iR = 0; iR < g.nR(); ++iR)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                const size_t i = g.index(iLat, iR, iLon);
+                const float point = decodeUint16Point(g, layout, encoded.data(), bounds.data(), iLat, iR, iLon, true);
+                if (std::isnan(values[i])) {
+                    ++missing;
+                    EXPECT_TRUE(std::isnan(decoded[i])) << i;
+                    EXPECT_TRUE(std::isnan(point)) << i;
+                    continue;
+                }
+                const size_t owner = layout.index(uint32_t(iLat / 8), uint32_t(iR / 8), uint32_t(iLon / 8));
+                const double bound = uint16ErrorBound(bounds[2 * owner], bounds[2 * owner + 1], true);
+                EXPECT_GT(bound, (bounds[2 * owner + 1] - bounds[2 * owner]) / 131070.0);  // 65534 levels, not 65535
+                EXPECT_LE(std::abs(double(decoded[i]) - values[i]), bound * (1 + 1e-6) + 1e-5) << i;
+                EXPECT_EQ(point, decoded[i]) << i;
+            }
+    EXPECT_GT(missing, 10 * g.nR() * g.nLon());
+    EXPECT_EQ(missing, size_t(std::count_if(values.begin(), values.end(), [](float v) { return std::isnan(v); })));
+}
+
+}  // namespace
+}  // namespace raypc::dataset

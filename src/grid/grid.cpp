@@ -153,14 +153,35 @@ SphericalGrid::VolumeFactors SphericalGrid::volumeFactors() const
     const auto le = latEdgesDeg(), re = rEdgesKm(), oe = lonEdgesDeg();
     f.lat.resize(nLat());
     for (size_t i = 0; i < nLat(); ++i)
-        f.lat[i] = std::sin(degToRad(le[i + 1])) - std::sin(degToRad(le[i]));
+        f.lat[i] = latHoldsData(latDeg[i]) ? std::sin(degToRad(le[i + 1])) - std::sin(degToRad(le[i])) : 0.0;
     f.r.resize(nR());
     for (size_t i = 0; i < nR(); ++i)
         f.r[i] = (re[i + 1] * re[i + 1] * re[i + 1] - re[i] * re[i] * re[i]) / 3.0;
     f.lon.resize(nLon());
     for (size_t i = 0; i < nLon(); ++i)
-        f.lon[i] = degToRad(oe[i + 1] - oe[i]);
+        f.lon[i] = lonHoldsData(lonDeg[i]) ? degToRad(oe[i + 1] - oe[i]) : 0.0;
     return f;
+}
+
+// A coarser level's row or column that merges a point of data with one of padding lies between
+// them, outside the data's extent: it has no volume, as its value (the mean, with a NaN) has none.
+// The tolerance admits the float rounding of the extent as a file writes it.
+bool SphericalGrid::latHoldsData(double lat) const
+{
+    constexpr double kTolDeg = 1e-6;
+    return !dataLatDeg || (lat >= (*dataLatDeg)[0] - kTolDeg && lat <= (*dataLatDeg)[1] + kTolDeg);
+}
+
+bool SphericalGrid::lonHoldsData(double lon) const
+{
+    constexpr double kTolDeg = 1e-6;
+    if (!dataLonDeg)
+        return true;
+    const double west = (*dataLonDeg)[0], east = (*dataLonDeg)[1];
+    // Degrees east of the western edge, in [0, 360).
+    const double fromWest = std::fmod(std::fmod(lon - west, 360.0) + 360.0 + kTolDeg, 360.0) - kTolDeg;
+    const double width = std::fmod(std::fmod(east - west, 360.0) + 360.0, 360.0);
+    return fromWest <= width + kTolDeg;
 }
 
 double SphericalGrid::totalVolumeKm3() const
@@ -184,6 +205,8 @@ SphericalGrid SphericalGrid::coarsened() const
     // Lon pairs never straddle the seam (pairs start at column 0), so a plain mean is the
     // circular mean; an odd last column stays alone.
     g.lonDeg = pairMeans(lonDeg);
+    g.dataLatDeg = dataLatDeg;
+    g.dataLonDeg = dataLonDeg;
     return g;
 }
 
@@ -198,30 +221,8 @@ void SphericalGrid::validate(const std::string& what) const
         fail("{}: the radii (from the radius or depth coordinate) are not strictly monotonic and positive", what);
     if (!strictlyAscending(lonDeg) || lonDeg.front() < 0.0 || lonDeg.back() >= 360.0)
         fail("{}: lon coordinates are not strictly monotonic within [0, 360) degrees", what);
-    // The renderer wraps lon: a regional grid would be stretched over the globe.
-    std::vector<double> gaps;
-    for (size_t i = 1; i < nLon(); ++i)
-        gaps.push_back(lonDeg[i] - lonDeg[i - 1]);
-    const double seamGap = lonDeg.front() + 360.0 - lonDeg.back();
-    std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
-    const double median = gaps[gaps.size() / 2];
-    if (seamGap > 2.0 * median + 1e-9)
-        fail("{}: lon covers {:.3g}..{:.3g} degrees, expected a global grid (a gap of {:.3g} degrees at the "
-             "seam against a spacing of {:.3g})",
-             what, lonDeg.front(), lonDeg.back(), seamGap, median);
-    // The same for lat: the pole caps blend the rows nearest each pole toward it, so a grid that
-    // stops short of a pole would have values invented there. Regional grids are not read yet.
-    std::vector<double> latGaps;
-    for (size_t i = 1; i < nLat(); ++i)
-        latGaps.push_back(latDeg[i] - latDeg[i - 1]);
-    std::nth_element(latGaps.begin(), latGaps.begin() + latGaps.size() / 2, latGaps.end());
-    const double latMedian = latGaps[latGaps.size() / 2];
-    const double southGap = latDeg.front() + 90.0, northGap = 90.0 - latDeg.back();
-    if (std::max(southGap, northGap) > 2.0 * latMedian + 1e-9)
-        fail("{}: lat covers {:.3g}..{:.3g} degrees, expected a global grid (a gap of {:.3g} degrees at the {} "
-             "pole against a spacing of {:.3g}); regional grids are not supported yet",
-             what, latDeg.front(), latDeg.back(), std::max(southGap, northGap),
-             southGap >= northGap ? "south" : "north", latMedian);
+    // A regional grid is made global by its reader with points that hold no data (io/netcdf_coordinates.cpp):
+    // wide gaps between the points of a grid are allowed here, and hold what the reader put there.
 }
 
 bool SphericalGrid::sameAs(const SphericalGrid& other, double tolerance) const
@@ -234,7 +235,10 @@ bool SphericalGrid::sameAs(const SphericalGrid& other, double tolerance) const
                 return false;
         return true;
     };
-    return same(latDeg, other.latDeg) && same(rKm, other.rKm) && same(lonDeg, other.lonDeg);
+    return same(latDeg, other.latDeg) && same(rKm, other.rKm) && same(lonDeg, other.lonDeg) &&
+           dataLatDeg.has_value() == other.dataLatDeg.has_value() && dataLonDeg.has_value() == other.dataLonDeg.has_value() &&
+           (!dataLatDeg || same({(*dataLatDeg)[0], (*dataLatDeg)[1]}, {(*other.dataLatDeg)[0], (*other.dataLatDeg)[1]})) &&
+           (!dataLonDeg || same({(*dataLonDeg)[0], (*dataLonDeg)[1]}, {(*other.dataLonDeg)[0], (*other.dataLonDeg)[1]}));
 }
 
 BrickLayout BrickLayout::forGrid(const SphericalGrid& grid, uint32_t size)

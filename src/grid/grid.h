@@ -16,6 +16,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -25,6 +27,16 @@ struct SphericalGrid {
     std::vector<double> latDeg;  // ascending, within [-90, 90]
     std::vector<double> rKm;     // ascending
     std::vector<double> lonDeg;  // ascending, within [0, 360), periodic
+
+    // A regional grid, padded to the globe by its reader with points that hold no data (NaN in every
+    // field), keeps the extent of its data: the latitudes south..north, the longitudes west..east
+    // (degrees east in [0, 360); west > east when the region crosses 0°). Points outside have no
+    // volume (volumeFactors): statistics, selections and features count the region the data cover.
+    std::optional<std::array<double, 2>> dataLatDeg, dataLonDeg;
+    bool regional() const { return dataLatDeg.has_value() || dataLonDeg.has_value(); }
+    // Whether latitude `latDeg` (of a row) and longitude `lonDeg` (of a column) lie within the data's extent.
+    bool latHoldsData(double latDeg) const;
+    bool lonHoldsData(double lonDeg) const;
 
     size_t nLat() const { return latDeg.size(); }
     size_t nR() const { return rKm.size(); }
@@ -49,7 +61,8 @@ struct SphericalGrid {
 
     // Volume of the dual cell of every grid point, in km³, as three separable factors:
     // volume(iLat, iR, iLon) = latFactor[iLat] * rFactor[iR] * lonFactor[iLon], with
-    // latFactor = sin(edge+) - sin(edge-), rFactor = (r+³ - r-³)/3, lonFactor = Δlon in radians.
+    // latFactor = sin(edge+) - sin(edge-), rFactor = (r+³ - r-³)/3, lonFactor = Δlon in radians; 0 for a
+    // row or column outside a regional grid's data (dataLatDeg, dataLonDeg).
     struct VolumeFactors {
         std::vector<double> lat, r, lon;
         double at(size_t iLat, size_t iR, size_t iLon) const { return lat[iLat] * r[iR] * lon[iLon]; }
@@ -63,8 +76,8 @@ struct SphericalGrid {
     // the fine grid's extent; samplers clamp (constant extension) up to the shell boundaries.
     SphericalGrid coarsened() const;
 
-    // Throws raypc::Error naming `what` unless the coordinates are strictly ascending,
-    // in range, and lon is periodic (covers 360° with no gap wider than twice the median spacing).
+    // Throws raypc::Error naming `what` unless the coordinates are strictly ascending and in range.
+    // Spacings may vary: a regional grid's reader pads it to the globe with points that hold no data.
     void validate(const std::string& what) const;
 
     // True when both grids have the same sizes and coordinates within `toleranceDeg/Km`.

@@ -44,36 +44,51 @@ TEST(Grid, CoarsenedHalvesEachAxisAndKeepsOddEnds)
     EXPECT_NO_THROW(coarse.validate("coarse"));
 }
 
-TEST(Grid, ValidateRejectsRegionalAndUnsortedGrids)
+TEST(Grid, ValidateRejectsUnsortedGrids)
 {
     SphericalGrid g = centredGrid(4, 3, 8);
     EXPECT_NO_THROW(g.validate("ok"));
-    SphericalGrid regional = g;
-    regional.lonDeg = {0, 10, 20, 30};
-    EXPECT_THROW(regional.validate("regional"), Error);
     SphericalGrid unsorted = g;
     std::swap(unsorted.rKm[0], unsorted.rKm[1]);
     EXPECT_THROW(unsorted.validate("unsorted"), Error);
-    // Latitudes that stop short of a pole: the pole cap would invent the values there.
-    SphericalGrid north = centredGrid(72, 3, 8);
-    north.latDeg.clear();
-    for (int i = 0; i <= 35; ++i)
-        north.latDeg.push_back(2.5 * i);  // 0 ... 87.5
-    try {
-        north.validate("north.nc");
-        ADD_FAILURE() << "a grid of lat 0..87.5 was accepted";
-    } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("north.nc: lat covers 0..87.5 degrees, expected a global grid (a gap of "
-                                             "90 degrees at the south pole"),
-                  std::string::npos)
-            << e.what();
-    }
-    // Rows at the poles themselves, or half a spacing from them, are global.
-    SphericalGrid poles = north;
-    poles.latDeg.clear();
-    for (int i = 0; i <= 36; ++i)
-        poles.latDeg.push_back(-90.0 + 5.0 * i);
-    EXPECT_NO_THROW(poles.validate("poles"));
+    SphericalGrid beyondPole = g;
+    beyondPole.latDeg.back() = 90.5;
+    EXPECT_THROW(beyondPole.validate("beyond the pole"), Error);
+    SphericalGrid lon360 = g;
+    lon360.lonDeg.back() = 360.0;
+    EXPECT_THROW(lon360.validate("lon 360"), Error);
+}
+
+// A regional grid padded to the globe: its rows and columns outside the data's extent weigh nothing,
+// so volumes, statistics and selections are the region's; the rest are the global grid's dual cells.
+TEST(Grid, RegionalGridsHaveVolumeOnlyWhereTheirDataAre)
+{
+    SphericalGrid g;
+    g.latDeg = {-90, -43, -11, 5, 13, 17, 19, 20, 21, 22, 23, 24, 25, 26, 28, 32, 40, 56, 90};
+    g.rKm = {5000, 5500, 6000};
+    g.lonDeg = {0, 10, 20, 60, 180, 300, 340, 350};  // data from 340 across 0 to 20 degrees east
+    g.dataLatDeg = std::array<double, 2>{20, 25};
+    g.dataLonDeg = std::array<double, 2>{340, 20};
+    EXPECT_NO_THROW(g.validate("regional"));
+    EXPECT_TRUE(g.regional());
+    const auto w = g.volumeFactors();
+    for (size_t i = 0; i < g.nLat(); ++i)
+        EXPECT_EQ(w.lat[i] > 0, g.latDeg[i] >= 20 && g.latDeg[i] <= 25) << "lat " << g.latDeg[i];
+    for (size_t i = 0; i < g.nLon(); ++i)
+        EXPECT_EQ(w.lon[i] > 0, g.lonDeg[i] <= 20 || g.lonDeg[i] >= 340) << "lon " << g.lonDeg[i];
+    EXPECT_FALSE(g.lonHoldsData(300));
+    EXPECT_TRUE(g.lonHoldsData(355));  // within the extent, though no column lies there
+    // The region's volume: its rows' dual cells (half a spacing beyond the outermost), its columns'.
+    const double latPart = std::sin(degToRad(25.5)) - std::sin(degToRad(19.5));
+    const auto lonEdges = g.lonEdgesDeg();
+    double lonPart = 0;
+    for (size_t i = 0; i < g.nLon(); ++i)
+        if (g.lonHoldsData(g.lonDeg[i]))
+            lonPart += degToRad(lonEdges[i + 1] - lonEdges[i]);
+    EXPECT_NEAR(g.totalVolumeKm3(), latPart * lonPart * (std::pow(6000.0, 3) - std::pow(5000.0, 3)) / 3, 1e-6 * g.totalVolumeKm3());
+    // The extent survives coarsening, and a grid without one is global.
+    EXPECT_EQ(g.coarsened().dataLatDeg, g.dataLatDeg);
+    EXPECT_FALSE(centredGrid(4, 3, 8).regional());
 }
 
 // Every trilinear value a sample can take lies within the bounds of the brick it falls in,

@@ -14,6 +14,8 @@
 
 #include "grid/grid.h"
 
+#include <cmath>
+#include <limits>
 #include <optional>
 #include <type_traits>
 #include <utility>
@@ -70,8 +72,16 @@ public:
         auto atR = [&](size_t iR) {
             return sampleLateral([&](size_t iLat, size_t iLon) { return valueAt(iLat, iR, iLon); }, lateral);
         };
-        const double a = atR(at.r0), b = atR(at.r1);
-        return a + (b - a) * at.tR;
+        return lerpMissing(atR(at.r0), atR(at.r1), at.tR);
+    }
+
+    // a + (b - a) t, or where a or b is missing (NaN) the other at the weight that takes it alone,
+    // NaN between: a point of data at the edge of a missing region keeps its value.
+    static double lerpMissing(double a, double b, double t)
+    {
+        if (std::isnan(a) || std::isnan(b))
+            return t == 0 ? a : t == 1 ? b : std::numeric_limits<double>::quiet_NaN();
+        return a + (b - a) * t;
     }
 
     // The value on one shell (a radius's values, given by `valueAt(iLat, iLon)`, a float) at a
@@ -81,7 +91,7 @@ public:
     double sampleLateral(const ValueAt& valueAt, const LateralPart& at) const
     {
         auto v = [&](size_t iLat, size_t iLon) { return static_cast<double>(valueAt(iLat, iLon)); };
-        auto lerp = [](double a, double b, double t) { return a + (b - a) * t; };
+        auto lerp = [](double a, double b, double t) { return lerpMissing(a, b, t); };
         auto atLat = [&](size_t iLat) { return lerp(v(iLat, at.lon0), v(iLat, at.lon1), at.tLon); };
         double value = lerp(atLat(at.lat0), atLat(at.lat1), at.tLat);
         if (at.poleWeight > 0) {

@@ -38,13 +38,16 @@ void checkGridFitsMemory(const SphericalGrid& grid, uint64_t neededBytes, const 
              available.limitedBy);
 }
 
-void fillMissingByShellMean(const SphericalGrid& grid, std::vector<float>& values, const std::string& what)
+void fillMissingByShellMean(const SphericalGrid& grid, std::vector<float>& values, const std::string& what,
+                            const std::function<bool(size_t iLat, size_t iLon)>& holdsData)
 {
     for (size_t iR = 0; iR < grid.nR(); ++iR) {
         double sum = 0;
         size_t count = 0, missing = 0;
         for (size_t iLat = 0; iLat < grid.nLat(); ++iLat)
             for (size_t iLon = 0; iLon < grid.nLon(); ++iLon) {
+                if (holdsData && !holdsData(iLat, iLon))
+                    continue;
                 const float v = values[grid.index(iLat, iR, iLon)];
                 std::isnan(v) ? ++missing : (sum += v, ++count);
             }
@@ -55,7 +58,7 @@ void fillMissingByShellMean(const SphericalGrid& grid, std::vector<float>& value
         const float mean = static_cast<float>(sum / double(count));
         for (size_t iLat = 0; iLat < grid.nLat(); ++iLat)
             for (size_t iLon = 0; iLon < grid.nLon(); ++iLon)
-                if (float& v = values[grid.index(iLat, iR, iLon)]; std::isnan(v))
+                if (float& v = values[grid.index(iLat, iR, iLon)]; std::isnan(v) && (!holdsData || holdsData(iLat, iLon)))
                     v = mean;
     }
 }
@@ -69,7 +72,20 @@ std::string describeGridPoint(const SphericalGrid& grid, size_t index)
 
 void checkFinite(const Snapshot& snapshot, const Field& field, const std::string& source)
 {
-    const auto bad = std::find_if(field.values.begin(), field.values.end(), [](float v) { return !std::isfinite(v); });
+    // NaN is a missing value (of the input, or of a derived field's input there); an infinity, or a NaN
+    // computed from inputs that all have values, is a failure.
+    std::vector<const Field*> sources;
+    for (const auto& name : field.derivedFrom)
+        if (const Field* f = snapshot.find(name))
+            sources.push_back(f);
+    const auto bad = std::find_if(field.values.begin(), field.values.end(), [&](const float& v) {
+        if (std::isinf(v))
+            return true;
+        if (!std::isnan(v) || sources.empty())
+            return false;
+        const size_t i = static_cast<size_t>(&v - field.values.data());
+        return std::all_of(sources.begin(), sources.end(), [&](const Field* f) { return std::isfinite(f->values[i]); });
+    });
     if (bad == field.values.end())
         return;
     const size_t i = static_cast<size_t>(bad - field.values.begin());

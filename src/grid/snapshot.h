@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -45,12 +46,15 @@ void checkGridFitsMemory(const SphericalGrid& grid, uint64_t neededBytes, const 
 std::string describeGridPoint(const SphericalGrid& grid, size_t index);
 
 // Replaces every NaN of `values` (canonical order) by the mean of the other values on its radius
-// shell (--fill-missing). Throws raypc::Error naming `what` (file and variable) and the shell when all
-// of a shell's values are NaN.
-void fillMissingByShellMean(const SphericalGrid& grid, std::vector<float>& values, const std::string& what);
+// shell (--fill-missing); with `holdsData`, only at the columns (iLat, iLon) it accepts, and of their
+// values (a regional grid's padding stays missing). Throws raypc::Error naming `what` (file and
+// variable) and the shell when all of a shell's values are NaN.
+void fillMissingByShellMean(const SphericalGrid& grid, std::vector<float>& values, const std::string& what,
+                            const std::function<bool(size_t iLat, size_t iLon)>& holdsData = {});
 
-// Throws raypc::Error if a value of `field` is NaN or infinite, naming `source` (the input
-// file), the field, the first such point and, for a derived field, its inputs' values there.
+// Throws raypc::Error if a value of `field` is infinite, or NaN where it is not missing (a derived
+// field's NaN where all its inputs have values), naming `source` (the input file), the field, the
+// first such point and, for a derived field, its inputs' values there. A NaN is a missing value.
 void checkFinite(const Snapshot& snapshot, const Field& field, const std::string& source);
 
 // The eight variables of the SciVis 2021 contest files, in their file order.

@@ -7,6 +7,7 @@
 #include "io/netcdf_reader.h"
 
 #include <array>
+#include <cstdint>
 #include <cstddef>
 #include <vector>
 
@@ -15,11 +16,14 @@ namespace raypc::io::netcdf {
 enum Axis { kLat = 0, kR = 1, kLon = 2 };
 constexpr std::array<const char*, 3> kAxisNames = {"lat", "r", "lon"};
 
+// The file index of a grid point a regional grid is padded with (no data: missing).
+inline constexpr size_t kNoData = SIZE_MAX;
+
 struct CoordinateAxis {
     int varId = -1;
     int dimId = -1;
     std::vector<double> fileValues;  // in file order, converted to degrees / km (of radius)
-    // canonical index -> index in the file
+    // canonical index -> index in the file, or kNoData for a point that pads a regional grid
     std::vector<size_t> fileIndex;
     std::vector<double> canonical;
 };

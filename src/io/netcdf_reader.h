@@ -13,9 +13,12 @@
 //   for (radii outside 3000..7000 km; lat within ±π/2, lon within ±2π: radians?) are refused.
 // - Dims: the three grid dims in any order, and other dims of length 1 (one time step per file);
 //   coordinates ascending or descending, lon in [-180, 180) or [0, 360] with or without the
-//   repeated seam, float or double.
+//   repeated seam, float or double. A regional grid (latitudes more than two spacings short of a
+//   pole, or a gap of more than two spacings in longitude) is padded to the globe with points of no
+//   data (SphericalGrid::dataLatDeg, dataLonDeg: the data's extent).
 // - Values: any numeric type (doubles and integers wider than 16 bits are read as double);
-//   _FillValue (or netCDF's default fill value), missing_value, NaN and Inf are missing;
+//   _FillValue (or netCDF's default fill value), missing_value, NaN and Inf are missing, and stay
+//   missing (NaN) unless ReaderOptions::fillMissing; a variable missing everywhere is an error;
 //   scale_factor / add_offset and _Unsigned are applied; a value beyond float32 is an error.
 //   Text attributes may be NC_CHAR or NC_STRING.
 // Fields are returned in canonical order (grid.h): lat ascending (degrees north), r ascending (km),
@@ -49,8 +52,9 @@ struct ReaderOptions {
     // Variables to read (canonical names); empty: the eight contest variables when a file holds
     // them all, else every variable on the grid's three dims (a tomography model's one `vs`).
     std::vector<std::string> variables;
-    // Cells that hold the fill value / missing value (or NaN) are an error unless this is set;
-    // then they are replaced by the mean of the valid values on the same radius shell.
+    // Cells that hold the fill value / missing value (or NaN) are missing (NaN) unless this is set;
+    // then they are replaced by the mean of the valid values on the same radius shell (the points
+    // that pad a regional grid stay missing).
     bool fillMissing = false;
     // What the numbers of the radius (or depth) coordinate are. FromFile: its units attribute
     // (km or m); without one, km when the radii lie within a mantle (3000..7000 km), else an error.
@@ -96,7 +100,7 @@ FileHeader readHeader(const std::filesystem::path& path, const ReaderOptions& op
 // Reads the whole snapshot. Throws raypc::Error naming the file (and variable) on a missing
 // or unreadable file, a non-netCDF or truncated file, a missing variable, wrong dims (a time
 // dimension longer than 1), coordinates whose units are unknown or missing where the numbers do not
-// fit, missing / non-finite values (unless options.fillMissing), or a value beyond float32.
+// fit, a variable whose every value is missing, or a value beyond float32.
 grid::Snapshot readSnapshot(const std::filesystem::path& path, const ReaderOptions& options = {});
 
 // The velocity's components vx, vy, vz of `snapshot`, when it has all three, into Cartesian m/s:

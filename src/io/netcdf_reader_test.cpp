@@ -275,6 +275,20 @@ void expectReadError(const std::filesystem::path& path, const ReaderOptions& opt
     }
 }
 
+// Expects readSnapshot to give the first field missing (NaN) at the canonical points `missing` and
+// nowhere else.
+void expectMissingOnlyAt(const std::filesystem::path& path, const ReaderOptions& options,
+                         std::initializer_list<std::array<size_t, 3>> missing)
+{
+    const grid::Snapshot s = readSnapshot(path, options);
+    std::vector<size_t> expected;
+    for (const auto& [iLat, iR, iLon] : missing)
+        expected.push_back(s.grid.index(iLat, iR, iLon));
+    for (size_t i = 0; i < s.fields[0].values.size(); ++i)
+        EXPECT_EQ(std::isnan(s.fields[0].values[i]), std::find(expected.begin(), expected.end(), i) != expected.end())
+            << path << ": point " << i << " holds " << s.fields[0].values[i];
+}
+
 TEST(NetcdfReaderBadInput, MissingFile)
 {
     expectReadError("/nonexistent/spherical001.nc", {}, {"/nonexistent/spherical001.nc", "no such file"});
@@ -351,9 +365,8 @@ TEST(NetcdfReaderBadInput, DefaultFillValuesAreMissing)
         // ncgen writes the type's default fill value for `_` when the variable has no _FillValue.
         const auto path = ncgen(dir.path(), std::string("unwritten-") + kind,
                                 smallCdl("1, 2, 3, 4, 5, _, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16"), kind);
-        expectReadError(path, temperatureOnly(),
-                        {"temperature", "1 of 16 values are missing", "default fill value", "9.96921e+36",
-                         "lat 45°, r 6371 km, lon 90°"});
+        // Kept missing, at lat 45°, r 6371 km, lon 90° (canonical row 1, radius 1, column 1).
+        expectMissingOnlyAt(path, temperatureOnly(), {{1, 1, 1}});
         ReaderOptions fill = temperatureOnly();
         fill.fillMissing = true;
         const grid::Snapshot s = readSnapshot(path, fill);
@@ -361,7 +374,11 @@ TEST(NetcdfReaderBadInput, DefaultFillValuesAreMissing)
     }
     // Integer variables too (NC_FILL_SHORT = -32767).
     const std::string cdl = plainCdl("short", "45, -45", "1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, _, 13, 14, 15, 16");
-    expectReadError(ncgen(dir.path(), "short", cdl), temperatureOnly(), {"1 of 16 values are missing", "-32767"});
+    expectMissingOnlyAt(ncgen(dir.path(), "short", cdl), temperatureOnly(), {{0, 0, 3}});
+    // A step whose values are all missing is an error naming it.
+    const std::string none = plainCdl("float", "45, -45", "_, _, _, _, _, _, _, _, _, _, _, _, _, _, _, _");
+    expectReadError(ncgen(dir.path(), "none", none), temperatureOnly(),
+                    {"none.nc", "temperature", "every value of the step is missing", "default fill value"});
 }
 
 // A coordinate variable declared but never written holds the fill value: named as such, not as a
@@ -616,11 +633,11 @@ TEST(NetcdfReaderBadInput, NanAndFillValues)
 {
     TempDir dir("nan");
     const auto nan = ncgen(dir.path(), "nan", smallCdl("1, 2, 3, 4, 5, NaN, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16"));
-    expectReadError(nan, temperatureOnly(), {"nan.nc", "temperature", "1 of 16 values are missing"});
+    expectMissingOnlyAt(nan, temperatureOnly(), {{1, 1, 1}});
     const auto filled = ncgen(dir.path(), "fill",
                               smallCdl("1, 2, 3, 4, 5, -999, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16",
                                        "temperature:_FillValue = -999.f ;"));
-    expectReadError(filled, temperatureOnly(), {"fill.nc", "missing"});
+    expectMissingOnlyAt(filled, temperatureOnly(), {{1, 1, 1}});
     ReaderOptions fill = temperatureOnly();
     fill.fillMissing = true;
     const grid::Snapshot s = readSnapshot(filled, fill);

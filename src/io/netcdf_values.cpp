@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -121,9 +122,17 @@ ConversionReport toCanonical(const std::vector<T>& buffer, const OpenedHeader& h
         ConversionReport local;
         local.missingPerShell.assign(nR, 0);
         for (size_t iR = 0; iR < nR; ++iR) {
-            const size_t base = latIdx[iLat] * stride[kLat] + rIdx[iR] * stride[kR];
             float* row = out.data() + grid.index(iLat, iR, 0);
+            if (latIdx[iLat] == kNoData) {
+                std::fill(row, row + nLon, std::numeric_limits<float>::quiet_NaN());
+                continue;
+            }
+            const size_t base = latIdx[iLat] * stride[kLat] + rIdx[iR] * stride[kR];
             for (size_t iLon = 0; iLon < nLon; ++iLon) {
+                if (lonIdx[iLon] == kNoData) {
+                    row[iLon] = std::numeric_limits<float>::quiet_NaN();
+                    continue;
+                }
                 const T v = buffer[base + lonIdx[iLon] * stride[kLon]];
                 if ((fill && v == *fill) || (missing && v == *missing) || !std::isfinite(v)) {
                     if (local.firstMissing == SIZE_MAX) {
@@ -182,6 +191,15 @@ ConversionReport readThrough(std::vector<T>& buffer, std::vector<Other>& other, 
     return toCanonical(buffer, h, layout, rule, out);
 }
 
+// The grid points that the file holds (those that pad a regional grid aside).
+size_t dataPoints(const OpenedHeader& h)
+{
+    size_t n = 1;
+    for (const auto& axis : h.axes)
+        n *= size_t(std::count_if(axis.fileIndex.begin(), axis.fileIndex.end(), [](size_t i) { return i != kNoData; }));
+    return n;
+}
+
 }  // namespace
 
 bool readsAsDouble(const NcFile& file, int varId)
@@ -211,23 +229,26 @@ grid::Field readField(const NcFile& file, const OpenedHeader& h, const std::stri
              grid::describeGridPoint(h.grid, report.firstBeyondFloat), double(std::numeric_limits<float>::max()));
     const size_t missing =
         std::accumulate(report.missingPerShell.begin(), report.missingPerShell.end(), size_t(0));
-    if (missing > 0) {
-        if (!options.fillMissing) {
-            const double first = report.firstMissingValue;
-            const std::string what =
-                !std::isfinite(first)       ? fmt::format("{}", first)
-                : rule.isFill(first)        ? fmt::format("{} {:g}",
-                                                          rule.fillIsDefault
-                                                              ? "netCDF's default fill value (never written)"
-                                                              : "_FillValue",
-                                                          *rule.fill)
-                                            : fmt::format("missing_value {:g}", *rule.missing);
-            fail("{}: {}: {} of {} values are missing (fill value, missing_value or NaN/Inf), the first at {}: {}; "
-                 "use --fill-missing to replace them by the mean of their radius shell",
-                 file.path().string(), fileName, missing, n, grid::describeGridPoint(h.grid, report.firstMissing), what);
-        }
-        grid::fillMissingByShellMean(h.grid, field.values, fmt::format("{}: {}", file.path().string(), fileName));
+    if (missing > 0 && missing == dataPoints(h)) {
+        const double first = report.firstMissingValue;
+        fail("{}: {}: every value of the step is missing (the first, at {}, is {})", file.path().string(), fileName,
+             grid::describeGridPoint(h.grid, report.firstMissing),
+             !std::isfinite(first) ? fmt::format("{}", first)
+             : rule.isFill(first)  ? fmt::format("{} {:g}",
+                                                  rule.fillIsDefault ? "netCDF's default fill value (never written)"
+                                                                     : "the _FillValue",
+                                                  *rule.fill)
+                                   : fmt::format("missing_value {:g}", *rule.missing));
     }
+    // Missing values stay missing (NaN) unless the user asks to fill them; points that pad a
+    // regional grid are never filled.
+    if (missing > 0 && options.fillMissing)
+        grid::fillMissingByShellMean(h.grid, field.values, fmt::format("{}: {}", file.path().string(), fileName),
+                                     [&](size_t iLat, size_t iLon) {
+                                         return h.axes[kLat].fileIndex[iLat] != kNoData &&
+                                                h.axes[kLon].fileIndex[iLon] != kNoData;
+                                     });
+    return field;
     return field;
 }
 

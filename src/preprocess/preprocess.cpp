@@ -433,7 +433,7 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
             if (options.encoding == dataset::ValueEncoding::Uint16) {
                 // Quantised from the exact values; coarser levels are computed from the exact ones too.
                 std::vector<uint16_t> encoded(current[v].size());
-                dataset::encodeUint16(grid, layout, current[v], bounds, encoded);
+                dataset::encodeUint16(grid, layout, current[v], bounds, encoded, stats[v].missingPoints > 0);
                 writeArray<uint16_t>(dataset::format::encodedValuesFile(dir, stem), encoded);
             } else {
                 writeArray<float>(dataset::format::valuesFile(dir, stem), current[v]);
@@ -575,6 +575,27 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
             out->writeManifest(plan.manifest);
     });
     mpi::dieHook("preprocess-pathlines");
+    // Pathlines need the flow and their seed field everywhere: missing values in either (a regional
+    // model's padding, a model's holes) leave them out, said once.
+    if (options.pathlines.enabled) {
+        std::vector<std::string> gaps;
+        for (size_t v = 0; v < plan.specs.size(); ++v) {
+            const std::string& name = plan.specs[v].name;
+            if (!varname::isVelocityComponent(name) && name != options.pathlines.field)
+                continue;
+            for (const json& sj : stepJsons)
+                if (sj.at("stats").at(v).value("missing_points", size_t(0)) > 0) {
+                    gaps.push_back(name);
+                    break;
+                }
+        }
+        if (!gaps.empty()) {
+            options.pathlines.enabled = false;
+            if (!options.quiet && mpi::isRoot())
+                spdlog::info("{}: {} {} missing values: no pathlines", inputs.front().string(), fmt::join(gaps, ", "),
+                             gaps.size() == 1 ? "has" : "have");
+        }
+    }
     phases::writePathlines(outDir, plan.header.grid, plan.specs, stepJsons, options, summary);
     mpi::together([&] {
         plan.manifest["pathlines"] =

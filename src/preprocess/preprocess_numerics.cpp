@@ -77,17 +77,17 @@ void addDerivedVariables(grid::Snapshot& snapshot)
 grid::Field lateralAnomaly(const grid::SphericalGrid& g, const grid::Field& field, const std::string& name)
 {
     const auto w = g.volumeFactors();
-    double area = 0;
-    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
-        for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
-            area += w.lat[iLat] * w.lon[iLon];
     grid::Field out{name, field.units, std::vector<float>(g.cellCount()), {field.name}};
     tbb::parallel_for(size_t(0), g.nR(), [&](size_t iR) {
-        double sum = 0;
+        // The mean of the values the shell has (missing ones left out; none: the anomaly is missing).
+        double sum = 0, area = 0;
         for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
             for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
-                sum += w.lat[iLat] * w.lon[iLon] * field.values[g.index(iLat, iR, iLon)];
-        const double mean = sum / area;
+                if (const float v = field.values[g.index(iLat, iR, iLon)]; !std::isnan(v)) {
+                    sum += w.lat[iLat] * w.lon[iLon] * v;
+                    area += w.lat[iLat] * w.lon[iLon];
+                }
+        const double mean = area > 0 ? sum / area : std::numeric_limits<double>::quiet_NaN();
         for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
             for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
                 const size_t i = g.index(iLat, iR, iLon);
@@ -142,7 +142,10 @@ dataset::VariableStats computeStats(const grid::SphericalGrid& grid, std::span<c
     // Named copies, not structured bindings: clang 14 (the fuzzing build) cannot capture those.
     const float lo = extremes.first, hi = extremes.second;
 
-    // Callers check that values are finite (checkFinite): an infinite range has no bins.
+    // Callers check that values are finite or missing (checkFinite): an infinite range has no bins. A
+    // field missing everywhere (a derived one whose inputs are) has no statistics.
+    if (!(lo <= hi))
+        fail("every value is missing: no statistics");
     RAYPC_CHECK(std::isfinite(lo) && std::isfinite(hi));
     dataset::VariableStats stats;
     stats.range = {lo, hi};
@@ -151,7 +154,8 @@ dataset::VariableStats computeStats(const grid::SphericalGrid& grid, std::span<c
     // One partial sum per lat row, added in row order: the sums do not depend on how rows were
     // spread over threads, so a rerun writes the same bytes (dataset.json is reproducible).
     struct Partial {
-        double weighted = 0, weight = 0;
+        double weighted = 0, weight = 0, missing = 0;
+        size_t missingPoints = 0;
     };
     std::vector<Partial> rows(grid.nLat());
     std::vector<double> rowHistograms(grid.nLat() * dataset::kHistogramBins, 0.0);
@@ -163,6 +167,11 @@ dataset::VariableStats computeStats(const grid::SphericalGrid& grid, std::span<c
             const float* row = values.data() + iLat * rowSize + iR * grid.nLon();
             for (size_t iLon = 0; iLon < grid.nLon(); ++iLon) {
                 const double wi = wRow * w.lon[iLon];
+                if (std::isnan(row[iLon])) {
+                    p.missing += wi;  // the statistics are of the values there are
+                    ++p.missingPoints;
+                    continue;
+                }
                 // In double: the difference of two finite floats may overflow float.
                 const int bin = std::min(dataset::kHistogramBins - 1, static_cast<int>((double(row[iLon]) - lo) * scale));
                 histogram[bin] += wi;
@@ -172,13 +181,16 @@ dataset::VariableStats computeStats(const grid::SphericalGrid& grid, std::span<c
         }
     });
     stats.histogram.assign(dataset::kHistogramBins, 0.0);
-    double weighted = 0, weight = 0;
+    double weighted = 0, weight = 0, missing = 0;
     for (size_t iLat = 0; iLat < grid.nLat(); ++iLat) {
         for (int b = 0; b < dataset::kHistogramBins; ++b)
             stats.histogram[b] += rowHistograms[iLat * dataset::kHistogramBins + b];
         weighted += rows[iLat].weighted;
         weight += rows[iLat].weight;
+        missing += rows[iLat].missing;
+        stats.missingPoints += rows[iLat].missingPoints;
     }
+    stats.missingFraction = missing / (missing + weight);
     for (double& h : stats.histogram)
         h /= weight;
     stats.mean = weighted / weight;
@@ -195,6 +207,8 @@ dataset::VariableStats statsOverSteps(std::span<const dataset::VariableStats> pe
         global.range.min = std::min(global.range.min, st.range.min);
         global.range.max = std::max(global.range.max, st.range.max);
         mean += st.mean / perStep.size();
+        global.missingFraction += st.missingFraction / double(perStep.size());
+        global.missingPoints = std::max(global.missingPoints, st.missingPoints);
     }
     global.mean = mean;
     global.histogram.assign(dataset::kHistogramBins, 0.0);

@@ -32,8 +32,9 @@ grid::Field lateralAnomaly(const grid::SphericalGrid& grid, const grid::Field& f
 // fine points it merges (grid.coarsened() gives its coordinates).
 std::vector<float> coarsenField(const grid::SphericalGrid& fine, std::span<const float> values);
 
-// Exact range, volume-weighted mean and kHistogramBins-bin volume-fraction histogram of finite
-// values (a non-finite value is a broken invariant: checked, aborts).
+// Exact range, volume-weighted mean and kHistogramBins-bin volume-fraction histogram of the values
+// there are: NaN (missing) is left out (an infinity is a broken invariant: checked, aborts). Throws
+// raypc::Error when every value is missing.
 dataset::VariableStats computeStats(const grid::SphericalGrid& grid, std::span<const float> values);
 
 // One variable over all steps: min and max over the steps, the mean of the step means, and the

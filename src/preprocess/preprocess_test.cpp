@@ -415,13 +415,13 @@ TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)
 TEST(Preprocess, ResumesAfterAFailedRunAndSkipsFinishedSteps)
 {
     TempDir dir("resume");
-    // The third input holds a NaN, which only shows when its data are read: the run stops
-    // there, leaving two finished steps.
+    // The third input's first variable is missing everywhere, which only shows when its data are
+    // read: the run stops there, leaving two finished steps.
     auto files = fixtureFiles();
     std::filesystem::copy_file(files[0], dir / "spherical001.nc");
     std::filesystem::copy_file(files[1], dir / "spherical002.nc");
     grid::Snapshot broken = io::readSnapshot(files[2]);
-    broken.fields[0].values[100] = std::nanf("");
+    std::fill(broken.fields[0].values.begin(), broken.fields[0].values.end(), std::nanf(""));
     io::writeContestFile(dir / "spherical003.nc", broken);
     const std::vector<std::filesystem::path> inputs = {dir / "spherical001.nc", dir / "spherical002.nc",
                                                        dir / "spherical003.nc"};

@@ -573,8 +573,11 @@ inline Rgb coreColorAt(const KernelParams& k, Vec3 hit)
     Rgb c = k.coreColor;
     if (k.coreByVariable) {
         const Located L = locate(k, hit.x, hit.y, hit.z);
-        const int i = k.coreTable.indexOf(sampleAt(k, k.coreVariable, L));
-        c = {k.coreTable.red[i], k.coreTable.green[i], k.coreTable.blue[i]};
+        // Where the variable is missing, the plain core colour.
+        if (const float v = sampleAt(k, k.coreVariable, L); !std::isnan(v)) {
+            const int i = k.coreTable.indexOf(v);
+            c = {k.coreTable.red[i], k.coreTable.green[i], k.coreTable.blue[i]};
+        }
     }
     const float lambert = std::max(0.0f, dot(normalize(hit), k.lightDir));
     const Occlusion occ = occlusionAt(k, hit);

@@ -60,7 +60,10 @@ void marchScalar(const KernelParams& k, Vec3 o, Vec3 d, float t0, float t1, floa
             ++stats.samples;
             if (!insideBrushes(k, p, L))
                 continue;
-            const int idx = k.table.indexOf(sampleAt(k, k.color, L));
+            const float value = sampleAt(k, k.color, L);
+            if (std::isnan(value))
+                continue;  // missing (also where a trilinear sample meets a missing value): empty space
+            const int idx = k.table.indexOf(value);
             const float sigma = std::max(k.table.sigmaPerKm[idx], k.selectionSigmaPerKm);
             if (!(sigma > 0.0f))
                 continue;
@@ -103,9 +106,8 @@ void extinctionBatchScalar(const KernelParams& k, const float* x, const float* y
         const Vec3 p{x[i], y[i], z[i]};
         const Located L = locate(k, p.x, p.y, p.z);
         const bool inShell = L.rKm >= k.rInnerKm && L.rKm <= k.rOuterKm;
-        out[i] = inShell && brickActive(k, L) && insideBrushes(k, p, L)
-                     ? std::max(k.table.sigmaPerKm[k.table.indexOf(sampleAt(k, k.color, L))], k.selectionSigmaPerKm)
-                     : 0.0f;
+        const float value = inShell && brickActive(k, L) && insideBrushes(k, p, L) ? sampleAt(k, k.color, L) : NAN;
+        out[i] = std::isnan(value) ? 0.0f : std::max(k.table.sigmaPerKm[k.table.indexOf(value)], k.selectionSigmaPerKm);
     }
 }
 

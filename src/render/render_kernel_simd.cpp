@@ -404,6 +404,8 @@ HWY_INLINE ClassifiedV Classify(DF d, const KernelParams& k, const LocatedV& L, 
     const DI di;
     const VF zero = hn::Zero(d);
     const VF value = Sample(d, k, k.color, L);
+    // A missing value (NaN, also where a trilinear sample meets one) is empty space.
+    keep = hn::And(keep, hn::Eq(value, value));
     const VF u = Clamp(hn::MulAdd(hn::Sub(value, hn::Set(d, k.table.valueMin)), hn::Set(d, k.table.indexScale), hn::Set(d, 0.5f)),
                        zero, hn::Set(d, float(k.table.size - 1)));
     ClassifiedV c;
@@ -555,12 +557,14 @@ void ExtinctionBatch(const KernelParams& k, const float* x, const float* y, cons
         VF sigma = hn::Zero(d);
         if (!hn::AllFalse(d, keep)) {
             const VF value = Sample(d, k, k.color, L);
+            // A missing value (NaN, also where a trilinear sample meets one) is empty space.
+            const MF valued = hn::And(keep, hn::Eq(value, value));
             const VF u = Clamp(hn::MulAdd(hn::Sub(value, hn::Set(d, k.table.valueMin)), hn::Set(d, k.table.indexScale),
                                           hn::Set(d, 0.5f)),
                                hn::Zero(d), hn::Set(d, float(k.table.size - 1)));
-            const VI index = hn::IfThenElseZero(hn::RebindMask(di, keep), hn::ConvertTo(di, u));
+            const VI index = hn::IfThenElseZero(hn::RebindMask(di, valued), hn::ConvertTo(di, u));
             sigma = hn::IfThenElseZero(
-                keep, hn::Max(hn::GatherIndex(d, k.table.sigmaPerKm, index), hn::Set(d, k.selectionSigmaPerKm)));
+                valued, hn::Max(hn::GatherIndex(d, k.table.sigmaPerKm, index), hn::Set(d, k.selectionSigmaPerKm)));
         }
         return sigma;
     });

@@ -79,7 +79,21 @@ VariableCatalog catalogOf(const dataset::Dataset& dataset)
     return catalog;
 }
 
-state::RenderState defaultState(const dataset::Dataset& dataset) { return defaultState(catalogOf(dataset)); }
+state::RenderState defaultState(const dataset::Dataset& dataset)
+{
+    state::RenderState s = defaultState(catalogOf(dataset));
+    // A regional model faces the camera: the orbit looks at the centre of its data from above it.
+    const grid::SphericalGrid& g = dataset.levels().front().grid;
+    if (g.regional()) {
+        if (g.dataLatDeg)
+            s.camera.elevationDeg = 0.5 * ((*g.dataLatDeg)[0] + (*g.dataLatDeg)[1]);
+        if (g.dataLonDeg) {
+            const double west = (*g.dataLonDeg)[0], east = (*g.dataLonDeg)[1];
+            s.camera.azimuthDeg = wrapLonDeg(west + 0.5 * wrapLonDeg(east - west));
+        }
+    }
+    return s;
+}
 
 state::RenderState defaultState(const VariableCatalog& catalog)
 {

@@ -132,6 +132,8 @@ int TransferTable::indexOf(float value) const
 
 bool TransferTable::transparentOver(float lo, float hi) const
 {
+    if (!(lo <= hi))
+        return true;  // a brick of nothing but missing values: (+inf, -inf)
     const int a = indexOf(lo), b = indexOf(hi);
     return nonzeroPrefix[b + 1] - nonzeroPrefix[a] == 0;
 }

@@ -73,11 +73,14 @@ bad_inputs)
   head -c 2000000 "$fixture/spherical003.nc" > "$work/in/spherical003.nc"
   expect_error "spherical003.nc: truncated" preprocess "$work/in" -o "$work/ds"
   check "nothing written when a header is bad" test ! -e "$work/ds"
-  # Damage that only shows in the data (a NaN) stops the run at that step.
-  ncdump "$fixture/spherical003.nc" |
-    awk 'done != 1 && after { sub(/[-0-9.e+]+/, "NaN"); done = 1 } /^ temperature =/ { after = 1 } { print }' > "$work/nan.cdl"
-  ncgen -k nc6 -o "$work/in/spherical003.nc" "$work/nan.cdl"
-  expect_error "spherical003.nc: temperature: 1 of" preprocess "$work/in" -o "$work/ds" --quiet
+  # Damage that only shows in the data (a variable with no value in the step: NaN everywhere) stops
+  # the run at that step.
+  cp "$fixture/spherical003.nc" "$work/in/spherical003.nc"
+  python3 -c "
+import netCDF4, numpy, sys
+with netCDF4.Dataset(sys.argv[1], 'a') as nc:
+    nc.variables['temperature'][:] = numpy.nan" "$work/in/spherical003.nc"
+  expect_error "spherical003.nc: temperature: every value of the step is missing" preprocess "$work/in" -o "$work/ds" --quiet
   expect_error "did not finish" info "$work/ds"
   cp "$fixture/spherical003.nc" "$work/in/"
   out=$("$raypc" preprocess "$work/in" -o "$work/ds" --quiet)
@@ -453,11 +456,17 @@ truncated_and_fill)
   ncdump "$fixture/spherical002.nc" |
     awk 'done != 1 && after { sub(/[-0-9.e+]+/, "_"); done = 1 } /^ temperature =/ { after = 1 } { print }' > "$work/unwritten.cdl"
   ncgen -k nc6 -o "$work/unwritten.nc" "$work/unwritten.cdl"
-  expect_error "unwritten.nc: temperature: 1 of 106272 values are missing" preprocess "$work/unwritten.nc" -o "$work/out" --quiet
-  expect_error "netCDF's default fill value (never written) 9.96921e+36" preprocess "$work/unwritten.nc" -o "$work/out" --quiet
-  check "no output after default fill values" test ! -e "$work/out"
+  "$raypc" preprocess "$work/unwritten.nc" -o "$work/kept" --quiet --no-pathlines >/dev/null
+  check "it is kept missing: the manifest counts 1 missing point" python3 -c "
+import json, sys
+j = json.load(open(sys.argv[1]))
+t = [v['name'] for v in j['variables']].index('temperature')
+sys.exit(0 if j['steps'][0]['stats'][t].get('missing_points') == 1 else 1)" "$work/kept/dataset.json"
   "$raypc" preprocess "$work/unwritten.nc" -o "$work/filled" --fill-missing --quiet --no-pathlines >/dev/null
-  check "--fill-missing accepts them" grep -q '"complete"' "$work/filled/dataset.json"
+  check "--fill-missing fills it" python3 -c "
+import json, sys
+j = json.load(open(sys.argv[1]))
+sys.exit(0 if all('missing_points' not in s for st in j['steps'] for s in st['stats']) else 1)" "$work/filled/dataset.json"
   ;;
 huge_grid)
   # A netCDF-4 file may declare a grid larger than memory (its data never written,
@@ -861,6 +870,84 @@ sys.exit(0 if abs(p['value'] - vs) <= p['quantisation_error_max'] + 1e-5 else 1)
   check "features of the slow shallow region" test "$(wc -l < "$work/f.csv")" -ge 2
   expect_error "no velocity component 'vx'" features "$work/ds" --range "vs=4:4.45" -o "$work/f2.csv" --tracks "$work/t.csv"
   expect_error "no 'radial velocity' variable" flux "$work/ds" --range "vs=4:4.45" -o "$work/x.csv"
+  ;;
+regional)
+  # A regional tomography model (tests/data/emc-layout/regional_vs.nc: lat 20..55, lon -130..-65, depth
+  # 25..800 km, no data east of -100 below 400 km): padded to the globe with points of no data, its
+  # missing values kept missing; maps, statistics and probe are of the region.
+  emc="$(dirname "$fixture")/emc-layout"
+  info=$("$raypc" info "$emc/regional_vs.nc")
+  check "info: regional, data within lat 20..55, lon 230..295 east" \
+    grep -q "regional: data within lat 20..55 deg, lon 230..295 deg east" <<<"$info"
+  check "info: vs has missing values, their share of the region said" grep -qE '^ +vs .*missing [0-9.]+ % \(of the region\)' <<<"$info"
+  "$raypc" preprocess "$emc/regional_vs.nc" -o "$work/ds" --quiet >/dev/null
+  for encoding in u16 float32; do
+    [[ $encoding == float32 ]] && "$raypc" preprocess "$emc/regional_vs.nc" -o "$work/ds32" --quiet --encoding float32 >/dev/null
+    ds=$work/ds; [[ $encoding == float32 ]] && ds=$work/ds32
+    # Probe at the data's grid points equals the file; in the hole and outside the region: no data.
+    for point in "20 -130 25" "37 -110 700" "55 -65 400" "40 -80 100"; do
+      read -r lat lon depth <<<"$point"
+      got=$("$raypc" probe "$ds" --lat "$lat" --lon "$lon" --r "$((6371 - depth))" --var vs)
+      check "$encoding: probe at lat $lat, lon $lon, depth $depth km equals the file" python3 -c "
+import json, math, sys
+p = json.loads(sys.argv[1])['values']['vs']
+lat, lon, d = map(float, sys.argv[2:5])
+vs = 4.4 + 0.0007 * d + 0.1 * math.cos(math.radians(lat)) * math.cos(math.radians(lon - 30)) * (1 - d / 2891)
+sys.exit(0 if abs(p['value'] - vs) <= p['quantisation_error_max'] + 1e-5 else 1)" "$got" "$lat" "$lon" "$depth"
+    done
+    for point in "40 -80 600" "30 -90 800" "0 0 300" "-60 -100 100" "40 -140 100" "70 -100 100"; do
+      read -r lat lon depth <<<"$point"
+      got=$("$raypc" probe "$ds" --lat "$lat" --lon "$lon" --r "$((6371 - depth))" --var vs)
+      check "$encoding: no data at lat $lat, lon $lon, depth $depth km" python3 -c "
+import json, sys
+p = json.loads(sys.argv[1])['values']['vs']
+sys.exit(0 if p['value'] is None and p['no_data'] is True else 1)" "$got"
+    done
+  done
+  # The region's volume: the dual cells of its points (half a spacing beyond the outermost), its
+  # selected share of what has data.
+  "$raypc" info "$work/ds" --json > "$work/info.json"
+  check "the dataset's volume is the region's" python3 -c "
+import json, math, sys
+g = json.load(open(sys.argv[1]))['levels'][0]['grid']
+rad = math.radians
+lat = math.sin(rad(55.5)) - math.sin(rad(19.5))
+lon = rad(66)
+r0, r1 = 6371 - 800, 6371 - 25  # the outermost radii's dual cells end at the radii themselves
+v = lat * lon * (r1 ** 3 - r0 ** 3) / 3
+sys.exit(0 if abs(g['volume_km3'] - v) < 1e-6 * v else 1)" "$work/info.json"
+  "$raypc" stats "$work/ds" --range "vs=0:10" -o "$work/s.csv" -q >/dev/null
+  check "stats: every value there is selected by vs 0..10: the region less its hole" python3 -c "
+import csv, math, sys
+row = next(csv.DictReader(open(sys.argv[1])))
+rad = math.radians
+# The hole: depth 400 < d <= 800 (points 425..800; the dual cells from 412.5 down to 800) east of -100
+# (points -99..-65; the dual cells from -99.5 to -64.5), over all the region's latitudes.
+shell = lambda a, b: ((6371 - a) ** 3 - (6371 - b) ** 3) / 3
+lat = math.sin(rad(55.5)) - math.sin(rad(19.5))
+total = lat * rad(66) * shell(25, 800)
+hole = lat * rad(35) * shell(412.5, 800)
+share = 100 * (total - hole) / total
+sys.exit(0 if abs(float(row['selected_percent_of_mantle']) - share) < 0.01 else 1)" "$work/s.csv"
+  "$raypc" map "$work/ds" --depth 100 --size 200x120 --projection orthographic --central-latitude 40 --central-meridian -100 \
+    -o "$work/map.png" --netcdf "$work/map.nc" >/dev/null
+  check "a map of the region and its CF grid, no data outside as _FillValue" python3 -c "
+import netCDF4, numpy, sys
+with netCDF4.Dataset(sys.argv[1]) as nc:
+    v = [nc.variables[n] for n in nc.variables if nc.variables[n].ndim == 2][0][:]
+    sys.exit(0 if numpy.ma.count_masked(v) > 0 and v.count() > 0 else 1)" "$work/map.nc"
+  "$raypc" render "$work/ds" --size 96x96 --passes 1 -o "$work/vs.png" >/dev/null
+  check "the default view renders" test -s "$work/vs.png"
+  # A global model with a hole, filled on request: the hole takes its shell's mean, the padding none.
+  "$raypc" preprocess "$emc/regional_vs.nc" -o "$work/filled" --quiet --fill-missing >/dev/null
+  got=$("$raypc" probe "$work/filled" --lat 40 --lon -80 --r "$((6371 - 600))" --var vs)
+  check "--fill-missing fills the hole" python3 -c "
+import json, sys
+sys.exit(0 if json.loads(sys.argv[1])['values']['vs']['value'] is not None else 1)" "$got"
+  got=$("$raypc" probe "$work/filled" --lat 0 --lon 0 --r 6000 --var vs)
+  check "  and not the padding" python3 -c "
+import json, sys
+sys.exit(0 if json.loads(sys.argv[1])['values']['vs']['value'] is None else 1)" "$got"
   ;;
 citcoms)
   # CitcomS output (tests/data/citcoms-layout, written by h5py from CitcomS' own description): 12

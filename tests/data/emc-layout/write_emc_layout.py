@@ -18,6 +18,11 @@ temperature, no velocity of flow: nothing of a mantle-convection model's variabl
 
 (the lateral part is largest at the surface and changes sign across the globe; its maximum at
 lat 0, lon 30 and its minimum at lat 0, lon -150). truth.json gives the grid and the formula.
+
+Beside it, a regional model as regional tomography is published (e.g. the western United States):
+`regional_vs.nc`, latitude 20 ... 55 and longitude -130 ... -65 in 1 degree steps, depth 25 ... 800 km
+in 25 km steps, the same formula as `vs`, and no data (the _FillValue) east of -100 degrees below
+400 km depth (where such a model's rays do not reach). Nothing of it lies near a pole or the seam.
 The file is written into a temporary folder and moved into place, and not written again while this
 script is unchanged (a stamp records its hash).
 """
@@ -70,6 +75,46 @@ def write(path):
         v[:] = vs(D, LA, LO).astype(np.float32)
 
 
+REGIONAL_DEPTH_KM = np.arange(25.0, 800.0 + 1e-9, 25.0)
+REGIONAL_LAT_DEG = np.arange(20.0, 55.0 + 1e-9, 1.0)
+REGIONAL_LON_DEG = np.arange(-130.0, -65.0 + 1e-9, 1.0)
+REGIONAL_FILL = 99999.0
+
+
+def regional_missing(depth_km, lon_deg):
+    """Where the regional model has no data."""
+    return (depth_km > 400.0) & (lon_deg > -100.0)
+
+
+def write_regional(path):
+    with netCDF4.Dataset(path, "w", format="NETCDF4") as nc:
+        nc.title = "RayPC test model in the EMC layout, regional, with a region of no data (analytic)"
+        nc.id = "raypc-emc-regional-test"
+        nc.geospatial_lat_min, nc.geospatial_lat_max = 20.0, 55.0
+        nc.geospatial_lon_min, nc.geospatial_lon_max = -130.0, -65.0
+        nc.geospatial_vertical_units = "km"
+        nc.geospatial_vertical_positive = "down"
+        nc.createDimension("depth", len(REGIONAL_DEPTH_KM))
+        nc.createDimension("latitude", len(REGIONAL_LAT_DEG))
+        nc.createDimension("longitude", len(REGIONAL_LON_DEG))
+        d = nc.createVariable("depth", "f4", ("depth",))
+        d.long_name, d.units, d.positive = "depth below earth surface", "km", "down"
+        d[:] = REGIONAL_DEPTH_KM
+        la = nc.createVariable("latitude", "f4", ("latitude",))
+        la.long_name, la.units, la.standard_name = "Latitude; positive north", "degrees_north", "latitude"
+        la[:] = REGIONAL_LAT_DEG
+        lo = nc.createVariable("longitude", "f4", ("longitude",))
+        lo.long_name, lo.units, lo.standard_name = "Longitude; positive east", "degrees_east", "longitude"
+        lo[:] = REGIONAL_LON_DEG
+        v = nc.createVariable("vs", "f4", ("depth", "latitude", "longitude"), fill_value=REGIONAL_FILL)
+        v.long_name, v.units = "Shear-wave velocity", "km/s"
+        D, LA, LO = np.meshgrid(REGIONAL_DEPTH_KM, REGIONAL_LAT_DEG, REGIONAL_LON_DEG, indexing="ij")
+        values = vs(D, LA, LO).astype(np.float32)
+        values[regional_missing(D, LO)] = REGIONAL_FILL
+        v.set_auto_mask(False)
+        v[:] = values
+
+
 def main():
     global DEPTH_KM, LAT_DEG, LON_DEG
     args = sys.argv[1:]
@@ -87,6 +132,11 @@ def main():
         truth = {"file": "global_vs.nc", "variable": "vs", "units": "km/s", "depth_km": DEPTH_KM.tolist(),
                  "lat_deg": LAT_DEG.tolist(), "lon_deg": LON_DEG.tolist(),
                  "vs": "4.4 + 0.0007 depth + 0.1 cos(lat) cos(lon - 30 deg) (1 - depth / 2891)"}
+        write_regional(os.path.join(tmp, "regional_vs.nc"))
+        truth["regional"] = {"file": "regional_vs.nc", "depth_km": REGIONAL_DEPTH_KM.tolist(),
+                             "lat_deg": REGIONAL_LAT_DEG.tolist(), "lon_deg": REGIONAL_LON_DEG.tolist(),
+                             "fill_value": REGIONAL_FILL,
+                             "missing": "depth > 400 km and lon > -100 deg"}
         with open(os.path.join(tmp, "truth.json"), "w") as fh:
             json.dump(truth, fh, indent=1)
 
