@@ -47,13 +47,15 @@ void ReaderFlags::add(CLI::App& app)
         ->check(CLI::IsMember({"km", "m", "nondimensional"}));
     app.add_option("--velocity", velocity,
                    "The velocity's three variables in the input when they are not vx, vy, vz: x,y,z or, with "
-                   "--velocity-frame spherical, radial,north,east (m/s, cm/yr, mm/yr or m/yr)")
+                   "--velocity-frame spherical, radial,north,east, or with --velocity-frame colatitude (CitcomS' "
+                   "order) colatitude,longitude,radial (m/s, cm/yr, mm/yr or m/yr)")
         ->delimiter(',')
         ->expected(3);
     app.add_option("--velocity-frame", velocityFrame,
-                   "What --velocity's (or vx, vy, vz's) components are: cartesian (x, y, z) or spherical (radial, "
-                   "north, east)")
-        ->check(CLI::IsMember({"cartesian", "spherical"}))
+                   "What --velocity's (or vx, vy, vz's) components are: cartesian (x, y, z), spherical (radial, "
+                   "north, east) or colatitude (CitcomS' order: colatitude, i.e. southward; longitude, eastward; "
+                   "radial)")
+        ->check(CLI::IsMember({"cartesian", "spherical", "colatitude"}))
         ->capture_default_str();
     app.add_flag("--fill-missing", fillMissing,
                  "Replace missing values (_FillValue, missing_value, NaN) by their shell's mean instead of failing");
@@ -100,8 +102,10 @@ io::ReaderOptions ReaderFlags::toOptions() const
         for (int c = 0; c < 3; ++c)
             o.variableNames[std::string("v") + "xyz"[c]] = velocity[size_t(c)];
     }
-    o.velocityFrame = velocityFrame == "spherical" ? io::ReaderOptions::VelocityFrame::Spherical
-                                                   : io::ReaderOptions::VelocityFrame::Cartesian;
+    using VelocityFrame = io::ReaderOptions::VelocityFrame;
+    o.velocityFrame = velocityFrame == "spherical"    ? VelocityFrame::Spherical
+                      : velocityFrame == "colatitude" ? VelocityFrame::Colatitude
+                                                      : VelocityFrame::Cartesian;
     o.latName = latName;
     o.rName = rName;
     o.lonName = lonName;

@@ -41,10 +41,12 @@ struct ReaderOptions {
     // (e.g. "temperature" -> "T"). Unmapped variables are looked up by their canonical name.
     std::map<std::string, std::string> variableNames;
     // The velocity's components vx, vy, vz (variableNames may name them in the file: --velocity)
-    // are Cartesian, or spherical: radial (up), north, east (--velocity-frame spherical), turned
-    // into Cartesian ones at each grid point when read. Either way they are converted into m/s
-    // from the units they have (m/s, cm/yr, mm/yr, m/yr and their CF spellings; none: m/s).
-    enum class VelocityFrame { Cartesian, Spherical };
+    // are Cartesian, or spherical: radial (up), north, east (--velocity-frame spherical), or
+    // colatitude (southward), longitude (eastward), radial as CitcomS orders them (--velocity-frame
+    // colatitude), turned into Cartesian ones at each grid point when read. Either way they are
+    // converted into m/s from the units they have (m/s, cm/yr, mm/yr, m/yr and their CF spellings;
+    // none: m/s).
+    enum class VelocityFrame { Cartesian, Spherical, Colatitude };
     VelocityFrame velocityFrame = VelocityFrame::Cartesian;
     // Names of the coordinate variables (rName: the radius or depth); empty: found by CF attributes
     // or customary names (above).

@@ -495,6 +495,33 @@ TEST(NetcdfReader, SphericalVelocityInOtherUnitsBecomesCartesianMetresPerSecond)
     expectReadError(ncgen(dir.path(), "odd", furlongs), {}, {"odd.nc: vx: velocity units 'furlongs/fortnight'"});
 }
 
+// CitcomS' order (--velocity vt,vp,vr --velocity-frame colatitude): colatitude (southward),
+// longitude (eastward), radial. The same flow as above: 1 cm/yr up, 3 cm/yr north, 2 cm/yr east.
+TEST(NetcdfReader, ColatitudeOrderedVelocityIsCitcomsOrder)
+{
+    TempDir dir("colatvel");
+    const std::string cdl = depthGridCdl("vel", R"(
+  float vt(depth, lat, lon) ; vt:units = "cm/yr" ;
+  float vp(depth, lat, lon) ; vp:units = "cm/yr" ;
+  float vr(depth, lat, lon) ; vr:units = "cm/yr" ;)",
+                                         R"(
+  vt = -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3, -3 ;
+  vp = 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2 ;
+  vr = 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1 ;)");
+    const auto path = ncgen(dir.path(), "vel", cdl);
+    ReaderOptions o;
+    o.variableNames = {{"vx", "vt"}, {"vy", "vp"}, {"vz", "vr"}};
+    o.velocityFrame = ReaderOptions::VelocityFrame::Colatitude;
+    const grid::Snapshot s = readSnapshot(path, o);
+    const double cmPerYr = 0.01 / 3.15576e7;
+    // At lat 45, lon 90: up = (0, cos 45, sin 45), north = (0, -sin 45, cos 45), east = (-1, 0, 0).
+    const size_t i = s.grid.index(1, 0, 1);
+    const double h = std::sqrt(0.5);
+    EXPECT_NEAR(s.find("vx")->values[i], -2 * cmPerYr, 1e-6 * cmPerYr);
+    EXPECT_NEAR(s.find("vy")->values[i], (h - 3 * h) * cmPerYr, 1e-6 * cmPerYr);
+    EXPECT_NEAR(s.find("vz")->values[i], (h + 3 * h) * cmPerYr, 1e-6 * cmPerYr);
+}
+
 TEST(NetcdfReader, CfStandardNamesOfTheFlowAreTheSphericalVelocity)
 {
     TempDir dir("cfvel");

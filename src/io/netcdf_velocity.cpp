@@ -53,9 +53,13 @@ void normaliseVelocity(grid::Snapshot& snapshot, ReaderOptions::VelocityFrame fr
                 x = float(double(x) * *scale);
         f->units = "m/s";
     }
-    if (frame != ReaderOptions::VelocityFrame::Spherical)
+    if (frame == ReaderOptions::VelocityFrame::Cartesian)
         return;
-    // (radial, north, east) at each point into (x, y, z): v = v_r e_r + v_n e_n + v_e e_e.
+    // (radial, north, east) at each point into (x, y, z): v = v_r e_r + v_n e_n + v_e e_e; CitcomS'
+    // (colatitude, longitude, radial) is (v_r, v_n, v_e) = (third, -first, second).
+    const bool colatitude = frame == ReaderOptions::VelocityFrame::Colatitude;
+    const std::array<size_t, 3> from = colatitude ? std::array<size_t, 3>{2, 0, 1} : std::array<size_t, 3>{0, 1, 2};
+    const double northSign = colatitude ? -1.0 : 1.0;
     const grid::SphericalGrid& g = snapshot.grid;
     for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
         for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
@@ -63,8 +67,9 @@ void normaliseVelocity(grid::Snapshot& snapshot, ReaderOptions::VelocityFrame fr
             const EastNorth en = eastNorthAt(g.latDeg[iLat], g.lonDeg[iLon]);
             for (size_t iR = 0; iR < g.nR(); ++iR) {
                 const size_t i = g.index(iLat, iR, iLon);
-                const Vec3d c = double(v[0]->values[i]) * up + double(v[1]->values[i]) * en.north +
-                                double(v[2]->values[i]) * en.east;
+                const Vec3d c = double(v[from[0]]->values[i]) * up +
+                                northSign * double(v[from[1]]->values[i]) * en.north +
+                                double(v[from[2]]->values[i]) * en.east;
                 v[0]->values[i] = float(c.x), v[1]->values[i] = float(c.y), v[2]->values[i] = float(c.z);
             }
         }

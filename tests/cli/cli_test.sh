@@ -518,13 +518,16 @@ failed_run_leaves)
   # What a failed run may leave and what it must not (docs/format.md, "What a failed run leaves").
   mkdir -p "$work/in" "$work/empty"
   cp "$fixture"/spherical00{1,2}.nc "$work/in/"
-  ncdump "$fixture/spherical003.nc" |
-    awk 'done != 1 && after { sub(/[-0-9.e+]+/, "NaN"); done = 1 } /^ temperature =/ { after = 1 } { print }' > "$work/nan.cdl"
-  ncgen -k nc6 -o "$work/nan.nc" "$work/nan.cdl"
+  # Damage that only shows in the data: a variable with no value in the step (NaN everywhere).
+  cp "$fixture/spherical003.nc" "$work/nan.nc"
+  python3 -c "
+import netCDF4, numpy, sys
+with netCDF4.Dataset(sys.argv[1], 'a') as nc:
+    nc.variables['temperature'][:] = numpy.nan" "$work/nan.nc"
   # A fresh run failing at its first step: nothing, in a new or an existing empty directory.
-  expect_error "nan.nc: temperature: 1 of" preprocess "$work/nan.nc" -o "$work/new" --quiet
+  expect_error "nan.nc: temperature: every value of the step is missing" preprocess "$work/nan.nc" -o "$work/new" --quiet
   check "no directory created" test ! -e "$work/new"
-  expect_error "nan.nc: temperature: 1 of" preprocess "$work/nan.nc" -o "$work/empty" --quiet
+  expect_error "nan.nc: temperature: every value of the step is missing" preprocess "$work/nan.nc" -o "$work/empty" --quiet
   check "the empty directory stays empty" test -z "$(ls -A "$work/empty")"
   # Failing later: the finished steps, sample_coords.f32 and an "incomplete" manifest, nothing else.
   cp "$work/nan.nc" "$work/in/spherical003.nc"
