@@ -33,15 +33,19 @@ public:
         : m_dir(std::move(dataset)), m_level{grid, grid::BrickLayout::forGrid(grid, options.brickSize)},
           m_encoding(options.encoding)
     {
-        for (const auto& v : specs)
-            m_stems.push_back(fileSafeName(v.name));
+        for (const auto& v : specs) {
+            if (v.computed)
+                m_computed.push_back(*v.computed);
+            else
+                m_stems.push_back(fileSafeName(v.name));
+        }
     }
 
     const std::shared_ptr<const dataset::StepVolume>& volume(int step)
     {
         auto& v = m_steps[step];
         if (!v)
-            v = dataset::StepVolume::open(dataset::format::levelDir(dataset::format::stepDir(m_dir, step), 0), m_level, m_stems, m_encoding);
+            v = dataset::StepVolume::open(dataset::format::levelDir(dataset::format::stepDir(m_dir, step), 0), m_level, m_stems, m_encoding, {}, m_computed);
         return v;
     }
     // Releases the steps before `step`.
@@ -52,6 +56,7 @@ private:
     dataset::LevelInfo m_level;
     dataset::ValueEncoding m_encoding;
     std::vector<std::string> m_stems;
+    std::vector<dataset::ShellAnomalyOf> m_computed;
     std::map<int, std::shared_ptr<const dataset::StepVolume>> m_steps;
 };
 
@@ -95,6 +100,7 @@ void writePathlines(const fs::path& outDir, const grid::SphericalGrid& grid, con
                     const std::vector<json>& stepJsons, const PreprocessOptions& options, PreprocessSummary& summary)
 {
     const PathlineOptions& po = options.pathlines;
+    checkPathlineOptions(po, specs);  // the field among the variables the dataset has in the end
     const fs::path root = outDir / "pathlines";
     const int nSteps = static_cast<int>(stepJsons.size());
     const json settings = pathlineSettings(po);
