@@ -95,6 +95,7 @@ json describeDataset(const dataset::Dataset& d)
         j["variables"].push_back({{"name", v.name},
                                   {"units", v.units},
                                   {"derived", v.derived},
+                                  {"stored", v.stored},
                                   {"source", v.source},
                                   {"long_name", v.longName},
                                   {"min", v.global.range.min},
@@ -113,11 +114,13 @@ json describeDataset(const dataset::Dataset& d)
     return j;
 }
 
-// Where a dataset's variable comes from: "  (derived from vx, vy, vz)", "  (from 'T')" when the
+// Where a dataset's variable comes from: "  (computed from vs when read)", "  (derived from vx, vy, vz)", "  (from 'T')" when the
 // input names it otherwise; a file's variables say so when --map renamed them.
 std::string sourceNote(const json& v)
 {
     const std::string source = v.value("source", std::string());
+    if (!v.value("stored", true))
+        return fmt::format("  (computed from {} when read)", source);
     if (v.value("derived", false))
         return source.empty() ? "  (derived)" : fmt::format("  (derived from {})", source);
     const std::string inFile = v.value("name_in_file", source), longName = v.value("long_name", std::string());

@@ -122,6 +122,7 @@ std::shared_ptr<StepVolume> StepVolume::fromSnapshot(const grid::Snapshot& snaps
         volume->m_values[i].store(volume->m_owned[2 * i].data());
         volume->m_bounds.push_back(volume->m_owned[2 * i + 1].data());
     }
+    volume->m_storedCount = count;
     return volume;
 }
 
@@ -139,8 +140,9 @@ std::shared_ptr<StepVolume> StepVolume::withVariable(std::shared_ptr<const StepV
     for (size_t i = 0; i + 1 < count; ++i) {
         // Not decoded by the base yet: decode() asks the base on first use.
         volume->m_values[i].store(base->valuesReady(i) ? base->values(i) : nullptr);
-        volume->m_bounds.push_back(base->brickBounds(i));
+        volume->m_bounds.push_back(nullptr);  // brickBounds asks the base (a computed variable's are made on use)
     }
+    volume->m_storedCount = count;
     volume->m_owned.reserve(2);  // references below must stay valid
     auto& own = volume->m_owned.emplace_back(std::move(values));
     auto& bounds = volume->m_owned.emplace_back(2 * volume->m_bricks.brickCount());
@@ -153,10 +155,13 @@ std::shared_ptr<StepVolume> StepVolume::withVariable(std::shared_ptr<const StepV
 
 std::shared_ptr<StepVolume> StepVolume::open(const std::filesystem::path& dir, const LevelInfo& level,
                                              const std::vector<std::string>& fileStems, ValueEncoding encoding,
-                                             std::span<const ValueRange> ranges, std::span<const char> missing)
+                                             std::span<const ValueRange> ranges, std::span<const char> missing,
+                                             std::span<const ShellAnomalyOf> computed)
 {
     RAYPC_CHECK(ranges.empty() || ranges.size() == fileStems.size());
     RAYPC_CHECK(missing.empty() || missing.size() == fileStems.size());
+    for (const ShellAnomalyOf& c : computed)
+        RAYPC_CHECK(c.base < fileStems.size());
     auto volume = std::make_shared<StepVolume>();
     volume->m_grid = level.grid;
     volume->m_bricks = level.bricks;
@@ -165,10 +170,13 @@ std::shared_ptr<StepVolume> StepVolume::open(const std::filesystem::path& dir, c
     const bool encoded = encoding == ValueEncoding::Uint16;
     const size_t valueBytes = n * (encoded ? sizeof(uint16_t) : sizeof(float));
     const size_t boundBytes = 2 * brickCount * sizeof(float);
-    const size_t count = fileStems.size();
-    volume->m_valuesStorage = std::make_unique<std::atomic<const float*>[]>(count);
-    volume->m_values = {volume->m_valuesStorage.get(), count};
-    volume->m_decoded.resize(count);
+    const size_t count = fileStems.size(), total = count + computed.size();
+    volume->m_valuesStorage = std::make_unique<std::atomic<const float*>[]>(total);
+    volume->m_values = {volume->m_valuesStorage.get(), total};
+    volume->m_decoded.resize(total);
+    volume->m_storedCount = count;
+    volume->m_computed.assign(computed.begin(), computed.end());
+    volume->m_computedBounds.resize(computed.size());
     volume->m_mapped.reserve(count);  // references below must stay valid
     volume->m_owned.reserve(count);
     volume->m_ranges.assign(count, ValueRange{-std::numeric_limits<float>::max(), std::numeric_limits<float>::max()});
@@ -241,6 +249,55 @@ size_t firstOutsideRange(std::span<const float> values, ValueRange range, bool m
          m_ranges[var].min, m_ranges[var].max);
 }
 
+const ShellAnomalyOf* StepVolume::computedFrom(size_t var) const
+{
+    RAYPC_CHECK(var < variableCount());
+    if (m_base && var < m_base->variableCount())
+        return m_base->computedFrom(var);
+    return var >= m_storedCount && var - m_storedCount < m_computed.size() ? &m_computed[var - m_storedCount] : nullptr;
+}
+
+const float* StepVolume::brickBounds(size_t var) const
+{
+    RAYPC_CHECK(var < variableCount());
+    if (m_base && var < m_base->variableCount())
+        return m_base->brickBounds(var);
+    if (var >= m_storedCount) {
+        values(var);  // computes the bounds with the values; both are ready once it returns
+        return m_computedBounds[var - m_storedCount].data();
+    }
+    return m_bounds[var];
+}
+
+// A shell anomaly of this level: from the level's own values of its base and their shell means, so
+// that every level of detail has anomalies about zero on each of its shells.
+const float* StepVolume::compute(size_t var) const
+{
+    const ShellAnomalyOf& of = m_computed[var - m_storedCount];
+    const size_t n = m_grid.cellCount();
+    const std::span<const float> base(values(of.base), n);  // before the lock: it may decode
+    std::lock_guard lock(m_computeMutex);
+    if (const float* p = m_values[var].load(std::memory_order_acquire))
+        return p;  // another thread computed it while this one waited
+    auto out = std::make_unique_for_overwrite<float[]>(n);
+    std::vector<float>& bounds = m_computedBounds[var - m_storedCount];
+    bounds.resize(2 * m_bricks.brickCount());
+    // Isolated: while this thread waits inside a parallel loop it must not pick up another task that
+    // asks this volume for a computed variable and blocks on the lock it holds.
+    tbb::this_task_arena::isolate([&] {
+        auto means = m_shellMeans.find(of.base);
+        if (means == m_shellMeans.end())
+            means = m_shellMeans.emplace(of.base, shellMeans(m_grid, base)).first;
+        computeShellAnomaly(m_grid, base, means->second, of.kind, {out.get(), n});
+        computeBrickBounds(m_grid, m_bricks, {out.get(), n}, bounds);
+    });
+    const float* p = out.get();
+    m_decoded[var] = std::move(out);
+    m_decodedBytes.fetch_add(n * sizeof(float) + bounds.size() * sizeof(float), std::memory_order_relaxed);
+    m_values[var].store(p, std::memory_order_release);
+    return p;
+}
+
 const float* StepVolume::decode(size_t var) const
 {
     RAYPC_CHECK(var < variableCount());
@@ -249,6 +306,8 @@ const float* StepVolume::decode(size_t var) const
         m_values[var].store(p, std::memory_order_release);
         return p;
     }
+    if (var >= m_storedCount)
+        return compute(var);
     std::lock_guard lock(m_decodeMutex);
     if (const float* p = m_values[var].load(std::memory_order_acquire))
         return p;  // another thread decoded it while this one waited
@@ -289,6 +348,8 @@ float StepVolume::value(size_t var, size_t iLat, size_t iR, size_t iLon) const
         return p[m_grid.index(iLat, iR, iLon)];
     if (m_base && var < m_base->variableCount())
         return m_base->value(var, iLat, iR, iLon);
+    if (var >= m_storedCount)
+        return values(var)[m_grid.index(iLat, iR, iLon)];
     m_mapped[var].checkNotCutShort();
     if (m_encoding == ValueEncoding::Float32) {
         // Not yet checked as a whole (decode): this one value is.
@@ -309,9 +370,37 @@ double StepVolume::errorBound(size_t var, size_t iLat, size_t iR, size_t iLon) c
         return m_base->errorBound(var, iLat, iR, iLon);
     if (m_encoding != ValueEncoding::Uint16)
         return 0;
+    if (var >= m_storedCount) {
+        // x - m: the point's error and the mean's (at most the largest on its shell); the percentage
+        // 100 (x/m - 1) to first order 100 (ex/|m| + |x| em/m^2).
+        const ShellAnomalyOf& of = m_computed[var - m_storedCount];
+        const double ex = errorBound(of.base, iLat, iR, iLon), em = shellErrorBound(of.base, iR);
+        if (of.kind == ShellAnomalyKind::Difference)
+            return ex + em;
+        values(var);  // the shell means
+        double m = 0;
+        {
+            std::lock_guard lock(m_computeMutex);
+            m = std::abs(m_shellMeans.at(of.base)[iR]);
+        }
+        const double x = std::abs(double(value(of.base, iLat, iR, iLon)));
+        return 100.0 * (ex / m + x * em / (m * m));
+    }
     const uint32_t s = m_bricks.size;
     const size_t brick = m_bricks.index(uint32_t(iLat / s), uint32_t(iR / s), uint32_t(iLon / s));
     return uint16ErrorBound(m_bounds[var][2 * brick], m_bounds[var][2 * brick + 1], hasMissing(var));
+}
+
+double StepVolume::shellErrorBound(size_t var, size_t iR) const
+{
+    const uint32_t s = m_bricks.size;
+    double bound = 0;
+    for (uint32_t bLat = 0; bLat < m_bricks.count[0]; ++bLat)
+        for (uint32_t bLon = 0; bLon < m_bricks.count[2]; ++bLon) {
+            const size_t brick = m_bricks.index(bLat, uint32_t(iR / s), bLon);
+            bound = std::max(bound, uint16ErrorBound(m_bounds[var][2 * brick], m_bounds[var][2 * brick + 1], hasMissing(var)));
+        }
+    return bound;
 }
 
 size_t StepVolume::memoryBytes() const
@@ -353,7 +442,7 @@ const float* StepVolume::brickBounds(size_t var, uint32_t brickSize) const
 {
     RAYPC_CHECK(var < variableCount());
     if (brickSize == m_bricks.size)
-        return m_bounds[var];
+        return brickBounds(var);
     std::lock_guard lock(m_derivedMutex);
     std::vector<float>& bounds = m_derivedBounds[{var, brickSize}];
     if (bounds.empty()) {
@@ -663,14 +752,35 @@ std::vector<VariableInfo> readVariables(const ManifestReader& r, const json& j)
             info.source = r.string(v, field, "source");
         if (v.is_object() && v.contains("long_name"))
             info.longName = r.string(v, field, "long_name");
-        info.fileStem = r.string(v, field, "file_stem");
-        if (!plainFileStem(info.fileStem))
-            r.bad(ManifestReader::path(field, "file_stem"), excerpt(v.at("file_stem")),
-                  "a file name of letters, digits, '-', '.' and '_'");
+        // Datasets written before computed variables existed store every variable.
+        if (v.is_object() && v.contains("stored"))
+            info.stored = r.boolean(v, field, "stored");
+        if (info.stored) {
+            if (std::any_of(out.begin(), out.end(), [](const VariableInfo& o) { return !o.stored; }))
+                r.bad(ManifestReader::path(field, "stored"), "true after a computed variable",
+                      "every stored variable before the computed ones");
+            info.fileStem = r.string(v, field, "file_stem");
+            if (!plainFileStem(info.fileStem))
+                r.bad(ManifestReader::path(field, "file_stem"), excerpt(v.at("file_stem")),
+                      "a file name of letters, digits, '-', '.' and '_'");
+        } else {
+            // A computed variable: its kind, and in `source` the stored variable it is computed from.
+            const std::string kind = r.string(v, field, "kind");
+            const auto parsed = parseShellAnomalyKind(kind);
+            if (!parsed)
+                r.bad(ManifestReader::path(field, "kind"), excerpt(v.at("kind")), "'{}' or '{}'",
+                      shellAnomalyKindName(ShellAnomalyKind::Difference), shellAnomalyKindName(ShellAnomalyKind::Percent));
+            const auto base = std::find_if(out.begin(), out.end(),
+                                           [&](const VariableInfo& o) { return o.stored && o.name == info.source; });
+            if (base == out.end())
+                r.bad(ManifestReader::path(field, "source"), fmt::format("'{}'", info.source),
+                      "the name of a stored variable before it");
+            info.computed = ShellAnomalyOf{size_t(base - out.begin()), *parsed};
+        }
         for (const auto& other : out) {
             if (other.name == info.name)
                 r.bad(ManifestReader::path(field, "name"), excerpt(v.at("name")), "a name no other variable has");
-            if (other.fileStem == info.fileStem)
+            if (info.stored && other.stored && other.fileStem == info.fileStem)
                 r.bad(ManifestReader::path(field, "file_stem"), excerpt(v.at("file_stem")),
                       "a file stem no other variable has");
         }
@@ -682,7 +792,8 @@ std::vector<VariableInfo> readVariables(const ManifestReader& r, const json& j)
 
 // Steps: in order (step i's arrays are in steps/i), times finite and increasing, statistics per variable
 // within the global ones of `variables`.
-std::vector<StepInfo> readSteps(const ManifestReader& r, const json& j, const std::vector<VariableInfo>& variables)
+std::vector<StepInfo> readSteps(const ManifestReader& r, const json& j, const std::vector<VariableInfo>& variables,
+                                size_t shells)
 {
     std::vector<StepInfo> out;
     const json& steps = r.array(j, "", "steps", 1, 1000000);
@@ -711,6 +822,23 @@ std::vector<StepInfo> readSteps(const ManifestReader& r, const json& j, const st
                       "a range within variables[{}].global [{}, {}]", v, global.min, global.max);
             info.stats.push_back(std::move(st));
         }
+        // The level-0 shell means of every variable a computed one is made from (the sample's columns
+        // of the computed variables are made with them): numbers, null for a shell without a value.
+        info.shellMeans.resize(variables.size());
+        for (const VariableInfo& v : variables) {
+            if (!v.computed || !info.shellMeans[v.computed->base].empty())
+                continue;
+            const std::string& baseName = variables[v.computed->base].name;
+            const std::string meansField = ManifestReader::path(field, "shell_means");
+            const json& means = r.member(r.member(step, field, "shell_means"), meansField, baseName.c_str());
+            const std::string baseField = fmt::format("{}[\"{}\"]", meansField, baseName);
+            if (!means.is_array() || means.size() != shells)
+                r.bad(baseField, excerpt(means), "an array of {} shell means (one per radius)", shells);
+            std::vector<double>& m = info.shellMeans[v.computed->base];
+            for (size_t i = 0; i < means.size(); ++i)
+                m.push_back(means[i].is_null() ? std::numeric_limits<double>::quiet_NaN()
+                                               : r.number(means[i], ManifestReader::path(baseField, i)));
+        }
         out.push_back(std::move(info));
     }
     return out;
@@ -725,14 +853,17 @@ void checkArrayFiles(const Dataset& dataset, size_t sampleRows, uint32_t brickSi
     const bool encoded = dataset.encoding() == ValueEncoding::Uint16;
     const size_t valueSize = encoded ? sizeof(uint16_t) : sizeof(float);
     const std::string encoding(encodingName(dataset.encoding()));
+    const size_t stored = size_t(std::count_if(variables.begin(), variables.end(), [](const auto& v) { return v.stored; }));
     for (size_t s = 0; s < dataset.steps().size(); ++s) {
         const auto stepDir = format::stepDir(dir, static_cast<int>(s));
-        checkFileSize(stepDir / format::kStepSample, uint64_t(sampleRows) * variables.size() * sizeof(float),
-                      fmt::format("sample.rows {} x {} variables of float32", sampleRows, variables.size()));
+        checkFileSize(stepDir / format::kStepSample, uint64_t(sampleRows) * stored * sizeof(float),
+                      fmt::format("sample.rows {} x {} stored variables of float32", sampleRows, stored));
         for (size_t l = 0; l < dataset.levels().size(); ++l) {
             const auto levelDir = format::levelDir(stepDir, static_cast<int>(l));
             const LevelInfo& level = dataset.levels()[l];
             for (const auto& v : variables) {
+                if (!v.stored)
+                    continue;
                 checkFileSize(encoded ? format::encodedValuesFile(levelDir, v.fileStem)
                                       : format::valuesFile(levelDir, v.fileStem),
                               uint64_t(level.grid.cellCount()) * valueSize,
@@ -745,6 +876,9 @@ void checkArrayFiles(const Dataset& dataset, size_t sampleRows, uint32_t brickSi
     }
     checkFileSize(dir / format::kSampleCoords, uint64_t(sampleRows) * grid::coordinateInfos().size() * sizeof(float),
                   fmt::format("sample.rows {} x {} coordinates of float32", sampleRows, grid::coordinateInfos().size()));
+    if (stored < variables.size())
+        checkFileSize(dir / format::kSampleCells, uint64_t(sampleRows) * sizeof(uint32_t),
+                      fmt::format("sample.rows {} grid-point indices of uint32", sampleRows));
 }
 
 }  // namespace
@@ -774,7 +908,7 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
     const auto brickSize = static_cast<uint32_t>(r.integer(j, "", "brick_size", 1, kMaxBrickSize));
     dataset->m_levels = readLevels(r, j, manifestPath, brickSize);
     dataset->m_variables = readVariables(r, j);
-    dataset->m_steps = readSteps(r, j, dataset->m_variables);
+    dataset->m_steps = readSteps(r, j, dataset->m_variables, dataset->m_levels.front().grid.nR());
     const json& sample = r.member(j, "", "sample");
     dataset->m_sampleRows = r.integer(sample, "sample", "rows", 0, grid::kMaxGridPoints);
     checkArrayFiles(*dataset, dataset->m_sampleRows, brickSize);
@@ -816,13 +950,18 @@ std::shared_ptr<const StepVolume> Dataset::load(int step, int level) const
     std::vector<std::string> stems;
     std::vector<ValueRange> ranges;
     std::vector<char> missing;
+    std::vector<ShellAnomalyOf> computed;
     for (size_t v = 0; v < m_variables.size(); ++v) {
+        if (m_variables[v].computed) {
+            computed.push_back(*m_variables[v].computed);
+            continue;
+        }
         stems.push_back(m_variables[v].fileStem);
         ranges.push_back(m_steps[step].stats[v].range);
         missing.push_back(m_steps[step].stats[v].missingPoints > 0);
     }
     return StepVolume::open(format::levelDir(format::stepDir(m_dir, step), level), m_levels[level], stems, m_encoding,
-                            ranges, missing);
+                            ranges, missing, computed);
 }
 
 SampleTable Dataset::loadSample(int step, SampleColumns which) const
@@ -840,10 +979,36 @@ SampleTable Dataset::loadSample(int step, SampleColumns which) const
         table.units.push_back(v.units);
     }
     const size_t nCoords = withCoords ? grid::coordinateInfos().size() : 0, nVars = m_variables.size(), rows = m_sampleRows;
-    const MappedFile vars(format::stepDir(m_dir, step) / format::kStepSample);
-    if (vars.size() != rows * nVars * sizeof(float))
+    const size_t nStored = size_t(std::count_if(m_variables.begin(), m_variables.end(), [](const auto& x) { return x.stored; }));
+    const MappedFile storedFile(format::stepDir(m_dir, step) / format::kStepSample);
+    if (storedFile.size() != rows * nStored * sizeof(float))
         fail("{}: sample files do not hold {} rows", m_dir.string(), rows);
-    const auto* v = reinterpret_cast<const float*>(vars.bytes().data());
+    const auto* stored = reinterpret_cast<const float*>(storedFile.bytes().data());
+    // The computed variables' columns: from their base's column and the step's level-0 shell means at
+    // each row's radius (the sample's grid points), as StepVolume computes them on level 0.
+    std::vector<float> all;
+    const float* v = stored;
+    if (nStored < nVars) {
+        const MappedFile cellFile(m_dir / format::kSampleCells);
+        if (cellFile.size() != rows * sizeof(uint32_t))
+            fail("{}: sample files do not hold {} rows", m_dir.string(), rows);
+        const auto* cells = reinterpret_cast<const uint32_t*>(cellFile.bytes().data());
+        const grid::SphericalGrid& g = m_levels.front().grid;
+        all.resize(rows * nVars);
+        for (size_t row = 0; row < rows; ++row) {
+            if (cells[row] >= g.cellCount())
+                fail("{}: sample point {} is grid point {}, beyond the grid's {}", (m_dir / format::kSampleCells).string(),
+                     row, cells[row], g.cellCount());
+            const size_t iR = (cells[row] / g.nLon()) % g.nR();
+            for (size_t k = 0; k < nVars; ++k) {
+                const auto& of = m_variables[k].computed;
+                all[row * nVars + k] = of ? shellAnomalyValue(stored[row * nStored + of->base],
+                                                              m_steps[step].shellMeans[of->base][iR], of->kind)
+                                          : stored[row * nStored + k];
+            }
+        }
+        v = all.data();
+    }
     table.rows = rows;
     if (!withCoords) {
         table.values.assign(v, v + rows * nVars);

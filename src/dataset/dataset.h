@@ -3,7 +3,8 @@
 // little-endian float32 in canonical grid order (grid.h), so a step loads without parsing.
 //
 // Variables: the stored ones of the input (contest names and units) plus derived ones
-// ("radial velocity" and "velocity magnitude" in cm/yr). Coordinates (x, y, z in km,
+// ("radial velocity" and "velocity magnitude" in cm/yr, stored), then the shell anomalies
+// ("X anomaly", "X anomaly %"; dataset/shell_anomaly.h), computed when read. Coordinates (x, y, z in km,
 // lat/lon in degrees, radius and depth in km) are not stored: they are functions of the grid.
 //
 // Thread safety: a Dataset and the StepVolumes it returns are immutable and may be shared.
@@ -13,6 +14,7 @@
 #include "grid/coordinates.h"
 #include "grid/grid.h"
 #include "grid/snapshot.h"
+#include "dataset/shell_anomaly.h"
 #include "dataset/value_encoding.h"
 
 #include <atomic>
@@ -55,7 +57,10 @@ struct VariableInfo {
     // datasets written before it was recorded.
     std::string source;
     std::string longName;  // the input's CF long_name, or empty
-    std::string fileStem;  // file-safe name of its arrays
+    // Whether its arrays are stored; a variable that is not is computed when read (`computed`).
+    bool stored = true;
+    std::optional<ShellAnomalyOf> computed;
+    std::string fileStem;  // file-safe name of its arrays (a stored variable's)
     VariableStats global;  // over all steps (histogram rebinned from the steps' histograms)
 };
 
@@ -64,6 +69,9 @@ struct StepInfo {
     double timeMyr = 0;
     std::string source;  // input file name
     std::vector<VariableStats> stats;  // one per variable, same order as Dataset::variables()
+    // Per variable, the level-0 shell means (grid nR of them, NaN for a shell without a value) of a
+    // variable a computed one is made from; empty for the others.
+    std::vector<std::vector<double>> shellMeans;
     // How the step was made from a mesh (Snapshot::origin: format, cells, grid points inside a cell,
     // snapped, missing); null for a step read from a netCDF file.
     nlohmann::json origin;
@@ -79,6 +87,9 @@ struct LevelInfo {
 //
 // A dataset of encoding u16 (value_encoding.h) decodes a variable's values on first use of
 // values(var) (in parallel) and keeps them with the volume; float32 datasets map their values.
+// Computed variables (shell anomalies, after the stored ones) are computed on first use of
+// values(var) from the level's own values of their base variable and its shell means on this level,
+// and kept with the volume likewise; their brick bounds come from the computed values.
 class StepVolume {
 public:
     // Builds a volume in memory from a snapshot (computing brick bounds); used by tests
@@ -88,13 +99,15 @@ public:
     // Maps the arrays of one level directory (docs/format.md): per variable `<stem>.f32` or
     // `<stem>.u16`, and `<stem>.bricks.f32` (the bounds are copied into memory, the values stay
     // mapped). `ranges`: per variable the step's exact range (the manifest's statistics), or empty
-    // for any finite value. Throws raypc::Error naming the file when one is missing, has the wrong
-    // size, or holds brick bounds that are not finite with min <= max within the range. `missing`: per
-    // variable whether the step has missing values (NaN; VariableStats::missingPoints > 0), or empty
-    // for none.
+    // for any finite value. `missing`: per stored variable whether the step has missing values (NaN;
+    // VariableStats::missingPoints > 0), or empty for none. `computed`: the variables after the stored
+    // ones, each computed from a stored one (its index < fileStems.size()). Throws raypc::Error naming
+    // the file when one is missing, has the wrong size, or holds brick bounds that are not finite with
+    // min <= max within the range (a variable with missing values: or (+inf, -inf)).
     static std::shared_ptr<StepVolume> open(const std::filesystem::path& levelDir, const LevelInfo& level,
                                             const std::vector<std::string>& fileStems, ValueEncoding encoding,
-                                            std::span<const ValueRange> ranges = {}, std::span<const char> missing = {});
+                                            std::span<const ValueRange> ranges = {}, std::span<const char> missing = {},
+                                            std::span<const ShellAnomalyOf> computed = {});
 
     // A volume of `base`'s variables and one more, the last: `values` (grid().cellCount() of them,
     // canonical order; brick bounds computed here). The base's variables are read through it as the
@@ -106,6 +119,8 @@ public:
     const grid::SphericalGrid& grid() const { return m_grid; }
     const grid::BrickLayout& bricks() const { return m_bricks; }
     size_t variableCount() const { return m_values.size(); }
+    // Whether variable `var` is computed when read (a shell anomaly), and from what.
+    const ShellAnomalyOf* computedFrom(size_t var) const;
     ValueEncoding encoding() const { return m_encoding; }
     // grid().cellCount() values of variable `var`, canonical order. Thread-safe; the first call for a
     // variable of a u16 volume decodes it (its cost: bench/value_encoding_bench.cpp; other threads
@@ -125,8 +140,9 @@ public:
     float value(size_t var, size_t iLat, size_t iR, size_t iLon) const;
     // Whether values(var) is ready without decoding.
     bool valuesReady(size_t var) const { return m_values[var].load(std::memory_order_acquire) != nullptr; }
-    // bricks().brickCount() pairs (min, max) of variable `var`.
-    const float* brickBounds(size_t var) const { return m_bounds[var]; }
+    // bricks().brickCount() pairs (min, max) of variable `var`. Thread-safe; a computed variable's
+    // are computed with its values (values(var)).
+    const float* brickBounds(size_t var) const;
     // The same over bricks of `brickSize` points (BrickLayout::forGrid(grid(), brickSize)): the stored
     // bounds at bricks().size, otherwise computed from the values on first use and kept with the
     // volume (the renderer skips smaller bricks on coarse levels). Thread-safe.
@@ -137,7 +153,8 @@ public:
 
     // The largest error of value (iLat, iR, iLon) of variable `var` against the exact value: 0 for
     // float32, for u16 uint16ErrorBound of the brick that owns the point (value_encoding.h; without
-    // the half ulp of float32 rounding).
+    // the half ulp of float32 rounding). A computed variable's: to first order, from its base's bound
+    // at the point and the largest on the point's shell (which bounds the error of the shell mean).
     double errorBound(size_t var, size_t iLat, size_t iR, size_t iLon) const;
 
     // Bytes of the values and bounds the volume holds now: mapped files (page cache), arrays built in
@@ -155,6 +172,8 @@ public:
 private:
     const float* decode(size_t var) const;
     bool hasMissing(size_t var) const { return var < m_missing.size() && m_missing[var]; }
+    const float* compute(size_t var) const;
+    double shellErrorBound(size_t var, size_t iR) const;
     [[noreturn]] void failValue(size_t var, size_t index, float value) const;
 
     grid::SphericalGrid m_grid;
@@ -175,6 +194,11 @@ private:
     std::vector<MappedFile> m_mapped;              // when loaded from disk: per variable its values
     std::vector<std::vector<float>> m_owned;       // when built in memory
     std::shared_ptr<const StepVolume> m_base;      // withVariable: the volume whose variables come first
+    size_t m_storedCount = 0;                      // variables before the computed ones
+    std::vector<ShellAnomalyOf> m_computed;        // the computed variables, after the stored ones
+    mutable std::mutex m_computeMutex;
+    mutable std::vector<std::vector<float>> m_computedBounds;    // per computed variable, with its values
+    mutable std::map<size_t, std::vector<double>> m_shellMeans;  // per base variable, this level's
 };
 
 // The parallel-coordinates sample of one step: `rows` cells, columns = coordinates

@@ -16,6 +16,9 @@ inline constexpr const char* kFormatName = "raypc-dataset";
 inline constexpr int kVersion = 2;               // 2: the manifest names the arrays' `encoding`
 inline constexpr int kOldestReadableVersion = 1;  // 1: float32 arrays
 inline constexpr const char* kSampleCoords = "sample_coords.f32";
+// The sample's grid-point indices (uint32, canonical order), from which a computed variable's sample
+// column is made: present where the manifest has computed variables.
+inline constexpr const char* kSampleCells = "sample_cells.u32";
 inline constexpr const char* kStepManifest = "step.json";
 inline constexpr const char* kStepSample = "sample.f32";
 // The size and modification time of every file a step was made from, so that a resumed run redoes

@@ -17,6 +17,7 @@
 #include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_for_each.h>
 
 #include <algorithm>
 #include <chrono>
@@ -24,6 +25,7 @@
 #include <exception>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <optional>
 #include <utility>
 
@@ -64,8 +66,8 @@ void writeArray(const fs::path& path, std::span<const T> values)
         fail("{}: write failed (disk full?)", path.string());
 }
 
-// The variables of the dataset, in order: the stored ones as the reader returns them, then
-// the derived ones. Units of derived variables are fixed by addDerivedVariables.
+// The stored variables of the dataset, in order: the input's as the reader returns them, then the
+// derived ones. Units of derived variables are fixed by addStoredDerivedVariables.
 std::vector<VariableSpec> variableSpecs(const io::FileHeader& header)
 {
     std::vector<VariableSpec> specs;
@@ -80,17 +82,20 @@ std::vector<VariableSpec> variableSpecs(const io::FileHeader& header)
         specs.push_back({varname::kVelocityMagnitude, varname::kVelocityMagnitudeUnits, true,
                          fmt::format("{}", fmt::join(varname::kVelocityMagnitudeFrom, ", "))});
     }
-    for (const auto& v : header.variables)
-        if (v.name == varname::kThermalExpansivity)
-            specs.push_back({varname::kThermalExpansivityAnomaly, v.units, true, v.name});
-    // As addDerivedVariables: a model with a temperature but no anomaly (ASPECT writes T) gets one.
-    if (!has(varname::kTemperatureAnomaly))
-        for (const auto& v : header.variables)
-            if (std::find(varname::kTemperatureAnomalyFrom.begin(), varname::kTemperatureAnomalyFrom.end(), v.name) !=
-                varname::kTemperatureAnomalyFrom.end()) {
-                specs.push_back({varname::kTemperatureAnomaly, v.units, true, v.name});
-                break;
-            }
+    return specs;
+}
+
+// The shell anomalies the stored variables may have (dataset/shell_anomaly.h), computed when read:
+// every "X anomaly" is offered; an "X anomaly %" only where every step's shell means are positive,
+// which the steps tell (offeredComputedSpecs).
+std::vector<VariableSpec> computedSpecs(const std::vector<VariableSpec>& stored)
+{
+    std::vector<dataset::BaseVariable> bases;
+    for (const VariableSpec& v : stored)
+        bases.push_back({v.name, v.units, v.derived});
+    std::vector<VariableSpec> specs;
+    for (const dataset::ShellAnomalyVariable& v : dataset::shellAnomalyVariables(bases))
+        specs.push_back({v.name, v.units, true, stored[v.of.base].name, "", v.of});
     return specs;
 }
 
@@ -99,6 +104,19 @@ double stepIntervalMyr(const PreprocessOptions& options)
 {
     const auto& t = options.timesMyr;
     return t.size() >= 2 ? (t.back() - t.front()) / double(t.size() - 1) : options.dtMyr;
+}
+
+// A variable's entry in the manifest (docs/format.md, dataset.json).
+json variableJson(const VariableSpec& v)
+{
+    json j{{"name", v.name}, {"units", v.units}, {"derived", v.derived}, {"source", v.source}, {"stored", !v.computed}};
+    if (v.computed)
+        j["kind"] = dataset::shellAnomalyKindName(v.computed->kind);
+    else
+        j["file_stem"] = fileSafeName(v.name);
+    if (!v.longName.empty())
+        j["long_name"] = v.longName;
+    return j;
 }
 
 json manifest(const std::vector<grid::SphericalGrid>& levels, const std::vector<VariableSpec>& specs,
@@ -115,13 +133,8 @@ json manifest(const std::vector<grid::SphericalGrid>& levels, const std::vector<
     for (const auto& g : levels)
         j["levels"].push_back(dataset::format::toJson(g));
     j["variables"] = json::array();
-    for (const auto& v : specs) {
-        j["variables"].push_back(
-            {{"name", v.name}, {"units", v.units}, {"derived", v.derived}, {"source", v.source},
-             {"file_stem", fileSafeName(v.name)}});
-        if (!v.longName.empty())
-            j["variables"].back()["long_name"] = v.longName;
-    }
+    for (const auto& v : specs)
+        j["variables"].push_back(variableJson(v));
     j["inputs"] = json::array();
     for (const auto& p : inputs)
         j["inputs"].push_back(p.filename().string());
@@ -150,7 +163,8 @@ struct RunPlan {
     io::ReaderOptions reader;                // as given, with a resampled series's grid fixed
     std::vector<grid::SphericalGrid> levels;   // level 0 first
     std::vector<VariableSpec> specs;     // stored, then derived
-    json manifest;                       // "incomplete", without steps
+    std::vector<VariableSpec> computed;  // the shell anomalies each step's statistics are made for
+    json manifest;                       // "incomplete", without steps and computed variables
 };
 
 // Phase 1: the options, every input's header, the grid's size and memory. Nothing is written
@@ -198,25 +212,41 @@ RunPlan planRun(const std::vector<fs::path>& inputs, PreprocessOptions& options)
                  inputs.front().filename().string(), fmt::join(firstNames, ", "));
     }
     plan.specs = variableSpecs(plan.header);
+    plan.computed = computedSpecs(plan.specs);
+    // The variables pathlines may be seeded on: the stored ones and the anomalies (every "X anomaly"
+    // is offered; a percentage only where the steps allow).
+    std::vector<VariableSpec> seedable = plan.specs;
+    for (const VariableSpec& v : plan.computed)
+        if (v.computed->kind == dataset::ShellAnomalyKind::Difference)
+            seedable.push_back(v);
     const auto hasSpec = [&](const std::string& name) {
-        return std::any_of(plan.specs.begin(), plan.specs.end(), [&](const VariableSpec& v) { return v.name == name; });
+        return std::any_of(seedable.begin(), seedable.end(), [&](const VariableSpec& v) { return v.name == name; });
     };
     // Pathlines follow the flow: a model without a velocity (a tomography model) has none. Their
-    // seeds default to the temperature anomaly's critical points, else the first stored variable's.
+    // seeds default to the temperature anomaly's critical points, else the first variable's anomaly
+    // (the first the rule gives), else the first stored variable's.
     if (options.pathlines.enabled && !varname::hasVelocity(hasSpec)) {
         options.pathlines.enabled = false;
         if (!options.quiet && mpi::isRoot())
             spdlog::info("{}: no velocity (vx, vy, vz): no pathlines", inputs.front().string());
     }
-    if (options.pathlines.enabled && options.pathlines.field == PathlineOptions{}.field && !hasSpec(options.pathlines.field))
-        for (const VariableSpec& v : plan.specs)
-            if (!varname::isVelocityComponent(v.name)) {
-                options.pathlines.field = v.name;
-                break;
-            }
-    phases::checkPathlineOptions(options.pathlines, plan.specs);
+    if (options.pathlines.enabled && options.pathlines.field == PathlineOptions{}.field && !hasSpec(options.pathlines.field)) {
+        const auto anomaly = std::find_if(plan.computed.begin(), plan.computed.end(), [](const VariableSpec& v) {
+            return v.computed->kind == dataset::ShellAnomalyKind::Difference;
+        });
+        if (anomaly != plan.computed.end())
+            options.pathlines.field = anomaly->name;
+        else
+            for (const VariableSpec& v : plan.specs)
+                if (!varname::isVelocityComponent(v.name)) {
+                    options.pathlines.field = v.name;
+                    break;
+                }
+    }
+    phases::checkPathlineOptions(options.pathlines, seedable);
     // A u16 dataset's pathline phase decodes the velocities of every step it traces through.
-    uint64_t bytes = preprocessMemoryBytes(plan.header.grid, plan.specs.size());
+    // The stored variables, and one array for the computed ones' statistics.
+    uint64_t bytes = preprocessMemoryBytes(plan.header.grid, plan.specs.size() + (plan.computed.empty() ? 0 : 1));
     if (options.encoding == dataset::ValueEncoding::Uint16 && options.pathlines.enabled) {
         const uint64_t traced = uint64_t(std::min<size_t>(size_t(std::max(options.pathlines.steps, 0)), inputs.size() - 1)) + 1;
         bytes = std::max(bytes, (3 * traced + 1) * plan.header.grid.cellCount() * sizeof(float));
@@ -234,7 +264,7 @@ public:
     OutputDirectory(const fs::path& dir, const json& manifest)
         : m_dir(dir), m_existed(fs::exists(dir)), m_lock(dir), m_fresh(!fs::exists(manifestPath()))
     {
-        for (const fs::path name : {dataset::format::kSampleCoords, "steps", "pathlines"})
+        for (const fs::path name : {dataset::format::kSampleCoords, dataset::format::kSampleCells, "steps", "pathlines"})
             if (!fs::exists(m_dir / name))
                 m_created.push_back(m_dir / name);
         if (!m_fresh) {
@@ -262,11 +292,16 @@ private:
         } catch (const Error& e) {
             fail("{} (it exists already); remove the directory to start over", e.what());
         }
-        // A finished manifest adds global statistics to the variables: not a setting.
-        if (old.contains("variables") && old["variables"].is_array())
+        // A finished manifest adds global statistics and the computed variables: not settings.
+        if (old.contains("variables") && old["variables"].is_array()) {
+            json stored = json::array();
             for (auto& v : old["variables"])
-                if (v.is_object())
+                if (v.is_object() && v.value("stored", true)) {
                     v.erase("global");
+                    stored.push_back(v);
+                }
+            old["variables"] = stored;
+        }
         for (const char* key : {"format", "version", "encoding", "levels", "variables", "dt_myr", "brick_size", "sample"})
             if (old.value(key, json()) != j[key])
                 fail("{}: holds a dataset made with a different '{}' (other inputs or options); "
@@ -323,6 +358,9 @@ std::vector<uint32_t> writeSampleCoordinates(const fs::path& dir, const grid::Sp
         const auto coords = sampleCoordinates(grid, cells);
         writeFileAtomic(dir / dataset::format::kSampleCoords, std::as_bytes(std::span(coords)));
     }
+    // The grid points themselves, for the computed variables' sample columns (Dataset::loadSample).
+    if (mpi::isRoot() && !fs::exists(dir / dataset::format::kSampleCells))
+        writeFileAtomic(dir / dataset::format::kSampleCells, std::as_bytes(std::span(cells)));
     return cells;
 }
 
@@ -375,6 +413,42 @@ std::vector<int> findStepsToDo(const OutputDirectory& out, const std::vector<fs:
     return todo;
 }
 
+// The step's level-0 shell means of every variable a shell anomaly is computed from
+// (step["shell_means"][name], null for a shell without a value) and each shell anomaly's statistics
+// (step["computed_stats"][name]), from the exact values: null where the step does not define it (a
+// percentage of a shell mean not positive) or it overflows float32. Made with the functions the
+// readers compute the values with (dataset/shell_anomaly.h).
+void addComputedStats(json& stepJson, const RunPlan& plan, const std::vector<std::vector<float>>& values)
+{
+    const grid::SphericalGrid& g = plan.header.grid;
+    std::map<size_t, std::vector<double>> means;
+    for (const VariableSpec& v : plan.computed)
+        means.try_emplace(v.computed->base);
+    tbb::parallel_for_each(means.begin(), means.end(), [&](auto& m) { m.second = dataset::shellMeans(g, values[m.first]); });
+    stepJson["shell_means"] = json::object();
+    for (const auto& [base, m] : means) {
+        json& out = stepJson["shell_means"][plan.specs[base].name] = json::array();
+        for (double mean : m)
+            out.push_back(std::isnan(mean) ? json() : json(mean));
+    }
+    // One variable at a time (each computed in parallel): one more array of the grid in memory.
+    std::vector<json> stats(plan.computed.size());
+    std::vector<float> anomaly(plan.computed.empty() ? 0 : g.cellCount());
+    for (size_t c = 0; c < plan.computed.size(); ++c) {
+        const dataset::ShellAnomalyOf of = *plan.computed[c].computed;
+        const std::vector<double>& m = means.at(of.base);
+        if (of.kind == dataset::ShellAnomalyKind::Percent && !dataset::shellMeansPositive(m))
+            continue;
+        dataset::computeShellAnomaly(g, values[of.base], m, of.kind, anomaly);
+        if (std::any_of(anomaly.begin(), anomaly.end(), [](float x) { return std::isinf(x); }))
+            continue;
+        stats[c] = dataset::format::toJson(computeStats(g, anomaly));
+    }
+    stepJson["computed_stats"] = json::object();
+    for (size_t c = 0; c < plan.computed.size(); ++c)
+        stepJson["computed_stats"][plan.computed[c].name] = stats[c];
+}
+
 // Phase 5, for one step: read, derive, check, statistics and sample values at full resolution,
 // then level by level values and brick bounds of every variable, written into a temporary
 // directory renamed when whole (removed if anything fails). Returns the step's manifest.
@@ -389,7 +463,7 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
     grid::Snapshot snap = io::readStep(input, plan.reader);
     spdlog::debug("{}: read in {:.2f} s", input.filename().string(), elapsed());
     checkSameGrid(input, snap.grid, plan.header.grid, inputs.front());
-    addDerivedVariables(snap);
+    addStoredDerivedVariables(snap);
     RAYPC_CHECK_EQ(snap.fields.size(), specs.size());
     // The reader refused non-finite inputs; a finite input can still derive an infinity.
     for (const auto& field : snap.fields)
@@ -417,6 +491,7 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
     });
     for (const auto& st : stats)
         stepJson["stats"].push_back(dataset::format::toJson(st));
+    addComputedStats(stepJson, plan, current);
     spdlog::debug("{}: derived, stats and sample done at {:.2f} s", input.filename().string(), elapsed());
     for (int level = 0; level < dataset::kLevelCount; ++level)
         fs::create_directories(dataset::format::levelDir(tmpDir, level));
@@ -457,15 +532,38 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
     return stepJson;
 }
 
-// Phase 6: every step's statistics and the global ranges and histograms in the manifest.
-void addStepsToManifest(json& j, const std::vector<json>& stepJsons, size_t variableCount)
+// The computed variables every step defines (its statistics in every step's "computed_stats"; a
+// step made before they existed has none), in the plan's order.
+std::vector<VariableSpec> offeredComputedSpecs(const RunPlan& plan, const std::vector<json>& stepJsons)
+{
+    std::vector<VariableSpec> offered;
+    for (const VariableSpec& v : plan.computed)
+        if (std::all_of(stepJsons.begin(), stepJsons.end(), [&](const json& sj) {
+                const auto stats = sj.find("computed_stats");
+                return stats != sj.end() && stats->contains(v.name) && !stats->at(v.name).is_null();
+            }))
+            offered.push_back(v);
+    return offered;
+}
+
+// Phase 6: every step's statistics and the global ranges and histograms in the manifest, the
+// computed variables the steps define appended to its variables (their statistics to the steps').
+void addStepsToManifest(json& j, const std::vector<json>& stepJsons, const std::vector<VariableSpec>& computed)
 {
     j["steps"] = json::array();
-    for (const auto& sj : stepJsons)
-        j["steps"].push_back(sj);
-    for (size_t v = 0; v < variableCount; ++v) {
+    for (json sj : stepJsons) {
+        for (const VariableSpec& v : computed)
+            sj["stats"].push_back(sj.at("computed_stats").at(v.name));
+        sj.erase("computed_stats");
+        if (computed.empty())
+            sj.erase("shell_means");
+        j["steps"].push_back(std::move(sj));
+    }
+    for (const VariableSpec& v : computed)
+        j["variables"].push_back(variableJson(v));
+    for (size_t v = 0; v < j["variables"].size(); ++v) {
         std::vector<dataset::VariableStats> perStep;
-        for (const auto& sj : stepJsons)
+        for (const auto& sj : j["steps"])
             perStep.push_back(dataset::format::statsFromJson(sj.at("stats").at(v)));
         j["variables"][v]["global"] = dataset::format::toJson(statsOverSteps(perStep));
     }
@@ -568,23 +666,29 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
             stepJsons[size_t(std::stoi(index))] = stepJson;
     }
 
+    // The dataset's variables: the stored ones, then the computed ones every step defines.
+    std::vector<VariableSpec> variables = plan.specs;
+    const std::vector<VariableSpec> computed = offeredComputedSpecs(plan, stepJsons);
+    variables.insert(variables.end(), computed.begin(), computed.end());
     mpi::together([&] {
-        addStepsToManifest(plan.manifest, stepJsons, plan.specs.size());
+        addStepsToManifest(plan.manifest, stepJsons, computed);
         // Phase 7 reads the finished steps back: the manifest says "complete" only after it.
         if (out)
             out->writeManifest(plan.manifest);
     });
     mpi::dieHook("preprocess-pathlines");
     // Pathlines need the flow and their seed field everywhere: missing values in either (a regional
-    // model's padding, a model's holes) leave them out, said once.
+    // model's padding, a model's holes) leave them out, said once. A computed field has gaps where
+    // the variable it is computed from has.
     if (options.pathlines.enabled) {
         std::vector<std::string> gaps;
-        for (size_t v = 0; v < plan.specs.size(); ++v) {
-            const std::string& name = plan.specs[v].name;
+        for (size_t v = 0; v < variables.size(); ++v) {
+            const std::string& name = variables[v].name;
             if (!varname::isVelocityComponent(name) && name != options.pathlines.field)
                 continue;
+            const size_t stored = variables[v].computed ? variables[v].computed->base : v;
             for (const json& sj : stepJsons)
-                if (sj.at("stats").at(v).value("missing_points", size_t(0)) > 0) {
+                if (sj.at("stats").at(stored).value("missing_points", size_t(0)) > 0) {
                     gaps.push_back(name);
                     break;
                 }
@@ -596,7 +700,7 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
                              gaps.size() == 1 ? "has" : "have");
         }
     }
-    phases::writePathlines(outDir, plan.header.grid, plan.specs, stepJsons, options, summary);
+    phases::writePathlines(outDir, plan.header.grid, variables, stepJsons, options, summary);
     mpi::together([&] {
         plan.manifest["pathlines"] =
             options.pathlines.enabled ? phases::pathlineSettings(options.pathlines) : json();

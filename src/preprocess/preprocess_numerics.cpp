@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <random>
 
 namespace raypc::preprocess {
@@ -55,46 +56,38 @@ void addVelocityVariables(grid::Snapshot& snapshot)
 
 }  // namespace
 
-void addDerivedVariables(grid::Snapshot& snapshot)
+void addStoredDerivedVariables(grid::Snapshot& snapshot)
 {
-    const auto& g = snapshot.grid;
     if (varname::hasVelocity([&](const char* c) { return snapshot.find(c) != nullptr; }))
         addVelocityVariables(snapshot);
-    // The contest's correlation task asks for the sign of the expansivity *anomaly*: its
-    // deviation from the area-weighted lateral mean of each shell, like the temperature anomaly.
-    if (const grid::Field* alpha = snapshot.find(varname::kThermalExpansivity))
-        snapshot.fields.push_back(lateralAnomaly(g, *alpha, varname::kThermalExpansivityAnomaly));
-    // A model that writes a temperature but no anomaly (ASPECT: T) gets the contest's anomaly: the
-    // deviation from the area-weighted mean of each shell.
-    if (!snapshot.find(varname::kTemperatureAnomaly))
-        for (const char* source : varname::kTemperatureAnomalyFrom)
-            if (const grid::Field* t = snapshot.find(source)) {
-                snapshot.fields.push_back(lateralAnomaly(g, *t, varname::kTemperatureAnomaly));
-                break;
-            }
 }
 
-grid::Field lateralAnomaly(const grid::SphericalGrid& g, const grid::Field& field, const std::string& name)
+std::vector<dataset::BaseVariable> baseVariables(const grid::Snapshot& snapshot)
 {
-    const auto w = g.volumeFactors();
-    grid::Field out{name, field.units, std::vector<float>(g.cellCount()), {field.name}};
-    tbb::parallel_for(size_t(0), g.nR(), [&](size_t iR) {
-        // The mean of the values the shell has (missing ones left out; none: the anomaly is missing).
-        double sum = 0, area = 0;
-        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
-            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
-                if (const float v = field.values[g.index(iLat, iR, iLon)]; !std::isnan(v)) {
-                    sum += w.lat[iLat] * w.lon[iLon] * v;
-                    area += w.lat[iLat] * w.lon[iLon];
-                }
-        const double mean = area > 0 ? sum / area : std::numeric_limits<double>::quiet_NaN();
-        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
-            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
-                const size_t i = g.index(iLat, iR, iLon);
-                out.values[i] = toFloat32(field.values[i] - mean);
-            }
-    });
+    std::vector<dataset::BaseVariable> out;
+    for (const grid::Field& f : snapshot.fields)
+        out.push_back({f.name, f.units, !f.derivedFrom.empty()});
     return out;
+}
+
+void addDerivedVariables(grid::Snapshot& snapshot)
+{
+    addStoredDerivedVariables(snapshot);
+    const auto& g = snapshot.grid;
+    const size_t stored = snapshot.fields.size();
+    std::map<size_t, std::vector<double>> means;
+    for (const dataset::ShellAnomalyVariable& v : dataset::shellAnomalyVariables(baseVariables(snapshot))) {
+        const grid::Field& base = snapshot.fields[v.of.base];
+        auto m = means.find(v.of.base);
+        if (m == means.end())
+            m = means.emplace(v.of.base, dataset::shellMeans(g, base.values)).first;
+        if (v.of.kind == dataset::ShellAnomalyKind::Percent && !dataset::shellMeansPositive(m->second))
+            continue;
+        grid::Field field{v.name, v.units, std::vector<float>(g.cellCount()), {base.name}};
+        dataset::computeShellAnomaly(g, snapshot.fields[v.of.base].values, m->second, v.of.kind, field.values);
+        snapshot.fields.push_back(std::move(field));
+    }
+    RAYPC_CHECK(snapshot.fields.size() >= stored);
 }
 
 std::vector<float> coarsenField(const grid::SphericalGrid& fine, std::span<const float> values)

@@ -17,16 +17,20 @@ namespace raypc::preprocess {
 // `value` as float32; ±infinity beyond float32's range (where a plain conversion is undefined).
 float toFloat32(double value);
 
-// Appends what derives from the fields there are: with a velocity (vx, vy, vz in m/s) "radial
-// velocity" and "velocity magnitude" (cm/yr); with "thermal expansivity", "thermal expansivity
-// anomaly" (see lateralAnomaly); without "temperature anomaly", it from "temperature" or (ASPECT)
-// "T" the same way. A model without a velocity (a tomography model) gets none of the velocity's.
-// Values too large for float32 become infinite (see checkFinite).
+// Appends the derived variables a dataset stores: with a velocity (vx, vy, vz in m/s) "radial
+// velocity" and "velocity magnitude" (cm/yr). A model without a velocity (a tomography model) gets
+// none. Values too large for float32 become infinite (see checkFinite).
+void addStoredDerivedVariables(grid::Snapshot& snapshot);
+
+// The snapshot's fields as the shell-anomaly rule sees them (a field with `derivedFrom` is derived).
+std::vector<dataset::BaseVariable> baseVariables(const grid::Snapshot& snapshot);
+
+// Appends every variable a dataset of this one snapshot has, in the dataset's order: the stored
+// derived ones (addStoredDerivedVariables), then the shell anomalies (dataset/shell_anomaly.h:
+// "thermal expansivity anomaly", "temperature anomaly" from ASPECT's T, every "X anomaly" and the
+// "X anomaly %" whose shell means are all positive here), computed as the dataset computes them when
+// read. For tests and tools that work on snapshots in memory.
 void addDerivedVariables(grid::Snapshot& snapshot);
-
-
-// `field` minus its area-weighted mean over each radius shell (the lateral mean), named `name`.
-grid::Field lateralAnomaly(const grid::SphericalGrid& grid, const grid::Field& field, const std::string& name);
 
 // The next coarser level: each coarse point is the volume-weighted mean of the (up to) 2x2x2
 // fine points it merges (grid.coarsened() gives its coordinates).

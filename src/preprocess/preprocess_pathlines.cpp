@@ -29,19 +29,30 @@ using nlohmann::json;
 class StepArrays {
 public:
     StepArrays(fs::path dataset, const grid::SphericalGrid& grid, const std::vector<VariableSpec>& specs,
-               const PreprocessOptions& options)
+               const std::vector<json>& stepJsons, const PreprocessOptions& options)
         : m_dir(std::move(dataset)), m_level{grid, grid::BrickLayout::forGrid(grid, options.brickSize)},
           m_encoding(options.encoding)
     {
-        for (const auto& v : specs)
-            m_stems.push_back(fileSafeName(v.name));
+        for (const auto& v : specs) {
+            if (v.computed)
+                m_computed.push_back(*v.computed);
+            else
+                m_stems.push_back(fileSafeName(v.name));
+        }
+        // Per step and stored variable: whether it has missing values (how its arrays are encoded).
+        for (const json& sj : stepJsons) {
+            std::vector<char>& missing = m_missing.emplace_back();
+            for (size_t v = 0; v < m_stems.size(); ++v)
+                missing.push_back(sj.at("stats").at(v).value("missing_points", size_t(0)) > 0);
+        }
     }
 
     const std::shared_ptr<const dataset::StepVolume>& volume(int step)
     {
         auto& v = m_steps[step];
         if (!v)
-            v = dataset::StepVolume::open(dataset::format::levelDir(dataset::format::stepDir(m_dir, step), 0), m_level, m_stems, m_encoding);
+            v = dataset::StepVolume::open(dataset::format::levelDir(dataset::format::stepDir(m_dir, step), 0), m_level, m_stems, m_encoding, {},
+                                          m_missing.at(size_t(step)), m_computed);
         return v;
     }
     // Releases the steps before `step`.
@@ -52,6 +63,8 @@ private:
     dataset::LevelInfo m_level;
     dataset::ValueEncoding m_encoding;
     std::vector<std::string> m_stems;
+    std::vector<dataset::ShellAnomalyOf> m_computed;
+    std::vector<std::vector<char>> m_missing;
     std::map<int, std::shared_ptr<const dataset::StepVolume>> m_steps;
 };
 
@@ -95,6 +108,7 @@ void writePathlines(const fs::path& outDir, const grid::SphericalGrid& grid, con
                     const std::vector<json>& stepJsons, const PreprocessOptions& options, PreprocessSummary& summary)
 {
     const PathlineOptions& po = options.pathlines;
+    checkPathlineOptions(po, specs);  // the field among the variables the dataset has in the end
     const fs::path root = outDir / "pathlines";
     const int nSteps = static_cast<int>(stepJsons.size());
     const json settings = pathlineSettings(po);
@@ -151,7 +165,7 @@ void writePathlines(const fs::path& outDir, const grid::SphericalGrid& grid, con
     std::optional<Progress> progress;
     if (!options.quiet && !todo.empty() && mpi::isRoot())
         progress.emplace("pathlines", static_cast<int64_t>(todo.size()), "steps");
-    StepArrays arrays(outDir, grid, specs, options);
+    StepArrays arrays(outDir, grid, specs, stepJsons, options);
     int64_t reported = 0, written = 0, lines = 0;
     auto traceStep = [&](int s) {
         throwIfCancelled(options);

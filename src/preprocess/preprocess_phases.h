@@ -7,18 +7,21 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace raypc::preprocess::phases {
 
-// A variable of the dataset: stored (as the reader returns it) or derived.
+// A variable of the dataset: stored (as the reader returns it, or derived and stored), or computed
+// when read (a shell anomaly: `computed`, after the stored ones).
 struct VariableSpec {
     std::string name, units;
     bool derived;
     // What it comes from: a stored variable's name in the input, a derived one's inputs.
     std::string source;
     std::string longName;  // the input's long_name, where it has one
+    std::optional<dataset::ShellAnomalyOf> computed = {};
 };
 
 // Throws raypc::Error "preprocess: cancelled" once options.cancel is set (between steps and sets).
@@ -32,7 +35,8 @@ void checkPathlineOptions(const PathlineOptions& options, const std::vector<Vari
 
 // The pathline phase: critical points and pathlines of every step, each step's set written
 // atomically and skipped on a rerun when it was made with the same settings and reaches the
-// same last step. Reads the written level-0 arrays back; `stepJsons` are the steps' manifests.
+// same last step. Reads the written level-0 arrays back (computed variables computed from them);
+// `specs` are the dataset's variables, stored then computed; `stepJsons` are the steps' manifests.
 void writePathlines(const std::filesystem::path& outDir, const grid::SphericalGrid& grid,
                     const std::vector<VariableSpec>& specs, const std::vector<nlohmann::json>& stepJsons,
                     const PreprocessOptions& options, PreprocessSummary& summary);

@@ -344,11 +344,17 @@ TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)
     ASSERT_EQ(ds->steps().size(), 3u);
     EXPECT_DOUBLE_EQ(ds->steps()[2].timeMyr, 4.0);
     EXPECT_EQ(ds->steps()[1].source, "spherical002.nc");
-    ASSERT_EQ(ds->variables().size(), 11u);
+    // The file's 8, the velocity's 2 stored, then the shell anomalies computed when read: of the
+    // conductivity and the expansivity (the temperature's is the file's), and the temperature's
+    // percentage (the fixture's conductivity and expansivity are anomalies: no percentage).
+    ASSERT_EQ(ds->variables().size(), 13u);
     EXPECT_EQ(ds->variables()[8].name, "radial velocity");
     EXPECT_TRUE(ds->variables()[8].derived);
-    EXPECT_EQ(ds->variables()[10].name, "thermal expansivity anomaly");
-    EXPECT_EQ(ds->variables()[10].units, "1/K");
+    EXPECT_TRUE(ds->variables()[9].stored);
+    EXPECT_EQ(ds->variables()[11].name, "thermal expansivity anomaly");
+    EXPECT_EQ(ds->variables()[11].units, "1/K");
+    EXPECT_FALSE(ds->variables()[11].stored);
+    EXPECT_EQ(ds->variables()[12].name, "temperature anomaly %");
     ASSERT_EQ(ds->levels().size(), 3u);
     EXPECT_EQ(ds->levels()[1].grid.nLat(), 18u);
     EXPECT_EQ(ds->levels()[1].grid.nR(), 21u);
@@ -390,7 +396,7 @@ TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)
     // The sample: coordinates consistent with each other, values those of the sampled points.
     const auto table = ds->loadSample(1);
     ASSERT_EQ(table.rows, 5000u);
-    ASSERT_EQ(table.columns.size(), 7u + 11u);
+    ASSERT_EQ(table.columns.size(), 7u + ds->variables().size());
     EXPECT_EQ(table.columns[6], "depth");
     const grid::SphericalGrid& g = snap.grid;
     for (size_t row = 0; row < table.rows; row += 97) {
@@ -409,6 +415,11 @@ TEST(Preprocess, ContestFixtureDatasetHoldsEveryProduct)
         };
         const size_t a = nearest(g.latDeg, lat), b = nearest(g.rKm, r), c = nearest(g.lonDeg, lon);
         ASSERT_EQ(table.at(row, 7 + anomaly), snap.find("temperature anomaly")->values[g.index(a, b, c)]);
+        // A computed column: the file's temperature less the step's level-0 shell mean.
+        const size_t percent = size_t(ds->variableIndex("temperature anomaly %"));
+        const double mean = ds->steps()[1].shellMeans[size_t(ds->variableIndex("temperature"))][b];
+        ASSERT_NEAR(table.at(row, 7 + percent), 100 * (snap.find("temperature")->values[g.index(a, b, c)] - mean) / mean,
+                    1e-4);
     }
 }
 

@@ -100,5 +100,30 @@ TEST(RenderState, DefaultOpacityIsAVForMapsCentredOnZero)
     s.opacity = {{0, 0.2f}, {1, 0.2f}};
     EXPECT_FLOAT_EQ(resolveParams(s, catalog).transfer.opacity[0].opacity, 0.2f);
 }
+// The first view shows what the dataset has: the temperature anomaly, else the first variable's shell
+// anomaly (a tomography model's vs), else the first variable.
+TEST(RenderState, DefaultViewIsTheTemperatureAnomalyElseTheFirstVariablesAnomaly)
+{
+    VariableCatalog tomography;
+    tomography.names = {"vs", "vs anomaly", "vs anomaly %"};
+    tomography.ranges = {{4.3f, 6.5f}, {-0.1f, 0.1f}, {-2.3f, 2.3f}};
+    EXPECT_EQ(defaultState(tomography).colorVariable, "vs anomaly");
+    EXPECT_EQ(defaultState(tomography).colorMap, ColorMapId::BlueWhiteRed);  // either side of zero
+
+    VariableCatalog flow;  // the velocity first: it has no anomaly
+    flow.names = {"vx", "vy", "vz", "viscosity", "radial velocity", "viscosity anomaly", "viscosity anomaly %"};
+    flow.ranges.assign(flow.names.size(), {-1.0f, 1.0f});
+    EXPECT_EQ(defaultState(flow).colorVariable, "viscosity anomaly");
+
+    VariableCatalog contest;
+    contest.names = {"temperature", "thermal conductivity", "temperature anomaly", "thermal conductivity anomaly"};
+    contest.ranges.assign(contest.names.size(), {-1.0f, 1.0f});
+    EXPECT_EQ(defaultState(contest).colorVariable, "temperature anomaly");
+
+    VariableCatalog plain;
+    plain.names = {"density"};
+    plain.ranges = {{3000.0f, 5000.0f}};
+    EXPECT_EQ(defaultState(plain).colorVariable, "density");
+}
 }  // namespace
 }  // namespace raypc::render

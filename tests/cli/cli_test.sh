@@ -105,7 +105,9 @@ fixture_info_probe_export)
   check "u16 probe values are within their quantisation bound of float32's" python3 - "$work/p16.json" "$work/p32.json" <<'PY'
 import json, sys
 a, b = (json.load(open(f))["values"] for f in sys.argv[1:3])
-assert len(a) == 11 and a.keys() == b.keys()
+# The file's 8, the velocity's 2 and 3 shell anomalies computed when read (their bounds: the base's
+# at the point and on its shell).
+assert len(a) == 13 and a.keys() == b.keys()
 assert sum(a[k]["quantisation_error_max"] > 0 for k in a) >= 8
 for k in a:
     assert b[k]["quantisation_error_max"] == 0, k
@@ -693,7 +695,7 @@ aspect_series)
   check "preprocess of the adaptive series: $(cat "$work/pre.txt")" grep -q "3 steps (3 written, 0 already done) of 133x34x266" "$work/pre.txt"
   "$raypc" info "$work/amr" >"$work/info.txt"
   check "times from the .pvd (years)" grep -q "steps: 3 (0 .. 4 Myr, 2 Myr apart; solution-00000.pvtu .. solution-00002.pvtu)" "$work/info.txt"
-  check "temperature anomaly derived from T" grep -Eq "temperature anomaly .*\(derived from T\)" "$work/info.txt"
+  check "temperature anomaly computed from T" grep -Eq "temperature anomaly .*\(computed from T when read\)" "$work/info.txt"
   check "info names the source and the resampling: $(grep source: "$work/info.txt")" \
     grep -Eq "source: VTK XML \(ASPECT layout\), resampled onto level 0; step 0: 53296 cells in 3 pieces, grid points inside a cell 9[0-9.]+ %, snapped to the nearest cell [0-9.]+ %, in none 0" "$work/info.txt"
   # At the centre of the blob at 60°N 20°E, 5300 km, step 0: T = 1600 + 2000 (6371 - 5300) / 2886 + 300
@@ -873,6 +875,68 @@ sys.exit(0 if abs(p['value'] - vs) <= p['quantisation_error_max'] + 1e-5 else 1)
   check "features of the slow shallow region" test "$(wc -l < "$work/f.csv")" -ge 2
   expect_error "no velocity component 'vx'" features "$work/ds" --range "vs=4:4.45" -o "$work/f2.csv" --tracks "$work/t.csv"
   expect_error "no 'radial velocity' variable" flux "$work/ds" --range "vs=4:4.45" -o "$work/x.csv"
+  # Its shell anomalies, computed when read (no arrays): vs anomaly in km/s and dlnVs in %.
+  dsinfo=$("$raypc" info "$work/ds")
+  check "info: vs anomaly [km/s], computed from vs" grep -qE '^ +vs anomaly +\[km/s .*computed from vs' <<<"$dsinfo"
+  check "info: vs anomaly % [%], computed from vs" grep -qE '^ +vs anomaly % +\[% .*computed from vs' <<<"$dsinfo"
+  check "  and no arrays of them" test -z "$(find "$work/ds" -name '*anomaly*')"
+  "$raypc" preprocess "$emc/global_vs.nc" -o "$work/ds32" --encoding float32 --quiet >/dev/null
+  # The definition, from the file with numpy: each depth's mean weighted by the dual cells' areas
+  # (lat edges halfway between rows, the pole rows' half a spacing to the pole; the seam's repeated
+  # column dropped), and the dual cells' volumes for a brush's selected volume.
+  cat >"$work/truth.py" <<'PY'
+import netCDF4, numpy as np
+def truth(path):
+    with netCDF4.Dataset(path) as nc:
+        depth = np.asarray(nc["depth"][:], float)
+        lat = np.asarray(nc["latitude"][:], float)
+        lon = np.asarray(nc["longitude"][:], float)[:-1]
+        vs = np.asarray(nc["vs"][:], float)[:, :, :-1]
+    edges = np.concatenate([[lat[0] - (lat[1] - lat[0]) / 2], (lat[1:] + lat[:-1]) / 2, [lat[-1] + (lat[-1] - lat[-2]) / 2]])
+    edges = np.radians(np.clip(edges, -90, 90))
+    area = np.diff(np.sin(edges))[None, :, None] * np.ones(vs.shape)
+    mean = (vs * area).sum(axis=(1, 2)) / area.sum(axis=(1, 2))
+    anomaly = vs - mean[:, None, None]
+    r = 6371.0 - depth[::-1]
+    redges = np.concatenate([[r[0]], (r[1:] + r[:-1]) / 2, [r[-1]]])
+    shell = (np.diff(redges ** 3) / 3)[::-1]
+    volume = shell[:, None, None] * area * np.radians(360.0 / len(lon))
+    return depth, lat, lon, vs, mean, anomaly, 100 * anomaly / mean[:, None, None], volume
+PY
+  for ds in ds ds32; do
+    for point in "0 30 50" "45 -90 1050" "-85 175 2850" "90 0 650"; do
+      read -r lat lon depth <<<"$point"
+      got=$("$raypc" probe "$work/$ds" --lat "$lat" --lon "$lon" --r "$((6371 - depth))")
+      check "$ds: vs anomaly and vs anomaly % at lat $lat, lon $lon, depth $depth km are their definition" \
+        python3 - "$work/truth.py" "$emc/global_vs.nc" "$got" "$lat" "$lon" "$depth" <<'PY'
+import json, sys
+sys.path.insert(0, sys.argv[1].rsplit("/", 1)[0]); from truth import truth
+depth, lat, lon, vs, mean, anomaly, percent, volume = truth(sys.argv[2])
+p = json.loads(sys.argv[3])["values"]
+la, lo, d = map(float, sys.argv[4:7])
+k, i, j = list(depth).index(d), list(lat).index(la), list(((lon + 360) % 360)).index(lo % 360)
+a, q = p["vs anomaly"], p["vs anomaly %"]
+ok = abs(a["value"] - anomaly[k, i, j]) <= a["quantisation_error_max"] + 2e-6
+ok &= abs(q["value"] - percent[k, i, j]) <= q["quantisation_error_max"] + 5e-5
+print(a, anomaly[k, i, j], q, percent[k, i, j])
+sys.exit(0 if ok else 1)
+PY
+    done
+  done
+  # Brushing dlnVs >= 1 %: the selected volume is that of the grid points where the definition is
+  # (points within 1e-4 % of the edge may go either way).
+  "$raypc" stats "$work/ds32" --range "vs anomaly %=1:100" -o "$work/pct.csv" -q >/dev/null
+  check "stats of a brush on vs anomaly % select the definition's volume" \
+    python3 - "$work/truth.py" "$emc/global_vs.nc" "$work/pct.csv" <<'PY'
+import csv, sys
+sys.path.insert(0, sys.argv[1].rsplit("/", 1)[0]); from truth import truth
+depth, lat, lon, vs, mean, anomaly, percent, volume = truth(sys.argv[2])
+row = next(csv.DictReader(open(sys.argv[3])))
+want, slack = volume[percent >= 1].sum(), volume[abs(percent - 1) < 1e-4].sum()
+got = float(row["selected_volume_km3"])
+print(got, want, slack)
+sys.exit(0 if want > 0 and abs(got - want) <= slack + 1e-6 * want else 1)
+PY
   ;;
 regional)
   # A regional tomography model (tests/data/emc-layout/regional_vs.nc: lat 20..55, lon -130..-65, depth

@@ -35,9 +35,22 @@ def test_derived_variables_have_the_tables_names_units_and_sources(contest):
     manifest = {v["name"]: v for v in json.loads((Path(contest.path) / "dataset.json").read_text())["variables"]}
     table = {v["name"]: v for v in TABLE["derivedVariables"]}
     derived = [v for v in contest.variables if v.derived]
-    # The contest's files have a velocity and an expansivity (their anomaly is stored).
-    assert {v.name for v in derived} == {"radial velocity", "velocity magnitude", "thermal expansivity anomaly"}
+    rule = TABLE["shellAnomaly"]
+    # The contest's files have a velocity and an expansivity; their shell anomalies are computed when
+    # read (not stored), the percentages only of variables whose shell means are positive.
+    computed = [v for v in derived if manifest[v.name]["stored"] is False]
+    assert {v.name for v in derived} - {v.name for v in computed} == {"radial velocity", "velocity magnitude"}
+    assert "thermal expansivity anomaly" in {v.name for v in computed}
+    for v in computed:
+        source = manifest[v.name]["source"]
+        assert manifest[source]["stored"] is True
+        if manifest[v.name]["kind"] == "anomaly %":
+            assert v.name.endswith(rule["percentSuffix"]) and v.units == rule["percentUnits"]
+        else:
+            assert v.name.endswith(rule["suffix"]) and v.units == manifest[source]["units"]
     for v in derived:
+        if v in computed and v.name not in table:
+            continue
         assert v.name in table, f"{v.name}: derived, but not in names.json"
         entry, source = table[v.name], manifest[v.name]["source"]
         if entry["units"] is None:  # an anomaly of the first of 'from' the model has, in its units

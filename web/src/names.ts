@@ -30,3 +30,6 @@ export const selectionOverTimeColumns: readonly string[] = table.columns.selecti
 export const shortTitles: ReadonlyMap<string, string> = new Map(
   [...table.derivedVariables, ...table.knownVariables].flatMap((v): [string, string][] =>
     'short' in v && v.short ? [[v.name, v.short]] : []));
+// The rule of the shell anomalies every stored variable X gives (computed when read): 'X anomaly'
+// in X's units and, where its shell means are positive, 'X anomaly %'.
+export const shellAnomaly: { suffix: string; percentSuffix: string; percentUnits: string } = table.shellAnomaly;

@@ -1,0 +1,110 @@
+#include "dataset/shell_anomaly.h"
+
+#include "core/error.h"
+#include "grid/variable_names.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace raypc::dataset {
+
+std::string_view shellAnomalyKindName(ShellAnomalyKind kind)
+{
+    return kind == ShellAnomalyKind::Difference ? "anomaly" : "anomaly %";
+}
+
+std::optional<ShellAnomalyKind> parseShellAnomalyKind(std::string_view text)
+{
+    for (const ShellAnomalyKind k : {ShellAnomalyKind::Difference, ShellAnomalyKind::Percent})
+        if (text == shellAnomalyKindName(k))
+            return k;
+    return std::nullopt;
+}
+
+std::vector<ShellAnomalyVariable> shellAnomalyVariables(std::span<const BaseVariable> variables)
+{
+    const auto exists = [&](const std::string& name) {
+        return std::any_of(variables.begin(), variables.end(), [&](const BaseVariable& v) { return v.name == name; });
+    };
+    // The temperature whose anomaly is named "temperature anomaly": the first of the table's sources
+    // the model has, when it has no temperature anomaly of its own.
+    std::string temperature;
+    if (!exists(varname::kTemperatureAnomaly))
+        for (const char* source : varname::kTemperatureAnomalyFrom)
+            if (exists(source)) {
+                temperature = source;
+                break;
+            }
+    const std::string_view suffix = varname::kShellAnomalySuffix;
+    std::vector<ShellAnomalyVariable> anomalies, percents;
+    for (size_t i = 0; i < variables.size(); ++i) {
+        const BaseVariable& v = variables[i];
+        if (v.derived || varname::isVelocityComponent(v.name) || v.name.find("anomaly") != std::string::npos)
+            continue;
+        // The name the anomaly goes by ("temperature anomaly" for ASPECT's T), and so its percentage's.
+        const std::string anomaly = v.name == temperature ? std::string(varname::kTemperatureAnomaly) : v.name + std::string(suffix);
+        const std::string stem = anomaly.substr(0, anomaly.size() - suffix.size());
+        if (!exists(anomaly))
+            anomalies.push_back({anomaly, v.units, {i, ShellAnomalyKind::Difference}});
+        const std::string percent = stem + varname::kShellAnomalyPercentSuffix;
+        if (!exists(percent))
+            percents.push_back({percent, varname::kShellAnomalyPercentUnits, {i, ShellAnomalyKind::Percent}});
+    }
+    anomalies.insert(anomalies.end(), percents.begin(), percents.end());
+    return anomalies;
+}
+
+std::vector<double> shellMeans(const grid::SphericalGrid& g, std::span<const float> values)
+{
+    RAYPC_CHECK_EQ(values.size(), g.cellCount());
+    const auto w = g.volumeFactors();
+    std::vector<double> means(g.nR());
+    tbb::parallel_for(size_t(0), g.nR(), [&](size_t iR) {
+        double sum = 0, area = 0;
+        for (size_t iLat = 0; iLat < g.nLat(); ++iLat) {
+            const float* row = values.data() + g.index(iLat, iR, 0);
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+                if (std::isfinite(row[iLon])) {
+                    const double a = w.lat[iLat] * w.lon[iLon];
+                    sum += a * row[iLon];
+                    area += a;
+                }
+        }
+        means[iR] = area > 0 ? sum / area : std::numeric_limits<double>::quiet_NaN();
+    });
+    return means;
+}
+
+bool shellMeansPositive(std::span<const double> means)
+{
+    return std::all_of(means.begin(), means.end(), [](double m) { return std::isnan(m) || m > 0; });
+}
+
+float shellAnomalyValue(float x, double mean, ShellAnomalyKind kind)
+{
+    const double d = double(x) - mean;
+    const double v = kind == ShellAnomalyKind::Difference ? d : 100.0 * d / mean;
+    if (std::abs(v) > double(std::numeric_limits<float>::max()))
+        return std::copysign(std::numeric_limits<float>::infinity(), v);
+    return static_cast<float>(v);
+}
+
+void computeShellAnomaly(const grid::SphericalGrid& g, std::span<const float> values, std::span<const double> means,
+                         ShellAnomalyKind kind, std::span<float> out)
+{
+    RAYPC_CHECK_EQ(values.size(), g.cellCount());
+    RAYPC_CHECK_EQ(out.size(), g.cellCount());
+    RAYPC_CHECK_EQ(means.size(), g.nR());
+    tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
+        for (size_t iR = 0; iR < g.nR(); ++iR) {
+            const size_t first = g.index(iLat, iR, 0);
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+                out[first + iLon] = shellAnomalyValue(values[first + iLon], means[iR], kind);
+        }
+    });
+}
+
+}  // namespace raypc::dataset
