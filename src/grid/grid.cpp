@@ -225,6 +225,99 @@ void SphericalGrid::validate(const std::string& what) const
     // wide gaps between the points of a grid are allowed here, and hold what the reader put there.
 }
 
+namespace {
+
+double medianSpacing(const std::vector<double>& ascending)
+{
+    std::vector<double> gaps;
+    for (size_t i = 1; i < ascending.size(); ++i)
+        gaps.push_back(ascending[i] - ascending[i - 1]);
+    if (gaps.empty())
+        return 0;
+    std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
+    return gaps[gaps.size() / 2];
+}
+
+// Points from `from` toward `to` (exclusive) with spacings step, 2 step, 4 step...: few points, however
+// far, and a first one a regular spacing beyond the data. Stops where the next spacing would leave
+// less than itself before `to`.
+std::vector<double> growingSteps(double from, double to, double step)
+{
+    std::vector<double> points;
+    const double sign = to > from ? 1.0 : -1.0;
+    double x = from;
+    for (double s = step; std::abs(to - x) > 2.0 * s; s *= 2.0) {
+        x += sign * s;
+        points.push_back(x);
+    }
+    return points;
+}
+
+}  // namespace
+
+PaddedAxis padToGlobe(const std::vector<double>& ascendingDeg, bool latitude)
+{
+    PaddedAxis out;
+    out.deg = ascendingDeg;
+    for (size_t i = 0; i < ascendingDeg.size(); ++i)
+        out.source.push_back(i);
+    const double d = medianSpacing(ascendingDeg);
+    if (d <= 0)
+        return out;
+    constexpr size_t kNoData = PaddedAxis::kPadding;
+    std::vector<std::pair<double, size_t>> points;
+    for (size_t i = 0; i < ascendingDeg.size(); ++i)
+        points.emplace_back(ascendingDeg[i], i);
+    std::optional<std::array<double, 2>>& extent = out.extent;
+    const std::vector<double>& canonical = ascendingDeg;
+    if (latitude) {
+        const double south = canonical.front(), north = canonical.back();
+        if (south + 90.0 <= 2.0 * d + 1e-9 && 90.0 - north <= 2.0 * d + 1e-9)
+            return out;
+        extent = std::array<double, 2>{south, north};
+        if (south + 90.0 > 2.0 * d + 1e-9) {
+            for (double x : growingSteps(south, -90.0, d))
+                points.emplace_back(x, kNoData);
+            points.emplace_back(-90.0, kNoData);
+        }
+        if (90.0 - north > 2.0 * d + 1e-9) {
+            for (double x : growingSteps(north, 90.0, d))
+                points.emplace_back(x, kNoData);
+            points.emplace_back(90.0, kNoData);
+        }
+    } else {
+        // The widest gap between neighbours on the circle (the seam's included).
+        const size_t n = canonical.size();
+        size_t widest = n - 1;
+        double widestGap = canonical.front() + 360.0 - canonical.back();
+        for (size_t i = 0; i + 1 < n; ++i)
+            if (canonical[i + 1] - canonical[i] > widestGap) {
+                widestGap = canonical[i + 1] - canonical[i];
+                widest = i;
+            }
+        if (widestGap <= 2.0 * d + 1e-9)
+            return out;
+        const double west = canonical[(widest + 1) % n], east = canonical[widest];
+        extent = std::array<double, 2>{west, east};
+        // From both sides toward the middle of the gap, then the middle itself.
+        const double mid = east + 0.5 * widestGap;
+        for (double x : growingSteps(east, mid, d))
+            points.emplace_back(wrapLonDeg(x), kNoData);
+        for (double x : growingSteps(east + widestGap, mid, d))
+            points.emplace_back(wrapLonDeg(x), kNoData);
+        points.emplace_back(wrapLonDeg(mid), kNoData);
+    }
+    std::stable_sort(points.begin(), points.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
+    out.deg.clear();
+    out.source.clear();
+    for (const auto& [x, i] : points) {
+        out.deg.push_back(x);
+        out.source.push_back(i);
+    }
+    return out;
+}
+
+
 bool SphericalGrid::sameAs(const SphericalGrid& other, double tolerance) const
 {
     auto same = [tolerance](const std::vector<double>& a, const std::vector<double>& b) {

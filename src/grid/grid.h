@@ -84,6 +84,21 @@ struct SphericalGrid {
     bool sameAs(const SphericalGrid& other, double tolerance = 1e-6) const;
 };
 
+// A regional axis made global (docs/format.md, "Regional and partial grids"): latitudes that stop more
+// than two spacings short of a pole, or longitudes that leave a gap of more than two spacings, get
+// points that hold no data: rows toward each pole (the last on it), columns from both sides into the
+// gap, at spacings of 1, 2, 4 ... times the data's median spacing, so that few are added however
+// small the region. Nothing interpolates into them but from the data's last points.
+struct PaddedAxis {
+    static constexpr size_t kPadding = SIZE_MAX;
+    std::vector<double> deg;     // ascending (lon within [0, 360))
+    std::vector<size_t> source;  // per point its index in the input, or kPadding
+    // The data's extent (south, north; or west, east, west > east across 0°), or none: no padding.
+    std::optional<std::array<double, 2>> extent;
+};
+// `ascendingDeg`: latitudes (degrees north) or longitudes (degrees east within [0, 360)), ascending.
+PaddedAxis padToGlobe(const std::vector<double>& ascendingDeg, bool latitude);
+
 // The gradient of a field at every grid point in the grid's own directions, per degree of latitude,
 // per km of radius and per degree of longitude: central differences over the two neighbours
 // (x[i+1] - x[i-1] apart), one-sided at the outermost rows and radii, wrapped across the lon seam.

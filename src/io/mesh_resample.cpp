@@ -2,6 +2,7 @@
 
 #include "core/clock.h"
 #include "core/error.h"
+#include "core/spherical.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -412,6 +413,74 @@ int lagrangeHexPointIndex(int i, int j, int k, int p)
     return offset + ((k - 1) * e + (j - 1)) * e + (i - 1);
 }
 
+namespace {
+
+// A mesh's extent when it is regional (ShellMesh::latExtentDeg, lonExtentDeg): its nodes' latitudes,
+// and the widest gap between its nodes' longitudes (on a tenth-of-a-degree circle of bins).
+void findRegion(ShellMesh& mesh, const std::vector<vtk::Piece>& pieces)
+{
+    constexpr int kBinsPerDeg = 10;
+    struct Partial {
+        double south = 90, north = -90;
+        // Per bin the least and the largest longitude of a node in it (+inf, -inf: none).
+        std::vector<double> lonLo = std::vector<double>(360 * kBinsPerDeg, INFINITY);
+        std::vector<double> lonHi = std::vector<double>(360 * kBinsPerDeg, -INFINITY);
+    };
+    tbb::combinable<Partial> partial;
+    for (const auto& piece : pieces)
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, piece.points.size() / 3, 1 << 14), [&](const auto& range) {
+            Partial& p = partial.local();
+            for (size_t i = range.begin(); i != range.end(); ++i) {
+                const SphericalPoint s = cartesianToSpherical(
+                    Vec3d{piece.points[3 * i], piece.points[3 * i + 1], piece.points[3 * i + 2]});
+                p.south = std::min(p.south, s.latDeg), p.north = std::max(p.north, s.latDeg);
+                const double lon = wrapLonDeg(s.lonDeg);
+                const size_t b = std::min(size_t(lon * kBinsPerDeg), size_t(360 * kBinsPerDeg - 1));
+                p.lonLo[b] = std::min(p.lonLo[b], lon), p.lonHi[b] = std::max(p.lonHi[b], lon);
+            }
+        });
+    Partial all;
+    partial.combine_each([&](const Partial& p) {
+        all.south = std::min(all.south, p.south), all.north = std::max(all.north, p.north);
+        for (size_t b = 0; b < all.lonLo.size(); ++b)
+            all.lonLo[b] = std::min(all.lonLo[b], p.lonLo[b]), all.lonHi[b] = std::max(all.lonHi[b], p.lonHi[b]);
+    });
+    const auto occupied = [&](int b) { return all.lonLo[size_t(b)] <= all.lonHi[size_t(b)]; };
+    // Nodes of a mesh that covers the globe lie within a cell of every pole and every meridian: gaps
+    // are measured against its coarsest cell (the arc between a cell's farthest nodes).
+    const double margin = 2 * mesh.coarsestArcDeg;
+    if (all.south > -90 + margin || all.north < 90 - margin)
+        mesh.latExtentDeg = std::array<double, 2>{all.south, all.north};
+    // The widest run of empty bins on the circle; a gap wider than two cells is outside the mesh (a
+    // mesh that reaches a pole has nodes at every longitude near it).
+    const int n = int(all.lonLo.size());
+    int first = -1;
+    for (int b = 0; b < n && first < 0; ++b)
+        if (occupied(b))
+            first = b;
+    if (first < 0)
+        return;
+    int bestStart = 0, bestLength = 0;
+    for (int k = 1, run = 0; k <= n; ++k) {
+        const int b = (first + k) % n;
+        if (!occupied(b)) {
+            ++run;
+            continue;
+        }
+        if (run > bestLength)
+            bestLength = run, bestStart = (b - run + n) % n;
+        run = 0;
+    }
+    if (double(bestLength) / kBinsPerDeg > margin) {
+        // The nodes on either side of the gap: the easternmost before it, the westernmost after it.
+        const double east = all.lonHi[size_t((bestStart - 1 + n) % n)];
+        const double west = all.lonLo[size_t((bestStart + bestLength) % n)];
+        mesh.lonExtentDeg = std::array<double, 2>{west, east};
+    }
+}
+
+}  // namespace
+
 ShellMesh makeShellMesh(std::vector<vtk::Piece> pieces, double kmPerUnit, const std::string& what)
 {
     ShellMesh mesh;
@@ -420,7 +489,7 @@ ShellMesh makeShellMesh(std::vector<vtk::Piece> pieces, double kmPerUnit, const 
     mesh.finestArcDeg = INFINITY, mesh.finestRadialKm = INFINITY;
     // The shell's radii and the finest cell, over every cell's nodes, in parallel.
     struct Extent {
-        double rMin = INFINITY, rMax = 0, arcDeg = INFINITY, radialKm = INFINITY;
+        double rMin = INFINITY, rMax = 0, arcDeg = INFINITY, radialKm = INFINITY, coarsestArcDeg = 0;
     };
     tbb::combinable<Extent> partial;
     for (auto& piece : pieces) {
@@ -451,6 +520,7 @@ ShellMesh makeShellMesh(std::vector<vtk::Piece> pieces, double kmPerUnit, const 
                 // its edge; the radial extent is one edge when the cell's radial edges are radial.
                 if (arc > 0)
                     e.arcDeg = std::min(e.arcDeg, arc / std::sqrt(2.0) / cell.degree);
+                e.coarsestArcDeg = std::max(e.coarsestArcDeg, arc);
                 if (rHi > rLo)
                     e.radialKm = std::min(e.radialKm, (rHi - rLo) / cell.degree);
             }
@@ -460,6 +530,7 @@ ShellMesh makeShellMesh(std::vector<vtk::Piece> pieces, double kmPerUnit, const 
         mesh.rMinKm = std::min(mesh.rMinKm, e.rMin), mesh.rMaxKm = std::max(mesh.rMaxKm, e.rMax);
         mesh.finestArcDeg = std::min(mesh.finestArcDeg, e.arcDeg);
         mesh.finestRadialKm = std::min(mesh.finestRadialKm, e.radialKm);
+        mesh.coarsestArcDeg = std::max(mesh.coarsestArcDeg, e.coarsestArcDeg);
     });
     if (mesh.cellCount == 0)
         fail("{}: the mesh has no cells", what);
@@ -471,6 +542,7 @@ ShellMesh makeShellMesh(std::vector<vtk::Piece> pieces, double kmPerUnit, const 
     mesh.rMinKm = std::round(mesh.rMinKm * 1e3) / 1e3, mesh.rMaxKm = std::round(mesh.rMaxKm * 1e3) / 1e3;
     if (!std::isfinite(mesh.finestArcDeg) || !std::isfinite(mesh.finestRadialKm))
         fail("{}: every cell of the mesh is flat (no extent along a shell or across radii)", what);
+    findRegion(mesh, pieces);
     mesh.pieces = std::move(pieces);
     return mesh;
 }
@@ -479,12 +551,32 @@ grid::SphericalGrid resampleGrid(const ShellMesh& mesh, size_t nLat, size_t nR, 
 {
     RAYPC_CHECK(nLat >= 2 && nR >= 2 && nLon >= 4);
     grid::SphericalGrid g;
-    for (size_t i = 0; i < nLat; ++i)
-        g.latDeg.push_back(-90 + (double(i) + 0.5) * 180.0 / double(nLat));
     for (size_t i = 0; i < nR; ++i)
         g.rKm.push_back(mesh.rMinKm + (mesh.rMaxKm - mesh.rMinKm) * double(i) / double(nR - 1));
-    for (size_t i = 0; i < nLon; ++i)
-        g.lonDeg.push_back(360.0 * double(i) / double(nLon));
+    if (mesh.latExtentDeg) {
+        const auto [south, north] = *mesh.latExtentDeg;
+        for (size_t i = 0; i < nLat; ++i)
+            g.latDeg.push_back(south + (north - south) * double(i) / double(nLat - 1));
+        const grid::PaddedAxis padded = grid::padToGlobe(g.latDeg, true);
+        g.latDeg = padded.deg;
+        g.dataLatDeg = padded.extent;
+    } else {
+        for (size_t i = 0; i < nLat; ++i)
+            g.latDeg.push_back(-90 + (double(i) + 0.5) * 180.0 / double(nLat));
+    }
+    if (mesh.lonExtentDeg) {
+        const auto [west, east] = *mesh.lonExtentDeg;
+        const double width = wrapLonDeg(east - west);
+        for (size_t i = 0; i < nLon; ++i)
+            g.lonDeg.push_back(wrapLonDeg(west + width * double(i) / double(nLon - 1)));
+        std::sort(g.lonDeg.begin(), g.lonDeg.end());
+        const grid::PaddedAxis padded = grid::padToGlobe(g.lonDeg, false);
+        g.lonDeg = padded.deg;
+        g.dataLonDeg = padded.extent;
+    } else {
+        for (size_t i = 0; i < nLon; ++i)
+            g.lonDeg.push_back(360.0 * double(i) / double(nLon));
+    }
     return g;
 }
 
@@ -493,11 +585,16 @@ grid::SphericalGrid defaultResampleGrid(const ShellMesh& mesh, uint64_t maxPoint
     // A spacing that divides the extent (to rounding) gives that many intervals, not one more.
     const auto intervals = [](double extent, double spacing) { return std::ceil(extent / spacing * (1 - 1e-9)); };
     double nLat = intervals(180, mesh.finestArcDeg), nLon = 2 * nLat;
+    // A regional mesh: points on its extent's edges, as far apart as its finest cell.
+    if (mesh.latExtentDeg)
+        nLat = intervals((*mesh.latExtentDeg)[1] - (*mesh.latExtentDeg)[0], mesh.finestArcDeg) + 1;
+    if (mesh.lonExtentDeg)
+        nLon = intervals(wrapLonDeg((*mesh.lonExtentDeg)[1] - (*mesh.lonExtentDeg)[0]), mesh.finestArcDeg) + 1;
     double nR = intervals(mesh.rMaxKm - mesh.rMinKm, mesh.finestRadialKm) + 1;
     const double points = nLat * nR * nLon;
     if (points > double(maxPoints)) {
         const double s = std::cbrt(double(maxPoints) / points);
-        nLat = std::floor(nLat * s), nR = std::floor(nR * s), nLon = 2 * nLat;
+        nLat = std::floor(nLat * s), nR = std::floor(nR * s), nLon = mesh.lonExtentDeg ? std::floor(nLon * s) : 2 * nLat;
     }
     return resampleGrid(mesh, size_t(std::max(nLat, 2.0)), size_t(std::max(nR, 2.0)), size_t(std::max(nLon, 4.0)));
 }

@@ -21,7 +21,9 @@
 #include "grid/grid.h"
 #include "io/vtk_xml.h"
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,7 +43,14 @@ struct ShellMesh {
     // The finest cell: its extent along a shell (degrees of arc) and across radii (km), divided
     // by the cell's degree (a Lagrange cell's nodes are that far apart).
     double finestArcDeg = 0, finestRadialKm = 0;
+    double coarsestArcDeg = 0;  // the largest arc between two nodes of one cell (degrees)
     size_t cellCount = 0, pointCount = 0;
+    // A regional mesh (a CitcomS regional cap, a chunk of an ASPECT model): the extent of its nodes'
+    // latitudes (south, north; none: within two of its coarsest cells of both poles) and longitudes
+    // (west, east in degrees east within [0, 360), west > east across 0°; none: no gap wider than two
+    // of its coarsest cells).
+    std::optional<std::array<double, 2>> latExtentDeg, lonExtentDeg;
+    bool regional() const { return latExtentDeg.has_value() || lonExtentDeg.has_value(); }
 };
 
 // Gathers the pieces and measures them. Throws raypc::Error naming `what` when the mesh is empty
@@ -51,9 +60,12 @@ ShellMesh makeShellMesh(std::vector<vtk::Piece> pieces, double kmPerUnit, const 
 
 // The grid a mesh is resampled onto by default: spacings as fine as the mesh's finest cell (arc
 // and radial), lat at cell centres (no point on a pole), lon from 0° in equal steps, r from the
-// inner to the outer radius; coarsened evenly when it would have more than `maxPoints` points.
+// inner to the outer radius; coarsened evenly when it would have more than `maxPoints` points. A
+// regional mesh's grid spans its extent (its first and last points on the extent's edges) and is
+// padded to the globe with points of no data (grid::padToGlobe).
 grid::SphericalGrid defaultResampleGrid(const ShellMesh& mesh, uint64_t maxPoints);
-// A grid of the given sizes over the mesh's shell, laid out as defaultResampleGrid's.
+// A grid of the given sizes over the mesh's shell (a regional mesh's: over its extent, then padded),
+// laid out as defaultResampleGrid's.
 grid::SphericalGrid resampleGrid(const ShellMesh& mesh, size_t nLat, size_t nR, size_t nLon);
 
 struct ResampleCounts {

@@ -317,89 +317,19 @@ CoordinateAxis readAxis(const NcFile& file, Axis axis, const std::string& explic
     return a;
 }
 
-double medianSpacing(const std::vector<double>& ascending)
+// A regional grid's axis padded to the globe (grid::padToGlobe): the points that pad it hold no data
+// (fileIndex kNoData).
+void padToGlobal(CoordinateAxis& a, bool latitude, std::optional<std::array<double, 2>>& extent)
 {
-    std::vector<double> gaps;
-    for (size_t i = 1; i < ascending.size(); ++i)
-        gaps.push_back(ascending[i] - ascending[i - 1]);
-    if (gaps.empty())
-        return 0;
-    std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
-    return gaps[gaps.size() / 2];
-}
-
-// Points from `from` toward `to` (exclusive) with spacings step, 2 step, 4 step...: few points, however
-// far, and a first one a regular spacing beyond the data. Stops where the next spacing would leave
-// less than itself before `to`.
-std::vector<double> growingSteps(double from, double to, double step)
-{
-    std::vector<double> points;
-    const double sign = to > from ? 1.0 : -1.0;
-    double x = from;
-    for (double s = step; std::abs(to - x) > 2.0 * s; s *= 2.0) {
-        x += sign * s;
-        points.push_back(x);
-    }
-    return points;
-}
-
-// A regional grid (latitudes that stop more than two spacings short of a pole, longitudes that leave a
-// gap of more than two spacings) is made global with points that hold no data (fileIndex kNoData):
-// rows toward each pole (the last on it) and columns across the gap, with spacings growing away from
-// the data so that few are added. Every value there is missing: the renderer shows nothing, the
-// statistics leave it out, and nothing interpolates into it but from the data's last points.
-void padToGlobal(CoordinateAxis& a, Axis axis, std::optional<std::array<double, 2>>& extent)
-{
-    const double d = medianSpacing(a.canonical);
-    if (d <= 0)
+    const grid::PaddedAxis padded = grid::padToGlobe(a.canonical, latitude);
+    if (!padded.extent)
         return;
-    std::vector<std::pair<double, size_t>> points;
-    for (size_t i = 0; i < a.canonical.size(); ++i)
-        points.emplace_back(a.canonical[i], a.fileIndex[i]);
-    if (axis == kLat) {
-        const double south = a.canonical.front(), north = a.canonical.back();
-        if (south + 90.0 <= 2.0 * d + 1e-9 && 90.0 - north <= 2.0 * d + 1e-9)
-            return;
-        extent = {south, north};
-        if (south + 90.0 > 2.0 * d + 1e-9) {
-            for (double x : growingSteps(south, -90.0, d))
-                points.emplace_back(x, kNoData);
-            points.emplace_back(-90.0, kNoData);
-        }
-        if (90.0 - north > 2.0 * d + 1e-9) {
-            for (double x : growingSteps(north, 90.0, d))
-                points.emplace_back(x, kNoData);
-            points.emplace_back(90.0, kNoData);
-        }
-    } else {
-        // The widest gap between neighbours on the circle (the seam's included).
-        const size_t n = a.canonical.size();
-        size_t widest = n - 1;
-        double widestGap = a.canonical.front() + 360.0 - a.canonical.back();
-        for (size_t i = 0; i + 1 < n; ++i)
-            if (a.canonical[i + 1] - a.canonical[i] > widestGap) {
-                widestGap = a.canonical[i + 1] - a.canonical[i];
-                widest = i;
-            }
-        if (widestGap <= 2.0 * d + 1e-9)
-            return;
-        const double west = a.canonical[(widest + 1) % n], east = a.canonical[widest];
-        extent = {west, east};
-        // From both sides toward the middle of the gap, then the middle itself.
-        const double mid = east + 0.5 * widestGap;
-        for (double x : growingSteps(east, mid, d))
-            points.emplace_back(wrapLonDeg(x), kNoData);
-        for (double x : growingSteps(east + widestGap, mid, d))
-            points.emplace_back(wrapLonDeg(x), kNoData);
-        points.emplace_back(wrapLonDeg(mid), kNoData);
-    }
-    std::stable_sort(points.begin(), points.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
-    a.canonical.clear();
-    a.fileIndex.clear();
-    for (const auto& [x, i] : points) {
-        a.canonical.push_back(x);
-        a.fileIndex.push_back(i);
-    }
+    extent = padded.extent;
+    std::vector<size_t> fileIndex;
+    for (size_t source : padded.source)
+        fileIndex.push_back(source == grid::PaddedAxis::kPadding ? kNoData : a.fileIndex[source]);
+    a.canonical = padded.deg;
+    a.fileIndex = std::move(fileIndex);
 }
 
 }  // namespace
@@ -416,8 +346,8 @@ OpenedHeader readAxes(const NcFile& file, const ReaderOptions& options)
     h.axes[kLat] = readAxis(file, kLat, options.latName, options, dataDims);
     h.axes[kR] = readAxis(file, kR, options.rName, options, dataDims);
     h.axes[kLon] = readAxis(file, kLon, options.lonName, options, dataDims);
-    padToGlobal(h.axes[kLat], kLat, h.grid.dataLatDeg);
-    padToGlobal(h.axes[kLon], kLon, h.grid.dataLonDeg);
+    padToGlobal(h.axes[kLat], true, h.grid.dataLatDeg);
+    padToGlobal(h.axes[kLon], false, h.grid.dataLonDeg);
     h.grid.latDeg = h.axes[kLat].canonical;
     h.grid.rKm = h.axes[kR].canonical;
     h.grid.lonDeg = h.axes[kLon].canonical;

@@ -16,6 +16,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <functional>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -178,24 +179,46 @@ grid::Snapshot resampleMesh(const ShellMesh& mesh, const std::vector<VtkVariable
                   readSeconds, snap.grid.nLat(), snap.grid.nR(), snap.grid.nLon(), secondsSince(start));
     for (size_t a = 0; a < variables.size(); ++a)
         snap.fields.push_back(grid::Field{variables[a].name, variables[a].units, std::move(values[a])});
+    // A regional mesh's grid is padded to the globe: the points outside its extent hold no data. A
+    // point within the extent that no cell holds is a hole in the mesh.
+    const grid::SphericalGrid& g = snap.grid;
+    const auto holdsData = [&](size_t iLat, size_t iLon) { return g.latHoldsData(g.latDeg[iLat]) && g.lonHoldsData(g.lonDeg[iLon]); };
+    size_t holes = 0, firstHole = SIZE_MAX, outside = 0;
     if (counts.missing > 0) {
         const auto& first = snap.fields.front().values;
-        const size_t at = size_t(std::find_if(first.begin(), first.end(), [](float v) { return std::isnan(v); }) - first.begin());
+        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+            for (size_t iR = 0; iR < g.nR(); ++iR)
+                for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                    const size_t i = g.index(iLat, iR, iLon);
+                    if (!std::isnan(first[i]))
+                        continue;
+                    if (!holdsData(iLat, iLon)) {
+                        ++outside;
+                    } else if (holes++ == 0) {
+                        firstHole = i;
+                    }
+                }
+    }
+    if (holes > 0) {
         if (!options.fillMissing)
             fail("{}: {} of {} grid points lie in no cell of the mesh ({} cells), the first at {}; use "
                  "--fill-missing to give them the mean of their radius shell",
-                 step.string(), counts.missing, counts.points, mesh.cellCount, grid::describeGridPoint(snap.grid, at));
+                 step.string(), holes, counts.points - outside, mesh.cellCount, grid::describeGridPoint(g, firstHole));
         for (grid::Field& f : snap.fields)
-            grid::fillMissingByShellMean(snap.grid, f.values, fmt::format("{}: {}", step.string(), f.name));
+            grid::fillMissingByShellMean(g, f.values, fmt::format("{}: {}", step.string(), f.name),
+                                         g.regional() ? std::function<bool(size_t, size_t)>(holdsData)
+                                                      : std::function<bool(size_t, size_t)>());
     }
     snap.origin = {{"format", format},
                    {"pieces", mesh.pieces.size()},
                    {"cells", mesh.cellCount},
                    {"points", mesh.pointCount},
-                   {"grid_points", counts.points},
+                   {"grid_points", counts.points - outside},
                    {"inside", counts.inside},
                    {"snapped", counts.snapped},
-                   {"missing", counts.missing}};
+                   {"missing", holes}};
+    if (g.regional())
+        snap.origin["outside_region"] = outside;
     return snap;
 }
 

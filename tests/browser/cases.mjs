@@ -2283,15 +2283,15 @@ const cases = {
   },
 
   // A seismic tomography model (tests/data/emc-layout: one variable vs in km/s, no velocity, no
-  // temperature): the UI opens on what is there. The first view colours vs over its range, the
-  // parallel coordinates have its axis and brushing it selects, every preset says why it does not
-  // apply, and nothing reports an error.
+  // temperature): the UI opens on what is there. The first view colours vs's anomaly to its shell
+  // means (computed when read) on a diverging map, the parallel coordinates have vs's axis and
+  // brushing it selects, every preset says why it does not apply, and nothing reports an error.
   async tomography({ context, url }) {
     const page = await openUi(context, url);
     await waitConverged(page);
     const state = await rState(page);
-    check(state.color.variable === 'vs', `the first view colours '${state.color.variable}', not vs`);
-    check(state.color.colorMap === 'viridis', `the first view of a velocity uses '${state.color.colorMap}', not viridis`);
+    check(state.color.variable === 'vs anomaly', `the first view colours '${state.color.variable}', not vs anomaly`);
+    check(state.color.colorMap === 'blue-white-red', `the first view of an anomaly uses '${state.color.colorMap}', not blue-white-red`);
     const lit = await page.evaluate(() => {
       const { data: d } = window.__viewImageData();
       let n = 0;

@@ -1052,6 +1052,28 @@ import json, sys
 v = json.loads(sys.argv[1])['values']
 expect = 100 * 1e-6 / 6.371e6 * 6000 / 6371
 sys.exit(0 if abs(v['vx']['value'] + expect) < 0.03 * expect and abs(v['radial velocity']['value']) < 0.005 else 1)" "$got"
+  # A regional run (one cap over lat 10..50, lon 200..260): resampled over its extent, padded to the
+  # globe with points of no data; no pathlines (the flow has gaps), probe says where there is none.
+  info=$("$raypc" info "$cit/regional/run.0.h5")
+  check "the regional run: data within lat 10..50, lon 200..260" \
+    grep -q "regional: data within lat 10..50 deg, lon 200..260 deg east" <<<"$info"
+  out=$("$raypc" preprocess "$cit/regional" -o "$work/regional" 2>&1)
+  check "  no pathlines: the flow has missing values" grep -q "missing values: no pathlines" <<<"$out"
+  for point in "30 230 5000" "12 201 6300" "48 258 3600"; do
+    read -r lat lon r <<<"$point"
+    got=$("$raypc" probe "$work/regional" --lat "$lat" --lon "$lon" --r "$r" --var temperature)
+    check "  temperature at lat $lat, lon $lon, r $r km is the formula's" python3 -c "
+import json, math, sys
+v = json.loads(sys.argv[1])['values']['temperature']['value']
+lat, lon, r = float(sys.argv[2]), float(sys.argv[3]), float(sys.argv[4]) / 6371
+c = math.radians(90 - lat)
+t = 0.5 + 0.2 * math.cos(c) + 0.1 * math.sin(c) * math.cos(math.radians(lon)) + 0.3 * (1 - r) / 0.45
+sys.exit(0 if abs(v - t) < 0.01 else 1)" "$got" "$lat" "$lon" "$r"
+  done
+  got=$("$raypc" probe "$work/regional" --lat -30 --lon 100 --r 5000 --var temperature)
+  check "  no data outside the region" python3 -c "
+import json, sys
+sys.exit(0 if json.loads(sys.argv[1])['values']['temperature']['no_data'] is True else 1)" "$got"
   expect_error "run.cap03.0: 4528 values (566 rows of 8), its header \"9 x 9 x 7\" announces 567 nodes" \
     preprocess "$cit/bad/rows/run.cap00.0" -o "$work/x"
   expect_error "11 caps of step 0 found; a full sphere has 12 (missing: 7)" info "$cit/bad/missing"

@@ -31,8 +31,9 @@ vector; nondimensional):
 
 Also broken inputs for the error tests: a cap file with a row missing (bad/rows), a step with a cap
 missing (bad/missing), an HDF5 coordinates file without /coord (bad/nocoord), twelve caps that
-do not cover the sphere (bad/hole: cap 7 written where cap 6 lies). truth.json names the
-files and gives the formulas.
+do not cover the sphere (bad/hole: cap 7 written where cap 6 lies). And a regional run (regional/:
+one cap over latitudes 10 ... 50 degrees north, longitudes 200 ... 260 degrees east, HDF5, step 0).
+truth.json names the files and gives the formulas.
 """
 import json
 import math
@@ -157,9 +158,38 @@ def write(out, hdf5_only=False):
                     write_cap_file(os.path.join(out, "bad", "missing", "run.cap%02d.0" % n), nodes, t, v, h)
                 # Twelve caps that leave a hole: cap 7 lies where cap 6 does.
                 write_cap_file(os.path.join(out, "bad", "hole", "run.cap%02d.0" % n), caps[6] if n == 7 else nodes, t, v, h)
+    write_regional(os.path.join(out, "regional"))
     with h5py.File(os.path.join(out, "bad", "nocoord", "run.h5"), "w") as f:
         f.create_group("input").attrs["caps"] = np.int32(12)
     shutil.copyfile(os.path.join(out, "run.0.h5"), os.path.join(out, "bad", "nocoord", "run.0.h5"))
+
+
+REGIONAL_COLAT = (math.radians(40.0), math.radians(80.0))  # latitudes 10 ... 50 degrees north
+REGIONAL_LON = (math.radians(200.0), math.radians(260.0))
+
+
+def write_regional(out):
+    """A regional run as CitcomS writes one (one cap, nodes regular in colatitude, longitude and
+    radius between the cap's bounds, lib/Regional_*.c): HDF5 output, one step, the same fields."""
+    os.makedirs(out)
+    colat = np.linspace(*REGIONAL_COLAT, NX)
+    lon = np.linspace(*REGIONAL_LON, NY)
+    r = np.linspace(R_INNER, 1.0, NZ)
+    nodes = np.stack(np.meshgrid(colat, lon, r, indexing="ij"), axis=-1)
+    with h5py.File(os.path.join(out, "run.h5"), "w") as f:
+        f.create_dataset("coord", data=nodes[None].astype(np.float32))
+        g = f.create_group("input")
+        for name, value in (("caps", 1), ("nodex", NX), ("nodey", NY), ("nodez", NZ)):
+            g.attrs[name] = np.int32(value)
+        g.attrs["radius_km"] = np.float32(6371.0)
+        g.attrs["thermdiff"] = np.float32(1e-6)
+    t, v, h = fields(nodes, 0)
+    with h5py.File(os.path.join(out, "run.0.h5"), "w") as f:
+        f.create_dataset("temperature", data=t[None].astype(np.float32))
+        f.create_dataset("velocity", data=v[None].astype(np.float32))
+        f.create_dataset("viscosity", data=h[None].astype(np.float32))
+        f.attrs["time"] = np.float32(0.0)
+        f.attrs["timestep"] = np.float32(0)
 
 
 def main():
