@@ -71,7 +71,9 @@ struct CoordinateRange {
     double min = 0, max = 0;
 };
 // The range of `c` over the shell the grid covers (r from rKm.front() to rKm.back(); the whole
-// sphere in lat and lon): x, y, z within ±rKm.back(), lat -90..90, lon 0..360.
+// sphere in lat and lon): x, y, z within ±rKm.back(), lat -90..90, lon 0..360. A regional grid's
+// (grid.h, dataLatDeg and dataLonDeg): over its data's extent (x, y, z over its grid points of data;
+// lon 0..360 when the region crosses 0°).
 CoordinateRange coordinateRange(const SphericalGrid& grid, Coordinate c);
 
 }  // namespace raypc::grid

@@ -54,6 +54,29 @@ TEST(Coordinates, RangesCoverTheShellOfTheGrid)
     EXPECT_DOUBLE_EQ(coordinateRange(g, Coordinate::Lon).max, 360.0);
 }
 
+// A regional grid's axes span its data: lat and lon the extent, x, y, z its points of data (here
+// lat 0..60, lon 0..90 on radii 3485..6371: x = r cos lat cos lon from 0 to 6371, z up to 6371 sin 60).
+TEST(Coordinates, ARegionalGridsRangesAreItsRegions)
+{
+    SphericalGrid g;
+    g.latDeg = {-90, -30, 0, 30, 60, 90};
+    g.rKm = {3485, 6371};
+    g.lonDeg = {0, 45, 90, 180, 270};
+    g.dataLatDeg = std::array<double, 2>{0, 60};
+    g.dataLonDeg = std::array<double, 2>{0, 90};
+    EXPECT_DOUBLE_EQ(coordinateRange(g, Coordinate::Lat).min, 0.0);
+    EXPECT_DOUBLE_EQ(coordinateRange(g, Coordinate::Lat).max, 60.0);
+    EXPECT_DOUBLE_EQ(coordinateRange(g, Coordinate::Lon).max, 90.0);
+    EXPECT_NEAR(coordinateRange(g, Coordinate::X).max, 6371.0, 1e-9);
+    EXPECT_NEAR(coordinateRange(g, Coordinate::X).min, 0.0, 1e-9);
+    EXPECT_NEAR(coordinateRange(g, Coordinate::Z).max, 6371.0 * std::sqrt(3.0) / 2, 1e-9);
+    EXPECT_NEAR(coordinateRange(g, Coordinate::Z).min, 0.0, 1e-9);
+    // Across 0°: the whole lon axis.
+    g.dataLonDeg = std::array<double, 2>{270, 45};
+    EXPECT_DOUBLE_EQ(coordinateRange(g, Coordinate::Lon).min, 0.0);
+    EXPECT_DOUBLE_EQ(coordinateRange(g, Coordinate::Lon).max, 360.0);
+}
+
 TEST(Brushes, OneResolverForVariablesAndCoordinates)
 {
     const std::vector<std::string> names = {"temperature", "depth"};  // a variable shadows a coordinate

@@ -2313,6 +2313,38 @@ const cases = {
     check(errors.length === 0, `errors on a tomography model: ${JSON.stringify(errors)}`);
   },
 
+  // A regional tomography model with a hole (tests/data/emc-layout/regional_vs.nc: lat 20..55, lon
+  // -130..-65, no data east of -100 below 400 km): the first view faces the region and draws it, the
+  // parallel coordinates draw no line of a missing value, a brush on vs selects a share of the region
+  // (as POST /api/selection computes it), and nothing reports an error.
+  async regional({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const state = await rState(page);
+    check(Math.abs(state.camera.azimuthDeg - 262.5) < 1e-6 && Math.abs(state.camera.elevationDeg - 37.5) < 1e-6,
+      `the first view looks at azimuth ${state.camera.azimuthDeg}, elevation ${state.camera.elevationDeg}, not the region's centre (262.5, 37.5)`);
+    const lit = await page.evaluate(() => {
+      const { data: d } = window.__viewImageData();
+      let n = 0;
+      for (let i = 0; i < d.length; i += 4) if (d[i] + d[i + 1] + d[i + 2] > 60) n++;
+      return n;
+    });
+    check(lit > 1000, `the first view shows ${lit} lit pixels: the region is not drawn`);
+    await brushAxis(page, 'vs', 0.05, 0.95);
+    await waitConverged(page);
+    await page.waitForFunction(() => window.__raypc.selection && Number.isFinite(window.__raypc.selection.fractionOfMantle),
+      null, { timeout: 30000 });
+    const brushed = await rState(page);
+    const sel = await page.evaluate(() => window.__raypc.selection);
+    const server = await postJson(url + 'api/selection', brushed);
+    check(server.status === 200 && Math.abs(server.body.fractionOfMantle - sel.fractionOfMantle) < 1e-9,
+      `UI shows ${sel.fractionOfMantle}, POST /api/selection says ${JSON.stringify(server.body)}`);
+    check(sel.fractionOfMantle > 0.05 && sel.fractionOfMantle < 0.76,
+      `a brush over most of vs selects ${sel.fractionOfMantle} of the region, which has no data in a quarter of it`);
+    const errors = await page.evaluate(() => window.__raypc.errors);
+    check(errors.length === 0, `errors on a regional model: ${JSON.stringify(errors)}`);
+  },
+
   // The UI linked both ways (docs/protocol.md, GET/POST /api/link): a state a program sets
   // is applied by the open page as a loaded file is, with a note; what the user then brushes is the
   // linked state a program reads, from the UI, at a higher version.

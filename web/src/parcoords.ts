@@ -483,8 +483,14 @@ export class ParallelCoordinates {
           const c = color(r);
           if (c !== style) { ctx.strokeStyle = c; style = c; }
           ctx.beginPath();
-          ctx.moveTo(px[0], r[ks[0]] * sa[0] + sb[0]);
-          for (let k = 1; k < m; k++) ctx.lineTo(px[k], r[ks[k]] * sa[k] + sb[k]);
+          // A missing value (NaN: no data there) breaks the line: nothing is drawn to or from its axis.
+          let pen = false;
+          for (let k = 0; k < m; k++) {
+            const y = r[ks[k]] * sa[k] + sb[k];
+            if (!Number.isFinite(y)) pen = false;
+            else if (pen) ctx.lineTo(px[k], y);
+            else { ctx.moveTo(px[k], y); pen = true; }
+          }
           ctx.stroke();
         }
         // Chromium records a 2D canvas' strokes and rasterises them when the page's next frame is
