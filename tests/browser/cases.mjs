@@ -49,6 +49,14 @@ async function drag(page, dx, dy, { steps = 6, button = 'left' } = {}) {
 
 const info = async (url) => (await fetch(url + 'api/info')).json();
 
+// How many pixels of the 3D view are lit (brighter than the dark background).
+const litPixels = (page) => page.evaluate(() => {
+  const { data: d } = window.__viewImageData();
+  let n = 0;
+  for (let i = 0; i < d.length; i += 4) if (d[i] + d[i + 1] + d[i + 2] > 60) n++;
+  return n;
+});
+
 // The Rendering section's Re-project set to on (auto is off on headless chromium's software GL).
 const reprojectOn = (page) => page.evaluate(() => {
   const s = document.getElementById('reproject');
@@ -2292,12 +2300,7 @@ const cases = {
     const state = await rState(page);
     check(state.color.variable === 'vs anomaly', `the first view colours '${state.color.variable}', not vs anomaly`);
     check(state.color.colorMap === 'blue-white-red', `the first view of an anomaly uses '${state.color.colorMap}', not blue-white-red`);
-    const lit = await page.evaluate(() => {
-      const { data: d } = window.__viewImageData();
-      let n = 0;
-      for (let i = 0; i < d.length; i += 4) if (d[i] + d[i + 1] + d[i + 2] > 60) n++;
-      return n;
-    });
+    const lit = await litPixels(page);
     check(lit > 1000, `the first view shows ${lit} lit pixels: the model is not drawn`);
     const presets = await (await fetch(url + 'api/presets')).json();
     check(presets.length > 0 && presets.every((p) => p.unavailable && /the dataset has: vs/.test(p.unavailable)),
@@ -2323,12 +2326,7 @@ const cases = {
     const state = await rState(page);
     check(Math.abs(state.camera.azimuthDeg - 262.5) < 1e-6 && Math.abs(state.camera.elevationDeg - 37.5) < 1e-6,
       `the first view looks at azimuth ${state.camera.azimuthDeg}, elevation ${state.camera.elevationDeg}, not the region's centre (262.5, 37.5)`);
-    const lit = await page.evaluate(() => {
-      const { data: d } = window.__viewImageData();
-      let n = 0;
-      for (let i = 0; i < d.length; i += 4) if (d[i] + d[i + 1] + d[i + 2] > 60) n++;
-      return n;
-    });
+    const lit = await litPixels(page);
     check(lit > 1000, `the first view shows ${lit} lit pixels: the region is not drawn`);
     await brushAxis(page, 'vs', 0.05, 0.95);
     await waitConverged(page);

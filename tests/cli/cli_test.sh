@@ -29,6 +29,19 @@ preprocess_fixture() {
   "$raypc" preprocess "$fixture" -o "$work/ds" --quiet --sample-rows 2000 >/dev/null
 }
 
+
+# check_emc_vs WHAT DATASET LAT LON DEPTH_KM: probe of vs there equals the EMC fixtures' formula
+# (tests/data/emc-layout), within the quantisation error probe reports.
+check_emc_vs() {
+  local got
+  got=$("$raypc" probe "$2" --lat "$3" --lon "$4" --r "$((6371 - $5))" --var vs)
+  check "$1 at lat $3, lon $4, depth $5 km equals the file" python3 -c "
+import json, math, sys
+p = json.loads(sys.argv[1])['values']['vs']
+lat, lon, d = map(float, sys.argv[2:5])
+vs = 4.4 + 0.0007 * d + 0.1 * math.cos(math.radians(lat)) * math.cos(math.radians(lon - 30)) * (1 - d / 2891)
+sys.exit(0 if abs(p['value'] - vs) <= p['quantisation_error_max'] + 1e-5 else 1)" "$got" "$3" "$4" "$5"
+}
 case $case_name in
 bad_options)
   preprocess_fixture
@@ -856,14 +869,7 @@ tomography)
   check "  and no derived velocity" test "$("$raypc" info "$work/ds" | grep -c "radial velocity")" -eq 0
   # Probe at grid points equals the file (u16: within the quantisation error it reports).
   for point in "0 30 50" "45 -90 1050" "-85 175 2850"; do
-    read -r lat lon depth <<<"$point"
-    got=$("$raypc" probe "$work/ds" --lat "$lat" --lon "$lon" --r "$((6371 - depth))" --var vs)
-    check "probe at lat $lat, lon $lon, depth $depth km equals the file" python3 -c "
-import json, math, sys
-p = json.loads(sys.argv[1])['values']['vs']
-lat, lon, d = map(float, sys.argv[2:5])
-vs = 4.4 + 0.0007 * d + 0.1 * math.cos(math.radians(lat)) * math.cos(math.radians(lon - 30)) * (1 - d / 2891)
-sys.exit(0 if abs(p['value'] - vs) <= p['quantisation_error_max'] + 1e-5 else 1)" "$got" "$lat" "$lon" "$depth"
+    check_emc_vs "probe" "$work/ds" $point
   done
   "$raypc" render "$work/ds" --size 96x96 --passes 1 -o "$work/vs.png" >/dev/null
   check "the default view renders" test -s "$work/vs.png"
@@ -953,14 +959,7 @@ regional)
     ds=$work/ds; [[ $encoding == float32 ]] && ds=$work/ds32
     # Probe at the data's grid points equals the file; in the hole and outside the region: no data.
     for point in "20 -130 25" "37 -110 700" "55 -65 400" "40 -80 100"; do
-      read -r lat lon depth <<<"$point"
-      got=$("$raypc" probe "$ds" --lat "$lat" --lon "$lon" --r "$((6371 - depth))" --var vs)
-      check "$encoding: probe at lat $lat, lon $lon, depth $depth km equals the file" python3 -c "
-import json, math, sys
-p = json.loads(sys.argv[1])['values']['vs']
-lat, lon, d = map(float, sys.argv[2:5])
-vs = 4.4 + 0.0007 * d + 0.1 * math.cos(math.radians(lat)) * math.cos(math.radians(lon - 30)) * (1 - d / 2891)
-sys.exit(0 if abs(p['value'] - vs) <= p['quantisation_error_max'] + 1e-5 else 1)" "$got" "$lat" "$lon" "$depth"
+      check_emc_vs "$encoding: probe" "$ds" $point
     done
     for point in "40 -80 600" "30 -90 800" "0 0 300" "-60 -100 100" "40 -140 100" "70 -100 100"; do
       read -r lat lon depth <<<"$point"

@@ -48,6 +48,21 @@ def vs(depth_km, lat_deg, lon_deg):
     return 4.4 + 0.0007 * depth_km + 0.1 * np.cos(lat) * np.cos(lon) * (1.0 - depth_km / 2891.0)
 
 
+def write_coordinates(nc, depth_km, lat_deg, lon_deg):
+    """The EMC layout's dimensions and coordinate variables."""
+    for name, values in (("depth", depth_km), ("latitude", lat_deg), ("longitude", lon_deg)):
+        nc.createDimension(name, len(values))
+    d = nc.createVariable("depth", "f4", ("depth",))
+    d.long_name, d.units, d.positive = "depth below earth surface", "km", "down"
+    d[:] = depth_km
+    la = nc.createVariable("latitude", "f4", ("latitude",))
+    la.long_name, la.units, la.standard_name = "Latitude; positive north", "degrees_north", "latitude"
+    la[:] = lat_deg
+    lo = nc.createVariable("longitude", "f4", ("longitude",))
+    lo.long_name, lo.units, lo.standard_name = "Longitude; positive east", "degrees_east", "longitude"
+    lo[:] = lon_deg
+
+
 def write(path):
     with netCDF4.Dataset(path, "w", format="NETCDF3_CLASSIC") as nc:
         nc.title = "RayPC test model in the EMC layout (analytic)"
@@ -57,18 +72,7 @@ def write(path):
         nc.geospatial_vertical_min, nc.geospatial_vertical_max = float(DEPTH_KM[0]), float(DEPTH_KM[-1])
         nc.geospatial_vertical_units = "km"
         nc.geospatial_vertical_positive = "down"
-        nc.createDimension("depth", len(DEPTH_KM))
-        nc.createDimension("latitude", len(LAT_DEG))
-        nc.createDimension("longitude", len(LON_DEG))
-        d = nc.createVariable("depth", "f4", ("depth",))
-        d.long_name, d.units, d.positive = "depth below earth surface", "km", "down"
-        d[:] = DEPTH_KM
-        la = nc.createVariable("latitude", "f4", ("latitude",))
-        la.long_name, la.units, la.standard_name = "Latitude; positive north", "degrees_north", "latitude"
-        la[:] = LAT_DEG
-        lo = nc.createVariable("longitude", "f4", ("longitude",))
-        lo.long_name, lo.units, lo.standard_name = "Longitude; positive east", "degrees_east", "longitude"
-        lo[:] = LON_DEG
+        write_coordinates(nc, DEPTH_KM, LAT_DEG, LON_DEG)
         v = nc.createVariable("vs", "f4", ("depth", "latitude", "longitude"), fill_value=99999.0)
         v.long_name, v.display_name, v.units = "Shear-wave velocity", "S Velocity (km/s)", "km/s"
         D, LA, LO = np.meshgrid(DEPTH_KM, LAT_DEG, LON_DEG, indexing="ij")
@@ -94,18 +98,7 @@ def write_regional(path):
         nc.geospatial_lon_min, nc.geospatial_lon_max = -130.0, -65.0
         nc.geospatial_vertical_units = "km"
         nc.geospatial_vertical_positive = "down"
-        nc.createDimension("depth", len(REGIONAL_DEPTH_KM))
-        nc.createDimension("latitude", len(REGIONAL_LAT_DEG))
-        nc.createDimension("longitude", len(REGIONAL_LON_DEG))
-        d = nc.createVariable("depth", "f4", ("depth",))
-        d.long_name, d.units, d.positive = "depth below earth surface", "km", "down"
-        d[:] = REGIONAL_DEPTH_KM
-        la = nc.createVariable("latitude", "f4", ("latitude",))
-        la.long_name, la.units, la.standard_name = "Latitude; positive north", "degrees_north", "latitude"
-        la[:] = REGIONAL_LAT_DEG
-        lo = nc.createVariable("longitude", "f4", ("longitude",))
-        lo.long_name, lo.units, lo.standard_name = "Longitude; positive east", "degrees_east", "longitude"
-        lo[:] = REGIONAL_LON_DEG
+        write_coordinates(nc, REGIONAL_DEPTH_KM, REGIONAL_LAT_DEG, REGIONAL_LON_DEG)
         v = nc.createVariable("vs", "f4", ("depth", "latitude", "longitude"), fill_value=REGIONAL_FILL)
         v.long_name, v.units = "Shear-wave velocity", "km/s"
         D, LA, LO = np.meshgrid(REGIONAL_DEPTH_KM, REGIONAL_LAT_DEG, REGIONAL_LON_DEG, indexing="ij")
