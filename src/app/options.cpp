@@ -1,12 +1,15 @@
 #include "app/options.h"
 
 #include "core/error.h"
+#include "core/mpi.h"
 #include "state/render_state.h"
 #include "core/spherical.h"
 #include "core/strings.h"
 #include "dataset/value_encoding.h"
 #include "grid/coordinates.h"
 #include "grid/variable_names.h"
+
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <charconv>
@@ -318,6 +321,12 @@ SeriesSelection resolveSeriesSelection(const SeriesSelectionFlags& flags)
 {
     SeriesSelection s;
     s.dataset = dataset::Dataset::open(flags.dataset);
+    // A regional model's statistics are of its region (its points outside have no volume): said once.
+    if (const grid::SphericalGrid& g = s.dataset->levels().front().grid; g.regional() && mpi::isRoot())
+        spdlog::info("{}: a regional model: volumes and percentages are of its region ({} to {} deg north, {} to {} "
+                     "deg east), not the whole mantle",
+                     flags.dataset, g.dataLatDeg ? (*g.dataLatDeg)[0] : -90.0, g.dataLatDeg ? (*g.dataLatDeg)[1] : 90.0,
+                     g.dataLonDeg ? (*g.dataLonDeg)[0] : 0.0, g.dataLonDeg ? (*g.dataLonDeg)[1] : 360.0);
     std::vector<analysis::NamedRange> ranges;
     if (!flags.statePath.empty())
         ranges = state::loadRenderState(flags.statePath).brushes;

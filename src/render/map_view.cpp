@@ -284,7 +284,8 @@ ImageRgba8 mapPicture(const SliceInputs& in)
         where += ", " + latText(map.centralLatitudeDeg);
     const std::string title = fitTitle({fmt::format("{} at {:g} km depth", in.colorTitle, map.depthKm), in.when, where}, width, height);
     std::vector<TextLabel> labels{{title, width / 2.0f, 1.1f * fontPx, {1, 1, 1}}};
-    addNotes(labels, width, height, {grey ? "grey: outside the brushes" : "", flowText, pathlineText});
+    addNotes(labels, width, height,
+             {grey ? "grey: outside the brushes" : "", flowText, pathlineText, regionNote(in.volume->grid())});
     drawTextLabels(image.pixels, width, height, labels);
     drawLegends(image.pixels, width, height, legends);
     return image;

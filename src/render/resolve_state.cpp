@@ -82,14 +82,18 @@ VariableCatalog catalogOf(const dataset::Dataset& dataset)
 state::RenderState defaultState(const dataset::Dataset& dataset)
 {
     state::RenderState s = defaultState(catalogOf(dataset));
-    // A regional model faces the camera: the orbit looks at the centre of its data from above it.
+    // A regional model faces the camera: the orbit looks at the centre of its data from above it, and
+    // maps are centred on it.
     const grid::SphericalGrid& g = dataset.levels().front().grid;
     if (g.regional()) {
-        if (g.dataLatDeg)
+        if (g.dataLatDeg) {
             s.camera.elevationDeg = 0.5 * ((*g.dataLatDeg)[0] + (*g.dataLatDeg)[1]);
+            s.map.centralLatitudeDeg = float(s.camera.elevationDeg);
+        }
         if (g.dataLonDeg) {
             const double west = (*g.dataLonDeg)[0], east = (*g.dataLonDeg)[1];
             s.camera.azimuthDeg = wrapLonDeg(west + 0.5 * wrapLonDeg(east - west));
+            s.map.centralMeridianDeg = float(std::remainder(s.camera.azimuthDeg, 360.0));
         }
     }
     return s;

@@ -210,6 +210,17 @@ void drawDepthPlotFrame(std::vector<uint8_t>& rgba, int width, int height, const
     compositeLines(rgba, layer, ink, 0.9f);
 }
 
+std::string regionNote(const grid::SphericalGrid& grid)
+{
+    if (!grid.regional())
+        return "";
+    const std::string lat = grid.dataLatDeg ? fmt::format("{} to {}", latText((*grid.dataLatDeg)[0]), latText((*grid.dataLatDeg)[1]))
+                                            : std::string("pole to pole");
+    const std::string lon = grid.dataLonDeg ? fmt::format("{} to {}", lonText((*grid.dataLonDeg)[0]), lonText((*grid.dataLonDeg)[1]))
+                                            : std::string("all longitudes");
+    return fmt::format("data: {}, {} (regional); none elsewhere", lat, lon);
+}
+
 void addNotes(std::vector<TextLabel>& labels, int width, int height, const std::vector<std::string>& given)
 {
     std::vector<std::string> notes;

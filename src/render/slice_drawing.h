@@ -73,6 +73,11 @@ void drawDepthMarks(std::vector<uint8_t>& rgba, int width, int height, const Dep
 void drawDepthPlotFrame(std::vector<uint8_t>& rgba, int width, int height, const DepthPlot& plot,
                         std::span<const std::pair<float, std::string>> xTicks, Rgb ink, std::vector<TextLabel>& labels);
 
+// For a regional grid (grid.h, dataLatDeg and dataLonDeg) the note that its data lie within its
+// extent, e.g. "data: 20.0°N to 55.0°N, 130.0°W to 65.0°W (regional); none elsewhere"; empty for a
+// global grid.
+std::string regionNote(const grid::SphericalGrid& grid);
+
 // What else a picture says, right-aligned above its bottom edge, one line each: what grey means,
 // the arrows' scale and the pathlines drawn.
 void addNotes(std::vector<TextLabel>& labels, int width, int height, const std::vector<std::string>& given);

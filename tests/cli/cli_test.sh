@@ -982,7 +982,8 @@ lon = rad(66)
 r0, r1 = 6371 - 800, 6371 - 25  # the outermost radii's dual cells end at the radii themselves
 v = lat * lon * (r1 ** 3 - r0 ** 3) / 3
 sys.exit(0 if abs(g['volume_km3'] - v) < 1e-6 * v else 1)" "$work/info.json"
-  "$raypc" stats "$work/ds" --range "vs=0:10" -o "$work/s.csv" -q >/dev/null
+  note=$("$raypc" stats "$work/ds" --range "vs=0:10" -o "$work/s.csv" 2>&1)
+  check "stats say they are of the region" grep -q "a regional model: volumes and percentages are of its region (20 to 55 deg north, 230 to 295 deg east)" <<<"$note"
   check "stats: every value there is selected by vs 0..10: the region less its hole" python3 -c "
 import csv, math, sys
 row = next(csv.DictReader(open(sys.argv[1])))
