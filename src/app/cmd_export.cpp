@@ -23,7 +23,7 @@ namespace raypc::app {
 namespace {
 
 struct ExportArgs {
-    std::string dataset, time = "0", what = "sample", output, var = varname::kTemperatureAnomaly;
+    std::string dataset, time = "0", what = "sample", output, var;  // var: empty, varname::anomalyToShow
 };
 
 
@@ -66,8 +66,9 @@ const CommandRegistration kExportCommand(
         cmd.add_option("-t,--time", args->time, "Step index (0-based) or time like 24Myr")->capture_default_str();
         cmd.add_option("--what", args->what, "What to export: sample, pathlines, critical-points or persistence")
             ->capture_default_str();
-        cmd.add_option("--var", args->var, "persistence: the variable whose persistence pairs are exported")
-            ->capture_default_str();
+        cmd.add_option("--var", args->var,
+                       "persistence: the variable whose persistence pairs are exported (default: the temperature "
+                       "anomaly, else the first variable's shell anomaly)");
         cmd.add_option("-o,--output", args->output,
                        "Output file: .csv; for pathlines and critical-points also .vtp (VTK XML) or .vtk (legacy VTK)")
             ->required();
@@ -90,6 +91,8 @@ const CommandRegistration kExportCommand(
                 return;
             }
             if (args->what == "persistence") {
+                if (args->var.empty())
+                    args->var = varname::anomalyToShow(dataset->variableNames());
                 const int var = dataset->variableIndex(args->var);
                 if (var < 0)
                     fail("--var: no variable '{}' in {}; variables are {}", args->var, args->dataset,

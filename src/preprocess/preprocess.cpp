@@ -231,17 +231,13 @@ RunPlan planRun(const std::vector<fs::path>& inputs, PreprocessOptions& options)
             spdlog::info("{}: no velocity (vx, vy, vz): no pathlines", inputs.front().string());
     }
     if (options.pathlines.enabled && options.pathlines.field == PathlineOptions{}.field && !hasSpec(options.pathlines.field)) {
-        const auto anomaly = std::find_if(plan.computed.begin(), plan.computed.end(), [](const VariableSpec& v) {
-            return v.computed->kind == dataset::ShellAnomalyKind::Difference;
-        });
-        if (anomaly != plan.computed.end())
-            options.pathlines.field = anomaly->name;
-        else
-            for (const VariableSpec& v : plan.specs)
-                if (!varname::isVelocityComponent(v.name)) {
-                    options.pathlines.field = v.name;
-                    break;
-                }
+        std::vector<std::string> names;
+        for (const VariableSpec& v : plan.specs)
+            names.push_back(v.name);
+        for (const VariableSpec& v : plan.computed)
+            names.push_back(v.name);
+        if (const std::string field = varname::anomalyToShow(names); !field.empty())
+            options.pathlines.field = field;
     }
     phases::checkPathlineOptions(options.pathlines, seedable);
     // A u16 dataset's pathline phase decodes the velocities of every step it traces through.

@@ -102,12 +102,8 @@ state::RenderState defaultState(const dataset::Dataset& dataset)
 state::RenderState defaultState(const VariableCatalog& catalog)
 {
     state::RenderState s;
-    // What there is to see: the temperature anomaly, else the first variable's shell anomaly (a
-    // tomography model's `vs anomaly`), else the first variable.
-    const auto has = [&](const std::string& name) { return std::find(catalog.names.begin(), catalog.names.end(), name); };
-    auto anomaly = has(varname::kTemperatureAnomaly);
-    for (auto v = catalog.names.begin(); v != catalog.names.end() && anomaly == catalog.names.end(); ++v)
-        anomaly = has(*v + varname::kShellAnomalySuffix);
+    // What there is to see (varname::anomalyToShow), else the first variable.
+    const auto anomaly = std::find(catalog.names.begin(), catalog.names.end(), varname::anomalyToShow(catalog.names));
     const size_t var = anomaly != catalog.names.end() ? size_t(anomaly - catalog.names.begin()) : 0;
     s.colorVariable = catalog.names.at(var);
     const dataset::ValueRange r = catalog.ranges.at(var);

@@ -381,7 +381,7 @@ ApiAnswer persistence(const ApiContext& api, const ApiRequest& request)
     if (fs::exists(analysis::pathlineDir(dataset.dir(), step) / "lines.json"))
         set = analysis::loadPathlineSet(dataset.dir(), step);
     const analysis::PathlineSet* stored = set ? &*set : nullptr;
-    std::string name = stored ? stored->seedField : std::string(varname::kTemperatureAnomaly);
+    std::string name = stored ? stored->seedField : varname::anomalyToShow(dataset.variableNames());
     if (const auto var = queryParameter(request.query, "var"))
         name = *var;
     const int var = dataset.variableIndex(name);
