@@ -2343,6 +2343,25 @@ const cases = {
     check(errors.length === 0, `errors on a regional model: ${JSON.stringify(errors)}`);
   },
 
+  // A CitcomS run (tests/data/citcoms-layout: 12 caps, HDF5, resampled): the first view colours the
+  // temperature anomaly computed from its temperature and draws it, the parallel coordinates have
+  // its axes, and nothing reports an error.
+  async citcoms({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const state = await rState(page);
+    check(state.color.variable === 'temperature anomaly', `the first view colours '${state.color.variable}', not the temperature anomaly`);
+    const lit = await litPixels(page);
+    check(lit > 1000, `the first view shows ${lit} lit pixels: the run is not drawn`);
+    await brushAxis(page, 'viscosity', 0.1, 0.5);
+    await waitConverged(page);
+    const brushed = await rState(page);
+    check(brushed.brushes.length === 1 && brushed.brushes[0].name === 'viscosity',
+      `the brush on the viscosity axis: ${JSON.stringify(brushed.brushes)}`);
+    const errors = await page.evaluate(() => window.__raypc.errors);
+    check(errors.length === 0, `errors on a CitcomS run: ${JSON.stringify(errors)}`);
+  },
+
   // The UI linked both ways (docs/protocol.md, GET/POST /api/link): a state a program sets
   // is applied by the open page as a loaded file is, with a note; what the user then brushes is the
   // linked state a program reads, from the UI, at a higher version.
