@@ -73,14 +73,24 @@ void writePathlineSet(const fs::path& dir, const PathlineSet& set)
         fail("{}: write failed", (dir / "lines.json").string());
 }
 
+std::string noPathlinesReason(const fs::path& dataset)
+{
+    // The manifest's word (docs/format.md, dataset.json: no_pathlines), read for this message alone.
+    try {
+        const json j = parseJsonInput(readFile(dataset / "dataset.json"), (dataset / "dataset.json").string());
+        if (j.is_object() && j.contains("no_pathlines") && j.at("no_pathlines").is_string())
+            return j.at("no_pathlines").get<std::string>();
+    } catch (const Error&) {
+    }
+    return "the dataset was preprocessed with --no-pathlines, or the step does not exist";
+}
+
 PathlineSet loadPathlineSet(const fs::path& dataset, int step)
 {
     const fs::path dir = pathlineDir(dataset, step);
     const fs::path jsonPath = dir / "lines.json";
     if (!fs::exists(jsonPath))
-        fail("{}: no pathlines for step {} (the dataset was preprocessed with --no-pathlines, or the step "
-             "does not exist)",
-             dataset.string(), step);
+        fail("{}: no pathlines for step {} ({})", dataset.string(), step, noPathlinesReason(dataset));
     PathlineSet set;
     try {
         const json j = parseJsonInput(readFile(jsonPath), jsonPath.string());

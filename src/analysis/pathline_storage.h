@@ -27,6 +27,10 @@ void writePathlineSet(const std::filesystem::path& dir, const PathlineSet& set);
 // raypc::Error naming the file when it is missing (e.g. preprocessed with --no-pathlines), of the
 // wrong size or malformed.
 PathlineSet loadPathlineSet(const std::filesystem::path& dataset, int step);
+// Why a dataset has no pathlines, as its manifest says (`no_pathlines`: the model has no velocity,
+// its flow has missing values, preprocessed with --no-pathlines), or a general reason for a dataset
+// written before it was said.
+std::string noPathlinesReason(const std::filesystem::path& dataset);
 
 // The longest window of injection steps shown at once (the state's pathlines.window, the server's
 // /api/pathlines, Python's Dataset.pathlines).

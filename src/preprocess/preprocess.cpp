@@ -227,6 +227,7 @@ RunPlan planRun(const std::vector<fs::path>& inputs, PreprocessOptions& options)
     // (the first the rule gives), else the first stored variable's.
     if (options.pathlines.enabled && !varname::hasVelocity(hasSpec)) {
         options.pathlines.enabled = false;
+        options.pathlines.absentBecause = "the model has no velocity (vx, vy, vz)";
         if (!options.quiet && mpi::isRoot())
             spdlog::info("{}: no velocity (vx, vy, vz): no pathlines", inputs.front().string());
     }
@@ -691,6 +692,8 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
         }
         if (!gaps.empty()) {
             options.pathlines.enabled = false;
+            options.pathlines.absentBecause = fmt::format("{} {} missing values", fmt::join(gaps, ", "),
+                                                          gaps.size() == 1 ? "has" : "have");
             if (!options.quiet && mpi::isRoot())
                 spdlog::info("{}: {} {} missing values: no pathlines", inputs.front().string(), fmt::join(gaps, ", "),
                              gaps.size() == 1 ? "has" : "have");
@@ -700,6 +703,10 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
     mpi::together([&] {
         plan.manifest["pathlines"] =
             options.pathlines.enabled ? phases::pathlineSettings(options.pathlines) : json();
+        if (!options.pathlines.enabled)
+            plan.manifest["no_pathlines"] = options.pathlines.absentBecause.empty()
+                                                ? std::string("preprocessed with --no-pathlines")
+                                                : options.pathlines.absentBecause;
         plan.manifest["status"] = "complete";
         if (out)
             out->writeManifest(plan.manifest);

@@ -27,6 +27,9 @@ namespace raypc::preprocess {
 // critical points of `field` at each step seed pathlines traced through the next `steps` steps.
 struct PathlineOptions {
     bool enabled = true;
+    // Why a run traces none (the manifest's `no_pathlines`), set where they are left out: the model
+    // has no velocity, its flow or seed field has missing values; empty: they were not asked for.
+    std::string absentBecause;
     std::string field = varname::kTemperatureAnomaly;
     int steps = 10;  // traced from step s to min(s + steps, last step)
     analysis::CriticalPointFilter filter;

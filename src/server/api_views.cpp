@@ -9,6 +9,7 @@
 #include "analysis/feature_run.h"
 #include "analysis/feature_series.h"
 #include "analysis/flux.h"
+#include "analysis/pathline_storage.h"
 #include "render/color_map.h"
 #include "render/feature_paint.h"
 #include "state/render_state.h"
@@ -495,7 +496,7 @@ json infoJson(const dataset::Dataset& dataset, const ServerLimits& limits)
         const render::Rgb c = render::featurePaintColor(slot);
         palette.push_back({c.r, c.g, c.b});
     }
-    return {{"protocol", kProtocolVersion},
+    json info = {{"protocol", kProtocolVersion},
             {"variables", variables},
             {"coordinates", coordinates},
             {"steps", steps},
@@ -509,6 +510,10 @@ json infoJson(const dataset::Dataset& dataset, const ServerLimits& limits)
              {{"screenshotPixels", limits.maxScreenshotPixels},
               {"screenshotPasses", limits.maxScreenshotPasses},
               {"screenshotPixelPasses", limits.maxScreenshotPixelPasses}}}};
+    // Why there are no pathlines, for the UI's Pathlines panel (the manifest's word).
+    if (!std::filesystem::exists(analysis::pathlineDir(dataset.dir(), 0) / "lines.json"))
+        info["noPathlines"] = analysis::noPathlinesReason(dataset.dir());
+    return info;
 }
 
 // ---------------------------------------------------------------------------------------------

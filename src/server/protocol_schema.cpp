@@ -223,6 +223,10 @@ const std::vector<Definition>& messages()
               "the colours (r, g, b in 0..1) the 3D view paints features in (render/feature_paint.h): slot 0 the "
               "rest of the selection, 1..10 a feature by its id ((id − 1) mod 10 + 1), 11 a highlighted one"},
              {"defaultState", stateDocument(""), "a full state document: the first view (`render::defaultState`)"},
+             {"noPathlines", text(""),
+              "why the dataset has no pathlines (the model has no velocity, its flow has missing values, "
+              "preprocessed with --no-pathlines); absent when it has them",
+              false},
              {"limits",
               named("ServerLimits", "",
                     {{"screenshotPixels", integer(""), "largest width × height of a screenshot"},

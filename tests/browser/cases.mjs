@@ -2312,6 +2312,9 @@ const cases = {
     const brushed = await rState(page);
     check(brushed.brushes.length === 1 && brushed.brushes[0].name === 'vs',
       `the brush on the vs axis: ${JSON.stringify(brushed.brushes)}`);
+    const noPathlines = await page.textContent('#plUnavailable');
+    check(await page.isVisible('#plUnavailable') && noPathlines.includes('the model has no velocity'),
+      `the Pathlines panel on a model without a flow says '${noPathlines}'`);
     const errors = await page.evaluate(() => window.__raypc.errors);
     check(errors.length === 0, `errors on a tomography model: ${JSON.stringify(errors)}`);
   },

@@ -879,6 +879,7 @@ tomography)
   check "stats of a brush on vs select the deep mantle" awk -F, 'NR == 2 { exit !($4 > 20 && $4 < 60) }' "$work/s.csv"
   "$raypc" features "$work/ds" --range "vs=4:4.45" -o "$work/f.csv" -q >/dev/null
   check "features of the slow shallow region" test "$(wc -l < "$work/f.csv")" -ge 2
+  expect_error "no pathlines for step 0 (the model has no velocity (vx, vy, vz))" export "$work/ds" --what pathlines -o "$work/p.csv"
   expect_error "no velocity component 'vx'" features "$work/ds" --range "vs=4:4.45" -o "$work/f2.csv" --tracks "$work/t.csv"
   expect_error "no 'radial velocity' variable" flux "$work/ds" --range "vs=4:4.45" -o "$work/x.csv"
   # Its shell anomalies, computed when read (no arrays): vs anomaly in km/s and dlnVs in %.

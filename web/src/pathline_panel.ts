@@ -235,7 +235,10 @@ export class PathlinePanel {
   }
 
   private setUpControls(): void {
-    if (!this.pathlines) {
+    // A dataset without pathlines (a tomography model has no flow): the server says why.
+    const absent = this.store.info.noPathlines;
+    if (!this.pathlines || absent) {
+      if (absent) $('plUnavailable').textContent = `No pathlines: ${absent}.`;
       $('plUnavailable').hidden = false;
       $('plControls').hidden = true;
       $('pcTabPathlines').hidden = true;
