@@ -249,7 +249,6 @@ grid::Field readField(const NcFile& file, const OpenedHeader& h, const std::stri
                                                 h.axes[kLon].fileIndex[iLon] != kNoData;
                                      });
     return field;
-    return field;
 }
 
 }  // namespace raypc::io::netcdf
