@@ -37,6 +37,9 @@ struct SphericalGrid {
     // Whether latitude `latDeg` (of a row) and longitude `lonDeg` (of a column) lie within the data's extent.
     bool latHoldsData(double latDeg) const;
     bool lonHoldsData(double lonDeg) const;
+    // Whether the column of grid points (iLat, iLon) lies within the data's extent (every column of a
+    // global grid).
+    bool holdsData(size_t iLat, size_t iLon) const { return latHoldsData(latDeg[iLat]) && lonHoldsData(lonDeg[iLon]); }
 
     size_t nLat() const { return latDeg.size(); }
     size_t nR() const { return rKm.size(); }

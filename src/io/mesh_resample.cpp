@@ -751,9 +751,16 @@ ResampleCounts resampleRow(size_t row, const ShellMesh& mesh, const grid::Spheri
                 }
         }
     }
+    // A point in no cell outside a regional grid's extent pads the grid; within it, it is missing.
     ResampleCounts local;
-    for (const float b : best)
-        (b == 0 ? local.inside : std::isfinite(b) ? local.snapped : local.missing) += 1;
+    const bool rowHoldsData = grid.latHoldsData(grid.latDeg[row]);
+    for (size_t p = 0; p < rowPoints; ++p) {
+        const float b = best[p];
+        (b == 0                                                           ? local.inside
+         : std::isfinite(b)                                               ? local.snapped
+         : rowHoldsData && grid.lonHoldsData(grid.lonDeg[p % grid.nLon()]) ? local.missing
+                                                                          : local.outside) += 1;
+    }
     return local;
 }
 
@@ -779,6 +786,7 @@ std::vector<std::vector<float>> resampleOntoGrid(const ShellMesh& mesh, const gr
         const ResampleCounts local = resampleRow(row, mesh, grid, byRow, sources, arrays, cosLon, sinLon, out);
         std::lock_guard lock(countMutex);
         total.inside += local.inside, total.snapped += local.snapped, total.missing += local.missing;
+        total.outside += local.outside;
     });
     spdlog::debug("{}: {} candidate boxes in {:.2f} s ({} cell rows), points located in {:.2f} s", what,
                   byRow.cells.size(), boxSeconds, byRow.rowCells.size(), secondsSince(start) - boxSeconds);

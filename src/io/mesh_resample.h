@@ -72,7 +72,8 @@ struct ResampleCounts {
     size_t points = 0;   // grid points
     size_t inside = 0;   // inside a cell
     size_t snapped = 0;  // within kSnapReference of a cell: its nearest boundary's values
-    size_t missing = 0;  // in no cell and near none: NaN
+    size_t missing = 0;  // in no cell and near none, within a regional grid's extent: NaN (a hole)
+    size_t outside = 0;  // in no cell, outside a regional grid's extent (grid.h): NaN, padding
 };
 
 // The values of point arrays `arrays` (name and component; -1 for a scalar) at every grid point

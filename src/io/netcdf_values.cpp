@@ -244,10 +244,7 @@ grid::Field readField(const NcFile& file, const OpenedHeader& h, const std::stri
     // regional grid are never filled.
     if (missing > 0 && options.fillMissing)
         grid::fillMissingByShellMean(h.grid, field.values, fmt::format("{}: {}", file.path().string(), fileName),
-                                     [&](size_t iLat, size_t iLon) {
-                                         return h.axes[kLat].fileIndex[iLat] != kNoData &&
-                                                h.axes[kLon].fileIndex[iLon] != kNoData;
-                                     });
+                                     [&](size_t iLat, size_t iLon) { return h.grid.holdsData(iLat, iLon); });
     return field;
 }
 

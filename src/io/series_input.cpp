@@ -18,7 +18,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <functional>
 #include <map>
 #include <system_error>
 
@@ -182,43 +181,31 @@ grid::Snapshot resampleMesh(const ShellMesh& mesh, const std::vector<VtkVariable
     // A regional mesh's grid is padded to the globe: the points outside its extent hold no data. A
     // point within the extent that no cell holds is a hole in the mesh.
     const grid::SphericalGrid& g = snap.grid;
-    const auto holdsData = [&](size_t iLat, size_t iLon) { return g.latHoldsData(g.latDeg[iLat]) && g.lonHoldsData(g.lonDeg[iLon]); };
-    size_t holes = 0, firstHole = SIZE_MAX, outside = 0;
+    const auto holdsData = [&](size_t iLat, size_t iLon) { return g.holdsData(iLat, iLon); };
     if (counts.missing > 0) {
-        const auto& first = snap.fields.front().values;
-        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
-            for (size_t iR = 0; iR < g.nR(); ++iR)
-                for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
-                    const size_t i = g.index(iLat, iR, iLon);
-                    if (!std::isnan(first[i]))
-                        continue;
-                    if (!holdsData(iLat, iLon)) {
-                        ++outside;
-                    } else if (holes++ == 0) {
-                        firstHole = i;
-                    }
-                }
-    }
-    if (holes > 0) {
-        if (!options.fillMissing)
+        if (!options.fillMissing) {
+            const auto& first = snap.fields.front().values;
+            size_t at = 0;
+            while (!(std::isnan(first[at]) && g.holdsData(at / g.nLon() / g.nR(), at % g.nLon())))
+                ++at;
             fail("{}: {} of {} grid points lie in no cell of the mesh ({} cells), the first at {}; use "
                  "--fill-missing to give them the mean of their radius shell",
-                 step.string(), holes, counts.points - outside, mesh.cellCount, grid::describeGridPoint(g, firstHole));
+                 step.string(), counts.missing, counts.points - counts.outside, mesh.cellCount,
+                 grid::describeGridPoint(g, at));
+        }
         for (grid::Field& f : snap.fields)
-            grid::fillMissingByShellMean(g, f.values, fmt::format("{}: {}", step.string(), f.name),
-                                         g.regional() ? std::function<bool(size_t, size_t)>(holdsData)
-                                                      : std::function<bool(size_t, size_t)>());
+            grid::fillMissingByShellMean(g, f.values, fmt::format("{}: {}", step.string(), f.name), holdsData);
     }
     snap.origin = {{"format", format},
                    {"pieces", mesh.pieces.size()},
                    {"cells", mesh.cellCount},
                    {"points", mesh.pointCount},
-                   {"grid_points", counts.points - outside},
+                   {"grid_points", counts.points - counts.outside},
                    {"inside", counts.inside},
                    {"snapped", counts.snapped},
-                   {"missing", holes}};
+                   {"missing", counts.missing}};
     if (g.regional())
-        snap.origin["outside_region"] = outside;
+        snap.origin["outside_region"] = counts.outside;
     return snap;
 }
 
