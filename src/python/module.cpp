@@ -12,6 +12,7 @@
 #include "app/options.h"
 #include "analysis/probe.h"
 #include "app/series_inputs.h"
+#include "app/slice_grid.h"
 #include "core/error.h"
 #include "core/install_paths.h"
 #include "core/spherical.h"
@@ -23,7 +24,9 @@
 #include "analysis/selection.h"
 #include "state/render_state.h"
 #include "render/state_renderer.h"
+#include "server/api_views.h"
 #include "server/server.h"
+#include "server/step_cache.h"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -382,6 +385,85 @@ public:
         return csv;
     }
 
+    // The state's map or section of its colour variable as a CF grid (what `raypc map --netcdf` and
+    // `raypc section --netcdf` write, app/slice_grid.h): a dict of the grid's parts for xarray.
+    py::dict sliceGrid(const std::string& text, const std::string& view, double gridStepDeg, double depthStepKm) const
+    {
+        if (view != "map" && view != "section")
+            fail("view '{}': expected 'map' or 'section'", view);
+        const auto slice = view == "map" ? render::StateRenderer::Slice::Map : render::StateRenderer::Slice::Section;
+        const app::SliceGridNames names{"grid_step_deg", "depth_step_km", "state.map.depthKm"};
+        app::checkSliceGridSpacing(slice, gridStepDeg, depthStepKm, names);
+        const state::RenderState state = parseState(text, "state");
+        io::CfGridFile file;
+        {
+            py::gil_scoped_release release;
+            const render::ResolvedState resolved = render::resolveState(state, *m_dataset);
+            const auto volume = m_dataset->load(resolved.state.step, resolved.state.level.value_or(0));
+            file = app::sliceGridFile(*m_dataset, *volume, resolved, slice, gridStepDeg, depthStepKm,
+                                      "raypc.Dataset." + view + "_grid", names);
+        }
+        auto variable = [](const io::CfVariable1D& v) {
+            return py::dict(py::arg("name") = v.name, py::arg("units") = v.units, py::arg("standard_name") = v.standardName,
+                            py::arg("long_name") = v.longName, py::arg("axis") = v.axis, py::arg("positive") = v.positive,
+                            py::arg("values") = doubles(v.values), py::arg("dimension") = v.dimension);
+        };
+        py::list auxiliary, scalars;
+        for (const io::CfVariable1D& v : file.auxiliary)
+            auxiliary.append(variable(v));
+        for (const io::CfVariable1D& v : file.scalars)
+            scalars.append(variable(v));
+        return py::dict(py::arg("name") = file.name, py::arg("units") = file.units, py::arg("long_name") = file.longName,
+                        py::arg("rows") = variable(file.rows), py::arg("columns") = variable(file.columns),
+                        py::arg("auxiliary") = auxiliary, py::arg("scalars") = scalars,
+                        py::arg("values") = arrayOf(file.values, {py::ssize_t(file.rows.values.size()),
+                                                                  py::ssize_t(file.columns.values.size())}),
+                        py::arg("attributes") = file.globalAttributes);
+    }
+
+    // The features of the state's brushes in every step followed through the series (what the UI's
+    // Features panel shows and `raypc features --tracks/--events/--stalls` and `raypc flux` write:
+    // server/api_views.h featureSeriesJson), as its JSON text with the CSV tables under "csv".
+    std::string featureSeries(const std::string& text, int level, double minVolumeKm3, std::vector<double> depthsKm,
+                              double bandHalfWidthKm, double minOverlapShare, const std::string& stallBy, double sigmas,
+                              py::object progress) const
+    {
+        const state::RenderState state = parseState(text, "state");
+        const std::vector<analysis::RangeFilter> filters = analysis::resolveRangeFilters(*m_dataset, state.brushes, "brushes");
+        m_dataset->checkLevel(level, "level");
+        state::FeatureSettings settings;
+        settings.minVolumeKm3 = float(minVolumeKm3);
+        settings.depthsKm.assign(depthsKm.begin(), depthsKm.end());
+        settings.bandHalfWidthKm = float(bandHalfWidthKm);
+        settings.minOverlapShare = float(minOverlapShare);
+        state::checkFeatureSettings(settings, {{"minVolumeKm3", "min_volume_km3"},
+                                                {"depthsKm", "depths_km"},
+                                                {"bandHalfWidthKm", "band_half_width_km"},
+                                                {"minOverlapShare", "min_overlap"}});
+        const analysis::StallMeasure measure = analysis::parseStallMeasure(stallBy);
+        const analysis::FeatureOptions options = analysis::featureOptions(minVolumeKm3, std::move(depthsKm), bandHalfWidthKm);
+        ProgressBridge bridge(std::move(progress));
+        std::string out;
+        {
+            py::gil_scoped_release release;
+            // Each step is read once, in order: a small cache that keeps nothing for long.
+            server::StepCache cache([this](int step, int lod) { return m_dataset->load(step, lod); }, size_t(1) << 30, 2);
+            try {
+                out = server::featureSeriesJson(*m_dataset, cache, filters, options, minOverlapShare, measure, level, sigmas,
+                                                &bridge.cancel, [&](int done, int total) {
+                                                    if (done > 0)
+                                                        bridge("steps", done, total);
+                                                })
+                          .dump();
+            } catch (const Error&) {
+                if (!bridge.cancel)
+                    throw;
+            }
+        }
+        bridge.rethrow();
+        return out;
+    }
+
 private:
     std::shared_ptr<const dataset::Dataset> m_dataset;
 };
@@ -476,6 +558,11 @@ PYBIND11_MODULE(_raypc, m)
              py::arg("progress") = py::none())
         .def("features", &PyDataset::features, py::arg("json"), py::arg("first"), py::arg("last"), py::arg("level"),
              py::arg("min_volume_km3"), py::arg("depths_km"), py::arg("band_half_width_km"), py::arg("progress") = py::none())
+        .def("slice_grid", &PyDataset::sliceGrid, py::arg("json"), py::arg("view"), py::arg("grid_step_deg"),
+             py::arg("depth_step_km"))
+        .def("feature_series", &PyDataset::featureSeries, py::arg("json"), py::arg("level"), py::arg("min_volume_km3"),
+             py::arg("depths_km"), py::arg("band_half_width_km"), py::arg("min_overlap"), py::arg("stall_by"),
+             py::arg("sigmas"), py::arg("progress") = py::none())
         .def("stats", &PyDataset::stats, py::arg("json"), py::arg("first"), py::arg("last"), py::arg("level"),
              py::arg("mean_of") = "", py::arg("progress") = py::none());
 
