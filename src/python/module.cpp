@@ -16,6 +16,7 @@
 #include "core/error.h"
 #include "core/install_paths.h"
 #include "core/spherical.h"
+#include "io/cf_grid.h"
 #include "analysis/critical_points.h"
 #include "dataset/dataset.h"
 #include "analysis/feature_run.h"
@@ -530,6 +531,8 @@ PYBIND11_MODULE(_raypc, m)
     m.def("state_version", [] { return raypc::state::kRenderStateVersion; });
     m.def("names_json", [] { return std::string(kNamesJson); },
           "src/grid/names.json: the names of derived variables and of the columns of the tables raypc writes");
+    m.def("cf_name", &raypc::io::cfName, py::arg("display_name"),
+          "The CF/netCDF-safe name of a variable's display name (io/cf_grid.h: what raypc writes in every file)");
     m.def(
         "critical_kind_name",
         [](int kind) {
