@@ -8,6 +8,7 @@
 // rendering, statistics, reading a field) releases the GIL and runs on every core as the executable
 // does; progress callbacks take the GIL only while they run, and a KeyboardInterrupt seen there
 // cancels the work between steps.
+#include "app/cli.h"
 #include "app/feature_table.h"
 #include "app/options.h"
 #include "analysis/probe.h"
@@ -40,6 +41,9 @@
 
 #include <algorithm>
 #include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <iostream>
 #include <cstring>
 #include <thread>
 
@@ -472,7 +476,11 @@ private:
 // `raypc serve` of one dataset inside this process, on its own thread (the notebook view).
 class PyServer {
 public:
-    PyServer(const std::string& dataset, const std::string& host, int port)
+    // assets/examples: the UI's files and the example states inside the installed package
+    // (raypc/web, raypc/examples, passed by raypc.show); nullopt: the executable's lookup
+    // (core/install_paths.h), which finds them in the build and source trees.
+    PyServer(const std::string& dataset, const std::string& host, int port,
+             const std::optional<std::string>& assets, const std::optional<std::string>& examples)
     {
         if (port < 0 || port > 65535)
             fail("port: {} out of range 0..65535", port);
@@ -481,8 +489,11 @@ public:
         options.host = host;
         options.port = uint16_t(port);
         options.handleSignals = false;  // the Python process's signals stay Python's
-        options.assets = findAssetDir(std::nullopt);
-        options.examples = findExamplesDir(std::nullopt);
+        const auto path = [](const std::optional<std::string>& p) {
+            return p ? std::optional<std::filesystem::path>(*p) : std::nullopt;
+        };
+        options.assets = findAssetDir(path(assets));
+        options.examples = findExamplesDir(path(examples));
         m_server = std::make_unique<server::Server>(std::move(options));
         m_thread = std::thread([this] { m_server->run(); });
     }
@@ -504,6 +515,37 @@ private:
     std::thread m_thread;
 };
 
+// `python3 -m raypc ARGS`: the command line (app/cli.h) as the executable runs it, minus the
+// executable's restart with transparent huge pages, which would exec /proc/self/exe (Python).
+int runCommandLine(std::vector<std::string> args)
+{
+    if (args.empty())
+        fail("main: argv is empty, expected the program's name first (as sys.argv)");
+    std::vector<char*> argv;
+    for (auto& arg : args)
+        argv.push_back(arg.data());
+    argv.push_back(nullptr);
+    // `serve` stops on SIGINT/SIGTERM through its own handlers, which it leaves at the default when
+    // it stops: put back the handlers this process had (Python's KeyboardInterrupt) afterwards.
+    struct sigaction savedInt{}, savedTerm{};
+    sigaction(SIGINT, nullptr, &savedInt);
+    sigaction(SIGTERM, nullptr, &savedTerm);
+    // Python's own output first, then the command's (both to the same file descriptors).
+    py::module_::import("sys").attr("stdout").attr("flush")();
+    py::module_::import("sys").attr("stderr").attr("flush")();
+    int status = 0;
+    {
+        py::gil_scoped_release release;
+        status = app::run(int(args.size()), argv.data());
+        std::cout.flush();
+        std::fflush(stdout);
+        std::fflush(stderr);
+    }
+    sigaction(SIGINT, &savedInt, nullptr);
+    sigaction(SIGTERM, &savedTerm, nullptr);
+    return status;
+}
+
 }  // namespace
 }  // namespace raypc::python
 
@@ -521,6 +563,10 @@ PYBIND11_MODULE(_raypc, m)
         }
     });
 
+    m.attr("__version__") = RAYPC_VERSION;  // project(VERSION), as `raypc --version` and the wheel's metadata
+    m.def("main", &runCommandLine, py::arg("argv"),
+          "Runs the raypc command line on argv (argv[0] the program's name, as sys.argv); returns the exit status. "
+          "Ctrl-C: `serve` stops; other commands stop only if SIGINT's handler is the default (python3 -m raypc sets it)");
     m.def("prepare", &prepare, py::arg("args"), py::arg("progress") = py::none(),
           "Preprocess inputs as `raypc serve INPUT…` does; returns the dataset directory");
     m.def(
@@ -570,8 +616,10 @@ PYBIND11_MODULE(_raypc, m)
              py::arg("mean_of") = "", py::arg("progress") = py::none());
 
     py::class_<PyServer>(m, "Server")
-        .def(py::init<const std::string&, const std::string&, int>(), py::arg("dataset"), py::arg("host"),
-             py::arg("port"))
+        .def(py::init<const std::string&, const std::string&, int, const std::optional<std::string>&,
+                      const std::optional<std::string>&>(),
+             py::arg("dataset"), py::arg("host"), py::arg("port"), py::arg("assets") = py::none(),
+             py::arg("examples") = py::none())
         .def_property_readonly("url", &PyServer::url)
         .def_property_readonly("port", &PyServer::port)
         .def_property_readonly("token", &PyServer::token)

@@ -20,6 +20,14 @@ from .state import State
 _servers: dict = {}  # (dataset dir, host, port) -> _raypc.Server, reused by show()
 
 
+def _inside_package(name: str, needs: str = "") -> Optional[str]:
+    """The package's copy of the UI (``web``) or of the example states (``examples``), which an
+    installed package carries (setup.py puts them there); None in the build tree, where the server
+    finds them in the source tree as the executable does."""
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), name)
+    return path if os.path.isdir(path) and (not needs or os.path.isfile(os.path.join(path, needs))) else None
+
+
 @atexit.register
 def _stop_servers() -> None:
     """Stops the servers show() started before the interpreter goes away under their threads."""
@@ -137,6 +145,7 @@ def show(dataset: Union[Dataset, str, os.PathLike], host: str = "127.0.0.1", por
     key = (str(ds.path), host, port)
     server = _servers.get(key)
     if server is None:
-        server = _raypc.Server(str(ds.path), host, port)
+        server = _raypc.Server(str(ds.path), host, port, assets=_inside_package("web", needs="index.html"),
+                               examples=_inside_package("examples"))
         _servers[key] = server
     return View(server.url, width, height, server)
