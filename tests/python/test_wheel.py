@@ -136,3 +136,34 @@ def test_the_module_tests_pass_on_the_installed_package(venv):
         """, SOURCE / "tests" / "python" / "test_dataset.py", check=False)
     assert out.returncode == 0, out.stdout[-4000:] + out.stderr[-4000:]
     assert " passed" in out.stdout and "failed" not in out.stdout
+
+
+def test_python_m_raypc_serve_stops_on_ctrl_c(venv, contest):
+    import signal
+    import urllib.request
+
+    server = subprocess.Popen([str(venv), "-m", "raypc", "serve", str(contest.path), "--port", "0"], env=CLEAN_ENV,
+                              stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                              cwd=venv.parents[2])
+    try:
+        # The log (on stdout), then "raypc: serving URL" once the port is bound.
+        lines = []
+        while not (lines and lines[-1].startswith("raypc: serving ")):
+            line = server.stdout.readline()
+            assert line, "".join(lines)  # ended before serving
+            lines.append(line)
+        url = lines[-1].split()[-1]
+        # the UI and the presets of the installed package, not of the source tree
+        package = venv.parents[1] / "lib"
+        assert any("serving the UI from" in line and str(package) in line for line in lines), lines
+        assert any("presets from" in line and str(package) in line for line in lines), lines
+        # Once it answers, the server runs, and it stops on SIGINT by its own handler.
+        with urllib.request.urlopen(url + "api/info", timeout=10) as answer:
+            assert answer.status == 200
+        server.send_signal(signal.SIGINT)
+        assert server.wait(timeout=20) == 0
+        assert "signal 2: stopping" in server.stdout.read()
+    finally:
+        if server.poll() is None:
+            server.kill()
+            server.wait()
