@@ -167,3 +167,37 @@ def test_python_m_raypc_serve_stops_on_ctrl_c(venv, contest):
         if server.poll() is None:
             server.kill()
             server.wait()
+
+
+def test_main_in_process_gives_python_its_ctrl_c_back(contest):
+    """_raypc.main called from Python (the build tree's module): `serve` stops on SIGINT by its own
+    handler, and afterwards Ctrl-C is Python's KeyboardInterrupt again (a handler left at the
+    default would end this process instead)."""
+    import signal
+    import threading
+    import urllib.request
+
+    import raypc
+
+    with pytest.raises(raypc.Error, match="argv is empty"):
+        raypc._raypc.main([])
+    import socket
+
+    with socket.socket() as probe:  # a port free a moment ago (serve fails loudly if it is taken since)
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+
+    def interrupt_once_serving():
+        for _ in range(200):
+            try:
+                urllib.request.urlopen(f"http://127.0.0.1:{port}/api/info", timeout=1).close()
+                break
+            except OSError:
+                time.sleep(0.05)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    threading.Thread(target=interrupt_once_serving, daemon=True).start()
+    assert raypc._raypc.main(["raypc", "serve", str(contest.path), "--port", str(port)]) == 0
+    with pytest.raises(KeyboardInterrupt):
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(1)
