@@ -89,6 +89,21 @@ def test_imports_from_the_venv_with_its_metadata(venv):
     assert requires_python and "numpy" in requires and any(r.startswith("xarray") and "extra" in r for r in requires)
 
 
+def test_pictures_take_the_coastlines_inside_the_package(venv, contest):
+    out = in_venv(venv, """
+        import os, sys, numpy, raypc
+        ds = raypc.Dataset(sys.argv[1])
+        state = {"version": 12, "image": {"width": 200, "height": 100}, "reference": {"coastlines": {"visible": True}}}
+        with_lines = ds.render(state, view="map")
+        state["reference"]["coastlines"]["visible"] = False
+        without = ds.render(state, view="map")
+        print(os.environ["RAYPC_COASTLINES"], int((with_lines != without).any(axis=-1).sum()))
+        """, contest.path)
+    where, changed = out.stdout.split()
+    assert Path(where).is_relative_to(venv.parents[1]) and Path(where).name == "coastlines.json"
+    assert int(changed) > 100  # the coastlines drawn
+
+
 def as_executable(*args):
     """The raypc executable named `raypc` in its help, as `python -m raypc` names it."""
     return subprocess.run(["raypc", *map(str, args)], executable=RAYPC_EXE, capture_output=True, text=True, timeout=600)

@@ -14,7 +14,16 @@ the ``raypc`` executable: a picture equals ``raypc render``'s, a table ``raypc s
 """
 from __future__ import annotations
 
-from . import _raypc
+import os as _os
+
+# An installed package carries the UI's coastlines (web/coastlines.json): pictures with
+# reference.coastlines find them there unless $RAYPC_COASTLINES says otherwise (in the build tree the
+# source tree's web/dist is found as before).
+_COASTLINES = _os.path.join(_os.path.dirname(_os.path.abspath(__file__)), "web", "coastlines.json")
+if _os.path.isfile(_COASTLINES):
+    _os.environ.setdefault("RAYPC_COASTLINES", _COASTLINES)
+
+from . import _raypc  # noqa: E402 (after the coastlines' default, which the compiled module reads)
 from ._raypc import Error
 from ._raypc import __version__  # project(VERSION) in CMakeLists.txt, as the wheel's metadata
 from .dataset import Dataset, StepLike
