@@ -15,6 +15,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy # Python's raypc module (src/python, docs/python.md)
   python3-xarray python3-pandas     # its to_xarray and DataFrames
+  python3-dask                      # xarray chunks={}: a lazy dask chunk per step and variable
   chromium                          # the web UI's browser tests
 )
 # Only the test command needs these: an independent XML parser and ParaView's Python, which
