@@ -80,7 +80,7 @@ def test_to_xarray_has_cf_coordinates_and_units(contest, truth):
     i = int(np.abs(contest.grid.r - 5711).argmin())
     np.testing.assert_array_equal(shell.values, contest.field("temperature", 1).values[:, i, :])
     # radial velocity == u0 everywhere (5e-11 m/s = 0.1578 cm/yr)
-    np.testing.assert_allclose(x["radial velocity"].values, 5e-11 * 100 * 3.15576e7, rtol=1e-4)
+    np.testing.assert_allclose(x["radial_velocity"].values, 5e-11 * 100 * 3.15576e7, rtol=1e-4)
 
 
 @pytest.mark.parametrize("lat,lon,r", [(12.3, 45.6, 5000.0), (89.7, 123.0, 4000.0), (-89.9, 10.0, 6000.0),
