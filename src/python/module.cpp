@@ -34,7 +34,6 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <atomic>
@@ -93,20 +92,13 @@ void readBox(const dataset::StepVolume& volume, size_t var, const std::array<siz
     }
     g_valuesRead.fetch_add(needed, std::memory_order_relaxed);
     if (!of) {
-        tbb::parallel_for(begin[0], end[0], [&](size_t iLat) {
-            for (size_t iR = begin[1]; iR < end[1]; ++iR)
-                for (size_t iLon = begin[2]; iLon < end[2]; ++iLon)
-                    at(iLat, iR, iLon) = volume.value(var, iLat, iR, iLon);
-        });
+        volume.valuesInBox(var, begin, end, out);
         return;
     }
     const auto w = g.volumeFactors();
     std::vector<float> shell(g.nLat() * g.nLon());
     for (size_t iR = begin[1]; iR < end[1]; ++iR) {
-        tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
-            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
-                shell[iLat * g.nLon() + iLon] = volume.value(of->base, iLat, iR, iLon);
-        });
+        volume.valuesInBox(of->base, {0, iR, 0}, {g.nLat(), iR + 1, g.nLon()}, shell.data());
         const double mean = dataset::shellMean(w, shell.data(), g.nLon());
         for (size_t iLat = begin[0]; iLat < end[0]; ++iLat)
             for (size_t iLon = begin[2]; iLon < end[2]; ++iLon)
