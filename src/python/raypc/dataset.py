@@ -96,16 +96,16 @@ class Dataset:
         g = self._levels[level]
         return Field(values, g.lat, g.r, g.lon, variable, self._units[variable], s, float(self._times[s]), level)
 
-    def _variable_name(self, name: str) -> str:
+    def _variable_name(self, name: str, what: str = "variable") -> str:
         """The display name of a variable named by its display name or its CF name (to_xarray's)."""
         if not isinstance(name, str):
-            raise Error(f"variable: expected a name, not {type(name).__name__}")
+            raise Error(f"{what}: expected a name, not {type(name).__name__}")
         if name in self._units:
             return name
         for display, cf in cf_names(self._units).items():
             if cf == name:
                 return display
-        raise Error(f"variable: unknown variable '{name}'; the dataset has: {', '.join(self._units)}")
+        raise Error(f"{what}: unknown variable '{name}'; the dataset has: {', '.join(self._units)}")
 
     def to_xarray(self, step: Optional[StepLike] = None, variables: Optional[Sequence[str]] = None, level: int = 0):
         """The dataset as a lazy ``xarray.Dataset`` on (time, lat, radius, lon), as
@@ -229,7 +229,7 @@ class Dataset:
         if mean_of is not None and by != "depth":
             raise Error("mean_of: the means are per depth; ask for by='depth'")
         if mean_of is not None:
-            mean_of = self._variable_name(mean_of)
+            mean_of = self._variable_name(mean_of, "mean_of")
         first, last = self._step_range(steps)
         bar = _Progress("stats", progress, delay=0.5)
         try:
