@@ -16,6 +16,7 @@ packages=(
   pybind11-dev python3-dev python3-numpy # Python's raypc module (src/python, docs/python.md)
   python3-xarray python3-pandas     # its to_xarray and DataFrames
   python3-pip python3-setuptools python3-wheel # `pip install --no-build-isolation .` (pyproject.toml)
+  python3-dask                      # xarray chunks={}: a lazy dask chunk per step and variable
   chromium                          # the web UI's browser tests
 )
 # Only the test command needs these: an independent XML parser and ParaView's Python, which

@@ -351,6 +351,11 @@ float StepVolume::value(size_t var, size_t iLat, size_t iR, size_t iLon) const
     if (var >= m_storedCount)
         return values(var)[m_grid.index(iLat, iR, iLon)];
     m_mapped[var].checkNotCutShort();
+    return mappedValue(var, iLat, iR, iLon);
+}
+
+float StepVolume::mappedValue(size_t var, size_t iLat, size_t iR, size_t iLon) const
+{
     if (m_encoding == ValueEncoding::Float32) {
         // Not yet checked as a whole (decode): this one value is.
         const size_t index = m_grid.index(iLat, iR, iLon);
@@ -361,6 +366,26 @@ float StepVolume::value(size_t var, size_t iLat, size_t iR, size_t iLon) const
     }
     return decodeUint16Point(m_grid, m_bricks, static_cast<const uint16_t*>(m_valueFiles[var]), m_bounds[var], iLat,
                              iR, iLon, hasMissing(var));
+}
+
+void StepVolume::valuesInBox(size_t var, const std::array<size_t, 3>& begin, const std::array<size_t, 3>& end,
+                             float* out) const
+{
+    RAYPC_CHECK(var < variableCount());
+    const std::array<size_t, 3> n{m_grid.nLat(), m_grid.nR(), m_grid.nLon()};
+    for (size_t a = 0; a < 3; ++a)
+        RAYPC_CHECK(begin[a] <= end[a] && end[a] <= n[a]);
+    const size_t nR = end[1] - begin[1], nLon = end[2] - begin[2];
+    // Decoded already, another volume's or computed: value() is a load, or computes the whole once.
+    const bool mapped = !valuesReady(var) && !(m_base && var < m_base->variableCount()) && var < m_storedCount;
+    if (mapped)
+        m_mapped[var].checkNotCutShort();
+    tbb::parallel_for(begin[0], end[0], [&](size_t iLat) {
+        float* row = out + (iLat - begin[0]) * nR * nLon;
+        for (size_t iR = begin[1]; iR < end[1]; ++iR, row += nLon)
+            for (size_t iLon = begin[2]; iLon < end[2]; ++iLon)
+                row[iLon - begin[2]] = mapped ? mappedValue(var, iLat, iR, iLon) : value(var, iLat, iR, iLon);
+    });
 }
 
 double StepVolume::errorBound(size_t var, size_t iLat, size_t iR, size_t iLon) const

@@ -17,6 +17,7 @@
 #include "dataset/shell_anomaly.h"
 #include "dataset/value_encoding.h"
 
+#include <array>
 #include <atomic>
 #include <filesystem>
 #include <map>
@@ -138,6 +139,10 @@ public:
     // decoded yet (for a few samples, such as the pathline phase's attributes). Thread-safe. Throws
     // as values() does (float32: for this value only).
     float value(size_t var, size_t iLat, size_t iR, size_t iLon) const;
+    // value() of every point of the box [begin[a], end[a]) of each axis (lat, r, lon) into `out` (the
+    // box's shape, C order), for a box much smaller than the grid (Python's lazy xarray arrays): the
+    // file is checked once for the box, not once per value. Thread-safe; throws as value() does.
+    void valuesInBox(size_t var, const std::array<size_t, 3>& begin, const std::array<size_t, 3>& end, float* out) const;
     // Whether values(var) is ready without decoding.
     bool valuesReady(size_t var) const { return m_values[var].load(std::memory_order_acquire) != nullptr; }
     // bricks().brickCount() pairs (min, max) of variable `var`. Thread-safe; a computed variable's
@@ -171,6 +176,7 @@ public:
 
 private:
     const float* decode(size_t var) const;
+    float mappedValue(size_t var, size_t iLat, size_t iR, size_t iLon) const;  // value() of a stored, undecoded one
     bool hasMissing(size_t var) const { return var < m_missing.size() && m_missing[var]; }
     const float* compute(size_t var) const;
     double shellErrorBound(size_t var, size_t iR) const;

@@ -15,6 +15,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <array>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -277,9 +279,37 @@ TEST_F(DamagedDatasets, AFileCutShortAfterItWasMappedIsAnErrorNotSigbus)
         const std::string message = errorOf([&] { volume->values(var); });
         EXPECT_NE(message.find(file.string() + ": 0 bytes now"), std::string::npos) << message;
         EXPECT_NE(errorOf([&] { volume->value(var, 0, 0, 0); }).find("cut short"), std::string::npos);
+        EXPECT_NE(errorOf([&] {
+                      float v = 0;
+                      volume->valuesInBox(var, {0, 0, 0}, {1, 1, 1}, &v);
+                  }).find("cut short"),
+                  std::string::npos);
         EXPECT_NE(errorOf([&] { volume->touchPages(); }).find("cut short"), std::string::npos);
         EXPECT_NO_THROW(volume->values(0));  // what was read before stays
         EXPECT_NE(errorOf([&] { dataset->load(0, 0); }).find(file.string() + ": 0 bytes, expected"), std::string::npos);
+    }
+}
+
+// Python's lazy arrays read boxes (valuesInBox, point by point from the mapped file); they must be
+// what decoding the whole variable gives, bit for bit, on brick borders and at the lon seam too.
+TEST_F(DamagedDatasets, ValuesInABoxAreTheWholeVariablesValuesBitForBit)
+{
+    for (const auto encoding : {ValueEncoding::Uint16, ValueEncoding::Float32}) {
+        const auto dataset = Dataset::open(s_dir->path() / std::string(encodingName(encoding)));
+        const grid::SphericalGrid& g = dataset->levels()[0].grid;
+        const std::array<size_t, 3> begin{3, 2, 5}, end{10, 9, 16};
+        for (size_t var = 0; var < dataset->variables().size(); ++var) {
+            std::vector<float> box((end[0] - begin[0]) * (end[1] - begin[1]) * (end[2] - begin[2]));
+            dataset->load(1, 0)->valuesInBox(var, begin, end, box.data());  // a fresh volume: nothing decoded
+            const auto whole = dataset->load(1, 0);
+            const float* all = whole->values(var);
+            size_t i = 0;
+            for (size_t iLat = begin[0]; iLat < end[0]; ++iLat)
+                for (size_t iR = begin[1]; iR < end[1]; ++iR)
+                    for (size_t iLon = begin[2]; iLon < end[2]; ++iLon, ++i)
+                        ASSERT_EQ(std::bit_cast<uint32_t>(box[i]), std::bit_cast<uint32_t>(all[g.index(iLat, iR, iLon)]))
+                            << dataset->variables()[var].name << " at " << iLat << ", " << iR << ", " << iLon;
+        }
     }
 }
 

@@ -57,24 +57,28 @@ std::vector<ShellAnomalyVariable> shellAnomalyVariables(std::span<const BaseVari
     return anomalies;
 }
 
+double shellMean(const grid::SphericalGrid::VolumeFactors& w, const float* shell, size_t rowStride)
+{
+    double sum = 0, area = 0;
+    for (size_t iLat = 0; iLat < w.lat.size(); ++iLat) {
+        const float* row = shell + iLat * rowStride;
+        for (size_t iLon = 0; iLon < w.lon.size(); ++iLon)
+            if (std::isfinite(row[iLon])) {
+                const double a = w.lat[iLat] * w.lon[iLon];
+                sum += a * row[iLon];
+                area += a;
+            }
+    }
+    return area > 0 ? sum / area : std::numeric_limits<double>::quiet_NaN();
+}
+
 std::vector<double> shellMeans(const grid::SphericalGrid& g, std::span<const float> values)
 {
     RAYPC_CHECK_EQ(values.size(), g.cellCount());
     const auto w = g.volumeFactors();
     std::vector<double> means(g.nR());
-    tbb::parallel_for(size_t(0), g.nR(), [&](size_t iR) {
-        double sum = 0, area = 0;
-        for (size_t iLat = 0; iLat < g.nLat(); ++iLat) {
-            const float* row = values.data() + g.index(iLat, iR, 0);
-            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
-                if (std::isfinite(row[iLon])) {
-                    const double a = w.lat[iLat] * w.lon[iLon];
-                    sum += a * row[iLon];
-                    area += a;
-                }
-        }
-        means[iR] = area > 0 ? sum / area : std::numeric_limits<double>::quiet_NaN();
-    });
+    tbb::parallel_for(size_t(0), g.nR(),
+                      [&](size_t iR) { means[iR] = shellMean(w, values.data() + g.index(0, iR, 0), g.nR() * g.nLon()); });
     return means;
 }
 

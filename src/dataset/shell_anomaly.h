@@ -61,6 +61,12 @@ std::vector<ShellAnomalyVariable> shellAnomalyVariables(std::span<const BaseVari
 // each summed in one order: the same numbers whatever the number of threads.
 std::vector<double> shellMeans(const grid::SphericalGrid& grid, std::span<const float> values);
 
+// The mean shellMeans gives one shell, from that shell's values alone: row iLat (w.lon.size() values)
+// at shell + iLat * rowStride, `w` the grid's volumeFactors. The same sums in the same order, so the
+// same bits: a reader of a few shells (Python's lazy xarray arrays) computes the anomalies the whole
+// step's StepVolume would.
+double shellMean(const grid::SphericalGrid::VolumeFactors& w, const float* shell, size_t rowStride);
+
 // Whether every shell mean that exists (is not NaN) is positive: where "X anomaly %" is defined.
 bool shellMeansPositive(std::span<const double> means);
 

@@ -20,6 +20,7 @@
 #include "io/cf_grid.h"
 #include "analysis/critical_points.h"
 #include "dataset/dataset.h"
+#include "dataset/shell_anomaly.h"
 #include "analysis/feature_run.h"
 #include "analysis/features.h"
 #include "analysis/pathline_storage.h"
@@ -67,6 +68,50 @@ py::array_t<T> arrayOf(const std::vector<T>& values, std::vector<py::ssize_t> sh
     py::array_t<T> out(shape);
     std::memcpy(out.mutable_data(), values.data(), values.size() * sizeof(T));
     return out;
+}
+
+// Grid values read from step files by Dataset.field and Dataset.read_box since the module was loaded:
+// what the tests of the lazy xarray arrays count (tests/python/test_xarray.py). A whole variable read
+// at once counts every grid point of its level. Relaxed: a statistic, it orders nothing.
+std::atomic<uint64_t> g_valuesRead{0};
+
+// The values of variable `var` of `volume` in the box [begin[a], end[a]) of each axis (lat, r, lon)
+// into `out` (the box's shape, C order). Decodes only what the box needs, value by value from the
+// mapped files (StepVolume::value), unless that is most of the step (then the whole variable, in
+// parallel). A shell anomaly needs its base over the box's whole shells, for their means
+// (shellMean: the bits the whole step's StepVolume computes).
+void readBox(const dataset::StepVolume& volume, size_t var, const std::array<size_t, 3>& begin,
+             const std::array<size_t, 3>& end, float* out)
+{
+    const grid::SphericalGrid& g = volume.grid();
+    const size_t nLat = end[0] - begin[0], nR = end[1] - begin[1], nLon = end[2] - begin[2];
+    const dataset::ShellAnomalyOf* of = volume.computedFrom(var);
+    const size_t needed = of ? g.nLat() * nR * g.nLon() : nLat * nR * nLon;
+    const auto at = [&](size_t iLat, size_t iR, size_t iLon) -> float& {
+        return out[((iLat - begin[0]) * nR + (iR - begin[1])) * nLon + (iLon - begin[2])];
+    };
+    if (needed * 4 >= g.cellCount()) {
+        const float* all = volume.values(var);
+        for (size_t iLat = begin[0]; iLat < end[0]; ++iLat)
+            for (size_t iR = begin[1]; iR < end[1]; ++iR)
+                std::memcpy(&at(iLat, iR, begin[2]), all + g.index(iLat, iR, begin[2]), nLon * sizeof(float));
+        g_valuesRead.fetch_add(g.cellCount(), std::memory_order_relaxed);
+        return;
+    }
+    g_valuesRead.fetch_add(needed, std::memory_order_relaxed);
+    if (!of) {
+        volume.valuesInBox(var, begin, end, out);
+        return;
+    }
+    const auto w = g.volumeFactors();
+    std::vector<float> shell(g.nLat() * g.nLon());
+    for (size_t iR = begin[1]; iR < end[1]; ++iR) {
+        volume.valuesInBox(of->base, {0, iR, 0}, {g.nLat(), iR + 1, g.nLon()}, shell.data());
+        const double mean = dataset::shellMean(w, shell.data(), g.nLon());
+        for (size_t iLat = begin[0]; iLat < end[0]; ++iLat)
+            for (size_t iLon = begin[2]; iLon < end[2]; ++iLon)
+                at(iLat, iR, iLon) = dataset::shellAnomalyValue(shell[iLat * g.nLon() + iLon], mean, of->kind);
+    }
 }
 
 py::array_t<double> doubles(const std::vector<double>& values)
@@ -198,10 +243,7 @@ public:
     // One variable of one step at one level, (lat, r, lon), float32, a copy.
     py::array_t<float> field(const std::string& name, int step, int level) const
     {
-        const int var = m_dataset->variableIndex(name);
-        if (var < 0)
-            fail("variable: unknown variable '{}'; the dataset has: {}", name,
-                 fmt::join(m_dataset->variableNames(), ", "));
+        const int var = variableIndex(name);
         m_dataset->checkStep(step);
         m_dataset->checkLevel(level);
         const grid::SphericalGrid& grid = m_dataset->levels()[size_t(level)].grid;
@@ -211,6 +253,33 @@ public:
             py::gil_scoped_release release;
             const auto volume = m_dataset->load(step, level);
             std::memcpy(dst, volume->values(size_t(var)), grid.cellCount() * sizeof(float));
+            g_valuesRead.fetch_add(grid.cellCount(), std::memory_order_relaxed);
+        }
+        return out;
+    }
+
+    // The box [lat0, lat1) x [r0, r1) x [lon0, lon1) (grid indices of the level) of one variable of
+    // one step, float32, a copy; reads only what the box needs (readBox): the lazy xarray arrays'
+    // one read. Throws raypc::Error naming an axis whose range is empty or outside the grid.
+    py::array_t<float> readBoxOf(const std::string& name, int step, int level, std::array<size_t, 3> begin,
+                                 std::array<size_t, 3> end) const
+    {
+        const int var = variableIndex(name);
+        m_dataset->checkStep(step);
+        m_dataset->checkLevel(level);
+        const grid::SphericalGrid& grid = m_dataset->levels()[size_t(level)].grid;
+        const std::array<size_t, 3> n{grid.nLat(), grid.nR(), grid.nLon()};
+        constexpr const char* axes[] = {"lat", "r", "lon"};
+        for (size_t a = 0; a < 3; ++a)
+            if (!(begin[a] < end[a] && end[a] <= n[a]))
+                fail("read_box: {} index range {}..{} is empty or outside 0..{} of level {}", axes[a], begin[a], end[a],
+                     n[a], level);
+        py::array_t<float> out({py::ssize_t(end[0] - begin[0]), py::ssize_t(end[1] - begin[1]),
+                                py::ssize_t(end[2] - begin[2])});
+        float* dst = out.mutable_data();
+        {
+            py::gil_scoped_release release;
+            readBox(*m_dataset->load(step, level), size_t(var), begin, end, dst);
         }
         return out;
     }
@@ -470,6 +539,15 @@ public:
     }
 
 private:
+    int variableIndex(const std::string& name) const
+    {
+        const int var = m_dataset->variableIndex(name);
+        if (var < 0)
+            fail("variable: unknown variable '{}'; the dataset has: {}", name,
+                 fmt::join(m_dataset->variableNames(), ", "));
+        return var;
+    }
+
     std::shared_ptr<const dataset::Dataset> m_dataset;
 };
 
@@ -573,6 +651,8 @@ PYBIND11_MODULE(_raypc, m)
         "check_state",
         [](const std::string& text) { return raypc::state::toJson(parseState(text, "state")).dump(); },
         py::arg("json"), "The state document parsed by the one state schema, normalised (JSON)");
+    m.def("values_read", [] { return g_valuesRead.load(std::memory_order_relaxed); },
+          "Grid values read from step files by Dataset.field and read_box so far (for tests of laziness)");
     m.def("surface_radius_km", [] { return raypc::kSurfaceRadiusKm; });
     m.def("state_version", [] { return raypc::state::kRenderStateVersion; });
     m.def("names_json", [] { return std::string(kNamesJson); },
@@ -597,6 +677,9 @@ PYBIND11_MODULE(_raypc, m)
         .def_property_readonly("encoding", &PyDataset::encoding)
         .def("step", &PyDataset::step, py::arg("text"))
         .def("field", &PyDataset::field, py::arg("variable"), py::arg("step"), py::arg("level"))
+        .def("read_box", &PyDataset::readBoxOf, py::arg("variable"), py::arg("step"), py::arg("level"),
+             py::arg("begin"), py::arg("end"),
+             "One variable of one step in the grid-index box [begin, end) of (lat, r, lon), reading only what it needs")
         .def("probe", &PyDataset::probe, py::arg("lat"), py::arg("lon"), py::arg("r_km"), py::arg("step"),
              py::arg("level"), py::arg("variable"))
         .def("sample", &PyDataset::sample, py::arg("step"))

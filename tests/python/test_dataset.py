@@ -68,18 +68,19 @@ def test_field_equals_the_analytic_truth(contest, truth, name):
 
 def test_to_xarray_has_cf_coordinates_and_units(contest, truth):
     x = contest.to_xarray(1, variables=["temperature", "radial velocity"])
-    assert set(x.data_vars) == {"temperature", "radial velocity"}
-    assert x["temperature"].dims == ("lat", "r", "lon")
+    assert set(x.data_vars) == {"temperature", "radial_velocity"}  # CF names (raypc.names.cf_name)
+    assert x["radial_velocity"].attrs["long_name"] == "radial velocity"
+    assert x["temperature"].dims == ("lat", "radius", "lon")
     assert x["lat"].attrs["units"] == "degrees_north" and x["lon"].attrs["units"] == "degrees_east"
-    assert x["r"].attrs["units"] == "km" and x["depth"].attrs["positive"] == "down"
+    assert x["radius"].attrs["units"] == "km" and x["depth"].attrs["positive"] == "down"
     assert x["temperature"].attrs["units"] == "K"
     assert float(x["time"]) == 2.0 and x["time"].attrs["units"] == "Myr"
-    shell = x["temperature"].sel(r=5711, method="nearest")
+    shell = x["temperature"].sel(radius=5711, method="nearest")
     assert shell.dims == ("lat", "lon")
     i = int(np.abs(contest.grid.r - 5711).argmin())
     np.testing.assert_array_equal(shell.values, contest.field("temperature", 1).values[:, i, :])
     # radial velocity == u0 everywhere (5e-11 m/s = 0.1578 cm/yr)
-    np.testing.assert_allclose(x["radial velocity"].values, 5e-11 * 100 * 3.15576e7, rtol=1e-4)
+    np.testing.assert_allclose(x["radial_velocity"].values, 5e-11 * 100 * 3.15576e7, rtol=1e-4)
 
 
 @pytest.mark.parametrize("lat,lon,r", [(12.3, 45.6, 5000.0), (89.7, 123.0, 4000.0), (-89.9, 10.0, 6000.0),
@@ -176,11 +177,11 @@ def test_field_and_to_xarray_at_grid_points_equal_probe(contest):
     """At a grid point the interpolation is the point's own value: probe (the CLI's JSON) = field."""
     g = contest.grid
     f = contest.field("thermal conductivity", 2).values
-    x = contest.to_xarray(2, ["thermal conductivity"])["thermal conductivity"]
+    x = contest.to_xarray(2, ["thermal conductivity"])["thermal_conductivity"]
     for i, j, k in [(0, 0, 0), (17, 20, 71), (35, 40, 36), (5, 39, 1)]:
         value = contest.probe(g.lat[i], g.lon[k], g.r[j], step=2)["values"]["thermal conductivity"]["value"]
         assert value == pytest.approx(float(f[i, j, k]), rel=1e-6, abs=1e-9)
-        assert float(x.isel(lat=i, r=j, lon=k)) == float(f[i, j, k])
+        assert float(x.isel(lat=i, radius=j, lon=k)) == float(f[i, j, k])
 
 
 def test_an_interrupt_stops_preprocessing_and_the_next_open_resumes(tmp_path):

@@ -35,10 +35,10 @@ def global_vs(tmp_path_factory):
 
 def test_a_tomography_model_has_its_variable_and_its_shell_anomalies(global_vs):
     x = global_vs.to_xarray(0)
-    assert list(x.data_vars) == ["vs", "vs anomaly", "vs anomaly %"]
-    assert x["vs anomaly %"].attrs.get("units") == "%"
+    assert list(x.data_vars) == ["vs", "vs_anomaly", "vs_anomaly_percent"]  # CF names of the display names
+    assert x["vs_anomaly_percent"].attrs.get("units") == "%"
     vs = x["vs"].values
-    anomaly = x["vs anomaly"].values
+    anomaly = x["vs_anomaly"].values
     # At every grid point: vs minus the area-weighted mean of its shell (weights: the dual cells'
     # sin(lat) band widths, every lon column alike here).
     lat = x["lat"].values
@@ -46,13 +46,13 @@ def test_a_tomography_model_has_its_variable_and_its_shell_anomalies(global_vs):
     w = np.diff(np.sin(np.radians(edges)))
     mean = np.einsum("l,lrk->r", w, vs) / (w.sum() * vs.shape[2])
     assert np.allclose(anomaly, vs - mean[None, :, None], atol=2e-5)
-    assert np.allclose(x["vs anomaly %"].values, 100 * (vs / mean[None, :, None] - 1), atol=5e-4)
+    assert np.allclose(x["vs_anomaly_percent"].values, 100 * (vs / mean[None, :, None] - 1), atol=5e-4)
 
 
 def test_a_regional_model_keeps_no_data_missing(regional):
     x = regional.to_xarray(0)
     vs = x["vs"]
-    lat, lon, r = x["lat"].values, x["lon"].values, x["r"].values
+    lat, lon, r = x["lat"].values, x["lon"].values, x["radius"].values
     depth = 6371.0 - r
     inside = (lat[:, None, None] >= 20 - 1e-6) & (lat[:, None, None] <= 55 + 1e-6) \
         & (lon[None, None, :] >= 230 - 1e-6) & (lon[None, None, :] <= 295 + 1e-6)

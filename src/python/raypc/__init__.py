@@ -8,7 +8,8 @@ the ``raypc`` executable: a picture equals ``raypc render``'s, a table ``raypc s
 
 >>> import raypc
 >>> ds = raypc.open("demo-data/dataset")                     # a dataset, netCDF files or ASPECT's solution.pvd
->>> ds.to_xarray(6)["temperature"].sel(r=5711, method="nearest").plot()
+>>> ds.to_xarray(6).temperature.sel(depth=660, method="nearest").plot()   # lazy, CF names
+>>> xr.open_dataset("demo-data/dataset", engine="raypc")          # the whole series, lazy
 >>> state = raypc.State("examples/task1-slabs-660km.json")
 >>> ds.stats(state).plot(x="time_myr", y="selected_percent_of_mantle")
 """

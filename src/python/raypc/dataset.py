@@ -15,7 +15,7 @@ from . import _raypc
 from ._progress import _Progress
 from ._raypc import Error
 from .grid import SURFACE_RADIUS_KM, Field, Grid, Variable
-from .names import _COLUMNS, _PATHLINE_ATTRIBUTE
+from .names import _COLUMNS, _PATHLINE_ATTRIBUTE, cf_names
 from .picture import Picture
 from .state import State
 
@@ -145,38 +145,38 @@ class Dataset:
     def field(self, variable: str, step: StepLike = 0, level: int = 0) -> Field:
         """One variable of one step on the native grid, (lat, r, lon) float32 (a copy)."""
         s = self._step(step)
+        variable = self._variable_name(variable)
         values = self._core.field(variable, s, level)  # checks the variable and the level
         g = self._levels[level]
         return Field(values, g.lat, g.r, g.lon, variable, self._units[variable], s, float(self._times[s]), level)
 
-    def to_xarray(self, step: StepLike = 0, variables: Optional[Sequence[str]] = None, level: int = 0):
-        """The step as an ``xarray.Dataset`` on (lat, r, lon) with CF attributes and units, a depth
-        coordinate on r and the time (Myr): ``ds.to_xarray(6)["temperature"].sel(r=5711,
-        method="nearest").plot()``."""
-        import xarray as xr
+    def _variable_name(self, name: str, what: str = "variable") -> str:
+        """The display name of a variable named by its display name or its CF name (to_xarray's)."""
+        if not isinstance(name, str):
+            raise Error(f"{what}: expected a name, not {type(name).__name__}")
+        if name in self._units:
+            return name
+        for display, cf in cf_names(self._units).items():
+            if cf == name:
+                return display
+        raise Error(f"{what}: unknown variable '{name}'; the dataset has: {', '.join(self._units)}")
 
+    def to_xarray(self, step: Optional[StepLike] = None, variables: Optional[Sequence[str]] = None, level: int = 0):
+        """The dataset as a lazy ``xarray.Dataset`` on (time, lat, radius, lon), as
+        ``xr.open_dataset(path, engine="raypc")`` opens it (raypc.xarray_backend): CF names
+        (``temperature_anomaly``), attributes and units, ``depth`` indexed too; values read when
+        used, only those used. ``step``: that step alone (``.isel(time=step)``, a scalar time, and
+        the attribute ``step``): ``ds.to_xarray(6).temperature.sel(depth=660, method="nearest").plot()``.
+        ``variables``: names, display or CF, to keep (default all)."""
+        from .xarray_backend import open_raypc_dataset
+
+        x = open_raypc_dataset(self, variables, level)
+        if step is None:
+            return x
         s = self._step(step)
-        if isinstance(variables, str):
-            variables = [variables]
-        names = [v.name for v in self._variables] if variables is None else list(variables)
-        if not names:
-            raise Error("variables: none given")
-        data_vars = {}
-        for name in names:
-            f = self.field(name, s, level)
-            data_vars[name] = (("lat", "r", "lon"), f.values, {"long_name": name, "units": f.units})
-        g = self._levels[level]
-        coords = {
-            "lat": ("lat", g.lat, {"standard_name": "latitude", "units": "degrees_north", "axis": "Y"}),
-            "r": ("r", g.r, {"long_name": "radius", "units": "km", "axis": "Z", "positive": "up"}),
-            "lon": ("lon", g.lon, {"standard_name": "longitude", "units": "degrees_east", "axis": "X"}),
-            "depth": ("r", g.depth, {"standard_name": "depth", "long_name": "depth below the surface", "units": "km",
-                                     "positive": "down"}),
-            "time": ((), float(self._times[s]), {"standard_name": "time", "long_name": "model time", "units": "Myr"}),
-        }
-        return xr.Dataset(data_vars, coords=coords,
-                          attrs={"Conventions": "CF-1.8", "source": f"RayPC dataset {self.path}", "step": s,
-                                 "level_of_detail": level})
+        x = x.isel(time=s)
+        x.attrs["step"] = s
+        return x
 
     def probe(self, lat: float, lon: float, r_km: float, step: StepLike = 0, level: int = 0,
               variable: Optional[str] = None) -> dict:
@@ -184,7 +184,7 @@ class Dataset:
         ``{"step", "time_myr", "level", "point": {...}, "values": {NAME: {"value", "units",
         "quantisation_error_max"}}}``."""
         return json.loads(self._core.probe(float(lat), float(lon), float(r_km), self._step(step), level,
-                                           variable or ""))
+                                           self._variable_name(variable) if variable else ""))
 
     def sample(self, step: StepLike = 0):
         """The parallel-coordinates sample of a step (the same cells in every step) as a
@@ -282,6 +282,8 @@ class Dataset:
             raise Error(f"by: expected 'step' or 'depth', not {by!r}")
         if mean_of is not None and by != "depth":
             raise Error("mean_of: the means are per depth; ask for by='depth'")
+        if mean_of is not None:
+            mean_of = self._variable_name(mean_of, "mean_of")
         first, last = self._step_range(steps)
         bar = _Progress("stats", progress, delay=0.5)
         try:
