@@ -443,24 +443,33 @@ public:
         options.assets = findAssetDir(std::nullopt);
         options.examples = findExamplesDir(std::nullopt);
         m_server = withPythonArgumentNames([&] { return std::make_unique<server::Server>(std::move(options)); });
+        m_url = m_server->url();
+        m_port = m_server->port();
+        m_token = m_server->token();
         m_thread = std::thread([this] { m_server->run(); });
     }
     ~PyServer() { stop(); }
+    // Stops serving and frees the port: Server::stop() ends the run loop, but the listening socket
+    // is closed only with the Server, and a socket left listening would take connections that no
+    // one answers (a client waits for its timeout instead of being refused). Stopping again: nothing.
     void stop()
     {
-        if (!m_thread.joinable())
+        if (!m_server)
             return;
         py::gil_scoped_release release;
         m_server->stop();
         m_thread.join();
+        m_server.reset();
     }
-    std::string url() const { return m_server->url(); }
-    int port() const { return m_server->port(); }
-    std::string token() const { return m_server->token(); }
+    std::string url() const { return m_url; }
+    int port() const { return m_port; }
+    std::string token() const { return m_token; }
 
 private:
     std::unique_ptr<server::Server> m_server;
     std::thread m_thread;
+    std::string m_url, m_token;  // kept for after stop()
+    int m_port = 0;
 };
 
 }  // namespace
