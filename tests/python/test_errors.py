@@ -4,6 +4,7 @@ name its flags; a failed raypc.open leaves nothing behind; closing one view of a
 leaves the others working, and closing the last frees the port."""
 import socket
 import subprocess
+import threading
 import urllib.parse
 
 import pytest
@@ -222,3 +223,20 @@ def test_a_server_that_does_not_answer_is_a_raypc_error_naming_the_url():
     view = raypc.View(url)
     with pytest.raises(raypc.Error, match=r"/api/link: the RayPC server does not answer"):
         view.link()
+    # Something else listening, which answers what is not HTTP.
+    with socket.socket() as other:
+        other.bind(("127.0.0.1", 0))
+        other.listen(1)
+
+        def answer_garbage():
+            connection, _ = other.accept()
+            with connection:
+                connection.recv(4096)
+                connection.sendall(b"SSH-2.0-OpenSSH\r\n")
+
+        thread = threading.Thread(target=answer_garbage, daemon=True)
+        thread.start()
+        view = raypc.View(f"http://127.0.0.1:{other.getsockname()[1]}/")
+        with pytest.raises(raypc.Error, match=r"/api/link: the answer is not a RayPC server's"):
+            view.link()
+        thread.join(timeout=5)

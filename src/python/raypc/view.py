@@ -3,6 +3,7 @@ it, and the view that reads and sets the state the UI shows through the server's
 from __future__ import annotations
 
 import atexit
+import http.client
 import json
 import os
 import threading
@@ -79,6 +80,8 @@ class View:
         except OSError as e:  # a timeout or a connection reset while reading the answer
             reason = f"no answer within {self.timeout:g} s" if isinstance(e, TimeoutError) else (e.strerror or str(e))
             raise Error(f"{self._base}{path}: the RayPC server does not answer ({reason})") from None
+        except (http.client.HTTPException, ValueError):  # not HTTP, or not JSON: something else listens there
+            raise Error(f"{self._base}{path}: the answer is not a RayPC server's") from None
 
     def link(self) -> dict:
         """The server's linked state: {"version", "state", "source" ("ui"/"api"), "sessions"}."""
