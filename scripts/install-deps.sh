@@ -15,6 +15,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy # Python's raypc module (src/python, docs/python.md)
   python3-xarray python3-pandas     # its to_xarray and DataFrames
+  python3-pip python3-setuptools python3-wheel # `pip install --no-build-isolation .` (pyproject.toml)
   chromium                          # the web UI's browser tests
 )
 # Only the test command needs these: an independent XML parser and ParaView's Python, which
@@ -24,11 +25,12 @@ packages=(
 # its example notebook (tests/python); clang with its sanitizer and libFuzzer runtimes and
 # llvm-symbolizer for `scripts/test.sh --sanitize` and tests/fuzz/; GMT, which checks that it
 # reads the maps and sections RayPC exports as netCDF grids (tests/cli, maps_sections); h5py, which
-# writes the CitcomS HDF5 fixture at test time (tests/data/citcoms-layout).
+# writes the CitcomS HDF5 fixture at test time (tests/data/citcoms-layout); venv, in which the
+# test of the pip-installed package installs its wheel (tests/python/test_wheel.py).
 if [[ ${1:-} == --tests ]]; then
   packages+=(libxml2-utils python3-paraview python3-netcdf4 clang libclang-rt-14-dev llvm
              python3-pytest python3-nbclient python3-nbformat python3-ipykernel python3-matplotlib python3-pil
-             python3-websocket gmt python3-h5py)
+             python3-websocket gmt python3-h5py python3-venv)
 fi
 # Node.js and npm build the web UI; a machine may carry them from elsewhere (npm bundled with
 # nodejs), so ask for Debian's only when the commands are missing.

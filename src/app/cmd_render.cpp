@@ -11,6 +11,7 @@
 #include "app/command.h"
 #include "app/options.h"
 #include "app/series_inputs.h"
+#include "app/slice_grid.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/mpi.h"
@@ -139,70 +140,10 @@ void applySliceFlags(const RenderArgs& args, state::RenderState& state)
                  args.lengthDeg, degToRad(1.0) * kSurfaceRadiusKm);
         state.section.to = GreatCircle::pointAlong(state.section.from, args.azimuthDeg, args.lengthDeg);
     }
-    if (!(args.gridStepDeg >= 0) || !(args.depthStepKm > 0))
-        fail("--grid-step {} / --depth-step {}: expected positive numbers", args.gridStepDeg, args.depthStepKm);
-    if (args.view == "map" && args.gridStepDeg > 0) {
-        const double n = 180 / args.gridStepDeg;
-        if (std::abs(n - std::round(n)) > 1e-9 || n > 36000)
-            fail("--grid-step {}: expected degrees that divide 180 (e.g. 0.25, 0.5, 1, 2)", args.gridStepDeg);
-    }
-    if (args.view == "section" && args.gridStepDeg > 0 && args.gridStepDeg < 0.001)
-        fail("--grid-step {}: at least 0.001 degrees", args.gridStepDeg);
-    if (args.view == "section" && args.depthStepKm < 0.1)
-        fail("--depth-step {}: at least 0.1 km", args.depthStepKm);
+    if (args.view != "3d")
+        checkSliceGridSpacing(args.view == "map" ? StateRenderer::Slice::Map : StateRenderer::Slice::Section,
+                              args.gridStepDeg, args.depthStepKm, {"--grid-step", "--depth-step"});
 }
-
-// The slice of `step` as a CF netCDF grid (`--netcdf`): a map's lat-lon grid or a section's
-// distance-depth grid of the colour variable, sampled as the picture is.
-io::CfGridFile sliceGridFile(const dataset::Dataset& dataset, const dataset::StepVolume* volume, const ResolvedState& resolved,
-                         StateRenderer::Slice slice, const RenderArgs& args)
-{
-    const state::RenderState& state = resolved.state;
-    const size_t var = size_t(resolved.params.colorVariable);
-    const dataset::VariableInfo& info = dataset.variables().at(var);
-    io::CfGridFile file;
-    file.name = io::cfName(info.name);
-    file.units = info.units;
-    file.longName = info.name;
-    const double timeMyr = dataset.steps().at(size_t(state.step)).timeMyr;
-    const io::CfVariable1D lat{"lat", "degrees_north", "latitude", "latitude", "Y", "", {}, ""};
-    const io::CfVariable1D lon{"lon", "degrees_east", "longitude", "longitude", "X", "", {}, ""};
-    if (slice == StateRenderer::Slice::Map) {
-        const SliceGrid g = latLonSlice(*volume, var, state.map.depthKm, args.gridStepDeg > 0 ? args.gridStepDeg : 1.0,
-                                        "--depth");  // the step was checked with the options
-        file.rows = lat;
-        file.rows.values = g.rows;
-        file.columns = lon;
-        file.columns.values = g.columns;
-        file.scalars.push_back({"depth", "km", "depth", "depth below the surface", "Z", "down", {state.map.depthKm}, ""});
-        file.values = g.values;
-        file.globalAttributes.emplace_back(
-            "title", fmt::format("{} at {:g} km depth, step {} ({:.3f} Myr)", info.name, state.map.depthKm, state.step, timeMyr));
-    } else {
-        const GreatCircle circle(state.section.from, state.section.to);
-        const double step = args.gridStepDeg > 0 ? args.gridStepDeg : 0.5;
-        const int columns = std::max(2, int(std::ceil(circle.lengthDeg() / step)) + 1);
-        const double depthSpan = kSurfaceRadiusKm - volume->grid().rKm.front();
-        const int rows = std::max(2, int(std::ceil(depthSpan / args.depthStepKm)) + 1);
-        const SectionGrid g = sectionGrid(*volume, var, state.section, columns, rows);
-        file.rows = {"depth", "km", "depth", "depth below the surface", "Z", "down", g.grid.rows, ""};
-        file.columns = {"distance", "km", "", "distance along the great circle from the section's start, at the surface", "X", "", g.grid.columns, ""};
-        file.auxiliary.push_back({"distance_deg", "degree", "", "angle along the great circle from the section's start", "", "", g.distanceDeg, "distance"});
-        file.auxiliary.push_back({"lat", "degrees_north", "latitude", "latitude", "", "", g.latDeg, "distance"});
-        file.auxiliary.push_back({"lon", "degrees_east", "longitude", "longitude", "", "", g.lonDeg, "distance"});
-        file.values = g.grid.values;
-        file.globalAttributes.emplace_back(
-            "title", fmt::format("{} on the great-circle section from {} to {}, step {} ({:.3f} Myr)", info.name,
-                                 latLonText(state.section.from.latDeg, state.section.from.lonDeg),
-                                 latLonText(state.section.to.latDeg, state.section.to.lonDeg), state.step, timeMyr));
-    }
-    file.globalAttributes.emplace_back("source", "RayPC (raypc " + args.view + "), sampled on the model's native grid as "
-                                                 "raypc probe samples (trilinear, lon seam and pole caps joined)");
-    file.globalAttributes.emplace_back("time", fmt::format("{:.6g} Myr", timeMyr));
-    return file;
-}
-
-
 
 // What the options resolve to, before anything is rendered.
 struct RenderSetup {
@@ -396,8 +337,8 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
         // Both made before either is written: a grid that cannot be made leaves no picture.
         std::optional<io::CfGridFile> grid;
         if (setup.netcdf)
-            grid = sliceGridFile(dataset, setup.volume(step, resolved.state.level.value_or(0)).get(), resolved,
-                                 *setup.slice, args);
+            grid = sliceGridFile(dataset, *setup.volume(step, resolved.state.level.value_or(0)), resolved,
+                                 *setup.slice, args.gridStepDeg, args.depthStepKm, "raypc " + args.view);
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         const std::string out = (*setup.output)(step);
         makeParent(out);

@@ -37,8 +37,10 @@ struct CfGridFile {
 // raypc::Error naming the file and what failed, or the sizes that do not match.
 void writeCfGrid(const std::filesystem::path& path, const CfGridFile& grid);
 
-// A name netCDF tools take without quoting: letters, digits and '_' ("temperature anomaly" ->
-// "temperature_anomaly").
+// A name netCDF tools and CF take without quoting, the one rule for every file and xarray Dataset
+// raypc makes (Python's raypc.cf_name calls it): '%' spelled "percent", every run of characters other
+// than letters, digits and '_' one '_', none at either end, "v_" in front of a name that would not
+// start with a letter ("temperature anomaly %" -> "temperature_anomaly_percent"; case kept: "dlnVs").
 std::string cfName(const std::string& name);
 
 }  // namespace raypc::io

@@ -153,9 +153,27 @@ namespace raypc::io {
 std::string cfName(const std::string& name)
 {
     std::string out;
-    for (const char c : name)
-        out += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
-    if (out.empty() || std::isdigit(static_cast<unsigned char>(out[0])))
+    bool gap = false;  // a run of characters netCDF tools would need quoted, written as one '_'
+    auto put = [&](const std::string& part) {
+        if (gap && !out.empty())
+            out += '_';
+        gap = false;
+        out += part;
+    };
+    for (const char c : name) {
+        if (c == '%') {
+            gap = true;
+            put("percent");
+            gap = true;
+        } else if (std::isalnum(static_cast<unsigned char>(c)) || c == '_') {
+            put(std::string(1, c));
+        } else {
+            gap = true;
+        }
+    }
+    const size_t first = out.find_first_not_of('_'), last = out.find_last_not_of('_');
+    out = first == std::string::npos ? std::string() : out.substr(first, last - first + 1);
+    if (out.empty() || !std::isalpha(static_cast<unsigned char>(out[0])))
         out = "v_" + out;
     return out;
 }

@@ -11,14 +11,17 @@
 // rendering, statistics, reading a field) releases the GIL and runs on every core as the executable
 // does; progress callbacks take the GIL only while they run, and a KeyboardInterrupt seen there
 // cancels the work between steps.
+#include "app/cli.h"
 #include "app/feature_table.h"
 #include "app/options.h"
 #include "analysis/probe.h"
 #include "app/series_inputs.h"
+#include "app/slice_grid.h"
 #include "core/error.h"
 #include "core/error_kinds.h"
 #include "core/install_paths.h"
 #include "core/spherical.h"
+#include "io/cf_grid.h"
 #include "analysis/critical_points.h"
 #include "dataset/dataset.h"
 #include "analysis/feature_run.h"
@@ -27,7 +30,9 @@
 #include "analysis/selection.h"
 #include "state/render_state.h"
 #include "render/state_renderer.h"
+#include "server/api_views.h"
 #include "server/server.h"
+#include "server/step_cache.h"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -41,6 +46,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <csignal>
+#include <cstdio>
+#include <iostream>
 #include <cstring>
 #include <thread>
 
@@ -424,6 +432,85 @@ public:
         return csv;
     }
 
+    // The state's map or section of its colour variable as a CF grid (what `raypc map --netcdf` and
+    // `raypc section --netcdf` write, app/slice_grid.h): a dict of the grid's parts for xarray.
+    py::dict sliceGrid(const std::string& text, const std::string& view, double gridStepDeg, double depthStepKm) const
+    {
+        if (view != "map" && view != "section")
+            fail("view '{}': expected 'map' or 'section'", view);
+        const auto slice = view == "map" ? render::StateRenderer::Slice::Map : render::StateRenderer::Slice::Section;
+        const app::SliceGridNames names{"grid_step_deg", "depth_step_km", "state.map.depthKm"};
+        app::checkSliceGridSpacing(slice, gridStepDeg, depthStepKm, names);
+        const state::RenderState state = parseState(text, "state");
+        io::CfGridFile file;
+        {
+            py::gil_scoped_release release;
+            const render::ResolvedState resolved = render::resolveState(state, *m_dataset);
+            const auto volume = m_dataset->load(resolved.state.step, resolved.state.level.value_or(0));
+            file = app::sliceGridFile(*m_dataset, *volume, resolved, slice, gridStepDeg, depthStepKm,
+                                      "raypc.Dataset." + view + "_grid", names);
+        }
+        auto variable = [](const io::CfVariable1D& v) {
+            return py::dict(py::arg("name") = v.name, py::arg("units") = v.units, py::arg("standard_name") = v.standardName,
+                            py::arg("long_name") = v.longName, py::arg("axis") = v.axis, py::arg("positive") = v.positive,
+                            py::arg("values") = doubles(v.values), py::arg("dimension") = v.dimension);
+        };
+        py::list auxiliary, scalars;
+        for (const io::CfVariable1D& v : file.auxiliary)
+            auxiliary.append(variable(v));
+        for (const io::CfVariable1D& v : file.scalars)
+            scalars.append(variable(v));
+        return py::dict(py::arg("name") = file.name, py::arg("units") = file.units, py::arg("long_name") = file.longName,
+                        py::arg("rows") = variable(file.rows), py::arg("columns") = variable(file.columns),
+                        py::arg("auxiliary") = auxiliary, py::arg("scalars") = scalars,
+                        py::arg("values") = arrayOf(file.values, {py::ssize_t(file.rows.values.size()),
+                                                                  py::ssize_t(file.columns.values.size())}),
+                        py::arg("attributes") = file.globalAttributes);
+    }
+
+    // The features of the state's brushes in every step followed through the series (what the UI's
+    // Features panel shows and `raypc features --tracks/--events/--stalls` and `raypc flux` write:
+    // server/api_views.h featureSeriesJson), as its JSON text with the CSV tables under "csv".
+    std::string featureSeries(const std::string& text, int level, double minVolumeKm3, std::vector<double> depthsKm,
+                              double bandHalfWidthKm, double minOverlapShare, const std::string& stallBy, double sigmas,
+                              py::object progress) const
+    {
+        const state::RenderState state = parseState(text, "state");
+        const std::vector<analysis::RangeFilter> filters = analysis::resolveRangeFilters(*m_dataset, state.brushes, "brushes");
+        m_dataset->checkLevel(level, "level");
+        state::FeatureSettings settings;
+        settings.minVolumeKm3 = float(minVolumeKm3);
+        settings.depthsKm.assign(depthsKm.begin(), depthsKm.end());
+        settings.bandHalfWidthKm = float(bandHalfWidthKm);
+        settings.minOverlapShare = float(minOverlapShare);
+        state::checkFeatureSettings(settings, {{"minVolumeKm3", "min_volume_km3"},
+                                                {"depthsKm", "depths_km"},
+                                                {"bandHalfWidthKm", "band_half_width_km"},
+                                                {"minOverlapShare", "min_overlap"}});
+        const analysis::StallMeasure measure = analysis::parseStallMeasure(stallBy);
+        const analysis::FeatureOptions options = analysis::featureOptions(minVolumeKm3, std::move(depthsKm), bandHalfWidthKm);
+        ProgressBridge bridge(std::move(progress));
+        std::string out;
+        {
+            py::gil_scoped_release release;
+            // Each step is read once, in order: a small cache that keeps nothing for long.
+            server::StepCache cache([this](int step, int lod) { return m_dataset->load(step, lod); }, size_t(1) << 30, 2);
+            try {
+                out = server::featureSeriesJson(*m_dataset, cache, filters, options, minOverlapShare, measure, level, sigmas,
+                                                &bridge.cancel, [&](int done, int total) {
+                                                    if (done > 0)
+                                                        bridge("steps", done, total);
+                                                })
+                          .dump();
+            } catch (const Error&) {
+                if (!bridge.cancel)
+                    throw;
+            }
+        }
+        bridge.rethrow();
+        return out;
+    }
+
 private:
     std::shared_ptr<const dataset::Dataset> m_dataset;
 };
@@ -431,7 +518,11 @@ private:
 // `raypc serve` of one dataset inside this process, on its own thread (the notebook view).
 class PyServer {
 public:
-    PyServer(const std::string& dataset, const std::string& host, int port)
+    // assets/examples: the UI's files and the example states inside the installed package
+    // (raypc/web, raypc/examples, passed by raypc.show); nullopt: the executable's lookup
+    // (core/install_paths.h), which finds them in the build and source trees.
+    PyServer(const std::string& dataset, const std::string& host, int port,
+             const std::optional<std::string>& assets, const std::optional<std::string>& examples)
     {
         if (port < 0 || port > 65535)
             fail("port: {} out of range 0..65535", port);
@@ -440,8 +531,11 @@ public:
         options.host = host;
         options.port = uint16_t(port);
         options.handleSignals = false;  // the Python process's signals stay Python's
-        options.assets = findAssetDir(std::nullopt);
-        options.examples = findExamplesDir(std::nullopt);
+        const auto path = [](const std::optional<std::string>& p) {
+            return p ? std::optional<std::filesystem::path>(*p) : std::nullopt;
+        };
+        options.assets = findAssetDir(path(assets));
+        options.examples = findExamplesDir(path(examples));
         m_server = withPythonArgumentNames([&] { return std::make_unique<server::Server>(std::move(options)); });
         m_url = m_server->url();
         m_port = m_server->port();
@@ -471,6 +565,37 @@ private:
     std::string m_url, m_token;  // kept for after stop()
     int m_port = 0;
 };
+
+// `python3 -m raypc ARGS`: the command line (app/cli.h) as the executable runs it, minus the
+// executable's restart with transparent huge pages, which would exec /proc/self/exe (Python).
+int runCommandLine(std::vector<std::string> args)
+{
+    if (args.empty())
+        fail("main: argv is empty, expected the program's name first (as sys.argv)");
+    std::vector<char*> argv;
+    for (auto& arg : args)
+        argv.push_back(arg.data());
+    argv.push_back(nullptr);
+    // `serve` stops on SIGINT/SIGTERM through its own handlers, which it leaves at the default when
+    // it stops: put back the handlers this process had (Python's KeyboardInterrupt) afterwards.
+    struct sigaction savedInt{}, savedTerm{};
+    sigaction(SIGINT, nullptr, &savedInt);
+    sigaction(SIGTERM, nullptr, &savedTerm);
+    // Python's own output first, then the command's (both to the same file descriptors).
+    py::module_::import("sys").attr("stdout").attr("flush")();
+    py::module_::import("sys").attr("stderr").attr("flush")();
+    int status = 0;
+    {
+        py::gil_scoped_release release;
+        status = app::run(int(args.size()), argv.data());
+        std::cout.flush();
+        std::fflush(stdout);
+        std::fflush(stderr);
+    }
+    sigaction(SIGINT, &savedInt, nullptr);
+    sigaction(SIGTERM, &savedTerm, nullptr);
+    return status;
+}
 
 }  // namespace
 }  // namespace raypc::python
@@ -517,6 +642,10 @@ PYBIND11_MODULE(_raypc, m)
         }
     });
 
+    m.attr("__version__") = RAYPC_VERSION;  // project(VERSION), as `raypc --version` and the wheel's metadata
+    m.def("main", &runCommandLine, py::arg("argv"),
+          "Runs the raypc command line on argv (argv[0] the program's name, as sys.argv); returns the exit status. "
+          "Ctrl-C: `serve` stops; other commands stop only if SIGINT's handler is the default (python3 -m raypc sets it)");
     m.def("prepare", &prepare, py::arg("args"), py::arg("progress") = py::none(),
           "Preprocess inputs as `raypc serve INPUT…` does; returns the dataset directory");
     m.def(
@@ -527,6 +656,8 @@ PYBIND11_MODULE(_raypc, m)
     m.def("state_version", [] { return raypc::state::kRenderStateVersion; });
     m.def("names_json", [] { return std::string(kNamesJson); },
           "src/grid/names.json: the names of derived variables and of the columns of the tables raypc writes");
+    m.def("cf_name", &raypc::io::cfName, py::arg("display_name"),
+          "The CF/netCDF-safe name of a variable's display name (io/cf_grid.h: what raypc writes in every file)");
     m.def(
         "critical_kind_name",
         [](int kind) {
@@ -555,12 +686,19 @@ PYBIND11_MODULE(_raypc, m)
              py::arg("progress") = py::none())
         .def("features", &PyDataset::features, py::arg("json"), py::arg("first"), py::arg("last"), py::arg("level"),
              py::arg("min_volume_km3"), py::arg("depths_km"), py::arg("band_half_width_km"), py::arg("progress") = py::none())
+        .def("slice_grid", &PyDataset::sliceGrid, py::arg("json"), py::arg("view"), py::arg("grid_step_deg"),
+             py::arg("depth_step_km"))
+        .def("feature_series", &PyDataset::featureSeries, py::arg("json"), py::arg("level"), py::arg("min_volume_km3"),
+             py::arg("depths_km"), py::arg("band_half_width_km"), py::arg("min_overlap"), py::arg("stall_by"),
+             py::arg("sigmas"), py::arg("progress") = py::none())
         .def("stats", &PyDataset::stats, py::arg("json"), py::arg("first"), py::arg("last"), py::arg("level"),
              py::arg("mean_of") = "", py::arg("progress") = py::none());
 
     py::class_<PyServer>(m, "Server")
-        .def(py::init<const std::string&, const std::string&, int>(), py::arg("dataset"), py::arg("host"),
-             py::arg("port"))
+        .def(py::init<const std::string&, const std::string&, int, const std::optional<std::string>&,
+                      const std::optional<std::string>&>(),
+             py::arg("dataset"), py::arg("host"), py::arg("port"), py::arg("assets") = py::none(),
+             py::arg("examples") = py::none())
         .def_property_readonly("url", &PyServer::url)
         .def_property_readonly("port", &PyServer::port)
         .def_property_readonly("token", &PyServer::token)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from . import _raypc
 from ._raypc import Error, NotFoundError, OutOfRangeError, UnknownNameError
+from ._raypc import __version__  # project(VERSION) in CMakeLists.txt, as the wheel's metadata
 from .dataset import Dataset, StepLike
 from .grid import SURFACE_RADIUS_KM, Field, Grid, Variable
 from .names import NAMES

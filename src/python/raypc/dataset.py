@@ -8,7 +8,7 @@ import json
 import numbers
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Optional, Sequence, Union
+from typing import TYPE_CHECKING, Any, NamedTuple, Optional, Sequence, Union
 
 import numpy as np
 
@@ -30,6 +30,42 @@ def _state_of(state: Union[None, State, dict, str, os.PathLike], dataset: "Datas
     if state is None:
         return dataset.default_state()
     return state if isinstance(state, State) else State(state)
+
+
+class FeatureTracks(NamedTuple):
+    """Features followed through a series (:meth:`Dataset.tracks`), the tables of ``raypc features
+    --tracks/--events/--stalls`` and ``raypc flux`` (columns in docs/features.md)."""
+
+    tracks: Any      # DataFrame: a row per track and step (volume km³, mean depth km, centroid)
+    events: Any      # DataFrame: births, deaths, merges and splits
+    stalls: Any      # DataFrame: how long each track stays near each depth (Myr) and how it left
+    flux: Any        # DataFrame: the flux across the shells per step (km³/yr), None without shells in the grid
+    settings: dict   # the settings used (level, minVolumeKm3, depthsKm, bandHalfWidthKm, minOverlapShare, stallBy)
+
+    def __repr__(self) -> str:
+        flux = "none" if self.flux is None else f"{len(self.flux)} rows"
+        return (f"<raypc.FeatureTracks: {self.tracks['track'].nunique()} tracks, {len(self.events)} events, "
+                f"{len(self.stalls)} stalls, flux {flux}; stall by {self.settings['stallBy']}>")
+
+
+def _grid_array(d: dict):
+    """A slice grid of the compiled module (app/slice_grid.h's CF grid) as an xarray.DataArray."""
+    import xarray as xr
+
+    def attrs(v: dict) -> dict:
+        keys = ("units", "standard_name", "long_name", "axis", "positive")
+        return {k: v[k] for k in keys if v[k]}
+
+    rows, columns = d["rows"], d["columns"]
+    coords = {rows["name"]: (rows["name"], rows["values"], attrs(rows)),
+              columns["name"]: (columns["name"], columns["values"], attrs(columns))}
+    for v in d["auxiliary"]:
+        coords[v["name"]] = (v["dimension"], v["values"], attrs(v))
+    for v in d["scalars"]:
+        coords[v["name"]] = ((), float(v["values"][0]), attrs(v))
+    out_attrs = {"long_name": d["long_name"], "units": d["units"], **dict(d["attributes"])}
+    return xr.DataArray(d["values"], dims=(rows["name"], columns["name"]), coords=coords, name=d["name"],
+                        attrs=out_attrs)
 
 
 class Dataset:
@@ -83,6 +119,24 @@ class Dataset:
         return (f"<raypc.Dataset {str(self.path)!r}: {len(t)} steps, {t[0]:g}..{t[-1]:g} Myr; grid "
                 f"{len(g.lat)} lat x {len(g.r)} r x {len(g.lon)} lon ({g.r[0]:.0f}..{g.r[-1]:.0f} km), "
                 f"{len(self.levels)} levels, {self._core.encoding}; variables: {variables}>")
+
+    def _repr_html_(self) -> str:
+        """The dataset in a notebook: its grid, steps and variables with units and global ranges."""
+        from html import escape
+
+        g, t = self.grid, self.times
+        rows = "".join(
+            f"<tr><td style='text-align:left'>{escape(v.name)}</td><td style='text-align:left'>{escape(v.units)}</td>"
+            f"<td>{v.min:.6g}</td><td>{v.max:.6g}</td>"
+            f"<td style='text-align:left'>{'derived' if v.derived else 'stored'}</td></tr>" for v in self.variables)
+        levels = ", ".join(f"{len(l.lat)}×{len(l.r)}×{len(l.lon)}" for l in self.levels)
+        return (f"<div><b>raypc.Dataset</b> <code>{escape(str(self.path))}</code><br>"
+                f"{len(t)} steps, {t[0]:g}–{t[-1]:g} Myr; grid {len(g.lat)} lat × {len(g.r)} r × {len(g.lon)} lon, "
+                f"lat {g.lat[0]:g}..{g.lat[-1]:g} °N, lon {g.lon[0]:g}..{g.lon[-1]:g} °E, "
+                f"radius {g.r[0]:.0f}..{g.r[-1]:.0f} km (depth {SURFACE_RADIUS_KM - g.r[-1]:.0f}..{SURFACE_RADIUS_KM - g.r[0]:.0f} km); "
+                f"levels {levels}; values {escape(self._core.encoding)}"
+                f"<table><thead><tr><th style='text-align:left'>variable</th><th style='text-align:left'>units</th>"
+                f"<th>min</th><th>max</th><th style='text-align:left'></th></tr></thead><tbody>{rows}</tbody></table></div>")
 
     def _step(self, step: StepLike, what: str = "step") -> int:
         # str() would accept anything (a float, a list) and the message would blame its text; the
@@ -290,6 +344,126 @@ class Dataset:
         finally:
             bar.close()
         return pd.read_csv(io.StringIO(text))
+
+    def map_grid(self, state: Union[None, State, dict, str, os.PathLike] = None, step: Optional[StepLike] = None,
+                 variable: Optional[str] = None, depth_km: Optional[float] = None, grid_step_deg: float = 0):
+        """The state's map as an ``xarray.DataArray`` on (lat, lon): its colour variable (``variable``
+        overrides) at its ``map.depthKm`` (``depth_km`` overrides, km below the surface) of ``step``
+        (default: the state's), sampled every ``grid_step_deg`` degrees (0: 1°; must divide 180) as
+        ``raypc map --netcdf`` writes it (trilinear on the native grid; NaN where the data have
+        none), with CF attributes and units."""
+        s = self._slice_state(state, step, variable)
+        if depth_km is not None:
+            s.setdefault("map", {})["depthKm"] = float(depth_km)
+        return _grid_array(self._core.slice_grid(json.dumps(s), "map", float(grid_step_deg), 10.0))
+
+    def section_grid(self, state: Union[None, State, dict, str, os.PathLike] = None, step: Optional[StepLike] = None,
+                     variable: Optional[str] = None, start: Optional[tuple] = None, end: Optional[tuple] = None,
+                     grid_step_deg: float = 0, depth_step_km: float = 10):
+        """The state's great-circle section as an ``xarray.DataArray`` on (depth km, distance km
+        along the surface), with the latitude, longitude and angle of every column as auxiliary
+        coordinates: its colour variable (``variable`` overrides) from ``start`` to ``end``
+        ((lat, lon) degrees; default the state's ``section``), a column every ``grid_step_deg``
+        (0: 0.5°) and a row every ``depth_step_km`` km, as ``raypc section --netcdf`` writes it."""
+        s = self._slice_state(state, step, variable)
+        section = s.setdefault("section", {})
+        for key, point in (("from", start), ("to", end)):
+            if point is not None:
+                lat, lon = point
+                section[key] = {"latDeg": float(lat), "lonDeg": float(lon)}
+        return _grid_array(self._core.slice_grid(json.dumps(s), "section", float(grid_step_deg), float(depth_step_km)))
+
+    def _slice_state(self, state: Any, step: Optional[StepLike], variable: Optional[str]) -> dict:
+        s = _state_of(state, self).to_dict()
+        if step is not None:
+            s["step"] = self._step(step)
+        if variable is not None:
+            s.setdefault("color", {})["variable"] = variable
+        return s
+
+    def tracks(self, state: Union[None, State, dict, str, os.PathLike] = None, level: Optional[int] = None,
+               min_volume_km3: Optional[float] = None, depths_km: Optional[Sequence[float]] = None,
+               band_half_width_km: Optional[float] = None, min_overlap: Optional[float] = None,
+               stall_by: Optional[str] = None, sigmas: float = 2.0, progress: bool = True) -> "FeatureTracks":
+        """The features of the state's brushes followed through every step (docs/features.md): the
+        tables of ``raypc features --tracks --events --stalls`` and ``raypc flux`` as DataFrames, the
+        same numbers as the UI's Features panel. Needs the dataset's velocity (features are moved
+        with the flow to link them). Settings left at None come from the state's ``features``:
+        ``level``, ``min_volume_km3`` (km³), ``depths_km`` (the stall and flux depths, km),
+        ``band_half_width_km`` (km), ``min_overlap`` (share of a feature's volume carried onto
+        another for a link), ``stall_by`` ("mean-depth", "deepest" or "shallowest"); ``sigmas``:
+        how far above its mean a shell's downward flux marks an avalanche step (standard
+        deviations)."""
+        import io
+
+        import pandas as pd
+
+        state = _state_of(state, self)
+        settings = state.to_dict()["features"]
+        pick = lambda value, key: settings[key] if value is None else value  # noqa: E731
+        bar = _Progress("tracks", progress, delay=0.5)
+        try:
+            text = self._core.feature_series(
+                state.to_json(None), int(pick(level, "level")), float(pick(min_volume_km3, "minVolumeKm3")),
+                [float(d) for d in pick(depths_km, "depthsKm")], float(pick(band_half_width_km, "bandHalfWidthKm")),
+                float(pick(min_overlap, "minOverlapShare")), str(pick(stall_by, "stallBy")), float(sigmas), bar)
+        finally:
+            bar.close()
+        result = json.loads(text)
+        tables = {name: (pd.read_csv(io.StringIO(csv)) if csv is not None else None)
+                  for name, csv in result["csv"].items()}
+        settings = {k: result[k] for k in ("level", "minVolumeKm3", "depthsKm", "bandHalfWidthKm", "minOverlapShare",
+                                           "stallBy")}
+        return FeatureTracks(tables["tracks"], tables["events"], tables["stalls"], tables["flux"], settings)
+
+    # ---- other libraries ----------------------------------------------------------------------
+
+    def to_vtk(self, step: StepLike = 0, variables: Optional[Sequence[str]] = None, level: int = 0):
+        """A step as a ``vtkStructuredGrid`` (VTK's Python modules: Debian's python3-vtk9 or
+        ParaView's): the native grid's points in km (x towards 0° E on the equator, z to the north
+        pole), the longitude seam closed by repeating the first meridian, and every variable (or
+        ``variables``) as point data with NaN where the data have none; units in the field data
+        array ``units``."""
+        try:
+            from vtkmodules.util.numpy_support import numpy_to_vtk
+            from vtkmodules.vtkCommonCore import vtkPoints, vtkStringArray
+            from vtkmodules.vtkCommonDataModel import vtkStructuredGrid
+        except ImportError as e:
+            raise ImportError("to_vtk needs VTK's Python modules (Debian: apt install python3-vtk9)") from e
+        s = self._step(step)
+        names = [v.name for v in self._variables] if variables is None else (
+            [variables] if isinstance(variables, str) else list(variables))
+        g = self._levels[level]
+        lon = np.append(g.lon, g.lon[0] + 360.0)  # the seam closed
+        lat_r, r_r, lon_r = np.radians(g.lat), g.r, np.radians(lon)
+        # Points in VTK's order: longitude fastest, then radius, then latitude (the values' (lat, r, lon)).
+        la, rr, lo = np.meshgrid(lat_r, r_r, lon_r, indexing="ij")
+        xyz = np.stack([rr * np.cos(la) * np.cos(lo), rr * np.cos(la) * np.sin(lo), rr * np.sin(la)], axis=-1)
+        grid = vtkStructuredGrid()
+        grid.SetDimensions(len(lon), len(g.r), len(g.lat))
+        points = vtkPoints()
+        points.SetData(numpy_to_vtk(np.ascontiguousarray(xyz.reshape(-1, 3)), deep=True))
+        grid.SetPoints(points)
+        units = vtkStringArray()
+        units.SetName("units")
+        for name in names:
+            values = self.field(name, s, level).values
+            closed = np.concatenate([values, values[:, :, :1]], axis=2)
+            array = numpy_to_vtk(np.ascontiguousarray(closed.reshape(-1)), deep=True)
+            array.SetName(name)
+            grid.GetPointData().AddArray(array)
+            units.InsertNextValue(f"{name}: {self._units[name]}")
+        grid.GetFieldData().AddArray(units)
+        return grid
+
+    def to_pyvista(self, step: StepLike = 0, variables: Optional[Sequence[str]] = None, level: int = 0):
+        """A step as a ``pyvista.StructuredGrid`` (:meth:`to_vtk` wrapped by PyVista):
+        ``ds.to_pyvista(6).plot(scalars="temperature anomaly")``."""
+        try:
+            import pyvista
+        except ImportError as e:
+            raise ImportError("to_pyvista needs PyVista (pip install pyvista); to_vtk gives the VTK grid without it") from e
+        return pyvista.wrap(self.to_vtk(step, variables, level))
 
     def _step_range(self, steps: Any) -> tuple:
         if steps is None:

@@ -18,6 +18,7 @@ from ._raypc import Error
 from .dataset import Dataset
 from .state import State
 
+
 class _Shared:
     """A server show() started, reused by later show() calls of the same dataset, and the number of
     open views that use it: the last one to close stops it."""
@@ -28,6 +29,14 @@ class _Shared:
 
 _servers: dict = {}  # (dataset dir, host, port) -> _Shared
 _servers_lock = threading.Lock()  # views are closed from any thread (a callback, atexit)
+
+
+def _inside_package(name: str, needs: str = "") -> Optional[str]:
+    """The package's copy of the UI (``web``) or of the example states (``examples``), which an
+    installed package carries (setup.py puts them there); None in the build tree, where the server
+    finds them in the source tree as the executable does."""
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), name)
+    return path if os.path.isdir(path) and (not needs or os.path.isfile(os.path.join(path, needs))) else None
 
 
 @atexit.register
@@ -168,6 +177,8 @@ def show(dataset: Union[Dataset, str, os.PathLike], host: str = "127.0.0.1", por
     with _servers_lock:
         shared = _servers.get(key)
         if shared is None:
-            shared = _servers[key] = _Shared(_raypc.Server(str(ds.path), host, port))
+            server = _raypc.Server(str(ds.path), host, port, assets=_inside_package("web", needs="index.html"),
+                                   examples=_inside_package("examples"))
+            shared = _servers[key] = _Shared(server)
         shared.views += 1
     return View(shared.server.url, width, height, shared.server)
