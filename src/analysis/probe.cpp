@@ -1,6 +1,7 @@
 #include "analysis/probe.h"
 
 #include "core/error.h"
+#include "core/error_kinds.h"
 #include "grid/coordinates.h"
 #include "grid/sampler.h"
 
@@ -37,28 +38,28 @@ double quantisationBound(const dataset::StepVolume& volume, size_t var, const gr
 }  // namespace
 
 nlohmann::json probeJson(const dataset::Dataset& dataset, int step, int level, double latDeg, double lonDeg, double rKm,
-                         const std::string& var)
+                         const std::string& var, const ProbeArgumentNames& names)
 {
-    dataset.checkStep(step, "--time");
-    dataset.checkLevel(level, "--lod");
-    return probeJson(dataset, *dataset.load(step, level), step, level, latDeg, lonDeg, rKm, var);
+    dataset.checkStep(step, names.step);
+    dataset.checkLevel(level, names.level);
+    return probeJson(dataset, *dataset.load(step, level), step, level, latDeg, lonDeg, rKm, var, names);
 }
 
 nlohmann::json probeJson(const dataset::Dataset& dataset, const dataset::StepVolume& volumeAtStep, int step, int level, double latDeg,
-                         double lonDeg, double rKm, const std::string& var)
+                         double lonDeg, double rKm, const std::string& var, const ProbeArgumentNames& names)
 {
     if (!(latDeg >= -90 && latDeg <= 90))
-        fail("--lat: {} is outside [-90, 90] degrees", latDeg);
+        fail("{}: {} is outside [-90, 90] degrees", names.lat, latDeg);
     int only = -1;
     if (!var.empty() && (only = dataset.variableIndex(var)) < 0) {
-        fail("--var: unknown variable '{}'; the dataset has: {}", var,
-             fmt::join(dataset.variableNames(), ", "));
+        failUnknownName("{}: unknown variable '{}'; the dataset has: {}", names.var, var,
+                        fmt::join(dataset.variableNames(), ", "));
     }
     const dataset::StepVolume* volume = &volumeAtStep;  // the code below reads it through a pointer
     const grid::GridSampler sampler(volume->grid());
     const auto at = sampler.locate(latDeg, lonDeg, rKm);
     if (!at)
-        fail("--r: {} km is outside the mantle shell {}..{} km", rKm, volume->grid().rKm.front(),
+        fail("{}: {} km is outside the mantle shell {}..{} km", names.r, rKm, volume->grid().rKm.front(),
              volume->grid().rKm.back());
     nlohmann::json point = nlohmann::json::object();  // x, y, z, lat, lon, radius, depth (grid/coordinates.h)
     for (const grid::CoordinateInfo& c : grid::coordinateInfos())

@@ -1,6 +1,7 @@
 #include "analysis/selection.h"
 
 #include "core/error.h"
+#include "core/error_kinds.h"
 #include "core/spherical.h"
 
 #include <fmt/format.h>
@@ -47,8 +48,8 @@ std::vector<RangeFilter> resolveRangeFilters(std::span<const std::string> variab
             std::vector<std::string> coordinates;
             for (const auto& info : grid::coordinateInfos())
                 coordinates.push_back(info.name);
-            fail("{}[{}] ({}): unknown variable or coordinate '{}'; variables: {}; coordinates: {}", what, i, name,
-                 name, fmt::join(variableNames, ", "), fmt::join(coordinates, ", "));
+            failUnknownName("{}[{}] ({}): unknown variable or coordinate '{}'; variables: {}; coordinates: {}", what, i, name,
+                            name, fmt::join(variableNames, ", "), fmt::join(coordinates, ", "));
         }
         filters.push_back(std::move(f));
     }

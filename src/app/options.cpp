@@ -1,6 +1,7 @@
 #include "app/options.h"
 
 #include "core/error.h"
+#include "core/error_kinds.h"
 #include "core/mpi.h"
 #include "state/render_state.h"
 #include "core/spherical.h"
@@ -163,7 +164,7 @@ int parseStep(const dataset::Dataset& dataset, const std::string& text, const st
         for (const auto& s : dataset.steps())
             if (std::abs(s.timeMyr - myr) <= 1e-6 * std::max(1.0, std::abs(myr)))
                 return s.index;
-        fail("{}: no step at {} Myr; steps are {} Myr apart from {} to {} Myr", option, myr, dataset.dtMyr(),
+        failOutOfRange("{}: no step at {} Myr; steps are {} Myr apart from {} to {} Myr", option, myr, dataset.dtMyr(),
              dataset.steps().front().timeMyr, dataset.steps().back().timeMyr);
     }
     int step = -1;

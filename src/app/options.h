@@ -49,8 +49,9 @@ struct PreprocessFlags {
     preprocess::PreprocessOptions toOptions(const CLI::App& cmd) const;
 };
 
-// A step given as an index ("12") or a time ("24Myr"); throws raypc::Error naming the option
-// and the dataset's valid steps when it is out of range or malformed.
+// A step given as an index ("12") or a time ("24Myr"); throws raypc::Error naming `option` (the
+// CLI's flag, or Python's argument) and the dataset's valid steps when it is malformed, and
+// raypc::OutOfRangeError (core/error_kinds.h) when no step has that index or time.
 int parseStep(const dataset::Dataset& dataset, const std::string& text, const std::string& option = "--time");
 
 // Parses "NAME=MIN:MAX" (names may contain spaces; the last '=' splits) for --range.

@@ -2,12 +2,14 @@
 
 #include "core/clock.h"
 #include "core/error.h"
+#include "core/error_kinds.h"
 #include "core/mpi.h"
 #include "dataset/dataset.h"
 #include "dataset/dataset_format.h"
 #include "io/netcdf_reader.h"
 #include "io/series_input.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -42,6 +44,53 @@ std::string seriesName(const std::vector<fs::path>& files)
     return name.empty() ? "series" : name;
 }
 
+// The directories a run is about to create for a dataset: `dir` and those of its parents that do not
+// exist yet. When the run fails before writing anything that stays (preprocess() removes what it
+// wrote itself, docs/format.md "What a failed run leaves"), removeIfEmpty() takes them away again,
+// so that a failed open leaves no empty directory behind. Only directories this run created go, and
+// only while empty: a directory that existed before, or one holding anything, is never touched, and
+// fs::remove does not follow a symbolic link.
+class CreatedDirectories {
+public:
+    explicit CreatedDirectories(const fs::path& dir)
+    {
+        std::error_code ec;
+        const fs::path absolute = fs::absolute(dir, ec);
+        if (ec)
+            return;
+        for (fs::path p = absolute; !p.empty() && p != p.parent_path(); p = p.parent_path()) {
+            std::error_code statusError;  // set for a path that does not exist: that is the answer here
+            if (fs::symlink_status(p, statusError).type() != fs::file_type::not_found)
+                break;
+            m_missing.push_back(p);  // innermost first
+        }
+    }
+    void removeIfEmpty() const
+    {
+        for (const fs::path& p : m_missing) {
+            std::error_code ec;
+            if (!fs::is_directory(fs::symlink_status(p, ec)) || !fs::is_empty(p, ec) || ec || !fs::remove(p, ec))
+                return;  // not ours to remove any more (something was put there): keep it and its parents
+        }
+    }
+
+private:
+    std::vector<fs::path> m_missing;
+};
+
+// Runs `work`, which may create `dir`; if it throws, the directories it created and left empty go.
+template <typename Work>
+void leavingNothingOnFailure(const fs::path& dir, Work&& work)
+{
+    const CreatedDirectories created(dir);
+    try {
+        work();
+    } catch (...) {
+        created.removeIfEmpty();
+        throw;
+    }
+}
+
 // The dataset directory of files exists and can be written, or one error that says where to write.
 void checkWritable(const fs::path& dir)
 {
@@ -69,8 +118,9 @@ SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std
     try {
         listing = io::listSeries(std::vector<fs::path>(args.begin(), args.end()), reader);
     } catch (const Error& e) {
-        fail("{} (expected a RayPC dataset directory, which holds {}, netCDF files or an ASPECT .pvd collection)",
-             e.what(), dataset::format::kManifest);
+        failLike(e, fmt::format("{} (expected a RayPC dataset directory, which holds {}, netCDF files or an ASPECT "
+                                ".pvd collection)",
+                                e.what(), dataset::format::kManifest));
     }
     inputs.files = listing.steps;
     inputs.timesMyr = listing.timesMyr;
@@ -108,20 +158,24 @@ double preparePreview(const SeriesInputs& inputs, preprocess::PreprocessOptions 
     if (!datasetOfFiles(dir, first)) {
         std::error_code ec;
         fs::remove_all(dir, ec);  // a preview of other files, or of other options: ours to replace
-        checkWritable(inputs.dataset);
         options.pathlines.enabled = false;
         options.quiet = true;
         if (!options.timesMyr.empty())
             options.timesMyr.resize(1);
-        preprocess::preprocess(first, dir, options);
+        leavingNothingOnFailure(inputs.dataset, [&] {
+            checkWritable(inputs.dataset);
+            preprocess::preprocess(first, dir, options);
+        });
     }
     return secondsSince(start);
 }
 
 void prepareSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions& options)
 {
-    checkWritable(inputs.dataset);
-    preprocess::preprocess(inputs.files, inputs.dataset, options);
+    leavingNothingOnFailure(inputs.dataset, [&] {
+        checkWritable(inputs.dataset);
+        preprocess::preprocess(inputs.files, inputs.dataset, options);
+    });
     std::error_code ec;
     fs::remove_all(inputs.previewDir(), ec);
 }

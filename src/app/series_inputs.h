@@ -27,7 +27,8 @@ struct SeriesInputs {
 // and directories of *.nc, an ASPECT .pvd collection or its directory, .pvtu / .vtu steps).
 // `datasetOption` (--dataset): where a dataset made from files goes; empty: beside the first file
 // (beside a .pvd collection), named after the files' common name and ".raypc" (spherical001.nc …
-// spherical251.nc -> spherical.raypc). Throws raypc::Error naming an argument that is none of these.
+// spherical251.nc -> spherical.raypc). Throws raypc::Error naming an argument that is none of these,
+// raypc::NotFoundError (core/error_kinds.h) for one that does not exist.
 SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std::string& datasetOption,
                                  const io::ReaderOptions& reader);
 
@@ -41,7 +42,9 @@ double preparePreview(const SeriesInputs& inputs, preprocess::PreprocessOptions 
 
 // Preprocesses what is missing of the series into inputs.dataset (progress as `options` say), then
 // removes the preview. Throws raypc::Error like preprocess(), and naming the directory and --dataset
-// when it cannot be written.
+// when it cannot be written. A run that fails before finishing a step leaves nothing: besides what
+// preprocess() removes itself, the dataset directory (and its parents) go if this run created them
+// (preparePreview too).
 void prepareSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions& options);
 
 // What serve and render take on the command line: INPUT… (a dataset or netCDF files), --dataset and

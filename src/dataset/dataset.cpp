@@ -2,6 +2,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/error_kinds.h"
 #include "core/json_input.h"
 #include "core/strings.h"
 #include "dataset/bricks.h"
@@ -911,10 +912,15 @@ void checkArrayFiles(const Dataset& dataset, size_t sampleRows, uint32_t brickSi
 std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
 {
     const auto manifestPath = dir / format::kManifest;
-    if (!std::filesystem::is_directory(dir))
+    if (!std::filesystem::is_directory(dir)) {
+        // Nothing there is "not found"; a file where the directory should be is a wrong argument.
+        std::error_code ec;
+        if (!std::filesystem::exists(std::filesystem::symlink_status(dir, ec)))
+            failNotFound("{}: not a directory (expected a RayPC dataset made by `raypc preprocess`)", dir.string());
         fail("{}: not a directory (expected a RayPC dataset made by `raypc preprocess`)", dir.string());
+    }
     if (!std::filesystem::exists(manifestPath))
-        fail("{}: no {} (expected a RayPC dataset made by `raypc preprocess`)", dir.string(), format::kManifest);
+        failNotFound("{}: no {} (expected a RayPC dataset made by `raypc preprocess`)", dir.string(), format::kManifest);
     const json j = parseJsonInput(readFile(manifestPath), manifestPath.string());
     auto dataset = std::make_shared<Dataset>();
     dataset->m_dir = dir;
@@ -959,13 +965,13 @@ int Dataset::variableIndex(const std::string& name) const
 void Dataset::checkStep(int step, std::string_view what) const
 {
     if (step < 0 || step >= static_cast<int>(m_steps.size()))
-        fail("{}: {} out of range 0..{}", what, step, m_steps.size() - 1);
+        failOutOfRange("{}: {} out of range 0..{}", what, step, m_steps.size() - 1);
 }
 
 void Dataset::checkLevel(int level, std::string_view what) const
 {
     if (level < 0 || level >= static_cast<int>(m_levels.size()))
-        fail("{}: {} out of range 0..{}", what, level, m_levels.size() - 1);
+        failOutOfRange("{}: {} out of range 0..{}", what, level, m_levels.size() - 1);
 }
 
 std::shared_ptr<const StepVolume> Dataset::load(int step, int level) const

@@ -246,7 +246,8 @@ private:
 class Dataset {
 public:
     // Opens a dataset directory. Throws raypc::Error naming the directory if it is not a
-    // complete RayPC dataset of a supported format version.
+    // complete RayPC dataset of a supported format version; raypc::NotFoundError (core/error_kinds.h)
+    // when nothing is at `dir` or it holds no manifest.
     static std::shared_ptr<const Dataset> open(const std::filesystem::path& dir);
 
     const std::filesystem::path& dir() const { return m_dir; }
@@ -262,7 +263,8 @@ public:
     ValueEncoding encoding() const { return m_encoding; }
 
     // The range checks of every request that names a step or a level (CLI options, state documents,
-    // HTTP parameters): throw raypc::Error "<what>: 300 out of range 0..11" unless valid.
+    // HTTP parameters): throw raypc::OutOfRangeError (core/error_kinds.h) "<what>: 300 out of range
+    // 0..11" unless valid.
     void checkStep(int step, std::string_view what = "step") const;
     void checkLevel(int level, std::string_view what = "level") const;
 

@@ -4,6 +4,7 @@
 #include "io/netcdf_reader.h"
 
 #include "core/error.h"
+#include "core/error_kinds.h"
 #include "core/strings.h"
 #include "core/system_memory.h"
 #include "grid/variable_names.h"
@@ -161,7 +162,7 @@ std::vector<std::filesystem::path> listSnapshotFiles(const std::vector<std::file
             files.insert(files.end(), inDir.begin(), inDir.end());
         } else {
             if (!std::filesystem::exists(input, ec))
-                fail("{}: no such file", input.string());
+                failNotFound("{}: no such file", input.string());
             files.push_back(input);
         }
     }

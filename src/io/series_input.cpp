@@ -2,6 +2,7 @@
 
 #include "core/clock.h"
 #include "core/error.h"
+#include "core/error_kinds.h"
 #include "core/spherical.h"
 #include "core/strings.h"
 #include "core/system_memory.h"
@@ -352,7 +353,7 @@ SeriesListing listSeries(const std::vector<fs::path>& args, const ReaderOptions&
             std::error_code ec;
             const fs::file_status status = fs::status(step.file, ec);
             if (!fs::exists(status))
-                fail("{}: names {}, which does not exist", pvd.string(), step.file.string());
+                failNotFound("{}: names {}, which does not exist", pvd.string(), step.file.string());
             if (!fs::is_regular_file(status))
                 fail("{}: names {}, which is {}, not a file", pvd.string(), step.file.string(),
                      fs::is_directory(status) ? "a directory" : fs::is_fifo(status) ? "a FIFO" : "a device or socket");
@@ -378,7 +379,7 @@ SeriesListing listSeries(const std::vector<fs::path>& args, const ReaderOptions&
                 citcomsSteps[citcoms::stepNumber(step)] = step;
         } else if (citcoms::isStep(arg)) {
             if (!fs::exists(arg, ec))
-                fail("{}: no such file", arg.string());
+                failNotFound("{}: no such file", arg.string());
             citcomsSteps.emplace(citcoms::stepNumber(arg), arg);
         } else if (fs::is_directory(arg, ec)) {
             std::vector<fs::path> pvds;
@@ -406,11 +407,11 @@ SeriesListing listSeries(const std::vector<fs::path>& args, const ReaderOptions&
             }
         } else if (hasExtension(arg, ".pvd")) {
             if (!fs::exists(arg, ec))
-                fail("{}: no such file", arg.string());
+                failNotFound("{}: no such file", arg.string());
             addCollection(arg), collection = true;
         } else if (isVtkStep(arg)) {
             if (!fs::exists(arg, ec))
-                fail("{}: no such file", arg.string());
+                failNotFound("{}: no such file", arg.string());
             out.steps.push_back(arg), vtkFiles = true;
         } else {
             netcdf.push_back(arg);

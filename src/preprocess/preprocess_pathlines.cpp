@@ -1,5 +1,6 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/error_kinds.h"
 #include "core/json_input.h"
 #include "core/mpi.h"
 #include "core/progress.h"
@@ -99,7 +100,8 @@ void checkPathlineOptions(const PathlineOptions& o, const std::vector<VariableSp
         std::vector<std::string> names;
         for (const auto& v : specs)
             names.push_back(v.name);
-        fail("--pathline-field: no variable '{}' in the input; variables are {}", o.field, fmt::join(names, ", "));
+        failUnknownName("--pathline-field: no variable '{}' in the input; variables are {}", o.field,
+                        fmt::join(names, ", "));
     }
     analysis::checkCriticalPointFilter(o.filter);
 }

@@ -4,7 +4,10 @@
 // (render/state_renderer), exact statistics (analysis/selection), probing (analysis/probe) and the server
 // (server/server). The Pythonic layer (xarray, pandas, the notebook view) is the raypc package's modules.
 //
-// Errors: raypc::Error becomes raypc.Error with the CLI's one-line message. Long work (preprocessing,
+// Errors: raypc::Error becomes raypc.Error (a ValueError) with the CLI's one-line message, its kinds
+// (core/error_kinds.h) the subclasses that are also Python's builtin exceptions: NotFoundError
+// (FileNotFoundError), UnknownNameError (KeyError), OutOfRangeError (IndexError). Messages name
+// Python's arguments (step, level, lat, variable …), not the CLI's flags. Long work (preprocessing,
 // rendering, statistics, reading a field) releases the GIL and runs on every core as the executable
 // does; progress callbacks take the GIL only while they run, and a KeyboardInterrupt seen there
 // cancels the work between steps.
@@ -15,6 +18,7 @@
 #include "app/series_inputs.h"
 #include "app/slice_grid.h"
 #include "core/error.h"
+#include "core/error_kinds.h"
 #include "core/install_paths.h"
 #include "core/spherical.h"
 #include "io/cf_grid.h"
@@ -42,6 +46,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
@@ -129,6 +134,40 @@ state::RenderState parseState(const std::string& text, const std::string& what)
     return state::parseRenderState(document, what);
 }
 
+// The CLI's flags in a message ("--time-units: ...") as the keywords Python passes them with
+// (time_units): for calls whose keyword arguments become the CLI's flags (raypc.open's options,
+// raypc.show's host) and whose messages therefore come from the CLI's option parsing.
+std::string pythonArgumentNames(const std::string& message)
+{
+    auto isLower = [](char c) { return std::islower(static_cast<unsigned char>(c)) != 0; };
+    auto isFlagChar = [&](char c) { return isLower(c) || std::isdigit(static_cast<unsigned char>(c)) != 0 || c == '-'; };
+    std::string out;
+    for (size_t i = 0; i < message.size();) {
+        const bool startsFlag = message.compare(i, 2, "--") == 0 && i + 2 < message.size() && isLower(message[i + 2]) &&
+                                (i == 0 || !(std::isalnum(static_cast<unsigned char>(message[i - 1])) ||
+                                             message[i - 1] == '-' || message[i - 1] == '_'));
+        if (!startsFlag) {
+            out += message[i++];
+            continue;
+        }
+        for (i += 2; i < message.size() && isFlagChar(message[i]); ++i)
+            out += message[i] == '-' ? '_' : message[i];
+    }
+    return out;
+}
+
+// Runs `work`; an error it throws is thrown again, of the same kind, with its flags named as Python's
+// keywords (pythonArgumentNames).
+template <typename Work>
+auto withPythonArgumentNames(Work&& work)
+{
+    try {
+        return work();
+    } catch (const Error& e) {
+        failLike(e, pythonArgumentNames(e.what()));
+    }
+}
+
 // Calls `callback(done, total)` with the GIL; a KeyboardInterrupt (or any Python exception) there
 // sets `cancel` and is kept for the caller to raise once the C++ work has stopped.
 class ProgressBridge {
@@ -183,9 +222,9 @@ std::string prepare(std::vector<std::string> args, py::object progress)
     try {
         app.parse(args);
     } catch (const CLI::ParseError& e) {
-        fail("{}", e.what());
+        fail("{}", pythonArgumentNames(e.what()));
     }
-    auto [inputs, options] = flags.resolve();
+    auto [inputs, options] = withPythonArgumentNames([&] { return flags.resolve(); });
     if (!inputs.fromFiles())
         return inputs.dataset.string();
     ProgressBridge bridge(std::move(progress));
@@ -196,9 +235,9 @@ std::string prepare(std::vector<std::string> args, py::object progress)
         py::gil_scoped_release release;
         try {
             app::prepareSeries(inputs, options);
-        } catch (const Error&) {
+        } catch (const Error& e) {
             if (!bridge.cancel)
-                throw;
+                failLike(e, pythonArgumentNames(e.what()));
         }
     }
     bridge.rethrow();
@@ -237,15 +276,15 @@ public:
     std::string encoding() const { return m_dataset->encoding() == dataset::ValueEncoding::Float32 ? "float32" : "u16"; }
     std::string dir() const { return m_dataset->dir().string(); }
 
-    // Step "12" or "24Myr" as the CLI's --time takes it.
-    int step(const std::string& text) const { return app::parseStep(*m_dataset, text, "step"); }
+    // Step "12" or "24Myr" as the CLI's --time takes it; messages name the argument `what`.
+    int step(const std::string& text, const std::string& what) const { return app::parseStep(*m_dataset, text, what); }
 
     // One variable of one step at one level, (lat, r, lon), float32, a copy.
     py::array_t<float> field(const std::string& name, int step, int level) const
     {
         const int var = variableIndex(name);
-        m_dataset->checkStep(step);
-        m_dataset->checkLevel(level);
+        m_dataset->checkStep(step, "step");
+        m_dataset->checkLevel(level, "level");
         const grid::SphericalGrid& grid = m_dataset->levels()[size_t(level)].grid;
         py::array_t<float> out({py::ssize_t(grid.nLat()), py::ssize_t(grid.nR()), py::ssize_t(grid.nLon())});
         float* dst = out.mutable_data();
@@ -287,13 +326,15 @@ public:
     std::string probe(double lat, double lon, double rKm, int step, int level, const std::string& var) const
     {
         py::gil_scoped_release release;
-        return analysis::probeJson(*m_dataset, step, level, lat, lon, rKm, var).dump();
+        static const analysis::ProbeArgumentNames kNames{"step", "level", "lat", "r_km", "variable"};
+        return analysis::probeJson(*m_dataset, step, level, lat, lon, rKm, var, kNames).dump();
     }
 
     // The parallel-coordinates sample of a step: (columns, units, rows x columns float32).
     py::tuple sample(int step) const
     {
-        dataset::SampleTable t;  // loadSample checks the step
+        m_dataset->checkStep(step, "step");  // loadSample checks it too, naming the dataset's directory
+        dataset::SampleTable t;
         {
             py::gil_scoped_release release;
             t = m_dataset->loadSample(step);
@@ -348,7 +389,7 @@ public:
             fail("passes: {} is negative", passes);
         if (view != "3d" && view != "map" && view != "section")
             fail("view '{}': expected '3d', 'map' or 'section'", view);
-        render::checkPictureFitsMemory(state, false, availableMemory());
+        withPythonArgumentNames([&] { render::checkPictureFitsMemory(state, false, availableMemory()); });
         ProgressBridge bridge(std::move(progress));
         render::ImageRgba8 image;
         if (view != "3d") {
@@ -388,7 +429,8 @@ public:
         if (!meanOf.empty()) {
             const int index = m_dataset->variableIndex(meanOf);
             if (index < 0)
-                fail("mean_of: unknown variable '{}'; the dataset has: {}", meanOf, fmt::join(m_dataset->variableNames(), ", "));
+                failUnknownName("mean_of: unknown variable '{}'; the dataset has: {}", meanOf,
+                                fmt::join(m_dataset->variableNames(), ", "));
             meanVariable = size_t(index);
         }
         if (first > last)  // selectionOverTime checks the steps and the level
@@ -543,8 +585,8 @@ private:
     {
         const int var = m_dataset->variableIndex(name);
         if (var < 0)
-            fail("variable: unknown variable '{}'; the dataset has: {}", name,
-                 fmt::join(m_dataset->variableNames(), ", "));
+            failUnknownName("variable: unknown variable '{}'; the dataset has: {}", name,
+                            fmt::join(m_dataset->variableNames(), ", "));
         return var;
     }
 
@@ -572,25 +614,34 @@ public:
         };
         options.assets = findAssetDir(path(assets));
         options.examples = findExamplesDir(path(examples));
-        m_server = std::make_unique<server::Server>(std::move(options));
+        m_server = withPythonArgumentNames([&] { return std::make_unique<server::Server>(std::move(options)); });
+        m_url = m_server->url();
+        m_port = m_server->port();
+        m_token = m_server->token();
         m_thread = std::thread([this] { m_server->run(); });
     }
     ~PyServer() { stop(); }
+    // Stops serving and frees the port: Server::stop() ends the run loop, but the listening socket
+    // is closed only with the Server, and a socket left listening would take connections that no
+    // one answers (a client waits for its timeout instead of being refused). Stopping again: nothing.
     void stop()
     {
-        if (!m_thread.joinable())
+        if (!m_server)
             return;
         py::gil_scoped_release release;
         m_server->stop();
         m_thread.join();
+        m_server.reset();
     }
-    std::string url() const { return m_server->url(); }
-    int port() const { return m_server->port(); }
-    std::string token() const { return m_server->token(); }
+    std::string url() const { return m_url; }
+    int port() const { return m_port; }
+    std::string token() const { return m_token; }
 
 private:
     std::unique_ptr<server::Server> m_server;
     std::thread m_thread;
+    std::string m_url, m_token;  // kept for after stop()
+    int m_port = 0;
 };
 
 // `python3 -m raypc ARGS`: the command line (app/cli.h) as the executable runs it, minus the
@@ -631,11 +682,39 @@ PYBIND11_MODULE(_raypc, m)
 {
     using namespace raypc::python;
     m.doc() = "RayPC's compiled core (use the raypc package)";
-    static py::exception<raypc::Error> error(m, "Error");
+    // raypc.Error is a ValueError (a bad value given, as most of its messages say); each kind is also
+    // the builtin exception a Python user catches for it. Shown as raypc.X, where the package
+    // exports them (raypc/__init__.py).
+    static py::exception<raypc::Error> error(m, "Error", PyExc_ValueError);
+    static py::exception<raypc::NotFoundError> notFound(m, "NotFoundError",
+                                                        py::make_tuple(error, py::handle(PyExc_FileNotFoundError)));
+    static py::exception<raypc::UnknownNameError> unknownName(m, "UnknownNameError",
+                                                              py::make_tuple(error, py::handle(PyExc_KeyError)));
+    static py::exception<raypc::OutOfRangeError> outOfRange(m, "OutOfRangeError",
+                                                            py::make_tuple(error, py::handle(PyExc_IndexError)));
+    error.doc() = "An expected failure of RayPC (bad input), with the command line's one-line message; a ValueError.";
+    notFound.doc() = "A file, directory or dataset that is not there; also a FileNotFoundError.";
+    unknownName.doc() = "A name (a variable, a brushed variable or coordinate) the dataset does not have; also a KeyError.";
+    outOfRange.doc() = "A step or level of detail that does not exist; also an IndexError.";
+    // KeyError's str() shows its argument's repr (quotes, escapes): a message prints as it reads.
+    unknownName.attr("__str__") = py::cpp_function(
+        [](py::handle self) -> py::str {
+            const py::tuple args = self.attr("args");
+            return args.size() == 1 ? py::str(args[0]) : py::str(py::object(args));
+        },
+        py::is_method(unknownName));
+    for (py::handle type : {py::handle(error), py::handle(notFound), py::handle(unknownName), py::handle(outOfRange)})
+        type.attr("__module__") = "raypc";
     py::register_exception_translator([](std::exception_ptr p) {
         try {
             if (p)
                 std::rethrow_exception(p);
+        } catch (const raypc::NotFoundError& e) {
+            notFound(e.what());
+        } catch (const raypc::UnknownNameError& e) {
+            unknownName(e.what());
+        } catch (const raypc::OutOfRangeError& e) {
+            outOfRange(e.what());
         } catch (const raypc::Error& e) {
             error(e.what());
         }
@@ -675,7 +754,7 @@ PYBIND11_MODULE(_raypc, m)
         .def_property_readonly("times_myr", &PyDataset::timesMyr)
         .def_property_readonly("levels", &PyDataset::levels)
         .def_property_readonly("encoding", &PyDataset::encoding)
-        .def("step", &PyDataset::step, py::arg("text"))
+        .def("step", &PyDataset::step, py::arg("text"), py::arg("what") = "step")
         .def("field", &PyDataset::field, py::arg("variable"), py::arg("step"), py::arg("level"))
         .def("read_box", &PyDataset::readBoxOf, py::arg("variable"), py::arg("step"), py::arg("level"),
              py::arg("begin"), py::arg("end"),

@@ -1,6 +1,7 @@
 #include "render/resolve_state.h"
 
 #include "core/error.h"
+#include "core/error_kinds.h"
 #include "core/spherical.h"
 #include "grid/variable_names.h"
 #include "analysis/pathline_storage.h"
@@ -28,7 +29,7 @@ RenderParams resolveParams(const state::RenderState& s, const VariableCatalog& c
         for (size_t i = 0; i < catalog.names.size(); ++i)
             if (catalog.names[i] == name)
                 return int(i);
-        fail("{} variable '{}' is unknown; the dataset has: {}", role, name, known());
+        failUnknownName("{} variable '{}' is unknown; the dataset has: {}", role, name, known());
     };
     if (catalog.names.empty())
         fail("the volume has no variables to render");

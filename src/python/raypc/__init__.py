@@ -4,7 +4,9 @@ ways (docs/python.md).
 
 Everything here calls the compiled module ``raypc._raypc``, which is linked to the same libraries as
 the ``raypc`` executable: a picture equals ``raypc render``'s, a table ``raypc stats``', a probe
-``raypc probe``'s. Errors are :class:`raypc.Error` with the command line's one-line messages.
+``raypc probe``'s. Errors are :class:`raypc.Error` (a ValueError) with the command line's one-line
+messages, naming Python's arguments; a missing file is also a FileNotFoundError, an unknown variable
+a KeyError, a step or level out of range an IndexError (docs/python.md, "Errors").
 
 >>> import raypc
 >>> ds = raypc.open("demo-data/dataset")                     # a dataset, netCDF files or ASPECT's solution.pvd
@@ -25,7 +27,7 @@ if _os.path.isfile(_COASTLINES):
     _os.environ.setdefault("RAYPC_COASTLINES", _COASTLINES)
 
 from . import _raypc  # noqa: E402 (after the coastlines' default, which the compiled module reads)
-from ._raypc import Error
+from ._raypc import Error, NotFoundError, OutOfRangeError, UnknownNameError
 from ._raypc import __version__  # project(VERSION) in CMakeLists.txt, as the wheel's metadata
 from .dataset import Dataset, StepLike
 from .grid import SURFACE_RADIUS_KM, Field, Grid, Variable
@@ -35,4 +37,5 @@ from .preprocess import open
 from .state import STATE_VERSION, State
 from .view import View, show
 
-__all__ = ["Error", "open", "Dataset", "State", "Field", "Grid", "Variable", "Picture", "View", "show", "NAMES"]
+__all__ = ["Error", "NotFoundError", "UnknownNameError", "OutOfRangeError", "open", "Dataset", "State", "Field",
+           "Grid", "Variable", "Picture", "View", "show", "NAMES"]

@@ -5,6 +5,7 @@ the matching ``raypc`` command (render, stats, features, probe), so that the two
 from __future__ import annotations
 
 import json
+import numbers
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple, Optional, Sequence, Union
@@ -137,8 +138,15 @@ class Dataset:
                 f"<table><thead><tr><th style='text-align:left'>variable</th><th style='text-align:left'>units</th>"
                 f"<th>min</th><th>max</th><th style='text-align:left'></th></tr></thead><tbody>{rows}</tbody></table></div>")
 
-    def _step(self, step: StepLike) -> int:
-        return self._core.step(str(step))
+    def _step(self, step: StepLike, what: str = "step") -> int:
+        # str() would accept anything (a float, a list) and the message would blame its text; the
+        # wrong type is a TypeError. bool is an int to Python but never meant as a step.
+        if isinstance(step, numbers.Integral) and not isinstance(step, bool):
+            return self._core.step(str(int(step)), what)
+        if isinstance(step, str):
+            return self._core.step(step, what)
+        raise TypeError(f"{what}: expected a step index (int) or a time such as '24Myr' (str), "
+                        f"not {type(step).__name__}")
 
     # ---- values -----------------------------------------------------------------------------
 
@@ -204,6 +212,8 @@ class Dataset:
         import pandas as pd
 
         out = []
+        if isinstance(window, bool) or not isinstance(window, numbers.Integral):
+            raise TypeError(f"window: expected a number of steps (int), not {type(window).__name__}")
         for s in self._core.pathlines(self._step(step), int(window)):
             lines = pd.DataFrame(s["attributes"], columns=s["columns"])
             lines.attrs["units"] = dict(zip(s["columns"], s["units"]))
@@ -463,10 +473,13 @@ class Dataset:
         if isinstance(steps, range):
             if len(steps) == 0 or steps.step != 1:
                 raise Error(f"steps: {steps} is not a non-empty range of consecutive steps")
-            return self._step(steps[0]), self._step(steps[-1])
+            return self._step(steps[0], "steps"), self._step(steps[-1], "steps")
         if isinstance(steps, (tuple, list)) and len(steps) == 2:
-            return self._step(steps[0]), self._step(steps[1])
-        s = self._step(steps)
+            return self._step(steps[0], "steps"), self._step(steps[1], "steps")
+        if isinstance(steps, (tuple, list)):
+            raise TypeError(f"steps: expected None, a step, a (first, last) pair or a range, not a "
+                            f"{type(steps).__name__} of {len(steps)}")
+        s = self._step(steps, "steps")
         return s, s
 
     def show(self, **kwargs: Any) -> "View":

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any, Iterable, Optional, Union
 
 from . import _raypc
-from ._raypc import Error
+from ._raypc import Error, NotFoundError
 
 STATE_VERSION: int = _raypc.state_version()  # of the state document this package writes
 
@@ -33,7 +33,8 @@ class State:
                 text = path.read_text()
             except OSError as e:
                 shown = str(path) if len(str(path)) <= 120 else f"{str(path)[:80]}… ({len(str(path))} characters)"
-                raise Error(f"{shown}: cannot read the state ({e.strerror})") from None
+                kind = NotFoundError if isinstance(e, FileNotFoundError) else Error
+                raise kind(f"{shown}: cannot read the state ({e.strerror})") from None
             object.__setattr__(self, "_doc", json.loads(_raypc.check_state(text)))
             return
         elif isinstance(source, str):

@@ -3,6 +3,7 @@ it, and the view that reads and sets the state the UI shows through the server's
 from __future__ import annotations
 
 import atexit
+import http.client
 import json
 import os
 import threading
@@ -17,7 +18,17 @@ from ._raypc import Error
 from .dataset import Dataset
 from .state import State
 
-_servers: dict = {}  # (dataset dir, host, port) -> _raypc.Server, reused by show()
+
+class _Shared:
+    """A server show() started, reused by later show() calls of the same dataset, and the number of
+    open views that use it: the last one to close stops it."""
+
+    def __init__(self, server: Any):
+        self.server, self.views = server, 0
+
+
+_servers: dict = {}  # (dataset dir, host, port) -> _Shared
+_servers_lock = threading.Lock()  # views are closed from any thread (a callback, atexit)
 
 
 def _inside_package(name: str, needs: str = "") -> Optional[str]:
@@ -31,9 +42,11 @@ def _inside_package(name: str, needs: str = "") -> Optional[str]:
 @atexit.register
 def _stop_servers() -> None:
     """Stops the servers show() started before the interpreter goes away under their threads."""
-    for server in list(_servers.values()):
-        server.stop()
-    _servers.clear()
+    with _servers_lock:
+        shared = list(_servers.values())
+        _servers.clear()
+    for s in shared:
+        s.server.stop()
 
 
 class View:
@@ -51,15 +64,19 @@ class View:
         self._token = urllib.parse.parse_qs(parts.query).get("token", [None])[0]
         self._watchers: list = []
         self._stop = threading.Event()
+        self._closed = False
+        self.timeout = 30.0  # seconds a request to the server may take before raypc.Error
 
     def _request(self, method: str, path: str, body: Optional[dict] = None) -> dict:
+        if self._closed:
+            raise Error(f"{self.url}: this view is closed")
         headers = {"Content-Type": "application/json"}
         if self._token:
             headers["Authorization"] = f"Bearer {self._token}"
         data = None if body is None else json.dumps(body).encode()
         request = urllib.request.Request(self._base + path, data=data, method=method, headers=headers)
         try:
-            with urllib.request.urlopen(request, timeout=30) as response:
+            with urllib.request.urlopen(request, timeout=self.timeout) as response:
                 return json.loads(response.read())
         except urllib.error.HTTPError as e:
             try:
@@ -68,7 +85,12 @@ class View:
                 message = str(e)
             raise Error(f"{path}: {message}") from None
         except urllib.error.URLError as e:
-            raise Error(f"{self._base}: the RayPC server does not answer ({e.reason})") from None
+            raise Error(f"{self._base}{path}: the RayPC server does not answer ({e.reason})") from None
+        except OSError as e:  # a timeout or a connection reset while reading the answer
+            reason = f"no answer within {self.timeout:g} s" if isinstance(e, TimeoutError) else (e.strerror or str(e))
+            raise Error(f"{self._base}{path}: the RayPC server does not answer ({reason})") from None
+        except (http.client.HTTPException, ValueError):  # not HTTP, or not JSON: something else listens there
+            raise Error(f"{self._base}{path}: the answer is not a RayPC server's") from None
 
     def link(self) -> dict:
         """The server's linked state: {"version", "state", "source" ("ui"/"api"), "sessions"}."""
@@ -115,16 +137,25 @@ class View:
             time.sleep(0.1)
 
     def close(self) -> None:
-        """Stops the callbacks and, when this view started it, the server."""
+        """Stops this view's callbacks and, when it is the last open view of a server this process
+        started (show() gives every view of a dataset the same server), the server, which frees its
+        port. Closing again does nothing."""
+        self._closed = True
         self._stop.set()
         for thread in self._watchers:
-            thread.join(timeout=2)
-        if self._server is not None:
-            for key, server in list(_servers.items()):
-                if server is self._server:
+            if thread is not threading.current_thread():  # close() called from an on_change callback
+                thread.join(timeout=2)
+        server, self._server = self._server, None
+        if server is None:
+            return
+        with _servers_lock:
+            for key, shared in list(_servers.items()):
+                if shared.server is server:
+                    shared.views -= 1
+                    if shared.views > 0:
+                        return  # another view still shows it
                     del _servers[key]
-            self._server.stop()
-            self._server = None
+        server.stop()
 
     def _repr_html_(self) -> str:
         width = self.width if isinstance(self.width, str) else f"{int(self.width)}px"
@@ -140,12 +171,14 @@ def show(dataset: Union[Dataset, str, os.PathLike], host: str = "127.0.0.1", por
     """Serves the dataset's browser UI from this process (``raypc serve``'s server on its own
     thread, on loopback unless ``host`` says otherwise, where the token rules apply; ``port`` 0:
     any free port) — or reuses the server started earlier for it — and returns a :class:`View`,
-    which a notebook displays inline."""
+    which a notebook displays inline. The server stops when the last of its views is closed."""
     ds = dataset if isinstance(dataset, Dataset) else Dataset(dataset)
     key = (str(ds.path), host, port)
-    server = _servers.get(key)
-    if server is None:
-        server = _raypc.Server(str(ds.path), host, port, assets=_inside_package("web", needs="index.html"),
-                               examples=_inside_package("examples"))
-        _servers[key] = server
-    return View(server.url, width, height, server)
+    with _servers_lock:
+        shared = _servers.get(key)
+        if shared is None:
+            server = _raypc.Server(str(ds.path), host, port, assets=_inside_package("web", needs="index.html"),
+                                   examples=_inside_package("examples"))
+            shared = _servers[key] = _Shared(server)
+        shared.views += 1
+    return View(shared.server.url, width, height, shared.server)
