@@ -732,8 +732,8 @@ PYBIND11_MODULE(_raypc, m)
         py::arg("json"), "The state document parsed by the one state schema, normalised (JSON)");
     m.def("values_read", [] { return g_valuesRead.load(std::memory_order_relaxed); },
           "Grid values read from step files by Dataset.field and read_box so far (for tests of laziness)");
-    m.def("surface_radius_km", [] { return raypc::kSurfaceRadiusKm; });
-    m.def("state_version", [] { return raypc::state::kRenderStateVersion; });
+    m.def("surface_radius_km", [] { return raypc::kSurfaceRadiusKm; }, "The Earth's radius that depths count from, km");
+    m.def("state_version", [] { return raypc::state::kRenderStateVersion; }, "The version of the state document this build writes");
     m.def("names_json", [] { return std::string(kNamesJson); },
           "src/grid/names.json: the names of derived variables and of the columns of the tables raypc writes");
     m.def("cf_name", &raypc::io::cfName, py::arg("display_name"),
@@ -748,42 +748,56 @@ PYBIND11_MODULE(_raypc, m)
         py::arg("kind"));
 
     py::class_<PyDataset>(m, "Dataset")
-        .def(py::init<const std::string&>(), py::arg("dir"))
-        .def_property_readonly("dir", &PyDataset::dir)
-        .def_property_readonly("variables", &PyDataset::variables)
-        .def_property_readonly("times_myr", &PyDataset::timesMyr)
-        .def_property_readonly("levels", &PyDataset::levels)
-        .def_property_readonly("encoding", &PyDataset::encoding)
-        .def("step", &PyDataset::step, py::arg("text"), py::arg("what") = "step")
-        .def("field", &PyDataset::field, py::arg("variable"), py::arg("step"), py::arg("level"))
+        .def(py::init<const std::string&>(), py::arg("dir"), "Opens a dataset directory (raypc preprocess)")
+        .def_property_readonly("dir", &PyDataset::dir, "The dataset directory")
+        .def_property_readonly("variables", &PyDataset::variables,
+                               "Every variable: {name, units, derived, min, max (global range, in its units)}")
+        .def_property_readonly("times_myr", &PyDataset::timesMyr, "The time of every step, Myr")
+        .def_property_readonly("levels", &PyDataset::levels,
+                               "Every level of detail's grid: {lat (degrees north), r (km), lon (degrees east)}")
+        .def_property_readonly("encoding", &PyDataset::encoding, "How the levels are stored: 'u16' or 'float32'")
+        .def("step", &PyDataset::step, py::arg("text"), py::arg("what") = "step",
+             "The step of an index ('12') or a time ('24Myr'); `what` names the argument in errors")
+        .def("field", &PyDataset::field, py::arg("variable"), py::arg("step"), py::arg("level"),
+             "One variable of one step at a level, (lat, r, lon) float32 in its units, NaN where there are no data")
         .def("read_box", &PyDataset::readBoxOf, py::arg("variable"), py::arg("step"), py::arg("level"),
              py::arg("begin"), py::arg("end"),
              "One variable of one step in the grid-index box [begin, end) of (lat, r, lon), reading only what it needs")
         .def("probe", &PyDataset::probe, py::arg("lat"), py::arg("lon"), py::arg("r_km"), py::arg("step"),
-             py::arg("level"), py::arg("variable"))
-        .def("sample", &PyDataset::sample, py::arg("step"))
-        .def("pathlines", &PyDataset::pathlines, py::arg("step"), py::arg("window"))
-        .def("default_state", &PyDataset::defaultState)
-        .def("check_state", &PyDataset::checkState, py::arg("json"))
+             py::arg("level"), py::arg("variable"),
+             "The values at a point (lat, lon degrees; r_km radius, km) as raypc probe's JSON text; `variable` '' for all")
+        .def("sample", &PyDataset::sample, py::arg("step"),
+             "The parallel-coordinates sample of a step: (columns, units, rows x columns float32)")
+        .def("pathlines", &PyDataset::pathlines, py::arg("step"), py::arg("window"),
+             "The pathline sets injected in the `window` steps up to `step` (points x, y, z km, time Myr)")
+        .def("default_state", &PyDataset::defaultState, "The UI's first view of this dataset, as state JSON text")
+        .def("check_state", &PyDataset::checkState, py::arg("json"),
+             "The state checked against this dataset (variables, step, level), normalised JSON text")
         .def("render", &PyDataset::render, py::arg("json"), py::arg("passes"), py::arg("view") = "3d",
-             py::arg("progress") = py::none())
+             py::arg("progress") = py::none(),
+             "The state's picture (raypc render --state; view 'map'/'section': raypc map/section), (h, w, 4) uint8")
         .def("features", &PyDataset::features, py::arg("json"), py::arg("first"), py::arg("last"), py::arg("level"),
-             py::arg("min_volume_km3"), py::arg("depths_km"), py::arg("band_half_width_km"), py::arg("progress") = py::none())
+             py::arg("min_volume_km3"), py::arg("depths_km"), py::arg("band_half_width_km"), py::arg("progress") = py::none(),
+             "The features of the state's brushes in steps first..last: raypc features' CSV text (volumes km³, depths km)")
         .def("slice_grid", &PyDataset::sliceGrid, py::arg("json"), py::arg("view"), py::arg("grid_step_deg"),
-             py::arg("depth_step_km"))
+             py::arg("depth_step_km"),
+             "The state's map or section as the CF grid of raypc map/section --netcdf (degrees, km), as a dict")
         .def("feature_series", &PyDataset::featureSeries, py::arg("json"), py::arg("level"), py::arg("min_volume_km3"),
              py::arg("depths_km"), py::arg("band_half_width_km"), py::arg("min_overlap"), py::arg("stall_by"),
-             py::arg("sigmas"), py::arg("progress") = py::none())
+             py::arg("sigmas"), py::arg("progress") = py::none(),
+             "The features followed through every step (the UI's Features panel) as JSON text, the CLI's CSVs under 'csv'")
         .def("stats", &PyDataset::stats, py::arg("json"), py::arg("first"), py::arg("last"), py::arg("level"),
-             py::arg("mean_of") = "", py::arg("progress") = py::none());
+             py::arg("mean_of") = "", py::arg("progress") = py::none(),
+             "The exact selected volume (km³, share of the mantle) per step, with its profile per radius");
 
     py::class_<PyServer>(m, "Server")
         .def(py::init<const std::string&, const std::string&, int, const std::optional<std::string>&,
                       const std::optional<std::string>&>(),
              py::arg("dataset"), py::arg("host"), py::arg("port"), py::arg("assets") = py::none(),
-             py::arg("examples") = py::none())
-        .def_property_readonly("url", &PyServer::url)
-        .def_property_readonly("port", &PyServer::port)
-        .def_property_readonly("token", &PyServer::token)
-        .def("stop", &PyServer::stop);
+             py::arg("examples") = py::none(),
+             "Serves the dataset's UI (raypc serve) on its own thread; `assets`/`examples`: the UI's and the states' directories")
+        .def_property_readonly("url", &PyServer::url, "The UI's address (with the token off loopback)")
+        .def_property_readonly("port", &PyServer::port, "The port it listens on")
+        .def_property_readonly("token", &PyServer::token, "The access token ('' on loopback)")
+        .def("stop", &PyServer::stop, "Stops the server and frees its port");
 }

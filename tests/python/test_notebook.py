@@ -1,6 +1,7 @@
 """The example notebook (examples/task1-slabs-660km.ipynb) executed headless by nbclient on a
 small synthetic series given as netCDF files (raypc synth), so that it cannot rot: every cell runs
-without error, the figure and the plots are there, and its table equals the module's statistics."""
+without error, the figure and the plots are there (the map through xarray's engine "raypc"), and its
+tables equal the module's statistics and stalls."""
 import os
 from pathlib import Path
 
@@ -32,5 +33,11 @@ def test_task1_notebook_runs(tmp_path, monkeypatch):
     assert expected["selected_volume_km3"].gt(0).any()
     texts = [o["data"]["text/plain"] for o in outputs if "text/plain" in o.get("data", {})]
     assert repr(expected) in texts
+    # its stall table is the module's tracks of the cold sinking material (raypc features --stalls)
+    slabs = raypc.State(state.to_dict())
+    slabs.brushes = [b for b in slabs.brushes if b["name"] != "depth"]
+    stalls = ds.tracks(slabs, stall_by="deepest", depths_km=[660], progress=False).stalls
+    shown = stalls.sort_values("duration_myr", ascending=False, ignore_index=True)
+    assert repr(shown[["track", "depth_km", "duration_myr", "first_step", "last_step", "left"]]) in texts
     # the dataset was preprocessed beside the files, where the next open found it
     assert ds.path == tmp_path / "nc" / "spherical.raypc"

@@ -40,7 +40,7 @@ def test_cf_names_are_safe_and_unique():
     assert cf_name("temperature anomaly %") == "temperature_anomaly_percent"
     assert cf_name("Thermal  Conductivity") == "Thermal_Conductivity" and cf_name("dlnVs") == "dlnVs"  # case kept
     assert cf_name("3d field") == "v_3d_field"
-    assert cf_names(["a b", "a_b", "A B %"]) == {"a b": "a_b", "a_b": "a_b_2", "A B %": "a_b_percent"}
+    assert cf_names(["a b", "a_b", "A B %"]) == {"a b": "a_b", "a_b": "a_b_2", "A B %": "A_B_percent"}
 
 
 def test_opening_reads_no_values_and_describes_the_series(contest):

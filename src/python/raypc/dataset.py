@@ -14,13 +14,17 @@ import numpy as np
 
 from . import _raypc
 from ._progress import _Progress
-from ._raypc import Error
+from ._raypc import Error, UnknownNameError
 from .grid import SURFACE_RADIUS_KM, Field, Grid, Variable
 from .names import _COLUMNS, _PATHLINE_ATTRIBUTE, cf_names
 from .picture import Picture
 from .state import State
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # for the annotations only: pandas, xarray and VTK are imported where used
+    import pandas as pd
+    import xarray as xr
+    from vtkmodules.vtkCommonDataModel import vtkStructuredGrid
+
     from .view import View
 
 StepLike = Union[int, str]  # 12, or a time such as "24Myr"
@@ -36,10 +40,10 @@ class FeatureTracks(NamedTuple):
     """Features followed through a series (:meth:`Dataset.tracks`), the tables of ``raypc features
     --tracks/--events/--stalls`` and ``raypc flux`` (columns in docs/features.md)."""
 
-    tracks: Any      # DataFrame: a row per track and step (volume km³, mean depth km, centroid)
-    events: Any      # DataFrame: births, deaths, merges and splits
-    stalls: Any      # DataFrame: how long each track stays near each depth (Myr) and how it left
-    flux: Any        # DataFrame: the flux across the shells per step (km³/yr), None without shells in the grid
+    tracks: "pd.DataFrame"   # DataFrame: a row per track and step (volume km³, mean depth km, centroid)
+    events: "pd.DataFrame"   # DataFrame: births, deaths, merges and splits
+    stalls: "pd.DataFrame"   # DataFrame: how long each track stays near each depth (Myr) and how it left
+    flux: "Optional[pd.DataFrame]"  # DataFrame: the flux across the shells per step (km³/yr), None without shells in the grid
     settings: dict   # the settings used (level, minVolumeKm3, depthsKm, bandHalfWidthKm, minOverlapShare, stallBy)
 
     def __repr__(self) -> str:
@@ -48,7 +52,7 @@ class FeatureTracks(NamedTuple):
                 f"{len(self.stalls)} stalls, flux {flux}; stall by {self.settings['stallBy']}>")
 
 
-def _grid_array(d: dict):
+def _grid_array(d: dict) -> "xr.DataArray":
     """A slice grid of the compiled module (app/slice_grid.h's CF grid) as an xarray.DataArray."""
     import xarray as xr
 
@@ -71,7 +75,7 @@ def _grid_array(d: dict):
 class Dataset:
     """A preprocessed RayPC dataset (docs/format.md); see :func:`raypc.open`."""
 
-    def __init__(self, directory: Union[str, os.PathLike]):
+    def __init__(self, directory: Union[str, os.PathLike]) -> None:
         self._core = _raypc.Dataset(os.fspath(directory))
         # What the dataset is, read once (it does not change while open); arrays read-only, shared.
         self._variables = [Variable(v["name"], v["units"], v["min"], v["max"], v["derived"])
@@ -161,15 +165,15 @@ class Dataset:
     def _variable_name(self, name: str, what: str = "variable") -> str:
         """The display name of a variable named by its display name or its CF name (to_xarray's)."""
         if not isinstance(name, str):
-            raise Error(f"{what}: expected a name, not {type(name).__name__}")
+            raise TypeError(f"{what}: expected a name, not {type(name).__name__}")
         if name in self._units:
             return name
         for display, cf in cf_names(self._units).items():
             if cf == name:
                 return display
-        raise Error(f"{what}: unknown variable '{name}'; the dataset has: {', '.join(self._units)}")
+        raise UnknownNameError(f"{what}: unknown variable '{name}'; the dataset has: {', '.join(self._units)}")
 
-    def to_xarray(self, step: Optional[StepLike] = None, variables: Optional[Sequence[str]] = None, level: int = 0):
+    def to_xarray(self, step: Optional[StepLike] = None, variables: Optional[Sequence[str]] = None, level: int = 0) -> "xr.Dataset":
         """The dataset as a lazy ``xarray.Dataset`` on (time, lat, radius, lon), as
         ``xr.open_dataset(path, engine="raypc")`` opens it (raypc.xarray_backend): CF names
         (``temperature_anomaly``), attributes and units, ``depth`` indexed too; values read when
@@ -194,7 +198,7 @@ class Dataset:
         return json.loads(self._core.probe(float(lat), float(lon), float(r_km), self._step(step), level,
                                            self._variable_name(variable) if variable else ""))
 
-    def sample(self, step: StepLike = 0):
+    def sample(self, step: StepLike = 0) -> "pd.DataFrame":
         """The parallel-coordinates sample of a step (the same cells in every step) as a
         ``pandas.DataFrame``: coordinate columns then variables; units in ``df.attrs["units"]``."""
         import pandas as pd
@@ -226,7 +230,7 @@ class Dataset:
                         "lines": lines, "points": points})
         return out
 
-    def critical_points(self, step: StepLike = 0):
+    def critical_points(self, step: StepLike = 0) -> "pd.DataFrame":
         """The significant critical points of the seed field that seeded the pathlines of ``step``
         (docs/persistence.md) as a DataFrame: kind, lat, lon, radius_km, depth_km, value,
         persistence."""
@@ -277,7 +281,7 @@ class Dataset:
         return pixels.view(Picture)
 
     def stats(self, state: Union[None, State, dict, str, os.PathLike] = None, steps: Optional[Any] = None,
-              level: int = 0, by: str = "step", mean_of: Optional[str] = None, progress: bool = True):
+              level: int = 0, by: str = "step", mean_of: Optional[str] = None, progress: bool = True) -> "pd.DataFrame":
         """The exact selected volume of the state's brushes (``raypc stats``) as a DataFrame.
         ``by="step"``: step, time_myr, selected_volume_km3, selected_percent_of_mantle;
         ``by="depth"``: per step and radius, the depth profile (``raypc stats --profile``), and with
@@ -321,7 +325,7 @@ class Dataset:
     def features(self, state: Union[None, State, dict, str, os.PathLike] = None, steps: Optional[Any] = None,
                  level: Optional[int] = None, min_volume_km3: Optional[float] = None,
                  depths_km: Optional[Sequence[float]] = None, band_half_width_km: Optional[float] = None,
-                 progress: bool = True):
+                 progress: bool = True) -> "pd.DataFrame":
         """The features of the state's brushes in each step (``raypc features``, docs/features.md) as a
         DataFrame: a row per feature and step with its volume, depths, centroid, every variable's
         mean/min/max (units in the column names) and the percent of its volume near each depth.
@@ -348,7 +352,7 @@ class Dataset:
         return pd.read_csv(io.StringIO(text))
 
     def map_grid(self, state: Union[None, State, dict, str, os.PathLike] = None, step: Optional[StepLike] = None,
-                 variable: Optional[str] = None, depth_km: Optional[float] = None, grid_step_deg: float = 0):
+                 variable: Optional[str] = None, depth_km: Optional[float] = None, grid_step_deg: float = 0) -> "xr.DataArray":
         """The state's map as an ``xarray.DataArray`` on (lat, lon): its colour variable (``variable``
         overrides) at its ``map.depthKm`` (``depth_km`` overrides, km below the surface) of ``step``
         (default: the state's), sampled every ``grid_step_deg`` degrees (0: 1°; must divide 180) as
@@ -361,7 +365,7 @@ class Dataset:
 
     def section_grid(self, state: Union[None, State, dict, str, os.PathLike] = None, step: Optional[StepLike] = None,
                      variable: Optional[str] = None, start: Optional[tuple] = None, end: Optional[tuple] = None,
-                     grid_step_deg: float = 0, depth_step_km: float = 10):
+                     grid_step_deg: float = 0, depth_step_km: float = 10) -> "xr.DataArray":
         """The state's great-circle section as an ``xarray.DataArray`` on (depth km, distance km
         along the surface), with the latitude, longitude and angle of every column as auxiliary
         coordinates: its colour variable (``variable`` overrides) from ``start`` to ``end``
@@ -420,7 +424,7 @@ class Dataset:
 
     # ---- other libraries ----------------------------------------------------------------------
 
-    def to_vtk(self, step: StepLike = 0, variables: Optional[Sequence[str]] = None, level: int = 0):
+    def to_vtk(self, step: StepLike = 0, variables: Optional[Sequence[str]] = None, level: int = 0) -> "vtkStructuredGrid":
         """A step as a ``vtkStructuredGrid`` (VTK's Python modules: Debian's python3-vtk9 or
         ParaView's): the native grid's points in km (x towards 0° E on the equator, z to the north
         pole), the longitude seam closed by repeating the first meridian, and every variable (or
@@ -458,7 +462,7 @@ class Dataset:
         grid.GetFieldData().AddArray(units)
         return grid
 
-    def to_pyvista(self, step: StepLike = 0, variables: Optional[Sequence[str]] = None, level: int = 0):
+    def to_pyvista(self, step: StepLike = 0, variables: Optional[Sequence[str]] = None, level: int = 0) -> Any:
         """A step as a ``pyvista.StructuredGrid`` (:meth:`to_vtk` wrapped by PyVista):
         ``ds.to_pyvista(6).plot(scalars="temperature anomaly")``."""
         try:
