@@ -12,7 +12,7 @@ from raypc.names import cf_name, cf_names
 from raypc.xarray_backend import RaypcBackendEntrypoint
 from test_dataset import analytic
 
-ENGINE = RaypcBackendEntrypoint  # registered as "raypc" when installed; the class itself in the build tree
+ENGINE = "raypc"  # the entry point: pip's metadata when installed, build/python's dist-info in the build tree
 
 
 @pytest.fixture(scope="module")
@@ -154,6 +154,18 @@ def test_drop_variables_and_level(contest):
         contest.to_xarray(0, ["pressure"])
     with pytest.raises(raypc.Error, match=r"read_box: r index range 3\.\.3 is empty"):
         contest._core.read_box("temperature", 0, 0, [0, 3, 0], [1, 3, 1])
+
+
+def test_the_engine_is_found_by_its_name(contest):
+    from importlib.metadata import entry_points
+
+    (ep,) = [e for e in entry_points(group="xarray.backends") if e.name == "raypc"]
+    assert ep.load() is RaypcBackendEntrypoint
+    by_name = xr.open_dataset(contest.path, engine="raypc")
+    assert by_name.identical(xr.open_dataset(contest.path, engine=RaypcBackendEntrypoint).assign_attrs(
+        history=by_name.attrs["history"]))
+    # xarray picks the engine itself for a dataset directory (guess_can_open)
+    assert set(xr.open_dataset(contest.path).data_vars) == set(by_name.data_vars)
 
 
 def test_guess_can_open(contest, tmp_path):
