@@ -6,7 +6,7 @@
 // kernel and a TLB entry; on 2 MiB pages one fault covers 512 of them. Where the kernel gives huge
 // pages only on request (/sys/kernel/mm/transparent_hugepage/enabled is "madvise", Debian's
 // default), nothing gets them unless it asks with madvise(MADV_HUGEPAGE): `raypc features` over the
-// demo spends 0.20 s in the kernel with them (14 000 page faults) and 0.41 s without (140 000;
+// demo spends 0.20 s in the kernel with them (36 000 page faults) and 0.41 s without (140 000;
 // bench/python_features.sh). The raypc CLI also runs itself again with glibc's malloc asking for
 // every block it maps (restartWithTransparentHugePages, core/system_memory.h), which still covers
 // what does not come from here (preprocessing's snapshots and levels); a library loaded into
