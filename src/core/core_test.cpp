@@ -293,6 +293,8 @@ TEST(HugePages, LargeArraysStartOnAHugePageAndAreAdvised)
     if (!transparentHugePagesBuiltIn())
         GTEST_SKIP() << "a kernel without transparent huge pages";
     const HugePagesVariable unset(nullptr);
+    if (!hugePagesEnabled())
+        GTEST_SKIP() << "glibc's malloc asks for huge pages itself here (GLIBC_TUNABLES)";
     const size_t bytes = 3 * kHugePageBytes + 12345;
     const auto a = makeHugePageArray<char>(bytes);
     const auto p = reinterpret_cast<uintptr_t>(a.get());
@@ -318,6 +320,8 @@ TEST(HugePages, AdviceCoversTheAlignedInteriorOnly)
     if (!transparentHugePagesBuiltIn())
         GTEST_SKIP() << "a kernel without transparent huge pages";
     const HugePagesVariable unset(nullptr);
+    if (!hugePagesEnabled())
+        GTEST_SKIP() << "glibc's malloc asks for huge pages itself here (GLIBC_TUNABLES)";
     // Eight huge pages of address space, of which a range from 4 KB past the first boundary to
     // 4 KB past the fourth: its aligned interior is the second and third huge pages.
     const size_t mapped = 8 * kHugePageBytes;
@@ -353,7 +357,15 @@ TEST(HugePages, RaypcHugePagesZeroAsksForNothing)
     munmap(base, mapped);
     {
         const HugePagesVariable on("1");
+        const char* tunables = std::getenv("GLIBC_TUNABLES");
+        EXPECT_EQ(hugePagesEnabled(), !(tunables && std::string(tunables).find("glibc.malloc.hugetlb=1") != std::string::npos));
+        // glibc's malloc asking already: the library does not ask again; hugetlb=0 is no asking.
+        const std::string old = tunables ? tunables : "";
+        setenv("GLIBC_TUNABLES", "glibc.malloc.hugetlb=1", 1);
+        EXPECT_FALSE(hugePagesEnabled());
+        setenv("GLIBC_TUNABLES", "glibc.malloc.tcache_count=5:glibc.malloc.hugetlb=0", 1);
         EXPECT_TRUE(hugePagesEnabled());
+        tunables ? setenv("GLIBC_TUNABLES", old.c_str(), 1) : unsetenv("GLIBC_TUNABLES");
     }
 }
 

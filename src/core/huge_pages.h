@@ -13,7 +13,7 @@
 // python3 cannot do that, so the arrays of the analyses ask for themselves.
 //
 // RAYPC_HUGE_PAGES=0 in the environment (read at each large allocation) turns the asking off, for
-// A/B runs: the arrays are then plain malloc'd memory.
+// A/B runs: the arrays are then plain malloc'd memory (hugePagesEnabled).
 #pragma once
 
 #include <cstddef>
@@ -35,8 +35,10 @@ inline constexpr size_t kHugePageBytes = size_t(2) << 20;
 // changes nothing but speed. Thread-safe; never throws.
 void adviseHugePages(void* p, size_t bytes) noexcept;
 
-// Whether adviseHugePages asks (RAYPC_HUGE_PAGES is not "0"). Thread-safe unless another thread
-// changes the environment meanwhile (as getenv).
+// Whether adviseHugePages asks: RAYPC_HUGE_PAGES is not "0", and glibc's malloc does not ask for
+// every block already (GLIBC_TUNABLES holds no glibc.malloc.hugetlb other than 0, as in a raypc CLI
+// that ran itself again with it). Thread-safe unless another thread changes the environment
+// meanwhile (as getenv).
 bool hugePagesEnabled() noexcept;
 
 // `bytes` of uninitialised memory, released with std::free. From `kHugePageBytes` up it starts on a
