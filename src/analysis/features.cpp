@@ -42,7 +42,7 @@ public:
     }
 
 private:
-    std::vector<int64_t> m_parent;
+    HugePageVector<int64_t> m_parent;  // 8 bytes a grid point: the biggest array of a step's features
 };
 
 struct Sums {
@@ -55,7 +55,7 @@ struct Sums {
 
 // Connected components of the selected points: each selected point joins its 13 forward neighbours of
 // the 26-neighbourhood (the other 13 join it), the lon index wrapping at the seam.
-DisjointSets connectNeighbours(const grid::SphericalGrid& g, const std::vector<uint8_t>& selected)
+DisjointSets connectNeighbours(const grid::SphericalGrid& g, const HugePageVector<uint8_t>& selected)
 {
     const size_t nLat = g.nLat(), nR = g.nR(), nLon = g.nLon();
     DisjointSets sets(g.cellCount());
@@ -83,7 +83,7 @@ DisjointSets connectNeighbours(const grid::SphericalGrid& g, const std::vector<u
 }
 
 // Around each pole: the outermost row's points at one radius and the next are one region.
-void joinPoleRings(const grid::SphericalGrid& g, const std::vector<uint8_t>& selected, DisjointSets& sets)
+void joinPoleRings(const grid::SphericalGrid& g, const HugePageVector<uint8_t>& selected, DisjointSets& sets)
 {
     const size_t nLat = g.nLat(), nR = g.nR(), nLon = g.nLon();
     for (const size_t iLat : {size_t(0), nLat - 1}) {
@@ -107,8 +107,8 @@ void joinPoleRings(const grid::SphericalGrid& g, const std::vector<uint8_t>& sel
 
 // Labels in index order (a set's root, its smallest index, is met first): each selected point's set
 // numbered from 1 in `labels`, and the sums of each set (by label - 1) over its points.
-std::vector<Sums> labelAndSum(const dataset::StepVolume& volume, const std::vector<uint8_t>& selected, DisjointSets& sets,
-                              const FeatureOptions& options, std::vector<int32_t>& labels)
+std::vector<Sums> labelAndSum(const dataset::StepVolume& volume, const HugePageVector<uint8_t>& selected, DisjointSets& sets,
+                              const FeatureOptions& options, HugePageVector<int32_t>& labels)
 {
     const grid::SphericalGrid& g = volume.grid();
     const size_t nLat = g.nLat(), nR = g.nR(), nLon = g.nLon();
@@ -224,7 +224,7 @@ StepFeatures extractFeatures(const dataset::StepVolume& volume, std::span<const 
         fail("features: minimum volume {} km³ is negative", options.minVolumeKm3);
     if (!(options.bandHalfWidthKm >= 0))
         fail("features: band half-width {} km is negative", options.bandHalfWidthKm);
-    const std::vector<uint8_t> selected = selectedPoints(volume, filters);  // checks the filters
+    const HugePageVector<uint8_t> selected = selectedPoints(volume, filters);  // checks the filters
     const grid::SphericalGrid& g = volume.grid();
     DisjointSets sets = connectNeighbours(g, selected);
     joinPoleRings(g, selected, sets);

@@ -11,6 +11,7 @@
 // Thread safety: pure functions of their arguments.
 #pragma once
 
+#include "core/huge_pages.h"
 #include "dataset/dataset.h"
 #include "analysis/selection.h"
 
@@ -55,7 +56,7 @@ struct Feature {
 struct StepFeatures {
     std::vector<Feature> features;  // by decreasing volume
     // Per grid point (canonical order): the id of its feature, 0 when unselected or dropped.
-    std::vector<int32_t> labels;
+    HugePageVector<int32_t> labels;
 };
 
 // The options of feature settings however they are given (a state's `features`, through

@@ -34,8 +34,8 @@ std::vector<ShellFlux> shellFluxes(const dataset::StepVolume& volume, size_t rad
     if (heat && !(heat->heatCapacityJPerKgK > 0 && std::isfinite(heat->heatCapacityJPerKgK)))
         fail("flux: heat capacity {} J/(kg K) is not positive", heat->heatCapacityJPerKgK);
     const grid::SphericalGrid& g = volume.grid();
-    const std::vector<uint8_t> selected =
-        filters.empty() ? std::vector<uint8_t>(g.cellCount(), 1) : selectedPoints(volume, filters);
+    const HugePageVector<uint8_t> selected =
+        filters.empty() ? HugePageVector<uint8_t>(g.cellCount(), 1) : selectedPoints(volume, filters);
     const float* v = volume.values(radialVelocity);
     const float* anomaly = heat ? volume.values(heat->temperatureAnomaly) : nullptr;
     const float* rho = density ? volume.values(*density) : nullptr;

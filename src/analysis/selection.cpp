@@ -176,11 +176,11 @@ SelectionStats selectedVolume(const dataset::StepVolume& volume, std::span<const
     return stats;
 }
 
-std::vector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::span<const RangeFilter> filters)
+HugePageVector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::span<const RangeFilter> filters)
 {
     checkFilters(volume, filters);
     const auto& g = volume.grid();
-    std::vector<uint8_t> out(g.cellCount(), 0);
+    HugePageVector<uint8_t> out(g.cellCount(), 0);
     tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
         for (size_t iR = 0; iR < g.nR(); ++iR)
             for (size_t iLon = 0; iLon < g.nLon(); ++iLon)

@@ -3,6 +3,7 @@
 // distribution over depth. Used by the server's status line and `raypc stats`.
 #pragma once
 
+#include "core/huge_pages.h"
 #include "dataset/dataset.h"
 
 #include <functional>
@@ -83,7 +84,7 @@ SelectionStats selectedVolume(const dataset::StepVolume& volume, std::span<const
 
 // Whether each grid point is selected (1) or not (0), canonical order, by the rule of
 // selectedVolume. Throws raypc::Error as selectedVolume does. Parallel over lat rows.
-std::vector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::span<const RangeFilter> filters);
+HugePageVector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::span<const RangeFilter> filters);
 
 // The selection split by a labelling of the grid's points: `classes` holds one class in
 // [0, classCount) per grid point (canonical order), e.g. what the synthetic generator put there

@@ -1,5 +1,6 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/huge_pages.h"
 #include "core/json_input.h"
 #include "core/lru_cache.h"
 #include "core/numbered_name.h"
@@ -7,10 +8,16 @@
 #include "core/strings.h"
 
 #include <gtest/gtest.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <optional>
+#include <sstream>
+#include <string>
 
 namespace raypc {
 namespace {
@@ -228,6 +235,137 @@ TEST(NumberedName, RefusesEveryOtherConversion)
         ADD_FAILURE();
     } catch (const Error& e) {
         EXPECT_LT(std::string(e.what()).size(), 300u);
+    }
+}
+
+// The mapping of this process holding `address`, as /proc/self/smaps lists it: its range and its
+// VmFlags ("hg": advised MADV_HUGEPAGE).
+struct Mapping {
+    uintptr_t begin = 0, end = 0;
+    std::string flags;
+};
+
+Mapping mappingOf(const void* address)
+{
+    const auto at = reinterpret_cast<uintptr_t>(address);
+    std::ifstream smaps("/proc/self/smaps");
+    std::string line;
+    Mapping m;
+    bool inside = false;
+    while (std::getline(smaps, line)) {
+        uintptr_t begin = 0, end = 0;
+        char dash = 0;
+        std::istringstream range(line);
+        if (range >> std::hex >> begin >> dash >> end && dash == '-') {
+            inside = begin <= at && at < end;
+            if (inside)
+                m = {begin, end, ""};
+        } else if (inside && line.starts_with("VmFlags:")) {
+            m.flags = line.substr(8) + " ";
+            return m;
+        }
+    }
+    return m;
+}
+
+bool transparentHugePagesBuiltIn()
+{
+    return std::filesystem::exists("/sys/kernel/mm/transparent_hugepage/enabled");
+}
+
+// RAYPC_HUGE_PAGES as a test sets it, restored afterwards.
+class HugePagesVariable {
+public:
+    explicit HugePagesVariable(const char* value)
+    {
+        if (const char* old = std::getenv("RAYPC_HUGE_PAGES"))
+            m_old = old;
+        value ? setenv("RAYPC_HUGE_PAGES", value, 1) : unsetenv("RAYPC_HUGE_PAGES");
+    }
+    ~HugePagesVariable() { m_old ? setenv("RAYPC_HUGE_PAGES", m_old->c_str(), 1) : unsetenv("RAYPC_HUGE_PAGES"); }
+
+private:
+    std::optional<std::string> m_old;
+};
+
+TEST(HugePages, LargeArraysStartOnAHugePageAndAreAdvised)
+{
+    if (!transparentHugePagesBuiltIn())
+        GTEST_SKIP() << "a kernel without transparent huge pages";
+    const HugePagesVariable unset(nullptr);
+    if (!hugePagesEnabled())
+        GTEST_SKIP() << "glibc's malloc asks for huge pages itself here (GLIBC_TUNABLES)";
+    const size_t bytes = 3 * kHugePageBytes + 12345;
+    const auto a = makeHugePageArray<char>(bytes);
+    const auto p = reinterpret_cast<uintptr_t>(a.get());
+    EXPECT_EQ(p % kHugePageBytes, 0u);
+    const Mapping m = mappingOf(a.get());
+    EXPECT_NE(m.flags.find(" hg "), std::string::npos) << m.flags;
+    // Its three whole huge pages are advised, not its last partial one.
+    EXPECT_LE(m.begin, p);
+    EXPECT_EQ(m.end, p + 3 * kHugePageBytes);
+    // The memory is usable to its last byte.
+    a[0] = 1;
+    a[bytes - 1] = 2;
+    EXPECT_EQ(a[0] + a[bytes - 1], 3);
+
+    HugePageVector<int32_t> v(kHugePageBytes / sizeof(int32_t), 7);
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(v.data()) % kHugePageBytes, 0u);
+    EXPECT_NE(mappingOf(v.data()).flags.find(" hg "), std::string::npos);
+    EXPECT_EQ(std::count(v.begin(), v.end(), 7), std::ptrdiff_t(v.size()));
+}
+
+TEST(HugePages, AdviceCoversTheAlignedInteriorOnly)
+{
+    if (!transparentHugePagesBuiltIn())
+        GTEST_SKIP() << "a kernel without transparent huge pages";
+    const HugePagesVariable unset(nullptr);
+    if (!hugePagesEnabled())
+        GTEST_SKIP() << "glibc's malloc asks for huge pages itself here (GLIBC_TUNABLES)";
+    // Eight huge pages of address space, of which a range from 4 KB past the first boundary to
+    // 4 KB past the fourth: its aligned interior is the second and third huge pages.
+    const size_t mapped = 8 * kHugePageBytes;
+    void* base = mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    ASSERT_NE(base, MAP_FAILED);
+    const uintptr_t boundary = (reinterpret_cast<uintptr_t>(base) + kHugePageBytes - 1) & ~(kHugePageBytes - 1);
+    auto* start = reinterpret_cast<char*>(boundary + 4096);
+    adviseHugePages(start, 3 * kHugePageBytes);
+    const Mapping inside = mappingOf(reinterpret_cast<void*>(boundary + kHugePageBytes));
+    EXPECT_NE(inside.flags.find(" hg "), std::string::npos) << inside.flags;
+    EXPECT_EQ(inside.begin, boundary + kHugePageBytes);
+    EXPECT_EQ(inside.end, boundary + 3 * kHugePageBytes);
+    EXPECT_EQ(mappingOf(start).flags.find(" hg "), std::string::npos) << mappingOf(start).flags;
+    EXPECT_EQ(mappingOf(start + 3 * kHugePageBytes - 1).flags.find(" hg "), std::string::npos);
+    // A range without a whole aligned huge page inside is left alone.
+    adviseHugePages(reinterpret_cast<char*>(boundary) + 5 * kHugePageBytes + 4096, kHugePageBytes);
+    EXPECT_EQ(mappingOf(reinterpret_cast<char*>(boundary) + 5 * kHugePageBytes + 8192).flags.find(" hg "),
+              std::string::npos);
+    munmap(base, mapped);
+}
+
+TEST(HugePages, RaypcHugePagesZeroAsksForNothing)
+{
+    if (!transparentHugePagesBuiltIn())
+        GTEST_SKIP() << "a kernel without transparent huge pages";
+    const HugePagesVariable off("0");
+    EXPECT_FALSE(hugePagesEnabled());
+    const size_t mapped = 4 * kHugePageBytes;
+    void* base = mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    ASSERT_NE(base, MAP_FAILED);
+    adviseHugePages(base, mapped);
+    EXPECT_EQ(mappingOf(static_cast<char*>(base) + 2 * kHugePageBytes).flags.find(" hg "), std::string::npos);
+    munmap(base, mapped);
+    {
+        const HugePagesVariable on("1");
+        const char* tunables = std::getenv("GLIBC_TUNABLES");
+        EXPECT_EQ(hugePagesEnabled(), !(tunables && std::string(tunables).find("glibc.malloc.hugetlb=1") != std::string::npos));
+        // glibc's malloc asking already: the library does not ask again; hugetlb=0 is no asking.
+        const std::string old = tunables ? tunables : "";
+        setenv("GLIBC_TUNABLES", "glibc.malloc.hugetlb=1", 1);
+        EXPECT_FALSE(hugePagesEnabled());
+        setenv("GLIBC_TUNABLES", "glibc.malloc.tcache_count=5:glibc.malloc.hugetlb=0", 1);
+        EXPECT_TRUE(hugePagesEnabled());
+        tunables ? setenv("GLIBC_TUNABLES", old.c_str(), 1) : unsetenv("GLIBC_TUNABLES");
     }
 }
 

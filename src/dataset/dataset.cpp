@@ -280,7 +280,7 @@ const float* StepVolume::compute(size_t var) const
     std::lock_guard lock(m_computeMutex);
     if (const float* p = m_values[var].load(std::memory_order_acquire))
         return p;  // another thread computed it while this one waited
-    auto out = std::make_unique_for_overwrite<float[]>(n);
+    auto out = makeHugePageArray<float>(n);
     std::vector<float>& bounds = m_computedBounds[var - m_storedCount];
     bounds.resize(2 * m_bricks.brickCount());
     // Isolated: while this thread waits inside a parallel loop it must not pick up another task that
@@ -329,7 +329,7 @@ const float* StepVolume::decode(size_t var) const
         m_values[var].store(values, std::memory_order_release);
         return values;
     }
-    auto values = std::make_unique_for_overwrite<float[]>(n);
+    auto values = makeHugePageArray<float>(n);
     // Isolated: while this thread waits inside the parallel loop it must not pick up another task
     // that asks this volume for values and blocks on the lock it holds.
     tbb::this_task_arena::isolate([&] {

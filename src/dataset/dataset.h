@@ -10,6 +10,7 @@
 // Thread safety: a Dataset and the StepVolumes it returns are immutable and may be shared.
 #pragma once
 
+#include "core/huge_pages.h"
 #include "core/mapped_file.h"
 #include "grid/coordinates.h"
 #include "grid/grid.h"
@@ -192,7 +193,7 @@ private:
     std::vector<ValueRange> m_ranges;       // per variable the step's range (open)
     std::vector<char> m_missing;            // per variable whether the step has missing values (open)
     mutable std::mutex m_decodeMutex;
-    mutable std::vector<std::unique_ptr<float[]>> m_decoded;
+    mutable std::vector<HugePageArray<float>> m_decoded;  // on huge pages: written whole once, read often
     mutable std::atomic<size_t> m_decodedBytes{0};
     mutable std::mutex m_derivedMutex;
     mutable std::map<std::pair<size_t, uint32_t>, std::vector<float>> m_derivedBounds;

@@ -14,6 +14,7 @@
 // sources it is given must be thread-safe when shared.
 #pragma once
 
+#include "core/huge_pages.h"
 #include "core/system_memory.h"
 #include "dataset/dataset.h"
 #include "analysis/pathline_storage.h"
@@ -196,7 +197,7 @@ private:
     state::FeatureSettings m_paintSettings;
     // Of m_paintKey, found on first use: the step's feature labels (on the grid of features.level),
     // and the painted volume of each level (the views of a stereo pair share one).
-    std::optional<std::vector<int32_t>> m_paintLabels;
+    std::optional<HugePageVector<int32_t>> m_paintLabels;
     std::map<int, std::shared_ptr<const dataset::StepVolume>> m_paintedVolumes;
     int m_rendererStep = -1;
     std::map<std::pair<int, int>, std::unique_ptr<VolumeRenderer>> m_renderers;  // by (level, view), of m_rendererStep
