@@ -17,7 +17,7 @@ import { setUpScreenshot } from './screenshot';
 import { SelectionPanel } from './selection_panel';
 import { SlicePanel } from './slice_panel';
 import { watchSeriesProgress } from './series_progress';
-import { describePreset } from './presets';
+import { describePreset, sameBrushes } from './presets';
 import { normaliseState, type Brush, type RenderState } from './state';
 import { StateStore } from './store';
 import { TfPanel } from './tf_panel';
@@ -60,6 +60,7 @@ export class App {
   private sampleFailedAt = 0;
   private errorTimer = 0;
   private statusNote = '';
+  private viewNoteText = '';
   private linkedStates: Promise<void> = Promise.resolve(); // the linked states being applied, in order
   private shellKey: ShellKeyEntry[] = []; // the reference shells the last frame shown drew
 
@@ -233,6 +234,7 @@ export class App {
 
   loadState(s: unknown): void {
     const prev = this.store.replace(s);
+    this.features.stateLoaded(s);
     this.showViewNote(''); // a preset shows its own after loading
     const state = this.store.state;
     this.syncControls();
@@ -284,6 +286,7 @@ export class App {
   commit(interactive: boolean): void {
     this.link.send(interactive);
     this.updateLegends();
+    this.updateViewNote();
     this.slices.stateChanged();
     if (interactive) return;
     writeStateToUrl(this.store);
@@ -487,19 +490,33 @@ export class App {
 
   // The brushes no longer are a preset's: its button is no longer highlighted, and its note (which
   // lists its brushes) says that the selection was changed.
+  // Brushes that are the preset's own (a saved state of it loaded again, the parallel coordinates
+  // setting them back) leave it in force: only a different selection is a change.
   private presetLeft(): void {
     const active = document.querySelector<HTMLButtonElement>('#presets button.active');
     if (!active) return;
+    const preset = this.presets.find((p) => p.name === active.dataset.preset);
+    const presetBrushes = (preset?.state as { brushes?: Brush[] } | undefined)?.brushes ?? [];
+    if (preset && sameBrushes(presetBrushes, this.store.state.brushes)) return;
     active.classList.remove('active');
     $('presetNote').textContent = `${active.textContent}: brushes changed since (no preset in force)`;
+    // The status line's "preset TITLE" named the selection in force; it is no longer.
+    if (this.statusNote === `preset ${active.textContent}`) this.setStatusNote('');
     this.showViewNote('');
   }
 
   // The note over the 3D view (#viewNote): what a preset coloured the volume by; '' hides it.
+  // While the view is coloured by feature (features.colorById) the colour variable is not what the
+  // view shows, so the note is hidden until the view is coloured by the variable again.
   private showViewNote(text: string): void {
+    this.viewNoteText = text;
+    this.updateViewNote();
+  }
+
+  private updateViewNote(): void {
     const note = $('viewNote');
-    note.textContent = text;
-    note.hidden = text === '';
+    note.textContent = this.viewNoteText;
+    note.hidden = this.viewNoteText === '' || (this.store.state.features.colorById && this.store.state.brushes.length > 0);
   }
 
   private onBrush(brushes: Brush[], interactive: boolean): void {
