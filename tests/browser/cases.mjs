@@ -2627,17 +2627,26 @@ const cases = {
     await waitConverged(page);
     check(await page.isVisible('#viewNote'), 'coloured by the variable again, the note on the view did not return');
 
-    // Reloading a saved state with exactly the preset's brushes: the preset stays in force.
+    // Reloading a saved state with exactly the preset's brushes, while the preset is in force and
+    // after its brushes were cleared: the preset is in force, not "brushes changed since".
     const file = join(tmp, 'task1.json');
     writeFileSync(file, JSON.stringify(await rState(page)));
-    await page.setInputFiles('#load', file);
-    await page.waitForFunction(() => document.getElementById('status').textContent.includes('loaded'), null, { timeout: 10000 });
-    await waitConverged(page);
-    const reloaded = await page.textContent('#presetNote');
-    const active = await page.$$eval('#presets button.active', (b) => b.map((x) => x.dataset.preset));
-    console.log(`  after reloading: '${reloaded}', active ${JSON.stringify(active)}`);
-    check(!/changed since/.test(reloaded) && active.length === 1 && active[0] === p.name,
-      `reloading the preset's own brushes: '${reloaded}', active ${JSON.stringify(active)}`);
+    const reload = async (when) => {
+      await page.setInputFiles('#load', file);
+      await page.waitForFunction(() => document.getElementById('status').textContent.includes('loaded'), null, { timeout: 10000 });
+      await waitConverged(page);
+      const note = await page.textContent('#presetNote');
+      const active = await page.$$eval('#presets button.active', (b) => b.map((x) => x.dataset.preset));
+      console.log(`  reloaded ${when}: '${note}', active ${JSON.stringify(active)}`);
+      check(!/changed since/.test(note) && note.startsWith(p.title) && active.length === 1 && active[0] === p.name,
+        `reloading the preset's own brushes ${when}: '${note}', active ${JSON.stringify(active)}`);
+    };
+    await reload('with the preset in force');
+    await page.mouse.click(5, 5);
+    await page.keyboard.press('Escape');
+    await page.waitForFunction(() => /changed since/.test(document.getElementById('presetNote').textContent), null, { timeout: 5000 })
+      .catch(async () => { throw new TestFailure(`after Escape the preset note says '${await page.textContent('#presetNote')}'`); });
+    await reload('after Escape');
 
     // Escape clears the brushes: the status line no longer names the preset.
     await apply();
