@@ -2515,6 +2515,8 @@ const cases = {
     await setBrushes([{ name: 'temperature anomaly', min: -10000, max: -25 }]);
     const cold = await answerAfter(n, 'a cold selection');
     console.log(`  cold: stallBy ${cold.state.features.stallBy}; '${cold.note}'`);
+    // The server's answer says what it timed the stalls by: the request carried the implied measure.
+    check(cold.f.stallBy === 'deepest', `a cold selection was answered with stalls by ${cold.f.stallBy}`);
     check(cold.state.features.stallBy === 'deepest' && cold.select === 'deepest' && /deepest/.test(cold.note) && /cold/.test(cold.note),
       `a cold selection is timed by ${cold.state.features.stallBy} (menu ${cold.select}); note '${cold.note}'`);
     check(cold.warning === null, `a selection without a depth brush warns: '${cold.warning}'`);
@@ -2522,6 +2524,7 @@ const cases = {
     n = await answers();
     await setBrushes([{ name: 'temperature anomaly', min: 25, max: 10000 }]);
     const hot = await answerAfter(n, 'a hot selection');
+    check(hot.f.stallBy === 'shallowest', `a hot selection was answered with stalls by ${hot.f.stallBy}`);
     check(hot.state.features.stallBy === 'shallowest' && /shallowest/.test(hot.note) && /hot/.test(hot.note),
       `a hot selection is timed by ${hot.state.features.stallBy}; note '${hot.note}'`);
     // Neither (a temperature range across 0): the mean depth.

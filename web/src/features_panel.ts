@@ -43,7 +43,8 @@ function fmtVolume(v: number): string {
   return v.toExponential(2);
 }
 
-type StallBy = 'mean-depth' | 'deepest' | 'shallowest';
+// The measures the server times stalls by (the protocol's FeatureSeries.stallBy).
+type StallBy = FeatureSeries['stallBy'];
 const kStallByWords: Record<StallBy, string> = {
   'mean-depth': 'mean depth', deepest: 'deepest point (the slab\'s tip)', shallowest: 'shallowest point (the plume\'s head)',
 };
@@ -340,7 +341,7 @@ export class FeaturesPanel {
   }
 
   private stallMyr(t: FeatureTrack): number {
-    return t.stalls.reduce((a, s) => Math.max(a, s.durationMyr), -1);
+    return this.stallsShown(t).reduce((a, s) => Math.max(a, s.durationMyr), -1);
   }
 
   // The stalls worth a line: a track that only crossed a depth within one step (0 Myr) did not stall.
@@ -359,7 +360,7 @@ export class FeaturesPanel {
     if (!f) return;
     const value = (t: FeatureTrack): number => {
       switch (this.sort.key) {
-        case 'stallMyr': return this.stallsShown(t).reduce((a, s) => Math.max(a, s.durationMyr), -1);
+        case 'stallMyr': return this.stallMyr(t);
         case 'events': return this.eventCount(t.track);
         default: return t[this.sort.key];
       }
