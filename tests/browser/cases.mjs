@@ -2484,6 +2484,190 @@ const cases = {
     await page.waitForFunction(() => document.getElementById('viewNote').hidden, null, { timeout: 5000 })
       .catch(() => { throw new TestFailure('choosing a variable left the preset\'s note on the view'); });
   },
+
+  // Issue 47, stalls that answer the question (docs/features.md, "In the UI"): the stall measure a
+  // selection implies when none was chosen (cold → the tip, hot → the head, else the mean depth),
+  // said in the panel and sent with the request; a warning when the selection brushes depth; every
+  // stall cell with its units on one line and no zero-length stall; the legend names the track id
+  // the table names.
+  async stalls({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    // A document with these brushes that names no stall measure (as the presets): the page picks one.
+    const setBrushes = (b) => page.evaluate((brushes) => {
+      const s = window.__raypc.state();
+      const { stallBy: _, ...features } = s.features;
+      window.__raypc.setState({ ...s, step: 0, brushes, features });
+    }, b);
+    // Waits for an answer to a request asked after `n` answers, and returns it with the state then.
+    const answerAfter = async (n, what) => {
+      await page.waitForFunction((k) => window.__raypc.featureAnswers.length > k && window.__raypc.featureAnswers.at(-1), n, { timeout: 30000 })
+        .catch(async () => { throw new TestFailure(`${what}: no features; note: ${await page.textContent('#featuresNote')}; errors: ${await page.evaluate(() => window.__raypc.errors.join('; '))}`); });
+      return page.evaluate(() => ({ f: window.__raypc.featureAnswers.at(-1), state: window.__raypc.state(),
+        note: document.getElementById('featuresStallNote').textContent, select: document.getElementById('featuresStallBy').value,
+        warning: document.getElementById('featuresDepthWarning').hidden ? null : document.getElementById('featuresDepthWarning').textContent }));
+    };
+    const answers = () => page.evaluate(() => window.__raypc.featureAnswers.length);
+    await page.click('#featuresDetails summary');
+
+    // Cold material alone (temperature anomaly entirely below 0): the slabs' tip times the stalls.
+    let n = await answers();
+    await setBrushes([{ name: 'temperature anomaly', min: -10000, max: -25 }]);
+    const cold = await answerAfter(n, 'a cold selection');
+    console.log(`  cold: stallBy ${cold.state.features.stallBy}; '${cold.note}'`);
+    // The server's answer says what it timed the stalls by: the request carried the implied measure.
+    check(cold.f.stallBy === 'deepest', `a cold selection was answered with stalls by ${cold.f.stallBy}`);
+    check(cold.state.features.stallBy === 'deepest' && cold.select === 'deepest' && /deepest/.test(cold.note) && /cold/.test(cold.note),
+      `a cold selection is timed by ${cold.state.features.stallBy} (menu ${cold.select}); note '${cold.note}'`);
+    check(cold.warning === null, `a selection without a depth brush warns: '${cold.warning}'`);
+    // Hot material alone: the plumes' head.
+    n = await answers();
+    await setBrushes([{ name: 'temperature anomaly', min: 25, max: 10000 }]);
+    const hot = await answerAfter(n, 'a hot selection');
+    check(hot.f.stallBy === 'shallowest', `a hot selection was answered with stalls by ${hot.f.stallBy}`);
+    check(hot.state.features.stallBy === 'shallowest' && /shallowest/.test(hot.note) && /hot/.test(hot.note),
+      `a hot selection is timed by ${hot.state.features.stallBy}; note '${hot.note}'`);
+    // Neither (a temperature range across 0): the mean depth.
+    n = await answers();
+    await setBrushes([{ name: 'temperature anomaly', min: -25, max: 25 }]);
+    const mixed = await answerAfter(n, 'a selection across 0');
+    check(mixed.state.features.stallBy === 'mean-depth' && /mean depth/.test(mixed.note),
+      `a selection across 0 is timed by ${mixed.state.features.stallBy}; note '${mixed.note}'`);
+
+    // The selection brushes depth: a warning that stalls near its ends are the brush's.
+    n = await answers();
+    const task1 = [{ name: 'depth', min: 560, max: 760 }, { name: 'temperature anomaly', min: -10000, max: -25 }];
+    await setBrushes(task1);
+    const brushed = await answerAfter(n, 'a selection brushing depth');
+    const visible = await page.isVisible('#featuresDepthWarning');
+    console.log(`  depth brushed: '${brushed.warning}'`);
+    check(visible && brushed.warning !== null && /depth 560–760 km/.test(brushed.warning) && /artefact/.test(brushed.warning),
+      `no visible warning that the selection brushes depth: '${brushed.warning}' (visible ${visible})`);
+
+    // The user's choice stays when the brushes change in the page (a drag).
+    n = await answers();
+    await setBrushes([{ name: 'temperature anomaly', min: -10000, max: -25 }]);
+    await answerAfter(n, 'the cold selection again');
+    n = await answers();
+    await page.selectOption('#featuresStallBy', 'shallowest');
+    const chosen = await answerAfter(n, 'choosing the shallowest point');
+    check(chosen.state.features.stallBy === 'shallowest' && /your choice/.test(chosen.note) && /implies the deepest/.test(chosen.note),
+      `the choice of the shallowest point: ${chosen.state.features.stallBy}, '${chosen.note}'`);
+    n = await answers();
+    await brushAxis(page, 'lat', 0.05, 0.6);
+    const dragged = await answerAfter(n, 'a brush dragged after the choice');
+    check(dragged.state.brushes.length === 2 && dragged.state.features.stallBy === 'shallowest',
+      `after a drag (brushes ${JSON.stringify(dragged.state.brushes.map((b) => b.name))}) the chosen measure gave way to ${dragged.state.features.stallBy}`);
+
+    // A loaded document naming the default measure follows its selection again.
+    n = await answers();
+    await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, step: 0, features: { ...s.features, stallBy: 'mean-depth' },
+      brushes: [{ name: 'depth', min: 0, max: 660 }, { name: 'lat', min: -90, max: -60 }, { name: 'lat', min: 60, max: 90 }] }); });
+    const caps = await answerAfter(n, 'the polar caps');
+    check(caps.state.features.stallBy === 'mean-depth' && !/your choice/.test(caps.note), `the polar caps: ${caps.state.features.stallBy}, '${caps.note}'`);
+    // The caps do not move: timed at their own mean depth (from the answer) they stall there through
+    // the series; the default depths are kept to give stalls of other lengths, 0 among them maybe.
+    const own = [...new Set(caps.f.tracks.map((t) => Math.round(t.meanDepthKm)))];
+    n = await answers();
+    await page.evaluate((depthsKm) => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, features: { ...s.features, depthsKm } }); },
+      [...own, ...caps.state.features.depthsKm].sort((a, b) => a - b));
+    const timed = await answerAfter(n, 'the polar caps timed at their depths');
+
+    // Every stall cell: "DEPTH km: T Myr", one line each, no zero-length stall; as many as the answer
+    // has stalls longer than 0.
+    const cells = await page.$$eval('#featuresTable td.stalls span.stall', (spans) => spans.map((e) => ({
+      text: e.textContent, lines: e.getClientRects().length, height: e.getBoundingClientRect().height,
+      lineHeight: parseFloat(getComputedStyle(e).lineHeight) || 1.3 * parseFloat(getComputedStyle(e).fontSize), cut: e.scrollWidth > e.clientWidth + 1 })));
+    const stalls = timed.f.tracks.flatMap((t) => t.stalls);
+    const lasting = stalls.filter((s) => s.durationMyr > 0);
+    console.log(`  ${stalls.length} stalls (${lasting.length} longer than 0): ${cells.map((c) => c.text).join(' | ')}`);
+    check(lasting.length > 0, `the polar caps' tracks have no stall to show (${JSON.stringify(stalls)})`);
+    check(cells.length === lasting.length, `${cells.length} stall lines in the table for ${lasting.length} stalls longer than 0 (${stalls.length} in all)`);
+    for (const c of cells) {
+      check(/^\d+(\.\d+)? km: \d+(\.\d)? Myr( [↓↑†])?$/.test(c.text) && !/: 0(\.0)? Myr/.test(c.text), `stall cell '${c.text}' without its units, or of 0 Myr`);
+      check(c.lines === 1 && c.height < 1.6 * c.lineHeight && !c.cut, `stall cell '${c.text}' wraps or is cut (${c.lines} boxes, ${c.height.toFixed(1)} px high)`);
+    }
+
+    // One id space: a chosen track is named by its id in the table, the legend and the highlight.
+    const f = timed.f;
+    const pick = f.tracks.find((t) => t.points.some((p) => p.step === 0 && p.feature !== t.track)) ?? f.tracks[0];
+    await page.click(`#featuresTable tr[data-track="${pick.track}"]`);
+    await page.waitForFunction(() => window.__raypc.state().features.highlight.length > 0, null, { timeout: 5000 });
+    await page.waitForFunction((id) => [...document.querySelectorAll('#legends .legendTitle')].some((e) => e.textContent.includes(`track ${id}`)), pick.track, { timeout: 5000 })
+      .catch(async () => { throw new TestFailure(`choosing track ${pick.track} (feature ${pick.points[0].feature} of step 0): the legend says ${JSON.stringify(await page.$$eval('#legends .legendTitle', (e) => e.map((x) => x.textContent)))}`); });
+    const legend = await page.$$eval('#legends .legendTitle', (e) => e.map((x) => x.textContent).join(' | '));
+    console.log(`  track ${pick.track} (feature ${pick.points[0].feature}): legend '${legend}'`);
+    check(!/highlighted feature/.test(legend), `the legend names a feature id: '${legend}'`);
+    const row = await page.textContent(`#featuresTable tr[data-track="${pick.track}"] td`);
+    check(row.trim() === String(pick.track), `the table's row of track ${pick.track} reads '${row}'`);
+  },
+
+  // Issue 47, stale labels: a preset's name leaves the status line once the brushes are no longer
+  // its own (Escape, a new brush); the note on the view of the colour variable goes while the view is
+  // coloured by feature; reloading a state with exactly the preset's brushes keeps the preset in force.
+  async preset_labels({ context, url, tmp }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const presets = await (await fetch(url + 'api/presets')).json();
+    const p = presets.find((x) => x.name === 'task1-slabs-660km');
+    check(p, `no preset task1-slabs-660km in ${presets.map((x) => x.name)}`);
+    const status = () => page.textContent('#status');
+    const apply = async () => {
+      await page.click(`#presets button[data-preset="${p.name}"]`);
+      await waitConverged(page);
+      check((await status()).includes(`preset ${p.title}`), `the status line does not name the preset: '${await status()}'`);
+    };
+    await apply();
+
+    // Coloured by feature, the note naming the colour variable goes; back to the variable, it returns.
+    check(await page.isVisible('#viewNote'), 'no note on the view after the preset');
+    await page.click('#featuresDetails summary');
+    await page.check('#featuresColorById');
+    await waitConverged(page);
+    const noteWhileFeatures = await page.isVisible('#viewNote') ? await page.textContent('#viewNote') : null;
+    check(noteWhileFeatures === null, `coloured by feature, the view still says '${noteWhileFeatures}'`);
+    await page.uncheck('#featuresColorById');
+    await waitConverged(page);
+    check(await page.isVisible('#viewNote'), 'coloured by the variable again, the note on the view did not return');
+
+    // Reloading a saved state with exactly the preset's brushes, while the preset is in force and
+    // after its brushes were cleared: the preset is in force, not "brushes changed since".
+    const file = join(tmp, 'task1.json');
+    writeFileSync(file, JSON.stringify(await rState(page)));
+    const reload = async (when) => {
+      await page.setInputFiles('#load', file);
+      await page.waitForFunction(() => document.getElementById('status').textContent.includes('loaded'), null, { timeout: 10000 });
+      await waitConverged(page);
+      const note = await page.textContent('#presetNote');
+      const active = await page.$$eval('#presets button.active', (b) => b.map((x) => x.dataset.preset));
+      console.log(`  reloaded ${when}: '${note}', active ${JSON.stringify(active)}`);
+      check(!/changed since/.test(note) && note.startsWith(p.title) && active.length === 1 && active[0] === p.name,
+        `reloading the preset's own brushes ${when}: '${note}', active ${JSON.stringify(active)}`);
+    };
+    await reload('with the preset in force');
+    await page.mouse.click(5, 5);
+    await page.keyboard.press('Escape');
+    await page.waitForFunction(() => /changed since/.test(document.getElementById('presetNote').textContent), null, { timeout: 5000 })
+      .catch(async () => { throw new TestFailure(`after Escape the preset note says '${await page.textContent('#presetNote')}'`); });
+    await reload('after Escape');
+
+    // Escape clears the brushes: the status line no longer names the preset.
+    await apply();
+    await page.mouse.click(5, 5);
+    await page.keyboard.press('Escape');
+    await page.waitForFunction(() => window.__raypc.state().brushes.length === 0, null, { timeout: 5000 });
+    await waitConverged(page);
+    check(!(await status()).includes(`preset ${p.title}`), `after Escape the status line still says '${await status()}'`);
+    check(/changed since/.test(await page.textContent('#presetNote')), `after Escape the preset note says '${await page.textContent('#presetNote')}'`);
+
+    // A new brush after the preset: the same.
+    await apply();
+    await brushAxis(page, 'temperature anomaly', 0.1, 0.3);
+    await waitConverged(page);
+    const brushes = (await rState(page)).brushes;
+    check(brushes.length !== p.state.brushes.length || JSON.stringify(brushes) !== JSON.stringify(p.state.brushes), `the drag left the preset's brushes ${JSON.stringify(brushes)}`);
+    check(!(await status()).includes(`preset ${p.title}`), `after a new brush the status line still says '${await status()}'`);
+  },
 };
 
 // Chromium context options per case (default: 1280x860 at devicePixelRatio 1).
@@ -2494,6 +2678,9 @@ const caseOptions = {
   series: { netcdf: true },
   play: { sampleRows: 20000 },
   first_view: { contextOptions: { viewport: { width: 1920, height: 1080 } } },
+  // Issue 47 asks for these at 1366x768 (the smallest screen it names).
+  stalls: { contextOptions: { viewport: { width: 1366, height: 768 } } },
+  preset_labels: { contextOptions: { viewport: { width: 1366, height: 768 } } },
 };
 
 const body = cases[caseName];

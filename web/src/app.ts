@@ -17,7 +17,7 @@ import { setUpScreenshot } from './screenshot';
 import { SelectionPanel } from './selection_panel';
 import { SlicePanel } from './slice_panel';
 import { watchSeriesProgress } from './series_progress';
-import { describePreset } from './presets';
+import { describePreset, sameBrushes } from './presets';
 import { normaliseState, type Brush, type RenderState } from './state';
 import { StateStore } from './store';
 import { TfPanel } from './tf_panel';
@@ -60,6 +60,8 @@ export class App {
   private sampleFailedAt = 0;
   private errorTimer = 0;
   private statusNote = '';
+  private viewNoteText = '';
+  private lastPreset: Preset | null = null; // the preset applied last, in force while its brushes are
   private linkedStates: Promise<void> = Promise.resolve(); // the linked states being applied, in order
   private shellKey: ShellKeyEntry[] = []; // the reference shells the last frame shown drew
 
@@ -233,6 +235,7 @@ export class App {
 
   loadState(s: unknown): void {
     const prev = this.store.replace(s);
+    this.features.stateLoaded(s);
     this.showViewNote(''); // a preset shows its own after loading
     const state = this.store.state;
     this.syncControls();
@@ -274,6 +277,7 @@ export class App {
       this.store.autoFitImage = true;
       if (this.fitImage()) this.commit(false);
     }
+    this.presetLeft(); // a document with the last preset's brushes puts it back in force
     this.setStatusNote(asked > last
       ? `loaded ${what}: written for step ${asked}, this dataset ends at step ${last}, shown`
       : `loaded ${what}`);
@@ -284,6 +288,7 @@ export class App {
   commit(interactive: boolean): void {
     this.link.send(interactive);
     this.updateLegends();
+    this.updateViewNote();
     this.slices.stateChanged();
     if (interactive) return;
     writeStateToUrl(this.store);
@@ -389,10 +394,8 @@ export class App {
       const fit = this.store.autoFitImage;
       this.loadState(doc);
       this.store.autoFitImage = fit;
-      for (const b of document.querySelectorAll<HTMLButtonElement>('#presets button'))
-        b.classList.toggle('active', b.dataset.preset === p.name);
-      const note = describePreset(this.store.state, this.store.axes());
-      $('presetNote').textContent = `${p.title}: ${note}${asked > last ? ` (written for step ${asked}; this dataset ends at step ${last})` : ''}`;
+      this.lastPreset = p;
+      this.showPresetInForce(p);
       this.setStatusNote(`preset ${p.title}`);
       // The colouring on the view itself: a preset may switch the colour variable (task 1 colours
       // by radial velocity), which the picture alone does not tell.
@@ -403,6 +406,16 @@ export class App {
     } catch (e) {
       this.showError(`preset ${p.name}: ${(e as Error).message}`);
     }
+  }
+
+  // The preset's button highlighted and its one-line description under the buttons.
+  private showPresetInForce(p: Preset): void {
+    for (const b of document.querySelectorAll<HTMLButtonElement>('#presets button'))
+      b.classList.toggle('active', b.dataset.preset === p.name);
+    const last = this.info.steps.length - 1;
+    const asked = typeof (p.state as { step?: unknown }).step === 'number' ? (p.state as { step: number }).step : 0;
+    const note = describePreset(this.store.state, this.store.axes());
+    $('presetNote').textContent = `${p.title}: ${note}${asked > last ? ` (written for step ${asked}; this dataset ends at step ${last})` : ''}`;
   }
 
   // ---- view size ---------------------------------------------------------------------------
@@ -487,19 +500,36 @@ export class App {
 
   // The brushes no longer are a preset's: its button is no longer highlighted, and its note (which
   // lists its brushes) says that the selection was changed.
+  // Brushes that are the preset's own (a saved state of it loaded again, the parallel coordinates
+  // setting them back) leave it in force, or put it back in force: only a different selection is a
+  // change.
   private presetLeft(): void {
+    const last = this.lastPreset;
+    if (last && sameBrushes((last.state as { brushes?: Brush[] }).brushes ?? [], this.store.state.brushes)) {
+      this.showPresetInForce(last);
+      return;
+    }
     const active = document.querySelector<HTMLButtonElement>('#presets button.active');
     if (!active) return;
     active.classList.remove('active');
     $('presetNote').textContent = `${active.textContent}: brushes changed since (no preset in force)`;
+    // The status line's "preset TITLE" named the selection in force; it is no longer.
+    if (this.statusNote === `preset ${active.textContent}`) this.setStatusNote('');
     this.showViewNote('');
   }
 
   // The note over the 3D view (#viewNote): what a preset coloured the volume by; '' hides it.
+  // While the view is coloured by feature (features.colorById) the colour variable is not what the
+  // view shows, so the note is hidden until the view is coloured by the variable again.
   private showViewNote(text: string): void {
+    this.viewNoteText = text;
+    this.updateViewNote();
+  }
+
+  private updateViewNote(): void {
     const note = $('viewNote');
-    note.textContent = text;
-    note.hidden = text === '';
+    note.textContent = this.viewNoteText;
+    note.hidden = this.viewNoteText === '' || (this.store.state.features.colorById && this.store.state.brushes.length > 0);
   }
 
   private onBrush(brushes: Brush[], interactive: boolean): void {

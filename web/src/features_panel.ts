@@ -12,7 +12,10 @@ import { plotFrame } from './stats_plot';
 import { cloneState, type RenderState } from './state';
 import type { StateStore } from './store';
 import type { LegendEntry } from './context_panel';
-import { derivedVariable } from './names';
+import { derivedVariable, shellAnomaly, temperatureAnomalyName, temperatureSources } from './names';
+import type { Brush } from './state';
+import { fmt } from './selection_panel';
+import { displayUnits } from './units';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
 // The flux is that of the radial velocity (raypc flux).
@@ -40,6 +43,46 @@ function fmtVolume(v: number): string {
   return v.toExponential(2);
 }
 
+// The measures the server times stalls by (the protocol's FeatureSeries.stallBy).
+type StallBy = FeatureSeries['stallBy'];
+const kStallByWords: Record<StallBy, string> = {
+  'mean-depth': 'mean depth', deepest: 'deepest point (the slab\'s tip)', shallowest: 'shallowest point (the plume\'s head)',
+};
+
+// A stall's time as a cell shows it: whole Myr, or one decimal below 10 Myr so that a short stall
+// never reads "0".
+function fmtMyr(myr: number): string {
+  return myr < 10 ? myr.toFixed(1) : myr.toFixed(0);
+}
+
+// The measure a selection implies for timing stalls, and why: a selection of cold material (every
+// brush on a temperature axis entirely below its reference: 0 for an anomaly, the server's global
+// mean for a stored temperature) is of sinking slabs, whose tip reaches a depth first and stalls
+// there while their mean depth is still above it; a hot one is of rising plumes, led by their head.
+// Anything else (no temperature brush, both or neither side) keeps the mean depth.
+export function impliedStallBy(brushes: readonly Brush[], variables: readonly { name: string; mean: number; units: string }[]):
+  { stallBy: StallBy; why: string } {
+  const sides = new Set<'cold' | 'hot' | 'mixed'>();
+  const said: string[] = [];
+  for (const b of brushes) {
+    const isAnomaly = b.name === temperatureAnomalyName
+      || temperatureSources.some((t) => b.name === t + shellAnomaly.suffix || b.name === t + shellAnomaly.percentSuffix);
+    const v = variables.find((x) => x.name === b.name);
+    if (!v || !(isAnomaly || temperatureSources.includes(b.name))) continue;
+    const reference = isAnomaly ? 0 : v.mean;
+    const units = v.units ? ` ${displayUnits(v.units)}` : '';
+    const below = isAnomaly ? '0' : `its global mean ${fmt(v.mean)}${units}`;
+    if (b.max <= reference) { sides.add('cold'); said.push(`${b.name} ≤ ${fmt(b.max)}${units}, below ${below}`); }
+    else if (b.min >= reference) { sides.add('hot'); said.push(`${b.name} ≥ ${fmt(b.min)}${units}, above ${below}`); }
+    else sides.add('mixed');
+  }
+  if (sides.size === 1 && sides.has('cold'))
+    return { stallBy: 'deepest', why: `the selection is cold (${said.join('; ')}): sinking slabs, timed by their tip` };
+  if (sides.size === 1 && sides.has('hot'))
+    return { stallBy: 'shallowest', why: `the selection is hot (${said.join('; ')}): rising plumes, timed by their head` };
+  return { stallBy: 'mean-depth', why: sides.size ? 'the selection is neither only cold nor only hot' : 'the selection brushes no temperature' };
+}
+
 export class FeaturesPanel {
   observer: FeaturesPanelObserver | null = null;
   result: FeatureSeries | null = null;
@@ -52,6 +95,9 @@ export class FeaturesPanel {
   private ticker = 0;
   private sort: { key: SortKey; descending: boolean } = { key: 'maxVolumeKm3', descending: true };
   private timeDepthUrl = '';
+  // Whether the stall measure is the user's (chosen under "stall by", or named by a loaded state
+  // that differs from what its selection implies); else features.stallBy follows the selection.
+  private stallChosen = false;
 
   constructor(private readonly store: StateStore, private readonly host: FeaturesPanelHost) {
     $('featuresDetails').addEventListener('toggle', () => this.refresh());
@@ -87,10 +133,14 @@ export class FeaturesPanel {
       s.minVolumeKm3 = minVolume;
       s.bandHalfWidthKm = band;
       s.depthsKm = depths;
-      s.stallBy = $<HTMLSelectElement>('featuresStallBy').value as typeof s.stallBy;
       this.host.commit(false);
     };
-    for (const id of ['featuresMinVolume', 'featuresBand', 'featuresDepths', 'featuresStallBy']) $(id).addEventListener('change', settings);
+    for (const id of ['featuresMinVolume', 'featuresBand', 'featuresDepths']) $(id).addEventListener('change', settings);
+    $('featuresStallBy').addEventListener('change', () => {
+      this.stallChosen = true;
+      this.store.state.features.stallBy = $<HTMLSelectElement>('featuresStallBy').value;
+      this.host.commit(false);
+    });
     for (const [id, what] of [['featuresTracksCsv', 'tracks'], ['featuresEventsCsv', 'events'], ['featuresStallsCsv', 'stalls'], ['featuresFluxCsv', 'flux']] as const)
       $(id).addEventListener('click', () => this.exportCsv(what));
     $('featuresTimeDepthCsv').addEventListener('click', () => {
@@ -134,6 +184,42 @@ export class FeaturesPanel {
     $<HTMLInputElement>('featuresBand').value = String(s.bandHalfWidthKm);
     $<HTMLInputElement>('featuresDepths').value = s.depthsKm.join(', ');
     $<HTMLSelectElement>('featuresStallBy').value = s.stallBy;
+    this.showStallMeasure();
+  }
+
+  // A state was loaded (a file, a preset, a link, the URL): a document whose features.stallBy is
+  // neither the default nor what its selection implies was chosen, and keeps it; otherwise the
+  // measure follows the selection. A document that names the default cannot be told from one that
+  // names none (a preset written before stallBy existed, a saved state of the first view), so the
+  // default counts as not chosen.
+  stateLoaded(doc: unknown): void {
+    const named = (doc as { features?: { stallBy?: unknown } } | null)?.features?.stallBy;
+    this.stallChosen = typeof named === 'string' && named !== this.store.defaults.features.stallBy
+      && named !== impliedStallBy(this.store.state.brushes, this.store.info.variables).stallBy;
+  }
+
+  // Sets features.stallBy to what the selection implies unless the user chose one (called before the
+  // features are asked for, so that the request and a saved state carry the measure used), and says
+  // in the panel which measure times the stalls and why; warns when the selection brushes depth.
+  private showStallMeasure(): void {
+    const s = this.store.state;
+    const implied = impliedStallBy(s.brushes, this.store.info.variables);
+    if (!this.stallChosen && s.features.stallBy !== implied.stallBy) {
+      s.features.stallBy = implied.stallBy;
+      $<HTMLSelectElement>('featuresStallBy').value = implied.stallBy;
+    }
+    const by = s.features.stallBy as StallBy;
+    $('featuresStallNote').textContent = this.stallChosen
+      ? `stalls timed by the ${kStallByWords[by] ?? by}: your choice${by === implied.stallBy ? '' : ` (the selection implies the ${kStallByWords[implied.stallBy]}: ${implied.why})`}`
+      : `stalls timed by the ${kStallByWords[by]}: ${implied.why}; choose another under "stall by"`;
+    // A brush on depth cuts every feature at its ends: a track whose tip or head reaches a brushed
+    // end stays there, and reads as a stall at any depth of the band near it.
+    const depth = s.brushes.filter((b) => b.name === 'depth' || b.name === 'radius');
+    const warning = $('featuresDepthWarning');
+    warning.hidden = depth.length === 0;
+    warning.textContent = depth.length
+      ? `⚠ The selection brushes ${depth.map((b) => `${b.name} ${fmt(b.min)}–${fmt(b.max)} km`).join(' and ')}: stalls at depths near the brush's ends are an artefact of the brush (features are cut there). Clear the ${depth[0].name} brush to time real stalls.`
+      : '';
   }
 
   private open(): boolean {
@@ -152,6 +238,7 @@ export class FeaturesPanel {
       $('featuresNote').textContent = 'Brush an axis: its connected regions are followed through the series here.';
       return;
     }
+    this.showStallMeasure();
     const of = $<HTMLSelectElement>('featuresTimeDepthOf').value;
     const { highlight: _h, colorById: _c, ...settings } = state.features; // painting asks nothing new
     const key = JSON.stringify([state.brushes, settings, of]);
@@ -254,7 +341,12 @@ export class FeaturesPanel {
   }
 
   private stallMyr(t: FeatureTrack): number {
-    return t.stalls.reduce((a, s) => Math.max(a, s.durationMyr), -1);
+    return this.stallsShown(t).reduce((a, s) => Math.max(a, s.durationMyr), -1);
+  }
+
+  // The stalls worth a line: a track that only crossed a depth within one step (0 Myr) did not stall.
+  private stallsShown(t: FeatureTrack): FeatureTrack['stalls'] {
+    return t.stalls.filter((s) => s.durationMyr > 0);
   }
 
   private eventCount(track: number): number {
@@ -281,7 +373,7 @@ export class FeaturesPanel {
       ['lifetimeMyr', 'Myr', 'lifetime, Myr'],
       ['maxVolumeKm3', 'max km³', 'largest volume, km³'],
       ['meanDepthKm', 'depth km', 'mean over its steps of its mean depth, km'],
-      ['stallMyr', 'stalls', 'time at each depth (its stall-by depth within the band), Myr, and how it left (↓ down, ↑ up, † ended)'],
+      ['stallMyr', 'stalls', 'time at each depth (its stall-by depth within the band), and how it left (↓ down, ↑ up, † ended)'],
       ['events', 'events', 'births, deaths, merges and splits of this track'],
     ];
     for (const [key, text, title] of columns) {
@@ -304,7 +396,7 @@ export class FeaturesPanel {
         t.lifetimeMyr.toFixed(1),
         fmtVolume(t.maxVolumeKm3),
         t.meanDepthKm.toFixed(0),
-        t.stalls.map((s) => `${s.depthKm}: ${s.durationMyr.toFixed(0)}${arrow[s.left] ?? ''}`).join(', '),
+        '', // the stalls, one line each (below)
         events.join(', '),
       ];
       for (const c of cells) {
@@ -312,13 +404,21 @@ export class FeaturesPanel {
         td.textContent = c;
         tr.appendChild(td);
       }
+      const stallCell = tr.children[5] as HTMLElement;
+      stallCell.classList.add('stalls');
+      for (const st of this.stallsShown(t)) {
+        const span = document.createElement('span');
+        span.className = 'stall';
+        span.textContent = `${st.depthKm} km: ${fmtMyr(st.durationMyr)} Myr${arrow[st.left] ?? ''}`;
+        stallCell.appendChild(span);
+      }
       // The colour the 3D view paints the track's feature of the current step in (features.colorById).
       const now = t.points.find((p) => p.step === this.store.state.step);
       const swatch = tr.firstElementChild as HTMLElement;
       if (now) {
         const [r, g, b] = this.store.info.featurePalette[(now.feature - 1) % 10 + 1].map((c) => Math.round(255 * c));
         swatch.style.borderLeft = `6px solid rgb(${r},${g},${b})`;
-        swatch.title = `feature ${now.feature} of step ${now.step}: this colour in the 3D view when coloured by feature`;
+        swatch.title = `track ${t.track} (its feature ${now.feature} of step ${now.step}): this colour in the 3D view when coloured by feature`;
       }
       tr.title = `track ${t.track}: hover to highlight its feature of this step in the 3D view, click to show it from its first step`;
       table.appendChild(tr);
@@ -357,11 +457,18 @@ export class FeaturesPanel {
     const s = this.store.state, f = s.features;
     if (!s.brushes.length || (!f.colorById && !f.highlight.length)) return null;
     const slot = (k: number) => this.store.info.featurePalette[k] as [number, number, number];
+    // The table's id space: the highlight is sent as the step's feature ids (what the renderer
+    // paints), but the reader chose a track, so the legend names the track; a highlight from a loaded
+    // state with no track behind it names its features of the step.
+    const track = this.hoverTrack ?? this.selectedTrack;
+    const what = track !== null && f.highlight.length
+      ? `track ${track}`
+      : `feature${f.highlight.length > 1 ? 's' : ''} ${f.highlight.join(', ')} of step ${s.step}`;
     if (f.colorById)
-      return { title: `features by id (colours repeat every 10)${f.highlight.length ? `; highlighted: ${f.highlight.join(', ')}` : ''}; grey: the rest of the selection`,
+      return { title: `features by id (colours repeat every 10; the table's colour marks give each track's)${f.highlight.length ? `; highlighted: ${what}` : ''}; grey: the rest of the selection`,
         colorAt: (u) => slot(1 + Math.min(9, Math.floor(u * 10))), valueAt: (u) => 1 + Math.round(u * 9),
         ticks: Array.from({ length: 10 }, (_, k) => ({ at: (k + 0.5) / 10, text: String(k + 1) })) };
-    return { title: `highlighted feature${f.highlight.length > 1 ? 's' : ''} ${f.highlight.join(', ')} (amber); grey: the rest of the selection`,
+    return { title: `highlighted ${what} (amber); grey: the rest of the selection`,
       colorAt: (u) => slot(u < 0.5 ? 0 : 11), valueAt: (u) => (u < 0.5 ? 0 : f.highlight[0]),
       ticks: [{ at: 0.25, text: 'rest' }, { at: 0.75, text: 'highlighted' }] };
   }
@@ -424,7 +531,7 @@ export class FeaturesPanel {
       .attr('d', d3.line<(typeof t.points)[number]>().x((p) => x(p.timeMyr)).y((p) => vs(p.volumeKm3) as number));
     g.selectAll('circle.point').data(t.points).enter().append('circle').attr('class', 'point')
       .attr('cx', (p) => x(p.timeMyr)).attr('cy', (p) => y(p.meanDepthKm)).attr('r', 2.2).attr('fill', '#8ab4f8')
-      .append('title').text((p) => `step ${p.step}, ${p.timeMyr.toFixed(1)} Myr: feature ${p.feature}, mean depth ${p.meanDepthKm.toFixed(0)} km (${p.topDepthKm.toFixed(0)}–${p.bottomDepthKm.toFixed(0)}), ${p.volumeKm3.toExponential(2)} km³${p.radialVelocityCmPerYr === null ? '' : `, v_r ${p.radialVelocityCmPerYr.toFixed(2)} cm/yr`}`);
+      .append('title').text((p) => `step ${p.step}, ${p.timeMyr.toFixed(1)} Myr: track ${t.track} (feature ${p.feature} of the step), mean depth ${p.meanDepthKm.toFixed(0)} km (${p.topDepthKm.toFixed(0)}–${p.bottomDepthKm.toFixed(0)}), ${p.volumeKm3.toExponential(2)} km³${p.radialVelocityCmPerYr === null ? '' : `, v_r ${p.radialVelocityCmPerYr.toFixed(2)} cm/yr`}`);
     const cur = f.steps.find((s) => s.step === this.store.state.step);
     if (cur) g.append('line').attr('x1', x(cur.timeMyr)).attr('x2', x(cur.timeMyr)).attr('y1', 0).attr('y2', ih).attr('stroke', '#ffcc4d').attr('stroke-dasharray', '3,2');
     g.append('text').attr('x', iw + 44).attr('y', -kMargin.top).attr('dominant-baseline', 'hanging').attr('text-anchor', 'end')

@@ -33,3 +33,8 @@ export const shortTitles: ReadonlyMap<string, string> = new Map(
 // The rule of the shell anomalies every stored variable X gives (computed when read): 'X anomaly'
 // in X's units and, where its shell means are positive, 'X anomaly %'.
 export const shellAnomaly: { suffix: string; percentSuffix: string; percentUnits: string } = table.shellAnomaly;
+// The temperatures a selection can be cold or hot in (features' default stall measure): the
+// derived temperature anomaly and the stored temperatures it is derived from ('from').
+export const temperatureAnomalyName: string = derivedVariable('temperatureAnomaly');
+export const temperatureSources: readonly string[] =
+  table.derivedVariables.find((v) => v.key === 'temperatureAnomaly')?.from ?? [];

@@ -2,7 +2,7 @@
 // its brushes select, and the step it shows, in the units of the axes.
 import type { AxisInfo } from './parcoords';
 import { fmt } from './selection_panel';
-import { rangesByName, type RenderState } from './state';
+import { rangesByName, type Brush, type RenderState } from './state';
 import { displayUnits } from './units';
 
 // A range as a reader says it: an end beyond the axis's data is open ("≤ -25", "≥ 100"), not the
@@ -27,4 +27,18 @@ export function describePreset(s: RenderState, axes: AxisInfo[]): string {
   else parts.push('no brushes');
   if (s.pathlines?.visible) parts.push(`pathlines of the last ${s.pathlines.window} steps`);
   return parts.join('; ');
+}
+
+// Whether two selections are the same brushes (in any order; ends equal to a millionth of their
+// size, as a saved and reloaded document or the parallel coordinates may round them).
+export function sameBrushes(a: readonly Brush[], b: readonly Brush[]): boolean {
+  if (a.length !== b.length) return false;
+  const near = (x: number, y: number) => Math.abs(x - y) <= 1e-6 * Math.max(1, Math.abs(x), Math.abs(y));
+  const left = [...b];
+  return a.every((p) => {
+    const i = left.findIndex((q) => q.name === p.name && near(q.min, p.min) && near(q.max, p.max));
+    if (i < 0) return false;
+    left.splice(i, 1);
+    return true;
+  });
 }
