@@ -26,7 +26,7 @@ runs=${3:-7}
 [[ -d $build/python/raypc ]] || { echo "no $build/python/raypc: build the _raypc target first" >&2; exit 1; }
 dataset=$work/demo/dataset
 state=$root/examples/task1-slabs-660km.json
-[[ -f $dataset/manifest.json ]] || "$raypc" demo --no-serve --dir "$work/demo" >/dev/null
+[[ -f $dataset/dataset.json ]] || "$raypc" demo --no-serve --dir "$work/demo" >/dev/null
 
 # python_features [ENV...]: "WALL CPU ROWS" of one open + features in python3.
 python_features() {
