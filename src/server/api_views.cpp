@@ -496,7 +496,16 @@ json infoJson(const dataset::Dataset& dataset, const ServerLimits& limits)
         const render::Rgb c = render::featurePaintColor(slot);
         palette.push_back({c.r, c.g, c.b});
     }
+    // The dataset by its directory's last two path components ("demo-data/dataset",
+    // "run42/spherical.raypc"): what a user recognises, without the absolute path (the UI may be remote).
+    std::error_code ec;
+    const fs::path dir = fs::weakly_canonical(dataset.dir(), ec);
+    const fs::path& known = ec ? dataset.dir() : dir;
+    const std::string name = known.parent_path().filename().empty()
+                                 ? known.filename().string()
+                                 : (known.parent_path().filename() / known.filename()).string();
     json info = {{"protocol", kProtocolVersion},
+            {"name", name},
             {"variables", variables},
             {"coordinates", coordinates},
             {"steps", steps},

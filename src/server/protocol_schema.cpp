@@ -195,6 +195,9 @@ const std::vector<Definition>& messages()
         d.push_back(message(
             "Info", "GET /api/info", "the dataset",
             {{"protocol", integer(""), fmt::format("the protocol's version ({})", kProtocolVersion)},
+             {"name", text(""),
+              "the dataset: its directory's last two path components (e.g. `demo-data/dataset`; no absolute "
+              "path, the UI may be remote)"},
              {"variables", arrayOf(ref("VariableInfo"), ""), "the variables, in the dataset's order"},
              {"coordinates", arrayOf(ref("CoordinateInfo"), ""), "the coordinates (grid/coordinates.h)"},
              {"steps",

@@ -5,7 +5,7 @@
 // Each case starts its own server and browser.
 import { readFileSync, writeFileSync } from 'node:fs';
 import { spawnSync } from 'node:child_process';
-import { join } from 'node:path';
+import { basename, dirname, join } from 'node:path';
 import { binaryHeader, check, meanAbsDiff, openUi, postJson, runCase, standardView, TestFailure, viewPixels, volumeOnly, waitConverged } from './harness.mjs';
 
 // A fourth argument `gpu` runs chromium with GPU rasterisation on a software GL (SwiftShader), as a
@@ -2419,9 +2419,14 @@ const cases = {
   // the picture: the 410 km ring spans most of the view's height), shows the legend with the
   // variable and the shells' key with each depth, draws the 410 and 660 km rings in colours of
   // their own (the key's), and a preset that switches the colour variable says so on the view.
-  async first_view({ context, url }) {
+  async first_view({ context, url, dataset }) {
     const page = await openUi(context, url);
     await waitConverged(page);
+    // The header names the dataset (/api/info's name: its directory's last two path components).
+    const name = `${basename(dirname(dataset))}/${basename(dataset)}`;
+    const header = await page.textContent('#dataset');
+    check(header.startsWith(`${name} · `), `the header says '${header}': expected the dataset's name ${name} first`);
+    check((await page.title()) === `RayPC · ${name}`, `the page's title '${await page.title()}' does not name ${name}`);
     const s = await rState(page);
     // The shells' colours as the server drew them (the frame header's key, the UI's legend).
     const shellKey = await page.evaluate(() => window.__raypc.headers.at(-1).shellKey ?? []);

@@ -59,7 +59,8 @@ export function download(blob: Blob, name: string): void {
 
 export function setUpControls(store: StateStore, host: ControlsHost): void {
   const info = store.info;
-  $('dataset').textContent = `${info.steps.length} steps · ${info.variables.length} variables · sample of ${info.sample.rows.toLocaleString()} points`;
+  $('dataset').textContent = `${info.name} · ${info.steps.length} steps · ${info.variables.length} variables · sample of ${info.sample.rows.toLocaleString()} points`;
+  document.title = `RayPC · ${info.name}`;
   // The cap on the still frame's longer side (a setting of this browser, not of the state).
   const maxSize = $<HTMLSelectElement>('maxSize');
   const savedMax = localStorage.getItem(kMaxSizeKey);
