@@ -148,8 +148,12 @@ def test_drop_variables_and_level(contest):
     assert coarse.sizes["radius"] == len(g1.r) and coarse.attrs["level"] == 1
     np.testing.assert_array_equal(coarse.temperature_anomaly.isel(time=2).sel(depth=660, method="nearest").values,
                                   contest.field("temperature anomaly", 2, level=1).values[:, nearest(g1.depth, 660), :])
-    with pytest.raises(raypc.Error, match=r"level: 7 out of range 0\.\.2"):
+    with pytest.raises(IndexError, match=r"level: 7 out of range 0\.\.2"):  # raypc.OutOfRangeError
         xr.open_dataset(contest.path, engine=ENGINE, level=7)
+    with pytest.raises(TypeError, match="level: expected an integer level of detail, not 1.5"):
+        xr.open_dataset(contest.path, engine=ENGINE, level=1.5)
+    with pytest.raises(KeyError, match="unknown variable 'pressure'"):  # raypc.UnknownNameError
+        contest.to_xarray(0, ["pressure"])
     with pytest.raises(raypc.Error, match="unknown variable 'pressure'"):
         contest.to_xarray(0, ["pressure"])
     with pytest.raises(raypc.Error, match=r"read_box: r index range 3\.\.3 is empty"):

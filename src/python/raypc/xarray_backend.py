@@ -27,7 +27,7 @@ import xarray as xr
 from xarray.backends import BackendArray, BackendEntrypoint
 from xarray.core import indexing
 
-from ._raypc import Error
+from ._raypc import Error, OutOfRangeError
 from .names import cf_names
 
 if TYPE_CHECKING:
@@ -92,9 +92,9 @@ def open_raypc_dataset(dataset: "Dataset", variables: Optional[Iterable[str]] = 
     """The lazy whole-series Dataset of a :class:`raypc.Dataset` (see the module's text).
     ``variables``/``drop_variables``: names, display or CF, to keep or to leave out."""
     if isinstance(level, bool) or not isinstance(level, (int, np.integer)):
-        raise Error(f"level: expected an integer level of detail, not {level!r}")
+        raise TypeError(f"level: expected an integer level of detail, not {level!r}")
     if not 0 <= level < len(dataset.levels):
-        raise Error(f"level: {level} out of range 0..{len(dataset.levels) - 1}")
+        raise OutOfRangeError(f"level: {level} out of range 0..{len(dataset.levels) - 1}")
     level = int(level)
     display = [v.name for v in dataset.variables]
     cf = cf_names(display)
@@ -157,7 +157,7 @@ class RaypcBackendEntrypoint(BackendEntrypoint):
         from .dataset import Dataset  # here: the dataset module imports this one
 
         if not isinstance(filename_or_obj, (str, os.PathLike)):
-            raise Error(f"raypc engine: expected the path of a RayPC dataset directory, not {type(filename_or_obj).__name__}")
+            raise TypeError(f"raypc engine: expected the path of a RayPC dataset directory, not {type(filename_or_obj).__name__}")
         dataset = Dataset(filename_or_obj)
         return open_raypc_dataset(dataset, level=level, drop_variables=drop_variables)
 
