@@ -2582,7 +2582,9 @@ const cases = {
     // has stalls longer than 0.
     const cells = await page.$$eval('#featuresTable td.stalls span.stall', (spans) => spans.map((e) => ({
       text: e.textContent, lines: e.getClientRects().length, height: e.getBoundingClientRect().height,
-      lineHeight: parseFloat(getComputedStyle(e).lineHeight) || 1.3 * parseFloat(getComputedStyle(e).fontSize), cut: e.scrollWidth > e.clientWidth + 1 })));
+      lineHeight: parseFloat(getComputedStyle(e).lineHeight) || 1.3 * parseFloat(getComputedStyle(e).fontSize), cut: e.scrollWidth > e.clientWidth + 1,
+      // Seen without scrolling sideways: inside the side panel (at 1366 px the table once ran past it).
+      outside: e.getBoundingClientRect().right > document.getElementById('side').getBoundingClientRect().right })));
     const stalls = timed.f.tracks.flatMap((t) => t.stalls);
     const lasting = stalls.filter((s) => s.durationMyr > 0);
     console.log(`  ${stalls.length} stalls (${lasting.length} longer than 0): ${cells.map((c) => c.text).join(' | ')}`);
@@ -2591,6 +2593,7 @@ const cases = {
     for (const c of cells) {
       check(/^\d+(\.\d+)? km: \d+(\.\d)? Myr( [↓↑†])?$/.test(c.text) && !/: 0(\.0)? Myr/.test(c.text), `stall cell '${c.text}' without its units, or of 0 Myr`);
       check(c.lines === 1 && c.height < 1.6 * c.lineHeight && !c.cut, `stall cell '${c.text}' wraps or is cut (${c.lines} boxes, ${c.height.toFixed(1)} px high)`);
+      check(!c.outside, `stall cell '${c.text}' lies past the side panel's right edge: the table is wider than the panel`);
     }
 
     // One id space: a chosen track is named by its id in the table, the legend and the highlight.
