@@ -2584,7 +2584,10 @@ const cases = {
       text: e.textContent, lines: e.getClientRects().length, height: e.getBoundingClientRect().height,
       lineHeight: parseFloat(getComputedStyle(e).lineHeight) || 1.3 * parseFloat(getComputedStyle(e).fontSize), cut: e.scrollWidth > e.clientWidth + 1,
       // Seen without scrolling sideways: inside the side panel (at 1366 px the table once ran past it).
-      outside: e.getBoundingClientRect().right > document.getElementById('side').getBoundingClientRect().right })));
+      outside: (() => {  // the side panel's content box: its scroll bar hides what lies under it
+        const side = document.getElementById('side');
+        return e.getBoundingClientRect().right > side.getBoundingClientRect().left + side.clientLeft + side.clientWidth;
+      })() })));
     const stalls = timed.f.tracks.flatMap((t) => t.stalls);
     const lasting = stalls.filter((s) => s.durationMyr > 0);
     console.log(`  ${stalls.length} stalls (${lasting.length} longer than 0): ${cells.map((c) => c.text).join(' | ')}`);

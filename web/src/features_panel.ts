@@ -368,13 +368,14 @@ export class FeaturesPanel {
     const tracks = [...f.tracks].sort((a, b) => (this.sort.descending ? value(b) - value(a) : value(a) - value(b)) || a.track - b.track);
     const head = document.createElement('tr');
     const columns: [SortKey, string, string][] = [
+      // The stalls next to the track's id: the answer a task reads stays in sight in a narrow panel.
       ['track', 'track', 'track id'],
+      ['stallMyr', 'stalls', 'time at each depth (its stall-by depth within the band), and how it left (↓ down, ↑ up, † ended)'],
       ['firstStep', 'steps', 'first and last step'],
       ['lifetimeMyr', 'Myr', 'lifetime, Myr'],
       ['maxVolumeKm3', 'max km³', 'largest volume, km³'],
       ['meanDepthKm', 'depth km', 'mean over its steps of its mean depth, km'],
-      ['stallMyr', 'stalls', 'time at each depth (its stall-by depth within the band), and how it left (↓ down, ↑ up, † ended)'],
-      ['events', 'events', 'births, deaths, merges and splits of this track'],
+      ['events', 'events', 'how many births, deaths, merges and splits this track has (the list: hover the number)'],
     ];
     for (const [key, text, title] of columns) {
       const th = document.createElement('th');
@@ -392,19 +393,23 @@ export class FeaturesPanel {
       const events = f.events.filter((e) => e.track === t.track).map((e) => `${e.kind} @${e.step}`);
       const cells = [
         String(t.track),
+        '', // the stalls, one line each (below)
         t.firstStep === t.lastStep ? String(t.firstStep) : `${t.firstStep}–${t.lastStep}`,
         t.lifetimeMyr.toFixed(1),
         fmtVolume(t.maxVolumeKm3),
         t.meanDepthKm.toFixed(0),
-        '', // the stalls, one line each (below)
-        events.join(', '),
+        // Their count, the list in the tooltip: the whole list made the rows tall and the table wider
+        // than the side panel, pushing the stalls out of sight.
+        events.length ? String(events.length) : '',
       ];
       for (const c of cells) {
         const td = document.createElement('td');
         td.textContent = c;
         tr.appendChild(td);
       }
-      const stallCell = tr.children[5] as HTMLElement;
+      if (events.length)
+        (tr.lastElementChild as HTMLElement).title = events.join(', ');
+      const stallCell = tr.children[1] as HTMLElement;
       stallCell.classList.add('stalls');
       for (const st of this.stallsShown(t)) {
         const span = document.createElement('span');
