@@ -377,6 +377,23 @@ void StepVolume::valuesInBox(size_t var, const std::array<size_t, 3>& begin, con
     for (size_t a = 0; a < 3; ++a)
         RAYPC_CHECK(begin[a] <= end[a] && end[a] <= n[a]);
     const size_t nR = end[1] - begin[1], nLon = end[2] - begin[2];
+    // A shell anomaly not computed yet: from its base's values on the box's whole shells, which their
+    // means need (shellMean: the bits compute() gets from the whole step), not from the whole step.
+    if (const ShellAnomalyOf* of = computedFrom(var); of && !valuesReady(var)) {
+        const size_t nLatAll = m_grid.nLat(), nLonAll = m_grid.nLon();
+        const auto w = m_grid.volumeFactors();
+        std::vector<float> shell(nLatAll * nLonAll);
+        for (size_t iR = begin[1]; iR < end[1]; ++iR) {
+            valuesInBox(of->base, {0, iR, 0}, {nLatAll, iR + 1, nLonAll}, shell.data());
+            const double mean = shellMean(w, shell.data(), nLonAll);
+            for (size_t iLat = begin[0]; iLat < end[0]; ++iLat) {
+                float* row = out + ((iLat - begin[0]) * nR + (iR - begin[1])) * nLon;
+                for (size_t iLon = begin[2]; iLon < end[2]; ++iLon)
+                    row[iLon - begin[2]] = shellAnomalyValue(shell[iLat * nLonAll + iLon], mean, of->kind);
+            }
+        }
+        return;
+    }
     // Decoded already, another volume's or computed: value() is a load, or computes the whole once.
     const bool mapped = !valuesReady(var) && !(m_base && var < m_base->variableCount()) && var < m_storedCount;
     if (mapped)

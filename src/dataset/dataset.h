@@ -142,7 +142,9 @@ public:
     float value(size_t var, size_t iLat, size_t iR, size_t iLon) const;
     // value() of every point of the box [begin[a], end[a]) of each axis (lat, r, lon) into `out` (the
     // box's shape, C order), for a box much smaller than the grid (Python's lazy xarray arrays): the
-    // file is checked once for the box, not once per value. Thread-safe; throws as value() does.
+    // file is checked once for the box, not once per value; a shell anomaly not computed yet comes
+    // from its base on the box's whole shells (their means), the same bits as values(). Thread-safe;
+    // throws as value() does.
     void valuesInBox(size_t var, const std::array<size_t, 3>& begin, const std::array<size_t, 3>& end, float* out) const;
     // Whether values(var) is ready without decoding.
     bool valuesReady(size_t var) const { return m_values[var].load(std::memory_order_acquire) != nullptr; }

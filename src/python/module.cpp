@@ -24,7 +24,6 @@
 #include "io/cf_grid.h"
 #include "analysis/critical_points.h"
 #include "dataset/dataset.h"
-#include "dataset/shell_anomaly.h"
 #include "analysis/feature_run.h"
 #include "analysis/features.h"
 #include "analysis/pathline_storage.h"
@@ -81,42 +80,27 @@ py::array_t<T> arrayOf(const std::vector<T>& values, std::vector<py::ssize_t> sh
 std::atomic<uint64_t> g_valuesRead{0};
 
 // The values of variable `var` of `volume` in the box [begin[a], end[a]) of each axis (lat, r, lon)
-// into `out` (the box's shape, C order). Decodes only what the box needs, value by value from the
-// mapped files (StepVolume::value), unless that is most of the step (then the whole variable, in
-// parallel). A shell anomaly needs its base over the box's whole shells, for their means
-// (shellMean: the bits the whole step's StepVolume computes).
+// into `out` (the box's shape, C order): StepVolume::valuesInBox, which decodes only what the box
+// needs (a shell anomaly: its base on the box's whole shells), unless that is most of the step (then
+// the whole variable, in parallel). Counts what it read (g_valuesRead).
 void readBox(const dataset::StepVolume& volume, size_t var, const std::array<size_t, 3>& begin,
              const std::array<size_t, 3>& end, float* out)
 {
     const grid::SphericalGrid& g = volume.grid();
     const size_t nLat = end[0] - begin[0], nR = end[1] - begin[1], nLon = end[2] - begin[2];
-    const dataset::ShellAnomalyOf* of = volume.computedFrom(var);
-    const size_t needed = of ? g.nLat() * nR * g.nLon() : nLat * nR * nLon;
-    const auto at = [&](size_t iLat, size_t iR, size_t iLon) -> float& {
-        return out[((iLat - begin[0]) * nR + (iR - begin[1])) * nLon + (iLon - begin[2])];
-    };
+    const bool shells = volume.computedFrom(var) && !volume.valuesReady(var);
+    const size_t needed = shells ? g.nLat() * nR * g.nLon() : nLat * nR * nLon;
     if (needed * 4 >= g.cellCount()) {
         const float* all = volume.values(var);
         for (size_t iLat = begin[0]; iLat < end[0]; ++iLat)
             for (size_t iR = begin[1]; iR < end[1]; ++iR)
-                std::memcpy(&at(iLat, iR, begin[2]), all + g.index(iLat, iR, begin[2]), nLon * sizeof(float));
+                std::memcpy(out + ((iLat - begin[0]) * nR + (iR - begin[1])) * nLon, all + g.index(iLat, iR, begin[2]),
+                            nLon * sizeof(float));
         g_valuesRead.fetch_add(g.cellCount(), std::memory_order_relaxed);
         return;
     }
     g_valuesRead.fetch_add(needed, std::memory_order_relaxed);
-    if (!of) {
-        volume.valuesInBox(var, begin, end, out);
-        return;
-    }
-    const auto w = g.volumeFactors();
-    std::vector<float> shell(g.nLat() * g.nLon());
-    for (size_t iR = begin[1]; iR < end[1]; ++iR) {
-        volume.valuesInBox(of->base, {0, iR, 0}, {g.nLat(), iR + 1, g.nLon()}, shell.data());
-        const double mean = dataset::shellMean(w, shell.data(), g.nLon());
-        for (size_t iLat = begin[0]; iLat < end[0]; ++iLat)
-            for (size_t iLon = begin[2]; iLon < end[2]; ++iLon)
-                at(iLat, iR, iLon) = dataset::shellAnomalyValue(shell[iLat * g.nLon() + iLon], mean, of->kind);
-    }
+    volume.valuesInBox(var, begin, end, out);
 }
 
 py::array_t<double> doubles(const std::vector<double>& values)

@@ -81,6 +81,8 @@ class Dataset:
         self._variables = [Variable(v["name"], v["units"], v["min"], v["max"], v["derived"])
                            for v in self._core.variables]
         self._units = {v.name: v.units for v in self._variables}
+        self._cf_names = cf_names(self._units)  # display name -> CF name, unique (to_xarray's names)
+        self._display_names = {cf: display for display, cf in self._cf_names.items()}
         self._levels = [Grid(g["lat"], g["r"], g["lon"]) for g in self._core.levels]
         self._times = self._core.times_myr
         for a in [self._times] + [a for g in self._levels for a in g]:
@@ -168,9 +170,8 @@ class Dataset:
             raise TypeError(f"{what}: expected a name, not {type(name).__name__}")
         if name in self._units:
             return name
-        for display, cf in cf_names(self._units).items():
-            if cf == name:
-                return display
+        if name in self._display_names:
+            return self._display_names[name]
         raise UnknownNameError(f"{what}: unknown variable '{name}'; the dataset has: {', '.join(self._units)}")
 
     def to_xarray(self, step: Optional[StepLike] = None, variables: Optional[Sequence[str]] = None, level: int = 0) -> "xr.Dataset":

@@ -28,7 +28,6 @@ from xarray.backends import BackendArray, BackendEntrypoint
 from xarray.core import indexing
 
 from ._raypc import Error, OutOfRangeError
-from .names import cf_names
 
 if TYPE_CHECKING:
     from .dataset import Dataset
@@ -97,7 +96,7 @@ def open_raypc_dataset(dataset: "Dataset", variables: Optional[Iterable[str]] = 
         raise OutOfRangeError(f"level: {level} out of range 0..{len(dataset.levels) - 1}")
     level = int(level)
     display = [v.name for v in dataset.variables]
-    cf = cf_names(display)
+    cf = dataset._cf_names
     if isinstance(variables, str):
         variables = [variables]
     if isinstance(drop_variables, str):
