@@ -1008,6 +1008,7 @@ const cases = {
     const boxes = () => page.evaluate(() => {
       const box = (sel) => { const b = document.querySelector(sel).getBoundingClientRect(); return { top: b.top, bottom: b.bottom, height: b.height }; };
       return { presets: box('#presets'), tf: box('#tf'), side: box('#side'), view: box('#view3d'), play: box('#play'),
+        selection: box('#selection'), statsTime: box('#statsTime'),
         sideScroll: document.getElementById('side').scrollTop, pageScroll: document.documentElement.scrollHeight - window.innerHeight,
         error: document.getElementById('error').hidden ? '' : document.getElementById('error').textContent };
     });
@@ -1019,6 +1020,11 @@ const cases = {
       check(b.presets.height > 40 && b.presets.top >= b.side.top && b.presets.bottom <= b.side.bottom,
         `${w}x${h}: the presets (${Math.round(b.presets.top)}-${Math.round(b.presets.bottom)} px) are not within the side panel's visible ${Math.round(b.side.top)}-${Math.round(b.side.bottom)} px`);
       check(b.play.bottom <= h && b.view.height >= 0.4 * h, `${w}x${h}: time bar at ${Math.round(b.play.bottom)} px, view ${Math.round(b.view.height)} px high`);
+      // Issue 47: the selection's figure and its plot over time come before the colour and
+      // rendering controls, above the fold.
+      console.log(`  ${w}x${h}: side ${Math.round(b.side.top)}-${Math.round(b.side.bottom)}, selection ${Math.round(b.selection.top)}-${Math.round(b.selection.bottom)}, plot over time ${Math.round(b.statsTime.top)}-${Math.round(b.statsTime.bottom)}, tf ${Math.round(b.tf.top)}`);
+      check(b.selection.bottom <= b.side.bottom && b.statsTime.bottom <= b.side.bottom && b.statsTime.top < b.tf.top,
+        `${w}x${h}: the selection (${Math.round(b.selection.top)}-${Math.round(b.selection.bottom)} px) or its plot over time (${Math.round(b.statsTime.top)}-${Math.round(b.statsTime.bottom)} px) is below the side panel's visible ${Math.round(b.side.top)}-${Math.round(b.side.bottom)} px, or after the transfer function`);
     }
     await page.setViewportSize({ width: 1000, height: 700 });
     await page.waitForTimeout(500);

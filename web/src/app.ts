@@ -368,13 +368,13 @@ export class App {
         for (const p of presets) {
           const b = document.createElement('button');
           b.textContent = p.title;
-          b.title = `${p.name}.json`;
+          b.title = `${p.title} (${p.name}.json)`;
           b.dataset.preset = p.name;
           if (p.unavailable) {
             // The server tried it on this dataset (a model without the contest's variables, say).
             b.disabled = true;
             b.classList.add('unavailable');
-            b.title = `${p.name}.json: ${p.unavailable}`;
+            b.title = `${p.title} (${p.name}.json): ${p.unavailable}`;
           }
           b.addEventListener('click', () => this.applyPreset(p));
           box.appendChild(b);
