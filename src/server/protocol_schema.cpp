@@ -593,6 +593,10 @@ const std::vector<Definition>& messages()
               "a mono frame with reference shells whose rings are in view: each shell's depth label, for the UI to "
               "write over the frame (the frame itself carries none; stereo frames and pictures carry theirs)",
               false},
+             {"surfaceOutline", arrayOf(pairOf(number(""), ""), ""),
+              "a mono frame seen from outside the planet: the surface's silhouette as points [x, y], fractions of "
+              "the frame's width and height from its top left, a closed line the UI draws over the frame",
+              false},
              {"stereo",
               named("FrameStereo", "",
                     {{"mode", namesOf<render::StereoMode>(state::allStereoModes(), state::stereoModeName, "", render::StereoMode::Off), "the stereo mode"},

@@ -176,8 +176,9 @@ void RenderSession::sendFrame(Job& job, const ViewFrames& frames, const StateRen
     // legend key.
     if (!job.shellKey.empty())
         header["shellKey"] = job.shellKey;
-    // Where each shell's depth goes on a mono frame (render::shellLabels), as fractions of its
-    // width and height: the UI writes them, crisp whatever the frame's size or level.
+    // Where each shell's depth goes on a mono frame (render::shellLabels) and the surface's outline
+    // (render::sphereOutline), as fractions of its width and height: the UI draws them, crisp
+    // whatever the frame's size or level.
     if (labelsByUi) {
         const grid::SphericalGrid& grid = m_context.dataset->levels().front().grid;
         nlohmann::json labels = nlohmann::json::array();
@@ -189,6 +190,13 @@ void RenderSession::sendFrame(Job& job, const ViewFrames& frames, const StateRen
                               {"y", l.y / float(picture.height)}});
         if (!labels.empty())
             header["shellLabels"] = std::move(labels);
+        // The surface's outline, which the UI draws so that material near the surface is seen inside it.
+        nlohmann::json outline = nlohmann::json::array();
+        for (const auto& [x, y] : render::sphereOutline(state.camera, picture.width, picture.height,
+                                                        float(grid.rKm.back())))
+            outline.push_back({x / float(picture.width), y / float(picture.height)});
+        if (!outline.empty())
+            header["surfaceOutline"] = std::move(outline);
     }
     std::string bytes = encodeFrame(std::move(header), {reinterpret_cast<const uint8_t*>(jpeg.data()), jpeg.size()},
                                     depth, depthWidth, depthHeight);

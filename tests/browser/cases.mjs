@@ -2737,6 +2737,32 @@ const cases = {
       check(Math.abs(sp.x - ex) < 3 && Math.abs(sp.y - ey) < 3, `label ${sp.text} at ${sp.x.toFixed(1)}, ${sp.y.toFixed(1)}; the header puts it at ${ex.toFixed(1)}, ${ey.toFixed(1)}`);
     });
     console.log(`  labels ${l.spans.map((x) => `${x.text} at ${x.x.toFixed(0)},${x.y.toFixed(0)} (${x.px} px)`).join('; ')}`);
+    // The surface's outline: the silhouette of the 6371 km sphere, here (the camera aimed at the
+    // centre) a circle about the picture's centre of radius tan(asin(R / D)) / tan(fovY / 2) of half
+    // its height; every drawn pixel lies inside it.
+    const outline = await page.evaluate(() => {
+      const poly = document.querySelector('#shellLabels polygon');
+      const pts = (poly?.getAttribute('points') ?? '').trim().split(/\s+/).filter(Boolean).map((p) => p.split(',').map(Number));
+      const c = document.getElementById('view3d').getBoundingClientRect();
+      const h = window.__raypc.headers.at(-1), cam = window.__raypc.state().camera;
+      let w = c.width, ht = w * h.height / h.width;
+      if (ht > c.height) { ht = c.height; w = ht * h.width / h.height; }
+      const cx = c.width / 2, cy = c.height / 2; // the polygon's points are the view's own (CSS px from its top left)
+      const radius = Math.tan(Math.asin(6371 / cam.distanceKm)) / Math.tan(cam.fovYDeg * Math.PI / 360) * ht / 2;
+      const dist = pts.map(([x, y]) => Math.hypot(x - cx, y - cy));
+      const { data: d, width, height } = window.__viewImageData();
+      let outside = 0;
+      for (let y = 0; y < height; y++) for (let x = 0; x < width; x++) {
+        const o = (y * width + x) * 4;
+        if (Math.max(d[o], d[o + 1], d[o + 2]) > 40 && Math.hypot((x + 0.5) * c.width / width - cx, (y + 0.5) * c.height / height - cy) > radius + 2) outside++;
+      }
+      return { n: pts.length, radius, min: Math.min(...dist), max: Math.max(...dist), target: cam.targetKm, outside };
+    });
+    console.log(`  surface outline: ${outline.n} points at ${outline.min.toFixed(1)}-${outline.max.toFixed(1)} px from the centre; expected ${outline.radius.toFixed(1)}; drawn pixels outside it ${outline.outside}`);
+    check(outline.target.every((t) => t === 0), `the default camera aims at ${outline.target}, not the centre`);
+    check(outline.n >= 32 && Math.abs(outline.min - outline.radius) < 1.5 && Math.abs(outline.max - outline.radius) < 1.5,
+      `the surface outline lies ${outline.min.toFixed(1)}-${outline.max.toFixed(1)} px from the centre, the sphere's silhouette ${outline.radius.toFixed(1)} px`);
+    check(outline.outside === 0, `${outline.outside} drawn pixels lie outside the surface outline`);
     // Orbiting: while the frame is re-projected, the labels (of the frame's camera) are hidden.
     const c = await page.evaluate(() => document.getElementById('view3d').getBoundingClientRect());
     await page.mouse.move(c.left + c.width / 2, c.top + c.height / 2);
