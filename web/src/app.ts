@@ -8,6 +8,7 @@ import type { ShellKeyEntry } from './connection';
 import { ContextPanel, showLegends, type LegendEntry } from './context_panel';
 import { download, maxImageSide, setUpControls, syncControls, writeStateToUrl } from './controls';
 import { ParallelCoordinates } from './parcoords';
+import { PairView } from './pair';
 import { PathlinePanel } from './pathline_panel';
 import { PersistencePanel } from './persistence_panel';
 import { FeaturesPanel } from './features_panel';
@@ -50,6 +51,8 @@ export class App {
   readonly context: ContextPanel;
   readonly slices: SlicePanel;
   presets: Preset[] = [];
+  // The second dataset's view of a pair (`raypc serve A B`, pair.ts); null: one dataset.
+  pair: PairView | null = null;
   // The WebXR session control once the browser has said whether it offers immersive-vr (null: not).
   readonly xr: Promise<XrSession | null>;
   sampleStep = -1;
@@ -222,6 +225,15 @@ export class App {
 
   // Starts the work that needs the test hooks (if any) in place: the first state, the sample, ….
   start(): void {
+    if (this.info.pair) {
+      this.pair = new PairView({
+        info: this.info, store: this.store, link: this.link, pc: this.pc,
+        commit: (i) => this.commit(i),
+        showError: (m) => this.showError(m),
+        layoutChanged: () => this.onResize(),
+        firstSelection: () => this.selection.selection?.fractionOfMantle ?? null,
+      });
+    }
     this.onResize();
     this.syncControls();
     this.loadSample();
@@ -638,6 +650,7 @@ export class App {
     if (lat) parts.push(`latency ${lat.shownMs.toFixed(0)} ms`);
     if (this.statusNote) parts.push(this.statusNote);
     $('status').textContent = parts.join(' · ');
+    this.pair?.updateLabels();
   }
 
   showError(message: string): void {
