@@ -49,6 +49,8 @@ export class PairView {
   private sampleLoading = false;
   swapped = false;
   closed = false;
+  // The second view's frames shown, newest last (the browser tests read them).
+  readonly headers: FrameHeader[] = [];
 
   constructor(private readonly host: PairHost) {
     const pair = host.info.pair!;
@@ -103,6 +105,8 @@ export class PairView {
   }
 
   private secondShown(h: FrameHeader): void {
+    this.headers.push(h);
+    if (this.headers.length > 200) this.headers.shift();
     this.updateLabels();
     if (!h.interactive && !h.playback) this.loadSample(h.step);
   }
