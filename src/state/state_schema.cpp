@@ -1241,7 +1241,8 @@ const Object<RenderState>& document()
                                                       "nearest in model time to the state's `step` (the earlier of "
                                                       "two as near), `index` the same index (the last if it has "
                                                       "fewer)",
-                                           .cost = Cost::Reload})},
+                                           .cost = Cost::Reload,
+                                           .defaultText = "`time`"})},
                          {}},
                         "object or null"),
                     {.meaning = "two datasets side by side (docs/compare.md, \"Side by side\"): the state is drawn "
