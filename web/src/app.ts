@@ -247,6 +247,7 @@ export class App {
 
   loadState(s: unknown): void {
     const prev = this.store.replace(s);
+    this.pair?.stateLoaded();
     this.features.stateLoaded(s);
     this.showViewNote(''); // a preset shows its own after loading
     const state = this.store.state;

@@ -85,8 +85,7 @@ export class PairView {
     setUpCameraInput(this.canvas, store, (i) => host.commit(i));
     this.resize = new ResizeObserver(() => this.fitView());
     this.resize.observe(this.canvas);
-    // The state says it is a pair's (saved files, `raypc render --state`, screenshots).
-    store.state.pair = { dataset: pair.datasets[1].name, steps: store.state.pair?.steps ?? 'time' };
+    this.stateLoaded();
     fetchInfo(1)
       .then((info) => {
         this.secondInfo = info;
@@ -95,6 +94,14 @@ export class PairView {
       .catch((e) => host.showError((e as Error).message));
     this.fitView();
     this.updateLabels();
+  }
+
+  // The state says it is a pair's (saved files, `raypc render --state`, screenshots): after a state
+  // is loaded too (a preset, a file), keeping the file's step matching if it has one.
+  stateLoaded(): void {
+    if (this.closed) return;
+    const s = this.host.store.state;
+    s.pair = { dataset: this.host.info.pair!.datasets[1].name, steps: s.pair?.steps ?? 'time' };
   }
 
   // The second view's canvas at its size in device pixels.
