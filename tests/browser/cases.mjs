@@ -2682,8 +2682,9 @@ const cases = {
   // Two datasets side by side (`raypc serve A B`, docs/compare.md): two synthetic runs of different
   // seeds, each in its own labelled half; one camera and one brush reach both (their frames' cameras
   // are the state's, the selection's figures of each are non-zero and differ); the parallel
-  // coordinates draw both samples; closing the second returns to one view at the full width.
-  async compare({ context, url }) {
+  // coordinates draw both samples; a screenshot holds both; closing the second returns to one view
+  // at the full width.
+  async compare({ context, url, tmp }) {
     const page = await openUi(context, url);
     const pairInfo = (await info(url)).pair;
     check(pairInfo && pairInfo.datasets.length === 2, `GET /api/info has no pair: ${JSON.stringify(pairInfo)}`);
@@ -2749,6 +2750,11 @@ const cases = {
     [la, lb] = await labels();
     check(/selected \d+\.\d\d %/.test(la) && /selected \d+\.\d\d %/.test(lb), `the labels give the selections: '${la}' / '${lb}'`);
     if (process.env.RAYPC_TEST_DEBUG) await page.screenshot({ path: join(process.env.RAYPC_TEST_DEBUG, 'compare.png') });
+    // A screenshot of the pair holds both views: twice the width of one.
+    const image = (await rState(page)).image;
+    const shot = await screenshot(page, join(tmp, 'pair.png'));
+    check(shot.width === 2 * image.width && shot.height === image.height,
+      `the pair's screenshot is ${shot.width}x${shot.height}, expected ${2 * image.width}x${image.height} (two views of ${image.width}x${image.height})`);
 
     // Swap exchanges the sides; close returns to one view at the panel's full width.
     await page.click('#pairSwap');

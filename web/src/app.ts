@@ -202,7 +202,8 @@ export class App {
       },
     });
     setUpScreenshot({
-      state: () => store.state,
+      // A pair's picture holds both views: twice the width of one (docs/compare.md).
+      state: () => (this.pair && !this.pair.closed ? { ...store.state, image: { ...store.state.image, width: 2 * store.state.image.width } } : store.state),
       showError: (m) => this.showError(m),
       setStatusNote: (t) => this.setStatusNote(t),
       download,
