@@ -559,6 +559,11 @@ const std::vector<Definition>& messages()
         d.push_back(part("ShellKeyEntry", "a reference shell drawn",
                          {{"label", text(""), "as the legend names it (e.g. `410 km`)"},
                           {"color", arrayOf(number(""), ""), "its colour, r, g, b in [0, 1]"}}));
+        d.push_back(part("ShellLabel", "a reference shell's depth written on its ring",
+                         {{"label", text(""), "the depth (e.g. `660 km`)"},
+                          {"color", arrayOf(number(""), ""), "the shell's colour, r, g, b in [0, 1]"},
+                          {"x", number(""), "where the label's centre goes, a fraction of the frame's width from its left"},
+                          {"y", number(""), "the same, a fraction of its height from its top"}}));
         std::vector<Key> frameSelection = selectionKeys();
         d.push_back(message(
             "FrameHeader", "WebSocket server → client (binary frame's JSON header)", "one rendered pass",
@@ -603,6 +608,10 @@ const std::vector<Definition>& messages()
                       "lacks, …; `render/pair_state.h`), one sentence each; empty when nothing"}}),
               "a session of a pair's second dataset (`/ws?dataset=1`): its `step` is the one matched to the "
               "state's (`pair.steps` of the state)",
+              false},
+             {"shellLabels", arrayOf(ref("ShellLabel"), ""),
+              "a mono frame with reference shells whose rings are in view: each shell's depth label, for the UI to "
+              "write over the frame (the frame itself carries none; stereo frames and pictures carry theirs)",
               false},
              {"stereo",
               named("FrameStereo", "",

@@ -143,7 +143,9 @@ void RenderSession::sendFrame(Job& job, const ViewFrames& frames, const StateRen
     const Request& request = job.request;
     const state::RenderState& state = request.resolved.state;
     const auto encodeStart = Clock::now();
-    const ImageRgba8 picture = m_renderer.picture(frames, request.resolved, false);  // the UI draws legends
+    // The UI draws the legends, and over a mono frame the shells' depth labels (shellLabels below).
+    const bool labelsByUi = !state.stereo.enabled();
+    const ImageRgba8 picture = m_renderer.picture(frames, request.resolved, false, !labelsByUi);
     const std::string jpeg = encodeJpeg(picture.pixels, picture.width, picture.height,
                                         job.interactive || preview ? kJpegQualityInteractive : kJpegQualityStill);
     // A stereo pair's depth is the two eyes' side by side, whatever the picture's layout, each
@@ -181,6 +183,20 @@ void RenderSession::sendFrame(Job& job, const ViewFrames& frames, const StateRen
     // legend key.
     if (!job.shellKey.empty())
         header["shellKey"] = job.shellKey;
+    // Where each shell's depth goes on a mono frame (render::shellLabels), as fractions of its
+    // width and height: the UI writes them, crisp whatever the frame's size or level.
+    if (labelsByUi) {
+        const grid::SphericalGrid& grid = m_context.dataset->levels().front().grid;
+        nlohmann::json labels = nlohmann::json::array();
+        for (const TextLabel& l : render::shellLabels(state.reference, state.camera, picture.width, picture.height,
+                                                      float(grid.rKm.back()), float(grid.rKm.front())))
+            labels.push_back({{"label", l.text},
+                              {"color", {l.color.r, l.color.g, l.color.b}},
+                              {"x", l.x / float(picture.width)},
+                              {"y", l.y / float(picture.height)}});
+        if (!labels.empty())
+            header["shellLabels"] = std::move(labels);
+    }
     if (!request.pair.is_null())
         header["pair"] = request.pair;
     std::string bytes = encodeFrame(std::move(header), {reinterpret_cast<const uint8_t*>(jpeg.data()), jpeg.size()},

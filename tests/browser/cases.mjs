@@ -2700,6 +2700,61 @@ const cases = {
       .catch(async () => { throw new TestFailure(`paused: badge '${await page.textContent('#coarseBadge')}', readout '${await page.textContent('#viewReadout')}'`); });
   },
 
+  // Issue 47: the shells' depth labels are written by the page over the frame (crisp at any frame
+  // size), where the server's frame header says each goes; not while the frame is re-projected.
+  async shell_labels({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const labels = () => page.evaluate(() => {
+      const box = document.getElementById('shellLabels');
+      const canvas = document.getElementById('view3d').getBoundingClientRect();
+      return { hidden: box.hidden, header: window.__raypc.headers.at(-1).shellLabels ?? null,
+        canvas: { left: canvas.left, top: canvas.top, right: canvas.right, bottom: canvas.bottom },
+        spans: [...box.querySelectorAll('.shellLabel')].filter((e) => !e.hidden).map((e) => {
+          const b = e.getBoundingClientRect();
+          return { text: e.textContent, x: (b.left + b.right) / 2, y: (b.top + b.bottom) / 2, px: parseFloat(getComputedStyle(e).fontSize), color: getComputedStyle(e).color };
+        }) };
+    });
+    let l = await labels();
+    check(l.header && l.header.length === 2, `the frame header's shell labels: ${JSON.stringify(l.header)}; expected 410 and 660 km`);
+    check(!l.hidden && l.spans.length === 2 && l.spans.map((x) => x.text).join(',') === l.header.map((x) => x.label).join(','),
+      `the page writes ${JSON.stringify(l.spans.map((x) => x.text))} (hidden: ${l.hidden}) for the header's ${JSON.stringify(l.header.map((x) => x.label))}`);
+    for (const [i, sp] of l.spans.entries()) {
+      check(sp.px >= 12, `label ${sp.text} is ${sp.px} px`);
+      check(sp.x > l.canvas.left && sp.x < l.canvas.right && sp.y > l.canvas.top && sp.y < l.canvas.bottom, `label ${sp.text} at ${sp.x}, ${sp.y} lies outside the view ${JSON.stringify(l.canvas)}`);
+      const [r, g, b] = l.header[i].color.map((c) => Math.round(255 * c));
+      check(sp.color === `rgb(${r}, ${g}, ${b})`, `label ${sp.text} is ${sp.color}, the shell is rgb(${r}, ${g}, ${b})`);
+    }
+    // Each label where the header puts it on the frame's picture, letterboxed into the view as drawn.
+    const placed = await page.evaluate(() => {
+      const h = window.__raypc.headers.at(-1), c = document.getElementById('view3d').getBoundingClientRect();
+      let w = c.width, ht = w * h.height / h.width;
+      if (ht > c.height) { ht = c.height; w = ht * h.width / h.height; }
+      return { x: c.left + (c.width - w) / 2, y: c.top + (c.height - ht) / 2, w, h: ht };
+    });
+    l.spans.forEach((sp, i) => {
+      const ex = placed.x + l.header[i].x * placed.w, ey = placed.y + l.header[i].y * placed.h;
+      check(Math.abs(sp.x - ex) < 3 && Math.abs(sp.y - ey) < 3, `label ${sp.text} at ${sp.x.toFixed(1)}, ${sp.y.toFixed(1)}; the header puts it at ${ex.toFixed(1)}, ${ey.toFixed(1)}`);
+    });
+    console.log(`  labels ${l.spans.map((x) => `${x.text} at ${x.x.toFixed(0)},${x.y.toFixed(0)} (${x.px} px)`).join('; ')}`);
+    // Orbiting: while the frame is re-projected, the labels (of the frame's camera) are hidden.
+    const c = await page.evaluate(() => document.getElementById('view3d').getBoundingClientRect());
+    await page.mouse.move(c.left + c.width / 2, c.top + c.height / 2);
+    await page.mouse.down();
+    let hiddenWhileMoving = false;
+    for (let i = 1; i <= 10; i++) {
+      await page.mouse.move(c.left + c.width / 2 + 12 * i, c.top + c.height / 2 + 3 * i);
+      const k = await page.evaluate(() => window.__raypc.drawnLog?.at?.(-1) ?? null);
+      if (await page.evaluate(() => document.getElementById('shellLabels').hidden)) hiddenWhileMoving = true;
+      void k;
+    }
+    await page.mouse.up();
+    check(hiddenWhileMoving, 'the labels stayed while the view was re-projected to a moving camera');
+    await waitConverged(page);
+    await page.waitForFunction(() => !document.getElementById('shellLabels').hidden, null, { timeout: 10000 })
+      .catch(() => { throw new TestFailure('the labels did not come back on the converged frame'); });
+  },
+
   async preset_labels({ context, url, tmp }) {
     const page = await openUi(context, url);
     await waitConverged(page);
@@ -2869,6 +2924,7 @@ const caseOptions = {
   stalls: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   preset_labels: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   readout: { contextOptions: { viewport: { width: 1366, height: 768 } } },
+  shell_labels: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   compare: { pairSeeds: [1, 2], contextOptions: { viewport: { width: 1920, height: 1080 } } },
 };
 

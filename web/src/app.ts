@@ -24,6 +24,7 @@ import { StateStore } from './store';
 import { TfPanel } from './tf_panel';
 import { displayUnits } from './units';
 import { readoutText } from './view_readout';
+import { placeShellLabels } from './shell_labels';
 import { setUpXr, type XrSession } from './xr';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
@@ -101,6 +102,7 @@ export class App {
           this.updateLegends();
         }
       },
+      onDrawn: (kind) => placeShellLabels($('shellLabels'), this.link.view.frameHeader, kind, this.link.view.pictureRect),
       onError: (m) => this.showError(m),
       onStatus: (t) => this.setStatusNote(t),
       // A program set the linked state (e.g. a notebook's `view.state = s`): applied as "Load

@@ -11,6 +11,7 @@ import { setUpCameraInput } from './camera_input';
 import type { FrameHeader } from './connection';
 import type { ParallelCoordinates } from './parcoords';
 import { RenderLink } from './render_link';
+import { placeShellLabels } from './shell_labels';
 import type { StateStore } from './store';
 
 // What the pair needs of the App.
@@ -43,6 +44,7 @@ export class PairView {
   private readonly canvas: HTMLCanvasElement;
   private readonly labels: [HTMLElement, HTMLElement];
   private readonly bar: HTMLElement;
+  private readonly shellBox: HTMLElement; // the second view's shell depth labels (shell_labels.ts)
   private readonly resize: ResizeObserver;
   private secondInfo: Info | null = null;
   private sampleStep = -1;
@@ -68,7 +70,10 @@ export class PairView {
     close.addEventListener('click', () => this.close());
     this.bar = el('div', { id: 'pairBar' });
     this.bar.append(swap, close);
+    this.shellBox = el('div', { id: 'shellLabelsB', 'aria-hidden': 'true' });
+    this.shellBox.hidden = true;
     this.host.link.view.canvas.after(this.canvas);
+    this.canvas.after(this.shellBox);
     this.panel.append(this.labels[0], this.labels[1], this.bar);
     this.panel.classList.add('pair');
 
@@ -80,6 +85,7 @@ export class PairView {
       onError: (m) => host.showError(`second dataset: ${m}`),
       onStatus: () => {},
       onLink: () => {},
+      onDrawn: (kind) => placeShellLabels(this.shellBox, this.link.view.frameHeader, kind, this.link.view.pictureRect),
     }, 1);
     host.link.mirror = this.link;
     setUpCameraInput(this.canvas, store, (i) => host.commit(i));
@@ -168,6 +174,7 @@ export class PairView {
     this.resize.disconnect();
     this.canvas.remove();
     for (const l of this.labels) l.remove();
+    this.shellBox.remove();
     this.bar.remove();
     this.panel.classList.remove('pair', 'swapped');
     this.host.pc.setSecond(null);

@@ -22,6 +22,9 @@ export interface RenderLinkEvents {
   onFrameHeld(frame: Frame): void;
   // A frame is on screen.
   onFrameShown(header: FrameHeader): void;
+  // The view was drawn: the frame as rendered ('exact'), re-projected to the moving camera
+  // ('warped'), or as rendered for another camera ('unwarped').
+  onDrawn?(kind: DrawKind): void;
   onError(message: string): void;
   onStatus(text: string): void;
   // A state a program set (POST /api/link; Connection's onLink).
@@ -268,6 +271,7 @@ export class RenderLink {
     const bg = (s.background as [number, number, number] | undefined) ?? [0, 0, 0];
     const kind = this.view.draw(s.camera, s.stereo, s.image.width, s.image.height, bg);
     this.observer?.drawn(kind, this.lastShownId < this.lastSentId);
+    this.events.onDrawn?.(kind);
   }
 
   // Work that waits until the frame of the state sent last is on screen (or kAfterFrameMs passed),
