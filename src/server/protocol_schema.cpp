@@ -230,6 +230,18 @@ const std::vector<Definition>& messages()
               "why the dataset has no pathlines (the model has no velocity, its flow has missing values, "
               "preprocessed with --no-pathlines); absent when it has them",
               false},
+             {"pair",
+              named("PairInfo", "",
+                    {{"index", integer(""), "which of the two this info is about: 0, or 1 (asked with `?dataset=1`)"},
+                     {"datasets",
+                      arrayOf(named("PairDataset", "",
+                                    {{"name", text(""), "the dataset's name, as `name` above"},
+                                     {"timesMyr", arrayOf(number(""), ""), "its steps' model times, Myr"}}),
+                              ""),
+                      "the two datasets, first then second"}}),
+              "only when the server serves a pair (`raypc serve A B`, docs/compare.md): the endpoints and `/ws` "
+              "take `dataset=1` for the second",
+              false},
              {"limits",
               named("ServerLimits", "",
                     {{"screenshotPixels", integer(""), "largest width × height of a screenshot"},
@@ -589,6 +601,14 @@ const std::vector<Definition>& messages()
                      {"visible", integer(""), "those the filters and brushes leave visible"}}),
               "with pathlines shown", false},
              {"shellKey", arrayOf(ref("ShellKeyEntry"), ""), "with reference shells drawn: each shell drawn", false},
+             {"pair",
+              named("FramePair", "",
+                    {{"notes", arrayOf(text(""), ""),
+                      "what this dataset's picture leaves out or changes of the state (a brush on a variable it "
+                      "lacks, …; `render/pair_state.h`), one sentence each; empty when nothing"}}),
+              "a session of a pair's second dataset (`/ws?dataset=1`): its `step` is the one matched to the "
+              "state's (`pair.steps` of the state)",
+              false},
              {"shellLabels", arrayOf(ref("ShellLabel"), ""),
               "a mono frame with reference shells whose rings are in view: each shell's depth label, for the UI to "
               "write over the frame (the frame itself carries none; stereo frames and pictures carry theirs)",

@@ -1,5 +1,7 @@
 #include "server/render_session.h"
 
+#include "render/pair_state.h"
+
 #include "core/clock.h"
 #include "core/error.h"
 #include "analysis/selection.h"
@@ -67,6 +69,11 @@ void RenderSession::submit(int64_t id, state::RenderState state, FrameMode mode)
     Request request;
     request.received = Clock::now();
     request.id = id;
+    if (m_context.pairFirst) {
+        render::PairedState paired = render::secondOfPair(std::move(state), *m_context.pairFirst, *m_context.dataset);
+        state = std::move(paired.state);
+        request.pair = {{"notes", paired.notes}};
+    }
     request.resolved = render::resolveState(std::move(state), *m_context.dataset);  // throws: the old state stays
     checkSessionImage(request.resolved.state);
     request.mode = mode;
@@ -198,6 +205,8 @@ void RenderSession::sendFrame(Job& job, const ViewFrames& frames, const StateRen
         if (!outline.empty())
             header["surfaceOutline"] = std::move(outline);
     }
+    if (!request.pair.is_null())
+        header["pair"] = request.pair;
     std::string bytes = encodeFrame(std::move(header), {reinterpret_cast<const uint8_t*>(jpeg.data()), jpeg.size()},
                                     depth, depthWidth, depthHeight);
     job.encodeMs += millisecondsSince(encodeStart);

@@ -2844,6 +2844,98 @@ const cases = {
     check(brushes.length !== p.state.brushes.length || JSON.stringify(brushes) !== JSON.stringify(p.state.brushes), `the drag left the preset's brushes ${JSON.stringify(brushes)}`);
     check(!(await status()).includes(`preset ${p.title}`), `after a new brush the status line still says '${await status()}'`);
   },
+  // Two datasets side by side (`raypc serve A B`, docs/compare.md): two synthetic runs of different
+  // seeds, each in its own labelled half; one camera and one brush reach both (their frames' cameras
+  // are the state's, the selection's figures of each are non-zero and differ); the parallel
+  // coordinates draw both samples; a screenshot holds both; closing the second returns to one view
+  // at the full width.
+  async compare({ context, url, tmp }) {
+    const page = await openUi(context, url);
+    const pairInfo = (await info(url)).pair;
+    check(pairInfo && pairInfo.datasets.length === 2, `GET /api/info has no pair: ${JSON.stringify(pairInfo)}`);
+    const names = pairInfo.datasets.map((d) => d.name);
+    check(names[0].endsWith('seed1') && names[1].endsWith('seed2'), `the pair's names are ${names.join(', ')}`);
+    // Both views converged on the newest state (the second's frames are in pair.headers).
+    const bothConverged = async () => {
+      await waitConverged(page);
+      await page.waitForFunction(() => {
+        const p = window.__raypc.pair;
+        const h = p?.headers[p.headers.length - 1];
+        return h && h.converged && h.id === p.link.lastSentId;
+      }, null, { timeout: 30000, polling: 50 }).catch(async () => {
+        throw new TestFailure(`the second view has no converged frame of its newest state: ${JSON.stringify(await page.evaluate(() => window.__raypc.pair?.headers.slice(-1)))}`);
+      });
+    };
+    await bothConverged();
+    const boxes = await page.evaluate(() => ['view3d', 'view3dB'].map((id) => {
+      const r = document.getElementById(id)?.getBoundingClientRect();
+      return r ? { x: r.x, width: r.width } : null;
+    }));
+    const panel = await page.locator('#viewPanel').boundingBox();
+    check(boxes[0] && boxes[1], `two views expected, found ${JSON.stringify(boxes)}`);
+    check(Math.abs(boxes[0].width - panel.width / 2) <= 2 && Math.abs(boxes[1].width - panel.width / 2) <= 2 && boxes[1].x > boxes[0].x,
+      `each view half of the ${panel.width} px panel side by side, found ${JSON.stringify(boxes)}`);
+    const labels = async () => page.evaluate(() => ['pairLabelA', 'pairLabelB'].map((id) => document.getElementById(id)?.textContent ?? ''));
+    let [la, lb] = await labels();
+    check(la.includes(names[0]) && /step 0 \(0\.0 Myr\)/.test(la), `label A: '${la}'`);
+    check(lb.includes(names[1]) && /step 0 \(0\.0 Myr\)/.test(lb), `label B: '${lb}'`);
+    const state0 = await rState(page);
+    check(state0.pair && state0.pair.dataset === names[1], `the state's pair: ${JSON.stringify(state0.pair)}`);
+
+    // One camera: a drag on the first view turns both; both frames are of the state's camera.
+    await drag(page, 160, 40);
+    await bothConverged();
+    const camera = (await rState(page)).camera;
+    check(Math.abs(camera.azimuthDeg - state0.camera.azimuthDeg) > 5, `the drag did not turn the camera: ${JSON.stringify(camera)}`);
+    const cams = await page.evaluate(() => {
+      const a = window.__raypc.headers[window.__raypc.headers.length - 1], p = window.__raypc.pair;
+      return [a.camera, p.headers[p.headers.length - 1].camera];
+    });
+    for (const [i, c] of cams.entries())
+      check(Math.abs(c.azimuthDeg - camera.azimuthDeg) < 1e-6 && Math.abs(c.elevationDeg - camera.elevationDeg) < 1e-6,
+        `view ${'AB'[i]}'s frame camera ${JSON.stringify(c)} is not the state's ${JSON.stringify(camera)}`);
+
+    // The parallel coordinates draw both samples (the second's once it has loaded).
+    await page.waitForFunction(() => window.__raypc.parcoords.timing.lines.foreground >= 2 * window.__raypc.parcoords.rowCount && window.__raypc.parcoords.timing.drawnAt.foreground > 0,
+      null, { timeout: 20000 }).catch(async () => {
+      throw new TestFailure(`the parallel coordinates do not draw both samples: ${JSON.stringify(await page.evaluate(() => [window.__raypc.parcoords.rowCount, window.__raypc.parcoords.timing.lines]))}`);
+    });
+
+    // One brush, applied to both by name: the selection's figures of each are non-zero and differ.
+    await brushAxis(page, 'temperature anomaly', 0.05, 0.35);
+    await bothConverged();
+    const brushes = (await rState(page)).brushes;
+    check(brushes.length === 1 && brushes[0].name === 'temperature anomaly', `brushes: ${JSON.stringify(brushes)}`);
+    await page.waitForFunction(() => window.__raypc.selection && window.__raypc.pair.headers[window.__raypc.pair.headers.length - 1].selection,
+      null, { timeout: 20000 });
+    const figures = await page.evaluate(() => [window.__raypc.selection.fractionOfMantle,
+      window.__raypc.pair.headers[window.__raypc.pair.headers.length - 1].selection.fractionOfMantle]);
+    check(figures[0] > 0 && figures[1] > 0 && Math.abs(figures[0] - figures[1]) > 1e-6,
+      `the selection of A and B: ${figures.join(', ')} (expected both non-zero and different: two seeds)`);
+    [la, lb] = await labels();
+    check(/selected \d+\.\d\d %/.test(la) && /selected \d+\.\d\d %/.test(lb), `the labels give the selections: '${la}' / '${lb}'`);
+    if (process.env.RAYPC_TEST_DEBUG) await page.screenshot({ path: join(process.env.RAYPC_TEST_DEBUG, 'compare.png') });
+    // A screenshot of the pair holds both views: twice the width of one.
+    const image = (await rState(page)).image;
+    const shot = await screenshot(page, join(tmp, 'pair.png'));
+    check(shot.width === 2 * image.width && shot.height === image.height,
+      `the pair's screenshot is ${shot.width}x${shot.height}, expected ${2 * image.width}x${image.height} (two views of ${image.width}x${image.height})`);
+
+    // Swap exchanges the sides; close returns to one view at the panel's full width.
+    await page.click('#pairSwap');
+    const swapped = await page.evaluate(() => ['view3d', 'view3dB'].map((id) => document.getElementById(id).getBoundingClientRect().x));
+    check(swapped[0] > swapped[1], `after Swap the first view is not on the right: ${JSON.stringify(swapped)}`);
+    const halfWidth = (await rState(page)).image.width;
+    await page.click('#pairClose');
+    await waitConverged(page);
+    const after = await page.evaluate(() => ({ second: !!document.getElementById('view3dB'), pair: window.__raypc.pair, labels: document.querySelectorAll('.pairLabel').length,
+      box: document.getElementById('view3d').getBoundingClientRect().width }));
+    check(!after.second && after.pair === null && after.labels === 0, `after Close: ${JSON.stringify(after)}`);
+    check(Math.abs(after.box - panel.width) <= 2, `after Close the view is ${after.box} px wide, the panel ${panel.width}`);
+    const state1 = await rState(page);
+    check(state1.pair === null && state1.image.width > 1.8 * halfWidth, `after Close the state: pair ${JSON.stringify(state1.pair)}, image ${JSON.stringify(state1.image)} (was ${halfWidth} wide)`);
+    check(!page.raypcErrors.length, `page errors: ${page.raypcErrors.join(' | ')}`);
+  },
 };
 
 // Chromium context options per case (default: 1280x860 at devicePixelRatio 1).
@@ -2859,6 +2951,7 @@ const caseOptions = {
   preset_labels: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   readout: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   shell_labels: { contextOptions: { viewport: { width: 1366, height: 768 } } },
+  compare: { pairSeeds: [1, 2], contextOptions: { viewport: { width: 1920, height: 1080 } } },
 };
 
 const body = cases[caseName];

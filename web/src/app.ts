@@ -8,6 +8,7 @@ import type { FrameHeader, ShellKeyEntry } from './connection';
 import { ContextPanel, showLegends, type LegendEntry } from './context_panel';
 import { download, maxImageSide, setUpControls, syncControls, writeStateToUrl } from './controls';
 import { ParallelCoordinates } from './parcoords';
+import { PairView } from './pair';
 import { PathlinePanel } from './pathline_panel';
 import { PersistencePanel } from './persistence_panel';
 import { FeaturesPanel } from './features_panel';
@@ -52,6 +53,8 @@ export class App {
   readonly context: ContextPanel;
   readonly slices: SlicePanel;
   presets: Preset[] = [];
+  // The second dataset's view of a pair (`raypc serve A B`, pair.ts); null: one dataset.
+  pair: PairView | null = null;
   // The WebXR session control once the browser has said whether it offers immersive-vr (null: not).
   readonly xr: Promise<XrSession | null>;
   sampleStep = -1;
@@ -208,7 +211,8 @@ export class App {
       },
     });
     setUpScreenshot({
-      state: () => store.state,
+      // A pair's picture holds both views: twice the width of one (docs/compare.md).
+      state: () => (this.pair && !this.pair.closed ? { ...store.state, image: { ...store.state.image, width: 2 * store.state.image.width } } : store.state),
       showError: (m) => this.showError(m),
       setStatusNote: (t) => this.setStatusNote(t),
       download,
@@ -232,6 +236,15 @@ export class App {
 
   // Starts the work that needs the test hooks (if any) in place: the first state, the sample, ….
   start(): void {
+    if (this.info.pair) {
+      this.pair = new PairView({
+        info: this.info, store: this.store, link: this.link, pc: this.pc,
+        commit: (i) => this.commit(i),
+        showError: (m) => this.showError(m),
+        layoutChanged: () => this.onResize(),
+        firstSelection: () => this.selection.selection?.fractionOfMantle ?? null,
+      });
+    }
     this.onResize();
     this.syncControls();
     this.loadSample();
@@ -245,6 +258,7 @@ export class App {
 
   loadState(s: unknown): void {
     const prev = this.store.replace(s);
+    this.pair?.stateLoaded();
     this.features.stateLoaded(s);
     this.showViewNote(''); // a preset shows its own after loading
     const state = this.store.state;
@@ -659,6 +673,7 @@ export class App {
     if (lat && dev) parts.push(`latency ${lat.shownMs.toFixed(0)} ms`);
     if (this.statusNote) parts.push(this.statusNote);
     $('status').textContent = parts.join(' · ');
+    this.pair?.updateLabels();
     this.updateReadout();
   }
 
