@@ -106,39 +106,61 @@ json presetsJson(const std::optional<fs::path>& dir, const dataset::Dataset* dat
 }
 
 json selectionStatsJson(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters, int level,
-                        int profileStep, const std::atomic<bool>* cancel)
+                        int profileStep, const std::atomic<bool>* cancel, SelectionCache* selections, bool allProfiles,
+                        int* computed)
 {
     dataset.checkLevel(level);
     dataset.checkStep(profileStep);
     const int nSteps = int(dataset.steps().size());
-    const auto selections = analysis::selectionOverTime(dataset, filters, level, 0, nSteps - 1, [&](int step, int l) {
-        if (cancel && *cancel)
-            fail("statistics cancelled at step {} of {} (the client went away or the server is stopping)", step, nSteps);
-        return cache.getWithoutEvicting(step, l);
-    });
+    const auto perStep =
+        selections ? selections->overTime(dataset, cache, filters, level, 0, nSteps - 1, std::nullopt, cancel, computed)
+                   : analysis::selectionOverTime(dataset, filters, level, 0, nSteps - 1, [&](int step, int l) {
+                         if (cancel && *cancel)
+                             fail("statistics cancelled at step {} of {} (the client went away or the server is stopping)",
+                                  step, nSteps);
+                         if (computed)
+                             ++*computed;
+                         return cache.getWithoutEvicting(step, l);
+                     });
     json steps = json::array();
-    for (const analysis::StepSelection& sel : selections)
+    for (const analysis::StepSelection& sel : perStep)
         steps.push_back({{"step", sel.step},
                          {"timeMyr", sel.timeMyr},
                          {"volumeKm3", sel.stats.volumeKm3},
                          {"fractionOfMantle", sel.stats.fractionOfMantle}});
-    const analysis::SelectionStats& profile = selections[size_t(profileStep)].stats;
     const grid::SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
-    json radius = json::array(), depth = json::array(), selected = json::array(), shell = json::array();
+    // The selected and the whole volume per radius index, 0 beyond what the statistics hold.
+    auto perRadius = [&](const analysis::SelectionStats& stats) {
+        json selected = json::array(), shell = json::array();
+        for (size_t iR = 0; iR < grid.nR(); ++iR) {
+            selected.push_back(iR < stats.volumeByRadiusKm3.size() ? stats.volumeByRadiusKm3[iR] : 0.0);
+            shell.push_back(iR < stats.shellVolumeByRadiusKm3.size() ? stats.shellVolumeByRadiusKm3[iR] : 0.0);
+        }
+        return std::pair{std::move(selected), std::move(shell)};
+    };
+    json radius = json::array(), depth = json::array();
     for (size_t iR = 0; iR < grid.nR(); ++iR) {
         radius.push_back(grid.rKm[iR]);
         depth.push_back(kSurfaceRadiusKm - grid.rKm[iR]);
-        selected.push_back(iR < profile.volumeByRadiusKm3.size() ? profile.volumeByRadiusKm3[iR] : 0.0);
-        shell.push_back(iR < profile.shellVolumeByRadiusKm3.size() ? profile.shellVolumeByRadiusKm3[iR] : 0.0);
     }
-    return {{"level", level},
-            {"steps", std::move(steps)},
-            {"profile",
-             {{"step", profileStep},
-              {"radiusKm", std::move(radius)},
-              {"depthKm", std::move(depth)},
-              {"volumeKm3", std::move(selected)},
-              {"shellVolumeKm3", std::move(shell)}}}};
+    auto [selected, shell] = perRadius(perStep[size_t(profileStep)].stats);
+    json out = {{"level", level},
+                {"steps", std::move(steps)},
+                {"profile",
+                 {{"step", profileStep},
+                  {"radiusKm", std::move(radius)},
+                  {"depthKm", std::move(depth)},
+                  {"volumeKm3", std::move(selected)},
+                  {"shellVolumeKm3", std::move(shell)}}}};
+    if (allProfiles) {
+        json profiles = json::array();
+        for (const analysis::StepSelection& sel : perStep) {
+            auto [v, s] = perRadius(sel.stats);
+            profiles.push_back({{"step", sel.step}, {"volumeKm3", std::move(v)}, {"shellVolumeKm3", std::move(s)}});
+        }
+        out["profiles"] = std::move(profiles);
+    }
+    return out;
 }
 
 namespace {

@@ -10,6 +10,7 @@
 #include "analysis/features.h"
 #include "analysis/persistence.h"
 #include "analysis/selection.h"
+#include "server/analysis_caches.h"
 #include "server/dataset_caches.h"
 #include "server/limits.h"
 #include "server/step_cache.h"
@@ -42,9 +43,13 @@ nlohmann::json presetsJson(const std::optional<std::filesystem::path>& dir, cons
 // ({level, steps: [{step, timeMyr, volumeKm3, fractionOfMantle}], profile: {step, radiusKm,
 // depthKm, volumeKm3, shellVolumeKm3}}). Volumes come through `cache` without evicting what the
 // renderers use. Throws raypc::Error for a level out of range, or when `cancel` becomes true (checked
-// before every step).
+// before every step computed). With `selections` each step's statistics come from that cache and
+// are kept there (the same numbers, so the same bytes). With `allProfiles` also `profiles`: every
+// step's {step, volumeKm3, shellVolumeKm3} per radius, so that a client follows the step without
+// asking again. `computed`, when given, is increased by the steps computed (not taken from a cache).
 nlohmann::json selectionStatsJson(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters,
-                                  int level, int profileStep, const std::atomic<bool>* cancel = nullptr);
+                                  int level, int profileStep, const std::atomic<bool>* cancel = nullptr,
+                                  SelectionCache* selections = nullptr, bool allProfiles = false, int* computed = nullptr);
 
 // POST /api/features (docs/protocol.md, FeatureSeries): the features of the selection `filters` in
 // every step at `level` (extractFeatures with `options`), followed through the steps (FeatureSeries,

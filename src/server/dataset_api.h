@@ -6,6 +6,7 @@
 #pragma once
 
 #include "dataset/dataset.h"
+#include "server/analysis_caches.h"
 #include "server/api_views.h"
 #include "server/dataset_caches.h"
 #include "server/limits.h"
@@ -42,6 +43,9 @@ struct ApiContext {
     std::shared_ptr<const SeriesProgress> series;   // GET /api/progress; nullptr: a complete dataset
     LinkedState* link = nullptr;                    // GET/POST /api/link (the server's, server_context.h)
     JobProgress* jobs = nullptr;                    // POST /api/features?job=, GET /api/job-progress
+    // Kept analyses (server/analysis_caches.h); nullptr: computed for each request.
+    SelectionCache* selections = nullptr;       // POST /api/stats, /api/selection, /api/time-depth
+    FeatureSeriesCache* featureSeries = nullptr;  // POST /api/features
 };
 
 // One API request as the handlers see it: the percent-encoded query, the body, and a flag that
@@ -56,6 +60,9 @@ struct ApiRequest {
 struct ApiAnswer {
     std::string body;
     std::string contentType;
+    // Answers over the steps: how many steps this request computed (0: all from the kept analyses),
+    // sent as the header X-Raypc-Steps-Computed (docs/protocol.md); -1: no such header.
+    int stepsComputed = -1;
 };
 
 enum class HttpMethod { Get, Post };

@@ -130,6 +130,8 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     s.api.cache = s.cache.get();
     s.api.pathlines = s.pathlines.get();
     s.api.persistence = s.persistence.get();
+    s.api.selections = &s.selections;
+    s.api.featureSeries = &s.featureSeries;
     s.api.examples = s.options.examples;
     s.api.infoJson = infoJson(*s.dataset, s.options.limits).dump(-1, ' ', false, json::error_handler_t::replace);
     s.api.limits = s.options.limits;

@@ -127,6 +127,8 @@ struct ServerContext {
     std::unique_ptr<StepCache> cache;
     std::unique_ptr<PathlineCache> pathlines;
     std::unique_ptr<PersistenceCache> persistence;
+    SelectionCache selections;            // kept selection statistics per step; api.selections points here
+    FeatureSeriesCache featureSeries{8};  // kept features answers; api.featureSeries points here
     ApiContext api;
     RenderContext render;
     LinkedState link;  // the state the UI shows, for programs (GET/POST /api/link); api.link points here
