@@ -39,6 +39,27 @@ std::vector<analysis::StepSelection> SelectionCache::overTime(const dataset::Dat
     return out;
 }
 
+std::string FeatureLabelsCache::key(int step, int level, std::span<const analysis::RangeFilter> filters,
+                                    const analysis::FeatureOptions& options)
+{
+    // Labels depend on the selection and the minimum volume only (the depths and band give measures).
+    return fmt::format("{} | {} | {} | {}", step, level, options.minVolumeKm3, analysis::selectionKey(filters));
+}
+
+std::shared_ptr<const FeatureLabelsCache::Labels> FeatureLabelsCache::get(StepCache& volumes, int step, int level,
+                                                                          std::span<const analysis::RangeFilter> filters,
+                                                                          const analysis::FeatureOptions& options)
+{
+    return m_cache.get(key(step, level, filters, options),
+                       [&] { return std::move(analysis::extractFeatures(*volumes.get(step, level), filters, options).labels); });
+}
+
+void FeatureLabelsCache::put(int step, int level, std::span<const analysis::RangeFilter> filters, const analysis::FeatureOptions& options,
+                             std::shared_ptr<const Labels> labels)
+{
+    m_cache.put(key(step, level, filters, options), std::move(labels));
+}
+
 std::string featureSeriesKey(std::span<const analysis::RangeFilter> filters, const analysis::FeatureOptions& options,
                              double minOverlapShare, analysis::StallMeasure stallBy, int level, double sigmas)
 {

@@ -6,6 +6,7 @@
 // computation (core/lru_cache.h).
 #pragma once
 
+#include "core/huge_pages.h"
 #include "core/lru_cache.h"
 #include "dataset/dataset.h"
 #include "analysis/features.h"
@@ -52,6 +53,29 @@ public:
 
 private:
     Cache m_cache;
+};
+
+// The feature labels (analysis::StepFeatures::labels: each grid point's feature id at the level)
+// of one step's selection, by (step, level, selection, the options' minimum volume), the least
+// recently used out beyond `maxEntries` (a step's labels are 4 bytes a grid point: 52 MB at full
+// resolution). What the painted features of the renderers (render/feature_paint.h) are made from;
+// a features request puts those of its state's step, which the UI then paints.
+class FeatureLabelsCache {
+public:
+    using Labels = HugePageVector<int32_t>;
+    explicit FeatureLabelsCache(size_t maxEntries = 4) : m_cache(maxEntries) {}
+
+    // The labels, extracted from `volumes`' volume (step, level) unless kept. Throws what the volume's
+    // loading and analysis::extractFeatures throw.
+    std::shared_ptr<const Labels> get(StepCache& volumes, int step, int level, std::span<const analysis::RangeFilter> filters,
+                                      const analysis::FeatureOptions& options);
+    void put(int step, int level, std::span<const analysis::RangeFilter> filters, const analysis::FeatureOptions& options,
+             std::shared_ptr<const Labels> labels);
+    LruCache<std::string, Labels>::Counts counts() const { return m_cache.counts(); }
+
+private:
+    static std::string key(int step, int level, std::span<const analysis::RangeFilter> filters, const analysis::FeatureOptions& options);
+    LruCache<std::string, Labels> m_cache;
 };
 
 // The answers of POST /api/features (their bytes) by featureSeriesKey, the least recently used out

@@ -249,6 +249,28 @@ TEST_F(AnalysisCaches, EndpointsAnswerRepeatedRequestsFromTheCache)
     otherLevel["features"]["level"] = painted["features"].value("level", 0) == 0 ? 1 : 0;
     EXPECT_EQ(features(kept, {"", otherLevel.dump()}).stepsComputed, 4);
     EXPECT_THROW(stats(kept, {"profiles=some", atStep1}), Error);
+
+    // The painted features of the state's step: the labels the features request found, kept for the
+    // renderers, equal to what they would extract themselves.
+    FeatureLabelsCache labels;
+    kept.featureLabels = &labels;
+    json atStep2 = stateWithBrushes(2);
+    atStep2["features"]["minVolumeKm3"] = 1.0;  // a settings change: the series is computed again
+    EXPECT_EQ(features(kept, {"", atStep2.dump()}).stepsComputed, 4);
+    const render::ResolvedState resolved = render::resolveState(atStep2, *s_dataset);
+    const analysis::FeatureOptions options = state::featureOptions(resolved.state.features);
+    const int level = resolved.state.features.level;
+    const auto painted2 = labels.get(*m_volumes, 2, level, resolved.params.brushes, options);
+    EXPECT_EQ(labels.counts().made, 0u) << "step 2's labels came from the features request";
+    EXPECT_EQ(labels.counts().hits, 1u);
+    const auto extracted = analysis::extractFeatures(*s_dataset->load(2, level), resolved.params.brushes, options).labels;
+    ASSERT_EQ(painted2->size(), extracted.size());
+    EXPECT_TRUE(std::equal(painted2->begin(), painted2->end(), extracted.begin()));
+    EXPECT_TRUE(std::any_of(extracted.begin(), extracted.end(), [](int32_t l) { return l > 0; })) << "a feature to paint";
+    labels.get(*m_volumes, 1, level, resolved.params.brushes, options);
+    EXPECT_EQ(labels.counts().made, 1u) << "another step is extracted once";
+    labels.get(*m_volumes, 1, level, filters(true), options);
+    EXPECT_EQ(labels.counts().made, 1u);
     EXPECT_NE(json::parse(stats(kept, {"profiles=all", atStep1}).body)["profiles"].size(), 0u);
 }
 

@@ -213,7 +213,8 @@ FeatureSteps featureSteps(const dataset::Dataset& dataset, StepCache& cache, std
                           const analysis::FeatureOptions& options, double minOverlapShare, int level,
                           std::optional<size_t> radialVelocity, std::optional<size_t> density,
                           std::span<const double> fluxDepths, const std::atomic<bool>* cancel,
-                          const std::function<void(int done, int total)>& progress)
+                          const std::function<void(int done, int total)>& progress,
+                          const std::function<void(int step, std::shared_ptr<const HugePageVector<int32_t>>)>& labels)
 {
     const int nSteps = int(dataset.steps().size());
     FeatureSteps out{json::array(), {}, analysis::FeatureSeries(dataset, minOverlapShare, "features")};
@@ -226,6 +227,8 @@ FeatureSteps featureSteps(const dataset::Dataset& dataset, StepCache& cache, std
             if (radialVelocity && !fluxDepths.empty())
                 out.fluxes.push_back(analysis::shellFluxes(*s.volume, *radialVelocity, fluxDepths, filters, std::nullopt, density));
             out.series.add(s.step, s.volume, s.features);
+            if (labels)
+                labels(s.step, std::make_shared<const HugePageVector<int32_t>>(std::move(s.features.labels)));
         },
         {cancel, progress});
     if (stopped)
@@ -335,7 +338,8 @@ json fluxJson(const dataset::Dataset& dataset, const std::vector<std::vector<ana
 json featureSeriesJson(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters,
                        const analysis::FeatureOptions& options, double minOverlapShare, analysis::StallMeasure stallBy, int level,
                        double sigmas, const std::atomic<bool>* cancel,
-                       const std::function<void(int done, int total)>& progress)
+                       const std::function<void(int done, int total)>& progress,
+                       const std::function<void(int step, std::shared_ptr<const HugePageVector<int32_t>>)>& labels)
 {
     dataset.checkLevel(level);
     if (filters.empty())
@@ -352,7 +356,7 @@ json featureSeriesJson(const dataset::Dataset& dataset, StepCache& cache, std::s
             fluxDepths.push_back(d);
 
     FeatureSteps run = featureSteps(dataset, cache, filters, options, minOverlapShare, level, radialVelocity, density,
-                                    fluxDepths, cancel, progress);
+                                    fluxDepths, cancel, progress, labels);
     const auto& fluxes = run.fluxes;
     // The tables of `raypc features --tracks/--events/--stalls` and `raypc flux`, written by the same
     // code (analysis/feature_csv.h), for the UI's CSV buttons.

@@ -58,11 +58,13 @@ nlohmann::json selectionStatsJson(const dataset::Dataset& dataset, StepCache& ca
 // the shells at those depths (inside the grid) per step with the avalanche steps (`sigmas`).
 // Volumes come through `cache` without evicting. Throws raypc::Error for no filters, a level out of
 // range, a dataset without velocity, or when `cancel` becomes true (checked before every step).
-// `progress` hears the steps done before each step and at the end.
+// `progress` hears the steps done before each step and at the end; `labels`, when set, is handed
+// each step's feature labels (to keep some for the painted features: FeatureLabelsCache).
 nlohmann::json featureSeriesJson(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters,
                                  const analysis::FeatureOptions& options, double minOverlapShare, analysis::StallMeasure stallBy,
                                  int level, double sigmas, const std::atomic<bool>* cancel = nullptr,
-                                 const std::function<void(int done, int total)>& progress = {});
+                                 const std::function<void(int done, int total)>& progress = {},
+                                 const std::function<void(int step, std::shared_ptr<const HugePageVector<int32_t>>)>& labels = {});
 
 // The line attributes of a window as one binary answer: u32 little-endian header length, a UTF-8
 // JSON header {step, window, lines, columns, units, sets: [{injectionStep, injectionTimeMyr, lines}]},

@@ -154,7 +154,7 @@ ApiAnswer screenshot(const ApiContext& api, const ApiRequest& request)
     const render::ResolvedState resolved = render::resolveState(parseBody(request.body), *api.dataset);
     checkScreenshotLimits(resolved.state, api.limits);
     const auto start = std::chrono::steady_clock::now();
-    render::StateRenderer renderer(api.dataset, cacheSources(api.cache, api.pathlines));
+    render::StateRenderer renderer(api.dataset, cacheSources(api.cache, api.pathlines, api.featureLabels));
     const auto still = renderer.renderStill(resolved, 0, request.cancel);
     const int done = still.frames.back().passes();  // the last view's: a stereo pass renders the left eye first
     if (done < std::max(1, resolved.state.passes))
@@ -181,7 +181,7 @@ ApiAnswer slice(const ApiContext& api, const ApiRequest& request)
         fail("slice: image {}x{} is over the limit of {} pixels", state.width, state.height, api.limits.maxScreenshotPixels);
     const auto start = std::chrono::steady_clock::now();
     const bool map = *view == "map";
-    render::StateRenderer renderer(api.dataset, cacheSources(api.cache, api.pathlines));
+    render::StateRenderer renderer(api.dataset, cacheSources(api.cache, api.pathlines, api.featureLabels));
     const render::ImageRgba8 picture =
         renderer.slicePicture(resolved, map ? render::StateRenderer::Slice::Map : render::StateRenderer::Slice::Section);
     json header{{"view", *view}, {"width", picture.width}, {"height", picture.height}, {"step", state.step}};
@@ -297,9 +297,16 @@ ApiAnswer features(const ApiContext& api, const ApiRequest& request)
     if (job && api.jobs)
         progress = [&](int done, int total) { api.jobs->running(*job, done, total); };
     const int nSteps = int(dataset.steps().size());
+    // The labels of the state's step are kept for its painting (what the UI shows next).
+    std::function<void(int, std::shared_ptr<const HugePageVector<int32_t>>)> keepLabels;
+    if (api.featureLabels)
+        keepLabels = [&](int step, std::shared_ptr<const HugePageVector<int32_t>> labels) {
+            if (step == resolved.state.step)
+                api.featureLabels->put(step, level, resolved.params.brushes, options, std::move(labels));
+        };
     auto compute = [&] {
         return jsonAnswer(featureSeriesJson(dataset, *api.cache, resolved.params.brushes, options, settings.minOverlapShare,
-                                            settings.stallBy, level, sigmas, request.cancel, progress))
+                                            settings.stallBy, level, sigmas, request.cancel, progress, keepLabels))
             .body;
     };
     std::shared_ptr<const std::string> body;

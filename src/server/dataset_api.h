@@ -46,6 +46,7 @@ struct ApiContext {
     // Kept analyses (server/analysis_caches.h); nullptr: computed for each request.
     SelectionCache* selections = nullptr;       // POST /api/stats, /api/selection, /api/time-depth
     FeatureSeriesCache* featureSeries = nullptr;  // POST /api/features
+    FeatureLabelsCache* featureLabels = nullptr;  // the painted features (POST /api/features puts its step's)
 };
 
 // One API request as the handlers see it: the percent-encoded query, the body, and a flag that

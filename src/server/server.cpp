@@ -132,6 +132,8 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     s.api.persistence = s.persistence.get();
     s.api.selections = &s.selections;
     s.api.featureSeries = &s.featureSeries;
+    s.api.featureLabels = &s.featureLabels;
+    s.render.featureLabels = &s.featureLabels;
     s.api.examples = s.options.examples;
     s.api.infoJson = infoJson(*s.dataset, s.options.limits).dump(-1, ' ', false, json::error_handler_t::replace);
     s.api.limits = s.options.limits;

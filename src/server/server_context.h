@@ -129,6 +129,7 @@ struct ServerContext {
     std::unique_ptr<PersistenceCache> persistence;
     SelectionCache selections;            // kept selection statistics per step; api.selections points here
     FeatureSeriesCache featureSeries{8};  // kept features answers; api.featureSeries points here
+    FeatureLabelsCache featureLabels;     // painted features' labels; api.featureLabels, render.featureLabels
     ApiContext api;
     RenderContext render;
     LinkedState link;  // the state the UI shows, for programs (GET/POST /api/link); api.link points here
