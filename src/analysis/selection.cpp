@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <type_traits>
 
 namespace raypc::analysis {
@@ -27,6 +28,26 @@ std::vector<NamedRanges> groupRanges(std::span<const NamedRange> ranges, const s
         it->ranges.push_back({r.min, r.max});
     }
     return groups;
+}
+
+std::string selectionKey(std::span<const RangeFilter> filters)
+{
+    std::vector<std::string> axes;
+    for (const RangeFilter& f : filters) {
+        std::vector<dataset::ValueRange> ranges = f.ranges;
+        std::sort(ranges.begin(), ranges.end(),
+                  [](const auto& a, const auto& b) { return a.min < b.min || (a.min == b.min && a.max < b.max); });
+        // Variables before coordinates, each by index; zero-padded so that text order is index order.
+        std::string axis = f.coordinate ? fmt::format("c{:04}", int(*f.coordinate)) : fmt::format("v{:04}", f.variable);
+        for (const dataset::ValueRange& r : ranges)
+            axis += fmt::format(":{},{}", r.min, r.max);
+        axes.push_back(std::move(axis));
+    }
+    std::sort(axes.begin(), axes.end());
+    std::string key;
+    for (const std::string& a : axes)
+        key += a + '|';
+    return key;
 }
 
 std::vector<RangeFilter> resolveRangeFilters(std::span<const std::string> variableNames,
@@ -110,13 +131,16 @@ SelectionStats selectedVolume(const dataset::StepVolume& volume, std::span<const
         std::vector<double> volume, selectedSum, shellSum, selectedWeight, shellWeight;
     };
     const size_t n = g.nR(), m = values ? n : 0;
-    tbb::enumerable_thread_specific<Sums> perThread(Sums{std::vector<double>(n, 0.0), std::vector<double>(m, 0.0),
-                                                         std::vector<double>(m, 0.0), std::vector<double>(m, 0.0),
-                                                         std::vector<double>(m, 0.0)});
+    // Sums per latitude row, added in row order afterwards: the same numbers whichever thread did
+    // which row, so that an answer is the same bytes each time it is computed (kept answers equal
+    // fresh ones: server/analysis_caches.h).
+    std::vector<Sums> perRow(g.nLat());
     // The selection's loop as it was without a mean variable (the brushes' hot path: /api/selection
     // and the frame header ask on every release); the sums of the mean only when asked for.
     auto sumRow = [&](size_t iLat, auto withMean) {
-        Sums& sums = perThread.local();
+        Sums& sums = perRow[iLat];
+        sums = Sums{std::vector<double>(n, 0.0), std::vector<double>(m, 0.0), std::vector<double>(m, 0.0),
+                    std::vector<double>(m, 0.0), std::vector<double>(m, 0.0)};
         for (size_t iR = 0; iR < n; ++iR)
             for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
                 const bool selected = pointSelected(volume, filters, iLat, iR, iLon);
@@ -149,7 +173,7 @@ SelectionStats selectedVolume(const dataset::StepVolume& volume, std::span<const
     stats.volumeByRadiusKm3.assign(n, 0.0);
     Sums all{{}, std::vector<double>(m, 0.0), std::vector<double>(m, 0.0), std::vector<double>(m, 0.0),
              std::vector<double>(m, 0.0)};
-    for (const Sums& sums : perThread) {
+    for (const Sums& sums : perRow) {
         for (size_t iR = 0; iR < n; ++iR)
             stats.volumeByRadiusKm3[iR] += sums.volume[iR];
         for (size_t iR = 0; iR < m; ++iR) {

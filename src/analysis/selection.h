@@ -65,6 +65,12 @@ std::vector<RangeFilter> resolveRangeFilters(std::span<const std::string> variab
 std::vector<RangeFilter> resolveRangeFilters(const dataset::Dataset& dataset, std::span<const NamedRange> ranges,
                                              const std::string& what = "brushes");
 
+// The selection `filters` make as a canonical text, equal for filters that select the same points
+// whatever order their axes and ranges were given in: axes sorted (variables by index, then
+// coordinates), each axis' ranges sorted, numbers exact (shortest round trip). What caches of a
+// selection's results are keyed by (server/analysis_caches.h, the painted features).
+std::string selectionKey(std::span<const RangeFilter> filters);
+
 struct SelectionStats {
     double volumeKm3 = 0;
     double fractionOfMantle = 0;             // of the grid's whole shell volume

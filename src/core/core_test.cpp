@@ -12,6 +12,10 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <vector>
+#include <thread>
+#include <chrono>
+#include <atomic>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -41,6 +45,88 @@ TEST(LruCache, KeepsTheMostRecentlyUsedAndCachesNoFailure)
     EXPECT_THROW(cache.get(5, []() -> std::string { fail("cannot read"); }), Error);
     EXPECT_EQ(*cache.get(5, make(5)), "5");  // the failure was not cached
     EXPECT_EQ(made, 5);
+}
+
+TEST(LruCache, CountsHitsAndMakingsAndEvictsTheLeastRecentlyUsed)
+{
+    LruCache<int, int> cache(2);
+    int how = -1;
+    cache.get(1, [] { return 10; }, &how);
+    EXPECT_EQ(how, (LruCache<int, int>::kMade));
+    EXPECT_EQ(*cache.get(1, []() -> int { ADD_FAILURE() << "made again"; return 0; }, &how), 10);
+    EXPECT_EQ(how, (LruCache<int, int>::kHit));
+    cache.get(2, [] { return 20; });
+    cache.get(3, [] { return 30; });  // 1 was used before 2: 1 goes
+    EXPECT_EQ(cache.size(), 2u);
+    EXPECT_EQ(cache.find(1), nullptr);
+    ASSERT_NE(cache.find(2), nullptr);
+    EXPECT_EQ(*cache.find(2), 20);
+    cache.put(4, std::make_shared<const int>(40));  // 2 was found last: 3 goes
+    EXPECT_EQ(cache.find(3), nullptr);
+    EXPECT_EQ(*cache.find(4), 40);
+    const auto counts = cache.counts();
+    EXPECT_EQ(counts.made, 3u);
+    EXPECT_EQ(counts.hits, 1u);
+    EXPECT_EQ(counts.shared, 0u);
+}
+
+// Callers that ask for a key while it is being made wait for that making instead of making it again;
+// a failure reaches them all and is not cached.
+TEST(LruCache, ConcurrentRequestsOfOneKeyShareOneMaking)
+{
+    constexpr int kThreads = 6;
+    LruCache<std::string, int> cache(4);
+    std::atomic<int> made{0};
+    auto slowMake = [&](int value) {
+        return [&, value] {
+            ++made;
+            // Hold the making until every other caller waits for it (counted by the cache).
+            const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+            while (cache.counts().shared < size_t(kThreads - 1) && std::chrono::steady_clock::now() < until)
+                std::this_thread::yield();
+            if (value < 0)
+                fail("cannot make {}", value);
+            return value;
+        };
+    };
+    std::vector<std::thread> threads;
+    std::vector<int> got(kThreads, 0);
+    for (int t = 0; t < kThreads; ++t)
+        threads.emplace_back([&, t] { got[size_t(t)] = *cache.get("k", slowMake(7)); });
+    for (auto& t : threads)
+        t.join();
+    EXPECT_EQ(made, 1);
+    EXPECT_EQ(got, std::vector<int>(kThreads, 7));
+    EXPECT_EQ(cache.counts().made, 1u);
+    EXPECT_EQ(cache.counts().shared, size_t(kThreads - 1));
+
+    LruCache<std::string, int> failing(4);
+    std::atomic<int> failures{0};
+    made = 0;
+    threads.clear();
+    auto failingMake = [&] {
+        ++made;
+        const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+        while (failing.counts().shared < size_t(kThreads - 1) && std::chrono::steady_clock::now() < until)
+            std::this_thread::yield();
+        fail("cannot read");
+        return 0;
+    };
+    for (int t = 0; t < kThreads; ++t)
+        threads.emplace_back([&] {
+            try {
+                failing.get("k", failingMake);
+            } catch (const Error& e) {
+                EXPECT_NE(std::string(e.what()).find("cannot read"), std::string::npos);
+                ++failures;
+            }
+        });
+    for (auto& t : threads)
+        t.join();
+    EXPECT_EQ(made, 1);
+    EXPECT_EQ(failures, kThreads);
+    EXPECT_EQ(failing.size(), 0u);
+    EXPECT_EQ(*failing.get("k", [] { return 3; }), 3);
 }
 
 TEST(Strings, NaturalOrderComparesDigitRunsByValue)

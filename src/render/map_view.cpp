@@ -67,7 +67,7 @@ struct MapPixelsKey {
     MapProjection projection;
     double centralMeridianDeg, centralLatitudeDeg, scale, cx, cy;
     int width, height;
-    bool operator==(const MapPixelsKey&) const = default;
+    auto operator<=>(const MapPixelsKey&) const = default;
 };
 using MapPixelPoints = std::vector<std::array<float, 2>>;
 

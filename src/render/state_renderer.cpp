@@ -116,9 +116,12 @@ std::shared_ptr<const dataset::StepVolume> StateRenderer::volumeFor(int step, in
     const auto start = std::chrono::steady_clock::now();
     const int labelLevel = std::min(m_paintSettings.level, int(m_dataset->levels().size()) - 1);
     const grid::SphericalGrid& labelGrid = m_dataset->levels()[size_t(labelLevel)].grid;
-    if (!m_paintLabels) {
+    if (!m_paintLabels && m_sources.featureLabels) {
+        m_paintLabels = m_sources.featureLabels(step, labelLevel, m_paintFilters, state::featureOptions(m_paintSettings));
+    } else if (!m_paintLabels) {
         const auto labelVolume = labelLevel == level ? volume : m_sources.volume(step, labelLevel);
-        m_paintLabels = analysis::extractFeatures(*labelVolume, m_paintFilters, state::featureOptions(m_paintSettings)).labels;
+        m_paintLabels = std::make_shared<const HugePageVector<int32_t>>(
+            analysis::extractFeatures(*labelVolume, m_paintFilters, state::featureOptions(m_paintSettings)).labels);
     }
     auto painted = dataset::StepVolume::withVariable(
         volume, featurePaintField(volume->grid(), labelGrid, *m_paintLabels, m_paintSettings));

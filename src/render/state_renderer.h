@@ -17,6 +17,7 @@
 #include "core/huge_pages.h"
 #include "core/system_memory.h"
 #include "dataset/dataset.h"
+#include "analysis/features.h"
 #include "analysis/pathline_storage.h"
 #include "render/pathline_scene.h"
 #include "render/image_io.h"
@@ -31,6 +32,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -62,11 +64,16 @@ uint64_t pictureMemoryBytes(const state::RenderState& state, bool withDepth);
 // choose a smaller --size".
 void checkPictureFitsMemory(const state::RenderState& state, bool withDepth, const AvailableMemory& available);
 
-// Where a StateRenderer gets volumes and pathlines. Unset members read the dataset directly
-// (Dataset::load, loadPathlineWindow); the server passes its shared caches.
+// Where a StateRenderer gets volumes, pathlines and the painted features' labels. Unset members read
+// the dataset directly (Dataset::load, loadPathlineWindow, extractFeatures); the server passes its
+// shared caches (the labels those of its features answers: server/analysis_caches.h).
 struct StateSources {
     std::function<std::shared_ptr<const dataset::StepVolume>(int step, int level)> volume;
     std::function<std::shared_ptr<const std::vector<analysis::PathlineSet>>(int step, int window)> pathlines;
+    // analysis::extractFeatures(volume(step, level), filters, options).labels, may be shared.
+    std::function<std::shared_ptr<const HugePageVector<int32_t>>(int step, int level, std::span<const analysis::RangeFilter> filters,
+                                                                 const analysis::FeatureOptions& options)>
+        featureLabels;
 };
 
 // How the level is chosen when the state leaves it open (RenderState::level unset).
@@ -200,7 +207,7 @@ private:
     state::FeatureSettings m_paintSettings;
     // Of m_paintKey, found on first use: the step's feature labels (on the grid of features.level),
     // and the painted volume of each level (the views of a stereo pair share one).
-    std::optional<HugePageVector<int32_t>> m_paintLabels;
+    std::shared_ptr<const HugePageVector<int32_t>> m_paintLabels;
     std::map<int, std::shared_ptr<const dataset::StepVolume>> m_paintedVolumes;
     int m_rendererStep = -1;
     std::map<std::pair<int, int>, std::unique_ptr<VolumeRenderer>> m_renderers;  // by (level, view), of m_rendererStep

@@ -106,39 +106,61 @@ json presetsJson(const std::optional<fs::path>& dir, const dataset::Dataset* dat
 }
 
 json selectionStatsJson(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters, int level,
-                        int profileStep, const std::atomic<bool>* cancel)
+                        int profileStep, const std::atomic<bool>* cancel, SelectionCache* selections, bool allProfiles,
+                        int* computed)
 {
     dataset.checkLevel(level);
     dataset.checkStep(profileStep);
     const int nSteps = int(dataset.steps().size());
-    const auto selections = analysis::selectionOverTime(dataset, filters, level, 0, nSteps - 1, [&](int step, int l) {
-        if (cancel && *cancel)
-            fail("statistics cancelled at step {} of {} (the client went away or the server is stopping)", step, nSteps);
-        return cache.getWithoutEvicting(step, l);
-    });
+    const auto perStep =
+        selections ? selections->overTime(dataset, cache, filters, level, 0, nSteps - 1, std::nullopt, cancel, computed)
+                   : analysis::selectionOverTime(dataset, filters, level, 0, nSteps - 1, [&](int step, int l) {
+                         if (cancel && *cancel)
+                             fail("statistics cancelled at step {} of {} (the client went away or the server is stopping)",
+                                  step, nSteps);
+                         if (computed)
+                             ++*computed;
+                         return cache.getWithoutEvicting(step, l);
+                     });
     json steps = json::array();
-    for (const analysis::StepSelection& sel : selections)
+    for (const analysis::StepSelection& sel : perStep)
         steps.push_back({{"step", sel.step},
                          {"timeMyr", sel.timeMyr},
                          {"volumeKm3", sel.stats.volumeKm3},
                          {"fractionOfMantle", sel.stats.fractionOfMantle}});
-    const analysis::SelectionStats& profile = selections[size_t(profileStep)].stats;
     const grid::SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
-    json radius = json::array(), depth = json::array(), selected = json::array(), shell = json::array();
+    // The selected and the whole volume per radius index, 0 beyond what the statistics hold.
+    auto perRadius = [&](const analysis::SelectionStats& stats) {
+        json selected = json::array(), shell = json::array();
+        for (size_t iR = 0; iR < grid.nR(); ++iR) {
+            selected.push_back(iR < stats.volumeByRadiusKm3.size() ? stats.volumeByRadiusKm3[iR] : 0.0);
+            shell.push_back(iR < stats.shellVolumeByRadiusKm3.size() ? stats.shellVolumeByRadiusKm3[iR] : 0.0);
+        }
+        return std::pair{std::move(selected), std::move(shell)};
+    };
+    json radius = json::array(), depth = json::array();
     for (size_t iR = 0; iR < grid.nR(); ++iR) {
         radius.push_back(grid.rKm[iR]);
         depth.push_back(kSurfaceRadiusKm - grid.rKm[iR]);
-        selected.push_back(iR < profile.volumeByRadiusKm3.size() ? profile.volumeByRadiusKm3[iR] : 0.0);
-        shell.push_back(iR < profile.shellVolumeByRadiusKm3.size() ? profile.shellVolumeByRadiusKm3[iR] : 0.0);
     }
-    return {{"level", level},
-            {"steps", std::move(steps)},
-            {"profile",
-             {{"step", profileStep},
-              {"radiusKm", std::move(radius)},
-              {"depthKm", std::move(depth)},
-              {"volumeKm3", std::move(selected)},
-              {"shellVolumeKm3", std::move(shell)}}}};
+    auto [selected, shell] = perRadius(perStep[size_t(profileStep)].stats);
+    json out = {{"level", level},
+                {"steps", std::move(steps)},
+                {"profile",
+                 {{"step", profileStep},
+                  {"radiusKm", std::move(radius)},
+                  {"depthKm", std::move(depth)},
+                  {"volumeKm3", std::move(selected)},
+                  {"shellVolumeKm3", std::move(shell)}}}};
+    if (allProfiles) {
+        json profiles = json::array();
+        for (const analysis::StepSelection& sel : perStep) {
+            auto [v, s] = perRadius(sel.stats);
+            profiles.push_back({{"step", sel.step}, {"volumeKm3", std::move(v)}, {"shellVolumeKm3", std::move(s)}});
+        }
+        out["profiles"] = std::move(profiles);
+    }
+    return out;
 }
 
 namespace {
@@ -191,7 +213,8 @@ FeatureSteps featureSteps(const dataset::Dataset& dataset, StepCache& cache, std
                           const analysis::FeatureOptions& options, double minOverlapShare, int level,
                           std::optional<size_t> radialVelocity, std::optional<size_t> density,
                           std::span<const double> fluxDepths, const std::atomic<bool>* cancel,
-                          const std::function<void(int done, int total)>& progress)
+                          const std::function<void(int done, int total)>& progress,
+                          const std::function<void(int step, std::shared_ptr<const HugePageVector<int32_t>>)>& labels)
 {
     const int nSteps = int(dataset.steps().size());
     FeatureSteps out{json::array(), {}, analysis::FeatureSeries(dataset, minOverlapShare, "features")};
@@ -204,6 +227,8 @@ FeatureSteps featureSteps(const dataset::Dataset& dataset, StepCache& cache, std
             if (radialVelocity && !fluxDepths.empty())
                 out.fluxes.push_back(analysis::shellFluxes(*s.volume, *radialVelocity, fluxDepths, filters, std::nullopt, density));
             out.series.add(s.step, s.volume, s.features);
+            if (labels)
+                labels(s.step, std::make_shared<const HugePageVector<int32_t>>(std::move(s.features.labels)));
         },
         {cancel, progress});
     if (stopped)
@@ -313,7 +338,8 @@ json fluxJson(const dataset::Dataset& dataset, const std::vector<std::vector<ana
 json featureSeriesJson(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters,
                        const analysis::FeatureOptions& options, double minOverlapShare, analysis::StallMeasure stallBy, int level,
                        double sigmas, const std::atomic<bool>* cancel,
-                       const std::function<void(int done, int total)>& progress)
+                       const std::function<void(int done, int total)>& progress,
+                       const std::function<void(int step, std::shared_ptr<const HugePageVector<int32_t>>)>& labels)
 {
     dataset.checkLevel(level);
     if (filters.empty())
@@ -330,7 +356,7 @@ json featureSeriesJson(const dataset::Dataset& dataset, StepCache& cache, std::s
             fluxDepths.push_back(d);
 
     FeatureSteps run = featureSteps(dataset, cache, filters, options, minOverlapShare, level, radialVelocity, density,
-                                    fluxDepths, cancel, progress);
+                                    fluxDepths, cancel, progress, labels);
     const auto& fluxes = run.fluxes;
     // The tables of `raypc features --tracks/--events/--stalls` and `raypc flux`, written by the same
     // code (analysis/feature_csv.h), for the UI's CSV buttons.

@@ -10,6 +10,7 @@
 #include "analysis/features.h"
 #include "analysis/persistence.h"
 #include "analysis/selection.h"
+#include "server/analysis_caches.h"
 #include "server/dataset_caches.h"
 #include "server/limits.h"
 #include "server/step_cache.h"
@@ -46,9 +47,13 @@ nlohmann::json presetsJson(const std::optional<std::filesystem::path>& dir, cons
 // ({level, steps: [{step, timeMyr, volumeKm3, fractionOfMantle}], profile: {step, radiusKm,
 // depthKm, volumeKm3, shellVolumeKm3}}). Volumes come through `cache` without evicting what the
 // renderers use. Throws raypc::Error for a level out of range, or when `cancel` becomes true (checked
-// before every step).
+// before every step computed). With `selections` each step's statistics come from that cache and
+// are kept there (the same numbers, so the same bytes). With `allProfiles` also `profiles`: every
+// step's {step, volumeKm3, shellVolumeKm3} per radius, so that a client follows the step without
+// asking again. `computed`, when given, is increased by the steps computed (not taken from a cache).
 nlohmann::json selectionStatsJson(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters,
-                                  int level, int profileStep, const std::atomic<bool>* cancel = nullptr);
+                                  int level, int profileStep, const std::atomic<bool>* cancel = nullptr,
+                                  SelectionCache* selections = nullptr, bool allProfiles = false, int* computed = nullptr);
 
 // POST /api/features (docs/protocol.md, FeatureSeries): the features of the selection `filters` in
 // every step at `level` (extractFeatures with `options`), followed through the steps (FeatureSeries,
@@ -57,11 +62,13 @@ nlohmann::json selectionStatsJson(const dataset::Dataset& dataset, StepCache& ca
 // the shells at those depths (inside the grid) per step with the avalanche steps (`sigmas`).
 // Volumes come through `cache` without evicting. Throws raypc::Error for no filters, a level out of
 // range, a dataset without velocity, or when `cancel` becomes true (checked before every step).
-// `progress` hears the steps done before each step and at the end.
+// `progress` hears the steps done before each step and at the end; `labels`, when set, is handed
+// each step's feature labels (to keep some for the painted features: FeatureLabelsCache).
 nlohmann::json featureSeriesJson(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters,
                                  const analysis::FeatureOptions& options, double minOverlapShare, analysis::StallMeasure stallBy,
                                  int level, double sigmas, const std::atomic<bool>* cancel = nullptr,
-                                 const std::function<void(int done, int total)>& progress = {});
+                                 const std::function<void(int done, int total)>& progress = {},
+                                 const std::function<void(int step, std::shared_ptr<const HugePageVector<int32_t>>)>& labels = {});
 
 // The line attributes of a window as one binary answer: u32 little-endian header length, a UTF-8
 // JSON header {step, window, lines, columns, units, sets: [{injectionStep, injectionTimeMyr, lines}]},

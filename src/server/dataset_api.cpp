@@ -131,9 +131,15 @@ ApiAnswer sample(const ApiContext& api, const ApiRequest& request)
 ApiAnswer selection(const ApiContext& api, const ApiRequest& request)
 {
     const render::ResolvedState resolved = resolveBody(api, request.body);
-    const auto volume = api.cache->get(resolved.state.step, 0);
-    const auto s = analysis::selectedVolume(*volume, resolved.params.brushes);
-    return jsonAnswer({{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}, {"step", resolved.state.step}});
+    const int step = resolved.state.step;
+    analysis::SelectionStats s;
+    if (api.selections) {
+        const dataset::Dataset& dataset = *api.dataset;
+        s = api.selections->overTime(dataset, *api.cache, resolved.params.brushes, 0, step, step)[0].stats;
+    } else {
+        s = analysis::selectedVolume(*api.cache->get(step, 0), resolved.params.brushes);
+    }
+    return jsonAnswer({{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}, {"step", step}});
 }
 
 // The bounds of limits.h, checked before anything is allocated.
@@ -185,7 +191,7 @@ ApiAnswer screenshot(const ApiContext& api, const ApiRequest& request)
     if (resolved.state.pair && api.pairSecond)
         return pairScreenshot(api, resolved, request.cancel);
     const auto start = std::chrono::steady_clock::now();
-    render::StateRenderer renderer(api.dataset, cacheSources(api.cache, api.pathlines));
+    render::StateRenderer renderer(api.dataset, cacheSources(api.cache, api.pathlines, api.featureLabels));
     const auto still = renderer.renderStill(resolved, 0, request.cancel);
     const int done = still.frames.back().passes();  // the last view's: a stereo pass renders the left eye first
     if (done < std::max(1, resolved.state.passes))
@@ -212,7 +218,7 @@ ApiAnswer slice(const ApiContext& api, const ApiRequest& request)
         fail("slice: image {}x{} is over the limit of {} pixels", state.width, state.height, api.limits.maxScreenshotPixels);
     const auto start = std::chrono::steady_clock::now();
     const bool map = *view == "map";
-    render::StateRenderer renderer(api.dataset, cacheSources(api.cache, api.pathlines));
+    render::StateRenderer renderer(api.dataset, cacheSources(api.cache, api.pathlines, api.featureLabels));
     const render::ImageRgba8 picture =
         renderer.slicePicture(resolved, map ? render::StateRenderer::Slice::Map : render::StateRenderer::Slice::Section);
     json header{{"view", *view}, {"width", picture.width}, {"height", picture.height}, {"step", state.step}};
@@ -286,12 +292,20 @@ ApiAnswer stats(const ApiContext& api, const ApiRequest& request)
     const int level =
         queryParameter(request.query, "level") ? parseIntParameter(request.query, "level") : std::min(1, levels - 1);
     dataset.checkLevel(level);
+    bool allProfiles = false;
+    if (const auto profiles = queryParameter(request.query, "profiles")) {
+        if (*profiles != "all")
+            fail("profiles: expected 'all' (every step's depth profile), found '{}'", profiles->substr(0, 40));
+        allProfiles = true;
+    }
     const render::ResolvedState resolved = resolveBody(api, request.body);
     const auto start = std::chrono::steady_clock::now();
+    int computed = 0;
     json result = selectionStatsJson(dataset, *api.cache, resolved.params.brushes, level, resolved.state.step,
-                                     request.cancel);
-    spdlog::info("stats: {} steps at level {} in {:.0f} ms", result["steps"].size(), level, millisecondsSince(start));
-    return {result.dump(), "application/json"};
+                                     request.cancel, api.selections, allProfiles, &computed);
+    spdlog::info("stats: {} steps ({} computed) at level {} in {:.0f} ms", result["steps"].size(), computed, level,
+                 millisecondsSince(start));
+    return {result.dump(), "application/json", computed};
 }
 
 // The level of a features or time–depth request: ?level=, else the state's features.level.
@@ -319,20 +333,50 @@ ApiAnswer features(const ApiContext& api, const ApiRequest& request)
     std::function<void(int, int)> progress;
     if (job && api.jobs)
         progress = [&](int done, int total) { api.jobs->running(*job, done, total); };
-    json result;
+    const int nSteps = int(dataset.steps().size());
+    // The labels of the state's step are kept for its painting (what the UI shows next).
+    std::function<void(int, std::shared_ptr<const HugePageVector<int32_t>>)> keepLabels;
+    if (api.featureLabels)
+        keepLabels = [&](int step, std::shared_ptr<const HugePageVector<int32_t>> labels) {
+            if (step == resolved.state.step)
+                api.featureLabels->put(step, level, resolved.params.brushes, options, std::move(labels));
+        };
+    auto compute = [&] {
+        return jsonAnswer(featureSeriesJson(dataset, *api.cache, resolved.params.brushes, options, settings.minOverlapShare,
+                                            settings.stallBy, level, sigmas, request.cancel, progress, keepLabels))
+            .body;
+    };
+    std::shared_ptr<const std::string> body;
+    int how = FeatureSeriesCache::kMade;
     try {
-        result = featureSeriesJson(dataset, *api.cache, resolved.params.brushes, options, settings.minOverlapShare,
-                                   settings.stallBy, level, sigmas, request.cancel, progress);
+        if (!api.featureSeries) {
+            body = std::make_shared<const std::string>(compute());
+        } else {
+            const std::string key = featureSeriesKey(resolved.params.brushes, options, settings.minOverlapShare,
+                                                     settings.stallBy, level, sigmas);
+            try {
+                body = api.featureSeries->get(key, compute, &how);
+            } catch (const Error&) {
+                // Another request's computation we waited for failed: when it was cancelled (its
+                // client went away) and this one was not, compute for this one.
+                if (how != FeatureSeriesCache::kShared || (request.cancel && *request.cancel))
+                    throw;
+                body = api.featureSeries->get(key, compute, &how);
+            }
+        }
     } catch (...) {
         if (progress)
             api.jobs->ended(*job, false);
         throw;
     }
-    if (progress)
+    if (progress) {
+        if (how != FeatureSeriesCache::kMade)
+            progress(nSteps, nSteps);
         api.jobs->ended(*job, true);
-    spdlog::info("features: {} tracks in {} steps at level {} in {:.0f} ms", result["tracks"].size(),
-                 result["steps"].size(), level, millisecondsSince(start));
-    return jsonAnswer(result);
+    }
+    spdlog::info("features: {} steps at level {} {} in {:.0f} ms", nSteps, level,
+                 how == FeatureSeriesCache::kMade ? "computed" : "kept", millisecondsSince(start));
+    return {*body, "application/json", how == FeatureSeriesCache::kMade ? nSteps : 0};
 }
 
 // The time–depth picture (PNG) of the state's selection over the series: ?of=share (default),
@@ -364,14 +408,16 @@ ApiAnswer timeDepth(const ApiContext& api, const ApiRequest& request)
         fail("time-depth: image {}x{} is over the limit of {} pixels", width, height, api.limits.maxScreenshotPixels);
     render::checkTimeDepthPictureSize(width, height);
     const int last = int(dataset.steps().size()) - 1;
-    const std::vector<analysis::StepSelection> selections = analysis::selectionOverTime(
-        dataset, resolved.params.brushes, level, 0, last,
-        [&](int step, int l) {
-            if (request.cancel && *request.cancel)
-                fail("time-depth cancelled at step {} (the client went away or the server is stopping)", step);
-            return api.cache->getWithoutEvicting(step, l);
-        },
-        {}, mean);
+    const std::vector<analysis::StepSelection> selections =
+        api.selections ? api.selections->overTime(dataset, *api.cache, resolved.params.brushes, level, 0, last, mean, request.cancel)
+                       : analysis::selectionOverTime(
+                             dataset, resolved.params.brushes, level, 0, last,
+                             [&](int step, int l) {
+                                 if (request.cancel && *request.cancel)
+                                     fail("time-depth cancelled at step {} (the client went away or the server is stopping)", step);
+                                 return api.cache->getWithoutEvicting(step, l);
+                             },
+                             {}, mean);
     if (csv)  // the values behind the picture: `raypc stats --profile [--profile-var]`'s table
         return {analysis::profileCsvHeader(mean ? &dataset.variables()[*mean] : nullptr) +
                     analysis::profileCsvRows(selections, dataset.levels()[size_t(level)].grid),
@@ -489,7 +535,7 @@ const Route kRoutes[] = {
     {HttpMethod::Post, "/api/slice", Lane::Slice, slice, "view"},
     {HttpMethod::Get, "/api/probe", Lane::Worker, probe, "step,lat,lon,depthKm,var,level"},
     {HttpMethod::Get, "/api/presets", Lane::Worker, presets, ""},
-    {HttpMethod::Post, "/api/stats", Lane::Statistics, stats, "level"},
+    {HttpMethod::Post, "/api/stats", Lane::Statistics, stats, "level,profiles"},
     {HttpMethod::Post, "/api/features", Lane::Statistics, features, "level,sigmas,job"},
     {HttpMethod::Get, "/api/job-progress", Lane::Network, jobProgress, "job", false},
     {HttpMethod::Post, "/api/time-depth", Lane::Statistics, timeDepth, "level,of,var,format,width,height"},

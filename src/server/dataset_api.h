@@ -6,6 +6,7 @@
 #pragma once
 
 #include "dataset/dataset.h"
+#include "server/analysis_caches.h"
 #include "server/api_views.h"
 #include "server/dataset_caches.h"
 #include "server/limits.h"
@@ -47,6 +48,10 @@ struct ApiContext {
     // the second's context, which a screenshot of a state with `pair` draws at its right.
     std::shared_ptr<const dataset::Dataset> pairFirst;
     const ApiContext* pairSecond = nullptr;
+    // Kept analyses (server/analysis_caches.h); nullptr: computed for each request.
+    SelectionCache* selections = nullptr;       // POST /api/stats, /api/selection, /api/time-depth
+    FeatureSeriesCache* featureSeries = nullptr;  // POST /api/features
+    FeatureLabelsCache* featureLabels = nullptr;  // the painted features (POST /api/features puts its step's)
 };
 
 // One API request as the handlers see it: the percent-encoded query, the body, and a flag that
@@ -61,6 +66,9 @@ struct ApiRequest {
 struct ApiAnswer {
     std::string body;
     std::string contentType;
+    // Answers over the steps: how many steps this request computed (0: all from the kept analyses),
+    // sent as the header X-Raypc-Steps-Computed (docs/protocol.md); -1: no such header.
+    int stepsComputed = -1;
 };
 
 enum class HttpMethod { Get, Post };

@@ -8,7 +8,7 @@ namespace raypc::server {
 
 namespace fs = std::filesystem;
 
-render::StateSources cacheSources(StepCache* volumes, PathlineCache* lines)
+render::StateSources cacheSources(StepCache* volumes, PathlineCache* lines, FeatureLabelsCache* labels)
 {
     render::StateSources s;
     s.volume = [volumes](int step, int level) { return volumes->get(step, level); };
@@ -17,6 +17,11 @@ render::StateSources cacheSources(StepCache* volumes, PathlineCache* lines)
             fail("this server has no pathline cache");
         return lines->get(step, window);
     };
+    if (labels)
+        s.featureLabels = [volumes, labels](int step, int level, std::span<const analysis::RangeFilter> filters,
+                                            const analysis::FeatureOptions& options) {
+            return labels->get(*volumes, step, level, filters, options);
+        };
     return s;
 }
 

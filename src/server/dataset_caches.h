@@ -10,6 +10,7 @@
 #include "analysis/pathline_storage.h"
 #include "analysis/persistence.h"
 #include "render/state_renderer.h"
+#include "server/analysis_caches.h"
 #include "server/step_cache.h"
 
 #include <filesystem>
@@ -46,8 +47,9 @@ private:
     LruCache<std::pair<int, int>, Pairs> m_cache;  // by (step, variable)
 };
 
-// The server's shared caches as the sources of a render::StateRenderer (valid while they live).
-render::StateSources cacheSources(StepCache* volumes, PathlineCache* lines);
+// The server's shared caches as the sources of a render::StateRenderer (valid while they live);
+// without `labels` the renderer extracts the painted features' labels itself.
+render::StateSources cacheSources(StepCache* volumes, PathlineCache* lines, FeatureLabelsCache* labels = nullptr);
 
 // What a server process reads a dataset through: the dataset and its volume and pathline caches,
 // built alike by the Server and by every other rank of a distributed server (rank_pool.h).

@@ -71,7 +71,10 @@ Response bodyResponse(std::string body, std::string_view contentType, unsigned v
 
 Response answerResponse(ApiAnswer answer, unsigned version, bool keepAlive)
 {
-    return bodyResponse(std::move(answer.body), answer.contentType, version, keepAlive);
+    Response res = bodyResponse(std::move(answer.body), answer.contentType, version, keepAlive);
+    if (answer.stepsComputed >= 0)
+        res.set("X-Raypc-Steps-Computed", std::to_string(answer.stepsComputed));
+    return res;
 }
 
 // One HTTP connection (keep-alive): routes requests, upgrades /ws to a WsSession. At most one request

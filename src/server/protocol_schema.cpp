@@ -307,7 +307,16 @@ const std::vector<Definition>& messages()
                          {"depthKm", arrayOf(number(""), ""), "the same as depths below the surface, km"},
                          {"volumeKm3", arrayOf(number(""), ""), "selected volume of each radius' dual shell, km³"},
                          {"shellVolumeKm3", arrayOf(number(""), ""), "volume of each dual shell, km³"}}),
-                  "the selection per radius at the state's step"}}));
+                  "the selection per radius at the state's step"},
+                 {"profiles",
+                  arrayOf(named("StepProfile", "",
+                                {{"step", integer(""), "the step"},
+                                 {"volumeKm3", arrayOf(number(""), ""), "selected volume of each radius' dual shell, km³"},
+                                 {"shellVolumeKm3", arrayOf(number(""), ""), "volume of each dual shell, km³"}}),
+                          ""),
+                  "with `profiles=all` only: every step's selection per radius (the radii of `profile`), so that a "
+                  "client follows the step without asking again",
+                  false}}));
         }
         d.push_back(message(
             "FeatureSeries", "POST /api/features",

@@ -44,7 +44,7 @@ RenderSession::RenderSession(RenderContext& context, SessionSink sink, std::stri
     : m_context(context),
       m_sink(std::move(sink)),
       m_name(std::move(name)),
-      m_renderer(context.dataset, cacheSources(context.cache, context.pathlines)),
+      m_renderer(context.dataset, cacheSources(context.cache, context.pathlines, context.featureLabels)),
       m_rankSession(context.ranks ? context.ranks->openSession() : 0),
       m_thread([this] { loop(); })
 {

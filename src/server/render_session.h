@@ -40,6 +40,7 @@ struct RenderContext {
     std::shared_ptr<const dataset::Dataset> dataset;
     StepCache* cache = nullptr;
     PathlineCache* pathlines = nullptr;  // line windows shared by the sessions (each builds its own scene)
+    FeatureLabelsCache* featureLabels = nullptr;  // the painted features' labels, shared with POST /api/features
     // Throughput of the machine in estimated samples (VolumeRenderer::estimateSamplesPerPass) per
     // second, all threads; updated from every pass, used to choose the interactive level.
     std::atomic<double> samplesPerSecond{0.0};

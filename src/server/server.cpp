@@ -132,6 +132,10 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     s.api.cache = s.cache.get();
     s.api.pathlines = s.pathlines.get();
     s.api.persistence = s.persistence.get();
+    s.api.selections = &s.selections;
+    s.api.featureSeries = &s.featureSeries;
+    s.api.featureLabels = &s.featureLabels;
+    s.render.featureLabels = &s.featureLabels;
     s.api.examples = s.options.examples;
     s.api.infoJson = infoJson(*s.dataset, s.options.limits).dump(-1, ' ', false, json::error_handler_t::replace);
     s.api.limits = s.options.limits;
@@ -156,6 +160,10 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
         api.cache = second->cache.get();
         api.pathlines = second->pathlines.get();
         api.persistence = second->persistence.get();
+        api.selections = &second->selections;
+        api.featureSeries = &second->featureSeries;
+        api.featureLabels = &second->featureLabels;
+        second->render.featureLabels = &second->featureLabels;
         api.series = nullptr;
         api.pairFirst = s.dataset;
         // Each info is its own dataset's, with the pair's key (pairJson) added.

@@ -117,6 +117,10 @@ struct SecondDataset {
     std::unique_ptr<StepCache> cache;
     std::unique_ptr<PathlineCache> pathlines;
     std::unique_ptr<PersistenceCache> persistence;
+    // Its kept analyses: their keys do not name the dataset, so the first's must not answer for it.
+    SelectionCache selections;
+    FeatureSeriesCache featureSeries{8};
+    FeatureLabelsCache featureLabels;
     ApiContext api;
     RenderContext render;
 };
@@ -137,6 +141,9 @@ struct ServerContext {
     std::unique_ptr<StepCache> cache;
     std::unique_ptr<PathlineCache> pathlines;
     std::unique_ptr<PersistenceCache> persistence;
+    SelectionCache selections;            // kept selection statistics per step; api.selections points here
+    FeatureSeriesCache featureSeries{8};  // kept features answers; api.featureSeries points here
+    FeatureLabelsCache featureLabels;     // painted features' labels; api.featureLabels, render.featureLabels
     ApiContext api;
     RenderContext render;
     LinkedState link;  // the state the UI shows, for programs (GET/POST /api/link); api.link points here

@@ -1617,6 +1617,22 @@ const cases = {
     await csv.saveAs(csvFile);
     const rows = readFileSync(csvFile, 'utf8').trim().split('\n');
     check(rows[0] === 'step,time_myr,selected_volume_km3,selected_percent_of_mantle,level' && rows.length === nSteps + 1, `statistics CSV: ${rows.join(' | ')}`);
+    // A step change is drawn from the answer the panel has (every step's figures and profiles): no
+    // new request, the new step's depth profile and "now" figure.
+    const asked = await page.evaluate(() => window.__raypc.statsRequests);
+    const other = (step + 1) % nSteps;
+    await page.evaluate((st) => window.__raypc.setState({ ...window.__raypc.state(), step: st }), other);
+    await page.waitForFunction((st) => window.__raypc.stats?.profile.step === st, other, { timeout: 30000 })
+      .catch(() => { throw new TestFailure(`the depth profile did not follow the step to ${other}`); });
+    await page.waitForTimeout(600); // past the requests' debounce
+    const moved = await page.evaluate(() => ({ stats: window.__raypc.stats, asked: window.__raypc.statsRequests,
+      note: document.getElementById('statsNote').textContent }));
+    const otherNow = moved.stats.steps.find((s) => s.step === other);
+    const otherSum = moved.stats.profile.volumeKm3.reduce((a, b) => a + b, 0);
+    check(moved.asked === asked, `a step change asked for the statistics again (${asked} -> ${moved.asked} requests)`);
+    check(Math.abs(otherSum - otherNow.volumeKm3) <= 1e-6 * Math.max(1, otherNow.volumeKm3) &&
+      moved.note.includes(`now ${(otherNow.fractionOfMantle * 100).toFixed(2)} %`),
+      `after the step change to ${other}: profile sums to ${otherSum}, the step's volume is ${otherNow.volumeKm3}; note '${moved.note}'`);
     await page.uncheck('#statsExact');
     await waitStats(1);
     const approx = await page.textContent('#statsNote');

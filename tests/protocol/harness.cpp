@@ -212,7 +212,7 @@ HttpAnswer httpRequest(uint16_t port, http::verb method, const std::string& targ
                                  (writeError ? " (after a failed write: " + writeError.message() + ")" : ""));
     const auto& res = parser.get();
     return {int(res.result_int()), res.body(), std::string(res[http::field::content_type]),
-            std::string(res[http::field::set_cookie])};
+            std::string(res[http::field::set_cookie]), std::string(res["X-Raypc-Steps-Computed"])};
 }
 
 HttpAnswer httpGet(uint16_t port, const std::string& target,

@@ -95,6 +95,7 @@ void setReceiveTimeout(tcp::socket& socket, int seconds);
 struct HttpAnswer {
     int status = 0;
     std::string body, contentType, setCookie;
+    std::string stepsComputed;  // the header X-Raypc-Steps-Computed, empty without it
 };
 // One request on a new connection (Host: 127.0.0.1:PORT unless `headers` sets it).
 HttpAnswer httpRequest(uint16_t port, http::verb method, const std::string& target, const std::string& body = "",

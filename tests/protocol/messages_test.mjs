@@ -101,6 +101,7 @@ try {
   if (!presets.some((p) => p.unavailable)) fail('GET /api/presets: the preset for another dataset is not unavailable');
   expectMessage('Presets', presets, 'GET /api/presets');
   expectMessage('SelectionOverTime', await getJson('api/stats?level=0', post({ ...state, brushes: [{ name: 'depth', min: 500, max: 1500 }] })), 'POST /api/stats');
+  expectMessage('SelectionOverTime', await getJson('api/stats?level=0&profiles=all', post({ ...state, brushes: [{ name: 'depth', min: 500, max: 1500 }] })), 'POST /api/stats?profiles=all');
   const caps = { ...state, brushes: [{ name: 'depth', min: 0, max: 660 }, { name: 'lat', min: -90, max: -60 }, { name: 'lat', min: 60, max: 90 }],
     features: { ...state.features, depthsKm: [300, 660], bandHalfWidthKm: 100 } };
   const features = await getJson('api/features?job=protocol-test_1', post(caps));

@@ -301,6 +301,18 @@ TEST(Serve, APairAnswersForEachDatasetByTheDatasetParameter)
     EXPECT_NE(errorOf("/api/link?dataset=1").find("unknown parameter 'dataset' for /api/link"), std::string::npos);
     EXPECT_THROW(WsClient(server.port, "/ws?dataset=2"), std::exception);
 
+    // Each dataset keeps its own analyses: the same brushes' statistics on the second are computed
+    // for it (its one step), not answered from what the first kept.
+    json depthState = smallState();
+    depthState["brushes"] = {{{"name", "depth"}, {"min", 500}, {"max", 1500}}};
+    const auto statsFirst = httpRequest(server.port, http::verb::post, "/api/stats?level=0", depthState.dump());
+    ASSERT_EQ(statsFirst.status, 200) << statsFirst.body;
+    const auto statsSecond = httpRequest(server.port, http::verb::post, "/api/stats?level=0&dataset=1", depthState.dump());
+    ASSERT_EQ(statsSecond.status, 200) << statsSecond.body;
+    EXPECT_EQ(statsSecond.stepsComputed, "1");
+    EXPECT_EQ(json::parse(statsSecond.body)["steps"].size(), 1u);
+    EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/stats?level=0&dataset=1", depthState.dump()).stepsComputed, "0");
+
     // The first's state, with a brush on a variable the second lacks, for the second: step matched
     // by time (its one step), the brush left out, the colour variable it lacks replaced; said in the
     // frames' `pair.notes`.
@@ -772,6 +784,49 @@ TEST(Serve, PresetsAreTheExampleStates)
     EXPECT_EQ(mine[0]["title"], "my view");  // not in titles.tsv: its name
     EXPECT_EQ(mine[1]["name"], "other-view");
     EXPECT_EQ(mine[1]["title"], "The other view");
+}
+
+// The kept analyses (docs/scaling.md): a second identical /api/stats or /api/features request, or one
+// that differs only by the step (and, for features, the painting), computes no step
+// (X-Raypc-Steps-Computed: 0) and answers what the first answered.
+TEST(Serve, RepeatedStatisticsAndFeaturesAreAnsweredFromTheKeptAnalyses)
+{
+    FixtureServer server;
+    json state = smallState();
+    state["step"] = 1;
+    state["brushes"] = {{{"name", "depth"}, {"min", 500}, {"max", 1500}}};
+    const auto first = httpRequest(server.port, http::verb::post, "/api/stats?level=0", state.dump());
+    ASSERT_EQ(first.status, 200) << first.body;
+    EXPECT_EQ(first.stepsComputed, "3");
+    const auto again = httpRequest(server.port, http::verb::post, "/api/stats?level=0", state.dump());
+    EXPECT_EQ(again.stepsComputed, "0");
+    EXPECT_EQ(again.body, first.body);
+    state["step"] = 2;
+    const auto stepped = httpRequest(server.port, http::verb::post, "/api/stats?level=0&profiles=all", state.dump());
+    ASSERT_EQ(stepped.status, 200) << stepped.body;
+    EXPECT_EQ(stepped.stepsComputed, "0") << "a step change computes nothing";
+    const json s1 = json::parse(first.body), s2 = json::parse(stepped.body);
+    EXPECT_EQ(s2["steps"], s1["steps"]);
+    EXPECT_EQ(s2["profile"]["step"], 2);
+    ASSERT_EQ(s2["profiles"].size(), 3u);
+    EXPECT_EQ(s2["profiles"][1]["volumeKm3"], s1["profile"]["volumeKm3"]) << "step 1's profile, as the first answer gave it";
+    EXPECT_EQ(s2["profiles"][2]["volumeKm3"], s2["profile"]["volumeKm3"]);
+    state["brushes"][0]["max"] = 1600;
+    EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/stats?level=0", state.dump()).stepsComputed, "3") << "a new brush";
+    EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/stats?profiles=some", state.dump()).status, 400);
+
+    const auto features = httpRequest(server.port, http::verb::post, "/api/features?job=kept-1", state.dump());
+    ASSERT_EQ(features.status, 200) << features.body;
+    EXPECT_EQ(features.stepsComputed, "3");
+    state["step"] = 0;
+    state["version"] = raypc::state::kRenderStateVersion;  // a document that has `features`
+    state["features"] = {{"colorById", true}};
+    const auto kept = httpRequest(server.port, http::verb::post, "/api/features?job=kept-2", state.dump());
+    EXPECT_EQ(kept.stepsComputed, "0");
+    EXPECT_EQ(kept.body, features.body);
+    const json progress = json::parse(httpGet(server.port, "/api/job-progress?job=kept-2").body);
+    EXPECT_EQ(progress["state"], "done") << progress.dump();
+    EXPECT_EQ(progress["done"], 3) << progress.dump();
 }
 
 // POST /api/stats: the selected volume of every step at level 0 equals `raypc stats` and the

@@ -128,8 +128,11 @@ export async function fetchPresets(): Promise<Preset[]> {
 }
 
 // Selected volume of every step and the depth profile of the state's step (POST /api/stats).
-export async function postStats(state: RenderState, level: number | undefined, signal?: AbortSignal): Promise<SelectionOverTime> {
-  const r = await fetch(`api/stats${level === undefined ? '' : `?level=${level}`}`, {
+// With `allProfiles` the answer holds every step's depth profile (`profiles`), not only the state's step's.
+export async function postStats(state: RenderState, level: number | undefined, signal?: AbortSignal,
+  allProfiles = false): Promise<SelectionOverTime> {
+  const query = [level === undefined ? '' : `level=${level}`, allProfiles ? 'profiles=all' : ''].filter((x) => x).join('&');
+  const r = await fetch(`api/stats${query ? `?${query}` : ''}`, {
     method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(state), signal,
   });
   return (await check(r, 'POST /api/stats')).json();

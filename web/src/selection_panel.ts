@@ -205,8 +205,9 @@ export class SelectionPanel {
       : 'computing…';
   }
 
-  // Asks for the statistics when the brushes, the step or the level asked for changed (debounced;
-  // not while playing, when only the current-step mark moves).
+  // Asks for the statistics when the brushes or the level asked for changed (debounced; not while
+  // playing). The answer holds every step's figures and depth profile (`profiles=all`), so a step
+  // change only redraws from it: the step is not part of the request's key.
   refreshStats(): void {
     const exact = $<HTMLInputElement>('statsExact').checked;
     const state = this.store.state;
@@ -220,8 +221,8 @@ export class SelectionPanel {
       for (const id of ['statsTime', 'statsProfile']) $(id).innerHTML = '';
       return;
     }
-    const key = JSON.stringify([state.brushes, state.step, exact]);
-    if (this.stats) drawTimePlot($('statsTime') as unknown as SVGSVGElement, this.stats, state.step);
+    const key = JSON.stringify([state.brushes, exact]);
+    if (this.stats && key === this.statsKey) this.showStats(this.stats);
     if (key === this.statsKey || this.host.playing()) return;
     clearTimeout(this.statsTimer);
     this.statsTimer = window.setTimeout(() => {
@@ -232,26 +233,36 @@ export class SelectionPanel {
       const brushesKey = JSON.stringify(this.store.state.brushes);
       this.observer?.statsRequested();
       $('statsNote').textContent = 'computing…';
-      postStats(cloneState(this.store.state), exact ? 0 : undefined, ctl.signal)
+      postStats(cloneState(this.store.state), exact ? 0 : undefined, ctl.signal, true)
         .then((st) => {
           if (ctl.signal.aborted) return;
           this.stats = st;
           this.statsBrushes = brushesKey;
-          this.observer?.stats(st);
-          const step = this.store.state.step;
-          const cur = st.steps.find((x) => x.step === step);
-          // Exact figures (level 0) agree with the selection above and `raypc stats`; the quick ones
-          // of a coarser grid are labelled as approximate.
-          const pct = (x: number) => (x * 100).toFixed(2);
-          const lo = Math.min(...st.steps.map((x) => x.fractionOfMantle)), hi = Math.max(...st.steps.map((x) => x.fractionOfMantle));
-          $('statsNote').textContent = st.level === 0
-            ? `exact: now ${cur ? pct(cur.fractionOfMantle) : '?'} % · over time ${pct(lo)}–${pct(hi)} %`
-            : `approximate (level ${st.level} grid): now ≈ ${cur ? pct(cur.fractionOfMantle) : '?'} % · over time ≈ ${pct(lo)}–${pct(hi)} %`;
-          drawTimePlot($('statsTime') as unknown as SVGSVGElement, st, step);
-          drawProfilePlot($('statsProfile') as unknown as SVGSVGElement, st);
+          this.showStats(st);
           this.host.selectionChanged(); // the readout on the view takes the exact figure of its step
         })
         .catch((e) => { if (!ctl.signal.aborted) { this.statsKey = ''; this.host.showError((e as Error).message); } });
     }, 250);
+  }
+
+  // The statistics at the store's step, from the answer over all steps: its profile (the answer's
+  // `profiles`), the note's "now" figure and the time plot's mark.
+  private showStats(all: SelectionOverTime): void {
+    const step = this.store.state.step;
+    const p = all.profiles?.find((x) => x.step === step);
+    const st: SelectionOverTime = p
+      ? { ...all, profile: { ...all.profile, step, volumeKm3: p.volumeKm3, shellVolumeKm3: p.shellVolumeKm3 } }
+      : all;
+    this.observer?.stats(st);
+    const cur = st.steps.find((x) => x.step === step);
+    // Exact figures (level 0) agree with the selection above and `raypc stats`; the quick ones
+    // of a coarser grid are labelled as approximate.
+    const pct = (x: number) => (x * 100).toFixed(2);
+    const lo = Math.min(...st.steps.map((x) => x.fractionOfMantle)), hi = Math.max(...st.steps.map((x) => x.fractionOfMantle));
+    $('statsNote').textContent = st.level === 0
+      ? `exact: now ${cur ? pct(cur.fractionOfMantle) : '?'} % · over time ${pct(lo)}–${pct(hi)} %`
+      : `approximate (level ${st.level} grid): now ≈ ${cur ? pct(cur.fractionOfMantle) : '?'} % · over time ≈ ${pct(lo)}–${pct(hi)} %`;
+    drawTimePlot($('statsTime') as unknown as SVGSVGElement, st, step);
+    drawProfilePlot($('statsProfile') as unknown as SVGSVGElement, st);
   }
 }
