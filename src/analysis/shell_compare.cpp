@@ -50,7 +50,18 @@ std::string field(const std::string& text)
 
 std::string unitsOf(const std::string& units) { return units.empty() ? std::string("1") : units; }
 
-std::string squared(const std::string& units) { return units.empty() ? std::string("1") : "(" + units + ")^2"; }
+// Units that are one symbol go bare ("K^2"), others in parentheses ("(km/s)^2").
+std::string bracketed(const std::string& units)
+{
+    return units.find_first_of("/ *^") == std::string::npos ? units : "(" + units + ")";
+}
+std::string squared(const std::string& units) { return units.empty() ? std::string("1") : bracketed(units) + "^2"; }
+std::string ratioUnits(const std::string& a, const std::string& b)
+{
+    if (a == b)
+        return "1";
+    return bracketed(unitsOf(a)) + "/" + bracketed(unitsOf(b));
+}
 
 }  // namespace
 
@@ -194,8 +205,7 @@ std::string correlationCsv(const std::vector<ShellCorrelation>& rows, const std:
     std::string out = fmt::format("# A: {}\n# B: {}\n", titleA, titleB);
     out += options.lmax ? fmt::format("# both low-pass filtered to spherical-harmonic degree <= {}\n", *options.lmax)
                         : std::string("# unfiltered; over the points where both have data, area-weighted\n");
-    out += fmt::format("# units: rms_a {}; rms_b {}; rms_ratio ({})/({})\n", unitsOf(unitsA), unitsOf(unitsB), unitsOf(unitsA),
-                       unitsOf(unitsB));
+    out += fmt::format("# units: rms_a {}; rms_b {}; rms_ratio {}\n", unitsOf(unitsA), unitsOf(unitsB), ratioUnits(unitsA, unitsB));
     out += "depth_km,radius_km,correlation,rms_a,rms_b,rms_ratio,points,area_covered_percent,note\n";
     // Depth increasing downward, as mantle profiles are read.
     for (auto it = rows.rbegin(); it != rows.rend(); ++it)
