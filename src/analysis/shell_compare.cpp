@@ -160,6 +160,26 @@ ShellSpectra shellSpectra(const grid::SphericalGrid& g, const float* values, int
     return out;
 }
 
+std::vector<double> shellSpectrumAt(const grid::SphericalGrid& g, const float* values, size_t iR, int lmax,
+                                    const std::string& what)
+{
+    if (iR >= g.nR())
+        fail("spectrum: shell {} out of range 0..{}", iR, g.nR() - 1);
+    const ShellTransform t(g, lmax, what);
+    if (const size_t missing = missingOnShell(g, values, iR))
+        fail("{}: {} point(s) without data (missing values) on the shell at depth {:.1f} km; a spectrum needs the whole "
+             "sphere",
+             what, missing, kSurfaceRadiusKm - g.rKm[iR]);
+    std::vector<std::complex<double>> alm;
+    t.analyse(values, iR, alm);
+    return t.powerPerDegree(alm);
+}
+
+int defaultSpectrumDegree(const grid::SphericalGrid& g)
+{
+    return std::max(0, std::min(maxDegree(g), 60));
+}
+
 DegreeCorrelation degreeCorrelationAt(const grid::SphericalGrid& g, const float* a, const float* b, size_t iR, int lmax,
                                       const std::string& whatA, const std::string& whatB)
 {

@@ -58,6 +58,14 @@ struct ShellSpectra {
 // range, and naming the shallowest shell (its depth) and the count when a shell has missing values.
 ShellSpectra shellSpectra(const grid::SphericalGrid& grid, const float* values, int lmax, const std::string& what);
 
+// The power per degree of a field on shell `iR` alone (what the UI plots for the shown depth). Throws as
+// shellSpectra does.
+std::vector<double> shellSpectrumAt(const grid::SphericalGrid& grid, const float* values, size_t iR, int lmax,
+                                    const std::string& what);
+
+// The degree a spectrum goes to when none is given: the grid's largest (maxDegree), at most 60.
+int defaultSpectrumDegree(const grid::SphericalGrid& grid);
+
 // The per-degree powers of two fields on shell `iR` and their correlation r_l (NaN where either has no
 // power at that degree). Throws as shellSpectra does, for either field.
 struct DegreeCorrelation {

@@ -88,15 +88,10 @@ std::vector<analysis::ShellCorrelation> correlateFields(const ComparedField& a, 
     return analysis::correlateShells(a.volume->grid(), a.values(), onA.data(), options, "A (" + a.title() + ")");
 }
 
-int defaultSpectrumDegree(const grid::SphericalGrid& grid)
-{
-    return std::max(0, std::min(analysis::maxDegree(grid), 60));
-}
-
 analysis::ShellSpectra fieldSpectra(const ComparedField& field, int lmax)
 {
     const grid::SphericalGrid& g = field.volume->grid();
-    return analysis::shellSpectra(g, field.values(), lmax < 0 ? defaultSpectrumDegree(g) : lmax, field.title());
+    return analysis::shellSpectra(g, field.values(), lmax < 0 ? analysis::defaultSpectrumDegree(g) : lmax, field.title());
 }
 
 analysis::DegreeCorrelation fieldDegreeCorrelation(const ComparedField& a, const ComparedField& b, double depthKm, int lmax)
@@ -104,7 +99,7 @@ analysis::DegreeCorrelation fieldDegreeCorrelation(const ComparedField& a, const
     const grid::SphericalGrid& g = a.volume->grid();
     const size_t shell = analysis::nearestShell(g, depthKm);
     const std::vector<float> onA = valuesOnGridOf(b, a);
-    return analysis::degreeCorrelationAt(g, a.values(), onA.data(), shell, lmax < 0 ? defaultSpectrumDegree(g) : lmax,
+    return analysis::degreeCorrelationAt(g, a.values(), onA.data(), shell, lmax < 0 ? analysis::defaultSpectrumDegree(g) : lmax,
                                          "A (" + a.title() + ")", "B (" + b.title() + ") on A's grid");
 }
 

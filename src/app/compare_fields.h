@@ -48,13 +48,10 @@ std::vector<float> valuesOnGridOf(const ComparedField& b, const ComparedField& a
 // A and B correlated shell by shell on A's grid (analysis/shell_compare.h).
 std::vector<analysis::ShellCorrelation> correlateFields(const ComparedField& a, const ComparedField& b,
                                                         const analysis::CorrelationOptions& options);
-// The power spectrum of a field per shell to degree `lmax` (default, < 0: min(the grid's largest, 60)).
+// The power spectrum of a field per shell to degree `lmax` (< 0: analysis::defaultSpectrumDegree).
 analysis::ShellSpectra fieldSpectra(const ComparedField& field, int lmax);
 // The per-degree correlation of A and B on A's shell nearest `depthKm`.
 analysis::DegreeCorrelation fieldDegreeCorrelation(const ComparedField& a, const ComparedField& b, double depthKm, int lmax);
-
-// The degree a spectrum goes to when none is given: the grid's largest (analysis::maxDegree), at most 60.
-int defaultSpectrumDegree(const grid::SphericalGrid& grid);
 
 // The pictures of `raypc correlate --png` (the correlation per depth, depth down, 410 and 660 km
 // marked) and `raypc spectrum --png` (log10 of the power per degree 1..lmax and depth: degree 0, the
