@@ -7,7 +7,7 @@ import { plotFrame } from './stats_plot';
 import { displayUnits } from './units';
 
 export function drawSpectrumPlot(svg: SVGSVGElement, s: Spectrum): string {
-  const { g, iw, ih } = plotFrame(svg, { top: 8, right: 12, bottom: 22, left: 54 });
+  const { g, iw, ih } = plotFrame(svg, { top: 20, right: 12, bottom: 34, left: 54 });
   const pts = s.power.map((p, l) => ({ l, p })).filter((d) => d.l >= 1 && d.p > 0);
   svg.dataset.lmax = String(s.lmax);
   svg.dataset.depthKm = String(s.depthKm);
@@ -20,8 +20,8 @@ export function drawSpectrumPlot(svg: SVGSVGElement, s: Spectrum): string {
   const units = displayUnits(s.units || '1');
   g.append('g').attr('class', 'axis').attr('transform', `translate(0,${ih})`).call(d3.axisBottom(xs).ticks(6).tickFormat(d3.format('d')));
   g.append('g').attr('class', 'axis').call(d3.axisLeft(ys).ticks(4, '~e'));
-  g.append('text').attr('x', iw).attr('y', ih + 20).attr('text-anchor', 'end').text('degree l');
-  g.append('text').attr('x', 2).attr('y', 2).attr('dominant-baseline', 'hanging').text(`power [${/[/ ]/.test(units) ? `(${units})` : units}²]`);
+  g.append('text').attr('x', iw).attr('y', ih + 31).attr('text-anchor', 'end').text('degree l');
+  g.append('text').attr('x', -50).attr('y', -18).attr('dominant-baseline', 'hanging').text(`power [${/[/ ]/.test(units) ? `(${units})` : units}²]`);
   const shown = pts.filter((d) => d.p >= least);
   g.append('path').datum(shown).attr('fill', 'none').attr('stroke', '#8ab4f8').attr('stroke-width', 1.5)
     .attr('d', d3.line<{ l: number; p: number }>().x((d) => xs(d.l) as number).y((d) => ys(d.p) as number));
