@@ -7,11 +7,17 @@
 #include <libsharp/sharp.h>
 #include <libsharp/sharp_geomhelpers.h>
 #include <libsharp/sharp_almhelpers.h>
-#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+
+// The two calls of the OpenMP API used here, answered by libgomp, the runtime libsharp runs on
+// (src/analysis/CMakeLists.txt): declared rather than taken from <omp.h>, which is the compiler's.
+extern "C" {
+int omp_get_max_threads(void);
+void omp_set_num_threads(int);
+}
 
 namespace raypc::analysis {
 namespace {
