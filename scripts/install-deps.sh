@@ -8,6 +8,7 @@ packages=(
   libnetcdf-dev netcdf-bin          # input files; ncgen/nccopy write independent test files
   libpugixml-dev zlib1g-dev         # VTK XML input (ASPECT's .pvd/.pvtu/.vtu), not VTK itself
   libtbb-dev libhwy-dev libembree-dev
+  libsharp-dev                      # spherical-harmonic transforms (raypc correlate --lmax, raypc spectrum)
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libboost-dev libturbojpeg0-dev libpng-dev
   libopenmpi-dev openmpi-bin        # MPI: one binary, alone or under mpirun (docs/scaling.md)

@@ -12,6 +12,7 @@
 // does; progress callbacks take the GIL only while they run, and a KeyboardInterrupt seen there
 // cancels the work between steps.
 #include "app/cli.h"
+#include "app/compare_fields.h"
 #include "app/feature_table.h"
 #include "app/options.h"
 #include "analysis/probe.h"
@@ -50,6 +51,7 @@
 #include <cstdio>
 #include <iostream>
 #include <cstring>
+#include <optional>
 #include <thread>
 
 namespace py = pybind11;
@@ -226,6 +228,93 @@ std::string prepare(std::vector<std::string> args, py::object progress)
     }
     bridge.rethrow();
     return inputs.dataset.string();
+}
+
+// Python's raypc.correlate, raypc.spectrum and raypc.degree_correlation (raypc/compare.py): the code of
+// `raypc correlate` and `raypc spectrum` (app/compare_fields.h), their numbers as arrays. `input`: a
+// dataset directory or what `raypc serve` takes; `variable` '' for the default; `step` an index or a
+// time like "24Myr".
+app::ComparedField comparedField(const std::string& input, const std::string& variable, const std::string& step,
+                                 const std::string& what, const std::string& stepArgument)
+{
+    return app::openComparedField(app::FieldSpec{input, variable}, step, what, stepArgument, true);
+}
+
+py::dict fieldDict(const app::ComparedField& f)
+{
+    return py::dict(py::arg("title") = f.title(), py::arg("variable") = f.info().name, py::arg("units") = f.info().units,
+                    py::arg("dataset") = f.dataset->dir().string(), py::arg("step") = f.step,
+                    py::arg("time_myr") = f.dataset->steps()[size_t(f.step)].timeMyr);
+}
+
+py::dict correlate(const std::string& a, const std::string& varA, const std::string& stepA, const std::string& b,
+                   const std::string& varB, const std::string& stepB, int lmax)
+{
+    std::optional<app::ComparedField> fa, fb;
+    std::vector<analysis::ShellCorrelation> rows;
+    analysis::CorrelationOptions options;
+    if (lmax >= 0)
+        options.lmax = lmax;
+    {
+        py::gil_scoped_release release;
+        fa = comparedField(a, varA, stepA, "a", "step");
+        fb = comparedField(b, varB, stepB, "b", "step_b");
+        rows = app::correlateFields(*fa, *fb, options);
+    }
+    // Depth increasing, as the CLI's CSV.
+    std::reverse(rows.begin(), rows.end());
+    std::vector<double> depth, radius, r, rmsA, rmsB, ratio, area;
+    std::vector<int64_t> points;
+    py::list notes;
+    for (const analysis::ShellCorrelation& row : rows) {
+        depth.push_back(row.depthKm), radius.push_back(row.radiusKm), r.push_back(row.correlation);
+        rmsA.push_back(row.rmsA), rmsB.push_back(row.rmsB), ratio.push_back(row.rmsRatio);
+        points.push_back(int64_t(row.points)), area.push_back(100.0 * row.areaFraction);
+        notes.append(row.note);
+    }
+    return py::dict(py::arg("depth_km") = doubles(depth), py::arg("radius_km") = doubles(radius),
+                    py::arg("correlation") = doubles(r), py::arg("rms_a") = doubles(rmsA), py::arg("rms_b") = doubles(rmsB),
+                    py::arg("rms_ratio") = doubles(ratio), py::arg("points") = arrayOf(points, {py::ssize_t(points.size())}),
+                    py::arg("area_covered_percent") = doubles(area), py::arg("note") = notes, py::arg("a") = fieldDict(*fa),
+                    py::arg("b") = fieldDict(*fb), py::arg("regridded") = !fb->volume->grid().sameAs(fa->volume->grid()));
+}
+
+py::dict spectrum(const std::string& input, const std::string& variable, const std::string& step, int lmax)
+{
+    std::optional<app::ComparedField> f;
+    analysis::ShellSpectra s;
+    {
+        py::gil_scoped_release release;
+        f = comparedField(input, variable, step, "ds", "step");
+        s = app::fieldSpectra(*f, lmax);
+    }
+    // Depth increasing (radii descending), as the CLI's CSV.
+    const size_t nR = s.radiiKm.size(), nL = size_t(s.lmax) + 1;
+    std::vector<double> depth, radius, power;
+    for (size_t iR = nR; iR-- > 0;) {
+        depth.push_back(kSurfaceRadiusKm - s.radiiKm[iR]);
+        radius.push_back(s.radiiKm[iR]);
+        power.insert(power.end(), s.power.begin() + ptrdiff_t(iR * nL), s.power.begin() + ptrdiff_t((iR + 1) * nL));
+    }
+    return py::dict(py::arg("depth_km") = doubles(depth), py::arg("radius_km") = doubles(radius), py::arg("lmax") = s.lmax,
+                    py::arg("power") = arrayOf(power, {py::ssize_t(nR), py::ssize_t(nL)}),
+                    py::arg("quadrature") = analysis::quadratureName(s.quadrature), py::arg("field") = fieldDict(*f));
+}
+
+py::dict degreeCorrelation(const std::string& a, const std::string& varA, const std::string& stepA, const std::string& b,
+                           const std::string& varB, const std::string& stepB, double depthKm, int lmax)
+{
+    std::optional<app::ComparedField> fa, fb;
+    analysis::DegreeCorrelation c;
+    {
+        py::gil_scoped_release release;
+        fa = comparedField(a, varA, stepA, "a", "step");
+        fb = comparedField(b, varB, stepB, "b", "step_b");
+        c = app::fieldDegreeCorrelation(*fa, *fb, depthKm, lmax);
+    }
+    return py::dict(py::arg("depth_km") = c.depthKm, py::arg("radius_km") = c.radiusKm, py::arg("lmax") = c.lmax,
+                    py::arg("power_a") = doubles(c.powerA), py::arg("power_b") = doubles(c.powerB),
+                    py::arg("correlation") = doubles(c.correlation), py::arg("a") = fieldDict(*fa), py::arg("b") = fieldDict(*fb));
 }
 
 class PyDataset {
@@ -716,6 +805,14 @@ PYBIND11_MODULE(_raypc, m)
         py::arg("json"), "The state document parsed by the one state schema, normalised (JSON)");
     m.def("values_read", [] { return g_valuesRead.load(std::memory_order_relaxed); },
           "Grid values read from step files by Dataset.field and read_box so far (for tests of laziness)");
+    m.def("correlate", &correlate, py::arg("a"), py::arg("var_a"), py::arg("step"), py::arg("b"), py::arg("var_b"),
+          py::arg("step_b"), py::arg("lmax"),
+          "raypc correlate's numbers: per depth the area-weighted correlation, RMS of each and ratio (lmax < 0: unfiltered)");
+    m.def("spectrum", &spectrum, py::arg("ds"), py::arg("var"), py::arg("step"), py::arg("lmax"),
+          "raypc spectrum's numbers: the power per degree at every depth (lmax < 0: the grid's largest, at most 60)");
+    m.def("degree_correlation", &degreeCorrelation, py::arg("a"), py::arg("var_a"), py::arg("step"), py::arg("b"),
+          py::arg("var_b"), py::arg("step_b"), py::arg("depth_km"), py::arg("lmax"),
+          "raypc spectrum --with's numbers: the per-degree powers and correlation at the shell nearest depth_km");
     m.def("surface_radius_km", [] { return raypc::kSurfaceRadiusKm; }, "The Earth's radius that depths count from, km");
     m.def("state_version", [] { return raypc::state::kRenderStateVersion; }, "The version of the state document this build writes");
     m.def("names_json", [] { return std::string(kNamesJson); },

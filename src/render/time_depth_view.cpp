@@ -34,14 +34,14 @@ void checkTimeDepthPictureSize(int width, int height) { timeDepthPlot(width, hei
 ImageRgba8 timeDepthPicture(const TimeDepthInputs& in)
 {
     using namespace slice;  // slice_sampling.h, slice_drawing.h
-    const size_t nSteps = in.timesMyr.size(), nR = in.radiiKm.size();
+    const size_t nSteps = in.columns.size(), nR = in.radiiKm.size();
     if (nSteps == 0 || nR < 2 || in.values.size() != nSteps * nR)
         fail("time-depth picture: {} values for {} steps and {} radii", in.values.size(), nSteps, nR);
     const int width = in.width, height = in.height, fontPx = legendFontPx(width, height);
     const DepthPlot plot = timeDepthPlot(width, height, kSurfaceRadiusKm - in.radiiKm.front());
     // The time axis spans the steps' times, half a step beyond the first and last (one step: 1 Myr).
-    const double dt = nSteps > 1 ? (in.timesMyr.back() - in.timesMyr.front()) / double(nSteps - 1) : 1.0;
-    const double t0 = in.timesMyr.front() - dt / 2, t1 = in.timesMyr.back() + dt / 2;
+    const double dt = nSteps > 1 ? (in.columns.back() - in.columns.front()) / double(nSteps - 1) : 1.0;
+    const double t0 = in.columns.front() - dt / 2, t1 = in.columns.back() + dt / 2;
     auto xOfTime = [&](double t) { return float(plot.left + (t - t0) / (t1 - t0) * (plot.right - plot.left)); };
     // The nearest of sorted `axis` to v (ties to the lower), or nullopt beyond half a spacing outside.
     auto nearest = [](const std::vector<double>& axis, double v) -> std::optional<size_t> {
@@ -59,7 +59,7 @@ ImageRgba8 timeDepthPicture(const TimeDepthInputs& in)
     for (int x = 0; x < width; ++x)
         if (x + 0.5 >= plot.left && x + 0.5 <= plot.right)
             columns[size_t(x)] = nSteps == 1 ? std::optional<size_t>(0)
-                                             : nearest(in.timesMyr, t0 + (x + 0.5 - plot.left) / (plot.right - plot.left) * (t1 - t0));
+                                             : nearest(in.columns, t0 + (x + 0.5 - plot.left) / (plot.right - plot.left) * (t1 - t0));
     for (int y = 0; y < height; ++y)
         if (y + 0.5 >= plot.top && y + 0.5 <= plot.bottom)
             rows[size_t(y)] = nearest(in.radiiKm, kSurfaceRadiusKm - (y + 0.5 - plot.top) / (plot.bottom - plot.top) * plot.depthSpanKm);
@@ -74,19 +74,22 @@ ImageRgba8 timeDepthPicture(const TimeDepthInputs& in)
     std::vector<TextLabel> labels;
     drawDepthMarks(image.pixels, width, height, plot, in.marks, labels);
     std::vector<std::pair<float, std::string>> ticks;
-    const double span = in.timesMyr.back() - in.timesMyr.front();
+    const bool degrees = in.columnsAre == TimeDepthInputs::Columns::Degree;
+    auto columnText = [&](double v) { return degrees ? fmt::format("l = {:g}", v) : fmt::format("{:g} Myr", v); };
+    const double span = in.columns.back() - in.columns.front();
     if (span > 0) {
-        const double step = niceStep(span, std::max(1.0, (plot.right - plot.left) / (6.0 * fontPx)),
-                                     {0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000});
-        for (double t = std::ceil(in.timesMyr.front() / step) * step; t <= in.timesMyr.back() + 1e-9; t += step)
-            ticks.emplace_back(xOfTime(t), fmt::format("{:g} Myr", t));
+        const double step = degrees ? niceStep(span, std::max(1.0, (plot.right - plot.left) / (6.0 * fontPx)), {1, 2, 5, 10, 20, 50, 100})
+                                    : niceStep(span, std::max(1.0, (plot.right - plot.left) / (6.0 * fontPx)),
+                                               {0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000});
+        for (double t = std::ceil(in.columns.front() / step) * step; t <= in.columns.back() + 1e-9; t += step)
+            ticks.emplace_back(xOfTime(t), columnText(t));
     } else {
-        ticks.emplace_back(xOfTime(in.timesMyr.front()), fmt::format("{:g} Myr", in.timesMyr.front()));
+        ticks.emplace_back(xOfTime(in.columns.front()), columnText(in.columns.front()));
     }
     drawDepthPlotFrame(image.pixels, width, height, plot, ticks, ink, labels);
     labels.push_back({fitTitle({in.title}, width, height), width / 2.0f, 1.1f * fontPx, {1, 1, 1}});
     const bool blank = std::any_of(in.values.begin(), in.values.end(), [](float v) { return std::isnan(v); });
-    addNotes(labels, width, height, {blank ? "background: nothing selected at that depth and time" : ""});
+    addNotes(labels, width, height, {blank ? in.blankNote : ""});
     drawTextLabels(image.pixels, width, height, labels);
     const LegendSpec legend{in.colorTitle, in.colors};
     drawLegends(image.pixels, width, height, std::span(&legend, 1));
@@ -122,7 +125,7 @@ TimeDepthInputs timeDepthInputs(const dataset::Dataset& dataset, int first, int 
         fail("time-depth picture: the mean of which variable? (none given)");
     TimeDepthInputs in;
     for (int step = first; step <= last; ++step)
-        in.timesMyr.push_back(dataset.steps().at(size_t(step)).timeMyr);
+        in.columns.push_back(dataset.steps().at(size_t(step)).timeMyr);
     in.radiiKm = dataset.levels().at(size_t(level)).grid.rKm;
     in.values = std::move(values);
     float lo = INFINITY, hi = -INFINITY;
@@ -147,7 +150,7 @@ TimeDepthInputs timeDepthInputs(const dataset::Dataset& dataset, int first, int 
                         : fmt::format("{} mean over the {} [{}]", mean->name,
                                       of == TimeDepthOf::SelectedMean ? "selection" : "shell", displayUnits(mean->units));
     in.title = fmt::format("{} · steps {}–{} ({:g}–{:g} Myr) · {} range(s), level {}", in.colorTitle, first, last,
-                           in.timesMyr.front(), in.timesMyr.back(), ranges, level);
+                           in.columns.front(), in.columns.back(), ranges, level);
     return in;
 }
 

@@ -19,11 +19,15 @@ namespace raypc::render {
 
 // A time–depth (Hovmöller) picture of a quantity per step and radius (`raypc stats --hovmoller`):
 // model time to the right, depth down; each step a column reaching half way to its neighbours' times
+// (or, `columnsAre` Degree, each spherical-harmonic degree a column: a spectrum's degree–depth picture,
+// `raypc spectrum --png`)
 // and each radius a row reaching half way to its neighbours (values are not interpolated), NaN drawn
 // as the background; `marks` (when visible) as dashed lines across, labelled at the right; the
 // title, ticks and colour legend laid out as a section's.
 struct TimeDepthInputs {
-    std::vector<double> timesMyr;  // per step (column), ascending
+    // What the columns are, and their values ascending: per step its time (Myr), or per degree l.
+    enum class Columns { TimeMyr, Degree } columnsAre = Columns::TimeMyr;
+    std::vector<double> columns;
     std::vector<double> radiiKm;   // the grid's radii (rows), ascending
     std::vector<float> values;     // steps x radii, step-major
     TransferFunction colors;       // colour map and range (the opacity is not used)
@@ -32,6 +36,7 @@ struct TimeDepthInputs {
     int width = 960, height = 540;
     Rgb background{0, 0, 0};
     state::ReferenceState::Shells marks;
+    std::string blankNote = "background: nothing selected at that depth and time";  // said when a value is NaN
 };
 // Throws raypc::Error when the inputs disagree in size or the picture has no room for the plot.
 ImageRgba8 timeDepthPicture(const TimeDepthInputs& inputs);

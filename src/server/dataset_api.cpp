@@ -10,6 +10,7 @@
 #include "core/spherical.h"
 #include "analysis/feature_csv.h"
 #include "analysis/probe.h"
+#include "analysis/shell_compare.h"
 #include "render/color_map.h"
 #include "render/pair_state.h"
 #include "render/pathline_scene.h"
@@ -437,6 +438,40 @@ ApiAnswer timeDepth(const ApiContext& api, const ApiRequest& request)
     return {encodePng(picture.pixels, picture.width, picture.height, 1), "image/png"};
 }
 
+// The spherical-harmonic power per degree of the state's colour variable (?var=NAME instead) at its
+// step on the shell nearest the map's depth (?depthKm= instead), to degree ?lmax= (default the grid's
+// largest, at most 60): what the UI plots for the shown depth (docs/compare.md, "Spectra"). A grid or a
+// shell the transform refuses (regional, missing values) is an error naming the reason.
+ApiAnswer spectrum(const ApiContext& api, const ApiRequest& request)
+{
+    const dataset::Dataset& dataset = *api.dataset;
+    const render::ResolvedState resolved = render::resolveState(parseBody(request.body), dataset);
+    std::string name = resolved.state.colorVariable.empty() ? dataset.variables().front().name : resolved.state.colorVariable;
+    if (const auto var = queryParameter(request.query, "var"))
+        name = *var;
+    const int var = dataset.variableIndex(name);
+    if (var < 0)
+        fail("var: unknown variable '{}'", name.substr(0, 80));
+    double depthKm = resolved.state.map.depthKm;
+    if (queryParameter(request.query, "depthKm"))
+        depthKm = parseNumberParameter(request.query, "depthKm");
+    const grid::SphericalGrid& grid = dataset.levels().front().grid;
+    const int lmax = queryParameter(request.query, "lmax") ? parseIntParameter(request.query, "lmax")
+                                                           : analysis::defaultSpectrumDegree(grid);
+    const size_t shell = analysis::nearestShell(grid, depthKm);
+    const auto volume = api.cache->getWithoutEvicting(resolved.state.step, 0);
+    const dataset::VariableInfo& v = dataset.variables()[size_t(var)];
+    const std::vector<double> power = analysis::shellSpectrumAt(grid, volume->values(size_t(var)), shell, lmax, v.name);
+    return jsonAnswer({{"variable", v.name},
+                       {"units", v.units},
+                       {"step", resolved.state.step},
+                       {"depthKm", kSurfaceRadiusKm - grid.rKm[shell]},
+                       {"radiusKm", grid.rKm[shell]},
+                       {"lmax", lmax},
+                       {"quadrature", analysis::quadratureName(analysis::quadratureOf(grid))},
+                       {"power", power}});
+}
+
 ApiAnswer pathlines(const ApiContext& api, const ApiRequest& request)
 {
     const int step = checkedStep(*api.dataset, request.query);
@@ -539,6 +574,7 @@ const Route kRoutes[] = {
     {HttpMethod::Post, "/api/features", Lane::Statistics, features, "level,sigmas,job"},
     {HttpMethod::Get, "/api/job-progress", Lane::Network, jobProgress, "job", false},
     {HttpMethod::Post, "/api/time-depth", Lane::Statistics, timeDepth, "level,of,var,format,width,height"},
+    {HttpMethod::Post, "/api/spectrum", Lane::Statistics, spectrum, "var,depthKm,lmax"},
     {HttpMethod::Get, "/api/pathlines", Lane::Worker, pathlines, "step,window"},
     {HttpMethod::Get, "/api/persistence", Lane::Worker, persistence, "step,top,var"},
     {HttpMethod::Get, "/api/link", Lane::Worker, linkGet, "", false},

@@ -481,6 +481,19 @@ const std::vector<Definition>& messages()
                               {"seedPersistenceColumn", boolean(""), "whether the lines carry `seed persistence`"}})),
               "how the step's pathlines were seeded; null without pathlines or for another variable"}}));
         d.push_back(message(
+            "Spectrum", "POST /api/spectrum",
+            "the spherical-harmonic power per degree of a variable on one shell (docs/compare.md, \"Spectra\")",
+            {{"variable", text(""), "the variable"},
+             {"units", text(""), "its units (the power's are their square)"},
+             {"step", integer(""), "the step"},
+             {"depthKm", number(""), "the shell's depth, km (the grid's shell nearest the depth asked for)"},
+             {"radiusKm", number(""), "its radius, km"},
+             {"lmax", integer(""), "the largest degree"},
+             {"quadrature", text(""), "the rows' quadrature: Fejér's first rule, Clenshaw–Curtis or area weights"},
+             {"power", arrayOf(number(""), ""),
+              "S_l for l = 0 … lmax: Σ_m c_lm² of the 4π-normalised real harmonics (Σ_l S_l is the mean square over "
+              "the sphere)"}}));
+        d.push_back(message(
             "MapHeader", "POST /api/slice?view=map (JSON header)", "where a map puts the sphere",
             sliceKeys("map",
                       {{"projection", namesOf<render::MapProjection>(state::allMapProjections(), state::mapProjectionName, ""),

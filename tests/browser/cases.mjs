@@ -1060,6 +1060,21 @@ const cases = {
       .catch(async () => { throw new TestFailure(`no new ${which} picture (${JSON.stringify(await shown())}); errors: ${await page.evaluate(() => window.__raypc.errors.join('; '))}`); });
     await nextPicture('map', 0);
     await nextPicture('section', 0);
+    // The spectrum of the map's depth (POST /api/spectrum): a plot of degrees 1..lmax, the same numbers
+    // the server gives for that state, and a new one when the depth changes.
+    const spectrumOf = () => page.evaluate(() => ({ ...document.getElementById('spectrumPlot').dataset,
+      circles: document.querySelectorAll('#spectrumPlot circle').length, note: document.getElementById('spectrumNote').textContent }));
+    await page.waitForFunction(() => Number(document.getElementById('spectrumPlot').dataset.points) > 0, null, { timeout: 20000 })
+      .catch(async () => { throw new TestFailure(`no spectrum plot: ${JSON.stringify(await spectrumOf())}`); });
+    const plotted = await spectrumOf();
+    const asked = await (await fetch(`${url}api/spectrum`, { method: 'POST', headers: { 'Content-Type': 'application/json' },
+      body: JSON.stringify(await rState(page)) })).json();
+    console.log(`  spectrum plot: ${JSON.stringify(plotted)}; the server: lmax ${asked.lmax} at ${asked.depthKm} km`);
+    check(Number(plotted.lmax) === asked.lmax && Number(plotted.depthKm) === asked.depthKm,
+      `the plot (${JSON.stringify(plotted)}) is not the server's spectrum of the state (lmax ${asked.lmax}, ${asked.depthKm} km)`);
+    const most = Math.max(...asked.power.slice(1));
+    check(plotted.circles === asked.power.slice(1).filter((p) => p > 0 && p >= most * 1e-6).length && /4π-normalised/.test(plotted.note),
+      `the plot shows ${plotted.circles} degrees, the server gives ${asked.power.length - 1} (note '${plotted.note}')`);
     // A picture's pixels: grey levels on a 48 x 24 grid, and the grey (r = g = b) and coloured
     // pixels of the upper and lower halves (the background, black, counts as neither).
     const look = (id) => page.evaluate((id) => {

@@ -1160,6 +1160,118 @@ json.dump(s, open(sys.argv[5], 'w'))" "$work/pair.json" "$work/nowhere" "$work/m
   expect_error "--dataset: only for netCDF inputs" serve "$work/a" "$work/b" --dataset "$work/c" --port 0
   check "no picture after errors" test ! -e "$work/x.png"
   ;;
+compare_sphere)
+  # raypc correlate and raypc spectrum on fields of known spherical harmonics written by Python's
+  # netCDF4 (tests/data/harmonics, its own Legendre recurrence): amplitude A(r) = r / 1000 km of the
+  # 4pi-normalised harmonics, so the power at degree l is A(r)^2 and the RMS is A(r).
+  h="$(dirname "$fixture")/harmonics"
+  for f in global poles regional; do
+    "$raypc" preprocess "$h/$f.nc" -o "$work/$f" --encoding float32 --quiet >/dev/null
+  done
+  g=$work/global
+  # column COLUMN FILE: the values of a CSV column (comment lines skipped), one a line.
+  column() { python3 -c "
+import csv, sys
+rows = list(csv.DictReader(l for l in open(sys.argv[2]) if not l.startswith('#')))
+print('\n'.join(r[sys.argv[1]] for r in rows))" "$1" "$2"; }
+  # all_near COLUMN FILE VALUE TOL: every value of the column within TOL of VALUE.
+  all_near() { column "$1" "$2" | python3 -c "
+import sys
+v = [float(x) for x in sys.stdin.read().split()]
+sys.exit(0 if len(v) == 5 and all(abs(x - float(sys.argv[1])) <= float(sys.argv[2]) for x in v) else 1)" "$3" "$4"; }
+  "$raypc" correlate "$g:y20" "$g:y20" -o "$work/self.csv" --png "$work/self.png" >/dev/null
+  check "a field against itself: 1 at every depth" all_near correlation "$work/self.csv" 1 1e-9
+  check "  the correlation-versus-depth picture" test -s "$work/self.png"
+  "$raypc" correlate "$g:y20" "$g:y20_negative" -o "$work/neg.csv" >/dev/null
+  check "against its negative: -1" all_near correlation "$work/neg.csv" -1 1e-9
+  check "  RMS ratio 1" all_near rms_ratio "$work/neg.csv" 1 1e-9
+  "$raypc" correlate "$g:y20" "$g:y31" -o "$work/orth.csv" >/dev/null
+  check "Y(2,0) against Y(3,1): 0" all_near correlation "$work/orth.csv" 0 1e-6
+  check "  the whole sphere covered" all_near area_covered_percent "$work/orth.csv" 100 1e-6
+  check "the RMS of A Y(3,1) is A(r) = r / 1000 km" python3 -c "
+import csv, sys
+rows = [r for r in csv.DictReader(l for l in open(sys.argv[1]) if not l.startswith('#'))]
+sys.exit(0 if all(abs(float(r['rms_b']) - float(r['radius_km']) / 1000) < 0.003 * float(r['radius_km']) / 1000 for r in rows) else 1)" "$work/orth.csv"
+  check "the CSV's header names the columns and their units" grep -q "^depth_km,radius_km,correlation,rms_a,rms_b,rms_ratio,points,area_covered_percent,note$" "$work/orth.csv"
+  # Power only at the harmonic's degree, A(r)^2, on both quadratures.
+  for f in global poles; do
+    "$raypc" spectrum "$work/$f:y31" --lmax 10 -o "$work/$f-y31.csv" >/dev/null
+    check "$f: Y(3,1) has power A(r)^2 at degree 3 and none elsewhere" python3 -c "
+import csv, sys
+for r in csv.DictReader(l for l in open(sys.argv[1]) if not l.startswith('#')):
+    a2 = (float(r['radius_km']) / 1000) ** 2
+    p = float(r['power'])
+    ok = abs(p - a2) < 1e-5 * a2 if r['degree'] == '3' else p < 1e-10 * a2
+    if not ok: sys.exit(f'degree {r[\"degree\"]} at {r[\"depth_km\"]} km: {p}')" "$work/$f-y31.csv"
+  done
+  check "the cell-centred grid is Fejér's first rule" grep -q "quadrature: Fejér's first rule" "$work/global-y31.csv"
+  check "the grid with pole rows Clenshaw–Curtis" grep -q "quadrature: Clenshaw–Curtis" "$work/poles-y31.csv"
+  # Turned by 180 degrees in longitude: the same spectrum.
+  "$raypc" spectrum "$g:mix" --lmax 12 -o "$work/mix.csv" --png "$work/mix.png" >/dev/null
+  "$raypc" spectrum "$g:mix_turned" --lmax 12 -o "$work/turned.csv" >/dev/null
+  check "turned by 180 degrees in longitude: the same power at every depth and degree" python3 -c "
+import sys
+a = [l.split(',') for l in open(sys.argv[1]) if l[0].isdigit()]
+b = [l.split(',') for l in open(sys.argv[2]) if l[0].isdigit()]
+sys.exit(0 if len(a) == 5 * 13 and all(x[:3] == y[:3] and abs(float(x[3]) - float(y[3])) <= 1e-6 * (1 + float(x[3])) for x, y in zip(a, b)) else 1)" "$work/mix.csv" "$work/turned.csv"
+  check "mix: powers 1, 1/4 and 1/16 of A(r)^2 at degrees 2, 5 and 9" python3 -c "
+import csv, sys
+want = {'2': 1.0, '5': 0.25, '9': 0.0625}
+for r in csv.DictReader(l for l in open(sys.argv[1]) if not l.startswith('#')):
+    a2 = (float(r['radius_km']) / 1000) ** 2
+    if abs(float(r['power']) - want.get(r['degree'], 0.0) * a2) > 1e-5 * a2: sys.exit(f'{r}')" "$work/mix.csv"
+  check "  the degree-depth picture" test -s "$work/mix.png"
+  # Filtering to L removes the degrees above L: mix filtered to 4 is Y(2,0); the Y(5,3) part that turning
+  # changes is gone, so the filtered correlation of mix and mix_turned is 1 where the unfiltered is not.
+  "$raypc" correlate "$g:mix" "$g:y20" --lmax 4 -o "$work/low.csv" >/dev/null
+  check "mix filtered to degree 4 against Y(2,0): 1" all_near correlation "$work/low.csv" 1 1e-6
+  "$raypc" correlate "$g:mix" "$g:mix_turned" -o "$work/turn-raw.csv" >/dev/null
+  "$raypc" correlate "$g:mix" "$g:mix_turned" --lmax 4 -o "$work/turn-low.csv" >/dev/null
+  check "mix against mix turned by 180 degrees, unfiltered: 1 - 2 (1/4) / (1 + 1/4 + 1/16)" \
+    all_near correlation "$work/turn-raw.csv" "$(python3 -c 'print(1 - 0.5 / 1.3125)')" 1e-4
+  check "  filtered to degree 4: 1" all_near correlation "$work/turn-low.csv" 1 1e-6
+  # Per-degree correlation at a depth.
+  "$raypc" spectrum "$g:mix" --with "$g:mix_turned" --depth 700 --lmax 10 -o "$work/deg.csv" >/dev/null
+  check "per degree: r = 1 at degree 2 and 9, -1 at degree 5 (odd order turned), none elsewhere, at the shell nearest 700 km" python3 -c "
+import csv, sys
+rows = list(csv.DictReader(l for l in open(sys.argv[1]) if not l.startswith('#')))
+got = {r['degree']: r['correlation'] for r in rows}
+ok = len(rows) == 11 and all(r['depth_km'] == '771' for r in rows)
+ok = ok and abs(float(got['2']) - 1) < 1e-9 and abs(float(got['9']) - 1) < 1e-9 and abs(float(got['5']) + 1) < 1e-9
+ok = ok and all(got[l] == '' for l in ('1', '3', '4', '6', '7', '8', '10'))
+sys.exit(0 if ok else 1)" "$work/deg.csv"
+  # Missing values: the correlation over the covered area, the spectrum refused with the reason.
+  "$raypc" correlate "$g:y20_holes" "$g:y20" -o "$work/holes.csv" >/dev/null
+  check "missing values: 1 over the points both have" all_near correlation "$work/holes.csv" 1 1e-9
+  check "  the deep shells cover less" test "$(column area_covered_percent "$work/holes.csv" | tail -1 | cut -c1-5)" = "93.30"
+  expect_error "2700 point(s) without data (missing values) on the shell at depth 2171.0 km; a spectrum needs the whole sphere" \
+    spectrum "$g:y20_holes" -o "$work/x.csv"
+  "$raypc" correlate "$g:y20_holes" "$g:y20" --lmax 4 -o "$work/holes-low.csv" >/dev/null
+  check "  with --lmax the shells with missing values are left empty, saying why" \
+    test "$(grep -c 'not filtered: A has no data at 2700 point(s)' "$work/holes-low.csv")" -eq 2
+  # A regional grid: the correlation over its region (B resampled onto it), the spectrum refused.
+  "$raypc" correlate "$work/regional:y20" "$g:y20" -o "$work/reg.csv" >/dev/null
+  check "regional A against global B: 1 over the region" all_near correlation "$work/reg.csv" 1 1e-4
+  check "  the region's area: (sin 61 - sin 19) x 102 degrees of the sphere" all_near area_covered_percent "$work/reg.csv" \
+    "$(python3 -c 'import math; print(100 * (math.sin(math.radians(61)) - math.sin(math.radians(19))) * math.radians(102) / (4 * math.pi))')" 1e-6
+  expect_error "the grid is regional (data within lat 20..60°, lon 200..300° east); spherical harmonics need the whole sphere" \
+    spectrum "$work/regional:y20" -o "$work/x.csv"
+  expect_error "--lmax: the grid is regional" correlate "$work/regional:y20" "$g:y20" --lmax 4 -o "$work/x.csv"
+  # A netCDF file as an input, preprocessed beside it (as serve does).
+  cp "$h/poles.nc" "$work/copy.nc"
+  "$raypc" correlate "$work/copy.nc:y31" "$g:y31" -o "$work/files.csv" -q >/dev/null
+  check "a netCDF file as A, resampled B: about 1" all_near correlation "$work/files.csv" 1 1e-3
+  # Bad input: one clear message each, nothing written.
+  expect_error "A: no variable 'nope'" correlate "$g:nope" "$g:y20" -o "$work/bad.csv"
+  expect_error "degree 50 is out of range 0..44" spectrum "$g:y20" --lmax 50 -o "$work/bad.csv"
+  expect_error "--lmax: -2 is negative" correlate "$g:y20" "$g:y20" --lmax -2 -o "$work/bad.csv"
+  expect_error "--with: needs --depth" spectrum "$g:y20" --with "$g:y31" -o "$work/bad.csv"
+  expect_error "--depth: needs --with" spectrum "$g:y20" --depth 100 -o "$work/bad.csv"
+  expect_error "--depth: 3000 km is outside the grid's radii" spectrum "$g:y20" --with "$g:y31" --depth 3000 -o "$work/bad.csv"
+  expect_error "--time: 3 out of range 0..0" correlate "$g:y20" "$g:y20" --time 3 -o "$work/bad.csv"
+  expect_error "writes CSV" correlate "$g:y20" "$g:y20" -o "$work/bad.png"
+  check "nothing written by the refused runs" test ! -e "$work/bad.csv" -a ! -e "$work/x.csv"
+  ;;
 *) echo "unknown case $case_name"; exit 2 ;;
 esac
 

@@ -95,6 +95,11 @@ try {
   const state = info.defaultState;
   const variable = info.variables[0].name;
   expectMessage('Histogram', await getJson(`api/histogram?step=0&var=${encodeURIComponent(variable)}`), 'GET /api/histogram');
+  // The spectrum of the shown depth: the fixture's analytic temperature anomaly on its 36 x 72 grid (Fejér's first rule).
+  const spectrum = await getJson('api/spectrum?depthKm=660&lmax=8', post({ ...state, color: { ...state.color, variable: 'temperature anomaly' } }));
+  expectMessage('Spectrum', spectrum, 'POST /api/spectrum');
+  if (spectrum.power.length !== 9 || spectrum.quadrature !== "Fejér's first rule" || !(spectrum.power.slice(1).some((p) => p > 0)))
+    fail(`POST /api/spectrum: ${JSON.stringify(spectrum)}`);
   expectMessage('Selection', await getJson('api/selection', post({ ...state, brushes: [{ name: variable, min: info.variables[0].min, max: info.variables[0].mean }] })), 'POST /api/selection');
   expectMessage('SeriesProgress', await getJson('api/progress'), 'GET /api/progress');
   const presets = await getJson('api/presets');  // the fixture's examples, one not for it (below)
@@ -140,7 +145,7 @@ try {
     ['api/selection', post({ ...state, brushes: [{ name: 'pressure', min: 0, max: 1 }] })],
     ['api/features', post(state)], ['api/time-depth?of=mean', post(caps)], ['api/time-depth?of=shell-mean', post(caps)],
     ['api/time-depth?width=100000&height=100000', post(caps)], ['api/features?sigmas=-1', post(caps)],
-    ['api/features?level=9', post(caps)], ['api/features?job=a%20b', post(caps)], ['api/job-progress'], ['api/job-progress?job=' + 'x'.repeat(65)], ['api/time-depth?format=gif', post(caps)], ['api/time-depth?of=selected-mean&var=pressure', post(caps)]])
+    ['api/features?level=9', post(caps)], ['api/features?job=a%20b', post(caps)], ['api/job-progress'], ['api/job-progress?job=' + 'x'.repeat(65)], ['api/time-depth?format=gif', post(caps)], ['api/spectrum?lmax=999', post(caps)], ['api/spectrum?depthKm=5000', post(caps)], ['api/time-depth?of=selected-mean&var=pressure', post(caps)]])
     expectMessage('HttpError', await getJson(path, init, 400), `${path} (refused)`);
 
   // ---- WebSocket ----

@@ -7,11 +7,11 @@ import type { RenderState } from './state';
 // `raypc protocol-schema`, generated into generated/protocol_types.ts).
 import type {
   CoordinateInfo, FeatureSeries, FeatureTrack, Histogram, Info, JobProgress, MapHeader, PathlinesHeader, PersistenceDiagram, PersistencePair, Preset,
-  ProbeAnswer, SectionHeader, Selection, SelectionOverTime, SeriesProgress, StepInfo, VariableInfo,
+  ProbeAnswer, SectionHeader, Selection, SelectionOverTime, SeriesProgress, Spectrum, StepInfo, VariableInfo,
 } from './generated/protocol_types';
 export type {
   CoordinateInfo, FeatureSeries, FeatureTrack, Histogram, Info, JobProgress, PersistenceDiagram, PersistencePair, Preset, ProbeAnswer, Selection,
-  SelectionOverTime, SeriesProgress, StepInfo, VariableInfo,
+  SelectionOverTime, SeriesProgress, Spectrum, StepInfo, VariableInfo,
 };
 // What POST /api/slice drew: a map's projection or a section's plot (`view` tells which).
 export type SliceHeader = MapHeader | SectionHeader;
@@ -209,6 +209,15 @@ export async function postSlice(view: 'map' | 'section', state: RenderState): Pr
   if (n < 0 || 4 + n > body.byteLength) throw new Error(`POST /api/slice: an answer of ${body.byteLength} bytes without its header`);
   const header = JSON.parse(new TextDecoder().decode(new Uint8Array(body, 4, n))) as SliceHeader;
   return { header, png: new Blob([new Uint8Array(body, 4 + n)], { type: 'image/png' }) };
+}
+
+// The power per spherical-harmonic degree of the state's colour variable at its step, on the shell
+// nearest the map's depth (POST /api/spectrum; docs/compare.md, as `raypc spectrum` computes it).
+export async function postSpectrum(state: RenderState): Promise<Spectrum> {
+  const r = await fetch('api/spectrum', {
+    method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(state),
+  });
+  return (await check(r, 'POST /api/spectrum')).json();
 }
 
 // The values at a point (GET /api/probe; analysis/probe.h, as `raypc probe`).

@@ -7,10 +7,11 @@
 // section's start, the next its end.
 import { geoEquirectangular, geoInterpolate, geoOrthographic, geoRotation, type GeoProjection } from 'd3-geo';
 import { geoHammer, geoMollweide, geoRobinson } from 'd3-geo-projection';
-import { fetchProbe, postSlice, type SliceHeader } from './api';
+import { fetchProbe, postSlice, postSpectrum, type SliceHeader } from './api';
 import type { MapHeader } from './generated/protocol_types';
 import type { RenderState } from './state';
 import type { StateStore } from './store';
+import { drawSpectrumPlot } from './spectrum_plot';
 import { displayUnits } from './units';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
@@ -119,6 +120,7 @@ export class SlicePanel {
     this.setUpControls();
     this.setUpPointer();
     new ResizeObserver(() => this.stateChanged()).observe($('slices'));
+    $('spectrumDetails').addEventListener('toggle', () => { if (this.visible) this.requestSpectrum(); });
   }
 
   // The tab is shown or hidden (app.ts's bottom tabs).
@@ -134,11 +136,35 @@ export class SlicePanel {
     if (visible) this.stateChanged();
   }
 
-  // The state in force changed: both pictures follow while they are shown.
+  // The state in force changed: both pictures and the spectrum follow while they are shown.
   stateChanged(): void {
     if (!this.visible) return;
     this.map.request();
     this.section.request();
+    this.requestSpectrum();
+  }
+
+  // The spectrum of the map's depth (POST /api/spectrum) when its variable, step or depth changed; one
+  // request at a time, the latest state asked for next.
+  private spectrumKey = '';
+  private spectrumBusy = false;
+  private requestSpectrum(): void {
+    if (!$<HTMLDetailsElement>('spectrumDetails').open) return;
+    const s = this.store.state;
+    const key = JSON.stringify([s.step, s.color.variable, s.map.depthKm]);
+    if (key === this.spectrumKey || this.spectrumBusy) return;
+    this.spectrumKey = key;
+    this.spectrumBusy = true;
+    postSpectrum(s)
+      .then((answer) => { $('spectrumNote').textContent = drawSpectrumPlot($<SVGSVGElement & HTMLElement>('spectrumPlot'), answer); })
+      .catch((e: Error) => {
+        $<SVGSVGElement & HTMLElement>('spectrumPlot').replaceChildren();
+        $('spectrumNote').textContent = e.message;
+      })
+      .finally(() => {
+        this.spectrumBusy = false;
+        this.requestSpectrum();
+      });
   }
 
   // Puts the state into the controls (after a load, a preset, the URL).

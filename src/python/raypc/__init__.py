@@ -14,6 +14,7 @@ a KeyError, a step or level out of range an IndexError (docs/python.md, "Errors"
 >>> xr.open_dataset("demo-data/dataset", engine="raypc")          # the whole series, lazy
 >>> state = raypc.State("examples/task1-slabs-660km.json")
 >>> ds.stats(state).plot(x="time_myr", y="selected_percent_of_mantle")
+>>> raypc.correlate(ds, "other.raypc", lmax=20).correlation.plot(y="depth", yincrease=False)  # docs/compare.md
 """
 from __future__ import annotations
 
@@ -29,6 +30,7 @@ if _os.path.isfile(_COASTLINES):
 from . import _raypc  # noqa: E402 (after the coastlines' default, which the compiled module reads)
 from ._raypc import Error, NotFoundError, OutOfRangeError, UnknownNameError
 from ._raypc import __version__  # project(VERSION) in CMakeLists.txt, as the wheel's metadata
+from .compare import correlate, degree_correlation, spectrum
 from .dataset import Dataset, StepLike
 from .grid import SURFACE_RADIUS_KM, Field, Grid, Variable
 from .names import NAMES
@@ -38,4 +40,4 @@ from .state import STATE_VERSION, State
 from .view import View, show
 
 __all__ = ["Error", "NotFoundError", "UnknownNameError", "OutOfRangeError", "open", "Dataset", "State", "Field",
-           "Grid", "Variable", "Picture", "View", "show", "NAMES"]
+           "Grid", "Variable", "Picture", "View", "show", "NAMES", "correlate", "spectrum", "degree_correlation"]
