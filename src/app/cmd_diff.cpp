@@ -58,7 +58,9 @@ const CommandRegistration kDiffCommand(
                        g.nLon(), d->variables().size(), summary.seconds);
         });
     },
-    25);
+    // One process: the pipeline's collective phases would wait for ranks that a root-only command
+    // leaves waiting outside it; a difference costs about what reading both datasets does.
+    25, Ranks::OneProcess);
 
 }  // namespace
 }  // namespace raypc::app
