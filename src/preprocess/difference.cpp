@@ -13,7 +13,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <utility>
 
 namespace raypc::preprocess {
 namespace {
@@ -54,6 +56,15 @@ std::vector<std::string> commonStored(const dataset::Dataset& a, const dataset::
     return names;
 }
 
+// Where a grid holds data, for messages: "lat -90..90 deg, lon 0..359 deg, r 3485..6371 km".
+std::string extentText(const grid::SphericalGrid& g)
+{
+    const auto lat = g.dataLatDeg.value_or(std::array<double, 2>{g.latDeg.front(), g.latDeg.back()});
+    const auto lon = g.dataLonDeg.value_or(std::array<double, 2>{g.lonDeg.front(), g.lonDeg.back()});
+    return fmt::format("lat {:g}..{:g} deg, lon {:g}..{:g} deg, r {:g}..{:g} km", lat[0], lat[1], lon[0], lon[1],
+                       g.rKm.front(), g.rKm.back());
+}
+
 }  // namespace
 
 StepMatch parseStepMatch(std::string_view text, std::string_view what)
@@ -87,17 +98,8 @@ DifferenceSource::DifferenceSource(const DifferenceRequest& request) : m_request
     // The grids: B must cover some of A's grid; the rest of D is missing.
     m_covered = grid::coveredFraction(gridB, gridA);
     if (!(m_covered > 0))
-        fail("diff: the grids of {} (lat {:g}..{:g} deg, lon {:g}..{:g} deg, r {:g}..{:g} km) and {} (lat {:g}..{:g} "
-             "deg, lon {:g}..{:g} deg, r {:g}..{:g} km) do not overlap: no point of {} has a value of {}",
-             aName(), gridA.dataLatDeg ? (*gridA.dataLatDeg)[0] : gridA.latDeg.front(),
-             gridA.dataLatDeg ? (*gridA.dataLatDeg)[1] : gridA.latDeg.back(),
-             gridA.dataLonDeg ? (*gridA.dataLonDeg)[0] : gridA.lonDeg.front(),
-             gridA.dataLonDeg ? (*gridA.dataLonDeg)[1] : gridA.lonDeg.back(), gridA.rKm.front(), gridA.rKm.back(),
-             bName(), gridB.dataLatDeg ? (*gridB.dataLatDeg)[0] : gridB.latDeg.front(),
-             gridB.dataLatDeg ? (*gridB.dataLatDeg)[1] : gridB.latDeg.back(),
-             gridB.dataLonDeg ? (*gridB.dataLonDeg)[0] : gridB.lonDeg.front(),
-             gridB.dataLonDeg ? (*gridB.dataLonDeg)[1] : gridB.lonDeg.back(), gridB.rKm.front(), gridB.rKm.back(),
-             aName(), bName());
+        fail("diff: the grids of {} ({}) and {} ({}) do not overlap: no point of {} has a value of {}", aName(),
+             extentText(gridA), bName(), extentText(gridB), aName(), bName());
 
     // The variables: the ones named (stored in both, with the same units), else the stored ones both have.
     if (request.variables.empty()) {
@@ -153,10 +155,11 @@ DifferenceSource::DifferenceSource(const DifferenceRequest& request) : m_request
             fail("diff: {} has {} steps and {} has {}; --match index pairs steps by index (--match time pairs them "
                  "by time)",
                  aName(), nA, bName(), nB);
+        bool warned = false;
         for (int s = 0; s < nA; ++s) {
             m_pairs.emplace_back(s, s);
             const double tA = a.steps()[size_t(s)].timeMyr, tB = b.steps()[size_t(s)].timeMyr;
-            if (std::abs(tA - tB) > tolerance && m_pairs.size() == 1)
+            if (std::abs(tA - tB) > tolerance && !std::exchange(warned, true))
                 spdlog::warn("diff: step {} is at {:g} Myr in {} and at {:g} Myr in {}; paired by index, D's steps "
                              "have {}'s times",
                              s, tA, aName(), tB, bName(), aName());

@@ -132,6 +132,19 @@ try:
     again = diff(a, b, "-o", w("d.ds"))
     check("a rerun resumes (nothing to write)", "(0 written, 3 already done)" in again)
 
+    # Chosen variables: a derived one named with its inputs is derived again from their differences.
+    diff(a, b, "--variable", "vx", "--variable", "vy", "--variable", "vz", "--variable", "radial velocity",
+         "-o", w("v.ds"))
+    v = {x["name"]: x for x in info(w("v.ds"))["variables"]}
+    check("--variable vx, vy, vz, radial velocity: the velocity stored, the radial velocity derived again",
+          [n for n, x in v.items() if not x["derived"]] == ["vx", "vy", "vz"] and v["radial velocity"]["derived"])
+    # Paired by index, times that differ: D has A's times, and raypc diff says so once.
+    b3 = preprocess(sorted(os.path.join(w("b"), f) for f in os.listdir(w("b"))), w("b3.ds"), "--dt-myr", "3")
+    p = subprocess.run([raypc, "diff", a, b3, "-o", w("d3.ds"), "-q"], capture_output=True, text=True)
+    check("index pairing of other times warns once and keeps A's times",
+          p.returncode == 0 and (p.stdout + p.stderr).count("paired by index") == 1 and
+          [x["time_myr"] for x in info(w("d3.ds"))["steps"]] == [0.0, 2.0, 4.0])
+
     # Like any other dataset: rendered, mapped and exported as CF netCDF.
     run("render", w("d.ds"), "--var", "temperature", "--size", "64x64", "--passes", "1", "-o", w("d.png"))
     check("D renders", os.path.getsize(w("d.png")) > 0)
