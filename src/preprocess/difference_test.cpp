@@ -57,14 +57,14 @@ std::vector<float> randomValues(size_t n, unsigned seed)
 
 // A float32 dataset (exact values) of `steps` steps of `names` with random values, at `timesMyr`.
 fs::path writeDataset(const fs::path& dir, const grid::SphericalGrid& g, const std::vector<std::string>& names,
-                      int steps, unsigned seed, std::vector<double> timesMyr = {})
+                      int steps, unsigned seed, std::vector<double> timesMyr = {}, const std::string& units = "K")
 {
     std::vector<grid::Snapshot> snaps;
     for (int s = 0; s < steps; ++s) {
         grid::Snapshot snap;
         snap.grid = g;
         for (size_t v = 0; v < names.size(); ++v)
-            snap.fields.push_back({names[v], "K", randomValues(g.cellCount(), seed * 1000 + unsigned(s * 10 + v))});
+            snap.fields.push_back({names[v], units, randomValues(g.cellCount(), seed * 1000 + unsigned(s * 10 + v))});
         snaps.push_back(std::move(snap));
     }
     MemorySource source(std::move(snaps));
@@ -214,6 +214,10 @@ TEST(Difference, Refusals)
               std::string::npos)
         << errorOf(byTime);
     EXPECT_NE(errorOf(pair(a)).find("give a dataset B"), std::string::npos);
+    const fs::path celsius = writeDataset(tmp / "celsius.ds", g, {"temperature"}, 2, 6, {0, 2}, "degC");
+    EXPECT_NE(errorOf(pair(a, celsius)).find("variable 'temperature' is in K in a.ds but in degC in celsius.ds"),
+              std::string::npos)
+        << errorOf(pair(a, celsius));
 }
 
 TEST(Difference, DatasetThroughThePipelineResumesAndRefusesOtherOutputs)
