@@ -14,6 +14,7 @@
 #include "app/slice_grid.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/error_kinds.h"
 #include "core/mpi.h"
 #include "core/numbered_name.h"
 #include "core/strings.h"
@@ -23,6 +24,7 @@
 #include "render/pathline_scene.h"
 #include "state/render_state.h"
 #include "render/slice_view.h"
+#include "render/pair_state.h"
 #include "render/state_renderer.h"
 
 #include <fmt/format.h>
@@ -158,6 +160,9 @@ struct RenderSetup {
     // The volume of a step and level: the last one read kept, so that a slice's picture and its
     // --netcdf grid read a step once.
     std::function<std::shared_ptr<const dataset::StepVolume>(int step, int level)> volume;
+    // A state with `pair` (docs/compare.md, "Side by side"): the second dataset, drawn at the right.
+    std::shared_ptr<const dataset::Dataset> second;
+    std::shared_ptr<StateRenderer> secondRenderer;  // its renderer (run() makes it)
 };
 
 std::function<std::shared_ptr<const dataset::StepVolume>(int, int)> lastVolumeKept(std::shared_ptr<const dataset::Dataset> dataset)
@@ -308,8 +313,58 @@ RenderSetup setUp(const RenderArgs& args)
     ResolvedState resolved = resolveState(state, *dataset);
     if (slice == StateRenderer::Slice::Section)
         GreatCircle(resolved.state.section.from, resolved.state.section.to, "--from/--to");  // checked before reading
+    std::shared_ptr<const dataset::Dataset> second;
+    if (state.pair) {
+        // The pair's two halves are whole pictures of one process, of the 3D view.
+        if (slice || depth || state.stereo.enabled() || mpi::distributed())
+            fail("{}: pair: a pair of datasets is drawn as two 3D views side by side by one process; not with "
+                 "--view map|section, --depth, stereo or under mpirun",
+                 args.statePath);
+        try {
+            second = dataset::Dataset::open(state.pair->dataset);
+        } catch (const Error& e) {
+            failLike(e, fmt::format("{}: pair.dataset: {}", args.statePath, e.what()));
+        }
+        pairHalves(state, *dataset, *second);  // checks the width and the state against both before rendering
+    }
     return {dataset,          resolved,          first, last, sequence, lodAuto, std::move(output), std::move(depth),
-            slice,            std::move(netcdf), {}};
+            slice,            std::move(netcdf), {},    std::move(second)};
+}
+
+// A pair's step (docs/compare.md, "Side by side"): each dataset's half through its StateRenderer, the
+// second's state from the first's (render::pairHalves), composed and written as one PNG.
+nlohmann::json renderPairStep(const RenderSetup& setup, StateRenderer& renderer, const LevelPolicy& policy,
+                              const ResolvedState& resolved)
+{
+    const int step = resolved.state.step;
+    const PairHalves halves = pairHalves(resolved.state, *setup.dataset, *setup.second);
+    const ResolvedState left = resolveState(halves.left, *setup.dataset);
+    const ResolvedState right = resolveState(halves.right.state, *setup.second);
+    nlohmann::json levels = nlohmann::json::array();
+    auto draw = [&](StateRenderer& r, const ResolvedState& view) {
+        const StateRenderer::Prepared prepared = r.prepare(view, policy);
+        levels.push_back(prepared.level);
+        ViewFrames frames = prepared.frames();
+        for (int pass = 0; pass < view.state.passes; ++pass)
+            prepared.renderPass(frames, nullptr, {});
+        return r.picture(frames, view, true);
+    };
+    const auto t0 = std::chrono::steady_clock::now();
+    const ImageRgba8 image = sideBySide(draw(renderer, left), draw(*setup.secondRenderer, right));
+    const std::string out = (*setup.output)(step);
+    if (const auto parent = std::filesystem::path(out).parent_path(); !parent.empty())
+        std::filesystem::create_directories(parent);
+    writePng(out, image);
+    return {{"step", step},
+            {"timeMyr", setup.dataset->steps()[size_t(step)].timeMyr},
+            {"pair",
+             {{"step", right.state.step},
+              {"timeMyr", setup.second->steps()[size_t(right.state.step)].timeMyr},
+              {"notes", halves.right.notes}}},
+            {"levels", levels},
+            {"output", out},
+            {"size", {image.width, image.height}},
+            {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()}};
 }
 
 // Renders one step (only the tiles of `share`; rank 0 then gathers them all when `share` is shared
@@ -358,6 +413,8 @@ nlohmann::json renderStep(const RenderArgs& args, const RenderSetup& setup, Stat
         }
         return stats;
     }
+    if (setup.second)
+        return renderPairStep(setup, renderer, policy, resolved);
     ViewFrames frames;  // one, or a stereo pair's two eyes
     nlohmann::json passes = nlohmann::json::array();
     PassStats total;
@@ -429,6 +486,8 @@ void run(const RenderArgs& args)
     RenderSetup setup;
     mpi::together([&] { setup = setUp(args); });
     setup.volume = lastVolumeKept(setup.dataset);
+    if (setup.second)
+        setup.secondRenderer = std::make_shared<StateRenderer>(setup.second);
     StateRenderer renderer(setup.dataset, setup.slice ? StateSources{.volume = setup.volume, .pathlines = {}} : StateSources{});
     LevelPolicy policy;  // level 0 unless the state names one
     if (setup.lodAuto && !setup.resolved.state.level && !setup.slice) {

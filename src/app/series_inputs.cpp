@@ -108,7 +108,7 @@ SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std
 {
     if (args.empty())
         fail("no input: give a dataset directory or netCDF files");
-    if (args.size() == 1 && fs::is_directory(args.front()) && fs::exists(fs::path(args.front()) / dataset::format::kManifest)) {
+    if (args.size() == 1 && isDatasetDirectory(args.front())) {
         if (!datasetOption.empty())
             fail("--dataset: only for netCDF inputs; '{}' is a dataset already", args.front());
         return {fs::path(args.front()), {}, {}};
@@ -129,6 +129,11 @@ SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std
                          ? fs::absolute(beside).parent_path() / (seriesName(inputs.files) + ".raypc")
                          : fs::path(datasetOption);
     return inputs;
+}
+
+bool isDatasetDirectory(const fs::path& path)
+{
+    return fs::is_directory(path) && fs::exists(path / dataset::format::kManifest);
 }
 
 bool datasetOfFiles(const fs::path& dir, const std::vector<fs::path>& files)
@@ -202,6 +207,15 @@ std::pair<SeriesInputs, preprocess::PreprocessOptions> SeriesFlags::resolve() co
         result.second.timesMyr = result.first.timesMyr;
     });
     return result;
+}
+
+std::vector<fs::path> SeriesFlags::pair() const
+{
+    if (inputs.size() != 2 || !isDatasetDirectory(inputs[0]) || !isDatasetDirectory(inputs[1]))
+        return {};
+    if (!dataset.empty())
+        fail("--dataset: only for netCDF inputs; '{}' and '{}' are datasets already", inputs[0], inputs[1]);
+    return {fs::path(inputs[0]), fs::path(inputs[1])};
 }
 
 }  // namespace raypc::app

@@ -32,6 +32,9 @@ struct SeriesInputs {
 SeriesInputs resolveSeriesInputs(const std::vector<std::string>& args, const std::string& datasetOption,
                                  const io::ReaderOptions& reader);
 
+// True when `path` is a dataset directory (it holds dataset.json).
+bool isDatasetDirectory(const std::filesystem::path& path);
+
 // True when `dir` holds a complete dataset of exactly `files` (by name, in order).
 bool datasetOfFiles(const std::filesystem::path& dir, const std::vector<std::filesystem::path>& files);
 
@@ -50,7 +53,7 @@ void prepareSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptio
 // What serve and render take on the command line: INPUT… (a dataset or netCDF files), --dataset and
 // the preprocessing options of `raypc preprocess` (an option group).
 struct SeriesFlags {
-    std::vector<std::string> inputs;
+    std::vector<std::string> inputs;  // the inputs of one series, or of `raypc serve A B` two datasets (pair())
     std::string dataset;
     PreprocessFlags preprocess;
 
@@ -59,6 +62,10 @@ struct SeriesFlags {
     // The inputs and the preprocessing options; under mpirun agreed over the ranks (one message for
     // a bad input, not one per rank). Throws raypc::Error as resolveSeriesInputs and PreprocessFlags.
     std::pair<SeriesInputs, preprocess::PreprocessOptions> resolve() const;
+    // `raypc serve A B` (docs/compare.md, "Side by side"): the two dataset directories when the inputs
+    // are exactly two of them (never one series: a series is netCDF or VTK inputs); else empty.
+    // Throws raypc::Error when --dataset is given with them.
+    std::vector<std::filesystem::path> pair() const;
 
 private:
     CLI::App* m_group = nullptr;

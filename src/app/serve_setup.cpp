@@ -174,10 +174,17 @@ void holdForTest(const std::atomic<bool>& cancel)
 
 }  // namespace
 
-void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags)
+void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags,
+                  const std::optional<std::filesystem::path>& second)
 {
+    if (second)
+        mpi::together([] {
+            if (mpi::distributed())
+                fail("serving a pair of datasets is for one process; under mpirun serve one dataset");
+        });
     keepLargeBlocksForReuse();  // frame buffers come and go with every state
     server::ServerOptions options = serverOptions(dataset, flags);
+    options.second = second;
     serveOnRanks(options, [&](const server::Server& srv) { announce(options, srv); });
 }
 

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,7 +27,10 @@ struct ServeFlags {
 // Serves `dataset` until SIGINT/SIGTERM. Prints one parseable line "raypc: serving URL" (tests and
 // scripts read the port and token from it). Throws raypc::Error when the dataset cannot be opened,
 // the address cannot be bound, or --assets/--examples is not a directory.
-void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags);
+// `second`: a pair's second dataset (`raypc serve A B`, docs/compare.md), served by one process
+// (under mpirun: raypc::Error).
+void serveDataset(const std::filesystem::path& dataset, const ServeFlags& flags,
+                  const std::optional<std::filesystem::path>& second = std::nullopt);
 
 // `raypc serve INPUT…`: a dataset as serveDataset; netCDF files (series_inputs.h) as the dataset made
 // from them: when it is not complete yet, the first file is preprocessed alone and served at once

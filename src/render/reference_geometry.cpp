@@ -204,6 +204,31 @@ std::vector<TextLabel> shellLabels(const state::ReferenceState& reference, const
     return labels;
 }
 
+std::vector<std::array<float, 2>> sphereOutline(const OrbitCamera& camera, int width, int height, float radiusKm,
+                                                int points)
+{
+    std::vector<std::array<float, 2>> outline;
+    const CameraFrame cam(camera, width, height);
+    const float eyeDistance = std::sqrt(dot(cam.eye, cam.eye));
+    if (eyeDistance <= radiusKm * 1.0001f || points < 3)
+        return outline;
+    // The silhouette circle, as for the shells' labels (shellLabels).
+    const Vec3 toEye = cam.eye * (1.0f / eyeDistance);
+    const Vec3 u = normalize(cam.right - toEye * dot(cam.right, toEye));
+    const Vec3 v = normalize(cam.up - toEye * dot(cam.up, toEye) - u * dot(cam.up, u));
+    const float q = radiusKm / eyeDistance;
+    const Vec3 centre = toEye * (radiusKm * q);
+    const float rho = radiusKm * std::sqrt(1.0f - q * q);
+    for (int i = 0; i < points; ++i) {
+        const float angle = float(2.0 * M_PI * i / points);
+        float x, y, t;
+        if (!cam.project(centre + (u * std::cos(angle) + v * std::sin(angle)) * rho, x, y, t))
+            return {};
+        outline.push_back({x, y});
+    }
+    return outline;
+}
+
 void drawReferenceGeometry(const state::ReferenceState& reference, const OrbitCamera& camera, int width, int height,
                            float surfaceRadiusKm, float coreRadiusKm, std::vector<float>& rgba,
                            const std::vector<float>& depthKm, const Coastlines* coastlines, const SliceMarks* marks)

@@ -17,6 +17,7 @@
 #include "render/legend.h"
 #include "state/render_state.h"
 
+#include <array>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -53,6 +54,12 @@ Rgb shellColor(const state::ReferenceState::Shells& shells, size_t index);
 // would fall outside the image. Coloured as the shell (shellColor).
 std::vector<TextLabel> shellLabels(const state::ReferenceState& reference, const OrbitCamera& camera, int width, int height,
                                    float surfaceRadiusKm, float coreRadiusKm);
+
+// The outline of the sphere of `radiusKm` (the surface) as the camera sees it: `points` points of
+// its silhouette circle in image pixels (closed: the last joins the first); empty when the eye is
+// inside the sphere or a point of the circle is behind the eye.
+std::vector<std::array<float, 2>> sphereOutline(const OrbitCamera& camera, int width, int height, float radiusKm,
+                                                int points = 96);
 
 // The shells' key of a legend: each drawn shell's depth and colour (positions unused); pictures'
 // legends draw it, and the server's frame headers carry it for the UI's legend.

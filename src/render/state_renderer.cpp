@@ -319,24 +319,25 @@ void checkPictureFitsMemory(const state::RenderState& state, bool withDepth, con
              formatBytes(needed), formatBytes(available.bytes), available.limitedBy);
 }
 
-ImageRgba8 StateRenderer::picture(const ViewFrames& frames, const ResolvedState& resolved, bool withLegends) const
+ImageRgba8 StateRenderer::picture(const ViewFrames& frames, const ResolvedState& resolved, bool withLegends,
+                                  bool withShellLabels) const
 {
     const std::vector<ResolvedState> views = stereoViews(resolved);
     RAYPC_CHECK_EQ(frames.size(), views.size());
     const FrameBuffer& first = frames.front();
     if (views.size() == 1)
-        return {first.width(), first.height(), viewPicture(first, resolved, withLegends)};
+        return {first.width(), first.height(), viewPicture(first, resolved, withLegends, withShellLabels)};
     // Each eye is a whole picture (its own reference geometry and legends), then the pair is composed.
     const StereoMode mode = resolved.state.stereo.mode;
     const StereoLayout eyes = stereoLayout(mode == StereoMode::Anaglyph ? mode : StereoMode::SideBySide, first.width(),
                                      first.height());
     return {eyes.width, eyes.height,
-            composeStereo(mode, eyes, viewPicture(first, views[0], withLegends),
-                          viewPicture(frames[1], views[1], withLegends))};
+            composeStereo(mode, eyes, viewPicture(first, views[0], withLegends, withShellLabels),
+                          viewPicture(frames[1], views[1], withLegends, withShellLabels))};
 }
 
 std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const ResolvedState& resolved,
-                                                bool withLegends) const
+                                                bool withLegends, bool withShellLabels) const
 {
     const state::RenderState& state = resolved.state;
     const auto& ref = state.reference;
@@ -350,10 +351,12 @@ std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const 
                               float(grid.rKm.front()), rgba, frame.averagedDepthKm(), coastlines.get(),
                               state.map.showInView ? &marks : nullptr);
         out = toRgba8(rgba, state.background);
-        // Each shell's depth on its ring, in every frame that draws the shells (the UI's too).
-        drawTextLabels(out, frame.width(), frame.height(),
-                       shellLabels(ref, state.camera, frame.width(), frame.height(), float(grid.rKm.back()),
-                                   float(grid.rKm.front())));
+        // Each shell's depth on its ring (the UI writes them itself over a mono frame, crisp at any
+        // frame size).
+        if (withShellLabels)
+            drawTextLabels(out, frame.width(), frame.height(),
+                           shellLabels(ref, state.camera, frame.width(), frame.height(), float(grid.rKm.back()),
+                                       float(grid.rKm.front())));
     } else {
         out = frame.resolveRgba8(state.background);
     }

@@ -165,8 +165,10 @@ public:
     // state.legend the colour legends (the volume's variable; the pathlines' colouring when they
     // are shown); a stereo pair's two views then composed as stereo.mode says (composeStereo).
     // 8-bit RGBA, row-major from the top left. Throws raypc::Error when the coastlines or the
-    // legend font cannot be read.
-    ImageRgba8 picture(const ViewFrames& frames, const ResolvedState& resolved, bool withLegends) const;
+    // legend font cannot be read. Without `withShellLabels` the shells' depths are not written on
+    // their rings: the UI writes them over the frame (shellLabels, for the frame header).
+    ImageRgba8 picture(const ViewFrames& frames, const ResolvedState& resolved, bool withLegends,
+                       bool withShellLabels = true) const;
 
     // A map or a section of `resolved` (state.map, state.section; render/slice_view.h) at the state's
     // size, from the volume of its step at its level (0 unless the state names one), with its title
@@ -181,7 +183,8 @@ public:
 private:
     std::shared_ptr<const PathlineScene> pathlinesFor(const state::RenderState& state);
     // One view's picture (`resolved` is the view's).
-    std::vector<uint8_t> viewPicture(const FrameBuffer& frame, const ResolvedState& resolved, bool withLegends) const;
+    std::vector<uint8_t> viewPicture(const FrameBuffer& frame, const ResolvedState& resolved, bool withLegends,
+                                     bool withShellLabels) const;
 
     // The features painted (feature_paint.h): sets the key of what the renderers' volumes hold; a new
     // key drops the renderers. Returns whether the state paints features.

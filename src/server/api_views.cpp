@@ -450,7 +450,30 @@ json rangeJson(dataset::ValueRange r)
 {
     return json::array({r.min, r.max});
 }
+
+// The dataset by its directory's last two path components ("demo-data/dataset",
+// "run42/spherical.raypc"): what a user recognises, without the absolute path (the UI may be remote).
+std::string datasetName(const dataset::Dataset& dataset)
+{
+    std::error_code ec;
+    const fs::path dir = fs::weakly_canonical(dataset.dir(), ec);
+    const fs::path& known = ec ? dataset.dir() : dir;
+    return known.parent_path().filename().empty() ? known.filename().string()
+                                                  : (known.parent_path().filename() / known.filename()).string();
+}
 }  // namespace
+
+json pairJson(int index, const dataset::Dataset& first, const dataset::Dataset& second)
+{
+    json datasets = json::array();
+    for (const dataset::Dataset* d : {&first, &second}) {
+        json times = json::array();
+        for (const auto& s : d->steps())
+            times.push_back(s.timeMyr);
+        datasets.push_back({{"name", datasetName(*d)}, {"timesMyr", times}});
+    }
+    return {{"index", index}, {"datasets", datasets}};
+}
 
 json infoJson(const dataset::Dataset& dataset, const ServerLimits& limits)
 {
@@ -496,14 +519,7 @@ json infoJson(const dataset::Dataset& dataset, const ServerLimits& limits)
         const render::Rgb c = render::featurePaintColor(slot);
         palette.push_back({c.r, c.g, c.b});
     }
-    // The dataset by its directory's last two path components ("demo-data/dataset",
-    // "run42/spherical.raypc"): what a user recognises, without the absolute path (the UI may be remote).
-    std::error_code ec;
-    const fs::path dir = fs::weakly_canonical(dataset.dir(), ec);
-    const fs::path& known = ec ? dataset.dir() : dir;
-    const std::string name = known.parent_path().filename().empty()
-                                 ? known.filename().string()
-                                 : (known.parent_path().filename() / known.filename()).string();
+    const std::string name = datasetName(dataset);
     json info = {{"protocol", kProtocolVersion},
             {"name", name},
             {"variables", variables},

@@ -30,6 +30,10 @@ namespace raypc::server {
 // default state (docs/protocol.md).
 nlohmann::json infoJson(const dataset::Dataset& dataset, const ServerLimits& limits = {});
 
+// GET /api/info's `pair` key when the server serves a pair (docs/compare.md, "Side by side"):
+// `index` (which of the two this info is about, 0 or 1) and both datasets' names and step times.
+nlohmann::json pairJson(int index, const dataset::Dataset& first, const dataset::Dataset& second);
+
 // Every *.json in `dir` except demo.json, sorted by file name, as [{name, title, state}]: name is
 // the file name without .json, title a short human title (the directory's titles.tsv; else the
 // name with spaces), state the parsed document. A file that is not JSON is left out with a warning.

@@ -11,6 +11,7 @@
 #include "analysis/feature_csv.h"
 #include "analysis/probe.h"
 #include "render/color_map.h"
+#include "render/pair_state.h"
 #include "render/pathline_scene.h"
 #include "render/reference_geometry.h"
 #include "render/slice_view.h"
@@ -71,6 +72,16 @@ int checkedStep(const dataset::Dataset& dataset, std::string_view query)
 
 json parseBody(std::string_view body) { return parseJsonInput(body, "body"); }
 
+// The body's state resolved against the request's dataset: a pair's second takes the first's state
+// as its sessions do (render::secondOfPair).
+render::ResolvedState resolveBody(const ApiContext& api, std::string_view body)
+{
+    if (!api.pairFirst)
+        return render::resolveState(parseBody(body), *api.dataset);
+    render::PairedState paired = render::secondOfPair(state::parseRenderState(parseBody(body)), *api.pairFirst, *api.dataset);
+    return render::resolveState(std::move(paired.state), *api.dataset);
+}
+
 ApiAnswer jsonAnswer(const json& j)
 {
     return {j.dump(-1, ' ', false, json::error_handler_t::replace), "application/json"};
@@ -119,7 +130,7 @@ ApiAnswer sample(const ApiContext& api, const ApiRequest& request)
 
 ApiAnswer selection(const ApiContext& api, const ApiRequest& request)
 {
-    const render::ResolvedState resolved = render::resolveState(parseBody(request.body), *api.dataset);
+    const render::ResolvedState resolved = resolveBody(api, request.body);
     const auto volume = api.cache->get(resolved.state.step, 0);
     const auto s = analysis::selectedVolume(*volume, resolved.params.brushes);
     return jsonAnswer({{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}, {"step", resolved.state.step}});
@@ -143,10 +154,36 @@ void checkScreenshotLimits(const state::RenderState& state, const ServerLimits& 
              state.width, state.height, passes, limits.maxScreenshotPixelPasses);
 }
 
+// A state with `pair` on a server of a pair: both datasets' halves (render::pairHalves), each drawn
+// as a screenshot is, side by side in one PNG (what `raypc render --state` writes).
+ApiAnswer pairScreenshot(const ApiContext& api, const render::ResolvedState& resolved, const std::atomic<bool>* cancel)
+{
+    if (resolved.state.stereo.enabled())
+        fail("screenshot: a pair is drawn as two views side by side; not in stereo");
+    const ApiContext& second = *api.pairSecond;
+    const auto start = std::chrono::steady_clock::now();
+    const render::PairHalves halves = render::pairHalves(resolved.state, *api.dataset, *second.dataset);
+    auto draw = [&](const ApiContext& side, const state::RenderState& state) {
+        const render::ResolvedState view = render::resolveState(state, *side.dataset);
+        render::StateRenderer renderer(side.dataset, cacheSources(side.cache, side.pathlines));
+        const auto still = renderer.renderStill(view, 0, cancel);
+        if (still.frames.back().passes() < std::max(1, view.state.passes))
+            fail("screenshot cancelled (the client went away or the server is stopping)");
+        return renderer.picture(still.frames, view, true);
+    };
+    const render::ImageRgba8 picture = render::sideBySide(draw(api, halves.left), draw(second, halves.right.state));
+    std::string png = encodePng(picture.pixels, picture.width, picture.height);
+    spdlog::info("screenshot of the pair: steps {} and {} {}x{} in {:.0f} ms", halves.left.step,
+                 halves.right.state.step, picture.width, picture.height, millisecondsSince(start));
+    return {std::move(png), "image/png"};
+}
+
 ApiAnswer screenshot(const ApiContext& api, const ApiRequest& request)
 {
-    const render::ResolvedState resolved = render::resolveState(parseBody(request.body), *api.dataset);
+    const render::ResolvedState resolved = resolveBody(api, request.body);
     checkScreenshotLimits(resolved.state, api.limits);
+    if (resolved.state.pair && api.pairSecond)
+        return pairScreenshot(api, resolved, request.cancel);
     const auto start = std::chrono::steady_clock::now();
     render::StateRenderer renderer(api.dataset, cacheSources(api.cache, api.pathlines));
     const auto still = renderer.renderStill(resolved, 0, request.cancel);
@@ -169,7 +206,7 @@ ApiAnswer slice(const ApiContext& api, const ApiRequest& request)
     const auto view = queryParameter(request.query, "view");
     if (!view || (*view != "map" && *view != "section"))
         fail("view: expected 'map' or 'section', found '{}'", view ? view->substr(0, 40) : "nothing");
-    const render::ResolvedState resolved = render::resolveState(parseBody(request.body), *api.dataset);
+    const render::ResolvedState resolved = resolveBody(api, request.body);
     const state::RenderState& state = resolved.state;
     if (int64_t(state.width) * state.height > api.limits.maxScreenshotPixels)
         fail("slice: image {}x{} is over the limit of {} pixels", state.width, state.height, api.limits.maxScreenshotPixels);
@@ -249,7 +286,7 @@ ApiAnswer stats(const ApiContext& api, const ApiRequest& request)
     const int level =
         queryParameter(request.query, "level") ? parseIntParameter(request.query, "level") : std::min(1, levels - 1);
     dataset.checkLevel(level);
-    const render::ResolvedState resolved = render::resolveState(parseBody(request.body), dataset);
+    const render::ResolvedState resolved = resolveBody(api, request.body);
     const auto start = std::chrono::steady_clock::now();
     json result = selectionStatsJson(dataset, *api.cache, resolved.params.brushes, level, resolved.state.step,
                                      request.cancel);
@@ -270,7 +307,7 @@ int featureLevel(const dataset::Dataset& dataset, const ApiRequest& request, con
 ApiAnswer features(const ApiContext& api, const ApiRequest& request)
 {
     const dataset::Dataset& dataset = *api.dataset;
-    const render::ResolvedState resolved = render::resolveState(parseBody(request.body), dataset);
+    const render::ResolvedState resolved = resolveBody(api, request.body);
     const state::FeatureSettings& settings = resolved.state.features;
     const int level = featureLevel(dataset, request, resolved.state);
     const double sigmas = queryParameter(request.query, "sigmas") ? parseNumberParameter(request.query, "sigmas") : 2.0;
@@ -304,7 +341,7 @@ ApiAnswer features(const ApiContext& api, const ApiRequest& request)
 ApiAnswer timeDepth(const ApiContext& api, const ApiRequest& request)
 {
     const dataset::Dataset& dataset = *api.dataset;
-    const render::ResolvedState resolved = render::resolveState(parseBody(request.body), dataset);
+    const render::ResolvedState resolved = resolveBody(api, request.body);
     const int level = featureLevel(dataset, request, resolved.state);
     const auto ofText = queryParameter(request.query, "of");
     const render::TimeDepthOf of = render::parseTimeDepthOf(ofText ? std::string(*ofText) : "share", "of");
@@ -444,7 +481,7 @@ ApiAnswer linkPost(const ApiContext& api, const ApiRequest& request)
 
 const Route kRoutes[] = {
     {HttpMethod::Get, "/api/info", Lane::Network, info, ""},
-    {HttpMethod::Get, "/api/progress", Lane::Network, progress, ""},
+    {HttpMethod::Get, "/api/progress", Lane::Network, progress, "", false},
     {HttpMethod::Get, "/api/histogram", Lane::Network, histogram, "step,var"},
     {HttpMethod::Get, "/api/sample", Lane::Worker, sample, "step,columns"},
     {HttpMethod::Post, "/api/selection", Lane::Worker, selection, ""},
@@ -454,12 +491,12 @@ const Route kRoutes[] = {
     {HttpMethod::Get, "/api/presets", Lane::Worker, presets, ""},
     {HttpMethod::Post, "/api/stats", Lane::Statistics, stats, "level"},
     {HttpMethod::Post, "/api/features", Lane::Statistics, features, "level,sigmas,job"},
-    {HttpMethod::Get, "/api/job-progress", Lane::Network, jobProgress, "job"},
+    {HttpMethod::Get, "/api/job-progress", Lane::Network, jobProgress, "job", false},
     {HttpMethod::Post, "/api/time-depth", Lane::Statistics, timeDepth, "level,of,var,format,width,height"},
     {HttpMethod::Get, "/api/pathlines", Lane::Worker, pathlines, "step,window"},
     {HttpMethod::Get, "/api/persistence", Lane::Worker, persistence, "step,top,var"},
-    {HttpMethod::Get, "/api/link", Lane::Worker, linkGet, ""},
-    {HttpMethod::Post, "/api/link", Lane::Worker, linkPost, ""},
+    {HttpMethod::Get, "/api/link", Lane::Worker, linkGet, "", false},
+    {HttpMethod::Post, "/api/link", Lane::Worker, linkPost, "", false},
 };
 
 }  // namespace
@@ -483,7 +520,7 @@ void checkQueryParameters(const Route& route, std::string_view query)
         if (std::find(seen.begin(), seen.end(), key) != seen.end())
             fail("query: parameter '{}' is given twice", shown);
         seen.push_back(key);
-        if (key == "token")
+        if (key == "token" || (key == "dataset" && route.perDataset))
             continue;
         bool known = false;
         for (std::string_view rest = route.parameters; !rest.empty() && !known;) {
@@ -496,6 +533,21 @@ void checkQueryParameters(const Route& route, std::string_view query)
                  route.parameters.empty() ? std::string("it takes none")
                                           : fmt::format("it takes {}", route.parameters));
     }
+}
+
+int datasetOfQuery(const Route* route, std::string_view query, int datasets)
+{
+    const auto text = queryParameter(query, "dataset");
+    if (!text)
+        return 0;
+    const std::string where = route ? std::string(route->path) : std::string("/ws");
+    const std::string serves = datasets == 1 ? std::string("this server serves one dataset, 0 (`raypc serve A B` serves a pair)")
+                                             : fmt::format("this server serves a pair, 0 and 1");
+    if (*text == "0")
+        return 0;
+    if (*text == "1" && datasets == 2)
+        return 1;
+    fail("dataset: {} for {}: expected an index of the datasets served; {}", text->substr(0, 40), where, serves);
 }
 
 }  // namespace raypc::server

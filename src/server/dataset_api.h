@@ -42,6 +42,11 @@ struct ApiContext {
     std::shared_ptr<const SeriesProgress> series;   // GET /api/progress; nullptr: a complete dataset
     LinkedState* link = nullptr;                    // GET/POST /api/link (the server's, server_context.h)
     JobProgress* jobs = nullptr;                    // POST /api/features?job=, GET /api/job-progress
+    // A pair (docs/compare.md, "Side by side"). The second dataset's context: the first, whose states
+    // the endpoints taking a state are sent (render::secondOfPair makes them its own). The first's:
+    // the second's context, which a screenshot of a state with `pair` draws at its right.
+    std::shared_ptr<const dataset::Dataset> pairFirst;
+    const ApiContext* pairSecond = nullptr;
 };
 
 // One API request as the handlers see it: the percent-encoded query, the body, and a flag that
@@ -74,6 +79,8 @@ struct Route {
     Lane lane;
     ApiHandler handler;
     std::string_view parameters;  // the query parameters it takes, comma-separated (besides `token`)
+    // Whether it answers about one dataset, so that it takes `dataset` (a pair's 0 or 1) too.
+    bool perDataset = true;
 };
 
 // Every /api/ endpoint of docs/protocol.md.
@@ -82,5 +89,10 @@ std::span<const Route> apiRoutes();
 // Throws raypc::Error (answered 400) for a query parameter `route` does not take or one given
 // twice, naming it and the parameters the route takes, as unknown JSON keys are refused.
 void checkQueryParameters(const Route& route, std::string_view query);
+
+// The dataset a request is about: its `dataset` query parameter (0 when absent), or that of a /ws
+// upgrade (`route` nullptr). Throws raypc::Error (answered 400) for a value other than an index of
+// the `datasets` served, naming it and what the server serves.
+int datasetOfQuery(const Route* route, std::string_view query, int datasets);
 
 }  // namespace raypc::server

@@ -171,8 +171,16 @@ private:
                 send(errorResponse(http::status::service_unavailable, why, request.version(), false));
                 return;
             }
+            int dataset = 0;
+            try {
+                dataset = datasetOfQuery(nullptr, targetQuery(target), m_server.datasetCount());
+            } catch (const Error& e) {
+                spdlog::warn("http: /ws: 400 {}", e.what());
+                send(errorResponse(http::status::bad_request, e.what(), request.version(), false));
+                return;
+            }
             m_stream.expires_never();
-            startWsSession(m_stream.release_socket(), m_server, std::move(request));
+            startWsSession(m_stream.release_socket(), m_server, std::move(request), dataset);
             return;
         }
         route(std::move(request));
@@ -199,11 +207,12 @@ private:
                                                 [&](const Route& r) { return r.path == path && r.method == method; });
                 if (found != routes.end()) {
                     checkQueryParameters(*found, targetQuery(target));
+                    const ApiContext& api = m_server.apiOf(datasetOfQuery(&*found, targetQuery(target), m_server.datasetCount()));
                     if (found->lane == Lane::Network)
-                        send(answerResponse(found->handler(m_server.api, {targetQuery(target), request.body(), nullptr}),
+                        send(answerResponse(found->handler(api, {targetQuery(target), request.body(), nullptr}),
                                             version, keepAlive));
                     else
-                        offload(*found, std::move(request));
+                        offload(*found, api, std::move(request));
                 } else if (std::any_of(routes.begin(), routes.end(), [&](const Route& r) { return r.path == path; })) {
                     bad(http::status::method_not_allowed, fmt::format("{}: method not allowed", path));
                 } else {
@@ -273,7 +282,7 @@ private:
     // Runs the route's handler on its lane; the answer is written back on the network thread. A
     // raypc::Error becomes 400; a full lane 503. While the handler runs, the connection is watched:
     // when the client goes away, the handler's cancel flag is set.
-    void offload(const Route& route, Request request)
+    void offload(const Route& route, const ApiContext& api, Request request)
     {
         JobLane& lane = laneOf(route.lane);
         if (!lane.tryEnter()) {
@@ -287,7 +296,7 @@ private:
         }
         m_job = m_server.jobs.add();
         watchForDisconnect();
-        net::post(lane.pool(), [self = shared_from_this(), &route, &lane, cancel = m_job, request = std::move(request)]() {
+        net::post(lane.pool(), [self = shared_from_this(), &route, &api, &lane, cancel = m_job, request = std::move(request)]() {
             const unsigned version = request.version();
             const bool keepAlive = request.keep_alive();
             const std::string target(request.target());
@@ -296,7 +305,7 @@ private:
                 // A request whose client left (or a server that is stopping) while it waited is not started.
                 if (*cancel)
                     fail("cancelled before it started (the client went away or the server is stopping)");
-                res = answerResponse(route.handler(self->m_server.api, {targetQuery(target), request.body(), cancel.get()}),
+                res = answerResponse(route.handler(api, {targetQuery(target), request.body(), cancel.get()}),
                                      version, keepAlive);
             } catch (const Error& e) {
                 if (*cancel)

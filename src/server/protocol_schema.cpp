@@ -230,6 +230,18 @@ const std::vector<Definition>& messages()
               "why the dataset has no pathlines (the model has no velocity, its flow has missing values, "
               "preprocessed with --no-pathlines); absent when it has them",
               false},
+             {"pair",
+              named("PairInfo", "",
+                    {{"index", integer(""), "which of the two this info is about: 0, or 1 (asked with `?dataset=1`)"},
+                     {"datasets",
+                      arrayOf(named("PairDataset", "",
+                                    {{"name", text(""), "the dataset's name, as `name` above"},
+                                     {"timesMyr", arrayOf(number(""), ""), "its steps' model times, Myr"}}),
+                              ""),
+                      "the two datasets, first then second"}}),
+              "only when the server serves a pair (`raypc serve A B`, docs/compare.md): the endpoints and `/ws` "
+              "take `dataset=1` for the second",
+              false},
              {"limits",
               named("ServerLimits", "",
                     {{"screenshotPixels", integer(""), "largest width × height of a screenshot"},
@@ -547,6 +559,11 @@ const std::vector<Definition>& messages()
         d.push_back(part("ShellKeyEntry", "a reference shell drawn",
                          {{"label", text(""), "as the legend names it (e.g. `410 km`)"},
                           {"color", arrayOf(number(""), ""), "its colour, r, g, b in [0, 1]"}}));
+        d.push_back(part("ShellLabel", "a reference shell's depth written on its ring",
+                         {{"label", text(""), "the depth (e.g. `660 km`)"},
+                          {"color", arrayOf(number(""), ""), "the shell's colour, r, g, b in [0, 1]"},
+                          {"x", number(""), "where the label's centre goes, a fraction of the frame's width from its left"},
+                          {"y", number(""), "the same, a fraction of its height from its top"}}));
         std::vector<Key> frameSelection = selectionKeys();
         d.push_back(message(
             "FrameHeader", "WebSocket server → client (binary frame's JSON header)", "one rendered pass",
@@ -584,6 +601,22 @@ const std::vector<Definition>& messages()
                      {"visible", integer(""), "those the filters and brushes leave visible"}}),
               "with pathlines shown", false},
              {"shellKey", arrayOf(ref("ShellKeyEntry"), ""), "with reference shells drawn: each shell drawn", false},
+             {"pair",
+              named("FramePair", "",
+                    {{"notes", arrayOf(text(""), ""),
+                      "what this dataset's picture leaves out or changes of the state (a brush on a variable it "
+                      "lacks, …; `render/pair_state.h`), one sentence each; empty when nothing"}}),
+              "a session of a pair's second dataset (`/ws?dataset=1`): its `step` is the one matched to the "
+              "state's (`pair.steps` of the state)",
+              false},
+             {"shellLabels", arrayOf(ref("ShellLabel"), ""),
+              "a mono frame with reference shells whose rings are in view: each shell's depth label, for the UI to "
+              "write over the frame (the frame itself carries none; stereo frames and pictures carry theirs)",
+              false},
+             {"surfaceOutline", arrayOf(pairOf(number(""), ""), ""),
+              "a mono frame seen from outside the planet: the surface's silhouette as points [x, y], fractions of "
+              "the frame's width and height from its top left, a closed line the UI draws over the frame",
+              false},
              {"stereo",
               named("FrameStereo", "",
                     {{"mode", namesOf<render::StereoMode>(state::allStereoModes(), state::stereoModeName, "", render::StereoMode::Off), "the stereo mode"},

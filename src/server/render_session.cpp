@@ -1,5 +1,7 @@
 #include "server/render_session.h"
 
+#include "render/pair_state.h"
+
 #include "core/clock.h"
 #include "core/error.h"
 #include "analysis/selection.h"
@@ -67,6 +69,11 @@ void RenderSession::submit(int64_t id, state::RenderState state, FrameMode mode)
     Request request;
     request.received = Clock::now();
     request.id = id;
+    if (m_context.pairFirst) {
+        render::PairedState paired = render::secondOfPair(std::move(state), *m_context.pairFirst, *m_context.dataset);
+        state = std::move(paired.state);
+        request.pair = {{"notes", paired.notes}};
+    }
     request.resolved = render::resolveState(std::move(state), *m_context.dataset);  // throws: the old state stays
     checkSessionImage(request.resolved.state);
     request.mode = mode;
@@ -136,7 +143,9 @@ void RenderSession::sendFrame(Job& job, const ViewFrames& frames, const StateRen
     const Request& request = job.request;
     const state::RenderState& state = request.resolved.state;
     const auto encodeStart = Clock::now();
-    const ImageRgba8 picture = m_renderer.picture(frames, request.resolved, false);  // the UI draws legends
+    // The UI draws the legends, and over a mono frame the shells' depth labels (shellLabels below).
+    const bool labelsByUi = !state.stereo.enabled();
+    const ImageRgba8 picture = m_renderer.picture(frames, request.resolved, false, !labelsByUi);
     const std::string jpeg = encodeJpeg(picture.pixels, picture.width, picture.height,
                                         job.interactive || preview ? kJpegQualityInteractive : kJpegQualityStill);
     // A stereo pair's depth is the two eyes' side by side, whatever the picture's layout, each
@@ -174,6 +183,30 @@ void RenderSession::sendFrame(Job& job, const ViewFrames& frames, const StateRen
     // legend key.
     if (!job.shellKey.empty())
         header["shellKey"] = job.shellKey;
+    // Where each shell's depth goes on a mono frame (render::shellLabels) and the surface's outline
+    // (render::sphereOutline), as fractions of its width and height: the UI draws them, crisp
+    // whatever the frame's size or level.
+    if (labelsByUi) {
+        const grid::SphericalGrid& grid = m_context.dataset->levels().front().grid;
+        nlohmann::json labels = nlohmann::json::array();
+        for (const TextLabel& l : render::shellLabels(state.reference, state.camera, picture.width, picture.height,
+                                                      float(grid.rKm.back()), float(grid.rKm.front())))
+            labels.push_back({{"label", l.text},
+                              {"color", {l.color.r, l.color.g, l.color.b}},
+                              {"x", l.x / float(picture.width)},
+                              {"y", l.y / float(picture.height)}});
+        if (!labels.empty())
+            header["shellLabels"] = std::move(labels);
+        // The surface's outline, which the UI draws so that material near the surface is seen inside it.
+        nlohmann::json outline = nlohmann::json::array();
+        for (const auto& [x, y] : render::sphereOutline(state.camera, picture.width, picture.height,
+                                                        float(grid.rKm.back())))
+            outline.push_back({x / float(picture.width), y / float(picture.height)});
+        if (!outline.empty())
+            header["surfaceOutline"] = std::move(outline);
+    }
+    if (!request.pair.is_null())
+        header["pair"] = request.pair;
     std::string bytes = encodeFrame(std::move(header), {reinterpret_cast<const uint8_t*>(jpeg.data()), jpeg.size()},
                                     depth, depthWidth, depthHeight);
     job.encodeMs += millisecondsSince(encodeStart);

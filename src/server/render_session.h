@@ -48,6 +48,9 @@ struct RenderContext {
     // room for (LevelPolicy::overheadSeconds).
     std::atomic<double> frameOverheadSeconds{0.0};
     RankPool* ranks = nullptr;  // a distributed server's (rank_pool.h): passes go to every rank
+    // The second dataset of a pair (docs/compare.md): the first, whose states its sessions are sent
+    // and draw through render::secondOfPair. nullptr: the first or only dataset.
+    std::shared_ptr<const dataset::Dataset> pairFirst;
 };
 
 // Throws raypc::Error when a resolved state's image is over what a session renders (4096 x 4096
@@ -69,7 +72,8 @@ public:
     RenderSession& operator=(const RenderSession&) = delete;
 
     // Validates the state against the dataset (throws raypc::Error naming the key; the previous
-    // state stays in force) and makes it the newest request.
+    // state stays in force) and makes it the newest request. A pair's second dataset takes the
+    // first's state through render::secondOfPair.
     void submit(int64_t id, state::RenderState state, FrameMode mode);
     // Stops the current work; no more frames until the next submit.
     void cancel();
@@ -82,6 +86,7 @@ private:
     struct Request {
         int64_t id = 0;
         render::ResolvedState resolved;
+        nlohmann::json pair;  // a pair's second dataset: the frame header's `pair` (its notes); else null
         FrameMode mode = FrameMode::still;
         std::chrono::steady_clock::time_point received;  // for the log: waiting and preparation time
     };

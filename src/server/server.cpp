@@ -117,7 +117,9 @@ struct Server::Impl {
 Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(options)))
 {
     ServerContext& s = m_impl->state;
-    DatasetCaches caches = openDatasetCaches(s.options.dataset, s.options.cacheBytes, s.options.cacheEntries);
+    // A pair shares the cache bound: each dataset gets half (docs/compare.md, "Side by side").
+    const size_t cacheBytes = s.options.second ? s.options.cacheBytes / 2 : s.options.cacheBytes;
+    DatasetCaches caches = openDatasetCaches(s.options.dataset, cacheBytes, s.options.cacheEntries);
     s.dataset = std::move(caches.dataset);
     s.cache = std::move(caches.volumes);
     s.pathlines = std::move(caches.pathlines);
@@ -136,6 +138,36 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     s.api.series = s.options.series;
     s.api.link = &s.link;
     s.api.jobs = &s.jobProgress;
+    if (s.options.second) {
+        auto second = std::make_unique<SecondDataset>();
+        DatasetCaches c = openDatasetCaches(*s.options.second, cacheBytes, s.options.cacheEntries);
+        second->dataset = std::move(c.dataset);
+        second->cache = std::move(c.volumes);
+        second->pathlines = std::move(c.pathlines);
+        second->persistence = std::make_unique<PersistenceCache>(second->cache.get());
+        second->render.dataset = second->dataset;
+        second->render.cache = second->cache.get();
+        second->render.pathlines = second->pathlines.get();
+        second->render.ranks = s.options.ranks;
+        second->render.pairFirst = s.dataset;
+        ApiContext& api = second->api;
+        api = s.api;
+        api.dataset = second->dataset;
+        api.cache = second->cache.get();
+        api.pathlines = second->pathlines.get();
+        api.persistence = second->persistence.get();
+        api.series = nullptr;
+        api.pairFirst = s.dataset;
+        // Each info is its own dataset's, with the pair's key (pairJson) added.
+        for (int index : {0, 1}) {
+            ApiContext& a = index == 0 ? s.api : api;
+            json info = infoJson(*a.dataset, s.options.limits);
+            info["pair"] = pairJson(index, *s.dataset, *second->dataset);
+            a.infoJson = info.dump(-1, ' ', false, json::error_handler_t::replace);
+        }
+        s.second = std::move(second);
+        s.api.pairSecond = &s.second->api;
+    }
     s.assets = s.options.assets;
     s.site.loopback = isLoopbackHost(s.options.host);
     for (const auto& origin : s.options.allowedOrigins)

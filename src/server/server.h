@@ -26,6 +26,10 @@ class SeriesProgress;
 
 struct ServerOptions {
     std::filesystem::path dataset;
+    // The second dataset of a pair (`raypc serve A B`, docs/compare.md, "Side by side"): its own
+    // caches (each dataset gets half of cacheBytes), chosen by the `dataset` parameter of the HTTP
+    // endpoints and of /ws. nullopt: one dataset.
+    std::optional<std::filesystem::path> second;
     std::string host = "127.0.0.1";
     uint16_t port = 8080;  // 0: an ephemeral port (see Server::port())
     std::optional<std::filesystem::path> assets;  // nullopt: the built-in page saying the UI is not built

@@ -111,6 +111,16 @@ private:
     size_t m_limit, m_used = 0;
 };
 
+// The second dataset of a pair (ServerOptions::second): what the first has in ServerContext, its own.
+struct SecondDataset {
+    std::shared_ptr<const dataset::Dataset> dataset;
+    std::unique_ptr<StepCache> cache;
+    std::unique_ptr<PathlineCache> pathlines;
+    std::unique_ptr<PersistenceCache> persistence;
+    ApiContext api;
+    RenderContext render;
+};
+
 struct ServerContext {
     explicit ServerContext(ServerOptions serverOptions)
         : options(std::move(serverOptions)),
@@ -134,6 +144,13 @@ struct ServerContext {
     std::string token;  // empty on loopback
     SitePolicy site;
     std::optional<std::filesystem::path> assets;
+    std::unique_ptr<SecondDataset> second;  // a pair's second dataset; nullptr: one dataset
+
+    // How many datasets are served (1, or 2 for a pair), and the contexts of dataset `index` (checked
+    // by datasetOfQuery, dataset_api.h).
+    int datasetCount() const { return second ? 2 : 1; }
+    const ApiContext& apiOf(int index) const { return index == 1 ? second->api : api; }
+    RenderContext& renderOf(int index) { return index == 1 ? second->render : render; }
 
     // Where work runs besides the network thread (docs/reliability.md, Server): the quick API
     // requests; screenshots, statistics over time and map or section pictures one at a time each

@@ -31,9 +31,10 @@ constexpr size_t kMiB = size_t(1) << 20;
 // half is done with the last one: a client that sends faster than that is slowed by TCP, not queued.
 class WsSession : public std::enable_shared_from_this<WsSession> {
 public:
-    WsSession(tcp::socket&& socket, ServerContext& server)
+    WsSession(tcp::socket&& socket, ServerContext& server, int dataset)
         : m_ws(std::move(socket)),
           m_server(server),
+          m_dataset(dataset),
           m_limits(server.options.limits),
           m_stallTimer(m_ws.get_executor()),
           m_control(net::make_strand(server.messages))
@@ -85,7 +86,7 @@ private:
             };
         };
         try {
-            m_render = std::make_shared<RenderSession>(m_server.render, SessionSink{sink(false), sink(true)}, m_name);
+            m_render = std::make_shared<RenderSession>(m_server.renderOf(m_dataset), SessionSink{sink(false), sink(true)}, m_name);
         } catch (const std::exception& e) {
             // No render thread (e.g. the process is out of threads or memory): refuse this session, keep
             // the server and the others.
@@ -285,7 +286,7 @@ private:
             // From now on the session gets the states a program sets (POST /api/link), in order after
             // the hello reply (both are posted to the network thread); the reply is posted once the
             // session counts, so a client that has it finds itself among GET /api/link's sessions.
-            if (m_linkKey == 0) {
+            if (m_linkKey == 0 && m_dataset == 0) {
                 auto sink = [weak = weak_from_this(), executor = m_ws.get_executor()](std::string text) {
                     net::post(executor, [weak, text = std::move(text)]() mutable {
                         if (auto self = weak.lock())
@@ -366,7 +367,7 @@ private:
         m_awaiting = message.id;
         // A settled state that goes to rendering is what the UI shows: the linked state (GET /api/link);
         // the steps of playback and dragging are not settled.
-        if (message.mode == FrameMode::still)
+        if (message.mode == FrameMode::still && m_dataset == 0)
             m_server.link.commitFromUi(message.state);
     }
 
@@ -387,6 +388,7 @@ private:
     websocket::stream<beast::tcp_stream> m_ws;
     beast::flat_buffer m_buffer;
     ServerContext& m_server;
+    const int m_dataset;  // which dataset this session renders: 0, or a pair's 1
     const ServerLimits& m_limits;
     std::string m_name;
     std::deque<std::pair<bool, std::string>> m_queue;  // (binary, bytes); front is being written
@@ -412,9 +414,9 @@ private:
 
 }  // namespace
 
-void startWsSession(tcp::socket&& socket, ServerContext& server, http::request<http::string_body> upgrade)
+void startWsSession(tcp::socket&& socket, ServerContext& server, http::request<http::string_body> upgrade, int dataset)
 {
-    std::make_shared<WsSession>(std::move(socket), server)->run(std::move(upgrade));
+    std::make_shared<WsSession>(std::move(socket), server, dataset)->run(std::move(upgrade));
 }
 
 }  // namespace raypc::server

@@ -15,8 +15,10 @@
 
 namespace raypc::server {
 
-// Completes the WebSocket handshake of `upgrade` on `socket` and serves the connection.
+// Completes the WebSocket handshake of `upgrade` on `socket` and serves the connection, rendering
+// dataset `dataset` (0, or a pair's 1: `/ws?dataset=1`; checked by datasetOfQuery). Only the
+// sessions of dataset 0 take part in the linked state (GET/POST /api/link).
 void startWsSession(boost::asio::ip::tcp::socket&& socket, ServerContext& server,
-                    boost::beast::http::request<boost::beast::http::string_body> upgrade);
+                    boost::beast::http::request<boost::beast::http::string_body> upgrade, int dataset = 0);
 
 }  // namespace raypc::server

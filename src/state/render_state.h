@@ -33,9 +33,9 @@ namespace raypc::state {
 // (explicit camera poses, e.g. WebXR eyes), version 8 "selection" (show the selection whatever the
 // transfer function's opacity), version 9 "map" and "section" (depth slices and great-circle
 // sections, render/slice_view.h), version 10 "features" (how features are found), version 11
-// "features.colorById" and "features.highlight", version 12 "features.stallBy"; older documents are
-// still read (they have none of these).
-inline constexpr int kRenderStateVersion = 12;
+// "features.colorById" and "features.highlight", version 12 "features.stallBy", version 13 "pair" (two
+// datasets side by side); older documents are still read (they have none of these).
+inline constexpr int kRenderStateVersion = 13;
 
 // A brush range: a variable or a coordinate (x, y, z, lat, lon, radius, depth) and [min, max]. The
 // brush model is analysis/selection.h's: a name that repeats adds a range to its axis (OR).
@@ -140,6 +140,14 @@ analysis::FeatureOptions featureOptions(const FeatureSettings& settings);
 void checkFeatureSettings(const FeatureSettings& settings,
                           std::initializer_list<std::pair<std::string_view, std::string_view>> optionNames);
 
+// The "pair" object (version 13, docs/compare.md, "Side by side"): the state is drawn for a second
+// dataset too, beside the first, with the same camera, transfer function and brushes (by name; a
+// brush on a variable it lacks is left out for it, render/pair_state.h). nullopt (null): one dataset.
+struct PairState {
+    std::string dataset;  // the second dataset's directory (relative: to the working directory)
+    PairSteps steps = PairSteps::Time;  // how its step is matched to the state's `step`
+};
+
 struct RenderState {
     int version = kRenderStateVersion;
     int step = 0;  // time step index (reload class)
@@ -187,6 +195,7 @@ struct RenderState {
     MapState map;          // version 9
     SectionState section;  // version 9
     FeatureSettings features;  // version 10
+    std::optional<PairState> pair;  // version 13
 };
 
 // The opacity used when the state gives none: a ramp from 0 to 0.5 over the range, or for maps

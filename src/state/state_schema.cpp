@@ -85,6 +85,7 @@ struct Kind {
     // than a version (null: none).
     std::function<void(const std::string& path, std::vector<std::vector<std::string>>& rows)> elementRows{};
     std::function<json(int version)> forbiddenBefore{};
+    std::string elementPath = "[].";  // how the element rows' keys continue the key (an optional object: ".")
 };
 
 std::string boundText(double x) { return fmt::format("{}", x); }
@@ -453,6 +454,11 @@ Kind<analysis::StallMeasure> stallMeasure()
     return enumeration<analysis::StallMeasure>(analysis::kStallMeasures, analysis::stallMeasureName, analysis::parseStallMeasure, "a stall measure");
 }
 
+Kind<PairSteps> pairSteps()
+{
+    return enumeration<PairSteps>(allPairSteps(), pairStepsName, parsePairSteps, "a step matching");
+}
+
 Kind<MapProjection> mapProjection()
 {
     return enumeration<MapProjection>(allMapProjections(), mapProjectionName, parseMapProjection, "a map projection");
@@ -708,7 +714,7 @@ public:
         const std::string type = m_kind.type + (this->doc.required ? ", required" : "") + this->sinceText();
         out.push_back({prefix + this->key, type, this->defaultCell(defaults), this->doc.meaning, costText(this->doc.cost)});
         if (m_kind.elementRows)
-            m_kind.elementRows(prefix + this->key + "[].", out);
+            m_kind.elementRows(prefix + this->key + m_kind.elementPath, out);
     }
     json forbiddenBefore(int version) const override
     {
@@ -802,6 +808,34 @@ Kind<std::vector<E>> arrayOf(Object<E> element, std::string type)
         json sub = e->forbiddenBefore(version);
         return sub.is_null() ? sub : json{{"items", sub}};
     };
+    return kind;
+}
+
+// A JSON object read into an optional element, or null (nullopt, written as null).
+template <class E>
+Kind<std::optional<E>> optionalObject(Object<E> element, std::string type)
+{
+    auto e = std::make_shared<const Object<E>>(std::move(element));
+    json schema = e->schema(json());
+    schema["type"] = json::array({"object", "null"});
+    Kind<std::optional<E>> kind{
+        [e](const json& v, std::optional<E>& target, Reader& r, const std::string& key) {
+            if (v.is_null()) {
+                target.reset();
+                return;
+            }
+            if (!v.is_object())
+                r.failAt(key, "expected an object or null, found " + jsonExcerpt(v));
+            Reader child = r.child(key, v);
+            E item;
+            e->read(child, item);
+            target = std::move(item);
+        },
+        [e](const std::optional<E>& item) { return item ? e->write(*item) : json(); },
+        schema,
+        std::move(type)};
+    kind.elementRows = [e](const std::string& prefix, Rows& out) { e->rows(prefix, json(), out); };
+    kind.elementPath = ".";
     return kind;
 }
 
@@ -1192,6 +1226,32 @@ const Object<RenderState>& document()
                                      "view axes, asymmetric frusta)",
                           .defaultText = "null: `camera.distanceKm` (the camera's target on the screen)"})},
                 {.meaning = "stereoscopic output of the camera (docs/rendering.md, Stereo)", .since = 5}),
+            leaf<S>("pair", at(&S::pair),
+                    optionalObject<PairState>(
+                        {"PairState",
+                         {leaf<PairState>("dataset", at(&PairState::dataset), text(false, "a dataset directory"),
+                                          {.meaning = "the second dataset's directory (relative: to the working "
+                                                      "directory of `raypc render`; the UI writes the name the "
+                                                      "server gives, `GET /api/info` `pair`)",
+                                           .cost = Cost::Reload,
+                                           .required = true,
+                                           .expect = "a dataset directory"}),
+                          leaf<PairState>("steps", at(&PairState::steps), pairSteps(),
+                                          {.meaning = "which step of the second dataset is drawn: `time` its step "
+                                                      "nearest in model time to the state's `step` (the earlier of "
+                                                      "two as near), `index` the same index (the last if it has "
+                                                      "fewer)",
+                                           .cost = Cost::Reload,
+                                           .defaultText = "`time`"})},
+                         {}},
+                        "object or null"),
+                    {.meaning = "two datasets side by side (docs/compare.md, \"Side by side\"): the state is drawn "
+                                "for this second dataset too, each in half the image's width, the first on the "
+                                "left, with the same camera, transfer function and brushes (by name: a brush on a "
+                                "variable the second lacks is left out for it)",
+                     .cost = Cost::Reload,
+                     .defaultText = "null: one dataset",
+                     .since = 13}),
         },
         // Explicit views: one, or a stereo pair's two eyes. Before version 4 a repeated name meant
         // the intersection of its ranges (nothing wrote that); since then the union. An older

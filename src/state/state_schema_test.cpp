@@ -47,8 +47,8 @@ TEST(StateSchema, CarriesTheParsersBoundsAndVersions)
     const json& camera = schema["properties"]["camera"]["properties"];
     EXPECT_EQ(camera["elevationDeg"]["minimum"], -90);
     EXPECT_EQ(camera["elevationDeg"]["maximum"], 90);
-    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12}));
-    EXPECT_EQ(kRenderStateVersion, 12);
+    EXPECT_EQ(schema["properties"]["version"]["enum"], json::array({1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13}));
+    EXPECT_EQ(kRenderStateVersion, 13);
     EXPECT_EQ(schema["properties"]["brushes"]["items"]["required"], json::array({"name", "min", "max"}));
     // A version-1 document may not have pathlines, as parseRenderState says.
     ASSERT_TRUE(schema.contains("allOf"));
@@ -151,6 +151,31 @@ TEST(StateSchema, FeatureSettingsRoundTripAndBadValuesNameTheKey)
     EXPECT_NE(refusal(R"({"version": 10, "features": {"minVolumeKm3": -1}})").find("features.minVolumeKm3"), std::string::npos);
     EXPECT_NE(refusal(R"({"version": 10, "features": {"depthsKm": [7000]}})").find("features.depthsKm"), std::string::npos);
     EXPECT_NE(refusal(R"({"version": 9, "features": {"level": 0}})").find("features"), std::string::npos);
+}
+
+// Version 13: a pair of datasets (docs/compare.md) round-trips, null is one dataset, bad ones are
+// refused naming the key.
+TEST(StateSchema, PairRoundTripsAndBadPairsAreRefused)
+{
+    EXPECT_FALSE(RenderState{}.pair.has_value());
+    EXPECT_TRUE(toJson(RenderState{})["pair"].is_null());
+    const RenderState s = parseRenderState(json::parse(R"({"version": 13, "pair": {"dataset": "runs/b.raypc", "steps": "index"}})"));
+    ASSERT_TRUE(s.pair.has_value());
+    EXPECT_EQ(s.pair->dataset, "runs/b.raypc");
+    EXPECT_EQ(s.pair->steps, PairSteps::Index);
+    const RenderState back = parseRenderState(toJson(s));
+    ASSERT_TRUE(back.pair.has_value());
+    EXPECT_EQ(back.pair->dataset, "runs/b.raypc");
+    EXPECT_EQ(back.pair->steps, PairSteps::Index);
+    EXPECT_EQ(parseRenderState(json::parse(R"({"version": 13, "pair": {"dataset": "b"}})")).pair->steps, PairSteps::Time)
+        << "the default";
+    EXPECT_FALSE(parseRenderState(json::parse(R"({"version": 13, "pair": null})")).pair.has_value());
+    auto refusal = [](const char* text) { return refusalOf(json::parse(text)); };
+    EXPECT_NE(refusal(R"({"version": 12, "pair": {"dataset": "b"}})").find("pair: needs version 13"), std::string::npos);
+    EXPECT_NE(refusal(R"({"version": 13, "pair": {"steps": "time"}})").find("pair.dataset: missing"), std::string::npos);
+    EXPECT_NE(refusal(R"({"version": 13, "pair": {"dataset": ""}})").find("pair.dataset"), std::string::npos);
+    EXPECT_NE(refusal(R"({"version": 13, "pair": {"dataset": "b", "steps": "seconds"}})").find("pair.steps"), std::string::npos);
+    EXPECT_NE(refusal(R"({"version": 13, "pair": "b"})").find("pair: expected an object or null"), std::string::npos);
 }
 
 // Version 7: explicit camera views (WebXR eyes) round-trip; bad ones are refused naming the key.

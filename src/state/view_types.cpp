@@ -114,4 +114,23 @@ MapProjection parseMapProjection(std::string_view name)
     fail("unknown map projection '{}'; expected one of: {}", name, known);
 }
 
+namespace {
+constexpr PairSteps kAllPairSteps[] = {PairSteps::Time, PairSteps::Index};
+}
+
+std::span<const PairSteps> allPairSteps() { return kAllPairSteps; }
+
+std::string_view pairStepsName(PairSteps steps)
+{
+    return steps == PairSteps::Index ? "index" : "time";
+}
+
+PairSteps parsePairSteps(std::string_view name)
+{
+    std::string known;
+    if (const auto steps = findByName(name, allPairSteps(), pairStepsName, known))
+        return *steps;
+    fail("unknown step matching '{}'; expected one of: {}", name, known);
+}
+
 }  // namespace raypc::state

@@ -111,4 +111,13 @@ std::string_view mapProjectionTitle(MapProjection projection);  // "Mollweide", 
 // Throws raypc::Error listing the known names.
 MapProjection parseMapProjection(std::string_view name);
 
+// How a pair's second dataset takes the state's step (state key pair.steps, docs/compare.md): the
+// same index, or its step nearest in model time to the first's.
+enum class PairSteps { Time, Index };
+
+std::span<const PairSteps> allPairSteps();
+std::string_view pairStepsName(PairSteps steps);  // "time", "index"
+// Throws raypc::Error listing the known names.
+PairSteps parsePairSteps(std::string_view name);
+
 }  // namespace raypc::state

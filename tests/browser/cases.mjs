@@ -1008,6 +1008,7 @@ const cases = {
     const boxes = () => page.evaluate(() => {
       const box = (sel) => { const b = document.querySelector(sel).getBoundingClientRect(); return { top: b.top, bottom: b.bottom, height: b.height }; };
       return { presets: box('#presets'), tf: box('#tf'), side: box('#side'), view: box('#view3d'), play: box('#play'),
+        selection: box('#selection'), statsTime: box('#statsTime'),
         sideScroll: document.getElementById('side').scrollTop, pageScroll: document.documentElement.scrollHeight - window.innerHeight,
         error: document.getElementById('error').hidden ? '' : document.getElementById('error').textContent };
     });
@@ -1019,6 +1020,11 @@ const cases = {
       check(b.presets.height > 40 && b.presets.top >= b.side.top && b.presets.bottom <= b.side.bottom,
         `${w}x${h}: the presets (${Math.round(b.presets.top)}-${Math.round(b.presets.bottom)} px) are not within the side panel's visible ${Math.round(b.side.top)}-${Math.round(b.side.bottom)} px`);
       check(b.play.bottom <= h && b.view.height >= 0.4 * h, `${w}x${h}: time bar at ${Math.round(b.play.bottom)} px, view ${Math.round(b.view.height)} px high`);
+      // Issue 47: the selection's figure and its plot over time come before the colour and
+      // rendering controls, above the fold.
+      console.log(`  ${w}x${h}: side ${Math.round(b.side.top)}-${Math.round(b.side.bottom)}, selection ${Math.round(b.selection.top)}-${Math.round(b.selection.bottom)}, plot over time ${Math.round(b.statsTime.top)}-${Math.round(b.statsTime.bottom)}, tf ${Math.round(b.tf.top)}`);
+      check(b.selection.bottom <= b.side.bottom && b.statsTime.bottom <= b.side.bottom && b.statsTime.top < b.tf.top,
+        `${w}x${h}: the selection (${Math.round(b.selection.top)}-${Math.round(b.selection.bottom)} px) or its plot over time (${Math.round(b.statsTime.top)}-${Math.round(b.statsTime.bottom)} px) is below the side panel's visible ${Math.round(b.side.top)}-${Math.round(b.side.bottom)} px, or after the transfer function`);
     }
     await page.setViewportSize({ width: 1000, height: 700 });
     await page.waitForTimeout(500);
@@ -2616,6 +2622,165 @@ const cases = {
   // Issue 47, stale labels: a preset's name leaves the status line once the brushes are no longer
   // its own (Escape, a new brush); the note on the view of the colour variable goes while the view is
   // coloured by feature; reloading a state with exactly the preset's brushes keeps the preset in force.
+  // Issue 47: the answer on the view, describing the frame shown. The readout (step, time, the
+  // selection's share and volume at that step) is on the 3D view without scrolling; a figure of a
+  // coarser level's grid says "≈"; a frame coarser than the view carries a badge; while playing,
+  // every frame shown has its own step in the readout and the step label.
+  async readout({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const ds = await info(url);
+    const snap = () => page.evaluate(() => {
+      const r = document.getElementById('viewReadout'), b = document.getElementById('coarseBadge');
+      const box = r.getBoundingClientRect();
+      return { readout: r.hidden ? null : r.textContent, badge: b.hidden ? null : b.textContent,
+        shown: window.__raypc.shownLog.at(-1), stepLabel: document.getElementById('stepLabel').textContent,
+        box: { top: box.top, bottom: box.bottom, left: box.left, right: box.right }, vw: innerWidth, vh: innerHeight,
+        state: window.__raypc.state(), selection: window.__raypc.selection, status: document.getElementById('status').textContent };
+    });
+    let v = await snap();
+    check(v.readout && v.readout.startsWith(`step ${v.state.step} · ${ds.steps[v.state.step].timeMyr.toFixed(1)} Myr`),
+      `without brushes the readout says '${v.readout}': expected the step and its time`);
+    check(v.badge === null, `a converged level-0 frame at the view's size has a badge: '${v.badge}'`);
+    // The frame's cost is behind "Frame statistics": not in the status line by default.
+    check(!/ms\/pass|samples\/s|bricks skipped/.test(v.status), `the status line shows developer statistics by default: '${v.status}'`);
+    await page.check('#devStats');
+    check(/ms\/pass/.test(await page.textContent('#status')), 'Frame statistics on: the status line has no ms/pass');
+    await page.uncheck('#devStats');
+
+    // A brush: the exact figure (POST /api/selection) on the view, within the window.
+    await page.evaluate(() => {
+      const s = window.__raypc.state();
+      window.__raypc.setState({ ...s, brushes: [{ name: 'temperature anomaly', min: 25, max: 10000 }] });
+    });
+    await waitConverged(page);
+    await page.waitForFunction(() => /% of the mantle selected/.test(document.getElementById('viewReadout').textContent) &&
+      !document.getElementById('viewReadout').textContent.startsWith('≈'), null, { timeout: 15000 })
+      .catch(async () => { throw new TestFailure(`no exact figure on the view: '${await page.textContent('#viewReadout')}'`); });
+    v = await snap();
+    const pct = Number(/([\d.]+) % of the mantle selected/.exec(v.readout)[1]);
+    check(v.selection && Math.abs(pct - 100 * v.selection.fractionOfMantle) < 0.006,
+      `the readout says ${pct} %, the exact selection is ${100 * v.selection?.fractionOfMantle} %`);
+    check(/km³/.test(v.readout) && v.readout.includes(`step ${v.state.step}`), `the readout '${v.readout}' lacks the volume or the step`);
+    check(v.box.top >= 0 && v.box.bottom <= v.vh && v.box.right <= v.vw && v.box.left >= 0,
+      `the readout lies at ${JSON.stringify(v.box)} in a ${v.vw}x${v.vh} window`);
+
+    // A coarser level asked for: the frame says so.
+    await page.evaluate(() => window.__raypc.setState({ ...window.__raypc.state(), level: 2 }));
+    await waitConverged(page);
+    v = await snap();
+    check(v.shown.level === 2 && v.badge && /level 2/.test(v.badge), `a level-2 frame: badge '${v.badge}' (frame level ${v.shown.level})`);
+    await page.evaluate(() => window.__raypc.setState({ ...window.__raypc.state(), level: 'auto' }));
+    await waitConverged(page);
+
+    // Playing: sampled every 60 ms, the readout and the step label describe the frame on screen.
+    await page.selectOption('#fps', '5');
+    await page.click('#play');
+    const seen = new Set();
+    let approximate = 0, coarseBadges = 0, coarseFrames = 0;
+    for (let i = 0; i < 60; i++) {
+      await page.waitForTimeout(60);
+      v = await snap();
+      if (!v.shown) continue;
+      seen.add(v.shown.step);
+      check(v.readout.includes(`step ${v.shown.step} ·`), `playing: the frame shown is of step ${v.shown.step}, the readout says '${v.readout}'`);
+      check(v.stepLabel.startsWith(`step ${v.shown.step} of`), `playing: the frame shown is of step ${v.shown.step}, the step label says '${v.stepLabel}'`);
+      const coarse = v.shown.level > 0 || v.shown.width < v.state.image.width;
+      if (coarse) coarseFrames++;
+      if (coarse && v.badge) coarseBadges++;
+      check(coarse || v.badge === null, `playing: a full frame (level ${v.shown.level}, ${v.shown.width} px) has the badge '${v.badge}'`);
+      if (v.readout.startsWith('≈')) approximate++;
+    }
+    await page.click('#play');
+    console.log(`  playing: steps seen ${[...seen].join(', ')}; coarse frames ${coarseFrames} (badged ${coarseBadges}); approximate figures ${approximate}`);
+    check(seen.size >= 2, `playback showed only steps ${[...seen]}`);
+    check(coarseBadges === coarseFrames, `${coarseFrames - coarseBadges} coarse frames shown without the badge`);
+    await waitConverged(page);
+    await page.waitForFunction(() => document.getElementById('coarseBadge').hidden && !document.getElementById('viewReadout').textContent.startsWith('≈'), null, { timeout: 15000 })
+      .catch(async () => { throw new TestFailure(`paused: badge '${await page.textContent('#coarseBadge')}', readout '${await page.textContent('#viewReadout')}'`); });
+  },
+
+  // Issue 47: the shells' depth labels are written by the page over the frame (crisp at any frame
+  // size), where the server's frame header says each goes; not while the frame is re-projected.
+  async shell_labels({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const labels = () => page.evaluate(() => {
+      const box = document.getElementById('shellLabels');
+      const canvas = document.getElementById('view3d').getBoundingClientRect();
+      return { hidden: box.hidden, header: window.__raypc.headers.at(-1).shellLabels ?? null,
+        canvas: { left: canvas.left, top: canvas.top, right: canvas.right, bottom: canvas.bottom },
+        spans: [...box.querySelectorAll('.shellLabel')].filter((e) => !e.hidden).map((e) => {
+          const b = e.getBoundingClientRect();
+          return { text: e.textContent, x: (b.left + b.right) / 2, y: (b.top + b.bottom) / 2, px: parseFloat(getComputedStyle(e).fontSize), color: getComputedStyle(e).color };
+        }) };
+    });
+    let l = await labels();
+    check(l.header && l.header.length === 2, `the frame header's shell labels: ${JSON.stringify(l.header)}; expected 410 and 660 km`);
+    check(!l.hidden && l.spans.length === 2 && l.spans.map((x) => x.text).join(',') === l.header.map((x) => x.label).join(','),
+      `the page writes ${JSON.stringify(l.spans.map((x) => x.text))} (hidden: ${l.hidden}) for the header's ${JSON.stringify(l.header.map((x) => x.label))}`);
+    for (const [i, sp] of l.spans.entries()) {
+      check(sp.px >= 12, `label ${sp.text} is ${sp.px} px`);
+      check(sp.x > l.canvas.left && sp.x < l.canvas.right && sp.y > l.canvas.top && sp.y < l.canvas.bottom, `label ${sp.text} at ${sp.x}, ${sp.y} lies outside the view ${JSON.stringify(l.canvas)}`);
+      const [r, g, b] = l.header[i].color.map((c) => Math.round(255 * c));
+      check(sp.color === `rgb(${r}, ${g}, ${b})`, `label ${sp.text} is ${sp.color}, the shell is rgb(${r}, ${g}, ${b})`);
+    }
+    // Each label where the header puts it on the frame's picture, letterboxed into the view as drawn.
+    const placed = await page.evaluate(() => {
+      const h = window.__raypc.headers.at(-1), c = document.getElementById('view3d').getBoundingClientRect();
+      let w = c.width, ht = w * h.height / h.width;
+      if (ht > c.height) { ht = c.height; w = ht * h.width / h.height; }
+      return { x: c.left + (c.width - w) / 2, y: c.top + (c.height - ht) / 2, w, h: ht };
+    });
+    l.spans.forEach((sp, i) => {
+      const ex = placed.x + l.header[i].x * placed.w, ey = placed.y + l.header[i].y * placed.h;
+      check(Math.abs(sp.x - ex) < 3 && Math.abs(sp.y - ey) < 3, `label ${sp.text} at ${sp.x.toFixed(1)}, ${sp.y.toFixed(1)}; the header puts it at ${ex.toFixed(1)}, ${ey.toFixed(1)}`);
+    });
+    console.log(`  labels ${l.spans.map((x) => `${x.text} at ${x.x.toFixed(0)},${x.y.toFixed(0)} (${x.px} px)`).join('; ')}`);
+    // The surface's outline: the silhouette of the 6371 km sphere, here (the camera aimed at the
+    // centre) a circle about the picture's centre of radius tan(asin(R / D)) / tan(fovY / 2) of half
+    // its height; every drawn pixel lies inside it.
+    const outline = await page.evaluate(() => {
+      const poly = document.querySelector('#shellLabels polygon');
+      const pts = (poly?.getAttribute('points') ?? '').trim().split(/\s+/).filter(Boolean).map((p) => p.split(',').map(Number));
+      const c = document.getElementById('view3d').getBoundingClientRect();
+      const h = window.__raypc.headers.at(-1), cam = window.__raypc.state().camera;
+      let w = c.width, ht = w * h.height / h.width;
+      if (ht > c.height) { ht = c.height; w = ht * h.width / h.height; }
+      const cx = c.width / 2, cy = c.height / 2; // the polygon's points are the view's own (CSS px from its top left)
+      const radius = Math.tan(Math.asin(6371 / cam.distanceKm)) / Math.tan(cam.fovYDeg * Math.PI / 360) * ht / 2;
+      const dist = pts.map(([x, y]) => Math.hypot(x - cx, y - cy));
+      const { data: d, width, height } = window.__viewImageData();
+      let outside = 0;
+      for (let y = 0; y < height; y++) for (let x = 0; x < width; x++) {
+        const o = (y * width + x) * 4;
+        if (Math.max(d[o], d[o + 1], d[o + 2]) > 40 && Math.hypot((x + 0.5) * c.width / width - cx, (y + 0.5) * c.height / height - cy) > radius + 2) outside++;
+      }
+      return { n: pts.length, radius, min: Math.min(...dist), max: Math.max(...dist), target: cam.targetKm, outside };
+    });
+    console.log(`  surface outline: ${outline.n} points at ${outline.min.toFixed(1)}-${outline.max.toFixed(1)} px from the centre; expected ${outline.radius.toFixed(1)}; drawn pixels outside it ${outline.outside}`);
+    check(outline.target.every((t) => t === 0), `the default camera aims at ${outline.target}, not the centre`);
+    check(outline.n >= 32 && Math.abs(outline.min - outline.radius) < 1.5 && Math.abs(outline.max - outline.radius) < 1.5,
+      `the surface outline lies ${outline.min.toFixed(1)}-${outline.max.toFixed(1)} px from the centre, the sphere's silhouette ${outline.radius.toFixed(1)} px`);
+    check(outline.outside === 0, `${outline.outside} drawn pixels lie outside the surface outline`);
+    // Orbiting: while the frame is re-projected, the labels (of the frame's camera) are hidden.
+    const c = await page.evaluate(() => document.getElementById('view3d').getBoundingClientRect());
+    await page.mouse.move(c.left + c.width / 2, c.top + c.height / 2);
+    await page.mouse.down();
+    let hiddenWhileMoving = false;
+    for (let i = 1; i <= 10; i++) {
+      await page.mouse.move(c.left + c.width / 2 + 12 * i, c.top + c.height / 2 + 3 * i);
+      const k = await page.evaluate(() => window.__raypc.drawnLog?.at?.(-1) ?? null);
+      if (await page.evaluate(() => document.getElementById('shellLabels').hidden)) hiddenWhileMoving = true;
+      void k;
+    }
+    await page.mouse.up();
+    check(hiddenWhileMoving, 'the labels stayed while the view was re-projected to a moving camera');
+    await waitConverged(page);
+    await page.waitForFunction(() => !document.getElementById('shellLabels').hidden, null, { timeout: 10000 })
+      .catch(() => { throw new TestFailure('the labels did not come back on the converged frame'); });
+  },
+
   async preset_labels({ context, url, tmp }) {
     const page = await openUi(context, url);
     await waitConverged(page);
@@ -2679,6 +2844,98 @@ const cases = {
     check(brushes.length !== p.state.brushes.length || JSON.stringify(brushes) !== JSON.stringify(p.state.brushes), `the drag left the preset's brushes ${JSON.stringify(brushes)}`);
     check(!(await status()).includes(`preset ${p.title}`), `after a new brush the status line still says '${await status()}'`);
   },
+  // Two datasets side by side (`raypc serve A B`, docs/compare.md): two synthetic runs of different
+  // seeds, each in its own labelled half; one camera and one brush reach both (their frames' cameras
+  // are the state's, the selection's figures of each are non-zero and differ); the parallel
+  // coordinates draw both samples; a screenshot holds both; closing the second returns to one view
+  // at the full width.
+  async compare({ context, url, tmp }) {
+    const page = await openUi(context, url);
+    const pairInfo = (await info(url)).pair;
+    check(pairInfo && pairInfo.datasets.length === 2, `GET /api/info has no pair: ${JSON.stringify(pairInfo)}`);
+    const names = pairInfo.datasets.map((d) => d.name);
+    check(names[0].endsWith('seed1') && names[1].endsWith('seed2'), `the pair's names are ${names.join(', ')}`);
+    // Both views converged on the newest state (the second's frames are in pair.headers).
+    const bothConverged = async () => {
+      await waitConverged(page);
+      await page.waitForFunction(() => {
+        const p = window.__raypc.pair;
+        const h = p?.headers[p.headers.length - 1];
+        return h && h.converged && h.id === p.link.lastSentId;
+      }, null, { timeout: 30000, polling: 50 }).catch(async () => {
+        throw new TestFailure(`the second view has no converged frame of its newest state: ${JSON.stringify(await page.evaluate(() => window.__raypc.pair?.headers.slice(-1)))}`);
+      });
+    };
+    await bothConverged();
+    const boxes = await page.evaluate(() => ['view3d', 'view3dB'].map((id) => {
+      const r = document.getElementById(id)?.getBoundingClientRect();
+      return r ? { x: r.x, width: r.width } : null;
+    }));
+    const panel = await page.locator('#viewPanel').boundingBox();
+    check(boxes[0] && boxes[1], `two views expected, found ${JSON.stringify(boxes)}`);
+    check(Math.abs(boxes[0].width - panel.width / 2) <= 2 && Math.abs(boxes[1].width - panel.width / 2) <= 2 && boxes[1].x > boxes[0].x,
+      `each view half of the ${panel.width} px panel side by side, found ${JSON.stringify(boxes)}`);
+    const labels = async () => page.evaluate(() => ['pairLabelA', 'pairLabelB'].map((id) => document.getElementById(id)?.textContent ?? ''));
+    let [la, lb] = await labels();
+    check(la.includes(names[0]) && /step 0 \(0\.0 Myr\)/.test(la), `label A: '${la}'`);
+    check(lb.includes(names[1]) && /step 0 \(0\.0 Myr\)/.test(lb), `label B: '${lb}'`);
+    const state0 = await rState(page);
+    check(state0.pair && state0.pair.dataset === names[1], `the state's pair: ${JSON.stringify(state0.pair)}`);
+
+    // One camera: a drag on the first view turns both; both frames are of the state's camera.
+    await drag(page, 160, 40);
+    await bothConverged();
+    const camera = (await rState(page)).camera;
+    check(Math.abs(camera.azimuthDeg - state0.camera.azimuthDeg) > 5, `the drag did not turn the camera: ${JSON.stringify(camera)}`);
+    const cams = await page.evaluate(() => {
+      const a = window.__raypc.headers[window.__raypc.headers.length - 1], p = window.__raypc.pair;
+      return [a.camera, p.headers[p.headers.length - 1].camera];
+    });
+    for (const [i, c] of cams.entries())
+      check(Math.abs(c.azimuthDeg - camera.azimuthDeg) < 1e-6 && Math.abs(c.elevationDeg - camera.elevationDeg) < 1e-6,
+        `view ${'AB'[i]}'s frame camera ${JSON.stringify(c)} is not the state's ${JSON.stringify(camera)}`);
+
+    // The parallel coordinates draw both samples (the second's once it has loaded).
+    await page.waitForFunction(() => window.__raypc.parcoords.timing.lines.foreground >= 2 * window.__raypc.parcoords.rowCount && window.__raypc.parcoords.timing.drawnAt.foreground > 0,
+      null, { timeout: 20000 }).catch(async () => {
+      throw new TestFailure(`the parallel coordinates do not draw both samples: ${JSON.stringify(await page.evaluate(() => [window.__raypc.parcoords.rowCount, window.__raypc.parcoords.timing.lines]))}`);
+    });
+
+    // One brush, applied to both by name: the selection's figures of each are non-zero and differ.
+    await brushAxis(page, 'temperature anomaly', 0.05, 0.35);
+    await bothConverged();
+    const brushes = (await rState(page)).brushes;
+    check(brushes.length === 1 && brushes[0].name === 'temperature anomaly', `brushes: ${JSON.stringify(brushes)}`);
+    await page.waitForFunction(() => window.__raypc.selection && window.__raypc.pair.headers[window.__raypc.pair.headers.length - 1].selection,
+      null, { timeout: 20000 });
+    const figures = await page.evaluate(() => [window.__raypc.selection.fractionOfMantle,
+      window.__raypc.pair.headers[window.__raypc.pair.headers.length - 1].selection.fractionOfMantle]);
+    check(figures[0] > 0 && figures[1] > 0 && Math.abs(figures[0] - figures[1]) > 1e-6,
+      `the selection of A and B: ${figures.join(', ')} (expected both non-zero and different: two seeds)`);
+    [la, lb] = await labels();
+    check(/selected \d+\.\d\d %/.test(la) && /selected \d+\.\d\d %/.test(lb), `the labels give the selections: '${la}' / '${lb}'`);
+    if (process.env.RAYPC_TEST_DEBUG) await page.screenshot({ path: join(process.env.RAYPC_TEST_DEBUG, 'compare.png') });
+    // A screenshot of the pair holds both views: twice the width of one.
+    const image = (await rState(page)).image;
+    const shot = await screenshot(page, join(tmp, 'pair.png'));
+    check(shot.width === 2 * image.width && shot.height === image.height,
+      `the pair's screenshot is ${shot.width}x${shot.height}, expected ${2 * image.width}x${image.height} (two views of ${image.width}x${image.height})`);
+
+    // Swap exchanges the sides; close returns to one view at the panel's full width.
+    await page.click('#pairSwap');
+    const swapped = await page.evaluate(() => ['view3d', 'view3dB'].map((id) => document.getElementById(id).getBoundingClientRect().x));
+    check(swapped[0] > swapped[1], `after Swap the first view is not on the right: ${JSON.stringify(swapped)}`);
+    const halfWidth = (await rState(page)).image.width;
+    await page.click('#pairClose');
+    await waitConverged(page);
+    const after = await page.evaluate(() => ({ second: !!document.getElementById('view3dB'), pair: window.__raypc.pair, labels: document.querySelectorAll('.pairLabel').length,
+      box: document.getElementById('view3d').getBoundingClientRect().width }));
+    check(!after.second && after.pair === null && after.labels === 0, `after Close: ${JSON.stringify(after)}`);
+    check(Math.abs(after.box - panel.width) <= 2, `after Close the view is ${after.box} px wide, the panel ${panel.width}`);
+    const state1 = await rState(page);
+    check(state1.pair === null && state1.image.width > 1.8 * halfWidth, `after Close the state: pair ${JSON.stringify(state1.pair)}, image ${JSON.stringify(state1.image)} (was ${halfWidth} wide)`);
+    check(!page.raypcErrors.length, `page errors: ${page.raypcErrors.join(' | ')}`);
+  },
 };
 
 // Chromium context options per case (default: 1280x860 at devicePixelRatio 1).
@@ -2692,6 +2949,9 @@ const caseOptions = {
   // Issue 47 asks for these at 1366x768 (the smallest screen it names).
   stalls: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   preset_labels: { contextOptions: { viewport: { width: 1366, height: 768 } } },
+  readout: { contextOptions: { viewport: { width: 1366, height: 768 } } },
+  shell_labels: { contextOptions: { viewport: { width: 1366, height: 768 } } },
+  compare: { pairSeeds: [1, 2], contextOptions: { viewport: { width: 1920, height: 1080 } } },
 };
 
 const body = cases[caseName];

@@ -70,7 +70,9 @@ function waitForUrl(proc, timeoutMs) {
 // `ranks` > 1 starts the server under MPI (scripts/mpirun-local.sh -np RANKS: a distributed server).
 // `netcdf`: serve the fixture's netCDF files themselves (raypc serve FILE.nc…), the background run of
 // the series held until the case creates `${tmp}/go` (RAYPC_TEST_HOLD_SERIES).
-export async function runCase(name, raypc, fixture, body, { limitMs = 100000, contextOptions = {}, gpu = false, sampleRows = 5000, ranks = 1, netcdf = false } = {}) {
+// `pairSeeds` [A, B]: instead of the fixture, two synthetic runs (`raypc synth --seed`) of these seeds,
+// preprocessed into `${tmp}/seedA` and `${tmp}/seedB` and served as a pair (`raypc serve A B`).
+export async function runCase(name, raypc, fixture, body, { limitMs = 100000, contextOptions = {}, gpu = false, sampleRows = 5000, ranks = 1, netcdf = false, pairSeeds = null } = {}) {
   const started = Date.now();
   let server = null, context = null, tmp = null;
   const cleanup = async () => {
@@ -99,7 +101,16 @@ export async function runCase(name, raypc, fixture, body, { limitMs = 100000, co
     tmp = mkdtempSync(join(tmpdir(), `raypc-browser-${name}-`));
     const dataset = join(tmp, 'ds');
     let inputs = [dataset];
-    if (netcdf) {
+    if (pairSeeds) {
+      inputs = pairSeeds.map((seed) => join(tmp, `seed${seed}`));
+      for (const [i, seed] of pairSeeds.entries()) {
+        const files = join(tmp, `synth${seed}`);
+        const synth = spawnSync(raypc, ['synth', '-o', files, '--seed', String(seed), '--steps', '3', '--grid', '32x41x64'], { encoding: 'utf8', timeout: 60000 });
+        check(synth.status === 0, `raypc synth --seed ${seed} failed (${synth.status}): ${synth.stderr}`);
+        const pre = spawnSync(raypc, ['preprocess', files, '-o', inputs[i], '--quiet', '--sample-rows', String(sampleRows)], { encoding: 'utf8', timeout: 60000 });
+        check(pre.status === 0, `raypc preprocess of seed ${seed} failed (${pre.status}): ${pre.stderr}`);
+      }
+    } else if (netcdf) {
       inputs = readdirSync(fixture).filter((f) => f.endsWith('.nc')).sort().map((f) => join(fixture, f));
       inputs.push('--dataset', dataset, '--sample-rows', String(sampleRows));
     } else {

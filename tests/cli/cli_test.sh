@@ -1106,6 +1106,60 @@ resume_changed_input)
       "$("$raypc" probe "$work/fresh" --time 0 $point | sed 1d)"
   done
   ;;
+pair_render)
+  # Two datasets side by side (docs/compare.md, "Side by side"): a state with `pair` draws the first
+  # at the left half and the second at the right, each as a render of its own at half the width
+  # (the second's step matched by time: its times are 3 Myr apart, the first's 2).
+  "$raypc" synth -o "$work/s1" --seed 1 --steps 3 --grid 32x41x64 >/dev/null
+  "$raypc" synth -o "$work/s2" --seed 2 --steps 3 --grid 32x41x64 >/dev/null
+  "$raypc" preprocess "$work/s1" -o "$work/a" --quiet --no-pathlines --sample-rows 500 >/dev/null
+  "$raypc" preprocess "$work/s2" -o "$work/b" --quiet --no-pathlines --sample-rows 500 --dt-myr 3 >/dev/null
+  cat > "$work/half.json" <<'JSON'
+{"version": 13, "step": 2, "image": {"width": 80, "height": 96}, "passes": 2,
+ "color": {"variable": "temperature anomaly", "range": [-300, 300]},
+ "brushes": [{"name": "temperature anomaly", "min": 50, "max": 1000}]}
+JSON
+  python3 -c "
+import json, sys
+s = json.load(open(sys.argv[1]))
+s['image']['width'] = 160
+s['pair'] = {'dataset': sys.argv[2], 'steps': 'time'}
+json.dump(s, open(sys.argv[3], 'w'))
+s['step'] = 1
+del s['pair']
+s['image']['width'] = 80
+json.dump(s, open(sys.argv[4], 'w'))" "$work/half.json" "$work/b" "$work/pair.json" "$work/half-b.json"
+  "$raypc" render "$work/a" --state "$work/pair.json" -o "$work/pair.png" --stats > "$work/pair-stats.json"
+  "$raypc" render "$work/a" --state "$work/half.json" -o "$work/left.png" >/dev/null
+  "$raypc" render "$work/b" --state "$work/half-b.json" -o "$work/right.png" >/dev/null
+  check "the pair's picture: its left half is the first's render at half width, its right half the second's" python3 - "$work" <<'PY'
+import sys
+from PIL import Image, ImageChops
+w = sys.argv[1]
+pair, left, right = (Image.open(f"{w}/{n}.png").convert("RGB") for n in ("pair", "left", "right"))
+assert pair.size == (160, 96), pair.size
+assert ImageChops.difference(pair.crop((0, 0, 80, 96)), left).getbbox() is None, "left half differs"
+assert ImageChops.difference(pair.crop((80, 0, 160, 96)), right).getbbox() is None, "right half differs"
+assert ImageChops.difference(left, right).getbbox() is not None, "the two seeds drew the same picture"
+PY
+  check "the stats name the second's step matched by time (4 Myr: its step 1 at 3 Myr)" python3 -c "
+import json, sys
+s = json.load(open(sys.argv[1]))
+sys.exit(0 if s['step'] == 2 and s['pair']['step'] == 1 and s['pair']['timeMyr'] == 3.0 else 1)" "$work/pair-stats.json"
+  python3 -c "
+import json, sys
+s = json.load(open(sys.argv[1]))
+s['pair']['dataset'] = sys.argv[2]
+json.dump(s, open(sys.argv[3], 'w'))
+s['pair']['dataset'] = sys.argv[4]
+s['image']['width'] = 1
+json.dump(s, open(sys.argv[5], 'w'))" "$work/pair.json" "$work/nowhere" "$work/missing.json" "$work/b" "$work/narrow.json"
+  expect_error "pair.dataset" render "$work/a" --state "$work/missing.json" -o "$work/x.png"
+  expect_error "cannot be split between a pair's two datasets" render "$work/a" --state "$work/narrow.json" -o "$work/x.png"
+  expect_error "not with --view map|section" render "$work/a" --state "$work/pair.json" --view map -o "$work/x.png"
+  expect_error "--dataset: only for netCDF inputs" serve "$work/a" "$work/b" --dataset "$work/c" --port 0
+  check "no picture after errors" test ! -e "$work/x.png"
+  ;;
 *) echo "unknown case $case_name"; exit 2 ;;
 esac
 

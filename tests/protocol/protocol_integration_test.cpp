@@ -242,6 +242,114 @@ TEST(Serve, WebSocketFrameLayout)
     EXPECT_LE(h["level"].get<int>(), 2);
 }
 
+// Two datasets side by side (`raypc serve A B`, docs/compare.md, "Side by side"): the fixture and a
+// tomography model (tests/data/emc-layout: one step, vs and its anomalies, none of the contest's
+// variables). Every endpoint of one dataset takes `dataset` (0 default, 1 the second); a session
+// opened with /ws?dataset=1 draws the first's states for the second and says what it left out.
+TEST(Serve, APairAnswersForEachDatasetByTheDatasetParameter)
+{
+    const fs::path work = WorkDirEnvironment::work();
+    const fs::path second = work / "pair-second";
+    if (!fs::exists(second / "dataset.json")) {
+        const fs::path emc = fs::path(RAYPC_CONTEST_LAYOUT_DIR).parent_path() / "emc-layout" / "global_vs.nc";
+        const std::string command = std::string("'") + RAYPC_EXE + "' preprocess '" + emc.string() + "' -o '" +
+                                    second.string() + "' --quiet --sample-rows 500 >/dev/null";
+        ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    }
+    FixtureServer server({}, false, {}, {(work / "ds").string(), second.string()});
+
+    const json first = json::parse(httpGet(server.port, "/api/info").body);
+    ASSERT_TRUE(first.contains("pair")) << first.dump().substr(0, 300);
+    EXPECT_EQ(first["pair"]["index"], 0);
+    ASSERT_EQ(first["pair"]["datasets"].size(), 2u);
+    EXPECT_EQ(first["pair"]["datasets"][0]["name"], first["name"]);
+    EXPECT_EQ(first["pair"]["datasets"][0]["timesMyr"].size(), first["steps"].size());
+    const auto secondAnswer = httpGet(server.port, "/api/info?dataset=1");
+    ASSERT_EQ(secondAnswer.status, 200) << secondAnswer.body;
+    const json other = json::parse(secondAnswer.body);
+    EXPECT_EQ(other["pair"]["index"], 1);
+    EXPECT_EQ(other["name"], first["pair"]["datasets"][1]["name"]);
+    EXPECT_EQ(other["steps"].size(), 1u);
+    EXPECT_EQ(other["pair"]["datasets"], first["pair"]["datasets"]);
+    auto names = [](const json& info) {
+        std::set<std::string> out;
+        for (const auto& v : info["variables"])
+            out.insert(v["name"].get<std::string>());
+        return out;
+    };
+    EXPECT_TRUE(names(other).count("vs"));
+    EXPECT_FALSE(names(other).count("temperature"));
+    EXPECT_TRUE(names(first).count("temperature"));
+
+    // Each dataset's own answers: a variable only the second has, its sample's shape.
+    EXPECT_EQ(httpGet(server.port, "/api/histogram?step=0&var=vs&dataset=1").status, 200);
+    EXPECT_EQ(httpGet(server.port, "/api/histogram?step=0&var=vs").status, 400);
+    const auto sample = httpGet(server.port, "/api/sample?step=0&dataset=1");
+    ASSERT_EQ(sample.status, 200);
+    EXPECT_EQ(sample.body.size(),
+              other["sample"]["rows"].get<size_t>() * other["sample"]["columns"].size() * sizeof(float));
+
+    // Out of range, or on an endpoint that is not about one dataset: 400 naming it.
+    auto errorOf = [&](const std::string& target) {
+        const auto a = httpGet(server.port, target);
+        EXPECT_EQ(a.status, 400) << target;
+        return json::parse(a.body).value("error", std::string());
+    };
+    EXPECT_NE(errorOf("/api/histogram?step=0&var=vs&dataset=2").find("dataset: 2 for /api/histogram: expected an index of the datasets served; this server serves a pair, 0 and 1"),
+              std::string::npos);
+    EXPECT_NE(errorOf("/api/info?dataset=one").find("dataset: one for /api/info"), std::string::npos);
+    EXPECT_NE(errorOf("/api/link?dataset=1").find("unknown parameter 'dataset' for /api/link"), std::string::npos);
+    EXPECT_THROW(WsClient(server.port, "/ws?dataset=2"), std::exception);
+
+    // The first's state, with a brush on a variable the second lacks, for the second: step matched
+    // by time (its one step), the brush left out, the colour variable it lacks replaced; said in the
+    // frames' `pair.notes`.
+    json state = smallState(30, "viridis", 2);
+    state["brushes"] = json::array({{{"name", "temperature"}, {"min", 2000}, {"max", 4000}}});
+    const auto selection = httpRequest(server.port, http::verb::post, "/api/selection?dataset=1", state.dump());
+    ASSERT_EQ(selection.status, 200) << selection.body;
+    EXPECT_EQ(json::parse(selection.body)["step"], 0);
+    EXPECT_NEAR(json::parse(selection.body)["fractionOfMantle"].get<double>(), 1.0, 1e-9);  // no brush left
+    WsClient ws(server.port, "/ws?dataset=1");
+    ws.hello();
+    ws.send({{"type", "state"}, {"id", 1}, {"state", state}, {"interactive", false}});
+    const auto frames = ws.framesUntilConverged(1);
+    ASSERT_FALSE(frames.empty());
+    const json& h = frames.back().frame.header;
+    EXPECT_EQ(h["step"], 0);
+    ASSERT_TRUE(h.contains("pair")) << h.dump();
+    const std::string notes = h["pair"]["notes"].dump();
+    EXPECT_NE(notes.find("brush on 'temperature' left out: the second dataset has no such variable"), std::string::npos) << notes;
+    EXPECT_NE(notes.find("colour: the second dataset has no 'temperature'"), std::string::npos) << notes;
+    // The first dataset's session draws the state as it is, without `pair` in its frames.
+    WsClient ws0(server.port);
+    ws0.hello();
+    ws0.send({{"type", "state"}, {"id", 1}, {"state", state}, {"interactive", false}});
+    const auto firstFrames = ws0.framesUntilConverged(1);
+    ASSERT_FALSE(firstFrames.empty());
+    const json& h0 = firstFrames.back().frame.header;
+    EXPECT_EQ(h0["step"], 1);
+    EXPECT_FALSE(h0.contains("pair"));
+    EXPECT_LT(h0["selection"]["fractionOfMantle"].get<double>(), 1.0);
+}
+
+// A server of one dataset refuses the second's index, on HTTP and on /ws, and its info has no pair.
+TEST(Serve, OneDatasetRefusesTheSecondIndex)
+{
+    FixtureServer server;
+    EXPECT_FALSE(json::parse(httpGet(server.port, "/api/info").body).contains("pair"));
+    EXPECT_EQ(httpGet(server.port, "/api/info?dataset=0").status, 200);
+    const auto a = httpGet(server.port, "/api/histogram?step=0&var=temperature&dataset=1");
+    EXPECT_EQ(a.status, 400);
+    EXPECT_NE(json::parse(a.body)["error"].get<std::string>().find(
+                  "dataset: 1 for /api/histogram: expected an index of the datasets served; this server serves one dataset, 0"),
+              std::string::npos)
+        << a.body;
+    EXPECT_THROW(WsClient(server.port, "/ws?dataset=1"), std::exception);
+    WsClient ws(server.port, "/ws?dataset=0");
+    ws.hello();
+}
+
 TEST(Serve, DefaultStateOfInfoRendersAndInteractiveFitsTheBudget)
 {
     FixtureServer server;

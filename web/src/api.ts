@@ -33,8 +33,9 @@ async function check(response: Response, what: string): Promise<Response> {
   throw new Error(`${what}: ${message}`);
 }
 
-export async function fetchInfo(): Promise<Info> {
-  return (await check(await fetch('api/info'), 'GET /api/info')).json();
+// `dataset`: a pair's second dataset is 1 (docs/compare.md).
+export async function fetchInfo(dataset = 0): Promise<Info> {
+  return (await check(await fetch(dataset ? `api/info?dataset=${dataset}` : 'api/info'), 'GET /api/info')).json();
 }
 
 // GET /api/progress (docs/protocol.md): a series of netCDF files preprocessed in the background
@@ -54,8 +55,8 @@ export async function fetchHistogram(step: number, variable: string): Promise<Hi
 // during which the 3D frames of a playback waited (measured in docs/ui.md). Without workers, here.
 type SampleColumns = 'all' | 'variables';
 
-function sampleUrl(step: number, which: SampleColumns): string {
-  return `api/sample?step=${step}&columns=${which}`;
+function sampleUrl(step: number, which: SampleColumns, dataset = 0): string {
+  return `api/sample?step=${step}&columns=${which}${dataset ? `&dataset=${dataset}` : ''}`;
 }
 
 export async function fetchSampleBody(url: string): Promise<ArrayBuffer> {
@@ -99,8 +100,9 @@ function fetchSampleOffThread(url: string): Promise<ArrayBuffer> {
   });
 }
 
-export async function fetchSample(step: number, columns: string[], which: SampleColumns = 'all'): Promise<Sample> {
-  const buffer = await fetchSampleOffThread(sampleUrl(step, which));
+// `dataset`: a pair's second dataset is 1 (docs/compare.md).
+export async function fetchSample(step: number, columns: string[], which: SampleColumns = 'all', dataset = 0): Promise<Sample> {
+  const buffer = await fetchSampleOffThread(sampleUrl(step, which, dataset));
   if (buffer.byteLength % (4 * columns.length) !== 0)
     throw new Error(`GET /api/sample: ${buffer.byteLength} bytes is not a whole number of rows of ${columns.length} float32`);
   const values = new Float32Array(buffer);

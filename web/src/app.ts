@@ -4,10 +4,11 @@
 // panels, playback, the other controls and the status line.
 import { fetchPresets, fetchSample, postSelection, type Info, type Preset } from './api';
 import { setUpCameraInput } from './camera_input';
-import type { ShellKeyEntry } from './connection';
+import type { FrameHeader, ShellKeyEntry } from './connection';
 import { ContextPanel, showLegends, type LegendEntry } from './context_panel';
 import { download, maxImageSide, setUpControls, syncControls, writeStateToUrl } from './controls';
 import { ParallelCoordinates } from './parcoords';
+import { PairView } from './pair';
 import { PathlinePanel } from './pathline_panel';
 import { PersistencePanel } from './persistence_panel';
 import { FeaturesPanel } from './features_panel';
@@ -22,6 +23,8 @@ import { normaliseState, type Brush, type RenderState } from './state';
 import { StateStore } from './store';
 import { TfPanel } from './tf_panel';
 import { displayUnits } from './units';
+import { readoutText } from './view_readout';
+import { placeShellLabels } from './shell_labels';
 import { setUpXr, type XrSession } from './xr';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
@@ -50,6 +53,8 @@ export class App {
   readonly context: ContextPanel;
   readonly slices: SlicePanel;
   presets: Preset[] = [];
+  // The second dataset's view of a pair (`raypc serve A B`, pair.ts); null: one dataset.
+  pair: PairView | null = null;
   // The WebXR session control once the browser has said whether it offers immersive-vr (null: not).
   readonly xr: Promise<XrSession | null>;
   sampleStep = -1;
@@ -64,6 +69,7 @@ export class App {
   private lastPreset: Preset | null = null; // the preset applied last, in force while its brushes are
   private linkedStates: Promise<void> = Promise.resolve(); // the linked states being applied, in order
   private shellKey: ShellKeyEntry[] = []; // the reference shells the last frame shown drew
+  private shownHeader: FrameHeader | null = null; // the frame on screen (the readout describes it)
 
   constructor(readonly info: Info) {
     this.store = new StateStore(info);
@@ -78,11 +84,16 @@ export class App {
       onFrameArrived: (h) => {
         // Interactive frames carry the selection on the level they rendered: quick feedback while
         // brushing; final states get the exact volume from POST /api/selection (refreshSelection).
-        if (h.selection && (h.interactive || h.playback) && store.state.brushes.length) this.selection.setSelection({ ...h.selection, step: h.step });
+        // (A playback frame's figure is taken when the frame is shown: it is of the step ahead.)
+        if (h.selection && h.interactive && store.state.brushes.length) this.selection.setSelection({ ...h.selection, step: h.step }, h.level);
         if (this.playback.playing) this.playback.maybeAdvance();
       },
       onFrameHeld: (f) => this.playback.frameHeld(f),
       onFrameShown: (h) => {
+        this.shownHeader = h;
+        // Playback's step on the time bar once its frame is on screen, not when it is released.
+        if (h.playback) this.showStepOnBar(h.step);
+        if (h.selection && h.playback && store.state.brushes.length) this.selection.setSelection({ ...h.selection, step: h.step }, h.level);
         this.updateStatus();
         this.pathlines.frameShown(h);
         const key = h.shellKey ?? [];
@@ -91,6 +102,7 @@ export class App {
           this.updateLegends();
         }
       },
+      onDrawn: (kind) => placeShellLabels($('shellLabels'), this.link.view.frameHeader, kind, this.link.view.pictureRect),
       onError: (m) => this.showError(m),
       onStatus: (t) => this.setStatusNote(t),
       // A program set the linked state (e.g. a notebook's `view.state = s`): applied as "Load
@@ -199,7 +211,8 @@ export class App {
       },
     });
     setUpScreenshot({
-      state: () => store.state,
+      // A pair's picture holds both views: twice the width of one (docs/compare.md).
+      state: () => (this.pair && !this.pair.closed ? { ...store.state, image: { ...store.state.image, width: 2 * store.state.image.width } } : store.state),
       showError: (m) => this.showError(m),
       setStatusNote: (t) => this.setStatusNote(t),
       download,
@@ -217,11 +230,21 @@ export class App {
         this.onBrush([], false);
       }
     });
+    $('devStats').addEventListener('change', () => this.updateStatus());
     new ResizeObserver(() => this.onResize()).observe($('viewPanel'));
   }
 
   // Starts the work that needs the test hooks (if any) in place: the first state, the sample, ….
   start(): void {
+    if (this.info.pair) {
+      this.pair = new PairView({
+        info: this.info, store: this.store, link: this.link, pc: this.pc,
+        commit: (i) => this.commit(i),
+        showError: (m) => this.showError(m),
+        layoutChanged: () => this.onResize(),
+        firstSelection: () => this.selection.selection?.fractionOfMantle ?? null,
+      });
+    }
     this.onResize();
     this.syncControls();
     this.loadSample();
@@ -235,6 +258,7 @@ export class App {
 
   loadState(s: unknown): void {
     const prev = this.store.replace(s);
+    this.pair?.stateLoaded();
     this.features.stateLoaded(s);
     this.showViewNote(''); // a preset shows its own after loading
     const state = this.store.state;
@@ -360,13 +384,13 @@ export class App {
         for (const p of presets) {
           const b = document.createElement('button');
           b.textContent = p.title;
-          b.title = `${p.name}.json`;
+          b.title = `${p.title} (${p.name}.json)`;
           b.dataset.preset = p.name;
           if (p.unavailable) {
             // The server tried it on this dataset (a model without the contest's variables, say).
             b.disabled = true;
             b.classList.add('unavailable');
-            b.title = `${p.name}.json: ${p.unavailable}`;
+            b.title = `${p.title} (${p.name}.json): ${p.unavailable}`;
           }
           b.addEventListener('click', () => this.applyPreset(p));
           box.appendChild(b);
@@ -603,12 +627,17 @@ export class App {
   private stepShown(step: number): void {
     this.store.state.step = step;
     this.features.stepChanged();
-    this.updateStepLabel();
     if (performance.now() - this.lastSampleLoad > 1000) this.loadSample();
   }
 
-  private updateStepLabel(): void {
-    const s = this.info.steps[this.store.state.step];
+  // The time bar (slider and label) at `step`: the store's, or during playback the frame shown's.
+  private showStepOnBar(step: number): void {
+    $<HTMLInputElement>('step').value = String(step);
+    this.updateStepLabel(step);
+  }
+
+  private updateStepLabel(step = this.store.state.step): void {
+    const s = this.info.steps[step];
     // Steps are numbered from 0 everywhere: the state's step, file names, `raypc render --time`.
     $('stepLabel').textContent = s ? `step ${s.index} of 0–${this.info.steps.length - 1} · ${s.timeMyr.toFixed(1)} Myr` : '';
   }
@@ -623,21 +652,48 @@ export class App {
   private updateStatus(): void {
     const h = this.link?.lastHeader;
     const parts: string[] = [];
+    // The frame's step and level always; what it cost behind "Frame statistics".
+    const dev = $<HTMLInputElement>('devStats').checked;
     if (h) {
       const st = h.stats ?? {};
-      parts.push(`frame ${h.id}`, `step ${h.step}`, `level ${h.level}`, h.preview ? 'preview' : `pass ${h.pass}/${h.passes}${h.converged ? ' ✓' : ''}`);
-      if (st.passMs !== undefined) parts.push(`${st.passMs.toFixed(1)} ms/pass`);
-      if (st.samplesPerSecond !== undefined) parts.push(`${(st.samplesPerSecond / 1e6).toFixed(1)} M samples/s`);
-      if (st.bricksTotal) parts.push(`${(((st.bricksSkipped ?? 0) / st.bricksTotal) * 100).toFixed(0)} % bricks skipped`);
-      parts.push(`${h.width}×${h.height}`);
+      if (dev) parts.push(`frame ${h.id}`);
+      parts.push(`step ${h.step}`, `level ${h.level}`);
+      if (dev) {
+        parts.push(h.preview ? 'preview' : `pass ${h.pass}/${h.passes}${h.converged ? ' ✓' : ''}`);
+        if (st.passMs !== undefined) parts.push(`${st.passMs.toFixed(1)} ms/pass`);
+        if (st.samplesPerSecond !== undefined) parts.push(`${(st.samplesPerSecond / 1e6).toFixed(1)} M samples/s`);
+        if (st.bricksTotal) parts.push(`${(((st.bricksSkipped ?? 0) / st.bricksTotal) * 100).toFixed(0)} % bricks skipped`);
+        parts.push(`${h.width}×${h.height}`);
+      }
       if ((h.ranks ?? 1) > 1) parts.push(`${h.ranks} ranks`);
     }
     const sel = this.selection?.selection;
-    if (this.store.state.brushes.length && sel) parts.push(`selected ${(sel.fractionOfMantle * 100).toFixed(2)} %`);
+    if (this.store.state.brushes.length && sel) parts.push(`selected ${this.selection.selectionLevel > 0 ? '≈ ' : ''}${(sel.fractionOfMantle * 100).toFixed(2)} %`);
     const lat = this.link?.lastLatency;
-    if (lat) parts.push(`latency ${lat.shownMs.toFixed(0)} ms`);
+    if (lat && dev) parts.push(`latency ${lat.shownMs.toFixed(0)} ms`);
     if (this.statusNote) parts.push(this.statusNote);
     $('status').textContent = parts.join(' · ');
+    this.pair?.updateLabels();
+    this.updateReadout();
+  }
+
+  // The readout and the coarse-frame badge on the view (view_readout.ts): of the frame shown.
+  private updateReadout(): void {
+    const h = this.shownHeader;
+    const s = this.store.state;
+    const { readout, badge } = readoutText({
+      frame: h,
+      steps: this.info.steps,
+      brushed: s.brushes.length > 0,
+      imageWidth: s.image.width,
+      imageHeight: s.image.height,
+      figures: h && this.selection ? this.selection.figures(h.step) : [],
+    });
+    const r = $('viewReadout'), b = $('coarseBadge');
+    r.textContent = readout;
+    r.hidden = readout === '';
+    b.textContent = badge;
+    b.hidden = badge === '';
   }
 
   showError(message: string): void {

@@ -57,8 +57,17 @@ export class Connection {
   lastSentId = 0;
   lastFrameId = 0;
 
-  constructor(private readonly events: ConnectionEvents) {
+  private closed = false;
+
+  // `dataset`: which dataset of a pair the session renders (docs/compare.md; 0 the first or only one).
+  constructor(private readonly events: ConnectionEvents, private readonly dataset = 0) {
     this.connect();
+  }
+
+  // Closes the session for good (a pair's second view closed): no reconnection.
+  close(): void {
+    this.closed = true;
+    this.ws?.close();
   }
 
   private connect(): void {
@@ -66,6 +75,7 @@ export class Connection {
     url.protocol = location.protocol === 'https:' ? 'wss:' : 'ws:';
     const token = new URLSearchParams(location.search).get('token');
     if (token) url.searchParams.set('token', token);
+    if (this.dataset) url.searchParams.set('dataset', String(this.dataset));
     const ws = new WebSocket(url.toString());
     ws.binaryType = 'arraybuffer';
     this.ws = ws;
@@ -106,6 +116,7 @@ export class Connection {
     ws.onclose = () => {
       this.open = false;
       this.ws = null;
+      if (this.closed) return;
       this.events.onStatus(`disconnected; retrying in ${(this.retryMs / 1000).toFixed(1)} s`);
       setTimeout(() => this.connect(), this.retryMs);
       this.retryMs = Math.min(8000, this.retryMs * 2);

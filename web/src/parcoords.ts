@@ -114,9 +114,15 @@ export function snapTo(v: number, step: number): number {
   return +(Math.round(v / step) * step).toFixed(decimals);
 }
 
+// The key that marks a row of a pair's second sample (not a column name: it starts with a NUL).
+const kSecondRow = '\u0000second';
+
 export class ParallelCoordinates {
   private pc: any = null; // eslint-disable-line @typescript-eslint/no-explicit-any
   private rows: Row[] = [];
+  // A pair's second sample (setSecond), marked by kSecondRow, and the two samples' colours.
+  private second: Row[] = [];
+  private pairColors: [string, string] | null = null;
   private suppress = 0;
   private order_: string[] | null = null;
   private shownOrder = '';
@@ -188,12 +194,43 @@ export class ParallelCoordinates {
     const brushes = this.brushes();
     this.suppress++;
     try {
-      this.pc.data(rows);
+      this.pc.data(this.allRows());
       this.pc.render();
       if (brushes.length) this.applyBrushes(brushes);
     } finally {
       this.suppress--;
     }
+  }
+
+  // A pair's second sample (docs/compare.md, "Side by side"): drawn and brushed with the first, each
+  // in its own colour (`colors`: the first's, the second's) instead of the volume's; null: one sample.
+  setSecond(sample: Sample | null, colors: [string, string] = ['#4aa3ff', '#ff9933']): void {
+    const rows: Row[] = [];
+    if (sample) {
+      const n = sample.rows, c = sample.columns.length, v = sample.values;
+      for (let i = 0; i < n; i++) rows.push({ [kSecondRow]: 1 });
+      for (let k = 0; k < c; k++) for (let i = 0; i < n; i++) rows[i][sample.columns[k]] = v[i * c + k];
+    }
+    this.second = rows;
+    this.pairColors = sample ? colors : null;
+    if (!this.pc) {
+      this.rebuild();
+      return;
+    }
+    const brushes = this.brushes();
+    this.suppress++;
+    try {
+      this.pc.data(this.allRows());
+      this.pc.render();
+      if (brushes.length) this.applyBrushes(brushes);
+    } finally {
+      this.suppress--;
+    }
+  }
+
+  // The rows drawn: the sample's, then a pair's second sample's.
+  private allRows(): Row[] {
+    return this.second.length ? this.rows.concat(this.second) : this.rows;
   }
 
   // Coarse mode: at most kDragLines lines per layer (see above); turning it off redraws every line.
@@ -354,7 +391,7 @@ export class ParallelCoordinates {
         alphaOnBrushed: (this.options.alpha ?? 0.06) / 2, lineWidth: 1 })(this.container));
       this.installRenderer();
       this.pc
-        .data(this.rows)
+        .data(this.allRows())
         .dimensions(dimensions)
         .mode('queue')
         .color(this.lineColor)
@@ -394,7 +431,7 @@ export class ParallelCoordinates {
     // 0 at the top): a depth brush veiled every line and highlighted none.
     const brushed = () => {
       const ranges = [...rangesByName(this.brushes())];
-      const rows = ranges.length ? this.rows.filter((r) => ranges.every(([name, rs]) => inRanges(r[name], rs))) : [];
+      const rows = ranges.length ? this.allRows().filter((r) => ranges.every(([name, rs]) => inRanges(r[name], rs))) : [];
       this.drawLayer('brushed', rows, this.dragging || this.coarse);
     };
     this.redrawBrushed = brushed;
@@ -464,7 +501,8 @@ export class ParallelCoordinates {
       return (r[1] - r[0]) / (d[1] - d[0] || 1);
     });
     const sb = ks.map((k, i) => dims[k].yscale.range()[0] - dims[k].yscale.domain()[0] * sa[i]);
-    const color = this.lineColor;
+    const pair = this.pairColors;
+    const color = pair ? (r: Row) => (r[kSecondRow] ? pair[1] : pair[0]) : this.lineColor;
     const m = ks.length;
     const stride = coarse ? Math.max(1, Math.ceil(rows.length / kDragLines)) : 1;
     this.timing.lines[layer] = Math.ceil(rows.length / stride);

@@ -110,8 +110,7 @@ export class Playback {
       return;
     }
     this.lastAdvance = wait >= -kLateShare * period ? this.lastAdvance + period : now;
-    this.host.showHeld(ahead.step);
-    $<HTMLInputElement>('step').value = String(ahead.step);
+    this.host.showHeld(ahead.step); // the time bar follows when its frame is on screen
     this.sendAhead();
     this.schedule(this.lastAdvance + period - performance.now());
   }

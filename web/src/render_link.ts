@@ -22,6 +22,9 @@ export interface RenderLinkEvents {
   onFrameHeld(frame: Frame): void;
   // A frame is on screen.
   onFrameShown(header: FrameHeader): void;
+  // The view was drawn: the frame as rendered ('exact'), re-projected to the moving camera
+  // ('warped'), or as rendered for another camera ('unwarped').
+  onDrawn?(kind: DrawKind): void;
   onError(message: string): void;
   onStatus(text: string): void;
   // A state a program set (POST /api/link; Connection's onLink).
@@ -81,14 +84,23 @@ export class RenderLink {
   // (the eyes' views, a side-by-side pair), and the session's animation frames draw, not this link.
   xr: { stateToSend(state: RenderState): RenderState } | null = null;
 
-  constructor(canvas: HTMLCanvasElement, private readonly store: StateStore, private readonly events: RenderLinkEvents) {
+  // A pair's second view (pair.ts): every state sent here goes there too, and it draws when this does.
+  mirror: RenderLink | null = null;
+
+  // `dataset`: which dataset of a pair this link renders (0 the first or only one).
+  constructor(canvas: HTMLCanvasElement, private readonly store: StateStore, private readonly events: RenderLinkEvents, dataset = 0) {
     this.view = new View3D(canvas);
     this.connection = new Connection({
       onFrame: (f) => this.receive(f),
       onError: (m, id) => events.onError(id !== undefined ? `state ${id}: ${m}` : m),
       onStatus: (t) => events.onStatus(t),
       onLink: (state, version) => events.onLink(state, version),
-    });
+    }, dataset);
+  }
+
+  // Ends the session (a pair's second view closed).
+  close(): void {
+    this.connection.close();
   }
 
   // True when the newest sent state has been answered by at least one frame.
@@ -97,6 +109,7 @@ export class RenderLink {
   }
 
   cancel(): void {
+    this.mirror?.cancel();
     this.connection.cancel();
   }
 
@@ -173,6 +186,7 @@ export class RenderLink {
     this.sendTimes.set(id, { t: this.lastSendTime, mode });
     if (this.sendTimes.size > 200) this.sendTimes.delete(this.sendTimes.keys().next().value as number);
     this.lastSentId = id;
+    this.mirror?.sendNow(mode, adjust);
     this.observer?.sent({ id, t: this.lastSendTime, step: state.step, interactive: mode === 'interactive', playback: mode === 'playback',
       brushes: state.brushes.map((b) => ({ ...b })), camera: cloneState(state).camera, stereoMode: state.stereo.mode,
       image: { ...state.image } });
@@ -242,6 +256,7 @@ export class RenderLink {
   }
 
   requestDraw(): void {
+    this.mirror?.requestDraw();
     if (this.drawPending) return;
     this.drawPending = true;
     requestAnimationFrame(() => {
@@ -256,6 +271,7 @@ export class RenderLink {
     const bg = (s.background as [number, number, number] | undefined) ?? [0, 0, 0];
     const kind = this.view.draw(s.camera, s.stereo, s.image.width, s.image.height, bg);
     this.observer?.drawn(kind, this.lastShownId < this.lastSentId);
+    this.events.onDrawn?.(kind);
   }
 
   // Work that waits until the frame of the state sent last is on screen (or kAfterFrameMs passed),

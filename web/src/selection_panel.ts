@@ -7,6 +7,7 @@ import { drawProfilePlot, drawTimePlot } from './stats_plot';
 import { download } from './controls';
 import { selectionOverTimeColumns } from './names';
 import type { StateStore } from './store';
+import type { SelectionFigure } from './view_readout';
 import { displayUnits } from './units';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
@@ -34,10 +35,14 @@ export function fmt(v: number): string {
 
 export class SelectionPanel {
   selection: Selection | null = null;
+  // The level of the grid `selection` was counted on: 0 exact (POST /api/selection), above 0 an
+  // interactive or playback frame's quick figure.
+  selectionLevel = 0;
   observer: SelectionPanelObserver | null = null;
   private selectionAbort: AbortController | null = null;
   private stats: SelectionOverTime | null = null;
   private statsKey = '';
+  private statsBrushes = ''; // the brushes `stats` are of
   private statsAbort: AbortController | null = null;
   private statsTimer = 0;
   // The user turned "show the selection" off: brushing no longer turns it on by itself.
@@ -97,11 +102,24 @@ export class SelectionPanel {
       .catch((e) => { if (!ctl.signal.aborted) this.host.showError((e as Error).message); });
   }
 
-  setSelection(s: Selection): void {
+  setSelection(s: Selection, level = 0): void {
     this.selection = s;
+    this.selectionLevel = level;
     this.observer?.selection(s);
     this.updateText();
     this.host.selectionChanged();
+  }
+
+  // The selection's figures known for the readout on the view: the last one set, and the
+  // statistics over time's figure of `step` (exact when they were asked exact).
+  figures(step: number): SelectionFigure[] {
+    const out: SelectionFigure[] = [];
+    const s = this.selection;
+    if (s && s.step !== undefined) out.push({ step: s.step, fractionOfMantle: s.fractionOfMantle, volumeKm3: s.volumeKm3, level: this.selectionLevel });
+    const st = this.stats, key = JSON.stringify(this.store.state.brushes);
+    const p = st && this.statsBrushes === key ? st.steps.find((x) => x.step === step) : undefined;
+    if (st && p) out.push({ step, fractionOfMantle: p.fractionOfMantle, volumeKm3: p.volumeKm3, level: st.level });
+    return out;
   }
 
   updateText(): void {
@@ -183,7 +201,7 @@ export class SelectionPanel {
   private selectionText(): string {
     const s = this.selection;
     return s && Number.isFinite(s.fractionOfMantle)
-      ? `${(s.fractionOfMantle * 100).toFixed(2)} % of the mantle${Number.isFinite(s.volumeKm3) ? `, ${s.volumeKm3.toExponential(3)} km³` : ''}`
+      ? `${this.selectionLevel > 0 ? `≈ (level ${this.selectionLevel}) ` : ''}${(s.fractionOfMantle * 100).toFixed(2)} % of the mantle${Number.isFinite(s.volumeKm3) ? `, ${s.volumeKm3.toExponential(3)} km³` : ''}`
       : 'computing…';
   }
 
@@ -195,6 +213,7 @@ export class SelectionPanel {
     if (!state.brushes.length) {
       this.statsAbort?.abort();
       this.stats = null;
+      this.statsBrushes = '';
       this.observer?.stats(null);
       this.statsKey = '';
       $('statsNote').textContent = 'Brush an axis to see the selected volume over time.';
@@ -210,12 +229,14 @@ export class SelectionPanel {
       const ctl = new AbortController();
       this.statsAbort = ctl;
       this.statsKey = key;
+      const brushesKey = JSON.stringify(this.store.state.brushes);
       this.observer?.statsRequested();
       $('statsNote').textContent = 'computing…';
       postStats(cloneState(this.store.state), exact ? 0 : undefined, ctl.signal)
         .then((st) => {
           if (ctl.signal.aborted) return;
           this.stats = st;
+          this.statsBrushes = brushesKey;
           this.observer?.stats(st);
           const step = this.store.state.step;
           const cur = st.steps.find((x) => x.step === step);
@@ -228,6 +249,7 @@ export class SelectionPanel {
             : `approximate (level ${st.level} grid): now ≈ ${cur ? pct(cur.fractionOfMantle) : '?'} % · over time ≈ ${pct(lo)}–${pct(hi)} %`;
           drawTimePlot($('statsTime') as unknown as SVGSVGElement, st, step);
           drawProfilePlot($('statsProfile') as unknown as SVGSVGElement, st);
+          this.host.selectionChanged(); // the readout on the view takes the exact figure of its step
         })
         .catch((e) => { if (!ctl.signal.aborted) { this.statsKey = ''; this.host.showError((e as Error).message); } });
     }, 250);

@@ -3,6 +3,7 @@
 // script); otherwise nothing here runs and nothing is recorded.
 import type { FeatureSeries, Selection, SelectionOverTime } from './api';
 import type { FeaturesPanel } from './features_panel';
+import type { PairView } from './pair';
 import type { App } from './app';
 import type { Frame, FrameHeader } from './connection';
 import { snapStep, type AxisInfo, type ParallelCoordinates } from './parcoords';
@@ -62,6 +63,8 @@ export interface TestHooks {
   features: FeaturesPanel;
   featureAnswers: (FeatureSeries | null)[];
   timeDepthPictures: boolean[];
+  // A pair's second view (`raypc serve A B`; its frames in `headers`), null with one dataset or once closed.
+  readonly pair: PairView | null;
 }
 
 export function testHooksWanted(): boolean {
@@ -120,6 +123,7 @@ export function installTestHooks(app: App): TestHooks {
     features: app.features,
     featureAnswers: [],
     timeDepthPictures: [],
+    get pair() { return app.pair && !app.pair.closed ? app.pair : null; },
   };
   app.link.observer = {
     sent: (e) => {

@@ -16,7 +16,7 @@
 // the frames a drag received (docs/ui.md, the section on speed).
 import { CameraFrame, camerasEqual, stereoLayout, type CameraView, type EyeOffset } from './camera';
 import type { CameraState, StereoState } from './state';
-import type { Frame } from './connection';
+import type { Frame, FrameHeader } from './connection';
 
 const kPlanetRadiusKm = 6371;
 const kRimBlocks = 2;
@@ -125,6 +125,8 @@ export class View3D {
   private meshFrame: Frame | null = null;
   private readonly quadVao: WebGLVertexArrayObject;
   private frame: Frame | null = null;
+  // The header of the frame the view draws.
+  get frameHeader(): FrameHeader | null { return this.frame?.header ?? null; }
   private size = { width: 1, height: 1 };
   readonly stats: ViewStats = { warpedDraws: 0, exactDraws: 0, framesShown: 0, glDraws: 0 };
   // The name of the rasteriser when WebGL runs on the CPU (from the unmasked renderer string where
@@ -135,6 +137,9 @@ export class View3D {
   reproject: boolean;
   // What the canvas shows (draw's key): a draw that would draw the same is skipped.
   private drawnKey = '';
+  // Where the last draw put the frame's picture in the canvas, CSS pixels from the canvas's top
+  // left (letterboxed); null before a frame. What the page writes over the picture goes there.
+  pictureRect: { x: number; y: number; width: number; height: number } | null = null;
 
   constructor(readonly canvas: HTMLCanvasElement) {
     const gl = canvas.getContext('webgl2', { antialias: false, preserveDrawingBuffer: true, alpha: false });
@@ -354,6 +359,8 @@ export class View3D {
     let vw = cw, vh = Math.round(cw / aspect);
     if (vh > ch) { vh = ch; vw = Math.round(ch * aspect); }
     const vx = Math.floor((cw - vw) / 2), vy = Math.floor((ch - vh) / 2);
+    const cssPerPx = this.canvas.clientWidth / cw || 1;
+    this.pictureRect = { x: vx * cssPerPx, y: (ch - vy - vh) * cssPerPx, width: vw * cssPerPx, height: vh * cssPerPx };
     gl.viewport(vx, vy, vw, vh);
     gl.bindTexture(gl.TEXTURE_2D, this.texture);
     if (kind !== 'warped') {
