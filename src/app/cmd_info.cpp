@@ -2,6 +2,9 @@
 #include "app/command.h"
 #include "app/options.h"
 #include "core/error.h"
+#include "core/json_input.h"
+#include "core/atomic_file.h"
+#include "dataset/dataset_format.h"
 #include "dataset/dataset.h"
 #include "io/netcdf_reader.h"
 #include "preprocess/preprocess.h"
@@ -111,6 +114,10 @@ json describeDataset(const dataset::Dataset& d)
         if (!s.origin.is_null())
             j["steps"].back()["resampled"] = s.origin;
     }
+    // What a difference dataset (raypc diff) is the difference of, as its manifest records it.
+    const std::filesystem::path manifest = d.dir() / dataset::format::kManifest;
+    if (const json m = parseJsonInput(readFile(manifest), manifest.string()); m.contains("difference"))
+        j["difference"] = m["difference"];
     return j;
 }
 
@@ -121,8 +128,11 @@ std::string sourceNote(const json& v)
     const std::string source = v.value("source", std::string());
     if (!v.value("stored", true))
         return fmt::format("  (computed from {} when read)", source);
-    if (v.value("derived", false))
-        return source.empty() ? "  (derived)" : fmt::format("  (derived from {})", source);
+    if (v.value("derived", false)) {
+        const std::string longName = v.value("long_name", std::string());
+        return (source.empty() ? "  (derived)" : fmt::format("  (derived from {})", source)) +
+               (longName.empty() ? "" : "  " + longName);
+    }
     const std::string inFile = v.value("name_in_file", source), longName = v.value("long_name", std::string());
     const std::string from =
         !inFile.empty() && inFile != v["name"].get<std::string>() ? fmt::format("  (from '{}')", inFile) : "";
@@ -176,6 +186,18 @@ void printText(const json& j)
                    steps.front()["time_myr"].get<double>(), steps.back()["time_myr"].get<double>(),
                    j["dt_myr"].get<double>(), steps.front()["source"].get<std::string>(),
                    steps.back()["source"].get<std::string>());
+        if (j.contains("difference")) {
+            const json& d = j["difference"];
+            if (d["b"].is_null())
+                fmt::print("  difference: step differences X(t) − X(t−{}) of {} ({} variables; {:.1f} % covered)\n",
+                           d["step_lag"].get<int>(), d["a"].get<std::string>(), d["variables"].size(),
+                           100 * d["covered_fraction"].get<double>());
+            else
+                fmt::print("  difference: {} − {} on the first one's grid, steps paired by {} ({} variables; the "
+                           "second covers {:.1f} % of the grid)\n",
+                           d["a"].get<std::string>(), d["b"].get<std::string>(), d["match"].get<std::string>(),
+                           d["variables"].size(), 100 * d["covered_fraction"].get<double>());
+        }
         if (const auto& first = steps.front(); first.contains("resampled")) {
             const json& r = first["resampled"];
             const double points = r.value("grid_points", 1.0);

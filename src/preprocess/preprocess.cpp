@@ -68,7 +68,7 @@ void writeArray(const fs::path& path, std::span<const T> values)
 
 // The stored variables of the dataset, in order: the input's as the reader returns them, then the
 // derived ones. Units of derived variables are fixed by addStoredDerivedVariables.
-std::vector<VariableSpec> variableSpecs(const io::FileHeader& header)
+std::vector<VariableSpec> variableSpecs(const io::FileHeader& header, const StepSource& source)
 {
     std::vector<VariableSpec> specs;
     for (const auto& v : header.variables)
@@ -78,9 +78,11 @@ std::vector<VariableSpec> variableSpecs(const io::FileHeader& header)
     };
     if (varname::hasVelocity(has)) {
         specs.push_back({varname::kRadialVelocity, varname::kRadialVelocityUnits, true,
-                         fmt::format("{}", fmt::join(varname::kRadialVelocityFrom, ", "))});
+                         fmt::format("{}", fmt::join(varname::kRadialVelocityFrom, ", ")),
+                         source.derivedLongName(varname::kRadialVelocity)});
         specs.push_back({varname::kVelocityMagnitude, varname::kVelocityMagnitudeUnits, true,
-                         fmt::format("{}", fmt::join(varname::kVelocityMagnitudeFrom, ", "))});
+                         fmt::format("{}", fmt::join(varname::kVelocityMagnitudeFrom, ", ")),
+                         source.derivedLongName(varname::kVelocityMagnitude)});
     }
     return specs;
 }
@@ -120,7 +122,7 @@ json variableJson(const VariableSpec& v)
 }
 
 json manifest(const std::vector<grid::SphericalGrid>& levels, const std::vector<VariableSpec>& specs,
-              const std::vector<fs::path>& inputs, const PreprocessOptions& options, size_t sampleRows)
+              const StepSource& source, const PreprocessOptions& options, size_t sampleRows)
 {
     json j;
     j["format"] = dataset::format::kFormatName;
@@ -136,9 +138,11 @@ json manifest(const std::vector<grid::SphericalGrid>& levels, const std::vector<
     for (const auto& v : specs)
         j["variables"].push_back(variableJson(v));
     j["inputs"] = json::array();
-    for (const auto& p : inputs)
-        j["inputs"].push_back(p.filename().string());
+    for (size_t s = 0; s < source.stepCount(); ++s)
+        j["inputs"].push_back(source.label(s));
     j["sample"] = {{"rows", sampleRows}, {"seed", options.seed}};
+    if (const std::string key = source.describeKey(); !key.empty())
+        j[key] = source.describe();
     return j;
 }
 
@@ -148,19 +152,66 @@ double stepTimeMyr(const PreprocessOptions& options, int s)
     return options.timesMyr.empty() ? s * options.dtMyr : options.timesMyr[size_t(s)];
 }
 
-void checkSameGrid(const fs::path& input, const grid::SphericalGrid& grid, const grid::SphericalGrid& first,
-                   const fs::path& firstInput)
+void checkSameGrid(const std::string& input, const grid::SphericalGrid& grid, const grid::SphericalGrid& first,
+                   const std::string& firstLabel)
 {
     if (!grid.sameAs(first))
         fail("{}: grid {}x{}x{} (lat x r x lon) or its coordinates differ from the first step's {}x{}x{} in {}",
-             input.string(), grid.nLat(), grid.nR(), grid.nLon(), first.nLat(), first.nR(), first.nLon(),
-             firstInput.filename().string());
+             input, grid.nLat(), grid.nR(), grid.nLon(), first.nLat(), first.nR(), first.nLon(), firstLabel);
 }
+
+// The size and modification time of each file step `input` is read from (format::kStepInputs).
+json inputFingerprint(const fs::path& input)
+{
+    return phases::filesFingerprint(io::stepSourceFiles(input));
+}
+
+// The series of input files: each step read by its format's reader (io/series_input.h).
+class FileSeries final : public StepSource {
+public:
+    FileSeries(const std::vector<fs::path>& inputs, const io::ReaderOptions& reader) : m_inputs(inputs), m_reader(reader) {}
+
+    size_t stepCount() const override { return m_inputs.size(); }
+    std::string path(size_t s) const override { return m_inputs[s].string(); }
+    std::string label(size_t s) const override { return m_inputs[s].filename().string(); }
+    json fingerprint(size_t s) const override { return inputFingerprint(m_inputs[s]); }
+    grid::Snapshot read(size_t s) const override { return io::readStep(m_inputs[s], m_reader); }
+
+    io::FileHeader plan() override
+    {
+        // The first file fixes the grid and the variables; every other step must match them. A
+        // resampled series takes the grid chosen for its first step.
+        io::FileHeader header = io::readStepHeader(m_inputs.front(), m_reader);
+        if (io::isMeshStep(m_inputs.front())) {
+            m_reader.targetGrid = header.grid;
+        } else if (m_reader.variables.empty()) {
+            // The variables the first file holds are every step's: a step that lacks one is named.
+            for (const auto& v : header.variables)
+                m_reader.variables.push_back(v.name);
+        }
+        for (size_t s = 1; s < m_inputs.size(); ++s) {
+            const io::FileHeader h = io::readStepHeader(m_inputs[s], m_reader);
+            checkSameGrid(path(s), h.grid, header.grid, label(0));
+            std::vector<std::string> names, firstNames;
+            for (const auto& v : h.variables)
+                names.push_back(v.name);
+            for (const auto& v : header.variables)
+                firstNames.push_back(v.name);
+            if (names != firstNames)
+                fail("{}: variables {}, the first step's {} has {}", path(s), fmt::join(names, ", "), label(0),
+                     fmt::join(firstNames, ", "));
+        }
+        return header;
+    }
+
+private:
+    std::vector<fs::path> m_inputs;
+    io::ReaderOptions m_reader;  // as given, with a resampled series's grid fixed by plan()
+};
 
 // What a run will write, known from the options and the inputs' headers alone.
 struct RunPlan {
     io::FileHeader header;                   // of the first input: the grid and the variables
-    io::ReaderOptions reader;                // as given, with a resampled series's grid fixed
     std::vector<grid::SphericalGrid> levels;   // level 0 first
     std::vector<VariableSpec> specs;     // stored, then derived
     std::vector<VariableSpec> computed;  // the shell anomalies each step's statistics are made for
@@ -169,49 +220,27 @@ struct RunPlan {
 
 // Phase 1: the options, every input's header, the grid's size and memory. Nothing is written
 // yet, so a bad file, a missing variable or a different grid stops the run before it starts.
-RunPlan planRun(const std::vector<fs::path>& inputs, PreprocessOptions& options)
+RunPlan planRun(StepSource& source, PreprocessOptions& options)
 {
-    if (inputs.empty())
+    if (source.stepCount() == 0)
         fail("preprocess: no input files");
     if (!(options.dtMyr > 0))
         fail("--dt-myr: {} is not a positive time step", options.dtMyr);
     if (options.sampleRows == 0 || options.sampleRows > kMaxSampleRows)
         fail("--sample-rows: {}, expected 1 to {} rows", options.sampleRows, kMaxSampleRows);
     if (!options.timesMyr.empty()) {
-        RAYPC_CHECK_EQ(options.timesMyr.size(), inputs.size());
-        for (size_t s = 0; s < inputs.size(); ++s)
+        RAYPC_CHECK_EQ(options.timesMyr.size(), source.stepCount());
+        for (size_t s = 0; s < source.stepCount(); ++s)
             if (!std::isfinite(options.timesMyr[s]) || (s > 0 && !(options.timesMyr[s] > options.timesMyr[s - 1])))
-                fail("{}: time {} Myr, expected a finite time after the step before's", inputs[s].string(),
+                fail("{}: time {} Myr, expected a finite time after the step before's", source.path(s),
                      options.timesMyr[s]);
     }
     RunPlan plan;
-    // The first file fixes the grid and the variables; every other step must match them. A
-    // resampled series takes the grid chosen for its first step.
-    plan.reader = options.reader;
-    plan.header = io::readStepHeader(inputs.front(), plan.reader);
-    if (io::isMeshStep(inputs.front())) {
-        plan.reader.targetGrid = plan.header.grid;
-    } else if (plan.reader.variables.empty()) {
-        // The variables the first file holds are every step's: a step that lacks one is named.
-        for (const auto& v : plan.header.variables)
-            plan.reader.variables.push_back(v.name);
-    }
+    plan.header = source.plan();
     plan.levels = {plan.header.grid};
     for (int l = 1; l < dataset::kLevelCount; ++l)
         plan.levels.push_back(plan.levels.back().coarsened());
-    for (size_t s = 1; s < inputs.size(); ++s) {
-        const io::FileHeader h = io::readStepHeader(inputs[s], plan.reader);
-        checkSameGrid(inputs[s], h.grid, plan.header.grid, inputs.front());
-        std::vector<std::string> names, firstNames;
-        for (const auto& v : h.variables)
-            names.push_back(v.name);
-        for (const auto& v : plan.header.variables)
-            firstNames.push_back(v.name);
-        if (names != firstNames)
-            fail("{}: variables {}, the first step's {} has {}", inputs[s].string(), fmt::join(names, ", "),
-                 inputs.front().filename().string(), fmt::join(firstNames, ", "));
-    }
-    plan.specs = variableSpecs(plan.header);
+    plan.specs = variableSpecs(plan.header, source);
     plan.computed = computedSpecs(plan.specs);
     // The variables pathlines may be seeded on: the stored ones and the anomalies (every "X anomaly"
     // is offered; a percentage only where the steps allow).
@@ -229,7 +258,7 @@ RunPlan planRun(const std::vector<fs::path>& inputs, PreprocessOptions& options)
         options.pathlines.enabled = false;
         options.pathlines.absentBecause = "the model has no velocity (vx, vy, vz)";
         if (!options.quiet && mpi::isRoot())
-            spdlog::info("{}: no velocity (vx, vy, vz): no pathlines", inputs.front().string());
+            spdlog::info("{}: no velocity (vx, vy, vz): no pathlines", source.path(0));
     }
     if (options.pathlines.enabled && options.pathlines.field == PathlineOptions{}.field && !hasSpec(options.pathlines.field)) {
         std::vector<std::string> names;
@@ -245,11 +274,11 @@ RunPlan planRun(const std::vector<fs::path>& inputs, PreprocessOptions& options)
     // The stored variables, and one array for the computed ones' statistics.
     uint64_t bytes = preprocessMemoryBytes(plan.header.grid, plan.specs.size() + (plan.computed.empty() ? 0 : 1));
     if (options.encoding == dataset::ValueEncoding::Uint16 && options.pathlines.enabled) {
-        const uint64_t traced = uint64_t(std::min<size_t>(size_t(std::max(options.pathlines.steps, 0)), inputs.size() - 1)) + 1;
+        const uint64_t traced = uint64_t(std::min<size_t>(size_t(std::max(options.pathlines.steps, 0)), source.stepCount() - 1)) + 1;
         bytes = std::max(bytes, (3 * traced + 1) * plan.header.grid.cellCount() * sizeof(float));
     }
-    grid::checkGridFitsMemory(plan.header.grid, bytes, inputs.front().string(), "preprocess", availableMemory());
-    plan.manifest = manifest(plan.levels, plan.specs, inputs, options, options.sampleRows);
+    grid::checkGridFitsMemory(plan.header.grid, bytes, source.path(0), "preprocess", availableMemory());
+    plan.manifest = manifest(plan.levels, plan.specs, source, options, options.sampleRows);
     return plan;
 }
 
@@ -299,8 +328,9 @@ private:
                 }
             old["variables"] = stored;
         }
-        for (const char* key : {"format", "version", "encoding", "levels", "variables", "dt_myr", "brick_size", "sample"})
-            if (old.value(key, json()) != j[key])
+        for (const char* key : {"difference", "format", "version", "encoding", "levels", "variables", "dt_myr",
+                                "brick_size", "sample"})
+            if (old.value(key, json()) != j.value(key, json()))
                 fail("{}: holds a dataset made with a different '{}' (other inputs or options); "
                      "use another output directory or remove it",
                      m_dir.string(), key);
@@ -361,11 +391,12 @@ std::vector<uint32_t> writeSampleCoordinates(const fs::path& dir, const grid::Sp
     return cells;
 }
 
-// The size and modification time of each file step `input` is read from (format::kStepInputs).
-json inputFingerprint(const fs::path& input)
+}  // namespace
+
+json phases::filesFingerprint(const std::vector<fs::path>& sourceFiles)
 {
     json files = json::array();
-    for (const fs::path& file : io::stepSourceFiles(input)) {
+    for (const fs::path& file : sourceFiles) {
         std::error_code ec;
         const auto size = fs::file_size(file, ec);
         const auto mtime = fs::last_write_time(file, ec);
@@ -380,21 +411,23 @@ json inputFingerprint(const fs::path& input)
     return files;
 }
 
+namespace {
+
 // Phase 4: the steps an earlier run finished (their step.json, kept) and the ones to do (a step
 // directory without step.json is removed, and so is a finished step whose input files changed
 // since that run: their size or modification time differs from its inputs.json).
-std::vector<int> findStepsToDo(const OutputDirectory& out, const std::vector<fs::path>& inputs,
+std::vector<int> findStepsToDo(const OutputDirectory& out, const StepSource& source,
                                std::vector<json>& stepJsons, PreprocessSummary& summary)
 {
     std::vector<int> todo;
-    for (size_t s = 0; s < inputs.size(); ++s) {
+    for (size_t s = 0; s < source.stepCount(); ++s) {
         const fs::path stepPath = dataset::format::stepDir(out.path(), static_cast<int>(s));
         const fs::path fingerprint = stepPath / dataset::format::kStepInputs;
         if (fs::exists(stepPath / dataset::format::kStepManifest) && fs::exists(fingerprint) &&
-            parseJsonInput(readFile(fingerprint), fingerprint.string()) != inputFingerprint(inputs[s])) {
+            parseJsonInput(readFile(fingerprint), fingerprint.string()) != source.fingerprint(s)) {
             spdlog::warn("{}: changed since an earlier run made step {} from it (size or modification time); "
                          "making the step again",
-                         inputs[s].string(), s);
+                         source.path(s), s);
             fs::remove_all(stepPath);
         }
         if (fs::exists(stepPath / dataset::format::kStepManifest)) {
@@ -449,22 +482,22 @@ void addComputedStats(json& stepJson, const RunPlan& plan, const std::vector<std
 // Phase 5, for one step: read, derive, check, statistics and sample values at full resolution,
 // then level by level values and brick bounds of every variable, written into a temporary
 // directory renamed when whole (removed if anything fails). Returns the step's manifest.
-json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs::path>& inputs, int s,
+json writeStep(const fs::path& outDir, const RunPlan& plan, const StepSource& source, int s,
                std::span<const uint32_t> cells, const PreprocessOptions& options)
 {
-    const fs::path& input = inputs[s];
+    const std::string input = source.path(size_t(s)), label = source.label(size_t(s));
     const auto& specs = plan.specs;
     const auto stepStart = std::chrono::steady_clock::now();
     auto elapsed = [&] { return secondsSince(stepStart); };
-    const json fingerprint = inputFingerprint(input);  // before reading: a change while reading is seen next time
-    grid::Snapshot snap = io::readStep(input, plan.reader);
-    spdlog::debug("{}: read in {:.2f} s", input.filename().string(), elapsed());
-    checkSameGrid(input, snap.grid, plan.header.grid, inputs.front());
+    const json fingerprint = source.fingerprint(size_t(s));  // before reading: a change while reading is seen next time
+    grid::Snapshot snap = source.read(size_t(s));
+    spdlog::debug("{}: read in {:.2f} s", label, elapsed());
+    checkSameGrid(input, snap.grid, plan.header.grid, source.label(0));
     addStoredDerivedVariables(snap);
     RAYPC_CHECK_EQ(snap.fields.size(), specs.size());
     // The reader refused non-finite inputs; a finite input can still derive an infinity.
     for (const auto& field : snap.fields)
-        grid::checkFinite(snap, field, input.string());
+        grid::checkFinite(snap, field, input);
 
     const fs::path finalDir = dataset::format::stepDir(outDir, s);
     const fs::path tmpDir = temporarySibling(finalDir);
@@ -472,7 +505,7 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
         std::error_code ec;
         fs::remove_all(tmpDir, ec);
     });
-    json stepJson = {{"index", s}, {"time_myr", stepTimeMyr(options, s)}, {"source", input.filename().string()}};
+    json stepJson = {{"index", s}, {"time_myr", stepTimeMyr(options, s)}, {"source", label}};
     if (!snap.origin.is_null())
         stepJson["origin"] = snap.origin;
     stepJson["stats"] = json::array();
@@ -489,7 +522,7 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
     for (const auto& st : stats)
         stepJson["stats"].push_back(dataset::format::toJson(st));
     addComputedStats(stepJson, plan, current);
-    spdlog::debug("{}: derived, stats and sample done at {:.2f} s", input.filename().string(), elapsed());
+    spdlog::debug("{}: derived, stats and sample done at {:.2f} s", label, elapsed());
     for (int level = 0; level < dataset::kLevelCount; ++level)
         fs::create_directories(dataset::format::levelDir(tmpDir, level));
     // Variables in parallel: writing into the page cache costs as much CPU as computing,
@@ -525,7 +558,7 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const std::vector<fs
     }
     renameAtomic(tmpDir, finalDir);
     removeTmp.dismiss();
-    spdlog::debug("{}: levels, bricks and files done at {:.2f} s", input.filename().string(), elapsed());
+    spdlog::debug("{}: levels, bricks and files done at {:.2f} s", label, elapsed());
     return stepJson;
 }
 
@@ -580,7 +613,13 @@ uint64_t preprocessMemoryBytes(const grid::SphericalGrid& grid, size_t variableC
 }
 
 PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path& outDir,
-                             const PreprocessOptions& given)
+                             const PreprocessOptions& options)
+{
+    FileSeries files(inputs, options.reader);
+    return preprocess(files, outDir, options);
+}
+
+PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const PreprocessOptions& given)
 {
     // What the inputs allow: planRun turns pathlines off for a model without a velocity.
     PreprocessOptions options = given;
@@ -590,7 +629,7 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
     // gathered, and rank 0 writes the global statistics. Each phase ends with every rank agreeing.
     const auto start = std::chrono::steady_clock::now();
     RunPlan plan;
-    mpi::together([&] { plan = planRun(inputs, options); });
+    mpi::together([&] { plan = planRun(source, options); });
     // From here on the run writes; one run at a time per directory.
     std::optional<OutputDirectory> out;
     mpi::together([&] {
@@ -601,11 +640,11 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
     mpi::together([&] { cells = writeSampleCoordinates(outDir, plan.header.grid, options); });
 
     PreprocessSummary summary;
-    std::vector<json> stepJsons(inputs.size());
+    std::vector<json> stepJsons(source.stepCount());
     std::vector<int> todo;
     mpi::together([&] {
         if (mpi::isRoot())
-            todo = findStepsToDo(*out, inputs, stepJsons, summary);
+            todo = findStepsToDo(*out, source, stepJsons, summary);
     });
     if (mpi::distributed()) {
         // Rank 0 found what an earlier run left; every rank needs the list and the finished steps.
@@ -617,7 +656,7 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
     }
     if (summary.stepsSkipped > 0 && !options.quiet && mpi::isRoot())
         spdlog::info("{}: {} of {} steps already done by an earlier run, skipping them", outDir.string(),
-                     summary.stepsSkipped, inputs.size());
+                     summary.stepsSkipped, source.stepCount());
     std::optional<Progress> progress;
     if (!options.quiet && !todo.empty() && mpi::isRoot())
         progress.emplace("preprocess", static_cast<int64_t>(todo.size()), "steps");
@@ -629,12 +668,12 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
             [&](int64_t item) {
                 phases::throwIfCancelled(options);
                 const int s = todo[size_t(item)];
-                written[std::to_string(s)] = writeStep(outDir, plan, inputs, s, cells, options);
+                written[std::to_string(s)] = writeStep(outDir, plan, source, s, cells, options);
                 if (out)
                     out->keep();
                 ++summary.stepsWritten;
                 if (options.onProgress)
-                    options.onProgress({"steps", summary.stepsSkipped + summary.stepsWritten, int(inputs.size())});
+                    options.onProgress({"steps", summary.stepsSkipped + summary.stepsWritten, int(source.stepCount())});
                 mpi::dieHook("preprocess-step");
             },
             [&](int64_t handedOut) {
@@ -695,7 +734,7 @@ PreprocessSummary preprocess(const std::vector<fs::path>& inputs, const fs::path
             options.pathlines.absentBecause = fmt::format("{} {} missing values", fmt::join(gaps, ", "),
                                                           gaps.size() == 1 ? "has" : "have");
             if (!options.quiet && mpi::isRoot())
-                spdlog::info("{}: {} {} missing values: no pathlines", inputs.front().string(), fmt::join(gaps, ", "),
+                spdlog::info("{}: {} {} missing values: no pathlines", source.path(0), fmt::join(gaps, ", "),
                              gaps.size() == 1 ? "has" : "have");
         }
     }

@@ -77,6 +77,31 @@ struct PreprocessSummary {
     double seconds = 0;
 };
 
+// Where preprocess() reads its steps from: a series of input files (their readers, io/), or any
+// other series of snapshots on one grid, such as the difference of two datasets
+// (preprocess/difference.h). Everything after reading is the one pipeline.
+class StepSource {
+public:
+    virtual ~StepSource() = default;
+    virtual size_t stepCount() const = 0;
+    // Step s for messages (an input's path) and in the manifest (its "inputs", a step's "source").
+    virtual std::string path(size_t s) const = 0;
+    virtual std::string label(size_t s) const = 0;
+    // What every step shares, read and checked before anything is written: the grid and the stored
+    // variables in order. Called once, before read(). Throws raypc::Error naming the step at fault.
+    virtual io::FileHeader plan() = 0;
+    // Step s on the plan's grid with the plan's variables in order (preprocess adds the derived ones).
+    virtual grid::Snapshot read(size_t s) const = 0;
+    // What step s is made from (the size and modification time of its files), so that a rerun makes
+    // a step again whose sources changed since.
+    virtual nlohmann::json fingerprint(size_t s) const = 0;
+    // What the dataset is, for its manifest under `key` (a difference: "difference"); null for files.
+    virtual std::string describeKey() const { return {}; }
+    virtual nlohmann::json describe() const { return nullptr; }
+    // The long_name of a derived variable (`name`: "radial velocity", …), where the source has one.
+    virtual std::string derivedLongName(const std::string& /*name*/) const { return {}; }
+};
+
 // Preprocesses `inputs` (files, in step order) into `outDir`, in phases (preprocess.cpp):
 // 1. plan: options and every input's header, the grid's size and the memory a step needs,
 //    before anything is written; 2. the output directory: locked (DatasetWriteLock), checked
@@ -91,6 +116,8 @@ struct PreprocessSummary {
 // made from other inputs.
 PreprocessSummary preprocess(const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& outDir,
                              const PreprocessOptions& options);
+// The same pipeline over any source of steps (options.reader is the file source's only).
+PreprocessSummary preprocess(StepSource& source, const std::filesystem::path& outDir, const PreprocessOptions& options);
 
 // Bytes of memory preprocessing one step of `grid` takes at its peak: `variableCount` (stored and
 // derived) full-resolution float32 arrays and the reader's buffer for one variable.

@@ -24,6 +24,10 @@ struct VariableSpec {
     std::optional<dataset::ShellAnomalyOf> computed = {};
 };
 
+// The size and modification time of each of `files` (a step's inputs.json, format::kStepInputs).
+// Throws raypc::Error naming a file whose size or time cannot be read.
+nlohmann::json filesFingerprint(const std::vector<std::filesystem::path>& files);
+
 // Throws raypc::Error "preprocess: cancelled" once options.cancel is set (between steps and sets).
 void throwIfCancelled(const PreprocessOptions& options);
 

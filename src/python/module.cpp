@@ -25,6 +25,7 @@
 #include "io/cf_grid.h"
 #include "analysis/critical_points.h"
 #include "dataset/dataset.h"
+#include "preprocess/difference.h"
 #include "analysis/feature_run.h"
 #include "analysis/features.h"
 #include "analysis/pathline_storage.h"
@@ -315,6 +316,37 @@ py::dict degreeCorrelation(const std::string& a, const std::string& varA, const 
     return py::dict(py::arg("depth_km") = c.depthKm, py::arg("radius_km") = c.radiusKm, py::arg("lmax") = c.lmax,
                     py::arg("power_a") = doubles(c.powerA), py::arg("power_b") = doubles(c.powerB),
                     py::arg("correlation") = doubles(c.correlation), py::arg("a") = fieldDict(*fa), py::arg("b") = fieldDict(*fb));
+}
+
+// `raypc.diff`: raypc diff's difference dataset written to `out` by the same code
+// (preprocess/difference.h); `b` empty with `steps` k > 0 for step differences. Messages name
+// Python's arguments (steps, match).
+void difference(const std::string& a, const std::string& b, const std::string& out,
+                const std::vector<std::string>& variables, int steps, const std::string& match, py::object progress)
+{
+    preprocess::DifferenceRequest request;
+    request.a = a;
+    request.b = b;
+    request.variables = variables;
+    request.stepLag = steps;
+    request.match = preprocess::parseStepMatch(match, "match");
+    if (steps < 0 || (b.empty() && steps == 0))
+        fail("steps: {}, expected a step lag k >= 1 (or a dataset b to subtract)", steps);
+    ProgressBridge bridge(std::move(progress));
+    preprocess::PreprocessOptions options;
+    options.quiet = true;
+    options.onProgress = [&bridge](const preprocess::PreprocessProgress& p) { bridge(p.phase, p.done, p.total); };
+    options.cancel = &bridge.cancel;
+    {
+        py::gil_scoped_release release;
+        try {
+            preprocess::preprocessDifference(request, out, options);
+        } catch (const Error& e) {
+            if (!bridge.cancel)
+                failLike(e, pythonArgumentNames(e.what()));
+        }
+    }
+    bridge.rethrow();
 }
 
 class PyDataset {
@@ -799,6 +831,9 @@ PYBIND11_MODULE(_raypc, m)
           "Ctrl-C: `serve` stops; other commands stop only if SIGINT's handler is the default (python3 -m raypc sets it)");
     m.def("prepare", &prepare, py::arg("args"), py::arg("progress") = py::none(),
           "Preprocess inputs as `raypc serve INPUT…` does; returns the dataset directory");
+    m.def("diff", &difference, py::arg("a"), py::arg("b"), py::arg("out"), py::arg("variables"), py::arg("steps"),
+          py::arg("match"), py::arg("progress") = py::none(),
+          "raypc diff: the difference dataset a − b (or a's step differences, b empty and steps k) written to out");
     m.def(
         "check_state",
         [](const std::string& text) { return raypc::state::toJson(parseState(text, "state")).dump(); },

@@ -32,6 +32,7 @@ from ._raypc import Error, NotFoundError, OutOfRangeError, UnknownNameError
 from ._raypc import __version__  # project(VERSION) in CMakeLists.txt, as the wheel's metadata
 from .compare import correlate, degree_correlation, spectrum
 from .dataset import Dataset, StepLike
+from .difference import diff
 from .grid import SURFACE_RADIUS_KM, Field, Grid, Variable
 from .names import NAMES
 from .picture import Picture
@@ -39,5 +40,5 @@ from .preprocess import open
 from .state import STATE_VERSION, State
 from .view import View, show
 
-__all__ = ["Error", "NotFoundError", "UnknownNameError", "OutOfRangeError", "open", "Dataset", "State", "Field",
+__all__ = ["Error", "NotFoundError", "UnknownNameError", "OutOfRangeError", "open", "diff", "Dataset", "State", "Field",
            "Grid", "Variable", "Picture", "View", "show", "NAMES", "correlate", "spectrum", "degree_correlation"]
