@@ -11,6 +11,7 @@
 #include "analysis/feature_csv.h"
 #include "analysis/probe.h"
 #include "analysis/shell_compare.h"
+#include "grid/regrid.h"
 #include "render/color_map.h"
 #include "render/pair_state.h"
 #include "render/pathline_scene.h"
@@ -445,7 +446,7 @@ ApiAnswer timeDepth(const ApiContext& api, const ApiRequest& request)
 ApiAnswer spectrum(const ApiContext& api, const ApiRequest& request)
 {
     const dataset::Dataset& dataset = *api.dataset;
-    const render::ResolvedState resolved = render::resolveState(parseBody(request.body), dataset);
+    const render::ResolvedState resolved = resolveBody(api, request.body);
     std::string name = resolved.state.colorVariable.empty() ? dataset.variables().front().name : resolved.state.colorVariable;
     if (const auto var = queryParameter(request.query, "var"))
         name = *var;
@@ -470,6 +471,50 @@ ApiAnswer spectrum(const ApiContext& api, const ApiRequest& request)
                        {"lmax", lmax},
                        {"quadrature", analysis::quadratureName(analysis::quadratureOf(grid))},
                        {"power", power}});
+}
+
+// A pair's two datasets correlated shell by shell (docs/compare.md, "Correlation"): the state's
+// colour variable (or `var`) of the first at the state's step against the same variable of the second
+// at its matched step (render::secondOfPair), put on the first's grid (grid::regrid); `lmax` filters
+// both first. Asked of the first dataset's endpoint; refused without a pair.
+ApiAnswer correlate(const ApiContext& api, const ApiRequest& request)
+{
+    if (!api.pairSecond)
+        fail("correlate: needs a pair of datasets (raypc serve A B) asked through the first (dataset 0)");
+    const dataset::Dataset& first = *api.dataset;
+    const dataset::Dataset& second = *api.pairSecond->dataset;
+    const state::RenderState state = state::parseRenderState(parseBody(request.body));
+    const render::ResolvedState resolved = render::resolveState(state, first);
+    std::string name = resolved.state.colorVariable.empty() ? first.variables().front().name : resolved.state.colorVariable;
+    if (const auto var = queryParameter(request.query, "var"))
+        name = *var;
+    const int varA = first.variableIndex(name), varB = second.variableIndex(name);
+    if (varA < 0)
+        fail("var: the first dataset has no variable '{}'", name.substr(0, 80));
+    if (varB < 0)
+        fail("var: the second dataset has no variable '{}' to correlate with the first's", name.substr(0, 80));
+    analysis::CorrelationOptions options;
+    if (queryParameter(request.query, "lmax"))
+        options.lmax = parseIntParameter(request.query, "lmax");
+    const int stepA = resolved.state.step;
+    const int stepB = render::secondOfPair(state, first, second).state.step;
+    const auto a = api.cache->getWithoutEvicting(stepA, 0);
+    const auto b = api.pairSecond->cache->getWithoutEvicting(stepB, 0);
+    const grid::SphericalGrid& gridA = first.levels().front().grid;
+    const grid::SphericalGrid& gridB = second.levels().front().grid;
+    if (grid::coveredFraction(gridB, gridA) == 0)
+        fail("correlate: the second dataset's grid covers none of the first's");
+    const std::vector<float> bOnA = grid::regrid(gridB, b->values(size_t(varB)), gridA);
+    const auto rows = analysis::correlateShells(gridA, a->values(size_t(varA)), bOnA.data(), options, name);
+    json out = json::array();
+    for (const auto& r : rows)
+        out.push_back({{"depthKm", r.depthKm}, {"correlation", r.correlation}, {"rmsA", r.rmsA}, {"rmsB", r.rmsB},
+                       {"rmsRatio", r.rmsRatio}, {"areaFraction", r.areaFraction}, {"note", r.note}});
+    return jsonAnswer({{"variable", name},
+                       {"units", first.variables()[size_t(varA)].units},
+                       {"steps", {stepA, stepB}},
+                       {"lmax", options.lmax ? json(*options.lmax) : json(nullptr)},
+                       {"shells", std::move(out)}});
 }
 
 ApiAnswer pathlines(const ApiContext& api, const ApiRequest& request)
@@ -575,6 +620,7 @@ const Route kRoutes[] = {
     {HttpMethod::Get, "/api/job-progress", Lane::Network, jobProgress, "job", false},
     {HttpMethod::Post, "/api/time-depth", Lane::Statistics, timeDepth, "level,of,var,format,width,height"},
     {HttpMethod::Post, "/api/spectrum", Lane::Statistics, spectrum, "var,depthKm,lmax"},
+    {HttpMethod::Post, "/api/correlate", Lane::Statistics, correlate, "var,lmax", false},
     {HttpMethod::Get, "/api/pathlines", Lane::Worker, pathlines, "step,window"},
     {HttpMethod::Get, "/api/persistence", Lane::Worker, persistence, "step,top,var"},
     {HttpMethod::Get, "/api/link", Lane::Worker, linkGet, "", false},

@@ -494,6 +494,24 @@ const std::vector<Definition>& messages()
               "S_l for l = 0 … lmax: Σ_m c_lm² of the 4π-normalised real harmonics (Σ_l S_l is the mean square over "
               "the sphere)"}}));
         d.push_back(message(
+            "PairCorrelation", "POST /api/correlate",
+            "a pair's two datasets correlated shell by shell on the first's grid (docs/compare.md, \"Correlation\")",
+            {{"variable", text(""), "the variable correlated (the state's colour variable, or `var`)"},
+             {"units", text(""), "its units (the RMS amplitudes')"},
+             {"steps", pairOf(integer(""), ""), "the first's step and the second's matched step"},
+             {"lmax", nullable(integer("")), "both filtered to degrees ≤ lmax first; null: unfiltered"},
+             {"shells",
+              arrayOf(named("ShellCorrelationRow", "",
+                            {{"depthKm", number(""), "the shell's depth, km"},
+                             {"correlation", nullable(number("")), "area-weighted Pearson r; null where `note` says why"},
+                             {"rmsA", nullable(number("")), "the first's RMS about the shell's mean"},
+                             {"rmsB", nullable(number("")), "the second's"},
+                             {"rmsRatio", nullable(number("")), "rmsA / rmsB"},
+                             {"areaFraction", number(""), "the share of the sphere where both have data, 0..1"},
+                             {"note", text(""), "why a value is missing; empty otherwise"}}),
+                      ""),
+              "one per radius of the first's grid, deepest first"}}));
+        d.push_back(message(
             "MapHeader", "POST /api/slice?view=map (JSON header)", "where a map puts the sphere",
             sliceKeys("map",
                       {{"projection", namesOf<render::MapProjection>(state::allMapProjections(), state::mapProjectionName, ""),

@@ -2945,6 +2945,23 @@ const cases = {
       `the selection of A and B: ${figures.join(', ')} (expected both non-zero and different: two seeds)`);
     [la, lb] = await labels();
     check(/selected \d+\.\d\d %/.test(la) && /selected \d+\.\d\d %/.test(lb), `the labels give the selections: '${la}' / '${lb}'`);
+    // Each view's surface outline is a line, not a filled shape over the view.
+    const fills = await page.evaluate(() => [...document.querySelectorAll('#shellLabels polygon, #shellLabelsB polygon')].map((p) => getComputedStyle(p).fill));
+    check(fills.length === 2 && fills.every((f) => f === 'none'), `the views' surface outlines are filled: ${JSON.stringify(fills)}`);
+    // "Compare A and B": the two runs' temperature anomaly correlated shell by shell (POST
+    // /api/correlate), one point per shell with data, every r within [-1, 1]; runs of different seeds
+    // are not the same field (r < 1 somewhere).
+    await page.waitForFunction(() => Number(document.getElementById('pairCorrelation')?.dataset.points) > 0, null, { timeout: 20000 })
+      .catch(async () => { throw new TestFailure(`no correlation per depth: '${await page.textContent('#pairCorrelationNote')}'`); });
+    const corr = await page.evaluate(async () => {
+      const r = await fetch('api/correlate', { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(window.__raypc.state()) });
+      return { status: r.status, body: await r.json(), points: Number(document.getElementById('pairCorrelation').dataset.points), note: document.getElementById('pairCorrelationNote').textContent };
+    });
+    const rs = corr.body.shells.map((x) => x.correlation).filter((x) => x !== null);
+    console.log(`  correlation per depth: ${corr.points} points; r ${Math.min(...rs).toFixed(2)}..${Math.max(...rs).toFixed(2)}; '${corr.note}'`);
+    check(corr.status === 200 && corr.points === rs.length && rs.length >= corr.body.shells.length - 2 && rs.every((x) => x >= -1 - 1e-9 && x <= 1 + 1e-9) && Math.min(...rs) < 0.999,
+      `the pair's correlation: ${corr.points} points drawn of ${rs.length} (${corr.body.shells.length} shells), r ${Math.min(...rs)}..${Math.max(...rs)}`);
+    check(corr.note.includes(`step ${corr.body.steps[0]}`) && /temperature anomaly/.test(corr.note), `the correlation's note: '${corr.note}'`);
     if (process.env.RAYPC_TEST_DEBUG) await page.screenshot({ path: join(process.env.RAYPC_TEST_DEBUG, 'compare.png') });
     // A screenshot of the pair holds both views: twice the width of one.
     const image = (await rState(page)).image;

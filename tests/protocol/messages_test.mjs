@@ -10,7 +10,7 @@
 //
 // node --experimental-websocket messages_test.mjs RAYPC FIXTURE_DIR EXAMPLES_DIR
 import { spawn, spawnSync } from 'node:child_process';
-import { copyFileSync, mkdirSync, mkdtempSync, readdirSync, rmSync, writeFileSync } from 'node:fs';
+import { copyFileSync, cpSync, mkdirSync, mkdtempSync, readdirSync, rmSync, writeFileSync } from 'node:fs';
 import { createRequire } from 'node:module';
 import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
@@ -100,6 +100,33 @@ try {
   expectMessage('Spectrum', spectrum, 'POST /api/spectrum');
   if (spectrum.power.length !== 9 || spectrum.quadrature !== "Fejér's first rule" || !(spectrum.power.slice(1).some((p) => p > 0)))
     fail(`POST /api/spectrum: ${JSON.stringify(spectrum)}`);
+
+  // A pair's correlation per depth (POST /api/correlate), from a second server serving the dataset
+  // and a copy of it as a pair: the same field, so r = 1 and the RMS ratio 1 on every shell.
+  {
+    const copy = join(tmp, 'ds-copy');
+    cpSync(dataset, copy, { recursive: true });
+    rmSync(join(copy, '.lock'), { force: true });
+    const pairServer = spawn(raypc, ['serve', dataset, copy, '--port', '0'], { stdio: ['ignore', 'pipe', 'pipe'] });
+    try {
+      const pairBase = await new Promise((resolveUrl, reject) => {
+        let out = '', err = '';
+        pairServer.stdout.on('data', (d) => { out += d; const m = /(http:\/\/127\.0\.0\.1:\d+\/)/.exec(out); if (m) resolveUrl(m[1]); });
+        pairServer.stderr.on('data', (d) => { err += d; });
+        pairServer.on('exit', (code) => reject(new Error(`raypc serve A B exited with ${code}: ${err}`)));
+      });
+      const r = await fetch(new URL('api/correlate', pairBase), post({ ...state, color: { ...state.color, variable: 'temperature anomaly' } }));
+      const corr = JSON.parse(Buffer.from(await r.arrayBuffer()).toString('utf8'));
+      if (r.status !== 200) fail(`POST /api/correlate on a pair: status ${r.status}: ${JSON.stringify(corr)}`);
+      else {
+        expectMessage('PairCorrelation', corr, 'POST /api/correlate');
+        const bad = corr.shells.filter((x) => x.correlation === null || Math.abs(x.correlation - 1) > 1e-9 || Math.abs(x.rmsRatio - 1) > 1e-9);
+        if (corr.shells.length === 0 || bad.length) fail(`POST /api/correlate of a dataset with its copy: shells not r = 1: ${JSON.stringify(bad.slice(0, 3))}`);
+      }
+    } finally {
+      pairServer.kill('SIGKILL');
+    }
+  }
   expectMessage('Selection', await getJson('api/selection', post({ ...state, brushes: [{ name: variable, min: info.variables[0].min, max: info.variables[0].mean }] })), 'POST /api/selection');
   expectMessage('SeriesProgress', await getJson('api/progress'), 'GET /api/progress');
   const presets = await getJson('api/presets');  // the fixture's examples, one not for it (below)

@@ -313,6 +313,13 @@ TEST(Serve, APairAnswersForEachDatasetByTheDatasetParameter)
     EXPECT_EQ(json::parse(statsSecond.body)["steps"].size(), 1u);
     EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/stats?level=0&dataset=1", depthState.dump()).stepsComputed, "0");
 
+    // Correlating the pair needs a variable both have (this pair has none), asked of the first.
+    const auto corr = httpRequest(server.port, http::verb::post, "/api/correlate", depthState.dump());
+    EXPECT_EQ(corr.status, 400);
+    EXPECT_NE(json::parse(corr.body).value("error", std::string()).find("the second dataset has no variable 'temperature' to correlate"),
+              std::string::npos) << corr.body;
+    EXPECT_EQ(httpRequest(server.port, http::verb::post, "/api/correlate?dataset=1", depthState.dump()).status, 400);
+
     // The first's state, with a brush on a variable the second lacks, for the second: step matched
     // by time (its one step), the brush left out, the colour variable it lacks replaced; said in the
     // frames' `pair.notes`.

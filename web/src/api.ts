@@ -7,11 +7,11 @@ import type { RenderState } from './state';
 // `raypc protocol-schema`, generated into generated/protocol_types.ts).
 import type {
   CoordinateInfo, FeatureSeries, FeatureTrack, Histogram, Info, JobProgress, MapHeader, PathlinesHeader, PersistenceDiagram, PersistencePair, Preset,
-  ProbeAnswer, SectionHeader, Selection, SelectionOverTime, SeriesProgress, Spectrum, StepInfo, VariableInfo,
+  ProbeAnswer, SectionHeader, Selection, SelectionOverTime, SeriesProgress, Spectrum, StepInfo, VariableInfo, PairCorrelation,
 } from './generated/protocol_types';
 export type {
   CoordinateInfo, FeatureSeries, FeatureTrack, Histogram, Info, JobProgress, PersistenceDiagram, PersistencePair, Preset, ProbeAnswer, Selection,
-  SelectionOverTime, SeriesProgress, Spectrum, StepInfo, VariableInfo,
+  SelectionOverTime, SeriesProgress, Spectrum, StepInfo, VariableInfo, PairCorrelation,
 };
 // What POST /api/slice drew: a map's projection or a section's plot (`view` tells which).
 export type SliceHeader = MapHeader | SectionHeader;
@@ -218,6 +218,15 @@ export async function postSpectrum(state: RenderState): Promise<Spectrum> {
     method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(state),
   });
   return (await check(r, 'POST /api/spectrum')).json();
+}
+
+// A pair's two datasets correlated shell by shell, the state's colour variable at its step and the
+// second's matched step (POST /api/correlate; docs/compare.md, as `raypc correlate` computes it).
+export async function postPairCorrelation(state: RenderState): Promise<PairCorrelation> {
+  const r = await fetch('api/correlate', {
+    method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(state),
+  });
+  return (await check(r, 'POST /api/correlate')).json();
 }
 
 // The values at a point (GET /api/probe; analysis/probe.h, as `raypc probe`).

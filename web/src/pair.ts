@@ -6,7 +6,8 @@
 // store's camera, so a drag on either turns both. Each view is labelled with its dataset, the step it
 // shows (and its time) and the selection's share of the mantle; the parallel coordinates draw both
 // samples, each in its own colour. Swap exchanges the sides; close ends the second view.
-import { fetchInfo, fetchSample, type Info } from './api';
+import { fetchInfo, fetchSample, postPairCorrelation, type Info } from './api';
+import { drawPairCorrelation } from './pair_correlation';
 import { setUpCameraInput } from './camera_input';
 import type { FrameHeader } from './connection';
 import type { ParallelCoordinates } from './parcoords';
@@ -45,6 +46,10 @@ export class PairView {
   private readonly labels: [HTMLElement, HTMLElement];
   private readonly bar: HTMLElement;
   private readonly shellBox: HTMLElement; // the second view's shell depth labels (shell_labels.ts)
+  // "Compare A and B" in the side panel: the correlation per depth of the shown variable.
+  private readonly compareSection: HTMLElement;
+  private correlationKey = '';
+  private correlationAbort: AbortController | null = null;
   private readonly resize: ResizeObserver;
   private secondInfo: Info | null = null;
   private sampleStep = -1;
@@ -76,6 +81,14 @@ export class PairView {
     this.canvas.after(this.shellBox);
     this.panel.append(this.labels[0], this.labels[1], this.bar);
     this.panel.classList.add('pair');
+    this.compareSection = el('section', { id: 'pairCompare' });
+    const svg = document.createElementNS('http://www.w3.org/2000/svg', 'svg');
+    svg.id = 'pairCorrelation';
+    svg.setAttribute('width', '300');
+    svg.setAttribute('height', '200');
+    svg.setAttribute('aria-label', 'correlation of the two datasets against depth');
+    this.compareSection.append(el('h2', {}, 'Compare A and B'), el('div', { id: 'pairCorrelationNote', class: 'note' }), svg);
+    document.getElementById('selectionSection')?.after(this.compareSection);
 
     const store = host.store;
     this.link = new RenderLink(this.canvas, store, {
@@ -121,7 +134,34 @@ export class PairView {
     this.headers.push(h);
     if (this.headers.length > 200) this.headers.shift();
     this.updateLabels();
-    if (!h.interactive && !h.playback) this.loadSample(h.step);
+    if (!h.interactive && !h.playback) {
+      this.loadSample(h.step);
+      this.refreshCorrelation();
+    }
+  }
+
+  // The correlation per depth of the shown variable at the shown steps, asked again when the step,
+  // the variable or the step matching changed.
+  private refreshCorrelation(): void {
+    const s = this.host.store.state;
+    const key = JSON.stringify([s.step, s.color.variable, s.pair?.steps]);
+    if (key === this.correlationKey || this.closed) return;
+    this.correlationKey = key;
+    this.correlationAbort?.abort();
+    const ctl = new AbortController();
+    this.correlationAbort = ctl;
+    const note = document.getElementById('pairCorrelationNote')!;
+    note.textContent = 'computing the correlation per depth…';
+    postPairCorrelation(s)
+      .then((c) => {
+        if (ctl.signal.aborted || this.closed) return;
+        note.textContent = drawPairCorrelation(document.getElementById('pairCorrelation') as unknown as SVGSVGElement, c);
+      })
+      .catch((e) => {
+        if (ctl.signal.aborted) return;
+        this.correlationKey = '';
+        note.textContent = (e as Error).message;
+      });
   }
 
   // The second dataset's sample of `step` into the parallel coordinates (one at a time; the newest
@@ -175,6 +215,8 @@ export class PairView {
     this.canvas.remove();
     for (const l of this.labels) l.remove();
     this.shellBox.remove();
+    this.correlationAbort?.abort();
+    this.compareSection.remove();
     this.bar.remove();
     this.panel.classList.remove('pair', 'swapped');
     this.host.pc.setSecond(null);
