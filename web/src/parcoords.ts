@@ -187,6 +187,11 @@ export class ParallelCoordinates {
       for (let i = 0; i < n; i++) rows[i][name] = v[i * c + k];
     }
     this.rows = rows;
+    this.redrawRows();
+  }
+
+  // The rows (both samples of a pair) drawn again with the brushes in force, or the plot rebuilt.
+  private redrawRows(): void {
     if (!this.pc) {
       this.rebuild();
       return;
@@ -213,19 +218,7 @@ export class ParallelCoordinates {
     }
     this.second = rows;
     this.pairColors = sample ? colors : null;
-    if (!this.pc) {
-      this.rebuild();
-      return;
-    }
-    const brushes = this.brushes();
-    this.suppress++;
-    try {
-      this.pc.data(this.allRows());
-      this.pc.render();
-      if (brushes.length) this.applyBrushes(brushes);
-    } finally {
-      this.suppress--;
-    }
+    this.redrawRows();
   }
 
   // The rows drawn: the sample's, then a pair's second sample's.
