@@ -310,6 +310,8 @@ export class App {
     $('pcTabVolume').classList.toggle('active', tab === 'volume');
     $('pcTabPathlines').classList.toggle('active', tab === 'pathlines');
     $('pcTabSlices').classList.toggle('active', tab === 'slices');
+    for (const [id, t] of [['pcTabVolume', 'volume'], ['pcTabPathlines', 'pathlines'], ['pcTabSlices', 'slices']])
+      $(id).setAttribute('aria-selected', String(tab === t));
   }
 
   // The colour legends on the view (state.legend): the volume's variable, and the pathlines'
