@@ -2831,6 +2831,61 @@ const cases = {
     check(brushes.length === 1 && brushes[0].max === beyond.max, `the brush beyond the axis was dropped or changed: ${JSON.stringify(brushes)}`);
     check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
   },
+  // Issue 47, an empty selection says so (item 2): preset 1 (radial velocity ≤ 0) on the fixture,
+  // whose radial velocity is positive everywhere, selects nothing; a note under the figure names the
+  // radial velocity brush as the one that selects nothing by itself, from the server's answer.
+  async empty_selection({ context, url }) {
+    const page = await openUi(context, url);
+    await page.click('#presets button[data-preset="task1-slabs-660km"]');
+    await waitConverged(page);
+    await page.waitForFunction(() => { const e = document.querySelector('#emptySelection'); return e && !e.hidden && e.textContent; }, null, { timeout: 10000 })
+      .catch(async () => { throw new TestFailure(`no empty-selection note; the selection reads '${await page.textContent('#selection')}'`); });
+    const note = await page.textContent('#emptySelection');
+    const state = await rState(page);
+    const answer = await postJson(url + 'api/selection', state);
+    check(answer.status === 200 && answer.body.fractionOfMantle === 0, `the preset's selection is ${JSON.stringify(answer.body)}, not empty`);
+    const empty = answer.body.empty ?? [];
+    check(empty.length === new Set(state.brushes.map((b) => b.name)).size, `the server's 'empty' ${JSON.stringify(empty)} does not list every brushed axis`);
+    const zero = empty.filter((e) => e.alone === 0).map((e) => e.name);
+    check(zero.includes('radial velocity'), `the server does not say radial velocity ≤ 0 selects nothing alone: ${JSON.stringify(empty)}`);
+    for (const e of empty.filter((x) => x.alone > 0)) check(!note.includes(e.name), `the note '${note}' blames ${e.name}, which selects ${e.alone} alone`);
+    check(note.includes('radial velocity') && /nothing by itself/.test(note), `the note '${note}' does not name the radial velocity brush`);
+    check(/0\.00 %/.test(await page.textContent('#selection')), `the selection reads '${await page.textContent('#selection')}'`);
+    const box = await page.locator('#emptySelection').boundingBox();
+    check(box && box.height > 0, 'the empty-selection note is not drawn');
+    // A selection with something in it: no note.
+    await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, brushes: [{ name: 'depth', min: 560, max: 760 }] }); });
+    await waitConverged(page);
+    await page.waitForFunction(() => document.querySelector('#emptySelection').hidden, null, { timeout: 10000 })
+      .catch(async () => { throw new TestFailure(`the note stays for a selection of ${await page.textContent('#selection')}: '${await page.textContent('#emptySelection')}'`); });
+    check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
+  },
+
+  // Issue 47, derived and stored variables told apart (item 3): /api/info says how each variable is
+  // made (derived, source, computed), and the Variable menu's options and the axes' tooltips say it.
+  async variable_origin({ context, url }) {
+    const info = await (await fetch(url + 'api/info')).json();
+    for (const v of info.variables) check(typeof v.source === 'string', `/api/info: variable '${v.name}' has no source`);
+    const derived = info.variables.find((v) => v.name === 'radial velocity');
+    check(derived && derived.derived && /vx/.test(derived.source), `/api/info: radial velocity is ${JSON.stringify(derived && { derived: derived.derived, source: derived.source })}`);
+    const computed = info.variables.filter((v) => v.computed);
+    check(computed.length > 0 && computed.every((v) => info.variables.some((b) => b.name === v.computed.from && !b.computed)),
+      `/api/info: computed variables ${JSON.stringify(computed.map((v) => [v.name, v.computed]))}`);
+    const stored = info.variables.filter((v) => !v.derived && !v.computed);
+    check(stored.length > 0, '/api/info: no stored variable');
+    const page = await openUi(context, url);
+    const titles = await page.evaluate(() => Object.fromEntries([...document.querySelectorAll('#variable option')].map((o) => [o.value, o.title])));
+    for (const v of info.variables) {
+      const t = titles[v.name] ?? '';
+      const want = v.computed ? new RegExp(`computed when read: ${v.computed.from.replace(/[.*+?^${}()|[\]\\]/g, '\\$&')}`) : v.derived ? /derived at preprocessing from/ : /stored: read from the input files/;
+      check(want.test(t), `the Variable menu's '${v.name}' says '${t}', expected ${want}`);
+    }
+    const axisTips = await page.evaluate(() => Object.fromEntries([...document.querySelectorAll('#parcoords g.dimension')].map((g) => [g.__data__, g.querySelector('text.label').parentNode.querySelector(':scope > title')?.textContent ?? ''])));
+    for (const v of info.variables.filter((x) => axisTips[x.name] !== undefined)) {
+      check(axisTips[v.name].includes(titles[v.name].split(': ').slice(1).join(': ')), `the axis '${v.name}' tooltip '${axisTips[v.name]}' does not say how it is made`);
+    }
+    check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
+  },
 };
 
 // Chromium context options per case (default: 1280x860 at devicePixelRatio 1).
@@ -2845,6 +2900,7 @@ const caseOptions = {
   stalls: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   preset_labels: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   parcoords_access: { contextOptions: { viewport: { width: 1366, height: 768 } } },
+  empty_selection: { contextOptions: { viewport: { width: 1366, height: 768 } } },
 };
 
 const body = cases[caseName];

@@ -23,6 +23,7 @@ import { StateStore } from './store';
 import { TfPanel } from './tf_panel';
 import { displayUnits } from './units';
 import { setUpXr, type XrSession } from './xr';
+import { showEmptySelection } from './empty_selection';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
 
@@ -157,7 +158,7 @@ export class App {
         this.onBrush(brushes, false);
       },
       playing: () => this.playback.playing,
-      selectionChanged: () => this.updateStatus(),
+      selectionChanged: () => { this.updateStatus(); showEmptySelection(this.selection.selection); },
       commit: (i) => this.commit(i),
     });
     this.playback = new Playback({
@@ -537,6 +538,7 @@ export class App {
   private onBrush(brushes: Brush[], interactive: boolean): void {
     const started = !this.store.state.brushes.length && brushes.length > 0;
     this.store.state.brushes = brushes;
+    showEmptySelection(null); // until the new selection's answer says otherwise
     if (started) this.selection.brushingStarted();
     this.presetLeft();
     if (!interactive) this.pc.showAxes(this.shownAxes()); // an axis hidden once its brush is gone
