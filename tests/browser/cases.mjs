@@ -2886,6 +2886,67 @@ const cases = {
     }
     check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
   },
+  // Issue 47, maps and sections linked (item 4), at 1366×768 and 1920×1080: the section's line and
+  // its ends A and B drawn over the map where the map's projection puts them (within a few pixels of
+  // where the probe's inverse finds the ends), a graticule and coastlines drawn by default, and a
+  // hint that says which end the next click sets.
+  async map_section({ context, url }) {
+    const page = await openUi(context, url);
+    await page.click('#pcTabSlices');
+    for (const [width, height] of [[1366, 768], [1920, 1080]]) {
+      const at = `${width}×${height}`;
+      await page.setViewportSize({ width, height });
+      const before = await page.evaluate(() => window.__raypc.slices.map.shown);
+      await page.waitForFunction((b) => window.__raypc.slices.map.shown > b || (b > 0 && window.__raypc.slices.map.header), before, { timeout: 20000 }).catch(() => {});
+      await page.waitForFunction(() => window.__raypc.slices.map.header && document.getElementById('mapImage').complete, null, { timeout: 20000 })
+        .catch(() => { throw new TestFailure(`${at}: no map picture`); });
+      await page.waitForTimeout(700);
+      // Two clicks on the map: A, then B; the hint names the end the next click sets.
+      const hint = () => page.textContent('#mapReadout');
+      await page.mouse.move(1, 1);
+      await page.waitForTimeout(200);
+      const first = await hint();
+      check(/sets A/.test(first), `${at}: before the first click the hint says '${first}'`);
+      const img = await page.locator('#mapImage').boundingBox();
+      const onMap = async (fx, fy) => {
+        // A point of the map's sphere: the picture's pixels inverted by the projection (slice_panel.ts).
+        return page.evaluate(([fx, fy]) => {
+          const h = window.__raypc.slices.map.header, el = document.getElementById('mapImage').getBoundingClientRect();
+          const css = Math.min(el.width / h.width, el.height / h.height);
+          const px = h.centre[0] + (fx - 0.5) * 2 * h.scale, py = h.centre[1] + (fy - 0.5) * h.scale;
+          const ll = window.__raypc.slices.lonLatOnMap(px, py);
+          return ll && { x: el.left + px * css, y: el.top + py * css, lon: ll[0], lat: ll[1] };
+        }, [fx, fy]);
+      };
+      const a = await onMap(0.35, 0.45), b = await onMap(0.65, 0.6);
+      check(a && b, `${at}: no point of the sphere at the chosen places (${JSON.stringify([a, b])})`);
+      await page.mouse.click(a.x, a.y);
+      await page.mouse.move(1, 1);
+      await page.waitForTimeout(300);
+      check(/sets B/.test(await hint()), `${at}: after the first click the hint says '${await hint()}'`);
+      await page.mouse.click(b.x, b.y);
+      await page.mouse.move(1, 1);
+      await page.waitForTimeout(300);
+      check(/sets A/.test(await hint()), `${at}: after the second click the hint says '${await hint()}'`);
+      const section = (await rState(page)).section;
+      check(Math.abs(section.from.lonDeg - a.lon) < 2.5 && Math.abs(section.to.lonDeg - b.lon) < 2.5, `${at}: the clicks set the section ${JSON.stringify(section)}, not A ${a.lon} and B ${b.lon}`);
+      await page.waitForTimeout(300);
+      const marks = await page.evaluate(() => {
+        const box = (e) => { const r = e.getBoundingClientRect(); return { x: r.x + r.width / 2, y: r.y + r.height / 2, w: r.width, h: r.height }; };
+        const ends = Object.fromEntries([...document.querySelectorAll('#mapMarks .sectionEnd')].map((g) => [g.dataset.end, { ...box(g.querySelector('circle')), label: g.querySelector('text').textContent }]));
+        const line = document.querySelector('#mapMarks .sectionLine');
+        return { ends, line: line ? box(line) : null, graticule: document.querySelector('#mapMarks .graticule')?.getAttribute('d')?.length ?? 0,
+          coast: document.querySelector('#mapMarks .coastline')?.getAttribute('d')?.length ?? 0,
+          labels: [...document.querySelectorAll('#mapMarks .graticuleLabel')].map((t) => t.textContent) };
+      });
+      check(marks.ends.A?.label === 'A' && marks.ends.B?.label === 'B', `${at}: the section's ends are not drawn labelled A and B: ${JSON.stringify(marks.ends)}`);
+      check(Math.hypot(marks.ends.A.x - a.x, marks.ends.A.y - a.y) < 4 && Math.hypot(marks.ends.B.x - b.x, marks.ends.B.y - b.y) < 4,
+        `${at}: A drawn at ${marks.ends.A.x},${marks.ends.A.y} and B at ${marks.ends.B.x},${marks.ends.B.y}, clicked at ${a.x},${a.y} and ${b.x},${b.y}`);
+      check(marks.line && marks.line.w > Math.abs(b.x - a.x) * 0.8, `${at}: the section's line is not drawn between its ends: ${JSON.stringify(marks.line)}`);
+      check(marks.graticule > 100 && marks.labels.some((l) => l === '30°N') && marks.coast > 1000, `${at}: no graticule, its labels or the coastlines on the map by default: ${JSON.stringify({ graticule: marks.graticule, coast: marks.coast, labels: marks.labels })}`);
+    }
+    check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
+  },
 };
 
 // Chromium context options per case (default: 1280x860 at devicePixelRatio 1).
@@ -2901,6 +2962,7 @@ const caseOptions = {
   preset_labels: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   parcoords_access: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   empty_selection: { contextOptions: { viewport: { width: 1366, height: 768 } } },
+  map_section: { contextOptions: { viewport: { width: 1366, height: 768 } } },
 };
 
 const body = cases[caseName];
