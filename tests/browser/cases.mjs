@@ -2947,6 +2947,47 @@ const cases = {
     }
     check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
   },
+  // Issue 47, the feature plots (item 5), at 1366×768 and 1920×1080, on a synthetic model with
+  // sinking slabs (raypc synth): the flux within the selection is drawn on its own (right) axis and
+  // spans most of the plot's height, not flat near zero under the whole shell's lines; the depths'
+  // legend is under the plot, not written over its lines.
+  async flux_plot({ context, url }) {
+    const page = await openUi(context, url);
+    await page.click('#presets button[data-preset="task1-slabs-660km"]');
+    await waitConverged(page);
+    await page.click('#featuresDetails summary');
+    await page.waitForFunction(() => window.__raypc.featureAnswers.some((f) => f && f.flux), null, { timeout: 60000 })
+      .catch(async () => { throw new TestFailure(`no features with a flux; note: ${await page.textContent('#featuresNote')}`); });
+    const f = await page.evaluate(() => window.__raypc.featureAnswers.filter((x) => x && x.flux).at(-1));
+    const sel = f.flux.steps.flatMap((s) => s.selectedDownKm3PerYr.map((v) => -v)), all = f.flux.steps.flatMap((s) => s.downKm3PerYr.map((v) => -v));
+    const maxSel = Math.max(...sel), maxAll = Math.max(...all);
+    console.log(`  downward flux: whole shell up to ${maxAll.toFixed(2)} km³/yr, within the selection up to ${maxSel.toFixed(3)} km³/yr`);
+    check(maxSel > 0 && maxSel < 0.5 * maxAll, `the fixture does not show the case: the selection's flux ${maxSel} against the shell's ${maxAll}`);
+    for (const [width, height] of [[1366, 768], [1920, 1080]]) {
+      const at = `${width}×${height}`;
+      await page.setViewportSize({ width, height });
+      await page.waitForTimeout(800);
+      await page.evaluate(() => document.getElementById('featuresFlux').scrollIntoView());
+      const plot = await page.evaluate(() => {
+        const svg = document.getElementById('featuresFlux');
+        // The vertical axes' height: the plot's.
+        const vertical = [...svg.querySelectorAll('.axis path.domain')].map((d) => d.getBoundingClientRect()).sort((a, b) => b.height - a.height)[0];
+        const axis = { height: vertical.height };
+        // How high above the time axis each dashed line reaches.
+        const dashed = [...svg.querySelectorAll('path[stroke-dasharray]')].map((p) => vertical.bottom - p.getBoundingClientRect().top);
+        return { axisHeight: axis.height, dashed, svgTexts: [...svg.querySelectorAll('text')].map((t) => t.textContent),
+          keys: [...document.querySelectorAll('#featuresFluxNote .fluxKey')].map((k) => k.textContent.trim()),
+          rightAxis: svg.querySelectorAll('.selectedAxis .tick').length };
+      });
+      check(plot.dashed.length === f.flux.depthsKm.length, `${at}: ${plot.dashed.length} dashed lines for ${f.flux.depthsKm.length} depths`);
+      const tallest = Math.max(...plot.dashed);
+      check(tallest > 0.4 * plot.axisHeight, `${at}: the flux within the selection reaches ${tallest.toFixed(1)} px up the plot's ${plot.axisHeight.toFixed(1)} px: flat near zero`);
+      check(plot.rightAxis >= 2, `${at}: no axis for the flux within the selection`);
+      check(!plot.svgTexts.some((t) => / km$/.test(t)), `${at}: depth labels written over the plot: ${JSON.stringify(plot.svgTexts)}`);
+      check(f.flux.depthsKm.every((d) => plot.keys.some((k) => k.includes(`${d} km`))), `${at}: the legend under the plot reads ${JSON.stringify(plot.keys)}`);
+    }
+    check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
+  },
 };
 
 // Chromium context options per case (default: 1280x860 at devicePixelRatio 1).
@@ -2963,6 +3004,7 @@ const caseOptions = {
   parcoords_access: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   empty_selection: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   map_section: { contextOptions: { viewport: { width: 1366, height: 768 } } },
+  flux_plot: { contextOptions: { viewport: { width: 1366, height: 768 } }, limitMs: 150000 },
 };
 
 const body = cases[caseName];
