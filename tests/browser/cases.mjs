@@ -177,7 +177,9 @@ const cases = {
     const ds = await info(url);
     const radius = ds.coordinates.find((c) => c.name === 'radius');
     check(radius && radius.units === 'km', `/api/info has no radius coordinate in km: ${JSON.stringify(ds.coordinates)}`);
-    const titles = () => page.evaluate(() => [...document.querySelectorAll('#parcoords svg .label')].map((e) => e.textContent));
+    // A title's lines (tspans: long titles wrap) joined as one text.
+    const titles = () => page.evaluate(() => [...document.querySelectorAll('#parcoords svg .label')]
+      .map((e) => ([...e.querySelectorAll('tspan')].map((t) => t.textContent).join(' ') || e.textContent).replace(/- /g, '-')));
     // x, y, z and radius are hidden by default; the Axes menu shows radius.
     const hidden = ['x', 'y', 'z', 'radius'];
     const shownBefore = await titles();
@@ -186,13 +188,15 @@ const cases = {
     await page.click('#axisMenu summary');
     await page.check('#axisChoice input[data-axis="radius"]');
     await page.click('#axisMenu summary');
-    await page.waitForFunction(() => [...document.querySelectorAll('#parcoords svg .label')].some((e) => e.textContent === 'radius [km]'), null, { timeout: 5000 })
+    await page.waitForFunction(() => [...document.querySelectorAll('#parcoords svg .label')].some((e) => [...e.querySelectorAll('tspan')].map((t) => t.textContent).join(' ') === 'radius [km]'), null, { timeout: 5000 })
       .catch(() => { throw new TestFailure('ticking radius under Axes did not show its axis'); });
     const title = await titles();
     check(title.includes('radius [km]') && title.some((t) => /^temperature \[K\]$/.test(t)), `axis titles lack units: ${title.join(', ')}`);
     // Units as src/render/display_units.json writes them (the legends of pictures too).
-    check(title.includes('lat [°N]') && title.includes('lon [°E]') && title.includes('spin Δρ [kg/m³]'),
-      `axis titles do not write units as display_units.json says: ${title.join(', ')}`);
+    // A long title may wrap and end in "…": the whole is the axis' ARIA label.
+    const spin = await page.evaluate(() => [...document.querySelectorAll('#parcoords g.dimension')].find((g) => g.__data__.startsWith('spin'))?.getAttribute('aria-label') ?? '');
+    check(title.includes('lat [°N]') && title.includes('lon [°E]') && spin.startsWith('spin transition-induced density anomaly [kg/m³]'),
+      `axis titles do not write units as display_units.json says: ${title.join(', ')}; ${spin}`);
     check(title.length === shownBefore.length + 1, `${title.length} axes after showing radius, expected ${shownBefore.length + 1}`);
 
     await brushAxis(page, 'radius', 0.5, 0.95);
