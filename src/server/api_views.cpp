@@ -4,6 +4,7 @@
 #include "core/error.h"
 #include "core/json_input.h"
 #include "core/spherical.h"
+#include "dataset/shell_anomaly.h"
 #include "grid/coordinates.h"
 #include "analysis/feature_csv.h"
 #include "analysis/feature_run.h"
@@ -504,10 +505,11 @@ json pairJson(int index, const dataset::Dataset& first, const dataset::Dataset& 
 json infoJson(const dataset::Dataset& dataset, const ServerLimits& limits)
 {
     json variables = json::array();
-    for (const auto& v : dataset.variables())
+    for (const auto& v : dataset.variables()) {
         variables.push_back({{"name", v.name},
                              {"units", v.units},
                              {"derived", v.derived},
+                             {"source", v.source},
                              {"min", v.global.range.min},
                              {"max", v.global.range.max},
                              {"mean", v.global.mean},
@@ -517,6 +519,10 @@ json infoJson(const dataset::Dataset& dataset, const ServerLimits& limits)
                              {"defaultColorRange",
                               {{"centred", rangeJson(render::defaultColorRange(v.global.range, true))},
                                {"other", rangeJson(render::defaultColorRange(v.global.range, false))}}}});
+        if (v.computed)
+            variables.back()["computed"] = {{"from", dataset.variables().at(v.computed->base).name},
+                                            {"kind", dataset::shellAnomalyKindName(v.computed->kind)}};
+    }
     json coordinates = json::array();
     for (const auto& c : grid::coordinateInfos()) {
         const grid::CoordinateRange r = grid::coordinateRange(dataset.levels().front().grid, c.id);

@@ -134,14 +134,34 @@ ApiAnswer selection(const ApiContext& api, const ApiRequest& request)
 {
     const render::ResolvedState resolved = resolveBody(api, request.body);
     const int step = resolved.state.step;
+    const auto& filters = resolved.params.brushes;
     analysis::SelectionStats s;
     if (api.selections) {
         const dataset::Dataset& dataset = *api.dataset;
-        s = api.selections->overTime(dataset, *api.cache, resolved.params.brushes, 0, step, step)[0].stats;
+        s = api.selections->overTime(dataset, *api.cache, filters, 0, step, step)[0].stats;
     } else {
-        s = analysis::selectedVolume(*api.cache->get(step, 0), resolved.params.brushes);
+        s = analysis::selectedVolume(*api.cache->get(step, 0), filters);
     }
-    return jsonAnswer({{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}, {"step", step}});
+    json answer{{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}, {"step", step}};
+    // An empty selection says why: what each brushed axis selects alone and what the others select
+    // without it (a brush that selects nothing alone, or whose removal selects something, is the one
+    // that excluded everything). Only then: 2 passes per brushed axis.
+    if (s.volumeKm3 == 0 && !filters.empty()) {
+        const auto volume = api.cache->get(step, 0);
+        const auto names = analysis::groupRanges(resolved.state.brushes);
+        json axes = json::array();
+        for (size_t i = 0; i < filters.size() && i < names.size(); ++i) {
+            std::vector<analysis::RangeFilter> others;
+            for (size_t j = 0; j < filters.size(); ++j)
+                if (j != i)
+                    others.push_back(filters[j]);
+            const double alone = analysis::selectedVolume(*volume, std::span(&filters[i], 1)).fractionOfMantle;
+            const double withoutIt = others.empty() ? 1.0 : analysis::selectedVolume(*volume, others).fractionOfMantle;
+            axes.push_back({{"name", names[i].name}, {"alone", alone}, {"withoutIt", withoutIt}});
+        }
+        answer["empty"] = std::move(axes);
+    }
+    return jsonAnswer(answer);
 }
 
 // The bounds of limits.h, checked before anything is allocated.

@@ -178,6 +178,15 @@ const std::vector<Definition>& messages()
                          {{"name", text(""), "the variable's name (e.g. `temperature anomaly`)"},
                           {"units", text(""), "its units as the file gives them"},
                           {"derived", boolean(""), "computed at preprocessing (e.g. `velocity magnitude`), not in the files"},
+                          {"source", text(""),
+                           "a stored variable's name in the input files, a derived one's inputs (e.g. `vx, vy, vz`); "
+                           "empty for a computed one and in datasets written before it was recorded"},
+                          {"computed",
+                           named("ComputedFrom", "",
+                                 {{"from", text(""), "the stored variable it is computed from"},
+                                  {"kind", oneOfTexts({"anomaly", "anomaly %"}, ""),
+                                   "`anomaly`: minus its shell mean at each radius; `anomaly %`: that difference in % of the mean"}}),
+                           "only for a variable computed when read (a shell anomaly, dataset/shell_anomaly.h)", false},
                           {"min", number(""), "smallest value over every step"},
                           {"max", number(""), "largest value over every step"},
                           {"mean", number(""), "volume-weighted mean over every step"},
@@ -257,6 +266,16 @@ const std::vector<Definition>& messages()
         {
             std::vector<Key> keys = selectionKeys();
             keys.push_back({"step", integer(""), "the step it is of"});
+            keys.push_back({"empty",
+                            arrayOf(named("EmptyBecause", "",
+                                          {{"name", text(""), "a brushed variable or coordinate"},
+                                           {"alone", number(""), "the fraction of the mantle its ranges select alone, 0..1"},
+                                           {"withoutIt", number(""),
+                                            "the fraction the other brushes select without it (1 when it is the only one)"}}),
+                                    ""),
+                            "only when the brushes select nothing: per brushed axis, in the brushes' order, what "
+                            "excluded everything (an axis selecting nothing alone, or one whose removal selects something)",
+                            false});
             d.push_back(message("Selection", "POST /api/selection",
                                 "the volume inside every brush, at full resolution", keys));
         }

@@ -177,7 +177,9 @@ const cases = {
     const ds = await info(url);
     const radius = ds.coordinates.find((c) => c.name === 'radius');
     check(radius && radius.units === 'km', `/api/info has no radius coordinate in km: ${JSON.stringify(ds.coordinates)}`);
-    const titles = () => page.evaluate(() => [...document.querySelectorAll('#parcoords svg .label')].map((e) => e.textContent));
+    // A title's lines (tspans: long titles wrap) joined as one text.
+    const titles = () => page.evaluate(() => [...document.querySelectorAll('#parcoords svg .label')]
+      .map((e) => ([...e.querySelectorAll('tspan')].map((t) => t.textContent).join(' ') || e.textContent).replace(/- /g, '-')));
     // x, y, z and radius are hidden by default; the Axes menu shows radius.
     const hidden = ['x', 'y', 'z', 'radius'];
     const shownBefore = await titles();
@@ -186,13 +188,15 @@ const cases = {
     await page.click('#axisMenu summary');
     await page.check('#axisChoice input[data-axis="radius"]');
     await page.click('#axisMenu summary');
-    await page.waitForFunction(() => [...document.querySelectorAll('#parcoords svg .label')].some((e) => e.textContent === 'radius [km]'), null, { timeout: 5000 })
+    await page.waitForFunction(() => [...document.querySelectorAll('#parcoords svg .label')].some((e) => [...e.querySelectorAll('tspan')].map((t) => t.textContent).join(' ') === 'radius [km]'), null, { timeout: 5000 })
       .catch(() => { throw new TestFailure('ticking radius under Axes did not show its axis'); });
     const title = await titles();
     check(title.includes('radius [km]') && title.some((t) => /^temperature \[K\]$/.test(t)), `axis titles lack units: ${title.join(', ')}`);
     // Units as src/render/display_units.json writes them (the legends of pictures too).
-    check(title.includes('lat [°N]') && title.includes('lon [°E]') && title.includes('spin Δρ [kg/m³]'),
-      `axis titles do not write units as display_units.json says: ${title.join(', ')}`);
+    // A long title may wrap and end in "…": the whole is the axis' ARIA label.
+    const spin = await page.evaluate(() => [...document.querySelectorAll('#parcoords g.dimension')].find((g) => g.__data__.startsWith('spin'))?.getAttribute('aria-label') ?? '');
+    check(title.includes('lat [°N]') && title.includes('lon [°E]') && spin.startsWith('spin transition-induced density anomaly [kg/m³]'),
+      `axis titles do not write units as display_units.json says: ${title.join(', ')}; ${spin}`);
     check(title.length === shownBefore.length + 1, `${title.length} axes after showing radius, expected ${shownBefore.length + 1}`);
 
     await brushAxis(page, 'radius', 0.5, 0.95);
@@ -2984,6 +2988,315 @@ const cases = {
     check(state1.pair === null && state1.image.width > 1.8 * halfWidth, `after Close the state: pair ${JSON.stringify(state1.pair)}, image ${JSON.stringify(state1.image)} (was ${halfWidth} wide)`);
     check(!page.raypcErrors.length, `page errors: ${page.raypcErrors.join(' | ')}`);
   },
+  // Issue 47, the parallel coordinates (item 1), at 1366×768 and 1920×1080: full axis titles with
+  // units (the Variable menu's names, never cut), text ≥ 12 px and WCAG AA contrast (text ≥ 4.5:1,
+  // lines ≥ 3:1, from the computed styles over the panel's background), ARIA labels on axes and
+  // tabs, brush-end labels clear of the titles, a range beyond its axis drawn at that end and said;
+  // and a whole brush from the keyboard: Tab to an axis, type a range, the selected volume changes.
+  async parcoords_access({ context, url }) {
+    const page = await openUi(context, url);
+    const info = await (await fetch(url + 'api/info')).json();
+    const waitAxes = (w) => page.waitForFunction((w) => {
+      const svg = document.querySelector('#parcoords svg');
+      return svg && Math.abs(svg.getBoundingClientRect().width - w) < 40 && document.querySelectorAll('#parcoords g.dimension[tabindex]').length > 3;
+    }, w, { timeout: 10000 }).catch(() => { throw new TestFailure(`the parallel coordinates were not redrawn at width ${w}`); });
+    for (const [width, height] of [[1366, 768], [1920, 1080]]) {
+      await page.setViewportSize({ width, height });
+      await waitAxes(width);
+      await page.waitForTimeout(300);
+      const at = `${width}×${height}`;
+      const facts = await page.evaluate(() => {
+        const parse = (c) => (c.match(/[\d.]+/g) ?? []).map(Number);
+        const lum = ([r, g, b]) => {
+          const f = (v) => { v /= 255; return v <= 0.03928 ? v / 12.92 : ((v + 0.055) / 1.055) ** 2.4; };
+          return 0.2126 * f(r) + 0.7152 * f(g) + 0.0722 * f(b);
+        };
+        const panel = document.querySelector('#parcoords .parcoords') ?? document.querySelector('#parcoords');
+        const bg = parse(getComputedStyle(panel).backgroundColor).slice(0, 3);
+        // The colour as drawn: its alpha, fill-/stroke-opacity and every opacity up to the panel, over the background.
+        const drawn = (el, prop) => {
+          const cs = getComputedStyle(el);
+          const c = parse(cs[prop]);
+          let a = (c.length > 3 ? c[3] : 1) * Number(cs[prop === 'fill' ? 'fillOpacity' : 'strokeOpacity']);
+          for (let e = el; e && e !== panel; e = e.parentElement) a *= Number(getComputedStyle(e).opacity);
+          return c.slice(0, 3).map((v, i) => v * a + bg[i] * (1 - a));
+        };
+        const ratio = (fg) => { const l1 = lum(fg), l2 = lum(bg); return (Math.max(l1, l2) + 0.05) / (Math.min(l1, l2) + 0.05); };
+        const svg = document.querySelector('#parcoords svg').getBoundingClientRect();
+        const axes = [...document.querySelectorAll('#parcoords g.dimension')].map((g) => {
+          const label = g.querySelector('text.label');
+          const r = label.getBoundingClientRect();
+          return { name: g.__data__, title: ([...label.querySelectorAll('tspan')].map((t) => t.textContent).join(' ') || label.textContent).replace(/- /g, '-'),
+            aria: g.getAttribute('aria-label'), tabindex: g.getAttribute('tabindex'),
+            box: { left: r.left, right: r.right, top: r.top, bottom: r.bottom } };
+        });
+        const texts = [...document.querySelectorAll('#parcoords svg text')].filter((t) => t.getBoundingClientRect().width > 0);
+        const small = texts.map((t) => [t.textContent, parseFloat(getComputedStyle(t).fontSize)]).filter(([, px]) => px < 12);
+        const lowText = texts.map((t) => [t.textContent, ratio(drawn(t, 'fill'))]).filter(([, r]) => r < 4.5);
+        const lines = [...document.querySelectorAll('#parcoords .axis path.domain, #parcoords .axis .tick line')];
+        const lowLines = lines.map((l) => ratio(drawn(l, 'stroke'))).filter((r) => r < 3);
+        const tabs = [...document.querySelectorAll('#pcTabs [role=tab]')].map((b) => ({ id: b.id, label: b.getAttribute('aria-label') ?? b.textContent, selected: b.getAttribute('aria-selected') }));
+        const unnamed = [...document.querySelectorAll('#pcPanel button, #pcPanel summary')].filter((b) => !b.hidden && !(b.getAttribute('aria-label') || /[A-Za-z]{2}/.test(b.textContent))).map((b) => b.outerHTML.slice(0, 80));
+        return { bg, axes, small, lowText, lowLines, lineCount: lines.length, tabs, unnamed, svg: { left: svg.left, right: svg.right, top: svg.top } };
+      });
+      check(facts.lineCount > 5, `${at}: no axis lines found`);
+      check(facts.small.length === 0, `${at}: text under 12 px in the parallel coordinates: ${JSON.stringify(facts.small.slice(0, 5))}`);
+      check(facts.lowText.length === 0, `${at}: text under 4.5:1 against the panel ${facts.bg}: ${JSON.stringify(facts.lowText.slice(0, 5))}`);
+      check(facts.lowLines.length === 0, `${at}: axis lines under 3:1 against the panel: ${JSON.stringify(facts.lowLines.slice(0, 5))}`);
+      check(facts.tabs.length === 3 && facts.tabs.every((t) => t.label && t.selected !== null), `${at}: tabs without role, label or aria-selected: ${JSON.stringify(facts.tabs)}`);
+      check(facts.unnamed.length === 0, `${at}: buttons without an accessible name: ${JSON.stringify(facts.unnamed)}`);
+      for (const a of facts.axes) {
+        const v = info.variables.find((x) => x.name === a.name) ?? info.coordinates.find((x) => x.name === a.name);
+        check(v, `${at}: axis '${a.name}' is not a variable or coordinate of /api/info`);
+        const full = await page.evaluate((n) => [...document.querySelectorAll('#variable option')].some((o) => o.textContent === n || o.value === n), a.name);
+        if (info.variables.some((x) => x.name === a.name)) check(full, `${at}: axis '${a.name}' is not a name of the Variable menu`);
+        const title = a.title.replace(/…$/, '');
+        check(title.length > 0 && (a.title.endsWith('…') ? `${a.name} [`.startsWith(title.slice(0, a.name.length + 2)) || a.name.startsWith(title) : a.title.startsWith(`${a.name} [`) || a.title === a.name),
+          `${at}: axis '${a.name}' is titled '${a.title}', not by its full name with units`);
+        check(a.aria && a.aria.startsWith(a.name) && a.tabindex === '0', `${at}: axis '${a.name}' has aria-label '${a.aria}', tabindex ${a.tabindex}`);
+        check(a.box.left >= facts.svg.left - 1 && a.box.right <= facts.svg.right + 1 && a.box.top >= facts.svg.top - 1, `${at}: the title of '${a.name}' is cut at the panel's edge: ${JSON.stringify(a.box)} in ${JSON.stringify(facts.svg)}`);
+      }
+      const sorted = [...facts.axes].sort((p, q) => p.box.left - q.box.left);
+      for (let i = 1; i < sorted.length; i++)
+        check(sorted[i].box.left >= sorted[i - 1].box.right - 1, `${at}: titles '${sorted[i - 1].title}' and '${sorted[i].title}' overlap`);
+      check(facts.axes.some((a) => a.name === 'spin transition-induced density anomaly' && a.aria.startsWith('spin transition-induced density anomaly [')) || !info.variables.some((v) => v.name.startsWith('spin')),
+        `${at}: the spin transition's axis is not titled by its full name: ${JSON.stringify(facts.axes.map((a) => a.title))}`);
+    }
+
+    // The whole brush from the keyboard, at 1366×768: from the tab bar, Tab to the first axis, → to
+    // depth, type a range, Enter.
+    await page.setViewportSize({ width: 1366, height: 768 });
+    await waitAxes(1366);
+    await page.waitForTimeout(300);
+    const focused = () => page.evaluate(() => document.activeElement?.__data__ ?? document.activeElement?.id ?? document.activeElement?.tagName);
+    await page.focus('#pcTabVolume');
+    const isAxis = () => page.evaluate(() => document.activeElement?.matches?.('#parcoords g.dimension') ?? false);
+    for (let i = 0; i < 10 && !(await isAxis()); i++) await page.keyboard.press('Tab');
+    check(await isAxis(), `Tab from the tab bar never reached an axis (focus on ${await focused()})`);
+    const order = await page.evaluate(() => window.__raypc.parcoords.order());
+    for (let i = 0; i < order.length && (await focused()) !== 'depth'; i++) await page.keyboard.press('ArrowRight');
+    check((await focused()) === 'depth', `→ did not reach the depth axis (focus on ${await focused()})`);
+    const before = await page.textContent('#selection');
+    await page.keyboard.type('560-760');
+    await page.keyboard.press('Enter');
+    await waitConverged(page);
+    let brushes = (await rState(page)).brushes;
+    check(brushes.length === 1 && brushes[0].name === 'depth' && brushes[0].min === 560 && brushes[0].max === 760, `typing 560-760 on depth gave brushes ${JSON.stringify(brushes)}`);
+    await page.waitForFunction((b) => /% of the mantle/.test(document.querySelector('#selection').textContent) && document.querySelector('#selection').textContent !== b, before, { timeout: 10000 })
+      .catch(async () => { throw new TestFailure(`the selection still reads '${await page.textContent('#selection')}' after a typed brush`); });
+    const first = await page.textContent('#selectionValue');
+    check((await focused()) === 'depth', `after Enter the focus is on ${await focused()}, not the depth axis`);
+    // ↑ moves the brush towards the top of the screen: smaller depths, one snap step.
+    await page.keyboard.press('ArrowUp');
+    await waitConverged(page);
+    brushes = (await rState(page)).brushes;
+    check(brushes.length === 1 && brushes[0].max < 760 && brushes[0].max - brushes[0].min === 200, `↑ on depth 560–760 gave ${JSON.stringify(brushes)}`);
+    await page.waitForFunction((f) => document.querySelector('#selectionValue')?.textContent !== f, first, { timeout: 10000 })
+      .catch(() => { throw new TestFailure(`the selection stayed '${first}' after ↑ moved the brush`); });
+    // The brush-end labels stay clear of the titles: a range up to the axis' top end (depth 0 km).
+    await page.keyboard.type('0-300');
+    await page.keyboard.press('Enter');
+    await waitConverged(page);
+    const clash = await page.evaluate(() => {
+      const out = [];
+      for (const g of document.querySelectorAll('#parcoords g.dimension')) {
+        const t = g.querySelector('text.label').getBoundingClientRect();
+        for (const l of g.querySelectorAll('text.brushLabel')) {
+          const r = l.getBoundingClientRect();
+          if (r.left < t.right && r.right > t.left && r.top < t.bottom && r.bottom > t.top) out.push(`${g.__data__}: '${l.textContent}' over '${g.querySelector('text.label').textContent}'`);
+        }
+      }
+      return { out, labels: document.querySelectorAll('#parcoords text.brushLabel').length };
+    });
+    check(clash.labels >= 2 && clash.out.length === 0, `brush-end labels over axis titles: ${JSON.stringify(clash)}`);
+    // Escape on the axis clears its brush (and only that).
+    await page.keyboard.press('Escape');
+    await waitConverged(page);
+    brushes = (await rState(page)).brushes;
+    check(brushes.length === 0, `Escape on the depth axis left ${JSON.stringify(brushes)}`);
+    await page.waitForFunction(() => /no brushes/.test(document.querySelector('#selection').textContent), null, { timeout: 5000 })
+      .catch(async () => { throw new TestFailure(`after Escape the selection reads '${await page.textContent('#selection')}'`); });
+    check((await focused()) === 'depth', `after Escape the focus is on ${await focused()}`);
+
+    // A range wholly beyond its axis (as preset 1's radial velocity ≤ 0 on a model whose values are
+    // all positive): kept, drawn as a mark at that end, and said in its label and ARIA label.
+    const t = info.variables.find((v) => v.name === 'temperature anomaly');
+    const beyond = { name: 'temperature anomaly', min: t.min - 500, max: t.min - 100 };
+    await page.evaluate((b) => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, brushes: [b] }); }, beyond);
+    await waitConverged(page);
+    await page.waitForFunction(() => document.querySelector('#parcoords rect.brushOutside'), null, { timeout: 5000 })
+      .catch(() => { throw new TestFailure('a brush below the temperature anomaly axis draws no mark at its end'); });
+    const said = await page.evaluate(() => {
+      const g = [...document.querySelectorAll('#parcoords g.dimension')].find((x) => x.__data__ === 'temperature anomaly');
+      const mark = g.querySelector('rect.brushOutside').getBoundingClientRect();
+      const domain = g.querySelector('.axis path.domain').getBoundingClientRect();
+      return { labels: [...g.querySelectorAll('text.brushLabel')].map((l) => l.textContent), aria: g.getAttribute('aria-label'),
+        markY: mark.top + mark.height / 2, axisTop: domain.top, axisBottom: domain.bottom };
+    });
+    check(said.labels.some((l) => /below the axis/.test(l)), `the label of a brush below the axis says ${JSON.stringify(said.labels)}`);
+    check(/below the axis/.test(said.aria), `the axis' ARIA label does not say the brush is below it: '${said.aria}'`);
+    check(Math.abs(said.markY - said.axisBottom) < 12, `the mark of a brush below the axis is at y ${said.markY}, not at the axis' low end ${said.axisBottom}`);
+    brushes = (await rState(page)).brushes;
+    check(brushes.length === 1 && brushes[0].max === beyond.max, `the brush beyond the axis was dropped or changed: ${JSON.stringify(brushes)}`);
+    check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
+  },
+  // Issue 47, an empty selection says so (item 2): preset 1 (radial velocity ≤ 0) on the fixture,
+  // whose radial velocity is positive everywhere, selects nothing; a note under the figure names the
+  // radial velocity brush as the one that selects nothing by itself, from the server's answer.
+  async empty_selection({ context, url }) {
+    const page = await openUi(context, url);
+    await page.click('#presets button[data-preset="task1-slabs-660km"]');
+    await waitConverged(page);
+    await page.waitForFunction(() => { const e = document.querySelector('#emptySelection'); return e && !e.hidden && e.textContent; }, null, { timeout: 10000 })
+      .catch(async () => { throw new TestFailure(`no empty-selection note; the selection reads '${await page.textContent('#selection')}'`); });
+    const note = await page.textContent('#emptySelection');
+    const state = await rState(page);
+    const answer = await postJson(url + 'api/selection', state);
+    check(answer.status === 200 && answer.body.fractionOfMantle === 0, `the preset's selection is ${JSON.stringify(answer.body)}, not empty`);
+    const empty = answer.body.empty ?? [];
+    check(empty.length === new Set(state.brushes.map((b) => b.name)).size, `the server's 'empty' ${JSON.stringify(empty)} does not list every brushed axis`);
+    const zero = empty.filter((e) => e.alone === 0).map((e) => e.name);
+    check(zero.includes('radial velocity'), `the server does not say radial velocity ≤ 0 selects nothing alone: ${JSON.stringify(empty)}`);
+    for (const e of empty.filter((x) => x.alone > 0)) check(!note.includes(e.name), `the note '${note}' blames ${e.name}, which selects ${e.alone} alone`);
+    check(note.includes('radial velocity') && /nothing by itself/.test(note), `the note '${note}' does not name the radial velocity brush`);
+    check(/0\.00 %/.test(await page.textContent('#selection')), `the selection reads '${await page.textContent('#selection')}'`);
+    const box = await page.locator('#emptySelection').boundingBox();
+    check(box && box.height > 0, 'the empty-selection note is not drawn');
+    // A selection with something in it: no note.
+    await page.evaluate(() => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, brushes: [{ name: 'depth', min: 560, max: 760 }] }); });
+    await waitConverged(page);
+    await page.waitForFunction(() => document.querySelector('#emptySelection').hidden, null, { timeout: 10000 })
+      .catch(async () => { throw new TestFailure(`the note stays for a selection of ${await page.textContent('#selection')}: '${await page.textContent('#emptySelection')}'`); });
+    check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
+  },
+
+  // Issue 47, derived and stored variables told apart (item 3): /api/info says how each variable is
+  // made (derived, source, computed), and the Variable menu's options and the axes' tooltips say it.
+  async variable_origin({ context, url }) {
+    const info = await (await fetch(url + 'api/info')).json();
+    for (const v of info.variables) check(typeof v.source === 'string', `/api/info: variable '${v.name}' has no source`);
+    const derived = info.variables.find((v) => v.name === 'radial velocity');
+    check(derived && derived.derived && /vx/.test(derived.source), `/api/info: radial velocity is ${JSON.stringify(derived && { derived: derived.derived, source: derived.source })}`);
+    const computed = info.variables.filter((v) => v.computed);
+    check(computed.length > 0 && computed.every((v) => info.variables.some((b) => b.name === v.computed.from && !b.computed)),
+      `/api/info: computed variables ${JSON.stringify(computed.map((v) => [v.name, v.computed]))}`);
+    const stored = info.variables.filter((v) => !v.derived && !v.computed);
+    check(stored.length > 0, '/api/info: no stored variable');
+    const page = await openUi(context, url);
+    const titles = await page.evaluate(() => Object.fromEntries([...document.querySelectorAll('#variable option')].map((o) => [o.value, o.title])));
+    for (const v of info.variables) {
+      const t = titles[v.name] ?? '';
+      const want = v.computed ? new RegExp(`computed when read: ${v.computed.from.replace(/[.*+?^${}()|[\]\\]/g, '\\$&')}`) : v.derived ? /derived at preprocessing from/ : /stored: read from the input files/;
+      check(want.test(t), `the Variable menu's '${v.name}' says '${t}', expected ${want}`);
+    }
+    const axisTips = await page.evaluate(() => Object.fromEntries([...document.querySelectorAll('#parcoords g.dimension')].map((g) => [g.__data__, g.querySelector('text.label').parentNode.querySelector(':scope > title')?.textContent ?? ''])));
+    for (const v of info.variables.filter((x) => axisTips[x.name] !== undefined)) {
+      check(axisTips[v.name].includes(titles[v.name].split(': ').slice(1).join(': ')), `the axis '${v.name}' tooltip '${axisTips[v.name]}' does not say how it is made`);
+    }
+    check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
+  },
+  // Issue 47, maps and sections linked (item 4), at 1366×768 and 1920×1080: the section's line and
+  // its ends A and B drawn over the map where the map's projection puts them (within a few pixels of
+  // where the probe's inverse finds the ends), a graticule and coastlines drawn by default, and a
+  // hint that says which end the next click sets.
+  async map_section({ context, url }) {
+    const page = await openUi(context, url);
+    await page.click('#pcTabSlices');
+    for (const [width, height] of [[1366, 768], [1920, 1080]]) {
+      const at = `${width}×${height}`;
+      await page.setViewportSize({ width, height });
+      const before = await page.evaluate(() => window.__raypc.slices.map.shown);
+      await page.waitForFunction((b) => window.__raypc.slices.map.shown > b || (b > 0 && window.__raypc.slices.map.header), before, { timeout: 20000 }).catch(() => {});
+      await page.waitForFunction(() => window.__raypc.slices.map.header && document.getElementById('mapImage').complete, null, { timeout: 20000 })
+        .catch(() => { throw new TestFailure(`${at}: no map picture`); });
+      await page.waitForTimeout(700);
+      // Two clicks on the map: A, then B; the hint names the end the next click sets.
+      const hint = () => page.textContent('#mapReadout');
+      await page.mouse.move(1, 1);
+      await page.waitForTimeout(200);
+      const first = await hint();
+      check(/sets A/.test(first), `${at}: before the first click the hint says '${first}'`);
+      const img = await page.locator('#mapImage').boundingBox();
+      const onMap = async (fx, fy) => {
+        // A point of the map's sphere: the picture's pixels inverted by the projection (slice_panel.ts).
+        return page.evaluate(([fx, fy]) => {
+          const h = window.__raypc.slices.map.header, el = document.getElementById('mapImage').getBoundingClientRect();
+          const css = Math.min(el.width / h.width, el.height / h.height);
+          const px = h.centre[0] + (fx - 0.5) * 2 * h.scale, py = h.centre[1] + (fy - 0.5) * h.scale;
+          const ll = window.__raypc.slices.lonLatOnMap(px, py);
+          return ll && { x: el.left + px * css, y: el.top + py * css, lon: ll[0], lat: ll[1] };
+        }, [fx, fy]);
+      };
+      const a = await onMap(0.35, 0.45), b = await onMap(0.65, 0.6);
+      check(a && b, `${at}: no point of the sphere at the chosen places (${JSON.stringify([a, b])})`);
+      await page.mouse.click(a.x, a.y);
+      await page.mouse.move(1, 1);
+      await page.waitForTimeout(300);
+      check(/sets B/.test(await hint()), `${at}: after the first click the hint says '${await hint()}'`);
+      await page.mouse.click(b.x, b.y);
+      await page.mouse.move(1, 1);
+      await page.waitForTimeout(300);
+      check(/sets A/.test(await hint()), `${at}: after the second click the hint says '${await hint()}'`);
+      const section = (await rState(page)).section;
+      check(Math.abs(section.from.lonDeg - a.lon) < 2.5 && Math.abs(section.to.lonDeg - b.lon) < 2.5, `${at}: the clicks set the section ${JSON.stringify(section)}, not A ${a.lon} and B ${b.lon}`);
+      await page.waitForTimeout(300);
+      const marks = await page.evaluate(() => {
+        const box = (e) => { const r = e.getBoundingClientRect(); return { x: r.x + r.width / 2, y: r.y + r.height / 2, w: r.width, h: r.height }; };
+        const ends = Object.fromEntries([...document.querySelectorAll('#mapMarks .sectionEnd')].map((g) => [g.dataset.end, { ...box(g.querySelector('circle')), label: g.querySelector('text').textContent }]));
+        const line = document.querySelector('#mapMarks .sectionLine');
+        return { ends, line: line ? box(line) : null, graticule: document.querySelector('#mapMarks .graticule')?.getAttribute('d')?.length ?? 0,
+          coast: document.querySelector('#mapMarks .coastline')?.getAttribute('d')?.length ?? 0,
+          labels: [...document.querySelectorAll('#mapMarks .graticuleLabel')].map((t) => t.textContent) };
+      });
+      check(marks.ends.A?.label === 'A' && marks.ends.B?.label === 'B', `${at}: the section's ends are not drawn labelled A and B: ${JSON.stringify(marks.ends)}`);
+      check(Math.hypot(marks.ends.A.x - a.x, marks.ends.A.y - a.y) < 4 && Math.hypot(marks.ends.B.x - b.x, marks.ends.B.y - b.y) < 4,
+        `${at}: A drawn at ${marks.ends.A.x},${marks.ends.A.y} and B at ${marks.ends.B.x},${marks.ends.B.y}, clicked at ${a.x},${a.y} and ${b.x},${b.y}`);
+      check(marks.line && marks.line.w > Math.abs(b.x - a.x) * 0.8, `${at}: the section's line is not drawn between its ends: ${JSON.stringify(marks.line)}`);
+      check(marks.graticule > 100 && marks.labels.some((l) => l === '30°N') && marks.coast > 1000, `${at}: no graticule, its labels or the coastlines on the map by default: ${JSON.stringify({ graticule: marks.graticule, coast: marks.coast, labels: marks.labels })}`);
+    }
+    check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
+  },
+  // Issue 47, the feature plots (item 5), at 1366×768 and 1920×1080, on a synthetic model with
+  // sinking slabs (raypc synth): the flux within the selection is drawn on its own (right) axis and
+  // spans most of the plot's height, not flat near zero under the whole shell's lines; the depths'
+  // legend is under the plot, not written over its lines.
+  async flux_plot({ context, url }) {
+    const page = await openUi(context, url);
+    await page.click('#presets button[data-preset="task1-slabs-660km"]');
+    await waitConverged(page);
+    await page.click('#featuresDetails summary');
+    await page.waitForFunction(() => window.__raypc.featureAnswers.some((f) => f && f.flux), null, { timeout: 60000 })
+      .catch(async () => { throw new TestFailure(`no features with a flux; note: ${await page.textContent('#featuresNote')}`); });
+    const f = await page.evaluate(() => window.__raypc.featureAnswers.filter((x) => x && x.flux).at(-1));
+    const sel = f.flux.steps.flatMap((s) => s.selectedDownKm3PerYr.map((v) => -v)), all = f.flux.steps.flatMap((s) => s.downKm3PerYr.map((v) => -v));
+    const maxSel = Math.max(...sel), maxAll = Math.max(...all);
+    console.log(`  downward flux: whole shell up to ${maxAll.toFixed(2)} km³/yr, within the selection up to ${maxSel.toFixed(3)} km³/yr`);
+    check(maxSel > 0 && maxSel < 0.5 * maxAll, `the fixture does not show the case: the selection's flux ${maxSel} against the shell's ${maxAll}`);
+    for (const [width, height] of [[1366, 768], [1920, 1080]]) {
+      const at = `${width}×${height}`;
+      await page.setViewportSize({ width, height });
+      await page.waitForTimeout(800);
+      await page.evaluate(() => document.getElementById('featuresFlux').scrollIntoView());
+      const plot = await page.evaluate(() => {
+        const svg = document.getElementById('featuresFlux');
+        // The vertical axes' height: the plot's.
+        const vertical = [...svg.querySelectorAll('.axis path.domain')].map((d) => d.getBoundingClientRect()).sort((a, b) => b.height - a.height)[0];
+        const axis = { height: vertical.height };
+        // How high above the time axis each dashed line reaches.
+        const dashed = [...svg.querySelectorAll('path[stroke-dasharray]')].map((p) => vertical.bottom - p.getBoundingClientRect().top);
+        return { axisHeight: axis.height, dashed, svgTexts: [...svg.querySelectorAll('text')].map((t) => t.textContent),
+          keys: [...document.querySelectorAll('#featuresFluxNote .fluxKey')].map((k) => k.textContent.trim()),
+          rightAxis: svg.querySelectorAll('.selectedAxis .tick').length };
+      });
+      check(plot.dashed.length === f.flux.depthsKm.length, `${at}: ${plot.dashed.length} dashed lines for ${f.flux.depthsKm.length} depths`);
+      const tallest = Math.max(...plot.dashed);
+      check(tallest > 0.4 * plot.axisHeight, `${at}: the flux within the selection reaches ${tallest.toFixed(1)} px up the plot's ${plot.axisHeight.toFixed(1)} px: flat near zero`);
+      check(plot.rightAxis >= 2, `${at}: no axis for the flux within the selection`);
+      check(!plot.svgTexts.some((t) => / km$/.test(t)), `${at}: depth labels written over the plot: ${JSON.stringify(plot.svgTexts)}`);
+      check(f.flux.depthsKm.every((d) => plot.keys.some((k) => k.includes(`${d} km`))), `${at}: the legend under the plot reads ${JSON.stringify(plot.keys)}`);
+    }
+    check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
+  },
 };
 
 // Chromium context options per case (default: 1280x860 at devicePixelRatio 1).
@@ -3000,6 +3313,10 @@ const caseOptions = {
   readout: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   shell_labels: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   compare: { pairSeeds: [1, 2], contextOptions: { viewport: { width: 1920, height: 1080 } } },
+  parcoords_access: { contextOptions: { viewport: { width: 1366, height: 768 } } },
+  empty_selection: { contextOptions: { viewport: { width: 1366, height: 768 } } },
+  map_section: { contextOptions: { viewport: { width: 1366, height: 768 } } },
+  flux_plot: { contextOptions: { viewport: { width: 1366, height: 768 } }, limitMs: 150000 },
 };
 
 const body = cases[caseName];

@@ -26,6 +26,7 @@ import { displayUnits } from './units';
 import { readoutText } from './view_readout';
 import { placeShellLabels } from './shell_labels';
 import { setUpXr, type XrSession } from './xr';
+import { showEmptySelection } from './empty_selection';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
 
@@ -169,7 +170,7 @@ export class App {
         this.onBrush(brushes, false);
       },
       playing: () => this.playback.playing,
-      selectionChanged: () => this.updateStatus(),
+      selectionChanged: () => { this.updateStatus(); showEmptySelection(this.selection.selection); },
       commit: (i) => this.commit(i),
     });
     this.playback = new Playback({
@@ -334,6 +335,8 @@ export class App {
     $('pcTabVolume').classList.toggle('active', tab === 'volume');
     $('pcTabPathlines').classList.toggle('active', tab === 'pathlines');
     $('pcTabSlices').classList.toggle('active', tab === 'slices');
+    for (const [id, t] of [['pcTabVolume', 'volume'], ['pcTabPathlines', 'pathlines'], ['pcTabSlices', 'slices']])
+      $(id).setAttribute('aria-selected', String(tab === t));
   }
 
   // The colour legends on the view (state.legend): the volume's variable, and the pathlines'
@@ -559,6 +562,7 @@ export class App {
   private onBrush(brushes: Brush[], interactive: boolean): void {
     const started = !this.store.state.brushes.length && brushes.length > 0;
     this.store.state.brushes = brushes;
+    showEmptySelection(null); // until the new selection's answer says otherwise
     if (started) this.selection.brushingStarted();
     this.presetLeft();
     if (!interactive) this.pc.showAxes(this.shownAxes()); // an axis hidden once its brush is gone

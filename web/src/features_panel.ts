@@ -544,7 +544,9 @@ export class FeaturesPanel {
   }
 
   // The downward flux across each depth of the state (whole shell, and within the selection dashed)
-  // against time; avalanche steps marked.
+  // against time; avalanche steps marked. The flux within the selection (a few slabs' share of the
+  // whole shell's) has its own scale, the right axis: on the whole shell's it was flat near zero.
+  // The depths' legend is under the plot (in the note), never over its lines.
   private drawFlux(): void {
     const svg = $('featuresFlux') as unknown as SVGSVGElement;
     const flux = this.result?.flux;
@@ -553,24 +555,27 @@ export class FeaturesPanel {
       $('featuresFluxNote').textContent = this.result ? `no flux: the dataset has no ${kRadialVelocity}` : '';
       return;
     }
-    const { g, iw, ih } = frame(svg);
+    const { g, iw, ih } = frame(svg, 46); // the selection's axis on the right
     const xs = d3.scaleLinear().domain(d3.extent(flux.steps, (s) => s.timeMyr) as [number, number]).range([0, iw]);
     const all = flux.steps.flatMap((s) => s.downKm3PerYr.map((v) => -v));
-    const ys = d3.scaleLinear().domain([0, (d3.max(all) ?? 1) * 1.05]).nice().range([ih, 0]);
-    const x = (v: number) => xs(v) as number, y = (v: number) => ys(v) as number;
+    const ys = d3.scaleLinear().domain([0, (d3.max(all) ?? 1) * 1.05 || 1]).nice().range([ih, 0]);
+    const selected = flux.steps.flatMap((s) => s.selectedDownKm3PerYr.map((v) => -v));
+    const ss = d3.scaleLinear().domain([Math.min(0, d3.min(selected) ?? 0), (d3.max(selected) ?? 1) * 1.05 || 1]).nice().range([ih, 0]);
+    const x = (v: number) => xs(v) as number, y = (v: number) => ys(v) as number, ySel = (v: number) => ss(v) as number;
     g.append('g').attr('class', 'axis').attr('transform', `translate(0,${ih})`).call(d3.axisBottom(xs).ticks(5).tickFormat(d3.format('~g')));
     g.append('g').attr('class', 'axis').call(d3.axisLeft(ys).ticks(4).tickFormat(d3.format('~g')));
+    g.append('g').attr('class', 'axis selectedAxis').attr('transform', `translate(${iw},0)`).call(d3.axisRight(ss).ticks(4).tickFormat(d3.format('~g')));
     g.append('text').attr('x', iw).attr('y', ih + 20).attr('text-anchor', 'end').text('time [Myr]');
-    g.append('text').attr('x', -kMargin.left + 2).attr('y', -kMargin.top).attr('dominant-baseline', 'hanging').text('downward flux [km³/yr]');
+    g.append('text').attr('x', -kMargin.left + 2).attr('y', -kMargin.top).attr('dominant-baseline', 'hanging').text('downward flux [km³/yr]: shell');
+    g.append('text').attr('x', iw + 44).attr('y', -kMargin.top).attr('dominant-baseline', 'hanging').attr('text-anchor', 'end').text('selection ┆');
     const colors = d3.schemeTableau10;
     flux.depthsKm.forEach((depth, d) => {
       const c = colors[d % colors.length];
       const pts = flux.steps.map((s) => ({ t: s.timeMyr, v: -s.downKm3PerYr[d], sel: -s.selectedDownKm3PerYr[d], step: s.step }));
       g.append('path').datum(pts).attr('fill', 'none').attr('stroke', c).attr('stroke-width', 1.5)
         .attr('d', d3.line<{ t: number; v: number }>().x((p) => x(p.t)).y((p) => y(p.v)));
-      g.append('path').datum(pts).attr('fill', 'none').attr('stroke', c).attr('stroke-width', 1).attr('stroke-dasharray', '3,2')
-        .attr('d', d3.line<{ t: number; sel: number }>().x((p) => x(p.t)).y((p) => y(p.sel)));
-      g.append('text').attr('x', iw - 2).attr('y', 14 + 12 * d).attr('text-anchor', 'end').style('fill', c).text(`${depth} km`);
+      g.append('path').datum(pts).attr('class', 'selectedFlux').attr('fill', 'none').attr('stroke', c).attr('stroke-width', 1.2).attr('stroke-dasharray', '3,2')
+        .attr('d', d3.line<{ t: number; sel: number }>().x((p) => x(p.t)).y((p) => ySel(p.sel)));
       for (const a of flux.avalanches.filter((a) => a.depthKm === depth)) {
         const p = pts.find((q) => q.step === a.step);
         if (p) g.append('circle').attr('class', 'avalanche').attr('cx', x(p.t)).attr('cy', y(p.v)).attr('r', 4.5)
@@ -579,7 +584,14 @@ export class FeaturesPanel {
       }
     });
     const n = flux.avalanches.length;
-    $('featuresFluxNote').textContent = `solid: the whole shell, dashed: within the selection; ${n ? `${n} avalanche step${n === 1 ? '' : 's'} (red: downward flux above the mean + ${flux.sigmas} σ)` : `no avalanche (no step's downward flux above the mean + ${flux.sigmas} σ)`}`;
+    const note = $('featuresFluxNote');
+    note.replaceChildren(...flux.depthsKm.map((depth, d) => {
+      const key = document.createElement('span');
+      key.className = 'fluxKey';
+      key.style.color = colors[d % colors.length];
+      key.textContent = `■ ${depth} km `;
+      return key;
+    }), `solid: the whole shell (left axis), dashed: within the selection (right axis); ${n ? `${n} avalanche step${n === 1 ? '' : 's'} (red: downward flux above the mean + ${flux.sigmas} σ)` : `no avalanche (no step's downward flux above the mean + ${flux.sigmas} σ)`}`);
   }
 
   // The CSV files of `raypc features --tracks/--events/--stalls` and `raypc flux`, as the server wrote them.

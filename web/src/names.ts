@@ -26,10 +26,6 @@ export const pathlineAttributeNames: ReadonlySet<string> = new Set(table.columns
 // The columns of `raypc stats -o` (the selected volume over time).
 export const selectionOverTimeColumns: readonly string[] = table.columns.selectionOverTime.map((c) => c.name);
 
-// Short axis titles for the long names of variables (derived or known), by full name.
-export const shortTitles: ReadonlyMap<string, string> = new Map(
-  [...table.derivedVariables, ...table.knownVariables].flatMap((v): [string, string][] =>
-    'short' in v && v.short ? [[v.name, v.short]] : []));
 // The rule of the shell anomalies every stored variable X gives (computed when read): 'X anomaly'
 // in X's units and, where its shell means are positive, 'X anomaly %'.
 export const shellAnomaly: { suffix: string; percentSuffix: string; percentUnits: string } = table.shellAnomaly;

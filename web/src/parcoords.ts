@@ -7,7 +7,6 @@ import ParCoords from 'parcoord-es';
 import * as d3 from 'd3';
 import { inRanges, rangesByName, type Brush } from './state';
 import type { Sample } from './api';
-import { pathlineVariablePrefixes, shortTitles } from './names';
 import { displayUnits } from './units';
 
 export interface AxisInfo {
@@ -17,6 +16,8 @@ export interface AxisInfo {
   max: number;
   // Names of integer values (a categorical axis such as the seed kind): ticks at those values.
   categories?: Record<number, string>;
+  // How the column is made (stored, derived, computed when read), for the axis' tooltip.
+  about?: string;
 }
 
 export interface ParcoordsOptions {
@@ -80,14 +81,67 @@ function withCpuCanvases<T>(make: () => T): T {
 // Axes whose values grow downwards.
 const kDownwards = new Set(['depth']);
 
-// Short axis titles for the long dataset names (src/grid/names.json; the full name is the axis'
-// tooltip).
+// An axis' title: the column's full name (as the Variable menu and the server name it, from
+// src/grid/names.json) with its units. Long titles wrap over up to three lines (wrapTitle).
 export function axisTitle(a: AxisInfo): string {
   const units = displayUnits(a.units);
-  // Pathline attributes: "start temperature anomaly" -> "start T anomaly".
-  const prefix = pathlineVariablePrefixes.find((p) => a.name.startsWith(p) && shortTitles.has(a.name.slice(p.length)));
-  const name = shortTitles.get(a.name) ?? (prefix === undefined ? a.name : prefix + shortTitles.get(a.name.slice(prefix.length)));
-  return units ? `${name} [${units}]` : name;
+  return units ? `${a.name} [${units}]` : a.name;
+}
+
+// The text size of the plot's titles, ticks and brush labels, px: issue 47 asks for at least 12 px
+// at 1366×768. kLineHeight: one title line.
+const kFontPx = 12;
+const kLineHeight = 14;
+const kMaxTitleLines = 3;
+
+// Greedy word wrap of `text` into lines no wider than `width` px (measured with `measure`); at most
+// kMaxTitleLines, the last one ending in "…" when the text did not fit (the whole title is the
+// axis' tooltip and ARIA label).
+export function wrapTitle(text: string, width: number, measure: (s: string) => number): string[] {
+  // Words too wide for a line are split after their hyphens ("transition-induced").
+  const words = text.split(/\s+/).filter(Boolean)
+    .flatMap((w) => (measure(w) > width && w.includes('-') ? w.split(/(?<=-)/) : [w]));
+  const lines: string[] = [];
+  let line = '';
+  for (const w of words) {
+    const next = !line ? w : line.endsWith('-') ? line + w : `${line} ${w}`;
+    if (!line || measure(next) <= width) line = next;
+    else {
+      lines.push(line);
+      line = w;
+    }
+  }
+  if (line) lines.push(line);
+  if (lines.length <= kMaxTitleLines) return lines;
+  const kept = lines.slice(0, kMaxTitleLines);
+  let last = `${kept[kMaxTitleLines - 1]} ${lines.slice(kMaxTitleLines).join(' ')}`;
+  while (last.length > 1 && measure(`${last}…`) > width) last = last.slice(0, -1);
+  kept[kMaxTitleLines - 1] = `${last.trimEnd()}…`;
+  return kept;
+}
+
+// A typed range of an axis: "560-760", "560 to 760", "-5 -2", "<= 0" / "≤ 0" (from the axis' lowest
+// value), ">= 100" (to its highest). Returns [lo, hi] (lo ≤ hi) or an error message.
+export function parseRange(text: string, axisMin: number, axisMax: number): [number, number] | string {
+  const t = text.trim().replace(/−/g, '-').replace(/[–—]/g, ' to ');
+  const num = '(-?(?:\\d+\\.?\\d*|\\.\\d+)(?:e[-+]?\\d+)?)';
+  let m = new RegExp(`^(<=|≤|<)\\s*${num}$`, 'i').exec(t);
+  if (m) return [Math.min(axisMin, Number(m[2])), Number(m[2])];
+  m = new RegExp(`^(>=|≥|>)\\s*${num}$`, 'i').exec(t);
+  if (m) return [Number(m[2]), Math.max(axisMax, Number(m[2]))];
+  m = new RegExp(`^${num}\\s*(?:\\s|to|,|\\.\\.|-)\\s*${num}$`, 'i').exec(t);
+  if (m) {
+    const a = Number(m[1]), b = Number(m[2]);
+    if (Number.isFinite(a) && Number.isFinite(b)) return [Math.min(a, b), Math.max(a, b)];
+  }
+  return `'${text}' is not a range: type e.g. 560-760, <= 0 or >= 100`;
+}
+
+// Widths of text in the plot's font, px.
+function textMeasure(): (s: string) => number {
+  const ctx = document.createElement('canvas').getContext('2d')!;
+  ctx.font = `${kFontPx}px sans-serif`; // parcoord-es's font family (its parcoords.css)
+  return (s) => ctx.measureText(s).width;
 }
 
 // Tick labels that stay short for values like 3e-9 m/s or 2e-6 1/K.
@@ -137,6 +191,12 @@ export class ParallelCoordinates {
   // The brushes last reported or set, in data units (typed values exact): an end of a brush that
   // a drag did not move keeps its value here, one it moved snaps (snapDragged).
   private known: Brush[] = [];
+  // Ranges that lie wholly outside their axis (e.g. radial velocity ≤ 0 where the axis starts at
+  // 0.99): parcoord-es cannot draw them, so they are kept here, drawn as a mark at the axis' end
+  // they lie beyond and said in its label; they select nothing. Part of brushes().
+  private outside: Brush[] = [];
+  // The axis the keyboard is on (kept focused across a rebuild) and its open range field, if any.
+  private focusName: string | null = null;
 
   constructor(private readonly container: HTMLElement, private axes: AxisInfo[], private readonly options: ParcoordsOptions) {
     this.channel.port1.onmessage = () => {
@@ -245,8 +305,42 @@ export class ParallelCoordinates {
     if (this.pc) this.pc.color(fn).render();
   }
 
-  // The current brushes in data units, in axis order (an axis' ranges in the order drawn).
+  // The current brushes in data units, in axis order (an axis' ranges in the order drawn), then
+  // the ranges wholly outside their axis. An end beyond its axis is drawn at the axis' end: it is
+  // reported as known (the value set or typed), not as the end drawn.
   brushes(): Brush[] {
+    const raw = this.rawBrushes().map((b) => this.knownFor(b) ?? b);
+    return [...raw, ...this.outside];
+  }
+
+  // The axis' value range, low to high ([a.min, a.max] as drawn).
+  private domain(name: string): [number, number] | null {
+    const dims = this.pc?.dimensions() as Record<string, { yscale: { domain(): number[] } }> | undefined;
+    const d = dims?.[name]?.yscale.domain();
+    return d ? [Math.min(d[0], d[1]), Math.max(d[0], d[1])] : null;
+  }
+
+  // Half a pixel of the axis in its units (how near an end drawn is to a value).
+  private halfPixel(name: string): number {
+    const dims = this.pc?.dimensions() as Record<string, { yscale: { domain(): number[]; range(): number[] } }> | undefined;
+    const dim = dims?.[name];
+    if (!dim) return 0;
+    const d = dim.yscale.domain(), r = dim.yscale.range();
+    return 0.5 * Math.abs((d[1] - d[0]) / ((r[1] - r[0]) || 1));
+  }
+
+  // The known range drawn as `b` (its ends clamped to the axis), if any.
+  private knownFor(b: Brush): Brush | undefined {
+    const dom = this.domain(b.name);
+    if (!dom) return undefined;
+    const tol = this.halfPixel(b.name);
+    const clamp = (v: number) => Math.min(dom[1], Math.max(dom[0], v));
+    return this.known.find((k) => k.name === b.name && Math.abs(clamp(k.min) - b.min) <= tol && Math.abs(clamp(k.max) - b.max) <= tol &&
+      (k.min < dom[0] || k.max > dom[1]));
+  }
+
+  // The brushes as parcoord-es has them (ends within the axis).
+  private rawBrushes(): Brush[] {
     if (!this.pc || !this.pc.brushExtents) return [];
     type Extent = { selection: { scaled: number[] } };
     const ext = this.pc.brushExtents() as Record<string, Extent | Extent[]>;
@@ -305,8 +399,19 @@ export class ParallelCoordinates {
     this.drawBrushLabels();
   }
 
-  private applyBrushes(brushes: Brush[]): void {
+  private applyBrushes(given: Brush[]): void {
     const known = new Set(this.axes.map((a) => a.name));
+    // A range wholly beyond its axis is kept aside (this.outside); one partly beyond is drawn to
+    // the axis' end.
+    this.outside = [];
+    const brushes: Brush[] = [];
+    for (const b of given) {
+      const dom = this.domain(b.name);
+      if (!dom || !known.has(b.name)) continue;
+      const lo = Math.max(dom[0], b.min), hi = Math.min(dom[1], b.max);
+      if (hi <= lo && !(b.min === b.max && b.min >= dom[0] && b.min <= dom[1])) this.outside.push({ ...b });
+      else brushes.push({ name: b.name, min: lo, max: hi });
+    }
     const byName = [...rangesByName(brushes)].filter(([name]) => known.has(name));
     if (!byName.length) return;
     if (!this.options.multi) {
@@ -356,11 +461,21 @@ export class ParallelCoordinates {
     const brushes = this.pc ? this.brushes() : this.pending;
     if (this.pc) this.order_ = this.pc.getOrderedDimensionKeys();
     this.container.innerHTML = '';
-    // Wide enough side margins that the first and last (centred) titles are not cut off.
-    const margin = { top: 34, right: 64, bottom: 14, left: 48 };
-    const plotH = h - margin.top - margin.bottom;
     const names = this.axes.map((a) => a.name);
     const order = this.order_ ? [...this.order_.filter((n) => names.includes(n)), ...names.filter((n) => !this.order_!.includes(n))] : names;
+    // Full titles wrapped to the space between axes, centred on their axes (the first and last
+    // within the side margins too); the top margin holds the most lines any title needs.
+    const side = { left: 48, right: 64 };
+    const gap = order.length > 1 ? (w - side.left - side.right) / (order.length - 1) : w - side.left - side.right;
+    const measure = textMeasure();
+    const titles = new Map(order.map((name, i) => {
+      const a = this.axes.find((x) => x.name === name);
+      const room = Math.min(gap - 4, i === 0 ? 2 * side.left - 4 : i === order.length - 1 ? 2 * side.right - 4 : Infinity);
+      return [name, wrapTitle(a ? axisTitle(a) : name, Math.max(40, room), measure)];
+    }));
+    const lines = Math.max(1, ...[...titles.values()].map((t) => t.length));
+    const margin = { top: 8 + lines * kLineHeight, right: side.right, bottom: 16, left: side.left };
+    const plotH = h - margin.top - margin.bottom;
     const dimensions: Record<string, unknown> = {};
     order.forEach((name, index) => {
       const a = this.axes.find((x) => x.name === name);
@@ -400,19 +515,183 @@ export class ParallelCoordinates {
     }
     this.shownOrder = JSON.stringify(this.pc.getOrderedDimensionKeys());
     this.drawBrushLabels();
-    // Titles carry units; stagger every other one so neighbours do not overlap; the first and last
-    // titles are anchored inwards so that a long one is not cut off at the panel's edge; full name
-    // as tooltip.
-    const shown = (this.pc.getOrderedDimensionKeys() as string[]);
+    // Titles carry units, wrapped (above) and centred; the whole title and how to brush is the
+    // tooltip.
     d3.select(this.container).selectAll<SVGTextElement, string>('text.label')
-      .style('font-size', '11px')
-      .attr('text-anchor', (d) => (d === shown[0] ? 'start' : d === shown[shown.length - 1] ? 'end' : 'middle'))
-      .attr('transform', (_d, i) => `translate(0,${i % 2 ? -5 : -18})`)
+      .attr('text-anchor', 'middle')
+      .attr('transform', 'translate(0,-5)')
       .each((d, i, nodes) => {
+        const text = d3.select(nodes[i]);
+        const ls = titles.get(d) ?? [d];
+        text.text(null);
+        ls.forEach((line, k) => text.append('tspan').attr('x', 0).attr('dy', k === 0 ? -(ls.length - 1) * kLineHeight : kLineHeight).text(line));
         const a = this.axes.find((x) => x.name === d);
         d3.select(nodes[i].parentNode as SVGGElement).append('title')
-          .text(a ? `${a.name} [${displayUnits(a.units)}]: drag vertically on the axis to brush, drag the title to reorder` : d);
+          .text(`${a ? axisTitle(a) : d}${a?.about ? ` — ${a.about}` : ''}. Drag vertically on the axis to brush, drag the title to reorder; ` +
+            'from the keyboard (Tab to the axis): type a range such as 560-760 or <= 0 and Enter, arrow keys move the brush, Shift+arrows widen or narrow it, Escape clears it');
       });
+    this.setUpKeyboard();
+  }
+
+  // ---- keyboard -------------------------------------------------------------------------------
+
+  // Each axis is a focusable group with an ARIA label (its title, range and brush); the keys
+  // brush it: typing (or Enter) opens a field for a range, ↑/↓ move its brush by the snap step (a
+  // new one covers the middle tenth of the axis), Shift+↑/↓ widen or narrow it, Escape clears
+  // the axis' brushes, ←/→ go to the neighbouring axis.
+  private setUpKeyboard(): void {
+    for (const g of this.container.querySelectorAll<SVGGElement>('g.dimension')) {
+      const name = (g as unknown as { __data__?: string }).__data__;
+      if (name === undefined) continue;
+      g.setAttribute('tabindex', '0');
+      g.setAttribute('role', 'group');
+      g.setAttribute('aria-roledescription', 'axis');
+      g.addEventListener('keydown', (e) => this.onAxisKey(e, name));
+      g.addEventListener('focus', () => { this.focusName = name; });
+      g.addEventListener('blur', () => { if (this.focusName === name && !this.container.querySelector('input.pcRange')) this.focusName = null; });
+    }
+    this.updateAria();
+    if (this.focusName) this.axisNode(this.focusName)?.focus();
+  }
+
+  private axisNode(name: string): SVGGElement | null {
+    for (const g of this.container.querySelectorAll<SVGGElement>('g.dimension'))
+      if ((g as unknown as { __data__?: string }).__data__ === name) return g;
+    return null;
+  }
+
+  // The axes' ARIA labels: title, range, and the ranges brushed (or that none is).
+  private updateAria(): void {
+    const byName = rangesByName(this.currentBrushes());
+    for (const g of this.container.querySelectorAll<SVGGElement>('g.dimension')) {
+      const name = (g as unknown as { __data__?: string }).__data__;
+      const a = this.axes.find((x) => x.name === name);
+      if (!a || name === undefined) continue;
+      const format = tickFormatFor(a.min, a.max);
+      const ranges = byName.get(name) ?? [];
+      const brushed = ranges.length
+        ? `brushed ${ranges.map(([lo, hi]) => `${format(lo)} to ${format(hi)}${this.beyondText(a, lo, hi)}`).join(' or ')}`
+        : 'not brushed';
+      g.setAttribute('aria-label', `${axisTitle(a)}, ${format(a.min)} to ${format(a.max)}, ${brushed}. ` +
+        'Type a range and Enter to brush, arrows move the brush, Escape clears it');
+    }
+  }
+
+  // " (below the axis: selects nothing)" for a range wholly beyond the axis' values, else ''.
+  private beyondText(a: AxisInfo, lo: number, hi: number): string {
+    if (hi < a.min) return ' (below the axis, which starts at ' + tickFormatFor(a.min, a.max)(a.min) + ': selects nothing)';
+    if (lo > a.max) return ' (above the axis, which ends at ' + tickFormatFor(a.min, a.max)(a.max) + ': selects nothing)';
+    return '';
+  }
+
+  // The brushes with their exact ends (typed or snapped) where they are known for every range.
+  private currentBrushes(): Brush[] {
+    const shown = this.brushes();
+    return this.known.length === shown.length ? this.known : shown;
+  }
+
+  private onAxisKey(e: KeyboardEvent, name: string): void {
+    const a = this.axes.find((x) => x.name === name);
+    if (!a || e.target !== this.axisNode(name)) return;
+    const ranges = this.currentBrushes().filter((b) => b.name === name);
+    const step = snapStep(a) || (a.max - a.min) / 100 || 1;
+    let handled = true;
+    if (e.key === 'Escape') {
+      if (ranges.length) this.setAxisRange(name, null);
+      else handled = false; // nothing on this axis: Escape goes on to clear the other brushes
+    } else if (e.key === 'ArrowUp' || e.key === 'ArrowDown') {
+      // ↑ moves the brush towards the top of the screen (larger values, smaller depths).
+      const towardsTop = e.key === 'ArrowUp';
+      const sign = (kDownwards.has(name) ? -1 : 1) * (towardsTop ? 1 : -1);
+      const r = ranges[ranges.length - 1];
+      if (!r) {
+        const mid = snapTo((a.min + a.max) / 2, step), half = Math.max(step, snapTo((a.max - a.min) / 20, step));
+        this.setAxisRange(name, [mid - half, mid + half]);
+      } else if (e.shiftKey) {
+        // Shift+↑ widens (one step at each end), Shift+↓ narrows (never below one step wide).
+        const d = towardsTop ? step : -step;
+        const lo = snapTo(r.min - d, step), hi = snapTo(r.max + d, step);
+        this.setAxisRange(name, hi - lo >= step ? [lo, hi] : [r.min, r.max]);
+      } else {
+        this.setAxisRange(name, [snapTo(r.min + sign * step, step), snapTo(r.max + sign * step, step)]);
+      }
+    } else if (e.key === 'ArrowLeft' || e.key === 'ArrowRight') {
+      const order = this.order(), i = order.indexOf(name);
+      const next = order[i + (e.key === 'ArrowLeft' ? -1 : 1)];
+      if (next) this.axisNode(next)?.focus();
+    } else if (e.key === 'Enter' || (e.key.length === 1 && /[-−0-9.<>=≤≥]/.test(e.key) && !e.ctrlKey && !e.metaKey && !e.altKey)) {
+      this.openRangeField(name, e.key === 'Enter' ? '' : e.key);
+    } else {
+      handled = false;
+    }
+    if (handled) {
+      e.preventDefault();
+      e.stopPropagation();
+    }
+  }
+
+  // A text field over the axis for a typed range: Enter sets it (or says what is wrong), Escape
+  // or leaving it closes it; the axis keeps the focus afterwards.
+  private openRangeField(name: string, first: string): void {
+    const a = this.axes.find((x) => x.name === name), g = this.axisNode(name);
+    if (!a || !g) return;
+    this.container.querySelector('input.pcRange')?.remove();
+    const input = document.createElement('input');
+    input.type = 'text';
+    input.className = 'pcRange';
+    input.value = first;
+    input.placeholder = 'e.g. 560-760, <= 0';
+    input.setAttribute('aria-label', `Range of ${axisTitle(a)} to brush, e.g. 560-760, <= 0 or >= 100; Enter sets it, Escape cancels`);
+    const box = g.getBoundingClientRect(), own = this.container.getBoundingClientRect();
+    input.style.left = `${Math.max(0, Math.min(own.width - 130, box.left + box.width / 2 - own.left - 60))}px`;
+    input.style.top = `${Math.max(0, box.top - own.top + box.height / 3)}px`;
+    this.container.appendChild(input);
+    let closed = false;
+    const close = (refocus: boolean) => {
+      if (closed) return;
+      closed = true;
+      input.remove();
+      if (refocus) this.axisNode(name)?.focus();
+    };
+    input.addEventListener('keydown', (e) => {
+      e.stopPropagation();
+      if (e.key === 'Escape') {
+        e.preventDefault();
+        close(true);
+      } else if (e.key === 'Enter') {
+        e.preventDefault();
+        const r = parseRange(input.value, a.min, a.max);
+        if (typeof r === 'string') {
+          input.setCustomValidity(r);
+          input.title = r;
+          input.classList.add('invalid');
+          input.reportValidity();
+          return;
+        }
+        close(false);
+        this.setAxisRange(name, r);
+      }
+    });
+    input.addEventListener('input', () => { input.setCustomValidity(''); input.classList.remove('invalid'); });
+    input.addEventListener('blur', () => close(false));
+    input.focus();
+  }
+
+  // Sets the axis' brush to one range (or clears its ranges), shows it and reports it as a
+  // released brush; the axis keeps the keyboard focus.
+  private setAxisRange(name: string, range: [number, number] | null): void {
+    this.focusName = name;
+    const next = this.currentBrushes().filter((b) => b.name !== name).map((b) => ({ ...b }));
+    if (range) next.push({ name, min: range[0], max: range[1] });
+    this.setBrushes(next);
+    this.known = next.map((b) => ({ ...b }));
+    this.drawBrushLabels();
+    this.dragging = false;
+    this.timing.brushEvents++;
+    this.options.onBrush(next, false);
+    if (this.options.afterFrame) this.options.afterFrame(() => this.redrawBrushed());
+    else this.redrawBrushed();
+    this.axisNode(name)?.focus();
   }
 
   // Replaces parcoord-es's line drawing (foreground and brushed layers; it stays in charge of
@@ -550,28 +829,54 @@ export class ParallelCoordinates {
     this.channel.port2.postMessage(0);
   }
 
-  // Each brush's min and max as text at its ends, in the axis' tick format.
+  // Each brush's min and max as text at its ends, in the axis' tick format, inside the plot (never
+  // over the axis' title). An end beyond the axis is drawn at the axis' end and its label says so;
+  // a range wholly beyond it is a mark at that end with a label saying that it selects nothing.
   private drawBrushLabels(): void {
     if (!this.pc) return;
-    const dims = this.pc.dimensions() as Record<string, { yscale: (v: number) => number }>;
-    // The values reported (snapped or typed) where they are known for every range shown.
-    const shown = this.brushes();
-    const brushes = rangesByName(this.known.length === shown.length ? this.known : shown);
+    const dims = this.pc.dimensions() as Record<string, { yscale: { (v: number): number; range(): number[] } }>;
+    const brushes = rangesByName(this.currentBrushes());
     d3.select(this.container).selectAll<SVGGElement, string>('g.dimension').each((name, i, nodes) => {
       const g = d3.select(nodes[i]);
-      g.selectAll('text.brushLabel').remove();
+      g.selectAll('.brushLabel, .brushOutside').remove();
       const ranges = brushes.get(name), dim = dims[name];
-      if (!ranges || !dim) return;
       const a = this.axes.find((x) => x.name === name);
+      if (!ranges || !dim || !a) return;
+      const format = tickFormatFor(a.min, a.max);
+      const [yA, yB] = dim.yscale.range();
+      const yTop = Math.min(yA, yB), yBottom = Math.max(yA, yB);
+      const clampY = (v: number) => Math.min(yBottom, Math.max(yTop, dim.yscale(v)));
+      // Baselines: the upper label's text stays below the title (y ≥ yTop + kFontPx - 2), the lower
+      // one inside the bottom margin.
+      const upperY = (y: number) => Math.max(yTop + kFontPx - 2, y - 4);
+      const lowerY = (y: number) => Math.min(yBottom + kFontPx, y + kFontPx + 1);
+      const label = (y: number, text: string, beyond: boolean) =>
+        g.append('text').attr('class', beyond ? 'brushLabel beyond' : 'brushLabel').attr('x', 9).attr('y', y).text(text);
+      // Lines of a label, the first baseline at y.
+      const lines = (y: number, texts: string[]) => {
+        const t = g.append('text').attr('class', 'brushLabel beyond').attr('y', y);
+        texts.forEach((line, k) => t.append('tspan').attr('x', 9).attr('dy', k ? kLineHeight : 0).text(line));
+      };
       for (const [lo, hi] of ranges) {
-        const format = tickFormatFor(a?.min ?? lo, a?.max ?? hi);
+        const beyond = this.beyondText(a, lo, hi);
+        if (beyond) {
+          // A mark at the end the range lies beyond, and a label inwards from it.
+          const y = clampY(hi < a.min ? a.min : a.max), atTop = y - yTop < yBottom - y;
+          g.append('rect').attr('class', 'brushOutside').attr('x', -9).attr('width', 18).attr('y', atTop ? y : y - 6).attr('height', 6);
+          const texts = [`${format(lo)} to ${format(hi)}`, `${hi < a.min ? 'below' : 'above'} the axis:`, 'selects nothing'];
+          lines(atTop ? y + 6 + kFontPx : y - 10 - (texts.length - 1) * kLineHeight, texts);
+          continue;
+        }
         // Each range's upper end above it and its lower end below it on screen.
-        const top = Math.min(dim.yscale(lo), dim.yscale(hi)), bottom = Math.max(dim.yscale(lo), dim.yscale(hi));
-        const [atTop, atBottom] = dim.yscale(hi) <= dim.yscale(lo) ? [hi, lo] : [lo, hi];
-        g.append('text').attr('class', 'brushLabel').attr('x', 9).attr('y', top - 4).text(format(atTop));
-        g.append('text').attr('class', 'brushLabel').attr('x', 9).attr('y', bottom + 12).text(format(atBottom));
+        const yLo = clampY(lo), yHi = clampY(hi);
+        const [top, bottom] = [Math.min(yLo, yHi), Math.max(yLo, yHi)];
+        const [atTop, atBottom] = yHi <= yLo ? [hi, lo] : [lo, hi];
+        const past = (v: number) => (v < a.min || v > a.max ? ' (past the axis)' : '');
+        label(upperY(top), `${format(atTop)}${past(atTop)}`, past(atTop) !== '');
+        label(lowerY(bottom), `${format(atBottom)}${past(atBottom)}`, past(atBottom) !== '');
       }
     });
+    this.updateAria();
   }
 
   // The brushes as the plot has them, with the ends a drag moved on their axis' snap step and the
@@ -582,14 +887,16 @@ export class ParallelCoordinates {
     const dims = this.pc.dimensions() as Record<string, { yscale: { domain(): number[]; range(): number[] } }>;
     return raw.map((b) => {
       const a = this.axes.find((x) => x.name === b.name), dim = dims[b.name];
-      if (!a || !dim) return b;
+      if (!a || !dim || this.outside.includes(b)) return b;
       const d = dim.yscale.domain(), r = dim.yscale.range();
       const halfPixel = 0.5 * Math.abs((d[1] - d[0]) / ((r[1] - r[0]) || 1));
       const same = this.known.filter((k) => k.name === b.name);
       const k = same.sort((p, q) => (Math.abs(p.min - b.min) + Math.abs(p.max - b.max)) - (Math.abs(q.min - b.min) + Math.abs(q.max - b.max)))[0];
       const step = snapStep(a);
+      // A known end beyond the axis is drawn at the axis' end.
+      const lo = Math.min(d[0], d[1]), hi = Math.max(d[0], d[1]);
       const end = (v: number, knownV: number | undefined) =>
-        knownV !== undefined && Math.abs(v - knownV) <= halfPixel ? knownV : snapTo(v, step);
+        knownV !== undefined && Math.abs(v - Math.min(hi, Math.max(lo, knownV))) <= halfPixel ? knownV : snapTo(v, step);
       const min = end(b.min, k?.min), max = end(b.max, k?.max);
       return min <= max ? { name: b.name, min, max } : { name: b.name, min: b.min, max: b.max };
     });

@@ -4,8 +4,11 @@
 // section" tab; their controls are the side panel's "Map and section". The pointer reads the point
 // under it with d3's projection placed as the server placed it (the same formulas, tested against
 // each other) and its values from the server (GET /api/probe); a click on the map sets the
-// section's start, the next its end.
-import { geoEquirectangular, geoInterpolate, geoOrthographic, geoRotation, type GeoProjection } from 'd3-geo';
+// section's start (A), the next its end (B), and the hint under the map says which comes next.
+// Over the map the page draws, with that projection, the section's line and its ends A and B,
+// and (unless the state's reference has the server draw them) a labelled graticule and the
+// coastlines: crisp at any size, on by default.
+import { geoEquirectangular, geoGraticule, geoInterpolate, geoOrthographic, geoPath, geoRotation, type GeoProjection } from 'd3-geo';
 import { geoHammer, geoMollweide, geoRobinson } from 'd3-geo-projection';
 import { fetchProbe, postSlice, postSpectrum, type SliceHeader } from './api';
 import type { MapHeader } from './generated/protocol_types';
@@ -114,13 +117,105 @@ export class SlicePanel {
       if (width < 64 || height < 64) return null;
       return { ...this.store.state, image: { width, height } };
     };
-    this.map = new SlicePicture('map', $<HTMLImageElement>('mapImage'), sized($<HTMLImageElement>('mapImage')), host.showError);
+    this.map = new SlicePicture('map', $<HTMLImageElement>('mapImage'), sized($<HTMLImageElement>('mapImage')), host.showError,
+      () => this.drawMarks());
     this.section = new SlicePicture('section', $<HTMLImageElement>('sectionImage'),
       sized($<HTMLImageElement>('sectionImage')), host.showError, (h) => this.showArc(h));
     this.setUpControls();
     this.setUpPointer();
-    new ResizeObserver(() => this.stateChanged()).observe($('slices'));
+    new ResizeObserver(() => { this.stateChanged(); this.drawMarks(); }).observe($('slices'));
     $('spectrumDetails').addEventListener('toggle', () => { if (this.visible) this.requestSpectrum(); });
+    this.showHint();
+    // The coastlines the UI build wrote beside the page (web/build.mjs), as the server draws them.
+    fetch('coastlines.json')
+      .then((r) => (r.ok ? r.json() : null))
+      .then((c: { lines: number[][] } | null) => {
+        if (!c) return;
+        this.coastlines = { type: 'MultiLineString', coordinates: c.lines.map((l) => l.flatMap((_v, i) => (i % 2 ? [] : [[l[i], l[i + 1]]]))) };
+        this.drawMarks();
+      })
+      .catch(() => {});
+  }
+
+  private coastlines: GeoJSON.MultiLineString | null = null;
+
+  // The hint under the map: which end the next click sets.
+  private showHint(): void {
+    $('mapReadout').textContent = this.nextEnd === 'from'
+      ? 'click the map: sets A (the section\u2019s start)'
+      : 'click the map: sets B (the section\u2019s end)';
+  }
+
+  // The map's projection as the server placed it (the header of its picture), or null.
+  private projection(): GeoProjection | null {
+    const h = this.map.header;
+    if (h?.view !== 'map') return null;
+    return kProjections[h.projection]().scale(h.scale).translate(h.centre).rotate([-h.centralMeridianDeg, -h.centralLatitudeDeg]);
+  }
+
+  // Draws over the map picture (#mapMarks, in the picture's pixels): the graticule every 30° with
+  // its labels and the coastlines (where the state's reference does not have the server draw
+  // them), the section's great circle and its ends A and B.
+  drawMarks(): void {
+    const svg = document.getElementById('mapMarks') as unknown as SVGSVGElement | null;
+    const h = this.map.header, p = this.projection(), img = this.map.image;
+    if (!svg) return;
+    if (h?.view !== 'map' || !p || !img.clientWidth) {
+      svg.replaceChildren();
+      return;
+    }
+    const box = img.getBoundingClientRect(), pane = img.parentElement!.getBoundingClientRect();
+    const cssPerPixel = Math.min(box.width / h.width, box.height / h.height);
+    svg.style.left = `${box.left - pane.left}px`;
+    svg.style.top = `${box.top - pane.top}px`;
+    svg.style.width = `${h.width * cssPerPixel}px`;
+    svg.style.height = `${h.height * cssPerPixel}px`;
+    svg.setAttribute('viewBox', `0 0 ${h.width} ${h.height}`);
+    const px = 1 / cssPerPixel; // one CSS pixel in the picture's pixels
+    const path = geoPath(p);
+    const ns = 'http://www.w3.org/2000/svg';
+    const el = (tag: string, attrs: Record<string, string | number>, text?: string) => {
+      const e = document.createElementNS(ns, tag);
+      for (const [k, v] of Object.entries(attrs)) e.setAttribute(k, String(v));
+      if (text !== undefined) e.textContent = text;
+      return e;
+    };
+    const out: Element[] = [];
+    const ref = this.store.state.reference;
+    if (!ref.graticule.visible) {
+      out.push(el('path', { class: 'graticule', d: path(geoGraticule().step([30, 30])()) ?? '', 'stroke-width': px }));
+      const cm = h.centralMeridianDeg;
+      for (const lat of [-60, -30, 0, 30, 60]) {
+        const at = p([cm - 179.999, lat]);
+        if (at) out.push(el('text', { class: 'graticuleLabel', x: at[0] - 3 * px, y: at[1] + 4 * px, 'text-anchor': 'end', 'font-size': 11 * px }, `${Math.abs(lat)}°${lat < 0 ? 'S' : lat > 0 ? 'N' : ''}`));
+      }
+      // Meridian labels along 30°S, every 60°, those too close to the last one drawn left out.
+      let lastX = -Infinity;
+      for (let k = -2; k <= 2; k++) {
+        const lon = ((cm + 60 * k + 540) % 360) - 180;
+        const at = p([cm + 60 * k, -30]);
+        if (!at || at[0] - lastX < 42 * px) continue;
+        lastX = at[0];
+        out.push(el('text', { class: 'graticuleLabel', x: at[0], y: at[1] + 12 * px, 'text-anchor': 'middle', 'font-size': 11 * px }, `${Math.abs(Math.round(lon))}°${lon < 0 ? 'W' : lon > 0 ? 'E' : ''}`));
+      }
+    }
+    if (!ref.coastlines.visible && this.coastlines) {
+      for (const [cls, w] of [['coastlineHalo', 2.6], ['coastline', 1.2]] as const) out.push(el('path', { class: cls, d: path(this.coastlines) ?? '', 'stroke-width': w * px }));
+    }
+    // The section: its great circle, A at its start and B at its end.
+    const { from, to } = this.store.state.section;
+    const line: GeoJSON.LineString = { type: 'LineString', coordinates: [[from.lonDeg, from.latDeg], [to.lonDeg, to.latDeg]] };
+    out.push(el('path', { class: 'sectionLineHalo', d: path(line) ?? '', 'stroke-width': 5 * px }));
+    out.push(el('path', { class: 'sectionLine', d: path(line) ?? '', 'stroke-width': 2.5 * px }));
+    for (const [name, end] of [['A', from], ['B', to]] as const) {
+      const at = p([end.lonDeg, end.latDeg]);
+      if (!at || !Number.isFinite(at[0])) continue;
+      const g = el('g', { class: 'sectionEnd', 'data-end': name });
+      g.append(el('circle', { cx: at[0], cy: at[1], r: 5 * px, 'stroke-width': 1.5 * px }),
+        el('text', { x: at[0] + 7 * px, y: at[1] - 6 * px, 'font-size': 13 * px, 'stroke-width': 3 * px }, name));
+      out.push(g);
+    }
+    svg.replaceChildren(...out);
   }
 
   // The tab is shown or hidden (app.ts's bottom tabs).
@@ -290,6 +385,7 @@ export class SlicePanel {
     $<HTMLInputElement>(end === 'from' ? 'sectionFrom' : 'sectionTo').value = `${s.section[end].latDeg}, ${s.section[end].lonDeg}`;
     this.host.changed();
     this.stateChanged();
+    this.drawMarks();
   }
 
   // The map's (lon, lat) under a point of its picture, or null off the sphere: d3's projection
@@ -343,14 +439,21 @@ export class SlicePanel {
       const p = this.map.pixelOf(e);
       const ll = p && this.lonLatOnMap(p[0], p[1]);
       if (ll) readout('mapReadout', ll[1], ll[0], this.store.state.map.depthKm);
-      else $('mapReadout').textContent = 'click the map: the section\u2019s start, then its end';
+      else this.showHint();
+    });
+    mapImage.addEventListener('mouseleave', () => {
+      // The last readout may still be on its way: the hint comes back once it is in.
+      const hint = () => this.showHint();
+      if (this.probeBusy) this.probeNext = hint;
+      else hint();
     });
     mapImage.addEventListener('click', (e) => {
       const p = this.map.pixelOf(e);
       const ll = p && this.lonLatOnMap(p[0], p[1]);
       if (!ll) return;
-      this.setEnd(this.nextEnd, ll[1], ll[0]);
       this.nextEnd = this.nextEnd === 'from' ? 'to' : 'from';
+      this.setEnd(this.nextEnd === 'to' ? 'from' : 'to', ll[1], ll[0]);
+      this.showHint();
     });
     sectionImage.addEventListener('mousemove', (e) => {
       const p = this.section.pixelOf(e);

@@ -5,6 +5,7 @@ import type { Info } from './api';
 import { centredMaps, mapStops, sampleStops, type ColorStop } from './colormaps';
 import type { AxisInfo } from './parcoords';
 import { cloneState, normaliseState, stateFromHash, type RenderState } from './state';
+import { variableOrigin } from './variable_origin';
 
 export class StateStore {
   state: RenderState;
@@ -91,7 +92,7 @@ export class StateStore {
       const v = this.info.variables.find((x) => x.name === name);
       const c = this.info.coordinates.find((x) => x.name === name);
       const r = v ?? c;
-      return { name, units: units[i] ?? r?.units ?? '', min: r?.min ?? 0, max: r?.max ?? 1 };
+      return { name, units: units[i] ?? r?.units ?? '', min: r?.min ?? 0, max: r?.max ?? 1, ...(v ? { about: variableOrigin(v) } : {}) };
     });
   }
 }

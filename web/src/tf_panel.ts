@@ -12,6 +12,7 @@ import { paraViewMapJson, parseParaViewMap } from './paraview_colormap';
 import type { StateStore } from './store';
 import { TfEditor } from './tf_editor';
 import { displayUnits } from './units';
+import { variableOrigin } from './variable_origin';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
 
@@ -55,7 +56,11 @@ export class TfPanel {
     });
     const info = store.info;
     const varSel = $<HTMLSelectElement>('variable');
-    for (const v of info.variables) varSel.add(new Option(`${v.name} [${displayUnits(v.units)}]`, v.name));
+    for (const v of info.variables) {
+      const option = new Option(`${v.name} [${displayUnits(v.units)}]`, v.name);
+      option.title = `${option.text}: ${variableOrigin(v)}`; // stored, derived or computed when read
+      varSel.add(option);
+    }
     varSel.addEventListener('change', () => {
       this.applyVariableDefaults(varSel.value);
       this.stepHistogram = null;
