@@ -369,7 +369,7 @@ std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const 
             legends.push_back(featurePaintLegend(state.features));
         } else {
             legends.push_back({variableTitle(m_dataset->variables().at(size_t(resolved.params.colorVariable))),
-                               resolved.params.transfer});
+                               resolved.params.transfer, {}});
         }
         if (state.pathlines.visible && m_scene && m_sceneStep == state.step) {
             legends.push_back(pathlineLegend(m_scene->style(), m_scene->columns()));

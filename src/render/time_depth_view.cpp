@@ -91,7 +91,7 @@ ImageRgba8 timeDepthPicture(const TimeDepthInputs& in)
     const bool blank = std::any_of(in.values.begin(), in.values.end(), [](float v) { return std::isnan(v); });
     addNotes(labels, width, height, {blank ? in.blankNote : ""});
     drawTextLabels(image.pixels, width, height, labels);
-    const LegendSpec legend{in.colorTitle, in.colors};
+    const LegendSpec legend{in.colorTitle, in.colors, {}};
     drawLegends(image.pixels, width, height, std::span(&legend, 1));
     return image;
 }

@@ -88,8 +88,8 @@ export function axisTitle(a: AxisInfo): string {
   return units ? `${a.name} [${units}]` : a.name;
 }
 
-// The text size of the plot's titles, ticks and brush labels, px: issue 47 asks for at least 12 px
-// at 1366×768. kLineHeight: one title line.
+// The text size of the plot's titles, ticks and brush labels, px: at least 12 px, so that they stay
+// legible at 1366×768. kLineHeight: one title line.
 const kFontPx = 12;
 const kLineHeight = 14;
 const kMaxTitleLines = 3;

@@ -1,4 +1,5 @@
-// What the 3D view shows, said on the view itself, where the eye is (issue 47): the step and time of
+// What the 3D view shows, said on the view itself, where the eye is (not below the side panel's
+// controls, nor in a status line of developer figures): the step and time of
 // the frame on screen, the selected volume and its share of the mantle at that step, and a badge
 // when the frame is coarser than the view (a coarser level of detail, or fewer pixels).
 //
