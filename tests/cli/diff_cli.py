@@ -210,6 +210,9 @@ try:
                     np.zeros((len(c_lat), 5, len(c_lon))))
     far = preprocess([w("far.nc")], w("far.ds"))
     expect_error("do not overlap", "diff", a1, far, "-o", w("x.ds"))
+    # The same refusal for a correlation (app/compare_fields.h), and nothing written.
+    expect_error("does not overlap A's grid", "correlate", a1 + ":temperature", far + ":temperature", "-o", w("x.csv"))
+    check("no CSV after the refused correlation", not os.path.exists(w("x.csv")))
     expect_error("a1.ds and global.ds have no stored variable in common", "diff", a1, glob, "-o", w("x.ds"))
     expect_error("variable 'vx': c.ds has no such variable", "diff", a1, c, "--variable", "vx", "-o", w("x.ds"))
     expect_error("variable 'pressure': a.ds has no such variable", "diff", a, b, "--variable", "pressure",
