@@ -10,7 +10,9 @@
 // Goal at 24 full-resolution steps (--full): statistics of a new brush <= 1 s, features <= 8 s, both
 // <= 2 s when only the step changes.
 //   node bench/analyses_series.mjs [BUILD_DIR] [--steps N] [--grid LATxRxLON | --full] [--exact]
-//        [--work DIR] [--keep]
+//        [--work DIR] [--keep] [--dataset DIR]
+// --dataset times an existing dataset instead (bench/series.sh passes the one it preprocessed);
+// --steps and --grid are then taken from it.
 // Defaults: build/, 12 steps, 64x81x128 (the demo's grid), ${TMPDIR:-/tmp}/raypc-bench-analyses.
 import { execFileSync, spawn } from 'node:child_process';
 import { cpus } from 'node:os';
@@ -27,7 +29,8 @@ const option = (name, fallback) => {
   return v;
 };
 const full = flag('--full'), exact = flag('--exact'), keep = flag('--keep');
-const steps = Number(option('--steps', '12'));
+const given = option('--dataset', undefined);
+let steps = Number(option('--steps', '12'));
 const grid = option('--grid', full ? '180x201x360' : '64x81x128');
 const work = resolve(option('--work', join(process.env.TMPDIR ?? '/tmp', 'raypc-bench-analyses')));
 const build = resolve(args[0] ?? 'build');
@@ -39,18 +42,26 @@ const raypc = join(build, 'raypc');
 const load = () => readFileSync('/proc/loadavg', 'utf8').split(' ').slice(0, 3).join(' ');
 const seconds = (t0) => (performance.now() - t0) / 1000;
 
-console.log(`analyses over a series: ${steps} steps of ${grid}; machine: ${cpus().length} cores, ${cpus()[0]?.model ?? '?'}`);
-rmSync(work, { recursive: true, force: true });
-let t0 = performance.now();
-execFileSync(raypc, ['synth', '-o', join(work, 'nc'), '--grid', grid, '--steps', String(steps),
-  '--avalanche', String(2 * Math.floor(steps / 2))], { stdio: 'ignore' });
-console.log(`synth:      ${seconds(t0).toFixed(1)} s (load ${load()})`);
-t0 = performance.now();
-const files = readdirSync(join(work, 'nc')).filter((f) => f.endsWith('.nc')).map((f) => join(work, 'nc', f));
-execFileSync(raypc, ['preprocess', ...files, '-o', join(work, 'ds'), '--no-pathlines', '--quiet'], { stdio: 'ignore' });
-console.log(`preprocess: ${seconds(t0).toFixed(1)} s (--no-pathlines; load ${load()})`);
+let dataset = given && resolve(given);
+if (dataset) {
+  const manifest = JSON.parse(readFileSync(join(dataset, 'dataset.json'), 'utf8'));
+  steps = manifest.steps?.length ?? manifest.times?.length ?? NaN;
+  console.log(`analyses over ${dataset}: ${steps} steps; machine: ${cpus().length} cores, ${cpus()[0]?.model ?? '?'}`);
+} else {
+  console.log(`analyses over a series: ${steps} steps of ${grid}; machine: ${cpus().length} cores, ${cpus()[0]?.model ?? '?'}`);
+  rmSync(work, { recursive: true, force: true });
+  let t0 = performance.now();
+  execFileSync(raypc, ['synth', '-o', join(work, 'nc'), '--grid', grid, '--steps', String(steps),
+    '--avalanche', String(2 * Math.floor(steps / 2))], { stdio: 'ignore' });
+  console.log(`synth:      ${seconds(t0).toFixed(1)} s (load ${load()})`);
+  t0 = performance.now();
+  const files = readdirSync(join(work, 'nc')).filter((f) => f.endsWith('.nc')).map((f) => join(work, 'nc', f));
+  execFileSync(raypc, ['preprocess', ...files, '-o', join(work, 'ds'), '--no-pathlines', '--quiet'], { stdio: 'ignore' });
+  console.log(`preprocess: ${seconds(t0).toFixed(1)} s (--no-pathlines; load ${load()})`);
+  dataset = join(work, 'ds');
+}
 
-const child = spawn(raypc, ['serve', join(work, 'ds'), '--port', '0'], { stdio: ['ignore', 'pipe', 'pipe'] });
+const child = spawn(raypc, ['serve', dataset, '--port', '0'], { stdio: ['ignore', 'pipe', 'pipe'] });
 let out = '';
 const url = await new Promise((res, rej) => {
   child.stdout.on('data', (d) => {
@@ -100,5 +111,5 @@ for (const [i, b] of brushes.entries()) {
 }
 child.kill('SIGTERM');
 await new Promise((res) => child.once('exit', res));
-if (!keep) rmSync(work, { recursive: true, force: true });
+if (!keep && !given) rmSync(work, { recursive: true, force: true });
 console.log(`load at the end: ${load()}`);
