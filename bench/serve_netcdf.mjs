@@ -38,9 +38,13 @@ ws.binaryType = 'arraybuffer';
 await new Promise((resolve) => { ws.onopen = resolve; });
 ws.send(JSON.stringify({ type: 'hello', protocol: 1 }));
 let first = null;
-await new Promise((resolve) => {
+await new Promise((resolve, reject) => {
   ws.onmessage = (e) => {
-    if (typeof e.data === 'string') return;
+    if (typeof e.data === 'string') {
+      const m = JSON.parse(e.data);
+      if (m.type === 'error') reject(new Error(`the server refused the state: ${m.message ?? e.data}`));
+      return;
+    }
     const n = new DataView(e.data).getUint32(0, true);
     const h = JSON.parse(new TextDecoder().decode(new Uint8Array(e.data, 4, n)));
     if (first === null) {
@@ -52,8 +56,15 @@ await new Promise((resolve) => {
       resolve();
     }
   };
+  // A small series is whole before the first step converges: the server that serves it replaces the
+  // first and closes this connection.
+  ws.onclose = () => {
+    console.log(`connection closed before a converged frame: ${since()} s (the whole series replaced the first step's server)`);
+    resolve();
+  };
   ws.send(JSON.stringify({ type: 'state', id: 1, state, interactive: false }));
 });
+ws.onclose = null;
 ws.close();
 for (;;) {
   let p = null;
