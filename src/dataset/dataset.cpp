@@ -349,10 +349,38 @@ float StepVolume::value(size_t var, size_t iLat, size_t iR, size_t iLon) const
         return p[m_grid.index(iLat, iR, iLon)];
     if (m_base && var < m_base->variableCount())
         return m_base->value(var, iLat, iR, iLon);
+    if (const ShellAnomalyOf* of = computedFrom(var))
+        return shellAnomalyValue(value(of->base, iLat, iR, iLon), shellMeanOf(of->base, iR), of->kind);
     if (var >= m_storedCount)
         return values(var)[m_grid.index(iLat, iR, iLon)];
     m_mapped[var].checkNotCutShort();
     return mappedValue(var, iLat, iR, iLon);
+}
+
+double StepVolume::shellMeanOf(size_t base, size_t iR) const
+{
+    {
+        std::lock_guard lock(m_computeMutex);
+        if (const auto all = m_shellMeans.find(base); all != m_shellMeans.end())
+            return all->second[iR];
+        PointShellMeans& some = m_pointShellMeans[base];
+        if (some.known.empty()) {
+            some.means.assign(m_grid.nR(), 0.0);
+            some.known.assign(m_grid.nR(), 0);
+        }
+        if (some.known[iR])
+            return some.means[iR];
+    }
+    // Outside the lock: valuesInBox runs a parallel loop. Two threads may compute one shell: the same bits.
+    const size_t nLat = m_grid.nLat(), nLon = m_grid.nLon();
+    std::vector<float> shell(nLat * nLon);
+    valuesInBox(base, {0, iR, 0}, {nLat, iR + 1, nLon}, shell.data());
+    const double mean = shellMean(m_grid.volumeFactors(), shell.data(), nLon);
+    std::lock_guard lock(m_computeMutex);
+    PointShellMeans& some = m_pointShellMeans[base];
+    some.means[iR] = mean;
+    some.known[iR] = 1;
+    return mean;
 }
 
 float StepVolume::mappedValue(size_t var, size_t iLat, size_t iR, size_t iLon) const
