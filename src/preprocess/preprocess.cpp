@@ -694,7 +694,7 @@ PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const P
         progress.emplace("preprocess", static_cast<int64_t>(todo.size()), "steps");
     // One process traces the pathlines while it writes the steps (phases::PathlineStream), fed each
     // step in order once it and every step before it are written; with the variables the plan
-    // expects (a computed variable some step leaves undefined makes the sets again in phase 7).
+    // expects (a computed variable some step leaves undefined loses its columns afterwards).
     std::unique_ptr<phases::PathlineStream> pathlines = startPathlines(outDir, plan, options, stepJsons);
     int fed = 0;
     auto feedPathlines = [&] {
@@ -754,13 +754,13 @@ PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const P
     variables.insert(variables.end(), computed.begin(), computed.end());
     std::set<int> pathlinesMade;  // by the one pass, with the columns of `variables`
     if (pathlines) {
-        if (computed.size() == plan.computed.size() && !pathlines->stopped()) {
+        if (!pathlines->stopped()) {
+            // A computed variable some step leaves undefined is not the dataset's: its columns go.
+            if (computed.size() != plan.computed.size())
+                phases::keepPathlineColumns(outDir, pathlines->written(), variables);
             pathlinesMade = pathlines->written();
             summary.pathlineSetsWritten += int(pathlinesMade.size());
             summary.pathlineCount += pathlines->lineCount();
-        } else {
-            for (int s : pathlines->written())
-                fs::remove_all(analysis::pathlineDir(outDir, s));
         }
         summary.pathlineWindowPeakBytes = pathlines->peakHeldBytes();
         pathlines.reset();

@@ -316,6 +316,38 @@ void PathlineStream::finish(OpenSet& open)
         onSetWritten();
 }
 
+void keepPathlineColumns(const fs::path& outDir, const std::set<int>& sets, const std::vector<VariableSpec>& specs)
+{
+    std::vector<std::string> names;
+    for (const auto& v : specs)
+        names.push_back(v.name);
+    const std::vector<std::string> columns = analysis::pathlineColumns(names);
+    for (int s : sets) {
+        analysis::PathlineSet set = analysis::loadPathlineSet(outDir, s);
+        std::vector<size_t> kept;
+        for (const std::string& c : columns) {
+            const int at = set.column(c);
+            RAYPC_CHECK(at >= 0);
+            kept.push_back(size_t(at));
+        }
+        std::vector<float> attributes;
+        std::vector<std::string> units;
+        for (size_t c : kept)
+            units.push_back(set.units[c]);
+        for (size_t line = 0; line < set.lineCount(); ++line)
+            for (size_t c : kept)
+                attributes.push_back(set.attribute(line, c));
+        set.columns = columns;
+        set.units = std::move(units);
+        set.attributes = std::move(attributes);
+        const fs::path finalDir = analysis::pathlineDir(outDir, s);
+        const fs::path tmpDir = temporarySibling(finalDir);
+        analysis::writePathlineSet(tmpDir, set);
+        fs::remove_all(finalDir);
+        renameAtomic(tmpDir, finalDir);
+    }
+}
+
 void writePathlines(const fs::path& outDir, const grid::SphericalGrid& grid, const std::vector<VariableSpec>& specs,
                     const std::vector<json>& stepJsons, const PreprocessOptions& options,
                     const std::set<int>& madeThisRun, PreprocessSummary& summary)

@@ -113,6 +113,12 @@ private:
     bool m_stopped = false;
 };
 
+// Rewrites the sets `sets` (written by a PathlineStream with more variables) with the attribute
+// columns of `specs` only (a computed variable some step left undefined is not the dataset's).
+// Throws raypc::Error as loadPathlineSet and writePathlineSet.
+void keepPathlineColumns(const std::filesystem::path& outDir, const std::set<int>& sets,
+                         const std::vector<VariableSpec>& specs);
+
 // The pathline phase after the steps: the sets still to do (those the one pass did not write: a
 // distributed run, a run that resumed, a run whose computed variables changed), each rank tracing a
 // contiguous block of them with a PathlineStream fed from the written steps. `madeThisRun`: the sets
