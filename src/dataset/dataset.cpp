@@ -363,24 +363,28 @@ double StepVolume::shellMeanOf(size_t base, size_t iR) const
         std::lock_guard lock(m_computeMutex);
         if (const auto all = m_shellMeans.find(base); all != m_shellMeans.end())
             return all->second[iR];
-        PointShellMeans& some = m_pointShellMeans[base];
-        if (some.known.empty()) {
-            some.means.assign(m_grid.nR(), 0.0);
-            some.known.assign(m_grid.nR(), 0);
-        }
-        if (some.known[iR])
-            return some.means[iR];
     }
-    // Outside the lock: valuesInBox runs a parallel loop. Two threads may compute one shell: the same bits.
-    const size_t nLat = m_grid.nLat(), nLon = m_grid.nLon();
-    std::vector<float> shell(nLat * nLon);
-    valuesInBox(base, {0, iR, 0}, {nLat, iR + 1, nLon}, shell.data());
-    const double mean = shellMean(m_grid.volumeFactors(), shell.data(), nLon);
+    // Every shell's mean at once (shellMeans, as compute() gets them): from the values when they are
+    // at hand (decoded, or mapped float32), else from a decoded copy dropped at once, so that a few
+    // point reads keep no array of the grid. Outside the lock (parallel loops); two threads may
+    // compute them: the same bits.
+    const size_t n = m_grid.cellCount();
+    std::vector<double> means;
+    if (m_encoding == ValueEncoding::Uint16 && !valuesReady(base) && !(m_base && base < m_base->variableCount()) &&
+        base < m_storedCount) {
+        m_mapped[base].checkNotCutShort();
+        std::vector<float> decoded(n);
+        tbb::this_task_arena::isolate([&] {
+            decodeUint16(m_grid, m_bricks, {static_cast<const uint16_t*>(m_valueFiles[base]), n},
+                         {m_bounds[base], 2 * m_bricks.brickCount()}, decoded, hasMissing(base));
+            means = shellMeans(m_grid, decoded);
+        });
+    } else {
+        const std::span<const float> values(this->values(base), n);
+        tbb::this_task_arena::isolate([&] { means = shellMeans(m_grid, values); });
+    }
     std::lock_guard lock(m_computeMutex);
-    PointShellMeans& some = m_pointShellMeans[base];
-    some.means[iR] = mean;
-    some.known[iR] = 1;
-    return mean;
+    return m_shellMeans.try_emplace(base, std::move(means)).first->second[iR];
 }
 
 float StepVolume::mappedValue(size_t var, size_t iLat, size_t iR, size_t iLon) const
