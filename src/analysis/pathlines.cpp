@@ -118,14 +118,37 @@ double PathlineTracer::sample(size_t var, const Vec3d& pKm, double timeMyr) cons
 
 TracedPathline PathlineTracer::trace(const Vec3d& startKm, double startMyr, double endMyr) const
 {
-    TracedPathline line;
-    line.pointsKm.push_back(startKm);
-    line.timesMyr.push_back(startMyr);
-    auto k1 = velocityKmPerMyr(startKm, startMyr);
+    PathlineTrace tr = begin(startKm, startMyr);
+    if (!tr.done)
+        advance(tr, endMyr, endMyr);
+    return std::move(tr.line);
+}
+
+PathlineTrace PathlineTracer::begin(const Vec3d& startKm, double startMyr) const
+{
+    PathlineTrace tr;
+    tr.line.pointsKm.push_back(startKm);
+    tr.line.timesMyr.push_back(startMyr);
+    const auto k1 = velocityKmPerMyr(startKm, startMyr);
     if (!k1) {
-        line.end = PathlineEnd::LeftShell;
-        return line;
+        tr.line.end = PathlineEnd::LeftShell;
+        tr.done = true;
+        return tr;
     }
+    tr.velocityKmPerMyr = *k1;
+    tr.nextStepMyr = m_options.maxStepMyr;
+    return tr;
+}
+
+void PathlineTracer::advance(PathlineTrace& tr, double untilMyr, double endMyr) const
+{
+    if (tr.done)
+        return;
+    TracedPathline& line = tr.line;
+    auto finish = [&](PathlineEnd end) {
+        line.end = end;
+        tr.done = true;
+    };
     const auto& times = m_series.timesMyr;
     const double timeEps = 1e-9 * std::max(1.0, std::abs(endMyr));
 
@@ -166,14 +189,20 @@ TracedPathline PathlineTracer::trace(const Vec3d& startKm, double startMyr, doub
         return error <= 0 ? 5.0 : std::clamp(0.9 * std::pow(m_options.toleranceKm / error, 0.2), 0.2, 5.0);
     };
 
-    Vec3d p = startKm;
-    double t = startMyr;
-    double h = m_options.maxStepMyr;
-    k[0] = *k1;
-    while (t < endMyr - timeEps) {
+    Vec3d p = line.pointsKm.back();
+    double t = line.timesMyr.back();
+    double h = tr.nextStepMyr;
+    k[0] = tr.velocityKmPerMyr;
+    // Save the state for the next call (a line that ended needs none).
+    auto pause = [&] {
+        tr.velocityKmPerMyr = k[0];
+        tr.nextStepMyr = h;
+    };
+    const double stopMyr = std::min(untilMyr, endMyr);
+    while (t < stopMyr - timeEps) {
         if (line.pointsKm.size() >= m_options.maxPoints) {
-            line.end = PathlineEnd::PointLimit;
-            return line;
+            finish(PathlineEnd::PointLimit);
+            return;
         }
         // Land exactly on the next step time (velocity is only piecewise linear in time) and keep
         // stored points close enough for smooth tubes.
@@ -210,12 +239,12 @@ TracedPathline PathlineTracer::trace(const Vec3d& startKm, double startMyr, doub
                 line.lengthKm += length(loP - p);
                 line.pointsKm.push_back(loP);
                 line.timesMyr.push_back(t + lo);
-                line.end = PathlineEnd::LeftShell;
-                return line;
+                finish(PathlineEnd::LeftShell);
+                return;
             }
             if (lo <= 0) {
-                line.end = PathlineEnd::LeftShell;
-                return line;
+                finish(PathlineEnd::LeftShell);
+                return;
             }
             // The exit step is not accurate enough: shorten and try again.
             h = lo * factor(loError);
@@ -231,8 +260,10 @@ TracedPathline PathlineTracer::trace(const Vec3d& startKm, double startMyr, doub
         }
         h *= factor(error);
     }
-    line.end = PathlineEnd::ReachedEndTime;
-    return line;
+    if (t >= endMyr - timeEps)
+        finish(PathlineEnd::ReachedEndTime);
+    else
+        pause();
 }
 
 // --- Tracing a set ---------------------------------------------------------------------------
@@ -256,56 +287,75 @@ std::vector<std::string> pathlineColumns(const std::vector<std::string>& variabl
     return columns;
 }
 
-PathlineSet tracePathlines(const FieldSeries& series, const PathlineTracer& tracer,
-                           const std::vector<CriticalPoint>& seeds, int injectionStep, int endStep,
-                           const std::vector<std::string>& names, const std::vector<std::string>& units)
+PathlineSet emptyPathlineSet(int injectionStep, double injectionTimeMyr, int endStep,
+                             const std::vector<std::string>& names, const std::vector<std::string>& units)
 {
     RAYPC_CHECK_EQ(names.size(), units.size());
-    RAYPC_CHECK(injectionStep >= 0 && endStep >= injectionStep &&
-                endStep < static_cast<int>(series.timesMyr.size()));
     PathlineSet set;
     set.injectionStep = injectionStep;
-    set.injectionTimeMyr = series.timesMyr[injectionStep];
+    set.injectionTimeMyr = injectionTimeMyr;
     set.endStep = endStep;
     set.columns = pathlineColumns(names);
     for (const columns::TableColumn& c : kPathlineFixedColumns)
         set.units.push_back(c.units);
     for (size_t side = 0; side < columns::kPathlineVariablePrefixes.size(); ++side)
         set.units.insert(set.units.end(), units.begin(), units.end());
+    set.offsets.push_back(0);
+    return set;
+}
 
+std::vector<float> sampleVariables(const PathlineTracer& tracer, size_t variableCount, const Vec3d& pKm, double timeMyr)
+{
+    std::vector<float> values(variableCount);
+    for (size_t v = 0; v < variableCount; ++v)
+        values[v] = static_cast<float>(tracer.sample(v, pKm, timeMyr));
+    return values;
+}
+
+void appendPathline(PathlineSet& set, const CriticalPoint& seed, const TracedPathline& line,
+                    std::span<const float> startValues, std::span<const float> endValues)
+{
+    const size_t nc = set.columns.size();
+    RAYPC_CHECK_EQ(kPathlineFixedColumnCount + startValues.size() + endValues.size(), nc);
+    for (size_t j = 0; j < line.pointsKm.size(); ++j) {
+        const Vec3d& p = line.pointsKm[j];
+        for (double x : {p.x, p.y, p.z, line.timesMyr[j]})
+            set.points.push_back(static_cast<float>(x));
+    }
+    set.offsets.push_back(static_cast<uint32_t>(set.pointCount()));
+    const Vec3d a = line.pointsKm.front(), b = line.pointsKm.back();
+    const double ta = line.timesMyr.front(), tb = line.timesMyr.back();
+    const SphericalPoint sa = cartesianToSpherical(a), sb = cartesianToSpherical(b);
+    // A seed without a persistence (chosen by hand, or by a rule that computed none) gets 0.
+    const double persistence = std::isnan(seed.persistence) ? 0.0 : seed.persistence;
+    const double fixed[] = {static_cast<double>(seed.kind), seed.value, persistence, set.injectionTimeMyr, tb - ta,
+                            line.lengthKm, static_cast<double>(line.end), sa.latDeg, sa.lonDeg, sa.rKm,
+                            sb.latDeg, sb.lonDeg, sb.rKm};
+    static_assert(sizeof(fixed) / sizeof(fixed[0]) == kPathlineFixedColumnCount);
+    for (double x : fixed)
+        set.attributes.push_back(static_cast<float>(x));
+    set.attributes.insert(set.attributes.end(), startValues.begin(), startValues.end());
+    set.attributes.insert(set.attributes.end(), endValues.begin(), endValues.end());
+}
+
+PathlineSet tracePathlines(const FieldSeries& series, const PathlineTracer& tracer,
+                           const std::vector<CriticalPoint>& seeds, int injectionStep, int endStep,
+                           const std::vector<std::string>& names, const std::vector<std::string>& units)
+{
+    RAYPC_CHECK(injectionStep >= 0 && endStep >= injectionStep &&
+                endStep < static_cast<int>(series.timesMyr.size()));
+    PathlineSet set = emptyPathlineSet(injectionStep, series.timesMyr[injectionStep], endStep, names, units);
     const double t0 = series.timesMyr[injectionStep], t1 = series.timesMyr[endStep];
     std::vector<TracedPathline> lines(seeds.size());
     tbb::parallel_for(size_t(0), seeds.size(), [&](size_t i) {
         const auto& s = seeds[i];
         lines[i] = tracer.trace(sphericalToCartesianKm(s.latDeg, s.lonDeg, s.rKm), t0, t1);
     });
-
-    const size_t nc = set.columns.size();
-    set.attributes.resize(seeds.size() * nc);
-    set.offsets.push_back(0);
     for (size_t i = 0; i < seeds.size(); ++i) {
         const auto& line = lines[i];
-        for (size_t j = 0; j < line.pointsKm.size(); ++j) {
-            const Vec3d& p = line.pointsKm[j];
-            for (double x : {p.x, p.y, p.z, line.timesMyr[j]})
-                set.points.push_back(static_cast<float>(x));
-        }
-        set.offsets.push_back(static_cast<uint32_t>(set.pointCount()));
-        const Vec3d a = line.pointsKm.front(), b = line.pointsKm.back();
-        const double ta = line.timesMyr.front(), tb = line.timesMyr.back();
-        const SphericalPoint sa = cartesianToSpherical(a), sb = cartesianToSpherical(b);
-        float* row = set.attributes.data() + i * nc;
-        // A seed without a persistence (chosen by hand, or by a rule that computed none) gets 0.
-        const double persistence = std::isnan(seeds[i].persistence) ? 0.0 : seeds[i].persistence;
-        const double fixed[] = {static_cast<double>(seeds[i].kind), seeds[i].value, persistence, t0, tb - ta, line.lengthKm,
-                                static_cast<double>(line.end), sa.latDeg, sa.lonDeg, sa.rKm,
-                                sb.latDeg, sb.lonDeg, sb.rKm};
-        for (size_t c = 0; c < kPathlineFixedColumnCount; ++c)
-            row[c] = static_cast<float>(fixed[c]);
-        for (size_t v = 0; v < names.size(); ++v) {
-            row[kPathlineFixedColumnCount + v] = static_cast<float>(tracer.sample(v, a, ta));
-            row[kPathlineFixedColumnCount + names.size() + v] = static_cast<float>(tracer.sample(v, b, tb));
-        }
+        appendPathline(set, seeds[i], line,
+                       sampleVariables(tracer, names.size(), line.pointsKm.front(), line.timesMyr.front()),
+                       sampleVariables(tracer, names.size(), line.pointsKm.back(), line.timesMyr.back()));
     }
     return set;
 }

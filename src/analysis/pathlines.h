@@ -22,6 +22,7 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -71,6 +72,16 @@ struct TracedPathline {
     double lengthKm = 0;  // polyline length
 };
 
+// A line part way through its trace (PathlineTracer::begin, advance): the line so far and the
+// integrator's state at its last point, so that tracing interval by interval, each with a series of
+// only the steps it needs, gives the same line as one trace over the whole series.
+struct PathlineTrace {
+    TracedPathline line;
+    Vec3d velocityKmPerMyr{};  // at the last point (Dormand–Prince's first-same-as-last stage)
+    double nextStepMyr = 0;    // the step size the controller chose last
+    bool done = false;         // the line ended (line.end says why)
+};
+
 // Integrates dx/dt = v(x, t) with the Dormand–Prince 5(4) pair (Dormand & Prince 1980; step
 // control as in Hairer, Nørsett & Wanner, "Solving ODEs I", II.4), steps ending exactly on the
 // series' step times (where v has a kink in time). A line stops at `endMyr`, or where it leaves
@@ -90,6 +101,18 @@ public:
     double sample(size_t var, const Vec3d& pKm, double timeMyr) const;
 
     TracedPathline trace(const Vec3d& startKm, double startMyr, double endMyr) const;
+
+    // trace() in parts: begin() at the seed, then advance() to successive step times until done.
+    // advance(trace, untilMyr, endMyr) integrates until `untilMyr` (a time of this tracer's series,
+    // at most the line's `endMyr`) or the line ends; it reads the series' steps bracketing
+    // [last time, untilMyr] and, for a step that lands within rounding past `untilMyr`, the step
+    // after it (include it when it is <= the end step). begin then advance(endMyr) once is trace().
+    // A line whose time lands within 1e-9 endMyr short of a step time without reaching it continues
+    // on the next call with the velocity of that step rather than interpolated to it: a change far
+    // below the integration tolerance, not seen in practice (the controller lands on step times
+    // exactly).
+    PathlineTrace begin(const Vec3d& startKm, double startMyr) const;
+    void advance(PathlineTrace& trace, double untilMyr, double endMyr) const;
 
 private:
     std::optional<grid::GridSampler::Location> locate(const Vec3d& pKm) const;
@@ -144,5 +167,15 @@ std::vector<std::string> pathlineColumns(const std::vector<std::string>& variabl
 PathlineSet tracePathlines(const FieldSeries& series, const PathlineTracer& tracer,
                            const std::vector<CriticalPoint>& seeds, int injectionStep, int endStep,
                            const std::vector<std::string>& names, const std::vector<std::string>& units);
+
+// tracePathlines in parts, for a set traced interval by interval (preprocessing's one pass): a set
+// with the columns of `names` and no lines yet; each variable at a point and time (the tracer's
+// sample(), as stored: float); a traced line appended with its attribute row, `startValues` and
+// `endValues` being sampleVariables at its first and last point.
+PathlineSet emptyPathlineSet(int injectionStep, double injectionTimeMyr, int endStep,
+                             const std::vector<std::string>& names, const std::vector<std::string>& units);
+std::vector<float> sampleVariables(const PathlineTracer& tracer, size_t variableCount, const Vec3d& pKm, double timeMyr);
+void appendPathline(PathlineSet& set, const CriticalPoint& seed, const TracedPathline& line,
+                    std::span<const float> startValues, std::span<const float> endValues);
 
 }  // namespace raypc::analysis

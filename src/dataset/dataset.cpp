@@ -349,10 +349,42 @@ float StepVolume::value(size_t var, size_t iLat, size_t iR, size_t iLon) const
         return p[m_grid.index(iLat, iR, iLon)];
     if (m_base && var < m_base->variableCount())
         return m_base->value(var, iLat, iR, iLon);
+    if (const ShellAnomalyOf* of = computedFrom(var))
+        return shellAnomalyValue(value(of->base, iLat, iR, iLon), shellMeanOf(of->base, iR), of->kind);
     if (var >= m_storedCount)
         return values(var)[m_grid.index(iLat, iR, iLon)];
     m_mapped[var].checkNotCutShort();
     return mappedValue(var, iLat, iR, iLon);
+}
+
+double StepVolume::shellMeanOf(size_t base, size_t iR) const
+{
+    {
+        std::lock_guard lock(m_computeMutex);
+        if (const auto all = m_shellMeans.find(base); all != m_shellMeans.end())
+            return all->second[iR];
+    }
+    // Every shell's mean at once (shellMeans, as compute() gets them): from the values when they are
+    // at hand (decoded, or mapped float32), else from a decoded copy dropped at once, so that a few
+    // point reads keep no array of the grid. Outside the lock (parallel loops); two threads may
+    // compute them: the same bits.
+    const size_t n = m_grid.cellCount();
+    std::vector<double> means;
+    if (m_encoding == ValueEncoding::Uint16 && !valuesReady(base) && !(m_base && base < m_base->variableCount()) &&
+        base < m_storedCount) {
+        m_mapped[base].checkNotCutShort();
+        std::vector<float> decoded(n);
+        tbb::this_task_arena::isolate([&] {
+            decodeUint16(m_grid, m_bricks, {static_cast<const uint16_t*>(m_valueFiles[base]), n},
+                         {m_bounds[base], 2 * m_bricks.brickCount()}, decoded, hasMissing(base));
+            means = shellMeans(m_grid, decoded);
+        });
+    } else {
+        const std::span<const float> values(this->values(base), n);
+        tbb::this_task_arena::isolate([&] { means = shellMeans(m_grid, values); });
+    }
+    std::lock_guard lock(m_computeMutex);
+    return m_shellMeans.try_emplace(base, std::move(means)).first->second[iR];
 }
 
 float StepVolume::mappedValue(size_t var, size_t iLat, size_t iR, size_t iLon) const

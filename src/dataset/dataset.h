@@ -137,8 +137,9 @@ public:
         return p ? p : decode(var);
     }
     // values(var)[grid().index(iLat, iR, iLon)], without decoding the whole variable when it is not
-    // decoded yet (for a few samples, such as the pathline phase's attributes). Thread-safe. Throws
-    // as values() does (float32: for this value only).
+    // decoded yet (for a few samples, such as the pathlines' attributes): a computed variable from its
+    // base's value and the mean of the point's shell (the step's shell means computed once from a
+    // decoded copy of the base that is not kept: the same bits). Thread-safe. Throws as values() does (float32: for this value only).
     float value(size_t var, size_t iLat, size_t iR, size_t iLon) const;
     // value() of every point of the box [begin[a], end[a]) of each axis (lat, r, lon) into `out` (the
     // box's shape, C order), for a box much smaller than the grid (Python's lazy xarray arrays): the
@@ -208,6 +209,8 @@ private:
     mutable std::mutex m_computeMutex;
     mutable std::vector<std::vector<float>> m_computedBounds;    // per computed variable, with its values
     mutable std::map<size_t, std::vector<double>> m_shellMeans;  // per base variable, this level's
+    // m_shellMeans[base][iR], computed first if need be without keeping the base's values decoded.
+    double shellMeanOf(size_t base, size_t iR) const;
 };
 
 // The parallel-coordinates sample of one step: `rows` cells, columns = coordinates

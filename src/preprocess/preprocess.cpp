@@ -11,6 +11,7 @@
 #include "core/system_memory.h"
 #include "dataset/bricks.h"
 #include "dataset/dataset_format.h"
+#include "analysis/pathline_storage.h"
 #include "preprocess/preprocess_phases.h"
 #include "io/series_input.h"
 
@@ -26,6 +27,8 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <memory>
+#include <set>
 #include <optional>
 #include <utility>
 
@@ -270,12 +273,13 @@ RunPlan planRun(StepSource& source, PreprocessOptions& options)
             options.pathlines.field = field;
     }
     phases::checkPathlineOptions(options.pathlines, seedable);
-    // A u16 dataset's pathline phase decodes the velocities of every step it traces through.
+    // A u16 dataset's pathlines decode the velocity of at most three steps (phases::PathlineStream)
+    // and a seed field with the variable it is computed from, between steps.
     // The stored variables, and one array for the computed ones' statistics.
     uint64_t bytes = preprocessMemoryBytes(plan.header.grid, plan.specs.size() + (plan.computed.empty() ? 0 : 1));
     if (options.encoding == dataset::ValueEncoding::Uint16 && options.pathlines.enabled) {
-        const uint64_t traced = uint64_t(std::min<size_t>(size_t(std::max(options.pathlines.steps, 0)), source.stepCount() - 1)) + 1;
-        bytes = std::max(bytes, (3 * traced + 1) * plan.header.grid.cellCount() * sizeof(float));
+        const uint64_t window = std::min<uint64_t>(3, source.stepCount());
+        bytes = std::max(bytes, (3 * window + 2) * plan.header.grid.cellCount() * sizeof(float));
     }
     grid::checkGridFitsMemory(plan.header.grid, bytes, source.path(0), "preprocess", availableMemory());
     plan.manifest = manifest(plan.levels, plan.specs, source, options, options.sampleRows);
@@ -599,6 +603,34 @@ void addStepsToManifest(json& j, const std::vector<json>& stepJsons, const std::
     }
 }
 
+// The one pass of pathlines (phases::PathlineStream) for one process, over the sets still to do,
+// with the variables the plan expects; none under mpirun (phase 7 shares the sets out), without
+// pathlines, or when the seed field is not among the variables (phase 7 then says so).
+std::unique_ptr<phases::PathlineStream> startPathlines(const fs::path& outDir, const RunPlan& plan,
+                                                       const PreprocessOptions& options, const std::vector<json>& stepJsons)
+{
+    const PathlineOptions& po = options.pathlines;
+    if (mpi::distributed() || !po.enabled || po.steps < 1)
+        return nullptr;
+    std::vector<VariableSpec> specs = plan.specs;
+    specs.insert(specs.end(), plan.computed.begin(), plan.computed.end());
+    if (std::none_of(specs.begin(), specs.end(), [&](const VariableSpec& v) { return v.name == po.field; }))
+        return nullptr;
+    std::vector<double> times;
+    for (size_t s = 0; s < stepJsons.size(); ++s)
+        times.push_back(stepJsons[s].is_null() ? stepTimeMyr(options, int(s)) : stepJsons[s].at("time_myr").get<double>());
+    int skipped = 0;
+    std::vector<int> sets = phases::pathlineSetsToDo(outDir, int(stepJsons.size()), po, {}, skipped);
+    auto stream = std::make_unique<phases::PathlineStream>(outDir, plan.header.grid, std::move(specs), std::move(sets),
+                                                            std::move(times), options);
+    const int total = int(stepJsons.size());
+    stream->onSetWritten = [&options, &stream = *stream, skipped, total] {
+        if (options.onProgress)
+            options.onProgress({"pathlines", skipped + int(stream.written().size()), total});
+    };
+    return stream;
+}
+
 }  // namespace
 
 void phases::throwIfCancelled(const PreprocessOptions& options)
@@ -660,21 +692,35 @@ PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const P
     std::optional<Progress> progress;
     if (!options.quiet && !todo.empty() && mpi::isRoot())
         progress.emplace("preprocess", static_cast<int64_t>(todo.size()), "steps");
+    // One process traces the pathlines while it writes the steps (phases::PathlineStream), fed each
+    // step in order once it and every step before it are written; with the variables the plan
+    // expects (a computed variable some step leaves undefined loses its columns afterwards).
+    std::unique_ptr<phases::PathlineStream> pathlines = startPathlines(outDir, plan, options, stepJsons);
+    int fed = 0;
+    auto feedPathlines = [&] {
+        for (; pathlines && fed < int(stepJsons.size()) && !stepJsons[size_t(fed)].is_null(); ++fed)
+            pathlines->stepReady(fed, stepJsons[size_t(fed)]);
+    };
     int64_t reported = 0;
     json written = json::object();  // this rank's steps: index -> step manifest
     try {
+        feedPathlines();
         mpi::forEachDynamic(
             int64_t(todo.size()),
             [&](int64_t item) {
                 phases::throwIfCancelled(options);
                 const int s = todo[size_t(item)];
-                written[std::to_string(s)] = writeStep(outDir, plan, source, s, cells, options);
+                const json& stepJson = written[std::to_string(s)] = writeStep(outDir, plan, source, s, cells, options);
                 if (out)
                     out->keep();
                 ++summary.stepsWritten;
                 if (options.onProgress)
                     options.onProgress({"steps", summary.stepsSkipped + summary.stepsWritten, int(source.stepCount())});
                 mpi::dieHook("preprocess-step");
+                if (pathlines) {
+                    stepJsons[size_t(s)] = stepJson;
+                    feedPathlines();
+                }
             },
             [&](int64_t handedOut) {
                 if (progress)
@@ -706,6 +752,19 @@ PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const P
     std::vector<VariableSpec> variables = plan.specs;
     const std::vector<VariableSpec> computed = offeredComputedSpecs(plan, stepJsons);
     variables.insert(variables.end(), computed.begin(), computed.end());
+    std::set<int> pathlinesMade;  // by the one pass, with the columns of `variables`
+    if (pathlines) {
+        if (!pathlines->stopped()) {
+            // A computed variable some step leaves undefined is not the dataset's: its columns go.
+            if (computed.size() != plan.computed.size())
+                phases::keepPathlineColumns(outDir, pathlines->written(), variables);
+            pathlinesMade = pathlines->written();
+            summary.pathlineSetsWritten += int(pathlinesMade.size());
+            summary.pathlineCount += pathlines->lineCount();
+        }
+        summary.pathlineWindowPeakBytes = pathlines->peakHeldBytes();
+        pathlines.reset();
+    }
     mpi::together([&] {
         addStepsToManifest(plan.manifest, stepJsons, computed);
         // Phase 7 reads the finished steps back: the manifest says "complete" only after it.
@@ -738,7 +797,7 @@ PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const P
                              gaps.size() == 1 ? "has" : "have");
         }
     }
-    phases::writePathlines(outDir, plan.header.grid, variables, stepJsons, options, summary);
+    phases::writePathlines(outDir, plan.header.grid, variables, stepJsons, options, pathlinesMade, summary);
     mpi::together([&] {
         plan.manifest["pathlines"] =
             options.pathlines.enabled ? phases::pathlineSettings(options.pathlines) : json();

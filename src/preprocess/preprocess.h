@@ -23,8 +23,8 @@
 
 namespace raypc::preprocess {
 
-// The pathline phase (docs/format.md, "Pathlines"): after every step is written, the significant
-// critical points of `field` at each step seed pathlines traced through the next `steps` steps.
+// The pathlines (docs/format.md, "Pathlines"): the significant critical points of `field` at each
+// step seed pathlines traced through the next `steps` steps, while the steps are written.
 struct PathlineOptions {
     bool enabled = true;
     // Why a run traces none (the manifest's `no_pathlines`), set where they are left out: the model
@@ -74,6 +74,9 @@ struct PreprocessSummary {
     int pathlineSetsWritten = 0;
     int pathlineSetsSkipped = 0;  // finished by an earlier run with the same settings
     size_t pathlineCount = 0;     // lines in the sets written by this run
+    // The most bytes of decoded values the pathline tracing held at once (its window of velocity
+    // and a seed field; phases::PathlineStream::peakHeldBytes), this process.
+    size_t pathlineWindowPeakBytes = 0;
     double seconds = 0;
 };
 
@@ -107,9 +110,10 @@ public:
 //    before anything is written; 2. the output directory: locked (DatasetWriteLock), checked
 //    for resuming, the "incomplete" manifest written; 3. the sample's coordinates; 4. the steps
 //    an earlier run finished; 5. each remaining step (preprocess_numerics.h), written under a
-//    temporary name and renamed; 6. statistics over all steps in the manifest; 7. critical
-//    points and pathlines (preprocess_pathlines.cpp: they need later steps' velocities, read
-//    back from the written level-0 arrays); 8. the manifest says "complete".
+//    temporary name and renamed, and (one process) the pathlines traced in one pass as the steps
+//    are written (preprocess_pathlines.cpp: from the written level-0 arrays of the newest three
+//    steps); 6. statistics over all steps in the manifest; 7. the pathline sets still to do
+//    (under mpirun: all), from the written steps; 8. the manifest says "complete".
 // Resumable: finished steps of an earlier run into the same directory are kept. What a failed
 // or killed run leaves is in docs/format.md. Throws raypc::Error naming the file and the
 // problem on bad input, when another run holds `outDir`, and when `outDir` holds a dataset

@@ -4,6 +4,8 @@
 #include "core/error.h"
 #include "core/spherical.h"
 #include "dataset/dataset_format.h"
+#include "analysis/pathline_storage.h"
+#include "analysis/persistence.h"
 #include "synth/synth.h"
 #include "grid/test_util.h"
 
@@ -460,6 +462,84 @@ TEST(Preprocess, ResumesAfterAFailedRunAndSkipsFinishedSteps)
     auto other = quiet();
     other.dtMyr = 5;
     EXPECT_THROW(preprocess(inputs, dir / "ds", other), Error);
+}
+
+// A synthetic series of `steps` steps on a small grid, written into `dir` (its netCDF files).
+std::vector<std::filesystem::path> synthSeries(const std::filesystem::path& dir, int steps)
+{
+    synth::SynthOptions o;
+    o.nLat = 24;
+    o.nR = 17;
+    o.nLon = 48;
+    o.steps = steps;
+    synth::writeSyntheticSeries(dir, o);
+    return io::listSnapshotFiles({dir});
+}
+
+// The one pass traces each line interval by interval as the steps are written; the lines and their
+// attributes must be those of one trace over steps s..end of the written dataset (what the pathline
+// phase did before, re-reading the steps), to the bit.
+TEST(Preprocess, PathlinesOfTheOnePassEqualOneTraceOverTheWrittenSteps)
+{
+    TempDir dir("onepass");
+    PreprocessOptions o = quiet();
+    o.pathlines.steps = 3;  // sets that end inside the series and sets cut by its end
+    const auto summary = preprocess(synthSeries(dir / "in", 7), dir / "ds", o);
+    EXPECT_EQ(summary.pathlineSetsWritten, 7);
+    const auto ds = dataset::Dataset::open(dir / "ds");
+    std::vector<std::string> names, units;
+    for (const auto& v : ds->variables()) {
+        names.push_back(v.name);
+        units.push_back(v.units);
+    }
+    const size_t field = size_t(ds->variableIndex(o.pathlines.field));
+    const size_t vx = size_t(ds->variableIndex("vx")), vy = size_t(ds->variableIndex("vy")),
+                 vz = size_t(ds->variableIndex("vz"));
+    size_t lines = 0;
+    for (int s = 0; s < 7; ++s) {
+        const int end = std::min(s + 3, 6);
+        analysis::FieldSeries series;
+        series.grid = ds->levels()[0].grid;
+        for (int k = s; k <= end; ++k) {
+            series.timesMyr.push_back(ds->steps()[size_t(k)].timeMyr);
+            series.volumes.push_back(ds->load(k, 0));
+        }
+        const std::span<const float> values(series.field(0, field), series.grid.cellCount());
+        const auto all = analysis::findCriticalPoints(series.grid, values);
+        const auto seeds = analysis::selectSeeds(series.grid, values, all, o.pathlines.filter).seeds;
+        const analysis::PathlineTracer tracer(series, vx, vy, vz, o.pathlines.tracer);
+        const analysis::PathlineSet want = analysis::tracePathlines(series, tracer, seeds, 0, end - s, names, units);
+        const analysis::PathlineSet got = analysis::loadPathlineSet(dir / "ds", s);
+        ASSERT_GT(want.lineCount(), 0u) << s;
+        EXPECT_EQ(got.endStep, end);
+        ASSERT_EQ(got.offsets, want.offsets) << "set " << s;
+        ASSERT_EQ(got.columns, want.columns);
+        for (size_t i = 0; i < want.points.size(); ++i)
+            ASSERT_EQ(got.points[i], want.points[i]) << "set " << s << " value " << i;
+        for (size_t i = 0; i < want.attributes.size(); ++i)
+            ASSERT_EQ(std::bit_cast<uint32_t>(got.attributes[i]), std::bit_cast<uint32_t>(want.attributes[i]))
+                << "set " << s << " " << want.columns[i % want.columns.size()] << " of line " << i / want.columns.size();
+        lines += want.lineCount();
+    }
+    EXPECT_EQ(summary.pathlineCount, lines);
+}
+
+// The pathlines are traced with a window of the newest steps' velocity: what the tracing holds does
+// not grow with the number of steps (the pathline phase before held the 11 steps of a set: here
+// 4 + 1 steps of 5, then 10 + 1 of 16).
+TEST(Preprocess, ThePathlineWindowDoesNotGrowWithTheSteps)
+{
+    TempDir dir("window");
+    const auto few = preprocess(synthSeries(dir / "few", 5), dir / "ds-few", quiet());
+    const auto many = preprocess(synthSeries(dir / "many", 16), dir / "ds-many", quiet());
+    EXPECT_EQ(many.pathlineSetsWritten, 16);
+    const size_t array = size_t(24) * 17 * 48 * sizeof(float);
+    // At most three steps' velocity and a seed field with the variable it is computed from.
+    EXPECT_GT(many.pathlineWindowPeakBytes, 0u);
+    EXPECT_LE(many.pathlineWindowPeakBytes, (3 * 3 + 2) * array);
+    EXPECT_LE(many.pathlineWindowPeakBytes, few.pathlineWindowPeakBytes + 3 * array)
+        << few.pathlineWindowPeakBytes / array << " arrays for 5 steps, " << many.pathlineWindowPeakBytes / array
+        << " for 16";
 }
 
 }  // namespace
