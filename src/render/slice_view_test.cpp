@@ -128,8 +128,8 @@ TEST_F(Slices, BrushesGreyWhatTheyLeaveOut)
     // diverging map's light neutral.
     const auto south = frame.pixelOf(10, -40);
     float darkest = 1, lightest = 0;
-    for (int dy = 0; dy < kUnselectedHatchPx; ++dy)
-        for (int dx = 0; dx < kUnselectedHatchPx; ++dx) {
+    for (int dy = 0; dy < slice::kUnselectedHatchPx; ++dy)
+        for (int dx = 0; dx < slice::kUnselectedHatchPx; ++dx) {
             const auto p = pixel(image, int((*south)[0]) + dx, int((*south)[1]) + dy);
             EXPECT_TRUE(p[0] == p[1] && p[1] == p[2]);
             darkest = std::min(darkest, p[0]);

@@ -104,7 +104,7 @@ TEST(DefaultColorRange, RobustSymmetricPercentileRoundedUp)
     // percentile of |v| is 2.98.
     const std::vector<double> uniform(dataset::kHistogramBins, 1.0 / dataset::kHistogramBins);
     EXPECT_NEAR(absQuantile({-1, 3}, uniform, 0.995), 2.98, 1e-4);
-    EXPECT_NEAR(absQuantile({-1, 3}, uniform, 0.5), 1.5, 1e-4);  // (3 - m) / 4 + (1 - m) / 4 = 0.5 at m = 1.5
+    EXPECT_NEAR(absQuantile({-1, 3}, uniform, 0.5), 1.0, 1e-4);  // (3 - m) / 4 + (1 - m) / 4 = 0.5 at m = 1
     const dataset::ValueRange u = defaultColorRange({-1, 3}, true, uniform);
     EXPECT_FLOAT_EQ(u.min, -3);
     EXPECT_FLOAT_EQ(u.max, 3);
