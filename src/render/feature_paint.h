@@ -39,7 +39,7 @@ std::vector<float> featurePaintField(const grid::SphericalGrid& target, const gr
                                      std::span<const int32_t> labels, const state::FeatureSettings& settings);
 
 // The opacity (per opacityUnitKm) of slot 0, the selected material of no painted feature.
-inline constexpr float kFeatureRestOpacity = 0.06f;
+inline constexpr float kFeatureRestOpacity = 0.08f;
 // Colours the volume by the slots of variable `variable`: the fixed palette, slot 0 dark grey and
 // faint (kFeatureRestOpacity), painted slots 0.8.
 void applyFeaturePaint(RenderParams& params, int variable);

@@ -1201,7 +1201,7 @@ const Object<RenderState>& document()
                  leaf<S>("colorById", at(&S::features, &FeatureSettings::colorById), boolean(),
                          {.meaning = "the 3D view colours the selection by feature: each feature of the step in its "
                                      "own colour (its id modulo 10, the UI's table's colours), other selected material "
-                                     "grey and faint",
+                                     "dark grey and faint",
                           .since = 11}),
                  leaf<S>("highlight", at(&S::features, &FeatureSettings::highlight), integerList(1, 1000000, 64),
                          {.meaning = "ids of features of the state's step drawn highlighted (amber, or their own "
