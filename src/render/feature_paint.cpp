@@ -37,7 +37,9 @@ Rgb featurePaintColor(int slot)
 {
     // Tableau 10 (as d3.schemeTableau10); the UI takes these from GET /api/info (featurePalette).
     static constexpr std::array<Rgb, kFeaturePaintSlots> kPalette{{
-        {0.55f, 0.57f, 0.62f},                                               // 0: no painted feature
+        // 0: no painted feature, a dark neutral grey (a quarter of a diverging map's light neutral,
+        // lit or not) and faint, so the rest is never mistaken for a near-zero value.
+        {0.20f, 0.20f, 0.20f},
         {0x4e / 255.f, 0x79 / 255.f, 0xa7 / 255.f}, {0xf2 / 255.f, 0x8e / 255.f, 0x2c / 255.f},
         {0xe1 / 255.f, 0x57 / 255.f, 0x59 / 255.f}, {0x76 / 255.f, 0xb7 / 255.f, 0xb2 / 255.f},
         {0x59 / 255.f, 0xa1 / 255.f, 0x4f / 255.f}, {0xed / 255.f, 0xc9 / 255.f, 0x49 / 255.f},
@@ -117,7 +119,7 @@ void applyFeaturePaint(RenderParams& params, int variable)
         tf.colorPoints.push_back({(float(s) + 0.02f) / n, featurePaintColor(s)});
         tf.colorPoints.push_back({(float(s) + 0.98f) / n, featurePaintColor(s)});
     }
-    tf.opacity = {{0.0f, 0.08f}, {0.98f / n, 0.08f}, {1.02f / n, 0.8f}, {1.0f, 0.8f}};
+    tf.opacity = {{0.0f, kFeatureRestOpacity}, {0.98f / n, kFeatureRestOpacity}, {1.02f / n, 0.8f}, {1.0f, 0.8f}};
     params.colorVariable = variable;
     params.selectionMinOpacity = 0;
 }
@@ -133,14 +135,14 @@ LegendSpec featurePaintLegend(const state::FeatureSettings& settings)
             tf.colorPoints.push_back({(float(s) - 0.02f) / 10, featurePaintColor(s)});
             legend.ticks.push_back({(float(s) - 0.5f) / 10, std::to_string(s)});
         }
-        legend.title = settings.highlight.empty() ? "feature id (colours repeat every 10); grey: the rest of the selection"
-                                                  : "highlighted features by id; the rest of the selection grey";
+        legend.title = settings.highlight.empty() ? "feature id (colours repeat every 10); dark grey: the rest of the selection"
+                                                  : "highlighted features by id; the rest of the selection dark grey";
     } else {
         tf.range = {0, 1};
         tf.colorPoints = {{0, featurePaintColor(0)}, {0.49f, featurePaintColor(0)}, {0.51f, featurePaintColor(11)},
                           {1, featurePaintColor(11)}};
         legend.ticks = {{0.25f, "rest"}, {0.75f, "highlighted"}};
-        legend.title = "highlighted features (amber); the rest of the selection grey";
+        legend.title = "highlighted features (amber); the rest of the selection dark grey";
     }
     return legend;
 }

@@ -1,7 +1,7 @@
 // The features of a step painted in the 3D view (state.features.colorById and .highlight, state
 // version 11; docs/features.md): the connected regions of the state's selection (analysis/features.h,
 // found at features.level with features.minVolumeKm3) each in its own colour, or the highlighted
-// ones in amber, and the rest of the selection grey and faint. What the renderer draws is an extra
+// ones in amber, and the rest of the selection dark grey and faint. What the renderer draws is an extra
 // variable of the step's volume (StepVolume::withVariable) holding each grid point's palette slot,
 // coloured by a transfer function of fixed colours: the one path from a state to pixels is kept.
 //
@@ -38,8 +38,10 @@ bool paintsFeatures(const state::RenderState& state);
 std::vector<float> featurePaintField(const grid::SphericalGrid& target, const grid::SphericalGrid& labelGrid,
                                      std::span<const int32_t> labels, const state::FeatureSettings& settings);
 
-// Colours the volume by the slots of variable `variable`: the fixed palette, slot 0 faint
-// (opacity 0.08 per opacityUnitKm), painted slots 0.8.
+// The opacity (per opacityUnitKm) of slot 0, the selected material of no painted feature.
+inline constexpr float kFeatureRestOpacity = 0.08f;
+// Colours the volume by the slots of variable `variable`: the fixed palette, slot 0 dark grey and
+// faint (kFeatureRestOpacity), painted slots 0.8.
 void applyFeaturePaint(RenderParams& params, int variable);
 
 // The legend of painted features: with colorById the ten colours of ids 1..10 (each labelled with its

@@ -2,6 +2,9 @@
 // volume that carries them, and a picture of two blobs in their own colours.
 #include "render/feature_paint.h"
 
+#include "render/color_map.h"
+#include "state/color_maps.h"
+
 #include "core/error.h"
 #include "analysis/features.h"
 #include "render/test_volumes.h"
@@ -138,6 +141,21 @@ namespace {
 
 // The legend of painted features names each colour: with colorById a tick per id 1..10 at the middle
 // of its colour (the bar's colour there is that id's), else "rest" on grey and "highlighted" on amber.
+// The rest of the selection (slot 0) is a dark neutral grey, a quarter of every diverging map's light
+// neutral at most, so that under the same lighting a near-zero value (a stalled slab) is never
+// taken for it (issue 47); and fainter than a painted feature.
+TEST(FeaturePaint, TheRestIsDarkerThanAnyDivergingNeutral)
+{
+    const Rgb rest = featurePaintColor(0);
+    EXPECT_TRUE(rest.r == rest.g && rest.g == rest.b);
+    for (ColorMapId m : state::allColorMaps())
+        if (state::isDiverging(m)) {
+            const Rgb n = sampleColorMap(m, 0.5f);
+            EXPECT_LT(rest.r, 0.25f * (0.2126f * n.r + 0.7152f * n.g + 0.0722f * n.b)) << state::colorMapName(m);
+        }
+    EXPECT_LT(kFeatureRestOpacity, 0.1f);
+}
+
 TEST(FeaturePaint, TheLegendLabelsEachColourWithItsId)
 {
     state::FeatureSettings byId;

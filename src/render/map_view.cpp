@@ -285,7 +285,7 @@ ImageRgba8 mapPicture(const SliceInputs& in)
     const std::string title = fitTitle({fmt::format("{} at {:g} km depth", in.colorTitle, map.depthKm), in.when, where}, width, height);
     std::vector<TextLabel> labels{{title, width / 2.0f, 1.1f * fontPx, {1, 1, 1}}};
     addNotes(labels, width, height,
-             {grey ? "grey: outside the brushes" : "", flowText, pathlineText, regionNote(in.volume->grid())});
+             {grey ? "hatched grey: outside the brushes" : "", flowText, pathlineText, regionNote(in.volume->grid())});
     drawTextLabels(image.pixels, width, height, labels);
     drawLegends(image.pixels, width, height, legends);
     return image;

@@ -470,7 +470,7 @@ PathlineStyle PathlineLines::styleFor(const state::PathlineState& pl) const
     }
     if (!(lo <= hi))
         lo = 0, hi = 1;
-    style.range = defaultColorRange({lo, hi}, state::isCentredOnZero(style.colorMap));
+    style.range = defaultColorRange(dataset::ValueRange{lo, hi}, state::isCentredOnZero(style.colorMap));
     return style;
 }
 

@@ -41,8 +41,11 @@ RenderParams resolveParams(const state::RenderState& s, const VariableCatalog& c
     p.height = s.height;
     p.colorVariable = s.colorVariable.empty() ? 0 : variableIndex(s.colorVariable, "colouring");
     auto defaultRange = [&](int var, ColorMapId map) {
-        return defaultColorRange(var < int(catalog.ranges.size()) ? catalog.ranges[size_t(var)] : dataset::ValueRange{0, 1},
-                                 state::isCentredOnZero(map));
+        const bool known = var < int(catalog.ranges.size());
+        return defaultColorRange(known ? catalog.ranges[size_t(var)] : dataset::ValueRange{0, 1},
+                                 state::isCentredOnZero(map),
+                                 var < int(catalog.histograms.size()) ? std::span<const double>(catalog.histograms[size_t(var)])
+                                                                      : std::span<const double>());
     };
     p.transfer.colorMap = s.colorMap;
     p.transfer.range = s.colorRange ? *s.colorRange : defaultRange(p.colorVariable, s.colorMap);
@@ -75,8 +78,10 @@ VariableCatalog catalogOf(const dataset::Dataset& dataset)
 {
     VariableCatalog catalog;
     catalog.names = dataset.variableNames();
-    for (const auto& v : dataset.variables())
+    for (const auto& v : dataset.variables()) {
         catalog.ranges.push_back(v.global.range);
+        catalog.histograms.push_back(v.global.histogram);
+    }
     return catalog;
 }
 
@@ -109,12 +114,12 @@ state::RenderState defaultState(const VariableCatalog& catalog)
     s.colorVariable = catalog.names.at(var);
     const dataset::ValueRange r = catalog.ranges.at(var);
     if (r.min < 0 && r.max > 0) {
-        // An anomaly (values either side of zero): symmetric range over the bulk of the values, so
-        // that plumes and slabs saturate, as bodies with edges: the tails opaque over 80 km (200 km
-        // made them soft, translucent blobs), nothing in the middle 30 % of the range.
+        // An anomaly (values either side of zero): the default colour range (defaultColorRange:
+        // symmetric, the bulk of the values, the same the presets take), so that plumes and slabs
+        // saturate, as bodies with edges: the tails opaque over 80 km (200 km made them soft,
+        // translucent blobs), nothing in the middle 30 % of the range.
         s.colorMap = ColorMapId::BlueWhiteRed;
-        const float m = 0.6f * std::max(std::abs(r.min), std::abs(r.max));
-        s.colorRange = dataset::ValueRange{-m, m};
+        s.colorRange.reset();
         s.opacity = {{0.0f, 1.0f}, {0.25f, 0.6f}, {0.35f, 0.0f}, {0.65f, 0.0f}, {0.75f, 0.6f}, {1.0f, 1.0f}};
         s.opacityUnitKm = 80.0f;
     } else {

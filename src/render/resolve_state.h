@@ -15,13 +15,15 @@
 
 namespace raypc::render {
 
-// What a volume offers to resolve names against: variable names and their global ranges.
+// What a volume offers to resolve names against: variable names, their global ranges and (when
+// known) their global histograms (VariableStats::histogram; for the default colour range).
 struct VariableCatalog {
     std::vector<std::string> names;
     std::vector<dataset::ValueRange> ranges;
+    std::vector<std::vector<double>> histograms;  // empty, or one per variable
 };
 
-// The catalog of a dataset: its variables' names and global ranges (over all steps).
+// The catalog of a dataset: its variables' names, global ranges and histograms (over all steps).
 VariableCatalog catalogOf(const dataset::Dataset& dataset);
 
 // Resolves names and defaults. Throws raypc::Error for an unknown variable or coordinate (listing
@@ -31,7 +33,8 @@ RenderParams resolveParams(const state::RenderState& state, const VariableCatalo
 
 // A state that shows the data well without tuning (the UI's first view, `raypc render` without a
 // state and `raypc demo`'s picture): the temperature anomaly (if the dataset has it, else the first
-// variable) on the blue-white-red map, opaque only on the hot and cold tails, lit, a dark core, the
+// variable) on the blue-white-red map over the default colour range (no range: defaultColorRange,
+// as the presets), opaque only on the hot and cold tails, lit, a dark core, the
 // planet filling 94 % of the image's shorter side, the 410 and 660 km shells and the legend.
 state::RenderState defaultState(const dataset::Dataset& dataset);
 // The same for any volume's variables (their names and global ranges).

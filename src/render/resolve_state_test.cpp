@@ -2,8 +2,13 @@
 
 #include "core/error.h"
 #include "state/test_states.h"
+#include "state/color_maps.h"
+#include "render/transfer_function.h"
 
 #include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
 
 namespace raypc::render {
 namespace {
@@ -125,5 +130,57 @@ TEST(RenderState, DefaultViewIsTheTemperatureAnomalyElseTheFirstVariablesAnomaly
     plain.ranges = {{3000.0f, 5000.0f}};
     EXPECT_EQ(defaultState(plain).colorVariable, "density");
 }
+// One default colour range per variable (issue 47): the default view and a preset that names no
+// range resolve to the same one, render::defaultColorRange of the variable's statistics (robust and
+// symmetric for centred maps); a document naming a range keeps it.
+TEST(RenderState, TheDefaultViewAndThePresetsShareTheDefaultRange)
+{
+    VariableCatalog catalog;
+    catalog.names = {"temperature", "temperature anomaly"};
+    catalog.ranges = {{1000, 4000}, {-269.8f, 451.8f}};
+    std::vector<double> h(dataset::kHistogramBins, 0.0);
+    const double width = (451.8 + 269.8) / dataset::kHistogramBins;
+    for (int i = 0; i < dataset::kHistogramBins; ++i)
+        h[size_t(i)] = std::abs(-269.8 + width * (i + 0.5)) < 190 ? 1.0 : 0.002;
+    catalog.histograms = {std::vector<double>(dataset::kHistogramBins, 1.0 / dataset::kHistogramBins), h};
+    const RenderState first = defaultState(catalog);
+    EXPECT_EQ(first.colorVariable, "temperature anomaly");
+    EXPECT_FALSE(first.colorRange.has_value()) << "the default view names a range of its own";
+    const dataset::ValueRange viewRange = resolveParams(first, catalog).transfer.range;
+    EXPECT_FLOAT_EQ(viewRange.min, -200);
+    EXPECT_FLOAT_EQ(viewRange.max, 200);
+    const RenderState preset = parseRenderState(json{
+        {"version", 3}, {"color", {{"variable", "temperature anomaly"}, {"colorMap", "blue-white-red"}}}});
+    const dataset::ValueRange presetRange = resolveParams(preset, catalog).transfer.range;
+    EXPECT_FLOAT_EQ(presetRange.min, viewRange.min);
+    EXPECT_FLOAT_EQ(presetRange.max, viewRange.max);
+    const RenderState stored = parseRenderState(json{
+        {"version", 3},
+        {"color", {{"variable", "temperature anomaly"}, {"colorMap", "blue-white-red"}, {"range", {-300, 300}}}}});
+    EXPECT_FLOAT_EQ(resolveParams(stored, catalog).transfer.range.max, 300);
+}
+
+// The presets take the default range: none of the example states with a map centred on zero names
+// a colour range of its own (it would differ from the default view's, as ±300 K did from ±451.8 K).
+TEST(RenderState, PresetsOnCentredMapsNameNoColourRange)
+{
+    int checked = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(RAYPC_SOURCE_DIR) / "examples")) {
+        if (entry.path().extension() != ".json")
+            continue;
+        std::ifstream in(entry.path());
+        const json doc = json::parse(in);
+        if (!doc.contains("color"))
+            continue;
+        const json& color = doc["color"];
+        const ColorMapId map = state::parseColorMap(color.value("colorMap", "viridis"));
+        if (!state::isCentredOnZero(map))
+            continue;
+        ++checked;
+        EXPECT_FALSE(color.contains("range")) << entry.path().filename() << " names color.range " << color["range"];
+    }
+    EXPECT_GE(checked, 9);
+}
+
 }  // namespace
 }  // namespace raypc::render

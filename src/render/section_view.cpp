@@ -232,7 +232,7 @@ ImageRgba8 sectionPicture(const SliceInputs& in)
                                        width, height);
     labels.push_back({title, width / 2.0f, 1.1f * fontPx, {1, 1, 1}});
     addNotes(labels, width, height,
-             {grey ? "grey: outside the brushes" : "", flowText, pathlineText, regionNote(in.volume->grid())});
+             {grey ? "hatched grey: outside the brushes" : "", flowText, pathlineText, regionNote(in.volume->grid())});
     drawTextLabels(image.pixels, width, height, labels);
     drawLegends(image.pixels, width, height, legends);
     return image;

@@ -83,6 +83,14 @@ void drawArrow(LineLayer& halo, LineLayer& line, float x, float y, float dx, flo
 
 }  // namespace
 
+Rgb unselectedColor(Rgb c, size_t x, size_t y)
+{
+    const float luma = 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b;
+    const bool hatch = (x + y) % size_t(kUnselectedHatchPx) == 0;
+    const float g = 0.08f + 0.18f * luma + (hatch ? 0.22f : 0.0f);
+    return {g, g, g};
+}
+
 std::vector<uint8_t> colorPixels(const PixelSamples& s, const TransferFunction& tf, Rgb background, bool greyUnselected)
 {
     std::vector<uint8_t> rgba(s.value.size() * 4);
@@ -96,11 +104,8 @@ std::vector<uint8_t> colorPixels(const PixelSamples& s, const TransferFunction& 
         Rgb c = background;
         if (!std::isnan(s.value[i])) {
             c = table[size_t(std::lround(tf.colorPositionOf(s.value[i]) * (kTable - 1)))];
-            if (greyUnselected && !s.selected[i]) {
-                const float luma = 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b;
-                const float g = 0.22f + 0.45f * luma;
-                c = {g, g, g};
-            }
+            if (greyUnselected && !s.selected[i])
+                c = unselectedColor(c, i % size_t(std::max(s.width, 1)), i / size_t(std::max(s.width, 1)));
         }
         rgba[i * 4 + 0] = byte(c.r);
         rgba[i * 4 + 1] = byte(c.g);
@@ -174,12 +179,16 @@ void drawDepthMarks(std::vector<uint8_t>& rgba, int width, int height, const Dep
         const double d = shells.depthsKm[k];
         if (!shells.visible || d <= 0 || d >= plot.depthSpanKm)
             continue;
-        LineLayer layer(width, height, false);
+        LineLayer casing(width, height, false), layer(width, height, false);
         const float y = plot.yOfDepth(d);
-        // Dashed: the data shows between the dashes.
-        for (float x = float(plot.left); x < plot.right; x += 12)
+        // Dashed: the data shows between the dashes. Each dash on a dark casing, so that it stands out
+        // from every colour map beneath (the 660 km shell's yellow vanished on viridis's yellow).
+        for (float x = float(plot.left); x < plot.right; x += 12) {
+            drawSegment(casing, x - 1, y, std::min(float(plot.right), x + 8), y, 4.0f);
             drawSegment(layer, x, y, std::min(float(plot.right), x + 7), y, 1.5f);
+        }
         const Rgb c = shellColor(shells, k);
+        compositeLines(rgba, casing, {0, 0, 0}, 0.85f);
         compositeLines(rgba, layer, c, 0.95f);
         labels.push_back({fmt::format("{:g} km", d), float(plot.right + 2.2 * fontPx), y, c});
     }

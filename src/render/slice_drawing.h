@@ -27,8 +27,15 @@
 namespace raypc::render::slice {
 
 // The picture's pixels: the transfer function's colour of each value over the background; what the
-// brushes leave out in a muted grey of its lightness when `greyUnselected`.
+// brushes leave out drawn as unselectedColor when `greyUnselected`.
 std::vector<uint8_t> colorPixels(const PixelSamples& s, const TransferFunction& tf, Rgb background, bool greyUnselected);
+
+// "Not selected" in maps and sections, in a way no colour map draws: the colour `c` desaturated and
+// dimmed to a dark grey (0.08–0.26, keeping a trace of its lightness) crossed by lighter diagonal
+// hatching (every kUnselectedHatchPx pixels, at pixel x, y). A near-zero value on a diverging map
+// (its light neutral) stays light and unhatched, so "stalled" is never read as "left out".
+inline constexpr int kUnselectedHatchPx = 6;
+Rgb unselectedColor(Rgb c, size_t x, size_t y);
 
 // An arrow of the flow at (x, y): its unit direction on the picture and its speed (cm/yr).
 struct Arrow {

@@ -3,6 +3,10 @@
 // blob finds it at its distance and depth, and the exported grids hold the truth.
 #include "render/slice_view.h"
 
+#include "render/color_map.h"
+#include "render/slice_drawing.h"
+#include "state/color_maps.h"
+
 #include "core/error.h"
 #include "core/spherical.h"
 #include "analysis/selection.h"
@@ -10,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace raypc::render {
@@ -118,11 +123,71 @@ TEST_F(Slices, BrushesGreyWhatTheyLeaveOut)
         EXPECT_TRUE(s[0] == s[1] && s[1] == s[2]) << "the south at " << lon << " is not grey";
         EXPECT_FALSE(n[0] == n[1] && n[1] == n[2]) << "the north at " << lon << " is grey";
     }
+    // "Not selected" is hatched and dark, unlike any colour map (issue 47): over a hatch period
+    // around a southern point the grey takes a dark and a lighter value, all below a third of a
+    // diverging map's light neutral.
+    const auto south = frame.pixelOf(10, -40);
+    float darkest = 1, lightest = 0;
+    for (int dy = 0; dy < slice::kUnselectedHatchPx; ++dy)
+        for (int dx = 0; dx < slice::kUnselectedHatchPx; ++dx) {
+            const auto p = pixel(image, int((*south)[0]) + dx, int((*south)[1]) + dy);
+            EXPECT_TRUE(p[0] == p[1] && p[1] == p[2]);
+            darkest = std::min(darkest, p[0]);
+            lightest = std::max(lightest, p[0]);
+        }
+    EXPECT_LT(darkest, 0.31f);
+    EXPECT_GT(lightest - darkest, 0.15f) << "no hatching";
     r.state.map.greyUnselected = false;
     const ImageRgba8 colour = mapPicture(in);
-    const auto south = frame.pixelOf(10, -40);
     const auto s = pixel(colour, int((*south)[0]), int((*south)[1]));
     EXPECT_FALSE(s[0] == s[1] && s[1] == s[2]) << "greyUnselected off still greys";
+}
+
+// Whatever the colour map and value, "not selected" is a hatched grey, darker on most pixels than
+// a third of every diverging map's light neutral (what a stalled slab, v_r ≈ 0, is drawn in), and
+// never lighter than 0.55 on the hatching.
+TEST(NotSelected, NoColourMapDrawsIt)
+{
+    for (ColorMapId m : state::allColorMaps()) {
+        const Rgb neutral = sampleColorMap(m, 0.5f);
+        const float neutralLuma = 0.2126f * neutral.r + 0.7152f * neutral.g + 0.0722f * neutral.b;
+        for (float u = 0; u <= 1.0f; u += 0.125f) {
+            const Rgb c = sampleColorMap(m, u);
+            const Rgb off = slice::unselectedColor(c, 1, 0), on = slice::unselectedColor(c, 0, 0);
+            EXPECT_TRUE(off.r == off.g && off.g == off.b && on.r == on.g && on.g == on.b);
+            EXPECT_GT(on.r - off.r, 0.15f) << state::colorMapName(m);
+            EXPECT_LE(on.r, 0.55f);
+            if (state::isDiverging(m))
+                EXPECT_LT(off.r, neutralLuma / 3) << state::colorMapName(m) << " at " << u;
+        }
+    }
+}
+
+// The reference shells' dashes in depth plots have a dark casing: the 660 km shell's yellow dash is
+// seen over viridis's yellow (issue 47).
+TEST(DepthMarks, StandOutFromTheMapBeneath)
+{
+    const int width = 200, height = 100;
+    const Rgb yellow = sampleColorMap(ColorMapId::Viridis, 1);
+    std::vector<uint8_t> rgba(size_t(width) * height * 4);
+    for (size_t i = 0; i < rgba.size(); i += 4) {
+        rgba[i] = uint8_t(yellow.r * 255), rgba[i + 1] = uint8_t(yellow.g * 255), rgba[i + 2] = uint8_t(yellow.b * 255);
+        rgba[i + 3] = 255;
+    }
+    state::ReferenceState::Shells shells;
+    shells.visible = true;
+    shells.depthsKm = {410, 660};
+    const slice::DepthPlot plot{10, 190, 10, 90, 2890};
+    std::vector<TextLabel> labels;
+    slice::drawDepthMarks(rgba, width, height, plot, shells, labels);
+    ASSERT_EQ(labels.size(), 2u);
+    // Within a few rows of the 660 km line some pixel is far darker than the yellow beneath.
+    const int y = int(std::lround(plot.yOfDepth(660)));
+    int darkest = 255;
+    for (int yy = y - 3; yy <= y + 3; ++yy)
+        for (int x = 20; x < 60; ++x)
+            darkest = std::min(darkest, int(rgba[(size_t(yy) * width + x) * 4 + 1]));
+    EXPECT_LT(darkest, 80) << "the 660 km line has no dark casing over viridis's yellow";
 }
 
 TEST_F(Slices, LatLonSliceIsTheTruthAtPolesAndSeam)

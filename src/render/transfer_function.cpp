@@ -4,18 +4,63 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 namespace raypc::render {
 
-dataset::ValueRange defaultColorRange(dataset::ValueRange r, bool centredOnZero)
+float absQuantile(dataset::ValueRange values, std::span<const double> histogram, double q)
+{
+    const float largest = std::max(std::abs(values.min), std::abs(values.max));
+    const double total = std::accumulate(histogram.begin(), histogram.end(), 0.0);
+    if (histogram.empty() || !(total > 0) || !(values.max > values.min))
+        return largest;
+    // Each bin's fraction spread evenly over its values, folded onto |value|: the fraction above a
+    // magnitude m is the sum over bins of the part of each bin beyond ±m.
+    const double width = (double(values.max) - values.min) / double(histogram.size());
+    auto beyond = [&](double m) {
+        double f = 0;
+        for (size_t i = 0; i < histogram.size(); ++i) {
+            const double lo = values.min + width * double(i), hi = lo + width;
+            const double above = std::max(0.0, hi - std::max(lo, m)), below = std::max(0.0, std::min(hi, -m) - lo);
+            f += histogram[i] * (above + below) / width;
+        }
+        return f / total;
+    };
+    // Bisection on the magnitude: `beyond` falls from 1 (at 0) to 0 (at the larger magnitude).
+    double a = 0, b = largest;
+    for (int k = 0; k < 60; ++k) {
+        const double m = 0.5 * (a + b);
+        (beyond(m) > 1.0 - q ? a : b) = m;
+    }
+    return float(b);
+}
+
+float niceCeil(float x)
+{
+    if (!(x > 0) || !std::isfinite(x))
+        return x;
+    const double decade = std::pow(10.0, std::floor(std::log10(double(x))));
+    for (double n : {1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0})
+        if (n * decade >= double(x) * (1 - 1e-6))
+            return float(n * decade);
+    return float(10 * decade);
+}
+
+dataset::ValueRange defaultColorRange(dataset::ValueRange r, bool centredOnZero, std::span<const double> histogram)
 {
     if (centredOnZero) {
-        const float m = std::max(std::abs(r.min), std::abs(r.max));
+        const float largest = std::max(std::abs(r.min), std::abs(r.max));
+        const float m = histogram.empty() ? largest : std::min(largest, niceCeil(absQuantile(r, histogram, 0.995)));
         r = {-m, m};
     }
     if (!(r.min < r.max))
         r = {r.min - 0.5f, r.max + 0.5f};
     return r;
+}
+
+dataset::ValueRange defaultColorRange(const dataset::VariableStats& stats, bool centredOnZero)
+{
+    return defaultColorRange(stats.range, centredOnZero, stats.histogram);
 }
 
 void TransferFunction::validate() const

@@ -11,17 +11,30 @@
 #include "render/color_map.h"
 #include "state/view_types.h"
 
+#include <span>
 #include <vector>
 
 namespace raypc::render {
 
 using state::OpacityPoint;  // state/view_types.h
 
-// The colour range a value range gets when none is chosen (the one rule for the volume, the
-// pathlines and the UI, which takes it from /api/info): symmetric about zero for maps centred on
-// zero (isCentredOnZero: ±the larger magnitude), and a constant (or empty) range widened by 0.5
-// each way so that it stays usable.
-dataset::ValueRange defaultColorRange(dataset::ValueRange values, bool centredOnZero);
+// The colour range a variable gets when none is chosen: the one rule for the default view, the
+// presets (which name no range), the volume, the pathlines and the UI (which takes it from
+// /api/info). For maps centred on zero (isCentredOnZero: anomalies, signed velocities) it is
+// symmetric, ±the 99.5th percentile of |value| over the series (volume-weighted, from `histogram`:
+// kHistogramBins fractions over `values`, VariableStats::histogram) rounded up to a nice number (1,
+// 1.5, 2, 2.5, 3, 4, 5, 6, 8 × 10^k) but never beyond the larger magnitude: the few extreme points
+// do not wash out the plumes and slabs. Without a histogram, ±the larger magnitude. Other maps take
+// the exact range. A constant (or empty) range is widened by 0.5 each way so that it stays usable.
+dataset::ValueRange defaultColorRange(dataset::ValueRange values, bool centredOnZero,
+                                      std::span<const double> histogram = {});
+// The same for a variable's statistics over the series (VariableInfo::global).
+dataset::ValueRange defaultColorRange(const dataset::VariableStats& stats, bool centredOnZero);
+// The quantile `q` (0..1) of |value| for a histogram of kHistogramBins fractions over `values`
+// (linear within a bin); the larger magnitude for an empty histogram.
+float absQuantile(dataset::ValueRange values, std::span<const double> histogram, double q);
+// The smallest nice number (1, 1.5, 2, 2.5, 3, 4, 5, 6, 8 × 10^k) ≥ x > 0.
+float niceCeil(float x);
 
 struct TransferFunction {
     ColorMapId colorMap = ColorMapId::Viridis;

@@ -96,6 +96,53 @@ TEST(ColorMap, ScientificMapsFromTheSharedTable)
     EXPECT_EQ(state::allColorMaps().size(), 11u);
 }
 
+// One default colour range per variable (issue 47): for centred maps ±the 99.5th percentile of
+// |value| rounded up to a nice number, at most ±the larger magnitude; the exact range otherwise.
+TEST(DefaultColorRange, RobustSymmetricPercentileRoundedUp)
+{
+    // Uniform over [-1, 3]: the fraction with |v| > m is (3 - m) / 4 for m in [1, 3], so the 99.5th
+    // percentile of |v| is 2.98.
+    const std::vector<double> uniform(dataset::kHistogramBins, 1.0 / dataset::kHistogramBins);
+    EXPECT_NEAR(absQuantile({-1, 3}, uniform, 0.995), 2.98, 1e-4);
+    EXPECT_NEAR(absQuantile({-1, 3}, uniform, 0.5), 1.0, 1e-4);  // (3 - m) / 4 + (1 - m) / 4 = 0.5 at m = 1
+    const dataset::ValueRange u = defaultColorRange({-1, 3}, true, uniform);
+    EXPECT_FLOAT_EQ(u.min, -3);
+    EXPECT_FLOAT_EQ(u.max, 3);
+    EXPECT_FLOAT_EQ(niceCeil(271.08f), 300);
+    EXPECT_FLOAT_EQ(niceCeil(2.98f), 3);
+    EXPECT_FLOAT_EQ(niceCeil(0.0123f), 0.015f);
+    EXPECT_FLOAT_EQ(niceCeil(4), 4);
+    EXPECT_FLOAT_EQ(niceCeil(8.5f), 10);
+
+    // A temperature anomaly of [-269.8, 451.8] K whose bulk lies within ±200 K and whose hottest
+    // 0.2 % reach 451.8 K (a few plume conduits): ±200 K, not ±451.8 K.
+    const dataset::ValueRange values{-269.8f, 451.8f};
+    std::vector<double> h(dataset::kHistogramBins, 0.0);
+    const double width = (values.max - values.min) / dataset::kHistogramBins;
+    for (int i = 0; i < dataset::kHistogramBins; ++i) {
+        const double mid = values.min + width * (i + 0.5);
+        h[size_t(i)] = std::abs(mid) < 190 ? 1.0 : 0.002;
+    }
+    const dataset::ValueRange t = defaultColorRange(values, true, h);
+    EXPECT_FLOAT_EQ(t.min, -t.max);
+    EXPECT_FLOAT_EQ(t.max, 200);
+    // The statistics' overload is the same rule.
+    dataset::VariableStats stats;
+    stats.range = values;
+    stats.histogram = h;
+    EXPECT_FLOAT_EQ(defaultColorRange(stats, true).max, 200);
+    // A nice number beyond the data is cut at the larger magnitude; without a histogram, ±it.
+    std::vector<double> edge(dataset::kHistogramBins, 0.0);
+    edge.back() = 1;
+    EXPECT_FLOAT_EQ(defaultColorRange({-10, 450}, true, edge).max, 450);
+    EXPECT_FLOAT_EQ(defaultColorRange(values, true).max, 451.8f);
+    // Other maps: the exact range; a constant one widened.
+    EXPECT_FLOAT_EQ(defaultColorRange(values, false, h).min, -269.8f);
+    EXPECT_FLOAT_EQ(defaultColorRange(values, false, h).max, 451.8f);
+    EXPECT_FLOAT_EQ(defaultColorRange({2, 2}, false, h).max, 2.5f);
+    EXPECT_FLOAT_EQ(defaultColorRange({2, 2}, true, h).max, 2);
+}
+
 TEST(TransferFunction, ColorPointsReversedAndLogScale)
 {
     TransferFunction tf;

@@ -517,8 +517,8 @@ json infoJson(const dataset::Dataset& dataset, const ServerLimits& limits)
                              // The colour range without a chosen one (render::defaultColorRange), for
                              // maps centred on zero and for the others.
                              {"defaultColorRange",
-                              {{"centred", rangeJson(render::defaultColorRange(v.global.range, true))},
-                               {"other", rangeJson(render::defaultColorRange(v.global.range, false))}}}});
+                              {{"centred", rangeJson(render::defaultColorRange(v.global, true))},
+                               {"other", rangeJson(render::defaultColorRange(v.global, false))}}}});
         if (v.computed)
             variables.back()["computed"] = {{"from", dataset.variables().at(v.computed->base).name},
                                             {"kind", dataset::shellAnomalyKindName(v.computed->kind)}};

@@ -193,7 +193,7 @@ const std::vector<Definition>& messages()
                           {"histogram", arrayOf(number(""), ""), "256 volume fractions over [min, max]"},
                           {"defaultColorRange",
                            named("DefaultColorRange", "",
-                                 {{"centred", range, "[lo, hi] for colour maps centred on zero"},
+                                 {{"centred", range, "[lo, hi] for colour maps centred on zero: ±the 99.5th percentile of \\|v\\| rounded up to a nice number"},
                                   {"other", range, "[lo, hi] for the others"}}),
                            "the colour range the renderer takes when the state gives none (`render::defaultColorRange`)"}}));
         d.push_back(part("CoordinateInfo", "a coordinate the sample and the brushes offer",

@@ -155,7 +155,7 @@ struct RenderState {
     int width = 512, height = 512;
     std::string colorVariable;  // empty: the first variable
     ColorMapId colorMap = ColorMapId::Viridis;
-    std::optional<dataset::ValueRange> colorRange;  // default: the variable's global range (symmetric for centred maps)
+    std::optional<dataset::ValueRange> colorRange;  // default: render::defaultColorRange (symmetric and robust for centred maps)
     std::vector<OpacityPoint> opacity;  // empty: defaultOpacity(colorMap)
     float opacityUnitKm = 100.0f;
     std::vector<ColorStop> colorPoints;  // version 3: custom colours replacing colorMap when not empty

@@ -945,8 +945,9 @@ const Object<RenderState>& document()
                                      "`blue-white-red` diverging, centred on 0"}),
                  leaf<S>("range", at(&S::colorRange), range(),
                          {.meaning = "value range of the transfer function; values outside clamp to the ends",
-                          .defaultText = "null: the global range of the variable over all steps (symmetric ±max\\|v\\| "
-                                         "for centred maps)"}),
+                          .defaultText = "null: the variable's default range (`render::defaultColorRange`): for centred "
+                                         "maps ±the 99.5th percentile of \\|v\\| over all steps rounded up to a nice "
+                                         "number (at most ±max\\|v\\|), else the global range over all steps"}),
                  leaf<S>("opacity", at(&S::opacity), opacityPoints(),
                          {.meaning = "piecewise-linear opacity; position normalised over `color.range` (0 = min, 1 = "
                                      "max)",
@@ -1200,11 +1201,11 @@ const Object<RenderState>& document()
                  leaf<S>("colorById", at(&S::features, &FeatureSettings::colorById), boolean(),
                          {.meaning = "the 3D view colours the selection by feature: each feature of the step in its "
                                      "own colour (its id modulo 10, the UI's table's colours), other selected material "
-                                     "grey and faint",
+                                     "dark grey and faint",
                           .since = 11}),
                  leaf<S>("highlight", at(&S::features, &FeatureSettings::highlight), integerList(1, 1000000, 64),
                          {.meaning = "ids of features of the state's step drawn highlighted (amber, or their own "
-                                     "colour with `colorById`); the rest of the selection grey and faint; empty: none",
+                                     "colour with `colorById`); the rest of the selection dark grey and faint; empty: none",
                           .since = 11})},
                 {.meaning = "how the connected regions of the selection (features) are found and followed through "
                             "the steps (`raypc features --state`, docs/features.md); a saved state reproduces their "

@@ -1,7 +1,8 @@
 // End-to-end browser tests of the UI against the real server:
 //   node tests/browser/cases.mjs CASE RAYPC FIXTURE_DIR
 // CASE: brush | warp | play | save_load | two_tabs | presets | pathlines | resolution | context | colours |
-// brush_values | multi_brush | axes | camera | responsive | stereo | light | persistence | link [gpu].
+// brush_values | multi_brush | axes | camera | responsive | stereo | light | persistence | link |
+// colours_unmistakable [gpu].
 // Each case starts its own server and browser.
 import { readFileSync, writeFileSync } from 'node:fs';
 import { spawnSync } from 'node:child_process';
@@ -3167,6 +3168,67 @@ const cases = {
     await waitConverged(page);
     await page.waitForFunction(() => document.querySelector('#emptySelection').hidden, null, { timeout: 10000 })
       .catch(async () => { throw new TestFailure(`the note stays for a selection of ${await page.textContent('#selection')}: '${await page.textContent('#emptySelection')}'`); });
+    check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
+  },
+
+  // Issue 47, colours that cannot be mistaken (item 4): one default colour range per variable — the
+  // default view, the presets that colour by the same variable and /api/info show the same range,
+  // symmetric (the temperature anomaly was ±451.8 K in one and ±300 K in the others); and the map
+  // draws what the brushes leave out hatched and dark, never in a grey that a diverging map's light
+  // neutral (a stalled slab, v_r ≈ 0) could be read as.
+  async colours_unmistakable({ context, url }) {
+    const page = await openUi(context, url);
+    await waitConverged(page);
+    const shownRange = () => page.evaluate(() => [Number(document.getElementById('rangeMin').value), Number(document.getElementById('rangeMax').value)]);
+    const near = (a, b) => Math.abs(a[0] - b[0]) <= 1e-4 * Math.abs(b[1]) && Math.abs(a[1] - b[1]) <= 1e-4 * Math.abs(b[1]);
+    const variable = (await rState(page)).color.variable;
+    const v = (await info(url)).variables.find((x) => x.name === variable);
+    const d = v.defaultColorRange.centred;
+    const first = await shownRange();
+    check(d[0] === -d[1] && d[1] <= Math.max(-v.min, v.max) * (1 + 1e-6), `/api/info's default range of ${variable} ${JSON.stringify(d)} is not symmetric within the data's ${v.min}..${v.max}`);
+    check(near(first, d), `the default view shows ${variable} over ${JSON.stringify(first)}, /api/info's default range is ${JSON.stringify(d)}`);
+    const presets = (await (await fetch(url + 'api/presets')).json())
+      .filter((p) => !p.unavailable && p.state.color.variable === variable && p.state.color.colorMap === 'blue-white-red');
+    check(presets.length >= 2, `only ${presets.length} presets colour by ${variable}`);
+    for (const p of presets) {
+      await page.click(`#presets button[data-preset="${p.name}"]`);
+      await waitConverged(page);
+      const r = await shownRange();
+      check(near(r, first), `preset ${p.name} shows ${variable} over ${JSON.stringify(r)}, the default view over ${JSON.stringify(first)}`);
+    }
+    // The map of the warm half (temperature anomaly ≥ 0) at 660 km: the cold half is hatched dark grey.
+    await page.click('#pcTabSlices');
+    await page.evaluate((name) => { const s = window.__raypc.state(); window.__raypc.setState({ ...s, brushes: [{ name, min: 0, max: 1e6 }], map: { ...s.map, greyUnselected: true, depthKm: 660 } }); }, variable);
+    await waitConverged(page);
+    await page.waitForFunction(() => window.__raypc.slices.map.header && document.getElementById('mapImage').complete, null, { timeout: 20000 })
+      .catch(() => { throw new TestFailure('no map picture'); });
+    await page.waitForTimeout(1500);
+    const grey = await page.evaluate(() => {
+      const img = document.getElementById('mapImage');
+      const c = document.createElement('canvas');
+      c.width = img.naturalWidth; c.height = img.naturalHeight;
+      const g = c.getContext('2d');
+      g.drawImage(img, 0, 0);
+      const { data } = g.getImageData(0, 0, c.width, c.height);
+      // Blocks of 6×6 pixels all of one grey (r = g = b) but the background's: their darkest and lightest.
+      const bg = [data[0], data[1], data[2]];
+      const blocks = [];
+      for (let y = 0; y + 6 <= c.height; y += 6)
+        for (let x = 0; x + 6 <= c.width; x += 6) {
+          let lo = 255, hi = 0, ok = true;
+          for (let dy = 0; dy < 6 && ok; dy++)
+            for (let dx = 0; dx < 6 && ok; dx++) {
+              const i = ((y + dy) * c.width + x + dx) * 4;
+              if (data[i] !== data[i + 1] || data[i + 1] !== data[i + 2] || (data[i] === bg[0] && data[i + 1] === bg[1] && data[i + 2] === bg[2])) ok = false;
+              lo = Math.min(lo, data[i]); hi = Math.max(hi, data[i]);
+            }
+          if (ok) blocks.push([lo, hi]);
+        }
+      return blocks;
+    });
+    check(grey.length >= 20, `the map has ${grey.length} grey blocks: nothing drawn as not selected`);
+    const hatched = grey.filter(([lo, hi]) => hi - lo >= 35 && lo <= 70).length;
+    check(hatched >= 0.8 * grey.length, `${hatched} of ${grey.length} grey blocks of the map are hatched and dark; not selected must be drawn as no colour map draws`);
     check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
   },
 

@@ -470,10 +470,10 @@ export class FeaturesPanel {
       ? `track ${track}`
       : `feature${f.highlight.length > 1 ? 's' : ''} ${f.highlight.join(', ')} of step ${s.step}`;
     if (f.colorById)
-      return { title: `features by id (colours repeat every 10; the table's colour marks give each track's)${f.highlight.length ? `; highlighted: ${what}` : ''}; grey: the rest of the selection`,
+      return { title: `features by id (colours repeat every 10; the table's colour marks give each track's)${f.highlight.length ? `; highlighted: ${what}` : ''}; dark grey: the rest of the selection`,
         colorAt: (u) => slot(1 + Math.min(9, Math.floor(u * 10))), valueAt: (u) => 1 + Math.round(u * 9),
         ticks: Array.from({ length: 10 }, (_, k) => ({ at: (k + 0.5) / 10, text: String(k + 1) })) };
-    return { title: `highlighted ${what} (amber); grey: the rest of the selection`,
+    return { title: `highlighted ${what} (amber); dark grey: the rest of the selection`,
       colorAt: (u) => slot(u < 0.5 ? 0 : 11), valueAt: (u) => (u < 0.5 ? 0 : f.highlight[0]),
       ticks: [{ at: 0.25, text: 'rest' }, { at: 0.75, text: 'highlighted' }] };
   }
