@@ -4,7 +4,9 @@
 // loader, so each keeps its own way to load (Dataset::load, the server's shared cache); what a step's
 // features become (table rows, links, tracks, flux) is the caller's callback.
 //
-// Thread safety: runs on the calling thread; `cancel` may be set from any thread.
+// Thread safety: `onStep` and `progress` are called on the calling thread, in step order; the next
+// steps are loaded and extracted meanwhile on other threads (oneTBB tasks), so `load` may be called
+// from any thread, for a few steps at once. `cancel` may be set from any thread.
 #pragma once
 
 #include "dataset/dataset.h"
@@ -37,7 +39,8 @@ struct FeatureRunControl {
 };
 
 // Loads, extracts (extractFeatures with `filters` and `options`) and hands to `onStep` every step
-// of first..last in order. Returns the step at which `cancel` stopped the run, or nullopt when every
+// of first..last in order (a step's load and extraction may run before the previous steps' onStep).
+// Returns the step at which `cancel` stopped the run, or nullopt when every
 // step was done. Throws what `load`, extractFeatures and `onStep` throw.
 std::optional<int> forEachStepFeatures(int first, int last, const StepVolumeLoader& load,
                                        std::span<const RangeFilter> filters, const FeatureOptions& options,

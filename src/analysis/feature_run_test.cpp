@@ -6,7 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
+#include <mutex>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -34,22 +37,27 @@ TEST(FeatureRun, EveryStepInOrderWithItsVolumeAndProgressBeforeEachAndAfterTheLa
 {
     const grid::SphericalGrid g = testing::centredGrid(36, 21, 72);
     std::vector<int> loaded, counts;
+    std::mutex loadedMutex;  // steps load on other threads, ahead of the one handed over
     std::vector<std::pair<int, int>> progress;
+    const auto caller = std::this_thread::get_id();
     const auto stopped = forEachStepFeatures(
         1, 3,
         [&](int step) {
+            std::lock_guard lock(loadedMutex);
             loaded.push_back(step);
             return blobsOfStep(g, step);
         },
         kAboveHalf, {},
         [&](FeatureStep& s) {
+            EXPECT_EQ(std::this_thread::get_id(), caller) << "onStep runs on the calling thread";
             EXPECT_EQ(s.volume->grid().nLon(), g.nLon());
             EXPECT_EQ(s.features.labels.size(), g.nLat() * g.nR() * g.nLon());
             counts.push_back(int(s.features.features.size()));
         },
         {nullptr, [&](int done, int total) { progress.emplace_back(done, total); }});
     EXPECT_FALSE(stopped);
-    EXPECT_EQ(loaded, (std::vector<int>{1, 2, 3}));
+    std::sort(loaded.begin(), loaded.end());
+    EXPECT_EQ(loaded, (std::vector<int>{1, 2, 3})) << "each step loaded once";
     EXPECT_EQ(counts, (std::vector<int>{2, 3, 4}));
     EXPECT_EQ(progress, (std::vector<std::pair<int, int>>{{0, 3}, {1, 3}, {2, 3}, {3, 3}}));
 }
@@ -78,6 +86,28 @@ TEST(FeatureRun, CancellingStopsBeforeTheNextStepAndSaysWhich)
         0, 4, [&](int) -> std::shared_ptr<const dataset::StepVolume> { throw Error("loaded"); }, kAboveHalf, {},
         [](FeatureStep&) {}, {&cancel, {}});
     EXPECT_EQ(none, std::optional<int>(0));
+}
+
+// A step that fails to load (or extract) fails the run when its turn comes: the steps before it are
+// handed over first, whatever was loaded ahead.
+TEST(FeatureRun, AStepThatFailsIsThrownInItsTurnAfterTheStepsBefore)
+{
+    const grid::SphericalGrid g = testing::centredGrid(36, 21, 72);
+    std::vector<int> done;
+    try {
+        forEachStepFeatures(
+            0, 5,
+            [&](int step) {
+                if (step == 3)
+                    throw Error("step 3 is damaged");
+                return blobsOfStep(g, step);
+            },
+            kAboveHalf, {}, [&](FeatureStep& s) { done.push_back(s.step); });
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "step 3 is damaged");
+    }
+    EXPECT_EQ(done, (std::vector<int>{0, 1, 2}));
 }
 
 }  // namespace

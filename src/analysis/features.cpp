@@ -116,9 +116,10 @@ std::vector<Sums> labelAndSum(const dataset::StepVolume& volume, const HugePageV
     std::vector<Sums> sums;
     const auto w = g.volumeFactors();
     const size_t nVar = volume.variableCount();
-    std::vector<const float*> values(nVar);
+    // Read at the selected points alone: what no selected point holds is not decoded or computed.
+    std::vector<dataset::StepVolume::PointValues> values;
     for (size_t k = 0; k < nVar; ++k)
-        values[k] = volume.values(k);
+        values.push_back(volume.pointValues(k));
     const size_t nBands = options.bandDepthsKm.size();
     for (size_t iLat = 0; iLat < nLat; ++iLat)
         for (size_t iR = 0; iR < nR; ++iR) {
@@ -152,7 +153,7 @@ std::vector<Sums> labelAndSum(const dataset::StepVolume& volume, const HugePageV
                 s.top = std::min(s.top, depth);
                 s.bottom = std::max(s.bottom, depth);
                 for (size_t k = 0; k < nVar; ++k) {
-                    const double x = values[k][i];
+                    const double x = values[k].at(i, iLat, iR, iLon);
                     if (!std::isfinite(x))
                         continue;
                     s.sum[k] += v * x;

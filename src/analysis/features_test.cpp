@@ -4,6 +4,8 @@
 #include "core/spherical.h"
 #include "grid/coordinates.h"
 #include "grid/test_util.h"
+#include "io/netcdf_reader.h"
+#include "preprocess/preprocess.h"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -11,9 +13,12 @@
 
 #include <cmath>
 #include <map>
+#include <set>
 
 namespace raypc::analysis {
 namespace {
+
+using testing::TempDir;
 
 // A volume of one field "f" on a centred grid (no pole rows), given per grid point.
 std::shared_ptr<dataset::StepVolume> volumeOf(const grid::SphericalGrid& g, const std::function<double(size_t, size_t, size_t)>& f,
@@ -299,6 +304,58 @@ TEST(Features, StallsCanBeTimedByTheDeepestOrShallowestPoint)
     for (const StallMeasure m : kStallMeasures)
         EXPECT_EQ(parseStallMeasure(stallMeasureName(m)), m);
     EXPECT_THROW(parseStallMeasure("tip"), Error);
+}
+
+// A step's features read the selected points alone: on a u16 dataset nothing is decoded whole but the
+// bases of the shell anomalies (their shell means need every point), no anomaly's array or bounds are
+// computed, and a brush on a stored variable decodes only what its bricks' bounds cannot rule out;
+// the features are those of the step decoded whole, bit for bit.
+TEST(Features, AStepOfAU16DatasetDecodesOnlyWhatItsSelectedPointsNeed)
+{
+    const TempDir dir("features-u16");
+    preprocess::PreprocessOptions o;
+    o.quiet = true;
+    o.sampleRows = 200;
+    o.encoding = dataset::ValueEncoding::Uint16;
+    o.pathlines.enabled = false;
+    preprocess::preprocess(io::listSnapshotFiles({testing::contestLayoutDir()}), dir.path() / "ds", o);
+    const auto dataset = dataset::Dataset::open(dir.path() / "ds");
+    const int t = dataset->variableIndex("radial velocity");  // stored, no anomaly's base
+    ASSERT_GE(t, 0);
+    const dataset::ValueRange range = dataset->steps()[0].stats[size_t(t)].range;
+    // The faster half of the upwellings, below the top 100 km.
+    const std::vector<NamedRange> brush{{"radial velocity", 0.5f * range.max, range.max}, {"depth", 100, 6371}};
+    const auto filters = resolveRangeFilters(*dataset, brush);
+    const FeatureOptions options = featureOptions(0, {660}, 50);
+    const auto lazy = dataset->load(0, 0);
+    const StepFeatures a = extractFeatures(*lazy, filters, options);
+    const auto whole = dataset->load(0, 0);
+    for (size_t v = 0; v < whole->variableCount(); ++v)
+        whole->values(v);
+    const StepFeatures b = extractFeatures(*whole, filters, options);
+    ASSERT_GT(a.features.size(), 0u);
+    ASSERT_EQ(a.features.size(), b.features.size());
+    for (size_t k = 0; k < a.features.size(); ++k) {
+        EXPECT_EQ(a.features[k].points, b.features[k].points);
+        EXPECT_EQ(a.features[k].volumeKm3, b.features[k].volumeKm3);
+        ASSERT_EQ(a.features[k].variables.size(), whole->variableCount());
+        for (size_t v = 0; v < whole->variableCount(); ++v) {
+            const VariableSummary &x = a.features[k].variables[v], &y = b.features[k].variables[v];
+            EXPECT_EQ(fmt::format("{} {} {}", x.mean, x.min, x.max), fmt::format("{} {} {}", y.mean, y.min, y.max))
+                << "feature " << k + 1 << ", " << dataset->variables()[v].name;
+        }
+    }
+    EXPECT_TRUE(std::equal(a.labels.begin(), a.labels.end(), b.labels.begin(), b.labels.end()));
+    std::set<size_t> bases;
+    for (size_t v = 0; v < lazy->variableCount(); ++v)
+        if (const dataset::ShellAnomalyOf* of = lazy->computedFrom(v)) {
+            bases.insert(of->base);
+            EXPECT_FALSE(lazy->valuesReady(v)) << dataset->variables()[v].name << ": no array computed";
+        }
+    ASSERT_FALSE(bases.empty());
+    EXPECT_FALSE(lazy->valuesReady(size_t(t))) << "the brushed variable read brick by brick";
+    EXPECT_EQ(lazy->decodedBytes(), bases.size() * lazy->grid().cellCount() * sizeof(float))
+        << "decoded whole: the anomalies' bases alone";
 }
 
 }  // namespace

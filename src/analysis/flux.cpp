@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace raypc::analysis {
 
@@ -36,9 +37,14 @@ std::vector<ShellFlux> shellFluxes(const dataset::StepVolume& volume, size_t rad
     const grid::SphericalGrid& g = volume.grid();
     const HugePageVector<uint8_t> selected =
         filters.empty() ? HugePageVector<uint8_t>(g.cellCount(), 1) : selectedPoints(volume, filters);
-    const float* v = volume.values(radialVelocity);
-    const float* anomaly = heat ? volume.values(heat->temperatureAnomaly) : nullptr;
-    const float* rho = density ? volume.values(*density) : nullptr;
+    // Read on the shells alone (two radii each): a variable not decoded yet is not decoded whole.
+    using Values = dataset::StepVolume::PointValues;
+    const Values v = volume.pointValues(radialVelocity);
+    const Values anomaly = heat ? volume.pointValues(heat->temperatureAnomaly) : Values{};  // read only with heat
+    const Values rho = density ? volume.pointValues(*density) : Values{};                  // only with density
+    const auto at = [&](const Values& values, size_t iLat, size_t iR, size_t iLon) {
+        return values.at(g.index(iLat, iR, iLon), iLat, iR, iLon);
+    };
     constexpr double kM3PerKm3 = 1e9;
     const auto w = g.volumeFactors();
     constexpr double kKmPerCm = 1e-5;
@@ -60,14 +66,14 @@ std::vector<ShellFlux> shellFluxes(const dataset::StepVolume& volume, size_t rad
         for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
             for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
                 const double area = r * r * w.lat[iLat] * w.lon[iLon];
-                const double vr = (1.0 - t) * v[g.index(iLat, lower, iLon)] + t * v[g.index(iLat, upper, iLon)];
+                const double vr = (1.0 - t) * at(v, iLat, lower, iLon) + t * at(v, iLat, upper, iLon);
                 const double flux = vr * kKmPerCm * area;
                 double heatW = 0;
-                if (anomaly)
+                if (heat)
                     heatW = heatFactor * area * vr *
-                            ((1.0 - t) * anomaly[g.index(iLat, lower, iLon)] + t * anomaly[g.index(iLat, upper, iLon)]);
+                            ((1.0 - t) * at(anomaly, iLat, lower, iLon) + t * at(anomaly, iLat, upper, iLon));
                 const double mass =
-                    rho ? kM3PerKm3 * flux * ((1.0 - t) * rho[g.index(iLat, lower, iLon)] + t * rho[g.index(iLat, upper, iLon)])
+                    density ? kM3PerKm3 * flux * ((1.0 - t) * at(rho, iLat, lower, iLon) + t * at(rho, iLat, upper, iLon))
                         : 0.0;
                 f.areaKm2 += area;
                 (flux < 0 ? f.downKm3PerYr : f.upKm3PerYr) += flux;

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <type_traits>
 
@@ -204,11 +205,62 @@ HugePageVector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::s
 {
     checkFilters(volume, filters);
     const auto& g = volume.grid();
+    const grid::BrickLayout& bricks = volume.bricks();
+    // The rule of pointSelected, read so that what no point of a brick can pass is not decoded: a
+    // stored variable's brick bounds (stored, or of its values) hold every value of the brick's points
+    // (for u16 the decoded ones: value_encoding.h), so a brick whose bounds meet none of a filter's
+    // ranges has no selected point; the other points read their values one by one (PointValues), so
+    // that a variable is decoded only where its bricks may be selected. Coordinates first: cheaper.
+    struct Axis {
+        const RangeFilter* filter;
+        std::optional<dataset::StepVolume::PointValues> values;
+        const float* bounds = nullptr;  // a stored variable's
+    };
+    std::vector<Axis> axes;
+    for (const RangeFilter& f : filters)
+        if (f.coordinate)
+            axes.push_back({&f, std::nullopt, nullptr});
+    for (const RangeFilter& f : filters)
+        if (!f.coordinate) {
+            const size_t var = size_t(f.variable);
+            axes.push_back({&f, volume.pointValues(var), volume.computedFrom(var) ? nullptr : volume.brickBounds(var)});
+        }
+    const auto mayHold = [&](size_t brick) {
+        for (const Axis& a : axes) {
+            if (!a.bounds)
+                continue;
+            const float lo = a.bounds[2 * brick], hi = a.bounds[2 * brick + 1];
+            bool any = false;
+            for (const dataset::ValueRange& r : a.filter->ranges)
+                any = any || (hi >= r.min && lo <= r.max);
+            if (!any)
+                return false;
+        }
+        return true;
+    };
     HugePageVector<uint8_t> out(g.cellCount(), 0);
+    const size_t s = bricks.size;
     tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
         for (size_t iR = 0; iR < g.nR(); ++iR)
-            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
-                out[g.index(iLat, iR, iLon)] = pointSelected(volume, filters, iLat, iR, iLon) ? 1 : 0;
+            for (uint32_t c = 0; c < bricks.count[2]; ++c) {
+                if (!mayHold(bricks.index(uint32_t(iLat / s), uint32_t(iR / s), c)))
+                    continue;
+                const size_t end = std::min(size_t(c + 1) * s, g.nLon());
+                for (size_t iLon = size_t(c) * s; iLon < end; ++iLon) {
+                    const size_t i = g.index(iLat, iR, iLon);
+                    bool selected = true;
+                    for (const Axis& a : axes) {
+                        const double v = a.values ? double(a.values->at(i, iLat, iR, iLon))
+                                                  : grid::coordinateValue(*a.filter->coordinate, g.latDeg[iLat],
+                                                                          g.lonDeg[iLon], g.rKm[iR]);
+                        if (!a.filter->contains(v)) {
+                            selected = false;
+                            break;
+                        }
+                    }
+                    out[i] = selected ? 1 : 0;
+                }
+            }
     });
     return out;
 }

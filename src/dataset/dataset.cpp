@@ -299,6 +299,48 @@ const float* StepVolume::compute(size_t var) const
     return p;
 }
 
+const std::vector<double>& StepVolume::shellMeansOf(size_t var) const
+{
+    RAYPC_CHECK(var < variableCount());
+    const std::span<const float> values(this->values(var), m_grid.cellCount());  // before the lock: it may decode
+    std::lock_guard lock(m_computeMutex);
+    auto means = m_shellMeans.find(var);
+    if (means == m_shellMeans.end())
+        // Isolated as in compute().
+        tbb::this_task_arena::isolate([&] { means = m_shellMeans.emplace(var, shellMeans(m_grid, values)).first; });
+    return means->second;
+}
+
+StepVolume::PointValues StepVolume::pointValues(size_t var) const
+{
+    RAYPC_CHECK(var < variableCount());
+    PointValues p;
+    if (const float* v = m_values[var].load(std::memory_order_acquire)) {
+        p.m_values = v;
+        return p;
+    }
+    if (m_base && var < m_base->variableCount())
+        return m_base->pointValues(var);
+    if (var >= m_storedCount) {
+        const ShellAnomalyOf& of = m_computed[var - m_storedCount];
+        p.m_means = shellMeansOf(of.base).data();
+        p.m_baseValues = values(of.base);
+        p.m_kind = of.kind;
+        return p;
+    }
+    if (m_encoding == ValueEncoding::Float32) {
+        p.m_values = values(var);  // mapped: checked once as a whole
+        return p;
+    }
+    m_mapped[var].checkNotCutShort();
+    p.m_grid = &m_grid;
+    p.m_bricks = &m_bricks;
+    p.m_encoded = static_cast<const uint16_t*>(m_valueFiles[var]);
+    p.m_bounds = m_bounds[var];
+    p.m_missing = hasMissing(var);
+    return p;
+}
+
 const float* StepVolume::decode(size_t var) const
 {
     RAYPC_CHECK(var < variableCount());

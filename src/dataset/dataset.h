@@ -147,6 +147,41 @@ public:
     // from its base on the box's whole shells (their means), the same bits as values(). Thread-safe;
     // throws as value() does.
     void valuesInBox(size_t var, const std::array<size_t, 3>& begin, const std::array<size_t, 3>& end, float* out) const;
+    // One variable's values read point by point, without decoding or computing the whole variable:
+    // the decoded array when there is one, otherwise a u16 variable's points decoded one by one
+    // (decodeUint16Point) and a shell anomaly's from its base's values and shell means (shellMeansOf:
+    // no array of the anomaly, no brick bounds of it).
+    // The same bits as values(var). For passes that read a few points of many variables (a
+    // selection's features: extractFeatures); a pass over every point should use values().
+    class PointValues {
+    public:
+        float at(size_t index, size_t iLat, size_t iR, size_t iLon) const
+        {
+            if (m_values)
+                return m_values[index];
+            if (m_means)
+                return shellAnomalyValue(m_baseValues[index], m_means[iR], m_kind);
+            return decodeUint16Point(*m_grid, *m_bricks, m_encoded, m_bounds, iLat, iR, iLon, m_missing);
+        }
+
+    private:
+        friend class StepVolume;
+        const float* m_values = nullptr;  // decoded, mapped float32 or computed
+        const grid::SphericalGrid* m_grid = nullptr;
+        const grid::BrickLayout* m_bricks = nullptr;
+        const uint16_t* m_encoded = nullptr;  // u16, not decoded
+        const float* m_bounds = nullptr;
+        bool m_missing = false;
+        const double* m_means = nullptr;      // a shell anomaly not computed: its base's shell means
+        const float* m_baseValues = nullptr;  // and values
+        ShellAnomalyKind m_kind = ShellAnomalyKind::Difference;
+    };
+    // Thread-safe; the reader lives as long as the volume. Throws as values() does (a file cut short,
+    // a float32 value outside the range).
+    PointValues pointValues(size_t var) const;
+    // The shell means (grid().nR() of them) of variable `var` on this level, as a shell anomaly of it
+    // is computed with (shellMeans of values(var)): computed on first use and kept. Thread-safe.
+    const std::vector<double>& shellMeansOf(size_t var) const;
     // Whether values(var) is ready without decoding.
     bool valuesReady(size_t var) const { return m_values[var].load(std::memory_order_acquire) != nullptr; }
     // bricks().brickCount() pairs (min, max) of variable `var`. Thread-safe; a computed variable's

@@ -313,5 +313,39 @@ TEST_F(DamagedDatasets, ValuesInABoxAreTheWholeVariablesValuesBitForBit)
     }
 }
 
+// What reads a few points of many variables (a selection's features) reads them one by one: the
+// values of values(), bit for bit, without decoding a u16 variable or computing a shell anomaly's
+// array (only its base is decoded, for the shell means).
+TEST_F(DamagedDatasets, PointValuesAreTheWholeVariablesValuesBitForBitWithoutDecodingIt)
+{
+    for (const auto encoding : {ValueEncoding::Uint16, ValueEncoding::Float32}) {
+        const auto dataset = Dataset::open(s_dir->path() / std::string(encodingName(encoding)));
+        const grid::SphericalGrid& g = dataset->levels()[0].grid;
+        const size_t n = g.cellCount();
+        bool computed = false;
+        for (size_t var = 0; var < dataset->variables().size(); ++var) {
+            const auto fresh = dataset->load(1, 0);
+            const StepVolume::PointValues points = fresh->pointValues(var);
+            const auto whole = dataset->load(1, 0);
+            const float* all = whole->values(var);
+            for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+                for (size_t iR = 0; iR < g.nR(); ++iR)
+                    for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                        const size_t i = g.index(iLat, iR, iLon);
+                        ASSERT_EQ(std::bit_cast<uint32_t>(points.at(i, iLat, iR, iLon)), std::bit_cast<uint32_t>(all[i]))
+                            << dataset->variables()[var].name << " at " << iLat << ", " << iR << ", " << iLon;
+                    }
+            const ShellAnomalyOf* of = fresh->computedFrom(var);
+            computed = computed || of;
+            EXPECT_FALSE(fresh->valuesReady(var) && of) << dataset->variables()[var].name << ": no array computed";
+            if (encoding == ValueEncoding::Uint16) {
+                EXPECT_EQ(fresh->decodedBytes(), of ? n * sizeof(float) : 0)
+                    << dataset->variables()[var].name << ": decoded " << (of ? "its base alone" : "nothing");
+            }
+        }
+        EXPECT_TRUE(computed) << "the dataset has shell anomalies";
+    }
+}
+
 }  // namespace
 }  // namespace raypc::dataset

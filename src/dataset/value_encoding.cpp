@@ -36,9 +36,14 @@ AxisCover coverOf(size_t i, size_t n, uint32_t size, uint32_t brickCount, bool w
             c.bricks[c.count++] = uint32_t(i / size - 1);
         return c;
     }
+    // Brick b covers i when i lies less than `points` columns after b·s (mod n): b·s <= i only for the
+    // owner and the brick before it, b·s > i (wrapping) only for the last brick. Only those are tried
+    // (decodeUint16Point asks this for every point it decodes), in increasing order.
     const size_t points = std::min<size_t>(size + 1, n);
-    for (uint32_t b = 0; b < brickCount; ++b)
-        if (b != c.bricks[0] && (i + n - (size_t(b) * size) % n) % n < points) {
+    const uint32_t owner = c.bricks[0];
+    for (const uint32_t b : {owner > 0 ? owner - 1 : brickCount, brickCount - 1})
+        if (b < brickCount && b != owner && (c.count < 2 || b != c.bricks[1]) &&
+            (i + n - (size_t(b) * size) % n) % n < points) {
             RAYPC_CHECK_LT(c.count, 3u);
             c.bricks[c.count++] = b;
         }
