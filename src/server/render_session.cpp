@@ -406,7 +406,12 @@ void RenderSession::render(const Request& request)
     // frame), answers at once; any change but the step makes another key and drops the kept ones.
     const std::string frameKey = frameCacheKey(job.document);
     m_frameCache.setKey(frameKey);
-    planAhead(request, frameKey);
+    // Rendering ahead starts once the session moves in time (a step of playback, another step), so
+    // that a session that only looks at one step costs no more than its own frames.
+    if (request.mode == FrameMode::playback || (m_lastStep >= 0 && step != m_lastStep))
+        m_renderAhead = true;
+    if (m_renderAhead)
+        planAhead(request, frameKey);
     if (const auto kept = m_frameCache.find(frameKey, step)) {
         sendKept(*kept, request);
         m_lastStep = step;

@@ -5,7 +5,8 @@
 // after the one asked for, at still quality (the state's level, else level 0, its passes, full
 // size), into the session's FrameCache, while playing and while paused. A state whose step has a
 // finished frame there is answered with it at once ("cached": true); a still state's own finished
-// frame goes in as well. Any change but the step (camera, transfer function, brushes, size,
+// frame goes in as well. It starts once the session moves in time (a step of playback, or a state of
+// another step than the last), so that a session looking at one step costs only its own frames. Any change but the step (camera, transfer function, brushes, size,
 // quality...) gives another key and drops the frames.
 //
 // The newest state wins: submit() replaces any state that has not started and cancels the pass in
@@ -162,6 +163,7 @@ private:
     // Render thread only.
     render::StateRenderer m_renderer;
     int m_lastStep = -1;
+    bool m_renderAhead = false;  // the session has moved in time: its states are rendered ahead
     uint64_t m_rankSession = 0;  // this session's id in m_context.ranks
     uint64_t m_frames = 0;       // frames started (a distributed pass names its frame)
     std::string m_selectionKey;
