@@ -114,7 +114,7 @@ void RenderSession::stop()
     {
         std::lock_guard lock(m_aheadMutex);
         m_ahead.reset();
-        m_aheadChanged = true;
+        m_aheadStop = true;
         m_aheadCancel = true;
     }
     m_aheadCv.notify_all();
@@ -317,8 +317,8 @@ void RenderSession::aheadLoop()
         std::optional<AheadPlan> plan;
         {
             std::unique_lock lock(m_aheadMutex);
-            m_aheadCv.wait(lock, [&] { return m_stopping || (m_ahead && m_aheadChanged); });
-            if (m_stopping)
+            m_aheadCv.wait(lock, [&] { return m_aheadStop || (m_ahead && m_aheadChanged); });
+            if (m_aheadStop)
                 return;
             plan = m_ahead;
             m_aheadChanged = false;
@@ -328,7 +328,7 @@ void RenderSession::aheadLoop()
         const int shown = plan->request.resolved.state.step;
         for (int k = 1; k <= steps; ++k) {
             const int step = (shown + k) % steps;
-            if (m_aheadCancel || m_stopping)
+            if (m_aheadCancel || m_aheadStop)
                 break;
             {
                 std::lock_guard lock(m_aheadMutex);

@@ -180,6 +180,7 @@ private:
     std::condition_variable m_aheadCv;
     std::optional<AheadPlan> m_ahead;
     bool m_aheadChanged = false;
+    std::atomic<bool> m_aheadStop{false};
     std::atomic<bool> m_aheadCancel{false};
     render::StateRenderer m_aheadRenderer;
     std::thread m_aheadThread;
