@@ -75,7 +75,7 @@ for (let k = 1; k <= total; k++) {
   const now = performance.now();
   due = now - due > 0.25 * period ? now + period : due + period;
   shown.push({ loop: Math.floor(k / nSteps), step: ahead.step, level: h.level, width: h.width, height: h.height,
-    pass: h.pass, cached: h.cached === true, t: now });
+    pass: h.pass, converged: h.converged === true, cached: h.cached === true, t: now });
   ahead = send((ahead.step + 1) % nSteps);
 }
 ws.close();
@@ -90,8 +90,10 @@ for (let l = 0; l <= loops; l++) {
   const full = s.filter((x) => x.level === 0 && x.width === width && x.height === height).length;
   const levels = {};
   for (const x of s) levels[x.level] = (levels[x.level] ?? 0) + 1;
+  const done = s.filter((x) => x.level === 0 && x.width === width && x.height === height && x.converged).length;
   console.log(`  loop ${l + 1}: ${s.length} steps shown at ${rate.toFixed(2)} steps/s; level 0 at full size ${full}/${s.length} ` +
-    `(${(100 * full / s.length).toFixed(0)} %); from the frames rendered ahead ${s.filter((x) => x.cached).length}; by level ${JSON.stringify(levels)}`);
+    `(${(100 * full / s.length).toFixed(0)} %), of which with every pass ${done}; from the frames rendered ahead ` +
+    `${s.filter((x) => x.cached).length}; by level ${JSON.stringify(levels)}`);
 }
 console.log(`load: ${readFileSync('/proc/loadavg', 'utf8').trim()}`);
 process.exit(0);
