@@ -66,8 +66,8 @@ void ServeFlags::add(CLI::App& cmd)
                    "Memory for the steps in use (their levels and decoded variables, shared by all sessions), "
                    "e.g. 8G or 512M (default: half of the memory available at start)");
     cmd.add_option("--frame-cache", frameCache,
-                   fmt::format("Memory for each session's frames rendered ahead (playback from memory), e.g. 256M "
-                               "(default: {}M)",
+                   fmt::format("Memory for each session's frames rendered ahead (playback from memory), e.g. 256M; "
+                               "0: none rendered ahead (default: {}M)",
                                server::ServerLimits{}.frameCacheBytes >> 20));
 }
 
@@ -86,7 +86,9 @@ server::ServerOptions serverOptions(const std::filesystem::path& dataset, const 
     options.limits.sessionFrameBytes = flags.sessionMemoryMiB << 20;
     options.cacheBytes = flags.stepCache.empty() ? server::StepCache::defaultBytes()
                                                  : size_t(parseMemorySize(flags.stepCache, "--step-cache"));
-    if (!flags.frameCache.empty())
+    if (flags.frameCache == "0")
+        options.limits.frameCacheBytes = 0;  // no frames rendered ahead
+    else if (!flags.frameCache.empty())
         options.limits.frameCacheBytes = size_t(parseMemorySize(flags.frameCache, "--frame-cache"));
     spdlog::info("step cache: {}{}; frames rendered ahead: {} a session", formatBytes(options.cacheBytes),
                  flags.stepCache.empty() ? " (half of the memory available)" : "",

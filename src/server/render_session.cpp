@@ -324,6 +324,7 @@ void RenderSession::aheadLoop()
             m_aheadChanged = false;
             m_aheadCancel = false;
         }
+        m_aheadBusy = true;
         // The steps after the one shown, in playing order (wrapping around), that have no frame yet.
         const int shown = plan->request.resolved.state.step;
         for (int k = 1; k <= steps; ++k) {
@@ -359,6 +360,7 @@ void RenderSession::aheadLoop()
                 break;
             }
         }
+        m_aheadBusy = false;
     }
 }
 
@@ -408,7 +410,8 @@ void RenderSession::render(const Request& request)
     m_frameCache.setKey(frameKey);
     // Rendering ahead starts once the session moves in time (a step of playback, another step), so
     // that a session that only looks at one step costs no more than its own frames.
-    if (request.mode == FrameMode::playback || (m_lastStep >= 0 && step != m_lastStep))
+    if (m_context.frameCacheBytes > 0 &&
+        (request.mode == FrameMode::playback || (m_lastStep >= 0 && step != m_lastStep)))
         m_renderAhead = true;
     if (m_renderAhead)
         planAhead(request, frameKey);
@@ -510,6 +513,10 @@ void RenderSession::render(const Request& request)
         }
         updateSelection(selectionKey, step, selectionLevel, prepared);
         if (last)
+            break;
+        // While steps are still rendered ahead, a step of playback gets its one pass and leaves the
+        // cores to them: refining a frame shown once is worth less than the next loop at level 0.
+        if (request.mode == FrameMode::playback && m_aheadBusy)
             break;
     }
     if (done > 0)

@@ -6,7 +6,9 @@
 // size), into the session's FrameCache, while playing and while paused. A state whose step has a
 // finished frame there is answered with it at once ("cached": true); a still state's own finished
 // frame goes in as well. It starts once the session moves in time (a step of playback, or a state of
-// another step than the last), so that a session looking at one step costs only its own frames. Any change but the step (camera, transfer function, brushes, size,
+// another step than the last), so that a session looking at one step costs only its own frames;
+// while it has steps to render, a step of playback gets one pass (no refinement), leaving the cores
+// to it. A bound of 0 bytes (--frame-cache 0) turns it off. Any change but the step (camera, transfer function, brushes, size,
 // quality...) gives another key and drops the frames.
 //
 // The newest state wins: submit() replaces any state that has not started and cancels the pass in
@@ -181,6 +183,7 @@ private:
     std::optional<AheadPlan> m_ahead;
     bool m_aheadChanged = false;
     std::atomic<bool> m_aheadStop{false};
+    std::atomic<bool> m_aheadBusy{false};  // the ahead thread has steps to render
     std::atomic<bool> m_aheadCancel{false};
     render::StateRenderer m_aheadRenderer;
     std::thread m_aheadThread;

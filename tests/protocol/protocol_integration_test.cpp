@@ -397,7 +397,7 @@ TEST(Serve, DefaultStateOfInfoRendersAndInteractiveFitsTheBudget)
 // step's time is up; playback does not change the linked state.
 TEST(Serve, PlaybackStepsGetTheirLevelFromTheBudgetThenRefine)
 {
-    FixtureServer server;
+    FixtureServer server({"--frame-cache", "0"});  // no rendering ahead, which would stop the refinement
     json state = json::parse(httpGet(server.port, "/api/info").body)["defaultState"];
     WsClient ws(server.port);
     ws.hello();
