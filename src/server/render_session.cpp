@@ -477,6 +477,9 @@ void RenderSession::render(const Request& request)
     const double waitedMs = std::chrono::duration<double, std::milli>(renderStart - request.received).count();
     const double preparedMs = millisecondsSince(renderStart);
     ViewFrames frames = prepared.frames();
+    // While steps are still rendered ahead, a step of playback gets one pass (its last) and leaves
+    // the cores to them: refining a frame shown once is worth less than the next loop at level 0.
+    const bool onePass = request.mode == FrameMode::playback && m_aheadBusy;
     double renderMsTotal = 0, firstPassMs = 0;
     int done = 0, unsent = 0;
     for (int pass = 1; pass <= job.passes; ++pass) {
@@ -488,7 +491,8 @@ void RenderSession::render(const Request& request)
         // Adaptive refinement (a still state's convergenceGreyLevels) may have stopped every block:
         // this frame is final, further passes would render nothing.
         const bool refined = std::all_of(frames.begin(), frames.end(), [](const FrameBuffer& f) { return f.converged(); });
-        const bool last = pass == job.passes || refined;
+        const bool finished = pass == job.passes || refined;
+        const bool last = finished || onePass;
         renderMsTotal += stats.seconds * 1000.0;
         if (pass == 1)
             firstPassMs = stats.seconds * 1000.0;
@@ -505,7 +509,7 @@ void RenderSession::render(const Request& request)
                                      selectionKey == m_selectionKey ? m_selection : nlohmann::json());
         // A finished frame at still quality (the state's level, else 0; full size; every pass) is
         // what rendering ahead would make: kept for the next time this step is asked.
-        if (last && !job.interactive && prepared.divisor == 1 && prepared.level == state.level.value_or(0))
+        if (finished && !job.interactive && prepared.divisor == 1 && prepared.level == state.level.value_or(0))
             m_frameCache.insert(frameKey, step, frame);
         if (pass == 1 && job.interactive) {
             const double overhead = (preparedMs + job.encodeMs) / 1000.0;
@@ -513,10 +517,6 @@ void RenderSession::render(const Request& request)
         }
         updateSelection(selectionKey, step, selectionLevel, prepared);
         if (last)
-            break;
-        // While steps are still rendered ahead, a step of playback gets its one pass and leaves the
-        // cores to them: refining a frame shown once is worth less than the next loop at level 0.
-        if (request.mode == FrameMode::playback && m_aheadBusy)
             break;
     }
     if (done > 0)
