@@ -6,6 +6,7 @@
 #include "core/system_memory.h"
 #include "server/rank_pool.h"
 #include "server/series_progress.h"
+#include "server/step_cache.h"
 #include "server/server.h"
 
 #include <fmt/format.h>
@@ -61,6 +62,13 @@ void ServeFlags::add(CLI::App& cmd)
                                server::kFrameBytesPerPixel))
         ->capture_default_str()
         ->check(CLI::Range(1, 1 << 24));
+    cmd.add_option("--step-cache", stepCache,
+                   "Memory for the steps in use (their levels and decoded variables, shared by all sessions), "
+                   "e.g. 8G or 512M (default: half of the memory available at start)");
+    cmd.add_option("--frame-cache", frameCache,
+                   fmt::format("Memory for each session's frames rendered ahead (playback from memory), e.g. 256M; "
+                               "0: none rendered ahead (default: {}M)",
+                               server::ServerLimits{}.frameCacheBytes >> 20));
 }
 
 namespace {
@@ -76,6 +84,15 @@ server::ServerOptions serverOptions(const std::filesystem::path& dataset, const 
     options.allowedOrigins = flags.allowOrigins;
     options.limits = flags.limits;
     options.limits.sessionFrameBytes = flags.sessionMemoryMiB << 20;
+    options.cacheBytes = flags.stepCache.empty() ? server::StepCache::defaultBytes()
+                                                 : size_t(parseMemorySize(flags.stepCache, "--step-cache"));
+    if (flags.frameCache == "0")
+        options.limits.frameCacheBytes = 0;  // no frames rendered ahead
+    else if (!flags.frameCache.empty())
+        options.limits.frameCacheBytes = size_t(parseMemorySize(flags.frameCache, "--frame-cache"));
+    spdlog::info("step cache: {}{}; frames rendered ahead: {} a session", formatBytes(options.cacheBytes),
+                 flags.stepCache.empty() ? " (half of the memory available)" : "",
+                 formatBytes(options.limits.frameCacheBytes));
     return options;
 }
 

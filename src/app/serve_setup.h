@@ -20,6 +20,9 @@ struct ServeFlags {
     std::vector<std::string> allowOrigins;
     server::ServerLimits limits;
     size_t sessionMemoryMiB = server::ServerLimits{}.sessionFrameBytes >> 20;
+    // --step-cache and --frame-cache as given (parseMemorySize); empty: the defaults
+    // (StepCache::defaultBytes, ServerLimits::frameCacheBytes).
+    std::string stepCache, frameCache;
 
     void add(CLI::App& cmd);
 };

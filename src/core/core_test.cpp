@@ -6,6 +6,7 @@
 #include "core/numbered_name.h"
 #include "core/spherical.h"
 #include "core/strings.h"
+#include "core/system_memory.h"
 
 #include <gtest/gtest.h>
 #include <sys/mman.h>
@@ -457,3 +458,24 @@ TEST(HugePages, RaypcHugePagesZeroAsksForNothing)
 
 }  // namespace
 }  // namespace raypc
+
+TEST(SystemMemory, ParsesSizesWithBinaryUnitsAndNamesTheOptionOnBadOnes)
+{
+    using raypc::parseMemorySize;
+    EXPECT_EQ(parseMemorySize("512M", "--step-cache"), uint64_t(512) << 20);
+    EXPECT_EQ(parseMemorySize("8G", "--step-cache"), uint64_t(8) << 30);
+    EXPECT_EQ(parseMemorySize("1.5GiB", "--step-cache"), uint64_t(3) << 29);
+    EXPECT_EQ(parseMemorySize("64mb", "--step-cache"), uint64_t(64) << 20);
+    EXPECT_EQ(parseMemorySize("2T", "--step-cache"), uint64_t(2) << 40);
+    EXPECT_EQ(parseMemorySize("3000000", "--step-cache"), 3000000u);
+    for (const char* bad : {"", "G", "12Q", "1.2.3G", "-5G", "0", "0.0000001K", "8 G", "9000000T"}) {
+        try {
+            parseMemorySize(bad, "--step-cache");
+            ADD_FAILURE() << "accepted '" << bad << "'";
+        } catch (const raypc::Error& e) {
+            const std::string m = e.what();
+            EXPECT_TRUE(m.starts_with(std::string("--step-cache: '") + bad + "'")) << m;
+            EXPECT_NE(m.find("expected a number with an optional unit"), std::string::npos) << m;
+        }
+    }
+}

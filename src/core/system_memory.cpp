@@ -1,11 +1,16 @@
 #include "core/system_memory.h"
 
+#include "core/error.h"
+
 #include <malloc.h>
 #include <unistd.h>
 
 #include <fmt/format.h>
 #include <sys/resource.h>
 
+#include <algorithm>
+#include <cctype>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <limits>
@@ -78,6 +83,44 @@ AvailableMemory availableMemory()
     consider(cgroupRemaining(), "cgroup memory.max");
     consider(addressSpaceRemaining(), "ulimit -v");
     return a;
+}
+
+uint64_t parseMemorySize(const std::string& text, const std::string& option)
+{
+    const auto bad = [&](const char* why) {
+        fail("{}: '{}' {}; expected a number with an optional unit K, M, G or T (binary: 1G = 1024M), e.g. 8G or 512M",
+             option, text, why);
+    };
+    size_t digits = 0;
+    while (digits < text.size() && (std::isdigit(static_cast<unsigned char>(text[digits])) || text[digits] == '.'))
+        ++digits;
+    if (digits == 0 || std::count(text.begin(), text.begin() + std::ptrdiff_t(digits), '.') > 1)
+        bad("is not a size");
+    const double number = std::strtod(text.substr(0, digits).c_str(), nullptr);
+    std::string unit = text.substr(digits);
+    for (char& c : unit)
+        c = char(std::toupper(static_cast<unsigned char>(c)));
+    if (unit.ends_with("IB"))
+        unit.resize(unit.size() - 2);
+    else if (unit.size() > 1 && unit.ends_with("B"))
+        unit.pop_back();
+    double scale = 1;
+    if (unit == "K")
+        scale = 0x1p10;
+    else if (unit == "M")
+        scale = 0x1p20;
+    else if (unit == "G")
+        scale = 0x1p30;
+    else if (unit == "T")
+        scale = 0x1p40;
+    else if (!unit.empty() && unit != "B")
+        bad("has an unknown unit");
+    const double bytes = std::floor(number * scale);
+    if (!(bytes >= 1))
+        bad("is zero");
+    if (bytes >= 0x1p63)
+        bad("is too large");
+    return uint64_t(bytes);
 }
 
 std::string formatBytes(uint64_t bytes)

@@ -37,6 +37,12 @@ void keepLargeBlocksForReuse();
 // first thing in main; returns only if nothing was done or the exec failed. Never throws.
 void restartWithTransparentHugePages(char** argv);
 
+// A size of memory as a user writes it: a number (decimals allowed) with an optional unit K, M, G or
+// T, each 1024 times the one before, optionally followed by "iB" or "B" ("512M", "1.5GiB", "8G",
+// "3000000" bytes). Throws raypc::Error naming `option` ("--step-cache: '12Q' is not a size ...")
+// for anything else, for zero, and for a size of 2^63 bytes or more.
+uint64_t parseMemorySize(const std::string& text, const std::string& option);
+
 // "1.5 GB", "830 MB": bytes for messages (decimal units).
 std::string formatBytes(uint64_t bytes);
 

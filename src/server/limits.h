@@ -31,6 +31,9 @@ struct ServerLimits {
     // The frame memory of every session's newest state together (width x height x
     // kFrameBytesPerPixel); a state that does not fit gets an error and the previous state stays.
     size_t sessionFrameBytes = size_t(2) << 30;
+    // The frames a session keeps of its current state, rendered ahead for playback
+    // (server/frame_cache.h), each session's; `--frame-cache`.
+    size_t frameCacheBytes = size_t(256) << 20;
 
     // Text replies (errors, pongs) waiting for a client that does not read; beyond this the
     // connection is closed. Frames do not count: only the newest waits (the older one is dropped).

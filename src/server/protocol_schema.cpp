@@ -636,6 +636,9 @@ const std::vector<Definition>& messages()
              {"interactive", boolean(""), "an interactive state's one pass"},
              {"playback", boolean(""), "a step of playback"},
              {"preview", boolean(""), "a still state's quick pass before its first"},
+             {"cached", boolean(""),
+              "the frame was rendered ahead (or kept from an earlier still frame) of this state at this step and is "
+              "sent from the session's frame cache: the state's level (else 0), full size, every pass"},
              {"ranks", integer(""), "MPI ranks that rendered the pass (1 alone)"},
              {"width", integer(""), "the JPEG's width, pixels"},
              {"height", integer(""), "its height, pixels"},

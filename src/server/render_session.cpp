@@ -4,6 +4,7 @@
 
 #include "core/clock.h"
 #include "core/error.h"
+#include "core/system_memory.h"
 #include "analysis/selection.h"
 #include "render/reference_geometry.h"
 #include "server/image_codec.h"
@@ -11,6 +12,10 @@
 
 #include <spdlog/spdlog.h>
 #include <tbb/task_arena.h>
+
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -46,6 +51,9 @@ RenderSession::RenderSession(RenderContext& context, SessionSink sink, std::stri
       m_name(std::move(name)),
       m_renderer(context.dataset, cacheSources(context.cache, context.pathlines, context.featureLabels)),
       m_rankSession(context.ranks ? context.ranks->openSession() : 0),
+      m_frameCache(context.frameCacheBytes),
+      m_aheadRenderer(context.dataset, cacheSources(context.cache, context.pathlines, context.featureLabels)),
+      m_aheadThread([this] { aheadLoop(); }),
       m_thread([this] { loop(); })
 {
 }
@@ -103,6 +111,15 @@ void RenderSession::stop()
     m_cv.notify_all();
     if (m_thread.joinable())
         m_thread.join();
+    {
+        std::lock_guard lock(m_aheadMutex);
+        m_ahead.reset();
+        m_aheadStop = true;
+        m_aheadCancel = true;
+    }
+    m_aheadCv.notify_all();
+    if (m_aheadThread.joinable())
+        m_aheadThread.join();
 }
 
 void RenderSession::loop()
@@ -137,21 +154,24 @@ nlohmann::json shellKeyJson(const state::RenderState& state, const dataset::Data
     return key;
 }
 
-void RenderSession::sendFrame(Job& job, const ViewFrames& frames, const StateRenderer::Prepared& prepared,
-                              const PassStats& stats, int pass, bool last, bool preview, const nlohmann::json& selection)
+std::shared_ptr<EncodedFrame> RenderSession::makeFrame(const StateRenderer& renderer, Job& job, const ViewFrames& frames,
+                                                       const StateRenderer::Prepared& prepared, const PassStats& stats,
+                                                       int pass, bool last, bool preview,
+                                                       const nlohmann::json& selection) const
 {
     const Request& request = job.request;
     const state::RenderState& state = request.resolved.state;
-    const auto encodeStart = Clock::now();
     // The UI draws the legends, and over a mono frame the shells' depth labels (shellLabels below).
     const bool labelsByUi = !state.stereo.enabled();
-    const ImageRgba8 picture = m_renderer.picture(frames, request.resolved, false, !labelsByUi);
-    const std::string jpeg = encodeJpeg(picture.pixels, picture.width, picture.height,
+    const ImageRgba8 picture = renderer.picture(frames, request.resolved, false, !labelsByUi);
+    auto frame = std::make_shared<EncodedFrame>();
+    frame->jpeg = encodeJpeg(picture.pixels, picture.width, picture.height,
                                         job.interactive || preview ? kJpegQualityInteractive : kJpegQualityStill);
     // A stereo pair's depth is the two eyes' side by side, whatever the picture's layout, each
     // downsampled on its own.
-    int depthWidth = 0, depthHeight = 0;
-    const std::vector<float> depth =
+    int& depthWidth = frame->depthWidth;
+    int& depthHeight = frame->depthHeight;
+    frame->depth =
         averagedDepthKm(frames, depthWidth, depthHeight, [](std::vector<float> eye, int& width, int& height) {
             int w = 0, h = 0;
             std::vector<float> out = downsampleDepth(eye, width, height, kDepthDownsample, w, h);
@@ -169,6 +189,7 @@ void RenderSession::sendFrame(Job& job, const ViewFrames& frames, const StateRen
                           {"interactive", job.interactive},
                           {"playback", request.mode == FrameMode::playback},
                           {"preview", preview},
+                          {"cached", false},
                           {"ranks", job.ranks},
                           {"width", picture.width},
                           {"height", picture.height},
@@ -207,10 +228,140 @@ void RenderSession::sendFrame(Job& job, const ViewFrames& frames, const StateRen
     }
     if (!request.pair.is_null())
         header["pair"] = request.pair;
-    std::string bytes = encodeFrame(std::move(header), {reinterpret_cast<const uint8_t*>(jpeg.data()), jpeg.size()},
-                                    depth, depthWidth, depthHeight);
+    frame->header = std::move(header);
+    return frame;
+}
+
+void RenderSession::send(const EncodedFrame& frame, int64_t id)
+{
+    std::string bytes =
+        encodeFrame(frame.header, {reinterpret_cast<const uint8_t*>(frame.jpeg.data()), frame.jpeg.size()}, frame.depth,
+                    frame.depthWidth, frame.depthHeight);
+    m_sink.sendBinary(std::move(bytes), id);
+}
+
+std::shared_ptr<EncodedFrame> RenderSession::sendFrame(Job& job, const ViewFrames& frames,
+                                                       const StateRenderer::Prepared& prepared, const PassStats& stats,
+                                                       int pass, bool last, bool preview, const nlohmann::json& selection)
+{
+    const auto encodeStart = Clock::now();
+    auto frame = makeFrame(m_renderer, job, frames, prepared, stats, pass, last, preview, selection);
+    send(*frame, job.request.id);
     job.encodeMs += millisecondsSince(encodeStart);
-    m_sink.sendBinary(std::move(bytes), request.id);
+    return frame;
+}
+
+void RenderSession::sendKept(const EncodedFrame& kept, const Request& request)
+{
+    EncodedFrame frame = kept;
+    nlohmann::json& h = frame.header;
+    h["id"] = request.id;
+    h["interactive"] = request.mode == FrameMode::interactive;
+    h["playback"] = request.mode == FrameMode::playback;
+    h["preview"] = false;
+    h["cached"] = true;
+    send(frame, request.id);
+}
+
+void RenderSession::planAhead(const Request& request, const std::string& key)
+{
+    {
+        std::lock_guard lock(m_aheadMutex);
+        if (!m_ahead || m_ahead->key != key)
+            m_aheadCancel = true;  // the frame in flight is of a state no longer shown
+        m_ahead = AheadPlan{key, request};
+        m_aheadChanged = true;
+    }
+    m_aheadCv.notify_all();
+}
+
+std::shared_ptr<const EncodedFrame> RenderSession::renderFinished(StateRenderer& renderer, const Request& request,
+                                                                  const std::atomic<bool>& cancel)
+{
+    const state::RenderState& state = request.resolved.state;
+    Job job{.request = request,
+            .document = state::toJson(state),
+            .shellKey = shellKeyJson(state, *m_context.dataset),
+            .interactive = false,
+            .passes = std::max(1, state.passes),
+            .ranks = 1};
+    const StateRenderer::Prepared prepared = renderer.prepare(request.resolved, LevelPolicy{});
+    ViewFrames frames = prepared.frames();
+    PassStats stats;
+    int pass = 0;
+    while (pass < job.passes) {
+        if (cancel)
+            return nullptr;
+        stats = prepared.renderPass(frames, &cancel);
+        if (stats.cancelled)
+            return nullptr;
+        ++pass;
+        if (std::all_of(frames.begin(), frames.end(), [](const FrameBuffer& f) { return f.converged(); }))
+            break;
+    }
+    const auto volume = prepared.views.front().renderer->volume();
+    const analysis::SelectionStats s = analysis::selectedVolume(*volume, prepared.views.front().params.brushes);
+    const nlohmann::json selection{{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}};
+    return makeFrame(renderer, job, frames, prepared, stats, pass, true, false, selection);
+}
+
+void RenderSession::aheadLoop()
+{
+    // Below the session's own frames: a nicer thread, and a TBB arena whose tasks the shared workers
+    // take only when the normal-priority arena has none.
+    setpriority(PRIO_PROCESS, pid_t(syscall(SYS_gettid)), 10);
+    tbb::task_arena arena(tbb::task_arena::automatic, 1, tbb::task_arena::priority::low);
+    const int steps = int(m_context.dataset->steps().size());
+    size_t frameBytes = 0;  // the last frame's, to stop before the bound
+    for (;;) {
+        std::optional<AheadPlan> plan;
+        {
+            std::unique_lock lock(m_aheadMutex);
+            m_aheadCv.wait(lock, [&] { return m_aheadStop || (m_ahead && m_aheadChanged); });
+            if (m_aheadStop)
+                return;
+            plan = m_ahead;
+            m_aheadChanged = false;
+            m_aheadCancel = false;
+        }
+        m_aheadBusy = true;
+        // The steps after the one shown, in playing order (wrapping around), that have no frame yet.
+        const int shown = plan->request.resolved.state.step;
+        for (int k = 1; k <= steps; ++k) {
+            const int step = (shown + k) % steps;
+            if (m_aheadCancel || m_aheadStop)
+                break;
+            {
+                std::lock_guard lock(m_aheadMutex);
+                if (m_aheadChanged)
+                    break;  // a newer state: start again from its step
+            }
+            if (m_frameCache.contains(plan->key, step))
+                continue;
+            if (!m_frameCache.hasRoomFor(frameBytes))
+                break;
+            try {
+                Request request = plan->request;
+                request.id = 0;
+                request.mode = FrameMode::still;
+                request.resolved.state.step = step;
+                request.resolved = render::resolveState(std::move(request.resolved.state), *m_context.dataset);
+                std::shared_ptr<const EncodedFrame> frame;
+                arena.execute([&] { frame = renderFinished(m_aheadRenderer, request, m_aheadCancel); });
+                if (!frame)
+                    break;
+                frameBytes = frame->bytes();
+                if (m_frameCache.insert(plan->key, step, frame))
+                    spdlog::debug("{}: rendered ahead step {} ({} frames kept, {})", m_name, step,
+                                  m_frameCache.frames(), formatBytes(m_frameCache.bytes()));
+            } catch (const std::exception& e) {
+                // Logged, not sent: the client did not ask for this frame; the step is asked again in time.
+                spdlog::warn("{}: rendering ahead step {}: {}", m_name, step, e.what());
+                break;
+            }
+        }
+        m_aheadBusy = false;
+    }
 }
 
 PassStats RenderSession::renderPass(const Job& job, uint64_t frameNumber, int pass,
@@ -252,6 +403,25 @@ void RenderSession::render(const Request& request)
             .interactive = request.mode == FrameMode::interactive,
             .passes = request.mode == FrameMode::interactive ? 1 : std::max(1, state.passes),
             .ranks = m_context.ranks ? m_context.ranks->ranks() : 1};
+
+    // A finished frame of this state at this step, rendered ahead (or kept from an earlier still
+    // frame), answers at once; any change but the step makes another key and drops the kept ones.
+    const std::string frameKey = frameCacheKey(job.document);
+    m_frameCache.setKey(frameKey);
+    // Rendering ahead starts once the session moves in time (a step of playback, another step), so
+    // that a session that only looks at one step costs no more than its own frames.
+    if (m_context.frameCacheBytes > 0 &&
+        (request.mode == FrameMode::playback || (m_lastStep >= 0 && step != m_lastStep)))
+        m_renderAhead = true;
+    if (m_renderAhead)
+        planAhead(request, frameKey);
+    if (const auto kept = m_frameCache.find(frameKey, step)) {
+        sendKept(*kept, request);
+        m_lastStep = step;
+        spdlog::info("{}: state {} step {} {}: the frame rendered ahead, after {:.1f} ms", m_name, request.id, step,
+                     frameModeName(request.mode), millisecondsSince(request.received));
+        return;
+    }
 
     // Interactive and playback: the finest level within the time budget at the measured throughput
     // (interactiveLevelPolicy). Still: the state's level, else level 0.
@@ -307,6 +477,9 @@ void RenderSession::render(const Request& request)
     const double waitedMs = std::chrono::duration<double, std::milli>(renderStart - request.received).count();
     const double preparedMs = millisecondsSince(renderStart);
     ViewFrames frames = prepared.frames();
+    // While steps are still rendered ahead, a step of playback gets one pass (its last) and leaves
+    // the cores to them: refining a frame shown once is worth less than the next loop at level 0.
+    const bool onePass = request.mode == FrameMode::playback && m_aheadBusy;
     double renderMsTotal = 0, firstPassMs = 0;
     int done = 0, unsent = 0;
     for (int pass = 1; pass <= job.passes; ++pass) {
@@ -318,7 +491,8 @@ void RenderSession::render(const Request& request)
         // Adaptive refinement (a still state's convergenceGreyLevels) may have stopped every block:
         // this frame is final, further passes would render nothing.
         const bool refined = std::all_of(frames.begin(), frames.end(), [](const FrameBuffer& f) { return f.converged(); });
-        const bool last = pass == job.passes || refined;
+        const bool finished = pass == job.passes || refined;
+        const bool last = finished || onePass;
         renderMsTotal += stats.seconds * 1000.0;
         if (pass == 1)
             firstPassMs = stats.seconds * 1000.0;
@@ -331,8 +505,12 @@ void RenderSession::render(const Request& request)
             ++unsent;
             continue;
         }
-        sendFrame(job, frames, prepared, stats, pass, last, false,
-                  selectionKey == m_selectionKey ? m_selection : nlohmann::json());
+        const auto frame = sendFrame(job, frames, prepared, stats, pass, last, false,
+                                     selectionKey == m_selectionKey ? m_selection : nlohmann::json());
+        // A finished frame at still quality (the state's level, else 0; full size; every pass) is
+        // what rendering ahead would make: kept for the next time this step is asked.
+        if (finished && !job.interactive && prepared.divisor == 1 && prepared.level == state.level.value_or(0))
+            m_frameCache.insert(frameKey, step, frame);
         if (pass == 1 && job.interactive) {
             const double overhead = (preparedMs + job.encodeMs) / 1000.0;
             m_context.frameOverheadSeconds.store(averagedMeasure(m_context.frameOverheadSeconds.load(), overhead));

@@ -1,5 +1,16 @@
 // The render work of one WebSocket session, on its own thread, decoupled from the network.
 //
+// Frames rendered ahead (docs/protocol.md, "Frames rendered ahead"): a second thread, at a lower
+// priority (nice 10, a low-priority TBB arena), renders the session's current state at the steps
+// after the one asked for, at still quality (the state's level, else level 0, its passes, full
+// size), into the session's FrameCache, while playing and while paused. A state whose step has a
+// finished frame there is answered with it at once ("cached": true); a still state's own finished
+// frame goes in as well. It starts once the session moves in time (a step of playback, or a state of
+// another step than the last), so that a session looking at one step costs only its own frames;
+// while it has steps to render, a step of playback gets one pass (no refinement), leaving the cores
+// to it. A bound of 0 bytes (--frame-cache 0) turns it off. Any change but the step (camera, transfer function, brushes, size,
+// quality...) gives another key and drops the frames.
+//
 // The newest state wins: submit() replaces any state that has not started and cancels the pass in
 // flight (the renderer checks the flag before every tile); states in between are dropped, never
 // queued. An interactive state gets one pass at the finest level whose estimated pass time fits the
@@ -17,6 +28,7 @@
 #include "render/state_renderer.h"
 #include "render/volume_renderer.h"
 #include "server/dataset_api.h"
+#include "server/frame_cache.h"
 #include "server/protocol.h"
 #include "server/step_cache.h"
 
@@ -52,6 +64,8 @@ struct RenderContext {
     // The second dataset of a pair (docs/compare.md): the first, whose states its sessions are sent
     // and draw through render::secondOfPair. nullptr: the first or only dataset.
     std::shared_ptr<const dataset::Dataset> pairFirst;
+    // Each session's bound of frames rendered ahead (FrameCache; ServerLimits::frameCacheBytes).
+    size_t frameCacheBytes = size_t(256) << 20;
 };
 
 // Throws raypc::Error when a resolved state's image is over what a session renders (4096 x 4096
@@ -82,6 +96,8 @@ public:
     void stop();
 
     const std::string& name() const { return m_name; }
+    // The frames rendered ahead (tests, the log).
+    const FrameCache& frameCache() const { return m_frameCache; }
 
 private:
     struct Request {
@@ -102,6 +118,16 @@ private:
         double encodeMs = 0;  // all frames' encoding so far
     };
     void loop();
+    // The thread that renders ahead (the class comment): the steps after m_ahead's, not yet kept.
+    void aheadLoop();
+    // Renders `request`'s state as a still frame (all its passes at its level, full size) with
+    // `renderer`; nullptr when cancelled by `cancel`.
+    std::shared_ptr<const EncodedFrame> renderFinished(render::StateRenderer& renderer, const Request& request,
+                                                       const std::atomic<bool>& cancel);
+    // Tells the ahead thread what the session shows now: the state (its key) and its step.
+    void planAhead(const Request& request, const std::string& key);
+    // Sends a kept frame as the answer to `request`.
+    void sendKept(const EncodedFrame& kept, const Request& request);
     // Prepares the request's state (a preview first where it helps), renders its passes and sends
     // each frame the client should see.
     void render(const Request& request);
@@ -109,9 +135,19 @@ private:
     // rendered every pixel updates the shared throughput measure.
     render::PassStats renderPass(const Job& job, uint64_t frameNumber, int pass,
                                  const render::StateRenderer::Prepared& prepared, render::ViewFrames& frames);
-    // Encodes the accumulation of a pass as one binary frame (protocol.h) and sends it.
-    void sendFrame(Job& job, const render::ViewFrames& frames, const render::StateRenderer::Prepared& prepared,
-                   const render::PassStats& stats, int pass, bool last, bool preview, const nlohmann::json& selection);
+    // The accumulation of a pass as a frame (its header, JPEG and depth), drawn by `renderer`.
+    std::shared_ptr<EncodedFrame> makeFrame(const render::StateRenderer& renderer, Job& job,
+                                            const render::ViewFrames& frames,
+                                            const render::StateRenderer::Prepared& prepared,
+                                            const render::PassStats& stats, int pass, bool last, bool preview,
+                                            const nlohmann::json& selection) const;
+    // Encodes a frame as one binary frame (protocol.h) and sends it.
+    void send(const EncodedFrame& frame, int64_t id);
+    // makeFrame, then send; returns the frame.
+    std::shared_ptr<EncodedFrame> sendFrame(Job& job, const render::ViewFrames& frames,
+                                            const render::StateRenderer::Prepared& prepared,
+                                            const render::PassStats& stats, int pass, bool last, bool preview,
+                                            const nlohmann::json& selection);
     // The selection's statistics of the prepared state's brushes on `level` of `step`, unless `key`
     // (step, level, brushes) says they are the last ones computed.
     void updateSelection(const std::string& key, int step, int level, const render::StateRenderer::Prepared& prepared);
@@ -129,10 +165,28 @@ private:
     // Render thread only.
     render::StateRenderer m_renderer;
     int m_lastStep = -1;
+    bool m_renderAhead = false;  // the session has moved in time: its states are rendered ahead
     uint64_t m_rankSession = 0;  // this session's id in m_context.ranks
     uint64_t m_frames = 0;       // frames started (a distributed pass names its frame)
     std::string m_selectionKey;
     nlohmann::json m_selection;
+
+    // Rendering ahead: the newest state shown (its key and step), guarded by m_aheadMutex; the
+    // ahead thread's own renderer.
+    struct AheadPlan {
+        std::string key;
+        Request request;
+    };
+    FrameCache m_frameCache;
+    std::mutex m_aheadMutex;
+    std::condition_variable m_aheadCv;
+    std::optional<AheadPlan> m_ahead;
+    bool m_aheadChanged = false;
+    std::atomic<bool> m_aheadStop{false};
+    std::atomic<bool> m_aheadBusy{false};  // the ahead thread has steps to render
+    std::atomic<bool> m_aheadCancel{false};
+    render::StateRenderer m_aheadRenderer;
+    std::thread m_aheadThread;
 
     std::thread m_thread;  // last member: starts after everything above exists
 };

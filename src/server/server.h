@@ -34,8 +34,10 @@ struct ServerOptions {
     uint16_t port = 8080;  // 0: an ephemeral port (see Server::port())
     std::optional<std::filesystem::path> assets;  // nullopt: the built-in page saying the UI is not built
     std::optional<std::filesystem::path> examples;  // presets (GET /api/presets); nullopt: none (findExamplesDir)
-    size_t cacheBytes = size_t(2) << 30;          // bound of the shared StepVolume cache
-    size_t cacheEntries = 12;
+    // Bound of the shared StepVolume cache (`--step-cache`; StepCache::defaultBytes: half the memory
+    // available at start) and of its entries (a level-0 step and its coarser levels are each one).
+    size_t cacheBytes = size_t(2) << 30;
+    size_t cacheEntries = 64;
     bool handleSignals = true;                    // SIGINT/SIGTERM stop run()
     // Pages of other origins that may use the server ("http://host:port", `--allow-origin`); their
     // hosts are also accepted as Host on loopback (access.h, SitePolicy).

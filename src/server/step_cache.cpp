@@ -1,5 +1,7 @@
 #include "server/step_cache.h"
 
+#include "core/system_memory.h"
+
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -22,6 +24,14 @@ StepCache::~StepCache()
     }
     m_prefetchCv.notify_all();
     m_prefetchThread.join();
+}
+
+size_t StepCache::defaultBytes()
+{
+    const uint64_t available = availableMemory().bytes;
+    if (available == UINT64_MAX)
+        return size_t(2) << 30;
+    return size_t(std::max<uint64_t>(available / 2, uint64_t(512) << 20));
 }
 
 size_t StepCache::volumeBytes(const dataset::StepVolume& volume)

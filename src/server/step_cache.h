@@ -57,6 +57,11 @@ public:
     // entered the cache are counted when it is next asked for.
     static size_t volumeBytes(const dataset::StepVolume& volume);
 
+    // The bound a server's cache takes unless told (`raypc serve --step-cache`): half of the memory
+    // the process may take now (availableMemory: MemAvailable, the cgroup's limit, ulimit -v), at
+    // least 512 MiB; 2 GiB when none of those can be read. Never throws.
+    static size_t defaultBytes();
+
 private:
     struct Entry {
         int step, level;

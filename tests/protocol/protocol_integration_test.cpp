@@ -397,7 +397,7 @@ TEST(Serve, DefaultStateOfInfoRendersAndInteractiveFitsTheBudget)
 // step's time is up; playback does not change the linked state.
 TEST(Serve, PlaybackStepsGetTheirLevelFromTheBudgetThenRefine)
 {
-    FixtureServer server;
+    FixtureServer server({"--frame-cache", "0"});  // no rendering ahead, which would stop the refinement
     json state = json::parse(httpGet(server.port, "/api/info").body)["defaultState"];
     WsClient ws(server.port);
     ws.hello();
@@ -498,6 +498,84 @@ TEST(Serve, PlaybackPrefetchesTheNextStep)
     for (int i = 0; i < 50 && server.output().find("playback: prefetching step 2 level 1") == std::string::npos; ++i)
         std::this_thread::sleep_for(std::chrono::milliseconds(100));
     EXPECT_NE(server.output().find("playback: prefetching step 2 level 1"), std::string::npos) << server.output();
+}
+
+// Frames rendered ahead (docs/protocol.md): after a still state, the session renders the other steps
+// of that state in the background; a step of playback (or a still state) at a kept step is answered
+// with the kept frame ("cached": true), whose JPEG and depth are those of a fresh render of the same
+// state; any change but the step (a brush here) drops the kept frames.
+TEST(Serve, FramesRenderedAheadAnswerPlaybackAndEqualAFreshRender)
+{
+    FixtureServer server;
+    json state = json::parse(httpGet(server.port, "/api/info").body)["defaultState"];
+    state["image"] = {{"width", 160}, {"height", 120}};
+    state["passes"] = 3;
+    state["convergenceGreyLevels"] = 0;
+    state["timeBudgetMs"] = 60000;
+    state["step"] = 0;
+    WsClient ws(server.port);
+    ws.hello();
+    int64_t id = 1;
+    ws.send({{"type", "state"}, {"id", id}, {"state", state}});
+    const auto still = ws.framesUntilConverged(id);
+    EXPECT_EQ(still.back().frame.header["cached"], false) << "the first frame of a state is rendered";
+
+    // A step of playback, as the UI sends it (a short time budget); its frame, the last one sent.
+    const auto play = [&](int step) {
+        state["step"] = step;
+        state["timeBudgetMs"] = 100;
+        ws.send({{"type", "state"}, {"id", ++id}, {"state", state}, {"playback", true}});
+        return ws.framesUntilConverged(id).back();
+    };
+    // The first loop: the steps after 0 are rendered ahead while it plays; wait until a loop has
+    // every step from the cache (the background thread has its own pace).
+    bool allKept = false;
+    for (int loop = 0; loop < 100 && !allKept; ++loop) {
+        allKept = true;
+        for (int step = 0; step < 3; ++step)
+            allKept = play(step).frame.header["cached"] == true && allKept;
+        if (!allKept)
+            std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    ASSERT_TRUE(allKept) << "no loop of playback came from the frames rendered ahead";
+    // The next loop: every frame kept, at the state's quality: level 0, full size, every pass.
+    std::vector<WsClient::Message> kept;
+    for (int step = 0; step < 3; ++step) {
+        kept.push_back(play(step));
+        const json& h = kept.back().frame.header;
+        EXPECT_EQ(h["cached"], true) << "step " << step;
+        EXPECT_EQ(h["playback"], true);
+        EXPECT_EQ(h["id"], id);
+        EXPECT_EQ(h["step"], step);
+        EXPECT_EQ(h["level"], 0);
+        EXPECT_EQ(h["pass"], 3);
+        EXPECT_EQ(h["converged"], true);
+        EXPECT_EQ(h["width"], 160);
+        EXPECT_EQ(h["height"], 120);
+    }
+    EXPECT_EQ(jpegOf(kept[0]), jpegOf(still.back())) << "step 0's kept frame is the still frame sent";
+
+    // A fresh render of step 2 in another session (its own cache): the same bytes as the kept frame.
+    {
+        WsClient fresh(server.port);
+        fresh.hello();
+        state["step"] = 2;
+        state["timeBudgetMs"] = 60000;
+        fresh.send({{"type", "state"}, {"id", 1}, {"state", state}});
+        const auto frames = fresh.framesUntilConverged(1);
+        ASSERT_EQ(frames.back().frame.header["cached"], false);
+        EXPECT_EQ(frames.back().frame.header["pass"], 3);
+        EXPECT_EQ(jpegOf(frames.back()), jpegOf(kept[2])) << "the kept frame differs from a fresh render";
+        EXPECT_EQ(frames.back().frame.depth, kept[2].frame.depth);
+    }
+
+    // A brush: another state, rendered afresh; back to the first state, its kept frames are gone.
+    json brushed = state;
+    brushed["brushes"] = json::array({{{"name", "temperature"}, {"min", 2000}, {"max", 4000}}});
+    brushed["step"] = 1;
+    ws.send({{"type", "state"}, {"id", ++id}, {"state", brushed}, {"playback", true}});
+    EXPECT_EQ(ws.framesUntilConverged(id).back().frame.header["cached"], false) << "a brush answered from the cache";
+    EXPECT_EQ(play(2).frame.header["cached"], false) << "a brush change did not drop the kept frames";
 }
 
 TEST(Serve, BadMessagesGetErrorsAndTheConnectionStays)

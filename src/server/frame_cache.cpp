@@ -1,0 +1,83 @@
+#include "server/frame_cache.h"
+
+namespace raypc::server {
+
+size_t EncodedFrame::bytes() const
+{
+    return jpeg.size() + depth.size() * sizeof(float) + header.dump().size() + sizeof(EncodedFrame);
+}
+
+std::string frameCacheKey(const nlohmann::json& document)
+{
+    nlohmann::json key = document;
+    key.erase("step");
+    key.erase("timeBudgetMs");
+    return key.dump();
+}
+
+FrameCache::FrameCache(size_t maxBytes) : m_maxBytes(maxBytes) {}
+
+void FrameCache::setKey(const std::string& key)
+{
+    std::lock_guard lock(m_mutex);
+    if (key == m_key)
+        return;
+    m_key = key;
+    m_frames.clear();
+    m_bytes = 0;
+}
+
+std::shared_ptr<const EncodedFrame> FrameCache::find(const std::string& key, int step)
+{
+    std::lock_guard lock(m_mutex);
+    if (key != m_key)
+        return nullptr;
+    const auto it = m_frames.find(step);
+    if (it == m_frames.end())
+        return nullptr;
+    ++m_hits;
+    return it->second;
+}
+
+bool FrameCache::contains(const std::string& key, int step) const
+{
+    std::lock_guard lock(m_mutex);
+    return key == m_key && m_frames.contains(step);
+}
+
+bool FrameCache::insert(const std::string& key, int step, std::shared_ptr<const EncodedFrame> frame)
+{
+    const size_t bytes = frame->bytes();
+    std::lock_guard lock(m_mutex);
+    if (key != m_key || m_frames.contains(step) || m_bytes + bytes > m_maxBytes)
+        return false;
+    m_frames.emplace(step, std::move(frame));
+    m_bytes += bytes;
+    return true;
+}
+
+bool FrameCache::hasRoomFor(size_t bytes) const
+{
+    std::lock_guard lock(m_mutex);
+    return m_bytes + bytes <= m_maxBytes;
+}
+
+size_t FrameCache::bytes() const
+{
+    std::lock_guard lock(m_mutex);
+    return m_bytes;
+}
+
+size_t FrameCache::frames() const
+{
+    std::lock_guard lock(m_mutex);
+    return m_frames.size();
+}
+
+uint64_t FrameCache::hits() const
+{
+    std::lock_guard lock(m_mutex);
+    return m_hits;
+}
+
+}  // namespace raypc::server

@@ -1,0 +1,67 @@
+// A session's frames rendered ahead: the finished frames of one state at many steps, so that
+// playback shows steps from memory at full quality (docs/protocol.md, "Frames rendered ahead").
+//
+// The cache holds the frames of one key at a time: the state's document without its step and its
+// time budget (frameCacheKey). A new key drops every frame (any change but the step invalidates);
+// a frame that does not fit in the bound is refused, never let in by evicting another: playback
+// loops over the steps, so the frames kept are as good as any (LRU would evict each frame just
+// before it is shown again).
+//
+// Thread safety: every member function may be called from any thread.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace raypc::server {
+
+// A finished frame as the session sends it, before its per-request fields (id, mode) are set.
+struct EncodedFrame {
+    nlohmann::json header;  // the frame header (protocol_schema.cpp) without jpegBytes/depth sizes
+    std::string jpeg;
+    std::vector<float> depth;  // km, depthWidth x depthHeight
+    int depthWidth = 0, depthHeight = 0;
+
+    size_t bytes() const;  // what it costs to keep
+};
+
+// The key of a state's frames in the cache: its document (state::toJson) less `step` and
+// `timeBudgetMs`, which do not change a still frame's pixels.
+std::string frameCacheKey(const nlohmann::json& document);
+
+class FrameCache {
+public:
+    explicit FrameCache(size_t maxBytes);
+
+    // Makes `key` the cache's key; a different one from before drops every frame.
+    void setKey(const std::string& key);
+    // The frame of `step` under `key`; nullptr when none (or `key` is not the current one).
+    std::shared_ptr<const EncodedFrame> find(const std::string& key, int step);
+    bool contains(const std::string& key, int step) const;
+    // Keeps the frame when `key` is the current key and it fits in the bound; returns whether it did.
+    bool insert(const std::string& key, int step, std::shared_ptr<const EncodedFrame> frame);
+    // Whether one more frame of about `bytes` would still fit.
+    bool hasRoomFor(size_t bytes) const;
+
+    size_t bytes() const;
+    size_t frames() const;
+    uint64_t hits() const;  // frames found so far
+    size_t maxBytes() const { return m_maxBytes; }
+
+private:
+    size_t m_maxBytes;
+    mutable std::mutex m_mutex;
+    std::string m_key;
+    std::map<int, std::shared_ptr<const EncodedFrame>> m_frames;  // by step
+    size_t m_bytes = 0;
+    uint64_t m_hits = 0;
+};
+
+}  // namespace raypc::server
