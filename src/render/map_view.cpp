@@ -39,7 +39,9 @@ MapLayout mapLayoutOf(const state::RenderState& s)
     const double aspect = e.xMax / e.yMax;
     // Beside: the map as high as the picture allows, then a gap and the legends' panel.
     const double fullHeight = s.height - fontPx - top - 0.5 * fontPx;
-    const int legendsW = legendBarPx(s.width, s.height) + fontPx;
+    // The legends' panel: its bar, or a title of up to about 26 characters (the UI's slice_panel.ts
+    // sizes the map's pane by the same rule).
+    const int legendsW = std::max(legendBarPx(s.width, s.height), 14 * fontPx) + fontPx;
     const double besideW = fullHeight * aspect;
     if (fontPx + besideW + fontPx + legendsW + fontPx <= s.width)
         return {double(fontPx), top, besideW, fullHeight, int(std::lround(fontPx + besideW + fontPx))};

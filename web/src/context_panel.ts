@@ -117,7 +117,8 @@ export function colorBarTicks(lo: number, hi: number, log: boolean, barPx: numbe
       const s = step * every;
       const decimals = Math.max(0, -Math.floor(Math.log10(s) + 1e-9));
       const ticks = [];
-      for (let k = Math.ceil(lo / s - 1e-9); k * s <= hi + s * 1e-9; k++) {
+      const slack = 1e-6 * (hi - lo);
+      for (let k = Math.ceil((lo - slack) / s); k * s <= hi + slack; k++) {
         const v = k * s;
         if (log && v <= 0) continue;
         const m = Math.abs(v);
@@ -168,7 +169,7 @@ function legendContent(e: LegendEntry): LegendContent {
   const log = lo > 0 && hi > lo && Math.abs(mid - Math.sqrt(lo * hi)) < 1e-6 * hi && Math.abs(mid - (lo + hi) / 2) > 1e-6 * hi;
   const labels = e.ticks
     ? e.ticks.map((t) => ({ at: t.at, text: t.text }))
-    : colorBarTicks(Math.min(lo, hi), Math.max(lo, hi), log, kLegendBarWidth, kLegendFontPx, measureLegendText)
+    : colorBarTicks(Math.min(lo, hi), Math.max(lo, hi), log, kLegendBarWidth, kLegendFontPx / 2, measureLegendText)
       .map((t) => ({ at: hi >= lo ? t.at : 1 - t.at, text: t.text }));
   return { title: e.title, colors, labels };
 }

@@ -239,7 +239,12 @@ export class SlicePanel {
     const total = box.clientWidth, h = box.clientHeight - 20; // less the hint under the picture
     if (total < 100 || h < 50) return;
     const aspect = this.store.state.map.projection === 'orthographic' ? 1 : 2;
-    const want = aspect * (h - 48) + 240;
+    // mapLayoutOf's sizes: the text size f, the map at the picture's height less the title band
+    // (2.2 f) and margins (1.5 f), margins of f around it, and the legends' panel (the wider of its
+    // bar, clamp(W / 4, 8 f, 20 f), and 14 f) plus f.
+    const f = Math.max(12, Math.min(48, Math.floor(h / 36)));
+    const fixed = aspect * (h - 3.7 * f) + 4 * f;
+    const want = Math.max(fixed + 14 * f, Math.min((fixed * 4) / 3, fixed + 20 * f)) + 2;
     pane.style.flex = `0 0 ${Math.round(Math.min(0.62 * total, Math.max(0.3 * total, want)))}px`;
   }
 
