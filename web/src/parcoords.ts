@@ -282,7 +282,11 @@ export class ParallelCoordinates {
     this.suppress++;
     try {
       this.pc.data(this.allRows());
-      this.pc.render();
+      // parcoord-es's render sizes the canvases again (autoscale), which clears them: in coarse mode
+      // (playback) the lines are drawn by the renderer's queue alone, off screen, and the layers keep
+      // the last step's lines until the new ones are complete. The axes' ranges are fixed.
+      if (this.coarse) this.pc.render.queue();
+      else this.pc.render();
       if (brushes.length) this.applyBrushes(brushes);
     } finally {
       this.suppress--;
