@@ -3363,6 +3363,19 @@ const cases = {
       check(m.mapH >= 0.65 * m.pane.h, `${at}: the map is ${m.mapH.toFixed(0)} px high in a pane of ${m.pane.h.toFixed(0)}`);
       check(m.left >= m.pane.x - 1 && m.left + m.mapW <= m.pane.x + m.pane.w + 1, `${at}: the map (${m.left.toFixed(0)}–${(m.left + m.mapW).toFixed(0)}) is not inside its pane`);
       check(m.fontPx >= 12, `${at}: the graticule's labels are ${m.fontPx} px`);
+      // The view's colour bar (item 8): its labels round values, apart, inside the bar, 12 px.
+      const bar = await page.evaluate(() => [...document.querySelectorAll('#legends .legendLabels')].map((l) => {
+        const box = l.getBoundingClientRect();
+        return { box: [box.left, box.right], spans: [...l.querySelectorAll('span')].map((x) => { const r = x.getBoundingClientRect(); return { text: x.textContent, l: r.left, r: r.right, px: parseFloat(getComputedStyle(x).fontSize) }; }) };
+      }));
+      check(bar.length > 0, `${at}: no colour bar on the view`);
+      for (const b of bar) {
+        check(b.spans.length >= 2, `${at}: the colour bar labels ${JSON.stringify(b.spans.map((x) => x.text))}`);
+        b.spans.forEach((x, i) => {
+          check(x.px >= 12 && x.l >= b.box[0] - 0.5 && x.r <= b.box[1] + 0.5, `${at}: the colour bar's label '${x.text}' (${x.px} px) at ${x.l}–${x.r}, the bar ${b.box}`);
+          if (i > 0) check(x.l - b.spans[i - 1].r >= 4, `${at}: the colour bar's labels '${b.spans[i - 1].text}' and '${x.text}' run together`);
+        });
+      }
       await page.screenshot({ path: `${process.env.RAYPC_SHOTS ?? '/tmp'}/map_fill_${width}x${height}.png` }).catch(() => {});
     }
     check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
@@ -3406,6 +3419,28 @@ const cases = {
       check(plot.rightAxis >= 2, `${at}: no axis for the flux within the selection`);
       check(!plot.svgTexts.some((t) => / km$/.test(t)), `${at}: depth labels written over the plot: ${JSON.stringify(plot.svgTexts)}`);
       check(f.flux.depthsKm.every((d) => plot.keys.some((k) => k.includes(`${d} km`))), `${at}: the legend under the plot reads ${JSON.stringify(plot.keys)}`);
+      // Issue 47, item 8: titles and tick labels were cut ("volume [km³]"): every text of the
+      // feature and selection plots lies inside its svg, at 12 px or more; the time–depth
+      // picture's title fits it (render::fitTitle measures it), drawn at one picture pixel per CSS px
+      // or more.
+      await page.click('#featuresTable tbody tr');
+      await page.waitForFunction(() => document.querySelector('#featuresTimeline .trackDepth'), null, { timeout: 10000 })
+        .catch(() => { throw new TestFailure(`${at}: clicking a track drew no timeline`); });
+      const clipped = await page.evaluate(() => {
+        const out = [];
+        for (const id of ['featuresTimeline', 'featuresFlux', 'statsTime', 'statsProfile']) {
+          const svg = document.getElementById(id), box = svg.getBoundingClientRect();
+          for (const t of svg.querySelectorAll('text')) {
+            const r = t.getBoundingClientRect();
+            if (!t.textContent || r.width === 0) continue;
+            const size = parseFloat(getComputedStyle(t).fontSize);
+            if (r.left < box.left - 0.5 || r.right > box.right + 0.5 || r.top < box.top - 0.5 || r.bottom > box.bottom + 0.5 || size < 12)
+              out.push(`${id} '${t.textContent}' ${size} px at ${r.left.toFixed(0)}–${r.right.toFixed(0)} × ${r.top.toFixed(0)}–${r.bottom.toFixed(0)} in ${box.left.toFixed(0)}–${box.right.toFixed(0)} × ${box.top.toFixed(0)}–${box.bottom.toFixed(0)}`);
+          }
+        }
+        return out;
+      });
+      check(clipped.length === 0, `${at}: texts cut or small: ${clipped.join('; ')}`);
     }
     check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
   },
