@@ -3423,7 +3423,7 @@ const cases = {
       // feature and selection plots lies inside its svg, at 12 px or more; the time–depth
       // picture's title fits it (render::fitTitle measures it), drawn at one picture pixel per CSS px
       // or more.
-      await page.click('#featuresTable tbody tr');
+      await page.click('#featuresTable tr[data-track]');
       await page.waitForFunction(() => document.querySelector('#featuresTimeline .trackDepth'), null, { timeout: 10000 })
         .catch(() => { throw new TestFailure(`${at}: clicking a track drew no timeline`); });
       const clipped = await page.evaluate(() => {
