@@ -173,7 +173,122 @@ int legendBlockPx(int fontPx)
 
 }  // namespace
 
-int legendFontPx(int width, int height) { return std::clamp(std::min(width, height) / 36, 10, 48); }
+// At least 12 px: legible in the UI's panes, where a picture's pixel is a CSS pixel (maps, sections,
+// time–depth pictures a few hundred pixels high).
+int legendFontPx(int width, int height) { return std::clamp(std::min(width, height) / 36, 12, 48); }
+
+int legendBarPx(int width, int height)
+{
+    const int fontPx = legendFontPx(width, height);
+    return std::clamp(width / 4, 8 * fontPx, 20 * fontPx);
+}
+
+int legendTextWidthPx(const std::string& text, int fontPx)
+{
+    std::vector<uint8_t> none;
+    const uint8_t white[3] = {255, 255, 255};
+    return cachedFont(fontPx).text(none, 0, 0, 0, 0, text, white, false);
+}
+
+int tickLabelLeftPx(float at, int labelPx, int barPx)
+{
+    return std::clamp(int(std::lround(at * float(barPx))) - labelPx / 2, 0, std::max(0, barPx - labelPx));
+}
+
+namespace {
+
+// The smallest of 1, 2, 5 × 10^k at least `raw`.
+double roundStep(double raw)
+{
+    const double base = std::pow(10.0, std::floor(std::log10(raw)));
+    for (const double m : {1.0, 2.0, 5.0, 10.0})
+        if (m * base >= raw * (1 - 1e-9))
+            return m * base;
+    return 10 * base;
+}
+
+// A tick's text: as many decimals as the step between ticks needs; exponent form for very large
+// or small values (legendNumber's rule).
+std::string tickText(double v, double step)
+{
+    if (std::abs(v) < step * 1e-6)
+        return "0";
+    const double m = std::abs(v);
+    if (m >= 1e5 || m < 1e-2)
+        return fmt::format("{:.3g}", v);
+    const int decimals = std::max(0, -int(std::floor(std::log10(step) + 1e-9)));
+    return fmt::format("{:.{}f}", v, decimals);
+}
+
+}  // namespace
+
+std::vector<LegendSpec::Tick> colorBarTicks(const TransferFunction& colors, int barPx, int gapPx,
+                                            const std::function<int(const std::string&)>& textWidthPx)
+{
+    const double lo = std::min(colors.range.min, colors.range.max), hi = std::max(colors.range.min, colors.range.max);
+    const bool log = colors.logScale && lo > 0;
+    // Position along the bar of a value (the bar runs from range.min to range.max, as drawn).
+    const auto at = [&](double v) {
+        const double u = log ? std::log(v / colors.range.min) / std::log(double(colors.range.max) / colors.range.min)
+                             : (v - colors.range.min) / (double(colors.range.max) - colors.range.min);
+        return float(u);
+    };
+    if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi))
+        return {{0.5f, legendNumber(lo)}};
+    // The ticks fit: labels inside the bar and `gapPx` apart, in order along it.
+    const auto fits = [&](std::vector<LegendSpec::Tick>& ticks) {
+        std::sort(ticks.begin(), ticks.end(), [](const auto& a, const auto& b) { return a.at < b.at; });
+        int right = -1 << 20;
+        for (const LegendSpec::Tick& t : ticks) {
+            const int w = textWidthPx(t.text);
+            if (w > barPx)
+                return false;
+            const int left = tickLabelLeftPx(t.at, w, barPx);
+            if (left < right + gapPx)
+                return false;
+            right = left + w;
+        }
+        return !ticks.empty();
+    };
+    if (log && std::log10(hi / lo) >= 1) {
+        // Powers of ten, every k-th decade.
+        const int d0 = int(std::ceil(std::log10(lo) - 1e-9)), d1 = int(std::floor(std::log10(hi) + 1e-9));
+        for (int every = 1; every <= std::max(1, d1 - d0); ++every) {
+            std::vector<LegendSpec::Tick> ticks;
+            for (int d = d0; d <= d1; d += every)
+                ticks.push_back({at(std::pow(10.0, d)), fmt::format("{:g}", std::pow(10.0, d))});
+            if (ticks.size() <= 6 && fits(ticks))
+                return ticks;
+        }
+    }
+    // Steps of 1, 2 or 5 × 10^k from the finest that gives at most 6 values, each also with every
+    // other value (multiples of twice the step: -400, 0, 400 where -400 … 400 by 200 is too dense):
+    // the first that fits with two values or more, else the first that fits with one.
+    std::vector<LegendSpec::Tick> single;
+    for (double step = roundStep((hi - lo) / 6); step <= 2 * (hi - lo); step = roundStep(step * 1.5)) {
+        for (const int every : {1, 2}) {
+            const double s = step * every;
+            std::vector<LegendSpec::Tick> ticks;
+            // (a millionth of the span of slack: a float range's 0.99 is 0.9900000095)
+            const double slack = 1e-6 * (hi - lo);
+            for (double k = std::ceil((lo - slack) / s); k * s <= hi + slack; k += 1) {
+                const double v = k * s;
+                if (log && v <= 0)
+                    continue;
+                ticks.push_back({std::clamp(at(v), 0.0f, 1.0f), tickText(v, s)});
+            }
+            if (ticks.size() > 6 || !fits(ticks))
+                continue;
+            if (ticks.size() >= 2)
+                return ticks;
+            if (single.empty())
+                single = ticks;
+        }
+    }
+    if (!single.empty())
+        return single;
+    return {{at(log ? std::sqrt(lo * hi) : (lo + hi) / 2), legendNumber(log ? std::sqrt(lo * hi) : (lo + hi) / 2)}};
+}
 
 int legendsHeightPx(int width, int height, size_t count)
 {
@@ -183,13 +298,15 @@ int legendsHeightPx(int width, int height, size_t count)
     return fontPx + int(count) * (legendBlockPx(fontPx) + fontPx / 2);
 }
 
+int labelFontPx(int width, int height) { return std::max(12, legendFontPx(width, height) * 5 / 6); }
+
 void drawTextLabels(std::vector<uint8_t>& rgba, int width, int height, std::span<const TextLabel> labels)
 {
     if (labels.empty())
         return;
     if (rgba.size() != size_t(width) * size_t(height) * 4)
         fail("labels: image of {} bytes for {}x{} pixels", rgba.size(), width, height);
-    const int fontPx = std::max(10, legendFontPx(width, height) * 5 / 6);
+    const int fontPx = labelFontPx(width, height);
     Font& font = cachedFont(fontPx);
     const int pad = std::max(2, fontPx / 4);
     const float panel[3] = {0.05f, 0.06f, 0.08f};
@@ -205,7 +322,7 @@ void drawTextLabels(std::vector<uint8_t>& rgba, int width, int height, std::span
 }
 
 void drawLegends(std::vector<uint8_t>& rgba, int width, int height, std::span<const LegendSpec> legends,
-                 std::span<const TextLabel> shellKey)
+                 std::span<const TextLabel> shellKey, int leftPx)
 {
     if (legends.empty() && shellKey.empty())
         return;
@@ -215,14 +332,14 @@ void drawLegends(std::vector<uint8_t>& rgba, int width, int height, std::span<co
     const int fontPx = legendFontPx(width, height);
     Font& font = cachedFont(fontPx);
     const int margin = fontPx, pad = fontPx / 2;
-    const int barW = std::clamp(width / 4, 8 * fontPx, 20 * fontPx), barH = std::max(6, fontPx * 3 / 4);
+    const int barW = legendBarPx(width, height), barH = std::max(6, fontPx * 3 / 4);
     const int blockH = legendBlockPx(fontPx);
     const uint8_t white[3] = {235, 235, 235};
     const float panel[3] = {0.05f, 0.06f, 0.08f};
     for (size_t n = 0; n < legends.size(); ++n) {
         const LegendSpec& l = legends[n];
         const int top = height - margin - int(legends.size() - n) * (blockH + pad);
-        const int left = margin;
+        const int left = leftPx >= 0 ? leftPx : margin;
         const int titleW = font.text(rgba, width, height, 0, 0, l.title, white, false);
         const int panelW = std::max(barW, titleW) + 2 * pad;
         blend(rgba, width, height, left, top, left + panelW, top + blockH, panel, 0.6f);
@@ -241,20 +358,20 @@ void drawLegends(std::vector<uint8_t>& rgba, int width, int height, std::span<co
             blend(rgba, width, height, left + pad + x, barTop, left + pad + x + 1, barTop + barH, cc, 1.0f);
         }
         y = barTop + barH + pad / 2 + fontPx * 4 / 5;
-        if (!l.ticks.empty()) {  // each centred on its position, kept inside the bar's span
-            for (const LegendSpec::Tick& t : l.ticks) {
-                const int tw = font.text(rgba, width, height, 0, 0, t.text, white, false);
-                const int x = std::clamp(int(std::lround(t.at * float(barW))) - tw / 2, 0, std::max(0, barW - tw));
-                font.text(rgba, width, height, left + pad + x, y, t.text, white);
+        // Categories' labels as given; a variable's round values, each with a mark under the bar.
+        const bool values = l.ticks.empty();
+        const std::vector<LegendSpec::Tick> ticks =
+            values ? colorBarTicks(tf, barW, std::max(4, fontPx / 2), [&](const std::string& t) { return font.text(rgba, width, height, 0, 0, t, white, false); })
+                   : l.ticks;
+        const float markColor[3] = {0.92f, 0.92f, 0.92f};
+        for (const LegendSpec::Tick& t : ticks) {
+            const int tw = font.text(rgba, width, height, 0, 0, t.text, white, false);
+            font.text(rgba, width, height, left + pad + tickLabelLeftPx(t.at, tw, barW), y, t.text, white);
+            if (values) {
+                const int x = left + pad + std::clamp(int(std::lround(t.at * float(barW))), 0, barW - 1);
+                blend(rgba, width, height, x, barTop + barH, x + std::max(1, fontPx / 12), barTop + barH + std::max(2, pad / 2), markColor, 1.0f);
             }
-            continue;
         }
-        const std::string a = legendNumber(valueAt(0)), m = legendNumber(valueAt(0.5)), b = legendNumber(valueAt(1));
-        font.text(rgba, width, height, left + pad, y, a, white);
-        const int mw = font.text(rgba, width, height, 0, 0, m, white, false);
-        font.text(rgba, width, height, left + pad + barW / 2 - mw / 2, y, m, white);
-        const int bw = font.text(rgba, width, height, 0, 0, b, white, false);
-        font.text(rgba, width, height, left + pad + barW - bw, y, b, white);
     }
     if (shellKey.empty())
         return;
@@ -262,7 +379,7 @@ void drawLegends(std::vector<uint8_t>& rgba, int width, int height, std::span<co
     // above the colour bars.
     const int keyH = pad + fontPx + pad;
     const int top = height - margin - int(legends.size()) * (blockH + pad) - keyH - pad;
-    const int left = margin, swatchW = fontPx, gap = fontPx / 2;
+    const int left = leftPx >= 0 ? leftPx : margin, swatchW = fontPx, gap = fontPx / 2;
     int rowW = font.text(rgba, width, height, 0, 0, "shells", white, false);
     for (const TextLabel& k : shellKey)
         rowW += gap + swatchW + pad / 2 + font.text(rgba, width, height, 0, 0, k.text, white, false);

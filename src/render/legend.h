@@ -1,5 +1,5 @@
 // Colour legends in still pictures (`raypc render`, screenshots; RenderState::legend): a colour bar
-// with its title (variable and units) and the values at its ends and middle, stacked in the
+// with its title (variable and units) and round values along it (colorBarTicks), stacked in the
 // bottom-left corner on a translucent panel. Text is drawn with FreeType in DejaVu Sans (Debian
 // fonts-dejavu-core), found at $RAYPC_FONT or the Debian path.
 //
@@ -10,6 +10,7 @@
 #include "render/transfer_function.h"
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string>
 #include <vector>
@@ -46,6 +47,22 @@ std::string legendNumber(double value);
 
 // The legends' text size in a picture of this size, pixels.
 int legendFontPx(int width, int height);
+// The width of a legend's colour bar in a picture of this size, pixels.
+int legendBarPx(int width, int height);
+// The width of `text` in the legends' font at `fontPx` pixels. Throws as drawLegends.
+int legendTextWidthPx(const std::string& text, int fontPx);
+
+// The values a colour bar `barPx` wide labels: round numbers (the multiples of a step of 1, 2 or
+// 5 × 10^k, or of twice it; powers of ten on a log scale spanning a decade or more) inside the
+// range, as many as fit with their labels (widths from `textWidthPx`) at least `gapPx` apart (drawLegends: half the text size), at
+// most 6, two or more where two fit; an end's label is kept inside the bar (its text shifted in,
+// the value's position unchanged). At least one (the middle's value when no round value fits).
+// `at`: 0 the bar's left end (the range's min), 1 its right end.
+std::vector<LegendSpec::Tick> colorBarTicks(const TransferFunction& colors, int barPx, int gapPx,
+                                            const std::function<int(const std::string&)>& textWidthPx);
+// Where a tick's label is drawn: its left edge along the bar (the label centred on its position,
+// shifted to lie inside the bar), pixels.
+int tickLabelLeftPx(float at, int labelPx, int barPx);
 // How far up from the bottom `count` legends (without a shell key) reach, margin included: what a
 // picture keeps free of data below them (maps and sections).
 int legendsHeightPx(int width, int height, size_t count);
@@ -54,11 +71,15 @@ int legendsHeightPx(int width, int height, size_t count);
 // raypc::Error when the font cannot be found or read.
 // `shellKey` (may be empty) adds one block above the colour bars naming each reference shell's
 // depth beside a swatch of its colour (the labels' text and colour; their position is not used).
+// The legends stand in the bottom-left corner, or from `leftPx` (e.g. beside a map) when given.
 void drawLegends(std::vector<uint8_t>& rgba, int width, int height, std::span<const LegendSpec> legends,
-                 std::span<const TextLabel> shellKey = {});
+                 std::span<const TextLabel> shellKey = {}, int leftPx = -1);
 
-// Draws each label's text centred at its position on a small dark box, at the legends' font size
-// for the picture. Throws raypc::Error when the font cannot be found or read.
+// The text size of drawTextLabels' labels in a picture of this size, pixels.
+int labelFontPx(int width, int height);
+
+// Draws each label's text centred at its position on a small dark box, at labelFontPx for the
+// picture. Throws raypc::Error when the font cannot be found or read.
 void drawTextLabels(std::vector<uint8_t>& rgba, int width, int height, std::span<const TextLabel> labels);
 
 }  // namespace raypc::render

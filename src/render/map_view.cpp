@@ -22,11 +22,31 @@
 namespace raypc::render {
 namespace {
 
-// A map's band: below the title, above the legend.
-double mapTopPx(const state::RenderState& s) { return 2.2 * legendFontPx(s.width, s.height); }
-double mapBottomPx(const state::RenderState& s)
+// Where a map goes in its picture: below the title, and above the legends or, in a picture wide
+// enough for the map at the full height and the legends beside it (a pane of the UI's bottom panel),
+// the whole height with the legends to its right: a wide, low picture used to leave most of its
+// height to the legends and the map a third of its width.
+struct MapLayout {
+    double left, top, width, height;
+    int legendsLeftPx = -1;  // the legends' left edge when beside the map (-1: below it)
+};
+
+MapLayout mapLayoutOf(const state::RenderState& s)
 {
-    return s.height - legendsHeightPx(s.width, s.height, slice::legendCount(s));
+    const int fontPx = legendFontPx(s.width, s.height);
+    const double top = 2.2 * fontPx;
+    const Projector::Extent e = Projector(s.map.projection, 0.0, 0.0).extent();
+    const double aspect = e.xMax / e.yMax;
+    // Beside: the map as high as the picture allows, then a gap and the legends' panel.
+    const double fullHeight = s.height - fontPx - top - 0.5 * fontPx;
+    // The legends' panel: its bar, or a title of up to about 26 characters (the UI's slice_panel.ts
+    // sizes the map's pane by the same rule).
+    const int legendsW = std::max(legendBarPx(s.width, s.height), 14 * fontPx) + fontPx;
+    const double besideW = fullHeight * aspect;
+    if (fontPx + besideW + fontPx + legendsW + fontPx <= s.width)
+        return {double(fontPx), top, besideW, fullHeight, int(std::lround(fontPx + besideW + fontPx))};
+    const double bottom = s.height - legendsHeightPx(s.width, s.height, slice::legendCount(s));
+    return {double(fontPx), top, s.width - 2.0 * fontPx, bottom - top - 0.5 * fontPx};
 }
 
 // A polyline of (lon, lat) degrees on the map, subdivided to at most half a degree a segment; a
@@ -98,12 +118,11 @@ std::shared_ptr<const MapPixelPoints> mapPixelPoints(const state::MapState& map,
 
 MapFrame mapFrameOf(const state::RenderState& s)
 {
-    const int fontPx = legendFontPx(s.width, s.height);
-    const double top = mapTopPx(s), bottom = mapBottomPx(s);
+    const MapLayout l = mapLayoutOf(s);
     // The picture's size in the message: the frame's own is what is left after titles and legends.
-    if (!(s.width - 2.0 * fontPx >= 8 && bottom - top - 0.5 * fontPx >= 8))
+    if (!(l.width >= 8 && l.height >= 8))
         fail("map: a picture of {}x{} pixels has no room for the map; choose a larger size", s.width, s.height);
-    return MapFrame(s.map, fontPx, top, s.width - 2.0 * fontPx, bottom - top - 0.5 * fontPx);
+    return MapFrame(s.map, l.left, l.top, l.width, l.height);
 }
 
 MapFrame::MapFrame(const state::MapState& map, double left, double top, double width, double height)
@@ -242,7 +261,8 @@ ImageRgba8 mapPicture(const SliceInputs& in)
     PointProbe probe(*in.volume, params, in.variableNames, map.flow, "map.flow");
 
     const int fontPx = legendFontPx(width, height);
-    const double top = mapTopPx(state), bottom = mapBottomPx(state);
+    const MapLayout layout = mapLayoutOf(state);
+    const double top = layout.top, bottom = layout.top + layout.height;
     const MapFrame frame = mapFrameOf(state);
     probe.fixRadius(rKm);
     const std::shared_ptr<const MapPixelPoints> points = mapPixelPoints(map, frame, width, height);
@@ -287,7 +307,7 @@ ImageRgba8 mapPicture(const SliceInputs& in)
     addNotes(labels, width, height,
              {grey ? "hatched grey: outside the brushes" : "", flowText, pathlineText, regionNote(in.volume->grid())});
     drawTextLabels(image.pixels, width, height, labels);
-    drawLegends(image.pixels, width, height, legends);
+    drawLegends(image.pixels, width, height, legends, {}, layout.legendsLeftPx);
     return image;
 }
 

@@ -159,16 +159,31 @@ double niceStep(double span, double target, std::initializer_list<double> steps)
 
 std::string fitTitle(const std::vector<std::string>& parts, int width, int height)
 {
-    // About 0.55 em a character at the labels' size (drawTextLabels: 5/6 of the legend's font).
-    const double em = std::max(10, legendFontPx(width, height) * 5 / 6), room = width - 2.0 * em;
+    // Measured in the labels' font (drawTextLabels), its box's padding and a margin each side.
+    const int fontPx = labelFontPx(width, height);
+    const int room = width - 2 * fontPx - 2 * std::max(2, fontPx / 4);
+    const auto fits = [&](const std::string& t) { return legendTextWidthPx(t, fontPx) <= room; };
     std::string title = parts.front();
     for (size_t i = 1; i < parts.size(); ++i) {
         const std::string longer = title + " · " + parts[i];
-        if (0.55 * em * double(longer.size()) > room)
+        if (!fits(longer))
             break;
         title = longer;
     }
-    return title;
+    // A first part wider than the picture loses its end (whole UTF-8 characters) to "…".
+    if (fits(title))
+        return title;
+    while (!title.empty()) {
+        while (!title.empty() && (uint8_t(title.back()) & 0xC0) == 0x80)
+            title.pop_back();  // a character's continuation bytes
+        if (!title.empty())
+            title.pop_back();  // its first byte
+        while (!title.empty() && title.back() == ' ')
+            title.pop_back();
+        if (fits(title + "…"))
+            return title + "…";
+    }
+    return "…";
 }
 
 void drawDepthMarks(std::vector<uint8_t>& rgba, int width, int height, const DepthPlot& plot,

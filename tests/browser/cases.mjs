@@ -3318,6 +3318,131 @@ const cases = {
     }
     check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
   },
+  // Issue 47, item 1: at 10 steps/s the parallel coordinates showed no selected line. Playing at
+  // 10 steps/s with a brush in force, sampled every 120 ms: the brushed layer always shows lines
+  // (its canvas differs from the veil), the step they are of (#pcStep, linesStep) is a step whose
+  // frame was on screen, and they follow the playback (several steps); the Selection panel's figure
+  // names the step of a frame shown and the statistics' profile is of the store's step.
+  async play_lines({ context, url }) {
+    const page = await openUi(context, url);
+    const nSteps = (await info(url)).steps.length;
+    await brushAxis(page, 'temperature anomaly', 0.15, 0.55);
+    await waitConverged(page);
+    await page.waitForFunction(() => window.__raypc.stats && window.__raypc.linesStep >= 0 && window.__raypc.parcoords.timing.drawnAt.brushed > 0, null, { timeout: 30000 })
+      .catch(() => { throw new TestFailure('no statistics or no lines drawn after the brush'); });
+    const linePixels = () => page.evaluate(() => {
+      // The brushed layer: the veil is one colour everywhere; a line is any other.
+      const c = document.querySelector('#parcoords canvas.brushed');
+      const d = c.getContext('2d', { willReadFrequently: true }).getImageData(0, 0, c.width, c.height).data;
+      let n = 0;
+      for (let i = 0; i < d.length; i += 16) if (Math.abs(d[i] - d[0]) + Math.abs(d[i + 1] - d[1]) + Math.abs(d[i + 2] - d[2]) + Math.abs(d[i + 3] - d[3]) > 8) n++;
+      return n;
+    });
+    await page.waitForFunction(() => window.__raypc.parcoords.timing.lines.brushed > 0 && window.__raypc.parcoords.timing.drawnAt.brushed > 0, null, { timeout: 30000 })
+      .catch(async () => { throw new TestFailure(`no brushed lines drawn after the brush: ${JSON.stringify(await page.evaluate(() => ({ brushes: window.__raypc.state().brushes, timing: window.__raypc.parcoords.timing })))}`); });
+    const paused = await linePixels();
+    check(paused > 200, `paused, the brushed layer shows ${paused} line pixels`);
+    await page.selectOption('#fps', '10');
+    const t0 = await page.evaluate(() => performance.now());
+    await page.click('#play');
+    const samples = [];
+    const until = Date.now() + 9000;
+    while (Date.now() < until) {
+      await page.waitForTimeout(120);
+      samples.push(await page.evaluate((since) => {
+        const r = window.__raypc;
+        // The brushed layer: the veil is one colour everywhere; a line is any other.
+        const c = document.querySelector('#parcoords canvas.brushed');
+        const d = c.getContext('2d', { willReadFrequently: true }).getImageData(0, 0, c.width, c.height).data;
+        let pixels = 0;
+        for (let i = 0; i < d.length; i += 16) if (Math.abs(d[i] - d[0]) + Math.abs(d[i + 1] - d[1]) + Math.abs(d[i + 2] - d[2]) + Math.abs(d[i + 3] - d[3]) > 8) pixels++;
+        const shown = r.shownLog.filter((e) => e.t >= since).map((e) => e.step);
+        return { pixels, linesStep: r.linesStep, label: document.getElementById('pcStep').textContent, shown: [...new Set(shown)],
+          selection: document.getElementById('selectionValue')?.textContent ?? '', storeStep: r.state().step, profileStep: r.stats?.profile.step };
+      }, t0));
+    }
+    await page.click('#play');
+    const steps = new Set();
+    let named = 0;
+    for (const [i, x] of samples.entries()) {
+      check(x.pixels > 200, `sample ${i} (${(120 * i / 1000).toFixed(1)} s into playback): the brushed layer shows no lines (${x.pixels} line pixels)`);
+      // The initial step (0) was on screen before playback.
+      check(x.linesStep === 0 || x.shown.includes(x.linesStep), `sample ${i}: the lines are of step ${x.linesStep}, not a step shown (${x.shown.join(',')})`);
+      check(x.label.startsWith(`lines: step ${x.linesStep} `), `sample ${i}: the label over the lines says '${x.label}', the lines are of step ${x.linesStep}`);
+      steps.add(x.linesStep);
+      const m = /^step (\d+): /.exec(x.selection);
+      if (m) {
+        named++;
+        check(x.shown.includes(Number(m[1])) || Number(m[1]) === 0, `sample ${i}: the Selection panel's figure is of step ${m[1]}, not a step shown`);
+      }
+      if (x.profileStep !== undefined) check(x.profileStep === x.storeStep, `sample ${i}: the statistics' profile is of step ${x.profileStep}, the store's step is ${x.storeStep}`);
+    }
+    const shownSteps = new Set(samples.at(-1).shown);
+    console.log(`  ${samples.length} samples; lines of steps ${[...steps].join(',')}; frames of ${shownSteps.size} steps shown; the selection named its step in ${named}`);
+    check(shownSteps.size >= Math.min(nSteps, 4), `playback showed the steps ${[...shownSteps].join(',')} only`);
+    check(steps.size >= 2, `the lines stayed at step ${[...steps].join(',')} through playback`);
+    check(named >= samples.length / 2, `the Selection panel named its step in ${named} of ${samples.length} samples`);
+    // Paused: the lines are of the step shown again.
+    await waitConverged(page);
+    await page.waitForFunction(() => window.__raypc.linesStep === window.__raypc.state().step, null, { timeout: 20000 })
+      .catch(async () => { throw new TestFailure(`after pausing the lines are of step ${await page.evaluate(() => window.__raypc.linesStep)}`); });
+    check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
+  },
+
+  // Issue 47, item 5: the Mollweide map filled ~480 of its pane's 958 px (at 1366×768 before this
+  // case: 208×104 px in a pane of 681×207). The map (its projected sphere, from the picture's
+  // header) spans most of its pane's width and height at 1366×768 and
+  // 1920×1080, the picture is shown at one picture pixel per CSS pixel (the server's text, at least
+  // 12 px, stays so), and the page's labels over it are 12 px or more.
+  async map_fill({ context, url }) {
+    const page = await openUi(context, url);
+    await page.click('#pcTabSlices');
+    for (const [width, height] of [[1366, 768], [1920, 1080]]) {
+      const at = `${width}×${height}`;
+      await page.setViewportSize({ width, height });
+      await page.waitForTimeout(500);
+      await page.waitForFunction(() => {
+        const h = window.__raypc.slices.map.header, img = document.getElementById('mapImage');
+        return h && img.complete && Math.abs(h.width - img.getBoundingClientRect().width * devicePixelRatio) < 2;
+      }, null, { timeout: 20000 }).catch(() => { throw new TestFailure(`${at}: no map picture of its pane's size`); });
+      await page.waitForTimeout(500);
+      const m = await page.evaluate(() => {
+        const h = window.__raypc.slices.map.header, img = document.getElementById('mapImage').getBoundingClientRect();
+        const pane = document.getElementById('mapImage').parentElement.getBoundingClientRect();
+        const css = Math.min(img.width / h.width, img.height / h.height);
+        // d3's Mollweide: x in ±2√2, y in ±√2 times the scale.
+        const mapW = 4 * Math.SQRT2 * h.scale * css, mapH = 2 * Math.SQRT2 * h.scale * css;
+        const left = img.left + (h.centre[0] - 2 * Math.SQRT2 * h.scale) * css;
+        const labels = [...document.querySelectorAll('#mapMarks .graticuleLabel')].map((t) => t.getBoundingClientRect().height);
+        return { projection: h.projection, css, mapW, mapH, left, pane: { x: pane.x, w: pane.width, h: pane.height }, panel: document.getElementById('slices').getBoundingClientRect().width,
+          labelPx: labels.length ? Math.min(...labels) : 0, fontPx: Number(document.querySelector('#mapMarks .graticuleLabel')?.getAttribute('font-size') ?? 0) * css };
+      });
+      console.log(`  ${at}: map ${m.mapW.toFixed(0)}×${m.mapH.toFixed(0)} px in a pane of ${m.pane.w.toFixed(0)}×${m.pane.h.toFixed(0)} (panel ${m.panel.toFixed(0)}); labels ${m.fontPx.toFixed(1)} px`);
+      check(m.projection === 'mollweide', `${at}: the map is ${m.projection}, the default is mollweide`);
+      check(m.css > 0.97 && m.css < 1.03, `${at}: the picture is shown at ${m.css} CSS px per pixel`);
+      // (the rest of the width is the colour bar beside the map; of the height, the title and the hint)
+      check(m.mapW >= 0.55 * m.pane.w, `${at}: the map is ${m.mapW.toFixed(0)} px wide in a pane of ${m.pane.w.toFixed(0)}`);
+      check(m.mapH >= 0.65 * m.pane.h, `${at}: the map is ${m.mapH.toFixed(0)} px high in a pane of ${m.pane.h.toFixed(0)}`);
+      check(m.left >= m.pane.x - 1 && m.left + m.mapW <= m.pane.x + m.pane.w + 1, `${at}: the map (${m.left.toFixed(0)}–${(m.left + m.mapW).toFixed(0)}) is not inside its pane`);
+      check(m.fontPx >= 12, `${at}: the graticule's labels are ${m.fontPx} px`);
+      // The view's colour bar (item 8): its labels round values, apart, inside the bar, 12 px.
+      const bar = await page.evaluate(() => [...document.querySelectorAll('#legends .legendLabels')].map((l) => {
+        const box = l.getBoundingClientRect();
+        return { box: [box.left, box.right], spans: [...l.querySelectorAll('span')].map((x) => { const r = x.getBoundingClientRect(); return { text: x.textContent, l: r.left, r: r.right, px: parseFloat(getComputedStyle(x).fontSize) }; }) };
+      }));
+      check(bar.length > 0, `${at}: no colour bar on the view`);
+      for (const b of bar) {
+        check(b.spans.length >= 2, `${at}: the colour bar labels ${JSON.stringify(b.spans.map((x) => x.text))}`);
+        b.spans.forEach((x, i) => {
+          check(x.px >= 12 && x.l >= b.box[0] - 0.5 && x.r <= b.box[1] + 0.5, `${at}: the colour bar's label '${x.text}' (${x.px} px) at ${x.l}–${x.r}, the bar ${b.box}`);
+          if (i > 0) check(x.l - b.spans[i - 1].r >= 4, `${at}: the colour bar's labels '${b.spans[i - 1].text}' and '${x.text}' run together`);
+        });
+      }
+      await page.screenshot({ path: `${process.env.RAYPC_SHOTS ?? '/tmp'}/map_fill_${width}x${height}.png` }).catch(() => {});
+    }
+    check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
+  },
+
   // Issue 47, the feature plots (item 5), at 1366×768 and 1920×1080, on a synthetic model with
   // sinking slabs (raypc synth): the flux within the selection is drawn on its own (right) axis and
   // spans most of the plot's height, not flat near zero under the whole shell's lines; the depths'
@@ -3356,6 +3481,28 @@ const cases = {
       check(plot.rightAxis >= 2, `${at}: no axis for the flux within the selection`);
       check(!plot.svgTexts.some((t) => / km$/.test(t)), `${at}: depth labels written over the plot: ${JSON.stringify(plot.svgTexts)}`);
       check(f.flux.depthsKm.every((d) => plot.keys.some((k) => k.includes(`${d} km`))), `${at}: the legend under the plot reads ${JSON.stringify(plot.keys)}`);
+      // Issue 47, item 8: titles and tick labels were cut ("volume [km³]"): every text of the
+      // feature and selection plots lies inside its svg, at 12 px or more; the time–depth
+      // picture's title fits it (render::fitTitle measures it), drawn at one picture pixel per CSS px
+      // or more.
+      await page.click('#featuresTable tr[data-track]');
+      await page.waitForFunction(() => document.querySelector('#featuresTimeline .trackDepth'), null, { timeout: 10000 })
+        .catch(() => { throw new TestFailure(`${at}: clicking a track drew no timeline`); });
+      const clipped = await page.evaluate(() => {
+        const out = [];
+        for (const id of ['featuresTimeline', 'featuresFlux', 'statsTime', 'statsProfile']) {
+          const svg = document.getElementById(id), box = svg.getBoundingClientRect();
+          for (const t of svg.querySelectorAll('text')) {
+            const r = t.getBoundingClientRect();
+            if (!t.textContent || r.width === 0) continue;
+            const size = parseFloat(getComputedStyle(t).fontSize);
+            if (r.left < box.left - 0.5 || r.right > box.right + 0.5 || r.top < box.top - 0.5 || r.bottom > box.bottom + 0.5 || size < 12)
+              out.push(`${id} '${t.textContent}' ${size} px at ${r.left.toFixed(0)}–${r.right.toFixed(0)} × ${r.top.toFixed(0)}–${r.bottom.toFixed(0)} in ${box.left.toFixed(0)}–${box.right.toFixed(0)} × ${box.top.toFixed(0)}–${box.bottom.toFixed(0)}`);
+          }
+        }
+        return out;
+      });
+      check(clipped.length === 0, `${at}: texts cut or small: ${clipped.join('; ')}`);
     }
     check(page.raypcErrors.length === 0, `page errors: ${page.raypcErrors.join(' | ')}`);
   },
@@ -3378,6 +3525,8 @@ const caseOptions = {
   parcoords_access: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   empty_selection: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   map_section: { contextOptions: { viewport: { width: 1366, height: 768 } } },
+  play_lines: { contextOptions: { viewport: { width: 1366, height: 768 } }, sampleRows: 20000 },
+  map_fill: { contextOptions: { viewport: { width: 1366, height: 768 } } },
   flux_plot: { contextOptions: { viewport: { width: 1366, height: 768 } }, limitMs: 150000 },
 };
 

@@ -2,7 +2,7 @@
 // docs/protocol.md), and the parts that read and change it: camera input, the transfer-function
 // panel, presets, the volume's parallel coordinates and its sample, the selection and pathline
 // panels, playback, the other controls and the status line.
-import { fetchPresets, fetchSample, postSelection, type Info, type Preset } from './api';
+import { fetchPresets, fetchSample, postSelection, type Info, type Preset, type Sample } from './api';
 import { setUpCameraInput } from './camera_input';
 import type { FrameHeader, ShellKeyEntry } from './connection';
 import { ContextPanel, showLegends, type LegendEntry } from './context_panel';
@@ -29,6 +29,9 @@ import { setUpXr, type XrSession } from './xr';
 import { showEmptySelection } from './empty_selection';
 
 const $ = <T extends HTMLElement = HTMLElement>(id: string) => document.getElementById(id) as T;
+
+// While playing, a new step's sample is fetched at most this often, ms.
+const kPlaybackSampleMs = 250;
 
 // Axes of the volume's plot hidden until ticked under Axes (or brushed).
 const kHiddenByDefault = ['x', 'y', 'z', 'radius'];
@@ -64,6 +67,11 @@ export class App {
   private lastSampleLoad = 0;
   private sampleFailedStep = -1;
   private sampleFailedAt = 0;
+  // Playback: the step sent ahead (not yet on screen) and its sample if it came before its frame
+  // was shown (given to the parallel coordinates when it is).
+  private aheadStep = -1;
+  private heldSample: { step: number; sample: Sample } | null = null;
+  linesStep = -1; // the step whose sample the parallel coordinates show complete (both layers)
   private errorTimer = 0;
   private statusNote = '';
   private viewNoteText = '';
@@ -93,7 +101,10 @@ export class App {
       onFrameShown: (h) => {
         this.shownHeader = h;
         // Playback's step on the time bar once its frame is on screen, not when it is released.
-        if (h.playback) this.showStepOnBar(h.step);
+        if (h.playback) {
+          this.showStepOnBar(h.step);
+          this.showLinesStep(this.linesStep);
+        }
         if (h.selection && h.playback && store.state.brushes.length) this.selection.setSelection({ ...h.selection, step: h.step }, h.level);
         this.updateStatus();
         this.pathlines.frameShown(h);
@@ -129,6 +140,7 @@ export class App {
       afterFrame: (draw) => this.link.afterFrameShown(draw),
       multi: true,
       onOrder: (order) => this.setAxes(order),
+      onDrawn: (step) => this.showLinesStep(step),
     });
     this.pathlines = new PathlinePanel(store, {
       commit: (i) => this.commit(i),
@@ -176,7 +188,14 @@ export class App {
     this.playback = new Playback({
       stepCount: info.steps.length,
       currentStep: () => store.state.step,
-      sendStep: (step, budgetMs) => this.link.sendPlayback(step, budgetMs),
+      sendStep: (step, budgetMs) => {
+        const id = this.link.sendPlayback(step, budgetMs);
+        // Its sample is fetched meanwhile, to be drawn when its frame is shown (at most four a
+        // second: the page shares the machine with the server rendering the steps).
+        this.aheadStep = step;
+        if (performance.now() - this.lastSampleLoad >= kPlaybackSampleMs) this.loadSample(step);
+        return id;
+      },
       hasHeld: (id) => this.link.hasHeld(id),
       showHeld: (step) => {
         this.link.releaseHeld();
@@ -188,7 +207,12 @@ export class App {
       setStep: (step, interactive) => this.setStep(step, interactive),
       // While playing, the parallel coordinates draw a twentieth of the lines of each new step's
       // sample (the full redraw of 100 000 lines per sample held playback to ~5 steps/s).
-      playingChanged: (playing) => this.pc.setCoarse(playing),
+      playingChanged: (playing) => {
+        this.pc.setCoarse(playing);
+        this.aheadStep = -1;
+        this.heldSample = null;
+        this.showLinesStep(this.linesStep);
+      },
     });
     setUpControls(store, {
       commit: (i) => this.commit(i),
@@ -571,9 +595,14 @@ export class App {
     this.pathlines.updateLineCount();
   }
 
-  private loadSample(): void {
+  // Loads the sample of `step` (the store's unless given) into the parallel coordinates, one load at
+  // a time. While playing, the sample of the step sent ahead (sendStep) is fetched while its frame
+  // is rendered and drawn once that frame is shown (stepShown); one that comes after its frame was
+  // shown is drawn at once. Steps come faster than samples at high speeds: a step is skipped while a
+  // sample loads, the lines on screen stay those of the last sample drawn, and the label over them
+  // names its step (showLinesStep), a step that was on screen.
+  private loadSample(step = this.store.state.step): void {
     if (this.sampleLoading) return;
-    const step = this.store.state.step;
     if (step === this.sampleStep) return;
     // A step whose sample failed is asked for again only when the step changes (or after a pause):
     // never in a loop.
@@ -586,10 +615,8 @@ export class App {
       : fetchSample(step, this.info.variables.map((v) => v.name), 'variables');
     request
       .then((sample) => {
-        this.pc.setData(sample);  // drawn with the colour function in force
-        // A new step's lines keep that function; setting it again would draw them all twice.
-        if (this.sampleStep < 0) this.updateLineColors();
-        this.sampleStep = step;
+        if (this.playback.playing && step === this.aheadStep && this.sampleStep >= 0) this.heldSample = { step, sample };
+        else this.drawSample(step, sample);
       })
       .catch((e) => {
         this.sampleFailedStep = step;
@@ -600,6 +627,31 @@ export class App {
         this.sampleLoading = false;
         if (this.store.state.step !== this.sampleStep && !this.playback.playing) this.loadSample();
       });
+  }
+
+  private drawSample(step: number, sample: Sample): void {
+    const first = this.sampleStep < 0;
+    this.pc.setData(sample, step);  // drawn with the colour function in force
+    // A new step's lines keep that function; setting it again would draw them all twice.
+    if (first) this.updateLineColors();
+    this.sampleStep = step;
+  }
+
+  // The label over the parallel coordinates: the step whose sample the lines on screen show (while
+  // playing, often not the step of the 3D view: it says so).
+  private showLinesStep(step: number): void {
+    if (step >= 0) this.linesStep = step;
+    step = this.linesStep;
+    const el = $('pcStep');
+    const s = this.info.steps[step];
+    if (!s) {
+      el.textContent = '';
+      return;
+    }
+    const viewStep = this.shownHeader?.step ?? this.store.state.step;
+    el.textContent = `lines: step ${s.index} · ${s.timeMyr.toFixed(1)} Myr${step !== viewStep ? ` (view: step ${viewStep})` : ''}`;
+    el.classList.toggle('behind', step !== viewStep);
+    el.dataset.step = String(step);
   }
 
   // The lines of the sample coloured as the volume.
@@ -631,7 +683,11 @@ export class App {
   private stepShown(step: number): void {
     this.store.state.step = step;
     this.features.stepChanged();
-    if (performance.now() - this.lastSampleLoad > 1000) this.loadSample();
+    this.selection.stepShown(step);
+    const held = this.heldSample;
+    this.heldSample = null;
+    if (held && held.step === step) this.drawSample(step, held.sample);
+    else this.showLinesStep(this.linesStep);
   }
 
   // The time bar (slider and label) at `step`: the store's, or during playback the frame shown's.

@@ -72,11 +72,88 @@ function legendNumber(v: number): string {
   return m >= 1e5 || m < 1e-2 ? v.toExponential(2) : String(+v.toPrecision(4));
 }
 
+// The text size of the legends' labels, px (style.css .legendLabels).
+const kLegendFontPx = 12;
+
+// The values a colour bar `barPx` wide labels, by the rule of the server's legends
+// (render::colorBarTicks, src/render/legend.h): round numbers (multiples of 1, 2 or 5 × 10^k, or of
+// twice that; powers of ten on a log scale spanning a decade or more) inside [lo, hi], as many as
+// fit (at most 6) with their labels (widths from `measure`) at least `gapPx` apart and inside the
+// bar; at least one.
+// `at`: 0 the bar's left end (lo), 1 its right end.
+export function colorBarTicks(lo: number, hi: number, log: boolean, barPx: number, gapPx: number,
+  measure: (text: string) => number): { at: number; text: string }[] {
+  log = log && lo > 0;
+  const at = (v: number) => Math.min(1, Math.max(0, log ? Math.log(v / lo) / Math.log(hi / lo) : (v - lo) / (hi - lo)));
+  if (!(hi > lo) || !Number.isFinite(lo) || !Number.isFinite(hi)) return [{ at: 0.5, text: legendNumber(lo) }];
+  const fits = (ticks: { at: number; text: string }[]) => {
+    let right = -Infinity;
+    for (const t of ticks) {
+      const w = measure(t.text);
+      if (w > barPx) return false;
+      const left = tickLabelLeft(t.at, w, barPx);
+      if (left < right + gapPx) return false;
+      right = left + w;
+    }
+    return ticks.length > 0;
+  };
+  if (log && Math.log10(hi / lo) >= 1) {
+    const d0 = Math.ceil(Math.log10(lo) - 1e-9), d1 = Math.floor(Math.log10(hi) + 1e-9);
+    for (let every = 1; every <= Math.max(1, d1 - d0); every++) {
+      const ticks = [];
+      for (let d = d0; d <= d1; d += every) ticks.push({ at: at(10 ** d), text: String(+(10 ** d).toPrecision(6)) });
+      if (ticks.length <= 6 && fits(ticks)) return ticks;
+    }
+  }
+  // Steps of 1, 2 or 5 × 10^k from the finest giving at most 6 values, each also with every other
+  // value: the first that fits with two values or more, else the first with one.
+  const roundStep = (raw: number) => {
+    const base = 10 ** Math.floor(Math.log10(raw));
+    return [1, 2, 5, 10].map((m) => m * base).find((x) => x >= raw * (1 - 1e-9)) ?? 10 * base;
+  };
+  let single: { at: number; text: string }[] | null = null;
+  for (let step = roundStep((hi - lo) / 6); step <= 2 * (hi - lo); step = roundStep(step * 1.5)) {
+    for (const every of [1, 2]) {
+      const s = step * every;
+      const decimals = Math.max(0, -Math.floor(Math.log10(s) + 1e-9));
+      const ticks = [];
+      const slack = 1e-6 * (hi - lo);
+      for (let k = Math.ceil((lo - slack) / s); k * s <= hi + slack; k++) {
+        const v = k * s;
+        if (log && v <= 0) continue;
+        const m = Math.abs(v);
+        const text = m < s * 1e-6 ? '0' : m >= 1e5 || m < 1e-2 ? String(+v.toPrecision(3)) : v.toFixed(decimals);
+        ticks.push({ at: at(v), text });
+      }
+      if (ticks.length > 6 || !fits(ticks)) continue;
+      if (ticks.length >= 2) return ticks;
+      single ??= ticks;
+    }
+  }
+  if (single) return single;
+  const mid = log ? Math.sqrt(lo * hi) : (lo + hi) / 2;
+  return [{ at: at(mid), text: legendNumber(mid) }];
+}
+
+// A tick label's left edge along the bar: centred on its position, shifted inside the bar, px.
+export function tickLabelLeft(at: number, labelPx: number, barPx: number): number {
+  return Math.min(Math.max(0, barPx - labelPx), Math.max(0, Math.round(at * barPx) - labelPx / 2));
+}
+
+let measureContext: CanvasRenderingContext2D | null = null;
+function measureLegendText(text: string): number {
+  if (!measureContext) {
+    measureContext = document.createElement('canvas').getContext('2d')!;
+    measureContext.font = `${kLegendFontPx}px ${getComputedStyle(document.body).fontFamily || 'sans-serif'}`;
+  }
+  return measureContext.measureText(text).width;
+}
+
 // What a legend shows: its title, the bar's colours and its labels.
 interface LegendContent {
   title: string;
   colors: string[];
-  labels: { at?: number; text: string }[];
+  labels: { at: number; text: string }[];
 }
 
 const kLegendBarWidth = 200;
@@ -87,9 +164,13 @@ function legendContent(e: LegendEntry): LegendContent {
     const [r, g, b] = e.colorAt((x + 0.5) / kLegendBarWidth);
     colors.push(`rgb(${Math.round(r * 255)},${Math.round(g * 255)},${Math.round(b * 255)})`);
   }
+  // A log scale's middle is the ends' geometric mean.
+  const lo = e.valueAt(0), hi = e.valueAt(1), mid = e.valueAt(0.5);
+  const log = lo > 0 && hi > lo && Math.abs(mid - Math.sqrt(lo * hi)) < 1e-6 * hi && Math.abs(mid - (lo + hi) / 2) > 1e-6 * hi;
   const labels = e.ticks
     ? e.ticks.map((t) => ({ at: t.at, text: t.text }))
-    : [e.valueAt(0), e.valueAt(0.5), e.valueAt(1)].map((v) => ({ text: legendNumber(v) }));
+    : colorBarTicks(Math.min(lo, hi), Math.max(lo, hi), log, kLegendBarWidth, kLegendFontPx / 2, measureLegendText)
+      .map((t) => ({ at: hi >= lo ? t.at : 1 - t.at, text: t.text }));
   return { title: e.title, colors, labels };
 }
 
@@ -140,23 +221,12 @@ export function showLegends(entries: LegendEntry[], shells: ShellKeyEntry[] = []
     });
     const labels = document.createElement('div');
     labels.className = 'legendLabels';
-    if (e.labels.some((l) => l.at !== undefined)) {
-      labels.style.position = 'relative';
-      labels.style.height = '1.2em';
-      for (const t of e.labels) {
-        const span = document.createElement('span');
-        span.textContent = t.text;
-        span.style.position = 'absolute';
-        span.style.left = `${((t.at ?? 0) * 100).toFixed(2)}%`;
-        span.style.transform = 'translateX(-50%)';
-        labels.appendChild(span);
-      }
-    } else {
-      for (const t of e.labels) {
-        const span = document.createElement('span');
-        span.textContent = t.text;
-        labels.appendChild(span);
-      }
+    // Each label centred on its value's place, shifted inside the bar at the ends (as measured).
+    for (const t of e.labels) {
+      const span = document.createElement('span');
+      span.textContent = t.text;
+      span.style.left = `${tickLabelLeft(t.at, measureLegendText(t.text), kLegendBarWidth).toFixed(1)}px`;
+      labels.appendChild(span);
     }
     div.append(title, bar, labels);
     box.appendChild(div);

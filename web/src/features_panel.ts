@@ -35,7 +35,8 @@ export interface FeaturesPanelObserver {
 
 type SortKey = 'track' | 'firstStep' | 'lifetimeMyr' | 'maxVolumeKm3' | 'meanDepthKm' | 'stallMyr' | 'events';
 
-const kMargin = { top: 16, right: 12, bottom: 22, left: 50 };
+// A title row above the plot, and below it the tick labels and the axis' title (12 px text).
+const kMargin = { top: 22, right: 12, bottom: 36, left: 54 };
 
 const frame = (svg: SVGSVGElement, right = kMargin.right) => plotFrame(svg, { ...kMargin, right });
 
@@ -507,7 +508,7 @@ export class FeaturesPanel {
       d3.select(svg).selectAll('*').remove();
       return;
     }
-    const { g, iw, ih } = frame(svg, 46); // the volume's axis on the right
+    const { g, iw, ih } = frame(svg, 58); // the volume's axis on the right (labels like 1.2e+8)
     const times = f.steps.map((s) => s.timeMyr);
     const xs = d3.scaleLinear().domain(d3.extent(times) as [number, number]).range([0, iw]);
     if (times.length < 2) xs.domain([times[0] - 1, times[0] + 1]);
@@ -518,8 +519,8 @@ export class FeaturesPanel {
     g.append('g').attr('class', 'axis').attr('transform', `translate(0,${ih})`).call(d3.axisBottom(xs).ticks(5).tickFormat(d3.format('~g')));
     g.append('g').attr('class', 'axis').call(d3.axisLeft(ys).ticks(5).tickFormat(d3.format('~g')));
     g.append('g').attr('class', 'axis').attr('transform', `translate(${iw},0)`).call(d3.axisRight(vs).ticks(3).tickFormat(d3.format('.1e')));
-    g.append('text').attr('x', iw).attr('y', ih + 20).attr('text-anchor', 'end').text('time [Myr]');
-    g.append('text').attr('x', -kMargin.left + 2).attr('y', -kMargin.top).attr('dominant-baseline', 'hanging').text('depth [km]');
+    g.append('text').attr('x', iw).attr('y', ih + 32).attr('text-anchor', 'end').text('time [Myr]');
+    g.append('text').attr('x', -kMargin.left + 2).attr('y', -kMargin.top + 3).attr('dominant-baseline', 'hanging').text('depth [km]');
     for (const d of f.depthsKm) {
       if (d < ys.domain()[0] || d > ys.domain()[1]) continue;
       g.append('rect').attr('x', 0).attr('width', iw).attr('y', y(d - f.bandHalfWidthKm)).attr('height', Math.max(1, y(d + f.bandHalfWidthKm) - y(d - f.bandHalfWidthKm)))
@@ -539,7 +540,7 @@ export class FeaturesPanel {
       .append('title').text((p) => `step ${p.step}, ${p.timeMyr.toFixed(1)} Myr: track ${t.track} (feature ${p.feature} of the step), mean depth ${p.meanDepthKm.toFixed(0)} km (${p.topDepthKm.toFixed(0)}–${p.bottomDepthKm.toFixed(0)}), ${p.volumeKm3.toExponential(2)} km³${p.radialVelocityCmPerYr === null ? '' : `, v_r ${p.radialVelocityCmPerYr.toFixed(2)} cm/yr`}`);
     const cur = f.steps.find((s) => s.step === this.store.state.step);
     if (cur) g.append('line').attr('x1', x(cur.timeMyr)).attr('x2', x(cur.timeMyr)).attr('y1', 0).attr('y2', ih).attr('stroke', '#ffcc4d').attr('stroke-dasharray', '3,2');
-    g.append('text').attr('x', iw + 44).attr('y', -kMargin.top).attr('dominant-baseline', 'hanging').attr('text-anchor', 'end')
+    g.append('text').attr('x', iw + 56).attr('y', -kMargin.top + 3).attr('dominant-baseline', 'hanging').attr('text-anchor', 'end')
       .style('fill', '#f4a259').text('volume [km³]');
   }
 
@@ -555,7 +556,7 @@ export class FeaturesPanel {
       $('featuresFluxNote').textContent = this.result ? `no flux: the dataset has no ${kRadialVelocity}` : '';
       return;
     }
-    const { g, iw, ih } = frame(svg, 46); // the selection's axis on the right
+    const { g, iw, ih } = frame(svg, 50); // the selection's axis on the right
     const xs = d3.scaleLinear().domain(d3.extent(flux.steps, (s) => s.timeMyr) as [number, number]).range([0, iw]);
     const all = flux.steps.flatMap((s) => s.downKm3PerYr.map((v) => -v));
     const ys = d3.scaleLinear().domain([0, (d3.max(all) ?? 1) * 1.05 || 1]).nice().range([ih, 0]);
@@ -565,9 +566,9 @@ export class FeaturesPanel {
     g.append('g').attr('class', 'axis').attr('transform', `translate(0,${ih})`).call(d3.axisBottom(xs).ticks(5).tickFormat(d3.format('~g')));
     g.append('g').attr('class', 'axis').call(d3.axisLeft(ys).ticks(4).tickFormat(d3.format('~g')));
     g.append('g').attr('class', 'axis selectedAxis').attr('transform', `translate(${iw},0)`).call(d3.axisRight(ss).ticks(4).tickFormat(d3.format('~g')));
-    g.append('text').attr('x', iw).attr('y', ih + 20).attr('text-anchor', 'end').text('time [Myr]');
-    g.append('text').attr('x', -kMargin.left + 2).attr('y', -kMargin.top).attr('dominant-baseline', 'hanging').text('downward flux [km³/yr]: shell');
-    g.append('text').attr('x', iw + 44).attr('y', -kMargin.top).attr('dominant-baseline', 'hanging').attr('text-anchor', 'end').text('selection ┆');
+    g.append('text').attr('x', iw).attr('y', ih + 32).attr('text-anchor', 'end').text('time [Myr]');
+    g.append('text').attr('x', -kMargin.left + 2).attr('y', -kMargin.top + 3).attr('dominant-baseline', 'hanging').text('downward flux [km³/yr]: shell');
+    g.append('text').attr('x', iw + 48).attr('y', -kMargin.top + 3).attr('dominant-baseline', 'hanging').attr('text-anchor', 'end').text('selection ┆');
     const colors = d3.schemeTableau10;
     flux.depthsKm.forEach((depth, d) => {
       const c = colors[d % colors.length];

@@ -33,6 +33,9 @@ export interface ParcoordsOptions {
   multi?: boolean;
   // The axis order changed (an axis dragged sideways), in display order.
   onOrder?(order: string[]): void;
+  // Both layers show every line of the data set with `tag` (setData's; e.g. the step of the sample):
+  // what the lines on screen describe.
+  onDrawn?(tag: number): void;
 }
 
 export interface ParcoordsTiming {
@@ -54,7 +57,10 @@ type Row = Record<string, number>;
 // as opaque, so the density looks alike): less main-thread and CPU time per move on a machine
 // whose cores the browser shares with the server. Releasing the brush draws every line. In coarse
 // mode (setCoarse: while the time series plays) both layers are drawn that way, so that a new
-// step's sample costs a twentieth of a full redraw; leaving it draws every line.
+// step's sample costs a twentieth of a full redraw; leaving it draws every line. In coarse mode a
+// layer is drawn off screen and shown once it is complete: the lines on screen are always every
+// (drawn) line of one step, never a cleared layer nor a mix of two steps, however often new steps
+// come (at 10 steps/s a drawing that the next step cancelled left no brushed line at all).
 const kSliceMs = 6;
 const kDragLines = 5000;
 
@@ -188,6 +194,15 @@ export class ParallelCoordinates {
   private readonly slices: (() => void)[] = [];
   private dragging = false;
   private coarse = false;
+  // The tag of the data set (setData) and, per layer, of the lines that layer shows complete.
+  private dataTag = -1;
+  private readonly drawnTags: Record<string, number> = { foreground: -1, brushed: -1 };
+  // Off-screen layers of coarse mode (drawn there, then copied at once).
+  private readonly offscreen: Record<string, CanvasRenderingContext2D | null> = { foreground: null, brushed: null };
+  // Coarse mode: a layer's complete off-screen drawing waiting for the other layer's, and whether a
+  // layer's drawing is under way.
+  private readonly ready: Record<string, (() => void) | null> = { foreground: null, brushed: null };
+  private readonly inProgress: Record<string, boolean> = { foreground: false, brushed: false };
   // The brushes last reported or set, in data units (typed values exact): an end of a brush that
   // a drag did not move keeps its value here, one it moved snaps (snapDragged).
   private known: Brush[] = [];
@@ -233,8 +248,15 @@ export class ParallelCoordinates {
     return this.rows.length;
   }
 
+  // The tag (setData's) of the lines both layers show complete; -1 while they differ or draw.
+  get drawnTag(): number {
+    return this.drawnTags.foreground === this.drawnTags.brushed ? this.drawnTags.foreground : -1;
+  }
+
   // A sample of every column, or (a new step) of some of the columns the lines have: those change.
-  setData(sample: Sample): void {
+  // `tag` names the data (the step of the sample): onDrawn reports it once its lines are drawn.
+  setData(sample: Sample, tag = -1): void {
+    this.dataTag = tag;
     const n = sample.rows, c = sample.columns.length, v = sample.values;
     // A new step's sample has the same rows: its values go into the rows there are (100 000 objects
     // not made again, nor collected, for every step of a playback); the other columns stay.
@@ -260,7 +282,11 @@ export class ParallelCoordinates {
     this.suppress++;
     try {
       this.pc.data(this.allRows());
-      this.pc.render();
+      // parcoord-es's render sizes the canvases again (autoscale), which clears them: in coarse mode
+      // (playback) the lines are drawn by the renderer's queue alone, off screen, and the layers keep
+      // the last step's lines until the new ones are complete. The axes' ranges are fixed.
+      if (this.coarse) this.pc.render.queue();
+      else this.pc.render();
       if (brushes.length) this.applyBrushes(brushes);
     } finally {
       this.suppress--;
@@ -727,35 +753,95 @@ export class ParallelCoordinates {
     };
   }
 
+  // A layer shows every line of the data tagged `tag`: once both do, onDrawn hears of it.
+  private layerDrawn(layer: string, tag: number): void {
+    this.drawnTags[layer] = tag;
+    if (this.drawnTags.foreground === tag && this.drawnTags.brushed === tag) this.options.onDrawn?.(tag);
+  }
+
   // Draws the brushed layer again (installRenderer sets it to its own rule).
   private redrawBrushed: () => void = () => {};
 
   // Clears the layer (parcoord-es's clear: the brushed layer then veils the foreground while something
   // is brushed) and draws the rows' polylines in time-limited slices; a newer call for the layer
-  // cancels this one.
+  // cancels this one. In coarse mode (playback) the lines are drawn off screen and the layer is
+  // cleared and given them in one go once both layers' drawings are complete.
   private drawLayer(layer: 'foreground' | 'brushed', rows: Row[], coarse = false): void {
     const job = ++this.jobs[layer];
     const pc = this.pc;
-    if (layer === 'foreground') {
-      pc.clear('foreground');
-      pc.clear('highlight');
-    } else if (rows.length || this.brushes().length > 0) {
-      pc.clear('brushed');
+    const tag = this.dataTag;
+    const buffered = this.coarse;
+    const clearShown = () => {
+      if (layer === 'foreground') {
+        pc.clear('foreground');
+        pc.clear('highlight');
+      } else if (rows.length || this.brushes().length > 0) {
+        pc.clear('brushed');
+      } else {
+        // Nothing brushed: no veil. parcoord-es's clear veils whenever its brush state has a key, and
+        // the multi-range mode keeps keys for axes without ranges: the lines were veiled with no brush.
+        const c = pc.ctx.brushed as CanvasRenderingContext2D;
+        c.save();
+        c.setTransform(1, 0, 0, 1, 0, 0);
+        c.clearRect(0, 0, c.canvas.width, c.canvas.height);
+        c.restore();
+      }
+    };
+    const shown = pc.ctx[layer] as CanvasRenderingContext2D;
+    this.ready[layer] = null;
+    this.inProgress[layer] = buffered;
+    let ctx = shown;
+    if (buffered) {
+      // The off-screen layer: the visible one's size, transform and line style, cleared.
+      let off = this.offscreen[layer];
+      if (!off || off.canvas.width !== shown.canvas.width || off.canvas.height !== shown.canvas.height) {
+        const c = document.createElement('canvas');
+        c.width = shown.canvas.width;
+        c.height = shown.canvas.height;
+        off = c.getContext('2d', { willReadFrequently: true })!;
+        this.offscreen[layer] = off;
+      }
+      off.setTransform(1, 0, 0, 1, 0, 0);
+      off.clearRect(0, 0, off.canvas.width, off.canvas.height);
+      off.setTransform(shown.getTransform());
+      off.lineWidth = shown.lineWidth;
+      off.globalCompositeOperation = shown.globalCompositeOperation;
+      ctx = off;
     } else {
-      // Nothing brushed: no veil. parcoord-es's clear veils whenever its brush state has a key, and
-      // the multi-range mode keeps keys for axes without ranges: the lines were veiled with no brush.
-      const c = pc.ctx.brushed as CanvasRenderingContext2D;
-      c.save();
-      c.setTransform(1, 0, 0, 1, 0, 0);
-      c.clearRect(0, 0, c.canvas.width, c.canvas.height);
-      c.restore();
+      clearShown();
     }
+    // The layer complete: shown (buffered: with the other layer, once its drawing is complete too).
+    const complete = () => {
+      this.timing.drawnAt[layer] = performance.now();
+      if (!buffered) {
+        this.layerDrawn(layer, tag);
+        return;
+      }
+      const off = ctx;
+      this.ready[layer] = () => {
+        clearShown();
+        shown.save();
+        shown.setTransform(1, 0, 0, 1, 0, 0);
+        shown.globalAlpha = 1;
+        shown.globalCompositeOperation = 'source-over';
+        shown.drawImage(off.canvas, 0, 0);
+        shown.restore();
+        this.layerDrawn(layer, tag);
+      };
+      this.inProgress[layer] = false;
+      if (!this.inProgress.foreground && !this.inProgress.brushed) {
+        for (const l of ['foreground', 'brushed']) {
+          const flip = this.ready[l];
+          this.ready[l] = null;
+          flip?.();
+        }
+      }
+    };
     if (!rows.length) {
       this.timing.lines[layer] = 0;
-      this.timing.drawnAt[layer] = performance.now();
+      complete();
       return;
     }
-    const ctx = pc.ctx[layer] as CanvasRenderingContext2D;
     const dims = pc.dimensions() as Record<string, { yscale: { domain(): number[]; range(): number[] } }>;
     const keys = (pc.getOrderedDimensionKeys() as string[]).filter((k) => dims[k]);
     // An axis being dragged sideways sits at its drag position (parcoord-es keeps it on the node).
@@ -810,7 +896,7 @@ export class ParallelCoordinates {
         if (performance.now() - t0 > kSliceMs) break;
       }
       if (next < rows.length) this.yieldThen(slice);
-      else this.timing.drawnAt[layer] = performance.now();
+      else complete();
     };
     this.yieldThen(slice);
   }

@@ -103,6 +103,16 @@ export class SelectionPanel {
   }
 
   setSelection(s: Selection, level = 0): void {
+    // A frame's quick figure (a coarse level; playback's) gives way to the statistics over time's
+    // figure of its step where those are finer (exact when asked exact): the panel then agrees with
+    // the exact range beside it.
+    const st = this.stats;
+    const p = level > 0 && st && st.level < level && s.step !== undefined && this.statsBrushes === JSON.stringify(this.store.state.brushes)
+      ? st.steps.find((x) => x.step === s.step) : undefined;
+    if (p && st) {
+      s = { ...s, fractionOfMantle: p.fractionOfMantle, volumeKm3: p.volumeKm3 };
+      level = st.level;
+    }
     this.selection = s;
     this.selectionLevel = level;
     this.observer?.selection(s);
@@ -198,10 +208,17 @@ export class SelectionPanel {
     });
   }
 
+  // Playback showed a frame of `step` (now the store's): the statistics' "now", mark and profile follow.
+  stepShown(_step: number): void {
+    if (this.stats && this.statsBrushes === JSON.stringify(this.store.state.brushes)) this.showStats(this.stats);
+  }
+
   private selectionText(): string {
     const s = this.selection;
+    // While playing (or when the figure is of another step than the store's) it names its step.
+    const of = s?.step !== undefined && (this.host.playing() || s.step !== this.store.state.step) ? `step ${s.step}: ` : '';
     return s && Number.isFinite(s.fractionOfMantle)
-      ? `${this.selectionLevel > 0 ? `≈ (level ${this.selectionLevel}) ` : ''}${(s.fractionOfMantle * 100).toFixed(2)} % of the mantle${Number.isFinite(s.volumeKm3) ? `, ${s.volumeKm3.toExponential(3)} km³` : ''}`
+      ? `${of}${this.selectionLevel > 0 ? `≈ (level ${this.selectionLevel}) ` : ''}${(s.fractionOfMantle * 100).toFixed(2)} % of the mantle${Number.isFinite(s.volumeKm3) ? `, ${s.volumeKm3.toExponential(3)} km³` : ''}`
       : 'computing…';
   }
 

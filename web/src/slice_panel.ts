@@ -187,7 +187,7 @@ export class SlicePanel {
       const cm = h.centralMeridianDeg;
       for (const lat of [-60, -30, 0, 30, 60]) {
         const at = p([cm - 179.999, lat]);
-        if (at) out.push(el('text', { class: 'graticuleLabel', x: at[0] - 3 * px, y: at[1] + 4 * px, 'text-anchor': 'end', 'font-size': 11 * px }, `${Math.abs(lat)}°${lat < 0 ? 'S' : lat > 0 ? 'N' : ''}`));
+        if (at) out.push(el('text', { class: 'graticuleLabel', x: at[0] - 3 * px, y: at[1] + 4 * px, 'text-anchor': 'end', 'font-size': 12 * px }, `${Math.abs(lat)}°${lat < 0 ? 'S' : lat > 0 ? 'N' : ''}`));
       }
       // Meridian labels along 30°S, every 60°, those too close to the last one drawn left out.
       let lastX = -Infinity;
@@ -196,7 +196,7 @@ export class SlicePanel {
         const at = p([cm + 60 * k, -30]);
         if (!at || at[0] - lastX < 42 * px) continue;
         lastX = at[0];
-        out.push(el('text', { class: 'graticuleLabel', x: at[0], y: at[1] + 12 * px, 'text-anchor': 'middle', 'font-size': 11 * px }, `${Math.abs(Math.round(lon))}°${lon < 0 ? 'W' : lon > 0 ? 'E' : ''}`));
+        out.push(el('text', { class: 'graticuleLabel', x: at[0], y: at[1] + 12 * px, 'text-anchor': 'middle', 'font-size': 12 * px }, `${Math.abs(Math.round(lon))}°${lon < 0 ? 'W' : lon > 0 ? 'E' : ''}`));
       }
     }
     if (!ref.coastlines.visible && this.coastlines) {
@@ -231,9 +231,27 @@ export class SlicePanel {
     if (visible) this.stateChanged();
   }
 
+  // The map's pane as wide as the map needs at the pane's height (the projection's aspect, and the
+  // legend beside it: render/map_view.cpp lays a wide picture out so), at most 62 % of the panel;
+  // the section takes the rest. Equal halves left a 2:1 map a third of its pane's width.
+  private layoutPanes(): void {
+    const pane = $('mapImage').parentElement!, box = $('slices');
+    const total = box.clientWidth, h = box.clientHeight - 20; // less the hint under the picture
+    if (total < 100 || h < 50) return;
+    const aspect = this.store.state.map.projection === 'orthographic' ? 1 : 2;
+    // mapLayoutOf's sizes: the text size f, the map at the picture's height less the title band
+    // (2.2 f) and margins (1.5 f), margins of f around it, and the legends' panel (the wider of its
+    // bar, clamp(W / 4, 8 f, 20 f), and 14 f) plus f.
+    const f = Math.max(12, Math.min(48, Math.floor(h / 36)));
+    const fixed = aspect * (h - 3.7 * f) + 4 * f;
+    const want = Math.max(fixed + 14 * f, Math.min((fixed * 4) / 3, fixed + 20 * f)) + 2;
+    pane.style.flex = `0 0 ${Math.round(Math.min(0.62 * total, Math.max(0.3 * total, want)))}px`;
+  }
+
   // The state in force changed: both pictures and the spectrum follow while they are shown.
   stateChanged(): void {
     if (!this.visible) return;
+    this.layoutPanes();
     this.map.request();
     this.section.request();
     this.requestSpectrum();

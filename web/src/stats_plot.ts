@@ -4,7 +4,8 @@
 import * as d3 from 'd3';
 import type { SelectionOverTime } from './api';
 
-const kMargin = { top: 8, right: 12, bottom: 22, left: 50 };
+// Room below the plot for the tick labels and, under them, the axis' title (12 px text).
+const kMargin = { top: 8, right: 14, bottom: 36, left: 50 };
 export type PlotMargin = typeof kMargin;
 
 // A small plot's frame: the svg emptied, as wide as the panel holding it (docked in the side panel,
@@ -29,7 +30,7 @@ export function drawTimePlot(svg: SVGSVGElement, s: SelectionOverTime, currentSt
   const x = (v: number) => xs(v) as number, y = (v: number) => ys(v) as number;
   g.append('g').attr('class', 'axis').attr('transform', `translate(0,${ih})`).call(d3.axisBottom(xs).ticks(5).tickFormat(d3.format('~g')));
   g.append('g').attr('class', 'axis').call(d3.axisLeft(ys).ticks(4).tickFormat(d3.format('~g')));
-  g.append('text').attr('x', iw).attr('y', ih + 20).attr('text-anchor', 'end').text('time [Myr]');
+  g.append('text').attr('x', iw).attr('y', ih + 32).attr('text-anchor', 'end').text('time [Myr]');
   g.append('text').attr('x', 2).attr('y', 2).attr('dominant-baseline', 'hanging').text('% of the mantle');
   g.append('path').datum(pts).attr('fill', 'none').attr('stroke', '#8ab4f8').attr('stroke-width', 1.5)
     .attr('d', d3.line<{ t: number; v: number }>().x((p) => x(p.t)).y((p) => y(p.v)));
@@ -53,7 +54,7 @@ export function drawProfilePlot(svg: SVGSVGElement, s: SelectionOverTime): void 
   const x = (v: number) => xs(v) as number, y = (v: number) => ys(v) as number;
   g.append('g').attr('class', 'axis').attr('transform', `translate(0,${ih})`).call(d3.axisBottom(xs).ticks(4).tickFormat(d3.format('~g')));
   g.append('g').attr('class', 'axis').call(d3.axisLeft(ys).ticks(5).tickFormat(d3.format('~g')));
-  g.append('text').attr('x', iw).attr('y', ih + 20).attr('text-anchor', 'end').text('% of the shell selected');
+  g.append('text').attr('x', iw).attr('y', ih + 32).attr('text-anchor', 'end').text('% of the shell selected');
   g.append('text').attr('x', 4).attr('y', ih - 4).text('depth [km]');
   g.append('path').datum(pts).attr('class', 'profile').attr('fill', 'rgba(138,180,248,0.35)').attr('stroke', '#8ab4f8')
     .attr('d', d3.area<{ d: number; v: number }>().y((q) => y(q.d)).x0(0).x1((q) => x(q.v)));

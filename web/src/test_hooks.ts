@@ -31,6 +31,8 @@ export interface TestHooks {
   readonly playing: boolean;
   parcoords: ParallelCoordinates;
   readonly sampleStep: number;
+  // The step whose sample the parallel coordinates' lines show complete (both layers), -1 before any.
+  readonly linesStep: number;
   // What was sent and received when, warps drawn while a newer state was pending, and holding
   // incoming frames back (to look at a warped view deterministically).
   sentLog: SentEntry[];
@@ -94,6 +96,7 @@ export function installTestHooks(app: App): TestHooks {
     get playing() { return app.playback.playing; },
     parcoords: app.pc,
     get sampleStep() { return app.sampleStep; },
+    get linesStep() { return app.linesStep; },
     sentLog: [],
     frameLog: [],
     shownLog: [],
