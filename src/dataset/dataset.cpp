@@ -299,18 +299,6 @@ const float* StepVolume::compute(size_t var) const
     return p;
 }
 
-const std::vector<double>& StepVolume::shellMeansOf(size_t var) const
-{
-    RAYPC_CHECK(var < variableCount());
-    const std::span<const float> values(this->values(var), m_grid.cellCount());  // before the lock: it may decode
-    std::lock_guard lock(m_computeMutex);
-    auto means = m_shellMeans.find(var);
-    if (means == m_shellMeans.end())
-        // Isolated as in compute().
-        tbb::this_task_arena::isolate([&] { means = m_shellMeans.emplace(var, shellMeans(m_grid, values)).first; });
-    return means->second;
-}
-
 StepVolume::PointValues StepVolume::pointValues(size_t var) const
 {
     RAYPC_CHECK(var < variableCount());
@@ -323,8 +311,8 @@ StepVolume::PointValues StepVolume::pointValues(size_t var) const
         return m_base->pointValues(var);
     if (var >= m_storedCount) {
         const ShellAnomalyOf& of = m_computed[var - m_storedCount];
+        p.m_baseValues = values(of.base);  // first: the means then come from these values
         p.m_means = shellMeansOf(of.base).data();
-        p.m_baseValues = values(of.base);
         p.m_kind = of.kind;
         return p;
     }
@@ -392,24 +380,25 @@ float StepVolume::value(size_t var, size_t iLat, size_t iR, size_t iLon) const
     if (m_base && var < m_base->variableCount())
         return m_base->value(var, iLat, iR, iLon);
     if (const ShellAnomalyOf* of = computedFrom(var))
-        return shellAnomalyValue(value(of->base, iLat, iR, iLon), shellMeanOf(of->base, iR), of->kind);
+        return shellAnomalyValue(value(of->base, iLat, iR, iLon), shellMeansOf(of->base)[iR], of->kind);
     if (var >= m_storedCount)
         return values(var)[m_grid.index(iLat, iR, iLon)];
     m_mapped[var].checkNotCutShort();
     return mappedValue(var, iLat, iR, iLon);
 }
 
-double StepVolume::shellMeanOf(size_t base, size_t iR) const
+const std::vector<double>& StepVolume::shellMeansOf(size_t base) const
 {
+    RAYPC_CHECK(base < variableCount());
     {
         std::lock_guard lock(m_computeMutex);
         if (const auto all = m_shellMeans.find(base); all != m_shellMeans.end())
-            return all->second[iR];
+            return all->second;
     }
     // Every shell's mean at once (shellMeans, as compute() gets them): from the values when they are
     // at hand (decoded, or mapped float32), else from a decoded copy dropped at once, so that a few
     // point reads keep no array of the grid. Outside the lock (parallel loops); two threads may
-    // compute them: the same bits.
+    // compute them: the same bits. std::map: a reference handed out stays valid as others are added.
     const size_t n = m_grid.cellCount();
     std::vector<double> means;
     if (m_encoding == ValueEncoding::Uint16 && !valuesReady(base) && !(m_base && base < m_base->variableCount()) &&
@@ -426,7 +415,7 @@ double StepVolume::shellMeanOf(size_t base, size_t iR) const
         tbb::this_task_arena::isolate([&] { means = shellMeans(m_grid, values); });
     }
     std::lock_guard lock(m_computeMutex);
-    return m_shellMeans.try_emplace(base, std::move(means)).first->second[iR];
+    return m_shellMeans.try_emplace(base, std::move(means)).first->second;
 }
 
 float StepVolume::mappedValue(size_t var, size_t iLat, size_t iR, size_t iLon) const

@@ -180,7 +180,9 @@ public:
     // a float32 value outside the range).
     PointValues pointValues(size_t var) const;
     // The shell means (grid().nR() of them) of variable `var` on this level, as a shell anomaly of it
-    // is computed with (shellMeans of values(var)): computed on first use and kept. Thread-safe.
+    // is computed with (shellMeans of values(var), the same bits): computed on first use and kept.
+    // A u16 variable not decoded yet is decoded into a copy dropped at once, so that a few point
+    // reads keep no array of the grid. Thread-safe.
     const std::vector<double>& shellMeansOf(size_t var) const;
     // Whether values(var) is ready without decoding.
     bool valuesReady(size_t var) const { return m_values[var].load(std::memory_order_acquire) != nullptr; }
@@ -244,8 +246,6 @@ private:
     mutable std::mutex m_computeMutex;
     mutable std::vector<std::vector<float>> m_computedBounds;    // per computed variable, with its values
     mutable std::map<size_t, std::vector<double>> m_shellMeans;  // per base variable, this level's
-    // m_shellMeans[base][iR], computed first if need be without keeping the base's values decoded.
-    double shellMeanOf(size_t base, size_t iR) const;
 };
 
 // The parallel-coordinates sample of one step: `rows` cells, columns = coordinates
