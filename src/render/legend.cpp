@@ -175,7 +175,11 @@ int legendBlockPx(int fontPx)
 
 // At least 12 px: legible in the UI's panes, where a picture's pixel is a CSS pixel (maps, sections,
 // time–depth pictures a few hundred pixels high).
-int legendFontPx(int width, int height) { return std::clamp(std::min(width, height) / 36, 12, 48); }
+int legendFontPx(int width, int height)
+{
+    const int side = std::min(width, height);
+    return std::clamp(side / 36, side < 120 ? 10 : 12, 48);
+}
 
 int legendBarPx(int width, int height)
 {

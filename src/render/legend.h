@@ -45,7 +45,9 @@ std::string displayUnits(const std::string& units);
 // The label of a value on a legend: 4 significant digits, exponent form for very large or small values.
 std::string legendNumber(double value);
 
-// The legends' text size in a picture of this size, pixels.
+// The legends' text size in a picture of this size, pixels: 1/36 of its smaller side, at least 12
+// (legible beside the page's own text), but 10 in a picture under 120 px on a side (a thumbnail such
+// as Python's 200x100 map), where 12 px titles and legends would leave the map or plot no room.
 int legendFontPx(int width, int height);
 // The width of a legend's colour bar in a picture of this size, pixels.
 int legendBarPx(int width, int height);

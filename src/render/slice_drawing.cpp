@@ -250,7 +250,7 @@ void addNotes(std::vector<TextLabel>& labels, int width, int height, const std::
     std::vector<std::string> notes;
     for (const std::string& n : given)
         if (!n.empty())
-            notes.push_back(n);
+            notes.push_back(fitTitle({n}, width, height));  // a long one ends in "…", not off the picture
     const int fontPx = legendFontPx(width, height);
     for (size_t i = 0; i < notes.size(); ++i)
         labels.push_back({notes[i], float(width - fontPx), float(height - fontPx * (1.2 + 1.6 * double(notes.size() - 1 - i))),

@@ -380,8 +380,10 @@ TEST(Serve, DefaultStateOfInfoRendersAndInteractiveFitsTheBudget)
     const auto still = ws.framesUntilConverged(1);
     EXPECT_EQ(still.back().frame.header["width"], state["image"]["width"]);
     // A budget no level can meet: the interactive frame comes at the coarsest level and a reduced size
-    // of the same aspect.
+    // of the same aspect. The camera moves a degree, as in a drag: the same view again would be the
+    // still frame the session keeps (server/frame_cache.h), at once and whole.
     state["timeBudgetMs"] = 0.001;
+    state["camera"]["azimuthDeg"] = state["camera"]["azimuthDeg"].get<double>() + 1.0;
     ws.send({{"type", "state"}, {"id", 2}, {"state", state}, {"interactive", true}});
     const json h = ws.framesUntilConverged(2).back().frame.header;
     EXPECT_EQ(h["level"], 2);

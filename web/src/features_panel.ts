@@ -297,7 +297,7 @@ export class FeaturesPanel {
       });
     const width = Math.max(320, Math.round(($('featuresPanel').clientWidth || 300) * devicePixelRatio));
     const meanVar = of === 'share' ? undefined : state.color.variable;
-    postTimeDepth(state, of, meanVar, width, Math.round(width * 0.6), ctl.signal)
+    postTimeDepth(state, of, meanVar, width, Math.round(width * 0.9), ctl.signal)
       .then((png) => {
         if (ctl.signal.aborted) return;
         if (this.timeDepthUrl) URL.revokeObjectURL(this.timeDepthUrl);
