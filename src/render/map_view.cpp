@@ -286,7 +286,7 @@ ImageRgba8 mapPicture(const SliceInputs& in)
         flowText = drawArrows(image.pixels, width, height, arrows, spacing, "horizontal flow");
     }
 
-    std::vector<LegendSpec> legends{{in.colorTitle, params.transfer}};
+    std::vector<LegendSpec> legends{{in.colorTitle, params.transfer, {}}};
     const std::string pathlineText = drawPathlines(
         image.pixels, width, height, in,
         [&](float x, float y, float z) -> std::optional<PlacedPoint> {

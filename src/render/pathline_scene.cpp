@@ -278,7 +278,7 @@ LegendSpec pathlineLegend(const PathlineStyle& style, const std::vector<std::str
     const auto stops = state::colorMapStops(style.colorMap);
     colors.colorPoints.assign(stops.begin(), stops.end());
     colors.range = style.range;
-    return {what, colors};
+    return {what, colors, {}};
 }
 
 PathlineScene::PathlineScene(std::vector<analysis::PathlineSet> sets, float radiusKm)

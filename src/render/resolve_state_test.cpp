@@ -20,7 +20,7 @@ using state::testing::refusalOf;
 
 TEST(RenderState, ResolvesNamesAndRejectsUnknownOnes)
 {
-    const VariableCatalog catalog{{"temperature", "temperature anomaly"}, {{1000, 4000}, {-500, 200}}};
+    const VariableCatalog catalog{{"temperature", "temperature anomaly"}, {{1000, 4000}, {-500, 200}}, {}};
     RenderState s;
     s.colorVariable = "temperature anomaly";
     s.colorMap = ColorMapId::BlueWhiteRed;
@@ -48,7 +48,7 @@ TEST(RenderState, ResolvesNamesAndRejectsUnknownOnes)
 // written; an older document repeating a name (which meant the intersection) is refused.
 TEST(RenderState, RepeatedBrushNamesAreRangesOfOneAxis)
 {
-    const VariableCatalog catalog{{"temperature"}, {{1000, 4000}}};
+    const VariableCatalog catalog{{"temperature"}, {{1000, 4000}}, {}};
     const json doc = json::parse(R"({"version": 4, "brushes": [{"name": "depth", "min": 0, "max": 660},
         {"name": "temperature", "min": 1500, "max": 2500}, {"name": "depth", "min": 1500, "max": 2000}],
         "pathlines": {"filters": [{"name": "length", "min": 0, "max": 10}, {"name": "length", "min": 50, "max": 60}]}})");
@@ -82,7 +82,7 @@ TEST(RenderState, RepeatedBrushNamesAreRangesOfOneAxis)
 // empty name or a version-3 document with axes are refused naming the key.
 TEST(RenderState, DefaultOpacityIsAVForMapsCentredOnZero)
 {
-    const VariableCatalog catalog{{"temperature anomaly"}, {{-500, 200}}};
+    const VariableCatalog catalog{{"temperature anomaly"}, {{-500, 200}}, {}};
     RenderState s = parseRenderState(json{{"version", 1}, {"color", {{"colorMap", "blue-white-red"}}}});
     EXPECT_TRUE(s.opacity.empty());
     const TransferFunction tf = resolveParams(s, catalog).transfer;

@@ -199,7 +199,7 @@ ImageRgba8 sectionPicture(const SliceInputs& in)
         flowText = drawArrows(image.pixels, width, height, sectionFlowArrows(plane, probe, spacing), spacing,
                               "flow in the section's plane (directions on the picture's axes)");
     }
-    std::vector<LegendSpec> legends{{in.colorTitle, params.transfer}};
+    std::vector<LegendSpec> legends{{in.colorTitle, params.transfer, {}}};
     const std::string pathlineText = drawPathlines(
         image.pixels, width, height, in,
         [&](float x, float y, float z) -> std::optional<PlacedPoint> {
