@@ -3414,7 +3414,11 @@ const cases = {
         const mapW = 4 * Math.SQRT2 * h.scale * css, mapH = 2 * Math.SQRT2 * h.scale * css;
         const left = img.left + (h.centre[0] - 2 * Math.SQRT2 * h.scale) * css;
         const labels = [...document.querySelectorAll('#mapMarks .graticuleLabel')].map((t) => t.getBoundingClientRect().height);
-        return { projection: h.projection, css, mapW, mapH, left, pane: { x: pane.x, w: pane.width, h: pane.height }, panel: document.getElementById('slices').getBoundingClientRect().width,
+        const outside = [...document.querySelectorAll('#mapMarks .graticuleLabel')].filter((t) => {
+          const r = t.getBoundingClientRect();
+          return r.left < pane.left - 0.5 || r.right > pane.right + 0.5 || r.top < pane.top - 0.5 || r.bottom > pane.bottom + 0.5;
+        }).map((t) => t.textContent);
+        return { projection: h.projection, css, mapW, mapH, left, outside, pane: { x: pane.x, w: pane.width, h: pane.height }, panel: document.getElementById('slices').getBoundingClientRect().width,
           labelPx: labels.length ? Math.min(...labels) : 0, fontPx: Number(document.querySelector('#mapMarks .graticuleLabel')?.getAttribute('font-size') ?? 0) * css };
       });
       console.log(`  ${at}: map ${m.mapW.toFixed(0)}×${m.mapH.toFixed(0)} px in a pane of ${m.pane.w.toFixed(0)}×${m.pane.h.toFixed(0)} (panel ${m.panel.toFixed(0)}); labels ${m.fontPx.toFixed(1)} px`);
@@ -3425,6 +3429,7 @@ const cases = {
       check(m.mapH >= 0.65 * m.pane.h, `${at}: the map is ${m.mapH.toFixed(0)} px high in a pane of ${m.pane.h.toFixed(0)}`);
       check(m.left >= m.pane.x - 1 && m.left + m.mapW <= m.pane.x + m.pane.w + 1, `${at}: the map (${m.left.toFixed(0)}–${(m.left + m.mapW).toFixed(0)}) is not inside its pane`);
       check(m.fontPx >= 12, `${at}: the graticule's labels are ${m.fontPx} px`);
+      check(m.outside.length === 0, `${at}: the graticule's labels ${JSON.stringify(m.outside)} are cut by the pane's edge`);
       // The view's colour bar (item 8): its labels round values, apart, inside the bar, 12 px.
       const bar = await page.evaluate(() => [...document.querySelectorAll('#legends .legendLabels')].map((l) => {
         const box = l.getBoundingClientRect();

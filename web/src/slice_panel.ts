@@ -187,7 +187,8 @@ export class SlicePanel {
       const cm = h.centralMeridianDeg;
       for (const lat of [-60, -30, 0, 30, 60]) {
         const at = p([cm - 179.999, lat]);
-        if (at) out.push(el('text', { class: 'graticuleLabel', x: at[0] - 3 * px, y: at[1] + 4 * px, 'text-anchor': 'end', 'font-size': 12 * px }, `${Math.abs(lat)}°${lat < 0 ? 'S' : lat > 0 ? 'N' : ''}`));
+        // Inside the map's edge (on a dark halo): outside it, the map's left margin cut them.
+        if (at) out.push(el('text', { class: 'graticuleLabel', x: at[0] + 3 * px, y: at[1] + 4 * px, 'text-anchor': 'start', 'font-size': 12 * px }, `${Math.abs(lat)}°${lat < 0 ? 'S' : lat > 0 ? 'N' : ''}`));
       }
       // Meridian labels along 30°S, every 60°, those too close to the last one drawn left out.
       let lastX = -Infinity;
