@@ -639,6 +639,9 @@ huge_pages)
   "$raypc" preprocess "$fixture" -o "$work/ds" --quiet >/dev/null
   # server_memory [ENV...]: "GLIBC_TUNABLES (first tunable) AnonHugePages_kB" of a running server.
   server_memory() {
+    # Emptied first: the background shell truncates the log only once it runs, and the wait below
+    # once read the previous server's address in it and then a server not yet serving (flaky).
+    : > "$work/serve.log"
     env "$@" "$raypc" serve "$work/ds" --port 0 > "$work/serve.log" 2>&1 &
     local pid=$!
     # Up to a minute: under a full ctest run on 2 cores a start once took longer than the 20 s
