@@ -143,7 +143,7 @@ namespace {
 // of its colour (the bar's colour there is that id's), else "rest" on grey and "highlighted" on amber.
 // The rest of the selection (slot 0) is a dark neutral grey, a quarter of every diverging map's light
 // neutral at most, so that under the same lighting a near-zero value (a stalled slab) is never
-// taken for it (issue 47); and fainter than a painted feature.
+// taken for it (lit, the neutral turns grey); and fainter than a painted feature.
 TEST(FeaturePaint, TheRestIsDarkerThanAnyDivergingNeutral)
 {
     const Rgb rest = featurePaintColor(0);

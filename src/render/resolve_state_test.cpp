@@ -130,7 +130,8 @@ TEST(RenderState, DefaultViewIsTheTemperatureAnomalyElseTheFirstVariablesAnomaly
     plain.ranges = {{3000.0f, 5000.0f}};
     EXPECT_EQ(defaultState(plain).colorVariable, "density");
 }
-// One default colour range per variable (issue 47): the default view and a preset that names no
+// One default colour range per variable, so that a preset and the default view never show one
+// variable over two ranges: the default view and a preset that names no
 // range resolve to the same one, render::defaultColorRange of the variable's statistics (robust and
 // symmetric for centred maps); a document naming a range keeps it.
 TEST(RenderState, TheDefaultViewAndThePresetsShareTheDefaultRange)

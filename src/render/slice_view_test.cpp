@@ -123,9 +123,9 @@ TEST_F(Slices, BrushesGreyWhatTheyLeaveOut)
         EXPECT_TRUE(s[0] == s[1] && s[1] == s[2]) << "the south at " << lon << " is not grey";
         EXPECT_FALSE(n[0] == n[1] && n[1] == n[2]) << "the north at " << lon << " is grey";
     }
-    // "Not selected" is hatched and dark, unlike any colour map (issue 47): over a hatch period
-    // around a southern point the grey takes a dark and a lighter value, all below a third of a
-    // diverging map's light neutral.
+    // "Not selected" is hatched and dark, unlike any colour map, so that a near-zero value is never
+    // read as unselected: over a hatch period around a southern point the grey takes a dark and a
+    // lighter value, all below a third of a diverging map's light neutral.
     const auto south = frame.pixelOf(10, -40);
     float darkest = 1, lightest = 0;
     for (int dy = 0; dy < slice::kUnselectedHatchPx; ++dy)
@@ -164,7 +164,7 @@ TEST(NotSelected, NoColourMapDrawsIt)
 }
 
 // The reference shells' dashes in depth plots have a dark casing: the 660 km shell's yellow dash is
-// seen over viridis's yellow (issue 47).
+// seen over viridis's yellow, where a bare yellow dash vanished.
 TEST(DepthMarks, StandOutFromTheMapBeneath)
 {
     const int width = 200, height = 100;

@@ -96,7 +96,7 @@ TEST(ColorMap, ScientificMapsFromTheSharedTable)
     EXPECT_EQ(state::allColorMaps().size(), 11u);
 }
 
-// One default colour range per variable (issue 47): for centred maps ±the 99.5th percentile of
+// One default colour range per variable (robust to a few extreme points): for centred maps ±the 99.5th percentile of
 // |value| rounded up to a nice number, at most ±the larger magnitude; the exact range otherwise.
 TEST(DefaultColorRange, RobustSymmetricPercentileRoundedUp)
 {
