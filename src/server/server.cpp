@@ -129,6 +129,7 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     s.render.pathlines = s.pathlines.get();
     s.render.ranks = s.options.ranks;
     s.render.frameCacheBytes = s.options.limits.frameCacheBytes;
+    s.render.frameBudget = &s.frameBudget;
     s.api.dataset = s.dataset;
     s.api.cache = s.cache.get();
     s.api.pathlines = s.pathlines.get();
@@ -155,6 +156,7 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
         second->render.pathlines = second->pathlines.get();
         second->render.ranks = s.options.ranks;
         second->render.frameCacheBytes = s.options.limits.frameCacheBytes;
+        second->render.frameBudget = &s.frameBudget;
         second->render.pairFirst = s.dataset;
         ApiContext& api = second->api;
         api = s.api;
