@@ -282,7 +282,7 @@ const float* StepVolume::compute(size_t var) const
     std::lock_guard lock(m_computeMutex);
     if (const float* p = m_values[var].load(std::memory_order_acquire))
         return p;  // another thread computed it while this one waited
-    auto out = makeHugePageArray<float>(n);
+    auto out = makeSpareArray<float>(n);
     std::vector<float>& bounds = m_computedBounds[var - m_storedCount];
     bounds.resize(2 * m_bricks.brickCount());
     // Isolated: while this thread waits inside a parallel loop it must not pick up another task that
@@ -362,7 +362,7 @@ const float* StepVolume::decode(size_t var) const
         return values;
     }
     const auto start = std::chrono::steady_clock::now();
-    auto values = makeHugePageArray<float>(n);
+    auto values = makeSpareArray<float>(n);
     // Isolated: while this thread waits inside the parallel loop it must not pick up another task
     // that asks this volume for values and blocks on the lock it holds.
     tbb::this_task_arena::isolate([&] {
