@@ -382,7 +382,14 @@ private:
 TEST(SpareBlocks, ASpareOfEachSizeTakenIsMadeWithinTheBound)
 {
     const size_t small = size_t(8) << 20, big = kMaxSpareBytes - small / 2;
-    EXPECT_EQ(waitForSpareBlocks(), 0u);
+    // Off (a CLI command): no spare is made.
+    void* fresh = takeBlock(small);
+    ASSERT_NE(fresh, nullptr);
+    EXPECT_EQ(waitForSpareBlocks(), 0u) << "a spare made without keepSpareBlocks(true)";
+    giveBackBlock(fresh, small);
+    EXPECT_EQ(waitForSpareBlocks(), 0u) << "a block given back kept without keepSpareBlocks(true)";
+
+    keepSpareBlocks(true);
     void* a = takeBlock(small);
     ASSERT_NE(a, nullptr);
     std::fill_n(static_cast<char*>(a), small, char(1));
@@ -412,6 +419,8 @@ TEST(SpareBlocks, ASpareOfEachSizeTakenIsMadeWithinTheBound)
     giveBackBlock(e, other);
     b.reset();  // its size has a spare: freed
     EXPECT_EQ(waitForSpareBlocks(), small + other);
+    keepSpareBlocks(false);
+    EXPECT_EQ(waitForSpareBlocks(), 0u) << "spares kept after keepSpareBlocks(false)";
 }
 
 TEST(HugePages, LargeArraysStartOnAHugePageAndAreAdvised)

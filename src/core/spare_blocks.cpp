@@ -69,6 +69,8 @@ public:
         void* p = nullptr;
         {
             std::lock_guard lock(m_mutex);
+            if (!m_keep)
+                return mapBlock(bytes, true);  // as allocateHugePageBacked would
             if (const auto it = m_spares.find(bytes); it != m_spares.end()) {
                 p = it->second;
                 m_spareBytes -= bytes;
@@ -92,13 +94,29 @@ public:
         }
         {
             std::lock_guard lock(m_mutex);
-            if (!m_spares.contains(bytes) && m_spareBytes + bytes <= kMaxSpareBytes) {
+            if (m_keep && !m_spares.contains(bytes) && m_spareBytes + bytes <= kMaxSpareBytes) {
                 m_spares.emplace(bytes, p);
                 m_spareBytes += bytes;
                 return;
             }
         }
         unmapBlock(p, bytes);
+    }
+
+    void keep(bool on)
+    {
+        std::map<size_t, void*> dropped;
+        {
+            std::lock_guard lock(m_mutex);
+            m_keep = on;
+            if (!on) {
+                dropped.swap(m_spares);
+                m_spareBytes = 0;
+                m_wanted.clear();
+            }
+        }
+        for (const auto& [bytes, p] : dropped)
+            unmapBlock(p, bytes);
     }
 
     size_t waitIdle()
@@ -118,7 +136,7 @@ private:
             m_cv.wait(lock, [&] { return !m_wanted.empty(); });
             const size_t bytes = m_wanted.front();
             m_wanted.pop_front();
-            if (m_spares.contains(bytes) || m_spareBytes + bytes > kMaxSpareBytes) {
+            if (!m_keep || m_spares.contains(bytes) || m_spareBytes + bytes > kMaxSpareBytes) {
                 m_idleCv.notify_all();
                 continue;
             }
@@ -136,7 +154,7 @@ private:
             }
             lock.lock();
             m_busy = false;
-            if (p && !m_spares.contains(bytes) && m_spareBytes + bytes <= kMaxSpareBytes) {
+            if (p && m_keep && !m_spares.contains(bytes) && m_spareBytes + bytes <= kMaxSpareBytes) {
                 m_spares.emplace(bytes, p);
                 m_spareBytes += bytes;
                 p = nullptr;
@@ -154,12 +172,15 @@ private:
     std::condition_variable m_cv, m_idleCv;
     std::map<size_t, void*> m_spares;  // by size: one each
     size_t m_spareBytes = 0;
+    bool m_keep = false;
     std::deque<size_t> m_wanted;
     bool m_busy = false;
     std::thread m_thread;
 };
 
 }  // namespace
+
+void keepSpareBlocks(bool on) { Spares::instance().keep(on); }
 
 void* takeBlock(size_t bytes) { return Spares::instance().take(bytes); }
 

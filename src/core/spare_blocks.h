@@ -14,6 +14,10 @@
 // pages (its compaction happened in the background); a block taken when no spare is ready is mapped
 // on 4 KB pages, whose faults never wait for compaction.
 //
+// Spares are made only in a process that asks for them (keepSpareBlocks: the server, which changes
+// steps while a user waits); elsewhere (a CLI command, the Python module) a block is mapped fresh
+// and advised onto huge pages as allocateHugePageBacked's are, and unmapped when given back.
+//
 // Thread safety: every function may be called from any thread.
 #pragma once
 
@@ -28,6 +32,9 @@ namespace raypc {
 inline constexpr size_t kMaxSpareBytes = size_t(512) << 20;
 // Blocks smaller than this are plain allocateHugePageBacked: faulting them in is cheap.
 inline constexpr size_t kMinSpareBytes = size_t(4) << 20;
+
+// Turns making and keeping spares on (the server, at start) or off (then the spares kept are freed).
+void keepSpareBlocks(bool on);
 
 // `bytes` of uninitialised memory starting on a 2 MiB boundary, from the spares when one of exactly
 // this size is ready (below kMinSpareBytes: allocateHugePageBacked). Release it with giveBackBlock(p, bytes). Throws
