@@ -7,7 +7,8 @@
 #   2. raypc serve on the netCDF files: the first step served, the whole series preprocessed
 #      (bench/serve_netcdf.mjs);
 #   3. playback in the UI at 2 and 5 steps/s for two loops each (tests/browser/measure.mjs, the
-#      3D view at its own size in a 1920x1080 window): steps/s and the frames shown by level;
+#      3D view at its own size in a 1920x1080 window): steps/s and the frames shown by level; then
+#      three loops at each speed over the protocol at 1500x627 (bench/playback_loops.mjs), loop by loop;
 #   4. statistics and features of a new brush and after a step change (bench/analyses_series.mjs);
 # and ends with the per-step figures multiplied out to 251 steps (the SciVis 2021 contest series).
 #
@@ -80,6 +81,12 @@ if ! skipped playback; then
   echo "playback, 2 and 5 steps/s for $seconds s each (load $(load)):"
   node --experimental-websocket "$root/tests/browser/measure.mjs" "$raypc" "$dataset" --only-play \
     --play 2,5 --seconds "$seconds" --size view --viewport 1920x1080 2>&1 | sed 's/^/  /'
+  # Loop by loop over the protocol at 1500x627 (the goal's figures: from the second loop on).
+  for fps in 2 5; do
+    echo "  loops at $fps steps/s, 1500x627 (bench/playback_loops.mjs; load $(load)):"
+    node --experimental-websocket "$root/bench/playback_loops.mjs" "$raypc" "$dataset" --fps "$fps" --loops 3 2>&1 |
+      sed 's/^/    /'
+  done
   echo "  load at the end $(load)"
 fi
 

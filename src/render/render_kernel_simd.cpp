@@ -453,8 +453,11 @@ HWY_INLINE void Composite(DF d, const KernelParams& k, const LaneShifts& shifts,
 
 // One ray segment [t0, t1): the chunks of walkChunks, each as vectors of samples through the stages
 // above.
+// Flattened: walkChunks is compiled for the generic target and GCC does not inline this file's
+// AVX-512 chunk body into it, so without this every 16-sample chunk was a call (4-13 % of a level-0
+// pass; bench/ab_render.sh).
 template <bool kMultiRange>
-void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, float t0, float t1, float along,
+__attribute__((flatten)) void MarchSimd(const KernelParams& k, const LaneShifts& shifts, const Ray& ray, float t0, float t1, float along,
                RayAccum& acc, TileStats& stats)
 {
     const DF d;

@@ -77,34 +77,41 @@ size_t FrameCache::clear()
     return freed;
 }
 
-std::shared_ptr<const EncodedFrame> FrameCache::find(const std::string& key, int step)
+std::shared_ptr<const EncodedFrame> FrameCache::find(const std::string& key, int step, bool finishedOnly)
 {
     std::lock_guard lock(m_mutex);
     if (key != m_key)
         return nullptr;
     const auto it = m_frames.find(step);
-    if (it == m_frames.end())
+    if (it == m_frames.end() || (finishedOnly && !it->second->finished))
         return nullptr;
     ++m_hits;
     return it->second;
 }
 
-bool FrameCache::contains(const std::string& key, int step) const
+bool FrameCache::contains(const std::string& key, int step, bool finishedOnly) const
 {
     std::lock_guard lock(m_mutex);
-    return key == m_key && m_frames.contains(step);
+    const auto it = m_frames.find(step);
+    return key == m_key && it != m_frames.end() && (!finishedOnly || it->second->finished);
 }
 
 bool FrameCache::insert(const std::string& key, int step, std::shared_ptr<const EncodedFrame> frame)
 {
     const size_t bytes = frame->bytes();
     std::lock_guard lock(m_mutex);
-    if (key != m_key || m_frames.contains(step) || m_bytes + bytes > m_maxBytes)
+    const auto it = m_frames.find(step);
+    const bool replacesDraft = it != m_frames.end() && !it->second->finished && frame->finished;
+    const size_t freed = replacesDraft ? it->second->bytes() : 0;
+    if (key != m_key || (it != m_frames.end() && !replacesDraft) || m_bytes - freed + bytes > m_maxBytes)
         return false;
-    if (m_budget && !m_budget->takeKept(bytes))
+    // The frame memory: what the frame adds beyond the draft it replaces (or gives back, if smaller).
+    if (m_budget && bytes > freed && !m_budget->takeKept(bytes - freed))
         return false;  // the sessions' images and the other kept frames fill the frame memory
-    m_frames.emplace(step, std::move(frame));
-    m_bytes += bytes;
+    if (m_budget && freed > bytes)
+        m_budget->returnKept(freed - bytes);
+    m_bytes = m_bytes - freed + bytes;
+    m_frames[step] = std::move(frame);
     return true;
 }
 

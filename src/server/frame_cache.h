@@ -34,6 +34,9 @@ struct EncodedFrame {
     std::string jpeg;
     std::vector<float> depth;  // km, depthWidth x depthHeight
     int depthWidth = 0, depthHeight = 0;
+    // Every pass of its state (or converged before): a still frame. False for a draft, the first
+    // pass alone, rendered ahead while playing so that a loop has a level-0 frame of each step soon.
+    bool finished = true;
 
     size_t bytes() const;  // what it costs to keep
 };
@@ -52,10 +55,12 @@ public:
 
     // Makes `key` the cache's key; a different one from before drops every frame.
     void setKey(const std::string& key);
-    // The frame of `step` under `key`; nullptr when none (or `key` is not the current one).
-    std::shared_ptr<const EncodedFrame> find(const std::string& key, int step);
-    bool contains(const std::string& key, int step) const;
+    // The frame of `step` under `key`; nullptr when none (or `key` is not the current one), or when
+    // `finishedOnly` and the kept frame is a draft.
+    std::shared_ptr<const EncodedFrame> find(const std::string& key, int step, bool finishedOnly = true);
+    bool contains(const std::string& key, int step, bool finishedOnly = true) const;
     // Keeps the frame when `key` is the current key and it fits in the bound; returns whether it did.
+    // A finished frame replaces a draft of its step; nothing else replaces a kept frame.
     bool insert(const std::string& key, int step, std::shared_ptr<const EncodedFrame> frame);
     // Whether one more frame of about `bytes` would still fit (in the cache's bound and the budget).
     bool hasRoomFor(size_t bytes) const;

@@ -55,6 +55,15 @@ TEST(FrameCache, KeptFramesCountInTheSessionsFrameMemory)
         EXPECT_EQ(budget.keptBytes(), 0u);
         EXPECT_TRUE(cache.insert("b", 0, frameOf(1000)));
         EXPECT_EQ(budget.keptBytes(), frameBytes);
+
+        // A finished frame replacing a draft of its step counts its own bytes, not both.
+        auto draft = std::make_shared<EncodedFrame>(*frameOf(500));
+        draft->finished = false;
+        EXPECT_TRUE(cache.insert("b", 1, draft));
+        EXPECT_EQ(budget.keptBytes(), frameBytes + draft->bytes());
+        EXPECT_TRUE(cache.insert("b", 1, frameOf(1000)));
+        EXPECT_EQ(budget.keptBytes(), 2 * frameBytes);
+        EXPECT_EQ(cache.bytes(), 2 * frameBytes);
     }
     EXPECT_EQ(budget.keptBytes(), 0u) << "a cache's end did not give its frames' bytes back";
     EXPECT_EQ(budget.usedBytes(), image);

@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 
 namespace raypc::server {
 
@@ -276,7 +277,7 @@ void RenderSession::planAhead(const Request& request, const std::string& key)
 }
 
 std::shared_ptr<const EncodedFrame> RenderSession::renderFinished(StateRenderer& renderer, const Request& request,
-                                                                  const std::atomic<bool>& cancel)
+                                                                  const std::atomic<bool>& cancel, int maxPasses)
 {
     const state::RenderState& state = request.resolved.state;
     Job job{.request = request,
@@ -289,20 +290,25 @@ std::shared_ptr<const EncodedFrame> RenderSession::renderFinished(StateRenderer&
     ViewFrames frames = prepared.frames();
     PassStats stats;
     int pass = 0;
-    while (pass < job.passes) {
+    bool finished = false;
+    while (pass < std::min(job.passes, maxPasses)) {
         if (cancel)
             return nullptr;
         stats = prepared.renderPass(frames, &cancel);
         if (stats.cancelled)
             return nullptr;
         ++pass;
-        if (std::all_of(frames.begin(), frames.end(), [](const FrameBuffer& f) { return f.converged(); }))
+        finished = pass == job.passes ||
+                   std::all_of(frames.begin(), frames.end(), [](const FrameBuffer& f) { return f.converged(); });
+        if (finished)
             break;
     }
     const auto volume = prepared.views.front().renderer->volume();
     const analysis::SelectionStats s = analysis::selectedVolume(*volume, prepared.views.front().params.brushes);
     const nlohmann::json selection{{"fractionOfMantle", s.fractionOfMantle}, {"volumeKm3", s.volumeKm3}};
-    return makeFrame(renderer, job, frames, prepared, stats, pass, true, false, selection);
+    auto frame = makeFrame(renderer, job, frames, prepared, stats, pass, true, false, selection);
+    frame->finished = finished;
+    return frame;
 }
 
 void RenderSession::aheadLoop()
@@ -326,38 +332,57 @@ void RenderSession::aheadLoop()
         }
         m_aheadBusy = true;
         // The steps after the one shown, in playing order (wrapping around), that have no frame yet.
+        // While playing, first a draft of each (its first pass, at the still's level and size: one
+        // loop then shows every step at that level), then the finished frames; paused, the finished
+        // frames at once (a still asks for them; a draft would not answer it).
         const int shown = plan->request.resolved.state.step;
-        for (int k = 1; k <= steps; ++k) {
-            const int step = (shown + k) % steps;
-            if (m_aheadCancel || m_aheadStop)
-                break;
-            {
-                std::lock_guard lock(m_aheadMutex);
-                if (m_aheadChanged)
-                    break;  // a newer state: start again from its step
-            }
-            if (m_frameCache.contains(plan->key, step))
-                continue;
-            if (!m_frameCache.hasRoomFor(frameBytes))
-                break;
-            try {
-                Request request = plan->request;
-                request.id = 0;
-                request.mode = FrameMode::still;
-                request.resolved.state.step = step;
-                request.resolved = render::resolveState(std::move(request.resolved.state), *m_context.dataset);
-                std::shared_ptr<const EncodedFrame> frame;
-                arena.execute([&] { frame = renderFinished(m_aheadRenderer, request, m_aheadCancel); });
-                if (!frame)
+        const bool drafts = plan->request.mode == FrameMode::playback && plan->request.resolved.state.passes > 1;
+        bool stopped = false;
+        for (int round = drafts ? 0 : 1; round < 2 && !stopped; ++round) {
+            const bool draft = round == 0;
+            for (int k = 1; k <= steps; ++k) {
+                const int step = (shown + k) % steps;
+                if (m_aheadCancel || m_aheadStop)
+                    stopped = true;
+                {
+                    std::lock_guard lock(m_aheadMutex);
+                    if (m_aheadChanged)
+                        stopped = true;  // a newer state: start again from its step
+                }
+                if (stopped)
                     break;
-                frameBytes = frame->bytes();
-                if (m_frameCache.insert(plan->key, step, frame))
-                    spdlog::debug("{}: rendered ahead step {} ({} frames kept, {})", m_name, step,
-                                  m_frameCache.frames(), formatBytes(m_frameCache.bytes()));
-            } catch (const std::exception& e) {
-                // Logged, not sent: the client did not ask for this frame; the step is asked again in time.
-                spdlog::warn("{}: rendering ahead step {}: {}", m_name, step, e.what());
-                break;
+                if (m_frameCache.contains(plan->key, step, !draft))
+                    continue;
+                if (!m_frameCache.hasRoomFor(frameBytes)) {
+                    stopped = true;
+                    break;
+                }
+                try {
+                    Request request = plan->request;
+                    request.id = 0;
+                    request.mode = FrameMode::still;
+                    request.resolved.state.step = step;
+                    request.resolved = render::resolveState(std::move(request.resolved.state), *m_context.dataset);
+                    std::shared_ptr<const EncodedFrame> frame;
+                    arena.execute([&] {
+                        frame = renderFinished(m_aheadRenderer, request, m_aheadCancel,
+                                               draft ? 1 : std::numeric_limits<int>::max());
+                    });
+                    if (!frame) {
+                        stopped = true;
+                        break;
+                    }
+                    frameBytes = frame->bytes();
+                    if (m_frameCache.insert(plan->key, step, frame))
+                        spdlog::debug("{}: rendered ahead step {}{} ({} frames kept, {})", m_name, step,
+                                      frame->finished ? "" : " (draft)", m_frameCache.frames(),
+                                      formatBytes(m_frameCache.bytes()));
+                } catch (const std::exception& e) {
+                    // Logged, not sent: the client did not ask for this frame; the step is asked again in time.
+                    spdlog::warn("{}: rendering ahead step {}: {}", m_name, step, e.what());
+                    stopped = true;
+                    break;
+                }
             }
         }
         m_aheadBusy = false;
@@ -415,7 +440,8 @@ void RenderSession::render(const Request& request)
         m_renderAhead = true;
     if (m_renderAhead)
         planAhead(request, frameKey);
-    if (const auto kept = m_frameCache.find(frameKey, step)) {
+    // A step of playback is answered by a draft too; a still or interactive state only by a finished frame.
+    if (const auto kept = m_frameCache.find(frameKey, step, request.mode != FrameMode::playback)) {
         sendKept(*kept, request);
         m_lastStep = step;
         spdlog::info("{}: state {} step {} {}: the frame rendered ahead, after {:.1f} ms", m_name, request.id, step,
@@ -508,9 +534,14 @@ void RenderSession::render(const Request& request)
         const auto frame = sendFrame(job, frames, prepared, stats, pass, last, false,
                                      selectionKey == m_selectionKey ? m_selection : nlohmann::json());
         // A finished frame at still quality (the state's level, else 0; full size; every pass) is
-        // what rendering ahead would make: kept for the next time this step is asked.
-        if (finished && !job.interactive && prepared.divisor == 1 && prepared.level == state.level.value_or(0))
+        // what rendering ahead would make: kept for the next time this step is asked; a step of
+        // playback's one pass at that level and size is kept as a draft (what the ahead thread's
+        // first round makes).
+        if ((finished || onePass) && !job.interactive && prepared.divisor == 1 &&
+            prepared.level == state.level.value_or(0)) {
+            frame->finished = finished;
             m_frameCache.insert(frameKey, step, frame);
+        }
         if (pass == 1 && job.interactive) {
             const double overhead = (preparedMs + job.encodeMs) / 1000.0;
             m_context.frameOverheadSeconds.store(averagedMeasure(m_context.frameOverheadSeconds.load(), overhead));

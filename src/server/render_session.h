@@ -122,10 +122,10 @@ private:
     void loop();
     // The thread that renders ahead (the class comment): the steps after m_ahead's, not yet kept.
     void aheadLoop();
-    // Renders `request`'s state as a still frame (all its passes at its level, full size) with
-    // `renderer`; nullptr when cancelled by `cancel`.
+    // Renders `request`'s state as a still frame (its level, full size) with `renderer`, all its
+    // passes or at most `maxPasses` (a draft when that stops it early); nullptr when cancelled.
     std::shared_ptr<const EncodedFrame> renderFinished(render::StateRenderer& renderer, const Request& request,
-                                                       const std::atomic<bool>& cancel);
+                                                       const std::atomic<bool>& cancel, int maxPasses);
     // Tells the ahead thread what the session shows now: the state (its key) and its step.
     void planAhead(const Request& request, const std::string& key);
     // Sends a kept frame as the answer to `request`.
