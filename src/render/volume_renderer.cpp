@@ -8,7 +8,6 @@
 #include "render/shadow_volume.h"
 #include "render/skip_grid.h"
 
-#include <spdlog/spdlog.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/partitioner.h>
@@ -726,10 +725,7 @@ void VolumeRenderer::bindShadows(kernel::KernelParams& k)
     const int nodes = shadowNodesFor(im.dAngleRad, im.params.rOuterKm);
     if (!im.shadows || im.shadows->nodes() != nodes)
         im.shadows = std::make_unique<ShadowVolume>(nodes);
-    const ShadowBuildStats built = im.shadows->update(im.params, m_params.shading.shadowStrength, im.pathlines.get());
-    if (built.extinctionBuilt || built.lightBuilt || built.ambientBuilt)
-        spdlog::debug("shadows of {} nodes: extinction {:.1f} ms, tubes {:.1f} ms, light {:.1f} ms, ambient {:.1f} ms", nodes,
-                      built.extinctionMs, built.tubesMs, built.lightMs, built.ambientMs);
+    im.shadows->update(im.params, m_params.shading.shadowStrength, im.pathlines.get());
     im.shadows->bind(k);
 }
 
