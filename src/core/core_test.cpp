@@ -4,6 +4,7 @@
 #include "core/json_input.h"
 #include "core/lru_cache.h"
 #include "core/numbered_name.h"
+#include "core/spare_blocks.h"
 #include "core/spherical.h"
 #include "core/strings.h"
 #include "core/system_memory.h"
@@ -374,6 +375,53 @@ public:
 private:
     std::optional<std::string> m_old;
 };
+
+// A block taken is replaced by a spare of its size made in the background, a block given back is
+// kept as the spare of its size only when there is none, and the spares never exceed their bound.
+// (The pool is the process's: this binary's other tests take no blocks.)
+TEST(SpareBlocks, ASpareOfEachSizeTakenIsMadeWithinTheBound)
+{
+    const size_t small = size_t(8) << 20, big = kMaxSpareBytes - small / 2;
+    // Off (a CLI command): no spare is made.
+    void* fresh = takeBlock(small);
+    ASSERT_NE(fresh, nullptr);
+    EXPECT_EQ(waitForSpareBlocks(), 0u) << "a spare made without keepSpareBlocks(true)";
+    giveBackBlock(fresh, small);
+    EXPECT_EQ(waitForSpareBlocks(), 0u) << "a block given back kept without keepSpareBlocks(true)";
+
+    keepSpareBlocks(true);
+    void* a = takeBlock(small);
+    ASSERT_NE(a, nullptr);
+    std::fill_n(static_cast<char*>(a), small, char(1));
+    EXPECT_EQ(waitForSpareBlocks(), small) << "no spare made of a size taken";
+    giveBackBlock(a, small);  // its size has a spare: freed
+    EXPECT_EQ(waitForSpareBlocks(), small);
+
+    // The spare is handed out, and another made in its place.
+    SpareArray<float> b = makeSpareArray<float>(small / sizeof(float));
+    std::fill_n(b.get(), small / sizeof(float), 2.0f);
+    EXPECT_EQ(waitForSpareBlocks(), small);
+
+    // A size whose spare would take the spares over their bound gets none, taken or given back.
+    void* c = takeBlock(big);
+    ASSERT_NE(c, nullptr);
+    EXPECT_EQ(waitForSpareBlocks(), small) << "a spare over kMaxSpareBytes was kept";
+    giveBackBlock(c, big);
+    EXPECT_EQ(waitForSpareBlocks(), small);
+
+    // With no spare of its size, a block given back becomes it.
+    const size_t other = size_t(5) << 20;
+    void* d = takeBlock(other);
+    EXPECT_EQ(waitForSpareBlocks(), small + other);
+    void* e = takeBlock(other);  // the spare; another is being made
+    EXPECT_EQ(waitForSpareBlocks(), small + other);
+    giveBackBlock(d, other);
+    giveBackBlock(e, other);
+    b.reset();  // its size has a spare: freed
+    EXPECT_EQ(waitForSpareBlocks(), small + other);
+    keepSpareBlocks(false);
+    EXPECT_EQ(waitForSpareBlocks(), 0u) << "spares kept after keepSpareBlocks(false)";
+}
 
 TEST(HugePages, LargeArraysStartOnAHugePageAndAreAdvised)
 {

@@ -1,6 +1,7 @@
 #include "dataset/dataset.h"
 
 #include "core/atomic_file.h"
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/error_kinds.h"
 #include "core/json_input.h"
@@ -10,6 +11,7 @@
 
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -280,7 +282,7 @@ const float* StepVolume::compute(size_t var) const
     std::lock_guard lock(m_computeMutex);
     if (const float* p = m_values[var].load(std::memory_order_acquire))
         return p;  // another thread computed it while this one waited
-    auto out = makeHugePageArray<float>(n);
+    auto out = makeSpareArray<float>(n);
     std::vector<float>& bounds = m_computedBounds[var - m_storedCount];
     bounds.resize(2 * m_bricks.brickCount());
     // Isolated: while this thread waits inside a parallel loop it must not pick up another task that
@@ -359,13 +361,15 @@ const float* StepVolume::decode(size_t var) const
         m_values[var].store(values, std::memory_order_release);
         return values;
     }
-    auto values = makeHugePageArray<float>(n);
+    const auto start = std::chrono::steady_clock::now();
+    auto values = makeSpareArray<float>(n);
     // Isolated: while this thread waits inside the parallel loop it must not pick up another task
     // that asks this volume for values and blocks on the lock it holds.
     tbb::this_task_arena::isolate([&] {
         decodeUint16(m_grid, m_bricks, {static_cast<const uint16_t*>(m_valueFiles[var]), n},
                      {m_bounds[var], 2 * m_bricks.brickCount()}, {values.get(), n}, hasMissing(var));
     });
+    spdlog::debug("decoded {} ({} points) in {:.1f} ms", m_mapped[var].path().string(), n, millisecondsSince(start));
     const float* p = values.get();
     m_decoded[var] = std::move(values);
     m_decodedBytes.fetch_add(n * sizeof(float), std::memory_order_relaxed);
@@ -554,10 +558,13 @@ const float* StepVolume::brickBounds(size_t var, uint32_t brickSize) const
     if (bounds.empty()) {
         const grid::BrickLayout layout = grid::BrickLayout::forGrid(m_grid, brickSize);
         bounds.resize(2 * layout.brickCount());
+        const auto start = std::chrono::steady_clock::now();
         // Isolated: while this thread waits inside the parallel loop it must not pick up another
         // task that asks this volume for derived data and blocks on the lock it holds.
         tbb::this_task_arena::isolate(
             [&] { computeBrickBounds(m_grid, layout, {values(var), m_grid.cellCount()}, bounds); });
+        spdlog::debug("brick bounds of variable {} at brick size {} in {:.1f} ms (decoding included)", var, brickSize,
+                      millisecondsSince(start));
     }
     return bounds.data();
 }
@@ -567,10 +574,14 @@ const grid::NodeGradient& StepVolume::nodeGradient(size_t var) const
     RAYPC_CHECK(var < variableCount());
     std::lock_guard lock(m_derivedMutex);
     auto it = m_gradients.find(var);
-    if (it == m_gradients.end())
-        it = m_gradients
-                 .emplace(var, tbb::this_task_arena::isolate([&] { return raypc::grid::nodeGradient(m_grid, values(var)); }))
+    if (it == m_gradients.end()) {
+        const float* v = values(var);
+        const auto start = std::chrono::steady_clock::now();
+        it = m_gradients.emplace(var, tbb::this_task_arena::isolate([&] { return raypc::grid::nodeGradient(m_grid, v); }))
                  .first;  // isolated as above
+        spdlog::debug("shading gradient of variable {} ({} points) in {:.1f} ms", var, m_grid.cellCount(),
+                      millisecondsSince(start));
+    }
     return it->second;
 }
 

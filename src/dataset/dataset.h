@@ -12,6 +12,7 @@
 
 #include "core/huge_pages.h"
 #include "core/mapped_file.h"
+#include "core/spare_blocks.h"
 #include "grid/coordinates.h"
 #include "grid/grid.h"
 #include "grid/snapshot.h"
@@ -233,7 +234,7 @@ private:
     std::vector<ValueRange> m_ranges;       // per variable the step's range (open)
     std::vector<char> m_missing;            // per variable whether the step has missing values (open)
     mutable std::mutex m_decodeMutex;
-    mutable std::vector<HugePageArray<float>> m_decoded;  // on huge pages: written whole once, read often
+    mutable std::vector<SpareArray<float>> m_decoded;  // written whole once, read often (core/spare_blocks.h)
     mutable std::atomic<size_t> m_decodedBytes{0};
     mutable std::mutex m_derivedMutex;
     mutable std::map<std::pair<size_t, uint32_t>, std::vector<float>> m_derivedBounds;

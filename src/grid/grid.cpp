@@ -105,7 +105,8 @@ NodeGradient nodeGradient(const SphericalGrid& grid, const float* values)
     RAYPC_CHECK(nLat >= 2 && nR >= 2 && nLon >= 2);
     NodeGradient out;
     out.count = grid.cellCount();
-    out.values.reset(new float[3 * out.count]);  // not zeroed: the threads write (and first touch) it
+    // Not zeroed: the threads write it (a spare block is faulted in already, a fresh one on first touch).
+    out.values = makeSpareArray<float>(3 * out.count);
     // Neighbours i - 1 and i + 1 (clamped) and the inverse of the coordinate difference between them.
     struct Stencil {
         size_t lo, hi;

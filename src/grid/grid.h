@@ -12,6 +12,8 @@
 // Thread safety: immutable after construction.
 #pragma once
 
+#include "core/spare_blocks.h"
+
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -109,7 +111,7 @@ PaddedAxis padToGlobe(const std::vector<double>& ascendingDeg, bool latitude);
 // the ray caster's shading maps it to Cartesian with the local unit vectors.
 struct NodeGradient {
     size_t count = 0;                // grid.cellCount()
-    std::unique_ptr<float[]> values;  // 3 * count: per degree lat, then per km r, then per degree lon
+    SpareArray<float> values;  // 3 * count: per degree lat, then per km r, then per degree lon (core/spare_blocks.h)
     const float* perDegLat() const { return values.get(); }
     const float* perKmR() const { return values.get() + count; }
     const float* perDegLon() const { return values.get() + 2 * count; }

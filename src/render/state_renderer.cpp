@@ -218,8 +218,12 @@ StateRenderer::Prepared StateRenderer::prepare(const ResolvedState& resolved, co
     }
 
     for (size_t i = 0; i < p.views.size(); ++i) {
+        const auto start = std::chrono::steady_clock::now();
         p.views[i].renderer = &rendererFor(step, p.level, int(i));
+        const double loadedMs = millisecondsSince(start);
         p.views[i].renderer->setParams(p.views[i].params);  // restart class: camera, transfer function, brushes, size
+        spdlog::debug("step {} level {} view {}: volume {:.1f} ms, parameters {:.1f} ms", step, p.level, i, loadedMs,
+                      millisecondsSince(start) - loadedMs);
     }
     p.scene = pathlinesFor(state);  // before any pass reads it
     for (auto& entry : m_renderers) {

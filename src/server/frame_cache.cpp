@@ -1,5 +1,7 @@
 #include "server/frame_cache.h"
 
+#include <algorithm>
+
 namespace raypc::server {
 
 size_t EncodedFrame::bytes() const
@@ -15,7 +17,48 @@ std::string frameCacheKey(const nlohmann::json& document)
     return key.dump();
 }
 
-FrameCache::FrameCache(size_t maxBytes) : m_maxBytes(maxBytes) {}
+void FrameBudget::addCache(FrameCache* cache)
+{
+    std::lock_guard lock(m_cachesMutex);
+    m_caches.push_back(cache);
+}
+
+void FrameBudget::removeCache(FrameCache* cache)
+{
+    std::lock_guard lock(m_cachesMutex);
+    std::erase(m_caches, cache);
+}
+
+size_t FrameBudget::reclaimKeptFrames()
+{
+    std::lock_guard lock(m_cachesMutex);
+    size_t freed = 0;
+    for (FrameCache* cache : m_caches)
+        freed += cache->clear();
+    return freed;
+}
+
+FrameCache::FrameCache(size_t maxBytes, FrameBudget* budget) : m_maxBytes(maxBytes), m_budget(budget)
+{
+    if (m_budget)
+        m_budget->addCache(this);
+}
+
+FrameCache::~FrameCache()
+{
+    if (m_budget)
+        m_budget->removeCache(this);  // first: reclaimKeptFrames no longer reaches this cache
+    std::lock_guard lock(m_mutex);
+    dropLocked();
+}
+
+void FrameCache::dropLocked()
+{
+    if (m_budget)
+        m_budget->returnKept(m_bytes);
+    m_frames.clear();
+    m_bytes = 0;
+}
 
 void FrameCache::setKey(const std::string& key)
 {
@@ -23,8 +66,15 @@ void FrameCache::setKey(const std::string& key)
     if (key == m_key)
         return;
     m_key = key;
-    m_frames.clear();
-    m_bytes = 0;
+    dropLocked();
+}
+
+size_t FrameCache::clear()
+{
+    std::lock_guard lock(m_mutex);
+    const size_t freed = m_bytes;
+    dropLocked();
+    return freed;
 }
 
 std::shared_ptr<const EncodedFrame> FrameCache::find(const std::string& key, int step, bool finishedOnly)
@@ -55,6 +105,11 @@ bool FrameCache::insert(const std::string& key, int step, std::shared_ptr<const 
     const size_t freed = replacesDraft ? it->second->bytes() : 0;
     if (key != m_key || (it != m_frames.end() && !replacesDraft) || m_bytes - freed + bytes > m_maxBytes)
         return false;
+    // The frame memory: what the frame adds beyond the draft it replaces (or gives back, if smaller).
+    if (m_budget && bytes > freed && !m_budget->takeKept(bytes - freed))
+        return false;  // the sessions' images and the other kept frames fill the frame memory
+    if (m_budget && freed > bytes)
+        m_budget->returnKept(freed - bytes);
     m_bytes = m_bytes - freed + bytes;
     m_frames[step] = std::move(frame);
     return true;
@@ -63,7 +118,7 @@ bool FrameCache::insert(const std::string& key, int step, std::shared_ptr<const 
 bool FrameCache::hasRoomFor(size_t bytes) const
 {
     std::lock_guard lock(m_mutex);
-    return m_bytes + bytes <= m_maxBytes;
+    return m_bytes + bytes <= m_maxBytes && (!m_budget || m_budget->fitsKept(bytes));
 }
 
 size_t FrameCache::bytes() const

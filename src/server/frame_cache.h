@@ -7,8 +7,14 @@
 // loops over the steps, so the frames kept are as good as any (LRU would evict each frame just
 // before it is shown again).
 //
+// The kept frames count in the server's frame memory (`--session-memory`, server/frame_budget.h)
+// when the cache is given the budget: a frame that does not fit there is refused as well, and the
+// budget may drop every kept frame to make room for a session's image.
+//
 // Thread safety: every member function may be called from any thread.
 #pragma once
+
+#include "server/frame_budget.h"
 
 #include <nlohmann/json.hpp>
 
@@ -41,7 +47,11 @@ std::string frameCacheKey(const nlohmann::json& document);
 
 class FrameCache {
 public:
-    explicit FrameCache(size_t maxBytes);
+    // `budget` (may be null: no shared bound) must outlive the cache; the cache registers with it.
+    explicit FrameCache(size_t maxBytes, FrameBudget* budget = nullptr);
+    ~FrameCache();
+    FrameCache(const FrameCache&) = delete;
+    FrameCache& operator=(const FrameCache&) = delete;
 
     // Makes `key` the cache's key; a different one from before drops every frame.
     void setKey(const std::string& key);
@@ -52,8 +62,10 @@ public:
     // Keeps the frame when `key` is the current key and it fits in the bound; returns whether it did.
     // A finished frame replaces a draft of its step; nothing else replaces a kept frame.
     bool insert(const std::string& key, int step, std::shared_ptr<const EncodedFrame> frame);
-    // Whether one more frame of about `bytes` would still fit.
+    // Whether one more frame of about `bytes` would still fit (in the cache's bound and the budget).
     bool hasRoomFor(size_t bytes) const;
+    // Drops every frame (the key stays); returns the bytes freed. FrameBudget::reclaimKeptFrames.
+    size_t clear();
 
     size_t bytes() const;
     size_t frames() const;
@@ -61,7 +73,10 @@ public:
     size_t maxBytes() const { return m_maxBytes; }
 
 private:
+    void dropLocked();
+
     size_t m_maxBytes;
+    FrameBudget* m_budget;
     mutable std::mutex m_mutex;
     std::string m_key;
     std::map<int, std::shared_ptr<const EncodedFrame>> m_frames;  // by step

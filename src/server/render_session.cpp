@@ -52,7 +52,7 @@ RenderSession::RenderSession(RenderContext& context, SessionSink sink, std::stri
       m_name(std::move(name)),
       m_renderer(context.dataset, cacheSources(context.cache, context.pathlines, context.featureLabels)),
       m_rankSession(context.ranks ? context.ranks->openSession() : 0),
-      m_frameCache(context.frameCacheBytes),
+      m_frameCache(context.frameCacheBytes, context.frameBudget),
       m_aheadRenderer(context.dataset, cacheSources(context.cache, context.pathlines, context.featureLabels)),
       m_aheadThread([this] { aheadLoop(); }),
       m_thread([this] { loop(); })

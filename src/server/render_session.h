@@ -66,6 +66,8 @@ struct RenderContext {
     std::shared_ptr<const dataset::Dataset> pairFirst;
     // Each session's bound of frames rendered ahead (FrameCache; ServerLimits::frameCacheBytes).
     size_t frameCacheBytes = size_t(256) << 20;
+    // The server's frame memory (`--session-memory`), which the kept frames count in; null: not counted.
+    FrameBudget* frameBudget = nullptr;
 };
 
 // Throws raypc::Error when a resolved state's image is over what a session renders (4096 x 4096

@@ -1,5 +1,7 @@
 #include "server/server.h"
 
+#include "core/spare_blocks.h"
+
 #include "core/error.h"
 #include "server/access.h"
 #include "server/http_session.h"
@@ -119,6 +121,9 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     ServerContext& s = m_impl->state;
     // A pair shares the cache bound: each dataset gets half (docs/compare.md, "Side by side").
     const size_t cacheBytes = s.options.second ? s.options.cacheBytes / 2 : s.options.cacheBytes;
+    // A step change waits for a new step's decoded variable and shading gradient: their memory is
+    // made ready in the background (core/spare_blocks.h).
+    keepSpareBlocks(true);
     DatasetCaches caches = openDatasetCaches(s.options.dataset, cacheBytes, s.options.cacheEntries);
     s.dataset = std::move(caches.dataset);
     s.cache = std::move(caches.volumes);
@@ -129,6 +134,7 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     s.render.pathlines = s.pathlines.get();
     s.render.ranks = s.options.ranks;
     s.render.frameCacheBytes = s.options.limits.frameCacheBytes;
+    s.render.frameBudget = &s.frameBudget;
     s.api.dataset = s.dataset;
     s.api.cache = s.cache.get();
     s.api.pathlines = s.pathlines.get();
@@ -155,6 +161,7 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
         second->render.pathlines = second->pathlines.get();
         second->render.ranks = s.options.ranks;
         second->render.frameCacheBytes = s.options.limits.frameCacheBytes;
+        second->render.frameBudget = &s.frameBudget;
         second->render.pairFirst = s.dataset;
         ApiContext& api = second->api;
         api = s.api;

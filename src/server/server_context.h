@@ -81,36 +81,6 @@ private:
     std::vector<std::weak_ptr<std::atomic<bool>>> m_flags;
 };
 
-// The frame memory reserved by the sessions (ServerLimits::sessionFrameBytes).
-class FrameBudget {
-public:
-    explicit FrameBudget(size_t limitBytes) : m_limit(limitBytes) {}
-    // Replaces a session's reservation `held` by `wanted` bytes if the total stays within the limit;
-    // otherwise returns false and leaves everything as it was. `othersBytes` receives what the other
-    // sessions hold (for the error message).
-    bool replace(size_t& held, size_t wanted, size_t& othersBytes)
-    {
-        std::lock_guard lock(m_mutex);
-        othersBytes = m_used - held;
-        if (othersBytes + wanted > m_limit)
-            return false;
-        m_used = othersBytes + wanted;
-        held = wanted;
-        return true;
-    }
-    void release(size_t& held)
-    {
-        std::lock_guard lock(m_mutex);
-        m_used -= held;
-        held = 0;
-    }
-    size_t limit() const { return m_limit; }
-
-private:
-    std::mutex m_mutex;
-    size_t m_limit, m_used = 0;
-};
-
 // The second dataset of a pair (ServerOptions::second): what the first has in ServerContext, its own.
 struct SecondDataset {
     std::shared_ptr<const dataset::Dataset> dataset;

@@ -332,7 +332,10 @@ private:
             const size_t wanted =
                 size_t(render::stereoLayout(s.stereo.mode, s.width, s.height).renderedPixels()) * kFrameBytesPerPixel;
             size_t others = 0;
-            if (!m_server.frameBudget.replace(m_frameBytes, wanted, others))
+            // The kept frames (server/frame_budget.h) make room for an image: they are only copies.
+            if (!m_server.frameBudget.replace(m_frameBytes, wanted, others) &&
+                (m_server.frameBudget.reclaimKeptFrames() == 0 ||
+                 !m_server.frameBudget.replace(m_frameBytes, wanted, others)))
                 fail("image: {}x{}{} needs {} MiB of frame memory, over the limit of the sessions' frame memory: "
                      "{} MiB, of which other sessions hold {} MiB (--session-memory); use a smaller image",
                      s.width, s.height, s.stereo.enabled() ? " (stereo: two eyes)" : "", (wanted + kMiB - 1) / kMiB,
