@@ -14,7 +14,7 @@
 #
 #   bench/series.sh [BUILD_DIR] [WORK_DIR] [--steps N] [--grid LATxRxLON] [--skip STAGE,...]
 # Defaults: build/, ${TMPDIR:-/tmp}/raypc-bench-series, 24 steps, 180x201x360 (the contest's grid:
-# about 3.3 GB of netCDF and 8 GB of dataset at 24 steps). STAGE is preprocess, serve, playback or
+# about 10 GB of netCDF and 8 GB of dataset at 24 steps). STAGE is preprocess, serve, playback or
 # analyses; a stage skipped reuses what an earlier run left in WORK_DIR. The netCDF files are kept
 # between runs (remove WORK_DIR to start again).
 set -euo pipefail
