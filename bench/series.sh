@@ -9,6 +9,7 @@
 #   3. playback in the UI at 2 and 5 steps/s for two loops each (tests/browser/measure.mjs, the
 #      3D view at its own size in a 1920x1080 window): steps/s and the frames shown by level; then
 #      three loops at each speed over the protocol at 1500x627 (bench/playback_loops.mjs), loop by loop;
+#      and step changes to a converged level-0 frame (bench/step_change.mjs);
 #   4. statistics and features of a new brush and after a step change (bench/analyses_series.mjs);
 # and ends with the per-step figures multiplied out to 251 steps (the SciVis 2021 contest series).
 #
@@ -87,6 +88,8 @@ if ! skipped playback; then
     node --experimental-websocket "$root/bench/playback_loops.mjs" "$raypc" "$dataset" --fps "$fps" --loops 3 2>&1 |
       sed 's/^/    /'
   done
+  echo "  a step change to a converged level-0 frame, 1500x627 (bench/step_change.mjs, no frames rendered ahead; load $(load)):"
+  node --experimental-websocket "$root/bench/step_change.mjs" "$raypc" "$dataset" -- --frame-cache 0 2>&1 | sed 's/^/    /'
   echo "  load at the end $(load)"
 fi
 
