@@ -510,12 +510,13 @@ ReadStep readStep(const RunPlan& plan, const StepSource& source, int s)
     return step;
 }
 
-// Reads the steps one ahead, on a thread of its own, while the caller writes the one before:
-// reading a netCDF step is one thread's work (the library decodes serially), and writing a step
-// keeps the other cores busy. Holds at most one step read and not yet taken. take(i) must be
-// called for i = 0, 1, … in order; a read's failure is thrown by the take() of its step, after
-// every step before it was taken, as a serial run would. The destructor waits for a read under
-// way (a run that fails or is cancelled leaves no thread behind).
+// Reads the steps one ahead, on a thread of its own, while the caller works on the one before:
+// reading a netCDF step is one thread's work (the library decodes serially), and writing a step or
+// tracing its pathlines keeps the other cores busy. Holds at most one step read and not yet taken.
+// take(i) must be called for i = 0, 1, … in order, and readNext() after each take() to start
+// reading step i + 1 (when the caller has room for it in memory); a read's failure is thrown by the
+// take() of its step, after every step before it was taken, as a serial run would. The destructor
+// waits for a read under way (a run that fails or is cancelled leaves no thread behind).
 class StepsReadAhead {
 public:
     StepsReadAhead(const RunPlan& plan, const StepSource& source, std::vector<int> order, const PreprocessOptions& options)
@@ -528,10 +529,13 @@ public:
     {
         RAYPC_CHECK_EQ(i, m_next);
         ++m_next;
+        const auto start = std::chrono::steady_clock::now();
         ReadStep step = m_pending.get();
-        start(i + 1);
+        spdlog::debug("{}: waited {:.2f} s for its reading", m_source.label(size_t(step.index)), secondsSince(start));
         return step;
     }
+
+    void readNext() { start(m_next); }
 
 private:
     void start(size_t i)
@@ -779,8 +783,15 @@ PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const P
                 phases::throwIfCancelled(options);
                 const int s = todo[size_t(item)];
                 ReadStep read = ahead ? ahead->take(size_t(item)) : readStep(plan, source, s);
+                // The next step is read while this one's pathlines are traced, once its arrays are
+                // written and freed (a step read while another is written would add a step's
+                // arrays to the peak: 0.5 GB at full resolution); without pathlines, at once.
+                if (ahead && !pathlines)
+                    ahead->readNext();
                 const json& stepJson = written[std::to_string(s)] =
                     writeStep(outDir, plan, source, std::move(read), cells, options);
+                if (ahead && pathlines)
+                    ahead->readNext();
                 if (out)
                     out->keep();
                 ++summary.stepsWritten;
