@@ -772,7 +772,7 @@ PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const P
     json written = json::object();  // this rank's steps: index -> step manifest
     try {
         feedPathlines();
-        // One process reads the next step while it writes this one; under mpirun each rank takes
+        // One process reads the next step while it works on this one; under mpirun each rank takes
         // whichever step is next when it is free (mpi::forEachDynamic), so it cannot read ahead.
         std::optional<StepsReadAhead> ahead;
         if (!mpi::distributed() && options.readAhead)
