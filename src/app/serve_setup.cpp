@@ -170,8 +170,10 @@ void serveOnRanks(server::ServerOptions options, const std::function<void(const 
         fail("{}", broken);
 }
 
-// The background thread's share of the machine: one thread (a task arena of one), at a lower
-// priority than the renderer's (nice 10 for this thread alone, Linux's per-thread priority).
+// The background thread's share of the machine: every core, in a task arena of low priority (oneTBB
+// gives its threads to the renderer's arena first whenever that has work), the thread itself (and the
+// thread it starts to read ahead) at a lower priority than the renderer's (nice 10, Linux's
+// per-thread priority).
 void yieldToRendering()
 {
     ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
@@ -253,7 +255,9 @@ void serveSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions
             loggedTenth = tenth;
         };
         try {
-            tbb::task_arena(1).execute([&] { prepareSeries(inputs, o); });
+            tbb::task_arena(tbb::task_arena::automatic, 1, tbb::task_arena::priority::low).execute([&] {
+                prepareSeries(inputs, o);
+            });
         } catch (const std::exception& e) {
             if (!cancel) {
                 spdlog::error("background preprocessing stopped: {}; serving step 0 only", e.what());

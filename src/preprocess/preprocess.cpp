@@ -26,6 +26,7 @@
 #include <exception>
 #include <fstream>
 #include <functional>
+#include <future>
 #include <map>
 #include <memory>
 #include <set>
@@ -483,25 +484,91 @@ void addComputedStats(json& stepJson, const RunPlan& plan, const std::vector<std
         stepJson["computed_stats"][plan.computed[c].name] = stats[c];
 }
 
-// Phase 5, for one step: read, derive, check, statistics and sample values at full resolution,
-// then level by level values and brick bounds of every variable, written into a temporary
-// directory renamed when whole (removed if anything fails). Returns the step's manifest.
-json writeStep(const fs::path& outDir, const RunPlan& plan, const StepSource& source, int s,
+// A step read, derived and checked, ready to be written (writeStep).
+struct ReadStep {
+    int index = 0;
+    json fingerprint;
+    grid::Snapshot snap;
+};
+
+// Phase 5, reading one step: the input's values, the stored derived variables, checked.
+ReadStep readStep(const RunPlan& plan, const StepSource& source, int s)
+{
+    const std::string input = source.path(size_t(s));
+    const auto start = std::chrono::steady_clock::now();
+    ReadStep step;
+    step.index = s;
+    step.fingerprint = source.fingerprint(size_t(s));  // before reading: a change while reading is seen next time
+    step.snap = source.read(size_t(s));
+    spdlog::debug("{}: read in {:.2f} s", source.label(size_t(s)), secondsSince(start));
+    checkSameGrid(input, step.snap.grid, plan.header.grid, source.label(0));
+    addStoredDerivedVariables(step.snap);
+    RAYPC_CHECK_EQ(step.snap.fields.size(), plan.specs.size());
+    // The reader refused non-finite inputs; a finite input can still derive an infinity.
+    for (const auto& field : step.snap.fields)
+        grid::checkFinite(step.snap, field, input);
+    return step;
+}
+
+// Reads the steps one ahead, on a thread of its own, while the caller works on the one before:
+// reading a netCDF step is one thread's work (the library decodes serially), and writing a step or
+// tracing its pathlines keeps the other cores busy. Holds at most one step read and not yet taken.
+// take(i) must be called for i = 0, 1, … in order, and readNext() after each take() to start
+// reading step i + 1 (when the caller has room for it in memory); a read's failure is thrown by the
+// take() of its step, after every step before it was taken, as a serial run would. The destructor
+// waits for a read under way (a run that fails or is cancelled leaves no thread behind).
+class StepsReadAhead {
+public:
+    StepsReadAhead(const RunPlan& plan, const StepSource& source, std::vector<int> order, const PreprocessOptions& options)
+        : m_plan(plan), m_source(source), m_order(std::move(order)), m_options(options)
+    {
+        start(0);
+    }
+
+    ReadStep take(size_t i)
+    {
+        RAYPC_CHECK_EQ(i, m_next);
+        ++m_next;
+        const auto start = std::chrono::steady_clock::now();
+        ReadStep step = m_pending.get();
+        spdlog::debug("{}: waited {:.2f} s for its reading", m_source.label(size_t(step.index)), secondsSince(start));
+        return step;
+    }
+
+    void readNext() { start(m_next); }
+
+private:
+    void start(size_t i)
+    {
+        if (i >= m_order.size())
+            return;
+        m_pending = std::async(std::launch::async, [this, s = m_order[i]] {
+            phases::throwIfCancelled(m_options);
+            return readStep(m_plan, m_source, s);
+        });
+    }
+
+    const RunPlan& m_plan;
+    const StepSource& m_source;
+    std::vector<int> m_order;
+    const PreprocessOptions& m_options;
+    size_t m_next = 0;
+    std::future<ReadStep> m_pending;  // the next step's read; its destructor waits for it
+};
+
+// Phase 5, writing one step: statistics and sample values at full resolution, then level by level
+// values and brick bounds of every variable, written into a temporary directory renamed when whole
+// (removed if anything fails). Returns the step's manifest.
+json writeStep(const fs::path& outDir, const RunPlan& plan, const StepSource& source, ReadStep&& read,
                std::span<const uint32_t> cells, const PreprocessOptions& options)
 {
-    const std::string input = source.path(size_t(s)), label = source.label(size_t(s));
+    const int s = read.index;
+    const std::string label = source.label(size_t(s));
     const auto& specs = plan.specs;
     const auto stepStart = std::chrono::steady_clock::now();
     auto elapsed = [&] { return secondsSince(stepStart); };
-    const json fingerprint = source.fingerprint(size_t(s));  // before reading: a change while reading is seen next time
-    grid::Snapshot snap = source.read(size_t(s));
-    spdlog::debug("{}: read in {:.2f} s", label, elapsed());
-    checkSameGrid(input, snap.grid, plan.header.grid, source.label(0));
-    addStoredDerivedVariables(snap);
-    RAYPC_CHECK_EQ(snap.fields.size(), specs.size());
-    // The reader refused non-finite inputs; a finite input can still derive an infinity.
-    for (const auto& field : snap.fields)
-        grid::checkFinite(snap, field, input);
+    const json fingerprint = std::move(read.fingerprint);
+    grid::Snapshot snap = std::move(read.snap);
 
     const fs::path finalDir = dataset::format::stepDir(outDir, s);
     const fs::path tmpDir = temporarySibling(finalDir);
@@ -705,12 +772,26 @@ PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const P
     json written = json::object();  // this rank's steps: index -> step manifest
     try {
         feedPathlines();
+        // One process reads the next step while it works on this one; under mpirun each rank takes
+        // whichever step is next when it is free (mpi::forEachDynamic), so it cannot read ahead.
+        std::optional<StepsReadAhead> ahead;
+        if (!mpi::distributed() && options.readAhead)
+            ahead.emplace(plan, source, todo, options);
         mpi::forEachDynamic(
             int64_t(todo.size()),
             [&](int64_t item) {
                 phases::throwIfCancelled(options);
                 const int s = todo[size_t(item)];
-                const json& stepJson = written[std::to_string(s)] = writeStep(outDir, plan, source, s, cells, options);
+                ReadStep read = ahead ? ahead->take(size_t(item)) : readStep(plan, source, s);
+                // The next step is read while this one's pathlines are traced, once its arrays are
+                // written and freed (a step read while another is written would add a step's
+                // arrays to the peak: 0.5 GB at full resolution); without pathlines, at once.
+                if (ahead && !pathlines)
+                    ahead->readNext();
+                const json& stepJson = written[std::to_string(s)] =
+                    writeStep(outDir, plan, source, std::move(read), cells, options);
+                if (ahead && pathlines)
+                    ahead->readNext();
                 if (out)
                     out->keep();
                 ++summary.stepsWritten;

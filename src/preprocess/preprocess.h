@@ -59,6 +59,10 @@ struct PreprocessOptions {
     dataset::ValueEncoding encoding = dataset::ValueEncoding::Uint16;
     bool quiet = false;          // no progress output
     PathlineOptions pathlines;
+    // One process reads step k + 1 (on a thread of its own) while it traces step k's pathlines
+    // (without pathlines: while it writes step k), holding one step more in memory; false: one step
+    // at a time, as each rank does under mpirun. The dataset's bytes are the same either way.
+    bool readAhead = true;
     // For a run in the background (`raypc serve FILES`, app/series_inputs.h), one process only:
     // `onProgress` is called after each step or pathline set this run finishes; `cancel`, once set,
     // stops the run before its next step or pathline set with raypc::Error "cancelled" (what was

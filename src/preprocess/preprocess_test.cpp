@@ -19,6 +19,7 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <random>
 
@@ -540,6 +541,69 @@ TEST(Preprocess, ThePathlineWindowDoesNotGrowWithTheSteps)
     EXPECT_LE(many.pathlineWindowPeakBytes, few.pathlineWindowPeakBytes + 3 * array)
         << few.pathlineWindowPeakBytes / array << " arrays for 5 steps, " << many.pathlineWindowPeakBytes / array
         << " for 16";
+}
+
+// Every regular file under `dir` (the write lock aside) and its bytes, by path relative to `dir`.
+std::map<std::string, std::string> filesUnder(const std::filesystem::path& dir)
+{
+    std::map<std::string, std::string> files;
+    for (const auto& entry : std::filesystem::recursive_directory_iterator(dir))
+        if (entry.is_regular_file() && entry.path().filename() != ".lock")
+            files[std::filesystem::relative(entry.path(), dir).string()] = readFile(entry.path());
+    return files;
+}
+
+// One process reads step k + 1 on another thread while it writes step k (and traces its
+// pathlines): the dataset must be byte for byte that of one step at a time, with and without
+// pathlines; a step whose input fails to read stops the run after the steps before it are
+// finished, with no temporary directory left and the failing step not begun.
+TEST(Preprocess, ReadingAheadWritesTheBytesOfOneStepAtATime)
+{
+    TempDir dir("readahead");
+    const auto inputs = synthSeries(dir / "in", 6);
+    for (const bool pathlines : {true, false}) {
+        PreprocessOptions o = quiet();
+        o.pathlines.enabled = pathlines;
+        o.pathlines.steps = 3;
+        o.readAhead = false;
+        const std::string tag = pathlines ? "lines" : "nolines";
+        preprocess(inputs, dir / ("serial-" + tag), o);
+        o.readAhead = true;
+        const auto summary = preprocess(inputs, dir / ("ahead-" + tag), o);
+        EXPECT_EQ(summary.stepsWritten, 6);
+        EXPECT_EQ(summary.pathlineSetsWritten, pathlines ? 6 : 0);
+        const auto serial = filesUnder(dir / ("serial-" + tag)), ahead = filesUnder(dir / ("ahead-" + tag));
+        EXPECT_GT(serial.size(), 6u * 2 * dataset::kLevelCount);
+        ASSERT_EQ(serial.size(), ahead.size()) << tag;
+        for (const auto& [path, bytes] : serial) {
+            ASSERT_TRUE(ahead.contains(path)) << tag << ": " << path;
+            EXPECT_TRUE(ahead.at(path) == bytes) << tag << ": " << path << " differs";
+        }
+    }
+
+    // Step 3's first variable is missing everywhere, which shows only when its values are read:
+    // ahead of the run, while step 2 is being written.
+    grid::Snapshot broken = io::readSnapshot(inputs[3]);
+    std::fill(broken.fields[0].values.begin(), broken.fields[0].values.end(), std::nanf(""));
+    io::writeContestFile(inputs[3], broken);
+    std::vector<std::string> events;
+    PreprocessOptions o = quiet();
+    o.onProgress = [&](const PreprocessProgress& p) { events.push_back(fmt::format("{} {}/{}", p.phase, p.done, p.total)); };
+    try {
+        preprocess(inputs, dir / "failed", o);
+        FAIL() << "a step missing everywhere passed";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(inputs[3].filename().string()), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("3 finished steps stay"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(events, (std::vector<std::string>{"steps 1/6", "steps 2/6", "steps 3/6"}));
+    std::vector<std::string> stepDirs;
+    for (const auto& entry : std::filesystem::directory_iterator(dir / "failed" / "steps"))
+        stepDirs.push_back(entry.path().filename().string());
+    std::sort(stepDirs.begin(), stepDirs.end());
+    EXPECT_EQ(stepDirs, (std::vector<std::string>{"0000", "0001", "0002"}));
+    for (int s = 0; s < 3; ++s)
+        EXPECT_TRUE(std::filesystem::exists(dataset::format::stepDir(dir / "failed", s) / dataset::format::kStepManifest));
 }
 
 }  // namespace
