@@ -246,17 +246,21 @@ std::vector<FeatureLink> linkFeatures(const dataset::StepVolume& earlier, const 
         if (v >= earlier.variableCount())
             fail("features: velocity variable index {} out of range 0..{}", v, earlier.variableCount() - 1);
     const grid::GridSampler sampler(g);
-    const float* vx = earlier.values(velocity.x);
-    const float* vy = earlier.values(velocity.y);
-    const float* vz = earlier.values(velocity.z);
+    // Read at the points the features' displacements sample alone: no component decoded whole.
+    const dataset::StepVolume::PointValues vx = earlier.pointValues(velocity.x), vy = earlier.pointValues(velocity.y),
+                                           vz = earlier.pointValues(velocity.z);
+    auto at = [&](const dataset::StepVolume::PointValues& v) {
+        return [&g, p = &v](size_t iLat, size_t iR, size_t iLon) { return p->at(g.index(iLat, iR, iLon), iLat, iR, iLon); };
+    };
     const double kmPerMps = intervalMyr * kSecondsPerMyr * 1e-3;  // displacement (km) of 1 m/s over the interval
     // The velocity (km over the interval) at a Cartesian point, or nullopt outside the shell.
     auto displacement = [&](const Vec3d& p) -> std::optional<Vec3d> {
         const SphericalPoint s = cartesianToSpherical(p);
-        const auto at = sampler.locate(s.latDeg, s.lonDeg, s.rKm);
-        if (!at)
+        const auto where = sampler.locate(s.latDeg, s.lonDeg, s.rKm);
+        if (!where)
             return std::nullopt;
-        return Vec3d{sampler.sample(vx, *at), sampler.sample(vy, *at), sampler.sample(vz, *at)} * kmPerMps;
+        return Vec3d{sampler.sample(at(vx), *where), sampler.sample(at(vy), *where), sampler.sample(at(vz), *where)} *
+               kmPerMps;
     };
     const auto w = g.volumeFactors();
     std::map<std::pair<int, int>, double> overlap;

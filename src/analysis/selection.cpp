@@ -220,10 +220,24 @@ HugePageVector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::s
     for (const RangeFilter& f : filters)
         if (f.coordinate)
             axes.push_back({&f, std::nullopt, nullptr});
+    // A shell anomaly not computed yet: bounds from its base's and the shells' means
+    // (shellAnomalyBrickBounds), when the means need no decoding of the base.
+    std::vector<std::vector<float>> anomalyBounds;
+    anomalyBounds.reserve(filters.size());  // pointers into it stay valid
     for (const RangeFilter& f : filters)
         if (!f.coordinate) {
             const size_t var = size_t(f.variable);
-            axes.push_back({&f, volume.pointValues(var), volume.computedFrom(var) ? nullptr : volume.brickBounds(var)});
+            const dataset::ShellAnomalyOf* of = volume.computedFrom(var);
+            const float* bounds = nullptr;
+            if (!of || volume.valuesReady(var)) {
+                bounds = volume.brickBounds(var);
+            } else if (volume.shellMeansReady(of->base)) {
+                std::vector<float>& b = anomalyBounds.emplace_back(2 * bricks.brickCount());
+                dataset::shellAnomalyBrickBounds(g, bricks, {volume.brickBounds(of->base), b.size()},
+                                                 volume.shellMeansOf(of->base), of->kind, b);
+                bounds = b.data();
+            }
+            axes.push_back({&f, volume.pointValues(var), bounds});
         }
     const auto mayHold = [&](size_t brick) {
         for (const Axis& a : axes) {

@@ -74,6 +74,11 @@ struct StepInfo {
     // Per variable, the level-0 shell means (grid nR of them, NaN for a shell without a value) of a
     // variable a computed one is made from; empty for the others.
     std::vector<std::vector<double>> shellMeans;
+    // Per level, per variable the shell means (the level's nR, NaN for a shell without a value) of a
+    // variable a computed one is made from, as StepVolume::shellMeansOf gives them from the level's
+    // stored values (for u16 the decoded ones: the same bits); empty for the others, and for every
+    // variable in datasets written before they were kept (the volume then computes them).
+    std::vector<std::vector<std::vector<double>>> levelShellMeans;
     // How the step was made from a mesh (Snapshot::origin: format, cells, grid points inside a cell,
     // snapped, missing); null for a step read from a netCDF file.
     nlohmann::json origin;
@@ -103,13 +108,16 @@ public:
     // mapped). `ranges`: per variable the step's exact range (the manifest's statistics), or empty
     // for any finite value. `missing`: per stored variable whether the step has missing values (NaN;
     // VariableStats::missingPoints > 0), or empty for none. `computed`: the variables after the stored
-    // ones, each computed from a stored one (its index < fileStems.size()). Throws raypc::Error naming
+    // ones, each computed from a stored one (its index < fileStems.size()). `shellMeans`: per stored
+    // variable its shell means on this level as shellMeansOf would compute them (StepInfo::levelShellMeans),
+    // empty where not known, or empty for none known. Throws raypc::Error naming
     // the file when one is missing, has the wrong size, or holds brick bounds that are not finite with
     // min <= max within the range (a variable with missing values: or (+inf, -inf)).
     static std::shared_ptr<StepVolume> open(const std::filesystem::path& levelDir, const LevelInfo& level,
                                             const std::vector<std::string>& fileStems, ValueEncoding encoding,
                                             std::span<const ValueRange> ranges = {}, std::span<const char> missing = {},
-                                            std::span<const ShellAnomalyOf> computed = {});
+                                            std::span<const ShellAnomalyOf> computed = {},
+                                            std::span<const std::vector<double>> shellMeans = {});
 
     // A volume of `base`'s variables and one more, the last: `values` (grid().cellCount() of them,
     // canonical order; brick bounds computed here). The base's variables are read through it as the
@@ -149,31 +157,31 @@ public:
     void valuesInBox(size_t var, const std::array<size_t, 3>& begin, const std::array<size_t, 3>& end, float* out) const;
     // One variable's values read point by point, without decoding or computing the whole variable:
     // the decoded array when there is one, otherwise a u16 variable's points decoded one by one
-    // (decodeUint16Point) and a shell anomaly's from its base's values and shell means (shellMeansOf:
-    // no array of the anomaly, no brick bounds of it).
+    // (Uint16PointDecoder, its tables built once per volume) and a shell anomaly's from its base's
+    // values and shell means (shellMeansOf: no array of the anomaly, no brick bounds of it); its base
+    // read point by point too when the means are known without decoding it (kept in the manifest:
+    // StepInfo::levelShellMeans), else decoded whole (the means need every point).
     // The same bits as values(var). For passes that read a few points of many variables (a
     // selection's features: extractFeatures); a pass over every point should use values().
     class PointValues {
     public:
         float at(size_t index, size_t iLat, size_t iR, size_t iLon) const
         {
-            if (m_values)
-                return m_values[index];
-            if (m_means)
-                return shellAnomalyValue(m_baseValues[index], m_means[iR], m_kind);
-            return decodeUint16Point(*m_grid, *m_bricks, m_encoded, m_bounds, iLat, iR, iLon, m_missing);
+            const float x =
+                m_values ? m_values[index] : m_decoder->decode(m_encoded, m_bounds, index, iLat, iR, iLon, m_missing);
+            return m_means ? shellAnomalyValue(x, m_means[iR], m_kind) : x;
         }
 
     private:
         friend class StepVolume;
-        const float* m_values = nullptr;  // decoded, mapped float32 or computed
-        const grid::SphericalGrid* m_grid = nullptr;
-        const grid::BrickLayout* m_bricks = nullptr;
-        const uint16_t* m_encoded = nullptr;  // u16, not decoded
+        // The variable's values, or a shell anomaly's base's: decoded, mapped float32 or computed; else
+        // a u16 one's encoded points.
+        const float* m_values = nullptr;
+        const Uint16PointDecoder* m_decoder = nullptr;
+        const uint16_t* m_encoded = nullptr;
         const float* m_bounds = nullptr;
         bool m_missing = false;
-        const double* m_means = nullptr;      // a shell anomaly not computed: its base's shell means
-        const float* m_baseValues = nullptr;  // and values
+        const double* m_means = nullptr;  // a shell anomaly not computed: its base's shell means
         ShellAnomalyKind m_kind = ShellAnomalyKind::Difference;
     };
     // Thread-safe; the reader lives as long as the volume. Throws as values() does (a file cut short,
@@ -184,6 +192,9 @@ public:
     // A u16 variable not decoded yet is decoded into a copy dropped at once, so that a few point
     // reads keep no array of the grid. Thread-safe.
     const std::vector<double>& shellMeansOf(size_t var) const;
+    // Whether shellMeansOf(var) is at hand without decoding var: computed already, kept in the
+    // manifest, or var's values ready. Thread-safe.
+    bool shellMeansReady(size_t var) const;
     // Whether values(var) is ready without decoding.
     bool valuesReady(size_t var) const { return m_values[var].load(std::memory_order_acquire) != nullptr; }
     // bricks().brickCount() pairs (min, max) of variable `var`. Thread-safe; a computed variable's
@@ -238,6 +249,7 @@ private:
     mutable std::mutex m_derivedMutex;
     mutable std::map<std::pair<size_t, uint32_t>, std::vector<float>> m_derivedBounds;
     mutable std::map<size_t, grid::NodeGradient> m_gradients;
+    std::optional<Uint16PointDecoder> m_pointDecoder;  // u16 volumes: PointValues' decoding
     std::vector<MappedFile> m_mapped;              // when loaded from disk: per variable its values
     std::vector<std::vector<float>> m_owned;       // when built in memory
     std::shared_ptr<const StepVolume> m_base;      // withVariable: the volume whose variables come first
