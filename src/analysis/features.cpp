@@ -246,11 +246,11 @@ std::vector<FeatureLink> linkFeatures(const dataset::StepVolume& earlier, const 
         if (v >= earlier.variableCount())
             fail("features: velocity variable index {} out of range 0..{}", v, earlier.variableCount() - 1);
     const grid::GridSampler sampler(g);
-    // Read at the points the features' displacements sample alone: no component decoded whole.
-    const dataset::StepVolume::PointValues vx = earlier.pointValues(velocity.x), vy = earlier.pointValues(velocity.y),
-                                           vz = earlier.pointValues(velocity.z);
-    auto at = [&](const dataset::StepVolume::PointValues& v) {
-        return [&g, p = &v](size_t iLat, size_t iR, size_t iLon) { return p->at(g.index(iLat, iR, iLon), iLat, iR, iLon); };
+    // Read in the bricks the features' displacements sample alone: no component decoded whole, and a
+    // point the sampler's corners come back to decoded once.
+    dataset::BrickCachedValues vx(earlier, velocity.x), vy(earlier, velocity.y), vz(earlier, velocity.z);
+    auto at = [](dataset::BrickCachedValues& v) {
+        return [p = &v](size_t iLat, size_t iR, size_t iLon) { return p->at(iLat, iR, iLon); };
     };
     const double kmPerMps = intervalMyr * kSecondsPerMyr * 1e-3;  // displacement (km) of 1 m/s over the interval
     // The velocity (km over the interval) at a Cartesian point, or nullopt outside the shell.

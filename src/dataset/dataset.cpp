@@ -342,6 +342,42 @@ StepVolume::PointValues StepVolume::pointValues(size_t var) const
     return p;
 }
 
+bool StepVolume::pointValuesDirect(size_t var) const
+{
+    RAYPC_CHECK(var < variableCount());
+    if (valuesReady(var))
+        return true;
+    if (m_base && var < m_base->variableCount())
+        return m_base->pointValuesDirect(var);
+    if (const ShellAnomalyOf* of = computedFrom(var))
+        return !shellMeansReady(of->base) || pointValuesDirect(of->base);
+    return m_encoding == ValueEncoding::Float32;
+}
+
+BrickCachedValues::BrickCachedValues(const StepVolume& volume, size_t var)
+    : m_grid(&volume.grid()), m_bricks(volume.bricks()), m_points(volume.pointValues(var)),
+      m_direct(volume.pointValuesDirect(var))
+{
+    if (!m_direct)
+        m_slot.assign(m_bricks.brickCount(), -1);
+}
+
+void BrickCachedValues::fill(size_t brick)
+{
+    const size_t s = m_bricks.size, slot = m_decoded.size() / (s * s * s);
+    RAYPC_CHECK(slot < size_t(std::numeric_limits<int32_t>::max()));
+    m_decoded.resize(m_decoded.size() + s * s * s, NAN);
+    float* out = m_decoded.data() + slot * s * s * s;
+    const size_t bLon = brick % m_bricks.count[2], bR = (brick / m_bricks.count[2]) % m_bricks.count[1],
+                 bLat = brick / (size_t(m_bricks.count[2]) * m_bricks.count[1]);
+    // The points the brick owns: [b·s, (b+1)·s) along each axis, cut at the grid's end.
+    for (size_t iLat = bLat * s; iLat < std::min((bLat + 1) * s, m_grid->nLat()); ++iLat)
+        for (size_t iR = bR * s; iR < std::min((bR + 1) * s, m_grid->nR()); ++iR)
+            for (size_t iLon = bLon * s; iLon < std::min((bLon + 1) * s, m_grid->nLon()); ++iLon)
+                out[((iLat % s) * s + iR % s) * s + iLon % s] = m_points.at(m_grid->index(iLat, iR, iLon), iLat, iR, iLon);
+    m_slot[brick] = int32_t(slot);
+}
+
 const float* StepVolume::decode(size_t var) const
 {
     RAYPC_CHECK(var < variableCount());

@@ -187,6 +187,8 @@ public:
     // Thread-safe; the reader lives as long as the volume. Throws as values() does (a file cut short,
     // a float32 value outside the range).
     PointValues pointValues(size_t var) const;
+    // Whether pointValues(var) reads an array (decoded, mapped float32) rather than decoding points.
+    bool pointValuesDirect(size_t var) const;
     // The shell means (grid().nR() of them) of variable `var` on this level, as a shell anomaly of it
     // is computed with (shellMeans of values(var), the same bits): computed on first use and kept.
     // A u16 variable not decoded yet is decoded into a copy dropped at once, so that a few point
@@ -258,6 +260,36 @@ private:
     mutable std::mutex m_computeMutex;
     mutable std::vector<std::vector<float>> m_computedBounds;    // per computed variable, with its values
     mutable std::map<size_t, std::vector<double>> m_shellMeans;  // per base variable, this level's
+};
+
+// One variable of a step read point by point (StepVolume::PointValues) brick by brick: the first read
+// of a point decodes every point of the brick that owns it (BrickLayout::index(i / size, …)) into a
+// table kept here, so that reads that return to a neighbourhood (a sampler's corners: linking
+// features) decode each point once and whatever is never near a read is never decoded. A variable
+// whose values are at hand (decoded, mapped float32) is read from them. The same bits as
+// PointValues. Not thread-safe: one per thread. Lives no longer than the volume.
+class BrickCachedValues {
+public:
+    BrickCachedValues(const StepVolume& volume, size_t var);
+    float at(size_t iLat, size_t iR, size_t iLon)
+    {
+        if (m_direct)
+            return m_points.at(m_grid->index(iLat, iR, iLon), iLat, iR, iLon);
+        const uint32_t s = m_bricks.size;
+        const size_t brick = m_bricks.index(uint32_t(iLat / s), uint32_t(iR / s), uint32_t(iLon / s));
+        if (m_slot[brick] < 0)
+            fill(brick);
+        return m_decoded[size_t(m_slot[brick]) * s * s * s + ((iLat % s) * s + iR % s) * s + iLon % s];
+    }
+
+private:
+    void fill(size_t brick);
+    const grid::SphericalGrid* m_grid;
+    grid::BrickLayout m_bricks;
+    StepVolume::PointValues m_points;
+    bool m_direct = false;
+    std::vector<int32_t> m_slot;  // per brick its place in m_decoded, or -1
+    std::vector<float> m_decoded;  // size³ values per brick decoded
 };
 
 // The parallel-coordinates sample of one step: `rows` cells, columns = coordinates
