@@ -358,8 +358,19 @@ BrickCachedValues::BrickCachedValues(const StepVolume& volume, size_t var)
     : m_grid(&volume.grid()), m_bricks(volume.bricks()), m_points(volume.pointValues(var)),
       m_direct(volume.pointValuesDirect(var))
 {
-    if (!m_direct)
-        m_slot.assign(m_bricks.brickCount(), -1);
+    if (m_direct)
+        return;
+    m_slot.assign(m_bricks.brickCount(), -1);
+    const size_t s = m_bricks.size;
+    m_brickPoints = s * s * s;
+    const std::array<size_t, 3> n{m_grid->nLat(), m_grid->nR(), m_grid->nLon()};
+    const std::array<size_t, 3> brickStride{size_t(m_bricks.count[1]) * m_bricks.count[2], m_bricks.count[2], 1};
+    const std::array<size_t, 3> offsetStride{s * s, s, 1};
+    for (size_t a = 0; a < 3; ++a)
+        for (size_t i = 0; i < n[a]; ++i) {
+            m_brickOf[a].push_back(uint32_t(i / s * brickStride[a]));
+            m_offsetOf[a].push_back(uint32_t(i % s * offsetStride[a]));
+        }
 }
 
 void BrickCachedValues::fill(size_t brick)
@@ -374,7 +385,8 @@ void BrickCachedValues::fill(size_t brick)
     for (size_t iLat = bLat * s; iLat < std::min((bLat + 1) * s, m_grid->nLat()); ++iLat)
         for (size_t iR = bR * s; iR < std::min((bR + 1) * s, m_grid->nR()); ++iR)
             for (size_t iLon = bLon * s; iLon < std::min((bLon + 1) * s, m_grid->nLon()); ++iLon)
-                out[((iLat % s) * s + iR % s) * s + iLon % s] = m_points.at(m_grid->index(iLat, iR, iLon), iLat, iR, iLon);
+                out[m_offsetOf[0][iLat] + m_offsetOf[1][iR] + m_offsetOf[2][iLon]] =
+                    m_points.at(m_grid->index(iLat, iR, iLon), iLat, iR, iLon);
     m_slot[brick] = int32_t(slot);
 }
 

@@ -275,11 +275,11 @@ public:
     {
         if (m_direct)
             return m_points.at(m_grid->index(iLat, iR, iLon), iLat, iR, iLon);
-        const uint32_t s = m_bricks.size;
-        const size_t brick = m_bricks.index(uint32_t(iLat / s), uint32_t(iR / s), uint32_t(iLon / s));
+        const size_t brick = m_brickOf[0][iLat] + m_brickOf[1][iR] + m_brickOf[2][iLon];
         if (m_slot[brick] < 0)
             fill(brick);
-        return m_decoded[size_t(m_slot[brick]) * s * s * s + ((iLat % s) * s + iR % s) * s + iLon % s];
+        return m_decoded[size_t(m_slot[brick]) * m_brickPoints + m_offsetOf[0][iLat] + m_offsetOf[1][iR] +
+                         m_offsetOf[2][iLon]];
     }
 
 private:
@@ -288,6 +288,10 @@ private:
     grid::BrickLayout m_bricks;
     StepVolume::PointValues m_points;
     bool m_direct = false;
+    // Per axis and index: its part of the owning brick's index and of the point's place in the brick
+    // (no division per read).
+    std::array<std::vector<uint32_t>, 3> m_brickOf, m_offsetOf;
+    size_t m_brickPoints = 0;
     std::vector<int32_t> m_slot;  // per brick its place in m_decoded, or -1
     std::vector<float> m_decoded;  // size³ values per brick decoded
 };
