@@ -456,15 +456,17 @@ json levelShellMeans(const RunPlan& plan, const PreprocessOptions& options, cons
 {
     json out = json::array();
     const bool missing = std::any_of(exact.begin(), exact.end(), [](float x) { return std::isnan(x); });
-    std::vector<float> level = exact, decoded;
+    std::vector<float> coarser, decoded;  // level 0 read from `exact`, not copied
+    std::vector<uint16_t> encoded;
     for (int l = 0; l < dataset::kLevelCount; ++l) {
         const grid::SphericalGrid& g = plan.levels[size_t(l)];
+        const std::span<const float> level = l == 0 ? std::span<const float>(exact) : std::span<const float>(coarser);
         std::vector<double> means;
         if (options.encoding == dataset::ValueEncoding::Uint16) {
             const grid::BrickLayout layout = grid::BrickLayout::forGrid(g, options.brickSize);
             std::vector<float> bounds(2 * layout.brickCount());
             dataset::computeBrickBounds(g, layout, level, bounds);
-            std::vector<uint16_t> encoded(level.size());
+            encoded.resize(level.size());
             dataset::encodeUint16(g, layout, level, bounds, encoded, missing);
             decoded.resize(level.size());
             dataset::decodeUint16(g, layout, encoded, bounds, decoded, missing);
@@ -476,7 +478,7 @@ json levelShellMeans(const RunPlan& plan, const PreprocessOptions& options, cons
         for (double mean : means)
             m.push_back(std::isnan(mean) ? json() : json(mean));
         if (l + 1 < dataset::kLevelCount)
-            level = coarsenField(g, level);
+            coarser = coarsenField(g, level);
     }
     return out;
 }
@@ -504,7 +506,9 @@ void addComputedStats(json& stepJson, const RunPlan& plan, const PreprocessOptio
     std::vector<std::pair<size_t, json>> kept;
     for (const auto& m : means)
         kept.emplace_back(m.first, json());
-    tbb::parallel_for_each(kept.begin(), kept.end(), [&](auto& k) { k.second = levelShellMeans(plan, options, values[k.first]); });
+    // One base at a time (each encoded and decoded in parallel): two more arrays of the grid in memory.
+    for (auto& [base, perLevel] : kept)
+        perLevel = levelShellMeans(plan, options, values[base]);
     stepJson["level_shell_means"] = json::array();
     for (int l = 0; l < dataset::kLevelCount; ++l) {
         json& byName = stepJson["level_shell_means"].emplace_back(json::object());
