@@ -201,9 +201,11 @@ SelectionStats selectedVolume(const dataset::StepVolume& volume, std::span<const
     return stats;
 }
 
-HugePageVector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::span<const RangeFilter> filters)
+HugePageVector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::span<const RangeFilter> filters,
+                                       std::span<const uint8_t> radii)
 {
     checkFilters(volume, filters);
+    RAYPC_CHECK(radii.empty() || radii.size() == volume.grid().nR());
     const auto& g = volume.grid();
     const grid::BrickLayout& bricks = volume.bricks();
     // The rule of pointSelected, read so that what no point of a brick can pass is not decoded: a
@@ -257,7 +259,7 @@ HugePageVector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::s
     tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
         for (size_t iR = 0; iR < g.nR(); ++iR)
             for (uint32_t c = 0; c < bricks.count[2]; ++c) {
-                if (!mayHold(bricks.index(uint32_t(iLat / s), uint32_t(iR / s), c)))
+                if ((!radii.empty() && !radii[iR]) || !mayHold(bricks.index(uint32_t(iLat / s), uint32_t(iR / s), c)))
                     continue;
                 const size_t end = std::min(size_t(c + 1) * s, g.nLon());
                 for (size_t iLon = size_t(c) * s; iLon < end; ++iLon) {
