@@ -5,6 +5,9 @@
 #include "grid/coordinates.h"
 #include "grid/sampler.h"
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -246,43 +249,69 @@ std::vector<FeatureLink> linkFeatures(const dataset::StepVolume& earlier, const 
         if (v >= earlier.variableCount())
             fail("features: velocity variable index {} out of range 0..{}", v, earlier.variableCount() - 1);
     const grid::GridSampler sampler(g);
-    const float* vx = earlier.values(velocity.x);
-    const float* vy = earlier.values(velocity.y);
-    const float* vz = earlier.values(velocity.z);
     const double kmPerMps = intervalMyr * kSecondsPerMyr * 1e-3;  // displacement (km) of 1 m/s over the interval
-    // The velocity (km over the interval) at a Cartesian point, or nullopt outside the shell.
-    auto displacement = [&](const Vec3d& p) -> std::optional<Vec3d> {
-        const SphericalPoint s = cartesianToSpherical(p);
-        const auto at = sampler.locate(s.latDeg, s.lonDeg, s.rKm);
-        if (!at)
-            return std::nullopt;
-        return Vec3d{sampler.sample(vx, *at), sampler.sample(vy, *at), sampler.sample(vz, *at)} * kmPerMps;
+    // The velocity read in the bricks the features' displacements sample alone: no component decoded
+    // whole, and a point the sampler's corners come back to decoded once (per thread).
+    struct Velocity {
+        dataset::BrickCachedValues x, y, z;
     };
-    const auto w = g.volumeFactors();
-    std::map<std::pair<int, int>, double> overlap;
-    for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+    tbb::enumerable_thread_specific<Velocity> velocities([&] {
+        return Velocity{{earlier, velocity.x}, {earlier, velocity.y}, {earlier, velocity.z}};
+    });
+    auto at = [](dataset::BrickCachedValues& v) {
+        return [p = &v](size_t iLat, size_t iR, size_t iLon) { return p->at(iLat, iR, iLon); };
+    };
+    // The velocity (km over the interval) at a Cartesian point, or nullopt outside the shell.
+    auto displacement = [&](Velocity& v, const Vec3d& p) -> std::optional<Vec3d> {
+        const SphericalPoint s = cartesianToSpherical(p);
+        const auto where = sampler.locate(s.latDeg, s.lonDeg, s.rKm);
+        if (!where)
+            return std::nullopt;
+        return Vec3d{sampler.sample(at(v.x), *where), sampler.sample(at(v.y), *where), sampler.sample(at(v.z), *where)} *
+               kmPerMps;
+    };
+    // Where each feature point of `a` lands in `b` (its label there, 0 for none), rows in parallel;
+    // then the overlaps summed in index order, as one thread would: the same bits.
+    std::vector<std::vector<int32_t>> landsIn(g.nLat());
+    tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
+        Velocity& v = velocities.local();
+        std::vector<int32_t>& row = landsIn[iLat];
         for (size_t iR = 0; iR < g.nR(); ++iR)
             for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
                 const size_t i = g.index(iLat, iR, iLon);
                 if (a.labels[i] == 0)
                     continue;
+                row.push_back(0);
                 const Vec3d p = sphericalToCartesianKm(g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR]);
-                const auto d0 = displacement(p);
+                const auto d0 = displacement(v, p);
                 if (!d0)
                     continue;
-                const auto d1 = displacement(p + *d0 * 0.5);
+                const auto d1 = displacement(v, p + *d0 * 0.5);
                 if (!d1)
                     continue;
                 const SphericalPoint q = cartesianToSpherical(p + *d1);
-                const auto at = sampler.locate(q.latDeg, q.lonDeg, q.rKm);
-                if (!at)
+                const auto to = sampler.locate(q.latDeg, q.lonDeg, q.rKm);
+                if (!to)
                     continue;
-                const size_t jLat = at->tLat < 0.5 ? at->lat0 : at->lat1, jR = at->tR < 0.5 ? at->r0 : at->r1,
-                             jLon = at->tLon < 0.5 ? at->lon0 : at->lon1;
-                const int to = b.labels[g.index(jLat, jR, jLon)];
+                const size_t jLat = to->tLat < 0.5 ? to->lat0 : to->lat1, jR = to->tR < 0.5 ? to->r0 : to->r1,
+                             jLon = to->tLon < 0.5 ? to->lon0 : to->lon1;
+                row.back() = b.labels[g.index(jLat, jR, jLon)];
+            }
+    });
+    const auto w = g.volumeFactors();
+    std::map<std::pair<int, int>, double> overlap;
+    for (size_t iLat = 0; iLat < g.nLat(); ++iLat) {
+        auto next = landsIn[iLat].begin();
+        for (size_t iR = 0; iR < g.nR(); ++iR)
+            for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                const size_t i = g.index(iLat, iR, iLon);
+                if (a.labels[i] == 0)
+                    continue;
+                const int to = *next++;
                 if (to != 0)
                     overlap[{a.labels[i], to}] += w.at(iLat, iR, iLon);
             }
+    }
     std::vector<FeatureLink> links;
     for (const auto& [key, km3] : overlap)
         links.push_back({key.first, key.second, km3});

@@ -1,6 +1,8 @@
 #include "analysis/features.h"
 
+#include "core/atomic_file.h"
 #include "core/error.h"
+#include "dataset/dataset_format.h"
 #include "core/spherical.h"
 #include "grid/coordinates.h"
 #include "grid/test_util.h"
@@ -8,6 +10,7 @@
 #include "preprocess/preprocess.h"
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <fmt/ranges.h>
 #include <gtest/gtest.h>
 
@@ -306,10 +309,30 @@ TEST(Features, StallsCanBeTimedByTheDeepestOrShallowestPoint)
     EXPECT_THROW(parseStallMeasure("tip"), Error);
 }
 
-// A step's features read the selected points alone: on a u16 dataset nothing is decoded whole but the
-// bases of the shell anomalies (their shell means need every point), no anomaly's array or bounds are
-// computed, and a brush on a stored variable decodes only what its bricks' bounds cannot rule out;
-// the features are those of the step decoded whole, bit for bit.
+// Whether two steps' features are the same, bit for bit (labels, volumes, every variable's summary).
+void expectSameFeatures(const StepFeatures& a, const StepFeatures& b, const dataset::Dataset& dataset)
+{
+    ASSERT_GT(a.features.size(), 0u);
+    ASSERT_EQ(a.features.size(), b.features.size());
+    for (size_t k = 0; k < a.features.size(); ++k) {
+        EXPECT_EQ(a.features[k].points, b.features[k].points);
+        EXPECT_EQ(a.features[k].volumeKm3, b.features[k].volumeKm3);
+        ASSERT_EQ(a.features[k].variables.size(), dataset.variables().size());
+        for (size_t v = 0; v < dataset.variables().size(); ++v) {
+            const VariableSummary &x = a.features[k].variables[v], &y = b.features[k].variables[v];
+            EXPECT_EQ(fmt::format("{} {} {}", x.mean, x.min, x.max), fmt::format("{} {} {}", y.mean, y.min, y.max))
+                << "feature " << k + 1 << ", " << dataset.variables()[v].name;
+        }
+    }
+    EXPECT_TRUE(std::equal(a.labels.begin(), a.labels.end(), b.labels.begin(), b.labels.end()));
+}
+
+// A step's features read the selected points alone: on a u16 dataset nothing is decoded whole (the
+// anomalies' bases' shell means are kept in the manifest), no anomaly's array or bounds are computed,
+// a brush on a stored variable or an anomaly decodes only what its bricks' bounds cannot rule out, and
+// linking two steps reads the velocity near the features alone; the features and links are those of
+// the steps decoded whole, bit for bit. A dataset written before the means were kept decodes the
+// bases whole for them and gives the same features.
 TEST(Features, AStepOfAU16DatasetDecodesOnlyWhatItsSelectedPointsNeed)
 {
     const TempDir dir("features-u16");
@@ -321,39 +344,61 @@ TEST(Features, AStepOfAU16DatasetDecodesOnlyWhatItsSelectedPointsNeed)
     preprocess::preprocess(io::listSnapshotFiles({testing::contestLayoutDir()}), dir.path() / "ds", o);
     const auto dataset = dataset::Dataset::open(dir.path() / "ds");
     const int t = dataset->variableIndex("radial velocity");  // stored, no anomaly's base
+    const int anomaly = dataset->variableIndex("temperature anomaly");
     ASSERT_GE(t, 0);
+    ASSERT_GE(anomaly, 0);
+    ASSERT_GE(dataset->steps().size(), 2u);
     const dataset::ValueRange range = dataset->steps()[0].stats[size_t(t)].range;
-    // The faster half of the upwellings, below the top 100 km.
-    const std::vector<NamedRange> brush{{"radial velocity", 0.5f * range.max, range.max}, {"depth", 100, 6371}};
-    const auto filters = resolveRangeFilters(*dataset, brush);
+    const dataset::ValueRange cold = dataset->steps()[0].stats[size_t(anomaly)].range;
+    // The faster half of the upwellings, below the top 100 km; the coldest third of the anomaly.
+    const std::vector<std::vector<NamedRange>> brushes{
+        {{"radial velocity", 0.5f * range.max, range.max}, {"depth", 100, 6371}},
+        {{"temperature anomaly", cold.min, 0.66f * cold.min}, {"depth", 100, 6371}}};
     const FeatureOptions options = featureOptions(0, {660}, 50);
-    const auto lazy = dataset->load(0, 0);
-    const StepFeatures a = extractFeatures(*lazy, filters, options);
-    const auto whole = dataset->load(0, 0);
-    for (size_t v = 0; v < whole->variableCount(); ++v)
-        whole->values(v);
-    const StepFeatures b = extractFeatures(*whole, filters, options);
-    ASSERT_GT(a.features.size(), 0u);
-    ASSERT_EQ(a.features.size(), b.features.size());
-    for (size_t k = 0; k < a.features.size(); ++k) {
-        EXPECT_EQ(a.features[k].points, b.features[k].points);
-        EXPECT_EQ(a.features[k].volumeKm3, b.features[k].volumeKm3);
-        ASSERT_EQ(a.features[k].variables.size(), whole->variableCount());
+    const VelocityVariables velocity{size_t(dataset->variableIndex("vx")), size_t(dataset->variableIndex("vy")),
+                                     size_t(dataset->variableIndex("vz"))};
+    for (const auto& brush : brushes) {
+        SCOPED_TRACE(brush[0].name);
+        const auto filters = resolveRangeFilters(*dataset, brush);
+        const auto lazy = dataset->load(0, 0), lazyNext = dataset->load(1, 0);
+        const StepFeatures a = extractFeatures(*lazy, filters, options);
+        const StepFeatures aNext = extractFeatures(*lazyNext, filters, options);
+        const std::vector<FeatureLink> lazyLinks = linkFeatures(*lazy, a, aNext, velocity, 1.0);
+        const auto whole = dataset->load(0, 0), wholeNext = dataset->load(1, 0);
         for (size_t v = 0; v < whole->variableCount(); ++v) {
-            const VariableSummary &x = a.features[k].variables[v], &y = b.features[k].variables[v];
-            EXPECT_EQ(fmt::format("{} {} {}", x.mean, x.min, x.max), fmt::format("{} {} {}", y.mean, y.min, y.max))
-                << "feature " << k + 1 << ", " << dataset->variables()[v].name;
+            whole->values(v);
+            wholeNext->values(v);
         }
+        expectSameFeatures(a, extractFeatures(*whole, filters, options), *dataset);
+        const StepFeatures bNext = extractFeatures(*wholeNext, filters, options);
+        expectSameFeatures(aNext, bNext, *dataset);
+        const std::vector<FeatureLink> wholeLinks = linkFeatures(*whole, a, bNext, velocity, 1.0);
+        ASSERT_GT(wholeLinks.size(), 0u);
+        ASSERT_EQ(lazyLinks.size(), wholeLinks.size());
+        for (size_t k = 0; k < lazyLinks.size(); ++k)
+            EXPECT_EQ(fmt::format("{} {} {}", lazyLinks[k].from, lazyLinks[k].to, lazyLinks[k].overlapKm3),
+                      fmt::format("{} {} {}", wholeLinks[k].from, wholeLinks[k].to, wholeLinks[k].overlapKm3));
+        for (size_t v = 0; v < lazy->variableCount(); ++v)
+            if (lazy->computedFrom(v))
+                EXPECT_FALSE(lazy->valuesReady(v)) << dataset->variables()[v].name << ": no array computed";
+        EXPECT_FALSE(lazy->valuesReady(size_t(t))) << "the brushed variable read brick by brick";
+        EXPECT_EQ(lazy->decodedBytes(), 0u) << "nothing decoded whole, the velocity for linking neither";
     }
-    EXPECT_TRUE(std::equal(a.labels.begin(), a.labels.end(), b.labels.begin(), b.labels.end()));
+
+    // Without the kept means (a dataset written before): the bases decoded whole, the same features.
+    nlohmann::json manifest = nlohmann::json::parse(readFile(dir.path() / "ds" / dataset::format::kManifest));
+    for (nlohmann::json& step : manifest.at("steps"))
+        ASSERT_EQ(step.erase("level_shell_means"), 1u);
+    writeFileAtomic(dir.path() / "ds" / dataset::format::kManifest, manifest.dump(1));
+    const auto before = dataset::Dataset::open(dir.path() / "ds");
+    const auto filters = resolveRangeFilters(*before, brushes[1]);
+    const auto lazy = before->load(0, 0), kept = dataset->load(0, 0);
+    expectSameFeatures(extractFeatures(*lazy, filters, options), extractFeatures(*kept, filters, options), *before);
     std::set<size_t> bases;
     for (size_t v = 0; v < lazy->variableCount(); ++v)
-        if (const dataset::ShellAnomalyOf* of = lazy->computedFrom(v)) {
+        if (const dataset::ShellAnomalyOf* of = lazy->computedFrom(v))
             bases.insert(of->base);
-            EXPECT_FALSE(lazy->valuesReady(v)) << dataset->variables()[v].name << ": no array computed";
-        }
     ASSERT_FALSE(bases.empty());
-    EXPECT_FALSE(lazy->valuesReady(size_t(t))) << "the brushed variable read brick by brick";
     EXPECT_EQ(lazy->decodedBytes(), bases.size() * lazy->grid().cellCount() * sizeof(float))
         << "decoded whole: the anomalies' bases alone";
 }

@@ -35,8 +35,24 @@ std::vector<ShellFlux> shellFluxes(const dataset::StepVolume& volume, size_t rad
     if (heat && !(heat->heatCapacityJPerKgK > 0 && std::isfinite(heat->heatCapacityJPerKgK)))
         fail("flux: heat capacity {} J/(kg K) is not positive", heat->heatCapacityJPerKgK);
     const grid::SphericalGrid& g = volume.grid();
+    // The radii around a shell at `depth` and the weight of the upper one.
+    struct Shell {
+        size_t lower, upper, nearer;
+        double t;
+    };
+    const auto shellAt = [&](double depth) {
+        const double r = kSurfaceRadiusKm - depth;
+        const size_t upper = std::min(size_t(std::lower_bound(g.rKm.begin(), g.rKm.end(), r) - g.rKm.begin()), g.nR() - 1);
+        const size_t lower = upper > 0 ? upper - 1 : 0;
+        const double t = upper == lower ? 1.0 : (r - g.rKm[lower]) / (g.rKm[upper] - g.rKm[lower]);
+        return Shell{lower, upper, t >= 0.5 ? upper : lower, t};
+    };
+    // The selection on the radii the shells take it from alone.
+    std::vector<uint8_t> radii(g.nR(), 0);
+    for (const double depth : depthsKm)
+        radii[shellAt(depth).nearer] = 1;
     const HugePageVector<uint8_t> selected =
-        filters.empty() ? HugePageVector<uint8_t>(g.cellCount(), 1) : selectedPoints(volume, filters);
+        filters.empty() ? HugePageVector<uint8_t>(g.cellCount(), 1) : selectedPoints(volume, filters, radii);
     // Read on the shells alone (two radii each): a variable not decoded yet is not decoded whole.
     using Values = dataset::StepVolume::PointValues;
     const Values v = volume.pointValues(radialVelocity);
@@ -55,11 +71,7 @@ std::vector<ShellFlux> shellFluxes(const dataset::StepVolume& volume, size_t rad
     for (const double depth : depthsKm) {
         checkShellDepth(g, depth);
         const double r = kSurfaceRadiusKm - depth;
-        // The radii around the shell and the weight of the upper one.
-        const size_t upper = std::min(size_t(std::lower_bound(g.rKm.begin(), g.rKm.end(), r) - g.rKm.begin()), g.nR() - 1);
-        const size_t lower = upper > 0 ? upper - 1 : 0;
-        const double t = upper == lower ? 1.0 : (r - g.rKm[lower]) / (g.rKm[upper] - g.rKm[lower]);
-        const size_t nearer = t >= 0.5 ? upper : lower;
+        const auto [lower, upper, nearer, t] = shellAt(depth);
         ShellFlux f;
         f.depthKm = depth;
         f.radiusKm = r;

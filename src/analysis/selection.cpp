@@ -201,9 +201,11 @@ SelectionStats selectedVolume(const dataset::StepVolume& volume, std::span<const
     return stats;
 }
 
-HugePageVector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::span<const RangeFilter> filters)
+HugePageVector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::span<const RangeFilter> filters,
+                                       std::span<const uint8_t> radii)
 {
     checkFilters(volume, filters);
+    RAYPC_CHECK(radii.empty() || radii.size() == volume.grid().nR());
     const auto& g = volume.grid();
     const grid::BrickLayout& bricks = volume.bricks();
     // The rule of pointSelected, read so that what no point of a brick can pass is not decoded: a
@@ -220,10 +222,24 @@ HugePageVector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::s
     for (const RangeFilter& f : filters)
         if (f.coordinate)
             axes.push_back({&f, std::nullopt, nullptr});
+    // A shell anomaly not computed yet: bounds from its base's and the shells' means
+    // (shellAnomalyBrickBounds), when the means need no decoding of the base.
+    std::vector<std::vector<float>> anomalyBounds;
+    anomalyBounds.reserve(filters.size());  // pointers into it stay valid
     for (const RangeFilter& f : filters)
         if (!f.coordinate) {
             const size_t var = size_t(f.variable);
-            axes.push_back({&f, volume.pointValues(var), volume.computedFrom(var) ? nullptr : volume.brickBounds(var)});
+            const dataset::ShellAnomalyOf* of = volume.computedFrom(var);
+            const float* bounds = nullptr;
+            if (!of || volume.valuesReady(var)) {
+                bounds = volume.brickBounds(var);
+            } else if (volume.shellMeansReady(of->base)) {
+                std::vector<float>& b = anomalyBounds.emplace_back(2 * bricks.brickCount());
+                dataset::shellAnomalyBrickBounds(g, bricks, {volume.brickBounds(of->base), b.size()},
+                                                 volume.shellMeansOf(of->base), of->kind, b);
+                bounds = b.data();
+            }
+            axes.push_back({&f, volume.pointValues(var), bounds});
         }
     const auto mayHold = [&](size_t brick) {
         for (const Axis& a : axes) {
@@ -243,7 +259,7 @@ HugePageVector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::s
     tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
         for (size_t iR = 0; iR < g.nR(); ++iR)
             for (uint32_t c = 0; c < bricks.count[2]; ++c) {
-                if (!mayHold(bricks.index(uint32_t(iLat / s), uint32_t(iR / s), c)))
+                if ((!radii.empty() && !radii[iR]) || !mayHold(bricks.index(uint32_t(iLat / s), uint32_t(iR / s), c)))
                     continue;
                 const size_t end = std::min(size_t(c + 1) * s, g.nLon());
                 for (size_t iLon = size_t(c) * s; iLon < end; ++iLon) {

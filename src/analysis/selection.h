@@ -89,8 +89,11 @@ SelectionStats selectedVolume(const dataset::StepVolume& volume, std::span<const
                               std::optional<size_t> meanVariable = std::nullopt);
 
 // Whether each grid point is selected (1) or not (0), canonical order, by the rule of
-// selectedVolume. Throws raypc::Error as selectedVolume does. Parallel over lat rows.
-HugePageVector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::span<const RangeFilter> filters);
+// selectedVolume. `radii`: per radius index whether to look there (0 at every point of a radius
+// not looked at), or empty for every radius. Throws raypc::Error as selectedVolume does. Parallel
+// over lat rows.
+HugePageVector<uint8_t> selectedPoints(const dataset::StepVolume& volume, std::span<const RangeFilter> filters,
+                                       std::span<const uint8_t> radii = {});
 
 // The selection split by a labelling of the grid's points: `classes` holds one class in
 // [0, classCount) per grid point (canonical order), e.g. what the synthetic generator put there

@@ -159,12 +159,14 @@ std::shared_ptr<StepVolume> StepVolume::withVariable(std::shared_ptr<const StepV
 std::shared_ptr<StepVolume> StepVolume::open(const std::filesystem::path& dir, const LevelInfo& level,
                                              const std::vector<std::string>& fileStems, ValueEncoding encoding,
                                              std::span<const ValueRange> ranges, std::span<const char> missing,
-                                             std::span<const ShellAnomalyOf> computed)
+                                             std::span<const ShellAnomalyOf> computed,
+                                             std::span<const std::vector<double>> shellMeans)
 {
     RAYPC_CHECK(ranges.empty() || ranges.size() == fileStems.size());
     RAYPC_CHECK(missing.empty() || missing.size() == fileStems.size());
     for (const ShellAnomalyOf& c : computed)
         RAYPC_CHECK(c.base < fileStems.size());
+    RAYPC_CHECK(shellMeans.empty() || shellMeans.size() == fileStems.size());
     auto volume = std::make_shared<StepVolume>();
     volume->m_grid = level.grid;
     volume->m_bricks = level.bricks;
@@ -180,6 +182,13 @@ std::shared_ptr<StepVolume> StepVolume::open(const std::filesystem::path& dir, c
     volume->m_storedCount = count;
     volume->m_computed.assign(computed.begin(), computed.end());
     volume->m_computedBounds.resize(computed.size());
+    for (size_t i = 0; i < shellMeans.size(); ++i)
+        if (!shellMeans[i].empty()) {
+            RAYPC_CHECK_EQ(shellMeans[i].size(), level.grid.nR());
+            volume->m_shellMeans.emplace(i, shellMeans[i]);
+        }
+    if (encoding == ValueEncoding::Uint16)
+        volume->m_pointDecoder.emplace(level.grid, level.bricks);
     volume->m_mapped.reserve(count);  // references below must stay valid
     volume->m_owned.reserve(count);
     volume->m_ranges.assign(count, ValueRange{-std::numeric_limits<float>::max(), std::numeric_limits<float>::max()});
@@ -313,7 +322,12 @@ StepVolume::PointValues StepVolume::pointValues(size_t var) const
         return m_base->pointValues(var);
     if (var >= m_storedCount) {
         const ShellAnomalyOf& of = m_computed[var - m_storedCount];
-        p.m_baseValues = values(of.base);  // first: the means then come from these values
+        // The base read as its points are when its means need no decoding (kept, or its values ready);
+        // else decoded first: the means then come from these values.
+        if (shellMeansReady(of.base))
+            p = pointValues(of.base);
+        else
+            p.m_values = values(of.base);
         p.m_means = shellMeansOf(of.base).data();
         p.m_kind = of.kind;
         return p;
@@ -323,12 +337,59 @@ StepVolume::PointValues StepVolume::pointValues(size_t var) const
         return p;
     }
     m_mapped[var].checkNotCutShort();
-    p.m_grid = &m_grid;
-    p.m_bricks = &m_bricks;
+    p.m_decoder = &*m_pointDecoder;
     p.m_encoded = static_cast<const uint16_t*>(m_valueFiles[var]);
     p.m_bounds = m_bounds[var];
     p.m_missing = hasMissing(var);
     return p;
+}
+
+bool StepVolume::pointValuesDirect(size_t var) const
+{
+    RAYPC_CHECK(var < variableCount());
+    if (valuesReady(var))
+        return true;
+    if (m_base && var < m_base->variableCount())
+        return m_base->pointValuesDirect(var);
+    if (const ShellAnomalyOf* of = computedFrom(var))
+        return !shellMeansReady(of->base) || pointValuesDirect(of->base);
+    return m_encoding == ValueEncoding::Float32;
+}
+
+BrickCachedValues::BrickCachedValues(const StepVolume& volume, size_t var)
+    : m_grid(&volume.grid()), m_bricks(volume.bricks()), m_points(volume.pointValues(var)),
+      m_direct(volume.pointValuesDirect(var))
+{
+    if (m_direct)
+        return;
+    m_slot.assign(m_bricks.brickCount(), -1);
+    const size_t s = m_bricks.size;
+    m_brickPoints = s * s * s;
+    const std::array<size_t, 3> n{m_grid->nLat(), m_grid->nR(), m_grid->nLon()};
+    const std::array<size_t, 3> brickStride{size_t(m_bricks.count[1]) * m_bricks.count[2], m_bricks.count[2], 1};
+    const std::array<size_t, 3> offsetStride{s * s, s, 1};
+    for (size_t a = 0; a < 3; ++a)
+        for (size_t i = 0; i < n[a]; ++i) {
+            m_brickOf[a].push_back(uint32_t(i / s * brickStride[a]));
+            m_offsetOf[a].push_back(uint32_t(i % s * offsetStride[a]));
+        }
+}
+
+void BrickCachedValues::fill(size_t brick)
+{
+    const size_t s = m_bricks.size, slot = m_decoded.size() / (s * s * s);
+    RAYPC_CHECK(slot < size_t(std::numeric_limits<int32_t>::max()));
+    m_decoded.resize(m_decoded.size() + s * s * s, NAN);
+    float* out = m_decoded.data() + slot * s * s * s;
+    const size_t bLon = brick % m_bricks.count[2], bR = (brick / m_bricks.count[2]) % m_bricks.count[1],
+                 bLat = brick / (size_t(m_bricks.count[2]) * m_bricks.count[1]);
+    // The points the brick owns: [b·s, (b+1)·s) along each axis, cut at the grid's end.
+    for (size_t iLat = bLat * s; iLat < std::min((bLat + 1) * s, m_grid->nLat()); ++iLat)
+        for (size_t iR = bR * s; iR < std::min((bR + 1) * s, m_grid->nR()); ++iR)
+            for (size_t iLon = bLon * s; iLon < std::min((bLon + 1) * s, m_grid->nLon()); ++iLon)
+                out[m_offsetOf[0][iLat] + m_offsetOf[1][iR] + m_offsetOf[2][iLon]] =
+                    m_points.at(m_grid->index(iLat, iR, iLon), iLat, iR, iLon);
+    m_slot[brick] = int32_t(slot);
 }
 
 const float* StepVolume::decode(size_t var) const
@@ -389,6 +450,17 @@ float StepVolume::value(size_t var, size_t iLat, size_t iR, size_t iLon) const
         return values(var)[m_grid.index(iLat, iR, iLon)];
     m_mapped[var].checkNotCutShort();
     return mappedValue(var, iLat, iR, iLon);
+}
+
+bool StepVolume::shellMeansReady(size_t var) const
+{
+    RAYPC_CHECK(var < variableCount());
+    {
+        std::lock_guard lock(m_computeMutex);
+        if (m_shellMeans.count(var))
+            return true;
+    }
+    return valuesReady(var) || (m_encoding == ValueEncoding::Float32 && !m_base);
 }
 
 const std::vector<double>& StepVolume::shellMeansOf(size_t base) const
@@ -910,8 +982,9 @@ std::vector<VariableInfo> readVariables(const ManifestReader& r, const json& j)
 // Steps: in order (step i's arrays are in steps/i), times finite and increasing, statistics per variable
 // within the global ones of `variables`.
 std::vector<StepInfo> readSteps(const ManifestReader& r, const json& j, const std::vector<VariableInfo>& variables,
-                                size_t shells)
+                                const std::vector<LevelInfo>& levels)
 {
+    const size_t shells = levels.front().grid.nR();
     std::vector<StepInfo> out;
     const json& steps = r.array(j, "", "steps", 1, 1000000);
     for (size_t s = 0; s < steps.size(); ++s) {
@@ -955,6 +1028,33 @@ std::vector<StepInfo> readSteps(const ManifestReader& r, const json& j, const st
             for (size_t i = 0; i < means.size(); ++i)
                 m.push_back(means[i].is_null() ? std::numeric_limits<double>::quiet_NaN()
                                                : r.number(means[i], ManifestReader::path(baseField, i)));
+        }
+        // Per level the same from the level's stored values (since 28 November 2026; optional: a
+        // volume of a step without them computes them).
+        if (step.contains("level_shell_means")) {
+            const std::string levelsField = ManifestReader::path(field, "level_shell_means");
+            const json& perLevel = r.array(step, field, "level_shell_means", levels.size(), levels.size());
+            info.levelShellMeans.assign(levels.size(), std::vector<std::vector<double>>(variables.size()));
+            for (size_t l = 0; l < levels.size(); ++l) {
+                const std::string levelField = ManifestReader::path(levelsField, l);
+                const json& byName = perLevel[l];
+                if (!byName.is_object())
+                    r.bad(levelField, excerpt(byName), "an object of shell means by variable name");
+                for (const VariableInfo& v : variables) {
+                    if (!v.computed || !info.levelShellMeans[l][v.computed->base].empty())
+                        continue;
+                    const std::string& baseName = variables[v.computed->base].name;
+                    const std::string baseField = fmt::format("{}[\"{}\"]", levelField, baseName);
+                    const json& means = r.member(byName, levelField, baseName.c_str());
+                    const size_t n = levels[l].grid.nR();
+                    if (!means.is_array() || means.size() != n)
+                        r.bad(baseField, excerpt(means), "an array of {} shell means (one per radius of level {})", n, l);
+                    std::vector<double>& m = info.levelShellMeans[l][v.computed->base];
+                    for (size_t i = 0; i < n; ++i)
+                        m.push_back(means[i].is_null() ? std::numeric_limits<double>::quiet_NaN()
+                                                       : r.number(means[i], ManifestReader::path(baseField, i)));
+                }
+            }
         }
         out.push_back(std::move(info));
     }
@@ -1030,7 +1130,7 @@ std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
     const auto brickSize = static_cast<uint32_t>(r.integer(j, "", "brick_size", 1, kMaxBrickSize));
     dataset->m_levels = readLevels(r, j, manifestPath, brickSize);
     dataset->m_variables = readVariables(r, j);
-    dataset->m_steps = readSteps(r, j, dataset->m_variables, dataset->m_levels.front().grid.nR());
+    dataset->m_steps = readSteps(r, j, dataset->m_variables, dataset->m_levels);
     const json& sample = r.member(j, "", "sample");
     dataset->m_sampleRows = r.integer(sample, "sample", "rows", 0, grid::kMaxGridPoints);
     checkArrayFiles(*dataset, dataset->m_sampleRows, brickSize);
@@ -1082,8 +1182,12 @@ std::shared_ptr<const StepVolume> Dataset::load(int step, int level) const
         ranges.push_back(m_steps[step].stats[v].range);
         missing.push_back(m_steps[step].stats[v].missingPoints > 0);
     }
+    // The shell means kept in the manifest (stored variables come first: the same indices).
+    std::span<const std::vector<double>> shellMeans;
+    if (const auto& kept = m_steps[step].levelShellMeans; !kept.empty())
+        shellMeans = std::span(kept[size_t(level)]).first(stems.size());
     return StepVolume::open(format::levelDir(format::stepDir(m_dir, step), level), m_levels[level], stems, m_encoding,
-                            ranges, missing, computed);
+                            ranges, missing, computed, shellMeans);
 }
 
 SampleTable Dataset::loadSample(int step, SampleColumns which) const

@@ -75,6 +75,11 @@ struct StepInfo {
     // Per variable, the level-0 shell means (grid nR of them, NaN for a shell without a value) of a
     // variable a computed one is made from; empty for the others.
     std::vector<std::vector<double>> shellMeans;
+    // Per level, per variable the shell means (the level's nR, NaN for a shell without a value) of a
+    // variable a computed one is made from, as StepVolume::shellMeansOf gives them from the level's
+    // stored values (for u16 the decoded ones: the same bits); empty for the others, and for every
+    // variable in datasets written before they were kept (the volume then computes them).
+    std::vector<std::vector<std::vector<double>>> levelShellMeans;
     // How the step was made from a mesh (Snapshot::origin: format, cells, grid points inside a cell,
     // snapped, missing); null for a step read from a netCDF file.
     nlohmann::json origin;
@@ -104,13 +109,16 @@ public:
     // mapped). `ranges`: per variable the step's exact range (the manifest's statistics), or empty
     // for any finite value. `missing`: per stored variable whether the step has missing values (NaN;
     // VariableStats::missingPoints > 0), or empty for none. `computed`: the variables after the stored
-    // ones, each computed from a stored one (its index < fileStems.size()). Throws raypc::Error naming
+    // ones, each computed from a stored one (its index < fileStems.size()). `shellMeans`: per stored
+    // variable its shell means on this level as shellMeansOf would compute them (StepInfo::levelShellMeans),
+    // empty where not known, or empty for none known. Throws raypc::Error naming
     // the file when one is missing, has the wrong size, or holds brick bounds that are not finite with
     // min <= max within the range (a variable with missing values: or (+inf, -inf)).
     static std::shared_ptr<StepVolume> open(const std::filesystem::path& levelDir, const LevelInfo& level,
                                             const std::vector<std::string>& fileStems, ValueEncoding encoding,
                                             std::span<const ValueRange> ranges = {}, std::span<const char> missing = {},
-                                            std::span<const ShellAnomalyOf> computed = {});
+                                            std::span<const ShellAnomalyOf> computed = {},
+                                            std::span<const std::vector<double>> shellMeans = {});
 
     // A volume of `base`'s variables and one more, the last: `values` (grid().cellCount() of them,
     // canonical order; brick bounds computed here). The base's variables are read through it as the
@@ -150,41 +158,46 @@ public:
     void valuesInBox(size_t var, const std::array<size_t, 3>& begin, const std::array<size_t, 3>& end, float* out) const;
     // One variable's values read point by point, without decoding or computing the whole variable:
     // the decoded array when there is one, otherwise a u16 variable's points decoded one by one
-    // (decodeUint16Point) and a shell anomaly's from its base's values and shell means (shellMeansOf:
-    // no array of the anomaly, no brick bounds of it).
+    // (Uint16PointDecoder, its tables built once per volume) and a shell anomaly's from its base's
+    // values and shell means (shellMeansOf: no array of the anomaly, no brick bounds of it); its base
+    // read point by point too when the means are known without decoding it (kept in the manifest:
+    // StepInfo::levelShellMeans), else decoded whole (the means need every point).
     // The same bits as values(var). For passes that read a few points of many variables (a
     // selection's features: extractFeatures); a pass over every point should use values().
     class PointValues {
     public:
         float at(size_t index, size_t iLat, size_t iR, size_t iLon) const
         {
-            if (m_values)
-                return m_values[index];
-            if (m_means)
-                return shellAnomalyValue(m_baseValues[index], m_means[iR], m_kind);
-            return decodeUint16Point(*m_grid, *m_bricks, m_encoded, m_bounds, iLat, iR, iLon, m_missing);
+            const float x =
+                m_values ? m_values[index] : m_decoder->decode(m_encoded, m_bounds, index, iLat, iR, iLon, m_missing);
+            return m_means ? shellAnomalyValue(x, m_means[iR], m_kind) : x;
         }
 
     private:
         friend class StepVolume;
-        const float* m_values = nullptr;  // decoded, mapped float32 or computed
-        const grid::SphericalGrid* m_grid = nullptr;
-        const grid::BrickLayout* m_bricks = nullptr;
-        const uint16_t* m_encoded = nullptr;  // u16, not decoded
+        // The variable's values, or a shell anomaly's base's: decoded, mapped float32 or computed; else
+        // a u16 one's encoded points.
+        const float* m_values = nullptr;
+        const Uint16PointDecoder* m_decoder = nullptr;
+        const uint16_t* m_encoded = nullptr;
         const float* m_bounds = nullptr;
         bool m_missing = false;
-        const double* m_means = nullptr;      // a shell anomaly not computed: its base's shell means
-        const float* m_baseValues = nullptr;  // and values
+        const double* m_means = nullptr;  // a shell anomaly not computed: its base's shell means
         ShellAnomalyKind m_kind = ShellAnomalyKind::Difference;
     };
     // Thread-safe; the reader lives as long as the volume. Throws as values() does (a file cut short,
     // a float32 value outside the range).
     PointValues pointValues(size_t var) const;
+    // Whether pointValues(var) reads an array (decoded, mapped float32) rather than decoding points.
+    bool pointValuesDirect(size_t var) const;
     // The shell means (grid().nR() of them) of variable `var` on this level, as a shell anomaly of it
     // is computed with (shellMeans of values(var), the same bits): computed on first use and kept.
     // A u16 variable not decoded yet is decoded into a copy dropped at once, so that a few point
     // reads keep no array of the grid. Thread-safe.
     const std::vector<double>& shellMeansOf(size_t var) const;
+    // Whether shellMeansOf(var) is at hand without decoding var: computed already, kept in the
+    // manifest, or var's values ready. Thread-safe.
+    bool shellMeansReady(size_t var) const;
     // Whether values(var) is ready without decoding.
     bool valuesReady(size_t var) const { return m_values[var].load(std::memory_order_acquire) != nullptr; }
     // bricks().brickCount() pairs (min, max) of variable `var`. Thread-safe; a computed variable's
@@ -239,6 +252,7 @@ private:
     mutable std::mutex m_derivedMutex;
     mutable std::map<std::pair<size_t, uint32_t>, std::vector<float>> m_derivedBounds;
     mutable std::map<size_t, grid::NodeGradient> m_gradients;
+    std::optional<Uint16PointDecoder> m_pointDecoder;  // u16 volumes: PointValues' decoding
     std::vector<MappedFile> m_mapped;              // when loaded from disk: per variable its values
     std::vector<std::vector<float>> m_owned;       // when built in memory
     std::shared_ptr<const StepVolume> m_base;      // withVariable: the volume whose variables come first
@@ -247,6 +261,40 @@ private:
     mutable std::mutex m_computeMutex;
     mutable std::vector<std::vector<float>> m_computedBounds;    // per computed variable, with its values
     mutable std::map<size_t, std::vector<double>> m_shellMeans;  // per base variable, this level's
+};
+
+// One variable of a step read point by point (StepVolume::PointValues) brick by brick: the first read
+// of a point decodes every point of the brick that owns it (BrickLayout::index(i / size, …)) into a
+// table kept here, so that reads that return to a neighbourhood (a sampler's corners: linking
+// features) decode each point once and whatever is never near a read is never decoded. A variable
+// whose values are at hand (decoded, mapped float32) is read from them. The same bits as
+// PointValues. Not thread-safe: one per thread. Lives no longer than the volume.
+class BrickCachedValues {
+public:
+    BrickCachedValues(const StepVolume& volume, size_t var);
+    float at(size_t iLat, size_t iR, size_t iLon)
+    {
+        if (m_direct)
+            return m_points.at(m_grid->index(iLat, iR, iLon), iLat, iR, iLon);
+        const size_t brick = m_brickOf[0][iLat] + m_brickOf[1][iR] + m_brickOf[2][iLon];
+        if (m_slot[brick] < 0)
+            fill(brick);
+        return m_decoded[size_t(m_slot[brick]) * m_brickPoints + m_offsetOf[0][iLat] + m_offsetOf[1][iR] +
+                         m_offsetOf[2][iLon]];
+    }
+
+private:
+    void fill(size_t brick);
+    const grid::SphericalGrid* m_grid;
+    grid::BrickLayout m_bricks;
+    StepVolume::PointValues m_points;
+    bool m_direct = false;
+    // Per axis and index: its part of the owning brick's index and of the point's place in the brick
+    // (no division per read).
+    std::array<std::vector<uint32_t>, 3> m_brickOf, m_offsetOf;
+    size_t m_brickPoints = 0;
+    std::vector<int32_t> m_slot;  // per brick its place in m_decoded, or -1
+    std::vector<float> m_decoded;  // size³ values per brick decoded
 };
 
 // The parallel-coordinates sample of one step: `rows` cells, columns = coordinates

@@ -315,13 +315,12 @@ TEST_F(DamagedDatasets, ValuesInABoxAreTheWholeVariablesValuesBitForBit)
 
 // What reads a few points of many variables (a selection's features) reads them one by one: the
 // values of values(), bit for bit, without decoding a u16 variable or computing a shell anomaly's
-// array (only its base is decoded, for the shell means).
+// array (its base's shell means are kept in the manifest: nothing is decoded).
 TEST_F(DamagedDatasets, PointValuesAreTheWholeVariablesValuesBitForBitWithoutDecodingIt)
 {
     for (const auto encoding : {ValueEncoding::Uint16, ValueEncoding::Float32}) {
         const auto dataset = Dataset::open(s_dir->path() / std::string(encodingName(encoding)));
         const grid::SphericalGrid& g = dataset->levels()[0].grid;
-        const size_t n = g.cellCount();
         bool computed = false;
         for (size_t var = 0; var < dataset->variables().size(); ++var) {
             const auto fresh = dataset->load(1, 0);
@@ -339,11 +338,84 @@ TEST_F(DamagedDatasets, PointValuesAreTheWholeVariablesValuesBitForBitWithoutDec
             computed = computed || of;
             EXPECT_FALSE(fresh->valuesReady(var) && of) << dataset->variables()[var].name << ": no array computed";
             if (encoding == ValueEncoding::Uint16) {
-                EXPECT_EQ(fresh->decodedBytes(), of ? n * sizeof(float) : 0)
-                    << dataset->variables()[var].name << ": decoded " << (of ? "its base alone" : "nothing");
+                EXPECT_EQ(fresh->decodedBytes(), 0u) << dataset->variables()[var].name << ": decoded nothing";
             }
         }
         EXPECT_TRUE(computed) << "the dataset has shell anomalies";
+    }
+}
+
+// The shell means the manifest keeps per step and level are those a volume computes from the level's
+// stored values (decoded, for u16), bit for bit: the anomalies read with them are the same.
+TEST_F(DamagedDatasets, KeptShellMeansAreThoseOfTheStoredValuesBitForBit)
+{
+    for (const auto encoding : {ValueEncoding::Uint16, ValueEncoding::Float32}) {
+        const auto dataset = Dataset::open(s_dir->path() / std::string(encodingName(encoding)));
+        size_t compared = 0;
+        for (size_t s = 0; s < dataset->steps().size(); ++s) {
+            const auto& kept = dataset->steps()[s].levelShellMeans;
+            ASSERT_EQ(kept.size(), dataset->levels().size()) << "step " << s;
+            for (size_t l = 0; l < kept.size(); ++l) {
+                const grid::SphericalGrid& g = dataset->levels()[l].grid;
+                const auto volume = dataset->load(int(s), int(l));
+                for (size_t var = 0; var < dataset->variables().size(); ++var) {
+                    const ShellAnomalyOf* of = dataset->variables()[var].computed ? &*dataset->variables()[var].computed
+                                                                                  : nullptr;
+                    if (!of)
+                        continue;
+                    const std::vector<double> computed = shellMeans(g, {volume->values(of->base), g.cellCount()});
+                    ASSERT_EQ(kept[l][of->base].size(), g.nR());
+                    for (size_t iR = 0; iR < g.nR(); ++iR, ++compared)
+                        ASSERT_EQ(std::bit_cast<uint64_t>(kept[l][of->base][iR]), std::bit_cast<uint64_t>(computed[iR]))
+                            << encodingName(encoding) << " step " << s << " level " << l << " "
+                            << dataset->variables()[of->base].name << " shell " << iR;
+                }
+            }
+        }
+        EXPECT_GT(compared, 0u);
+    }
+}
+
+// A dataset written before the shell means were kept (no level_shell_means) opens and gives the same
+// values, computing the means from the decoded base.
+TEST_F(DamagedDatasets, ADatasetWithoutKeptShellMeansGivesTheSameValues)
+{
+    const TempDir tmp("no-kept-means");
+    const fs::path dir = copy(tmp);
+    json manifest = json::parse(readFile(dir / format::kManifest));
+    for (json& step : manifest.at("steps")) {
+        ASSERT_TRUE(step.contains("level_shell_means"));
+        step.erase("level_shell_means");
+    }
+    writeFileAtomic(dir / format::kManifest, manifest.dump(1));
+    const auto before = Dataset::open(dir);
+    const auto kept = Dataset::open(s_dir->path() / "u16");
+    EXPECT_TRUE(before->steps()[1].levelShellMeans.empty());
+    for (int level = 0; level < int(kept->levels().size()); ++level) {
+        const grid::SphericalGrid& g = kept->levels()[size_t(level)].grid;
+        for (size_t var = 0; var < kept->variables().size(); ++var) {
+            const ShellAnomalyOf* of = kept->variables()[var].computed ? &*kept->variables()[var].computed : nullptr;
+            if (!of)
+                continue;
+            const auto fresh = before->load(1, level);
+            const StepVolume::PointValues points = fresh->pointValues(var);
+            EXPECT_EQ(fresh->decodedBytes(), g.cellCount() * sizeof(float)) << "the base decoded for its means";
+            const auto other = kept->load(1, level);
+            const StepVolume::PointValues keptPoints = other->pointValues(var);
+            EXPECT_EQ(other->decodedBytes(), 0u);
+            const auto whole = kept->load(1, level);
+            const float* all = whole->values(var);
+            for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+                for (size_t iR = 0; iR < g.nR(); ++iR)
+                    for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                        const size_t i = g.index(iLat, iR, iLon);
+                        ASSERT_EQ(std::bit_cast<uint32_t>(points.at(i, iLat, iR, iLon)), std::bit_cast<uint32_t>(all[i]));
+                        ASSERT_EQ(std::bit_cast<uint32_t>(keptPoints.at(i, iLat, iR, iLon)), std::bit_cast<uint32_t>(all[i]));
+                    }
+            const auto wholeBefore = before->load(1, level);
+            const float* computed = wholeBefore->values(var);
+            EXPECT_EQ(std::memcmp(computed, all, g.cellCount() * sizeof(float)), 0) << kept->variables()[var].name;
+        }
     }
 }
 

@@ -111,4 +111,30 @@ void computeShellAnomaly(const grid::SphericalGrid& g, std::span<const float> va
     });
 }
 
+void shellAnomalyBrickBounds(const grid::SphericalGrid& g, const grid::BrickLayout& layout,
+                             std::span<const float> baseBounds, std::span<const double> means, ShellAnomalyKind kind,
+                             std::span<float> out)
+{
+    RAYPC_CHECK_EQ(baseBounds.size(), 2 * layout.brickCount());
+    RAYPC_CHECK_EQ(out.size(), 2 * layout.brickCount());
+    RAYPC_CHECK_EQ(means.size(), g.nR());
+    const size_t s = layout.size, nR = g.nR();
+    for (size_t b = 0; b < layout.brickCount(); ++b) {
+        const size_t bR = (b / layout.count[2]) % layout.count[1];
+        const float lo = baseBounds[2 * b], hi = baseBounds[2 * b + 1];
+        float outLo = std::numeric_limits<float>::infinity(), outHi = -outLo;
+        // Radii [bR*s, (bR+1)*s] inclusive, clamped at the grid's end: the shells the brick covers.
+        for (size_t iR = bR * s; lo <= hi && iR <= std::min((bR + 1) * s, nR - 1); ++iR) {
+            if (std::isnan(means[iR]))
+                continue;  // the shell's anomaly is NaN: never selected
+            // Increasing in x for a positive mean (and a difference), decreasing for a negative one.
+            const float a = shellAnomalyValue(lo, means[iR], kind), c = shellAnomalyValue(hi, means[iR], kind);
+            outLo = std::min({outLo, a, c});
+            outHi = std::max({outHi, a, c});
+        }
+        out[2 * b] = outLo;
+        out[2 * b + 1] = outHi;
+    }
+}
+
 }  // namespace raypc::dataset

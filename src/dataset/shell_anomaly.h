@@ -74,6 +74,15 @@ bool shellMeansPositive(std::span<const double> means);
 // its range; NaN where x or the mean is NaN).
 float shellAnomalyValue(float x, double mean, ShellAnomalyKind kind);
 
+// Per brick of `layout` bounds (min, max) on every value of a shell anomaly at the points the brick
+// covers (computeBrickBounds' rule), from its base's brick bounds `baseBounds` (as computeBrickBounds
+// writes them) and the shells' `means`: shellAnomalyValue is monotone in x on each shell, so its
+// values at the base's bounds bound it. Wider than the anomaly's own bounds, never narrower: a brick
+// whose bounds meet no range has no point in it. (+inf, -inf) for a brick with no finite value.
+void shellAnomalyBrickBounds(const grid::SphericalGrid& grid, const grid::BrickLayout& layout,
+                             std::span<const float> baseBounds, std::span<const double> means, ShellAnomalyKind kind,
+                             std::span<float> out);
+
 // Every value of a shell anomaly of `values` with the shells' `means` into `out` (both
 // grid.cellCount()). Parallel.
 void computeShellAnomaly(const grid::SphericalGrid& grid, std::span<const float> values, std::span<const double> means,

@@ -6,6 +6,7 @@
 
 #include "core/atomic_file.h"
 #include "core/spherical.h"
+#include "dataset/bricks.h"
 #include "dataset/dataset.h"
 #include "dataset/dataset_format.h"
 #include "io/netcdf_reader.h"
@@ -138,6 +139,35 @@ TEST(ShellAnomaly, ShellMeansAreAreaWeightedAndLeaveOutMissingValues)
     EXPECT_FALSE(shellMeansPositive(mixed));
     mixed[1] = 0;
     EXPECT_FALSE(shellMeansPositive(mixed));
+}
+
+// Bricks skipped by a selection of an anomaly are skipped by the bounds made from the base's: those
+// hold every anomaly value of the brick's points (both kinds, negative means, missing values), and
+// are finite where the brick has a value (so that they can skip it).
+TEST(ShellAnomaly, BrickBoundsFromTheBasesHoldEveryValueOfTheBrick)
+{
+    const grid::SphericalGrid g = testing::centredGrid(13, 11, 18);
+    std::vector<float> v = testing::fillGrid(g, [&](size_t a, size_t r, size_t c) {
+        return (r == 4 ? -1.0 : 1.0) * (500.0 + 40.0 * std::sin(0.7 * double(a * 31 + r * 7 + c * 3))) + double(r);
+    });
+    for (size_t c = 0; c < g.nLon(); ++c)
+        v[g.index(12, 10, c)] = std::numeric_limits<float>::quiet_NaN();  // a ring without values
+    v[g.index(3, 3, 3)] = std::numeric_limits<float>::quiet_NaN();
+    const grid::BrickLayout layout = grid::BrickLayout::forGrid(g, 4);
+    std::vector<float> baseBounds(2 * layout.brickCount()), own(baseBounds.size()), bounds(baseBounds.size()),
+        anomaly(g.cellCount());
+    computeBrickBounds(g, layout, v, baseBounds);
+    const std::vector<double> means = shellMeans(g, v);
+    for (const ShellAnomalyKind kind : {ShellAnomalyKind::Difference, ShellAnomalyKind::Percent}) {
+        computeShellAnomaly(g, v, means, kind, anomaly);
+        computeBrickBounds(g, layout, anomaly, own);
+        shellAnomalyBrickBounds(g, layout, baseBounds, means, kind, bounds);
+        for (size_t b = 0; b < layout.brickCount(); ++b) {
+            EXPECT_LE(bounds[2 * b], own[2 * b]) << "brick " << b;
+            EXPECT_GE(bounds[2 * b + 1], own[2 * b + 1]) << "brick " << b;
+            EXPECT_TRUE(std::isfinite(bounds[2 * b]) && std::isfinite(bounds[2 * b + 1])) << "brick " << b;
+        }
+    }
 }
 
 // The contest fixture preprocessed (float32 and u16), read back.

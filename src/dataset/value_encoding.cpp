@@ -11,7 +11,8 @@
 #include <vector>
 
 namespace raypc::dataset {
-namespace {
+// Named rather than anonymous: Uint16PointDecoder's tables (declared in the header) hold its types.
+namespace value_encoding_detail {
 
 constexpr double kLevels = 65535.0;
 // A variable with missing values keeps the highest code for them (kMissingCode: NaN) and quantises
@@ -80,7 +81,9 @@ void intersectBounds(const grid::BrickLayout& layout, std::span<const float> bou
             }
 }
 
-}  // namespace
+}  // namespace value_encoding_detail
+
+using namespace value_encoding_detail;
 
 std::string_view encodingName(ValueEncoding encoding)
 {
@@ -186,17 +189,16 @@ void decodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layo
 
 namespace raypc::dataset {
 
-float decodeUint16Point(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, const uint16_t* encoded,
-                        const float* bounds, size_t iLat, size_t iR, size_t iLon, bool missing)
+namespace {
+
+// decodeUint16's steps for one point, its covers along each axis given, so that both give the same bits.
+float decodePoint(const grid::BrickLayout& layout, const float* bounds, uint16_t code, const AxisCover& lat,
+                  const AxisCover& r, const AxisCover& lon, bool missing)
 {
-    if (missing && encoded[grid.index(iLat, iR, iLon)] == kMissingCode)
+    if (missing && code == kMissingCode)
         return NAN;
-    const AxisCover lat = coverOf(iLat, grid.nLat(), layout.size, layout.count[0], false);
-    const AxisCover r = coverOf(iR, grid.nR(), layout.size, layout.count[1], false);
-    const AxisCover lon = coverOf(iLon, grid.nLon(), layout.size, layout.count[2], true);
     const size_t brick = layout.index(lat.bricks[0], r.bricks[0], lon.bricks[0]);
     const float min = bounds[2 * brick], max = bounds[2 * brick + 1];
-    // The steps of decodeUint16, so that both give the same bits.
     float lo = min, hi = max;
     const std::span<const float> all(bounds, 2 * layout.brickCount());
     if (lat.count > 1 || r.count > 1)
@@ -204,13 +206,40 @@ float decodeUint16Point(const grid::SphericalGrid& grid, const grid::BrickLayout
     if (missing && !(lo <= hi))
         return NAN;
     const double scale = (double(max) - double(min)) / levelsOf(missing);
-    const double v = double(min) + double(encoded[grid.index(iLat, iR, iLon)]) * scale;
+    const double v = double(min) + double(code) * scale;
     float value = float(std::clamp(v, double(lo), double(hi)));
     if (lon.count > 1) {
         intersectBounds(layout, all, lat, r, lon, lo, hi);
         value = lo <= hi ? std::clamp(value, lo, hi) : NAN;
     }
     return value;
+}
+
+}  // namespace
+
+float decodeUint16Point(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, const uint16_t* encoded,
+                        const float* bounds, size_t iLat, size_t iR, size_t iLon, bool missing)
+{
+    return decodePoint(layout, bounds, encoded[grid.index(iLat, iR, iLon)],
+                       coverOf(iLat, grid.nLat(), layout.size, layout.count[0], false),
+                       coverOf(iR, grid.nR(), layout.size, layout.count[1], false),
+                       coverOf(iLon, grid.nLon(), layout.size, layout.count[2], true), missing);
+}
+
+struct Uint16PointDecoder::Tables : value_encoding_detail::Covers {
+    using Covers::Covers;
+};
+
+Uint16PointDecoder::Uint16PointDecoder(const grid::SphericalGrid& grid, const grid::BrickLayout& layout)
+    : m_layout(layout), m_tables(std::make_shared<const Tables>(grid, layout))
+{
+}
+
+float Uint16PointDecoder::decode(const uint16_t* encoded, const float* bounds, size_t index, size_t iLat, size_t iR,
+                                 size_t iLon, bool missing) const
+{
+    return decodePoint(m_layout, bounds, encoded[index], m_tables->lat[iLat], m_tables->r[iR], m_tables->lon[iLon],
+                       missing);
 }
 
 }  // namespace raypc::dataset

@@ -18,6 +18,7 @@
 #include "grid/grid.h"
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string_view>
 
@@ -48,5 +49,23 @@ void decodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layo
 // sparse reads: a few samples of a variable that is not decoded).
 float decodeUint16Point(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, const uint16_t* encoded,
                         const float* bounds, size_t iLat, size_t iR, size_t iLon, bool missing = false);
+
+// decodeUint16Point for many points of one grid and brick layout (a step's sparse reads: a
+// selection's features), with the bricks that cover each index along each axis found once (the
+// tables decodeUint16 builds) instead of per point: the same bits. Immutable and thread-safe; cheap to
+// copy (the tables are shared).
+class Uint16PointDecoder {
+public:
+    Uint16PointDecoder(const grid::SphericalGrid& grid, const grid::BrickLayout& layout);
+    // The value of point (iLat, iR, iLon), `index` = grid.index(iLat, iR, iLon), of the variable
+    // `encoded` with brick bounds `bounds` (as decodeUint16Point takes them).
+    float decode(const uint16_t* encoded, const float* bounds, size_t index, size_t iLat, size_t iR, size_t iLon,
+                 bool missing) const;
+
+private:
+    struct Tables;
+    grid::BrickLayout m_layout;
+    std::shared_ptr<const Tables> m_tables;
+};
 
 }  // namespace raypc::dataset

@@ -19,6 +19,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -89,6 +90,7 @@ Checked checkRoundTrip(const grid::SphericalGrid& g, const std::vector<float>& v
                         }
             }
     Checked result;
+    const Uint16PointDecoder pointDecoder(g, layout);
     for (size_t i = 0; i < g.nLat(); ++i)
         for (size_t j = 0; j < g.nR(); ++j)
             for (size_t k = 0; k < g.nLon(); ++k) {
@@ -98,8 +100,9 @@ Checked checkRoundTrip(const grid::SphericalGrid& g, const std::vector<float>& v
                 // Plus half an ulp of the decoded float (value_encoding.h).
                 const double rounding = 0.5 * std::abs(std::nextafter(decoded[p], INFINITY) - decoded[p]);
                 const double error = std::abs(double(decoded[p]) - double(values[p]));
-                // One point decoded alone gives the same bits.
+                // One point decoded alone gives the same bits, and so does the decoder of many points.
                 EXPECT_EQ(decodeUint16Point(g, layout, encoded.data(), bounds.data(), i, j, k), decoded[p]);
+                EXPECT_EQ(pointDecoder.decode(encoded.data(), bounds.data(), p, i, j, k, false), decoded[p]);
                 EXPECT_LE(error, quantisation * (1 + 1e-9) + rounding)
                     << "point " << i << " " << j << " " << k << ": " << values[p] << " -> " << decoded[p];
                 if (quantisation > 0)
@@ -422,11 +425,14 @@ TEST(ValueEncoding, MissingValuesStayMissing)
     std::vector<float> decoded(values.size());
     decodeUint16(g, layout, encoded, bounds, decoded, true);
     size_t missing = 0;
+    const Uint16PointDecoder pointDecoder(g, layout);
     for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
         for (size_t iR = 0; iR < g.nR(); ++iR)
             for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
                 const size_t i = g.index(iLat, iR, iLon);
                 const float point = decodeUint16Point(g, layout, encoded.data(), bounds.data(), iLat, iR, iLon, true);
+                const float decoderPoint = pointDecoder.decode(encoded.data(), bounds.data(), i, iLat, iR, iLon, true);
+                EXPECT_EQ(std::bit_cast<uint32_t>(decoderPoint), std::bit_cast<uint32_t>(point)) << i;
                 if (std::isnan(values[i])) {
                     ++missing;
                     EXPECT_TRUE(std::isnan(decoded[i])) << i;
