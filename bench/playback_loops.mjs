@@ -75,7 +75,7 @@ for (let k = 1; k <= total; k++) {
   const now = performance.now();
   due = now - due > 0.25 * period ? now + period : due + period;
   shown.push({ loop: Math.floor(k / nSteps), step: ahead.step, level: h.level, width: h.width, height: h.height,
-    pass: h.pass, converged: h.converged === true, cached: h.cached === true, t: now });
+    pass: h.pass, passes: h.passes, converged: h.converged === true, cached: h.cached === true, t: now });
   ahead = send((ahead.step + 1) % nSteps);
 }
 ws.close();
@@ -90,7 +90,11 @@ for (let l = 0; l <= loops; l++) {
   const full = s.filter((x) => x.level === 0 && x.width === width && x.height === height).length;
   const levels = {};
   for (const x of s) levels[x.level] = (levels[x.level] ?? 0) + 1;
-  const done = s.filter((x) => x.level === 0 && x.width === width && x.height === height && x.converged).length;
+  // With every pass: the last frame of its state and more than its first pass (adaptive refinement
+  // stops a frame early only after its second pass); a draft or a one-pass step says converged
+  // after its first pass of several.
+  const done = s.filter((x) => x.level === 0 && x.width === width && x.height === height && x.converged &&
+    (x.pass > 1 || x.passes === 1)).length;
   console.log(`  loop ${l + 1}: ${s.length} steps shown at ${rate.toFixed(2)} steps/s; level 0 at full size ${full}/${s.length} ` +
     `(${(100 * full / s.length).toFixed(0)} %), of which with every pass ${done}; from the frames rendered ahead ` +
     `${s.filter((x) => x.cached).length}; by level ${JSON.stringify(levels)}`);

@@ -311,6 +311,19 @@ std::shared_ptr<const EncodedFrame> RenderSession::renderFinished(StateRenderer&
     return frame;
 }
 
+// The level of a draft rendered ahead while playing: one finer than the session's own steps of
+// playback of this state took at best within their period (a draft has a whole loop's time, shared
+// with those steps), never
+// finer than the still's; before any step of playback, one coarser than the still's. So at 2 steps/s
+// on a full-resolution series (playback at level 1) the drafts are at level 0, at 5 steps/s (level 2)
+// at level 1: a full-size frame of every step within about a loop, which the finished frame replaces.
+int RenderSession::draftLevel(const state::RenderState& state) const
+{
+    const int still = state.level.value_or(0), coarsest = int(m_context.dataset->levels().size()) - 1;
+    const int played = m_playbackLevel.load();
+    return std::clamp(played >= 0 ? played - 1 : still + 1, still, std::max(still, coarsest));
+}
+
 void RenderSession::aheadLoop()
 {
     // Below the session's own frames: a nicer thread, and a TBB arena whose tasks the shared workers
@@ -362,6 +375,8 @@ void RenderSession::aheadLoop()
                     request.id = 0;
                     request.mode = FrameMode::still;
                     request.resolved.state.step = step;
+                    if (draft)
+                        request.resolved.state.level = draftLevel(request.resolved.state);
                     request.resolved = render::resolveState(std::move(request.resolved.state), *m_context.dataset);
                     std::shared_ptr<const EncodedFrame> frame;
                     arena.execute([&] {
@@ -481,6 +496,12 @@ void RenderSession::render(const Request& request)
         prepared = m_renderer.prepare(request.resolved, policy);  // the preview's renderers are no longer valid
     }
     const int level = prepared.level;
+    if (frameKey != m_playbackKey) {
+        m_playbackKey = frameKey;
+        m_playbackLevel = -1;
+    }
+    if (request.mode == FrameMode::playback && (m_playbackLevel < 0 || level < m_playbackLevel))
+        m_playbackLevel = level;
 
     // Playback (step = previous step + 1): load the next step in the background at this level.
     if (m_lastStep >= 0 && step == m_lastStep + 1 && step + 1 < int(dataset.steps().size())) {
@@ -535,11 +556,12 @@ void RenderSession::render(const Request& request)
                                      selectionKey == m_selectionKey ? m_selection : nlohmann::json());
         // A finished frame at still quality (the state's level, else 0; full size; every pass) is
         // what rendering ahead would make: kept for the next time this step is asked; a step of
-        // playback's one pass at that level and size is kept as a draft (what the ahead thread's
-        // first round makes).
-        if ((finished || onePass) && !job.interactive && prepared.divisor == 1 &&
-            prepared.level == state.level.value_or(0)) {
-            frame->finished = finished;
+        // playback's one pass at full size and at most the drafts' level is kept as a draft (what
+        // the ahead thread's first round makes).
+        const bool atStillQuality = finished && prepared.level == state.level.value_or(0);
+        const bool asDraft = onePass && prepared.level <= draftLevel(state);
+        if ((atStillQuality || asDraft) && !job.interactive && prepared.divisor == 1) {
+            frame->finished = atStillQuality;
             m_frameCache.insert(frameKey, step, frame);
         }
         if (pass == 1 && job.interactive) {

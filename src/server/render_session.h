@@ -126,6 +126,8 @@ private:
     // passes or at most `maxPasses` (a draft when that stops it early); nullptr when cancelled.
     std::shared_ptr<const EncodedFrame> renderFinished(render::StateRenderer& renderer, const Request& request,
                                                        const std::atomic<bool>& cancel, int maxPasses);
+    // The level of a draft rendered ahead while playing (draftLevel in render_session.cpp).
+    int draftLevel(const state::RenderState& state) const;
     // Tells the ahead thread what the session shows now: the state (its key) and its step.
     void planAhead(const Request& request, const std::string& key);
     // Sends a kept frame as the answer to `request`.
@@ -186,6 +188,8 @@ private:
     bool m_aheadChanged = false;
     std::atomic<bool> m_aheadStop{false};
     std::atomic<bool> m_aheadBusy{false};  // the ahead thread has steps to render
+    std::atomic<int> m_playbackLevel{-1};   // the finest level of a step of playback rendered here
+    std::string m_playbackKey;              // ... of this frame key (session thread only)
     std::atomic<bool> m_aheadCancel{false};
     render::StateRenderer m_aheadRenderer;
     std::thread m_aheadThread;
