@@ -7,7 +7,7 @@
 //   node --experimental-websocket bench/playback_loops.mjs RAYPC DATASET [--fps 2] [--loops 3]
 //        [--size 1500x627] [--pause S] [-- extra serve options...]
 // --pause S: after the still frame of step 0, wait S seconds (paused) before playing (default 0).
-import { spawn } from 'node:child_process';
+import { openSession, startServer } from './protocol_client.mjs';
 import { readFileSync } from 'node:fs';
 
 const args = process.argv.slice(2);
@@ -21,21 +21,11 @@ if (!raypc || !dataset || typeof WebSocket !== 'function') {
   console.error('usage: node --experimental-websocket bench/playback_loops.mjs RAYPC DATASET [--fps 2] [--loops 3] [--size WxH] [--pause S] [-- serve options]');
   process.exit(2);
 }
-const child = spawn(raypc, ['serve', dataset, '--port', '0', ...serveExtra], { stdio: ['ignore', 'pipe', 'inherit'] });
-let out = '';
-const url = await new Promise((resolve) => child.stdout.on('data', (d) => {
-  out += d;
-  const m = /serving (http:\/\/\S+)/.exec(out);
-  if (m) resolve(m[1]);
-}));
-const info = await (await fetch(url + 'api/info')).json();
+const { child, url, info } = await startServer(raypc, dataset, serveExtra);
 const nSteps = info.steps.length;
 const base = { ...info.defaultState, image: { width, height } };
 
-const ws = new WebSocket(url.replace(/^http/, 'ws') + 'ws');
-ws.binaryType = 'arraybuffer';
-await new Promise((resolve) => { ws.onopen = resolve; });
-ws.send(JSON.stringify({ type: 'hello', protocol: 1 }));
+const ws = await openSession(url);
 const newest = new Map(); // state id -> { header, at }
 let onFrame = () => {};
 ws.onmessage = (e) => {

@@ -9,7 +9,7 @@
 // --verbose: the server logs its debug timings (raypc -v) to stderr.
 // Prints per step change: the time to the first frame (a preview), to the first level-0 frame, to the
 // converged level-0 frame, and the passes; then the load.
-import { spawn } from 'node:child_process';
+import { openSession, startServer } from './protocol_client.mjs';
 import { readFileSync } from 'node:fs';
 
 const args = process.argv.slice(2);
@@ -23,24 +23,12 @@ if (!raypc || !dataset || typeof WebSocket !== 'function') {
   console.error('usage: node --experimental-websocket bench/step_change.mjs RAYPC DATASET [--size WxH] [-- serve options]');
   process.exit(2);
 }
-const child = spawn(raypc, [...(verbose ? ['-v'] : []), 'serve', dataset, '--port', '0', ...serveExtra],
-  { stdio: ['ignore', 'pipe', 'inherit'] });
+const { child, url, info } = await startServer(raypc, dataset, serveExtra, { verbose: verbose > 0 });
 child.once('exit', (code) => { console.error(`raypc serve exited (${code})`); process.exit(1); });
-let out = '';
-const url = await new Promise((resolve) => child.stdout.on('data', (d) => {
-  if (verbose) process.stderr.write(d);
-  out += d;
-  const m = /serving (http:\/\/\S+)/.exec(out);
-  if (m) resolve(m[1]);
-}));
-const info = await (await fetch(url + 'api/info')).json();
 const nSteps = info.steps.length;
 const base = { ...info.defaultState, image: { width, height } };
 
-const ws = new WebSocket(url.replace(/^http/, 'ws') + 'ws');
-ws.binaryType = 'arraybuffer';
-await new Promise((resolve) => { ws.onopen = resolve; });
-ws.send(JSON.stringify({ type: 'hello', protocol: 1 }));
+const ws = await openSession(url);
 let onFrame = () => {};
 ws.onmessage = (e) => {
   if (typeof e.data === 'string') {
