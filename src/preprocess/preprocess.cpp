@@ -448,50 +448,12 @@ std::vector<int> findStepsToDo(const OutputDirectory& out, const StepSource& sou
     return todo;
 }
 
-// The shell means a reader's StepVolume::shellMeansOf gives on each level (dataset::StepInfo::
-// levelShellMeans): of the level's values as stored, i.e. coarsened from the exact level-0 values as
-// writeStep coarsens them and, for u16, encoded with the bounds writeStep computes and decoded again:
-// the same bits, so that a reader need not decode a base variable whole for its means.
-// step["level_shell_means"][level][name], null for a shell without a value.
-json levelShellMeans(const RunPlan& plan, const PreprocessOptions& options, const std::vector<float>& exact)
-{
-    json out = json::array();
-    const bool missing = std::any_of(exact.begin(), exact.end(), [](float x) { return std::isnan(x); });
-    std::vector<float> coarser, decoded;  // level 0 read from `exact`, not copied
-    std::vector<uint16_t> encoded;
-    for (int l = 0; l < dataset::kLevelCount; ++l) {
-        const grid::SphericalGrid& g = plan.levels[size_t(l)];
-        const std::span<const float> level = l == 0 ? std::span<const float>(exact) : std::span<const float>(coarser);
-        std::vector<double> means;
-        if (options.encoding == dataset::ValueEncoding::Uint16) {
-            const grid::BrickLayout layout = grid::BrickLayout::forGrid(g, options.brickSize);
-            std::vector<float> bounds(2 * layout.brickCount());
-            dataset::computeBrickBounds(g, layout, level, bounds);
-            encoded.resize(level.size());
-            dataset::encodeUint16(g, layout, level, bounds, encoded, missing);
-            decoded.resize(level.size());
-            dataset::decodeUint16(g, layout, encoded, bounds, decoded, missing);
-            means = dataset::shellMeans(g, decoded);
-        } else {
-            means = dataset::shellMeans(g, level);
-        }
-        json& m = out.emplace_back(json::array());
-        for (double mean : means)
-            m.push_back(std::isnan(mean) ? json() : json(mean));
-        if (l + 1 < dataset::kLevelCount)
-            coarser = coarsenField(g, level);
-    }
-    return out;
-}
-
 // The step's level-0 shell means of every variable a shell anomaly is computed from
-// (step["shell_means"][name], null for a shell without a value), each level's as a reader gets them
-// (step["level_shell_means"]: levelShellMeans) and each shell anomaly's statistics
+// (step["shell_means"][name], null for a shell without a value) and each shell anomaly's statistics
 // (step["computed_stats"][name]), from the exact values: null where the step does not define it (a
 // percentage of a shell mean not positive) or it overflows float32. Made with the functions the
 // readers compute the values with (dataset/shell_anomaly.h).
-void addComputedStats(json& stepJson, const RunPlan& plan, const PreprocessOptions& options,
-                      const std::vector<std::vector<float>>& values)
+void addComputedStats(json& stepJson, const RunPlan& plan, const std::vector<std::vector<float>>& values)
 {
     const grid::SphericalGrid& g = plan.header.grid;
     std::map<size_t, std::vector<double>> means;
@@ -503,18 +465,6 @@ void addComputedStats(json& stepJson, const RunPlan& plan, const PreprocessOptio
         json& out = stepJson["shell_means"][plan.specs[base].name] = json::array();
         for (double mean : m)
             out.push_back(std::isnan(mean) ? json() : json(mean));
-    }
-    std::vector<std::pair<size_t, json>> kept;
-    for (const auto& m : means)
-        kept.emplace_back(m.first, json());
-    // One base at a time (each encoded and decoded in parallel): two more arrays of the grid in memory.
-    for (auto& [base, perLevel] : kept)
-        perLevel = levelShellMeans(plan, options, values[base]);
-    stepJson["level_shell_means"] = json::array();
-    for (int l = 0; l < dataset::kLevelCount; ++l) {
-        json& byName = stepJson["level_shell_means"].emplace_back(json::object());
-        for (auto& [base, perLevel] : kept)
-            byName[plan.specs[base].name] = std::move(perLevel[size_t(l)]);
     }
     // One variable at a time (each computed in parallel): one more array of the grid in memory.
     std::vector<json> stats(plan.computed.size());
@@ -642,14 +592,21 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const StepSource& so
     });
     for (const auto& st : stats)
         stepJson["stats"].push_back(dataset::format::toJson(st));
-    addComputedStats(stepJson, plan, options, current);
+    addComputedStats(stepJson, plan, current);
     spdlog::debug("{}: derived, stats and sample done at {:.2f} s", label, elapsed());
     for (int level = 0; level < dataset::kLevelCount; ++level)
         fs::create_directories(dataset::format::levelDir(tmpDir, level));
+    // The shell means a reader's StepVolume::shellMeansOf gives on each level of every variable a
+    // shell anomaly is computed from (dataset::StepInfo::levelShellMeans): of the level's values as
+    // stored (for u16 decoded again), the same bits, so that a reader need not decode a base whole.
+    std::vector<std::vector<std::vector<double>>> levelMeans(specs.size());  // [variable][level][shell]
+    for (const VariableSpec& c : plan.computed)
+        levelMeans[c.computed->base].resize(dataset::kLevelCount);
     // Variables in parallel: writing into the page cache costs as much CPU as computing,
     // so both cores write while they compute bounds and coarser levels.
     tbb::parallel_for(size_t(0), specs.size(), [&](size_t v) {
         const auto stem = fileSafeName(specs[v].name);
+        const bool keepMeans = !levelMeans[v].empty();
         for (int level = 0; level < dataset::kLevelCount; ++level) {
             const grid::SphericalGrid& grid = plan.levels[level];
             const grid::BrickLayout layout = grid::BrickLayout::forGrid(grid, options.brickSize);
@@ -658,17 +615,37 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const StepSource& so
             dataset::computeBrickBounds(grid, layout, current[v], bounds);
             if (options.encoding == dataset::ValueEncoding::Uint16) {
                 // Quantised from the exact values; coarser levels are computed from the exact ones too.
+                const bool missing = stats[v].missingPoints > 0;
                 std::vector<uint16_t> encoded(current[v].size());
-                dataset::encodeUint16(grid, layout, current[v], bounds, encoded, stats[v].missingPoints > 0);
+                dataset::encodeUint16(grid, layout, current[v], bounds, encoded, missing);
                 writeArray<uint16_t>(dataset::format::encodedValuesFile(dir, stem), encoded);
+                if (keepMeans) {
+                    std::vector<float> decoded(encoded.size());
+                    dataset::decodeUint16(grid, layout, encoded, bounds, decoded, missing);
+                    levelMeans[v][size_t(level)] = dataset::shellMeans(grid, decoded);
+                }
             } else {
                 writeArray<float>(dataset::format::valuesFile(dir, stem), current[v]);
+                if (keepMeans)
+                    levelMeans[v][size_t(level)] = dataset::shellMeans(grid, current[v]);
             }
             writeArray<float>(dataset::format::boundsFile(dir, stem), bounds);
             if (level + 1 < dataset::kLevelCount)
                 current[v] = coarsenField(grid, current[v]);
         }
     });
+    // step["level_shell_means"][level][name], null for a shell without a value.
+    stepJson["level_shell_means"] = json::array();
+    for (int level = 0; level < dataset::kLevelCount; ++level) {
+        json& byName = stepJson["level_shell_means"].emplace_back(json::object());
+        for (size_t v = 0; v < specs.size(); ++v) {
+            if (levelMeans[v].empty())
+                continue;
+            json& m = byName[specs[v].name] = json::array();
+            for (double mean : levelMeans[v][size_t(level)])
+                m.push_back(std::isnan(mean) ? json() : json(mean));
+        }
+    }
     writeArray<float>(tmpDir / dataset::format::kStepSample, sample);
     writeFileAtomic(tmpDir / dataset::format::kStepInputs, fingerprint.dump(1));
     {
