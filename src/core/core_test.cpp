@@ -19,6 +19,7 @@
 #include <chrono>
 #include <atomic>
 #include <cstdlib>
+#include <memory>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -431,7 +432,7 @@ TEST(HugePages, LargeArraysStartOnAHugePageAndAreAdvised)
     if (!hugePagesEnabled())
         GTEST_SKIP() << "glibc's malloc asks for huge pages itself here (GLIBC_TUNABLES)";
     const size_t bytes = 3 * kHugePageBytes + 12345;
-    const auto a = makeHugePageArray<char>(bytes);
+    const std::unique_ptr<char[], void (*)(void*)> a(static_cast<char*>(allocateHugePageBacked(bytes)), std::free);
     const auto p = reinterpret_cast<uintptr_t>(a.get());
     EXPECT_EQ(p % kHugePageBytes, 0u);
     const Mapping m = mappingOf(a.get());

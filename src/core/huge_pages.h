@@ -70,23 +70,5 @@ struct HugePageAllocator {
 template <class T>
 using HugePageVector = std::vector<T, HugePageAllocator<T>>;
 
-struct HugePageFree {
-    void operator()(void* p) const noexcept { std::free(p); }
-};
-
-// An array of n uninitialised T (as std::make_unique_for_overwrite<T[]>) from allocateHugePageBacked:
-// for arrays that are written whole right after (a decoded variable).
-template <class T>
-using HugePageArray = std::unique_ptr<T[], HugePageFree>;
-
-template <class T>
-HugePageArray<T> makeHugePageArray(size_t n)
-{
-    static_assert(std::is_trivially_default_constructible_v<T> && std::is_trivially_destructible_v<T>,
-                  "the array is never constructed nor destroyed element by element");
-    if (n > size_t(-1) / sizeof(T))
-        throw std::bad_array_new_length();
-    return HugePageArray<T>(static_cast<T*>(allocateHugePageBacked(n * sizeof(T))));
-}
 
 }  // namespace raypc

@@ -448,6 +448,15 @@ std::vector<int> findStepsToDo(const OutputDirectory& out, const StepSource& sou
     return todo;
 }
 
+// Shell means as a step's manifest keeps them: null for a shell without a value.
+json shellMeansJson(const std::vector<double>& means)
+{
+    json out = json::array();
+    for (double mean : means)
+        out.push_back(std::isnan(mean) ? json() : json(mean));
+    return out;
+}
+
 // The step's level-0 shell means of every variable a shell anomaly is computed from
 // (step["shell_means"][name], null for a shell without a value) and each shell anomaly's statistics
 // (step["computed_stats"][name]), from the exact values: null where the step does not define it (a
@@ -461,11 +470,8 @@ void addComputedStats(json& stepJson, const RunPlan& plan, const std::vector<std
         means.try_emplace(v.computed->base);
     tbb::parallel_for_each(means.begin(), means.end(), [&](auto& m) { m.second = dataset::shellMeans(g, values[m.first]); });
     stepJson["shell_means"] = json::object();
-    for (const auto& [base, m] : means) {
-        json& out = stepJson["shell_means"][plan.specs[base].name] = json::array();
-        for (double mean : m)
-            out.push_back(std::isnan(mean) ? json() : json(mean));
-    }
+    for (const auto& [base, m] : means)
+        stepJson["shell_means"][plan.specs[base].name] = shellMeansJson(m);
     // One variable at a time (each computed in parallel): one more array of the grid in memory.
     std::vector<json> stats(plan.computed.size());
     std::vector<float> anomaly(plan.computed.empty() ? 0 : g.cellCount());
@@ -634,17 +640,13 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const StepSource& so
                 current[v] = coarsenField(grid, current[v]);
         }
     });
-    // step["level_shell_means"][level][name], null for a shell without a value.
+    // step["level_shell_means"][level][name].
     stepJson["level_shell_means"] = json::array();
     for (int level = 0; level < dataset::kLevelCount; ++level) {
         json& byName = stepJson["level_shell_means"].emplace_back(json::object());
-        for (size_t v = 0; v < specs.size(); ++v) {
-            if (levelMeans[v].empty())
-                continue;
-            json& m = byName[specs[v].name] = json::array();
-            for (double mean : levelMeans[v][size_t(level)])
-                m.push_back(std::isnan(mean) ? json() : json(mean));
-        }
+        for (size_t v = 0; v < specs.size(); ++v)
+            if (!levelMeans[v].empty())
+                byName[specs[v].name] = shellMeansJson(levelMeans[v][size_t(level)]);
     }
     writeArray<float>(tmpDir / dataset::format::kStepSample, sample);
     writeFileAtomic(tmpDir / dataset::format::kStepInputs, fingerprint.dump(1));
