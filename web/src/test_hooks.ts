@@ -39,7 +39,9 @@ export interface TestHooks {
   frameLog: { id: number; step: number; pass: number; t: number }[];
   // Frames on screen, when (performance.now()) and what the server rendered them as.
   // buffer: the 3D view's drawing buffer when the frame was shown (View3D's fitBuffer), full: the view's size.
-  shownLog: { id: number; step: number; pass: number; level: number; width: number; height: number; playback: boolean; interactive: boolean;
+  // passes: the state's; converged: the server's last frame of it; cached: rendered ahead (or kept).
+  shownLog: { id: number; step: number; pass: number; passes: number; converged: boolean; cached: boolean; level: number;
+    width: number; height: number; playback: boolean; interactive: boolean;
     buffer: [number, number]; full: [number, number]; t: number }[];
   warpedWhileWaiting: number;
   // Deferred work (the full line redraw after a brush release): the state it waited for, whether
@@ -146,7 +148,8 @@ export function installTestHooks(app: App): TestHooks {
     },
     shown: (h, latency) => {
       if (latency) push(hooks.latencies, latency, 200);
-      push(hooks.shownLog, { id: h.id, step: h.step, pass: h.pass, level: h.level, width: h.width, height: h.height,
+      push(hooks.shownLog, { id: h.id, step: h.step, pass: h.pass, passes: h.passes, converged: !!h.converged, cached: !!h.cached,
+        level: h.level, width: h.width, height: h.height,
         playback: !!h.playback, interactive: !!h.interactive, buffer: [app.link.view.canvas.width, app.link.view.canvas.height],
         full: [app.link.view.fullWidth, app.link.view.fullHeight], t: performance.now() }, 500);
     },
