@@ -83,11 +83,7 @@ std::shared_ptr<const Coastlines> defaultCoastlines()
 
 namespace {
 
-// One premultiplied layer of colour at a distance along the pixel's ray.
-struct Fragment {
-    float t;
-    float r, g, b, a;
-};
+using Fragment = ReferenceLayer::Fragment;
 
 Vec3 onSphere(float lonDeg, float latDeg, float radiusKm)
 {
@@ -229,19 +225,21 @@ std::vector<std::array<float, 2>> sphereOutline(const OrbitCamera& camera, int w
     return outline;
 }
 
-void drawReferenceGeometry(const state::ReferenceState& reference, const OrbitCamera& camera, int width, int height,
-                           float surfaceRadiusKm, float coreRadiusKm, std::vector<float>& rgba,
-                           const std::vector<float>& depthKm, const Coastlines* coastlines, const SliceMarks* marks)
+ReferenceLayer::ReferenceLayer(const state::ReferenceState& reference, const OrbitCamera& camera, int width,
+                               int height, float surfaceRadiusKm, float coreRadiusKm, const Coastlines* coastlines,
+                               const SliceMarks* marks)
+    : m_width(width), m_height(height)
 {
+    if (width < 0 || height < 0)
+        fail("reference geometry: an image of {}x{} pixels", width, height);
     const size_t pixels = size_t(width) * size_t(height);
-    if (rgba.size() != pixels * 4 || depthKm.size() != pixels)
-        fail("reference geometry: image of {} values and depth of {} for {}x{} pixels", rgba.size(), depthKm.size(),
-             width, height);
     const auto& shells = reference.shells;
     const auto& graticule = reference.graticule;
     const bool drawCoast = reference.coastlines.visible;
-    if (!shells.visible && !graticule.visible && !drawCoast && !marks)
+    if (!shells.visible && !graticule.visible && !drawCoast && !marks) {
+        m_first.assign(pixels + 1, 0);
         return;
+    }
     if (drawCoast && !coastlines)
         fail("reference.coastlines: visible, but no coastlines were given");
     const CameraFrame cam(camera, width, height);
@@ -311,8 +309,12 @@ void drawReferenceGeometry(const state::ReferenceState& reference, const OrbitCa
     // Transmittance of a shell seen face-on; along a path 1/|cos| as long, its power.
     const float faceOnTransmittance = 1.0f - std::min(shells.opacity, 0.999f);
 
+    // Each row's fragments, sorted per pixel (rows in parallel), then joined into one array.
+    std::vector<std::vector<Fragment>> rows(static_cast<size_t>(height));
+    std::vector<uint32_t> counts(pixels);
     tbb::parallel_for(0, height, [&](int y) {
         std::vector<Fragment> fragments;
+        std::vector<Fragment>& row = rows[size_t(y)];
         for (int x = 0; x < width; ++x) {
             const size_t i = size_t(y) * size_t(width) + size_t(x);
             fragments.clear();
@@ -341,9 +343,38 @@ void drawReferenceGeometry(const state::ReferenceState& reference, const OrbitCa
             addLine(graticuleLayer, graticule.opacity, graticule.color);
             addLine(coastLayer, reference.coastlines.opacity, reference.coastlines.color);
             addLine(markLayer, 0.95f, kSliceMarkColor);
-            if (fragments.empty())
-                continue;
             std::sort(fragments.begin(), fragments.end(), [](const Fragment& a, const Fragment& b) { return a.t < b.t; });
+            counts[i] = uint32_t(fragments.size());
+            row.insert(row.end(), fragments.begin(), fragments.end());
+        }
+    });
+    m_first.resize(pixels + 1);
+    m_first[0] = 0;
+    for (size_t i = 0; i < pixels; ++i)
+        m_first[i + 1] = m_first[i] + counts[i];
+    m_fragments.resize(m_first[pixels]);
+    tbb::parallel_for(0, height, [&](int y) {
+        std::copy(rows[size_t(y)].begin(), rows[size_t(y)].end(), m_fragments.begin() + m_first[size_t(y) * size_t(width)]);
+    });
+}
+
+size_t ReferenceLayer::bytes() const
+{
+    return m_first.capacity() * sizeof(uint32_t) + m_fragments.capacity() * sizeof(Fragment);
+}
+
+void ReferenceLayer::composite(std::vector<float>& rgba, const std::vector<float>& depthKm) const
+{
+    const size_t pixels = size_t(m_width) * size_t(m_height);
+    if (rgba.size() != pixels * 4 || depthKm.size() != pixels)
+        fail("reference geometry: image of {} values and depth of {} for {}x{} pixels", rgba.size(), depthKm.size(),
+             m_width, m_height);
+    if (m_fragments.empty())
+        return;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels, 4096), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t i = range.begin(); i < range.end(); ++i) {
+            if (m_first[i] == m_first[i + 1])
+                continue;
             // Front to back: fragments before the volume's depth, the volume, the fragments behind it.
             float* px = &rgba[i * 4];
             const std::array<float, 4> volume{px[0], px[1], px[2], px[3]};
@@ -356,18 +387,31 @@ void drawReferenceGeometry(const state::ReferenceState& reference, const OrbitCa
                 acc[3] += k * a;
             };
             bool volumeDone = false;
-            for (const Fragment& f : fragments) {
-                if (!volumeDone && f.t >= depthKm[i]) {
+            for (uint32_t f = m_first[i]; f < m_first[i + 1]; ++f) {
+                const Fragment& fragment = m_fragments[f];
+                if (!volumeDone && fragment.t >= depthKm[i]) {
                     over(volume[0], volume[1], volume[2], volume[3]);
                     volumeDone = true;
                 }
-                over(f.r, f.g, f.b, f.a);
+                over(fragment.r, fragment.g, fragment.b, fragment.a);
             }
             if (!volumeDone)
                 over(volume[0], volume[1], volume[2], volume[3]);
             std::copy(acc.begin(), acc.end(), px);
         }
     });
+}
+
+void drawReferenceGeometry(const state::ReferenceState& reference, const OrbitCamera& camera, int width, int height,
+                           float surfaceRadiusKm, float coreRadiusKm, std::vector<float>& rgba,
+                           const std::vector<float>& depthKm, const Coastlines* coastlines, const SliceMarks* marks)
+{
+    const size_t pixels = size_t(width) * size_t(height);
+    if (rgba.size() != pixels * 4 || depthKm.size() != pixels)
+        fail("reference geometry: image of {} values and depth of {} for {}x{} pixels", rgba.size(), depthKm.size(),
+             width, height);
+    ReferenceLayer(reference, camera, width, height, surfaceRadiusKm, coreRadiusKm, coastlines, marks)
+        .composite(rgba, depthKm);
 }
 
 }  // namespace raypc::render

@@ -75,12 +75,38 @@ struct SliceMarks {
 };
 inline constexpr Rgb kSliceMarkColor{0.2f, 0.9f, 1.0f};
 
+// The reference geometry of one view, rasterised: each pixel's fragments (shells crossed, lines)
+// sorted front to back, at their distance along the pixel's ray, premultiplied. It depends on the
+// reference state, the camera and the image size, not on the volume, so the passes of a still state
+// and the steps of playback composite one layer over each of their frames (StateRenderer keeps it).
+// Arguments as drawReferenceGeometry's. Immutable once made: composite may run on several threads.
+class ReferenceLayer {
+public:
+    ReferenceLayer(const state::ReferenceState& reference, const OrbitCamera& camera, int width, int height,
+                   float surfaceRadiusKm, float coreRadiusKm, const Coastlines* coastlines,
+                   const SliceMarks* marks = nullptr);
+    // Composites the layer with a volume image of the layer's size, as drawReferenceGeometry.
+    void composite(std::vector<float>& rgba, const std::vector<float>& depthKm) const;
+    bool empty() const { return m_fragments.empty(); }
+    size_t bytes() const;  // what keeping it costs
+
+    struct Fragment {
+        float t;           // km along the pixel's ray from the eye
+        float r, g, b, a;  // premultiplied
+    };
+
+private:
+    int m_width = 0, m_height = 0;
+    std::vector<uint32_t> m_first;  // per pixel, its first fragment; one more at the end
+    std::vector<Fragment> m_fragments;
+};
+
 // Draws `reference` into `rgba` (premultiplied, width x height x 4 floats, row-major from the top
 // left, as FrameBuffer::averagedRgba) using `depthKm` (FrameBuffer::averagedDepthKm, +inf where the
 // volume never became opaque). `surfaceRadiusKm` carries the graticule and the coastlines; shells
 // lie at surfaceRadiusKm - depth, drawn only between `coreRadiusKm` and the surface. `coastlines`
 // may be null when reference.coastlines is hidden.
-// `marks`, when given, adds the map's and the section's marks.
+// `marks`, when given, adds the map's and the section's marks. ReferenceLayer(...).composite.
 void drawReferenceGeometry(const state::ReferenceState& reference, const OrbitCamera& camera, int width, int height,
                            float surfaceRadiusKm, float coreRadiusKm, std::vector<float>& rgba,
                            const std::vector<float>& depthKm, const Coastlines* coastlines,

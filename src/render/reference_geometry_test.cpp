@@ -197,6 +197,48 @@ TEST(ReferenceGeometry, SliceMarksLieWhereTheSectionAndTheDepthAre)
     EXPECT_GT(im.alpha(int(x), int(y)), 0.0f) << "no depth shell";
 }
 
+// One layer, made once, composited over two different volume images (one empty, one opaque half
+// way in with a depth in front of the shells on one side): each equals the geometry drawn afresh
+// over that image, value for value.
+TEST(ReferenceGeometry, OneLayerCompositesAsDrawingAfreshOverEveryVolume)
+{
+    state::ReferenceState r = shellsOnly(660, 0.4f);
+    r.shells.depthsKm = {410, 660, 1600};
+    r.graticule.visible = true;
+    r.graticule.spacingDeg = 30;
+    SliceMarks marks;
+    marks.depthKm = 1000;
+    marks.from = {10, -40};
+    marks.to = {-5, 35};
+    const ReferenceLayer layer(r, frontCamera(), kSize, kSize, 6371, 3481, nullptr, &marks);
+    EXPECT_FALSE(layer.empty());
+    EXPECT_GT(layer.bytes(), size_t(kSize) * kSize * sizeof(uint32_t));
+    Image empty, volume;
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize / 2; ++x) {
+            const size_t i = size_t(y) * kSize + size_t(x);
+            volume.depth[i] = 24000;  // in front of the near side of the 410 km shell, behind the surface
+            for (int c = 0; c < 4; ++c)
+                volume.rgba[i * 4 + size_t(c)] = c == 3 ? 0.8f : 0.3f;
+        }
+    for (Image* im : {&empty, &volume}) {
+        Image fresh = *im;
+        drawReferenceGeometry(r, frontCamera(), kSize, kSize, 6371, 3481, fresh.rgba, fresh.depth, nullptr, &marks);
+        layer.composite(im->rgba, im->depth);
+        EXPECT_EQ(im->rgba, fresh.rgba);
+    }
+    EXPECT_NE(empty.rgba, volume.rgba);
+    // An image of another size is refused, naming both.
+    std::vector<float> small(16 * 4), smallDepth(16);
+    EXPECT_THROW(layer.composite(small, smallDepth), Error);
+    // Nothing to draw: an empty layer leaves the image as it was.
+    const ReferenceLayer none(state::ReferenceState{}, frontCamera(), kSize, kSize, 6371, 3481, nullptr);
+    EXPECT_TRUE(none.empty());
+    Image kept = volume;
+    none.composite(kept.rgba, kept.depth);
+    EXPECT_EQ(kept.rgba, volume.rgba);
+}
+
 TEST(ReferenceGeometry, CoastlineFileIsCheckedAndDrawn)
 {
     const auto dir = std::filesystem::temp_directory_path() / "raypc_coastlines_test";

@@ -343,6 +343,33 @@ ImageRgba8 StateRenderer::picture(const ViewFrames& frames, const ResolvedState&
                           viewPicture(frames[1], views[1], withLegends, withShellLabels))};
 }
 
+std::shared_ptr<const ReferenceLayer> StateRenderer::referenceLayer(const state::RenderState& state, int width,
+                                                                    int height) const
+{
+    const nlohmann::json document = state::toJson(state);
+    const bool marked = state.map.showInView;
+    const std::string key = nlohmann::json{{"reference", document["reference"]},
+                                           {"camera", document["camera"]},
+                                           {"marks", marked ? nlohmann::json{document["map"]["depthKm"], document["section"]}
+                                                            : nlohmann::json()},
+                                           {"size", {width, height}}}
+                                .dump();
+    std::lock_guard lock(m_referenceMutex);
+    for (const auto& [k, layer] : m_referenceLayers)
+        if (k == key)
+            return layer;
+    const grid::SphericalGrid& grid = m_dataset->levels().front().grid;
+    const auto coastlines = state.reference.coastlines.visible ? defaultCoastlines() : nullptr;
+    const SliceMarks marks{state.map.depthKm, state.section.from, state.section.to};
+    auto layer = std::make_shared<const ReferenceLayer>(state.reference, state.camera, width, height,
+                                                        float(grid.rKm.back()), float(grid.rKm.front()),
+                                                        coastlines.get(), marked ? &marks : nullptr);
+    if (m_referenceLayers.size() >= 2)
+        m_referenceLayers.erase(m_referenceLayers.begin());
+    m_referenceLayers.emplace_back(key, layer);
+    return layer;
+}
+
 std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const ResolvedState& resolved,
                                                 bool withLegends, bool withShellLabels) const
 {
@@ -352,11 +379,7 @@ std::vector<uint8_t> StateRenderer::viewPicture(const FrameBuffer& frame, const 
     if (ref.shells.visible || ref.graticule.visible || ref.coastlines.visible || state.map.showInView) {
         std::vector<float> rgba = frame.averagedRgba();
         const grid::SphericalGrid& grid = m_dataset->levels().front().grid;
-        const auto coastlines = ref.coastlines.visible ? defaultCoastlines() : nullptr;
-        const SliceMarks marks{state.map.depthKm, state.section.from, state.section.to};
-        drawReferenceGeometry(ref, state.camera, frame.width(), frame.height(), float(grid.rKm.back()),
-                              float(grid.rKm.front()), rgba, frame.averagedDepthKm(), coastlines.get(),
-                              state.map.showInView ? &marks : nullptr);
+        referenceLayer(state, frame.width(), frame.height())->composite(rgba, frame.averagedDepthKm());
         out = toRgba8(rgba, state.background);
         // Each shell's depth on its ring (the UI writes them itself over a mono frame, crisp at any
         // frame size).

@@ -20,6 +20,7 @@
 #include "analysis/features.h"
 #include "analysis/pathline_storage.h"
 #include "render/pathline_scene.h"
+#include "render/reference_geometry.h"
 #include "render/image_io.h"
 #include "render/resolve_state.h"
 #include "render/stereo.h"
@@ -31,6 +32,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <span>
 #include <utility>
@@ -192,6 +194,9 @@ private:
     // One view's picture (`resolved` is the view's).
     std::vector<uint8_t> viewPicture(const FrameBuffer& frame, const ResolvedState& resolved, bool withLegends,
                                      bool withShellLabels) const;
+    // The reference geometry of `state`'s view at this size, made once for the passes and steps that
+    // share it (the last two kept: the eyes of a stereo pair).
+    std::shared_ptr<const ReferenceLayer> referenceLayer(const state::RenderState& state, int width, int height) const;
 
     // The features painted (feature_paint.h): sets the key of what the renderers' volumes hold; a new
     // key drops the renderers. Returns whether the state paints features.
@@ -213,6 +218,8 @@ private:
     std::map<std::pair<int, int>, std::unique_ptr<VolumeRenderer>> m_renderers;  // by (level, view), of m_rendererStep
     std::shared_ptr<PathlineScene> m_scene;
     int m_sceneStep = -1, m_sceneWindow = -1;
+    mutable std::mutex m_referenceMutex;
+    mutable std::vector<std::pair<std::string, std::shared_ptr<const ReferenceLayer>>> m_referenceLayers;  // newest last
 };
 
 }  // namespace raypc::render

@@ -1,9 +1,14 @@
 // The state-to-pixels path's own rules that need no dataset: the pathline tubes' minimum width on
 // screen (tubeRadiusKm) against the pixel footprint at the camera target's distance; the memory a
-// picture needs, checked before anything is allocated (a huge picture is refused with its figures, not std::bad_alloc).
+// picture needs, checked before anything is allocated (a huge picture is refused with its figures, not std::bad_alloc);
+// the reference geometry it keeps between pictures, never that of another view.
 #include "render/state_renderer.h"
 
 #include "core/error.h"
+#include "grid/test_util.h"
+#include "io/netcdf_reader.h"
+#include "preprocess/preprocess.h"
+#include "render/resolve_state.h"
 
 #include <gtest/gtest.h>
 
@@ -45,6 +50,45 @@ TEST(StateRenderer, InteractivePolicyUsesTheMeasuredThroughput)
     EXPECT_TRUE(measured.reduceResolution);
     EXPECT_EQ(measured.overheadSeconds, 0);
     EXPECT_EQ(interactiveLevelPolicy(3.5e7, 0.012).overheadSeconds, 0.012);
+}
+
+// The reference geometry is kept between pictures of one view (ReferenceLayer); a picture after
+// another camera, other shells or another size is the picture a new renderer makes of it.
+TEST(StateRenderer, KeptReferenceGeometryIsNeverAnotherViews)
+{
+    raypc::testing::TempDir dir("state_renderer");
+    auto files = io::listSnapshotFiles({raypc::testing::contestLayoutDir()});
+    files.resize(1);
+    preprocess::PreprocessOptions o;
+    o.quiet = true;
+    o.sampleRows = 200;
+    o.pathlines.enabled = false;
+    preprocess::preprocess(files, dir.path() / "ds", o);
+    const auto dataset = dataset::Dataset::open(dir.path() / "ds");
+    state::RenderState a;
+    a.width = 96;
+    a.height = 64;
+    a.passes = 1;
+    a.reference.shells.visible = true;
+    a.reference.shells.depthsKm = {660};
+    a.reference.graticule.visible = true;
+    state::RenderState turned = a, deeper = a, larger = a;
+    turned.camera.azimuthDeg += 37;  // not a multiple of the graticule's spacing: its lines move
+    deeper.reference.shells.depthsKm = {1600};
+    larger.width = 128;
+    auto pictureOf = [&](StateRenderer& renderer, const state::RenderState& state) {
+        const ResolvedState resolved = resolveState(state, *dataset);
+        const StateRenderer::Still still = renderer.renderStill(resolved);
+        return renderer.picture(still.frames, resolved, false).pixels;
+    };
+    StateRenderer kept(dataset);
+    const auto first = pictureOf(kept, a);
+    for (const state::RenderState* s : {&turned, &deeper, &larger, &a}) {
+        StateRenderer fresh(dataset);
+        EXPECT_EQ(pictureOf(kept, *s), pictureOf(fresh, *s));
+    }
+    EXPECT_NE(pictureOf(kept, turned), first);
+    EXPECT_NE(pictureOf(kept, deeper), first);
 }
 
 TEST(PictureMemory, GrowsWithPixelsEyesAndDepth)
