@@ -364,6 +364,7 @@ std::shared_ptr<const ReferenceLayer> StateRenderer::referenceLayer(const state:
     auto layer = std::make_shared<const ReferenceLayer>(state.reference, state.camera, width, height,
                                                         float(grid.rKm.back()), float(grid.rKm.front()),
                                                         coastlines.get(), marked ? &marks : nullptr);
+    spdlog::debug("reference geometry of {}x{} pixels made: {} kept", width, height, formatBytes(layer->bytes()));
     if (m_referenceLayers.size() >= 2)
         m_referenceLayers.erase(m_referenceLayers.begin());
     m_referenceLayers.emplace_back(key, layer);
