@@ -1,8 +1,11 @@
 #include "dataset/value_encoding.h"
 
+#include "dataset/shell_anomaly.h"
+
 #include "core/error.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -138,51 +141,86 @@ void encodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layo
     });
 }
 
+namespace {
+
+// decodeUint16 of one row (iLat, iR) into `out` (its nLon values).
+void decodeRow(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, const Covers& cover,
+               std::span<const uint16_t> encoded, std::span<const float> bounds, bool missing, size_t row, float* out)
+{
+    const double levels = levelsOf(missing);
+    const size_t nR = grid.nR(), nLon = grid.nLon(), s = layout.size;
+    const size_t iLat = row / nR, iR = row % nR;
+    const uint16_t* codes = encoded.data() + row * nLon;
+    const AxisCover& lat = cover.lat[iLat];
+    const AxisCover& r = cover.r[iR];
+    for (uint32_t c = 0; c < layout.count[2]; ++c) {
+        const size_t brick = layout.index(lat.bricks[0], r.bricks[0], c);
+        const float min = bounds[2 * brick], max = bounds[2 * brick + 1];
+        // Points this row shares with lat or r neighbours' bricks are clamped into theirs too.
+        float lo = min, hi = max;
+        if (lat.count > 1 || r.count > 1)
+            intersectBounds(layout, bounds, lat, r, AxisCover{{c}, 1}, lo, hi);
+        const size_t begin = size_t(c) * s, end = std::min(begin + s, nLon);
+        // A row that lies in a brick of nothing but missing values is missing too.
+        if (missing && !(lo <= hi)) {
+            std::fill(out + begin, out + end, NAN);
+            continue;
+        }
+        const double scale = (double(max) - double(min)) / levels;
+        // The brick's points in one tight loop (clamped in double, so that rounding to float
+        // cannot leave [lo, hi]), then the few shared with lon neighbours' bricks.
+        for (size_t iLon = begin; iLon < end; ++iLon) {
+            const double v = double(min) + double(codes[iLon]) * scale;
+            out[iLon] = float(std::clamp(v, double(lo), double(hi)));
+        }
+        for (size_t iLon = begin; iLon < end; ++iLon)
+            if (missing && codes[iLon] == kMissingCode)
+                out[iLon] = NAN;
+            else if (cover.lon[iLon].count > 1) {
+                float l = lo, h = hi;
+                intersectBounds(layout, bounds, lat, r, cover.lon[iLon], l, h);
+                out[iLon] = l <= h ? std::clamp(out[iLon], l, h) : NAN;
+            }
+    }
+}
+
+void checkDecodeSizes(const grid::SphericalGrid& grid, const grid::BrickLayout& layout,
+                      std::span<const uint16_t> encoded, std::span<const float> bounds)
+{
+    RAYPC_CHECK_EQ(encoded.size(), grid.cellCount());
+    RAYPC_CHECK_EQ(bounds.size(), 2 * layout.brickCount());
+}
+
+}  // namespace
+
 void decodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, std::span<const uint16_t> encoded,
                   std::span<const float> bounds, std::span<float> out, bool missing)
 {
-    const double levels = levelsOf(missing);
-    RAYPC_CHECK_EQ(encoded.size(), grid.cellCount());
+    checkDecodeSizes(grid, layout, encoded, bounds);
     RAYPC_CHECK_EQ(out.size(), grid.cellCount());
-    RAYPC_CHECK_EQ(bounds.size(), 2 * layout.brickCount());
     const Covers cover(grid, layout);
-    const size_t nR = grid.nR(), nLon = grid.nLon(), s = layout.size;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.nLat() * nR), [&](const auto& rows) {
-        for (size_t row = rows.begin(); row != rows.end(); ++row) {
-            const size_t iLat = row / nR, iR = row % nR, first = row * nLon;
-            const AxisCover& lat = cover.lat[iLat];
-            const AxisCover& r = cover.r[iR];
-            for (uint32_t c = 0; c < layout.count[2]; ++c) {
-                const size_t brick = layout.index(lat.bricks[0], r.bricks[0], c);
-                const float min = bounds[2 * brick], max = bounds[2 * brick + 1];
-                // Points this row shares with lat or r neighbours' bricks are clamped into theirs too.
-                float lo = min, hi = max;
-                if (lat.count > 1 || r.count > 1)
-                    intersectBounds(layout, bounds, lat, r, AxisCover{{c}, 1}, lo, hi);
-                const size_t begin = size_t(c) * s, end = std::min(begin + s, nLon);
-                // A row that lies in a brick of nothing but missing values is missing too.
-                if (missing && !(lo <= hi)) {
-                    std::fill(out.begin() + first + begin, out.begin() + first + end, NAN);
-                    continue;
-                }
-                const double scale = (double(max) - double(min)) / levels;
-                // The brick's points in one tight loop (clamped in double, so that rounding to float
-                // cannot leave [lo, hi]), then the few shared with lon neighbours' bricks.
-                for (size_t iLon = begin; iLon < end; ++iLon) {
-                    const double v = double(min) + double(encoded[first + iLon]) * scale;
-                    out[first + iLon] = float(std::clamp(v, double(lo), double(hi)));
-                }
-                for (size_t iLon = begin; iLon < end; ++iLon)
-                    if (missing && encoded[first + iLon] == kMissingCode)
-                        out[first + iLon] = NAN;
-                    else if (cover.lon[iLon].count > 1) {
-                        float l = lo, h = hi;
-                        intersectBounds(layout, bounds, lat, r, cover.lon[iLon], l, h);
-                        out[first + iLon] = l <= h ? std::clamp(out[first + iLon], l, h) : NAN;
-                    }
-            }
-        }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.nLat() * grid.nR()), [&](const auto& rows) {
+        for (size_t row = rows.begin(); row != rows.end(); ++row)
+            decodeRow(grid, layout, cover, encoded, bounds, missing, row, out.data() + row * grid.nLon());
     });
+}
+
+std::vector<double> shellMeansOfUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout,
+                                       std::span<const uint16_t> encoded, std::span<const float> bounds, bool missing)
+{
+    checkDecodeSizes(grid, layout, encoded, bounds);
+    const Covers cover(grid, layout);
+    const auto w = grid.volumeFactors();
+    const size_t nLat = grid.nLat(), nR = grid.nR(), nLon = grid.nLon();
+    std::vector<double> means(nR);
+    tbb::enumerable_thread_specific<std::vector<float>> shells([&] { return std::vector<float>(nLat * nLon); });
+    tbb::parallel_for(size_t(0), nR, [&](size_t iR) {
+        std::vector<float>& shell = shells.local();
+        for (size_t iLat = 0; iLat < nLat; ++iLat)
+            decodeRow(grid, layout, cover, encoded, bounds, missing, iLat * nR + iR, shell.data() + iLat * nLon);
+        means[iR] = shellMean(w, shell.data(), nLon);
+    });
+    return means;
 }
 
 }  // namespace raypc::dataset

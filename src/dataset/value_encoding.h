@@ -21,6 +21,7 @@
 #include <memory>
 #include <span>
 #include <string_view>
+#include <vector>
 
 namespace raypc::dataset {
 
@@ -44,6 +45,12 @@ void encodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layo
 // (Dataset::load checks them). Parallel over rows (oneTBB); allocates only per-axis tables.
 void decodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, std::span<const uint16_t> encoded,
                   std::span<const float> bounds, std::span<float> out, bool missing = false);
+
+// shellMeans (shell_anomaly.h) of what decodeUint16 gives, bit for bit, decoding one shell at a time
+// instead of the whole array (what a writer stores for the readers' shell anomalies).
+std::vector<double> shellMeansOfUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout,
+                                       std::span<const uint16_t> encoded, std::span<const float> bounds,
+                                       bool missing = false);
 
 // The value decodeUint16 gives point (iLat, iR, iLon), bit for bit, decoding that point alone (for
 // sparse reads: a few samples of a variable that is not decoded).

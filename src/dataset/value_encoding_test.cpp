@@ -10,6 +10,7 @@
 #include "dataset/bricks.h"
 #include "dataset/dataset.h"
 #include "dataset/dataset_format.h"
+#include "dataset/shell_anomaly.h"
 #include "io/netcdf_reader.h"
 #include "analysis/pathline_storage.h"
 #include "preprocess/preprocess.h"
@@ -447,6 +448,14 @@ TEST(ValueEncoding, MissingValuesStayMissing)
             }
     EXPECT_GT(missing, 10 * g.nR() * g.nLon());
     EXPECT_EQ(missing, size_t(std::count_if(values.begin(), values.end(), [](float v) { return std::isnan(v); })));
+
+    // The shell means of the stored values, one shell decoded at a time: those of the decoded array,
+    // bit for bit (a writer keeps them for readers that decode the array), on every shell.
+    const std::vector<double> whole = shellMeans(g, decoded), byShell = shellMeansOfUint16(g, layout, encoded, bounds, true);
+    ASSERT_EQ(byShell.size(), g.nR());
+    for (size_t iR = 0; iR < g.nR(); ++iR)
+        EXPECT_EQ(std::bit_cast<uint64_t>(byShell[iR]), std::bit_cast<uint64_t>(whole[iR])) << "shell " << iR;
+    EXPECT_NE(shellMeans(g, values)[3], whole[3]) << "the means of the exact values: nothing was decoded";
 }
 
 }  // namespace

@@ -625,11 +625,8 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const StepSource& so
                 std::vector<uint16_t> encoded(current[v].size());
                 dataset::encodeUint16(grid, layout, current[v], bounds, encoded, missing);
                 writeArray<uint16_t>(dataset::format::encodedValuesFile(dir, stem), encoded);
-                if (keepMeans) {
-                    std::vector<float> decoded(encoded.size());
-                    dataset::decodeUint16(grid, layout, encoded, bounds, decoded, missing);
-                    levelMeans[v][size_t(level)] = dataset::shellMeans(grid, decoded);
-                }
+                if (keepMeans)
+                    levelMeans[v][size_t(level)] = dataset::shellMeansOfUint16(grid, layout, encoded, bounds, missing);
             } else {
                 writeArray<float>(dataset::format::valuesFile(dir, stem), current[v]);
                 if (keepMeans)
