@@ -20,7 +20,8 @@
 namespace raypc::analysis {
 namespace {
 
-// Union-find over grid point indices; the root of a set is its smallest index.
+// Union-find over the selected points, numbered 0, 1, ... in index order (selectedNumbers): the root
+// of a set is its smallest number, so its smallest index; memory in the selected points, not the grid's.
 class DisjointSets {
 public:
     explicit DisjointSets(size_t n) : m_parent(n) { std::iota(m_parent.begin(), m_parent.end(), int64_t(0)); }
@@ -45,8 +46,22 @@ public:
     }
 
 private:
-    HugePageVector<int64_t> m_parent;  // 8 bytes a grid point: the biggest array of a step's features
+    std::vector<int64_t> m_parent;
 };
+
+// Each selected point's number + 1 in `numbers` (0 where not selected), in index order; returns how many.
+size_t selectedNumbers(const HugePageVector<uint8_t>& selected, HugePageVector<int32_t>& numbers)
+{
+    numbers.assign(selected.size(), 0);
+    size_t n = 0;
+    for (size_t i = 0; i < selected.size(); ++i)
+        if (selected[i]) {
+            if (n >= size_t(std::numeric_limits<int32_t>::max()))
+                fail("features: more than {} selected points", std::numeric_limits<int32_t>::max());
+            numbers[i] = int32_t(++n);
+        }
+    return n;
+}
 
 struct Sums {
     size_t points = 0;
@@ -56,17 +71,18 @@ struct Sums {
     std::vector<double> band;                   // per band depth
 };
 
-// Connected components of the selected points: each selected point joins its 13 forward neighbours of
-// the 26-neighbourhood (the other 13 join it), the lon index wrapping at the seam.
-DisjointSets connectNeighbours(const grid::SphericalGrid& g, const HugePageVector<uint8_t>& selected)
+// Connected components of the selected points (`numbers`: selectedNumbers): each selected point joins
+// its 13 forward neighbours of the 26-neighbourhood (the other 13 join it), the lon index wrapping at
+// the seam.
+DisjointSets connectNeighbours(const grid::SphericalGrid& g, const HugePageVector<int32_t>& numbers, size_t count)
 {
     const size_t nLat = g.nLat(), nR = g.nR(), nLon = g.nLon();
-    DisjointSets sets(g.cellCount());
+    DisjointSets sets(count);
     for (size_t iLat = 0; iLat < nLat; ++iLat)
         for (size_t iR = 0; iR < nR; ++iR)
             for (size_t iLon = 0; iLon < nLon; ++iLon) {
                 const size_t i = g.index(iLat, iR, iLon);
-                if (!selected[i])
+                if (!numbers[i])
                     continue;
                 for (int dLat = 0; dLat <= 1; ++dLat)
                     for (int dR = -1; dR <= 1; ++dR)
@@ -78,15 +94,15 @@ DisjointSets connectNeighbours(const grid::SphericalGrid& g, const HugePageVecto
                                 continue;
                             const size_t jLon = size_t((int64_t(iLon) + dLon + int64_t(nLon)) % int64_t(nLon));
                             const size_t j = g.index(size_t(jLat), size_t(jR), jLon);
-                            if (selected[j])
-                                sets.unite(int64_t(i), int64_t(j));
+                            if (numbers[j])
+                                sets.unite(numbers[i] - 1, numbers[j] - 1);
                         }
             }
     return sets;
 }
 
 // Around each pole: the outermost row's points at one radius and the next are one region.
-void joinPoleRings(const grid::SphericalGrid& g, const HugePageVector<uint8_t>& selected, DisjointSets& sets)
+void joinPoleRings(const grid::SphericalGrid& g, const HugePageVector<int32_t>& numbers, DisjointSets& sets)
 {
     const size_t nLat = g.nLat(), nR = g.nR(), nLon = g.nLon();
     for (const size_t iLat : {size_t(0), nLat - 1}) {
@@ -95,11 +111,11 @@ void joinPoleRings(const grid::SphericalGrid& g, const HugePageVector<uint8_t>& 
             int64_t anchor = -1;
             for (size_t iLon = 0; iLon < nLon; ++iLon) {
                 const size_t i = g.index(iLat, iR, iLon);
-                if (!selected[i])
+                if (!numbers[i])
                     continue;
                 if (anchor < 0)
-                    anchor = int64_t(i);
-                sets.unite(anchor, int64_t(i));
+                    anchor = numbers[i] - 1;
+                sets.unite(anchor, numbers[i] - 1);
             }
             if (anchor >= 0 && previous >= 0)
                 sets.unite(anchor, previous);
@@ -109,13 +125,14 @@ void joinPoleRings(const grid::SphericalGrid& g, const HugePageVector<uint8_t>& 
 }
 
 // Labels in index order (a set's root, its smallest index, is met first): each selected point's set
-// numbered from 1 in `labels`, and the sums of each set (by label - 1) over its points.
-std::vector<Sums> labelAndSum(const dataset::StepVolume& volume, const HugePageVector<uint8_t>& selected, DisjointSets& sets,
+// numbered from 1 in `labels` (which hold selectedNumbers before), and the sums of each set (by
+// label - 1) over its points.
+std::vector<Sums> labelAndSum(const dataset::StepVolume& volume, DisjointSets& sets, size_t count,
                               const FeatureOptions& options, HugePageVector<int32_t>& labels)
 {
     const grid::SphericalGrid& g = volume.grid();
     const size_t nLat = g.nLat(), nR = g.nR(), nLon = g.nLon();
-    labels.assign(g.cellCount(), 0);
+    std::vector<int32_t> rootLabel(count, 0);  // by a root's number
     std::vector<Sums> sums;
     const auto w = g.volumeFactors();
     const size_t nVar = volume.variableCount();
@@ -129,10 +146,10 @@ std::vector<Sums> labelAndSum(const dataset::StepVolume& volume, const HugePageV
             const double depth = grid::coordinateValue(grid::Coordinate::Depth, 0.0, 0.0, g.rKm[iR]);
             for (size_t iLon = 0; iLon < nLon; ++iLon) {
                 const size_t i = g.index(iLat, iR, iLon);
-                if (!selected[i])
+                if (!labels[i])
                     continue;
-                const int64_t root = sets.find(int64_t(i));
-                if (root == int64_t(i)) {
+                const int64_t number = labels[i] - 1, root = sets.find(number);
+                if (root == number) {
                     sums.emplace_back();
                     Sums& s = sums.back();
                     s.sum.assign(nVar, 0.0);
@@ -140,10 +157,9 @@ std::vector<Sums> labelAndSum(const dataset::StepVolume& volume, const HugePageV
                     s.min.assign(nVar, std::numeric_limits<double>::infinity());
                     s.max.assign(nVar, -std::numeric_limits<double>::infinity());
                     s.band.assign(nBands, 0.0);
-                    labels[i] = int32_t(sums.size());
-                } else {
-                    labels[i] = labels[size_t(root)];
+                    rootLabel[size_t(number)] = int32_t(sums.size());
                 }
+                labels[i] = rootLabel[size_t(root)];
                 Sums& s = sums[size_t(labels[i]) - 1];
                 const double v = w.at(iLat, iR, iLon);
                 const Vec3d p = sphericalToCartesianKm(g.latDeg[iLat], g.lonDeg[iLon], g.rKm[iR]);
@@ -230,10 +246,11 @@ StepFeatures extractFeatures(const dataset::StepVolume& volume, std::span<const 
         fail("features: band half-width {} km is negative", options.bandHalfWidthKm);
     const HugePageVector<uint8_t> selected = selectedPoints(volume, filters);  // checks the filters
     const grid::SphericalGrid& g = volume.grid();
-    DisjointSets sets = connectNeighbours(g, selected);
-    joinPoleRings(g, selected, sets);
     StepFeatures out;
-    const std::vector<Sums> sums = labelAndSum(volume, selected, sets, options, out.labels);
+    const size_t count = selectedNumbers(selected, out.labels);
+    DisjointSets sets = connectNeighbours(g, out.labels, count);
+    joinPoleRings(g, out.labels, sets);
+    const std::vector<Sums> sums = labelAndSum(volume, sets, count, options, out.labels);
     rankFeatures(sums, g, volume.variableCount(), options, out);
     return out;
 }
