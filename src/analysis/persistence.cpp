@@ -105,7 +105,12 @@ const char* pairKindName(PairKind kind)
     return "?";
 }
 
-std::vector<PersistencePair> persistencePairs(const grid::SphericalGrid& grid, std::span<const float> values)
+namespace {
+
+// persistencePairs, and with `points` findCriticalPoints too, from the one pass over the vertices'
+// links both need.
+std::vector<PersistencePair> pairsAndPoints(const grid::SphericalGrid& grid, std::span<const float> values,
+                                            std::vector<CriticalPoint>* points)
 {
     grid::triangulation::checkTriangulable(grid, values.size(), "persistence");
     if (grid.cellCount() >= std::numeric_limits<uint32_t>::max())
@@ -118,9 +123,11 @@ std::vector<PersistencePair> persistencePairs(const grid::SphericalGrid& grid, s
     // neighbour; extrema point at themselves. Saddles are collected for the sweeps.
     std::vector<uint32_t> down(grid.cellCount()), up(grid.cellCount());
     tbb::enumerable_thread_specific<std::vector<Saddle>> joinsLocal, splitsLocal;
+    tbb::enumerable_thread_specific<std::vector<CriticalPoint>> pointsLocal;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.nLat()), [&](const tbb::blocked_range<size_t>& rows) {
         auto& joins = joinsLocal.local();
         auto& splits = splitsLocal.local();
+        auto& found = pointsLocal.local();
         std::array<size_t, kLinkSize> nb{};
         for (size_t iLat = rows.begin(); iLat != rows.end(); ++iLat)
             for (size_t iR = 0; iR < grid.nR(); ++iR)
@@ -146,8 +153,27 @@ std::vector<PersistencePair> persistencePairs(const grid::SphericalGrid& grid, s
                         joins.push_back({static_cast<uint32_t>(self), cl, cu});
                     if (cu >= 2)
                         splits.push_back({static_cast<uint32_t>(self), cl, cu});
+                    if (points)
+                        if (const auto kind = classifyLink(cl, cu)) {
+                            CriticalPoint p;
+                            p.index = self;
+                            p.kind = *kind;
+                            p.value = v[self];
+                            p.lowerComponents = cl;
+                            p.upperComponents = cu;
+                            p.latDeg = grid.latDeg[iLat];
+                            p.rKm = grid.rKm[iR];
+                            p.lonDeg = grid.lonDeg[iLon];
+                            found.push_back(p);
+                        }
                 }
     });
+    if (points) {
+        points->clear();
+        for (auto& part : pointsLocal)
+            points->insert(points->end(), part.begin(), part.end());
+        std::sort(points->begin(), points->end(), [](const auto& a, const auto& b) { return a.index < b.index; });
+    }
     std::vector<Saddle> joins, splits;
     for (auto& part : joinsLocal)
         joins.insert(joins.end(), part.begin(), part.end());
@@ -183,11 +209,35 @@ std::vector<PersistencePair> persistencePairs(const grid::SphericalGrid& grid, s
     return pairs;
 }
 
+}  // namespace
+
+std::vector<PersistencePair> persistencePairs(const grid::SphericalGrid& grid, std::span<const float> values)
+{
+    return pairsAndPoints(grid, values, nullptr);
+}
+
+CriticalStructure criticalStructure(const grid::SphericalGrid& grid, std::span<const float> values)
+{
+    CriticalStructure out;
+    out.pairs = pairsAndPoints(grid, values, &out.points);
+    return out;
+}
+
 SeedSelection selectSeeds(const grid::SphericalGrid& grid, std::span<const float> values,
                           const std::vector<CriticalPoint>& all, const CriticalPointFilter& filter)
 {
     checkCriticalPointFilter(filter);
     grid::triangulation::checkTriangulable(grid, values.size(), "seed selection");
+    return selectSeeds(grid, values, CriticalStructure{all, persistencePairs(grid, values)}, filter);
+}
+
+SeedSelection selectSeeds(const grid::SphericalGrid& grid, std::span<const float> values,
+                          const CriticalStructure& structure, const CriticalPointFilter& filter)
+{
+    checkCriticalPointFilter(filter);
+    grid::triangulation::checkTriangulable(grid, values.size(), "seed selection");
+    const std::vector<CriticalPoint>& all = structure.points;
+    const std::vector<PersistencePair>& pairs = structure.pairs;
     SeedSelection out;
     if (filter.rule == SeedRule::Value) {
         double maxAbs = 0;
@@ -197,7 +247,6 @@ SeedSelection selectSeeds(const grid::SphericalGrid& grid, std::span<const float
         out.threshold = significanceThreshold(filter, maxAbs);
         // The seeds' persistence too (the pathlines' "seed persistence" attribute), so that a set
         // chosen by value can still be thresholded by persistence.
-        const auto pairs = persistencePairs(grid, values);
         std::unordered_map<size_t, double> largest;
         for (const auto& p : pairs)  // by decreasing persistence: the first met is the largest
             for (const size_t index : {p.birthIndex, p.deathIndex})
@@ -208,7 +257,6 @@ SeedSelection selectSeeds(const grid::SphericalGrid& grid, std::span<const float
         }
         return out;
     }
-    const auto pairs = persistencePairs(grid, values);
     const PersistencePair& global =
         *std::find_if(pairs.begin(), pairs.end(), [](const PersistencePair& p) { return p.kind == PairKind::Global; });
     out.threshold = filter.persistenceIsFraction ? filter.minPersistence * global.persistence() : filter.minPersistence;

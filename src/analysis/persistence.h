@@ -61,6 +61,14 @@ struct PersistencePair {
 // or more.
 std::vector<PersistencePair> persistencePairs(const grid::SphericalGrid& grid, std::span<const float> values);
 
+// findCriticalPoints and persistencePairs of `values` from the one pass over the vertices' links
+// both need: the same points and pairs as the two calls. Throws like persistencePairs.
+struct CriticalStructure {
+    std::vector<CriticalPoint> points;   // findCriticalPoints'
+    std::vector<PersistencePair> pairs;  // persistencePairs'
+};
+CriticalStructure criticalStructure(const grid::SphericalGrid& grid, std::span<const float> values);
+
 // The seeds the filter's rule chooses among `all` (findCriticalPoints(grid, values)), most
 // significant first, and the threshold it applied in the field's units.
 //   SeedRule::Persistence: the extrema of the pairs whose persistence exceeds the threshold (both
@@ -77,6 +85,9 @@ struct SeedSelection {
 };
 SeedSelection selectSeeds(const grid::SphericalGrid& grid, std::span<const float> values,
                           const std::vector<CriticalPoint>& all, const CriticalPointFilter& filter);
+// The same with the points and pairs of criticalStructure(grid, values), not computed again.
+SeedSelection selectSeeds(const grid::SphericalGrid& grid, std::span<const float> values,
+                          const CriticalStructure& structure, const CriticalPointFilter& filter);
 
 // The persistence diagram as CSV, one row per pair in the given order: kind, birth, death,
 // persistence (in `units`), then for the birth end and the death end: critical kind, lat, lon,

@@ -12,6 +12,7 @@
 #include <numbers>
 #include <numeric>
 #include <random>
+#include <set>
 #include <tuple>
 
 namespace raypc::analysis {
@@ -399,6 +400,46 @@ TEST(Persistence, ValueRuleIsTheOldSelection)
     for (size_t k = 0; k < old.size(); ++k)
         EXPECT_EQ(sel.seeds[k].index, old[k].index);
     EXPECT_DOUBLE_EQ(sel.threshold, significanceThreshold(f, maxAbs));
+}
+
+// The one pass over the links (criticalStructure) gives the points of findCriticalPoints and the
+// pairs of persistencePairs, field for field, on noise with blobs (thousands of each, every kind),
+// and the seeds both ways chosen are the same, by either rule.
+TEST(Persistence, OnePassGivesThePointsAndPairsOfBoth)
+{
+    const grid::SphericalGrid g = centredGrid(36, 41, 72);
+    const auto v = blobField(g, {{24, 20, 12, 1000, 600}, {16, 8, 26, -800, 600}, {2, 30, 70, 300, 600}}, 0.5, 3);
+    const CriticalStructure one = criticalStructure(g, v);
+    const auto points = findCriticalPoints(g, v);
+    const auto pairs = persistencePairs(g, v);
+    ASSERT_GT(points.size(), 1000u);
+    ASSERT_EQ(one.points.size(), points.size());
+    std::set<CriticalKind> kinds;
+    for (size_t k = 0; k < points.size(); ++k) {
+        const CriticalPoint &a = one.points[k], &b = points[k];
+        kinds.insert(b.kind);
+        EXPECT_TRUE(a.index == b.index && a.kind == b.kind && a.value == b.value &&
+                    a.lowerComponents == b.lowerComponents && a.upperComponents == b.upperComponents &&
+                    a.latDeg == b.latDeg && a.lonDeg == b.lonDeg && a.rKm == b.rKm)
+            << "point " << k << " at index " << b.index;
+    }
+    EXPECT_GE(kinds.size(), 4u);
+    ASSERT_EQ(one.pairs.size(), pairs.size());
+    for (size_t k = 0; k < pairs.size(); ++k)
+        EXPECT_TRUE(one.pairs[k].kind == pairs[k].kind && one.pairs[k].birthIndex == pairs[k].birthIndex &&
+                    one.pairs[k].deathIndex == pairs[k].deathIndex)
+            << "pair " << k;
+    for (const SeedRule rule : {SeedRule::Persistence, SeedRule::Value}) {
+        CriticalPointFilter f;
+        f.rule = rule;
+        f.saddles = true;
+        const auto a = selectSeeds(g, v, one, f), b = selectSeeds(g, v, points, f);
+        ASSERT_EQ(a.seeds.size(), b.seeds.size());
+        EXPECT_GT(a.seeds.size(), 1u);
+        EXPECT_EQ(a.threshold, b.threshold);
+        for (size_t k = 0; k < a.seeds.size(); ++k)
+            EXPECT_TRUE(a.seeds[k].index == b.seeds[k].index && a.seeds[k].persistence == b.seeds[k].persistence) << k;
+    }
 }
 
 TEST(Persistence, RejectsWrongSizes)

@@ -253,8 +253,9 @@ void PathlineStream::open(int s)
             m_options.encoding, {}, m_window.back()->missing, m_computed);
         const std::span<const float> values(seedVolume->values(m_field), m_grid.cellCount());
         noteHeldBytes(seedVolume->decodedBytes());  // the window's, and the seed field's
-        const auto all = analysis::findCriticalPoints(m_grid, values);
-        analysis::SeedSelection selection = analysis::selectSeeds(m_grid, values, all, m_options.pathlines.filter);
+        const analysis::CriticalStructure structure = analysis::criticalStructure(m_grid, values);
+        const std::vector<analysis::CriticalPoint>& all = structure.points;
+        analysis::SeedSelection selection = analysis::selectSeeds(m_grid, values, structure, m_options.pathlines.filter);
         set->seeds = std::move(selection.seeds);
         set->threshold = selection.threshold;
         set->criticalCounts.assign(5, 0);
