@@ -228,11 +228,11 @@ SeedSelection selectSeeds(const grid::SphericalGrid& grid, std::span<const float
 {
     checkCriticalPointFilter(filter);
     grid::triangulation::checkTriangulable(grid, values.size(), "seed selection");
-    return selectSeeds(grid, values, CriticalStructure{all, persistencePairs(grid, values)}, filter);
+    return selectSeedsFrom(grid, values, CriticalStructure{all, persistencePairs(grid, values)}, filter);
 }
 
-SeedSelection selectSeeds(const grid::SphericalGrid& grid, std::span<const float> values,
-                          const CriticalStructure& structure, const CriticalPointFilter& filter)
+SeedSelection selectSeedsFrom(const grid::SphericalGrid& grid, std::span<const float> values,
+                              const CriticalStructure& structure, const CriticalPointFilter& filter)
 {
     checkCriticalPointFilter(filter);
     grid::triangulation::checkTriangulable(grid, values.size(), "seed selection");

@@ -85,9 +85,9 @@ struct SeedSelection {
 };
 SeedSelection selectSeeds(const grid::SphericalGrid& grid, std::span<const float> values,
                           const std::vector<CriticalPoint>& all, const CriticalPointFilter& filter);
-// The same with the points and pairs of criticalStructure(grid, values), not computed again.
-SeedSelection selectSeeds(const grid::SphericalGrid& grid, std::span<const float> values,
-                          const CriticalStructure& structure, const CriticalPointFilter& filter);
+// selectSeeds with the points and pairs of criticalStructure(grid, values), not computed again.
+SeedSelection selectSeedsFrom(const grid::SphericalGrid& grid, std::span<const float> values,
+                              const CriticalStructure& structure, const CriticalPointFilter& filter);
 
 // The persistence diagram as CSV, one row per pair in the given order: kind, birth, death,
 // persistence (in `units`), then for the birth end and the death end: critical kind, lat, lon,

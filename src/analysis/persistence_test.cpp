@@ -433,7 +433,7 @@ TEST(Persistence, OnePassGivesThePointsAndPairsOfBoth)
         CriticalPointFilter f;
         f.rule = rule;
         f.saddles = true;
-        const auto a = selectSeeds(g, v, one, f), b = selectSeeds(g, v, points, f);
+        const auto a = selectSeedsFrom(g, v, one, f), b = selectSeeds(g, v, points, f);
         ASSERT_EQ(a.seeds.size(), b.seeds.size());
         EXPECT_GT(a.seeds.size(), 1u);
         EXPECT_EQ(a.threshold, b.threshold);

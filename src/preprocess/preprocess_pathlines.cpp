@@ -255,7 +255,7 @@ void PathlineStream::open(int s)
         noteHeldBytes(seedVolume->decodedBytes());  // the window's, and the seed field's
         const analysis::CriticalStructure structure = analysis::criticalStructure(m_grid, values);
         const std::vector<analysis::CriticalPoint>& all = structure.points;
-        analysis::SeedSelection selection = analysis::selectSeeds(m_grid, values, structure, m_options.pathlines.filter);
+        analysis::SeedSelection selection = analysis::selectSeedsFrom(m_grid, values, structure, m_options.pathlines.filter);
         set->seeds = std::move(selection.seeds);
         set->threshold = selection.threshold;
         set->criticalCounts.assign(5, 0);
