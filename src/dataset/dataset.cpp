@@ -979,6 +979,32 @@ std::vector<VariableInfo> readVariables(const ManifestReader& r, const json& j)
     return out;
 }
 
+// Per variable the shell means kept in `byName` (a manifest object at `field`, by variable name) of
+// every variable a computed one is made from: `shells` numbers, null for a shell without a value;
+// empty for the other variables. `level` names the level in a message ("" for none).
+std::vector<std::vector<double>> readShellMeans(const ManifestReader& r, const json& byName, const std::string& field,
+                                                const std::vector<VariableInfo>& variables, size_t shells,
+                                                const std::string& level)
+{
+    if (!byName.is_object())
+        r.bad(field, excerpt(byName), "an object of shell means by variable name");
+    std::vector<std::vector<double>> out(variables.size());
+    for (const VariableInfo& v : variables) {
+        if (!v.computed || !out[v.computed->base].empty())
+            continue;
+        const std::string& baseName = variables[v.computed->base].name;
+        const json& means = r.member(byName, field, baseName.c_str());
+        const std::string baseField = fmt::format("{}[\"{}\"]", field, baseName);
+        if (!means.is_array() || means.size() != shells)
+            r.bad(baseField, excerpt(means), "an array of {} shell means (one per radius{})", shells, level);
+        std::vector<double>& m = out[v.computed->base];
+        for (size_t i = 0; i < shells; ++i)
+            m.push_back(means[i].is_null() ? std::numeric_limits<double>::quiet_NaN()
+                                           : r.number(means[i], ManifestReader::path(baseField, i)));
+    }
+    return out;
+}
+
 // Steps: in order (step i's arrays are in steps/i), times finite and increasing, statistics per variable
 // within the global ones of `variables`.
 std::vector<StepInfo> readSteps(const ManifestReader& r, const json& j, const std::vector<VariableInfo>& variables,
@@ -1014,47 +1040,19 @@ std::vector<StepInfo> readSteps(const ManifestReader& r, const json& j, const st
         }
         // The level-0 shell means of every variable a computed one is made from (the sample's columns
         // of the computed variables are made with them): numbers, null for a shell without a value.
-        info.shellMeans.resize(variables.size());
-        for (const VariableInfo& v : variables) {
-            if (!v.computed || !info.shellMeans[v.computed->base].empty())
-                continue;
-            const std::string& baseName = variables[v.computed->base].name;
-            const std::string meansField = ManifestReader::path(field, "shell_means");
-            const json& means = r.member(r.member(step, field, "shell_means"), meansField, baseName.c_str());
-            const std::string baseField = fmt::format("{}[\"{}\"]", meansField, baseName);
-            if (!means.is_array() || means.size() != shells)
-                r.bad(baseField, excerpt(means), "an array of {} shell means (one per radius)", shells);
-            std::vector<double>& m = info.shellMeans[v.computed->base];
-            for (size_t i = 0; i < means.size(); ++i)
-                m.push_back(means[i].is_null() ? std::numeric_limits<double>::quiet_NaN()
-                                               : r.number(means[i], ManifestReader::path(baseField, i)));
-        }
+        const bool anyComputed = std::any_of(variables.begin(), variables.end(), [](const VariableInfo& v) { return bool(v.computed); });
+        info.shellMeans = anyComputed ? readShellMeans(r, r.member(step, field, "shell_means"),
+                                                       ManifestReader::path(field, "shell_means"), variables, shells, "")
+                                      : std::vector<std::vector<double>>(variables.size());
         // Per level the same from the level's stored values (since 28 November 2026; optional: a
         // volume of a step without them computes them).
         if (step.contains("level_shell_means")) {
             const std::string levelsField = ManifestReader::path(field, "level_shell_means");
             const json& perLevel = r.array(step, field, "level_shell_means", levels.size(), levels.size());
-            info.levelShellMeans.assign(levels.size(), std::vector<std::vector<double>>(variables.size()));
-            for (size_t l = 0; l < levels.size(); ++l) {
-                const std::string levelField = ManifestReader::path(levelsField, l);
-                const json& byName = perLevel[l];
-                if (!byName.is_object())
-                    r.bad(levelField, excerpt(byName), "an object of shell means by variable name");
-                for (const VariableInfo& v : variables) {
-                    if (!v.computed || !info.levelShellMeans[l][v.computed->base].empty())
-                        continue;
-                    const std::string& baseName = variables[v.computed->base].name;
-                    const std::string baseField = fmt::format("{}[\"{}\"]", levelField, baseName);
-                    const json& means = r.member(byName, levelField, baseName.c_str());
-                    const size_t n = levels[l].grid.nR();
-                    if (!means.is_array() || means.size() != n)
-                        r.bad(baseField, excerpt(means), "an array of {} shell means (one per radius of level {})", n, l);
-                    std::vector<double>& m = info.levelShellMeans[l][v.computed->base];
-                    for (size_t i = 0; i < n; ++i)
-                        m.push_back(means[i].is_null() ? std::numeric_limits<double>::quiet_NaN()
-                                                       : r.number(means[i], ManifestReader::path(baseField, i)));
-                }
-            }
+            for (size_t l = 0; l < levels.size(); ++l)
+                info.levelShellMeans.push_back(readShellMeans(r, perLevel[l], ManifestReader::path(levelsField, l),
+                                                              variables, levels[l].grid.nR(),
+                                                              fmt::format(" of level {}", l)));
         }
         out.push_back(std::move(info));
     }

@@ -144,6 +144,18 @@ TEST_F(DamagedDatasets, EveryFieldOfTheManifestIsCheckedAtOpen)
          "steps[1].time_myr:"},
         {"a step's stats for too few variables", [](json& j) { j["steps"][0]["stats"].erase(0); },
          "steps[0].stats:"},
+        {"a step's shell means of another length", [](json& j) { j["steps"][1]["shell_means"]["temperature"].erase(0); },
+         "steps[1].shell_means[\"temperature\"]: an array of 8 entries, expected an array of 9 shell means (one per radius)"},
+        {"a level's shell means of another length",
+         [](json& j) { j["steps"][0]["level_shell_means"][1]["temperature"].erase(0); },
+         "steps[0].level_shell_means[1][\"temperature\"]: an array of 4 entries, expected an array of 5 shell means (one "
+         "per radius of level 1)"},
+        {"a level's shell means not an object", [](json& j) { j["steps"][0]["level_shell_means"][2] = 3; },
+         "steps[0].level_shell_means[2]: 3, expected an object of shell means by variable name"},
+        {"a level's shell mean a string", [](json& j) { j["steps"][0]["level_shell_means"][0]["temperature"][2] = "x"; },
+         "steps[0].level_shell_means[0][\"temperature\"][2]: \"x\""},
+        {"shell means of too few levels", [](json& j) { j["steps"][0]["level_shell_means"].erase(0); },
+         "steps[0].level_shell_means:"},
         {"a step's range beyond the global one",
          [](json& j) {
              const double max = j["variables"][3]["global"]["max"].get<double>();

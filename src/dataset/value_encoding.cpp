@@ -86,8 +86,6 @@ void intersectBounds(const grid::BrickLayout& layout, std::span<const float> bou
 
 }  // namespace value_encoding_detail
 
-using namespace value_encoding_detail;
-
 std::string_view encodingName(ValueEncoding encoding)
 {
     return encoding == ValueEncoding::Uint16 ? "u16" : "float32";
@@ -104,12 +102,14 @@ ValueEncoding parseEncoding(std::string_view name, std::string_view what)
 
 double uint16ErrorBound(float min, float max, bool missing)
 {
+    using namespace value_encoding_detail;
     return min <= max ? (double(max) - double(min)) / (2 * levelsOf(missing)) : 0.0;
 }
 
 void encodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, std::span<const float> values,
                   std::span<const float> bounds, std::span<uint16_t> out, bool missing)
 {
+    using namespace value_encoding_detail;
     const double levels = levelsOf(missing);
     RAYPC_CHECK_EQ(values.size(), grid.cellCount());
     RAYPC_CHECK_EQ(out.size(), grid.cellCount());
@@ -141,7 +141,7 @@ void encodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layo
     });
 }
 
-namespace {
+namespace value_encoding_detail {
 
 // decodeUint16 of one row (iLat, iR) into `out` (its nLon values).
 void decodeRow(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, const Covers& cover,
@@ -191,11 +191,12 @@ void checkDecodeSizes(const grid::SphericalGrid& grid, const grid::BrickLayout& 
     RAYPC_CHECK_EQ(bounds.size(), 2 * layout.brickCount());
 }
 
-}  // namespace
+}  // namespace value_encoding_detail
 
 void decodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, std::span<const uint16_t> encoded,
                   std::span<const float> bounds, std::span<float> out, bool missing)
 {
+    using namespace value_encoding_detail;
     checkDecodeSizes(grid, layout, encoded, bounds);
     RAYPC_CHECK_EQ(out.size(), grid.cellCount());
     const Covers cover(grid, layout);
@@ -208,6 +209,7 @@ void decodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layo
 std::vector<double> shellMeansOfUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layout,
                                        std::span<const uint16_t> encoded, std::span<const float> bounds, bool missing)
 {
+    using namespace value_encoding_detail;
     checkDecodeSizes(grid, layout, encoded, bounds);
     const Covers cover(grid, layout);
     const auto w = grid.volumeFactors();
@@ -227,7 +229,7 @@ std::vector<double> shellMeansOfUint16(const grid::SphericalGrid& grid, const gr
 
 namespace raypc::dataset {
 
-namespace {
+namespace value_encoding_detail {
 
 // decodeUint16's steps for one point, its covers along each axis given, so that both give the same bits.
 float decodePoint(const grid::BrickLayout& layout, const float* bounds, uint16_t code, const AxisCover& lat,
@@ -253,11 +255,12 @@ float decodePoint(const grid::BrickLayout& layout, const float* bounds, uint16_t
     return value;
 }
 
-}  // namespace
+}  // namespace value_encoding_detail
 
 float decodeUint16Point(const grid::SphericalGrid& grid, const grid::BrickLayout& layout, const uint16_t* encoded,
                         const float* bounds, size_t iLat, size_t iR, size_t iLon, bool missing)
 {
+    using namespace value_encoding_detail;
     return decodePoint(layout, bounds, encoded[grid.index(iLat, iR, iLon)],
                        coverOf(iLat, grid.nLat(), layout.size, layout.count[0], false),
                        coverOf(iR, grid.nR(), layout.size, layout.count[1], false),
@@ -276,6 +279,7 @@ Uint16PointDecoder::Uint16PointDecoder(const grid::SphericalGrid& grid, const gr
 float Uint16PointDecoder::decode(const uint16_t* encoded, const float* bounds, size_t index, size_t iLat, size_t iR,
                                  size_t iLon, bool missing) const
 {
+    using namespace value_encoding_detail;
     return decodePoint(m_layout, bounds, encoded[index], m_tables->lat[iLat], m_tables->r[iR], m_tables->lon[iLon],
                        missing);
 }
