@@ -77,13 +77,14 @@ size_t FrameCache::clear()
     return freed;
 }
 
-std::shared_ptr<const EncodedFrame> FrameCache::find(const std::string& key, int step, bool finishedOnly)
+std::shared_ptr<const EncodedFrame> FrameCache::find(const std::string& key, int step, int draftsUpToLevel)
 {
     std::lock_guard lock(m_mutex);
     if (key != m_key)
         return nullptr;
     const auto it = m_frames.find(step);
-    if (it == m_frames.end() || (finishedOnly && !it->second->finished))
+    if (it == m_frames.end() ||
+        (!it->second->finished && it->second->header.value("level", 0) > draftsUpToLevel))
         return nullptr;
     ++m_hits;
     return it->second;

@@ -56,8 +56,9 @@ public:
     // Makes `key` the cache's key; a different one from before drops every frame.
     void setKey(const std::string& key);
     // The frame of `step` under `key`; nullptr when none (or `key` is not the current one), or when
-    // `finishedOnly` and the kept frame is a draft.
-    std::shared_ptr<const EncodedFrame> find(const std::string& key, int step, bool finishedOnly = true);
+    // the kept frame is a draft whose level (its header's) is coarser than `draftsUpToLevel` (-1: a
+    // finished frame only).
+    std::shared_ptr<const EncodedFrame> find(const std::string& key, int step, int draftsUpToLevel = -1);
     bool contains(const std::string& key, int step, bool finishedOnly = true) const;
     // Keeps the frame when `key` is the current key and it fits in the bound; returns whether it did.
     // A finished frame replaces a draft of its step; nothing else replaces a kept frame.

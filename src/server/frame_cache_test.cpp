@@ -86,18 +86,20 @@ TEST(FrameCache, OwnBoundRefusesWithoutEvicting)
     EXPECT_EQ(cache.find("other", 0), nullptr) << "a frame found under another key";
 }
 
-// A draft (one pass rendered ahead while playing) answers playback only; a finished frame of its
-// step replaces it, and nothing replaces a finished frame.
+// A draft (one pass rendered ahead while playing) answers playback only, and only when no coarser
+// than the level asked; a finished frame of its step replaces it, and nothing replaces a finished frame.
 TEST(FrameCache, DraftsAnswerPlaybackAndGiveWayToFinishedFrames)
 {
     FrameCache cache(1 << 20);
     cache.setKey("k");
     auto draft = std::make_shared<EncodedFrame>(*frameOf(300));
     draft->finished = false;
+    draft->header["level"] = 1;
     ASSERT_TRUE(cache.insert("k", 4, draft));
     EXPECT_EQ(cache.find("k", 4), nullptr) << "a still was answered by a draft";
     EXPECT_FALSE(cache.contains("k", 4));
-    EXPECT_EQ(cache.find("k", 4, false), draft);
+    EXPECT_EQ(cache.find("k", 4, 0), nullptr) << "a draft at level 1 answered a step whose own level is 0";
+    EXPECT_EQ(cache.find("k", 4, 1), draft);
     EXPECT_TRUE(cache.contains("k", 4, false));
 
     auto another = std::make_shared<EncodedFrame>(*draft);
@@ -109,7 +111,7 @@ TEST(FrameCache, DraftsAnswerPlaybackAndGiveWayToFinishedFrames)
     EXPECT_EQ(cache.frames(), 1u);
     EXPECT_FALSE(cache.insert("k", 4, draft)) << "a draft replaced a finished frame";
     EXPECT_FALSE(cache.insert("k", 4, frameOf(2000))) << "a finished frame was replaced";
-    EXPECT_EQ(cache.find("k", 4, false), finished);
+    EXPECT_EQ(cache.find("k", 4, 0), finished);
 }
 
 }  // namespace

@@ -459,13 +459,8 @@ void RenderSession::render(const Request& request)
     // this state's own steps of playback reached (a draft made before the first step knew it is at a
     // guessed level, which may be coarser than what the step renders in its time); a still or
     // interactive state only by a finished frame.
-    auto kept = m_frameCache.find(frameKey, step, request.mode != FrameMode::playback);
-    if (kept && !kept->finished) {
-        const int played = m_playbackKey == frameKey ? m_playbackLevel.load() : -1;
-        if (played < 0 || kept->header.value("level", 0) > played)
-            kept = nullptr;
-    }
-    if (kept) {
+    const int played = m_playbackKey == frameKey ? m_playbackLevel.load() : -1;
+    if (const auto kept = m_frameCache.find(frameKey, step, request.mode == FrameMode::playback ? played : -1)) {
         sendKept(*kept, request);
         m_lastStep = step;
         spdlog::info("{}: state {} step {} {}: the frame rendered ahead, after {:.1f} ms", m_name, request.id, step,
