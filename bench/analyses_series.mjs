@@ -6,15 +6,17 @@
 //   the same after a step change  (the UI no longer asks: what it would cost if it did)
 //   features of a new brush       POST /api/features (the state's features.level)
 //   the same after a step change  and with the painting turned on
-// each with the steps the server computed (X-Raypc-Steps-Computed), per step, and the load.
+// each with the steps the server computed (X-Raypc-Steps-Computed), per step, the answer's size and
+// hash (the same answer from any number of ranks) and the load.
 // Goal at 24 full-resolution steps (--full): statistics of a new brush <= 1 s, features <= 8 s, both
 // <= 2 s when only the step changes.
 //   node bench/analyses_series.mjs [BUILD_DIR] [--steps N] [--grid LATxRxLON | --full] [--exact]
-//        [--work DIR] [--keep] [--dataset DIR]
+//        [--work DIR] [--keep] [--dataset DIR] [--ranks N]
 // --dataset times an existing dataset instead (bench/series.sh passes the one it preprocessed);
 // --steps and --grid are then taken from it.
 // Defaults: build/, 12 steps, 64x81x128 (the demo's grid), ${TMPDIR:-/tmp}/raypc-bench-analyses.
 import { execFileSync, spawn } from 'node:child_process';
+import { createHash } from 'node:crypto';
 import { cpus } from 'node:os';
 import { readFileSync, rmSync, readdirSync } from 'node:fs';
 import { join, resolve } from 'node:path';
@@ -30,12 +32,14 @@ const option = (name, fallback) => {
 };
 const full = flag('--full'), exact = flag('--exact'), keep = flag('--keep');
 const given = option('--dataset', undefined);
+const ranks = Number(option('--ranks', '1'));
 let steps = Number(option('--steps', '12'));
 const grid = option('--grid', full ? '180x201x360' : '64x81x128');
 const work = resolve(option('--work', join(process.env.TMPDIR ?? '/tmp', 'raypc-bench-analyses')));
 const build = resolve(args[0] ?? 'build');
-if (!Number.isInteger(steps) || steps < 2 || !/^\d+x\d+x\d+$/.test(grid) || args.length > 1) {
-  console.error('usage: node bench/analyses_series.mjs [BUILD_DIR] [--steps N>=2] [--grid LATxRxLON | --full] [--exact] [--work DIR] [--keep]');
+if (!Number.isInteger(steps) || steps < 2 || !/^\d+x\d+x\d+$/.test(grid) || !Number.isInteger(ranks) || ranks < 1 ||
+    args.length > 1) {
+  console.error('usage: node bench/analyses_series.mjs [BUILD_DIR] [--steps N>=2] [--grid LATxRxLON | --full] [--exact] [--work DIR] [--keep] [--dataset DIR] [--ranks N]');
   process.exit(2);
 }
 const raypc = join(build, 'raypc');
@@ -61,7 +65,13 @@ if (dataset) {
   dataset = join(work, 'ds');
 }
 
-const child = spawn(raypc, ['serve', dataset, '--port', '0'], { stdio: ['ignore', 'pipe', 'pipe'] });
+// --ranks N: a distributed server (scripts/mpirun-local.sh), which shares the features' steps out.
+const serve = ['serve', dataset, '--port', '0'];
+const child = ranks > 1
+  ? spawn(join(import.meta.dirname, '..', 'scripts', 'mpirun-local.sh'), ['-np', String(ranks), raypc, ...serve],
+    { stdio: ['ignore', 'pipe', 'pipe'] })
+  : spawn(raypc, serve, { stdio: ['ignore', 'pipe', 'pipe'] });
+if (ranks > 1) console.log(`server: ${ranks} ranks`);
 let out = '';
 const url = await new Promise((res, rej) => {
   child.stdout.on('data', (d) => {
@@ -90,13 +100,14 @@ async function ask(path, state) {
   const r = await fetch(url + path, { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(state) });
   const body = await r.text();
   if (!r.ok) throw new Error(`${path}: ${r.status} ${body}`);
-  return { s: seconds(t), computed: r.headers.get('x-raypc-steps-computed'), bytes: body.length };
+  return { s: seconds(t), computed: r.headers.get('x-raypc-steps-computed'), bytes: body.length,
+    hash: createHash('sha256').update(body).digest('hex').slice(0, 12) };
 }
 const rows = [];
 const row = (what, a) => {
   rows.push(a);
   console.log(`${what.padEnd(46)} ${a.s.toFixed(3).padStart(8)} s  ${(1000 * a.s / steps).toFixed(1).padStart(7)} ms/step` +
-    `  computed ${String(a.computed).padStart(3)} of ${steps} steps  ${(a.bytes / 1024).toFixed(0).padStart(6)} KiB  load ${load()}`);
+    `  computed ${String(a.computed).padStart(3)} of ${steps} steps  ${(a.bytes / 1024).toFixed(0).padStart(6)} KiB  sha256 ${a.hash}  load ${load()}`);
 };
 const mid = Math.floor(steps / 2);
 const levels = exact ? ['', 'level=0&'] : [''];

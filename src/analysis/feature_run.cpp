@@ -1,8 +1,12 @@
 #include "analysis/feature_run.h"
 
+#include "core/error.h"
+
 #include <tbb/task_group.h>
 
+#include <cstring>
 #include <deque>
+#include <type_traits>
 
 namespace raypc::analysis {
 namespace {
@@ -81,6 +85,138 @@ std::optional<int> forEachStepFeatures(int first, int last, const StepVolumeLoad
     if (control.progress)
         control.progress(total, total);
     return std::nullopt;
+}
+
+std::optional<int> forEachBlockStep(const dataset::Dataset& dataset, int first, int last, const StepVolumeLoader& load,
+                                    std::span<const RangeFilter> filters, const FeatureOptions& options,
+                                    const FeatureBlockOptions& block, const std::function<void(const FeatureBlockStep&)>& onStep,
+                                    const FeatureRunControl& control)
+{
+    const bool fluxes = block.radialVelocity && !block.fluxDepthsKm.empty();
+    std::shared_ptr<const dataset::StepVolume> previousVolume;
+    StepFeatures previous;  // labels only
+    const auto timeOf = [&](int step) { return dataset.steps().at(size_t(step)).timeMyr; };
+    if (block.velocity && first > block.linkFrom && first <= last) {
+        if (control.cancel && control.cancel->load())
+            return first;
+        previousVolume = load(first - 1);
+        previous.labels = extractFeatures(*previousVolume, filters, options).labels;
+    }
+    FeatureBlockStep out;
+    return forEachStepFeatures(first, last, load, filters, options, [&](FeatureStep& s) {
+        out.step = s.step;
+        out.features = std::move(s.features);
+        out.links.clear();
+        if (block.velocity && previousVolume)
+            out.links = linkFeatures(*previousVolume, previous, out.features, *block.velocity, timeOf(s.step) - timeOf(s.step - 1));
+        out.fluxes.clear();
+        if (fluxes)
+            out.fluxes = shellFluxes(*s.volume, *block.radialVelocity, block.fluxDepthsKm, filters, std::nullopt, block.density);
+        onStep(out);
+        if (block.velocity) {
+            previousVolume = std::move(s.volume);
+            previous.labels = std::move(out.features.labels);
+        }
+    }, control);
+}
+
+namespace {
+
+class Packer {
+public:
+    explicit Packer(std::string& out) : m_out(out) {}
+    template <class T>
+    void put(const T& value)
+    {
+        static_assert(std::is_trivially_copyable_v<T>);
+        m_out.append(reinterpret_cast<const char*>(&value), sizeof(T));
+    }
+    template <class T>
+    void putAll(const std::vector<T>& values)
+    {
+        put(uint64_t(values.size()));
+        for (const T& v : values)
+            put(v);
+    }
+
+private:
+    std::string& m_out;
+};
+
+class Unpacker {
+public:
+    explicit Unpacker(std::string_view bytes) : m_bytes(bytes) {}
+    bool done() const { return m_at == m_bytes.size(); }
+    template <class T>
+    T get()
+    {
+        static_assert(std::is_trivially_copyable_v<T>);
+        if (m_bytes.size() - m_at < sizeof(T))
+            fail("features: a block of steps' packed features ends early ({} of {} bytes)", m_at, m_bytes.size());
+        T value;
+        std::memcpy(&value, m_bytes.data() + m_at, sizeof(T));
+        m_at += sizeof(T);
+        return value;
+    }
+    template <class T>
+    void getAll(std::vector<T>& values)
+    {
+        const uint64_t n = get<uint64_t>();
+        if (n > (m_bytes.size() - m_at) / sizeof(T))
+            fail("features: a block of steps' packed features ends early ({} items of {} bytes announced, {} bytes "
+                 "left)", n, sizeof(T), m_bytes.size() - m_at);
+        values.resize(size_t(n));
+        for (T& v : values)
+            v = get<T>();
+    }
+
+private:
+    std::string_view m_bytes;
+    size_t m_at = 0;
+};
+
+}  // namespace
+
+void packBlockStep(std::string& out, const FeatureBlockStep& step)
+{
+    Packer p(out);
+    p.put(int32_t(step.step));
+    p.put(uint64_t(step.features.features.size()));
+    for (const Feature& x : step.features.features) {
+        p.put(int32_t(x.id));
+        p.put(uint64_t(x.points));
+        for (const double v : {x.volumeKm3, x.fractionOfMantle, x.topDepthKm, x.bottomDepthKm, x.centroidLatDeg,
+                               x.centroidLonDeg, x.centroidDepthKm, x.meanDepthKm})
+            p.put(v);
+        p.putAll(x.variables);
+        p.putAll(x.bandFractions);
+    }
+    p.putAll(step.links);
+    p.putAll(step.fluxes);
+}
+
+std::vector<FeatureBlockStep> unpackBlockSteps(std::string_view bytes)
+{
+    Unpacker in(bytes);
+    std::vector<FeatureBlockStep> steps;
+    while (!in.done()) {
+        FeatureBlockStep& s = steps.emplace_back();
+        s.step = in.get<int32_t>();
+        const uint64_t n = in.get<uint64_t>();
+        for (uint64_t i = 0; i < n; ++i) {
+            Feature& x = s.features.features.emplace_back();
+            x.id = in.get<int32_t>();
+            x.points = size_t(in.get<uint64_t>());
+            for (double* v : {&x.volumeKm3, &x.fractionOfMantle, &x.topDepthKm, &x.bottomDepthKm, &x.centroidLatDeg,
+                              &x.centroidLonDeg, &x.centroidDepthKm, &x.meanDepthKm})
+                *v = in.get<double>();
+            in.getAll(x.variables);
+            in.getAll(x.bandFractions);
+        }
+        in.getAll(s.links);
+        in.getAll(s.fluxes);
+    }
+    return steps;
 }
 
 }  // namespace raypc::analysis

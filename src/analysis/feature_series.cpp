@@ -27,20 +27,6 @@ FeatureSeries::FeatureSeries(const dataset::Dataset& dataset, double minOverlapS
         m_radialVelocity = size_t(i);
 }
 
-void FeatureSeries::add(int step, std::shared_ptr<const dataset::StepVolume> volume, const StepFeatures& features)
-{
-    const double timeMyr = m_dataset.steps().at(size_t(step)).timeMyr;
-    const std::vector<FeatureLink> links =
-        m_previousVolume
-            ? linkFeatures(*m_previousVolume, m_previousFeatures, features, m_velocity, timeMyr - m_previousTimeMyr)
-            : std::vector<FeatureLink>{};
-    addLinked(step, features, links);
-    m_previousVolume = std::move(volume);
-    m_previousFeatures = features;
-    m_previousFeatures.features.clear();  // linking needs the labels only
-    m_previousTimeMyr = timeMyr;
-}
-
 void FeatureSeries::addLinked(int step, const StepFeatures& features, const std::vector<FeatureLink>& links)
 {
     const double timeMyr = m_dataset.steps().at(size_t(step)).timeMyr;

@@ -27,12 +27,9 @@ public:
     // it has no velocity to link steps with.
     FeatureSeries(const dataset::Dataset& dataset, double minOverlapShare, const char* what = "tracking");
 
-    // Adds the next step's features (steps in increasing order, each once) with the volume they were
-    // extracted from (kept until the next step is linked to it).
-    void add(int step, std::shared_ptr<const dataset::StepVolume> volume, const StepFeatures& features);
-    // The same with the links from the previous step's features found elsewhere (linkFeatures of the
-    // previous step's volume and labels and these, with velocity() over the steps' interval; empty for
-    // the first step): an MPI rank that linked its own steps. `features`' labels are not used.
+    // Adds the next step's features (steps in increasing order, each once; labels not used) with the
+    // links from the previous step's features (forEachBlockStep's: linkFeatures over the steps'
+    // interval with velocity(); empty for the first step), found by this process or another.
     void addLinked(int step, const StepFeatures& features, const std::vector<FeatureLink>& links);
     const VelocityVariables& velocity() const { return m_velocity; }
 
@@ -60,9 +57,6 @@ private:
     VelocityVariables m_velocity;
     std::optional<size_t> m_radialVelocity;  // variable index, for the stalls' speeds
     FeatureTracker m_tracker;
-    std::shared_ptr<const dataset::StepVolume> m_previousVolume;
-    StepFeatures m_previousFeatures;
-    double m_previousTimeMyr = 0;
     std::vector<Row> m_rows;
     std::map<std::pair<int, int>, size_t> m_rowOf;  // (step, feature id) -> index into m_rows
     std::map<int, std::vector<TrackPoint>> m_points;

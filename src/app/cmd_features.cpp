@@ -21,7 +21,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <map>
 #include <optional>
 
@@ -63,136 +62,35 @@ void applyStateSettings(FeaturesArgs& args)
     }
 }
 
-// A step's features and their links from the previous step's, packed for rank 0 (bytes as in
-// memory: the receiver is the same build on the same kind of machine).
-class Packer {
-public:
-    template <class T>
-    void put(const T& value)
-    {
-        m_bytes.append(reinterpret_cast<const char*>(&value), sizeof(T));
-    }
-    void putStep(int step, const analysis::StepFeatures& f, const std::vector<analysis::FeatureLink>& links)
-    {
-        put(int32_t(step));
-        put(uint32_t(f.features.size()));
-        for (const analysis::Feature& x : f.features) {
-            put(int32_t(x.id));
-            put(uint64_t(x.points));
-            for (const double v : {x.volumeKm3, x.fractionOfMantle, x.topDepthKm, x.bottomDepthKm, x.centroidLatDeg,
-                                   x.centroidLonDeg, x.centroidDepthKm, x.meanDepthKm})
-                put(v);
-            put(uint32_t(x.variables.size()));
-            for (const analysis::VariableSummary& v : x.variables)
-                put(v);
-            put(uint32_t(x.bandFractions.size()));
-            for (const double v : x.bandFractions)
-                put(v);
-        }
-        put(uint32_t(links.size()));
-        for (const analysis::FeatureLink& l : links)
-            put(l);
-    }
-    const std::string& bytes() const { return m_bytes; }
-
-private:
-    std::string m_bytes;
-};
-
-class Unpacker {
-public:
-    explicit Unpacker(const std::string& bytes) : m_bytes(bytes) {}
-    bool done() const { return m_at == m_bytes.size(); }
-    template <class T>
-    T get()
-    {
-        if (m_bytes.size() - m_at < sizeof(T))
-            fail("features: a rank's packed features end early ({} of {} bytes)", m_at, m_bytes.size());
-        T value;
-        std::memcpy(&value, m_bytes.data() + m_at, sizeof(T));
-        m_at += sizeof(T);
-        return value;
-    }
-    int getStep(analysis::StepFeatures& f, std::vector<analysis::FeatureLink>& links)
-    {
-        const int step = get<int32_t>();
-        f.features.resize(get<uint32_t>());
-        for (analysis::Feature& x : f.features) {
-            x.id = get<int32_t>();
-            x.points = get<uint64_t>();
-            for (double* v : {&x.volumeKm3, &x.fractionOfMantle, &x.topDepthKm, &x.bottomDepthKm, &x.centroidLatDeg,
-                              &x.centroidLonDeg, &x.centroidDepthKm, &x.meanDepthKm})
-                *v = get<double>();
-            x.variables.resize(get<uint32_t>());
-            for (analysis::VariableSummary& v : x.variables)
-                v = get<analysis::VariableSummary>();
-            x.bandFractions.resize(get<uint32_t>());
-            for (double& v : x.bandFractions)
-                v = get<double>();
-        }
-        links.resize(get<uint32_t>());
-        for (analysis::FeatureLink& l : links)
-            l = get<analysis::FeatureLink>();
-        return step;
-    }
-
-private:
-    const std::string& m_bytes;
-    size_t m_at = 0;
-};
-
-// A rank's block of steps, begin..end-1: its rows of the features table, how many features they
-// hold, and with tracking (`tracks`) its steps' features with their links from the previous step's,
-// found for the block's first step too (its previous step is another rank's), packed for rank 0.
-struct BlockFeatures {
-    std::string rows;
-    size_t count = 0;
-    Packer linked;
-};
-
-BlockFeatures blockFeatures(const SeriesSelection& sel, const analysis::FeatureOptions& options, int level, int begin, int end,
-                            const analysis::FeatureSeries* tracks, Progress* progress)
+// A rank's block of steps, begin..end-1 (forEachBlockStep: with tracking, each step's links from
+// the previous step's features, the block's first step's too, whose previous step is another
+// rank's), packed for rank 0.
+std::string blockFeatures(const SeriesSelection& sel, const analysis::FeatureOptions& options, int level, int begin, int end,
+                          const analysis::FeatureSeries* tracks, Progress* progress)
 {
     const dataset::Dataset& dataset = *sel.dataset;
-    const std::vector<analysis::RangeFilter>& filters = sel.filters;
-    BlockFeatures out;
-    std::shared_ptr<const dataset::StepVolume> previousVolume;
-    analysis::StepFeatures previous;  // labels only
-    const analysis::StepVolumeLoader load = [&](int step) { return dataset.load(step, level); };
-    if (tracks && begin > sel.first && begin < end) {  // the step before the block, to link the block's first
-        previousVolume = load(begin - 1);
-        previous = analysis::extractFeatures(*previousVolume, filters, options);
-    }
+    analysis::FeatureBlockOptions block;
+    if (tracks)
+        block.velocity = tracks->velocity();
+    block.linkFrom = sel.first;
     analysis::FeatureRunControl control;
     if (progress)
         control.progress = [&](int done, int) {
             if (done > 0)
                 progress->advance();
         };
-    analysis::forEachStepFeatures(begin, end - 1, load, filters, options, [&](analysis::FeatureStep& s) {
-        const int step = s.step;
-        analysis::StepFeatures& f = s.features;
-        out.count += f.features.size();
-        out.rows += featureTableRows(step, dataset.steps()[size_t(step)].timeMyr, f);
-        if (tracks) {
-            const std::vector<analysis::FeatureLink> links =
-                previousVolume ? analysis::linkFeatures(*previousVolume, previous, f, tracks->velocity(),
-                                              dataset.steps()[size_t(step)].timeMyr -
-                                                  dataset.steps()[size_t(step) - 1].timeMyr)
-                               : std::vector<analysis::FeatureLink>{};
-            out.linked.putStep(step, f, links);
-            previousVolume = s.volume;
-            previous.labels = std::move(f.labels);
-        }
-    }, control);
-    return out;
+    std::string packed;
+    analysis::forEachBlockStep(
+        dataset, begin, end - 1, [&](int step) { return dataset.load(step, level); }, sel.filters, options, block,
+        [&](const analysis::FeatureBlockStep& s) { analysis::packBlockStep(packed, s); }, control);
+    return packed;
 }
 
 // Under mpirun the steps are split into contiguous blocks over the ranks (as `raypc stats` does);
-// rank 0 gathers the rows in rank order, which is step order, and writes the file. With tracking,
-// each rank also links its steps' features to the previous step's (finding the features of the step
-// before its block as well), and rank 0 follows the tracks through the gathered features and links:
-// the files are those of one process, byte for byte.
+// rank 0 gathers the blocks' features in rank order, which is step order, and writes the rows. With
+// tracking, each rank also links its steps' features to the previous step's (finding the features of
+// the step before its block as well), and rank 0 follows the tracks through the gathered features and
+// links: the files are those of one process, byte for byte.
 void run(FeaturesArgs args)
 {
     SeriesSelection sel;
@@ -230,7 +128,7 @@ void run(FeaturesArgs args)
             tracks.emplace(dataset, args.minOverlapShare, "--tracks/--events/--stalls");
     });
     const mpi::Block block = mpi::blockOf(last - first + 1);
-    BlockFeatures mine;
+    std::string mine;
     std::optional<Progress> progress;
     if (!args.quiet && mpi::isRoot())
         progress.emplace(mpi::distributed() ? fmt::format("features (rank 0 of {})", mpi::size()) : "features",
@@ -241,31 +139,19 @@ void run(FeaturesArgs args)
     });
     if (progress)
         progress->finish();
-    const auto parts = mpi::gatherToRoot(mine.rows);
-    const auto counts = mpi::gatherToRoot(std::to_string(mine.count));
-    const auto linkedParts = mpi::gatherToRoot(mine.linked.bytes());
-    mpi::together([&] {
-        if (!tracks || !mpi::isRoot())
-            return;
-        for (const std::string& part : linkedParts) {  // rank order: step order
-            Unpacker in(part);
-            while (!in.done()) {
-                analysis::StepFeatures f;
-                std::vector<analysis::FeatureLink> links;
-                const int step = in.getStep(f, links);
-                tracks->addLinked(step, f, links);
-            }
-        }
-    });
+    const auto parts = mpi::gatherToRoot(mine);
     mpi::together([&] {
         if (!mpi::isRoot())
             return;
         std::string csv = featureTableHeader(dataset, options);
         size_t total = 0;
-        for (const auto& part : parts)
-            csv += part;
-        for (const auto& c : counts)
-            total += std::stoull(c);
+        for (const std::string& part : parts)  // rank order: step order
+            for (const analysis::FeatureBlockStep& s : analysis::unpackBlockSteps(part)) {
+                csv += featureTableRows(s.step, dataset.steps()[size_t(s.step)].timeMyr, s.features);
+                total += s.features.features.size();
+                if (tracks)
+                    tracks->addLinked(s.step, s.features, s.links);
+            }
         writeFileAtomic(args.output, csv);
         if (!args.tracks.empty())
             writeFileAtomic(args.tracks, analysis::trackCsv(*tracks));

@@ -223,9 +223,42 @@ std::optional<Message> tryReceive(int source, int tag)
     return message;
 }
 
+struct PendingSend::Request {
+    MPI_Request request = MPI_REQUEST_NULL;
+};
+
+PendingSend::PendingSend(int destination, int tag, std::string bytes)
+    : m_bytes(std::move(bytes)), m_request(std::make_unique<Request>())
+{
+    if (!distributed())
+        fail("MPI: send to rank {} without MPI", destination);
+    MPI_Isend(m_bytes.data(), toCount(m_bytes.size(), "a message"), MPI_BYTE, destination, tag, MPI_COMM_WORLD,
+              &m_request->request);
+}
+
+PendingSend::~PendingSend()
+{
+    if (m_request->request != MPI_REQUEST_NULL)
+        MPI_Wait(&m_request->request, MPI_STATUS_IGNORE);
+}
+
+bool PendingSend::done()
+{
+    if (m_request->request == MPI_REQUEST_NULL)
+        return true;
+    int finished = 0;
+    MPI_Test(&m_request->request, &finished, MPI_STATUS_IGNORE);
+    return finished != 0;
+}
+
 Block blockOf(int64_t count)
 {
-    const int64_t n = size(), r = rank();
+    return blockOf(count, rank(), size());
+}
+
+Block blockOf(int64_t count, int rank, int ranks)
+{
+    const int64_t n = ranks, r = rank;
     const int64_t base = count / n, extra = count % n;
     const int64_t begin = r * base + std::min(r, extra);
     return {begin, begin + base + (r < extra ? 1 : 0)};

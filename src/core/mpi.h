@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <exception>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -94,11 +95,30 @@ void send(int destination, int tag, const std::string& bytes);
 // spinning a core (MPI's blocking receive busy-waits on shared memory). Without MPI: nullopt.
 std::optional<Message> tryReceive(int source, int tag);
 
-// The contiguous block of [0, count) that this rank takes in a static split (balanced to one item).
+// A send that returns at once (MPI_Isend): for a rank that answers when its work is done rather than
+// when asked, so that it never blocks in a send while the receiver blocks sending to it. The
+// message goes while done() is polled; the destructor waits for it (the receiver must take it).
+class PendingSend {
+public:
+    PendingSend(int destination, int tag, std::string bytes);
+    ~PendingSend();
+    PendingSend(const PendingSend&) = delete;
+    PendingSend& operator=(const PendingSend&) = delete;
+    bool done();
+
+private:
+    struct Request;
+    std::string m_bytes;
+    std::unique_ptr<Request> m_request;
+};
+
+// The contiguous block of [0, count) that this rank takes in a static split (balanced to one item),
+// and that rank `rank` of `ranks` takes (without MPI too: a server's jobs name their rank).
 struct Block {
     int64_t begin = 0, end = 0;
 };
 Block blockOf(int64_t count);
+Block blockOf(int64_t count, int rank, int ranks);
 
 // Hands the items 0..count-1 out one at a time to whichever rank asks first (a counter on rank 0
 // read with MPI_Fetch_and_op), so a rank that finishes early takes more. Calls `work(item)` for

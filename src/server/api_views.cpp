@@ -3,6 +3,7 @@
 
 #include "core/error.h"
 #include "core/json_input.h"
+#include "core/mpi.h"
 #include "core/spherical.h"
 #include "dataset/shell_anomaly.h"
 #include "grid/coordinates.h"
@@ -210,30 +211,123 @@ struct FeatureSteps {
     analysis::FeatureSeries series;
 };
 
+// A features request's filters, options and what each step adds (links, flux) as a job for the
+// other ranks of a distributed server, and back (the numbers exact: JSON round-trips doubles).
+json featureJob(std::span<const analysis::RangeFilter> filters, const analysis::FeatureOptions& options, int level,
+                const analysis::FeatureBlockOptions& block)
+{
+    json jsonFilters = json::array();
+    for (const analysis::RangeFilter& f : filters) {
+        json ranges = json::array();
+        for (const dataset::ValueRange& r : f.ranges)
+            ranges.push_back({r.min, r.max});
+        jsonFilters.push_back({{"variable", f.variable},
+                               {"coordinate", f.coordinate ? json(int(*f.coordinate)) : json(nullptr)},
+                               {"ranges", std::move(ranges)}});
+    }
+    const auto optional = [](std::optional<size_t> i) { return i ? json(*i) : json(nullptr); };
+    return {{"filters", std::move(jsonFilters)},
+            {"minVolumeKm3", options.minVolumeKm3},
+            {"bandDepthsKm", options.bandDepthsKm},
+            {"bandHalfWidthKm", options.bandHalfWidthKm},
+            {"level", level},
+            {"velocity", block.velocity ? json::array({block.velocity->x, block.velocity->y, block.velocity->z}) : json(nullptr)},
+            {"radialVelocity", optional(block.radialVelocity)},
+            {"density", optional(block.density)},
+            {"fluxDepthsKm", block.fluxDepthsKm}};
+}
+
+struct FeatureJob {
+    std::vector<analysis::RangeFilter> filters;
+    analysis::FeatureOptions options;
+    int level = 0;
+    analysis::FeatureBlockOptions block;
+};
+
+FeatureJob parseFeatureJob(const json& job)
+{
+    FeatureJob out;
+    for (const json& f : job.at("filters")) {
+        analysis::RangeFilter& filter = out.filters.emplace_back();
+        filter.variable = f.at("variable").get<int>();
+        if (!f.at("coordinate").is_null())
+            filter.coordinate = grid::Coordinate(f.at("coordinate").get<int>());
+        for (const json& r : f.at("ranges"))
+            filter.ranges.push_back({r.at(0).get<float>(), r.at(1).get<float>()});
+    }
+    out.options.minVolumeKm3 = job.at("minVolumeKm3").get<double>();
+    out.options.bandDepthsKm = job.at("bandDepthsKm").get<std::vector<double>>();
+    out.options.bandHalfWidthKm = job.at("bandHalfWidthKm").get<double>();
+    out.level = job.at("level").get<int>();
+    if (const json& v = job.at("velocity"); !v.is_null())
+        out.block.velocity = analysis::VelocityVariables{v.at(0).get<size_t>(), v.at(1).get<size_t>(), v.at(2).get<size_t>()};
+    const auto optional = [](const json& i) { return i.is_null() ? std::nullopt : std::optional<size_t>(i.get<size_t>()); };
+    out.block.radialVelocity = optional(job.at("radialVelocity"));
+    out.block.density = optional(job.at("density"));
+    out.block.fluxDepthsKm = job.at("fluxDepthsKm").get<std::vector<double>>();
+    return out;
+}
+
+// The steps [first, last] of a features request, through `cache` without evicting.
+std::optional<int> featureBlock(const dataset::Dataset& dataset, StepCache& cache, const FeatureJob& job, int first, int last,
+                                const std::function<void(const analysis::FeatureBlockStep&)>& onStep,
+                                const analysis::FeatureRunControl& control)
+{
+    return analysis::forEachBlockStep(
+        dataset, first, last, [&](int step) { return cache.getWithoutEvicting(step, job.level); }, job.filters, job.options,
+        job.block, onStep, control);
+}
+
 FeatureSteps featureSteps(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters,
                           const analysis::FeatureOptions& options, double minOverlapShare, int level,
                           std::optional<size_t> radialVelocity, std::optional<size_t> density,
                           std::span<const double> fluxDepths, const std::atomic<bool>* cancel,
                           const std::function<void(int done, int total)>& progress,
-                          const std::function<void(int step, std::shared_ptr<const HugePageVector<int32_t>>)>& labels)
+                          const std::function<void(int step, const HugePageVector<int32_t>&)>& labels,
+                          const FeatureRanks* ranks)
 {
     const int nSteps = int(dataset.steps().size());
     FeatureSteps out{json::array(), {}, analysis::FeatureSeries(dataset, minOverlapShare, "features")};
-    const auto stopped = analysis::forEachStepFeatures(
-        0, nSteps - 1, [&](int step) { return cache.getWithoutEvicting(step, level); }, filters, options,
-        [&](analysis::FeatureStep& s) {
-            out.steps.push_back({{"step", s.step},
-                                 {"timeMyr", dataset.steps()[size_t(s.step)].timeMyr},
-                                 {"features", s.features.features.size()}});
-            if (radialVelocity && !fluxDepths.empty())
-                out.fluxes.push_back(analysis::shellFluxes(*s.volume, *radialVelocity, fluxDepths, filters, std::nullopt, density));
-            out.series.add(s.step, s.volume, s.features);
-            if (labels)
-                labels(s.step, std::make_shared<const HugePageVector<int32_t>>(std::move(s.features.labels)));
-        },
-        {cancel, progress});
+    FeatureJob job{{filters.begin(), filters.end()}, options, level, {}};
+    job.block.velocity = out.series.velocity();
+    job.block.radialVelocity = radialVelocity;
+    job.block.density = density;
+    job.block.fluxDepthsKm.assign(fluxDepths.begin(), fluxDepths.end());
+    const auto add = [&](const analysis::FeatureBlockStep& s) {
+        out.steps.push_back({{"step", s.step},
+                             {"timeMyr", dataset.steps()[size_t(s.step)].timeMyr},
+                             {"features", s.features.features.size()}});
+        if (radialVelocity && !fluxDepths.empty())
+            out.fluxes.push_back(s.fluxes);
+        out.series.addLinked(s.step, s.features, s.links);
+    };
+    // With other ranks, this process takes the first block and they the others (forEachBlockStep
+    // links each block's first step to the step before it); their steps follow its own in step order.
+    const int nRanks = ranks ? ranks->ranks : 1;
+    const mpi::Block mine = mpi::blockOf(nSteps, 0, nRanks);
+    std::shared_future<std::vector<std::string>> others;
+    if (nRanks > 1)
+        others = ranks->shareOut(featureJob(filters, options, level, job.block));
+    analysis::FeatureRunControl control{cancel, {}};
+    if (progress)  // with other ranks, this block's share scaled to the series (the blocks are found side by side)
+        control.progress = [&](int done, int total) {
+            const int scaled = int(int64_t(done) * nSteps / std::max(total, 1));
+            progress(nRanks > 1 ? std::min(scaled, nSteps - 1) : scaled, nSteps);
+        };
+    const auto stopped = featureBlock(dataset, cache, job, int(mine.begin), int(mine.end) - 1, [&](const analysis::FeatureBlockStep& s) {
+        add(s);
+        if (labels)
+            labels(s.step, s.features.labels);
+    }, control);
     if (stopped)
         fail("features cancelled at step {} of {} (the client went away or the server is stopping)", *stopped, nSteps);
+    if (nRanks > 1) {
+        for (const std::string& block : others.get())  // rank order: step order; throws a rank's failure
+            for (const analysis::FeatureBlockStep& s : analysis::unpackBlockSteps(block))
+                add(s);
+        if (progress)
+            progress(nSteps, nSteps);
+    }
     return out;
 }
 
@@ -336,11 +430,27 @@ json fluxJson(const dataset::Dataset& dataset, const std::vector<std::vector<ana
 
 }  // namespace
 
+std::string featureBlockOfJob(const dataset::Dataset& dataset, StepCache& cache, const nlohmann::json& text, int rank,
+                              int ranks, const std::atomic<bool>* cancel)
+{
+    const FeatureJob job = parseFeatureJob(text);
+    dataset.checkLevel(job.level);
+    const mpi::Block block = mpi::blockOf(int64_t(dataset.steps().size()), rank, ranks);
+    std::string packed;
+    const auto stopped = featureBlock(dataset, cache, job, int(block.begin), int(block.end) - 1,
+                                      [&](const analysis::FeatureBlockStep& s) { analysis::packBlockStep(packed, s); },
+                                      {cancel, {}});
+    if (stopped)
+        fail("features cancelled at step {}", *stopped);
+    return packed;
+}
+
 json featureSeriesJson(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters,
                        const analysis::FeatureOptions& options, double minOverlapShare, analysis::StallMeasure stallBy, int level,
                        double sigmas, const std::atomic<bool>* cancel,
                        const std::function<void(int done, int total)>& progress,
-                       const std::function<void(int step, std::shared_ptr<const HugePageVector<int32_t>>)>& labels)
+                       const std::function<void(int step, const HugePageVector<int32_t>& labels)>& labels,
+                       const FeatureRanks* ranks)
 {
     dataset.checkLevel(level);
     if (filters.empty())
@@ -357,7 +467,7 @@ json featureSeriesJson(const dataset::Dataset& dataset, StepCache& cache, std::s
             fluxDepths.push_back(d);
 
     FeatureSteps run = featureSteps(dataset, cache, filters, options, minOverlapShare, level, radialVelocity, density,
-                                    fluxDepths, cancel, progress, labels);
+                                    fluxDepths, cancel, progress, labels, ranks);
     const auto& fluxes = run.fluxes;
     // The tables of `raypc features --tracks/--events/--stalls` and `raypc flux`, written by the same
     // code (analysis/feature_csv.h), for the UI's CSV buttons.

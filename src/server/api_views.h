@@ -19,6 +19,7 @@
 
 #include <atomic>
 #include <functional>
+#include <future>
 #include <filesystem>
 #include <optional>
 #include <span>
@@ -55,6 +56,21 @@ nlohmann::json selectionStatsJson(const dataset::Dataset& dataset, StepCache& ca
                                   int level, int profileStep, const std::atomic<bool>* cancel = nullptr,
                                   SelectionCache* selections = nullptr, bool allProfiles = false, int* computed = nullptr);
 
+// The other ranks of a distributed server (server/rank_pool.h) for a features request: `ranks`
+// processes, this one the first; the steps are split into contiguous blocks as mpi::blockOf does.
+struct FeatureRanks {
+    int ranks = 1;
+    // Hands a job to ranks 1..ranks-1, each answering featureBlockOfJob of its block; the future gives
+    // their answers in rank order, or throws raypc::Error naming a rank that failed.
+    std::function<std::shared_future<std::vector<std::string>>(nlohmann::json job)> shareOut;
+};
+
+// What rank `rank` of `ranks` answers a features job (featureSeriesJson's, through FeatureRanks):
+// its block's steps (analysis::packBlockStep). Throws raypc::Error for a bad job or level, what the
+// steps' features throw, and when `cancel` becomes true.
+std::string featureBlockOfJob(const dataset::Dataset& dataset, StepCache& cache, const nlohmann::json& job, int rank,
+                              int ranks, const std::atomic<bool>* cancel);
+
 // POST /api/features (docs/protocol.md, FeatureSeries): the features of the selection `filters` in
 // every step at `level` (extractFeatures with `options`), followed through the steps (FeatureSeries,
 // links counting from `minOverlapShare`): every track with its points, stalls at the options' depths
@@ -62,13 +78,15 @@ nlohmann::json selectionStatsJson(const dataset::Dataset& dataset, StepCache& ca
 // the shells at those depths (inside the grid) per step with the avalanche steps (`sigmas`).
 // Volumes come through `cache` without evicting. Throws raypc::Error for no filters, a level out of
 // range, a dataset without velocity, or when `cancel` becomes true (checked before every step).
-// `progress` hears the steps done before each step and at the end; `labels`, when set, is handed
-// each step's feature labels (to keep some for the painted features: FeatureLabelsCache).
+// `progress` hears the steps done before each step and at the end; `labels`, when set, is shown
+// each step's feature labels found by this process (to copy some for the painted features:
+// FeatureLabelsCache). With `ranks`, the steps are shared out over them, and the answer is the same.
 nlohmann::json featureSeriesJson(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters,
                                  const analysis::FeatureOptions& options, double minOverlapShare, analysis::StallMeasure stallBy,
                                  int level, double sigmas, const std::atomic<bool>* cancel = nullptr,
                                  const std::function<void(int done, int total)>& progress = {},
-                                 const std::function<void(int step, std::shared_ptr<const HugePageVector<int32_t>>)>& labels = {});
+                                 const std::function<void(int step, const HugePageVector<int32_t>& labels)>& labels = {},
+                                 const FeatureRanks* ranks = nullptr);
 
 // The line attributes of a window as one binary answer: u32 little-endian header length, a UTF-8
 // JSON header {step, window, lines, columns, units, sets: [{injectionStep, injectionTimeMyr, lines}]},

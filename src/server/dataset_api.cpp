@@ -23,6 +23,7 @@
 #include "server/access.h"
 #include "server/image_codec.h"
 #include "server/protocol.h"
+#include "server/rank_pool.h"
 #include "server/render_session.h"
 
 #include <spdlog/spdlog.h>
@@ -356,16 +357,23 @@ ApiAnswer features(const ApiContext& api, const ApiRequest& request)
     if (job && api.jobs)
         progress = [&](int done, int total) { api.jobs->running(*job, done, total); };
     const int nSteps = int(dataset.steps().size());
-    // The labels of the state's step are kept for its painting (what the UI shows next).
-    std::function<void(int, std::shared_ptr<const HugePageVector<int32_t>>)> keepLabels;
+    // The labels of the state's step are kept for its painting (what the UI shows next). A step
+    // another rank found has none here: the painting extracts them (FeatureLabelsCache::get).
+    std::function<void(int, const HugePageVector<int32_t>&)> keepLabels;
     if (api.featureLabels)
-        keepLabels = [&](int step, std::shared_ptr<const HugePageVector<int32_t>> labels) {
+        keepLabels = [&](int step, const HugePageVector<int32_t>& labels) {
             if (step == resolved.state.step)
-                api.featureLabels->put(step, level, resolved.params.brushes, options, std::move(labels));
+                api.featureLabels->put(step, level, resolved.params.brushes, options,
+                                       std::make_shared<const HugePageVector<int32_t>>(labels));
         };
+    // A distributed server shares the steps out over its ranks.
+    std::optional<FeatureRanks> ranks;
+    if (api.ranks)
+        ranks = FeatureRanks{api.ranks->ranks(), [&](nlohmann::json job) { return api.ranks->shareOut(std::move(job), request.cancel); }};
     auto compute = [&] {
         return jsonAnswer(featureSeriesJson(dataset, *api.cache, resolved.params.brushes, options, settings.minOverlapShare,
-                                            settings.stallBy, level, sigmas, request.cancel, progress, keepLabels))
+                                            settings.stallBy, level, sigmas, request.cancel, progress, keepLabels,
+                                            ranks ? &*ranks : nullptr))
             .body;
     };
     std::shared_ptr<const std::string> body;
@@ -397,7 +405,10 @@ ApiAnswer features(const ApiContext& api, const ApiRequest& request)
         api.jobs->ended(*job, true);
     }
     spdlog::info("features: {} steps at level {} {} in {:.0f} ms", nSteps, level,
-                 how == FeatureSeriesCache::kMade ? "computed" : "kept", millisecondsSince(start));
+                 how != FeatureSeriesCache::kMade ? "kept"
+                 : ranks                          ? fmt::format("computed on {} ranks", ranks->ranks)
+                                                  : "computed",
+                 millisecondsSince(start));
     return {*body, "application/json", how == FeatureSeriesCache::kMade ? nSteps : 0};
 }
 

@@ -29,6 +29,8 @@
 
 namespace raypc::server {
 
+class RankPool;
+
 // What the handlers read: shared by every connection of a server, immutable after start (the caches
 // and the linked state are thread-safe).
 
@@ -52,6 +54,9 @@ struct ApiContext {
     SelectionCache* selections = nullptr;       // POST /api/stats, /api/selection, /api/time-depth
     FeatureSeriesCache* featureSeries = nullptr;  // POST /api/features
     FeatureLabelsCache* featureLabels = nullptr;  // the painted features (POST /api/features puts its step's)
+    // A distributed server's ranks (server/rank_pool.h), which POST /api/features shares its steps
+    // out over; nullptr: one process.
+    RankPool* ranks = nullptr;
 };
 
 // One API request as the handlers see it: the percent-encoded query, the body, and a flag that

@@ -25,7 +25,23 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 // Message tags (core/mpi.h send/tryReceive).
-enum Tag : int { kTagPass = 1, kTagCancel = 2, kTagDrop = 3, kTagStop = 4, kTagAnswer = 5, kTagPrepare = 6 };
+enum Tag : int {
+    kTagPass = 1,
+    kTagCancel = 2,  // a pass's or a job's, by its seq
+    kTagDrop = 3,
+    kTagStop = 4,
+    kTagAnswer = 5,
+    kTagPrepare = 6,
+    kTagJob = 7,
+    kTagJobAnswer = 8,
+};
+
+// A job's answer: a JSON header line ({seq}, with "error" or "cancelled" when it has no result)
+// and the result's bytes.
+std::string jobAnswer(const json& header, const std::string& bytes = {})
+{
+    return header.dump() + '\n' + bytes;
+}
 
 
 // What a rank needs to prepare a session's frame (kTagPrepare; a pass adds "seq" and "pass").
@@ -154,6 +170,87 @@ render::PassStats RankPool::renderPass(uint64_t session, uint64_t frame, int pas
     return total;
 }
 
+std::shared_future<std::vector<std::string>> RankPool::shareOut(json job, const std::atomic<bool>* cancel)
+{
+    auto task = std::make_unique<Task>();
+    task->tag = kTagJob;
+    task->cancel = cancel;
+    std::shared_future<std::vector<std::string>> answers = task->answers.get_future().share();
+    {
+        std::lock_guard lock(m_mutex);
+        if (!m_broken.empty())
+            fail("{}", m_broken);
+        if (m_stopping)
+            fail("the server is stopping");
+        task->seq = m_nextSeq++;
+        job["seq"] = task->seq;
+        task->bytes = job.dump();
+        m_queue.push_back(std::move(task));
+    }
+    m_cv.notify_all();
+    return answers;
+}
+
+void RankPool::takeJobAnswers()
+{
+    while (std::optional<mpi::Message> m = mpi::tryReceive(mpi::kAnySource, kTagJobAnswer)) {
+        const size_t eol = m->bytes.find('\n');
+        RAYPC_CHECK(eol != std::string::npos);
+        const uint64_t seq = json::parse(m->bytes.substr(0, eol)).at("seq").get<uint64_t>();
+        const auto it = m_jobs.find(seq);
+        if (it == m_jobs.end()) {
+            spdlog::debug("distributed: rank {} answered job {} after it was given up", m->source, seq);
+            continue;
+        }
+        it->second.answers.at(size_t(m->source - 1)) = std::move(m->bytes);
+    }
+    bool stopping = false;
+    {
+        std::lock_guard lock(m_mutex);
+        stopping = m_stopping;
+    }
+    for (auto it = m_jobs.begin(); it != m_jobs.end();) {
+        Job& job = it->second;
+        std::vector<int> silent;
+        for (int r = 1; r < m_ranks; ++r)
+            if (!job.answers[size_t(r - 1)])
+                silent.push_back(r);
+        if (silent.empty()) {
+            std::vector<std::string> results;
+            try {
+                for (int r = 1; r < m_ranks; ++r) {
+                    std::string& answer = *job.answers[size_t(r - 1)];
+                    const size_t eol = answer.find('\n');
+                    const json header = json::parse(answer.substr(0, eol));
+                    if (header.contains("error"))
+                        fail("rank {}: {}", r, header["error"].get<std::string>());
+                    if (header.value("cancelled", false))
+                        fail("cancelled (the client went away or the server is stopping)");
+                    results.push_back(answer.substr(eol + 1));
+                }
+                job.task->answers.set_value(std::move(results));
+            } catch (...) {
+                job.task->answers.set_exception(std::current_exception());
+            }
+            it = m_jobs.erase(it);
+            continue;
+        }
+        if (!job.cancelledAt && (stopping || (job.task->cancel && job.task->cancel->load()))) {
+            for (const int r : silent)
+                mpi::send(r, kTagCancel, std::to_string(it->first));
+            job.cancelledAt = Clock::now();
+        }
+        if (job.cancelledAt && secondsSince(*job.cancelledAt) > kAnswerTimeoutSeconds) {
+            job.task->answers.set_exception(std::make_exception_ptr(
+                Error(fmt::format("distributed server: rank{} {} did not answer within {:.0f} s of a cancel",
+                                  silent.size() > 1 ? "s" : "", fmt::join(silent, ", "), kAnswerTimeoutSeconds))));
+            it = m_jobs.erase(it);
+            continue;
+        }
+        ++it;
+    }
+}
+
 void RankPool::stop()
 {
     {
@@ -220,38 +317,53 @@ bool RankPool::run(const std::function<void(const std::string&)>& onBroken)
         std::unique_ptr<Task> task;
         {
             std::unique_lock lock(m_mutex);
-            m_cv.wait(lock, [&] { return m_stopping || !m_queue.empty(); });
-            if (m_queue.empty())
+            const auto ready = [&] { return m_stopping || !m_queue.empty(); };
+            if (m_jobs.empty())
+                m_cv.wait(lock, ready);
+            else  // answers to take: look again soon
+                m_cv.wait_for(lock, std::chrono::milliseconds(1), ready);
+            if (m_queue.empty() && m_stopping && m_jobs.empty())
                 break;  // stopping, and nothing left: later calls fail at once
-            task = std::move(m_queue.front());
-            m_queue.pop_front();
+            if (!m_queue.empty()) {
+                task = std::move(m_queue.front());
+                m_queue.pop_front();
+            }
         }
-        if (task->tag != kTagPass) {
+        if (task && task->tag == kTagJob) {
+            for (int r = 1; r < m_ranks; ++r)
+                mpi::send(r, kTagJob, task->bytes);
+            const uint64_t seq = task->seq;
+            m_jobs[seq] = Job{std::move(task), std::vector<std::optional<std::string>>(size_t(m_ranks - 1)), {}};
+        } else if (task && task->tag != kTagPass) {
             for (int r = 1; r < m_ranks; ++r)
                 mpi::send(r, task->tag, task->bytes);
-            continue;
-        }
-        bool broken = false;
-        std::string why;
-        std::vector<std::string> answers = collect(*task, broken, why);
-        if (!broken) {
+        } else if (task) {
+            bool broken = false;
+            std::string why;
+            std::vector<std::string> answers = collect(*task, broken, why);
+            if (broken) {
+                spdlog::error("{}", why);
+                std::deque<std::unique_ptr<Task>> left;
+                {
+                    std::lock_guard lock(m_mutex);
+                    m_broken = why;
+                    left.swap(m_queue);
+                }
+                const auto error = std::make_exception_ptr(Error(why));
+                task->answers.set_exception(error);
+                for (auto& t : left)
+                    if (t->tag == kTagPass || t->tag == kTagJob)
+                        t->answers.set_exception(error);
+                for (auto& [seq, job] : m_jobs)
+                    job.task->answers.set_exception(error);
+                m_jobs.clear();
+                onBroken(why);
+                return false;
+            }
             task->answers.set_value(std::move(answers));
-            continue;
         }
-        spdlog::error("{}", why);
-        std::deque<std::unique_ptr<Task>> left;
-        {
-            std::lock_guard lock(m_mutex);
-            m_broken = why;
-            left.swap(m_queue);
-        }
-        const auto error = std::make_exception_ptr(Error(why));
-        task->answers.set_exception(error);
-        for (auto& t : left)
-            if (t->tag == kTagPass)
-                t->answers.set_exception(error);
-        onBroken(why);
-        return false;
+        if (!m_jobs.empty())
+            takeJobAnswers();
     }
     for (int r = 1; r < m_ranks; ++r)
         mpi::send(r, kTagStop, "");
@@ -301,6 +413,7 @@ void WorkerRank::run()
         if (signalled && secondsSince(*signalled) > kAnswerTimeoutSeconds)
             fail("distributed server: rank {} got signal {} and rank 0 did not stop the server within {:.0f} s",
                  mpi::rank(), int(g_signal), kAnswerTimeoutSeconds);
+        sendFinishedJobs();
         std::optional<mpi::Message> m = mpi::tryReceive(0, mpi::kAnyTag);
         if (!m) {
             std::this_thread::sleep_for(idle);
@@ -310,12 +423,17 @@ void WorkerRank::run()
         idle = std::chrono::microseconds(100);
         switch (m->tag) {
         case kTagStop:
+            endJobs();
             return;
         case kTagDrop:
             m_sessions.erase(std::stoull(m->bytes));
             break;
         case kTagCancel:
-            break;  // for a pass already answered
+            noteCancel(m->bytes);  // a job's, or a pass's already answered
+            break;
+        case kTagJob:
+            startJob(m->bytes);
+            break;
         case kTagPass:
             mpi::send(0, kTagAnswer, renderPass(m->bytes));
             break;
@@ -326,6 +444,66 @@ void WorkerRank::run()
             fail("distributed server: rank {} got a message with the unknown tag {}", mpi::rank(), m->tag);
         }
     }
+}
+
+void WorkerRank::startJob(const std::string& text)
+{
+    uint64_t seq = 0;
+    json job;
+    try {
+        job = json::parse(text);
+        seq = job.at("seq").get<uint64_t>();
+    } catch (const std::exception& e) {
+        m_sent.push_back(std::make_unique<mpi::PendingSend>(0, kTagJobAnswer, jobAnswer({{"seq", seq}, {"error", e.what()}})));
+        return;
+    }
+    auto running = std::make_unique<RunningJob>();
+    RunningJob& r = *running;
+    r.answer = std::async(std::launch::async, [this, &r, seq, job = std::move(job)] {
+        try {
+            const std::string packed =
+                featureBlockOfJob(*m_caches.dataset, *m_caches.volumes, job, mpi::rank(), mpi::size(), &r.cancel);
+            return jobAnswer({{"seq", seq}}, packed);
+        } catch (const std::exception& e) {
+            if (r.cancel)
+                return jobAnswer({{"seq", seq}, {"cancelled", true}});
+            return jobAnswer({{"seq", seq}, {"error", e.what()}});
+        }
+    });
+    m_jobs[seq] = std::move(running);
+}
+
+void WorkerRank::noteCancel(const std::string& seq)
+{
+    try {
+        if (const auto it = m_jobs.find(std::stoull(seq)); it != m_jobs.end())
+            it->second->cancel = true;
+    } catch (const std::exception&) {  // not a number: no job of ours
+    }
+}
+
+void WorkerRank::sendFinishedJobs()
+{
+    for (auto it = m_jobs.begin(); it != m_jobs.end();) {
+        if (it->second->answer.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+            ++it;
+            continue;
+        }
+        m_sent.push_back(std::make_unique<mpi::PendingSend>(0, kTagJobAnswer, it->second->answer.get()));
+        it = m_jobs.erase(it);
+    }
+    std::erase_if(m_sent, [](const std::unique_ptr<mpi::PendingSend>& s) { return s->done(); });
+}
+
+void WorkerRank::endJobs()
+{
+    // Rank 0 takes every job's answers before it says stop; a job still running here was given up.
+    for (auto& [seq, job] : m_jobs)
+        job->cancel = true;
+    for (auto& [seq, job] : m_jobs)
+        job->answer.wait();
+    m_jobs.clear();
+    m_sent.clear();
 }
 
 WorkerRank::Session& WorkerRank::session(uint64_t id)
@@ -392,8 +570,12 @@ std::string WorkerRank::renderPass(const std::string& text)
             std::async(std::launch::async, [&] { return s.prepared->renderPass(s.frames, &cancel, share); });
         const std::string mine = std::to_string(seq);
         while (rendered.wait_for(std::chrono::milliseconds(1)) != std::future_status::ready)
-            if (std::optional<mpi::Message> c = mpi::tryReceive(0, kTagCancel); c && c->bytes == mine)
-                cancel = true;
+            if (std::optional<mpi::Message> c = mpi::tryReceive(0, kTagCancel)) {
+                if (c->bytes == mine)
+                    cancel = true;
+                else
+                    noteCancel(c->bytes);
+            }
         const render::PassStats stats = rendered.get();
         mpi::dieHook("serve-pass");
         header = {{"seq", seq}, {"cancelled", stats.cancelled}, {"counts", stats.counts()}};

@@ -12,6 +12,11 @@
 // StateRenderer per session, kept until the session closes, so a pass after the first reuses the
 // mapped volume and the accumulated frame as a lone process does.
 //
+// Jobs besides passes (a features request's blocks of steps: server/api_views.h FeatureRanks) go to
+// every other rank at once and are answered when each is done, while passes go on: a rank works on
+// a job on a thread of its own and sends its answer without waiting for rank 0 to take it
+// (mpi::PendingSend), and rank 0's main thread takes answers between passes.
+//
 // Messages (tagged byte strings): a pass is JSON (the state document, the level and size divisor
 // rank 0 chose, the pass number), and so is a frame to prepare ahead of its first pass (the same
 // without the pass number; no answer); a worker answers every pass exactly once with a JSON header
@@ -25,12 +30,14 @@
 // with an error (Open MPI cannot continue without a rank).
 #pragma once
 
+#include "core/mpi.h"
 #include "render/state_renderer.h"
 #include "server/dataset_api.h"
 #include "server/server.h"
 #include "server/step_cache.h"
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -40,7 +47,11 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
 
 namespace raypc::server {
 
@@ -78,6 +89,12 @@ public:
                                  const render::StateRenderer::Prepared& prepared, render::ViewFrames& frames,
                                  const std::atomic<bool>* cancel);
 
+    // Hands `job` (JSON, given a "seq") to ranks 1..N-1, each answering it with WorkerRank's job
+    // handler (featureBlockOfJob); the future gives their answers in rank order, or an Error naming
+    // a rank that failed or did not answer within kAnswerTimeoutSeconds of a cancel (`cancel`
+    // becoming true, or the server stopping), or saying that the job was cancelled.
+    std::shared_future<std::vector<std::string>> shareOut(nlohmann::json job, const std::atomic<bool>* cancel);
+
     // The main thread: hands out passes until stop(), then tells the other ranks to stop. Returns
     // false when a rank stopped answering (after calling `onBroken`, which should stop the server).
     bool run(const std::function<void(const std::string& why)>& onBroken);
@@ -92,6 +109,14 @@ private:
         std::promise<std::vector<std::string>> answers;  // passes only: ranks 1..N-1's, in rank order
     };
     std::vector<std::string> collect(const Task& task, bool& broken, std::string& why);
+    // Jobs handed out and not yet answered by every rank.
+    struct Job {
+        std::unique_ptr<Task> task;
+        std::vector<std::optional<std::string>> answers;  // ranks 1..N-1
+        std::optional<std::chrono::steady_clock::time_point> cancelledAt;
+    };
+    void takeJobAnswers();  // receives what has arrived, ends the jobs answered, cancelled or silent
+    std::map<uint64_t, Job> m_jobs;  // by seq; the main thread's
 
     int m_ranks;
     std::mutex m_mutex;
@@ -117,8 +142,18 @@ private:
     void prepare(Session& s, const nlohmann::json& job);  // frame `job.frame` at its level and divisor
     void prepareAhead(const std::string& job);
     std::string renderPass(const std::string& job);
+    void startJob(const std::string& job);
+    void noteCancel(const std::string& seq);  // a pass's (renderPass polls for it) or a job's
+    void sendFinishedJobs();
+    void endJobs();  // cancels what runs, waits for it and for the answers sent
 
     DatasetCaches m_caches;
+    struct RunningJob {
+        std::atomic<bool> cancel{false};
+        std::future<std::string> answer;
+    };
+    std::map<uint64_t, std::unique_ptr<RunningJob>> m_jobs;  // by seq
+    std::vector<std::unique_ptr<mpi::PendingSend>> m_sent;
     std::map<uint64_t, std::unique_ptr<Session>> m_sessions;
 };
 

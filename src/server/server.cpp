@@ -149,6 +149,7 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
     s.api.series = s.options.series;
     s.api.link = &s.link;
     s.api.jobs = &s.jobProgress;
+    s.api.ranks = s.options.ranks;
     if (s.options.second) {
         auto second = std::make_unique<SecondDataset>();
         DatasetCaches c = openDatasetCaches(*s.options.second, cacheBytes, s.options.cacheEntries);
@@ -174,6 +175,7 @@ Server::Server(ServerOptions options) : m_impl(std::make_unique<Impl>(std::move(
         api.featureLabels = &second->featureLabels;
         second->render.featureLabels = &second->featureLabels;
         api.series = nullptr;
+        api.ranks = nullptr;  // the ranks map the first dataset only
         api.pairFirst = s.dataset;
         // Each info is its own dataset's, with the pair's key (pairJson) added.
         for (int index : {0, 1}) {

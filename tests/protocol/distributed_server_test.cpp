@@ -200,6 +200,51 @@ TEST(DistributedServer, NewStatesAtAnyMomentOfAStillGetFramesNotErrors)
     expectCleanStop(server, 2);
 }
 
+// POST /api/features on a distributed server: each rank finds the features of a block of steps (with
+// the links from the step before its block, and the flux) and rank 0 follows the tracks through
+// them: the answer is one process's, byte for byte, on 2 and 3 ranks (3 steps: blocks of 2 + 1 and
+// 1 + 1 + 1), for a brush of one shell a step and one of a variable's range.
+TEST(DistributedServer, FeaturesAreSharedOutAndAnswerAsOneProcess)
+{
+    json shell = smallState();
+    shell["brushes"] = {{{"name", "depth"}, {"min", 500}, {"max", 1600}}};
+    json hot = smallState();
+    hot["brushes"] = {{{"name", "temperature"}, {"min", 1800}, {"max", 4000}}, {{"name", "depth"}, {"min", 200}, {"max", 2800}}};
+    const std::vector<json> states{shell, hot};
+    auto answers = [&](int ranks) {
+        Server server(ranks);
+        std::vector<std::string> out;
+        for (const json& state : states) {
+            const auto a = httpRequest(server.port, http::verb::post, "/api/features?job=f1", state.dump());
+            EXPECT_EQ(a.status, 200) << ranks << " ranks: " << a.body;
+            EXPECT_EQ(a.stepsComputed, "3");
+            out.push_back(a.body);
+            const json progress = json::parse(httpGet(server.port, "/api/job-progress?job=f1").body);
+            EXPECT_EQ(progress["state"], "done") << progress.dump();
+            EXPECT_EQ(progress["done"], 3) << progress.dump();
+        }
+        expectCleanStop(server, ranks);
+        if (ranks > 1)
+            EXPECT_NE(server.output().find(fmt::format("features: 3 steps at level 0 computed on {} ranks", ranks)),
+                      std::string::npos)
+                << server.output();
+        return out;
+    };
+    const std::vector<std::string> alone = answers(1);
+    ASSERT_EQ(alone.size(), states.size());
+    const json first = json::parse(alone[0]);
+    ASSERT_EQ(first["steps"].size(), 3u);
+    EXPECT_FALSE(first["tracks"].empty()) << alone[0].substr(0, 400);
+    EXPECT_FALSE(first["flux"].is_null());
+    for (const int ranks : {2, 3}) {
+        const std::vector<std::string> shared = answers(ranks);
+        ASSERT_EQ(shared.size(), alone.size());
+        for (size_t i = 0; i < alone.size(); ++i)
+            EXPECT_TRUE(shared[i] == alone[i]) << "brush " << i << " on " << ranks << " ranks: the answer differs:\n"
+                                               << shared[i].substr(0, 600) << "\nalone:\n" << alone[i].substr(0, 600);
+    }
+}
+
 // Rank 1 exits in the middle of a pass (the test hook of docs/scaling.md): the job ends with an
 // error that names the rank, well within the timeout, and the client's connection closes.
 TEST(DistributedServer, RankThatDiesEndsTheJobWithoutHanging)
