@@ -40,6 +40,10 @@ public:
         a.step.step = step;
         a.group.run([&a, step, &load, filters, &options] {
             a.step.volume = load(step);
+            // Its points are read all over every variable: from disk, in large reads rather than a
+            // small one per page fault (a new brush over 24 full-resolution steps not in the page
+            // cache: docs/scaling.md).
+            a.step.volume->adviseWillNeed();
             a.step.features = extractFeatures(*a.step.volume, filters, options);
         });
     }

@@ -45,6 +45,12 @@ MappedFile::~MappedFile()
         ::munmap(m_data, m_size);
 }
 
+void MappedFile::adviseWillNeed() const noexcept
+{
+    if (m_data)
+        ::madvise(m_data, m_size, MADV_WILLNEED);
+}
+
 std::optional<size_t> MappedFile::cutShort() const noexcept
 {
     if (m_path.empty())

@@ -36,6 +36,10 @@ public:
     std::optional<size_t> cutShort() const noexcept;
     // Throws raypc::Error naming the file when cutShort().
     void checkNotCutShort() const;
+    // Asks the kernel to read the whole file into the page cache now, in the background
+    // (madvise MADV_WILLNEED), for a reader that will touch it all over rather than in order. Only
+    // advice: never throws, and a failure changes nothing but the speed.
+    void adviseWillNeed() const noexcept;
 
 private:
     void* m_data = nullptr;

@@ -607,6 +607,14 @@ bool StepVolume::filesCutShort() const noexcept
     return false;
 }
 
+void StepVolume::adviseWillNeed() const noexcept
+{
+    if (m_base)
+        m_base->adviseWillNeed();
+    for (const auto& file : m_mapped)
+        file.adviseWillNeed();
+}
+
 void StepVolume::touchPages() const
 {
     if (m_base)

@@ -225,6 +225,10 @@ public:
     // Reads one value per page of every mapped file, so that a later pass does not wait for the disk.
     // Throws raypc::Error naming a file cut short since it was mapped.
     void touchPages() const;
+    // Asks the kernel to read every mapped file in the background (MappedFile::adviseWillNeed): for
+    // a reader of points all over the volume (a step's features read every variable at the selected
+    // points), whose page faults would otherwise each wait for a small read. Never throws.
+    void adviseWillNeed() const noexcept;
     // Whether a mapped file is shorter now than when it was mapped (MappedFile::cutShort): reading it
     // would raise SIGBUS. The server's step cache asks before it hands out a cached volume.
     bool filesCutShort() const noexcept;
