@@ -308,6 +308,15 @@ FeatureSteps featureSteps(const dataset::Dataset& dataset, StepCache& cache, std
     std::shared_future<std::vector<std::string>> others;
     if (nRanks > 1)
         others = ranks->shareOut(featureJob(filters, options, level, job.block));
+    // The ranks' job reads `cancel` until they have all answered: however this block ends, wait.
+    struct WaitForOthers {
+        const std::shared_future<std::vector<std::string>>& others;
+        ~WaitForOthers()
+        {
+            if (others.valid())
+                others.wait();
+        }
+    } waitForOthers{others};
     analysis::FeatureRunControl control{cancel, {}};
     if (progress)  // with other ranks, this block's share scaled to the series (the blocks are found side by side)
         control.progress = [&](int done, int total) {

@@ -317,11 +317,10 @@ bool RankPool::run(const std::function<void(const std::string&)>& onBroken)
         std::unique_ptr<Task> task;
         {
             std::unique_lock lock(m_mutex);
-            const auto ready = [&] { return m_stopping || !m_queue.empty(); };
             if (m_jobs.empty())
-                m_cv.wait(lock, ready);
+                m_cv.wait(lock, [&] { return m_stopping || !m_queue.empty(); });
             else  // answers to take: look again soon
-                m_cv.wait_for(lock, std::chrono::milliseconds(1), ready);
+                m_cv.wait_for(lock, std::chrono::milliseconds(1), [&] { return !m_queue.empty(); });
             if (m_queue.empty() && m_stopping && m_jobs.empty())
                 break;  // stopping, and nothing left: later calls fail at once
             if (!m_queue.empty()) {

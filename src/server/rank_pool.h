@@ -92,7 +92,8 @@ public:
     // Hands `job` (JSON, given a "seq") to ranks 1..N-1, each answering it with WorkerRank's job
     // handler (featureBlockOfJob); the future gives their answers in rank order, or an Error naming
     // a rank that failed or did not answer within kAnswerTimeoutSeconds of a cancel (`cancel`
-    // becoming true, or the server stopping), or saying that the job was cancelled.
+    // becoming true, or the server stopping), or saying that the job was cancelled. `cancel` is
+    // read until the future is ready: the caller keeps it alive that long.
     std::shared_future<std::vector<std::string>> shareOut(nlohmann::json job, const std::atomic<bool>* cancel);
 
     // The main thread: hands out passes until stop(), then tells the other ranks to stop. Returns

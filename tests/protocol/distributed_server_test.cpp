@@ -12,6 +12,8 @@
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <regex>
 #include <string>
 #include <sys/wait.h>
@@ -23,12 +25,14 @@ namespace {
 using namespace raypc::servertest;
 
 // `raypc serve` of the prepared dataset on `ranks` ranks (1: alone, without mpirun).
+// `inputs`: what it serves (default: the fixture's dataset).
 class Server : public FixtureServer {
 public:
-    explicit Server(int ranks, bool verbose = false)
+    explicit Server(int ranks, bool verbose = false, std::vector<std::string> inputs = {})
         : FixtureServer({}, verbose,
                         ranks == 1 ? std::vector<std::string>{}
-                                   : std::vector<std::string>{RAYPC_MPIRUN_LOCAL, "-np", std::to_string(ranks)})
+                                   : std::vector<std::string>{RAYPC_MPIRUN_LOCAL, "-np", std::to_string(ranks)},
+                        std::move(inputs))
     {
     }
 };
@@ -243,6 +247,40 @@ TEST(DistributedServer, FeaturesAreSharedOutAndAnswerAsOneProcess)
             EXPECT_TRUE(shared[i] == alone[i]) << "brush " << i << " on " << ranks << " ranks: the answer differs:\n"
                                                << shared[i].substr(0, 600) << "\nalone:\n" << alone[i].substr(0, 600);
     }
+}
+
+// A step of another rank's block that cannot be read (values damaged after preprocessing, which
+// only its load finds): the request fails with one error naming the rank, the file and the point,
+// as one process names them; the server goes on serving.
+TEST(DistributedServer, AFeaturesStepThatFailsOnAnotherRankIsOneErrorNamingIt)
+{
+    const std::filesystem::path ds = WorkDirEnvironment::work() / "ds-damaged";
+    std::filesystem::remove_all(ds);
+    const std::string preprocess = std::string(RAYPC_EXE) + " preprocess " + RAYPC_CONTEST_LAYOUT_DIR + " -o " +
+                                   ds.string() + " --encoding float32 --no-pathlines --quiet >/dev/null";
+    ASSERT_EQ(std::system(preprocess.c_str()), 0) << preprocess;
+    {  // step 2 (rank 1's of 2: steps 0-1 and 2): NaN where temperature has no missing values
+        std::fstream f(ds / "steps" / "0002" / "L0" / "temperature.f32", std::ios::in | std::ios::out | std::ios::binary);
+        ASSERT_TRUE(f.good());
+        f.seekp(4000);
+        const std::string nan(400, '\xff');
+        f.write(nan.data(), std::streamsize(nan.size()));
+    }
+    json state = smallState();
+    state["brushes"] = {{{"name", "depth"}, {"min", 500}, {"max", 1600}}};
+    auto answer = [&](int ranks) {
+        Server server(ranks, false, {ds.string()});
+        const auto a = httpRequest(server.port, http::verb::post, "/api/features", state.dump());
+        EXPECT_EQ(httpGet(server.port, "/api/info").status, 200) << "the server goes on serving";
+        expectCleanStop(server, ranks);
+        return a;
+    };
+    const auto alone = answer(1), shared = answer(2);
+    EXPECT_EQ(alone.status, 400) << alone.body;
+    EXPECT_EQ(shared.status, 400) << shared.body;
+    const std::string message = json::parse(alone.body).at("error").get<std::string>();
+    EXPECT_NE(message.find("0002/L0/temperature.f32: point 1000"), std::string::npos) << message;
+    EXPECT_EQ(json::parse(shared.body).at("error").get<std::string>(), "rank 1: " + message);
 }
 
 // Rank 1 exits in the middle of a pass (the test hook of docs/scaling.md): the job ends with an
