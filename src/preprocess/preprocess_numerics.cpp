@@ -8,6 +8,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -117,11 +118,64 @@ std::vector<float> coarsenField(const grid::SphericalGrid& fine, std::span<const
     return out;
 }
 
+namespace {
+
+// A lat row's sums in computeStats.
+struct StatsPartial {
+    double weighted = 0, weight = 0, missing = 0;
+    size_t missingPoints = 0;
+};
+
+// How many lat rows statsOfRows sums side by side.
+constexpr size_t kStatsRowsAtOnce = 4;
+
+// computeStats' sums of the N lat rows from firstLat on, into rows[iLat] and the row's histogram
+// (kHistogramBins doubles from histograms + iLat · kHistogramBins). Each row adds its points in its
+// own order (r, then lon), as one row alone would: the same bits for any N. Why N rows at once: a
+// row's sums are chains of dependent additions (a histogram bin's through a store and a load), so
+// one row alone waits on each addition; N rows' chains, interleaved point by point, overlap.
+template <size_t N>
+void statsOfRows(const grid::SphericalGrid& grid, const grid::SphericalGrid::VolumeFactors& w, const float* values,
+                 float lo, double scale, size_t firstLat, StatsPartial* rows, double* histograms)
+{
+    const size_t nR = grid.nR(), nLon = grid.nLon(), rowSize = nR * nLon;
+    std::array<StatsPartial, N> p{};
+    std::array<double*, N> histogram;
+    for (size_t j = 0; j < N; ++j)
+        histogram[j] = histograms + (firstLat + j) * dataset::kHistogramBins;
+    for (size_t iR = 0; iR < nR; ++iR) {
+        std::array<double, N> wRow;
+        std::array<const float*, N> row;
+        for (size_t j = 0; j < N; ++j) {
+            wRow[j] = w.lat[firstLat + j] * w.r[iR];
+            row[j] = values + (firstLat + j) * rowSize + iR * nLon;
+        }
+        for (size_t iLon = 0; iLon < nLon; ++iLon)
+            for (size_t j = 0; j < N; ++j) {
+                const float x = row[j][iLon];
+                const double wi = wRow[j] * w.lon[iLon];
+                if (std::isnan(x)) {
+                    p[j].missing += wi;  // the statistics are of the values there are
+                    ++p[j].missingPoints;
+                    continue;
+                }
+                // In double: the difference of two finite floats may overflow float.
+                const int bin = std::min(dataset::kHistogramBins - 1, static_cast<int>((double(x) - lo) * scale));
+                histogram[j][bin] += wi;
+                p[j].weighted += wi * x;
+                p[j].weight += wi;
+            }
+    }
+    for (size_t j = 0; j < N; ++j)
+        rows[firstLat + j] = p[j];
+}
+
+}  // namespace
+
 dataset::VariableStats computeStats(const grid::SphericalGrid& grid, std::span<const float> values)
 {
     RAYPC_CHECK_EQ(values.size(), grid.cellCount());
     const auto w = grid.volumeFactors();
-    const size_t rowSize = grid.nR() * grid.nLon();
     const auto extremes = tbb::parallel_reduce(
         tbb::blocked_range<size_t>(0, values.size(), 1 << 16), std::pair<float, float>(INFINITY, -INFINITY),
         [&](const auto& range, std::pair<float, float> acc) {
@@ -146,32 +200,18 @@ dataset::VariableStats computeStats(const grid::SphericalGrid& grid, std::span<c
     const double scale = span > 0 ? dataset::kHistogramBins / span : 0.0;
     // One partial sum per lat row, added in row order: the sums do not depend on how rows were
     // spread over threads, so a rerun writes the same bytes (dataset.json is reproducible).
-    struct Partial {
-        double weighted = 0, weight = 0, missing = 0;
-        size_t missingPoints = 0;
-    };
-    std::vector<Partial> rows(grid.nLat());
+    std::vector<StatsPartial> rows(grid.nLat());
     std::vector<double> rowHistograms(grid.nLat() * dataset::kHistogramBins, 0.0);
-    tbb::parallel_for(size_t(0), grid.nLat(), [&](size_t iLat) {
-        Partial& p = rows[iLat];
-        double* histogram = rowHistograms.data() + iLat * dataset::kHistogramBins;
-        for (size_t iR = 0; iR < grid.nR(); ++iR) {
-            const double wRow = w.lat[iLat] * w.r[iR];
-            const float* row = values.data() + iLat * rowSize + iR * grid.nLon();
-            for (size_t iLon = 0; iLon < grid.nLon(); ++iLon) {
-                const double wi = wRow * w.lon[iLon];
-                if (std::isnan(row[iLon])) {
-                    p.missing += wi;  // the statistics are of the values there are
-                    ++p.missingPoints;
-                    continue;
-                }
-                // In double: the difference of two finite floats may overflow float.
-                const int bin = std::min(dataset::kHistogramBins - 1, static_cast<int>((double(row[iLon]) - lo) * scale));
-                histogram[bin] += wi;
-                p.weighted += wi * row[iLon];
-                p.weight += wi;
-            }
+    // Rows kStatsRowsAtOnce at a time (statsOfRows); a last group of fewer one at a time.
+    const size_t groups = (grid.nLat() + kStatsRowsAtOnce - 1) / kStatsRowsAtOnce;
+    tbb::parallel_for(size_t(0), groups, [&](size_t group) {
+        const size_t first = group * kStatsRowsAtOnce;
+        if (first + kStatsRowsAtOnce <= grid.nLat()) {
+            statsOfRows<kStatsRowsAtOnce>(grid, w, values.data(), lo, scale, first, rows.data(), rowHistograms.data());
+            return;
         }
+        for (size_t iLat = first; iLat < grid.nLat(); ++iLat)
+            statsOfRows<1>(grid, w, values.data(), lo, scale, iLat, rows.data(), rowHistograms.data());
     });
     stats.histogram.assign(dataset::kHistogramBins, 0.0);
     double weighted = 0, weight = 0, missing = 0;
