@@ -150,21 +150,28 @@ struct InteriorRow {
     }
 
 private:
-    // One neighbour (bit k at `offset`) of every vertex of the row; `After`: offset > 0.
+    // One neighbour (bit k at `offset`) of every vertex of the row; `After`: offset > 0. The tests
+    // are combined with & and |, not && and ||, so that the loop has no branch to vectorise around.
     template <bool After>
-    void neighbour(const float* row, const float* n, int k, int32_t offset, size_t nLon)
+    void neighbour(const float* __restrict row, const float* __restrict n, int k, int32_t offset, size_t nLon)
     {
+        uint32_t* __restrict lowerOf = lower.data();
+        float* __restrict lo = lowest.data();
+        float* __restrict hi = highest.data();
+        int32_t* __restrict loOffset = lowestOffset.data();
+        int32_t* __restrict hiOffset = highestOffset.data();
         for (size_t i = 1; i + 1 < nLon; ++i) {
             const float x = row[i], w = n[i];
             // vertexMasks: w < x, or w == x and the neighbour's index is the smaller.
-            const bool isLower = After ? w < x : (w < x || w == x);
-            lower[i] |= uint32_t(isLower) << k;
-            const bool newLowest = isLower && (w < lowest[i] || (w == lowest[i] && offset < lowestOffset[i]));
-            const bool newHighest = !isLower && (highest[i] < w || (highest[i] == w && highestOffset[i] < offset));
-            lowest[i] = newLowest ? w : lowest[i];
-            lowestOffset[i] = newLowest ? offset : lowestOffset[i];
-            highest[i] = newHighest ? w : highest[i];
-            highestOffset[i] = newHighest ? offset : highestOffset[i];
+            const bool isLower = After ? w < x : ((w < x) | (w == x));
+            lowerOf[i] |= uint32_t(isLower) << k;
+            const bool newLowest = isLower & ((w < lo[i]) | ((w == lo[i]) & (offset < loOffset[i])));
+            const bool isUpper = !isLower;
+            const bool newHighest = isUpper & ((hi[i] < w) | ((hi[i] == w) & (hiOffset[i] < offset)));
+            lo[i] = newLowest ? w : lo[i];
+            loOffset[i] = newLowest ? offset : loOffset[i];
+            hi[i] = newHighest ? w : hi[i];
+            hiOffset[i] = newHighest ? offset : hiOffset[i];
         }
     }
 };
