@@ -64,10 +64,14 @@ std::vector<AxisCover> axisCover(size_t n, uint32_t size, uint32_t brickCount, b
 
 struct Covers {
     std::vector<AxisCover> lat, r, lon;
+    std::vector<uint32_t> lonShared;  // the lon indices covered by more than one brick, ascending
     Covers(const grid::SphericalGrid& g, const grid::BrickLayout& l)
         : lat(axisCover(g.nLat(), l.size, l.count[0], false)), r(axisCover(g.nR(), l.size, l.count[1], false)),
           lon(axisCover(g.nLon(), l.size, l.count[2], true))
     {
+        for (size_t i = 0; i < lon.size(); ++i)
+            if (lon[i].count > 1)
+                lonShared.push_back(uint32_t(i));
     }
 };
 
@@ -153,6 +157,7 @@ void decodeRow(const grid::SphericalGrid& grid, const grid::BrickLayout& layout,
     const uint16_t* codes = encoded.data() + row * nLon;
     const AxisCover& lat = cover.lat[iLat];
     const AxisCover& r = cover.r[iR];
+    size_t nextShared = 0;  // into cover.lonShared: the first not visited yet
     for (uint32_t c = 0; c < layout.count[2]; ++c) {
         const size_t brick = layout.index(lat.bricks[0], r.bricks[0], c);
         const float min = bounds[2 * brick], max = bounds[2 * brick + 1];
@@ -168,19 +173,31 @@ void decodeRow(const grid::SphericalGrid& grid, const grid::BrickLayout& layout,
         }
         const double scale = (double(max) - double(min)) / levels;
         // The brick's points in one tight loop (clamped in double, so that rounding to float
-        // cannot leave [lo, hi]), then the few shared with lon neighbours' bricks.
+        // cannot leave [lo, hi]), then the few shared with lon neighbours' bricks. The clamp is
+        // std::clamp's, written as two selects so that the compiler vectorises the loop.
+        const double lower = lo, upper = hi;
         for (size_t iLon = begin; iLon < end; ++iLon) {
             const double v = double(min) + double(codes[iLon]) * scale;
-            out[iLon] = float(std::clamp(v, double(lo), double(hi)));
+            const double atMost = upper < v ? upper : v;
+            out[iLon] = float(v < lower ? lower : atMost);
         }
-        for (size_t iLon = begin; iLon < end; ++iLon)
-            if (missing && codes[iLon] == kMissingCode)
-                out[iLon] = NAN;
-            else if (cover.lon[iLon].count > 1) {
-                float l = lo, h = hi;
-                intersectBounds(layout, bounds, lat, r, cover.lon[iLon], l, h);
-                out[iLon] = l <= h ? std::clamp(out[iLon], l, h) : NAN;
-            }
+        auto shared = [&](size_t iLon) {
+            float l = lo, h = hi;
+            intersectBounds(layout, bounds, lat, r, cover.lon[iLon], l, h);
+            out[iLon] = l <= h ? std::clamp(out[iLon], l, h) : NAN;
+        };
+        if (missing) {
+            for (size_t iLon = begin; iLon < end; ++iLon)
+                if (codes[iLon] == kMissingCode)
+                    out[iLon] = NAN;
+                else if (cover.lon[iLon].count > 1)
+                    shared(iLon);
+            continue;
+        }
+        // Without missing values only the shared points change: visited from their list.
+        for (; nextShared < cover.lonShared.size() && cover.lonShared[nextShared] < end; ++nextShared)
+            if (cover.lonShared[nextShared] >= begin)
+                shared(cover.lonShared[nextShared]);
     }
 }
 
