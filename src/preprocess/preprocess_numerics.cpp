@@ -91,6 +91,31 @@ void addDerivedVariables(grid::Snapshot& snapshot)
     RAYPC_CHECK(snapshot.fields.size() >= stored);
 }
 
+namespace {
+
+// coarsenField's means of one coarse row (cLat, cR) whose fine points come from the N fine rows
+// `rows` (lat, then r order) with weights wRow (w.lat · w.r of each): each coarse point adds its
+// fine points in coarsenField's order (lat, r, lon) with the same weights, w.lat · w.r · w.lon.
+// Why by rows: the weights of a row are found once, not three lookups and two products per point.
+template <size_t N>
+void coarsenRow(const std::array<const float*, 4>& rows, const std::array<double, 4>& wRow, const double* wLon,
+                size_t nLon, size_t coarseLon, float* out)
+{
+    for (size_t cLon = 0; cLon < coarseLon; ++cLon) {
+        const size_t lon0 = 2 * cLon, lon1 = std::min(lon0 + 2, nLon);
+        double sum = 0, weight = 0;
+        for (size_t j = 0; j < N; ++j)
+            for (size_t iLon = lon0; iLon < lon1; ++iLon) {
+                const double wi = wRow[j] * wLon[iLon];
+                sum += wi * rows[j][iLon];
+                weight += wi;
+            }
+        out[cLon] = static_cast<float>(sum / weight);
+    }
+}
+
+}  // namespace
+
 std::vector<float> coarsenField(const grid::SphericalGrid& fine, std::span<const float> values)
 {
     RAYPC_CHECK_EQ(values.size(), fine.cellCount());
@@ -101,17 +126,20 @@ std::vector<float> coarsenField(const grid::SphericalGrid& fine, std::span<const
         const size_t lat0 = 2 * cLat, lat1 = std::min(lat0 + 2, fine.nLat());
         for (size_t cR = 0; cR < coarse.nR(); ++cR) {
             const size_t r0 = 2 * cR, r1 = std::min(r0 + 2, fine.nR());
-            for (size_t cLon = 0; cLon < coarse.nLon(); ++cLon) {
-                const size_t lon0 = 2 * cLon, lon1 = std::min(lon0 + 2, fine.nLon());
-                double sum = 0, weight = 0;
-                for (size_t iLat = lat0; iLat < lat1; ++iLat)
-                    for (size_t iR = r0; iR < r1; ++iR)
-                        for (size_t iLon = lon0; iLon < lon1; ++iLon) {
-                            const double wi = w.at(iLat, iR, iLon);
-                            sum += wi * values[fine.index(iLat, iR, iLon)];
-                            weight += wi;
-                        }
-                out[coarse.index(cLat, cR, cLon)] = static_cast<float>(sum / weight);
+            // The fine rows this coarse row merges, in the order their points are added.
+            std::array<const float*, 4> rows{};
+            std::array<double, 4> wRow{};
+            size_t n = 0;
+            for (size_t iLat = lat0; iLat < lat1; ++iLat)
+                for (size_t iR = r0; iR < r1; ++iR) {
+                    rows[n] = values.data() + fine.index(iLat, iR, 0);
+                    wRow[n++] = w.lat[iLat] * w.r[iR];
+                }
+            float* row = out.data() + coarse.index(cLat, cR, 0);
+            switch (n) {
+            case 4: coarsenRow<4>(rows, wRow, w.lon.data(), fine.nLon(), coarse.nLon(), row); break;
+            case 2: coarsenRow<2>(rows, wRow, w.lon.data(), fine.nLon(), coarse.nLon(), row); break;
+            default: coarsenRow<1>(rows, wRow, w.lon.data(), fine.nLon(), coarse.nLon(), row); break;
             }
         }
     });
