@@ -130,6 +130,24 @@ void encodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layo
                 // A brick whose values are all missing has the bounds (+inf, -inf).
                 RAYPC_CHECK((std::isfinite(lo) && std::isfinite(hi) && lo <= hi) || (missing && lo > hi));
                 const double perUnit = hi > lo ? levels / (hi - lo) : 0.0;
+                // Points within the brick's bounds (all of them, unless missing or bounds that are
+                // not the values' own): t = (x − lo)·perUnit lies in [0, levels] up to rounding, so
+                // rounding first and clamping the integer gives the codes of the loop below, in two
+                // loops without a branch, which the compiler vectorises (it keeps the loop below's
+                // clamp in double as branches).
+                const float* x = values.data() + first;
+                const float bottom = bounds[2 * brick], top = bounds[2 * brick + 1];
+                int outside = 0;
+                for (size_t iLon = size_t(c) * s; iLon < end; ++iLon)
+                    outside |= !(x[iLon] >= bottom) | !(x[iLon] <= top);
+                if (!outside) {
+                    const int32_t maxCode = int32_t(levels);
+                    for (size_t iLon = size_t(c) * s; iLon < end; ++iLon) {
+                        const int32_t code = int32_t((double(x[iLon]) - lo) * perUnit + 0.5);
+                        out[first + iLon] = uint16_t(std::min(maxCode, std::max(0, code)));
+                    }
+                    continue;
+                }
                 for (size_t iLon = size_t(c) * s; iLon < end; ++iLon) {
                     if (std::isnan(values[first + iLon])) {
                         RAYPC_CHECK(missing);

@@ -158,6 +158,49 @@ TEST(BrickBounds, TheBitsOfOneValueAfterAnother)
         }
 }
 
+// encodeUint16 rounds the points within their brick's bounds first and clamps the integer: the
+// codes of u = round((v − min) / (max − min) · levels), clamped, for every point, with the bounds
+// computeBrickBounds gives, with narrower ones (points outside them), with constant bricks and with
+// missing values.
+TEST(Uint16Encoding, CodesOfTheFormulaForEveryPoint)
+{
+    std::mt19937 rng(5);
+    const grid::SphericalGrid g = centredGrid(11, 9, 37);
+    const grid::BrickLayout layout = grid::BrickLayout::forGrid(g, 4);
+    for (int field = 0; field < 4; ++field) {
+        std::uniform_real_distribution<float> real(-3, 5);
+        std::uniform_int_distribution<int> pick(0, 19);
+        std::vector<float> values(g.cellCount());
+        const bool missing = field == 3;
+        for (size_t i = 0; i < values.size(); ++i)
+            values[i] = field == 2 && (i / g.nLon()) % 3 == 0 ? 1.25f : missing && pick(rng) == 0 ? NAN : real(rng);
+        std::vector<float> bounds(2 * layout.brickCount());
+        computeBrickBounds(g, layout, values, bounds);
+        if (field == 1)
+            for (size_t b = 0; b < layout.brickCount(); ++b)
+                if (b % 2 == 0 && bounds[2 * b] < bounds[2 * b + 1]) {  // points on either side outside
+                    const float quarter = (bounds[2 * b + 1] - bounds[2 * b]) / 4;
+                    bounds[2 * b] += quarter;
+                    bounds[2 * b + 1] -= quarter;
+                }
+        std::vector<uint16_t> codes(g.cellCount());
+        encodeUint16(g, layout, values, bounds, codes, missing);
+        const double levels = missing ? 65534.0 : 65535.0;
+        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+            for (size_t iR = 0; iR < g.nR(); ++iR)
+                for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                    const size_t i = g.index(iLat, iR, iLon), b = layout.index(iLat / 4, iR / 4, iLon / 4);
+                    const double lo = bounds[2 * b], hi = bounds[2 * b + 1];
+                    uint16_t expected = 65535;
+                    if (!std::isnan(values[i])) {
+                        const double perUnit = hi > lo ? levels / (hi - lo) : 0.0, t = (double(values[i]) - lo) * perUnit;
+                        expected = uint16_t(std::floor(std::clamp(t, 0.0, levels) + 0.5));
+                    }
+                    ASSERT_EQ(codes[i], expected) << "field " << field << " at " << iLat << " " << iR << " " << iLon;
+                }
+    }
+}
+
 TEST(Uint16Encoding, RandomValuesStayWithinTheBoundOfTheirBrick)
 {
     // Odd sizes: the last lat and r bricks hold one point, the last lon brick wraps past column 0.
