@@ -102,11 +102,32 @@ void computeShellAnomaly(const grid::SphericalGrid& g, std::span<const float> va
     RAYPC_CHECK_EQ(values.size(), g.cellCount());
     RAYPC_CHECK_EQ(out.size(), g.cellCount());
     RAYPC_CHECK_EQ(means.size(), g.nR());
+    RAYPC_CHECK(values.data() != out.data());  // a row may be computed again from its values
     tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
         for (size_t iR = 0; iR < g.nR(); ++iR) {
             const size_t first = g.index(iLat, iR, 0);
-            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
-                out[first + iLon] = shellAnomalyValue(values[first + iLon], means[iR], kind);
+            const float* x = values.data() + first;
+            float* row = out.data() + first;
+            // shellAnomalyValue's arithmetic in a loop the compiler vectorises, for the row's one
+            // mean and kind; a row with a value beyond float32 goes through shellAnomalyValue
+            // itself (its infinity, where a plain conversion may round down to the largest float).
+            const double mean = means[iR];
+            int beyond = 0;
+            if (kind == ShellAnomalyKind::Difference)
+                for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                    const double v = double(x[iLon]) - mean;
+                    beyond |= std::abs(v) > double(std::numeric_limits<float>::max());
+                    row[iLon] = static_cast<float>(v);
+                }
+            else
+                for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                    const double v = 100.0 * (double(x[iLon]) - mean) / mean;
+                    beyond |= std::abs(v) > double(std::numeric_limits<float>::max());
+                    row[iLon] = static_cast<float>(v);
+                }
+            if (beyond)
+                for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+                    row[iLon] = shellAnomalyValue(x[iLon], mean, kind);
         }
     });
 }
