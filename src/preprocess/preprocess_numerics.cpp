@@ -207,9 +207,34 @@ dataset::VariableStats computeStats(const grid::SphericalGrid& grid, std::span<c
     const auto extremes = tbb::parallel_reduce(
         tbb::blocked_range<size_t>(0, values.size(), 1 << 16), std::pair<float, float>(INFINITY, -INFINITY),
         [&](const auto& range, std::pair<float, float> acc) {
-            for (size_t i = range.begin(); i != range.end(); ++i) {
-                acc.first = std::min(acc.first, values[i]);
-                acc.second = std::max(acc.second, values[i]);
+            // Four running extremes (chains a quarter as long); their lowest and highest have the
+            // bits of one std::min/std::max after another unless they are a zero, whose sign
+            // depends on the order: then the range is gone over again in order.
+            std::array<float, 4> lo, hi;
+            lo.fill(acc.first);
+            hi.fill(acc.second);
+            size_t i = range.begin();
+            for (; i + 4 <= range.end(); i += 4)
+                for (size_t j = 0; j < 4; ++j) {
+                    const float x = values[i + j];
+                    lo[j] = x < lo[j] ? x : lo[j];
+                    hi[j] = hi[j] < x ? x : hi[j];
+                }
+            for (; i != range.end(); ++i) {
+                lo[0] = std::min(lo[0], values[i]);
+                hi[0] = std::max(hi[0], values[i]);
+            }
+            const float first = acc.first, second = acc.second;
+            for (size_t j = 0; j < 4; ++j) {
+                acc.first = std::min(acc.first, lo[j]);
+                acc.second = std::max(acc.second, hi[j]);
+            }
+            if (acc.first == 0 || acc.second == 0) {
+                acc = {first, second};
+                for (size_t k = range.begin(); k != range.end(); ++k) {
+                    acc.first = std::min(acc.first, values[k]);
+                    acc.second = std::max(acc.second, values[k]);
+                }
             }
             return acc;
         },
