@@ -37,17 +37,26 @@ void addVelocityVariables(grid::Snapshot& snapshot)
                  {varname::kRadialVelocityFrom.begin(), varname::kRadialVelocityFrom.end()}};
     grid::Field magnitude{varname::kVelocityMagnitude, varname::kVelocityMagnitudeUnits, std::vector<float>(g.cellCount()),
                     {varname::kVelocityMagnitudeFrom.begin(), varname::kVelocityMagnitudeFrom.end()}};
+    const size_t nLon = g.nLon();
     tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
         const double lat = degToRad(g.latDeg[iLat]);
-        for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+        // The outward unit vector is the same on every shell of a column: found once per column,
+        // then the shells row by row (points in memory order).
+        std::vector<double> ux(nLon), uy(nLon), uz(nLon);
+        for (size_t iLon = 0; iLon < nLon; ++iLon) {
             const double lon = degToRad(g.lonDeg[iLon]);
-            // The outward unit vector is the same on every shell of this column.
-            const double ux = std::cos(lat) * std::cos(lon), uy = std::cos(lat) * std::sin(lon), uz = std::sin(lat);
-            for (size_t iR = 0; iR < g.nR(); ++iR) {
-                const size_t i = g.index(iLat, iR, iLon);
-                const double x = vx->values[i], y = vy->values[i], z = vz->values[i];
-                radial.values[i] = toFloat32((x * ux + y * uy + z * uz) * kMpsToCmPerYr);
-                magnitude.values[i] = toFloat32(std::sqrt(x * x + y * y + z * z) * kMpsToCmPerYr);
+            ux[iLon] = std::cos(lat) * std::cos(lon);
+            uy[iLon] = std::cos(lat) * std::sin(lon);
+            uz[iLon] = std::sin(lat);
+        }
+        for (size_t iR = 0; iR < g.nR(); ++iR) {
+            const size_t first = g.index(iLat, iR, 0);
+            const float *x = vx->values.data() + first, *y = vy->values.data() + first, *z = vz->values.data() + first;
+            float *r = radial.values.data() + first, *m = magnitude.values.data() + first;
+            for (size_t iLon = 0; iLon < nLon; ++iLon) {
+                const double a = x[iLon], b = y[iLon], c = z[iLon];
+                r[iLon] = toFloat32((a * ux[iLon] + b * uy[iLon] + c * uz[iLon]) * kMpsToCmPerYr);
+                m[iLon] = toFloat32(std::sqrt(a * a + b * b + c * c) * kMpsToCmPerYr);
             }
         }
     });
