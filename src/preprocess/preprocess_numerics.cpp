@@ -110,7 +110,21 @@ template <size_t N>
 void coarsenRow(const std::array<const float*, 4>& rows, const std::array<double, 4>& wRow, const double* wLon,
                 size_t nLon, size_t coarseLon, float* out)
 {
-    for (size_t cLon = 0; cLon < coarseLon; ++cLon) {
+    // The coarse points of two fine columns each, in a loop of a fixed body that the compiler
+    // vectorises; then a last one of one column (an odd count).
+    const size_t pairs = nLon / 2;
+    for (size_t cLon = 0; cLon < pairs; ++cLon) {
+        double sum = 0, weight = 0;
+        for (size_t j = 0; j < N; ++j) {
+            const double w0 = wRow[j] * wLon[2 * cLon], w1 = wRow[j] * wLon[2 * cLon + 1];
+            sum += w0 * rows[j][2 * cLon];
+            weight += w0;
+            sum += w1 * rows[j][2 * cLon + 1];
+            weight += w1;
+        }
+        out[cLon] = static_cast<float>(sum / weight);
+    }
+    for (size_t cLon = pairs; cLon < coarseLon; ++cLon) {
         const size_t lon0 = 2 * cLon, lon1 = std::min(lon0 + 2, nLon);
         double sum = 0, weight = 0;
         for (size_t j = 0; j < N; ++j)
