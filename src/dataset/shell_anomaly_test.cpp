@@ -143,6 +143,26 @@ TEST(ShellAnomaly, ShellMeansAreAreaWeightedAndLeaveOutMissingValues)
     EXPECT_FALSE(shellMeansPositive(mixed));
 }
 
+// shellMeans sums four shells side by side: each mean has the bits of shellMean's of that shell
+// alone, with missing values and a shell count that is no multiple of four.
+TEST(ShellAnomaly, ShellMeansSideBySideAreEachShellsAlone)
+{
+    const grid::SphericalGrid g = testing::centredGrid(9, 7, 23);
+    std::vector<float> v = testing::fillGrid(g, [&](size_t a, size_t r, size_t c) {
+        return 700.0 + 90.0 * std::cos(0.37 * double(a * 13 + r * 3 + c));
+    });
+    v[g.index(4, 5, 6)] = std::numeric_limits<float>::quiet_NaN();
+    for (size_t a = 0; a < g.nLat(); ++a)
+        for (size_t c = 0; c < g.nLon(); ++c)
+            v[g.index(a, 6, c)] = std::numeric_limits<float>::quiet_NaN();
+    const auto w = g.volumeFactors();
+    const std::vector<double> means = shellMeans(g, v);
+    for (size_t r = 0; r < g.nR(); ++r) {
+        const double alone = shellMean(w, v.data() + g.index(0, r, 0), g.nR() * g.nLon());
+        EXPECT_EQ(std::bit_cast<uint64_t>(means[r]), std::bit_cast<uint64_t>(alone)) << "shell " << r;
+    }
+}
+
 // computeShellAnomaly works a row at a time in a vectorised loop: every value has the bits of
 // shellAnomalyValue's, both kinds, with missing values and values beyond float32 (its infinity where
 // a plain conversion would round down to the largest float).

@@ -250,12 +250,21 @@ std::vector<double> shellMeansOfUint16(const grid::SphericalGrid& grid, const gr
     const auto w = grid.volumeFactors();
     const size_t nLat = grid.nLat(), nR = grid.nR(), nLon = grid.nLon();
     std::vector<double> means(nR);
-    tbb::enumerable_thread_specific<std::vector<float>> shells([&] { return std::vector<float>(nLat * nLon); });
-    tbb::parallel_for(size_t(0), nR, [&](size_t iR) {
-        std::vector<float>& shell = shells.local();
-        for (size_t iLat = 0; iLat < nLat; ++iLat)
-            decodeRow(grid, layout, cover, encoded, bounds, missing, iLat * nR + iR, shell.data() + iLat * nLon);
-        means[iR] = shellMean(w, shell.data(), nLon);
+    // kShellsAtOnce shells decoded, then their means summed side by side (shellMeansSideBySide).
+    tbb::enumerable_thread_specific<std::vector<float>> buffers(
+        [&] { return std::vector<float>(kShellsAtOnce * nLat * nLon); });
+    const size_t groups = (nR + kShellsAtOnce - 1) / kShellsAtOnce;
+    tbb::parallel_for(size_t(0), groups, [&](size_t group) {
+        std::vector<float>& buffer = buffers.local();
+        const size_t first = group * kShellsAtOnce, count = std::min(kShellsAtOnce, nR - first);
+        std::array<const float*, kShellsAtOnce> shells{};
+        for (size_t k = 0; k < count; ++k) {
+            float* shell = buffer.data() + k * nLat * nLon;
+            for (size_t iLat = 0; iLat < nLat; ++iLat)
+                decodeRow(grid, layout, cover, encoded, bounds, missing, iLat * nR + first + k, shell + iLat * nLon);
+            shells[k] = shell;
+        }
+        shellMeansSideBySide(w, shells.data(), count, nLon, means.data() + first);
     });
     return means;
 }
