@@ -107,6 +107,75 @@ const char* pairKindName(PairKind kind)
 
 namespace {
 
+// Every neighbour of a vertex inside the grid: its link mask off the boundaries.
+constexpr uint32_t kAllNeighbours = (1u << kLinkSize) - 1;
+
+// What pairsAndPoints needs of the vertices of one row (iLat, iR) that touch neither a boundary nor
+// the seam (0 < iLat < nLat − 1, 0 < iR < nR − 1, 0 < iLon < nLon − 1), the same bits as
+// vertexMasks and the searches over its masks give each alone: there every neighbour is inside the
+// grid at a fixed index offset, below the vertex in index exactly when that offset is negative, so
+// the row is worked neighbour by neighbour in loops over lon the compiler vectorises, not vertex by
+// vertex through bounds checks and data-dependent branches.
+struct InteriorRow {
+    std::vector<uint32_t> lower;                       // vertexMasks' lower mask; entries 1 … nLon − 2
+    std::vector<int32_t> lowestOffset, highestOffset;  // the lowest lower and highest upper neighbour − the vertex
+    std::vector<float> lowest, highest;                // their values
+
+    explicit InteriorRow(size_t nLon)
+        : lower(nLon), lowestOffset(nLon), highestOffset(nLon), lowest(nLon), highest(nLon)
+    {
+    }
+
+    void compute(const grid::SphericalGrid& grid, const float* values, size_t iLat, size_t iR)
+    {
+        const size_t nR = grid.nR(), nLon = grid.nLon();
+        const float* row = values + grid.index(iLat, iR, 0);
+        for (size_t i = 1; i + 1 < nLon; ++i) {
+            lower[i] = 0;
+            lowestOffset[i] = highestOffset[i] = 0;
+            lowest[i] = highest[i] = row[i];
+        }
+        // Neighbours in vertexMasks' order (bit k), which the searches follow too: a lower
+        // neighbour replaces the lowest so far when below it, an upper one the highest so far when
+        // above it (Simulation of Simplicity: by value, then by index, i.e. by offset).
+        for (int k = 0; k < kLinkSize; ++k) {
+            const auto& o = grid::triangulation::kOffsets[size_t(k)];
+            const int32_t offset = int32_t((ptrdiff_t(o.lat) * ptrdiff_t(nR) + o.r) * ptrdiff_t(nLon) + o.lon);
+            const float* n = row + offset;
+            if (offset > 0)
+                neighbour<true>(row, n, k, offset, nLon);
+            else
+                neighbour<false>(row, n, k, offset, nLon);
+        }
+    }
+
+private:
+    // One neighbour (bit k at `offset`) of every vertex of the row; `After`: offset > 0. The tests
+    // are combined with & and |, not && and ||, so that the loop has no branch to vectorise around.
+    template <bool After>
+    void neighbour(const float* __restrict row, const float* __restrict n, int k, int32_t offset, size_t nLon)
+    {
+        uint32_t* __restrict lowerOf = lower.data();
+        float* __restrict lo = lowest.data();
+        float* __restrict hi = highest.data();
+        int32_t* __restrict loOffset = lowestOffset.data();
+        int32_t* __restrict hiOffset = highestOffset.data();
+        for (size_t i = 1; i + 1 < nLon; ++i) {
+            const float x = row[i], w = n[i];
+            // vertexMasks: w < x, or w == x and the neighbour's index is the smaller.
+            const bool isLower = After ? w < x : ((w < x) | (w == x));
+            lowerOf[i] |= uint32_t(isLower) << k;
+            const bool newLowest = isLower & ((w < lo[i]) | ((w == lo[i]) & (offset < loOffset[i])));
+            const bool isUpper = !isLower;
+            const bool newHighest = isUpper & ((hi[i] < w) | ((hi[i] == w) & (hiOffset[i] < offset)));
+            lo[i] = newLowest ? w : lo[i];
+            loOffset[i] = newLowest ? offset : loOffset[i];
+            hi[i] = newHighest ? w : hi[i];
+            hiOffset[i] = newHighest ? offset : hiOffset[i];
+        }
+    }
+};
+
 // persistencePairs, and with `points` findCriticalPoints too, from the one pass over the vertices'
 // links both need.
 std::vector<PersistencePair> pairsAndPoints(const grid::SphericalGrid& grid, std::span<const float> values,
@@ -124,49 +193,73 @@ std::vector<PersistencePair> pairsAndPoints(const grid::SphericalGrid& grid, std
     std::vector<uint32_t> down(grid.cellCount()), up(grid.cellCount());
     tbb::enumerable_thread_specific<std::vector<Saddle>> joinsLocal, splitsLocal;
     tbb::enumerable_thread_specific<std::vector<CriticalPoint>> pointsLocal;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.nLat()), [&](const tbb::blocked_range<size_t>& rows) {
+    const size_t nLat = grid.nLat(), nR = grid.nR(), nLon = grid.nLon();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nLat), [&](const tbb::blocked_range<size_t>& rows) {
         auto& joins = joinsLocal.local();
         auto& splits = splitsLocal.local();
         auto& found = pointsLocal.local();
         std::array<size_t, kLinkSize> nb{};
-        for (size_t iLat = rows.begin(); iLat != rows.end(); ++iLat)
-            for (size_t iR = 0; iR < grid.nR(); ++iR)
-                for (size_t iLon = 0; iLon < grid.nLon(); ++iLon) {
-                    const size_t self = grid.index(iLat, iR, iLon);
-                    const auto m = grid::triangulation::vertexMasks(grid, v, iLat, iR, iLon, nb.data());
-                    const uint32_t lower = m.lower, upper = m.valid & ~m.lower;
-                    size_t lowest = self, highest = self;
-                    for (uint32_t bits = lower; bits; bits &= bits - 1) {
-                        const size_t n = nb[std::countr_zero(bits)];
-                        if (grid::triangulation::below(v, n, lowest))
-                            lowest = n;
-                    }
-                    for (uint32_t bits = upper; bits; bits &= bits - 1) {
-                        const size_t n = nb[std::countr_zero(bits)];
-                        if (grid::triangulation::below(v, highest, n))
-                            highest = n;
-                    }
-                    down[self] = static_cast<uint32_t>(lowest);
-                    up[self] = static_cast<uint32_t>(highest);
-                    const uint8_t cl = tables.components[lower], cu = tables.components[upper];
-                    if (cl >= 2)
-                        joins.push_back({static_cast<uint32_t>(self), cl, cu});
-                    if (cu >= 2)
-                        splits.push_back({static_cast<uint32_t>(self), cl, cu});
-                    if (points)
-                        if (const auto kind = classifyLink(cl, cu)) {
-                            CriticalPoint p;
-                            p.index = self;
-                            p.kind = *kind;
-                            p.value = v[self];
-                            p.lowerComponents = cl;
-                            p.upperComponents = cu;
-                            p.latDeg = grid.latDeg[iLat];
-                            p.rKm = grid.rKm[iR];
-                            p.lonDeg = grid.lonDeg[iLon];
-                            found.push_back(p);
-                        }
+        InteriorRow interior(nLon);
+        // A vertex's forests' pointers, saddles and critical point, from its link's masks and its
+        // lowest lower and highest upper neighbour (itself when there is none).
+        auto add = [&](size_t iLat, size_t iR, size_t iLon, uint32_t lower, uint32_t upper, size_t lowest,
+                       size_t highest) {
+            const size_t self = grid.index(iLat, iR, iLon);
+            down[self] = static_cast<uint32_t>(lowest);
+            up[self] = static_cast<uint32_t>(highest);
+            const uint8_t cl = tables.components[lower], cu = tables.components[upper];
+            if (cl >= 2)
+                joins.push_back({static_cast<uint32_t>(self), cl, cu});
+            if (cu >= 2)
+                splits.push_back({static_cast<uint32_t>(self), cl, cu});
+            if (points)
+                if (const auto kind = classifyLink(cl, cu)) {
+                    CriticalPoint p;
+                    p.index = self;
+                    p.kind = *kind;
+                    p.value = v[self];
+                    p.lowerComponents = cl;
+                    p.upperComponents = cu;
+                    p.latDeg = grid.latDeg[iLat];
+                    p.rKm = grid.rKm[iR];
+                    p.lonDeg = grid.lonDeg[iLon];
+                    found.push_back(p);
                 }
+        };
+        // Any vertex: its link as vertexMasks finds it (boundaries, the seam).
+        auto addAny = [&](size_t iLat, size_t iR, size_t iLon) {
+            const size_t self = grid.index(iLat, iR, iLon);
+            const auto m = grid::triangulation::vertexMasks(grid, v, iLat, iR, iLon, nb.data());
+            const uint32_t lower = m.lower, upper = m.valid & ~m.lower;
+            size_t lowest = self, highest = self;
+            for (uint32_t bits = lower; bits; bits &= bits - 1) {
+                const size_t n = nb[std::countr_zero(bits)];
+                if (grid::triangulation::below(v, n, lowest))
+                    lowest = n;
+            }
+            for (uint32_t bits = upper; bits; bits &= bits - 1) {
+                const size_t n = nb[std::countr_zero(bits)];
+                if (grid::triangulation::below(v, highest, n))
+                    highest = n;
+            }
+            add(iLat, iR, iLon, lower, upper, lowest, highest);
+        };
+        for (size_t iLat = rows.begin(); iLat != rows.end(); ++iLat)
+            for (size_t iR = 0; iR < nR; ++iR) {
+                if (iLat == 0 || iLat + 1 == nLat || iR == 0 || iR + 1 == nR) {
+                    for (size_t iLon = 0; iLon < nLon; ++iLon)
+                        addAny(iLat, iR, iLon);
+                    continue;
+                }
+                interior.compute(grid, v, iLat, iR);
+                addAny(iLat, iR, 0);
+                const size_t rowStart = grid.index(iLat, iR, 0);
+                for (size_t iLon = 1; iLon + 1 < nLon; ++iLon)
+                    add(iLat, iR, iLon, interior.lower[iLon], kAllNeighbours & ~interior.lower[iLon],
+                        size_t(ptrdiff_t(rowStart + iLon) + interior.lowestOffset[iLon]),
+                        size_t(ptrdiff_t(rowStart + iLon) + interior.highestOffset[iLon]));
+                addAny(iLat, iR, nLon - 1);
+            }
     });
     if (points) {
         points->clear();

@@ -442,6 +442,41 @@ TEST(Persistence, OnePassGivesThePointsAndPairsOfBoth)
     }
 }
 
+// The one pass works the rows off the boundaries and the seam neighbour by neighbour (InteriorRow):
+// on fields with many ties (Simulation of Simplicity decides by index), rough and smooth, its
+// critical points are those findCriticalPoints finds vertex by vertex, and its pairs the plain
+// sweep's.
+TEST(Persistence, InteriorRowsGiveWhatEachVertexAloneGives)
+{
+    std::mt19937 rng(7);
+    for (const auto& g : {centredGrid(5, 4, 3), centredGrid(9, 7, 13), centredGrid(16, 11, 24)}) {
+        std::uniform_int_distribution<int> small(0, 2);
+        std::uniform_real_distribution<float> real(-1, 1);
+        for (int field = 0; field < 3; ++field) {
+            const auto v = fillGrid(g, [&](size_t a, size_t b, size_t c) {
+                if (field == 0)
+                    return double(small(rng));
+                if (field == 1)
+                    return double(real(rng));
+                return std::round(4 * (std::sin(0.9 * a) * std::cos(1.7 * b) + std::sin(0.5 * c))) / 4;
+            });
+            const CriticalStructure one = criticalStructure(g, v);
+            const auto points = findCriticalPoints(g, v);
+            ASSERT_EQ(one.points.size(), points.size()) << "field " << field;
+            for (size_t k = 0; k < points.size(); ++k)
+                EXPECT_TRUE(one.points[k].index == points[k].index && one.points[k].kind == points[k].kind &&
+                            one.points[k].lowerComponents == points[k].lowerComponents &&
+                            one.points[k].upperComponents == points[k].upperComponents)
+                    << "field " << field << ", point " << k << " at index " << points[k].index;
+            std::multiset<std::tuple<int, size_t, size_t>> got;
+            for (const auto& p : one.pairs)
+                if (p.kind != PairKind::Global)
+                    got.insert({int(p.kind), p.birthIndex, p.deathIndex});
+            EXPECT_EQ(got, textbookPairs(g, v)) << "field " << field;
+        }
+    }
+}
+
 TEST(Persistence, RejectsWrongSizes)
 {
     const grid::SphericalGrid g = centredGrid(6, 5, 8);

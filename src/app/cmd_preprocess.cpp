@@ -3,6 +3,7 @@
 #include "app/options.h"
 #include "core/error.h"
 #include "core/mpi.h"
+#include "core/spare_blocks.h"
 #include "core/system_memory.h"
 #include "preprocess/preprocess.h"
 #include "io/series_input.h"
@@ -39,8 +40,10 @@ const CommandRegistration kPreprocessCommand(
                 options.timesMyr = std::move(listing.timesMyr);
             });
             // Every step allocates and frees the same arrays of tens of MB: reused from the heap,
-            // their pages are not faulted and zeroed by the kernel again for each step.
+            // their pages are not faulted and zeroed by the kernel again for each step. So are the
+            // blocks the pathlines decode each step's velocity and seed field into (core/spare_blocks.h).
             keepLargeBlocksForReuse();
+            reuseGivenBackBlocks(kMaxSpareBytes);
             // Under mpirun every rank takes steps (preprocess.h); rank 0 reports.
             const auto summary = preprocess::preprocess(files, args->output, options);
             mpi::together([&] {

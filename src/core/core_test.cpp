@@ -424,6 +424,37 @@ TEST(SpareBlocks, ASpareOfEachSizeTakenIsMadeWithinTheBound)
     EXPECT_EQ(waitForSpareBlocks(), 0u) << "spares kept after keepSpareBlocks(false)";
 }
 
+// Without spares made ahead, blocks given back are kept for reuse only when asked, several of a
+// size, within their bound, and handed out again by takes of their exact size.
+TEST(SpareBlocks, BlocksGivenBackAreReusedWithinTheirBound)
+{
+    const size_t small = size_t(8) << 20, other = size_t(6) << 20;
+    ASSERT_EQ(waitForSpareBlocks(), 0u);
+    reuseGivenBackBlocks(2 * small + other);
+    void* a = takeBlock(small);
+    void* b = takeBlock(small);
+    void* c = takeBlock(small);
+    std::fill_n(static_cast<char*>(a), small, char(1));
+    giveBackBlock(a, small);
+    giveBackBlock(b, small);
+    EXPECT_EQ(waitForSpareBlocks(), 2 * small) << "two blocks of one size kept";
+    giveBackBlock(c, small);  // over the bound: freed
+    EXPECT_EQ(waitForSpareBlocks(), 2 * small);
+    void* d = takeBlock(other);  // no block of its size kept: a fresh one
+    EXPECT_TRUE(d != a && d != b);
+    EXPECT_EQ(waitForSpareBlocks(), 2 * small);
+    void* e = takeBlock(small);
+    EXPECT_TRUE(e == a || e == b) << "a kept block handed out again";
+    EXPECT_EQ(waitForSpareBlocks(), small);
+    giveBackBlock(d, other);
+    giveBackBlock(e, small);
+    EXPECT_EQ(waitForSpareBlocks(), 2 * small + other);
+    reuseGivenBackBlocks(small + other);  // a smaller bound frees what exceeds it
+    EXPECT_LE(waitForSpareBlocks(), small + other);
+    reuseGivenBackBlocks(0);
+    EXPECT_EQ(waitForSpareBlocks(), 0u) << "blocks kept after reuseGivenBackBlocks(0)";
+}
+
 TEST(HugePages, LargeArraysStartOnAHugePageAndAreAdvised)
 {
     if (!transparentHugePagesBuiltIn())

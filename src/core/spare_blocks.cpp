@@ -69,8 +69,15 @@ public:
         void* p = nullptr;
         {
             std::lock_guard lock(m_mutex);
-            if (!m_keep)
+            if (!m_keep) {
+                if (const auto it = m_reusable.find(bytes); it != m_reusable.end()) {
+                    p = it->second;
+                    m_reusableBytes -= bytes;
+                    m_reusable.erase(it);
+                    return p;
+                }
                 return mapBlock(bytes, true);  // as allocateHugePageBacked would
+            }
             if (const auto it = m_spares.find(bytes); it != m_spares.end()) {
                 p = it->second;
                 m_spareBytes -= bytes;
@@ -99,8 +106,31 @@ public:
                 m_spareBytes += bytes;
                 return;
             }
+            if (!m_keep && m_reusableBytes + bytes <= m_reusableLimit) {
+                m_reusable.emplace(bytes, p);
+                m_reusableBytes += bytes;
+                return;
+            }
         }
         unmapBlock(p, bytes);
+    }
+
+    void reuse(size_t maxBytes)
+    {
+        std::multimap<size_t, void*> dropped;
+        {
+            std::lock_guard lock(m_mutex);
+            m_reusableLimit = maxBytes;
+            // The newest kept first (a multimap keeps equal sizes in the order given back).
+            while (m_reusableBytes > m_reusableLimit) {
+                const auto last = std::prev(m_reusable.end());
+                m_reusableBytes -= last->first;
+                dropped.insert(*last);
+                m_reusable.erase(last);
+            }
+        }
+        for (const auto& [bytes, p] : dropped)
+            unmapBlock(p, bytes);
     }
 
     void keep(bool on)
@@ -123,7 +153,7 @@ public:
     {
         std::unique_lock lock(m_mutex);
         m_idleCv.wait(lock, [&] { return m_wanted.empty() && !m_busy; });
-        return m_spareBytes;
+        return m_spareBytes + m_reusableBytes;
     }
 
 private:
@@ -175,12 +205,18 @@ private:
     bool m_keep = false;
     std::deque<size_t> m_wanted;
     bool m_busy = false;
+    // Blocks given back kept as they are while no spares are made (reuseGivenBackBlocks): any
+    // number of each size, m_reusableLimit bytes in all.
+    std::multimap<size_t, void*> m_reusable;
+    size_t m_reusableBytes = 0, m_reusableLimit = 0;
     std::thread m_thread;
 };
 
 }  // namespace
 
 void keepSpareBlocks(bool on) { Spares::instance().keep(on); }
+
+void reuseGivenBackBlocks(size_t maxBytes) { Spares::instance().reuse(maxBytes); }
 
 void* takeBlock(size_t bytes) { return Spares::instance().take(bytes); }
 

@@ -16,7 +16,10 @@
 //
 // Spares are made only in a process that asks for them (keepSpareBlocks: the server, which changes
 // steps while a user waits); elsewhere (a CLI command, the Python module) a block is mapped fresh
-// and advised onto huge pages as allocateHugePageBacked's are, and unmapped when given back.
+// and advised onto huge pages as allocateHugePageBacked's are, and unmapped when given back, unless
+// the process asks for blocks given back to be kept for the next takes of their size
+// (reuseGivenBackBlocks: raypc preprocess, whose pathlines decode the same arrays step after step;
+// no background thread, no spare made ahead: only the kernel's faults and zeroing are saved).
 //
 // Thread safety: every function may be called from any thread.
 #pragma once
@@ -36,6 +39,11 @@ inline constexpr size_t kMinSpareBytes = size_t(4) << 20;
 // Turns making and keeping spares on (the server, at start) or off (then the spares kept are freed).
 void keepSpareBlocks(bool on);
 
+// While no spares are made (keepSpareBlocks(false)): blocks given back are kept, any number of each
+// size up to `maxBytes` in all, and handed out again by takeBlock of their exact size instead of
+// fresh ones. 0 (the default) keeps none and frees those kept; a smaller bound frees what exceeds it.
+void reuseGivenBackBlocks(size_t maxBytes);
+
 // `bytes` of uninitialised memory starting on a 2 MiB boundary, from the spares when one of exactly
 // this size is ready (below kMinSpareBytes: allocateHugePageBacked). Release it with giveBackBlock(p, bytes). Throws
 // std::bad_alloc when there is no memory.
@@ -43,7 +51,8 @@ void* takeBlock(size_t bytes);
 // Keeps `p` (from takeBlock with the same `bytes`) as the spare of its size when there is none and
 // the spares stay within kMaxSpareBytes; frees it otherwise. Never throws.
 void giveBackBlock(void* p, size_t bytes) noexcept;
-// Waits until no spare is being made (tests). Returns the bytes of the spares kept now.
+// Waits until no spare is being made (tests). Returns the bytes of the spares and of the blocks
+// kept for reuse now.
 size_t waitForSpareBlocks();
 
 struct SpareBlockFree {

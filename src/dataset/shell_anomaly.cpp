@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -72,13 +73,53 @@ double shellMean(const grid::SphericalGrid::VolumeFactors& w, const float* shell
     return area > 0 ? sum / area : std::numeric_limits<double>::quiet_NaN();
 }
 
+namespace {
+
+// shellMean of N shells, each adding its points in shellMean's order, interleaved point by point.
+template <size_t N>
+void shellMeansOf(const grid::SphericalGrid::VolumeFactors& w, const float* const* shells, size_t rowStride,
+                  double* means)
+{
+    std::array<double, N> sum{}, area{};
+    for (size_t iLat = 0; iLat < w.lat.size(); ++iLat)
+        for (size_t iLon = 0; iLon < w.lon.size(); ++iLon)
+            for (size_t k = 0; k < N; ++k) {
+                const float x = shells[k][iLat * rowStride + iLon];
+                if (std::isfinite(x)) {
+                    const double a = w.lat[iLat] * w.lon[iLon];
+                    sum[k] += a * x;
+                    area[k] += a;
+                }
+            }
+    for (size_t k = 0; k < N; ++k)
+        means[k] = area[k] > 0 ? sum[k] / area[k] : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
+
+void shellMeansSideBySide(const grid::SphericalGrid::VolumeFactors& w, const float* const* shells, size_t count,
+                          size_t rowStride, double* means)
+{
+    size_t k = 0;
+    for (; k + kShellsAtOnce <= count; k += kShellsAtOnce)
+        shellMeansOf<kShellsAtOnce>(w, shells + k, rowStride, means + k);
+    for (; k < count; ++k)
+        shellMeansOf<1>(w, shells + k, rowStride, means + k);
+}
+
 std::vector<double> shellMeans(const grid::SphericalGrid& g, std::span<const float> values)
 {
     RAYPC_CHECK_EQ(values.size(), g.cellCount());
     const auto w = g.volumeFactors();
     std::vector<double> means(g.nR());
-    tbb::parallel_for(size_t(0), g.nR(),
-                      [&](size_t iR) { means[iR] = shellMean(w, values.data() + g.index(0, iR, 0), g.nR() * g.nLon()); });
+    const size_t groups = (g.nR() + kShellsAtOnce - 1) / kShellsAtOnce;
+    tbb::parallel_for(size_t(0), groups, [&](size_t group) {
+        const size_t first = group * kShellsAtOnce, count = std::min(kShellsAtOnce, g.nR() - first);
+        std::array<const float*, kShellsAtOnce> shells{};
+        for (size_t k = 0; k < count; ++k)
+            shells[k] = values.data() + g.index(0, first + k, 0);
+        shellMeansSideBySide(w, shells.data(), count, g.nR() * g.nLon(), means.data() + first);
+    });
     return means;
 }
 
@@ -102,11 +143,32 @@ void computeShellAnomaly(const grid::SphericalGrid& g, std::span<const float> va
     RAYPC_CHECK_EQ(values.size(), g.cellCount());
     RAYPC_CHECK_EQ(out.size(), g.cellCount());
     RAYPC_CHECK_EQ(means.size(), g.nR());
+    RAYPC_CHECK(values.data() != out.data());  // a row may be computed again from its values
     tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
         for (size_t iR = 0; iR < g.nR(); ++iR) {
             const size_t first = g.index(iLat, iR, 0);
-            for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
-                out[first + iLon] = shellAnomalyValue(values[first + iLon], means[iR], kind);
+            const float* x = values.data() + first;
+            float* row = out.data() + first;
+            // shellAnomalyValue's arithmetic in a loop the compiler vectorises, for the row's one
+            // mean and kind; a row with a value beyond float32 goes through shellAnomalyValue
+            // itself (its infinity, where a plain conversion may round down to the largest float).
+            const double mean = means[iR];
+            int beyond = 0;
+            if (kind == ShellAnomalyKind::Difference)
+                for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                    const double v = double(x[iLon]) - mean;
+                    beyond |= std::abs(v) > double(std::numeric_limits<float>::max());
+                    row[iLon] = static_cast<float>(v);
+                }
+            else
+                for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                    const double v = 100.0 * (double(x[iLon]) - mean) / mean;
+                    beyond |= std::abs(v) > double(std::numeric_limits<float>::max());
+                    row[iLon] = static_cast<float>(v);
+                }
+            if (beyond)
+                for (size_t iLon = 0; iLon < g.nLon(); ++iLon)
+                    row[iLon] = shellAnomalyValue(x[iLon], mean, kind);
         }
     });
 }

@@ -67,6 +67,12 @@ std::vector<double> shellMeans(const grid::SphericalGrid& grid, std::span<const 
 // step's StepVolume would.
 double shellMean(const grid::SphericalGrid::VolumeFactors& w, const float* shell, size_t rowStride);
 
+// shellMean of each of `count` shells (shells[k], rows rowStride apart) into means[k], the same bits;
+// up to kShellsAtOnce of them summed side by side, so that their chains of dependent additions overlap.
+inline constexpr size_t kShellsAtOnce = 4;
+void shellMeansSideBySide(const grid::SphericalGrid::VolumeFactors& w, const float* const* shells, size_t count,
+                          size_t rowStride, double* means);
+
 // Whether every shell mean that exists (is not NaN) is positive: where "X anomaly %" is defined.
 bool shellMeansPositive(std::span<const double> means);
 

@@ -14,6 +14,8 @@
 #include "grid/test_util.h"
 
 #include <gtest/gtest.h>
+
+#include <bit>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -139,6 +141,55 @@ TEST(ShellAnomaly, ShellMeansAreAreaWeightedAndLeaveOutMissingValues)
     EXPECT_FALSE(shellMeansPositive(mixed));
     mixed[1] = 0;
     EXPECT_FALSE(shellMeansPositive(mixed));
+}
+
+// shellMeans sums four shells side by side: each mean has the bits of shellMean's of that shell
+// alone, with missing values and a shell count that is no multiple of four.
+TEST(ShellAnomaly, ShellMeansSideBySideAreEachShellsAlone)
+{
+    const grid::SphericalGrid g = testing::centredGrid(9, 7, 23);
+    std::vector<float> v = testing::fillGrid(g, [&](size_t a, size_t r, size_t c) {
+        return 700.0 + 90.0 * std::cos(0.37 * double(a * 13 + r * 3 + c));
+    });
+    v[g.index(4, 5, 6)] = std::numeric_limits<float>::quiet_NaN();
+    for (size_t a = 0; a < g.nLat(); ++a)
+        for (size_t c = 0; c < g.nLon(); ++c)
+            v[g.index(a, 6, c)] = std::numeric_limits<float>::quiet_NaN();
+    const auto w = g.volumeFactors();
+    const std::vector<double> means = shellMeans(g, v);
+    for (size_t r = 0; r < g.nR(); ++r) {
+        const double alone = shellMean(w, v.data() + g.index(0, r, 0), g.nR() * g.nLon());
+        EXPECT_EQ(std::bit_cast<uint64_t>(means[r]), std::bit_cast<uint64_t>(alone)) << "shell " << r;
+    }
+}
+
+// computeShellAnomaly works a row at a time in a vectorised loop: every value has the bits of
+// shellAnomalyValue's, both kinds, with missing values and values beyond float32 (its infinity where
+// a plain conversion would round down to the largest float).
+TEST(ShellAnomaly, EveryValueIsShellAnomalyValues)
+{
+    const grid::SphericalGrid g = testing::centredGrid(7, 5, 19);
+    std::vector<float> v = testing::fillGrid(g, [&](size_t a, size_t r, size_t c) {
+        return 800.0 + 50.0 * std::sin(0.3 * double(a * 19 + r * 5 + c)) + double(r);
+    });
+    v[g.index(2, 1, 4)] = std::numeric_limits<float>::quiet_NaN();
+    v[g.index(3, 2, 7)] = std::numeric_limits<float>::max();
+    v[g.index(3, 2, 8)] = -std::numeric_limits<float>::max();
+    std::vector<double> means = shellMeans(g, v);
+    means[2] = -3.0e38;  // shell 2: max − mean and −max − mean beyond float32, and just beyond
+    means[3] = std::nextafter(0.0, 1.0);
+    std::vector<float> out(g.cellCount());
+    for (const ShellAnomalyKind kind : {ShellAnomalyKind::Difference, ShellAnomalyKind::Percent}) {
+        computeShellAnomaly(g, v, means, kind, out);
+        for (size_t a = 0; a < g.nLat(); ++a)
+            for (size_t r = 0; r < g.nR(); ++r)
+                for (size_t c = 0; c < g.nLon(); ++c) {
+                    const size_t i = g.index(a, r, c);
+                    const float expected = shellAnomalyValue(v[i], means[r], kind);
+                    EXPECT_EQ(std::bit_cast<uint32_t>(out[i]), std::bit_cast<uint32_t>(expected))
+                        << out[i] << " " << expected << " at " << a << " " << r << " " << c;
+                }
+    }
 }
 
 // Bricks skipped by a selection of an anomaly are skipped by the bounds made from the base's: those

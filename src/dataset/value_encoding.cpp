@@ -64,10 +64,14 @@ std::vector<AxisCover> axisCover(size_t n, uint32_t size, uint32_t brickCount, b
 
 struct Covers {
     std::vector<AxisCover> lat, r, lon;
+    std::vector<uint32_t> lonShared;  // the lon indices covered by more than one brick, ascending
     Covers(const grid::SphericalGrid& g, const grid::BrickLayout& l)
         : lat(axisCover(g.nLat(), l.size, l.count[0], false)), r(axisCover(g.nR(), l.size, l.count[1], false)),
           lon(axisCover(g.nLon(), l.size, l.count[2], true))
     {
+        for (size_t i = 0; i < lon.size(); ++i)
+            if (lon[i].count > 1)
+                lonShared.push_back(uint32_t(i));
     }
 };
 
@@ -126,6 +130,24 @@ void encodeUint16(const grid::SphericalGrid& grid, const grid::BrickLayout& layo
                 // A brick whose values are all missing has the bounds (+inf, -inf).
                 RAYPC_CHECK((std::isfinite(lo) && std::isfinite(hi) && lo <= hi) || (missing && lo > hi));
                 const double perUnit = hi > lo ? levels / (hi - lo) : 0.0;
+                // Points within the brick's bounds (all of them, unless missing or bounds that are
+                // not the values' own): t = (x − lo)·perUnit lies in [0, levels] up to rounding, so
+                // rounding first and clamping the integer gives the codes of the loop below, in two
+                // loops without a branch, which the compiler vectorises (it keeps the loop below's
+                // clamp in double as branches).
+                const float* x = values.data() + first;
+                const float bottom = bounds[2 * brick], top = bounds[2 * brick + 1];
+                int outside = 0;
+                for (size_t iLon = size_t(c) * s; iLon < end; ++iLon)
+                    outside |= !(x[iLon] >= bottom) | !(x[iLon] <= top);
+                if (!outside) {
+                    const int32_t maxCode = int32_t(levels);
+                    for (size_t iLon = size_t(c) * s; iLon < end; ++iLon) {
+                        const int32_t code = int32_t((double(x[iLon]) - lo) * perUnit + 0.5);
+                        out[first + iLon] = uint16_t(std::min(maxCode, std::max(0, code)));
+                    }
+                    continue;
+                }
                 for (size_t iLon = size_t(c) * s; iLon < end; ++iLon) {
                     if (std::isnan(values[first + iLon])) {
                         RAYPC_CHECK(missing);
@@ -153,6 +175,7 @@ void decodeRow(const grid::SphericalGrid& grid, const grid::BrickLayout& layout,
     const uint16_t* codes = encoded.data() + row * nLon;
     const AxisCover& lat = cover.lat[iLat];
     const AxisCover& r = cover.r[iR];
+    size_t nextShared = 0;  // into cover.lonShared: the first not visited yet
     for (uint32_t c = 0; c < layout.count[2]; ++c) {
         const size_t brick = layout.index(lat.bricks[0], r.bricks[0], c);
         const float min = bounds[2 * brick], max = bounds[2 * brick + 1];
@@ -168,19 +191,31 @@ void decodeRow(const grid::SphericalGrid& grid, const grid::BrickLayout& layout,
         }
         const double scale = (double(max) - double(min)) / levels;
         // The brick's points in one tight loop (clamped in double, so that rounding to float
-        // cannot leave [lo, hi]), then the few shared with lon neighbours' bricks.
+        // cannot leave [lo, hi]), then the few shared with lon neighbours' bricks. The clamp is
+        // std::clamp's, written as two selects so that the compiler vectorises the loop.
+        const double lower = lo, upper = hi;
         for (size_t iLon = begin; iLon < end; ++iLon) {
             const double v = double(min) + double(codes[iLon]) * scale;
-            out[iLon] = float(std::clamp(v, double(lo), double(hi)));
+            const double atMost = upper < v ? upper : v;
+            out[iLon] = float(v < lower ? lower : atMost);
         }
-        for (size_t iLon = begin; iLon < end; ++iLon)
-            if (missing && codes[iLon] == kMissingCode)
-                out[iLon] = NAN;
-            else if (cover.lon[iLon].count > 1) {
-                float l = lo, h = hi;
-                intersectBounds(layout, bounds, lat, r, cover.lon[iLon], l, h);
-                out[iLon] = l <= h ? std::clamp(out[iLon], l, h) : NAN;
-            }
+        auto shared = [&](size_t iLon) {
+            float l = lo, h = hi;
+            intersectBounds(layout, bounds, lat, r, cover.lon[iLon], l, h);
+            out[iLon] = l <= h ? std::clamp(out[iLon], l, h) : NAN;
+        };
+        if (missing) {
+            for (size_t iLon = begin; iLon < end; ++iLon)
+                if (codes[iLon] == kMissingCode)
+                    out[iLon] = NAN;
+                else if (cover.lon[iLon].count > 1)
+                    shared(iLon);
+            continue;
+        }
+        // Without missing values only the shared points change: visited from their list.
+        for (; nextShared < cover.lonShared.size() && cover.lonShared[nextShared] < end; ++nextShared)
+            if (cover.lonShared[nextShared] >= begin)
+                shared(cover.lonShared[nextShared]);
     }
 }
 
@@ -215,12 +250,21 @@ std::vector<double> shellMeansOfUint16(const grid::SphericalGrid& grid, const gr
     const auto w = grid.volumeFactors();
     const size_t nLat = grid.nLat(), nR = grid.nR(), nLon = grid.nLon();
     std::vector<double> means(nR);
-    tbb::enumerable_thread_specific<std::vector<float>> shells([&] { return std::vector<float>(nLat * nLon); });
-    tbb::parallel_for(size_t(0), nR, [&](size_t iR) {
-        std::vector<float>& shell = shells.local();
-        for (size_t iLat = 0; iLat < nLat; ++iLat)
-            decodeRow(grid, layout, cover, encoded, bounds, missing, iLat * nR + iR, shell.data() + iLat * nLon);
-        means[iR] = shellMean(w, shell.data(), nLon);
+    // kShellsAtOnce shells decoded, then their means summed side by side (shellMeansSideBySide).
+    tbb::enumerable_thread_specific<std::vector<float>> buffers(
+        [&] { return std::vector<float>(kShellsAtOnce * nLat * nLon); });
+    const size_t groups = (nR + kShellsAtOnce - 1) / kShellsAtOnce;
+    tbb::parallel_for(size_t(0), groups, [&](size_t group) {
+        std::vector<float>& buffer = buffers.local();
+        const size_t first = group * kShellsAtOnce, count = std::min(kShellsAtOnce, nR - first);
+        std::array<const float*, kShellsAtOnce> shells{};
+        for (size_t k = 0; k < count; ++k) {
+            float* shell = buffer.data() + k * nLat * nLon;
+            for (size_t iLat = 0; iLat < nLat; ++iLat)
+                decodeRow(grid, layout, cover, encoded, bounds, missing, iLat * nR + first + k, shell + iLat * nLon);
+            shells[k] = shell;
+        }
+        shellMeansSideBySide(w, shells.data(), count, nLon, means.data() + first);
     });
     return means;
 }

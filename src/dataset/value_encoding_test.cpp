@@ -116,6 +116,91 @@ Checked checkRoundTrip(const grid::SphericalGrid& g, const std::vector<float>& v
     return result;
 }
 
+// computeBrickBounds keeps four running extremes per brick: its bounds have the bits of one
+// std::min and std::max value after value in the brick's order (lat, r, lon from the brick's first
+// column, wrapping at the seam), on values with zeros of both signs, NaN and ties, on grids whose
+// last bricks are short and whose lon bricks wrap.
+TEST(BrickBounds, TheBitsOfOneValueAfterAnother)
+{
+    std::mt19937 rng(11);
+    for (const auto& g : {centredGrid(9, 7, 13), centredGrid(12, 10, 21), centredGrid(5, 4, 3)})
+        for (const uint32_t size : {2u, 4u, 8u}) {
+            const grid::BrickLayout layout = grid::BrickLayout::forGrid(g, size);
+            for (int field = 0; field < 4; ++field) {
+                std::uniform_int_distribution<int> pick(0, 9);
+                std::uniform_real_distribution<float> real(-1, 1);
+                std::vector<float> values(g.cellCount());
+                for (float& v : values) {
+                    const int k = pick(rng);
+                    v = field == 0 ? real(rng) : k < 3 ? 0.0f : k < 6 ? -0.0f : k < 7 ? NAN : field == 1 ? real(rng) : float(k);
+                    if (field == 3)
+                        v = std::abs(v);  // zeros the lowest values
+                }
+                std::vector<float> got(2 * layout.brickCount());
+                computeBrickBounds(g, layout, values, got);
+                for (size_t b = 0; b < layout.brickCount(); ++b) {
+                    const size_t bLon = b % layout.count[2], bR = (b / layout.count[2]) % layout.count[1],
+                                 bLat = b / (size_t(layout.count[2]) * layout.count[1]);
+                    float lo = INFINITY, hi = -INFINITY;
+                    for (size_t i = bLat * size; i <= std::min<size_t>((bLat + 1) * size, g.nLat() - 1); ++i)
+                        for (size_t j = bR * size; j <= std::min<size_t>((bR + 1) * size, g.nR() - 1); ++j)
+                            for (size_t k = 0; k < std::min<size_t>(size + 1, g.nLon()); ++k) {
+                                const float v = values[g.index(i, j, (bLon * size + k) % g.nLon())];
+                                lo = std::min(lo, v);
+                                hi = std::max(hi, v);
+                            }
+                    EXPECT_EQ(std::bit_cast<uint32_t>(got[2 * b]), std::bit_cast<uint32_t>(lo))
+                        << "brick " << b << " field " << field << ": " << got[2 * b] << " " << lo;
+                    EXPECT_EQ(std::bit_cast<uint32_t>(got[2 * b + 1]), std::bit_cast<uint32_t>(hi))
+                        << "brick " << b << " field " << field << ": " << got[2 * b + 1] << " " << hi;
+                }
+            }
+        }
+}
+
+// encodeUint16 rounds the points within their brick's bounds first and clamps the integer: the
+// codes of u = round((v − min) / (max − min) · levels), clamped, for every point, with the bounds
+// computeBrickBounds gives, with narrower ones (points outside them), with constant bricks and with
+// missing values.
+TEST(Uint16Encoding, CodesOfTheFormulaForEveryPoint)
+{
+    std::mt19937 rng(5);
+    const grid::SphericalGrid g = centredGrid(11, 9, 37);
+    const grid::BrickLayout layout = grid::BrickLayout::forGrid(g, 4);
+    for (int field = 0; field < 4; ++field) {
+        std::uniform_real_distribution<float> real(-3, 5);
+        std::uniform_int_distribution<int> pick(0, 19);
+        std::vector<float> values(g.cellCount());
+        const bool missing = field == 3;
+        for (size_t i = 0; i < values.size(); ++i)
+            values[i] = field == 2 && (i / g.nLon()) % 3 == 0 ? 1.25f : missing && pick(rng) == 0 ? NAN : real(rng);
+        std::vector<float> bounds(2 * layout.brickCount());
+        computeBrickBounds(g, layout, values, bounds);
+        if (field == 1)
+            for (size_t b = 0; b < layout.brickCount(); ++b)
+                if (b % 2 == 0 && bounds[2 * b] < bounds[2 * b + 1]) {  // points on either side outside
+                    const float quarter = (bounds[2 * b + 1] - bounds[2 * b]) / 4;
+                    bounds[2 * b] += quarter;
+                    bounds[2 * b + 1] -= quarter;
+                }
+        std::vector<uint16_t> codes(g.cellCount());
+        encodeUint16(g, layout, values, bounds, codes, missing);
+        const double levels = missing ? 65534.0 : 65535.0;
+        for (size_t iLat = 0; iLat < g.nLat(); ++iLat)
+            for (size_t iR = 0; iR < g.nR(); ++iR)
+                for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+                    const size_t i = g.index(iLat, iR, iLon), b = layout.index(iLat / 4, iR / 4, iLon / 4);
+                    const double lo = bounds[2 * b], hi = bounds[2 * b + 1];
+                    uint16_t expected = 65535;
+                    if (!std::isnan(values[i])) {
+                        const double perUnit = hi > lo ? levels / (hi - lo) : 0.0, t = (double(values[i]) - lo) * perUnit;
+                        expected = uint16_t(std::floor(std::clamp(t, 0.0, levels) + 0.5));
+                    }
+                    ASSERT_EQ(codes[i], expected) << "field " << field << " at " << iLat << " " << iR << " " << iLon;
+                }
+    }
+}
+
 TEST(Uint16Encoding, RandomValuesStayWithinTheBoundOfTheirBrick)
 {
     // Odd sizes: the last lat and r bricks hold one point, the last lon brick wraps past column 0.

@@ -117,6 +117,15 @@ ConversionReport toCanonical(const std::vector<T>& buffer, const OpenedHeader& h
     constexpr double kFloatMax = std::numeric_limits<float>::max();
     ConversionReport report;
     report.missingPerShell.assign(nR, 0);
+    // Float values kept as they are, whose rows the file holds whole and in order (lon contiguous,
+    // no padding): a row without a missing value is copied as it is, found by one loop without a
+    // branch, which the compiler vectorises; a row with one goes value by value as any other.
+    bool copyRows = std::is_same_v<T, float> && !convert && stride[kLon] == 1 && lonIdx[0] != kNoData;
+    for (size_t iLon = 0; copyRows && iLon < nLon; ++iLon)
+        copyRows = lonIdx[iLon] == lonIdx[0] + iLon;
+    // NaN: never equal, so an absent fill or missing value matches nothing.
+    const float fillOrNaN = fill ? float(*fill) : std::numeric_limits<float>::quiet_NaN();
+    const float missingOrNaN = missing ? float(*missing) : std::numeric_limits<float>::quiet_NaN();
     std::mutex reportMutex;
     tbb::parallel_for(size_t(0), grid.nLat(), [&](size_t iLat) {
         ConversionReport local;
@@ -128,6 +137,18 @@ ConversionReport toCanonical(const std::vector<T>& buffer, const OpenedHeader& h
                 continue;
             }
             const size_t base = latIdx[iLat] * stride[kLat] + rIdx[iR] * stride[kR];
+            if (copyRows) {
+                const T* from = buffer.data() + base + lonIdx[0];
+                int special = 0;
+                for (size_t iLon = 0; iLon < nLon; ++iLon) {
+                    const float v = float(from[iLon]);
+                    special |= (v == fillOrNaN) | (v == missingOrNaN) | !(std::abs(v) <= std::numeric_limits<float>::max());
+                }
+                if (!special) {
+                    std::copy(from, from + nLon, row);
+                    continue;
+                }
+            }
             for (size_t iLon = 0; iLon < nLon; ++iLon) {
                 if (lonIdx[iLon] == kNoData) {
                     row[iLon] = std::numeric_limits<float>::quiet_NaN();

@@ -622,7 +622,9 @@ json writeStep(const fs::path& outDir, const RunPlan& plan, const StepSource& so
             if (options.encoding == dataset::ValueEncoding::Uint16) {
                 // Quantised from the exact values; coarser levels are computed from the exact ones too.
                 const bool missing = stats[v].missingPoints > 0;
-                std::vector<uint16_t> encoded(current[v].size());
+                // Not value-initialised: encodeUint16 writes every code (a zeroing pass saved).
+                const auto codes = std::make_unique_for_overwrite<uint16_t[]>(current[v].size());
+                const std::span<uint16_t> encoded(codes.get(), current[v].size());
                 dataset::encodeUint16(grid, layout, current[v], bounds, encoded, missing);
                 writeArray<uint16_t>(dataset::format::encodedValuesFile(dir, stem), encoded);
                 if (keepMeans)

@@ -8,6 +8,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -36,17 +37,26 @@ void addVelocityVariables(grid::Snapshot& snapshot)
                  {varname::kRadialVelocityFrom.begin(), varname::kRadialVelocityFrom.end()}};
     grid::Field magnitude{varname::kVelocityMagnitude, varname::kVelocityMagnitudeUnits, std::vector<float>(g.cellCount()),
                     {varname::kVelocityMagnitudeFrom.begin(), varname::kVelocityMagnitudeFrom.end()}};
+    const size_t nLon = g.nLon();
     tbb::parallel_for(size_t(0), g.nLat(), [&](size_t iLat) {
         const double lat = degToRad(g.latDeg[iLat]);
-        for (size_t iLon = 0; iLon < g.nLon(); ++iLon) {
+        // The outward unit vector is the same on every shell of a column: found once per column,
+        // then the shells row by row (points in memory order).
+        std::vector<double> ux(nLon), uy(nLon), uz(nLon);
+        for (size_t iLon = 0; iLon < nLon; ++iLon) {
             const double lon = degToRad(g.lonDeg[iLon]);
-            // The outward unit vector is the same on every shell of this column.
-            const double ux = std::cos(lat) * std::cos(lon), uy = std::cos(lat) * std::sin(lon), uz = std::sin(lat);
-            for (size_t iR = 0; iR < g.nR(); ++iR) {
-                const size_t i = g.index(iLat, iR, iLon);
-                const double x = vx->values[i], y = vy->values[i], z = vz->values[i];
-                radial.values[i] = toFloat32((x * ux + y * uy + z * uz) * kMpsToCmPerYr);
-                magnitude.values[i] = toFloat32(std::sqrt(x * x + y * y + z * z) * kMpsToCmPerYr);
+            ux[iLon] = std::cos(lat) * std::cos(lon);
+            uy[iLon] = std::cos(lat) * std::sin(lon);
+            uz[iLon] = std::sin(lat);
+        }
+        for (size_t iR = 0; iR < g.nR(); ++iR) {
+            const size_t first = g.index(iLat, iR, 0);
+            const float *x = vx->values.data() + first, *y = vy->values.data() + first, *z = vz->values.data() + first;
+            float *r = radial.values.data() + first, *m = magnitude.values.data() + first;
+            for (size_t iLon = 0; iLon < nLon; ++iLon) {
+                const double a = x[iLon], b = y[iLon], c = z[iLon];
+                r[iLon] = toFloat32((a * ux[iLon] + b * uy[iLon] + c * uz[iLon]) * kMpsToCmPerYr);
+                m[iLon] = toFloat32(std::sqrt(a * a + b * b + c * c) * kMpsToCmPerYr);
             }
         }
     });
@@ -90,6 +100,45 @@ void addDerivedVariables(grid::Snapshot& snapshot)
     RAYPC_CHECK(snapshot.fields.size() >= stored);
 }
 
+namespace {
+
+// coarsenField's means of one coarse row (cLat, cR) whose fine points come from the N fine rows
+// `rows` (lat, then r order) with weights wRow (w.lat · w.r of each): each coarse point adds its
+// fine points in coarsenField's order (lat, r, lon) with the same weights, w.lat · w.r · w.lon.
+// Why by rows: the weights of a row are found once, not three lookups and two products per point.
+template <size_t N>
+void coarsenRow(const std::array<const float*, 4>& rows, const std::array<double, 4>& wRow, const double* wLon,
+                size_t nLon, size_t coarseLon, float* out)
+{
+    // The coarse points of two fine columns each, in a loop of a fixed body that the compiler
+    // vectorises; then a last one of one column (an odd count).
+    const size_t pairs = nLon / 2;
+    for (size_t cLon = 0; cLon < pairs; ++cLon) {
+        double sum = 0, weight = 0;
+        for (size_t j = 0; j < N; ++j) {
+            const double w0 = wRow[j] * wLon[2 * cLon], w1 = wRow[j] * wLon[2 * cLon + 1];
+            sum += w0 * rows[j][2 * cLon];
+            weight += w0;
+            sum += w1 * rows[j][2 * cLon + 1];
+            weight += w1;
+        }
+        out[cLon] = static_cast<float>(sum / weight);
+    }
+    for (size_t cLon = pairs; cLon < coarseLon; ++cLon) {
+        const size_t lon0 = 2 * cLon, lon1 = std::min(lon0 + 2, nLon);
+        double sum = 0, weight = 0;
+        for (size_t j = 0; j < N; ++j)
+            for (size_t iLon = lon0; iLon < lon1; ++iLon) {
+                const double wi = wRow[j] * wLon[iLon];
+                sum += wi * rows[j][iLon];
+                weight += wi;
+            }
+        out[cLon] = static_cast<float>(sum / weight);
+    }
+}
+
+}  // namespace
+
 std::vector<float> coarsenField(const grid::SphericalGrid& fine, std::span<const float> values)
 {
     RAYPC_CHECK_EQ(values.size(), fine.cellCount());
@@ -100,34 +149,115 @@ std::vector<float> coarsenField(const grid::SphericalGrid& fine, std::span<const
         const size_t lat0 = 2 * cLat, lat1 = std::min(lat0 + 2, fine.nLat());
         for (size_t cR = 0; cR < coarse.nR(); ++cR) {
             const size_t r0 = 2 * cR, r1 = std::min(r0 + 2, fine.nR());
-            for (size_t cLon = 0; cLon < coarse.nLon(); ++cLon) {
-                const size_t lon0 = 2 * cLon, lon1 = std::min(lon0 + 2, fine.nLon());
-                double sum = 0, weight = 0;
-                for (size_t iLat = lat0; iLat < lat1; ++iLat)
-                    for (size_t iR = r0; iR < r1; ++iR)
-                        for (size_t iLon = lon0; iLon < lon1; ++iLon) {
-                            const double wi = w.at(iLat, iR, iLon);
-                            sum += wi * values[fine.index(iLat, iR, iLon)];
-                            weight += wi;
-                        }
-                out[coarse.index(cLat, cR, cLon)] = static_cast<float>(sum / weight);
+            // The fine rows this coarse row merges, in the order their points are added.
+            std::array<const float*, 4> rows{};
+            std::array<double, 4> wRow{};
+            size_t n = 0;
+            for (size_t iLat = lat0; iLat < lat1; ++iLat)
+                for (size_t iR = r0; iR < r1; ++iR) {
+                    rows[n] = values.data() + fine.index(iLat, iR, 0);
+                    wRow[n++] = w.lat[iLat] * w.r[iR];
+                }
+            float* row = out.data() + coarse.index(cLat, cR, 0);
+            switch (n) {
+            case 4: coarsenRow<4>(rows, wRow, w.lon.data(), fine.nLon(), coarse.nLon(), row); break;
+            case 2: coarsenRow<2>(rows, wRow, w.lon.data(), fine.nLon(), coarse.nLon(), row); break;
+            default: coarsenRow<1>(rows, wRow, w.lon.data(), fine.nLon(), coarse.nLon(), row); break;
             }
         }
     });
     return out;
 }
 
+namespace {
+
+// A lat row's sums in computeStats.
+struct StatsPartial {
+    double weighted = 0, weight = 0, missing = 0;
+    size_t missingPoints = 0;
+};
+
+// How many lat rows statsOfRows sums side by side.
+constexpr size_t kStatsRowsAtOnce = 4;
+
+// computeStats' sums of the N lat rows from firstLat on, into rows[iLat] and the row's histogram
+// (kHistogramBins doubles from histograms + iLat · kHistogramBins). Each row adds its points in its
+// own order (r, then lon), as one row alone would: the same bits for any N. Why N rows at once: a
+// row's sums are chains of dependent additions (a histogram bin's through a store and a load), so
+// one row alone waits on each addition; N rows' chains, interleaved point by point, overlap.
+template <size_t N>
+void statsOfRows(const grid::SphericalGrid& grid, const grid::SphericalGrid::VolumeFactors& w, const float* values,
+                 float lo, double scale, size_t firstLat, StatsPartial* rows, double* histograms)
+{
+    const size_t nR = grid.nR(), nLon = grid.nLon(), rowSize = nR * nLon;
+    std::array<StatsPartial, N> p{};
+    std::array<double*, N> histogram;
+    for (size_t j = 0; j < N; ++j)
+        histogram[j] = histograms + (firstLat + j) * dataset::kHistogramBins;
+    for (size_t iR = 0; iR < nR; ++iR) {
+        std::array<double, N> wRow;
+        std::array<const float*, N> row;
+        for (size_t j = 0; j < N; ++j) {
+            wRow[j] = w.lat[firstLat + j] * w.r[iR];
+            row[j] = values + (firstLat + j) * rowSize + iR * nLon;
+        }
+        for (size_t iLon = 0; iLon < nLon; ++iLon)
+            for (size_t j = 0; j < N; ++j) {
+                const float x = row[j][iLon];
+                const double wi = wRow[j] * w.lon[iLon];
+                if (std::isnan(x)) {
+                    p[j].missing += wi;  // the statistics are of the values there are
+                    ++p[j].missingPoints;
+                    continue;
+                }
+                // In double: the difference of two finite floats may overflow float.
+                const int bin = std::min(dataset::kHistogramBins - 1, static_cast<int>((double(x) - lo) * scale));
+                histogram[j][bin] += wi;
+                p[j].weighted += wi * x;
+                p[j].weight += wi;
+            }
+    }
+    for (size_t j = 0; j < N; ++j)
+        rows[firstLat + j] = p[j];
+}
+
+}  // namespace
+
 dataset::VariableStats computeStats(const grid::SphericalGrid& grid, std::span<const float> values)
 {
     RAYPC_CHECK_EQ(values.size(), grid.cellCount());
     const auto w = grid.volumeFactors();
-    const size_t rowSize = grid.nR() * grid.nLon();
     const auto extremes = tbb::parallel_reduce(
         tbb::blocked_range<size_t>(0, values.size(), 1 << 16), std::pair<float, float>(INFINITY, -INFINITY),
         [&](const auto& range, std::pair<float, float> acc) {
-            for (size_t i = range.begin(); i != range.end(); ++i) {
-                acc.first = std::min(acc.first, values[i]);
-                acc.second = std::max(acc.second, values[i]);
+            // Four running extremes (chains a quarter as long); their lowest and highest have the
+            // bits of one std::min/std::max after another unless they are a zero, whose sign
+            // depends on the order: then the range is gone over again in order.
+            std::array<float, 4> lo, hi;
+            lo.fill(acc.first);
+            hi.fill(acc.second);
+            size_t i = range.begin();
+            for (; i + 4 <= range.end(); i += 4)
+                for (size_t j = 0; j < 4; ++j) {
+                    const float x = values[i + j];
+                    lo[j] = x < lo[j] ? x : lo[j];
+                    hi[j] = hi[j] < x ? x : hi[j];
+                }
+            for (; i != range.end(); ++i) {
+                lo[0] = std::min(lo[0], values[i]);
+                hi[0] = std::max(hi[0], values[i]);
+            }
+            const float first = acc.first, second = acc.second;
+            for (size_t j = 0; j < 4; ++j) {
+                acc.first = std::min(acc.first, lo[j]);
+                acc.second = std::max(acc.second, hi[j]);
+            }
+            if (acc.first == 0 || acc.second == 0) {
+                acc = {first, second};
+                for (size_t k = range.begin(); k != range.end(); ++k) {
+                    acc.first = std::min(acc.first, values[k]);
+                    acc.second = std::max(acc.second, values[k]);
+                }
             }
             return acc;
         },
@@ -146,32 +276,18 @@ dataset::VariableStats computeStats(const grid::SphericalGrid& grid, std::span<c
     const double scale = span > 0 ? dataset::kHistogramBins / span : 0.0;
     // One partial sum per lat row, added in row order: the sums do not depend on how rows were
     // spread over threads, so a rerun writes the same bytes (dataset.json is reproducible).
-    struct Partial {
-        double weighted = 0, weight = 0, missing = 0;
-        size_t missingPoints = 0;
-    };
-    std::vector<Partial> rows(grid.nLat());
+    std::vector<StatsPartial> rows(grid.nLat());
     std::vector<double> rowHistograms(grid.nLat() * dataset::kHistogramBins, 0.0);
-    tbb::parallel_for(size_t(0), grid.nLat(), [&](size_t iLat) {
-        Partial& p = rows[iLat];
-        double* histogram = rowHistograms.data() + iLat * dataset::kHistogramBins;
-        for (size_t iR = 0; iR < grid.nR(); ++iR) {
-            const double wRow = w.lat[iLat] * w.r[iR];
-            const float* row = values.data() + iLat * rowSize + iR * grid.nLon();
-            for (size_t iLon = 0; iLon < grid.nLon(); ++iLon) {
-                const double wi = wRow * w.lon[iLon];
-                if (std::isnan(row[iLon])) {
-                    p.missing += wi;  // the statistics are of the values there are
-                    ++p.missingPoints;
-                    continue;
-                }
-                // In double: the difference of two finite floats may overflow float.
-                const int bin = std::min(dataset::kHistogramBins - 1, static_cast<int>((double(row[iLon]) - lo) * scale));
-                histogram[bin] += wi;
-                p.weighted += wi * row[iLon];
-                p.weight += wi;
-            }
+    // Rows kStatsRowsAtOnce at a time (statsOfRows); a last group of fewer one at a time.
+    const size_t groups = (grid.nLat() + kStatsRowsAtOnce - 1) / kStatsRowsAtOnce;
+    tbb::parallel_for(size_t(0), groups, [&](size_t group) {
+        const size_t first = group * kStatsRowsAtOnce;
+        if (first + kStatsRowsAtOnce <= grid.nLat()) {
+            statsOfRows<kStatsRowsAtOnce>(grid, w, values.data(), lo, scale, first, rows.data(), rowHistograms.data());
+            return;
         }
+        for (size_t iLat = first; iLat < grid.nLat(); ++iLat)
+            statsOfRows<1>(grid, w, values.data(), lo, scale, iLat, rows.data(), rowHistograms.data());
     });
     stats.histogram.assign(dataset::kHistogramBins, 0.0);
     double weighted = 0, weight = 0, missing = 0;

@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <optional>
 #include <utility>
@@ -34,6 +35,26 @@ std::vector<char> missingFlags(const json& stepJson, size_t storedCount)
     for (size_t v = 0; v < storedCount; ++v)
         missing.push_back(stepJson.at("stats").at(v).value("missing_points", size_t(0)) > 0);
     return missing;
+}
+
+// The stored variables' level-0 shell means a step's manifest keeps (writeStep's
+// "level_shell_means": the bits StepVolume::shellMeansOf would compute from the decoded values), so
+// that a volume of the step decodes no variable whole for them (the seed field's anomaly, the
+// shell anomalies sampled at a line's ends); empty when the step has none (made before they were
+// kept, or without computed variables).
+std::vector<std::vector<double>> keptShellMeans(const json& stepJson, const std::vector<std::string>& names,
+                                                size_t storedCount)
+{
+    const auto levels = stepJson.find("level_shell_means");
+    if (levels == stepJson.end() || !levels->is_array() || levels->empty() || !levels->front().is_object())
+        return {};
+    const json& byName = levels->front();
+    std::vector<std::vector<double>> means(storedCount);
+    for (size_t v = 0; v < storedCount; ++v)
+        if (const auto kept = byName.find(names[v]); kept != byName.end())
+            for (const json& m : *kept)
+                means[v].push_back(m.is_null() ? std::numeric_limits<double>::quiet_NaN() : m.get<double>());
+    return means;
 }
 
 }  // namespace
@@ -109,7 +130,8 @@ std::vector<int> pathlineSetsToDo(const fs::path& outDir, int nSteps, const Path
 // A step of the window: its time and its written level-0 arrays.
 struct PathlineStream::Step {
     int index;
-    std::vector<char> missing;  // per stored variable (how its arrays are encoded)
+    std::vector<char> missing;                    // per stored variable (how its arrays are encoded)
+    std::vector<std::vector<double>> shellMeans;  // per stored variable, as kept (keptShellMeans)
     std::shared_ptr<const dataset::StepVolume> volume;
 };
 
@@ -190,10 +212,10 @@ void PathlineStream::stepReady(int k, const json& stepJson)
         return;
     }
     const dataset::LevelInfo level{m_grid, grid::BrickLayout::forGrid(m_grid, m_options.brickSize)};
-    m_window.push_back(std::make_unique<Step>(Step{
-        k, missing,
-        dataset::StepVolume::open(dataset::format::levelDir(dataset::format::stepDir(m_outDir, k), 0), level, m_stems,
-                                  m_options.encoding, {}, missing, m_computed)}));
+    std::vector<std::vector<double>> shellMeans = keptShellMeans(stepJson, m_names, m_stems.size());
+    auto volume = dataset::StepVolume::open(dataset::format::levelDir(dataset::format::stepDir(m_outDir, k), 0), level,
+                                            m_stems, m_options.encoding, {}, missing, m_computed, shellMeans);
+    m_window.push_back(std::make_unique<Step>(Step{k, missing, std::move(shellMeans), std::move(volume)}));
 
     // Lines at step k - 2 go on to k - 1 with step k at hand (a Dormand–Prince step that lands on
     // k - 1 within rounding samples past it, as one trace over the whole series would); then the
@@ -250,7 +272,7 @@ void PathlineStream::open(int s)
         const auto seedVolume = dataset::StepVolume::open(
             dataset::format::levelDir(dataset::format::stepDir(m_outDir, s), 0),
             dataset::LevelInfo{m_grid, grid::BrickLayout::forGrid(m_grid, m_options.brickSize)}, m_stems,
-            m_options.encoding, {}, m_window.back()->missing, m_computed);
+            m_options.encoding, {}, m_window.back()->missing, m_computed, m_window.back()->shellMeans);
         const std::span<const float> values(seedVolume->values(m_field), m_grid.cellCount());
         noteHeldBytes(seedVolume->decodedBytes());  // the window's, and the seed field's
         const analysis::CriticalStructure structure = analysis::criticalStructure(m_grid, values);

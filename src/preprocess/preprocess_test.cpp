@@ -247,6 +247,57 @@ TEST(Derived, ValuesBeyondFloat32BecomeInfiniteAndAreRefusedWithTheirPlace)
     }
 }
 
+// checkFinite passes over chunks of finite values: an infinity, and a NaN computed from inputs that
+// all have values, far into a large field are still found at their place; a NaN where an input has
+// none passes.
+TEST(Derived, CheckFiniteFindsTheFirstBadValueAnywhere)
+{
+    grid::Snapshot snap;
+    snap.grid = centredGrid(20, 30, 40);
+    snap.fields.push_back({"vx", "m/s", std::vector<float>(snap.grid.cellCount(), 0.01f)});
+    snap.fields.push_back({"derived", "m/s", std::vector<float>(snap.grid.cellCount(), 1.0f), {"vx"}});
+    const size_t input = snap.grid.index(11, 3, 5), nan = snap.grid.index(13, 7, 9), inf = snap.grid.index(17, 2, 3);
+    snap.fields[0].values[input] = std::numeric_limits<float>::quiet_NaN();
+    snap.fields[1].values[input] = std::numeric_limits<float>::quiet_NaN();  // missing where its input is
+    EXPECT_NO_THROW(grid::checkFinite(snap, snap.fields[1], "in.nc"));
+    snap.fields[1].values[inf] = std::numeric_limits<float>::infinity();
+    snap.fields[1].values[nan] = std::numeric_limits<float>::quiet_NaN();
+    for (const size_t expected : {nan, inf}) {
+        try {
+            grid::checkFinite(snap, snap.fields[1], "in.nc");
+            FAIL() << "a bad value passed";
+        } catch (const Error& e) {
+            const std::string m = e.what();
+            const size_t iLon = expected % 40, iR = expected / 40 % 30, iLat = expected / 1200;
+            const std::string point = fmt::format("point {}, {}, {} of", iLat, iR, iLon);
+            EXPECT_NE(m.find(point), std::string::npos) << m << " lacks " << point;
+        }
+        snap.fields[1].values[nan] = 1.0f;  // next: the infinity
+    }
+}
+
+// The range's extremes are found four at a time; a zero among them keeps the sign of one
+// std::min/std::max after another (the first zero met).
+TEST(Stats, ARangeEndingAtZeroKeepsTheSignOfTheFirstZero)
+{
+    const grid::SphericalGrid g = centredGrid(10, 9, 16);
+    for (const float first : {-0.0f, 0.0f}) {
+        std::vector<float> v(g.cellCount(), 2.0f);
+        v[37] = first;
+        v[38] = -first;
+        v[101] = -first;
+        v[555] = 7.5f;
+        const dataset::VariableStats st = computeStats(g, v);
+        EXPECT_EQ(std::bit_cast<uint32_t>(st.range.min), std::bit_cast<uint32_t>(first));
+        EXPECT_EQ(st.range.max, 7.5f);
+        for (float& x : v)
+            x = -x;
+        const dataset::VariableStats negated = computeStats(g, v);
+        EXPECT_EQ(std::bit_cast<uint32_t>(negated.range.max), std::bit_cast<uint32_t>(-first));
+        EXPECT_EQ(negated.range.min, -7.5f);
+    }
+}
+
 TEST(Memory, AGridTooLargeIsRefusedBeforeAllocating)
 {
     grid::SphericalGrid g = centredGrid(1000, 500, 1000);
