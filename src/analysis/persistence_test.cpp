@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <numbers>
 #include <numeric>
@@ -38,6 +39,23 @@ std::vector<float> blobField(const grid::SphericalGrid& g, const std::vector<Blo
             sum += bl.amplitude *
                    gaussianBlob(g, a, b, c, g.latDeg[bl.iLat], g.lonDeg[bl.iLon], g.rKm[bl.iR], bl.sigmaKm);
         return sum;
+    });
+}
+
+// Field `kind` of three on `g`: 0 small integers 0..maxInteger (many ties, which Simulation of
+// Simplicity decides by index), 1 uniform in [-1, 1), 2 `smooth` of the indices (lat, r, lon) and
+// a uniform number in [-1, 1).
+std::vector<float> testField(const grid::SphericalGrid& g, int kind, std::mt19937& rng, int maxInteger,
+                             const std::function<double(size_t, size_t, size_t, double)>& smooth)
+{
+    std::uniform_int_distribution<int> small(0, maxInteger);
+    std::uniform_real_distribution<float> real(-1, 1);
+    return fillGrid(g, [&](size_t a, size_t b, size_t c) {
+        if (kind == 0)
+            return double(small(rng));
+        if (kind == 1)
+            return double(real(rng));
+        return smooth(a, b, c, real(rng));
     });
 }
 
@@ -128,16 +146,9 @@ TEST(Persistence, SameAsTheTextbookSweep)
     std::mt19937 rng(3);
     for (const auto& g :
          {centredGrid(6, 5, 8), centredGrid(7, 6, 3), centredGrid(12, 9, 16), centredGrid(20, 15, 30)}) {
-        std::uniform_int_distribution<int> small(0, 4);
-        std::uniform_real_distribution<float> real(-1, 1);
         for (int field = 0; field < 3; ++field) {
-            const auto v = fillGrid(g, [&](size_t a, size_t b, size_t c) {
-                if (field == 0)
-                    return double(small(rng));
-                if (field == 1)
-                    return double(real(rng));
-                return std::sin(0.9 * a) * std::cos(1.7 * b) + std::sin(2 * std::numbers::pi * c / g.nLon()) +
-                       0.05 * real(rng);
+            const auto v = testField(g, field, rng, 4, [&](size_t a, size_t b, size_t c, double noise) {
+                return std::sin(0.9 * a) * std::cos(1.7 * b) + std::sin(2 * std::numbers::pi * c / g.nLon()) + 0.05 * noise;
             });
             const auto pairs = persistencePairs(g, v);
             std::multiset<std::tuple<int, size_t, size_t>> got;
@@ -450,14 +461,8 @@ TEST(Persistence, InteriorRowsGiveWhatEachVertexAloneGives)
 {
     std::mt19937 rng(7);
     for (const auto& g : {centredGrid(5, 4, 3), centredGrid(9, 7, 13), centredGrid(16, 11, 24)}) {
-        std::uniform_int_distribution<int> small(0, 2);
-        std::uniform_real_distribution<float> real(-1, 1);
         for (int field = 0; field < 3; ++field) {
-            const auto v = fillGrid(g, [&](size_t a, size_t b, size_t c) {
-                if (field == 0)
-                    return double(small(rng));
-                if (field == 1)
-                    return double(real(rng));
+            const auto v = testField(g, field, rng, 2, [](size_t a, size_t b, size_t c, double) {
                 return std::round(4 * (std::sin(0.9 * a) * std::cos(1.7 * b) + std::sin(0.5 * c))) / 4;
             });
             const CriticalStructure one = criticalStructure(g, v);
