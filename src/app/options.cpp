@@ -250,6 +250,9 @@ void PreprocessFlags::add(CLI::App& cmd, bool withQuiet)
            "Level arrays: 'u16' (quantised per brick, error <= brick range / 131070; half the size) or 'float32' "
            "(exact)")
         ->default_str(std::string(dataset::encodingName(options.encoding)));
+    cmd.add_flag("!--no-read-ahead", options.readAhead,
+                 "Read one step at a time: a step less in memory (about 0.5 GB at the contest's full resolution), "
+                 "the next step no longer read while this one is worked on (slower)");
     auto& pl = options.pathlines;
     cmd.add_flag("--no-pathlines", noPathlines,
                  "Skip the critical points of --pathline-field and the pathlines seeded there");
