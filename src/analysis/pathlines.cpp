@@ -47,6 +47,8 @@ PathlineTracer::PathlineTracer(const FieldSeries& series, size_t vx, size_t vy, 
                      series.variableCount(k));
     if (!(options.toleranceKm > 0 && options.maxStepMyr > 0 && options.maxSegmentKm > 0 && options.maxPoints >= 2))
         fail("pathlines: tolerance, step, segment and point limits must be positive");
+    for (const auto& volume : series.volumes)
+        m_velocity.push_back({volume->pointValues(vx), volume->pointValues(vy), volume->pointValues(vz)});
     m_rMinKm = series.grid.rKm.front();
     m_rMaxKm = series.grid.rKm.back();
     // Integration error moves a particle that rides on a boundary slightly off it; within this
@@ -93,8 +95,18 @@ std::optional<Vec3d> PathlineTracer::velocityKmPerMyr(const Vec3d& pKm, double t
     bracketTime(timeMyr, k0, k1, w);
     double v[3];
     for (int c = 0; c < 3; ++c) {
-        const double a = m_sampler.sample(m_series.field(k0, m_v[c]), *at);
-        const double b = w > 0 ? m_sampler.sample(m_series.field(k1, m_v[c]), *at) : a;
+        double a, b;
+        if (m_velocity.empty()) {
+            a = m_sampler.sample(m_series.field(k0, m_v[c]), *at);
+            b = w > 0 ? m_sampler.sample(m_series.field(k1, m_v[c]), *at) : a;
+        } else {
+            const grid::SphericalGrid& g = m_series.grid;
+            const auto& p0 = m_velocity[k0][size_t(c)];
+            const auto& p1 = m_velocity[k1][size_t(c)];
+            a = m_sampler.sample([&](size_t i, size_t j, size_t k) { return p0.at(g.index(i, j, k), i, j, k); }, *at);
+            b = w > 0 ? m_sampler.sample([&](size_t i, size_t j, size_t k) { return p1.at(g.index(i, j, k), i, j, k); }, *at)
+                      : a;
+        }
         v[c] = (a + (b - a) * w) * kMpsToKmPerMyr;
     }
     return Vec3d{v[0], v[1], v[2]};

@@ -18,6 +18,7 @@
 #include "grid/names.h"
 #include "grid/sampler.h"
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -122,6 +123,10 @@ private:
     const FieldSeries& m_series;
     grid::GridSampler m_sampler;
     size_t m_v[3];
+    // With `volumes`: each step's velocity components read point by point, a u16 one decoded at the
+    // points a trace samples (the same bits as decoding it whole), so that tracing holds no decoded
+    // array of the grid.
+    std::vector<std::array<dataset::StepVolume::PointValues, 3>> m_velocity;
     TracerOptions m_options;
     double m_rMinKm, m_rMaxKm, m_rToleranceKm;
 };

@@ -3,6 +3,7 @@
 #include "core/huge_pages.h"
 #include "core/json_input.h"
 #include "core/lru_cache.h"
+#include "core/mapped_file.h"
 #include "core/numbered_name.h"
 #include "core/spare_blocks.h"
 #include "core/spherical.h"
@@ -12,17 +13,20 @@
 #include <gtest/gtest.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <vector>
 #include <thread>
 #include <chrono>
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <span>
 #include <sstream>
 #include <string>
 
@@ -168,6 +172,52 @@ TEST(Spherical, CartesianRoundTripAndContestFrame)
     EXPECT_DOUBLE_EQ(wrapLonDeg(-10.0), 350.0);
     EXPECT_DOUBLE_EQ(wrapLonDeg(360.0), 0.0);
     EXPECT_DOUBLE_EQ(wrapLonDeg(725.0), 5.0);
+}
+
+// The resident kB of the mapping that holds `address`, from /proc/self/smaps (-1 when not found).
+long residentKbOfMapping(const void* address)
+{
+    std::ifstream smaps("/proc/self/smaps");
+    const auto at = reinterpret_cast<uintptr_t>(address);
+    bool inside = false;
+    for (std::string line; std::getline(smaps, line);) {
+        unsigned long begin = 0, end = 0;
+        if (std::sscanf(line.c_str(), "%lx-%lx ", &begin, &end) == 2 && line.find(':') > line.find(' '))
+            inside = at >= begin && at < end;
+        else if (inside && line.starts_with("Rss:"))
+            return std::stol(line.substr(4));
+    }
+    return -1;
+}
+
+// A mapping read all over counts in the process's resident memory; dropResidentPages takes it out,
+// and the file reads the same bytes after.
+TEST(MappedFile, DroppingResidentPagesKeepsTheBytes)
+{
+    const auto path = std::filesystem::temp_directory_path() / ("raypc-mapped-" + std::to_string(getpid()));
+    std::vector<char> bytes(size_t(8) << 20);
+    for (size_t i = 0; i < bytes.size(); ++i)
+        bytes[i] = char(i * 7919 % 251);
+    writeFileAtomic(path, std::as_bytes(std::span(bytes)));
+    {
+        const MappedFile file(path);
+        const auto view = file.bytes();
+        const auto sum = [&] {
+            uint64_t s = 0;
+            for (size_t i = 0; i < view.size(); i += 97)
+                s += uint8_t(view[i]);
+            return s;
+        };
+        uint64_t want = 0;
+        for (size_t i = 0; i < bytes.size(); i += 97)
+            want += uint8_t(bytes[i]);
+        ASSERT_EQ(sum(), want);
+        EXPECT_GE(residentKbOfMapping(view.data()), 4096) << "a file read all over is resident";
+        file.dropResidentPages();
+        EXPECT_EQ(residentKbOfMapping(view.data()), 0);
+        EXPECT_EQ(sum(), want);
+    }
+    std::filesystem::remove(path);
 }
 
 TEST(AtomicFile, WritesWholeFileAndLeavesNoTemporary)

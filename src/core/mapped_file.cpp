@@ -51,6 +51,12 @@ void MappedFile::adviseWillNeed() const noexcept
         ::madvise(m_data, m_size, MADV_WILLNEED);
 }
 
+void MappedFile::dropResidentPages() const noexcept
+{
+    if (m_data)
+        ::madvise(m_data, m_size, MADV_DONTNEED);
+}
+
 std::optional<size_t> MappedFile::cutShort() const noexcept
 {
     if (m_path.empty())

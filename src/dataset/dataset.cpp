@@ -615,6 +615,14 @@ void StepVolume::adviseWillNeed() const noexcept
         file.adviseWillNeed();
 }
 
+void StepVolume::dropResidentPages() const noexcept
+{
+    if (m_base)
+        m_base->dropResidentPages();
+    for (const auto& file : m_mapped)
+        file.dropResidentPages();
+}
+
 void StepVolume::touchPages() const
 {
     if (m_base)

@@ -229,6 +229,10 @@ public:
     // a reader of points all over the volume (a step's features read every variable at the selected
     // points), whose page faults would otherwise each wait for a small read. Never throws.
     void adviseWillNeed() const noexcept;
+    // Drops the mapped files' pages from the process's resident memory (MappedFile::dropResidentPages),
+    // for a holder that reads a few points now and then (preprocessing's pathline window). Values
+    // read later map them again from the page cache. Never throws.
+    void dropResidentPages() const noexcept;
     // Whether a mapped file is shorter now than when it was mapped (MappedFile::cutShort): reading it
     // would raise SIGBUS. The server's step cache asks before it hands out a cached volume.
     bool filesCutShort() const noexcept;

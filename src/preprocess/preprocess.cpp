@@ -274,14 +274,10 @@ RunPlan planRun(StepSource& source, PreprocessOptions& options)
             options.pathlines.field = field;
     }
     phases::checkPathlineOptions(options.pathlines, seedable);
-    // A u16 dataset's pathlines decode the velocity of at most three steps (phases::PathlineStream)
-    // and a seed field with the variable it is computed from, between steps.
-    // The stored variables, and one array for the computed ones' statistics.
-    uint64_t bytes = preprocessMemoryBytes(plan.header.grid, plan.specs.size() + (plan.computed.empty() ? 0 : 1));
-    if (options.encoding == dataset::ValueEncoding::Uint16 && options.pathlines.enabled) {
-        const uint64_t window = std::min<uint64_t>(3, source.stepCount());
-        bytes = std::max(bytes, (3 * window + 2) * plan.header.grid.cellCount() * sizeof(float));
-    }
+    // The stored variables, and one array for the computed ones' statistics. (The pathlines decode
+    // no velocity, and between steps only a seed field with the variable it is computed from:
+    // phases::PathlineStream.)
+    const uint64_t bytes = preprocessMemoryBytes(plan.header.grid, plan.specs.size() + (plan.computed.empty() ? 0 : 1));
     grid::checkGridFitsMemory(plan.header.grid, bytes, source.path(0), "preprocess", availableMemory());
     plan.manifest = manifest(plan.levels, plan.specs, source, options, options.sampleRows);
     return plan;

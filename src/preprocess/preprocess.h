@@ -78,8 +78,8 @@ struct PreprocessSummary {
     int pathlineSetsWritten = 0;
     int pathlineSetsSkipped = 0;  // finished by an earlier run with the same settings
     size_t pathlineCount = 0;     // lines in the sets written by this run
-    // The most bytes of decoded values the pathline tracing held at once (its window of velocity
-    // and a seed field; phases::PathlineStream::peakHeldBytes), this process.
+    // The most bytes of decoded values the pathline tracing held at once (a seed field and its base;
+    // phases::PathlineStream::peakHeldBytes), this process.
     size_t pathlineWindowPeakBytes = 0;
     double seconds = 0;
 };

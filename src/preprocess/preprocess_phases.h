@@ -54,9 +54,11 @@ std::vector<int> pathlineSetsToDo(const std::filesystem::path& outDir, int stepC
 // injection step and advances every open line through the interval between the two steps before the
 // newest one, each line resumed where the last interval left it (PathlineTracer::advance), so that
 // the lines are those of one trace over steps s..end. A set is written atomically (pathlines/NNNN)
-// when its lines reach its end step. The velocity is read from the written level-0 arrays (a u16
-// variable decoded: the values every reader sees) of the newest three steps only: memory is flat in
-// the number of steps and the work linear in it.
+// when its lines reach its end step. The velocity is read from the written level-0 arrays of the
+// newest three steps only, a u16 variable decoded at the points the lines sample (the values every
+// reader sees, with no decoded array of the grid held), and the files' pages are dropped from the
+// process's resident memory between steps: memory is flat in the number of steps (1.19 GB for 6 and
+// for 24 full-resolution steps, docs/scaling.md) and the work linear in it.
 // Not thread-safe; stepReady uses oneTBB over the lines.
 class PathlineStream {
 public:
@@ -80,8 +82,8 @@ public:
     // The injection steps of the sets written so far, and their lines.
     const std::set<int>& written() const { return m_written; }
     size_t lineCount() const { return m_lineCount; }
-    // The most bytes of decoded values (StepVolume::decodedBytes) the stream held at once: the
-    // window of velocity and the seed field of the newest step.
+    // The most bytes of decoded values (StepVolume::decodedBytes) the stream held at once: the seed
+    // field of the newest step and the variable it is computed from (the velocity is not decoded).
     size_t peakHeldBytes() const { return m_peakHeldBytes; }
     // Called after each set is written (progress).
     std::function<void()> onSetWritten;
