@@ -1114,6 +1114,19 @@ void checkArrayFiles(const Dataset& dataset, size_t sampleRows, uint32_t brickSi
 
 }  // namespace
 
+std::vector<std::vector<double>> readLevelShellMeans(const json& step, const std::string& what,
+                                                     const std::vector<VariableInfo>& variables, size_t level,
+                                                     size_t levelCount, size_t shells)
+{
+    RAYPC_CHECK(level < levelCount);
+    if (!step.is_object() || !step.contains("level_shell_means"))
+        return std::vector<std::vector<double>>(variables.size());
+    const ManifestReader r(what);
+    const json& perLevel = r.array(step, "", "level_shell_means", levelCount, levelCount);
+    return readShellMeans(r, perLevel[level], ManifestReader::path("level_shell_means", level), variables, shells,
+                          fmt::format(" of level {}", level));
+}
+
 std::shared_ptr<const Dataset> Dataset::open(const std::filesystem::path& dir)
 {
     const auto manifestPath = dir / format::kManifest;

@@ -318,6 +318,14 @@ struct SampleTable {
     float at(size_t row, size_t column) const { return values[row * columns.size() + column]; }
 };
 
+// The shell means of level `level` that a step's manifest entry `step` keeps ("level_shell_means",
+// docs/format.md) for each variable a computed one of `variables` is made from (NaN for a shell
+// without a value), empty for the others; all empty when the entry keeps none (a step written before
+// they were kept). Checked as Dataset::open checks them: throws raypc::Error "<what>: <field>: ...".
+std::vector<std::vector<double>> readLevelShellMeans(const nlohmann::json& step, const std::string& what,
+                                                     const std::vector<VariableInfo>& variables, size_t level,
+                                                     size_t levelCount, size_t shells);
+
 // Exclusive write access to a dataset directory, so that two `raypc preprocess` runs into one
 // directory cannot interleave: flock(2) on DIR/.lock, released when the object is destroyed or
 // the process ends (also when it is killed, so a stale lock never blocks a rerun). The file

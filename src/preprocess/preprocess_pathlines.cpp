@@ -16,7 +16,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <limits>
 #include <map>
 #include <optional>
 #include <utility>
@@ -35,26 +34,6 @@ std::vector<char> missingFlags(const json& stepJson, size_t storedCount)
     for (size_t v = 0; v < storedCount; ++v)
         missing.push_back(stepJson.at("stats").at(v).value("missing_points", size_t(0)) > 0);
     return missing;
-}
-
-// The stored variables' level-0 shell means a step's manifest keeps (writeStep's
-// "level_shell_means": the bits StepVolume::shellMeansOf would compute from the decoded values), so
-// that a volume of the step decodes no variable whole for them (the seed field's anomaly, the
-// shell anomalies sampled at a line's ends); empty when the step has none (made before they were
-// kept, or without computed variables).
-std::vector<std::vector<double>> keptShellMeans(const json& stepJson, const std::vector<std::string>& names,
-                                                size_t storedCount)
-{
-    const auto levels = stepJson.find("level_shell_means");
-    if (levels == stepJson.end() || !levels->is_array() || levels->empty() || !levels->front().is_object())
-        return {};
-    const json& byName = levels->front();
-    std::vector<std::vector<double>> means(storedCount);
-    for (size_t v = 0; v < storedCount; ++v)
-        if (const auto kept = byName.find(names[v]); kept != byName.end())
-            for (const json& m : *kept)
-                means[v].push_back(m.is_null() ? std::numeric_limits<double>::quiet_NaN() : m.get<double>());
-    return means;
 }
 
 }  // namespace
@@ -131,7 +110,7 @@ std::vector<int> pathlineSetsToDo(const fs::path& outDir, int nSteps, const Path
 struct PathlineStream::Step {
     int index;
     std::vector<char> missing;                    // per stored variable (how its arrays are encoded)
-    std::vector<std::vector<double>> shellMeans;  // per stored variable, as kept (keptShellMeans)
+    std::vector<std::vector<double>> shellMeans;  // per stored variable, as kept (readLevelShellMeans)
     std::shared_ptr<const dataset::StepVolume> volume;
 };
 
@@ -156,6 +135,7 @@ PathlineStream::PathlineStream(fs::path outDir, const grid::SphericalGrid& grid,
         const VariableSpec& spec = m_specs[v];
         m_names.push_back(spec.name);
         m_units.push_back(spec.units);
+        m_variables.push_back(dataset::VariableInfo{.name = spec.name, .computed = spec.computed});
         if (spec.computed)
             m_computed.push_back(*spec.computed);
         else
@@ -212,7 +192,13 @@ void PathlineStream::stepReady(int k, const json& stepJson)
         return;
     }
     const dataset::LevelInfo level{m_grid, grid::BrickLayout::forGrid(m_grid, m_options.brickSize)};
-    std::vector<std::vector<double>> shellMeans = keptShellMeans(stepJson, m_names, m_stems.size());
+    // The level-0 shell means the step keeps (writeStep: the bits StepVolume::shellMeansOf would
+    // compute from the decoded values), so that a volume of the step decodes no variable whole for
+    // them (the seed field's anomaly, the shell anomalies sampled at a line's ends).
+    std::vector<std::vector<double>> shellMeans = dataset::readLevelShellMeans(
+        stepJson, (dataset::format::stepDir(m_outDir, k) / dataset::format::kStepManifest).string(), m_variables, 0,
+        dataset::kLevelCount, m_grid.nR());
+    shellMeans.resize(m_stems.size());  // the stored variables'
     auto volume = dataset::StepVolume::open(dataset::format::levelDir(dataset::format::stepDir(m_outDir, k), 0), level,
                                             m_stems, m_options.encoding, {}, missing, m_computed, shellMeans);
     m_window.push_back(std::make_unique<Step>(Step{k, missing, std::move(shellMeans), std::move(volume)}));

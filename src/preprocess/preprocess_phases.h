@@ -101,6 +101,7 @@ private:
     grid::SphericalGrid m_grid;
     std::vector<VariableSpec> m_specs;
     std::vector<std::string> m_names, m_units, m_stems;
+    std::vector<dataset::VariableInfo> m_variables;  // names, and what a computed one is made from
     std::vector<dataset::ShellAnomalyOf> m_computed;
     size_t m_field = 0, m_v[3] = {0, 0, 0};
     std::set<int> m_todo;

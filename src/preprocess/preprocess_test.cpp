@@ -529,8 +529,8 @@ std::vector<std::filesystem::path> synthSeries(const std::filesystem::path& dir,
 }
 
 // The one pass traces each line interval by interval as the steps are written; the lines and their
-// attributes must be those of one trace over steps s..end of the written dataset (what the pathline
-// phase did before, re-reading the steps), to the bit.
+// attributes must be those of one trace over steps s..end of the written dataset's decoded arrays
+// (what the pathline phase did before, re-reading the steps), to the bit.
 TEST(Preprocess, PathlinesOfTheOnePassEqualOneTraceOverTheWrittenSteps)
 {
     TempDir dir("onepass");
@@ -550,11 +550,17 @@ TEST(Preprocess, PathlinesOfTheOnePassEqualOneTraceOverTheWrittenSteps)
     size_t lines = 0;
     for (int s = 0; s < 7; ++s) {
         const int end = std::min(s + 3, 6);
+        // The reference reads every variable from whole decoded arrays; the one pass reads the
+        // velocity point by point where the lines sample it.
         analysis::FieldSeries series;
         series.grid = ds->levels()[0].grid;
+        std::vector<std::shared_ptr<const dataset::StepVolume>> volumes;
         for (int k = s; k <= end; ++k) {
             series.timesMyr.push_back(ds->steps()[size_t(k)].timeMyr);
-            series.volumes.push_back(ds->load(k, 0));
+            const auto& volume = volumes.emplace_back(ds->load(k, 0));
+            auto& fields = series.fields.emplace_back();
+            for (size_t v = 0; v < volume->variableCount(); ++v)
+                fields.push_back(volume->values(v));
         }
         const std::span<const float> values(series.field(0, field), series.grid.cellCount());
         const auto all = analysis::findCriticalPoints(series.grid, values);
@@ -574,6 +580,35 @@ TEST(Preprocess, PathlinesOfTheOnePassEqualOneTraceOverTheWrittenSteps)
         lines += want.lineCount();
     }
     EXPECT_EQ(summary.pathlineCount, lines);
+}
+
+// A rerun traces the sets still to do from the steps an earlier run wrote, with the shell means
+// their manifests keep: a damaged one is one error naming the file and the field, as Dataset::open
+// gives it.
+TEST(Preprocess, ADamagedKeptShellMeanIsOneErrorNamingTheStepManifest)
+{
+    TempDir dir("keptmeans");
+    const auto inputs = synthSeries(dir / "in", 4);
+    PreprocessOptions o = quiet();
+    o.pathlines.steps = 2;
+    preprocess(inputs, dir / "ds", o);
+    const auto manifestPath = dataset::format::stepDir(dir / "ds", 1) / dataset::format::kStepManifest;
+    nlohmann::json step = nlohmann::json::parse(readFile(manifestPath));
+    nlohmann::json& kept = step.at("level_shell_means").at(0);
+    ASSERT_FALSE(kept.empty());
+    const std::string base = kept.begin().key();
+    kept[base][2] = "x";
+    writeFileAtomic(manifestPath, step.dump(1));
+    std::filesystem::remove_all(analysis::pathlineDir(dir / "ds", 0));
+    try {
+        preprocess(inputs, dir / "ds", o);
+        FAIL() << "a damaged shell mean passed";
+    } catch (const Error& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find(manifestPath.string() + ": level_shell_means[0][\"" + base + "\"][2]: \"x\""),
+                  std::string::npos)
+            << what;
+    }
 }
 
 // The pathlines are traced with a window of the newest steps' velocity, read point by point: what
