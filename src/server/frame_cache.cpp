@@ -4,6 +4,20 @@
 
 namespace raypc::server {
 
+int typicalPlaybackLevel(const std::vector<int>& countsByLevel)
+{
+    int total = 0;
+    for (const int n : countsByLevel)
+        total += n;
+    if (total <= 0)
+        return -1;
+    int finer = 0;
+    for (size_t level = 0; level < countsByLevel.size(); ++level)
+        if ((finer += countsByLevel[level]) * 2 >= total)
+            return int(level);
+    return int(countsByLevel.size()) - 1;  // not reached: the counts add up to the total
+}
+
 size_t EncodedFrame::bytes() const
 {
     return jpeg.size() + depth.size() * sizeof(float) + header.dump().size() + sizeof(EncodedFrame);

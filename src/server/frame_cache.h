@@ -28,6 +28,13 @@
 
 namespace raypc::server {
 
+// The level most steps of playback reached, from how many reached each level (countsByLevel[l]):
+// their median, a tie going to the finer level; -1 when there are none. The drafts rendered ahead
+// are one level finer (RenderSession::draftLevel): the finest level reached instead would follow
+// one step that happened to render finer (the first, on a throughput measured on a still) and make
+// every draft too costly to render within a loop.
+int typicalPlaybackLevel(const std::vector<int>& countsByLevel);
+
 // A finished frame as the session sends it, before its per-request fields (id, mode) are set.
 struct EncodedFrame {
     nlohmann::json header;  // the frame header (protocol_schema.cpp) without jpegBytes/depth sizes

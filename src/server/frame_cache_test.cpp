@@ -114,5 +114,19 @@ TEST(FrameCache, DraftsAnswerPlaybackAndGiveWayToFinishedFrames)
     EXPECT_EQ(cache.find("k", 4, 0), finished);
 }
 
+// The drafts' level follows the level most steps of playback reached, not the finest: at 5 steps/s
+// on a full-resolution series the first step rendered at level 1 and the 22 after it at level 2.
+TEST(FrameCache, TypicalPlaybackLevelIsTheMedian)
+{
+    EXPECT_EQ(typicalPlaybackLevel({0, 0, 0}), -1);
+    EXPECT_EQ(typicalPlaybackLevel({}), -1);
+    EXPECT_EQ(typicalPlaybackLevel({0, 1, 22}), 2);
+    EXPECT_EQ(typicalPlaybackLevel({0, 1, 0}), 1);
+    EXPECT_EQ(typicalPlaybackLevel({12, 11, 0}), 0);
+    EXPECT_EQ(typicalPlaybackLevel({1, 0, 1}), 0);  // a tie: the finer
+    EXPECT_EQ(typicalPlaybackLevel({1, 1, 3}), 2);
+    EXPECT_EQ(typicalPlaybackLevel({2, 1, 3}), 1);
+}
+
 }  // namespace
 }  // namespace raypc::server

@@ -311,9 +311,9 @@ std::shared_ptr<const EncodedFrame> RenderSession::renderFinished(StateRenderer&
     return frame;
 }
 
-// The level of a draft rendered ahead while playing: one finer than the session's own steps of
-// playback of this state took at best within their period (a draft has a whole loop's time, shared
-// with those steps), never
+// The level of a draft rendered ahead while playing: one finer than most of the session's own steps
+// of playback of this state took within their period (their median level: a draft has a whole loop's
+// time, shared with those steps), never
 // finer than the still's; before any step of playback, one coarser than the still's. So at 2 steps/s
 // on a full-resolution series (playback at level 1) the drafts are at level 0, at 5 steps/s (level 2)
 // at level 1: a full-size frame of every step within about a loop, which the finished frame replaces.
@@ -455,8 +455,8 @@ void RenderSession::render(const Request& request)
         m_renderAhead = true;
     if (m_renderAhead)
         planAhead(request, frameKey);
-    // A step of playback is answered by a draft too, when the draft is no coarser than the finest level
-    // this state's own steps of playback reached (a draft made before the first step knew it is at a
+    // A step of playback is answered by a draft too, when the draft is no coarser than the level most
+    // of this state's own steps of playback reached (a draft made before the first step knew it is at a
     // guessed level, which may be coarser than what the step renders in its time); a still or
     // interactive state only by a finished frame.
     const int played = m_playbackKey == frameKey ? m_playbackLevel.load() : -1;
@@ -503,9 +503,12 @@ void RenderSession::render(const Request& request)
     if (frameKey != m_playbackKey) {
         m_playbackKey = frameKey;
         m_playbackLevel = -1;
+        m_playbackLevelCounts.assign(dataset.levels().size(), 0);
     }
-    if (request.mode == FrameMode::playback && (m_playbackLevel < 0 || level < m_playbackLevel))
-        m_playbackLevel = level;
+    if (request.mode == FrameMode::playback && size_t(level) < m_playbackLevelCounts.size()) {
+        ++m_playbackLevelCounts[size_t(level)];
+        m_playbackLevel = typicalPlaybackLevel(m_playbackLevelCounts);
+    }
 
     // Playback (step = previous step + 1): load the next step in the background at this level.
     if (m_lastStep >= 0 && step == m_lastStep + 1 && step + 1 < int(dataset.steps().size())) {

@@ -188,8 +188,11 @@ private:
     bool m_aheadChanged = false;
     std::atomic<bool> m_aheadStop{false};
     std::atomic<bool> m_aheadBusy{false};  // the ahead thread has steps to render
-    std::atomic<int> m_playbackLevel{-1};   // the finest level of a step of playback rendered here
-    std::string m_playbackKey;              // ... of this frame key (session thread only)
+    // The level most steps of playback of this frame key rendered here reached
+    // (typicalPlaybackLevel), -1 before any; and how many reached each level (session thread only).
+    std::atomic<int> m_playbackLevel{-1};
+    std::vector<int> m_playbackLevelCounts;
+    std::string m_playbackKey;  // session thread only
     std::atomic<bool> m_aheadCancel{false};
     render::StateRenderer m_aheadRenderer;
     std::thread m_aheadThread;
