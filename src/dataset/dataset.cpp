@@ -673,6 +673,19 @@ const grid::NodeGradient& StepVolume::nodeGradient(size_t var) const
     return it->second;
 }
 
+size_t StepVolume::dropGradients() const
+{
+    std::map<size_t, grid::NodeGradient> dropped;
+    {
+        std::lock_guard lock(m_derivedMutex);
+        dropped.swap(m_gradients);
+    }
+    size_t bytes = 0;
+    for (const auto& [var, g] : dropped)
+        bytes += 3 * g.count * sizeof(float);
+    return bytes;  // given back as `dropped` goes
+}
+
 namespace {
 
 using nlohmann::json;

@@ -210,6 +210,11 @@ public:
     // nodeGradient (grid/grid.h) of variable `var`: computed from the values on first use and kept
     // with the volume (the ray caster's shading interpolates it). Thread-safe.
     const grid::NodeGradient& nodeGradient(size_t var) const;
+    // Drops the shading gradients computed so far, their memory given back (core/spare_blocks.h: the
+    // next step's gradient takes it already faulted in); returns their bytes. A later nodeGradient
+    // computes it again. Only for a volume no one else holds: a renderer keeps pointers into its
+    // gradient. Thread-safe.
+    size_t dropGradients() const;
 
     // The largest error of value (iLat, iR, iLon) of variable `var` against the exact value: 0 for
     // float32, for u16 uint16ErrorBound of the brick that owns the point (value_encoding.h; without

@@ -53,6 +53,22 @@ TEST(StepCache, HitsDoNotReload)
     EXPECT_EQ(*loader.calls, 2);
 }
 
+// A new step takes the shading gradient's memory of a step that only the cache holds; a step a
+// renderer holds keeps its gradient (the renderer reads it through pointers).
+TEST(StepCache, ANewStepDropsTheGradientsOfStepsNoOneHolds)
+{
+    CountingLoader loader;
+    StepCache cache(loader, size_t(1) << 30, 8);
+    const size_t gradientBytes = 3 * cache.get(0, 0)->grid().cellCount() * sizeof(float);
+    cache.get(0, 0)->nodeGradient(0);  // shown, then let go
+    const auto held = cache.get(1, 0);
+    held->nodeGradient(0);
+    cache.get(2, 0);
+    EXPECT_EQ(cache.get(0, 0)->dropGradients(), 0u) << "step 0's gradient stayed though no one held it";
+    EXPECT_EQ(held->dropGradients(), gradientBytes) << "step 1's gradient went while held";
+    EXPECT_EQ(*loader.calls, 3);
+}
+
 TEST(StepCache, BoundedByEntriesWhilePlayingManySteps)
 {
     CountingLoader loader;
