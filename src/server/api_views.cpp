@@ -204,17 +204,35 @@ std::optional<size_t> variableIfAny(const dataset::Dataset& dataset, const std::
 }
 
 // The steps' features through the series: what each step has, its flux across the shells at
-// `fluxDepths` (with a radial velocity and depths) and the features followed through the steps.
+// the depths of featureBlockOptions and the features followed through the steps.
 struct FeatureSteps {
     json steps = json::array();
     std::vector<std::vector<analysis::ShellFlux>> fluxes;  // [step][depth]
     analysis::FeatureSeries series;
 };
 
-// A features request's filters, options and what each step adds (links, flux) as a job for the
-// other ranks of a distributed server, and back (the numbers exact: JSON round-trips doubles).
-json featureJob(std::span<const analysis::RangeFilter> filters, const analysis::FeatureOptions& options, int level,
-                const analysis::FeatureBlockOptions& block)
+// What each step of a features request at `level` adds besides its features, from the dataset (so
+// the same on every rank): the links from the previous step's (throws raypc::Error without a
+// velocity), and the flux across the shells at the options' depths inside the grid, with the radial
+// velocity (and the density, for the mass flux) where the dataset has them.
+analysis::FeatureBlockOptions featureBlockOptions(const dataset::Dataset& dataset, const analysis::FeatureOptions& options,
+                                                  int level)
+{
+    analysis::FeatureBlockOptions block;
+    block.velocity = analysis::velocityVariables(dataset, "features");
+    block.radialVelocity = variableIfAny(dataset, varname::kRadialVelocity);
+    block.density = variableIfAny(dataset, analysis::kDensityVariable);
+    const grid::SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
+    for (const double d : options.bandDepthsKm)
+        if (analysis::shellInsideGrid(grid, d))
+            block.fluxDepthsKm.push_back(d);
+    return block;
+}
+
+// A features request's filters, options and level as a job for the other ranks of a distributed
+// server, and back (the numbers exact: JSON round-trips doubles); each rank finds the rest from the
+// dataset (featureBlockOptions).
+json featureJob(std::span<const analysis::RangeFilter> filters, const analysis::FeatureOptions& options, int level)
 {
     json jsonFilters = json::array();
     for (const analysis::RangeFilter& f : filters) {
@@ -225,16 +243,11 @@ json featureJob(std::span<const analysis::RangeFilter> filters, const analysis::
                                {"coordinate", f.coordinate ? json(int(*f.coordinate)) : json(nullptr)},
                                {"ranges", std::move(ranges)}});
     }
-    const auto optional = [](std::optional<size_t> i) { return i ? json(*i) : json(nullptr); };
     return {{"filters", std::move(jsonFilters)},
             {"minVolumeKm3", options.minVolumeKm3},
             {"bandDepthsKm", options.bandDepthsKm},
             {"bandHalfWidthKm", options.bandHalfWidthKm},
-            {"level", level},
-            {"velocity", block.velocity ? json::array({block.velocity->x, block.velocity->y, block.velocity->z}) : json(nullptr)},
-            {"radialVelocity", optional(block.radialVelocity)},
-            {"density", optional(block.density)},
-            {"fluxDepthsKm", block.fluxDepthsKm}};
+            {"level", level}};
 }
 
 struct FeatureJob {
@@ -259,12 +272,6 @@ FeatureJob parseFeatureJob(const json& job)
     out.options.bandDepthsKm = job.at("bandDepthsKm").get<std::vector<double>>();
     out.options.bandHalfWidthKm = job.at("bandHalfWidthKm").get<double>();
     out.level = job.at("level").get<int>();
-    if (const json& v = job.at("velocity"); !v.is_null())
-        out.block.velocity = analysis::VelocityVariables{v.at(0).get<size_t>(), v.at(1).get<size_t>(), v.at(2).get<size_t>()};
-    const auto optional = [](const json& i) { return i.is_null() ? std::nullopt : std::optional<size_t>(i.get<size_t>()); };
-    out.block.radialVelocity = optional(job.at("radialVelocity"));
-    out.block.density = optional(job.at("density"));
-    out.block.fluxDepthsKm = job.at("fluxDepthsKm").get<std::vector<double>>();
     return out;
 }
 
@@ -280,24 +287,19 @@ std::optional<int> featureBlock(const dataset::Dataset& dataset, StepCache& cach
 
 FeatureSteps featureSteps(const dataset::Dataset& dataset, StepCache& cache, std::span<const analysis::RangeFilter> filters,
                           const analysis::FeatureOptions& options, double minOverlapShare, int level,
-                          std::optional<size_t> radialVelocity, std::optional<size_t> density,
-                          std::span<const double> fluxDepths, const std::atomic<bool>* cancel,
+                          const analysis::FeatureBlockOptions& block, const std::atomic<bool>* cancel,
                           const std::function<void(int done, int total)>& progress,
                           const std::function<void(int step, const HugePageVector<int32_t>&)>& labels,
                           const FeatureRanks* ranks)
 {
     const int nSteps = int(dataset.steps().size());
     FeatureSteps out{json::array(), {}, analysis::FeatureSeries(dataset, minOverlapShare, "features")};
-    FeatureJob job{{filters.begin(), filters.end()}, options, level, {}};
-    job.block.velocity = out.series.velocity();
-    job.block.radialVelocity = radialVelocity;
-    job.block.density = density;
-    job.block.fluxDepthsKm.assign(fluxDepths.begin(), fluxDepths.end());
+    const FeatureJob job{{filters.begin(), filters.end()}, options, level, block};
     const auto add = [&](const analysis::FeatureBlockStep& s) {
         out.steps.push_back({{"step", s.step},
                              {"timeMyr", dataset.steps()[size_t(s.step)].timeMyr},
                              {"features", s.features.features.size()}});
-        if (radialVelocity && !fluxDepths.empty())
+        if (block.radialVelocity && !block.fluxDepthsKm.empty())
             out.fluxes.push_back(s.fluxes);
         out.series.addLinked(s.step, s.features, s.links);
     };
@@ -307,7 +309,7 @@ FeatureSteps featureSteps(const dataset::Dataset& dataset, StepCache& cache, std
     const mpi::Block mine = mpi::blockOf(nSteps, 0, nRanks);
     std::shared_future<std::vector<std::string>> others;
     if (nRanks > 1)
-        others = ranks->shareOut(featureJob(filters, options, level, job.block));
+        others = ranks->shareOut(featureJob(filters, options, level));
     // The ranks' job reads `cancel` until they have all answered: however this block ends, wait.
     struct WaitForOthers {
         const std::shared_future<std::vector<std::string>>& others;
@@ -442,8 +444,9 @@ json fluxJson(const dataset::Dataset& dataset, const std::vector<std::vector<ana
 std::string featureBlockOfJob(const dataset::Dataset& dataset, StepCache& cache, const nlohmann::json& text, int rank,
                               int ranks, const std::atomic<bool>* cancel)
 {
-    const FeatureJob job = parseFeatureJob(text);
+    FeatureJob job = parseFeatureJob(text);
     dataset.checkLevel(job.level);
+    job.block = featureBlockOptions(dataset, job.options, job.level);
     const mpi::Block block = mpi::blockOf(int64_t(dataset.steps().size()), rank, ranks);
     std::string packed;
     const auto stopped = featureBlock(dataset, cache, job, int(block.begin), int(block.end) - 1,
@@ -467,16 +470,12 @@ json featureSeriesJson(const dataset::Dataset& dataset, StepCache& cache, std::s
     if (!(sigmas >= 0))
         fail("sigmas: {} is negative", sigmas);
     const int nSteps = int(dataset.steps().size());
-    const std::optional<size_t> radialVelocity = variableIfAny(dataset, varname::kRadialVelocity);
-    const std::optional<size_t> density = variableIfAny(dataset, analysis::kDensityVariable);
-    const grid::SphericalGrid& grid = dataset.levels()[size_t(level)].grid;
-    std::vector<double> fluxDepths;  // the options' depths inside the grid's shell
-    for (const double d : options.bandDepthsKm)
-        if (analysis::shellInsideGrid(grid, d))
-            fluxDepths.push_back(d);
+    const analysis::FeatureBlockOptions block = featureBlockOptions(dataset, options, level);
+    const std::optional<size_t> radialVelocity = block.radialVelocity, density = block.density;
+    const std::vector<double>& fluxDepths = block.fluxDepthsKm;
 
-    FeatureSteps run = featureSteps(dataset, cache, filters, options, minOverlapShare, level, radialVelocity, density,
-                                    fluxDepths, cancel, progress, labels, ranks);
+    FeatureSteps run = featureSteps(dataset, cache, filters, options, minOverlapShare, level, block, cancel, progress,
+                                    labels, ranks);
     const auto& fluxes = run.fluxes;
     // The tables of `raypc features --tracks/--events/--stalls` and `raypc flux`, written by the same
     // code (analysis/feature_csv.h), for the UI's CSV buttons.

@@ -226,7 +226,8 @@ void RankPool::takeJobAnswers()
                         fail("rank {}: {}", r, header["error"].get<std::string>());
                     if (header.value("cancelled", false))
                         fail("cancelled (the client went away or the server is stopping)");
-                    results.push_back(answer.substr(eol + 1));
+                    answer.erase(0, eol + 1);  // the packed steps, without copying them
+                    results.push_back(std::move(answer));
                 }
                 job.task->answers.set_value(std::move(results));
             } catch (...) {
