@@ -175,14 +175,17 @@ double preparePreview(const SeriesInputs& inputs, preprocess::PreprocessOptions 
     return secondsSince(start);
 }
 
-void prepareSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions& options)
+preprocess::PreprocessSummary prepareSeries(const SeriesInputs& inputs, preprocess::PreprocessOptions options)
 {
+    options.stepsFrom = inputs.previewDir();  // step 0, where a preview of it was made: not made twice
+    preprocess::PreprocessSummary summary;
     leavingNothingOnFailure(inputs.dataset, [&] {
         checkWritable(inputs.dataset);
-        preprocess::preprocess(inputs.files, inputs.dataset, options);
+        summary = preprocess::preprocess(inputs.files, inputs.dataset, options);
     });
     std::error_code ec;
     fs::remove_all(inputs.previewDir(), ec);
+    return summary;
 }
 
 void SeriesFlags::add(CLI::App& cmd, const std::string& inputsHelp)

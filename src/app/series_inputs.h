@@ -43,12 +43,13 @@ bool datasetOfFiles(const std::filesystem::path& dir, const std::vector<std::fil
 // Throws raypc::Error like prepareSeries.
 double preparePreview(const SeriesInputs& inputs, preprocess::PreprocessOptions options);
 
-// Preprocesses what is missing of the series into inputs.dataset (progress as `options` say), then
-// removes the preview. Throws raypc::Error like preprocess(), and naming the directory and --dataset
+// Preprocesses what is missing of the series into inputs.dataset (progress as `options` say), taking
+// step 0 from the preview where one was made with the same settings, then removes the preview. Returns
+// what the run did. Throws raypc::Error like preprocess(), and naming the directory and --dataset
 // when it cannot be written. A run that fails before finishing a step leaves nothing: besides what
 // preprocess() removes itself, the dataset directory (and its parents) go if this run created them
 // (preparePreview too).
-void prepareSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions& options);
+preprocess::PreprocessSummary prepareSeries(const SeriesInputs& inputs, preprocess::PreprocessOptions options);
 
 // What serve and render take on the command line: INPUT… (a dataset or netCDF files), --dataset and
 // the preprocessing options of `raypc preprocess` (an option group).

@@ -14,9 +14,6 @@
 
 #include <tbb/task_arena.h>
 
-#include <sys/resource.h>
-#include <unistd.h>
-
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -170,15 +167,6 @@ void serveOnRanks(server::ServerOptions options, const std::function<void(const 
         fail("{}", broken);
 }
 
-// The background thread's share of the machine: every core, in a task arena of low priority (oneTBB
-// gives its threads to the renderer's arena first whenever that has work), the thread itself (and the
-// thread it starts to read ahead) at a lower priority than the renderer's (nice 10, Linux's
-// per-thread priority).
-void yieldToRendering()
-{
-    ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
-}
-
 // Test hook (docs/protocol.md, GET /api/progress): with RAYPC_TEST_HOLD_SERIES=FILE set, the
 // background run starts only once FILE exists, so that a test sees the first step served alone.
 void holdForTest(const std::atomic<bool>& cancel)
@@ -240,12 +228,16 @@ void serveSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions
     std::atomic<bool> cancel{false};
     std::mutex serverMutex;  // srv: stopped from the background thread once the series is ready
     bool switching = false;
+    // The background thread's share of the machine: every core, in a task arena of low priority
+    // (oneTBB gives its threads to the renderer's arena first whenever that has work), the thread
+    // itself at a lower priority than the renderer's (nice 10) once it has started the thread that
+    // reads the steps ahead, which keeps the renderer's: reading is the series' critical path.
     std::thread background([&] {
-        yieldToRendering();
         holdForTest(cancel);
         preprocess::PreprocessOptions o = preprocessOptions;
         o.quiet = true;
         o.cancel = &cancel;
+        o.niceIncrement = 10;
         int loggedTenth = -1;
         o.onProgress = [&](const preprocess::PreprocessProgress& p) {
             progress->update(p);
@@ -256,7 +248,8 @@ void serveSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions
         };
         try {
             tbb::task_arena(tbb::task_arena::automatic, 1, tbb::task_arena::priority::low).execute([&] {
-                prepareSeries(inputs, o);
+                if (prepareSeries(inputs, o).stepsTaken > 0)
+                    spdlog::info("background preprocessing took step 0 from the preview rather than making it again");
             });
         } catch (const std::exception& e) {
             if (!cancel) {

@@ -21,7 +21,9 @@
 #include <tbb/parallel_for_each.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <exception>
 #include <fstream>
@@ -29,9 +31,14 @@
 #include <future>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <set>
 #include <optional>
+#include <thread>
 #include <utility>
+
+#include <sys/resource.h>
+#include <unistd.h>
 
 namespace raypc::preprocess {
 namespace {
@@ -283,6 +290,26 @@ RunPlan planRun(StepSource& source, PreprocessOptions& options)
     return plan;
 }
 
+// The first setting that shapes a step's bytes (of those in a manifest) which `old` (a manifest read
+// from disk, maybe finished) holds differently from `now` (this run's); empty when none does. A
+// finished manifest adds global statistics and the computed variables: not settings.
+std::string differingStepSetting(json old, const json& now)
+{
+    if (old.contains("variables") && old["variables"].is_array()) {
+        json stored = json::array();
+        for (auto& v : old["variables"])
+            if (v.is_object() && v.value("stored", true)) {
+                v.erase("global");
+                stored.push_back(v);
+            }
+        old["variables"] = stored;
+    }
+    for (const char* key : {"difference", "format", "version", "encoding", "levels", "variables", "brick_size", "sample"})
+        if (old.value(key, json()) != now.value(key, json()))
+            return key;
+    return {};
+}
+
 // Phase 2: the output directory, locked for this run, checked for resuming, cleared of a killed
 // run's leftovers, with the "incomplete" manifest written. Until keep() a fresh run that fails
 // leaves nothing: what it created goes (docs/format.md, "What a failed run leaves").
@@ -319,22 +346,13 @@ private:
         } catch (const Error& e) {
             fail("{} (it exists already); remove the directory to start over", e.what());
         }
-        // A finished manifest adds global statistics and the computed variables: not settings.
-        if (old.contains("variables") && old["variables"].is_array()) {
-            json stored = json::array();
-            for (auto& v : old["variables"])
-                if (v.is_object() && v.value("stored", true)) {
-                    v.erase("global");
-                    stored.push_back(v);
-                }
-            old["variables"] = stored;
-        }
-        for (const char* key : {"difference", "format", "version", "encoding", "levels", "variables", "dt_myr",
-                                "brick_size", "sample"})
-            if (old.value(key, json()) != j.value(key, json()))
-                fail("{}: holds a dataset made with a different '{}' (other inputs or options); "
-                     "use another output directory or remove it",
-                     m_dir.string(), key);
+        std::string key = differingStepSetting(old, j);
+        if (key.empty() && old.value("dt_myr", json()) != j.value("dt_myr", json()))
+            key = "dt_myr";  // the steps' times: a resumed run's and the finished steps' must agree
+        if (!key.empty())
+            fail("{}: holds a dataset made with a different '{}' (other inputs or options); "
+                 "use another output directory or remove it",
+                 m_dir.string(), key);
         const auto oldInputs = old.value("inputs", json::array());
         for (size_t i = 0; i < std::min(oldInputs.size(), j["inputs"].size()); ++i)
             if (oldInputs[i] != j["inputs"][i] && fs::exists(dataset::format::stepDir(m_dir, static_cast<int>(i))))
@@ -414,13 +432,81 @@ json phases::filesFingerprint(const std::vector<fs::path>& sourceFiles)
 
 namespace {
 
-// Phase 4: the steps an earlier run finished (their step.json, kept) and the ones to do (a step
-// directory without step.json is removed, and so is a finished step whose input files changed
-// since that run: their size or modification time differs from its inputs.json).
-std::vector<int> findStepsToDo(const OutputDirectory& out, const StepSource& source,
-                               std::vector<json>& stepJsons, PreprocessSummary& summary)
+// The finished steps of another dataset (PreprocessOptions::stepsFrom) that this run may take
+// instead of making them again: those made with the same step settings (differingStepSetting) from
+// the same input files, unchanged since (their inputs.json), at the same time and with the same
+// source. give() hard-links the step's files into a temporary directory and renames it into place,
+// so that the donor keeps its own (a server may be reading them); it leaves nothing when it cannot
+// (the donor has no such step, or is on another file system) and the run makes the step.
+class StepDonor {
+public:
+    StepDonor(const fs::path& dir, const json& manifest) : m_dir(dir)
+    {
+        if (dir.empty())
+            return;
+        try {
+            const json theirs = parseJsonInput(readFile(dir / dataset::format::kManifest), dir.string());
+            const std::string key = differingStepSetting(theirs, manifest);
+            if (!key.empty()) {
+                spdlog::debug("{}: its steps were made with another '{}'; making them again", dir.string(), key);
+                return;
+            }
+            m_usable = true;
+        } catch (const Error& e) {
+            spdlog::debug("{}: not taking its steps: {}", dir.string(), e.what());
+        }
+    }
+
+    bool give(const fs::path& outDir, const StepSource& source, const PreprocessOptions& options, int s) const
+    {
+        if (!m_usable)
+            return false;
+        const fs::path from = dataset::format::stepDir(m_dir, s);
+        const fs::path to = dataset::format::stepDir(outDir, s);
+        const fs::path tmp = temporarySibling(to);
+        try {
+            const json inputs = parseJsonInput(readFile(from / dataset::format::kStepInputs), from.string());
+            const json step = parseJsonInput(readFile(from / dataset::format::kStepManifest), from.string());
+            if (inputs != source.fingerprint(size_t(s)) || step.value("source", json()) != source.label(size_t(s)) ||
+                step.value("time_myr", json()) != json(stepTimeMyr(options, s)))
+                return false;
+            fs::create_directories(tmp);
+            for (const auto& entry : fs::recursive_directory_iterator(from)) {
+                const fs::path target = tmp / fs::relative(entry.path(), from);
+                if (entry.is_directory())
+                    fs::create_directory(target);
+                else if (entry.is_regular_file())
+                    fs::create_hard_link(entry.path(), target);
+                else
+                    fail("{}: neither a file nor a directory", entry.path().string());
+            }
+            renameAtomic(tmp, to);
+        } catch (const std::exception& e) {  // raypc::Error or fs::filesystem_error: the run makes the step
+            std::error_code ec;
+            fs::remove_all(tmp, ec);
+            spdlog::debug("{}: making step {} again rather than taking it from {}: {}", outDir.string(), s,
+                          m_dir.string(), e.what());
+            return false;
+        }
+        spdlog::debug("{}: step {} taken from {}", outDir.string(), s, m_dir.string());
+        return true;
+    }
+
+private:
+    fs::path m_dir;
+    bool m_usable = false;
+};
+
+// Phase 4: the steps an earlier run finished (their step.json, kept), those taken from
+// options.stepsFrom (StepDonor), and the ones to do (a step directory without step.json is removed,
+// and so is a finished step whose input files changed since that run: their size or modification
+// time differs from its inputs.json).
+std::vector<int> findStepsToDo(const OutputDirectory& out, const StepSource& source, const RunPlan& plan,
+                               const PreprocessOptions& options, std::vector<json>& stepJsons,
+                               PreprocessSummary& summary)
 {
     std::vector<int> todo;
+    const StepDonor donor(options.stepsFrom, plan.manifest);
     for (size_t s = 0; s < source.stepCount(); ++s) {
         const fs::path stepPath = dataset::format::stepDir(out.path(), static_cast<int>(s));
         const fs::path fingerprint = stepPath / dataset::format::kStepInputs;
@@ -431,13 +517,17 @@ std::vector<int> findStepsToDo(const OutputDirectory& out, const StepSource& sou
                          source.path(s), s);
             fs::remove_all(stepPath);
         }
+        if (!fs::exists(stepPath / dataset::format::kStepManifest)) {
+            if (fs::exists(stepPath))
+                fs::remove_all(stepPath);
+            if (donor.give(out.path(), source, options, static_cast<int>(s)))
+                ++summary.stepsTaken;
+        }
         if (fs::exists(stepPath / dataset::format::kStepManifest)) {
             stepJsons[s] = parseJsonInput(readFile(stepPath / dataset::format::kStepManifest),
                                           (stepPath / dataset::format::kStepManifest).string());
             ++summary.stepsSkipped;
         } else {
-            if (fs::exists(stepPath))
-                fs::remove_all(stepPath);
             todo.push_back(static_cast<int>(s));
         }
     }
@@ -517,46 +607,95 @@ ReadStep readStep(const RunPlan& plan, const StepSource& source, int s)
 // tracing its pathlines keeps the other cores busy. Holds at most one step read and not yet taken.
 // take(i) must be called for i = 0, 1, … in order, and readNext() after each take() to start
 // reading step i + 1 (when the caller has room for it in memory); a read's failure is thrown by the
-// take() of its step, after every step before it was taken, as a serial run would. The destructor
-// waits for a read under way (a run that fails or is cancelled leaves no thread behind).
+// take() of its step, after every step before it was taken, as a serial run would. One thread reads
+// every step, started here: it keeps the priority of the thread that made this object, whatever that
+// thread's priority later becomes (PreprocessOptions::niceIncrement). The destructor waits for a read
+// under way (a run that fails or is cancelled leaves no thread behind).
 class StepsReadAhead {
 public:
     StepsReadAhead(const RunPlan& plan, const StepSource& source, std::vector<int> order, const PreprocessOptions& options)
-        : m_plan(plan), m_source(source), m_order(std::move(order)), m_options(options)
+        : m_plan(plan), m_source(source), m_order(std::move(order)), m_options(options), m_reads(m_order.size())
     {
-        start(0);
+        for (auto& read : m_reads)
+            m_taken.push_back(read.get_future());
+        m_thread = std::thread([this] { readInOrder(); });
     }
+    ~StepsReadAhead()
+    {
+        {
+            std::lock_guard lock(m_mutex);
+            m_stopping = true;
+        }
+        m_wake.notify_one();
+        m_thread.join();
+    }
+    StepsReadAhead(const StepsReadAhead&) = delete;
+    StepsReadAhead& operator=(const StepsReadAhead&) = delete;
 
     ReadStep take(size_t i)
     {
         RAYPC_CHECK_EQ(i, m_next);
         ++m_next;
         const auto start = std::chrono::steady_clock::now();
-        ReadStep step = m_pending.get();
+        ReadStep step = m_taken[i].get();
         spdlog::debug("{}: waited {:.2f} s for its reading", m_source.label(size_t(step.index)), secondsSince(start));
         return step;
     }
 
-    void readNext() { start(m_next); }
+    void readNext()
+    {
+        {
+            std::lock_guard lock(m_mutex);
+            m_allowed = m_next + 1;
+        }
+        m_wake.notify_one();
+    }
 
 private:
-    void start(size_t i)
+    void readInOrder()
     {
-        if (i >= m_order.size())
-            return;
-        m_pending = std::async(std::launch::async, [this, s = m_order[i]] {
-            phases::throwIfCancelled(m_options);
-            return readStep(m_plan, m_source, s);
-        });
+        for (size_t i = 0; i < m_order.size(); ++i) {
+            {
+                std::unique_lock lock(m_mutex);
+                m_wake.wait(lock, [&] { return m_stopping || m_allowed > i; });
+                if (m_stopping)
+                    return;
+            }
+            try {
+                phases::throwIfCancelled(m_options);
+                m_reads[i].set_value(readStep(m_plan, m_source, m_order[i]));
+            } catch (...) {
+                m_reads[i].set_exception(std::current_exception());
+                return;  // the steps after a failed one are never taken
+            }
+        }
     }
 
     const RunPlan& m_plan;
     const StepSource& m_source;
     std::vector<int> m_order;
     const PreprocessOptions& m_options;
-    size_t m_next = 0;
-    std::future<ReadStep> m_pending;  // the next step's read; its destructor waits for it
+    std::vector<std::promise<ReadStep>> m_reads;  // set by the reading thread, in order
+    std::vector<std::future<ReadStep>> m_taken;   // m_reads' futures
+    size_t m_next = 0;                            // the next take(); the caller's thread only
+    std::mutex m_mutex;                           // guards m_allowed and m_stopping
+    std::condition_variable m_wake;
+    size_t m_allowed = 1;  // steps the reading thread may read: m_order[0, m_allowed)
+    bool m_stopping = false;
+    std::thread m_thread;  // last: started once the members above exist
 };
+
+// The calling thread's nice value raised by `increment` (Linux's per-thread priority; an
+// unprivileged thread cannot lower it again), at most to 19. 0: unchanged.
+void lowerThreadPriority(int increment)
+{
+    if (increment <= 0)
+        return;
+    errno = 0;
+    const int nice = ::getpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()));
+    if (errno == 0)
+        ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), std::min(nice + increment, 19));
+}
 
 // Phase 5, writing one step: statistics and sample values at full resolution, then level by level
 // values and brick bounds of every variable, written into a temporary directory renamed when whole
@@ -769,7 +908,7 @@ PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const P
     std::vector<int> todo;
     mpi::together([&] {
         if (mpi::isRoot())
-            todo = findStepsToDo(*out, source, stepJsons, summary);
+            todo = findStepsToDo(*out, source, plan, options, stepJsons, summary);
     });
     if (mpi::distributed()) {
         // Rank 0 found what an earlier run left; every rank needs the list and the finished steps.
@@ -780,8 +919,9 @@ PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const P
         stepJsons = found.at("steps").get<std::vector<json>>();
     }
     if (summary.stepsSkipped > 0 && !options.quiet && mpi::isRoot())
-        spdlog::info("{}: {} of {} steps already done by an earlier run, skipping them", outDir.string(),
-                     summary.stepsSkipped, source.stepCount());
+        spdlog::info("{}: {} of {} steps already done by an earlier run{}, skipping them", outDir.string(),
+                     summary.stepsSkipped, source.stepCount(),
+                     summary.stepsTaken > 0 ? fmt::format(" or in {}", options.stepsFrom.string()) : "");
     std::optional<Progress> progress;
     if (!options.quiet && !todo.empty() && mpi::isRoot())
         progress.emplace("preprocess", static_cast<int64_t>(todo.size()), "steps");
@@ -803,6 +943,7 @@ PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const P
         std::optional<StepsReadAhead> ahead;
         if (!mpi::distributed() && options.readAhead)
             ahead.emplace(plan, source, todo, options);
+        lowerThreadPriority(options.niceIncrement);
         mpi::forEachDynamic(
             int64_t(todo.size()),
             [&](int64_t item) {

@@ -69,12 +69,24 @@ struct PreprocessOptions {
     // finished stays, as after any failure: a rerun resumes).
     std::function<void(const PreprocessProgress&)> onProgress;
     const std::atomic<bool>* cancel = nullptr;
+    // A dataset whose finished steps this run takes (hard links, the donor keeps its own) instead of
+    // making them again, where they were made with the same settings from the same unchanged input
+    // files at the same times: the one-step preview `raypc serve FILES` shows while the series is
+    // made (app/series_inputs.h). Empty: none. A step it cannot take is made as usual.
+    std::filesystem::path stepsFrom;
+    // For a run beside an interactive user (`raypc serve FILES`): once its reading thread is started,
+    // the calling thread (which works on the steps with oneTBB's threads) lowers its priority by this
+    // nice increment for good (Linux's per-thread priority, which an unprivileged thread cannot raise
+    // again). The reading thread keeps the caller's priority: reading a step is one thread's work on
+    // the run's critical path. 0: unchanged.
+    int niceIncrement = 0;
 };
 
 
 struct PreprocessSummary {
     int stepsWritten = 0;
-    int stepsSkipped = 0;  // already finished by an earlier run
+    int stepsSkipped = 0;  // already finished by an earlier run, or taken from PreprocessOptions::stepsFrom
+    int stepsTaken = 0;    // of stepsSkipped: taken from PreprocessOptions::stepsFrom
     int pathlineSetsWritten = 0;
     int pathlineSetsSkipped = 0;  // finished by an earlier run with the same settings
     size_t pathlineCount = 0;     // lines in the sets written by this run

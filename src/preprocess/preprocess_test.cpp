@@ -6,22 +6,27 @@
 #include "dataset/dataset_format.h"
 #include "analysis/pathline_storage.h"
 #include "analysis/persistence.h"
+#include "io/series_input.h"
 #include "synth/synth.h"
 #include "grid/test_util.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
+#include <sys/resource.h>
 #include <unistd.h>
 #include <nlohmann/json.hpp>
 
 #include <atomic>
 #include <bit>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <numbers>
 #include <random>
+#include <thread>
 
 namespace raypc::preprocess {
 namespace {
@@ -691,6 +696,116 @@ TEST(Preprocess, ReadingAheadWritesTheBytesOfOneStepAtATime)
     EXPECT_EQ(stepDirs, (std::vector<std::string>{"0000", "0001", "0002"}));
     for (int s = 0; s < 3; ++s)
         EXPECT_TRUE(std::filesystem::exists(dataset::format::stepDir(dir / "failed", s) / dataset::format::kStepManifest));
+}
+
+// `raypc serve FILES` shows a preview of step 0 while the series is made: the series takes that
+// step (hard links) instead of making it again, and is byte for byte the series made without it.
+// A preview made with other settings, or from a file changed since, gives nothing.
+TEST(Preprocess, TakesTheStepsOfAnotherDatasetMadeWithTheSameSettingsFromTheSameFiles)
+{
+    TempDir dir("donor");
+    const auto inputs = synthSeries(dir / "in", 4);
+    PreprocessOptions o = quiet();
+    o.pathlines.steps = 2;
+    preprocess(inputs, dir / "made", o);
+
+    PreprocessOptions preview = quiet();
+    preview.pathlines.enabled = false;
+    preprocess({inputs.front()}, dir / "preview", preview);
+    PreprocessOptions taking = o;
+    taking.stepsFrom = dir / "preview";
+    auto summary = preprocess(inputs, dir / "taken", taking);
+    EXPECT_EQ(summary.stepsTaken, 1);
+    EXPECT_EQ(summary.stepsSkipped, 1);
+    EXPECT_EQ(summary.stepsWritten, 3);
+    EXPECT_EQ(summary.pathlineSetsWritten, 4);
+    const auto made = filesUnder(dir / "made"), taken = filesUnder(dir / "taken");
+    ASSERT_EQ(made.size(), taken.size());
+    for (const auto& [path, bytes] : made) {
+        ASSERT_TRUE(taken.contains(path)) << path;
+        EXPECT_TRUE(taken.at(path) == bytes) << path << " differs";
+    }
+    // Linked, not copied: the preview keeps its own names to the same files.
+    const auto sample = [&](const std::filesystem::path& ds) {
+        return dataset::format::stepDir(ds, 0) / dataset::format::kStepSample;
+    };
+    EXPECT_EQ(std::filesystem::hard_link_count(sample(dir / "taken")), 2u);
+    EXPECT_TRUE(std::filesystem::equivalent(sample(dir / "taken"), sample(dir / "preview")));
+    EXPECT_TRUE(std::filesystem::exists(dataset::format::stepDir(dir / "preview", 0) / dataset::format::kStepManifest));
+
+    // Another brick size: the preview's step is not this dataset's.
+    PreprocessOptions bricks = taking;
+    bricks.brickSize = 4;
+    summary = preprocess(inputs, dir / "bricks", bricks);
+    EXPECT_EQ(summary.stepsTaken, 0);
+    EXPECT_EQ(summary.stepsWritten, 4);
+
+    // The first file changed since the preview was made (its modification time): made again.
+    std::filesystem::last_write_time(inputs.front(),
+                                     std::filesystem::last_write_time(inputs.front()) + std::chrono::seconds(5));
+    summary = preprocess(inputs, dir / "changed", taking);
+    EXPECT_EQ(summary.stepsTaken, 0);
+    EXPECT_EQ(summary.stepsWritten, 4);
+}
+
+// netCDF files as a StepSource that records which thread read each step, and at which nice value.
+class ReadRecordingSource final : public StepSource {
+public:
+    explicit ReadRecordingSource(std::vector<std::filesystem::path> files) : m_files(std::move(files)) {}
+    size_t stepCount() const override { return m_files.size(); }
+    std::string path(size_t s) const override { return m_files[s].string(); }
+    std::string label(size_t s) const override { return m_files[s].filename().string(); }
+    nlohmann::json fingerprint(size_t s) const override { return label(s); }
+    io::FileHeader plan() override { return io::readStepHeader(m_files.front(), {}); }
+    grid::Snapshot read(size_t s) const override
+    {
+        {
+            std::lock_guard lock(m_mutex);
+            m_reads.push_back({::gettid(), ::getpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()))});
+        }
+        return io::readStep(m_files[s], {});
+    }
+    std::vector<std::pair<pid_t, int>> reads() const
+    {
+        std::lock_guard lock(m_mutex);
+        return m_reads;
+    }
+
+private:
+    std::vector<std::filesystem::path> m_files;
+    mutable std::mutex m_mutex;
+    mutable std::vector<std::pair<pid_t, int>> m_reads;  // thread, nice
+};
+
+// A run beside an interactive user lowers its own thread's priority once it has started the thread
+// that reads the steps ahead; that thread reads every step at the caller's priority (reading is the
+// run's critical path). The run is on a thread of its own: a thread's nice cannot be raised again.
+TEST(Preprocess, ABackgroundRunLowersItsPriorityAndReadsAtTheCallers)
+{
+    TempDir dir("nice");
+    ReadRecordingSource source(synthSeries(dir / "in", 4));
+    PreprocessOptions o = quiet();
+    o.pathlines.steps = 2;
+    o.niceIncrement = 4;
+    int before = 0, after = 0;
+    pid_t caller = 0;
+    std::thread run([&] {
+        caller = ::gettid();
+        before = ::getpriority(PRIO_PROCESS, static_cast<id_t>(caller));
+        preprocess(source, dir / "ds", o);
+        after = ::getpriority(PRIO_PROCESS, static_cast<id_t>(caller));
+    });
+    run.join();
+    if (before > 15)
+        GTEST_SKIP() << "this process runs at nice " << before << ": no room to lower a thread's priority";
+    EXPECT_EQ(after, before + 4);
+    const auto reads = source.reads();
+    ASSERT_EQ(reads.size(), 4u);
+    for (const auto& [thread, nice] : reads) {
+        EXPECT_NE(thread, caller);
+        EXPECT_EQ(thread, reads.front().first) << "one thread reads every step";
+        EXPECT_EQ(nice, before);
+    }
 }
 
 }  // namespace

@@ -1330,6 +1330,7 @@ TEST(ServeNetcdf, FirstStepAtOnceThenTheWholeSeriesOnTheSameAddress)
         const std::string out = server.output();
         EXPECT_NE(out.find("spherical001.nc: step 0 preprocessed in"), std::string::npos) << out;
         EXPECT_NE(out.find("all 3 steps are ready; serving them at the same address"), std::string::npos) << out;
+        EXPECT_NE(out.find("took step 0 from the preview"), std::string::npos) << out;
         // The replacing server: same port, same token, the whole series in file order (2 Myr apart).
         EXPECT_EQ(httpGet(server.port, "/api/info").status, 401);
         const json info = json::parse(httpGet(server.port, "/api/info?token=" + server.token).body);
