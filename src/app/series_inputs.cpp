@@ -165,6 +165,7 @@ double preparePreview(const SeriesInputs& inputs, preprocess::PreprocessOptions 
         fs::remove_all(dir, ec);  // a preview of other files, or of other options: ours to replace
         options.pathlines.enabled = false;
         options.quiet = true;
+        options.stepsFrom = inputs.dataset;  // the series' step 0, when it is written: not made twice
         if (!options.timesMyr.empty())
             options.timesMyr.resize(1);
         leavingNothingOnFailure(inputs.dataset, [&] {
@@ -175,17 +176,14 @@ double preparePreview(const SeriesInputs& inputs, preprocess::PreprocessOptions 
     return secondsSince(start);
 }
 
-preprocess::PreprocessSummary prepareSeries(const SeriesInputs& inputs, preprocess::PreprocessOptions options)
+void prepareSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions& options)
 {
-    options.stepsFrom = inputs.previewDir();  // step 0, where a preview of it was made: not made twice
-    preprocess::PreprocessSummary summary;
     leavingNothingOnFailure(inputs.dataset, [&] {
         checkWritable(inputs.dataset);
-        summary = preprocess::preprocess(inputs.files, inputs.dataset, options);
+        preprocess::preprocess(inputs.files, inputs.dataset, options);
     });
     std::error_code ec;
     fs::remove_all(inputs.previewDir(), ec);
-    return summary;
 }
 
 void SeriesFlags::add(CLI::App& cmd, const std::string& inputsHelp)

@@ -38,18 +38,19 @@ bool isDatasetDirectory(const std::filesystem::path& path);
 // True when `dir` holds a complete dataset of exactly `files` (by name, in order).
 bool datasetOfFiles(const std::filesystem::path& dir, const std::vector<std::filesystem::path>& files);
 
-// The first file alone, without pathlines, preprocessed into inputs.previewDir() (a preview of those
-// files made earlier is reused; anything else there is replaced). Returns the seconds it took.
+// The first file alone, without pathlines, as a dataset in inputs.previewDir(): a preview of those
+// files made earlier is reused (anything else there is replaced); step 0 of the series in
+// inputs.dataset, where it is written with the same settings, is taken by hard links (a preview then
+// costs a manifest); else the file is preprocessed. Returns the seconds it took.
 // Throws raypc::Error like prepareSeries.
 double preparePreview(const SeriesInputs& inputs, preprocess::PreprocessOptions options);
 
-// Preprocesses what is missing of the series into inputs.dataset (progress as `options` say), taking
-// step 0 from the preview where one was made with the same settings, then removes the preview. Returns
-// what the run did. Throws raypc::Error like preprocess(), and naming the directory and --dataset
+// Preprocesses what is missing of the series into inputs.dataset (progress as `options` say), then
+// removes the preview. Throws raypc::Error like preprocess(), and naming the directory and --dataset
 // when it cannot be written. A run that fails before finishing a step leaves nothing: besides what
 // preprocess() removes itself, the dataset directory (and its parents) go if this run created them
 // (preparePreview too).
-preprocess::PreprocessSummary prepareSeries(const SeriesInputs& inputs, preprocess::PreprocessOptions options);
+void prepareSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions& options);
 
 // What serve and render take on the command line: INPUT… (a dataset or netCDF files), --dataset and
 // the preprocessing options of `raypc preprocess` (an option group).

@@ -1,9 +1,11 @@
 #include "app/serve_setup.h"
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/install_paths.h"
 #include "core/mpi.h"
 #include "core/system_memory.h"
+#include "dataset/dataset_format.h"
 #include "server/rank_pool.h"
 #include "server/series_progress.h"
 #include "server/step_cache.h"
@@ -16,10 +18,12 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -168,11 +172,11 @@ void serveOnRanks(server::ServerOptions options, const std::function<void(const 
 }
 
 // Test hook (docs/protocol.md, GET /api/progress): with RAYPC_TEST_HOLD_SERIES=FILE set, the
-// background run starts only once FILE exists, so that a test sees the first step served alone.
+// background run goes on after step 0 only once FILE exists, so that a test sees step 0 served alone.
 void holdForTest(const std::atomic<bool>& cancel)
 {
     const char* file = std::getenv("RAYPC_TEST_HOLD_SERIES");
-    if (!file)
+    if (!file || std::filesystem::exists(file))
         return;
     spdlog::info("test hook RAYPC_TEST_HOLD_SERIES: waiting for {}", file);
     while (!cancel && !std::filesystem::exists(file))
@@ -215,77 +219,127 @@ void serveSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions
         return;
     }
     keepLargeBlocksForReuse();
-    const double previewSeconds = preparePreview(inputs, preprocessOptions);
-    spdlog::info("{}: step 0 preprocessed in {:.1f} s; the other {} steps follow in the background into {}",
-                 inputs.files.front().filename().string(), previewSeconds, steps - 1, inputs.dataset.string());
+    const auto start = std::chrono::steady_clock::now();
     auto progress = std::make_shared<server::SeriesProgress>(inputs.dataset, int(steps));
-    server::ServerOptions options = serverOptions(inputs.previewDir(), flags);
-    options.series = progress;
-    auto srv = std::make_unique<server::Server>(options);
 
-    // The rest of the series in the background; when it is complete the server is replaced by one of
-    // the whole series on the same port (and token): open pages reload (docs/protocol.md, /api/progress).
+    // The whole series in the background from the start. Once its step 0 is written, that step alone
+    // is served (the preview takes it by hard links: preparePreview); when the series is complete the
+    // server is replaced by one of the whole series on the same port (and token): open pages reload
+    // (docs/protocol.md, /api/progress). The background thread's share of the machine: every core, in
+    // a task arena of low priority (oneTBB gives its threads to the renderer's arena first whenever
+    // that has work), the thread itself at a lower priority than the renderer's (nice + 10) once it
+    // has started the thread that reads the steps ahead, which keeps the renderer's: reading is the
+    // series' critical path.
     std::atomic<bool> cancel{false};
-    std::mutex serverMutex;  // srv: stopped from the background thread once the series is ready
-    bool switching = false;
-    // The background thread's share of the machine: every core, in a task arena of low priority
-    // (oneTBB gives its threads to the renderer's arena first whenever that has work), the thread
-    // itself at a lower priority than the renderer's (nice 10) once it has started the thread that
-    // reads the steps ahead, which keeps the renderer's: reading is the series' critical path.
+    std::mutex mutex;  // guards the four below
+    std::condition_variable changed;
+    bool firstStep = false, ended = false, succeeded = false, switching = false;
+    std::unique_ptr<server::Server> srv;  // the preview's: stopped from the background thread once the series is ready
+    const std::filesystem::path firstStepManifest = dataset::format::stepDir(inputs.dataset, 0) / dataset::format::kStepManifest;
     std::thread background([&] {
-        holdForTest(cancel);
         preprocess::PreprocessOptions o = preprocessOptions;
         o.quiet = true;
         o.cancel = &cancel;
         o.niceIncrement = 10;
-        int loggedTenth = -1;
+        std::map<std::string, int> loggedTenth;  // by phase: the steps' and the pathlines' alternate
         o.onProgress = [&](const preprocess::PreprocessProgress& p) {
             progress->update(p);
             const int tenth = p.total > 0 ? 10 * p.done / p.total : 10;
-            if (tenth != loggedTenth)
-                spdlog::info("background preprocessing: {} {} of {}", p.phase, p.done, p.total);
-            loggedTenth = tenth;
+            if (const auto [it, isNew] = loggedTenth.try_emplace(p.phase, tenth); isNew || it->second != tenth) {
+                it->second = tenth;
+                if (p.done > 0)
+                    spdlog::info("background preprocessing: {} {} of {}", p.phase, p.done, p.total);
+            }
+            // Called once the finished steps are known, then after each step: step 0 is there to show.
+            if (p.phase != "steps" || !std::filesystem::exists(firstStepManifest))
+                return;
+            {
+                std::lock_guard lock(mutex);
+                firstStep = true;
+            }
+            changed.notify_all();
+            holdForTest(cancel);
         };
+        bool ok = false;
         try {
             tbb::task_arena(tbb::task_arena::automatic, 1, tbb::task_arena::priority::low).execute([&] {
-                if (prepareSeries(inputs, o).stepsTaken > 0)
-                    spdlog::info("background preprocessing took step 0 from the preview rather than making it again");
+                prepareSeries(inputs, o);
             });
+            progress->finished();
+            ok = true;
         } catch (const std::exception& e) {
             if (!cancel) {
                 spdlog::error("background preprocessing stopped: {}; serving step 0 only", e.what());
                 progress->failed(e.what());
             }
-            return;
         }
-        progress->finished();
-        std::lock_guard lock(serverMutex);
-        if (cancel)
-            return;  // the server was stopped (SIGINT/SIGTERM) as the series became ready: no switch
-        switching = true;
-        srv->stop();
+        std::lock_guard lock(mutex);
+        ended = true;
+        succeeded = ok;
+        changed.notify_all();
+        if (ok && srv && !cancel) {
+            switching = true;
+            srv->stop();
+        }
     });
-    announce(options, *srv);
-    srv->run();
-    {
-        std::lock_guard lock(serverMutex);
-        if (!switching) {
+    // The background run is stopped and joined however this thread leaves (a first file that cannot
+    // be read, a port in use).
+    struct StopOnExit {
+        std::thread& thread;
+        std::atomic<bool>& cancel;
+        ~StopOnExit()
+        {
             cancel = true;
-            spdlog::info("stopping the background preprocessing (finished steps stay in {}; the next run resumes)",
-                         inputs.dataset.string());
+            if (thread.joinable())
+                thread.join();
         }
+    } stopOnExit{background, cancel};
+
+    {
+        std::unique_lock lock(mutex);
+        changed.wait(lock, [&] { return firstStep || ended; });
+    }
+    server::ServerOptions options = serverOptions(inputs.previewDir(), flags);
+    options.series = progress;
+    if (std::unique_lock lock(mutex); !succeeded) {
+        lock.unlock();
+        // Step 0 of the series, or the first file alone when the series stopped before it.
+        const double previewSeconds = preparePreview(inputs, preprocessOptions);
+        spdlog::info("{}: step 0 ready in {:.1f} s (its preview in {:.2f} s); the other {} steps follow in the "
+                     "background into {}",
+                     inputs.files.front().filename().string(), secondsSince(start), previewSeconds, steps - 1,
+                     inputs.dataset.string());
+        lock.lock();
+        if (!succeeded)  // else the series was finished before the preview: it is served at once
+            srv = std::make_unique<server::Server>(options);
+    }
+    if (srv) {
+        announce(options, *srv);
+        srv->run();
+        {
+            std::lock_guard lock(mutex);
+            if (!switching) {
+                cancel = true;
+                spdlog::info("stopping the background preprocessing (finished steps stay in {}; the next run resumes)",
+                             inputs.dataset.string());
+            }
+        }
+        background.join();
+        if (!switching)
+            return;
+        options.port = srv->port();
+        options.token = srv->token();
+        srv.reset();
+        options.dataset = inputs.dataset;
+        options.series = nullptr;
+        srv = std::make_unique<server::Server>(options);
+        spdlog::info("{}: all {} steps are ready; serving them at the same address", inputs.dataset.string(), steps);
+        srv->run();
+        return;
     }
     background.join();
-    if (!switching)
-        return;
-    options.port = srv->port();
-    options.token = srv->token();
-    srv.reset();
-    options.dataset = inputs.dataset;
-    options.series = nullptr;
-    srv = std::make_unique<server::Server>(options);
-    spdlog::info("{}: all {} steps are ready; serving them at the same address", inputs.dataset.string(), steps);
-    srv->run();
+    spdlog::info("{}: all {} steps are ready", inputs.dataset.string(), steps);
+    serveDataset(inputs.dataset, flags);
 }
 
 }  // namespace raypc::app

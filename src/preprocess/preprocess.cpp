@@ -922,6 +922,8 @@ PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const P
         spdlog::info("{}: {} of {} steps already done by an earlier run{}, skipping them", outDir.string(),
                      summary.stepsSkipped, source.stepCount(),
                      summary.stepsTaken > 0 ? fmt::format(" or in {}", options.stepsFrom.string()) : "");
+    if (options.onProgress && mpi::isRoot())
+        options.onProgress({"steps", summary.stepsSkipped, int(source.stepCount())});
     std::optional<Progress> progress;
     if (!options.quiet && !todo.empty() && mpi::isRoot())
         progress.emplace("preprocess", static_cast<int64_t>(todo.size()), "steps");

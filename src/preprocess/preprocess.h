@@ -64,7 +64,8 @@ struct PreprocessOptions {
     // at a time, as each rank does under mpirun. The dataset's bytes are the same either way.
     bool readAhead = true;
     // For a run in the background (`raypc serve FILES`, app/series_inputs.h), one process only:
-    // `onProgress` is called after each step or pathline set this run finishes; `cancel`, once set,
+    // `onProgress` is called once the steps an earlier run finished are known (phase "steps", done:
+    // those), then after each step or pathline set this run finishes; `cancel`, once set,
     // stops the run before its next step or pathline set with raypc::Error "cancelled" (what was
     // finished stays, as after any failure: a rerun resumes).
     std::function<void(const PreprocessProgress&)> onProgress;

@@ -358,8 +358,9 @@ TEST(Preprocess, AFreshRunThatFailsLeavesNothing)
     EXPECT_TRUE(std::filesystem::is_empty(dir / "empty"));
 }
 
-// `raypc serve FILE.nc…` runs preprocessing in the background: it reports every step and pathline
-// set, and a cancel stops it between steps with what was finished kept for the next run.
+// `raypc serve FILE.nc…` runs preprocessing in the background: it reports the steps done before it
+// starts, then every step and pathline set, and a cancel stops it between steps with what was
+// finished kept for the next run.
 TEST(Preprocess, ACancelledRunKeepsItsStepsAndProgressCountsEveryItem)
 {
     TempDir dir("cancel");
@@ -378,7 +379,7 @@ TEST(Preprocess, ACancelledRunKeepsItsStepsAndProgressCountsEveryItem)
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("cancelled"), std::string::npos) << e.what();
     }
-    EXPECT_EQ(events, std::vector<std::string>{"steps 1/3"});
+    EXPECT_EQ(events, (std::vector<std::string>{"steps 0/3", "steps 1/3"}));
     EXPECT_TRUE(std::filesystem::exists(dir / "ds" / "steps" / "0000" / "step.json"));
     EXPECT_FALSE(std::filesystem::exists(dir / "ds" / "steps" / "0001"));
     EXPECT_THROW(dataset::Dataset::open(dir / "ds"), Error);
@@ -389,7 +390,7 @@ TEST(Preprocess, ACancelledRunKeepsItsStepsAndProgressCountsEveryItem)
     const auto summary = preprocess(fixtureFiles(), dir / "ds", o);
     EXPECT_EQ(summary.stepsSkipped, 1);
     EXPECT_EQ(summary.stepsWritten, 2);
-    EXPECT_EQ(events, (std::vector<std::string>{"steps 2/3", "steps 3/3", "pathlines 1/3", "pathlines 2/3",
+    EXPECT_EQ(events, (std::vector<std::string>{"steps 1/3", "steps 2/3", "steps 3/3", "pathlines 1/3", "pathlines 2/3",
                                                 "pathlines 3/3"}));
     EXPECT_EQ(dataset::Dataset::open(dir / "ds")->steps().size(), 3u);
 }
@@ -688,7 +689,7 @@ TEST(Preprocess, ReadingAheadWritesTheBytesOfOneStepAtATime)
         EXPECT_NE(std::string(e.what()).find(inputs[3].filename().string()), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("3 finished steps stay"), std::string::npos) << e.what();
     }
-    EXPECT_EQ(events, (std::vector<std::string>{"steps 1/6", "steps 2/6", "steps 3/6"}));
+    EXPECT_EQ(events, (std::vector<std::string>{"steps 0/6", "steps 1/6", "steps 2/6", "steps 3/6"}));
     std::vector<std::string> stepDirs;
     for (const auto& entry : std::filesystem::directory_iterator(dir / "failed" / "steps"))
         stepDirs.push_back(entry.path().filename().string());

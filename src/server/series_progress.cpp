@@ -16,13 +16,19 @@ void SeriesProgress::update(const preprocess::PreprocessProgress& progress)
 {
     std::lock_guard lock(m_mutex);
     const auto now = std::chrono::steady_clock::now();
-    if (!m_phaseSeen || progress.phase != m_phase) {
-        // A phase's first report comes after its first item: the rate counts the items this run did
-        // since the previous report (items an earlier run finished are in `done` but took no time).
+    if (!m_phaseSeen) {
+        // The run's first report says what an earlier run finished, before any item of this run:
+        // those are in `done` but took no time.
+        m_phaseStart = now;
+        m_doneAtPhaseStart = progress.done;
+        m_phase = progress.phase;
+        m_phaseSeen = true;
+    } else if (progress.phase != m_phase) {
+        // A later phase's first report comes after its first item: the rate counts the items this run
+        // did since the previous report.
         m_phaseStart = m_lastUpdate;
         m_doneAtPhaseStart = progress.done - 1;
         m_phase = progress.phase;
-        m_phaseSeen = true;
     }
     m_lastUpdate = now;
     m_done = progress.done;
