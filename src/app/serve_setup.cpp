@@ -222,26 +222,35 @@ void serveSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions
     const auto start = std::chrono::steady_clock::now();
     auto progress = std::make_shared<server::SeriesProgress>(inputs.dataset, int(steps));
 
-    // The whole series in the background from the start. Once its step 0 is written, that step alone
-    // is served (the preview takes it by hard links: preparePreview); when the series is complete the
-    // server is replaced by one of the whole series on the same port (and token): open pages reload
-    // (docs/protocol.md, /api/progress). The background thread's share of the machine: every core, in
-    // a task arena of low priority (oneTBB gives its threads to the renderer's arena first whenever
-    // that has work), the thread itself at a lower priority than the renderer's (nice + 10) once it
-    // has started the thread that reads the steps ahead, which keeps the renderer's: reading is the
-    // series' critical path.
+    // The whole series in the background from the start. Once its step 0 is written, the background
+    // thread makes the preview of it (hard links: preparePreview) before it reads on, and that step
+    // alone is served; when the series is complete the server is replaced by one of the whole series
+    // on the same port (and token): open pages reload (docs/protocol.md, /api/progress). The
+    // background thread's share of the machine: every core, in a task arena of low priority (oneTBB
+    // gives its threads to the renderer's arena first whenever that has work), the thread itself at
+    // a lower priority than the renderer's (nice + 10) once it has started the thread that reads the
+    // steps ahead, which keeps the renderer's: reading is the series' critical path.
     std::atomic<bool> cancel{false};
-    std::mutex mutex;  // guards the four below
+    std::mutex mutex;  // guards the five below
     std::condition_variable changed;
-    bool firstStep = false, ended = false, succeeded = false, switching = false;
+    bool previewMade = false, ended = false, succeeded = false, switching = false;
+    std::exception_ptr previewFailure;
     std::unique_ptr<server::Server> srv;  // the preview's: stopped from the background thread once the series is ready
     const std::filesystem::path firstStepManifest = dataset::format::stepDir(inputs.dataset, 0) / dataset::format::kStepManifest;
+    auto makePreview = [&] {
+        const double seconds = preparePreview(inputs, preprocessOptions);
+        spdlog::info("{}: step 0 ready in {:.1f} s (its preview in {:.2f} s); the other {} steps follow in the "
+                     "background into {}",
+                     inputs.files.front().filename().string(), secondsSince(start), seconds, steps - 1,
+                     inputs.dataset.string());
+    };
     std::thread background([&] {
         preprocess::PreprocessOptions o = preprocessOptions;
         o.quiet = true;
         o.cancel = &cancel;
         o.niceIncrement = 10;
         std::map<std::string, int> loggedTenth;  // by phase: the steps' and the pathlines' alternate
+        bool previewTried = false;
         o.onProgress = [&](const preprocess::PreprocessProgress& p) {
             progress->update(p);
             const int tenth = p.total > 0 ? 10 * p.done / p.total : 10;
@@ -251,11 +260,19 @@ void serveSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions
                     spdlog::info("background preprocessing: {} {} of {}", p.phase, p.done, p.total);
             }
             // Called once the finished steps are known, then after each step: step 0 is there to show.
-            if (p.phase != "steps" || !std::filesystem::exists(firstStepManifest))
+            if (previewTried || p.phase != "steps" || !std::filesystem::exists(firstStepManifest))
                 return;
+            previewTried = true;
+            std::exception_ptr failure;
+            try {
+                makePreview();
+            } catch (...) {
+                failure = std::current_exception();
+            }
             {
                 std::lock_guard lock(mutex);
-                firstStep = true;
+                previewMade = !failure;
+                previewFailure = failure;
             }
             changed.notify_all();
             holdForTest(cancel);
@@ -295,22 +312,20 @@ void serveSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions
         }
     } stopOnExit{background, cancel};
 
-    {
-        std::unique_lock lock(mutex);
-        changed.wait(lock, [&] { return firstStep || ended; });
-    }
     server::ServerOptions options = serverOptions(inputs.previewDir(), flags);
     options.series = progress;
-    if (std::unique_lock lock(mutex); !succeeded) {
-        lock.unlock();
-        // Step 0 of the series, or the first file alone when the series stopped before it.
-        const double previewSeconds = preparePreview(inputs, preprocessOptions);
-        spdlog::info("{}: step 0 ready in {:.1f} s (its preview in {:.2f} s); the other {} steps follow in the "
-                     "background into {}",
-                     inputs.files.front().filename().string(), secondsSince(start), previewSeconds, steps - 1,
-                     inputs.dataset.string());
-        lock.lock();
-        if (!succeeded)  // else the series was finished before the preview: it is served at once
+    {
+        std::unique_lock lock(mutex);
+        changed.wait(lock, [&] { return previewMade || previewFailure || ended; });
+        if (previewFailure)
+            std::rethrow_exception(previewFailure);
+        if (!previewMade && !succeeded) {
+            // The series stopped before its step 0 (a later file it cannot read): the first file alone.
+            lock.unlock();
+            makePreview();
+            lock.lock();
+        }
+        if (!succeeded)  // else the series was finished before a preview was served: it is served at once
             srv = std::make_unique<server::Server>(options);
     }
     if (srv) {

@@ -954,18 +954,20 @@ PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const P
                 ReadStep read = ahead ? ahead->take(size_t(item)) : readStep(plan, source, s);
                 // The next step is read while this one's pathlines are traced, once its arrays are
                 // written and freed (a step read while another is written would add a step's
-                // arrays to the peak: 0.5 GB at full resolution); without pathlines, at once.
+                // arrays to the peak: 0.5 GB at full resolution) and onProgress has returned (what
+                // it does with the step, such as `raypc serve`'s preview, is not kept waiting for
+                // a read: reading a netCDF file is one call at a time); without pathlines, at once.
                 if (ahead && !pathlines)
                     ahead->readNext();
                 const json& stepJson = written[std::to_string(s)] =
                     writeStep(outDir, plan, source, std::move(read), cells, options);
-                if (ahead && pathlines)
-                    ahead->readNext();
                 if (out)
                     out->keep();
                 ++summary.stepsWritten;
                 if (options.onProgress)
                     options.onProgress({"steps", summary.stepsSkipped + summary.stepsWritten, int(source.stepCount())});
+                if (ahead && pathlines)
+                    ahead->readNext();
                 mpi::dieHook("preprocess-step");
                 if (pathlines) {
                     stepJsons[size_t(s)] = stepJson;

@@ -1358,6 +1358,39 @@ TEST(ServeNetcdf, FirstStepAtOnceThenTheWholeSeriesOnTheSameAddress)
     EXPECT_TRUE(again.stop());
 }
 
+// The step served alone while the series is made is the series' own step 0, its files hard-linked
+// (the first file is not preprocessed twice): checked while the series is held after that step
+// (RAYPC_TEST_HOLD_SERIES), then the series goes on and replaces it.
+TEST(ServeNetcdf, TheStepServedFirstIsTheSeriesOwnStepZero)
+{
+    const fs::path dir = g_work / "nc-held";
+    const auto files = copyContestFiles(dir);
+    const fs::path go = dir / "go";
+    ::setenv("RAYPC_TEST_HOLD_SERIES", go.c_str(), 1);
+    FixtureServer server({"--sample-rows", "2000"}, false, {}, files);
+    ::unsetenv("RAYPC_TEST_HOLD_SERIES");
+    const json held = json::parse(httpGet(server.port, "/api/progress").body);
+    EXPECT_EQ(held.value("state", ""), "preparing") << held.dump();
+    EXPECT_EQ(held.value("done", -1), 1) << held.dump();
+    EXPECT_EQ(json::parse(httpGet(server.port, "/api/info").body)["steps"].size(), 1u);
+    const fs::path series = dir / "spherical.raypc" / "steps" / "0000";
+    const fs::path preview = dir / "spherical.raypc" / "preview" / "steps" / "0000";
+    size_t linked = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(preview)) {
+        if (!entry.is_regular_file())
+            continue;
+        const fs::path theirs = series / fs::relative(entry.path(), preview);
+        ASSERT_TRUE(fs::exists(theirs)) << theirs;
+        EXPECT_TRUE(fs::equivalent(entry.path(), theirs)) << entry.path() << " is a copy, not the series' file";
+        ++linked;
+    }
+    EXPECT_GT(linked, 10u);
+    { std::ofstream(go).put('\n'); }
+    EXPECT_EQ(waitForProgress(server.port, "", "complete", 60).value("state", ""), "complete") << server.output();
+    EXPECT_FALSE(fs::exists(dir / "spherical.raypc" / "preview"));
+    EXPECT_TRUE(server.stop()) << server.output();
+}
+
 TEST(ServeNetcdf, ALaterBadFileStopsTheBackgroundRunAndTheFirstStepStaysServed)
 {
     const fs::path dir = g_work / "nc-broken";
