@@ -699,9 +699,10 @@ TEST(Preprocess, ReadingAheadWritesTheBytesOfOneStepAtATime)
         EXPECT_TRUE(std::filesystem::exists(dataset::format::stepDir(dir / "failed", s) / dataset::format::kStepManifest));
 }
 
-// `raypc serve FILES` shows a preview of step 0 while the series is made: the series takes that
-// step (hard links) instead of making it again, and is byte for byte the series made without it.
-// A preview made with other settings, or from a file changed since, gives nothing.
+// A run takes the finished steps of another dataset made with the same settings from the same files
+// (hard links) instead of making them again (`raypc serve FILES`: the one-step preview takes the
+// series' step 0). Here a series takes a one-step dataset's step 0 and is byte for byte the series
+// made without it; a donor made with other settings, or from a file changed since, gives nothing.
 TEST(Preprocess, TakesTheStepsOfAnotherDatasetMadeWithTheSameSettingsFromTheSameFiles)
 {
     TempDir dir("donor");
