@@ -218,7 +218,7 @@ void serveSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions
         serveDataset(inputs.dataset, flags);
         return;
     }
-    keepLargeBlocksForReuse();
+    keepLargeBlocksForReuseOnEveryThread();  // the series' arrays are made on the background thread
     const auto start = std::chrono::steady_clock::now();
     auto progress = std::make_shared<server::SeriesProgress>(inputs.dataset, int(steps));
 

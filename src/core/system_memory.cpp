@@ -163,4 +163,10 @@ void keepLargeBlocksForReuse()
     mallopt(M_TRIM_THRESHOLD, kBytes);
 }
 
+void keepLargeBlocksForReuseOnEveryThread()
+{
+    keepLargeBlocksForReuse();
+    mallopt(M_ARENA_MAX, 1);
+}
+
 }  // namespace raypc

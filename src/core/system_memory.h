@@ -24,6 +24,12 @@ AvailableMemory availableMemory();
 // the heap's top is still returned (what it saves a 1920x1080 still: docs/reliability.md). Never
 // throws.
 void keepLargeBlocksForReuse();
+// As keepLargeBlocksForReuse, for blocks that threads other than the main one allocate and free:
+// every thread started from now on allocates from the main heap (one glibc arena), since a
+// thread's own arena grows in heaps of at most 64 MB and maps a larger block afresh each time.
+// For `raypc serve FILES`, whose background run of the series makes step-sized arrays on a thread
+// of its own. Never throws.
+void keepLargeBlocksForReuseOnEveryThread();
 
 // Runs this program again, in place (the same process and arguments; the environment gains one
 // tunable), with glibc's malloc told to ask for transparent huge pages
