@@ -609,3 +609,28 @@ TEST(SystemMemory, ParsesSizesWithBinaryUnitsAndNamesTheOptionOnBadOnes)
         }
     }
 }
+
+// `raypc serve FILES` makes the series' step-sized arrays on a thread of its own: after
+// keepLargeBlocksForReuseOnEveryThread such a thread allocates from the main heap (below the
+// program break), where a freed block is reused, not from an arena of its own, whose heaps of at
+// most 64 MB send a 100 MB block to a fresh mapping (far above the break) every time.
+TEST(SystemMemory, ThreadsAllocateLargeBlocksFromTheMainHeapOnceAsked)
+{
+#if defined(__SANITIZE_ADDRESS__)
+    GTEST_SKIP() << "ASan's allocator replaces glibc's";
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+    GTEST_SKIP() << "ASan's allocator replaces glibc's";
+#endif
+#endif
+    raypc::keepLargeBlocksForReuseOnEveryThread();
+    uintptr_t block = 0, brk = 0;
+    std::thread([&] {
+        void* p = std::malloc(size_t(100) << 20);
+        block = reinterpret_cast<uintptr_t>(p);
+        brk = reinterpret_cast<uintptr_t>(::sbrk(0));
+        std::free(p);
+    }).join();
+    ASSERT_NE(block, 0u);
+    EXPECT_LT(block, brk) << "a thread's 100 MB block was mapped outside the main heap";
+}
