@@ -941,9 +941,10 @@ PreprocessSummary preprocess(StepSource& source, const fs::path& outDir, const P
     try {
         feedPathlines();
         // One process reads the next step while it works on this one; under mpirun each rank takes
-        // whichever step is next when it is free (mpi::forEachDynamic), so it cannot read ahead.
+        // whichever step is next when it is free (mpi::forEachDynamic), so it cannot read ahead. A
+        // run with every step taken or written before starts no reading thread.
         std::optional<StepsReadAhead> ahead;
-        if (!mpi::distributed() && options.readAhead)
+        if (!mpi::distributed() && options.readAhead && !todo.empty())
             ahead.emplace(plan, source, todo, options);
         lowerThreadPriority(options.niceIncrement);
         mpi::forEachDynamic(
