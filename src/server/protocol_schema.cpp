@@ -285,11 +285,11 @@ const std::vector<Definition>& messages()
               "`complete`: a whole dataset is shown (no other key); `preparing`; `ready`: the whole series is written, reload; `failed`"},
              {"dataset", text(""), "the dataset being written", false},
              {"steps", integer(""), "steps of the series", false},
-             {"phase", oneOfTexts({"steps", "pathlines"}, ""), "what is being written", false},
+             {"phase", oneOfTexts({"steps", "pathlines"}, ""), "what the line shows: the steps until every one is written, then the pathlines (a one-pass run writes them in turn)", false},
              {"done", integer(""), "items done, including what an earlier run finished", false},
-             {"total", integer(""), "items of the phase", false},
+             {"total", integer(""), "items of that phase", false},
              {"elapsedSeconds", number(""), "seconds since the run started", false},
-             {"etaSeconds", nullable(number("")), "seconds left; null until this run finished an item", false},
+             {"etaSeconds", nullable(number("")), "seconds left in the phase shown, at this run's rate in it (a one-pass run traces the pathlines as the steps are written: the last sets follow the last step); null until this run finished an item", false},
              {"message", text(""), "why it failed (`failed` only)", false}}));
         d.push_back(message(
             "JobProgress", "GET /api/job-progress?job=ID",
