@@ -176,12 +176,18 @@ double preparePreview(const SeriesInputs& inputs, preprocess::PreprocessOptions 
     return secondsSince(start);
 }
 
-void prepareSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions& options)
+void prepareSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions& options, bool keepPreview)
 {
     leavingNothingOnFailure(inputs.dataset, [&] {
         checkWritable(inputs.dataset);
         preprocess::preprocess(inputs.files, inputs.dataset, options);
     });
+    if (!keepPreview)
+        removePreview(inputs);
+}
+
+void removePreview(const SeriesInputs& inputs)
+{
     std::error_code ec;
     fs::remove_all(inputs.previewDir(), ec);
 }

@@ -46,11 +46,14 @@ bool datasetOfFiles(const std::filesystem::path& dir, const std::vector<std::fil
 double preparePreview(const SeriesInputs& inputs, preprocess::PreprocessOptions options);
 
 // Preprocesses what is missing of the series into inputs.dataset (progress as `options` say), then
-// removes the preview. Throws raypc::Error like preprocess(), and naming the directory and --dataset
+// removes the preview, unless `keepPreview`: a caller that still serves it removes it
+// (removePreview) once it no longer does. Throws raypc::Error like preprocess(), and naming the directory and --dataset
 // when it cannot be written. A run that fails before finishing a step leaves nothing: besides what
 // preprocess() removes itself, the dataset directory (and its parents) go if this run created them
 // (preparePreview too).
-void prepareSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions& options);
+void prepareSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions& options, bool keepPreview = false);
+// Removes inputs.previewDir(), if any. Never throws.
+void removePreview(const SeriesInputs& inputs);
 
 // What serve and render take on the command line: INPUT… (a dataset or netCDF files), --dataset and
 // the preprocessing options of `raypc preprocess` (an option group).

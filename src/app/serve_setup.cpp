@@ -280,7 +280,7 @@ void serveSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions
         bool ok = false;
         try {
             tbb::task_arena(tbb::task_arena::automatic, 1, tbb::task_arena::priority::low).execute([&] {
-                prepareSeries(inputs, o);
+                prepareSeries(inputs, o, true);  // the preview is served until the server of the series replaces it
             });
             progress->finished();
             ok = true;
@@ -340,11 +340,15 @@ void serveSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions
             }
         }
         background.join();
-        if (!switching)
+        if (!switching) {
+            if (succeeded)
+                removePreview(inputs);  // the series was finished as the server was stopped
             return;
+        }
         options.port = srv->port();
         options.token = srv->token();
         srv.reset();
+        removePreview(inputs);  // served no more: a request for its files until now found them
         options.dataset = inputs.dataset;
         options.series = nullptr;
         srv = std::make_unique<server::Server>(options);
@@ -353,6 +357,7 @@ void serveSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions
         return;
     }
     background.join();
+    removePreview(inputs);
     spdlog::info("{}: all {} steps are ready", inputs.dataset.string(), steps);
     serveDataset(inputs.dataset, flags);
 }
