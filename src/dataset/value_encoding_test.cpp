@@ -328,9 +328,10 @@ TEST_F(EncodedDatasets, EveryPointOfTheContestFilesIsWithinTheBound)
                     continue;
                 // Coarser levels: the truth is the float32 dataset's (exact) means.
                 const float* exact = level == 0 ? truth.fields[v].values.data() : b->values(v);
-                if (level == 0)
+                if (level == 0) {
                     for (size_t i = 0; i < g.cellCount(); ++i)
                         ASSERT_EQ(b->values(v)[i], exact[i]);  // float32 is exact
+                }
                 for (size_t i = 0; i < g.nLat(); ++i)
                     for (size_t j = 0; j < g.nR(); ++j)
                         for (size_t k = 0; k < g.nLon(); ++k) {
