@@ -328,7 +328,7 @@ RenderSetup setUp(const RenderArgs& args)
         pairHalves(state, *dataset, *second);  // checks the width and the state against both before rendering
     }
     return {dataset,          resolved,          first, last, sequence, lodAuto, std::move(output), std::move(depth),
-            slice,            std::move(netcdf), {},    std::move(second)};
+            slice,            std::move(netcdf), {},    std::move(second), nullptr};
 }
 
 // A pair's step (docs/compare.md, "Side by side"): each dataset's half through its StateRenderer, the
@@ -488,7 +488,7 @@ void run(const RenderArgs& args)
     setup.volume = lastVolumeKept(setup.dataset);
     if (setup.second)
         setup.secondRenderer = std::make_shared<StateRenderer>(setup.second);
-    StateRenderer renderer(setup.dataset, setup.slice ? StateSources{.volume = setup.volume, .pathlines = {}} : StateSources{});
+    StateRenderer renderer(setup.dataset, setup.slice ? StateSources{.volume = setup.volume, .pathlines = {}, .featureLabels = {}} : StateSources{});
     LevelPolicy policy;  // level 0 unless the state names one
     if (setup.lodAuto && !setup.resolved.state.level && !setup.slice) {
         mpi::together([&] {

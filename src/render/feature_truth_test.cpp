@@ -261,10 +261,11 @@ TEST(FeatureTruth, Task1TracksFollowEachStalledSlabThroughTheSeries)
         int previousStep = -1, previousTrack = -1;
         for (const auto& [step, track] : steps) {
             path.push_back(fmt::format("{}:{}", step, track));
-            if (previousStep >= 0 && track != previousTrack)
+            if (previousStep >= 0 && track != previousTrack) {
                 EXPECT_TRUE(splits.count({previousStep, previousTrack}) || merges.count({step, track}))
                     << "slab " << slab << " moves from track " << previousTrack << " to " << track << " at step " << step
                     << " without a split or merge";
+            }
             previousStep = step, previousTrack = track;
         }
         const int track = steps.rbegin()->second;

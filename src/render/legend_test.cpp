@@ -60,8 +60,9 @@ void expectTicksApart(float lo, float hi, int width, int height)
         << "step " << step;
     for (size_t i = 0; i < values.size(); ++i) {
         EXPECT_NEAR(values[i] / step, std::round(values[i] / step), 1e-6) << values[i];
-        if (i > 0)
+        if (i > 0) {
             EXPECT_NEAR(values[i] - values[i - 1], step, 1e-6 * step) << values[i];
+        }
     }
 }
 

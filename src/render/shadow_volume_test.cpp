@@ -185,8 +185,9 @@ TEST(Shadows, ExtinctionSimdEqualsScalar)
     for (int i = 0; i < n; ++i) {
         EXPECT_NEAR(simd[size_t(i)], scalar[size_t(i)], 1e-6f) << i;
         const float r = std::sqrt(x[size_t(i)] * x[size_t(i)] + y[size_t(i)] * y[size_t(i)] + z[size_t(i)] * z[size_t(i)]);
-        if (r > 6371.5f || r < 3484.5f)
+        if (r > 6371.5f || r < 3484.5f) {
             EXPECT_EQ(scalar[size_t(i)], 0.0f) << "outside the shell";
+        }
         nonzero += scalar[size_t(i)] > 0.0f;
     }
     EXPECT_GT(nonzero, n / 100);  // the comparison is not vacuous

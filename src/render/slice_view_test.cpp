@@ -88,7 +88,7 @@ TEST_F(Slices, MapColoursAreTheTruthAtPixelCentresInEveryProjection)
                     continue;  // a pixel whose centre lies just off the sphere's edge
                 // The outline is drawn over the sphere's rim: only pixels a few pixels inside it count.
                 bool inside = true;
-                for (const auto [dx, dy] : {std::pair{-3, 0}, {3, 0}, {0, -3}, {0, 3}})
+                for (const auto& [dx, dy] : {std::pair{-3, 0}, {3, 0}, {0, -3}, {0, 3}})
                     inside = inside && frame.lonLatAt(x + 0.5 + dx, y + 0.5 + dy).has_value();
                 if (!inside)
                     continue;
@@ -157,8 +157,9 @@ TEST(NotSelected, NoColourMapDrawsIt)
             EXPECT_TRUE(off.r == off.g && off.g == off.b && on.r == on.g && on.g == on.b);
             EXPECT_GT(on.r - off.r, 0.15f) << state::colorMapName(m);
             EXPECT_LE(on.r, 0.55f);
-            if (state::isDiverging(m))
+            if (state::isDiverging(m)) {
                 EXPECT_LT(off.r, neutralLuma / 3) << state::colorMapName(m) << " at " << u;
+            }
         }
     }
 }

@@ -27,8 +27,9 @@ void expectDescribed(const json& written, const json& schema, const std::string&
             expectDescribed(*it, property, key, table);
         } else {
             EXPECT_NE(table.find("| `" + key + "` |"), std::string::npos) << key << " has no row in the table";
-            if (key != "version")
+            if (key != "version") {
                 EXPECT_EQ(property.value("default", json()), *it) << key;
+            }
         }
     }
 }

@@ -104,7 +104,7 @@ struct PendingRequest {
         beast::flat_buffer buffer;
         http::response_parser<http::string_body> parser;
         http::read(socket, buffer, parser);
-        return {int(parser.get().result_int()), parser.get().body(), "", ""};
+        return {int(parser.get().result_int()), parser.get().body(), "", "", ""};
     }
     void close()
     {
