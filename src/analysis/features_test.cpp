@@ -379,8 +379,9 @@ TEST(Features, AStepOfAU16DatasetDecodesOnlyWhatItsSelectedPointsNeed)
             EXPECT_EQ(fmt::format("{} {} {}", lazyLinks[k].from, lazyLinks[k].to, lazyLinks[k].overlapKm3),
                       fmt::format("{} {} {}", wholeLinks[k].from, wholeLinks[k].to, wholeLinks[k].overlapKm3));
         for (size_t v = 0; v < lazy->variableCount(); ++v)
-            if (lazy->computedFrom(v))
+            if (lazy->computedFrom(v)) {
                 EXPECT_FALSE(lazy->valuesReady(v)) << dataset->variables()[v].name << ": no array computed";
+            }
         EXPECT_FALSE(lazy->valuesReady(size_t(t))) << "the brushed variable read brick by brick";
         EXPECT_EQ(lazy->decodedBytes(), 0u) << "nothing decoded whole, the velocity for linking neither";
     }

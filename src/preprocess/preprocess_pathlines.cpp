@@ -135,7 +135,10 @@ PathlineStream::PathlineStream(fs::path outDir, const grid::SphericalGrid& grid,
         const VariableSpec& spec = m_specs[v];
         m_names.push_back(spec.name);
         m_units.push_back(spec.units);
-        m_variables.push_back(dataset::VariableInfo{.name = spec.name, .computed = spec.computed});
+        dataset::VariableInfo info;
+        info.name = spec.name;
+        info.computed = spec.computed;
+        m_variables.push_back(std::move(info));
         if (spec.computed)
             m_computed.push_back(*spec.computed);
         else

@@ -160,8 +160,9 @@ TEST(DistributedServer, NewStateCancelsThePassOnEveryRank)
         const std::vector<WsClient::Message> frames = ws.framesUntilConverged(2);
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
         for (const auto& m : frames)
-            if (m.frame.header["id"] == 1)
+            if (m.frame.header["id"] == 1) {
                 EXPECT_FALSE(m.frame.header["converged"].get<bool>()) << "the old state went on to converge";
+            }
         // 400 passes of 1024x768 take minutes; the new state's 2 small passes come after one old pass at most.
         EXPECT_LT(seconds, 60.0);
         EXPECT_LT(frames.size(), 12u) << "old frames kept coming after the new state";
@@ -228,10 +229,11 @@ TEST(DistributedServer, FeaturesAreSharedOutAndAnswerAsOneProcess)
             EXPECT_EQ(progress["done"], 3) << progress.dump();
         }
         expectCleanStop(server, ranks);
-        if (ranks > 1)
+        if (ranks > 1) {
             EXPECT_NE(server.output().find(fmt::format("features: 3 steps at level 0 computed on {} ranks", ranks)),
                       std::string::npos)
                 << server.output();
+        }
         return out;
     };
     const std::vector<std::string> alone = answers(1);

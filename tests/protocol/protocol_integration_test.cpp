@@ -537,8 +537,9 @@ TEST(Serve, FramesRenderedAheadAnswerPlaybackAndEqualAFreshRender)
         allKept = true;
         for (int step = 0; step < 3; ++step) {
             const json h = play(step).frame.header;
-            if (h["cached"] == true)
+            if (h["cached"] == true) {
                 EXPECT_TRUE(h["pass"] == 1 || h["pass"] == 3) << h.dump();
+            }
             allKept = h["cached"] == true && h["pass"] == 3 && allKept;
         }
         if (!allKept)
