@@ -340,15 +340,13 @@ void serveSeries(const SeriesInputs& inputs, const preprocess::PreprocessOptions
             }
         }
         background.join();
-        if (!switching) {
-            if (succeeded)
-                removePreview(inputs);  // the series was finished as the server was stopped
+        if (succeeded)
+            removePreview(inputs);  // served no more: the first server has stopped
+        if (!switching)
             return;
-        }
         options.port = srv->port();
         options.token = srv->token();
         srv.reset();
-        removePreview(inputs);  // served no more: a request for its files until now found them
         options.dataset = inputs.dataset;
         options.series = nullptr;
         srv = std::make_unique<server::Server>(options);
